@@ -1,0 +1,31 @@
+//! # rotavg — certifiably optimal rotation averaging
+//!
+//! Three problems (Hartley, Trumpf, Dai & Li, "Rotation Averaging", IJCV 2013):
+//!
+//! 1. **Single** rotation averaging ([`single`]): L1/L2 means of many estimates of one rotation
+//!    under the angle (geodesic), chordal and quaternion distances.
+//! 2. **Multiple** rotation averaging ([`multiple`]): absolute rotations `R_1..R_n` from relative
+//!    measurements `R_ij` on a view graph, with `R_ij R_i = R_j`.
+//! 3. **Conjugate** rotation averaging (hand-eye): `S` with `R_i ~ S^-1 L_i S`.
+//!
+//! Every solver returns a report (estimate, cost, iterations, why it stopped, wall time) and a
+//! [`Certificate`]: a proven lower bound on the global minimum and the gap to it.
+//!
+//! Conventions (see `paper-notes/conventions.md`): a rotation is a 3x3 matrix with `R^T R = I`
+//! and `det R = +1` ([`Rotation`] = `nalgebra::Rotation3<f64>`); `theta(R, S)` is the angle of
+//! `R^T S` in `[0, pi]`; chordal distance `||R - S||_F = 2 sqrt(2) sin(theta/2)`; quaternion
+//! distance `2 sin(theta/4)`.
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+pub mod certificate;
+pub mod error;
+pub mod multiple;
+pub mod report;
+pub mod serde_rot;
+pub mod so3;
+
+pub use certificate::{BoundMethod, Certificate, Verdict};
+pub use error::{Error, Result};
+pub use report::{SolverReport, Termination};
+pub use so3::{Metric, Rotation};

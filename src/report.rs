@@ -1,0 +1,124 @@
+//! What every solver reports: iterations, why it stopped (with the measured value and its
+//! threshold), and wall time.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// Why an iterative solver stopped. Each variant carries the measured value and the threshold
+/// it was compared against, so that "converged" is never an unexplained word.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "status", rename_all = "snake_case")]
+pub enum Termination {
+    /// A closed-form solution: no iterations.
+    ClosedForm,
+    /// The stopping test was met: `value < threshold` for the named quantity.
+    Converged {
+        /// What was measured, e.g. `"gradient norm"`, `"relative cost decrease"`, `"step angle"`.
+        measure: String,
+        /// Its value at the last iterate.
+        value: f64,
+        /// The threshold.
+        threshold: f64,
+    },
+    /// The iteration limit was reached before the stopping test was met.
+    IterationLimit {
+        /// The limit.
+        iterations: usize,
+        /// The stopping quantity at the last iterate (e.g. gradient norm).
+        value: f64,
+        /// Its threshold.
+        threshold: f64,
+    },
+    /// No further decrease could be made (e.g. line search or trust region failed) while the
+    /// stopping test was not met.
+    Stalled {
+        /// The stopping quantity at the last iterate.
+        value: f64,
+        /// Its threshold.
+        threshold: f64,
+    },
+    /// A numerical failure (non-finite values, failed factorisation) ended the iteration; the
+    /// best iterate so far is returned.
+    NumericalFailure {
+        /// What failed.
+        reason: String,
+    },
+}
+
+impl Termination {
+    /// `true` for [`Termination::ClosedForm`] and [`Termination::Converged`].
+    pub fn is_converged(&self) -> bool {
+        matches!(
+            self,
+            Termination::ClosedForm | Termination::Converged { .. }
+        )
+    }
+
+    /// Short machine-readable name: `closed_form`, `converged`, `iteration_limit`, `stalled`,
+    /// `numerical_failure`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Termination::ClosedForm => "closed_form",
+            Termination::Converged { .. } => "converged",
+            Termination::IterationLimit { .. } => "iteration_limit",
+            Termination::Stalled { .. } => "stalled",
+            Termination::NumericalFailure { .. } => "numerical_failure",
+        }
+    }
+}
+
+impl fmt::Display for Termination {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Termination::ClosedForm => write!(f, "closed form"),
+            Termination::Converged {
+                measure,
+                value,
+                threshold,
+            } => {
+                write!(f, "converged: {measure} {value:.3e} < {threshold:.1e}")
+            }
+            Termination::IterationLimit {
+                iterations,
+                value,
+                threshold,
+            } => write!(
+                f,
+                "iteration limit {iterations} reached (stopping value {value:.3e}, threshold {threshold:.1e})"
+            ),
+            Termination::Stalled { value, threshold } => {
+                write!(
+                    f,
+                    "stalled: no further decrease (stopping value {value:.3e}, threshold {threshold:.1e})"
+                )
+            }
+            Termination::NumericalFailure { reason } => write!(f, "numerical failure: {reason}"),
+        }
+    }
+}
+
+/// The common part of every solver's report (SPEC section 5, `"solver"`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SolverReport {
+    /// Solver name, e.g. `"karcher"`, `"gauss-newton"`.
+    pub name: String,
+    /// Iterations performed (0 for closed forms).
+    pub iterations: usize,
+    /// Why it stopped.
+    pub termination: Termination,
+    /// Wall time in seconds.
+    pub seconds: f64,
+}
+
+impl fmt::Display for SolverReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}: {} iterations, {} ({:.3} ms)",
+            self.name,
+            self.iterations,
+            self.termination,
+            self.seconds * 1e3
+        )
+    }
+}

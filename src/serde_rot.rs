@@ -1,0 +1,48 @@
+//! Serde helpers: rotations as row-major nested arrays `[[r11, r12, r13], [..], [..]]`, the JSON
+//! layout of SPEC section 5. Use with `#[serde(with = "rotavg::serde_rot::rotation")]` or
+//! `#[serde(with = "rotavg::serde_rot::rotations")]`. Deserialisation validates the rotation with
+//! [`crate::so3::DEFAULT_ROTATION_TOLERANCE`].
+
+/// One rotation as a row-major nested array.
+pub mod rotation {
+    use crate::so3::{DEFAULT_ROTATION_TOLERANCE, Rotation, rotation_from_rows, rotation_to_rows};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    /// Serialise.
+    pub fn serialize<S: Serializer>(r: &Rotation, s: S) -> Result<S::Ok, S::Error> {
+        rotation_to_rows(r).serialize(s)
+    }
+
+    /// Deserialise and validate.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Rotation, D::Error> {
+        let rows = <[[f64; 3]; 3]>::deserialize(d)?;
+        rotation_from_rows(&rows, DEFAULT_ROTATION_TOLERANCE, "rotation")
+            .map_err(serde::de::Error::custom)
+    }
+}
+
+/// A list of rotations, each a row-major nested array.
+pub mod rotations {
+    use crate::so3::{DEFAULT_ROTATION_TOLERANCE, Rotation, rotation_from_rows, rotation_to_rows};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    /// Serialise.
+    pub fn serialize<S: Serializer>(rs: &[Rotation], s: S) -> Result<S::Ok, S::Error> {
+        rs.iter()
+            .map(rotation_to_rows)
+            .collect::<Vec<_>>()
+            .serialize(s)
+    }
+
+    /// Deserialise and validate.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Rotation>, D::Error> {
+        let rows = Vec::<[[f64; 3]; 3]>::deserialize(d)?;
+        rows.iter()
+            .enumerate()
+            .map(|(k, r)| {
+                rotation_from_rows(r, DEFAULT_ROTATION_TOLERANCE, &format!("rotation {k}"))
+                    .map_err(serde::de::Error::custom)
+            })
+            .collect()
+    }
+}

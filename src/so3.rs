@@ -1,0 +1,419 @@
+//! SO(3) primitives: hat/vee, exp/log, angles and the three distances, projection onto SO(3),
+//! validation of user rotations, and seeded random rotations for tests, examples and the demo.
+//!
+//! Equations are stated in `paper-notes/conventions.md` (labels `[C1]`..`[C6]`).
+
+use crate::error::{Error, Result};
+use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// The public rotation type: a 3x3 orthogonal matrix with determinant +1.
+pub type Rotation = Rotation3<f64>;
+
+/// Default tolerance for accepting a user matrix as a rotation: `||R^T R - I||_F <= tol` and
+/// `|det R - 1| <= tol`. Real data files are orthonormal to ~3e-6 (1DSfM) and quaternions
+/// are printed to ~1e-7, hence 1e-5.
+pub const DEFAULT_ROTATION_TOLERANCE: f64 = 1e-5;
+
+/// The distance used to compare two rotations (SPEC section 1, `[C2]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Metric {
+    /// Angle (geodesic) distance `theta(R, S)`.
+    Geodesic,
+    /// Chordal distance `||R - S||_F = 2 sqrt(2) sin(theta / 2)`.
+    #[default]
+    Chordal,
+    /// Quaternion distance `min ||q_R -+ q_S|| = 2 sin(theta / 4)`.
+    Quaternion,
+}
+
+impl Metric {
+    /// Distance between `r` and `s` under this metric.
+    ///
+    /// ```
+    /// use rotavg::so3::{exp, Metric};
+    /// use nalgebra::Vector3;
+    /// let r = exp(&Vector3::new(0.0, 0.0, 0.5));
+    /// let s = exp(&Vector3::new(0.0, 0.0, -0.25));
+    /// assert!((Metric::Geodesic.distance(&r, &s) - 0.75).abs() < 1e-12);
+    /// ```
+    pub fn distance(self, r: &Rotation, s: &Rotation) -> f64 {
+        match self {
+            Metric::Geodesic => angle_between(r, s),
+            Metric::Chordal => chordal_distance(r, s),
+            Metric::Quaternion => quaternion_distance(r, s),
+        }
+    }
+
+    /// The distance as a function of the angle `theta` between the two rotations `[C2]`.
+    pub fn from_angle(self, theta: f64) -> f64 {
+        match self {
+            Metric::Geodesic => theta,
+            Metric::Chordal => 2.0 * std::f64::consts::SQRT_2 * (theta / 2.0).sin(),
+            Metric::Quaternion => 2.0 * (theta / 4.0).sin(),
+        }
+    }
+}
+
+impl std::fmt::Display for Metric {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Metric::Geodesic => "geodesic",
+            Metric::Chordal => "chordal",
+            Metric::Quaternion => "quaternion",
+        })
+    }
+}
+
+/// `hat(v)`: the skew-symmetric matrix with `hat(v) w = v x w` `[C1]`.
+///
+/// ```
+/// use rotavg::so3::{hat, vee};
+/// use nalgebra::Vector3;
+/// let v = Vector3::new(1.0, 2.0, 3.0);
+/// assert_eq!(vee(&hat(&v)), v);
+/// ```
+pub fn hat(v: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+}
+
+/// `vee(M)`: the vector of the skew-symmetric part of `M` (inverse of [`hat`] on so(3)).
+pub fn vee(m: &Matrix3<f64>) -> Vector3<f64> {
+    Vector3::new(
+        0.5 * (m[(2, 1)] - m[(1, 2)]),
+        0.5 * (m[(0, 2)] - m[(2, 0)]),
+        0.5 * (m[(1, 0)] - m[(0, 1)]),
+    )
+}
+
+/// Exponential map `exp(hat(v))` (Rodrigues, with Taylor series for small `|v|`) `[C3]`.
+///
+/// ```
+/// use rotavg::so3::{exp, log};
+/// use nalgebra::Vector3;
+/// let v = Vector3::new(0.3, -0.2, 1.1);
+/// assert!((log(&exp(&v)) - v).norm() < 1e-14);
+/// ```
+pub fn exp(v: &Vector3<f64>) -> Rotation {
+    let t2 = v.norm_squared();
+    let t = t2.sqrt();
+    let (a, b) = if t < 1e-4 {
+        // sin(t)/t and (1 - cos t)/t^2 to O(t^6)
+        (
+            1.0 - t2 / 6.0 + t2 * t2 / 120.0,
+            0.5 - t2 / 24.0 + t2 * t2 / 720.0,
+        )
+    } else {
+        (t.sin() / t, (1.0 - t.cos()) / t2)
+    };
+    let k = hat(v);
+    Rotation3::from_matrix_unchecked(Matrix3::identity() + k * a + k * k * b)
+}
+
+/// Rotation angle of `r` in `[0, pi]`, accurate near 0 and near pi `[C4]`:
+/// `theta = atan2(||vee(R - R^T)||, tr R - 1)`.
+pub fn angle(r: &Rotation) -> f64 {
+    let m = r.matrix();
+    let s = vee(m).norm(); // sin(theta)
+    let c = 0.5 * (m.trace() - 1.0); // cos(theta)
+    s.atan2(c).clamp(0.0, PI)
+}
+
+/// `theta(R, S)`: the angle of `R^T S`, in `[0, pi]`.
+pub fn angle_between(r: &Rotation, s: &Rotation) -> f64 {
+    angle(&(r.inverse() * s))
+}
+
+/// Chordal distance `||R - S||_F`.
+pub fn chordal_distance(r: &Rotation, s: &Rotation) -> f64 {
+    (r.matrix() - s.matrix()).norm()
+}
+
+/// Quaternion distance `min(||q_R - q_S||, ||q_R + q_S||) = 2 sin(theta / 4)`.
+pub fn quaternion_distance(r: &Rotation, s: &Rotation) -> f64 {
+    let qr = to_quaternion(r);
+    let qs = to_quaternion(s);
+    let a = (qr.coords - qs.coords).norm();
+    let b = (qr.coords + qs.coords).norm();
+    a.min(b)
+}
+
+/// Logarithm map: the vector `v` with `exp(hat(v)) = R` and `|v| = theta in [0, pi]` `[C3]`.
+/// Accurate near `theta = 0` (first-order series) and near `theta = pi` (axis from the symmetric
+/// part `R + R^T`, sign from the skew part). At exactly `theta = pi` either sign is a valid
+/// logarithm; one is returned.
+///
+/// ```
+/// use rotavg::so3::{exp, log};
+/// use nalgebra::Vector3;
+/// // near pi
+/// let v = Vector3::new(1.0, 2.0, -0.5).normalize() * (std::f64::consts::PI - 1e-9);
+/// assert!((log(&exp(&v)) - v).norm() < 1e-7);
+/// ```
+pub fn log(r: &Rotation) -> Vector3<f64> {
+    let m = r.matrix();
+    let w = vee(m); // sin(theta) * axis
+    let s = w.norm();
+    let c = 0.5 * (m.trace() - 1.0);
+    let theta = s.atan2(c);
+    if theta < 1e-4 {
+        // theta / sin(theta) = 1 + theta^2 / 6 + ...
+        return w * (1.0 + theta * theta / 6.0);
+    }
+    if theta < PI - 1e-3 {
+        return w * (theta / s);
+    }
+    // Near pi: (R + R^T)/2 = cos(t) I + (1 - cos t) a a^T.
+    let sym = (m + m.transpose()) * 0.5;
+    let one_minus_c = 1.0 - c;
+    let d = Vector3::new(sym[(0, 0)] - c, sym[(1, 1)] - c, sym[(2, 2)] - c) / one_minus_c;
+    let k = d.imax();
+    let mut axis = sym.column(k).into_owned() / one_minus_c;
+    axis[k] = d[k];
+    // axis ~ a * a_k; normalise.
+    let n = axis.norm();
+    if n == 0.0 || !n.is_finite() {
+        return Vector3::new(theta, 0.0, 0.0);
+    }
+    axis /= n;
+    // Sign: sin(theta) * axis = w.
+    if axis.dot(&w) < 0.0 {
+        axis = -axis;
+    }
+    axis * theta
+}
+
+/// The unit quaternion of a rotation (Hamilton convention, nalgebra's).
+pub fn to_quaternion(r: &Rotation) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_rotation_matrix(r)
+}
+
+/// Nearest rotation to `m` in the Frobenius norm: `U diag(1, 1, det(U V^T)) V^T` from the SVD
+/// `m = U S V^T` (determinant-corrected) `[C5]`. Returns `None` when `m` has a non-finite
+/// entry. For rank-deficient `m` the result is one of the (non-unique) minimisers.
+///
+/// ```
+/// use rotavg::so3::{exp, project_to_so3};
+/// use nalgebra::Vector3;
+/// let r = exp(&Vector3::new(0.1, 0.2, 0.3));
+/// let p = project_to_so3(&(r.matrix() * 2.5)).unwrap();
+/// assert!((p.matrix() - r.matrix()).norm() < 1e-12);
+/// ```
+pub fn project_to_so3(m: &Matrix3<f64>) -> Option<Rotation> {
+    if !m.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let svd = m.svd(true, true);
+    let u = svd.u?;
+    let vt = svd.v_t?;
+    let mut d = Matrix3::identity();
+    if (u * vt).determinant() < 0.0 {
+        d[(2, 2)] = -1.0; // nalgebra sorts singular values descending: flip the smallest.
+    }
+    Some(Rotation3::from_matrix_unchecked(u * d * vt))
+}
+
+/// `||R^T R - I||_F` and `det R` of a matrix: how far it is from being a rotation.
+pub fn rotation_defect(m: &Matrix3<f64>) -> (f64, f64) {
+    (
+        (m.transpose() * m - Matrix3::identity()).norm(),
+        m.determinant(),
+    )
+}
+
+/// Accept `m` as a rotation when it is finite, `||m^T m - I||_F <= tol` and `|det m - 1| <= tol`
+/// `[C6]`. The accepted matrix is re-orthonormalised by [`project_to_so3`] (a change of order
+/// `tol`), so that downstream costs and certificates are evaluated at an exact rotation.
+/// `item` names the matrix in the error message (e.g. `"edge 12"`).
+///
+/// ```
+/// use rotavg::so3::{rotation_from_matrix, DEFAULT_ROTATION_TOLERANCE};
+/// use nalgebra::Matrix3;
+/// assert!(rotation_from_matrix(&Matrix3::identity(), DEFAULT_ROTATION_TOLERANCE, "I").is_ok());
+/// let reflection = Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 1.0, -1.0));
+/// assert!(rotation_from_matrix(&reflection, DEFAULT_ROTATION_TOLERANCE, "F").is_err());
+/// ```
+pub fn rotation_from_matrix(m: &Matrix3<f64>, tol: f64, item: &str) -> Result<Rotation> {
+    if !m.iter().all(|x| x.is_finite()) {
+        return Err(Error::NonFinite {
+            item: item.to_owned(),
+        });
+    }
+    let (orth, det) = rotation_defect(m);
+    if !(orth <= tol && (det - 1.0).abs() <= tol) {
+        return Err(Error::NotARotation {
+            item: item.to_owned(),
+            orthogonality_error: orth,
+            determinant: det,
+            tolerance: tol,
+        });
+    }
+    project_to_so3(m).ok_or_else(|| Error::NonFinite {
+        item: item.to_owned(),
+    })
+}
+
+/// Build a rotation from a row-major 3x3 array (the JSON layout), validating it.
+pub fn rotation_from_rows(rows: &[[f64; 3]; 3], tol: f64, item: &str) -> Result<Rotation> {
+    let m = Matrix3::from_fn(|i, j| rows[i][j]);
+    rotation_from_matrix(&m, tol, item)
+}
+
+/// Row-major 3x3 array of a rotation (the JSON layout).
+pub fn rotation_to_rows(r: &Rotation) -> [[f64; 3]; 3] {
+    let m = r.matrix();
+    [
+        [m[(0, 0)], m[(0, 1)], m[(0, 2)]],
+        [m[(1, 0)], m[(1, 1)], m[(1, 2)]],
+        [m[(2, 0)], m[(2, 1)], m[(2, 2)]],
+    ]
+}
+
+/// A uniformly (Haar) distributed random rotation (Shoemake's subgroup algorithm).
+///
+/// ```
+/// use rand::SeedableRng;
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+/// let r = rotavg::so3::random_rotation(&mut rng);
+/// assert!((r.matrix().determinant() - 1.0).abs() < 1e-12);
+/// ```
+pub fn random_rotation<R: Rng + ?Sized>(rng: &mut R) -> Rotation {
+    let u1: f64 = rng.random();
+    let u2: f64 = rng.random::<f64>() * 2.0 * PI;
+    let u3: f64 = rng.random::<f64>() * 2.0 * PI;
+    let a = (1.0 - u1).sqrt();
+    let b = u1.sqrt();
+    let q = nalgebra::Quaternion::new(b * u3.cos(), a * u2.sin(), a * u2.cos(), b * u3.sin());
+    UnitQuaternion::from_quaternion(q).to_rotation_matrix()
+}
+
+/// A uniformly distributed unit vector.
+pub fn random_unit_vector<R: Rng + ?Sized>(rng: &mut R) -> Vector3<f64> {
+    let z: f64 = rng.random::<f64>() * 2.0 - 1.0;
+    let phi: f64 = rng.random::<f64>() * 2.0 * PI;
+    let s = (1.0 - z * z).max(0.0).sqrt();
+    Vector3::new(s * phi.cos(), s * phi.sin(), z)
+}
+
+/// `R exp(angle * hat(a))` for a uniformly random unit axis `a`: a rotation at exactly angle
+/// `angle` (radians, in `[0, pi]`) from `r`.
+pub fn perturb<R: Rng + ?Sized>(r: &Rotation, angle: f64, rng: &mut R) -> Rotation {
+    r * exp(&(random_unit_vector(rng) * angle))
+}
+
+/// `R exp(hat(w))` with `w` isotropic Gaussian of standard deviation `sigma` (radians) per
+/// component: the usual noise model for synthetic data.
+pub fn perturb_gaussian<R: Rng + ?Sized>(r: &Rotation, sigma: f64, rng: &mut R) -> Rotation {
+    let w = Vector3::new(gaussian(rng), gaussian(rng), gaussian(rng)) * sigma;
+    r * exp(&w)
+}
+
+/// A standard normal sample (Box-Muller).
+pub fn gaussian<R: Rng + ?Sized>(rng: &mut R) -> f64 {
+    let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
+    let u2: f64 = rng.random::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand::rngs::StdRng;
+
+    #[test]
+    fn log_exp_roundtrip_small_and_near_pi() {
+        let mut rng = StdRng::seed_from_u64(1);
+        for &t in &[
+            0.0,
+            1e-12,
+            1e-8,
+            1e-5,
+            1e-3,
+            0.5,
+            2.0,
+            PI - 1e-2,
+            PI - 1e-4,
+            PI - 1e-7,
+        ] {
+            for _ in 0..50 {
+                let v = random_unit_vector(&mut rng) * t;
+                let r = exp(&v);
+                let w = log(&r);
+                // near pi the accuracy of the axis is limited by sqrt(eps)-type conditioning
+                let tol = if t > PI - 1e-3 { 1e-7 } else { 1e-13 };
+                assert!(
+                    (w - v).norm() <= tol * (1.0 + t),
+                    "t={t}: |log exp v - v| = {}",
+                    (w - v).norm()
+                );
+                assert!((angle(&r) - t).abs() <= 1e-13 + tol, "angle");
+                // exp is an exact rotation
+                let (orth, det) = rotation_defect(r.matrix());
+                assert!(orth < 1e-14 && (det - 1.0).abs() < 1e-14);
+            }
+        }
+    }
+
+    #[test]
+    fn log_at_exactly_pi_is_a_valid_logarithm() {
+        for axis in [
+            Vector3::x(),
+            Vector3::y(),
+            Vector3::z(),
+            Vector3::new(1.0, 1.0, 1.0).normalize(),
+        ] {
+            let r = Rotation3::from_matrix_unchecked(
+                2.0 * axis * axis.transpose() - Matrix3::identity(),
+            );
+            let w = log(&r);
+            assert!((w.norm() - PI).abs() < 1e-12);
+            assert!((exp(&w).matrix() - r.matrix()).norm() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn distances_agree_with_closed_forms_of_angle() {
+        let mut rng = StdRng::seed_from_u64(2);
+        for _ in 0..200 {
+            let r = random_rotation(&mut rng);
+            let s = random_rotation(&mut rng);
+            let t = angle_between(&r, &s);
+            for m in [Metric::Geodesic, Metric::Chordal, Metric::Quaternion] {
+                assert!((m.distance(&r, &s) - m.from_angle(t)).abs() < 1e-12, "{m}");
+                assert!((m.distance(&r, &s) - m.distance(&s, &r)).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn projection_fixes_reflections_and_rejects_nan() {
+        let f = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
+        let p = project_to_so3(&f).unwrap();
+        assert!((p.matrix().determinant() - 1.0).abs() < 1e-12);
+        let mut m = Matrix3::identity();
+        m[(1, 1)] = f64::NAN;
+        assert!(project_to_so3(&m).is_none());
+        assert!(matches!(
+            rotation_from_matrix(&m, 1e-6, "x"),
+            Err(Error::NonFinite { .. })
+        ));
+        assert!(matches!(
+            rotation_from_matrix(&(Matrix3::identity() * 1.01), 1e-6, "x"),
+            Err(Error::NotARotation { .. })
+        ));
+    }
+
+    #[test]
+    fn perturb_moves_by_exact_angle() {
+        let mut rng = StdRng::seed_from_u64(3);
+        let r = random_rotation(&mut rng);
+        for &t in &[0.0, 0.1, 1.0, 3.0] {
+            let s = perturb(&r, t, &mut rng);
+            assert!((angle_between(&r, &s) - t).abs() < 1e-12);
+        }
+    }
+}
