@@ -20,6 +20,7 @@
 
 pub mod certificate;
 pub mod error;
+pub mod io;
 pub mod multiple;
 pub mod report;
 pub mod serde_rot;

@@ -1,5 +1,94 @@
-//! The `rotavg` command-line tool (SPEC section 5).
-fn main() {
-    eprintln!("rotavg: not yet implemented");
-    std::process::exit(2);
+//! The `rotavg` command-line tool. The contract is SPEC section 5 (see README.md):
+//!
+//! ```text
+//! rotavg demo
+//! rotavg single    INPUT [--metric chordal|quaternion|geodesic] [--p 1|2] [--json]
+//! rotavg multiple  INPUT [--format auto|g2o|1dsfm|json] [--loss chordal|geodesic|l1|huber|cauchy]
+//!                        [--certify auto|dual|sdp|none] [--json] [--output FILE]
+//! rotavg conjugate INPUT [--format auto|json|...] [--certify auto|sdp|none] [--json]
+//! rotavg certify   INPUT --estimate FILE [--json]
+//! rotavg info      INPUT
+//! ```
+//!
+//! Exit status: 0 success (whatever the verdict), 1 bad input or failure, 2 usage error,
+//! 3 with `--require-certified` when the verdict is not `certified`.
+
+mod certify;
+mod common;
+mod conjugate;
+mod demo;
+mod info;
+mod multiple;
+mod single;
+
+use clap::{Parser, Subcommand};
+use common::Common;
+use rotavg::Verdict;
+use std::process::ExitCode;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "rotavg",
+    version,
+    about = "Certifiably optimal rotation averaging"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run all problems on built-in synthetic instances (no files needed).
+    Demo(demo::Args),
+    /// Average many estimates of one rotation.
+    Single(single::Args),
+    /// Absolute rotations from relative ones on a view graph (R_ij R_i = R_j).
+    Multiple(multiple::Args),
+    /// Conjugate (hand-eye) averaging: S with R_i ~ S^-1 L_i S.
+    Conjugate(conjugate::Args),
+    /// Certify (or bound the gap of) an estimate computed elsewhere, without changing it.
+    Certify(certify::Args),
+    /// Describe an input file: sizes, components, degrees, spectral gap.
+    Info(info::Args),
+}
+
+/// What a subcommand reports back for the exit status.
+pub struct Outcome {
+    /// The verdict of the certificate, if one was computed.
+    pub verdict: Option<Verdict>,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let (result, common): (rotavg::Result<Outcome>, Option<&Common>) = match &cli.command {
+        Command::Demo(a) => (demo::run(a), None),
+        Command::Single(a) => (single::run(a), Some(&a.common)),
+        Command::Multiple(a) => (multiple::run(a), Some(&a.common)),
+        Command::Conjugate(a) => (conjugate::run(a), Some(&a.common)),
+        Command::Certify(a) => (certify::run(a), Some(&a.common)),
+        Command::Info(a) => (info::run(a), None),
+    };
+    match result {
+        Ok(outcome) => {
+            let require = common.is_some_and(|c| c.require_certified);
+            if require && outcome.verdict != Some(Verdict::Certified) {
+                if !common.is_some_and(|c| c.quiet) {
+                    eprintln!(
+                        "rotavg: --require-certified: verdict is {}",
+                        outcome
+                            .verdict
+                            .map_or("none".to_string(), |v| v.to_string())
+                    );
+                }
+                ExitCode::from(3)
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
+        Err(e) => {
+            eprintln!("rotavg: error: {e}");
+            ExitCode::from(1)
+        }
+    }
 }
