@@ -6,5 +6,6 @@
 
 pub mod laplacian;
 pub mod problem;
+pub mod synthetic;
 
 pub use problem::{Edge, MultipleProblem, fix_gauge};

@@ -1,0 +1,109 @@
+//! Seeded synthetic view graphs with a planted ground truth, for tests, benchmarks and the demo.
+
+use crate::multiple::{Edge, MultipleProblem};
+use crate::so3::{Rotation, exp, perturb_gaussian, random_rotation};
+use nalgebra::Vector3;
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use serde::{Deserialize, Serialize};
+
+/// Parameters of a random connected view graph with planted rotations.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SyntheticGraph {
+    /// Number of nodes (>= 2).
+    pub num_rotations: usize,
+    /// Total number of edges (at least `num_rotations - 1`; a random spanning tree is always
+    /// included so the graph is connected; extra edges join uniformly random distinct pairs,
+    /// multi-edges possible).
+    pub num_edges: usize,
+    /// Gaussian noise per tangent component on every edge, radians.
+    pub noise_sigma: f64,
+    /// Fraction of edges replaced by uniformly random rotations (outliers), in `[0, 1]`.
+    pub outlier_fraction: f64,
+    /// RNG seed.
+    pub seed: u64,
+}
+
+impl Default for SyntheticGraph {
+    fn default() -> Self {
+        SyntheticGraph {
+            num_rotations: 100,
+            num_edges: 300,
+            noise_sigma: 0.05,
+            outlier_fraction: 0.0,
+            seed: 0,
+        }
+    }
+}
+
+impl SyntheticGraph {
+    /// Generate `(problem, ground truth)`; the ground truth has `R_0 = I`. Unit weights.
+    ///
+    /// ```
+    /// use rotavg::multiple::synthetic::SyntheticGraph;
+    /// let (p, gt) = SyntheticGraph { num_rotations: 10, num_edges: 20, noise_sigma: 0.0, ..Default::default() }.generate();
+    /// assert!(p.chordal_cost(&gt) < 1e-20);
+    /// ```
+    pub fn generate(&self) -> (MultipleProblem, Vec<Rotation>) {
+        let n = self.num_rotations.max(2);
+        let m = self.num_edges.max(n - 1);
+        let mut rng = StdRng::seed_from_u64(self.seed);
+        let mut gt: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
+        crate::multiple::fix_gauge(&mut gt);
+        let mut pairs = Vec::with_capacity(m);
+        // random spanning tree: attach node k to a random earlier node (random order)
+        let mut order: Vec<usize> = (0..n).collect();
+        for k in (1..n).rev() {
+            let j = rng.random_range(0..=k);
+            order.swap(k, j);
+        }
+        for k in 1..n {
+            let parent = order[rng.random_range(0..k)];
+            pairs.push((parent, order[k]));
+        }
+        while pairs.len() < m {
+            let i = rng.random_range(0..n);
+            let j = rng.random_range(0..n);
+            if i != j {
+                pairs.push((i, j));
+            }
+        }
+        let edges = pairs
+            .into_iter()
+            .map(|(i, j)| {
+                let rotation = if rng.random::<f64>() < self.outlier_fraction {
+                    random_rotation(&mut rng)
+                } else {
+                    perturb_gaussian(&(gt[j] * gt[i].inverse()), self.noise_sigma, &mut rng)
+                };
+                Edge {
+                    i,
+                    j,
+                    rotation,
+                    weight: 1.0,
+                }
+            })
+            .collect();
+        (
+            MultipleProblem::new(n, edges).expect("generated graph is valid"),
+            gt,
+        )
+    }
+}
+
+/// A cycle `0 -> 1 -> ... -> n-1 -> 0` of rotations about the z axis whose measurements compose
+/// to a loop error of `phi` radians about z (each edge rotates by `phi / n` about z), unit weights.
+/// Its chordal local minima are known in closed form (`paper-notes/multiple.md`).
+pub fn z_cycle(n: usize, phi: f64) -> MultipleProblem {
+    let n = n.max(3);
+    let step = exp(&(Vector3::z() * (phi / n as f64)));
+    let edges = (0..n)
+        .map(|i| Edge {
+            i,
+            j: (i + 1) % n,
+            rotation: step,
+            weight: 1.0,
+        })
+        .collect();
+    MultipleProblem::new(n, edges).expect("cycle is valid")
+}
