@@ -418,6 +418,16 @@ pub fn solve_conjugate_from(
                 }
             }
             None => {
+                // The model predicts a decrease below the rounding level of the cost: no
+                // representable progress is possible, the iterate is stationary to precision.
+                let resolution = 1e3 * f64::EPSILON * cost.abs();
+                if -slope <= resolution {
+                    break Termination::Converged {
+                        measure: "predicted decrease (cost rounding level)".into(),
+                        value: -slope,
+                        threshold: resolution,
+                    };
+                }
                 if delta.norm() < settings.step_tolerance.max(1e-10) {
                     break Termination::Converged {
                         measure: "step angle".into(),
