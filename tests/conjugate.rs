@@ -266,3 +266,134 @@ fn robust_losses_resist_outliers() {
     );
     assert!(e1 < e2 && ec < e2);
 }
+
+mod qcqp {
+    //! The 10x10 QCQP data, checked against the definitions (no SDP solve here).
+    use super::*;
+    use nalgebra::Matrix3;
+    use rand::Rng;
+    use rotavg::conjugate::sdp::{
+        constraint_matrices, cost_matrix, lift, refine_multipliers, verify_lower_bound,
+    };
+
+    fn random_matrix(rng: &mut StdRng) -> Matrix3<f64> {
+        Matrix3::from_fn(|_, _| rng.random::<f64>() * 2.0 - 1.0)
+    }
+
+    /// The polynomial each constraint states, evaluated directly with nalgebra: returns
+    /// `p_k(S, y)` such that the constraint is `p_k = b_k`, in the order of
+    /// `constraint_matrices`.
+    fn definitions(s: &Matrix3<f64>, y: f64) -> Vec<f64> {
+        let mut out = vec![y * y];
+        let sts = s.transpose() * s;
+        let sst = s * s.transpose();
+        for m in [sts, sst] {
+            for a in 0..3 {
+                for b in a..3 {
+                    out.push(m[(a, b)] - if a == b { y * y } else { 0.0 });
+                }
+            }
+        }
+        for rows in [false, true] {
+            let u = |v: usize| -> Vector3<f64> {
+                if rows {
+                    s.row(v).transpose().into_owned()
+                } else {
+                    s.column(v).into_owned()
+                }
+            };
+            for (a, b, c) in [(0, 1, 2), (1, 2, 0), (2, 0, 1)] {
+                let d = u(a).cross(&u(b)) - u(c) * y;
+                out.extend(d.iter());
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn constraint_matrices_match_definitions_entry_by_entry() {
+        let cons = constraint_matrices();
+        assert_eq!(cons.len(), 31);
+        let mut rng = StdRng::seed_from_u64(31);
+        for _ in 0..100 {
+            // arbitrary (non-orthogonal) S and y: z^T A_k z must equal the polynomial exactly
+            let s = random_matrix(&mut rng);
+            let y = rng.random::<f64>() * 2.0 - 1.0;
+            let z = lift(&s, y);
+            let defs = definitions(&s, y);
+            for (k, (con, d)) in cons.iter().zip(&defs).enumerate() {
+                assert!(
+                    con.matrix == con.matrix.transpose(),
+                    "{} not symmetric",
+                    con.name
+                );
+                let rhs_part = if k == 0 { 0.0 } else { con.rhs };
+                assert!(
+                    ((z.transpose() * con.matrix * z)[0] - (d + rhs_part)).abs() < 1e-12,
+                    "{}",
+                    con.name
+                );
+            }
+            // random rotation, y = 1: every constraint holds, z^T A z = b
+            let r = random_rotation(&mut rng);
+            let z = lift(r.matrix(), 1.0);
+            for con in &cons {
+                assert!(
+                    ((z.transpose() * con.matrix * z)[0] - con.rhs).abs() < 1e-12,
+                    "{}",
+                    con.name
+                );
+            }
+            // a reflection violates a handedness constraint (only orthogonality would allow it)
+            let f = -*r.matrix();
+            let z = lift(&f, 1.0);
+            let worst = cons
+                .iter()
+                .map(|c| ((z.transpose() * c.matrix * z)[0] - c.rhs).abs())
+                .fold(0.0, f64::max);
+            assert!(worst > 0.5);
+        }
+    }
+
+    #[test]
+    fn cost_matrix_matches_cost() {
+        // [H2]: s^T M s = sum w ||S R - L S||^2 for every 3x3 S (column-major vec).
+        let mut rng = StdRng::seed_from_u64(32);
+        let (p, _) = random_instance(9, 0.4, 0.0, &mut rng);
+        let m = cost_matrix(&p);
+        for _ in 0..20 {
+            let s = random_matrix(&mut rng);
+            let v = nalgebra::SVector::<f64, 9>::from_column_slice(s.as_slice());
+            let direct: f64 = p
+                .pairs()
+                .iter()
+                .map(|q| q.weight * (s * q.right.matrix() - q.left.matrix() * s).norm_squared())
+                .sum();
+            assert!(((v.transpose() * m * v)[0] - direct).abs() < 1e-10 * direct);
+            let r = random_rotation(&mut rng);
+            let v = nalgebra::SVector::<f64, 9>::from_column_slice(r.matrix().as_slice());
+            assert!(((v.transpose() * m * v)[0] - p.chordal_cost(&r)).abs() < 1e-10);
+        }
+    }
+
+    #[test]
+    fn any_multipliers_give_a_valid_bound() {
+        // [H8] holds for arbitrary nu: the verified bound never exceeds g at any rotation.
+        let mut rng = StdRng::seed_from_u64(33);
+        let cons = constraint_matrices();
+        for _ in 0..200 {
+            let (p, _) = random_instance(6, 0.5, 0.0, &mut rng);
+            let m = cost_matrix(&p);
+            let nu: Vec<f64> = (0..31).map(|_| rng.random::<f64>() * 4.0 - 2.0).collect();
+            let b = verify_lower_bound(&m, &cons, &nu).unwrap();
+            let s = random_rotation(&mut rng);
+            assert!(b.lower_bound <= p.chordal_cost(&s));
+            // refined at a noise-free optimum: the dual value equals the cost there
+            let (q, s0) = random_instance(6, 0.0, 0.0, &mut rng);
+            let mq = cost_matrix(&q);
+            let nu2 = refine_multipliers(&mq, &cons, &nu, &s0).unwrap();
+            let b2 = verify_lower_bound(&mq, &cons, &nu2).unwrap();
+            assert!(b2.lower_bound <= q.chordal_cost(&s0) + 1e-12);
+        }
+    }
+}
