@@ -183,8 +183,9 @@ fn diagnostics_flag_mismatched_and_small_pairs() {
     let mut rng = StdRng::seed_from_u64(6);
     let (p, s) = random_instance(10, 0.0, 0.0, &mut rng);
     let mut pairs = p.pairs().to_vec();
-    // pair 3: corrupt L with a rotation of a different angle (mis-pairing)
-    pairs[3].left = pairs[3].left * exp(&Vector3::new(0.0, 0.0, 0.5));
+    // pair 3: L squared (angle a -> 2a or 2 pi - 2a; with a in [0.2, 2.0] rad the angle changes
+    // by at least 0.2 rad = 11 deg > the 5 deg threshold)
+    pairs[3].left = pairs[3].left * pairs[3].left;
     // pair 5: pure translation (both angles ~0)
     let tiny = exp(&Vector3::new(1e-4, 0.0, 0.0));
     pairs[5] = ConjugatePair::new(s * tiny * s.inverse(), tiny);
@@ -196,7 +197,7 @@ fn diagnostics_flag_mismatched_and_small_pairs() {
             assert!(*m < 1e-12, "pair {k}: {m}");
         }
     }
-    assert!(d.suspicious_pairs.contains(&3) || d.angle_mismatch[3] > 0.0);
+    assert_eq!(d.suspicious_pairs, vec![3]);
     assert_eq!(d.small_rotation_pairs, vec![5]);
     assert!(d.identifiability.is_determined());
 }
