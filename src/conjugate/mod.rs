@@ -14,6 +14,7 @@ mod average;
 mod local;
 mod problem;
 pub mod sdp;
+pub mod simultaneous;
 pub mod synthetic;
 
 pub use average::{
