@@ -341,8 +341,10 @@ pub fn solve_conjugate(
 /// loss) or IRLS (robust losses: each iteration one Gauss-Newton step with weights
 /// `w_i psi(d_i)`), update `S <- S exp(hat(t delta))` with backtracking (Armijo, `c = 1e-4`)
 /// `[H7]`. Stops when the gradient norm `< gradient_tolerance * total weight` ("gradient
-/// norm"), the step angle `< step_tolerance` ("step angle"), or no decrease is possible
-/// (`Stalled`). Refuses unidentifiable data ([`Error::Degenerate`]).
+/// norm"), the step angle `< step_tolerance` ("step angle"), when the line search fails and the
+/// predicted decrease is below `1e3 eps |cost|` (rounding level, counted as converged), or when
+/// no decrease is possible otherwise (`Stalled`). Refuses unidentifiable data
+/// ([`Error::Degenerate`]).
 pub fn solve_conjugate_from(
     problem: &ConjugateProblem,
     settings: &ConjugateSettings,

@@ -7,6 +7,7 @@
 //! * [`relax_conjugate`], [`certify_conjugate`]: the 10x10 SDP relaxation and its verified bound.
 //! * [`average_conjugate`]: the pipeline closed form -> chordal -> SDP certificate.
 //! * [`synthetic`]: seeded instances with a planted `S`.
+//! * [`simultaneous`]: `S` jointly with absolute rotations from two view graphs (`[H12]`).
 //!
 //! Every equation is stated in `paper-notes/conjugate.md` with a label `[H1]`..`[H9]`.
 
