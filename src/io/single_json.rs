@@ -25,6 +25,41 @@ use std::path::Path;
 /// Largest capacity reserved up front from a size hint (no unbounded allocation from input).
 const MAX_PREALLOCATION: usize = 1 << 16;
 
+/// Rotation `k` of the list, validated inside its own `deserialize_seq` call so that
+/// `serde_json` reports the position where that rotation ends (not where the list ends).
+struct RotationSeed(usize);
+
+impl<'de> de::DeserializeSeed<'de> for RotationSeed {
+    type Value = Rotation;
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> std::result::Result<Rotation, D::Error> {
+        struct V(usize);
+        impl<'de> Visitor<'de> for V {
+            type Value = Rotation;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a 3x3 rotation as a row-major nested array [[r11, r12, r13], ...]")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> std::result::Result<Rotation, A::Error> {
+                let mut rows = [[0.0; 3]; 3];
+                for (i, row) in rows.iter_mut().enumerate() {
+                    *row = seq
+                        .next_element::<[f64; 3]>()?
+                        .ok_or_else(|| de::Error::invalid_length(i, &self))?;
+                }
+                if seq.next_element::<de::IgnoredAny>()?.is_some() {
+                    return Err(de::Error::invalid_length(4, &self));
+                }
+                let item = format!("rotation {}", self.0);
+                rotation_from_rows(&rows, DEFAULT_ROTATION_TOLERANCE, &item)
+                    .map_err(de::Error::custom)
+            }
+        }
+        d.deserialize_seq(V(self.0))
+    }
+}
+
 struct Rotations(Vec<Rotation>);
 
 impl<'de> Deserialize<'de> for Rotations {
@@ -41,16 +76,51 @@ impl<'de> Deserialize<'de> for Rotations {
             ) -> std::result::Result<Rotations, A::Error> {
                 let mut out =
                     Vec::with_capacity(seq.size_hint().unwrap_or(0).min(MAX_PREALLOCATION));
-                while let Some(rows) = seq.next_element::<[[f64; 3]; 3]>()? {
-                    let item = format!("rotation {}", out.len());
-                    let r = rotation_from_rows(&rows, DEFAULT_ROTATION_TOLERANCE, &item)
-                        .map_err(de::Error::custom)?;
+                while let Some(r) = seq.next_element_seed(RotationSeed(out.len()))? {
                     out.push(r);
                 }
                 Ok(Rotations(out))
             }
         }
         d.deserialize_seq(V)
+    }
+}
+
+/// Weight `k`, validated inside its own `deserialize_f64` call (position of the number).
+struct WeightSeed(usize);
+
+impl<'de> de::DeserializeSeed<'de> for WeightSeed {
+    type Value = f64;
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> std::result::Result<f64, D::Error> {
+        struct V(usize);
+        impl V {
+            fn check<E: de::Error>(&self, w: f64) -> std::result::Result<f64, E> {
+                if w.is_finite() && w > 0.0 {
+                    Ok(w)
+                } else {
+                    Err(E::custom(Error::InvalidWeight {
+                        item: format!("weight {}", self.0),
+                        weight: w,
+                    }))
+                }
+            }
+        }
+        impl<'de> Visitor<'de> for V {
+            type Value = f64;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a weight (a finite number > 0)")
+            }
+            fn visit_f64<E: de::Error>(self, w: f64) -> std::result::Result<f64, E> {
+                self.check(w)
+            }
+            fn visit_u64<E: de::Error>(self, w: u64) -> std::result::Result<f64, E> {
+                self.check(w as f64)
+            }
+            fn visit_i64<E: de::Error>(self, w: i64) -> std::result::Result<f64, E> {
+                self.check(w as f64)
+            }
+        }
+        d.deserialize_f64(V(self.0))
     }
 }
 
@@ -70,13 +140,7 @@ impl<'de> Deserialize<'de> for Weights {
             ) -> std::result::Result<Weights, A::Error> {
                 let mut out =
                     Vec::with_capacity(seq.size_hint().unwrap_or(0).min(MAX_PREALLOCATION));
-                while let Some(w) = seq.next_element::<f64>()? {
-                    if !(w.is_finite() && w > 0.0) {
-                        return Err(de::Error::custom(Error::InvalidWeight {
-                            item: format!("weight {}", out.len()),
-                            weight: w,
-                        }));
-                    }
+                while let Some(w) = seq.next_element_seed(WeightSeed(out.len()))? {
                     out.push(w);
                 }
                 Ok(Weights(out))

@@ -93,10 +93,11 @@ fn chordal_l2_bound(problem: &SingleProblem, cost: f64) -> (Option<f64>, String)
     let mut text = format!(
         "closed form [S1]: global minimum 6W - 2(s1 + s2 + sign(det M) s3) = {fstar:.9e} from the singular values of M = sum w_i R_i"
     );
-    if s[2] <= 1e-12 * s[0].max(1e-300) || s[1] - s[2] <= 1e-12 * s[0].max(1e-300) {
-        text.push_str(
-            " (M is rank-deficient or has a repeated singular value: the minimiser is not unique; the value is)",
-        );
+    // Umeyama: the maximiser of tr(R^T M) is unique iff rank M >= 2 and, when det M < 0,
+    // s2 > s3.
+    let tiny = 1e-12 * s[0].max(f64::MIN_POSITIVE);
+    if s[1] <= tiny || (sign < 0.0 && s[1] - s[2] <= tiny) {
+        text.push_str(" (M is degenerate: the minimiser is not unique, the minimum value is)");
     }
     (Some(lb), text)
 }

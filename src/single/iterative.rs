@@ -21,8 +21,9 @@ pub const COINCIDENCE_ANGLE: f64 = 1e-12;
 /// Maximum number of step halvings before an iteration is declared stalled.
 pub const MAX_BACKTRACKS: usize = 40;
 
-/// Below this distance (radians) to the nearest sample, the Weiszfeld iterations test whether
-/// that sample is the minimiser (subgradient condition `[S5]`) and jump to it if so.
+/// Below this distance (radians) to the nearest sample, or below 10 times the last step, the
+/// Weiszfeld iterations test whether that sample is the minimiser (subgradient condition
+/// `[S5]`) and jump to it if so.
 const SAMPLE_TEST_RADIUS: f64 = 1e-3;
 
 /// Everything the geodesic methods need at one point `R`.
@@ -160,6 +161,7 @@ pub(crate) fn geodesic_l1_local(
         .copied()
         .unwrap_or_else(|| chordal_l2_local(problem).estimate);
     let mut e = eval_geodesic(problem, &r, Norm::L1);
+    let mut last_step = 0.0;
     for it in 1..=settings.max_iterations {
         let g = e.gradient_norm(Norm::L1) / total;
         if g <= settings.gradient_tolerance {
@@ -175,7 +177,7 @@ pub(crate) fn geodesic_l1_local(
         // Sample test [S5]: if the nearest sample satisfies the optimality condition and is
         // no worse, it is the answer (avoids the slow approach of Weiszfeld to a sample).
         if let Some((k, t)) = e.nearest
-            && t < SAMPLE_TEST_RADIUS
+            && (t < SAMPLE_TEST_RADIUS || t < 10.0 * last_step)
         {
             let rk = problem.rotations()[k];
             let ek = eval_geodesic(problem, &rk, Norm::L1);
@@ -202,6 +204,7 @@ pub(crate) fn geodesic_l1_local(
         };
         r = r_new;
         e = e_new;
+        last_step = step;
         if step < settings.step_tolerance {
             return converged(
                 r,
@@ -226,12 +229,51 @@ fn backtrack(
     v: &Vector3<f64>,
     norm: Norm,
 ) -> Option<(Rotation, GeodesicEval, f64)> {
+    line_search(
+        r,
+        e.cost,
+        v,
+        norm == Norm::L1,
+        |x| eval_geodesic(problem, x, norm),
+        |x| x.cost,
+    )
+}
+
+/// Line search along `R exp(t v)`: halve `t` from 1 until the cost does not increase; if `t = 1`
+/// decreases it and `expand` is set, keep doubling `t` while the cost strictly decreases and
+/// the step stays below pi/2 (this accelerates the slow, majorise-minimise-like L1 steps, e.g.
+/// when the minimiser is a sample). Returns the point, its evaluation and the step angle.
+fn line_search<E>(
+    r: &Rotation,
+    cost: f64,
+    v: &Vector3<f64>,
+    expand: bool,
+    eval: impl Fn(&Rotation) -> E,
+    cost_of: impl Fn(&E) -> f64,
+) -> Option<(Rotation, E, f64)> {
+    let vn = v.norm();
     let mut t = 1.0;
     for _ in 0..MAX_BACKTRACKS {
         let r_new = r * so3::exp(&(v * t));
-        let e_new = eval_geodesic(problem, &r_new, norm);
-        if e_new.cost <= e.cost {
-            return Some((r_new, e_new, t * v.norm()));
+        let e_new = eval(&r_new);
+        if cost_of(&e_new) <= cost {
+            let mut best = (r_new, e_new, t * vn);
+            if expand && t == 1.0 {
+                for _ in 0..MAX_BACKTRACKS {
+                    let t2 = 2.0 * best.2 / vn.max(f64::MIN_POSITIVE);
+                    if !(t2 * vn <= std::f64::consts::FRAC_PI_2) {
+                        break;
+                    }
+                    let r2 = r * so3::exp(&(v * t2));
+                    let e2 = eval(&r2);
+                    if cost_of(&e2) < cost_of(&best.1) {
+                        best = (r2, e2, t2 * vn);
+                    } else {
+                        break;
+                    }
+                }
+            }
+            return Some(best);
         }
         t *= 0.5;
     }
@@ -322,6 +364,7 @@ pub(crate) fn chordal_l1_local(
         }
     };
     let mut e = eval_chordal_l1(problem, &r);
+    let mut last_step = 0.0;
     for it in 1..=settings.max_iterations {
         let g = e.gradient_norm() / total;
         if g <= settings.gradient_tolerance {
@@ -335,7 +378,7 @@ pub(crate) fn chordal_l1_local(
             );
         }
         if let Some((k, c)) = e.nearest
-            && c < SAMPLE_TEST_RADIUS
+            && (c < SAMPLE_TEST_RADIUS || c < 10.0 * last_step)
         {
             let rk = problem.rotations()[k];
             let ek = eval_chordal_l1(problem, &rk);
@@ -364,22 +407,20 @@ pub(crate) fn chordal_l1_local(
             }
             e.descent * ((1.0 - SQRT_2 * e.coincident_weight / gn) / e.curvature)
         };
-        let mut t = 1.0;
-        let mut accepted = None;
-        for _ in 0..MAX_BACKTRACKS {
-            let r_new = r * so3::exp(&(v * t));
-            let e_new = eval_chordal_l1(problem, &r_new);
-            if e_new.cost <= e.cost {
-                accepted = Some((r_new, e_new, t * v.norm()));
-                break;
-            }
-            t *= 0.5;
-        }
+        let accepted = line_search(
+            &r,
+            e.cost,
+            &v,
+            true,
+            |x| eval_chordal_l1(problem, x),
+            |x| x.cost,
+        );
         let Some((r_new, e_new, step)) = accepted else {
             return stalled(r, it - 1, g, settings.gradient_tolerance, NAME);
         };
         r = r_new;
         e = e_new;
+        last_step = step;
         if step < settings.step_tolerance {
             return converged(
                 r,
