@@ -162,6 +162,8 @@ pub(crate) fn geodesic_l1_local(
         .unwrap_or_else(|| chordal_l2_local(problem).estimate);
     let mut e = eval_geodesic(problem, &r, Norm::L1);
     let mut last_step = 0.0;
+    // Samples whose optimality test failed (the test depends on the sample only).
+    let mut rejected: Vec<usize> = Vec::new();
     for it in 1..=settings.max_iterations {
         let g = e.gradient_norm(Norm::L1) / total;
         if g <= settings.gradient_tolerance {
@@ -178,6 +180,7 @@ pub(crate) fn geodesic_l1_local(
         // no worse, it is the answer (avoids the slow approach of Weiszfeld to a sample).
         if let Some((k, t)) = e.nearest
             && (t < SAMPLE_TEST_RADIUS || t < 10.0 * last_step)
+            && !rejected.contains(&k)
         {
             let rk = problem.rotations()[k];
             let ek = eval_geodesic(problem, &rk, Norm::L1);
@@ -191,6 +194,9 @@ pub(crate) fn geodesic_l1_local(
                     settings.gradient_tolerance,
                     NAME,
                 );
+            }
+            if gk > settings.gradient_tolerance {
+                rejected.push(k);
             }
         }
         let gn = e.descent.norm();
@@ -233,7 +239,7 @@ fn backtrack(
         r,
         e.cost,
         v,
-        norm == Norm::L1,
+        false,
         |x| eval_geodesic(problem, x, norm),
         |x| x.cost,
     )
@@ -261,7 +267,7 @@ fn line_search<E>(
             if expand && t == 1.0 {
                 for _ in 0..MAX_BACKTRACKS {
                     let t2 = 2.0 * best.2 / vn.max(f64::MIN_POSITIVE);
-                    if !(t2 * vn <= std::f64::consts::FRAC_PI_2) {
+                    if t2 * vn > std::f64::consts::FRAC_PI_2 || t2.is_nan() {
                         break;
                     }
                     let r2 = r * so3::exp(&(v * t2));
@@ -365,6 +371,8 @@ pub(crate) fn chordal_l1_local(
     };
     let mut e = eval_chordal_l1(problem, &r);
     let mut last_step = 0.0;
+    // Samples whose optimality test failed (the test depends on the sample only).
+    let mut rejected: Vec<usize> = Vec::new();
     for it in 1..=settings.max_iterations {
         let g = e.gradient_norm() / total;
         if g <= settings.gradient_tolerance {
@@ -379,6 +387,7 @@ pub(crate) fn chordal_l1_local(
         }
         if let Some((k, c)) = e.nearest
             && (c < SAMPLE_TEST_RADIUS || c < 10.0 * last_step)
+            && !rejected.contains(&k)
         {
             let rk = problem.rotations()[k];
             let ek = eval_chordal_l1(problem, &rk);
@@ -392,6 +401,9 @@ pub(crate) fn chordal_l1_local(
                     settings.gradient_tolerance,
                     NAME,
                 );
+            }
+            if gk > settings.gradient_tolerance {
+                rejected.push(k);
             }
         }
         // Proposed step as a tangent vector v with R_new = R exp(v).
@@ -507,7 +519,7 @@ pub(crate) fn euclidean_median(
             break;
         }
         let (cand, cand_next, _) = eval_euclidean(problem, &next);
-        if !(cand.cost <= cur.cost) {
+        if cand.cost > cur.cost || cand.cost.is_nan() {
             break; // rounding: no further decrease
         }
         let moved = (next - y).norm();
