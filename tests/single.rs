@@ -526,6 +526,18 @@ fn json_round_trip_and_errors_with_lines() {
 }
 
 #[test]
+fn problem_deserialisation_validates() {
+    let ok: SingleProblem =
+        serde_json::from_str(r#"{"rotations": [[[1,0,0],[0,1,0],[0,0,1]]], "weights": [2]}"#).unwrap();
+    assert_eq!(ok.weights(), &[2.0]);
+    let bad = serde_json::from_str::<SingleProblem>(
+        r#"{"rotations": [[[1,0,0],[0,1,0],[0,0,1]]], "weights": [-2]}"#,
+    );
+    assert!(bad.is_err());
+    assert!(serde_json::from_str::<SingleProblem>(r#"{"rotations": []}"#).is_err());
+}
+
+#[test]
 fn solution_serialises_rotation_row_major_and_displays() {
     let r = exp(&Vector3::new(0.0, 0.0, 0.5));
     let p = SingleProblem::new(vec![r], None).unwrap();

@@ -91,11 +91,30 @@ impl fmt::Display for Norm {
 }
 
 /// Validated data of a single-averaging problem: samples `R_i` and weights `w_i > 0`.
+/// (De)serialises as `{"rotations": [R, ...], "weights": [w, ...]}`; deserialisation validates
+/// like [`SingleProblem::new`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawSingleProblem")]
 pub struct SingleProblem {
     #[serde(with = "crate::serde_rot::rotations")]
     rotations: Vec<Rotation>,
     weights: Vec<f64>,
+}
+
+/// Unvalidated serde form of [`SingleProblem`].
+#[derive(Deserialize)]
+struct RawSingleProblem {
+    #[serde(with = "crate::serde_rot::rotations")]
+    rotations: Vec<Rotation>,
+    #[serde(default)]
+    weights: Option<Vec<f64>>,
+}
+
+impl TryFrom<RawSingleProblem> for SingleProblem {
+    type Error = Error;
+    fn try_from(raw: RawSingleProblem) -> Result<Self> {
+        SingleProblem::new(raw.rotations, raw.weights)
+    }
 }
 
 impl SingleProblem {
