@@ -528,7 +528,8 @@ fn json_round_trip_and_errors_with_lines() {
 #[test]
 fn problem_deserialisation_validates() {
     let ok: SingleProblem =
-        serde_json::from_str(r#"{"rotations": [[[1,0,0],[0,1,0],[0,0,1]]], "weights": [2]}"#).unwrap();
+        serde_json::from_str(r#"{"rotations": [[[1,0,0],[0,1,0],[0,0,1]]], "weights": [2]}"#)
+            .unwrap();
     assert_eq!(ok.weights(), &[2.0]);
     let bad = serde_json::from_str::<SingleProblem>(
         r#"{"rotations": [[[1,0,0],[0,1,0],[0,0,1]]], "weights": [-2]}"#,
