@@ -391,6 +391,23 @@ pub(crate) struct Local {
 ///
 /// Errors only for invalid settings ([`Error::InvalidSettings`]); non-convergence is reported in
 /// `solution.report.termination`, and a missing proof of optimality in `solution.certificate`.
+///
+/// ```
+/// use rotavg::single::{average_single, Norm, SingleProblem, SingleSettings};
+/// use rotavg::so3::{exp, Metric};
+/// use nalgebra::Vector3;
+/// // Rz(0.2), Rz(-0.2) and I: every mean is I by symmetry.
+/// let p = SingleProblem::new(
+///     vec![exp(&Vector3::new(0.0, 0.0, 0.2)), exp(&Vector3::new(0.0, 0.0, -0.2)), exp(&Vector3::zeros())],
+///     None,
+/// )?;
+/// for (metric, norm) in [(Metric::Chordal, Norm::L2), (Metric::Geodesic, Norm::L1)] {
+///     let s = average_single(&p, &SingleSettings::new(metric, norm))?;
+///     assert!(rotavg::so3::angle(&s.estimate) < 1e-9);
+///     assert!(s.certificate.is_certified());
+/// }
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn average_single(
     problem: &SingleProblem,
     settings: &SingleSettings,
