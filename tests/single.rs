@@ -414,6 +414,34 @@ fn l1_means_land_exactly_on_a_dominant_sample() {
 }
 
 #[test]
+fn l1_means_step_off_a_non_optimal_sample() {
+    // Started exactly on sample 0 (an outlier-ish sample, not optimal), both L1 methods must
+    // take the Vardi-Zhang step off it [S5]/[S6] and reach the brute-force minimum.
+    let (_, p) = noisy(80, 9, 0.3);
+    for metric in [Metric::Geodesic, Metric::Chordal] {
+        let start = p.rotations()[0];
+        let sol =
+            rotavg::single::average_single_from(&p, &settings(metric, Norm::L1), Some(&start))
+                .unwrap();
+        let (_, fb) = brute_force_min(&p, metric, Norm::L1, &sol.estimate);
+        assert!(
+            sol.cost <= fb + 1e-9 * (1.0 + fb),
+            "{metric}: {} vs {fb}",
+            sol.cost
+        );
+        assert!(
+            angle_between(&sol.estimate, &start) > 1e-6,
+            "{metric}: stayed on the sample"
+        );
+        assert!(
+            sol.report.termination.is_converged(),
+            "{metric}: {}",
+            sol.report
+        );
+    }
+}
+
+#[test]
 fn bad_input_gives_typed_errors() {
     let mut m = *Rotation::identity().matrix();
     m[(0, 1)] = f64::NAN;
