@@ -198,3 +198,35 @@ fn init_file_and_unit_weights() {
     // unit weights: cost = 0.1^2 + 0.1^2 + 0 at the mean I
     assert!((v["cost"].as_f64().unwrap() - 0.02).abs() < 1e-10, "{v}");
 }
+
+#[test]
+fn reads_standard_input() {
+    use std::io::Write;
+    use std::process::Stdio;
+    let text = format!("{{\"rotations\": [{}, {}]}}", rz(0.2), rz(0.4));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rotavg"))
+        .args(["single", "-", "--json"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(text.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // chordal L2 mean of Rz(0.2) and Rz(0.4) is Rz(0.3): entry (1, 0) = sin(0.3)
+    let e10 = v["estimate"][1][0].as_f64().unwrap();
+    assert!((e10 - 0.3f64.sin()).abs() < 1e-12, "{e10}");
+    assert_eq!(v["num_measurements"], 2);
+}
