@@ -516,33 +516,46 @@ fn eval_euclidean(
 
 /// Geometric median of the sample matrices in `R^{3x3}` (Weiszfeld with the Vardi-Zhang
 /// modification, monotone in the cost), from `sum w_i R_i / W`. Stops when the minimum-norm
-/// subgradient norm / W is at most `gradient_tolerance`, the step is below 1e-15 (relative), or
-/// after `max_iterations`; the returned data are evaluated at the returned point.
+/// subgradient norm / W is at most `gradient_tolerance`, the step is below 1e-15 (relative),
+/// after 3 steps without a strict decrease of the cost (rounding floor), or after
+/// `max_iterations`. Returns, among the iterates, the one with the largest lower bound `[S7]`
+/// `f_E(M) - |g| (sqrt 3 + |M|_F) - 2 slack` (every iterate gives a valid bound).
 pub(crate) fn euclidean_median(
     problem: &SingleProblem,
     max_iterations: usize,
     gradient_tolerance: f64,
 ) -> EuclideanMedian {
     let total = problem.total_weight();
+    let bound = |m: &EuclideanMedian| {
+        m.cost - m.gradient_norm * (3f64.sqrt() + m.point.norm()) - 2.0 * m.coincident_slack
+    };
     let mut y = super::closed_form::weighted_matrix_sum(problem) / total;
     let (mut cur, mut next, _) = eval_euclidean(problem, &y);
+    let mut best = cur.clone();
+    let mut flat = 0;
     for _ in 0..max_iterations {
         if cur.gradient_norm / total <= gradient_tolerance {
             break;
         }
         let (cand, cand_next, _) = eval_euclidean(problem, &next);
-        if cand.cost > cur.cost || cand.cost.is_nan() {
-            break; // rounding: no further decrease
+        if cand.cost.is_nan() || cand.cost > cur.cost + rounding_slack(problem.len(), cur.cost) {
+            break;
+        }
+        if cand.cost >= cur.cost {
+            flat += 1;
         }
         let moved = (next - y).norm();
         y = next;
         cur = cand;
         next = cand_next;
-        if moved <= 1e-15 * (1.0 + y.norm()) {
+        if bound(&cur) > bound(&best) {
+            best = cur.clone();
+        }
+        if flat >= 3 || moved <= 1e-15 * (1.0 + y.norm()) {
             break;
         }
     }
-    cur
+    best
 }
 
 fn converged(
