@@ -25,6 +25,7 @@ pub mod io;
 pub mod multiple;
 pub mod report;
 pub mod serde_rot;
+pub mod single;
 pub mod so3;
 
 pub use certificate::{BoundMethod, Certificate, Verdict};

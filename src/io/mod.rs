@@ -2,3 +2,4 @@
 //! `EDGE3`, 1DSfM `EGs.txt`, Bundler ground truth, hand-eye pose files. Each reader documents,
 //! where it reads, how the format maps onto this crate's conventions.
 pub mod handeye;
+pub mod single_json;
