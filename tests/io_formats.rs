@@ -72,7 +72,11 @@ fn g2o_se3_convention_is_noise_free_and_matches_sesync_cost() {
     assert_eq!(g.problem.num_edges(), 7);
     assert_eq!(g.duplicates, 1); // (1,0) repeats {0,1} (see duplicate_count_of_pairs)
     assert_eq!(g.reversed, 3); // (3,0), (2,0), (1,0)
-    assert!(g.warnings.iter().any(|s| s.contains("FIX")), "{:?}", g.warnings);
+    assert!(
+        g.warnings.iter().any(|s| s.contains("FIX")),
+        "{:?}",
+        g.warnings
+    );
     let truth: Vec<Rotation> = w.iter().map(|x| x.inverse()).collect();
     let init = g.initial.clone().unwrap();
     for (a, b) in init.iter().zip(&truth) {
@@ -107,8 +111,9 @@ fn duplicate_count_of_pairs() {
         rotation: Rotation::identity(),
         weight: 1.0,
     };
-    let p = rotavg::multiple::MultipleProblem::new(4, PAIRS.iter().map(|&(i, j)| e(i, j)).collect())
-        .unwrap();
+    let p =
+        rotavg::multiple::MultipleProblem::new(4, PAIRS.iter().map(|&(i, j)| e(i, j)).collect())
+            .unwrap();
     // {0,1},{1,2},{2,3},{0,3},{0,2},{1,3},{0,1}: 6 distinct pairs, 1 repeat
     assert_eq!(rotavg::multiple::stats::duplicate_edge_count(&p), 1);
 }
@@ -119,21 +124,33 @@ fn duplicate_count_of_pairs() {
 fn edge3_convention_and_weights() {
     let mut rng = StdRng::seed_from_u64(2);
     let ypr: Vec<[f64; 3]> = (0..4)
-        .map(|_| [rng.random_range(-3.0..3.0), rng.random_range(-1.5..1.5), rng.random_range(-3.0..3.0)])
+        .map(|_| {
+            [
+                rng.random_range(-3.0..3.0),
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-3.0..3.0),
+            ]
+        })
         .collect();
     let wmat = |k: usize| rz(ypr[k][0]) * ry(ypr[k][1]) * rx(ypr[k][2]);
     let mut text = String::new();
-    for k in 0..4 {
-        writeln!(text, "VERTEX3 {k} 0 0 0 {} {} {}", ypr[k][2], ypr[k][1], ypr[k][0]).unwrap();
+    for (k, [yaw, pitch, roll]) in ypr.iter().enumerate() {
+        writeln!(text, "VERTEX3 {k} 0 0 0 {roll} {pitch} {yaw}").unwrap();
     }
     for (n, &(i, j)) in PAIRS.iter().enumerate() {
         let z = Rotation::from_matrix_unchecked(wmat(i).transpose() * wmat(j));
         let (roll, pitch, yaw) = z.euler_angles(); // nalgebra: R = Rz(yaw) Ry(pitch) Rx(roll)
-        let info = if n % 2 == 0 { " 10 0 0 0 0 0 10 0 0 0 0 10 0 0 0 100 0 0 100 0 25" } else { "" };
+        let info = if n % 2 == 0 {
+            " 10 0 0 0 0 0 10 0 0 0 0 10 0 0 0 100 0 0 100 0 25"
+        } else {
+            ""
+        };
         writeln!(text, "EDGE3 {i} {j} 1 0 0 {roll} {pitch} {yaw}{info}").unwrap();
     }
     let g = read_g2o(&text, "t.txt", &opts()).unwrap();
-    let truth: Vec<Rotation> = (0..4).map(|k| Rotation::from_matrix_unchecked(wmat(k).transpose())).collect();
+    let truth: Vec<Rotation> = (0..4)
+        .map(|k| Rotation::from_matrix_unchecked(wmat(k).transpose()))
+        .collect();
     assert!(g.problem.chordal_cost(&truth) < 1e-20);
     assert!(g.problem.chordal_cost(g.initial.as_ref().unwrap()) < 1e-20);
     // 6 / (1/100 + 1/100 + 1/25) = 100
@@ -141,7 +158,15 @@ fn edge3_convention_and_weights() {
         let expect = if n % 2 == 0 { 100.0 } else { 1.0 };
         assert!((e.weight - expect).abs() < 1e-9, "edge {n}: {}", e.weight);
     }
-    let u = read_g2o(&text, "t.txt", &ReadOptions { weights: WeightSource::Unit, ..opts() }).unwrap();
+    let u = read_g2o(
+        &text,
+        "t.txt",
+        &ReadOptions {
+            weights: WeightSource::Unit,
+            ..opts()
+        },
+    )
+    .unwrap();
     assert!(u.problem.edges().iter().all(|e| e.weight == 1.0));
 }
 
@@ -158,7 +183,10 @@ fn se2_convention() {
     }
     let g = read_g2o(&text, "p.g2o", &opts()).unwrap();
     assert!(g.planar);
-    let truth: Vec<Rotation> = th.iter().map(|t| Rotation::from_matrix_unchecked(rz(*t).transpose())).collect();
+    let truth: Vec<Rotation> = th
+        .iter()
+        .map(|t| Rotation::from_matrix_unchecked(rz(*t).transpose()))
+        .collect();
     assert!(g.problem.chordal_cost(&truth) < 1e-20);
     assert!(g.problem.edges().iter().all(|e| e.weight == 7.5));
 }
@@ -177,7 +205,10 @@ fn egs_convention_and_ground_truth_files() {
             .collect();
         writeln!(text, "{} {} {} 0.6 0 0.8", IDS[i], IDS[j], rows.join(" ")).unwrap();
     }
-    assert_eq!(detect_format("EGs.txt", &text).unwrap(), GraphFormat::OneDsfm);
+    assert_eq!(
+        detect_format("EGs.txt", &text).unwrap(),
+        GraphFormat::OneDsfm
+    );
     let g = read_egs(&text, "EGs.txt", &opts()).unwrap();
     assert_eq!(g.node_ids, IDS.to_vec());
     assert!(g.problem.chordal_cost(&c) < 1e-20);
@@ -211,7 +242,9 @@ fn egs_convention_and_ground_truth_files() {
     let mut l = String::new();
     for ck in &c {
         let m = ck.matrix();
-        let v: Vec<String> = (0..3).flat_map(|r| (0..3).map(move |cc| m[(r, cc)].to_string())).collect();
+        let v: Vec<String> = (0..3)
+            .flat_map(|r| (0..3).map(move |cc| m[(r, cc)].to_string()))
+            .collect();
         writeln!(l, "{}", v.join(" ")).unwrap();
     }
     l.push_str("0 0 0 0 0 0 0 0 0\n");
@@ -248,15 +281,29 @@ fn writers_round_trip() {
         assert!(angle_between(a, b) < 1e-12);
     }
     let est = read_rotations_estimate(&write_estimate_json(&gt), "e.json", &opts()).unwrap();
-    assert!(est.iter().zip(&gt).all(|(a, b)| angle_between(a, b) < 1e-14));
+    assert!(
+        est.iter()
+            .zip(&gt)
+            .all(|(a, b)| angle_between(a, b) < 1e-14)
+    );
     // --json output style and single-rotation files
     let printed = format!(
         "{{\"problem\": \"multiple\", \"cost\": 1.0, \"estimate\": {}}}",
-        serde_json::to_string(&gt.iter().map(rotavg::so3::rotation_to_rows).collect::<Vec<_>>()).unwrap()
+        serde_json::to_string(
+            &gt.iter()
+                .map(rotavg::so3::rotation_to_rows)
+                .collect::<Vec<_>>()
+        )
+        .unwrap()
     );
-    assert!(matches!(read_estimate(&printed, "o.json", &opts()).unwrap(), Estimate::Multiple(v) if v.len() == 30));
+    assert!(
+        matches!(read_estimate(&printed, "o.json", &opts()).unwrap(), Estimate::Multiple(v) if v.len() == 30)
+    );
     let single = r#"{"estimate": [[0,-1,0],[1,0,0],[0,0,1]], "problem": "single"}"#;
-    assert!(matches!(read_estimate(single, "s.json", &opts()).unwrap(), Estimate::Single(_)));
+    assert!(matches!(
+        read_estimate(single, "s.json", &opts()).unwrap(),
+        Estimate::Single(_)
+    ));
     assert!(read_rotations_estimate(single, "s.json", &opts()).is_err());
 }
 
@@ -264,7 +311,10 @@ fn writers_round_trip() {
 fn detection() {
     assert_eq!(detect_format("a.json", "").unwrap(), GraphFormat::Json);
     assert_eq!(detect_format("a.g2o", "").unwrap(), GraphFormat::G2o);
-    assert_eq!(detect_format("a.txt", "\n# c\nEDGE3 0 1").unwrap(), GraphFormat::G2o);
+    assert_eq!(
+        detect_format("a.txt", "\n# c\nEDGE3 0 1").unwrap(),
+        GraphFormat::G2o
+    );
     assert!(detect_format("a.txt", "1 2 3\n").is_err());
     assert!(detect_format("a.txt", "  \n").is_err());
     let text = "EDGE_SE2 0 1 0 0 0.1 1 0 0 1 0 1\n";
@@ -286,23 +336,97 @@ const GOOD_EDGE: &str = "EDGE_SE3:QUAT 0 1 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1
 #[test]
 fn malformed_g2o_inputs() {
     let cases: Vec<(String, usize, &str)> = vec![
-        (format!("{GOOD_EDGE}\nEDGE_SE3:QUAT 0 1 0 0 0 0 0 0 1\n"), 2, "tokens"),
-        (format!("{GOOD_EDGE}\nEDGE_SE3:QUAT 0 x 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"), 2, "not a non-negative integer"),
-        (format!("{GOOD_EDGE}\nEDGE_SE3:QUAT 0 -1 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"), 2, "integer"),
-        (format!("\n{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 abc 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"), 3, "not a number"),
-        (format!("{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 NaN 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"), 2, "not finite"),
-        (format!("{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 inf 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"), 2, "not finite"),
-        (format!("{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 0 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"), 2, "quaternion"),
-        (format!("{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 2 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"), 2, "quaternion"),
+        (
+            format!("{GOOD_EDGE}\nEDGE_SE3:QUAT 0 1 0 0 0 0 0 0 1 5\n"),
+            2,
+            "tokens",
+        ),
+        (
+            format!(
+                "{GOOD_EDGE}\nEDGE_SE3:QUAT 0 x 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"
+            ),
+            2,
+            "not a non-negative integer",
+        ),
+        (
+            format!(
+                "{GOOD_EDGE}\nEDGE_SE3:QUAT 0 -1 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"
+            ),
+            2,
+            "integer",
+        ),
+        (
+            format!(
+                "\n{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 abc 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"
+            ),
+            3,
+            "not a number",
+        ),
+        (
+            format!(
+                "{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 NaN 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"
+            ),
+            2,
+            "not finite",
+        ),
+        (
+            format!(
+                "{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 inf 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"
+            ),
+            2,
+            "not finite",
+        ),
+        (
+            format!(
+                "{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 0 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"
+            ),
+            2,
+            "quaternion",
+        ),
+        (
+            format!(
+                "{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 2 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"
+            ),
+            2,
+            "quaternion",
+        ),
         // rotation block diag(1, -1, 1): not positive definite
-        (format!("{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 -1 0 1\n"), 2, "positive definite"),
+        (
+            format!(
+                "{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 -1 0 1\n"
+            ),
+            2,
+            "positive definite",
+        ),
         // rotation block all zero
-        (format!("{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 0 0 0 0 0 0\n"), 2, "positive definite"),
-        (format!("{GOOD_EDGE}\nEDGE_SE3:QUAT 3 3 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"), 2, "self loop"),
-        (format!("VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nVERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\n{GOOD_EDGE}\n"), 2, "twice"),
+        (
+            format!(
+                "{GOOD_EDGE}\nEDGE_SE3:QUAT 0 2 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 0 0 0 0 0 0\n"
+            ),
+            2,
+            "positive definite",
+        ),
+        (
+            format!(
+                "{GOOD_EDGE}\nEDGE_SE3:QUAT 3 3 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"
+            ),
+            2,
+            "self loop",
+        ),
+        (
+            format!(
+                "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nVERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\n{GOOD_EDGE}\n"
+            ),
+            2,
+            "twice",
+        ),
         ("VERTEX_SE3:QUAT 0 0 0 0 0 0 0\n".to_string(), 1, "tokens"),
         ("EDGE3 0 1 0 0 0 0 0\n".to_string(), 1, "tokens"),
-        ("EDGE3 0 1 0 0 0 0 0 0 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 0\n".to_string(), 1, "positive definite"),
+        (
+            "EDGE3 0 1 0 0 0 0 0 0 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 0\n".to_string(),
+            1,
+            "positive definite",
+        ),
         ("EDGE_SE2 0 1 0 0 0 1 0 0 1 0 0\n".to_string(), 1, "I33"),
         ("EDGE_SE2 0 1 0 0\n".to_string(), 1, "tokens"),
         ("VERTEX_SE2 0 0 0 0\nFIX 0\n".to_string(), 2, "no edge"),
@@ -313,7 +437,10 @@ fn malformed_g2o_inputs() {
         assert_eq!(file.as_deref(), Some("bad.g2o"), "{err}");
         assert_eq!(l, Some(*line), "{text}: {err}");
         assert!(err.to_string().contains(needle), "{err} lacks `{needle}`");
-        assert!(err.to_string().starts_with(&format!("bad.g2o:{line}: ")), "{err}");
+        assert!(
+            err.to_string().starts_with(&format!("bad.g2o:{line}: ")),
+            "{err}"
+        );
     }
     // empty file
     let err = read_g2o("", "empty.g2o", &opts()).unwrap_err();
@@ -325,24 +452,54 @@ fn malformed_egs_bundler_list_json() {
     let rot = "1 0 0 0 1 0 0 0 1";
     let cases: Vec<(String, usize, &str)> = vec![
         (format!("0 1 {rot} 1 0 0\n0 2 {rot} 1 0\n"), 2, "tokens"),
-        (format!("0 1 {rot} 1 0 0\n0 2 1 0 0 0 1 0 0 0 2 1 0 0\n"), 2, "not a rotation"),
-        (format!("0 1 {rot} 1 0 0\n0 2 1 0 0 0 1 0 0 0 -1 1 0 0\n"), 2, "not a rotation"),
-        (format!("0 1 {rot} 1 0 0\n2 2 {rot} 1 0 0\n"), 2, "self loop"),
-        (format!("0 1 {rot} 1 0 0\n0 1 1 0 0 0 nan 0 0 0 1 1 0 0\n"), 2, "finite"),
+        (
+            format!("0 1 {rot} 1 0 0\n0 2 1 0 0 0 1 0 0 0 2 1 0 0\n"),
+            2,
+            "not a rotation",
+        ),
+        (
+            format!("0 1 {rot} 1 0 0\n0 2 1 0 0 0 1 0 0 0 -1 1 0 0\n"),
+            2,
+            "not a rotation",
+        ),
+        (
+            format!("0 1 {rot} 1 0 0\n2 2 {rot} 1 0 0\n"),
+            2,
+            "self loop",
+        ),
+        (
+            format!("0 1 {rot} 1 0 0\n0 1 1 0 0 0 nan 0 0 0 1 1 0 0\n"),
+            2,
+            "finite",
+        ),
         (format!("0 1 {rot} 1 0 0\nx 1 {rot} 1 0 0\n"), 2, "integer"),
     ];
     for (text, line, needle) in &cases {
         let err = read_egs(text, "EGs.txt", &opts()).expect_err(text);
         let (file, l) = location(&err);
-        assert_eq!((file.as_deref(), l), (Some("EGs.txt"), Some(*line)), "{err}");
+        assert_eq!(
+            (file.as_deref(), l),
+            (Some("EGs.txt"), Some(*line)),
+            "{err}"
+        );
         assert!(err.to_string().contains(needle), "{err} lacks `{needle}`");
     }
     assert!(read_egs("\n\n", "EGs.txt", &opts()).is_err());
     // Bundler: truncated; bad rotation; header lies about a huge count (no allocation from it)
     let hdr = "# Bundle file v0.3\n";
-    let err = read_bundler(&format!("{hdr}18446744073709551615 0\n500 0 0\n1 0 0\n0 1 0\n0 0 1\n0 0 0\n"), "b.out", &opts()).unwrap_err();
+    let err = read_bundler(
+        &format!("{hdr}18446744073709551615 0\n500 0 0\n1 0 0\n0 1 0\n0 0 1\n0 0 0\n"),
+        "b.out",
+        &opts(),
+    )
+    .unwrap_err();
     assert!(err.to_string().contains("truncated"), "{err}");
-    let err = read_bundler(&format!("{hdr}1 0\n500 0 0\n1 0 0\n0 1 0\n0 0 2\n0 0 0\n"), "b.out", &opts()).unwrap_err();
+    let err = read_bundler(
+        &format!("{hdr}1 0\n500 0 0\n1 0 0\n0 1 0\n0 0 2\n0 0 0\n"),
+        "b.out",
+        &opts(),
+    )
+    .unwrap_err();
     assert_eq!(location(&err).1, Some(4), "{err}");
     assert!(read_bundler("", "b.out", &opts()).is_err());
     assert!(read_rotation_list("1 0 0 0 1 0 0 0\n", "l.txt", &opts()).is_err());
@@ -353,12 +510,54 @@ fn malformed_egs_bundler_list_json() {
     let id = "[[1,0,0],[0,1,0],[0,0,1]]";
     let json = |edges: &str, n: usize| format!("{{\"num_rotations\": {n}, \"edges\": [{edges}]}}");
     let bad = [
-        (json(&format!("{{\"i\":0,\"j\":1,\"rotation\":{id}}}, {{\"i\":1,\"j\":2,\"rotation\":[[1,0,0],[0,1,0],[0,0,3]]}}"), 3), "edge 1"),
-        (json(&format!("{{\"i\":0,\"j\":1,\"rotation\":{id}}}, {{\"i\":1,\"j\":3,\"rotation\":{id}}}"), 3), "node 3"),
-        (json(&format!("{{\"i\":0,\"j\":1,\"rotation\":{id}}}, {{\"i\":1,\"j\":1,\"rotation\":{id}}}"), 3), "self loop"),
-        (json(&format!("{{\"i\":0,\"j\":1,\"rotation\":{id},\"weight\":-1}}"), 2), "weight"),
-        (json(&format!("{{\"i\":0,\"j\":1,\"rotation\":{id},\"wieght\":2}}"), 2), "wieght"),
-        (json(&format!("{{\"i\":0,\"j\":1,\"rotation\":{id}}}"), 1_000_000_000_000), "num_rotations"),
+        (
+            json(
+                &format!(
+                    "{{\"i\":0,\"j\":1,\"rotation\":{id}}}, {{\"i\":1,\"j\":2,\"rotation\":[[1,0,0],[0,1,0],[0,0,3]]}}"
+                ),
+                3,
+            ),
+            "edge 1",
+        ),
+        (
+            json(
+                &format!(
+                    "{{\"i\":0,\"j\":1,\"rotation\":{id}}}, {{\"i\":1,\"j\":3,\"rotation\":{id}}}"
+                ),
+                3,
+            ),
+            "node 3",
+        ),
+        (
+            json(
+                &format!(
+                    "{{\"i\":0,\"j\":1,\"rotation\":{id}}}, {{\"i\":1,\"j\":1,\"rotation\":{id}}}"
+                ),
+                3,
+            ),
+            "self loop",
+        ),
+        (
+            json(
+                &format!("{{\"i\":0,\"j\":1,\"rotation\":{id},\"weight\":-1}}"),
+                2,
+            ),
+            "weight",
+        ),
+        (
+            json(
+                &format!("{{\"i\":0,\"j\":1,\"rotation\":{id},\"wieght\":2}}"),
+                2,
+            ),
+            "wieght",
+        ),
+        (
+            json(
+                &format!("{{\"i\":0,\"j\":1,\"rotation\":{id}}}"),
+                1_000_000_000_000,
+            ),
+            "num_rotations",
+        ),
         (json("", 0), "empty"),
     ];
     for (text, needle) in &bad {
@@ -368,7 +567,14 @@ fn malformed_egs_bundler_list_json() {
     }
     assert!(read_estimate("{}", "e.json", &opts()).is_err());
     assert!(read_estimate("{\"rotations\": []}", "e.json", &opts()).is_err());
-    assert!(read_estimate("{\"rotations\": [[[1,0,0],[0,1,0],[0,0,-1]]]}", "e.json", &opts()).is_err());
+    assert!(
+        read_estimate(
+            "{\"rotations\": [[[1,0,0],[0,1,0],[0,0,-1]]]}",
+            "e.json",
+            &opts()
+        )
+        .is_err()
+    );
 }
 
 /// A disconnected graph loads (info reports it) but `require_connected` gives the typed error
@@ -387,14 +593,40 @@ fn disconnected_graph_is_reported() {
 #[test]
 fn fuzz_readers_never_panic() {
     let mut rng = StdRng::seed_from_u64(77);
-    let (p, gt) = SyntheticGraph { num_rotations: 6, num_edges: 10, ..Default::default() }.generate();
+    let (p, gt) = SyntheticGraph {
+        num_rotations: 6,
+        num_edges: 10,
+        ..Default::default()
+    }
+    .generate();
     let g2o = write_g2o(&p, Some(&gt));
     let json = write_problem_json(&p);
     let egs = "0 1 1 0 0 0 1 0 0 0 1 1 0 0\n3 1 0 -1 0 1 0 0 0 0 1 1 0 0\n".to_string();
     let toro = "VERTEX3 0 0 0 0 0.1 0.2 0.3\nEDGE3 0 1 1 0 0 0.1 0.2 0.3\nEDGE3 1 2 1 0 0 0.1 0.2 0.3 10 0 0 0 0 0 10 0 0 0 0 10 0 0 0 100 0 0 100 0 25\nEDGE_SE2 2 3 0 0 1 1 0 0 1 0 1\n".to_string();
-    let bundle = "# Bundle file v0.3\n1 1\n500 0 0\n1 0 0\n0 1 0\n0 0 1\n0 0 0\n1 2 3\n".to_string();
+    let bundle =
+        "# Bundle file v0.3\n1 1\n500 0 0\n1 0 0\n0 1 0\n0 0 1\n0 0 0\n1 2 3\n".to_string();
     let est = write_estimate_json(&gt);
-    let pieces = ["", " ", "\n", "0", "-1", "nan", "1e308", "-0", "{", "}", "[", "]", ",", "\"", "EDGE3", "FIX", "99999999999999999999", "1.5", "x"];
+    let pieces = [
+        "",
+        " ",
+        "\n",
+        "0",
+        "-1",
+        "nan",
+        "1e308",
+        "-0",
+        "{",
+        "}",
+        "[",
+        "]",
+        ",",
+        "\"",
+        "EDGE3",
+        "FIX",
+        "99999999999999999999",
+        "1.5",
+        "x",
+    ];
     for base in [&g2o, &json, &egs, &toro, &bundle, &est] {
         for _ in 0..600 {
             let mut s: Vec<char> = base.chars().collect();
@@ -417,14 +649,23 @@ fn fuzz_readers_never_panic() {
                 }
             }
             let text: String = s.into_iter().collect();
-            for fmt in [GraphFormat::Auto, GraphFormat::G2o, GraphFormat::OneDsfm, GraphFormat::Json] {
+            for fmt in [
+                GraphFormat::Auto,
+                GraphFormat::G2o,
+                GraphFormat::OneDsfm,
+                GraphFormat::Json,
+            ] {
                 let _ = read_graph(&text, "fuzz", fmt, &opts());
             }
             let _ = read_bundler(&text, "fuzz", &opts());
             let _ = read_rotation_list(&text, "fuzz", &opts());
             let _ = read_estimate(&text, "fuzz", &opts());
             if let Ok(g) = read_graph(&text, "fuzz", GraphFormat::Auto, &opts()) {
-                let _ = rotavg::multiple::stats::graph_stats(&g.problem, g.initial.as_deref(), &Default::default());
+                let _ = rotavg::multiple::stats::graph_stats(
+                    &g.problem,
+                    g.initial.as_deref(),
+                    &Default::default(),
+                );
             }
         }
     }

@@ -81,12 +81,26 @@ fn every_g2o_file_loads_with_readme_counts() {
         assert!(g.problem.require_connected().is_ok(), "{rel}");
         assert_eq!(g.planar, rel.contains("/2d/"), "{rel}");
         assert!(g.warnings.is_empty(), "{rel}: {:?}", g.warnings);
-        assert!(g.problem.edges().iter().all(|e| e.weight > 0.0 && e.weight.is_finite()));
+        assert!(
+            g.problem
+                .edges()
+                .iter()
+                .all(|e| e.weight > 0.0 && e.weight.is_finite())
+        );
     }
     // README facts: MIT has 20 edges with i > j, smallGrid3D 33; CSAIL one duplicated pair.
-    assert_eq!(load(&dir, "g2o/2d/sesync/MIT.g2o", WeightSource::Unit).reversed, 20);
-    assert_eq!(load(&dir, "g2o/3d/sesync/smallGrid3D.g2o", WeightSource::Unit).reversed, 33);
-    assert_eq!(load(&dir, "g2o/2d/sesync/CSAIL.g2o", WeightSource::Unit).duplicates, 1);
+    assert_eq!(
+        load(&dir, "g2o/2d/sesync/MIT.g2o", WeightSource::Unit).reversed,
+        20
+    );
+    assert_eq!(
+        load(&dir, "g2o/3d/sesync/smallGrid3D.g2o", WeightSource::Unit).reversed,
+        33
+    );
+    assert_eq!(
+        load(&dir, "g2o/2d/sesync/CSAIL.g2o", WeightSource::Unit).duplicates,
+        1
+    );
 }
 
 /// Madrid_Metropolis: N = 394, E = 23784, connected, no duplicates, i < j everywhere, and the
@@ -96,7 +110,10 @@ fn madrid_loads() {
     let dir = data_or_skip!();
     let g = load(&dir, "1dsfm/Madrid_Metropolis/EGs.txt", WeightSource::File);
     assert_eq!(g.format, GraphFormat::OneDsfm);
-    assert_eq!((g.problem.num_rotations(), g.problem.num_edges()), (394, 23784));
+    assert_eq!(
+        (g.problem.num_rotations(), g.problem.num_edges()),
+        (394, 23784)
+    );
     assert_eq!((g.duplicates, g.reversed), (0, 0));
     assert!(g.problem.require_connected().is_ok());
     let cc = std::fs::read_to_string(dir.join("1dsfm/Madrid_Metropolis/cc.txt")).unwrap();
@@ -129,17 +146,31 @@ fn sphere2500_truth(g: &LoadedGraph) -> Vec<Rotation> {
 #[test]
 fn sphere2500_ground_truth_cost_is_tiny() {
     let dir = data_or_skip!();
-    let g = load(&dir, "g2o/3d/gtsam/sphere2500_groundtruth.txt", WeightSource::Unit);
+    let g = load(
+        &dir,
+        "g2o/3d/gtsam/sphere2500_groundtruth.txt",
+        WeightSource::Unit,
+    );
     let truth = sphere2500_truth(&g);
     let cost = g.problem.chordal_cost(&truth);
     let bound = 4949.0 * (2.0 * 2f64.sqrt() * (2.5e-4f64.to_radians() / 2.0).sin()).powi(2);
     println!("sphere2500 ground truth: cost {cost:.3e} (bound {bound:.3e})");
     assert!(cost <= bound, "{cost} > {bound}");
     // the opposite convention (R_ij = Z_ij instead of Z_ij^T) makes the chain inconsistent
-    let flipped: Vec<rotavg::multiple::Edge> =
-        g.problem.edges().iter().map(|e| rotavg::multiple::Edge { rotation: e.rotation.inverse(), ..e.clone() }).collect();
+    let flipped: Vec<rotavg::multiple::Edge> = g
+        .problem
+        .edges()
+        .iter()
+        .map(|e| rotavg::multiple::Edge {
+            rotation: e.rotation.inverse(),
+            ..e.clone()
+        })
+        .collect();
     let pf = rotavg::multiple::MultipleProblem::new(2500, flipped).unwrap();
-    let tf = sphere2500_truth(&LoadedGraph { problem: pf.clone(), ..g.clone() });
+    let tf = sphere2500_truth(&LoadedGraph {
+        problem: pf.clone(),
+        ..g.clone()
+    });
     let cf = pf.chordal_cost(&tf);
     println!("sphere2500 ground truth, opposite convention: cost {cf:.3e}");
     assert!(cf > 1.0);
@@ -148,14 +179,23 @@ fn sphere2500_ground_truth_cost_is_tiny() {
     // EDGE3 weights (kappa = 6 / tr(Omega^-1) = 100) match SE-Sync's g2o weights (3 / (2 tr))
     // to 1 % (edge3_and_g2o_weights_agree, [F3]).
     let s = load(&dir, "g2o/3d/sesync/sphere2500.g2o", WeightSource::File);
-    let res: Vec<f64> = s.problem.residual_angles(&truth).iter().map(|a| a.to_degrees()).collect();
+    let res: Vec<f64> = s
+        .problem
+        .residual_angles(&truth)
+        .iter()
+        .map(|a| a.to_degrees())
+        .collect();
     let max = res.iter().cloned().fold(0.0, f64::max);
     println!("sesync sphere2500 measurements vs truth: max residual {max:.3} deg");
     assert!(max < 20.0);
     for (a, b) in g.problem.edges().iter().zip(s.problem.edges()).take(10) {
         assert_eq!((a.i, a.j), (b.i, b.j));
     }
-    let ge = load(&dir, "g2o/3d/gtsam/sphere2500_groundtruth.txt", WeightSource::File);
+    let ge = load(
+        &dir,
+        "g2o/3d/gtsam/sphere2500_groundtruth.txt",
+        WeightSource::File,
+    );
     let w3: f64 = ge.problem.edges().iter().map(|e| e.weight).sum::<f64>() / 4949.0;
     let wg: f64 = s.problem.edges().iter().map(|e| e.weight).sum::<f64>() / 4949.0;
     println!("edge3_and_g2o_weights_agree: mean kappa EDGE3 {w3:.4}, g2o {wg:.4}");
@@ -170,7 +210,12 @@ fn mrob_sphere_gt_vertex_cost_is_tiny() {
     let dir = data_or_skip!();
     let g = load(&dir, "g2o/3d/mrob/sphere_gt.g2o", WeightSource::Unit);
     let init = g.initial.clone().expect("vertex lines");
-    let res: Vec<f64> = g.problem.residual_angles(&init).iter().map(|a| a.to_degrees()).collect();
+    let res: Vec<f64> = g
+        .problem
+        .residual_angles(&init)
+        .iter()
+        .map(|a| a.to_degrees())
+        .collect();
     let max = res.iter().cloned().fold(0.0, f64::max);
     let cost = g.problem.chordal_cost(&init);
     // 9799 edges at <= 0.004 deg: cost <= 9799 * (2 sqrt2 sin(0.002 deg))^2 = 9.6e-5 (unit weights)
@@ -178,16 +223,29 @@ fn mrob_sphere_gt_vertex_cost_is_tiny() {
     println!("sphere_gt: vertex cost {cost:.3e} (bound {bound:.3e}), max residual {max:.5} deg");
     assert!(max < 0.004 && cost < bound);
     let opposite: Vec<Rotation> = init.iter().map(|r| r.inverse()).collect();
-    let mut ro: Vec<f64> = g.problem.residual_angles(&opposite).iter().map(|a| a.to_degrees()).collect();
+    let mut ro: Vec<f64> = g
+        .problem
+        .residual_angles(&opposite)
+        .iter()
+        .map(|a| a.to_degrees())
+        .collect();
     ro.sort_by(f64::total_cmp);
     let co = g.problem.chordal_cost(&opposite);
-    println!("sphere_gt, opposite convention: cost {co:.3e}, median residual {:.3} deg", ro[ro.len() / 2]);
+    println!(
+        "sphere_gt, opposite convention: cost {co:.3e}, median residual {:.3} deg",
+        ro[ro.len() / 2]
+    );
     assert!(co > 1e3 * bound.max(1e-3) && ro[ro.len() / 2] > 1.0);
 
     // The noisy twin: its measurements against the truth (README: median 0.9, max 2.7 deg),
     // and the accuracy of its vertex initial guess after alignment.
     let noisy = load(&dir, "g2o/3d/mrob/sphere.g2o", WeightSource::File);
-    let mut rn: Vec<f64> = noisy.problem.residual_angles(&init).iter().map(|a| a.to_degrees()).collect();
+    let mut rn: Vec<f64> = noisy
+        .problem
+        .residual_angles(&init)
+        .iter()
+        .map(|a| a.to_degrees())
+        .collect();
     rn.sort_by(f64::total_cmp);
     let (med, mx) = (rn[rn.len() / 2], rn[rn.len() - 1]);
     println!("mrob sphere.g2o edges vs truth: median {med:.3} deg, max {mx:.3} deg");

@@ -133,19 +133,21 @@ pub fn rotation_from_ypr(yaw: f64, pitch: f64, roll: f64) -> Rotation {
 /// Read the 21 upper-triangular entries of a 6x6 information matrix and return the rotation
 /// block (rows/columns 3..6), validated finite and positive definite, and `tr(block^{-1})`.
 fn rotation_information_trace_inv(t: &mut Tokens<'_>) -> Result<f64> {
-    let mut info = [[0.0f64; 6]; 6];
+    let mut info = nalgebra::Matrix6::<f64>::zeros();
     for r in 0..6 {
         for c in r..6 {
             let v = t.next_f64(&format!("information entry ({}, {})", r + 1, c + 1))?;
-            info[r][c] = v;
-            info[c][r] = v;
+            info[(r, c)] = v;
+            info[(c, r)] = v;
         }
     }
-    let block = Matrix3::from_fn(|r, c| info[r + 3][c + 3]);
+    let block: Matrix3<f64> = info.fixed_view::<3, 3>(3, 3).into_owned();
     let chol = block.cholesky().ok_or_else(|| {
         t.err(format!(
             "the rotation block of the information matrix is not positive definite: {:?}",
-            [info[3][3..].to_vec(), info[4][3..].to_vec(), info[5][3..].to_vec()]
+            (0..3)
+                .map(|r| [block[(r, 0)], block[(r, 1)], block[(r, 2)]])
+                .collect::<Vec<_>>()
         ))
     })?;
     let tr = chol.inverse().trace();
@@ -310,9 +312,7 @@ pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
         }
         if let Some((id, r)) = vertex {
             if let Some((_, first)) = vertices.get(&id) {
-                return Err(t.err(format!(
-                    "vertex {id} defined twice (first at line {first})"
-                )));
+                return Err(t.err(format!("vertex {id} defined twice (first at line {first})")));
             }
             vertices.insert(id, (r, ln));
         }
@@ -379,7 +379,8 @@ pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
         None
     };
     let first_line = raw.first().map(|e| e.line);
-    let problem = MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(file, first_line))?;
+    let problem =
+        MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(file, first_line))?;
     let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
     Ok(LoadedGraph {
         problem,

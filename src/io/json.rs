@@ -165,12 +165,17 @@ pub fn read_estimate(text: &str, file: &str, options: &ReadOptions) -> Result<Es
     let tol = options.rotation_tolerance;
     let many = |rows: &[Rows]| -> Result<Vec<Rotation>> {
         if rows.is_empty() {
-            return Err(Error::parse(Some(file), None, "the estimate has no rotations"));
+            return Err(Error::parse(
+                Some(file),
+                None,
+                "the estimate has no rotations",
+            ));
         }
         rows.iter()
             .enumerate()
             .map(|(k, r)| {
-                rotation_from_rows(r, tol, &format!("rotation {k}")).map_err(|e| e.in_file(file, None))
+                rotation_from_rows(r, tol, &format!("rotation {k}"))
+                    .map_err(|e| e.in_file(file, None))
             })
             .collect()
     };
@@ -205,7 +210,11 @@ pub fn read_estimate(text: &str, file: &str, options: &ReadOptions) -> Result<Es
 }
 
 /// Read an estimate for multiple averaging (a list of rotations); a single rotation is an error.
-pub fn read_rotations_estimate(text: &str, file: &str, options: &ReadOptions) -> Result<Vec<Rotation>> {
+pub fn read_rotations_estimate(
+    text: &str,
+    file: &str,
+    options: &ReadOptions,
+) -> Result<Vec<Rotation>> {
     match read_estimate(text, file, options)? {
         Estimate::Multiple(rs) => Ok(rs),
         Estimate::Single(_) => Err(Error::parse(
@@ -228,7 +237,12 @@ pub fn read_rotations_estimate(text: &str, file: &str, options: &ReadOptions) ->
 pub fn write_estimate_json(rotations: &[Rotation]) -> String {
     let lines: Vec<String> = rotations
         .iter()
-        .map(|r| format!("  {}", serde_json::to_string(&rotation_to_rows(r)).unwrap_or_default()))
+        .map(|r| {
+            format!(
+                "  {}",
+                serde_json::to_string(&rotation_to_rows(r)).unwrap_or_default()
+            )
+        })
         .collect();
     format!("{{\"rotations\": [\n{}\n]}}\n", lines.join(",\n"))
 }

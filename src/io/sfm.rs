@@ -62,7 +62,10 @@ pub fn read_egs(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
             continue;
         }
         let mut t = Tokens::new(file, ln, trimmed);
-        t.expect_count(&[14, 11], "i j R11 R12 R13 R21 R22 R23 R31 R32 R33 [tx ty tz]")?;
+        t.expect_count(
+            &[14, 11],
+            "i j R11 R12 R13 R21 R22 R23 R31 R32 R33 [tx ty tz]",
+        )?;
         let i = t.next_id("camera id i")?;
         let j = t.next_id("camera id j")?;
         let m = read_matrix(&mut t)?;
@@ -100,7 +103,8 @@ pub fn read_egs(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
         .collect();
     let reversed = raw.iter().filter(|e| e.0 > e.1).count();
     let first_line = raw.first().map(|e| e.3);
-    let problem = MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(file, first_line))?;
+    let problem =
+        MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(file, first_line))?;
     let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
     Ok(LoadedGraph {
         problem,
@@ -130,14 +134,22 @@ fn is_zero(m: &Matrix3<f64>) -> bool {
 /// assert_eq!(gt.len(), 2);
 /// assert!(gt[0].is_some() && gt[1].is_none());
 /// ```
-pub fn read_bundler(text: &str, file: &str, options: &ReadOptions) -> Result<Vec<Option<Rotation>>> {
+pub fn read_bundler(
+    text: &str,
+    file: &str,
+    options: &ReadOptions,
+) -> Result<Vec<Option<Rotation>>> {
     let mut lines = text
         .lines()
         .enumerate()
         .map(|(k, l)| (k + 1, l.trim()))
         .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
     let (hl, header) = lines.next().ok_or_else(|| {
-        Error::parse(Some(file), Some(1), "empty Bundler file (no `num_cameras num_points` line)")
+        Error::parse(
+            Some(file),
+            Some(1),
+            "empty Bundler file (no `num_cameras num_points` line)",
+        )
     })?;
     let mut t = Tokens::new(file, hl, header);
     t.expect_count(&[2], "num_cameras num_points")?;
@@ -216,7 +228,12 @@ pub fn read_rotation_list(
             out.push(None);
         } else {
             let item = format!("rotation {}", out.len());
-            out.push(Some(to_rotation(&t, &m, options.rotation_tolerance, &item)?));
+            out.push(Some(to_rotation(
+                &t,
+                &m,
+                options.rotation_tolerance,
+                &item,
+            )?));
         }
     }
     if out.is_empty() {
@@ -227,7 +244,10 @@ pub fn read_rotation_list(
 
 /// Ground truth indexed by file id, reordered onto a graph's nodes: entry `k` is the truth of
 /// node `k` (file id `node_ids[k]`), `None` when the file has none for it.
-pub fn truth_for_nodes(truth_by_id: &[Option<Rotation>], node_ids: &[u64]) -> Vec<Option<Rotation>> {
+pub fn truth_for_nodes(
+    truth_by_id: &[Option<Rotation>],
+    node_ids: &[u64],
+) -> Vec<Option<Rotation>> {
     node_ids
         .iter()
         .map(|&id| {

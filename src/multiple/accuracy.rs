@@ -54,7 +54,10 @@ impl fmt::Display for AccuracyReport {
 /// let rep = align_and_compare(&est, &some).unwrap();
 /// assert!(rep.max_deg < 1e-9);
 /// ```
-pub fn align_and_compare(estimate: &[Rotation], truth: &[Option<Rotation>]) -> Result<AccuracyReport> {
+pub fn align_and_compare(
+    estimate: &[Rotation],
+    truth: &[Option<Rotation>],
+) -> Result<AccuracyReport> {
     if estimate.len() != truth.len() {
         return Err(Error::InvalidSettings {
             name: "ground truth".into(),
@@ -126,7 +129,13 @@ mod tests {
         let noisy: Vec<Rotation> = exact
             .iter()
             .enumerate()
-            .map(|(k, r)| if k % 2 == 1 { perturb(r, 1f64.to_radians(), &mut rng) } else { *r })
+            .map(|(k, r)| {
+                if k % 2 == 1 {
+                    perturb(r, 1f64.to_radians(), &mut rng)
+                } else {
+                    *r
+                }
+            })
             .collect();
         let rep = align_and_compare(&noisy, &t_opt).unwrap();
         assert!(rep.max_deg < 1.5 && rep.max_deg > 0.5, "{rep}");
@@ -134,7 +143,10 @@ mod tests {
         // missing truth is skipped
         let mut partial = t_opt.clone();
         partial[3] = None;
-        assert_eq!(align_and_compare(&exact, &partial).unwrap().num_compared, 49);
+        assert_eq!(
+            align_and_compare(&exact, &partial).unwrap().num_compared,
+            49
+        );
         assert!(align_and_compare(&exact, &vec![None; 50]).is_err());
         assert!(align_and_compare(&exact[..3], &t_opt).is_err());
     }

@@ -107,6 +107,9 @@ pub enum SpectralGap {
         residual: f64,
         /// Lanczos steps taken.
         steps: usize,
+        /// Whether the residual is below `1e-8 d_max` (otherwise `lambda2` is only an upper
+        /// bound, possibly a loose one).
+        converged: bool,
     },
     /// The graph is disconnected: `lambda_2 = 0`.
     Disconnected,
@@ -145,9 +148,15 @@ impl fmt::Display for SpectralGap {
                 normalized,
                 residual,
                 steps,
+                converged,
             } => write!(
                 f,
-                "{normalized:.6e} (lambda_2 <= {lambda2:.6e}, Lanczos {steps} steps, residual {residual:.1e})"
+                "{normalized:.6e} (lambda_2 <= {lambda2:.6e}, Lanczos {steps} steps, residual {residual:.1e}{})",
+                if *converged {
+                    ""
+                } else {
+                    ", NOT converged: upper bound only"
+                }
             ),
             SpectralGap::Disconnected => write!(f, "0 (disconnected)"),
             SpectralGap::Skipped { reason } => write!(f, "skipped ({reason})"),
@@ -225,7 +234,7 @@ pub fn duplicate_disagreements(problem: &MultipleProblem) -> Vec<((usize, usize)
         }
     }
     let mut out: Vec<_> = worst.into_iter().collect();
-    out.sort_by(|a, b| a.0.cmp(&b.0));
+    out.sort_by_key(|a| a.0);
     out
 }
 
@@ -320,9 +329,11 @@ fn lanczos_lambda2(deg: &[f64], adj: &[Vec<(usize, f64)>], steps: usize, dmax: f
         laplacian_apply(deg, adj, &basis[k], &mut w);
         let a: f64 = w.iter().zip(&basis[k]).map(|(x, y)| x * y).sum();
         alpha.push(a);
-        project(&mut w);
-        // full reorthogonalisation (twice, for stability)
+        // Full reorthogonalisation, twice, against the ones vector and the basis. Any rounding
+        // component along the ones vector (eigenvalue 0) would otherwise be amplified by the
+        // Krylov iteration until a spurious Ritz value 0 appears (seen after ~100 steps).
         for _ in 0..2 {
+            project(&mut w);
             for b in &basis {
                 let c: f64 = w.iter().zip(b).map(|(x, y)| x * y).sum();
                 w.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
@@ -354,6 +365,7 @@ fn lanczos_lambda2(deg: &[f64], adj: &[Vec<(usize, f64)>], steps: usize, dmax: f
                 normalized: lambda2 / dmax,
                 residual,
                 steps: k,
+                converged: residual <= 1e-8 * dmax,
             }
         }
         Err(e) => SpectralGap::Skipped {
@@ -410,10 +422,7 @@ pub fn graph_stats(
         num_pairs: m - duplicate_edges,
         duplicate_edges,
         contradictory_pairs: dis.iter().filter(|(_, a)| *a > thr).count(),
-        max_duplicate_disagreement_deg: dis
-            .iter()
-            .map(|(_, a)| a.to_degrees())
-            .reduce(f64::max),
+        max_duplicate_disagreement_deg: dis.iter().map(|(_, a)| a.to_degrees()).reduce(f64::max),
         component_sizes: problem.components().iter().map(Vec::len).collect(),
         degree: Summary::of(&degree).unwrap_or(zero),
         weight: Summary::of(&weights).unwrap_or(zero),
@@ -476,7 +485,10 @@ mod tests {
             let p = z_cycle(n, 0.0);
             let exact = (2.0 - 2.0 * (2.0 * std::f64::consts::PI / n as f64).cos()) / 2.0;
             let dense = spectral_gap(&p, &StatsSettings::default());
-            assert!((dense.normalized().unwrap() - exact).abs() < 1e-12, "{dense}");
+            assert!(
+                (dense.normalized().unwrap() - exact).abs() < 1e-12,
+                "{dense}"
+            );
             let lz = spectral_gap(
                 &p,
                 &StatsSettings {
@@ -498,7 +510,9 @@ mod tests {
             ..Default::default()
         }
         .generate();
-        let d = spectral_gap(&p, &StatsSettings::default()).normalized().unwrap();
+        let d = spectral_gap(&p, &StatsSettings::default())
+            .normalized()
+            .unwrap();
         let l = spectral_gap(
             &p,
             &StatsSettings {
@@ -508,21 +522,37 @@ mod tests {
         )
         .normalized()
         .unwrap();
-        assert!(l >= d - 1e-9 && (l - d).abs() < 1e-6 * d.max(1e-3), "{l} vs {d}");
+        assert!(
+            l >= d - 1e-9 && (l - d).abs() < 1e-6 * d.max(1e-3),
+            "{l} vs {d}"
+        );
     }
 
     #[test]
     fn duplicates_and_contradictions() {
         let rz = |a: f64| Rotation::from_axis_angle(&nalgebra::Vector3::z_axis(), a.to_radians());
-        let e = |i, j, r| Edge { i, j, rotation: r, weight: 1.0 };
+        let e = |i, j, r| Edge {
+            i,
+            j,
+            rotation: r,
+            weight: 1.0,
+        };
         // pair {0,1}: 10 deg, then its reverse given as (1,0) with -10 deg (agrees), then 30 deg.
         let p = MultipleProblem::new(
             3,
-            vec![e(0, 1, rz(10.0)), e(1, 0, rz(-10.0)), e(0, 1, rz(30.0)), e(1, 2, rz(0.0))],
+            vec![
+                e(0, 1, rz(10.0)),
+                e(1, 0, rz(-10.0)),
+                e(0, 1, rz(30.0)),
+                e(1, 2, rz(0.0)),
+            ],
         )
         .unwrap();
         let s = graph_stats(&p, None, &StatsSettings::default());
-        assert_eq!((s.num_pairs, s.duplicate_edges, s.contradictory_pairs), (2, 2, 1));
+        assert_eq!(
+            (s.num_pairs, s.duplicate_edges, s.contradictory_pairs),
+            (2, 2, 1)
+        );
         assert!((s.max_duplicate_disagreement_deg.unwrap() - 20.0).abs() < 1e-9);
         // disconnected graph: gap 0
         let q = MultipleProblem::new(4, vec![e(0, 1, rz(1.0)), e(2, 3, rz(1.0))]).unwrap();

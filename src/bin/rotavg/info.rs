@@ -89,18 +89,29 @@ pub fn run(args: &Args) -> rotavg::Result<Outcome> {
         });
         println!("{value}");
     } else {
-        println!("file:           {name} ({} format{})", g.format, if g.planar { ", planar (2-D)" } else { "" });
+        println!(
+            "file:           {name} ({} format{})",
+            g.format,
+            if g.planar { ", planar (2-D)" } else { "" }
+        );
         if let (Some(a), Some(b)) = (g.node_ids.first(), g.node_ids.last()) {
             let contiguous = *b + 1 == g.node_ids.len() as u64 && *a == 0;
             if !contiguous {
-                println!("node ids:       sparse ({a}..={b}), mapped to 0..{}", g.node_ids.len());
+                println!(
+                    "node ids:       sparse ({a}..={b}), mapped to 0..{}",
+                    g.node_ids.len()
+                );
             }
         }
         println!("{stats}");
         println!("reversed edges: {} (given with i > j; kept)", g.reversed);
         println!(
             "vertex lines:   {}",
-            if g.initial.is_some() { "an initial guess for every node" } else { "none used" }
+            if g.initial.is_some() {
+                "an initial guess for every node"
+            } else {
+                "none used"
+            }
         );
         for w in &g.warnings {
             println!("warning:        {w}");
