@@ -78,10 +78,21 @@ impl Summary {
 
 impl fmt::Display for Summary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // fixed notation for ordinary magnitudes, scientific for tiny or huge ones
+        let num = |x: f64| {
+            if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
+                format!("{x:.4}")
+            } else {
+                format!("{x:.4e}")
+            }
+        };
         write!(
             f,
-            "min {:.4}, mean {:.4}, median {:.4}, max {:.4}",
-            self.min, self.mean, self.median, self.max
+            "min {}, mean {}, median {}, max {}",
+            num(self.min),
+            num(self.mean),
+            num(self.median),
+            num(self.max)
         )
     }
 }
