@@ -173,6 +173,25 @@ impl BlockPattern {
         Llt::try_new_with_symbolic(sym.clone(), mat, Side::Lower).ok()
     }
 
+    /// `y = A x` (one vector) for the symmetric matrix stored by its lower triangle.
+    pub(crate) fn sym_mul_flat(&self, val: &[f64], x: &[f64], y: &mut [f64]) {
+        y.iter_mut().for_each(|v| *v = 0.0);
+        let rows = self.symbolic.row_idx();
+        for c in 0..self.col_ptr.len() - 1 {
+            let xc = x[c];
+            let mut acc = 0.0;
+            for idx in self.col_ptr[c]..self.col_ptr[c + 1] {
+                let r = rows[idx];
+                let v = val[idx];
+                y[r] += v * xc;
+                if r != c {
+                    acc += v * x[r];
+                }
+            }
+            y[c] += acc;
+        }
+    }
+
     /// `y = A x` for the symmetric matrix stored by its lower triangle; `x`, `y`: dim x k.
     pub(crate) fn sym_mul(&self, val: &[f64], x: &Mat<f64>) -> Mat<f64> {
         let dim = self.col_ptr.len() - 1;
@@ -193,6 +212,171 @@ impl BlockPattern {
         }
         y
     }
+}
+
+/// Fill-in budget of the direct solver: a sparse Cholesky is used when the scalar (one entry
+/// per node) symbolic factor has at most this many entries per node; otherwise (expander-like
+/// graphs, e.g. random view graphs, whose Cholesky factors are nearly dense) preconditioned
+/// conjugate gradients are used (`[M6]`, "linear solver").
+pub const DIRECT_FILL_PER_NODE: usize = 60;
+
+/// Linear solver for a symmetric block-sparse matrix with the pattern of a [`BlockPattern`].
+pub(crate) enum LinearSolver {
+    /// Sparse Cholesky; symbolic factorisation done once.
+    Direct(SymbolicLlt<usize>),
+    /// Block-Jacobi preconditioned conjugate gradients.
+    Pcg,
+}
+
+/// A factorised (or preconditioned) system ready to solve.
+pub(crate) enum Factor<'a> {
+    Direct(Llt<usize, f64>),
+    Pcg {
+        pattern: &'a BlockPattern,
+        val: Vec<f64>,
+        /// inverse diagonal blocks (bs x bs each, row-major)
+        precond: Vec<Matrix3<f64>>,
+    },
+}
+
+impl LinearSolver {
+    /// Choose direct vs iterative from the fill of the scalar symbolic Cholesky of the graph.
+    pub(crate) fn choose(pattern: &BlockPattern, scalar: &BlockPattern) -> Result<Self> {
+        let nblocks = scalar.col_ptr.len() - 1;
+        let sym = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
+            scalar.symbolic.as_ref(),
+            Side::Lower,
+            Default::default(),
+            Default::default(),
+        )
+        .map_err(|e| Error::Solver {
+            message: format!("symbolic sparse Cholesky failed: {e:?}"),
+        })?;
+        if sym.len_val() <= DIRECT_FILL_PER_NODE * nblocks.max(1) {
+            Ok(LinearSolver::Direct(pattern.symbolic_llt()?))
+        } else {
+            Ok(LinearSolver::Pcg)
+        }
+    }
+
+    /// Prepare to solve with matrix values `val`; `None` if not positive definite (direct) or
+    /// if a diagonal block is not positive definite (PCG; indefiniteness found later is
+    /// reported by [`Factor::solve`]).
+    pub(crate) fn factor<'a>(&self, pattern: &'a BlockPattern, val: &[f64]) -> Option<Factor<'a>> {
+        match self {
+            LinearSolver::Direct(sym) => pattern.llt(sym, val).map(Factor::Direct),
+            LinearSolver::Pcg => {
+                let bs = pattern.bs;
+                let nb = (pattern.col_ptr.len() - 1) / bs;
+                let mut precond = Vec::with_capacity(nb);
+                for q in 0..nb {
+                    let mut m = Matrix3::identity();
+                    for b in 0..bs {
+                        let c = pattern.col_ptr[bs * q + b];
+                        for a in b..bs {
+                            m[(a, b)] = val[c + a - b];
+                            m[(b, a)] = val[c + a - b];
+                        }
+                    }
+                    let inv = m.cholesky()?.inverse();
+                    precond.push(inv);
+                }
+                Some(Factor::Pcg {
+                    pattern,
+                    val: val.to_vec(),
+                    precond,
+                })
+            }
+        }
+    }
+}
+
+impl Factor<'_> {
+    /// Solve `A x = b` in place for each column of `b` (relative residual `rel_tol` for PCG).
+    /// Returns `false` if PCG met non-positive curvature (the matrix is not positive definite).
+    pub(crate) fn solve(&self, b: &mut Mat<f64>, rel_tol: f64, max_iter: usize) -> bool {
+        match self {
+            Factor::Direct(l) => {
+                l.solve_in_place(b.as_mut());
+                true
+            }
+            Factor::Pcg {
+                pattern,
+                val,
+                precond,
+            } => {
+                for col in 0..b.ncols() {
+                    let rhs: Vec<f64> = (0..b.nrows()).map(|r| b[(r, col)]).collect();
+                    let Some(x) = pcg(pattern, val, precond, &rhs, rel_tol, max_iter) else {
+                        return false;
+                    };
+                    for (r, v) in x.into_iter().enumerate() {
+                        b[(r, col)] = v;
+                    }
+                }
+                true
+            }
+        }
+    }
+}
+
+/// Preconditioned conjugate gradients (block-Jacobi). `None` on non-positive curvature.
+fn pcg(
+    pattern: &BlockPattern,
+    val: &[f64],
+    precond: &[Matrix3<f64>],
+    b: &[f64],
+    rel_tol: f64,
+    max_iter: usize,
+) -> Option<Vec<f64>> {
+    let bs = pattern.bs;
+    let dim = b.len();
+    let apply_m = |r: &[f64], z: &mut [f64]| {
+        for (q, m) in precond.iter().enumerate() {
+            for a in 0..bs {
+                let mut s = 0.0;
+                for c in 0..bs {
+                    s += m[(a, c)] * r[bs * q + c];
+                }
+                z[bs * q + a] = s;
+            }
+        }
+    };
+    let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
+    let bnorm = dot(b, b).sqrt();
+    let mut x = vec![0.0; dim];
+    if bnorm == 0.0 {
+        return Some(x);
+    }
+    let mut r = b.to_vec();
+    let mut z = vec![0.0; dim];
+    apply_m(&r, &mut z);
+    let mut p = z.clone();
+    let mut rz = dot(&r, &z);
+    let mut ap = vec![0.0; dim];
+    for _ in 0..max_iter {
+        pattern.sym_mul_flat(val, &p, &mut ap);
+        let pap = dot(&p, &ap);
+        if pap <= 0.0 || !pap.is_finite() {
+            return None;
+        }
+        let alpha = rz / pap;
+        for k in 0..dim {
+            x[k] += alpha * p[k];
+            r[k] -= alpha * ap[k];
+        }
+        if dot(&r, &r).sqrt() <= rel_tol * bnorm {
+            break;
+        }
+        apply_m(&r, &mut z);
+        let rz_new = dot(&r, &z);
+        let beta = rz_new / rz;
+        rz = rz_new;
+        for k in 0..dim {
+            p[k] = z[k] + beta * p[k];
+        }
+    }
+    Some(x)
 }
 
 /// Per-edge data for the Newton system: variable blocks (node 0 fixed -> `None`) and slot.
@@ -308,7 +492,17 @@ pub(crate) fn solve_chordal(
             .map(|e| (e.i - 1, e.j - 1)),
     );
     let slots = edge_slots(problem, &pattern);
-    let sym = pattern.symbolic_llt()?;
+    let scalar = BlockPattern::new(
+        n - 1,
+        1,
+        problem
+            .edges()
+            .iter()
+            .filter(|e| e.i != 0 && e.j != 0)
+            .map(|e| (e.i - 1, e.j - 1)),
+    );
+    let solver = LinearSolver::choose(&pattern, &scalar)?;
+    drop(scalar);
     let mut hval = vec![0.0; pattern.nnz()];
     let mut val = vec![0.0; pattern.nnz()];
     let mut mu = 1e-6; // damping relative to the mean Hessian diagonal
@@ -343,13 +537,21 @@ pub(crate) fn solve_chordal(
                 rhs[(3 * (i - 1) + a, 0)] = -grad[i][a];
             }
         }
-        // factorise H + lambda I, increasing lambda until positive definite
-        let (llt, lambda) = loop {
+        // factorise H + lambda I, increasing lambda until positive definite; inexact Newton
+        // tolerance for PCG: eta = min(1e-2, sqrt(relative gradient)) ([M6])
+        let eta = (gn / total_weight).sqrt().clamp(1e-12, 1e-2);
+        let lambda = loop {
             let lambda = mu * mean_diag.max(f64::MIN_POSITIVE);
             val.copy_from_slice(&hval);
             pattern.add_diagonal(&mut val, lambda);
-            if let Some(l) = pattern.llt(&sym, &val) {
-                break (l, lambda);
+            let mut x = rhs.clone();
+            let ok = match solver.factor(&pattern, &val) {
+                Some(f) => f.solve(&mut x, eta, 2000),
+                None => false,
+            };
+            if ok {
+                rhs = x;
+                break lambda;
             }
             mu *= 10.0;
             if mu > 1e16 {
@@ -364,7 +566,6 @@ pub(crate) fn solve_chordal(
                 );
             }
         };
-        llt.solve_in_place(rhs.as_mut());
         let step: Vec<Vector3<f64>> = (0..n)
             .map(|i| {
                 if i == 0 {
@@ -381,9 +582,13 @@ pub(crate) fn solve_chordal(
         let g_dot_s: f64 = grad.iter().zip(&step).map(|(g, s)| g.dot(s)).sum();
         let s2: f64 = step.iter().map(|s| s.norm_squared()).sum();
         let max_step = step.iter().map(|s| s.norm()).fold(0.0, f64::max);
-        // predicted decrease of the quadratic model (H + lambda I) s = -g:
-        // -(g.s + s^T H s / 2) = -g.s / 2 + lambda |s|^2 / 2
-        let predicted = -0.5 * g_dot_s + 0.5 * lambda * s2;
+        // predicted decrease of the quadratic model: -(g.s + s^T H s / 2)
+        let flat: Vec<f64> = (0..3 * (n - 1)).map(|k| rhs[(k, 0)]).collect();
+        let mut hs = vec![0.0; flat.len()];
+        pattern.sym_mul_flat(&hval, &flat, &mut hs);
+        let shs: f64 = flat.iter().zip(&hs).map(|(a, b)| a * b).sum();
+        let predicted = -(g_dot_s + 0.5 * shs);
+        let _ = (lambda, s2);
         if !max_step.is_finite() {
             return finish(
                 r,

@@ -11,13 +11,12 @@
 
 use crate::error::Result;
 use crate::multiple::MultipleProblem;
-use crate::multiple::chordal::BlockPattern;
+use crate::multiple::chordal::{BlockPattern, LinearSolver};
 use crate::multiple::robust::{edge_log, loss_terms};
 use crate::multiple::solve::{Loss, MultipleSettings, MultipleSolution};
 use crate::report::{SolverReport, Termination};
 use crate::so3::{Rotation, exp};
 use faer::Mat;
-use faer::linalg::solvers::Solve;
 use nalgebra::{Matrix3, Vector3};
 
 /// Geodesic L2 (`sum w theta^2`) from `init`.
@@ -122,7 +121,7 @@ pub(crate) fn lie_algebraic(
             _ => 0,
         })
         .collect();
-    let sym = pattern.symbolic_llt()?;
+    let solver = LinearSolver::choose(&pattern, &pattern)?;
     let constant_weights = matches!(loss, Loss::Geodesic);
     let mut factor = None;
     let mut val = vec![0.0; pattern.nnz()];
@@ -159,7 +158,7 @@ pub(crate) fn lie_algebraic(
                     pattern.add(&mut val, q, p, slot, &(-one));
                 }
             }
-            match pattern.llt(&sym, &val) {
+            match solver.factor(&pattern, &val) {
                 Some(l) => factor = Some(l),
                 None => {
                     return finish(
@@ -175,7 +174,16 @@ pub(crate) fn lie_algebraic(
         }
         let llt = factor.as_ref().expect("factor set above");
         let mut rhs = Mat::<f64>::from_fn(n - 1, 3, |p, a| -ev.grad[p + 1][a]);
-        llt.solve_in_place(rhs.as_mut());
+        if !llt.solve(&mut rhs, 1e-10, 5000) {
+            return finish(
+                r,
+                &ev,
+                iterations,
+                Termination::NumericalFailure {
+                    reason: "weighted Laplacian not positive definite (CG)".into(),
+                },
+            );
+        }
         let step: Vec<Vector3<f64>> = (0..n)
             .map(|i| {
                 if i == 0 {

@@ -4,11 +4,10 @@
 
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;
-use crate::multiple::chordal::BlockPattern;
+use crate::multiple::chordal::{BlockPattern, LinearSolver};
 use crate::multiple::solve::Initialisation;
 use crate::so3::{Rotation, project_to_so3};
 use faer::Mat;
-use faer::linalg::solvers::Solve;
 use nalgebra::{Matrix3, SymmetricEigen};
 
 /// Compute a starting estimate (one rotation per node; gauge not fixed). The graph must be
@@ -84,6 +83,10 @@ pub fn spanning_tree(problem: &MultipleProblem) -> Vec<Rotation> {
     r
 }
 
+/// Residual tolerance of the spectral initialisation, relative to the mean weighted degree:
+/// stop when `||Q Y - Y (Y^T Q Y)||_F <= SPECTRAL_TOLERANCE * mean degree` `[M5]`.
+pub const SPECTRAL_TOLERANCE: f64 = 1e-4;
+
 /// Maximum number of block inverse iterations of the spectral initialisation `[M5]`.
 pub const SPECTRAL_MAX_ITERATIONS: usize = 50;
 
@@ -91,7 +94,7 @@ pub const SPECTRAL_MAX_ITERATIONS: usize = 50;
 /// subspace of the connection Laplacian `Q`, by block inverse iteration with a sparse
 /// Cholesky factorisation of `Q + sigma I` (`sigma = 1e-6` x mean weighted degree; factorised
 /// once), started from the spanning-tree estimate; stopped when the residual
-/// `||Q Y - Y (Y^T Q Y)||_F <= 1e-6` x mean degree or after [`SPECTRAL_MAX_ITERATIONS`].
+/// [`SPECTRAL_TOLERANCE`] x mean degree or after [`SPECTRAL_MAX_ITERATIONS`].
 /// Rounding: scale by `sqrt(n)`, flip the sign of the third column if most blocks have negative
 /// determinant, project every 3x3 block to SO(3).
 pub fn spectral(problem: &MultipleProblem) -> Result<Vec<Rotation>> {
@@ -120,12 +123,14 @@ pub fn spectral(problem: &MultipleProblem) -> Result<Vec<Rotation>> {
         pattern.add(&mut qval, i, i, 0, &(Matrix3::identity() * *d));
     }
     let mean_degree = degree.iter().sum::<f64>() / n as f64;
-    let sym = pattern.symbolic_llt()?;
+    let scalar = BlockPattern::new(n, 1, problem.edges().iter().map(|e| (e.i, e.j)));
+    let solver = LinearSolver::choose(&pattern, &scalar)?;
+    drop(scalar);
     let mut sigma = 1e-6 * mean_degree;
     let llt = loop {
         let mut val = qval.clone();
         pattern.add_diagonal(&mut val, sigma);
-        if let Some(l) = pattern.llt(&sym, &val) {
+        if let Some(l) = solver.factor(&pattern, &val) {
             break l;
         }
         sigma *= 100.0;
@@ -145,7 +150,11 @@ pub fn spectral(problem: &MultipleProblem) -> Result<Vec<Rotation>> {
     }
     orthonormalise(&mut y);
     for _ in 0..SPECTRAL_MAX_ITERATIONS {
-        llt.solve_in_place(y.as_mut());
+        if !llt.solve(&mut y, 1e-8, 5000) {
+            return Err(Error::Solver {
+                message: "spectral initialisation: Q + sigma I not positive definite (CG)".into(),
+            });
+        }
         orthonormalise(&mut y);
         let qy = pattern.sym_mul(&qval, &y);
         // residual ||QY - Y (Y^T Q Y)||_F
@@ -156,7 +165,7 @@ pub fn spectral(problem: &MultipleProblem) -> Result<Vec<Rotation>> {
                 message: "spectral initialisation: non-finite iterate".into(),
             });
         }
-        if res <= 1e-6 * mean_degree {
+        if res <= SPECTRAL_TOLERANCE * mean_degree {
             break;
         }
     }
