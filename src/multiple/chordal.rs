@@ -228,6 +228,23 @@ pub(crate) enum LinearSolver {
     Pcg,
 }
 
+/// `true` if a sparse Cholesky of the graph Laplacian pattern is cheap: the scalar symbolic
+/// factor (AMD ordering) has at most [`DIRECT_FILL_PER_NODE`] entries per node.
+pub(crate) fn prefers_direct(problem: &MultipleProblem) -> Result<bool> {
+    let n = problem.num_rotations();
+    let scalar = BlockPattern::new(n, 1, problem.edges().iter().map(|e| (e.i, e.j)));
+    let sym = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
+        scalar.symbolic.as_ref(),
+        Side::Lower,
+        Default::default(),
+        Default::default(),
+    )
+    .map_err(|e| Error::Solver {
+        message: format!("symbolic sparse Cholesky failed: {e:?}"),
+    })?;
+    Ok(sym.len_val() <= DIRECT_FILL_PER_NODE * n.max(1))
+}
+
 /// A factorised (or preconditioned) system ready to solve.
 pub(crate) enum Factor<'a> {
     Direct(Llt<usize, f64>),
@@ -240,19 +257,17 @@ pub(crate) enum Factor<'a> {
 }
 
 impl LinearSolver {
-    /// Choose direct vs iterative from the fill of the scalar symbolic Cholesky of the graph.
-    pub(crate) fn choose(pattern: &BlockPattern, scalar: &BlockPattern) -> Result<Self> {
-        let nblocks = scalar.col_ptr.len() - 1;
-        let sym = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
-            scalar.symbolic.as_ref(),
-            Side::Lower,
-            Default::default(),
-            Default::default(),
-        )
-        .map_err(|e| Error::Solver {
-            message: format!("symbolic sparse Cholesky failed: {e:?}"),
-        })?;
-        if sym.len_val() <= DIRECT_FILL_PER_NODE * nblocks.max(1) {
+    /// Direct if `direct`, else PCG; `direct = None` decides with [`prefers_direct`].
+    pub(crate) fn new(
+        problem: &MultipleProblem,
+        pattern: &BlockPattern,
+        direct: Option<bool>,
+    ) -> Result<Self> {
+        let direct = match direct {
+            Some(d) => d,
+            None => prefers_direct(problem)?,
+        };
+        if direct {
             Ok(LinearSolver::Direct(pattern.symbolic_llt()?))
         } else {
             Ok(LinearSolver::Pcg)
@@ -443,6 +458,7 @@ pub(crate) fn solve_chordal(
     problem: &MultipleProblem,
     init: Vec<Rotation>,
     settings: &MultipleSettings,
+    direct: Option<bool>,
 ) -> Result<MultipleSolution> {
     let start = std::time::Instant::now();
     let n = problem.num_rotations();
@@ -492,17 +508,7 @@ pub(crate) fn solve_chordal(
             .map(|e| (e.i - 1, e.j - 1)),
     );
     let slots = edge_slots(problem, &pattern);
-    let scalar = BlockPattern::new(
-        n - 1,
-        1,
-        problem
-            .edges()
-            .iter()
-            .filter(|e| e.i != 0 && e.j != 0)
-            .map(|e| (e.i - 1, e.j - 1)),
-    );
-    let solver = LinearSolver::choose(&pattern, &scalar)?;
-    drop(scalar);
+    let solver = LinearSolver::new(problem, &pattern, direct)?;
     let mut hval = vec![0.0; pattern.nnz()];
     let mut val = vec![0.0; pattern.nnz()];
     let mut mu = 1e-6; // damping relative to the mean Hessian diagonal

@@ -24,6 +24,7 @@ pub(crate) fn solve_geodesic(
     problem: &MultipleProblem,
     init: Vec<Rotation>,
     settings: &MultipleSettings,
+    direct: Option<bool>,
 ) -> Result<MultipleSolution> {
     lie_algebraic(
         problem,
@@ -31,6 +32,7 @@ pub(crate) fn solve_geodesic(
         settings,
         "lie-algebraic",
         settings.max_iterations,
+        direct,
     )
 }
 
@@ -67,6 +69,7 @@ pub(crate) fn lie_algebraic(
     settings: &MultipleSettings,
     name: &str,
     max_iterations: usize,
+    direct: Option<bool>,
 ) -> Result<MultipleSolution> {
     let start = std::time::Instant::now();
     let loss = settings.loss;
@@ -121,7 +124,7 @@ pub(crate) fn lie_algebraic(
             _ => 0,
         })
         .collect();
-    let solver = LinearSolver::choose(&pattern, &pattern)?;
+    let solver = LinearSolver::new(problem, &pattern, direct)?;
     let constant_weights = matches!(loss, Loss::Geodesic);
     let mut factor = None;
     let mut val = vec![0.0; pattern.nnz()];

@@ -25,7 +25,7 @@ pub fn initialise(problem: &MultipleProblem, init: &Initialisation) -> Result<Ve
     problem.require_connected()?;
     match init {
         Initialisation::SpanningTree => Ok(spanning_tree(problem)),
-        Initialisation::Spectral => spectral(problem),
+        Initialisation::Spectral => spectral_with(problem, None),
         Initialisation::Given(r) => {
             problem.check_estimate(r)?;
             Ok(r.clone())
@@ -87,6 +87,10 @@ pub fn spanning_tree(problem: &MultipleProblem) -> Vec<Rotation> {
 /// stop when `||Q Y - Y (Y^T Q Y)||_F <= SPECTRAL_TOLERANCE * mean degree` `[M5]`.
 pub const SPECTRAL_TOLERANCE: f64 = 1e-4;
 
+/// Relative residual of the inner conjugate-gradient solves of the spectral initialisation on
+/// high-fill graphs (inexact inverse iteration, `[M5]`).
+pub const SPECTRAL_INNER_TOLERANCE: f64 = 1e-5;
+
 /// Maximum number of block inverse iterations of the spectral initialisation `[M5]`.
 pub const SPECTRAL_MAX_ITERATIONS: usize = 50;
 
@@ -98,6 +102,14 @@ pub const SPECTRAL_MAX_ITERATIONS: usize = 50;
 /// Rounding: scale by `sqrt(n)`, flip the sign of the third column if most blocks have negative
 /// determinant, project every 3x3 block to SO(3).
 pub fn spectral(problem: &MultipleProblem) -> Result<Vec<Rotation>> {
+    spectral_with(problem, None)
+}
+
+/// [`spectral`] with the direct/iterative choice made by the caller (`None`: decide here).
+pub(crate) fn spectral_with(
+    problem: &MultipleProblem,
+    direct: Option<bool>,
+) -> Result<Vec<Rotation>> {
     let n = problem.num_rotations();
     let tree = spanning_tree(problem);
     if n < 2 {
@@ -123,9 +135,7 @@ pub fn spectral(problem: &MultipleProblem) -> Result<Vec<Rotation>> {
         pattern.add(&mut qval, i, i, 0, &(Matrix3::identity() * *d));
     }
     let mean_degree = degree.iter().sum::<f64>() / n as f64;
-    let scalar = BlockPattern::new(n, 1, problem.edges().iter().map(|e| (e.i, e.j)));
-    let solver = LinearSolver::choose(&pattern, &scalar)?;
-    drop(scalar);
+    let solver = LinearSolver::new(problem, &pattern, direct)?;
     let mut sigma = 1e-6 * mean_degree;
     let llt = loop {
         let mut val = qval.clone();
@@ -150,7 +160,7 @@ pub fn spectral(problem: &MultipleProblem) -> Result<Vec<Rotation>> {
     }
     orthonormalise(&mut y);
     for _ in 0..SPECTRAL_MAX_ITERATIONS {
-        if !llt.solve(&mut y, 1e-8, 5000) {
+        if !llt.solve(&mut y, SPECTRAL_INNER_TOLERANCE, 5000) {
             return Err(Error::Solver {
                 message: "spectral initialisation: Q + sigma I not positive definite (CG)".into(),
             });

@@ -87,6 +87,7 @@ pub(crate) fn solve_robust(
     problem: &MultipleProblem,
     init: Vec<Rotation>,
     settings: &MultipleSettings,
+    direct: Option<bool>,
 ) -> Result<MultipleSolution> {
     let name = match settings.loss {
         Loss::L1 => "irls-l1",
@@ -95,5 +96,12 @@ pub(crate) fn solve_robust(
         Loss::Geodesic => "lie-algebraic",
         Loss::Chordal => "irls-chordal",
     };
-    lie_algebraic(problem, init, settings, name, 10 * settings.max_iterations)
+    lie_algebraic(
+        problem,
+        init,
+        settings,
+        name,
+        10 * settings.max_iterations,
+        direct,
+    )
 }

@@ -203,11 +203,18 @@ pub fn solve_multiple(
     settings.validate()?;
     problem.require_connected()?;
     let start = std::time::Instant::now();
-    let init = crate::multiple::init::initialise(problem, &settings.init)?;
+    // direct sparse Cholesky or PCG, decided once from the graph ([M6])
+    let direct = Some(crate::multiple::chordal::prefers_direct(problem)?);
+    let init = match &settings.init {
+        Initialisation::Spectral => crate::multiple::init::spectral_with(problem, direct)?,
+        other => crate::multiple::init::initialise(problem, other)?,
+    };
     let mut out = match settings.loss {
-        Loss::Chordal => crate::multiple::chordal::solve_chordal(problem, init, settings)?,
-        Loss::Geodesic => crate::multiple::geodesic::solve_geodesic(problem, init, settings)?,
-        _ => crate::multiple::robust::solve_robust(problem, init, settings)?,
+        Loss::Chordal => crate::multiple::chordal::solve_chordal(problem, init, settings, direct)?,
+        Loss::Geodesic => {
+            crate::multiple::geodesic::solve_geodesic(problem, init, settings, direct)?
+        }
+        _ => crate::multiple::robust::solve_robust(problem, init, settings, direct)?,
     };
     fix_gauge(&mut out.rotations);
     // R_0 R_0^T is I up to rounding; make it exact.
