@@ -85,7 +85,7 @@ pub fn spanning_tree(problem: &MultipleProblem) -> Vec<Rotation> {
 
 /// Residual tolerance of the spectral initialisation, relative to the mean weighted degree:
 /// stop when `||Q Y - Y (Y^T Q Y)||_F <= SPECTRAL_TOLERANCE * mean degree` `[M5]`.
-pub const SPECTRAL_TOLERANCE: f64 = 1e-4;
+pub const SPECTRAL_TOLERANCE: f64 = 1e-3;
 
 /// Relative residual of the inner conjugate-gradient solves of the spectral initialisation on
 /// high-fill graphs (inexact inverse iteration, `[M5]`).
