@@ -228,10 +228,18 @@ pub(crate) enum LinearSolver {
     Pcg,
 }
 
-/// `true` if a sparse Cholesky of the graph Laplacian pattern is cheap: the scalar symbolic
+/// `true` if a sparse Cholesky of the graph Laplacian pattern is cheap: not expander-like by
+/// the BFS pre-filter below, and the scalar symbolic
 /// factor (AMD ordering) has at most [`DIRECT_FILL_PER_NODE`] entries per node.
 pub(crate) fn prefers_direct(problem: &MultipleProblem) -> Result<bool> {
     let n = problem.num_rotations();
+    // Cheap pre-filter, O(m): every BFS level is a vertex separator; if the widest level from
+    // node 0 holds more than a quarter of the nodes the graph is expander-like and its factor
+    // nearly dense, so skip the (then expensive) symbolic analysis and use PCG, which is always
+    // applicable ([M6]).
+    if n > 1000 && max_bfs_level_width(problem) * 4 > n {
+        return Ok(false);
+    }
     let scalar = BlockPattern::new(n, 1, problem.edges().iter().map(|e| (e.i, e.j)));
     let sym = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
         scalar.symbolic.as_ref(),
@@ -243,6 +251,45 @@ pub(crate) fn prefers_direct(problem: &MultipleProblem) -> Result<bool> {
         message: format!("symbolic sparse Cholesky failed: {e:?}"),
     })?;
     Ok(sym.len_val() <= DIRECT_FILL_PER_NODE * n.max(1))
+}
+
+/// The largest number of nodes at one BFS distance from node 0.
+fn max_bfs_level_width(problem: &MultipleProblem) -> usize {
+    let n = problem.num_rotations();
+    let mut adj_ptr = vec![0usize; n + 1];
+    for e in problem.edges() {
+        adj_ptr[e.i + 1] += 1;
+        adj_ptr[e.j + 1] += 1;
+    }
+    for k in 0..n {
+        adj_ptr[k + 1] += adj_ptr[k];
+    }
+    let mut fill = adj_ptr.clone();
+    let mut adj = vec![0usize; adj_ptr[n]];
+    for e in problem.edges() {
+        adj[fill[e.i]] = e.j;
+        fill[e.i] += 1;
+        adj[fill[e.j]] = e.i;
+        fill[e.j] += 1;
+    }
+    let mut seen = vec![false; n];
+    let mut level = vec![0usize];
+    seen[0] = true;
+    let mut widest = 1;
+    while !level.is_empty() {
+        let mut next = Vec::new();
+        for &u in &level {
+            for &v in &adj[adj_ptr[u]..adj_ptr[u + 1]] {
+                if !seen[v] {
+                    seen[v] = true;
+                    next.push(v);
+                }
+            }
+        }
+        widest = widest.max(next.len());
+        level = next;
+    }
+    widest
 }
 
 /// A factorised (or preconditioned) system ready to solve.
