@@ -5,9 +5,18 @@
 //! `[M1]`). Gauge: solutions are defined up to `R_i -> R_i G`; outputs fix `R_0 = I`.
 
 pub mod accuracy;
+pub mod chordal;
+pub mod geodesic;
+pub mod init;
 pub mod laplacian;
 pub mod problem;
+pub mod robust;
+pub mod solve;
 pub mod stats;
 pub mod synthetic;
 
+pub use chordal::chordal_gradient;
+pub use init::{initialise, spanning_tree, spectral};
 pub use problem::{Edge, MultipleProblem, fix_gauge};
+pub use robust::{loss_cost_gradient, loss_terms};
+pub use solve::{Initialisation, Loss, MultipleSettings, MultipleSolution, solve_multiple};

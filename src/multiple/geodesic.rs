@@ -1,0 +1,261 @@
+//! Geodesic L2 multiple rotation averaging by Lie-algebraic averaging (Govindu), and the
+//! reweighted iteration shared with the robust losses (`paper-notes/multiple.md`, `[M8]`,
+//! `[M9]`).
+//!
+//! Each iteration linearises `r_e(w) = log(exp(-hat w_j) R_j^T R_ij R_i exp(hat w_i))` as
+//! `r_e + w_i - w_j` and solves the weighted least-squares problem
+//! `min sum_e (w_e psi_e / 2) |r_e + w_i - w_j|^2` (node 0 fixed): the normal matrix is the
+//! weighted graph Laplacian (n-1 square, scalar, same for the 3 axes). Its sparsity pattern and
+//! symbolic Cholesky are built once; for the geodesic loss (`psi = 2`) the numeric factor is
+//! also computed only once. A backtracking safeguard halves the step until the cost decreases.
+
+use crate::error::Result;
+use crate::multiple::MultipleProblem;
+use crate::multiple::chordal::{BlockPattern, LinearSolver};
+use crate::multiple::robust::{edge_log, loss_terms};
+use crate::multiple::solve::{Loss, MultipleSettings, MultipleSolution};
+use crate::report::{SolverReport, Termination};
+use crate::so3::{Rotation, exp};
+use faer::Mat;
+use nalgebra::{Matrix3, Vector3};
+
+/// Geodesic L2 (`sum w theta^2`) from `init`.
+pub(crate) fn solve_geodesic(
+    problem: &MultipleProblem,
+    init: Vec<Rotation>,
+    settings: &MultipleSettings,
+    direct: Option<bool>,
+) -> Result<MultipleSolution> {
+    lie_algebraic(
+        problem,
+        init,
+        settings,
+        "lie-algebraic",
+        settings.max_iterations,
+        direct,
+    )
+}
+
+struct Eval {
+    cost: f64,
+    grad: Vec<Vector3<f64>>,
+    psi: Vec<f64>,
+}
+
+fn evaluate(problem: &MultipleProblem, r: &[Rotation], loss: &Loss, eps: f64) -> Eval {
+    let mut grad = vec![Vector3::zeros(); r.len()];
+    let mut psi = Vec::with_capacity(problem.num_edges());
+    let mut cost = 0.0;
+    for e in problem.edges() {
+        let v = edge_log(e, r);
+        let (rho, p) = loss_terms(loss, v.norm(), eps);
+        cost += e.weight * rho;
+        let g = v * (e.weight * p);
+        grad[e.i] += g;
+        grad[e.j] -= g;
+        psi.push(p);
+    }
+    Eval { cost, grad, psi }
+}
+
+fn norm(g: &[Vector3<f64>]) -> f64 {
+    g.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt()
+}
+
+/// The (reweighted) Lie-algebraic iteration for `settings.loss` `[M8]`, `[M9]`.
+pub(crate) fn lie_algebraic(
+    problem: &MultipleProblem,
+    init: Vec<Rotation>,
+    settings: &MultipleSettings,
+    name: &str,
+    max_iterations: usize,
+    direct: Option<bool>,
+) -> Result<MultipleSolution> {
+    let start = std::time::Instant::now();
+    let loss = settings.loss;
+    let eps = settings.l1_epsilon;
+    let n = problem.num_rotations();
+    let total_weight: f64 = problem.edges().iter().map(|e| e.weight).sum();
+    let tol = settings.gradient_tolerance;
+    let mut r = init;
+    let mut ev = evaluate(problem, &r, &loss, eps);
+    let init_cost = ev.cost;
+    let measure = "relative gradient norm ||grad|| / sum(w)";
+    let finish = |r: Vec<Rotation>, ev: &Eval, iterations: usize, termination| {
+        Ok(MultipleSolution {
+            chordal_cost: problem.chordal_cost(&r),
+            rotations: r,
+            cost: ev.cost,
+            gradient_norm: norm(&ev.grad),
+            loss,
+            report: SolverReport {
+                name: name.into(),
+                iterations,
+                termination,
+                seconds: start.elapsed().as_secs_f64(),
+            },
+            init_cost,
+        })
+    };
+    let converged = |g: f64| Termination::Converged {
+        measure: measure.into(),
+        value: g / total_weight,
+        threshold: tol,
+    };
+    if norm(&ev.grad) / total_weight <= tol || n < 2 {
+        let g = norm(&ev.grad);
+        return finish(r, &ev, 0, converged(g));
+    }
+    let var = |i: usize| if i == 0 { None } else { Some(i - 1) };
+    let pattern = BlockPattern::new(
+        n - 1,
+        1,
+        problem
+            .edges()
+            .iter()
+            .filter(|e| e.i != 0 && e.j != 0)
+            .map(|e| (e.i - 1, e.j - 1)),
+    );
+    let slots: Vec<usize> = problem
+        .edges()
+        .iter()
+        .map(|e| match (var(e.i), var(e.j)) {
+            (Some(p), Some(q)) => pattern.slot(p, q),
+            _ => 0,
+        })
+        .collect();
+    let solver = LinearSolver::new(problem, &pattern, direct)?;
+    let constant_weights = matches!(loss, Loss::Geodesic);
+    let mut factor = None;
+    let mut val = vec![0.0; pattern.nnz()];
+    let mut iterations = 0;
+    loop {
+        if iterations >= max_iterations {
+            let g = norm(&ev.grad);
+            return finish(
+                r,
+                &ev,
+                iterations,
+                Termination::IterationLimit {
+                    iterations,
+                    value: g / total_weight,
+                    threshold: tol,
+                },
+            );
+        }
+        iterations += 1;
+        if factor.is_none() || !constant_weights {
+            // weighted Laplacian with edge weights w_e psi_e, node 0 removed [M8]
+            val.iter_mut().for_each(|v| *v = 0.0);
+            for ((e, &slot), &psi) in problem.edges().iter().zip(&slots).zip(&ev.psi) {
+                let c = e.weight * psi;
+                let one = Matrix3::from_element(c);
+                let (vi, vj) = (var(e.i), var(e.j));
+                if let Some(p) = vi {
+                    pattern.add(&mut val, p, p, 0, &one);
+                }
+                if let Some(q) = vj {
+                    pattern.add(&mut val, q, q, 0, &one);
+                }
+                if let (Some(p), Some(q)) = (vi, vj) {
+                    pattern.add(&mut val, q, p, slot, &(-one));
+                }
+            }
+            match solver.factor(&pattern, &val) {
+                Some(l) => factor = Some(l),
+                None => {
+                    return finish(
+                        r,
+                        &ev,
+                        iterations,
+                        Termination::NumericalFailure {
+                            reason: "weighted Laplacian not positive definite".into(),
+                        },
+                    );
+                }
+            }
+        }
+        let llt = factor.as_ref().expect("factor set above");
+        let mut rhs = Mat::<f64>::from_fn(n - 1, 3, |p, a| -ev.grad[p + 1][a]);
+        if !llt.solve(&mut rhs, 1e-10, 5000) {
+            return finish(
+                r,
+                &ev,
+                iterations,
+                Termination::NumericalFailure {
+                    reason: "weighted Laplacian not positive definite (CG)".into(),
+                },
+            );
+        }
+        let step: Vec<Vector3<f64>> = (0..n)
+            .map(|i| {
+                if i == 0 {
+                    Vector3::zeros()
+                } else {
+                    Vector3::new(rhs[(i - 1, 0)], rhs[(i - 1, 1)], rhs[(i - 1, 2)])
+                }
+            })
+            .collect();
+        let max_step = step.iter().map(|s| s.norm()).fold(0.0, f64::max);
+        if !max_step.is_finite() {
+            return finish(
+                r,
+                &ev,
+                iterations,
+                Termination::NumericalFailure {
+                    reason: "non-finite step".into(),
+                },
+            );
+        }
+        // backtracking: halve until the cost does not increase (up to 30 halvings)
+        let mut t = 1.0;
+        let mut accepted = None;
+        for _ in 0..30 {
+            let cand: Vec<Rotation> = r
+                .iter()
+                .zip(&step)
+                .map(|(ri, s)| ri * exp(&(s * t)))
+                .collect();
+            let cev = evaluate(problem, &cand, &loss, eps);
+            if cev.cost <= ev.cost {
+                accepted = Some((cand, cev));
+                break;
+            }
+            t *= 0.5;
+        }
+        let Some((cand, cev)) = accepted else {
+            let g = norm(&ev.grad);
+            return finish(
+                r,
+                &ev,
+                iterations,
+                Termination::Stalled {
+                    value: g / total_weight,
+                    threshold: tol,
+                },
+            );
+        };
+        r = cand;
+        ev = cev;
+        if t < 1.0 {
+            // the weights changed along a shortened step: refactor next time
+            factor = None;
+        }
+        let g = norm(&ev.grad);
+        if g / total_weight <= tol {
+            return finish(r, &ev, iterations, converged(g));
+        }
+        if max_step * t < settings.step_tolerance {
+            return finish(
+                r,
+                &ev,
+                iterations,
+                Termination::Converged {
+                    measure: "max step angle (rad)".into(),
+                    value: max_step * t,
+                    threshold: settings.step_tolerance,
+                },
+            );
+        }
+    }
+}

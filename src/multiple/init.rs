@@ -1,0 +1,209 @@
+//! Initialisations of the local solvers (`paper-notes/multiple.md`, `[M4]`, `[M5]`): maximum
+//! weight spanning tree, and the spectral relaxation (bottom-3 eigenvectors of the connection
+//! Laplacian by sparse block inverse iteration, rounded to SO(3)).
+
+use crate::error::{Error, Result};
+use crate::multiple::MultipleProblem;
+use crate::multiple::chordal::{BlockPattern, LinearSolver};
+use crate::multiple::solve::Initialisation;
+use crate::so3::{Rotation, project_to_so3};
+use faer::Mat;
+use nalgebra::{Matrix3, SymmetricEigen};
+
+/// Compute a starting estimate (one rotation per node; gauge not fixed). The graph must be
+/// connected ([`Error::Disconnected`]); a given estimate must have one rotation per node.
+///
+/// ```
+/// use rotavg::multiple::{initialise, Initialisation, synthetic::SyntheticGraph};
+/// let (p, _) = SyntheticGraph { noise_sigma: 0.0, ..Default::default() }.generate();
+/// for init in [Initialisation::SpanningTree, Initialisation::Spectral] {
+///     let r = initialise(&p, &init).unwrap();
+///     assert!(p.chordal_cost(&r) < 1e-16);
+/// }
+/// ```
+pub fn initialise(problem: &MultipleProblem, init: &Initialisation) -> Result<Vec<Rotation>> {
+    problem.require_connected()?;
+    match init {
+        Initialisation::SpanningTree => Ok(spanning_tree(problem)),
+        Initialisation::Spectral => spectral_with(problem, None),
+        Initialisation::Given(r) => {
+            problem.check_estimate(r)?;
+            Ok(r.clone())
+        }
+    }
+}
+
+/// Maximum-weight spanning tree (Kruskal), rotations propagated from `R_0 = I` along the tree
+/// by `R_j = R_ij R_i` (edges used in either direction) `[M4]`. Nodes not reached (only if the
+/// graph is disconnected) keep the identity.
+pub fn spanning_tree(problem: &MultipleProblem) -> Vec<Rotation> {
+    let n = problem.num_rotations();
+    let edges = problem.edges();
+    let mut order: Vec<usize> = (0..edges.len()).collect();
+    // heaviest first; ties by edge index (deterministic)
+    order.sort_by(|&a, &b| edges[b].weight.total_cmp(&edges[a].weight).then(a.cmp(&b)));
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    // adjacency of the tree: (neighbour, edge index)
+    let mut adj: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
+    for k in order {
+        let e = &edges[k];
+        let (a, b) = (find(&mut parent, e.i), find(&mut parent, e.j));
+        if a != b {
+            parent[a] = b;
+            adj[e.i].push((e.j, k));
+            adj[e.j].push((e.i, k));
+        }
+    }
+    let mut r = vec![Rotation::identity(); n];
+    let mut seen = vec![false; n];
+    let mut queue = std::collections::VecDeque::from([0usize]);
+    seen[0] = true;
+    while let Some(u) = queue.pop_front() {
+        for &(v, k) in &adj[u] {
+            if !seen[v] {
+                seen[v] = true;
+                let e = &edges[k];
+                // R_ij R_i = R_j  =>  R_j = R_ij R_i,  R_i = R_ij^T R_j
+                r[v] = if e.i == u {
+                    e.rotation * r[u]
+                } else {
+                    e.rotation.inverse() * r[u]
+                };
+                queue.push_back(v);
+            }
+        }
+    }
+    r
+}
+
+/// Residual tolerance of the spectral initialisation, relative to the mean weighted degree:
+/// stop when `||Q Y - Y (Y^T Q Y)||_F <= SPECTRAL_TOLERANCE * mean degree` `[M5]`.
+pub const SPECTRAL_TOLERANCE: f64 = 1e-3;
+
+/// Relative residual of the inner conjugate-gradient solves of the spectral initialisation on
+/// high-fill graphs (inexact inverse iteration, `[M5]`).
+pub const SPECTRAL_INNER_TOLERANCE: f64 = 1e-5;
+
+/// Maximum number of block inverse iterations of the spectral initialisation `[M5]`.
+pub const SPECTRAL_MAX_ITERATIONS: usize = 50;
+
+/// Spectral initialisation `[M5]`: an orthonormal basis `Y` (3n x 3) of the bottom-3 invariant
+/// subspace of the connection Laplacian `Q`, by block inverse iteration with a sparse
+/// Cholesky factorisation of `Q + sigma I` (`sigma = 1e-6` x mean weighted degree; factorised
+/// once), started from the spanning-tree estimate; stopped when the residual
+/// [`SPECTRAL_TOLERANCE`] x mean degree or after [`SPECTRAL_MAX_ITERATIONS`].
+/// Rounding: scale by `sqrt(n)`, flip the sign of the third column if most blocks have negative
+/// determinant, project every 3x3 block to SO(3).
+pub fn spectral(problem: &MultipleProblem) -> Result<Vec<Rotation>> {
+    spectral_with(problem, None)
+}
+
+/// [`spectral`] with the direct/iterative choice made by the caller (`None`: decide here).
+pub(crate) fn spectral_with(
+    problem: &MultipleProblem,
+    direct: Option<bool>,
+) -> Result<Vec<Rotation>> {
+    let n = problem.num_rotations();
+    let tree = spanning_tree(problem);
+    if n < 2 {
+        return Ok(tree);
+    }
+    let pattern = BlockPattern::new(n, 3, problem.edges().iter().map(|e| (e.i, e.j)));
+    let mut qval = vec![0.0; pattern.nnz()];
+    let mut degree = vec![0.0; n];
+    for e in problem.edges() {
+        degree[e.i] += e.weight;
+        degree[e.j] += e.weight;
+        // [M2]: Q_ji = -w R_ij (block row j, column i)
+        let slot = pattern.slot(e.i, e.j);
+        pattern.add(
+            &mut qval,
+            e.j,
+            e.i,
+            slot,
+            &(-e.weight * e.rotation.matrix()),
+        );
+    }
+    for (i, d) in degree.iter().enumerate() {
+        pattern.add(&mut qval, i, i, 0, &(Matrix3::identity() * *d));
+    }
+    let mean_degree = degree.iter().sum::<f64>() / n as f64;
+    let solver = LinearSolver::new(problem, &pattern, direct)?;
+    let mut sigma = 1e-6 * mean_degree;
+    let llt = loop {
+        let mut val = qval.clone();
+        pattern.add_diagonal(&mut val, sigma);
+        if let Some(l) = solver.factor(&pattern, &val) {
+            break l;
+        }
+        sigma *= 100.0;
+        if sigma > mean_degree {
+            return Err(Error::Solver {
+                message: "spectral initialisation: Cholesky of Q + sigma I failed".into(),
+            });
+        }
+    };
+    let mut y = Mat::<f64>::zeros(3 * n, 3);
+    for (i, r) in tree.iter().enumerate() {
+        for a in 0..3 {
+            for b in 0..3 {
+                y[(3 * i + a, b)] = r[(a, b)];
+            }
+        }
+    }
+    orthonormalise(&mut y);
+    for _ in 0..SPECTRAL_MAX_ITERATIONS {
+        if !llt.solve(&mut y, SPECTRAL_INNER_TOLERANCE, 5000) {
+            return Err(Error::Solver {
+                message: "spectral initialisation: Q + sigma I not positive definite (CG)".into(),
+            });
+        }
+        orthonormalise(&mut y);
+        let qy = pattern.sym_mul(&qval, &y);
+        // residual ||QY - Y (Y^T Q Y)||_F
+        let m = y.transpose() * &qy;
+        let res = (&qy - &y * &m).norm_l2();
+        if !res.is_finite() {
+            return Err(Error::Solver {
+                message: "spectral initialisation: non-finite iterate".into(),
+            });
+        }
+        if res <= SPECTRAL_TOLERANCE * mean_degree {
+            break;
+        }
+    }
+    // round [M5]
+    let scale = (n as f64).sqrt();
+    let block = |i: usize| Matrix3::from_fn(|a, b| y[(3 * i + a, b)] * scale);
+    let negative = (0..n).filter(|&i| block(i).determinant() < 0.0).count();
+    let flip = 2 * negative > n;
+    Ok((0..n)
+        .map(|i| {
+            let mut m = block(i);
+            if flip {
+                m.column_mut(2).neg_mut();
+            }
+            project_to_so3(&m).unwrap_or(tree[i])
+        })
+        .collect())
+}
+
+/// `Y <- Y (Y^T Y)^{-1/2}` (3 columns).
+fn orthonormalise(y: &mut Mat<f64>) {
+    let g = y.transpose() * &*y;
+    let g = Matrix3::from_fn(|a, b| g[(a, b)]);
+    let eig = SymmetricEigen::new(g);
+    let floor = eig.eigenvalues.max() * 1e-15;
+    let inv_sqrt = eig.eigenvectors
+        * Matrix3::from_diagonal(&eig.eigenvalues.map(|l| 1.0 / l.max(floor).sqrt()))
+        * eig.eigenvectors.transpose();
+    let t = Mat::<f64>::from_fn(3, 3, |a, b| inv_sqrt[(a, b)]);
+    *y = &*y * &t;
+}

@@ -1,0 +1,107 @@
+//! Robust losses on the residual angle (L1, Huber, Cauchy), minimised by iteratively
+//! reweighted Lie-algebraic least squares (`paper-notes/multiple.md`, `[M7]`, `[M9]`).
+
+use crate::error::Result;
+use crate::multiple::MultipleProblem;
+use crate::multiple::chordal::chordal_gradient;
+use crate::multiple::geodesic::lie_algebraic;
+use crate::multiple::solve::{Loss, MultipleSettings, MultipleSolution};
+use crate::so3::{Rotation, log};
+use nalgebra::Vector3;
+
+/// `(rho(theta), psi(theta))` for a residual angle `theta` (radians) `[M7]`, where the edge cost
+/// is `w rho(theta)` and `psi = rho'(theta) / theta` is the IRLS weight factor. For L1,
+/// `psi = 1 / max(theta, l1_epsilon)` (the smoothing). For [`Loss::Chordal`],
+/// `rho = 8 sin^2(theta / 2)` and `psi = 4 sin(theta) / theta`.
+pub fn loss_terms(loss: &Loss, theta: f64, l1_epsilon: f64) -> (f64, f64) {
+    match *loss {
+        Loss::Chordal => {
+            let s = (0.5 * theta).sin();
+            let psi = if theta < 1e-8 {
+                4.0
+            } else {
+                4.0 * theta.sin() / theta
+            };
+            (8.0 * s * s, psi)
+        }
+        Loss::Geodesic => (theta * theta, 2.0),
+        Loss::L1 => (theta, 1.0 / theta.max(l1_epsilon)),
+        Loss::Huber { threshold_deg } => {
+            let c = threshold_deg.to_radians();
+            if theta <= c {
+                (0.5 * theta * theta, 1.0)
+            } else {
+                (c * (theta - 0.5 * c), c / theta)
+            }
+        }
+        Loss::Cauchy { threshold_deg } => {
+            let c = threshold_deg.to_radians();
+            let u = theta / c;
+            (0.5 * c * c * (u * u).ln_1p(), 1.0 / (1.0 + u * u))
+        }
+    }
+}
+
+/// Cost `sum_e w_e rho(theta_e)` under `loss` and its gradient in the right-perturbation chart
+/// `R_i exp(hat w_i)` `[M8]`: with `r_e = log(R_j^T R_ij R_i)` (so `theta_e = |r_e|`),
+/// `grad_i += w_e psi(theta_e) r_e`, `grad_j -= w_e psi(theta_e) r_e`. For
+/// [`Loss::Chordal`] this is [`chordal_gradient`]. For L1 the gradient is that of the smoothed
+/// cost (the cost returned is the exact `sum w theta`). Panics if `rotations.len() != n`.
+///
+/// ```
+/// use rotavg::multiple::{loss_cost_gradient, Loss, synthetic::SyntheticGraph};
+/// let (p, gt) = SyntheticGraph { noise_sigma: 0.0, ..Default::default() }.generate();
+/// let (cost, grad) = loss_cost_gradient(&p, &gt, &Loss::Geodesic, 1e-6);
+/// assert!(cost < 1e-20 && grad.iter().all(|g| g.norm() < 1e-12));
+/// ```
+pub fn loss_cost_gradient(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    loss: &Loss,
+    l1_epsilon: f64,
+) -> (f64, Vec<Vector3<f64>>) {
+    if *loss == Loss::Chordal {
+        return chordal_gradient(problem, rotations);
+    }
+    assert_eq!(rotations.len(), problem.num_rotations());
+    let mut grad = vec![Vector3::zeros(); rotations.len()];
+    let mut cost = 0.0;
+    for e in problem.edges() {
+        let r = edge_log(e, rotations);
+        let (rho, psi) = loss_terms(loss, r.norm(), l1_epsilon);
+        cost += e.weight * rho;
+        let g = r * (e.weight * psi);
+        grad[e.i] += g;
+        grad[e.j] -= g;
+    }
+    (cost, grad)
+}
+
+/// `r_e = log(R_j^T R_ij R_i)`.
+pub(crate) fn edge_log(e: &crate::multiple::Edge, rotations: &[Rotation]) -> Vector3<f64> {
+    log(&(rotations[e.j].inverse() * e.rotation * rotations[e.i]))
+}
+
+/// IRLS for L1 / Huber / Cauchy from `init` `[M9]`. At most `10 * max_iterations` iterations.
+pub(crate) fn solve_robust(
+    problem: &MultipleProblem,
+    init: Vec<Rotation>,
+    settings: &MultipleSettings,
+    direct: Option<bool>,
+) -> Result<MultipleSolution> {
+    let name = match settings.loss {
+        Loss::L1 => "irls-l1",
+        Loss::Huber { .. } => "irls-huber",
+        Loss::Cauchy { .. } => "irls-cauchy",
+        Loss::Geodesic => "lie-algebraic",
+        Loss::Chordal => "irls-chordal",
+    };
+    lie_algebraic(
+        problem,
+        init,
+        settings,
+        name,
+        10 * settings.max_iterations,
+        direct,
+    )
+}
