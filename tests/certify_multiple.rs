@@ -11,8 +11,8 @@ use rotavg::Rotation;
 use rotavg::certificate::Verdict;
 use rotavg::certify::eigen::gamma;
 use rotavg::certify::multiple::{
-    CertifySettings, Verification, VerifiedBound, certificate_matrix, certify_multiple, laplacian_times,
-    lower_bound_from_multipliers, multipliers, stationarity_residual,
+    CertifySettings, Verification, VerifiedBound, certificate_matrix, certify_multiple,
+    laplacian_times, lower_bound_from_multipliers, multipliers, stationarity_residual,
 };
 use rotavg::multiple::laplacian::connection_laplacian;
 use rotavg::multiple::synthetic::{SyntheticGraph, z_cycle};
@@ -202,9 +202,14 @@ fn noise_free_planted_is_certified() {
 #[test]
 fn low_noise_local_optimum_is_certified_and_matches_dense() {
     let mut certified = 0;
-    for (k, (n, m, sigma)) in [(10, 20, 0.02), (20, 50, 0.05), (40, 120, 0.1), (80, 240, 0.05)]
-        .into_iter()
-        .enumerate()
+    for (k, (n, m, sigma)) in [
+        (10, 20, 0.02),
+        (20, 50, 0.05),
+        (40, 120, 0.1),
+        (80, 240, 0.05),
+    ]
+    .into_iter()
+    .enumerate()
     {
         let (p, gt) = SyntheticGraph {
             num_rotations: n,
@@ -227,7 +232,10 @@ fn low_noise_local_optimum_is_certified_and_matches_dense() {
             (est - mu).abs() < 1e-7,
             "iterative estimate {est} vs dense {mu}"
         );
-        assert!(c.bound.verified_min_eigenvalue <= mu, "verified mu above dense");
+        assert!(
+            c.bound.verified_min_eigenvalue <= mu,
+            "verified mu above dense"
+        );
         let dense_lb = l.iter().map(|x| x.trace()).sum::<f64>() + 3.0 * n as f64 * mu.min(0.0);
         assert!(c.bound.lower_bound <= dense_lb + 1e-9 * f.max(1.0));
         assert!(c.bound.lower_bound <= f);
@@ -288,7 +296,10 @@ fn bound_from_arbitrary_multipliers_matches_dense() {
         // the eigen estimate agrees with the dense value when negative
         if mu < -1e-6 {
             let est = b.min_eigenvalue_estimate.unwrap();
-            assert!((est - mu).abs() < 1e-6 * (1.0 + mu.abs()), "est {est} vs {mu}");
+            assert!(
+                (est - mu).abs() < 1e-6 * (1.0 + mu.abs()),
+                "est {est} vs {mu}"
+            );
             assert!(b.negative_eigenvector.is_some());
         }
         count += 1;
@@ -335,7 +346,8 @@ fn z_cycle_winding_configurations_are_never_certified() {
             (0..n)
                 .map(|i| {
                     // theta_i = i * 2 pi k / n: every residual is (2 pi k - phi)/n
-                    exp(&(Vector3::z() * (i as f64 * 2.0 * std::f64::consts::PI * k as f64 / n as f64)))
+                    exp(&(Vector3::z()
+                        * (i as f64 * 2.0 * std::f64::consts::PI * k as f64 / n as f64)))
                 })
                 .collect()
         };
@@ -399,4 +411,64 @@ fn certificate_is_gauge_invariant() {
         b.certificate.lower_bound.unwrap(),
     );
     assert!((la - lb).abs() < 1e-8 * la.abs().max(1.0));
+}
+
+/// The factor-size guard: with `max_factor_nonzeros` tiny, no factorisation is tried; the bound
+/// falls back to Gershgorin [C8] (valid: checked against the dense lambda_min), and the verdict
+/// is not certified for a noisy problem.
+#[test]
+fn factor_size_guard_falls_back_to_gershgorin() {
+    let (p, gt) = SyntheticGraph {
+        num_rotations: 20,
+        num_edges: 50,
+        noise_sigma: 0.05,
+        seed: 21,
+        ..Default::default()
+    }
+    .generate();
+    let (rs, f, _) = local_solve(&p, &gt, 20000, 1e-11);
+    let settings = CertifySettings {
+        max_factor_nonzeros: 1,
+        ..Default::default()
+    };
+    let c = certify_multiple(&p, &rs, &settings).unwrap();
+    println!("{c}");
+    assert!(c.bound.factorization_skipped);
+    assert_eq!(c.bound.factorizations, 0);
+    assert_eq!(c.bound.verification, Verification::Gershgorin);
+    let mu = dense_min_eig(dense_s(&p, &multipliers(&p, &rs).unwrap()));
+    assert!(c.bound.verified_min_eigenvalue <= mu);
+    assert!(c.certificate.lower_bound.unwrap() <= f);
+    assert!(!c.certificate.is_certified());
+}
+
+/// Settings are validated before any work.
+#[test]
+fn invalid_settings_are_rejected() {
+    let (p, gt) = SyntheticGraph {
+        num_rotations: 4,
+        num_edges: 5,
+        ..Default::default()
+    }
+    .generate();
+    for s in [
+        CertifySettings {
+            shift_budget_fraction: 0.0,
+            ..Default::default()
+        },
+        CertifySettings {
+            max_factorizations: 0,
+            ..Default::default()
+        },
+    ] {
+        assert!(certify_multiple(&p, &gt, &s).is_err());
+    }
+    assert!(certify_multiple(&p, &gt[..3], &CertifySettings::default()).is_err());
+    assert!(
+        lower_bound_from_multipliers(&p, &[Matrix3::zeros(); 3], &CertifySettings::default())
+            .is_err()
+    );
+    let mut l = vec![Matrix3::zeros(); 4];
+    l[1][(0, 0)] = f64::NAN;
+    assert!(lower_bound_from_multipliers(&p, &l, &CertifySettings::default()).is_err());
 }

@@ -128,7 +128,12 @@ fn campaign(seed: u64, instances: usize, outlier_fraction: f64) -> Tally {
             if c.certificate.is_certified() {
                 t.certified += 1;
                 assert!(
-                    *f <= best + c.certificate.tolerance.absolute.max(c.certificate.tolerance.relative * f.abs()) + fp_tol,
+                    *f <= best
+                        + c.certificate
+                            .tolerance
+                            .absolute
+                            .max(c.certificate.tolerance.relative * f.abs())
+                        + fp_tol,
                     "instance {inst}: certified cost {f} but a restart found {best}: {c}"
                 );
                 assert!(!non_global);
@@ -138,7 +143,10 @@ fn campaign(seed: u64, instances: usize, outlier_fraction: f64) -> Tally {
         let rnd: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
         let c = certify_multiple(&p, &rnd, &settings).expect("valid input");
         let lb = c.certificate.lower_bound.expect("a bound always exists");
-        assert!(lb <= best + fp_tol, "random point: lower bound {lb} > best {best}");
+        assert!(
+            lb <= best + fp_tol,
+            "random point: lower bound {lb} > best {best}"
+        );
         if c.certificate.is_certified() {
             assert!(p.chordal_cost(&rnd) <= best + budget + fp_tol);
         }
@@ -169,5 +177,8 @@ fn soundness_thirty_percent_outliers() {
     let t = campaign(2026, 350, 0.3);
     println!("soundness (30% outliers): {t:?}");
     assert_eq!(t.instances, 350);
-    assert!(t.non_global > 0, "the campaign should meet non-global local minima");
+    assert!(
+        t.non_global > 0,
+        "the campaign should meet non-global local minima"
+    );
 }

@@ -523,7 +523,8 @@ mod tests {
         let n = 60;
         let a = tridiag(n, -0.5);
         let exact_min = -0.5 + 2.0 - 2.0 * (std::f64::consts::PI / (n as f64 + 1.0)).cos();
-        let exact_max = -0.5 + 2.0 - 2.0 * (n as f64 * std::f64::consts::PI / (n as f64 + 1.0)).cos();
+        let exact_max =
+            -0.5 + 2.0 - 2.0 * (n as f64 * std::f64::consts::PI / (n as f64 + 1.0)).cos();
         let r = lanczos_extreme(
             n,
             |x, y| sparse_matvec(a.as_ref(), x, y),
@@ -532,7 +533,11 @@ mod tests {
             &LanczosSettings::default(),
             None,
         );
-        assert!((r.value - exact_min).abs() < 1e-8, "{} vs {exact_min}", r.value);
+        assert!(
+            (r.value - exact_min).abs() < 1e-8,
+            "{} vs {exact_min}",
+            r.value
+        );
         let r = lanczos_extreme(
             n,
             |x, y| sparse_matvec(a.as_ref(), x, y),
