@@ -7,6 +7,7 @@
 //! - a certified solution has cost <= best + the gap tolerance (so a non-global local minimum is
 //!   never certified);
 //! - no lower bound is NaN / the verdict is never Certified without a bound.
+//!
 //! Instance counts are printed (run with `--nocapture`).
 
 use nalgebra::Vector3;

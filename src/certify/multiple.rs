@@ -77,7 +77,10 @@ impl CertifySettings {
         if self.max_factorizations == 0 {
             return bad("max_factorizations", "must be at least 1");
         }
-        if self.lanczos.max_iterations == 0 || !(self.lanczos.tolerance > 0.0) {
+        if self.lanczos.max_iterations == 0
+            || self.lanczos.tolerance.is_nan()
+            || self.lanczos.tolerance <= 0.0
+        {
             return bad("lanczos", "needs max_iterations >= 1 and tolerance > 0");
         }
         Ok(())
