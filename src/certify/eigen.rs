@@ -27,6 +27,9 @@ use serde::{Deserialize, Serialize};
 /// Unit roundoff of `f64`: `u = 2^-53`.
 pub const UNIT_ROUNDOFF: f64 = f64::EPSILON / 2.0;
 
+/// Factor size (stored values) above which the numeric factorisation runs in parallel.
+const PARALLEL_FACTOR_THRESHOLD: usize = 2_000_000;
+
 /// `gamma_k = k u / (1 - k u)` (Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed.,
 /// Lemma 3.1): the relative error bound of a sum or inner product of `k` terms. Returns
 /// `+inf` when `k u >= 1/2` (the bound is then useless and no verification succeeds).
@@ -205,7 +208,13 @@ impl ShiftedCholesky {
             }
         }
         let mut values = vec![0.0f64; self.symbolic.len_val()];
-        let par = Par::Seq;
+        // large supernodal factorisations use all threads (the margin [C6] holds for any
+        // summation order); small ones stay sequential and deterministic
+        let par = if self.symbolic.len_val() > PARALLEL_FACTOR_THRESHOLD {
+            Par::rayon(0)
+        } else {
+            Par::Seq
+        };
         let req = self
             .symbolic
             .factorize_numeric_llt_scratch::<f64>(par, Default::default());
