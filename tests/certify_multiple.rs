@@ -472,3 +472,84 @@ fn invalid_settings_are_rejected() {
     l[1][(0, 0)] = f64::NAN;
     assert!(lower_bound_from_multipliers(&p, &l, &CertifySettings::default()).is_err());
 }
+
+/// [C11] Riemannian staircase from non-global critical points of the z-cycle: the verified
+/// staircase bound is <= f_0 (the closed-form global optimum [C10]) and, once the lifted
+/// descent converges, close to it (the cycle relaxation is tight), far above the dual bound of
+/// the winding configuration itself.
+#[test]
+fn staircase_bound_from_winding_configurations() {
+    use rotavg::certify::staircase::{StaircaseSettings, staircase_bound};
+    for (n, phi, k) in [(8usize, 1.0f64, 1i32), (12, 0.3, 1), (12, 0.3, 2)] {
+        let p = z_cycle(n, phi);
+        let f0 = 8.0 * n as f64 * ((phi / (2.0 * n as f64)).sin()).powi(2);
+        let y: Vec<Rotation> = (0..n)
+            .map(|i| {
+                exp(&(Vector3::z() * (i as f64 * 2.0 * std::f64::consts::PI * k as f64 / n as f64)))
+            })
+            .collect();
+        let dual = certify_multiple(&p, &y, &CertifySettings::default()).unwrap();
+        let r = staircase_bound(&p, &y, &StaircaseSettings::default()).unwrap();
+        let lb = r.certificate.lower_bound.unwrap();
+        println!(
+            "staircase n={n} phi={phi} k={k}: f_0={f0:.9e} dual lb={:.4e} staircase lb={lb:.9e} rank {} lifted {:.9e} ({} its): {}",
+            dual.certificate.lower_bound.unwrap(),
+            r.rank,
+            r.lifted_cost,
+            r.iterations,
+            r.stop_reason
+        );
+        assert!(
+            lb <= f0 * (1.0 + 1e-12) + 1e-15,
+            "staircase bound above the optimum"
+        );
+        assert!(lb > dual.certificate.lower_bound.unwrap());
+        assert!(
+            f0 - lb <= 1e-5 * f0,
+            "staircase bound {lb} not close to f_0 {f0}"
+        );
+        assert_ne!(r.certificate.verdict, Verdict::Certified);
+    }
+}
+
+/// [C11] on noisy graphs with outliers: from a non-global local minimum, the staircase bound is
+/// valid (<= best cost of restarts) and at least as good as the estimate's own dual bound.
+#[test]
+fn staircase_bound_is_valid_from_local_minima() {
+    use rotavg::certify::staircase::{StaircaseSettings, staircase_bound};
+    let mut rng = StdRng::seed_from_u64(404);
+    let mut checked = 0;
+    for inst in 0..8 {
+        let n = 6 + inst % 5;
+        let (p, gt) = SyntheticGraph {
+            num_rotations: n,
+            num_edges: 2 * n,
+            noise_sigma: 0.3,
+            outlier_fraction: 0.3,
+            seed: 500 + inst as u64,
+        }
+        .generate();
+        let mut sols = vec![local_solve(&p, &gt, 2000, 1e-11)];
+        for _ in 0..6 {
+            let s: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
+            sols.push(local_solve(&p, &s, 2000, 1e-11));
+        }
+        let best = sols.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
+        let worst = sols
+            .iter()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap()
+            .0
+            .clone();
+        let dual = certify_multiple(&p, &worst, &CertifySettings::default()).unwrap();
+        let r = staircase_bound(&p, &worst, &StaircaseSettings::default()).unwrap();
+        let lb = r.certificate.lower_bound.unwrap();
+        assert!(
+            lb <= best + 1e-9 * (1.0 + best),
+            "staircase {lb} > best {best}"
+        );
+        assert!(lb >= dual.certificate.lower_bound.unwrap() - 1e-9 * (1.0 + best));
+        checked += 1;
+    }
+    println!("staircase from local minima: {checked} instances");
+}

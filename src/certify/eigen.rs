@@ -197,7 +197,11 @@ impl ShiftedCholesky {
     /// Factorise `S + shift I`. `None` when a pivot is not positive or not finite (no conclusion:
     /// the matrix is then *probably* not positive definite), or when the computed margin is not
     /// finite. `Some(factor)` proves `lambda_min(S) >= -shift - factor.margin` `[C6]`.
-    pub fn factor(&mut self, shift: f64) -> Option<PositiveFactor<'_>> {
+    ///
+    /// `margin_target`: when the cheap a-priori margin `[C6]` (1) is already below it, the more
+    /// expensive residual-based margin `[C6]` (2) is not computed (pass 0 to always compute it
+    /// when the factor is small enough).
+    pub fn factor(&mut self, shift: f64, margin_target: f64) -> Option<PositiveFactor<'_>> {
         if !shift.is_finite() {
             return None;
         }
@@ -236,7 +240,7 @@ impl ShiftedCholesky {
         if !ok || !values.iter().all(|v| v.is_finite()) {
             return None;
         }
-        let (backward, min_pivot) = self.backward_error_bound(&values);
+        let (backward, min_pivot) = self.backward_error_bound(&values, margin_target / 2.0);
         // (b) forming error: every entry of S + shift I is the rounded result of at most
         // entry_terms + 1 operations on exact data, so |E_1| <= gamma(entry_terms + 1) |S + shift I|
         // entrywise and ||E_1||_2 <= gamma(...) || |S + shift I| ||_inf.
@@ -269,7 +273,7 @@ impl ShiftedCholesky {
     ///    (Ogita-Rump-Oishi, Dot2), inflated by 1%.
     ///
     /// Returns (bound, smallest pivot).
-    fn backward_error_bound(&self, values: &[f64]) -> (f64, f64) {
+    fn backward_error_bound(&self, values: &[f64], target: f64) -> (f64, f64) {
         let n = self.dim();
         let visit = |f: &mut dyn FnMut(usize, usize, f64)| match self.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(sym) => {
@@ -317,7 +321,7 @@ impl ShiftedCholesky {
         let k = rowcount.iter().copied().max().unwrap_or(0);
         let llt_norm = rowsum.into_iter().fold(0.0, f64::max);
         let higham = gamma(k + 1) * llt_norm;
-        if self.symbolic.len_val() > RESIDUAL_FACTOR_LIMIT {
+        if self.symbolic.len_val() > RESIDUAL_FACTOR_LIMIT || higham <= target {
             return (higham, min_pivot);
         }
         // Columns of L and rows of L (transpose), lower triangle, permuted coordinates.
@@ -329,6 +333,12 @@ impl ShiftedCholesky {
                 rows[r].push((c, v));
             }
         });
+        // rows ascending within each column (the partition_point below relies on it)
+        for col in cols.iter_mut() {
+            if !col.is_sorted_by_key(|e| e.0) {
+                col.sort_unstable_by_key(|e| e.0);
+            }
+        }
         let (fwd, inv): (Vec<usize>, Vec<usize>) = match self.symbolic.perm() {
             Some(p) => {
                 let (f, i) = p.arrays();
@@ -346,10 +356,10 @@ impl ShiftedCholesky {
         for j in 0..n {
             // -(L L^T)_{ij} for i >= j, in double-double
             for &(m, ljm) in &rows[j] {
-                for &(i, lim) in &cols[m] {
-                    if i < j {
-                        continue;
-                    }
+                let col = &cols[m];
+                // rows within a column are ascending (ensured above)
+                let first = col.partition_point(|&(i, _)| i < j);
+                for &(i, lim) in &col[first..] {
                     let p = -(lim * ljm);
                     let pe = (-lim).mul_add(ljm, -p); // exact: -lim*ljm = p + pe
                     let (sh, se) = two_sum(hi[i], p);
@@ -658,7 +668,7 @@ mod tests {
         let exact_min = c + 2.0 - 2.0 * (std::f64::consts::PI / (n as f64 + 1.0)).cos();
         let mut ch = ShiftedCholesky::new(a.clone(), 2).unwrap();
         // shift slightly above -lambda_min: must succeed and bound below the true value
-        let f = ch.factor(-exact_min + 1e-9).expect("PD");
+        let f = ch.factor(-exact_min + 1e-9, 0.0).expect("PD");
         assert!(f.verified_lower_bound() <= exact_min);
         assert!(f.verified_lower_bound() > exact_min - 1e-8);
         assert!(f.margin < 1e-12, "margin {}", f.margin);
@@ -672,7 +682,7 @@ mod tests {
         }
         drop(f);
         // shift below -lambda_min: indefinite, must fail
-        assert!(ch.factor(-exact_min - 1e-6).is_none());
+        assert!(ch.factor(-exact_min - 1e-6, 0.0).is_none());
         assert!(gershgorin_lower_bound(a.as_ref()) <= exact_min);
     }
 
@@ -701,7 +711,7 @@ mod tests {
                 let mut ch = ShiftedCholesky::new(a, 1).unwrap();
                 for k in 0..=40 {
                     let shift = eps * k as f64 / 20.0;
-                    if let Some(f) = ch.factor(shift) {
+                    if let Some(f) = ch.factor(shift, 0.0) {
                         assert!(
                             f.verified_lower_bound() <= -eps + 8.0 * UNIT_ROUNDOFF,
                             "n={n} eps={eps} shift={shift}: claimed {} > -eps",
@@ -710,7 +720,7 @@ mod tests {
                     }
                 }
                 // with a generous shift (here: 1e-9) the factorisation succeeds
-                assert!(ch.factor(eps + 1e-9).is_some(), "n={n} eps={eps}");
+                assert!(ch.factor(eps + 1e-9, 0.0).is_some(), "n={n} eps={eps}");
             }
         }
     }
