@@ -110,7 +110,7 @@ fn gradient(problem: &MultipleProblem, y: &[Block]) -> Vec<Block> {
 fn polar(m: &Block) -> Option<Block> {
     let g: Matrix3<f64> = m * m.transpose();
     let eig = SymmetricEigen::new(g);
-    if eig.eigenvalues.iter().any(|&v| !(v > 1e-300)) {
+    if eig.eigenvalues.iter().any(|&v| v.is_nan() || v <= 1e-300) {
         return None;
     }
     let d = Matrix3::from_diagonal(&eig.eigenvalues.map(|v| 1.0 / v.sqrt()));
