@@ -553,3 +553,17 @@ fn staircase_bound_is_valid_from_local_minima() {
     }
     println!("staircase from local minima: {checked} instances");
 }
+
+/// Regression: a non-finite estimate is a typed error (not a hang in an eigensolver).
+#[test]
+fn non_finite_estimate_is_rejected() {
+    let (p, mut gt) = SyntheticGraph {
+        num_rotations: 4,
+        num_edges: 5,
+        ..Default::default()
+    }
+    .generate();
+    gt[2] = Rotation::from_matrix_unchecked(Matrix3::from_element(f64::NAN));
+    assert!(certify_multiple(&p, &gt, &CertifySettings::default()).is_err());
+    assert!(rotavg::certify::staircase::staircase_bound(&p, &gt, &Default::default()).is_err());
+}

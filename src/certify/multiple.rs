@@ -61,7 +61,7 @@ impl Default for CertifySettings {
 }
 
 impl CertifySettings {
-    fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         let bad = |name: &str, reason: &str| {
             Err(Error::InvalidSettings {
                 name: name.into(),
@@ -202,6 +202,19 @@ pub fn stationarity_residual(problem: &MultipleProblem, rotations: &[Rotation]) 
         })
         .sum::<f64>()
         .sqrt())
+}
+
+/// One finite rotation per node.
+pub(crate) fn check_rotations(problem: &MultipleProblem, rotations: &[Rotation]) -> Result<()> {
+    problem.check_estimate(rotations)?;
+    for (i, r) in rotations.iter().enumerate() {
+        if !r.matrix().iter().all(|x| x.is_finite()) {
+            return Err(Error::NonFinite {
+                item: format!("estimate rotation {i}"),
+            });
+        }
+    }
+    Ok(())
 }
 
 fn check_lambdas(problem: &MultipleProblem, lambdas: &[Matrix3<f64>]) -> Result<()> {
@@ -503,7 +516,7 @@ pub fn certify_multiple(
 ) -> Result<MultipleCertificate> {
     let start = Instant::now();
     settings.validate()?;
-    problem.check_estimate(rotations)?;
+    check_rotations(problem, rotations)?;
     let cost = problem.chordal_cost(rotations);
     let lambdas = multipliers(problem, rotations)?;
     let stationarity = stationarity_residual(problem, rotations)?;

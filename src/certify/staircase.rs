@@ -188,7 +188,8 @@ pub fn staircase_bound(
     settings: &StaircaseSettings,
 ) -> Result<StaircaseResult> {
     let start = Instant::now();
-    problem.check_estimate(rotations)?;
+    crate::certify::multiple::check_rotations(problem, rotations)?;
+    settings.certify.validate()?;
     if settings.max_rank < 3 {
         return Err(Error::InvalidSettings {
             name: "max_rank".into(),
