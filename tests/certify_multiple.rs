@@ -618,3 +618,33 @@ fn margin_holds_at_the_boundary_for_certificate_matrices() {
     }
     println!("margin boundary checks: {checks} successful factorisations, {below} below -mu");
 }
+
+/// `certify_with_multipliers`: a winding (non-global) configuration of the z-cycle bounded with
+/// the multipliers of the global (k = 0) configuration: the bound is ~f_0 [C10] (valid, far
+/// better than its own dual bound), the verdict is gap_reported with gap ~ f_1 - f_0.
+#[test]
+fn external_multipliers_bound_a_non_global_estimate() {
+    use rotavg::BoundMethod;
+    use rotavg::certify::multiple::certify_with_multipliers;
+    let (n, phi) = (10usize, 0.8f64);
+    let p = z_cycle(n, phi);
+    let planar = |k: f64| -> Vec<Rotation> {
+        (0..n)
+            .map(|i| exp(&(Vector3::z() * (i as f64 * 2.0 * std::f64::consts::PI * k / n as f64))))
+            .collect()
+    };
+    let f0 = 8.0 * n as f64 * ((phi / (2.0 * n as f64)).sin()).powi(2);
+    let l0 = multipliers(&p, &planar(0.0)).unwrap();
+    let y1 = planar(1.0);
+    let c = certify_with_multipliers(&p, &y1, &l0, BoundMethod::Sdp, &CertifySettings::default())
+        .unwrap();
+    println!("{c}");
+    let lb = c.certificate.lower_bound.unwrap();
+    assert_eq!(c.certificate.method, BoundMethod::Sdp);
+    assert_eq!(c.certificate.verdict, Verdict::GapReported);
+    // the first shift spends 10% of the gap tolerance of the estimate's cost (1e-6 f(y1))
+    let allowance = 0.1 * 1e-6 * p.chordal_cost(&y1) * 1.01 + 1e-12;
+    assert!(lb <= f0 && lb >= f0 - allowance, "lb {lb} vs f_0 {f0}");
+    let own = certify_multiple(&p, &y1, &CertifySettings::default()).unwrap();
+    assert!(lb > own.certificate.lower_bound.unwrap());
+}

@@ -14,5 +14,5 @@ pub mod staircase;
 
 pub use multiple::{
     CertifySettings, MultipleCertificate, Verification, VerifiedBound, certificate_matrix,
-    certify_multiple, lower_bound_from_multipliers, multipliers,
+    certify_multiple, certify_with_multipliers, lower_bound_from_multipliers, multipliers,
 };

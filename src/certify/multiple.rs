@@ -568,3 +568,59 @@ pub fn certify_multiple(
         stationarity_residual: stationarity,
     })
 }
+
+/// Certify an estimate against multipliers obtained elsewhere (an SDP solve, a staircase, the
+/// multipliers of a better estimate): upper bound `f(rotations)`, lower bound verified from
+/// `lambdas` `[C4]`-`[C8]`, verdict from `Certificate::from_bounds`, with the given `method`
+/// (e.g. [`BoundMethod::Sdp`]). This is how an estimate that is not a critical point gets a useful
+/// bound. The estimate is never changed.
+///
+/// ```
+/// use rotavg::certify::multiple::{certify_with_multipliers, multipliers, CertifySettings};
+/// use rotavg::multiple::synthetic::SyntheticGraph;
+/// use rotavg::BoundMethod;
+/// let (p, gt) = SyntheticGraph { num_rotations: 6, num_edges: 10, noise_sigma: 0.0, ..Default::default() }.generate();
+/// let l = multipliers(&p, &gt).unwrap();
+/// let c = certify_with_multipliers(&p, &gt, &l, BoundMethod::Sdp, &CertifySettings::default()).unwrap();
+/// assert!(c.certificate.is_certified());
+/// ```
+pub fn certify_with_multipliers(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+    method: BoundMethod,
+    settings: &CertifySettings,
+) -> Result<MultipleCertificate> {
+    let start = Instant::now();
+    settings.validate()?;
+    check_rotations(problem, rotations)?;
+    check_lambdas(problem, lambdas)?;
+    let cost = problem.chordal_cost(rotations);
+    let stationarity = stationarity_residual(problem, rotations)?;
+    let bound = verify(problem, lambdas, cost.abs(), settings)?;
+    let explanation = format!(
+        "bound from supplied multipliers ({method}): lambda_min(Q - blkdiag(Lambda)) >= {:.3e} verified by {}",
+        bound.verified_min_eigenvalue,
+        match bound.verification {
+            Verification::Cholesky => "a sparse Cholesky factorisation",
+            Verification::Gershgorin => "Gershgorin discs",
+        }
+    );
+    let min_eig = bound
+        .min_eigenvalue_estimate
+        .or(Some(bound.verified_min_eigenvalue));
+    let certificate = Certificate::from_bounds(
+        cost,
+        Some(bound.lower_bound),
+        method,
+        min_eig,
+        settings.tolerance,
+        explanation,
+        start.elapsed().as_secs_f64(),
+    );
+    Ok(MultipleCertificate {
+        certificate,
+        bound,
+        stationarity_residual: stationarity,
+    })
+}
