@@ -20,11 +20,13 @@
 
 pub mod certificate;
 pub mod certify;
+pub mod conjugate;
 pub mod error;
 pub mod io;
 pub mod multiple;
 pub mod report;
 pub mod serde_rot;
+pub mod single;
 pub mod so3;
 
 pub use certificate::{BoundMethod, Certificate, Verdict};

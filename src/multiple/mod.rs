@@ -4,8 +4,10 @@
 //! Chordal L2 cost `f(R) = sum_(i,j) w_ij ||R_j - R_ij R_i||_F^2` (`paper-notes/multiple.md`,
 //! `[M1]`). Gauge: solutions are defined up to `R_i -> R_i G`; outputs fix `R_0 = I`.
 
+pub mod accuracy;
 pub mod laplacian;
 pub mod problem;
+pub mod stats;
 pub mod synthetic;
 
 pub use problem::{Edge, MultipleProblem, fix_gauge};

@@ -1,0 +1,49 @@
+//! Benchmarks of every single-averaging method on 10^3, 10^5 and 10^6 samples (Gaussian noise
+//! of 0.1 rad around a random rotation, seeded). Run with `cargo bench --bench single`.
+//! Sample counts are reduced for the large sizes to keep the run short.
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+use rotavg::single::{Norm, SingleProblem, SingleSettings, average_single};
+use rotavg::so3::{Metric, perturb_gaussian, random_rotation};
+use std::hint::black_box;
+use std::time::Duration;
+
+fn problem(n: usize) -> SingleProblem {
+    let mut rng = StdRng::seed_from_u64(n as u64);
+    let truth = random_rotation(&mut rng);
+    let rs = (0..n)
+        .map(|_| perturb_gaussian(&truth, 0.1, &mut rng))
+        .collect();
+    SingleProblem::new(rs, None).expect("valid rotations")
+}
+
+fn bench(c: &mut Criterion) {
+    let methods = [
+        ("chordal_l2", Metric::Chordal, Norm::L2),
+        ("quaternion_l2", Metric::Quaternion, Norm::L2),
+        ("geodesic_l2", Metric::Geodesic, Norm::L2),
+        ("geodesic_l1", Metric::Geodesic, Norm::L1),
+        ("chordal_l1", Metric::Chordal, Norm::L1),
+    ];
+    for n in [1_000usize, 100_000, 1_000_000] {
+        let p = problem(n);
+        let mut group = c.benchmark_group(format!("single_n{n}"));
+        if n >= 100_000 {
+            group.sample_size(10);
+            group.warm_up_time(Duration::from_millis(500));
+            group.measurement_time(Duration::from_secs(if n >= 1_000_000 { 8 } else { 3 }));
+        }
+        for (name, metric, norm) in methods {
+            let s = SingleSettings::new(metric, norm);
+            group.bench_with_input(BenchmarkId::new(name, n), &p, |b, p| {
+                b.iter(|| black_box(average_single(black_box(p), &s).expect("valid settings")))
+            });
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

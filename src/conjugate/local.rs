@@ -1,0 +1,466 @@
+//! Local solvers for conjugate rotation averaging: the quaternion closed form `[H6]` (the
+//! initialiser), and Gauss-Newton / IRLS on SO(3) for the chordal and geodesic metrics with
+//! squared, L1, Huber or Cauchy loss `[H7]`. Equations: `paper-notes/conjugate.md`.
+
+use super::problem::{ConjugateProblem, DiagnosticSettings};
+use crate::error::{Error, Result};
+use crate::report::{SolverReport, Termination};
+use crate::so3::{Metric, Rotation, angle, exp, hat, log, quaternion_distance, to_quaternion};
+use nalgebra::{Matrix3, Matrix4, Quaternion, SMatrix, SymmetricEigen, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// The loss `rho` applied to each pair's distance `d_i` (cost `sum_i w_i rho(d_i)`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Loss {
+    /// `rho(d) = d^2` (L2).
+    #[default]
+    Squared,
+    /// `rho(d) = d` (L1).
+    L1,
+    /// Huber: `d^2` for `d <= delta`, `2 delta d - delta^2` beyond.
+    Huber {
+        /// Threshold (same unit as the distance).
+        delta: f64,
+    },
+    /// Cauchy: `c^2 ln(1 + d^2 / c^2)`.
+    Cauchy {
+        /// Scale `c` (same unit as the distance).
+        scale: f64,
+    },
+}
+
+impl Loss {
+    /// `rho(d)`.
+    pub fn rho(self, d: f64) -> f64 {
+        match self {
+            Loss::Squared => d * d,
+            Loss::L1 => d,
+            Loss::Huber { delta } => {
+                if d <= delta {
+                    d * d
+                } else {
+                    2.0 * delta * d - delta * delta
+                }
+            }
+            Loss::Cauchy { scale } => scale * scale * (1.0 + d * d / (scale * scale)).ln(),
+        }
+    }
+
+    /// IRLS weight `psi(d) = rho'(d) / (2 d)` `[H7]` (so `rho(d) ~ psi * d^2` locally);
+    /// `eps` guards the L1 singularity at `d = 0`.
+    fn irls_weight(self, d: f64, eps: f64) -> f64 {
+        match self {
+            Loss::Squared => 1.0,
+            Loss::L1 => 0.5 / d.max(eps),
+            Loss::Huber { delta } => {
+                if d <= delta {
+                    1.0
+                } else {
+                    delta / d
+                }
+            }
+            Loss::Cauchy { scale } => 1.0 / (1.0 + d * d / (scale * scale)),
+        }
+    }
+
+    fn validate(self) -> Result<()> {
+        let bad = |name: &str, v: f64| {
+            Err(Error::InvalidSettings {
+                name: name.into(),
+                reason: format!("must be finite and > 0, got {v}"),
+            })
+        };
+        match self {
+            Loss::Huber { delta } if !(delta.is_finite() && delta > 0.0) => bad("delta", delta),
+            Loss::Cauchy { scale } if !(scale.is_finite() && scale > 0.0) => bad("scale", scale),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Settings of [`solve_conjugate`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ConjugateSettings {
+    /// Distance between `R_i` and `S^T L_i S`: `Chordal` (default), `Geodesic`, or `Quaternion`
+    /// (closed form `[H6]`; only with `Loss::Squared`).
+    pub metric: Metric,
+    /// Loss on each distance (default squared).
+    pub loss: Loss,
+    /// Iteration limit (default 200).
+    pub max_iterations: usize,
+    /// Stop when the Riemannian gradient norm is below `gradient_tolerance * total weight`
+    /// (default `1e-12`).
+    pub gradient_tolerance: f64,
+    /// Stop when the accepted step is shorter than this angle in radians (default `1e-13`).
+    pub step_tolerance: f64,
+    /// Thresholds of the identifiability test; data that do not determine `S` are refused.
+    pub diagnostics: DiagnosticSettings,
+}
+
+impl Default for ConjugateSettings {
+    fn default() -> Self {
+        ConjugateSettings {
+            metric: Metric::Chordal,
+            loss: Loss::Squared,
+            max_iterations: 200,
+            gradient_tolerance: 1e-12,
+            step_tolerance: 1e-13,
+            diagnostics: DiagnosticSettings::default(),
+        }
+    }
+}
+
+impl ConjugateSettings {
+    fn validate(&self) -> Result<()> {
+        self.loss.validate()?;
+        if self.metric == Metric::Quaternion && self.loss != Loss::Squared {
+            return Err(Error::InvalidSettings {
+                name: "loss".into(),
+                reason: "the quaternion metric has only the squared (closed-form) solver".into(),
+            });
+        }
+        for (name, v) in [
+            ("gradient_tolerance", self.gradient_tolerance),
+            ("step_tolerance", self.step_tolerance),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::InvalidSettings {
+                    name: name.into(),
+                    reason: format!("must be finite and >= 0, got {v}"),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A local solution: the estimate `S`, its cost `sum_i w_i rho(d(R_i, S^T L_i S))` under the
+/// settings' metric and loss, the chordal cost `g(S)` (SPEC section 1), and the solver report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConjugateSolution {
+    /// The estimate `S`.
+    #[serde(with = "crate::serde_rot::rotation")]
+    pub estimate: Rotation,
+    /// Cost under `metric` and `loss`.
+    pub cost: f64,
+    /// The chordal L2 cost `g(S)` (the certified objective).
+    pub chordal_cost: f64,
+    /// Metric of `cost`.
+    pub metric: Metric,
+    /// Loss of `cost`.
+    pub loss: Loss,
+    /// Iterations, termination, time.
+    pub report: SolverReport,
+}
+
+/// Distance between `R_i` and `S^T L_i S` under `metric`.
+fn pair_distance(metric: Metric, s: &Rotation, l: &Rotation, r: &Rotation) -> f64 {
+    let moved = s.inverse() * l * s;
+    match metric {
+        Metric::Chordal => (s.matrix() * r.matrix() - l.matrix() * s.matrix()).norm(),
+        Metric::Geodesic => angle(&(r.inverse() * moved)),
+        Metric::Quaternion => quaternion_distance(r, &moved),
+    }
+}
+
+/// The cost `sum_i w_i rho(d(R_i, S^T L_i S))`. With `Metric::Chordal` and `Loss::Squared`
+/// this is `g(S)` `[H1]`.
+pub fn conjugate_cost(problem: &ConjugateProblem, s: &Rotation, metric: Metric, loss: Loss) -> f64 {
+    problem
+        .pairs()
+        .iter()
+        .map(|p| p.weight * loss.rho(pair_distance(metric, s, &p.left, &p.right)))
+        .sum()
+}
+
+/// Left- and right-multiplication matrices of a quaternion, coordinates `(x, y, z, w)`
+/// (nalgebra's storage order): `left(p) q = p q`, `right(r) q = q r`.
+fn quat_mult_matrices(p: &Quaternion<f64>, r: &Quaternion<f64>) -> Matrix4<f64> {
+    let mut m = Matrix4::zeros();
+    for k in 0..4 {
+        let mut e = nalgebra::Vector4::zeros();
+        e[k] = 1.0;
+        let q = Quaternion::from(e);
+        let d = p * q - q * r;
+        m.set_column(k, &d.coords);
+    }
+    m
+}
+
+/// The quaternion closed form `[H6]`: with `q_L`, `q_R` the unit quaternions of `L_i`, `R_i`,
+/// each sign-normalised to a non-negative scalar part (conjugation preserves the scalar part
+/// `cos(theta / 2)`, so exact pairs then satisfy `q_L q_S = q_S q_R` with the *same* signs),
+/// `q_S` is the unit eigenvector of the smallest eigenvalue of
+/// `sum_i w_i (P(q_L) - Q(q_R))^T (P(q_L) - Q(q_R))`. Refuses unidentifiable data.
+///
+/// ```
+/// use rotavg::conjugate::{ConjugateProblem, quaternion_closed_form};
+/// use rotavg::so3::{exp, angle_between};
+/// use nalgebra::Vector3;
+/// let s = exp(&Vector3::new(0.4, -0.1, 0.7));
+/// let rs = [exp(&Vector3::new(0.5, 0.0, 0.1)), exp(&Vector3::new(0.0, 0.8, -0.3))];
+/// let ls: Vec<_> = rs.iter().map(|r| s * r * s.inverse()).collect();
+/// let p = ConjugateProblem::from_rotations(&ls, &rs).unwrap();
+/// let sol = quaternion_closed_form(&p, &Default::default()).unwrap();
+/// assert!(angle_between(&sol.estimate, &s) < 1e-10);
+/// ```
+pub fn quaternion_closed_form(
+    problem: &ConjugateProblem,
+    diagnostics: &DiagnosticSettings,
+) -> Result<ConjugateSolution> {
+    let start = Instant::now();
+    problem.require_identifiable(diagnostics)?;
+    let mut a = Matrix4::zeros();
+    for p in problem.pairs() {
+        let mut ql = *to_quaternion(&p.left).quaternion();
+        let mut qr = *to_quaternion(&p.right).quaternion();
+        if ql.w < 0.0 {
+            ql = -ql;
+        }
+        if qr.w < 0.0 {
+            qr = -qr;
+        }
+        let m = quat_mult_matrices(&ql, &qr);
+        a += m.transpose() * m * p.weight;
+    }
+    let eig = SymmetricEigen::new(a);
+    let k = eig.eigenvalues.imin();
+    let v = eig.eigenvectors.column(k).into_owned();
+    let q = UnitQuaternion::from_quaternion(Quaternion::from(v));
+    let s = q.to_rotation_matrix();
+    if !s.matrix().iter().all(|x| x.is_finite()) {
+        return Err(Error::Solver {
+            message: "quaternion closed form: non-finite eigenvector".into(),
+        });
+    }
+    Ok(ConjugateSolution {
+        estimate: s,
+        cost: conjugate_cost(problem, &s, Metric::Quaternion, Loss::Squared),
+        chordal_cost: problem.chordal_cost(&s),
+        metric: Metric::Quaternion,
+        loss: Loss::Squared,
+        report: SolverReport {
+            name: "quaternion-closed-form".into(),
+            iterations: 0,
+            termination: Termination::ClosedForm,
+            seconds: start.elapsed().as_secs_f64(),
+        },
+    })
+}
+
+/// Inverse right Jacobian of SO(3): `log(exp(phi) exp(d)) ~ phi + Jr^-1(phi) d`.
+fn right_jacobian_inverse(phi: &Vector3<f64>) -> Matrix3<f64> {
+    let t = phi.norm();
+    let k = hat(phi);
+    let c = if t < 1e-4 {
+        1.0 / 12.0 + t * t / 720.0
+    } else if t > 3.0 {
+        // Near pi the coefficient blows up; the Gauss-Newton model only needs a descent direction.
+        1.0 / 12.0
+    } else {
+        1.0 / (t * t) - (1.0 + t.cos()) / (2.0 * t * t.sin())
+    };
+    Matrix3::identity() + k * 0.5 + k * k * c
+}
+
+/// Gauss-Newton normal equations at `s`: (H, b, cost) with `H = sum psi_i w_i J_i^T J_i`,
+/// `b = sum psi_i w_i J_i^T r_i` (the Riemannian gradient of the cost is `2 b`).
+fn normal_equations(
+    problem: &ConjugateProblem,
+    s: &Rotation,
+    metric: Metric,
+    loss: Loss,
+) -> (Matrix3<f64>, Vector3<f64>) {
+    let sm = *s.matrix();
+    let mut h = Matrix3::zeros();
+    let mut b = Vector3::zeros();
+    let basis = [Vector3::x(), Vector3::y(), Vector3::z()];
+    for p in problem.pairs() {
+        let (l, r) = (p.left.matrix(), p.right.matrix());
+        match metric {
+            Metric::Geodesic => {
+                // e = log(L^T S R S^T); S -> S exp(w) gives e + Jr^-1(e) S (R^T - I) w  [H7]
+                let e = log(&(p.left.inverse() * s * p.right * s.inverse()));
+                let j = right_jacobian_inverse(&e) * sm * (r.transpose() - Matrix3::identity());
+                let omega = p.weight * loss.irls_weight(e.norm(), 1e-12);
+                h += j.transpose() * j * omega;
+                b += j.transpose() * e * omega;
+            }
+            _ => {
+                // r = vec(S R - L S); column k of J = vec(S hat(e_k) R - L S hat(e_k))  [H7]
+                let res = sm * r - l * sm;
+                let d = res.norm();
+                let mut j = SMatrix::<f64, 9, 3>::zeros();
+                for (k, e) in basis.iter().enumerate() {
+                    let hk = hat(e);
+                    let col = sm * hk * r - l * sm * hk;
+                    j.set_column(k, &SMatrix::<f64, 9, 1>::from_column_slice(col.as_slice()));
+                }
+                let rv = SMatrix::<f64, 9, 1>::from_column_slice(res.as_slice());
+                let omega = p.weight * loss.irls_weight(d, 1e-12);
+                h += j.transpose() * j * omega;
+                b += j.transpose() * rv * omega;
+            }
+        }
+    }
+    (h, b)
+}
+
+/// Solve from the quaternion closed form `[H6]` (see [`solve_conjugate_from`]).
+///
+/// ```
+/// use rotavg::conjugate::{ConjugateProblem, ConjugateSettings, solve_conjugate};
+/// use rotavg::so3::{exp, angle_between};
+/// use nalgebra::Vector3;
+/// let s = exp(&Vector3::new(0.4, -0.1, 0.7));
+/// let rs = [exp(&Vector3::new(0.5, 0.0, 0.1)), exp(&Vector3::new(0.0, 0.8, -0.3))];
+/// let ls: Vec<_> = rs.iter().map(|r| s * r * s.inverse()).collect();
+/// let p = ConjugateProblem::from_rotations(&ls, &rs).unwrap();
+/// let sol = solve_conjugate(&p, &ConjugateSettings::default()).unwrap();
+/// assert!(angle_between(&sol.estimate, &s) < 1e-10);
+/// assert!(sol.report.termination.is_converged());
+/// ```
+pub fn solve_conjugate(
+    problem: &ConjugateProblem,
+    settings: &ConjugateSettings,
+) -> Result<ConjugateSolution> {
+    settings.validate()?;
+    let init = quaternion_closed_form(problem, &settings.diagnostics)?;
+    if settings.metric == Metric::Quaternion {
+        return Ok(init);
+    }
+    let mut sol = solve_conjugate_from(problem, settings, &init.estimate)?;
+    sol.report.seconds += init.report.seconds;
+    Ok(sol)
+}
+
+/// Minimise `sum_i w_i rho(d(R_i, S^T L_i S))` over SO(3) from `init` by Gauss-Newton (squared
+/// loss) or IRLS (robust losses: each iteration one Gauss-Newton step with weights
+/// `w_i psi(d_i)`), update `S <- S exp(hat(t delta))` with backtracking (Armijo, `c = 1e-4`)
+/// `[H7]`. Stops when the gradient norm `< gradient_tolerance * total weight` ("gradient
+/// norm"), the step angle `< step_tolerance` ("step angle"), when the line search fails and the
+/// predicted decrease is below `1e3 eps |cost|` (rounding level, counted as converged), or when
+/// no decrease is possible otherwise (`Stalled`). Refuses unidentifiable data
+/// ([`Error::Degenerate`]).
+pub fn solve_conjugate_from(
+    problem: &ConjugateProblem,
+    settings: &ConjugateSettings,
+    init: &Rotation,
+) -> Result<ConjugateSolution> {
+    settings.validate()?;
+    problem.require_identifiable(&settings.diagnostics)?;
+    let start = Instant::now();
+    let (metric, loss) = (settings.metric, settings.loss);
+    if metric == Metric::Quaternion {
+        let mut sol = quaternion_closed_form(problem, &settings.diagnostics)?;
+        sol.report.seconds = start.elapsed().as_secs_f64();
+        return Ok(sol);
+    }
+    let cost_of = |s: &Rotation| conjugate_cost(problem, s, metric, loss);
+    let gtol = settings.gradient_tolerance * problem.total_weight();
+    let mut s = *init;
+    let mut cost = cost_of(&s);
+    let mut iterations = 0;
+    let termination = loop {
+        let (h, b) = normal_equations(problem, &s, metric, loss);
+        let gnorm = 2.0 * b.norm();
+        if !(gnorm.is_finite() && cost.is_finite()) {
+            break Termination::NumericalFailure {
+                reason: "non-finite cost or gradient".into(),
+            };
+        }
+        if gnorm < gtol {
+            break Termination::Converged {
+                measure: "gradient norm".into(),
+                value: gnorm,
+                threshold: gtol,
+            };
+        }
+        if iterations >= settings.max_iterations {
+            break Termination::IterationLimit {
+                iterations,
+                value: gnorm,
+                threshold: gtol,
+            };
+        }
+        iterations += 1;
+        // Levenberg damping only to keep H invertible.
+        let damped = h + Matrix3::identity() * (1e-12 * h.trace().abs() + 1e-300);
+        let delta = match damped.cholesky() {
+            Some(c) => -c.solve(&b),
+            None => -b,
+        };
+        let slope = 2.0 * b.dot(&delta); // directional derivative (< 0)
+        let mut t = 1.0;
+        let mut accepted = None;
+        for _ in 0..40 {
+            let cand = s * exp(&(delta * t));
+            let c = cost_of(&cand);
+            if c <= cost + 1e-4 * t * slope {
+                accepted = Some((cand, c));
+                break;
+            }
+            t *= 0.5;
+        }
+        match accepted {
+            Some((cand, c)) => {
+                let step = t * delta.norm();
+                s = cand;
+                s.renormalize();
+                cost = c;
+                if step < settings.step_tolerance {
+                    break Termination::Converged {
+                        measure: "step angle".into(),
+                        value: step,
+                        threshold: settings.step_tolerance,
+                    };
+                }
+            }
+            None => {
+                // The model predicts a decrease below the rounding level of the cost: no
+                // representable progress is possible, the iterate is stationary to precision.
+                let resolution = 1e3 * f64::EPSILON * cost.abs();
+                if -slope <= resolution {
+                    break Termination::Converged {
+                        measure: "predicted decrease (cost rounding level)".into(),
+                        value: -slope,
+                        threshold: resolution,
+                    };
+                }
+                if delta.norm() < settings.step_tolerance.max(1e-10) {
+                    break Termination::Converged {
+                        measure: "step angle".into(),
+                        value: delta.norm(),
+                        threshold: settings.step_tolerance.max(1e-10),
+                    };
+                }
+                break Termination::Stalled {
+                    value: gnorm,
+                    threshold: gtol,
+                };
+            }
+        }
+    };
+    let name = match (metric, loss) {
+        (Metric::Chordal, Loss::Squared) => "chordal-gauss-newton",
+        (Metric::Geodesic, Loss::Squared) => "geodesic-gauss-newton",
+        (Metric::Chordal, _) => "chordal-irls",
+        _ => "geodesic-irls",
+    };
+    Ok(ConjugateSolution {
+        estimate: s,
+        cost,
+        chordal_cost: problem.chordal_cost(&s),
+        metric,
+        loss,
+        report: SolverReport {
+            name: name.into(),
+            iterations,
+            termination,
+            seconds: start.elapsed().as_secs_f64(),
+        },
+    })
+}

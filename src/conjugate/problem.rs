@@ -1,0 +1,340 @@
+//! The validated conjugate (hand-eye) rotation-averaging problem: pairs `(L_i, R_i)` with
+//! weights, `R_i ~ S^-1 L_i S` (SPEC section 1), the chordal cost `g(S)` and data diagnostics
+//! (angle mismatch, uninformative pairs, identifiability). Equations: `paper-notes/conjugate.md`.
+
+use crate::error::{Error, Result};
+use crate::so3::{Rotation, angle, log};
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// One measured pair: `left = L_i`, `right = R_i` with `R_i ~ S^-1 L_i S` (equivalently
+/// `L_i S ~ S R_i`), weight `w_i > 0`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConjugatePair {
+    /// `L_i`.
+    #[serde(with = "crate::serde_rot::rotation")]
+    pub left: Rotation,
+    /// `R_i`.
+    #[serde(with = "crate::serde_rot::rotation")]
+    pub right: Rotation,
+    /// Weight `w_i` (finite, > 0); 1 when absent from JSON.
+    #[serde(default = "one")]
+    pub weight: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl ConjugatePair {
+    /// A pair with weight 1.
+    pub fn new(left: Rotation, right: Rotation) -> Self {
+        ConjugatePair {
+            left,
+            right,
+            weight: 1.0,
+        }
+    }
+}
+
+/// A validated conjugate problem: at least one pair, finite positive weights, exact rotations.
+/// Identifiability is *not* required by the type (see [`ConjugateProblem::identifiability`]);
+/// the solvers refuse data that do not determine `S`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConjugateProblem {
+    pairs: Vec<ConjugatePair>,
+}
+
+/// Thresholds of [`ConjugateProblem::diagnose`] and of the identifiability test.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct DiagnosticSettings {
+    /// A pair whose `L_i` and `R_i` both have rotation angle below this (radians) carries no
+    /// information about `S` (default `1e-2` rad = 0.57 deg).
+    pub min_rotation_angle: f64,
+    /// Axis spread (radians, see [`Identifiability`]) below which the axes count as parallel
+    /// (default `1e-2` rad).
+    pub min_axis_spread: f64,
+    /// A pair whose angle mismatch `|angle(L_i) - angle(R_i)|` exceeds this (radians) is flagged
+    /// as suspicious (default `5` degrees).
+    pub max_angle_mismatch: f64,
+}
+
+impl Default for DiagnosticSettings {
+    fn default() -> Self {
+        DiagnosticSettings {
+            min_rotation_angle: 1e-2,
+            min_axis_spread: 1e-2,
+            max_angle_mismatch: 5f64.to_radians(),
+        }
+    }
+}
+
+/// Whether the data determine `S` `[H5]`. `L_i = S R_i S^T` maps the rotation axis of `R_i` to
+/// that of `L_i`; `S` is unique iff the axes of the informative pairs (angle above
+/// `min_rotation_angle`) are not all parallel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "status", rename_all = "snake_case")]
+pub enum Identifiability {
+    /// `S` is determined. `axis_spread = 2 atan(sqrt(lambda_2 / lambda_1))` of the weighted axis
+    /// scatter matrix of the `R_i` (for two axes at angle `phi`, the spread is `phi`).
+    Determined {
+        /// Axis spread in radians.
+        axis_spread: f64,
+        /// Number of informative pairs.
+        informative_pairs: usize,
+    },
+    /// No pair has a rotation angle above the threshold: nothing constrains `S`.
+    AllAnglesSmall {
+        /// The largest rotation angle among the pairs (radians).
+        max_angle: f64,
+    },
+    /// All informative axes are (nearly) parallel: `S` is determined only up to a rotation about
+    /// the common axis (planar or single-axis motion).
+    ParallelAxes {
+        /// The common axis of the `R_i` (unit vector).
+        axis: [f64; 3],
+        /// Axis spread in radians (below the threshold).
+        axis_spread: f64,
+    },
+}
+
+impl Identifiability {
+    /// `true` for [`Identifiability::Determined`].
+    pub fn is_determined(&self) -> bool {
+        matches!(self, Identifiability::Determined { .. })
+    }
+
+    /// An error explaining why `S` is not determined (`None` when it is).
+    pub fn to_error(&self) -> Option<Error> {
+        match self {
+            Identifiability::Determined { .. } => None,
+            Identifiability::AllAnglesSmall { max_angle } => Some(Error::Degenerate {
+                reason: format!(
+                    "every pair has a rotation angle of at most {:.3e} deg: the data carry no information about S (move the robot through rotations, not only translations)",
+                    max_angle.to_degrees()
+                ),
+            }),
+            Identifiability::ParallelAxes { axis, axis_spread } => Some(Error::Degenerate {
+                reason: format!(
+                    "all rotation axes are parallel (axis spread {:.3e} deg, common axis of R_i [{:.4}, {:.4}, {:.4}]): S is determined only up to a rotation about that axis; add motions about a second axis",
+                    axis_spread.to_degrees(),
+                    axis[0],
+                    axis[1],
+                    axis[2]
+                ),
+            }),
+        }
+    }
+}
+
+/// Data diagnostics of a conjugate problem (see [`ConjugateProblem::diagnose`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Diagnostics {
+    /// `|angle(L_i) - angle(R_i)|` per pair (radians): zero for exact data, because conjugation
+    /// preserves the rotation angle `[H4]`.
+    pub angle_mismatch: Vec<f64>,
+    /// Median of `angle_mismatch`.
+    pub median_angle_mismatch: f64,
+    /// Maximum of `angle_mismatch`.
+    pub max_angle_mismatch: f64,
+    /// Pairs whose mismatch exceeds the threshold (mis-paired or corrupted data), 0-based.
+    pub suspicious_pairs: Vec<usize>,
+    /// Pairs whose `L_i` and `R_i` both have angle below the threshold (no information).
+    pub small_rotation_pairs: Vec<usize>,
+    /// Whether `S` is determined.
+    pub identifiability: Identifiability,
+}
+
+impl ConjugateProblem {
+    /// Validate and build. Errors: no pairs, a non-finite or non-positive weight.
+    ///
+    /// ```
+    /// use rotavg::conjugate::{ConjugatePair, ConjugateProblem};
+    /// use rotavg::so3::exp;
+    /// use nalgebra::Vector3;
+    /// let s = exp(&Vector3::new(0.1, 0.2, 0.3));
+    /// let pair = |v: Vector3<f64>| {
+    ///     let r = exp(&v);
+    ///     ConjugatePair::new(s * r * s.inverse(), r)
+    /// };
+    /// let p = ConjugateProblem::new(vec![pair(Vector3::x()), pair(Vector3::y())]).unwrap();
+    /// assert!(p.chordal_cost(&s) < 1e-20);
+    /// assert!(ConjugateProblem::new(vec![]).is_err());
+    /// ```
+    pub fn new(pairs: Vec<ConjugatePair>) -> Result<Self> {
+        if pairs.is_empty() {
+            return Err(Error::Empty {
+                what: "the list of conjugate pairs".into(),
+            });
+        }
+        for (k, p) in pairs.iter().enumerate() {
+            if !(p.weight.is_finite() && p.weight > 0.0) {
+                return Err(Error::InvalidWeight {
+                    item: format!("pair {k}"),
+                    weight: p.weight,
+                });
+            }
+            let finite = p.left.matrix().iter().all(|x| x.is_finite())
+                && p.right.matrix().iter().all(|x| x.is_finite());
+            if !finite {
+                return Err(Error::NonFinite {
+                    item: format!("pair {k}"),
+                });
+            }
+        }
+        Ok(ConjugateProblem { pairs })
+    }
+
+    /// Build from parallel slices of `L_i` and `R_i`, all weights 1.
+    pub fn from_rotations(left: &[Rotation], right: &[Rotation]) -> Result<Self> {
+        if left.len() != right.len() {
+            return Err(Error::InvalidSettings {
+                name: "pairs".into(),
+                reason: format!(
+                    "{} left rotations but {} right rotations",
+                    left.len(),
+                    right.len()
+                ),
+            });
+        }
+        Self::new(
+            left.iter()
+                .zip(right)
+                .map(|(l, r)| ConjugatePair::new(*l, *r))
+                .collect(),
+        )
+    }
+
+    /// The pairs.
+    pub fn pairs(&self) -> &[ConjugatePair] {
+        &self.pairs
+    }
+
+    /// Number of pairs.
+    pub fn num_pairs(&self) -> usize {
+        self.pairs.len()
+    }
+
+    /// Sum of the weights.
+    pub fn total_weight(&self) -> f64 {
+        self.pairs.iter().map(|p| p.weight).sum()
+    }
+
+    /// The chordal cost `g(S) = sum_i w_i ||S R_i - L_i S||_F^2` `[H1]`.
+    pub fn chordal_cost(&self, s: &Rotation) -> f64 {
+        let sm = s.matrix();
+        self.pairs
+            .iter()
+            .map(|p| p.weight * (sm * p.right.matrix() - p.left.matrix() * sm).norm_squared())
+            .sum()
+    }
+
+    /// Residual angles `theta(R_i, S^T L_i S)` (radians), one per pair.
+    pub fn residual_angles(&self, s: &Rotation) -> Vec<f64> {
+        self.pairs
+            .iter()
+            .map(|p| angle(&(p.left.inverse() * s * p.right * s.inverse())))
+            .collect()
+    }
+
+    /// Identifiability test `[H5]` with the given thresholds.
+    pub fn identifiability(&self, settings: &DiagnosticSettings) -> Identifiability {
+        let mut scatter = Matrix3::zeros();
+        let mut informative = 0usize;
+        let mut max_angle: f64 = 0.0;
+        for p in &self.pairs {
+            let a = angle(&p.right).max(angle(&p.left));
+            max_angle = max_angle.max(a);
+            if a < settings.min_rotation_angle {
+                continue;
+            }
+            let v: Vector3<f64> = log(&p.right);
+            let n = v.norm();
+            if n == 0.0 {
+                continue;
+            }
+            let u = v / n;
+            scatter += u * u.transpose() * p.weight;
+            informative += 1;
+        }
+        if informative == 0 {
+            return Identifiability::AllAnglesSmall { max_angle };
+        }
+        let eig = SymmetricEigen::new(scatter);
+        let mut idx = [0usize, 1, 2];
+        idx.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+        let l1 = eig.eigenvalues[idx[0]].max(f64::MIN_POSITIVE);
+        let l2 = eig.eigenvalues[idx[1]].max(0.0);
+        let spread = 2.0 * (l2 / l1).sqrt().atan();
+        if spread < settings.min_axis_spread {
+            let ax = eig.eigenvectors.column(idx[0]);
+            Identifiability::ParallelAxes {
+                axis: [ax[0], ax[1], ax[2]],
+                axis_spread: spread,
+            }
+        } else {
+            Identifiability::Determined {
+                axis_spread: spread,
+                informative_pairs: informative,
+            }
+        }
+    }
+
+    /// `Ok(())` when `S` is determined, otherwise [`Error::Degenerate`] explaining why.
+    pub fn require_identifiable(&self, settings: &DiagnosticSettings) -> Result<()> {
+        match self.identifiability(settings).to_error() {
+            None => Ok(()),
+            Some(e) => Err(e),
+        }
+    }
+
+    /// Data diagnostics: per-pair angle mismatch `[H4]`, uninformative pairs, identifiability.
+    pub fn diagnose(&self, settings: &DiagnosticSettings) -> Diagnostics {
+        let mismatch: Vec<f64> = self
+            .pairs
+            .iter()
+            .map(|p| (angle(&p.left) - angle(&p.right)).abs())
+            .collect();
+        let mut sorted = mismatch.clone();
+        sorted.sort_by(f64::total_cmp);
+        let median = median_sorted(&sorted);
+        let max = sorted.last().copied().unwrap_or(0.0);
+        let suspicious = mismatch
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| **m > settings.max_angle_mismatch)
+            .map(|(k, _)| k)
+            .collect();
+        let small = self
+            .pairs
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| {
+                angle(&p.left) < settings.min_rotation_angle
+                    && angle(&p.right) < settings.min_rotation_angle
+            })
+            .map(|(k, _)| k)
+            .collect();
+        Diagnostics {
+            angle_mismatch: mismatch,
+            median_angle_mismatch: median,
+            max_angle_mismatch: max,
+            suspicious_pairs: suspicious,
+            small_rotation_pairs: small,
+            identifiability: self.identifiability(settings),
+        }
+    }
+}
+
+/// Median of an ascending slice (0 for an empty one).
+pub(crate) fn median_sorted(sorted: &[f64]) -> f64 {
+    let n = sorted.len();
+    if n == 0 {
+        0.0
+    } else if n % 2 == 1 {
+        sorted[n / 2]
+    } else {
+        0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
+    }
+}

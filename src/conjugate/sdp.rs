@@ -1,0 +1,391 @@
+//! The SDP relaxation of conjugate averaging (SPEC section 3) and its verified lower bound.
+//!
+//! `s = vec(S)` is **column-major**: `s[3c + r] = S[r][c]` (nalgebra's storage order), and
+//! `z = [s; y]` (index 9 is the homogenising `y`). The cost is `g(S) = s^T M s` with
+//! `M = sum_i w_i (R_i^T (x) I - I (x) L_i)^T (R_i^T (x) I - I (x) L_i)` `[H2]`. The QCQP
+//! `min z^T blkdiag(M, 0) z` subject to `z^T A_k z = b_k` for the 31 constraints of
+//! [`constraint_matrices`] `[H3]` is relaxed to `min tr(C Z)`, `Z` PSD 10x10, and solved with
+//! Clarabel. The lower bound is recomputed from the multipliers with an independent dense
+//! eigenvalue computation `[H8]`; Clarabel's objective is never used as a bound.
+//!
+//! The small `svec` helper here is local (the multiple-averaging SDP has its own in
+//! `src/relax/`); both follow Clarabel's layout: upper triangle column by column,
+//! off-diagonals times `sqrt(2)`.
+
+use super::problem::ConjugateProblem;
+use crate::error::{Error, Result};
+use crate::so3::{Rotation, project_to_so3};
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
+use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, SVector, SymmetricEigen};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// 9x9 matrix.
+pub type Mat9 = SMatrix<f64, 9, 9>;
+/// 10x10 matrix.
+pub type Mat10 = SMatrix<f64, 10, 10>;
+/// 10-vector `z = [vec(S); y]`.
+pub type Vec10 = SVector<f64, 10>;
+
+/// Index of `S[r][c]` in `z` (column-major `vec`).
+pub const fn s_index(r: usize, c: usize) -> usize {
+    3 * c + r
+}
+/// Index of the homogenising variable `y` in `z`.
+pub const Y_INDEX: usize = 9;
+
+/// `z = [vec(S); y]` for a 3x3 matrix `S` (column-major `vec`).
+pub fn lift(s: &Matrix3<f64>, y: f64) -> Vec10 {
+    let mut z = Vec10::zeros();
+    z.fixed_rows_mut::<9>(0).copy_from_slice(s.as_slice());
+    z[Y_INDEX] = y;
+    z
+}
+
+/// The cost matrix `M` `[H2]`: `s^T M s = sum_i w_i ||S R_i - L_i S||_F^2` for every 3x3 `S`.
+pub fn cost_matrix(problem: &ConjugateProblem) -> Mat9 {
+    let mut m = Mat9::zeros();
+    let eye = Matrix3::<f64>::identity();
+    for p in problem.pairs() {
+        // vec(A X B) = (B^T (x) A) vec(X): vec(S R) = (R^T (x) I) s, vec(L S) = (I (x) L) s.
+        let k = p.right.matrix().transpose().kronecker(&eye) - eye.kronecker(p.left.matrix());
+        m += k.transpose() * k * p.weight;
+    }
+    m
+}
+
+/// One quadratic equality constraint `z^T A z = b` of the QCQP `[H3]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QcqpConstraint {
+    /// Symmetric 10x10 `A`.
+    pub matrix: Mat10,
+    /// Right-hand side `b`.
+    pub rhs: f64,
+    /// What it states, e.g. `"(S^T S)_01 = 0"`.
+    pub name: String,
+}
+
+/// Add `coef * z_i z_j` to the quadratic form of the symmetric `a`.
+fn add_bilinear(a: &mut Mat10, i: usize, j: usize, coef: f64) {
+    if i == j {
+        a[(i, i)] += coef;
+    } else {
+        a[(i, j)] += 0.5 * coef;
+        a[(j, i)] += 0.5 * coef;
+    }
+}
+
+/// The 31 constraints `[H3]`, in this order: `y^2 = 1`; `S^T S = y^2 I` (6, entries `a <= b`);
+/// `S S^T = y^2 I` (6); `col_a x col_b = y col_c` for cyclic `(a, b, c)` (9); the row versions
+/// `row_a x row_b = y row_c` (9). Every `S` in SO(3) with `y = 1` satisfies all of them.
+pub fn constraint_matrices() -> Vec<QcqpConstraint> {
+    let y = Y_INDEX;
+    let mut out = Vec::with_capacity(31);
+    let mut a = Mat10::zeros();
+    a[(y, y)] = 1.0;
+    out.push(QcqpConstraint {
+        matrix: a,
+        rhs: 1.0,
+        name: "y^2 = 1".into(),
+    });
+    // Orthogonality: (S^T S)_ab = col_a . col_b = sum_r S[r][a] S[r][b]; (S S^T)_ab = sum_c S[a][c] S[b][c].
+    for rows in [false, true] {
+        for ia in 0..3 {
+            for ib in ia..3 {
+                let mut a = Mat10::zeros();
+                for t in 0..3 {
+                    let (i, j) = if rows {
+                        (s_index(ia, t), s_index(ib, t))
+                    } else {
+                        (s_index(t, ia), s_index(t, ib))
+                    };
+                    add_bilinear(&mut a, i, j, 1.0);
+                }
+                if ia == ib {
+                    a[(y, y)] -= 1.0;
+                }
+                let what = if rows { "S S^T" } else { "S^T S" };
+                out.push(QcqpConstraint {
+                    matrix: a,
+                    rhs: 0.0,
+                    name: format!("({what})_{ia}{ib} = {} y^2", u8::from(ia == ib)),
+                });
+            }
+        }
+    }
+    // Handedness: (u_a x u_b)[k] = u_a[k+1] u_b[k+2] - u_a[k+2] u_b[k+1] = y u_c[k].
+    for rows in [false, true] {
+        for (ia, ib, ic) in [(0, 1, 2), (1, 2, 0), (2, 0, 1)] {
+            for k in 0..3 {
+                // element t of column/row `v`
+                let e = |v: usize, t: usize| {
+                    if rows { s_index(v, t) } else { s_index(t, v) }
+                };
+                let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+                let mut a = Mat10::zeros();
+                add_bilinear(&mut a, e(ia, k1), e(ib, k2), 1.0);
+                add_bilinear(&mut a, e(ia, k2), e(ib, k1), -1.0);
+                add_bilinear(&mut a, y, e(ic, k), -1.0);
+                let what = if rows { "row" } else { "col" };
+                out.push(QcqpConstraint {
+                    matrix: a,
+                    rhs: 0.0,
+                    name: format!("({what}_{ia} x {what}_{ib})[{k}] = y {what}_{ic}[{k}]"),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// `svec` of a symmetric `n x n` matrix in Clarabel's layout: upper triangle column by column,
+/// off-diagonals times `sqrt(2)`, so that `<A, B> = svec(A) . svec(B)`.
+fn svec(a: &Mat10) -> Vec<f64> {
+    let mut v = Vec::with_capacity(55);
+    for j in 0..10 {
+        for i in 0..=j {
+            v.push(if i == j {
+                a[(i, j)]
+            } else {
+                a[(i, j)] * std::f64::consts::SQRT_2
+            });
+        }
+    }
+    v
+}
+
+/// Inverse of [`svec`].
+fn smat(v: &[f64]) -> Mat10 {
+    let mut a = Mat10::zeros();
+    let mut k = 0;
+    for j in 0..10 {
+        for i in 0..=j {
+            let x = if i == j {
+                v[k]
+            } else {
+                v[k] / std::f64::consts::SQRT_2
+            };
+            a[(i, j)] = x;
+            a[(j, i)] = x;
+            k += 1;
+        }
+    }
+    a
+}
+
+/// Settings of [`relax_conjugate`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SdpSettings {
+    /// Clarabel's `max_iter` (default 100).
+    pub max_iterations: u32,
+    /// Clarabel's absolute and relative gap tolerances (default `1e-9`).
+    pub gap_tolerance: f64,
+    /// Clarabel's feasibility tolerance (default `1e-9`).
+    pub feasibility_tolerance: f64,
+}
+
+impl Default for SdpSettings {
+    fn default() -> Self {
+        SdpSettings {
+            max_iterations: 100,
+            gap_tolerance: 1e-9,
+            feasibility_tolerance: 1e-9,
+        }
+    }
+}
+
+/// Clarabel's outcome, in our words.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SdpStatus {
+    /// Solved to the requested accuracy.
+    Solved,
+    /// Solved to reduced accuracy.
+    AlmostSolved,
+    /// Any other end (iteration limit, numerical error, infeasibility claims).
+    Failed,
+}
+
+/// The solved relaxation: the primal `Z`, the multipliers `nu` (in the units of the unscaled
+/// cost, one per constraint of [`constraint_matrices`]) and solver statistics.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SdpRelaxation {
+    /// Primal solution `Z` (10x10, PSD up to solver accuracy).
+    pub z: Mat10,
+    /// Multipliers `nu_k` such that `blkdiag(M, 0) - sum_k nu_k A_k` is (nearly) PSD.
+    pub multipliers: Vec<f64>,
+    /// Clarabel's status.
+    pub status: SdpStatus,
+    /// Clarabel's iterations.
+    pub iterations: u32,
+    /// Wall time (setup + solve) in seconds.
+    pub seconds: f64,
+    /// `lambda_2(Z) / lambda_1(Z)`: 0 for a rank-one (tight) solution.
+    pub eigenvalue_ratio: f64,
+}
+
+/// Solve the SDP relaxation `[H3]` with Clarabel. The cost is divided by the total weight
+/// before solving (Clarabel ended `AlmostSolved` on unscaled 100-pair instances, SPEC 6) and the
+/// multipliers are scaled back.
+pub fn relax_conjugate(
+    problem: &ConjugateProblem,
+    settings: &SdpSettings,
+) -> Result<SdpRelaxation> {
+    let start = Instant::now();
+    let scale = problem.total_weight();
+    let m = cost_matrix(problem) / scale;
+    let mut c = Mat10::zeros();
+    c.fixed_view_mut::<9, 9>(0, 0).copy_from(&m);
+    let cons = constraint_matrices();
+    let ncons = cons.len();
+    let nv = 55;
+    let (mut ii, mut jj, mut vv) = (Vec::new(), Vec::new(), Vec::new());
+    let mut b = Vec::with_capacity(ncons + nv);
+    for (k, con) in cons.iter().enumerate() {
+        for (idx, x) in svec(&con.matrix).into_iter().enumerate() {
+            if x != 0.0 {
+                ii.push(k);
+                jj.push(idx);
+                vv.push(x);
+            }
+        }
+        b.push(con.rhs);
+    }
+    for idx in 0..nv {
+        ii.push(ncons + idx);
+        jj.push(idx);
+        vv.push(-1.0);
+        b.push(0.0);
+    }
+    let a = CscMatrix::new_from_triplets(ncons + nv, nv, ii, jj, vv);
+    let p = CscMatrix::<f64>::zeros((nv, nv));
+    let q = svec(&c);
+    let cones = [
+        SupportedConeT::ZeroConeT(ncons),
+        SupportedConeT::PSDTriangleConeT(10),
+    ];
+    let cs = DefaultSettings::<f64> {
+        verbose: false,
+        max_iter: settings.max_iterations,
+        tol_gap_abs: settings.gap_tolerance,
+        tol_gap_rel: settings.gap_tolerance,
+        tol_feas: settings.feasibility_tolerance,
+        ..DefaultSettings::default()
+    };
+    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, cs).map_err(|e| Error::Solver {
+        message: format!("Clarabel setup: {e:?}"),
+    })?;
+    solver.solve();
+    let sol = &solver.solution;
+    let status = match sol.status {
+        SolverStatus::Solved => SdpStatus::Solved,
+        SolverStatus::AlmostSolved => SdpStatus::AlmostSolved,
+        _ => SdpStatus::Failed,
+    };
+    let z = smat(&sol.x);
+    // Clarabel's dual z_k for the equality rows: C + sum_k z_k A_k is PSD, so nu = -z  [H8].
+    let multipliers: Vec<f64> = sol.z[..ncons].iter().map(|v| -v * scale).collect();
+    let eig = SymmetricEigen::new(z);
+    let mut ev: Vec<f64> = eig.eigenvalues.iter().copied().collect();
+    ev.sort_by(|x, y| y.total_cmp(x));
+    let ratio = if ev[0] > 0.0 {
+        ev[1].max(0.0) / ev[0]
+    } else {
+        1.0
+    };
+    Ok(SdpRelaxation {
+        z,
+        multipliers,
+        status,
+        iterations: sol.iterations,
+        seconds: start.elapsed().as_secs_f64(),
+        eigenvalue_ratio: ratio,
+    })
+}
+
+/// A lower bound on `min_{S in SO(3)} g(S)` verified from multipliers `[H8]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct VerifiedBound {
+    /// The bound `sum_k nu_k b_k + 4 min(lambda_min, 0) - margin`.
+    pub lower_bound: f64,
+    /// `lambda_min(C(nu))` from nalgebra's dense symmetric eigen-decomposition.
+    pub min_eigenvalue: f64,
+    /// The floating-point safety margin subtracted.
+    pub margin: f64,
+}
+
+/// The certificate matrix `C(nu) = blkdiag(M, 0) - sum_k nu_k A_k` `[H8]`.
+pub fn certificate_matrix(m: &Mat9, constraints: &[QcqpConstraint], nu: &[f64]) -> Mat10 {
+    let mut c = Mat10::zeros();
+    c.fixed_view_mut::<9, 9>(0, 0).copy_from(m);
+    for (con, &n) in constraints.iter().zip(nu) {
+        c -= con.matrix * n;
+    }
+    c
+}
+
+/// Verify a lower bound from any multipliers `nu` `[H8]`: for every feasible `z = [vec S; 1]`
+/// (`S` in SO(3)), `g(S) = z^T C(nu) z + sum_k nu_k b_k >= sum_k nu_k b_k + lambda_min ||z||^2`
+/// and `||z||^2 = ||S||_F^2 + 1 = 4`. `lambda_min` comes from nalgebra's dense eigen solver
+/// (independent of Clarabel); the margin `4 * 100 eps ||(|M| + sum |nu_k| |A_k|)||_F` covers
+/// rounding in forming `C(nu)` and in the eigenvalues. Returns `None` for non-finite input.
+pub fn verify_lower_bound(
+    m: &Mat9,
+    constraints: &[QcqpConstraint],
+    nu: &[f64],
+) -> Option<VerifiedBound> {
+    if nu.len() != constraints.len() || !nu.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let c = certificate_matrix(m, constraints, nu);
+    let mut mag = Mat10::zeros();
+    mag.fixed_view_mut::<9, 9>(0, 0).copy_from(&m.abs());
+    for (con, &n) in constraints.iter().zip(nu) {
+        mag += con.matrix.abs() * n.abs();
+    }
+    let lam = SymmetricEigen::new(c).eigenvalues.min();
+    let dual: f64 = constraints.iter().zip(nu).map(|(k, n)| k.rhs * n).sum();
+    let margin = 4.0 * 100.0 * f64::EPSILON * mag.norm() + 4.0 * f64::EPSILON * dual.abs();
+    let lb = dual + 4.0 * lam.min(0.0) - margin;
+    lb.is_finite().then_some(VerifiedBound {
+        lower_bound: lb,
+        min_eigenvalue: lam,
+        margin,
+    })
+}
+
+/// Refine multipliers so that `z* = [vec S*; 1]` is an exact null vector of `C(nu)`: the
+/// least-norm correction `nu + pinv(A(z*)) (C(nu) z*)` with `A(z*) = [A_1 z*, ..., A_K z*]`
+/// `[H8]`. Then `sum nu_k b_k = g(S*)`, so the bound is `g(S*) + 4 lambda_min`: tight up to the
+/// solver's PSD accuracy. Any multipliers give a valid bound, so this cannot make it unsound.
+pub fn refine_multipliers(
+    m: &Mat9,
+    constraints: &[QcqpConstraint],
+    nu: &[f64],
+    s: &Rotation,
+) -> Option<Vec<f64>> {
+    let z = lift(s.matrix(), 1.0);
+    let c = certificate_matrix(m, constraints, nu);
+    let resid = c * z;
+    let k = constraints.len();
+    let a = DMatrix::from_fn(10, k, |i, j| (constraints[j].matrix * z)[i]);
+    let rhs = DVector::from_column_slice(resid.as_slice());
+    let delta = a.svd(true, true).solve(&rhs, 1e-12).ok()?;
+    let out: Vec<f64> = nu.iter().zip(delta.iter()).map(|(n, d)| n + d).collect();
+    out.iter().all(|x| x.is_finite()).then_some(out)
+}
+
+/// Rank-one extraction: top eigenvector `v` of `Z`, scaled so that `y = 1`, `S` = projection
+/// of the reshaped (column-major) `v[0..9]` onto SO(3). `None` when `y ~ 0`.
+pub fn extract_rotation(z: &Mat10) -> Option<Rotation> {
+    let eig = SymmetricEigen::new(*z);
+    let k = eig.eigenvalues.imax();
+    let v = eig.eigenvectors.column(k);
+    if v[Y_INDEX].abs() < 1e-6 {
+        return None;
+    }
+    let s = Matrix3::from_column_slice(&v.as_slice()[..9]) / v[Y_INDEX];
+    project_to_so3(&s)
+}

@@ -1,0 +1,329 @@
+//! The simultaneous problem (issue 5 item 6, `paper-notes/conjugate.md` `[H12]`): nodes
+//! `i = 0..n` with unknown absolute rotations `R_i` and the unknown `S`, measured only through
+//! relative rotations on two view graphs: right edges `R_ij` (`R_ij R_i = R_j`) and left edges
+//! `L_ij ~ S R_ij S^T` (so `L_ij S R_i = S R_j`). Joint chordal cost
+//! `J(R, S) = sum_right w ||R_j - R_ij R_i||_F^2 + sum_left w ||S R_j - L_ij S R_i||_F^2`,
+//! minimised by dense Gauss-Newton over `(R_1..R_{n-1}, S)` with the gauge `R_0 = I`.
+//! The baseline [`average_then_conjugate`] averages each graph separately (gauge `R_0 = L_0 =
+//! I`, which is consistent because `L_0 = S R_0 S^T = I`) and then solves the conjugate problem
+//! on the pairs `(L_i, R_i)`. Small graphs only (dense normal equations, `3n x 3n`).
+
+use super::local::{ConjugateSettings, solve_conjugate};
+use super::problem::{ConjugatePair, ConjugateProblem};
+use crate::error::{Error, Result};
+use crate::multiple::Edge;
+use crate::report::{SolverReport, Termination};
+use crate::so3::{Rotation, exp, hat};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Two view graphs over the same `n` nodes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SimultaneousProblem {
+    /// Number of nodes.
+    pub num_nodes: usize,
+    /// Right graph: `R_ij` with `R_ij R_i = R_j`.
+    pub right: Vec<Edge>,
+    /// Left graph: `L_ij ~ S R_ij S^T`.
+    pub left: Vec<Edge>,
+}
+
+/// A joint estimate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SimultaneousSolution {
+    /// `R_0..R_{n-1}` with `R_0 = I`.
+    #[serde(with = "crate::serde_rot::rotations")]
+    pub rotations: Vec<Rotation>,
+    /// `S`.
+    #[serde(with = "crate::serde_rot::rotation")]
+    pub s: Rotation,
+    /// The joint cost `J`.
+    pub cost: f64,
+    /// Solver report.
+    pub report: SolverReport,
+}
+
+impl SimultaneousProblem {
+    fn validate(&self) -> Result<()> {
+        if self.num_nodes < 2 {
+            return Err(Error::Empty {
+                what: "the simultaneous problem (fewer than 2 nodes)".into(),
+            });
+        }
+        for (k, e) in self.right.iter().chain(&self.left).enumerate() {
+            let idx = e.i.max(e.j);
+            if idx >= self.num_nodes {
+                return Err(Error::IndexOutOfRange {
+                    edge: k,
+                    index: idx,
+                    num_rotations: self.num_nodes,
+                });
+            }
+            if e.i == e.j {
+                return Err(Error::SelfLoop { edge: k, node: e.i });
+            }
+            if !(e.weight.is_finite() && e.weight > 0.0) {
+                return Err(Error::InvalidWeight {
+                    item: format!("edge {k}"),
+                    weight: e.weight,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The joint cost `J(R, S)`.
+    pub fn cost(&self, rs: &[Rotation], s: &Rotation) -> f64 {
+        let (sm, mut c) = (s.matrix(), 0.0);
+        for e in &self.right {
+            c += e.weight
+                * (rs[e.j].matrix() - e.rotation.matrix() * rs[e.i].matrix()).norm_squared();
+        }
+        for e in &self.left {
+            c += e.weight
+                * (sm * rs[e.j].matrix() - e.rotation.matrix() * sm * rs[e.i].matrix())
+                    .norm_squared();
+        }
+        c
+    }
+}
+
+/// Which blocks a Gauss-Newton run optimises.
+#[derive(Clone, Copy)]
+enum Terms {
+    Right,
+    Joint,
+}
+
+/// Spanning-tree (BFS) initialisation of absolutes from one graph, `X_0 = I`.
+fn spanning_tree(n: usize, edges: &[Edge]) -> Result<Vec<Rotation>> {
+    let mut adj = vec![Vec::new(); n];
+    for e in edges {
+        adj[e.i].push((e.j, e.rotation));
+        adj[e.j].push((e.i, e.rotation.inverse()));
+    }
+    let mut out: Vec<Option<Rotation>> = vec![None; n];
+    out[0] = Some(Rotation::identity());
+    let mut queue = std::collections::VecDeque::from([0usize]);
+    while let Some(i) = queue.pop_front() {
+        let ri = out[i].unwrap_or_else(Rotation::identity);
+        for &(j, rij) in &adj[i] {
+            if out[j].is_none() {
+                out[j] = Some(rij * ri);
+                queue.push_back(j);
+            }
+        }
+    }
+    let sizes = out.iter().filter(|x| x.is_some()).count();
+    if sizes < n {
+        return Err(Error::Disconnected {
+            component_sizes: vec![sizes, n - sizes],
+        });
+    }
+    Ok(out
+        .into_iter()
+        .map(|x| x.unwrap_or_else(Rotation::identity))
+        .collect())
+}
+
+/// Dense Gauss-Newton on the chosen terms; variables `R_1..R_{n-1}` (and `S` for `Joint`).
+fn gauss_newton(
+    p: &SimultaneousProblem,
+    terms: Terms,
+    mut rs: Vec<Rotation>,
+    mut s: Rotation,
+    max_iter: usize,
+) -> (Vec<Rotation>, Rotation, f64, usize, Termination) {
+    let n = p.num_nodes;
+    let nv = 3 * (n - 1) + if matches!(terms, Terms::Joint) { 3 } else { 0 };
+    let right_only = SimultaneousProblem {
+        num_nodes: n,
+        right: p.right.clone(),
+        left: vec![],
+    };
+    let cost_fn = |rs: &[Rotation], s: &Rotation| match terms {
+        Terms::Right => right_only.cost(rs, s),
+        Terms::Joint => p.cost(rs, s),
+    };
+    let total_w: f64 = p.right.iter().chain(&p.left).map(|e| e.weight).sum();
+    let gtol = 1e-12 * total_w;
+    let basis = [Vector3::x(), Vector3::y(), Vector3::z()];
+    let mut cost = cost_fn(&rs, &s);
+    let mut it = 0;
+    let term = loop {
+        let mut h = DMatrix::<f64>::zeros(nv, nv);
+        let mut b = DVector::<f64>::zeros(nv);
+        // accumulate one 9-residual term with Jacobian blocks (var offset, 3 columns)
+        let mut add = |res: Matrix3<f64>, blocks: &[(Option<usize>, [Matrix3<f64>; 3])], w: f64| {
+            let cols: Vec<(usize, DVector<f64>)> = blocks
+                .iter()
+                .filter_map(|(off, m)| off.map(|o| (o, m)))
+                .flat_map(|(o, m)| {
+                    (0..3).map(move |k| (o + k, DVector::from_column_slice(m[k].as_slice())))
+                })
+                .collect();
+            let rv = DVector::from_column_slice(res.as_slice());
+            for (a, ca) in &cols {
+                b[*a] += w * ca.dot(&rv);
+                for (c, cc) in &cols {
+                    h[(*a, *c)] += w * ca.dot(cc);
+                }
+            }
+        };
+        let off = |i: usize| if i == 0 { None } else { Some(3 * (i - 1)) };
+        let s_off = Some(3 * (n - 1));
+        let sm = *s.matrix();
+        for e in &p.right {
+            let (ri, rj, rij) = (rs[e.i].matrix(), rs[e.j].matrix(), e.rotation.matrix());
+            let res = rj - rij * ri;
+            let jj = basis.map(|v| rj * hat(&v));
+            let ji = basis.map(|v| -(rij * ri * hat(&v)));
+            add(res, &[(off(e.j), jj), (off(e.i), ji)], e.weight);
+        }
+        if matches!(terms, Terms::Joint) {
+            for e in &p.left {
+                let (ri, rj, lij) = (rs[e.i].matrix(), rs[e.j].matrix(), e.rotation.matrix());
+                let res = sm * rj - lij * sm * ri;
+                let jj = basis.map(|v| sm * rj * hat(&v));
+                let ji = basis.map(|v| -(lij * sm * ri * hat(&v)));
+                let js = basis.map(|v| sm * hat(&v) * rj - lij * sm * hat(&v) * ri);
+                add(
+                    res,
+                    &[(off(e.j), jj), (off(e.i), ji), (s_off, js)],
+                    e.weight,
+                );
+            }
+        }
+        let gnorm = 2.0 * b.norm();
+        if gnorm < gtol {
+            break Termination::Converged {
+                measure: "gradient norm".into(),
+                value: gnorm,
+                threshold: gtol,
+            };
+        }
+        if it >= max_iter {
+            break Termination::IterationLimit {
+                iterations: it,
+                value: gnorm,
+                threshold: gtol,
+            };
+        }
+        it += 1;
+        let damp = 1e-12 * h.trace().abs() + 1e-300;
+        for k in 0..nv {
+            h[(k, k)] += damp;
+        }
+        let delta = match h.cholesky() {
+            Some(c) => -c.solve(&b),
+            None => -b.clone(),
+        };
+        let slope = 2.0 * b.dot(&delta);
+        let mut t = 1.0;
+        let mut accepted = None;
+        for _ in 0..40 {
+            let mut rs2 = rs.clone();
+            for (i, r) in rs2.iter_mut().enumerate().skip(1) {
+                let d = Vector3::new(
+                    delta[3 * (i - 1)],
+                    delta[3 * (i - 1) + 1],
+                    delta[3 * (i - 1) + 2],
+                );
+                *r *= exp(&(d * t));
+            }
+            let mut s2 = s;
+            if matches!(terms, Terms::Joint) {
+                let o = 3 * (n - 1);
+                s2 *= exp(&(Vector3::new(delta[o], delta[o + 1], delta[o + 2]) * t));
+            }
+            let c = cost_fn(&rs2, &s2);
+            if c <= cost + 1e-4 * t * slope {
+                accepted = Some((rs2, s2, c));
+                break;
+            }
+            t *= 0.5;
+        }
+        match accepted {
+            Some((r2, s2, c)) => {
+                rs = r2;
+                s = s2;
+                cost = c;
+            }
+            None => {
+                let res = 1e3 * f64::EPSILON * cost.abs();
+                if -slope <= res {
+                    break Termination::Converged {
+                        measure: "predicted decrease (cost rounding level)".into(),
+                        value: -slope,
+                        threshold: res,
+                    };
+                }
+                break Termination::Stalled {
+                    value: gnorm,
+                    threshold: gtol,
+                };
+            }
+        }
+    };
+    (rs, s, cost, it, term)
+}
+
+/// Baseline: average each graph separately (spanning tree + chordal Gauss-Newton, gauge
+/// `X_0 = I`), then solve the conjugate problem on `(L_i, R_i)`, `i >= 1`.
+pub fn average_then_conjugate(p: &SimultaneousProblem) -> Result<SimultaneousSolution> {
+    p.validate()?;
+    let start = Instant::now();
+    let n = p.num_nodes;
+    let avg = |edges: &[Edge]| -> Result<Vec<Rotation>> {
+        let init = spanning_tree(n, edges)?;
+        let q = SimultaneousProblem {
+            num_nodes: n,
+            right: edges.to_vec(),
+            left: vec![],
+        };
+        Ok(gauss_newton(&q, Terms::Right, init, Rotation::identity(), 100).0)
+    };
+    let rs = avg(&p.right)?;
+    let ls = avg(&p.left)?;
+    let pairs: Vec<_> = (1..n).map(|i| ConjugatePair::new(ls[i], rs[i])).collect();
+    let conj = solve_conjugate(
+        &ConjugateProblem::new(pairs)?,
+        &ConjugateSettings::default(),
+    )?;
+    let cost = p.cost(&rs, &conj.estimate);
+    Ok(SimultaneousSolution {
+        rotations: rs,
+        s: conj.estimate,
+        cost,
+        report: SolverReport {
+            name: "average-then-conjugate".into(),
+            iterations: 0,
+            termination: conj.report.termination,
+            seconds: start.elapsed().as_secs_f64(),
+        },
+    })
+}
+
+/// Joint Gauss-Newton on `J(R, S)` initialised by [`average_then_conjugate`] (so its cost is
+/// never higher than the baseline's).
+pub fn solve_simultaneous(
+    p: &SimultaneousProblem,
+    max_iterations: usize,
+) -> Result<SimultaneousSolution> {
+    let start = Instant::now();
+    let base = average_then_conjugate(p)?;
+    let (rs, s, cost, it, term) =
+        gauss_newton(p, Terms::Joint, base.rotations, base.s, max_iterations);
+    Ok(SimultaneousSolution {
+        rotations: rs,
+        s,
+        cost,
+        report: SolverReport {
+            name: "simultaneous-gauss-newton".into(),
+            iterations: it,
+            termination: term,
+            seconds: start.elapsed().as_secs_f64(),
+        },
+    })
+}

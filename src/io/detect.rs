@@ -1,0 +1,206 @@
+//! The front door for view-graph files: the loaded-graph type shared by every reader, the
+//! reader options, and format auto-detection (from the extension, then from the content).
+//!
+//! Formats and their conventions are documented where each is read ([`crate::io::g2o`],
+//! [`crate::io::sfm`], [`crate::io::json`]) and in `paper-notes/formats.md` (`[F1]`..`[F8]`).
+
+use crate::error::{Error, Result};
+use crate::multiple::MultipleProblem;
+use crate::so3::{DEFAULT_ROTATION_TOLERANCE, Rotation};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::Path;
+use std::str::FromStr;
+
+/// Where edge weights come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WeightSource {
+    /// From the file where the format has them (g2o: SE-Sync's `kappa`, `[F3]`); 1 otherwise.
+    #[default]
+    File,
+    /// All weights 1.
+    Unit,
+}
+
+/// A view-graph file format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GraphFormat {
+    /// Decide from the extension, then from the content ([`detect_format`]).
+    #[default]
+    Auto,
+    /// g2o / TORO pose graph: `EDGE_SE3:QUAT`, `EDGE3`, `EDGE_SE2` (+ optional vertex lines).
+    G2o,
+    /// 1DSfM `EGs.txt`: `i j R11..R33 [tx ty tz]` per line.
+    OneDsfm,
+    /// The JSON problem format of SPEC section 5.
+    Json,
+}
+
+impl fmt::Display for GraphFormat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            GraphFormat::Auto => "auto",
+            GraphFormat::G2o => "g2o",
+            GraphFormat::OneDsfm => "1dsfm",
+            GraphFormat::Json => "json",
+        })
+    }
+}
+
+impl FromStr for GraphFormat {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "auto" => Ok(GraphFormat::Auto),
+            "g2o" | "toro" => Ok(GraphFormat::G2o),
+            "1dsfm" | "egs" => Ok(GraphFormat::OneDsfm),
+            "json" => Ok(GraphFormat::Json),
+            _ => Err(Error::InvalidSettings {
+                name: "format".into(),
+                reason: format!("unknown format `{s}` (expected auto, g2o, 1dsfm or json)"),
+            }),
+        }
+    }
+}
+
+/// Options of the view-graph readers.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ReadOptions {
+    /// Weights from the file or all 1.
+    pub weights: WeightSource,
+    /// Tolerance for matrices given as rotations (1DSfM, JSON): `||R^T R - I||_F` and
+    /// `|det R - 1|` must not exceed it ([`crate::so3::rotation_from_matrix`]).
+    pub rotation_tolerance: f64,
+    /// Tolerance for quaternions (g2o): `| ||q|| - 1 |` must not exceed it; accepted quaternions
+    /// are normalised. Files written with 6 decimals are accurate to about 1e-6.
+    pub quaternion_tolerance: f64,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions {
+            weights: WeightSource::File,
+            rotation_tolerance: DEFAULT_ROTATION_TOLERANCE,
+            quaternion_tolerance: 1e-3,
+        }
+    }
+}
+
+/// A view graph read from a file, with what the file said beyond the measurements.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LoadedGraph {
+    /// The validated problem (nodes `0..n`, edges as read, in file order, multi-edges kept).
+    pub problem: MultipleProblem,
+    /// The file's id of each node: node `k` of [`Self::problem`] is `node_ids[k]` in the file.
+    /// Ids are sorted increasingly, so contiguous 0-based ids map to themselves.
+    pub node_ids: Vec<u64>,
+    /// Initial estimate from vertex lines (as this crate's `R_i`), when every node has one.
+    pub initial: Option<Vec<Rotation>>,
+    /// Number of edges whose unordered pair `{i, j}` already occurred earlier in the file.
+    pub duplicates: usize,
+    /// Number of edges given with `i > j` (kept as given; `R_ij` keeps its meaning).
+    pub reversed: usize,
+    /// Non-fatal remarks (skipped line types, missing vertices, ...), one per kind.
+    pub warnings: Vec<String>,
+    /// The format that was read.
+    pub format: GraphFormat,
+    /// `true` when every measurement is a planar rotation about z (g2o `EDGE_SE2`).
+    pub planar: bool,
+}
+
+impl LoadedGraph {
+    /// The node index of a file id, if the id occurs.
+    pub fn node_of_id(&self, id: u64) -> Option<usize> {
+        self.node_ids.binary_search(&id).ok()
+    }
+}
+
+/// Guess the format of a file from its extension (`.json`, `.g2o`) and otherwise from its
+/// content: a first non-blank character `{` means JSON; a first data line starting with a
+/// letter (a tag such as `EDGE_SE3:QUAT`, `VERTEX3`) means g2o; a first data line of 11 or 14
+/// numbers means 1DSfM `EGs.txt`.
+///
+/// ```
+/// use rotavg::io::detect::{detect_format, GraphFormat};
+/// assert_eq!(detect_format("x.txt", "EDGE3 0 1 0 0 0 0 0 0").unwrap(), GraphFormat::G2o);
+/// assert_eq!(detect_format("-", " {\"num_rotations\": 2}").unwrap(), GraphFormat::Json);
+/// assert_eq!(detect_format("EGs.txt", "0 1 1 0 0 0 1 0 0 0 1 1 0 0").unwrap(), GraphFormat::OneDsfm);
+/// ```
+pub fn detect_format(file: &str, text: &str) -> Result<GraphFormat> {
+    let lower = file.to_ascii_lowercase();
+    if lower.ends_with(".json") {
+        return Ok(GraphFormat::Json);
+    }
+    if lower.ends_with(".g2o") {
+        return Ok(GraphFormat::G2o);
+    }
+    if text.trim_start().starts_with('{') {
+        return Ok(GraphFormat::Json);
+    }
+    for (k, line) in text.lines().enumerate() {
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let first = t.split_whitespace().next().unwrap_or("");
+        if first.starts_with(|c: char| c.is_ascii_alphabetic()) {
+            return Ok(GraphFormat::G2o);
+        }
+        let count = t.split_whitespace().count();
+        if count == 14 || count == 11 {
+            return Ok(GraphFormat::OneDsfm);
+        }
+        return Err(Error::parse(
+            Some(file),
+            Some(k + 1),
+            format!(
+                "cannot detect the file format from this line ({count} tokens); pass --format g2o|1dsfm|json"
+            ),
+        ));
+    }
+    Err(Error::parse(
+        Some(file),
+        None,
+        "empty input: no data lines, cannot detect the format",
+    ))
+}
+
+/// Read a view graph from text. `file` names the source in error messages (`-` for stdin).
+///
+/// ```
+/// use rotavg::io::detect::{read_graph, GraphFormat, ReadOptions};
+/// let text = "EDGE_SE2 0 1 1 0 0.5 1 0 0 1 0 10\nEDGE_SE2 1 2 1 0 0.5 1 0 0 1 0 10\n";
+/// let g = read_graph(text, "a.g2o", GraphFormat::Auto, &ReadOptions::default()).unwrap();
+/// assert_eq!((g.problem.num_rotations(), g.problem.num_edges()), (3, 2));
+/// assert!(g.planar);
+/// ```
+pub fn read_graph(
+    text: &str,
+    file: &str,
+    format: GraphFormat,
+    options: &ReadOptions,
+) -> Result<LoadedGraph> {
+    let format = match format {
+        GraphFormat::Auto => detect_format(file, text)?,
+        f => f,
+    };
+    match format {
+        GraphFormat::OneDsfm => crate::io::sfm::read_egs(text, file, options),
+        GraphFormat::Json => crate::io::json::read_problem_json(text, file, options),
+        // `Auto` was resolved above; detect_format never returns it.
+        GraphFormat::G2o | GraphFormat::Auto => crate::io::g2o::read_g2o(text, file, options),
+    }
+}
+
+/// Read a file from disk ([`read_graph`]); I/O errors name the path.
+pub fn load_graph(path: &Path, format: GraphFormat, options: &ReadOptions) -> Result<LoadedGraph> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+        path: name.clone(),
+        message: e.to_string(),
+    })?;
+    read_graph(&text, &name, format, options)
+}

@@ -1,0 +1,434 @@
+//! g2o / TORO pose graphs read as rotation-averaging problems, and a g2o writer.
+//!
+//! # Conventions (`paper-notes/formats.md`, `[F1]`..`[F4]`)
+//!
+//! A g2o vertex pose `T_i = (W_i, t_i)` maps body-i coordinates to world coordinates
+//! (`W_i` is world-from-body), and an edge measures `T_i^{-1} T_j`, so its rotation is
+//! `Z_ij = W_i^T W_j` `[F1]`. This crate's convention is `R_ij R_i = R_j` (SPEC section 1), so we
+//! set **`R_i = W_i^T`** (world-to-body) and **`R_ij = Z_ij^T`**: then
+//! `R_ij R_i = Z_ij^T W_i^T = (W_i Z_ij)^T = W_j^T = R_j`, and the chordal cost
+//! `||R_j - R_ij R_i||_F = ||W_j - W_i Z_ij||_F` is SE-Sync's and GTSAM's rotation term.
+//! The test `io_shared_data::mrob_sphere_gt_vertex_cost_is_tiny` checks this on a file whose
+//! vertex lines are the ground truth, and that the opposite convention gives a large cost.
+//!
+//! Line types (tokens separated by any whitespace; empty lines and `#` comments skipped):
+//!
+//! * `VERTEX_SE3:QUAT id x y z qx qy qz qw` and `EDGE_SE3:QUAT i j x y z qx qy qz qw I(21)`:
+//!   Hamilton quaternion, **scalar last**, normalised on read (it must be unit within
+//!   [`ReadOptions::quaternion_tolerance`]). The 21 numbers are the upper triangle, row by row,
+//!   of the 6x6 information matrix, translation block first. Weight (SE-Sync) `[F3]`:
+//!   `kappa = 3 / (2 tr(Omega_rot^{-1}))` from the 3x3 rotation block, which must be finite and
+//!   positive definite. An edge without the 21 numbers gets weight 1.
+//! * `VERTEX3 id x y z roll pitch yaw`, `EDGE3 i j x y z roll pitch yaw [I(21)]` (TORO / GTSAM):
+//!   `Z = Rz(yaw) Ry(pitch) Rx(roll)` `[F2]`. Without information (9 tokens): weight 1. With it:
+//!   `kappa = 6 / tr(Omega_rot^{-1})` `[F3]`, because EDGE3 information is in rotation-angle
+//!   units while g2o's is in quaternion-vector (half-angle) units (`Omega_g2o = 4 Omega_EDGE3`),
+//!   so this is SE-Sync's rule applied to the equivalent g2o information. On sphere2500 the
+//!   two files then give the same weights to 1 % (test `edge3_and_g2o_weights_agree`).
+//! * `VERTEX_SE2 id x y theta`, `EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33`: a rotation
+//!   by `theta` about z `[F4]`; weight `kappa = I33` (SE-Sync's 2-D rule), `I33 > 0` required.
+//! * Any other tag (`FIX`, `VERTEX_XY`, ...) is skipped and counted in a warning.
+//!
+//! Node ids may be sparse: they are sorted and mapped to `0..n` ([`LoadedGraph::node_ids`]).
+//! Edges with `i > j` and multi-edges are kept as given.
+
+use crate::error::{Error, Result};
+use crate::io::detect::{GraphFormat, LoadedGraph, ReadOptions, WeightSource};
+use crate::multiple::{Edge, MultipleProblem};
+use crate::so3::Rotation;
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+/// Tokens of one line, with the file and line for error messages.
+pub(crate) struct Tokens<'a> {
+    pub(crate) file: &'a str,
+    pub(crate) line: usize,
+    pub(crate) toks: Vec<&'a str>,
+    pos: usize,
+}
+
+impl<'a> Tokens<'a> {
+    pub(crate) fn new(file: &'a str, line: usize, text: &'a str) -> Self {
+        Tokens {
+            file,
+            line,
+            toks: text.split_whitespace().collect(),
+            pos: 0,
+        }
+    }
+
+    pub(crate) fn err(&self, msg: impl Into<String>) -> Error {
+        Error::parse(Some(self.file), Some(self.line), msg)
+    }
+
+    pub(crate) fn next_str(&mut self, what: &str) -> Result<&'a str> {
+        let t = self
+            .toks
+            .get(self.pos)
+            .copied()
+            .ok_or_else(|| self.err(format!("missing {what}")))?;
+        self.pos += 1;
+        Ok(t)
+    }
+
+    pub(crate) fn next_f64(&mut self, what: &str) -> Result<f64> {
+        let t = self.next_str(what)?;
+        let v: f64 = t
+            .parse()
+            .map_err(|_| self.err(format!("{what}: `{t}` is not a number")))?;
+        if !v.is_finite() {
+            return Err(self.err(format!("{what}: `{t}` is not finite")));
+        }
+        Ok(v)
+    }
+
+    pub(crate) fn next_id(&mut self, what: &str) -> Result<u64> {
+        let t = self.next_str(what)?;
+        t.parse()
+            .map_err(|_| self.err(format!("{what}: `{t}` is not a non-negative integer id")))
+    }
+
+    pub(crate) fn expect_count(&self, allowed: &[usize], layout: &str) -> Result<()> {
+        if allowed.contains(&self.toks.len()) {
+            Ok(())
+        } else {
+            Err(self.err(format!(
+                "expected {} tokens ({layout}), found {}",
+                allowed
+                    .iter()
+                    .map(|k| k.to_string())
+                    .collect::<Vec<_>>()
+                    .join(" or "),
+                self.toks.len()
+            )))
+        }
+    }
+}
+
+/// Rotation of a g2o quaternion given scalar last, normalised; rejected if not unit within
+/// `tol` (a zero quaternion is always rejected).
+fn quaternion_rotation(t: &mut Tokens<'_>, tol: f64) -> Result<Rotation> {
+    let x = t.next_f64("qx")?;
+    let y = t.next_f64("qy")?;
+    let z = t.next_f64("qz")?;
+    let w = t.next_f64("qw")?;
+    let q = Quaternion::new(w, x, y, z);
+    let norm = q.norm();
+    if !(norm > 1e-12 && (norm - 1.0).abs() <= tol) {
+        return Err(t.err(format!(
+            "quaternion (qx qy qz qw) = ({x} {y} {z} {w}) has norm {norm:.3e}, not 1 within {tol:.1e}"
+        )));
+    }
+    Ok(UnitQuaternion::from_quaternion(q).to_rotation_matrix())
+}
+
+/// `Rz(yaw) Ry(pitch) Rx(roll)` `[F2]`.
+pub fn rotation_from_ypr(yaw: f64, pitch: f64, roll: f64) -> Rotation {
+    Rotation::from_axis_angle(&Vector3::z_axis(), yaw)
+        * Rotation::from_axis_angle(&Vector3::y_axis(), pitch)
+        * Rotation::from_axis_angle(&Vector3::x_axis(), roll)
+}
+
+/// Read the 21 upper-triangular entries of a 6x6 information matrix and return the rotation
+/// block (rows/columns 3..6), validated finite and positive definite, and `tr(block^{-1})`.
+fn rotation_information_trace_inv(t: &mut Tokens<'_>) -> Result<f64> {
+    let mut info = nalgebra::Matrix6::<f64>::zeros();
+    for r in 0..6 {
+        for c in r..6 {
+            let v = t.next_f64(&format!("information entry ({}, {})", r + 1, c + 1))?;
+            info[(r, c)] = v;
+            info[(c, r)] = v;
+        }
+    }
+    let block: Matrix3<f64> = info.fixed_view::<3, 3>(3, 3).into_owned();
+    let chol = block.cholesky().ok_or_else(|| {
+        t.err(format!(
+            "the rotation block of the information matrix is not positive definite: {:?}",
+            (0..3)
+                .map(|r| [block[(r, 0)], block[(r, 1)], block[(r, 2)]])
+                .collect::<Vec<_>>()
+        ))
+    })?;
+    let tr = chol.inverse().trace();
+    if !(tr.is_finite() && tr > 0.0) {
+        return Err(t.err(format!(
+            "the rotation block of the information matrix is numerically singular (tr(Omega^-1) = {tr:e})"
+        )));
+    }
+    Ok(tr)
+}
+
+struct RawEdge {
+    i: u64,
+    j: u64,
+    rotation: Rotation,
+    weight: f64,
+    line: usize,
+}
+
+/// Read a g2o / TORO file (see the module documentation for the conventions).
+///
+/// ```
+/// use rotavg::io::{g2o::read_g2o, detect::ReadOptions};
+/// // Two poses, the second rotated by 90 deg about z (W_1), one edge measuring Z_01 = W_1.
+/// let text = "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\n\
+///             VERTEX_SE3:QUAT 1 1 0 0 0 0 0.70710678118 0.70710678118\n\
+///             EDGE_SE3:QUAT 0 1 1 0 0 0 0 0.70710678118 0.70710678118 \
+///             1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 2 0 0 2 0 2\n";
+/// let g = read_g2o(text, "t.g2o", &ReadOptions::default()).unwrap();
+/// let init = g.initial.unwrap();
+/// assert!(g.problem.chordal_cost(&init) < 1e-12);
+/// assert!((g.problem.edges()[0].weight - 1.0).abs() < 1e-12); // kappa = 3 / (2 * 3/2)
+/// ```
+pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedGraph> {
+    let qtol = options.quaternion_tolerance;
+    let mut vertices: BTreeMap<u64, (Rotation, usize)> = BTreeMap::new();
+    let mut raw: Vec<RawEdge> = Vec::new();
+    let mut skipped: BTreeMap<String, (usize, usize)> = BTreeMap::new();
+    let (mut seen_3d, mut seen_2d) = (false, false);
+    let mut last_line = 0;
+    for (k, line) in text.lines().enumerate() {
+        let ln = k + 1;
+        last_line = ln;
+        let trimmed = line.trim();
+        if trimmed.is_empty() || trimmed.starts_with('#') {
+            continue;
+        }
+        let mut t = Tokens::new(file, ln, trimmed);
+        let tag = t.next_str("tag")?;
+        let mut vertex = None;
+        let mut edge = None;
+        match tag {
+            "VERTEX_SE3:QUAT" => {
+                t.expect_count(&[9], "VERTEX_SE3:QUAT id x y z qx qy qz qw")?;
+                let id = t.next_id("vertex id")?;
+                for w in ["x", "y", "z"] {
+                    t.next_f64(w)?;
+                }
+                let wi = quaternion_rotation(&mut t, qtol)?;
+                vertex = Some((id, wi.inverse())); // R_i = W_i^T [F1]
+                seen_3d = true;
+            }
+            "EDGE_SE3:QUAT" => {
+                t.expect_count(
+                    &[31, 10],
+                    "EDGE_SE3:QUAT i j x y z qx qy qz qw + 21 information entries",
+                )?;
+                let i = t.next_id("edge id i")?;
+                let j = t.next_id("edge id j")?;
+                for w in ["x", "y", "z"] {
+                    t.next_f64(w)?;
+                }
+                let z = quaternion_rotation(&mut t, qtol)?;
+                let weight = if t.toks.len() == 31 {
+                    3.0 / (2.0 * rotation_information_trace_inv(&mut t)?) // [F3]
+                } else {
+                    1.0
+                };
+                edge = Some((i, j, z.inverse(), weight)); // R_ij = Z_ij^T [F1]
+                seen_3d = true;
+            }
+            "VERTEX3" => {
+                t.expect_count(&[8], "VERTEX3 id x y z roll pitch yaw")?;
+                let id = t.next_id("vertex id")?;
+                for w in ["x", "y", "z"] {
+                    t.next_f64(w)?;
+                }
+                let roll = t.next_f64("roll")?;
+                let pitch = t.next_f64("pitch")?;
+                let yaw = t.next_f64("yaw")?;
+                vertex = Some((id, rotation_from_ypr(yaw, pitch, roll).inverse()));
+                seen_3d = true;
+            }
+            "EDGE3" => {
+                t.expect_count(
+                    &[9, 30],
+                    "EDGE3 i j x y z roll pitch yaw [+ 21 information entries]",
+                )?;
+                let i = t.next_id("edge id i")?;
+                let j = t.next_id("edge id j")?;
+                for w in ["x", "y", "z"] {
+                    t.next_f64(w)?;
+                }
+                let roll = t.next_f64("roll")?;
+                let pitch = t.next_f64("pitch")?;
+                let yaw = t.next_f64("yaw")?;
+                let weight = if t.toks.len() == 30 {
+                    6.0 / rotation_information_trace_inv(&mut t)? // [F3], angle units
+                } else {
+                    1.0
+                };
+                edge = Some((i, j, rotation_from_ypr(yaw, pitch, roll).inverse(), weight));
+                seen_3d = true;
+            }
+            "VERTEX_SE2" => {
+                t.expect_count(&[5], "VERTEX_SE2 id x y theta")?;
+                let id = t.next_id("vertex id")?;
+                t.next_f64("x")?;
+                t.next_f64("y")?;
+                let th = t.next_f64("theta")?;
+                vertex = Some((id, Rotation::from_axis_angle(&Vector3::z_axis(), -th)));
+                seen_2d = true;
+            }
+            "EDGE_SE2" => {
+                t.expect_count(
+                    &[12, 6],
+                    "EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33",
+                )?;
+                let i = t.next_id("edge id i")?;
+                let j = t.next_id("edge id j")?;
+                t.next_f64("dx")?;
+                t.next_f64("dy")?;
+                let th = t.next_f64("dtheta")?;
+                let weight = if t.toks.len() == 12 {
+                    let mut info = [0.0; 6];
+                    for (n, v) in info.iter_mut().enumerate() {
+                        *v = t.next_f64(&format!("information entry {}", n + 1))?;
+                    }
+                    if info[5] <= 0.0 {
+                        return Err(t.err(format!(
+                            "the rotation information I33 = {} must be > 0",
+                            info[5]
+                        )));
+                    }
+                    info[5] // [F4] SE-Sync's 2-D kappa
+                } else {
+                    1.0
+                };
+                // Z = Rz(dtheta), R_ij = Z^T = Rz(-dtheta) [F1], [F4]
+                edge = Some((
+                    i,
+                    j,
+                    Rotation::from_axis_angle(&Vector3::z_axis(), -th),
+                    weight,
+                ));
+                seen_2d = true;
+            }
+            other => {
+                let e = skipped.entry(other.to_owned()).or_insert((0, ln));
+                e.0 += 1;
+            }
+        }
+        if let Some((id, r)) = vertex {
+            if let Some((_, first)) = vertices.get(&id) {
+                return Err(t.err(format!("vertex {id} defined twice (first at line {first})")));
+            }
+            vertices.insert(id, (r, ln));
+        }
+        if let Some((i, j, rotation, weight)) = edge {
+            if i == j {
+                return Err(t.err(format!("self loop: edge from node {i} to itself")));
+            }
+            if !(weight.is_finite() && weight > 0.0) {
+                return Err(t.err(format!("edge weight {weight:e} is not finite and > 0")));
+            }
+            raw.push(RawEdge {
+                i,
+                j,
+                rotation,
+                weight,
+                line: ln,
+            });
+        }
+    }
+    if raw.is_empty() {
+        return Err(Error::parse(
+            Some(file),
+            Some(last_line.max(1)),
+            "no edge lines (EDGE_SE3:QUAT, EDGE3 or EDGE_SE2) in the file",
+        ));
+    }
+    let mut warnings = Vec::new();
+    for (tag, (count, first)) in &skipped {
+        warnings.push(format!(
+            "skipped {count} line(s) with unknown tag `{tag}` (first at line {first})"
+        ));
+    }
+    if seen_2d && seen_3d {
+        warnings.push("the file mixes 2-D and 3-D lines".to_owned());
+    }
+    let mut ids: Vec<u64> = vertices.keys().copied().collect();
+    ids.extend(raw.iter().flat_map(|e| [e.i, e.j]));
+    ids.sort_unstable();
+    ids.dedup();
+    let index = |id: u64| ids.binary_search(&id).unwrap_or(0);
+    let edges: Vec<Edge> = raw
+        .iter()
+        .map(|e| Edge {
+            i: index(e.i),
+            j: index(e.j),
+            rotation: e.rotation,
+            weight: match options.weights {
+                WeightSource::File => e.weight,
+                WeightSource::Unit => 1.0,
+            },
+        })
+        .collect();
+    let reversed = raw.iter().filter(|e| e.i > e.j).count();
+    let initial = if vertices.is_empty() {
+        None
+    } else if vertices.len() == ids.len() {
+        Some(vertices.values().map(|(r, _)| *r).collect())
+    } else {
+        warnings.push(format!(
+            "{} of {} nodes have no vertex line: no initial estimate",
+            ids.len() - vertices.len(),
+            ids.len()
+        ));
+        None
+    };
+    let first_line = raw.first().map(|e| e.line);
+    let problem =
+        MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(file, first_line))?;
+    let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
+    Ok(LoadedGraph {
+        problem,
+        node_ids: ids,
+        initial,
+        duplicates,
+        reversed,
+        warnings,
+        format: GraphFormat::G2o,
+        planar: seen_2d && !seen_3d,
+    })
+}
+
+/// Write a problem (and optionally an estimate `R_i`, as vertex lines) in g2o 3-D format with
+/// zero translations. Inverse of [`read_g2o`] `[F1]`, `[F3]`: vertex `W_i = R_i^T`, edge
+/// `Z_ij = R_ij^T`, and the information matrix `diag(1, 1, 1, 2w, 2w, 2w)`, for which SE-Sync's
+/// rule gives back `kappa = 3 / (2 * 3 / (2w)) = w`. Node ids are `0..n`. Numbers use Rust's
+/// shortest round-trip formatting.
+///
+/// ```
+/// use rotavg::io::{g2o::{read_g2o, write_g2o}, detect::ReadOptions};
+/// use rotavg::multiple::synthetic::SyntheticGraph;
+/// let (p, gt) = SyntheticGraph { num_rotations: 5, num_edges: 8, ..Default::default() }.generate();
+/// let text = write_g2o(&p, Some(&gt));
+/// let g = read_g2o(&text, "round-trip", &ReadOptions::default()).unwrap();
+/// assert!((g.problem.chordal_cost(&gt) - p.chordal_cost(&gt)).abs() < 1e-9);
+/// ```
+pub fn write_g2o(problem: &MultipleProblem, estimate: Option<&[Rotation]>) -> String {
+    let mut s = String::new();
+    let quat = |r: &Rotation| {
+        let q = UnitQuaternion::from_rotation_matrix(r);
+        let q = q.quaternion();
+        format!("{} {} {} {}", q.i, q.j, q.k, q.w)
+    };
+    if let Some(est) = estimate {
+        for (k, r) in est.iter().enumerate() {
+            let _ = writeln!(s, "VERTEX_SE3:QUAT {k} 0 0 0 {}", quat(&r.inverse()));
+        }
+    }
+    for e in problem.edges() {
+        let a = 2.0 * e.weight;
+        let _ = writeln!(
+            s,
+            "EDGE_SE3:QUAT {} {} 0 0 0 {} 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 {a} 0 0 {a} 0 {a}",
+            e.i,
+            e.j,
+            quat(&e.rotation.inverse())
+        );
+    }
+    s
+}

@@ -1,0 +1,248 @@
+//! JSON files of SPEC section 5: multiple-averaging problems and estimates.
+//!
+//! # Formats (`paper-notes/formats.md`, `[F8]`)
+//!
+//! * Problem: `{"num_rotations": n, "edges": [{"i": 0, "j": 1, "rotation": R, "weight": w}, ...]}`
+//!   with `R` = `R_ij` (`R_ij R_i = R_j`, this crate's convention, no conversion), a row-major
+//!   nested 3x3 array, indices 0-based, `weight` optional (default 1). Unknown fields in an
+//!   edge are an error (a misspelt `"wieght"` must not silently become 1); unknown top-level
+//!   fields are ignored.
+//! * Estimate: `{"rotations": [R, ...]}`, or `{"estimate": [R, ...]}` as printed by `--json`
+//!   (multiple), or `{"rotation": R}` / `{"estimate": R}` (single, conjugate). Rotations are
+//!   this crate's `R_i`.
+//!
+//! Syntax errors carry serde_json's line number; a matrix that is not a rotation is reported
+//! as `edge k` / `rotation k`.
+
+use crate::error::{Error, Result};
+use crate::io::detect::{GraphFormat, LoadedGraph, ReadOptions, WeightSource};
+use crate::multiple::{Edge, MultipleProblem};
+use crate::so3::{Rotation, rotation_from_rows, rotation_to_rows};
+use serde::{Deserialize, Serialize};
+
+type Rows = [[f64; 3]; 3];
+
+#[derive(Deserialize)]
+struct ProblemFile {
+    num_rotations: usize,
+    edges: Vec<EdgeFile>,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct EdgeFile {
+    i: usize,
+    j: usize,
+    rotation: Rows,
+    #[serde(default = "one")]
+    weight: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn syntax_error(file: &str, e: serde_json::Error) -> Error {
+    let line = (e.line() > 0).then_some(e.line());
+    Error::parse(Some(file), line, format!("invalid JSON: {e}"))
+}
+
+/// Read a multiple-averaging problem in the JSON format of SPEC section 5 `[F8]`.
+///
+/// ```
+/// use rotavg::io::{json::read_problem_json, detect::ReadOptions};
+/// let text = r#"{"num_rotations": 2, "edges": [{"i": 0, "j": 1, "rotation": [[1,0,0],[0,1,0],[0,0,1]]}]}"#;
+/// let g = read_problem_json(text, "p.json", &ReadOptions::default()).unwrap();
+/// assert_eq!(g.problem.edges()[0].weight, 1.0);
+/// ```
+pub fn read_problem_json(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedGraph> {
+    let pf: ProblemFile = serde_json::from_str(text).map_err(|e| syntax_error(file, e))?;
+    let n = pf.num_rotations;
+    let m = pf.edges.len();
+    // No allocation sized from an unchecked count: more than 2m + 1 nodes means some node has
+    // no edge at all (and the number could be absurd); reject before building anything of size n.
+    if n > 2 * m + 1 {
+        return Err(Error::parse(
+            Some(file),
+            None,
+            format!(
+                "num_rotations = {n}, but {m} edges touch at most {} nodes",
+                2 * m
+            ),
+        ));
+    }
+    let mut edges = Vec::with_capacity(m);
+    for (k, e) in pf.edges.iter().enumerate() {
+        let item = format!("edge {k} ({}, {})", e.i, e.j);
+        let rotation = rotation_from_rows(&e.rotation, options.rotation_tolerance, &item)
+            .map_err(|err| err.in_file(file, None))?;
+        edges.push(Edge {
+            i: e.i,
+            j: e.j,
+            rotation,
+            weight: match options.weights {
+                WeightSource::File => e.weight,
+                WeightSource::Unit => 1.0,
+            },
+        });
+    }
+    let reversed = edges.iter().filter(|e| e.i > e.j).count();
+    let problem = MultipleProblem::new(n, edges).map_err(|e| e.in_file(file, None))?;
+    let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
+    Ok(LoadedGraph {
+        node_ids: (0..n as u64).collect(),
+        problem,
+        initial: None,
+        duplicates,
+        reversed,
+        warnings: Vec::new(),
+        format: GraphFormat::Json,
+        planar: false,
+    })
+}
+
+/// Write a problem as JSON (SPEC section 5), one edge per line; numbers in Rust's shortest
+/// round-trip form, so [`read_problem_json`] gives back the same problem.
+///
+/// ```
+/// use rotavg::io::{json::{read_problem_json, write_problem_json}, detect::ReadOptions};
+/// use rotavg::multiple::synthetic::SyntheticGraph;
+/// let (p, _) = SyntheticGraph { num_rotations: 4, num_edges: 6, ..Default::default() }.generate();
+/// let q = read_problem_json(&write_problem_json(&p), "-", &ReadOptions::default()).unwrap();
+/// assert_eq!(q.problem.num_edges(), 6);
+/// ```
+pub fn write_problem_json(problem: &MultipleProblem) -> String {
+    let mut s = format!(
+        "{{\"num_rotations\": {}, \"edges\": [\n",
+        problem.num_rotations()
+    );
+    let lines: Vec<String> = problem
+        .edges()
+        .iter()
+        .map(|e| {
+            let ef = EdgeFile {
+                i: e.i,
+                j: e.j,
+                rotation: rotation_to_rows(&e.rotation),
+                weight: e.weight,
+            };
+            format!("  {}", serde_json::to_string(&ef).unwrap_or_default())
+        })
+        .collect();
+    s.push_str(&lines.join(",\n"));
+    s.push_str("\n]}\n");
+    s
+}
+
+/// An estimate read from a file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Estimate {
+    /// One rotation per node (multiple averaging).
+    Multiple(#[serde(with = "crate::serde_rot::rotations")] Vec<Rotation>),
+    /// One rotation (single, conjugate).
+    Single(#[serde(with = "crate::serde_rot::rotation")] Rotation),
+}
+
+#[derive(Deserialize)]
+struct EstimateFile {
+    rotations: Option<Vec<Rows>>,
+    rotation: Option<Rows>,
+    estimate: Option<serde_json::Value>,
+}
+
+/// Read an estimate file `[F8]`: `{"rotations": [R, ...]}`, `{"estimate": [R, ...]}`,
+/// `{"rotation": R}` or `{"estimate": R}`. Extra fields (the rest of a `--json` output) are
+/// ignored. Every matrix must be a rotation within `options.rotation_tolerance`.
+///
+/// ```
+/// use rotavg::io::{json::{read_estimate, Estimate}, detect::ReadOptions};
+/// let e = read_estimate(r#"{"rotation": [[1,0,0],[0,1,0],[0,0,1]]}"#, "e.json", &ReadOptions::default()).unwrap();
+/// assert!(matches!(e, Estimate::Single(_)));
+/// ```
+pub fn read_estimate(text: &str, file: &str, options: &ReadOptions) -> Result<Estimate> {
+    let ef: EstimateFile = serde_json::from_str(text).map_err(|e| syntax_error(file, e))?;
+    let tol = options.rotation_tolerance;
+    let many = |rows: &[Rows]| -> Result<Vec<Rotation>> {
+        if rows.is_empty() {
+            return Err(Error::parse(
+                Some(file),
+                None,
+                "the estimate has no rotations",
+            ));
+        }
+        rows.iter()
+            .enumerate()
+            .map(|(k, r)| {
+                rotation_from_rows(r, tol, &format!("rotation {k}"))
+                    .map_err(|e| e.in_file(file, None))
+            })
+            .collect()
+    };
+    let one = |r: &Rows| rotation_from_rows(r, tol, "rotation").map_err(|e| e.in_file(file, None));
+    match (&ef.rotations, &ef.rotation, &ef.estimate) {
+        (Some(rs), None, None) => Ok(Estimate::Multiple(many(rs)?)),
+        (None, Some(r), None) => Ok(Estimate::Single(one(r)?)),
+        (None, None, Some(v)) => {
+            if let Ok(rs) = serde_json::from_value::<Vec<Rows>>(v.clone()) {
+                Ok(Estimate::Multiple(many(&rs)?))
+            } else if let Ok(r) = serde_json::from_value::<Rows>(v.clone()) {
+                Ok(Estimate::Single(one(&r)?))
+            } else {
+                Err(Error::parse(
+                    Some(file),
+                    None,
+                    "\"estimate\" is neither a 3x3 rotation nor a list of them",
+                ))
+            }
+        }
+        (None, None, None) => Err(Error::parse(
+            Some(file),
+            None,
+            "no \"rotations\", \"estimate\" or \"rotation\" field",
+        )),
+        _ => Err(Error::parse(
+            Some(file),
+            None,
+            "more than one of \"rotations\", \"estimate\", \"rotation\": ambiguous estimate",
+        )),
+    }
+}
+
+/// Read an estimate for multiple averaging (a list of rotations); a single rotation is an error.
+pub fn read_rotations_estimate(
+    text: &str,
+    file: &str,
+    options: &ReadOptions,
+) -> Result<Vec<Rotation>> {
+    match read_estimate(text, file, options)? {
+        Estimate::Multiple(rs) => Ok(rs),
+        Estimate::Single(_) => Err(Error::parse(
+            Some(file),
+            None,
+            "expected a list of rotations (\"rotations\": [R, ...]), found a single rotation",
+        )),
+    }
+}
+
+/// Write an estimate `{"rotations": [R, ...]}`, one rotation per line, shortest round-trip
+/// numbers.
+///
+/// ```
+/// use rotavg::io::{json::{write_estimate_json, read_rotations_estimate}, detect::ReadOptions};
+/// let rs = vec![rotavg::Rotation::identity(); 3];
+/// let back = read_rotations_estimate(&write_estimate_json(&rs), "-", &ReadOptions::default()).unwrap();
+/// assert_eq!(back, rs);
+/// ```
+pub fn write_estimate_json(rotations: &[Rotation]) -> String {
+    let lines: Vec<String> = rotations
+        .iter()
+        .map(|r| {
+            format!(
+                "  {}",
+                serde_json::to_string(&rotation_to_rows(r)).unwrap_or_default()
+            )
+        })
+        .collect();
+    format!("{{\"rotations\": [\n{}\n]}}\n", lines.join(",\n"))
+}

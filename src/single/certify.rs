@@ -1,0 +1,218 @@
+//! Certificates for single rotation averaging (`paper-notes/single.md`): a proven lower bound on
+//! the global minimum of `sum_i w_i d(R_i, R)^p`, computed from the data and the estimate only
+//! (never from a solver's own claims), and the verdict of [`Certificate::from_bounds`].
+//!
+//! - chordal L2 `[S1]`: the global minimum value `6W - 2 (s1 + s2 + sign(det M) s3)` from the
+//!   singular values of `M = sum w_i R_i`;
+//! - quaternion L2 `[S2b]`/`[S2c]`: exact value `2W - 2 |sum w_i s_i q_i|` when the aligned
+//!   quaternions have pairwise non-negative inner products (e.g. all samples within pi/2 of the
+//!   estimate), else the Cauchy-Schwarz bound `2W - 2 sqrt(W lambda_max(sum w_i q_i q_i^T))`;
+//! - geodesic L2/L1 `[S4]`: `f(R) - |g| rho` when all samples lie within `rho < pi/2` of `R`,
+//!   else no bound (inconclusive, naming the farthest sample);
+//! - chordal L1 `[S7]`: `f_E(M) - |g| (sqrt 3 + |M|_F)` at a Euclidean geometric-median iterate.
+//!
+//! Every bound subtracts a floating-point safety margin (`rounding_margin`).
+
+use super::closed_form::{aligned_sum, sample_quaternions, weighted_matrix_sum};
+use super::iterative::{euclidean_median, eval_geodesic};
+use super::{Norm, SingleProblem, SingleSettings};
+use crate::certificate::{BoundMethod, Certificate};
+use crate::error::Result;
+use crate::so3::{self, Metric, Rotation};
+use nalgebra::Matrix4;
+use std::f64::consts::FRAC_PI_2;
+use std::time::Instant;
+
+/// Above this many samples the O(n^2) pairwise test of `[S2b]` is skipped (the O(n) ball test
+/// is still applied).
+pub const PAIRWISE_TEST_LIMIT: usize = 2048;
+
+/// Margin added to measured angles before comparing with pi/2 (their computed accuracy is a few
+/// ulps; `[S4]`).
+const ANGLE_MARGIN: f64 = 1e-12;
+
+/// Certify `estimate` for `problem` under `settings.metric` / `settings.norm`, without changing
+/// it. The upper bound is the cost of `estimate`; the lower bound is proven (see the module
+/// docs); the verdict compares the gap with `settings.gap_tolerance`.
+///
+/// ```
+/// use rotavg::single::{certify_single, SingleProblem, SingleSettings};
+/// use rotavg::{Rotation, Verdict};
+/// let p = SingleProblem::new(vec![Rotation::identity(); 4], None)?;
+/// let c = certify_single(&p, &Rotation::identity(), &SingleSettings::default())?;
+/// assert_eq!(c.verdict, Verdict::Certified);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn certify_single(
+    problem: &SingleProblem,
+    estimate: &Rotation,
+    settings: &SingleSettings,
+) -> Result<Certificate> {
+    settings.validate()?;
+    let start = Instant::now();
+    let cost = problem.cost(estimate, settings.metric, settings.norm);
+    let (lb, explanation) = match (settings.metric, settings.norm) {
+        (Metric::Chordal, Norm::L2) => chordal_l2_bound(problem, cost),
+        (Metric::Quaternion, _) => quaternion_l2_bound(problem, estimate, cost),
+        (Metric::Geodesic, norm) => geodesic_ball_bound(problem, estimate, norm),
+        (Metric::Chordal, Norm::L1) => chordal_l1_bound(problem, settings),
+    };
+    // A computed bound above the computed cost can only be rounding: f* <= f(estimate).
+    let lb = lb.map(|l| l.min(cost));
+    Ok(Certificate::from_bounds(
+        cost,
+        lb,
+        BoundMethod::Theory,
+        None,
+        settings.gap_tolerance,
+        explanation,
+        start.elapsed().as_secs_f64(),
+    ))
+}
+
+/// Safety margin for the rounding error of a computed cost `f = sum_i w_i d_i^p` of `n` terms
+/// (summation: `(n + 8) eps f`), doubled, plus the error of the distances themselves (a few
+/// ulps of absolute error per angle: `16 eps (W + sqrt(W f))`).
+pub(crate) fn rounding_margin(n: usize, cost: f64, total_weight: f64) -> f64 {
+    let eps = f64::EPSILON;
+    2.0 * (n as f64 + 8.0) * eps * cost.abs()
+        + 16.0 * eps * (total_weight + (total_weight * cost.abs()).sqrt())
+}
+
+/// `[S1]`: `min_R sum w_i ||R_i - R||^2 = 6W - 2 (s1 + s2 + sign(det M) s3)`.
+fn chordal_l2_bound(problem: &SingleProblem, cost: f64) -> (Option<f64>, String) {
+    let total = problem.total_weight();
+    let m = weighted_matrix_sum(problem);
+    let sv = m.singular_values();
+    let mut s = [sv[0], sv[1], sv[2]];
+    s.sort_by(|a, b| b.total_cmp(a));
+    let sign = if m.determinant() < 0.0 { -1.0 } else { 1.0 };
+    let fstar = 6.0 * total - 2.0 * (s[0] + s[1] + sign * s[2]);
+    let lb =
+        fstar - rounding_margin(problem.len(), cost, total) - 16.0 * f64::EPSILON * 6.0 * total;
+    let mut text = format!(
+        "closed form [S1]: global minimum 6W - 2(s1 + s2 + sign(det M) s3) = {fstar:.9e} from the singular values of M = sum w_i R_i"
+    );
+    // Umeyama: the maximiser of tr(R^T M) is unique iff rank M >= 2 and, when det M < 0,
+    // s2 > s3.
+    let tiny = 1e-12 * s[0].max(f64::MIN_POSITIVE);
+    if s[1] <= tiny || (sign < 0.0 && s[1] - s[2] <= tiny) {
+        text.push_str(" (M is degenerate: the minimiser is not unique, the minimum value is)");
+    }
+    (Some(lb), text)
+}
+
+/// `[S2b]` / `[S2c]`.
+fn quaternion_l2_bound(
+    problem: &SingleProblem,
+    estimate: &Rotation,
+    cost: f64,
+) -> (Option<f64>, String) {
+    let total = problem.total_weight();
+    let n = problem.len();
+    let quats = sample_quaternions(problem);
+    let q = so3::to_quaternion(estimate).into_inner().coords;
+    let (m, flipped) = aligned_sum(&quats, problem.weights(), &q);
+    let (far, rho) = problem.farthest(estimate);
+    let margin = rounding_margin(n, cost, total) + 16.0 * f64::EPSILON * 2.0 * total;
+    let in_ball = rho + ANGLE_MARGIN < FRAC_PI_2;
+    let pairwise = !in_ball && n <= PAIRWISE_TEST_LIMIT && {
+        let aligned: Vec<_> = quats
+            .iter()
+            .zip(&flipped)
+            .map(|(qi, &f)| if f { -qi } else { *qi })
+            .collect();
+        aligned.iter().enumerate().all(|(i, a)| {
+            aligned[i + 1..]
+                .iter()
+                .all(|b| a.dot(b) >= 16.0 * f64::EPSILON)
+        })
+    };
+    if in_ball || pairwise {
+        let fstar = 2.0 * total - 2.0 * m.norm();
+        let why = if in_ball {
+            format!("all samples lie within {rho:.6} rad < pi/2 of the estimate")
+        } else {
+            "the sign-aligned sample quaternions have pairwise non-negative inner products".into()
+        };
+        (
+            Some(fstar - margin),
+            format!(
+                "quaternion L2 [S2b]: {why}, so the global minimum is 2W - 2|sum w_i s_i q_i| = {fstar:.9e}"
+            ),
+        )
+    } else {
+        let mut a = Matrix4::zeros();
+        for (qi, w) in quats.iter().zip(problem.weights()) {
+            a += qi * qi.transpose() * *w;
+        }
+        let lmax = a.symmetric_eigenvalues().max() + 16.0 * f64::EPSILON * total;
+        let lb = 2.0 * total - 2.0 * (total * lmax).sqrt() - margin;
+        (
+            Some(lb),
+            format!(
+                "quaternion L2 [S2c]: sample {far} is {rho:.6} rad (>= pi/2) from the estimate and the aligned quaternions are not pairwise non-negative{}; Cauchy-Schwarz bound 2W - 2 sqrt(W lambda_max(sum w_i q_i q_i^T))",
+                if n > PAIRWISE_TEST_LIMIT {
+                    " (pairwise test skipped: too many samples)"
+                } else {
+                    ""
+                }
+            ),
+        )
+    }
+}
+
+/// `[S4]`: the pi/2-ball bound for the geodesic L^p costs.
+fn geodesic_ball_bound(
+    problem: &SingleProblem,
+    estimate: &Rotation,
+    norm: Norm,
+) -> (Option<f64>, String) {
+    let total = problem.total_weight();
+    let (far, rho) = problem.farthest(estimate);
+    let rho = rho + ANGLE_MARGIN;
+    if rho >= FRAC_PI_2 {
+        return (
+            None,
+            format!(
+                "no lower bound: sample {far} is {:.6} rad ({:.3} deg) from the estimate, not inside the open ball of radius pi/2 where the geodesic cost is convex [S4]",
+                rho - ANGLE_MARGIN,
+                (rho - ANGLE_MARGIN).to_degrees()
+            ),
+        );
+    }
+    let e = eval_geodesic(problem, estimate, norm);
+    let g = e.gradient_norm(norm) + 16.0 * f64::EPSILON * total * (1.0 + rho);
+    let lb =
+        e.cost - g * rho - 2.0 * e.coincident_slack - rounding_margin(problem.len(), e.cost, total);
+    (
+        Some(lb),
+        format!(
+            "pi/2-ball bound [S4]: all samples within rho = {rho:.6} rad < pi/2 of the estimate (farthest: sample {far}); f - |g| rho with (min-norm sub)gradient norm |g| = {:.3e}",
+            e.gradient_norm(norm)
+        ),
+    )
+}
+
+/// `[S7]`: `f(R) >= f_E(M) - |g| (sqrt 3 + |M|_F)` for every rotation `R`.
+fn chordal_l1_bound(problem: &SingleProblem, settings: &SingleSettings) -> (Option<f64>, String) {
+    let total = problem.total_weight();
+    let med = euclidean_median(
+        problem,
+        settings.max_iterations.max(100),
+        settings.gradient_tolerance,
+    );
+    let g = med.gradient_norm + 16.0 * f64::EPSILON * total;
+    let radius = 3f64.sqrt() + med.point.norm();
+    let lb = med.cost
+        - g * radius
+        - 2.0 * med.coincident_slack
+        - rounding_margin(problem.len(), med.cost, total);
+    (
+        Some(lb),
+        format!(
+            "Euclidean bound [S7]: geometric median of the matrices in R^3x3 has cost {:.9e} (subgradient norm {:.3e}); rotations lie in the ball |R|_F = sqrt 3, so f >= f_E(M) - |g|(sqrt 3 + |M|_F). The bound ignores the constraint R in SO(3), so noisy data leave a gap",
+            med.cost, med.gradient_norm
+        ),
+    )
+}

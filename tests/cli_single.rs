@@ -1,0 +1,232 @@
+//! `rotavg single` end to end: runs the built binary on temporary JSON files and checks the
+//! SPEC section 5 fields and exit codes.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn temp_file(name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rotavg-cli-single-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rotavg"))
+        .args(args)
+        .output()
+        .expect("run rotavg")
+}
+
+/// Rotations about z by the given angles, as row-major nested arrays.
+fn rz(t: f64) -> String {
+    let (s, c) = t.sin_cos();
+    format!("[[{c}, {}, 0], [{s}, {c}, 0], [0, 0, 1]]", -s)
+}
+
+fn problem_file(name: &str) -> PathBuf {
+    let text = format!(
+        "{{\"rotations\": [\n  {},\n  {},\n  {}\n],\n \"weights\": [1, 1, 2]}}\n",
+        rz(0.1),
+        rz(-0.1),
+        rz(0.0)
+    );
+    temp_file(name, &text)
+}
+
+#[test]
+fn json_output_has_the_spec_fields() {
+    let path = problem_file("ok.json");
+    for (metric, p) in [
+        ("chordal", "2"),
+        ("quaternion", "2"),
+        ("geodesic", "2"),
+        ("geodesic", "1"),
+        ("chordal", "1"),
+    ] {
+        let out = run(&[
+            "single",
+            path.to_str().unwrap(),
+            "--metric",
+            metric,
+            "--p",
+            p,
+            "--json",
+        ]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+        assert_eq!(v["problem"], "single");
+        assert_eq!(v["num_rotations"], 1);
+        assert_eq!(v["num_measurements"], 3);
+        // symmetric planted data: the mean of Rz(0.1), Rz(-0.1), Rz(0) (weights 1, 1, 2) is I
+        let est = &v["estimate"];
+        for i in 0..3 {
+            for j in 0..3 {
+                let e = est[i][j].as_f64().unwrap();
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((e - want).abs() < 1e-8, "{metric} {p}: estimate {est}");
+            }
+        }
+        assert!(v["cost"].as_f64().unwrap() > 0.0);
+        for key in ["name", "iterations", "termination", "seconds"] {
+            assert!(!v["solver"][key].is_null(), "solver.{key}");
+        }
+        let c = &v["certificate"];
+        for key in [
+            "verdict",
+            "upper_bound",
+            "gap",
+            "relative_gap",
+            "method",
+            "seconds",
+        ] {
+            assert!(!c[key].is_null(), "{metric} {p}: certificate.{key}");
+        }
+        assert!(c.get("lower_bound").is_some() && c.get("min_eigenvalue").is_some());
+        assert_eq!(c["method"], "theory");
+        if metric != "chordal" || p != "1" {
+            assert_eq!(c["verdict"], "certified", "{metric} {p}");
+        }
+    }
+}
+
+#[test]
+fn readable_summary_and_require_certified() {
+    let path = problem_file("summary.json");
+    let out = run(&["single", path.to_str().unwrap(), "--metric", "geodesic"]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("geodesic L2 mean of 3 samples") && text.contains("certified"),
+        "{text}"
+    );
+    // a sample 1.7 rad > pi/2 from the geodesic mean: inconclusive [S4], exit 3 when required
+    let far = temp_file(
+        "far.json",
+        &format!(
+            "{{\"rotations\": [{}, {}, {}]}}",
+            rz(0.0),
+            rz(1.7),
+            rz(-1.7)
+        ),
+    );
+    let out = run(&[
+        "single",
+        far.to_str().unwrap(),
+        "--metric",
+        "geodesic",
+        "--require-certified",
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(3));
+    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn malformed_file_exits_1_with_file_and_line() {
+    let path = temp_file(
+        "bad.json",
+        "{\"rotations\": [\n  [[1, 0, 0], [0, 1, 0], [0, 0, 1]],\n  [[1, 0, 0], [0, 1, 0], [0, 0, 1.5]]\n]}\n",
+    );
+    let out = run(&["single", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&format!("{}:3:", path.display())), "{err}");
+    assert!(err.contains("rotation 1 is not a rotation"), "{err}");
+
+    let path = temp_file(
+        "syntax.json",
+        "{\"rotations\": [\n  [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\n  oops\n]}\n",
+    );
+    let out = run(&["single", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&format!("{}:3:", path.display())), "{err}");
+
+    let out = run(&["single", "/nonexistent/rotavg-input.json"]);
+    assert_eq!(out.status.code(), Some(1));
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    let path = problem_file("usage.json");
+    assert_eq!(
+        run(&["single", path.to_str().unwrap(), "--p", "3"])
+            .status
+            .code(),
+        Some(2)
+    );
+    assert_eq!(
+        run(&["single", path.to_str().unwrap(), "--metric", "frobenius"])
+            .status
+            .code(),
+        Some(2)
+    );
+}
+
+#[test]
+fn init_file_and_unit_weights() {
+    let path = problem_file("init.json");
+    let init = temp_file(
+        "init-estimate.json",
+        &format!("{{\"rotation\": {}}}", rz(0.3)),
+    );
+    let out = run(&[
+        "single",
+        path.to_str().unwrap(),
+        "--metric",
+        "geodesic",
+        "--init",
+        init.to_str().unwrap(),
+        "--weights",
+        "unit",
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // unit weights: cost = 0.1^2 + 0.1^2 + 0 at the mean I
+    assert!((v["cost"].as_f64().unwrap() - 0.02).abs() < 1e-10, "{v}");
+}
+
+#[test]
+fn reads_standard_input() {
+    use std::io::Write;
+    use std::process::Stdio;
+    let text = format!("{{\"rotations\": [{}, {}]}}", rz(0.2), rz(0.4));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rotavg"))
+        .args(["single", "-", "--json"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(text.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // chordal L2 mean of Rz(0.2) and Rz(0.4) is Rz(0.3): entry (1, 0) = sin(0.3)
+    let e10 = v["estimate"][1][0].as_f64().unwrap();
+    assert!((e10 - 0.3f64.sin()).abs() < 1e-12, "{e10}");
+    assert_eq!(v["num_measurements"], 2);
+}
