@@ -59,7 +59,26 @@ pub struct Outcome {
     pub verdict: Option<Verdict>,
 }
 
+/// Exit quietly (status 141, as a shell reports a process ended by SIGPIPE) when stdout is
+/// closed by the reader, e.g. `rotavg demo | head`, instead of panicking in `println!`.
+fn exit_quietly_on_broken_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if msg.contains("failed printing to stdout") && msg.contains("Broken pipe") {
+            std::process::exit(141);
+        }
+        default(info);
+    }));
+}
+
 fn main() -> ExitCode {
+    exit_quietly_on_broken_pipe();
     let cli = Cli::parse();
     let (result, common): (rotavg::Result<Outcome>, Option<&Common>) = match &cli.command {
         Command::Demo(a) => (demo::run(a), None),
