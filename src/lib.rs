@@ -22,6 +22,7 @@ pub mod certificate;
 pub mod error;
 pub mod io;
 pub mod multiple;
+pub mod relax;
 pub mod report;
 pub mod serde_rot;
 pub mod so3;
