@@ -97,9 +97,10 @@ pub fn relax_multiple(problem: &MultipleProblem, settings: &SdpSettings) -> Resu
             }
         }
     }
+    let merge = settings.chordal_merge.clarabel_name(n, problem.num_edges());
     let raw = match settings.form {
-        SdpForm::Dual => solve_dual(n, &q_upper, settings)?,
-        SdpForm::Primal => solve_primal(n, &q_upper, settings)?,
+        SdpForm::Dual => solve_dual(n, &q_upper, settings, merge)?,
+        SdpForm::Primal => solve_primal(n, &q_upper, settings, merge)?,
     };
     let multipliers = raw
         .lambda_scaled
@@ -142,7 +143,7 @@ struct RawSolution {
     solver_seconds: f64,
 }
 
-fn clarabel_settings(settings: &SdpSettings) -> DefaultSettings<f64> {
+fn clarabel_settings(settings: &SdpSettings, merge: &str) -> DefaultSettings<f64> {
     DefaultSettings {
         verbose: settings.verbose,
         max_iter: settings.max_iterations,
@@ -153,6 +154,7 @@ fn clarabel_settings(settings: &SdpSettings) -> DefaultSettings<f64> {
         direct_solve_method: "faer".into(),
         chordal_decomposition_enable: settings.chordal_decomposition,
         chordal_decomposition_complete_dual: true,
+        chordal_decomposition_merge_method: merge.into(),
         ..DefaultSettings::default()
     }
 }
@@ -178,14 +180,13 @@ fn run_clarabel(
     b: &[f64],
     cones: &[SupportedConeT<f64>],
     settings: &SdpSettings,
+    merge: &str,
 ) -> Result<(SdpStatus, Vec<f64>, Vec<f64>, f64, f64, u32, f64)> {
     let nv = q.len();
     let p = CscMatrix::zeros((nv, nv));
-    let mut solver =
-        DefaultSolver::new(&p, q, &a, b, cones, clarabel_settings(settings)).map_err(|e| {
-            Error::Solver {
-                message: format!("Clarabel setup: {e}"),
-            }
+    let mut solver = DefaultSolver::new(&p, q, &a, b, cones, clarabel_settings(settings, merge))
+        .map_err(|e| Error::Solver {
+            message: format!("Clarabel setup: {e}"),
         })?;
     solver.solve();
     let s = &solver.solution;
@@ -209,6 +210,7 @@ fn solve_dual(
     n: usize,
     q_upper: &[(usize, usize, f64)],
     settings: &SdpSettings,
+    merge: &str,
 ) -> Result<RawSolution> {
     let dim = 3 * n;
     let m = svec_len(dim);
@@ -233,7 +235,7 @@ fn solve_dual(
     let a = csc(m, nv, trip);
     let cones = [SupportedConeT::PSDTriangleConeT(dim)];
     let (status, x, z, obj, obj_dual, iterations, secs) =
-        run_clarabel(&c, a, &b, &cones, settings)?;
+        run_clarabel(&c, a, &b, &cones, settings, merge)?;
     let lambda_scaled = (0..n)
         .map(|i| {
             Matrix3::from_fn(|r, cc| {
@@ -265,6 +267,7 @@ fn solve_primal(
     n: usize,
     q_upper: &[(usize, usize, f64)],
     settings: &SdpSettings,
+    merge: &str,
 ) -> Result<RawSolution> {
     let dim = 3 * n;
     let nv = svec_len(dim);
@@ -296,7 +299,7 @@ fn solve_primal(
         SupportedConeT::PSDTriangleConeT(dim),
     ];
     let (status, x, z, obj, obj_dual, iterations, secs) =
-        run_clarabel(&c, a, &b, &cones, settings)?;
+        run_clarabel(&c, a, &b, &cones, settings, merge)?;
     let lambda_scaled = (0..n)
         .map(|i| {
             Matrix3::from_fn(|r, cc| {
