@@ -14,6 +14,7 @@
 
 use super::problem::ConjugateProblem;
 use crate::error::{Error, Result};
+use crate::relax::svec::{svec_index, svec_len, svec_weight};
 use crate::so3::{Rotation, project_to_so3};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
@@ -139,17 +140,13 @@ pub fn constraint_matrices() -> Vec<QcqpConstraint> {
     out
 }
 
-/// `svec` of a symmetric `n x n` matrix in Clarabel's layout: upper triangle column by column,
-/// off-diagonals times `sqrt(2)`, so that `<A, B> = svec(A) . svec(B)`.
+/// `svec` of a symmetric 10x10 matrix in Clarabel's layout (the shared encoding of
+/// [`crate::relax::svec`]: upper triangle column by column, off-diagonals times `sqrt(2)`).
 fn svec(a: &Mat10) -> Vec<f64> {
-    let mut v = Vec::with_capacity(55);
+    let mut v = vec![0.0; svec_len(10)];
     for j in 0..10 {
         for i in 0..=j {
-            v.push(if i == j {
-                a[(i, j)]
-            } else {
-                a[(i, j)] * std::f64::consts::SQRT_2
-            });
+            v[svec_index(i, j)] = a[(i, j)] * svec_weight(i, j);
         }
     }
     v
@@ -157,21 +154,7 @@ fn svec(a: &Mat10) -> Vec<f64> {
 
 /// Inverse of [`svec`].
 fn smat(v: &[f64]) -> Mat10 {
-    let mut a = Mat10::zeros();
-    let mut k = 0;
-    for j in 0..10 {
-        for i in 0..=j {
-            let x = if i == j {
-                v[k]
-            } else {
-                v[k] / std::f64::consts::SQRT_2
-            };
-            a[(i, j)] = x;
-            a[(j, i)] = x;
-            k += 1;
-        }
-    }
-    a
+    Mat10::from_fn(|i, j| v[svec_index(i, j)] / svec_weight(i, j))
 }
 
 /// Settings of [`relax_conjugate`].
