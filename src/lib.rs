@@ -34,3 +34,8 @@ pub use certificate::{BoundMethod, Certificate, Verdict};
 pub use error::{Error, Result};
 pub use report::{SolverReport, Termination};
 pub use so3::{Metric, Rotation};
+
+/// The README's code blocks are compiled and run as doc tests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
