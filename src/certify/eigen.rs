@@ -236,6 +236,9 @@ impl ShiftedCholesky {
                 MemStack::new(&mut mem),
                 Default::default(),
             )
+            // Soundness: `LltRegularization::default()` has delta = epsilon = 0, and faer only
+            // regularises pivots when both are > 0 (faer 0.24, llt/factor.rs), so a success is a
+            // plain Cholesky factor of S + shift I; a non-positive pivot is an error.
             .is_ok();
         if !ok || !values.iter().all(|v| v.is_finite()) {
             return None;
