@@ -19,6 +19,7 @@
 #![deny(missing_docs)]
 
 pub mod certificate;
+pub mod certify;
 pub mod conjugate;
 pub mod error;
 pub mod io;
