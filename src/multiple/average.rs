@@ -1,4 +1,4 @@
-//! The multiple-rotation-averaging pipeline (`paper-notes/certificates.md`, "The pipeline"):
+//! The multiple-rotation-averaging pipeline `[C12]` (`paper-notes/certificates.md`):
 //! initialise, solve locally, certify with the dual certificate `[C3]`-`[C9]`; when that fails,
 //! bound the global minimum with the SDP relaxation (Clarabel, multipliers verified `[C4]`) for
 //! small graphs or with the Riemannian staircase `[C11]` for large ones, and keep the better of
@@ -14,7 +14,8 @@
 
 use crate::certificate::{BoundMethod, Certificate, GapTolerance};
 use crate::certify::multiple::{
-    CertifySettings, certify_multiple, lower_bound_from_multipliers, stationarity_residual,
+    CertifySettings, Verification, certify_multiple, lower_bound_from_multipliers,
+    stationarity_residual,
 };
 use crate::certify::staircase::{StaircaseSettings, staircase_bound};
 use crate::error::{Error, Result};
@@ -49,6 +50,10 @@ pub const REFINE_FACTOR: f64 = 1e-6;
 /// Refine before the first dual certificate when the stationarity residual `[C3]` exceeds this
 /// times `|f| + absolute tolerance`.
 pub const PRE_REFINE_RATIO: f64 = 1e-5;
+
+const MARGIN_LIMITED: &str = "SDP / staircase skipped: the estimate is a critical point whose \
+certificate matrix is PSD up to the floating-point margin of the verification; the gap is the \
+verification's precision (3n x margin), which other multipliers cannot improve";
 
 /// Which certificate the pipeline computes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -185,7 +190,8 @@ pub struct PipelineDetails {
     pub improved_by_sdp: bool,
     /// Stationarity residual of the certified estimate `[C3]` (0 at a critical point).
     pub stationarity_residual: Option<f64>,
-    /// Why no certificate was computed, if none was.
+    /// Why no certificate was computed (certificate `None`), or why the SDP / staircase was
+    /// skipped after a failed dual certificate.
     pub skipped_reason: Option<String>,
 }
 
@@ -383,15 +389,18 @@ fn run_staircase(
     Ok(())
 }
 
-/// Dual certificate at `rotations`: records the run, offers its bound, returns whether it
-/// certifies on its own.
+/// Dual certificate at `rotations`: records the run, offers its bound, returns
+/// `(certified, margin_limited)`. `margin_limited`: not certified, but the estimate is a critical
+/// point and `S + shift I` factorised with most of the verified deficit being the floating-point
+/// margin `[C6]` (not a negative eigenvalue): the gap is the verification's precision, and the
+/// SDP / staircase multipliers (verified the same way, at the same optimum) cannot do better.
 fn run_dual(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     certify: &CertifySettings,
     details: &mut PipelineDetails,
     best: &mut Option<Best>,
-) -> Result<bool> {
+) -> Result<(bool, bool)> {
     let c = certify_multiple(problem, rotations, certify)?;
     Best::offer(
         best,
@@ -412,7 +421,13 @@ fn run_dual(
             c.certificate.verdict, c.stationarity_residual
         ),
     });
-    Ok(c.certificate.is_certified())
+    let certified = c.certificate.is_certified();
+    let b = &c.bound;
+    let margin_limited = !certified
+        && b.verification == Verification::Cholesky
+        && b.fp_margin >= 0.5 * (-b.verified_min_eigenvalue)
+        && c.stationarity_residual <= 1e-6 * (c.certificate.upper_bound.abs() + 1.0);
+    Ok((certified, margin_limited))
 }
 
 /// Re-solve (chordal) from the current estimate with the gradient tolerance times
@@ -552,7 +567,7 @@ pub fn average_multiple(
     if residual > PRE_REFINE_RATIO * (solution.chordal_cost.abs() + certify.tolerance.absolute) {
         refined = refine(problem, settings, &mut solution, &mut details);
     }
-    let mut certified = run_dual(
+    let (mut certified, mut margin_limited) = run_dual(
         problem,
         &solution.rotations,
         &certify,
@@ -560,7 +575,7 @@ pub fn average_multiple(
         &mut best,
     )?;
     if !certified && !refined && refine(problem, settings, &mut solution, &mut details) {
-        certified = run_dual(
+        (certified, margin_limited) = run_dual(
             problem,
             &solution.rotations,
             &certify,
@@ -568,7 +583,10 @@ pub fn average_multiple(
             &mut best,
         )?;
     }
-    if !certified {
+    if margin_limited {
+        details.skipped_reason = Some(MARGIN_LIMITED.into());
+    }
+    if !certified && !margin_limited {
         match wants_sdp(
             settings.certify_mode,
             problem.num_rotations(),
@@ -651,8 +669,12 @@ pub fn certify_multiple_estimate(
         ..Default::default()
     };
     let mut best = None;
-    let certified = run_dual(problem, rotations, &certify, &mut details, &mut best)?;
-    if !certified {
+    let (certified, margin_limited) =
+        run_dual(problem, rotations, &certify, &mut details, &mut best)?;
+    if margin_limited {
+        details.skipped_reason = Some(MARGIN_LIMITED.into());
+    }
+    if !certified && !margin_limited {
         match wants_sdp(mode, problem.num_rotations(), settings.sdp_max_nodes) {
             Some(true) => {
                 run_sdp(problem, settings, &certify, &mut details, &mut best)?;
