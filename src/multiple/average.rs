@@ -468,10 +468,14 @@ fn refine(
 
 fn final_certificate(
     cost: f64,
-    best: Option<Best>,
+    mut best: Option<Best>,
+    note: Option<&str>,
     tolerance: GapTolerance,
     seconds: f64,
 ) -> Certificate {
+    if let (Some(b), Some(n)) = (best.as_mut(), note) {
+        b.explanation = format!("{}; {n}", b.explanation);
+    }
     match best {
         Some(b) => Certificate::from_bounds(
             cost,
@@ -574,7 +578,11 @@ pub fn average_multiple(
         &mut details,
         &mut best,
     )?;
-    if !certified && !refined && refine(problem, settings, &mut solution, &mut details) {
+    if !certified
+        && !refined
+        && !margin_limited
+        && refine(problem, settings, &mut solution, &mut details)
+    {
         (certified, margin_limited) = run_dual(
             problem,
             &solution.rotations,
@@ -622,6 +630,7 @@ pub fn average_multiple(
     let certificate = final_certificate(
         solution.chordal_cost,
         best,
+        margin_limited.then_some(MARGIN_LIMITED),
         certify.tolerance,
         t_cert.elapsed().as_secs_f64(),
     );
@@ -694,6 +703,7 @@ pub fn certify_multiple_estimate(
     let certificate = final_certificate(
         problem.chordal_cost(rotations),
         best,
+        margin_limited.then_some(MARGIN_LIMITED),
         certify.tolerance,
         start.elapsed().as_secs_f64(),
     );
