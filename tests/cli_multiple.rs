@@ -391,3 +391,73 @@ fn shared_benchmark_files() {
         println!("skipping: shared data not found");
     }
 }
+
+#[test]
+fn certify_conjugate_problem() {
+    use nalgebra::Vector3;
+    use rotavg::so3::{exp, rotation_to_rows};
+    // noise-free hand-eye pairs L_i = S R_i S^-1: the true S has cost 0 and is certified
+    let s = exp(&Vector3::new(0.4, -0.1, 0.7));
+    let rs = [
+        Vector3::new(0.5, 0.0, 0.1),
+        Vector3::new(0.0, 0.8, -0.3),
+        Vector3::new(-0.2, 0.1, 0.9),
+    ];
+    let pairs: Vec<_> = rs
+        .iter()
+        .map(|w| {
+            let r = exp(w);
+            let l = s * r * s.inverse();
+            serde_json::json!({"left": rotation_to_rows(&l), "right": rotation_to_rows(&r)})
+        })
+        .collect();
+    let p = tmp(
+        "conj.json",
+        &serde_json::json!({ "pairs": pairs }).to_string(),
+    );
+    let e = tmp(
+        "conj_est.json",
+        &serde_json::json!({ "rotation": rotation_to_rows(&s) }).to_string(),
+    );
+    let out = run(&[
+        "certify",
+        p.to_str().unwrap(),
+        "--estimate",
+        e.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json_of(&out);
+    assert_eq!(v["problem"], "conjugate");
+    assert_eq!(v["certificate"]["verdict"], "certified");
+    // a wrong S (rotated by 0.3 rad): not certified, exit 3 under --require-certified
+    let bad = s * exp(&Vector3::new(0.3, 0.0, 0.0));
+    let e2 = tmp(
+        "conj_bad.json",
+        &serde_json::json!({ "rotation": rotation_to_rows(&bad) }).to_string(),
+    );
+    let out = run(&[
+        "certify",
+        p.to_str().unwrap(),
+        "--estimate",
+        e2.to_str().unwrap(),
+        "--json",
+    ]);
+    let v = json_of(&out);
+    assert_ne!(v["certificate"]["verdict"], "certified");
+    assert!(v["cost"].as_f64().unwrap() > 1e-3);
+    let out = run(&[
+        "certify",
+        p.to_str().unwrap(),
+        "--estimate",
+        e2.to_str().unwrap(),
+        "--require-certified",
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(3));
+}
