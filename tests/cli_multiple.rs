@@ -461,3 +461,80 @@ fn certify_conjugate_problem() {
     ]);
     assert_eq!(out.status.code(), Some(3));
 }
+
+#[test]
+fn ground_truth_init_and_stdin() {
+    // noise-free: the estimate matches the planted truth after alignment (errors ~ 0)
+    let (p, gt) = SyntheticGraph {
+        num_rotations: 20,
+        num_edges: 50,
+        noise_sigma: 0.0,
+        seed: 5,
+        ..Default::default()
+    }
+    .generate();
+    let text = write_problem_json(&p);
+    let g = tmp("gt_graph.json", &text);
+    let truth = tmp("truth.json", &rotavg::io::json::write_estimate_json(&gt));
+    let out = run(&[
+        "multiple",
+        g.to_str().unwrap(),
+        "--ground-truth",
+        truth.to_str().unwrap(),
+        "--json",
+        "--init-method",
+        "tree",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json_of(&out);
+    assert!(
+        v["accuracy"]["max_deg"].as_f64().unwrap() < 1e-6,
+        "{}",
+        v["accuracy"]
+    );
+    // --init from the truth, input from stdin
+    use std::io::Write;
+    let mut child = bin()
+        .args([
+            "multiple",
+            "-",
+            "--format",
+            "json",
+            "--init",
+            truth.to_str().unwrap(),
+            "--json",
+        ])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(text.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let v = json_of(&out);
+    assert_eq!(v["certificate"]["verdict"], "certified");
+    assert!(v["cost"].as_f64().unwrap() < 1e-18);
+    // an --init with the wrong size is an error naming the file
+    let short = tmp(
+        "init_short.json",
+        &rotavg::io::json::write_estimate_json(&gt[..3]),
+    );
+    let out = run(&[
+        "multiple",
+        g.to_str().unwrap(),
+        "--init",
+        short.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("init_short.json"));
+}

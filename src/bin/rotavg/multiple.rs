@@ -122,8 +122,10 @@ pub struct Args {
     /// Certification.
     #[arg(long, value_enum, default_value_t = CertifyArg::Auto)]
     pub certify: CertifyArg,
-    /// Ground truth: g2o (vertex lines), Bundler `.out`, JSON estimate, or a rotation list
-    /// (`id R11 .. R33` per line); matched to nodes by file id.
+    /// Ground truth: g2o (vertex lines; `.g2o` or a first token that is a tag), Bundler `.out`,
+    /// JSON estimate (node order), or a rotation list (9 numbers per line,
+    /// line k = file id k); matched to
+    /// nodes by file id.
     #[arg(long, value_name = "FILE")]
     pub ground_truth: Option<String>,
     /// Solve the largest connected component of a disconnected graph (and report the others).
@@ -182,7 +184,13 @@ fn read_truth(
         }
         return Ok(rs.into_iter().map(Some).collect());
     }
-    if lower.ends_with(".g2o") {
+    let first_token = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+        .and_then(|l| l.split_whitespace().next())
+        .unwrap_or("");
+    if lower.ends_with(".g2o") || first_token.starts_with(|c: char| c.is_ascii_alphabetic()) {
         let gt = read_graph(&text, &name, GraphFormat::G2o, options)?;
         let init = gt.initial.as_ref();
         return Ok(graph
@@ -387,7 +395,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
             println!("  {} ({:.3} s): {}", m.method, m.seconds, m.note);
         }
         if let Some(a) = &accuracy {
-            println!("accuracy vs ground truth: {a}");
+            println!("{a}");
         }
         if let Some(p) = &args.output {
             println!("estimate written to {p}");
