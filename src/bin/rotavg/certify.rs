@@ -11,7 +11,7 @@
 
 use crate::Outcome;
 use crate::common::{Common, WeightSource, read_input};
-use crate::multiple::{CertifyArg, FormatArg, load, read_options};
+use crate::multiple::{CertifyArg, FormatArg, read_options};
 use clap::Args as ClapArgs;
 use rotavg::io::detect::{GraphFormat, detect_format};
 use rotavg::io::json::{Estimate, read_estimate};
@@ -103,11 +103,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let json;
     match kind {
         Kind::Multiple => {
-            let graph = if args.input == "-" {
-                rotavg::io::detect::read_graph(&text, &name, args.format.into(), &options)?
-            } else {
-                load(&args.input, args.format.into(), &options)?
-            };
+            let graph = rotavg::io::detect::read_graph(&text, &name, args.format.into(), &options)?;
             let rotations = match estimate {
                 Estimate::Multiple(rs) => rs,
                 Estimate::Single(_) => {
