@@ -5,6 +5,7 @@
 //! `[M1]`). Gauge: solutions are defined up to `R_i -> R_i G`; outputs fix `R_0 = I`.
 
 pub mod accuracy;
+pub mod average;
 pub mod chordal;
 pub mod geodesic;
 pub mod init;
@@ -15,6 +16,10 @@ pub mod solve;
 pub mod stats;
 pub mod synthetic;
 
+pub use average::{
+    AverageMultipleSettings, CertifyMode, EstimateCertificate, MultipleEstimate, PipelineDetails,
+    average_multiple, certify_multiple_estimate,
+};
 pub use chordal::chordal_gradient;
 pub use init::{initialise, spanning_tree, spectral};
 pub use problem::{Edge, MultipleProblem, fix_gauge};

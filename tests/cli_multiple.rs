@@ -1,0 +1,540 @@
+//! `rotavg multiple` and `rotavg certify` run as processes: JSON fields (SPEC section 5),
+//! `--require-certified` exit codes, `--output` round trips, certifying our own output and a
+//! perturbed one, malformed and disconnected inputs, and the shared benchmark files when present.
+
+use rotavg::io::detect::{GraphFormat, ReadOptions, load_graph};
+use rotavg::io::json::write_problem_json;
+use rotavg::multiple::synthetic::SyntheticGraph;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rotavg"))
+}
+
+fn dir() -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rotavg-cli-multiple-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn tmp(name: &str, text: &str) -> PathBuf {
+    let p = dir().join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().unwrap()
+}
+
+fn json_of(out: &Output) -> serde_json::Value {
+    let s = String::from_utf8_lossy(&out.stdout);
+    serde_json::from_str(&s).unwrap_or_else(|e| {
+        panic!(
+            "not JSON ({e}): {s} / {}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}
+
+fn shared(rel: &str) -> Option<PathBuf> {
+    let a = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data")
+        .join(rel);
+    let b = Path::new("/work/shared/data").join(rel);
+    [a, b].into_iter().find(|p| p.exists())
+}
+
+/// A synthetic graph (n = 30, 90 edges, sigma = 0.05 rad) written as SPEC JSON.
+fn graph_file(name: &str) -> PathBuf {
+    let (p, _) = SyntheticGraph {
+        num_rotations: 30,
+        num_edges: 90,
+        noise_sigma: 0.05,
+        seed: 11,
+        ..Default::default()
+    }
+    .generate();
+    tmp(name, &write_problem_json(&p))
+}
+
+#[test]
+fn multiple_json_output_and_certify_round_trip() {
+    let g = graph_file("g.json");
+    let est = dir().join("est.json");
+    let g = g.to_str().unwrap();
+    let out = run(&[
+        "multiple",
+        g,
+        "--json",
+        "--output",
+        est.to_str().unwrap(),
+        "--require-certified",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json_of(&out);
+    assert_eq!(v["problem"], "multiple");
+    assert_eq!(v["num_rotations"], 30);
+    assert_eq!(v["num_measurements"], 90);
+    assert!(v["cost"].as_f64().unwrap() > 0.0);
+    let e = v["estimate"].as_array().unwrap();
+    assert_eq!(e.len(), 30);
+    assert_eq!(
+        e[0],
+        serde_json::json!([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    );
+    for k in ["name", "iterations", "termination", "seconds"] {
+        assert!(!v["solver"][k].is_null(), "solver.{k}");
+    }
+    let c = &v["certificate"];
+    for k in [
+        "verdict",
+        "upper_bound",
+        "lower_bound",
+        "gap",
+        "relative_gap",
+        "min_eigenvalue",
+        "method",
+        "seconds",
+    ] {
+        assert!(!c[k].is_null(), "certificate.{k}");
+    }
+    assert_eq!(c["verdict"], "certified");
+    assert_eq!(c["method"], "dual");
+    assert_eq!(v["node_ids"].as_array().unwrap().len(), 30);
+
+    // certify our own output: certified, cost unchanged
+    let out = run(&[
+        "certify",
+        g,
+        "--estimate",
+        est.to_str().unwrap(),
+        "--json",
+        "--require-certified",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let w = json_of(&out);
+    assert_eq!(w["certificate"]["verdict"], "certified");
+    let (c1, c2) = (v["cost"].as_f64().unwrap(), w["cost"].as_f64().unwrap());
+    assert!((c1 - c2).abs() <= 1e-12 * c1, "{c1} vs {c2}");
+    // the --json output itself is a valid estimate file ({"estimate": [...]})
+    let full = tmp("full.json", &v.to_string());
+    let out = run(&["certify", g, "--estimate", full.to_str().unwrap(), "--json"]);
+    assert_eq!(json_of(&out)["certificate"]["verdict"], "certified");
+
+    // a perturbed estimate (node 5 rotated by 0.2 rad about x): gap reported, not certified
+    let mut rs: Vec<serde_json::Value> = e.clone();
+    let (c, s) = (0.2f64.cos(), 0.2f64.sin());
+    let rx = [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]];
+    let r5: Vec<Vec<f64>> = serde_json::from_value(rs[5].clone()).unwrap();
+    let prod: Vec<Vec<f64>> = (0..3)
+        .map(|i| {
+            (0..3)
+                .map(|j| (0..3).map(|k| r5[i][k] * rx[k][j]).sum())
+                .collect()
+        })
+        .collect();
+    rs[5] = serde_json::json!(prod);
+    let bad = tmp(
+        "bad.json",
+        &serde_json::json!({ "rotations": rs }).to_string(),
+    );
+    let out = run(&["certify", g, "--estimate", bad.to_str().unwrap(), "--json"]);
+    assert_eq!(out.status.code(), Some(0));
+    let w = json_of(&out);
+    assert_eq!(w["certificate"]["verdict"], "gap_reported");
+    assert!(w["cost"].as_f64().unwrap() > c1);
+    assert!(w["certificate"]["lower_bound"].as_f64().unwrap() <= c1 * (1.0 + 1e-9));
+    let out = run(&[
+        "certify",
+        g,
+        "--estimate",
+        bad.to_str().unwrap(),
+        "--require-certified",
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(3));
+
+    // wrong number of rotations: exit 1 naming the estimate file
+    let short = tmp(
+        "short.json",
+        &serde_json::json!({ "rotations": &e[..29] }).to_string(),
+    );
+    let out = run(&["certify", g, "--estimate", short.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("short.json") && err.contains("29"), "{err}");
+
+    // readable summary
+    let out = run(&["multiple", g]);
+    let s = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        s.contains("30 nodes") && s.contains("certificate: certified"),
+        "{s}"
+    );
+}
+
+#[test]
+fn output_g2o_round_trip_and_loss_options() {
+    let g = graph_file("h.json");
+    let out_g2o = dir().join("est.g2o");
+    let out = run(&[
+        "multiple",
+        g.to_str().unwrap(),
+        "--output",
+        out_g2o.to_str().unwrap(),
+        "--json",
+        "--init-method",
+        "tree",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json_of(&out);
+    let back = load_graph(&out_g2o, GraphFormat::G2o, &ReadOptions::default()).unwrap();
+    let init = back.initial.unwrap();
+    let est = v["estimate"].as_array().unwrap();
+    for (k, r) in init.iter().enumerate() {
+        let rows: [[f64; 3]; 3] = serde_json::from_value(est[k].clone()).unwrap();
+        for a in 0..3 {
+            for b in 0..3 {
+                assert!((r[(a, b)] - rows[a][b]).abs() < 1e-12);
+            }
+        }
+    }
+    assert_eq!(back.problem.num_edges(), 90);
+    // a robust loss: no certificate, exit 0; with --require-certified exit 3
+    let out = run(&[
+        "multiple",
+        g.to_str().unwrap(),
+        "--loss",
+        "huber",
+        "--loss-threshold",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(json_of(&out)["certificate"].is_null());
+    let out = run(&[
+        "multiple",
+        g.to_str().unwrap(),
+        "--loss",
+        "l1",
+        "--require-certified",
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(3));
+}
+
+#[test]
+fn malformed_and_disconnected_inputs() {
+    let bad = tmp(
+        "bad.g2o",
+        "EDGE_SE3:QUAT 0 1 0 0 0 0 0 0 1 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\nEDGE_SE3:QUAT 1 2 0 0 0 abc 0 0 1\n",
+    );
+    let out = run(&["multiple", bad.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.g2o:2"), "{err}");
+    let badjson = tmp(
+        "bad.json",
+        "{\"num_rotations\": 2,\n \"edges\": [ {\"i\": 0, \"j\": 1, \"rotation\": [[1,0,0],[0,1,0],[0,0,1]]},\n]}",
+    );
+    let out = run(&["multiple", badjson.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.json:3"), "{err}");
+    // two components: {0,1,2} and {3,4}
+    let i = "[[1,0,0],[0,1,0],[0,0,1]]";
+    let e = |a: usize, b: usize| format!("{{\"i\": {a}, \"j\": {b}, \"rotation\": {i}}}");
+    let text = format!(
+        "{{\"num_rotations\": 5, \"edges\": [{}, {}, {}]}}",
+        e(0, 1),
+        e(1, 2),
+        e(3, 4)
+    );
+    let dis = tmp("dis.json", &text);
+    let out = run(&["multiple", dis.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("[3, 2]"), "{err}");
+    let out = run(&[
+        "multiple",
+        dis.to_str().unwrap(),
+        "--largest-component",
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json_of(&out);
+    assert_eq!(v["num_rotations"], 3);
+    assert_eq!(v["other_components"], serde_json::json!([2]));
+    assert_eq!(v["certificate"]["verdict"], "certified");
+    // usage error: exit 2
+    assert_eq!(
+        run(&["multiple", dis.to_str().unwrap(), "--loss", "nope"])
+            .status
+            .code(),
+        Some(2)
+    );
+}
+
+#[test]
+fn certify_single_problem() {
+    // two samples symmetric about the identity: the chordal L2 mean is the identity
+    let c = 0.1f64.cos();
+    let s = 0.1f64.sin();
+    let text = format!(
+        "{{\"rotations\": [[[1,0,0],[0,{c},{m}],[0,{s},{c}]], [[1,0,0],[0,{c},{s}],[0,{m},{c}]]]}}",
+        m = -s
+    );
+    let p = tmp("single.json", &text);
+    let e = tmp(
+        "single_est.json",
+        "{\"rotation\": [[1,0,0],[0,1,0],[0,0,1]]}",
+    );
+    let out = run(&[
+        "certify",
+        p.to_str().unwrap(),
+        "--estimate",
+        e.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json_of(&out);
+    assert_eq!(v["problem"], "single");
+    assert_eq!(v["certificate"]["verdict"], "certified");
+    // a list estimate for a single problem is an error
+    let e2 = tmp(
+        "single_bad.json",
+        "{\"rotations\": [[[1,0,0],[0,1,0],[0,0,1]]]}",
+    );
+    let out = run(&[
+        "certify",
+        p.to_str().unwrap(),
+        "--estimate",
+        e2.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+}
+
+#[test]
+fn shared_benchmark_files() {
+    let mut any = false;
+    for rel in [
+        "g2o/3d/sesync/tinyGrid3D.g2o",
+        "g2o/3d/sesync/sphere2500.g2o",
+    ] {
+        let Some(path) = shared(rel) else {
+            println!("skipping {rel}: shared data not found");
+            continue;
+        };
+        any = true;
+        let est = dir().join(format!("{}.json", rel.replace('/', "_")));
+        let p = path.to_str().unwrap();
+        let out = run(&[
+            "multiple",
+            p,
+            "--json",
+            "--require-certified",
+            "--output",
+            est.to_str().unwrap(),
+        ]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{rel}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v = json_of(&out);
+        assert_eq!(v["certificate"]["verdict"], "certified", "{rel}");
+        let out = run(&[
+            "certify",
+            p,
+            "--estimate",
+            est.to_str().unwrap(),
+            "--json",
+            "--require-certified",
+        ]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{rel}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(json_of(&out)["certificate"]["verdict"], "certified");
+    }
+    if !any {
+        println!("skipping: shared data not found");
+    }
+}
+
+#[test]
+fn certify_conjugate_problem() {
+    use nalgebra::Vector3;
+    use rotavg::so3::{exp, rotation_to_rows};
+    // noise-free hand-eye pairs L_i = S R_i S^-1: the true S has cost 0 and is certified
+    let s = exp(&Vector3::new(0.4, -0.1, 0.7));
+    let rs = [
+        Vector3::new(0.5, 0.0, 0.1),
+        Vector3::new(0.0, 0.8, -0.3),
+        Vector3::new(-0.2, 0.1, 0.9),
+    ];
+    let pairs: Vec<_> = rs
+        .iter()
+        .map(|w| {
+            let r = exp(w);
+            let l = s * r * s.inverse();
+            serde_json::json!({"left": rotation_to_rows(&l), "right": rotation_to_rows(&r)})
+        })
+        .collect();
+    let p = tmp(
+        "conj.json",
+        &serde_json::json!({ "pairs": pairs }).to_string(),
+    );
+    let e = tmp(
+        "conj_est.json",
+        &serde_json::json!({ "rotation": rotation_to_rows(&s) }).to_string(),
+    );
+    let out = run(&[
+        "certify",
+        p.to_str().unwrap(),
+        "--estimate",
+        e.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json_of(&out);
+    assert_eq!(v["problem"], "conjugate");
+    assert_eq!(v["certificate"]["verdict"], "certified");
+    // a wrong S (rotated by 0.3 rad): not certified, exit 3 under --require-certified
+    let bad = s * exp(&Vector3::new(0.3, 0.0, 0.0));
+    let e2 = tmp(
+        "conj_bad.json",
+        &serde_json::json!({ "rotation": rotation_to_rows(&bad) }).to_string(),
+    );
+    let out = run(&[
+        "certify",
+        p.to_str().unwrap(),
+        "--estimate",
+        e2.to_str().unwrap(),
+        "--json",
+    ]);
+    let v = json_of(&out);
+    assert_ne!(v["certificate"]["verdict"], "certified");
+    assert!(v["cost"].as_f64().unwrap() > 1e-3);
+    let out = run(&[
+        "certify",
+        p.to_str().unwrap(),
+        "--estimate",
+        e2.to_str().unwrap(),
+        "--require-certified",
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(3));
+}
+
+#[test]
+fn ground_truth_init_and_stdin() {
+    // noise-free: the estimate matches the planted truth after alignment (errors ~ 0)
+    let (p, gt) = SyntheticGraph {
+        num_rotations: 20,
+        num_edges: 50,
+        noise_sigma: 0.0,
+        seed: 5,
+        ..Default::default()
+    }
+    .generate();
+    let text = write_problem_json(&p);
+    let g = tmp("gt_graph.json", &text);
+    let truth = tmp("truth.json", &rotavg::io::json::write_estimate_json(&gt));
+    let out = run(&[
+        "multiple",
+        g.to_str().unwrap(),
+        "--ground-truth",
+        truth.to_str().unwrap(),
+        "--json",
+        "--init-method",
+        "tree",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json_of(&out);
+    assert!(
+        v["accuracy"]["max_deg"].as_f64().unwrap() < 1e-6,
+        "{}",
+        v["accuracy"]
+    );
+    // --init from the truth, input from stdin
+    use std::io::Write;
+    let mut child = bin()
+        .args([
+            "multiple",
+            "-",
+            "--format",
+            "json",
+            "--init",
+            truth.to_str().unwrap(),
+            "--json",
+        ])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(text.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let v = json_of(&out);
+    assert_eq!(v["certificate"]["verdict"], "certified");
+    assert!(v["cost"].as_f64().unwrap() < 1e-18);
+    // an --init with the wrong size is an error naming the file
+    let short = tmp(
+        "init_short.json",
+        &rotavg::io::json::write_estimate_json(&gt[..3]),
+    );
+    let out = run(&[
+        "multiple",
+        g.to_str().unwrap(),
+        "--init",
+        short.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("init_short.json"));
+}
