@@ -54,10 +54,3 @@ pub fn read_input(path: &str) -> rotavg::Result<(String, String)> {
         Ok((path.into(), s))
     }
 }
-
-/// A subcommand that is not built yet.
-pub fn not_implemented(what: &str) -> rotavg::Error {
-    rotavg::Error::Solver {
-        message: format!("`rotavg {what}` is not implemented yet"),
-    }
-}
