@@ -33,7 +33,6 @@ pub struct Common {
     pub json: bool,
 }
 
-#[allow(dead_code)] // used by the subcommands as they are built
 /// Read an input argument: a path, or `-` for standard input. Returns (display name, text).
 pub fn read_input(path: &str) -> rotavg::Result<(String, String)> {
     use std::io::Read;
