@@ -1,0 +1,146 @@
+//! Semidefinite relaxations solved with Clarabel (`paper-notes/sdp.md`).
+//!
+//! - [`svec`]: the vectorisation of symmetric matrices used by Clarabel's PSD cone `[S1]`.
+//! - [`multiple`]: the SDP relaxation of chordal multiple rotation averaging, in dual form
+//!   (fast, exploits graph sparsity through chordal decomposition) or primal form (cross-check).
+//!
+//! Clarabel's types never appear in this public API: statuses are mapped to [`SdpStatus`].
+//! **The solver's objective values are informational only and never a bound**: a rigorous lower
+//! bound must be recomputed from the returned multipliers with an independent eigenvalue
+//! computation (SPEC section 3).
+
+pub mod multiple;
+pub mod svec;
+
+pub use multiple::relax_multiple;
+
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// Which SDP formulation to hand to the solver (`paper-notes/sdp.md`, `[S2]`, `[S3]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SdpForm {
+    /// Variables `Lambda_i` (6 per node); cone over `svec(Q - blkdiag(Lambda))`, whose
+    /// sparsity pattern is the view graph's, so chordal decomposition applies. Default.
+    #[default]
+    Dual,
+    /// Variables `X` (dense `3n x 3n`), `X_ii = I_3`. Only for small problems and cross-checks.
+    Primal,
+}
+
+/// Settings of the SDP solve (Clarabel interior-point method).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SdpSettings {
+    /// Formulation.
+    pub form: SdpForm,
+    /// Absolute duality-gap tolerance (on the scaled problem, see `paper-notes/sdp.md` `[S4]`).
+    pub tol_gap_abs: f64,
+    /// Relative duality-gap tolerance.
+    pub tol_gap_rel: f64,
+    /// Primal/dual feasibility tolerance.
+    pub tol_feas: f64,
+    /// Maximum interior-point iterations.
+    pub max_iterations: u32,
+    /// Wall-clock limit in seconds (`None`: unlimited).
+    pub time_limit_seconds: Option<f64>,
+    /// Use Clarabel's chordal decomposition of the PSD cone (dual form only benefits).
+    pub chordal_decomposition: bool,
+    /// Print Clarabel's iteration log.
+    pub verbose: bool,
+    /// Return the dense primal matrix `X` in [`SdpSolution::x_dense`] when `3n` is at most this.
+    pub dense_x_max_size: usize,
+}
+
+impl Default for SdpSettings {
+    fn default() -> Self {
+        SdpSettings {
+            form: SdpForm::Dual,
+            tol_gap_abs: 1e-8,
+            tol_gap_rel: 1e-8,
+            tol_feas: 1e-8,
+            max_iterations: 200,
+            time_limit_seconds: None,
+            chordal_decomposition: true,
+            verbose: false,
+            dense_x_max_size: 150,
+        }
+    }
+}
+
+impl SdpSettings {
+    /// Checks every value is in range.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &str, reason: &str| {
+            Err(Error::InvalidSettings {
+                name: name.into(),
+                reason: reason.into(),
+            })
+        };
+        for (name, v) in [
+            ("tol_gap_abs", self.tol_gap_abs),
+            ("tol_gap_rel", self.tol_gap_rel),
+            ("tol_feas", self.tol_feas),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(name, "must be finite and > 0");
+            }
+        }
+        if self.max_iterations == 0 {
+            return bad("max_iterations", "must be >= 1");
+        }
+        if let Some(t) = self.time_limit_seconds
+            && (t.is_nan() || t <= 0.0)
+        {
+            return bad("time_limit_seconds", "must be > 0");
+        }
+        Ok(())
+    }
+}
+
+/// Outcome of the interior-point solve (our mapping of Clarabel's status).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SdpStatus {
+    /// Converged to the requested tolerances.
+    Solved,
+    /// Converged to Clarabel's reduced ("almost") tolerances only.
+    AlmostSolved,
+    /// Iteration limit reached.
+    MaxIterations,
+    /// Time limit reached.
+    MaxTime,
+    /// The solver reported (almost) primal or dual infeasibility (should not happen for these
+    /// relaxations, which are always feasible; indicates numerical trouble).
+    Infeasible,
+    /// Numerical error or insufficient progress.
+    NumericalFailure,
+    /// Any other non-converged state.
+    Unsolved,
+}
+
+impl SdpStatus {
+    /// `true` for [`SdpStatus::Solved`] and [`SdpStatus::AlmostSolved`].
+    pub fn converged(self) -> bool {
+        matches!(self, SdpStatus::Solved | SdpStatus::AlmostSolved)
+    }
+}
+
+impl From<clarabel::solver::SolverStatus> for SdpStatus {
+    fn from(s: clarabel::solver::SolverStatus) -> Self {
+        use clarabel::solver::SolverStatus as S;
+        match s {
+            S::Solved => SdpStatus::Solved,
+            S::AlmostSolved => SdpStatus::AlmostSolved,
+            S::MaxIterations => SdpStatus::MaxIterations,
+            S::MaxTime => SdpStatus::MaxTime,
+            S::PrimalInfeasible
+            | S::DualInfeasible
+            | S::AlmostPrimalInfeasible
+            | S::AlmostDualInfeasible => SdpStatus::Infeasible,
+            S::NumericalError | S::InsufficientProgress => SdpStatus::NumericalFailure,
+            S::Unsolved | S::CallbackTerminated => SdpStatus::Unsolved,
+        }
+    }
+}

@@ -1,0 +1,371 @@
+//! The SDP relaxation of chordal L2 multiple rotation averaging (SPEC section 3,
+//! `paper-notes/sdp.md`):
+//!
+//! - primal `[S2]`: `min tr(Q X)` s.t. `X` PSD (`3n x 3n`), `X_ii = I_3`;
+//! - dual `[S3]`: `max sum_i tr(Lambda_i)` s.t. `Q - blkdiag(Lambda)` PSD, `Lambda_i` symmetric.
+//!
+//! [`relax_multiple`] solves either with Clarabel, returns the multipliers `Lambda_i` (from which
+//! a *verified* lower bound must be computed elsewhere: the solver's objectives are not bounds),
+//! the primal `X` and the rounded estimate `[S5]`.
+
+use crate::error::{Error, Result};
+use crate::multiple::MultipleProblem;
+use crate::multiple::laplacian::connection_laplacian;
+use crate::relax::svec::{smat, svec_index, svec_len, svec_weight};
+use crate::relax::{SdpForm, SdpSettings, SdpStatus};
+use crate::so3::{Rotation, project_to_so3};
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SupportedConeT};
+use faer::{Mat, Side};
+use nalgebra::Matrix3;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Result of [`relax_multiple`].
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SdpSolution {
+    /// Solver outcome.
+    pub status: SdpStatus,
+    /// Formulation that was solved.
+    pub form: SdpForm,
+    /// Dual multipliers `Lambda_i` (symmetrised), in the units of the cost `f`. Feed them to an
+    /// independent verification to get a rigorous lower bound; they are only approximately
+    /// dual feasible.
+    pub multipliers: Vec<Matrix3<f64>>,
+    /// Dense primal `X` (`3n x 3n`, column-major) when `3n <= settings.dense_x_max_size`.
+    pub x_dense: Option<Vec<f64>>,
+    /// Largest eigenvalues of `X`, descending (up to 6): the relaxation is tight (rank 3) when
+    /// the fourth is negligible against the third.
+    pub x_top_eigenvalues: Vec<f64>,
+    /// Rounded estimate `[S5]`: top-3 eigenvectors of `X`, global reflection fixed by the majority
+    /// of block determinant signs, blocks projected to SO(3), gauge `R_0 = I`.
+    #[serde(with = "crate::serde_rot::rotations")]
+    pub rounded: Vec<Rotation>,
+    /// Chordal cost `f` of [`Self::rounded`] (an upper bound on the global minimum).
+    pub rounded_cost: f64,
+    /// Solver's value of the primal objective `tr(Q X)`, unscaled. Informational only.
+    pub primal_objective: f64,
+    /// Solver's value of the dual objective `sum_i tr(Lambda_i)`, unscaled. Informational
+    /// only: **never use it as a lower bound**.
+    pub dual_objective: f64,
+    /// Interior-point iterations.
+    pub iterations: u32,
+    /// Clarabel's solve time, seconds.
+    pub solver_seconds: f64,
+    /// Total time including problem assembly and rounding, seconds.
+    pub seconds: f64,
+    /// The cost scale `s` (mean weighted degree): Clarabel solved the problem for `Q / s` `[S4]`.
+    pub scale: f64,
+}
+
+/// Solves the SDP relaxation of `problem` (chordal L2 cost) with Clarabel.
+///
+/// The cost is scaled by the mean weighted degree `s = 2 sum w / n` for conditioning and every
+/// returned quantity is unscaled `[S4]`. Errors: invalid settings, a graph with no edges, or a
+/// solver setup failure. A non-converged solve is *not* an error: check
+/// [`SdpSolution::status`].
+///
+/// ```
+/// use rotavg::multiple::synthetic::SyntheticGraph;
+/// use rotavg::relax::{relax_multiple, SdpSettings, SdpStatus};
+/// let (p, _) = SyntheticGraph { num_rotations: 5, num_edges: 8, noise_sigma: 0.0, ..Default::default() }.generate();
+/// let sol = relax_multiple(&p, &SdpSettings::default()).unwrap();
+/// assert_eq!(sol.status, SdpStatus::Solved);
+/// assert!(sol.rounded_cost < 1e-8); // noise free: the SDP recovers the planted rotations
+/// ```
+pub fn relax_multiple(problem: &MultipleProblem, settings: &SdpSettings) -> Result<SdpSolution> {
+    settings.validate()?;
+    let start = Instant::now();
+    let n = problem.num_rotations();
+    if problem.num_edges() == 0 || n == 0 {
+        return Err(Error::Empty {
+            what: "view graph (edges)".into(),
+        });
+    }
+    let total_weight: f64 = problem.edges().iter().map(|e| e.weight).sum();
+    // [S4] mean weighted degree; > 0 because weights are validated positive
+    let scale = 2.0 * total_weight / n as f64;
+    let q = connection_laplacian(problem);
+    // upper-triangle entries of Q / s
+    let mut q_upper: Vec<(usize, usize, f64)> = Vec::new();
+    for col in 0..q.ncols() {
+        let rows = q.as_ref().row_idx_of_col_raw(col);
+        let vals = q.as_ref().val_of_col(col);
+        for (&r, &v) in rows.iter().zip(vals) {
+            if r <= col && v != 0.0 {
+                q_upper.push((r, col, v / scale));
+            }
+        }
+    }
+    let raw = match settings.form {
+        SdpForm::Dual => solve_dual(n, &q_upper, settings)?,
+        SdpForm::Primal => solve_primal(n, &q_upper, settings)?,
+    };
+    let multipliers = raw
+        .lambda_scaled
+        .iter()
+        .map(|l| {
+            let l = l * scale;
+            (l + l.transpose()) * 0.5
+        })
+        .collect();
+    let (rounded, x_top_eigenvalues) = round(&raw.x, n)?;
+    let rounded_cost = problem.chordal_cost(&rounded);
+    let dim = 3 * n;
+    let x_dense = (dim <= settings.dense_x_max_size)
+        .then(|| (0..dim * dim).map(|k| raw.x[(k % dim, k / dim)]).collect());
+    Ok(SdpSolution {
+        status: raw.status,
+        form: settings.form,
+        multipliers,
+        x_dense,
+        x_top_eigenvalues,
+        rounded,
+        rounded_cost,
+        primal_objective: raw.primal_objective * scale,
+        dual_objective: raw.dual_objective * scale,
+        iterations: raw.iterations,
+        solver_seconds: raw.solver_seconds,
+        seconds: start.elapsed().as_secs_f64(),
+        scale,
+    })
+}
+
+/// What each formulation hands back (scaled problem).
+struct RawSolution {
+    status: SdpStatus,
+    lambda_scaled: Vec<Matrix3<f64>>,
+    x: Mat<f64>,
+    primal_objective: f64,
+    dual_objective: f64,
+    iterations: u32,
+    solver_seconds: f64,
+}
+
+fn clarabel_settings(settings: &SdpSettings) -> DefaultSettings<f64> {
+    DefaultSettings {
+        verbose: settings.verbose,
+        max_iter: settings.max_iterations,
+        time_limit: settings.time_limit_seconds.unwrap_or(f64::INFINITY),
+        tol_gap_abs: settings.tol_gap_abs,
+        tol_gap_rel: settings.tol_gap_rel,
+        tol_feas: settings.tol_feas,
+        direct_solve_method: "faer".into(),
+        chordal_decomposition_enable: settings.chordal_decomposition,
+        chordal_decomposition_complete_dual: true,
+        ..DefaultSettings::default()
+    }
+}
+
+/// Triplet lists to Clarabel's CSC.
+fn csc(m: usize, n: usize, t: Vec<(usize, usize, f64)>) -> CscMatrix<f64> {
+    let mut rows = Vec::with_capacity(t.len());
+    let mut cols = Vec::with_capacity(t.len());
+    let mut vals = Vec::with_capacity(t.len());
+    for (r, c, v) in t {
+        rows.push(r);
+        cols.push(c);
+        vals.push(v);
+    }
+    CscMatrix::new_from_triplets(m, n, rows, cols, vals)
+}
+
+/// Runs Clarabel and returns `(status, x, z, obj, obj_dual, iterations, seconds)`.
+#[allow(clippy::type_complexity)]
+fn run_clarabel(
+    q: &[f64],
+    a: CscMatrix<f64>,
+    b: &[f64],
+    cones: &[SupportedConeT<f64>],
+    settings: &SdpSettings,
+) -> Result<(SdpStatus, Vec<f64>, Vec<f64>, f64, f64, u32, f64)> {
+    let nv = q.len();
+    let p = CscMatrix::zeros((nv, nv));
+    let mut solver =
+        DefaultSolver::new(&p, q, &a, b, cones, clarabel_settings(settings)).map_err(|e| {
+            Error::Solver {
+                message: format!("Clarabel setup: {e}"),
+            }
+        })?;
+    solver.solve();
+    let s = &solver.solution;
+    Ok((
+        s.status.into(),
+        s.x.clone(),
+        s.z.clone(),
+        s.obj_val,
+        s.obj_val_dual,
+        s.iterations,
+        s.solve_time,
+    ))
+}
+
+/// Dual form `[S3]` in Clarabel's standard form `min c'x, b - A x in K`: `x` holds the upper
+/// triangles of the `Lambda_i` (6 per node, order of [`svec_index`] on 3x3),
+/// `c = -(diagonal indicators)`, `b - A x = svec(Q/s - blkdiag(Lambda))` in one PSD cone of
+/// size `3n`. Clarabel's dual variable of that cone is `svec(X)` of the primal `[S2]`
+/// (stationarity `A^T z = -c` is exactly `X_ii = I`).
+fn solve_dual(
+    n: usize,
+    q_upper: &[(usize, usize, f64)],
+    settings: &SdpSettings,
+) -> Result<RawSolution> {
+    let dim = 3 * n;
+    let m = svec_len(dim);
+    let mut b = vec![0.0; m];
+    for &(r, c, v) in q_upper {
+        b[svec_index(r, c)] = v * svec_weight(r, c);
+    }
+    let nv = 6 * n;
+    let mut c = vec![0.0; nv];
+    let mut trip = Vec::with_capacity(nv);
+    for i in 0..n {
+        for bb in 0..3 {
+            for a in 0..=bb {
+                let k = 6 * i + svec_index(a, bb);
+                if a == bb {
+                    c[k] = -1.0;
+                }
+                trip.push((svec_index(3 * i + a, 3 * i + bb), k, svec_weight(a, bb)));
+            }
+        }
+    }
+    let a = csc(m, nv, trip);
+    let cones = [SupportedConeT::PSDTriangleConeT(dim)];
+    let (status, x, z, obj, obj_dual, iterations, secs) =
+        run_clarabel(&c, a, &b, &cones, settings)?;
+    let lambda_scaled = (0..n)
+        .map(|i| {
+            Matrix3::from_fn(|r, cc| {
+                let v = x[6 * i + svec_index(r, cc)];
+                if v.is_finite() { v } else { f64::NAN }
+            })
+        })
+        .collect();
+    let xm = smat(&z, dim).ok_or_else(|| Error::Solver {
+        message: "Clarabel returned a dual vector of the wrong length".into(),
+    })?;
+    Ok(RawSolution {
+        status,
+        lambda_scaled,
+        x: xm,
+        // Clarabel minimises -sum tr(Lambda); its dual objective is -tr(Q X / s)
+        primal_objective: -obj_dual,
+        dual_objective: -obj,
+        iterations,
+        solver_seconds: secs,
+    })
+}
+
+/// Primal form `[S2]`: `x` = upper triangle of `X` (unscaled entries), cost `svec`-weighted
+/// `Q/s` so `c'x = tr(Q X / s)`; `6n` equality rows `X_ii[a,b] = delta_ab` (zero cone) and
+/// `-diag(w) x + s = 0`, `s = svec(X)` in the PSD cone. Multipliers from the equality duals
+/// `y`: `Lambda_aa = -y`, `Lambda_ab = -y/2` (derivation in `paper-notes/sdp.md` `[S3]`).
+fn solve_primal(
+    n: usize,
+    q_upper: &[(usize, usize, f64)],
+    settings: &SdpSettings,
+) -> Result<RawSolution> {
+    let dim = 3 * n;
+    let nv = svec_len(dim);
+    let mut c = vec![0.0; nv];
+    for &(r, cc, v) in q_upper {
+        c[svec_index(r, cc)] = if r == cc { v } else { 2.0 * v };
+    }
+    let neq = 6 * n;
+    let mut trip = Vec::with_capacity(neq + nv);
+    let mut b = vec![0.0; neq + nv];
+    for i in 0..n {
+        for bb in 0..3 {
+            for a in 0..=bb {
+                let row = 6 * i + svec_index(a, bb);
+                trip.push((row, svec_index(3 * i + a, 3 * i + bb), 1.0));
+                b[row] = if a == bb { 1.0 } else { 0.0 };
+            }
+        }
+    }
+    for col in 0..dim {
+        for row in 0..=col {
+            let k = svec_index(row, col);
+            trip.push((neq + k, k, -svec_weight(row, col)));
+        }
+    }
+    let a = csc(neq + nv, nv, trip);
+    let cones = [
+        SupportedConeT::ZeroConeT(neq),
+        SupportedConeT::PSDTriangleConeT(dim),
+    ];
+    let (status, x, z, obj, obj_dual, iterations, secs) =
+        run_clarabel(&c, a, &b, &cones, settings)?;
+    let lambda_scaled = (0..n)
+        .map(|i| {
+            Matrix3::from_fn(|r, cc| {
+                let y = z[6 * i + svec_index(r, cc)];
+                if r == cc { -y } else { -0.5 * y }
+            })
+        })
+        .collect();
+    let mut xm = Mat::zeros(dim, dim);
+    for col in 0..dim {
+        for row in 0..=col {
+            let v = x[svec_index(row, col)];
+            xm[(row, col)] = v;
+            xm[(col, row)] = v;
+        }
+    }
+    Ok(RawSolution {
+        status,
+        lambda_scaled,
+        x: xm,
+        primal_objective: obj,
+        dual_objective: obj_dual,
+        iterations,
+        solver_seconds: secs,
+    })
+}
+
+/// Rounding `[S5]`: `Y = V_3 diag(sqrt(lambda_1..3))` from the top eigenpairs of `X`; if most
+/// blocks `Y_i` have negative determinant, flip the third column (global reflection); project
+/// each block to SO(3); fix the gauge `R_0 = I`. Returns the rotations and the top eigenvalues.
+fn round(x: &Mat<f64>, n: usize) -> Result<(Vec<Rotation>, Vec<f64>)> {
+    let dim = 3 * n;
+    if !x.as_ref().is_all_finite() {
+        return Err(Error::Solver {
+            message: "the SDP solution contains non-finite values".into(),
+        });
+    }
+    let evd = x
+        .as_ref()
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| Error::Solver {
+            message: format!("eigendecomposition of X failed: {e:?}"),
+        })?;
+    // ascending eigenvalues: the top three are the last
+    let s = evd.S();
+    let u = evd.U();
+    let top: Vec<f64> = (0..dim.min(6)).map(|k| s[dim - 1 - k]).collect();
+    let mut y = vec![Matrix3::<f64>::zeros(); n];
+    for c in 0..3 {
+        let col = dim - 1 - c;
+        let w = s[col].max(0.0).sqrt();
+        for (i, yi) in y.iter_mut().enumerate() {
+            for a in 0..3 {
+                yi[(a, c)] = u[(3 * i + a, col)] * w;
+            }
+        }
+    }
+    let negative = y.iter().filter(|b| b.determinant() < 0.0).count();
+    if 2 * negative > n {
+        for b in y.iter_mut() {
+            for a in 0..3 {
+                b[(a, 2)] = -b[(a, 2)];
+            }
+        }
+    }
+    let mut rotations: Vec<Rotation> = y
+        .iter()
+        .map(|b| project_to_so3(b).unwrap_or_else(Rotation::identity))
+        .collect();
+    crate::multiple::fix_gauge(&mut rotations);
+    Ok((rotations, top))
+}
