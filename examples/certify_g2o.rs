@@ -16,6 +16,7 @@
 //! `--sdp` also solves the SDP relaxation with Clarabel (dual form; only for small graphs,
 //! a few hundred nodes at most) and certifies its rounded solution with the SDP multipliers.
 //! `--json` prints one JSON object instead of text (used by `benches/peers/run.sh`).
+//! `--gradient-tolerance X` overrides the solver's relative gradient tolerance (default 1e-8).
 
 use rotavg::BoundMethod;
 use rotavg::certify::multiple::{CertifySettings, certify_multiple, certify_with_multipliers};
@@ -30,34 +31,50 @@ struct Args {
     unit_weights: bool,
     sdp: bool,
     json: bool,
+    gradient_tolerance: Option<f64>,
 }
 
 fn parse_args() -> rotavg::Result<Args> {
     let mut path = None;
     let (mut unit_weights, mut sdp, mut json) = (false, false, false);
-    for a in std::env::args().skip(1) {
+    let mut gradient_tolerance = None;
+    let mut it = std::env::args().skip(1);
+    while let Some(a) = it.next() {
         match a.as_str() {
+            "--gradient-tolerance" => {
+                gradient_tolerance = it.next().and_then(|v| v.parse::<f64>().ok());
+                if gradient_tolerance.is_none() {
+                    return Err(rotavg::Error::InvalidSettings {
+                        name: a,
+                        reason: "expects a number".into(),
+                    });
+                }
+            }
             "--unit-weights" => unit_weights = true,
             "--sdp" => sdp = true,
             "--json" => json = true,
             s if s.starts_with("--") => {
                 return Err(rotavg::Error::InvalidSettings {
                     name: s.into(),
-                    reason: "unknown option (expected --unit-weights, --sdp, --json)".into(),
+                    reason: "unknown option (expected --unit-weights, --sdp, --json, --gradient-tolerance X)"
+                        .into(),
                 });
             }
-            _ => path = Some(PathBuf::from(a)),
+            _ => path = Some(PathBuf::from(&a)),
         }
     }
     let path = path.ok_or_else(|| rotavg::Error::InvalidSettings {
         name: "FILE".into(),
-        reason: "usage: certify_g2o FILE [--unit-weights] [--sdp] [--json]".into(),
+        reason:
+            "usage: certify_g2o FILE [--unit-weights] [--sdp] [--json] [--gradient-tolerance X]"
+                .into(),
     })?;
     Ok(Args {
         path,
         unit_weights,
         sdp,
         json,
+        gradient_tolerance,
     })
 }
 
@@ -79,7 +96,11 @@ fn run() -> rotavg::Result<()> {
     let load_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let solution = solve_multiple(&problem, &MultipleSettings::default())?;
+    let mut settings = MultipleSettings::default();
+    if let Some(tol) = args.gradient_tolerance {
+        settings.gradient_tolerance = tol;
+    }
+    let solution = solve_multiple(&problem, &settings)?;
     let solve_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
