@@ -52,6 +52,10 @@ def secs(x):
     return f"{x:.2f} s"
 
 
+def ratio(x):
+    return f"{x:.0f}x" if x >= 10 else f"{x:.2g}x"
+
+
 def gt_err(d):
     e = d.get("gt_err") if d else None
     if isinstance(e, dict):
@@ -97,7 +101,7 @@ for g in sorted(glob.glob(os.path.join(RES, "mra__*__gtsam.json"))):
     best = min(costs) if costs else None
     row = [name, f(n), f(m)]
     if shonan_failed:
-        row += [f"not finished ({shonan_failed})", "-", "-"]
+        row += ["timeout (> 600 s)" if "124" in str(shonan_failed) else f"failed ({shonan_failed})", "-", "-"]
     else:
         row += [secs(sh.get("time_s")), f(sh.get("cost_file_weights"), 6),
                 f"{f(sh.get('certified'))} / {f(sh.get('our_cert_subopt_bound'), 2)}"]
@@ -106,7 +110,7 @@ for g in sorted(glob.glob(os.path.join(RES, "mra__*__gtsam.json"))):
         row += [f"{secs(ours['process_wall_seconds'])} ({secs(ours['solve_seconds'])} / {secs(ours['certify_seconds'])})",
                 f(ours["cost"], 6), f"{f(ours['certified'])} ({f(ours.get('gap'), 2)})"]
         st = sh.get("time_s")
-        row.append(f"{st / ours['process_wall_seconds']:.2g}x" if st else (">%.0fx" % (600 / ours['process_wall_seconds']) if shonan_failed else "-"))
+        row.append(ratio(st / ours['process_wall_seconds']) if st else (">%.0fx" % (600 / ours['process_wall_seconds']) if shonan_failed else "-"))
         row.append(f"{(ours['cost'] - best) / best:+.1e}" if best else "-")
     else:
         row += [f"error: {(ours or {}).get('error', 'missing')}", "", "", "", ""]
@@ -117,7 +121,7 @@ for g in sorted(glob.glob(os.path.join(RES, "mra__*__gtsam.json"))):
         p("| " + " | ".join([f"{name}, `--gradient-tolerance 1e-12`", "", "", "", "", "", "", "",
             f"{secs(tight['process_wall_seconds'])} ({secs(tight['solve_seconds'])} / {secs(tight['certify_seconds'])})",
             f(tight["cost"], 6), f"{f(tight['certified'])} ({f(tight.get('gap'), 2)})",
-            f"{st / tight['process_wall_seconds']:.2g}x" if st else "-",
+            ratio(st / tight['process_wall_seconds']) if st else "-",
             f"{(tight['cost'] - best) / best:+.1e}" if best else "-"]) + " |")
 p("")
 
