@@ -1,0 +1,167 @@
+#!/usr/bin/env bash
+# Peer comparison driver: runs the peer tools of ../shared/peers (GTSAM Shonan, cvxpy SDP,
+# OpenCV hand-eye, SciPy mean) and rotavg's example binaries / CLI on the same inputs, and writes
+# $WORK/results/*.json plus $WORK/results/TABLES.md (see BENCHMARKS.md for a run).
+#
+#   bash benches/peers/run.sh                 # everything (stages: setup gen peers ours table)
+#   bash benches/peers/run.sh ours table      # only some stages
+#   WORK=/tmp/rotavg-peers FORCE=1 JOB_TIMEOUT=600 bash benches/peers/run.sh
+#
+# The peer code is never copied into this repository: it is copied from PEERS_SRC into
+# $WORK/peers (the shared folder is read-only) and its virtualenv is created there once.
+# Peer results are cached ($WORK/results/*.json is not recomputed unless FORCE=1); ours are
+# always recomputed. SKIP_BIG=1 skips the n=5000 synthetic graph.
+set -uo pipefail
+REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+PEERS_SRC="${PEERS_SRC:-}"
+if [[ -z "$PEERS_SRC" ]]; then
+  for d in "$REPO/../shared/peers" /work/shared/peers; do [[ -d "$d" ]] && { PEERS_SRC="$d"; break; }; done
+fi
+DATA="${DATA:-}"
+if [[ -z "$DATA" ]]; then
+  for d in "$REPO/../shared/data" /work/shared/data; do [[ -d "$d" ]] && { DATA="$d"; break; }; done
+fi
+WORK="${WORK:-/tmp/rotavg-peers}"
+T="${JOB_TIMEOUT:-600}"
+P="$WORK/peers"; PY="$P/.venv/bin/python"; INST="$WORK/inst"; RES="$WORK/results"
+BIN="$REPO/target/release"
+STAGES="${*:-setup gen peers ours table}"
+has() { [[ " $STAGES " == *" $1 "* ]]; }
+log() { echo "[peers $(date -u +%H:%M:%S)] $*" >&2; }
+mkdir -p "$WORK" "$INST" "$RES"
+
+# ---- setup: copy the peer harness and create its venv (once) ----
+if has setup; then
+  [[ -n "$PEERS_SRC" ]] || { echo "peers folder not found (set PEERS_SRC)" >&2; exit 1; }
+  if [[ ! -x "$PY" ]]; then
+    mkdir -p "$P"
+    cp -r "$PEERS_SRC"/. "$P"/
+    rm -rf "$P/.venv" "$P/results" "$P/instances"
+    bash "$P/setup.sh"
+  fi
+  (cd "$REPO" && cargo build --release --bin rotavg --example certify_g2o --example single --example conjugate --example multiple)
+fi
+
+# ---- gen: deterministic synthetic instances ----
+if has gen; then
+  S="$PY $P/synth.py"
+  $S mra --n 1000 --degree 8 --sigma-deg 2 --seed 0 --g2o --out "$INST/mra_n1000_d8_s2" >/dev/null
+  [[ -n "${SKIP_BIG:-}" ]] || $S mra --n 5000 --degree 6 --sigma-deg 2 --seed 0 --g2o --out "$INST/mra_n5000_d6_s2" >/dev/null
+  $S mra --n 40 --degree 6 --sigma-deg 2 --seed 0 --g2o --out "$INST/sdp_n40_d6_s2" >/dev/null
+  for m in 100 1000; do $S single --m $m --sigma-deg 5 --seed 0 --out "$INST/single_m${m}_s5" >/dev/null; done
+  $S single --m 100 --sigma-deg 5 --outlier-frac 0.2 --seed 0 --out "$INST/single_m100_s5_o20" >/dev/null
+  for N in 5 15; do   # poses mode: N(N-1)/2 pairs = 10 and 105, exactly what OpenCV forms
+    for s in 0.5 2 10; do
+      $S conj --mode poses --poses $N --sigma-deg $s --seed 0 --out "$INST/conj_N${N}_s${s}" >/dev/null
+    done
+  done
+  # outliers replace camera poses: 10 % of 15 poses; for 5 poses 10 % rounds to none, so 20 % (1 pose)
+  $S conj --mode poses --poses 15 --sigma-deg 2 --outlier-frac 0.1 --seed 0 --out "$INST/conj_N15_s2_o10" >/dev/null
+  $S conj --mode poses --poses 5 --sigma-deg 2 --outlier-frac 0.2 --seed 0 --out "$INST/conj_N5_s2_o20" >/dev/null
+  tabb="$DATA/handeye/tabb_rwhe_dataset1"
+  [[ -d "$tabb" ]] && "$PY" "$P/tabb2conj.py" "$tabb" --out "$INST/conj_tabb1" >/dev/null
+  # ROTAVG_CONJ PAIR lines (L, R with R ~ S^T L S, our convention) -> our JSON format
+  for f in "$INST"/conj_*.txt; do
+    case "$f" in *.gt.txt) continue;; esac
+    "$PY" - "$f" "${f%.txt}.json" <<'PYEOF'
+import json, sys
+pairs = []
+for line in open(sys.argv[1]):
+    t = line.split()
+    if t and t[0] == "PAIR":
+        v = [float(x) for x in t[2:20]]
+        rows = lambda a: [a[0:3], a[3:6], a[6:9]]
+        pairs.append({"left": rows(v[:9]), "right": rows(v[9:])})
+json.dump({"pairs": pairs}, open(sys.argv[2], "w"))
+PYEOF
+  done
+fi
+
+peer() {  # peer OUT.json script args...   (cached)
+  local out="$1"; shift
+  if [[ -s "$out" && -z "${FORCE:-}" ]]; then log "cached $(basename "$out")"; return; fi
+  log "$*"
+  (cd "$P" && timeout "$T" "$PY" "$@" --out "$out" >/dev/null 2>"${out%.json}.stderr")
+  local rc=$?
+  if [[ $rc -ne 0 ]]; then
+    echo "{\"error\": \"exit code $rc (124 = timeout ${T}s)\"}" > "$out"
+  fi
+  [[ -s "${out%.json}.stderr" ]] || rm -f "${out%.json}.stderr"
+}
+
+ours() {  # ours OUT.json cmd args...   (stdout must be one JSON object; wall time measured here)
+  local out="$1"; shift
+  log "$*"
+  local t0 t1 rc
+  t0=$(date +%s.%N)
+  timeout "$T" "$@" > "$out.tmp" 2>"${out%.json}.stderr"
+  rc=$?
+  t1=$(date +%s.%N)
+  "$PY" - "$out.tmp" "$out" "$t0" "$t1" "$rc" <<'PYEOF'
+import json, sys
+src, dst, t0, t1, rc = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4]), int(sys.argv[5])
+try:
+    d = json.load(open(src))
+except Exception as e:
+    d = {"error": f"exit code {rc}; no JSON ({e})"}
+d["process_wall_seconds"] = t1 - t0
+d["exit_code"] = rc
+json.dump(d, open(dst, "w"), indent=1)
+PYEOF
+  rm -f "$out.tmp"
+  [[ -s "${out%.json}.stderr" ]] || rm -f "${out%.json}.stderr"
+}
+
+REAL=(g2o/3d/sesync/sphere2500.g2o g2o/3d/sesync/parking-garage.g2o g2o/3d/sesync/smallGrid3D.g2o
+      g2o/3d/sesync/tinyGrid3D.g2o g2o/3d/mrob/sphere.g2o)
+tag_of() { basename "$1" .g2o; }
+SYN=(mra_n1000_d8_s2); [[ -n "${SKIP_BIG:-}" ]] || SYN+=(mra_n5000_d6_s2)
+
+if has peers; then
+  for f in "${REAL[@]}"; do
+    [[ -f "$DATA/$f" ]] || continue
+    peer "$RES/mra__$(tag_of "$f")__gtsam.json" shonan.py "$DATA/$f" --weights file \
+      --methods shonan,chordal,chordal_lm --native-run-max-n 0
+  done
+  for b in "${SYN[@]}"; do
+    peer "$RES/mra__${b}__gtsam.json" shonan.py "$INST/$b.txt" --weights file \
+      --methods shonan,chordal,chordal_lm --native-run-max-n 0
+    if grep -q '"error": "exit code' "$RES/mra__${b}__gtsam.json"; then  # Shonan timed out:
+      peer "$RES/mra__${b}__gtsamlm.json" shonan.py "$INST/$b.txt" --weights file \
+        --methods chordal_lm --no-cert --native-run-max-n 0   # keep GTSAM chordal+LM cost
+    fi
+  done
+  peer "$RES/sdp__sdp_n40_d6_s2__cvxpy.json" sdp_cvxpy.py "$INST/sdp_n40_d6_s2.txt" --solvers CLARABEL,SCS
+  for f in "$INST"/single_*.txt; do
+    case "$f" in *.gt.txt) continue;; esac
+    peer "$RES/single__$(basename "$f" .txt)__scipy.json" single_scipy.py "$f"
+  done
+  for f in "$INST"/conj_*.txt; do
+    case "$f" in *.gt.txt) continue;; esac
+    peer "$RES/conj__$(basename "$f" .txt)__opencv.json" handeye_opencv.py "$f"
+  done
+fi
+
+if has ours; then
+  for f in "${REAL[@]}"; do
+    [[ -f "$DATA/$f" ]] || continue
+    ours "$RES/mra__$(tag_of "$f")__rotavg.json" "$BIN/examples/certify_g2o" "$DATA/$f" --json
+    ours "$RES/mra__$(tag_of "$f")__rotavgtight.json" "$BIN/examples/certify_g2o" "$DATA/$f" --json \
+      --gradient-tolerance 1e-12
+  done
+  for b in "${SYN[@]}"; do
+    ours "$RES/mra__${b}__rotavg.json" "$BIN/examples/certify_g2o" "$INST/$b.g2o" --json
+  done
+  ours "$RES/sdp__sdp_n40_d6_s2__rotavg.json" "$BIN/examples/certify_g2o" "$INST/sdp_n40_d6_s2.g2o" --sdp --json
+  for f in "$INST"/single_*.txt; do
+    case "$f" in *.gt.txt) continue;; esac
+    ours "$RES/single__$(basename "$f" .txt)__rotavg.json" "$BIN/examples/single" --file "$f" --json
+  done
+  for f in "$INST"/conj_*.json; do
+    ours "$RES/conj__$(basename "$f" .json)__rotavg.json" "$BIN/rotavg" conjugate "$f" --json
+  done
+fi
+
+if has table; then
+  "$PY" "$REPO/benches/peers/tables.py" "$RES" "$INST" > "$RES/TABLES.md" && log "wrote $RES/TABLES.md"
+fi
