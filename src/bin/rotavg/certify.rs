@@ -132,9 +132,10 @@ pub fn run(args: &Args) -> Result<Outcome> {
                 },
                 ..Default::default()
             };
-            if !args.common.quiet && !args.common.json {
-                eprintln!("rotavg: certifying an estimate of {n} rotations...");
-            }
+            crate::common::progress(
+                &args.common,
+                format_args!("certifying an estimate of {n} rotations..."),
+            );
             let c = certify_multiple_estimate(&graph.problem, &rotations, &settings)?;
             let cost = graph.problem.chordal_cost(&rotations);
             json = serde_json::json!({

@@ -53,3 +53,12 @@ pub fn read_input(path: &str) -> rotavg::Result<(String, String)> {
         Ok((path.into(), s))
     }
 }
+
+/// Print a progress line on stderr, only when it can help a person watching: not under
+/// `--quiet` or `--json`, and only when stderr is a terminal (never into logs or pipes).
+pub fn progress(common: &Common, message: std::fmt::Arguments<'_>) {
+    use std::io::IsTerminal;
+    if !common.quiet && !common.json && std::io::stderr().is_terminal() {
+        eprintln!("rotavg: {message}");
+    }
+}

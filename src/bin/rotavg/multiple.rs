@@ -330,15 +330,16 @@ pub fn run(args: &Args) -> Result<Outcome> {
         certify_mode: args.certify.into(),
         ..Default::default()
     };
-    if !args.common.quiet && !args.common.json {
-        eprintln!(
-            "rotavg: {} nodes, {} edges: solving ({} loss) and certifying ({})...",
+    crate::common::progress(
+        &args.common,
+        format_args!(
+            "{} nodes, {} edges: solving ({} loss) and certifying ({})...",
             n,
             graph.problem.num_edges(),
             loss.name(),
             settings.certify_mode.name()
-        );
-    }
+        ),
+    );
     let est = average_multiple(&graph.problem, &settings)?;
     let sol = &est.solution;
     let accuracy: Option<AccuracyReport> = match &truth {
