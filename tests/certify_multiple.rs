@@ -2,7 +2,7 @@
 //!
 //! Expected values come from: planted solutions (noise-free: cost 0, Lambda = 0), dense
 //! reference computations on small instances (nalgebra dense Q, dense symmetric eigen), and the
-//! closed form of the z-axis cycle (`[C10]`).
+//! closed form of the z-axis cycle (`[D10]`).
 
 use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
 use rand::rngs::StdRng;
@@ -123,7 +123,7 @@ fn stack(rs: &[Rotation]) -> DMatrix<f64> {
 
 // ---------------------------------------------------------------------------------------------
 
-/// [C3]: the edge-wise multipliers equal sym((Q Y)_i R_i^T) computed with a dense Q, and
+/// [D3]: the edge-wise multipliers equal sym((Q Y)_i R_i^T) computed with a dense Q, and
 /// sum tr(Lambda_i) = f(Y) for ANY Y (identity tr(Y^T Q Y) = sum tr((QY)_i R_i^T)).
 #[test]
 fn multipliers_match_dense_formula_and_trace_identity() {
@@ -175,7 +175,7 @@ fn noise_free_planted_is_certified() {
         }
         .generate();
         // A noise-free S is exactly singular (gauge null space), so the provable gap is
-        // 3n (shift + fp margin [C6]) ~ 2e-9 at n = 100: above the default absolute tolerance
+        // 3n (shift + fp margin [D6]) ~ 2e-9 at n = 100: above the default absolute tolerance
         // 1e-9. Allow 1e-8 there (see paper-notes/certificates.md, "noise-free problems").
         let settings = CertifySettings {
             tolerance: rotavg::certificate::GapTolerance {
@@ -243,7 +243,7 @@ fn low_noise_local_optimum_is_certified_and_matches_dense() {
     println!("certified {certified} low-noise local optima");
 }
 
-/// [C4] dense cross-check for arbitrary (infeasible) multipliers, n <= 30: the verified sparse
+/// [D4] dense cross-check for arbitrary (infeasible) multipliers, n <= 30: the verified sparse
 /// bound is <= the dense bound tr(Lambda) + 3n min(lambda_min, 0) (dense nalgebra eigen) and
 /// within a small tolerance of it.
 #[test]
@@ -330,7 +330,7 @@ fn non_critical_estimate_is_not_certified() {
     assert!(c.certificate.min_eigenvalue.unwrap() < 0.0);
 }
 
-/// [C10] z-axis cycle with loop error phi: the planar configuration winding k times has equal
+/// [D10] z-axis cycle with loop error phi: the planar configuration winding k times has equal
 /// residual angles (2 pi k - phi)/n, cost f_k = 8 n sin^2((2 pi k - phi)/(2n)); the global
 /// minimum over SO(3)^n is f_0 when phi/n <= 0.8 (convex-envelope argument in the notes).
 /// Winding configurations (critical points, local minima or saddles) are never certified and
@@ -381,7 +381,7 @@ fn z_cycle_winding_configurations_are_never_certified() {
     println!("z-cycle winding configurations checked: {checked}");
 }
 
-/// Soundness of the floating-point margin [C6]: gamma is monotone and finite for sane sizes.
+/// Soundness of the floating-point margin [D6]: gamma is monotone and finite for sane sizes.
 #[test]
 fn gamma_is_sane() {
     assert!(gamma(1) > 1e-16 && gamma(1) < 1.2e-16);
@@ -414,7 +414,7 @@ fn certificate_is_gauge_invariant() {
 }
 
 /// The factor-size guard: with `max_factor_nonzeros` tiny, no factorisation is tried; the bound
-/// falls back to Gershgorin [C8] (valid: checked against the dense lambda_min), and the verdict
+/// falls back to Gershgorin [D8] (valid: checked against the dense lambda_min), and the verdict
 /// is not certified for a noisy problem.
 #[test]
 fn factor_size_guard_falls_back_to_gershgorin() {
@@ -473,8 +473,8 @@ fn invalid_settings_are_rejected() {
     assert!(lower_bound_from_multipliers(&p, &l, &CertifySettings::default()).is_err());
 }
 
-/// [C11] Riemannian staircase from non-global critical points of the z-cycle: the verified
-/// staircase bound is <= f_0 (the closed-form global optimum [C10]) and, once the lifted
+/// [D11] Riemannian staircase from non-global critical points of the z-cycle: the verified
+/// staircase bound is <= f_0 (the closed-form global optimum [D10]) and, once the lifted
 /// descent converges, close to it (the cycle relaxation is tight), far above the dual bound of
 /// the winding configuration itself.
 #[test]
@@ -512,7 +512,7 @@ fn staircase_bound_from_winding_configurations() {
     }
 }
 
-/// [C11] on noisy graphs with outliers: from a non-global local minimum, the staircase bound is
+/// [D11] on noisy graphs with outliers: from a non-global local minimum, the staircase bound is
 /// valid (<= best cost of restarts) and at least as good as the estimate's own dual bound.
 #[test]
 fn staircase_bound_is_valid_from_local_minima() {
@@ -568,7 +568,7 @@ fn non_finite_estimate_is_rejected() {
     assert!(rotavg::certify::staircase::staircase_bound(&p, &gt, &Default::default()).is_err());
 }
 
-/// [C6] adversarial check of the floating-point margin: certificate matrices S of random
+/// [D6] adversarial check of the floating-point margin: certificate matrices S of random
 /// (infeasible) multipliers, dense lambda_min `mu` from nalgebra; factorise S + sigma I for
 /// shifts straddling `-mu` within +-1e-11 and +-2e-14. Whenever a factorisation succeeds, the claimed bound
 /// `-sigma - margin` must be <= mu + (dense eigensolver error, 1e-13 ||S||). Successes at shifts
@@ -620,7 +620,7 @@ fn margin_holds_at_the_boundary_for_certificate_matrices() {
 }
 
 /// `certify_with_multipliers`: a winding (non-global) configuration of the z-cycle bounded with
-/// the multipliers of the global (k = 0) configuration: the bound is ~f_0 [C10] (valid, far
+/// the multipliers of the global (k = 0) configuration: the bound is ~f_0 [D10] (valid, far
 /// better than its own dual bound), the verdict is gap_reported with gap ~ f_1 - f_0.
 #[test]
 fn external_multipliers_bound_a_non_global_estimate() {

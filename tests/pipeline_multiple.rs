@@ -1,7 +1,7 @@
 //! The multiple-averaging pipeline (`average_multiple`, `certify_multiple_estimate`):
 //! planted optima certified (noise-free n = 50 and n = 200 exercise the scaled absolute
 //! tolerance, `paper-notes/certificates.md` "The pipeline"), z-cycle winding configurations
-//! (`[C10]`, known global optimum `f_0 = 8 n sin^2(phi / 2n)`) never certified but repaired by the
+//! (`[D10]`, known global optimum `f_0 = 8 n sin^2(phi / 2n)`) never certified but repaired by the
 //! SDP, and `certify_multiple_estimate` never changes its input.
 
 use nalgebra::Vector3;
@@ -24,7 +24,7 @@ fn winding(n: usize, k: i32) -> Vec<Rotation> {
         .collect()
 }
 
-/// `[C10]`: the global minimum of the z-cycle for `|phi| / n <= 0.8`.
+/// `[D10]`: the global minimum of the z-cycle for `|phi| / n <= 0.8`.
 fn f0(n: usize, phi: f64) -> f64 {
     8.0 * n as f64 * (phi / (2.0 * n as f64)).sin().powi(2)
 }

@@ -31,7 +31,7 @@ fn max_angle(a: &[Rotation], b: &[Rotation]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// [S1] svec convention checked against Clarabel itself: `max t s.t. M - t I PSD` has value
+/// [P1] svec convention checked against Clarabel itself: `max t s.t. M - t I PSD` has value
 /// `lambda_min(M)` only if off-diagonals are encoded with the sqrt(2) factor in Clarabel's order
 /// (a wrong order or factor changes the matrix, hence the eigenvalue). The dual variable is
 /// `smat(z) = v v^T` for the bottom eigenvector `v`.
@@ -129,7 +129,7 @@ fn low_noise_relaxation_is_tight() {
 
 #[test]
 fn primal_and_dual_forms_agree() {
-    // Same SDP posed two ways [S2]/[S3]: optimal values agree to solver tolerance, on a noisy
+    // Same SDP posed two ways [P2]/[P3]: optimal values agree to solver tolerance, on a noisy
     // instance with outliers (value > 0, not necessarily tight).
     for seed in 0..2 {
         let (p, _) = SyntheticGraph {

@@ -1,4 +1,4 @@
-//! Soundness campaign for the dual certificate (issue 4, `paper-notes/certificates.md` [C4]-[C9]).
+//! Soundness campaign for the dual certificate (issue 4, `paper-notes/certificates.md` [D4]-[D9]).
 //!
 //! Thousands of seeded random instances with n <= 12, noise 0..90 degrees, with and without
 //! outliers. For every instance, several local solutions (from the planted truth and from random

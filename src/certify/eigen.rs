@@ -1,10 +1,10 @@
 //! Sparse extreme-eigenvalue machinery for certificate matrices (`paper-notes/certificates.md`).
 //!
-//! - [`ShiftedCholesky`]: the *verification* step `[C5]`. A sparse Cholesky factorisation of
+//! - [`ShiftedCholesky`]: the *verification* step `[D5]`. A sparse Cholesky factorisation of
 //!   `A = S + sigma I` (symbolic analysis done once, numeric factorisation per shift) that, when it
 //!   succeeds, proves `lambda_min(S) >= -sigma - eps`, with `eps` a rigorous floating-point margin
-//!   computed from the computed factor (`[C6]`).
-//! - [`lanczos_extreme`]: the *estimation* step `[C7]`. Lanczos with full reorthogonalisation on
+//!   computed from the computed factor (`[D6]`).
+//! - [`lanczos_extreme`]: the *estimation* step `[D7]`. Lanczos with full reorthogonalisation on
 //!   any symmetric operator (the sparse matrix itself, or `(S + sigma I)^-1` through the
 //!   factorisation: shift-invert). Its numbers are estimates and never enter a bound by themselves.
 //!
@@ -29,7 +29,7 @@ pub const UNIT_ROUNDOFF: f64 = f64::EPSILON / 2.0;
 
 /// Factor size (stored values) above which the numeric factorisation runs in parallel.
 const PARALLEL_FACTOR_THRESHOLD: usize = 2_000_000;
-/// Factor size (stored values) up to which the residual-based margin `[C6]` (2) is computed.
+/// Factor size (stored values) up to which the residual-based margin `[D6]` (2) is computed.
 const RESIDUAL_FACTOR_LIMIT: usize = 20_000_000;
 
 /// `gamma_k = k u / (1 - k u)` (Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed.,
@@ -76,7 +76,7 @@ pub fn inf_norm(a: SparseColMatRef<'_, usize, f64>) -> f64 {
 }
 
 /// A Gershgorin lower bound on `lambda_min(A)`: `min_r (A_rr - sum_{c != r} |A_rc|)`, minus the
-/// rounding error of evaluating it (`[C8]`). Rigorous for the floating-point matrix `A`.
+/// rounding error of evaluating it (`[D8]`). Rigorous for the floating-point matrix `A`.
 pub fn gershgorin_lower_bound(a: SparseColMatRef<'_, usize, f64>) -> f64 {
     let n = a.nrows();
     let mut diag = vec![0.0f64; n];
@@ -105,7 +105,7 @@ pub fn gershgorin_lower_bound(a: SparseColMatRef<'_, usize, f64>) -> f64 {
     if n == 0 { 0.0 } else { lb }
 }
 
-/// The verification engine `[C5]`: symbolic Cholesky analysis of a symmetric sparse matrix `S`
+/// The verification engine `[D5]`: symbolic Cholesky analysis of a symmetric sparse matrix `S`
 /// (AMD ordering, done once), then numeric factorisations of `S + sigma I` for trial shifts.
 pub struct ShiftedCholesky {
     /// `S` itself (both triangles stored; only the lower one is read by the factorisation).
@@ -116,7 +116,7 @@ pub struct ShiftedCholesky {
     diag_pos: Vec<usize>,
     symbolic: SymbolicCholesky<usize>,
     /// Bound on the number of rounded operations that produced each entry of `S` (for the
-    /// forming error `[C6]`, part (b)).
+    /// forming error `[D6]`, part (b)).
     entry_terms: usize,
 }
 
@@ -126,7 +126,7 @@ pub struct PositiveFactor<'a> {
     values: Vec<f64>,
     /// The shift `sigma` that was factorised.
     pub shift: f64,
-    /// Rigorous margin: `lambda_min(S_exact) >= -shift - margin` `[C6]`.
+    /// Rigorous margin: `lambda_min(S_exact) >= -shift - margin` `[D6]`.
     pub margin: f64,
     /// Smallest diagonal entry of the computed factor (squared: the smallest pivot).
     pub min_pivot: f64,
@@ -196,10 +196,10 @@ impl ShiftedCholesky {
 
     /// Factorise `S + shift I`. `None` when a pivot is not positive or not finite (no conclusion:
     /// the matrix is then *probably* not positive definite), or when the computed margin is not
-    /// finite. `Some(factor)` proves `lambda_min(S) >= -shift - factor.margin` `[C6]`.
+    /// finite. `Some(factor)` proves `lambda_min(S) >= -shift - factor.margin` `[D6]`.
     ///
-    /// `margin_target`: when the cheap a-priori margin `[C6]` (1) is already below it, the more
-    /// expensive residual-based margin `[C6]` (2) is not computed (pass 0 to always compute it
+    /// `margin_target`: when the cheap a-priori margin `[D6]` (1) is already below it, the more
+    /// expensive residual-based margin `[D6]` (2) is not computed (pass 0 to always compute it
     /// when the factor is small enough).
     pub fn factor(&mut self, shift: f64, margin_target: f64) -> Option<PositiveFactor<'_>> {
         if !shift.is_finite() {
@@ -214,7 +214,7 @@ impl ShiftedCholesky {
             }
         }
         let mut values = vec![0.0f64; self.symbolic.len_val()];
-        // large supernodal factorisations use all threads (the margin [C6] holds for any
+        // large supernodal factorisations use all threads (the margin [D6] holds for any
         // summation order); small ones stay sequential and deterministic
         let par = if self.symbolic.len_val() > PARALLEL_FACTOR_THRESHOLD {
             Par::rayon(0)
@@ -263,7 +263,7 @@ impl ShiftedCholesky {
         })
     }
 
-    /// `[C6]` part (a). Two rigorous bounds on `||A - P^T L L^T P||_2` (`L` the computed
+    /// `[D6]` part (a). Two rigorous bounds on `||A - P^T L L^T P||_2` (`L` the computed
     /// factor, exact numbers), the smaller is used:
     /// 1. Higham Thm 10.3: a Cholesky factorisation that runs to completion gives
     ///    `L L^T = A + dA`, `|dA| <= gamma(k+1) |L| |L|^T`, `k` = the largest number of nonzero
@@ -486,7 +486,7 @@ pub struct LanczosResult {
     pub converged: bool,
 }
 
-/// Lanczos with full (twice-repeated Gram-Schmidt) reorthogonalisation `[C7]` for the smallest or
+/// Lanczos with full (twice-repeated Gram-Schmidt) reorthogonalisation `[D7]` for the smallest or
 /// largest eigenvalue of a symmetric operator `op(x, y): y = A x` of dimension `dim`.
 /// Stops when the Ritz residual `|beta_k s_k| <= tolerance * scale`, at `max_iterations`, or on an
 /// invariant subspace. The returned value is an estimate (`value >= lambda_min` for `Smallest` in
@@ -689,7 +689,7 @@ mod tests {
         assert!(gershgorin_lower_bound(a.as_ref()) <= exact_min);
     }
 
-    /// Stress test of the margin [C6] at the decision boundary: the path-graph Laplacian has
+    /// Stress test of the margin [D6] at the decision boundary: the path-graph Laplacian has
     /// lambda_min = 0 exactly (integer entries, exact in floating point); `A = L - eps I` has
     /// lambda_min = -eps up to the rounding of its diagonal (<= 2u * 3). Whenever a shifted
     /// factorisation succeeds, the verified bound must be <= -eps (+ that rounding).

@@ -1,10 +1,10 @@
 //! Dual certificate for chordal L2 multiple rotation averaging (SPEC section 3,
 //! `paper-notes/certificates.md`).
 //!
-//! - [`multipliers`]: `Lambda_i = sym((Q Y)_i R_i^T)` `[C3]`, edge-wise (no dense `Q`).
+//! - [`multipliers`]: `Lambda_i = sym((Q Y)_i R_i^T)` `[D3]`, edge-wise (no dense `Q`).
 //! - [`certificate_matrix`]: `S = Q - blkdiag(Lambda)` (sparse).
 //! - [`lower_bound_from_multipliers`]: the verified bound `sum tr(Lambda_i) + 3n min(mu, 0)`
-//!   `[C4]` from *any* multipliers, with `mu` a verified lower bound on `lambda_min(S)` `[C5]`-`[C8]`.
+//!   `[D4]` from *any* multipliers, with `mu` a verified lower bound on `lambda_min(S)` `[D5]`-`[D8]`.
 //! - [`certify_multiple`]: the certificate of an estimate (any rotations, critical point or not).
 
 use crate::certificate::{BoundMethod, Certificate, GapTolerance};
@@ -91,13 +91,13 @@ impl CertifySettings {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verification {
-    /// A successful sparse Cholesky factorisation of `S + shift I` `[C5]`, `[C6]`.
+    /// A successful sparse Cholesky factorisation of `S + shift I` `[D5]`, `[D6]`.
     Cholesky,
-    /// Gershgorin discs `[C8]` (no factorisation succeeded; usually a weak bound).
+    /// Gershgorin discs `[D8]` (no factorisation succeeded; usually a weak bound).
     Gershgorin,
 }
 
-/// A verified lower bound from multipliers `Lambda` `[C4]`.
+/// A verified lower bound from multipliers `Lambda` `[D4]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct VerifiedBound {
     /// The proven lower bound on the global minimum of the chordal cost (over `O(3)^n`, hence
@@ -111,7 +111,7 @@ pub struct VerifiedBound {
     pub verification: Verification,
     /// The Cholesky shift that verified `mu` (`mu = -shift - fp_margin`), if any.
     pub shift: Option<f64>,
-    /// The rigorous floating-point margin included in `mu` `[C6]`.
+    /// The rigorous floating-point margin included in `mu` `[D6]`.
     pub fp_margin: f64,
     /// Iterative *estimate* of `lambda_min(S)` (Lanczos), if computed.
     pub min_eigenvalue_estimate: Option<f64>,
@@ -138,7 +138,7 @@ pub struct MultipleCertificate {
     /// How the bound was obtained.
     pub bound: VerifiedBound,
     /// First-order (stationarity) residual `sqrt(sum_i ||(Q Y)_i - Lambda_i R_i||_F^2)`: zero at a
-    /// critical point `[C3]`. Equals `sqrt(sum_i ||skew((Q Y)_i R_i^T)||_F^2)`.
+    /// critical point `[D3]`. Equals `sqrt(sum_i ||skew((Q Y)_i R_i^T)||_F^2)`.
     pub stationarity_residual: f64,
 }
 
@@ -152,8 +152,8 @@ impl fmt::Display for MultipleCertificate {
     }
 }
 
-/// `(Q Y)_i` for every node, edge-wise: `(Q Y)_i = d_i R_i - sum_{(i,j)} w R_ij^T R_j
-/// - sum_{(j,i)} w R_ji R_j` `[C3]`.
+/// `(Q Y)_i` for every node, edge-wise `[D3]`:
+/// `(Q Y)_i = d_i R_i - sum_{(i,j)} w R_ij^T R_j - sum_{(j,i)} w R_ji R_j`.
 pub fn laplacian_times(problem: &MultipleProblem, rotations: &[Rotation]) -> Vec<Matrix3<f64>> {
     let n = problem.num_rotations();
     let mut qy = vec![Matrix3::zeros(); n];
@@ -166,7 +166,7 @@ pub fn laplacian_times(problem: &MultipleProblem, rotations: &[Rotation]) -> Vec
     qy
 }
 
-/// The multipliers `Lambda_i = sym((Q Y)_i R_i^T)` of an estimate `[C3]` (SPEC section 3).
+/// The multipliers `Lambda_i = sym((Q Y)_i R_i^T)` of an estimate `[D3]` (SPEC section 3).
 /// Errors if the estimate does not have one rotation per node.
 ///
 /// ```
@@ -278,9 +278,9 @@ fn entry_terms(problem: &MultipleProblem) -> usize {
 }
 
 /// A verified lower bound on the global minimum of the chordal cost from *any* multipliers
-/// `Lambda` (symmetrised) `[C4]`: `sum tr(Lambda_i) + 3n min(mu, 0)`, where `mu` is a
-/// verified lower bound on `lambda_min(Q - blkdiag(Lambda))` (sparse Cholesky `[C5]` with
-/// the floating-point margin `[C6]`; Gershgorin `[C8]` as the fallback). Use this to verify
+/// `Lambda` (symmetrised) `[D4]`: `sum tr(Lambda_i) + 3n min(mu, 0)`, where `mu` is a
+/// verified lower bound on `lambda_min(Q - blkdiag(Lambda))` (sparse Cholesky `[D5]` with
+/// the floating-point margin `[D6]`; Gershgorin `[D8]` as the fallback). Use this to verify
 /// an SDP solver's multipliers: never its reported objective.
 ///
 /// The first shift tried is `delta_0 = fraction * max(abs_tol, rel_tol |sum tr Lambda|) / (3n)`.
@@ -304,7 +304,7 @@ pub fn lower_bound_from_multipliers(
     verify(problem, lambdas, trace.abs(), settings)
 }
 
-/// The core of `[C4]`-`[C8]`: `scale` is the cost scale for the shift budget.
+/// The core of `[D4]`-`[D8]`: `scale` is the cost scale for the shift budget.
 fn verify(
     problem: &MultipleProblem,
     lambdas: &[Matrix3<f64>],
@@ -320,10 +320,10 @@ fn verify(
     let delta0 = settings.shift_budget_fraction * budget / dim;
     let terms = entry_terms(problem);
     // a floating-point margin below this costs at most 5% of the gap budget: no need to
-    // compute the tighter (more expensive) residual-based margin [C6] (2)
+    // compute the tighter (more expensive) residual-based margin [D6] (2)
     let margin_target = 0.05 * budget / dim;
-    // Gershgorin fallback [C8]: rigorous for S_fl; the forming error of S_fl vs the exact S
-    // is bounded as in [C6](b).
+    // Gershgorin fallback [D8]: rigorous for S_fl; the forming error of S_fl vs the exact S
+    // is bounded as in [D6](b).
     let gersh = gershgorin_lower_bound(s.as_ref()) - 2.0 * gamma(terms + 1) * norm;
     let s_copy = s.clone();
     let mut ch = ShiftedCholesky::new(s, terms)?;
@@ -337,7 +337,7 @@ fn verify(
     lz.max_iterations = lz.max_iterations.min(n3.max(1));
 
     // Shift-invert estimate with a successful factor: largest eigenvalue theta of
-    // (S + sigma I)^-1 gives lambda_min(S) ~ 1/theta - sigma [C7].
+    // (S + sigma I)^-1 gives lambda_min(S) ~ 1/theta - sigma [D7].
     let shift_invert = |f: &crate::certify::eigen::PositiveFactor<'_>,
                         start: Option<&[f64]>,
                         lz: &LanczosSettings|
@@ -481,7 +481,7 @@ fn verify(
     })
 }
 
-/// `[C4]` with rounding: `sum tr(Lambda_i) + 3n min(mu, 0)`, minus the rounding error of
+/// `[D4]` with rounding: `sum tr(Lambda_i) + 3n min(mu, 0)`, minus the rounding error of
 /// evaluating it: the trace sum of `3n` terms has error `<= gamma(3n) sum |Lambda_aa|`, the
 /// product and final subtraction `<= gamma(3n + 2) (sum |Lambda_aa| + 3n |mu|)`; doubled.
 fn bound_from_mu(lambdas: &[Matrix3<f64>], mu: f64) -> f64 {
@@ -497,7 +497,7 @@ fn bound_from_mu(lambdas: &[Matrix3<f64>], mu: f64) -> f64 {
 }
 
 /// Certify an estimate of chordal L2 multiple rotation averaging (SPEC section 3): multipliers
-/// from the first-order conditions `[C3]`, the verified bound `[C4]`, and the verdict from
+/// from the first-order conditions `[D3]`, the verified bound `[D4]`, and the verdict from
 /// `Certificate::from_bounds(f(Y), Some(lb), ..)`. Works for any rotations: at a point that is
 /// not critical the bound is still valid but weaker, and the verdict is `Certified` only if the
 /// gap is within tolerance. The estimate is never changed.
@@ -571,7 +571,7 @@ pub fn certify_multiple(
 
 /// Certify an estimate against multipliers obtained elsewhere (an SDP solve, a staircase, the
 /// multipliers of a better estimate): upper bound `f(rotations)`, lower bound verified from
-/// `lambdas` `[C4]`-`[C8]`, verdict from `Certificate::from_bounds`, with the given `method`
+/// `lambdas` `[D4]`-`[D8]`, verdict from `Certificate::from_bounds`, with the given `method`
 /// (e.g. [`BoundMethod::Sdp`]). This is how an estimate that is not a critical point gets a useful
 /// bound. The estimate is never changed.
 ///

@@ -1,4 +1,4 @@
-//! Riemannian staircase (Burer-Monteiro) for the multiple-rotation SDP `[C11]`
+//! Riemannian staircase (Burer-Monteiro) for the multiple-rotation SDP `[D11]`
 //! (`paper-notes/certificates.md`): when the dual certificate of an estimate fails, solve the
 //! rank-lifted problem `min tr(Y^T Q Y)` over `Y_i` in `St(3, p)` (3 x p, orthonormal rows),
 //! `p = 3, 4, ...`, escaping saddles along the negative eigenvector of `S`; the multipliers of
@@ -171,9 +171,9 @@ fn descend(
     (y, f, it)
 }
 
-/// Bound the global minimum by a Riemannian staircase started at `rotations` `[C11]`, and
+/// Bound the global minimum by a Riemannian staircase started at `rotations` `[D11]`, and
 /// certify `rotations` against it (method [`BoundMethod::Staircase`]). The bound is verified
-/// exactly like any multipliers (`[C4]`-`[C8]`): it is valid whatever the descent achieved.
+/// exactly like any multipliers (`[D4]`-`[D8]`): it is valid whatever the descent achieved.
 ///
 /// ```
 /// use rotavg::certify::staircase::{staircase_bound, StaircaseSettings};

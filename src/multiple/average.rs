@@ -1,7 +1,7 @@
-//! The multiple-rotation-averaging pipeline `[C12]` (`paper-notes/certificates.md`):
-//! initialise, solve locally, certify with the dual certificate `[C3]`-`[C9]`; when that fails,
-//! bound the global minimum with the SDP relaxation (Clarabel, multipliers verified `[C4]`) for
-//! small graphs or with the Riemannian staircase `[C11]` for large ones, and keep the better of
+//! The multiple-rotation-averaging pipeline `[D12]` (`paper-notes/certificates.md`):
+//! initialise, solve locally, certify with the dual certificate `[D3]`-`[D9]`; when that fails,
+//! bound the global minimum with the SDP relaxation (Clarabel, multipliers verified `[D4]`) for
+//! small graphs or with the Riemannian staircase `[D11]` for large ones, and keep the better of
 //! the local estimate and the polished SDP rounding.
 //!
 //! - [`average_multiple`]: estimate + certificate.
@@ -35,7 +35,7 @@ use std::time::Instant;
 ///
 /// Why: at a noise-free optimum the certificate matrix `S = Q` is exactly singular, and the
 /// provable gap is `3n (delta_0 + margin)` with a floating-point margin that grows with the
-/// matrix norm (the weighted degrees) and the size, i.e. with the total weight `[C5]`, `[C6]`;
+/// matrix norm (the weighted degrees) and the size, i.e. with the total weight `[D5]`, `[D6]`;
 /// a fixed `1e-9` is not attainable beyond n ~ 100. `1e-11 sum_e w_e` means a gap equivalent
 /// to a mean squared chordal residual of `1e-11` per unit weight (residual angles ~ `3e-6`
 /// rad): far below any measurement noise, so no estimate with a materially higher cost can be
@@ -47,7 +47,7 @@ pub const ABSOLUTE_TOLERANCE_PER_WEIGHT: f64 = 1e-11;
 /// tolerance multiplied by this factor before the dual certificate is retried.
 pub const REFINE_FACTOR: f64 = 1e-6;
 
-/// Refine before the first dual certificate when the stationarity residual `[C3]` exceeds this
+/// Refine before the first dual certificate when the stationarity residual `[D3]` exceeds this
 /// times `|f| + absolute tolerance`.
 pub const PRE_REFINE_RATIO: f64 = 1e-5;
 
@@ -188,7 +188,7 @@ pub struct PipelineDetails {
     pub sdp_polished_cost: Option<f64>,
     /// `true` when the polished SDP rounding replaced the local estimate (lower cost).
     pub improved_by_sdp: bool,
-    /// Stationarity residual of the certified estimate `[C3]` (0 at a critical point).
+    /// Stationarity residual of the certified estimate `[D3]` (0 at a critical point).
     pub stationarity_residual: Option<f64>,
     /// Why no certificate was computed (certificate `None`), or why the SDP / staircase was
     /// skipped after a failed dual certificate.
@@ -392,7 +392,7 @@ fn run_staircase(
 /// Dual certificate at `rotations`: records the run, offers its bound, returns
 /// `(certified, margin_limited)`. `margin_limited`: not certified, but the estimate is a critical
 /// point and `S + shift I` factorised with most of the verified deficit being the floating-point
-/// margin `[C6]` (not a negative eigenvalue): the gap is the verification's precision, and the
+/// margin `[D6]` (not a negative eigenvalue): the gap is the verification's precision, and the
 /// SDP / staircase multipliers (verified the same way, at the same optimum) cannot do better.
 fn run_dual(
     problem: &MultipleProblem,
@@ -510,12 +510,12 @@ fn wants_sdp(mode: CertifyMode, n: usize, max_nodes: usize) -> Option<bool> {
 /// Multiple rotation averaging with a certificate: initialise and solve locally
 /// ([`solve_multiple`] with `settings.local`), then, for the chordal loss, certify:
 ///
-/// 1. the dual certificate of the local solution `[C3]`-`[C9]`;
+/// 1. the dual certificate of the local solution `[D3]`-`[D9]`;
 /// 2. if it does not certify and the mode allows: the SDP (when `n <= sdp_max_nodes` in
-///    `Auto`, always in `Sdp`): its multipliers are verified independently `[C4]`, its rounding
+///    `Auto`, always in `Sdp`): its multipliers are verified independently `[D4]`, its rounding
 ///    is polished by the local solver and replaces the estimate when its chordal cost is lower
 ///    (the dual certificate is then recomputed at the new estimate); or the Riemannian
-///    staircase `[C11]` (large graphs in `Auto`, always in `Staircase`).
+///    staircase `[D11]` (large graphs in `Auto`, always in `Staircase`).
 ///
 /// The certificate's lower bound is the **largest** verified bound computed (each is a lower
 /// bound on the global minimum, whatever estimate produced it) and its `method` names the
@@ -645,7 +645,7 @@ pub fn average_multiple(
 
 /// Certify a given estimate (e.g. computed by another solver) **without changing it**: upper
 /// bound = its chordal cost; lower bound = the largest verified bound among the dual
-/// certificate at the estimate `[C3]`-`[C9]` and, if that does not certify, the SDP's verified
+/// certificate at the estimate `[D3]`-`[D9]` and, if that does not certify, the SDP's verified
 /// multipliers (`n <= sdp_max_nodes` in `Auto`, or mode `Sdp`) or the staircase (large graphs
 /// in `Auto`, or mode `Staircase`). Certified only when the verified gap is within the
 /// tolerance ([`AverageMultipleSettings::effective_tolerance`]); an estimate that is not a

@@ -1,6 +1,6 @@
 //! Semidefinite relaxations solved with Clarabel (`paper-notes/sdp.md`).
 //!
-//! - [`svec`]: the vectorisation of symmetric matrices used by Clarabel's PSD cone `[S1]`.
+//! - [`svec`]: the vectorisation of symmetric matrices used by Clarabel's PSD cone `[P1]`.
 //! - [`multiple`]: the SDP relaxation of chordal multiple rotation averaging, in dual form
 //!   (fast, exploits graph sparsity through chordal decomposition) or primal form (cross-check).
 //!
@@ -17,7 +17,7 @@ pub use multiple::{SdpSolution, relax_multiple};
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
-/// Which SDP formulation to hand to the solver (`paper-notes/sdp.md`, `[S2]`, `[S3]`).
+/// Which SDP formulation to hand to the solver (`paper-notes/sdp.md`, `[P2]`, `[P3]`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SdpForm {
@@ -35,7 +35,7 @@ pub enum SdpForm {
 pub struct SdpSettings {
     /// Formulation.
     pub form: SdpForm,
-    /// Absolute duality-gap tolerance (on the scaled problem, see `paper-notes/sdp.md` `[S4]`).
+    /// Absolute duality-gap tolerance (on the scaled problem, see `paper-notes/sdp.md` `[P4]`).
     pub tol_gap_abs: f64,
     /// Relative duality-gap tolerance.
     pub tol_gap_rel: f64,

@@ -1,12 +1,12 @@
 //! The SDP relaxation of chordal L2 multiple rotation averaging (SPEC section 3,
 //! `paper-notes/sdp.md`):
 //!
-//! - primal `[S2]`: `min tr(Q X)` s.t. `X` PSD (`3n x 3n`), `X_ii = I_3`;
-//! - dual `[S3]`: `max sum_i tr(Lambda_i)` s.t. `Q - blkdiag(Lambda)` PSD, `Lambda_i` symmetric.
+//! - primal `[P2]`: `min tr(Q X)` s.t. `X` PSD (`3n x 3n`), `X_ii = I_3`;
+//! - dual `[P3]`: `max sum_i tr(Lambda_i)` s.t. `Q - blkdiag(Lambda)` PSD, `Lambda_i` symmetric.
 //!
 //! [`relax_multiple`] solves either with Clarabel, returns the multipliers `Lambda_i` (from which
 //! a *verified* lower bound must be computed elsewhere: the solver's objectives are not bounds),
-//! the primal `X` and the rounded estimate `[S5]`.
+//! the primal `X` and the rounded estimate `[P5]`.
 
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;
@@ -37,7 +37,7 @@ pub struct SdpSolution {
     /// Largest eigenvalues of `X`, descending (up to 6): the relaxation is tight (rank 3) when
     /// the fourth is negligible against the third.
     pub x_top_eigenvalues: Vec<f64>,
-    /// Rounded estimate `[S5]`: top-3 eigenvectors of `X`, global reflection fixed by the majority
+    /// Rounded estimate `[P5]`: top-3 eigenvectors of `X`, global reflection fixed by the majority
     /// of block determinant signs, blocks projected to SO(3), gauge `R_0 = I`.
     #[serde(with = "crate::serde_rot::rotations")]
     pub rounded: Vec<Rotation>,
@@ -54,14 +54,14 @@ pub struct SdpSolution {
     pub solver_seconds: f64,
     /// Total time including problem assembly and rounding, seconds.
     pub seconds: f64,
-    /// The cost scale `s` (mean weighted degree): Clarabel solved the problem for `Q / s` `[S4]`.
+    /// The cost scale `s` (mean weighted degree): Clarabel solved the problem for `Q / s` `[P4]`.
     pub scale: f64,
 }
 
 /// Solves the SDP relaxation of `problem` (chordal L2 cost) with Clarabel.
 ///
 /// The cost is scaled by the mean weighted degree `s = 2 sum w / n` for conditioning and every
-/// returned quantity is unscaled `[S4]`. Errors: invalid settings, a graph with no edges, or a
+/// returned quantity is unscaled `[P4]`. Errors: invalid settings, a graph with no edges, or a
 /// solver setup failure. A non-converged solve is *not* an error: check
 /// [`SdpSolution::status`].
 ///
@@ -83,7 +83,7 @@ pub fn relax_multiple(problem: &MultipleProblem, settings: &SdpSettings) -> Resu
         });
     }
     let total_weight: f64 = problem.edges().iter().map(|e| e.weight).sum();
-    // [S4] mean weighted degree; > 0 because weights are validated positive
+    // [P4] mean weighted degree; > 0 because weights are validated positive
     let scale = 2.0 * total_weight / n as f64;
     let q = connection_laplacian(problem);
     // upper-triangle entries of Q / s
@@ -201,10 +201,10 @@ fn run_clarabel(
     ))
 }
 
-/// Dual form `[S3]` in Clarabel's standard form `min c'x, b - A x in K`: `x` holds the upper
+/// Dual form `[P3]` in Clarabel's standard form `min c'x, b - A x in K`: `x` holds the upper
 /// triangles of the `Lambda_i` (6 per node, order of [`svec_index`] on 3x3),
 /// `c = -(diagonal indicators)`, `b - A x = svec(Q/s - blkdiag(Lambda))` in one PSD cone of
-/// size `3n`. Clarabel's dual variable of that cone is `svec(X)` of the primal `[S2]`
+/// size `3n`. Clarabel's dual variable of that cone is `svec(X)` of the primal `[P2]`
 /// (stationarity `A^T z = -c` is exactly `X_ii = I`).
 fn solve_dual(
     n: usize,
@@ -259,10 +259,10 @@ fn solve_dual(
     })
 }
 
-/// Primal form `[S2]`: `x` = upper triangle of `X` (unscaled entries), cost `svec`-weighted
+/// Primal form `[P2]`: `x` = upper triangle of `X` (unscaled entries), cost `svec`-weighted
 /// `Q/s` so `c'x = tr(Q X / s)`; `6n` equality rows `X_ii[a,b] = delta_ab` (zero cone) and
 /// `-diag(w) x + s = 0`, `s = svec(X)` in the PSD cone. Multipliers from the equality duals
-/// `y`: `Lambda_aa = -y`, `Lambda_ab = -y/2` (derivation in `paper-notes/sdp.md` `[S3]`).
+/// `y`: `Lambda_aa = -y`, `Lambda_ab = -y/2` (derivation in `paper-notes/sdp.md` `[P3]`).
 fn solve_primal(
     n: usize,
     q_upper: &[(usize, usize, f64)],
@@ -327,7 +327,7 @@ fn solve_primal(
     })
 }
 
-/// Rounding `[S5]`: `Y = V_3 diag(sqrt(lambda_1..3))` from the top eigenpairs of `X`; if most
+/// Rounding `[P5]`: `Y = V_3 diag(sqrt(lambda_1..3))` from the top eigenpairs of `X`; if most
 /// blocks `Y_i` have negative determinant, flip the third column (global reflection); project
 /// each block to SO(3); fix the gauge `R_0 = I`. Returns the rotations and the top eigenvalues.
 fn round(x: &Mat<f64>, n: usize) -> Result<(Vec<Rotation>, Vec<f64>)> {

@@ -1,5 +1,5 @@
 //! The symmetric-matrix vectorisation used by Clarabel's `PSDTriangleConeT` (`paper-notes/sdp.md`,
-//! `[S1]`): the upper triangle, column by column, off-diagonal entries multiplied by `sqrt(2)`,
+//! `[P1]`): the upper triangle, column by column, off-diagonal entries multiplied by `sqrt(2)`,
 //! so that `<svec(A), svec(B)> = tr(A B)` for symmetric `A`, `B`.
 
 use faer::{Mat, MatRef};
@@ -65,7 +65,7 @@ mod tests {
 
     #[test]
     fn inner_product_is_trace() {
-        // <svec A, svec B> = tr(AB) is the defining property [S1].
+        // <svec A, svec B> = tr(AB) is the defining property [P1].
         let a = Mat::from_fn(4, 4, |i, j| (i + j) as f64 + 0.5 * (i * j) as f64);
         let b = Mat::from_fn(4, 4, |i, j| 1.0 / (1.0 + i as f64 + j as f64));
         let dot: f64 = svec(a.as_ref())
