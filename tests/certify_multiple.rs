@@ -12,86 +12,31 @@ use rotavg::certificate::Verdict;
 use rotavg::certify::eigen::gamma;
 use rotavg::certify::multiple::{
     CertifySettings, Verification, VerifiedBound, certificate_matrix, certify_multiple,
-    laplacian_times, lower_bound_from_multipliers, multipliers, stationarity_residual,
+    lower_bound_from_multipliers, multipliers, stationarity_residual,
 };
 use rotavg::multiple::laplacian::connection_laplacian;
 use rotavg::multiple::synthetic::{SyntheticGraph, z_cycle};
-use rotavg::multiple::{MultipleProblem, fix_gauge};
-use rotavg::so3::{exp, random_rotation, vee};
+use rotavg::multiple::{
+    Initialisation, MultipleProblem, MultipleSettings, fix_gauge, solve_multiple,
+};
+use rotavg::so3::{exp, random_rotation};
 
-// ---------------------------------------------------------------------------------------------
-// A minimal private local optimiser (Riemannian gradient descent with Barzilai-Borwein steps and
-// Armijo backtracking on SO(3)^n, left perturbation R_i <- exp(w_i) R_i). The gradient of
-// f = tr(Y^T Q Y) with respect to w_i is g_i = 4 vee(skew((Q Y)_i R_i^T)).
-// ---------------------------------------------------------------------------------------------
-
-fn gradient(p: &MultipleProblem, rs: &[Rotation]) -> Vec<Vector3<f64>> {
-    laplacian_times(p, rs)
-        .iter()
-        .zip(rs)
-        .map(|(g, r)| {
-            let m = g * r.matrix().transpose();
-            4.0 * vee(&(0.5 * (m - m.transpose())))
-        })
-        .collect()
-}
-
-fn retract(rs: &[Rotation], dir: &[Vector3<f64>], t: f64) -> Vec<Rotation> {
-    rs.iter()
-        .zip(dir)
-        .map(|(r, d)| {
-            let mut x = exp(&(d * t)) * r;
-            x.renormalize();
-            x
-        })
-        .collect()
-}
-
-/// Returns (rotations, cost, gradient norm).
+/// Local solutions from the crate's own chordal solver (Newton-LM on SO(3)^n) started at
+/// `start`, to relative gradient `1e-13` (`||grad|| / sum w`). Returns (rotations, cost, gradient
+/// norm). `_max_iter` and `_grad_tol` are kept from the earlier private optimiser's signature.
 fn local_solve(
     p: &MultipleProblem,
     start: &[Rotation],
-    max_iter: usize,
-    grad_tol: f64,
+    _max_iter: usize,
+    _grad_tol: f64,
 ) -> (Vec<Rotation>, f64, f64) {
-    let mut rs = start.to_vec();
-    let mut f = p.chordal_cost(&rs);
-    let mut g = gradient(p, &rs);
-    let mut step = 1e-2;
-    let mut prev: Option<(Vec<Vector3<f64>>, f64)> = None;
-    for _ in 0..max_iter {
-        let gn2: f64 = g.iter().map(|v| v.norm_squared()).sum();
-        if gn2.sqrt() <= grad_tol {
-            break;
-        }
-        if let Some((gp, tp)) = &prev {
-            // BB1 step on the tangent differences (vector-transport ignored: a heuristic)
-            let s2 = tp * tp * gp.iter().map(|v| v.norm_squared()).sum::<f64>();
-            let sy: f64 = -tp * gp.iter().zip(&g).map(|(a, b)| a.dot(&(b - a))).sum::<f64>();
-            if sy > 0.0 {
-                step = (s2 / sy).clamp(1e-8, 1.0);
-            }
-        }
-        let mut t = step;
-        let dir: Vec<Vector3<f64>> = g.iter().map(|v| -v).collect();
-        let mut accepted = None;
-        for _ in 0..60 {
-            let cand = retract(&rs, &dir, t);
-            let fc = p.chordal_cost(&cand);
-            if fc <= f - 1e-4 * t * gn2 {
-                accepted = Some((cand, fc));
-                break;
-            }
-            t *= 0.5;
-        }
-        let Some((cand, fc)) = accepted else { break };
-        rs = cand;
-        f = fc;
-        prev = Some((g.clone(), t));
-        g = gradient(p, &rs);
-    }
-    let gn = g.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt();
-    (rs, f, gn)
+    let settings = MultipleSettings {
+        init: Initialisation::Given(start.to_vec()),
+        gradient_tolerance: 1e-13,
+        ..Default::default()
+    };
+    let s = solve_multiple(p, &settings).expect("connected graph");
+    (s.rotations, s.chordal_cost, s.gradient_norm)
 }
 
 fn dense_q(p: &MultipleProblem) -> DMatrix<f64> {
