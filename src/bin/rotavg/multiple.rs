@@ -274,7 +274,11 @@ pub fn write_plot(
     let notes = certificate
         .map(rotavg::plot::certificate_annotations)
         .unwrap_or_default();
-    let title = format!("{input}: residual angles of {} edges", deg.len());
+    // the file name only: a long path would not fit above the histogram
+    let name = Path::new(input)
+        .file_name()
+        .map_or_else(|| input.to_string(), |f| f.to_string_lossy().into_owned());
+    let title = format!("{name}: residual angles of {} edges", deg.len());
     rotavg::plot::write_svg(
         path,
         &rotavg::plot::residual_histogram_svg(&deg, &title, &notes),
