@@ -24,6 +24,7 @@ pub mod conjugate;
 pub mod error;
 pub mod io;
 pub mod multiple;
+pub mod plot;
 pub mod relax;
 pub mod report;
 pub mod serde_rot;

@@ -35,6 +35,10 @@ pub struct Args {
     /// Bounding methods for multiple problems when the dual certificate fails (`none` = dual).
     #[arg(long, value_enum, default_value_t = CertifyArg::Auto)]
     pub certify: CertifyArg,
+    /// Write an SVG figure (multiple problems only): histogram of the residual angles
+    /// (degrees) and the certificate.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<String>,
     #[command(flatten)]
     pub common: Common,
 }
@@ -99,6 +103,12 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let (ename, etext) = read_input(&args.estimate)?;
     let estimate = read_estimate(&etext, &ename, &options)?;
     let kind = kind_of(&name, &text, args.format)?;
+    if args.plot.is_some() && !matches!(kind, Kind::Multiple) {
+        return Err(Error::InvalidSettings {
+            name: "plot".into(),
+            reason: "--plot is available for multiple problems only".into(),
+        });
+    }
     let cert: Certificate;
     let json;
     match kind {
@@ -138,6 +148,15 @@ pub fn run(args: &Args) -> Result<Outcome> {
             );
             let c = certify_multiple_estimate(&graph.problem, &rotations, &settings)?;
             let cost = graph.problem.chordal_cost(&rotations);
+            if let Some(path) = &args.plot {
+                crate::multiple::write_plot(
+                    path,
+                    &graph.problem,
+                    &rotations,
+                    Some(&c.certificate),
+                    &args.input,
+                )?;
+            }
             json = serde_json::json!({
                 "problem": "multiple",
                 "num_rotations": n,

@@ -135,6 +135,9 @@ pub struct Args {
     /// in `.g2o`.
     #[arg(long, value_name = "FILE")]
     pub output: Option<String>,
+    /// Write an SVG figure: histogram of the residual angles (degrees) and the certificate.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<String>,
     #[command(flatten)]
     pub common: Common,
 }
@@ -255,6 +258,33 @@ fn write_file(path: &str, text: &str) -> Result<()> {
     })
 }
 
+/// Write the `--plot` SVG: residual-angle histogram (degrees) and the certificate facts.
+pub fn write_plot(
+    path: &str,
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    certificate: Option<&rotavg::Certificate>,
+    input: &str,
+) -> Result<()> {
+    let deg: Vec<f64> = problem
+        .residual_angles(rotations)
+        .iter()
+        .map(|a| a.to_degrees())
+        .collect();
+    let notes = certificate
+        .map(rotavg::plot::certificate_annotations)
+        .unwrap_or_default();
+    // the file name only: a long path would not fit above the histogram
+    let name = Path::new(input)
+        .file_name()
+        .map_or_else(|| input.to_string(), |f| f.to_string_lossy().into_owned());
+    let title = format!("{name}: residual angles of {} edges", deg.len());
+    rotavg::plot::write_svg(
+        path,
+        &rotavg::plot::residual_histogram_svg(&deg, &title, &notes),
+    )
+}
+
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
     let options = read_options(&args.common);
@@ -352,6 +382,15 @@ pub fn run(args: &Args) -> Result<Outcome> {
             &output_text(path, &graph.problem, &sol.rotations, &graph.node_ids),
         )?;
     }
+    if let Some(path) = &args.plot {
+        write_plot(
+            path,
+            &graph.problem,
+            &sol.rotations,
+            est.certificate.as_ref(),
+            &args.input,
+        )?;
+    }
     let verdict = est.certificate.as_ref().map(|c| c.verdict);
     if args.common.json {
         let out = serde_json::json!({
@@ -400,6 +439,9 @@ pub fn run(args: &Args) -> Result<Outcome> {
         }
         if let Some(p) = &args.output {
             println!("estimate written to {p}");
+        }
+        if let Some(p) = &args.plot {
+            println!("figure written to {p}");
         }
     }
     Ok(Outcome { verdict })
