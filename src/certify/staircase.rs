@@ -239,11 +239,11 @@ pub fn staircase_bound(
         let mut alpha = 1.0;
         let mut next = None;
         for _ in 0..40 {
-            if let Some(c) = lift(alpha) {
-                if lifted_cost(problem, &c) < f {
-                    next = Some(c);
-                    break;
-                }
+            if let Some(c) = lift(alpha)
+                && lifted_cost(problem, &c) < f
+            {
+                next = Some(c);
+                break;
             }
             alpha *= 0.5;
         }

@@ -602,18 +602,18 @@ pub fn average_multiple(
         ) {
             Some(true) => {
                 let polished = run_sdp(problem, settings, &certify, &mut details, &mut best)?;
-                if let Some(p) = polished {
-                    if p.chordal_cost < solution.chordal_cost {
-                        solution = p;
-                        details.improved_by_sdp = true;
-                        run_dual(
-                            problem,
-                            &solution.rotations,
-                            &certify,
-                            &mut details,
-                            &mut best,
-                        )?;
-                    }
+                if let Some(p) = polished
+                    && p.chordal_cost < solution.chordal_cost
+                {
+                    solution = p;
+                    details.improved_by_sdp = true;
+                    run_dual(
+                        problem,
+                        &solution.rotations,
+                        &certify,
+                        &mut details,
+                        &mut best,
+                    )?;
                 }
             }
             Some(false) => run_staircase(
