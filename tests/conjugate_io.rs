@@ -229,3 +229,12 @@ fn real_eth_residuals() {
     // data README 3.4: median 0.6 deg with nearest-timestamp matching; interpolation does no worse.
     assert!(med < 1.0);
 }
+
+/// Regression: a truncated Tabb robot file used to give an error without a line number.
+#[test]
+fn truncated_tabb_file_error_names_the_last_line() {
+    let text = "2\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n\n1 0 0 0\n";
+    let err = read_tabb_robot(text, "robot_cali.txt", 1e-6).unwrap_err();
+    let msg = err.to_string();
+    assert!(msg.starts_with("robot_cali.txt:7: "), "{msg}");
+}

@@ -131,7 +131,7 @@ pub fn read_tabb_robot(text: &str, file: &str, tol: f64) -> Result<Vec<Pose>> {
             let (t, line) = it.next().ok_or_else(|| {
                 Error::parse(
                     Some(file),
-                    None,
+                    Some(text.lines().count().max(1)),
                     format!("end of file inside pose {k} of {n}"),
                 )
             })?;
@@ -205,7 +205,7 @@ pub fn read_tabb_camera(text: &str, file: &str, tol: f64) -> Result<Vec<Pose>> {
     if out.len() != n {
         return Err(Error::parse(
             Some(file),
-            None,
+            Some(text.lines().count().max(1)),
             format!("header says {n} images, found {}", out.len()),
         ));
     }
