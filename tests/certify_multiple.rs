@@ -593,3 +593,52 @@ fn external_multipliers_bound_a_non_global_estimate() {
     let own = certify_multiple(&p, &y1, &CertifySettings::default()).unwrap();
     assert!(lb > own.certificate.lower_bound.unwrap());
 }
+
+/// The scalar comparison [D13] against the 3n x 3n Cholesky verification on a random graph
+/// large enough for the default settings to try it first (2000 nodes, 6000 edges, noise 0.05
+/// rad): both certify, both bounds are <= the cost, and they agree to the gap tolerance.
+#[test]
+fn scalar_comparison_agrees_with_the_cholesky_verification() {
+    use rotavg::multiple::{MultipleSettings, solve_multiple};
+    let (p, _) = SyntheticGraph {
+        num_rotations: 2000,
+        num_edges: 6000,
+        noise_sigma: 0.05,
+        seed: 11,
+        ..Default::default()
+    }
+    .generate();
+    let sol = solve_multiple(
+        &p,
+        &MultipleSettings {
+            gradient_tolerance: 1e-12,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let fast = certify_multiple(&p, &sol.rotations, &CertifySettings::default()).unwrap();
+    let full = certify_multiple(
+        &p,
+        &sol.rotations,
+        &CertifySettings {
+            scalar_comparison_above: usize::MAX,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    println!("scalar: {fast}\nfull: {full}");
+    assert_eq!(fast.bound.verification, Verification::ScalarComparison);
+    assert_eq!(full.bound.verification, Verification::Cholesky);
+    assert!(fast.certificate.is_certified() && full.certificate.is_certified());
+    let cost = fast.certificate.upper_bound;
+    for c in [&fast, &full] {
+        assert!(c.certificate.lower_bound.unwrap() <= cost);
+    }
+    let tol = 1e-6 * cost;
+    assert!(
+        (fast.certificate.lower_bound.unwrap() - full.certificate.lower_bound.unwrap()).abs()
+            <= tol
+    );
+    // the scalar factor is far smaller than the 3n one
+    assert!(fast.bound.factor_nonzeros * 4 < full.bound.factor_nonzeros);
+}

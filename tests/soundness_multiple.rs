@@ -13,7 +13,7 @@
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rotavg::Rotation;
-use rotavg::certify::multiple::{CertifySettings, certify_multiple};
+use rotavg::certify::multiple::{CertifySettings, Verification, certify_multiple};
 use rotavg::multiple::synthetic::SyntheticGraph;
 use rotavg::multiple::{Initialisation, MultipleProblem, MultipleSettings, solve_multiple};
 use rotavg::so3::random_rotation;
@@ -37,11 +37,26 @@ struct Tally {
     certified: usize,
     non_global: usize,
     random_points: usize,
+    /// bounds verified by the scalar comparison [D13]
+    scalar: usize,
 }
 
 fn campaign(seed: u64, instances: usize, outlier_fraction: f64) -> Tally {
+    campaign_with(
+        seed,
+        instances,
+        outlier_fraction,
+        CertifySettings::default(),
+    )
+}
+
+fn campaign_with(
+    seed: u64,
+    instances: usize,
+    outlier_fraction: f64,
+    settings: CertifySettings,
+) -> Tally {
     let mut rng = StdRng::seed_from_u64(seed);
-    let settings = CertifySettings::default();
     let tol = settings.tolerance;
     let mut t = Tally::default();
     for inst in 0..instances {
@@ -69,6 +84,9 @@ fn campaign(seed: u64, instances: usize, outlier_fraction: f64) -> Tally {
             let c = certify_multiple(&p, rs, &settings).expect("valid input");
             let lb = c.certificate.lower_bound.expect("a bound always exists");
             assert!(lb.is_finite());
+            if c.bound.verification == Verification::ScalarComparison {
+                t.scalar += 1;
+            }
             assert!(
                 lb <= best + fp_tol,
                 "instance {inst} (n={n}, m={m}, noise {noise_deg} deg): lower bound {lb} > best cost {best}"
@@ -134,4 +152,19 @@ fn soundness_thirty_percent_outliers() {
         t.non_global > 0,
         "the campaign should meet non-global local minima"
     );
+}
+
+/// The same campaign with the scalar comparison [D13] tried first on every instance (by default
+/// it only runs on graphs whose 3n x 3n factor would be large): its bounds face the same checks.
+#[test]
+fn soundness_scalar_comparison_forced() {
+    let settings = CertifySettings {
+        scalar_comparison_above: 0,
+        ..Default::default()
+    };
+    let t = campaign_with(2027, 600, 0.1, settings);
+    println!("soundness (scalar comparison forced, 10% outliers): {t:?}");
+    assert_eq!(t.instances, 600);
+    assert!(t.scalar > 100, "the scalar comparison must be exercised");
+    assert!(t.certified > 0);
 }

@@ -5,11 +5,14 @@
 //!   verified lower bound from any multipliers (used for SDP multipliers too).
 //! - [`eigen`]: sparse extreme-eigenvalue machinery: verified lower bounds on `lambda_min` by
 //!   sparse Cholesky with a rigorous floating-point margin, and Lanczos estimates.
+//! - [`scalar`]: the scalar comparison `[D13]`: a proof that `S` is positive semidefinite from one
+//!   factorisation of an `n x n` scalar matrix (fast on graphs whose `3n x 3n` factor fills).
 //! - [`staircase`]: a Riemannian staircase (rank-lifted Burer-Monteiro descent) whose verified
 //!   multipliers bound the SDP optimum when the estimate's own certificate fails.
 
 pub mod eigen;
 pub mod multiple;
+pub mod scalar;
 pub mod staircase;
 
 pub use multiple::{
