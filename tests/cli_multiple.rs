@@ -146,8 +146,9 @@ fn multiple_json_output_and_certify_round_trip() {
         })
         .collect();
     rs[5] = serde_json::json!(prod);
+    // (a name of its own: tests in this file run in parallel and share the temp directory)
     let bad = tmp(
-        "bad.json",
+        "perturbed_estimate.json",
         &serde_json::json!({ "rotations": rs }).to_string(),
     );
     let out = run(&["certify", g, "--estimate", bad.to_str().unwrap(), "--json"]);
