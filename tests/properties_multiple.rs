@@ -97,6 +97,19 @@ fn reverse_some(p: &MultipleProblem, flip: &[bool]) -> MultipleProblem {
     MultipleProblem::new(p.num_rotations(), edges).unwrap()
 }
 
+/// Every measurement conjugated: `R_ij -> H R_ij H^T`.
+fn conjugate_measurements(p: &MultipleProblem, h: &Rotation) -> MultipleProblem {
+    let edges = p
+        .edges()
+        .iter()
+        .map(|e| Edge {
+            rotation: h * e.rotation * h.inverse(),
+            ..e.clone()
+        })
+        .collect();
+    MultipleProblem::new(p.num_rotations(), edges).unwrap()
+}
+
 fn scale_weights(p: &MultipleProblem, c: f64) -> MultipleProblem {
     let edges = p
         .edges()
@@ -157,7 +170,9 @@ proptest! {
     ///   the sum;
     /// * reversal `(i, j, R_ij) -> (j, i, R_ij^T)`: `||R_i - R_ij^T R_j|| = ||R_ij^T (R_ij R_i -
     ///   R_j)|| = ||R_j - R_ij R_i||`, so the cost *function* is unchanged;
-    /// * weights `w -> c w` scale every term, so `f -> c f`.
+    /// * weights `w -> c w` scale every term, so `f -> c f`;
+    /// * conjugated measurements `H R_ij H^T` with the estimate `H R_i`:
+    ///   `||H R_j - H R_ij H^T H R_i|| = ||R_j - R_ij R_i||`, so `f'({H R_i}) = f({R_i})`.
     #[test]
     fn chordal_cost_symmetries(
         seed in any::<u64>(), n in 2usize..=12, extra in 0usize..24, sigma in 0.0f64..0.5,
@@ -178,6 +193,9 @@ proptest! {
         prop_assert!(rel_close(reverse_some(&p, &flip).chordal_cost(&rs), f, 1e-13));
         let c = 10f64.powf(log_c);
         prop_assert!(rel_close(scale_weights(&p, c).chordal_cost(&rs), c * f, 1e-13));
+        let h = random_rotation(&mut rng);
+        let hrs: Vec<Rotation> = rs.iter().map(|r| h * r).collect();
+        prop_assert!(rel_close(conjugate_measurements(&p, &h).chordal_cost(&hrs), f, 1e-13));
     }
 
     /// Any proven lower bound is at most the global minimum, which is at most the cost of any
@@ -202,24 +220,26 @@ proptest! {
 proptest! {
     #![proptest_config(config(32))]
 
-    /// Solver-level relabelling/reversal invariance: by the identities above the relabelled and
-    /// partly reversed problem has the cost function `f'(R') = f(R)` with `R'_{pi(i)} = R_i`, so
-    /// its minimum is the same and its minimiser is the relabelled minimiser (up to the gauge;
-    /// low noise, sigma <= 0.1, makes the minimiser unique up to gauge).
+    /// Solver-level relabelling/reversal/conjugation invariance: by the identities above the
+    /// relabelled, partly reversed problem with measurements `H R_ij H^T` has the cost function
+    /// `f'(R') = f(R)` with `R'_{pi(i)} = H R_i`, so its minimum is the same and its minimiser
+    /// is the mapped minimiser (up to the gauge; low noise, sigma <= 0.1, makes the minimiser
+    /// unique up to gauge).
     #[test]
-    fn solution_follows_relabelling_and_edge_reversal(
+    fn solution_follows_relabelling_reversal_and_conjugation(
         seed in any::<u64>(), n in 3usize..=12, extra in 0usize..20, sigma in 0.0f64..0.1,
         flip in prop::collection::vec(any::<bool>(), 1..8),
     ) {
         let (p, _) = graph(seed, n, extra, sigma);
         let mut rng = StdRng::seed_from_u64(seed.wrapping_add(3));
         let perm = permutation(n, &mut rng);
-        let q = reverse_some(&relabel(&p, &perm), &flip);
+        let h = random_rotation(&mut rng);
+        let q = conjugate_measurements(&reverse_some(&relabel(&p, &perm), &flip), &h);
         let a = solve_multiple(&p, &MultipleSettings::default()).unwrap();
         let b = solve_multiple(&q, &MultipleSettings::default()).unwrap();
         prop_assert!(a.report.termination.is_converged() && b.report.termination.is_converged());
         prop_assert!((a.cost - b.cost).abs() <= 1e-9 * (1e-9 + a.cost), "{} vs {}", a.cost, b.cost);
-        let back: Vec<Rotation> = (0..n).map(|i| b.rotations[perm[i]]).collect();
+        let back: Vec<Rotation> = (0..n).map(|i| h.inverse() * b.rotations[perm[i]]).collect();
         prop_assert!(max_gauge_error(&a.rotations, &back) < 1e-6, "{}", max_gauge_error(&a.rotations, &back));
     }
 
