@@ -14,10 +14,10 @@ use rand::{Rng, SeedableRng};
 use rotavg::Rotation;
 use rotavg::conjugate::synthetic::random_instance;
 use rotavg::conjugate::{
-    AverageSettings, ConjugatePair, ConjugateProblem, ConjugateSettings, ConjugateSolution,
-    SdpSettings, average_conjugate, certify_conjugate, solve_conjugate,
+    AverageSettings, ConjugatePair, ConjugateProblem, ConjugateSettings, ConjugateSolution, Loss,
+    SdpSettings, average_conjugate, certify_conjugate, conjugate_cost, solve_conjugate,
 };
-use rotavg::so3::{angle_between, random_rotation};
+use rotavg::so3::{Metric, angle_between, random_rotation};
 
 /// Deterministic proptest configuration: a fixed RNG seed (so a failure reproduces and the suite
 /// is not flaky) unless `PROPTEST_RNG_SEED` is set to explore other cases; no regression files.
@@ -130,6 +130,17 @@ proptest! {
         prop_assert!(rel_close(permuted(&p, &mut rng).chordal_cost(&s), g, 1e-13));
         let c = 10f64.powf(log_c);
         prop_assert!(rel_close(scaled(&p, c).chordal_cost(&s), c * g, 1e-13));
+        // every distance d(R_i, S^T L_i S) is bi-invariant ([C2]) and
+        // (B R_i B^T)^T (A S B^T)^T (A L_i A^T) (A S B^T) = B R_i^T S^T L_i S B^T, so the
+        // cost under every metric and loss obeys the conjugation law, not only g
+        let q = conjugated(&p, &a, &b);
+        let s2 = a * s * b.inverse();
+        for metric in [Metric::Chordal, Metric::Geodesic, Metric::Quaternion] {
+            for loss in [Loss::Squared, Loss::L1, Loss::Huber { delta: 0.1 }, Loss::Cauchy { scale: 0.3 }] {
+                let x = conjugate_cost(&p, &s, metric, loss);
+                prop_assert!(rel_close(conjugate_cost(&q, &s2, metric, loss), x, 1e-12), "{metric} {loss:?}");
+            }
+        }
         // the residual angles theta(R_i, S^T L_i S) are invariant under conjugation too
         for (x, y) in p.residual_angles(&s).iter().zip(conjugated(&p, &a, &b).residual_angles(&(a * s * b.inverse()))) {
             prop_assert!((x - y).abs() < 1e-12);

@@ -156,6 +156,10 @@ proptest! {
         prop_assert!((angle_between(&(a * r), &(a * s)) - d).abs() < 1e-13);
         prop_assert!((angle_between(&(r * b), &(s * b)) - d).abs() < 1e-13);
         prop_assert!(d <= angle_between(&r, &t) + angle_between(&t, &s) + 1e-13);
+        // the chordal and quaternion distances are metrics too (norms of differences)
+        for m in [Metric::Chordal, Metric::Quaternion] {
+            prop_assert!(m.distance(&r, &s) <= m.distance(&r, &t) + m.distance(&t, &s) + 1e-13, "{m}");
+        }
         prop_assert!(angle_between(&r, &r) < 1e-14, "{}", angle_between(&r, &r));
     }
 
@@ -255,6 +259,21 @@ proptest! {
             let near = p * exp(&(rotavg::so3::random_unit_vector(&mut rng) * 1e-3));
             prop_assert!(dist <= (m - near.matrix()).norm() + 1e-12);
         }
+    }
+
+    /// The JSON layout is row-major (SPEC section 5): `rows[i][j] = R_ij`, and reading the rows
+    /// back validates and returns the same rotation (re-projection of an exact rotation is the
+    /// identity up to rounding, [C5]).
+    #[test]
+    fn row_major_round_trip(r in rotation()) {
+        let rows = rotavg::so3::rotation_to_rows(&r);
+        for (i, row) in rows.iter().enumerate() {
+            for (j, x) in row.iter().enumerate() {
+                prop_assert_eq!(*x, r.matrix()[(i, j)]);
+            }
+        }
+        let back = rotavg::so3::rotation_from_rows(&rows, DEFAULT_ROTATION_TOLERANCE, "r").unwrap();
+        prop_assert!((back.matrix() - r.matrix()).norm() < 1e-14);
     }
 
     /// [C6]: `rotation_from_matrix` rejects what is not a rotation: a reflection `R F` (det -1,
