@@ -3,7 +3,7 @@
 //! `s = vec(S)` is **column-major**: `s[3c + r] = S[r][c]` (nalgebra's storage order), and
 //! `z = [s; y]` (index 9 is the homogenising `y`). The cost is `g(S) = s^T M s` with
 //! `M = sum_i w_i (R_i^T (x) I - I (x) L_i)^T (R_i^T (x) I - I (x) L_i)` `[H2]`. The QCQP
-//! `min z^T blkdiag(M, 0) z` subject to `z^T A_k z = b_k` for the 31 constraints of
+//! `min z^T blkdiag(M, 0) z` subject to `z^T A_k z = b_k` for the 22 constraints of
 //! [`constraint_matrices`] `[H3]` is relaxed to `min tr(C Z)`, `Z` PSD 10x10, and solved with
 //! Clarabel. The lower bound is recomputed from the multipliers with an independent dense
 //! eigenvalue computation `[H8]`; Clarabel's objective is never used as a bound.
@@ -77,12 +77,13 @@ fn add_bilinear(a: &mut Mat10, i: usize, j: usize, coef: f64) {
     }
 }
 
-/// The 31 constraints `[H3]`, in this order: `y^2 = 1`; `S^T S = y^2 I` (6, entries `a <= b`);
-/// `S S^T = y^2 I` (6); `col_a x col_b = y col_c` for cyclic `(a, b, c)` (9); the row versions
-/// `row_a x row_b = y row_c` (9). Every `S` in SO(3) with `y = 1` satisfies all of them.
+/// The 22 constraints `[H3]`, in this order: `y^2 = 1`; `S^T S = y^2 I` (6, entries `a <= b`);
+/// `S S^T = y^2 I` (6); `col_a x col_b = y col_c` for cyclic `(a, b, c)` (9), i.e.
+/// `cof(S) = y S`. The row versions `row_a x row_b = y row_c` are the same 9 polynomials
+/// (`cof(S)_ck = y S_ck`) and are not repeated. Every `S` in SO(3) with `y = 1` satisfies all.
 pub fn constraint_matrices() -> Vec<QcqpConstraint> {
     let y = Y_INDEX;
-    let mut out = Vec::with_capacity(31);
+    let mut out = Vec::with_capacity(22);
     let mut a = Mat10::zeros();
     a[(y, y)] = 1.0;
     out.push(QcqpConstraint {
@@ -115,26 +116,23 @@ pub fn constraint_matrices() -> Vec<QcqpConstraint> {
             }
         }
     }
-    // Handedness: (u_a x u_b)[k] = u_a[k+1] u_b[k+2] - u_a[k+2] u_b[k+1] = y u_c[k].
-    for rows in [false, true] {
-        for (ia, ib, ic) in [(0, 1, 2), (1, 2, 0), (2, 0, 1)] {
-            for k in 0..3 {
-                // element t of column/row `v`
-                let e = |v: usize, t: usize| {
-                    if rows { s_index(v, t) } else { s_index(t, v) }
-                };
-                let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
-                let mut a = Mat10::zeros();
-                add_bilinear(&mut a, e(ia, k1), e(ib, k2), 1.0);
-                add_bilinear(&mut a, e(ia, k2), e(ib, k1), -1.0);
-                add_bilinear(&mut a, y, e(ic, k), -1.0);
-                let what = if rows { "row" } else { "col" };
-                out.push(QcqpConstraint {
-                    matrix: a,
-                    rhs: 0.0,
-                    name: format!("({what}_{ia} x {what}_{ib})[{k}] = y {what}_{ic}[{k}]"),
-                });
-            }
+    // Handedness: (col_a x col_b)[k] = col_a[k+1] col_b[k+2] - col_a[k+2] col_b[k+1] = y col_c[k],
+    // i.e. cof(S)_{kc} = y S_{kc}. The row version (row_a x row_b)[k] = y row_c[k] states
+    // cof(S)_{ck} = y S_{ck}: the same 9 polynomials, so it is not added again [H3].
+    for (ia, ib, ic) in [(0, 1, 2), (1, 2, 0), (2, 0, 1)] {
+        for k in 0..3 {
+            // element t of column v
+            let e = |v: usize, t: usize| s_index(t, v);
+            let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+            let mut a = Mat10::zeros();
+            add_bilinear(&mut a, e(ia, k1), e(ib, k2), 1.0);
+            add_bilinear(&mut a, e(ia, k2), e(ib, k1), -1.0);
+            add_bilinear(&mut a, y, e(ic, k), -1.0);
+            out.push(QcqpConstraint {
+                matrix: a,
+                rhs: 0.0,
+                name: format!("(col_{ia} x col_{ib})[{k}] = y col_{ic}[{k}]"),
+            });
         }
     }
     out
