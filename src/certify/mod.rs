@@ -5,11 +5,14 @@
 //!   verified lower bound from any multipliers (used for SDP multipliers too).
 //! - [`eigen`]: sparse extreme-eigenvalue machinery: verified lower bounds on `lambda_min` by
 //!   sparse Cholesky with a rigorous floating-point margin, and Lanczos estimates.
+//! - [`spectrum`]: the `k` smallest eigenvalues of a certificate matrix (estimates, for
+//!   figures; never bounds).
 //! - [`staircase`]: a Riemannian staircase (rank-lifted Burer-Monteiro descent) whose verified
 //!   multipliers bound the SDP optimum when the estimate's own certificate fails.
 
 pub mod eigen;
 pub mod multiple;
+pub mod spectrum;
 pub mod staircase;
 
 pub use multiple::{
