@@ -7,6 +7,8 @@
 
 use faer::Side;
 use faer::sparse::SparseColMat;
+use rand::SeedableRng;
+use rand::rngs::StdRng;
 use rotavg::certify::multiple::{
     CertifySettings, certificate_matrix, lower_bound_from_multipliers, multipliers,
 };
@@ -16,8 +18,6 @@ use rotavg::certify::spectrum::{
 use rotavg::multiple::MultipleProblem;
 use rotavg::multiple::synthetic::SyntheticGraph;
 use rotavg::so3::random_rotation;
-use rand::SeedableRng;
-use rand::rngs::StdRng;
 
 /// All eigenvalues of a sparse symmetric matrix, ascending, by faer's dense solver.
 fn faer_eigenvalues(s: &SparseColMat<usize, f64>) -> Vec<f64> {
@@ -164,11 +164,25 @@ fn invalid_settings_and_tiny_matrices() {
     let e = certificate_spectrum(&p, &l, &SpectrumSettings::default(), None).unwrap();
     assert_eq!(e.values.len(), 6);
     let w = p.edges()[0].weight;
-    assert_close(&e.values, &[0.0, 0.0, 0.0, 2.0 * w, 2.0 * w, 2.0 * w], 1e-12, "n=2");
+    assert_close(
+        &e.values,
+        &[0.0, 0.0, 0.0, 2.0 * w, 2.0 * w, 2.0 * w],
+        1e-12,
+        "n=2",
+    );
     for bad in [
-        SpectrumSettings { count: 0, ..Default::default() },
-        SpectrumSettings { block_size: 0, ..Default::default() },
-        SpectrumSettings { tolerance: f64::NAN, ..Default::default() },
+        SpectrumSettings {
+            count: 0,
+            ..Default::default()
+        },
+        SpectrumSettings {
+            block_size: 0,
+            ..Default::default()
+        },
+        SpectrumSettings {
+            tolerance: f64::NAN,
+            ..Default::default()
+        },
     ] {
         assert!(certificate_spectrum(&p, &l, &bad, None).is_err());
     }

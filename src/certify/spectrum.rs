@@ -94,7 +94,7 @@ pub struct SpectrumEstimate {
 }
 
 impl SpectrumSettings {
-    fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         let bad = |name: &str, reason: &str| {
             Err(Error::InvalidSettings {
                 name: name.into(),
@@ -235,7 +235,11 @@ pub fn dense_eigenvalues(m: &DMatrix<f64>) -> Vec<f64> {
         return Vec::new();
     }
     let sym = (m + m.transpose()) * 0.5;
-    let mut v: Vec<f64> = SymmetricEigen::new(sym).eigenvalues.iter().copied().collect();
+    let mut v: Vec<f64> = SymmetricEigen::new(sym)
+        .eigenvalues
+        .iter()
+        .copied()
+        .collect();
     v.sort_by(f64::total_cmp);
     v
 }
@@ -314,9 +318,8 @@ fn block_lanczos(
     let mem_cap = (40_000_000 / n.max(1)).max(k + b);
     let max_m = settings.max_subspace.max(k + b).min(mem_cap).min(n);
     let mut rng = StdRng::seed_from_u64(settings.seed);
-    let random = |rng: &mut StdRng| -> Vec<f64> {
-        (0..n).map(|_| rng.random::<f64>() - 0.5).collect()
-    };
+    let random =
+        |rng: &mut StdRng| -> Vec<f64> { (0..n).map(|_| rng.random::<f64>() - 0.5).collect() };
     let mut basis: Vec<Vec<f64>> = Vec::new();
     // h[j][i] = v_i^T op v_j for i <= j (symmetric)
     let mut h: Vec<Vec<f64>> = Vec::new();
@@ -396,7 +399,11 @@ fn rayleigh_ritz(
     let mut idx: Vec<usize> = (0..m).collect();
     idx.sort_by(|&p, &q| {
         let (a, b) = (eig.eigenvalues[p], eig.eigenvalues[q]);
-        if invert { b.total_cmp(&a) } else { a.total_cmp(&b) }
+        if invert {
+            b.total_cmp(&a)
+        } else {
+            a.total_cmp(&b)
+        }
     });
     let mut pairs: Vec<(f64, f64)> = Vec::with_capacity(k);
     let mut y = vec![0.0; n];
