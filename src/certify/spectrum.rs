@@ -56,7 +56,7 @@ impl Default for SpectrumSettings {
             block_size: 3,
             max_subspace: 150,
             tolerance: 1e-8,
-            seed: 0x5eed_e16,
+            seed: 0x05ee_de16,
         }
     }
 }
