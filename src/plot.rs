@@ -14,6 +14,7 @@ use crate::Certificate;
 use crate::certify::spectrum::SpectrumMethod;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// Most bins a histogram gets.
 pub const MAX_BINS: usize = 40;
@@ -348,14 +349,17 @@ fn draw_eigenvalues(area: &Area<'_>, e: &EigenvaluePanel) -> DrawResult {
         ))?;
         // label just under the line (above it when the line is near the bottom)
         // backend_coord is in root pixels; area.draw takes area-relative pixels
+        // (right-aligned at the right end, where the ascending values are highest)
         let (ox, oy) = area.get_base_pixel();
-        let (px, py) = chart.backend_coord(&(xr.start, mu));
-        let (_, pbottom) = chart.backend_coord(&(xr.start, lo));
+        let (px, py) = chart.backend_coord(&(xr.end, mu));
+        let (_, pbottom) = chart.backend_coord(&(xr.end, lo));
         let y = if pbottom - py > 24 { py + 6 } else { py - 20 };
         area.draw(&Text::new(
             format!("proven lambda_min >= {mu:.3e}"),
-            (px - ox + 8, y - oy),
-            font(13.0).color(&BOUND_COLOR),
+            (px - ox - 8, y - oy),
+            font(13.0)
+                .color(&BOUND_COLOR)
+                .pos(Pos::new(HPos::Right, VPos::Top)),
         ))?;
     }
     // the values: expected null space (orange), the rest (blue)
