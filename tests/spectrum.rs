@@ -187,3 +187,56 @@ fn invalid_settings_and_tiny_matrices() {
         assert!(certificate_spectrum(&p, &l, &bad, None).is_err());
     }
 }
+
+/// The pipeline attaches the estimates only when asked, always attaches the verified bound, and
+/// the verified bound is below every estimate (minus its residual): the proof and the estimate
+/// agree. n = 250 (3n = 750 > 600): shift-invert with the verification's shift.
+#[test]
+fn pipeline_attaches_spectrum_only_on_request() {
+    use rotavg::multiple::average::{AverageMultipleSettings, average_multiple};
+    let (p, _) = SyntheticGraph {
+        num_rotations: 250,
+        num_edges: 700,
+        noise_sigma: 0.05,
+        seed: 11,
+        ..Default::default()
+    }
+    .generate();
+    let plain = average_multiple(&p, &AverageMultipleSettings::default()).unwrap();
+    let c = plain.certificate.unwrap();
+    assert!(c.is_certified());
+    assert!(c.smallest_eigenvalues.is_none());
+    let mu = c.verified_min_eigenvalue.expect("verified bound exposed");
+    let with = average_multiple(
+        &p,
+        &AverageMultipleSettings {
+            spectrum: Some(SpectrumSettings::default()),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let c2 = with.certificate.unwrap();
+    assert_eq!(c2.verdict, c.verdict);
+    let e = c2.smallest_eigenvalues.expect("requested");
+    assert_eq!(e.method, SpectrumMethod::ShiftInvertLanczos);
+    assert_eq!(e.values.len(), 10);
+    for (v, r) in e.values.iter().zip(&e.residuals) {
+        assert!(
+            mu <= v + r + 1e-12,
+            "verified {mu} above estimate {v} (residual {r})"
+        );
+    }
+    // critical point: the 3 gauge directions are (numerically) null, the 4th is not
+    assert!(
+        e.values[..3].iter().all(|v| v.abs() < 1e-6),
+        "{:?}",
+        e.values
+    );
+    assert!(e.values[3] > 1e-3);
+    // the estimates agree with an independent dense solve of the same matrix
+    let l = multipliers(&p, &with.solution.rotations).unwrap();
+    let s = certificate_matrix(&p, &l).unwrap();
+    let exact = faer_eigenvalues(&s);
+    let scale = exact.last().unwrap().abs();
+    assert_close(&e.values, &exact[..10], 1e-8 * scale, "pipeline");
+}
