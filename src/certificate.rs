@@ -101,6 +101,17 @@ pub struct Certificate {
     pub explanation: String,
     /// Time spent certifying, in seconds.
     pub seconds: f64,
+    /// A **proven** lower bound on `lambda_min` of the certificate matrix whose multipliers gave
+    /// `lower_bound` (Cholesky-verified with a floating-point margin, or Gershgorin, `[D5]`-`[D8]`;
+    /// dense eigenvalues minus a rounding margin for the conjugate 10x10 matrix `[H8]`), where
+    /// known. Omitted from JSON when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verified_min_eigenvalue: Option<f64>,
+    /// **Estimates** (not bounds) of the smallest eigenvalues of that certificate matrix,
+    /// computed only on request (e.g. the CLI's `--plot`), `[D14]`. Omitted from JSON when
+    /// absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub smallest_eigenvalues: Option<crate::certify::spectrum::SpectrumEstimate>,
 }
 
 impl Certificate {
@@ -147,6 +158,8 @@ impl Certificate {
             tolerance,
             explanation: explanation.into(),
             seconds,
+            verified_min_eigenvalue: None,
+            smallest_eigenvalues: None,
         }
     }
 

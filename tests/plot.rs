@@ -1,12 +1,19 @@
-//! `rotavg::plot` (hand-written SVG) and the CLI's `--plot FILE.svg` for `multiple` and
-//! `certify`: the SVG is well formed (balanced tags, checked by a tiny tag scanner), has one bar
-//! per histogram bin, only finite numbers, and escapes text.
+//! `rotavg::plot` (plotters, SVG backend) and the CLI's `--plot FILE.svg` for `multiple`,
+//! `certify` and `conjugate`: the SVG is well formed (balanced tags, checked by a tiny tag
+//! scanner), has one bar per histogram bin (bars are the only elements filled with
+//! `BAR_COLOR` #4682B4), only finite numbers, escapes text, and, when a certificate with
+//! eigenvalue estimates is given, has the eigenvalue panel with the values as text and the
+//! proven-bound line.
 
+use rotavg::io::handeye::write_conjugate_json;
 use rotavg::io::json::write_problem_json;
 use rotavg::multiple::synthetic::SyntheticGraph;
-use rotavg::plot::{histogram, residual_histogram_svg};
+use rotavg::plot::{EigenvaluePanel, figure_svg, histogram, residual_histogram_svg};
 use std::path::PathBuf;
 use std::process::Command;
+
+/// The histogram bars' fill (`rotavg::plot::BAR_COLOR`).
+const BAR: &str = "fill=\"#4682B4\" stroke=\"none\"/>";
 
 /// Check the tags of `svg` are balanced (a stack of open element names; `<?...?>`, comments,
 /// self-closing tags handled) and the root is `svg`. Returns the number of elements.
@@ -114,19 +121,20 @@ fn svg_is_well_formed_with_one_bar_per_bin() {
     ];
     let svg = residual_histogram_svg(&v, "title <with> & markup", &notes);
     let bins = histogram(&v).counts.len();
-    assert_eq!(svg.matches("class=\"bar\"").count(), bins);
-    assert_eq!(svg.matches("class=\"annotation\"").count(), notes.len());
+    assert_eq!(svg.matches(BAR).count(), bins);
+    assert!(svg.contains("gap: 1.0e-9"));
+    assert!(
+        svg.contains("a&lt;b &amp; &quot;c&quot;: x &gt; y")
+            || svg.contains("a&lt;b &amp; \"c\": x &gt; y")
+    );
     assert!(svg.contains("&lt;with&gt; &amp; markup"));
     assert!(check_xml(&svg) > bins);
     check_numbers_finite(&svg);
     // no annotations: no certificate panel; empty and non-finite data still valid
     for data in [&v[..], &[][..], &[f64::NAN, 1.0, f64::NEG_INFINITY][..]] {
         let svg = residual_histogram_svg(data, "t", &[]);
-        assert!(!svg.contains("class=\"annotation\""));
-        assert_eq!(
-            svg.matches("class=\"bar\"").count(),
-            histogram(data).counts.len()
-        );
+        assert!(!svg.contains(">certificate<") && !svg.contains("\ncertificate\n"));
+        assert_eq!(svg.matches(BAR).count(), histogram(data).counts.len());
         check_xml(&svg);
         check_numbers_finite(&svg);
     }
@@ -170,11 +178,12 @@ fn cli_multiple_and_certify_write_svg() {
     check_xml(&text);
     check_numbers_finite(&text);
     assert!(
-        text.contains("class=\"annotation\""),
+        text.contains("verdict: certified"),
         "certificate panel missing"
     );
     // 30 residuals: ceil(log2 30) + 1 = 6 bins
-    assert_eq!(text.matches("class=\"bar\"").count(), 6);
+    assert_eq!(text.matches(BAR).count(), 6);
+    assert_eigen_panel(&text, 10, 3);
 
     let svg2 = d.join("cert.svg");
     let out = Command::new(env!("CARGO_BIN_EXE_rotavg"))
@@ -192,7 +201,8 @@ fn cli_multiple_and_certify_write_svg() {
     let text = std::fs::read_to_string(&svg2).unwrap();
     check_xml(&text);
     check_numbers_finite(&text);
-    assert!(text.contains("class=\"annotation\""));
+    assert!(text.contains("verdict: certified"));
+    assert_eigen_panel(&text, 10, 3);
 
     // unwritable path: an I/O error, non-zero exit
     let out = Command::new(env!("CARGO_BIN_EXE_rotavg"))
@@ -201,5 +211,180 @@ fn cli_multiple_and_certify_write_svg() {
         .output()
         .unwrap();
     assert!(!out.status.success());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The eigenvalue panel is present: title, `count` values as text, the proven-bound line's
+/// label, and the expected null-space note.
+fn assert_eigen_panel(svg: &str, count: usize, null_dimension: usize) {
+    assert!(
+        svg.contains("smallest eigenvalues of the certificate matrix (estimates)"),
+        "eigenvalue panel missing"
+    );
+    for k in 1..=count {
+        assert!(
+            svg.contains(&format!("lambda_{k} = ")),
+            "lambda_{k} missing"
+        );
+    }
+    assert!(!svg.contains(&format!("lambda_{} = ", count + 1)));
+    assert!(
+        svg.contains("proven lambda_min &gt;= "),
+        "bound line label missing"
+    );
+    assert!(svg.contains(&format!(
+        "expected at a certified solution: {null_dimension} eigenvalue"
+    )));
+}
+
+#[test]
+fn eigenvalue_panel_is_drawn_with_values_and_bound() {
+    let e = EigenvaluePanel {
+        values: vec![-1e-13, 2e-13, 5e-13, 0.7, 0.71, 1.3, f64::NAN],
+        residuals: vec![1e-14; 7],
+        verified_lower_bound: Some(-2.5e-9),
+        null_dimension: 3,
+        method: "dense eigen-decomposition".into(),
+    };
+    let svg = figure_svg(&[1.0, 2.0, 2.5], "t", &[], Some(&e));
+    check_xml(&svg);
+    check_numbers_finite(&svg);
+    // the 6 finite values, as text and as points
+    assert_eigen_panel(&svg, 6, 3);
+    assert!(svg.contains("lambda_4 = 7.000000e-1"));
+    assert!(svg.contains("proven lambda_min &gt;= -2.500e-9"));
+    assert_eq!(svg.matches("<circle").count(), 6);
+    // the histogram is still there
+    assert_eq!(
+        svg.matches(BAR).count(),
+        histogram(&[1.0, 2.0, 2.5]).counts.len()
+    );
+    // no verified bound: no line label, still well formed
+    let e2 = EigenvaluePanel {
+        verified_lower_bound: None,
+        ..e
+    };
+    let svg = figure_svg(&[], "t", &[], Some(&e2));
+    check_xml(&svg);
+    check_numbers_finite(&svg);
+    assert!(!svg.contains("proven lambda_min"));
+}
+
+/// `rotavg multiple --json`: `verified_min_eigenvalue` always (with a certificate),
+/// `smallest_eigenvalues` only with `--plot` (10 ascending values; first 3 ~ 0 at a certified
+/// solution, the verified bound below the smallest estimate minus its residual).
+#[test]
+fn cli_json_has_verified_bound_and_eigenvalues_with_plot() {
+    let (p, _) = SyntheticGraph {
+        num_rotations: 15,
+        num_edges: 40,
+        noise_sigma: 0.05,
+        seed: 9,
+        ..Default::default()
+    }
+    .generate();
+    let d = dir().join("json");
+    std::fs::create_dir_all(&d).unwrap();
+    let g = d.join("g.json");
+    std::fs::write(&g, write_problem_json(&p)).unwrap();
+    let run = |plot: bool| -> serde_json::Value {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_rotavg"));
+        cmd.args([
+            "multiple",
+            g.to_str().unwrap(),
+            "--json",
+            "--certify",
+            "auto",
+        ]);
+        if plot {
+            cmd.arg("--plot").arg(d.join("f.svg"));
+        }
+        let out = cmd.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let plain = run(false);
+    let c = &plain["certificate"];
+    assert_eq!(c["verdict"], "certified");
+    assert!(c["verified_min_eigenvalue"].as_f64().is_some());
+    assert!(c.get("smallest_eigenvalues").is_none());
+    let with = run(true);
+    let c = &with["certificate"];
+    let mu = c["verified_min_eigenvalue"].as_f64().unwrap();
+    let e = &c["smallest_eigenvalues"];
+    assert_eq!(e["method"], "dense");
+    let v: Vec<f64> = e["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(v.len(), 10);
+    assert!(v.windows(2).all(|w| w[0] <= w[1]));
+    assert!(v[..3].iter().all(|x| x.abs() < 1e-8), "{v:?}");
+    assert!(v[3] > 1e-3);
+    assert!(mu <= v[0] + 1e-9);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Conjugate: `rotavg conjugate --plot` and `rotavg certify --plot` draw the 10 eigenvalues of
+/// the 10x10 certificate matrix (one expected ~ 0).
+#[test]
+fn cli_conjugate_and_certify_conjugate_write_eigen_panel() {
+    use rand::SeedableRng;
+    let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+    let (p, s) = rotavg::conjugate::synthetic::random_instance(12, 0.01, 0.0, &mut rng);
+    let d = dir().join("conj");
+    std::fs::create_dir_all(&d).unwrap();
+    let g = d.join("pairs.json");
+    std::fs::write(&g, write_conjugate_json(&p)).unwrap();
+    let svg = d.join("c.svg");
+    let out = Command::new(env!("CARGO_BIN_EXE_rotavg"))
+        .args(["conjugate", g.to_str().unwrap(), "--quiet", "--plot"])
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    check_xml(&text);
+    check_numbers_finite(&text);
+    assert!(text.contains("verdict: certified"));
+    assert!(text.contains("residual angles of 12 pairs"));
+    assert_eigen_panel(&text, 10, 1);
+
+    let est = d.join("s.json");
+    std::fs::write(
+        &est,
+        format!(
+            "{{\"rotation\": {}}}",
+            serde_json::to_string(&rotavg::so3::rotation_to_rows(&s)).unwrap()
+        ),
+    )
+    .unwrap();
+    let svg2 = d.join("c2.svg");
+    let out = Command::new(env!("CARGO_BIN_EXE_rotavg"))
+        .args(["certify", g.to_str().unwrap(), "--quiet", "--estimate"])
+        .arg(&est)
+        .arg("--plot")
+        .arg(&svg2)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg2).unwrap();
+    check_xml(&text);
+    check_numbers_finite(&text);
+    assert_eigen_panel(&text, 10, 1);
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -7,12 +7,15 @@
 //!   sparse Cholesky with a rigorous floating-point margin, and Lanczos estimates.
 //! - [`scalar`]: the scalar comparison `[D13]`: a proof that `S` is positive semidefinite from one
 //!   factorisation of an `n x n` scalar matrix (fast on graphs whose `3n x 3n` factor fills).
+//! - [`spectrum`]: the `k` smallest eigenvalues of a certificate matrix (estimates, for
+//!   figures; never bounds).
 //! - [`staircase`]: a Riemannian staircase (rank-lifted Burer-Monteiro descent) whose verified
 //!   multipliers bound the SDP optimum when the estimate's own certificate fails.
 
 pub mod eigen;
 pub mod multiple;
 pub mod scalar;
+pub mod spectrum;
 pub mod staircase;
 
 pub use multiple::{

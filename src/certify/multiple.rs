@@ -679,6 +679,7 @@ pub fn certify_multiple(
         "not certified: the dual certificate S is not positive semidefinite (a local minimum or saddle of the nonconvex problem, or a non-tight relaxation)"
     };
     certificate.explanation = format!("{verdict_text}; {how}{est}");
+    certificate.verified_min_eigenvalue = Some(bound.verified_min_eigenvalue);
     certificate.seconds = start.elapsed().as_secs_f64();
     Ok(MultipleCertificate {
         certificate,
@@ -728,7 +729,7 @@ pub fn certify_with_multipliers(
     let min_eig = bound
         .min_eigenvalue_estimate
         .or(Some(bound.verified_min_eigenvalue));
-    let certificate = Certificate::from_bounds(
+    let mut certificate = Certificate::from_bounds(
         cost,
         Some(bound.lower_bound),
         method,
@@ -737,6 +738,7 @@ pub fn certify_with_multipliers(
         explanation,
         start.elapsed().as_secs_f64(),
     );
+    certificate.verified_min_eigenvalue = Some(bound.verified_min_eigenvalue);
     Ok(MultipleCertificate {
         certificate,
         bound,

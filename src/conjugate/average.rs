@@ -10,6 +10,7 @@ use super::sdp::{
     relax_conjugate, verify_lower_bound,
 };
 use crate::certificate::{BoundMethod, Certificate, GapTolerance};
+use crate::certify::spectrum::{SpectrumEstimate, SpectrumMethod};
 use crate::error::{Error, Result};
 use crate::so3::{Metric, Rotation};
 use serde::{Deserialize, Serialize};
@@ -132,7 +133,7 @@ pub fn certify_conjugate(
     let start = Instant::now();
     let (bound, relax) = sdp_bound(problem, sdp, &[*s])?;
     let lam = bound.map(|b| b.min_eigenvalue);
-    Ok(Certificate::from_bounds(
+    let mut certificate = Certificate::from_bounds(
         problem.chordal_cost(s),
         bound.map(|b| b.lower_bound),
         BoundMethod::Sdp,
@@ -144,7 +145,26 @@ pub fn certify_conjugate(
             lam.unwrap_or(f64::NAN),
         ),
         start.elapsed().as_secs_f64(),
-    ))
+    );
+    attach_spectrum(&mut certificate, bound.as_ref());
+    Ok(certificate)
+}
+
+/// The verified `lambda_min` bound and the 10 (dense, exact up to rounding) eigenvalues of the
+/// certificate matrix `C(nu)` of the bound `[H8]`, `[D14]` (free: the verification computed them).
+fn attach_spectrum(certificate: &mut Certificate, bound: Option<&super::sdp::VerifiedBound>) {
+    if let Some(b) = bound {
+        certificate.verified_min_eigenvalue = Some(b.verified_min_eigenvalue);
+        certificate.smallest_eigenvalues = Some(SpectrumEstimate {
+            values: b.eigenvalues.to_vec(),
+            residuals: b.eigen_residuals.to_vec(),
+            method: SpectrumMethod::Dense,
+            shift: None,
+            converged: true,
+            subspace_dim: 10,
+            seconds: 0.0,
+        });
+    }
 }
 
 /// The whole pipeline `[H9]`: local solve (closed-form initialiser, then the configured
@@ -225,7 +245,7 @@ pub fn average_conjugate_from(
         bound = Some(b);
     }
     let lam = bound.map(|b| b.min_eigenvalue);
-    let certificate = Certificate::from_bounds(
+    let mut certificate = Certificate::from_bounds(
         solution.chordal_cost,
         bound.map(|b| b.lower_bound),
         BoundMethod::Sdp,
@@ -238,6 +258,7 @@ pub fn average_conjugate_from(
         ),
         start.elapsed().as_secs_f64(),
     );
+    attach_spectrum(&mut certificate, bound.as_ref());
     Ok(ConjugateEstimate {
         solution,
         certificate: Some(certificate),

@@ -14,9 +14,10 @@
 
 use crate::certificate::{BoundMethod, Certificate, GapTolerance};
 use crate::certify::multiple::{
-    CertifySettings, Verification, certify_multiple, lower_bound_from_multipliers,
+    CertifySettings, Verification, certify_multiple, lower_bound_from_multipliers, multipliers,
     stationarity_residual,
 };
+use crate::certify::spectrum::{SpectrumSettings, certificate_spectrum};
 use crate::certify::staircase::{StaircaseSettings, staircase_bound};
 use crate::error::{Error, Result};
 use crate::multiple::{
@@ -24,6 +25,7 @@ use crate::multiple::{
 };
 use crate::relax::{SdpSettings, SdpStatus, relax_multiple};
 use crate::so3::Rotation;
+use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::time::Instant;
@@ -107,6 +109,11 @@ pub struct AverageMultipleSettings {
     /// Staircase settings (its `certify` field is replaced by [`Self::certify`] with the
     /// effective tolerance).
     pub staircase: StaircaseSettings,
+    /// When set, also estimate the smallest eigenvalues of the certificate matrix whose
+    /// multipliers gave the reported bound ([`Certificate::smallest_eigenvalues`], `[D14]`;
+    /// estimates for figures, not bounds). Default `None`: no extra work. Not computed when the
+    /// bound came from the staircase (its multipliers are not kept).
+    pub spectrum: Option<SpectrumSettings>,
 }
 
 impl Default for AverageMultipleSettings {
@@ -119,6 +126,7 @@ impl Default for AverageMultipleSettings {
             sdp: SdpSettings::default(),
             sdp_max_nodes: 150,
             staircase: StaircaseSettings::default(),
+            spectrum: None,
         }
     }
 }
@@ -147,6 +155,9 @@ impl AverageMultipleSettings {
                 name: "absolute_tolerance_per_weight".into(),
                 reason: format!("must be finite and >= 0, got {v}"),
             });
+        }
+        if let Some(sp) = &self.spectrum {
+            sp.validate()?;
         }
         Ok(())
     }
@@ -256,6 +267,12 @@ struct Best {
     method: BoundMethod,
     min_eigenvalue: Option<f64>,
     explanation: String,
+    /// Verified lower bound on `lambda_min` of this bound's certificate matrix.
+    verified_min_eigenvalue: f64,
+    /// The Cholesky shift that verified it, if any (a shift-invert hint for the spectrum).
+    shift: Option<f64>,
+    /// The multipliers of this bound's certificate matrix (`None` for the staircase).
+    lambdas: Option<Vec<Matrix3<f64>>>,
 }
 
 impl Best {
@@ -339,6 +356,9 @@ fn run_sdp(
                      independently: lambda_min(Q - blkdiag(Lambda)) >= {:.3e}",
                     sdp.status, b.verified_min_eigenvalue
                 ),
+                verified_min_eigenvalue: b.verified_min_eigenvalue,
+                shift: b.shift,
+                lambdas: Some(sdp.multipliers.clone()),
             },
         );
     }
@@ -375,6 +395,9 @@ fn run_staircase(
                 .min_eigenvalue_estimate
                 .or(Some(r.bound.verified_min_eigenvalue)),
             explanation: r.certificate.explanation.clone(),
+            verified_min_eigenvalue: r.bound.verified_min_eigenvalue,
+            shift: r.bound.shift,
+            lambdas: None,
         },
     );
     details.methods.push(MethodRun {
@@ -409,6 +432,10 @@ fn run_dual(
             method: BoundMethod::Dual,
             min_eigenvalue: c.certificate.min_eigenvalue,
             explanation: c.certificate.explanation.clone(),
+            verified_min_eigenvalue: c.bound.verified_min_eigenvalue,
+            shift: c.bound.shift,
+            // O(m), negligible next to the verification
+            lambdas: Some(multipliers(problem, rotations)?),
         },
     );
     details.stationarity_residual = Some(c.stationarity_residual);
@@ -466,26 +493,38 @@ fn refine(
     replaced
 }
 
+/// The certificate from the best bound; with `spectrum` set, also the smallest-eigenvalue
+/// estimates of that bound's certificate matrix `[D14]`.
 fn final_certificate(
+    problem: &MultipleProblem,
     cost: f64,
     mut best: Option<Best>,
     note: Option<&str>,
     tolerance: GapTolerance,
     seconds: f64,
+    spectrum: Option<&SpectrumSettings>,
 ) -> Certificate {
     if let (Some(b), Some(n)) = (best.as_mut(), note) {
         b.explanation = format!("{}; {n}", b.explanation);
     }
     match best {
-        Some(b) => Certificate::from_bounds(
-            cost,
-            Some(b.lower_bound),
-            b.method,
-            b.min_eigenvalue,
-            tolerance,
-            b.explanation,
-            seconds,
-        ),
+        Some(b) => {
+            let mut c = Certificate::from_bounds(
+                cost,
+                Some(b.lower_bound),
+                b.method,
+                b.min_eigenvalue,
+                tolerance,
+                b.explanation,
+                seconds,
+            );
+            c.verified_min_eigenvalue = Some(b.verified_min_eigenvalue);
+            if let (Some(sp), Some(l)) = (spectrum, &b.lambdas) {
+                // an estimate for a figure: its failure never fails the certification
+                c.smallest_eigenvalues = certificate_spectrum(problem, l, sp, b.shift).ok();
+            }
+            c
+        }
         None => Certificate::from_bounds(
             cost,
             None,
@@ -628,11 +667,13 @@ pub fn average_multiple(
         }
     }
     let certificate = final_certificate(
+        problem,
         solution.chordal_cost,
         best,
         margin_limited.then_some(MARGIN_LIMITED),
         certify.tolerance,
         t_cert.elapsed().as_secs_f64(),
+        settings.spectrum.as_ref(),
     );
     details.certify_seconds = t_cert.elapsed().as_secs_f64();
     details.total_seconds = start.elapsed().as_secs_f64();
@@ -701,11 +742,13 @@ pub fn certify_multiple_estimate(
     }
     details.stationarity_residual = Some(stationarity_residual(problem, rotations)?);
     let certificate = final_certificate(
+        problem,
         problem.chordal_cost(rotations),
         best,
         margin_limited.then_some(MARGIN_LIMITED),
         certify.tolerance,
         start.elapsed().as_secs_f64(),
+        settings.spectrum.as_ref(),
     );
     details.certify_seconds = start.elapsed().as_secs_f64();
     details.total_seconds = details.certify_seconds;

@@ -35,8 +35,8 @@ pub struct Args {
     /// Bounding methods for multiple problems when the dual certificate fails (`none` = dual).
     #[arg(long, value_enum, default_value_t = CertifyArg::Auto)]
     pub certify: CertifyArg,
-    /// Write an SVG figure (multiple problems only): histogram of the residual angles
-    /// (degrees) and the certificate.
+    /// Write an SVG figure (multiple and conjugate problems): histogram of the residual angles
+    /// (degrees), the certificate, and the smallest eigenvalues of the certificate matrix.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<String>,
     #[command(flatten)]
@@ -103,10 +103,10 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let (ename, etext) = read_input(&args.estimate)?;
     let estimate = read_estimate(&etext, &ename, &options)?;
     let kind = kind_of(&name, &text, args.format)?;
-    if args.plot.is_some() && !matches!(kind, Kind::Multiple) {
+    if args.plot.is_some() && matches!(kind, Kind::Single) {
         return Err(Error::InvalidSettings {
             name: "plot".into(),
-            reason: "--plot is available for multiple problems only".into(),
+            reason: "--plot is available for multiple and conjugate problems only".into(),
         });
     }
     let cert: Certificate;
@@ -140,6 +140,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
                     CertifyMode::None => CertifyMode::Dual,
                     m => m,
                 },
+                spectrum: args.plot.as_ref().map(|_| Default::default()),
                 ..Default::default()
             };
             crate::common::progress(
@@ -234,6 +235,16 @@ pub fn run(args: &Args) -> Result<Outcome> {
                 &Default::default(),
                 Default::default(),
             )?;
+            if let Some(path) = &args.plot {
+                crate::multiple::write_figure(
+                    path,
+                    &problem.residual_angles(&s),
+                    "pairs",
+                    Some(&c),
+                    1,
+                    &args.input,
+                )?;
+            }
             json = serde_json::json!({
                 "problem": "conjugate",
                 "num_rotations": 1,

@@ -87,6 +87,10 @@ pub struct Args {
     /// Huber / Cauchy scale in the metric's unit (geodesic: radians).
     #[arg(long, default_value_t = 0.05)]
     pub loss_scale: f64,
+    /// Write an SVG figure: histogram of the residual angles (degrees), the certificate, and
+    /// the eigenvalues of the 10x10 certificate matrix with the proven bound.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<String>,
     #[command(flatten)]
     pub common: Common,
 }
@@ -202,6 +206,16 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let est = average_conjugate_from(&problem, &settings, init.as_ref())?;
     let sol = &est.solution;
     let verdict = est.certificate.as_ref().map(|c| c.verdict);
+    if let Some(path) = &args.plot {
+        crate::multiple::write_figure(
+            path,
+            &problem.residual_angles(&sol.estimate),
+            "pairs",
+            est.certificate.as_ref(),
+            1,
+            &args.input,
+        )?;
+    }
     if args.common.json {
         let out = serde_json::json!({
             "problem": "conjugate",
@@ -267,6 +281,9 @@ pub fn run(args: &Args) -> Result<Outcome> {
         match &est.certificate {
             Some(c) => println!("certificate: {c}"),
             None => println!("certificate: none"),
+        }
+        if let Some(p) = &args.plot {
+            println!("figure written to {p}");
         }
     }
     Ok(Outcome { verdict })

@@ -135,7 +135,8 @@ pub struct Args {
     /// in `.g2o`.
     #[arg(long, value_name = "FILE")]
     pub output: Option<String>,
-    /// Write an SVG figure: histogram of the residual angles (degrees) and the certificate.
+    /// Write an SVG figure: histogram of the residual angles (degrees), the certificate, and
+    /// the 10 smallest eigenvalues of the certificate matrix (estimates) with the proven bound.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<String>,
     #[command(flatten)]
@@ -258,7 +259,8 @@ fn write_file(path: &str, text: &str) -> Result<()> {
     })
 }
 
-/// Write the `--plot` SVG: residual-angle histogram (degrees) and the certificate facts.
+/// Write the `--plot` SVG: residual-angle histogram (degrees), the certificate facts and, when
+/// the certificate carries them, the smallest eigenvalues of its certificate matrix.
 pub fn write_plot(
     path: &str,
     problem: &MultipleProblem,
@@ -266,22 +268,40 @@ pub fn write_plot(
     certificate: Option<&rotavg::Certificate>,
     input: &str,
 ) -> Result<()> {
-    let deg: Vec<f64> = problem
-        .residual_angles(rotations)
-        .iter()
-        .map(|a| a.to_degrees())
-        .collect();
+    write_figure(
+        path,
+        &problem.residual_angles(rotations),
+        "edges",
+        certificate,
+        3,
+        input,
+    )
+}
+
+/// Write a `--plot` SVG from residual angles (radians) of `what` (e.g. "edges", "pairs"), the
+/// certificate, and the null-space dimension expected at a certified solution (3 gauge
+/// directions for multiple averaging, 1 for the conjugate SDP).
+pub fn write_figure(
+    path: &str,
+    residuals_rad: &[f64],
+    what: &str,
+    certificate: Option<&rotavg::Certificate>,
+    null_dimension: usize,
+    input: &str,
+) -> Result<()> {
+    let deg: Vec<f64> = residuals_rad.iter().map(|a| a.to_degrees()).collect();
     let notes = certificate
         .map(rotavg::plot::certificate_annotations)
         .unwrap_or_default();
+    let eigen = certificate.and_then(|c| rotavg::plot::eigenvalue_panel(c, null_dimension));
     // the file name only: a long path would not fit above the histogram
     let name = Path::new(input)
         .file_name()
         .map_or_else(|| input.to_string(), |f| f.to_string_lossy().into_owned());
-    let title = format!("{name}: residual angles of {} edges", deg.len());
+    let title = format!("{name}: residual angles of {} {what}", deg.len());
     rotavg::plot::write_svg(
         path,
-        &rotavg::plot::residual_histogram_svg(&deg, &title, &notes),
+        &rotavg::plot::figure_svg(&deg, &title, &notes, eigen.as_ref()),
     )
 }
 
@@ -358,6 +378,8 @@ pub fn run(args: &Args) -> Result<Outcome> {
             ..Default::default()
         },
         certify_mode: args.certify.into(),
+        // the figure shows the smallest eigenvalues of the certificate matrix
+        spectrum: args.plot.as_ref().map(|_| Default::default()),
         ..Default::default()
     };
     crate::common::progress(

@@ -1,0 +1,441 @@
+//! The `k` smallest eigenvalues of a certificate matrix, as **estimates** (for figures and
+//! diagnostics, `paper-notes/certificates.md` `[D14]`).
+//!
+//! Nothing computed here is a proof: the only proven statement about the spectrum of `S` is the
+//! Cholesky-verified lower bound on `lambda_min(S)` of [`crate::certify::multiple`] (`[D5]`,
+//! `[D6]`). The values here are Ritz values (Rayleigh quotients on `S`) with their residuals
+//! `||S x - lambda x||` (some eigenvalue of `S` lies within the residual of each value).
+//!
+//! - dimension `<= dense_max_dim`: a dense symmetric eigen-decomposition (nalgebra);
+//! - larger, with a shift `sigma` known to make `S + sigma I` positive definite (the verified
+//!   Cholesky shift): block Lanczos with full reorthogonalisation on `(S + sigma I)^-1`
+//!   (shift-invert, the `k` largest eigenvalues of the inverse are the `k` smallest of `S`);
+//! - otherwise block Lanczos with full reorthogonalisation on `S` itself (slow convergence
+//!   for clustered small eigenvalues: the residuals say how far it got).
+//!
+//! The block size (default 3) matches the multiplicity-3 structure of rotation averaging (`S`
+//! is similar to `L (x) I_3` at a noise-free optimum): single-vector Lanczos finds only one
+//! copy of a multiple eigenvalue.
+
+use crate::certify::eigen::{ShiftedCholesky, inf_norm, sparse_matvec};
+use crate::certify::multiple::certificate_matrix;
+use crate::error::{Error, Result};
+use crate::multiple::MultipleProblem;
+use faer::sparse::{SparseColMat, SparseColMatRef};
+use nalgebra::{DMatrix, Matrix3, SymmetricEigen};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Settings of [`smallest_eigenvalues`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SpectrumSettings {
+    /// How many of the smallest eigenvalues (default 10; fewer when the matrix is smaller).
+    pub count: usize,
+    /// Dense eigen-decomposition up to this dimension (default 600).
+    pub dense_max_dim: usize,
+    /// Block size of the block Lanczos iteration (default 3, >= 1).
+    pub block_size: usize,
+    /// Largest Krylov subspace dimension (default 150; also capped so that the basis holds at
+    /// most `4e7` numbers, 320 MB).
+    pub max_subspace: usize,
+    /// Converged when every residual `||S x - lambda x|| <= tolerance * ||S||_inf`
+    /// (default `1e-8`).
+    pub tolerance: f64,
+    /// Seed of the random start block.
+    pub seed: u64,
+}
+
+impl Default for SpectrumSettings {
+    fn default() -> Self {
+        SpectrumSettings {
+            count: 10,
+            dense_max_dim: 600,
+            block_size: 3,
+            max_subspace: 150,
+            tolerance: 1e-8,
+            seed: 0x05ee_de16,
+        }
+    }
+}
+
+/// How the estimates were computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpectrumMethod {
+    /// Dense symmetric eigen-decomposition (all eigenvalues, accurate to `~ u ||S||`).
+    Dense,
+    /// Block Lanczos on `(S + shift I)^-1` through a sparse Cholesky factor.
+    ShiftInvertLanczos,
+    /// Block Lanczos on `S`.
+    Lanczos,
+}
+
+/// The `k` smallest eigenvalues of a symmetric matrix: **estimates**, not bounds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SpectrumEstimate {
+    /// Estimated smallest eigenvalues, ascending (Rayleigh quotients of the Ritz vectors).
+    pub values: Vec<f64>,
+    /// Residual `||S x - value x||_2` of each value (unit `x`): some eigenvalue of `S` lies
+    /// within it.
+    pub residuals: Vec<f64>,
+    /// How they were computed.
+    pub method: SpectrumMethod,
+    /// The shift of the shift-invert iteration, if used.
+    pub shift: Option<f64>,
+    /// Whether every residual met the tolerance (always `true` for `Dense`).
+    pub converged: bool,
+    /// Krylov subspace dimension reached (the matrix dimension for `Dense`).
+    pub subspace_dim: usize,
+    /// Wall time, seconds.
+    pub seconds: f64,
+}
+
+impl SpectrumSettings {
+    pub(crate) fn validate(&self) -> Result<()> {
+        let bad = |name: &str, reason: &str| {
+            Err(Error::InvalidSettings {
+                name: name.into(),
+                reason: reason.into(),
+            })
+        };
+        if self.count == 0 {
+            return bad("spectrum.count", "must be at least 1");
+        }
+        if self.block_size == 0 {
+            return bad("spectrum.block_size", "must be at least 1");
+        }
+        if self.tolerance.is_nan() || self.tolerance <= 0.0 {
+            return bad("spectrum.tolerance", "must be > 0");
+        }
+        Ok(())
+    }
+}
+
+/// Estimates of the `settings.count` smallest eigenvalues of the symmetric sparse matrix `s`
+/// (both triangles stored, as [`certificate_matrix`] builds it). `shift_hint`: a shift
+/// `sigma` for which `S + sigma I` is known to be positive definite (e.g.
+/// [`crate::certify::multiple::VerifiedBound::shift`]); enables shift-invert for large `s`.
+///
+/// ```
+/// use faer::sparse::{SparseColMat, Triplet};
+/// use rotavg::certify::spectrum::{smallest_eigenvalues, SpectrumSettings};
+/// // diag(3, 1, 2): smallest two are 1, 2
+/// let t = [Triplet::new(0, 0, 3.0), Triplet::new(1, 1, 1.0), Triplet::new(2, 2, 2.0)];
+/// let s = SparseColMat::<usize, f64>::try_new_from_triplets(3, 3, &t).unwrap();
+/// let e = smallest_eigenvalues(&s, &SpectrumSettings { count: 2, ..Default::default() }, None).unwrap();
+/// assert!((e.values[0] - 1.0).abs() < 1e-12 && (e.values[1] - 2.0).abs() < 1e-12);
+/// ```
+pub fn smallest_eigenvalues(
+    matrix: &SparseColMat<usize, f64>,
+    settings: &SpectrumSettings,
+    shift_hint: Option<f64>,
+) -> Result<SpectrumEstimate> {
+    let start = Instant::now();
+    let s = matrix.as_ref();
+    settings.validate()?;
+    let n = s.nrows();
+    if s.ncols() != n {
+        return Err(Error::Degenerate {
+            reason: "spectrum of a non-square matrix".into(),
+        });
+    }
+    if !s.val().iter().all(|v| v.is_finite()) {
+        return Err(Error::NonFinite {
+            item: "certificate matrix".into(),
+        });
+    }
+    let k = settings.count.min(n);
+    let mut out = if n <= settings.dense_max_dim {
+        dense(s, k)
+    } else {
+        let norm = inf_norm(s).max(f64::MIN_POSITIVE);
+        let mut result = None;
+        if let Some(h) = shift_hint.filter(|h| h.is_finite()) {
+            // a little more than the verified shift: still positive definite, and the
+            // inverse is not so ill-conditioned that rounding pollutes the other directions
+            let mut sigma = h.max(0.0) + 1e-6 * norm;
+            let mut ch = ShiftedCholesky::new(matrix.clone(), 1)?;
+            for _ in 0..4 {
+                if let Some(f) = ch.factor(sigma, f64::INFINITY) {
+                    let r = block_lanczos(
+                        s,
+                        n,
+                        k,
+                        settings,
+                        norm,
+                        |x, y| {
+                            y.copy_from_slice(x);
+                            f.solve_in_place(y);
+                        },
+                        true,
+                    );
+                    result = Some(SpectrumEstimate {
+                        method: SpectrumMethod::ShiftInvertLanczos,
+                        shift: Some(sigma),
+                        ..r
+                    });
+                    break;
+                }
+                sigma *= 10.0;
+            }
+        }
+        match result {
+            Some(r) => r,
+            None => block_lanczos(
+                s,
+                n,
+                k,
+                settings,
+                norm,
+                |x, y| sparse_matvec(s, x, y),
+                false,
+            ),
+        }
+    };
+    out.seconds = start.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+/// [`smallest_eigenvalues`] of the certificate matrix `S = Q - blkdiag(Lambda)` of `problem`
+/// and multipliers `lambdas` ([`certificate_matrix`]).
+///
+/// ```
+/// use rotavg::certify::multiple::multipliers;
+/// use rotavg::certify::spectrum::{certificate_spectrum, SpectrumSettings};
+/// use rotavg::multiple::synthetic::SyntheticGraph;
+/// let (p, gt) = SyntheticGraph { num_rotations: 8, num_edges: 16, noise_sigma: 0.0, ..Default::default() }.generate();
+/// let l = multipliers(&p, &gt).unwrap();
+/// let e = certificate_spectrum(&p, &l, &SpectrumSettings::default(), None).unwrap();
+/// // noise-free optimum: the three gauge directions span the null space
+/// assert!(e.values[..3].iter().all(|v| v.abs() < 1e-9) && e.values[3] > 1e-3);
+/// ```
+pub fn certificate_spectrum(
+    problem: &MultipleProblem,
+    lambdas: &[Matrix3<f64>],
+    settings: &SpectrumSettings,
+    shift_hint: Option<f64>,
+) -> Result<SpectrumEstimate> {
+    let s: SparseColMat<usize, f64> = certificate_matrix(problem, lambdas)?;
+    smallest_eigenvalues(&s, settings, shift_hint)
+}
+
+/// All eigenvalues of a small dense symmetric matrix, ascending (nalgebra's symmetric
+/// eigen-decomposition of the symmetric part). Used for the 10x10 conjugate certificate.
+///
+/// ```
+/// let m = nalgebra::DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
+/// let e = rotavg::certify::spectrum::dense_eigenvalues(&m);
+/// assert!((e[0] - 1.0).abs() < 1e-12 && (e[1] - 3.0).abs() < 1e-12);
+/// ```
+pub fn dense_eigenvalues(m: &DMatrix<f64>) -> Vec<f64> {
+    if m.nrows() != m.ncols() || m.is_empty() {
+        return Vec::new();
+    }
+    let sym = (m + m.transpose()) * 0.5;
+    let mut v: Vec<f64> = SymmetricEigen::new(sym)
+        .eigenvalues
+        .iter()
+        .copied()
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+fn dense(s: SparseColMatRef<'_, usize, f64>, k: usize) -> SpectrumEstimate {
+    let n = s.nrows();
+    let mut a = DMatrix::<f64>::zeros(n, n);
+    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
+    for c in 0..n {
+        for p in cp[c]..cp[c + 1] {
+            a[(ri[p], c)] += val[p];
+        }
+    }
+    let a = (&a + a.transpose()) * 0.5;
+    let eig = SymmetricEigen::new(a.clone());
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.sort_by(|&p, &q| eig.eigenvalues[p].total_cmp(&eig.eigenvalues[q]));
+    let mut values = Vec::with_capacity(k);
+    let mut residuals = Vec::with_capacity(k);
+    for &i in idx.iter().take(k) {
+        let x = eig.eigenvectors.column(i);
+        let l = eig.eigenvalues[i];
+        values.push(l);
+        residuals.push((&a * x - x * l).norm());
+    }
+    SpectrumEstimate {
+        values,
+        residuals,
+        method: SpectrumMethod::Dense,
+        shift: None,
+        converged: true,
+        subspace_dim: n,
+        seconds: 0.0,
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Orthogonalise `w` against `basis` twice ("twice is enough") and normalise it; `None` when
+/// less than `1e-10` of its norm survives (it lies in the span).
+fn orthonormalize(basis: &[Vec<f64>], mut w: Vec<f64>) -> Option<Vec<f64>> {
+    let before = dot(&w, &w).sqrt();
+    if before == 0.0 || !before.is_finite() {
+        return None;
+    }
+    for _ in 0..2 {
+        for v in basis {
+            let c = dot(v, &w);
+            w.iter_mut().zip(v).for_each(|(x, y)| *x -= c * y);
+        }
+    }
+    let after = dot(&w, &w).sqrt();
+    if after <= 1e-10 * before || !after.is_finite() {
+        return None;
+    }
+    w.iter_mut().for_each(|x| *x /= after);
+    Some(w)
+}
+
+/// Block Lanczos with full reorthogonalisation and Rayleigh-Ritz on the whole basis `[D14]`.
+/// `op` is `S` (`invert = false`, target: smallest Ritz values) or `(S + sigma I)^-1`
+/// (`invert = true`, target: largest). The reported values are Rayleigh quotients on `S` of
+/// the Ritz vectors, with residuals `||S x - value x||` (computed with `S`).
+fn block_lanczos(
+    s: SparseColMatRef<'_, usize, f64>,
+    n: usize,
+    k: usize,
+    settings: &SpectrumSettings,
+    norm: f64,
+    mut op: impl FnMut(&[f64], &mut [f64]),
+    invert: bool,
+) -> SpectrumEstimate {
+    let b = settings.block_size.min(n);
+    let mem_cap = (40_000_000 / n.max(1)).max(k + b);
+    let max_m = settings.max_subspace.max(k + b).min(mem_cap).min(n);
+    let mut rng = StdRng::seed_from_u64(settings.seed);
+    let random =
+        |rng: &mut StdRng| -> Vec<f64> { (0..n).map(|_| rng.random::<f64>() - 0.5).collect() };
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    // h[j][i] = v_i^T op v_j for i <= j (symmetric)
+    let mut h: Vec<Vec<f64>> = Vec::new();
+    let mut best: Option<SpectrumEstimate> = None;
+    let mut pending: Vec<Vec<f64>> = (0..b).map(|_| random(&mut rng)).collect();
+    loop {
+        // add the pending block, apply the operator
+        let mut images = Vec::new();
+        for v in pending.drain(..) {
+            if basis.len() >= max_m {
+                break;
+            }
+            let Some(v) = orthonormalize(&basis, v) else {
+                continue;
+            };
+            let mut w = vec![0.0; n];
+            op(&v, &mut w);
+            basis.push(v);
+            let row: Vec<f64> = basis.iter().map(|vi| dot(vi, &w)).collect();
+            h.push(row);
+            images.push(w);
+        }
+        let m = basis.len();
+        let full = m >= max_m;
+        let stalled = images.is_empty();
+        if m >= k && (full || stalled || m % (2 * b) < b || m == n) {
+            let r = rayleigh_ritz(s, &basis, &h, k, invert, norm, settings.tolerance);
+            let done = r.converged;
+            best = Some(r);
+            if done {
+                break;
+            }
+        }
+        if full || stalled || m == n {
+            break;
+        }
+        // next block: the images, orthogonalised (a random vector replaces a deflated one)
+        for w in images {
+            match orthonormalize(&basis, w) {
+                Some(v) => pending.push(v),
+                None => {
+                    if let Some(v) = orthonormalize(&basis, random(&mut rng)) {
+                        pending.push(v);
+                    }
+                }
+            }
+        }
+        if pending.is_empty() {
+            if let Some(v) = orthonormalize(&basis, random(&mut rng)) {
+                pending.push(v);
+            } else {
+                let r = rayleigh_ritz(s, &basis, &h, k, invert, norm, settings.tolerance);
+                best = Some(r);
+                break;
+            }
+        }
+    }
+    best.unwrap_or_else(|| rayleigh_ritz(s, &basis, &h, k, invert, norm, settings.tolerance))
+}
+
+fn rayleigh_ritz(
+    s: SparseColMatRef<'_, usize, f64>,
+    basis: &[Vec<f64>],
+    h: &[Vec<f64>],
+    k: usize,
+    invert: bool,
+    norm: f64,
+    tolerance: f64,
+) -> SpectrumEstimate {
+    let m = basis.len();
+    let n = s.nrows();
+    let t = DMatrix::<f64>::from_fn(m, m, |i, j| {
+        let (lo, hi) = if i <= j { (i, j) } else { (j, i) };
+        h[hi][lo]
+    });
+    let eig = SymmetricEigen::new(t);
+    let mut idx: Vec<usize> = (0..m).collect();
+    idx.sort_by(|&p, &q| {
+        let (a, b) = (eig.eigenvalues[p], eig.eigenvalues[q]);
+        if invert {
+            b.total_cmp(&a)
+        } else {
+            a.total_cmp(&b)
+        }
+    });
+    let mut pairs: Vec<(f64, f64)> = Vec::with_capacity(k);
+    let mut y = vec![0.0; n];
+    for &i in idx.iter().take(k) {
+        let c = eig.eigenvectors.column(i);
+        let mut x = vec![0.0; n];
+        for (cj, v) in c.iter().zip(basis) {
+            x.iter_mut().zip(v).for_each(|(xi, vi)| *xi += cj * vi);
+        }
+        let nx = dot(&x, &x).sqrt();
+        if nx > 0.0 {
+            x.iter_mut().for_each(|xi| *xi /= nx);
+        }
+        sparse_matvec(s, &x, &mut y);
+        let rq = dot(&x, &y);
+        let res = y
+            .iter()
+            .zip(&x)
+            .map(|(a, b)| (a - rq * b).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        pairs.push((rq, res));
+    }
+    pairs.sort_by(|p, q| p.0.total_cmp(&q.0));
+    let converged = pairs.len() == k && pairs.iter().all(|p| p.1 <= tolerance * norm);
+    SpectrumEstimate {
+        values: pairs.iter().map(|p| p.0).collect(),
+        residuals: pairs.iter().map(|p| p.1).collect(),
+        method: SpectrumMethod::Lanczos,
+        shift: None,
+        converged,
+        subspace_dim: m,
+        seconds: 0.0,
+    }
+}
