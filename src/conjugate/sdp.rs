@@ -212,6 +212,28 @@ pub struct SdpRelaxation {
 /// Solve the SDP relaxation `[H3]` with Clarabel. The cost is divided by the total weight
 /// before solving (Clarabel ended `AlmostSolved` on unscaled 100-pair instances, SPEC 6) and the
 /// multipliers are scaled back.
+///
+/// The solver's objective is never used as a bound: verify one from the multipliers with
+/// [`verify_lower_bound`] (or let [`crate::conjugate::certify_conjugate`] do it).
+///
+/// ```
+/// use rand::SeedableRng;
+/// use rotavg::conjugate::sdp::{constraint_matrices, cost_matrix, extract_rotation, verify_lower_bound};
+/// use rotavg::conjugate::{relax_conjugate, synthetic::random_instance, SdpSettings};
+/// use rotavg::so3::angle_between;
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+/// let (problem, s) = random_instance(20, 0.01, 0.0, &mut rng); // 20 pairs, 0.01 rad noise
+/// let relax = relax_conjugate(&problem, &SdpSettings::default())?;
+/// assert!(relax.status != rotavg::conjugate::SdpStatus::Failed);
+/// assert!(relax.eigenvalue_ratio < 1e-6); // Z is rank one: the relaxation is tight
+/// let s_sdp = extract_rotation(&relax.z).unwrap();
+/// assert!(angle_between(&s_sdp, &s) < 0.05);
+/// // An independently verified bound below the cost of every rotation, and close to it here.
+/// let bound = verify_lower_bound(&cost_matrix(&problem), &constraint_matrices(), &relax.multipliers).unwrap();
+/// let cost = problem.chordal_cost(&s_sdp);
+/// assert!(bound.lower_bound <= cost && cost - bound.lower_bound < 1e-5 * cost);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn relax_conjugate(
     problem: &ConjugateProblem,
     settings: &SdpSettings,
