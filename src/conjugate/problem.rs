@@ -239,19 +239,19 @@ impl ConjugateProblem {
     }
 
     /// Identifiability test `[H5]` with the given thresholds.
-///
-/// ```
-/// use rotavg::conjugate::{ConjugateProblem, Identifiability};
-/// use rotavg::so3::exp;
-/// use nalgebra::Vector3;
-/// // Every R_i about the z axis (planar motion): S is not determined about z.
-/// let rs = [exp(&Vector3::new(0.0, 0.0, 0.5)), exp(&Vector3::new(0.0, 0.0, 1.0))];
-/// let p = ConjugateProblem::from_rotations(&rs, &rs)?;
-/// let id = p.identifiability(&Default::default());
-/// assert!(matches!(id, Identifiability::ParallelAxes { .. }));
-/// assert!(p.require_identifiable(&Default::default()).is_err());
-/// # Ok::<(), rotavg::Error>(())
-/// ```
+    ///
+    /// ```
+    /// use rotavg::conjugate::{ConjugateProblem, Identifiability};
+    /// use rotavg::so3::exp;
+    /// use nalgebra::Vector3;
+    /// // Every R_i about the z axis (planar motion): S is not determined about z.
+    /// let rs = [exp(&Vector3::new(0.0, 0.0, 0.5)), exp(&Vector3::new(0.0, 0.0, 1.0))];
+    /// let p = ConjugateProblem::from_rotations(&rs, &rs)?;
+    /// let id = p.identifiability(&Default::default());
+    /// assert!(matches!(id, Identifiability::ParallelAxes { .. }));
+    /// assert!(p.require_identifiable(&Default::default()).is_err());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn identifiability(&self, settings: &DiagnosticSettings) -> Identifiability {
         let mut scatter = Matrix3::zeros();
         let mut informative = 0usize;
@@ -303,20 +303,20 @@ impl ConjugateProblem {
     }
 
     /// Data diagnostics: per-pair angle mismatch `[H4]`, uninformative pairs, identifiability.
-///
-/// ```
-/// use rotavg::conjugate::ConjugateProblem;
-/// use rotavg::so3::exp;
-/// use nalgebra::Vector3;
-/// // Pair 1 is mis-paired: its L and R rotate by different angles (0.5 vs 1.0 rad), which no
-/// // conjugation can explain.
-/// let l = [exp(&Vector3::new(0.5, 0.0, 0.0)), exp(&Vector3::new(0.0, 0.5, 0.0))];
-/// let r = [exp(&Vector3::new(0.0, 0.5, 0.0)), exp(&Vector3::new(0.0, 0.0, 1.0))];
-/// let d = ConjugateProblem::from_rotations(&l, &r)?.diagnose(&Default::default());
-/// assert_eq!(d.suspicious_pairs, vec![1]);
-/// assert!((d.max_angle_mismatch - 0.5).abs() < 1e-12);
-/// # Ok::<(), rotavg::Error>(())
-/// ```
+    ///
+    /// ```
+    /// use rotavg::conjugate::ConjugateProblem;
+    /// use rotavg::so3::exp;
+    /// use nalgebra::Vector3;
+    /// // Pair 1 is mis-paired: its L and R rotate by different angles (0.5 vs 1.0 rad), which no
+    /// // conjugation can explain.
+    /// let l = [exp(&Vector3::new(0.5, 0.0, 0.0)), exp(&Vector3::new(0.0, 0.5, 0.0))];
+    /// let r = [exp(&Vector3::new(0.0, 0.5, 0.0)), exp(&Vector3::new(0.0, 0.0, 1.0))];
+    /// let d = ConjugateProblem::from_rotations(&l, &r)?.diagnose(&Default::default());
+    /// assert_eq!(d.suspicious_pairs, vec![1]);
+    /// assert!((d.max_angle_mismatch - 0.5).abs() < 1e-12);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn diagnose(&self, settings: &DiagnosticSettings) -> Diagnostics {
         let mismatch: Vec<f64> = self
             .pairs
