@@ -1,5 +1,6 @@
 //! What every solver reports: iterations, why it stopped (with the measured value and its
-//! threshold), and wall time.
+//! threshold), and wall time: [`SolverReport`] with its [`Termination`]. Every solution type
+//! carries one (`report` field); its `Display` is what the CLI prints on the `solver` line.
 
 use serde::{Deserialize, Serialize};
 use std::fmt;

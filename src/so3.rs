@@ -2,6 +2,23 @@
 //! validation of user rotations, and seeded random rotations for tests, examples and the demo.
 //!
 //! Equations are stated in `paper-notes/conventions.md` (labels `[C1]`..`[C6]`).
+//!
+//! - Maps: [`hat`], [`vee`], [`exp`], [`log`] (accurate near 0 and pi), [`angle`].
+//! - Distances: [`angle_between`], [`chordal_distance`], [`quaternion_distance`], or
+//!   [`Metric::distance`] / [`Metric::from_angle`].
+//! - Matrices from users: [`project_to_so3`], [`rotation_from_matrix`] and
+//!   [`rotation_from_rows`] (validation at [`DEFAULT_ROTATION_TOLERANCE`]), [`rotation_to_rows`].
+//! - Seeded randomness: [`random_rotation`], [`perturb`] (exact angle), [`perturb_gaussian`].
+//!
+//! ```
+//! use rotavg::so3::{angle_between, exp, log, Metric};
+//! use nalgebra::Vector3;
+//! let r = exp(&Vector3::new(0.0, 0.0, 0.5));
+//! let s = exp(&Vector3::new(0.0, 0.0, -0.5));
+//! assert!((angle_between(&r, &s) - 1.0).abs() < 1e-12);
+//! assert!((Metric::Chordal.distance(&r, &s) - Metric::Chordal.from_angle(1.0)).abs() < 1e-12);
+//! assert!((log(&r) - Vector3::new(0.0, 0.0, 0.5)).norm() < 1e-15);
+//! ```
 
 use crate::error::{Error, Result};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};

@@ -1,4 +1,5 @@
-//! Seeded synthetic conjugate instances with a planted `S` (tests, benches, the demo).
+//! Seeded synthetic conjugate instances with a planted `S` (tests, benches, the demo):
+//! [`random_instance`].
 
 use super::problem::{ConjugatePair, ConjugateProblem};
 use crate::so3::{Rotation, exp, perturb_gaussian, random_rotation, random_unit_vector};

@@ -1,4 +1,9 @@
 //! The validated multiple-rotation-averaging problem: nodes, edges, weights, cost.
+//!
+//! [`MultipleProblem::new`] validates [`Edge`]s (`R_ij R_i = R_j`, weights > 0); the problem
+//! then gives the chordal cost [`MultipleProblem::chordal_cost`], residual angles, connected
+//! components ([`MultipleProblem::components`], [`MultipleProblem::largest_component`]) and
+//! the gauge fix [`fix_gauge`].
 
 use crate::error::{Error, Result};
 use crate::so3::{Rotation, angle_between};

@@ -1,4 +1,6 @@
-//! Seeded synthetic view graphs with a planted ground truth, for tests, benchmarks and the demo.
+//! Seeded synthetic view graphs with a planted ground truth, for tests, benchmarks and the demo:
+//! [`SyntheticGraph::generate`] (random connected graph, Gaussian noise, outliers) and
+//! [`z_cycle`] (a cycle with a known loop error, whose local minima are known in closed form).
 
 use crate::multiple::{Edge, MultipleProblem};
 use crate::so3::{Rotation, exp, perturb_gaussian, random_rotation};

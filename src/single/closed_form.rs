@@ -1,4 +1,5 @@
-//! The closed-form means: chordal L2 `[S1]` and quaternion L2 `[S2]`.
+//! The closed-form means: chordal L2 `[S1]` ([`chordal_l2_mean`]) and quaternion L2 `[S2]`
+//! ([`quaternion_l2_mean`]).
 
 use super::{Local, Norm, SingleProblem, SingleSettings, SingleSolution, average_single};
 use crate::error::Result;
