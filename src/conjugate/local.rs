@@ -33,6 +33,13 @@ pub enum Loss {
 
 impl Loss {
     /// `rho(d)`.
+    ///
+    /// ```
+    /// use rotavg::conjugate::Loss;
+    /// assert_eq!(Loss::Squared.rho(3.0), 9.0);
+    /// assert_eq!(Loss::L1.rho(3.0), 3.0);
+    /// assert_eq!(Loss::Huber { delta: 1.0 }.rho(3.0), 5.0); // 2 delta d - delta^2
+    /// ```
     pub fn rho(self, d: f64) -> f64 {
         match self {
             Loss::Squared => d * d,

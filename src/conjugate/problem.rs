@@ -187,6 +187,18 @@ impl ConjugateProblem {
     }
 
     /// Build from parallel slices of `L_i` and `R_i`, all weights 1.
+    ///
+    /// ```
+    /// use rotavg::conjugate::ConjugateProblem;
+    /// use rotavg::so3::{exp, Rotation};
+    /// use nalgebra::Vector3;
+    /// let s = exp(&Vector3::new(0.1, 0.2, 0.3));
+    /// let r = exp(&Vector3::new(0.0, 0.5, 0.0));
+    /// let p = ConjugateProblem::from_rotations(&[s * r * s.inverse()], &[r])?;
+    /// assert!(p.chordal_cost(&s) < 1e-28 && p.residual_angles(&s)[0] < 1e-7);
+    /// assert!(ConjugateProblem::from_rotations(&[Rotation::identity()], &[]).is_err()); // lengths differ
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn from_rotations(left: &[Rotation], right: &[Rotation]) -> Result<Self> {
         if left.len() != right.len() {
             return Err(Error::InvalidSettings {

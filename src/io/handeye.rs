@@ -428,6 +428,29 @@ pub fn interpolate(stream: &[StampedPose], t: f64, max_gap: f64) -> Option<Pose>
 /// hand stream interpolated at that time; for matched samples `i` (every `subsample`-th) and
 /// `j = i + stride`, `L = rot(H_i^-1 H_j)`, `R = rot(E_i^-1 E_j)`, so `R = S^-1 L S` with `S`
 /// the camera-to-hand rotation.
+///
+/// ```
+/// use rotavg::conjugate::{solve_conjugate, ConjugateSettings};
+/// use rotavg::io::handeye::{eth_problem, MotionSettings, Pose, StampedPose};
+/// use rotavg::so3::{angle_between, exp};
+/// use nalgebra::Vector3;
+/// // Hand poses H_k about changing axes at 10 Hz; camera poses E_k = X^-1 H_k X (rotation
+/// // parts), time-stamped identically, so that every relative motion satisfies
+/// // R = X^-1 L X exactly.
+/// let x = exp(&Vector3::new(0.3, -0.2, 0.5));
+/// let stamped = |k: usize, r| StampedPose { time: 0.1 * k as f64, pose: Pose { rotation: r, translation: Vector3::zeros() } };
+/// let hand: Vec<_> = (0..12).map(|k| {
+///     let t = k as f64;
+///     stamped(k, exp(&Vector3::new(0.3 * t.sin(), 0.2 * t, 0.4 * t.cos())))
+/// }).collect();
+/// let camera: Vec<_> = hand.iter().enumerate().map(|(k, h)| stamped(k, x.inverse() * h.pose.rotation * x)).collect();
+/// let settings = MotionSettings { stride: 2, subsample: 1, max_gap: 0.2, ..Default::default() };
+/// let (problem, stats) = eth_problem(&hand, &camera, &settings)?;
+/// assert!(stats.pairs >= 5);
+/// let s = solve_conjugate(&problem, &ConjugateSettings::default())?;
+/// assert!(angle_between(&s.estimate, &x) < 1e-9);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn eth_problem(
     hand: &[StampedPose],
     camera: &[StampedPose],

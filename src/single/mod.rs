@@ -279,6 +279,16 @@ impl SingleSettings {
     }
 
     /// Check every value; [`Error::InvalidSettings`] names the first bad one.
+    ///
+    /// ```
+    /// use rotavg::single::{Norm, SingleSettings};
+    /// use rotavg::Metric;
+    /// assert!(SingleSettings::new(Metric::Geodesic, Norm::L1).validate().is_ok());
+    /// // The quaternion L1 mean is not implemented: refused up front, not at solve time.
+    /// assert!(SingleSettings::new(Metric::Quaternion, Norm::L1).validate().is_err());
+    /// let bad = SingleSettings { max_iterations: 0, ..Default::default() };
+    /// assert!(bad.validate().unwrap_err().to_string().contains("max_iterations"));
+    /// ```
     pub fn validate(&self) -> Result<()> {
         let bad = |name: &str, reason: String| {
             Err(Error::InvalidSettings {
