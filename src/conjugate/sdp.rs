@@ -45,6 +45,20 @@ pub fn lift(s: &Matrix3<f64>, y: f64) -> Vec10 {
 }
 
 /// The cost matrix `M` `[H2]`: `s^T M s = sum_i w_i ||S R_i - L_i S||_F^2` for every 3x3 `S`.
+///
+/// ```
+/// use rand::SeedableRng;
+/// use rotavg::conjugate::sdp::cost_matrix;
+/// use rotavg::conjugate::synthetic::random_instance;
+/// use rotavg::so3::random_rotation;
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+/// let (p, _) = random_instance(8, 0.1, 0.0, &mut rng);
+/// let s = random_rotation(&mut rng);
+/// // g(S) = vec(S)^T M vec(S), column-major vec.
+/// let v = nalgebra::SVector::<f64, 9>::from_column_slice(s.matrix().as_slice());
+/// let quad = (v.transpose() * cost_matrix(&p) * v)[0];
+/// assert!((quad - p.chordal_cost(&s)).abs() < 1e-12 * (1.0 + quad));
+/// ```
 pub fn cost_matrix(problem: &ConjugateProblem) -> Mat9 {
     let mut m = Mat9::zeros();
     let eye = Matrix3::<f64>::identity();
@@ -80,6 +94,21 @@ fn add_bilinear(a: &mut Mat10, i: usize, j: usize, coef: f64) {
 /// The 31 constraints `[H3]`, in this order: `y^2 = 1`; `S^T S = y^2 I` (6, entries `a <= b`);
 /// `S S^T = y^2 I` (6); `col_a x col_b = y col_c` for cyclic `(a, b, c)` (9); the row versions
 /// `row_a x row_b = y row_c` (9). Every `S` in SO(3) with `y = 1` satisfies all of them.
+///
+/// ```
+/// use rotavg::conjugate::sdp::{constraint_matrices, lift};
+/// use rotavg::so3::exp;
+/// let s = exp(&nalgebra::Vector3::new(0.3, -1.2, 0.8));
+/// let z = lift(s.matrix(), 1.0);
+/// let cons = constraint_matrices();
+/// assert_eq!(cons.len(), 31);
+/// // A rotation with y = 1 satisfies every constraint z^T A_k z = b_k.
+/// assert!(cons.iter().all(|c| ((z.transpose() * c.matrix * z)[0] - c.rhs).abs() < 1e-14));
+/// // A reflection does not (the cross-product constraints fix det S = +1).
+/// let f = -s.matrix();
+/// let zf = lift(&f, 1.0);
+/// assert!(cons.iter().any(|c| ((zf.transpose() * c.matrix * zf)[0] - c.rhs).abs() > 0.5));
+/// ```
 pub fn constraint_matrices() -> Vec<QcqpConstraint> {
     let y = Y_INDEX;
     let mut out = Vec::with_capacity(31);
