@@ -119,6 +119,24 @@ impl Certificate {
     /// The verdict is `Certified` iff a lower bound is given, both bounds are finite, and
     /// `gap <= max(tol.absolute, tol.relative * max(|ub|, 1e-12))`; `GapReported` when a finite
     /// lower bound exceeds that; `Inconclusive` when there is no usable lower bound.
+    ///
+    /// ```
+    /// use rotavg::{BoundMethod, Certificate, Verdict};
+    /// use rotavg::certificate::GapTolerance;
+    /// let tol = GapTolerance::default(); // relative 1e-6, absolute 1e-9
+    /// // A verified lower bound within 1e-6 relative of the cost: certified.
+    /// let c = Certificate::from_bounds(10.0, Some(10.0 - 5e-6), BoundMethod::Dual, None, tol, "example", 0.0);
+    /// assert_eq!(c.verdict, Verdict::Certified);
+    /// assert!((c.gap.unwrap() - 5e-6).abs() < 1e-12);
+    /// // A lower bound 10 % below the cost: the gap is proven but too large.
+    /// let c = Certificate::from_bounds(10.0, Some(9.0), BoundMethod::Sdp, None, tol, "", 0.0);
+    /// assert_eq!(c.verdict, Verdict::GapReported);
+    /// assert!((c.relative_gap.unwrap() - 0.1).abs() < 1e-12);
+    /// // No (finite) lower bound: never certified.
+    /// let c = Certificate::from_bounds(10.0, Some(f64::NAN), BoundMethod::Dual, None, tol, "", 0.0);
+    /// assert_eq!(c.verdict, Verdict::Inconclusive);
+    /// assert!(c.lower_bound.is_none() && !c.is_certified());
+    /// ```
     pub fn from_bounds(
         upper_bound: f64,
         lower_bound: Option<f64>,

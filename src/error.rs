@@ -168,6 +168,11 @@ impl std::error::Error for Error {}
 
 impl Error {
     /// A parse error at `file:line`.
+    ///
+    /// ```
+    /// let e = rotavg::Error::parse(Some("graph.g2o"), Some(12), "expected 7 numbers");
+    /// assert_eq!(e.to_string(), "graph.g2o:12: expected 7 numbers");
+    /// ```
     pub fn parse(file: Option<&str>, line: Option<usize>, message: impl Into<String>) -> Self {
         Error::Parse {
             location: Location {
@@ -180,6 +185,13 @@ impl Error {
 
     /// Attach a file name (and line, if absent) to a data error raised while reading a file, so
     /// that validation errors found after parsing still name their source.
+    ///
+    /// ```
+    /// use rotavg::Error;
+    /// // A validation error found after parsing becomes a parse error that names the file.
+    /// let e = Error::Empty { what: "the list of rotations".into() }.in_file("samples.json", None);
+    /// assert_eq!(e.to_string(), "samples.json: the list of rotations is empty");
+    /// ```
     pub fn in_file(self, file: &str, line: Option<usize>) -> Self {
         match self {
             Error::Parse {

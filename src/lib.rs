@@ -15,6 +15,30 @@
 //! and `det R = +1` ([`Rotation`] = `nalgebra::Rotation3<f64>`); `theta(R, S)` is the angle of
 //! `R^T S` in `[0, pi]`; chordal distance `||R - S||_F = 2 sqrt(2) sin(theta/2)`; quaternion
 //! distance `2 sin(theta/4)`.
+//!
+//! # Where to start
+//!
+//! | problem | validated data | local solve | certify | whole pipeline |
+//! |---|---|---|---|---|
+//! | single | [`single::SingleProblem::new`] | [`single::average_single`] | [`single::certify_single`] | [`single::average_single`] |
+//! | multiple | [`multiple::MultipleProblem::new`] | [`multiple::solve_multiple`] | [`certify::certify_multiple`], [`multiple::certify_multiple_estimate`] | [`multiple::average_multiple`] |
+//! | conjugate | [`conjugate::ConjugateProblem::new`] | [`conjugate::solve_conjugate`] | [`conjugate::certify_conjugate`] | [`conjugate::average_conjugate`] |
+//!
+//! SDP relaxations: [`relax::relax_multiple`], [`conjugate::relax_conjugate`]. Files:
+//! [`io`] (g2o, TORO, 1DSfM, Bundler, hand-eye, JSON). SO(3) tools: [`so3`]. Results carry a
+//! [`SolverReport`] (with its [`Termination`]) and a [`Certificate`]; errors are one [`Error`].
+//! The README (also compiled as doc tests) shows the command-line tool and longer examples.
+//!
+//! ```
+//! use rotavg::multiple::synthetic::SyntheticGraph;
+//! use rotavg::multiple::{average_multiple, AverageMultipleSettings};
+//! // A seeded random view graph: 50 nodes, 150 edges, 0.05 rad noise; solve and certify.
+//! let (problem, _truth) = SyntheticGraph { num_rotations: 50, num_edges: 150, ..Default::default() }.generate();
+//! let estimate = average_multiple(&problem, &AverageMultipleSettings::default())?;
+//! assert!(estimate.certificate.as_ref().is_some_and(|c| c.is_certified()));
+//! assert!(rotavg::so3::angle(&estimate.solution.rotations[0]) < 1e-12); // gauge R_0 = I
+//! # Ok::<(), rotavg::Error>(())
+//! ```
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 

@@ -1,11 +1,24 @@
 //! What every solver reports: iterations, why it stopped (with the measured value and its
-//! threshold), and wall time.
+//! threshold), and wall time: [`SolverReport`] with its [`Termination`]. Every solution type
+//! carries one (`report` field); its `Display` is what the CLI prints on the `solver` line.
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
 /// Why an iterative solver stopped. Each variant carries the measured value and the threshold
 /// it was compared against, so that "converged" is never an unexplained word.
+///
+/// ```
+/// use rotavg::Termination;
+/// let t = Termination::Converged { measure: "gradient norm".into(), value: 3.2e-11, threshold: 1e-10 };
+/// assert!(t.is_converged() && t.name() == "converged");
+/// assert_eq!(t.to_string(), "converged: gradient norm 3.200e-11 < 1.0e-10");
+/// let t = Termination::IterationLimit { iterations: 100, value: 1e-3, threshold: 1e-10 };
+/// assert!(!t.is_converged());
+/// // JSON form (SPEC section 5): a `status` tag plus the variant's fields.
+/// let json = serde_json::to_value(&t).unwrap();
+/// assert_eq!(json["status"], "iteration_limit");
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "status", rename_all = "snake_case")]
 pub enum Termination {
@@ -98,6 +111,12 @@ impl fmt::Display for Termination {
 }
 
 /// The common part of every solver's report (SPEC section 5, `"solver"`).
+///
+/// ```
+/// use rotavg::{SolverReport, Termination};
+/// let r = SolverReport { name: "karcher".into(), iterations: 7, termination: Termination::ClosedForm, seconds: 0.0025 };
+/// assert_eq!(r.to_string(), "karcher: 7 iterations, closed form (2.500 ms)");
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SolverReport {
     /// Solver name, e.g. `"karcher"`, `"gauss-newton"`.

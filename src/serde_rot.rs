@@ -2,6 +2,20 @@
 //! layout of SPEC section 5. Use with `#[serde(with = "rotavg::serde_rot::rotation")]` or
 //! `#[serde(with = "rotavg::serde_rot::rotations")]`. Deserialisation validates the rotation with
 //! [`crate::so3::DEFAULT_ROTATION_TOLERANCE`].
+//!
+//! ```
+//! use rotavg::Rotation;
+//! #[derive(serde::Serialize, serde::Deserialize)]
+//! struct Pose {
+//!     #[serde(with = "rotavg::serde_rot::rotation")]
+//!     rotation: Rotation,
+//! }
+//! let json = serde_json::to_string(&Pose { rotation: Rotation::identity() }).unwrap();
+//! assert_eq!(json, r#"{"rotation":[[1.0,0.0,0.0],[0.0,1.0,0.0],[0.0,0.0,1.0]]}"#);
+//! // Reading validates: a reflection is refused.
+//! let bad = r#"{"rotation":[[1,0,0],[0,1,0],[0,0,-1]]}"#;
+//! assert!(serde_json::from_str::<Pose>(bad).is_err());
+//! ```
 
 /// One rotation as a row-major nested array.
 pub mod rotation {

@@ -2,6 +2,23 @@
 //! validation of user rotations, and seeded random rotations for tests, examples and the demo.
 //!
 //! Equations are stated in `paper-notes/conventions.md` (labels `[C1]`..`[C6]`).
+//!
+//! - Maps: [`hat`], [`vee`], [`exp`], [`log`] (accurate near 0 and pi), [`angle`].
+//! - Distances: [`angle_between`], [`chordal_distance`], [`quaternion_distance`], or
+//!   [`Metric::distance`] / [`Metric::from_angle`].
+//! - Matrices from users: [`project_to_so3`], [`rotation_from_matrix`] and
+//!   [`rotation_from_rows`] (validation at [`DEFAULT_ROTATION_TOLERANCE`]), [`rotation_to_rows`].
+//! - Seeded randomness: [`random_rotation`], [`perturb`] (exact angle), [`perturb_gaussian`].
+//!
+//! ```
+//! use rotavg::so3::{angle_between, exp, log, Metric};
+//! use nalgebra::Vector3;
+//! let r = exp(&Vector3::new(0.0, 0.0, 0.5));
+//! let s = exp(&Vector3::new(0.0, 0.0, -0.5));
+//! assert!((angle_between(&r, &s) - 1.0).abs() < 1e-12);
+//! assert!((Metric::Chordal.distance(&r, &s) - Metric::Chordal.from_angle(1.0)).abs() < 1e-12);
+//! assert!((log(&r) - Vector3::new(0.0, 0.0, 0.5)).norm() < 1e-15);
+//! ```
 
 use crate::error::{Error, Result};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
@@ -49,6 +66,16 @@ impl Metric {
     }
 
     /// The distance as a function of the angle `theta` between the two rotations `[C2]`.
+    ///
+    /// ```
+    /// use rotavg::so3::{chordal_distance, exp, Metric};
+    /// use nalgebra::Vector3;
+    /// // A quarter turn: chordal distance 2 sqrt(2) sin(pi/4) = 2.
+    /// let theta = std::f64::consts::FRAC_PI_2;
+    /// assert!((Metric::Chordal.from_angle(theta) - 2.0).abs() < 1e-12);
+    /// let r = exp(&Vector3::new(theta, 0.0, 0.0));
+    /// assert!((chordal_distance(&r, &rotavg::Rotation::identity()) - 2.0).abs() < 1e-12);
+    /// ```
     pub fn from_angle(self, theta: f64) -> f64 {
         match self {
             Metric::Geodesic => theta,
@@ -115,6 +142,15 @@ pub fn exp(v: &Vector3<f64>) -> Rotation {
 
 /// Rotation angle of `r` in `[0, pi]`, accurate near 0 and near pi `[C4]`:
 /// `theta = atan2(||vee(R - R^T)||, tr R - 1)`.
+///
+/// ```
+/// use rotavg::so3::{angle, exp};
+/// use nalgebra::Vector3;
+/// assert!((angle(&exp(&Vector3::new(0.0, 3.0, 0.0))) - 3.0).abs() < 1e-12);
+/// // exp of a vector of length 4 > pi is the rotation by 2 pi - 4 about the opposite axis.
+/// let t = 2.0 * std::f64::consts::PI - 4.0;
+/// assert!((angle(&exp(&Vector3::new(4.0, 0.0, 0.0))) - t).abs() < 1e-12);
+/// ```
 pub fn angle(r: &Rotation) -> f64 {
     let m = r.matrix();
     let s = vee(m).norm(); // sin(theta)
@@ -123,6 +159,15 @@ pub fn angle(r: &Rotation) -> f64 {
 }
 
 /// `theta(R, S)`: the angle of `R^T S`, in `[0, pi]`.
+///
+/// ```
+/// use rotavg::so3::{angle_between, exp};
+/// use nalgebra::Vector3;
+/// let r = exp(&Vector3::new(0.0, 0.0, 0.25));
+/// let s = exp(&Vector3::new(0.0, 0.0, 1.0));
+/// assert!((angle_between(&r, &s) - 0.75).abs() < 1e-12);
+/// assert!((angle_between(&r, &s) - angle_between(&s, &r)).abs() < 1e-15);
+/// ```
 pub fn angle_between(r: &Rotation, s: &Rotation) -> f64 {
     angle(&(r.inverse() * s))
 }
@@ -133,6 +178,16 @@ pub fn chordal_distance(r: &Rotation, s: &Rotation) -> f64 {
 }
 
 /// Quaternion distance `min(||q_R - q_S||, ||q_R + q_S||) = 2 sin(theta / 4)`.
+///
+/// ```
+/// use rotavg::so3::{exp, quaternion_distance, Metric};
+/// use nalgebra::Vector3;
+/// // Near pi the quaternion distance 2 sin(theta/4) -> sqrt(2), whichever sign the
+/// // quaternions have.
+/// let r = exp(&Vector3::new(0.0, 3.1, 0.0));
+/// let d = quaternion_distance(&r, &rotavg::Rotation::identity());
+/// assert!((d - Metric::Quaternion.from_angle(3.1)).abs() < 1e-12);
+/// ```
 pub fn quaternion_distance(r: &Rotation, s: &Rotation) -> f64 {
     let qr = to_quaternion(r);
     let qs = to_quaternion(s);
@@ -217,6 +272,12 @@ pub fn project_to_so3(m: &Matrix3<f64>) -> Option<Rotation> {
 }
 
 /// `||R^T R - I||_F` and `det R` of a matrix: how far it is from being a rotation.
+///
+/// ```
+/// use nalgebra::Matrix3;
+/// let (orth, det) = rotavg::so3::rotation_defect(&(Matrix3::identity() * 2.0));
+/// assert!((orth - 3f64.sqrt() * 3.0).abs() < 1e-12 && (det - 8.0).abs() < 1e-12);
+/// ```
 pub fn rotation_defect(m: &Matrix3<f64>) -> (f64, f64) {
     (
         (m.transpose() * m - Matrix3::identity()).norm(),
@@ -257,6 +318,20 @@ pub fn rotation_from_matrix(m: &Matrix3<f64>, tol: f64, item: &str) -> Result<Ro
 }
 
 /// Build a rotation from a row-major 3x3 array (the JSON layout), validating it.
+///
+/// ```
+/// use rotavg::so3::{rotation_from_rows, rotation_to_rows, DEFAULT_ROTATION_TOLERANCE};
+/// // A quarter turn about z, row-major: (1, 0, 0) -> (0, 1, 0).
+/// let rows = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+/// let r = rotation_from_rows(&rows, DEFAULT_ROTATION_TOLERANCE, "example")?;
+/// assert!((r * nalgebra::Vector3::x() - nalgebra::Vector3::y()).norm() < 1e-15);
+/// let back = rotation_to_rows(&r); // equal up to the re-orthonormalisation's rounding
+/// assert!(back.iter().flatten().zip(rows.iter().flatten()).all(|(a, b)| (a - b).abs() < 1e-15));
+/// // A matrix that is not a rotation is rejected and named in the error.
+/// let err = rotation_from_rows(&[[1.0, 0.0, 0.0]; 3], DEFAULT_ROTATION_TOLERANCE, "edge 7");
+/// assert!(err.unwrap_err().to_string().starts_with("edge 7 is not a rotation"));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn rotation_from_rows(rows: &[[f64; 3]; 3], tol: f64, item: &str) -> Result<Rotation> {
     let m = Matrix3::from_fn(|i, j| rows[i][j]);
     rotation_from_matrix(&m, tol, item)
@@ -300,12 +375,31 @@ pub fn random_unit_vector<R: Rng + ?Sized>(rng: &mut R) -> Vector3<f64> {
 
 /// `R exp(angle * hat(a))` for a uniformly random unit axis `a`: a rotation at exactly angle
 /// `angle` (radians, in `[0, pi]`) from `r`.
+///
+/// ```
+/// use rand::SeedableRng;
+/// use rotavg::so3::{angle_between, perturb, random_rotation};
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+/// let r = random_rotation(&mut rng);
+/// let s = perturb(&r, 0.4, &mut rng);
+/// assert!((angle_between(&r, &s) - 0.4).abs() < 1e-12);
+/// ```
 pub fn perturb<R: Rng + ?Sized>(r: &Rotation, angle: f64, rng: &mut R) -> Rotation {
     r * exp(&(random_unit_vector(rng) * angle))
 }
 
 /// `R exp(hat(w))` with `w` isotropic Gaussian of standard deviation `sigma` (radians) per
 /// component: the usual noise model for synthetic data.
+///
+/// ```
+/// use rand::SeedableRng;
+/// use rotavg::so3::{angle_between, perturb_gaussian, Rotation};
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(4);
+/// let id = Rotation::identity();
+/// // The angle of exp(hat(w)), w ~ N(0, sigma^2 I_3), has mean sigma sqrt(8 / pi) ~ 0.016.
+/// let mean: f64 = (0..2000).map(|_| angle_between(&id, &perturb_gaussian(&id, 0.01, &mut rng))).sum::<f64>() / 2000.0;
+/// assert!((mean - 0.01 * (8.0 / std::f64::consts::PI).sqrt()).abs() < 1e-3);
+/// ```
 pub fn perturb_gaussian<R: Rng + ?Sized>(r: &Rotation, sigma: f64, rng: &mut R) -> Rotation {
     let w = Vector3::new(gaussian(rng), gaussian(rng), gaussian(rng)) * sigma;
     r * exp(&w)

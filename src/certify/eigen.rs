@@ -9,6 +9,34 @@
 //!   factorisation: shift-invert). Its numbers are estimates and never enter a bound by themselves.
 //!
 //! Nothing here forms a dense `3n x 3n` matrix.
+//!
+//! ```
+//! use faer::sparse::{SparseColMat, Triplet};
+//! use rotavg::certify::eigen::{lanczos_extreme, sparse_matvec, Extreme, LanczosSettings, ShiftedCholesky};
+//! // S = tridiag(-1, 2, -1) of size 10: lambda_min = 2 - 2 cos(pi / 11) (closed form).
+//! let n = 10;
+//! let mut t = Vec::new();
+//! for i in 0..n {
+//!     t.push(Triplet::new(i, i, 2.0));
+//!     if i + 1 < n {
+//!         t.push(Triplet::new(i, i + 1, -1.0));
+//!         t.push(Triplet::new(i + 1, i, -1.0));
+//!     }
+//! }
+//! let s = SparseColMat::try_new_from_triplets(n, n, &t).unwrap();
+//! let exact = 2.0 - 2.0 * (std::f64::consts::PI / 11.0).cos();
+//! // Estimation (never a bound by itself): Lanczos.
+//! let est = lanczos_extreme(n, |x, y| sparse_matvec(s.as_ref(), x, y), Extreme::Smallest, 4.0, &LanczosSettings::default(), None);
+//! assert!((est.value - exact).abs() < 1e-8);
+//! // Verification: S - 0.9 lambda_min I factorises, which proves lambda_min(S) >= 0.9 lambda_min - margin.
+//! let mut ch = ShiftedCholesky::new(s, 2)?;
+//! let f = ch.factor(-0.9 * exact, 0.0).expect("positive definite");
+//! assert!(f.verified_lower_bound() <= exact && f.verified_lower_bound() > 0.89 * exact);
+//! // Shifting past lambda_min: the factorisation fails, and nothing is claimed.
+//! drop(f);
+//! assert!(ch.factor(-1.1 * exact, 0.0).is_none());
+//! # Ok::<(), rotavg::Error>(())
+//! ```
 
 use crate::error::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};

@@ -191,6 +191,20 @@ pub fn average_conjugate(
 }
 
 /// [`average_conjugate`] with an optional user initialisation (replaces the closed form).
+///
+/// ```
+/// use rand::SeedableRng;
+/// use rotavg::conjugate::{average_conjugate_from, synthetic::random_instance, AverageSettings};
+/// use rotavg::so3::Rotation;
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(8);
+/// let (problem, _s) = random_instance(10, 0.02, 0.0, &mut rng);
+/// // Even from a poor start the SDP step finds and certifies the global minimum.
+/// let est = average_conjugate_from(&problem, &AverageSettings::default(), Some(&Rotation::identity()))?;
+/// let cert = est.certificate.unwrap();
+/// assert!(cert.is_certified());
+/// assert!((cert.upper_bound - est.solution.chordal_cost).abs() <= 1e-12 * cert.upper_bound);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn average_conjugate_from(
     problem: &ConjugateProblem,
     settings: &AverageSettings,

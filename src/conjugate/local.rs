@@ -33,6 +33,13 @@ pub enum Loss {
 
 impl Loss {
     /// `rho(d)`.
+    ///
+    /// ```
+    /// use rotavg::conjugate::Loss;
+    /// assert_eq!(Loss::Squared.rho(3.0), 9.0);
+    /// assert_eq!(Loss::L1.rho(3.0), 3.0);
+    /// assert_eq!(Loss::Huber { delta: 1.0 }.rho(3.0), 5.0); // 2 delta d - delta^2
+    /// ```
     pub fn rho(self, d: f64) -> f64 {
         match self {
             Loss::Squared => d * d,
@@ -168,6 +175,20 @@ fn pair_distance(metric: Metric, s: &Rotation, l: &Rotation, r: &Rotation) -> f6
 
 /// The cost `sum_i w_i rho(d(R_i, S^T L_i S))`. With `Metric::Chordal` and `Loss::Squared`
 /// this is `g(S)` `[H1]`.
+///
+/// ```
+/// use rotavg::conjugate::{conjugate_cost, ConjugateProblem, Loss};
+/// use rotavg::so3::{exp, Metric, Rotation};
+/// use nalgebra::Vector3;
+/// // One pair with L = Rz(0.3), R = I: for S = I the residual angle is 0.3.
+/// let p = ConjugateProblem::from_rotations(&[exp(&Vector3::new(0.0, 0.0, 0.3))], &[Rotation::identity()])?;
+/// let id = Rotation::identity();
+/// assert!((conjugate_cost(&p, &id, Metric::Geodesic, Loss::L1) - 0.3).abs() < 1e-12);
+/// assert!((conjugate_cost(&p, &id, Metric::Geodesic, Loss::Squared) - 0.09).abs() < 1e-12);
+/// // Chordal squared is the certified objective g(S).
+/// assert!((conjugate_cost(&p, &id, Metric::Chordal, Loss::Squared) - p.chordal_cost(&id)).abs() < 1e-12);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn conjugate_cost(problem: &ConjugateProblem, s: &Rotation, metric: Metric, loss: Loss) -> f64 {
     problem
         .pairs()
@@ -345,6 +366,19 @@ pub fn solve_conjugate(
 /// predicted decrease is below `1e3 eps |cost|` (rounding level, counted as converged), or when
 /// no decrease is possible otherwise (`Stalled`). Refuses unidentifiable data
 /// ([`Error::Degenerate`]).
+///
+/// ```
+/// use rand::SeedableRng;
+/// use rotavg::conjugate::{solve_conjugate_from, synthetic::random_instance, ConjugateSettings, Loss};
+/// use rotavg::so3::{angle_between, Metric, Rotation};
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(6);
+/// // 30 pairs, 0.01 rad noise, 20 % of the L_i replaced by random rotations.
+/// let (problem, s) = random_instance(30, 0.01, 0.2, &mut rng);
+/// let robust = ConjugateSettings { metric: Metric::Geodesic, loss: Loss::L1, ..Default::default() };
+/// let sol = solve_conjugate_from(&problem, &robust, &Rotation::identity())?;
+/// assert!(angle_between(&sol.estimate, &s) < 0.02); // the outliers are ignored
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn solve_conjugate_from(
     problem: &ConjugateProblem,
     settings: &ConjugateSettings,

@@ -187,6 +187,18 @@ impl ConjugateProblem {
     }
 
     /// Build from parallel slices of `L_i` and `R_i`, all weights 1.
+    ///
+    /// ```
+    /// use rotavg::conjugate::ConjugateProblem;
+    /// use rotavg::so3::{exp, Rotation};
+    /// use nalgebra::Vector3;
+    /// let s = exp(&Vector3::new(0.1, 0.2, 0.3));
+    /// let r = exp(&Vector3::new(0.0, 0.5, 0.0));
+    /// let p = ConjugateProblem::from_rotations(&[s * r * s.inverse()], &[r])?;
+    /// assert!(p.chordal_cost(&s) < 1e-28 && p.residual_angles(&s)[0] < 1e-7);
+    /// assert!(ConjugateProblem::from_rotations(&[Rotation::identity()], &[]).is_err()); // lengths differ
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn from_rotations(left: &[Rotation], right: &[Rotation]) -> Result<Self> {
         if left.len() != right.len() {
             return Err(Error::InvalidSettings {
@@ -239,6 +251,19 @@ impl ConjugateProblem {
     }
 
     /// Identifiability test `[H5]` with the given thresholds.
+    ///
+    /// ```
+    /// use rotavg::conjugate::{ConjugateProblem, Identifiability};
+    /// use rotavg::so3::exp;
+    /// use nalgebra::Vector3;
+    /// // Every R_i about the z axis (planar motion): S is not determined about z.
+    /// let rs = [exp(&Vector3::new(0.0, 0.0, 0.5)), exp(&Vector3::new(0.0, 0.0, 1.0))];
+    /// let p = ConjugateProblem::from_rotations(&rs, &rs)?;
+    /// let id = p.identifiability(&Default::default());
+    /// assert!(matches!(id, Identifiability::ParallelAxes { .. }));
+    /// assert!(p.require_identifiable(&Default::default()).is_err());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn identifiability(&self, settings: &DiagnosticSettings) -> Identifiability {
         let mut scatter = Matrix3::zeros();
         let mut informative = 0usize;
@@ -290,6 +315,20 @@ impl ConjugateProblem {
     }
 
     /// Data diagnostics: per-pair angle mismatch `[H4]`, uninformative pairs, identifiability.
+    ///
+    /// ```
+    /// use rotavg::conjugate::ConjugateProblem;
+    /// use rotavg::so3::exp;
+    /// use nalgebra::Vector3;
+    /// // Pair 1 is mis-paired: its L and R rotate by different angles (0.5 vs 1.0 rad), which no
+    /// // conjugation can explain.
+    /// let l = [exp(&Vector3::new(0.5, 0.0, 0.0)), exp(&Vector3::new(0.0, 0.5, 0.0))];
+    /// let r = [exp(&Vector3::new(0.0, 0.5, 0.0)), exp(&Vector3::new(0.0, 0.0, 1.0))];
+    /// let d = ConjugateProblem::from_rotations(&l, &r)?.diagnose(&Default::default());
+    /// assert_eq!(d.suspicious_pairs, vec![1]);
+    /// assert!((d.max_angle_mismatch - 0.5).abs() < 1e-12);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn diagnose(&self, settings: &DiagnosticSettings) -> Diagnostics {
         let mismatch: Vec<f64> = self
             .pairs

@@ -45,6 +45,20 @@ pub fn lift(s: &Matrix3<f64>, y: f64) -> Vec10 {
 }
 
 /// The cost matrix `M` `[H2]`: `s^T M s = sum_i w_i ||S R_i - L_i S||_F^2` for every 3x3 `S`.
+///
+/// ```
+/// use rand::SeedableRng;
+/// use rotavg::conjugate::sdp::cost_matrix;
+/// use rotavg::conjugate::synthetic::random_instance;
+/// use rotavg::so3::random_rotation;
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+/// let (p, _) = random_instance(8, 0.1, 0.0, &mut rng);
+/// let s = random_rotation(&mut rng);
+/// // g(S) = vec(S)^T M vec(S), column-major vec.
+/// let v = nalgebra::SVector::<f64, 9>::from_column_slice(s.matrix().as_slice());
+/// let quad = (v.transpose() * cost_matrix(&p) * v)[0];
+/// assert!((quad - p.chordal_cost(&s)).abs() < 1e-12 * (1.0 + quad));
+/// ```
 pub fn cost_matrix(problem: &ConjugateProblem) -> Mat9 {
     let mut m = Mat9::zeros();
     let eye = Matrix3::<f64>::identity();
@@ -81,6 +95,21 @@ fn add_bilinear(a: &mut Mat10, i: usize, j: usize, coef: f64) {
 /// `S S^T = y^2 I` (6); `col_a x col_b = y col_c` for cyclic `(a, b, c)` (9), i.e.
 /// `cof(S) = y S`. The row versions `row_a x row_b = y row_c` are the same 9 polynomials
 /// (`cof(S)_ck = y S_ck`) and are not repeated. Every `S` in SO(3) with `y = 1` satisfies all.
+///
+/// ```
+/// use rotavg::conjugate::sdp::{constraint_matrices, lift};
+/// use rotavg::so3::exp;
+/// let s = exp(&nalgebra::Vector3::new(0.3, -1.2, 0.8));
+/// let z = lift(s.matrix(), 1.0);
+/// let cons = constraint_matrices();
+/// assert_eq!(cons.len(), 22);
+/// // A rotation with y = 1 satisfies every constraint z^T A_k z = b_k.
+/// assert!(cons.iter().all(|c| ((z.transpose() * c.matrix * z)[0] - c.rhs).abs() < 1e-14));
+/// // A reflection does not (the cross-product constraints fix det S = +1).
+/// let f = -s.matrix();
+/// let zf = lift(&f, 1.0);
+/// assert!(cons.iter().any(|c| ((zf.transpose() * c.matrix * zf)[0] - c.rhs).abs() > 0.5));
+/// ```
 pub fn constraint_matrices() -> Vec<QcqpConstraint> {
     let y = Y_INDEX;
     let mut out = Vec::with_capacity(22);
@@ -210,6 +239,28 @@ pub struct SdpRelaxation {
 /// Solve the SDP relaxation `[H3]` with Clarabel. The cost is divided by the total weight
 /// before solving (Clarabel ended `AlmostSolved` on unscaled 100-pair instances, SPEC 6) and the
 /// multipliers are scaled back.
+///
+/// The solver's objective is never used as a bound: verify one from the multipliers with
+/// [`verify_lower_bound`] (or let [`crate::conjugate::certify_conjugate`] do it).
+///
+/// ```
+/// use rand::SeedableRng;
+/// use rotavg::conjugate::sdp::{constraint_matrices, cost_matrix, extract_rotation, verify_lower_bound};
+/// use rotavg::conjugate::{relax_conjugate, synthetic::random_instance, SdpSettings};
+/// use rotavg::so3::angle_between;
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+/// let (problem, s) = random_instance(20, 0.01, 0.0, &mut rng); // 20 pairs, 0.01 rad noise
+/// let relax = relax_conjugate(&problem, &SdpSettings::default())?;
+/// assert!(relax.status != rotavg::conjugate::SdpStatus::Failed);
+/// assert!(relax.eigenvalue_ratio < 1e-6); // Z is rank one: the relaxation is tight
+/// let s_sdp = extract_rotation(&relax.z).unwrap();
+/// assert!(angle_between(&s_sdp, &s) < 0.05);
+/// // An independently verified bound below the cost of every rotation, and close to it here.
+/// let bound = verify_lower_bound(&cost_matrix(&problem), &constraint_matrices(), &relax.multipliers).unwrap();
+/// let cost = problem.chordal_cost(&s_sdp);
+/// assert!(bound.lower_bound <= cost && cost - bound.lower_bound < 1e-5 * cost);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn relax_conjugate(
     problem: &ConjugateProblem,
     settings: &SdpSettings,

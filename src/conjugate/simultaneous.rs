@@ -307,6 +307,28 @@ pub fn average_then_conjugate(p: &SimultaneousProblem) -> Result<SimultaneousSol
 
 /// Joint Gauss-Newton on `J(R, S)` initialised by [`average_then_conjugate`] (so its cost is
 /// never higher than the baseline's).
+///
+/// ```
+/// use rotavg::conjugate::simultaneous::{solve_simultaneous, SimultaneousProblem};
+/// use rotavg::multiple::Edge;
+/// use rotavg::so3::{angle_between, exp};
+/// use nalgebra::Vector3;
+/// // Planted absolute rotations (R_0 = I) and S; exact edges on a 4-cycle plus a chord.
+/// let rs: Vec<_> = [[0.0, 0.0, 0.0], [0.4, 0.0, 0.1], [0.0, 0.6, -0.2], [0.3, -0.3, 0.8]]
+///     .iter()
+///     .map(|v| exp(&Vector3::from(*v)))
+///     .collect();
+/// let s = exp(&Vector3::new(0.2, -0.5, 0.4));
+/// let pairs = [(0, 1), (1, 2), (2, 3), (3, 0), (0, 2)];
+/// let edge = |i: usize, j: usize, rotation| Edge { i, j, rotation, weight: 1.0 };
+/// let right: Vec<_> = pairs.iter().map(|&(i, j)| edge(i, j, rs[j] * rs[i].inverse())).collect();
+/// let left: Vec<_> = right.iter().map(|e| edge(e.i, e.j, s * e.rotation * s.inverse())).collect();
+/// let p = SimultaneousProblem { num_nodes: 4, right, left };
+/// let sol = solve_simultaneous(&p, 50)?;
+/// assert!(sol.cost < 1e-18);
+/// assert!(angle_between(&sol.s, &s) < 1e-8 && angle_between(&sol.rotations[3], &rs[3]) < 1e-8);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn solve_simultaneous(
     p: &SimultaneousProblem,
     max_iterations: usize,

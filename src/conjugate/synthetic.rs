@@ -1,4 +1,5 @@
-//! Seeded synthetic conjugate instances with a planted `S` (tests, benches, the demo).
+//! Seeded synthetic conjugate instances with a planted `S` (tests, benches, the demo):
+//! [`random_instance`].
 
 use super::problem::{ConjugatePair, ConjugateProblem};
 use crate::so3::{Rotation, exp, perturb_gaussian, random_rotation, random_unit_vector};
@@ -8,6 +9,15 @@ use rand::Rng;
 /// `[0.2, 2.0]` rad, `L_i = S R_i S^T` perturbed by isotropic Gaussian noise of `sigma` radians
 /// per axis; a fraction `outliers` of the `L_i` replaced by uniformly random rotations.
 /// Returns the problem and the planted `S`.
+///
+/// ```
+/// use rand::SeedableRng;
+/// use rotavg::conjugate::synthetic::random_instance;
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(1);
+/// let (problem, s) = random_instance(5, 0.0, 0.0, &mut rng);
+/// assert_eq!(problem.num_pairs(), 5);
+/// assert!(problem.chordal_cost(&s) < 1e-24); // noise-free: the planted S is exact
+/// ```
 pub fn random_instance<R: Rng + ?Sized>(
     n: usize,
     sigma: f64,

@@ -196,6 +196,22 @@ pub fn read_graph(
 }
 
 /// Read a file from disk ([`read_graph`]); I/O errors name the path.
+///
+/// ```
+/// use rotavg::io::detect::{load_graph, GraphFormat, ReadOptions};
+/// // A TORO triangle (EDGE3 i j x y z roll pitch yaw), written to a temporary file.
+/// let path = std::env::temp_dir().join(format!("rotavg-doc-{}.g2o", std::process::id()));
+/// std::fs::write(&path, "EDGE3 0 1 0 0 0 0 0 0.1\nEDGE3 1 2 0 0 0 0 0 0.2\nEDGE3 2 0 0 0 0 0 0 -0.3\n").unwrap();
+/// let g = load_graph(&path, GraphFormat::Auto, &ReadOptions::default());
+/// std::fs::remove_file(&path).unwrap();
+/// let g = g?;
+/// assert_eq!(g.format, GraphFormat::G2o);
+/// assert_eq!((g.problem.num_rotations(), g.problem.num_edges()), (3, 3));
+/// // A missing file is an I/O error naming the path.
+/// let err = load_graph(std::path::Path::new("no/such/file.g2o"), GraphFormat::Auto, &ReadOptions::default());
+/// assert!(matches!(err, Err(rotavg::Error::Io { .. })));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn load_graph(path: &Path, format: GraphFormat, options: &ReadOptions) -> Result<LoadedGraph> {
     let name = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| Error::Io {

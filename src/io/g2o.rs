@@ -124,6 +124,14 @@ fn quaternion_rotation(t: &mut Tokens<'_>, tol: f64) -> Result<Rotation> {
 }
 
 /// `Rz(yaw) Ry(pitch) Rx(roll)` `[F2]`.
+///
+/// ```
+/// use rotavg::io::g2o::rotation_from_ypr;
+/// use nalgebra::Vector3;
+/// // Yaw alone turns x towards y; roll alone turns y towards z.
+/// assert!((rotation_from_ypr(std::f64::consts::FRAC_PI_2, 0.0, 0.0) * Vector3::x() - Vector3::y()).norm() < 1e-15);
+/// assert!((rotation_from_ypr(0.0, 0.0, std::f64::consts::FRAC_PI_2) * Vector3::y() - Vector3::z()).norm() < 1e-15);
+/// ```
 pub fn rotation_from_ypr(yaw: f64, pitch: f64, roll: f64) -> Rotation {
     Rotation::from_axis_angle(&Vector3::z_axis(), yaw)
         * Rotation::from_axis_angle(&Vector3::y_axis(), pitch)

@@ -229,6 +229,41 @@ fn push_pair(
 
 /// Tabb relative motions `[H11]`: for every station pair `i < j`, `L = A_j A_i^-1` and
 /// `R = B_j B_i^-1` (rotation parts), so that `R = S^-1 L S` with `S = rot(Z)`.
+///
+/// Round trip through both readers on a planted hand-eye rotation `Z` (pattern pose `X = I`,
+/// so `A_i = Z B_i` in rotation): every station pair gives an exact pair and the closed form
+/// recovers `Z`.
+///
+/// ```
+/// use rotavg::conjugate::{solve_conjugate, ConjugateSettings};
+/// use rotavg::io::handeye::{read_tabb_camera, read_tabb_robot, tabb_problem, MotionSettings};
+/// use rotavg::so3::{angle_between, exp, rotation_to_rows, DEFAULT_ROTATION_TOLERANCE as TOL};
+/// use nalgebra::Vector3;
+/// let z = exp(&Vector3::new(0.1, 0.2, 0.3));
+/// let b: Vec<_> = [[0.5, 0.0, 0.0], [0.0, 0.7, 0.0], [0.0, 0.0, 0.9]]
+///     .iter()
+///     .map(|v| exp(&Vector3::from(*v)))
+///     .collect();
+/// // robot_cali.txt: a count, then 4x4 row-major matrices B_i.
+/// let mut robot = String::from("3\n");
+/// // cali.txt: a count, then name, 9 intrinsics, 9 rotation, 3 translation, distortion.
+/// let mut camera = String::from("3\n");
+/// for (k, bi) in b.iter().enumerate() {
+///     for row in rotation_to_rows(bi) {
+///         robot += &format!("{} {} {} 10\n", row[0], row[1], row[2]);
+///     }
+///     robot += "0 0 0 1\n\n";
+///     let a: Vec<String> = rotation_to_rows(&(z * bi)).iter().flatten().map(|x| x.to_string()).collect();
+///     camera += &format!("img{k}.png 800 0 320 0 800 240 0 0 1 {} 1 2 3 0 0 0 0 0\n", a.join(" "));
+/// }
+/// let robot = read_tabb_robot(&robot, "robot_cali.txt", TOL)?;
+/// let camera = read_tabb_camera(&camera, "cali.txt", TOL)?;
+/// let (problem, stats) = tabb_problem(&robot, &camera, &MotionSettings::default())?;
+/// assert_eq!((stats.poses, stats.pairs, stats.skipped_small), (3, 3, 0));
+/// let s = solve_conjugate(&problem, &ConjugateSettings::default())?;
+/// assert!(angle_between(&s.estimate, &z) < 1e-9);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn tabb_problem(
     robot: &[Pose],
     camera: &[Pose],
@@ -289,6 +324,24 @@ pub fn read_tabb_dir(
 /// Read an ETH ASL CSV: lines `t, x, y, z, q_x, q_y, q_z, q_w` (Hamilton quaternion, scalar
 /// last). A quaternion whose norm differs from 1 by more than `tol` is rejected; time stamps
 /// must increase strictly.
+///
+/// ```
+/// use rotavg::io::handeye::{interpolate, read_eth_csv};
+/// use rotavg::so3::{angle, DEFAULT_ROTATION_TOLERANCE as TOL};
+/// // Identity at t = 0, a quarter turn about z at t = 1 (q = (0, 0, sin pi/4, cos pi/4)).
+/// let h = std::f64::consts::FRAC_1_SQRT_2;
+/// let text = format!("# t,x,y,z,qx,qy,qz,qw\n0.0,0,0,0,0,0,0,1\n1.0,2,0,0,0,0,{h},{h}\n");
+/// let stream = read_eth_csv(&text, "hand.csv", TOL)?;
+/// assert_eq!(stream.len(), 2);
+/// // Halfway: SLERP gives an eighth of a turn, and the translation is averaged.
+/// let mid = interpolate(&stream, 0.5, 1.0).unwrap();
+/// assert!((angle(&mid.rotation) - std::f64::consts::FRAC_PI_4).abs() < 1e-12);
+/// assert!((mid.translation.x - 1.0).abs() < 1e-12);
+/// assert!(interpolate(&stream, 1.5, 1.0).is_none()); // outside the stream
+/// // Time stamps must increase.
+/// assert!(read_eth_csv("1,0,0,0,0,0,0,1\n0,0,0,0,0,0,0,1\n", "bad.csv", TOL).is_err());
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn read_eth_csv(text: &str, file: &str, tol: f64) -> Result<Vec<StampedPose>> {
     let mut out: Vec<StampedPose> = Vec::new();
     for (k, l) in text.lines().enumerate() {
@@ -375,6 +428,29 @@ pub fn interpolate(stream: &[StampedPose], t: f64, max_gap: f64) -> Option<Pose>
 /// hand stream interpolated at that time; for matched samples `i` (every `subsample`-th) and
 /// `j = i + stride`, `L = rot(H_i^-1 H_j)`, `R = rot(E_i^-1 E_j)`, so `R = S^-1 L S` with `S`
 /// the camera-to-hand rotation.
+///
+/// ```
+/// use rotavg::conjugate::{solve_conjugate, ConjugateSettings};
+/// use rotavg::io::handeye::{eth_problem, MotionSettings, Pose, StampedPose};
+/// use rotavg::so3::{angle_between, exp};
+/// use nalgebra::Vector3;
+/// // Hand poses H_k about changing axes at 10 Hz; camera poses E_k = X^-1 H_k X (rotation
+/// // parts), time-stamped identically, so that every relative motion satisfies
+/// // R = X^-1 L X exactly.
+/// let x = exp(&Vector3::new(0.3, -0.2, 0.5));
+/// let stamped = |k: usize, r| StampedPose { time: 0.1 * k as f64, pose: Pose { rotation: r, translation: Vector3::zeros() } };
+/// let hand: Vec<_> = (0..12).map(|k| {
+///     let t = k as f64;
+///     stamped(k, exp(&Vector3::new(0.3 * t.sin(), 0.2 * t, 0.4 * t.cos())))
+/// }).collect();
+/// let camera: Vec<_> = hand.iter().enumerate().map(|(k, h)| stamped(k, x.inverse() * h.pose.rotation * x)).collect();
+/// let settings = MotionSettings { stride: 2, subsample: 1, max_gap: 0.2, ..Default::default() };
+/// let (problem, stats) = eth_problem(&hand, &camera, &settings)?;
+/// assert!(stats.pairs >= 5);
+/// let s = solve_conjugate(&problem, &ConjugateSettings::default())?;
+/// assert!(angle_between(&s.estimate, &x) < 1e-9);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn eth_problem(
     hand: &[StampedPose],
     camera: &[StampedPose],
@@ -477,6 +553,25 @@ struct ConjugateJson {
 
 /// Read the conjugate JSON of SPEC section 5: `{"pairs": [{"left": L, "right": R, "weight": w}]}`
 /// (row-major rotations; weight optional, default 1; `R_i ~ S^-1 L_i S`).
+///
+/// ```
+/// use rotavg::io::handeye::{read_conjugate_json, write_conjugate_json};
+/// let text = r#"{"pairs": [
+///   {"left": [[0,-1,0],[1,0,0],[0,0,1]], "right": [[1,0,0],[0,0,-1],[0,1,0]], "weight": 2.0},
+///   {"left": [[1,0,0],[0,1,0],[0,0,1]], "right": [[1,0,0],[0,1,0],[0,0,1]]}
+/// ]}"#;
+/// let p = read_conjugate_json(text, "pairs.json")?;
+/// assert_eq!(p.num_pairs(), 2);
+/// assert_eq!(p.total_weight(), 3.0); // the missing weight defaults to 1
+/// // The writer produces the same format (re-read rotations agree to rounding).
+/// let again = read_conjugate_json(&write_conjugate_json(&p), "again.json")?;
+/// let s = rotavg::Rotation::identity();
+/// assert!((again.chordal_cost(&s) - p.chordal_cost(&s)).abs() < 1e-12);
+/// // A matrix that is not a rotation is rejected with the file name.
+/// let bad = r#"{"pairs": [{"left": [[2,0,0],[0,1,0],[0,0,1]], "right": [[1,0,0],[0,1,0],[0,0,1]]}]}"#;
+/// assert!(read_conjugate_json(bad, "bad.json").unwrap_err().to_string().starts_with("bad.json"));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn read_conjugate_json(text: &str, file: &str) -> Result<ConjugateProblem> {
     let parsed: ConjugateJson = serde_json::from_str(text)
         .map_err(|e| Error::parse(Some(file), Some(e.line()), e.to_string()))?;

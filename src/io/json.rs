@@ -210,6 +210,18 @@ pub fn read_estimate(text: &str, file: &str, options: &ReadOptions) -> Result<Es
 }
 
 /// Read an estimate for multiple averaging (a list of rotations); a single rotation is an error.
+///
+/// ```
+/// use rotavg::io::{detect::ReadOptions, json::{read_rotations_estimate, write_estimate_json}};
+/// use rotavg::so3::{angle_between, exp};
+/// let rs = vec![rotavg::Rotation::identity(), exp(&nalgebra::Vector3::new(0.1, 0.2, 0.3))];
+/// let text = write_estimate_json(&rs);
+/// let back = read_rotations_estimate(&text, "estimate.json", &ReadOptions::default())?;
+/// assert!(angle_between(&back[1], &rs[1]) < 1e-15);
+/// let one = r#"{"rotation": [[1,0,0],[0,1,0],[0,0,1]]}"#;
+/// assert!(read_rotations_estimate(one, "single.json", &ReadOptions::default()).is_err());
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn read_rotations_estimate(
     text: &str,
     file: &str,

@@ -1,6 +1,30 @@
 //! Readers and writers for the file formats: JSON (SPEC section 5), g2o (3-D and 2-D), TORO
 //! `EDGE3`, 1DSfM `EGs.txt`, Bundler ground truth, hand-eye pose files. Each reader documents,
 //! where it reads, how the format maps onto this crate's conventions.
+//!
+//! | module | reads | writes |
+//! |---|---|---|
+//! | [`detect`] | any view graph: [`detect::load_graph`] (path), [`detect::read_graph`] (text), format auto-detection | — |
+//! | [`g2o`] | g2o 3-D / 2-D and TORO `EDGE3` ([`g2o::read_g2o`]) | [`g2o::write_g2o`] |
+//! | [`sfm`] | 1DSfM `EGs.txt` ([`sfm::read_egs`]), Bundler ground truth, rotation lists | — |
+//! | [`json`] | multiple problems ([`json::read_problem_json`]) and estimates ([`json::read_estimate`]) | [`json::write_problem_json`], [`json::write_estimate_json`] |
+//! | [`single_json`] | single problems ([`single_json::parse_single_json`]) and estimates | [`single_json::to_single_json`] |
+//! | [`handeye`] | Tabb and ETH hand-eye data, conjugate JSON ([`handeye::read_conjugate_json`]) | [`handeye::write_conjugate_json`] |
+//!
+//! Readers take the text and a file name (used in error messages, with the line number), so
+//! tests and examples can read from inline strings:
+//!
+//! ```
+//! use rotavg::io::detect::{read_graph, GraphFormat, ReadOptions};
+//! // 1DSfM: `i j R11 .. R33` per line, holding R_i R_j^T; read as R_ij = its transpose.
+//! let text = "0 1 1 0 0 0 1 0 0 0 1\n1 2 1 0 0 0 1 0 0 0 1\n";
+//! let g = read_graph(text, "EGs.txt", GraphFormat::Auto, &ReadOptions::default())?;
+//! assert_eq!(g.format, GraphFormat::OneDsfm);
+//! assert_eq!((g.problem.num_rotations(), g.problem.num_edges()), (3, 2));
+//! let err = read_graph("0 1 2 3\n", "bad.txt", GraphFormat::OneDsfm, &ReadOptions::default());
+//! assert!(err.unwrap_err().to_string().starts_with("bad.txt:1:"));
+//! # Ok::<(), rotavg::Error>(())
+//! ```
 
 pub mod detect;
 pub mod g2o;

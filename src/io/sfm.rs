@@ -244,6 +244,15 @@ pub fn read_rotation_list(
 
 /// Ground truth indexed by file id, reordered onto a graph's nodes: entry `k` is the truth of
 /// node `k` (file id `node_ids[k]`), `None` when the file has none for it.
+///
+/// ```
+/// use rotavg::io::sfm::truth_for_nodes;
+/// use rotavg::Rotation;
+/// // Truth known for file ids 0 and 2; the graph's nodes are file ids 2 and 1.
+/// let truth = vec![Some(Rotation::identity()), None, Some(Rotation::identity())];
+/// let per_node = truth_for_nodes(&truth, &[2, 1]);
+/// assert!(per_node[0].is_some() && per_node[1].is_none());
+/// ```
 pub fn truth_for_nodes(
     truth_by_id: &[Option<Rotation>],
     node_ids: &[u64],

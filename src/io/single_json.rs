@@ -215,6 +215,16 @@ pub fn read_single_json(path: &Path) -> Result<SingleProblem> {
 }
 
 /// The JSON text of a problem in the layout read by [`parse_single_json`].
+///
+/// ```
+/// use rotavg::io::single_json::{parse_single_json, to_single_json};
+/// use rotavg::single::SingleProblem;
+/// let p = SingleProblem::new(vec![rotavg::so3::exp(&nalgebra::Vector3::new(0.0, 0.0, 0.3))], Some(vec![2.5]))?;
+/// let again = parse_single_json(&to_single_json(&p), "p.json")?;
+/// assert_eq!(again.weights(), &[2.5]);
+/// assert!(rotavg::so3::angle_between(&again.rotations()[0], &p.rotations()[0]) < 1e-15);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn to_single_json(problem: &SingleProblem) -> String {
     let out = RawSingleOut {
         rotations: problem.rotations().iter().map(rotation_to_rows).collect(),

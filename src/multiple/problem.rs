@@ -1,4 +1,9 @@
 //! The validated multiple-rotation-averaging problem: nodes, edges, weights, cost.
+//!
+//! [`MultipleProblem::new`] validates [`Edge`]s (`R_ij R_i = R_j`, weights > 0); the problem
+//! then gives the chordal cost [`MultipleProblem::chordal_cost`], residual angles, connected
+//! components ([`MultipleProblem::components`], [`MultipleProblem::largest_component`]) and
+//! the gauge fix [`fix_gauge`].
 
 use crate::error::{Error, Result};
 use crate::so3::{Rotation, angle_between};
@@ -20,6 +25,17 @@ pub struct Edge {
 
 impl Edge {
     /// The same measurement expressed as an edge `(j, i)`: `R_ji = R_ij^T`.
+    ///
+    /// ```
+    /// use rotavg::multiple::Edge;
+    /// use rotavg::so3::{angle_between, exp};
+    /// let r_i = exp(&nalgebra::Vector3::new(0.1, 0.0, 0.0));
+    /// let r_j = exp(&nalgebra::Vector3::new(0.0, 0.2, 0.0));
+    /// let e = Edge { i: 0, j: 1, rotation: r_j * r_i.inverse(), weight: 2.0 }; // R_ij R_i = R_j
+    /// let back = e.reversed(); // R_ji R_j = R_i
+    /// assert_eq!((back.i, back.j, back.weight), (1, 0, 2.0));
+    /// assert!(angle_between(&(back.rotation * r_j), &r_i) < 1e-15);
+    /// ```
     pub fn reversed(&self) -> Edge {
         Edge {
             i: self.j,
@@ -111,6 +127,21 @@ impl MultipleProblem {
     }
 
     /// Connected components as node lists, largest first (ties: smallest first node first).
+    ///
+    /// ```
+    /// use rotavg::multiple::{Edge, MultipleProblem};
+    /// use rotavg::Rotation;
+    /// let e = |i, j| Edge { i, j, rotation: Rotation::identity(), weight: 1.0 };
+    /// // Two triangles {0, 1, 2} and {3, 4, 5} joined by nothing, plus an edge 5-6.
+    /// let p = MultipleProblem::new(7, vec![e(0, 1), e(1, 2), e(2, 0), e(3, 4), e(4, 5), e(5, 3), e(5, 6)])?;
+    /// assert_eq!(p.components(), vec![vec![3, 4, 5, 6], vec![0, 1, 2]]);
+    /// let err = p.require_connected().unwrap_err();
+    /// assert_eq!(err, rotavg::Error::Disconnected { component_sizes: vec![4, 3] });
+    /// let (big, old_index) = p.largest_component();
+    /// assert_eq!((big.num_rotations(), big.num_edges()), (4, 4));
+    /// assert_eq!(old_index, vec![3, 4, 5, 6]);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn components(&self) -> Vec<Vec<usize>> {
         let n = self.num_rotations;
         let mut parent: Vec<usize> = (0..n).collect();
@@ -179,6 +210,20 @@ impl MultipleProblem {
 
     /// Chordal L2 cost `sum w_ij ||R_j - R_ij R_i||_F^2` `[M1]`. Panics if `rotations.len() != n`
     /// (a programming error, not user input: check with [`Self::check_estimate`]).
+    ///
+    /// ```
+    /// use rotavg::multiple::{Edge, MultipleProblem};
+    /// use rotavg::so3::{exp, Metric, Rotation};
+    /// // One edge measuring a 0.3 rad turn about z; the estimate has both nodes at I.
+    /// let rz = exp(&nalgebra::Vector3::new(0.0, 0.0, 0.3));
+    /// let p = MultipleProblem::new(2, vec![Edge { i: 0, j: 1, rotation: rz, weight: 2.0 }])?;
+    /// let est = vec![Rotation::identity(); 2];
+    /// // 2 ||I - Rz||_F^2 = 2 (2 sqrt(2) sin(0.15))^2
+    /// assert!((p.chordal_cost(&est) - 2.0 * Metric::Chordal.from_angle(0.3).powi(2)).abs() < 1e-12);
+    /// assert!((p.residual_angles(&est)[0] - 0.3).abs() < 1e-12);
+    /// assert!(p.chordal_cost(&[Rotation::identity(), rz]) < 1e-24);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn chordal_cost(&self, rotations: &[Rotation]) -> f64 {
         assert_eq!(
             rotations.len(),
@@ -209,6 +254,15 @@ impl MultipleProblem {
     }
 
     /// `Ok(())` if an estimate has one rotation per node.
+    ///
+    /// ```
+    /// use rotavg::multiple::{Edge, MultipleProblem};
+    /// use rotavg::Rotation;
+    /// let p = MultipleProblem::new(2, vec![Edge { i: 0, j: 1, rotation: Rotation::identity(), weight: 1.0 }])?;
+    /// assert!(p.check_estimate(&[Rotation::identity(); 2]).is_ok());
+    /// assert!(p.check_estimate(&[Rotation::identity(); 3]).is_err());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn check_estimate(&self, rotations: &[Rotation]) -> Result<()> {
         if rotations.len() != self.num_rotations {
             return Err(Error::InvalidSettings {
@@ -225,6 +279,17 @@ impl MultipleProblem {
 }
 
 /// Fix the gauge: `R_i -> R_i R_0^T`, so that `R_0 = I`. Costs are invariant.
+///
+/// ```
+/// use rotavg::multiple::{fix_gauge, synthetic::SyntheticGraph};
+/// use rotavg::so3::{angle, exp};
+/// let (p, truth) = SyntheticGraph { num_rotations: 5, num_edges: 8, ..Default::default() }.generate();
+/// let g = exp(&nalgebra::Vector3::new(0.5, 0.1, -0.3));
+/// let mut rotated: Vec<_> = truth.iter().map(|r| r * g).collect(); // R_i -> R_i G
+/// assert!((p.chordal_cost(&rotated) - p.chordal_cost(&truth)).abs() < 1e-12);
+/// fix_gauge(&mut rotated);
+/// assert!(angle(&rotated[0]) < 1e-15);
+/// ```
 pub fn fix_gauge(rotations: &mut [Rotation]) {
     if let Some(r0) = rotations.first().copied() {
         let g = r0.inverse();

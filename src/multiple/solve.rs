@@ -109,6 +109,13 @@ impl Default for MultipleSettings {
 
 impl MultipleSettings {
     /// Check every field; [`Error::InvalidSettings`] names the first bad one.
+    ///
+    /// ```
+    /// use rotavg::multiple::{Loss, MultipleSettings};
+    /// assert!(MultipleSettings::default().validate().is_ok());
+    /// let bad = MultipleSettings { loss: Loss::Huber { threshold_deg: -1.0 }, ..Default::default() };
+    /// assert!(matches!(bad.validate(), Err(rotavg::Error::InvalidSettings { .. })));
+    /// ```
     pub fn validate(&self) -> Result<()> {
         let bad = |name: &str, reason: String| {
             Err(Error::InvalidSettings {

@@ -275,6 +275,14 @@ fn laplacian_apply(deg: &[f64], adj: &[Vec<(usize, f64)>], x: &[f64], y: &mut [f
 }
 
 /// The normalised spectral gap `[F10]`.
+///
+/// ```
+/// use rotavg::multiple::stats::{spectral_gap, StatsSettings};
+/// use rotavg::multiple::synthetic::z_cycle;
+/// // A 6-cycle with unit weights: lambda_2 = 2 - 2 cos(2 pi / 6) = 1, d_max = 2.
+/// let gap = spectral_gap(&z_cycle(6, 0.0), &StatsSettings::default());
+/// assert!((gap.normalized().unwrap() - 0.5).abs() < 1e-12);
+/// ```
 pub fn spectral_gap(problem: &MultipleProblem, settings: &StatsSettings) -> SpectralGap {
     let n = problem.num_rotations();
     if problem.components().len() > 1 {

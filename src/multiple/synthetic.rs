@@ -1,4 +1,6 @@
-//! Seeded synthetic view graphs with a planted ground truth, for tests, benchmarks and the demo.
+//! Seeded synthetic view graphs with a planted ground truth, for tests, benchmarks and the demo:
+//! [`SyntheticGraph::generate`] (random connected graph, Gaussian noise, outliers) and
+//! [`z_cycle`] (a cycle with a known loop error, whose local minima are known in closed form).
 
 use crate::multiple::{Edge, MultipleProblem};
 use crate::so3::{Rotation, exp, perturb_gaussian, random_rotation};
@@ -94,6 +96,15 @@ impl SyntheticGraph {
 /// A cycle `0 -> 1 -> ... -> n-1 -> 0` of rotations about the z axis whose measurements compose
 /// to a loop error of `phi` radians about z (each edge rotates by `phi / n` about z), unit weights.
 /// Its chordal local minima are known in closed form (`paper-notes/multiple.md`).
+///
+/// ```
+/// use rotavg::multiple::synthetic::z_cycle;
+/// use rotavg::Rotation;
+/// let p = z_cycle(4, 0.4);
+/// assert_eq!((p.num_rotations(), p.num_edges()), (4, 4));
+/// // All at I: each of the 4 edges has residual angle 0.1.
+/// assert!(p.residual_angles(&[Rotation::identity(); 4]).iter().all(|t| (t - 0.1).abs() < 1e-12));
+/// ```
 pub fn z_cycle(n: usize, phi: f64) -> MultipleProblem {
     let n = n.max(3);
     let step = exp(&(Vector3::z() * (phi / n as f64)));

@@ -32,6 +32,17 @@ pub fn svec_weight(i: usize, j: usize) -> f64 {
 }
 
 /// `svec` of a symmetric matrix (only the upper triangle is read).
+///
+/// ```
+/// use faer::Mat;
+/// use rotavg::relax::svec::{smat, svec};
+/// let a = Mat::from_fn(2, 2, |i, j| if i == j { 1.0 } else { 3.0 });
+/// let v = svec(a.as_ref());
+/// assert_eq!(v, vec![1.0, 3.0 * 2f64.sqrt(), 1.0]);
+/// // <svec A, svec A> = tr(A A) = 1 + 9 + 9 + 1
+/// assert!((v.iter().map(|x| x * x).sum::<f64>() - 20.0).abs() < 1e-12);
+/// assert!((smat(&v, 2).unwrap() - &a).norm_max() < 1e-15);
+/// ```
 pub fn svec(a: MatRef<'_, f64>) -> Vec<f64> {
     let n = a.nrows();
     let mut v = Vec::with_capacity(svec_len(n));

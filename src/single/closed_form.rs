@@ -1,4 +1,5 @@
-//! The closed-form means: chordal L2 `[S1]` and quaternion L2 `[S2]`.
+//! The closed-form means: chordal L2 `[S1]` ([`chordal_l2_mean`]) and quaternion L2 `[S2]`
+//! ([`quaternion_l2_mean`]).
 
 use super::{Local, Norm, SingleProblem, SingleSettings, SingleSolution, average_single};
 use crate::error::Result;
@@ -171,6 +172,17 @@ pub fn chordal_l2_mean(problem: &SingleProblem) -> Result<SingleSolution> {
 
 /// The quaternion L2 mean `[S2]` with its certificate: [`average_single`] with
 /// `metric = Quaternion`, `norm = L2`.
+///
+/// ```
+/// use rotavg::single::{quaternion_l2_mean, SingleProblem};
+/// use rotavg::so3::{angle, exp};
+/// use nalgebra::Vector3;
+/// // Rz(0.4) and Rz(-0.4): the mean is I by symmetry.
+/// let p = SingleProblem::new(vec![exp(&Vector3::new(0.0, 0.0, 0.4)), exp(&Vector3::new(0.0, 0.0, -0.4))], None)?;
+/// let s = quaternion_l2_mean(&p)?;
+/// assert!(angle(&s.estimate) < 1e-12 && s.certificate.is_certified());
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn quaternion_l2_mean(problem: &SingleProblem) -> Result<SingleSolution> {
     average_single(problem, &SingleSettings::new(Metric::Quaternion, Norm::L2))
 }

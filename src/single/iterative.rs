@@ -608,6 +608,18 @@ fn limit(r: Rotation, settings: &SingleSettings, value: f64, name: &'static str)
 
 /// The geodesic L2 (Karcher) mean `[S3]` with its certificate: [`average_single`] with
 /// `metric = Geodesic`, `norm = L2` and the other fields of `settings`.
+///
+/// ```
+/// use rotavg::single::{geodesic_l2_mean, SingleProblem, SingleSettings};
+/// use rotavg::so3::{angle, exp};
+/// use nalgebra::Vector3;
+/// // Rotations about z by 0.1, 0.2 and 0.6: on one axis the Karcher mean is the mean angle 0.3.
+/// let p = SingleProblem::new([0.1, 0.2, 0.6].iter().map(|&t| exp(&Vector3::new(0.0, 0.0, t))).collect(), None)?;
+/// let s = geodesic_l2_mean(&p, &SingleSettings::default())?;
+/// assert!((angle(&s.estimate) - 0.3).abs() < 1e-12);
+/// assert!(s.certificate.is_certified()); // all samples within pi/2: the theory certificate
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn geodesic_l2_mean(
     problem: &SingleProblem,
     settings: &SingleSettings,
@@ -623,6 +635,17 @@ pub fn geodesic_l2_mean(
 }
 
 /// The geodesic L1 mean (Weiszfeld on SO(3)) `[S5]` with its certificate.
+///
+/// ```
+/// use rotavg::single::{geodesic_l1_mean, SingleProblem, SingleSettings};
+/// use rotavg::so3::{angle, exp};
+/// use nalgebra::Vector3;
+/// // About one axis, the geodesic L1 mean is the median angle (0.2), whatever the outlier (3.0).
+/// let p = SingleProblem::new([0.1, 0.2, 3.0].iter().map(|&t| exp(&Vector3::new(0.0, 0.0, t))).collect(), None)?;
+/// let s = geodesic_l1_mean(&p, &SingleSettings::default())?;
+/// assert!((angle(&s.estimate) - 0.2).abs() < 1e-9);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn geodesic_l1_mean(
     problem: &SingleProblem,
     settings: &SingleSettings,
@@ -638,6 +661,19 @@ pub fn geodesic_l1_mean(
 }
 
 /// The chordal L1 mean (IRLS on SO(3)) `[S6]` with its certificate `[S7]`.
+///
+/// ```
+/// use rand::SeedableRng;
+/// use rotavg::single::{chordal_l1_mean, SingleProblem, SingleSettings};
+/// use rotavg::so3::{angle_between, perturb_gaussian, random_rotation, Rotation};
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(2);
+/// // 40 samples near I and 10 uniformly random outliers: the L1 mean stays near I.
+/// let mut samples: Vec<_> = (0..40).map(|_| perturb_gaussian(&Rotation::identity(), 0.02, &mut rng)).collect();
+/// samples.extend((0..10).map(|_| random_rotation(&mut rng)));
+/// let s = chordal_l1_mean(&SingleProblem::new(samples, None)?, &SingleSettings::default())?;
+/// assert!(angle_between(&s.estimate, &Rotation::identity()) < 0.02);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
 pub fn chordal_l1_mean(
     problem: &SingleProblem,
     settings: &SingleSettings,

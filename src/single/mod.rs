@@ -64,6 +64,13 @@ impl Norm {
     }
 
     /// `Norm::L1` for 1, `Norm::L2` for 2, `None` otherwise.
+    ///
+    /// ```
+    /// use rotavg::single::Norm;
+    /// assert_eq!(Norm::from_exponent(1), Some(Norm::L1));
+    /// assert_eq!(Norm::from_exponent(3), None);
+    /// assert_eq!(Norm::L2.apply(3.0), 9.0);
+    /// ```
     pub fn from_exponent(p: u32) -> Option<Norm> {
         match p {
             1 => Some(Norm::L1),
@@ -222,6 +229,19 @@ impl SingleProblem {
     }
 
     /// The sample farthest from `estimate` in angle: `(index, theta)`.
+    ///
+    /// ```
+    /// use rotavg::single::{Norm, SingleProblem};
+    /// use rotavg::so3::{exp, Metric, Rotation};
+    /// use nalgebra::Vector3;
+    /// let p = SingleProblem::new(vec![exp(&Vector3::new(0.0, 0.0, 0.2)), exp(&Vector3::new(0.0, 0.0, -0.5))], Some(vec![1.0, 2.0]))?;
+    /// let (k, theta) = p.farthest(&Rotation::identity());
+    /// assert_eq!(k, 1);
+    /// assert!((theta - 0.5).abs() < 1e-12);
+    /// // Cost sum_i w_i theta_i at I: 1 * 0.2 + 2 * 0.5.
+    /// assert!((p.cost(&Rotation::identity(), Metric::Geodesic, Norm::L1) - 1.2).abs() < 1e-12);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn farthest(&self, estimate: &Rotation) -> (usize, f64) {
         let mut best = (0, f64::NEG_INFINITY);
         for (k, r) in self.rotations.iter().enumerate() {
@@ -279,6 +299,16 @@ impl SingleSettings {
     }
 
     /// Check every value; [`Error::InvalidSettings`] names the first bad one.
+    ///
+    /// ```
+    /// use rotavg::single::{Norm, SingleSettings};
+    /// use rotavg::Metric;
+    /// assert!(SingleSettings::new(Metric::Geodesic, Norm::L1).validate().is_ok());
+    /// // The quaternion L1 mean is not implemented: refused up front, not at solve time.
+    /// assert!(SingleSettings::new(Metric::Quaternion, Norm::L1).validate().is_err());
+    /// let bad = SingleSettings { max_iterations: 0, ..Default::default() };
+    /// assert!(bad.validate().unwrap_err().to_string().contains("max_iterations"));
+    /// ```
     pub fn validate(&self) -> Result<()> {
         let bad = |name: &str, reason: String| {
             Err(Error::InvalidSettings {
