@@ -155,6 +155,7 @@ fn clarabel_settings(settings: &SdpSettings, merge: &str) -> DefaultSettings<f64
         chordal_decomposition_enable: settings.chordal_decomposition,
         chordal_decomposition_complete_dual: true,
         chordal_decomposition_merge_method: merge.into(),
+        iterative_refinement_enable: settings.iterative_refinement,
         ..DefaultSettings::default()
     }
 }
