@@ -89,6 +89,62 @@ pub fn sparse_matvec(a: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64
     }
 }
 
+/// Rayleigh quotient `rho = v^T A v` of a unit vector `v` and its residual `||A v - rho v||`
+/// (an eigenvalue of the symmetric `A` lies within the residual of `rho`).
+pub fn rayleigh_quotient(a: SparseColMatRef<'_, usize, f64>, v: &[f64]) -> (f64, f64) {
+    let mut y = vec![0.0; v.len()];
+    sparse_matvec(a, v, &mut y);
+    let rq: f64 = y.iter().zip(v).map(|(a, b)| a * b).sum();
+    let residual = y
+        .iter()
+        .zip(v)
+        .map(|(a, b)| (a - rq * b).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    (rq, residual)
+}
+
+/// Calls `f(row, col, value)` for every stored entry of a sparse Cholesky-type factor (lower
+/// triangle, diagonal included) computed with `symbolic`, in either layout. The `LL^T` and
+/// `LDL^T` factors share faer's storage layout (for `LDL^T` the diagonal holds `D`, and `L` has
+/// an implicit unit diagonal), so this serves both.
+pub(crate) fn for_each_factor_entry(
+    symbolic: &SymbolicCholesky<usize>,
+    values: &[f64],
+    f: &mut dyn FnMut(usize, usize, f64),
+) {
+    let n = symbolic.nrows();
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(sym) => {
+            let cp = sym.col_ptr();
+            let ri = sym.row_idx();
+            for c in 0..n {
+                for k in cp[c]..cp[c + 1] {
+                    f(ri[k], c, values[k]);
+                }
+            }
+        }
+        SymbolicCholeskyRaw::Supernodal(sym) => {
+            let llt = SupernodalLltRef::<usize, f64>::new(sym, values);
+            for s in 0..sym.n_supernodes() {
+                let node = llt.supernode(s);
+                let start = node.start();
+                let pattern = node.pattern();
+                let m = node.val();
+                let ncols = m.ncols();
+                for jc in 0..ncols {
+                    for ir in jc..ncols {
+                        f(start + ir, start + jc, m[(ir, jc)]);
+                    }
+                    for (p, &row) in pattern.iter().enumerate() {
+                        f(row, start + jc, m[(ncols + p, jc)]);
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Maximum absolute row sum `||A||_inf` (for a symmetric matrix an upper bound on `||A||_2`).
 pub fn inf_norm(a: SparseColMatRef<'_, usize, f64>) -> f64 {
     let mut rows = vec![0.0f64; a.nrows()];
@@ -306,35 +362,8 @@ impl ShiftedCholesky {
     /// Returns (bound, smallest pivot).
     fn backward_error_bound(&self, values: &[f64], target: f64) -> (f64, f64) {
         let n = self.dim();
-        let visit = |f: &mut dyn FnMut(usize, usize, f64)| match self.symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(sym) => {
-                let cp = sym.col_ptr();
-                let ri = sym.row_idx();
-                for c in 0..n {
-                    for k in cp[c]..cp[c + 1] {
-                        f(ri[k], c, values[k]);
-                    }
-                }
-            }
-            SymbolicCholeskyRaw::Supernodal(sym) => {
-                let llt = SupernodalLltRef::<usize, f64>::new(sym, values);
-                for s in 0..sym.n_supernodes() {
-                    let node = llt.supernode(s);
-                    let start = node.start();
-                    let pattern = node.pattern();
-                    let m = node.val();
-                    let ncols = m.ncols();
-                    for jc in 0..ncols {
-                        for ir in jc..ncols {
-                            f(start + ir, start + jc, m[(ir, jc)]);
-                        }
-                        for (p, &row) in pattern.iter().enumerate() {
-                            f(row, start + jc, m[(ncols + p, jc)]);
-                        }
-                    }
-                }
-            }
-        };
+        let visit =
+            |f: &mut dyn FnMut(usize, usize, f64)| for_each_factor_entry(&self.symbolic, values, f);
         let mut colsum = vec![0.0f64; n];
         let mut rowcount = vec![0usize; n];
         let mut min_pivot = f64::INFINITY;

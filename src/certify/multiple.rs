@@ -10,7 +10,7 @@
 use crate::certificate::{BoundMethod, Certificate, GapTolerance};
 use crate::certify::eigen::{
     Extreme, LanczosResult, LanczosSettings, ShiftedCholesky, gamma, gershgorin_lower_bound,
-    inf_norm, lanczos_extreme, sparse_matvec,
+    inf_norm, lanczos_extreme, rayleigh_quotient, sparse_matvec,
 };
 use crate::certify::scalar::{ScalarAnalysis, scalar_comparison};
 use crate::error::{Error, Result};
@@ -379,16 +379,7 @@ fn verify(
         r
     };
     let rq_residual = |r: &mut LanczosResult, s: &faer::sparse::SparseColMat<usize, f64>| {
-        let mut y = vec![0.0; n3];
-        sparse_matvec(s.as_ref(), &r.vector, &mut y);
-        let rq: f64 = y.iter().zip(&r.vector).map(|(a, b)| a * b).sum();
-        r.residual = y
-            .iter()
-            .zip(&r.vector)
-            .map(|(a, b)| (a - rq * b).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        r.value = rq;
+        (r.value, r.residual) = rayleigh_quotient(s.as_ref(), &r.vector);
     };
 
     let skipped = factor_nonzeros > settings.max_factor_nonzeros;
@@ -554,15 +545,7 @@ fn try_scalar_comparison(
                 continue;
             }
             v.iter_mut().for_each(|x| *x /= nv);
-            let mut y = vec![0.0; n3];
-            sparse_matvec(s.as_ref(), &v, &mut y);
-            let rq: f64 = y.iter().zip(&v).map(|(a, b)| a * b).sum();
-            let res = y
-                .iter()
-                .zip(&v)
-                .map(|(a, b)| (a - rq * b).powi(2))
-                .sum::<f64>()
-                .sqrt();
+            let (rq, res) = rayleigh_quotient(s.as_ref(), &v);
             if let Some(e) = estimate.as_mut()
                 && rq < e.value
             {

@@ -33,15 +33,14 @@
 //! the caller falls back to the factorisation of `S` itself. The bound is never weaker than
 //! what it proves, and it is never used when it cannot be completed.
 
-use crate::certify::eigen::{UNIT_ROUNDOFF, gamma, inf_norm};
+use crate::certify::eigen::{UNIT_ROUNDOFF, for_each_factor_entry, gamma, inf_norm};
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
-    factorize_symbolic_cholesky, supernodal::SupernodalLdltRef,
+    CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Par, Side};
@@ -392,35 +391,7 @@ fn factor_inertia(
         return Err(ScalarFailure::Numerical);
     }
     // visit (row, col, value) of the factor: diagonal entries are D, strictly lower ones L
-    let visit = |f: &mut dyn FnMut(usize, usize, f64)| match sym.raw() {
-        SymbolicCholeskyRaw::Simplicial(s) => {
-            let cp = s.col_ptr();
-            let ri = s.row_idx();
-            for c in 0..n {
-                for k in cp[c]..cp[c + 1] {
-                    f(ri[k], c, values[k]);
-                }
-            }
-        }
-        SymbolicCholeskyRaw::Supernodal(s) => {
-            let ldlt = SupernodalLdltRef::<usize, f64>::new(s, &values);
-            for sn in 0..s.n_supernodes() {
-                let node = ldlt.supernode(sn);
-                let start = node.start();
-                let pattern = node.pattern();
-                let m = node.val();
-                let ncols = m.ncols();
-                for jc in 0..ncols {
-                    for ir in jc..ncols {
-                        f(start + ir, start + jc, m[(ir, jc)]);
-                    }
-                    for (p, &row) in pattern.iter().enumerate() {
-                        f(row, start + jc, m[(ncols + p, jc)]);
-                    }
-                }
-            }
-        }
-    };
+    let visit = |f: &mut dyn FnMut(usize, usize, f64)| for_each_factor_entry(sym, &values, f);
     let mut d = vec![0.0f64; n];
     let mut colsum = vec![1.0f64; n]; // the unit diagonal of L
     let mut rowcount = vec![1usize; n];
