@@ -17,7 +17,7 @@
 //! is similar to `L (x) I_3` at a noise-free optimum): single-vector Lanczos finds only one
 //! copy of a multiple eigenvalue.
 
-use crate::certify::eigen::{ShiftedCholesky, inf_norm, sparse_matvec};
+use crate::certify::eigen::{ShiftedCholesky, inf_norm, rayleigh_quotient, sparse_matvec};
 use crate::certify::multiple::certificate_matrix;
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;
@@ -406,7 +406,6 @@ fn rayleigh_ritz(
         }
     });
     let mut pairs: Vec<(f64, f64)> = Vec::with_capacity(k);
-    let mut y = vec![0.0; n];
     for &i in idx.iter().take(k) {
         let c = eig.eigenvectors.column(i);
         let mut x = vec![0.0; n];
@@ -417,15 +416,7 @@ fn rayleigh_ritz(
         if nx > 0.0 {
             x.iter_mut().for_each(|xi| *xi /= nx);
         }
-        sparse_matvec(s, &x, &mut y);
-        let rq = dot(&x, &y);
-        let res = y
-            .iter()
-            .zip(&x)
-            .map(|(a, b)| (a - rq * b).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        pairs.push((rq, res));
+        pairs.push(rayleigh_quotient(s, &x));
     }
     pairs.sort_by(|p, q| p.0.total_cmp(&q.0));
     let converged = pairs.len() == k && pairs.iter().all(|p| p.1 <= tolerance * norm);
