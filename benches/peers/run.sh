@@ -3,7 +3,7 @@
 # OpenCV hand-eye, SciPy mean) and rotavg's example binaries / CLI on the same inputs, and writes
 # $WORK/results/*.json plus $WORK/results/TABLES.md (see BENCHMARKS.md for a run).
 #
-#   bash benches/peers/run.sh                 # everything (stages: setup gen peers ours table)
+#   bash benches/peers/run.sh                 # everything (stages: setup gen peers proc ours table)
 #   bash benches/peers/run.sh ours table      # only some stages
 #   WORK=/tmp/rotavg-peers FORCE=1 JOB_TIMEOUT=600 bash benches/peers/run.sh
 #
@@ -25,7 +25,7 @@ WORK="${WORK:-/tmp/rotavg-peers}"
 T="${JOB_TIMEOUT:-600}"
 P="$WORK/peers"; PY="$P/.venv/bin/python"; INST="$WORK/inst"; RES="$WORK/results"
 BIN="$REPO/target/release"
-STAGES="${*:-setup gen peers ours table}"
+STAGES="${*:-setup gen peers proc ours table}"
 has() { [[ " $STAGES " == *" $1 "* ]]; }
 log() { echo "[peers $(date -u +%H:%M:%S)] $*" >&2; }
 mkdir -p "$WORK" "$INST" "$RES"
@@ -139,6 +139,44 @@ if has peers; then
   for f in "$INST"/conj_*.txt; do
     case "$f" in *.gt.txt) continue;; esac
     peer "$RES/conj__$(basename "$f" .txt)__opencv.json" handeye_opencv.py "$f"
+  done
+fi
+
+# ---- proc: GTSAM Shonan alone in its own process, wall-timed like ours (interpreter start,
+# imports, file parsing, graph construction, solve; no extra certificate, no other method) ----
+peerproc() {  # peerproc OUT.json script args...   (always recomputed; records process wall time)
+  local out="$1"; shift
+  log "process: $*"
+  local t0 t1 rc
+  t0=$(date +%s.%N)
+  (cd "$P" && timeout "$T" "$PY" "$@" --out "$out.tmp" >/dev/null 2>"${out%.json}.stderr")
+  rc=$?
+  t1=$(date +%s.%N)
+  "$PY" - "$out.tmp" "$out" "$t0" "$t1" "$rc" <<'PYEOF'
+import json, sys
+src, dst, t0, t1, rc = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4]), int(sys.argv[5])
+try:
+    d = json.load(open(src))
+except Exception as e:
+    d = {"error": f"exit code {rc} (124 = timeout); no JSON ({e})"}
+d["process_wall_seconds"] = t1 - t0
+d["exit_code"] = rc
+json.dump(d, open(dst, "w"), indent=1)
+PYEOF
+  rm -f "$out.tmp"
+  [[ -s "${out%.json}.stderr" ]] || rm -f "${out%.json}.stderr"
+}
+if has proc; then
+  for f in "${REAL[@]}"; do
+    [[ -f "$DATA/$f" ]] || continue
+    peerproc "$RES/mra__$(tag_of "$f")__gtsamproc.json" shonan.py "$DATA/$f" --weights file \
+      --methods shonan --no-cert --native-run-max-n 0
+  done
+  for b in "${SYN[@]}"; do
+    # the n = 5000 Shonan run exceeds the job timeout: not repeated (reported from 'peers')
+    grep -q '"error": "exit code' "$RES/mra__${b}__gtsam.json" 2>/dev/null && continue
+    peerproc "$RES/mra__${b}__gtsamproc.json" shonan.py "$INST/$b.txt" --weights file \
+      --methods shonan --no-cert --native-run-max-n 0
   done
 fi
 

@@ -125,6 +125,32 @@ for g in sorted(glob.glob(os.path.join(RES, "mra__*__gtsam.json"))):
             f"{(tight['cost'] - best) / best:+.1e}" if best else "-"]) + " |")
 p("")
 
+# ------------------------------------------------------------------ multiple, whole process
+procs = sorted(glob.glob(os.path.join(RES, "mra__*__gtsamproc.json")))
+if procs:
+    p("### Whole process against whole process (stage `proc`, same run as rotavg's)\n")
+    p("Shonan alone in its own process (`shonan.py --methods shonan --no-cert`), wall time measured "
+      "by the driver exactly as for rotavg: interpreter start, imports, file parsing, graph "
+      "construction and the Shonan staircase (with gtsam's own certification). rotavg: the whole "
+      "`certify_g2o` process (load, solve, verified certificate, JSON). The in-process column "
+      "compares Shonan's solve alone with rotavg's solve + certify.\n")
+    p("| graph | Shonan process | Shonan solve (in-process) | Shonan cost | rotavg process | rotavg solve + certify | rotavg cost | speed-up, whole process | speed-up, in-process |")
+    p("|---|---|---|---|---|---|---|---|---|")
+    for g in procs:
+        tag = tag_of(g, "__gtsamproc.json")
+        pr, ours = load(g), load(os.path.join(RES, tag + "__rotavg.json"))
+        name = tag[len("mra__"):]
+        sh = (pr or {}).get("results", {}).get("shonan", {})
+        pw = (pr or {}).get("process_wall_seconds")
+        if not ours or "cost" not in ours or not pw or "time_s" not in sh:
+            p(f"| {name} | {secs(pw)} | {(pr or {}).get('error', '-')} | | | | | | |")
+            continue
+        inproc = ours["solve_seconds"] + ours["certify_seconds"]
+        p(f"| {name} | {secs(pw)} | {secs(sh['time_s'])} | {f(sh.get('cost_file_weights'), 6)} "
+          f"| {secs(ours['process_wall_seconds'])} | {secs(inproc)} | {f(ours['cost'], 6)} "
+          f"| {ratio(pw / ours['process_wall_seconds'])} | {ratio(sh['time_s'] / inproc)} |")
+    p("")
+
 # ------------------------------------------------------------------ SDP
 for g in sorted(glob.glob(os.path.join(RES, "sdp__*__cvxpy.json"))):
     tag = tag_of(g, "__cvxpy.json")
