@@ -112,3 +112,115 @@ fn committed_seeds_are_accepted() {
     }
     assert!(count >= 25, "only {count} seeds");
 }
+
+/// The reader's error message for a fuzz input (the input must be rejected, not panic).
+fn rejected(target: &str, data: &[u8]) -> String {
+    match dispatch(target, data) {
+        Ok(()) => panic!("input accepted: {:?}", String::from_utf8_lossy(data)),
+        Err(e) => e,
+    }
+}
+
+/// Found by `handeye_text` (2026-11-22, after 6 min): with a very loose tolerance (selector
+/// `w`: 10) `read_eth_csv` accepted the zero quaternion `(0, 0, 0, 0)` (|0 - 1| <= 10) and
+/// normalised it into a NaN rotation. Now any quaternion of norm <= 1e-12 is rejected, as in
+/// the g2o reader.
+#[test]
+fn eth_zero_quaternion_is_rejected_at_any_tolerance() {
+    let input = b"w\n0, 0, 0, 0, 0, 0, 0,1\n0.1, 1, 0, 0, 0, 0, 00, 0\n";
+    let e = rejected("handeye_text", input);
+    assert!(
+        e.starts_with("hand.csv:3:") && e.contains("quaternion norm 0"),
+        "{e}"
+    );
+    // Direct call, default tolerance: unchanged behaviour.
+    let e = read_eth_csv("0, 0, 0, 0, 0, 0, 0, 0\n", "h.csv", 1e-5).unwrap_err();
+    assert!(e.to_string().contains("quaternion norm 0"), "{e}");
+}
+
+/// Found by `json` (2026-11-22, after 9 s): three valid rotations with weights
+/// `[1e307, 1e308, 1e307]` made `chordal_l2_mean` and `quaternion_l2_mean` return NaN
+/// estimates (the weighted sums overflow inside the SVD / eigen-solver); by hand we then found
+/// weights `1e308` (x3) "certified" the identity with cost 1.17e308 although the optimum is
+/// 0.774e308 (the unit-weight optimum 0.7737 scaled), and weights `1e-200` "certified" the
+/// identity for the chordal L2 mean (cost 8e-200, optimum 5.75e-200). The readers now reject
+/// weights outside `[MIN_WEIGHT, MAX_WEIGHT] = [1e-100, 1e100]` (`rotavg::io`), inside which
+/// the estimates are correct (checked below at both ends against the unit-weight answer).
+#[test]
+fn extreme_single_weights_are_rejected() {
+    let input = b" {\"rotations\": [[[1,0,0],[0,1,0],[0,0,1]], [[0,-1,0],[1,0,0],[0,0,1]], \
+[[1,0,0],[0,0,-1],[0,1,0]]], \"weights\": [1e307, 1e308, 1e307]}";
+    let e = rejected("json", input);
+    assert!(
+        e.starts_with("single.json:1:") && e.contains("outside"),
+        "{e}"
+    );
+    let rotations = "[[[1,0,0],[0,1,0],[0,0,1]], [[0,-1,0],[1,0,0],[0,0,1]], \
+[[1,0,0],[0,0,-1],[0,1,0]]]";
+    let with = |w: &str| format!("{{\"rotations\": {rotations}, \"weights\": [{w}, {w}, {w}]}}");
+    for w in ["1e308", "1e154", "1e101", "1e-101", "1e-200", "5e-324"] {
+        let e = parse_single_json(&with(w), "s.json").unwrap_err();
+        assert!(e.to_string().contains("outside"), "{w}: {e}");
+    }
+    // The window's ends give the unit-weight estimates (equal weights: scale invariant).
+    let unit = parse_single_json(&with("1"), "s.json").unwrap();
+    for w in ["1e100", "1e-100"] {
+        let p = parse_single_json(&with(w), "s.json").unwrap();
+        for (mean, name) in [
+            (rotavg::single::chordal_l2_mean as fn(_) -> _, "chordal"),
+            (rotavg::single::quaternion_l2_mean, "quaternion"),
+        ] {
+            let (a, b) = (mean(&p).unwrap(), mean(&unit).unwrap());
+            let d = rotavg::so3::angle_between(&a.estimate, &b.estimate);
+            assert!(
+                d < 1e-9,
+                "{name} at weight {w}: {d:e} rad from the unit-weight estimate"
+            );
+            assert_eq!(
+                a.certificate.verdict, b.certificate.verdict,
+                "{name} at {w}"
+            );
+        }
+    }
+}
+
+/// The same window in every reader that reads weights (multiple JSON, conjugate JSON, g2o);
+/// with `WeightSource::Unit` (selector bit 0) the file's weights are not used, not checked.
+#[test]
+fn extreme_weights_are_rejected_by_every_reader() {
+    let z = "[[0,-1,0],[1,0,0],[0,0,1]]";
+    let problem = |w: &str| {
+        format!(
+            "{{\"num_rotations\": 2, \"edges\": [{{\"i\": 0, \"j\": 1, \"rotation\": {z}, \"weight\": {w}}}]}}"
+        )
+    };
+    let input = |sel: u8, text: &str| [&[sel][..], text.as_bytes()].concat();
+    for w in ["1e101", "1e-101", "1.7e308"] {
+        let e = rejected("json", &input(0, &problem(w)));
+        assert!(
+            e.contains("edge 0 (0, 1): weight") && e.contains("outside"),
+            "{e}"
+        );
+        assert_eq!(
+            dispatch("json", &input(1, &problem(w))),
+            Ok(()),
+            "unit weights"
+        );
+        let pairs = format!("{{\"pairs\": [{{\"left\": {z}, \"right\": {z}, \"weight\": {w}}}]}}");
+        let e = rejected("json", &input(3 << 3, &pairs));
+        assert!(e.contains("pair 0: weight") && e.contains("outside"), "{e}");
+    }
+    for w in ["1e100", "1e-100", "2.5"] {
+        assert_eq!(dispatch("json", &input(0, &problem(w))), Ok(()), "{w}");
+    }
+    // g2o EDGE_SE2: the weight is I33. kappa = 1e101 is out, 1e100 in.
+    let g2o = |w: &str| format!("EDGE_SE2 0 1 1 0 0.5 1 0 0 1 0 {w}\n");
+    let e = rejected("g2o", &input(0, &g2o("1e101")));
+    assert!(e.starts_with("fuzz.g2o:1:") && e.contains("outside"), "{e}");
+    assert_eq!(
+        dispatch("g2o", &input(1, &g2o("1e101"))),
+        Ok(()),
+        "unit weights"
+    );
+    assert_eq!(dispatch("g2o", &input(0, &g2o("1e100"))), Ok(()));
+}
