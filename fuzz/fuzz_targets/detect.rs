@@ -11,7 +11,14 @@ use rotavg::io::detect::{GraphFormat, detect_format, read_graph};
 mod common;
 
 const NAMES: [&str; 8] = [
-    "-", "EGs.txt", "graph.g2o", "problem.json", "x.JSON", "sphere.G2O", "data", ".json.txt",
+    "-",
+    "EGs.txt",
+    "graph.g2o",
+    "problem.json",
+    "x.JSON",
+    "sphere.G2O",
+    "data",
+    ".json.txt",
 ];
 
 fuzz_target!(|data: &[u8]| {

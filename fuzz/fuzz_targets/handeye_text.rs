@@ -40,7 +40,9 @@ fuzz_target!(|data: &[u8]| {
     match (selector >> 3) & 3 {
         0 | 3 => {
             if let Ok(poses) = read_tabb_robot(&text, "robot_cali.txt", tol) {
-                poses.iter().for_each(|p| common::assert_rotation(&p.rotation));
+                poses
+                    .iter()
+                    .for_each(|p| common::assert_rotation(&p.rotation));
                 if poses.len() <= MAX_POSES {
                     if let Ok((p, _)) = tabb_problem(&poses, &poses, &settings) {
                         check_conjugate(&p);
@@ -50,7 +52,9 @@ fuzz_target!(|data: &[u8]| {
         }
         1 => {
             if let Ok(poses) = read_tabb_camera(&text, "cali.txt", tol) {
-                poses.iter().for_each(|p| common::assert_rotation(&p.rotation));
+                poses
+                    .iter()
+                    .for_each(|p| common::assert_rotation(&p.rotation));
                 if poses.len() <= MAX_POSES {
                     if let Ok((p, _)) = tabb_problem(&poses, &poses, &settings) {
                         check_conjugate(&p);
@@ -61,7 +65,9 @@ fuzz_target!(|data: &[u8]| {
         _ => {
             if let Ok(stream) = read_eth_csv(&text, "hand.csv", tol) {
                 assert!(stream.windows(2).all(|w| w[0].time < w[1].time));
-                stream.iter().for_each(|p| common::assert_rotation(&p.pose.rotation));
+                stream
+                    .iter()
+                    .for_each(|p| common::assert_rotation(&p.pose.rotation));
                 let settings = MotionSettings {
                     stride: 1,
                     subsample: 1,

@@ -58,8 +58,12 @@ fn problem(text: &str, options: &ReadOptions) {
         return;
     }
     let defaults = ReadOptions::default();
-    let back = read_problem_json(&write_problem_json(&g.problem), "round-trip.json", &defaults)
-        .expect("JSON round trip");
+    let back = read_problem_json(
+        &write_problem_json(&g.problem),
+        "round-trip.json",
+        &defaults,
+    )
+    .expect("JSON round trip");
     same_problem(&g, &back, "JSON round trip");
     // g2o stores 2w in the information matrix: stay clear of overflow and subnormals.
     let weights_ok = g
@@ -126,7 +130,10 @@ fn single(text: &str) {
     let back = parse_single_json(&to_single_json(&p), "round-trip.json").expect("round trip");
     assert_eq!(back.len(), p.len());
     if p.len() <= MAX_SAMPLES {
-        for solution in [chordal_l2_mean(&p), quaternion_l2_mean(&p)].into_iter().flatten() {
+        for solution in [chordal_l2_mean(&p), quaternion_l2_mean(&p)]
+            .into_iter()
+            .flatten()
+        {
             common::assert_rotation(&solution.estimate);
             assert!(solution.cost >= 0.0, "cost {}", solution.cost);
         }
