@@ -224,3 +224,41 @@ fn extreme_weights_are_rejected_by_every_reader() {
     );
     assert_eq!(dispatch("g2o", &input(0, &g2o("1e100"))), Ok(()));
 }
+
+/// Found by `json` (2026-11-22, at start-up, on the seed `problem-min-weights`): a problem
+/// with weights at the window's lower end `1e-100`, written with `write_g2o` (information
+/// `2w`) and read back, gave `kappa = 3 / (2 tr(Omega^-1)) = 9.999999999999999e-101` and was
+/// rejected. The window now has a relative rounding slack of `1e-12`; both ends round-trip.
+#[test]
+fn weights_at_the_window_ends_round_trip_through_g2o() {
+    use rotavg::io::g2o::write_g2o;
+    use rotavg::io::json::write_problem_json;
+    let z = "[[0,-1,0],[1,0,0],[0,0,1]]";
+    for w in ["1e-100", "1e100"] {
+        let text = format!(
+            "{{\"num_rotations\": 3, \"edges\": [{{\"i\":0,\"j\":1,\"rotation\":{z},\"weight\":{w}}},\
+             {{\"i\":1,\"j\":2,\"rotation\":{z},\"weight\":{w}}}]}}"
+        );
+        let o = ReadOptions::default();
+        let g = read_problem_json(&text, "p.json", &o).unwrap();
+        let identity = vec![rotavg::Rotation::identity(); 3];
+        let back = read_g2o(&write_g2o(&g.problem, Some(&identity)), "p.g2o", &o)
+            .unwrap_or_else(|e| panic!("weight {w}: {e}"));
+        let json_back = read_problem_json(&write_problem_json(&g.problem), "p.json", &o).unwrap();
+        for (a, b) in g.problem.edges().iter().zip(back.problem.edges()) {
+            assert!((a.weight - b.weight).abs() <= 1e-12 * a.weight, "{w}");
+        }
+        for (a, b) in g.problem.edges().iter().zip(json_back.problem.edges()) {
+            assert_eq!(a.weight, b.weight, "JSON keeps weights exactly");
+            assert!(rotavg::so3::angle_between(&a.rotation, &b.rotation) < 1e-12);
+        }
+    }
+    // Beyond the slack: still rejected.
+    let g2o = |w: &str| format!("EDGE_SE2 0 1 1 0 0.5 1 0 0 1 0 {w}\n");
+    for w in ["0.99999999e-100", "1.00000001e100"] {
+        assert!(
+            read_g2o(&g2o(w), "x.g2o", &ReadOptions::default()).is_err(),
+            "{w}"
+        );
+    }
+}
