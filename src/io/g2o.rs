@@ -28,6 +28,8 @@
 //! * `VERTEX_SE2 id x y theta`, `EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33`: a rotation
 //!   by `theta` about z `[F4]`; weight `kappa = I33` (SE-Sync's 2-D rule), `I33 > 0` required.
 //! * Any other tag (`FIX`, `VERTEX_XY`, ...) is skipped and counted in a warning.
+//! * With [`WeightSource::File`], a weight outside [`crate::io::MIN_WEIGHT`,
+//!   `crate::io::MAX_WEIGHT`] is an error (the solvers' squared sums would overflow).
 //!
 //! Node ids may be sparse: they are sorted and mapped to `0..n` ([`LoadedGraph::node_ids`]).
 //! Edges with `i > j` and multi-edges are kept as given.
@@ -330,6 +332,11 @@ pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
             }
             if !(weight.is_finite() && weight > 0.0) {
                 return Err(t.err(format!("edge weight {weight:e} is not finite and > 0")));
+            }
+            if options.weights == WeightSource::File
+                && let Some(why) = crate::io::weight_out_of_range(weight)
+            {
+                return Err(t.err(format!("edge {why}")));
             }
             raw.push(RawEdge {
                 i,

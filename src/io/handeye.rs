@@ -322,8 +322,8 @@ pub fn read_tabb_dir(
 }
 
 /// Read an ETH ASL CSV: lines `t, x, y, z, q_x, q_y, q_z, q_w` (Hamilton quaternion, scalar
-/// last). A quaternion whose norm differs from 1 by more than `tol` is rejected; time stamps
-/// must increase strictly.
+/// last). A quaternion whose norm differs from 1 by more than `tol`, or is below `1e-12`, is
+/// rejected; time stamps must increase strictly.
 ///
 /// ```
 /// use rotavg::io::handeye::{interpolate, read_eth_csv};
@@ -366,14 +366,14 @@ pub fn read_eth_csv(text: &str, file: &str, tol: f64) -> Result<Vec<StampedPose>
             *slot = number(t, line, file)?;
         }
         let q = Quaternion::new(v[7], v[4], v[5], v[6]);
-        if (q.norm() - 1.0).abs() > tol {
+        // A (near-)zero quaternion has no direction, whatever the tolerance: normalising it
+        // would give NaN (found by fuzzing, tests/fuzz_regressions.rs).
+        let norm = q.norm();
+        if !(norm > 1e-12 && (norm - 1.0).abs() <= tol) {
             return Err(Error::parse(
                 Some(file),
                 Some(line),
-                format!(
-                    "quaternion norm {} is not 1 (tolerance {tol:.1e})",
-                    q.norm()
-                ),
+                format!("quaternion norm {norm} is not 1 (tolerance {tol:.1e})"),
             ));
         }
         if let Some(prev) = out.last()
@@ -552,7 +552,8 @@ struct ConjugateJson {
 }
 
 /// Read the conjugate JSON of SPEC section 5: `{"pairs": [{"left": L, "right": R, "weight": w}]}`
-/// (row-major rotations; weight optional, default 1; `R_i ~ S^-1 L_i S`).
+/// (row-major rotations; weight optional, default 1, within
+/// [`[MIN_WEIGHT, MAX_WEIGHT]`](crate::io::MAX_WEIGHT); `R_i ~ S^-1 L_i S`).
 ///
 /// ```
 /// use rotavg::io::handeye::{read_conjugate_json, write_conjugate_json};
@@ -575,6 +576,11 @@ struct ConjugateJson {
 pub fn read_conjugate_json(text: &str, file: &str) -> Result<ConjugateProblem> {
     let parsed: ConjugateJson = serde_json::from_str(text)
         .map_err(|e| Error::parse(Some(file), Some(e.line()), e.to_string()))?;
+    for (k, p) in parsed.pairs.iter().enumerate() {
+        if let Some(why) = crate::io::weight_out_of_range(p.weight) {
+            return Err(Error::parse(Some(file), None, format!("pair {k}: {why}")));
+        }
+    }
     ConjugateProblem::new(parsed.pairs).map_err(|e| e.in_file(file, None))
 }
 

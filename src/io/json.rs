@@ -4,7 +4,8 @@
 //!
 //! * Problem: `{"num_rotations": n, "edges": [{"i": 0, "j": 1, "rotation": R, "weight": w}, ...]}`
 //!   with `R` = `R_ij` (`R_ij R_i = R_j`, this crate's convention, no conversion), a row-major
-//!   nested 3x3 array, indices 0-based, `weight` optional (default 1). Unknown fields in an
+//!   nested 3x3 array, indices 0-based, `weight` optional (default 1; within [`crate::io::MIN_WEIGHT`,
+//!   `crate::io::MAX_WEIGHT`] when weights come from the file). Unknown fields in an
 //!   edge are an error (a misspelt `"wieght"` must not silently become 1); unknown top-level
 //!   fields are ignored.
 //! * Estimate: `{"rotations": [R, ...]}`, or `{"estimate": [R, ...]}` as printed by `--json`
@@ -76,6 +77,11 @@ pub fn read_problem_json(text: &str, file: &str, options: &ReadOptions) -> Resul
         let item = format!("edge {k} ({}, {})", e.i, e.j);
         let rotation = rotation_from_rows(&e.rotation, options.rotation_tolerance, &item)
             .map_err(|err| err.in_file(file, None))?;
+        if options.weights == WeightSource::File
+            && let Some(why) = crate::io::weight_out_of_range(e.weight)
+        {
+            return Err(Error::parse(Some(file), None, format!("{item}: {why}")));
+        }
         edges.push(Edge {
             i: e.i,
             j: e.j,

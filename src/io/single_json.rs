@@ -6,7 +6,8 @@
 //!
 //! Each `R` is a rotation as a row-major nested array `[[r11, r12, r13], [r21, ..], [r31, ..]]`
 //! (the samples `R_i` themselves: no transposition). `weights` is optional (default: all 1);
-//! when present it has one finite weight > 0 per rotation. Unknown keys are rejected (a typo
+//! when present it has one weight per rotation, within
+//! [`[MIN_WEIGHT, MAX_WEIGHT]`](crate::io::MAX_WEIGHT). Unknown keys are rejected (a typo
 //! such as `"weight"` would otherwise silently mean unit weights). Every rotation is validated
 //! with [`crate::so3::rotation_from_rows`] at [`DEFAULT_ROTATION_TOLERANCE`] (item name
 //! `"rotation k"`, 0-based). Errors name the file and the line where the offending value ends.
@@ -95,13 +96,15 @@ impl<'de> de::DeserializeSeed<'de> for WeightSeed {
         struct V(usize);
         impl V {
             fn check<E: de::Error>(&self, w: f64) -> std::result::Result<f64, E> {
-                if w.is_finite() && w > 0.0 {
-                    Ok(w)
-                } else {
+                if !(w.is_finite() && w > 0.0) {
                     Err(E::custom(Error::InvalidWeight {
                         item: format!("weight {}", self.0),
                         weight: w,
                     }))
+                } else if let Some(why) = crate::io::weight_out_of_range(w) {
+                    Err(E::custom(format!("weight {}: {why}", self.0)))
+                } else {
+                    Ok(w)
                 }
             }
         }
