@@ -47,7 +47,8 @@ pub enum Error {
         /// What held the value.
         item: String,
     },
-    /// A weight that is not finite and strictly positive.
+    /// A weight outside `[1e-100, 1e100]` ([`crate::io::MIN_WEIGHT`], [`crate::io::MAX_WEIGHT`]):
+    /// not finite, not positive, or so extreme that squares of costs would over/underflow.
     InvalidWeight {
         /// Which input item, 0-based.
         item: String,
@@ -132,7 +133,7 @@ impl fmt::Display for Error {
             Error::InvalidWeight { item, weight } => {
                 write!(
                     f,
-                    "{item} has weight {weight}; weights must be finite and > 0"
+                    "{item} has weight {weight:e}; weights must lie in [1e-100, 1e100] (they are relative: rescale them)"
                 )
             }
             Error::Empty { what } => write!(f, "{what} is empty"),

@@ -262,3 +262,58 @@ fn weights_at_the_window_ends_round_trip_through_g2o() {
         );
     }
 }
+
+/// The weight window holds for problems built in code too, not only for files: the fuzzer's
+/// weights `1e308` made the quaternion L2 mean certify a wrong estimate and `1e-200` the chordal
+/// L2 mean (overflow / underflow). Every constructor now rejects weights outside
+/// `[MIN_WEIGHT, MAX_WEIGHT]` with `Error::InvalidWeight`.
+#[test]
+fn constructors_reject_weights_outside_the_window() {
+    use rotavg::conjugate::{ConjugatePair, ConjugateProblem};
+    use rotavg::multiple::{Edge, MultipleProblem};
+    use rotavg::single::SingleProblem;
+    use rotavg::{Error, Rotation};
+    let r = Rotation::identity();
+    for w in [1e308, 1e-200, 0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let s = SingleProblem::new(vec![r, r, r], Some(vec![w, 1.0, 1.0]));
+        assert!(matches!(s, Err(Error::InvalidWeight { .. })), "single {w}");
+        let m = MultipleProblem::new(
+            2,
+            vec![Edge {
+                i: 0,
+                j: 1,
+                rotation: r,
+                weight: w,
+            }],
+        );
+        assert!(
+            matches!(m, Err(Error::InvalidWeight { .. })),
+            "multiple {w}"
+        );
+        let c = ConjugateProblem::new(vec![ConjugatePair {
+            left: r,
+            right: r,
+            weight: w,
+        }]);
+        assert!(
+            matches!(c, Err(Error::InvalidWeight { .. })),
+            "conjugate {w}"
+        );
+    }
+    // the window's ends are accepted
+    for w in [1e-100, 1e100] {
+        assert!(SingleProblem::new(vec![r, r], Some(vec![w, 1.0])).is_ok());
+        assert!(
+            MultipleProblem::new(
+                2,
+                vec![Edge {
+                    i: 0,
+                    j: 1,
+                    rotation: r,
+                    weight: w
+                }]
+            )
+            .is_ok()
+        );
+    }
+}

@@ -17,7 +17,7 @@ pub struct ConjugatePair {
     /// `R_i`.
     #[serde(with = "crate::serde_rot::rotation")]
     pub right: Rotation,
-    /// Weight `w_i` (finite, > 0); 1 when absent from JSON.
+    /// Weight `w_i` in `[1e-100, 1e100]`; 1 when absent from JSON.
     #[serde(default = "one")]
     pub weight: f64,
 }
@@ -169,7 +169,7 @@ impl ConjugateProblem {
             });
         }
         for (k, p) in pairs.iter().enumerate() {
-            if !(p.weight.is_finite() && p.weight > 0.0) {
+            if crate::io::weight_out_of_range(p.weight).is_some() {
                 return Err(Error::InvalidWeight {
                     item: format!("pair {k}"),
                     weight: p.weight,

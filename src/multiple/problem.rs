@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::so3::{Rotation, angle_between};
 use serde::{Deserialize, Serialize};
 
-/// One measured edge: `rotation = R_ij` with `R_ij R_i = R_j`, weight `w_ij > 0`.
+/// One measured edge: `rotation = R_ij` with `R_ij R_i = R_j`, weight `w_ij` in `[1e-100, 1e100]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Edge {
     /// Tail node `i` (0-based).
@@ -93,7 +93,7 @@ impl MultipleProblem {
             if e.i == e.j {
                 return Err(Error::SelfLoop { edge: k, node: e.i });
             }
-            if !(e.weight.is_finite() && e.weight > 0.0) {
+            if crate::io::weight_out_of_range(e.weight).is_some() {
                 return Err(Error::InvalidWeight {
                     item: format!("edge {k} ({}, {})", e.i, e.j),
                     weight: e.weight,

@@ -129,8 +129,8 @@ impl SingleProblem {
     ///
     /// Errors: [`Error::Empty`] for no samples; [`Error::NonFinite`] / [`Error::NotARotation`]
     /// for a sample that is not a rotation within [`DEFAULT_ROTATION_TOLERANCE`] (the check is
-    /// `[C6]`; item name `"rotation k"`, 0-based); [`Error::InvalidWeight`] for a weight that is
-    /// not finite and > 0; [`Error::InvalidSettings`] when the numbers of weights and samples
+    /// `[C6]`; item name `"rotation k"`, 0-based); [`Error::InvalidWeight`] for a weight outside
+    /// `[1e-100, 1e100]` ([`crate::io::MIN_WEIGHT`], [`crate::io::MAX_WEIGHT`]; NaN included); [`Error::InvalidSettings`] when the numbers of weights and samples
     /// differ.
     ///
     /// ```
@@ -181,7 +181,7 @@ impl SingleProblem {
                 if let Some((k, &x)) = w
                     .iter()
                     .enumerate()
-                    .find(|(_, x)| !(x.is_finite() && **x > 0.0))
+                    .find(|(_, x)| crate::io::weight_out_of_range(**x).is_some())
                 {
                     return Err(Error::InvalidWeight {
                         item: format!("rotation {k}"),
