@@ -89,6 +89,23 @@ peer() {  # peer OUT.json script args...   (cached)
   [[ -s "${out%.json}.stderr" ]] || rm -f "${out%.json}.stderr"
 }
 
+stamp() {  # stamp OUT.json T0 T1 RC: OUT.json.tmp (the command's JSON) + wall time -> OUT.json
+  local out="$1"
+  "$PY" - "$out.tmp" "$out" "$2" "$3" "$4" <<'PYEOF'
+import json, sys
+src, dst, t0, t1, rc = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4]), int(sys.argv[5])
+try:
+    d = json.load(open(src))
+except Exception as e:
+    d = {"error": f"exit code {rc} (124 = timeout); no JSON ({e})"}
+d["process_wall_seconds"] = t1 - t0
+d["exit_code"] = rc
+json.dump(d, open(dst, "w"), indent=1)
+PYEOF
+  rm -f "$out.tmp"
+  [[ -s "${out%.json}.stderr" ]] || rm -f "${out%.json}.stderr"
+}
+
 ours() {  # ours OUT.json cmd args...   (stdout must be one JSON object; wall time measured here)
   local out="$1"; shift
   log "$*"
@@ -97,19 +114,7 @@ ours() {  # ours OUT.json cmd args...   (stdout must be one JSON object; wall ti
   timeout "$T" "$@" > "$out.tmp" 2>"${out%.json}.stderr"
   rc=$?
   t1=$(date +%s.%N)
-  "$PY" - "$out.tmp" "$out" "$t0" "$t1" "$rc" <<'PYEOF'
-import json, sys
-src, dst, t0, t1, rc = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4]), int(sys.argv[5])
-try:
-    d = json.load(open(src))
-except Exception as e:
-    d = {"error": f"exit code {rc}; no JSON ({e})"}
-d["process_wall_seconds"] = t1 - t0
-d["exit_code"] = rc
-json.dump(d, open(dst, "w"), indent=1)
-PYEOF
-  rm -f "$out.tmp"
-  [[ -s "${out%.json}.stderr" ]] || rm -f "${out%.json}.stderr"
+  stamp "$out" "$t0" "$t1" "$rc"
 }
 
 REAL=(g2o/3d/sesync/sphere2500.g2o g2o/3d/sesync/parking-garage.g2o g2o/3d/sesync/smallGrid3D.g2o
@@ -152,19 +157,7 @@ peerproc() {  # peerproc OUT.json script args...   (always recomputed; records p
   (cd "$P" && timeout "$T" "$PY" "$@" --out "$out.tmp" >/dev/null 2>"${out%.json}.stderr")
   rc=$?
   t1=$(date +%s.%N)
-  "$PY" - "$out.tmp" "$out" "$t0" "$t1" "$rc" <<'PYEOF'
-import json, sys
-src, dst, t0, t1, rc = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4]), int(sys.argv[5])
-try:
-    d = json.load(open(src))
-except Exception as e:
-    d = {"error": f"exit code {rc} (124 = timeout); no JSON ({e})"}
-d["process_wall_seconds"] = t1 - t0
-d["exit_code"] = rc
-json.dump(d, open(dst, "w"), indent=1)
-PYEOF
-  rm -f "$out.tmp"
-  [[ -s "${out%.json}.stderr" ]] || rm -f "${out%.json}.stderr"
+  stamp "$out" "$t0" "$t1" "$rc"
 }
 if has proc; then
   for f in "${REAL[@]}"; do
