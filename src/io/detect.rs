@@ -140,11 +140,8 @@ pub fn detect_format(file: &str, text: &str) -> Result<GraphFormat> {
     if text.trim_start().starts_with('{') {
         return Ok(GraphFormat::Json);
     }
-    for (k, line) in text.lines().enumerate() {
-        let t = line.trim();
-        if t.is_empty() || t.starts_with('#') {
-            continue;
-        }
+    // the first content line decides
+    if let Some((ln, t)) = crate::io::content_lines(text).next() {
         let first = t.split_whitespace().next().unwrap_or("");
         if first.starts_with(|c: char| c.is_ascii_alphabetic()) {
             return Ok(GraphFormat::G2o);
@@ -155,7 +152,7 @@ pub fn detect_format(file: &str, text: &str) -> Result<GraphFormat> {
         }
         return Err(Error::parse(
             Some(file),
-            Some(k + 1),
+            Some(ln),
             format!(
                 "cannot detect the file format from this line ({count} tokens); pass --format g2o|1dsfm|json"
             ),

@@ -197,14 +197,7 @@ pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
     let mut raw: Vec<RawEdge> = Vec::new();
     let mut skipped: BTreeMap<String, (usize, usize)> = BTreeMap::new();
     let (mut seen_3d, mut seen_2d) = (false, false);
-    let mut last_line = 0;
-    for (k, line) in text.lines().enumerate() {
-        let ln = k + 1;
-        last_line = ln;
-        let trimmed = line.trim();
-        if trimmed.is_empty() || trimmed.starts_with('#') {
-            continue;
-        }
+    for (ln, trimmed) in crate::io::content_lines(text) {
         let mut t = Tokens::new(file, ln, trimmed);
         let tag = t.next_str("tag")?;
         let mut vertex = None;
@@ -350,7 +343,7 @@ pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
     if raw.is_empty() {
         return Err(Error::parse(
             Some(file),
-            Some(last_line.max(1)),
+            Some(crate::io::last_line(text)),
             "no edge lines (EDGE_SE3:QUAT, EDGE3 or EDGE_SE2) in the file",
         ));
     }

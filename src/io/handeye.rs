@@ -344,12 +344,7 @@ pub fn read_tabb_dir(
 /// ```
 pub fn read_eth_csv(text: &str, file: &str, tol: f64) -> Result<Vec<StampedPose>> {
     let mut out: Vec<StampedPose> = Vec::new();
-    for (k, l) in text.lines().enumerate() {
-        let line = k + 1;
-        let l = l.trim();
-        if l.is_empty() || l.starts_with('#') {
-            continue;
-        }
+    for (line, l) in crate::io::content_lines(text) {
         let f: Vec<&str> = l.split(',').map(str::trim).collect();
         if f.len() != 8 {
             return Err(Error::parse(

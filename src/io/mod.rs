@@ -59,3 +59,17 @@ pub(crate) fn weight_out_of_range(w: f64) -> Option<String> {
         ))
     }
 }
+
+/// The content lines of a text file: `(1-based line number, trimmed line)` for every line that
+/// is neither blank nor a `#` comment. Shared by the line-oriented readers.
+pub(crate) fn content_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
+    text.lines()
+        .enumerate()
+        .map(|(k, l)| (k + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+}
+
+/// The line to blame for "nothing found" errors: the last line of the file (1 when empty).
+pub(crate) fn last_line(text: &str) -> usize {
+    text.lines().count().max(1)
+}

@@ -53,14 +53,7 @@ fn to_rotation(t: &Tokens<'_>, m: &Matrix3<f64>, tol: f64, item: &str) -> Result
 /// ```
 pub fn read_egs(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedGraph> {
     let mut raw: Vec<(u64, u64, Rotation, usize)> = Vec::new();
-    let mut last_line = 0;
-    for (k, line) in text.lines().enumerate() {
-        let ln = k + 1;
-        last_line = ln;
-        let trimmed = line.trim();
-        if trimmed.is_empty() || trimmed.starts_with('#') {
-            continue;
-        }
+    for (ln, trimmed) in crate::io::content_lines(text) {
         let mut t = Tokens::new(file, ln, trimmed);
         t.expect_count(
             &[14, 11],
@@ -84,7 +77,7 @@ pub fn read_egs(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
     if raw.is_empty() {
         return Err(Error::parse(
             Some(file),
-            Some(last_line.max(1)),
+            Some(crate::io::last_line(text)),
             "no edge lines in the EGs file",
         ));
     }
@@ -139,11 +132,7 @@ pub fn read_bundler(
     file: &str,
     options: &ReadOptions,
 ) -> Result<Vec<Option<Rotation>>> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(k, l)| (k + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+    let mut lines = crate::io::content_lines(text);
     let (hl, header) = lines.next().ok_or_else(|| {
         Error::parse(
             Some(file),
@@ -216,12 +205,8 @@ pub fn read_rotation_list(
     options: &ReadOptions,
 ) -> Result<Vec<Option<Rotation>>> {
     let mut out = Vec::new();
-    for (k, line) in text.lines().enumerate() {
-        let trimmed = line.trim();
-        if trimmed.is_empty() || trimmed.starts_with('#') {
-            continue;
-        }
-        let mut t = Tokens::new(file, k + 1, trimmed);
+    for (ln, trimmed) in crate::io::content_lines(text) {
+        let mut t = Tokens::new(file, ln, trimmed);
         t.expect_count(&[9], "R11 R12 R13 R21 R22 R23 R31 R32 R33")?;
         let m = read_matrix(&mut t)?;
         if is_zero(&m) {
