@@ -28,6 +28,16 @@ fn run(args: &[&str]) -> Output {
     bin().args(args).output().unwrap()
 }
 
+/// Exit status 0, else fail showing the process's stderr.
+fn assert_success(out: &Output) {
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn json_of(out: &Output) -> serde_json::Value {
     let s = String::from_utf8_lossy(&out.stdout);
     serde_json::from_str(&s).unwrap_or_else(|e| {
@@ -72,12 +82,7 @@ fn multiple_json_output_and_certify_round_trip() {
         est.to_str().unwrap(),
         "--require-certified",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v = json_of(&out);
     assert_eq!(v["problem"], "multiple");
     assert_eq!(v["num_rotations"], 30);
@@ -118,12 +123,7 @@ fn multiple_json_output_and_certify_round_trip() {
         "--json",
         "--require-certified",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let w = json_of(&out);
     assert_eq!(w["certificate"]["verdict"], "certified");
     let (c1, c2) = (v["cost"].as_f64().unwrap(), w["cost"].as_f64().unwrap());
@@ -199,12 +199,7 @@ fn output_g2o_round_trip_and_loss_options() {
         "--init-method",
         "tree",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v = json_of(&out);
     let back = load_graph(&out_g2o, GraphFormat::G2o, &ReadOptions::default()).unwrap();
     let init = back.initial.unwrap();
@@ -279,12 +274,7 @@ fn malformed_and_disconnected_inputs() {
         "--largest-component",
         "--json",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v = json_of(&out);
     assert_eq!(v["num_rotations"], 3);
     assert_eq!(v["other_components"], serde_json::json!([2]));
@@ -319,12 +309,7 @@ fn certify_single_problem() {
         e.to_str().unwrap(),
         "--json",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v = json_of(&out);
     assert_eq!(v["problem"], "single");
     assert_eq!(v["certificate"]["verdict"], "certified");
@@ -427,12 +412,7 @@ fn certify_conjugate_problem() {
         e.to_str().unwrap(),
         "--json",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v = json_of(&out);
     assert_eq!(v["problem"], "conjugate");
     assert_eq!(v["certificate"]["verdict"], "certified");
@@ -486,12 +466,7 @@ fn ground_truth_init_and_stdin() {
         "--init-method",
         "tree",
     ]);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v = json_of(&out);
     assert!(
         v["accuracy"]["max_deg"].as_f64().unwrap() < 1e-6,
