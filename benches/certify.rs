@@ -2,14 +2,15 @@
 //!
 //! 1. A 10^4-node synthetic graph (30000 edges, noise 0.02 rad) and a 100 x 100 grid: local
 //!    solve (`solve_multiple`, spectral init, Newton-LM to relative gradient 1e-12), then
-//!    `certify_multiple`, timed over several runs. The random graph is certified by the scalar
+//!    the dual certificate (`certify::multiple::dual_certificate`), timed over several runs. The random graph is certified by the scalar
 //!    comparison `[D13]` (its 3n x 3n Cholesky factor would hold 1.1e8 values), the grid by the
 //!    sparse Cholesky `[D5]`.
 //! 2. sphere2500 and parking-garage (SE-Sync g2o read by `io::detect::load_graph`, unit
 //!    weights) when the shared data are present: local solve, then certification; both timed.
 
 use rotavg::Rotation;
-use rotavg::certify::multiple::{CertifySettings, certify_multiple};
+use rotavg::certify::CertifySettings;
+use rotavg::certify::multiple::dual_certificate;
 use rotavg::io::detect::{GraphFormat, ReadOptions, WeightSource, load_graph};
 use rotavg::multiple::synthetic::SyntheticGraph;
 use rotavg::multiple::{Edge, MultipleProblem, MultipleSettings, solve_multiple};
@@ -84,7 +85,7 @@ fn certify_timed(label: &str, p: &MultipleProblem, rs: &[Rotation], runs: usize)
     let mut last = None;
     for _ in 0..runs {
         let t = Instant::now();
-        let c = certify_multiple(p, rs, &settings).expect("certify");
+        let c = dual_certificate(p, rs, &settings).expect("certify");
         times.push(t.elapsed().as_secs_f64());
         last = Some(c);
     }

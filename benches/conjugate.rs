@@ -4,10 +4,9 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rotavg::conjugate::synthetic::random_instance;
-use rotavg::conjugate::{
-    AverageSettings, ConjugateSettings, SdpSettings, average_conjugate, quaternion_closed_form,
-    relax_conjugate, solve_conjugate,
-};
+use rotavg::conjugate::{ConjugateSettings, quaternion_closed_form, solve_conjugate};
+use rotavg::pipeline::{AverageSettings, average_conjugate};
+use rotavg::relax::{SdpSettings, relax_conjugate};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

@@ -5,7 +5,9 @@
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
-use rotavg::single::{Norm, SingleProblem, SingleSettings, average_single};
+use rotavg::objective::{Loss, Objective};
+use rotavg::pipeline::{AverageSettings, average_single};
+use rotavg::single::SingleProblem;
 use rotavg::so3::{Metric, perturb_gaussian, random_rotation};
 use std::hint::black_box;
 use std::time::Duration;
@@ -21,11 +23,11 @@ fn problem(n: usize) -> SingleProblem {
 
 fn bench(c: &mut Criterion) {
     let methods = [
-        ("chordal_l2", Metric::Chordal, Norm::L2),
-        ("quaternion_l2", Metric::Quaternion, Norm::L2),
-        ("geodesic_l2", Metric::Geodesic, Norm::L2),
-        ("geodesic_l1", Metric::Geodesic, Norm::L1),
-        ("chordal_l1", Metric::Chordal, Norm::L1),
+        ("chordal_l2", Metric::Chordal, Loss::L2),
+        ("quaternion_l2", Metric::Quaternion, Loss::L2),
+        ("geodesic_l2", Metric::Geodesic, Loss::L2),
+        ("geodesic_l1", Metric::Geodesic, Loss::L1),
+        ("chordal_l1", Metric::Chordal, Loss::L1),
     ];
     for n in [1_000usize, 100_000, 1_000_000] {
         let p = problem(n);
@@ -36,7 +38,11 @@ fn bench(c: &mut Criterion) {
             group.measurement_time(Duration::from_secs(if n >= 1_000_000 { 8 } else { 3 }));
         }
         for (name, metric, norm) in methods {
-            let s = SingleSettings::new(metric, norm);
+            let p = p
+                .clone()
+                .with_objective(Objective::new(metric, norm))
+                .expect("supported objective");
+            let s = AverageSettings::default();
             group.bench_with_input(BenchmarkId::new(name, n), &p, |b, p| {
                 b.iter(|| black_box(average_single(black_box(p), &s).expect("valid settings")))
             });

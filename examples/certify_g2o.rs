@@ -19,9 +19,10 @@
 //! `--gradient-tolerance X` overrides the solver's relative gradient tolerance (default 1e-8).
 
 use rotavg::BoundMethod;
-use rotavg::certify::multiple::{CertifySettings, certify_with_multipliers};
+use rotavg::certify::CertifySettings;
+use rotavg::certify::multiple::certify_with_multipliers;
 use rotavg::io::detect::{GraphFormat, ReadOptions, WeightSource, load_graph};
-use rotavg::multiple::average::{AverageMultipleSettings, average_multiple};
+use rotavg::pipeline::{AverageMultipleSettings, average_multiple};
 use rotavg::relax::{SdpSettings, relax_multiple};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -99,11 +100,16 @@ fn run() -> rotavg::Result<()> {
     // is too large for the certificate, dual certificate (SDP / staircase when it fails).
     let mut settings = AverageMultipleSettings::default();
     if let Some(tol) = args.gradient_tolerance {
-        settings.local.gradient_tolerance = tol;
+        settings.solve.gradient_tolerance = tol;
     }
     let estimate = average_multiple(&problem, &settings)?;
     let solution = &estimate.solution;
-    let solve_s = estimate.details.solve_seconds + estimate.details.refine_seconds;
+    let refine_s = estimate
+        .details
+        .certify
+        .as_ref()
+        .map_or(0.0, |c| c.refine_seconds);
+    let solve_s = estimate.details.solve_seconds + refine_s;
     let certify_s = estimate.details.certify_seconds;
     let c = estimate
         .certificate

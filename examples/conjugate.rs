@@ -6,13 +6,13 @@
 //! ```
 //!
 //! Defaults: 100 pairs, 2 degrees of noise per axis, 10 % outliers. The chordal L2 pipeline
-//! ([`rotavg::conjugate::average_conjugate`]) runs the closed-form initialiser, the local
+//! ([`rotavg::pipeline::average_conjugate`]) runs the closed-form initialiser, the local
 //! solver, and the SDP relaxation (Clarabel), whose multipliers give a verified lower bound.
 
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rotavg::conjugate::synthetic::random_instance;
-use rotavg::conjugate::{AverageSettings, average_conjugate};
+use rotavg::pipeline::{AverageSettings, average_conjugate};
 use rotavg::so3::angle_between;
 use std::time::Instant;
 
@@ -50,12 +50,12 @@ fn run() -> rotavg::Result<()> {
         "error to planted S {:.4} deg",
         angle_between(&s.estimate, &truth).to_degrees()
     );
-    if let Some(sdp) = &est.sdp {
+    if let Some(sdp) = est.details.certify.as_ref().and_then(|c| c.sdp.as_ref()) {
         println!(
             "sdp          {:?}, {} iterations, {:.2} ms, eigenvalue ratio {:.1e}",
             sdp.status,
             sdp.iterations,
-            sdp.solve_seconds * 1e3,
+            sdp.seconds * 1e3,
             sdp.eigenvalue_ratio
         );
     }

@@ -8,7 +8,7 @@
 //!
 //! Defaults: 1000 nodes, 4000 edges (mean degree 8), 2 degrees of noise per axis.
 
-use rotavg::certify::multiple::{CertifySettings, certify_multiple};
+use rotavg::certify::{CertifyMode, CertifySettings, certify_multiple};
 use rotavg::multiple::accuracy::align_and_compare;
 use rotavg::multiple::synthetic::SyntheticGraph;
 use rotavg::multiple::{MultipleSettings, solve_multiple};
@@ -48,7 +48,8 @@ fn run() -> rotavg::Result<()> {
     println!("solve   {:8.4} s  {solution}", solve_s);
 
     let t = Instant::now();
-    let cert = certify_multiple(&problem, &solution.rotations, &CertifySettings::default())?;
+    let dual = CertifySettings::with_mode(CertifyMode::Dual);
+    let cert = certify_multiple(&problem, &solution.rotations, &dual)?;
     println!("certify {:8.4} s  {cert}", t.elapsed().as_secs_f64());
 
     let truth: Vec<_> = truth.into_iter().map(Some).collect();

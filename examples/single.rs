@@ -13,7 +13,9 @@
 
 use rand::SeedableRng;
 use rand::rngs::StdRng;
-use rotavg::single::{Norm, SingleProblem, SingleSettings, average_single};
+use rotavg::objective::{Loss, Objective};
+use rotavg::pipeline::{AverageSettings, average_single};
+use rotavg::single::SingleProblem;
 use rotavg::so3::{
     DEFAULT_ROTATION_TOLERANCE, Metric, Rotation, angle_between, exp, perturb_gaussian,
     random_rotation, rotation_from_matrix, rotation_to_rows,
@@ -75,11 +77,11 @@ fn run() -> rotavg::Result<()> {
         }
     };
     let methods = [
-        (Metric::Chordal, Norm::L2),
-        (Metric::Quaternion, Norm::L2),
-        (Metric::Geodesic, Norm::L2),
-        (Metric::Geodesic, Norm::L1),
-        (Metric::Chordal, Norm::L1),
+        (Metric::Chordal, Loss::L2),
+        (Metric::Quaternion, Loss::L2),
+        (Metric::Geodesic, Loss::L2),
+        (Metric::Geodesic, Loss::L1),
+        (Metric::Chordal, Loss::L1),
     ];
     let mut out = Vec::new();
     if !json {
@@ -87,18 +89,25 @@ fn run() -> rotavg::Result<()> {
     }
     for (metric, norm) in methods {
         let t = Instant::now();
-        let sol = average_single(&problem, &SingleSettings::new(metric, norm))?;
+        let p = problem
+            .clone()
+            .with_objective(Objective::new(metric, norm))?;
+        let est = average_single(&p, &AverageSettings::default())?;
         let seconds = t.elapsed().as_secs_f64();
-        let c = &sol.certificate;
+        let sol = &est.solution;
+        let c = est
+            .certificate
+            .as_ref()
+            .expect("single averaging always certifies");
         if json {
             out.push(serde_json::json!({
                 "metric": metric,
-                "norm": norm,
+                "norm": norm.name(),
                 "estimate": rotation_to_rows(&sol.estimate),
                 "cost": sol.cost,
-                "cost_chordal_l2": problem.cost(&sol.estimate, Metric::Chordal, Norm::L2),
-                "cost_geodesic_l2": problem.cost(&sol.estimate, Metric::Geodesic, Norm::L2),
-                "cost_geodesic_l1": problem.cost(&sol.estimate, Metric::Geodesic, Norm::L1),
+                "cost_chordal_l2": problem.cost_under(&sol.estimate, Objective::CHORDAL_L2),
+                "cost_geodesic_l2": problem.cost_under(&sol.estimate, Objective::new(Metric::Geodesic, Loss::L2)),
+                "cost_geodesic_l1": problem.cost_under(&sol.estimate, Objective::new(Metric::Geodesic, Loss::L1)),
                 "certified": c.is_certified(),
                 "lower_bound": c.lower_bound,
                 "gap": c.gap,
@@ -106,7 +115,7 @@ fn run() -> rotavg::Result<()> {
                 "seconds": seconds,
             }));
         } else {
-            println!("\n{sol}");
+            println!("\n{est}");
             if let Some(t) = &truth {
                 println!(
                     "  error to truth {:.4} deg",

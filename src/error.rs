@@ -47,7 +47,7 @@ pub enum Error {
         /// What held the value.
         item: String,
     },
-    /// A weight outside `[1e-100, 1e100]` ([`crate::io::MIN_WEIGHT`], [`crate::io::MAX_WEIGHT`]):
+    /// A weight outside `[1e-100, 1e100]` ([`crate::validate::MIN_WEIGHT`], [`crate::validate::MAX_WEIGHT`]):
     /// not finite, not positive, or so extreme that squares of costs would over/underflow.
     InvalidWeight {
         /// Which input item, 0-based.

@@ -8,33 +8,65 @@
 //!    measurements `R_ij` on a view graph, with `R_ij R_i = R_j`.
 //! 3. **Conjugate** rotation averaging (hand-eye): `S` with `R_i ~ S^-1 L_i S`.
 //!
-//! Every solver returns a report (estimate, cost, iterations, why it stopped, wall time) and a
-//! [`Certificate`]: a proven lower bound on the global minimum and the gap to it.
+//! Every local solver returns a solution with a report (estimate, cost, iterations, why it
+//! stopped, wall time); every certifier a [`Certificate`]: a proven lower bound on the global
+//! minimum and the gap to it.
 //!
 //! Conventions (see `paper-notes/conventions.md`): a rotation is a 3x3 matrix with `R^T R = I`
 //! and `det R = +1` ([`Rotation`] = `nalgebra::Rotation3<f64>`); `theta(R, S)` is the angle of
 //! `R^T S` in `[0, pi]`; chordal distance `||R - S||_F = 2 sqrt(2) sin(theta/2)`; quaternion
-//! distance `2 sin(theta/4)`.
+//! distance `2 sin(theta/4)`. Every problem minimises `sum_k w_k rho(d_k)` for its
+//! [`Objective`] (a [`Metric`] and a [`Loss`]; default chordal L2).
 //!
-//! # Where to start
+//! # Where to start: one verb, one signature, three problems
 //!
-//! | problem | validated data | local solve | certify | whole pipeline |
-//! |---|---|---|---|---|
-//! | single | [`single::SingleProblem::new`] | [`single::average_single`] | [`single::certify_single`] | [`single::average_single`] |
-//! | multiple | [`multiple::MultipleProblem::new`] | [`multiple::solve_multiple`] | [`certify::certify_multiple`], [`multiple::certify_multiple_estimate`] | [`multiple::average_multiple`] |
-//! | conjugate | [`conjugate::ConjugateProblem::new`] | [`conjugate::solve_conjugate`] | [`conjugate::certify_conjugate`] | [`conjugate::average_conjugate`] |
+//! | verb | single | multiple | conjugate |
+//! |---|---|---|---|
+//! | data | [`single::SingleProblem`] | [`multiple::MultipleProblem`] | [`conjugate::ConjugateProblem`] |
+//! | `solve_*(&problem, &settings)` | [`single::solve_single`] | [`multiple::solve_multiple`] | [`conjugate::solve_conjugate`] |
+//! | `relax_*(&problem, &SdpSettings)` | — | [`relax::relax_multiple`] | [`relax::relax_conjugate`] |
+//! | `certify_*(&problem, &estimate, &CertifySettings)` | [`certify::certify_single`] | [`certify::certify_multiple`] | [`certify::certify_conjugate`] |
+//! | `average_*(&problem, &AverageSettings)` | [`pipeline::average_single`] | [`pipeline::average_multiple`] | [`pipeline::average_conjugate`] |
 //!
-//! SDP relaxations: [`relax::relax_multiple`], [`conjugate::relax_conjugate`]. Files:
-//! [`io`] (g2o, TORO, 1DSfM, Bundler, hand-eye, JSON). SO(3) tools: [`so3`]. Results carry a
-//! [`SolverReport`] (with its [`Termination`]) and a [`Certificate`]; errors are one [`Error`].
+//! Files: [`io`] (g2o, TORO, 1DSfM, Bundler, hand-eye, JSON; [`io::input`] loads what the
+//! command line loads). Reports: [`report`] (the `--json` objects and texts of the command
+//! line, as types). Errors are one [`Error`].
 //! The README (also compiled as doc tests) shows the command-line tool and longer examples.
+//!
+//! # Layers
+//!
+//! Each layer is a folder (or a file) of `src/`, and a module imports only from its own layer
+//! or the layers below (checked by `tests/layers.rs`):
+//!
+//! ```text
+//!  bin/rotavg          the command line: parse arguments, print reports
+//!  report              typed reports: Serialize = the --json object, Display = the text
+//!  io, plot            file formats, input loading, figures
+//!  pipeline            average_*: solve -> certify -> adopt an improvement
+//!  certify             certify_*: theory, dual certificate, SDP bounds, staircase (verified)
+//!  relax               relax_*: the SDP relaxations (Clarabel glue, svec, rounding)
+//!  single multiple conjugate   problem data + objective + cost + local solvers (solve_*)
+//!  linalg              verified factorisations, Lanczos, block-sparse systems
+//!  objective validate  metric x loss; input checks
+//!  so3 termination     rotations, distances, serde; why a solver stopped
+//!  error               the one Error enum
+//! ```
+//!
+//! Data flow of every pipeline (one shape for the three problems):
+//!
+//! ```text
+//! file --io--> Problem --solve_*--> Solution --certify_*--> Certification { certificate, improvement }
+//!                                       ^                                        |
+//!                                       +---- better solution (refined, SDP) ----+
+//!                          --> Averaged { solution, certificate, details } --report--> JSON / text
+//! ```
 //!
 //! ```
 //! use rotavg::multiple::synthetic::SyntheticGraph;
-//! use rotavg::multiple::{average_multiple, AverageMultipleSettings};
+//! use rotavg::pipeline::{average_multiple, AverageSettings};
 //! // A seeded random view graph: 50 nodes, 150 edges, 0.05 rad noise; solve and certify.
 //! let (problem, _truth) = SyntheticGraph { num_rotations: 50, num_edges: 150, ..Default::default() }.generate();
-//! let estimate = average_multiple(&problem, &AverageMultipleSettings::default())?;
+//! let estimate = average_multiple(&problem, &AverageSettings::default())?;
 //! assert!(estimate.certificate.as_ref().is_some_and(|c| c.is_certified()));
 //! assert!(rotavg::so3::angle(&estimate.solution.rotations[0]) < 1e-12); // gauge R_0 = I
 //! # Ok::<(), rotavg::Error>(())
@@ -42,23 +74,28 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-pub mod certificate;
 pub mod certify;
 pub mod conjugate;
 pub mod error;
 pub mod io;
+pub mod linalg;
 pub mod multiple;
+pub mod objective;
+pub mod pipeline;
 pub mod plot;
+pub mod progress;
 pub mod relax;
 pub mod report;
-pub mod serde_rot;
 pub mod single;
 pub mod so3;
+pub mod termination;
+pub mod validate;
 
-pub use certificate::{BoundMethod, Certificate, Verdict};
+pub use certify::{BoundMethod, Certificate, Verdict};
 pub use error::{Error, Result};
-pub use report::{SolverReport, Termination};
+pub use objective::{Loss, Objective};
 pub use so3::{Metric, Rotation};
+pub use termination::{SolverReport, Termination};
 
 /// The README's code blocks are compiled and run as doc tests.
 #[doc = include_str!("../README.md")]

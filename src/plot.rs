@@ -129,11 +129,11 @@ pub fn eigenvalue_panel(c: &Certificate, null_dimension: usize) -> Option<Eigenv
         SpectrumMethod::ShiftInvertLanczos => format!(
             "shift-invert block Lanczos (shift {}){}",
             e.shift.map_or_else(|| "?".into(), |s| format!("{s:.2e}")),
-            if e.converged { "" } else { ", not converged" }
+            if e.converged() { "" } else { ", not converged" }
         ),
         SpectrumMethod::Lanczos => format!(
             "block Lanczos{}",
-            if e.converged { "" } else { ", not converged" }
+            if e.converged() { "" } else { ", not converged" }
         ),
     };
     Some(EigenvaluePanel {
@@ -474,4 +474,101 @@ pub fn write_svg(path: &str, svg: &str) -> crate::Result<()> {
         path: path.into(),
         message: e.to_string(),
     })
+}
+
+/// Write the `--plot` figure to `path`: the histogram of `residuals_rad` (radians, drawn in
+/// degrees) of `what` (e.g. `edges`, `pairs`) under the title `NAME: residual angles of m
+/// WHAT` (`NAME` the file name of `input`), the certificate's facts, and, when the certificate
+/// carries them, the smallest eigenvalues of its certificate matrix with `null_dimension`
+/// values expected at ~0 (3 gauge directions for multiple averaging, 1 for the conjugate SDP).
+///
+/// ```
+/// let path = std::env::temp_dir().join(format!("rotavg-doc-fig-{}.svg", std::process::id()));
+/// let path = path.to_str().unwrap();
+/// rotavg::plot::write_figure(path, &[0.01, 0.02, 0.03], "edges", None, 3, "data/graph.g2o")?;
+/// let svg = std::fs::read_to_string(path).unwrap();
+/// std::fs::remove_file(path).unwrap();
+/// assert!(svg.contains("graph.g2o: residual angles of 3 edges"));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn write_figure(
+    path: &str,
+    residuals_rad: &[f64],
+    what: &str,
+    certificate: Option<&Certificate>,
+    null_dimension: usize,
+    input: &str,
+) -> crate::Result<()> {
+    let deg: Vec<f64> = residuals_rad.iter().map(|a| a.to_degrees()).collect();
+    let notes = certificate.map(certificate_annotations).unwrap_or_default();
+    let eigen = certificate.and_then(|c| eigenvalue_panel(c, null_dimension));
+    // the file name only: a long path would not fit above the histogram
+    let name = std::path::Path::new(input)
+        .file_name()
+        .map_or_else(|| input.to_string(), |f| f.to_string_lossy().into_owned());
+    let title = format!("{name}: residual angles of {} {what}", deg.len());
+    write_svg(path, &figure_svg(&deg, &title, &notes, eigen.as_ref()))
+}
+
+/// [`write_figure`] for multiple averaging: the residual angles of the edges of `problem` at
+/// `rotations`, 3 gauge directions.
+///
+/// ```
+/// use rotavg::multiple::{Edge, MultipleProblem};
+/// use rotavg::Rotation;
+/// let p = MultipleProblem::new(2, vec![Edge { i: 0, j: 1, rotation: Rotation::identity(), weight: 1.0 }])?;
+/// let path = std::env::temp_dir().join(format!("rotavg-doc-mfig-{}.svg", std::process::id()));
+/// let path = path.to_str().unwrap();
+/// rotavg::plot::write_multiple_figure(path, &p, &[Rotation::identity(); 2], None, "g.json")?;
+/// assert!(std::fs::read_to_string(path).unwrap().contains("residual angles of 1 edges"));
+/// std::fs::remove_file(path).unwrap();
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn write_multiple_figure(
+    path: &str,
+    problem: &crate::multiple::MultipleProblem,
+    rotations: &[crate::Rotation],
+    certificate: Option<&Certificate>,
+    input: &str,
+) -> crate::Result<()> {
+    problem.check_estimate(rotations)?;
+    write_figure(
+        path,
+        &problem.residual_angles(rotations),
+        "edges",
+        certificate,
+        3,
+        input,
+    )
+}
+
+/// [`write_figure`] for conjugate averaging: the residual angles of the pairs of `problem` at
+/// `s`, one null direction.
+///
+/// ```
+/// use rotavg::conjugate::ConjugateProblem;
+/// use rotavg::Rotation;
+/// let p = ConjugateProblem::from_rotations(&[Rotation::identity()], &[Rotation::identity()])?;
+/// let path = std::env::temp_dir().join(format!("rotavg-doc-cfig-{}.svg", std::process::id()));
+/// let path = path.to_str().unwrap();
+/// rotavg::plot::write_conjugate_figure(path, &p, &Rotation::identity(), None, "pairs.json")?;
+/// assert!(std::fs::read_to_string(path).unwrap().contains("residual angles of 1 pairs"));
+/// std::fs::remove_file(path).unwrap();
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn write_conjugate_figure(
+    path: &str,
+    problem: &crate::conjugate::ConjugateProblem,
+    s: &crate::Rotation,
+    certificate: Option<&Certificate>,
+    input: &str,
+) -> crate::Result<()> {
+    write_figure(
+        path,
+        &problem.residual_angles(s),
+        "pairs",
+        certificate,
+        1,
+        input,
+    )
 }

@@ -103,7 +103,7 @@ fn readable_summary_and_require_certified() {
     assert_eq!(out.status.code(), Some(0));
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
-        text.contains("geodesic L2 mean of 3 samples") && text.contains("certified"),
+        text.contains("geodesic l2 mean of 3 samples") && text.contains("certified"),
         "{text}"
     );
     // a sample 1.7 rad > pi/2 from the geodesic mean: inconclusive [S4], exit 3 when required

@@ -6,10 +6,21 @@ use rand::rngs::StdRng;
 use rotavg::Error;
 use rotavg::conjugate::synthetic::random_instance;
 use rotavg::conjugate::{
-    ConjugatePair, ConjugateProblem, ConjugateSettings, DiagnosticSettings, Identifiability, Loss,
-    quaternion_closed_form, solve_conjugate, solve_conjugate_from,
+    ConjugatePair, ConjugateProblem, ConjugateSettings, DiagnosticSettings, Identifiability,
+    quaternion_closed_form, solve_conjugate,
 };
+use rotavg::objective::{Loss, Objective};
 use rotavg::so3::{Metric, Rotation, angle_between, exp, random_rotation, random_unit_vector};
+
+/// The residual angle in degrees whose distance under `metric` is `d` (the objective's
+/// thresholds are angles; these tests were written with thresholds in the metric's unit).
+fn threshold_deg(metric: Metric, d: f64) -> f64 {
+    match metric {
+        Metric::Geodesic => d.to_degrees(),
+        Metric::Chordal => (2.0 * (d / 8f64.sqrt()).asin()).to_degrees(),
+        Metric::Quaternion => (4.0 * (d / 2.0).asin()).to_degrees(),
+    }
+}
 
 fn exact_pairs(s: &Rotation, rs: &[Rotation]) -> ConjugateProblem {
     let ls: Vec<_> = rs.iter().map(|r| s * r * s.inverse()).collect();
@@ -45,17 +56,20 @@ fn noise_free_recovery_all_solvers() {
         );
         for metric in [Metric::Chordal, Metric::Geodesic] {
             for loss in [
-                Loss::Squared,
+                Loss::L2,
                 Loss::L1,
-                Loss::Huber { delta: 0.1 },
-                Loss::Cauchy { scale: 0.1 },
+                Loss::Huber {
+                    threshold_deg: threshold_deg(metric, 0.1),
+                },
+                Loss::Cauchy {
+                    scale_deg: threshold_deg(metric, 0.1),
+                },
             ] {
-                let set = ConjugateSettings {
-                    metric,
-                    loss,
-                    ..Default::default()
-                };
-                let sol = solve_conjugate(&p, &set).unwrap();
+                let q = p
+                    .clone()
+                    .with_objective(Objective::new(metric, loss))
+                    .unwrap();
+                let sol = solve_conjugate(&q, &ConjugateSettings::default()).unwrap();
                 assert!(
                     angle_between(&sol.estimate, &s) < 1e-8,
                     "{metric:?} {loss:?} trial {trial}"
@@ -75,7 +89,11 @@ fn local_solver_converges_from_far_start() {
     for _ in 0..50 {
         let (p, s) = random_instance(10, 0.0, 0.0, &mut rng);
         let init = random_rotation(&mut rng);
-        let sol = solve_conjugate_from(&p, &ConjugateSettings::default(), &init).unwrap();
+        let from = ConjugateSettings {
+            init: Some(init),
+            ..Default::default()
+        };
+        let sol = solve_conjugate(&p, &from).unwrap();
         if angle_between(&sol.estimate, &s) < 1e-8 {
             ok += 1;
         }
@@ -219,12 +237,14 @@ fn invalid_input_is_rejected() {
     assert!(ConjugateProblem::new(vec![p]).is_err());
     let mut rng = StdRng::seed_from_u64(8);
     let (prob, _) = random_instance(5, 0.0, 0.0, &mut rng);
-    let bad = ConjugateSettings {
-        loss: Loss::Huber { delta: -1.0 },
-        ..Default::default()
-    };
+    let bad = Objective::new(
+        Metric::Chordal,
+        Loss::Huber {
+            threshold_deg: -1.0,
+        },
+    );
     assert!(matches!(
-        solve_conjugate(&prob, &bad),
+        prob.with_objective(bad),
         Err(Error::InvalidSettings { .. })
     ));
 }
@@ -237,24 +257,17 @@ fn robust_losses_resist_outliers() {
     for _ in 0..10 {
         let (p, s) = random_instance(50, 0.01, 0.2, &mut rng);
         let l2 = solve_conjugate(&p, &ConjugateSettings::default()).unwrap();
-        let g1 = solve_conjugate(
-            &p,
-            &ConjugateSettings {
-                metric: Metric::Geodesic,
-                loss: Loss::L1,
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        let gc = solve_conjugate(
-            &p,
-            &ConjugateSettings {
-                metric: Metric::Geodesic,
-                loss: Loss::Cauchy { scale: 0.05 },
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let robust = |loss| {
+            let q = p
+                .clone()
+                .with_objective(Objective::new(Metric::Geodesic, loss))
+                .unwrap();
+            solve_conjugate(&q, &ConjugateSettings::default()).unwrap()
+        };
+        let g1 = robust(Loss::L1);
+        let gc = robust(Loss::Cauchy {
+            scale_deg: threshold_deg(Metric::Geodesic, 0.05),
+        });
         e2 += angle_between(&l2.estimate, &s);
         e1 += angle_between(&g1.estimate, &s);
         ec += angle_between(&gc.estimate, &s);
@@ -273,9 +286,8 @@ mod qcqp {
     use super::*;
     use nalgebra::Matrix3;
     use rand::Rng;
-    use rotavg::conjugate::sdp::{
-        constraint_matrices, cost_matrix, lift, refine_multipliers, verify_lower_bound,
-    };
+    use rotavg::certify::conjugate::{refine_multipliers, verify_lower_bound};
+    use rotavg::relax::conjugate::{constraint_matrices, cost_matrix, lift};
 
     fn random_matrix(rng: &mut StdRng) -> Matrix3<f64> {
         Matrix3::from_fn(|_, _| rng.random::<f64>() * 2.0 - 1.0)

@@ -4,11 +4,12 @@
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rotavg::Verdict;
+use rotavg::certify::{CertifySettings, ImprovementSource, certify_conjugate};
 use rotavg::conjugate::synthetic::random_instance;
-use rotavg::conjugate::{
-    AverageSettings, ConjugateSettings, SdpSettings, average_conjugate, certify_conjugate,
-    relax_conjugate, solve_conjugate_from,
-};
+use rotavg::conjugate::{ConjugateSettings, solve_conjugate};
+use rotavg::pipeline::{AverageSettings, average_conjugate};
+use rotavg::relax::conjugate::extract_rotation;
+use rotavg::relax::{SdpSettings, relax_conjugate};
 use rotavg::so3::{angle_between, exp, random_rotation};
 use std::time::Instant;
 
@@ -48,7 +49,11 @@ fn sdp_bound_never_exceeds_random_restart_minimum() {
         let mut best = est.solution.chordal_cost;
         for _ in 0..12 {
             let s0 = random_rotation(&mut rng);
-            let sol = solve_conjugate_from(&p, &ConjugateSettings::default(), &s0).unwrap();
+            let from = ConjugateSettings {
+                init: Some(s0),
+                ..Default::default()
+            };
+            let sol = solve_conjugate(&p, &from).unwrap();
             if sol.cost < est.solution.cost - 1e-9 * est.solution.cost.max(1e-12) {
                 local_nonglobal += 1;
             }
@@ -64,7 +69,7 @@ fn sdp_bound_never_exceeds_random_restart_minimum() {
             // certified => no restart found anything better beyond the tolerance
             assert!(est.solution.chordal_cost <= best + 1e-6 * best.max(1e-12) + 1e-9);
         }
-        if est.sdp.as_ref().is_some_and(|s| s.improved_local) {
+        if est.details.improved_by == Some(ImprovementSource::SdpRounding) {
             improved += 1;
         }
     }
@@ -80,7 +85,9 @@ fn suboptimal_estimate_gets_a_gap_not_a_certificate() {
     let mut rng = StdRng::seed_from_u64(43);
     let (p, s) = random_instance(20, 0.05, 0.0, &mut rng);
     let bad = s * exp(&nalgebra::Vector3::new(0.2, 0.0, 0.0));
-    let c = certify_conjugate(&p, &bad, &SdpSettings::default(), Default::default()).unwrap();
+    let c = certify_conjugate(&p, &bad, &CertifySettings::default())
+        .unwrap()
+        .certificate;
     assert_eq!(c.verdict, Verdict::GapReported, "{c}");
     assert!(c.lower_bound.unwrap() < p.chordal_cost(&bad));
     assert!((c.upper_bound - p.chordal_cost(&bad)).abs() < 1e-15);
@@ -101,7 +108,7 @@ fn relaxation_is_rank_one_and_timing() {
                 "Z not rank one: {}",
                 r.eigenvalue_ratio
             );
-            let x = rotavg::conjugate::sdp::extract_rotation(&r.z).unwrap();
+            let x = extract_rotation(&r.z).unwrap();
             assert!(angle_between(&x, &s) < 0.1);
         }
         times.sort_by(f64::total_cmp);

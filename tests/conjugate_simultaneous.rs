@@ -2,10 +2,10 @@
 
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
-use rotavg::conjugate::simultaneous::{
+use rotavg::multiple::Edge;
+use rotavg::pipeline::simultaneous::{
     SimultaneousProblem, average_then_conjugate, solve_simultaneous,
 };
-use rotavg::multiple::Edge;
 use rotavg::so3::{Rotation, angle_between, perturb_gaussian, random_rotation};
 
 /// `n` nodes, chain plus `extra` random edges in each graph, noise `sigma` rad on every edge.

@@ -144,7 +144,7 @@ fn eth_zero_quaternion_is_rejected_at_any_tolerance() {
 /// weights `1e308` (x3) "certified" the identity with cost 1.17e308 although the optimum is
 /// 0.774e308 (the unit-weight optimum 0.7737 scaled), and weights `1e-200` "certified" the
 /// identity for the chordal L2 mean (cost 8e-200, optimum 5.75e-200). The readers now reject
-/// weights outside `[MIN_WEIGHT, MAX_WEIGHT] = [1e-100, 1e100]` (`rotavg::io`), inside which
+/// weights outside `[MIN_WEIGHT, MAX_WEIGHT] = [1e-100, 1e100]` (`rotavg::validate`), inside which
 /// the estimates are correct (checked below at both ends against the unit-weight answer).
 #[test]
 fn extreme_single_weights_are_rejected() {
@@ -166,18 +166,25 @@ fn extreme_single_weights_are_rejected() {
     let unit = parse_single_json(&with("1"), "s.json").unwrap();
     for w in ["1e100", "1e-100"] {
         let p = parse_single_json(&with(w), "s.json").unwrap();
-        for (mean, name) in [
-            (rotavg::single::chordal_l2_mean as fn(_) -> _, "chordal"),
-            (rotavg::single::quaternion_l2_mean, "quaternion"),
+        for (metric, name) in [
+            (rotavg::Metric::Chordal, "chordal"),
+            (rotavg::Metric::Quaternion, "quaternion"),
         ] {
-            let (a, b) = (mean(&p).unwrap(), mean(&unit).unwrap());
-            let d = rotavg::so3::angle_between(&a.estimate, &b.estimate);
+            // the L2 mean under `metric` with its certificate (the pipeline)
+            let mean = |p: &rotavg::single::SingleProblem| {
+                let objective = rotavg::Objective::new(metric, rotavg::Loss::L2);
+                let p = p.clone().with_objective(objective).unwrap();
+                rotavg::pipeline::average_single(&p, &Default::default()).unwrap()
+            };
+            let (a, b) = (mean(&p), mean(&unit));
+            let d = rotavg::so3::angle_between(&a.solution.estimate, &b.solution.estimate);
             assert!(
                 d < 1e-9,
                 "{name} at weight {w}: {d:e} rad from the unit-weight estimate"
             );
             assert_eq!(
-                a.certificate.verdict, b.certificate.verdict,
+                a.certificate.unwrap().verdict,
+                b.certificate.unwrap().verdict,
                 "{name} at {w}"
             );
         }

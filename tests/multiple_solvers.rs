@@ -8,11 +8,12 @@ use rand::rngs::StdRng;
 use rotavg::Error;
 use rotavg::multiple::synthetic::{SyntheticGraph, z_cycle};
 use rotavg::multiple::{
-    Edge, Initialisation, Loss, MultipleProblem, MultipleSettings, chordal_gradient, fix_gauge,
-    initialise, loss_cost_gradient, solve_multiple,
+    Edge, Initialisation, MultipleProblem, MultipleSettings, chordal_gradient, fix_gauge,
+    initialise, objective_cost_gradient, objective_terms, solve_multiple,
 };
+use rotavg::objective::{Loss, Objective};
 use rotavg::so3::{angle_between, exp, perturb, random_rotation, random_unit_vector};
-use rotavg::{Rotation, Termination};
+use rotavg::{Metric, Rotation, Termination};
 
 fn max_error(a: &[Rotation], b: &[Rotation]) -> f64 {
     let (mut a, mut b) = (a.to_vec(), b.to_vec());
@@ -35,14 +36,38 @@ fn mean_error(a: &[Rotation], b: &[Rotation]) -> f64 {
         / a.len() as f64
 }
 
-fn all_losses() -> Vec<Loss> {
+const GEODESIC_L2: Objective = Objective {
+    metric: Metric::Geodesic,
+    loss: Loss::L2,
+};
+const GEODESIC_L1: Objective = Objective {
+    metric: Metric::Geodesic,
+    loss: Loss::L1,
+};
+
+/// Geodesic Huber with threshold `deg`.
+fn huber(deg: f64) -> Objective {
+    Objective::new(Metric::Geodesic, Loss::Huber { threshold_deg: deg })
+}
+
+/// Geodesic Cauchy with scale `deg`.
+fn cauchy(deg: f64) -> Objective {
+    Objective::new(Metric::Geodesic, Loss::Cauchy { scale_deg: deg })
+}
+
+fn all_losses() -> Vec<Objective> {
     vec![
-        Loss::Chordal,
-        Loss::Geodesic,
-        Loss::L1,
-        Loss::Huber { threshold_deg: 5.0 },
-        Loss::Cauchy { threshold_deg: 5.0 },
+        Objective::CHORDAL_L2,
+        GEODESIC_L2,
+        GEODESIC_L1,
+        huber(5.0),
+        cauchy(5.0),
     ]
+}
+
+/// The problem's data with another objective.
+fn with(p: &MultipleProblem, objective: Objective) -> MultipleProblem {
+    p.clone().with_objective(objective).unwrap()
 }
 
 /// Planted noise-free graphs: every loss and both initialisations reach cost ~0 and recover the
@@ -71,7 +96,6 @@ fn noise_free_exact_recovery() {
         let start: Vec<Rotation> = gt.iter().map(|r| perturb(r, 0.3, &mut rng)).collect();
         for loss in all_losses() {
             let s = MultipleSettings {
-                loss,
                 init: Initialisation::Given(start.clone()),
                 max_iterations: 200,
                 // noise-free: the gradient can be driven to rounding level, so recovery
@@ -79,17 +103,17 @@ fn noise_free_exact_recovery() {
                 gradient_tolerance: 1e-12,
                 ..Default::default()
             };
-            let sol = solve_multiple(&p, &s).unwrap();
+            let sol = solve_multiple(&with(&p, loss), &s).unwrap();
             let err = max_error(&sol.rotations, &gt);
             assert!(
                 sol.rotations[0] == Rotation::identity(),
                 "gauge R_0 = I not fixed"
             );
             // L1's smoothing (eps = 1e-6) and IRLS convergence limit its accuracy
-            let tol = if loss == Loss::L1 { 1e-5 } else { 1e-8 };
+            let tol = if loss == GEODESIC_L1 { 1e-5 } else { 1e-8 };
             assert!(err < tol, "{loss:?}: max error {err}, {sol}");
             assert!(sol.chordal_cost < 1e-10, "{loss:?}: {sol}");
-            if loss != Loss::L1 {
+            if loss != GEODESIC_L1 {
                 assert!(sol.report.termination.is_converged(), "{loss:?}: {sol}");
             }
         }
@@ -129,8 +153,8 @@ fn chordal_never_above_initialisation() {
 }
 
 /// Central finite differences of `t -> f(R_k exp(t hat u))` against `<grad_k, u>` `[M3]`, `[M8]`.
-fn check_gradient(p: &MultipleProblem, r: &[Rotation], loss: &Loss, rng: &mut StdRng) -> f64 {
-    let (_, g) = loss_cost_gradient(p, r, loss, 1e-6);
+fn check_gradient(p: &MultipleProblem, r: &[Rotation], rng: &mut StdRng) -> f64 {
+    let (_, g) = objective_cost_gradient(p, r, 1e-6);
     let h = 1e-6;
     let mut worst: f64 = 0.0;
     for _ in 0..6 {
@@ -139,7 +163,7 @@ fn check_gradient(p: &MultipleProblem, r: &[Rotation], loss: &Loss, rng: &mut St
         let f = |t: f64| {
             let mut rr = r.to_vec();
             rr[k] = r[k] * exp(&(u * t));
-            loss_cost_gradient(p, &rr, loss, 1e-6).0
+            objective_cost_gradient(p, &rr, 1e-6).0
         };
         let fd = (f(h) - f(-h)) / (2.0 * h);
         let an = g[k].dot(&u);
@@ -164,21 +188,21 @@ fn gradients_match_finite_differences() {
     let random: Vec<Rotation> = (0..gt.len()).map(|_| random_rotation(&mut rng)).collect();
     for loss in all_losses() {
         for r in [&near, &random] {
-            let e = check_gradient(&p, r, &loss, &mut rng);
+            let e = check_gradient(&with(&p, loss), r, &mut rng);
             // L1 is non-smooth only where theta_e < eps = 1e-6: not hit at these points
             assert!(e < 1e-6, "{loss:?}: finite-difference mismatch {e}");
         }
     }
-    // chordal_gradient is loss_cost_gradient(Chordal)
+    // chordal_gradient is objective_cost_gradient(chordal L2)
     let (c, g) = chordal_gradient(&p, &near);
     assert!((c - p.chordal_cost(&near)).abs() < 1e-10 * c);
-    // loss_terms(Chordal) agrees with the direct chordal gradient
+    // objective_terms(chordal L2) agrees with the direct chordal gradient
     let (c2, g2) = {
         let mut cost = 0.0;
         let mut grad = vec![Vector3::zeros(); near.len()];
         for e in p.edges() {
             let v = rotavg::so3::log(&(near[e.j].inverse() * e.rotation * near[e.i]));
-            let (rho, psi) = rotavg::multiple::loss_terms(&Loss::Chordal, v.norm(), 1e-6);
+            let (rho, psi) = objective_terms(&Objective::CHORDAL_L2, v.norm(), 1e-6);
             cost += e.weight * rho;
             grad[e.i] += v * (e.weight * psi);
             grad[e.j] -= v * (e.weight * psi);
@@ -204,16 +228,11 @@ fn gradient_vanishes_at_answer() {
     }
     .generate();
     let w: f64 = p.edges().iter().map(|e| e.weight).sum();
-    for loss in [
-        Loss::Chordal,
-        Loss::Geodesic,
-        Loss::Huber { threshold_deg: 3.0 },
-        Loss::Cauchy { threshold_deg: 3.0 },
-    ] {
+    for loss in [Objective::CHORDAL_L2, GEODESIC_L2, huber(3.0), cauchy(3.0)] {
+        let p = with(&p, loss);
         let sol = solve_multiple(
             &p,
             &MultipleSettings {
-                loss,
                 max_iterations: 500,
                 ..Default::default()
             },
@@ -221,14 +240,16 @@ fn gradient_vanishes_at_answer() {
         .unwrap();
         assert!(sol.report.termination.is_converged(), "{sol}");
         if let Termination::Converged { measure, .. } = &sol.report.termination {
-            assert!(measure.contains("gradient"), "{sol}");
+            // the gradient test, or (chordal Newton) the predicted decrease with the gradient
+            // test met: "... (with ||grad|| / sum(w) <= its tolerance)"
+            assert!(measure.contains("grad"), "{sol}");
         }
         assert!(sol.gradient_norm / w <= 1e-8, "{sol}");
-        let (_, g) = loss_cost_gradient(&p, &sol.rotations, &loss, 1e-6);
+        let (_, g) = objective_cost_gradient(&p, &sol.rotations, 1e-6);
         let gn = g.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt();
         assert!((gn - sol.gradient_norm).abs() <= 1e-6 * w * 1e-8 + 1e-9 * gn);
         // finite differences: the directional derivative is ~0 along random directions
-        let e = check_gradient(&p, &sol.rotations, &loss, &mut rng);
+        let e = check_gradient(&p, &sol.rotations, &mut rng);
         assert!(e < 1e-6, "{loss:?}: {e}");
     }
 }
@@ -251,11 +272,11 @@ fn gauge_and_relabelling_invariance() {
     let g = random_rotation(&mut rng);
     let start_g: Vec<Rotation> = start.iter().map(|r| r * g).collect();
     for loss in all_losses() {
+        let p = with(&p, loss);
         let solve = |init: Vec<Rotation>| {
             solve_multiple(
                 &p,
                 &MultipleSettings {
-                    loss,
                     init: Initialisation::Given(init),
                     max_iterations: 300,
                     ..Default::default()
@@ -265,7 +286,7 @@ fn gauge_and_relabelling_invariance() {
         };
         let a = solve(start.clone());
         let b = solve(start_g.clone());
-        let tol = if loss == Loss::L1 { 1e-4 } else { 1e-7 };
+        let tol = if loss == GEODESIC_L1 { 1e-4 } else { 1e-7 };
         assert!(max_error(&a.rotations, &b.rotations) < tol, "{loss:?}");
         assert!(
             (a.cost - b.cost).abs() <= 1e-8 * a.cost.max(1e-12),
@@ -327,11 +348,10 @@ fn z_cycle_local_minima() {
             .iter()
             .map(|r| r * exp(&(Vector3::z() * (0.05 * rotavg::so3::gaussian(&mut rng)))))
             .collect();
-        for (loss, expected) in [(Loss::Chordal, chordal), (Loss::Geodesic, geodesic)] {
+        for (loss, expected) in [(Objective::CHORDAL_L2, chordal), (GEODESIC_L2, geodesic)] {
             let sol = solve_multiple(
-                &p,
+                &with(&p, loss),
                 &MultipleSettings {
-                    loss,
                     init: Initialisation::Given(start.clone()),
                     max_iterations: 300,
                     ..Default::default()
@@ -365,19 +385,8 @@ fn robust_losses_reject_outliers() {
         .generate();
         let chordal = solve_multiple(&p, &MultipleSettings::default()).unwrap();
         let e_chordal = mean_error(&chordal.rotations, &gt);
-        for loss in [
-            Loss::L1,
-            Loss::Huber { threshold_deg: 3.0 },
-            Loss::Cauchy { threshold_deg: 3.0 },
-        ] {
-            let sol = solve_multiple(
-                &p,
-                &MultipleSettings {
-                    loss,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
+        for loss in [GEODESIC_L1, huber(3.0), cauchy(3.0)] {
+            let sol = solve_multiple(&with(&p, loss), &MultipleSettings::default()).unwrap();
             let e = mean_error(&sol.rotations, &gt);
             eprintln!("outliers {frac}: {loss:?} mean error {e:.4} vs chordal {e_chordal:.4}");
             assert!(e < 0.5 * e_chordal, "{loss:?}: {e} vs chordal {e_chordal}");
@@ -400,14 +409,8 @@ fn errors_are_typed() {
         other => panic!("expected Disconnected, got {other:?}"),
     }
     let q = MultipleProblem::new(3, vec![e(0, 1), e(1, 2)]).unwrap();
-    let bad = MultipleSettings {
-        loss: Loss::Huber {
-            threshold_deg: -1.0,
-        },
-        ..Default::default()
-    };
     assert!(matches!(
-        solve_multiple(&q, &bad),
+        q.clone().with_objective(huber(-1.0)),
         Err(Error::InvalidSettings { .. })
     ));
     let bad = MultipleSettings {
@@ -418,13 +421,17 @@ fn errors_are_typed() {
         solve_multiple(&q, &bad),
         Err(Error::InvalidSettings { .. })
     ));
-    // serde round trip of settings and solution
+    // serde round trip of settings, objective and solution
     let s = MultipleSettings {
-        loss: Loss::Cauchy { threshold_deg: 2.0 },
+        init: Initialisation::SpanningTree,
+        max_iterations: 7,
         ..Default::default()
     };
     let js = serde_json::to_string(&s).unwrap();
     assert_eq!(serde_json::from_str::<MultipleSettings>(&js).unwrap(), s);
+    let o = cauchy(2.0);
+    let js = serde_json::to_string(&o).unwrap();
+    assert_eq!(serde_json::from_str::<Objective>(&js).unwrap(), o);
     let sol = solve_multiple(&q, &MultipleSettings::default()).unwrap();
     let js = serde_json::to_string(&sol).unwrap();
     let back: rotavg::multiple::MultipleSolution = serde_json::from_str(&js).unwrap();

@@ -1,18 +1,19 @@
-//! The multiple-averaging pipeline (`average_multiple`, `certify_multiple_estimate`):
-//! planted optima certified (noise-free n = 50 and n = 200 exercise the scaled absolute
-//! tolerance, `paper-notes/certificates.md` "The pipeline"), z-cycle winding configurations
+//! The multiple-averaging pipeline (`average_multiple`, `certify_multiple`):
+//! planted optima certified (noise-free n = 50 and n = 200 exercise the absolute tolerance,
+//! `paper-notes/certificates.md` "The pipeline"), z-cycle winding configurations
 //! (`[D10]`, known global optimum `f_0 = 8 n sin^2(phi / 2n)`) never certified but repaired by the
-//! SDP, and `certify_multiple_estimate` never changes its input.
+//! SDP, and `certify_multiple` never changes its input.
 
 use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand::rngs::StdRng;
-use rotavg::multiple::average::{
-    ABSOLUTE_TOLERANCE_PER_WEIGHT, AverageMultipleSettings, CertifyMode, average_multiple,
-    certify_multiple_estimate,
-};
+use rotavg::Metric;
+use rotavg::certify::certificate::DEFAULT_ABSOLUTE_GAP_PER_MEDIAN_WEIGHT;
+use rotavg::certify::{CertifyMode, CertifySettings, ImprovementSource, certify_multiple};
 use rotavg::multiple::synthetic::{SyntheticGraph, z_cycle};
-use rotavg::multiple::{Initialisation, Loss, MultipleSettings};
+use rotavg::multiple::{Initialisation, MultipleSettings};
+use rotavg::objective::{Loss, Objective};
+use rotavg::pipeline::{AverageMultipleSettings, average_multiple};
 use rotavg::so3::{Rotation, exp, perturb};
 use rotavg::{BoundMethod, Verdict};
 
@@ -41,12 +42,10 @@ fn noise_free_planted_is_certified_at_n50_and_n200() {
         }
         .generate();
         let s = AverageMultipleSettings::default();
-        // the documented rule: absolute tolerance max(1e-9, 1e-11 * sum w) (unit weights: m)
-        let tol = s.effective_tolerance(&p);
-        assert_eq!(
-            tol.absolute,
-            (ABSOLUTE_TOLERANCE_PER_WEIGHT * m as f64).max(1e-9)
-        );
+        // the documented rule: absolute tolerance 1e-9 x the median edge weight (unit weights: 1)
+        let tol = s.certify.tolerance.resolve(p.median_weight());
+        assert_eq!(p.median_weight(), 1.0);
+        assert_eq!(tol.absolute, DEFAULT_ABSOLUTE_GAP_PER_MEDIAN_WEIGHT);
         let est = average_multiple(&p, &s).unwrap();
         let c = est.certificate.clone().unwrap();
         println!("n={n}: {c}");
@@ -55,7 +54,7 @@ fn noise_free_planted_is_certified_at_n50_and_n200() {
         assert!(est.solution.chordal_cost < 1e-18);
         // a lower bound can never exceed the true minimum (0 here)
         assert!(c.lower_bound.unwrap() <= 1e-18);
-        let c2 = certify_multiple_estimate(&p, &gt, &s).unwrap();
+        let c2 = certify_multiple(&p, &gt, &s.certify).unwrap();
         assert!(
             c2.certificate.is_certified(),
             "n={n} truth: {}",
@@ -67,7 +66,7 @@ fn noise_free_planted_is_certified_at_n50_and_n200() {
 #[test]
 fn scaled_tolerance_does_not_certify_a_perturbed_optimum() {
     // Noise-free n = 200: f* = 0. Perturbing one node by 1e-3 rad raises the cost by about
-    // deg * 8 sin^2(5e-4) ~ 1e-5 >> the tolerance 6e-9: must not be certified.
+    // deg * 8 sin^2(5e-4) ~ 1e-5 >> the tolerance 1e-9: must not be certified.
     let (p, gt) = SyntheticGraph {
         num_rotations: 200,
         num_edges: 600,
@@ -79,7 +78,7 @@ fn scaled_tolerance_does_not_certify_a_perturbed_optimum() {
     let mut rng = StdRng::seed_from_u64(9);
     let mut est = gt.clone();
     est[17] = perturb(&est[17], 1e-3, &mut rng);
-    let c = certify_multiple_estimate(&p, &est, &AverageMultipleSettings::default()).unwrap();
+    let c = certify_multiple(&p, &est, &CertifySettings::default()).unwrap();
     println!("{}", c.certificate);
     assert_ne!(c.certificate.verdict, Verdict::Certified);
     assert!(c.certificate.lower_bound.unwrap() <= 1e-15);
@@ -113,11 +112,8 @@ fn winding_configuration_is_bounded_not_certified_and_unchanged() {
         let copy = y.clone();
         let f_0 = f0(n, phi);
         for mode in [CertifyMode::Dual, CertifyMode::Auto, CertifyMode::Staircase] {
-            let s = AverageMultipleSettings {
-                certify_mode: mode,
-                ..Default::default()
-            };
-            let c = certify_multiple_estimate(&p, &y, &s).unwrap();
+            let s = CertifySettings::with_mode(mode);
+            let c = certify_multiple(&p, &y, &s).unwrap();
             println!("n={n} k={k} {mode:?}: {c}");
             assert_ne!(c.certificate.verdict, Verdict::Certified);
             // the bound is below the known optimum (small slack for the verified rounding)
@@ -137,10 +133,28 @@ fn winding_configuration_is_bounded_not_certified_and_unchanged() {
             }));
             if mode == CertifyMode::Auto {
                 // the SDP ran (n <= 150) and found a cheaper estimate
-                assert_eq!(c.certificate.method, BoundMethod::Sdp);
-                assert!(c.details.sdp_polished_cost.unwrap() < f_0 * (1.0 + 1e-6));
+                let sdp_run = c
+                    .details
+                    .methods
+                    .iter()
+                    .find(|m| m.method == BoundMethod::Sdp);
+                let sdp_lb = sdp_run.expect("the SDP ran").lower_bound.unwrap();
+                let sdp = c.details.sdp.as_ref().unwrap();
+                assert!(sdp.polished_cost.unwrap() < f_0 * (1.0 + 1e-6));
+                assert_eq!(
+                    c.improvement.as_ref().map(|s| s.chordal_cost),
+                    sdp.polished_cost
+                );
                 // the SDP bound is nearly tight: Clarabel's multipliers are feasible to ~1e-8
                 // (scaled), costing 3n |lambda_min| ~ 1e-7 absolute: 6e-6 relative at n = 12
+                assert!(sdp_lb >= f_0 * (1.0 - 1e-4), "lb {sdp_lb} f0 {f_0}");
+                // the certificate keeps the largest verified bound: the SDP's, or the dual
+                // certificate's at the polished rounding (which certify_multiple also verifies)
+                assert!(lb >= sdp_lb, "lb {lb} < SDP bound {sdp_lb}");
+                assert!(matches!(
+                    c.certificate.method,
+                    BoundMethod::Sdp | BoundMethod::Dual
+                ));
                 assert!(lb >= f_0 * (1.0 - 1e-4), "lb {lb} f0 {f_0}");
             }
         }
@@ -153,7 +167,7 @@ fn pipeline_from_a_winding_start_ends_certified_at_the_global_optimum() {
         let p = z_cycle(n, phi);
         let f_0 = f0(n, phi);
         let s = AverageMultipleSettings {
-            local: MultipleSettings {
+            solve: MultipleSettings {
                 init: Initialisation::Given(winding(n, k)),
                 ..Default::default()
             },
@@ -162,14 +176,14 @@ fn pipeline_from_a_winding_start_ends_certified_at_the_global_optimum() {
         let est = average_multiple(&p, &s).unwrap();
         let c = est.certificate.clone().unwrap();
         println!("n={n} k={k}: {est}");
-        assert!(est.details.improved_by_sdp);
+        assert_eq!(
+            est.details.improved_by,
+            Some(ImprovementSource::SdpRounding)
+        );
         assert!(c.is_certified(), "{c}");
         assert!((est.solution.chordal_cost - f_0).abs() <= 1e-7 * f_0);
         // Staircase mode gives the bound but cannot replace the estimate: gap reported
-        let s2 = AverageMultipleSettings {
-            certify_mode: CertifyMode::Staircase,
-            ..s.clone()
-        };
+        let s2 = s.clone().with_mode(CertifyMode::Staircase);
         let est2 = average_multiple(&p, &s2).unwrap();
         let c2 = est2.certificate.unwrap();
         assert_ne!(c2.verdict, Verdict::Certified);
@@ -186,19 +200,13 @@ fn other_losses_and_mode_none_have_no_certificate() {
         ..Default::default()
     }
     .generate();
-    let s = AverageMultipleSettings {
-        local: MultipleSettings {
-            loss: Loss::Geodesic,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    let e = average_multiple(&p, &s).unwrap();
+    let geodesic = p
+        .clone()
+        .with_objective(Objective::new(Metric::Geodesic, Loss::L2))
+        .unwrap();
+    let e = average_multiple(&geodesic, &AverageMultipleSettings::default()).unwrap();
     assert!(e.certificate.is_none() && e.details.skipped_reason.is_some());
-    let s = AverageMultipleSettings {
-        certify_mode: CertifyMode::None,
-        ..Default::default()
-    };
+    let s = AverageMultipleSettings::default().with_mode(CertifyMode::None);
     assert!(average_multiple(&p, &s).unwrap().certificate.is_none());
 }
 
@@ -210,5 +218,5 @@ fn wrong_estimate_length_is_an_error() {
         ..Default::default()
     }
     .generate();
-    assert!(certify_multiple_estimate(&p, &gt[..9], &AverageMultipleSettings::default()).is_err());
+    assert!(certify_multiple(&p, &gt[..9], &CertifySettings::default()).is_err());
 }

@@ -12,12 +12,24 @@ use proptest::test_runner::RngSeed;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rotavg::Rotation;
+use rotavg::certify::{CertifySettings, certify_conjugate};
 use rotavg::conjugate::synthetic::random_instance;
 use rotavg::conjugate::{
-    AverageSettings, ConjugatePair, ConjugateProblem, ConjugateSettings, ConjugateSolution, Loss,
-    SdpSettings, average_conjugate, certify_conjugate, conjugate_cost, solve_conjugate,
+    ConjugatePair, ConjugateProblem, ConjugateSettings, ConjugateSolution, solve_conjugate,
 };
+use rotavg::objective::{Loss, Objective};
+use rotavg::pipeline::{AverageSettings, average_conjugate};
 use rotavg::so3::{Metric, angle_between, random_rotation};
+
+/// The residual angle in degrees whose distance under `metric` is `d` (the objective's
+/// thresholds are angles; the laws below were stated with thresholds in the metric's unit).
+fn threshold_deg(metric: Metric, d: f64) -> f64 {
+    match metric {
+        Metric::Geodesic => d.to_degrees(),
+        Metric::Chordal => (2.0 * (d / 8f64.sqrt()).asin()).to_degrees(),
+        Metric::Quaternion => (4.0 * (d / 2.0).asin()).to_degrees(),
+    }
+}
 
 /// Deterministic proptest configuration: a fixed RNG seed (so a failure reproduces and the suite
 /// is not flaky) unless `PROPTEST_RNG_SEED` is set to explore other cases; no regression files.
@@ -136,9 +148,15 @@ proptest! {
         let q = conjugated(&p, &a, &b);
         let s2 = a * s * b.inverse();
         for metric in [Metric::Chordal, Metric::Geodesic, Metric::Quaternion] {
-            for loss in [Loss::Squared, Loss::L1, Loss::Huber { delta: 0.1 }, Loss::Cauchy { scale: 0.3 }] {
-                let x = conjugate_cost(&p, &s, metric, loss);
-                prop_assert!(rel_close(conjugate_cost(&q, &s2, metric, loss), x, 1e-12), "{metric} {loss:?}");
+            for loss in [
+                Loss::L2,
+                Loss::L1,
+                Loss::Huber { threshold_deg: threshold_deg(metric, 0.1) },
+                Loss::Cauchy { scale_deg: threshold_deg(metric, 0.3) },
+            ] {
+                let objective = Objective::new(metric, loss);
+                let x = p.cost_under(&s, objective);
+                prop_assert!(rel_close(q.cost_under(&s2, objective), x, 1e-12), "{metric} {loss:?}");
             }
         }
         // the residual angles theta(R_i, S^T L_i S) are invariant under conjugation too
@@ -217,13 +235,13 @@ proptest! {
         prop_assert!(lb <= est.solution.chordal_cost + slack);
         prop_assert!(lb <= p.chordal_cost(&s_true) + slack);
         let r = random_rotation(&mut rng);
-        let c = certify_conjugate(&p, &r, &SdpSettings::default(), Default::default()).unwrap();
+        let c = certify_conjugate(&p, &r, &CertifySettings::default()).unwrap().certificate;
         prop_assert!(c.lower_bound.unwrap_or(f64::NEG_INFINITY) <= p.chordal_cost(&r) + slack);
         prop_assert!(c.lower_bound.unwrap_or(f64::NEG_INFINITY) <= est.solution.chordal_cost + slack);
         let (a, b) = (random_rotation(&mut rng), random_rotation(&mut rng));
         let q = conjugated(&p, &a, &b);
         let mapped = a * est.solution.estimate * b.inverse();
-        let c2 = certify_conjugate(&q, &mapped, &SdpSettings::default(), Default::default()).unwrap();
+        let c2 = certify_conjugate(&q, &mapped, &CertifySettings::default()).unwrap().certificate;
         prop_assert_eq!(c2.verdict, cert.verdict, "{} vs {}", c2, cert);
         prop_assert!(c2.lower_bound.unwrap() <= q.chordal_cost(&mapped) + slack);
     }

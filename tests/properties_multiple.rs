@@ -11,13 +11,16 @@ use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
+use rotavg::Metric;
 use rotavg::Rotation;
-use rotavg::certify::multiple::{CertifySettings, MultipleCertificate, certify_multiple};
+use rotavg::certify::multiple::{DualCertificate, dual_certificate};
+use rotavg::certify::{CertifySettings, certify_multiple};
 use rotavg::multiple::synthetic::SyntheticGraph;
 use rotavg::multiple::{
-    AverageMultipleSettings, Edge, Initialisation, Loss, MultipleProblem, MultipleSettings,
-    average_multiple, certify_multiple_estimate, fix_gauge, solve_multiple,
+    Edge, Initialisation, MultipleProblem, MultipleSettings, fix_gauge, solve_multiple,
 };
+use rotavg::objective::{Loss, Objective};
+use rotavg::pipeline::{AverageMultipleSettings, average_multiple};
 use rotavg::so3::{angle_between, perturb, random_rotation};
 
 /// Deterministic proptest configuration: a fixed RNG seed (so a failure reproduces and the suite
@@ -164,8 +167,9 @@ fn local_solution(p: &MultipleProblem, start: &[Rotation]) -> Vec<Rotation> {
     .rotations
 }
 
-fn certify(p: &MultipleProblem, rs: &[Rotation]) -> MultipleCertificate {
-    certify_multiple(p, rs, &CertifySettings::default()).unwrap()
+/// The dual certificate of `rs` (no refinement, no SDP).
+fn certify(p: &MultipleProblem, rs: &[Rotation]) -> DualCertificate {
+    dual_certificate(p, rs, &CertifySettings::default()).unwrap()
 }
 
 fn rel_close(a: f64, b: f64, rel: f64) -> bool {
@@ -251,10 +255,14 @@ proptest! {
         // edge: theta(R_ij^T R_j, R_i) = theta(R_j, R_ij R_i); conjugation by H preserves
         // angles), so the argument holds for the geodesic and robust losses too; the L1 loss is
         // left out (non-smooth, its IRLS stops at ~1e-4 rad, see tests/multiple_solvers.rs).
-        for loss in [Loss::Chordal, Loss::Geodesic, Loss::Huber { threshold_deg: 5.0 }] {
-            let settings = MultipleSettings { loss, ..Default::default() };
-            let a = solve_multiple(&p, &settings).unwrap();
-            let b = solve_multiple(&q, &settings).unwrap();
+        for loss in [
+            Objective::CHORDAL_L2,
+            Objective::new(Metric::Geodesic, Loss::L2),
+            Objective::new(Metric::Geodesic, Loss::Huber { threshold_deg: 5.0 }),
+        ] {
+            let settings = MultipleSettings::default();
+            let a = solve_multiple(&p.clone().with_objective(loss).unwrap(), &settings).unwrap();
+            let b = solve_multiple(&q.clone().with_objective(loss).unwrap(), &settings).unwrap();
             prop_assert!(a.report.termination.is_converged() && b.report.termination.is_converged(), "{:?}", loss);
             prop_assert!((a.cost - b.cost).abs() <= 1e-9 * (1e-9 + a.cost), "{:?}: {} vs {}", loss, a.cost, b.cost);
             let back: Vec<Rotation> = (0..n).map(|i| h.inverse() * b.rotations[perm[i]]).collect();
@@ -384,7 +392,7 @@ proptest! {
     ///   the gap tolerance), and the verdicts agree at low noise (tight relaxation);
     /// * every lower bound of one problem is also below the cost of the *other* problem's
     ///   estimate (a bound on the common minimum, which is at most any cost);
-    /// * `certify_multiple_estimate` of a gauge-transformed estimate returns the verdict of the
+    /// * `certify_multiple` of a gauge-transformed estimate returns the verdict of the
     ///   estimate itself and evaluates, never changes, the given rotations (upper bound = cost).
     ///
     /// Half of the cases have 40 % outlier edges, where local minima exist and the pipeline
@@ -405,7 +413,7 @@ proptest! {
         let b = average_multiple(&q, &settings).unwrap();
         let (ca, cb) = (a.certificate.clone().unwrap(), b.certificate.clone().unwrap());
         let (fa, fb) = (a.solution.chordal_cost, b.solution.chordal_cost);
-        let tol = settings.effective_tolerance(&p);
+        let tol = settings.certify.tolerance.resolve(p.median_weight());
         let gap_tol = tol.absolute.max(tol.relative * fa.max(fb));
         if ca.is_certified() && cb.is_certified() {
             prop_assert!((fa - fb).abs() <= 2.0 * gap_tol, "{fa} vs {fb}");
@@ -421,7 +429,7 @@ proptest! {
         }
         let g = random_rotation(&mut rng);
         let moved: Vec<Rotation> = a.solution.rotations.iter().map(|r| r * g).collect();
-        let e = certify_multiple_estimate(&p, &moved, &settings).unwrap();
+        let e = certify_multiple(&p, &moved, &settings.certify).unwrap();
         prop_assert!((e.certificate.upper_bound - p.chordal_cost(&moved)).abs() <= 1e-12 * (1.0 + fa));
         if ca.is_certified() {
             prop_assert!(e.certificate.is_certified(), "{} vs {}", e.certificate, ca);

@@ -6,26 +6,53 @@ use nalgebra::Vector3;
 use proptest::prelude::*;
 use rand::SeedableRng;
 use rand::rngs::StdRng;
-use rotavg::single::{
-    Norm, SingleProblem, SingleSettings, average_single, certify_single, geodesic_l1_mean,
-};
+use rotavg::certify::{CertifySettings, certify_single};
+use rotavg::objective::{Loss, Objective};
+use rotavg::pipeline::{AverageSettings, average_single};
+use rotavg::single::{SingleProblem, SingleSettings, SingleSolution};
 use rotavg::so3::{
     Metric, angle, angle_between, exp, perturb, perturb_gaussian, random_rotation,
     random_unit_vector,
 };
-use rotavg::{Error, Rotation, Verdict};
+use rotavg::{Certificate, Error, Rotation, Verdict};
 use std::f64::consts::PI;
 
-const ALL: [(Metric, Norm); 5] = [
-    (Metric::Chordal, Norm::L2),
-    (Metric::Quaternion, Norm::L2),
-    (Metric::Geodesic, Norm::L2),
-    (Metric::Geodesic, Norm::L1),
-    (Metric::Chordal, Norm::L1),
+const ALL: [(Metric, Loss); 5] = [
+    (Metric::Chordal, Loss::L2),
+    (Metric::Quaternion, Loss::L2),
+    (Metric::Geodesic, Loss::L2),
+    (Metric::Geodesic, Loss::L1),
+    (Metric::Chordal, Loss::L1),
 ];
 
-fn settings(metric: Metric, norm: Norm) -> SingleSettings {
-    SingleSettings::new(metric, norm)
+/// The problem's data under the objective `metric` x `norm`.
+fn with(p: &SingleProblem, metric: Metric, norm: Loss) -> SingleProblem {
+    p.clone()
+        .with_objective(Objective::new(metric, norm))
+        .unwrap()
+}
+
+/// The pipeline (solve, then certify) from the method's default start or from `init`: the
+/// mean and its certificate.
+fn average_from(
+    p: &SingleProblem,
+    metric: Metric,
+    norm: Loss,
+    init: Option<Rotation>,
+) -> (SingleSolution, Certificate) {
+    let settings = AverageSettings {
+        solve: SingleSettings {
+            init,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let est = average_single(&with(p, metric, norm), &settings).unwrap();
+    (est.solution, est.certificate.unwrap())
+}
+
+fn average(p: &SingleProblem, metric: Metric, norm: Loss) -> (SingleSolution, Certificate) {
+    average_from(p, metric, norm, None)
 }
 
 /// Derivative-free local search on SO(3): from `start`, try `R exp(s d)` for the 6 signed axes
@@ -70,11 +97,11 @@ fn pattern_search(
 fn brute_force_min(
     problem: &SingleProblem,
     metric: Metric,
-    norm: Norm,
+    norm: Loss,
     hint: &Rotation,
 ) -> (Rotation, f64) {
     let mut rng = StdRng::seed_from_u64(99);
-    let f = |r: &Rotation| problem.cost(r, metric, norm);
+    let f = |r: &Rotation| problem.cost_under(r, Objective::new(metric, norm));
     let mut best = pattern_search(&f, *hint, &mut rng);
     for _ in 0..30 {
         let s = random_rotation(&mut rng);
@@ -101,7 +128,7 @@ fn every_mean_matches_brute_force_on_concentrated_data() {
     for seed in 0..3 {
         let (_, p) = noisy(seed, 12, 0.3);
         for (metric, norm) in ALL {
-            let sol = average_single(&p, &settings(metric, norm)).unwrap();
+            let (sol, cert) = average(&p, metric, norm);
             let (_, fb) = brute_force_min(&p, metric, norm, &sol.estimate);
             assert!(
                 sol.cost <= fb + 1e-9 * (1.0 + fb),
@@ -109,14 +136,17 @@ fn every_mean_matches_brute_force_on_concentrated_data() {
                 sol.cost
             );
             // conversely the solver's cost is achieved (it is the cost of its estimate)
-            assert!((sol.cost - p.cost(&sol.estimate, metric, norm)).abs() <= 1e-12 * (1.0 + fb));
+            assert!(
+                (sol.cost - p.cost_under(&sol.estimate, Objective::new(metric, norm))).abs()
+                    <= 1e-12 * (1.0 + fb)
+            );
             // concentrated data: the theory certificates apply (not the chordal L1 bound [S7])
-            if (metric, norm) != (Metric::Chordal, Norm::L1) {
+            if (metric, norm) != (Metric::Chordal, Loss::L1) {
                 assert_eq!(
-                    sol.certificate.verdict,
+                    cert.verdict,
                     Verdict::Certified,
                     "{metric} {norm}: {}",
-                    sol.certificate
+                    cert
                 );
             }
             assert!(
@@ -135,25 +165,22 @@ fn certified_results_are_never_beaten_on_spread_data() {
     for seed in 10..14 {
         let (_, p) = noisy(seed, 10, 1.2);
         for (metric, norm) in ALL {
-            let sol = average_single(&p, &settings(metric, norm)).unwrap();
+            let (sol, cert) = average(&p, metric, norm);
             let (_, fb) = brute_force_min(&p, metric, norm, &sol.estimate);
-            if let Some(lb) = sol.certificate.lower_bound {
+            if let Some(lb) = cert.lower_bound {
                 assert!(
                     lb <= fb + 1e-9 * (1.0 + fb),
                     "{metric} {norm}: lower bound {lb} > brute {fb}"
                 );
             }
-            if sol.certificate.is_certified() {
+            if cert.is_certified() {
                 assert!(
                     sol.cost <= fb + 1e-9 * (1.0 + fb),
                     "{metric} {norm}: certified but beaten"
                 );
             }
-            if metric == Metric::Chordal && norm == Norm::L2 {
-                assert!(
-                    sol.certificate.is_certified(),
-                    "closed form [S1] is always certified"
-                );
+            if metric == Metric::Chordal && norm == Loss::L2 {
+                assert!(cert.is_certified(), "closed form [S1] is always certified");
             }
         }
     }
@@ -167,11 +194,13 @@ fn lower_bounds_hold_for_suboptimal_estimates() {
     for seed in 20..23 {
         let (_, p) = noisy(seed, 15, 0.25);
         for (metric, norm) in ALL {
-            let sol = average_single(&p, &settings(metric, norm)).unwrap();
+            let (sol, _) = average(&p, metric, norm);
             let (_, fb) = brute_force_min(&p, metric, norm, &sol.estimate);
             for &off in &[0.02, 0.1, 0.3] {
                 let est = perturb(&sol.estimate, off, &mut rng);
-                let c = certify_single(&p, &est, &settings(metric, norm)).unwrap();
+                let c = certify_single(&with(&p, metric, norm), &est, &CertifySettings::default())
+                    .unwrap()
+                    .certificate;
                 if let Some(lb) = c.lower_bound {
                     assert!(
                         lb <= fb + 1e-10 * (1.0 + fb),
@@ -195,15 +224,15 @@ fn geodesic_bound_is_inconclusive_outside_the_pi_over_2_ball() {
     let mut rs: Vec<_> = (0..8).map(|_| perturb(&c, 0.1, &mut rng)).collect();
     rs.push(perturb(&c, 2.5, &mut rng)); // sample 8 is far away
     let p = SingleProblem::new(rs, None).unwrap();
-    for norm in [Norm::L1, Norm::L2] {
-        let sol = average_single(&p, &settings(Metric::Geodesic, norm)).unwrap();
-        assert_eq!(sol.certificate.verdict, Verdict::Inconclusive);
+    for norm in [Loss::L1, Loss::L2] {
+        let (_, cert) = average(&p, Metric::Geodesic, norm);
+        assert_eq!(cert.verdict, Verdict::Inconclusive);
         assert!(
-            sol.certificate.explanation.contains("sample 8"),
+            cert.explanation.contains("sample 8"),
             "{}",
-            sol.certificate.explanation
+            cert.explanation
         );
-        assert!(sol.certificate.lower_bound.is_none());
+        assert!(cert.lower_bound.is_none());
     }
 }
 
@@ -220,7 +249,7 @@ fn karcher_mean_of_symmetric_samples_is_the_centre() {
     }
     let p = SingleProblem::new(rs, None).unwrap();
     for (metric, norm) in ALL {
-        let sol = average_single(&p, &settings(metric, norm)).unwrap();
+        let (sol, _) = average(&p, metric, norm);
         assert!(
             angle_between(&sol.estimate, &c) < 1e-8,
             "{metric} {norm}: {}",
@@ -243,8 +272,8 @@ fn weight_two_equals_duplicated_sample() {
     ws.push(1.0);
     let duplicated = SingleProblem::new(rs, Some(ws)).unwrap();
     for (metric, norm) in ALL {
-        let a = average_single(&weighted, &settings(metric, norm)).unwrap();
-        let b = average_single(&duplicated, &settings(metric, norm)).unwrap();
+        let (a, _) = average(&weighted, metric, norm);
+        let (b, _) = average(&duplicated, metric, norm);
         assert!(
             (a.cost - b.cost).abs() <= 1e-9 * (1.0 + a.cost),
             "{metric} {norm}"
@@ -256,11 +285,11 @@ fn weight_two_equals_duplicated_sample() {
     }
 }
 
-fn check_invariance(p: &SingleProblem, a: &Rotation, b: &Rotation, metric: Metric, norm: Norm) {
+fn check_invariance(p: &SingleProblem, a: &Rotation, b: &Rotation, metric: Metric, norm: Loss) {
     let moved: Vec<_> = p.rotations().iter().map(|r| a * r * b).collect();
     let q = SingleProblem::new(moved, Some(p.weights().to_vec())).unwrap();
-    let s = average_single(p, &settings(metric, norm)).unwrap();
-    let t = average_single(&q, &settings(metric, norm)).unwrap();
+    let (s, _) = average(p, metric, norm);
+    let (t, _) = average(&q, metric, norm);
     assert!(
         (s.cost - t.cost).abs() <= 1e-9 * (1.0 + s.cost),
         "{metric} {norm}: cost {} vs {}",
@@ -296,8 +325,8 @@ proptest! {
         let (_, p) = noisy(seed.wrapping_add(7), 7, sigma);
         let a = random_rotation(&mut rng);
         let b = random_rotation(&mut rng);
-        check_invariance(&p, &a, &b, Metric::Chordal, Norm::L2);
-        check_invariance(&p, &a, &b, Metric::Geodesic, Norm::L2);
+        check_invariance(&p, &a, &b, Metric::Chordal, Loss::L2);
+        check_invariance(&p, &a, &b, Metric::Geodesic, Loss::L2);
     }
 }
 
@@ -308,17 +337,17 @@ fn one_sample_and_identical_samples() {
     for n in [1, 7] {
         let p = SingleProblem::new(vec![r; n], None).unwrap();
         for (metric, norm) in ALL {
-            let sol = average_single(&p, &settings(metric, norm)).unwrap();
+            let (sol, cert) = average(&p, metric, norm);
             assert!(
                 angle_between(&sol.estimate, &r) < 1e-9,
                 "{metric} {norm} n={n}"
             );
             assert!(sol.cost.abs() < 1e-12, "{metric} {norm}: {}", sol.cost);
             assert_eq!(
-                sol.certificate.verdict,
+                cert.verdict,
                 Verdict::Certified,
                 "{metric} {norm}: {}",
-                sol.certificate
+                cert
             );
         }
     }
@@ -333,7 +362,7 @@ fn samples_at_pi_apart_do_not_break_anything() {
     let r2 = exp(&Vector3::new(0.0, 0.0, PI));
     let p = SingleProblem::new(vec![r1, r2], None).unwrap();
     for (metric, norm) in ALL {
-        let sol = average_single(&p, &settings(metric, norm)).unwrap();
+        let (sol, cert) = average(&p, metric, norm);
         let m = sol.estimate.matrix();
         assert!(
             (m.determinant() - 1.0).abs() < 1e-9
@@ -341,23 +370,23 @@ fn samples_at_pi_apart_do_not_break_anything() {
         );
         assert!(sol.cost.is_finite());
         let (_, fb) = brute_force_min(&p, metric, norm, &sol.estimate);
-        if metric == Metric::Chordal && norm == Norm::L2 || metric == Metric::Quaternion {
+        if metric == Metric::Chordal && norm == Loss::L2 || metric == Metric::Quaternion {
             assert!(
                 sol.cost <= fb + 1e-9,
                 "{metric} {norm}: {} vs {fb}",
                 sol.cost
             );
         }
-        if let Some(lb) = sol.certificate.lower_bound {
+        if let Some(lb) = cert.lower_bound {
             assert!(lb <= fb + 1e-9, "{metric} {norm}");
         }
-        if sol.certificate.is_certified() {
+        if cert.is_certified() {
             assert!(sol.cost <= fb + 1e-9, "{metric} {norm}");
         }
     }
     // The exact minima (from theta alone): chordal L2: every R = Rz(phi) gives
     // 8 sin^2(phi/2) + 8 sin^2((pi - phi)/2) = 8 (minimum over SO(3) is 8 as well).
-    let s = average_single(&p, &settings(Metric::Chordal, Norm::L2)).unwrap();
+    let (s, _) = average(&p, Metric::Chordal, Loss::L2);
     assert!((s.cost - 8.0).abs() < 1e-9, "{}", s.cost);
 }
 
@@ -373,8 +402,8 @@ fn quaternion_l2_is_not_the_eigenvector_mean() {
         Some(vec![2.0, 1.0]),
     )
     .unwrap();
-    let q = average_single(&p, &settings(Metric::Quaternion, Norm::L2)).unwrap();
-    let c = average_single(&p, &settings(Metric::Chordal, Norm::L2)).unwrap();
+    let (q, q_cert) = average(&p, Metric::Quaternion, Loss::L2);
+    let (c, c_cert) = average(&p, Metric::Chordal, Loss::L2);
     let phi_q = 2.0 * (1.25f64.sin() / (2.0 + 1.25f64.cos())).atan();
     let phi_c = (2.5f64.sin() / (2.0 + 2.5f64.cos())).atan();
     assert!(
@@ -388,7 +417,7 @@ fn quaternion_l2_is_not_the_eigenvector_mean() {
         angle(&c.estimate)
     );
     assert!((phi_q - phi_c).abs() > 0.05);
-    assert!(q.certificate.is_certified() && c.certificate.is_certified());
+    assert!(q_cert.is_certified() && c_cert.is_certified());
 }
 
 #[test]
@@ -401,7 +430,7 @@ fn l1_means_land_exactly_on_a_dominant_sample() {
     rs.extend((0..4).map(|_| perturb(&c, 0.3, &mut rng)));
     let p = SingleProblem::new(rs, Some(vec![5.0, 1.0, 1.0, 1.0, 1.0])).unwrap();
     for metric in [Metric::Geodesic, Metric::Chordal] {
-        let sol = average_single(&p, &settings(metric, Norm::L1)).unwrap();
+        let (sol, _) = average(&p, metric, Loss::L1);
         assert!(
             angle_between(&sol.estimate, &c) < 1e-12,
             "{metric}: {}",
@@ -409,8 +438,8 @@ fn l1_means_land_exactly_on_a_dominant_sample() {
         );
         assert!(sol.report.termination.is_converged());
     }
-    let g = geodesic_l1_mean(&p, &SingleSettings::default()).unwrap();
-    assert!(g.certificate.is_certified(), "{}", g.certificate);
+    let (_, g) = average(&p, Metric::Geodesic, Loss::L1);
+    assert!(g.is_certified(), "{g}");
 }
 
 #[test]
@@ -420,10 +449,8 @@ fn l1_means_step_off_a_non_optimal_sample() {
     let (_, p) = noisy(80, 9, 0.3);
     for metric in [Metric::Geodesic, Metric::Chordal] {
         let start = p.rotations()[0];
-        let sol =
-            rotavg::single::average_single_from(&p, &settings(metric, Norm::L1), Some(&start))
-                .unwrap();
-        let (_, fb) = brute_force_min(&p, metric, Norm::L1, &sol.estimate);
+        let (sol, _) = average_from(&p, metric, Loss::L1, Some(start));
+        let (_, fb) = brute_force_min(&p, metric, Loss::L1, &sol.estimate);
         assert!(
             sol.cost <= fb + 1e-9 * (1.0 + fb),
             "{metric}: {} vs {fb}",
@@ -495,17 +522,21 @@ fn bad_input_gives_typed_errors() {
             gradient_tolerance: -1.0,
             ..Default::default()
         },
-        SingleSettings {
-            metric: Metric::Quaternion,
-            norm: Norm::L1,
-            ..Default::default()
-        },
     ] {
+        let bad = AverageSettings {
+            solve: bad,
+            ..Default::default()
+        };
         assert!(matches!(
             average_single(&p, &bad),
             Err(Error::InvalidSettings { .. })
         ));
     }
+    // The quaternion L1 mean is not implemented: refused when the objective is set.
+    assert!(matches!(
+        p.with_objective(Objective::new(Metric::Quaternion, Loss::L1)),
+        Err(Error::InvalidSettings { .. })
+    ));
 }
 
 #[test]
@@ -570,13 +601,13 @@ fn problem_deserialisation_validates() {
 fn solution_serialises_rotation_row_major_and_displays() {
     let r = exp(&Vector3::new(0.0, 0.0, 0.5));
     let p = SingleProblem::new(vec![r], None).unwrap();
-    let s = average_single(&p, &SingleSettings::default()).unwrap();
-    let v = serde_json::to_value(&s).unwrap();
+    let s = average_single(&p, &AverageSettings::default()).unwrap();
+    let v = serde_json::to_value(&s.solution).unwrap();
     let e01 = v["estimate"][0][1].as_f64().unwrap();
     assert!((e01 - r.matrix()[(0, 1)]).abs() < 1e-12 && e01 < 0.0); // row-major: -sin(0.5)
     let text = s.to_string();
     assert!(
-        text.contains("certified") && text.contains("chordal L2"),
+        text.contains("certified") && text.contains("chordal l2"),
         "{text}"
     );
 }

@@ -13,7 +13,8 @@
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rotavg::Rotation;
-use rotavg::certify::multiple::{CertifySettings, Verification, certify_multiple};
+use rotavg::certify::multiple::{Verification, dual_certificate};
+use rotavg::certify::{CertifySettings, DualSettings};
 use rotavg::multiple::synthetic::SyntheticGraph;
 use rotavg::multiple::{Initialisation, MultipleProblem, MultipleSettings, solve_multiple};
 use rotavg::so3::random_rotation;
@@ -57,7 +58,6 @@ fn campaign_with(
     settings: CertifySettings,
 ) -> Tally {
     let mut rng = StdRng::seed_from_u64(seed);
-    let tol = settings.tolerance;
     let mut t = Tally::default();
     for inst in 0..instances {
         let n = rng.random_range(3..=12);
@@ -78,10 +78,11 @@ fn campaign_with(
             sols.push(local_solve(&p, &start));
         }
         let best = sols.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
+        let tol = settings.tolerance.resolve(p.median_weight());
         let fp_tol = 1e-9 * (1.0 + best);
         let budget = tol.absolute.max(tol.relative * best.abs().max(1e-12));
         for (rs, f) in &sols {
-            let c = certify_multiple(&p, rs, &settings).expect("valid input");
+            let c = dual_certificate(&p, rs, &settings).expect("valid input");
             let lb = c.certificate.lower_bound.expect("a bound always exists");
             assert!(lb.is_finite());
             if c.bound.verification == Verification::ScalarComparison {
@@ -112,7 +113,7 @@ fn campaign_with(
         }
         // a random (non-critical) point: valid bound, never certified unless (absurdly) optimal
         let rnd: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
-        let c = certify_multiple(&p, &rnd, &settings).expect("valid input");
+        let c = dual_certificate(&p, &rnd, &settings).expect("valid input");
         let lb = c.certificate.lower_bound.expect("a bound always exists");
         assert!(
             lb <= best + fp_tol,
@@ -159,7 +160,10 @@ fn soundness_thirty_percent_outliers() {
 #[test]
 fn soundness_scalar_comparison_forced() {
     let settings = CertifySettings {
-        scalar_comparison_above: 0,
+        dual: DualSettings {
+            scalar_comparison_above: 0,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let t = campaign_with(2027, 600, 0.1, settings);

@@ -1,24 +1,35 @@
 //! Certificates of global optimality and proven suboptimality gaps (SPEC section 3,
-//! `paper-notes/certificates.md`).
+//! `paper-notes/certificates.md`), one verb for the three problems:
 //!
-//! - [`multiple`]: the dual certificate of chordal L2 multiple rotation averaging, and the
-//!   verified lower bound from any multipliers (used for SDP multipliers too).
-//! - [`eigen`]: sparse extreme-eigenvalue machinery: verified lower bounds on `lambda_min` by
-//!   sparse Cholesky with a rigorous floating-point margin, and Lanczos estimates.
-//! - [`scalar`]: the scalar comparison `[D13]`: a proof that `S` is positive semidefinite from one
-//!   factorisation of an `n x n` scalar matrix (fast on graphs whose `3n x 3n` factor fills).
-//! - [`spectrum`]: the `k` smallest eigenvalues of a certificate matrix (estimates, for
-//!   figures; never bounds).
-//! - [`staircase`]: a Riemannian staircase (rank-lifted Burer-Monteiro descent) whose verified
-//!   multipliers bound the SDP optimum when the estimate's own certificate fails.
+//! | problem | function | methods |
+//! |---|---|---|
+//! | single | [`certify_single`] | theorems: closed forms, convexity `[S1]`-`[S7]` ([`single`]) |
+//! | multiple | [`certify_multiple`] | dual certificate, SDP, staircase `[D3]`-`[D14]` ([`multiple`]) |
+//! | conjugate | [`certify_conjugate`] | SDP with verified multipliers `[H8]` ([`conjugate`]) |
+//!
+//! Each takes `(&problem, &estimate, &CertifySettings)`, never changes the estimate, and returns
+//! a [`Certification`]: the [`Certificate`] (verdict, proven lower bound, gap), what ran, and a
+//! better solution if one was found while bounding.
+//!
+//! Soundness rule: [`Verdict::Certified`] is only produced by [`Certificate::from_bounds`] from a
+//! lower bound verified independently of any solver's own report.
 
-pub mod eigen;
+pub mod certificate;
+pub mod certification;
+pub mod conjugate;
 pub mod multiple;
-pub mod scalar;
+pub mod settings;
+pub mod single;
 pub mod spectrum;
-pub mod staircase;
 
-pub use multiple::{
-    CertifySettings, MultipleCertificate, Verification, VerifiedBound, certificate_matrix,
-    certify_multiple, certify_with_multipliers, lower_bound_from_multipliers, multipliers,
+pub use certificate::{
+    BoundMethod, Certificate, GapTolerance, TolerancePart, ToleranceRule, Verdict,
 };
+pub use certification::{
+    Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun, SdpSummary,
+};
+pub use conjugate::certify_conjugate;
+pub use multiple::certify_multiple;
+pub use settings::{Budget, CertifyMode, CertifySettings, DualSettings};
+pub use single::certify_single;
+pub use spectrum::{SpectrumEstimate, SpectrumSettings};

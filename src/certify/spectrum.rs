@@ -17,14 +17,15 @@
 //! is similar to `L (x) I_3` at a noise-free optimum): single-vector Lanczos finds only one
 //! copy of a multiple eigenvalue.
 
-use crate::certify::eigen::{ShiftedCholesky, inf_norm, rayleigh_quotient, sparse_matvec};
 use crate::certify::multiple::certificate_matrix;
 use crate::error::{Error, Result};
+use crate::linalg::{
+    Extreme, LanczosSettings, LanczosStop, ShiftedCholesky, inf_norm, lanczos, rayleigh_quotient,
+    sparse_matvec,
+};
 use crate::multiple::MultipleProblem;
 use faer::sparse::{SparseColMat, SparseColMatRef};
 use nalgebra::{DMatrix, Matrix3, SymmetricEigen};
-use rand::rngs::StdRng;
-use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -85,16 +86,25 @@ pub struct SpectrumEstimate {
     pub method: SpectrumMethod,
     /// The shift of the shift-invert iteration, if used.
     pub shift: Option<f64>,
-    /// Whether every residual met the tolerance (always `true` for `Dense`).
-    pub converged: bool,
+    /// Why the Lanczos iteration stopped (`None` for `Dense`, which is exact up to rounding).
+    pub stop: Option<LanczosStop>,
     /// Krylov subspace dimension reached (the matrix dimension for `Dense`).
     pub subspace_dim: usize,
     /// Wall time, seconds.
     pub seconds: f64,
 }
 
+impl SpectrumEstimate {
+    /// `true` when the estimates are exact up to rounding (dense) or the Lanczos iteration
+    /// converged.
+    pub fn converged(&self) -> bool {
+        self.stop.is_none_or(|s| s.converged())
+    }
+}
+
 impl SpectrumSettings {
-    pub(crate) fn validate(&self) -> Result<()> {
+    /// Check every value; [`Error::InvalidSettings`] names the first bad one (`spectrum.<field>`).
+    pub fn validate(&self) -> Result<()> {
         let bad = |name: &str, reason: &str| {
             Err(Error::InvalidSettings {
                 name: name.into(),
@@ -270,163 +280,47 @@ fn dense(s: SparseColMatRef<'_, usize, f64>, k: usize) -> SpectrumEstimate {
         residuals,
         method: SpectrumMethod::Dense,
         shift: None,
-        converged: true,
+        stop: None,
         subspace_dim: n,
         seconds: 0.0,
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// Orthogonalise `w` against `basis` twice ("twice is enough") and normalise it; `None` when
-/// less than `1e-10` of its norm survives (it lies in the span).
-fn orthonormalize(basis: &[Vec<f64>], mut w: Vec<f64>) -> Option<Vec<f64>> {
-    let before = dot(&w, &w).sqrt();
-    if before == 0.0 || !before.is_finite() {
-        return None;
-    }
-    for _ in 0..2 {
-        for v in basis {
-            let c = dot(v, &w);
-            w.iter_mut().zip(v).for_each(|(x, y)| *x -= c * y);
-        }
-    }
-    let after = dot(&w, &w).sqrt();
-    if after <= 1e-10 * before || !after.is_finite() {
-        return None;
-    }
-    w.iter_mut().for_each(|x| *x /= after);
-    Some(w)
-}
-
-/// Block Lanczos with full reorthogonalisation and Rayleigh-Ritz on the whole basis `[D14]`.
-/// `op` is `S` (`invert = false`, target: smallest Ritz values) or `(S + sigma I)^-1`
-/// (`invert = true`, target: largest). The reported values are Rayleigh quotients on `S` of
-/// the Ritz vectors, with residuals `||S x - value x||` (computed with `S`).
+/// Block Lanczos `[D14]` ([`crate::linalg::lanczos`]) on `op`: `S` (`invert = false`,
+/// target: smallest Ritz values) or `(S + sigma I)^-1` (`invert = true`, target: largest). The
+/// reported values are Rayleigh quotients on `S` of the Ritz vectors, with residuals
+/// `||S x - value x||` (computed with `S`), ascending.
 fn block_lanczos(
     s: SparseColMatRef<'_, usize, f64>,
     n: usize,
     k: usize,
     settings: &SpectrumSettings,
     norm: f64,
-    mut op: impl FnMut(&[f64], &mut [f64]),
+    op: impl FnMut(&[f64], &mut [f64]),
     invert: bool,
 ) -> SpectrumEstimate {
-    let b = settings.block_size.min(n);
-    let mem_cap = (40_000_000 / n.max(1)).max(k + b);
-    let max_m = settings.max_subspace.max(k + b).min(mem_cap).min(n);
-    let mut rng = StdRng::seed_from_u64(settings.seed);
-    let random =
-        |rng: &mut StdRng| -> Vec<f64> { (0..n).map(|_| rng.random::<f64>() - 0.5).collect() };
-    let mut basis: Vec<Vec<f64>> = Vec::new();
-    // h[j][i] = v_i^T op v_j for i <= j (symmetric)
-    let mut h: Vec<Vec<f64>> = Vec::new();
-    let mut best: Option<SpectrumEstimate> = None;
-    let mut pending: Vec<Vec<f64>> = (0..b).map(|_| random(&mut rng)).collect();
-    loop {
-        // add the pending block, apply the operator
-        let mut images = Vec::new();
-        for v in pending.drain(..) {
-            if basis.len() >= max_m {
-                break;
-            }
-            let Some(v) = orthonormalize(&basis, v) else {
-                continue;
-            };
-            let mut w = vec![0.0; n];
-            op(&v, &mut w);
-            basis.push(v);
-            let row: Vec<f64> = basis.iter().map(|vi| dot(vi, &w)).collect();
-            h.push(row);
-            images.push(w);
-        }
-        let m = basis.len();
-        let full = m >= max_m;
-        let stalled = images.is_empty();
-        if m >= k && (full || stalled || m % (2 * b) < b || m == n) {
-            let r = rayleigh_ritz(s, &basis, &h, k, invert, norm, settings.tolerance);
-            let done = r.converged;
-            best = Some(r);
-            if done {
-                break;
-            }
-        }
-        if full || stalled || m == n {
-            break;
-        }
-        // next block: the images, orthogonalised (a random vector replaces a deflated one)
-        for w in images {
-            match orthonormalize(&basis, w) {
-                Some(v) => pending.push(v),
-                None => {
-                    if let Some(v) = orthonormalize(&basis, random(&mut rng)) {
-                        pending.push(v);
-                    }
-                }
-            }
-        }
-        if pending.is_empty() {
-            if let Some(v) = orthonormalize(&basis, random(&mut rng)) {
-                pending.push(v);
-            } else {
-                let r = rayleigh_ritz(s, &basis, &h, k, invert, norm, settings.tolerance);
-                best = Some(r);
-                break;
-            }
-        }
-    }
-    best.unwrap_or_else(|| rayleigh_ritz(s, &basis, &h, k, invert, norm, settings.tolerance))
-}
-
-fn rayleigh_ritz(
-    s: SparseColMatRef<'_, usize, f64>,
-    basis: &[Vec<f64>],
-    h: &[Vec<f64>],
-    k: usize,
-    invert: bool,
-    norm: f64,
-    tolerance: f64,
-) -> SpectrumEstimate {
-    let m = basis.len();
-    let n = s.nrows();
-    let t = DMatrix::<f64>::from_fn(m, m, |i, j| {
-        let (lo, hi) = if i <= j { (i, j) } else { (j, i) };
-        h[hi][lo]
-    });
-    let eig = SymmetricEigen::new(t);
-    let mut idx: Vec<usize> = (0..m).collect();
-    idx.sort_by(|&p, &q| {
-        let (a, b) = (eig.eigenvalues[p], eig.eigenvalues[q]);
-        if invert {
-            b.total_cmp(&a)
-        } else {
-            a.total_cmp(&b)
-        }
-    });
-    let mut pairs: Vec<(f64, f64)> = Vec::with_capacity(k);
-    for &i in idx.iter().take(k) {
-        let c = eig.eigenvectors.column(i);
-        let mut x = vec![0.0; n];
-        for (cj, v) in c.iter().zip(basis) {
-            x.iter_mut().zip(v).for_each(|(xi, vi)| *xi += cj * vi);
-        }
-        let nx = dot(&x, &x).sqrt();
-        if nx > 0.0 {
-            x.iter_mut().for_each(|xi| *xi /= nx);
-        }
-        pairs.push(rayleigh_quotient(s, &x));
-    }
+    let lz = LanczosSettings {
+        max_iterations: settings.max_subspace.max(k + settings.block_size),
+        tolerance: settings.tolerance,
+        seed: settings.seed,
+        block_size: settings.block_size,
+    };
+    let (which, scale) = if invert {
+        // relative to each Ritz value of the inverse
+        (Extreme::Largest, 0.0)
+    } else {
+        (Extreme::Smallest, norm)
+    };
+    let e = lanczos(n, op, which, k, scale, &lz, &[], None);
+    let mut pairs: Vec<(f64, f64)> = e.vectors.iter().map(|x| rayleigh_quotient(s, x)).collect();
     pairs.sort_by(|p, q| p.0.total_cmp(&q.0));
-    let converged = pairs.len() == k && pairs.iter().all(|p| p.1 <= tolerance * norm);
     SpectrumEstimate {
         values: pairs.iter().map(|p| p.0).collect(),
         residuals: pairs.iter().map(|p| p.1).collect(),
         method: SpectrumMethod::Lanczos,
         shift: None,
-        converged,
-        subspace_dim: m,
+        stop: Some(e.stop),
+        subspace_dim: e.subspace_dim,
         seconds: 0.0,
     }
 }

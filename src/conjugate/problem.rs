@@ -3,7 +3,9 @@
 //! (angle mismatch, uninformative pairs, identifiability). Equations: `paper-notes/conjugate.md`.
 
 use crate::error::{Error, Result};
-use crate::so3::{Rotation, angle, log};
+use crate::objective::{Loss, Objective};
+use crate::so3::{Metric, Rotation, angle, log, quaternion_distance};
+use crate::validate::{check_weight, non_negative};
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -12,10 +14,10 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConjugatePair {
     /// `L_i`.
-    #[serde(with = "crate::serde_rot::rotation")]
+    #[serde(with = "crate::so3::serde_rows::rotation")]
     pub left: Rotation,
     /// `R_i`.
-    #[serde(with = "crate::serde_rot::rotation")]
+    #[serde(with = "crate::so3::serde_rows::rotation")]
     pub right: Rotation,
     /// Weight `w_i` in `[1e-100, 1e100]`; 1 when absent from JSON.
     #[serde(default = "one")]
@@ -43,6 +45,8 @@ impl ConjugatePair {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConjugateProblem {
     pairs: Vec<ConjugatePair>,
+    #[serde(skip)]
+    objective: Objective,
 }
 
 /// Thresholds of [`ConjugateProblem::diagnose`] and of the identifiability test.
@@ -58,6 +62,16 @@ pub struct DiagnosticSettings {
     /// A pair whose angle mismatch `|angle(L_i) - angle(R_i)|` exceeds this (radians) is flagged
     /// as suspicious (default `5` degrees).
     pub max_angle_mismatch: f64,
+}
+
+impl DiagnosticSettings {
+    /// Check every value; [`Error::InvalidSettings`] names the first bad one (each must be
+    /// finite and >= 0).
+    pub fn validate(&self) -> Result<()> {
+        non_negative("diagnostics.min_rotation_angle", self.min_rotation_angle)?;
+        non_negative("diagnostics.min_axis_spread", self.min_axis_spread)?;
+        non_negative("diagnostics.max_angle_mismatch", self.max_angle_mismatch)
+    }
 }
 
 impl Default for DiagnosticSettings {
@@ -169,12 +183,7 @@ impl ConjugateProblem {
             });
         }
         for (k, p) in pairs.iter().enumerate() {
-            if crate::io::weight_out_of_range(p.weight).is_some() {
-                return Err(Error::InvalidWeight {
-                    item: format!("pair {k}"),
-                    weight: p.weight,
-                });
-            }
+            check_weight(|| format!("pair {k}"), p.weight)?;
             let finite = p.left.matrix().iter().all(|x| x.is_finite())
                 && p.right.matrix().iter().all(|x| x.is_finite());
             if !finite {
@@ -183,7 +192,63 @@ impl ConjugateProblem {
                 });
             }
         }
-        Ok(ConjugateProblem { pairs })
+        Ok(ConjugateProblem {
+            pairs,
+            objective: Objective::CHORDAL_L2,
+        })
+    }
+
+    /// The objectives with a solver: chordal or geodesic with any loss, quaternion with l2.
+    pub const SUPPORTED: &'static str =
+        "chordal or geodesic with l2, l1, huber or cauchy; quaternion with l2";
+
+    /// The same pairs with another objective (default chordal L2, the certifiable one).
+    /// [`Error::InvalidSettings`] (field `objective`) when there is no solver for it or a
+    /// robust threshold is bad.
+    ///
+    /// ```
+    /// use rotavg::conjugate::ConjugateProblem;
+    /// use rotavg::objective::{Loss, Objective};
+    /// use rotavg::so3::{exp, Metric, Rotation};
+    /// use nalgebra::Vector3;
+    /// // One pair with L = Rz(0.3), R = I: for S = I the residual angle is 0.3.
+    /// let p = ConjugateProblem::from_rotations(&[exp(&Vector3::new(0.0, 0.0, 0.3))], &[Rotation::identity()])?;
+    /// let id = Rotation::identity();
+    /// let l1 = p.clone().with_objective(Objective::new(Metric::Geodesic, Loss::L1))?;
+    /// assert!((l1.cost(&id) - 0.3).abs() < 1e-12);
+    /// // Chordal L2 (the default) is g(S).
+    /// assert!((p.cost(&id) - p.chordal_cost(&id)).abs() < 1e-12);
+    /// assert!(p.with_objective(Objective::new(Metric::Quaternion, Loss::L1)).is_err());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn with_objective(mut self, objective: Objective) -> Result<Self> {
+        objective.validate()?;
+        if objective.metric == Metric::Quaternion && objective.loss != Loss::L2 {
+            return Err(objective.unsupported("conjugate", Self::SUPPORTED));
+        }
+        self.objective = objective;
+        Ok(self)
+    }
+
+    /// The objective minimised.
+    pub fn objective(&self) -> Objective {
+        self.objective
+    }
+
+    /// The cost `sum_i w_i rho(d(R_i, S^T L_i S))` of `s` under the problem's objective (for
+    /// chordal L2 this is `g(S)` `[H1]`).
+    pub fn cost(&self, s: &Rotation) -> f64 {
+        self.cost_under(s, self.objective)
+    }
+
+    /// The cost of `s` under another objective.
+    pub fn cost_under(&self, s: &Rotation, objective: Objective) -> f64 {
+        self.pairs
+            .iter()
+            .map(|p| {
+                p.weight * objective.rho(pair_distance(objective.metric, s, &p.left, &p.right))
+            })
+            .sum()
     }
 
     /// Build from parallel slices of `L_i` and `R_i`, all weights 1.
@@ -226,6 +291,12 @@ impl ConjugateProblem {
     /// Number of pairs.
     pub fn num_pairs(&self) -> usize {
         self.pairs.len()
+    }
+
+    /// The median pair weight (the lower middle one for an even count): the scale of the
+    /// absolute part of the certificate's gap tolerance.
+    pub fn median_weight(&self) -> f64 {
+        crate::validate::median_weight(self.pairs.iter().map(|p| p.weight))
     }
 
     /// Sum of the weights.
@@ -363,6 +434,15 @@ impl ConjugateProblem {
             small_rotation_pairs: small,
             identifiability: self.identifiability(settings),
         }
+    }
+}
+
+/// Distance between `R_i` and `S^T L_i S` under `metric` (chordal: `||S R_i - L_i S||_F`).
+fn pair_distance(metric: Metric, s: &Rotation, l: &Rotation, r: &Rotation) -> f64 {
+    match metric {
+        Metric::Chordal => (s.matrix() * r.matrix() - l.matrix() * s.matrix()).norm(),
+        Metric::Geodesic => angle(&(r.inverse() * s.inverse() * l * s)),
+        Metric::Quaternion => quaternion_distance(r, &(s.inverse() * l * s)),
     }
 }
 

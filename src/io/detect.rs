@@ -5,6 +5,7 @@
 //! [`crate::io::sfm`], [`crate::io::json`]) and in `paper-notes/formats.md` (`[F1]`..`[F8]`).
 
 use crate::error::{Error, Result};
+use crate::io::names::Choice;
 use crate::multiple::MultipleProblem;
 use crate::so3::{DEFAULT_ROTATION_TOLERANCE, Rotation};
 use serde::{Deserialize, Serialize};
@@ -40,12 +41,7 @@ pub enum GraphFormat {
 
 impl fmt::Display for GraphFormat {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            GraphFormat::Auto => "auto",
-            GraphFormat::G2o => "g2o",
-            GraphFormat::OneDsfm => "1dsfm",
-            GraphFormat::Json => "json",
-        })
+        f.write_str(Choice::name(self))
     }
 }
 
@@ -115,6 +111,131 @@ impl LoadedGraph {
     /// The node index of a file id, if the id occurs.
     pub fn node_of_id(&self, id: u64) -> Option<usize> {
         self.node_ids.binary_search(&id).ok()
+    }
+
+    /// The graph restricted to its largest connected component (problem, node ids and initial
+    /// estimate; nodes renumbered in increasing order, as
+    /// [`MultipleProblem::largest_component`]), and which nodes were kept. A connected graph
+    /// is returned unchanged.
+    ///
+    /// ```
+    /// use rotavg::io::detect::{read_graph, GraphFormat, ReadOptions};
+    /// // Two components: {0, 1, 2} (a triangle) and {5, 7} (one edge).
+    /// let text = "EDGE3 0 1 0 0 0 0 0 0\nEDGE3 1 2 0 0 0 0 0 0\nEDGE3 2 0 0 0 0 0 0 0\nEDGE3 5 7 0 0 0 0 0 0\n";
+    /// let g = read_graph(text, "two.g2o", GraphFormat::Auto, &ReadOptions::default())?;
+    /// assert!(g.problem.require_connected().is_err());
+    /// let (big, selection) = g.largest_component();
+    /// assert_eq!(big.node_ids, vec![0, 1, 2]);
+    /// assert_eq!(selection.kept, vec![0, 1, 2]);
+    /// assert_eq!((selection.num_read, selection.other_component_sizes.clone()), (5, vec![2]));
+    /// // Per-node data of the file's graph (e.g. ground truth) follow the selection.
+    /// assert_eq!(selection.select(&["a", "b", "c", "d", "e"]), Some(vec!["a", "b", "c"]));
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn largest_component(self) -> (LoadedGraph, ComponentSelection) {
+        let num_read = self.problem.num_rotations();
+        let comps = self.problem.components();
+        if comps.len() <= 1 {
+            return (self, ComponentSelection::whole(num_read));
+        }
+        let (problem, kept) = self.problem.largest_component();
+        let node_ids = kept.iter().map(|&k| self.node_ids[k]).collect();
+        let initial = self
+            .initial
+            .as_ref()
+            .map(|v| kept.iter().map(|&k| v[k]).collect());
+        let selection = ComponentSelection {
+            kept,
+            num_read,
+            other_component_sizes: comps.iter().skip(1).map(Vec::len).collect(),
+        };
+        (
+            LoadedGraph {
+                problem,
+                node_ids,
+                initial,
+                ..self
+            },
+            selection,
+        )
+    }
+}
+
+/// Which nodes of a graph as read were kept ([`LoadedGraph::largest_component`]).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ComponentSelection {
+    /// Index, in the graph as read, of each kept node (increasing).
+    pub kept: Vec<usize>,
+    /// Number of nodes of the graph as read.
+    pub num_read: usize,
+    /// Sizes of the components not kept, largest first (empty when all nodes were kept).
+    pub other_component_sizes: Vec<usize>,
+}
+
+impl ComponentSelection {
+    /// Every node of a graph of `num_read` nodes.
+    ///
+    /// ```
+    /// use rotavg::io::detect::ComponentSelection;
+    /// let all = ComponentSelection::whole(3);
+    /// assert!(all.is_whole());
+    /// assert_eq!(all.select(&[1, 2, 3]), Some(vec![1, 2, 3]));
+    /// ```
+    pub fn whole(num_read: usize) -> Self {
+        ComponentSelection {
+            kept: (0..num_read).collect(),
+            num_read,
+            other_component_sizes: Vec::new(),
+        }
+    }
+
+    /// `true` when every node was kept.
+    pub fn is_whole(&self) -> bool {
+        self.kept.len() == self.num_read
+    }
+
+    /// The entries of the kept nodes, from one entry per node of the graph as read; `None`
+    /// when `per_node` does not have [`Self::num_read`] entries (or a kept index is out of
+    /// range).
+    pub fn select<T: Clone>(&self, per_node: &[T]) -> Option<Vec<T>> {
+        if per_node.len() != self.num_read {
+            return None;
+        }
+        self.kept
+            .iter()
+            .map(|&k| per_node.get(k).cloned())
+            .collect()
+    }
+
+    /// An estimate for the kept nodes from `rotations`, which has one rotation per kept node
+    /// (used as given) or one per node of the graph as read (restricted); otherwise a parse
+    /// error naming `file`.
+    ///
+    /// ```
+    /// use rotavg::io::detect::ComponentSelection;
+    /// use rotavg::Rotation;
+    /// let sel = ComponentSelection { kept: vec![1, 2], num_read: 3, other_component_sizes: vec![1] };
+    /// assert_eq!(sel.estimate_for_kept(vec![Rotation::identity(); 3], "init.json")?.len(), 2);
+    /// assert_eq!(sel.estimate_for_kept(vec![Rotation::identity(); 2], "init.json")?.len(), 2);
+    /// let err = sel.estimate_for_kept(vec![Rotation::identity(); 5], "init.json").unwrap_err();
+    /// assert!(err.to_string().contains("init.json"));
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn estimate_for_kept(&self, rotations: Vec<Rotation>, file: &str) -> Result<Vec<Rotation>> {
+        if rotations.len() == self.kept.len() {
+            return Ok(rotations);
+        }
+        self.select(&rotations).ok_or_else(|| {
+            Error::parse(
+                Some(file),
+                None,
+                format!(
+                    "initial estimate has {} rotations, the graph has {} nodes",
+                    rotations.len(),
+                    self.kept.len()
+                ),
+            )
+        })
     }
 }
 

@@ -145,9 +145,52 @@ pub fn write_problem_json(problem: &MultipleProblem) -> String {
 #[serde(rename_all = "snake_case")]
 pub enum Estimate {
     /// One rotation per node (multiple averaging).
-    Multiple(#[serde(with = "crate::serde_rot::rotations")] Vec<Rotation>),
+    Multiple(#[serde(with = "crate::so3::serde_rows::rotations")] Vec<Rotation>),
     /// One rotation (single, conjugate).
-    Single(#[serde(with = "crate::serde_rot::rotation")] Rotation),
+    Single(#[serde(with = "crate::so3::serde_rows::rotation")] Rotation),
+}
+
+impl Estimate {
+    /// The rotations of a multiple-averaging estimate; a parse error naming `file` for a
+    /// single rotation.
+    ///
+    /// ```
+    /// use rotavg::io::json::Estimate;
+    /// use rotavg::Rotation;
+    /// assert_eq!(Estimate::Multiple(vec![Rotation::identity(); 2]).into_rotations("e.json")?.len(), 2);
+    /// assert!(Estimate::Single(Rotation::identity()).into_rotations("e.json").is_err());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn into_rotations(self, file: &str) -> Result<Vec<Rotation>> {
+        match self {
+            Estimate::Multiple(rs) => Ok(rs),
+            Estimate::Single(_) => Err(Error::parse(
+                Some(file),
+                None,
+                "expected a list of rotations (\"rotations\": [R, ...]), found a single rotation",
+            )),
+        }
+    }
+
+    /// The rotation of a single or conjugate estimate; a parse error naming `file` for a list.
+    ///
+    /// ```
+    /// use rotavg::io::json::Estimate;
+    /// use rotavg::Rotation;
+    /// assert_eq!(Estimate::Single(Rotation::identity()).into_rotation("e.json")?, Rotation::identity());
+    /// assert!(Estimate::Multiple(vec![]).into_rotation("e.json").is_err());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn into_rotation(self, file: &str) -> Result<Rotation> {
+        match self {
+            Estimate::Single(r) => Ok(r),
+            Estimate::Multiple(_) => Err(Error::parse(
+                Some(file),
+                None,
+                "expected one rotation ({\"rotation\": R}) for this problem, found a list",
+            )),
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -233,14 +276,7 @@ pub fn read_rotations_estimate(
     file: &str,
     options: &ReadOptions,
 ) -> Result<Vec<Rotation>> {
-    match read_estimate(text, file, options)? {
-        Estimate::Multiple(rs) => Ok(rs),
-        Estimate::Single(_) => Err(Error::parse(
-            Some(file),
-            None,
-            "expected a list of rotations (\"rotations\": [R, ...]), found a single rotation",
-        )),
-    }
+    read_estimate(text, file, options)?.into_rotations(file)
 }
 
 /// Write an estimate `{"rotations": [R, ...]}`, one rotation per line, shortest round-trip

@@ -10,6 +10,9 @@
 //! | [`json`] | multiple problems ([`json::read_problem_json`]) and estimates ([`json::read_estimate`]) | [`json::write_problem_json`], [`json::write_estimate_json`] |
 //! | [`single_json`] | single problems ([`single_json::parse_single_json`]) and estimates | [`single_json::to_single_json`] |
 //! | [`handeye`] | Tabb and ETH hand-eye data, conjugate JSON ([`handeye::read_conjugate_json`]) | [`handeye::write_conjugate_json`] |
+//! | [`input`] | what the command line reads: `-` for stdin, problem-kind detection, unit weights, ground truth, estimates, the largest component ([`input::load_multiple_input`]) | — |
+//! | [`output`] | — | estimate files ([`output::write_estimate_file`]: g2o or JSON with node ids) |
+//! | [`names`] | the names of metrics, losses, certify modes, formats ([`names::Choice`], `FromStr`) | — |
 //!
 //! Readers take the text and a file name (used in error messages, with the line number), so
 //! tests and examples can read from inline strings:
@@ -29,36 +32,16 @@
 pub mod detect;
 pub mod g2o;
 pub mod handeye;
+pub mod input;
 pub mod json;
+pub mod names;
+pub mod output;
 pub mod sfm;
 pub mod single_json;
 
-/// Smallest weight the readers accept (see [`MAX_WEIGHT`]).
-pub const MIN_WEIGHT: f64 = 1e-100;
-
-/// Largest weight the readers accept. Weights are relative (scaling all of them scales every
-/// cost and leaves the minimiser unchanged), but the solvers and certificates form squares of
-/// weighted sums, which overflow or underflow in `f64` for extreme weights: fuzzing found NaN
-/// estimates of `rotavg single` for weights of about `1e154` and above, and wrong "certified"
-/// answers for weights `1e-200` and `1e308` (`tests/fuzz_regressions.rs`). Readers therefore
-/// reject a weight outside `[MIN_WEIGHT, MAX_WEIGHT]`; rescale such files.
-pub const MAX_WEIGHT: f64 = 1e100;
-
-/// Relative slack at the ends of `[MIN_WEIGHT, MAX_WEIGHT]`, for weights computed from a file
-/// (g2o `kappa`): a problem written at a window end must read back (found by fuzzing).
-const WEIGHT_SLACK: f64 = 1e-12;
-
-/// `Some(message)` when a weight read from a file is not finite or outside
-/// `[MIN_WEIGHT, MAX_WEIGHT]` (up to a relative rounding slack of `1e-12`).
-pub(crate) fn weight_out_of_range(w: f64) -> Option<String> {
-    if (MIN_WEIGHT * (1.0 - WEIGHT_SLACK)..=MAX_WEIGHT * (1.0 + WEIGHT_SLACK)).contains(&w) {
-        None
-    } else {
-        Some(format!(
-            "weight {w:e} is outside [{MIN_WEIGHT:e}, {MAX_WEIGHT:e}] (weights are relative: rescale them)"
-        ))
-    }
-}
+pub(crate) use crate::validate::weight_out_of_range;
+/// The weight window of every reader and constructor (see [`crate::validate::MAX_WEIGHT`]).
+pub use crate::validate::{MAX_WEIGHT, MIN_WEIGHT};
 
 /// The content lines of a text file: `(1-based line number, trimmed line)` for every line that
 /// is neither blank nor a `#` comment. Shared by the line-oriented readers.

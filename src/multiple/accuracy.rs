@@ -26,7 +26,7 @@ pub struct AccuracyReport {
     /// Number of nodes that had ground truth and were compared.
     pub num_compared: usize,
     /// The alignment `G` applied to the estimate (`R_i G` is compared with `T_i`).
-    #[serde(with = "crate::serde_rot::rotation")]
+    #[serde(with = "crate::so3::serde_rows::rotation")]
     pub alignment: Rotation,
 }
 

@@ -7,15 +7,15 @@
 //! Cholesky factorisation (faer, AMD ordering) are computed once; each iteration only
 //! reassembles the values and refactorises numerically. No dense `3n x 3n` matrix is formed.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::linalg::block_pattern::BlockPattern;
+use crate::linalg::linear_solver::LinearSolver;
 use crate::multiple::MultipleProblem;
-use crate::multiple::solve::{Loss, MultipleSettings, MultipleSolution};
-use crate::report::{SolverReport, Termination};
+use crate::multiple::solve::{MultipleSettings, MultipleSolution};
+use crate::objective::Objective;
 use crate::so3::{Rotation, exp, vee};
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Mat, Side};
+use crate::termination::{SolverReport, Termination};
+use faer::Mat;
 use nalgebra::{Matrix3, Vector3};
 
 /// Chordal L2 cost and its Riemannian gradient `[M3]`.
@@ -52,181 +52,11 @@ pub fn chordal_gradient(
     (cost, grad)
 }
 
-/// Lower-triangular CSC pattern of a symmetric block-sparse matrix with `bs x bs` blocks, one
-/// block row/column per variable node, off-diagonal blocks where the graph has an edge. Built
-/// once; [`BlockPattern::add`] accumulates into a value array (`[M6]`, assembly).
-pub(crate) struct BlockPattern {
-    bs: usize,
-    symbolic: SymbolicSparseColMat<usize>,
-    col_ptr: Vec<usize>,
-    /// sorted neighbours `P > Q` of each block column `Q`
-    nbrs: Vec<Vec<usize>>,
-}
-
-impl BlockPattern {
-    /// `pairs`: block pairs (p, q), p != q, duplicates allowed.
-    pub(crate) fn new(
-        nblocks: usize,
-        bs: usize,
-        pairs: impl Iterator<Item = (usize, usize)>,
-    ) -> Self {
-        let mut nbrs: Vec<Vec<usize>> = vec![Vec::new(); nblocks];
-        for (p, q) in pairs {
-            if p != q {
-                nbrs[p.min(q)].push(p.max(q));
-            }
-        }
-        for l in nbrs.iter_mut() {
-            l.sort_unstable();
-            l.dedup();
-        }
-        let dim = nblocks * bs;
-        let mut col_ptr = Vec::with_capacity(dim + 1);
-        let mut row_idx = Vec::new();
-        col_ptr.push(0);
-        for (q, l) in nbrs.iter().enumerate() {
-            for b in 0..bs {
-                for a in b..bs {
-                    row_idx.push(bs * q + a);
-                }
-                for &p in l {
-                    for a in 0..bs {
-                        row_idx.push(bs * p + a);
-                    }
-                }
-                col_ptr.push(row_idx.len());
-            }
-        }
-        let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr.clone(), None, row_idx);
-        BlockPattern {
-            bs,
-            symbolic,
-            col_ptr,
-            nbrs,
-        }
-    }
-
-    pub(crate) fn nnz(&self) -> usize {
-        *self.col_ptr.last().unwrap_or(&0)
-    }
-
-    /// Rank of neighbour `p` in the list of block column `q` (p > q), found once per edge.
-    pub(crate) fn slot(&self, p: usize, q: usize) -> usize {
-        let (p, q) = (p.max(q), p.min(q));
-        self.nbrs[q].binary_search(&p).expect("pair in pattern")
-    }
-
-    /// Add `m` (the `bs x bs` block at block row `p`, block column `q`) and, implicitly, its
-    /// transpose at `(q, p)`; only the lower triangle is stored. `slot` from [`Self::slot`]
-    /// (ignored when `p == q`).
-    pub(crate) fn add(&self, val: &mut [f64], p: usize, q: usize, slot: usize, m: &Matrix3<f64>) {
-        let bs = self.bs;
-        if p == q {
-            for b in 0..bs {
-                let c = self.col_ptr[bs * q + b];
-                for a in b..bs {
-                    val[c + a - b] += m[(a, b)];
-                }
-            }
-        } else if p > q {
-            for b in 0..bs {
-                let c = self.col_ptr[bs * q + b] + (bs - b) + slot * bs;
-                for a in 0..bs {
-                    val[c + a] += m[(a, b)];
-                }
-            }
-        } else {
-            // store the transpose at (q, p)
-            for b in 0..bs {
-                let c = self.col_ptr[bs * p + b] + (bs - b) + slot * bs;
-                for a in 0..bs {
-                    val[c + a] += m[(b, a)];
-                }
-            }
-        }
-    }
-
-    /// Add `s` to every diagonal entry.
-    pub(crate) fn add_diagonal(&self, val: &mut [f64], s: f64) {
-        for c in 0..self.col_ptr.len() - 1 {
-            val[self.col_ptr[c]] += s;
-        }
-    }
-
-    /// Diagonal entries.
-    pub(crate) fn diagonal(&self, val: &[f64]) -> Vec<f64> {
-        (0..self.col_ptr.len() - 1)
-            .map(|c| val[self.col_ptr[c]])
-            .collect()
-    }
-
-    /// Symbolic Cholesky (once).
-    pub(crate) fn symbolic_llt(&self) -> Result<SymbolicLlt<usize>> {
-        SymbolicLlt::try_new(self.symbolic.as_ref(), Side::Lower).map_err(|e| Error::Solver {
-            message: format!("symbolic sparse Cholesky failed: {e:?}"),
-        })
-    }
-
-    /// Numeric Cholesky with the given values; `None` if the matrix is not positive definite.
-    pub(crate) fn llt(&self, sym: &SymbolicLlt<usize>, val: &[f64]) -> Option<Llt<usize, f64>> {
-        let mat = SparseColMatRef::new(self.symbolic.as_ref(), val);
-        Llt::try_new_with_symbolic(sym.clone(), mat, Side::Lower).ok()
-    }
-
-    /// `y = A x` (one vector) for the symmetric matrix stored by its lower triangle.
-    pub(crate) fn sym_mul_flat(&self, val: &[f64], x: &[f64], y: &mut [f64]) {
-        y.iter_mut().for_each(|v| *v = 0.0);
-        let rows = self.symbolic.row_idx();
-        for c in 0..self.col_ptr.len() - 1 {
-            let xc = x[c];
-            let mut acc = 0.0;
-            for idx in self.col_ptr[c]..self.col_ptr[c + 1] {
-                let r = rows[idx];
-                let v = val[idx];
-                y[r] += v * xc;
-                if r != c {
-                    acc += v * x[r];
-                }
-            }
-            y[c] += acc;
-        }
-    }
-
-    /// `y = A x` for the symmetric matrix stored by its lower triangle; `x`, `y`: dim x k.
-    pub(crate) fn sym_mul(&self, val: &[f64], x: &Mat<f64>) -> Mat<f64> {
-        let dim = self.col_ptr.len() - 1;
-        let k = x.ncols();
-        let mut y = Mat::<f64>::zeros(dim, k);
-        let rows = self.symbolic.row_idx();
-        for c in 0..dim {
-            for idx in self.col_ptr[c]..self.col_ptr[c + 1] {
-                let r = rows[idx];
-                let v = val[idx];
-                for t in 0..k {
-                    y[(r, t)] += v * x[(c, t)];
-                    if r != c {
-                        y[(c, t)] += v * x[(r, t)];
-                    }
-                }
-            }
-        }
-        y
-    }
-}
-
 /// Fill-in budget of the direct solver: a sparse Cholesky is used when the scalar (one entry
 /// per node) symbolic factor has at most this many entries per node; otherwise (expander-like
 /// graphs, e.g. random view graphs, whose Cholesky factors are nearly dense) preconditioned
 /// conjugate gradients are used (`[M6]`, "linear solver").
 pub const DIRECT_FILL_PER_NODE: usize = 60;
-
-/// Linear solver for a symmetric block-sparse matrix with the pattern of a [`BlockPattern`].
-pub(crate) enum LinearSolver {
-    /// Sparse Cholesky; symbolic factorisation done once.
-    Direct(SymbolicLlt<usize>),
-    /// Block-Jacobi preconditioned conjugate gradients.
-    Pcg,
-}
 
 /// `true` if a sparse Cholesky of the graph Laplacian pattern is cheap: not expander-like by
 /// the BFS pre-filter below, and the scalar symbolic
@@ -241,16 +71,32 @@ pub(crate) fn prefers_direct(problem: &MultipleProblem) -> Result<bool> {
         return Ok(false);
     }
     let scalar = BlockPattern::new(n, 1, problem.edges().iter().map(|e| (e.i, e.j)));
-    let sym = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
-        scalar.symbolic.as_ref(),
-        Side::Lower,
-        Default::default(),
-        Default::default(),
-    )
-    .map_err(|e| Error::Solver {
-        message: format!("symbolic sparse Cholesky failed: {e:?}"),
-    })?;
-    Ok(sym.len_val() <= DIRECT_FILL_PER_NODE * n.max(1))
+    Ok(scalar.factor_len()? <= DIRECT_FILL_PER_NODE * n.max(1))
+}
+
+/// Per-node steps of a Newton-type system solved with node 0 fixed: zero for node 0, and
+/// `entry(i - 1, a)` for component `a` of node `i >= 1`.
+pub(crate) fn root_fixed_steps(n: usize, entry: impl Fn(usize, usize) -> f64) -> Vec<Vector3<f64>> {
+    (0..n)
+        .map(|i| match i {
+            0 => Vector3::zeros(),
+            _ => Vector3::new(entry(i - 1, 0), entry(i - 1, 1), entry(i - 1, 2)),
+        })
+        .collect()
+}
+
+/// The linear solver of the Newton systems on `pattern`: direct when `direct` says so, or, for
+/// `None`, when [`prefers_direct`] does.
+pub(crate) fn linear_solver(
+    problem: &MultipleProblem,
+    pattern: &BlockPattern,
+    direct: Option<bool>,
+) -> Result<LinearSolver> {
+    let direct = match direct {
+        Some(d) => d,
+        None => prefers_direct(problem)?,
+    };
+    LinearSolver::new(pattern, direct)
 }
 
 /// The largest number of nodes at one BFS distance from node 0.
@@ -290,155 +136,6 @@ fn max_bfs_level_width(problem: &MultipleProblem) -> usize {
         level = next;
     }
     widest
-}
-
-/// A factorised (or preconditioned) system ready to solve.
-pub(crate) enum Factor<'a> {
-    Direct(Llt<usize, f64>),
-    Pcg {
-        pattern: &'a BlockPattern,
-        val: Vec<f64>,
-        /// inverse diagonal blocks (bs x bs each, row-major)
-        precond: Vec<Matrix3<f64>>,
-    },
-}
-
-impl LinearSolver {
-    /// Direct if `direct`, else PCG; `direct = None` decides with [`prefers_direct`].
-    pub(crate) fn new(
-        problem: &MultipleProblem,
-        pattern: &BlockPattern,
-        direct: Option<bool>,
-    ) -> Result<Self> {
-        let direct = match direct {
-            Some(d) => d,
-            None => prefers_direct(problem)?,
-        };
-        if direct {
-            Ok(LinearSolver::Direct(pattern.symbolic_llt()?))
-        } else {
-            Ok(LinearSolver::Pcg)
-        }
-    }
-
-    /// Prepare to solve with matrix values `val`; `None` if not positive definite (direct) or
-    /// if a diagonal block is not positive definite (PCG; indefiniteness found later is
-    /// reported by [`Factor::solve`]).
-    pub(crate) fn factor<'a>(&self, pattern: &'a BlockPattern, val: &[f64]) -> Option<Factor<'a>> {
-        match self {
-            LinearSolver::Direct(sym) => pattern.llt(sym, val).map(Factor::Direct),
-            LinearSolver::Pcg => {
-                let bs = pattern.bs;
-                let nb = (pattern.col_ptr.len() - 1) / bs;
-                let mut precond = Vec::with_capacity(nb);
-                for q in 0..nb {
-                    let mut m = Matrix3::identity();
-                    for b in 0..bs {
-                        let c = pattern.col_ptr[bs * q + b];
-                        for a in b..bs {
-                            m[(a, b)] = val[c + a - b];
-                            m[(b, a)] = val[c + a - b];
-                        }
-                    }
-                    let inv = m.cholesky()?.inverse();
-                    precond.push(inv);
-                }
-                Some(Factor::Pcg {
-                    pattern,
-                    val: val.to_vec(),
-                    precond,
-                })
-            }
-        }
-    }
-}
-
-impl Factor<'_> {
-    /// Solve `A x = b` in place for each column of `b` (relative residual `rel_tol` for PCG).
-    /// Returns `false` if PCG met non-positive curvature (the matrix is not positive definite).
-    pub(crate) fn solve(&self, b: &mut Mat<f64>, rel_tol: f64, max_iter: usize) -> bool {
-        match self {
-            Factor::Direct(l) => {
-                l.solve_in_place(b.as_mut());
-                true
-            }
-            Factor::Pcg {
-                pattern,
-                val,
-                precond,
-            } => {
-                for col in 0..b.ncols() {
-                    let rhs: Vec<f64> = (0..b.nrows()).map(|r| b[(r, col)]).collect();
-                    let Some(x) = pcg(pattern, val, precond, &rhs, rel_tol, max_iter) else {
-                        return false;
-                    };
-                    for (r, v) in x.into_iter().enumerate() {
-                        b[(r, col)] = v;
-                    }
-                }
-                true
-            }
-        }
-    }
-}
-
-/// Preconditioned conjugate gradients (block-Jacobi). `None` on non-positive curvature.
-fn pcg(
-    pattern: &BlockPattern,
-    val: &[f64],
-    precond: &[Matrix3<f64>],
-    b: &[f64],
-    rel_tol: f64,
-    max_iter: usize,
-) -> Option<Vec<f64>> {
-    let bs = pattern.bs;
-    let dim = b.len();
-    let apply_m = |r: &[f64], z: &mut [f64]| {
-        for (q, m) in precond.iter().enumerate() {
-            for a in 0..bs {
-                let mut s = 0.0;
-                for c in 0..bs {
-                    s += m[(a, c)] * r[bs * q + c];
-                }
-                z[bs * q + a] = s;
-            }
-        }
-    };
-    let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
-    let bnorm = dot(b, b).sqrt();
-    let mut x = vec![0.0; dim];
-    if bnorm == 0.0 {
-        return Some(x);
-    }
-    let mut r = b.to_vec();
-    let mut z = vec![0.0; dim];
-    apply_m(&r, &mut z);
-    let mut p = z.clone();
-    let mut rz = dot(&r, &z);
-    let mut ap = vec![0.0; dim];
-    for _ in 0..max_iter {
-        pattern.sym_mul_flat(val, &p, &mut ap);
-        let pap = dot(&p, &ap);
-        if pap <= 0.0 || !pap.is_finite() {
-            return None;
-        }
-        let alpha = rz / pap;
-        for k in 0..dim {
-            x[k] += alpha * p[k];
-            r[k] -= alpha * ap[k];
-        }
-        if dot(&r, &r).sqrt() <= rel_tol * bnorm {
-            break;
-        }
-        apply_m(&r, &mut z);
-        let rz_new = dot(&r, &z);
-        let beta = rz_new / rz;
-        rz = rz_new;
-        for k in 0..dim {
-            p[k] = z[k] + beta * p[k];
-        }
-    }
-    Some(x)
 }
 
 /// Per-edge data for the Newton system: variable blocks (node 0 fixed -> `None`) and slot.
@@ -520,7 +217,7 @@ pub(crate) fn solve_chordal(
             cost,
             chordal_cost: cost,
             gradient_norm: g,
-            loss: Loss::Chordal,
+            objective: Objective::CHORDAL_L2,
             report: SolverReport {
                 name: "riemannian-newton-lm".into(),
                 iterations,
@@ -532,7 +229,7 @@ pub(crate) fn solve_chordal(
     };
     let measure = "relative gradient norm ||grad|| / sum(w)";
     let mut gn = grad_norm(&grad);
-    if gn / total_weight <= tol || n < 2 {
+    if gn == 0.0 || n < 2 {
         return finish(
             r,
             cost,
@@ -555,7 +252,7 @@ pub(crate) fn solve_chordal(
             .map(|e| (e.i - 1, e.j - 1)),
     );
     let slots = edge_slots(problem, &pattern);
-    let solver = LinearSolver::new(problem, &pattern, direct)?;
+    let solver = linear_solver(problem, &pattern, direct)?;
     let mut hval = vec![0.0; pattern.nnz()];
     let mut val = vec![0.0; pattern.nnz()];
     let mut mu = 1e-6; // damping relative to the mean Hessian diagonal
@@ -577,6 +274,12 @@ pub(crate) fn solve_chordal(
             );
         }
         iterations += 1;
+        crate::progress::emit(|| crate::progress::Event::Iteration {
+            phase: crate::progress::Phase::Solve,
+            iteration: iterations,
+            cost,
+            measure: gn / total_weight,
+        });
         if need_hessian {
             assemble_hessian(problem, &r, &pattern, &slots, &mut hval);
             let d = pattern.diagonal(&hval);
@@ -619,19 +322,7 @@ pub(crate) fn solve_chordal(
                 );
             }
         };
-        let step: Vec<Vector3<f64>> = (0..n)
-            .map(|i| {
-                if i == 0 {
-                    Vector3::zeros()
-                } else {
-                    Vector3::new(
-                        rhs[(3 * i - 3, 0)],
-                        rhs[(3 * i - 2, 0)],
-                        rhs[(3 * i - 1, 0)],
-                    )
-                }
-            })
-            .collect();
+        let step = root_fixed_steps(n, |i, a| rhs[(3 * i + a, 0)]);
         let g_dot_s: f64 = grad.iter().zip(&step).map(|(g, s)| g.dot(s)).sum();
         let s2: f64 = step.iter().map(|s| s.norm_squared()).sum();
         let max_step = step.iter().map(|s| s.norm()).fold(0.0, f64::max);
@@ -642,6 +333,23 @@ pub(crate) fn solve_chordal(
         let shs: f64 = flat.iter().zip(&hs).map(|(a, b)| a * b).sum();
         let predicted = -(g_dot_s + 0.5 * shs);
         let _ = (lambda, s2);
+        // converged: the gradient is small and the model cannot decrease the cost materially
+        let decrease_limit = settings.decrease_tolerance * cost.abs() + 1e-30 * total_weight;
+        if gn / total_weight <= tol && predicted <= decrease_limit {
+            return finish(
+                r,
+                cost,
+                gn,
+                iterations,
+                Termination::Converged {
+                    measure:
+                        "predicted Newton decrease / cost (with ||grad|| / sum(w) <= its tolerance)"
+                            .into(),
+                    value: predicted / cost.abs().max(f64::MIN_POSITIVE),
+                    threshold: settings.decrease_tolerance,
+                },
+            );
+        }
         if !max_step.is_finite() {
             return finish(
                 r,
@@ -676,19 +384,6 @@ pub(crate) fn solve_chordal(
                 mu = (mu / 4.0).max(1e-14);
             } else if rho < 0.25 {
                 mu *= 4.0;
-            }
-            if gn / total_weight <= tol {
-                return finish(
-                    r,
-                    cost,
-                    gn,
-                    iterations,
-                    Termination::Converged {
-                        measure: measure.into(),
-                        value: gn / total_weight,
-                        threshold: tol,
-                    },
-                );
             }
             if max_step < settings.step_tolerance {
                 return finish(

@@ -3,8 +3,9 @@
 //! Laplacian by sparse block inverse iteration, rounded to SO(3)).
 
 use crate::error::{Error, Result};
+use crate::linalg::block_pattern::BlockPattern;
 use crate::multiple::MultipleProblem;
-use crate::multiple::chordal::{BlockPattern, LinearSolver};
+use crate::multiple::chordal::linear_solver;
 use crate::multiple::solve::Initialisation;
 use crate::so3::{Rotation, project_to_so3};
 use faer::Mat;
@@ -153,7 +154,7 @@ pub(crate) fn spectral_with(
         pattern.add(&mut qval, i, i, 0, &(Matrix3::identity() * *d));
     }
     let mean_degree = degree.iter().sum::<f64>() / n as f64;
-    let solver = LinearSolver::new(problem, &pattern, direct)?;
+    let solver = linear_solver(problem, &pattern, direct)?;
     let mut sigma = 1e-6 * mean_degree;
     let llt = loop {
         let mut val = qval.clone();

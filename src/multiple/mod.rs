@@ -6,10 +6,11 @@
 //!
 //! - Data: [`MultipleProblem::new`] from [`Edge`]s; files through [`crate::io`]; seeded
 //!   instances from [`synthetic::SyntheticGraph`].
-//! - Local solvers: [`solve_multiple`] with [`MultipleSettings`] (chordal Newton-LM, geodesic,
-//!   L1 / Huber / Cauchy IRLS; [`Initialisation`] spanning tree or spectral, see [`initialise`]).
-//! - Whole pipeline: [`average_multiple`] (solve, then the dual certificate, then the SDP or the
-//!   staircase when needed) and [`certify_multiple_estimate`] for an estimate computed elsewhere.
+//! - Local solvers: [`solve_multiple`] with [`MultipleSettings`] for the problem's objective
+//!   (chordal Newton-LM, geodesic, L1 / Huber / Cauchy IRLS; [`Initialisation`] spanning tree
+//!   or spectral, see [`initialise`]).
+//! - Certificate: [`crate::certify::certify_multiple`]; whole pipeline:
+//!   [`crate::pipeline::average_multiple`].
 //! - Diagnostics: [`stats::graph_stats`], [`accuracy::align_and_compare`] against ground truth,
 //!   the connection Laplacian [`laplacian::connection_laplacian`].
 //!
@@ -26,7 +27,6 @@
 //! ```
 
 pub mod accuracy;
-pub mod average;
 pub mod chordal;
 pub mod geodesic;
 pub mod init;
@@ -37,12 +37,8 @@ pub mod solve;
 pub mod stats;
 pub mod synthetic;
 
-pub use average::{
-    AverageMultipleSettings, CertifyMode, EstimateCertificate, MultipleEstimate, PipelineDetails,
-    average_multiple, certify_multiple_estimate,
-};
 pub use chordal::chordal_gradient;
 pub use init::{initialise, spanning_tree, spectral};
 pub use problem::{Edge, MultipleProblem, fix_gauge};
-pub use robust::{loss_cost_gradient, loss_terms};
-pub use solve::{Initialisation, Loss, MultipleSettings, MultipleSolution, solve_multiple};
+pub use robust::{objective_cost_gradient, objective_terms};
+pub use solve::{Initialisation, MultipleSettings, MultipleSolution, solve_multiple};

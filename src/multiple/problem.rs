@@ -6,7 +6,9 @@
 //! the gauge fix [`fix_gauge`].
 
 use crate::error::{Error, Result};
-use crate::so3::{Rotation, angle_between};
+use crate::objective::Objective;
+use crate::so3::{Metric, Rotation, angle_between};
+use crate::validate::check_weight;
 use serde::{Deserialize, Serialize};
 
 /// One measured edge: `rotation = R_ij` with `R_ij R_i = R_j`, weight `w_ij` in `[1e-100, 1e100]`.
@@ -17,7 +19,7 @@ pub struct Edge {
     /// Head node `j` (0-based).
     pub j: usize,
     /// The relative rotation `R_ij`, with `R_ij R_i = R_j`.
-    #[serde(with = "crate::serde_rot::rotation")]
+    #[serde(with = "crate::so3::serde_rows::rotation")]
     pub rotation: Rotation,
     /// Weight `w_ij` (finite, > 0).
     pub weight: f64,
@@ -54,6 +56,8 @@ impl Edge {
 pub struct MultipleProblem {
     num_rotations: usize,
     edges: Vec<Edge>,
+    #[serde(skip)]
+    objective: Objective,
 }
 
 impl MultipleProblem {
@@ -93,12 +97,7 @@ impl MultipleProblem {
             if e.i == e.j {
                 return Err(Error::SelfLoop { edge: k, node: e.i });
             }
-            if crate::io::weight_out_of_range(e.weight).is_some() {
-                return Err(Error::InvalidWeight {
-                    item: format!("edge {k} ({}, {})", e.i, e.j),
-                    weight: e.weight,
-                });
-            }
+            check_weight(|| format!("edge {k} ({}, {})", e.i, e.j), e.weight)?;
             if !e.rotation.matrix().iter().all(|x| x.is_finite()) {
                 return Err(Error::NonFinite {
                     item: format!("edge {k} ({}, {})", e.i, e.j),
@@ -108,7 +107,45 @@ impl MultipleProblem {
         Ok(MultipleProblem {
             num_rotations,
             edges,
+            objective: Objective::CHORDAL_L2,
         })
+    }
+
+    /// The objectives with a solver: chordal L2, and the geodesic metric with any loss.
+    pub const SUPPORTED: &'static str = "chordal l2; geodesic with l2, l1, huber or cauchy";
+
+    /// The same graph with another objective (default chordal L2, the certifiable one).
+    /// [`Error::InvalidSettings`] (field `objective`) when there is no solver for it or a
+    /// robust threshold is bad.
+    ///
+    /// ```
+    /// use rotavg::multiple::synthetic::SyntheticGraph;
+    /// use rotavg::objective::{Loss, Objective};
+    /// use rotavg::Metric;
+    /// let (p, _) = SyntheticGraph::default().generate();
+    /// let robust = p.clone().with_objective(Objective::new(Metric::Geodesic, Loss::Huber { threshold_deg: 5.0 }))?;
+    /// assert_eq!(robust.objective().loss.name(), "huber");
+    /// assert!(p.with_objective(Objective::new(Metric::Chordal, Loss::L1)).is_err());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn with_objective(mut self, objective: Objective) -> Result<Self> {
+        objective.validate()?;
+        if !(objective.is_chordal_l2() || objective.metric == Metric::Geodesic) {
+            return Err(objective.unsupported("multiple", Self::SUPPORTED));
+        }
+        self.objective = objective;
+        Ok(self)
+    }
+
+    /// The median edge weight (the lower middle one for an even count): the scale of the
+    /// absolute part of the certificate's gap tolerance.
+    pub fn median_weight(&self) -> f64 {
+        crate::validate::median_weight(self.edges.iter().map(|e| e.weight))
+    }
+
+    /// The objective minimised.
+    pub fn objective(&self) -> Objective {
+        self.objective
     }
 
     /// Number of nodes `n`.
@@ -203,6 +240,7 @@ impl MultipleProblem {
             MultipleProblem {
                 num_rotations: keep.len(),
                 edges,
+                objective: self.objective,
             },
             keep,
         )
@@ -225,11 +263,7 @@ impl MultipleProblem {
     /// # Ok::<(), rotavg::Error>(())
     /// ```
     pub fn chordal_cost(&self, rotations: &[Rotation]) -> f64 {
-        assert_eq!(
-            rotations.len(),
-            self.num_rotations,
-            "estimate has the wrong number of rotations"
-        );
+        self.assert_estimate(rotations);
         self.edges
             .iter()
             .map(|e| {
@@ -240,17 +274,36 @@ impl MultipleProblem {
             .sum()
     }
 
+    /// The cost `sum_e w_e rho(d(R_ij R_i, R_j))` of `rotations` under the problem's objective
+    /// (for chordal L2 exactly [`Self::chordal_cost`]). Panics if `rotations.len() != n`.
+    pub fn cost(&self, rotations: &[Rotation]) -> f64 {
+        if self.objective.is_chordal_l2() {
+            return self.chordal_cost(rotations);
+        }
+        self.residual_angles(rotations)
+            .iter()
+            .zip(&self.edges)
+            .map(|(t, e)| e.weight * self.objective.term(*t))
+            .sum()
+    }
+
     /// Residual angles `theta(R_ij R_i, R_j)` per edge, in radians.
     pub fn residual_angles(&self, rotations: &[Rotation]) -> Vec<f64> {
+        self.assert_estimate(rotations);
+        self.edges
+            .iter()
+            .map(|e| angle_between(&(e.rotation * rotations[e.i]), &rotations[e.j]))
+            .collect()
+    }
+
+    /// Panics unless the estimate has one rotation per node (a programming error: user input
+    /// is checked with [`Self::check_estimate`]).
+    fn assert_estimate(&self, rotations: &[Rotation]) {
         assert_eq!(
             rotations.len(),
             self.num_rotations,
             "estimate has the wrong number of rotations"
         );
-        self.edges
-            .iter()
-            .map(|e| angle_between(&(e.rotation * rotations[e.i]), &rotations[e.j]))
-            .collect()
     }
 
     /// `Ok(())` if an estimate has one rotation per node.

@@ -5,62 +5,55 @@ use crate::error::Result;
 use crate::multiple::MultipleProblem;
 use crate::multiple::chordal::chordal_gradient;
 use crate::multiple::geodesic::lie_algebraic;
-use crate::multiple::solve::{Loss, MultipleSettings, MultipleSolution};
+use crate::multiple::solve::{MultipleSettings, MultipleSolution};
+use crate::objective::{Loss, Objective};
 use crate::so3::{Rotation, log};
 use nalgebra::Vector3;
 
-/// `(rho(theta), psi(theta))` for a residual angle `theta` (radians) `[M7]`, where the edge cost
-/// is `w rho(theta)` and `psi = rho'(theta) / theta` is the IRLS weight factor. For L1,
-/// `psi = 1 / max(theta, l1_epsilon)` (the smoothing). For [`Loss::Chordal`],
-/// `rho = 8 sin^2(theta / 2)` and `psi = 4 sin(theta) / theta`.
-pub fn loss_terms(loss: &Loss, theta: f64, l1_epsilon: f64) -> (f64, f64) {
-    match *loss {
-        Loss::Chordal => {
-            let s = (0.5 * theta).sin();
-            let psi = if theta < 1e-8 {
-                4.0
-            } else {
-                4.0 * theta.sin() / theta
-            };
-            (8.0 * s * s, psi)
-        }
-        Loss::Geodesic => (theta * theta, 2.0),
-        Loss::L1 => (theta, 1.0 / theta.max(l1_epsilon)),
-        Loss::Huber { threshold_deg } => {
-            let c = threshold_deg.to_radians();
-            if theta <= c {
-                (0.5 * theta * theta, 1.0)
-            } else {
-                (c * (theta - 0.5 * c), c / theta)
-            }
-        }
-        Loss::Cauchy { threshold_deg } => {
-            let c = threshold_deg.to_radians();
-            let u = theta / c;
-            (0.5 * c * c * (u * u).ln_1p(), 1.0 / (1.0 + u * u))
-        }
+/// `(rho(theta), psi(theta))` for a residual angle `theta` (radians) under `objective` `[M7]`,
+/// where the edge cost is `w rho(theta)` ([`Objective::term`]) and `psi = rho'(theta) / theta`
+/// is the IRLS weight factor. For L1, `psi = 1 / max(theta, l1_epsilon)` (the smoothing). For
+/// chordal L2, `rho = 8 sin^2(theta / 2)` and `psi = 4 sin(theta) / theta`; for the geodesic
+/// metric `psi = 2 psi_irls(theta)` with [`Objective::irls_weight`].
+pub fn objective_terms(objective: &Objective, theta: f64, l1_epsilon: f64) -> (f64, f64) {
+    if objective.is_chordal_l2() {
+        let s = (0.5 * theta).sin();
+        let psi = if theta < 1e-8 {
+            4.0
+        } else {
+            4.0 * theta.sin() / theta
+        };
+        return (8.0 * s * s, psi);
     }
+    let psi = match objective.loss {
+        Loss::L1 => 1.0 / theta.max(l1_epsilon),
+        _ => 2.0 * objective.irls_weight(theta, l1_epsilon),
+    };
+    (objective.term(theta), psi)
 }
 
-/// Cost `sum_e w_e rho(theta_e)` under `loss` and its gradient in the right-perturbation chart
+/// Cost `sum_e w_e rho(theta_e)` under the problem's objective and its gradient in the right-perturbation chart
 /// `R_i exp(hat w_i)` `[M8]`: with `r_e = log(R_j^T R_ij R_i)` (so `theta_e = |r_e|`),
 /// `grad_i += w_e psi(theta_e) r_e`, `grad_j -= w_e psi(theta_e) r_e`. For
-/// [`Loss::Chordal`] this is [`chordal_gradient`]. For L1 the gradient is that of the smoothed
+/// chordal L2 this is [`chordal_gradient`]. For L1 the gradient is that of the smoothed
 /// cost (the cost returned is the exact `sum w theta`). Panics if `rotations.len() != n`.
 ///
 /// ```
-/// use rotavg::multiple::{loss_cost_gradient, Loss, synthetic::SyntheticGraph};
+/// use rotavg::multiple::{objective_cost_gradient, synthetic::SyntheticGraph};
+/// use rotavg::objective::{Loss, Objective};
+/// use rotavg::Metric;
 /// let (p, gt) = SyntheticGraph { noise_sigma: 0.0, ..Default::default() }.generate();
-/// let (cost, grad) = loss_cost_gradient(&p, &gt, &Loss::Geodesic, 1e-6);
+/// let p = p.with_objective(Objective::new(Metric::Geodesic, Loss::L2)).unwrap();
+/// let (cost, grad) = objective_cost_gradient(&p, &gt, 1e-6);
 /// assert!(cost < 1e-20 && grad.iter().all(|g| g.norm() < 1e-12));
 /// ```
-pub fn loss_cost_gradient(
+pub fn objective_cost_gradient(
     problem: &MultipleProblem,
     rotations: &[Rotation],
-    loss: &Loss,
     l1_epsilon: f64,
 ) -> (f64, Vec<Vector3<f64>>) {
-    if *loss == Loss::Chordal {
+    let objective = problem.objective();
+    if objective.is_chordal_l2() {
         return chordal_gradient(problem, rotations);
     }
     assert_eq!(rotations.len(), problem.num_rotations());
@@ -68,7 +61,7 @@ pub fn loss_cost_gradient(
     let mut cost = 0.0;
     for e in problem.edges() {
         let r = edge_log(e, rotations);
-        let (rho, psi) = loss_terms(loss, r.norm(), l1_epsilon);
+        let (rho, psi) = objective_terms(&objective, r.norm(), l1_epsilon);
         cost += e.weight * rho;
         let g = r * (e.weight * psi);
         grad[e.i] += g;
@@ -89,12 +82,13 @@ pub(crate) fn solve_robust(
     settings: &MultipleSettings,
     direct: Option<bool>,
 ) -> Result<MultipleSolution> {
-    let name = match settings.loss {
+    let objective = problem.objective();
+    let name = match objective.loss {
+        _ if objective.is_chordal_l2() => "irls-chordal",
         Loss::L1 => "irls-l1",
         Loss::Huber { .. } => "irls-huber",
         Loss::Cauchy { .. } => "irls-cauchy",
-        Loss::Geodesic => "lie-algebraic",
-        Loss::Chordal => "irls-chordal",
+        Loss::L2 => "lie-algebraic",
     };
     lie_algebraic(
         problem,

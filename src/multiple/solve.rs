@@ -3,57 +3,11 @@
 
 use crate::error::{Error, Result};
 use crate::multiple::{MultipleProblem, fix_gauge};
-use crate::report::SolverReport;
+use crate::objective::{Loss, Objective};
 use crate::so3::Rotation;
+use crate::termination::SolverReport;
 use serde::{Deserialize, Serialize};
 use std::fmt;
-
-/// The loss minimised by [`solve_multiple`]. With `theta_e` the residual angle
-/// `theta(R_ij R_i, R_j)` of edge `e` and `w_e` its weight (`paper-notes/multiple.md`, `[M7]`):
-///
-/// | loss | cost |
-/// |---|---|
-/// | `Chordal` | `sum w_e ||R_j - R_ij R_i||_F^2 = sum w_e 8 sin^2(theta_e / 2)` |
-/// | `Geodesic` | `sum w_e theta_e^2` |
-/// | `L1` | `sum w_e theta_e` |
-/// | `Huber { c }` | `sum w_e rho(theta_e)`, `rho = theta^2 / 2` if `theta <= c`, else `c (theta - c / 2)` |
-/// | `Cauchy { c }` | `sum w_e (c^2 / 2) ln(1 + theta_e^2 / c^2)` |
-///
-/// The Huber and Cauchy thresholds `c` are given in degrees.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Loss {
-    /// Chordal L2 (the SDP-certifiable cost): Riemannian Newton / Levenberg-Marquardt.
-    #[default]
-    Chordal,
-    /// Geodesic L2: Lie-algebraic averaging (Govindu).
-    Geodesic,
-    /// Geodesic L1: IRLS (Weiszfeld-type weights `1 / max(theta, epsilon)`).
-    L1,
-    /// Huber loss on the residual angle, threshold in degrees: IRLS.
-    Huber {
-        /// Threshold `c` in degrees (> 0).
-        threshold_deg: f64,
-    },
-    /// Cauchy loss on the residual angle, scale in degrees: IRLS.
-    Cauchy {
-        /// Scale `c` in degrees (> 0).
-        threshold_deg: f64,
-    },
-}
-
-impl Loss {
-    /// Short name: `chordal`, `geodesic`, `l1`, `huber`, `cauchy`.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Loss::Chordal => "chordal",
-            Loss::Geodesic => "geodesic",
-            Loss::L1 => "l1",
-            Loss::Huber { .. } => "huber",
-            Loss::Cauchy { .. } => "cauchy",
-        }
-    }
-}
 
 /// How the local solver is started.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
@@ -65,16 +19,26 @@ pub enum Initialisation {
     #[default]
     Spectral,
     /// A given estimate (one rotation per node).
-    Given(#[serde(with = "crate::serde_rot::rotations")] Vec<Rotation>),
+    Given(#[serde(with = "crate::so3::serde_rows::rotations")] Vec<Rotation>),
 }
 
 /// Settings of [`solve_multiple`]. Build with struct update syntax:
-/// `MultipleSettings { loss: Loss::Geodesic, ..Default::default() }`.
+/// `MultipleSettings { max_iterations: 50, ..Default::default() }`. The cost minimised is the
+/// problem's objective ([`MultipleProblem::with_objective`]; `[M7]`):
+///
+/// | objective | cost | method |
+/// |---|---|---|
+/// | chordal L2 | `sum w_e ||R_j - R_ij R_i||_F^2 = sum w_e 8 sin^2(theta_e / 2)` | Riemannian Newton / Levenberg-Marquardt |
+/// | geodesic L2 | `sum w_e theta_e^2` | Lie-algebraic averaging (Govindu) |
+/// | geodesic L1 | `sum w_e theta_e` | IRLS (Weiszfeld-type weights `1 / max(theta, l1_epsilon)`) |
+/// | geodesic Huber | `sum w_e rho(theta_e)`, `rho = theta^2` if `theta <= c`, else `2 c theta - c^2` | IRLS |
+/// | geodesic Cauchy | `sum w_e c^2 ln(1 + theta_e^2 / c^2)` | IRLS |
+///
+/// (`theta_e` the residual angle of edge `e`; `c` the threshold of [`crate::objective::Loss`],
+/// given in degrees.)
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct MultipleSettings {
-    /// The loss (default chordal L2).
-    pub loss: Loss,
     /// The initialisation (default spectral).
     pub init: Initialisation,
     /// Maximum number of outer iterations (default 100 for the second-order methods; the IRLS
@@ -87,6 +51,13 @@ pub struct MultipleSettings {
     /// `4 sqrt(2) w_e`, `[M3]`), which makes the test invariant to scaling all weights and
     /// independent of the start. For the non-smooth L1 loss the test is on the smoothed cost.
     pub gradient_tolerance: f64,
+    /// Chordal L2 (Newton): stop only when, besides the gradient test, the Newton model's
+    /// predicted decrease `-(g.s + s^T H s / 2)` is at most this times the cost (default
+    /// `1e-12`; plus `1e-30 sum_e w_e` for costs near zero). The gradient test alone stops
+    /// early on small costs: on parking-garage it left the estimate `5e-6` (relative) above the
+    /// optimum, which no certificate can then close. One more Newton step near the optimum costs
+    /// one factorisation.
+    pub decrease_tolerance: f64,
     /// Also stop (converged) when every node moves by less than this angle in one step, radians
     /// (default `1e-12`).
     pub step_tolerance: f64,
@@ -97,10 +68,10 @@ pub struct MultipleSettings {
 impl Default for MultipleSettings {
     fn default() -> Self {
         MultipleSettings {
-            loss: Loss::Chordal,
             init: Initialisation::Spectral,
             max_iterations: 100,
             gradient_tolerance: 1e-8,
+            decrease_tolerance: 1e-12,
             step_tolerance: 1e-12,
             l1_epsilon: 1e-6,
         }
@@ -111,9 +82,9 @@ impl MultipleSettings {
     /// Check every field; [`Error::InvalidSettings`] names the first bad one.
     ///
     /// ```
-    /// use rotavg::multiple::{Loss, MultipleSettings};
+    /// use rotavg::multiple::MultipleSettings;
     /// assert!(MultipleSettings::default().validate().is_ok());
-    /// let bad = MultipleSettings { loss: Loss::Huber { threshold_deg: -1.0 }, ..Default::default() };
+    /// let bad = MultipleSettings { max_iterations: 0, ..Default::default() };
     /// assert!(matches!(bad.validate(), Err(rotavg::Error::InvalidSettings { .. })));
     /// ```
     pub fn validate(&self) -> Result<()> {
@@ -123,22 +94,12 @@ impl MultipleSettings {
                 reason,
             })
         };
-        match self.loss {
-            Loss::Huber { threshold_deg } | Loss::Cauchy { threshold_deg }
-                if !(threshold_deg.is_finite() && threshold_deg > 0.0) =>
-            {
-                return bad(
-                    "loss.threshold_deg",
-                    format!("must be finite and > 0, got {threshold_deg}"),
-                );
-            }
-            _ => {}
-        }
         if self.max_iterations == 0 {
             return bad("max_iterations", "must be at least 1".into());
         }
         for (name, v) in [
             ("gradient_tolerance", self.gradient_tolerance),
+            ("decrease_tolerance", self.decrease_tolerance),
             ("step_tolerance", self.step_tolerance),
             ("l1_epsilon", self.l1_epsilon),
         ] {
@@ -157,9 +118,9 @@ impl MultipleSettings {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MultipleSolution {
     /// The estimate, gauge fixed so that `R_0 = I`.
-    #[serde(with = "crate::serde_rot::rotations")]
+    #[serde(with = "crate::so3::serde_rows::rotations")]
     pub rotations: Vec<Rotation>,
-    /// The cost under the chosen loss ([`Loss`], `[M7]`).
+    /// The cost under the problem's objective (`[M7]`).
     pub cost: f64,
     /// The chordal L2 cost `sum w ||R_j - R_ij R_i||_F^2` of the estimate (`[M1]`).
     pub chordal_cost: f64,
@@ -167,11 +128,11 @@ pub struct MultipleSolution {
     /// stopping is this divided by the sum of weights, see
     /// [`MultipleSettings::gradient_tolerance`]).
     pub gradient_norm: f64,
-    /// The chosen loss.
-    pub loss: Loss,
+    /// The objective minimised.
+    pub objective: Objective,
     /// Iterations, why it stopped, wall time (including the initialisation).
     pub report: SolverReport,
-    /// The cost of the initialisation under the chosen loss.
+    /// The cost of the initialisation under the objective.
     pub init_cost: f64,
 }
 
@@ -179,8 +140,8 @@ impl fmt::Display for MultipleSolution {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} loss: cost {:.6e} (initial {:.6e}), chordal cost {:.6e}, gradient norm {:.3e}; {}",
-            self.loss.name(),
+            "{}: cost {:.6e} (initial {:.6e}), chordal cost {:.6e}, gradient norm {:.3e}; {}",
+            self.objective,
             self.cost,
             self.init_cost,
             self.chordal_cost,
@@ -191,7 +152,7 @@ impl fmt::Display for MultipleSolution {
 }
 
 /// Solve multiple rotation averaging locally: initialise ([`Initialisation`]), then minimise the
-/// chosen [`Loss`]. The graph must be connected ([`Error::Disconnected`] otherwise; solve
+/// problem's objective. The graph must be connected ([`Error::Disconnected`] otherwise; solve
 /// [`MultipleProblem::largest_component`] to go on). The output has `R_0 = I`.
 ///
 /// ```
@@ -212,16 +173,25 @@ pub fn solve_multiple(
     let start = std::time::Instant::now();
     // direct sparse Cholesky or PCG, decided once from the graph ([M6])
     let direct = Some(crate::multiple::chordal::prefers_direct(problem)?);
+    crate::progress::phase(crate::progress::Phase::Initialise, || {
+        format!(
+            "{} nodes, {} edges",
+            problem.num_rotations(),
+            problem.num_edges()
+        )
+    });
     let init = match &settings.init {
         Initialisation::Spectral => crate::multiple::init::spectral_with(problem, direct)?,
         other => crate::multiple::init::initialise(problem, other)?,
     };
-    let mut out = match settings.loss {
-        Loss::Chordal => crate::multiple::chordal::solve_chordal(problem, init, settings, direct)?,
-        Loss::Geodesic => {
-            crate::multiple::geodesic::solve_geodesic(problem, init, settings, direct)?
-        }
-        _ => crate::multiple::robust::solve_robust(problem, init, settings, direct)?,
+    let objective = problem.objective();
+    crate::progress::phase(crate::progress::Phase::Solve, || objective.to_string());
+    let mut out = if objective.is_chordal_l2() {
+        crate::multiple::chordal::solve_chordal(problem, init, settings, direct)?
+    } else if objective.loss == Loss::L2 {
+        crate::multiple::geodesic::solve_geodesic(problem, init, settings, direct)?
+    } else {
+        crate::multiple::robust::solve_robust(problem, init, settings, direct)?
     };
     fix_gauge(&mut out.rotations);
     // R_0 R_0^T is I up to rounding; make it exact.

@@ -11,6 +11,7 @@
 //! Ritz value is then an upper bound on `lambda_2` (Cauchy interlacing), reported with its
 //! residual `|beta_k s_k|`, which bounds its distance to an eigenvalue of `L`.
 
+use crate::linalg::{Extreme, LanczosSettings, LanczosStop, lanczos};
 use crate::multiple::MultipleProblem;
 use crate::so3::{Rotation, angle_between};
 use serde::{Deserialize, Serialize};
@@ -118,9 +119,9 @@ pub enum SpectralGap {
         residual: f64,
         /// Lanczos steps taken.
         steps: usize,
-        /// Whether the residual is below `1e-8 d_max` (otherwise `lambda2` is only an upper
-        /// bound, possibly a loose one).
-        converged: bool,
+        /// Why the iteration stopped: converged when the relative residual is below `1e-8`
+        /// (otherwise `lambda2` is only an upper bound, possibly a loose one).
+        stop: LanczosStop,
     },
     /// The graph is disconnected: `lambda_2 = 0`.
     Disconnected,
@@ -159,11 +160,11 @@ impl fmt::Display for SpectralGap {
                 normalized,
                 residual,
                 steps,
-                converged,
+                stop,
             } => write!(
                 f,
                 "{normalized:.6e} (lambda_2 <= {lambda2:.6e}, Lanczos {steps} steps, residual {residual:.1e}{})",
-                if *converged {
+                if stop.converged() {
                     ""
                 } else {
                     ", NOT converged: upper bound only"
@@ -316,79 +317,36 @@ pub fn spectral_gap(problem: &MultipleProblem, settings: &StatsSettings) -> Spec
     lanczos_lambda2(&deg, &adj, settings.lanczos_steps.max(2), dmax)
 }
 
-/// Lanczos with full reorthogonalisation on `L` restricted to `1^perp`, from a fixed
-/// deterministic start vector.
+/// The smallest eigenvalue of `L` on `1^perp` by [`lanczos`] (the ones vector deflated, a
+/// fixed seed: deterministic).
 fn lanczos_lambda2(deg: &[f64], adj: &[Vec<(usize, f64)>], steps: usize, dmax: f64) -> SpectralGap {
     let n = deg.len();
-    let inv_sqrt_n = 1.0 / (n as f64).sqrt();
-    let project = |v: &mut [f64]| {
-        let s: f64 = v.iter().sum::<f64>() * inv_sqrt_n;
-        v.iter_mut().for_each(|x| *x -= s * inv_sqrt_n);
+    let ones = vec![1.0 / (n as f64).sqrt(); n];
+    let settings = LanczosSettings {
+        max_iterations: steps.min(n - 1),
+        tolerance: 1e-8,
+        ..Default::default()
     };
-    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    // deterministic pseudo-random start (a fixed LCG), orthogonal to the ones vector
-    let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
-    let mut q: Vec<f64> = (0..n)
-        .map(|_| {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        })
-        .collect();
-    project(&mut q);
-    let nq = norm(&q);
-    q.iter_mut().for_each(|x| *x /= nq);
-    let k_max = steps.min(n - 1);
-    let mut basis: Vec<Vec<f64>> = vec![q];
-    let mut alpha: Vec<f64> = Vec::new();
-    let mut beta: Vec<f64> = Vec::new();
-    let mut w = vec![0.0; n];
-    for k in 0..k_max {
-        laplacian_apply(deg, adj, &basis[k], &mut w);
-        let a: f64 = w.iter().zip(&basis[k]).map(|(x, y)| x * y).sum();
-        alpha.push(a);
-        // Full reorthogonalisation, twice, against the ones vector and the basis. Any rounding
-        // component along the ones vector (eigenvalue 0) would otherwise be amplified by the
-        // Krylov iteration until a spurious Ritz value 0 appears (seen after ~100 steps).
-        for _ in 0..2 {
-            project(&mut w);
-            for b in &basis {
-                let c: f64 = w.iter().zip(b).map(|(x, y)| x * y).sum();
-                w.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
-            }
-        }
-        let bnorm = norm(&w);
-        if k + 1 == k_max || bnorm <= 1e-12 * dmax {
-            beta.push(bnorm);
-            break;
-        }
-        beta.push(bnorm);
-        basis.push(w.iter().map(|x| x / bnorm).collect());
-    }
-    let k = alpha.len();
-    let mut t = faer::Mat::<f64>::zeros(k, k);
-    for a in 0..k {
-        t[(a, a)] = alpha[a];
-        if a + 1 < k {
-            t[(a, a + 1)] = beta[a];
-            t[(a + 1, a)] = beta[a];
-        }
-    }
-    match t.self_adjoint_eigen(faer::Side::Lower) {
-        Ok(eig) => {
-            let lambda2 = eig.S().column_vector()[0];
-            let residual = (beta[k - 1] * eig.U()[(k - 1, 0)]).abs();
-            SpectralGap::Lanczos {
-                lambda2,
-                normalized: lambda2 / dmax,
-                residual,
-                steps: k,
-                converged: residual <= 1e-8 * dmax,
-            }
-        }
-        Err(e) => SpectralGap::Skipped {
-            reason: format!("tridiagonal eigen solver failed: {e:?}"),
+    let e = lanczos(
+        n,
+        |x, y| laplacian_apply(deg, adj, x, y),
+        Extreme::Smallest,
+        1,
+        dmax,
+        &settings,
+        &[ones],
+        None,
+    );
+    match (e.values.first(), e.residuals.first()) {
+        (Some(&lambda2), Some(&residual)) => SpectralGap::Lanczos {
+            lambda2,
+            normalized: lambda2 / dmax,
+            residual,
+            steps: e.subspace_dim,
+            stop: e.stop,
+        },
+        _ => SpectralGap::Skipped {
+            reason: "Lanczos found no Ritz pair".into(),
         },
     }
 }

@@ -1,6 +1,8 @@
 //! Seeded synthetic view graphs with a planted ground truth, for tests, benchmarks and the demo:
 //! [`SyntheticGraph::generate`] (random connected graph, Gaussian noise, outliers) and
-//! [`z_cycle`] (a cycle with a known loop error, whose local minima are known in closed form).
+//! [`SyntheticChain::generate`] (a SLAM-like trajectory: an odometry chain with loop closures,
+//! planar or 3-D) and [`z_cycle`] (a cycle with a known loop error, whose local minima are known
+//! in closed form).
 
 use crate::multiple::{Edge, MultipleProblem};
 use crate::so3::{Rotation, exp, perturb_gaussian, random_rotation};
@@ -88,6 +90,95 @@ impl SyntheticGraph {
             .collect();
         (
             MultipleProblem::new(n, edges).expect("generated graph is valid"),
+            gt,
+        )
+    }
+}
+
+/// Parameters of a SLAM-like pose graph with planted rotations: a trajectory whose headings
+/// perform a random walk (node `i + 1` turns by a Gaussian angle from node `i`), odometry edges
+/// `(i, i + 1)`, and loop closures between the current node and a node visited earlier.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SyntheticChain {
+    /// Number of nodes (>= 2).
+    pub num_rotations: usize,
+    /// Loop closures as a fraction of the nodes (e.g. 0.01 to 0.05).
+    pub loop_closure_fraction: f64,
+    /// Rotation of the trajectory per step (standard deviation per tangent component, or of
+    /// the heading when planar), radians.
+    pub turn_sigma: f64,
+    /// Gaussian measurement noise per tangent component, radians (odometry and closures).
+    pub noise_sigma: f64,
+    /// All rotations about the z axis (a planar SLAM problem) instead of 3-D.
+    pub planar: bool,
+    /// RNG seed.
+    pub seed: u64,
+}
+
+impl Default for SyntheticChain {
+    fn default() -> Self {
+        SyntheticChain {
+            num_rotations: 1000,
+            loop_closure_fraction: 0.02,
+            turn_sigma: 0.1,
+            noise_sigma: 1e-4,
+            planar: false,
+            seed: 0,
+        }
+    }
+}
+
+impl SyntheticChain {
+    /// Generate `(problem, ground truth)`; the ground truth has `R_0 = I`. Unit weights. Loop
+    /// closure `k` joins a uniformly random node `j >= 10` to a uniformly random earlier node
+    /// `i < j - 5`, so closures span every range, as when a robot revisits a place.
+    ///
+    /// ```
+    /// use rotavg::multiple::synthetic::SyntheticChain;
+    /// let (p, gt) = SyntheticChain { num_rotations: 200, noise_sigma: 0.0, planar: true, ..Default::default() }.generate();
+    /// assert_eq!(p.num_edges(), 199 + 4); // odometry + 2 % closures
+    /// assert!(p.chordal_cost(&gt) < 1e-20);
+    /// ```
+    pub fn generate(&self) -> (MultipleProblem, Vec<Rotation>) {
+        let n = self.num_rotations.max(2);
+        let mut rng = StdRng::seed_from_u64(self.seed);
+        let step = |rng: &mut StdRng, sigma: f64, planar: bool| -> Vector3<f64> {
+            let mut g = || sigma * crate::so3::gaussian(rng);
+            if planar {
+                Vector3::new(0.0, 0.0, g())
+            } else {
+                Vector3::new(g(), g(), g())
+            }
+        };
+        let mut gt = Vec::with_capacity(n);
+        gt.push(Rotation::identity());
+        for i in 1..n {
+            let turn = step(&mut rng, self.turn_sigma, self.planar);
+            gt.push(exp(&turn) * gt[i - 1]);
+        }
+        let mut pairs: Vec<(usize, usize)> = (1..n).map(|j| (j - 1, j)).collect();
+        let closures = (self.loop_closure_fraction.max(0.0) * n as f64).round() as usize;
+        if n > 16 {
+            for _ in 0..closures {
+                let j = rng.random_range(10..n);
+                let i = rng.random_range(0..j - 5);
+                pairs.push((i, j));
+            }
+        }
+        let edges = pairs
+            .into_iter()
+            .map(|(i, j)| {
+                let noise = step(&mut rng, self.noise_sigma, self.planar);
+                Edge {
+                    i,
+                    j,
+                    rotation: exp(&noise) * gt[j] * gt[i].inverse(),
+                    weight: 1.0,
+                }
+            })
+            .collect();
+        (
+            MultipleProblem::new(n, edges).expect("generated chain is valid"),
             gt,
         )
     }

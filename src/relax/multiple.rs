@@ -11,11 +11,10 @@
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;
 use crate::multiple::laplacian::connection_laplacian;
+use crate::relax::clarabel::{Cone, ConicSolution, csc, solve_conic};
+use crate::relax::settings::{SdpForm, SdpSettings, SdpStatus};
 use crate::relax::svec::{smat, svec_index, svec_len, svec_weight};
-use crate::relax::{SdpForm, SdpSettings, SdpStatus};
 use crate::so3::{Rotation, project_to_so3};
-use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SupportedConeT};
 use faer::{Mat, Side};
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
@@ -23,7 +22,7 @@ use std::time::Instant;
 
 /// Result of [`relax_multiple`].
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct SdpSolution {
+pub struct MultipleRelaxation {
     /// Solver outcome.
     pub status: SdpStatus,
     /// Formulation that was solved.
@@ -39,7 +38,7 @@ pub struct SdpSolution {
     pub x_top_eigenvalues: Vec<f64>,
     /// Rounded estimate `[P5]`: top-3 eigenvectors of `X`, global reflection fixed by the majority
     /// of block determinant signs, blocks projected to SO(3), gauge `R_0 = I`.
-    #[serde(with = "crate::serde_rot::rotations")]
+    #[serde(with = "crate::so3::serde_rows::rotations")]
     pub rounded: Vec<Rotation>,
     /// Chordal cost `f` of [`Self::rounded`] (an upper bound on the global minimum).
     pub rounded_cost: f64,
@@ -63,7 +62,7 @@ pub struct SdpSolution {
 /// The cost is scaled by the mean weighted degree `s = 2 sum w / n` for conditioning and every
 /// returned quantity is unscaled `[P4]`. Errors: invalid settings, a graph with no edges, or a
 /// solver setup failure. A non-converged solve is *not* an error: check
-/// [`SdpSolution::status`].
+/// [`MultipleRelaxation::status`].
 ///
 /// ```
 /// use rotavg::multiple::synthetic::SyntheticGraph;
@@ -73,7 +72,10 @@ pub struct SdpSolution {
 /// assert_eq!(sol.status, SdpStatus::Solved);
 /// assert!(sol.rounded_cost < 1e-8); // noise free: the SDP recovers the planted rotations
 /// ```
-pub fn relax_multiple(problem: &MultipleProblem, settings: &SdpSettings) -> Result<SdpSolution> {
+pub fn relax_multiple(
+    problem: &MultipleProblem,
+    settings: &SdpSettings,
+) -> Result<MultipleRelaxation> {
     settings.validate()?;
     let start = Instant::now();
     let n = problem.num_rotations();
@@ -115,18 +117,18 @@ pub fn relax_multiple(problem: &MultipleProblem, settings: &SdpSettings) -> Resu
     let dim = 3 * n;
     let x_dense = (dim <= settings.dense_x_max_size)
         .then(|| (0..dim * dim).map(|k| raw.x[(k % dim, k / dim)]).collect());
-    Ok(SdpSolution {
-        status: raw.status,
+    Ok(MultipleRelaxation {
+        status: raw.conic.status,
         form: settings.form,
         multipliers,
         x_dense,
         x_top_eigenvalues,
         rounded,
         rounded_cost,
-        primal_objective: raw.primal_objective * scale,
-        dual_objective: raw.dual_objective * scale,
-        iterations: raw.iterations,
-        solver_seconds: raw.solver_seconds,
+        primal_objective: raw.conic.primal_objective * scale,
+        dual_objective: raw.conic.dual_objective * scale,
+        iterations: raw.conic.iterations,
+        solver_seconds: raw.conic.solve_seconds,
         seconds: start.elapsed().as_secs_f64(),
         scale,
     })
@@ -134,72 +136,10 @@ pub fn relax_multiple(problem: &MultipleProblem, settings: &SdpSettings) -> Resu
 
 /// What each formulation hands back (scaled problem).
 struct RawSolution {
-    status: SdpStatus,
     lambda_scaled: Vec<Matrix3<f64>>,
     x: Mat<f64>,
-    primal_objective: f64,
-    dual_objective: f64,
-    iterations: u32,
-    solver_seconds: f64,
-}
-
-fn clarabel_settings(settings: &SdpSettings, merge: &str) -> DefaultSettings<f64> {
-    DefaultSettings {
-        verbose: settings.verbose,
-        max_iter: settings.max_iterations,
-        time_limit: settings.time_limit_seconds.unwrap_or(f64::INFINITY),
-        tol_gap_abs: settings.tol_gap_abs,
-        tol_gap_rel: settings.tol_gap_rel,
-        tol_feas: settings.tol_feas,
-        direct_solve_method: "faer".into(),
-        chordal_decomposition_enable: settings.chordal_decomposition,
-        chordal_decomposition_complete_dual: true,
-        chordal_decomposition_merge_method: merge.into(),
-        iterative_refinement_enable: settings.iterative_refinement,
-        ..DefaultSettings::default()
-    }
-}
-
-/// Triplet lists to Clarabel's CSC.
-fn csc(m: usize, n: usize, t: Vec<(usize, usize, f64)>) -> CscMatrix<f64> {
-    let mut rows = Vec::with_capacity(t.len());
-    let mut cols = Vec::with_capacity(t.len());
-    let mut vals = Vec::with_capacity(t.len());
-    for (r, c, v) in t {
-        rows.push(r);
-        cols.push(c);
-        vals.push(v);
-    }
-    CscMatrix::new_from_triplets(m, n, rows, cols, vals)
-}
-
-/// Runs Clarabel and returns `(status, x, z, obj, obj_dual, iterations, seconds)`.
-#[allow(clippy::type_complexity)]
-fn run_clarabel(
-    q: &[f64],
-    a: CscMatrix<f64>,
-    b: &[f64],
-    cones: &[SupportedConeT<f64>],
-    settings: &SdpSettings,
-    merge: &str,
-) -> Result<(SdpStatus, Vec<f64>, Vec<f64>, f64, f64, u32, f64)> {
-    let nv = q.len();
-    let p = CscMatrix::zeros((nv, nv));
-    let mut solver = DefaultSolver::new(&p, q, &a, b, cones, clarabel_settings(settings, merge))
-        .map_err(|e| Error::Solver {
-            message: format!("Clarabel setup: {e}"),
-        })?;
-    solver.solve();
-    let s = &solver.solution;
-    Ok((
-        s.status.into(),
-        s.x.clone(),
-        s.z.clone(),
-        s.obj_val,
-        s.obj_val_dual,
-        s.iterations,
-        s.solve_time,
-    ))
+    /// Status, iterations, time, and the objectives of the primal `[P2]` / dual `[P3]` (scaled).
+    conic: ConicSolution,
 }
 
 /// Dual form `[P3]` in Clarabel's standard form `min c'x, b - A x in K`: `x` holds the upper
@@ -234,9 +174,11 @@ fn solve_dual(
         }
     }
     let a = csc(m, nv, trip);
-    let cones = [SupportedConeT::PSDTriangleConeT(dim)];
-    let (status, x, z, obj, obj_dual, iterations, secs) =
-        run_clarabel(&c, a, &b, &cones, settings, merge)?;
+    let mut conic = solve_conic(&c, a, &b, &[Cone::Psd(dim)], settings, merge)?;
+    // Clarabel minimises -sum tr(Lambda); its dual objective is -tr(Q X / s)
+    (conic.primal_objective, conic.dual_objective) =
+        (-conic.dual_objective, -conic.primal_objective);
+    let x = &conic.x;
     let lambda_scaled = (0..n)
         .map(|i| {
             Matrix3::from_fn(|r, cc| {
@@ -245,18 +187,13 @@ fn solve_dual(
             })
         })
         .collect();
-    let xm = smat(&z, dim).ok_or_else(|| Error::Solver {
+    let xm = smat(&conic.z, dim).ok_or_else(|| Error::Solver {
         message: "Clarabel returned a dual vector of the wrong length".into(),
     })?;
     Ok(RawSolution {
-        status,
         lambda_scaled,
         x: xm,
-        // Clarabel minimises -sum tr(Lambda); its dual objective is -tr(Q X / s)
-        primal_objective: -obj_dual,
-        dual_objective: -obj,
-        iterations,
-        solver_seconds: secs,
+        conic,
     })
 }
 
@@ -295,12 +232,15 @@ fn solve_primal(
         }
     }
     let a = csc(neq + nv, nv, trip);
-    let cones = [
-        SupportedConeT::ZeroConeT(neq),
-        SupportedConeT::PSDTriangleConeT(dim),
-    ];
-    let (status, x, z, obj, obj_dual, iterations, secs) =
-        run_clarabel(&c, a, &b, &cones, settings, merge)?;
+    let conic = solve_conic(
+        &c,
+        a,
+        &b,
+        &[Cone::Zero(neq), Cone::Psd(dim)],
+        settings,
+        merge,
+    )?;
+    let (x, z) = (&conic.x, &conic.z);
     let lambda_scaled = (0..n)
         .map(|i| {
             Matrix3::from_fn(|r, cc| {
@@ -318,13 +258,9 @@ fn solve_primal(
         }
     }
     Ok(RawSolution {
-        status,
         lambda_scaled,
         x: xm,
-        primal_objective: obj,
-        dual_objective: obj_dual,
-        iterations,
-        solver_seconds: secs,
+        conic,
     })
 }
 

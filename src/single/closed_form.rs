@@ -1,10 +1,10 @@
-//! The closed-form means: chordal L2 `[S1]` ([`chordal_l2_mean`]) and quaternion L2 `[S2]`
-//! ([`quaternion_l2_mean`]).
+//! The closed-form means: chordal L2 `[S1]` and quaternion L2 `[S2]` (reached through
+//! [`crate::single::solve_single`] with those objectives).
 
-use super::{Local, Norm, SingleProblem, SingleSettings, SingleSolution, average_single};
-use crate::error::Result;
-use crate::report::Termination;
-use crate::so3::{self, Metric, Rotation};
+use super::problem::SingleProblem;
+use super::solve::{Local, SingleSettings};
+use crate::so3::{self, Rotation};
+use crate::termination::Termination;
 use nalgebra::{Matrix3, Vector4};
 
 /// `M = sum_i w_i R_i`, summed in blocks (pairwise-style) to keep the rounding error small for
@@ -153,36 +153,4 @@ pub(crate) fn quaternion_l2_local(
 pub(crate) fn quaternion_to_rotation(q: &Vector4<f64>) -> Rotation {
     nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion { coords: *q })
         .to_rotation_matrix()
-}
-
-/// The chordal L2 mean `[S1]` with its certificate: [`average_single`] with
-/// `metric = Chordal`, `norm = L2`.
-///
-/// ```
-/// use rotavg::single::{chordal_l2_mean, SingleProblem};
-/// use rotavg::Rotation;
-/// let p = SingleProblem::new(vec![Rotation::identity(); 3], None)?;
-/// let s = chordal_l2_mean(&p)?;
-/// assert!(s.cost.abs() < 1e-12 && s.certificate.is_certified());
-/// # Ok::<(), rotavg::Error>(())
-/// ```
-pub fn chordal_l2_mean(problem: &SingleProblem) -> Result<SingleSolution> {
-    average_single(problem, &SingleSettings::new(Metric::Chordal, Norm::L2))
-}
-
-/// The quaternion L2 mean `[S2]` with its certificate: [`average_single`] with
-/// `metric = Quaternion`, `norm = L2`.
-///
-/// ```
-/// use rotavg::single::{quaternion_l2_mean, SingleProblem};
-/// use rotavg::so3::{angle, exp};
-/// use nalgebra::Vector3;
-/// // Rz(0.4) and Rz(-0.4): the mean is I by symmetry.
-/// let p = SingleProblem::new(vec![exp(&Vector3::new(0.0, 0.0, 0.4)), exp(&Vector3::new(0.0, 0.0, -0.4))], None)?;
-/// let s = quaternion_l2_mean(&p)?;
-/// assert!(angle(&s.estimate) < 1e-12 && s.certificate.is_certified());
-/// # Ok::<(), rotavg::Error>(())
-/// ```
-pub fn quaternion_l2_mean(problem: &SingleProblem) -> Result<SingleSolution> {
-    average_single(problem, &SingleSettings::new(Metric::Quaternion, Norm::L2))
 }

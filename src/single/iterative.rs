@@ -6,10 +6,10 @@
 //! most [`MAX_BACKTRACKS`] times) if a step would increase it, so the cost never increases.
 
 use super::closed_form::chordal_l2_local;
-use super::{Local, Norm, SingleProblem, SingleSettings, SingleSolution, average_single};
-use crate::error::Result;
-use crate::report::Termination;
-use crate::so3::{self, Metric, Rotation};
+use super::problem::SingleProblem;
+use super::solve::{Local, Norm, SingleSettings};
+use crate::so3::{self, Rotation};
+use crate::termination::Termination;
 use nalgebra::{Matrix3, Vector3};
 use std::f64::consts::SQRT_2;
 
@@ -29,6 +29,8 @@ const SAMPLE_TEST_RADIUS: f64 = 1e-3;
 /// Everything the geodesic methods need at one point `R`.
 #[derive(Debug, Clone)]
 pub(crate) struct GeodesicEval {
+    /// Which cost (`p`).
+    pub norm: Norm,
     /// `sum_i w_i theta_i^p`.
     pub cost: f64,
     /// L2: `sum_i w_i log(R^T R_i)`; L1: `sum_{i not coincident} w_i log(R^T R_i) / theta_i`.
@@ -59,6 +61,7 @@ impl GeodesicEval {
 pub(crate) fn eval_geodesic(problem: &SingleProblem, r: &Rotation, norm: Norm) -> GeodesicEval {
     let rt = r.inverse();
     let mut e = GeodesicEval {
+        norm,
         cost: 0.0,
         descent: Vector3::zeros(),
         inverse_distance_weight: 0.0,
@@ -66,12 +69,7 @@ pub(crate) fn eval_geodesic(problem: &SingleProblem, r: &Rotation, norm: Norm) -
         coincident_slack: 0.0,
         nearest: None,
     };
-    for (k, (ri, &w)) in problem
-        .rotations()
-        .iter()
-        .zip(problem.weights())
-        .enumerate()
-    {
+    for (k, ri, w) in problem.samples() {
         let v = so3::log(&(rt * ri));
         let t = v.norm();
         match norm {
@@ -97,6 +95,117 @@ pub(crate) fn eval_geodesic(problem: &SingleProblem, r: &Rotation, norm: Norm) -
     e
 }
 
+/// What the descent driver needs at an iterate of one of the iterative means.
+pub(crate) trait Iterate {
+    /// The cost.
+    fn cost(&self) -> f64;
+    /// Norm of the (minimum-norm sub)gradient.
+    fn gradient_norm(&self) -> f64;
+    /// The nearest sample `(index, distance)`, for the sample test of the L1 means (`None` for
+    /// smooth costs: no test).
+    fn nearest_sample(&self) -> Option<(usize, f64)>;
+}
+
+impl Iterate for GeodesicEval {
+    fn cost(&self) -> f64 {
+        self.cost
+    }
+    fn gradient_norm(&self) -> f64 {
+        GeodesicEval::gradient_norm(self, self.norm)
+    }
+    fn nearest_sample(&self) -> Option<(usize, f64)> {
+        (self.norm == Norm::L1).then_some(self.nearest).flatten()
+    }
+}
+
+/// One iterative mean for the descent driver.
+struct Method<E, F, S> {
+    name: &'static str,
+    /// What the gradient test measures.
+    measure: &'static str,
+    /// Expanding line search (the slow majorise-minimise steps of chordal L1).
+    expand: bool,
+    eval: F,
+    /// The proposed tangent step `v` (`R_new = R exp(v)`); `None`: no step possible.
+    step: S,
+    _iterate: std::marker::PhantomData<E>,
+}
+
+/// The loop shared by the iterative means: gradient test; for the L1 means the sample test
+/// `[S5]` (if the nearest sample satisfies the optimality condition and is no worse, it is the
+/// answer: avoids the slow approach of Weiszfeld iterations to a sample); the method's step
+/// with a line search that never increases the cost; step-angle test.
+fn descend<E, F, S>(
+    problem: &SingleProblem,
+    settings: &SingleSettings,
+    start: Rotation,
+    method: Method<E, F, S>,
+) -> Local
+where
+    E: Iterate,
+    F: Fn(&Rotation) -> E,
+    S: Fn(&Rotation, &E) -> Option<Vector3<f64>>,
+{
+    let name = method.name;
+    let tol = settings.gradient_tolerance;
+    let total = problem.total_weight();
+    let mut r = start;
+    let mut e = (method.eval)(&r);
+    let mut last_step = 0.0;
+    // Samples whose optimality test failed (the test depends on the sample only).
+    let mut rejected: Vec<usize> = Vec::new();
+    for it in 1..=settings.max_iterations {
+        let g = e.gradient_norm() / total;
+        if g <= tol {
+            return converged(r, it - 1, method.measure, g, tol, name);
+        }
+        if let Some((k, t)) = e.nearest_sample()
+            && (t < SAMPLE_TEST_RADIUS || t < 10.0 * last_step)
+            && !rejected.contains(&k)
+        {
+            let rk = problem.rotations()[k];
+            let ek = (method.eval)(&rk);
+            let gk = ek.gradient_norm() / total;
+            if ek.cost() <= e.cost() && gk <= tol {
+                let measure = "min-norm subgradient / total weight at a sample";
+                return converged(rk, it, measure, gk, tol, name);
+            }
+            if gk > tol {
+                rejected.push(k);
+            }
+        }
+        let accepted = (method.step)(&r, &e).and_then(|v| {
+            line_search(
+                problem.len(),
+                &r,
+                e.cost(),
+                &v,
+                method.expand,
+                &method.eval,
+                E::cost,
+            )
+        });
+        let Some((r_new, e_new, step)) = accepted else {
+            return stalled(r, it - 1, g, tol, name);
+        };
+        r = r_new;
+        e = e_new;
+        last_step = step;
+        if step < settings.step_tolerance {
+            let measure = "step angle (rad)";
+            return converged(r, it, measure, step, settings.step_tolerance, name);
+        }
+    }
+    let g = e.gradient_norm() / total;
+    limit(r, settings, g, name)
+}
+
+/// The given start, or the chordal L2 mean `[S1]`.
+fn init_or_chordal_mean(problem: &SingleProblem, init: Option<&Rotation>) -> Rotation {
+    init.copied()
+        .unwrap_or_else(|| chordal_l2_local(problem).estimate)
+}
+
 /// Geodesic L2 (Karcher) mean `[S3]`: `R <- R exp(t v)`, `v = sum_i w_i log(R^T R_i) / W`,
 /// `t = 1` unless that increases the cost (then halved). Starts from the chordal L2 mean.
 /// Stops when `2 |v| <= gradient_tolerance` (gradient norm / W) or the step angle is below
@@ -106,43 +215,21 @@ pub(crate) fn geodesic_l2_local(
     settings: &SingleSettings,
     init: Option<&Rotation>,
 ) -> Local {
-    const NAME: &str = "karcher";
     let total = problem.total_weight();
-    let mut r = init
-        .copied()
-        .unwrap_or_else(|| chordal_l2_local(problem).estimate);
-    let mut e = eval_geodesic(problem, &r, Norm::L2);
-    for it in 1..=settings.max_iterations {
-        let v = e.descent / total;
-        let grad = 2.0 * v.norm();
-        if grad <= settings.gradient_tolerance {
-            return converged(
-                r,
-                it - 1,
-                "gradient norm / total weight",
-                grad,
-                settings.gradient_tolerance,
-                NAME,
-            );
-        }
-        let Some((r_new, e_new, step)) = backtrack(problem, &r, &e, &v, Norm::L2) else {
-            return stalled(r, it - 1, grad, settings.gradient_tolerance, NAME);
-        };
-        r = r_new;
-        e = e_new;
-        if step < settings.step_tolerance {
-            return converged(
-                r,
-                it,
-                "step angle (rad)",
-                step,
-                settings.step_tolerance,
-                NAME,
-            );
-        }
-    }
-    let grad = e.gradient_norm(Norm::L2) / total;
-    limit(r, settings, grad, NAME)
+    let start = init_or_chordal_mean(problem, init);
+    descend(
+        problem,
+        settings,
+        start,
+        Method {
+            name: "karcher",
+            measure: "gradient norm / total weight",
+            expand: false,
+            eval: |x: &Rotation| eval_geodesic(problem, x, Norm::L2),
+            step: |_: &Rotation, e: &GeodesicEval| Some(e.descent / total),
+            _iterate: std::marker::PhantomData,
+        },
+    )
 }
 
 /// Geodesic L1 mean by Weiszfeld on SO(3) (Hartley, Aftab & Trumpf 2011) with the Vardi-Zhang
@@ -155,94 +242,25 @@ pub(crate) fn geodesic_l1_local(
     settings: &SingleSettings,
     init: Option<&Rotation>,
 ) -> Local {
-    const NAME: &str = "weiszfeld-so3";
-    let total = problem.total_weight();
-    let mut r = init
-        .copied()
-        .unwrap_or_else(|| chordal_l2_local(problem).estimate);
-    let mut e = eval_geodesic(problem, &r, Norm::L1);
-    let mut last_step = 0.0;
-    // Samples whose optimality test failed (the test depends on the sample only).
-    let mut rejected: Vec<usize> = Vec::new();
-    for it in 1..=settings.max_iterations {
-        let g = e.gradient_norm(Norm::L1) / total;
-        if g <= settings.gradient_tolerance {
-            return converged(
-                r,
-                it - 1,
-                "min-norm subgradient / total weight",
-                g,
-                settings.gradient_tolerance,
-                NAME,
-            );
-        }
-        // Sample test [S5]: if the nearest sample satisfies the optimality condition and is
-        // no worse, it is the answer (avoids the slow approach of Weiszfeld to a sample).
-        if let Some((k, t)) = e.nearest
-            && (t < SAMPLE_TEST_RADIUS || t < 10.0 * last_step)
-            && !rejected.contains(&k)
-        {
-            let rk = problem.rotations()[k];
-            let ek = eval_geodesic(problem, &rk, Norm::L1);
-            let gk = ek.gradient_norm(Norm::L1) / total;
-            if ek.cost <= e.cost && gk <= settings.gradient_tolerance {
-                return converged(
-                    rk,
-                    it,
-                    "min-norm subgradient / total weight at a sample",
-                    gk,
-                    settings.gradient_tolerance,
-                    NAME,
-                );
-            }
-            if gk > settings.gradient_tolerance {
-                rejected.push(k);
-            }
-        }
-        let gn = e.descent.norm();
-        if !(gn > 0.0 && e.inverse_distance_weight > 0.0) {
-            // All samples coincide with R, or G = 0: then the gradient test above has passed.
-            return stalled(r, it - 1, g, settings.gradient_tolerance, NAME);
-        }
-        let v = e.descent * ((1.0 - e.coincident_weight / gn) / e.inverse_distance_weight);
-        let Some((r_new, e_new, step)) = backtrack(problem, &r, &e, &v, Norm::L1) else {
-            return stalled(r, it - 1, g, settings.gradient_tolerance, NAME);
-        };
-        r = r_new;
-        e = e_new;
-        last_step = step;
-        if step < settings.step_tolerance {
-            return converged(
-                r,
-                it,
-                "step angle (rad)",
-                step,
-                settings.step_tolerance,
-                NAME,
-            );
-        }
-    }
-    let g = e.gradient_norm(Norm::L1) / total;
-    limit(r, settings, g, NAME)
-}
-
-/// Try `R exp(t v)` for `t = 1, 1/2, 1/4, ...` until the cost does not increase. Returns the new
-/// point, its evaluation and the step angle `t |v|`.
-fn backtrack(
-    problem: &SingleProblem,
-    r: &Rotation,
-    e: &GeodesicEval,
-    v: &Vector3<f64>,
-    norm: Norm,
-) -> Option<(Rotation, GeodesicEval, f64)> {
-    line_search(
-        problem.len(),
-        r,
-        e.cost,
-        v,
-        false,
-        |x| eval_geodesic(problem, x, norm),
-        |x| x.cost,
+    let start = init_or_chordal_mean(problem, init);
+    descend(
+        problem,
+        settings,
+        start,
+        Method {
+            name: "weiszfeld-so3",
+            measure: "min-norm subgradient / total weight",
+            expand: false,
+            eval: |x: &Rotation| eval_geodesic(problem, x, Norm::L1),
+            step: |_: &Rotation, e: &GeodesicEval| {
+                let gn = e.descent.norm();
+                // All samples coincide with R, or G = 0: then the gradient test has passed.
+                (gn > 0.0 && e.inverse_distance_weight > 0.0).then(|| {
+                    e.descent * ((1.0 - e.coincident_weight / gn) / e.inverse_distance_weight)
+                })
+            },
+            _iterate: std::marker::PhantomData,
+        },
     )
 }
 
@@ -334,12 +352,7 @@ pub(crate) fn eval_chordal_l1(problem: &SingleProblem, r: &Rotation) -> ChordalE
         coincident_weight: 0.0,
         nearest: None,
     };
-    for (k, (ri, &w)) in problem
-        .rotations()
-        .iter()
-        .zip(problem.weights())
-        .enumerate()
-    {
+    for (k, ri, w) in problem.samples() {
         let c = (ri.matrix() - rm).norm();
         e.cost += w * c;
         if c <= COINCIDENCE_ANGLE {
@@ -367,9 +380,7 @@ pub(crate) fn chordal_l1_local(
     settings: &SingleSettings,
     init: Option<&Rotation>,
 ) -> Local {
-    const NAME: &str = "chordal-l1-irls";
-    let total = problem.total_weight();
-    let mut r = match init {
+    let r = match init {
         Some(r) => *r,
         None => {
             let median = euclidean_median(
@@ -380,84 +391,42 @@ pub(crate) fn chordal_l1_local(
             so3::project_to_so3(&median.point).unwrap_or_else(|| chordal_l2_local(problem).estimate)
         }
     };
-    let mut e = eval_chordal_l1(problem, &r);
-    let mut last_step = 0.0;
-    // Samples whose optimality test failed (the test depends on the sample only).
-    let mut rejected: Vec<usize> = Vec::new();
-    for it in 1..=settings.max_iterations {
-        let g = e.gradient_norm() / total;
-        if g <= settings.gradient_tolerance {
-            return converged(
-                r,
-                it - 1,
-                "min-norm subgradient / total weight",
-                g,
-                settings.gradient_tolerance,
-                NAME,
-            );
-        }
-        if let Some((k, c)) = e.nearest
-            && (c < SAMPLE_TEST_RADIUS || c < 10.0 * last_step)
-            && !rejected.contains(&k)
-        {
-            let rk = problem.rotations()[k];
-            let ek = eval_chordal_l1(problem, &rk);
-            let gk = ek.gradient_norm() / total;
-            if ek.cost <= e.cost && gk <= settings.gradient_tolerance {
-                return converged(
-                    rk,
-                    it,
-                    "min-norm subgradient / total weight at a sample",
-                    gk,
-                    settings.gradient_tolerance,
-                    NAME,
-                );
-            }
-            if gk > settings.gradient_tolerance {
-                rejected.push(k);
-            }
-        }
-        // Proposed step as a tangent vector v with R_new = R exp(v).
-        let v = if e.coincident_weight == 0.0 {
-            match so3::project_to_so3(&e.irls_sum) {
-                Some(p) => so3::log(&(r.inverse() * p)),
-                None => return stalled(r, it - 1, g, settings.gradient_tolerance, NAME),
-            }
-        } else {
-            let gn = e.descent.norm();
-            if !(gn > 0.0 && e.curvature > 0.0) {
-                return stalled(r, it - 1, g, settings.gradient_tolerance, NAME);
-            }
-            e.descent * ((1.0 - SQRT_2 * e.coincident_weight / gn) / e.curvature)
-        };
-        let accepted = line_search(
-            problem.len(),
-            &r,
-            e.cost,
-            &v,
-            true,
-            |x| eval_chordal_l1(problem, x),
-            |x| x.cost,
-        );
-        let Some((r_new, e_new, step)) = accepted else {
-            return stalled(r, it - 1, g, settings.gradient_tolerance, NAME);
-        };
-        r = r_new;
-        e = e_new;
-        last_step = step;
-        if step < settings.step_tolerance {
-            return converged(
-                r,
-                it,
-                "step angle (rad)",
-                step,
-                settings.step_tolerance,
-                NAME,
-            );
-        }
+    descend(
+        problem,
+        settings,
+        r,
+        Method {
+            name: "chordal-l1-irls",
+            measure: "min-norm subgradient / total weight",
+            expand: true,
+            eval: |x: &Rotation| eval_chordal_l1(problem, x),
+            step: |r: &Rotation, e: &ChordalEval| {
+                if e.coincident_weight == 0.0 {
+                    // IRLS (majorise-minimise) step
+                    so3::project_to_so3(&e.irls_sum).map(|p| so3::log(&(r.inverse() * p)))
+                } else {
+                    // Vardi-Zhang step at a sample
+                    let gn = e.descent.norm();
+                    (gn > 0.0 && e.curvature > 0.0).then(|| {
+                        e.descent * ((1.0 - SQRT_2 * e.coincident_weight / gn) / e.curvature)
+                    })
+                }
+            },
+            _iterate: std::marker::PhantomData,
+        },
+    )
+}
+
+impl Iterate for ChordalEval {
+    fn cost(&self) -> f64 {
+        self.cost
     }
-    let g = e.gradient_norm() / total;
-    limit(r, settings, g, NAME)
+    fn gradient_norm(&self) -> f64 {
+        ChordalEval::gradient_norm(self)
+    }
+    fn nearest_sample(&self) -> Option<(usize, f64)> {
+        self.nearest
+    }
 }
 
 /// A point of `R^{3x3}` with the Euclidean geometric-median data `[S7]`.
@@ -604,86 +573,4 @@ fn limit(r: Rotation, settings: &SingleSettings, value: f64, name: &'static str)
         },
         name,
     }
-}
-
-/// The geodesic L2 (Karcher) mean `[S3]` with its certificate: [`average_single`] with
-/// `metric = Geodesic`, `norm = L2` and the other fields of `settings`.
-///
-/// ```
-/// use rotavg::single::{geodesic_l2_mean, SingleProblem, SingleSettings};
-/// use rotavg::so3::{angle, exp};
-/// use nalgebra::Vector3;
-/// // Rotations about z by 0.1, 0.2 and 0.6: on one axis the Karcher mean is the mean angle 0.3.
-/// let p = SingleProblem::new([0.1, 0.2, 0.6].iter().map(|&t| exp(&Vector3::new(0.0, 0.0, t))).collect(), None)?;
-/// let s = geodesic_l2_mean(&p, &SingleSettings::default())?;
-/// assert!((angle(&s.estimate) - 0.3).abs() < 1e-12);
-/// assert!(s.certificate.is_certified()); // all samples within pi/2: the theory certificate
-/// # Ok::<(), rotavg::Error>(())
-/// ```
-pub fn geodesic_l2_mean(
-    problem: &SingleProblem,
-    settings: &SingleSettings,
-) -> Result<SingleSolution> {
-    average_single(
-        problem,
-        &SingleSettings {
-            metric: Metric::Geodesic,
-            norm: Norm::L2,
-            ..*settings
-        },
-    )
-}
-
-/// The geodesic L1 mean (Weiszfeld on SO(3)) `[S5]` with its certificate.
-///
-/// ```
-/// use rotavg::single::{geodesic_l1_mean, SingleProblem, SingleSettings};
-/// use rotavg::so3::{angle, exp};
-/// use nalgebra::Vector3;
-/// // About one axis, the geodesic L1 mean is the median angle (0.2), whatever the outlier (3.0).
-/// let p = SingleProblem::new([0.1, 0.2, 3.0].iter().map(|&t| exp(&Vector3::new(0.0, 0.0, t))).collect(), None)?;
-/// let s = geodesic_l1_mean(&p, &SingleSettings::default())?;
-/// assert!((angle(&s.estimate) - 0.2).abs() < 1e-9);
-/// # Ok::<(), rotavg::Error>(())
-/// ```
-pub fn geodesic_l1_mean(
-    problem: &SingleProblem,
-    settings: &SingleSettings,
-) -> Result<SingleSolution> {
-    average_single(
-        problem,
-        &SingleSettings {
-            metric: Metric::Geodesic,
-            norm: Norm::L1,
-            ..*settings
-        },
-    )
-}
-
-/// The chordal L1 mean (IRLS on SO(3)) `[S6]` with its certificate `[S7]`.
-///
-/// ```
-/// use rand::SeedableRng;
-/// use rotavg::single::{chordal_l1_mean, SingleProblem, SingleSettings};
-/// use rotavg::so3::{angle_between, perturb_gaussian, random_rotation, Rotation};
-/// let mut rng = rand::rngs::StdRng::seed_from_u64(2);
-/// // 40 samples near I and 10 uniformly random outliers: the L1 mean stays near I.
-/// let mut samples: Vec<_> = (0..40).map(|_| perturb_gaussian(&Rotation::identity(), 0.02, &mut rng)).collect();
-/// samples.extend((0..10).map(|_| random_rotation(&mut rng)));
-/// let s = chordal_l1_mean(&SingleProblem::new(samples, None)?, &SingleSettings::default())?;
-/// assert!(angle_between(&s.estimate, &Rotation::identity()) < 0.02);
-/// # Ok::<(), rotavg::Error>(())
-/// ```
-pub fn chordal_l1_mean(
-    problem: &SingleProblem,
-    settings: &SingleSettings,
-) -> Result<SingleSolution> {
-    average_single(
-        problem,
-        &SingleSettings {
-            metric: Metric::Chordal,
-            norm: Norm::L1,
-            ..*settings
-        },
-    )
 }

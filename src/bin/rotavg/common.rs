@@ -1,27 +1,22 @@
-//! Options shared by the problem subcommands (SPEC section 5, "Common options").
+//! Options shared by the problem subcommands (SPEC section 5, "Common options"), the parser
+//! of the library's named choices, progress lines and printing a report.
 
-use clap::{Args as ClapArgs, ValueEnum};
-use std::path::PathBuf;
-
-/// Where edge/sample weights come from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Default)]
-pub enum WeightSource {
-    /// Weights from the file where the format has them (g2o: SE-Sync's kappa).
-    #[default]
-    File,
-    /// All weights 1.
-    Unit,
-}
+use clap::Args as ClapArgs;
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use rotavg::io::detect::{ReadOptions, WeightSource};
+use rotavg::io::names::Choice;
+use serde::Serialize;
+use std::fmt::Display;
 
 /// Common options.
 #[derive(ClapArgs, Debug, Clone)]
 pub struct Common {
     /// Weights from the file (`file`, default) or all 1 (`unit`).
-    #[arg(long, value_enum, default_value_t = WeightSource::File)]
+    #[arg(long, value_parser = choice(WeightSource::choices()), default_value_t = WeightSource::File)]
     pub weights: WeightSource,
     /// Start the local solver from this estimate (JSON estimate file).
     #[arg(long, value_name = "FILE")]
-    pub init: Option<PathBuf>,
+    pub init: Option<String>,
     /// Exit with status 3 unless the verdict is `certified`.
     #[arg(long)]
     pub require_certified: bool,
@@ -33,32 +28,52 @@ pub struct Common {
     pub json: bool,
 }
 
-/// Read an input argument: a path, or `-` for standard input. Returns (display name, text).
-pub fn read_input(path: &str) -> rotavg::Result<(String, String)> {
-    use std::io::Read;
-    if path == "-" {
-        let mut s = String::new();
-        std::io::stdin()
-            .read_to_string(&mut s)
-            .map_err(|e| rotavg::Error::Io {
-                path: "-".into(),
-                message: e.to_string(),
-            })?;
-        Ok(("-".into(), s))
-    } else {
-        let s = std::fs::read_to_string(path).map_err(|e| rotavg::Error::Io {
-            path: path.into(),
-            message: e.to_string(),
-        })?;
-        Ok((path.into(), s))
+impl Common {
+    /// The readers' options.
+    pub fn read_options(&self) -> ReadOptions {
+        ReadOptions {
+            weights: self.weights,
+            ..Default::default()
+        }
+    }
+
+    /// Print a progress line on stderr, only when it can help a person watching: not under
+    /// `--quiet` or `--json`, and only when stderr is a terminal (never into logs or pipes).
+    pub fn progress(&self, message: std::fmt::Arguments<'_>) {
+        use std::io::IsTerminal;
+        if !self.quiet && !self.json && std::io::stderr().is_terminal() {
+            eprintln!("rotavg: {message}");
+        }
+    }
+
+    /// Print a report: its JSON with `--json`, its text unless `--quiet`.
+    pub fn print<R: Serialize + Display>(&self, report: &R) -> rotavg::Result<()> {
+        print(report, self.json, self.quiet)
     }
 }
 
-/// Print a progress line on stderr, only when it can help a person watching: not under
-/// `--quiet` or `--json`, and only when stderr is a terminal (never into logs or pipes).
-pub fn progress(common: &Common, message: std::fmt::Arguments<'_>) {
-    use std::io::IsTerminal;
-    if !common.quiet && !common.json && std::io::stderr().is_terminal() {
-        eprintln!("rotavg: {message}");
+/// Print a report: `serde_json::to_string(report)` when `json`, else `report.to_string()`
+/// unless `quiet`.
+pub fn print<R: Serialize + Display>(report: &R, json: bool, quiet: bool) -> rotavg::Result<()> {
+    if json {
+        let text = serde_json::to_string(report).map_err(|e| rotavg::Error::Io {
+            path: "<stdout>".into(),
+            message: e.to_string(),
+        })?;
+        println!("{text}");
+    } else if !quiet {
+        println!("{report}");
     }
+    Ok(())
+}
+
+/// A parser of the named values `values` of a library choice (help lists their names and
+/// descriptions; other names are a usage error).
+pub fn choice<T: Choice>(values: Vec<T>) -> impl TypedValueParser<Value = T> {
+    let possible: Vec<PossibleValue> = values
+        .iter()
+        .map(|v| PossibleValue::new(v.name()).help(v.help()))
+        .collect();
+    PossibleValuesParser::new(possible)
+        .try_map(|name| T::from_name(&name).ok_or_else(|| format!("unknown value `{name}`")))
 }

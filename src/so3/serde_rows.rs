@@ -1,13 +1,13 @@
 //! Serde helpers: rotations as row-major nested arrays `[[r11, r12, r13], [..], [..]]`, the JSON
-//! layout of SPEC section 5. Use with `#[serde(with = "rotavg::serde_rot::rotation")]` or
-//! `#[serde(with = "rotavg::serde_rot::rotations")]`. Deserialisation validates the rotation with
+//! layout of SPEC section 5. Use with `#[serde(with = "rotavg::so3::serde_rows::rotation")]` or
+//! `#[serde(with = "rotavg::so3::serde_rows::rotations")]`. Deserialisation validates the rotation with
 //! [`crate::so3::DEFAULT_ROTATION_TOLERANCE`].
 //!
 //! ```
 //! use rotavg::Rotation;
 //! #[derive(serde::Serialize, serde::Deserialize)]
 //! struct Pose {
-//!     #[serde(with = "rotavg::serde_rot::rotation")]
+//!     #[serde(with = "rotavg::so3::serde_rows::rotation")]
 //!     rotation: Rotation,
 //! }
 //! let json = serde_json::to_string(&Pose { rotation: Rotation::identity() }).unwrap();
@@ -58,5 +58,26 @@ pub mod rotations {
                     .map_err(serde::de::Error::custom)
             })
             .collect()
+    }
+}
+
+/// An optional rotation (`null` or a row-major nested array).
+pub mod optional_rotation {
+    use crate::so3::{DEFAULT_ROTATION_TOLERANCE, Rotation, rotation_from_rows, rotation_to_rows};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    /// Serialise.
+    pub fn serialize<S: Serializer>(r: &Option<Rotation>, s: S) -> Result<S::Ok, S::Error> {
+        r.as_ref().map(rotation_to_rows).serialize(s)
+    }
+
+    /// Deserialise and validate.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Rotation>, D::Error> {
+        Option::<[[f64; 3]; 3]>::deserialize(d)?
+            .map(|rows| {
+                rotation_from_rows(&rows, DEFAULT_ROTATION_TOLERANCE, "rotation")
+                    .map_err(serde::de::Error::custom)
+            })
+            .transpose()
     }
 }

@@ -3,14 +3,15 @@
 //! rank-lifted problem `min tr(Y^T Q Y)` over `Y_i` in `St(3, p)` (3 x p, orthonormal rows),
 //! `p = 3, 4, ...`, escaping saddles along the negative eigenvector of `S`; the multipliers of
 //! the final lifted point are verified exactly like any other multipliers
-//! ([`super::multiple::lower_bound_from_multipliers`]), so the bound is proven whatever the
+//! ([`super::lower_bound_from_multipliers`]), so the bound is proven whatever the
 //! optimiser achieved, and approaches the SDP optimum when the optimiser converges.
 //!
 //! The optimiser here is a plain Riemannian gradient descent (Barzilai-Borwein steps, Armijo
 //! backtracking, polar retraction): adequate for moderate sizes; it reports why it stopped.
 
-use crate::certificate::{BoundMethod, Certificate};
-use crate::certify::multiple::{CertifySettings, VerifiedBound, lower_bound_from_multipliers};
+use super::dual::{VerifiedBound, check_rotations, lower_bound_from_multipliers};
+use crate::certify::certificate::{BoundMethod, Certificate};
+use crate::certify::settings::CertifySettings;
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
@@ -28,8 +29,6 @@ pub struct StaircaseSettings {
     pub max_iterations: usize,
     /// Stop the descent when `||grad|| <= gradient_tolerance * (1 + F)`.
     pub gradient_tolerance: f64,
-    /// Verification settings (tolerance, shifts, Lanczos).
-    pub certify: CertifySettings,
 }
 
 impl Default for StaircaseSettings {
@@ -38,7 +37,81 @@ impl Default for StaircaseSettings {
             max_rank: 8,
             max_iterations: 5000,
             gradient_tolerance: 1e-10,
-            certify: CertifySettings::default(),
+        }
+    }
+}
+
+impl StaircaseSettings {
+    /// Check every value; [`Error::InvalidSettings`] names the first bad one
+    /// (`staircase.<field>`).
+    pub fn validate(&self) -> Result<()> {
+        if self.max_rank < 3 {
+            return Err(Error::InvalidSettings {
+                name: "staircase.max_rank".into(),
+                reason: format!("must be at least 3, got {}", self.max_rank),
+            });
+        }
+        crate::validate::at_least_one("staircase.max_iterations", self.max_iterations)?;
+        crate::validate::positive("staircase.gradient_tolerance", self.gradient_tolerance)
+    }
+}
+
+/// Why the staircase stopped.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "reason", rename_all = "snake_case")]
+pub enum StaircaseStop {
+    /// The certificate matrix of the rank-`rank` point has no negative eigenvalue estimate
+    /// below the shift budget: the bound is as good as the verification.
+    Verified {
+        /// The rank.
+        rank: usize,
+        /// The Lanczos estimate of `lambda_min(S)` at that point.
+        min_eigenvalue_estimate: Option<f64>,
+    },
+    /// The rank limit was reached with a negative eigenvalue left.
+    MaxRank {
+        /// The limit ([`StaircaseSettings::max_rank`]).
+        max_rank: usize,
+        /// The negative eigenvalue estimate left.
+        min_eigenvalue_estimate: Option<f64>,
+    },
+    /// Moving along the negative eigenvector did not decrease the lifted cost (40 halvings).
+    EscapeFailed {
+        /// The rank at which it failed.
+        rank: usize,
+        /// The negative eigenvalue estimate.
+        min_eigenvalue_estimate: Option<f64>,
+    },
+}
+
+impl std::fmt::Display for StaircaseStop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let est = |e: &Option<f64>| e.map_or("n/a".to_string(), |v| format!("{v:.3e}"));
+        match self {
+            StaircaseStop::Verified {
+                rank,
+                min_eigenvalue_estimate,
+            } => write!(
+                f,
+                "certificate S of the rank-{rank} point verified (no negative eigenvector; lambda_min estimate {})",
+                est(min_eigenvalue_estimate)
+            ),
+            StaircaseStop::MaxRank {
+                max_rank,
+                min_eigenvalue_estimate,
+            } => write!(
+                f,
+                "maximum rank {max_rank} reached (lambda_min estimate {} < 0)",
+                est(min_eigenvalue_estimate)
+            ),
+            StaircaseStop::EscapeFailed {
+                rank,
+                min_eigenvalue_estimate,
+            } => write!(
+                f,
+                "escape along the negative eigenvector at rank {rank} did not decrease the cost (lambda_min estimate {})",
+                est(min_eigenvalue_estimate)
+            ),
         }
     }
 }
@@ -57,7 +130,7 @@ pub struct StaircaseResult {
     /// Total gradient-descent iterations.
     pub iterations: usize,
     /// Why the staircase stopped.
-    pub stop_reason: String,
+    pub stop_reason: StaircaseStop,
 }
 
 type Block = Matrix3xX<f64>;
@@ -176,26 +249,22 @@ fn descend(
 /// exactly like any multipliers (`[D4]`-`[D8]`): it is valid whatever the descent achieved.
 ///
 /// ```
-/// use rotavg::certify::staircase::{staircase_bound, StaircaseSettings};
+/// use rotavg::certify::multiple::staircase::staircase_bound;
+/// use rotavg::certify::CertifySettings;
 /// use rotavg::multiple::synthetic::SyntheticGraph;
 /// let (p, gt) = SyntheticGraph { num_rotations: 8, num_edges: 14, noise_sigma: 0.0, ..Default::default() }.generate();
-/// let r = staircase_bound(&p, &gt, &StaircaseSettings::default()).unwrap();
+/// let r = staircase_bound(&p, &gt, &CertifySettings::default()).unwrap();
 /// assert!(r.certificate.lower_bound.unwrap() <= p.chordal_cost(&gt) + 1e-12);
 /// ```
 pub fn staircase_bound(
     problem: &MultipleProblem,
     rotations: &[Rotation],
-    settings: &StaircaseSettings,
+    certify: &CertifySettings,
 ) -> Result<StaircaseResult> {
     let start = Instant::now();
-    crate::certify::multiple::check_rotations(problem, rotations)?;
-    settings.certify.validate()?;
-    if settings.max_rank < 3 {
-        return Err(Error::InvalidSettings {
-            name: "max_rank".into(),
-            reason: "must be at least 3".into(),
-        });
-    }
+    check_rotations(problem, rotations)?;
+    certify.validate()?;
+    let settings = &certify.staircase;
     let upper = problem.chordal_cost(rotations);
     let mut y: Vec<Block> = rotations
         .iter()
@@ -208,18 +277,27 @@ pub fn staircase_bound(
         y = yn;
         iterations += it;
         let lambdas = lifted_multipliers(problem, &y);
-        let bound = lower_bound_from_multipliers(problem, &lambdas, &settings.certify)?;
+        let bound = lower_bound_from_multipliers(problem, &lambdas, certify)?;
+        let estimate = bound.min_eigenvalue_estimate;
         let Some(v) = bound.negative_eigenvector.clone() else {
             break (
                 bound,
                 f,
-                format!(
-                    "certificate S of the rank-{rank} point verified (no negative eigenvector)"
-                ),
+                StaircaseStop::Verified {
+                    rank,
+                    min_eigenvalue_estimate: estimate,
+                },
             );
         };
         if rank >= settings.max_rank {
-            break (bound, f, format!("maximum rank {rank} reached"));
+            break (
+                bound,
+                f,
+                StaircaseStop::MaxRank {
+                    max_rank: settings.max_rank,
+                    min_eigenvalue_estimate: estimate,
+                },
+            );
         }
         // escape along v in a new column: Y_i <- [Y_i, alpha v_i], retract; second-order
         // decrease ~ alpha^2 lambda_min
@@ -253,7 +331,10 @@ pub fn staircase_bound(
                 break (
                     bound,
                     f,
-                    "escape along the negative eigenvector did not decrease the cost".to_string(),
+                    StaircaseStop::EscapeFailed {
+                        rank,
+                        min_eigenvalue_estimate: estimate,
+                    },
                 );
             }
         }
@@ -263,7 +344,7 @@ pub fn staircase_bound(
         Some(bound.lower_bound),
         BoundMethod::Staircase,
         bound.min_eigenvalue_estimate,
-        settings.certify.tolerance,
+        certify.tolerance.resolve(problem.median_weight()),
         format!(
             "Riemannian staircase: rank {rank}, lifted cost {lifted:.9e}; {stop_reason}; bound \
              verified from the lifted multipliers (lambda_min(S) >= {:.3e})",

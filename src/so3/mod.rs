@@ -20,6 +20,8 @@
 //! assert!((log(&r) - Vector3::new(0.0, 0.0, 0.5)).norm() < 1e-15);
 //! ```
 
+pub mod serde_rows;
+
 use crate::error::{Error, Result};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use rand::Rng;

@@ -8,12 +8,11 @@
 //! I`, which is consistent because `L_0 = S R_0 S^T = I`) and then solves the conjugate problem
 //! on the pairs `(L_i, R_i)`. Small graphs only (dense normal equations, `3n x 3n`).
 
-use super::local::{ConjugateSettings, solve_conjugate};
-use super::problem::{ConjugatePair, ConjugateProblem};
+use crate::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings, solve_conjugate};
 use crate::error::{Error, Result};
 use crate::multiple::Edge;
-use crate::report::{SolverReport, Termination};
 use crate::so3::{Rotation, exp, hat};
+use crate::termination::{SolverReport, Termination};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -33,10 +32,10 @@ pub struct SimultaneousProblem {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SimultaneousSolution {
     /// `R_0..R_{n-1}` with `R_0 = I`.
-    #[serde(with = "crate::serde_rot::rotations")]
+    #[serde(with = "crate::so3::serde_rows::rotations")]
     pub rotations: Vec<Rotation>,
     /// `S`.
-    #[serde(with = "crate::serde_rot::rotation")]
+    #[serde(with = "crate::so3::serde_rows::rotation")]
     pub s: Rotation,
     /// The joint cost `J`.
     pub cost: f64,
@@ -309,7 +308,7 @@ pub fn average_then_conjugate(p: &SimultaneousProblem) -> Result<SimultaneousSol
 /// never higher than the baseline's).
 ///
 /// ```
-/// use rotavg::conjugate::simultaneous::{solve_simultaneous, SimultaneousProblem};
+/// use rotavg::pipeline::simultaneous::{solve_simultaneous, SimultaneousProblem};
 /// use rotavg::multiple::Edge;
 /// use rotavg::so3::{angle_between, exp};
 /// use nalgebra::Vector3;

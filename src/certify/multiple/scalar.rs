@@ -33,22 +33,18 @@
 //! the caller falls back to the factorisation of `S` itself. The bound is never weaker than
 //! what it proves, and it is never used when it cannot be completed.
 
-use crate::certify::eigen::{UNIT_ROUNDOFF, for_each_factor_entry, gamma, inf_norm};
 use crate::error::{Error, Result};
+use crate::linalg::cholesky::{UNIT_ROUNDOFF, gamma, inf_norm};
+use crate::linalg::ldlt::{LdltFailure, ldlt_inertia};
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::Side;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Par, Side};
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
-
-/// Factor size (stored values) above which the numeric factorisation runs in parallel.
-const PARALLEL_FACTOR_THRESHOLD: usize = 2_000_000;
 
 /// Largest `||R_i^T R_i - I||_F` accepted (the rotations are validated far tighter than this).
 const MAX_ORTHOGONALITY_DEFECT: f64 = 1e-3;
@@ -366,66 +362,20 @@ fn factor_inertia(
             val[analysis.diag_pos[i]] = deg_w[i] - delta[i] - h;
         }
     }
-    let sym = &analysis.symbolic;
-    let mut values = vec![0.0f64; sym.len_val()];
-    let par = if sym.len_val() > PARALLEL_FACTOR_THRESHOLD {
-        Par::rayon(0)
-    } else {
-        Par::Seq
-    };
-    let req = sym.factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
-    let mut mem = MemBuffer::try_new(req).map_err(|_| ScalarFailure::Numerical)?;
-    // Soundness: `LdltRegularization::default()` has delta = epsilon = 0 and no signs, and faer
-    // only alters pivots when both are > 0 (faer 0.24, ldlt/factor.rs); a zero pivot is an error.
-    sym.factorize_numeric_ldlt::<f64>(
-        &mut values,
-        a.as_ref(),
-        Side::Lower,
-        LdltRegularization::default(),
-        par,
-        MemStack::new(&mut mem),
-        Default::default(),
-    )
-    .map_err(|_| ScalarFailure::Numerical)?;
-    if !values.iter().all(|v| v.is_finite()) {
-        return Err(ScalarFailure::Numerical);
-    }
-    // visit (row, col, value) of the factor: diagonal entries are D, strictly lower ones L
-    let visit = |f: &mut dyn FnMut(usize, usize, f64)| for_each_factor_entry(sym, &values, f);
-    let mut d = vec![0.0f64; n];
-    let mut colsum = vec![1.0f64; n]; // the unit diagonal of L
-    let mut rowcount = vec![1usize; n];
-    visit(&mut |r, c, v| {
-        if r == c {
-            d[c] = v;
-        } else {
-            colsum[c] += v.abs();
-            rowcount[r] += 1;
-        }
-    });
-    let negative = d.iter().filter(|&&v| v < 0.0).count();
-    if d.iter().any(|&v| v == 0.0 || !v.is_finite()) {
-        return Err(ScalarFailure::Numerical);
-    }
+    let inertia = ldlt_inertia(&analysis.symbolic, a.as_ref()).map_err(|f| match f {
+        LdltFailure::Numerical => ScalarFailure::Numerical,
+    })?;
+    let negative = inertia.negative;
     if negative != 1 {
         return Err(ScalarFailure::Inertia {
             negative_pivots: negative,
         });
     }
-    // row sums of |L| |D| |L|^T: sum_m |L_im| |d_m| colsum_m (including the unit diagonal)
-    let mut rowsum: Vec<f64> = (0..n).map(|i| d[i].abs() * colsum[i]).collect();
-    visit(&mut |r, c, v| {
-        if r != c {
-            rowsum[r] += v.abs() * d[c].abs() * colsum[c];
-        }
-    });
-    let k = rowcount.iter().copied().max().unwrap_or(1);
-    let ldl_norm = rowsum.into_iter().fold(0.0, f64::max);
     // every entry of A = L - diag(delta) - hI is a sum of at most deg + 3 rounded terms
     let terms = deg_n.iter().copied().max().unwrap_or(0) + 3;
     let forming = gamma(terms + 2) * inf_norm(a.as_ref());
     // doubled to cover the rounding in evaluating the bounds themselves
-    let bound = 2.0 * (gamma(k + 4) * ldl_norm + forming);
+    let bound = inertia.backward_error + 2.0 * forming;
     if !bound.is_finite() {
         return Err(ScalarFailure::Numerical);
     }

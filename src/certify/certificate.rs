@@ -8,10 +8,12 @@
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
-/// Default tolerance on the relative gap `(f - lb) / max(|f|, 1e-12)` for a `Certified` verdict.
+/// Default relative part of the verdict's tolerance: certified when `gap <= 1e-6 |f|` (or the
+/// absolute part).
 pub const DEFAULT_RELATIVE_GAP_TOLERANCE: f64 = 1e-6;
-/// Default tolerance on the absolute gap `f - lb` (used for costs near zero, e.g. noise-free data).
-pub const DEFAULT_ABSOLUTE_GAP_TOLERANCE: f64 = 1e-9;
+/// Default absolute gap tolerance per unit of median weight (for costs near zero, e.g.
+/// noise-free data): the absolute part is `1e-9 x` the median edge / pair / sample weight.
+pub const DEFAULT_ABSOLUTE_GAP_PER_MEDIAN_WEIGHT: f64 = 1e-9;
 
 /// The outcome of certification.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -60,20 +62,110 @@ impl fmt::Display for BoundMethod {
     }
 }
 
-/// Tolerances for the verdict: certified when `gap <= max(abs_tol, rel_tol * max(|f|, 1e-12))`.
+/// The rule of the verdict's tolerance (SPEC section 3): certified when
+/// `gap <= max(relative * |f|, absolute_per_median_weight * median weight)`. Both parts scale
+/// with the weights, so multiplying every weight by `c` never changes a verdict, and the median
+/// is moved by no single measurement, so no edge can loosen it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ToleranceRule {
+    /// Relative part (default `1e-6`).
+    pub relative: f64,
+    /// Absolute part per unit of median weight (default `1e-9`).
+    pub absolute_per_median_weight: f64,
+}
+
+impl Default for ToleranceRule {
+    fn default() -> Self {
+        ToleranceRule {
+            relative: DEFAULT_RELATIVE_GAP_TOLERANCE,
+            absolute_per_median_weight: DEFAULT_ABSOLUTE_GAP_PER_MEDIAN_WEIGHT,
+        }
+    }
+}
+
+impl ToleranceRule {
+    /// Checks both parts are finite and `>= 0`; [`crate::Error::InvalidSettings`] names
+    /// `tolerance.relative` or `tolerance.absolute_per_median_weight`.
+    pub fn validate(&self) -> crate::Result<()> {
+        crate::validate::non_negative("tolerance.relative", self.relative)?;
+        crate::validate::non_negative(
+            "tolerance.absolute_per_median_weight",
+            self.absolute_per_median_weight,
+        )
+    }
+
+    /// The tolerance for a problem whose median weight is `median_weight`.
+    ///
+    /// ```
+    /// use rotavg::certify::ToleranceRule;
+    /// let t = ToleranceRule::default().resolve(250.0);
+    /// assert_eq!((t.relative, t.median_weight), (1e-6, 250.0));
+    /// assert!((t.absolute - 2.5e-7).abs() < 1e-20); // 1e-9 x 250
+    /// ```
+    pub fn resolve(&self, median_weight: f64) -> GapTolerance {
+        GapTolerance {
+            relative: self.relative,
+            absolute: self.absolute_per_median_weight * median_weight,
+            median_weight,
+        }
+    }
+}
+
+/// Which part of the tolerance decided (was the larger) at the certificate's cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TolerancePart {
+    /// `relative * |f|`.
+    Relative,
+    /// `absolute_per_median_weight * median weight`.
+    Absolute,
+}
+
+/// The tolerance that applied to a verdict: certified when
+/// `gap <= max(absolute, relative * |f|)`. (Unlike the reported `relative_gap`, the rule has no
+/// floor on `|f|`: a floor in the cost's units would not scale with the weights.)
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct GapTolerance {
     /// Relative gap tolerance.
     pub relative: f64,
-    /// Absolute gap tolerance.
+    /// Absolute gap tolerance (in the cost's units).
     pub absolute: f64,
+    /// The median weight the absolute part was scaled by (1 for a fixed absolute tolerance).
+    #[serde(default = "one")]
+    pub median_weight: f64,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 impl Default for GapTolerance {
     fn default() -> Self {
-        GapTolerance {
-            relative: DEFAULT_RELATIVE_GAP_TOLERANCE,
-            absolute: DEFAULT_ABSOLUTE_GAP_TOLERANCE,
+        ToleranceRule::default().resolve(1.0)
+    }
+}
+
+impl GapTolerance {
+    /// Checks both parts are finite and `>= 0`; [`crate::Error::InvalidSettings`] names
+    /// `tolerance.relative` or `tolerance.absolute`.
+    pub fn validate(&self) -> crate::Result<()> {
+        crate::validate::non_negative("tolerance.relative", self.relative)?;
+        crate::validate::non_negative("tolerance.absolute", self.absolute)
+    }
+
+    /// The largest gap that is certified at upper bound `f`:
+    /// `max(absolute, relative * |f|)`.
+    pub fn allowed_gap(&self, f: f64) -> f64 {
+        self.absolute.max(self.relative * f.abs())
+    }
+
+    /// Which part is the larger at `f`.
+    pub fn decisive_part(&self, f: f64) -> TolerancePart {
+        if self.relative * f.abs() >= self.absolute {
+            TolerancePart::Relative
+        } else {
+            TolerancePart::Absolute
         }
     }
 }
@@ -97,6 +189,8 @@ pub struct Certificate {
     pub method: BoundMethod,
     /// The tolerance applied for the verdict.
     pub tolerance: GapTolerance,
+    /// Which part of the tolerance decided (the larger one at the cost).
+    pub tolerance_part: TolerancePart,
     /// A sentence explaining the verdict (why certified, or why not).
     pub explanation: String,
     /// Time spent certifying, in seconds.
@@ -117,13 +211,13 @@ pub struct Certificate {
 impl Certificate {
     /// Build a certificate from an upper bound and an (independently verified) lower bound.
     /// The verdict is `Certified` iff a lower bound is given, both bounds are finite, and
-    /// `gap <= max(tol.absolute, tol.relative * max(|ub|, 1e-12))`; `GapReported` when a finite
+    /// `gap <= max(tol.absolute, tol.relative * |ub|)`; `GapReported` when a finite
     /// lower bound exceeds that; `Inconclusive` when there is no usable lower bound.
     ///
     /// ```
     /// use rotavg::{BoundMethod, Certificate, Verdict};
-    /// use rotavg::certificate::GapTolerance;
-    /// let tol = GapTolerance::default(); // relative 1e-6, absolute 1e-9
+    /// use rotavg::certify::GapTolerance;
+    /// let tol = GapTolerance::default(); // relative 1e-6, absolute 1e-9 (median weight 1)
     /// // A verified lower bound within 1e-6 relative of the cost: certified.
     /// let c = Certificate::from_bounds(10.0, Some(10.0 - 5e-6), BoundMethod::Dual, None, tol, "example", 0.0);
     /// assert_eq!(c.verdict, Verdict::Certified);
@@ -152,7 +246,7 @@ impl Certificate {
             Some(l) if upper_bound.is_finite() => {
                 let gap = upper_bound - l;
                 let rel = gap / scale;
-                let ok = gap <= tolerance.absolute.max(tolerance.relative * scale);
+                let ok = gap <= tolerance.allowed_gap(upper_bound);
                 (
                     Some(gap),
                     Some(rel),
@@ -174,11 +268,40 @@ impl Certificate {
             min_eigenvalue,
             method,
             tolerance,
+            tolerance_part: tolerance.decisive_part(upper_bound),
             explanation: explanation.into(),
             seconds,
             verified_min_eigenvalue: None,
             smallest_eigenvalues: None,
         }
+    }
+
+    /// The same lower bound (a bound on the global minimum, whatever estimate produced it)
+    /// against another upper bound: the certificate of a different estimate, e.g. an improved
+    /// one. Gap, relative gap and verdict are recomputed by the rule of [`Self::from_bounds`].
+    ///
+    /// ```
+    /// use rotavg::{BoundMethod, Certificate, Verdict};
+    /// use rotavg::certify::GapTolerance;
+    /// let c = Certificate::from_bounds(10.0, Some(9.0), BoundMethod::Sdp, None, GapTolerance::default(), "", 0.0);
+    /// assert_eq!(c.verdict, Verdict::GapReported);
+    /// let better = c.with_upper_bound(9.0 + 1e-9);
+    /// assert_eq!(better.verdict, Verdict::Certified);
+    /// assert_eq!(better.lower_bound, Some(9.0));
+    /// ```
+    pub fn with_upper_bound(&self, upper_bound: f64) -> Certificate {
+        let mut c = Certificate::from_bounds(
+            upper_bound,
+            self.lower_bound,
+            self.method,
+            self.min_eigenvalue,
+            self.tolerance,
+            self.explanation.clone(),
+            self.seconds,
+        );
+        c.verified_min_eigenvalue = self.verified_min_eigenvalue;
+        c.smallest_eigenvalues = self.smallest_eigenvalues.clone();
+        c
     }
 
     /// `true` iff the verdict is [`Verdict::Certified`].
@@ -203,7 +326,24 @@ impl fmt::Display for Certificate {
         if let Some(mu) = self.min_eigenvalue {
             write!(f, ", lambda_min {mu:.3e}")?;
         }
-        write!(f, "; {}", self.explanation)
+        let t = &self.tolerance;
+        write!(
+            f,
+            "; tolerance max({:.0e} |f|, {:.3e}) = {:.3e} ({} part{}); {}",
+            t.relative,
+            t.absolute,
+            t.allowed_gap(self.upper_bound),
+            match self.tolerance_part {
+                TolerancePart::Relative => "relative",
+                TolerancePart::Absolute => "absolute",
+            },
+            if t.median_weight != 1.0 {
+                format!(", median weight {:.3e}", t.median_weight)
+            } else {
+                String::new()
+            },
+            self.explanation
+        )
     }
 }
 

@@ -4,99 +4,20 @@
 
 use super::problem::{ConjugateProblem, DiagnosticSettings};
 use crate::error::{Error, Result};
-use crate::report::{SolverReport, Termination};
-use crate::so3::{Metric, Rotation, angle, exp, hat, log, quaternion_distance, to_quaternion};
+use crate::objective::{Loss, Objective};
+use crate::so3::{Metric, Rotation, exp, hat, log, to_quaternion};
+use crate::termination::{SolverReport, Termination};
+use crate::validate::{at_least_one, check_rotation, non_negative};
 use nalgebra::{Matrix3, Matrix4, Quaternion, SMatrix, SymmetricEigen, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
-/// The loss `rho` applied to each pair's distance `d_i` (cost `sum_i w_i rho(d_i)`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum Loss {
-    /// `rho(d) = d^2` (L2).
-    #[default]
-    Squared,
-    /// `rho(d) = d` (L1).
-    L1,
-    /// Huber: `d^2` for `d <= delta`, `2 delta d - delta^2` beyond.
-    Huber {
-        /// Threshold (same unit as the distance).
-        delta: f64,
-    },
-    /// Cauchy: `c^2 ln(1 + d^2 / c^2)`.
-    Cauchy {
-        /// Scale `c` (same unit as the distance).
-        scale: f64,
-    },
-}
-
-impl Loss {
-    /// `rho(d)`.
-    ///
-    /// ```
-    /// use rotavg::conjugate::Loss;
-    /// assert_eq!(Loss::Squared.rho(3.0), 9.0);
-    /// assert_eq!(Loss::L1.rho(3.0), 3.0);
-    /// assert_eq!(Loss::Huber { delta: 1.0 }.rho(3.0), 5.0); // 2 delta d - delta^2
-    /// ```
-    pub fn rho(self, d: f64) -> f64 {
-        match self {
-            Loss::Squared => d * d,
-            Loss::L1 => d,
-            Loss::Huber { delta } => {
-                if d <= delta {
-                    d * d
-                } else {
-                    2.0 * delta * d - delta * delta
-                }
-            }
-            Loss::Cauchy { scale } => scale * scale * (1.0 + d * d / (scale * scale)).ln(),
-        }
-    }
-
-    /// IRLS weight `psi(d) = rho'(d) / (2 d)` `[H7]` (so `rho(d) ~ psi * d^2` locally);
-    /// `eps` guards the L1 singularity at `d = 0`.
-    fn irls_weight(self, d: f64, eps: f64) -> f64 {
-        match self {
-            Loss::Squared => 1.0,
-            Loss::L1 => 0.5 / d.max(eps),
-            Loss::Huber { delta } => {
-                if d <= delta {
-                    1.0
-                } else {
-                    delta / d
-                }
-            }
-            Loss::Cauchy { scale } => 1.0 / (1.0 + d * d / (scale * scale)),
-        }
-    }
-
-    fn validate(self) -> Result<()> {
-        let bad = |name: &str, v: f64| {
-            Err(Error::InvalidSettings {
-                name: name.into(),
-                reason: format!("must be finite and > 0, got {v}"),
-            })
-        };
-        match self {
-            Loss::Huber { delta } if !(delta.is_finite() && delta > 0.0) => bad("delta", delta),
-            Loss::Cauchy { scale } if !(scale.is_finite() && scale > 0.0) => bad("scale", scale),
-            _ => Ok(()),
-        }
-    }
-}
-
-/// Settings of [`solve_conjugate`].
+/// Settings of [`solve_conjugate`]. The cost minimised is the problem's objective
+/// ([`ConjugateProblem::with_objective`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct ConjugateSettings {
-    /// Distance between `R_i` and `S^T L_i S`: `Chordal` (default), `Geodesic`, or `Quaternion`
-    /// (closed form `[H6]`; only with `Loss::Squared`).
-    pub metric: Metric,
-    /// Loss on each distance (default squared).
-    pub loss: Loss,
-    /// Iteration limit (default 200).
+    /// Iteration limit (default 200; >= 1).
     pub max_iterations: usize,
     /// Stop when the Riemannian gradient norm is below `gradient_tolerance * total weight`
     /// (default `1e-12`).
@@ -105,97 +26,66 @@ pub struct ConjugateSettings {
     pub step_tolerance: f64,
     /// Thresholds of the identifiability test; data that do not determine `S` are refused.
     pub diagnostics: DiagnosticSettings,
+    /// Start of the iterative solver (default `None`: the quaternion closed form `[H6]`).
+    #[serde(with = "crate::so3::serde_rows::optional_rotation")]
+    pub init: Option<Rotation>,
 }
 
 impl Default for ConjugateSettings {
     fn default() -> Self {
         ConjugateSettings {
-            metric: Metric::Chordal,
-            loss: Loss::Squared,
             max_iterations: 200,
             gradient_tolerance: 1e-12,
             step_tolerance: 1e-13,
             diagnostics: DiagnosticSettings::default(),
+            init: None,
         }
     }
 }
 
 impl ConjugateSettings {
-    fn validate(&self) -> Result<()> {
-        self.loss.validate()?;
-        if self.metric == Metric::Quaternion && self.loss != Loss::Squared {
-            return Err(Error::InvalidSettings {
-                name: "loss".into(),
-                reason: "the quaternion metric has only the squared (closed-form) solver".into(),
-            });
-        }
-        for (name, v) in [
-            ("gradient_tolerance", self.gradient_tolerance),
-            ("step_tolerance", self.step_tolerance),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::InvalidSettings {
-                    name: name.into(),
-                    reason: format!("must be finite and >= 0, got {v}"),
-                });
-            }
+    /// Check every value; [`Error::InvalidSettings`] names the first bad one.
+    ///
+    /// ```
+    /// use rotavg::conjugate::ConjugateSettings;
+    /// assert!(ConjugateSettings::default().validate().is_ok());
+    /// let bad = ConjugateSettings { gradient_tolerance: f64::NAN, ..Default::default() };
+    /// assert!(bad.validate().unwrap_err().to_string().contains("gradient_tolerance"));
+    /// ```
+    pub fn validate(&self) -> Result<()> {
+        at_least_one("max_iterations", self.max_iterations)?;
+        non_negative("gradient_tolerance", self.gradient_tolerance)?;
+        non_negative("step_tolerance", self.step_tolerance)?;
+        self.diagnostics.validate()?;
+        if let Some(r) = &self.init {
+            check_rotation(|| "init".into(), r)?;
         }
         Ok(())
     }
 }
 
 /// A local solution: the estimate `S`, its cost `sum_i w_i rho(d(R_i, S^T L_i S))` under the
-/// settings' metric and loss, the chordal cost `g(S)` (SPEC section 1), and the solver report.
+/// problem's objective, the chordal cost `g(S)` (SPEC section 1), and the solver report.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConjugateSolution {
     /// The estimate `S`.
-    #[serde(with = "crate::serde_rot::rotation")]
+    #[serde(with = "crate::so3::serde_rows::rotation")]
     pub estimate: Rotation,
-    /// Cost under `metric` and `loss`.
+    /// Cost under the objective.
     pub cost: f64,
-    /// The chordal L2 cost `g(S)` (the certified objective).
+    /// The chordal L2 cost `g(S)` (the SDP's objective).
     pub chordal_cost: f64,
-    /// Metric of `cost`.
-    pub metric: Metric,
-    /// Loss of `cost`.
-    pub loss: Loss,
+    /// The objective of `cost`.
+    pub objective: Objective,
     /// Iterations, termination, time.
     pub report: SolverReport,
 }
 
-/// Distance between `R_i` and `S^T L_i S` under `metric`.
-fn pair_distance(metric: Metric, s: &Rotation, l: &Rotation, r: &Rotation) -> f64 {
-    let moved = s.inverse() * l * s;
-    match metric {
-        Metric::Chordal => (s.matrix() * r.matrix() - l.matrix() * s.matrix()).norm(),
-        Metric::Geodesic => angle(&(r.inverse() * moved)),
-        Metric::Quaternion => quaternion_distance(r, &moved),
-    }
-}
-
-/// The cost `sum_i w_i rho(d(R_i, S^T L_i S))`. With `Metric::Chordal` and `Loss::Squared`
-/// this is `g(S)` `[H1]`.
-///
-/// ```
-/// use rotavg::conjugate::{conjugate_cost, ConjugateProblem, Loss};
-/// use rotavg::so3::{exp, Metric, Rotation};
-/// use nalgebra::Vector3;
-/// // One pair with L = Rz(0.3), R = I: for S = I the residual angle is 0.3.
-/// let p = ConjugateProblem::from_rotations(&[exp(&Vector3::new(0.0, 0.0, 0.3))], &[Rotation::identity()])?;
-/// let id = Rotation::identity();
-/// assert!((conjugate_cost(&p, &id, Metric::Geodesic, Loss::L1) - 0.3).abs() < 1e-12);
-/// assert!((conjugate_cost(&p, &id, Metric::Geodesic, Loss::Squared) - 0.09).abs() < 1e-12);
-/// // Chordal squared is the certified objective g(S).
-/// assert!((conjugate_cost(&p, &id, Metric::Chordal, Loss::Squared) - p.chordal_cost(&id)).abs() < 1e-12);
-/// # Ok::<(), rotavg::Error>(())
-/// ```
-pub fn conjugate_cost(problem: &ConjugateProblem, s: &Rotation, metric: Metric, loss: Loss) -> f64 {
-    problem
-        .pairs()
-        .iter()
-        .map(|p| p.weight * loss.rho(pair_distance(metric, s, &p.left, &p.right)))
-        .sum()
-}
+/// Quaternion L2, the objective of the closed form.
+const QUATERNION_L2: Objective = Objective {
+    metric: Metric::Quaternion,
+    loss: Loss::L2,
+};
 
 /// Left- and right-multiplication matrices of a quaternion, coordinates `(x, y, z, w)`
 /// (nalgebra's storage order): `left(p) q = p q`, `right(r) q = q r`.
@@ -259,10 +149,9 @@ pub fn quaternion_closed_form(
     }
     Ok(ConjugateSolution {
         estimate: s,
-        cost: conjugate_cost(problem, &s, Metric::Quaternion, Loss::Squared),
+        cost: problem.cost_under(&s, QUATERNION_L2),
         chordal_cost: problem.chordal_cost(&s),
-        metric: Metric::Quaternion,
-        loss: Loss::Squared,
+        objective: QUATERNION_L2,
         report: SolverReport {
             name: "quaternion-closed-form".into(),
             iterations: 0,
@@ -292,8 +181,7 @@ fn right_jacobian_inverse(phi: &Vector3<f64>) -> Matrix3<f64> {
 fn normal_equations(
     problem: &ConjugateProblem,
     s: &Rotation,
-    metric: Metric,
-    loss: Loss,
+    objective: Objective,
 ) -> (Matrix3<f64>, Vector3<f64>) {
     let sm = *s.matrix();
     let mut h = Matrix3::zeros();
@@ -301,12 +189,12 @@ fn normal_equations(
     let basis = [Vector3::x(), Vector3::y(), Vector3::z()];
     for p in problem.pairs() {
         let (l, r) = (p.left.matrix(), p.right.matrix());
-        match metric {
+        match objective.metric {
             Metric::Geodesic => {
                 // e = log(L^T S R S^T); S -> S exp(w) gives e + Jr^-1(e) S (R^T - I) w  [H7]
                 let e = log(&(p.left.inverse() * s * p.right * s.inverse()));
                 let j = right_jacobian_inverse(&e) * sm * (r.transpose() - Matrix3::identity());
-                let omega = p.weight * loss.irls_weight(e.norm(), 1e-12);
+                let omega = p.weight * objective.irls_weight(e.norm(), 1e-12);
                 h += j.transpose() * j * omega;
                 b += j.transpose() * e * omega;
             }
@@ -321,7 +209,7 @@ fn normal_equations(
                     j.set_column(k, &SMatrix::<f64, 9, 1>::from_column_slice(col.as_slice()));
                 }
                 let rv = SMatrix::<f64, 9, 1>::from_column_slice(res.as_slice());
-                let omega = p.weight * loss.irls_weight(d, 1e-12);
+                let omega = p.weight * objective.irls_weight(d, 1e-12);
                 h += j.transpose() * j * omega;
                 b += j.transpose() * rv * omega;
             }
@@ -330,76 +218,60 @@ fn normal_equations(
     (h, b)
 }
 
-/// Solve from the quaternion closed form `[H6]` (see [`solve_conjugate_from`]).
+/// Minimise the problem's objective `sum_i w_i rho(d(R_i, S^T L_i S))` over SO(3): the
+/// quaternion closed form `[H6]` for quaternion L2 (and as the default start); otherwise
+/// Gauss-Newton (L2) or IRLS (robust losses: each iteration one Gauss-Newton step with weights
+/// `w_i psi(d_i)`) from `settings.init` or the closed form, update `S <- S exp(hat(t delta))`
+/// with backtracking (Armijo, `c = 1e-4`) `[H7]`. Stops when the gradient norm
+/// `< gradient_tolerance * total weight` ("gradient norm"), the step angle `< step_tolerance`
+/// ("step angle"), when the line search fails and the predicted decrease is below
+/// `1e3 eps |cost|` (rounding level, counted as converged), or when no decrease is possible
+/// otherwise (`Stalled`). Refuses unidentifiable data ([`Error::Degenerate`]).
 ///
 /// ```
-/// use rotavg::conjugate::{ConjugateProblem, ConjugateSettings, solve_conjugate};
-/// use rotavg::so3::{exp, angle_between};
-/// use nalgebra::Vector3;
-/// let s = exp(&Vector3::new(0.4, -0.1, 0.7));
-/// let rs = [exp(&Vector3::new(0.5, 0.0, 0.1)), exp(&Vector3::new(0.0, 0.8, -0.3))];
-/// let ls: Vec<_> = rs.iter().map(|r| s * r * s.inverse()).collect();
-/// let p = ConjugateProblem::from_rotations(&ls, &rs).unwrap();
-/// let sol = solve_conjugate(&p, &ConjugateSettings::default()).unwrap();
-/// assert!(angle_between(&sol.estimate, &s) < 1e-10);
+/// use rand::SeedableRng;
+/// use rotavg::conjugate::{solve_conjugate, synthetic::random_instance, ConjugateSettings};
+/// use rotavg::objective::{Loss, Objective};
+/// use rotavg::so3::{angle_between, Metric, Rotation};
+/// let mut rng = rand::rngs::StdRng::seed_from_u64(6);
+/// // 30 pairs, 0.01 rad noise, 20 % of the L_i replaced by random rotations.
+/// let (problem, s) = random_instance(30, 0.01, 0.2, &mut rng);
+/// let robust = problem.with_objective(Objective::new(Metric::Geodesic, Loss::L1))?;
+/// let from_identity = ConjugateSettings { init: Some(Rotation::identity()), ..Default::default() };
+/// let sol = solve_conjugate(&robust, &from_identity)?;
+/// assert!(angle_between(&sol.estimate, &s) < 0.02); // the outliers are ignored
 /// assert!(sol.report.termination.is_converged());
+/// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn solve_conjugate(
     problem: &ConjugateProblem,
     settings: &ConjugateSettings,
 ) -> Result<ConjugateSolution> {
     settings.validate()?;
-    let init = quaternion_closed_form(problem, &settings.diagnostics)?;
-    if settings.metric == Metric::Quaternion {
-        return Ok(init);
-    }
-    let mut sol = solve_conjugate_from(problem, settings, &init.estimate)?;
-    sol.report.seconds += init.report.seconds;
-    Ok(sol)
-}
-
-/// Minimise `sum_i w_i rho(d(R_i, S^T L_i S))` over SO(3) from `init` by Gauss-Newton (squared
-/// loss) or IRLS (robust losses: each iteration one Gauss-Newton step with weights
-/// `w_i psi(d_i)`), update `S <- S exp(hat(t delta))` with backtracking (Armijo, `c = 1e-4`)
-/// `[H7]`. Stops when the gradient norm `< gradient_tolerance * total weight` ("gradient
-/// norm"), the step angle `< step_tolerance` ("step angle"), when the line search fails and the
-/// predicted decrease is below `1e3 eps |cost|` (rounding level, counted as converged), or when
-/// no decrease is possible otherwise (`Stalled`). Refuses unidentifiable data
-/// ([`Error::Degenerate`]).
-///
-/// ```
-/// use rand::SeedableRng;
-/// use rotavg::conjugate::{solve_conjugate_from, synthetic::random_instance, ConjugateSettings, Loss};
-/// use rotavg::so3::{angle_between, Metric, Rotation};
-/// let mut rng = rand::rngs::StdRng::seed_from_u64(6);
-/// // 30 pairs, 0.01 rad noise, 20 % of the L_i replaced by random rotations.
-/// let (problem, s) = random_instance(30, 0.01, 0.2, &mut rng);
-/// let robust = ConjugateSettings { metric: Metric::Geodesic, loss: Loss::L1, ..Default::default() };
-/// let sol = solve_conjugate_from(&problem, &robust, &Rotation::identity())?;
-/// assert!(angle_between(&sol.estimate, &s) < 0.02); // the outliers are ignored
-/// # Ok::<(), rotavg::Error>(())
-/// ```
-pub fn solve_conjugate_from(
-    problem: &ConjugateProblem,
-    settings: &ConjugateSettings,
-    init: &Rotation,
-) -> Result<ConjugateSolution> {
-    settings.validate()?;
     problem.require_identifiable(&settings.diagnostics)?;
     let start = Instant::now();
-    let (metric, loss) = (settings.metric, settings.loss);
-    if metric == Metric::Quaternion {
-        let mut sol = quaternion_closed_form(problem, &settings.diagnostics)?;
-        sol.report.seconds = start.elapsed().as_secs_f64();
-        return Ok(sol);
+    let objective = problem.objective();
+    let closed_form = match settings.init {
+        Some(_) if objective.metric != Metric::Quaternion => None,
+        _ => Some(quaternion_closed_form(problem, &settings.diagnostics)?),
+    };
+    if objective.metric == Metric::Quaternion {
+        // Quaternion L2 is the only quaternion objective (checked by with_objective).
+        return closed_form.ok_or_else(|| Error::Solver {
+            message: "quaternion closed form missing".into(),
+        });
     }
-    let cost_of = |s: &Rotation| conjugate_cost(problem, s, metric, loss);
+    let cost_of = |s: &Rotation| problem.cost(s);
     let gtol = settings.gradient_tolerance * problem.total_weight();
-    let mut s = *init;
+    let mut s = match (&settings.init, &closed_form) {
+        (Some(r), _) => *r,
+        (None, Some(c)) => c.estimate,
+        (None, None) => Rotation::identity(),
+    };
     let mut cost = cost_of(&s);
     let mut iterations = 0;
     let termination = loop {
-        let (h, b) = normal_equations(problem, &s, metric, loss);
+        let (h, b) = normal_equations(problem, &s, objective);
         let gnorm = 2.0 * b.norm();
         if !(gnorm.is_finite() && cost.is_finite()) {
             break Termination::NumericalFailure {
@@ -478,9 +350,9 @@ pub fn solve_conjugate_from(
             }
         }
     };
-    let name = match (metric, loss) {
-        (Metric::Chordal, Loss::Squared) => "chordal-gauss-newton",
-        (Metric::Geodesic, Loss::Squared) => "geodesic-gauss-newton",
+    let name = match (objective.metric, objective.loss) {
+        (Metric::Chordal, Loss::L2) => "chordal-gauss-newton",
+        (Metric::Geodesic, Loss::L2) => "geodesic-gauss-newton",
         (Metric::Chordal, _) => "chordal-irls",
         _ => "geodesic-irls",
     };
@@ -488,13 +360,12 @@ pub fn solve_conjugate_from(
         estimate: s,
         cost,
         chordal_cost: problem.chordal_cost(&s),
-        metric,
-        loss,
+        objective,
         report: SolverReport {
             name: name.into(),
             iterations,
             termination,
-            seconds: start.elapsed().as_secs_f64(),
+            seconds: start.elapsed().as_secs_f64() + closed_form.map_or(0.0, |c| c.report.seconds),
         },
     })
 }

@@ -13,12 +13,18 @@
 //!
 //! Every bound subtracts a floating-point safety margin (`rounding_margin`).
 
-use super::closed_form::{aligned_sum, sample_quaternions, weighted_matrix_sum};
-use super::iterative::{euclidean_median, eval_geodesic};
-use super::{Norm, SingleProblem, SingleSettings};
-use crate::certificate::{BoundMethod, Certificate};
+use super::certificate::{BoundMethod, Certificate};
+use super::certification::{Certification, CertifyDetails, MethodRun};
+use super::settings::{CertifyMode, CertifySettings};
 use crate::error::Result;
+use crate::linalg::compensated::Accumulator;
+use crate::objective::Loss;
+use crate::single::closed_form::{aligned_sum, sample_quaternions, weighted_matrix_sum};
+use crate::single::iterative::{euclidean_median, eval_geodesic};
+use crate::single::solve::Norm;
+use crate::single::{SingleProblem, SingleSettings, SingleSolution};
 use crate::so3::{self, Metric, Rotation};
+use crate::validate::check_rotation;
 use nalgebra::Matrix4;
 use std::f64::consts::FRAC_PI_2;
 use std::time::Instant;
@@ -31,43 +37,67 @@ pub const PAIRWISE_TEST_LIMIT: usize = 2048;
 /// ulps; `[S4]`).
 const ANGLE_MARGIN: f64 = 1e-12;
 
-/// Certify `estimate` for `problem` under `settings.metric` / `settings.norm`, without changing
-/// it. The upper bound is the cost of `estimate`; the lower bound is proven (see the module
-/// docs); the verdict compares the gap with `settings.gap_tolerance`.
+/// Certify `estimate` for `problem` under its objective, without changing it (modes `auto`
+/// and `theory`). The upper bound is the cost of `estimate`; the lower bound is proven (see
+/// the module docs); the verdict compares the gap with `settings.tolerance`.
 ///
 /// ```
-/// use rotavg::single::{certify_single, SingleProblem, SingleSettings};
+/// use rotavg::certify::{certify_single, CertifySettings};
+/// use rotavg::single::SingleProblem;
 /// use rotavg::{Rotation, Verdict};
 /// let p = SingleProblem::new(vec![Rotation::identity(); 4], None)?;
-/// let c = certify_single(&p, &Rotation::identity(), &SingleSettings::default())?;
-/// assert_eq!(c.verdict, Verdict::Certified);
+/// let c = certify_single(&p, &Rotation::identity(), &CertifySettings::default())?;
+/// assert_eq!(c.certificate.verdict, Verdict::Certified);
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn certify_single(
     problem: &SingleProblem,
     estimate: &Rotation,
-    settings: &SingleSettings,
-) -> Result<Certificate> {
+    settings: &CertifySettings,
+) -> Result<Certification<SingleSolution>> {
     settings.validate()?;
+    settings
+        .mode
+        .require("single", &[CertifyMode::Auto, CertifyMode::Theory])?;
+    check_rotation(|| "estimate".into(), estimate)?;
     let start = Instant::now();
-    let cost = problem.cost(estimate, settings.metric, settings.norm);
-    let (lb, explanation) = match (settings.metric, settings.norm) {
-        (Metric::Chordal, Norm::L2) => chordal_l2_bound(problem, cost),
-        (Metric::Quaternion, _) => quaternion_l2_bound(problem, estimate, cost),
-        (Metric::Geodesic, norm) => geodesic_ball_bound(problem, estimate, norm),
-        (Metric::Chordal, Norm::L1) => chordal_l1_bound(problem, settings),
+    let objective = problem.objective();
+    let cost = problem.cost(estimate);
+    let (lb, explanation) = match (objective.metric, objective.loss) {
+        (Metric::Chordal, Loss::L2) => chordal_l2_bound(problem, cost),
+        (Metric::Quaternion, Loss::L2) => quaternion_l2_bound(problem, estimate, cost),
+        (Metric::Geodesic, Loss::L2) => geodesic_ball_bound(problem, estimate, Norm::L2),
+        (Metric::Geodesic, Loss::L1) => geodesic_ball_bound(problem, estimate, Norm::L1),
+        (Metric::Chordal, Loss::L1) => chordal_l1_bound(problem),
+        _ => (None, format!("no lower bound for the {objective} cost")),
     };
     // A computed bound above the computed cost can only be rounding: f* <= f(estimate).
     let lb = lb.map(|l| l.min(cost));
-    Ok(Certificate::from_bounds(
+    let seconds = start.elapsed().as_secs_f64();
+    let certificate = Certificate::from_bounds(
         cost,
         lb,
         BoundMethod::Theory,
         None,
-        settings.gap_tolerance,
-        explanation,
-        start.elapsed().as_secs_f64(),
-    ))
+        settings.tolerance.resolve(problem.median_weight()),
+        explanation.clone(),
+        seconds,
+    );
+    Ok(Certification {
+        certificate,
+        details: CertifyDetails {
+            mode: settings.mode,
+            methods: vec![MethodRun {
+                method: BoundMethod::Theory,
+                lower_bound: lb,
+                seconds,
+                note: explanation,
+            }],
+            seconds,
+            ..Default::default()
+        },
+        improvement: None,
+    })
 }
 
 /// Safety margin for the rounding error of a computed cost `f = sum_i w_i d_i^p` of `n` terms
@@ -79,7 +109,9 @@ pub(crate) fn rounding_margin(n: usize, cost: f64, total_weight: f64) -> f64 {
         + 16.0 * eps * (total_weight + (total_weight * cost.abs()).sqrt())
 }
 
-/// `[S1]`: `min_R sum w_i ||R_i - R||^2 = 6W - 2 (s1 + s2 + sign(det M) s3)`.
+/// `[S1]`: `min_R sum w_i ||R_i - R||^2 = sum w_i ||R_i||_F^2 + 3W - 2 (s1 + s2 + sign(det M) s3)`
+/// (`= 6W - ...` for exactly orthogonal samples; the samples are orthogonal only within the
+/// validation tolerance, so `sum w_i ||R_i||_F^2` is evaluated, in double-double, not assumed).
 fn chordal_l2_bound(problem: &SingleProblem, cost: f64) -> (Option<f64>, String) {
     let total = problem.total_weight();
     let m = weighted_matrix_sum(problem);
@@ -87,11 +119,18 @@ fn chordal_l2_bound(problem: &SingleProblem, cost: f64) -> (Option<f64>, String)
     let mut s = [sv[0], sv[1], sv[2]];
     s.sort_by(|a, b| b.total_cmp(a));
     let sign = if m.determinant() < 0.0 { -1.0 } else { 1.0 };
-    let fstar = 6.0 * total - 2.0 * (s[0] + s[1] + sign * s[2]);
+    let mut norms = Accumulator::default();
+    for (_, r, w) in problem.samples() {
+        for v in r.matrix().iter() {
+            norms.add_triple(w, *v, *v);
+        }
+    }
+    let sum_norms = norms.value() - norms.bound();
+    let fstar = sum_norms + 3.0 * total - 2.0 * (s[0] + s[1] + sign * s[2]);
     let lb =
         fstar - rounding_margin(problem.len(), cost, total) - 16.0 * f64::EPSILON * 6.0 * total;
     let mut text = format!(
-        "closed form [S1]: global minimum 6W - 2(s1 + s2 + sign(det M) s3) = {fstar:.9e} from the singular values of M = sum w_i R_i"
+        "closed form [S1]: global minimum sum w_i |R_i|^2 + 3W - 2(s1 + s2 + sign(det M) s3) = {fstar:.9e} from the singular values of M = sum w_i R_i"
     );
     // Umeyama: the maximiser of tr(R^T M) is unique iff rank M >= 2 and, when det M < 0,
     // s2 > s3.
@@ -195,7 +234,8 @@ fn geodesic_ball_bound(
 }
 
 /// `[S7]`: `f(R) >= f_E(M) - |g| (sqrt 3 + |M|_F)` for every rotation `R`.
-fn chordal_l1_bound(problem: &SingleProblem, settings: &SingleSettings) -> (Option<f64>, String) {
+fn chordal_l1_bound(problem: &SingleProblem) -> (Option<f64>, String) {
+    let settings = SingleSettings::default();
     let total = problem.total_weight();
     let med = euclidean_median(
         problem,
@@ -215,4 +255,38 @@ fn chordal_l1_bound(problem: &SingleProblem, settings: &SingleSettings) -> (Opti
             med.cost, med.gradient_norm
         ),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::so3::{exp, random_rotation};
+    use nalgebra::Vector3;
+    use rand::SeedableRng;
+    use rand::rngs::StdRng;
+
+    /// Regression (found while tightening the multiple certificate, issue 11): samples are
+    /// accepted when orthogonal within 1e-5, but the closed form `[S1]` assumed
+    /// `||R_i||_F^2 = 3`. For samples `(1 - 2e-6) R` that overestimated the minimum by
+    /// `1.2e-5 W`, and an estimate `1e-6 W` above the optimum was certified.
+    #[test]
+    fn chordal_l2_bound_is_below_the_minimum_for_nearly_orthogonal_samples() {
+        let mut rng = StdRng::seed_from_u64(9);
+        for _ in 0..20 {
+            let r0 = random_rotation(&mut rng);
+            let scaled = crate::so3::Rotation::from_matrix_unchecked(r0.matrix() * (1.0 - 2e-6));
+            let p = SingleProblem::new(vec![scaled; 10], None).unwrap();
+            // the minimiser is r0 (the samples' polar factor), f* = 10 * 3 * (2e-6)^2
+            let fstar = p.cost(&r0);
+            assert!((fstar - 1.2e-10).abs() < 1e-14);
+            let worse = r0 * exp(&Vector3::new(1e-4, 0.0, 0.0));
+            assert!(p.cost(&worse) > fstar + 5e-8);
+            let c = certify_single(&p, &worse, &CertifySettings::default()).unwrap();
+            assert!(!c.certificate.is_certified(), "{}", c.certificate);
+            let lb = c.certificate.lower_bound.unwrap();
+            assert!(lb <= fstar + 1e-14, "bound {lb} above the minimum {fstar}");
+            let c = certify_single(&p, &r0, &CertifySettings::default()).unwrap();
+            assert!(c.certificate.is_certified(), "{}", c.certificate);
+        }
+    }
 }

@@ -1,4 +1,6 @@
-//! The SDP relaxation of conjugate averaging (SPEC section 3) and its verified lower bound.
+//! The SDP relaxation of conjugate averaging (SPEC section 3) and the rank-one extraction of
+//! its solution; the verified lower bound from its multipliers is in
+//! [`crate::certify::conjugate`].
 //!
 //! `s = vec(S)` is **column-major**: `s[3c + r] = S[r][c]` (nalgebra's storage order), and
 //! `z = [s; y]` (index 9 is the homogenising `y`). The cost is `g(S) = s^T M s` with
@@ -7,18 +9,14 @@
 //! [`constraint_matrices`] `[H3]` is relaxed to `min tr(C Z)`, `Z` PSD 10x10, and solved with
 //! Clarabel. The lower bound is recomputed from the multipliers with an independent dense
 //! eigenvalue computation `[H8]`; Clarabel's objective is never used as a bound.
-//!
-//! The small `svec` helper here is local (the multiple-averaging SDP has its own in
-//! `src/relax/`); both follow Clarabel's layout: upper triangle column by column,
-//! off-diagonals times `sqrt(2)`.
 
-use super::problem::ConjugateProblem;
-use crate::error::{Error, Result};
+use crate::conjugate::ConjugateProblem;
+use crate::error::Result;
+use crate::relax::clarabel::{Cone, csc, solve_conic};
+use crate::relax::settings::{SdpSettings, SdpStatus};
 use crate::relax::svec::{svec_index, svec_len, svec_weight};
 use crate::so3::{Rotation, project_to_so3};
-use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
-use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, SVector, SymmetricEigen};
+use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -48,7 +46,7 @@ pub fn lift(s: &Matrix3<f64>, y: f64) -> Vec10 {
 ///
 /// ```
 /// use rand::SeedableRng;
-/// use rotavg::conjugate::sdp::cost_matrix;
+/// use rotavg::relax::conjugate::cost_matrix;
 /// use rotavg::conjugate::synthetic::random_instance;
 /// use rotavg::so3::random_rotation;
 /// let mut rng = rand::rngs::StdRng::seed_from_u64(3);
@@ -97,7 +95,7 @@ fn add_bilinear(a: &mut Mat10, i: usize, j: usize, coef: f64) {
 /// (`cof(S)_ck = y S_ck`) and are not repeated. Every `S` in SO(3) with `y = 1` satisfies all.
 ///
 /// ```
-/// use rotavg::conjugate::sdp::{constraint_matrices, lift};
+/// use rotavg::relax::conjugate::{constraint_matrices, lift};
 /// use rotavg::so3::exp;
 /// let s = exp(&nalgebra::Vector3::new(0.3, -1.2, 0.8));
 /// let z = lift(s.matrix(), 1.0);
@@ -184,44 +182,10 @@ fn smat(v: &[f64]) -> Mat10 {
     Mat10::from_fn(|i, j| v[svec_index(i, j)] / svec_weight(i, j))
 }
 
-/// Settings of [`relax_conjugate`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct SdpSettings {
-    /// Clarabel's `max_iter` (default 100).
-    pub max_iterations: u32,
-    /// Clarabel's absolute and relative gap tolerances (default `1e-9`).
-    pub gap_tolerance: f64,
-    /// Clarabel's feasibility tolerance (default `1e-9`).
-    pub feasibility_tolerance: f64,
-}
-
-impl Default for SdpSettings {
-    fn default() -> Self {
-        SdpSettings {
-            max_iterations: 100,
-            gap_tolerance: 1e-9,
-            feasibility_tolerance: 1e-9,
-        }
-    }
-}
-
-/// Clarabel's outcome, in our words.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SdpStatus {
-    /// Solved to the requested accuracy.
-    Solved,
-    /// Solved to reduced accuracy.
-    AlmostSolved,
-    /// Any other end (iteration limit, numerical error, infeasibility claims).
-    Failed,
-}
-
 /// The solved relaxation: the primal `Z`, the multipliers `nu` (in the units of the unscaled
 /// cost, one per constraint of [`constraint_matrices`]) and solver statistics.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SdpRelaxation {
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConjugateRelaxation {
     /// Primal solution `Z` (10x10, PSD up to solver accuracy).
     pub z: Mat10,
     /// Multipliers `nu_k` such that `blkdiag(M, 0) - sum_k nu_k A_k` is (nearly) PSD.
@@ -241,17 +205,20 @@ pub struct SdpRelaxation {
 /// multipliers are scaled back.
 ///
 /// The solver's objective is never used as a bound: verify one from the multipliers with
-/// [`verify_lower_bound`] (or let [`crate::conjugate::certify_conjugate`] do it).
+/// [`crate::certify::conjugate::verify_lower_bound`] (or let [`crate::certify::certify_conjugate`]
+/// do it).
 ///
 /// ```
 /// use rand::SeedableRng;
-/// use rotavg::conjugate::sdp::{constraint_matrices, cost_matrix, extract_rotation, verify_lower_bound};
-/// use rotavg::conjugate::{relax_conjugate, synthetic::random_instance, SdpSettings};
+/// use rotavg::certify::conjugate::verify_lower_bound;
+/// use rotavg::conjugate::synthetic::random_instance;
+/// use rotavg::relax::conjugate::{constraint_matrices, cost_matrix, extract_rotation};
+/// use rotavg::relax::{relax_conjugate, SdpSettings};
 /// use rotavg::so3::angle_between;
 /// let mut rng = rand::rngs::StdRng::seed_from_u64(5);
 /// let (problem, s) = random_instance(20, 0.01, 0.0, &mut rng); // 20 pairs, 0.01 rad noise
 /// let relax = relax_conjugate(&problem, &SdpSettings::default())?;
-/// assert!(relax.status != rotavg::conjugate::SdpStatus::Failed);
+/// assert!(relax.status.converged());
 /// assert!(relax.eigenvalue_ratio < 1e-6); // Z is rank one: the relaxation is tight
 /// let s_sdp = extract_rotation(&relax.z).unwrap();
 /// assert!(angle_between(&s_sdp, &s) < 0.05);
@@ -264,7 +231,7 @@ pub struct SdpRelaxation {
 pub fn relax_conjugate(
     problem: &ConjugateProblem,
     settings: &SdpSettings,
-) -> Result<SdpRelaxation> {
+) -> Result<ConjugateRelaxation> {
     let start = Instant::now();
     let scale = problem.total_weight();
     let m = cost_matrix(problem) / scale;
@@ -291,31 +258,31 @@ pub fn relax_conjugate(
         vv.push(-1.0);
         b.push(0.0);
     }
-    let a = CscMatrix::new_from_triplets(ncons + nv, nv, ii, jj, vv);
-    let p = CscMatrix::<f64>::zeros((nv, nv));
+    let a = csc(
+        ncons + nv,
+        nv,
+        ii.into_iter()
+            .zip(jj)
+            .zip(vv)
+            .map(|((i, j), v)| (i, j, v))
+            .collect(),
+    );
     let q = svec(&c);
-    let cones = [
-        SupportedConeT::ZeroConeT(ncons),
-        SupportedConeT::PSDTriangleConeT(10),
-    ];
-    let cs = DefaultSettings::<f64> {
-        verbose: false,
-        max_iter: settings.max_iterations,
-        tol_gap_abs: settings.gap_tolerance,
-        tol_gap_rel: settings.gap_tolerance,
-        tol_feas: settings.feasibility_tolerance,
-        ..DefaultSettings::default()
-    };
-    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, cs).map_err(|e| Error::Solver {
-        message: format!("Clarabel setup: {e:?}"),
-    })?;
-    solver.solve();
-    let sol = &solver.solution;
-    let status = match sol.status {
-        SolverStatus::Solved => SdpStatus::Solved,
-        SolverStatus::AlmostSolved => SdpStatus::AlmostSolved,
-        _ => SdpStatus::Failed,
-    };
+    settings.validate()?;
+    let sol = solve_conic(
+        &q,
+        a,
+        &b,
+        &[Cone::Zero(ncons), Cone::Psd(10)],
+        settings,
+        "none",
+    )?;
+    let status = sol.status;
+    if sol.x.len() != nv || sol.z.len() != ncons + nv {
+        return Err(crate::Error::Solver {
+            message: "Clarabel returned vectors of the wrong length".into(),
+        });
+    }
     let z = smat(&sol.x);
     // Clarabel's dual z_k for the equality rows: C + sum_k z_k A_k is PSD, so nu = -z  [H8].
     let multipliers: Vec<f64> = sol.z[..ncons].iter().map(|v| -v * scale).collect();
@@ -327,7 +294,7 @@ pub fn relax_conjugate(
     } else {
         1.0
     };
-    Ok(SdpRelaxation {
+    Ok(ConjugateRelaxation {
         z,
         multipliers,
         status,
@@ -335,99 +302,6 @@ pub fn relax_conjugate(
         seconds: start.elapsed().as_secs_f64(),
         eigenvalue_ratio: ratio,
     })
-}
-
-/// A lower bound on `min_{S in SO(3)} g(S)` verified from multipliers `[H8]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct VerifiedBound {
-    /// The bound `sum_k nu_k b_k + 4 min(lambda_min, 0) - margin`.
-    pub lower_bound: f64,
-    /// `lambda_min(C(nu))` from nalgebra's dense symmetric eigen-decomposition.
-    pub min_eigenvalue: f64,
-    /// The floating-point safety margin subtracted.
-    pub margin: f64,
-    /// Proven lower bound on `lambda_min` of the exact `C(nu)`: `min_eigenvalue` minus the
-    /// eigenvalue part `100 eps ||(|M| + sum |nu_k| |A_k|)||_F` of `margin`.
-    pub verified_min_eigenvalue: f64,
-    /// All 10 eigenvalues of `C(nu)`, ascending (dense, as computed: estimates).
-    pub eigenvalues: [f64; 10],
-    /// Residuals `||C x - lambda x||` of the computed eigenpairs, same order.
-    pub eigen_residuals: [f64; 10],
-}
-
-/// The certificate matrix `C(nu) = blkdiag(M, 0) - sum_k nu_k A_k` `[H8]`.
-pub fn certificate_matrix(m: &Mat9, constraints: &[QcqpConstraint], nu: &[f64]) -> Mat10 {
-    let mut c = Mat10::zeros();
-    c.fixed_view_mut::<9, 9>(0, 0).copy_from(m);
-    for (con, &n) in constraints.iter().zip(nu) {
-        c -= con.matrix * n;
-    }
-    c
-}
-
-/// Verify a lower bound from any multipliers `nu` `[H8]`: for every feasible `z = [vec S; 1]`
-/// (`S` in SO(3)), `g(S) = z^T C(nu) z + sum_k nu_k b_k >= sum_k nu_k b_k + lambda_min ||z||^2`
-/// and `||z||^2 = ||S||_F^2 + 1 = 4`. `lambda_min` comes from nalgebra's dense eigen solver
-/// (independent of Clarabel); the margin `4 * 100 eps ||(|M| + sum |nu_k| |A_k|)||_F` covers
-/// rounding in forming `C(nu)` and in the eigenvalues. Returns `None` for non-finite input.
-pub fn verify_lower_bound(
-    m: &Mat9,
-    constraints: &[QcqpConstraint],
-    nu: &[f64],
-) -> Option<VerifiedBound> {
-    if nu.len() != constraints.len() || !nu.iter().all(|x| x.is_finite()) {
-        return None;
-    }
-    let c = certificate_matrix(m, constraints, nu);
-    let mut mag = Mat10::zeros();
-    mag.fixed_view_mut::<9, 9>(0, 0).copy_from(&m.abs());
-    for (con, &n) in constraints.iter().zip(nu) {
-        mag += con.matrix.abs() * n.abs();
-    }
-    let eig = SymmetricEigen::new(c);
-    let lam = eig.eigenvalues.min();
-    let mut order: Vec<usize> = (0..10).collect();
-    order.sort_by(|&p, &q| eig.eigenvalues[p].total_cmp(&eig.eigenvalues[q]));
-    let mut eigenvalues = [0.0; 10];
-    let mut eigen_residuals = [0.0; 10];
-    for (slot, &i) in order.iter().enumerate() {
-        let x = eig.eigenvectors.column(i);
-        eigenvalues[slot] = eig.eigenvalues[i];
-        eigen_residuals[slot] = (c * x - x * eig.eigenvalues[i]).norm();
-    }
-    let dual: f64 = constraints.iter().zip(nu).map(|(k, n)| k.rhs * n).sum();
-    let eigen_margin = 100.0 * f64::EPSILON * mag.norm();
-    let margin = 4.0 * eigen_margin + 4.0 * f64::EPSILON * dual.abs();
-    let lb = dual + 4.0 * lam.min(0.0) - margin;
-    lb.is_finite().then_some(VerifiedBound {
-        lower_bound: lb,
-        min_eigenvalue: lam,
-        margin,
-        verified_min_eigenvalue: lam - eigen_margin,
-        eigenvalues,
-        eigen_residuals,
-    })
-}
-
-/// Refine multipliers so that `z* = [vec S*; 1]` is an exact null vector of `C(nu)`: the
-/// least-norm correction `nu + pinv(A(z*)) (C(nu) z*)` with `A(z*) = [A_1 z*, ..., A_K z*]`
-/// `[H8]`. Then `sum nu_k b_k = g(S*)`, so the bound is `g(S*) + 4 lambda_min`: tight up to the
-/// solver's PSD accuracy. Any multipliers give a valid bound, so this cannot make it unsound.
-pub fn refine_multipliers(
-    m: &Mat9,
-    constraints: &[QcqpConstraint],
-    nu: &[f64],
-    s: &Rotation,
-) -> Option<Vec<f64>> {
-    let z = lift(s.matrix(), 1.0);
-    let c = certificate_matrix(m, constraints, nu);
-    let resid = c * z;
-    let k = constraints.len();
-    let a = DMatrix::from_fn(10, k, |i, j| (constraints[j].matrix * z)[i]);
-    let rhs = DVector::from_column_slice(resid.as_slice());
-    let delta = a.svd(true, true).solve(&rhs, 1e-12).ok()?;
-    let out: Vec<f64> = nu.iter().zip(delta.iter()).map(|(n, d)| n + d).collect();
-    out.iter().all(|x| x.is_finite()).then_some(out)
 }
 
 /// Rank-one extraction: top eigenvector `v` of `Z`, scaled so that `y = 1`, `S` = projection

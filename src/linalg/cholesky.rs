@@ -1,10 +1,10 @@
-//! Sparse extreme-eigenvalue machinery for certificate matrices (`paper-notes/certificates.md`).
+//! Verified factorisations and sparse helpers for certificate matrices (`paper-notes/certificates.md`).
 //!
 //! - [`ShiftedCholesky`]: the *verification* step `[D5]`. A sparse Cholesky factorisation of
 //!   `A = S + sigma I` (symbolic analysis done once, numeric factorisation per shift) that, when it
 //!   succeeds, proves `lambda_min(S) >= -sigma - eps`, with `eps` a rigorous floating-point margin
 //!   computed from the computed factor (`[D6]`).
-//! - [`lanczos_extreme`]: the *estimation* step `[D7]`. Lanczos with full reorthogonalisation on
+//! - [`lanczos_extreme`](crate::linalg::lanczos::lanczos_extreme): the *estimation* step `[D7]`. Lanczos with full reorthogonalisation on
 //!   any symmetric operator (the sparse matrix itself, or `(S + sigma I)^-1` through the
 //!   factorisation: shift-invert). Its numbers are estimates and never enter a bound by themselves.
 //!
@@ -12,7 +12,7 @@
 //!
 //! ```
 //! use faer::sparse::{SparseColMat, Triplet};
-//! use rotavg::certify::eigen::{lanczos_extreme, sparse_matvec, Extreme, LanczosSettings, ShiftedCholesky};
+//! use rotavg::linalg::{lanczos_extreme, sparse_matvec, Extreme, LanczosSettings, ShiftedCholesky};
 //! // S = tridiag(-1, 2, -1) of size 10: lambda_min = 2 - 2 cos(pi / 11) (closed form).
 //! let n = 10;
 //! let mut t = Vec::new();
@@ -38,6 +38,7 @@
 //! # Ok::<(), rotavg::Error>(())
 //! ```
 
+use super::compensated::two_sum;
 use crate::error::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -47,10 +48,6 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::{SparseColMat, SparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
-use nalgebra::{DMatrix, SymmetricEigen};
-use rand::rngs::StdRng;
-use rand::{Rng, SeedableRng};
-use serde::{Deserialize, Serialize};
 
 /// Unit roundoff of `f64`: `u = 2^-53`.
 pub const UNIT_ROUNDOFF: f64 = f64::EPSILON / 2.0;
@@ -465,14 +462,6 @@ impl ShiftedCholesky {
     }
 }
 
-/// Knuth's error-free sum: `a + b = s + e` exactly.
-fn two_sum(a: f64, b: f64) -> (f64, f64) {
-    let s = a + b;
-    let bb = s - a;
-    let e = (a - (s - bb)) + (b - bb);
-    (s, e)
-}
-
 impl PositiveFactor<'_> {
     /// Solve `(S + shift I) x = b` in place.
     pub fn solve_in_place(&self, x: &mut [f64]) {
@@ -496,183 +485,10 @@ impl PositiveFactor<'_> {
     }
 }
 
-/// Which end of the spectrum [`lanczos_extreme`] targets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Extreme {
-    /// The smallest (algebraic) eigenvalue.
-    Smallest,
-    /// The largest (algebraic) eigenvalue.
-    Largest,
-}
-
-/// Settings of [`lanczos_extreme`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct LanczosSettings {
-    /// Maximum Krylov dimension (each step stores one vector: memory `max_iterations * dim`).
-    pub max_iterations: usize,
-    /// Converged when the Ritz residual `||A x - theta x|| <= tolerance * max(scale, |theta|)`,
-    /// `scale` given by the caller (an estimate of `||A||`).
-    pub tolerance: f64,
-    /// Seed of the random start vector.
-    pub seed: u64,
-}
-
-impl Default for LanczosSettings {
-    fn default() -> Self {
-        LanczosSettings {
-            max_iterations: 120,
-            tolerance: 1e-10,
-            seed: 0x5eed,
-        }
-    }
-}
-
-/// Output of [`lanczos_extreme`]: an *estimate* of an extreme eigenpair.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct LanczosResult {
-    /// Ritz value.
-    pub value: f64,
-    /// Unit Ritz vector.
-    pub vector: Vec<f64>,
-    /// Ritz residual `||A x - value x||` (a standard bound: some eigenvalue lies within it).
-    pub residual: f64,
-    /// Krylov dimension reached.
-    pub iterations: usize,
-    /// Whether the residual criterion was met (or an invariant subspace found).
-    pub converged: bool,
-}
-
-/// Lanczos with full (twice-repeated Gram-Schmidt) reorthogonalisation `[D7]` for the smallest or
-/// largest eigenvalue of a symmetric operator `op(x, y): y = A x` of dimension `dim`.
-/// Stops when the Ritz residual `|beta_k s_k| <= tolerance * scale`, at `max_iterations`, or on an
-/// invariant subspace. The returned value is an estimate (`value >= lambda_min` for `Smallest` in
-/// exact arithmetic, by Cauchy interlacing).
-pub fn lanczos_extreme(
-    dim: usize,
-    mut op: impl FnMut(&[f64], &mut [f64]),
-    which: Extreme,
-    scale: f64,
-    settings: &LanczosSettings,
-    start: Option<&[f64]>,
-) -> LanczosResult {
-    if dim == 0 {
-        return LanczosResult {
-            value: 0.0,
-            vector: vec![],
-            residual: 0.0,
-            iterations: 0,
-            converged: true,
-        };
-    }
-    let kmax = settings.max_iterations.clamp(1, dim);
-    let mut rng = StdRng::seed_from_u64(settings.seed);
-    let mut v0: Vec<f64> = match start {
-        Some(s) if s.len() == dim && s.iter().any(|x| *x != 0.0) => {
-            // mix in a little randomness so a start vector orthogonal to the target still works
-            s.iter()
-                .map(|x| x + 1e-3 * (rng.random::<f64>() - 0.5) / (dim as f64).sqrt())
-                .collect()
-        }
-        _ => (0..dim).map(|_| rng.random::<f64>() - 0.5).collect(),
-    };
-    normalize(&mut v0);
-    let mut basis: Vec<Vec<f64>> = vec![v0];
-    let mut alpha: Vec<f64> = vec![];
-    let mut beta: Vec<f64> = vec![];
-    let mut w = vec![0.0; dim];
-    let mut best = (0.0, vec![1.0], f64::INFINITY);
-    let mut converged = false;
-    for j in 0..kmax {
-        op(&basis[j], &mut w);
-        let a = dot(&basis[j], &w);
-        alpha.push(a);
-        // full reorthogonalisation, twice ("twice is enough")
-        for _ in 0..2 {
-            for v in &basis {
-                let c = dot(v, &w);
-                axpy(-c, v, &mut w);
-            }
-        }
-        let b = norm(&w);
-        // Ritz pair of the tridiagonal T_j
-        let k = alpha.len();
-        let t = DMatrix::<f64>::from_fn(k, k, |r, c| {
-            if r == c {
-                alpha[r]
-            } else if r + 1 == c {
-                beta[r]
-            } else if c + 1 == r {
-                beta[c]
-            } else {
-                0.0
-            }
-        });
-        let eig = SymmetricEigen::new(t);
-        let idx = (0..k)
-            .reduce(|p, q| {
-                let better = match which {
-                    Extreme::Smallest => eig.eigenvalues[q] < eig.eigenvalues[p],
-                    Extreme::Largest => eig.eigenvalues[q] > eig.eigenvalues[p],
-                };
-                if better { q } else { p }
-            })
-            .unwrap_or(0);
-        let s: Vec<f64> = eig.eigenvectors.column(idx).iter().copied().collect();
-        let res = (b * s[k - 1]).abs();
-        best = (eig.eigenvalues[idx], s, res);
-        let invariant = b <= 1e-14 * scale.max(a.abs()).max(f64::MIN_POSITIVE);
-        if res <= settings.tolerance * scale.max(best.0.abs()) || invariant {
-            converged = true;
-            break;
-        }
-        if j + 1 == kmax {
-            break;
-        }
-        beta.push(b);
-        let mut next = w.clone();
-        next.iter_mut().for_each(|x| *x /= b);
-        basis.push(next);
-    }
-    let (value, s, residual) = best;
-    let mut x = vec![0.0; dim];
-    for (c, v) in s.iter().zip(&basis) {
-        axpy(*c, v, &mut x);
-    }
-    normalize(&mut x);
-    LanczosResult {
-        value,
-        vector: x,
-        residual,
-        iterations: alpha.len(),
-        converged,
-    }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn axpy(c: f64, x: &[f64], y: &mut [f64]) {
-    for (yi, xi) in y.iter_mut().zip(x) {
-        *yi += c * xi;
-    }
-}
-
-fn norm(a: &[f64]) -> f64 {
-    dot(a, a).sqrt()
-}
-
-fn normalize(a: &mut [f64]) {
-    let n = norm(a);
-    if n > 0.0 {
-        a.iter_mut().for_each(|x| *x /= n);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::lanczos::{Extreme, LanczosSettings, lanczos_extreme};
     use faer::sparse::Triplet;
 
     /// Path-graph Laplacian (tridiagonal 2,-1) of size n plus shift c: eigenvalues are known in

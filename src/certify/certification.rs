@@ -1,0 +1,123 @@
+//! What every `certify_*` function returns: one shape for the three problems.
+
+use super::certificate::{BoundMethod, Certificate};
+use super::settings::CertifyMode;
+use crate::relax::SdpStatus;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// The result of `certify_single`, `certify_multiple` and `certify_conjugate` for an estimate:
+/// its [`Certificate`] (upper bound = the estimate's cost, never changed), what was run, and a
+/// solution of lower cost if one was found while bounding.
+///
+/// `S` is the problem's solution type ([`crate::single::SingleSolution`],
+/// [`crate::multiple::MultipleSolution`], [`crate::conjugate::ConjugateSolution`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Certification<S> {
+    /// Verdict, bounds and gap of the given estimate.
+    pub certificate: Certificate,
+    /// The methods that ran, their bounds and times.
+    pub details: CertifyDetails,
+    /// A solution of strictly lower cost found while bounding (the local solver's polish of a
+    /// refined estimate, of an SDP rounding or extraction), or `None`. The certificate's lower
+    /// bound holds for it as well: [`Certificate::with_upper_bound`] gives its certificate. The
+    /// pipelines (`average_*`) return it in place of the estimate; `certify_*` never do.
+    pub improvement: Option<S>,
+}
+
+/// One bounding method that ran.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MethodRun {
+    /// Which method.
+    pub method: BoundMethod,
+    /// The verified lower bound it produced (on the global minimum), if any.
+    pub lower_bound: Option<f64>,
+    /// Wall time, seconds.
+    pub seconds: f64,
+    /// What happened, in words.
+    pub note: String,
+}
+
+/// Statistics of an SDP solve inside a certification.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SdpSummary {
+    /// Clarabel's outcome.
+    pub status: SdpStatus,
+    /// Interior-point iterations.
+    pub iterations: u32,
+    /// Time of the solve (setup, solve, rounding), seconds.
+    pub seconds: f64,
+    /// Tightness indicator of the primal solution: multiple averaging `lambda_4(X) / lambda_3(X)`,
+    /// conjugate `lambda_2(Z) / lambda_1(Z)` (0 for a tight, exactly low-rank solution).
+    pub eigenvalue_ratio: f64,
+    /// Cost of the rounded (multiple) or extracted (conjugate) estimate, before polishing.
+    pub rounded_cost: Option<f64>,
+    /// Cost after polishing it with the local solver.
+    pub polished_cost: Option<f64>,
+}
+
+/// Where an improvement came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ImprovementSource {
+    /// The local solver run from the estimate to a tighter tolerance (multiple averaging).
+    Refinement,
+    /// The rounding (multiple) or rank-one extraction (conjugate) of the SDP solution, polished
+    /// by the local solver.
+    SdpRounding,
+}
+
+/// A solution of lower cost than the certified estimate, found while bounding.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Improvement {
+    /// Where it came from.
+    pub source: ImprovementSource,
+    /// Its cost.
+    pub cost: f64,
+}
+
+/// What a certification did.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct CertifyDetails {
+    /// The mode requested.
+    pub mode: CertifyMode,
+    /// The bounding methods that ran, in order.
+    pub methods: Vec<MethodRun>,
+    /// Multiple averaging: the stationarity residual `[D3]` of the point whose multipliers
+    /// were verified (0 at a critical point).
+    pub stationarity_residual: Option<f64>,
+    /// Why a requested or default method was not run (e.g. the SDP after a dual certificate
+    /// limited by floating-point precision), if one was skipped.
+    pub skipped_reason: Option<String>,
+    /// The SDP solve, when one ran.
+    pub sdp: Option<SdpSummary>,
+    /// The improvement found, if any (the solution is in [`Certification::improvement`]).
+    pub improvement: Option<Improvement>,
+    /// Time spent refining the estimate before verifying multipliers (included in `seconds`).
+    pub refine_seconds: f64,
+    /// Total time, seconds.
+    pub seconds: f64,
+}
+
+impl fmt::Display for CertifyDetails {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "mode {}", self.mode)?;
+        for m in &self.methods {
+            write!(f, "; {} ({:.3} s): {}", m.method, m.seconds, m.note)?;
+        }
+        if let Some(r) = &self.skipped_reason {
+            write!(f, "; {r}")?;
+        }
+        Ok(())
+    }
+}
+
+impl<S> fmt::Display for Certification<S> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.certificate)?;
+        if let Some(c) = self.details.sdp.as_ref().and_then(|s| s.polished_cost) {
+            write!(f, "; SDP rounding + polish reaches cost {c:.9e}")?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,297 @@
+//! The settings of every `certify_*` function: one [`CertifySettings`] for the three problems
+//! (each reads the parts that apply to it), with the [`CertifyMode`] that chooses the method.
+
+use super::certificate::ToleranceRule;
+use super::multiple::staircase::StaircaseSettings;
+use super::spectrum::SpectrumSettings;
+use crate::error::{Error, Result};
+use crate::linalg::LanczosSettings;
+use crate::relax::SdpSettings;
+use crate::validate::at_least_one;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// Which argument bounds the global minimum.
+///
+/// | mode | single | multiple | conjugate |
+/// |---|---|---|---|
+/// | `auto` | theory | dual, then SDP (`n <= sdp_max_nodes`) or staircase | SDP (chordal L2) |
+/// | `theory` | closed forms, convexity `[S1]`-`[S7]` | — | — |
+/// | `dual` | — | dual certificate only `[D3]`-`[D9]` | — |
+/// | `sdp` | — | dual, then the SDP | SDP |
+/// | `staircase` | — | dual, then the Riemannian staircase `[D11]` | — |
+/// | `none` | no certificate | no certificate | no certificate |
+///
+/// A mode that does not apply to a problem is refused ([`Error::InvalidSettings`], field
+/// `mode`) before any work.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CertifyMode {
+    /// The best method for the problem (table above).
+    #[default]
+    Auto,
+    /// Theorems: closed forms and convexity balls (single averaging).
+    Theory,
+    /// The dual certificate of the estimate (multiple averaging).
+    Dual,
+    /// The SDP relaxation (multiple: after a failed dual certificate; conjugate: always).
+    Sdp,
+    /// The Riemannian staircase after a failed dual certificate (multiple averaging).
+    Staircase,
+    /// No certificate (the pipelines skip certification; `certify_*` refuse it).
+    None,
+}
+
+impl CertifyMode {
+    /// Short name: `auto`, `theory`, `dual`, `sdp`, `staircase`, `none`.
+    pub fn name(self) -> &'static str {
+        match self {
+            CertifyMode::Auto => "auto",
+            CertifyMode::Theory => "theory",
+            CertifyMode::Dual => "dual",
+            CertifyMode::Sdp => "sdp",
+            CertifyMode::Staircase => "staircase",
+            CertifyMode::None => "none",
+        }
+    }
+
+    /// [`Error::InvalidSettings`] (field `mode`) unless this mode is one of `allowed` for
+    /// `problem`.
+    pub(crate) fn require(self, problem: &str, allowed: &[CertifyMode]) -> Result<()> {
+        if allowed.contains(&self) {
+            return Ok(());
+        }
+        let names: Vec<&str> = allowed.iter().map(|m| m.name()).collect();
+        Err(Error::InvalidSettings {
+            name: "mode".into(),
+            reason: format!(
+                "certify mode `{}` does not apply to {problem} averaging (use {})",
+                self.name(),
+                names.join(", ")
+            ),
+        })
+    }
+}
+
+impl fmt::Display for CertifyMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Bytes a factorisation needs per stored factor value (values, work copy, the residual
+/// margin's double-double accumulators; measured on faer 0.24 supernodal factors).
+pub const BYTES_PER_FACTOR_VALUE: u64 = 24;
+
+/// Floating-point operations per second assumed when predicting a factorisation's time (a
+/// conservative rate for faer's supernodal Cholesky on one core of the reference machine).
+pub const PREDICTED_FLOP_RATE: f64 = 2e9;
+
+/// The memory and time a certification may use, checked *before* each expensive step from a
+/// predicted cost (the factor size from the symbolic analysis, and `len^2 / dim` flops for
+/// it), so that a run never swaps or hangs: a step that does not fit is not started, and the
+/// certificate says why (`inconclusive` when no proof fits).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Budget {
+    /// Largest memory one factorisation may need, bytes (default 4 GiB).
+    pub max_memory_bytes: u64,
+    /// Wall-clock limit of the certification, seconds (default 600; `None`: none). Checked
+    /// before each step (dual certificate, refinement, SDP, staircase) and against each
+    /// factorisation's predicted time.
+    pub max_seconds: Option<f64>,
+}
+
+impl Default for Budget {
+    fn default() -> Self {
+        Budget {
+            max_memory_bytes: 4 << 30,
+            max_seconds: Some(600.0),
+        }
+    }
+}
+
+impl Budget {
+    /// Check the values; [`Error::InvalidSettings`] names `budget.max_memory_bytes` or
+    /// `budget.max_seconds`.
+    pub fn validate(&self) -> Result<()> {
+        if self.max_memory_bytes == 0 {
+            return Err(Error::InvalidSettings {
+                name: "budget.max_memory_bytes".into(),
+                reason: "must be at least 1".into(),
+            });
+        }
+        if let Some(t) = self.max_seconds {
+            crate::validate::positive("budget.max_seconds", t)?;
+        }
+        Ok(())
+    }
+
+    /// `Err(reason)` when a factorisation with `values` stored factor values of a
+    /// `dim x dim` matrix does not fit: memory `BYTES_PER_FACTOR_VALUE * values`, time
+    /// `values^2 / dim / PREDICTED_FLOP_RATE` (a lower estimate of the flops).
+    ///
+    /// ```
+    /// use rotavg::certify::Budget;
+    /// let b = Budget { max_memory_bytes: 8 << 30, max_seconds: None };
+    /// assert!(b.factorisation_fits(10_000_000, 30_000).is_ok());
+    /// let why = b.factorisation_fits(41_000_000_000, 300_000).unwrap_err();
+    /// assert!(why.contains("4.1e10"), "{why}");
+    /// ```
+    pub fn factorisation_fits(&self, values: usize, dim: usize) -> std::result::Result<(), String> {
+        let bytes = values as f64 * BYTES_PER_FACTOR_VALUE as f64;
+        let gib = |b: f64| b / (1u64 << 30) as f64;
+        if bytes > self.max_memory_bytes as f64 {
+            return Err(format!(
+                "the proof would need a factor of {values:.1e} values ({:.1} GiB); memory budget {:.1} GiB",
+                gib(bytes),
+                gib(self.max_memory_bytes as f64)
+            ));
+        }
+        let seconds = (values as f64).powi(2) / dim.max(1) as f64 / PREDICTED_FLOP_RATE;
+        match self.max_seconds {
+            Some(limit) if seconds > limit => Err(format!(
+                "the proof would need a factorisation of {values:.1e} values, about {seconds:.0} s or more; time budget {limit} s"
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Settings of the verification of the dual certificate of multiple averaging `[D4]`-`[D8]`,
+/// `[D13]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct DualSettings {
+    /// Fraction of the gap tolerance spent on the first Cholesky shift:
+    /// `delta_0 = fraction * max(abs_tol, rel_tol |f|) / (3n)` (so that a verified
+    /// `lambda_min >= -delta_0` costs at most this fraction of the tolerance). In `(0, 1)`.
+    pub shift_budget_fraction: f64,
+    /// Maximum number of numeric Cholesky factorisations tried (>= 1).
+    pub max_factorizations: usize,
+    /// Lanczos settings for the eigenvalue *estimates* (never used as bounds by themselves).
+    pub lanczos: LanczosSettings,
+    /// Largest Cholesky factor (stored values) attempted: a guard on memory and time
+    /// (`8 * max_factor_nonzeros` bytes). Graphs with good separators (pose graphs, grids) fill
+    /// little; random expander graphs fill badly (a 10^4-node random graph with 3 10^4 edges
+    /// needs ~1.1e8 values, 7.7 s on an idle 2-core machine; the scalar comparison `[D13]`
+    /// usually avoids it). Above the cap no factorisation is tried: the bound falls
+    /// back to Gershgorin (valid, weak) and the explanation says so.
+    pub max_factor_nonzeros: usize,
+    /// Also estimate `lambda_min(S)` (shift-invert Lanczos) when the first shift already
+    /// verifies. Costs a few triangular solves; the estimate is reported, not used in the bound.
+    pub estimate_when_verified: bool,
+    /// Try the scalar comparison `[D13]` first when the `3n x 3n` Cholesky factor of `S` would
+    /// have more than this many stored values (estimated as 9 x the scalar factor). The scalar
+    /// proof needs one factorisation of an `n x n` matrix (about 27 x fewer flops on graphs
+    /// that fill); when it does not succeed within the gap budget the `3n` factorisation runs as
+    /// usual. `0`: always try it first; `usize::MAX`: never. Only used when the estimate's
+    /// rotations are known.
+    pub scalar_comparison_above: usize,
+}
+
+impl Default for DualSettings {
+    fn default() -> Self {
+        DualSettings {
+            shift_budget_fraction: 0.1,
+            max_factorizations: 24,
+            max_factor_nonzeros: 200_000_000,
+            lanczos: LanczosSettings::default(),
+            estimate_when_verified: true,
+            scalar_comparison_above: 30_000_000,
+        }
+    }
+}
+
+impl DualSettings {
+    /// Check every value; [`Error::InvalidSettings`] names the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.shift_budget_fraction > 0.0 && self.shift_budget_fraction < 1.0) {
+            return Err(Error::InvalidSettings {
+                name: "dual.shift_budget_fraction".into(),
+                reason: format!("must be in (0, 1), got {}", self.shift_budget_fraction),
+            });
+        }
+        at_least_one("dual.max_factorizations", self.max_factorizations)?;
+        self.lanczos.validate("dual.lanczos")
+    }
+}
+
+/// Settings of `certify_single`, `certify_multiple` and `certify_conjugate` (and of the
+/// certification step of the pipelines). Each problem reads the parts that apply to it:
+/// single `mode`, `tolerance`; multiple all but none; conjugate `mode`, `tolerance`, `sdp`,
+/// `spectrum`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CertifySettings {
+    /// Which method bounds the global minimum (default `auto`).
+    pub mode: CertifyMode,
+    /// Gap tolerance of the verdict: certified when
+    /// `gap <= max(relative |f|, absolute_per_median_weight x median weight)` (defaults `1e-6`
+    /// and `1e-9`; the median of the edge, pair or sample weights). Scale-free: multiplying
+    /// every weight by `c` never changes a verdict, and no single measurement can loosen it.
+    pub tolerance: ToleranceRule,
+    /// Multiple averaging: verification of the dual certificate.
+    pub dual: DualSettings,
+    /// The SDP solve (Clarabel).
+    pub sdp: SdpSettings,
+    /// Multiple averaging, mode `auto`: the SDP runs after a failed dual certificate only when
+    /// the graph has at most this many nodes (default 150; the SDP takes ~5 s at n = 150 on
+    /// sparse graphs on a 2-core machine); larger graphs get the staircase.
+    pub sdp_max_nodes: usize,
+    /// Multiple averaging: the Riemannian staircase.
+    pub staircase: StaircaseSettings,
+    /// Memory and time limits, checked before each expensive step.
+    pub budget: Budget,
+    /// When set, also estimate the smallest eigenvalues of the certificate matrix whose
+    /// multipliers gave the reported bound ([`super::Certificate::smallest_eigenvalues`],
+    /// `[D14]`; estimates for figures, not bounds). Default `None`: no extra work.
+    pub spectrum: Option<SpectrumSettings>,
+}
+
+impl Default for CertifySettings {
+    fn default() -> Self {
+        CertifySettings {
+            mode: CertifyMode::Auto,
+            tolerance: ToleranceRule::default(),
+            dual: DualSettings::default(),
+            sdp: SdpSettings::default(),
+            sdp_max_nodes: 150,
+            staircase: StaircaseSettings::default(),
+            budget: Budget::default(),
+            spectrum: None,
+        }
+    }
+}
+
+impl CertifySettings {
+    /// Default settings with the given mode.
+    pub fn with_mode(mode: CertifyMode) -> Self {
+        CertifySettings {
+            mode,
+            ..Default::default()
+        }
+    }
+
+    /// Check every value (all parts, whichever problem reads them);
+    /// [`Error::InvalidSettings`] names the first bad one.
+    ///
+    /// ```
+    /// use rotavg::certify::CertifySettings;
+    /// assert!(CertifySettings::default().validate().is_ok());
+    /// let mut bad = CertifySettings::default();
+    /// bad.sdp.max_iterations = 0;
+    /// assert!(bad.validate().unwrap_err().to_string().contains("sdp.max_iterations"));
+    /// ```
+    pub fn validate(&self) -> Result<()> {
+        self.tolerance.validate()?;
+        self.dual.validate()?;
+        self.sdp.validate()?;
+        self.staircase.validate()?;
+        self.budget.validate()?;
+        if let Some(sp) = &self.spectrum {
+            sp.validate()?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,196 @@
+//! The sparsity pattern of a symmetric block-sparse matrix (the Newton systems of the local
+//! solvers, `[M6]`): lower-triangular CSC storage, one block row/column per node, assembly,
+//! products, and the sparse Cholesky on it.
+
+use crate::error::{Error, Result};
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::{Mat, Side};
+use nalgebra::Matrix3;
+
+/// Lower-triangular CSC pattern of a symmetric block-sparse matrix with `bs x bs` blocks, one
+/// block row/column per variable node, off-diagonal blocks where the graph has an edge. Built
+/// once; [`BlockPattern::add`] accumulates into a value array (`[M6]`, assembly).
+pub(crate) struct BlockPattern {
+    bs: usize,
+    symbolic: SymbolicSparseColMat<usize>,
+    col_ptr: Vec<usize>,
+    /// sorted neighbours `P > Q` of each block column `Q`
+    nbrs: Vec<Vec<usize>>,
+}
+
+impl BlockPattern {
+    /// `pairs`: block pairs (p, q), p != q, duplicates allowed.
+    pub(crate) fn new(
+        nblocks: usize,
+        bs: usize,
+        pairs: impl Iterator<Item = (usize, usize)>,
+    ) -> Self {
+        let mut nbrs: Vec<Vec<usize>> = vec![Vec::new(); nblocks];
+        for (p, q) in pairs {
+            if p != q {
+                nbrs[p.min(q)].push(p.max(q));
+            }
+        }
+        for l in nbrs.iter_mut() {
+            l.sort_unstable();
+            l.dedup();
+        }
+        let dim = nblocks * bs;
+        let mut col_ptr = Vec::with_capacity(dim + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for (q, l) in nbrs.iter().enumerate() {
+            for b in 0..bs {
+                for a in b..bs {
+                    row_idx.push(bs * q + a);
+                }
+                for &p in l {
+                    for a in 0..bs {
+                        row_idx.push(bs * p + a);
+                    }
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr.clone(), None, row_idx);
+        BlockPattern {
+            bs,
+            symbolic,
+            col_ptr,
+            nbrs,
+        }
+    }
+
+    /// The block size.
+    pub(crate) fn block_size(&self) -> usize {
+        self.bs
+    }
+
+    /// The column pointers of the lower-triangular storage.
+    pub(crate) fn col_ptr(&self) -> &[usize] {
+        &self.col_ptr
+    }
+
+    /// Stored values.
+    pub(crate) fn nnz(&self) -> usize {
+        *self.col_ptr.last().unwrap_or(&0)
+    }
+
+    /// Rank of neighbour `p` in the list of block column `q` (p > q), found once per edge.
+    pub(crate) fn slot(&self, p: usize, q: usize) -> usize {
+        let (p, q) = (p.max(q), p.min(q));
+        self.nbrs[q].binary_search(&p).expect("pair in pattern")
+    }
+
+    /// Add `m` (the `bs x bs` block at block row `p`, block column `q`) and, implicitly, its
+    /// transpose at `(q, p)`; only the lower triangle is stored. `slot` from [`Self::slot`]
+    /// (ignored when `p == q`).
+    pub(crate) fn add(&self, val: &mut [f64], p: usize, q: usize, slot: usize, m: &Matrix3<f64>) {
+        let bs = self.bs;
+        if p == q {
+            for b in 0..bs {
+                let c = self.col_ptr[bs * q + b];
+                for a in b..bs {
+                    val[c + a - b] += m[(a, b)];
+                }
+            }
+        } else if p > q {
+            for b in 0..bs {
+                let c = self.col_ptr[bs * q + b] + (bs - b) + slot * bs;
+                for a in 0..bs {
+                    val[c + a] += m[(a, b)];
+                }
+            }
+        } else {
+            // store the transpose at (q, p)
+            for b in 0..bs {
+                let c = self.col_ptr[bs * p + b] + (bs - b) + slot * bs;
+                for a in 0..bs {
+                    val[c + a] += m[(b, a)];
+                }
+            }
+        }
+    }
+
+    /// Add `s` to every diagonal entry.
+    pub(crate) fn add_diagonal(&self, val: &mut [f64], s: f64) {
+        for c in 0..self.col_ptr.len() - 1 {
+            val[self.col_ptr[c]] += s;
+        }
+    }
+
+    /// Diagonal entries.
+    pub(crate) fn diagonal(&self, val: &[f64]) -> Vec<f64> {
+        (0..self.col_ptr.len() - 1)
+            .map(|c| val[self.col_ptr[c]])
+            .collect()
+    }
+
+    /// Stored values of the Cholesky factor (AMD ordering), from a symbolic analysis.
+    pub(crate) fn factor_len(&self) -> Result<usize> {
+        let sym = faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(
+            self.symbolic.as_ref(),
+            Side::Lower,
+            Default::default(),
+            Default::default(),
+        )
+        .map_err(|e| Error::Solver {
+            message: format!("symbolic sparse Cholesky failed: {e:?}"),
+        })?;
+        Ok(sym.len_val())
+    }
+
+    /// Symbolic Cholesky (once).
+    pub(crate) fn symbolic_llt(&self) -> Result<SymbolicLlt<usize>> {
+        SymbolicLlt::try_new(self.symbolic.as_ref(), Side::Lower).map_err(|e| Error::Solver {
+            message: format!("symbolic sparse Cholesky failed: {e:?}"),
+        })
+    }
+
+    /// Numeric Cholesky with the given values; `None` if the matrix is not positive definite.
+    pub(crate) fn llt(&self, sym: &SymbolicLlt<usize>, val: &[f64]) -> Option<Llt<usize, f64>> {
+        let mat = SparseColMatRef::new(self.symbolic.as_ref(), val);
+        Llt::try_new_with_symbolic(sym.clone(), mat, Side::Lower).ok()
+    }
+
+    /// `y = A x` (one vector) for the symmetric matrix stored by its lower triangle.
+    pub(crate) fn sym_mul_flat(&self, val: &[f64], x: &[f64], y: &mut [f64]) {
+        y.iter_mut().for_each(|v| *v = 0.0);
+        let rows = self.symbolic.row_idx();
+        for c in 0..self.col_ptr.len() - 1 {
+            let xc = x[c];
+            let mut acc = 0.0;
+            for idx in self.col_ptr[c]..self.col_ptr[c + 1] {
+                let r = rows[idx];
+                let v = val[idx];
+                y[r] += v * xc;
+                if r != c {
+                    acc += v * x[r];
+                }
+            }
+            y[c] += acc;
+        }
+    }
+
+    /// `y = A x` for the symmetric matrix stored by its lower triangle; `x`, `y`: dim x k.
+    pub(crate) fn sym_mul(&self, val: &[f64], x: &Mat<f64>) -> Mat<f64> {
+        let dim = self.col_ptr.len() - 1;
+        let k = x.ncols();
+        let mut y = Mat::<f64>::zeros(dim, k);
+        let rows = self.symbolic.row_idx();
+        for c in 0..dim {
+            for idx in self.col_ptr[c]..self.col_ptr[c + 1] {
+                let r = rows[idx];
+                let v = val[idx];
+                for t in 0..k {
+                    y[(r, t)] += v * x[(c, t)];
+                    if r != c {
+                        y[(c, t)] += v * x[(r, t)];
+                    }
+                }
+            }
+        }
+        y
+    }
+}

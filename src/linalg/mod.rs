@@ -1,0 +1,29 @@
+//! Linear algebra shared by the solvers and the certificates. Nothing here knows about
+//! rotations.
+//!
+//! - [`cholesky`]: sparse helpers and the verified shifted Cholesky factorisation `[D5]`,
+//!   `[D6]`, `[D8]` (the only source of proven eigenvalue bounds).
+//! - `compensated` (crate-internal): double-double sums of products with error bounds `[D15]`.
+//! - `ldlt` (crate-internal): the verified inertia of a sparse `LDL^T` factorisation `[D13]`.
+//! - [`lanczos`](mod@lanczos): the one eigen-estimation engine (block Lanczos with full
+//!   reorthogonalisation) `[D7]`, `[D14]`.
+//! - `block_pattern`, `linear_solver`, `pcg` (crate-internal): the block-sparse Newton systems
+//!   of the local solvers `[M6]`: pattern and assembly, sparse Cholesky or block-Jacobi
+//!   preconditioned conjugate gradients.
+
+pub(crate) mod block_pattern;
+pub mod cholesky;
+pub(crate) mod compensated;
+pub mod lanczos;
+pub(crate) mod ldlt;
+pub(crate) mod linear_solver;
+pub(crate) mod pcg;
+
+pub use cholesky::{
+    PositiveFactor, ShiftedCholesky, UNIT_ROUNDOFF, gamma, gershgorin_lower_bound, inf_norm,
+    rayleigh_quotient, sparse_matvec,
+};
+pub use lanczos::{
+    EigenEstimate, Extreme, LanczosResult, LanczosSettings, LanczosStop, lanczos, lanczos_extreme,
+    smallest_eigenpair,
+};

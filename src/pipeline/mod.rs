@@ -1,0 +1,220 @@
+//! The pipelines: solve locally, certify, and adopt a better solution found while certifying.
+//! One shape for the three problems:
+//!
+//! ```text
+//! problem ──solve_*──▶ solution ──certify_*──▶ certification ──▶ Averaged { solution, certificate, details }
+//!                         ▲                          │ improvement (refinement, SDP rounding)
+//!                         └──────────────────────────┘
+//! ```
+//!
+//! | problem | pipeline | settings |
+//! |---|---|---|
+//! | single | [`average_single`] | [`AverageSettings<SingleSettings>`](AverageSettings) |
+//! | multiple | [`average_multiple`] | [`AverageSettings<MultipleSettings>`](AverageSettings) |
+//! | conjugate | [`average_conjugate`] | [`AverageSettings<ConjugateSettings>`](AverageSettings) |
+//!
+//! [`simultaneous`] estimates the hand-eye rotation jointly with two view graphs `[H12]`.
+
+pub mod conjugate;
+pub mod multiple;
+pub mod simultaneous;
+pub mod single;
+
+pub use conjugate::average_conjugate;
+pub use multiple::average_multiple;
+pub use single::average_single;
+
+use crate::certify::{
+    Certificate, Certification, CertifyDetails, CertifyMode, CertifySettings, ImprovementSource,
+};
+use crate::conjugate::{ConjugateSettings, ConjugateSolution};
+use crate::error::Result;
+use crate::multiple::{MultipleSettings, MultipleSolution};
+use crate::single::{SingleSettings, SingleSolution};
+use crate::termination::SolverReport;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::time::Instant;
+
+/// Settings of a pipeline: the local solver's and the certificate's.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct AverageSettings<S> {
+    /// The local solver.
+    pub solve: S,
+    /// The certificate (`certify.mode = none`: no certificate).
+    pub certify: CertifySettings,
+}
+
+impl<S> AverageSettings<S> {
+    /// These settings with another certify mode.
+    pub fn with_mode(mut self, mode: CertifyMode) -> Self {
+        self.certify.mode = mode;
+        self
+    }
+}
+
+/// Settings of [`average_single`].
+pub type AverageSingleSettings = AverageSettings<SingleSettings>;
+/// Settings of [`average_multiple`].
+pub type AverageMultipleSettings = AverageSettings<MultipleSettings>;
+/// Settings of [`average_conjugate`].
+pub type AverageConjugateSettings = AverageSettings<ConjugateSettings>;
+
+/// The result of a pipeline: the solution (possibly improved while certifying), its
+/// certificate (`None` when not requested or not available), and what ran.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Averaged<S> {
+    /// The estimate with its cost and solver report.
+    pub solution: S,
+    /// Its certificate, when one was computed.
+    pub certificate: Option<Certificate>,
+    /// Times, methods, improvements.
+    pub details: PipelineDetails,
+}
+
+/// The result of [`average_single`].
+pub type SingleEstimate = Averaged<SingleSolution>;
+/// The result of [`average_multiple`].
+pub type MultipleEstimate = Averaged<MultipleSolution>;
+/// The result of [`average_conjugate`].
+pub type ConjugateEstimate = Averaged<ConjugateSolution>;
+
+/// What a pipeline did.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct PipelineDetails {
+    /// The certification's details, when it ran.
+    pub certify: Option<CertifyDetails>,
+    /// Why no certificate was computed (`certificate` is `None`).
+    pub skipped_reason: Option<String>,
+    /// Where the returned solution came from when it is not the local solver's.
+    pub improved_by: Option<ImprovementSource>,
+    /// Time of the local solve (initialisation included), seconds.
+    pub solve_seconds: f64,
+    /// Time of the certification (refinement and SDP polishing included), seconds.
+    pub certify_seconds: f64,
+    /// Total time, seconds.
+    pub total_seconds: f64,
+}
+
+impl<S: fmt::Display> fmt::Display for Averaged<S> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "{}", self.solution)?;
+        match &self.certificate {
+            Some(c) => write!(f, "certificate: {c}")?,
+            None => write!(
+                f,
+                "certificate: none ({})",
+                self.details
+                    .skipped_reason
+                    .as_deref()
+                    .unwrap_or("not requested")
+            )?,
+        }
+        if let Some(source) = self.details.improved_by {
+            write!(f, "\nimproved while certifying: {source:?}")?;
+        }
+        write!(
+            f,
+            "\ntimes: solve {:.3} s, certify {:.3} s, total {:.3} s",
+            self.details.solve_seconds, self.details.certify_seconds, self.details.total_seconds
+        )
+    }
+}
+
+/// What the pipelines need of a solution.
+pub(crate) trait PipelineSolution: Sized {
+    /// The cost the certificate bounds.
+    fn certified_cost(&self) -> f64;
+    /// The solver's report.
+    fn report_mut(&mut self) -> &mut SolverReport;
+    /// Adopt `better` (found while certifying), carrying this solution's iterations and time
+    /// into its report.
+    fn adopt(mut self, mut better: Self) -> Self {
+        let before = self.report_mut().clone();
+        let report = better.report_mut();
+        report.iterations += before.iterations;
+        report.seconds += before.seconds;
+        better
+    }
+}
+
+/// What a pipeline needs of a problem: its solver, its certifier, the certify modes that apply.
+pub(crate) trait PipelineProblem {
+    /// The local solver's settings.
+    type Settings;
+    /// The local solution.
+    type Solution: PipelineSolution;
+    /// `single`, `multiple` or `conjugate`.
+    const NAME: &'static str;
+    /// The certify modes that apply (`none` included).
+    const MODES: &'static [CertifyMode];
+    /// Check the solver's settings.
+    fn validate(settings: &Self::Settings) -> Result<()>;
+    /// Why this problem gets no certificate (its objective has no bound), if so.
+    fn uncertifiable(&self) -> Option<String>;
+    /// The local solve.
+    fn solve(&self, settings: &Self::Settings) -> Result<Self::Solution>;
+    /// The certification of a solution.
+    fn certify(
+        &self,
+        solution: &Self::Solution,
+        settings: &CertifySettings,
+    ) -> Result<Certification<Self::Solution>>;
+}
+
+/// The pipeline of every problem: validate all settings, solve, certify unless the mode is
+/// `none` or the objective has no certificate, and adopt an improvement.
+pub(crate) fn average<P: PipelineProblem>(
+    problem: &P,
+    settings: &AverageSettings<P::Settings>,
+) -> Result<Averaged<P::Solution>> {
+    let start = Instant::now();
+    P::validate(&settings.solve)?;
+    settings.certify.validate()?;
+    let mode = settings.certify.mode;
+    mode.require(P::NAME, P::MODES)?;
+    let skip = problem.uncertifiable();
+    if let Some(why) = &skip
+        && mode != CertifyMode::Auto
+        && mode != CertifyMode::None
+    {
+        return Err(crate::Error::InvalidSettings {
+            name: "certify.mode".into(),
+            reason: format!("certify mode `{mode}` was requested, but {why}"),
+        });
+    }
+    let mut solution = problem.solve(&settings.solve)?;
+    let mut details = PipelineDetails {
+        solve_seconds: solution.report_mut().seconds,
+        ..Default::default()
+    };
+    let skip = skip.or_else(|| (mode == CertifyMode::None).then(|| "certify mode none".into()));
+    if let Some(why) = skip {
+        details.skipped_reason = Some(why);
+        details.total_seconds = start.elapsed().as_secs_f64();
+        return Ok(Averaged {
+            solution,
+            certificate: None,
+            details,
+        });
+    }
+    let t = Instant::now();
+    let c = problem.certify(&solution, &settings.certify)?;
+    let (solution, certificate) = match c.improvement {
+        Some(better) => {
+            details.improved_by = c.details.improvement.map(|i| i.source);
+            let certificate = c.certificate.with_upper_bound(better.certified_cost());
+            (solution.adopt(better), certificate)
+        }
+        None => (solution, c.certificate),
+    };
+    details.certify = Some(c.details);
+    details.certify_seconds = t.elapsed().as_secs_f64();
+    details.total_seconds = start.elapsed().as_secs_f64();
+    Ok(Averaged {
+        solution,
+        certificate: Some(certificate),
+        details,
+    })
+}

@@ -1,0 +1,71 @@
+//! Typed reports: what the `rotavg` command prints, as values. Each report is built from a
+//! pipeline's result ([`crate::pipeline::Averaged`]) or a certification, plus the context of
+//! its input (file name, format, node ids, ground-truth accuracy, other components,
+//! diagnostics). Its `Serialize` is the `--json` object of the subcommand (SPEC section 5) and
+//! its `Display` is the text the subcommand prints; the command line prints nothing else.
+//!
+//! | subcommand | report | JSON `problem` |
+//! |---|---|---|
+//! | `rotavg single` | [`SingleReport`] | `single` |
+//! | `rotavg multiple` | [`MultipleReport`] | `multiple` |
+//! | `rotavg conjugate` | [`ConjugateReport`] | `conjugate` |
+//! | `rotavg certify` | [`CertifyReport`] (`solver: null`) | any of the three |
+//! | `rotavg info` | [`InfoReport`] | — (a file description) |
+//! | `rotavg demo` | [`DemoReport`] (text only) | — |
+//!
+//! Every problem report has the SPEC keys first, in SPEC order: `problem`, `num_rotations`,
+//! `num_measurements`, the objective (`metric`, `p`, `loss` where the subcommand prints them),
+//! `cost`, `estimate`, `solver`, `certificate`; then the keys of its subcommand.
+//!
+//! ```
+//! use rotavg::pipeline::{average_single, AverageSettings};
+//! use rotavg::report::SingleReport;
+//! use rotavg::single::SingleProblem;
+//! use rotavg::so3::exp;
+//! let samples = vec![exp(&nalgebra::Vector3::new(0.1, 0.0, 0.0)), exp(&nalgebra::Vector3::new(-0.1, 0.0, 0.0))];
+//! let result = average_single(&SingleProblem::new(samples, None)?, &AverageSettings::default())?;
+//! let report = SingleReport::new(result);
+//! let json: serde_json::Value = serde_json::to_value(&report).unwrap();
+//! assert_eq!(json["problem"], "single");
+//! assert_eq!(json["certificate"]["verdict"], "certified");
+//! assert!(report.to_string().starts_with("single rotation average: chordal l2 mean of 2 samples"));
+//! # Ok::<(), rotavg::Error>(())
+//! ```
+
+pub mod certify;
+pub mod conjugate;
+pub mod demo;
+pub mod info;
+pub mod multiple;
+pub mod single;
+
+pub use crate::io::input::ProblemKind;
+pub use certify::CertifyReport;
+pub use conjugate::ConjugateReport;
+pub use demo::DemoReport;
+pub use info::InfoReport;
+pub use multiple::MultipleReport;
+pub use single::SingleReport;
+
+use crate::certify::MethodRun;
+use crate::so3::Rotation;
+use serde::Serialize;
+use std::fmt;
+
+/// An estimate in JSON: one row-major rotation, or a list of them.
+#[derive(Serialize)]
+#[serde(untagged)]
+enum Rows<'a> {
+    /// `R` as `[[r11, r12, r13], ...]`.
+    One(#[serde(with = "crate::so3::serde_rows::rotation")] &'a Rotation),
+    /// `[R, ...]`.
+    Many(#[serde(with = "crate::so3::serde_rows::rotations")] &'a [Rotation]),
+}
+
+/// The lines `  METHOD (T s): NOTE` of the bounding methods that ran.
+fn write_methods(f: &mut fmt::Formatter<'_>, methods: &[MethodRun]) -> fmt::Result {
+    for m in methods {
+        write!(f, "\n  {} ({:.3} s): {}", m.method, m.seconds, m.note)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,178 @@
+//! The report of `rotavg multiple`.
+
+use super::{ProblemKind, Rows, write_methods};
+use crate::certify::{Certificate, Verdict};
+use crate::error::Result;
+use crate::io::detect::{ComponentSelection, GraphFormat};
+use crate::io::input::MultipleInput;
+use crate::io::names::MultipleLoss;
+use crate::multiple::accuracy::{AccuracyReport, align_and_compare};
+use crate::pipeline::{MultipleEstimate, PipelineDetails};
+use crate::termination::SolverReport;
+use serde::{Serialize, Serializer};
+use std::fmt;
+
+/// The result of multiple rotation averaging on a view-graph file, as `rotavg multiple`
+/// prints it.
+///
+/// JSON (`--json`): `problem` = `"multiple"`, `num_rotations`, `num_measurements` (edges),
+/// `loss` ([`MultipleLoss::name_of`]), `cost` (under the loss), `chordal_cost`, `estimate`
+/// (row-major, `R_0 = I`), `node_ids` (the file id of each node of the estimate), `solver`,
+/// `certificate` (or null), `pipeline` ([`PipelineDetails`]: certification methods, times),
+/// `accuracy` (against ground truth, or null), `other_components` (sizes of the components not
+/// solved), `format`.
+/// Text: the input line, warnings, the solution and certificate, the bounding methods, the
+/// accuracy, and the files written.
+///
+/// ```
+/// use rotavg::io::detect::{read_graph, ComponentSelection, GraphFormat, ReadOptions};
+/// use rotavg::io::input::MultipleInput;
+/// use rotavg::pipeline::{average_multiple, AverageSettings};
+/// use rotavg::report::MultipleReport;
+/// // A noise-free triangle (1DSfM lines `i j R_i R_j^T`, here all identities).
+/// let text = "0 1 1 0 0 0 1 0 0 0 1\n1 2 1 0 0 0 1 0 0 0 1\n2 0 1 0 0 0 1 0 0 0 1\n";
+/// let graph = read_graph(text, "EGs.txt", GraphFormat::Auto, &ReadOptions::default())?;
+/// let result = average_multiple(&graph.problem, &AverageSettings::default())?;
+/// let input = MultipleInput { name: "EGs.txt".into(), selection: ComponentSelection::whole(3), graph, truth: None, init: None };
+/// let report = MultipleReport::new(&input, result)?;
+/// let json = serde_json::to_value(&report).unwrap();
+/// assert_eq!((json["num_rotations"].as_u64(), json["loss"].as_str()), (Some(3), Some("chordal")));
+/// assert_eq!(json["format"], "one_dsfm"); // serde's name of GraphFormat::OneDsfm
+/// assert!(report.to_string().starts_with("EGs.txt: 1dsfm format, 3 nodes, 3 edges"));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct MultipleReport {
+    /// The pipeline's result.
+    pub result: MultipleEstimate,
+    /// The input as given (`-` for standard input).
+    pub input: String,
+    /// The format read.
+    pub format: GraphFormat,
+    /// Edges given twice (same unordered pair).
+    pub duplicates: usize,
+    /// Edges given with `i > j`.
+    pub reversed: usize,
+    /// The reader's remarks.
+    pub warnings: Vec<String>,
+    /// The file id of each node of the estimate.
+    pub node_ids: Vec<u64>,
+    /// Number of edges solved.
+    pub num_edges: usize,
+    /// Which nodes of the file's graph were solved.
+    pub selection: ComponentSelection,
+    /// Accuracy against the ground truth, when one was given.
+    pub accuracy: Option<AccuracyReport>,
+    /// Where the estimate was written (`--output`), if it was.
+    pub output: Option<String>,
+    /// Where the figure was written (`--plot`), if it was.
+    pub figure: Option<String>,
+}
+
+impl MultipleReport {
+    /// The report of `result`, a solution of `input.graph.problem`; the accuracy is computed
+    /// when `input` has ground truth (an error when no node has any).
+    pub fn new(input: &MultipleInput, result: MultipleEstimate) -> Result<Self> {
+        let accuracy = match &input.truth {
+            Some(t) => Some(align_and_compare(&result.solution.rotations, t)?),
+            None => None,
+        };
+        let g = &input.graph;
+        Ok(MultipleReport {
+            result,
+            input: input.name.clone(),
+            format: g.format,
+            duplicates: g.duplicates,
+            reversed: g.reversed,
+            warnings: g.warnings.clone(),
+            node_ids: g.node_ids.clone(),
+            num_edges: g.problem.num_edges(),
+            selection: input.selection.clone(),
+            accuracy,
+            output: None,
+            figure: None,
+        })
+    }
+
+    /// The certificate's verdict, when one was computed.
+    pub fn verdict(&self) -> Option<Verdict> {
+        self.result.certificate.as_ref().map(|c| c.verdict)
+    }
+}
+
+#[derive(Serialize)]
+struct Json<'a> {
+    problem: ProblemKind,
+    num_rotations: usize,
+    num_measurements: usize,
+    loss: String,
+    cost: f64,
+    chordal_cost: f64,
+    estimate: Rows<'a>,
+    node_ids: &'a [u64],
+    solver: &'a SolverReport,
+    certificate: Option<&'a Certificate>,
+    pipeline: &'a PipelineDetails,
+    accuracy: Option<&'a AccuracyReport>,
+    other_components: &'a [usize],
+    format: GraphFormat,
+}
+
+impl Serialize for MultipleReport {
+    fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+        let s = &self.result.solution;
+        Json {
+            problem: ProblemKind::Multiple,
+            num_rotations: s.rotations.len(),
+            num_measurements: self.num_edges,
+            loss: MultipleLoss::name_of(&s.objective),
+            cost: s.cost,
+            chordal_cost: s.chordal_cost,
+            estimate: Rows::Many(&s.rotations),
+            node_ids: &self.node_ids,
+            solver: &s.report,
+            certificate: self.result.certificate.as_ref(),
+            pipeline: &self.result.details,
+            accuracy: self.accuracy.as_ref(),
+            other_components: &self.selection.other_component_sizes,
+            format: self.format,
+        }
+        .serialize(serializer)
+    }
+}
+
+impl fmt::Display for MultipleReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let n = self.result.solution.rotations.len();
+        write!(
+            f,
+            "{}: {} format, {} nodes, {} edges ({} duplicate, {} reversed)",
+            self.input, self.format, n, self.num_edges, self.duplicates, self.reversed
+        )?;
+        let others = &self.selection.other_component_sizes;
+        if !others.is_empty() {
+            write!(
+                f,
+                "; solved the largest component ({n} of {} nodes); other components (sizes {others:?}) not solved",
+                self.selection.num_read
+            )?;
+        }
+        for w in &self.warnings {
+            write!(f, "\nwarning: {w}")?;
+        }
+        write!(f, "\n{}", self.result)?;
+        if let Some(c) = &self.result.details.certify {
+            write_methods(f, &c.methods)?;
+        }
+        if let Some(a) = &self.accuracy {
+            write!(f, "\n{a}")?;
+        }
+        if let Some(p) = &self.output {
+            write!(f, "\nestimate written to {p}")?;
+        }
+        if let Some(p) = &self.figure {
+            write!(f, "\nfigure written to {p}")?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,111 @@
+//! Input checks shared by the problem constructors and the readers: the weight window and the
+//! rotation test (`paper-notes/conventions.md`, `[C6]`).
+
+use crate::error::{Error, Result};
+use crate::so3::{self, DEFAULT_ROTATION_TOLERANCE, Rotation};
+
+/// Smallest weight accepted (see [`MAX_WEIGHT`]).
+pub const MIN_WEIGHT: f64 = 1e-100;
+
+/// Largest weight accepted. Weights are relative (scaling all of them scales every cost and
+/// leaves the minimiser unchanged), but the solvers and certificates form squares of weighted
+/// sums, which overflow or underflow in `f64` for extreme weights: fuzzing found NaN estimates
+/// of `rotavg single` for weights of about `1e154` and above, and wrong "certified" answers for
+/// weights `1e-200` and `1e308` (`tests/fuzz_regressions.rs`). Constructors and readers
+/// therefore reject a weight outside `[MIN_WEIGHT, MAX_WEIGHT]`; rescale such data.
+pub const MAX_WEIGHT: f64 = 1e100;
+
+/// Relative slack at the ends of `[MIN_WEIGHT, MAX_WEIGHT]`, for weights computed from a file
+/// (g2o `kappa`): a problem written at a window end must read back (found by fuzzing).
+const WEIGHT_SLACK: f64 = 1e-12;
+
+/// `Some(message)` when a weight is not finite or outside `[MIN_WEIGHT, MAX_WEIGHT]` (up to a
+/// relative rounding slack of `1e-12`).
+pub(crate) fn weight_out_of_range(w: f64) -> Option<String> {
+    if (MIN_WEIGHT * (1.0 - WEIGHT_SLACK)..=MAX_WEIGHT * (1.0 + WEIGHT_SLACK)).contains(&w) {
+        None
+    } else {
+        Some(format!(
+            "weight {w:e} is outside [{MIN_WEIGHT:e}, {MAX_WEIGHT:e}] (weights are relative: rescale them)"
+        ))
+    }
+}
+
+/// [`Error::InvalidWeight`] for `item` when `w` is outside the window.
+pub(crate) fn check_weight(item: impl FnOnce() -> String, w: f64) -> Result<()> {
+    match weight_out_of_range(w) {
+        None => Ok(()),
+        Some(_) => Err(Error::InvalidWeight {
+            item: item(),
+            weight: w,
+        }),
+    }
+}
+
+/// [`Error::NonFinite`] or [`Error::NotARotation`] for `item` unless `r` is a rotation within
+/// [`DEFAULT_ROTATION_TOLERANCE`] (`[C6]`).
+pub(crate) fn check_rotation(item: impl FnOnce() -> String, r: &Rotation) -> Result<()> {
+    let m = r.matrix();
+    if !m.iter().all(|x| x.is_finite()) {
+        return Err(Error::NonFinite { item: item() });
+    }
+    let (orth, det) = so3::rotation_defect(m);
+    if orth <= DEFAULT_ROTATION_TOLERANCE && (det - 1.0).abs() <= DEFAULT_ROTATION_TOLERANCE {
+        Ok(())
+    } else {
+        Err(Error::NotARotation {
+            item: item(),
+            orthogonality_error: orth,
+            determinant: det,
+            tolerance: DEFAULT_ROTATION_TOLERANCE,
+        })
+    }
+}
+
+/// [`Error::InvalidSettings`] naming `name` unless `v` is finite and `> 0`.
+pub(crate) fn positive(name: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidSettings {
+            name: name.into(),
+            reason: format!("must be finite and > 0, got {v}"),
+        })
+    }
+}
+
+/// [`Error::InvalidSettings`] naming `name` unless `v` is finite and `>= 0`.
+pub(crate) fn non_negative(name: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidSettings {
+            name: name.into(),
+            reason: format!("must be finite and >= 0, got {v}"),
+        })
+    }
+}
+
+/// [`Error::InvalidSettings`] naming `name` unless `v >= 1`.
+pub(crate) fn at_least_one(name: &str, v: usize) -> Result<()> {
+    if v >= 1 {
+        Ok(())
+    } else {
+        Err(Error::InvalidSettings {
+            name: name.into(),
+            reason: "must be at least 1".into(),
+        })
+    }
+}
+
+/// The median of weights (all finite, the lower middle one for an even count; 0 for none): the
+/// scale of the absolute part of every certificate tolerance, robust to a single weight.
+pub(crate) fn median_weight(weights: impl Iterator<Item = f64>) -> f64 {
+    let mut w: Vec<f64> = weights.collect();
+    if w.is_empty() {
+        return 0.0;
+    }
+    let mid = (w.len() - 1) / 2;
+    let (_, m, _) = w.select_nth_unstable_by(mid, f64::total_cmp);
+    *m
+}
