@@ -1,21 +1,8 @@
 //! `rotavg info` run as a process: readable and JSON output, exit codes, error messages with
 //! file and line.
 
-use std::io::Write;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rotavg"))
-}
-
-fn tmp(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rotavg-cli-info-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
+mod common;
+use common::{bin, run_with_stdin, shared_data, temp_file as tmp};
 
 /// A 4-cycle of planar edges plus a duplicate that contradicts by 30 deg: n = 4, m = 5.
 /// Unit weights: the scalar Laplacian of C_4 plus a double edge (0,1)... lambda_2 checked below
@@ -63,19 +50,7 @@ fn info_readable_and_json() {
 
 #[test]
 fn info_reads_stdin_and_forced_format() {
-    let mut child = bin()
-        .args(["info", "--format", "g2o", "-"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(CYCLE.as_bytes())
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
+    let out = run_with_stdin(&["info", "--format", "g2o", "-"], CYCLE);
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("nodes:          4"));
 }
@@ -101,12 +76,7 @@ fn info_errors_name_file_and_line() {
 
 #[test]
 fn info_on_shared_data_if_present() {
-    let dir = [
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
-        PathBuf::from("/work/shared/data"),
-    ]
-    .into_iter()
-    .find(|p| p.exists());
+    let dir = shared_data();
     let Some(dir) = dir else {
         println!("skipping: shared data not found");
         return;

@@ -5,56 +5,10 @@
 use rotavg::io::detect::{GraphFormat, ReadOptions, load_graph};
 use rotavg::io::json::write_problem_json;
 use rotavg::multiple::synthetic::SyntheticGraph;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::PathBuf;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rotavg"))
-}
-
-fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rotavg-cli-multiple-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn tmp(name: &str, text: &str) -> PathBuf {
-    let p = dir().join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
-
-fn run(args: &[&str]) -> Output {
-    bin().args(args).output().unwrap()
-}
-
-/// Exit status 0, else fail showing the process's stderr.
-fn assert_success(out: &Output) {
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn json_of(out: &Output) -> serde_json::Value {
-    let s = String::from_utf8_lossy(&out.stdout);
-    serde_json::from_str(&s).unwrap_or_else(|e| {
-        panic!(
-            "not JSON ({e}): {s} / {}",
-            String::from_utf8_lossy(&out.stderr)
-        )
-    })
-}
-
-fn shared(rel: &str) -> Option<PathBuf> {
-    let a = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data")
-        .join(rel);
-    let b = Path::new("/work/shared/data").join(rel);
-    [a, b].into_iter().find(|p| p.exists())
-}
+mod common;
+use common::{assert_success, json_of, run, run_with_stdin, shared, temp_dir, temp_file as tmp};
 
 /// A synthetic graph (n = 30, 90 edges, sigma = 0.05 rad) written as SPEC JSON.
 fn graph_file(name: &str) -> PathBuf {
@@ -72,7 +26,7 @@ fn graph_file(name: &str) -> PathBuf {
 #[test]
 fn multiple_json_output_and_certify_round_trip() {
     let g = graph_file("g.json");
-    let est = dir().join("est.json");
+    let est = temp_dir().join("est.json");
     let g = g.to_str().unwrap();
     let out = run(&[
         "multiple",
@@ -189,7 +143,7 @@ fn multiple_json_output_and_certify_round_trip() {
 #[test]
 fn output_g2o_round_trip_and_loss_options() {
     let g = graph_file("h.json");
-    let out_g2o = dir().join("est.g2o");
+    let out_g2o = temp_dir().join("est.g2o");
     let out = run(&[
         "multiple",
         g.to_str().unwrap(),
@@ -339,7 +293,7 @@ fn shared_benchmark_files() {
             continue;
         };
         any = true;
-        let est = dir().join(format!("{}.json", rel.replace('/', "_")));
+        let est = temp_dir().join(format!("{}.json", rel.replace('/', "_")));
         let p = path.to_str().unwrap();
         let out = run(&[
             "multiple",
@@ -474,9 +428,8 @@ fn ground_truth_init_and_stdin() {
         v["accuracy"]
     );
     // --init from the truth, input from stdin
-    use std::io::Write;
-    let mut child = bin()
-        .args([
+    let out = run_with_stdin(
+        &[
             "multiple",
             "-",
             "--format",
@@ -484,18 +437,9 @@ fn ground_truth_init_and_stdin() {
             "--init",
             truth.to_str().unwrap(),
             "--json",
-        ])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(text.as_bytes())
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
+        ],
+        &text,
+    );
     assert_eq!(out.status.code(), Some(0));
     let v = json_of(&out);
     assert_eq!(v["certificate"]["verdict"], "certified");

@@ -2,28 +2,9 @@
 //! SPEC section 5 fields and exit codes.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
-fn temp_file(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rotavg-cli-single-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rotavg"))
-        .args(args)
-        .output()
-        .expect("run rotavg")
-}
-
-/// Rotations about z by the given angles, as row-major nested arrays.
-fn rz(t: f64) -> String {
-    let (s, c) = t.sin_cos();
-    format!("[[{c}, {}, 0], [{s}, {c}, 0], [0, 0, 1]]", -s)
-}
+mod common;
+use common::{assert_success, json_of, run, run_with_stdin, rz_json as rz, temp_file};
 
 fn problem_file(name: &str) -> PathBuf {
     let text = format!(
@@ -201,30 +182,10 @@ fn init_file_and_unit_weights() {
 
 #[test]
 fn reads_standard_input() {
-    use std::io::Write;
-    use std::process::Stdio;
     let text = format!("{{\"rotations\": [{}, {}]}}", rz(0.2), rz(0.4));
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rotavg"))
-        .args(["single", "-", "--json"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(text.as_bytes())
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let out = run_with_stdin(&["single", "-", "--json"], &text);
+    assert_success(&out);
+    let v = json_of(&out);
     // chordal L2 mean of Rz(0.2) and Rz(0.4) is Rz(0.3): entry (1, 0) = sin(0.3)
     let e10 = v["estimate"][1][0].as_f64().unwrap();
     assert!((e10 - 0.3f64.sin()).abs() < 1e-12, "{e10}");

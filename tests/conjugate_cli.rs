@@ -5,22 +5,16 @@ use rand::rngs::StdRng;
 use rotavg::conjugate::synthetic::random_instance;
 use rotavg::io::handeye::write_conjugate_json;
 use rotavg::so3::{angle_between, rotation_from_rows};
-use std::process::Command;
 
-fn tmp(name: &str, text: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("rotavg-conj-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
+mod common;
+use common::{bin, temp_file as tmp};
 
 #[test]
 fn json_output_and_exit_codes() {
     let mut rng = StdRng::seed_from_u64(51);
     let (p, s) = random_instance(12, 0.0, 0.0, &mut rng);
     let f = tmp("exact.json", &write_conjugate_json(&p));
-    let out = Command::new(env!("CARGO_BIN_EXE_rotavg"))
+    let out = bin()
         .args([
             "conjugate",
             f.to_str().unwrap(),
@@ -56,7 +50,7 @@ fn json_output_and_exit_codes() {
     assert!(v["solver"]["name"].is_string() && v["solver"]["iterations"].is_number());
 
     // --certify none: certificate null; --require-certified then exits 3
-    let out = Command::new(env!("CARGO_BIN_EXE_rotavg"))
+    let out = bin()
         .args([
             "conjugate",
             f.to_str().unwrap(),
@@ -74,7 +68,7 @@ fn json_output_and_exit_codes() {
         "bad.json",
         "{\"pairs\": [\n  {\"left\": [[1,0,0],[0,1,0]], \"right\": 3}\n]}",
     );
-    let out = Command::new(env!("CARGO_BIN_EXE_rotavg"))
+    let out = bin()
         .args(["conjugate", bad.to_str().unwrap()])
         .output()
         .unwrap();
@@ -91,7 +85,7 @@ fn json_output_and_exit_codes() {
     let ls: Vec<_> = rs.iter().map(|r| s * r * s.inverse()).collect();
     let d = rotavg::conjugate::ConjugateProblem::from_rotations(&ls, &rs).unwrap();
     let f = tmp("degenerate.json", &write_conjugate_json(&d));
-    let out = Command::new(env!("CARGO_BIN_EXE_rotavg"))
+    let out = bin()
         .args(["conjugate", f.to_str().unwrap()])
         .output()
         .unwrap();

@@ -15,15 +15,8 @@ use rotavg::objective::{Loss, Objective};
 use rotavg::so3::{angle_between, exp, perturb, random_rotation, random_unit_vector};
 use rotavg::{Metric, Rotation, Termination};
 
-fn max_error(a: &[Rotation], b: &[Rotation]) -> f64 {
-    let (mut a, mut b) = (a.to_vec(), b.to_vec());
-    fix_gauge(&mut a);
-    fix_gauge(&mut b);
-    a.iter()
-        .zip(&b)
-        .map(|(x, y)| angle_between(x, y))
-        .fold(0.0, f64::max)
-}
+mod common;
+use common::max_gauge_error;
 
 fn mean_error(a: &[Rotation], b: &[Rotation]) -> f64 {
     let (mut a, mut b) = (a.to_vec(), b.to_vec());
@@ -89,7 +82,7 @@ fn noise_free_exact_recovery() {
         .generate();
         for init in [Initialisation::SpanningTree, Initialisation::Spectral] {
             let r0 = initialise(&p, &init).unwrap();
-            assert!(max_error(&r0, &gt) < 1e-8, "{init:?}");
+            assert!(max_gauge_error(&r0, &gt) < 1e-8, "{init:?}");
         }
         // start far away: random rotations close to the truth (0.3 rad)
         let mut rng = StdRng::seed_from_u64(seed as u64);
@@ -104,7 +97,7 @@ fn noise_free_exact_recovery() {
                 ..Default::default()
             };
             let sol = solve_multiple(&with(&p, loss), &s).unwrap();
-            let err = max_error(&sol.rotations, &gt);
+            let err = max_gauge_error(&sol.rotations, &gt);
             assert!(
                 sol.rotations[0] == Rotation::identity(),
                 "gauge R_0 = I not fixed"
@@ -287,7 +280,10 @@ fn gauge_and_relabelling_invariance() {
         let a = solve(start.clone());
         let b = solve(start_g.clone());
         let tol = if loss == GEODESIC_L1 { 1e-4 } else { 1e-7 };
-        assert!(max_error(&a.rotations, &b.rotations) < tol, "{loss:?}");
+        assert!(
+            max_gauge_error(&a.rotations, &b.rotations) < tol,
+            "{loss:?}"
+        );
         assert!(
             (a.cost - b.cost).abs() <= 1e-8 * a.cost.max(1e-12),
             "{loss:?}"
@@ -322,7 +318,7 @@ fn gauge_and_relabelling_invariance() {
     // same rotations up to the relabelling and gauge
     let mut b_back: Vec<Rotation> = (0..n).map(|i| b.rotations[perm[i]]).collect();
     fix_gauge(&mut b_back);
-    assert!(max_error(&a.rotations, &b_back) < 1e-7);
+    assert!(max_gauge_error(&a.rotations, &b_back) < 1e-7);
 }
 
 /// z_cycle(n, phi): planar critical configuration k has all residuals equal to
@@ -364,7 +360,7 @@ fn z_cycle_local_minima() {
                 sol.cost
             );
             assert!(
-                max_error(&sol.rotations, &config) < 1e-6,
+                max_gauge_error(&sol.rotations, &config) < 1e-6,
                 "k = {k} {loss:?}"
             );
         }

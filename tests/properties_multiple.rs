@@ -16,12 +16,13 @@ use rotavg::Rotation;
 use rotavg::certify::multiple::{DualCertificate, dual_certificate};
 use rotavg::certify::{CertifySettings, certify_multiple};
 use rotavg::multiple::synthetic::SyntheticGraph;
-use rotavg::multiple::{
-    Edge, Initialisation, MultipleProblem, MultipleSettings, fix_gauge, solve_multiple,
-};
+use rotavg::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings, solve_multiple};
 use rotavg::objective::{Loss, Objective};
 use rotavg::pipeline::{AverageMultipleSettings, average_multiple};
 use rotavg::so3::{angle_between, perturb, random_rotation};
+
+mod common;
+use common::{max_gauge_error, scale_weights};
 
 /// Deterministic proptest configuration: a fixed RNG seed (so a failure reproduces and the suite
 /// is not flaky) unless `PROPTEST_RNG_SEED` is set to explore other cases; no regression files.
@@ -123,29 +124,6 @@ fn conjugate_measurements(p: &MultipleProblem, h: &Rotation) -> MultipleProblem 
         })
         .collect();
     MultipleProblem::new(p.num_rotations(), edges).unwrap()
-}
-
-fn scale_weights(p: &MultipleProblem, c: f64) -> MultipleProblem {
-    let edges = p
-        .edges()
-        .iter()
-        .map(|e| Edge {
-            weight: e.weight * c,
-            ..e.clone()
-        })
-        .collect();
-    MultipleProblem::new(p.num_rotations(), edges).unwrap()
-}
-
-/// Largest angle between corresponding rotations after fixing the gauge of both (`R_0 = I`).
-fn max_gauge_error(a: &[Rotation], b: &[Rotation]) -> f64 {
-    let (mut a, mut b) = (a.to_vec(), b.to_vec());
-    fix_gauge(&mut a);
-    fix_gauge(&mut b);
-    a.iter()
-        .zip(&b)
-        .map(|(x, y)| angle_between(x, y))
-        .fold(0.0, f64::max)
 }
 
 fn random_estimate(n: usize, rng: &mut StdRng) -> Vec<Rotation> {

@@ -15,17 +15,8 @@ use rotavg::single::SingleProblem;
 use rotavg::so3::{exp, perturb_gaussian, random_rotation};
 use rotavg::{Rotation, Verdict};
 
-fn scaled(p: &MultipleProblem, c: f64) -> MultipleProblem {
-    let edges = p
-        .edges()
-        .iter()
-        .map(|e| Edge {
-            weight: e.weight * c,
-            ..e.clone()
-        })
-        .collect();
-    MultipleProblem::new(p.num_rotations(), edges).unwrap()
-}
+mod common;
+use common::scale_weights;
 
 /// Moves `y` along a fixed random direction until the cost is `(1 + excess) f*`
 /// (bisection on the step; the cost grows monotonically along it near the optimum).
@@ -122,7 +113,7 @@ fn the_three_false_certificates_of_the_old_rule_are_gone() {
 
     // (3) all weights scaled by 1e-12: the fixed 1e-9 floor certified a random estimate costing
     // 19 x the optimum.
-    let tiny = scaled(&p, 1e-12);
+    let tiny = scale_weights(&p, 1e-12);
     let random: Vec<Rotation> = (0..30).map(|_| random_rotation(&mut rng)).collect();
     let c = certify_multiple(&tiny, &random, &settings).unwrap();
     println!("weights x 1e-12, random estimate: {}", c.certificate);
@@ -163,7 +154,7 @@ fn verdicts_are_invariant_under_weight_scaling() {
                 continue;
             }
             for c in [1e-12, 1e-6, 1e6, 1e12] {
-                let v = certify_multiple(&scaled(&p, c), y, &settings)
+                let v = certify_multiple(&scale_weights(&p, c), y, &settings)
                     .unwrap()
                     .certificate;
                 assert_eq!(

@@ -1,0 +1,122 @@
+//! Helpers shared by the integration tests: running the `rotavg` binary, temporary input
+//! files, the shared benchmark data, and small comparisons of estimates.
+//!
+//! Each test file that needs them declares `mod common;`; not every file uses every helper.
+#![allow(dead_code)]
+
+use rotavg::Rotation;
+use rotavg::multiple::{Edge, MultipleProblem, fix_gauge};
+use rotavg::so3::angle_between;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+/// The built `rotavg` binary.
+pub fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rotavg"))
+}
+
+/// Runs `rotavg ARGS` to completion.
+pub fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("run rotavg")
+}
+
+/// Runs `rotavg ARGS` with `stdin` written to its standard input.
+pub fn run_with_stdin(args: &[&str], stdin: &str) -> Output {
+    let mut child = bin()
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn rotavg");
+    child
+        .stdin
+        .take()
+        .expect("piped stdin")
+        .write_all(stdin.as_bytes())
+        .expect("write stdin");
+    child.wait_with_output().expect("wait for rotavg")
+}
+
+/// Exit status 0, else fail showing the process's stderr.
+pub fn assert_success(out: &Output) {
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// The process's standard output parsed as JSON (fails showing stdout and stderr otherwise).
+pub fn json_of(out: &Output) -> serde_json::Value {
+    let s = String::from_utf8_lossy(&out.stdout);
+    serde_json::from_str(&s).unwrap_or_else(|e| {
+        panic!(
+            "not JSON ({e}): {s} / {}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}
+
+/// A temporary directory of this test binary and process.
+pub fn temp_dir() -> PathBuf {
+    let d = std::env::temp_dir().join(format!(
+        "rotavg-{}-{}",
+        env!("CARGO_CRATE_NAME"),
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&d).expect("create temporary directory");
+    d
+}
+
+/// Writes `text` to the file `name` of [`temp_dir`] and returns its path.
+pub fn temp_file(name: &str, text: &str) -> PathBuf {
+    let p = temp_dir().join(name);
+    std::fs::write(&p, text).expect("write temporary file");
+    p
+}
+
+/// The shared benchmark data (`../shared/data` beside the repository, or `/work/shared/data`),
+/// if present. Tests that need it print a skip notice when it is absent.
+pub fn shared_data() -> Option<PathBuf> {
+    let a = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data");
+    let b = PathBuf::from("/work/shared/data");
+    [a, b].into_iter().find(|p| p.is_dir())
+}
+
+/// A file of the shared data, if present.
+pub fn shared(rel: &str) -> Option<PathBuf> {
+    shared_data().map(|d| d.join(rel)).filter(|p| p.exists())
+}
+
+/// The rotation about z by `t` radians as a row-major nested JSON array.
+pub fn rz_json(t: f64) -> String {
+    let (s, c) = t.sin_cos();
+    format!("[[{c}, {}, 0], [{s}, {c}, 0], [0, 0, 1]]", -s)
+}
+
+/// Largest angle between corresponding rotations after fixing the gauge of both (`R_0 = I`).
+pub fn max_gauge_error(a: &[Rotation], b: &[Rotation]) -> f64 {
+    let (mut a, mut b) = (a.to_vec(), b.to_vec());
+    fix_gauge(&mut a);
+    fix_gauge(&mut b);
+    a.iter()
+        .zip(&b)
+        .map(|(x, y)| angle_between(x, y))
+        .fold(0.0, f64::max)
+}
+
+/// The same graph with every edge weight multiplied by `c`.
+pub fn scale_weights(p: &MultipleProblem, c: f64) -> MultipleProblem {
+    let edges = p
+        .edges()
+        .iter()
+        .map(|e| Edge {
+            weight: e.weight * c,
+            ..e.clone()
+        })
+        .collect();
+    MultipleProblem::new(p.num_rotations(), edges).expect("scaled weights stay valid")
+}
