@@ -5,6 +5,9 @@
 //!    the dual certificate (`certify::multiple::dual_certificate`), timed over several runs. The random graph is certified by the scalar
 //!    comparison `[D13]` (its 3n x 3n Cholesky factor would hold 1.1e8 values), the grid by the
 //!    sparse Cholesky `[D5]`.
+//! 1c. Long chains (`SyntheticChain`: odometry with 2 % loop closures, noise 1e-4 rad), 10^4 and
+//!    10^5 nodes, 3-D and planar: the SLAM shape of issue 11, certified by the grounded bound
+//!    `[D15]`.
 //! 2. sphere2500 and parking-garage (SE-Sync g2o read by `io::detect::load_graph`, unit
 //!    weights) when the shared data are present: local solve, then certification; both timed.
 
@@ -12,7 +15,7 @@ use rotavg::Rotation;
 use rotavg::certify::CertifySettings;
 use rotavg::certify::multiple::dual_certificate;
 use rotavg::io::detect::{GraphFormat, ReadOptions, WeightSource, load_graph};
-use rotavg::multiple::synthetic::SyntheticGraph;
+use rotavg::multiple::synthetic::{SyntheticChain, SyntheticGraph};
 use rotavg::multiple::{Edge, MultipleProblem, MultipleSettings, solve_multiple};
 use std::path::Path;
 use std::time::Instant;
@@ -133,6 +136,28 @@ fn main() {
         t.elapsed().as_secs_f64()
     );
     certify_timed("grid n=10000", &p, &rs, 5);
+
+    // 1c. long chains with few loop closures
+    for (n, planar) in [(10_000, false), (10_000, true), (100_000, false)] {
+        let (p, _truth) = SyntheticChain {
+            num_rotations: n,
+            loop_closure_fraction: 0.02,
+            noise_sigma: 1e-4,
+            planar,
+            seed: 3,
+            ..Default::default()
+        }
+        .generate();
+        let t = Instant::now();
+        let (rs, f, gn, it) = local_solve(&p);
+        let kind = if planar { "planar" } else { "3-D" };
+        println!(
+            "chain {kind} n={n} m={}: local solve {:.3} s ({it} iterations), cost {f:.6e}, |grad| {gn:.2e}",
+            p.num_edges(),
+            t.elapsed().as_secs_f64()
+        );
+        certify_timed(&format!("chain {kind} n={n}"), &p, &rs, 3);
+    }
 
     // 2. sphere2500
     let base = [
