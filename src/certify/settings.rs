@@ -127,6 +127,36 @@ impl Budget {
         Ok(())
     }
 
+    /// The most factor values a factorisation of a `dim x dim` matrix may store within this
+    /// budget: the inverse of [`Budget::factorisation_fits`], used to refuse a factorisation
+    /// before its symbolic analysis (which itself costs time proportional to the factor).
+    ///
+    /// ```
+    /// use rotavg::certify::Budget;
+    /// let b = Budget { max_memory_bytes: 8 << 30, max_seconds: None };
+    /// let v = b.max_factor_values(30_000);
+    /// assert!(b.factorisation_fits(v, 30_000).is_ok());
+    /// assert!(b.factorisation_fits(v + 1, 30_000).is_err());
+    /// ```
+    pub fn max_factor_values(&self, dim: usize) -> usize {
+        let by_memory = self.max_memory_bytes / BYTES_PER_FACTOR_VALUE;
+        let by_time = match self.max_seconds {
+            Some(limit) => (limit * dim.max(1) as f64 * PREDICTED_FLOP_RATE)
+                .sqrt()
+                .floor(),
+            None => f64::INFINITY,
+        };
+        let mut v = (by_memory as f64).min(by_time).min(usize::MAX as f64) as usize;
+        // the float round trip may land one off the exact boundary of `factorisation_fits`
+        while v > 0 && self.factorisation_fits(v, dim).is_err() {
+            v -= 1;
+        }
+        while self.factorisation_fits(v.saturating_add(1), dim).is_ok() && v < usize::MAX {
+            v += 1;
+        }
+        v
+    }
+
     /// `Err(reason)` when a factorisation with `values` stored factor values of a
     /// `dim x dim` matrix does not fit: memory `BYTES_PER_FACTOR_VALUE * values`, time
     /// `values^2 / dim / PREDICTED_FLOP_RATE` (a lower estimate of the flops).
@@ -140,12 +170,11 @@ impl Budget {
     /// ```
     pub fn factorisation_fits(&self, values: usize, dim: usize) -> std::result::Result<(), String> {
         let bytes = values as f64 * BYTES_PER_FACTOR_VALUE as f64;
-        let gib = |b: f64| b / (1u64 << 30) as f64;
         if bytes > self.max_memory_bytes as f64 {
             return Err(format!(
-                "the proof would need a factor of {values:.1e} values ({:.1} GiB); memory budget {:.1} GiB",
-                gib(bytes),
-                gib(self.max_memory_bytes as f64)
+                "the proof would need a factor of {values:.1e} values ({}); memory budget {}",
+                human_bytes(bytes),
+                human_bytes(self.max_memory_bytes as f64)
             ));
         }
         let seconds = (values as f64).powi(2) / dim.max(1) as f64 / PREDICTED_FLOP_RATE;
@@ -155,6 +184,22 @@ impl Budget {
             )),
             _ => Ok(()),
         }
+    }
+}
+
+/// `bytes` in the largest binary unit that keeps the number at least 1 (`1.5 KiB`, `4.0 GiB`).
+fn human_bytes(bytes: f64) -> String {
+    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB"];
+    let mut value = bytes;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < units.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{value:.0} bytes")
+    } else {
+        format!("{value:.1} {}", units[unit])
     }
 }
 

@@ -42,11 +42,13 @@ use super::compensated::two_sum;
 use crate::error::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::perm::PermRef;
+use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky, supernodal::SupernodalLltRef,
 };
-use faer::sparse::{SparseColMat, SparseColMatRef};
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
 /// Unit roundoff of `f64`: `u = 2^-53`.
@@ -213,11 +215,80 @@ pub struct PositiveFactor<'a> {
     pub min_pivot: f64,
 }
 
+/// The symbolic Cholesky analysis of a symmetric `pattern` (both triangles stored) in the
+/// approximate-minimum-degree ordering, refused *before* its column counts when AMD predicts a
+/// factor of more than `max_values` stored values: `Ok(Err(predicted))` then.
+///
+/// The symbolic analysis itself costs time proportional to the factor's size (its column
+/// counts visit every entry of `L`): on a random graph of 10^5 nodes, 40 s for a factor that
+/// could never be stored. AMD's own count (`n + ` its divisions, the entries of `L` below the
+/// diagonal for this ordering) is near-linear to obtain and decides first. The prediction only
+/// decides whether to try; nothing is claimed from it.
+pub fn symbolic_cholesky_within(
+    pattern: SymbolicSparseColMatRef<'_, usize>,
+    max_values: usize,
+) -> Result<std::result::Result<SymbolicCholesky<usize>, usize>> {
+    let n = pattern.nrows();
+    let failed = |what: &str, e: faer::sparse::FaerError| Error::Solver {
+        message: format!("{what} failed: {e:?}"),
+    };
+    let mut perm = vec![0usize; n];
+    let mut perm_inv = vec![0usize; n];
+    let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(
+        n,
+        pattern.compute_nnz(),
+    ))
+    .map_err(|_| Error::Solver {
+        message: "out of memory for the ordering of a sparse factorisation".into(),
+    })?;
+    let flops = amd::order_maybe_unsorted(
+        &mut perm,
+        &mut perm_inv,
+        pattern,
+        amd::Control::default(),
+        MemStack::new(&mut mem),
+    )
+    .map_err(|e| failed("minimum-degree ordering", e))?;
+    let predicted = if flops.n_div.is_finite() && flops.n_div >= 0.0 {
+        (flops.n_div as usize).saturating_add(n)
+    } else {
+        usize::MAX
+    };
+    if predicted > max_values {
+        return Ok(Err(predicted));
+    }
+    let ordering = PermRef::new_checked(&perm, &perm_inv, n);
+    factorize_symbolic_cholesky(
+        pattern,
+        Side::Lower,
+        SymmetricOrdering::Custom(ordering),
+        CholeskySymbolicParams::default(),
+    )
+    .map(Ok)
+    .map_err(|e| failed("symbolic Cholesky analysis", e))
+}
+
 impl ShiftedCholesky {
     /// Analyse `s` (square, symmetric, both triangles stored, every diagonal entry stored).
     /// `entry_terms` bounds the number of floating-point operations (terms summed) that formed any
     /// entry of `s` from the exact data, e.g. the maximum node degree plus 3 for `Q - blkdiag(L)`.
     pub fn new(s: SparseColMat<usize, f64>, entry_terms: usize) -> Result<Self> {
+        match Self::new_within(s, entry_terms, usize::MAX)? {
+            Ok(ch) => Ok(ch),
+            Err(predicted) => Err(Error::Solver {
+                message: format!("factor of {predicted} values cannot be analysed"),
+            }),
+        }
+    }
+
+    /// [`ShiftedCholesky::new`], refused before the symbolic analysis when the factor is
+    /// predicted to hold more than `max_values` values: `Ok(Err(predicted))`
+    /// ([`symbolic_cholesky_within`]).
+    pub fn new_within(
+        s: SparseColMat<usize, f64>,
+        entry_terms: usize,
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
         let n = s.nrows();
         if s.ncols() != n {
             return Err(Error::Degenerate {
@@ -242,22 +313,17 @@ impl ShiftedCholesky {
                 }
             }
         }
-        let symbolic = factorize_symbolic_cholesky(
-            s.symbolic(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| Error::Solver {
-            message: format!("symbolic Cholesky analysis failed: {e:?}"),
-        })?;
-        Ok(ShiftedCholesky {
+        let symbolic = match symbolic_cholesky_within(s.symbolic(), max_values)? {
+            Ok(symbolic) => symbolic,
+            Err(predicted) => return Ok(Err(predicted)),
+        };
+        Ok(Ok(ShiftedCholesky {
             work: s.clone(),
             s,
             diag_pos,
             symbolic,
             entry_terms,
-        })
+        }))
     }
 
     /// The matrix `S`.

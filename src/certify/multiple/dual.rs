@@ -362,8 +362,17 @@ fn verify(
     // is bounded as in [D6](b).
     let gersh = gershgorin_lower_bound(s.as_ref()) - 2.0 * gamma(terms + 1) * norm;
     let s_copy = s.clone();
-    let mut ch = ShiftedCholesky::new(s, terms)?;
-    let factor_nonzeros = ch.factor_len();
+    let cap = settings
+        .budget
+        .max_factor_values(n3)
+        .min(dual.max_factor_nonzeros);
+    let (mut analysed, factor_nonzeros) = match ShiftedCholesky::new_within(s, terms, cap)? {
+        Ok(ch) => {
+            let len = ch.factor_len();
+            (Some(ch), len)
+        }
+        Err(predicted) => (None, predicted),
+    };
     let mut factorizations = 0usize;
     let mut lanczos_iterations = 0usize;
     let mut estimate: Option<LanczosResult> = None;
@@ -402,11 +411,8 @@ fn verify(
         .factorisation_fits(factor_nonzeros, n3)
         .err();
     let skipped = factor_nonzeros > dual.max_factor_nonzeros || budget_exceeded.is_some();
-    if skipped {
-        let r = smallest_eigenpair(s_copy.as_ref(), norm, &lz);
-        lanczos_iterations += r.iterations;
-        estimate = Some(r);
-    } else {
+    let factor = analysed.as_mut().filter(|_| !skipped);
+    if let Some(ch) = factor {
         factorizations += 1;
         if let Some(f) = ch.factor(delta0, margin_target) {
             best = Some((f.shift, f.margin));
@@ -467,6 +473,15 @@ fn verify(
             }
             estimate = Some(r);
         }
+    } else {
+        // no proof fits: an estimate only, so keep its cost (about 5 m^2 n / 2 flops for a
+        // subspace of m vectors with full reorthogonalisation) near 1e9 flops
+        let mut lz_cheap = lz;
+        let affordable = (1e9 / n3.max(1) as f64).sqrt() as usize;
+        lz_cheap.max_iterations = lz.max_iterations.min(affordable.max(20));
+        let r = smallest_eigenpair(s_copy.as_ref(), norm, &lz_cheap);
+        lanczos_iterations += r.iterations;
+        estimate = Some(r);
     }
 
     let (verification, mu, shift, fp_margin) = match best {
@@ -575,7 +590,13 @@ fn grounded_bound(
     let mut fp_margin = 0.0;
     if n > 1 {
         let sub = without_block(s, g)?;
-        let mut ch = ShiftedCholesky::new(sub, terms)?;
+        let cap = settings
+            .budget
+            .max_factor_values(n3 - 3)
+            .min(settings.dual.max_factor_nonzeros);
+        let Ok(mut ch) = ShiftedCholesky::new_within(sub, terms, cap)? else {
+            return Ok(Grounded::NotApplicable);
+        };
         factor_nonzeros = ch.factor_len();
         if factor_nonzeros > settings.dual.max_factor_nonzeros
             || settings
@@ -769,13 +790,11 @@ fn try_scalar_comparison(
     if settings.dual.scalar_comparison_above == usize::MAX {
         return Ok(None);
     }
-    let analysis = ScalarAnalysis::new(problem)?;
-    if analysis.factor_len().saturating_mul(9) <= settings.dual.scalar_comparison_above
-        || settings
-            .budget
-            .factorisation_fits(analysis.factor_len(), problem.num_rotations())
-            .is_err()
-    {
+    let n = problem.num_rotations();
+    let Ok(analysis) = ScalarAnalysis::new(problem, settings.budget.max_factor_values(n))? else {
+        return Ok(None);
+    };
+    if analysis.factor_len().saturating_mul(9) <= settings.dual.scalar_comparison_above {
         return Ok(None);
     }
     let target = 0.5 * budget / s.nrows().max(1) as f64;

@@ -34,14 +34,11 @@
 //! what it proves, and it is never used when it cannot be completed.
 
 use crate::error::{Error, Result};
-use crate::linalg::cholesky::{UNIT_ROUNDOFF, gamma, inf_norm};
+use crate::linalg::cholesky::{UNIT_ROUNDOFF, gamma, inf_norm, symbolic_cholesky_within};
 use crate::linalg::ldlt::{LdltFailure, ldlt_inertia};
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
-use faer::Side;
-use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
-};
+use faer::sparse::linalg::cholesky::SymbolicCholesky;
 use faer::sparse::{SparseColMat, Triplet};
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
@@ -99,8 +96,13 @@ pub struct ScalarAnalysis {
 }
 
 impl ScalarAnalysis {
-    /// Analyse the graph of `problem`.
-    pub fn new(problem: &MultipleProblem) -> Result<Self> {
+    /// Analyse the graph of `problem`, refused before the symbolic analysis when the factor is
+    /// predicted to hold more than `max_values` values: `Ok(Err(predicted))`
+    /// ([`crate::linalg::cholesky::symbolic_cholesky_within`]).
+    pub fn new(
+        problem: &MultipleProblem,
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
         let n = problem.num_rotations();
         let mut t = Vec::with_capacity(2 * problem.num_edges() + n);
         for e in problem.edges() {
@@ -126,20 +128,15 @@ impl ScalarAnalysis {
                 }
             }
         }
-        let symbolic = factorize_symbolic_cholesky(
-            pattern.symbolic(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| Error::Solver {
-            message: format!("symbolic analysis of the scalar Laplacian failed: {e:?}"),
-        })?;
-        Ok(ScalarAnalysis {
+        let symbolic = match symbolic_cholesky_within(pattern.symbolic(), max_values)? {
+            Ok(symbolic) => symbolic,
+            Err(predicted) => return Ok(Err(predicted)),
+        };
+        Ok(Ok(ScalarAnalysis {
             symbolic,
             pattern,
             diag_pos,
-        })
+        }))
     }
 
     /// Stored values of the scalar factor.
@@ -440,7 +437,7 @@ mod tests {
             };
             instances += 1;
             let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
-            let an = ScalarAnalysis::new(&p).unwrap();
+            let an = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
             // the local solution, the ground truth (not critical when noisy), a perturbed point
             let perturbed: Vec<Rotation> = sol
                 .rotations
@@ -498,7 +495,7 @@ mod tests {
             exact < -1e-3,
             "independent check: S is indefinite ({exact})"
         );
-        let an = ScalarAnalysis::new(&p).unwrap();
+        let an = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
         if let Ok(c) = scalar_comparison(&p, &an, &rs, &l, 1e-9).unwrap() {
             assert!(c.verified_min_eigenvalue <= exact + 1e-12);
         }
