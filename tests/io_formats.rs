@@ -670,3 +670,27 @@ fn fuzz_readers_never_panic() {
         }
     }
 }
+
+/// Inputs that cannot be text are refused before they are read whole: a file above the size
+/// limit from its size alone (a sparse file: no disk used), binary data from its first block.
+#[test]
+fn oversized_and_binary_inputs_are_refused_early() {
+    use rotavg::io::detect::{GraphFormat, ReadOptions, load_graph};
+    use rotavg::io::text::{MAX_INPUT_BYTES, read_text};
+    let dir = std::env::temp_dir().join(format!("rotavg-io-limits-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let big = dir.join("big.g2o");
+    let f = std::fs::File::create(&big).unwrap();
+    f.set_len(MAX_INPUT_BYTES + 1).unwrap();
+    let err = load_graph(&big, GraphFormat::Auto, &ReadOptions::default()).unwrap_err();
+    assert!(err.to_string().contains("input limit"), "{err}");
+    let zeros = dir.join("zeros.g2o");
+    std::fs::write(&zeros, vec![0u8; 200_000]).unwrap();
+    let err = read_text(zeros.to_str().unwrap()).unwrap_err().to_string();
+    assert!(err.contains("NUL byte at offset 0"), "{err}");
+    let latin1 = dir.join("latin1.g2o");
+    std::fs::write(&latin1, b"# ok\n# caf\xe9\n").unwrap();
+    let err = read_text(latin1.to_str().unwrap()).unwrap_err().to_string();
+    assert!(err.contains(":2: not UTF-8"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

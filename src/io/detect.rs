@@ -332,9 +332,6 @@ pub fn read_graph(
 /// ```
 pub fn load_graph(path: &Path, format: GraphFormat, options: &ReadOptions) -> Result<LoadedGraph> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-        path: name.clone(),
-        message: e.to_string(),
-    })?;
+    let text = super::text::read_text(&name)?;
     read_graph(&text, &name, format, options)
 }

@@ -295,10 +295,7 @@ pub fn tabb_problem(
 }
 
 fn read_file(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|e| Error::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })
+    super::text::read_text(&path.display().to_string())
 }
 
 /// Read a Tabb dataset directory (`robot_cali.txt` and `cali.txt`) into a conjugate problem.

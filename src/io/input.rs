@@ -70,7 +70,8 @@ impl Input {
     }
 }
 
-/// Read a whole input: the file at `path`, or standard input for `-`. I/O errors name the path.
+/// Read a whole input: the file at `path`, or standard input for `-`, with the size limit and
+/// checks of [`super::text::read_text`]. I/O errors name the path.
 ///
 /// ```
 /// use rotavg::io::input::read_input;
@@ -84,19 +85,7 @@ impl Input {
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn read_input(path: &str) -> Result<Input> {
-    use std::io::Read;
-    let io_error = |e: std::io::Error| Error::Io {
-        path: path.into(),
-        message: e.to_string(),
-    };
-    let text = if path == "-" {
-        let mut s = String::new();
-        std::io::stdin().read_to_string(&mut s).map_err(io_error)?;
-        s
-    } else {
-        std::fs::read_to_string(path).map_err(io_error)?
-    };
-    Ok(Input::new(path, text))
+    Ok(Input::new(path, super::text::read_text(path)?))
 }
 
 /// Read a view graph from the file at `path` or, for `-`, from standard input

@@ -12,6 +12,7 @@
 //! | [`handeye`] | Tabb and ETH hand-eye data, conjugate JSON ([`handeye::read_conjugate_json`]) | [`handeye::write_conjugate_json`] |
 //! | [`input`] | what the command line reads: `-` for stdin, problem-kind detection, unit weights, ground truth, estimates, the largest component ([`input::load_multiple_input`]) | — |
 //! | [`output`] | — | estimate files ([`output::write_estimate_file`]: g2o or JSON with node ids) |
+//! | [`text`] | any text input with bounded memory ([`text::read_text`]: size limit, binary data refused early, UTF-8 errors with the line) | — |
 //! | [`names`] | the names of metrics, losses, certify modes, formats ([`names::Choice`], `FromStr`) | — |
 //!
 //! Readers take the text and a file name (used in error messages, with the line number), so
@@ -38,6 +39,7 @@ pub mod names;
 pub mod output;
 pub mod sfm;
 pub mod single_json;
+pub mod text;
 
 pub(crate) use crate::validate::weight_out_of_range;
 /// The weight window of every reader and constructor (see [`crate::validate::MAX_WEIGHT`]).

@@ -210,10 +210,7 @@ pub fn parse_single_json(text: &str, file: &str) -> Result<SingleProblem> {
 /// Read a single-averaging problem from a JSON file (see the module docs).
 pub fn read_single_json(path: &Path) -> Result<SingleProblem> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-        path: name.clone(),
-        message: e.to_string(),
-    })?;
+    let text = super::text::read_text(&name)?;
     parse_single_json(&text, &name)
 }
 
