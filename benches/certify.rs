@@ -5,10 +5,10 @@
 //!    the dual certificate (`certify::multiple::dual_certificate`), timed over several runs. The random graph is certified by the scalar
 //!    comparison `[D13]` (its 3n x 3n Cholesky factor would hold 1.1e8 values), the grid by the
 //!    sparse Cholesky `[D5]`.
-//! 1c. Long chains (`SyntheticChain`: odometry with 2 % loop closures, noise 1e-4 rad), 10^4 and
+//! 2. Long chains (`SyntheticChain`: odometry with 2 % loop closures, noise 1e-4 rad), 10^4 and
 //!    10^5 nodes, 3-D and planar: the SLAM shape of issue 11, certified by the grounded bound
 //!    `[D15]`.
-//! 2. sphere2500 and parking-garage (SE-Sync g2o read by `io::detect::load_graph`, unit
+//! 3. sphere2500 and parking-garage (SE-Sync g2o read by `io::detect::load_graph`, unit
 //!    weights) when the shared data are present: local solve, then certification; both timed.
 
 use rotavg::Rotation;

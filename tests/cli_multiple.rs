@@ -458,3 +458,42 @@ fn ground_truth_init_and_stdin() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("init_short.json"));
 }
+
+/// `--max-memory` and `--max-seconds` bound the certificate: a budget no factorisation fits
+/// gives `inconclusive` with the reason (never a claim), and invalid budgets are usage errors.
+#[test]
+fn budget_flags_bound_the_certificate() {
+    let g = graph_file("budget.json");
+    let g = g.to_str().unwrap();
+    let out = run(&["multiple", g, "--json"]);
+    assert_success(&out);
+    assert_eq!(json_of(&out)["certificate"]["verdict"], "certified");
+    for flags in [["--max-memory", "1K"], ["--max-seconds", "1e-9"]] {
+        let out = run(&["multiple", g, flags[0], flags[1], "--json"]);
+        assert_success(&out);
+        let v = json_of(&out);
+        assert_eq!(v["certificate"]["verdict"], "inconclusive", "{flags:?}");
+        assert!(v["certificate"]["lower_bound"].is_null(), "{flags:?}");
+        let text =
+            String::from_utf8_lossy(&run(&["multiple", g, flags[0], flags[1]]).stdout).to_string();
+        assert!(text.contains("budget"), "{flags:?}: {text}");
+    }
+    for bad in [
+        ["--max-memory", "0"],
+        ["--max-memory", "4X"],
+        ["--max-seconds", "-1"],
+    ] {
+        let out = run(&["multiple", g, bad[0], bad[1]]);
+        assert_eq!(out.status.code(), Some(2), "{bad:?}");
+    }
+    let out = run(&[
+        "multiple",
+        g,
+        "--max-seconds",
+        "none",
+        "--max-memory",
+        "16G",
+        "--json",
+    ]);
+    assert_eq!(json_of(&out)["certificate"]["verdict"], "certified");
+}

@@ -63,10 +63,14 @@ pub fn run(args: &Args) -> Result<Outcome> {
                     m => m,
                 },
                 spectrum: args.plot.as_ref().map(|_| Default::default()),
+                budget: args.common.budget(),
                 ..Default::default()
             }
         }
-        LoadedProblem::Single(_) | LoadedProblem::Conjugate(_) => CertifySettings::default(),
+        LoadedProblem::Single(_) | LoadedProblem::Conjugate(_) => CertifySettings {
+            budget: args.common.budget(),
+            ..Default::default()
+        },
     };
     let report = CertifyReport::certify(&input.name, &problem, estimate, &settings)?;
     if let Some(path) = &args.plot {

@@ -3,6 +3,7 @@
 
 use clap::Args as ClapArgs;
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use rotavg::certify::Budget;
 use rotavg::io::detect::{ReadOptions, WeightSource};
 use rotavg::io::names::Choice;
 use serde::Serialize;
@@ -26,6 +27,60 @@ pub struct Common {
     /// Print one JSON object on stdout (SPEC section 5) instead of the readable summary.
     #[arg(long)]
     pub json: bool,
+    /// Time budget of the certificate, seconds (`none`: no limit). A proof step predicted or
+    /// found to exceed it is not started; the verdict is then `inconclusive` with the reason.
+    #[arg(long, value_name = "SECONDS", default_value = "600", value_parser = parse_seconds)]
+    pub max_seconds: Seconds,
+    /// Memory budget of one factorisation of the certificate: bytes, or with a suffix K, M, G,
+    /// T (powers of 1024), e.g. `8G`. A proof whose factor would not fit is not started.
+    #[arg(long, value_name = "SIZE", default_value = "4G", value_parser = parse_bytes)]
+    pub max_memory: u64,
+}
+
+/// A time limit in seconds, or none.
+#[derive(Debug, Clone, Copy)]
+pub struct Seconds(pub Option<f64>);
+
+/// `none`, or a positive finite number of seconds.
+fn parse_seconds(text: &str) -> Result<Seconds, String> {
+    if text.eq_ignore_ascii_case("none") {
+        return Ok(Seconds(None));
+    }
+    match text.parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 => Ok(Seconds(Some(t))),
+        _ => Err(format!(
+            "`{text}` is not a positive number of seconds or `none`"
+        )),
+    }
+}
+
+/// A positive size in bytes with an optional K, M, G or T suffix (powers of 1024; a trailing
+/// `B` or `iB` is accepted).
+pub fn parse_bytes(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let upper = t.to_ascii_uppercase();
+    let stem = upper
+        .strip_suffix("IB")
+        .or_else(|| upper.strip_suffix('B'))
+        .unwrap_or(&upper);
+    let (number, unit) = match stem.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => (&stem[..i], c),
+        _ => (stem, ' '),
+    };
+    let shift = match unit {
+        ' ' => 0,
+        'K' => 10,
+        'M' => 20,
+        'G' => 30,
+        'T' => 40,
+        _ => return Err(format!("`{text}`: unknown unit (use K, M, G or T)")),
+    };
+    match number.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 1.0 && v * ((1u64 << shift) as f64) < 2f64.powi(63) => {
+            Ok((v * (1u64 << shift) as f64) as u64)
+        }
+        _ => Err(format!("`{text}` is not a size of at least 1 byte")),
+    }
 }
 
 impl Common {
@@ -37,13 +92,18 @@ impl Common {
         }
     }
 
-    /// Print a progress line on stderr, only when it can help a person watching: not under
-    /// `--quiet` or `--json`, and only when stderr is a terminal (never into logs or pipes).
-    pub fn progress(&self, message: std::fmt::Arguments<'_>) {
-        use std::io::IsTerminal;
-        if !self.quiet && !self.json && std::io::stderr().is_terminal() {
-            eprintln!("rotavg: {message}");
+    /// The certificate's budget from `--max-seconds` and `--max-memory`.
+    pub fn budget(&self) -> Budget {
+        Budget {
+            max_memory_bytes: self.max_memory,
+            max_seconds: self.max_seconds.0,
         }
+    }
+
+    /// Show a progress message on the display line (a terminal's stderr only; never under
+    /// `--quiet` or `--json`, see `progress.rs`).
+    pub fn progress(&self, message: std::fmt::Arguments<'_>) {
+        crate::progress::say(message);
     }
 
     /// Print a report: its JSON with `--json`, its text unless `--quiet`.
@@ -55,6 +115,7 @@ impl Common {
 /// Print a report: `serde_json::to_string(report)` when `json`, else `report.to_string()`
 /// unless `quiet`.
 pub fn print<R: Serialize + Display>(report: &R, json: bool, quiet: bool) -> rotavg::Result<()> {
+    crate::progress::finish();
     if json {
         let text = serde_json::to_string(report).map_err(|e| rotavg::Error::Io {
             path: "<stdout>".into(),
@@ -76,4 +137,26 @@ pub fn choice<T: Choice>(values: Vec<T>) -> impl TypedValueParser<Value = T> {
         .collect();
     PossibleValuesParser::new(possible)
         .try_map(|name| T::from_name(&name).ok_or_else(|| format!("unknown value `{name}`")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_and_seconds_parse() {
+        assert_eq!(parse_bytes("4G"), Ok(4 << 30));
+        assert_eq!(parse_bytes("512MiB"), Ok(512 << 20));
+        assert_eq!(parse_bytes("1.5k"), Ok(1536));
+        assert_eq!(parse_bytes("1000"), Ok(1000));
+        assert!(parse_bytes("0").is_err());
+        assert!(parse_bytes("-3G").is_err());
+        assert!(parse_bytes("4X").is_err());
+        assert!(parse_bytes("nan").is_err());
+        assert!(parse_bytes("1e30T").is_err());
+        assert_eq!(parse_seconds("none").map(|s| s.0), Ok(None));
+        assert_eq!(parse_seconds("2.5").map(|s| s.0), Ok(Some(2.5)));
+        assert!(parse_seconds("0").is_err());
+        assert!(parse_seconds("inf").is_err());
+    }
 }

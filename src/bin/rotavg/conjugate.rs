@@ -62,7 +62,10 @@ pub fn run(args: &Args) -> Result<Outcome> {
             init,
             ..Default::default()
         },
-        certify: CertifySettings::with_mode(args.certify),
+        certify: CertifySettings {
+            budget: args.common.budget(),
+            ..CertifySettings::with_mode(args.certify)
+        },
     };
     let result = average_conjugate(&problem, &settings)?;
     let mut report = ConjugateReport::new(&problem, loaded.to_string(), result);

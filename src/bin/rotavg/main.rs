@@ -19,6 +19,7 @@ mod conjugate;
 mod demo;
 mod info;
 mod multiple;
+mod progress;
 mod single;
 
 use clap::{Parser, Subcommand};
@@ -80,14 +81,23 @@ fn exit_quietly_on_broken_pipe() {
 fn main() -> ExitCode {
     exit_quietly_on_broken_pipe();
     let cli = Cli::parse();
-    let (result, common): (rotavg::Result<Outcome>, Option<&Common>) = match &cli.command {
-        Command::Demo(a) => (demo::run(a), None),
-        Command::Single(a) => (single::run(a), Some(&a.common)),
-        Command::Multiple(a) => (multiple::run(a), Some(&a.common)),
-        Command::Conjugate(a) => (conjugate::run(a), Some(&a.common)),
-        Command::Certify(a) => (certify::run(a), Some(&a.common)),
-        Command::Info(a) => (info::run(a), None),
+    let common: Option<&Common> = match &cli.command {
+        Command::Demo(_) | Command::Info(_) => None,
+        Command::Single(a) => Some(&a.common),
+        Command::Multiple(a) => Some(&a.common),
+        Command::Conjugate(a) => Some(&a.common),
+        Command::Certify(a) => Some(&a.common),
     };
+    progress::Display::install(common.is_some_and(|c| !c.quiet && !c.json));
+    let result = match &cli.command {
+        Command::Demo(a) => demo::run(a),
+        Command::Single(a) => single::run(a),
+        Command::Multiple(a) => multiple::run(a),
+        Command::Conjugate(a) => conjugate::run(a),
+        Command::Certify(a) => certify::run(a),
+        Command::Info(a) => info::run(a),
+    };
+    progress::finish();
     match result {
         Ok(outcome) => {
             let require = common.is_some_and(|c| c.require_certified);

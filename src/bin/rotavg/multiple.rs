@@ -91,6 +91,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
             mode: args.certify,
             // the figure shows the smallest eigenvalues of the certificate matrix
             spectrum: args.plot.as_ref().map(|_| Default::default()),
+            budget: args.common.budget(),
             ..Default::default()
         },
     };

@@ -4,6 +4,7 @@
 use crate::Outcome;
 use crate::common::{Common, choice};
 use clap::Args as ClapArgs;
+use rotavg::certify::CertifySettings;
 use rotavg::io::input::{load_estimate, read_input, read_single_problem};
 use rotavg::io::names::Choice;
 use rotavg::pipeline::{AverageSettings, average_single};
@@ -42,7 +43,10 @@ pub fn run(args: &Args) -> rotavg::Result<Outcome> {
             init,
             ..Default::default()
         },
-        ..Default::default()
+        certify: CertifySettings {
+            budget: args.common.budget(),
+            ..Default::default()
+        },
     };
     let report = SingleReport::new(average_single(&problem, &settings)?);
     args.common.print(&report)?;
