@@ -368,6 +368,42 @@ fn z_cycle_local_minima() {
 }
 
 /// 10-20% outliers: the robust losses' error to the ground truth is below chordal L2's.
+/// The L1 IRLS stops on its cost decrease over a window of iterations: the cost it stops at is
+/// within 1e-8 (relative) of the cost a run 10x longer (decrease test disabled) reaches, and
+/// no worse than the start.
+#[test]
+fn l1_stops_on_cost_decrease_near_the_long_run_cost() {
+    let (p, _) = SyntheticGraph {
+        num_rotations: 200,
+        num_edges: 1000,
+        noise_sigma: 0.02,
+        outlier_fraction: 0.2,
+        seed: 5,
+    }
+    .generate();
+    let p = with(&p, GEODESIC_L1);
+    let short = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    let long = solve_multiple(
+        &p,
+        &MultipleSettings {
+            irls_decrease_tolerance: f64::MIN_POSITIVE,
+            max_iterations: 1000,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    eprintln!("default: {short}\nlong: {long}");
+    assert!(short.report.termination.is_converged(), "{short}");
+    assert!(short.report.iterations <= long.report.iterations);
+    assert!(short.cost <= short.init_cost);
+    assert!(
+        (short.cost - long.cost).abs() <= 1e-8 * long.cost,
+        "{} vs {}",
+        short.cost,
+        long.cost
+    );
+}
+
 #[test]
 fn robust_losses_reject_outliers() {
     for (seed, frac) in [(1u64, 0.1), (2, 0.2)] {

@@ -15,7 +15,7 @@ use crate::linalg::linear_solver::LinearSolver;
 use crate::multiple::MultipleProblem;
 use crate::multiple::chordal::{linear_solver, root_fixed_steps};
 use crate::multiple::robust::{edge_log, objective_terms};
-use crate::multiple::solve::{MultipleSettings, MultipleSolution};
+use crate::multiple::solve::{IRLS_DECREASE_WINDOW, MultipleSettings, MultipleSolution};
 use crate::objective::{Loss, Objective};
 use crate::so3::{Rotation, exp};
 use crate::termination::{SolverReport, Termination};
@@ -143,6 +143,9 @@ pub(crate) fn lie_algebraic(
     let mut factor = None;
     let mut val = vec![0.0; pattern.nnz()];
     let mut iterations = 0;
+    // costs of the last IRLS_DECREASE_WINDOW + 1 iterates, oldest first
+    let mut recent = std::collections::VecDeque::with_capacity(IRLS_DECREASE_WINDOW + 1);
+    recent.push_back(ev.cost);
     loop {
         if iterations >= max_iterations {
             let g = norm(&ev.grad);
@@ -256,6 +259,25 @@ pub(crate) fn lie_algebraic(
         let g = norm(&ev.grad);
         if g / total_weight <= tol {
             return finish(r, &ev, iterations, converged(g));
+        }
+        recent.push_back(ev.cost);
+        if objective.loss == Loss::L1 && recent.len() > IRLS_DECREASE_WINDOW {
+            let oldest = recent.pop_front().unwrap_or(ev.cost);
+            let decrease = (oldest - ev.cost) / ev.cost.abs().max(f64::MIN_POSITIVE);
+            if decrease <= settings.irls_decrease_tolerance {
+                return finish(
+                    r,
+                    &ev,
+                    iterations,
+                    Termination::Converged {
+                        measure: format!(
+                            "relative cost decrease over the last {IRLS_DECREASE_WINDOW} iterations"
+                        ),
+                        value: decrease,
+                        threshold: settings.irls_decrease_tolerance,
+                    },
+                );
+            }
         }
         if max_step * t < settings.step_tolerance {
             return finish(

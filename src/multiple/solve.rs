@@ -9,6 +9,9 @@ use crate::termination::SolverReport;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
+/// The window of [`MultipleSettings::irls_decrease_tolerance`], iterations.
+pub const IRLS_DECREASE_WINDOW: usize = 10;
+
 /// How the local solver is started.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -58,6 +61,14 @@ pub struct MultipleSettings {
     /// optimum, which no certificate can then close. One more Newton step near the optimum costs
     /// one factorisation.
     pub decrease_tolerance: f64,
+    /// The L1 loss (IRLS, `[M9]`): also stop (converged) when the cost
+    /// decreased by at most this fraction of itself over the last [`IRLS_DECREASE_WINDOW`]
+    /// iterations (default `1e-10`). IRLS converges linearly, and for L1 its gradient test is
+    /// on a smoothed, non-smooth cost: on 1DSfM Madrid (23,784 edges) the L1 gradient hovered
+    /// near `8.5e-7` from iteration 140 to 405 while the cost changed by `6e-12` relative. This
+    /// test stops there after about 100 iterations, at a cost `3e-10` (relative) above where
+    /// 405 iterations end. The smooth losses keep the gradient test alone.
+    pub irls_decrease_tolerance: f64,
     /// Also stop (converged) when every node moves by less than this angle in one step, radians
     /// (default `1e-12`).
     pub step_tolerance: f64,
@@ -72,6 +83,7 @@ impl Default for MultipleSettings {
             max_iterations: 100,
             gradient_tolerance: 1e-8,
             decrease_tolerance: 1e-12,
+            irls_decrease_tolerance: 1e-10,
             step_tolerance: 1e-12,
             l1_epsilon: 1e-6,
         }
@@ -100,6 +112,7 @@ impl MultipleSettings {
         for (name, v) in [
             ("gradient_tolerance", self.gradient_tolerance),
             ("decrease_tolerance", self.decrease_tolerance),
+            ("irls_decrease_tolerance", self.irls_decrease_tolerance),
             ("step_tolerance", self.step_tolerance),
             ("l1_epsilon", self.l1_epsilon),
         ] {
