@@ -12,22 +12,11 @@ use rotavg::multiple::{
     initialise, objective_cost_gradient, objective_terms, solve_multiple,
 };
 use rotavg::objective::{Loss, Objective};
-use rotavg::so3::{angle_between, exp, perturb, random_rotation, random_unit_vector};
+use rotavg::so3::{exp, perturb, random_rotation, random_unit_vector};
 use rotavg::{Metric, Rotation, Termination};
 
 mod common;
-use common::max_gauge_error;
-
-fn mean_error(a: &[Rotation], b: &[Rotation]) -> f64 {
-    let (mut a, mut b) = (a.to_vec(), b.to_vec());
-    fix_gauge(&mut a);
-    fix_gauge(&mut b);
-    a.iter()
-        .zip(&b)
-        .map(|(x, y)| angle_between(x, y))
-        .sum::<f64>()
-        / a.len() as f64
-}
+use common::{max_gauge_error, mean_gauge_error as mean_error};
 
 const GEODESIC_L2: Objective = Objective {
     metric: Metric::Geodesic,

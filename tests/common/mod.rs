@@ -97,15 +97,23 @@ pub fn rz_json(t: f64) -> String {
     format!("[[{c}, {}, 0], [{s}, {c}, 0], [0, 0, 1]]", -s)
 }
 
-/// Largest angle between corresponding rotations after fixing the gauge of both (`R_0 = I`).
-pub fn max_gauge_error(a: &[Rotation], b: &[Rotation]) -> f64 {
+/// The angles between corresponding rotations after fixing the gauge of both (`R_0 = I`).
+pub fn gauge_errors(a: &[Rotation], b: &[Rotation]) -> Vec<f64> {
     let (mut a, mut b) = (a.to_vec(), b.to_vec());
     fix_gauge(&mut a);
     fix_gauge(&mut b);
-    a.iter()
-        .zip(&b)
-        .map(|(x, y)| angle_between(x, y))
-        .fold(0.0, f64::max)
+    a.iter().zip(&b).map(|(x, y)| angle_between(x, y)).collect()
+}
+
+/// Largest angle between corresponding rotations after fixing the gauge of both (`R_0 = I`).
+pub fn max_gauge_error(a: &[Rotation], b: &[Rotation]) -> f64 {
+    gauge_errors(a, b).into_iter().fold(0.0, f64::max)
+}
+
+/// Mean angle between corresponding rotations after fixing the gauge of both (`R_0 = I`).
+pub fn mean_gauge_error(a: &[Rotation], b: &[Rotation]) -> f64 {
+    let e = gauge_errors(a, b);
+    e.iter().sum::<f64>() / e.len().max(1) as f64
 }
 
 /// The same graph with every edge weight multiplied by `c`.
