@@ -1,22 +1,50 @@
-//! Measure the pipeline on synthetic graphs:
-//! `cargo run --release --example pipeline_scale -- N M SIGMA [ABSOLUTE_TOLERANCE_PER_MEDIAN_WEIGHT]`.
+//! Measure the whole pipeline (solve, then certify) on synthetic graphs, one size per run so
+//! that `/usr/bin/time -v` reports its peak RSS:
+//!
+//! ```text
+//! cargo run --release --example pipeline_scale -- [random|chain|planar-chain] N [M] [SIGMA] [ABSOLUTE_TOLERANCE_PER_MEDIAN_WEIGHT]
+//! ```
+//!
+//! `random`: `SyntheticGraph` with `M` edges (default `3 N`), noise `SIGMA` (default 0.05 rad).
+//! `chain`, `planar-chain`: `SyntheticChain` (odometry with 2 % loop closures; `M` ignored),
+//! noise `SIGMA` (default 1e-4 rad). Prints one line: sizes, solve and certify seconds, Newton
+//! iterations, verdict, relative gap, and the certificate methods tried.
 use rotavg::certify::{CertifySettings, ToleranceRule};
-use rotavg::multiple::synthetic::SyntheticGraph;
+use rotavg::multiple::synthetic::{SyntheticChain, SyntheticGraph};
 use rotavg::pipeline::{AverageMultipleSettings, average_multiple};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(10_000);
-    let m: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(3 * n);
-    let sigma: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(0.05);
-    let per_weight: f64 = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(1e-9);
-    let (p, _) = SyntheticGraph {
-        num_rotations: n,
-        num_edges: m,
-        noise_sigma: sigma,
-        ..Default::default()
-    }
-    .generate();
+    let (kind, rest) = match args.get(1).map(String::as_str) {
+        Some(k @ ("random" | "chain" | "planar-chain")) => (k.to_string(), &args[2..]),
+        _ => ("random".to_string(), &args[1..]),
+    };
+    let n: usize = rest.first().and_then(|s| s.parse().ok()).unwrap_or(10_000);
+    let m: usize = rest.get(1).and_then(|s| s.parse().ok()).unwrap_or(3 * n);
+    let default_sigma = if kind == "random" { 0.05 } else { 1e-4 };
+    let sigma: f64 = rest
+        .get(2)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default_sigma);
+    let per_weight: f64 = rest.get(3).and_then(|s| s.parse().ok()).unwrap_or(1e-9);
+    let (p, _) = match kind.as_str() {
+        "random" => SyntheticGraph {
+            num_rotations: n,
+            num_edges: m,
+            noise_sigma: sigma,
+            ..Default::default()
+        }
+        .generate(),
+        planar => SyntheticChain {
+            num_rotations: n,
+            loop_closure_fraction: 0.02,
+            noise_sigma: sigma,
+            planar: planar == "planar-chain",
+            seed: 3,
+            ..Default::default()
+        }
+        .generate(),
+    };
     let settings = AverageMultipleSettings {
         certify: CertifySettings {
             tolerance: ToleranceRule {
@@ -28,15 +56,25 @@ fn main() {
         ..Default::default()
     };
     match average_multiple(&p, &settings) {
-        Ok(e) => println!(
-            "n {n} m {m} sigma {sigma}: {e}\nmethods: {:?}",
-            e.details
-                .certify
-                .iter()
-                .flat_map(|c| &c.methods)
-                .map(|r| (r.method, r.lower_bound, r.seconds))
-                .collect::<Vec<_>>()
-        ),
+        Ok(e) => {
+            let c = e.certificate.as_ref();
+            println!(
+                "{kind} n {n} m {} sigma {sigma}: solve {:.3} s ({} iterations), certify {:.3} s, verdict {}, relative gap {}, methods {:?}",
+                p.num_edges(),
+                e.solution.report.seconds,
+                e.solution.report.iterations,
+                e.details.certify_seconds,
+                c.map_or("none".into(), |c| c.verdict.to_string()),
+                c.and_then(|c| c.relative_gap)
+                    .map_or("-".into(), |g| format!("{g:.1e}")),
+                e.details
+                    .certify
+                    .iter()
+                    .flat_map(|c| &c.methods)
+                    .map(|r| r.method.to_string())
+                    .collect::<Vec<_>>()
+            );
+        }
         Err(e) => println!("error: {e}"),
     }
 }
