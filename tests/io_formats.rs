@@ -694,3 +694,62 @@ fn oversized_and_binary_inputs_are_refused_early() {
     assert!(err.contains(":2: not UTF-8"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Ground truth as `id R11 .. R33` lines (world-to-camera, the layout many rotation-averaging
+/// tools write): matched to nodes by id, zeros and missing ids unknown, bad layouts refused
+/// with the line.
+#[test]
+fn ground_truth_with_ids() {
+    use rotavg::io::detect::{GraphFormat, ReadOptions, read_graph};
+    use rotavg::io::input::read_ground_truth;
+    use rotavg::so3::{angle_between, exp};
+    let o = ReadOptions::default();
+    // 1DSfM edges between file ids 2, 5 and 7 (nodes 0, 1, 2 in sorted id order)
+    let graph = read_graph(
+        "2 5 1 0 0 0 1 0 0 0 1\n5 7 1 0 0 0 1 0 0 0 1\n",
+        "EGs.txt",
+        GraphFormat::Auto,
+        &o,
+    )
+    .unwrap();
+    assert_eq!(graph.node_ids, [2, 5, 7]);
+    let r = exp(&nalgebra::Vector3::new(0.1, -0.2, 0.3));
+    let m = r.matrix();
+    let row = |id: u64| {
+        format!(
+            "{id} {} {} {} {} {} {} {} {} {}\n",
+            m[(0, 0)],
+            m[(0, 1)],
+            m[(0, 2)],
+            m[(1, 0)],
+            m[(1, 1)],
+            m[(1, 2)],
+            m[(2, 0)],
+            m[(2, 1)],
+            m[(2, 2)]
+        )
+    };
+    let text = format!("# id R\n{}{}0 0 0 0 0 0 0 0 0 0\n", row(7), row(2));
+    let truth = read_ground_truth(&text, "gt.txt", &graph, &o).unwrap();
+    assert!(angle_between(&truth[0].unwrap(), &r) < 1e-12);
+    assert!(truth[1].is_none()); // id 5 not listed
+    assert!(angle_between(&truth[2].unwrap(), &r) < 1e-12);
+    // mixed layouts, repeated ids, absurd ids: errors naming the line
+    for (bad, line, what) in [
+        (
+            format!("{}1 0 0 0 1 0 0 0 1\n", row(2)),
+            2,
+            "expected 10 tokens",
+        ),
+        (format!("{}{}", row(2), row(2)), 2, "appears twice"),
+        (row(1 << 40), 1, "larger than"),
+    ] {
+        let err = read_ground_truth(&bad, "gt.txt", &graph, &o)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with(&format!("gt.txt:{line}:")) && err.contains(what),
+            "{err}"
+        );
+    }
+}

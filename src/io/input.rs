@@ -369,7 +369,10 @@ pub fn load_conjugate(
 /// * a JSON estimate (`.json`, or text starting with `{`): one rotation per node, in node order;
 /// * g2o (`.g2o`, or a first token that is a tag): the vertex rotations;
 /// * Bundler (`.out`, or a `# Bundle` header): camera `k` is file id `k`;
-/// * otherwise a rotation list (9 numbers per line, line `k` = file id `k`).
+/// * otherwise a rotation list: 9 numbers per line (line `k` = file id `k`), or `id R11 .. R33`
+///   lines (world-to-camera, as many rotation-averaging tools write them)
+///   ([`crate::io::sfm::read_rotation_list`]). An all-zero rotation means "no ground truth for
+///   this camera".
 ///
 /// ```
 /// use rotavg::io::input::read_ground_truth;

@@ -14,8 +14,9 @@
 //!   world-to-camera (`x_cam = R X + t`): that is this crate's `R_i` unchanged. A camera with
 //!   an all-zero `R` was not reconstructed (`None`). Camera block `k` is file id `k`.
 //! * Plain rotation list `[F7]`: one row-major 3x3 rotation (9 numbers) per line, line `k` (of
-//!   the non-blank, non-`#` lines) being file id `k`, already in this crate's convention
-//!   (`R_i`); a line of 9 zeros means "no ground truth for this node" (`None`).
+//!   the non-blank, non-`#` lines) being file id `k`, or `id R11 .. R33` lines (10 tokens),
+//!   already in this crate's convention (`R_i`, world-to-camera); a rotation of 9 zeros means
+//!   "no ground truth for this node" (`None`).
 //!
 //! Use [`truth_for_nodes`] to reorder ground truth indexed by file id onto a graph's nodes.
 
@@ -191,38 +192,72 @@ pub fn read_bundler(
     Ok(out)
 }
 
-/// Read a plain rotation list `[F7]`: one row-major rotation per line (9 numbers); 9 zeros
-/// mean "unknown" (`None`).
+/// Read a plain rotation list `[F7]`: one row-major rotation per line, either 9 numbers
+/// (line `k` is file id `k`) or `id R11 .. R33` (10 tokens: the file id first, the layout many
+/// rotation-averaging tools write, world-to-camera = this crate's `R_i`); 9 zeros mean
+/// "unknown" (`None`), and so does an id no line names. All lines use the same layout; ids are
+/// unique and at most `16 x lines + 1024` (so a stray large id cannot allocate without bound).
 ///
 /// ```
 /// use rotavg::io::{sfm::read_rotation_list, detect::ReadOptions};
 /// let gt = read_rotation_list("1 0 0 0 1 0 0 0 1\n0 0 0 0 0 0 0 0 0\n", "gt.txt", &ReadOptions::default()).unwrap();
 /// assert_eq!(gt.len(), 2);
+/// // with ids: file ids 3 and 1 known, 0 and 2 not
+/// let gt = read_rotation_list("3 1 0 0 0 1 0 0 0 1\n1 1 0 0 0 1 0 0 0 1\n", "gt.txt", &ReadOptions::default()).unwrap();
+/// assert_eq!(gt.iter().map(Option::is_some).collect::<Vec<_>>(), [false, true, false, true]);
 /// ```
 pub fn read_rotation_list(
     text: &str,
     file: &str,
     options: &ReadOptions,
 ) -> Result<Vec<Option<Rotation>>> {
-    let mut out = Vec::new();
-    for (ln, trimmed) in crate::io::content_lines(text) {
+    let lines: Vec<(usize, &str)> = crate::io::content_lines(text).collect();
+    let Some(&(first_line, first)) = lines.first() else {
+        return Err(Error::parse(Some(file), None, "no rotations in the file"));
+    };
+    let with_ids = first.split_whitespace().count() == 10;
+    let max_id = 16 * lines.len() as u64 + 1024;
+    let mut out: Vec<Option<Rotation>> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
+    for &(ln, trimmed) in &lines {
         let mut t = Tokens::new(file, ln, trimmed);
-        t.expect_count(&[9], "R11 R12 R13 R21 R22 R23 R31 R32 R33")?;
-        let m = read_matrix(&mut t)?;
-        if is_zero(&m) {
-            out.push(None);
+        let id = if with_ids {
+            t.expect_count(
+                &[10],
+                &format!("id R11 R12 R13 R21 R22 R23 R31 R32 R33, as on line {first_line}"),
+            )?;
+            let id = t.next_id("id")?;
+            if id > max_id {
+                return Err(t.err(format!(
+                    "id {id} is larger than {max_id} (16 x the number of lines + 1024)"
+                )));
+            }
+            if !seen.insert(id) {
+                return Err(t.err(format!("id {id} appears twice")));
+            }
+            id as usize
         } else {
-            let item = format!("rotation {}", out.len());
-            out.push(Some(to_rotation(
+            t.expect_count(
+                &[9],
+                "R11 R12 R13 R21 R22 R23 R31 R32 R33, as on the first line",
+            )?;
+            out.len()
+        };
+        let m = read_matrix(&mut t)?;
+        let rotation = if is_zero(&m) {
+            None
+        } else {
+            Some(to_rotation(
                 &t,
                 &m,
                 options.rotation_tolerance,
-                &item,
-            )?));
+                &format!("rotation {id}"),
+            )?)
+        };
+        if out.len() <= id {
+            out.resize(id + 1, None);
         }
-    }
-    if out.is_empty() {
-        return Err(Error::parse(Some(file), None, "no rotations in the file"));
+        out[id] = rotation;
     }
     Ok(out)
 }

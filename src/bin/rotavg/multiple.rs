@@ -44,9 +44,9 @@ pub struct Args {
     #[arg(long, value_parser = choice(certify_modes()), default_value_t = CertifyMode::Auto)]
     pub certify: CertifyMode,
     /// Ground truth: g2o (vertex lines; `.g2o` or a first token that is a tag), Bundler `.out`,
-    /// JSON estimate (node order), or a rotation list (9 numbers per line,
-    /// line k = file id k); matched to
-    /// nodes by file id.
+    /// JSON estimate (node order), or a rotation list (`R11 .. R33` per line, line k = file id
+    /// k, or `id R11 .. R33` per line); matched to nodes by file id. An all-zero rotation
+    /// means "no ground truth for this camera".
     #[arg(long, value_name = "FILE")]
     pub ground_truth: Option<String>,
     /// Solve the largest connected component of a disconnected graph (and report the others).
