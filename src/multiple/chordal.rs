@@ -191,7 +191,8 @@ fn assemble_hessian(
     }
 }
 
-fn grad_norm(g: &[Vector3<f64>]) -> f64 {
+/// The Euclidean norm of a stacked gradient (one tangent vector per node).
+pub(crate) fn grad_norm(g: &[Vector3<f64>]) -> f64 {
     g.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt()
 }
 

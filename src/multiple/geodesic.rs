@@ -13,7 +13,7 @@ use crate::error::Result;
 use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::linear_solver::LinearSolver;
 use crate::multiple::MultipleProblem;
-use crate::multiple::chordal::{linear_solver, root_fixed_steps};
+use crate::multiple::chordal::{grad_norm as norm, linear_solver, root_fixed_steps};
 use crate::multiple::robust::{edge_log, objective_terms};
 use crate::multiple::solve::{IRLS_DECREASE_WINDOW, MultipleSettings, MultipleSolution};
 use crate::objective::{Loss, Objective};
@@ -63,10 +63,6 @@ fn evaluate(problem: &MultipleProblem, r: &[Rotation], objective: &Objective, ep
         psi.push(p);
     }
     Eval { cost, grad, psi }
-}
-
-fn norm(g: &[Vector3<f64>]) -> f64 {
-    g.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt()
 }
 
 /// The (reweighted) Lie-algebraic iteration for the problem's objective `[M8]`, `[M9]`.
