@@ -47,7 +47,10 @@ def cli():
     The binary is $ROTAVG_CLI, else target/release/rotavg of this repository, else `rotavg` on
     PATH.
     """
-    candidates = [os.environ.get("ROTAVG_CLI"), str(REPO / "target" / "release" / "rotavg")]
+    required = os.environ.get("ROTAVG_CLI")
+    if required and not Path(required).is_file():
+        pytest.fail(f"ROTAVG_CLI={required} does not exist")
+    candidates = [required, str(REPO / "target" / "release" / "rotavg")]
     exe = next((c for c in candidates if c and Path(c).is_file()), None) or shutil.which("rotavg")
     if exe is None:
         skip("rotavg command line not built (cargo build --release, or set ROTAVG_CLI)")
