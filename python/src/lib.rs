@@ -63,7 +63,7 @@ fn parse<T: std::str::FromStr<Err = rotavg::Error>>(name: &str) -> PyResult<T> {
     name.parse().map_err(error)
 }
 
-/// Edge data copied out of Python, validated later by [`EdgeArrays::problem`].
+/// Edge data copied out of Python, validated later by [`EdgeArrays::graph`].
 struct EdgeArrays {
     n: i64,
     i: Vec<i64>,

@@ -146,3 +146,20 @@ def test_file_errors_name_file_and_line(tmp_path):
     bad.write_text("EDGE3 0 1 0 0 0 0 0 0.1\nEDGE3 1 2 0 0 zz 0 0 0.2\n")
     msg = error("bad.g2o:2:", rotavg.read_graph, bad)
     assert "zz" in msg
+
+
+def test_reprs_docstrings_and_dicts(rng):
+    _, i, j, rel = synthetic_graph(rng, 10, 30, 0.01)
+    res = rotavg.average_multiple(10, i, j, rel)
+    assert repr(res).startswith("Result(problem='multiple', estimate=<array (10, 3, 3)>, cost=")
+    assert repr(res.certificate).startswith("Certificate(verdict='certified', upper_bound=")
+    assert repr(res.solver).startswith("SolverReport(name='riemannian-newton-lm', iterations=")
+    assert str(res).startswith("<arrays>: json format, 10 nodes, 30 edges")
+    d = res.to_dict()
+    assert d["certificate"] == res.certificate.to_dict() and d["solver"] == res.solver.to_dict()
+    assert res.to_json().startswith('{"problem":"multiple","num_rotations":10,')
+    for key in ["verdict", "upper_bound", "lower_bound", "gap", "relative_gap", "method", "seconds"]:
+        assert key in d["certificate"]
+    for name in rotavg.__all__:
+        if name != "__version__":
+            assert getattr(rotavg, name).__doc__, name
