@@ -19,12 +19,12 @@ use rotavg::io::detect::{ComponentSelection, GraphFormat, LoadedGraph, ReadOptio
 use rotavg::io::input::{LoadedEstimate, LoadedProblem, MultipleInput, load_view_graph};
 use rotavg::io::json::Estimate;
 use rotavg::io::names::{LossKind, MultipleLoss};
+use rotavg::multiple::stats::duplicate_edge_count;
 use rotavg::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_conjugate, average_multiple, average_single};
 use rotavg::report::{CertifyReport, ConjugateReport, MultipleReport, SingleReport};
 use rotavg::single::SingleProblem;
 use rotavg::{Loss, Metric, Objective};
-use std::collections::HashSet;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use types::{Certificate, Graph, Report, RunResult, SolverReport};
 
@@ -113,10 +113,17 @@ impl EdgeArrays {
             name: "n".into(),
             reason: format!("{} is negative", self.n),
         })?;
+        // As the JSON reader: nothing sized from an unchecked count. More than 2m + 1 nodes
+        // means a node without edges (a disconnected graph) and could be an absurd number.
+        let m = self.rel.len();
+        if n > 2 * m + 1 {
+            return Err(rotavg::Error::InvalidSettings {
+                name: "n".into(),
+                reason: format!("n = {n}, but {m} edges touch at most {} nodes", 2 * m),
+            });
+        }
         let rel = self.rel.rotations()?;
-        let mut edges = Vec::with_capacity(rel.len());
-        let (mut reversed, mut seen) = (0, HashSet::with_capacity(rel.len()));
-        let mut duplicates = 0;
+        let mut edges = Vec::with_capacity(m);
         for (k, rotation) in rel.into_iter().enumerate() {
             let node = |v: i64| {
                 usize::try_from(v).map_err(|_| rotavg::Error::InvalidSettings {
@@ -126,22 +133,20 @@ impl EdgeArrays {
                     ),
                 })
             };
-            let (i, j) = (node(self.i[k])?, node(self.j[k])?);
-            reversed += usize::from(i > j);
-            duplicates += usize::from(!seen.insert((i.min(j), i.max(j))));
-            let weight = self.weights.as_ref().map_or(1.0, |w| w[k]);
             edges.push(Edge {
-                i,
-                j,
+                i: node(self.i[k])?,
+                j: node(self.j[k])?,
                 rotation,
-                weight,
+                weight: self.weights.as_ref().map_or(1.0, |w| w[k]),
             });
         }
+        let reversed = edges.iter().filter(|e| e.i > e.j).count();
+        let problem = MultipleProblem::new(n, edges)?;
         Ok(LoadedGraph {
-            problem: MultipleProblem::new(n, edges)?,
+            duplicates: duplicate_edge_count(&problem),
+            problem,
             node_ids: (0..n as u64).collect(),
             initial: None,
-            duplicates,
             reversed,
             warnings: Vec::new(),
             format: GraphFormat::Json,

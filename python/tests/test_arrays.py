@@ -121,6 +121,8 @@ def test_indices_out_of_range_self_loops_and_types():
     error("expected integers", rotavg.average_multiple, n, i.astype(float), j, rel)
     error("n must be an integer", rotavg.average_multiple, "three", i, j, rel)
     error("not connected", rotavg.average_multiple, 5, i, j, rel)
+    error("3 edges touch at most 6 nodes", rotavg.average_multiple, 10**12, i, j, rel)
+    error("n = -1 is negative|is negative", rotavg.average_multiple, -1, i, j, rel)
 
 
 def test_graph_or_arrays_not_both(tmp_path):
