@@ -1,0 +1,50 @@
+"""rotavg: certifiably optimal rotation averaging, with numpy in and out.
+
+Three problems (Hartley, Trumpf, Dai & Li, "Rotation Averaging", IJCV 2013):
+
+* ``average_single(rotations, weights=None, metric="chordal", p=2)``: the L^p mean of rotations;
+* ``average_multiple(n, i, j, rel, weights=None, loss="chordal", certify="auto")``: absolute
+  rotations ``R_0..R_{n-1}`` from relative ones, ``rel[k] @ R_i = R_j`` for edge
+  ``(i[k], j[k])``; ``certify_multiple(...)`` certifies an estimate from any other solver;
+* ``average_conjugate(left, right, weights=None)``: hand-eye ``S`` with ``right[k] ~ S^-1 left[k] S``;
+  ``certify_conjugate(...)`` certifies an ``S`` from elsewhere.
+
+Rotations are float64 arrays of shape ``(N, 3, 3)`` (a ``scipy.spatial.transform.Rotation`` is
+accepted wherever rotations are); ``read_graph(path)`` reads g2o, 1DSfM and JSON view graphs.
+Every call returns a ``Result`` with the estimate, its cost, the solver's report and a
+``Certificate`` (a proven lower bound on the global minimum and the gap to it); ``to_dict()`` is
+the object the ``rotavg`` command line prints with ``--json``. Bad input raises ``rotavg.Error``
+(a ``ValueError``) with the library's message. The GIL is released while solving.
+"""
+
+from ._rotavg import (
+    Certificate,
+    Error,
+    Graph,
+    Result,
+    SolverReport,
+    __version__,
+    average_conjugate,
+    average_multiple,
+    average_single,
+    certify_conjugate,
+    certify_multiple,
+    certify_single,
+    read_graph,
+)
+
+__all__ = [
+    "Certificate",
+    "Error",
+    "Graph",
+    "Result",
+    "SolverReport",
+    "__version__",
+    "average_conjugate",
+    "average_multiple",
+    "average_single",
+    "certify_conjugate",
+    "certify_multiple",
+    "certify_single",
+    "read_graph",
+]

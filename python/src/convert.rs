@@ -1,0 +1,197 @@
+//! numpy in: array-likes (lists, ndarrays of any real dtype, objects with `as_matrix()` such as
+//! `scipy.spatial.transform.Rotation`) to plain Rust vectors, with the shape checks of the
+//! Python API. Only copies are made while the GIL is held; validation of the values (rotations,
+//! weights, indices) happens afterwards, without the GIL, in the library's own checks.
+//!
+//! numpy out: rotations as `(N, 3, 3)` or `(3, 3)` float64 arrays (row-major, C order).
+
+use crate::Error;
+use nalgebra::Matrix3;
+use numpy::ndarray::Dimension;
+use numpy::{AllowTypeChange, PyArray1, PyArrayLikeDyn, PyArrayMethods, PyUntypedArray};
+use pyo3::prelude::*;
+use rotavg::Rotation;
+use rotavg::so3::{DEFAULT_ROTATION_TOLERANCE, rotation_from_matrix};
+
+/// `obj` as a numpy array: `obj.as_matrix()` when `obj` is not an ndarray and has that method
+/// (scipy's `Rotation`), else `numpy.asarray(obj)`; the dtype kind must be one of `kinds`
+/// (numpy's one-letter codes: `f` float, `i` signed, `u` unsigned integer).
+fn ndarray<'py>(obj: &Bound<'py, PyAny>, what: &str, kinds: &str) -> PyResult<Bound<'py, PyAny>> {
+    let py = obj.py();
+    let is_array = obj.cast::<PyUntypedArray>().is_ok();
+    let obj = if !is_array && obj.hasattr("as_matrix")? {
+        obj.call_method0("as_matrix")?
+    } else {
+        obj.clone()
+    };
+    let array = py
+        .import("numpy")?
+        .call_method1("asarray", (obj,))
+        .map_err(|e| Error::new_err(format!("{what}: not an array of numbers ({e})")))?;
+    let kind: String = array.getattr("dtype")?.getattr("kind")?.extract()?;
+    let size: usize = array.getattr("size")?.extract()?;
+    // An empty list is float64 to numpy: let the size checks speak instead.
+    if size > 0 && !kinds.contains(kind.as_str()) {
+        let dtype = array.getattr("dtype")?.str()?.to_string();
+        let expected = if kinds.contains('f') {
+            "real numbers"
+        } else {
+            "integers"
+        };
+        return Err(Error::new_err(format!(
+            "{what}: expected {expected}, got an array of dtype {dtype}"
+        )));
+    }
+    Ok(array)
+}
+
+/// The shape of an array as a Python-style tuple string, e.g. `(4, 3)`.
+fn shape_text(shape: &[usize]) -> String {
+    match shape {
+        [one] => format!("({one},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// The values of a real array-like, in C order, with its shape.
+fn float_values(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<f64>, Vec<usize>)> {
+    let array = ndarray(obj, what, "fiu")?;
+    let a: PyArrayLikeDyn<'_, f64, AllowTypeChange> = array.extract()?;
+    let view = a.as_array();
+    let shape = view.raw_dim().as_array_view().to_vec();
+    let values = match view.as_slice() {
+        Some(s) => s.to_vec(),
+        None => view.iter().copied().collect(),
+    };
+    Ok((values, shape))
+}
+
+/// Rows of 9 numbers (row-major 3x3 matrices) of an `(N, 3, 3)` array-like.
+pub fn matrices(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Matrices> {
+    let (values, shape) = float_values(obj, what)?;
+    match shape.as_slice() {
+        [_, 3, 3] => Ok(Matrices {
+            values,
+            what: what.to_string(),
+        }),
+        _ => Err(Error::new_err(format!(
+            "{what} must have shape (N, 3, 3), got {}",
+            shape_text(&shape)
+        ))),
+    }
+}
+
+/// One row-major 3x3 matrix of a `(3, 3)` array-like.
+pub fn matrix(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Matrices> {
+    let (values, shape) = float_values(obj, what)?;
+    match shape.as_slice() {
+        [3, 3] => Ok(Matrices {
+            values,
+            what: what.to_string(),
+        }),
+        _ => Err(Error::new_err(format!(
+            "{what} must have shape (3, 3), got {}",
+            shape_text(&shape)
+        ))),
+    }
+}
+
+/// A 1-D real array-like of `len` entries (weights).
+pub fn vector(obj: &Bound<'_, PyAny>, what: &str, len: usize) -> PyResult<Vec<f64>> {
+    let (values, shape) = float_values(obj, what)?;
+    match shape.as_slice() {
+        [m] if *m == len => Ok(values),
+        _ => Err(Error::new_err(format!(
+            "{what} must have shape ({len},), got {}",
+            shape_text(&shape)
+        ))),
+    }
+}
+
+/// A 1-D integer array-like (node indices).
+pub fn indices(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<i64>> {
+    let array = ndarray(obj, what, "iu")?;
+    let a: PyArrayLikeDyn<'_, i64, AllowTypeChange> = array.extract()?;
+    let view = a.as_array();
+    match view.shape() {
+        [_] => Ok(view.iter().copied().collect()),
+        shape => Err(Error::new_err(format!(
+            "{what} must be a 1-D array of node indices, got shape {}",
+            shape_text(shape)
+        ))),
+    }
+}
+
+/// Matrices copied out of Python, not yet validated.
+#[derive(Debug, Clone)]
+pub struct Matrices {
+    values: Vec<f64>,
+    what: String,
+}
+
+impl Matrices {
+    /// Number of matrices.
+    pub fn len(&self) -> usize {
+        self.values.len() / 9
+    }
+
+    /// The matrices as rotations, each checked by the library
+    /// ([`rotation_from_matrix`], default tolerance); errors name `what[k]`.
+    pub fn rotations(&self) -> rotavg::Result<Vec<Rotation>> {
+        self.values
+            .chunks_exact(9)
+            .enumerate()
+            .map(|(k, m)| {
+                rotation_from_matrix(
+                    &Matrix3::from_row_slice(m),
+                    DEFAULT_ROTATION_TOLERANCE,
+                    &format!("{}[{k}]", self.what),
+                )
+            })
+            .collect()
+    }
+
+    /// The single matrix of [`matrix`] as a rotation; the error names `what`.
+    pub fn rotation(&self) -> rotavg::Result<Rotation> {
+        rotation_from_matrix(
+            &Matrix3::from_row_slice(&self.values),
+            DEFAULT_ROTATION_TOLERANCE,
+            &self.what,
+        )
+    }
+}
+
+/// Rotations as an `(N, 3, 3)` float64 array (row-major matrices).
+pub fn rotations_array<'py>(
+    py: Python<'py>,
+    rotations: &[Rotation],
+) -> PyResult<Bound<'py, PyAny>> {
+    let mut values = Vec::with_capacity(9 * rotations.len());
+    for r in rotations {
+        let m = r.matrix();
+        for row in 0..3 {
+            values.extend((0..3).map(|col| m[(row, col)]));
+        }
+    }
+    Ok(PyArray1::from_vec(py, values)
+        .reshape([rotations.len(), 3, 3])?
+        .into_any())
+}
+
+/// One rotation as a `(3, 3)` float64 array.
+pub fn rotation_array<'py>(py: Python<'py>, rotation: &Rotation) -> PyResult<Bound<'py, PyAny>> {
+    rotations_array(py, std::slice::from_ref(rotation))?.call_method1("reshape", (3, 3))
+}
+
+/// Mark a numpy array read-only (arrays that mirror data held on the Rust side).
+pub fn read_only<'py>(array: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    array.getattr("flags")?.setattr("writeable", false)?;
+    Ok(array)
+}

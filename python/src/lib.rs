@@ -1,0 +1,628 @@
+//! Python bindings of `rotavg` (the extension module `rotavg._rotavg`; the package is
+//! `python/rotavg/`, its stubs `python/rotavg/__init__.pyi`).
+//!
+//! Every function copies its numpy inputs while holding the GIL, then releases the GIL to
+//! validate them with the library's checks, run the library's pipeline (`average_*`) or
+//! certifier (`certify_*`) and build the library's typed report, the same report the command
+//! line prints with `--json`. Library errors become `rotavg.Error` (a `ValueError`) with the
+//! library's message; a panic (a bug) becomes a `RuntimeError`, never an abort.
+
+mod convert;
+mod types;
+
+use convert::{Matrices, indices, matrices, matrix, vector};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use rotavg::certify::{CertifyMode, CertifySettings};
+use rotavg::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings};
+use rotavg::io::detect::{ComponentSelection, GraphFormat, LoadedGraph, ReadOptions, WeightSource};
+use rotavg::io::input::{LoadedEstimate, LoadedProblem, MultipleInput, load_view_graph};
+use rotavg::io::json::Estimate;
+use rotavg::io::names::{LossKind, MultipleLoss};
+use rotavg::multiple::stats::duplicate_edge_count;
+use rotavg::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings};
+use rotavg::pipeline::{AverageSettings, average_conjugate, average_multiple, average_single};
+use rotavg::report::{CertifyReport, ConjugateReport, MultipleReport, SingleReport};
+use rotavg::single::SingleProblem;
+use rotavg::{Loss, Metric, Objective};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use types::{Certificate, Graph, Report, RunResult, SolverReport};
+
+pyo3::create_exception!(
+    rotavg,
+    Error,
+    PyValueError,
+    "Bad input or settings (a subclass of ValueError). The message is the library's: it names \
+     the offending item (e.g. ``rel[3]``) and, for files, the file and line."
+);
+
+/// A library error as `rotavg.Error`.
+fn error(e: rotavg::Error) -> PyErr {
+    Error::new_err(e.to_string())
+}
+
+/// Run `f` without the GIL; a library error becomes `rotavg.Error`, a panic a `RuntimeError`.
+fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> rotavg::Result<T> + Send) -> PyResult<T> {
+    match py.detach(|| catch_unwind(AssertUnwindSafe(f))) {
+        Ok(result) => result.map_err(error),
+        Err(payload) => {
+            let message = payload
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| payload.downcast_ref::<&str>().copied())
+                .unwrap_or("unknown panic");
+            Err(PyRuntimeError::new_err(format!(
+                "rotavg internal error (a bug, please report it): {message}"
+            )))
+        }
+    }
+}
+
+/// Parse a name of one of the library's choices (`chordal`, `auto`, ...).
+fn parse<T: std::str::FromStr<Err = rotavg::Error>>(name: &str) -> PyResult<T> {
+    name.parse().map_err(error)
+}
+
+/// Edge data copied out of Python, validated later by [`EdgeArrays::graph`].
+struct EdgeArrays {
+    n: i64,
+    i: Vec<i64>,
+    j: Vec<i64>,
+    rel: Matrices,
+    weights: Option<Vec<f64>>,
+}
+
+impl EdgeArrays {
+    /// Copy `n, i, j, rel, weights`, checking the shapes.
+    fn copy(
+        n: &Bound<'_, PyAny>,
+        i: &Bound<'_, PyAny>,
+        j: &Bound<'_, PyAny>,
+        rel: &Bound<'_, PyAny>,
+        weights: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let n: i64 = n
+            .extract()
+            .map_err(|_| Error::new_err("n must be an integer (the number of rotations)"))?;
+        let (i, j, rel) = (indices(i, "i")?, indices(j, "j")?, matrices(rel, "rel")?);
+        if i.len() != rel.len() || j.len() != rel.len() {
+            return Err(Error::new_err(format!(
+                "i, j and rel must have one entry per edge: got {}, {} and {}",
+                i.len(),
+                j.len(),
+                rel.len()
+            )));
+        }
+        let weights = weights
+            .filter(|w| !w.is_none())
+            .map(|w| vector(w, "weights", rel.len()))
+            .transpose()?;
+        Ok(EdgeArrays {
+            n,
+            i,
+            j,
+            rel,
+            weights,
+        })
+    }
+
+    /// The validated view graph (library checks: rotations, indices, self loops, weights), as a
+    /// loaded graph of `n` nodes with ids `0..n` (format `json`: the SPEC's data model).
+    fn graph(self) -> rotavg::Result<LoadedGraph> {
+        let n = usize::try_from(self.n).map_err(|_| rotavg::Error::InvalidSettings {
+            name: "n".into(),
+            reason: format!("{} is negative", self.n),
+        })?;
+        // As the JSON reader: nothing sized from an unchecked count. More than 2m + 1 nodes
+        // means a node without edges (a disconnected graph) and could be an absurd number.
+        let m = self.rel.len();
+        if n > 2 * m + 1 {
+            return Err(rotavg::Error::InvalidSettings {
+                name: "n".into(),
+                reason: format!("n = {n}, but {m} edges touch at most {} nodes", 2 * m),
+            });
+        }
+        let rel = self.rel.rotations()?;
+        let mut edges = Vec::with_capacity(m);
+        for (k, rotation) in rel.into_iter().enumerate() {
+            let node = |v: i64| {
+                usize::try_from(v).map_err(|_| rotavg::Error::InvalidSettings {
+                    name: "i, j".into(),
+                    reason: format!(
+                        "edge {k} refers to node {v}, but there are only {n} nodes (0..{n})"
+                    ),
+                })
+            };
+            edges.push(Edge {
+                i: node(self.i[k])?,
+                j: node(self.j[k])?,
+                rotation,
+                weight: self.weights.as_ref().map_or(1.0, |w| w[k]),
+            });
+        }
+        let reversed = edges.iter().filter(|e| e.i > e.j).count();
+        let problem = MultipleProblem::new(n, edges)?;
+        Ok(LoadedGraph {
+            duplicates: duplicate_edge_count(&problem),
+            problem,
+            node_ids: (0..n as u64).collect(),
+            initial: None,
+            reversed,
+            warnings: Vec::new(),
+            format: GraphFormat::Json,
+            planar: false,
+        })
+    }
+}
+
+/// A view graph given either as a `Graph` (in place of `n`) or as `n, i, j, rel, weights`.
+enum GraphInput {
+    Loaded(LoadedGraph, ComponentSelection, String),
+    Arrays(EdgeArrays),
+}
+
+impl GraphInput {
+    fn copy(
+        n: &Bound<'_, PyAny>,
+        i: Option<&Bound<'_, PyAny>>,
+        j: Option<&Bound<'_, PyAny>>,
+        rel: Option<&Bound<'_, PyAny>>,
+        weights: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        if let Ok(g) = n.cast::<Graph>() {
+            if i.is_some() || j.is_some() || rel.is_some() || weights.is_some() {
+                return Err(Error::new_err(
+                    "pass either a Graph or n, i, j, rel (and weights), not both",
+                ));
+            }
+            let g = g.get();
+            return Ok(GraphInput::Loaded(
+                g.loaded.clone(),
+                g.selection.clone(),
+                g.name.clone(),
+            ));
+        }
+        match (i, j, rel) {
+            (Some(i), Some(j), Some(rel)) => {
+                Ok(GraphInput::Arrays(EdgeArrays::copy(n, i, j, rel, weights)?))
+            }
+            _ => Err(Error::new_err(
+                "a view graph needs n, i, j and rel (or a Graph from read_graph)",
+            )),
+        }
+    }
+
+    /// The validated graph, the component selection and the input's name.
+    fn into_input(self) -> rotavg::Result<MultipleInput> {
+        let (graph, selection, name) = match self {
+            GraphInput::Loaded(g, s, name) => (g, s, name),
+            GraphInput::Arrays(a) => {
+                let g = a.graph()?;
+                let n = g.problem.num_rotations();
+                (g, ComponentSelection::whole(n), "<arrays>".to_string())
+            }
+        };
+        Ok(MultipleInput {
+            name,
+            graph,
+            selection,
+            truth: None,
+            init: None,
+        })
+    }
+}
+
+/// Rotations of an optional estimate or initial value.
+fn optional_matrices(obj: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Option<Matrices>> {
+    obj.filter(|o| !o.is_none())
+        .map(|o| matrices(o, what))
+        .transpose()
+}
+
+/// Single rotation averaging: the L^p mean ``argmin_R sum_k w_k d(R_k, R)^p`` of
+/// ``rotations`` and its certificate (closed forms and convexity theorems).
+///
+/// Args:
+///     rotations: ``(N, 3, 3)`` array-like of rotation matrices, or a
+///         ``scipy.spatial.transform.Rotation`` (anything with ``as_matrix()``).
+///     weights: ``(N,)`` positive weights (default all 1).
+///     metric: ``"chordal"``, ``"quaternion"`` or ``"geodesic"`` (the angle).
+///     p: 1 or 2 (quaternion only with 2).
+///
+/// Returns:
+///     Result: ``estimate`` is the ``(3, 3)`` mean; ``to_dict()`` equals
+///     ``rotavg single FILE --json``.
+///
+/// Raises:
+///     rotavg.Error: bad shapes, NaN, a matrix that is not a rotation (tolerance 1e-5),
+///         a weight that is not positive, an unknown metric or p.
+#[pyfunction]
+#[pyo3(name = "average_single", signature = (rotations, weights=None, metric="chordal", p=2))]
+fn average_single_py(
+    py: Python<'_>,
+    rotations: &Bound<'_, PyAny>,
+    weights: Option<&Bound<'_, PyAny>>,
+    metric: &str,
+    p: i64,
+) -> PyResult<RunResult> {
+    let rotations = matrices(rotations, "rotations")?;
+    let weights = optional_vector(weights, rotations.len())?;
+    let metric: Metric = parse(metric)?;
+    let loss = match p {
+        1 => Loss::L1,
+        2 => Loss::L2,
+        _ => return Err(Error::new_err(format!("p must be 1 or 2, got {p}"))),
+    };
+    let report = detached(py, move || {
+        let problem = SingleProblem::new(rotations.rotations()?, weights)?
+            .with_objective(Objective::new(metric, loss))?;
+        let result = average_single(&problem, &AverageSettings::default())?;
+        Ok(SingleReport::new(result))
+    })?;
+    RunResult::new(py, Report::Single(report))
+}
+
+/// `weights` as a vector of `len` entries, or None.
+fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<Option<Vec<f64>>> {
+    weights
+        .filter(|w| !w.is_none())
+        .map(|w| vector(w, "weights", len))
+        .transpose()
+}
+
+/// Multiple rotation averaging on a view graph, with a certificate of global optimality (or a
+/// proven bound on the gap) for the chordal L2 cost
+/// ``sum_k w_k ||R_j - rel[k] R_i||_F^2`` over edges ``(i, j) = (i[k], j[k])``.
+///
+/// Args:
+///     n: number of rotations, or a ``Graph`` from ``read_graph`` (then leave out i, j, rel,
+///         weights; the result is then exactly the command line's for that file).
+///     i, j: ``(M,)`` integer arrays of node indices in ``0..n``.
+///     rel: ``(M, 3, 3)`` relative rotations with ``rel[k] @ R_i = R_j``.
+///     weights: ``(M,)`` positive edge weights (default all 1).
+///     loss: ``"chordal"`` (L2, certified), ``"geodesic"`` (L2), ``"l1"``, ``"huber"``,
+///         ``"cauchy"`` (the last four on the residual angle; no certificate).
+///     certify: ``"auto"``, ``"dual"``, ``"sdp"``, ``"staircase"`` or ``"none"``.
+///     loss_threshold: Huber threshold / Cauchy scale in degrees.
+///     init: optional ``(n, 3, 3)`` initial estimate (default: spectral initialisation).
+///
+/// Returns:
+///     Result: ``estimate`` is ``(n, 3, 3)`` with the gauge ``estimate[0] = I``;
+///     ``to_dict()`` equals ``rotavg multiple FILE --json``.
+///
+/// Raises:
+///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
+///         bad weights, a disconnected graph, unknown names.
+#[pyfunction]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="chordal", certify="auto", *, loss_threshold=5.0, init=None))]
+#[allow(clippy::too_many_arguments)]
+fn average_multiple_py(
+    py: Python<'_>,
+    n: &Bound<'_, PyAny>,
+    i: Option<&Bound<'_, PyAny>>,
+    j: Option<&Bound<'_, PyAny>>,
+    rel: Option<&Bound<'_, PyAny>>,
+    weights: Option<&Bound<'_, PyAny>>,
+    loss: &str,
+    certify: &str,
+    loss_threshold: f64,
+    init: Option<&Bound<'_, PyAny>>,
+) -> PyResult<RunResult> {
+    let graph = GraphInput::copy(n, i, j, rel, weights)?;
+    let objective = parse::<MultipleLoss>(loss)?.objective(loss_threshold);
+    let mode: CertifyMode = parse(certify)?;
+    let init = optional_matrices(init, "init")?;
+    let report = detached(py, move || {
+        let input = graph.into_input()?;
+        let problem = input.graph.problem.clone().with_objective(objective)?;
+        let init = match init {
+            Some(m) => {
+                let rotations = m.rotations()?;
+                let n = problem.num_rotations();
+                if rotations.len() != n {
+                    return Err(rotavg::Error::InvalidSettings {
+                        name: "init".into(),
+                        reason: format!("{} rotations given for {n} nodes", rotations.len()),
+                    });
+                }
+                Initialisation::Given(rotations)
+            }
+            None => Initialisation::default(),
+        };
+        let settings = AverageSettings {
+            solve: MultipleSettings {
+                init,
+                ..Default::default()
+            },
+            certify: CertifySettings::with_mode(mode),
+        };
+        let result = average_multiple(&problem, &settings)?;
+        MultipleReport::new(&input, result)
+    })?;
+    RunResult::new(py, Report::Multiple(report))
+}
+
+/// Certify an estimate of a view graph computed elsewhere (any solver), **without changing
+/// it**: its chordal L2 cost and either a certificate of global optimality or a proven bound on
+/// its gap.
+///
+/// Args:
+///     n, i, j, rel, weights: the view graph as for ``average_multiple`` (or a ``Graph`` as n).
+///     estimate: ``(n, 3, 3)`` rotations ``R_i`` (any gauge).
+///     certify: ``"auto"`` (dual certificate, then the SDP or the staircase), ``"dual"``,
+///         ``"sdp"`` or ``"staircase"`` (``"none"`` means ``"dual"``, as on the command line).
+///
+/// Returns:
+///     Result: ``solver`` is None; ``to_dict()`` equals
+///     ``rotavg certify FILE --estimate EST --json``.
+///
+/// Raises:
+///     rotavg.Error: as ``average_multiple``, and an estimate of the wrong size.
+#[pyfunction]
+#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto"))]
+#[allow(clippy::too_many_arguments)]
+fn certify_multiple_py(
+    py: Python<'_>,
+    n: &Bound<'_, PyAny>,
+    i: Option<&Bound<'_, PyAny>>,
+    j: Option<&Bound<'_, PyAny>>,
+    rel: Option<&Bound<'_, PyAny>>,
+    estimate: Option<&Bound<'_, PyAny>>,
+    weights: Option<&Bound<'_, PyAny>>,
+    certify: &str,
+) -> PyResult<RunResult> {
+    let graph = GraphInput::copy(n, i, j, rel, weights)?;
+    let estimate = optional_matrices(estimate, "estimate")?
+        .ok_or_else(|| Error::new_err("certify_multiple needs an estimate"))?;
+    let mode = match parse(certify)? {
+        CertifyMode::None => CertifyMode::Dual,
+        m => m,
+    };
+    let report = detached(py, move || {
+        let input = graph.into_input()?;
+        let estimate = LoadedEstimate {
+            name: "estimate".into(),
+            estimate: Estimate::Multiple(estimate.rotations()?),
+        };
+        let problem = LoadedProblem::Multiple(input.graph);
+        CertifyReport::certify(
+            &input.name,
+            &problem,
+            estimate,
+            &CertifySettings::with_mode(mode),
+        )
+    })?;
+    RunResult::new(py, Report::Certify(report))
+}
+
+/// Pairs `(left[k], right[k], weights[k])` copied out of Python.
+struct PairArrays {
+    left: Matrices,
+    right: Matrices,
+    weights: Option<Vec<f64>>,
+}
+
+impl PairArrays {
+    fn copy(
+        left: &Bound<'_, PyAny>,
+        right: &Bound<'_, PyAny>,
+        weights: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let (left, right) = (matrices(left, "left")?, matrices(right, "right")?);
+        if left.len() != right.len() {
+            return Err(Error::new_err(format!(
+                "left and right must have one rotation per pair: got {} and {}",
+                left.len(),
+                right.len()
+            )));
+        }
+        let weights = optional_vector(weights, left.len())?;
+        Ok(PairArrays {
+            left,
+            right,
+            weights,
+        })
+    }
+
+    /// The validated conjugate problem (chordal L2 objective).
+    fn problem(self) -> rotavg::Result<ConjugateProblem> {
+        let (left, right) = (self.left.rotations()?, self.right.rotations()?);
+        let pairs = left
+            .into_iter()
+            .zip(right)
+            .enumerate()
+            .map(|(k, (left, right))| ConjugatePair {
+                left,
+                right,
+                weight: self.weights.as_ref().map_or(1.0, |w| w[k]),
+            })
+            .collect();
+        ConjugateProblem::new(pairs)
+    }
+}
+
+/// Conjugate (hand-eye) rotation averaging: ``S`` with ``right[k] ~ S^-1 left[k] S``, minimising
+/// ``sum_k w_k ||S right[k] - left[k] S||_F^2`` (chordal L2, certified by a 10x10 SDP), or a
+/// geodesic / robust cost.
+///
+/// Args:
+///     left, right: ``(N, 3, 3)`` rotations ``L_k`` and ``R_k`` (or scipy Rotations).
+///     weights: ``(N,)`` positive weights (default all 1).
+///     metric: ``"chordal"``, ``"geodesic"`` or ``"quaternion"``.
+///     loss: ``"l2"``, ``"l1"``, ``"huber"`` or ``"cauchy"``.
+///     certify: ``"auto"``, ``"sdp"`` or ``"none"``.
+///     loss_threshold: Huber threshold / Cauchy scale in degrees.
+///
+/// Returns:
+///     Result: ``estimate`` is ``S`` (3, 3); ``to_dict()`` equals
+///     ``rotavg conjugate FILE --json``.
+///
+/// Raises:
+///     rotavg.Error: bad shapes, NaN, non-rotations, bad weights, data that do not determine
+///         S (all rotation axes parallel), unknown names.
+#[pyfunction]
+#[pyo3(name = "average_conjugate", signature = (left, right, weights=None, *, metric="chordal", loss="l2", certify="auto", loss_threshold=5.0))]
+#[allow(clippy::too_many_arguments)]
+fn average_conjugate_py(
+    py: Python<'_>,
+    left: &Bound<'_, PyAny>,
+    right: &Bound<'_, PyAny>,
+    weights: Option<&Bound<'_, PyAny>>,
+    metric: &str,
+    loss: &str,
+    certify: &str,
+    loss_threshold: f64,
+) -> PyResult<RunResult> {
+    let pairs = PairArrays::copy(left, right, weights)?;
+    let objective = Objective::new(
+        parse(metric)?,
+        parse::<LossKind>(loss)?.with_threshold_deg(loss_threshold),
+    );
+    let mode: CertifyMode = parse(certify)?;
+    let report = detached(py, move || {
+        let problem = pairs.problem()?.with_objective(objective)?;
+        let settings = AverageSettings {
+            solve: ConjugateSettings::default(),
+            certify: CertifySettings::with_mode(mode),
+        };
+        let result = average_conjugate(&problem, &settings)?;
+        Ok(ConjugateReport::new(
+            &problem,
+            "<arrays>: conjugate pairs".into(),
+            result,
+        ))
+    })?;
+    RunResult::new(py, Report::Conjugate(report))
+}
+
+/// Certify a hand-eye rotation ``S`` computed elsewhere (e.g. OpenCV's ``calibrateHandEye``),
+/// **without changing it**: its chordal L2 cost and a certificate or a proven gap bound.
+///
+/// Args:
+///     left, right, weights: the pairs, as for ``average_conjugate``.
+///     estimate: the ``(3, 3)`` rotation ``S`` (or a single scipy Rotation).
+///
+/// Returns:
+///     Result: ``solver`` is None; ``to_dict()`` equals
+///     ``rotavg certify FILE --estimate EST --json``.
+///
+/// Raises:
+///     rotavg.Error: as ``average_conjugate``.
+#[pyfunction]
+#[pyo3(name = "certify_conjugate", signature = (left, right, estimate, weights=None))]
+fn certify_conjugate_py(
+    py: Python<'_>,
+    left: &Bound<'_, PyAny>,
+    right: &Bound<'_, PyAny>,
+    estimate: &Bound<'_, PyAny>,
+    weights: Option<&Bound<'_, PyAny>>,
+) -> PyResult<RunResult> {
+    let pairs = PairArrays::copy(left, right, weights)?;
+    let estimate = matrix(estimate, "estimate")?;
+    let report = detached(py, move || {
+        let problem = LoadedProblem::Conjugate(pairs.problem()?);
+        let estimate = LoadedEstimate {
+            name: "estimate".into(),
+            estimate: Estimate::Single(estimate.rotation()?),
+        };
+        CertifyReport::certify("<arrays>", &problem, estimate, &CertifySettings::default())
+    })?;
+    RunResult::new(py, Report::Certify(report))
+}
+
+/// Certify a single-rotation chordal L2 mean computed elsewhere, **without changing it**.
+///
+/// Args:
+///     rotations, weights: the samples, as for ``average_single``.
+///     estimate: the ``(3, 3)`` rotation to certify.
+///
+/// Returns:
+///     Result: ``solver`` is None; ``to_dict()`` equals
+///     ``rotavg certify FILE --estimate EST --json``.
+///
+/// Raises:
+///     rotavg.Error: as ``average_single``.
+#[pyfunction]
+#[pyo3(name = "certify_single", signature = (rotations, estimate, weights=None))]
+fn certify_single_py(
+    py: Python<'_>,
+    rotations: &Bound<'_, PyAny>,
+    estimate: &Bound<'_, PyAny>,
+    weights: Option<&Bound<'_, PyAny>>,
+) -> PyResult<RunResult> {
+    let rotations = matrices(rotations, "rotations")?;
+    let weights = optional_vector(weights, rotations.len())?;
+    let estimate = matrix(estimate, "estimate")?;
+    let report = detached(py, move || {
+        let problem = LoadedProblem::Single(SingleProblem::new(rotations.rotations()?, weights)?);
+        let estimate = LoadedEstimate {
+            name: "estimate".into(),
+            estimate: Estimate::Single(estimate.rotation()?),
+        };
+        CertifyReport::certify("<arrays>", &problem, estimate, &CertifySettings::default())
+    })?;
+    RunResult::new(py, Report::Certify(report))
+}
+
+/// Read a view graph with the library's readers (the command line's): g2o / TORO, 1DSfM
+/// ``EGs.txt`` or the JSON problem format, detected from the extension and the content.
+///
+/// Args:
+///     path: the file (str or path-like).
+///     format: ``"auto"``, ``"g2o"``, ``"1dsfm"`` or ``"json"``.
+///     weights: ``"file"`` (the file's weights, e.g. SE-Sync's kappa for g2o) or ``"unit"``.
+///     largest_component: keep only the largest connected component (nodes renumbered).
+///
+/// Returns:
+///     Graph: with ``n, i, j, rel, weights`` for ``average_multiple``.
+///
+/// Raises:
+///     rotavg.Error: unreadable file, or malformed content (the message names file and line).
+#[pyfunction]
+#[pyo3(signature = (path, format="auto", weights="file", largest_component=false))]
+fn read_graph(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    format: &str,
+    weights: &str,
+    largest_component: bool,
+) -> PyResult<Graph> {
+    let format: GraphFormat = parse(format)?;
+    let weights: WeightSource = parse(weights)?;
+    let name = path.to_string_lossy().into_owned();
+    let path_name = name.clone();
+    let (loaded, selection) = detached(py, move || {
+        let options = ReadOptions {
+            weights,
+            ..Default::default()
+        };
+        let graph = load_view_graph(&path_name, format, &options)?;
+        Ok(if largest_component {
+            graph.largest_component()
+        } else {
+            let n = graph.problem.num_rotations();
+            (graph, ComponentSelection::whole(n))
+        })
+    })?;
+    Graph::new(py, name, loaded, selection)
+}
+
+/// `rotavg._rotavg`: the compiled part of the `rotavg` package.
+#[pymodule]
+fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("Error", py.get_type::<Error>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<RunResult>()?;
+    m.add_class::<Certificate>()?;
+    m.add_class::<SolverReport>()?;
+    m.add_class::<Graph>()?;
+    m.add_function(wrap_pyfunction!(average_single_py, m)?)?;
+    m.add_function(wrap_pyfunction!(average_multiple_py, m)?)?;
+    m.add_function(wrap_pyfunction!(certify_multiple_py, m)?)?;
+    m.add_function(wrap_pyfunction!(average_conjugate_py, m)?)?;
+    m.add_function(wrap_pyfunction!(certify_conjugate_py, m)?)?;
+    m.add_function(wrap_pyfunction!(certify_single_py, m)?)?;
+    m.add_function(wrap_pyfunction!(read_graph, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,121 @@
+"""Multiple rotation averaging: planted solutions, certificates, the GIL, and the same costs and
+certificates as the `rotavg` command line on the shared benchmark graphs."""
+
+import json
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import rotavg
+from conftest import synthetic_graph, untimed
+
+#: Shared graphs (relative to the data folder) compared with the command line.
+SHARED_GRAPHS = [
+    "g2o/3d/sesync/tinyGrid3D.g2o",
+    "g2o/3d/sesync/smallGrid3D.g2o",
+    "g2o/3d/sesync/sphere2500.g2o",
+    "g2o/3d/sesync/parking-garage.g2o",
+    "g2o/3d/gtsam/Klaus3.g2o",
+    "1dsfm/Madrid_Metropolis/EGs.txt",
+]
+
+
+def test_noise_free_graph_is_solved_exactly_and_certified(rng):
+    truth, i, j, rel = synthetic_graph(rng, 40, 120, 0.0)
+    res = rotavg.average_multiple(40, i, j, rel)
+    assert res.cost < 1e-20 and res.chordal_cost < 1e-20
+    assert res.certificate.certified
+    assert np.allclose(res.estimate, truth @ truth[0].T, atol=1e-9)
+
+
+def test_cost_convention_rel_times_r_i_is_r_j(rng):
+    truth, i, j, rel = synthetic_graph(rng, 25, 70, 0.05)
+    w = rng.uniform(0.5, 2.0, size=len(i))
+    res = rotavg.average_multiple(25, i, j, rel, w)
+    r = res.estimate
+    cost = np.sum(w * np.sum((r[j] - rel @ r[i]) ** 2, axis=(1, 2)))
+    assert res.chordal_cost == pytest.approx(cost, rel=1e-10)
+    c = res.certificate
+    assert c.certified and c.lower_bound <= c.upper_bound + c.allowed_gap
+    assert c.upper_bound == pytest.approx(res.chordal_cost, rel=1e-12)
+    assert c.gap == pytest.approx(c.upper_bound - c.lower_bound)
+
+
+def test_certify_an_estimate_from_elsewhere(rng):
+    _, i, j, rel = synthetic_graph(rng, 30, 90, 0.05)
+    best = rotavg.average_multiple(30, i, j, rel)
+    # Same estimate in another gauge: same cost, certified.
+    g = rotavg.average_single(rel[:1]).estimate
+    res = rotavg.certify_multiple(30, i, j, rel, best.estimate @ g)
+    assert res.certificate.certified and res.solver is None
+    assert res.cost == pytest.approx(best.chordal_cost, rel=1e-9)
+    # A corrupted estimate: never certified, its gap bounded by a valid lower bound.
+    bad = best.estimate.copy()
+    bad[5] = bad[5] @ np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]])
+    res = rotavg.certify_multiple(30, i, j, rel, bad, certify="dual")
+    assert not res.certificate.certified
+    lb = res.certificate.lower_bound
+    assert lb is None or lb <= best.chordal_cost * (1 + 1e-9)
+
+
+def test_robust_losses_have_no_certificate(rng):
+    _, i, j, rel = synthetic_graph(rng, 20, 60, 0.02)
+    for loss in ["geodesic", "l1", "huber", "cauchy"]:
+        res = rotavg.average_multiple(20, i, j, rel, loss=loss)
+        assert res.certificate is None and res.to_dict()["loss"] == loss
+    res = rotavg.average_multiple(20, i, j, rel, certify="none")
+    assert res.certificate is None and res.to_dict()["certificate"] is None
+
+
+def test_init_is_used(rng):
+    truth, i, j, rel = synthetic_graph(rng, 20, 60, 0.0)
+    res = rotavg.average_multiple(20, i, j, rel, init=truth)
+    assert res.solver.iterations <= 2 and res.certificate.certified
+    with pytest.raises(rotavg.Error, match="3 rotations given for 20 nodes"):
+        rotavg.average_multiple(20, i, j, rel, init=truth[:3])
+
+
+def test_the_gil_is_released_while_solving(rng):
+    # While a solve runs in another thread, this thread keeps running Python code: the longest
+    # pause it sees is much shorter than the solve (with the GIL held it would be all of it).
+    _, i, j, rel = synthetic_graph(rng, 3000, 9000, 0.05)
+    out = {}
+    worker = threading.Thread(target=lambda: out.update(r=rotavg.average_multiple(3000, i, j, rel)))
+    longest, last = 0.0, time.perf_counter()
+    start = last
+    worker.start()
+    while worker.is_alive():
+        now = time.perf_counter()
+        longest, last = max(longest, now - last), now
+    elapsed = time.perf_counter() - start
+    assert out["r"].certificate is not None
+    assert elapsed > 0.05, "solve too fast to tell"
+    assert longest < 0.5 * elapsed, (longest, elapsed)
+
+
+@pytest.mark.parametrize("name", SHARED_GRAPHS)
+def test_same_costs_and_certificates_as_the_command_line(name, data_dir, cli, tmp_path):
+    path = data_dir / name
+    if not path.is_file():
+        pytest.skip(f"{path} absent")
+    theirs = cli("multiple", path)
+    g = rotavg.read_graph(path)
+    # A Graph is solved exactly as the command line solves the file: the same --json object.
+    from_graph = rotavg.average_multiple(g)
+    assert untimed(from_graph.to_dict()) == untimed(theirs)
+    assert from_graph.cost == theirs["cost"]
+    assert np.array_equal(from_graph.estimate, np.array(theirs["estimate"]))
+    # The arrays n, i, j, rel, weights give the same answer up to rounding (each rel[k] is
+    # validated and re-orthonormalised again on the way in).
+    from_arrays = rotavg.average_multiple(g.n, g.i, g.j, g.rel, g.weights)
+    c, t = from_arrays.certificate, theirs["certificate"]
+    assert from_arrays.cost == pytest.approx(theirs["cost"], rel=1e-9, abs=1e-12)
+    assert (c.verdict, c.method) == (t["verdict"], t["method"])
+    assert c.lower_bound == pytest.approx(t["lower_bound"], rel=1e-8, abs=1e-10)
+    # certify: the same report for the command line's own estimate.
+    est = tmp_path / "estimate.json"
+    est.write_text(json.dumps({"estimate": theirs["estimate"]}))
+    certified = rotavg.certify_multiple(g, estimate=np.array(theirs["estimate"]))
+    assert untimed(certified.to_dict()) == untimed(cli("certify", path, "--estimate", est))
