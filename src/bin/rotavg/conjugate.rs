@@ -67,6 +67,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
         certify: CertifySettings::with_mode(args.certify),
     };
     let result = average_conjugate(&problem, &settings)?;
+    #[cfg_attr(not(feature = "plot"), allow(unused_mut))] // the figure path is recorded
     let mut report = ConjugateReport::new(&problem, loaded.to_string(), result);
     #[cfg(feature = "plot")]
     if let Some(path) = &args.plot {
