@@ -82,6 +82,7 @@ pub mod linalg;
 pub mod multiple;
 pub mod objective;
 pub mod pipeline;
+#[cfg(feature = "plot")]
 pub mod plot;
 pub mod progress;
 pub mod relax;
@@ -96,6 +97,23 @@ pub use error::{Error, Result};
 pub use objective::{Loss, Objective};
 pub use so3::{Metric, Rotation};
 pub use termination::{SolverReport, Termination};
+
+/// The linear-algebra crate of the public API ([`Rotation`] is `nalgebra::Rotation3<f64>`):
+/// use `rotavg::nalgebra` to get the very version rotavg was built with.
+pub use nalgebra;
+
+/// The random-number crate of the seeded generators (`so3::random_rotation`,
+/// `conjugate::synthetic::random_instance`, ...): `rotavg::rand::SeedableRng` and so on.
+pub use rand;
+
+/// The sparse and dense matrix crate of the public API (connection Laplacians, certificate
+/// matrices, `svec`), re-exported for the same reason as [`nalgebra`].
+pub use faer;
+
+// The BLAS/LAPACK routines of Clarabel's SDP cone (`rotavg-lapack/`): naming the crate links it
+// into every binary that uses rotavg, and `relax::clarabel` takes the routines' addresses next
+// to its Clarabel call, so that order-sensitive linkers (GNU ld.bfd) load them too.
+use rotavg_lapack as _;
 
 /// The README's code blocks are compiled and run as doc tests.
 #[doc = include_str!("../README.md")]

@@ -104,6 +104,9 @@ pub(crate) fn solve_conic(
             Cone::Psd(k) => SupportedConeT::PSDTriangleConeT(k),
         })
         .collect();
+    // Clarabel's SDP cone calls dgemm_, dsyevr_, ... from rotavg-lapack: taking their addresses
+    // here makes every linker load them whenever this solver is linked (see src/lib.rs).
+    std::hint::black_box(rotavg_lapack::link_routines());
     let mut solver = DefaultSolver::new(&p, q, &a, b, &cones, clarabel_settings(settings, merge))
         .map_err(|e| Error::Solver {
         message: format!("Clarabel setup: {e}"),

@@ -151,8 +151,9 @@ impl CertifyReport {
     }
 
     /// `Ok` when [`Self::write_figure`] can draw `problem`: multiple and conjugate problems;
-    /// single problems have no figure ([`Error::InvalidSettings`], field `plot`). Checked
-    /// before certifying, so that a bad request costs no work.
+    /// single problems have no figure ([`Error::InvalidSettings`], field `plot`), and neither
+    /// has a build without the `plot` feature. Checked before certifying, so that a bad
+    /// request costs no work.
     ///
     /// ```
     /// use rotavg::io::input::LoadedProblem;
@@ -163,6 +164,9 @@ impl CertifyReport {
     /// # Ok::<(), rotavg::Error>(())
     /// ```
     pub fn require_figure(problem: &LoadedProblem) -> Result<()> {
+        if !cfg!(feature = "plot") {
+            return Err(no_plot_feature());
+        }
         match problem {
             LoadedProblem::Single(_) => Err(no_figure()),
             LoadedProblem::Multiple(_) | LoadedProblem::Conjugate(_) => Ok(()),
@@ -170,8 +174,9 @@ impl CertifyReport {
     }
 
     /// Write the `--plot` figure of the certified estimate of `problem` (the problem this
-    /// report certified): residual angles and the certificate ([`crate::plot::write_figure`]).
+    /// report certified): residual angles and the certificate (`rotavg::plot::write_figure`).
     /// Single problems have none ([`Error::InvalidSettings`], field `plot`).
+    #[cfg(feature = "plot")]
     pub fn write_figure(&self, path: &str, problem: &LoadedProblem) -> Result<()> {
         match (problem, &self.estimate) {
             (LoadedProblem::Multiple(g), Estimate::Multiple(rs)) => {
@@ -194,6 +199,23 @@ impl CertifyReport {
             }
             _ => Err(no_figure()),
         }
+    }
+
+    /// Without the `plot` feature there are no figures: always [`Error::InvalidSettings`]
+    /// (field `plot`).
+    #[cfg(not(feature = "plot"))]
+    pub fn write_figure(&self, _path: &str, _problem: &LoadedProblem) -> Result<()> {
+        Err(no_plot_feature())
+    }
+}
+
+/// The error for `--plot` in a build without the `plot` feature.
+pub fn no_plot_feature() -> Error {
+    Error::InvalidSettings {
+        name: "plot".into(),
+        reason: "this build of rotavg draws no figures: rebuild it with the `plot` feature \
+                 (on by default)"
+            .into(),
     }
 }
 

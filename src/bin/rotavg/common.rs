@@ -139,6 +139,14 @@ pub fn choice<T: Choice>(values: Vec<T>) -> impl TypedValueParser<Value = T> {
         .try_map(|name| T::from_name(&name).ok_or_else(|| format!("unknown value `{name}`")))
 }
 
+/// `--plot` needs the `plot` feature (on by default): without it, fail before doing any work.
+pub fn check_plot(plot: Option<&String>) -> rotavg::Result<()> {
+    match plot {
+        Some(_) if !cfg!(feature = "plot") => Err(rotavg::report::certify::no_plot_feature()),
+        _ => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -10,6 +10,7 @@ use rotavg::conjugate::ConjugateSettings;
 use rotavg::io::input::{load_conjugate, load_estimate};
 use rotavg::io::names::{Choice, ConjugateFormat, LossKind};
 use rotavg::pipeline::{AverageSettings, average_conjugate};
+#[cfg(feature = "plot")]
 use rotavg::plot::write_conjugate_figure;
 use rotavg::report::ConjugateReport;
 use rotavg::{Metric, Objective, Result};
@@ -46,6 +47,7 @@ pub struct Args {
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
+    crate::common::check_plot(args.plot.as_ref())?;
     let options = args.common.read_options();
     let loaded = load_conjugate(&args.input, args.format, &options)?;
     let objective = Objective::new(
@@ -68,7 +70,9 @@ pub fn run(args: &Args) -> Result<Outcome> {
         },
     };
     let result = average_conjugate(&problem, &settings)?;
+    #[cfg_attr(not(feature = "plot"), allow(unused_mut))] // the figure path is recorded
     let mut report = ConjugateReport::new(&problem, loaded.to_string(), result);
+    #[cfg(feature = "plot")]
     if let Some(path) = &args.plot {
         let (s, certificate) = (
             &report.result.solution.estimate,

@@ -14,6 +14,7 @@ use rotavg::io::names::{Choice, MultipleLoss};
 use rotavg::io::output::write_estimate_file;
 use rotavg::multiple::{Initialisation, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_multiple};
+#[cfg(feature = "plot")]
 use rotavg::plot::write_multiple_figure;
 use rotavg::report::MultipleReport;
 
@@ -66,6 +67,7 @@ pub struct Args {
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
+    crate::common::check_plot(args.plot.as_ref())?;
     let input = load_multiple_input(
         &args.input,
         &MultipleInputOptions {
@@ -110,9 +112,12 @@ pub fn run(args: &Args) -> Result<Outcome> {
     if let Some(path) = &args.output {
         write_estimate_file(path, &graph.problem, rotations, &graph.node_ids)?;
     }
+    #[cfg(feature = "plot")]
     if let Some(path) = &args.plot {
         write_multiple_figure(path, &graph.problem, rotations, certificate, &args.input)?;
     }
+    #[cfg(not(feature = "plot"))]
+    let _ = certificate;
     report.output = args.output.clone();
     report.figure = args.plot.clone();
     args.common.print(&report)?;

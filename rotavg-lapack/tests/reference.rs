@@ -5,7 +5,7 @@
 #![allow(unsafe_code, clippy::too_many_arguments, clippy::needless_range_loop)]
 
 use core::ffi::{c_char, c_int};
-use r_src::*;
+use rotavg_lapack::*;
 
 /// xorshift64*; uniform in [-1, 1).
 struct Rng(u64);

@@ -1,11 +1,36 @@
-//! A faer-backed stand-in for the `r-src` crate.
+//! BLAS/LAPACK for Clarabel's SDP cone, on faer: no system library, no Fortran compiler.
 //!
-//! Clarabel's SDP cone (feature `sdp-r`) calls eleven double-precision BLAS/LAPACK routines
+//! Clarabel's SDP cone (feature `sdp`) calls eleven double-precision BLAS/LAPACK routines
 //! through the `blas` and `lapack` crates, which declare them as Fortran-ABI externs
 //! (`dgemm_`, `dsyevr_`, ...; no hidden string-length arguments, see `blas-sys` 0.7 and
 //! `lapack-sys` 0.14). This crate exports exactly those symbols, implemented on
-//! [faer](https://docs.rs/faer), so that the whole workspace builds with cargo alone: no system
-//! BLAS, no Fortran compiler. See `README.md` next to this file for the rationale.
+//! [faer](https://docs.rs/faer), so that Clarabel SDPs build and run with cargo alone. See
+//! `README.md` next to this file for the rationale.
+//!
+//! # Using it with Clarabel
+//!
+//! Enable Clarabel's `sdp` feature *and* its two optional dependencies `blas-src` and
+//! `lapack-src` with no backend feature (they then only satisfy Clarabel's
+//! `extern crate blas_src;`), and make this crate part of the binary:
+//!
+//! ```toml
+//! [dependencies]
+//! clarabel = { version = "0.11.1", features = ["sdp", "blas-src", "lapack-src"] }
+//! rotavg-lapack = "0.1"
+//! ```
+//!
+//! ```
+//! use rotavg_lapack as _; // link the routines into this binary (any crate of it may say so)
+//! ```
+//!
+//! A crate that is never referenced is not linked at all, hence the `use ... as _;`. Linkers
+//! that read archives once, in order (GNU `ld.bfd`), need more: the object files holding the
+//! routines must be loaded before or when the first caller is. Code that calls Clarabel can
+//! make that hold by construction with [`link_routines`], which takes the address of every
+//! routine (this is what `rotavg` does next to its Clarabel calls); with the default linker of
+//! Rust 1.90+ on x86_64 Linux (`rust-lld`) the order does not matter.
+//!
+//! # Semantics
 //!
 //! Semantics follow the reference BLAS/LAPACK documentation (column-major storage, leading
 //! dimensions `ld* >= max(1, rows)`, 1-based `info` codes) with these documented differences:
@@ -37,6 +62,34 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 
 /// `info` value reported when an internal panic was caught (indicates a bug in this crate).
 pub const INTERNAL_ERROR: c_int = -1000;
+
+/// The addresses of the eleven exported routines, in the order `dgemm_`, `dsyrk_`, `dsyr2k_`,
+/// `dgemv_`, `dsymv_`, `dpotrf_`, `dpotrs_`, `dgesv_`, `dsyevr_`, `dgesdd_`, `dgesvd_`.
+///
+/// Calling this from the code that calls Clarabel forces every linker to load the routines
+/// whenever that code is linked, whatever order the archives are given in (see the crate
+/// documentation). The call is cheap and has no other effect.
+///
+/// ```
+/// let addresses = rotavg_lapack::link_routines();
+/// assert!(addresses.iter().all(|&a| a != 0));
+/// ```
+#[inline(never)]
+pub fn link_routines() -> [usize; 11] {
+    std::hint::black_box([
+        dgemm_ as *const () as usize,
+        dsyrk_ as *const () as usize,
+        dsyr2k_ as *const () as usize,
+        dgemv_ as *const () as usize,
+        dsymv_ as *const () as usize,
+        dpotrf_ as *const () as usize,
+        dpotrs_ as *const () as usize,
+        dgesv_ as *const () as usize,
+        dsyevr_ as *const () as usize,
+        dgesdd_ as *const () as usize,
+        dgesvd_ as *const () as usize,
+    ])
+}
 
 // ---------------------------------------------------------------------------------------------
 // helpers
@@ -176,7 +229,7 @@ pub unsafe extern "C" fn dgemm_(
         matmul(cm, Accum::Add, am, bm, alpha, par());
     });
     if ok.is_none() {
-        eprintln!("faer-lapack: internal error in DGEMM");
+        eprintln!("rotavg-lapack: internal error in DGEMM");
     }
 }
 
@@ -262,7 +315,7 @@ unsafe fn syrk_impl(
         }
     });
     if ok.is_none() {
-        eprintln!("faer-lapack: internal error in {name}");
+        eprintln!("rotavg-lapack: internal error in {name}");
     }
 }
 
@@ -402,7 +455,7 @@ pub unsafe extern "C" fn dgemv_(
         }
     });
     if ok.is_none() {
-        eprintln!("faer-lapack: internal error in DGEMV");
+        eprintln!("rotavg-lapack: internal error in DGEMV");
     }
 }
 
@@ -474,7 +527,7 @@ pub unsafe extern "C" fn dsymv_(
         }
     });
     if ok.is_none() {
-        eprintln!("faer-lapack: internal error in DSYMV");
+        eprintln!("rotavg-lapack: internal error in DSYMV");
     }
 }
 
