@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::objective::{Loss, Objective};
-use crate::so3::{self, Metric, Rotation};
+use crate::so3::{self, Rotation};
 use crate::validate::{check_rotation, check_weight};
 use serde::{Deserialize, Serialize};
 

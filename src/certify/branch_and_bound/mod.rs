@@ -2,12 +2,12 @@
 //! lower bound on the global minimum of every single- and conjugate-averaging cost (one unknown
 //! rotation), whatever the metric and loss.
 //!
-//! - [`profile`]: `h(theta) = rho(d(theta))` with bounds on `h'` and `h''`;
-//! - [`bound`]: the bound of a geodesic ball from its centre (`[B2]` Lipschitz per term, `[B3]`
+//! - `profile.rs`: `h(theta) = rho(d(theta))` with bounds on `h'` and `h''`;
+//! - `bound.rs`: the bound of a geodesic ball from its centre (`[B2]` Lipschitz per term, `[B3]`
 //!   first order, `[B4]` samples at the centre, `[B6]` rounding);
-//! - [`search`]: best-first search over axis-angle cubes (`[B1]`), with a ball around each
+//! - `search.rs`: best-first search over axis-angle cubes (`[B1]`), with a ball around each
 //!   incumbent (`[B5]`);
-//! - [`terms`]: the samples / pairs of the two problems.
+//! - `terms.rs`: the samples / pairs of the two problems.
 //!
 //! The verdict comes from [`crate::Certificate::from_bounds`] like every other method.
 
