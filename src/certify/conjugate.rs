@@ -160,17 +160,26 @@ pub fn certify_conjugate(
         ..Default::default()
     };
     let tolerance = settings.tolerance.resolve(problem.median_weight());
+    let small = problem.num_pairs() <= settings.branch_and_bound.auto_max_terms;
     if settings.mode == CertifyMode::BranchAndBound
-        || (settings.mode == CertifyMode::Auto && !objective.is_chordal_l2())
+        || (settings.mode == CertifyMode::Auto && !objective.is_chordal_l2() && small)
     {
         return Ok(with_branch_and_bound(
             problem, s, cost, settings, None, details, start,
         ));
     }
     if !objective.is_chordal_l2() {
-        details.skipped_reason = Some(format!(
-            "no lower bound for the {objective} cost: the SDP relaxation bounds chordal L2 only"
-        ));
+        details.skipped_reason = Some(if small {
+            format!(
+                "no lower bound for the {objective} cost: the SDP relaxation bounds chordal L2 only"
+            )
+        } else {
+            format!(
+                "no lower bound for the {objective} cost: the SDP relaxation bounds chordal L2 only, and {} pairs > branch_and_bound.auto_max_terms = {} (use mode branch_and_bound)",
+                problem.num_pairs(),
+                settings.branch_and_bound.auto_max_terms
+            )
+        });
         details.seconds = start.elapsed().as_secs_f64();
         let certificate = Certificate::from_bounds(
             cost,
@@ -252,7 +261,7 @@ pub fn certify_conjugate(
         source: ImprovementSource::SdpRounding,
         cost: p.cost,
     });
-    if settings.mode == CertifyMode::Auto && !certificate.is_certified() {
+    if settings.mode == CertifyMode::Auto && !certificate.is_certified() && small {
         // The SDP bound was not tight enough (or its rounding beat the estimate): the branch
         // and bound decides, starting from the SDP's bound.
         let prior = Some((certificate, improvement));

@@ -102,9 +102,14 @@ pub fn certify_single(
         .is_some_and(|(l, _, _)| cost - l <= tolerance.allowed_gap(cost));
     let mut improvement = None;
     let mut stats = None;
-    if settings.mode == CertifyMode::BranchAndBound
-        || (settings.mode == CertifyMode::Auto && !theory_certified)
-    {
+    let auto_bnb = settings.mode == CertifyMode::Auto && !theory_certified;
+    if auto_bnb && problem.len() > settings.branch_and_bound.auto_max_terms {
+        details.skipped_reason = Some(format!(
+            "branch and bound skipped: {} samples > branch_and_bound.auto_max_terms = {} (use mode branch_and_bound)",
+            problem.len(),
+            settings.branch_and_bound.auto_max_terms
+        ));
+    } else if settings.mode == CertifyMode::BranchAndBound || auto_bnb {
         let t = Instant::now();
         crate::progress::phase(crate::progress::Phase::Certify, || {
             format!("branch and bound over SO(3), {} samples", problem.len())

@@ -33,6 +33,10 @@ pub struct BranchAndBoundSettings {
     /// Largest number of local solves started from cell centres that beat the incumbent
     /// (default 16).
     pub max_local_solves: usize,
+    /// Mode `auto` falls back to the branch and bound only for problems with at most this many
+    /// samples / pairs (default 20 000: each cell costs one pass over the terms, ~0.1 us per
+    /// term, and a search bounds a few thousand cells); mode `branch_and_bound` has no limit.
+    pub auto_max_terms: usize,
 }
 
 impl Default for BranchAndBoundSettings {
@@ -41,6 +45,7 @@ impl Default for BranchAndBoundSettings {
             max_cells: 2_000_000,
             initial_divisions: 8,
             max_local_solves: 16,
+            auto_max_terms: 20_000,
         }
     }
 }
