@@ -5,9 +5,10 @@
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
+use rotavg::certify::{CertifyMode, CertifySettings, certify_single};
 use rotavg::objective::{Loss, Objective};
 use rotavg::pipeline::{AverageSettings, average_single};
-use rotavg::single::SingleProblem;
+use rotavg::single::{SingleProblem, SingleSettings, solve_single};
 use rotavg::so3::{Metric, perturb_gaussian, random_rotation};
 use std::hint::black_box;
 use std::time::Duration;
@@ -49,6 +50,36 @@ fn bench(c: &mut Criterion) {
         }
         group.finish();
     }
+    bench_branch_and_bound(c);
+}
+
+/// Branch and bound `[B1]`-`[B6]` (certify only, from the Weiszfeld mean) of the geodesic L1
+/// mean of 10^4 samples: 0.1 rad noise with 10 % uniform outliers (so that the pi/2-ball
+/// theorem does not apply).
+fn bench_branch_and_bound(c: &mut Criterion) {
+    let mut rng = StdRng::seed_from_u64(1);
+    let truth = random_rotation(&mut rng);
+    let rs = (0..10_000)
+        .map(|k| {
+            if k % 10 == 0 {
+                random_rotation(&mut rng)
+            } else {
+                perturb_gaussian(&truth, 0.1, &mut rng)
+            }
+        })
+        .collect();
+    let p = SingleProblem::new(rs, None)
+        .expect("valid rotations")
+        .with_objective(Objective::new(Metric::Geodesic, Loss::L1))
+        .expect("supported objective");
+    let sol = solve_single(&p, &SingleSettings::default()).expect("valid settings");
+    let s = CertifySettings::with_mode(CertifyMode::BranchAndBound);
+    let mut group = c.benchmark_group("single_bnb");
+    group.sample_size(10);
+    group.bench_function("geodesic_l1_n10000", |b| {
+        b.iter(|| black_box(certify_single(black_box(&p), &sol.estimate, &s).expect("valid")))
+    });
+    group.finish();
 }
 
 criterion_group!(benches, bench);

@@ -87,7 +87,8 @@ fn readable_summary_and_require_certified() {
         text.contains("geodesic l2 mean of 3 samples") && text.contains("certified"),
         "{text}"
     );
-    // a sample 1.7 rad > pi/2 from the geodesic mean: inconclusive [S4], exit 3 when required
+    // a sample 1.7 rad > pi/2 from the geodesic mean: the theorem [S4] alone is inconclusive,
+    // exit 3 when required; the default (auto) falls back to branch and bound and certifies
     let far = temp_file(
         "far.json",
         &format!(
@@ -102,11 +103,23 @@ fn readable_summary_and_require_certified() {
         far.to_str().unwrap(),
         "--metric",
         "geodesic",
+        "--certify",
+        "theory",
         "--require-certified",
         "--quiet",
     ]);
     assert_eq!(out.status.code(), Some(3));
     assert!(out.stdout.is_empty());
+    let out = run(&[
+        "single",
+        far.to_str().unwrap(),
+        "--metric",
+        "geodesic",
+        "--require-certified",
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("method branch_and_bound"), "{text}");
 }
 
 #[test]

@@ -225,7 +225,14 @@ fn geodesic_bound_is_inconclusive_outside_the_pi_over_2_ball() {
     rs.push(perturb(&c, 2.5, &mut rng)); // sample 8 is far away
     let p = SingleProblem::new(rs, None).unwrap();
     for norm in [Loss::L1, Loss::L2] {
-        let (_, cert) = average(&p, Metric::Geodesic, norm);
+        let (sol, auto) = average(&p, Metric::Geodesic, norm);
+        // auto: the theorem does not apply, the branch and bound [B1]-[B6] certifies
+        assert!(auto.is_certified(), "{auto}");
+        assert_eq!(auto.method, rotavg::BoundMethod::BranchAndBound);
+        let theory = CertifySettings::with_mode(rotavg::certify::CertifyMode::Theory);
+        let cert = certify_single(&with(&p, Metric::Geodesic, norm), &sol.estimate, &theory)
+            .unwrap()
+            .certificate;
         assert_eq!(cert.verdict, Verdict::Inconclusive);
         assert!(
             cert.explanation.contains("sample 8"),
@@ -532,9 +539,17 @@ fn bad_input_gives_typed_errors() {
             Err(Error::InvalidSettings { .. })
         ));
     }
-    // The quaternion L1 mean is not implemented: refused when the objective is set.
+    // The quaternion L1 mean (the sixth mean, [S10]) is accepted, a robust loss is not.
+    assert!(
+        p.clone()
+            .with_objective(Objective::new(Metric::Quaternion, Loss::L1))
+            .is_ok()
+    );
     assert!(matches!(
-        p.with_objective(Objective::new(Metric::Quaternion, Loss::L1)),
+        p.with_objective(Objective::new(
+            Metric::Quaternion,
+            Loss::Huber { threshold_deg: 5.0 }
+        )),
         Err(Error::InvalidSettings { .. })
     ));
 }

@@ -49,6 +49,9 @@ pub enum BoundMethod {
     Sdp,
     /// A rank-lifted (Riemannian staircase) solve of the SDP, with its own dual certificate.
     Staircase,
+    /// Branch and bound over SO(3) with proven per-cell bounds (single and conjugate
+    /// averaging, `[B1]`-`[B6]`).
+    BranchAndBound,
 }
 
 impl fmt::Display for BoundMethod {
@@ -58,6 +61,7 @@ impl fmt::Display for BoundMethod {
             BoundMethod::Dual => "dual",
             BoundMethod::Sdp => "sdp",
             BoundMethod::Staircase => "staircase",
+            BoundMethod::BranchAndBound => "branch_and_bound",
         })
     }
 }
@@ -206,6 +210,10 @@ pub struct Certificate {
     /// absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub smallest_eigenvalues: Option<crate::certify::spectrum::SpectrumEstimate>,
+    /// What the branch and bound did, when it produced the bound (cells, depth, time, why it
+    /// stopped). Omitted from JSON when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub branch_and_bound: Option<crate::certify::branch_and_bound::BranchAndBoundStats>,
 }
 
 impl Certificate {
@@ -273,6 +281,7 @@ impl Certificate {
             seconds,
             verified_min_eigenvalue: None,
             smallest_eigenvalues: None,
+            branch_and_bound: None,
         }
     }
 
@@ -301,6 +310,7 @@ impl Certificate {
         );
         c.verified_min_eigenvalue = self.verified_min_eigenvalue;
         c.smallest_eigenvalues = self.smallest_eigenvalues.clone();
+        c.branch_and_bound = self.branch_and_bound;
         c
     }
 

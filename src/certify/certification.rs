@@ -65,6 +65,8 @@ pub enum ImprovementSource {
     /// The rounding (multiple) or rank-one extraction (conjugate) of the SDP solution, polished
     /// by the local solver.
     SdpRounding,
+    /// A local solve started from a cell centre of the branch and bound that beat the estimate.
+    BranchAndBound,
 }
 
 /// A solution of lower cost than the certified estimate, found while bounding.
@@ -91,6 +93,9 @@ pub struct CertifyDetails {
     pub skipped_reason: Option<String>,
     /// The SDP solve, when one ran.
     pub sdp: Option<SdpSummary>,
+    /// The branch and bound, when one ran.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub branch_and_bound: Option<crate::certify::branch_and_bound::BranchAndBoundStats>,
     /// The improvement found, if any (the solution is in [`Certification::improvement`]).
     pub improvement: Option<Improvement>,
     /// Time spent refining the estimate before verifying multipliers (included in `seconds`).

@@ -1,6 +1,7 @@
 //! The verified lower bound of conjugate averaging from the multipliers of its SDP relaxation
 //! `[H8]`, and [`certify_conjugate`] (SPEC section 3, `paper-notes/conjugate.md`).
 
+use super::branch_and_bound;
 use super::certificate::{BoundMethod, Certificate};
 use super::certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun, SdpSummary,
@@ -117,8 +118,10 @@ pub fn refine_multipliers(
 /// multipliers and from the multipliers refined at `s` and at the polished extraction `[H8]`
 /// (each is a bound on the global minimum; the largest is kept), and polish the rank-one
 /// extraction with the local solver: when that has a lower cost than `s` it is returned as the
-/// [`Certification::improvement`]. Other objectives have no bound yet: their certificate is
-/// `inconclusive`.
+/// [`Certification::improvement`]. In mode `auto`, when the SDP does not certify, and for every
+/// other objective, the branch and bound over SO(3) `[B1]`-`[B6]` bounds the global minimum
+/// (mode `branch_and_bound`: only it); a better solution it finds is the improvement. Mode
+/// `sdp` with another objective than chordal L2 gives an `inconclusive` certificate.
 ///
 /// ```
 /// use rotavg::certify::{certify_conjugate, CertifySettings};
@@ -140,9 +143,14 @@ pub fn certify_conjugate(
     settings: &CertifySettings,
 ) -> Result<Certification<ConjugateSolution>> {
     settings.validate()?;
-    settings
-        .mode
-        .require("conjugate", &[CertifyMode::Auto, CertifyMode::Sdp])?;
+    settings.mode.require(
+        "conjugate",
+        &[
+            CertifyMode::Auto,
+            CertifyMode::Sdp,
+            CertifyMode::BranchAndBound,
+        ],
+    )?;
     check_rotation(|| "estimate".into(), s)?;
     let start = Instant::now();
     let objective = problem.objective();
@@ -151,17 +159,34 @@ pub fn certify_conjugate(
         mode: settings.mode,
         ..Default::default()
     };
-    if !objective.is_chordal_l2() {
-        details.skipped_reason = Some(format!(
-            "no lower bound for the {objective} cost: the SDP relaxation bounds chordal L2 only"
+    let tolerance = settings.tolerance.resolve(problem.median_weight());
+    let small = problem.num_pairs() <= settings.branch_and_bound.auto_max_terms;
+    if settings.mode == CertifyMode::BranchAndBound
+        || (settings.mode == CertifyMode::Auto && !objective.is_chordal_l2() && small)
+    {
+        return Ok(with_branch_and_bound(
+            problem, s, cost, settings, None, details, start,
         ));
+    }
+    if !objective.is_chordal_l2() {
+        details.skipped_reason = Some(if small {
+            format!(
+                "no lower bound for the {objective} cost: the SDP relaxation bounds chordal L2 only"
+            )
+        } else {
+            format!(
+                "no lower bound for the {objective} cost: the SDP relaxation bounds chordal L2 only, and {} pairs > branch_and_bound.auto_max_terms = {} (use mode branch_and_bound)",
+                problem.num_pairs(),
+                settings.branch_and_bound.auto_max_terms
+            )
+        });
         details.seconds = start.elapsed().as_secs_f64();
         let certificate = Certificate::from_bounds(
             cost,
             None,
             BoundMethod::Sdp,
             None,
-            settings.tolerance.resolve(problem.median_weight()),
+            tolerance,
             format!(
                 "no lower bound: the SDP relaxation bounds the chordal L2 cost, not {objective}"
             ),
@@ -236,11 +261,94 @@ pub fn certify_conjugate(
         source: ImprovementSource::SdpRounding,
         cost: p.cost,
     });
+    if settings.mode == CertifyMode::Auto && !certificate.is_certified() && small {
+        // The SDP bound was not tight enough (or its rounding beat the estimate): the branch
+        // and bound decides, starting from the SDP's bound.
+        let prior = Some((certificate, improvement));
+        return Ok(with_branch_and_bound(
+            problem, s, cost, settings, prior, details, start,
+        ));
+    }
     Ok(Certification {
         certificate,
         details,
         improvement,
     })
+}
+
+/// The branch and bound `[B1]`-`[B6]` for `s` (cost `cost`), after an SDP certificate `prior`
+/// (whose bound and improvement are kept when better).
+fn with_branch_and_bound(
+    problem: &ConjugateProblem,
+    s: &Rotation,
+    cost: f64,
+    settings: &CertifySettings,
+    prior: Option<(Certificate, Option<ConjugateSolution>)>,
+    mut details: CertifyDetails,
+    start: Instant,
+) -> Certification<ConjugateSolution> {
+    let t = Instant::now();
+    crate::progress::phase(crate::progress::Phase::Certify, || {
+        format!("branch and bound over SO(3), {} pairs", problem.num_pairs())
+    });
+    let run =
+        branch_and_bound::run_conjugate(problem, s, cost, settings, start.elapsed().as_secs_f64());
+    let lb = run.lower_bound.min(cost);
+    details.methods.push(MethodRun {
+        method: BoundMethod::BranchAndBound,
+        lower_bound: Some(lb),
+        seconds: t.elapsed().as_secs_f64(),
+        note: run.explanation.clone(),
+    });
+    details.branch_and_bound = Some(run.stats);
+    let seconds = start.elapsed().as_secs_f64();
+    details.seconds = seconds;
+    let (prior_cert, prior_improvement) = match prior {
+        Some((c, i)) => (Some(c), i),
+        None => (None, None),
+    };
+    let mut certificate = match prior_cert {
+        Some(c) if c.lower_bound.is_some_and(|p| p >= lb) => c,
+        _ => Certificate::from_bounds(
+            cost,
+            Some(lb),
+            BoundMethod::BranchAndBound,
+            None,
+            settings.tolerance.resolve(problem.median_weight()),
+            run.explanation,
+            seconds,
+        ),
+    };
+    certificate.seconds = seconds;
+    certificate.branch_and_bound = Some(run.stats);
+    // The better of the two improvements.
+    let improvement = match (prior_improvement, run.improvement) {
+        (Some(a), Some((b, c))) => {
+            if c < a.cost {
+                details.improvement = Some(Improvement {
+                    source: ImprovementSource::BranchAndBound,
+                    cost: c,
+                });
+                Some(b)
+            } else {
+                Some(a)
+            }
+        }
+        (Some(a), None) => Some(a),
+        (None, Some((b, c))) => {
+            details.improvement = Some(Improvement {
+                source: ImprovementSource::BranchAndBound,
+                cost: c,
+            });
+            Some(b)
+        }
+        (None, None) => None,
+    };
+    Certification {
+        certificate,
+        details,
+        improvement,
+    }
 }
 
 fn explain(bound: Option<&ConjugateBound>, relax: &ConjugateRelaxation) -> String {

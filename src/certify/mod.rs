@@ -3,9 +3,9 @@
 //!
 //! | problem | function | methods |
 //! |---|---|---|
-//! | single | [`certify_single`] | theorems: closed forms, convexity `[S1]`-`[S7]` ([`single`]) |
+//! | single | [`certify_single`] | theorems: closed forms, convexity `[S1]`-`[S7]` ([`single`]), then branch and bound `[B1]`-`[B6]` ([`branch_and_bound`]) |
 //! | multiple | [`certify_multiple`] | dual certificate, SDP, staircase `[D3]`-`[D14]` ([`multiple`]) |
-//! | conjugate | [`certify_conjugate`] | SDP with verified multipliers `[H8]` ([`conjugate`]) |
+//! | conjugate | [`certify_conjugate`] | SDP with verified multipliers `[H8]` ([`conjugate`]), branch and bound `[B1]`-`[B6]` |
 //!
 //! Each takes `(&problem, &estimate, &CertifySettings)`, never changes the estimate, and returns
 //! a [`Certification`]: the [`Certificate`] (verdict, proven lower bound, gap), what ran, and a
@@ -14,6 +14,7 @@
 //! Soundness rule: [`Verdict::Certified`] is only produced by [`Certificate::from_bounds`] from a
 //! lower bound verified independently of any solver's own report.
 
+pub mod branch_and_bound;
 pub mod certificate;
 pub mod certification;
 pub mod conjugate;
@@ -22,6 +23,7 @@ pub mod settings;
 pub mod single;
 pub mod spectrum;
 
+pub use branch_and_bound::{BranchAndBoundSettings, BranchAndBoundStats, BranchAndBoundStop};
 pub use certificate::{
     BoundMethod, Certificate, GapTolerance, TolerancePart, ToleranceRule, Verdict,
 };

@@ -1,6 +1,7 @@
 //! The settings of every `certify_*` function: one [`CertifySettings`] for the three problems
 //! (each reads the parts that apply to it), with the [`CertifyMode`] that chooses the method.
 
+use super::branch_and_bound::BranchAndBoundSettings;
 use super::certificate::ToleranceRule;
 use super::multiple::staircase::StaircaseSettings;
 use super::spectrum::SpectrumSettings;
@@ -15,8 +16,9 @@ use std::fmt;
 ///
 /// | mode | single | multiple | conjugate |
 /// |---|---|---|---|
-/// | `auto` | theory | dual, then SDP (`n <= sdp_max_nodes`) or staircase | SDP (chordal L2) |
+/// | `auto` | theory, then branch and bound | dual, then SDP (`n <= sdp_max_nodes`) or staircase | SDP (chordal L2), then branch and bound |
 /// | `theory` | closed forms, convexity `[S1]`-`[S7]` | — | — |
+/// | `branch_and_bound` | branch and bound `[B1]`-`[B6]` | — | branch and bound |
 /// | `dual` | — | dual certificate only `[D3]`-`[D9]` | — |
 /// | `sdp` | — | dual, then the SDP | SDP |
 /// | `staircase` | — | dual, then the Riemannian staircase `[D11]` | — |
@@ -38,12 +40,14 @@ pub enum CertifyMode {
     Sdp,
     /// The Riemannian staircase after a failed dual certificate (multiple averaging).
     Staircase,
+    /// Branch and bound over SO(3) only (single and conjugate averaging).
+    BranchAndBound,
     /// No certificate (the pipelines skip certification; `certify_*` refuse it).
     None,
 }
 
 impl CertifyMode {
-    /// Short name: `auto`, `theory`, `dual`, `sdp`, `staircase`, `none`.
+    /// Short name: `auto`, `theory`, `dual`, `sdp`, `staircase`, `branch_and_bound`, `none`.
     pub fn name(self) -> &'static str {
         match self {
             CertifyMode::Auto => "auto",
@@ -51,6 +55,7 @@ impl CertifyMode {
             CertifyMode::Dual => "dual",
             CertifyMode::Sdp => "sdp",
             CertifyMode::Staircase => "staircase",
+            CertifyMode::BranchAndBound => "branch_and_bound",
             CertifyMode::None => "none",
         }
     }
@@ -292,6 +297,9 @@ pub struct CertifySettings {
     /// multipliers gave the reported bound ([`super::Certificate::smallest_eigenvalues`],
     /// `[D14]`; estimates for figures, not bounds). Default `None`: no extra work.
     pub spectrum: Option<SpectrumSettings>,
+    /// Single and conjugate averaging: the branch and bound (its time limit is
+    /// `budget.max_seconds`).
+    pub branch_and_bound: BranchAndBoundSettings,
 }
 
 impl Default for CertifySettings {
@@ -305,6 +313,7 @@ impl Default for CertifySettings {
             staircase: StaircaseSettings::default(),
             budget: Budget::default(),
             spectrum: None,
+            branch_and_bound: BranchAndBoundSettings::default(),
         }
     }
 }
@@ -334,6 +343,7 @@ impl CertifySettings {
         self.sdp.validate()?;
         self.staircase.validate()?;
         self.budget.validate()?;
+        self.branch_and_bound.validate()?;
         if let Some(sp) = &self.spectrum {
             sp.validate()?;
         }

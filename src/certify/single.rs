@@ -13,8 +13,11 @@
 //!
 //! Every bound subtracts a floating-point safety margin (`rounding_margin`).
 
+use super::branch_and_bound;
 use super::certificate::{BoundMethod, Certificate};
-use super::certification::{Certification, CertifyDetails, MethodRun};
+use super::certification::{
+    Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun,
+};
 use super::settings::{CertifyMode, CertifySettings};
 use crate::error::Result;
 use crate::linalg::compensated::Accumulator;
@@ -37,9 +40,13 @@ pub const PAIRWISE_TEST_LIMIT: usize = 2048;
 /// ulps; `[S4]`).
 const ANGLE_MARGIN: f64 = 1e-12;
 
-/// Certify `estimate` for `problem` under its objective, without changing it (modes `auto`
-/// and `theory`). The upper bound is the cost of `estimate`; the lower bound is proven (see
-/// the module docs); the verdict compares the gap with `settings.tolerance`.
+/// Certify `estimate` for `problem` under its objective, without changing it. The upper bound
+/// is the cost of `estimate`; the lower bound is proven (see the module docs); the verdict
+/// compares the gap with `settings.tolerance`. Modes: `theory` (the theorems only),
+/// `branch_and_bound` (the branch and bound over SO(3) only, `[B1]`-`[B6]`), `auto` (the
+/// theorems, then the branch and bound when they do not certify; the larger bound is
+/// reported). When the branch and bound finds a solution of lower cost it is returned as the
+/// [`Certification::improvement`] (the estimate's verdict is then `gap_reported`).
 ///
 /// ```
 /// use rotavg::certify::{certify_single, CertifySettings};
@@ -56,48 +63,118 @@ pub fn certify_single(
     settings: &CertifySettings,
 ) -> Result<Certification<SingleSolution>> {
     settings.validate()?;
-    settings
-        .mode
-        .require("single", &[CertifyMode::Auto, CertifyMode::Theory])?;
+    settings.mode.require(
+        "single",
+        &[
+            CertifyMode::Auto,
+            CertifyMode::Theory,
+            CertifyMode::BranchAndBound,
+        ],
+    )?;
     check_rotation(|| "estimate".into(), estimate)?;
     let start = Instant::now();
     let objective = problem.objective();
     let cost = problem.cost(estimate);
-    let (lb, explanation) = match (objective.metric, objective.loss) {
+    let tolerance = settings.tolerance.resolve(problem.median_weight());
+    let mut details = CertifyDetails {
+        mode: settings.mode,
+        ..Default::default()
+    };
+    // A computed bound above the computed cost can only be rounding: f* <= f(estimate).
+    let mut best: Option<(f64, BoundMethod, String)> = None;
+    if settings.mode != CertifyMode::BranchAndBound {
+        let (lb, explanation) = theory_bound(problem, estimate, cost);
+        let lb = lb.map(|l| l.min(cost));
+        details.methods.push(MethodRun {
+            method: BoundMethod::Theory,
+            lower_bound: lb,
+            seconds: start.elapsed().as_secs_f64(),
+            note: explanation.clone(),
+        });
+        best = lb.map(|l| (l, BoundMethod::Theory, explanation.clone()));
+        if lb.is_none() {
+            best = None;
+            details.skipped_reason = Some(explanation);
+        }
+    }
+    let theory_certified = best
+        .as_ref()
+        .is_some_and(|(l, _, _)| cost - l <= tolerance.allowed_gap(cost));
+    let mut improvement = None;
+    let mut stats = None;
+    let auto_bnb = settings.mode == CertifyMode::Auto && !theory_certified;
+    if auto_bnb && problem.len() > settings.branch_and_bound.auto_max_terms {
+        details.skipped_reason = Some(format!(
+            "branch and bound skipped: {} samples > branch_and_bound.auto_max_terms = {} (use mode branch_and_bound)",
+            problem.len(),
+            settings.branch_and_bound.auto_max_terms
+        ));
+    } else if settings.mode == CertifyMode::BranchAndBound || auto_bnb {
+        let t = Instant::now();
+        crate::progress::phase(crate::progress::Phase::Certify, || {
+            format!("branch and bound over SO(3), {} samples", problem.len())
+        });
+        let run = branch_and_bound::run_single(
+            problem,
+            estimate,
+            cost,
+            settings,
+            start.elapsed().as_secs_f64(),
+        );
+        let lb = run.lower_bound.min(cost);
+        details.methods.push(MethodRun {
+            method: BoundMethod::BranchAndBound,
+            lower_bound: Some(lb),
+            seconds: t.elapsed().as_secs_f64(),
+            note: run.explanation.clone(),
+        });
+        details.branch_and_bound = Some(run.stats);
+        stats = Some(run.stats);
+        if best.as_ref().is_none_or(|(l, _, _)| lb > *l) {
+            best = Some((lb, BoundMethod::BranchAndBound, run.explanation));
+        }
+        if let Some((s, c)) = run.improvement {
+            details.improvement = Some(Improvement {
+                source: ImprovementSource::BranchAndBound,
+                cost: c,
+            });
+            improvement = Some(s);
+        }
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    details.seconds = seconds;
+    let (lb, method, explanation) = match best {
+        Some((l, m, e)) => (Some(l), m, e),
+        None => (
+            None,
+            BoundMethod::Theory,
+            details
+                .skipped_reason
+                .clone()
+                .unwrap_or_else(|| format!("no lower bound for the {objective} cost")),
+        ),
+    };
+    let mut certificate =
+        Certificate::from_bounds(cost, lb, method, None, tolerance, explanation, seconds);
+    certificate.branch_and_bound = stats;
+    Ok(Certification {
+        certificate,
+        details,
+        improvement,
+    })
+}
+
+/// The theorems `[S1]`-`[S7]` for the estimate (no bound for the other costs).
+fn theory_bound(problem: &SingleProblem, estimate: &Rotation, cost: f64) -> (Option<f64>, String) {
+    let objective = problem.objective();
+    match (objective.metric, objective.loss) {
         (Metric::Chordal, Loss::L2) => chordal_l2_bound(problem, cost),
         (Metric::Quaternion, Loss::L2) => quaternion_l2_bound(problem, estimate, cost),
         (Metric::Geodesic, Loss::L2) => geodesic_ball_bound(problem, estimate, Norm::L2),
         (Metric::Geodesic, Loss::L1) => geodesic_ball_bound(problem, estimate, Norm::L1),
         (Metric::Chordal, Loss::L1) => chordal_l1_bound(problem),
-        _ => (None, format!("no lower bound for the {objective} cost")),
-    };
-    // A computed bound above the computed cost can only be rounding: f* <= f(estimate).
-    let lb = lb.map(|l| l.min(cost));
-    let seconds = start.elapsed().as_secs_f64();
-    let certificate = Certificate::from_bounds(
-        cost,
-        lb,
-        BoundMethod::Theory,
-        None,
-        settings.tolerance.resolve(problem.median_weight()),
-        explanation.clone(),
-        seconds,
-    );
-    Ok(Certification {
-        certificate,
-        details: CertifyDetails {
-            mode: settings.mode,
-            methods: vec![MethodRun {
-                method: BoundMethod::Theory,
-                lower_bound: lb,
-                seconds,
-                note: explanation,
-            }],
-            seconds,
-            ..Default::default()
-        },
-        improvement: None,
-    })
+        _ => (None, format!("no theorem bounds the {objective} cost")),
+    }
 }
 
 /// Safety margin for the rounding error of a computed cost `f = sum_i w_i d_i^p` of `n` terms

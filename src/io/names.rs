@@ -115,6 +115,7 @@ impl Choice for CertifyMode {
             CertifyMode::Dual,
             CertifyMode::Sdp,
             CertifyMode::Staircase,
+            CertifyMode::BranchAndBound,
             CertifyMode::None,
         ]
     }
@@ -124,12 +125,15 @@ impl Choice for CertifyMode {
     fn help(&self) -> &'static str {
         match self {
             CertifyMode::Auto => {
-                "The best method for the problem (multiple: dual, then SDP on small graphs or staircase on large ones; conjugate: SDP)"
+                "The best method for the problem (single: theory, then branch and bound; multiple: dual, then SDP on small graphs or staircase on large ones; conjugate: SDP for chordal L2, then branch and bound)"
             }
             CertifyMode::Theory => "Theorems: closed forms and convexity balls (single averaging)",
             CertifyMode::Dual => "Dual certificate only (multiple averaging)",
             CertifyMode::Sdp => "The SDP relaxation (multiple: after a failed dual certificate)",
             CertifyMode::Staircase => "Dual, then the Riemannian staircase (multiple averaging)",
+            CertifyMode::BranchAndBound => {
+                "Branch and bound over SO(3) (single and conjugate averaging, every cost)"
+            }
             CertifyMode::None => "No certificate",
         }
     }

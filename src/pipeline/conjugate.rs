@@ -10,7 +10,7 @@ use crate::termination::SolverReport;
 
 impl PipelineSolution for ConjugateSolution {
     fn certified_cost(&self) -> f64 {
-        self.chordal_cost
+        self.cost
     }
     fn report_mut(&mut self) -> &mut SolverReport {
         &mut self.report
@@ -21,15 +21,19 @@ impl PipelineProblem for ConjugateProblem {
     type Settings = ConjugateSettings;
     type Solution = ConjugateSolution;
     const NAME: &'static str = "conjugate";
-    const MODES: &'static [CertifyMode] = &[CertifyMode::Auto, CertifyMode::Sdp, CertifyMode::None];
+    const MODES: &'static [CertifyMode] = &[
+        CertifyMode::Auto,
+        CertifyMode::Sdp,
+        CertifyMode::BranchAndBound,
+        CertifyMode::None,
+    ];
     fn validate(settings: &ConjugateSettings) -> Result<()> {
         settings.validate()
     }
-    fn uncertifiable(&self) -> Option<String> {
+    fn uncertifiable(&self, mode: CertifyMode) -> Option<String> {
         let objective = self.objective();
-        (!objective.is_chordal_l2()).then(|| {
-            format!("the {objective} cost has no certificate (only chordal L2 is certifiable)")
-        })
+        (mode == CertifyMode::Sdp && !objective.is_chordal_l2())
+            .then(|| format!("the SDP relaxation bounds chordal L2 only, not the {objective} cost"))
     }
     fn solve(&self, settings: &ConjugateSettings) -> Result<ConjugateSolution> {
         solve_conjugate(self, settings)

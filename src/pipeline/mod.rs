@@ -151,8 +151,8 @@ pub(crate) trait PipelineProblem {
     const MODES: &'static [CertifyMode];
     /// Check the solver's settings.
     fn validate(settings: &Self::Settings) -> Result<()>;
-    /// Why this problem gets no certificate (its objective has no bound), if so.
-    fn uncertifiable(&self) -> Option<String>;
+    /// Why this problem gets no certificate with `mode` (its objective has no bound), if so.
+    fn uncertifiable(&self, mode: CertifyMode) -> Option<String>;
     /// The local solve.
     fn solve(&self, settings: &Self::Settings) -> Result<Self::Solution>;
     /// The certification of a solution.
@@ -174,7 +174,7 @@ pub(crate) fn average<P: PipelineProblem>(
     settings.certify.validate()?;
     let mode = settings.certify.mode;
     mode.require(P::NAME, P::MODES)?;
-    let skip = problem.uncertifiable();
+    let skip = problem.uncertifiable(mode);
     if let Some(why) = &skip
         && mode != CertifyMode::Auto
         && mode != CertifyMode::None

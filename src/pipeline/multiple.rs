@@ -38,7 +38,7 @@ impl PipelineProblem for MultipleProblem {
     fn validate(settings: &MultipleSettings) -> Result<()> {
         settings.validate()
     }
-    fn uncertifiable(&self) -> Option<String> {
+    fn uncertifiable(&self, _mode: CertifyMode) -> Option<String> {
         let objective = self.objective();
         (!objective.is_chordal_l2()).then(|| {
             format!("the {objective} cost has no certificate (only chordal L2 is certifiable)")

@@ -19,12 +19,16 @@ impl PipelineProblem for SingleProblem {
     type Settings = SingleSettings;
     type Solution = SingleSolution;
     const NAME: &'static str = "single";
-    const MODES: &'static [CertifyMode] =
-        &[CertifyMode::Auto, CertifyMode::Theory, CertifyMode::None];
+    const MODES: &'static [CertifyMode] = &[
+        CertifyMode::Auto,
+        CertifyMode::Theory,
+        CertifyMode::BranchAndBound,
+        CertifyMode::None,
+    ];
     fn validate(settings: &SingleSettings) -> Result<()> {
         settings.validate()
     }
-    fn uncertifiable(&self) -> Option<String> {
+    fn uncertifiable(&self, _mode: CertifyMode) -> Option<String> {
         None
     }
     fn solve(&self, settings: &SingleSettings) -> Result<SingleSolution> {

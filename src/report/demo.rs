@@ -26,7 +26,7 @@ const CONJUGATE_PAIRS: usize = 30;
 /// use rotavg::report::DemoReport;
 /// use rotavg::Verdict;
 /// let demo = DemoReport::run(1, 30)?;
-/// assert_eq!(demo.verdicts().len(), 7);
+/// assert_eq!(demo.verdicts().len(), 8);
 /// assert_ne!(demo.worst_verdict(), Verdict::Inconclusive);
 /// assert!(demo.to_string().contains("=== summary"));
 /// # Ok::<(), rotavg::Error>(())
@@ -37,6 +37,10 @@ pub struct DemoReport {
     pub single_truth: Rotation,
     /// The single means (chordal L2, quaternion L2, geodesic L2, geodesic L1, chordal L1).
     pub single: Vec<SingleEstimate>,
+    /// The geodesic L1 mean of spread data (the same samples with 20 % replaced by uniform
+    /// outliers, beyond the pi/2 ball of the convexity theorem): certified by the branch and
+    /// bound over SO(3) (`[B1]`-`[B6]`).
+    pub spread: SingleEstimate,
     /// The view graph's number of nodes and edges.
     pub graph_size: (usize, usize),
     /// The local solution of the view graph.
@@ -74,6 +78,23 @@ impl DemoReport {
                 .with_objective(Objective::new(metric, loss))?;
             single.push(average_single(&p, &Default::default())?);
         }
+        let outlying: Vec<_> = problem
+            .rotations()
+            .iter()
+            .enumerate()
+            .map(|(k, r)| {
+                if k % 5 == 0 {
+                    random_rotation(&mut rng)
+                } else {
+                    *r
+                }
+            })
+            .collect();
+        let spread = average_single(
+            &SingleProblem::new(outlying, None)?
+                .with_objective(Objective::new(Metric::Geodesic, Loss::L1))?,
+            &Default::default(),
+        )?;
 
         let n = nodes.max(3);
         let (graph, truth) = SyntheticGraph {
@@ -95,6 +116,7 @@ impl DemoReport {
         Ok(DemoReport {
             single_truth,
             single,
+            spread,
             graph_size: (graph.num_rotations(), graph.num_edges()),
             multiple,
             multiple_certificate: cert.certificate,
@@ -104,8 +126,9 @@ impl DemoReport {
         })
     }
 
-    /// The verdicts in order: the five single means (inconclusive where there is no
-    /// certificate), the view graph, the hand-eye rotation (when certified at all).
+    /// The verdicts in order: the five single means and the spread geodesic L1 mean
+    /// (inconclusive where there is no certificate), the view graph, the hand-eye rotation
+    /// (when certified at all).
     pub fn verdicts(&self) -> Vec<Verdict> {
         let mut v: Vec<Verdict> = self
             .single
@@ -116,6 +139,12 @@ impl DemoReport {
                     .map_or(Verdict::Inconclusive, |c| c.verdict)
             })
             .collect();
+        v.push(
+            self.spread
+                .certificate
+                .as_ref()
+                .map_or(Verdict::Inconclusive, |c| c.verdict),
+        );
         v.push(self.multiple_certificate.verdict);
         v.extend(self.conjugate.certificate.as_ref().map(|c| c.verdict));
         v
@@ -163,6 +192,27 @@ impl fmt::Display for DemoReport {
                 c.map_or("none".to_string(), |c| c.method.to_string()),
             )?;
         }
+
+        let (s, c) = (&self.spread.solution, self.spread.certificate.as_ref());
+        writeln!(
+            f,
+            "the same samples with every fifth replaced by a uniform outlier (beyond the pi/2 ball):"
+        )?;
+        writeln!(
+            f,
+            "  {:<15} cost {:12.6}  error to truth {:.4} deg  {:8.3} ms  {} ({}{})",
+            format!("{}:", s.objective),
+            s.cost,
+            angle_between(&s.estimate, &self.single_truth).to_degrees(),
+            s.report.seconds * 1e3,
+            c.map_or(Verdict::Inconclusive, |c| c.verdict),
+            c.map_or("none".to_string(), |c| c.method.to_string()),
+            c.and_then(|c| c.branch_and_bound)
+                .map_or(String::new(), |b| format!(
+                    ": {} cells, depth {}, {:.3} s",
+                    b.cells_explored, b.max_depth, b.seconds
+                )),
+        )?;
 
         rule(f, "2. multiple rotation averaging (view graph)")?;
         writeln!(

@@ -11,7 +11,8 @@
 //! | quaternion | L2 | sign-aligned normalised quaternion sum `[S2]`                 | when all samples lie within pi/2 of the estimate (else a proven bound) |
 //! | geodesic   | L2 | Karcher mean, from the chordal L2 mean `[S3]`                 | pi/2 ball `[S4]` |
 //! | geodesic   | L1 | Weiszfeld on SO(3) with the sample case handled `[S5]`        | pi/2 ball `[S4]` |
-//! | chordal    | L1 | IRLS / majorise-minimise on SO(3) from the projected Euclidean geometric median `[S6]` | Euclidean bound `[S7]` |
+//! | chordal    | L1 | IRLS / majorise-minimise on SO(3) from the projected Euclidean geometric median `[S6]` | Euclidean bound `[S7]`, then branch and bound |
+//! | quaternion | L1 | sign-aligned Weiszfeld on unit quaternions `[S10]`                | branch and bound `[B1]`-`[B6]` |
 //!
 //! ```
 //! use rotavg::single::{solve_single, SingleProblem, SingleSettings};

@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::objective::{Loss, Objective};
-use crate::so3::{self, Metric, Rotation};
+use crate::so3::{self, Rotation};
 use crate::validate::{check_rotation, check_weight};
 use serde::{Deserialize, Serialize};
 
@@ -38,9 +38,8 @@ impl TryFrom<RawSingleProblem> for SingleProblem {
 }
 
 impl SingleProblem {
-    /// The objectives with a solver (every metric with L1 or L2, except quaternion L1).
-    pub const SUPPORTED: &'static str =
-        "chordal, geodesic or quaternion with l2; chordal or geodesic with l1";
+    /// The objectives with a solver (every metric with L1 or L2).
+    pub const SUPPORTED: &'static str = "chordal, geodesic or quaternion with l2 or l1";
 
     /// A problem from samples and optional weights (default: all 1), with the chordal L2
     /// objective.
@@ -109,7 +108,7 @@ impl SingleProblem {
     pub fn with_objective(mut self, objective: Objective) -> Result<Self> {
         objective.validate()?;
         match (objective.metric, objective.loss) {
-            (_, Loss::L2) | (Metric::Chordal | Metric::Geodesic, Loss::L1) => {}
+            (_, Loss::L2 | Loss::L1) => {}
             _ => return Err(objective.unsupported("single", Self::SUPPORTED)),
         }
         self.objective = objective;

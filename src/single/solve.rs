@@ -161,6 +161,7 @@ pub fn solve_single(problem: &SingleProblem, settings: &SingleSettings) -> Resul
         (Metric::Geodesic, Loss::L2) => iterative::geodesic_l2_local(problem, settings, init),
         (Metric::Geodesic, Loss::L1) => iterative::geodesic_l1_local(problem, settings, init),
         (Metric::Chordal, Loss::L1) => iterative::chordal_l1_local(problem, settings, init),
+        (Metric::Quaternion, Loss::L1) => closed_form::quaternion_l1_local(problem, settings, init),
         _ => return Err(objective.unsupported("single", SingleProblem::SUPPORTED)),
     };
     let seconds = start.elapsed().as_secs_f64();

@@ -1,4 +1,4 @@
-//! `rotavg conjugate INPUT [--format auto|json|tabb|eth] [--certify auto|sdp|none] [--json]`:
+//! `rotavg conjugate INPUT [--format auto|json|tabb|eth] [--certify auto|sdp|branch_and_bound|none] [--json]`:
 //! hand-eye (conjugate) rotation averaging, `R_i ~ S^-1 L_i S`
 //! (`rotavg::pipeline::average_conjugate`, printed as `rotavg::report::ConjugateReport`).
 
@@ -23,8 +23,10 @@ pub struct Args {
     /// Input format.
     #[arg(long, value_parser = choice(ConjugateFormat::choices()), default_value_t = ConjugateFormat::Auto)]
     pub format: ConjugateFormat,
-    /// Certification (SDP for the chordal L2 cost; none for other costs).
-    #[arg(long, value_parser = choice(vec![CertifyMode::Auto, CertifyMode::Sdp, CertifyMode::None]), default_value_t = CertifyMode::Auto)]
+    /// Certification: `auto` (the SDP for the chordal L2 cost, then branch and bound over SO(3)
+    /// when it does not certify; branch and bound for every other cost), `sdp`,
+    /// `branch_and_bound`, `none`.
+    #[arg(long, value_parser = choice(vec![CertifyMode::Auto, CertifyMode::Sdp, CertifyMode::BranchAndBound, CertifyMode::None]), default_value_t = CertifyMode::Auto)]
     pub certify: CertifyMode,
     /// Distance between R_i and S^T L_i S (chordal with `--loss l2` is certified; quaternion
     /// has the closed form).

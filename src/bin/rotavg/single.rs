@@ -1,10 +1,11 @@
-//! `rotavg single INPUT [--metric chordal|quaternion|geodesic] [--p 1|2] [--json]`: the L^p
-//! mean of the JSON file of SPEC section 5, certified (`rotavg::report::SingleReport`).
+//! `rotavg single INPUT [--metric chordal|quaternion|geodesic] [--p 1|2]
+//! [--certify auto|theory|branch_and_bound|none] [--json]`: the L^p mean of the JSON file of
+//! SPEC section 5, certified (`rotavg::report::SingleReport`).
 
 use crate::Outcome;
 use crate::common::{Common, choice};
 use clap::Args as ClapArgs;
-use rotavg::certify::CertifySettings;
+use rotavg::certify::{CertifyMode, CertifySettings};
 use rotavg::io::input::{load_estimate, read_input, read_single_problem};
 use rotavg::io::names::Choice;
 use rotavg::pipeline::{AverageSettings, average_single};
@@ -23,6 +24,10 @@ pub struct Args {
     /// The exponent p of the cost sum_i w_i d(R_i, R)^p (1 or 2).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=2))]
     pub p: u32,
+    /// Certification: `auto` (theorems, then branch and bound over SO(3) when they do not
+    /// certify), `theory`, `branch_and_bound`, `none`.
+    #[arg(long, value_parser = choice(vec![CertifyMode::Auto, CertifyMode::Theory, CertifyMode::BranchAndBound, CertifyMode::None]), default_value_t = CertifyMode::Auto)]
+    pub certify: CertifyMode,
     #[command(flatten)]
     pub common: Common,
 }
@@ -45,7 +50,7 @@ pub fn run(args: &Args) -> rotavg::Result<Outcome> {
         },
         certify: CertifySettings {
             budget: args.common.budget(),
-            ..Default::default()
+            ..CertifySettings::with_mode(args.certify)
         },
     };
     let report = SingleReport::new(average_single(&problem, &settings)?);

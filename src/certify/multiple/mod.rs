@@ -577,6 +577,7 @@ fn final_certificate(
             match source {
                 ImprovementSource::Refinement => "the estimate refined by the local solver",
                 ImprovementSource::SdpRounding => "the SDP rounding polished by the local solver",
+                ImprovementSource::BranchAndBound => "a local solve from a branch-and-bound cell",
             },
             if certified {
                 ", which the bound below certifies globally optimal"
