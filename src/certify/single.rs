@@ -36,6 +36,9 @@ use std::time::Instant;
 /// is still applied).
 pub const PAIRWISE_TEST_LIMIT: usize = 2048;
 
+/// Iterations of [`enclosing_centre`] (each one pass over the samples).
+const ENCLOSING_ITERATIONS: usize = 100;
+
 /// Margin added to measured angles before comparing with pi/2 (their computed accuracy is a few
 /// ulps; `[S4]`).
 const ANGLE_MARGIN: f64 = 1e-12;
@@ -278,36 +281,83 @@ fn quaternion_l2_bound(
     }
 }
 
-/// `[S4]`: the pi/2-ball bound for the geodesic L^p costs.
+/// `[S4]`: the pi/2-ball bound for the geodesic L^p costs, with the ball centred on the
+/// estimate or, when the samples do not fit there, on an approximate minimal enclosing centre
+/// `o` (`[S4b]`): `f(R) - |g| (theta(o, R) + rho_o)` when every sample and the estimate lie
+/// within `rho_o < pi/2` and `theta(o, R) < pi/2` of `o`.
 fn geodesic_ball_bound(
     problem: &SingleProblem,
     estimate: &Rotation,
     norm: Norm,
 ) -> (Option<f64>, String) {
     let total = problem.total_weight();
-    let (far, rho) = problem.farthest(estimate);
-    let rho = rho + ANGLE_MARGIN;
-    if rho >= FRAC_PI_2 {
-        return (
-            None,
+    let (far, rho_at_estimate) = problem.farthest(estimate);
+    let rho = rho_at_estimate + ANGLE_MARGIN;
+    // the radius L of the segment from the estimate to a minimiser, and how it was found
+    let (radius, why) = if rho < FRAC_PI_2 {
+        (
+            rho,
             format!(
-                "no lower bound: sample {far} is {:.6} rad ({:.3} deg) from the estimate, not inside the open ball of radius pi/2 where the geodesic cost is convex [S4]",
-                rho - ANGLE_MARGIN,
-                (rho - ANGLE_MARGIN).to_degrees()
+                "pi/2-ball bound [S4]: all samples within rho = {rho:.6} rad < pi/2 of the estimate (farthest: sample {far})"
             ),
-        );
-    }
+        )
+    } else {
+        let o = enclosing_centre(problem, estimate);
+        let (far_o, rho_o) = problem.farthest(&o);
+        let rho_o = rho_o + ANGLE_MARGIN;
+        let to_estimate = so3::angle_between(&o, estimate) + ANGLE_MARGIN;
+        if rho_o >= FRAC_PI_2 || to_estimate >= FRAC_PI_2 {
+            return (
+                None,
+                format!(
+                    "no lower bound: sample {far} is {:.6} rad ({:.3} deg) from the estimate, and no centre was found with every sample and the estimate inside an open ball of radius pi/2 (best centre: radius {:.6} rad, estimate at {:.6} rad) where the geodesic cost is convex [S4]",
+                    rho_at_estimate,
+                    rho_at_estimate.to_degrees(),
+                    rho_o - ANGLE_MARGIN,
+                    to_estimate - ANGLE_MARGIN
+                ),
+            );
+        }
+        (
+            to_estimate + rho_o,
+            format!(
+                "pi/2-ball bound [S4b]: all samples within rho = {rho_o:.6} rad < pi/2 of a centre that is {to_estimate:.6} rad from the estimate (farthest: sample {far_o}); segment length at most {:.6} rad",
+                to_estimate + rho_o
+            ),
+        )
+    };
     let e = eval_geodesic(problem, estimate, norm);
-    let g = e.gradient_norm(norm) + 16.0 * f64::EPSILON * total * (1.0 + rho);
-    let lb =
-        e.cost - g * rho - 2.0 * e.coincident_slack - rounding_margin(problem.len(), e.cost, total);
+    let g = e.gradient_norm(norm) + 16.0 * f64::EPSILON * total * (1.0 + radius);
+    let lb = e.cost
+        - g * radius
+        - 2.0 * e.coincident_slack
+        - rounding_margin(problem.len(), e.cost, total);
     (
         Some(lb),
         format!(
-            "pi/2-ball bound [S4]: all samples within rho = {rho:.6} rad < pi/2 of the estimate (farthest: sample {far}); f - |g| rho with (min-norm sub)gradient norm |g| = {:.3e}",
+            "{why}; f - |g| L with (min-norm sub)gradient norm |g| = {:.3e}",
             e.gradient_norm(norm)
         ),
     )
+}
+
+/// An approximate centre of the smallest geodesic ball holding every sample: from `start`,
+/// steps towards the farthest sample by `1 / (k + 2)` of the way (the Badoiu-Clarkson
+/// iteration, on SO(3)); the best centre seen. Only a candidate: [`geodesic_ball_bound`]
+/// measures its radius itself.
+fn enclosing_centre(problem: &SingleProblem, start: &Rotation) -> Rotation {
+    let mut o = *start;
+    let (mut best, mut best_rho) = (o, problem.farthest(&o).1);
+    for k in 0..ENCLOSING_ITERATIONS {
+        let (far, _) = problem.farthest(&o);
+        let step = so3::log(&(o.inverse() * problem.rotations()[far]));
+        o *= so3::exp(&(step / (k + 2) as f64));
+        let rho = problem.farthest(&o).1;
+        if rho < best_rho {
+            (best, best_rho) = (o, rho);
+        }
+    }
+    best
 }
 
 /// `[S7]`: `f(R) >= f_E(M) - |g| (sqrt 3 + |M|_F)` for every rotation `R`.
