@@ -140,8 +140,15 @@ fn svg_is_well_formed_with_one_bar_per_bin() {
     }
 }
 
+/// A fresh temporary directory per call (tests run in parallel and each removes its own).
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rotavg-plot-{}", std::process::id()));
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static NEXT: AtomicUsize = AtomicUsize::new(0);
+    let d = std::env::temp_dir().join(format!(
+        "rotavg-plot-{}-{}",
+        std::process::id(),
+        NEXT.fetch_add(1, Ordering::SeqCst)
+    ));
     std::fs::create_dir_all(&d).unwrap();
     d
 }

@@ -246,7 +246,7 @@ pub fn certify_multiple(
         problem,
         cost,
         best,
-        &last.diagnosis,
+        &first.diagnosis,
         point
             .solution
             .as_ref()
