@@ -27,7 +27,13 @@ const LAYERS: &[(&str, u32)] = &[
 ];
 
 /// Same-layer imports that are allowed (importer, imported).
-const PEERS_MAY_IMPORT: &[(&str, &str)] = &[("objective", "so3"), ("validate", "so3")];
+/// `multiple` may use `single` (the robust alignment of the accuracy report is a geodesic L1
+/// single mean), never the reverse.
+const PEERS_MAY_IMPORT: &[(&str, &str)] = &[
+    ("objective", "so3"),
+    ("validate", "so3"),
+    ("multiple", "single"),
+];
 
 /// Names re-exported at the crate root, and the module they come from.
 const ROOT_REEXPORTS: &[(&str, &str)] = &[
