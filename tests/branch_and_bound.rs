@@ -454,3 +454,39 @@ fn single_and_conjugate_soundness_campaign() {
     );
     assert!(certificates >= 1000, "{certificates}");
 }
+
+/// `[B6]`: for the quaternion metric the data margin of samples that are rotations only to the
+/// validation tolerance is not proven, so no bound beyond the trivial 0 is claimed and nothing
+/// is certified; exact rotations are searched as usual.
+#[test]
+fn quaternion_metric_on_inexact_rotations_claims_nothing() {
+    let mut rng = StdRng::seed_from_u64(77);
+    let c = random_rotation(&mut rng);
+    let exact: Vec<Rotation> = (0..6).map(|_| perturb(&c, 0.2, &mut rng)).collect();
+    let inexact: Vec<Rotation> = exact
+        .iter()
+        .map(|r| {
+            let mut m = *r.matrix();
+            m[(0, 1)] += 1e-7;
+            Rotation::from_matrix_unchecked(m)
+        })
+        .collect();
+    let o = Objective::new(Metric::Quaternion, Loss::L1);
+    for (samples, proven) in [(exact, true), (inexact, false)] {
+        let p = SingleProblem::new(samples, None)
+            .unwrap()
+            .with_objective(o)
+            .unwrap();
+        let c = certify_single(&p, &p.rotations()[0], &bnb())
+            .unwrap()
+            .certificate;
+        let stats = c.branch_and_bound.unwrap();
+        if proven {
+            assert_ne!(stats.stop, BranchAndBoundStop::UnprovenData, "{c}");
+        } else {
+            assert_eq!(stats.stop, BranchAndBoundStop::UnprovenData, "{c}");
+            assert_eq!(c.lower_bound, Some(0.0), "{c}");
+            assert!(!c.is_certified(), "{c}");
+        }
+    }
+}

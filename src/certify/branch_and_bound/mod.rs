@@ -78,6 +78,9 @@ pub enum BranchAndBoundStop {
     TimeBudget,
     /// A cell to split was below the resolution of the floating-point margins.
     Resolution,
+    /// Not searched: the data margin `[B6]` has no proof (quaternion metric, samples that are
+    /// rotations only to the validation tolerance); the bound is the trivial 0.
+    UnprovenData,
 }
 
 impl fmt::Display for BranchAndBoundStop {
@@ -87,6 +90,7 @@ impl fmt::Display for BranchAndBoundStop {
             BranchAndBoundStop::CellBudget => "cell budget",
             BranchAndBoundStop::TimeBudget => "time budget",
             BranchAndBoundStop::Resolution => "resolution limit",
+            BranchAndBoundStop::UnprovenData => "unproven data margin",
         })
     }
 }
@@ -162,6 +166,19 @@ fn run<T: search::Terms>(
     settings: &crate::certify::CertifySettings,
     elapsed: f64,
 ) -> Run<T::Solution> {
+    if !terms.data_slack().is_finite() {
+        // every term is >= 0: 0 is the only bound claimed
+        return Run {
+            lower_bound: 0.0,
+            stats: BranchAndBoundStats {
+                best_cost: cost,
+                stop: BranchAndBoundStop::UnprovenData,
+                ..Default::default()
+            },
+            improvement: None,
+            explanation: "branch and bound not run [B6]: some samples are rotations only to the validation tolerance, and the quaternion distance of such a matrix has no proven perturbation bound; the lower bound is the trivial 0 (project the data onto SO(3), or use another metric)".into(),
+        };
+    }
     let tolerance = settings.tolerance.resolve(median_weight);
     let out = search::search(
         terms,

@@ -21,6 +21,8 @@ const MIN_HALF_SIDE: f64 = 1e-11;
 pub(crate) trait Terms {
     /// The solution type of the local solver.
     type Solution;
+    /// The data margin `[B6]` subtracted from every ball bound (infinite: no proof possible).
+    fn data_slack(&self) -> f64;
     /// A proven lower bound of the cost on the geodesic ball `B(centre, radius)` and the
     /// cost at the centre.
     fn ball(&self, centre: &Rotation, radius: f64) -> BallBound;

@@ -18,6 +18,21 @@ fn projected(r: &Rotation) -> (Matrix3<f64>, f64) {
     }
 }
 
+/// Largest distance `e` of a sample from SO(3) for which the quaternion-metric data margin of
+/// `[B6]` is taken as proven: beyond it, the quaternion distance of a non-orthogonal matrix
+/// (nalgebra's extraction) has no proven perturbation bound.
+const QUATERNION_EXACT_DATA: f64 = 1e-12;
+
+/// The data margin `[B6]` of one term of weight `w` whose matrices are `e` from SO(3):
+/// infinite (no proof) for the quaternion metric beyond [`QUATERNION_EXACT_DATA`].
+fn term_slack(profile: &Profile, metric: so3::Metric, w: f64, e: f64) -> f64 {
+    if metric == so3::Metric::Quaternion && e > QUATERNION_EXACT_DATA {
+        f64::INFINITY
+    } else {
+        w * profile.perturbation(e, 2.0 * e)
+    }
+}
+
 /// `(theta, sin theta, u)` of a matrix `x` that is a rotation to rounding: `theta =
 /// atan2(|vee x|, (tr x - 1) / 2)` (as [`so3::angle`]) and `vee x = sin(theta) u`.
 #[inline]
@@ -41,12 +56,13 @@ impl<'a> SingleTerms<'a> {
     /// The terms of `problem`.
     pub(crate) fn new(problem: &'a SingleProblem) -> Self {
         let profile = Profile::new(problem.objective());
+        let metric = problem.objective().metric;
         let mut data_slack = 0.0;
         let samples = problem
             .samples()
             .map(|(_, r, w)| {
                 let (p, e) = projected(r);
-                data_slack += w * profile.perturbation(e, 2.0 * e);
+                data_slack += term_slack(&profile, metric, w, e);
                 p
             })
             .collect();
@@ -77,6 +93,10 @@ const CONJUGATE: Geometry = Geometry {
 
 impl Terms for SingleTerms<'_> {
     type Solution = SingleSolution;
+
+    fn data_slack(&self) -> f64 {
+        self.data_slack
+    }
 
     fn ball(&self, centre: &Rotation, radius: f64) -> BallBound {
         let ct = centre.matrix().transpose();
@@ -124,6 +144,7 @@ impl<'a> ConjugateTerms<'a> {
     /// The terms of `problem`.
     pub(crate) fn new(problem: &'a ConjugateProblem) -> Self {
         let profile = Profile::new(problem.objective());
+        let metric = problem.objective().metric;
         let mut data_slack = 0.0;
         let pairs = problem
             .pairs()
@@ -131,8 +152,7 @@ impl<'a> ConjugateTerms<'a> {
             .map(|p| {
                 let (l, el) = projected(&p.left);
                 let (r, er) = projected(&p.right);
-                let e = el + er;
-                data_slack += p.weight * profile.perturbation(e, 2.0 * e);
+                data_slack += term_slack(&profile, metric, p.weight, el + er);
                 (l, r.transpose(), p.weight)
             })
             .collect();
@@ -147,6 +167,10 @@ impl<'a> ConjugateTerms<'a> {
 
 impl Terms for ConjugateTerms<'_> {
     type Solution = ConjugateSolution;
+
+    fn data_slack(&self) -> f64 {
+        self.data_slack
+    }
 
     fn ball(&self, centre: &Rotation, radius: f64) -> BallBound {
         let c = centre.matrix();
