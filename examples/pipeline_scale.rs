@@ -2,31 +2,42 @@
 //! that `/usr/bin/time -v` reports its peak RSS:
 //!
 //! ```text
-//! cargo run --release --example pipeline_scale -- [random|chain|planar-chain] N [M] [SIGMA] [ABSOLUTE_TOLERANCE_PER_MEDIAN_WEIGHT]
+//! cargo run --release --example pipeline_scale -- [random|chain|planar-chain|grid|torus] N [M] [SIGMA] [ABSOLUTE_TOLERANCE_PER_MEDIAN_WEIGHT] [MAX_MEMORY_GIB]
 //! ```
 //!
 //! `random`: `SyntheticGraph` with `M` edges (default `3 N`), noise `SIGMA` (default 0.05 rad).
 //! `chain`, `planar-chain`: `SyntheticChain` (odometry with 2 % loop closures; `M` ignored),
-//! noise `SIGMA` (default 1e-4 rad). Prints one line: sizes, solve and certify seconds, Newton
-//! iterations, verdict, relative gap, and the certificate methods tried.
-use rotavg::certify::{CertifySettings, ToleranceRule};
-use rotavg::multiple::synthetic::{SyntheticChain, SyntheticGraph};
+//! noise `SIGMA` (default 1e-4 rad). `grid`, `torus`: `SyntheticGrid`, a sqrt(N) x sqrt(N)
+//! sweep with half of the other lattice edges as loop closures (`M` ignored), noise `SIGMA`
+//! (default 1e-3 rad). Prints one line: sizes, solve and certify seconds, Newton
+//! iterations, verdict, relative gap, and the certificate methods tried (and the explanation
+//! when not certified).
+use rotavg::certify::{Budget, CertifySettings, ToleranceRule};
+use rotavg::multiple::synthetic::{SyntheticChain, SyntheticGraph, SyntheticGrid};
 use rotavg::pipeline::{AverageMultipleSettings, average_multiple};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let (kind, rest) = match args.get(1).map(String::as_str) {
-        Some(k @ ("random" | "chain" | "planar-chain")) => (k.to_string(), &args[2..]),
+        Some(k @ ("random" | "chain" | "planar-chain" | "grid" | "torus")) => {
+            (k.to_string(), &args[2..])
+        }
         _ => ("random".to_string(), &args[1..]),
     };
     let n: usize = rest.first().and_then(|s| s.parse().ok()).unwrap_or(10_000);
     let m: usize = rest.get(1).and_then(|s| s.parse().ok()).unwrap_or(3 * n);
-    let default_sigma = if kind == "random" { 0.05 } else { 1e-4 };
+    let default_sigma = match kind.as_str() {
+        "random" => 0.05,
+        "grid" | "torus" => 1e-3,
+        _ => 1e-4,
+    };
     let sigma: f64 = rest
         .get(2)
         .and_then(|s| s.parse().ok())
         .unwrap_or(default_sigma);
     let per_weight: f64 = rest.get(3).and_then(|s| s.parse().ok()).unwrap_or(1e-9);
+    // the certificate's memory budget (default 4 GiB, as on the command line)
+    let max_memory_gib: Option<u64> = rest.get(4).and_then(|s| s.parse().ok());
     let (p, _) = match kind.as_str() {
         "random" => SyntheticGraph {
             num_rotations: n,
@@ -35,6 +46,18 @@ fn main() {
             ..Default::default()
         }
         .generate(),
+        "grid" | "torus" => {
+            let side = (n as f64).sqrt().round() as usize;
+            SyntheticGrid {
+                width: side,
+                height: side,
+                torus: kind == "torus",
+                noise_sigma: sigma,
+                seed: 3,
+                ..Default::default()
+            }
+            .generate()
+        }
         planar => SyntheticChain {
             num_rotations: n,
             loop_closure_fraction: 0.02,
@@ -49,6 +72,11 @@ fn main() {
         certify: CertifySettings {
             tolerance: ToleranceRule {
                 absolute_per_median_weight: per_weight,
+                ..Default::default()
+            },
+            budget: Budget {
+                max_memory_bytes: max_memory_gib
+                    .map_or(Budget::default().max_memory_bytes, |g| g << 30),
                 ..Default::default()
             },
             ..Default::default()
@@ -74,6 +102,9 @@ fn main() {
                     .map(|r| r.method.to_string())
                     .collect::<Vec<_>>()
             );
+            if let Some(c) = c.filter(|c| !c.is_certified()) {
+                println!("  why: {}", c.explanation);
+            }
         }
         Err(e) => println!("error: {e}"),
     }

@@ -376,7 +376,7 @@ fn certificate_is_gauge_invariant() {
 
 /// The factor-size guard: with `max_factor_nonzeros` tiny, no factorisation is tried; the bound
 /// falls back to Gershgorin [D8] (valid: checked against the dense lambda_min), and the verdict
-/// is not certified for a noisy problem.
+/// is `inconclusive` with the cap as its reason.
 #[test]
 fn factor_size_guard_falls_back_to_gershgorin() {
     let (p, gt) = SyntheticGraph {
@@ -402,8 +402,18 @@ fn factor_size_guard_falls_back_to_gershgorin() {
     assert_eq!(c.bound.verification, Verification::Gershgorin);
     let mu = dense_min_eig(dense_s(&p, &multipliers(&p, &rs).unwrap()));
     assert!(c.bound.verified_min_eigenvalue <= mu);
-    assert!(c.certificate.lower_bound.unwrap() <= f);
+    assert!(c.bound.lower_bound <= f);
+    // the cap is a budget: inconclusive with its reason, no lower bound claimed
     assert!(!c.certificate.is_certified());
+    assert_eq!(
+        c.certificate.verdict,
+        rotavg::certify::Verdict::Inconclusive
+    );
+    assert_eq!(c.certificate.lower_bound, None);
+    assert!(
+        c.certificate.explanation.contains("max_factor_nonzeros"),
+        "{c}"
+    );
 }
 
 /// Settings are validated before any work.

@@ -226,7 +226,8 @@ pub struct DualSettings {
     /// little; random expander graphs fill badly (a 10^4-node random graph with 3 10^4 edges
     /// needs ~1.1e8 values, 7.7 s on an idle 2-core machine; the scalar comparison `[D13]`
     /// usually avoids it). Above the cap no factorisation is tried: the bound falls
-    /// back to Gershgorin (valid, weak) and the explanation says so.
+    /// back to Gershgorin (valid, weak) and the verdict is `inconclusive` with the reason, as
+    /// over the [`Budget`].
     pub max_factor_nonzeros: usize,
     /// Also estimate `lambda_min(S)` (shift-invert Lanczos) when the first shift already
     /// verifies. Costs a few triangular solves; the estimate is reported, not used in the bound.

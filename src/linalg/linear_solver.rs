@@ -1,6 +1,7 @@
 //! Solving the symmetric positive definite block-sparse systems of the local solvers `[M6]`:
-//! a sparse Cholesky factorisation (symbolic analysis once), or block-Jacobi preconditioned
-//! conjugate gradients ([`super::pcg`]) on graphs whose factors fill.
+//! a sparse Cholesky factorisation (symbolic analysis once), or preconditioned conjugate
+//! gradients ([`super::pcg`]) on graphs whose block factors fill, preconditioned either by the
+//! factorised scalar graph Laplacian ([`ScalarLaplacian`], `[M6b]`) or block-Jacobi.
 
 use super::block_pattern::BlockPattern;
 use super::pcg::pcg;
@@ -10,12 +11,119 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use nalgebra::Matrix3;
 
+/// Which linear solver the Newton systems of the local solvers use (`[M6]`, `[M6b]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum SolverKind {
+    /// Sparse Cholesky of the block system (graphs whose factor stays sparse).
+    Direct,
+    /// Conjugate gradients preconditioned by a sparse Cholesky of the scalar graph Laplacian
+    /// (one factorisation per solve; long chains and grids whose block factor does not fit).
+    Laplacian,
+    /// Block-Jacobi preconditioned conjugate gradients (expander-like graphs: well conditioned,
+    /// and every factorisation nearly dense).
+    Jacobi,
+}
+
+impl std::fmt::Display for SolverKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            SolverKind::Direct => "sparse Cholesky",
+            SolverKind::Laplacian => "PCG (scalar Laplacian preconditioner)",
+            SolverKind::Jacobi => "PCG (block-Jacobi preconditioner)",
+        })
+    }
+}
+
+/// The preconditioner `[M6b]` `M = F (K ⊗ I_3) F^T` of a 3x3-block system, where `K` is a
+/// scalar weighted graph Laplacian plus a diagonal shift (an endpoint `None` is grounded: the
+/// edge only adds to the other endpoint's diagonal) and `F` is block diagonal with orthogonal
+/// `frames` (identity when absent). `K` is factorised once (sparse Cholesky, AMD ordering);
+/// applying `M^{-1}` costs one sparse triangular solve pair with 3 right-hand sides.
+pub(crate) struct ScalarLaplacian {
+    nblocks: usize,
+    llt: Llt<usize, f64>,
+    frames: Option<Vec<Matrix3<f64>>>,
+}
+
+impl ScalarLaplacian {
+    /// Factorise `K = sum_e c_e (e_p - e_q)(e_p - e_q)^T + shift I` on `nblocks` nodes;
+    /// `Ok(None)` if `K` is not numerically positive definite.
+    pub(crate) fn new(
+        nblocks: usize,
+        edges: &[(Option<usize>, Option<usize>, f64)],
+        shift: f64,
+        frames: Option<Vec<Matrix3<f64>>>,
+    ) -> Result<Option<Self>> {
+        let pattern = BlockPattern::new(
+            nblocks,
+            1,
+            edges.iter().filter_map(|&(p, q, _)| Some((p?, q?))),
+        );
+        let mut val = vec![0.0; pattern.nnz()];
+        for &(p, q, c) in edges {
+            let one = Matrix3::from_element(c);
+            if let Some(p) = p {
+                pattern.add(&mut val, p, p, 0, &one);
+            }
+            if let Some(q) = q {
+                pattern.add(&mut val, q, q, 0, &one);
+            }
+            if let (Some(p), Some(q)) = (p, q) {
+                let (hi, lo) = (p.max(q), p.min(q));
+                pattern.add(&mut val, hi, lo, pattern.slot(hi, lo), &(-one));
+            }
+        }
+        pattern.add_diagonal(&mut val, shift);
+        let sym = pattern.symbolic_llt()?;
+        Ok(pattern.llt(&sym, &val).map(|llt| ScalarLaplacian {
+            nblocks,
+            llt,
+            frames,
+        }))
+    }
+
+    /// `z[k] = M^{-1} r[k]` for node-major vectors (`3 q + a`), all columns in one sparse
+    /// triangular solve pair.
+    fn apply(&self, r: &[&[f64]], z: &mut [&mut [f64]]) {
+        let n = self.nblocks;
+        let frame = |q: usize| self.frames.as_ref().map(|f| f[q]);
+        // column 3 k + a of `b` holds component a of F^T r[k]
+        let mut b = Mat::<f64>::from_fn(n, 3 * r.len(), |q, col| {
+            let (k, a) = (col / 3, col % 3);
+            match frame(q) {
+                Some(f) => (0..3).map(|c| f[(c, a)] * r[k][3 * q + c]).sum(),
+                None => r[k][3 * q + a],
+            }
+        });
+        self.llt.solve_in_place(b.as_mut());
+        for (k, zk) in z.iter_mut().enumerate() {
+            for q in 0..n {
+                for a in 0..3 {
+                    zk[3 * q + a] = match frame(q) {
+                        Some(f) => (0..3).map(|c| f[(a, c)] * b[(q, 3 * k + c)]).sum(),
+                        None => b[(q, 3 * k + a)],
+                    };
+                }
+            }
+        }
+    }
+}
+
 /// Linear solver for a symmetric block-sparse matrix with the pattern of a [`BlockPattern`].
 pub(crate) enum LinearSolver {
     /// Sparse Cholesky; symbolic factorisation done once.
     Direct(SymbolicLlt<usize>),
+    /// Conjugate gradients preconditioned by a factorised scalar Laplacian (3x3 blocks only).
+    Laplacian(ScalarLaplacian),
     /// Block-Jacobi preconditioned conjugate gradients.
-    Pcg,
+    Jacobi,
+}
+
+/// The preconditioner of a [`Factor::Pcg`].
+pub(crate) enum Preconditioner<'a> {
+    /// inverse diagonal blocks (bs x bs each)
+    Jacobi(Vec<Matrix3<f64>>),
+    Laplacian(&'a ScalarLaplacian),
 }
 
 /// A factorised (or preconditioned) system ready to solve.
@@ -24,18 +132,17 @@ pub(crate) enum Factor<'a> {
     Pcg {
         pattern: &'a BlockPattern,
         val: Vec<f64>,
-        /// inverse diagonal blocks (bs x bs each, row-major)
-        precond: Vec<Matrix3<f64>>,
+        precond: Preconditioner<'a>,
     },
 }
 
 impl LinearSolver {
-    /// Sparse Cholesky if `direct` (symbolic analysis now), else PCG.
+    /// Sparse Cholesky if `direct` (symbolic analysis now), else block-Jacobi PCG.
     pub(crate) fn new(pattern: &BlockPattern, direct: bool) -> Result<Self> {
         if direct {
             Ok(LinearSolver::Direct(pattern.symbolic_llt()?))
         } else {
-            Ok(LinearSolver::Pcg)
+            Ok(LinearSolver::Jacobi)
         }
     }
 
@@ -46,17 +153,31 @@ impl LinearSolver {
         Self::new(pattern, size <= max_values)
     }
 
-    /// Prepare to solve with matrix values `val`; `None` if not positive definite (direct) or
-    /// if a diagonal block is not positive definite (PCG; indefiniteness found later is
-    /// reported by [`Factor::solve`]).
-    pub(crate) fn factor<'a>(&self, pattern: &'a BlockPattern, val: &[f64]) -> Option<Factor<'a>> {
+    /// The kind of this solver.
+    pub(crate) fn kind(&self) -> SolverKind {
         match self {
-            LinearSolver::Direct(sym) => pattern.llt(sym, val).map(Factor::Direct),
-            LinearSolver::Pcg => {
+            LinearSolver::Direct(_) => SolverKind::Direct,
+            LinearSolver::Laplacian(_) => SolverKind::Laplacian,
+            LinearSolver::Jacobi => SolverKind::Jacobi,
+        }
+    }
+
+    /// Prepare to solve with matrix values `val`; `None` if not positive definite (direct) or
+    /// if a diagonal block is not positive definite (block-Jacobi; indefiniteness found later
+    /// is reported by [`Factor::solve`]).
+    pub(crate) fn factor<'a>(
+        &'a self,
+        pattern: &'a BlockPattern,
+        val: &[f64],
+    ) -> Option<Factor<'a>> {
+        let precond = match self {
+            LinearSolver::Direct(sym) => return pattern.llt(sym, val).map(Factor::Direct),
+            LinearSolver::Laplacian(l) => Preconditioner::Laplacian(l),
+            LinearSolver::Jacobi => {
                 let bs = pattern.block_size();
                 let col_ptr = pattern.col_ptr();
                 let nb = (col_ptr.len() - 1) / bs;
-                let mut precond = Vec::with_capacity(nb);
+                let mut inv = Vec::with_capacity(nb);
                 for q in 0..nb {
                     let mut m = Matrix3::identity();
                     for b in 0..bs {
@@ -66,16 +187,16 @@ impl LinearSolver {
                             m[(b, a)] = val[c + a - b];
                         }
                     }
-                    let inv = m.cholesky()?.inverse();
-                    precond.push(inv);
+                    inv.push(m.cholesky()?.inverse());
                 }
-                Some(Factor::Pcg {
-                    pattern,
-                    val: val.to_vec(),
-                    precond,
-                })
+                Preconditioner::Jacobi(inv)
             }
-        }
+        };
+        Some(Factor::Pcg {
+            pattern,
+            val: val.to_vec(),
+            precond,
+        })
     }
 }
 
@@ -93,12 +214,28 @@ impl Factor<'_> {
                 val,
                 precond,
             } => {
-                for col in 0..b.ncols() {
-                    let rhs: Vec<f64> = (0..b.nrows()).map(|r| b[(r, col)]).collect();
-                    let Some(x) = pcg(pattern, val, precond, &rhs, rel_tol, max_iter) else {
-                        return false;
-                    };
-                    for (r, v) in x.into_iter().enumerate() {
+                let bs = pattern.block_size();
+                let apply = |r: &[&[f64]], z: &mut [&mut [f64]]| match precond {
+                    Preconditioner::Jacobi(inv) => {
+                        for (rk, zk) in r.iter().zip(z.iter_mut()) {
+                            for (q, m) in inv.iter().enumerate() {
+                                for a in 0..bs {
+                                    zk[bs * q + a] =
+                                        (0..bs).map(|c| m[(a, c)] * rk[bs * q + c]).sum();
+                                }
+                            }
+                        }
+                    }
+                    Preconditioner::Laplacian(l) => l.apply(r, z),
+                };
+                let rhs: Vec<Vec<f64>> = (0..b.ncols())
+                    .map(|col| (0..b.nrows()).map(|r| b[(r, col)]).collect())
+                    .collect();
+                let Some(x) = pcg(pattern, val, &apply, &rhs, rel_tol, max_iter) else {
+                    return false;
+                };
+                for (col, xc) in x.into_iter().enumerate() {
+                    for (r, v) in xc.into_iter().enumerate() {
                         b[(r, col)] = v;
                     }
                 }

@@ -1,63 +1,70 @@
-//! Preconditioned conjugate gradients with a block-Jacobi preconditioner on a
-//! [`BlockPattern`] matrix `[M6]`.
+//! Preconditioned conjugate gradients on a [`BlockPattern`] matrix `[M6]`, `[M6b]`.
 
 use super::block_pattern::BlockPattern;
-use nalgebra::Matrix3;
 
-/// Preconditioned conjugate gradients (block-Jacobi). `None` on non-positive curvature.
+/// `apply(r, z)` sets `z[k] = M^{-1} r[k]` for every column `k` given (a preconditioner).
+pub(crate) type ApplyPreconditioner<'a> = &'a dyn Fn(&[&[f64]], &mut [&mut [f64]]);
+
+/// Preconditioned conjugate gradients for the columns of `b` (each an independent system with
+/// the same matrix), run in lockstep so that the preconditioner is applied to all active
+/// columns at once: `apply_m(r, z)` sets `z[k] = M^{-1} r[k]` for every column `k` given.
+/// A column stops when its residual is at most `rel_tol ||b_k||`, or after `max_iter`
+/// iterations. `None` on non-positive curvature (the matrix is not positive definite).
 pub(crate) fn pcg(
     pattern: &BlockPattern,
     val: &[f64],
-    precond: &[Matrix3<f64>],
-    b: &[f64],
+    apply_m: ApplyPreconditioner<'_>,
+    b: &[Vec<f64>],
     rel_tol: f64,
     max_iter: usize,
-) -> Option<Vec<f64>> {
-    let bs = pattern.block_size();
-    let dim = b.len();
-    let apply_m = |r: &[f64], z: &mut [f64]| {
-        for (q, m) in precond.iter().enumerate() {
-            for a in 0..bs {
-                let mut s = 0.0;
-                for c in 0..bs {
-                    s += m[(a, c)] * r[bs * q + c];
-                }
-                z[bs * q + a] = s;
-            }
-        }
-    };
+) -> Option<Vec<Vec<f64>>> {
     let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
-    let bnorm = dot(b, b).sqrt();
-    let mut x = vec![0.0; dim];
-    if bnorm == 0.0 {
-        return Some(x);
-    }
-    let mut r = b.to_vec();
-    let mut z = vec![0.0; dim];
-    apply_m(&r, &mut z);
+    let k = b.len();
+    let dim = b.first().map_or(0, Vec::len);
+    let bnorm: Vec<f64> = b.iter().map(|c| dot(c, c).sqrt()).collect();
+    let mut x = vec![vec![0.0; dim]; k];
+    let mut r: Vec<Vec<f64>> = b.to_vec();
+    let mut z = vec![vec![0.0; dim]; k];
+    let mut active: Vec<usize> = (0..k).filter(|&c| bnorm[c] > 0.0).collect();
+    let precondition = |r: &[Vec<f64>], z: &mut [Vec<f64>], cols: &[usize]| {
+        let rs: Vec<&[f64]> = cols.iter().map(|&c| r[c].as_slice()).collect();
+        let mut zs: Vec<&mut [f64]> = z
+            .iter_mut()
+            .enumerate()
+            .filter(|(c, _)| cols.contains(c))
+            .map(|(_, v)| v.as_mut_slice())
+            .collect();
+        apply_m(&rs, &mut zs);
+    };
+    precondition(&r, &mut z, &active);
     let mut p = z.clone();
-    let mut rz = dot(&r, &z);
+    let mut rz: Vec<f64> = (0..k).map(|c| dot(&r[c], &z[c])).collect();
     let mut ap = vec![0.0; dim];
     for _ in 0..max_iter {
-        pattern.sym_mul_flat(val, &p, &mut ap);
-        let pap = dot(&p, &ap);
-        if pap <= 0.0 || !pap.is_finite() {
-            return None;
-        }
-        let alpha = rz / pap;
-        for k in 0..dim {
-            x[k] += alpha * p[k];
-            r[k] -= alpha * ap[k];
-        }
-        if dot(&r, &r).sqrt() <= rel_tol * bnorm {
+        if active.is_empty() {
             break;
         }
-        apply_m(&r, &mut z);
-        let rz_new = dot(&r, &z);
-        let beta = rz_new / rz;
-        rz = rz_new;
-        for k in 0..dim {
-            p[k] = z[k] + beta * p[k];
+        for &c in &active {
+            pattern.sym_mul_flat(val, &p[c], &mut ap);
+            let pap = dot(&p[c], &ap);
+            if pap <= 0.0 || !pap.is_finite() {
+                return None;
+            }
+            let alpha = rz[c] / pap;
+            for i in 0..dim {
+                x[c][i] += alpha * p[c][i];
+                r[c][i] -= alpha * ap[i];
+            }
+        }
+        active.retain(|&c| dot(&r[c], &r[c]).sqrt() > rel_tol * bnorm[c]);
+        precondition(&r, &mut z, &active);
+        for &c in &active {
+            let rz_new = dot(&r[c], &z[c]);
+            let beta = rz_new / rz[c];
+            rz[c] = rz_new;
+            for i in 0..dim {
+                p[c][i] = z[c][i] + beta * p[c][i];
+            }
         }
     }
     Some(x)

@@ -11,9 +11,9 @@
 
 use crate::error::Result;
 use crate::linalg::block_pattern::BlockPattern;
-use crate::linalg::linear_solver::LinearSolver;
+use crate::linalg::linear_solver::{LinearSolver, SolverKind};
 use crate::multiple::MultipleProblem;
-use crate::multiple::chordal::{grad_norm as norm, linear_solver, root_fixed_steps};
+use crate::multiple::chordal::{grad_norm as norm, root_fixed_steps};
 use crate::multiple::robust::{edge_log, objective_terms};
 use crate::multiple::solve::{IRLS_DECREASE_WINDOW, MultipleSettings, MultipleSolution};
 use crate::objective::{Loss, Objective};
@@ -22,8 +22,10 @@ use crate::termination::{SolverReport, Termination};
 use faer::Mat;
 use nalgebra::{Matrix3, Vector3};
 
-/// The scalar Laplacian systems of the Lie-algebraic iterations are factorised directly when
-/// the factor has at most this many values (~40 MB).
+/// The scalar Laplacian systems of the reweighted (robust) Lie-algebraic iterations are
+/// factorised directly when the factor has at most this many values (~40 MB); geodesic L2,
+/// whose weights are constant, factorises once up to
+/// [`LAPLACIAN_PRECONDITIONER_VALUES`](crate::multiple::chordal::LAPLACIAN_PRECONDITIONER_VALUES).
 pub const SCALAR_DIRECT_VALUES: usize = 5_000_000;
 
 /// Geodesic L2 (`sum w theta^2`) from `init`.
@@ -31,7 +33,7 @@ pub(crate) fn solve_geodesic(
     problem: &MultipleProblem,
     init: Vec<Rotation>,
     settings: &MultipleSettings,
-    direct: Option<bool>,
+    solver_kind: Option<SolverKind>,
 ) -> Result<MultipleSolution> {
     lie_algebraic(
         problem,
@@ -39,7 +41,7 @@ pub(crate) fn solve_geodesic(
         settings,
         "lie-algebraic",
         settings.max_iterations,
-        direct,
+        solver_kind,
     )
 }
 
@@ -72,7 +74,7 @@ pub(crate) fn lie_algebraic(
     settings: &MultipleSettings,
     name: &str,
     max_iterations: usize,
-    direct: Option<bool>,
+    solver_kind: Option<SolverKind>,
 ) -> Result<MultipleSolution> {
     let start = std::time::Instant::now();
     let objective = problem.objective();
@@ -131,11 +133,19 @@ pub(crate) fn lie_algebraic(
     // budget of the 3 x 3 block systems, and it is refactorised at every reweighting, where
     // PCG to 1e-10 would cost hundreds of products ([M8], measured on 1DSfM Madrid: 23784
     // edges on 394 nodes, 67 ms per IRLS iteration with PCG).
-    let solver = match direct {
-        Some(true) => linear_solver(problem, &pattern, Some(true))?,
-        _ => LinearSolver::direct_up_to(&pattern, SCALAR_DIRECT_VALUES)?,
-    };
+    // With constant weights (geodesic L2) the one factorisation serves every iteration, so it
+    // is used up to the Laplacian preconditioner's limit ([M6b]); reweighted losses refactorise
+    // at every iteration and keep the smaller limit.
     let constant_weights = objective.loss == Loss::L2;
+    let limit = if constant_weights {
+        crate::multiple::chordal::LAPLACIAN_PRECONDITIONER_VALUES
+    } else {
+        SCALAR_DIRECT_VALUES
+    };
+    let solver = match solver_kind {
+        Some(SolverKind::Direct) => LinearSolver::new(&pattern, true)?,
+        _ => LinearSolver::direct_up_to(&pattern, limit)?,
+    };
     let mut factor = None;
     let mut val = vec![0.0; pattern.nnz()];
     let mut iterations = 0;

@@ -4,8 +4,9 @@
 
 use crate::error::{Error, Result};
 use crate::linalg::block_pattern::BlockPattern;
+use crate::linalg::linear_solver::{LinearSolver, SolverKind};
 use crate::multiple::MultipleProblem;
-use crate::multiple::chordal::linear_solver;
+use crate::multiple::chordal::{choose_solver, laplacian_solver};
 use crate::multiple::solve::Initialisation;
 use crate::so3::{Rotation, project_to_so3};
 use faer::Mat;
@@ -124,10 +125,13 @@ pub fn spectral(problem: &MultipleProblem) -> Result<Vec<Rotation>> {
     spectral_with(problem, None)
 }
 
-/// [`spectral`] with the direct/iterative choice made by the caller (`None`: decide here).
+/// [`spectral`] with the linear solver chosen by the caller (`None`: decide here). With the
+/// Laplacian preconditioner `[M6b]`, `Q + sigma I` is preconditioned by
+/// `D ((L + sigma I) ⊗ I_3) D^T`, `D` the block diagonal of the spanning-tree rotations (equal
+/// to `Q + sigma I` on a tree, where the measurements are consistent).
 pub(crate) fn spectral_with(
     problem: &MultipleProblem,
-    direct: Option<bool>,
+    kind: Option<SolverKind>,
 ) -> Result<Vec<Rotation>> {
     let n = problem.num_rotations();
     let tree = spanning_tree(problem);
@@ -154,8 +158,18 @@ pub(crate) fn spectral_with(
         pattern.add(&mut qval, i, i, 0, &(Matrix3::identity() * *d));
     }
     let mean_degree = degree.iter().sum::<f64>() / n as f64;
-    let solver = linear_solver(problem, &pattern, direct)?;
     let mut sigma = 1e-6 * mean_degree;
+    let kind = match kind {
+        Some(k) => k,
+        None => choose_solver(problem)?,
+    };
+    let solver = match kind {
+        SolverKind::Laplacian => {
+            let frames = tree.iter().map(|r| *r.matrix()).collect();
+            laplacian_solver(problem, false, 1.0, sigma, Some(frames))?
+        }
+        k => LinearSolver::new(&pattern, k == SolverKind::Direct)?,
+    };
     let llt = loop {
         let mut val = qval.clone();
         pattern.add_diagonal(&mut val, sigma);

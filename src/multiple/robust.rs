@@ -2,6 +2,7 @@
 //! reweighted Lie-algebraic least squares (`paper-notes/multiple.md`, `[M7]`, `[M9]`).
 
 use crate::error::Result;
+use crate::linalg::linear_solver::SolverKind;
 use crate::multiple::MultipleProblem;
 use crate::multiple::chordal::chordal_gradient;
 use crate::multiple::geodesic::lie_algebraic;
@@ -80,7 +81,7 @@ pub(crate) fn solve_robust(
     problem: &MultipleProblem,
     init: Vec<Rotation>,
     settings: &MultipleSettings,
-    direct: Option<bool>,
+    solver_kind: Option<SolverKind>,
 ) -> Result<MultipleSolution> {
     let objective = problem.objective();
     let name = match objective.loss {
@@ -96,6 +97,6 @@ pub(crate) fn solve_robust(
         settings,
         name,
         10 * settings.max_iterations,
-        direct,
+        solver_kind,
     )
 }

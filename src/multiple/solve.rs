@@ -2,6 +2,7 @@
 //! multiple-rotation-averaging solvers (`paper-notes/multiple.md`, `[M4]`..`[M9]`).
 
 use crate::error::{Error, Result};
+use crate::linalg::linear_solver::SolverKind;
 use crate::multiple::{MultipleProblem, fix_gauge};
 use crate::objective::{Loss, Objective};
 use crate::so3::Rotation;
@@ -18,7 +19,10 @@ pub const IRLS_DECREASE_WINDOW: usize = 10;
 pub enum Initialisation {
     /// Maximum-weight spanning tree, rotations propagated from node 0 (`[M4]`).
     SpanningTree,
-    /// Bottom-3 eigenvectors of the connection Laplacian, rounded to SO(3) (`[M5]`).
+    /// Bottom-3 eigenvectors of the connection Laplacian, rounded to SO(3) (`[M5]`). In
+    /// [`solve_multiple`], graphs whose Newton systems are solved with the scalar Laplacian
+    /// preconditioner (block factor too large: long chains, large grids, `[M6b]`) start from
+    /// the spanning tree instead.
     #[default]
     Spectral,
     /// A given estimate (one rotation per node).
@@ -184,8 +188,8 @@ pub fn solve_multiple(
     settings.validate()?;
     problem.require_connected()?;
     let start = std::time::Instant::now();
-    // direct sparse Cholesky or PCG, decided once from the graph ([M6])
-    let direct = Some(crate::multiple::chordal::prefers_direct(problem)?);
+    // sparse Cholesky or PCG (which preconditioner), decided once from the graph ([M6], [M6b])
+    let kind = Some(crate::multiple::chordal::choose_solver(problem)?);
     crate::progress::phase(crate::progress::Phase::Initialise, || {
         format!(
             "{} nodes, {} edges",
@@ -194,17 +198,23 @@ pub fn solve_multiple(
         )
     });
     let init = match &settings.init {
-        Initialisation::Spectral => crate::multiple::init::spectral_with(problem, direct)?,
+        // [M6b]: on graphs solved with the Laplacian preconditioner (block factor too large),
+        // the near-singular solves of the spectral inverse iteration are not cheap; Newton-LM
+        // from the spanning tree is (10^6-node chain: 14 s against 122 s for the spectral step).
+        Initialisation::Spectral if kind == Some(SolverKind::Laplacian) => {
+            crate::multiple::init::spanning_tree(problem)
+        }
+        Initialisation::Spectral => crate::multiple::init::spectral_with(problem, kind)?,
         other => crate::multiple::init::initialise(problem, other)?,
     };
     let objective = problem.objective();
     crate::progress::phase(crate::progress::Phase::Solve, || objective.to_string());
     let mut out = if objective.is_chordal_l2() {
-        crate::multiple::chordal::solve_chordal(problem, init, settings, direct)?
+        crate::multiple::chordal::solve_chordal(problem, init, settings, kind)?
     } else if objective.loss == Loss::L2 {
-        crate::multiple::geodesic::solve_geodesic(problem, init, settings, direct)?
+        crate::multiple::geodesic::solve_geodesic(problem, init, settings, kind)?
     } else {
-        crate::multiple::robust::solve_robust(problem, init, settings, direct)?
+        crate::multiple::robust::solve_robust(problem, init, settings, kind)?
     };
     fix_gauge(&mut out.rotations);
     // R_0 R_0^T is I up to rounding; make it exact.

@@ -1,7 +1,8 @@
 //! Seeded synthetic view graphs with a planted ground truth, for tests, benchmarks and the demo:
 //! [`SyntheticGraph::generate`] (random connected graph, Gaussian noise, outliers) and
 //! [`SyntheticChain::generate`] (a SLAM-like trajectory: an odometry chain with loop closures,
-//! planar or 3-D) and [`z_cycle`] (a cycle with a known loop error, whose local minima are known
+//! planar or 3-D), [`SyntheticGrid::generate`] (a robot sweeping a planar grid or torus, loop
+//! closures between spatially adjacent poses) and [`z_cycle`] (a cycle with a known loop error, whose local minima are known
 //! in closed form).
 
 use crate::multiple::{Edge, MultipleProblem};
@@ -179,6 +180,116 @@ impl SyntheticChain {
             .collect();
         (
             MultipleProblem::new(n, edges).expect("generated chain is valid"),
+            gt,
+        )
+    }
+}
+
+/// Parameters of a SLAM-like lattice pose graph with planted rotations: a robot sweeps a
+/// `width x height` grid row by row (a boustrophedon path, the odometry edges), and every other
+/// lattice edge between spatially adjacent nodes (the next row, and with `torus` the
+/// wrap-around edges) is a loop closure kept with probability `closure_fraction`. Closures are
+/// spatially local, as in real SLAM (a Manhattan-world trajectory), so the graph is planar (a
+/// torus with `torus`) and its Cholesky factors fill like `O(n log n)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SyntheticGrid {
+    /// Nodes per row (>= 2).
+    pub width: usize,
+    /// Rows (>= 2).
+    pub height: usize,
+    /// Also join the last column to the first and the last row to the first.
+    pub torus: bool,
+    /// Probability that a non-odometry lattice edge is measured (0..=1).
+    pub closure_fraction: f64,
+    /// Rotation of the trajectory per step along the path (standard deviation per tangent
+    /// component), radians.
+    pub turn_sigma: f64,
+    /// Gaussian measurement noise per tangent component, radians.
+    pub noise_sigma: f64,
+    /// RNG seed.
+    pub seed: u64,
+}
+
+impl Default for SyntheticGrid {
+    fn default() -> Self {
+        SyntheticGrid {
+            width: 30,
+            height: 30,
+            torus: false,
+            closure_fraction: 0.5,
+            turn_sigma: 0.1,
+            noise_sigma: 1e-3,
+            seed: 0,
+        }
+    }
+}
+
+impl SyntheticGrid {
+    /// Generate `(problem, ground truth)`; node `k` is the `k`-th pose of the path, the ground
+    /// truth has `R_0 = I`. Unit weights.
+    ///
+    /// ```
+    /// use rotavg::multiple::synthetic::SyntheticGrid;
+    /// let g = SyntheticGrid { width: 4, height: 3, closure_fraction: 1.0, noise_sigma: 0.0, ..Default::default() };
+    /// let (p, gt) = g.generate();
+    /// // 11 odometry edges + the 17 - 11 = 6 other lattice edges of a 4 x 3 grid
+    /// assert_eq!((p.num_rotations(), p.num_edges()), (12, 17));
+    /// assert!(p.chordal_cost(&gt) < 1e-20);
+    /// ```
+    pub fn generate(&self) -> (MultipleProblem, Vec<Rotation>) {
+        let (w, h) = (self.width.max(2), self.height.max(2));
+        let n = w * h;
+        let mut rng = StdRng::seed_from_u64(self.seed);
+        let gaussian3 = |rng: &mut StdRng, sigma: f64| {
+            Vector3::new(
+                sigma * crate::so3::gaussian(rng),
+                sigma * crate::so3::gaussian(rng),
+                sigma * crate::so3::gaussian(rng),
+            )
+        };
+        let mut gt = Vec::with_capacity(n);
+        gt.push(Rotation::identity());
+        for k in 1..n {
+            let turn = gaussian3(&mut rng, self.turn_sigma);
+            gt.push(exp(&turn) * gt[k - 1]);
+        }
+        // path index of lattice cell (row, column): rows alternate direction
+        let node = |r: usize, c: usize| {
+            if r.is_multiple_of(2) {
+                r * w + c
+            } else {
+                r * w + (w - 1 - c)
+            }
+        };
+        let mut pairs: Vec<(usize, usize)> = (1..n).map(|k| (k - 1, k)).collect();
+        let p = self.closure_fraction.clamp(0.0, 1.0);
+        for r in 0..h {
+            for c in 0..w {
+                let down = (r + 1 < h).then_some((r + 1, c));
+                let wrap_down = (self.torus && r + 1 == h && h > 2).then_some((0, c));
+                let wrap_right = (self.torus && c + 1 == w && w > 2).then_some((r, 0));
+                for (r2, c2) in [down, wrap_down, wrap_right].into_iter().flatten() {
+                    let (a, b) = (node(r, c), node(r2, c2));
+                    if a.abs_diff(b) != 1 && rng.random::<f64>() < p {
+                        pairs.push((a.min(b), a.max(b)));
+                    }
+                }
+            }
+        }
+        let edges = pairs
+            .into_iter()
+            .map(|(i, j)| {
+                let noise = gaussian3(&mut rng, self.noise_sigma);
+                Edge {
+                    i,
+                    j,
+                    rotation: exp(&noise) * gt[j] * gt[i].inverse(),
+                    weight: 1.0,
+                }
+            })
+            .collect();
+        (
+            MultipleProblem::new(n, edges).expect("generated grid is valid"),
             gt,
         )
     }

@@ -406,10 +406,21 @@ fn verify(
         (r.value, r.residual) = rayleigh_quotient(s.as_ref(), &r.vector);
     };
 
+    // the cap of the dual settings is a budget as well: over it, the verdict is inconclusive
+    // with its reason (not a gap that rounding would explain)
     let budget_exceeded = settings
         .budget
         .factorisation_fits(factor_nonzeros, n3)
-        .err();
+        .err()
+        .or_else(|| {
+            (factor_nonzeros > dual.max_factor_nonzeros).then(|| {
+                format!(
+                    "the proof would need a factor of {factor_nonzeros:.1e} values; \
+                     limit dual.max_factor_nonzeros = {:.1e}",
+                    dual.max_factor_nonzeros
+                )
+            })
+        });
     let skipped = factor_nonzeros > dual.max_factor_nonzeros || budget_exceeded.is_some();
     let factor = analysed.as_mut().filter(|_| !skipped);
     if let Some(ch) = factor {

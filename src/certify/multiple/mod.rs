@@ -538,13 +538,17 @@ fn final_certificate(
 ) -> Certificate {
     let tolerance = settings.tolerance.resolve(problem.median_weight());
     let Some(b) = best else {
+        // say why (e.g. the budget's reason and the labelled estimate), not only that
         return Certificate::from_bounds(
             cost,
             None,
             BoundMethod::Dual,
             None,
             tolerance,
-            "no lower bound could be computed",
+            format!(
+                "no lower bound could be computed; {}",
+                diagnosis_text(first)
+            ),
             seconds,
         );
     };
