@@ -74,9 +74,10 @@ pub const LAPLACIAN_FROM_NODES: usize = 20_000;
 /// expander-like graphs by the BFS pre-filter below -> block-Jacobi PCG (well conditioned,
 /// every factor nearly dense); a scalar symbolic factor (AMD) of at most
 /// [`DIRECT_FILL_PER_NODE`] entries per node, below [`LAPLACIAN_FROM_NODES`] nodes -> sparse
-/// Cholesky; up to
+/// Cholesky; on more than 1000 nodes, up to
 /// [`LAPLACIAN_PRECONDITIONER_VALUES`] -> PCG with the factorised scalar Laplacian as
-/// preconditioner; otherwise block-Jacobi PCG.
+/// preconditioner; otherwise block-Jacobi PCG (small graphs that fill are dense-ish random
+/// graphs, which keep the spectral start).
 pub(crate) fn choose_solver(problem: &MultipleProblem) -> Result<SolverKind> {
     let n = problem.num_rotations();
     // Cheap pre-filter, O(m): every BFS level is a vertex separator; if the widest level from
@@ -90,7 +91,7 @@ pub(crate) fn choose_solver(problem: &MultipleProblem) -> Result<SolverKind> {
     Ok(
         if len <= DIRECT_FILL_PER_NODE * n.max(1) && n < LAPLACIAN_FROM_NODES {
             SolverKind::Direct
-        } else if len <= LAPLACIAN_PRECONDITIONER_VALUES {
+        } else if len <= LAPLACIAN_PRECONDITIONER_VALUES && n > 1000 {
             SolverKind::Laplacian
         } else {
             SolverKind::Jacobi
