@@ -85,6 +85,25 @@ impl ConjugateReport {
 
     /// The report with the counts of forming the pairs from poses
     /// ([`crate::io::input::LoadedConjugate::motion`]) and the settings used; `None` keeps none.
+    ///
+    /// ```
+    /// use rotavg::conjugate::ConjugateProblem;
+    /// use rotavg::io::handeye::{MotionSettings, MotionStats};
+    /// use rotavg::pipeline::{average_conjugate, AverageSettings};
+    /// use rotavg::report::ConjugateReport;
+    /// use rotavg::so3::exp;
+    /// use nalgebra::Vector3;
+    /// let rs = [exp(&Vector3::new(0.5, 0.0, 0.0)), exp(&Vector3::new(0.0, 0.7, 0.1))];
+    /// let problem = ConjugateProblem::from_rotations(&rs, &rs)?;
+    /// let result = average_conjugate(&problem, &AverageSettings::default())?;
+    /// let stats = MotionStats { poses: 3, pairs: 2, unmatched: 1, ..Default::default() };
+    /// let report = ConjugateReport::new(&problem, "streams".into(), result)
+    ///     .with_motion(Some(stats), MotionSettings::default());
+    /// let json = serde_json::to_value(&report).unwrap();
+    /// assert_eq!(json["motion"]["unmatched"], 1);
+    /// assert_eq!(json["motion"]["settings"]["stride"], 15);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn with_motion(mut self, stats: Option<MotionStats>, settings: MotionSettings) -> Self {
         self.motion = stats.map(|s| (s, settings));
         self
