@@ -9,6 +9,18 @@
 //! * **ETH**: the hand file holds `H = T_B_H` (hand in base), the camera file `E = T_W_E`
 //!   (camera in target); `(H_i^-1 H_j) X = X (E_i^-1 E_j)`, so `L = rot(H_i^-1 H_j)`,
 //!   `R = rot(E_i^-1 E_j)`, `S = rot(X)` (camera -> hand rotation).
+//! * **Motion-capture streams** (Vicon, OptiTrack, ROS pose topics) are read the same way
+//!   ([`read_pose_stream`]): the hand file is the tracked body's pose in the capture world
+//!   (`H`, body -> world), the camera file the camera's pose in the target frame (`E`,
+//!   camera -> target). Any pair of streams with these meanings works: `L` is always the
+//!   hand (first file, `--hand`) motion, `R` the camera (`--camera`) motion, and `S` maps
+//!   camera to hand coordinates. A camera stream that holds the *target in the camera* (the
+//!   inverse, `E^-1`) gives `R = rot(E_i E_j^-1)` instead, which is not conjugate to `L` by a
+//!   constant rotation: invert such poses before calling.
+//!
+//! File names: a directory is searched for a hand stream (name containing one of
+//! [`HAND_NAMES`]) and a camera stream ([`CAMERA_NAMES`]); [`find_stream_files`] says what it
+//! found when that fails, and either file can be named explicitly.
 //!
 //! Pairs whose `L` and `R` both rotate by less than `min_angle` carry no information about
 //! `S` and are skipped (Tabb has station pairs that differ by a pure translation).
@@ -29,16 +41,48 @@ pub struct Pose {
     pub translation: Vector3<f64>,
 }
 
-/// A time-stamped pose (ETH CSV).
+/// A time-stamped pose (ETH / motion-capture pose stream).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StampedPose {
-    /// Time in seconds.
+    /// Time in seconds (nanosecond files are converted, see [`read_pose_stream`]).
     pub time: f64,
     /// The pose.
     pub pose: Pose,
 }
 
-/// How relative motions are formed from pose sequences.
+/// Order of the four quaternion fields of a pose-stream line (after `t, x, y, z`). The
+/// quaternion is Hamilton's in both orders; only where its scalar part `w` stands differs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum QuaternionOrder {
+    /// `qx, qy, qz, qw`: scalar last (ETH ASL, ROS `geometry_msgs`; the default).
+    #[default]
+    Xyzw,
+    /// `qw, qx, qy, qz`: scalar first (Eigen's constructor order, some Vicon exports).
+    Wxyz,
+}
+
+/// Unit of the time column of a pose stream, as [`read_pose_stream`] detected it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TimeUnit {
+    /// Seconds (any number that is not a nanosecond stamp).
+    #[default]
+    Seconds,
+    /// Nanoseconds: the first stamp is an integer above `1e12` (ROS / Vicon `header.stamp`
+    /// printed as one integer); every stamp of the file is divided by `1e9`.
+    Nanoseconds,
+}
+
+/// How relative motions are formed from pose sequences (and how pose streams are read).
+///
+/// Pose streams (ETH, motion capture): the hand file holds `H_k` (hand in robot base, or the
+/// tracked body in the motion-capture world), the camera file `E_k` (camera in the calibration
+/// target's frame). Camera sample `k` (time `t_k`) is matched to the hand stream interpolated at
+/// `t_k + time_offset`; of the matched samples `0, 1, 2, ...` the pairs start at
+/// `i = 0, subsample, 2 subsample, ...` and end at `j = i + stride`, giving
+/// `L = rot(H_i^-1 H_j)` (hand motion) and `R = rot(E_i^-1 E_j)` (camera motion), so that
+/// `R = S^-1 L S` with `S = rot(X)` the camera-to-hand rotation (`[H11]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct MotionSettings {
@@ -46,15 +90,18 @@ pub struct MotionSettings {
     pub min_angle: f64,
     /// Rotation validation tolerance (default [`crate::so3::DEFAULT_ROTATION_TOLERANCE`]).
     pub rotation_tolerance: f64,
-    /// ETH: use matched samples `i` and `i + stride` (default 15, i.e. 0.5 s at 30 Hz).
+    /// Streams: use matched samples `i` and `i + stride` (default 15, i.e. 0.5 s at 30 Hz).
     pub stride: usize,
-    /// ETH: keep every `subsample`-th matched sample as a pair start (default 3).
+    /// Streams: keep every `subsample`-th matched sample as a pair start (default 3).
     pub subsample: usize,
-    /// ETH: a camera time stamp further than this (seconds) from the nearest hand samples on
+    /// Streams: a camera time stamp further than this (seconds) from the nearest hand samples on
     /// either side is not matched (default 0.05).
     pub max_gap: f64,
-    /// ETH: constant time offset added to camera time stamps before matching (default 0).
+    /// Streams: constant time offset (seconds) added to camera time stamps before matching:
+    /// camera time `t` is hand time `t + time_offset` (default 0).
     pub time_offset: f64,
+    /// Streams: order of the quaternion fields (default `qx qy qz qw`).
+    pub quaternion_order: QuaternionOrder,
 }
 
 impl Default for MotionSettings {
@@ -66,19 +113,90 @@ impl Default for MotionSettings {
             subsample: 3,
             max_gap: 0.05,
             time_offset: 0.0,
+            quaternion_order: QuaternionOrder::Xyzw,
         }
     }
 }
 
+impl MotionSettings {
+    /// Check the ranges: `stride`, `subsample` >= 1; `max_gap` > 0 and `min_angle` >= 0;
+    /// every number finite.
+    ///
+    /// ```
+    /// use rotavg::io::handeye::MotionSettings;
+    /// assert!(MotionSettings::default().validate().is_ok());
+    /// let bad = MotionSettings { max_gap: -1.0, ..Default::default() };
+    /// assert!(bad.validate().unwrap_err().to_string().contains("max_gap"));
+    /// ```
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &str, reason: &str| {
+            Err(Error::InvalidSettings {
+                name: name.into(),
+                reason: reason.into(),
+            })
+        };
+        if self.stride == 0 {
+            return bad("stride", "must be >= 1");
+        }
+        if self.subsample == 0 {
+            return bad("subsample", "must be >= 1");
+        }
+        if !(self.max_gap.is_finite() && self.max_gap > 0.0) {
+            return bad("max_gap", "must be a positive number of seconds");
+        }
+        if !self.time_offset.is_finite() {
+            return bad("time_offset", "must be a finite number of seconds");
+        }
+        if !(self.min_angle.is_finite() && self.min_angle >= 0.0) {
+            return bad("min_angle", "must be a finite angle >= 0");
+        }
+        Ok(())
+    }
+}
+
+/// What reading one pose stream found ([`read_pose_stream`]).
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct StreamStats {
+    /// The file.
+    pub file: String,
+    /// Data lines read.
+    pub samples: usize,
+    /// Samples kept (`samples - repeated_stamps`).
+    pub kept: usize,
+    /// Samples dropped because their time stamp equals the previous one (the first sample of a
+    /// repeated stamp is kept).
+    pub repeated_stamps: usize,
+    /// Leading lines skipped as a header (first field not a number).
+    pub header_lines: usize,
+    /// Unit of the time column.
+    pub time_unit: TimeUnit,
+}
+
+/// A pose stream with what reading it found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseStream {
+    /// The samples, time stamps strictly increasing.
+    pub poses: Vec<StampedPose>,
+    /// The counts.
+    pub stats: StreamStats,
+}
+
 /// Counts from forming relative motions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct MotionStats {
-    /// Absolute poses used (matched, for ETH).
+    /// Absolute poses used (Tabb: stations; streams: time-matched camera samples).
     pub poses: usize,
     /// Pairs kept.
     pub pairs: usize,
     /// Pairs skipped for a rotation angle below `min_angle`.
     pub skipped_small: usize,
+    /// Streams: camera samples not matched (no hand sample within `max_gap` on either side of
+    /// the shifted time, or outside the hand stream); 0 for Tabb.
+    pub unmatched: usize,
+    /// Streams: the hand stream read (`None` for Tabb, or streams given in memory).
+    pub hand: Option<StreamStats>,
+    /// Streams: the camera stream read.
+    pub camera: Option<StreamStats>,
 }
 
 /// Whitespace tokens with their 1-based line numbers.
@@ -281,8 +399,7 @@ pub fn tabb_problem(
     let mut pairs = Vec::new();
     let mut stats = MotionStats {
         poses: robot.len(),
-        pairs: 0,
-        skipped_small: 0,
+        ..Default::default()
     };
     for j in 0..robot.len() {
         for i in 0..j {
@@ -318,9 +435,175 @@ pub fn read_tabb_dir(
     tabb_problem(&robot, &camera, settings)
 }
 
-/// Read an ETH ASL CSV: lines `t, x, y, z, q_x, q_y, q_z, q_w` (Hamilton quaternion, scalar
-/// last). A quaternion whose norm differs from 1 by more than `tol`, or is below `1e-12`, is
-/// rejected; time stamps must increase strictly.
+/// The fields of a pose-stream line: comma-separated when the line holds a comma, else
+/// whitespace-separated.
+fn stream_fields(line: &str) -> Vec<&str> {
+    if line.contains(',') {
+        line.split(',').map(str::trim).collect()
+    } else {
+        line.split_whitespace().collect()
+    }
+}
+
+/// A nanosecond stamp: an integer (digits only) above `1e12`.
+fn nanoseconds(tok: &str) -> Option<i64> {
+    if !tok.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    tok.parse::<i64>().ok().filter(|&ns| ns > 1_000_000_000_000)
+}
+
+/// Read a pose stream (ETH ASL CSV, motion-capture exports such as Vicon's): one sample per
+/// line, `t, x, y, z` and the quaternion in `settings.quaternion_order` (default
+/// `qx, qy, qz, qw`, Hamilton, scalar last). Variants accepted:
+/// * fields separated by commas, or by white space when a line has no comma;
+/// * leading header lines (first field not a number) are skipped and counted; `#` comments
+///   and blank lines are ignored anywhere;
+/// * time in seconds, or in integer nanoseconds when the first stamp is an integer above
+///   `1e12` (then every stamp must be one; they are converted to seconds, resolution about
+///   `2.5e-7` s at today's epoch times);
+/// * repeated time stamps: a sample whose stamp equals the previous one is dropped (the first
+///   sample of the stamp is kept: interpolation needs strictly increasing stamps, and a motion
+///   capture driver that repeats a stamp re-sends or mis-stamps a frame, which averaging would
+///   not repair) and counted in [`StreamStats::repeated_stamps`]; a stamp *before* the
+///   previous one is an error with its line.
+///
+/// A quaternion whose norm differs from 1 by more than `settings.rotation_tolerance`, or is
+/// below `1e-12`, is rejected. Errors name the file and line.
+///
+/// ```
+/// use rotavg::io::handeye::{read_pose_stream, MotionSettings, QuaternionOrder, TimeUnit};
+/// // A Vicon-style export: a header, whitespace separators, nanosecond stamps, scalar first,
+/// // and one repeated stamp.
+/// let text = "time x y z qw qx qy qz\n\
+///             1700000000000000000 0 0 0 1 0 0 0\n\
+///             1700000000010000000 0 0 0 1 0 0 0\n\
+///             1700000000010000000 9 9 9 1 0 0 0\n\
+///             1700000000020000000 0 0 0 0 1 0 0\n";
+/// let settings = MotionSettings { quaternion_order: QuaternionOrder::Wxyz, ..Default::default() };
+/// let stream = read_pose_stream(text, "tool_vicon.txt", &settings)?;
+/// let s = &stream.stats;
+/// assert_eq!((s.samples, s.kept, s.repeated_stamps, s.header_lines), (4, 3, 1, 1));
+/// assert_eq!(s.time_unit, TimeUnit::Nanoseconds);
+/// assert!((stream.poses[1].time - stream.poses[0].time - 0.01).abs() < 1e-6);
+/// assert_eq!(stream.poses[1].pose.translation.x, 0.0); // the first sample of a stamp is kept
+/// // A stamp before the previous one is an error naming the line.
+/// let bad = "0.0 0 0 0 0 0 0 1\n0.2 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 0 1\n";
+/// let err = read_pose_stream(bad, "hand.csv", &MotionSettings::default()).unwrap_err();
+/// assert!(err.to_string().starts_with("hand.csv:3: "), "{err}");
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn read_pose_stream(text: &str, file: &str, settings: &MotionSettings) -> Result<PoseStream> {
+    let tol = settings.rotation_tolerance;
+    let mut poses: Vec<StampedPose> = Vec::new();
+    let mut stats = StreamStats {
+        file: file.to_string(),
+        ..Default::default()
+    };
+    let mut unit = None;
+    let mut first_header: Option<(usize, &str)> = None;
+    let mut prev_line = 0;
+    for (line, l) in crate::io::content_lines(text) {
+        let f = stream_fields(l);
+        if unit.is_none() && f[0].parse::<f64>().is_err() {
+            stats.header_lines += 1;
+            first_header.get_or_insert((line, l));
+            continue;
+        }
+        if f.len() != 8 {
+            return Err(Error::parse(
+                Some(file),
+                Some(line),
+                format!(
+                    "expected 8 fields (t, x, y, z and the quaternion, separated by commas or spaces), found {}",
+                    f.len()
+                ),
+            ));
+        }
+        let unit = *unit.get_or_insert(if nanoseconds(f[0]).is_some() {
+            TimeUnit::Nanoseconds
+        } else {
+            TimeUnit::Seconds
+        });
+        let time = match unit {
+            TimeUnit::Seconds => number(f[0], line, file)?,
+            TimeUnit::Nanoseconds => {
+                let ns = nanoseconds(f[0]).ok_or_else(|| {
+                    Error::parse(
+                        Some(file),
+                        Some(line),
+                        format!(
+                            "expected an integer nanosecond time stamp (as the first one), found `{}`",
+                            f[0]
+                        ),
+                    )
+                })?;
+                (ns / 1_000_000_000) as f64 + (ns % 1_000_000_000) as f64 * 1e-9
+            }
+        };
+        let mut v = [0.0; 7];
+        for (slot, t) in v.iter_mut().zip(&f[1..]) {
+            *slot = number(t, line, file)?;
+        }
+        let q = match settings.quaternion_order {
+            QuaternionOrder::Xyzw => Quaternion::new(v[6], v[3], v[4], v[5]),
+            QuaternionOrder::Wxyz => Quaternion::new(v[3], v[4], v[5], v[6]),
+        };
+        // A (near-)zero quaternion has no direction, whatever the tolerance: normalising it
+        // would give NaN (found by fuzzing, tests/fuzz_regressions.rs).
+        let norm = q.norm();
+        if !(norm > 1e-12 && (norm - 1.0).abs() <= tol) {
+            return Err(Error::parse(
+                Some(file),
+                Some(line),
+                format!("quaternion norm {norm} is not 1 (tolerance {tol:.1e})"),
+            ));
+        }
+        stats.samples += 1;
+        if let Some(prev) = poses.last() {
+            if time == prev.time {
+                stats.repeated_stamps += 1;
+                continue;
+            }
+            if time < prev.time {
+                return Err(Error::parse(
+                    Some(file),
+                    Some(line),
+                    format!(
+                        "time stamp {} is before the previous one {} (line {prev_line}); repeated stamps are dropped, decreasing ones are an error",
+                        f[0], prev.time
+                    ),
+                ));
+            }
+        }
+        prev_line = line;
+        poses.push(StampedPose {
+            time,
+            pose: Pose {
+                rotation: UnitQuaternion::from_quaternion(q).to_rotation_matrix(),
+                translation: Vector3::new(v[0], v[1], v[2]),
+            },
+        });
+    }
+    if poses.is_empty() {
+        let why = match first_header {
+            Some((line, l)) => format!(
+                "no poses: {} line(s) do not start with a number (skipped as a header), the first at line {line}: `{}`",
+                stats.header_lines,
+                l.chars().take(60).collect::<String>()
+            ),
+            None => "no poses".to_string(),
+        };
+        return Err(Error::parse(Some(file), None, why));
+    }
+    stats.kept = poses.len();
+    stats.time_unit = unit.unwrap_or_default();
+    Ok(PoseStream { poses, stats })
+}
+
+/// Read an ETH ASL CSV (`t, x, y, z, qx, qy, qz, qw`, seconds): the samples of
+/// [`read_pose_stream`] with default settings and rotation tolerance `tol`. Repeated time
+/// stamps are dropped (the first sample is kept); decreasing ones are an error.
 ///
 /// ```
 /// use rotavg::io::handeye::{interpolate, read_eth_csv};
@@ -335,63 +618,16 @@ pub fn read_tabb_dir(
 /// assert!((angle(&mid.rotation) - std::f64::consts::FRAC_PI_4).abs() < 1e-12);
 /// assert!((mid.translation.x - 1.0).abs() < 1e-12);
 /// assert!(interpolate(&stream, 1.5, 1.0).is_none()); // outside the stream
-/// // Time stamps must increase.
+/// // Time stamps must not decrease.
 /// assert!(read_eth_csv("1,0,0,0,0,0,0,1\n0,0,0,0,0,0,0,1\n", "bad.csv", TOL).is_err());
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn read_eth_csv(text: &str, file: &str, tol: f64) -> Result<Vec<StampedPose>> {
-    let mut out: Vec<StampedPose> = Vec::new();
-    for (line, l) in crate::io::content_lines(text) {
-        let f: Vec<&str> = l.split(',').map(str::trim).collect();
-        if f.len() != 8 {
-            return Err(Error::parse(
-                Some(file),
-                Some(line),
-                format!(
-                    "expected 8 comma-separated fields (t, x, y, z, qx, qy, qz, qw), found {}",
-                    f.len()
-                ),
-            ));
-        }
-        let mut v = [0.0; 8];
-        for (slot, t) in v.iter_mut().zip(&f) {
-            *slot = number(t, line, file)?;
-        }
-        let q = Quaternion::new(v[7], v[4], v[5], v[6]);
-        // A (near-)zero quaternion has no direction, whatever the tolerance: normalising it
-        // would give NaN (found by fuzzing, tests/fuzz_regressions.rs).
-        let norm = q.norm();
-        if !(norm > 1e-12 && (norm - 1.0).abs() <= tol) {
-            return Err(Error::parse(
-                Some(file),
-                Some(line),
-                format!("quaternion norm {norm} is not 1 (tolerance {tol:.1e})"),
-            ));
-        }
-        if let Some(prev) = out.last()
-            && v[0] <= prev.time
-        {
-            return Err(Error::parse(
-                Some(file),
-                Some(line),
-                format!(
-                    "time stamp {} does not increase (previous {})",
-                    v[0], prev.time
-                ),
-            ));
-        }
-        out.push(StampedPose {
-            time: v[0],
-            pose: Pose {
-                rotation: UnitQuaternion::from_quaternion(q).to_rotation_matrix(),
-                translation: Vector3::new(v[1], v[2], v[3]),
-            },
-        });
-    }
-    if out.is_empty() {
-        return Err(Error::parse(Some(file), None, "no poses"));
-    }
-    Ok(out)
+    let settings = MotionSettings {
+        rotation_tolerance: tol,
+        ..Default::default()
+    };
+    Ok(read_pose_stream(text, file, &settings)?.poses)
 }
 
 /// The pose of a stream at time `t`: SLERP of the rotation (geodesic interpolation on SO(3))
@@ -416,10 +652,12 @@ pub fn interpolate(stream: &[StampedPose], t: f64, max_gap: f64) -> Option<Pose>
     })
 }
 
-/// ETH relative motions `[H11]`: every camera sample (time `+ time_offset`) is matched to the
-/// hand stream interpolated at that time; for matched samples `i` (every `subsample`-th) and
-/// `j = i + stride`, `L = rot(H_i^-1 H_j)`, `R = rot(E_i^-1 E_j)`, so `R = S^-1 L S` with `S`
-/// the camera-to-hand rotation.
+/// ETH (pose-stream) relative motions `[H11]`: every camera sample (time `+ time_offset`) is
+/// matched to the hand stream interpolated at that time ([`interpolate`]; samples without a
+/// hand sample within `max_gap` on both sides are counted in [`MotionStats::unmatched`]); for
+/// matched samples `i` (every `subsample`-th) and `j = i + stride`, `L = rot(H_i^-1 H_j)`,
+/// `R = rot(E_i^-1 E_j)`, so `R = S^-1 L S` with `S` the camera-to-hand rotation. `stride`
+/// counts matched samples, not camera samples.
 ///
 /// ```
 /// use rotavg::conjugate::{solve_conjugate, ConjugateSettings};
@@ -448,12 +686,7 @@ pub fn eth_problem(
     camera: &[StampedPose],
     settings: &MotionSettings,
 ) -> Result<(ConjugateProblem, MotionStats)> {
-    if settings.stride == 0 || settings.subsample == 0 {
-        return Err(Error::InvalidSettings {
-            name: "stride/subsample".into(),
-            reason: "must be >= 1".into(),
-        });
-    }
+    settings.validate()?;
     let matched: Vec<(Rotation, Rotation)> = camera
         .iter()
         .filter_map(|e| {
@@ -464,8 +697,8 @@ pub fn eth_problem(
     let mut pairs = Vec::new();
     let mut stats = MotionStats {
         poses: matched.len(),
-        pairs: 0,
-        skipped_small: 0,
+        unmatched: camera.len() - matched.len(),
+        ..Default::default()
     };
     let mut i = 0;
     while i + settings.stride < matched.len() {
@@ -483,59 +716,177 @@ pub fn eth_problem(
     if pairs.is_empty() {
         return Err(Error::Degenerate {
             reason: format!(
-                "no relative motions: {} time-matched samples (hand stream {} samples, camera stream {} samples)",
+                "no relative motions: {} time-matched samples (hand stream {} samples, camera stream {} samples; max gap {} s, time offset {} s, stride {})",
                 matched.len(),
                 hand.len(),
-                camera.len()
+                camera.len(),
+                settings.max_gap,
+                settings.time_offset,
+                settings.stride
             ),
         });
     }
     Ok((ConjugateProblem::new(pairs)?, stats))
 }
 
-/// Read an ETH directory: the hand CSV is the one whose name contains `base_link` or `hand`,
-/// the camera CSV the one whose name contains `target` or `camera`.
-pub fn read_eth_dir(
+/// Words that mark the hand stream in a file name (lower case): `base_link` (ETH), `hand`,
+/// `vicon` (a motion-capture stream tracks the hand).
+pub const HAND_NAMES: [&str; 3] = ["base_link", "hand", "vicon"];
+
+/// Words that mark the camera stream in a file name (lower case): `target` (ETH), `camera`.
+pub const CAMERA_NAMES: [&str; 2] = ["target", "camera"];
+
+fn name_list(words: &[&str]) -> String {
+    let w: Vec<String> = words.iter().map(|w| format!("`{w}`")).collect();
+    w.join(", ")
+}
+
+fn path_list(paths: &[std::path::PathBuf]) -> String {
+    if paths.is_empty() {
+        return "none".into();
+    }
+    let names: Vec<String> = paths
+        .iter()
+        .map(|p| {
+            p.file_name()
+                .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into())
+        })
+        .collect();
+    names.join(", ")
+}
+
+/// The hand and camera stream files of a directory. A file given (`hand`, `camera`) is used as
+/// is; the other one is the only `.csv` or `.txt` file (case-insensitive) whose name contains
+/// one of [`HAND_NAMES`] (resp. [`CAMERA_NAMES`]) and none of the other list's words, the
+/// given file excluded. No candidate or several are an error listing what was found and how
+/// to name the files explicitly.
+///
+/// ```
+/// use rotavg::io::handeye::find_stream_files;
+/// let dir = std::env::temp_dir().join(format!("rotavg-doc-streams-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// for name in ["run1_vicon_tool.csv", "run1_camera.csv", "notes.md"] {
+///     std::fs::write(dir.join(name), "").unwrap();
+/// }
+/// let (hand, camera) = find_stream_files(&dir, None, None)?;
+/// assert!(hand.ends_with("run1_vicon_tool.csv") && camera.ends_with("run1_camera.csv"));
+/// // A second hand candidate makes detection ambiguous; the error says what to do.
+/// std::fs::write(dir.join("run2_vicon_tool.csv"), "").unwrap();
+/// let err = find_stream_files(&dir, None, None).unwrap_err().to_string();
+/// assert!(err.contains("run2_vicon_tool.csv") && err.contains("--hand FILE"), "{err}");
+/// // Naming the hand file resolves it.
+/// let (hand, _) = find_stream_files(&dir, Some(&dir.join("run2_vicon_tool.csv")), None)?;
+/// assert!(hand.ends_with("run2_vicon_tool.csv"));
+/// std::fs::remove_dir_all(&dir).unwrap();
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn find_stream_files(
     dir: &Path,
-    settings: &MotionSettings,
-) -> Result<(ConjugateProblem, MotionStats)> {
+    hand: Option<&Path>,
+    camera: Option<&Path>,
+) -> Result<(std::path::PathBuf, std::path::PathBuf)> {
+    if let (Some(h), Some(c)) = (hand, camera) {
+        return Ok((h.to_path_buf(), c.to_path_buf()));
+    }
     let entries = std::fs::read_dir(dir).map_err(|e| Error::Io {
         path: dir.display().to_string(),
         message: e.to_string(),
     })?;
-    let (mut hand, mut cam) = (None, None);
-    for e in entries.flatten() {
-        let p = e.path();
+    let mut files: Vec<std::path::PathBuf> = entries
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            let name = p
+                .file_name()
+                .map(|n| n.to_string_lossy().to_lowercase())
+                .unwrap_or_default();
+            (name.ends_with(".csv") || name.ends_with(".txt")) && p.is_file()
+        })
+        .collect();
+    files.sort();
+    let given = |p: &Path| [hand, camera].iter().flatten().any(|g| same_file(g, p));
+    let has = |p: &Path, words: &[&str]| {
         let name = p
             .file_name()
             .map(|n| n.to_string_lossy().to_lowercase())
             .unwrap_or_default();
-        if !name.ends_with(".csv") {
-            continue;
-        }
-        if name.contains("base_link") || name.contains("hand") {
-            hand = Some(p);
-        } else if name.contains("target") || name.contains("camera") {
-            cam = Some(p);
-        }
-    }
-    let (Some(hp), Some(cp)) = (hand, cam) else {
-        return Err(Error::Io {
-            path: dir.display().to_string(),
-            message: "expected a hand CSV (name containing `base_link` or `hand`) and a camera CSV (name containing `target` or `camera`)".into(),
-        });
+        words.iter().any(|w| name.contains(w))
     };
-    let h = read_eth_csv(
-        &read_file(&hp)?,
-        &hp.display().to_string(),
-        settings.rotation_tolerance,
-    )?;
-    let c = read_eth_csv(
-        &read_file(&cp)?,
-        &cp.display().to_string(),
-        settings.rotation_tolerance,
-    )?;
-    eth_problem(&h, &c, settings)
+    let pick = |mine: &[&str], other: &[&str]| -> Vec<std::path::PathBuf> {
+        files
+            .iter()
+            .filter(|p| !given(p) && has(p, mine) && !has(p, other))
+            .cloned()
+            .collect()
+    };
+    let hands = pick(&HAND_NAMES, &CAMERA_NAMES);
+    let cameras = pick(&CAMERA_NAMES, &HAND_NAMES);
+    let h = match hand {
+        Some(h) => Some(h.to_path_buf()),
+        None if hands.len() == 1 => Some(hands[0].clone()),
+        None => None,
+    };
+    let c = match camera {
+        Some(c) => Some(c.to_path_buf()),
+        None if cameras.len() == 1 => Some(cameras[0].clone()),
+        None => None,
+    };
+    match (h, c) {
+        (Some(h), Some(c)) => Ok((h, c)),
+        _ => Err(Error::Io {
+            path: dir.display().to_string(),
+            message: format!(
+                "cannot tell the hand and camera pose streams apart: hand candidates (.csv/.txt name containing {}): {}; camera candidates (name containing {}): {}. Name the files with --hand FILE and --camera FILE",
+                name_list(&HAND_NAMES),
+                if hand.is_some() {
+                    "given".into()
+                } else {
+                    path_list(&hands)
+                },
+                name_list(&CAMERA_NAMES),
+                if camera.is_some() {
+                    "given".into()
+                } else {
+                    path_list(&cameras)
+                },
+            ),
+        }),
+    }
+}
+
+/// Whether two paths name the same file (canonical paths when both resolve).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    }
+}
+
+/// Read a hand and a camera pose stream ([`read_pose_stream`]) and form their relative
+/// motions ([`eth_problem`]); the stream counts are in [`MotionStats::hand`] and
+/// [`MotionStats::camera`].
+pub fn read_stream_pair(
+    hand: &Path,
+    camera: &Path,
+    settings: &MotionSettings,
+) -> Result<(ConjugateProblem, MotionStats)> {
+    settings.validate()?;
+    let h = read_pose_stream(&read_file(hand)?, &hand.display().to_string(), settings)?;
+    let c = read_pose_stream(&read_file(camera)?, &camera.display().to_string(), settings)?;
+    let (problem, mut stats) = eth_problem(&h.poses, &c.poses, settings)?;
+    stats.hand = Some(h.stats);
+    stats.camera = Some(c.stats);
+    Ok((problem, stats))
+}
+
+/// Read an ETH (or motion-capture) directory: the hand and camera streams found by
+/// [`find_stream_files`], read and paired by [`read_stream_pair`].
+pub fn read_eth_dir(
+    dir: &Path,
+    settings: &MotionSettings,
+) -> Result<(ConjugateProblem, MotionStats)> {
+    let (hand, camera) = find_stream_files(dir, None, None)?;
+    read_stream_pair(&hand, &camera, settings)
 }
 
 #[derive(Serialize, Deserialize)]

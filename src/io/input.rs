@@ -10,7 +10,7 @@
 //! | [`read_single_problem`] | single JSON (weights per [`ReadOptions::weights`]) |
 //! | [`load_view_graph`] | g2o, 1DSfM, JSON view graphs ([`crate::io::detect::read_graph`]) |
 //! | [`load_multiple_input`] | a view graph with ground truth, initial estimate, largest component |
-//! | [`load_conjugate`] | conjugate JSON, Tabb and ETH directories |
+//! | [`load_conjugate`], [`load_conjugate_with`] | conjugate JSON, Tabb and ETH directories, named hand / camera pose streams |
 //! | [`read_ground_truth`], [`load_ground_truth`] | g2o vertices, Bundler, JSON estimate, rotation list |
 //! | [`load_estimate`] | an estimate file ([`crate::io::json::read_estimate`]) |
 //!
@@ -34,7 +34,8 @@ use crate::io::detect::{
     load_graph, read_graph,
 };
 use crate::io::handeye::{
-    MotionSettings, MotionStats, read_conjugate_json, read_eth_dir, read_tabb_dir,
+    MotionSettings, MotionStats, TimeUnit, find_stream_files, read_conjugate_json,
+    read_stream_pair, read_tabb_dir,
 };
 use crate::io::json::{Estimate, read_estimate, read_rotations_estimate};
 use crate::io::names::ConjugateFormat;
@@ -270,20 +271,30 @@ fn with_weights(problem: ConjugateProblem, options: &ReadOptions) -> Result<Conj
 pub struct LoadedConjugate {
     /// The problem (chordal L2 objective).
     pub problem: ConjugateProblem,
-    /// The input as given (a file, `-`, or a dataset directory).
+    /// The input as given (a file, `-`, or a dataset directory; the two stream files when only
+    /// those were given).
     pub name: String,
     /// The format read (never `auto`).
     pub format: ConjugateFormat,
-    /// Counts from forming relative motions (Tabb, ETH).
+    /// Counts from forming relative motions (Tabb, ETH / pose streams).
     pub motion: Option<MotionStats>,
-    /// The motion settings used (Tabb, ETH).
+    /// The motion settings used (Tabb, ETH / pose streams).
     pub motion_settings: MotionSettings,
 }
 
+/// The bare file name of a path (the path when it has none).
+fn file_name(path: &str) -> String {
+    Path::new(path)
+        .file_name()
+        .map_or_else(|| path.to_string(), |n| n.to_string_lossy().into_owned())
+}
+
 /// One line saying what was read, e.g. `Tabb: 88 stations, 3785 pairs (43 skipped: rotation
-/// < 0.57 deg)` or `pairs.json: conjugate JSON`.
+/// < 0.57 deg)` or `pairs.json: conjugate JSON`; pose streams add a line per stream and the
+/// pairing settings.
 impl fmt::Display for LoadedConjugate {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let m = &self.motion_settings;
         match (self.format, &self.motion) {
             (ConjugateFormat::Tabb, Some(s)) => write!(
                 f,
@@ -291,21 +302,68 @@ impl fmt::Display for LoadedConjugate {
                 s.poses,
                 s.pairs,
                 s.skipped_small,
-                self.motion_settings.min_angle.to_degrees()
+                m.min_angle.to_degrees()
             ),
-            (ConjugateFormat::Eth, Some(s)) => write!(
-                f,
-                "ETH: {} time-matched samples, {} pairs ({} skipped)",
-                s.poses, s.pairs, s.skipped_small
-            ),
+            (ConjugateFormat::Eth, Some(s)) => {
+                write!(
+                    f,
+                    "ETH: {} time-matched samples ({} camera samples unmatched), {} pairs ({} skipped: rotation < {:.2} deg); stride {}, subsample {}, max gap {} s, time offset {} s",
+                    s.poses,
+                    s.unmatched,
+                    s.pairs,
+                    s.skipped_small,
+                    m.min_angle.to_degrees(),
+                    m.stride,
+                    m.subsample,
+                    m.max_gap,
+                    m.time_offset
+                )?;
+                for (role, stream) in [("hand (L)", &s.hand), ("camera (R)", &s.camera)] {
+                    if let Some(st) = stream {
+                        write!(
+                            f,
+                            "\n{role}: {}: {} samples, {} repeated time stamps dropped{}{}",
+                            file_name(&st.file),
+                            st.samples,
+                            st.repeated_stamps,
+                            if st.header_lines > 0 {
+                                format!(", {} header lines", st.header_lines)
+                            } else {
+                                String::new()
+                            },
+                            if st.time_unit == TimeUnit::Nanoseconds {
+                                ", time in ns"
+                            } else {
+                                ""
+                            }
+                        )?;
+                    }
+                }
+                Ok(())
+            }
             _ => write!(f, "{}: conjugate JSON", self.name),
         }
     }
 }
 
+/// Where the hand-eye pose data are and how they are paired ([`load_conjugate_with`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HandEyeOptions {
+    /// The hand pose stream (`L_i` are its relative motions); found in the directory by name
+    /// when `None` ([`crate::io::handeye::find_stream_files`]). A relative path is taken as
+    /// given, or inside the directory when it does not exist as given.
+    pub hand: Option<String>,
+    /// The camera pose stream (`R_i` are its relative motions); found by name when `None`.
+    pub camera: Option<String>,
+    /// How motions are formed (Tabb uses `min_angle` only); `rotation_tolerance` is replaced by
+    /// the read options'.
+    pub motion: MotionSettings,
+}
+
 /// Read a conjugate problem: with `format` `auto`, a directory holding `robot_cali.txt` is a
 /// Tabb dataset, another directory an ETH dataset, anything else (`-` included) conjugate JSON.
-/// `options.weights` and `options.rotation_tolerance` apply.
+/// `options.weights` and `options.rotation_tolerance` apply. The same as
+/// [`load_conjugate_with`] with default [`HandEyeOptions`].
 ///
 /// ```
 /// use rotavg::io::input::load_conjugate;
@@ -327,10 +385,71 @@ pub fn load_conjugate(
     format: ConjugateFormat,
     options: &ReadOptions,
 ) -> Result<LoadedConjugate> {
-    let dir = Path::new(path);
-    let is_dir = path != "-" && dir.is_dir();
+    load_conjugate_with(Some(path), format, options, &HandEyeOptions::default())
+}
+
+/// [`load_conjugate`] with the hand-eye options: named hand / camera pose streams (then
+/// `path`, a directory, may be `None` when both are named, and `format` must be `auto` or
+/// `eth`) and the pairing settings.
+///
+/// ```
+/// use rotavg::io::input::{load_conjugate_with, HandEyeOptions};
+/// use rotavg::io::handeye::MotionSettings;
+/// use rotavg::io::names::ConjugateFormat;
+/// use rotavg::io::detect::ReadOptions;
+/// use rotavg::so3::exp;
+/// use nalgebra::{UnitQuaternion, Vector3};
+/// // Hand poses H_k and camera poses E_k = H_k X (rotations), the camera stream 5 ms late and
+/// // with one repeated time stamp.
+/// let x = exp(&Vector3::new(0.1, 0.4, -0.2));
+/// let (mut hand, mut camera) = (String::new(), String::new());
+/// for k in 0..60 {
+///     let t = 0.02 * k as f64;
+///     let h = exp(&Vector3::new((2.0 * t).sin(), t, 0.5 * (3.0 * t).cos()));
+///     let (qh, qe) = (UnitQuaternion::from_rotation_matrix(&h), UnitQuaternion::from_rotation_matrix(&(h * x)));
+///     hand += &format!("{t:.3},0,0,0,{},{},{},{}\n", qh.i, qh.j, qh.k, qh.w);
+///     let line = format!("{:.3} 0 0 0 {} {} {} {}\n", t + 0.005, qe.i, qe.j, qe.k, qe.w);
+///     camera += &line;
+///     if k == 30 { camera += &line; }
+/// }
+/// let dir = std::env::temp_dir().join(format!("rotavg-doc-streams-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// std::fs::write(dir.join("arm.csv"), hand).unwrap();
+/// std::fs::write(dir.join("cam.txt"), camera).unwrap();
+/// let he = HandEyeOptions {
+///     hand: Some("arm.csv".into()),   // inside the directory
+///     camera: Some("cam.txt".into()),
+///     motion: MotionSettings { stride: 5, subsample: 2, time_offset: -0.005, ..Default::default() },
+/// };
+/// let c = load_conjugate_with(dir.to_str(), ConjugateFormat::Auto, &ReadOptions::default(), &he);
+/// std::fs::remove_dir_all(&dir).unwrap();
+/// let c = c?;
+/// let stats = c.motion.as_ref().unwrap();
+/// assert_eq!(stats.camera.as_ref().unwrap().repeated_stamps, 1);
+/// assert!(c.problem.chordal_cost(&x) < 1e-12 && stats.pairs > 20);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn load_conjugate_with(
+    path: Option<&str>,
+    format: ConjugateFormat,
+    options: &ReadOptions,
+    handeye: &HandEyeOptions,
+) -> Result<LoadedConjugate> {
+    let named = handeye.hand.is_some() || handeye.camera.is_some();
+    let is_dir = path.is_some_and(|p| p != "-" && Path::new(p).is_dir());
     let format = match format {
-        ConjugateFormat::Auto if is_dir && dir.join("robot_cali.txt").is_file() => {
+        ConjugateFormat::Auto | ConjugateFormat::Eth if named => ConjugateFormat::Eth,
+        f if named => {
+            return Err(Error::InvalidSettings {
+                name: "hand/camera".into(),
+                reason: format!(
+                    "named hand and camera files are pose streams (format eth), not format {f}"
+                ),
+            });
+        }
+        ConjugateFormat::Auto
+            if is_dir && path.is_some_and(|p| Path::new(p).join("robot_cali.txt").is_file()) =>
+        {
             ConjugateFormat::Tabb
         }
         ConjugateFormat::Auto if is_dir => ConjugateFormat::Eth,
@@ -339,15 +458,53 @@ pub fn load_conjugate(
     };
     let motion_settings = MotionSettings {
         rotation_tolerance: options.rotation_tolerance,
-        ..Default::default()
+        ..handeye.motion
     };
+    motion_settings.validate()?;
+    let Some(path) = path.or(if named { None } else { Some("-") }) else {
+        // Only named streams: both must be given.
+        let (Some(h), Some(c)) = (&handeye.hand, &handeye.camera) else {
+            return Err(Error::InvalidSettings {
+                name: "hand/camera".into(),
+                reason: "without a directory both the hand and the camera file must be named"
+                    .into(),
+            });
+        };
+        let (p, s) = read_stream_pair(Path::new(h), Path::new(c), &motion_settings)?;
+        return Ok(LoadedConjugate {
+            problem: with_weights(p, options)?,
+            name: format!("{h} + {c}"),
+            format,
+            motion: Some(s),
+            motion_settings,
+        });
+    };
+    let dir = Path::new(path);
     let (problem, motion) = match format {
         ConjugateFormat::Tabb => {
             let (p, s) = read_tabb_dir(dir, &motion_settings)?;
             (p, Some(s))
         }
         ConjugateFormat::Eth => {
-            let (p, s) = read_eth_dir(dir, &motion_settings)?;
+            if !is_dir {
+                return Err(Error::Io {
+                    path: path.to_string(),
+                    message: "not a directory (pose streams: a directory, or name both files with --hand and --camera)".into(),
+                });
+            }
+            let in_dir = |f: &Option<String>| {
+                f.as_ref().map(|f| {
+                    let p = Path::new(f);
+                    if p.exists() {
+                        p.to_path_buf()
+                    } else {
+                        dir.join(p)
+                    }
+                })
+            };
+            let (hand, camera) = (in_dir(&handeye.hand), in_dir(&handeye.camera));
+            let (h, c) = find_stream_files(dir, hand.as_deref(), camera.as_deref())?;
+            let (p, s) = read_stream_pair(&h, &c, &motion_settings)?;
             (p, Some(s))
         }
         ConjugateFormat::Json | ConjugateFormat::Auto => {

@@ -12,6 +12,7 @@
 //! | [`CertifyMode`] | `auto`, `theory`, `dual`, `sdp`, `staircase`, `none` |
 //! | [`GraphFormat`] | `auto`, `g2o`, `1dsfm`, `json` |
 //! | [`ConjugateFormat`] | `auto`, `json`, `tabb`, `eth` |
+//! | [`QuaternionOrder`] (pose streams) | `xyzw`, `wxyz` |
 //! | [`WeightSource`] | `file`, `unit` |
 //! | [`Initialisation`] (the named ones) | `spectral`, `tree` |
 //!
@@ -39,6 +40,7 @@
 use crate::certify::CertifyMode;
 use crate::error::{Error, Result};
 use crate::io::detect::{GraphFormat, WeightSource};
+use crate::io::handeye::QuaternionOrder;
 use crate::multiple::Initialisation;
 use crate::objective::{Loss, Objective};
 use crate::so3::Metric;
@@ -478,7 +480,7 @@ impl Choice for ConjugateFormat {
                 "Tabb dataset directory (robot_cali.txt, cali.txt): relative motions of all station pairs"
             }
             ConjugateFormat::Eth => {
-                "ETH ASL directory with a hand CSV (*base_link*) and a camera CSV (*target*)"
+                "Pose streams (ETH ASL, Vicon, ...): a directory with a hand CSV (*base_link*, *hand*, *vicon*) and a camera CSV (*target*, *camera*), or --hand and --camera"
             }
         }
     }
@@ -494,5 +496,36 @@ impl FromStr for ConjugateFormat {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
         parse_choice(s, "format")
+    }
+}
+
+impl Choice for QuaternionOrder {
+    fn choices() -> Vec<Self> {
+        vec![QuaternionOrder::Xyzw, QuaternionOrder::Wxyz]
+    }
+    fn name(&self) -> &'static str {
+        match self {
+            QuaternionOrder::Xyzw => "xyzw",
+            QuaternionOrder::Wxyz => "wxyz",
+        }
+    }
+    fn help(&self) -> &'static str {
+        match self {
+            QuaternionOrder::Xyzw => "qx qy qz qw: scalar last (ETH ASL, ROS)",
+            QuaternionOrder::Wxyz => "qw qx qy qz: scalar first",
+        }
+    }
+}
+
+impl fmt::Display for QuaternionOrder {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for QuaternionOrder {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        parse_choice(s, "quaternion order")
     }
 }

@@ -3,6 +3,7 @@
 use super::{ProblemKind, Rows};
 use crate::certify::{Certificate, SdpSummary, Verdict};
 use crate::conjugate::{ConjugateProblem, DiagnosticSettings, Diagnostics, Identifiability};
+use crate::io::handeye::{MotionSettings, MotionStats};
 use crate::objective::Loss;
 use crate::pipeline::ConjugateEstimate;
 use crate::so3::{Metric, rotation_to_rows};
@@ -17,7 +18,10 @@ use std::fmt;
 /// ...), `cost` (under the objective), `chordal_cost`, `estimate` (`S`, row-major), `solver`,
 /// `certificate` (or null), `sdp` (the SDP solve, or null), `diagnostics`
 /// (`median_angle_mismatch_deg`, `max_angle_mismatch_deg`, `suspicious_pairs`,
-/// `small_rotation_pairs`, `identifiability`).
+/// `small_rotation_pairs`, `identifiability`), `motion` (null for pairs read as such; for Tabb
+/// and pose streams the [`MotionStats`] counts `poses`, `pairs`, `skipped_small`, `unmatched`,
+/// `hand` and `camera` (per stream: `file`, `samples`, `kept`, `repeated_stamps`,
+/// `header_lines`, `time_unit`; null for Tabb), and `settings`, the [`MotionSettings`] used).
 /// Text: where the data came from, the diagnostics, `S`, costs, solver, SDP and certificate.
 ///
 /// ```
@@ -56,6 +60,8 @@ pub struct ConjugateReport {
     pub median_residual: f64,
     /// Where the figure was written (`--plot`), if it was.
     pub figure: Option<String>,
+    /// How the pairs were formed from poses (Tabb, pose streams), with the settings used.
+    pub motion: Option<(MotionStats, MotionSettings)>,
 }
 
 impl ConjugateReport {
@@ -73,7 +79,34 @@ impl ConjugateReport {
             source,
             result,
             figure: None,
+            motion: None,
         }
+    }
+
+    /// The report with the counts of forming the pairs from poses
+    /// ([`crate::io::input::LoadedConjugate::motion`]) and the settings used; `None` keeps none.
+    ///
+    /// ```
+    /// use rotavg::conjugate::ConjugateProblem;
+    /// use rotavg::io::handeye::{MotionSettings, MotionStats};
+    /// use rotavg::pipeline::{average_conjugate, AverageSettings};
+    /// use rotavg::report::ConjugateReport;
+    /// use rotavg::so3::exp;
+    /// use nalgebra::Vector3;
+    /// let rs = [exp(&Vector3::new(0.5, 0.0, 0.0)), exp(&Vector3::new(0.0, 0.7, 0.1))];
+    /// let problem = ConjugateProblem::from_rotations(&rs, &rs)?;
+    /// let result = average_conjugate(&problem, &AverageSettings::default())?;
+    /// let stats = MotionStats { poses: 3, pairs: 2, unmatched: 1, ..Default::default() };
+    /// let report = ConjugateReport::new(&problem, "streams".into(), result)
+    ///     .with_motion(Some(stats), MotionSettings::default());
+    /// let json = serde_json::to_value(&report).unwrap();
+    /// assert_eq!(json["motion"]["unmatched"], 1);
+    /// assert_eq!(json["motion"]["settings"]["stride"], 15);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn with_motion(mut self, stats: Option<MotionStats>, settings: MotionSettings) -> Self {
+        self.motion = stats.map(|s| (s, settings));
+        self
     }
 
     /// The certificate's verdict, when one was computed.
@@ -114,6 +147,14 @@ struct Json<'a> {
     certificate: Option<&'a Certificate>,
     sdp: Option<&'a SdpSummary>,
     diagnostics: DiagnosticsJson<'a>,
+    motion: Option<MotionJson<'a>>,
+}
+
+#[derive(Serialize)]
+struct MotionJson<'a> {
+    #[serde(flatten)]
+    stats: &'a MotionStats,
+    settings: &'a MotionSettings,
 }
 
 impl Serialize for ConjugateReport {
@@ -139,6 +180,10 @@ impl Serialize for ConjugateReport {
                 small_rotation_pairs: &d.small_rotation_pairs,
                 identifiability: &d.identifiability,
             },
+            motion: self
+                .motion
+                .as_ref()
+                .map(|(stats, settings)| MotionJson { stats, settings }),
         }
         .serialize(serializer)
     }

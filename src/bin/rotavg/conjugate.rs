@@ -1,13 +1,17 @@
 //! `rotavg conjugate INPUT [--format auto|json|tabb|eth] [--certify auto|sdp|branch_and_bound|none] [--json]`:
 //! hand-eye (conjugate) rotation averaging, `R_i ~ S^-1 L_i S`
 //! (`rotavg::pipeline::average_conjugate`, printed as `rotavg::report::ConjugateReport`).
+//! Pose streams: `[DIR] [--hand FILE] [--camera FILE] [--stride N] [--subsample K]
+//! [--max-gap S] [--time-offset S] [--min-angle DEG] [--quaternion-order xyzw|wxyz]`
+//! (`rotavg::io::input::load_conjugate_with`).
 
 use crate::Outcome;
 use crate::common::{Common, choice};
 use clap::Args as ClapArgs;
 use rotavg::certify::{CertifyMode, CertifySettings};
 use rotavg::conjugate::ConjugateSettings;
-use rotavg::io::input::{load_conjugate, load_estimate};
+use rotavg::io::handeye::{MotionSettings, QuaternionOrder};
+use rotavg::io::input::{HandEyeOptions, load_conjugate_with, load_estimate};
 use rotavg::io::names::{Choice, ConjugateFormat, LossKind};
 use rotavg::pipeline::{AverageSettings, average_conjugate};
 #[cfg(feature = "plot")]
@@ -18,8 +22,10 @@ use rotavg::{Metric, Objective, Result};
 /// Arguments of `rotavg conjugate`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// Input file (or dataset directory for Tabb / ETH), or `-` for standard input (JSON).
-    pub input: String,
+    /// Input file (or dataset directory for Tabb / ETH / pose streams), or `-` for standard
+    /// input (JSON). Optional when both `--hand` and `--camera` are given.
+    #[arg(required_unless_present_all = ["hand", "camera"])]
+    pub input: Option<String>,
     /// Input format.
     #[arg(long, value_parser = choice(ConjugateFormat::choices()), default_value_t = ConjugateFormat::Auto)]
     pub format: ConjugateFormat,
@@ -44,14 +50,75 @@ pub struct Args {
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<String>,
     #[command(flatten)]
+    pub streams: StreamArgs,
+    #[command(flatten)]
     pub common: Common,
+}
+
+/// Hand-eye pose streams (ETH, Vicon and other motion-capture CSVs): which files, and how
+/// their samples are paired into motions `(L_i, R_i)` (`rotavg::io::handeye::MotionSettings`).
+#[derive(ClapArgs, Debug)]
+pub struct StreamArgs {
+    /// Hand pose stream (hand in robot base, or the tracked body in the capture world); its
+    /// relative motions are L_i. Default: the file in INPUT whose name contains `base_link`,
+    /// `hand` or `vicon`.
+    #[arg(long, value_name = "FILE")]
+    pub hand: Option<String>,
+    /// Camera pose stream (camera in the target frame); its relative motions are R_i. Default:
+    /// the file in INPUT whose name contains `target` or `camera`.
+    #[arg(long, value_name = "FILE")]
+    pub camera: Option<String>,
+    /// Pair time-matched samples i and i + N (streams).
+    #[arg(long, value_name = "N", default_value_t = MotionSettings::default().stride)]
+    pub stride: usize,
+    /// Start a pair at every K-th time-matched sample (streams).
+    #[arg(long, value_name = "K", default_value_t = MotionSettings::default().subsample)]
+    pub subsample: usize,
+    /// Match a camera sample only when hand samples lie within this many seconds on both sides
+    /// (streams).
+    #[arg(long, value_name = "SECONDS", default_value_t = MotionSettings::default().max_gap)]
+    pub max_gap: f64,
+    /// Seconds added to camera time stamps before matching them to the hand stream (streams).
+    #[arg(long, value_name = "SECONDS", default_value_t = MotionSettings::default().time_offset, allow_negative_numbers = true)]
+    pub time_offset: f64,
+    /// Skip pairs whose hand and camera motions both rotate by less than this (degrees; Tabb
+    /// and streams).
+    #[arg(long, value_name = "DEG", default_value_t = MotionSettings::default().min_angle.to_degrees())]
+    pub min_angle: f64,
+    /// Order of the quaternion fields after `t, x, y, z` (streams).
+    #[arg(long, value_parser = choice(QuaternionOrder::choices()), default_value_t = QuaternionOrder::default())]
+    pub quaternion_order: QuaternionOrder,
+}
+
+impl StreamArgs {
+    /// The library's hand-eye options.
+    fn options(&self) -> HandEyeOptions {
+        HandEyeOptions {
+            hand: self.hand.clone(),
+            camera: self.camera.clone(),
+            motion: MotionSettings {
+                stride: self.stride,
+                subsample: self.subsample,
+                max_gap: self.max_gap,
+                time_offset: self.time_offset,
+                min_angle: self.min_angle.to_radians(),
+                quaternion_order: self.quaternion_order,
+                ..Default::default()
+            },
+        }
+    }
 }
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
     crate::common::check_plot(args.plot.as_ref())?;
     let options = args.common.read_options();
-    let loaded = load_conjugate(&args.input, args.format, &options)?;
+    let loaded = load_conjugate_with(
+        args.input.as_deref(),
+        args.format,
+        &options,
+        &args.streams.options(),
+    )?;
     let objective = Objective::new(
         args.metric,
         args.loss.with_threshold_deg(args.loss_threshold),
@@ -73,14 +140,15 @@ pub fn run(args: &Args) -> Result<Outcome> {
     };
     let result = average_conjugate(&problem, &settings)?;
     #[cfg_attr(not(feature = "plot"), allow(unused_mut))] // the figure path is recorded
-    let mut report = ConjugateReport::new(&problem, loaded.to_string(), result);
+    let mut report = ConjugateReport::new(&problem, loaded.to_string(), result)
+        .with_motion(loaded.motion, loaded.motion_settings);
     #[cfg(feature = "plot")]
     if let Some(path) = &args.plot {
         let (s, certificate) = (
             &report.result.solution.estimate,
             report.result.certificate.as_ref(),
         );
-        write_conjugate_figure(path, &problem, s, certificate, &args.input)?;
+        write_conjugate_figure(path, &problem, s, certificate, &loaded.name)?;
         report.figure = Some(path.clone());
     }
     args.common.print(&report)?;
