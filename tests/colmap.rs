@@ -321,6 +321,17 @@ fn cli_solves_a_noisy_database_with_ground_truth_and_writes_images_txt() {
         "{}",
         ji["solver"]
     );
+    // rotavg info describes the database (the folder holding it too)
+    let dir = temp_dir().join("info_project");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(&path, dir.join("database.db")).unwrap();
+    let info = run(&["info", dir.to_str().unwrap(), "--json"]);
+    assert_success(&info);
+    let ji = json_of(&info);
+    assert_eq!(
+        (ji["format"].as_str(), ji["num_rotations"].as_u64()),
+        (Some("colmap"), Some(15))
+    );
     // --output-format colmap with another name; the text summary names the format.
     let other = temp_dir().join("rotations.txt");
     let text_out = run(&[

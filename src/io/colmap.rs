@@ -189,16 +189,6 @@ fn quaternion_rotation(q: [f64; 4], tol: f64, what: &str) -> std::result::Result
     Ok(UnitQuaternion::from_quaternion(quat).to_rotation_matrix())
 }
 
-fn f64s<const N: usize>(bytes: &[u8]) -> [f64; N] {
-    let mut out = [0.0; N];
-    for (k, chunk) in bytes.chunks_exact(8).take(N).enumerate() {
-        let mut b = [0u8; 8];
-        b.copy_from_slice(chunk);
-        out[k] = f64::from_le_bytes(b);
-    }
-    out
-}
-
 /// Read a COLMAP database (SQLite) as a view graph `[F12]`: the relative rotations of the
 /// rows of `two_view_geometries` whose `config` is accepted and that store a pose, on the
 /// images they name. The reader's remarks (rows skipped, by reason) are in
@@ -259,6 +249,16 @@ mod database {
     use crate::io::detect::GraphFormat;
     use crate::multiple::{Edge, MultipleProblem};
     use rusqlite::{Connection, OpenFlags};
+
+    fn f64s<const N: usize>(bytes: &[u8]) -> [f64; N] {
+        let mut out = [0.0; N];
+        for (k, chunk) in bytes.chunks_exact(8).take(N).enumerate() {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(chunk);
+            out[k] = f64::from_le_bytes(b);
+        }
+        out
+    }
 
     /// The longest image name accepted, characters.
     const MAX_NAME_CHARS: i64 = 4096;
