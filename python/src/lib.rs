@@ -146,6 +146,7 @@ impl EdgeArrays {
             duplicates: duplicate_edge_count(&problem),
             problem,
             node_ids: (0..n as u64).collect(),
+            node_names: Vec::new(),
             initial: None,
             reversed,
             warnings: Vec::new(),

@@ -37,6 +37,9 @@ pub enum GraphFormat {
     OneDsfm,
     /// The JSON problem format of SPEC section 5.
     Json,
+    /// A COLMAP database (SQLite: tables `images` and `two_view_geometries`,
+    /// [`crate::io::colmap::read_colmap_database`]); read from a path, never from text.
+    Colmap,
 }
 
 impl fmt::Display for GraphFormat {
@@ -53,9 +56,10 @@ impl FromStr for GraphFormat {
             "g2o" | "toro" => Ok(GraphFormat::G2o),
             "1dsfm" | "egs" => Ok(GraphFormat::OneDsfm),
             "json" => Ok(GraphFormat::Json),
+            "colmap" => Ok(GraphFormat::Colmap),
             _ => Err(Error::InvalidSettings {
                 name: "format".into(),
-                reason: format!("unknown format `{s}` (expected auto, g2o, 1dsfm or json)"),
+                reason: format!("unknown format `{s}` (expected auto, g2o, 1dsfm, json or colmap)"),
             }),
         }
     }
@@ -93,6 +97,10 @@ pub struct LoadedGraph {
     /// The file's id of each node: node `k` of [`Self::problem`] is `node_ids[k]` in the file.
     /// Ids are sorted increasingly, so contiguous 0-based ids map to themselves.
     pub node_ids: Vec<u64>,
+    /// The file's name of each node where the format names nodes (COLMAP: image names), else
+    /// empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub node_names: Vec<String>,
     /// Initial estimate from vertex lines (as this crate's `R_i`), when every node has one.
     pub initial: Option<Vec<Rotation>>,
     /// Number of edges whose unordered pair `{i, j}` already occurred earlier in the file.
@@ -140,6 +148,11 @@ impl LoadedGraph {
         }
         let (problem, kept) = self.problem.largest_component();
         let node_ids = kept.iter().map(|&k| self.node_ids[k]).collect();
+        let node_names = if self.node_names.len() == num_read {
+            kept.iter().map(|&k| self.node_names[k].clone()).collect()
+        } else {
+            Vec::new()
+        };
         let initial = self
             .initial
             .as_ref()
@@ -153,6 +166,7 @@ impl LoadedGraph {
             LoadedGraph {
                 problem,
                 node_ids,
+                node_names,
                 initial,
                 ..self
             },
@@ -306,6 +320,11 @@ pub fn read_graph(
         f => f,
     };
     match format {
+        GraphFormat::Colmap => Err(Error::parse(
+            Some(file),
+            None,
+            "a COLMAP database is an SQLite file: give its path (or the folder holding database.db), not text",
+        )),
         GraphFormat::OneDsfm => crate::io::sfm::read_egs(text, file, options),
         GraphFormat::Json => crate::io::json::read_problem_json(text, file, options),
         // `Auto` was resolved above; detect_format never returns it.
@@ -313,7 +332,9 @@ pub fn read_graph(
     }
 }
 
-/// Read a file from disk ([`read_graph`]); I/O errors name the path.
+/// Read a file from disk ([`read_graph`]); I/O errors name the path. A COLMAP database
+/// (`format` `colmap`, or with `auto` a file starting with SQLite's header or a folder holding
+/// `database.db`) is read by [`crate::io::colmap::read_colmap_database`].
 ///
 /// ```
 /// use rotavg::io::detect::{load_graph, GraphFormat, ReadOptions};
@@ -331,6 +352,18 @@ pub fn read_graph(
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn load_graph(path: &Path, format: GraphFormat, options: &ReadOptions) -> Result<LoadedGraph> {
+    match format {
+        GraphFormat::Colmap => {
+            let db = crate::io::colmap::find_database(path).unwrap_or_else(|| path.to_path_buf());
+            return crate::io::colmap::read_colmap_database(&db, options);
+        }
+        GraphFormat::Auto => {
+            if let Some(db) = crate::io::colmap::find_database(path) {
+                return crate::io::colmap::read_colmap_database(&db, options);
+            }
+        }
+        _ => {}
+    }
     let name = path.display().to_string();
     let text = super::text::read_text(&name)?;
     read_graph(&text, &name, format, options)

@@ -393,6 +393,7 @@ pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
     Ok(LoadedGraph {
         problem,
         node_ids: ids,
+        node_names: Vec::new(),
         initial,
         duplicates,
         reversed,

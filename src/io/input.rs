@@ -11,7 +11,8 @@
 //! | [`load_view_graph`] | g2o, 1DSfM, JSON view graphs ([`crate::io::detect::read_graph`]) |
 //! | [`load_multiple_input`] | a view graph with ground truth, initial estimate, largest component |
 //! | [`load_conjugate`], [`load_conjugate_with`] | conjugate JSON, Tabb and ETH directories, named hand / camera pose streams |
-//! | [`read_ground_truth`], [`load_ground_truth`] | g2o vertices, Bundler, JSON estimate, rotation list |
+//! | [`read_ground_truth`], [`load_ground_truth`] | g2o vertices, Bundler, JSON estimate, rotation list, COLMAP `images.txt` / `images.bin` |
+//! | [`load_initial_estimate`] | a JSON estimate or a COLMAP model, for the nodes of a graph |
 //! | [`load_estimate`] | an estimate file ([`crate::io::json::read_estimate`]) |
 //!
 //! ```
@@ -29,6 +30,9 @@
 
 use crate::conjugate::{ConjugatePair, ConjugateProblem};
 use crate::error::{Error, Result};
+use crate::io::colmap::{
+    is_images_binary, is_images_text, load_images, read_images_text, rotations_for_nodes,
+};
 use crate::io::detect::{
     ComponentSelection, GraphFormat, LoadedGraph, ReadOptions, WeightSource, detect_format,
     load_graph, read_graph,
@@ -526,6 +530,10 @@ pub fn load_conjugate_with(
 /// * a JSON estimate (`.json`, or text starting with `{`): one rotation per node, in node order;
 /// * g2o (`.g2o`, or a first token that is a tag): the vertex rotations;
 /// * Bundler (`.out`, or a `# Bundle` header): camera `k` is file id `k`;
+/// * COLMAP `images.txt` (a name ending in `images.txt`, or COLMAP's header line): matched by
+///   image name when the graph has names (a COLMAP database), else by image id
+///   ([`crate::io::colmap::rotations_for_nodes`]); [`load_ground_truth`] also reads
+///   `images.bin`;
 /// * otherwise a rotation list: 9 numbers per line (line `k` = file id `k`), or `id R11 .. R33`
 ///   lines (world-to-camera, as many rotation-averaging tools write them)
 ///   ([`crate::io::sfm::read_rotation_list`]). An all-zero rotation means "no ground truth for
@@ -548,6 +556,12 @@ pub fn read_ground_truth(
 ) -> Result<Vec<Option<Rotation>>> {
     let lower = file.to_ascii_lowercase();
     let trimmed = text.trim_start();
+    if is_images_text(file, text) {
+        return Ok(rotations_for_nodes(
+            &read_images_text(text, file, options)?,
+            graph,
+        ));
+    }
     if lower.ends_with(".json") || trimmed.starts_with('{') {
         let rs = read_rotations_estimate(text, file, options)?;
         if rs.len() != graph.node_ids.len() {
@@ -605,8 +619,74 @@ pub fn load_ground_truth(
     graph: &LoadedGraph,
     options: &ReadOptions,
 ) -> Result<Vec<Option<Rotation>>> {
+    if is_images_binary(path) {
+        return Ok(rotations_for_nodes(&load_images(path, options)?, graph));
+    }
     let input = read_input(path)?;
     read_ground_truth(&input.text, &input.name, graph, options)
+}
+
+/// An initial estimate for the nodes of `graph` (the graph as read), from the file at `path`:
+/// a COLMAP sparse model (`images.txt`, `images.bin`: matched as in [`read_ground_truth`]; every
+/// node must have an image) or a JSON estimate ([`load_estimate`], one rotation per node in node
+/// order, or per kept node).
+///
+/// ```
+/// use rotavg::io::input::load_initial_estimate;
+/// use rotavg::io::detect::{read_graph, GraphFormat, ReadOptions};
+/// let graph = read_graph("3 7 1 0 0 0 1 0 0 0 1\n", "EGs.txt", GraphFormat::Auto, &ReadOptions::default())?;
+/// let path = std::env::temp_dir().join(format!("rotavg-doc-init-{}-images.txt", std::process::id()));
+/// std::fs::write(&path, "7 1 0 0 0 0 0 0 1 x.jpg\n\n").unwrap();
+/// let init = load_initial_estimate(path.to_str().unwrap(), &graph, &ReadOptions::default());
+/// std::fs::remove_file(&path).unwrap();
+/// // image 3 is not in the model: an error naming the node
+/// assert!(init.unwrap_err().to_string().contains("node 0 (id 3"));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn load_initial_estimate(
+    path: &str,
+    graph: &LoadedGraph,
+    options: &ReadOptions,
+) -> Result<Vec<Rotation>> {
+    let per_node = if is_images_binary(path) {
+        Some(rotations_for_nodes(&load_images(path, options)?, graph))
+    } else {
+        let input = read_input(path)?;
+        if is_images_text(&input.name, &input.text) {
+            Some(rotations_for_nodes(
+                &read_images_text(&input.text, &input.name, options)?,
+                graph,
+            ))
+        } else {
+            return LoadedEstimate {
+                estimate: read_estimate(&input.text, &input.name, options)?,
+                name: input.name,
+            }
+            .into_rotations();
+        }
+    };
+    let per_node = per_node.unwrap_or_default();
+    per_node
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            r.ok_or_else(|| {
+                let name = graph
+                    .node_names
+                    .get(k)
+                    .map(|n| format!(", name {n}"))
+                    .unwrap_or_default();
+                Error::parse(
+                    Some(path),
+                    None,
+                    format!(
+                        "initial estimate: node {k} (id {}{name}) has no image in the COLMAP model",
+                        graph.node_ids[k]
+                    ),
+                )
+            })
+        })
+        .collect()
 }
 
 /// An estimate file and its name (for errors about its size or kind).
@@ -663,7 +743,8 @@ pub struct MultipleInputOptions {
     pub largest_component: bool,
     /// A ground-truth file ([`read_ground_truth`]).
     pub ground_truth: Option<String>,
-    /// An initial estimate: one rotation per node of the graph as read or per kept node.
+    /// An initial estimate ([`load_initial_estimate`]): a JSON estimate (one rotation per node
+    /// of the graph as read or per kept node) or a COLMAP `images.txt` / `images.bin`.
     pub init: Option<String>,
 }
 
@@ -715,7 +796,7 @@ pub fn load_multiple_input(path: &str, options: &MultipleInputOptions) -> Result
         None => None,
     };
     let init = match &options.init {
-        Some(p) => Some(load_estimate(p, &options.read)?),
+        Some(p) => Some((p, load_initial_estimate(p, &graph, &options.read)?)),
         None => None,
     };
     let (graph, selection) = if options.largest_component {
@@ -740,10 +821,7 @@ pub fn load_multiple_input(path: &str, options: &MultipleInputOptions) -> Result
         None => None,
     };
     let init = match init {
-        Some(e) => {
-            let name = e.name.clone();
-            Some(selection.estimate_for_kept(e.into_rotations()?, &name)?)
-        }
+        Some((name, rotations)) => Some(selection.estimate_for_kept(rotations, name)?),
         None => None,
     };
     Ok(MultipleInput {

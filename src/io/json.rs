@@ -97,6 +97,7 @@ pub fn read_problem_json(text: &str, file: &str, options: &ReadOptions) -> Resul
     let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
     Ok(LoadedGraph {
         node_ids: (0..n as u64).collect(),
+        node_names: Vec::new(),
         problem,
         initial: None,
         duplicates,

@@ -1,9 +1,11 @@
 //! Readers and writers for the file formats: JSON (SPEC section 5), g2o (3-D and 2-D), TORO
-//! `EDGE3`, 1DSfM `EGs.txt`, Bundler ground truth, hand-eye pose files. Each reader documents,
+//! `EDGE3`, 1DSfM `EGs.txt`, Bundler ground truth, COLMAP databases and sparse models,
+//! hand-eye pose files. Each reader documents,
 //! where it reads, how the format maps onto this crate's conventions.
 //!
 //! | module | reads | writes |
 //! |---|---|---|
+//! | [`colmap`] | COLMAP databases ([`colmap::read_colmap_database`], SQLite), `images.txt` / `images.bin` ([`colmap::load_images`]) | `images.txt` ([`colmap::write_images_text`]) |
 //! | [`detect`] | any view graph: [`detect::load_graph`] (path), [`detect::read_graph`] (text), format auto-detection | — |
 //! | [`g2o`] | g2o 3-D / 2-D and TORO `EDGE3` ([`g2o::read_g2o`]) | [`g2o::write_g2o`] |
 //! | [`sfm`] | 1DSfM `EGs.txt` ([`sfm::read_egs`]), Bundler ground truth, rotation lists | — |
@@ -30,6 +32,7 @@
 //! # Ok::<(), rotavg::Error>(())
 //! ```
 
+pub mod colmap;
 pub mod detect;
 pub mod g2o;
 pub mod handeye;

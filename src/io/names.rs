@@ -10,7 +10,8 @@
 //! | [`LossKind`] (a [`Loss`] without its threshold) | `l2`, `l1`, `huber`, `cauchy` |
 //! | [`MultipleLoss`] (the objectives of `rotavg multiple --loss`) | `chordal`, `geodesic`, `l1`, `huber`, `cauchy` |
 //! | [`CertifyMode`] | `auto`, `theory`, `dual`, `sdp`, `staircase`, `none` |
-//! | [`GraphFormat`] | `auto`, `g2o`, `1dsfm`, `json` |
+//! | [`GraphFormat`] | `auto`, `g2o`, `1dsfm`, `json`, `colmap` |
+//! | [`OutputFormat`] | `auto`, `json`, `g2o`, `colmap` |
 //! | [`ConjugateFormat`] | `auto`, `json`, `tabb`, `eth` |
 //! | [`QuaternionOrder`] (pose streams) | `xyzw`, `wxyz` |
 //! | [`WeightSource`] | `file`, `unit` |
@@ -41,6 +42,7 @@ use crate::certify::CertifyMode;
 use crate::error::{Error, Result};
 use crate::io::detect::{GraphFormat, WeightSource};
 use crate::io::handeye::QuaternionOrder;
+use crate::io::output::OutputFormat;
 use crate::multiple::Initialisation;
 use crate::objective::{Loss, Objective};
 use crate::so3::Metric;
@@ -54,7 +56,7 @@ use std::str::FromStr;
 /// use rotavg::io::names::Choice;
 /// use rotavg::io::detect::GraphFormat;
 /// let names: Vec<&str> = GraphFormat::choices().iter().map(|f| f.name()).collect();
-/// assert_eq!(names, ["auto", "g2o", "1dsfm", "json"]);
+/// assert_eq!(names, ["auto", "g2o", "1dsfm", "json", "colmap"]);
 /// assert_eq!(GraphFormat::from_name("1dsfm"), Some(GraphFormat::OneDsfm));
 /// assert!(!GraphFormat::Json.help().is_empty());
 /// ```
@@ -155,6 +157,7 @@ impl Choice for GraphFormat {
             GraphFormat::G2o,
             GraphFormat::OneDsfm,
             GraphFormat::Json,
+            GraphFormat::Colmap,
         ]
     }
     fn name(&self) -> &'static str {
@@ -163,6 +166,7 @@ impl Choice for GraphFormat {
             GraphFormat::G2o => "g2o",
             GraphFormat::OneDsfm => "1dsfm",
             GraphFormat::Json => "json",
+            GraphFormat::Colmap => "colmap",
         }
     }
     fn help(&self) -> &'static str {
@@ -171,6 +175,9 @@ impl Choice for GraphFormat {
             GraphFormat::G2o => "g2o / TORO pose graph",
             GraphFormat::OneDsfm => "1DSfM EGs.txt",
             GraphFormat::Json => "JSON problem (SPEC section 5)",
+            GraphFormat::Colmap => {
+                "COLMAP database (SQLite; a database.db file or the folder holding it)"
+            }
         }
     }
 }
@@ -496,6 +503,50 @@ impl FromStr for ConjugateFormat {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
         parse_choice(s, "format")
+    }
+}
+
+impl Choice for OutputFormat {
+    fn choices() -> Vec<Self> {
+        vec![
+            OutputFormat::Auto,
+            OutputFormat::Json,
+            OutputFormat::G2o,
+            OutputFormat::Colmap,
+        ]
+    }
+    fn name(&self) -> &'static str {
+        match self {
+            OutputFormat::Auto => "auto",
+            OutputFormat::Json => "json",
+            OutputFormat::G2o => "g2o",
+            OutputFormat::Colmap => "colmap",
+        }
+    }
+    fn help(&self) -> &'static str {
+        match self {
+            OutputFormat::Auto => {
+                "From the path: *.g2o is g2o, *images.txt COLMAP, anything else JSON"
+            }
+            OutputFormat::Json => "{\"node_ids\": [...], \"rotations\": [R, ...]}",
+            OutputFormat::G2o => "g2o: the edges and the estimate as vertex lines",
+            OutputFormat::Colmap => {
+                "COLMAP images.txt: world-to-camera quaternions, zero translations, image names"
+            }
+        }
+    }
+}
+
+impl fmt::Display for OutputFormat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for OutputFormat {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        parse_choice(s, "output_format")
     }
 }
 

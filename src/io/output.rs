@@ -1,11 +1,107 @@
-//! Writing estimates to files, as `rotavg multiple --output FILE` does: g2o for a `.g2o` path,
-//! otherwise JSON `{"node_ids": [...], "rotations": [R, ...]}` (readable by
+//! Writing estimates to files, as `rotavg multiple --output FILE [--output-format F]` does:
+//! [`OutputFormat`] `auto` picks g2o for a `.g2o` path, COLMAP `images.txt` for a path ending
+//! in `images.txt`, otherwise JSON `{"node_ids": [...], "rotations": [R, ...]}` (readable by
 //! [`crate::io::json::read_estimate`]).
 
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+
+/// The format of an estimate file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OutputFormat {
+    /// From the path ([`OutputFormat::for_path`]).
+    #[default]
+    Auto,
+    /// `{"node_ids": [...], "rotations": [R, ...]}`.
+    Json,
+    /// g2o: the problem's edges and the estimate as vertex lines ([`crate::io::g2o::write_g2o`]).
+    G2o,
+    /// COLMAP `images.txt` ([`crate::io::colmap::write_images_text`]).
+    Colmap,
+}
+
+impl OutputFormat {
+    /// The format `auto` means for `path`: g2o for `*.g2o`, COLMAP for `*images.txt`, else
+    /// JSON; any other value is returned unchanged.
+    ///
+    /// ```
+    /// use rotavg::io::output::OutputFormat;
+    /// assert_eq!(OutputFormat::Auto.for_path("sparse/images.txt"), OutputFormat::Colmap);
+    /// assert_eq!(OutputFormat::Auto.for_path("est.g2o"), OutputFormat::G2o);
+    /// assert_eq!(OutputFormat::Auto.for_path("est.txt"), OutputFormat::Json);
+    /// assert_eq!(OutputFormat::Colmap.for_path("est.txt"), OutputFormat::Colmap);
+    /// ```
+    pub fn for_path(self, path: &str) -> OutputFormat {
+        if self != OutputFormat::Auto {
+            return self;
+        }
+        let lower = path.to_ascii_lowercase();
+        if lower.ends_with(".g2o") {
+            OutputFormat::G2o
+        } else if lower.ends_with("images.txt") {
+            OutputFormat::Colmap
+        } else {
+            OutputFormat::Json
+        }
+    }
+}
+
+/// What an estimate file holds: the problem, the estimate and the file's node ids and names.
+#[derive(Debug, Clone, Copy)]
+pub struct EstimateFile<'a> {
+    /// The problem solved (its edges go into g2o files).
+    pub problem: &'a MultipleProblem,
+    /// The estimate, one rotation per node.
+    pub rotations: &'a [Rotation],
+    /// The file id of each node.
+    pub node_ids: &'a [u64],
+    /// The name of each node, or empty (COLMAP files then use the ids as names).
+    pub node_names: &'a [String],
+}
+
+impl EstimateFile<'_> {
+    /// The text of the file in `format` (resolved for `path` when `auto`).
+    ///
+    /// ```
+    /// use rotavg::io::output::{EstimateFile, OutputFormat};
+    /// use rotavg::multiple::{Edge, MultipleProblem};
+    /// use rotavg::Rotation;
+    /// let p = MultipleProblem::new(2, vec![Edge { i: 0, j: 1, rotation: Rotation::identity(), weight: 1.0 }])?;
+    /// let rs = vec![Rotation::identity(); 2];
+    /// let names = vec!["a.jpg".to_string(), "b.jpg".to_string()];
+    /// let file = EstimateFile { problem: &p, rotations: &rs, node_ids: &[1, 2], node_names: &names };
+    /// assert!(file.text("out/images.txt", OutputFormat::Auto)?.contains("\n2 1 0 0 0 0 0 0 1 b.jpg\n"));
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn text(&self, path: &str, format: OutputFormat) -> Result<String> {
+        match format.for_path(path) {
+            OutputFormat::Colmap => {
+                crate::io::colmap::write_images_text(self.rotations, self.node_ids, self.node_names)
+            }
+            OutputFormat::G2o => Ok(crate::io::g2o::write_g2o(
+                self.problem,
+                Some(self.rotations),
+            )),
+            OutputFormat::Json | OutputFormat::Auto => {
+                let mut s = serde_json::to_string(&EstimateWithIds {
+                    node_ids: self.node_ids,
+                    rotations: self.rotations,
+                })
+                .unwrap_or_default();
+                s.push('\n');
+                Ok(s)
+            }
+        }
+    }
+
+    /// Write [`Self::text`] to `path`; I/O errors name the path.
+    pub fn write(&self, path: &str, format: OutputFormat) -> Result<()> {
+        write_text(path, &self.text(path, format)?)
+    }
+}
 
 #[derive(Serialize)]
 struct EstimateWithIds<'a> {
@@ -17,6 +113,7 @@ struct EstimateWithIds<'a> {
 /// The text of an estimate file for `path`: g2o ([`crate::io::g2o::write_g2o`]: the problem's
 /// edges and the estimate as vertex lines) when `path` ends in `.g2o`, otherwise one JSON line
 /// `{"node_ids": [...], "rotations": [R, ...]}` (`node_ids[k]` is the file id of node `k`).
+/// (No names, no COLMAP: see [`EstimateFile`] for those.)
 ///
 /// ```
 /// use rotavg::io::output::estimate_file_text;

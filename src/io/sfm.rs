@@ -103,6 +103,7 @@ pub fn read_egs(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
     Ok(LoadedGraph {
         problem,
         node_ids: ids,
+        node_names: Vec::new(),
         initial: None,
         duplicates,
         reversed,

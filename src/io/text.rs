@@ -37,6 +37,55 @@ pub fn read_text(path: &str) -> Result<String> {
     read_text_limited(path, MAX_INPUT_BYTES)
 }
 
+/// Read the bytes of a binary input (the file at `path`, or standard input for `-`) with the
+/// size limit [`MAX_INPUT_BYTES`] (refused from the file's size before reading); no NUL or
+/// UTF-8 checks. Errors name the path. Binary readers (COLMAP `images.bin`) read through it.
+///
+/// ```
+/// use rotavg::io::text::read_bytes;
+/// let path = std::env::temp_dir().join(format!("rotavg-doc-bytes-{}.bin", std::process::id()));
+/// std::fs::write(&path, [0u8, 1, 2]).unwrap();
+/// let bytes = read_bytes(path.to_str().unwrap());
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(bytes?, vec![0, 1, 2]);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn read_bytes(path: &str) -> Result<Vec<u8>> {
+    let io_error = |message: String| Error::Io {
+        path: path.into(),
+        message,
+    };
+    let max_bytes = MAX_INPUT_BYTES;
+    if path == "-" {
+        return read_limited_binary(std::io::stdin().lock(), max_bytes).map_err(io_error);
+    }
+    let file = std::fs::File::open(path).map_err(|e| io_error(e.to_string()))?;
+    if let Ok(meta) = file.metadata()
+        && meta.is_file()
+        && meta.len() > max_bytes
+    {
+        return Err(io_error(format!(
+            "the file has {} bytes, more than the input limit of {max_bytes} bytes",
+            meta.len()
+        )));
+    }
+    read_limited_binary(file, max_bytes).map_err(io_error)
+}
+
+fn read_limited_binary(reader: impl Read, max_bytes: u64) -> std::result::Result<Vec<u8>, String> {
+    let mut bytes = Vec::new();
+    reader
+        .take(max_bytes.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| e.to_string())?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(format!(
+            "the input has more than the input limit of {max_bytes} bytes"
+        ));
+    }
+    Ok(bytes)
+}
+
 /// [`read_text`] with another size limit, bytes.
 pub fn read_text_limited(path: &str, max_bytes: u64) -> Result<String> {
     let io_error = |message: String| Error::Io {

@@ -60,10 +60,26 @@ impl InfoReport {
     pub fn read(input: &Input, format: GraphFormat, options: &ReadOptions) -> Result<Self> {
         let start = Instant::now();
         let g = read_graph(&input.text, &input.name, format, options)?;
-        let load_seconds = start.elapsed().as_secs_f64();
+        Ok(Self::describe(
+            &input.name,
+            g,
+            start.elapsed().as_secs_f64(),
+        ))
+    }
+
+    /// Read the view graph at `path` (`-`: standard input; a COLMAP database or the folder
+    /// holding one too, [`crate::io::input::load_view_graph`]) and describe it; `load_seconds`
+    /// includes reading the file.
+    pub fn load(path: &str, format: GraphFormat, options: &ReadOptions) -> Result<Self> {
+        let start = Instant::now();
+        let g = crate::io::input::load_view_graph(path, format, options)?;
+        Ok(Self::describe(path, g, start.elapsed().as_secs_f64()))
+    }
+
+    fn describe(file: &str, g: crate::io::detect::LoadedGraph, load_seconds: f64) -> Self {
         let stats = graph_stats(&g.problem, g.initial.as_deref(), &StatsSettings::default());
-        Ok(InfoReport {
-            file: input.name.clone(),
+        InfoReport {
+            file: file.to_string(),
             format: g.format,
             planar: g.planar,
             num_rotations: stats.num_nodes,
@@ -75,7 +91,7 @@ impl InfoReport {
             load_seconds,
             stats,
             id_range: g.node_ids.first().copied().zip(g.node_ids.last().copied()),
-        })
+        }
     }
 }
 

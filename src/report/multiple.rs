@@ -17,7 +17,8 @@ use std::fmt;
 ///
 /// JSON (`--json`): `problem` = `"multiple"`, `num_rotations`, `num_measurements` (edges),
 /// `loss` ([`MultipleLoss::name_of`]), `cost` (under the loss), `chordal_cost`, `estimate`
-/// (row-major, `R_0 = I`), `node_ids` (the file id of each node of the estimate), `solver`,
+/// (row-major, `R_0 = I`), `node_ids` (the file id of each node of the estimate), `node_names`
+/// (only when the format names nodes: COLMAP image names), `solver`,
 /// `certificate` (or null), `pipeline` ([`PipelineDetails`]: certification methods, times),
 /// `accuracy` (against ground truth, or null), `other_components` (sizes of the components not
 /// solved), `format`.
@@ -57,6 +58,8 @@ pub struct MultipleReport {
     pub warnings: Vec<String>,
     /// The file id of each node of the estimate.
     pub node_ids: Vec<u64>,
+    /// The file's name of each node (COLMAP image names), or empty.
+    pub node_names: Vec<String>,
     /// Number of edges solved.
     pub num_edges: usize,
     /// Which nodes of the file's graph were solved.
@@ -86,6 +89,7 @@ impl MultipleReport {
             reversed: g.reversed,
             warnings: g.warnings.clone(),
             node_ids: g.node_ids.clone(),
+            node_names: g.node_names.clone(),
             num_edges: g.problem.num_edges(),
             selection: input.selection.clone(),
             accuracy,
@@ -110,6 +114,8 @@ struct Json<'a> {
     chordal_cost: f64,
     estimate: Rows<'a>,
     node_ids: &'a [u64],
+    #[serde(skip_serializing_if = "<[String]>::is_empty")]
+    node_names: &'a [String],
     solver: &'a SolverReport,
     certificate: Option<&'a Certificate>,
     pipeline: &'a PipelineDetails,
@@ -130,6 +136,7 @@ impl Serialize for MultipleReport {
             chordal_cost: s.chordal_cost,
             estimate: Rows::Many(&s.rotations),
             node_ids: &self.node_ids,
+            node_names: &self.node_names,
             solver: &s.report,
             certificate: self.result.certificate.as_ref(),
             pipeline: &self.result.details,

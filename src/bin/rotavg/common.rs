@@ -15,7 +15,8 @@ pub struct Common {
     /// Weights from the file (`file`, default) or all 1 (`unit`).
     #[arg(long, value_parser = choice(WeightSource::choices()), default_value_t = WeightSource::File)]
     pub weights: WeightSource,
-    /// Start the local solver from this estimate (JSON estimate file).
+    /// Start the local solver from this estimate (JSON estimate file; `multiple` also reads a
+    /// COLMAP `images.txt` / `images.bin`, matched to the images by name or id).
     #[arg(long, value_name = "FILE")]
     pub init: Option<String>,
     /// Exit with status 3 unless the verdict is `certified`.

@@ -1,18 +1,17 @@
-//! `rotavg info INPUT [--format auto|g2o|1dsfm|json] [--weights file|unit] [--json]`: describe
+//! `rotavg info INPUT [--format auto|g2o|1dsfm|json|colmap] [--weights file|unit] [--json]`: describe
 //! a view-graph file (`rotavg::report::InfoReport`).
 
 use crate::Outcome;
 use crate::common::choice;
 use clap::Args as ClapArgs;
 use rotavg::io::detect::{GraphFormat, ReadOptions, WeightSource};
-use rotavg::io::input::read_input;
 use rotavg::io::names::Choice;
 use rotavg::report::InfoReport;
 
 /// Arguments of `rotavg info`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// Input file, or `-` for standard input.
+    /// Input file (or a folder holding a COLMAP database.db), or `-` for standard input.
     pub input: String,
     /// Input format.
     #[arg(long, value_parser = choice(GraphFormat::choices()), default_value_t = GraphFormat::Auto)]
@@ -31,7 +30,7 @@ pub fn run(args: &Args) -> rotavg::Result<Outcome> {
         weights: args.weights,
         ..Default::default()
     };
-    let report = InfoReport::read(&read_input(&args.input)?, args.format, &options)?;
+    let report = InfoReport::load(&args.input, args.format, &options)?;
     crate::common::print(&report, args.json, false)?;
     Ok(Outcome { verdict: None })
 }

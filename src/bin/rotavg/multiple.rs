@@ -1,5 +1,5 @@
-//! `rotavg multiple INPUT [--format auto|g2o|1dsfm|json] [--loss ...] [--certify ...] [--json]
-//! [--output FILE]`: multiple rotation averaging with a certificate
+//! `rotavg multiple INPUT [--format auto|g2o|1dsfm|json|colmap] [--loss ...] [--certify ...]
+//! [--json] [--output FILE [--output-format auto|json|g2o|colmap]]`: multiple rotation averaging with a certificate
 //! (`rotavg::pipeline::average_multiple`); input loading is `rotavg::io::input`, the printed
 //! object `rotavg::report::MultipleReport`.
 
@@ -11,7 +11,7 @@ use rotavg::certify::{CertifyMode, CertifySettings};
 use rotavg::io::detect::GraphFormat;
 use rotavg::io::input::{MultipleInputOptions, load_multiple_input};
 use rotavg::io::names::{Choice, MultipleLoss};
-use rotavg::io::output::write_estimate_file;
+use rotavg::io::output::{EstimateFile, OutputFormat};
 use rotavg::multiple::{Initialisation, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_multiple};
 #[cfg(feature = "plot")]
@@ -27,7 +27,7 @@ pub fn certify_modes() -> Vec<CertifyMode> {
 /// Arguments of `rotavg multiple`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// Input file, or `-` for standard input.
+    /// Input file (or a folder holding a COLMAP database.db), or `-` for standard input.
     pub input: String,
     /// Input format.
     #[arg(long, value_parser = choice(GraphFormat::choices()), default_value_t = GraphFormat::Auto)]
@@ -45,7 +45,8 @@ pub struct Args {
     #[arg(long, value_parser = choice(certify_modes()), default_value_t = CertifyMode::Auto)]
     pub certify: CertifyMode,
     /// Ground truth: g2o (vertex lines; `.g2o` or a first token that is a tag), Bundler `.out`,
-    /// JSON estimate (node order), or a rotation list (`R11 .. R33` per line, line k = file id
+    /// COLMAP `images.txt` / `images.bin` (matched by image name, or id), JSON estimate (node
+    /// order), or a rotation list (`R11 .. R33` per line, line k = file id
     /// k, or `id R11 .. R33` per line); matched to nodes by file id. An all-zero rotation
     /// means "no ground truth for this camera".
     #[arg(long, value_name = "FILE")]
@@ -53,10 +54,13 @@ pub struct Args {
     /// Solve the largest connected component of a disconnected graph (and report the others).
     #[arg(long)]
     pub largest_component: bool,
-    /// Write the estimate: JSON `{"rotations": [...], "node_ids": [...]}`, or g2o when FILE ends
-    /// in `.g2o`.
+    /// Write the estimate: JSON `{"rotations": [...], "node_ids": [...]}`, g2o when FILE ends
+    /// in `.g2o`, COLMAP `images.txt` when it ends in `images.txt` (see `--output-format`).
     #[arg(long, value_name = "FILE")]
     pub output: Option<String>,
+    /// Format of `--output` (`auto`: from the file name).
+    #[arg(long, value_parser = choice(OutputFormat::choices()), default_value_t = OutputFormat::Auto)]
+    pub output_format: OutputFormat,
     /// Write an SVG figure: histogram of the residual angles (degrees), the certificate, and
     /// the 10 smallest eigenvalues of the certificate matrix (estimates) with the proven bound.
     #[arg(long, value_name = "FILE.svg")]
@@ -110,7 +114,13 @@ pub fn run(args: &Args) -> Result<Outcome> {
         report.result.certificate.as_ref(),
     );
     if let Some(path) = &args.output {
-        write_estimate_file(path, &graph.problem, rotations, &graph.node_ids)?;
+        let file = EstimateFile {
+            problem: &graph.problem,
+            rotations,
+            node_ids: &graph.node_ids,
+            node_names: &graph.node_names,
+        };
+        file.write(path, args.output_format)?;
     }
     #[cfg(feature = "plot")]
     if let Some(path) = &args.plot {
