@@ -15,7 +15,7 @@ use crate::certify::{
 use crate::error::Result;
 use crate::multiple::robust::inlier_threshold_deg;
 use crate::multiple::{
-    Initialisation, MultipleProblem, MultipleSettings, MultipleSolution, fix_gauge, solve_multiple,
+    Initialisation, MultipleProblem, MultipleSettings, MultipleSolution, solve_multiple,
 };
 use crate::so3::{Rotation, project_to_so3};
 use crate::termination::SolverReport;
@@ -157,9 +157,9 @@ pub struct InlierGraph {
     /// Chordal cost of the refined estimate on the certified component (the certificate's
     /// upper bound).
     pub chordal_cost: f64,
-    /// The refined estimate of every node (`R_0 = I`): the refinement on `nodes`, aligned to
-    /// the robust estimate by the best rotation `G` (gauge); other nodes keep their robust
-    /// rotations.
+    /// The refined estimate of every node (`R_0 = I`): the refinement on `nodes` in the gauge
+    /// `R_0 = I` when node 0 is among them, else aligned to the robust estimate by the best
+    /// rotation `G`; the other nodes keep their robust rotations exactly.
     #[serde(with = "crate::so3::serde_rows::rotations")]
     pub estimate: Vec<Rotation>,
     /// The chordal L2 refinement (Newton-LM from the robust estimate), plus any refinement
@@ -279,19 +279,24 @@ pub fn certify_inlier_graph(
         certify: settings.certify.clone(),
     };
     let refined = average(&sub, &sub_settings)?;
-    // the gauge G aligning the refinement to the robust estimate: max tr(G^T sum R_k^T R_v)
-    let mut m = Matrix3::zeros();
-    for (k, &v) in nodes.iter().enumerate() {
-        m += refined.solution.rotations[k].matrix().transpose() * robust.rotations[v].matrix();
-    }
-    let g = project_to_so3(&m).unwrap_or_else(Rotation::identity);
+    // the gauge G of the refinement: R_0 G = I when node 0 is in the component (as the robust
+    // estimate), else the best alignment to the robust estimate, max tr(G^T sum R_k^T R_v);
+    // nodes outside the component keep their robust rotations exactly
+    let g = if nodes.first() == Some(&0) {
+        refined.solution.rotations[0].inverse()
+    } else {
+        let mut m = Matrix3::zeros();
+        for (k, &v) in nodes.iter().enumerate() {
+            m += refined.solution.rotations[k].matrix().transpose() * robust.rotations[v].matrix();
+        }
+        project_to_so3(&m).unwrap_or_else(Rotation::identity)
+    };
     let mut estimate = robust.rotations.clone();
     for (k, &v) in nodes.iter().enumerate() {
         estimate[v] = refined.solution.rotations[k] * g;
     }
-    fix_gauge(&mut estimate);
-    if let Some(r0) = estimate.first_mut() {
-        *r0 = Rotation::identity();
+    if nodes.first() == Some(&0) {
+        estimate[0] = Rotation::identity();
     }
     // the cost of the reported rotations (equal to the refinement's up to rounding: a gauge)
     let reported: Vec<Rotation> = nodes.iter().map(|&v| estimate[v]).collect();
