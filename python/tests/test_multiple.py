@@ -86,6 +86,8 @@ def test_robust_losses_report_inliers_and_certify_the_inlier_graph(rng):
     d = rotavg.average_multiple(30, i, j, rel, loss="huber", certify="none").to_dict()
     assert d["robust"]["inlier_graph"] is None and d["robust"]["num_outliers"] == 3
     assert rotavg.average_multiple(30, i, j, rel).to_dict()["robust"] is None
+    d = rotavg.average_multiple(30, i, j, rel, loss="l1", loss_threshold=2.0).to_dict()
+    assert d["robust"]["inlier_threshold_deg"] == 2.0  # as `rotavg multiple --loss-threshold 2`
 
 
 def test_init_is_used(rng):
