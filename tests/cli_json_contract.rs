@@ -427,6 +427,22 @@ fn json_output_of_every_subcommand_is_pinned() {
             ],
         ),
         (
+            "multiple_huber_inlier_graph",
+            &[
+                "multiple",
+                "graph.json",
+                "--loss",
+                "huber",
+                "--loss-threshold",
+                "0.5",
+                "--inlier-threshold",
+                "0.7",
+                "--ground-truth",
+                "graph_truth.json",
+                "--json",
+            ],
+        ),
+        (
             "multiple_largest_component_g2o",
             &[
                 "multiple",

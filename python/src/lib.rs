@@ -282,9 +282,13 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     rel: ``(M, 3, 3)`` relative rotations with ``rel[k] @ R_i = R_j``.
 ///     weights: ``(M,)`` positive edge weights (default all 1).
 ///     loss: ``"chordal"`` (L2, certified), ``"geodesic"`` (L2), ``"l1"``, ``"huber"``,
-///         ``"cauchy"`` (the last four on the residual angle; no certificate).
+///         ``"cauchy"`` (the last four on the residual angle; no certificate of their cost:
+///         for ``"l1"``, ``"huber"`` and ``"cauchy"``, ``to_dict()["robust"]`` has the inlier
+///         counts and residual quantiles, and unless ``certify="none"`` the certificate of the
+///         chordal L2 problem on the inlier graph, ``["robust"]["inlier_graph"]["certificate"]``).
 ///     certify: ``"auto"``, ``"dual"``, ``"sdp"``, ``"staircase"`` or ``"none"``.
-///     loss_threshold: Huber threshold / Cauchy scale in degrees.
+///     loss_threshold: Huber threshold / Cauchy scale in degrees, and the inlier threshold (an
+///         edge is an inlier iff its residual is at most this many degrees).
 ///     init: optional ``(n, 3, 3)`` initial estimate (default: spectral initialisation).
 ///
 /// Returns:
@@ -333,6 +337,9 @@ fn average_multiple_py(
         let settings = AverageSettings {
             solve: MultipleSettings {
                 init,
+                // as the command line: the L1 inlier threshold is --loss-threshold
+                inlier_threshold_deg: (objective.loss == rotavg::Loss::L1)
+                    .then_some(loss_threshold),
                 ..Default::default()
             },
             certify: CertifySettings::with_mode(mode),

@@ -188,6 +188,8 @@ impl SolverReport {
 }
 
 /// The library's report behind a [`RunResult`].
+// One value per call, moved once into its `RunResult`: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 pub enum Report {
     Single(SingleReport),
     Multiple(MultipleReport),

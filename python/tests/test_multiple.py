@@ -69,6 +69,27 @@ def test_robust_losses_have_no_certificate(rng):
     assert res.certificate is None and res.to_dict()["certificate"] is None
 
 
+def test_robust_losses_report_inliers_and_certify_the_inlier_graph(rng):
+    truth, i, j, rel = synthetic_graph(rng, 30, 150, 0.01)
+    bad = np.array([0, 7, 19])  # three edges replaced by a 90-degree turn about z
+    rel = rel.copy()
+    rel[bad] = np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]) @ rel[bad]
+    for loss in ["l1", "huber", "cauchy"]:
+        d = rotavg.average_multiple(30, i, j, rel, loss=loss).to_dict()
+        rob = d["robust"]
+        assert d["certificate"] is None and rob["reported_estimate"] == "robust"
+        assert (rob["num_inliers"], rob["num_outliers"]) == (147, 3)
+        cert = rob["inlier_graph"]["certificate"]
+        assert cert["verdict"] == "certified"
+        assert cert["certified_problem"]["kind"] == "chordal_l2_inliers"
+        assert cert["certified_problem"]["num_edges"] == 147
+    d = rotavg.average_multiple(30, i, j, rel, loss="huber", certify="none").to_dict()
+    assert d["robust"]["inlier_graph"] is None and d["robust"]["num_outliers"] == 3
+    assert rotavg.average_multiple(30, i, j, rel).to_dict()["robust"] is None
+    d = rotavg.average_multiple(30, i, j, rel, loss="l1", loss_threshold=2.0).to_dict()
+    assert d["robust"]["inlier_threshold_deg"] == 2.0  # as `rotavg multiple --loss-threshold 2`
+
+
 def test_init_is_used(rng):
     truth, i, j, rel = synthetic_graph(rng, 20, 60, 0.0)
     res = rotavg.average_multiple(20, i, j, rel, init=truth)

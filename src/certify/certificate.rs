@@ -174,6 +174,45 @@ impl GapTolerance {
     }
 }
 
+/// Which problem a certificate is about, when it is not the problem whose cost the report
+/// states (absent: that problem).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CertifiedProblemKind {
+    /// Chordal L2 multiple rotation averaging on the **inlier graph** of a robust solve: the
+    /// edges whose residual at the robust estimate is within the inlier threshold (its largest
+    /// connected component when they do not connect). The claim is about that problem only,
+    /// never about the robust cost on all edges.
+    ChordalL2Inliers,
+}
+
+/// The problem a certificate is about, with its size against the whole input's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CertifiedProblem {
+    /// What was certified.
+    pub kind: CertifiedProblemKind,
+    /// Nodes of the certified problem.
+    pub num_nodes: usize,
+    /// Nodes of the whole problem.
+    pub total_nodes: usize,
+    /// Edges of the certified problem.
+    pub num_edges: usize,
+    /// Edges of the whole problem.
+    pub total_edges: usize,
+}
+
+impl fmt::Display for CertifiedProblem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.kind {
+            CertifiedProblemKind::ChordalL2Inliers => write!(
+                f,
+                "the chordal L2 problem on the inlier graph ({} of {} edges, {} of {} nodes)",
+                self.num_edges, self.total_edges, self.num_nodes, self.total_nodes
+            ),
+        }
+    }
+}
+
 /// A certificate of (sub)optimality for an estimate (SPEC sections 3 and 5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Certificate {
@@ -214,6 +253,11 @@ pub struct Certificate {
     /// stopped). Omitted from JSON when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub branch_and_bound: Option<crate::certify::branch_and_bound::BranchAndBoundStats>,
+    /// The problem certified when it is not the one whose cost the report states (the
+    /// inlier graph of a robust solve, [`CertifiedProblemKind`]); the bounds are then of that
+    /// problem's cost. Omitted from JSON when absent (the report's own problem).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub certified_problem: Option<CertifiedProblem>,
 }
 
 impl Certificate {
@@ -282,7 +326,14 @@ impl Certificate {
             verified_min_eigenvalue: None,
             smallest_eigenvalues: None,
             branch_and_bound: None,
+            certified_problem: None,
         }
+    }
+
+    /// This certificate, stated as one of `problem` (its bounds are of that problem's cost).
+    pub fn for_problem(mut self, problem: CertifiedProblem) -> Certificate {
+        self.certified_problem = Some(problem);
+        self
     }
 
     /// The same lower bound (a bound on the global minimum, whatever estimate produced it)
@@ -311,6 +362,7 @@ impl Certificate {
         c.verified_min_eigenvalue = self.verified_min_eigenvalue;
         c.smallest_eigenvalues = self.smallest_eigenvalues.clone();
         c.branch_and_bound = self.branch_and_bound;
+        c.certified_problem = self.certified_problem;
         c
     }
 
@@ -327,6 +379,9 @@ impl fmt::Display for Certificate {
             "{} (method {}): cost {:.9e}",
             self.verdict, self.method, self.upper_bound
         )?;
+        if let Some(p) = &self.certified_problem {
+            write!(f, " of {p}")?;
+        }
         match (self.lower_bound, self.gap, self.relative_gap) {
             (Some(lb), Some(g), Some(r)) => {
                 write!(f, ", lower bound {lb:.9e}, gap {g:.3e} (relative {r:.3e})")?

@@ -25,7 +25,8 @@ pub mod spectrum;
 
 pub use branch_and_bound::{BranchAndBoundSettings, BranchAndBoundStats, BranchAndBoundStop};
 pub use certificate::{
-    BoundMethod, Certificate, GapTolerance, TolerancePart, ToleranceRule, Verdict,
+    BoundMethod, Certificate, CertifiedProblem, CertifiedProblemKind, GapTolerance, TolerancePart,
+    ToleranceRule, Verdict,
 };
 pub use certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun, SdpSummary,

@@ -5,6 +5,7 @@
 
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;
+use crate::multiple::robust::EdgeResiduals;
 use crate::so3::Rotation;
 use serde::{Deserialize, Serialize};
 
@@ -182,4 +183,91 @@ pub fn write_text(path: &str, text: &str) -> Result<()> {
         path: path.into(),
         message: e.to_string(),
     })
+}
+
+#[derive(Serialize)]
+struct EdgeRow {
+    i: u64,
+    j: u64,
+    residual_deg: f64,
+    weight: f64,
+    inlier: bool,
+}
+
+#[derive(Serialize)]
+struct EdgesJson {
+    inlier_threshold_deg: f64,
+    edges: Vec<EdgeRow>,
+}
+
+/// The text of a per-edge residual file (`rotavg multiple --edges-output FILE`), one row per
+/// edge in the input's edge order, nodes named by their file ids (`node_ids[k]` names node `k`):
+/// JSON `{"inlier_threshold_deg": t, "edges": [{"i", "j", "residual_deg", "weight",
+/// "inlier"}, ...]}` when `path` ends in `.json`, otherwise CSV with the header
+/// `i,j,residual_deg,weight,inlier` (`inlier` 1 or 0). `residual_deg`: the residual angle at the
+/// estimate; `weight`: the final IRLS weight relative to the edge's own weight, in `(0, 1]`;
+/// `inlier`: `residual_deg <= inlier_threshold_deg` ([`EdgeResiduals`]).
+///
+/// ```
+/// use rotavg::io::output::edges_file_text;
+/// use rotavg::multiple::{Edge, MultipleProblem};
+/// use rotavg::multiple::robust::edge_residuals;
+/// use rotavg::objective::{Loss, Objective};
+/// use rotavg::so3::exp;
+/// use rotavg::{Metric, Rotation};
+/// let turn = exp(&nalgebra::Vector3::new(0.0, 0.0, 10f64.to_radians()));
+/// let p = MultipleProblem::new(2, vec![Edge { i: 0, j: 1, rotation: turn, weight: 1.0 }])?
+///     .with_objective(Objective::new(Metric::Geodesic, Loss::Huber { threshold_deg: 5.0 }))?;
+/// let r = edge_residuals(&p, &[Rotation::identity(); 2], 5.0);
+/// let csv = edges_file_text("edges.csv", &p, &r, &[7, 9]);
+/// assert_eq!(csv.lines().next(), Some("i,j,residual_deg,weight,inlier"));
+/// let row: Vec<f64> = csv.lines().nth(1).unwrap().split(',').map(|x| x.parse().unwrap()).collect();
+/// assert_eq!((row[0], row[1], row[4]), (7.0, 9.0, 0.0)); // file ids; an outlier
+/// assert!((row[2] - 10.0).abs() < 1e-9 && (row[3] - 0.5).abs() < 1e-9); // Huber weight c / theta
+/// let json = edges_file_text("edges.json", &p, &r, &[7, 9]);
+/// assert!(json.contains(r#""i":7,"j":9"#) && json.contains(r#""inlier":false"#));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn edges_file_text(
+    path: &str,
+    problem: &MultipleProblem,
+    residuals: &EdgeResiduals,
+    node_ids: &[u64],
+) -> String {
+    let id = |k: usize| node_ids.get(k).copied().unwrap_or(k as u64);
+    let rows = problem
+        .edges()
+        .iter()
+        .zip(&residuals.residual_deg)
+        .zip(&residuals.weight)
+        .zip(&residuals.inlier)
+        .map(|(((e, &residual_deg), &weight), &inlier)| EdgeRow {
+            i: id(e.i),
+            j: id(e.j),
+            residual_deg,
+            weight,
+            inlier,
+        });
+    if path.to_ascii_lowercase().ends_with(".json") {
+        let mut s = serde_json::to_string(&EdgesJson {
+            inlier_threshold_deg: residuals.summary.inlier_threshold_deg,
+            edges: rows.collect(),
+        })
+        .unwrap_or_default();
+        s.push('\n');
+        s
+    } else {
+        let mut s = String::from("i,j,residual_deg,weight,inlier\n");
+        for r in rows {
+            s.push_str(&format!(
+                "{},{},{},{},{}\n",
+                r.i,
+                r.j,
+                r.residual_deg,
+                r.weight,
+                u8::from(r.inlier)
+            ));
+        }
+        s
+    }
 }

@@ -308,6 +308,7 @@ pub(crate) fn solve_chordal(
                 seconds: start.elapsed().as_secs_f64(),
             },
             init_cost,
+            residuals: None,
         })
     };
     let measure = "relative gradient norm ||grad|| / sum(w)";

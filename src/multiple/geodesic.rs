@@ -100,6 +100,7 @@ pub(crate) fn lie_algebraic(
                 seconds: start.elapsed().as_secs_f64(),
             },
             init_cost,
+            residuals: None,
         })
     };
     let converged = |g: f64| Termination::Converged {

@@ -10,6 +10,8 @@ use crate::multiple::solve::{MultipleSettings, MultipleSolution};
 use crate::objective::{Loss, Objective};
 use crate::so3::{Rotation, log};
 use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use std::fmt;
 
 /// `(rho(theta), psi(theta))` for a residual angle `theta` (radians) under `objective` `[M7]`,
 /// where the edge cost is `w rho(theta)` ([`Objective::term`]) and `psi = rho'(theta) / theta`
@@ -99,4 +101,201 @@ pub(crate) fn solve_robust(
         10 * settings.max_iterations,
         solver_kind,
     )
+}
+
+/// The inlier threshold of the L1 loss when none is given ([`MultipleSettings::inlier_threshold_deg`]),
+/// degrees: the command line's `--loss-threshold` default.
+pub const DEFAULT_L1_INLIER_THRESHOLD_DEG: f64 = 5.0;
+
+/// The inlier threshold (degrees) that applies to `objective` under `settings`, for the robust
+/// losses: [`MultipleSettings::inlier_threshold_deg`] when set, else the Huber threshold or
+/// Cauchy scale, else (L1) [`DEFAULT_L1_INLIER_THRESHOLD_DEG`]. `None` for the L2 losses
+/// (chordal, geodesic), which down-weight nothing.
+///
+/// ```
+/// use rotavg::multiple::MultipleSettings;
+/// use rotavg::multiple::robust::inlier_threshold_deg;
+/// use rotavg::objective::{Loss, Objective};
+/// use rotavg::Metric;
+/// let s = MultipleSettings::default();
+/// let huber = Objective::new(Metric::Geodesic, Loss::Huber { threshold_deg: 3.0 });
+/// assert_eq!(inlier_threshold_deg(&huber, &s), Some(3.0));
+/// assert_eq!(inlier_threshold_deg(&Objective::new(Metric::Geodesic, Loss::L1), &s), Some(5.0));
+/// assert_eq!(inlier_threshold_deg(&Objective::CHORDAL_L2, &s), None);
+/// let s = MultipleSettings { inlier_threshold_deg: Some(2.0), ..Default::default() };
+/// assert_eq!(inlier_threshold_deg(&huber, &s), Some(2.0));
+/// ```
+pub fn inlier_threshold_deg(objective: &Objective, settings: &MultipleSettings) -> Option<f64> {
+    match objective.loss {
+        Loss::L2 => None,
+        Loss::L1 => Some(
+            settings
+                .inlier_threshold_deg
+                .unwrap_or(DEFAULT_L1_INLIER_THRESHOLD_DEG),
+        ),
+        Loss::Huber { .. } | Loss::Cauchy { .. } => settings
+            .inlier_threshold_deg
+            .or(objective.loss.threshold_deg()),
+    }
+}
+
+/// The final IRLS weight of an edge with residual angle `theta` (radians) relative to the
+/// edge's own weight, in `(0, 1]` (1: not down-weighted): Huber `min(1, c / theta)`, Cauchy
+/// `1 / (1 + theta^2 / c^2)` (the factors [`Objective::irls_weight`] of the iteration), and for
+/// L1, whose IRLS factor `1 / theta` has no scale of its own, `min(1, tau / theta)` with `tau`
+/// the inlier threshold (the L1 weight relative to that of an edge at the threshold). 1 for
+/// the L2 losses.
+pub fn relative_weight(objective: &Objective, theta: f64, inlier_threshold_deg: f64) -> f64 {
+    match objective.loss {
+        Loss::L2 => 1.0,
+        Loss::L1 => {
+            let tau = inlier_threshold_deg.to_radians();
+            if theta <= tau { 1.0 } else { tau / theta }
+        }
+        Loss::Huber { .. } | Loss::Cauchy { .. } => {
+            objective.irls_weight(objective.metric.from_angle(theta), f64::MIN_POSITIVE)
+        }
+    }
+}
+
+/// Counts and quantiles of the per-edge residual angles of an estimate (degrees).
+/// Quantiles interpolate linearly between ranks: `q(p)` at rank `p (m - 1)` of the sorted
+/// residuals (so the median of an even count is the mean of the two middle values).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ResidualSummary {
+    /// The inlier rule's threshold: an edge is an inlier iff `residual_deg <= threshold_deg`.
+    pub inlier_threshold_deg: f64,
+    /// Number of edges `M`.
+    pub num_edges: usize,
+    /// Edges with `residual_deg <= inlier_threshold_deg`.
+    pub num_inliers: usize,
+    /// `M - num_inliers`.
+    pub num_outliers: usize,
+    /// Smallest residual.
+    pub min_deg: f64,
+    /// 25 % quantile.
+    pub q25_deg: f64,
+    /// Median.
+    pub median_deg: f64,
+    /// 75 % quantile.
+    pub q75_deg: f64,
+    /// 90 % quantile.
+    pub q90_deg: f64,
+    /// Largest residual.
+    pub max_deg: f64,
+}
+
+impl fmt::Display for ResidualSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} inliers, {} outliers of {} edges (inlier: residual <= {} deg); residual quantiles (deg): min {:.3}, 25% {:.3}, median {:.3}, 75% {:.3}, 90% {:.3}, max {:.3}",
+            self.num_inliers,
+            self.num_outliers,
+            self.num_edges,
+            self.inlier_threshold_deg,
+            self.min_deg,
+            self.q25_deg,
+            self.median_deg,
+            self.q75_deg,
+            self.q90_deg,
+            self.max_deg
+        )
+    }
+}
+
+/// Per-edge residuals of an estimate, in the problem's edge order: the residual angle
+/// `theta(R_ij R_i, R_j)` in degrees, the final IRLS weight relative to the edge's own weight
+/// ([`relative_weight`]), and the inlier flag `residual_deg <= inlier_threshold_deg`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EdgeResiduals {
+    /// Residual angle of each edge, degrees.
+    pub residual_deg: Vec<f64>,
+    /// Final IRLS weight of each edge relative to its own weight, in `(0, 1]`.
+    pub weight: Vec<f64>,
+    /// `residual_deg <= inlier_threshold_deg`.
+    pub inlier: Vec<bool>,
+    /// Counts and quantiles.
+    pub summary: ResidualSummary,
+}
+
+impl EdgeResiduals {
+    /// Indices of the inlier edges, in edge order.
+    pub fn inlier_edges(&self) -> Vec<usize> {
+        (0..self.inlier.len()).filter(|&k| self.inlier[k]).collect()
+    }
+}
+
+/// The per-edge residuals of `rotations` under `problem`'s objective, with the inlier rule
+/// `residual_deg <= inlier_threshold_deg` (any threshold; [`inlier_threshold_deg`] gives the
+/// one a solve uses). [`solve_multiple`](crate::multiple::solve_multiple) attaches them to the
+/// solution of a robust loss. Panics if `rotations.len() != n`.
+///
+/// ```
+/// use rotavg::multiple::{Edge, MultipleProblem};
+/// use rotavg::multiple::robust::edge_residuals;
+/// use rotavg::objective::{Loss, Objective};
+/// use rotavg::so3::exp;
+/// use rotavg::{Metric, Rotation};
+/// // A triangle of identities, one edge measuring a 30-degree turn instead.
+/// let e = |i, j, r| Edge { i, j, rotation: r, weight: 2.0 };
+/// let turn = exp(&nalgebra::Vector3::new(0.0, 0.0, 30f64.to_radians()));
+/// let p = MultipleProblem::new(3, vec![e(0, 1, Rotation::identity()), e(1, 2, Rotation::identity()), e(2, 0, turn)])?
+///     .with_objective(Objective::new(Metric::Geodesic, Loss::Huber { threshold_deg: 5.0 }))?;
+/// let r = edge_residuals(&p, &[Rotation::identity(); 3], 5.0);
+/// assert_eq!(r.inlier, [true, true, false]);
+/// assert!((r.residual_deg[2] - 30.0).abs() < 1e-9);
+/// assert!((r.weight[2] - 5.0 / 30.0).abs() < 1e-9); // Huber: c / theta
+/// assert_eq!((r.summary.num_inliers, r.summary.num_outliers), (2, 1));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn edge_residuals(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    inlier_threshold_deg: f64,
+) -> EdgeResiduals {
+    let objective = problem.objective();
+    let theta = problem.residual_angles(rotations);
+    let residual_deg: Vec<f64> = theta.iter().map(|t| t.to_degrees()).collect();
+    let weight = theta
+        .iter()
+        .map(|&t| relative_weight(&objective, t, inlier_threshold_deg))
+        .collect();
+    let inlier: Vec<bool> = residual_deg
+        .iter()
+        .map(|&d| d <= inlier_threshold_deg)
+        .collect();
+    let mut sorted = residual_deg.clone();
+    sorted.sort_by(f64::total_cmp);
+    let q = |p: f64| quantile(&sorted, p);
+    let num_inliers = inlier.iter().filter(|&&b| b).count();
+    let summary = ResidualSummary {
+        inlier_threshold_deg,
+        num_edges: residual_deg.len(),
+        num_inliers,
+        num_outliers: residual_deg.len() - num_inliers,
+        min_deg: q(0.0),
+        q25_deg: q(0.25),
+        median_deg: q(0.5),
+        q75_deg: q(0.75),
+        q90_deg: q(0.9),
+        max_deg: q(1.0),
+    };
+    EdgeResiduals {
+        residual_deg,
+        weight,
+        inlier,
+        summary,
+    }
+}
+
+/// `q(p)` of sorted values, linear between ranks (`NaN` for none).
+fn quantile(sorted: &[f64], p: f64) -> f64 {
+    let Some(last) = sorted.len().checked_sub(1) else {
+        return f64::NAN;
+    };
+    let pos = p * last as f64;
+    let lo = pos.floor() as usize;
+    let hi = pos.ceil() as usize;
+    sorted[lo] + (sorted[hi] - sorted[lo]) * (pos - lo as f64)
 }

@@ -78,6 +78,13 @@ pub struct MultipleSettings {
     pub step_tolerance: f64,
     /// L1 smoothing: IRLS weights `1 / max(theta_e, l1_epsilon)`, radians (default `1e-6`).
     pub l1_epsilon: f64,
+    /// The robust losses (L1, Huber, Cauchy): an edge is an **inlier** iff its residual angle
+    /// at the final estimate is at most this many degrees. `None` (default): the Huber
+    /// threshold or Cauchy scale, and for L1
+    /// [`DEFAULT_L1_INLIER_THRESHOLD_DEG`](crate::multiple::robust::DEFAULT_L1_INLIER_THRESHOLD_DEG)
+    /// ([`crate::multiple::robust::inlier_threshold_deg`]). The solution's
+    /// [`MultipleSolution::residuals`] and the inlier-graph certificate of the pipeline use it.
+    pub inlier_threshold_deg: Option<f64>,
 }
 
 impl Default for MultipleSettings {
@@ -90,6 +97,7 @@ impl Default for MultipleSettings {
             irls_decrease_tolerance: 1e-10,
             step_tolerance: 1e-12,
             l1_epsilon: 1e-6,
+            inlier_threshold_deg: None,
         }
     }
 }
@@ -127,6 +135,14 @@ impl MultipleSettings {
         if self.l1_epsilon <= 0.0 {
             return bad("l1_epsilon", "must be > 0".into());
         }
+        if let Some(t) = self.inlier_threshold_deg
+            && !(t.is_finite() && t > 0.0 && t <= 180.0)
+        {
+            return bad(
+                "inlier_threshold_deg",
+                format!("must be a finite angle in (0, 180] degrees, got {t}"),
+            );
+        }
         Ok(())
     }
 }
@@ -151,6 +167,11 @@ pub struct MultipleSolution {
     pub report: SolverReport,
     /// The cost of the initialisation under the objective.
     pub init_cost: f64,
+    /// The robust losses (L1, Huber, Cauchy): per-edge residual angles at the estimate, final
+    /// relative IRLS weights and inlier flags ([`crate::multiple::robust::edge_residuals`] with
+    /// [`MultipleSettings::inlier_threshold_deg`]); `None` for the L2 losses.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub residuals: Option<crate::multiple::robust::EdgeResiduals>,
 }
 
 impl fmt::Display for MultipleSolution {
@@ -222,6 +243,8 @@ pub fn solve_multiple(
         *r0 = Rotation::identity();
     }
     out.chordal_cost = problem.chordal_cost(&out.rotations);
+    out.residuals = crate::multiple::robust::inlier_threshold_deg(&objective, settings)
+        .map(|t| crate::multiple::robust::edge_residuals(problem, &out.rotations, t));
     out.report.seconds = start.elapsed().as_secs_f64();
     Ok(out)
 }

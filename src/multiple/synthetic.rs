@@ -50,6 +50,22 @@ impl SyntheticGraph {
     /// assert!(p.chordal_cost(&gt) < 1e-20);
     /// ```
     pub fn generate(&self) -> (MultipleProblem, Vec<Rotation>) {
+        let (problem, truth, _) = self.generate_labelled();
+        (problem, truth)
+    }
+
+    /// [`Self::generate`] (the same graph for the same parameters) with, per edge, whether it
+    /// is a planted outlier (its measurement a uniformly random rotation).
+    ///
+    /// ```
+    /// use rotavg::multiple::synthetic::SyntheticGraph;
+    /// let spec = SyntheticGraph { outlier_fraction: 0.2, ..Default::default() };
+    /// let (p, gt, outlier) = spec.generate_labelled();
+    /// assert_eq!((p.clone(), gt.clone()), spec.generate());
+    /// let k = outlier.iter().filter(|&&o| o).count();
+    /// assert!(k > 30 && k < 90, "{k} of 300 edges"); // about 20 %
+    /// ```
+    pub fn generate_labelled(&self) -> (MultipleProblem, Vec<Rotation>, Vec<bool>) {
         let n = self.num_rotations.max(2);
         let m = self.num_edges.max(n - 1);
         let mut rng = StdRng::seed_from_u64(self.seed);
@@ -73,10 +89,13 @@ impl SyntheticGraph {
                 pairs.push((i, j));
             }
         }
+        let mut outlier = Vec::with_capacity(pairs.len());
         let edges = pairs
             .into_iter()
             .map(|(i, j)| {
-                let rotation = if rng.random::<f64>() < self.outlier_fraction {
+                let is_outlier = rng.random::<f64>() < self.outlier_fraction;
+                outlier.push(is_outlier);
+                let rotation = if is_outlier {
                     random_rotation(&mut rng)
                 } else {
                     perturb_gaussian(&(gt[j] * gt[i].inverse()), self.noise_sigma, &mut rng)
@@ -92,6 +111,7 @@ impl SyntheticGraph {
         (
             MultipleProblem::new(n, edges).expect("generated graph is valid"),
             gt,
+            outlier,
         )
     }
 }

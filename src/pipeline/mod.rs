@@ -21,7 +21,7 @@ pub mod simultaneous;
 pub mod single;
 
 pub use conjugate::average_conjugate;
-pub use multiple::average_multiple;
+pub use multiple::{InlierGraph, average_multiple, certify_inlier_graph};
 pub use single::average_single;
 
 use crate::certify::{
@@ -95,6 +95,11 @@ pub struct PipelineDetails {
     pub certify_seconds: f64,
     /// Total time, seconds.
     pub total_seconds: f64,
+    /// Multiple averaging with a robust loss (L1, Huber, Cauchy) and a certify mode other
+    /// than `none`: the chordal L2 refinement and certificate of the inlier graph
+    /// ([`multiple::InlierGraph`]). Omitted from JSON when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inlier_graph: Option<Box<multiple::InlierGraph>>,
 }
 
 impl<S: fmt::Display> fmt::Display for Averaged<S> {

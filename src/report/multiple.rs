@@ -1,12 +1,14 @@
 //! The report of `rotavg multiple`.
 
 use super::{ProblemKind, Rows, write_methods};
+use crate::certify::CertifiedProblem;
 use crate::certify::{Certificate, Verdict};
 use crate::error::Result;
 use crate::io::detect::{ComponentSelection, GraphFormat};
 use crate::io::input::MultipleInput;
 use crate::io::names::MultipleLoss;
 use crate::multiple::accuracy::{AccuracyReport, align_and_compare};
+use crate::multiple::robust::ResidualSummary;
 use crate::pipeline::{MultipleEstimate, PipelineDetails};
 use crate::termination::SolverReport;
 use serde::{Serialize, Serializer};
@@ -21,9 +23,22 @@ use std::fmt;
 /// (only when the format names nodes: COLMAP image names), `solver`,
 /// `certificate` (or null), `pipeline` ([`PipelineDetails`]: certification methods, times),
 /// `accuracy` (against ground truth, or null), `other_components` (sizes of the components not
-/// solved), `format`.
+/// solved), `format`, `robust` (null for the L2 losses).
+///
+/// `robust` (L1, Huber, Cauchy): `reported_estimate` (`"robust"`: `estimate` is the robust
+/// solver's), `inlier_rule`, the [`ResidualSummary`] fields (`inlier_threshold_deg`,
+/// `num_edges`, `num_inliers`, `num_outliers`, residual quantiles `min_deg` .. `max_deg` at
+/// the robust estimate), `edges_output` (the per-edge file, or null) and `inlier_graph` (null
+/// under `--certify none`): the chordal L2 problem on the inlier graph ([`crate::pipeline::InlierGraph`]) with
+/// `certified_problem`, `other_component_sizes`, `isolated_nodes`, `robust_chordal_cost`,
+/// `chordal_cost` (of the refined estimate), `solver`, `certificate` (its `certified_problem`
+/// says which problem it is about), `accuracy` of the refined estimate, `estimate_output` (the
+/// refined estimate's file, or null) and `pipeline`. The top-level `certificate` stays null:
+/// the robust cost has no certificate.
+///
 /// Text: the input line, warnings, the solution and certificate, the bounding methods, the
-/// accuracy, and the files written.
+/// residuals and the inlier graph's certificate (robust losses), the accuracy, and the files
+/// written.
 ///
 /// ```
 /// use rotavg::io::detect::{read_graph, ComponentSelection, GraphFormat, ReadOptions};
@@ -70,6 +85,12 @@ pub struct MultipleReport {
     pub output: Option<String>,
     /// Where the figure was written (`--plot`), if it was.
     pub figure: Option<String>,
+    /// Accuracy of the inlier graph's refined estimate against the ground truth.
+    pub inlier_accuracy: Option<AccuracyReport>,
+    /// Where the per-edge residuals were written (`--edges-output`), if they were.
+    pub edges_output: Option<String>,
+    /// Where the inlier graph's refined estimate was written (`--inlier-output`), if it was.
+    pub inlier_output: Option<String>,
 }
 
 impl MultipleReport {
@@ -79,6 +100,10 @@ impl MultipleReport {
         let accuracy = match &input.truth {
             Some(t) => Some(align_and_compare(&result.solution.rotations, t)?),
             None => None,
+        };
+        let inlier_accuracy = match (&input.truth, &result.details.inlier_graph) {
+            (Some(t), Some(g)) => Some(align_and_compare(&g.estimate, t)?),
+            _ => None,
         };
         let g = &input.graph;
         Ok(MultipleReport {
@@ -95,6 +120,9 @@ impl MultipleReport {
             accuracy,
             output: None,
             figure: None,
+            inlier_accuracy,
+            edges_output: None,
+            inlier_output: None,
         })
     }
 
@@ -122,11 +150,65 @@ struct Json<'a> {
     accuracy: Option<&'a AccuracyReport>,
     other_components: &'a [usize],
     format: GraphFormat,
+    robust: Option<RobustJson<'a>>,
+}
+
+/// `robust` of the JSON report.
+#[derive(Serialize)]
+struct RobustJson<'a> {
+    reported_estimate: &'static str,
+    inlier_rule: &'static str,
+    #[serde(flatten)]
+    summary: &'a ResidualSummary,
+    edges_output: Option<&'a str>,
+    inlier_graph: Option<InlierGraphJson<'a>>,
+}
+
+/// `robust.inlier_graph` of the JSON report: the inlier graph without its estimate (the file of
+/// `--inlier-output`) and node list ([`crate::pipeline::InlierGraph`]).
+#[derive(Serialize)]
+struct InlierGraphJson<'a> {
+    certified_problem: &'a CertifiedProblem,
+    inlier_threshold_deg: f64,
+    other_component_sizes: &'a [usize],
+    isolated_nodes: usize,
+    robust_chordal_cost: f64,
+    chordal_cost: f64,
+    solver: &'a SolverReport,
+    certificate: Option<&'a Certificate>,
+    accuracy: Option<&'a AccuracyReport>,
+    estimate_output: Option<&'a str>,
+    pipeline: &'a PipelineDetails,
 }
 
 impl Serialize for MultipleReport {
     fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
         let s = &self.result.solution;
+        let graph = self.result.details.inlier_graph.as_deref();
+        let robust = s.residuals.as_ref().map(|r| RobustJson {
+            reported_estimate: "robust",
+            inlier_rule: "residual_deg <= inlier_threshold_deg",
+            summary: &r.summary,
+            edges_output: self.edges_output.as_deref(),
+            inlier_graph: graph.map(|g| InlierGraphJson {
+                certified_problem: &g.problem,
+                inlier_threshold_deg: g.inlier_threshold_deg,
+                other_component_sizes: &g.other_component_sizes,
+                isolated_nodes: g.isolated_nodes,
+                robust_chordal_cost: g.robust_chordal_cost,
+                chordal_cost: g.chordal_cost,
+                solver: &g.solver,
+                certificate: g.certificate.as_ref(),
+                accuracy: self.inlier_accuracy.as_ref(),
+                estimate_output: self.inlier_output.as_deref(),
+                pipeline: &g.details,
+            }),
+        });
+        // the inlier graph is reported under `robust`, not twice
+        let pipeline = PipelineDetails {
+            inlier_graph: None,
+            ..self.result.details.clone()
+        };
         Json {
             problem: ProblemKind::Multiple,
             num_rotations: s.rotations.len(),
@@ -139,10 +221,11 @@ impl Serialize for MultipleReport {
             node_names: &self.node_names,
             solver: &s.report,
             certificate: self.result.certificate.as_ref(),
-            pipeline: &self.result.details,
+            pipeline: &pipeline,
             accuracy: self.accuracy.as_ref(),
             other_components: &self.selection.other_component_sizes,
             format: self.format,
+            robust,
         }
         .serialize(serializer)
     }
@@ -171,8 +254,43 @@ impl fmt::Display for MultipleReport {
         if let Some(c) = &self.result.details.certify {
             write_methods(f, &c.methods)?;
         }
+        let robust = &self.result.solution;
+        if let Some(r) = &robust.residuals {
+            write!(
+                f,
+                "\nedges at the {} estimate: {}",
+                robust.objective.loss.name(),
+                r.summary
+            )?;
+        }
+        if let Some(g) = &self.result.details.inlier_graph {
+            write!(f, "\n{g}")?;
+            if let Some(c) = &g.details.certify {
+                write_methods(f, &c.methods)?;
+            }
+        }
         if let Some(a) = &self.accuracy {
             write!(f, "\n{a}")?;
+        }
+        if let Some(a) = &self.inlier_accuracy {
+            write!(f, "\ninlier graph estimate: {a}")?;
+        }
+        if robust.residuals.is_some() {
+            write!(
+                f,
+                "\nreported estimate: the robust ({}) one{}",
+                robust.objective.loss.name(),
+                match (&self.result.details.inlier_graph, &self.inlier_output) {
+                    (Some(_), Some(p)) =>
+                        format!("; the inlier graph's refined estimate written to {p}"),
+                    (Some(_), None) =>
+                        "; the inlier graph's refined estimate: --inlier-output FILE".into(),
+                    _ => String::new(),
+                }
+            )?;
+        }
+        if let Some(p) = &self.edges_output {
+            write!(f, "\nper-edge residuals written to {p}")?;
         }
         if let Some(p) = &self.output {
             write!(f, "\nestimate written to {p}")?;

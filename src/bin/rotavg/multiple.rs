@@ -11,7 +11,7 @@ use rotavg::certify::{CertifyMode, CertifySettings};
 use rotavg::io::detect::GraphFormat;
 use rotavg::io::input::{MultipleInputOptions, load_multiple_input};
 use rotavg::io::names::{Choice, MultipleLoss};
-use rotavg::io::output::{EstimateFile, OutputFormat};
+use rotavg::io::output::{EstimateFile, OutputFormat, edges_file_text, write_text};
 use rotavg::multiple::{Initialisation, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_multiple};
 #[cfg(feature = "plot")]
@@ -35,9 +35,24 @@ pub struct Args {
     /// Loss.
     #[arg(long, value_parser = choice(MultipleLoss::choices()), default_value_t = MultipleLoss::Chordal)]
     pub loss: MultipleLoss,
-    /// Huber / Cauchy threshold in degrees.
+    /// Huber / Cauchy threshold in degrees (for L1: the inlier threshold unless
+    /// `--inlier-threshold` is given).
     #[arg(long, value_name = "DEG", default_value_t = 5.0)]
     pub loss_threshold: f64,
+    /// Robust losses (l1, huber, cauchy): an edge is an inlier iff its residual angle at the
+    /// robust estimate is at most DEG (default: `--loss-threshold`). The inlier graph's
+    /// chordal L2 problem is refined and certified unless `--certify none`.
+    #[arg(long, value_name = "DEG")]
+    pub inlier_threshold: Option<f64>,
+    /// Robust losses: write the per-edge residuals, one row per edge (`i j residual_deg weight
+    /// inlier`, nodes by their file ids): JSON when FILE ends in `.json`, otherwise CSV.
+    #[arg(long, value_name = "FILE")]
+    pub edges_output: Option<String>,
+    /// Robust losses: write the inlier graph's refined (chordal L2) estimate, in the format
+    /// given by `--output-format` (or its path), as `--output` (the estimate printed and
+    /// written by `--output` is the robust one).
+    #[arg(long, value_name = "FILE")]
+    pub inlier_output: Option<String>,
     /// Initialisation of the local solver (ignored with `--init FILE`).
     #[arg(long, value_parser = choice(Initialisation::choices()), default_value_t = Initialisation::Spectral)]
     pub init_method: Initialisation,
@@ -85,12 +100,44 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let graph = &input.graph;
     let objective = args.loss.objective(args.loss_threshold);
     let problem = graph.problem.clone().with_objective(objective)?;
+    let robust_only = |flag: &str| rotavg::Error::InvalidSettings {
+        name: flag.into(),
+        reason: format!(
+            "needs a robust loss (--loss l1, huber or cauchy), not {}",
+            args.loss
+        ),
+    };
+    let inlier_threshold_deg = match args.loss {
+        MultipleLoss::L1 => Some(args.inlier_threshold.unwrap_or(args.loss_threshold)),
+        MultipleLoss::Huber | MultipleLoss::Cauchy => args.inlier_threshold,
+        MultipleLoss::Chordal | MultipleLoss::Geodesic => {
+            for (flag, given) in [
+                ("--inlier-threshold", args.inlier_threshold.is_some()),
+                ("--edges-output", args.edges_output.is_some()),
+                ("--inlier-output", args.inlier_output.is_some()),
+            ] {
+                if given {
+                    return Err(robust_only(flag));
+                }
+            }
+            None
+        }
+    };
+    if args.inlier_output.is_some() && args.certify == CertifyMode::None {
+        return Err(rotavg::Error::InvalidSettings {
+            name: "--inlier-output".into(),
+            reason:
+                "the inlier graph is refined only when it is certified (not with --certify none)"
+                    .into(),
+        });
+    }
     let settings = AverageSettings {
         solve: MultipleSettings {
             init: input
                 .init
                 .clone()
                 .map_or_else(|| args.init_method.clone(), Initialisation::Given),
+            inlier_threshold_deg,
             ..Default::default()
         },
         certify: CertifySettings {
@@ -122,6 +169,22 @@ pub fn run(args: &Args) -> Result<Outcome> {
         };
         file.write(path, args.output_format)?;
     }
+    if let (Some(path), Some(r)) = (&args.edges_output, &report.result.solution.residuals) {
+        write_text(
+            path,
+            &edges_file_text(path, &graph.problem, r, &graph.node_ids),
+        )?;
+    }
+    if let (Some(path), Some(g)) = (&args.inlier_output, &report.result.details.inlier_graph) {
+        let file = EstimateFile {
+            problem: &graph.problem,
+            rotations: &g.estimate,
+            node_ids: &graph.node_ids,
+            node_names: &graph.node_names,
+        };
+        file.write(path, args.output_format)?;
+        report.inlier_output = Some(path.clone());
+    }
     #[cfg(feature = "plot")]
     if let Some(path) = &args.plot {
         write_multiple_figure(path, &graph.problem, rotations, certificate, &args.input)?;
@@ -129,6 +192,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
     #[cfg(not(feature = "plot"))]
     let _ = certificate;
     report.output = args.output.clone();
+    report.edges_output = args.edges_output.clone();
     report.figure = args.plot.clone();
     args.common.print(&report)?;
     Ok(Outcome {
