@@ -247,7 +247,7 @@ pub fn read_colmap_database(path: &Path, options: &ReadOptions) -> Result<Loaded
 mod database {
     use super::*;
     use crate::io::detect::GraphFormat;
-    use crate::multiple::{Edge, MultipleProblem};
+    use crate::multiple::MultipleProblem;
     use rusqlite::{Connection, OpenFlags};
 
     fn f64s<const N: usize>(bytes: &[u8]) -> [f64; N] {
@@ -469,19 +469,7 @@ mod database {
                 accepted_list()
             )));
         }
-        let mut ids: Vec<u64> = raw.iter().flat_map(|e| [e.0, e.1]).collect();
-        ids.sort_unstable();
-        ids.dedup();
-        let index = |id: u64| ids.binary_search(&id).unwrap_or(0);
-        let edges: Vec<Edge> = raw
-            .iter()
-            .map(|&(i, j, rotation)| Edge {
-                i: index(i),
-                j: index(j),
-                rotation,
-                weight: 1.0,
-            })
-            .collect();
+        let (ids, edges) = crate::io::compact_unit_edges(raw.iter().copied());
         let node_names = ids
             .iter()
             .map(|id| names.get(id).cloned().unwrap_or_default())
@@ -524,6 +512,27 @@ pub struct ColmapImage {
     pub rotation: Rotation,
     /// COLMAP's `cam_from_world` translation.
     pub translation: [f64; 3],
+}
+
+impl ColmapImage {
+    /// An image from `qw qx qy qz tx ty tz` (`v`), the quaternion checked against `tol`;
+    /// `Err` names `what`.
+    fn from_values(
+        image_id: u32,
+        name: String,
+        camera_id: u32,
+        v: &[f64; 7],
+        tol: f64,
+        what: &str,
+    ) -> std::result::Result<Self, String> {
+        Ok(ColmapImage {
+            image_id,
+            name,
+            camera_id,
+            rotation: quaternion_rotation([v[0], v[1], v[2], v[3]], tol, what)?,
+            translation: [v[4], v[5], v[6]],
+        })
+    }
 }
 
 /// `true` when `file` / `text` look like a COLMAP `images.txt`: the file name ends in
@@ -602,19 +611,17 @@ pub fn read_images_text(text: &str, file: &str, options: &ReadOptions) -> Result
         let camera_id = id(8, "CAMERA_ID")?;
         // the name is the rest of the line (COLMAP writes names without spaces)
         let name = toks[9..].join(" ");
-        let rotation = quaternion_rotation(
-            [v[0], v[1], v[2], v[3]],
-            options.quaternion_tolerance,
-            &format!("image {image_id}"),
-        )
-        .map_err(perr)?;
-        images.push(ColmapImage {
-            image_id,
-            name,
-            camera_id,
-            rotation,
-            translation: [v[4], v[5], v[6]],
-        });
+        images.push(
+            ColmapImage::from_values(
+                image_id,
+                name,
+                camera_id,
+                &v,
+                options.quaternion_tolerance,
+                &format!("image {image_id}"),
+            )
+            .map_err(perr)?,
+        );
         // the points line that follows every image line
         lines.next();
     }
@@ -691,19 +698,17 @@ pub fn read_images_binary(
             )));
         }
         r.pos += (points * 24) as usize;
-        let rotation = quaternion_rotation(
-            [v[0], v[1], v[2], v[3]],
-            options.quaternion_tolerance,
-            &format!("image {k} (id {image_id})"),
-        )
-        .map_err(|m| Error::parse(Some(file), None, format!("byte {start}: {m}")))?;
-        images.push(ColmapImage {
-            image_id,
-            name,
-            camera_id,
-            rotation,
-            translation: [v[4], v[5], v[6]],
-        });
+        images.push(
+            ColmapImage::from_values(
+                image_id,
+                name,
+                camera_id,
+                &v,
+                options.quaternion_tolerance,
+                &format!("image {k} (id {image_id})"),
+            )
+            .map_err(|m| Error::parse(Some(file), None, format!("byte {start}: {m}")))?,
+        );
     }
     if r.remaining() > 0 {
         return Err(r.err(format!(

@@ -48,6 +48,27 @@ pub(crate) use crate::validate::weight_out_of_range;
 /// The weight window of every reader and constructor (see [`crate::validate::MAX_WEIGHT`]).
 pub use crate::validate::{MAX_WEIGHT, MIN_WEIGHT};
 
+/// Node ids compacted: the sorted distinct file ids of the edges' endpoints (node `k` is
+/// `ids[k]`) and unit-weight edges between their indices. Shared by the readers whose files
+/// name nodes by sparse ids (1DSfM, COLMAP).
+pub(crate) fn compact_unit_edges(
+    raw: impl Iterator<Item = (u64, u64, crate::so3::Rotation)> + Clone,
+) -> (Vec<u64>, Vec<crate::multiple::Edge>) {
+    let mut ids: Vec<u64> = raw.clone().flat_map(|(i, j, _)| [i, j]).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let index = |id: u64| ids.binary_search(&id).unwrap_or(0);
+    let edges = raw
+        .map(|(i, j, rotation)| crate::multiple::Edge {
+            i: index(i),
+            j: index(j),
+            rotation,
+            weight: 1.0,
+        })
+        .collect();
+    (ids, edges)
+}
+
 /// The content lines of a text file: `(1-based line number, trimmed line)` for every line that
 /// is neither blank nor a `#` comment. Shared by the line-oriented readers.
 pub(crate) fn content_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {

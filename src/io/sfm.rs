@@ -23,7 +23,7 @@
 use crate::error::{Error, Result};
 use crate::io::detect::{GraphFormat, LoadedGraph, ReadOptions};
 use crate::io::g2o::Tokens;
-use crate::multiple::{Edge, MultipleProblem};
+use crate::multiple::MultipleProblem;
 use crate::so3::{Rotation, rotation_from_matrix};
 use nalgebra::Matrix3;
 
@@ -82,19 +82,7 @@ pub fn read_egs(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
             "no edge lines in the EGs file",
         ));
     }
-    let mut ids: Vec<u64> = raw.iter().flat_map(|e| [e.0, e.1]).collect();
-    ids.sort_unstable();
-    ids.dedup();
-    let index = |id: u64| ids.binary_search(&id).unwrap_or(0);
-    let edges: Vec<Edge> = raw
-        .iter()
-        .map(|&(i, j, rotation, _)| Edge {
-            i: index(i),
-            j: index(j),
-            rotation,
-            weight: 1.0,
-        })
-        .collect();
+    let (ids, edges) = crate::io::compact_unit_edges(raw.iter().map(|&(i, j, r, _)| (i, j, r)));
     let reversed = raw.iter().filter(|e| e.0 > e.1).count();
     let first_line = raw.first().map(|e| e.3);
     let problem =
