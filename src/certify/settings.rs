@@ -221,13 +221,15 @@ pub struct DualSettings {
     pub max_factorizations: usize,
     /// Lanczos settings for the eigenvalue *estimates* (never used as bounds by themselves).
     pub lanczos: LanczosSettings,
-    /// Largest Cholesky factor (stored values) attempted: a guard on memory and time
-    /// (`8 * max_factor_nonzeros` bytes). Graphs with good separators (pose graphs, grids) fill
-    /// little; random expander graphs fill badly (a 10^4-node random graph with 3 10^4 edges
-    /// needs ~1.1e8 values, 7.7 s on an idle 2-core machine; the scalar comparison `[D13]`
-    /// usually avoids it). Above the cap no factorisation is tried: the bound falls
+    /// Largest Cholesky factor (stored values) attempted, on top of the [`Budget`] (which
+    /// predicts memory and time from the factor size and is the guard by default: the
+    /// default cap is `usize::MAX`, none). Graphs with good separators (pose graphs, grids)
+    /// fill little; random expander graphs fill badly (a 10^4-node random graph with 3 10^4
+    /// edges needs ~1.1e8 values, 7.7 s on an idle 2-core machine; the scalar comparison
+    /// `[D13]` usually avoids it). Above the cap no factorisation is tried: the bound falls
     /// back to Gershgorin (valid, weak) and the verdict is `inconclusive` with the reason, as
-    /// over the [`Budget`].
+    /// over the [`Budget`]. (Until 2026-11-25 the default was 2e8 values, which kept a larger
+    /// `--max-memory` from certifying a 10^6-node chain.)
     pub max_factor_nonzeros: usize,
     /// Also estimate `lambda_min(S)` (shift-invert Lanczos) when the first shift already
     /// verifies. Costs a few triangular solves; the estimate is reported, not used in the bound.
@@ -246,7 +248,7 @@ impl Default for DualSettings {
         DualSettings {
             shift_budget_fraction: 0.1,
             max_factorizations: 24,
-            max_factor_nonzeros: 200_000_000,
+            max_factor_nonzeros: usize::MAX,
             lanczos: LanczosSettings::default(),
             estimate_when_verified: true,
             scalar_comparison_above: 30_000_000,
