@@ -98,6 +98,18 @@ pub(crate) fn at_least_one(name: &str, v: usize) -> Result<()> {
     }
 }
 
+/// `q(p)` of ascending values, linear between ranks (rank `p (len - 1)`; so `p = 0.5` is the
+/// median, the mean of the two middle values for an even count); `NaN` for none. The one
+/// quantile of the crate's reports (residual and error summaries).
+pub(crate) fn quantile_sorted(sorted: &[f64], p: f64) -> f64 {
+    let Some(last) = sorted.len().checked_sub(1) else {
+        return f64::NAN;
+    };
+    let pos = p.clamp(0.0, 1.0) * last as f64;
+    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
+    sorted[lo] + (sorted[hi] - sorted[lo]) * (pos - lo as f64)
+}
+
 /// The median of weights (all finite, the lower middle one for an even count; 0 for none): the
 /// scale of the absolute part of every certificate tolerance, robust to a single weight.
 pub(crate) fn median_weight(weights: impl Iterator<Item = f64>) -> f64 {

@@ -408,7 +408,11 @@ impl ConjugateProblem {
             .collect();
         let mut sorted = mismatch.clone();
         sorted.sort_by(f64::total_cmp);
-        let median = median_sorted(&sorted);
+        let median = if sorted.is_empty() {
+            0.0
+        } else {
+            crate::validate::quantile_sorted(&sorted, 0.5)
+        };
         let max = sorted.last().copied().unwrap_or(0.0);
         let suspicious = mismatch
             .iter()
@@ -443,17 +447,5 @@ fn pair_distance(metric: Metric, s: &Rotation, l: &Rotation, r: &Rotation) -> f6
         Metric::Chordal => (s.matrix() * r.matrix() - l.matrix() * s.matrix()).norm(),
         Metric::Geodesic => angle(&(r.inverse() * s.inverse() * l * s)),
         Metric::Quaternion => quaternion_distance(r, &(s.inverse() * l * s)),
-    }
-}
-
-/// Median of an ascending slice (0 for an empty one).
-pub(crate) fn median_sorted(sorted: &[f64]) -> f64 {
-    let n = sorted.len();
-    if n == 0 {
-        0.0
-    } else if n % 2 == 1 {
-        sorted[n / 2]
-    } else {
-        0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
     }
 }

@@ -10,6 +10,7 @@ use crate::error::{Error, Result};
 use crate::objective::{Loss, Objective};
 use crate::single::{SingleProblem, SingleSettings, solve_single};
 use crate::so3::{Metric, Rotation, angle_between, project_to_so3};
+use crate::validate::quantile_sorted;
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -127,14 +128,14 @@ pub fn align_and_compare(
     let robust_errs = sorted_errors(&pairs, &g1);
     Ok(AccuracyReport {
         mean_deg: errs.iter().sum::<f64>() / k as f64,
-        median_deg: median(&errs),
+        median_deg: quantile_sorted(&errs, 0.5),
         max_deg: errs[k - 1],
         rmse_deg: (errs.iter().map(|e| e * e).sum::<f64>() / k as f64).sqrt(),
         num_compared: k,
         alignment: g,
         robust: RobustAccuracy {
             mean_deg: robust_errs.iter().sum::<f64>() / k as f64,
-            median_deg: median(&robust_errs),
+            median_deg: quantile_sorted(&robust_errs, 0.5),
             max_deg: robust_errs[k - 1],
             alignment: g1,
         },
@@ -149,16 +150,6 @@ fn sorted_errors(pairs: &[(&Rotation, &Rotation)], g: &Rotation) -> Vec<f64> {
         .collect();
     errs.sort_by(f64::total_cmp);
     errs
-}
-
-/// The median of sorted, non-empty values.
-fn median(sorted: &[f64]) -> f64 {
-    let k = sorted.len();
-    if k % 2 == 1 {
-        sorted[k / 2]
-    } else {
-        0.5 * (sorted[k / 2 - 1] + sorted[k / 2])
-    }
 }
 
 #[cfg(test)]

@@ -267,7 +267,7 @@ pub fn edge_residuals(
         .collect();
     let mut sorted = residual_deg.clone();
     sorted.sort_by(f64::total_cmp);
-    let q = |p: f64| quantile(&sorted, p);
+    let q = |p: f64| crate::validate::quantile_sorted(&sorted, p);
     let num_inliers = inlier.iter().filter(|&&b| b).count();
     let summary = ResidualSummary {
         inlier_threshold_deg,
@@ -287,15 +287,4 @@ pub fn edge_residuals(
         inlier,
         summary,
     }
-}
-
-/// `q(p)` of sorted values, linear between ranks (`NaN` for none).
-fn quantile(sorted: &[f64], p: f64) -> f64 {
-    let Some(last) = sorted.len().checked_sub(1) else {
-        return f64::NAN;
-    };
-    let pos = p * last as f64;
-    let lo = pos.floor() as usize;
-    let hi = pos.ceil() as usize;
-    sorted[lo] + (sorted[hi] - sorted[lo]) * (pos - lo as f64)
 }
