@@ -512,6 +512,34 @@ fn malformed_sparse_models_are_clear_errors() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("2-D points") && e.contains("truncated"), "{e}");
+    // one line per image, no points lines: the second image line is not a points line
+    let e = read_images_text(
+        "1 1 0 0 0 0 0 0 1 a.jpg\n2 1 0 0 0 0 0 0 1 b.jpg\n",
+        "images.txt",
+        &o,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("images.txt:2: ") && e.contains("points line of image 1"),
+        "{e}"
+    );
+    // an image named twice, and an id used twice
+    for (text, what) in [
+        (
+            "1 1 0 0 0 0 0 0 1 a.jpg\n\n2 1 0 0 0 0 0 0 1 a.jpg\n\n",
+            "name `a.jpg`",
+        ),
+        (
+            "1 1 0 0 0 0 0 0 1 a.jpg\n\n1 1 0 0 0 0 0 0 1 b.jpg\n\n",
+            "image_id 1",
+        ),
+    ] {
+        let e = read_images_text(text, "images.txt", &o)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(what) && e.contains("more than once"), "{e}");
+    }
     // a zero quaternion (text and binary)
     let e = read_images_text("1 0 0 0 0 0 0 0 1 a.jpg\n\n", "images.txt", &o)
         .unwrap_err()

@@ -468,3 +468,49 @@ fn real_eth_data_unchanged() {
     assert_eq!(v2["motion"]["pairs"], 551);
     assert!(angle_between(&estimate(&v2), &before) < 1e-12);
 }
+
+/// Pairing flags at the edge of `usize` and millisecond / microsecond stamps: a typed error or
+/// a result, never a panic (the subsample step once overflowed into an out-of-bounds index).
+#[test]
+fn extreme_pairing_flags_and_ambiguous_integer_stamps() {
+    let d = dir("extreme");
+    write_streams(&d, "arm_vicon.csv", "eye_camera.csv", false);
+    let (hand, camera) = (d.join("arm_vicon.csv"), d.join("eye_camera.csv"));
+    for (stride, subsample) in [("1", "18446744073709551615"), ("18446744073709551615", "1")] {
+        let out = run(&[
+            "conjugate",
+            "--hand",
+            path(&hand),
+            "--camera",
+            path(&camera),
+            "--stride",
+            stride,
+            "--subsample",
+            subsample,
+        ]);
+        let code = out.status.code();
+        assert!(
+            code == Some(0) || code == Some(1),
+            "stride {stride}, subsample {subsample}: exit {code:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    // millisecond epoch stamps are neither seconds nor nanoseconds: refused, with the line
+    let ms = "1700000000000 0 0 0 0 0 0 1\n1700000000010 0 0 0 0 0 0 1\n";
+    let err = read_pose_stream(ms, "ms.txt", &MotionSettings::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("ms.txt:1: ") && err.contains("milliseconds or microseconds"),
+        "{err}"
+    );
+    // nanoseconds and seconds still read
+    let ns = "1700000000000000000 0 0 0 0 0 0 1\n1700000000010000000 0 0 0 0 0 0 1\n";
+    assert_eq!(
+        read_pose_stream(ns, "ns.txt", &MotionSettings::default())
+            .unwrap()
+            .poses
+            .len(),
+        2
+    );
+}

@@ -535,6 +535,30 @@ impl ColmapImage {
     }
 }
 
+/// A sparse model names each image once: a repeated `image_id` or name would make the match to
+/// the graph's nodes depend on the order of the file.
+fn reject_repeated_images(images: &[ColmapImage], file: &str) -> Result<()> {
+    let mut ids = std::collections::BTreeSet::new();
+    let mut names = std::collections::BTreeSet::new();
+    for im in images {
+        if !ids.insert(im.image_id) {
+            return Err(Error::parse(
+                Some(file),
+                None,
+                format!("image_id {} appears more than once", im.image_id),
+            ));
+        }
+        if !names.insert(im.name.as_str()) {
+            return Err(Error::parse(
+                Some(file),
+                None,
+                format!("image name `{}` appears more than once", im.name),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// `true` when `file` / `text` look like a COLMAP `images.txt`: the file name ends in
 /// `images.txt`, or the text starts with COLMAP's header `# Image list with two lines of data
 /// per image`.
@@ -622,8 +646,20 @@ pub fn read_images_text(text: &str, file: &str, options: &ReadOptions) -> Result
             )
             .map_err(perr)?,
         );
-        // the points line that follows every image line
-        lines.next();
+        // the points line that follows every image line: empty or `X Y POINT3D_ID` triples
+        // (a second image line here would otherwise be skipped without a word)
+        if let Some((pln, points)) = lines.next() {
+            let toks: Vec<&str> = points.split_whitespace().collect();
+            if toks.len() % 3 != 0 || toks.iter().any(|t| t.parse::<f64>().is_err()) {
+                return Err(Error::parse(
+                    Some(file),
+                    Some(pln),
+                    format!(
+                        "expected the 2-D points line of image {image_id} (empty, or X Y POINT3D_ID triples): every image line is followed by one"
+                    ),
+                ));
+            }
+        }
     }
     if images.is_empty() {
         return Err(Error::parse(
@@ -632,6 +668,7 @@ pub fn read_images_text(text: &str, file: &str, options: &ReadOptions) -> Result
             "no image lines in the COLMAP images.txt",
         ));
     }
+    reject_repeated_images(&images, file)?;
     Ok(images)
 }
 
@@ -723,6 +760,7 @@ pub fn read_images_binary(
             "no images in the COLMAP images.bin",
         ));
     }
+    reject_repeated_images(&images, file)?;
     Ok(images)
 }
 

@@ -69,7 +69,7 @@ pub enum TimeUnit {
     /// Seconds (any number that is not a nanosecond stamp).
     #[default]
     Seconds,
-    /// Nanoseconds: the first stamp is an integer above `1e12` (ROS / Vicon `header.stamp`
+    /// Nanoseconds: the first stamp is an integer above `1e17` (ROS / Vicon `header.stamp`
     /// printed as one integer); every stamp of the file is divided by `1e9`.
     Nanoseconds,
 }
@@ -445,12 +445,23 @@ fn stream_fields(line: &str) -> Vec<&str> {
     }
 }
 
-/// A nanosecond stamp: an integer (digits only) above `1e12`.
+/// A nanosecond stamp: an integer (digits only) above `1e17` (nanoseconds since 1973).
 fn nanoseconds(tok: &str) -> Option<i64> {
     if !tok.bytes().all(|b| b.is_ascii_digit()) {
         return None;
     }
-    tok.parse::<i64>().ok().filter(|&ns| ns > 1_000_000_000_000)
+    tok.parse::<i64>()
+        .ok()
+        .filter(|&ns| ns > 100_000_000_000_000_000)
+}
+
+/// An integer stamp between `1e12` and `1e17`: milliseconds or microseconds since the epoch
+/// (no plausible count of seconds), which this reader does not guess.
+fn ambiguous_integer_stamp(tok: &str) -> bool {
+    tok.bytes().all(|b| b.is_ascii_digit())
+        && tok
+            .parse::<u64>()
+            .is_ok_and(|v| v > 1_000_000_000_000 && v <= 100_000_000_000_000_000)
 }
 
 /// Read a pose stream (ETH ASL CSV, motion-capture exports such as Vicon's): one sample per
@@ -460,7 +471,7 @@ fn nanoseconds(tok: &str) -> Option<i64> {
 /// * leading header lines (first field not a number) are skipped and counted; `#` comments
 ///   and blank lines are ignored anywhere;
 /// * time in seconds, or in integer nanoseconds when the first stamp is an integer above
-///   `1e12` (then every stamp must be one; they are converted to seconds, resolution about
+///   `1e17` (then every stamp must be one; they are converted to seconds, resolution about
 ///   `2.5e-7` s at today's epoch times);
 /// * repeated time stamps: a sample whose stamp equals the previous one is dropped (the first
 ///   sample of the stamp is kept: interpolation needs strictly increasing stamps, and a motion
@@ -517,6 +528,16 @@ pub fn read_pose_stream(text: &str, file: &str, settings: &MotionSettings) -> Re
                 format!(
                     "expected 8 fields (t, x, y, z and the quaternion, separated by commas or spaces), found {}",
                     f.len()
+                ),
+            ));
+        }
+        if unit.is_none() && ambiguous_integer_stamp(f[0]) {
+            return Err(Error::parse(
+                Some(file),
+                Some(line),
+                format!(
+                    "time stamp `{}`: an integer between 1e12 and 1e17 is neither seconds nor nanoseconds since the epoch (milliseconds or microseconds?); convert the stamps to seconds",
+                    f[0]
                 ),
             ));
         }
@@ -700,8 +721,10 @@ pub fn eth_problem(
         unmatched: camera.len() - matched.len(),
         ..Default::default()
     };
-    let mut i = 0;
-    while i + settings.stride < matched.len() {
+    // starts 0, subsample, 2 subsample, ... while the pair's end is a matched sample (no
+    // overflow for any stride / subsample the command line accepts)
+    let last_start = matched.len().saturating_sub(settings.stride);
+    for i in (0..last_start).step_by(settings.subsample.max(1)) {
         let (hi, ei) = matched[i];
         let (hj, ej) = matched[i + settings.stride];
         push_pair(
@@ -711,7 +734,6 @@ pub fn eth_problem(
             ei.inverse() * ej,
             settings.min_angle,
         );
-        i += settings.subsample;
     }
     if pairs.is_empty() {
         return Err(Error::Degenerate {
