@@ -213,6 +213,18 @@ impl fmt::Display for CertifiedProblem {
     }
 }
 
+/// A lower bound on a cost that is a sum of nonnegative terms (single and conjugate
+/// averaging), capped at the computed cost (a bound above it can only be rounding:
+/// `f* <= f(estimate)`). A bound that is not finite (never expected) becomes the trivial bound
+/// 0: `f64::min` would turn a NaN into the cost itself, a false certificate.
+pub(crate) fn nonnegative_bound_at_most(lower_bound: f64, cost: f64) -> f64 {
+    if lower_bound.is_finite() {
+        lower_bound.min(cost).max(0.0)
+    } else {
+        0.0
+    }
+}
+
 /// A certificate of (sub)optimality for an estimate (SPEC sections 3 and 5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Certificate {
@@ -433,5 +445,21 @@ mod tests {
         // noise-free: cost ~ 0, absolute tolerance applies
         let c = Certificate::from_bounds(1e-12, Some(-1e-11), BoundMethod::Dual, None, t, "", 0.0);
         assert_eq!(c.verdict, Verdict::Certified);
+    }
+}
+
+#[cfg(test)]
+mod bound_cap_tests {
+    use super::nonnegative_bound_at_most as cap;
+
+    /// A bound that is not finite must never become the cost (which would certify anything).
+    #[test]
+    fn non_finite_bounds_are_trivial_never_the_cost() {
+        assert_eq!(cap(f64::NAN, 2.0), 0.0);
+        assert_eq!(cap(f64::INFINITY, 2.0), 0.0);
+        assert_eq!(cap(f64::NEG_INFINITY, 2.0), 0.0);
+        assert_eq!(cap(3.0, 2.0), 2.0);
+        assert_eq!(cap(1.5, 2.0), 1.5);
+        assert_eq!(cap(-1.0, 2.0), 0.0);
     }
 }

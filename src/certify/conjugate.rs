@@ -8,6 +8,7 @@ use super::certification::{
 };
 use super::settings::{CertifyMode, CertifySettings};
 use super::spectrum::{SpectrumEstimate, SpectrumMethod};
+use crate::certify::certificate::nonnegative_bound_at_most;
 use crate::conjugate::{ConjugateProblem, ConjugateSettings, ConjugateSolution, solve_conjugate};
 use crate::error::Result;
 use crate::relax::conjugate::{
@@ -293,7 +294,7 @@ fn with_branch_and_bound(
     });
     let run =
         branch_and_bound::run_conjugate(problem, s, cost, settings, start.elapsed().as_secs_f64());
-    let lb = run.lower_bound.min(cost);
+    let lb = nonnegative_bound_at_most(run.lower_bound, cost);
     details.methods.push(MethodRun {
         method: BoundMethod::BranchAndBound,
         lower_bound: Some(lb),

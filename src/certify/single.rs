@@ -19,6 +19,7 @@ use super::certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun,
 };
 use super::settings::{CertifyMode, CertifySettings};
+use crate::certify::certificate::nonnegative_bound_at_most;
 use crate::error::Result;
 use crate::linalg::compensated::Accumulator;
 use crate::objective::Loss;
@@ -87,7 +88,7 @@ pub fn certify_single(
     let mut best: Option<(f64, BoundMethod, String)> = None;
     if settings.mode != CertifyMode::BranchAndBound {
         let (lb, explanation) = theory_bound(problem, estimate, cost);
-        let lb = lb.map(|l| l.min(cost));
+        let lb = lb.map(|l| nonnegative_bound_at_most(l, cost));
         details.methods.push(MethodRun {
             method: BoundMethod::Theory,
             lower_bound: lb,
@@ -124,7 +125,7 @@ pub fn certify_single(
             settings,
             start.elapsed().as_secs_f64(),
         );
-        let lb = run.lower_bound.min(cost);
+        let lb = nonnegative_bound_at_most(run.lower_bound, cost);
         details.methods.push(MethodRun {
             method: BoundMethod::BranchAndBound,
             lower_bound: Some(lb),

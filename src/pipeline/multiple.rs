@@ -249,6 +249,16 @@ pub fn certify_inlier_graph(
     };
     let n = problem.num_rotations();
     problem.check_estimate(&robust.rotations)?;
+    if residuals.inlier.len() != problem.num_edges() {
+        return Err(crate::error::Error::InvalidSettings {
+            name: "robust solution".into(),
+            reason: format!(
+                "its residuals cover {} edges, the problem has {}",
+                residuals.inlier.len(),
+                problem.num_edges()
+            ),
+        });
+    }
     let edges: Vec<_> = problem
         .edges()
         .iter()

@@ -250,8 +250,16 @@ pub(crate) fn search<T: Terms>(
             }
         }
     }
-    let live_min = heap.iter().map(|c| c.lb).fold(f64::INFINITY, f64::min);
-    let ball_min = balls.iter().map(|b| b.lb).fold(f64::INFINITY, f64::min);
+    // a NaN cell bound counts as the trivial 0 (f64::min would skip it)
+    let valid = |lb: f64| if lb.is_nan() { 0.0 } else { lb };
+    let live_min = heap
+        .iter()
+        .map(|c| valid(c.lb))
+        .fold(f64::INFINITY, f64::min);
+    let ball_min = balls
+        .iter()
+        .map(|b| valid(b.lb))
+        .fold(f64::INFINITY, f64::min);
     let mut lower_bound = live_min.min(pruned_min).min(ball_min);
     if !lower_bound.is_finite() {
         // Nothing was bounded (cannot happen: the cells cover SO(3)); 0 is always a bound.
