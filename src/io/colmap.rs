@@ -650,7 +650,7 @@ pub fn read_images_text(text: &str, file: &str, options: &ReadOptions) -> Result
         // (a second image line here would otherwise be skipped without a word)
         if let Some((pln, points)) = lines.next() {
             let toks: Vec<&str> = points.split_whitespace().collect();
-            if toks.len() % 3 != 0 || toks.iter().any(|t| t.parse::<f64>().is_err()) {
+            if !toks.len().is_multiple_of(3) || toks.iter().any(|t| t.parse::<f64>().is_err()) {
                 return Err(Error::parse(
                     Some(file),
                     Some(pln),
