@@ -1,6 +1,6 @@
 //! The one vocabulary of costs for all three problems: a [`Metric`] (how far apart two
 //! rotations are) and a [`Loss`] (what is summed), together an [`Objective`]
-//! (`paper-notes/conventions.md`, `[C2]`, `[C7]`).
+//! (`paper-notes/conventions.md` `[C2]`; the losses: `paper-notes/multiple.md` `[M7]`).
 //!
 //! Every problem minimises `sum_k w_k rho(d_k)` where `d_k` is the metric distance of the
 //! k-th residual (single: `d(R_k, R)`; multiple: `d(R_ij R_i, R_j)`; conjugate:

@@ -451,14 +451,14 @@ impl PairArrays {
 
 /// Conjugate (hand-eye) rotation averaging: ``S`` with ``right[k] ~ S^-1 left[k] S``, minimising
 /// ``sum_k w_k ||S right[k] - left[k] S||_F^2`` (chordal L2, certified by a 10x10 SDP), or a
-/// geodesic / robust cost.
+/// geodesic / robust cost, certified by branch and bound over SO(3).
 ///
 /// Args:
 ///     left, right: ``(N, 3, 3)`` rotations ``L_k`` and ``R_k`` (or scipy Rotations).
 ///     weights: ``(N,)`` positive weights (default all 1).
 ///     metric: ``"chordal"``, ``"geodesic"`` or ``"quaternion"``.
 ///     loss: ``"l2"``, ``"l1"``, ``"huber"`` or ``"cauchy"``.
-///     certify: ``"auto"``, ``"sdp"`` or ``"none"``.
+///     certify: ``"auto"``, ``"sdp"``, ``"branch_and_bound"`` or ``"none"``.
 ///     loss_threshold: Huber threshold / Cauchy scale in degrees.
 ///
 /// Returns:

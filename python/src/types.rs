@@ -34,13 +34,14 @@ fn opt(x: Option<f64>) -> String {
     x.map_or("None".into(), |x| format!("{x:?}"))
 }
 
-/// A certificate: a proven lower bound on the global minimum of the chordal L2 cost, the gap of
+/// A certificate: a proven lower bound on the global minimum of the cost it is about, the gap of
 /// the estimate to it, and the verdict (``"certified"`` when the gap is within the stated
 /// tolerance, ``"gap_reported"`` or ``"inconclusive"`` otherwise).
 ///
 /// Attributes: ``verdict``, ``certified`` (bool), ``upper_bound`` (the estimate's cost),
 /// ``lower_bound``, ``gap``, ``relative_gap``, ``min_eigenvalue`` (None when unavailable),
-/// ``method`` (``"theory"``, ``"dual"``, ``"sdp"`` or ``"staircase"``), ``allowed_gap``
+/// ``method`` (``"theory"``, ``"dual"``, ``"sdp"``, ``"staircase"`` or
+/// ``"branch_and_bound"``), ``allowed_gap``
 /// (the tolerance that applied), ``explanation`` and ``seconds``.
 /// ``to_dict()`` is the ``certificate`` object of the command line's ``--json`` output.
 #[pyclass(name = "Certificate", module = "rotavg", frozen)]
@@ -86,7 +87,8 @@ impl Certificate {
     fn min_eigenvalue(&self) -> Option<f64> {
         self.inner.min_eigenvalue
     }
-    /// Which argument produced the bound: ``"theory"``, ``"dual"``, ``"sdp"`` or ``"staircase"``.
+    /// Which argument produced the bound: ``"theory"``, ``"dual"``, ``"sdp"``, ``"staircase"``
+    /// or ``"branch_and_bound"``.
     #[getter]
     fn method(&self) -> String {
         self.inner.method.to_string()

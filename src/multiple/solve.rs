@@ -46,7 +46,8 @@ pub enum Initialisation {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct MultipleSettings {
-    /// The initialisation (default spectral).
+    /// The initialisation (default spectral; [`solve_multiple`] starts graphs solved with the
+    /// scalar Laplacian preconditioner, `[M6b]`, from the spanning tree instead).
     pub init: Initialisation,
     /// Maximum number of outer iterations (default 100 for the second-order methods; the IRLS
     /// methods use `10 * max_iterations`).

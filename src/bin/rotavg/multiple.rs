@@ -53,7 +53,9 @@ pub struct Args {
     /// written by `--output` is the robust one).
     #[arg(long, value_name = "FILE")]
     pub inlier_output: Option<String>,
-    /// Initialisation of the local solver (ignored with `--init FILE`).
+    /// Initialisation of the local solver (ignored with `--init FILE`; `spectral` on graphs
+    /// whose Newton systems use the Laplacian preconditioner, long chains and large grids,
+    /// starts from the spanning tree instead: paper-notes [M6b]).
     #[arg(long, value_parser = choice(Initialisation::choices()), default_value_t = Initialisation::Spectral)]
     pub init_method: Initialisation,
     /// Certification.

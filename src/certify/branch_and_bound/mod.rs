@@ -248,3 +248,25 @@ pub(crate) fn run_conjugate(
         elapsed,
     )
 }
+
+/// Every metric x loss (thresholds 20 and 15 degrees): the objectives the unit tests of the
+/// bounds run over.
+#[cfg(test)]
+pub(crate) fn test_objectives() -> Vec<crate::objective::Objective> {
+    use crate::objective::{Loss, Objective};
+    use crate::so3::Metric;
+    let mut v = Vec::new();
+    for m in [Metric::Geodesic, Metric::Chordal, Metric::Quaternion] {
+        for l in [
+            Loss::L1,
+            Loss::L2,
+            Loss::Huber {
+                threshold_deg: 20.0,
+            },
+            Loss::Cauchy { scale_deg: 15.0 },
+        ] {
+            v.push(Objective::new(m, l));
+        }
+    }
+    v
+}

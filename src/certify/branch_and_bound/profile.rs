@@ -139,22 +139,7 @@ impl Profile {
 mod tests {
     use super::*;
 
-    fn objectives() -> Vec<Objective> {
-        let mut v = Vec::new();
-        for m in [Metric::Geodesic, Metric::Chordal, Metric::Quaternion] {
-            for l in [
-                Loss::L1,
-                Loss::L2,
-                Loss::Huber {
-                    threshold_deg: 20.0,
-                },
-                Loss::Cauchy { scale_deg: 15.0 },
-            ] {
-                v.push(Objective::new(m, l));
-            }
-        }
-        v
-    }
+    use crate::certify::branch_and_bound::test_objectives as objectives;
 
     /// Finite differences: `h'` matches, the sup and concavity bounds hold on a grid.
     #[test]

@@ -219,22 +219,7 @@ mod tests {
     use rand::rngs::StdRng;
     use rand::{Rng, SeedableRng};
 
-    fn objectives() -> Vec<Objective> {
-        let mut v = Vec::new();
-        for m in [Metric::Geodesic, Metric::Chordal, Metric::Quaternion] {
-            for l in [
-                Loss::L1,
-                Loss::L2,
-                Loss::Huber {
-                    threshold_deg: 20.0,
-                },
-                Loss::Cauchy { scale_deg: 15.0 },
-            ] {
-                v.push(Objective::new(m, l));
-            }
-        }
-        v
-    }
+    use crate::certify::branch_and_bound::test_objectives as objectives;
 
     /// Random points of random balls never beat the ball's bound (single and conjugate, every
     /// metric and loss, spread data).
