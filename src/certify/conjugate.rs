@@ -12,7 +12,8 @@ use crate::certify::certificate::nonnegative_bound_at_most;
 use crate::conjugate::{ConjugateProblem, ConjugateSettings, ConjugateSolution, solve_conjugate};
 use crate::error::Result;
 use crate::relax::conjugate::{
-    Mat9, Mat10, QcqpConstraint, constraint_matrices, cost_matrix, extract_rotation, lift,
+    Mat9, Mat10, QcqpConstraint, constraint_matrices, cost_matrix_with_error, extract_rotation,
+    lift,
 };
 use crate::relax::{ConjugateRelaxation, relax_conjugate};
 use crate::so3::Rotation;
@@ -212,7 +213,8 @@ pub fn certify_conjugate(
         };
         solve_conjugate(problem, &local).ok()
     });
-    let m = cost_matrix(problem);
+    // the bound is verified on the computed M; lowered below by its forming error (n terms)
+    let (m, forming_error) = cost_matrix_with_error(problem);
     let cons = constraint_matrices();
     let mut bound = verify_lower_bound(&m, &cons, &relax.multipliers);
     let mut at = vec![*s];
@@ -225,6 +227,11 @@ pub fn certify_conjugate(
             bound = Some(b);
         }
     }
+    let bound = bound.map(|mut b| {
+        b.lower_bound -= 4.0 * forming_error;
+        b.margin += 4.0 * forming_error;
+        b
+    });
     let lam = bound.map(|b| b.min_eigenvalue);
     let seconds = start.elapsed().as_secs_f64();
     let mut certificate = Certificate::from_bounds(

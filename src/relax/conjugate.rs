@@ -58,14 +58,27 @@ pub fn lift(s: &Matrix3<f64>, y: f64) -> Vec10 {
 /// assert!((quad - p.chordal_cost(&s)).abs() < 1e-12 * (1.0 + quad));
 /// ```
 pub fn cost_matrix(problem: &ConjugateProblem) -> Mat9 {
+    cost_matrix_with_error(problem).0
+}
+
+/// [`cost_matrix`] and a bound on the Frobenius norm of its rounding error `M_fl - M`:
+/// `gamma(n + 12) ||sum_k w_k |K_k|^T |K_k| ||_F` (each `K` entry is one subtraction, each
+/// `K^T K` entry a sum of 9 products, one product by `w`, then `n` terms summed recursively;
+/// Higham 2002, §3.1 and §3.5). The verified bound [`verify_lower_bound`] on `M_fl` is
+/// lowered by 4 times this for the exact `M` (Weyl; `||z||^2 = 4`).
+pub(crate) fn cost_matrix_with_error(problem: &ConjugateProblem) -> (Mat9, f64) {
     let mut m = Mat9::zeros();
+    let mut mag = Mat9::zeros();
     let eye = Matrix3::<f64>::identity();
     for p in problem.pairs() {
         // vec(A X B) = (B^T (x) A) vec(X): vec(S R) = (R^T (x) I) s, vec(L S) = (I (x) L) s.
         let k = p.right.matrix().transpose().kronecker(&eye) - eye.kronecker(p.left.matrix());
         m += k.transpose() * k * p.weight;
+        let ka = k.abs();
+        mag += ka.transpose() * ka * p.weight;
     }
-    m
+    let error = crate::linalg::gamma(problem.num_pairs() + 12) * mag.norm();
+    (m, error)
 }
 
 /// One quadratic equality constraint `z^T A z = b` of the QCQP `[H3]`.
