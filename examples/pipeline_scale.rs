@@ -11,8 +11,9 @@
 //! sweep with half of the other lattice edges as loop closures (`M` ignored), noise `SIGMA`
 //! (default 1e-3 rad). Prints one line: sizes, solve and certify seconds, Newton
 //! iterations, verdict, relative gap, and the certificate methods tried (and the explanation
-//! when not certified).
-use rotavg::certify::{Budget, CertifySettings, ToleranceRule};
+//! when not certified; always with `ROTAVG_EXPLAIN=1`). `ROTAVG_CERTIFY=none` runs the solve
+//! alone (to measure its own peak RSS).
+use rotavg::certify::{Budget, CertifyMode, CertifySettings, ToleranceRule};
 use rotavg::multiple::synthetic::{SyntheticChain, SyntheticGraph, SyntheticGrid};
 use rotavg::pipeline::{AverageMultipleSettings, average_multiple};
 
@@ -68,8 +69,14 @@ fn main() {
         }
         .generate(),
     };
+    // ROTAVG_CERTIFY=none: the solve alone (its peak RSS)
+    let mode = match std::env::var("ROTAVG_CERTIFY").as_deref() {
+        Ok("none") => CertifyMode::None,
+        _ => CertifyMode::Auto,
+    };
     let settings = AverageMultipleSettings {
         certify: CertifySettings {
+            mode,
             tolerance: ToleranceRule {
                 absolute_per_median_weight: per_weight,
                 ..Default::default()
@@ -102,7 +109,9 @@ fn main() {
                     .map(|r| r.method.to_string())
                     .collect::<Vec<_>>()
             );
-            if let Some(c) = c.filter(|c| !c.is_certified()) {
+            if let Some(c) =
+                c.filter(|c| !c.is_certified() || std::env::var_os("ROTAVG_EXPLAIN").is_some())
+            {
                 println!("  why: {}", c.explanation);
             }
         }

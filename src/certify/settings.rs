@@ -7,6 +7,7 @@ use super::multiple::staircase::StaircaseSettings;
 use super::spectrum::SpectrumSettings;
 use crate::error::{Error, Result};
 use crate::linalg::LanczosSettings;
+use crate::linalg::cholesky::RESIDUAL_FACTOR_LIMIT;
 use crate::relax::SdpSettings;
 use crate::validate::at_least_one;
 use serde::{Deserialize, Serialize};
@@ -84,9 +85,14 @@ impl fmt::Display for CertifyMode {
     }
 }
 
-/// Bytes a factorisation needs per stored factor value (values, work copy, the residual
-/// margin's double-double accumulators; measured on faer 0.24 supernodal factors).
-pub const BYTES_PER_FACTOR_VALUE: u64 = 24;
+/// Bytes a factorisation needs per stored factor value (an `f64`). The matrix factorised is
+/// not counted (it exists before the factorisation is tried: the shift is added to its diagonal
+/// in place); see [`Budget::factorisation_bytes`] for the whole model.
+pub const BYTES_PER_FACTOR_VALUE: u64 = 8;
+
+/// Bytes per factor value, for factors of up to [`RESIDUAL_FACTOR_LIMIT`](crate::linalg::cholesky::RESIDUAL_FACTOR_LIMIT) values, of the
+/// residual-based margin `[D6]` (2) (the factor's columns and rows as `(index, value)` pairs).
+pub const RESIDUAL_MARGIN_BYTES_PER_VALUE: u64 = 32;
 
 /// Floating-point operations per second assumed when predicting a factorisation's time (a
 /// conservative rate for faer's supernodal Cholesky on one core of the reference machine).
@@ -144,7 +150,15 @@ impl Budget {
     /// assert!(b.factorisation_fits(v + 1, 30_000).is_err());
     /// ```
     pub fn max_factor_values(&self, dim: usize) -> usize {
-        let by_memory = self.max_memory_bytes / BYTES_PER_FACTOR_VALUE;
+        // the inverse of `factorisation_bytes` (piecewise linear)
+        let full = BYTES_PER_FACTOR_VALUE + RESIDUAL_MARGIN_BYTES_PER_VALUE;
+        let limit = RESIDUAL_FACTOR_LIMIT as u64;
+        let by_memory = if self.max_memory_bytes <= full * limit {
+            self.max_memory_bytes / full
+        } else {
+            (self.max_memory_bytes - RESIDUAL_MARGIN_BYTES_PER_VALUE * limit)
+                / BYTES_PER_FACTOR_VALUE
+        };
         let by_time = match self.max_seconds {
             Some(limit) => (limit * dim.max(1) as f64 * PREDICTED_FLOP_RATE)
                 .sqrt()
@@ -162,8 +176,26 @@ impl Budget {
         v
     }
 
+    /// The memory a factorisation with `values` stored factor values allocates, bytes:
+    /// [`BYTES_PER_FACTOR_VALUE`] per value, plus [`RESIDUAL_MARGIN_BYTES_PER_VALUE`] per value
+    /// for the first [`RESIDUAL_FACTOR_LIMIT`](crate::linalg::cholesky::RESIDUAL_FACTOR_LIMIT) (the residual margin `[D6]` (2), computed only
+    /// for factors up to that size). Callers that know the numeric scratch add it to `values`
+    /// in units of 8 bytes. Measured (faer 0.24, supernodal, 10^6-node grid sweep,
+    /// `examples/pipeline_scale`): a factor of 1.88e8 values, 2.1 GiB by this model; the whole
+    /// process peaked at 3.8 GB RSS, against 1.7 GB for the solve alone.
+    ///
+    /// ```
+    /// use rotavg::certify::Budget;
+    /// assert_eq!(Budget::factorisation_bytes(1_000), 40_000.0);
+    /// assert_eq!(Budget::factorisation_bytes(100_000_000), 8e8 + 6.4e8);
+    /// ```
+    pub fn factorisation_bytes(values: usize) -> f64 {
+        values as f64 * BYTES_PER_FACTOR_VALUE as f64
+            + values.min(RESIDUAL_FACTOR_LIMIT) as f64 * RESIDUAL_MARGIN_BYTES_PER_VALUE as f64
+    }
+
     /// `Err(reason)` when a factorisation with `values` stored factor values of a
-    /// `dim x dim` matrix does not fit: memory `BYTES_PER_FACTOR_VALUE * values`, time
+    /// `dim x dim` matrix does not fit: memory [`Budget::factorisation_bytes`], time
     /// `values^2 / dim / PREDICTED_FLOP_RATE` (a lower estimate of the flops).
     ///
     /// ```
@@ -174,7 +206,7 @@ impl Budget {
     /// assert!(why.contains("4.1e10"), "{why}");
     /// ```
     pub fn factorisation_fits(&self, values: usize, dim: usize) -> std::result::Result<(), String> {
-        let bytes = values as f64 * BYTES_PER_FACTOR_VALUE as f64;
+        let bytes = Self::factorisation_bytes(values);
         if bytes > self.max_memory_bytes as f64 {
             return Err(format!(
                 "the proof would need a factor of {values:.1e} values ({}); memory budget {}",

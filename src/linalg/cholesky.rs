@@ -56,8 +56,9 @@ pub const UNIT_ROUNDOFF: f64 = f64::EPSILON / 2.0;
 
 /// Factor size (stored values) above which the numeric factorisation runs in parallel.
 const PARALLEL_FACTOR_THRESHOLD: usize = 2_000_000;
-/// Factor size (stored values) up to which the residual-based margin `[D6]` (2) is computed.
-const RESIDUAL_FACTOR_LIMIT: usize = 20_000_000;
+/// Factor size (stored values) up to which the residual-based margin `[D6]` (2) is computed
+/// (it holds the factor's columns and rows as `(index, value)` pairs: 32 more bytes per value).
+pub const RESIDUAL_FACTOR_LIMIT: usize = 20_000_000;
 
 /// `gamma_k = k u / (1 - k u)` (Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed.,
 /// Lemma 3.1): the relative error bound of a sum or inner product of `k` terms. Returns
@@ -192,9 +193,9 @@ pub fn gershgorin_lower_bound(a: SparseColMatRef<'_, usize, f64>) -> f64 {
 /// (AMD ordering, done once), then numeric factorisations of `S + sigma I` for trial shifts.
 pub struct ShiftedCholesky {
     /// `S` itself (both triangles stored; only the lower one is read by the factorisation).
+    /// [`ShiftedCholesky::factor`] adds the shift to its diagonal in place and restores the
+    /// saved diagonal exactly afterwards (no second copy of `S`: 16 bytes per stored entry).
     s: SparseColMat<usize, f64>,
-    /// Work copy holding `S + sigma I`.
-    work: SparseColMat<usize, f64>,
     /// Value index of each diagonal entry of `S` (every diagonal entry must be stored).
     diag_pos: Vec<usize>,
     symbolic: SymbolicCholesky<usize>,
@@ -318,7 +319,6 @@ impl ShiftedCholesky {
             Err(predicted) => return Ok(Err(predicted)),
         };
         Ok(Ok(ShiftedCholesky {
-            work: s.clone(),
             s,
             diag_pos,
             symbolic,
@@ -341,6 +341,24 @@ impl ShiftedCholesky {
         self.symbolic.len_val()
     }
 
+    /// Bytes of the numeric factorisation's work space (faer's scratch for the supernodal
+    /// fronts; about half a byte per factor value on grid and chain graphs).
+    pub fn scratch_bytes(&self) -> usize {
+        self.symbolic
+            .factorize_numeric_llt_scratch::<f64>(self.parallelism(), Default::default())
+            .size_bytes()
+    }
+
+    /// Large supernodal factorisations use all threads (the margin `[D6]` holds for any
+    /// summation order); small ones stay sequential and deterministic.
+    fn parallelism(&self) -> Par {
+        if self.symbolic.len_val() > PARALLEL_FACTOR_THRESHOLD {
+            Par::rayon(0)
+        } else {
+            Par::Seq
+        }
+    }
+
     /// Factorise `S + shift I`. `None` when a pivot is not positive or not finite (no conclusion:
     /// the matrix is then *probably* not positive definite), or when the computed margin is not
     /// finite. `Some(factor)` proves `lambda_min(S) >= -shift - factor.margin` `[D6]`.
@@ -352,22 +370,39 @@ impl ShiftedCholesky {
         if !shift.is_finite() {
             return None;
         }
-        {
-            let src = self.s.val();
-            let dst = self.work.val_mut();
-            dst.copy_from_slice(src);
-            for &k in &self.diag_pos {
-                dst[k] += shift;
-            }
-        }
-        let mut values = vec![0.0f64; self.symbolic.len_val()];
-        // large supernodal factorisations use all threads (the margin [D6] holds for any
-        // summation order); small ones stay sequential and deterministic
-        let par = if self.symbolic.len_val() > PARALLEL_FACTOR_THRESHOLD {
-            Par::rayon(0)
-        } else {
-            Par::Seq
+        // S + shift I in place; the diagonal is restored exactly below, whatever happens
+        let diagonal: Vec<f64> = {
+            let val = self.s.val_mut();
+            self.diag_pos
+                .iter()
+                .map(|&k| {
+                    let d = val[k];
+                    val[k] = d + shift;
+                    d
+                })
+                .collect()
         };
+        let result = self.factor_shifted(margin_target);
+        let val = self.s.val_mut();
+        for (&k, &d) in self.diag_pos.iter().zip(&diagonal) {
+            val[k] = d;
+        }
+        let (values, margin, min_pivot) = result?;
+        Some(PositiveFactor {
+            owner: self,
+            values,
+            shift,
+            margin,
+            min_pivot,
+        })
+    }
+
+    /// The numeric factorisation of the (already shifted) matrix held in `self.s`, with the
+    /// margin `[D6]`: `(factor values, margin, smallest pivot)`, or `None` as in
+    /// [`ShiftedCholesky::factor`].
+    fn factor_shifted(&self, margin_target: f64) -> Option<(Vec<f64>, f64, f64)> {
+        let mut values = vec![0.0f64; self.symbolic.len_val()];
+        let par = self.parallelism();
         let req = self
             .symbolic
             .factorize_numeric_llt_scratch::<f64>(par, Default::default());
@@ -376,7 +411,7 @@ impl ShiftedCholesky {
             .symbolic
             .factorize_numeric_llt::<f64>(
                 &mut values,
-                self.work.as_ref(),
+                self.s.as_ref(),
                 Side::Lower,
                 LltRegularization::default(),
                 par,
@@ -394,20 +429,14 @@ impl ShiftedCholesky {
         // (b) forming error: every entry of S + shift I is the rounded result of at most
         // entry_terms + 1 operations on exact data, so |E_1| <= gamma(entry_terms + 1) |S + shift I|
         // entrywise and ||E_1||_2 <= gamma(...) || |S + shift I| ||_inf.
-        let forming = gamma(self.entry_terms + 2) * inf_norm(self.work.as_ref());
+        let forming = gamma(self.entry_terms + 2) * inf_norm(self.s.as_ref());
         // Factor 2 covers the rounding in evaluating these bounds themselves (they are sums of
         // nonnegative terms of the same order, each computed with relative error << 1).
         let margin = 2.0 * (backward + forming);
         if !margin.is_finite() {
             return None;
         }
-        Some(PositiveFactor {
-            owner: self,
-            values,
-            shift,
-            margin,
-            min_pivot,
-        })
+        Some((values, margin, min_pivot))
     }
 
     /// `[D6]` part (a). Two rigorous bounds on `||A - P^T L L^T P||_2` (`L` the computed
@@ -469,7 +498,7 @@ impl ShiftedCholesky {
             }
             None => ((0..n).collect(), (0..n).collect()),
         };
-        let a = self.work.as_ref();
+        let a = self.s.as_ref();
         let (acp, ari, aval) = (a.col_ptr(), a.row_idx(), a.val());
         let mut hi = vec![0.0f64; n];
         let mut lo = vec![0.0f64; n];

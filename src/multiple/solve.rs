@@ -17,7 +17,8 @@ pub const IRLS_DECREASE_WINDOW: usize = 10;
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Initialisation {
-    /// Maximum-weight spanning tree, rotations propagated from node 0 (`[M4]`).
+    /// The shortest-path spanning tree (lengths `1 / w`) from a central node, rotations
+    /// propagated along it, gauge `R_0 = I` (`[M4]`, [`crate::multiple::spanning_tree`]).
     SpanningTree,
     /// Bottom-3 eigenvectors of the connection Laplacian, rounded to SO(3) (`[M5]`). In
     /// [`solve_multiple`], graphs whose Newton systems are solved with the scalar Laplacian

@@ -366,13 +366,16 @@ fn verify(
         .budget
         .max_factor_values(n3)
         .min(dual.max_factor_nonzeros);
-    let (mut analysed, factor_nonzeros) = match ShiftedCholesky::new_within(s, terms, cap)? {
-        Ok(ch) => {
-            let len = ch.factor_len();
-            (Some(ch), len)
-        }
-        Err(predicted) => (None, predicted),
-    };
+    // the numeric scratch counts against the memory budget as values of 8 bytes
+    let (mut analysed, factor_nonzeros, scratch_values) =
+        match ShiftedCholesky::new_within(s, terms, cap)? {
+            Ok(ch) => {
+                let len = ch.factor_len();
+                let scratch = ch.scratch_bytes().div_ceil(8);
+                (Some(ch), len, scratch)
+            }
+            Err(predicted) => (None, predicted, 0),
+        };
     let mut factorizations = 0usize;
     let mut lanczos_iterations = 0usize;
     let mut estimate: Option<LanczosResult> = None;
@@ -410,7 +413,7 @@ fn verify(
     // with its reason (not a gap that rounding would explain)
     let budget_exceeded = settings
         .budget
-        .factorisation_fits(factor_nonzeros, n3)
+        .factorisation_fits(factor_nonzeros.saturating_add(scratch_values), n3)
         .err()
         .or_else(|| {
             (factor_nonzeros > dual.max_factor_nonzeros).then(|| {
@@ -609,10 +612,11 @@ fn grounded_bound(
             return Ok(Grounded::NotApplicable);
         };
         factor_nonzeros = ch.factor_len();
+        let scratch_values = ch.scratch_bytes().div_ceil(8);
         if factor_nonzeros > settings.dual.max_factor_nonzeros
             || settings
                 .budget
-                .factorisation_fits(factor_nonzeros, n3 - 3)
+                .factorisation_fits(factor_nonzeros.saturating_add(scratch_values), n3 - 3)
                 .is_err()
         {
             return Ok(Grounded::NotApplicable);
@@ -930,8 +934,8 @@ pub fn dual_certificate(
     let how = match (bound.verification, bound.shift) {
         (Verification::Cholesky, Some(s)) => format!(
             "lambda_min(S) >= {:.3e} verified by a sparse Cholesky factorisation of S + {:.3e} I \
-             (floating-point margin {:.1e})",
-            bound.verified_min_eigenvalue, s, bound.fp_margin
+             ({:.2e} factor values; floating-point margin {:.1e})",
+            bound.verified_min_eigenvalue, s, bound.factor_nonzeros as f64, bound.fp_margin
         ),
         (Verification::ScalarComparison, _) => format!(
             "lambda_min(S) >= {:.3e} verified by the scalar comparison [D13] (inertia of one \
@@ -941,9 +945,9 @@ pub fn dual_certificate(
         (Verification::Grounded, _) => match &bound.grounded {
             Some(g) => format!(
                 "gauge null space deflated [D15]: S without node {}'s block >= {:.3e} I verified \
-                 by a sparse Cholesky factorisation (floating-point margin {:.1e}); \
-                 ||S Y|| <= {:.1e}, Y^T S Y >= -{:.1e} I; deficit {:.1e}",
-                g.ground, g.c, bound.fp_margin, g.rho, g.h, g.deficit
+                 by a sparse Cholesky factorisation ({:.2e} factor values; floating-point margin \
+                 {:.1e}); ||S Y|| <= {:.1e}, Y^T S Y >= -{:.1e} I; deficit {:.1e}",
+                g.ground, g.c, bound.factor_nonzeros as f64, bound.fp_margin, g.rho, g.h, g.deficit
             ),
             None => "gauge null space deflated [D15]".into(),
         },
