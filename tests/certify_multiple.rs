@@ -719,3 +719,61 @@ fn scalar_comparison_agrees_with_the_cholesky_verification() {
     // the scalar factor is far smaller than the 3n one
     assert!(fast.bound.factor_nonzeros * 4 < full.bound.factor_nonzeros);
 }
+
+/// When no proof fits the budget, the labelled estimate on the complement of the gauge
+/// directions agrees with a dense eigendecomposition of `S` (built here from a dense `Q`):
+/// at a critical point `S Y ~ 0`, so the eigenvalues of `S` are three near zero (the gauge)
+/// and those of `S` on the complement; the Ritz value must lie within its residual of the
+/// fourth smallest eigenvalue, and the gauge Rayleigh quotient near zero. No lower bound is
+/// claimed (`inconclusive`).
+#[test]
+fn over_budget_reports_the_gauge_deflated_estimate() {
+    let (p, _) = SyntheticGraph {
+        num_rotations: 40,
+        num_edges: 120,
+        noise_sigma: 0.1,
+        seed: 21,
+        ..Default::default()
+    }
+    .generate();
+    let start = rotavg::multiple::spanning_tree(&p);
+    let (rs, _, _) = local_solve(&p, &start, 0, 0.0);
+    let mut settings = CertifySettings::default();
+    settings.budget.max_memory_bytes = 1; // no factorisation fits
+    let c = dual_certificate(&p, &rs, &settings).unwrap();
+    assert_eq!(c.certificate.verdict, Verdict::Inconclusive, "{c}");
+    let est = c
+        .bound
+        .complement_estimate
+        .clone()
+        .expect("estimate reported");
+    let lambdas = multipliers(&p, &rs).unwrap();
+    let mut eig: Vec<f64> = SymmetricEigen::new(dense_s(&p, &lambdas))
+        .eigenvalues
+        .iter()
+        .copied()
+        .collect();
+    eig.sort_by(f64::total_cmp);
+    assert!(eig[..3].iter().all(|e| e.abs() < 1e-8), "{:?}", &eig[..4]);
+    assert!(eig[3] > 0.1, "the test wants a clear gap: {}", eig[3]);
+    assert!(
+        (est.value - eig[3]).abs() <= est.residual + 1e-8 * eig[3],
+        "estimate {} (residual {}) against the dense fourth eigenvalue {}",
+        est.value,
+        est.residual,
+        eig[3]
+    );
+    assert!(est.gauge_rayleigh_quotient.abs() < 1e-8);
+    match &c.diagnosis {
+        rotavg::certify::multiple::DualDiagnosis::OverBudget {
+            complement_estimate: Some(e),
+            ..
+        } => assert_eq!(e, &est),
+        d => panic!("unexpected diagnosis {d:?}"),
+    }
+    assert!(
+        c.certificate.explanation.contains("not a proof"),
+        "{}",
+        c.certificate.explanation
+    );
+}

@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 use crate::linalg::cholesky::PositiveFactor;
 use crate::linalg::compensated::Accumulator;
 use crate::linalg::{
-    Extreme, LanczosResult, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, gamma,
+    Extreme, LanczosResult, LanczosSettings, LanczosStop, ShiftedCholesky, UNIT_ROUNDOFF, gamma,
     gershgorin_lower_bound, inf_norm, lanczos_extreme, rayleigh_quotient, smallest_eigenpair,
 };
 use crate::multiple::MultipleProblem;
@@ -100,6 +100,41 @@ pub struct VerifiedBound {
     /// ([`crate::certify::Budget`]); the bound is then Gershgorin's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub budget_exceeded: Option<String>,
+    /// When no proof fit the budget and the rotations were known: the estimate of
+    /// `lambda_min(S)` on the complement of the gauge directions (never a proof).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub complement_estimate: Option<ComplementEstimate>,
+}
+
+/// The smallest eigenvalue of `S` on the orthogonal complement of the gauge directions `Y`
+/// (the rotations stacked, `S Y ~ 0` at a critical point), estimated by Lanczos on
+/// `P S P`, `P = I - Y Y^T / n`: an *estimate*, never a proof. Positive with a small residual,
+/// it says `S` looks positive semidefinite with that much room; it is reported when no proof
+/// fits the budget ([`crate::certify::Budget`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ComplementEstimate {
+    /// The Ritz value.
+    pub value: f64,
+    /// Its Ritz residual `||P S P x - value x||` (some eigenvalue of `P S P` lies within it).
+    pub residual: f64,
+    /// Krylov subspace dimension reached.
+    pub iterations: usize,
+    /// The gauge directions' smallest Rayleigh quotient `lambda_min(sym(Y^T S Y)) / n`.
+    pub gauge_rayleigh_quotient: f64,
+    /// Why the Lanczos iteration stopped.
+    pub stop: LanczosStop,
+}
+
+impl fmt::Display for ComplementEstimate {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "Lanczos estimates (not a proof): lambda_min(S) on the complement of the gauge \
+             directions ~ {:.3e} (Ritz residual {:.1e} after {} iterations), on the gauge \
+             directions ~ {:.3e}",
+            self.value, self.residual, self.iterations, self.gauge_rayleigh_quotient
+        )
+    }
 }
 
 /// Why a dual certificate has its verdict `[D9]`.
@@ -133,6 +168,10 @@ pub enum DualDiagnosis {
         reason: String,
         /// The Lanczos *estimate* of `lambda_min(S)` (never a proof), if computed.
         min_eigenvalue_estimate: Option<f64>,
+        /// The estimate on the complement of the gauge directions, when the rotations were
+        /// known (never a proof).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        complement_estimate: Option<ComplementEstimate>,
     },
 }
 
@@ -379,6 +418,7 @@ fn verify(
     let mut factorizations = 0usize;
     let mut lanczos_iterations = 0usize;
     let mut estimate: Option<LanczosResult> = None;
+    let mut complement: Option<ComplementEstimate> = None;
     // (shift, margin) of the best verified factorisation
     let mut best: Option<(f64, f64)> = None;
     let mut lz = dual.lanczos;
@@ -493,9 +533,25 @@ fn verify(
         let mut lz_cheap = lz;
         let affordable = (1e9 / n3.max(1) as f64).sqrt() as usize;
         lz_cheap.max_iterations = lz.max_iterations.min(affordable.max(20));
-        let r = smallest_eigenpair(s_copy.as_ref(), norm, &lz_cheap);
-        lanczos_iterations += r.iterations;
-        estimate = Some(r);
+        match rotations {
+            Some(rs) => {
+                let c = complement_smallest(s_copy.as_ref(), rs, norm, &lz_cheap);
+                lanczos_iterations += c.iterations;
+                estimate = Some(LanczosResult {
+                    value: c.value.min(c.gauge_rayleigh_quotient),
+                    vector: Vec::new(),
+                    residual: c.residual,
+                    iterations: c.iterations,
+                    stop: c.stop,
+                });
+                complement = Some(c);
+            }
+            None => {
+                let r = smallest_eigenpair(s_copy.as_ref(), norm, &lz_cheap);
+                lanczos_iterations += r.iterations;
+                estimate = Some(r);
+            }
+        }
     }
 
     let (verification, mu, shift, fp_margin) = match best {
@@ -531,7 +587,87 @@ fn verify(
         grounded: None,
         not_critical,
         budget_exceeded,
+        complement_estimate: complement,
     })
+}
+
+/// [`ComplementEstimate`]: Lanczos on `P S P` with `P = I - Y Y^T / n` (the gauge directions
+/// `Y = [R_1; ...; R_n]`, whose columns are orthogonal with norm `sqrt(n)` for exact rotations;
+/// they are orthonormalised here, so nearly orthogonal rotations are fine too).
+fn complement_smallest(
+    s: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    rotations: &[Rotation],
+    scale: f64,
+    settings: &LanczosSettings,
+) -> ComplementEstimate {
+    let n3 = s.nrows();
+    let mut basis: Vec<Vec<f64>> = Vec::with_capacity(3);
+    let mut ysy = Matrix3::<f64>::zeros();
+    let mut sy = vec![0.0f64; n3];
+    for a in 0..3 {
+        let mut y: Vec<f64> = rotations
+            .iter()
+            .flat_map(|r| (0..3).map(move |row| r.matrix()[(row, a)]))
+            .collect();
+        crate::linalg::cholesky::sparse_matvec(s, &y, &mut sy);
+        for b in 0..3 {
+            ysy[(b, a)] = rotations
+                .iter()
+                .enumerate()
+                .map(|(i, r)| {
+                    (0..3)
+                        .map(|row| r.matrix()[(row, b)] * sy[3 * i + row])
+                        .sum::<f64>()
+                })
+                .sum();
+        }
+        for q in &basis {
+            let c: f64 = q.iter().zip(&y).map(|(u, v)| u * v).sum();
+            y.iter_mut().zip(q).for_each(|(v, u)| *v -= c * u);
+        }
+        let norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if norm > 0.0 {
+            y.iter_mut().for_each(|v| *v /= norm);
+            basis.push(y);
+        }
+    }
+    let n = rotations.len().max(1) as f64;
+    let gauge_rayleigh_quotient = (0.5 * (ysy + ysy.transpose()))
+        .symmetric_eigenvalues()
+        .min()
+        / n;
+    let project = |x: &mut [f64]| {
+        for q in &basis {
+            let c: f64 = q.iter().zip(x.iter()).map(|(u, v)| u * v).sum();
+            x.iter_mut().zip(q).for_each(|(v, u)| *v -= c * u);
+        }
+    };
+    let mut px = vec![0.0f64; n3];
+    let e = crate::linalg::lanczos(
+        n3,
+        |x, y| {
+            px.copy_from_slice(x);
+            project(&mut px);
+            crate::linalg::cholesky::sparse_matvec(s, &px, y);
+            project(y);
+        },
+        Extreme::Smallest,
+        1,
+        scale,
+        &LanczosSettings {
+            block_size: 1,
+            ..*settings
+        },
+        &basis,
+        None,
+    );
+    ComplementEstimate {
+        value: e.values.first().copied().unwrap_or(f64::NAN),
+        residual: e.residuals.first().copied().unwrap_or(f64::NAN),
+        iterations: e.subspace_dim,
+        gauge_rayleigh_quotient,
+        stop: e.stop,
+    }
 }
 
 /// What the grounded bound `[D15]` gave.
@@ -716,6 +852,7 @@ fn grounded_bound(
         }),
         not_critical: false,
         budget_exceeded: None,
+        complement_estimate: None,
     })))
 }
 
@@ -871,6 +1008,7 @@ fn try_scalar_comparison(
         grounded: None,
         not_critical: false,
         budget_exceeded: None,
+        complement_estimate: None,
     }))
 }
 
@@ -1010,6 +1148,7 @@ fn diagnose(certificate: &Certificate, bound: &VerifiedBound, residual: f64) -> 
         return DualDiagnosis::OverBudget {
             reason,
             min_eigenvalue_estimate: bound.min_eigenvalue_estimate,
+            complement_estimate: bound.complement_estimate.clone(),
         };
     }
     let gap = certificate.gap.unwrap_or(f64::INFINITY);
@@ -1058,14 +1197,18 @@ pub(crate) fn diagnosis_text(d: &DualDiagnosis) -> String {
         DualDiagnosis::OverBudget {
             reason,
             min_eigenvalue_estimate,
-        } => format!(
-            "inconclusive: {reason}{}",
-            min_eigenvalue_estimate
-                .map(|e| format!(
-                    "; Lanczos estimate lambda_min(S) ~ {e:.3e} (an estimate, not a proof)"
-                ))
-                .unwrap_or_default()
-        ),
+            complement_estimate,
+        } => match complement_estimate {
+            Some(c) => format!("inconclusive: {reason}; {c}"),
+            None => format!(
+                "inconclusive: {reason}{}",
+                min_eigenvalue_estimate
+                    .map(|e| format!(
+                        "; Lanczos estimate lambda_min(S) ~ {e:.3e} (an estimate, not a proof)"
+                    ))
+                    .unwrap_or_default()
+            ),
+        },
     }
 }
 

@@ -16,9 +16,9 @@ pub mod scalar;
 pub mod staircase;
 
 pub use dual::{
-    DualCertificate, DualDiagnosis, GroundedBound, Verification, VerifiedBound, certificate_matrix,
-    certify_with_multipliers, dual_certificate, laplacian_times, lower_bound_from_multipliers,
-    multipliers, stationarity_residual,
+    ComplementEstimate, DualCertificate, DualDiagnosis, GroundedBound, Verification, VerifiedBound,
+    certificate_matrix, certify_with_multipliers, dual_certificate, laplacian_times,
+    lower_bound_from_multipliers, multipliers, stationarity_residual,
 };
 
 use super::certificate::{BoundMethod, Certificate};
