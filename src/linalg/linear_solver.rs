@@ -3,12 +3,10 @@
 //! gradients ([`super::pcg`]) on graphs whose block factors fill, preconditioned either by the
 //! factorised scalar graph Laplacian ([`ScalarLaplacian`], `[M6b]`) or block-Jacobi.
 
-use super::block_pattern::BlockPattern;
+use super::block_pattern::{BlockPattern, SparseLlt, SymbolicFactor};
 use super::pcg::pcg;
 use crate::error::Result;
 use faer::Mat;
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use nalgebra::Matrix3;
 
 /// Which linear solver the Newton systems of the local solvers use (`[M6]`, `[M6b]`).
@@ -41,24 +39,23 @@ impl std::fmt::Display for SolverKind {
 /// applying `M^{-1}` costs one sparse triangular solve pair with 3 right-hand sides.
 pub(crate) struct ScalarLaplacian {
     nblocks: usize,
-    llt: Llt<usize, f64>,
+    llt: SparseLlt,
     frames: Option<Vec<Matrix3<f64>>>,
 }
 
 impl ScalarLaplacian {
     /// Factorise `K = sum_e c_e (e_p - e_q)(e_p - e_q)^T + shift I` on `nblocks` nodes;
     /// `Ok(None)` if `K` is not numerically positive definite.
+    /// `symbolic`: the symbolic analysis of [`ScalarLaplacian::pattern`] of the same
+    /// `nblocks` and `edges`, when it was computed already (else it is computed here).
     pub(crate) fn new(
         nblocks: usize,
         edges: &[(Option<usize>, Option<usize>, f64)],
         shift: f64,
         frames: Option<Vec<Matrix3<f64>>>,
+        symbolic: Option<SymbolicFactor>,
     ) -> Result<Option<Self>> {
-        let pattern = BlockPattern::new(
-            nblocks,
-            1,
-            edges.iter().filter_map(|&(p, q, _)| Some((p?, q?))),
-        );
+        let pattern = Self::pattern(nblocks, edges);
         let mut val = vec![0.0; pattern.nnz()];
         for &(p, q, c) in edges {
             let one = Matrix3::from_element(c);
@@ -74,12 +71,28 @@ impl ScalarLaplacian {
             }
         }
         pattern.add_diagonal(&mut val, shift);
-        let sym = pattern.symbolic_llt()?;
+        let sym = match symbolic {
+            Some(sym) => sym,
+            None => pattern.symbolic_llt()?,
+        };
         Ok(pattern.llt(&sym, &val).map(|llt| ScalarLaplacian {
             nblocks,
             llt,
             frames,
         }))
+    }
+
+    /// The scalar pattern of `K` (one node per block; edges with a grounded endpoint only
+    /// touch the diagonal).
+    pub(crate) fn pattern(
+        nblocks: usize,
+        edges: &[(Option<usize>, Option<usize>, f64)],
+    ) -> BlockPattern {
+        BlockPattern::new(
+            nblocks,
+            1,
+            edges.iter().filter_map(|&(p, q, _)| Some((p?, q?))),
+        )
     }
 
     /// `z[k] = M^{-1} r[k]` for node-major vectors (`3 q + a`), all columns in one sparse
@@ -112,7 +125,7 @@ impl ScalarLaplacian {
 /// Linear solver for a symmetric block-sparse matrix with the pattern of a [`BlockPattern`].
 pub(crate) enum LinearSolver {
     /// Sparse Cholesky; symbolic factorisation done once.
-    Direct(SymbolicLlt<usize>),
+    Direct(SymbolicFactor),
     /// Conjugate gradients preconditioned by a factorised scalar Laplacian (3x3 blocks only).
     Laplacian(ScalarLaplacian),
     /// Block-Jacobi preconditioned conjugate gradients.
@@ -128,7 +141,7 @@ pub(crate) enum Preconditioner<'a> {
 
 /// A factorised (or preconditioned) system ready to solve.
 pub(crate) enum Factor<'a> {
-    Direct(Llt<usize, f64>),
+    Direct(SparseLlt),
     Pcg {
         pattern: &'a BlockPattern,
         val: Vec<f64>,

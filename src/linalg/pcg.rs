@@ -57,6 +57,9 @@ pub(crate) fn pcg(
             }
         }
         active.retain(|&c| dot(&r[c], &r[c]).sqrt() > rel_tol * bnorm[c]);
+        if active.is_empty() {
+            break;
+        }
         precondition(&r, &mut z, &active);
         for &c in &active {
             let rz_new = dot(&r[c], &z[c]);

@@ -9,6 +9,7 @@
 
 use crate::error::Result;
 use crate::linalg::block_pattern::BlockPattern;
+use crate::linalg::block_pattern::SymbolicFactor;
 use crate::linalg::linear_solver::{LinearSolver, ScalarLaplacian, SolverKind};
 use crate::multiple::MultipleProblem;
 use crate::multiple::solve::{MultipleSettings, MultipleSolution};
@@ -78,50 +79,88 @@ pub const LAPLACIAN_FROM_NODES: usize = 20_000;
 /// [`LAPLACIAN_PRECONDITIONER_VALUES`] -> PCG with the factorised scalar Laplacian as
 /// preconditioner; otherwise block-Jacobi PCG (small graphs that fill are dense-ish random
 /// graphs, which keep the spectral start).
-pub(crate) fn choose_solver(problem: &MultipleProblem) -> Result<SolverKind> {
+pub(crate) fn choose_solver(problem: &MultipleProblem) -> Result<SolverChoice> {
     let n = problem.num_rotations();
     // Cheap pre-filter, O(m): every BFS level is a vertex separator; if the widest level from
     // node 0 holds more than a quarter of the nodes the graph is expander-like and its factor
     // nearly dense, so skip the (then expensive) symbolic analysis ([M6]).
     if n > 1000 && max_bfs_level_width(problem) * 4 > n {
-        return Ok(SolverKind::Jacobi);
+        return Ok(SolverKind::Jacobi.into());
     }
-    let scalar = BlockPattern::new(n, 1, problem.edges().iter().map(|e| (e.i, e.j)));
-    let len = scalar.factor_len()?;
-    Ok(
-        if len <= DIRECT_FILL_PER_NODE * n.max(1) && n < LAPLACIAN_FROM_NODES {
-            SolverKind::Direct
-        } else if len <= LAPLACIAN_PRECONDITIONER_VALUES && n > 1000 {
-            SolverKind::Laplacian
-        } else {
-            SolverKind::Jacobi
-        },
-    )
+    // the scalar Laplacian grounded at node 0: the pattern of the preconditioner [M6b], whose
+    // symbolic analysis is kept for it (the AMD ordering of a 10^6-node graph costs about 1 s)
+    let edges = laplacian_edges(problem, true, 1.0);
+    let scalar = ScalarLaplacian::pattern(n.saturating_sub(1), &edges);
+    let symbolic = scalar.symbolic_llt()?;
+    let len = symbolic.len_val() + 1;
+    let kind = if len <= DIRECT_FILL_PER_NODE * n.max(1) && n < LAPLACIAN_FROM_NODES {
+        SolverKind::Direct
+    } else if len <= LAPLACIAN_PRECONDITIONER_VALUES && n > 1000 {
+        SolverKind::Laplacian
+    } else {
+        SolverKind::Jacobi
+    };
+    Ok(SolverChoice {
+        kind,
+        grounded_scalar: (kind == SolverKind::Laplacian).then_some(symbolic),
+    })
+}
+
+/// The linear solver [`choose_solver`] picked for a graph, with the symbolic analysis of the
+/// grounded scalar Laplacian when the Laplacian preconditioner will use it `[M6b]`.
+#[derive(Clone)]
+pub(crate) struct SolverChoice {
+    /// The solver.
+    pub(crate) kind: SolverKind,
+    /// The symbolic analysis of the scalar Laplacian grounded at node 0
+    /// ([`ScalarLaplacian::pattern`] of [`laplacian_edges`] with `grounded`).
+    pub(crate) grounded_scalar: Option<SymbolicFactor>,
+}
+
+impl From<SolverKind> for SolverChoice {
+    fn from(kind: SolverKind) -> Self {
+        SolverChoice {
+            kind,
+            grounded_scalar: None,
+        }
+    }
+}
+
+/// The edges `(p, q, scale w_e)` of the scalar Laplacian on nodes `1..n` (node 0 grounded:
+/// `None`) or on all nodes.
+fn laplacian_edges(
+    problem: &MultipleProblem,
+    grounded: bool,
+    scale: f64,
+) -> Vec<(Option<usize>, Option<usize>, f64)> {
+    let var = |i: usize| match (grounded, i) {
+        (true, 0) => None,
+        (true, i) => Some(i - 1),
+        (false, i) => Some(i),
+    };
+    problem
+        .edges()
+        .iter()
+        .map(|e| (var(e.i), var(e.j), scale * e.weight))
+        .collect()
 }
 
 /// The scalar Laplacian preconditioner `[M6b]` of a system on nodes `1..n` (node 0 grounded)
 /// with edge coefficients `scale * w_e`, or on all nodes (`grounded = false`) plus `shift I`,
 /// in the per-node `frames`; block-Jacobi PCG if it is not numerically positive definite.
+/// `symbolic`: the analysis of that pattern when known ([`SolverChoice::grounded_scalar`]).
 pub(crate) fn laplacian_solver(
     problem: &MultipleProblem,
     grounded: bool,
     scale: f64,
     shift: f64,
     frames: Option<Vec<Matrix3<f64>>>,
+    symbolic: Option<SymbolicFactor>,
 ) -> Result<LinearSolver> {
-    let var = |i: usize| match (grounded, i) {
-        (true, 0) => None,
-        (true, i) => Some(i - 1),
-        (false, i) => Some(i),
-    };
-    let edges: Vec<_> = problem
-        .edges()
-        .iter()
-        .map(|e| (var(e.i), var(e.j), scale * e.weight))
-        .collect();
+    let edges = laplacian_edges(problem, grounded, scale);
     let nblocks = problem.num_rotations() - usize::from(grounded);
     Ok(
-        match ScalarLaplacian::new(nblocks, &edges, shift, frames)? {
+        match ScalarLaplacian::new(nblocks, &edges, shift, frames, symbolic)? {
             Some(l) => LinearSolver::Laplacian(l),
             None => LinearSolver::Jacobi,
         },
@@ -140,25 +179,26 @@ pub(crate) fn root_fixed_steps(n: usize, entry: impl Fn(usize, usize) -> f64) ->
 }
 
 /// The linear solver of the chordal Newton systems on `pattern` (nodes `1..n`, node 0
-/// grounded): `kind`, or for `None` the one [`choose_solver`] picks. The Laplacian
+/// grounded): `choice`, or for `None` the one [`choose_solver`] picks. The Laplacian
 /// preconditioner is `4 L ⊗ I_3`, the Hessian at a consistent estimate `[M6b]`.
 pub(crate) fn linear_solver(
     problem: &MultipleProblem,
     pattern: &BlockPattern,
-    kind: Option<SolverKind>,
+    choice: Option<SolverChoice>,
 ) -> Result<LinearSolver> {
-    let kind = match kind {
-        Some(k) => k,
+    let choice = match choice {
+        Some(c) => c,
         None => choose_solver(problem)?,
     };
-    match kind {
+    match choice.kind {
         SolverKind::Direct => LinearSolver::new(pattern, true),
         SolverKind::Jacobi => LinearSolver::new(pattern, false),
-        SolverKind::Laplacian => laplacian_solver(problem, true, 4.0, 0.0, None),
+        SolverKind::Laplacian => {
+            laplacian_solver(problem, true, 4.0, 0.0, None, choice.grounded_scalar)
+        }
     }
 }
 
-/// The largest number of nodes at one BFS distance from node 0.
 fn max_bfs_level_width(problem: &MultipleProblem) -> usize {
     let n = problem.num_rotations();
     let mut adj_ptr = vec![0usize; n + 1];
@@ -285,7 +325,7 @@ pub(crate) fn solve_chordal(
     problem: &MultipleProblem,
     init: Vec<Rotation>,
     settings: &MultipleSettings,
-    solver_kind: Option<SolverKind>,
+    solver: Option<SolverChoice>,
 ) -> Result<MultipleSolution> {
     let start = std::time::Instant::now();
     let n = problem.num_rotations();
@@ -336,7 +376,7 @@ pub(crate) fn solve_chordal(
             .map(|e| (e.i - 1, e.j - 1)),
     );
     let slots = edge_slots(problem, &pattern);
-    let solver = linear_solver(problem, &pattern, solver_kind)?;
+    let solver = linear_solver(problem, &pattern, solver)?;
     // Levenberg-Marquardt damping `lambda D` [M6]: D = mean Hessian diagonal x I, or, with the
     // Laplacian preconditioner, D = its matrix 4 L ⊗ I_3 (then the damped system stays
     // preconditioned by the one factorisation, [M6b]).
@@ -525,7 +565,7 @@ mod tests {
         let settings = MultipleSettings::default();
         let solve = |kind| {
             let init = spectral_with(problem, Some(kind)).unwrap();
-            let s = solve_chordal(problem, init, &settings, Some(kind)).unwrap();
+            let s = solve_chordal(problem, init, &settings, Some(kind.into())).unwrap();
             assert!(
                 s.report.termination.is_converged(),
                 "{kind}: {:?}",
@@ -604,7 +644,7 @@ mod tests {
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
         assert!(diff < 1e-12, "Hessian - 4 L ⊗ I = {diff}");
-        let solver = linear_solver(&p, &pattern, Some(SolverKind::Laplacian)).unwrap();
+        let solver = linear_solver(&p, &pattern, Some(SolverKind::Laplacian.into())).unwrap();
         assert_eq!(solver.kind(), SolverKind::Laplacian);
         let b = Mat::<f64>::from_fn(3 * (n - 1), 1, |k, _| ((k * 7) % 11) as f64 - 5.0);
         let mut x = b.clone();

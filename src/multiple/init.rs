@@ -233,12 +233,12 @@ pub(crate) fn spectral_with(
     let mut sigma = 1e-6 * mean_degree;
     let kind = match kind {
         Some(k) => k,
-        None => choose_solver(problem)?,
+        None => choose_solver(problem)?.kind,
     };
     let solver = match kind {
         SolverKind::Laplacian => {
             let frames = tree.iter().map(|r| *r.matrix()).collect();
-            laplacian_solver(problem, false, 1.0, sigma, Some(frames))?
+            laplacian_solver(problem, false, 1.0, sigma, Some(frames), None)?
         }
         k => LinearSolver::new(&pattern, k == SolverKind::Direct)?,
     };

@@ -212,7 +212,8 @@ pub fn solve_multiple(
     problem.require_connected()?;
     let start = std::time::Instant::now();
     // sparse Cholesky or PCG (which preconditioner), decided once from the graph ([M6], [M6b])
-    let kind = Some(crate::multiple::chordal::choose_solver(problem)?);
+    let choice = crate::multiple::chordal::choose_solver(problem)?;
+    let kind = Some(choice.kind);
     crate::progress::phase(crate::progress::Phase::Initialise, || {
         format!(
             "{} nodes, {} edges",
@@ -233,7 +234,7 @@ pub fn solve_multiple(
     let objective = problem.objective();
     crate::progress::phase(crate::progress::Phase::Solve, || objective.to_string());
     let mut out = if objective.is_chordal_l2() {
-        crate::multiple::chordal::solve_chordal(problem, init, settings, kind)?
+        crate::multiple::chordal::solve_chordal(problem, init, settings, Some(choice))?
     } else if objective.loss == Loss::L2 {
         crate::multiple::geodesic::solve_geodesic(problem, init, settings, kind)?
     } else {
