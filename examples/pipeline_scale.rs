@@ -18,9 +18,6 @@ use rotavg::multiple::synthetic::{SyntheticChain, SyntheticGraph, SyntheticGrid}
 use rotavg::pipeline::{AverageMultipleSettings, average_multiple};
 
 fn main() {
-    if std::env::var_os("FAER_SEQ").is_some() {
-        faer::set_global_parallelism(faer::Par::Seq);
-    }
     let args: Vec<String> = std::env::args().collect();
     let (kind, rest) = match args.get(1).map(String::as_str) {
         Some(k @ ("random" | "chain" | "planar-chain" | "grid" | "torus")) => {
