@@ -69,6 +69,41 @@ pub(crate) fn compact_unit_edges(
     (ids, edges)
 }
 
+/// An edge as a reader keeps it, with the file's node ids: the size and alignment of
+/// [`crate::multiple::Edge`], so [`compact_edges`] turns the one into the other in place.
+pub(crate) struct RawEdge {
+    pub(crate) i: u64,
+    pub(crate) j: u64,
+    pub(crate) rotation: crate::so3::Rotation,
+    pub(crate) weight: f64,
+}
+
+/// Node ids compacted, for edges read with file ids: the sorted distinct ids of `extra_ids`
+/// (e.g. vertex lines) and of the edges' endpoints (node `k` is `ids[k]`), and the edges
+/// between their indices, in file order. The edge list is converted in place (the two types
+/// have one size), so the peak memory is the edges plus 16 bytes per edge for the ids.
+pub(crate) fn compact_edges(
+    raw: Vec<RawEdge>,
+    extra_ids: impl Iterator<Item = u64>,
+) -> (Vec<u64>, Vec<crate::multiple::Edge>) {
+    let mut ids: Vec<u64> = extra_ids.collect();
+    ids.extend(raw.iter().flat_map(|e| [e.i, e.j]));
+    ids.sort_unstable();
+    ids.dedup();
+    ids.shrink_to_fit();
+    let index = |id: u64| ids.binary_search(&id).unwrap_or(0);
+    let edges = raw
+        .into_iter()
+        .map(|e| crate::multiple::Edge {
+            i: index(e.i),
+            j: index(e.j),
+            rotation: e.rotation,
+            weight: e.weight,
+        })
+        .collect();
+    (ids, edges)
+}
+
 /// The content lines of a text file: `(1-based line number, trimmed line)` for every line that
 /// is neither blank nor a `#` comment. Shared by the line-oriented readers.
 pub(crate) fn content_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
