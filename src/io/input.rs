@@ -140,9 +140,9 @@ pub fn load_problem(
     format: GraphFormat,
     options: &ReadOptions,
 ) -> Result<LoadedProblem> {
-    let stream = TextStream::open(path)?;
+    let mut stream = TextStream::open(path)?;
     let graph_format = match format {
-        GraphFormat::Auto => detect_stream_format(&stream)?,
+        GraphFormat::Auto => detect_stream_format(&mut stream)?,
         f => f,
     };
     if matches!(graph_format, GraphFormat::G2o | GraphFormat::OneDsfm) {

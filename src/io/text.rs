@@ -138,6 +138,8 @@ pub fn read_text_limited(path: &str, max_bytes: u64) -> Result<String> {
 pub struct TextStream<'a> {
     name: String,
     head: Vec<u8>,
+    /// The head holds the whole input.
+    ended: bool,
     rest: Box<dyn Read + 'a>,
     /// The size the file reported before reading (regular files only).
     file_len: Option<u64>,
@@ -218,6 +220,7 @@ impl<'a> TextStream<'a> {
         }
         Ok(TextStream {
             name: name.to_owned(),
+            ended: filled < SNIFF_BYTES,
             head,
             rest: Box::new(reader),
             file_len,
@@ -230,13 +233,47 @@ impl<'a> TextStream<'a> {
         &self.name
     }
 
-    /// `true` when the first block is the whole input.
+    /// `true` when the first block ([`Self::head`]) is the whole input.
     pub fn head_is_whole(&self) -> bool {
-        self.head.len() < SNIFF_BYTES || self.file_len == Some(self.head.len() as u64)
+        self.ended || self.file_len == Some(self.head.len() as u64)
     }
 
-    /// The text of the first block (a multi-byte character cut at its end left out); an error
-    /// with the line when it holds a byte that is not UTF-8.
+    /// Read one more block into the head (for format detection past long comments); `false`
+    /// when the input has ended. The size limit applies; the NUL check was the first block's.
+    pub fn extend_head(&mut self) -> Result<bool> {
+        if self.head_is_whole() {
+            return Ok(false);
+        }
+        let start = self.head.len();
+        self.head.resize(start + SNIFF_BYTES, 0);
+        let mut filled = start;
+        while filled < self.head.len() {
+            match self.rest.read(&mut self.head[filled..]) {
+                Ok(0) => break,
+                Ok(k) => filled += k,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => {
+                    return Err(Error::Io {
+                        path: self.name.clone(),
+                        message: e.to_string(),
+                    });
+                }
+            }
+        }
+        self.head.truncate(filled);
+        self.ended = filled < start + SNIFF_BYTES;
+        if self.head.len() as u64 > self.max_bytes {
+            return Err(Error::Io {
+                path: self.name.clone(),
+                message: over_limit(self.max_bytes),
+            });
+        }
+        Ok(filled > start)
+    }
+
+    /// The text of the first block (and of the blocks [`Self::extend_head`] added; a multi-byte
+    /// character cut at its end left out); an error with the line when it holds a byte that is
+    /// not UTF-8.
     pub fn head(&self) -> Result<&str> {
         match std::str::from_utf8(&self.head) {
             Ok(s) => Ok(s),
@@ -265,7 +302,7 @@ impl<'a> TextStream<'a> {
         if bytes.len() as u64 > max_bytes {
             return Err(io_error(over_limit(max_bytes)));
         }
-        if bytes.len() == SNIFF_BYTES {
+        if !self.ended {
             let budget = max_bytes
                 .saturating_add(1)
                 .saturating_sub(bytes.len() as u64);
