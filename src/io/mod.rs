@@ -6,16 +6,24 @@
 //! | module | reads | writes |
 //! |---|---|---|
 //! | [`colmap`] | COLMAP databases ([`colmap::read_colmap_database`], SQLite), `images.txt` / `images.bin` ([`colmap::load_images`]) | `images.txt` ([`colmap::write_images_text`]) |
-//! | [`detect`] | any view graph: [`detect::load_graph`] (path), [`detect::read_graph`] (text), format auto-detection | — |
-//! | [`g2o`] | g2o 3-D / 2-D and TORO `EDGE3` ([`g2o::read_g2o`]) | [`g2o::write_g2o`] |
-//! | [`sfm`] | 1DSfM `EGs.txt` ([`sfm::read_egs`]), Bundler ground truth, rotation lists | — |
+//! | [`detect`] | any view graph: [`detect::load_graph`] (path, streamed), [`detect::read_graph`] (text), [`detect::read_graph_stream`], format auto-detection | — |
+//! | [`g2o`] | g2o 3-D / 2-D and TORO `EDGE3` ([`g2o::read_g2o`], line by line: [`g2o::read_g2o_lines`]) | [`g2o::write_g2o`] |
+//! | [`sfm`] | 1DSfM `EGs.txt` ([`sfm::read_egs`], line by line: [`sfm::read_egs_lines`]), Bundler ground truth, rotation lists | — |
 //! | [`json`] | multiple problems ([`json::read_problem_json`]) and estimates ([`json::read_estimate`]) | [`json::write_problem_json`], [`json::write_estimate_json`] |
 //! | [`single_json`] | single problems ([`single_json::parse_single_json`]) and estimates | [`single_json::to_single_json`] |
 //! | [`handeye`] | Tabb and ETH hand-eye data, conjugate JSON ([`handeye::read_conjugate_json`]) | [`handeye::write_conjugate_json`] |
 //! | [`input`] | what the command line reads: `-` for stdin, problem-kind detection, unit weights, ground truth, estimates, the largest component ([`input::load_multiple_input`]) | — |
 //! | [`output`] | — | estimate files ([`output::write_estimate_file`]: g2o or JSON with node ids) |
-//! | [`text`] | any text input with bounded memory ([`text::read_text`]: size limit, binary data refused early, UTF-8 errors with the line) | — |
+//! | [`text`] | any text input with bounded memory ([`text::TextStream`]: size limit, binary data refused from the first block, UTF-8 errors with the line; read whole, [`text::read_text`], or line by line, [`text::TextLines`]) | — |
 //! | [`names`] | the names of metrics, losses, certify modes, formats ([`names::Choice`], `FromStr`) | — |
+//!
+//! **Memory.** The view-graph formats that can be large, g2o / TORO and 1DSfM `EGs.txt`, are
+//! streamed from a path or standard input ([`detect::load_graph`],
+//! [`input::load_view_graph`], [`input::load_problem`]: what `rotavg multiple`, `certify` and
+//! `info` read): one line of text at a time, so memory is what is kept, a fixed size per edge
+//! and vertex, at most [`text::MAX_RECORDS`] of them. JSON inputs (problems, estimates), ground
+//! truth, COLMAP `images.txt` and hand-eye streams are read whole (serde_json and the
+//! line readers take the text), below [`text::MAX_INPUT_BYTES`].
 //!
 //! Readers take the text and a file name (used in error messages, with the line number), so
 //! tests and examples can read from inline strings:
