@@ -402,12 +402,11 @@ pub fn detect_stream_format(stream: &mut TextStream<'_>) -> Result<GraphFormat> 
         if crate::io::content_lines(complete).next().is_some() {
             return detect_format(file, complete);
         }
-        let starts = head.trim_start();
-        if starts.starts_with('{') {
-            return Ok(GraphFormat::Json);
-        }
         if let Ok(f) = detect_format(file, "") {
-            return Ok(f); // from the extension
+            return Ok(f); // from the extension, as detect_format decides first
+        }
+        if head.trim_start().starts_with('{') {
+            return Ok(GraphFormat::Json);
         }
         if head.len() >= MAX_DETECT_BYTES || !stream.extend_head()? {
             break;

@@ -8,7 +8,7 @@
 //! | [`read_input`] | a path or `-`: name and text |
 //! | [`detect_problem_kind`], [`read_problem`], [`load_problem`] | any problem file: kind from the content (`load_problem`: from a path, view graphs streamed) |
 //! | [`read_single_problem`] | single JSON (weights per [`ReadOptions::weights`]) |
-//! | [`load_view_graph`] | g2o, 1DSfM, JSON view graphs ([`crate::io::detect::read_graph`]) |
+//! | [`load_view_graph`] | g2o, 1DSfM (streamed), JSON view graphs ([`crate::io::detect::read_graph_stream`]) |
 //! | [`load_multiple_input`] | a view graph with ground truth, initial estimate, largest component |
 //! | [`load_conjugate`], [`load_conjugate_with`] | conjugate JSON, Tabb and ETH directories, named hand / camera pose streams |
 //! | [`read_ground_truth`], [`load_ground_truth`] | g2o vertices, Bundler, JSON estimate, rotation list, COLMAP `images.txt` / `images.bin` |
@@ -95,7 +95,7 @@ pub fn read_input(path: &str) -> Result<Input> {
 }
 
 /// Read a view graph from the file at `path` or, for `-`, from standard input
-/// ([`read_graph`]; `format` `auto` detects it).
+/// ([`read_graph_stream`]: g2o and 1DSfM line by line; `format` `auto` detects it).
 ///
 /// ```
 /// use rotavg::io::input::load_view_graph;
