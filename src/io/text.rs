@@ -615,7 +615,18 @@ mod tests {
             )
         );
         // lines as str::lines counts them, CRLF endings removed
-        for text in ["", "\n", "a", "a\n", "a\r\nb", "a\n\n\nb\n", "\r\n\r\n"] {
+        for text in [
+            "",
+            "\n",
+            "a",
+            "a\n",
+            "a\r\nb",
+            "a\n\n\nb\n",
+            "\r\n\r\n",
+            "a\r",
+            "\r",
+            "a\rb\n",
+        ] {
             let mut lines = TextLines::from_text("t", text);
             let mut got = Vec::new();
             while let Some((_, l)) = lines.next_line().unwrap() {
@@ -624,6 +635,50 @@ mod tests {
             let want: Vec<String> = text.lines().map(str::to_owned).collect();
             assert_eq!(got, want, "{text:?}");
             assert_eq!(lines.lines_read(), want.len());
+        }
+    }
+
+    /// The content lines streamed are those of the whole-text readers
+    /// (`crate::io::content_lines`), also when the input arrives one byte at a time.
+    #[test]
+    fn content_lines_as_the_whole_text_readers() {
+        struct Trickle<'a>(&'a [u8]);
+        impl Read for Trickle<'_> {
+            fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+                match (self.0.split_first(), buf.first_mut()) {
+                    (Some((&b, rest)), Some(slot)) => {
+                        *slot = b;
+                        self.0 = rest;
+                        Ok(1)
+                    }
+                    _ => Ok(0),
+                }
+            }
+        }
+        let texts = [
+            "a\n  b c \r\n#d\n  # e\n\n\t\nf",
+            "\u{2003}x\u{2003}\n\u{0b}\n\u{0c}y\n# z\r\n\r\n",
+            "\r\rq\r\n",
+            "#only\n#comments",
+            "caf\u{e9} \u{1F600}\nlast line without newline",
+        ];
+        for text in texts {
+            let want: Vec<(usize, String)> = crate::io::content_lines(text)
+                .map(|(k, l)| (k, l.to_owned()))
+                .collect();
+            let collect = |mut lines: TextLines<'_>| {
+                let mut got = Vec::new();
+                while let Some((k, l)) = lines.next_content().unwrap() {
+                    got.push((k, l.to_owned()));
+                }
+                (got, lines.lines_read())
+            };
+            let (got, count) = collect(TextLines::from_text("t", text));
+            assert_eq!(got, want, "{text:?}");
+            assert_eq!(count, crate::io::last_line(text).min(text.lines().count()));
+            let stream =
+                TextStream::from_reader("t", Trickle(text.as_bytes()), u64::MAX, None).unwrap();
+            assert_eq!(collect(stream.into_lines()).0, want, "{text:?}");
         }
     }
 }
