@@ -673,6 +673,8 @@ fn fuzz_readers_never_panic() {
 
 /// Inputs that cannot be text are refused before they are read whole: a file above the size
 /// limit from its size alone (a sparse file: no disk used), binary data from its first block.
+/// A streamed view graph (g2o) has the larger limit, so a sparse file of zeros above the
+/// whole-file limit is refused by its first block; a JSON one still from its size.
 #[test]
 fn oversized_and_binary_inputs_are_refused_early() {
     use rotavg::io::detect::{GraphFormat, ReadOptions, load_graph};
@@ -682,8 +684,27 @@ fn oversized_and_binary_inputs_are_refused_early() {
     let big = dir.join("big.g2o");
     let f = std::fs::File::create(&big).unwrap();
     f.set_len(MAX_INPUT_BYTES + 1).unwrap();
-    let err = load_graph(&big, GraphFormat::Auto, &ReadOptions::default()).unwrap_err();
+    let err = read_text(big.to_str().unwrap()).unwrap_err();
     assert!(err.to_string().contains("input limit"), "{err}");
+    let err = load_graph(&big, GraphFormat::Auto, &ReadOptions::default()).unwrap_err();
+    assert!(err.to_string().contains("NUL byte at offset 0"), "{err}");
+    let big_json = dir.join("big.json");
+    std::fs::rename(&big, &big_json).unwrap();
+    let err = load_graph(&big_json, GraphFormat::Auto, &ReadOptions::default()).unwrap_err();
+    assert!(err.to_string().contains("NUL byte at offset 0"), "{err}");
+    // text in the first block, then a sparse tail: refused from the size, before reading it
+    std::fs::write(&big_json, [b' '; 70_000]).unwrap();
+    let f = std::fs::OpenOptions::new()
+        .write(true)
+        .open(&big_json)
+        .unwrap();
+    f.set_len(MAX_INPUT_BYTES + 1).unwrap();
+    drop(f);
+    let err = load_graph(&big_json, GraphFormat::Auto, &ReadOptions::default()).unwrap_err();
+    assert!(
+        err.to_string().contains("more than the input limit"),
+        "{err}"
+    );
     let zeros = dir.join("zeros.g2o");
     std::fs::write(&zeros, vec![0u8; 200_000]).unwrap();
     let err = read_text(zeros.to_str().unwrap()).unwrap_err().to_string();

@@ -6,6 +6,7 @@
 
 use crate::error::{Error, Result};
 use crate::io::names::Choice;
+use crate::io::text::{MAX_INPUT_BYTES, TextStream};
 use crate::multiple::MultipleProblem;
 use crate::so3::{DEFAULT_ROTATION_TOLERANCE, Rotation};
 use serde::{Deserialize, Serialize};
@@ -365,6 +366,107 @@ pub fn load_graph(path: &Path, format: GraphFormat, options: &ReadOptions) -> Re
         _ => {}
     }
     let name = path.display().to_string();
-    let text = super::text::read_text(&name)?;
-    read_graph(&text, &name, format, options)
+    read_graph_stream(TextStream::open(&name)?, format, options)
+}
+
+/// The most bytes read ahead to find the first data line for format detection (4 MiB).
+const MAX_DETECT_BYTES: usize = 1 << 22;
+
+/// The format of an opened input ([`detect_format`] on its first block, so nothing more is
+/// read): the extension, then the first content line. When the first block holds no complete
+/// content line (long comments), more blocks are read ahead (at most 4 MiB; they stay in the
+/// stream); when still none, the start decides (`{`: JSON, a letter: g2o), else it is an error.
+///
+/// ```
+/// use rotavg::io::detect::{detect_stream_format, GraphFormat};
+/// use rotavg::io::text::TextStream;
+/// let mut stream = TextStream::from_reader("-", "0 1 1 0 0 0 1 0 0 0 1\n".as_bytes(), u64::MAX, None)?;
+/// assert_eq!(detect_stream_format(&mut stream)?, GraphFormat::OneDsfm);
+/// // a comment longer than the first block, then a g2o line
+/// let text = format!("# {}\nEDGE3 0 1 0 0 0 0 0 0\n", "x".repeat(100_000));
+/// let mut stream = TextStream::from_reader("-", text.as_bytes(), u64::MAX, None)?;
+/// assert_eq!(detect_stream_format(&mut stream)?, GraphFormat::G2o);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn detect_stream_format(stream: &mut TextStream<'_>) -> Result<GraphFormat> {
+    let file = stream.name().to_owned();
+    let file = file.as_str();
+    loop {
+        let whole = stream.head_is_whole();
+        let head = stream.head()?;
+        if whole {
+            return detect_format(file, head);
+        }
+        // only the complete lines: a cut line would show too few tokens
+        let complete = head.rfind('\n').map_or("", |k| &head[..=k]);
+        if crate::io::content_lines(complete).next().is_some() {
+            return detect_format(file, complete);
+        }
+        if let Ok(f) = detect_format(file, "") {
+            return Ok(f); // from the extension, as detect_format decides first
+        }
+        if head.trim_start().starts_with('{') {
+            return Ok(GraphFormat::Json);
+        }
+        if head.len() >= MAX_DETECT_BYTES || !stream.extend_head()? {
+            break;
+        }
+    }
+    let head = stream.head()?;
+    if stream.head_is_whole() {
+        return detect_format(file, head);
+    }
+    if head
+        .trim_start()
+        .starts_with(|c: char| c.is_ascii_alphabetic())
+    {
+        return Ok(GraphFormat::G2o);
+    }
+    Err(Error::parse(
+        Some(file),
+        Some(1),
+        format!(
+            "cannot detect the file format: no complete data line in the first {} bytes; pass --format g2o|1dsfm|json",
+            head.len()
+        ),
+    ))
+}
+
+/// Read a view graph from an opened input ([`TextStream`]): g2o / TORO and 1DSfM `EGs.txt`
+/// line by line ([`crate::io::g2o::read_g2o_lines`], [`crate::io::sfm::read_egs_lines`]: the
+/// text is never held whole), JSON whole (serde_json; limit
+/// [`crate::io::text::MAX_INPUT_BYTES`]). `auto` detects the format from the first block
+/// ([`detect_stream_format`]).
+///
+/// ```
+/// use rotavg::io::detect::{read_graph_stream, GraphFormat, ReadOptions};
+/// use rotavg::io::text::TextStream;
+/// let text = "EDGE3 0 1 0 0 0 0 0 0.1\nEDGE3 1 2 0 0 0 0 0 0.2\n";
+/// let stream = TextStream::from_reader("-", text.as_bytes(), u64::MAX, None)?;
+/// let g = read_graph_stream(stream, GraphFormat::Auto, &ReadOptions::default())?;
+/// assert_eq!((g.format, g.problem.num_edges()), (GraphFormat::G2o, 2));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn read_graph_stream(
+    stream: TextStream<'_>,
+    format: GraphFormat,
+    options: &ReadOptions,
+) -> Result<LoadedGraph> {
+    let mut stream = stream;
+    let format = match format {
+        GraphFormat::Auto => detect_stream_format(&mut stream)?,
+        f => f,
+    };
+    match format {
+        GraphFormat::Json => {
+            let name = stream.name().to_owned();
+            let text = stream.into_string(MAX_INPUT_BYTES)?;
+            crate::io::json::read_problem_json(&text, &name, options)
+        }
+        GraphFormat::OneDsfm => crate::io::sfm::read_egs_lines(&mut stream.into_lines(), options),
+        GraphFormat::G2o | GraphFormat::Auto => {
+            crate::io::g2o::read_g2o_lines(&mut stream.into_lines(), options)
+        }
+        GraphFormat::Colmap => read_graph("", stream.name(), format, options),
+    }
 }

@@ -36,7 +36,9 @@
 
 use crate::error::{Error, Result};
 use crate::io::detect::{GraphFormat, LoadedGraph, ReadOptions, WeightSource};
-use crate::multiple::{Edge, MultipleProblem};
+use crate::io::text::{MAX_RECORDS, TextLines};
+use crate::io::{RawEdge, compact_edges};
+use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use std::collections::BTreeMap;
@@ -169,14 +171,6 @@ fn rotation_information_trace_inv(t: &mut Tokens<'_>) -> Result<f64> {
     Ok(tr)
 }
 
-struct RawEdge {
-    i: u64,
-    j: u64,
-    rotation: Rotation,
-    weight: f64,
-    line: usize,
-}
-
 /// Read a g2o / TORO file (see the module documentation for the conventions).
 ///
 /// ```
@@ -192,12 +186,46 @@ struct RawEdge {
 /// assert!((g.problem.edges()[0].weight - 1.0).abs() < 1e-12); // kappa = 3 / (2 * 3/2)
 /// ```
 pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedGraph> {
+    read_g2o_lines(&mut TextLines::from_text(file, text), options)
+}
+
+/// Read a g2o / TORO file line by line ([`read_g2o`] on a stream): the text is never held
+/// whole, memory grows with the edges and vertices kept (at most
+/// [`crate::io::text::MAX_RECORDS`]). Errors name [`TextLines::name`] and the line.
+///
+/// ```
+/// use rotavg::io::{g2o::read_g2o_lines, detect::ReadOptions, text::TextStream};
+/// let text = "EDGE3 0 1 0 0 0 0 0 0.1\nEDGE3 1 2 0 0 0 0 0 0.2\n";
+/// let mut lines = TextStream::from_reader("t.g2o", text.as_bytes(), u64::MAX, None)?.into_lines();
+/// let g = read_g2o_lines(&mut lines, &ReadOptions::default())?;
+/// assert_eq!((g.problem.num_rotations(), g.problem.num_edges()), (3, 2));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn read_g2o_lines(lines: &mut TextLines<'_>, options: &ReadOptions) -> Result<LoadedGraph> {
+    read_g2o_limited(lines, options, MAX_RECORDS)
+}
+
+/// The most distinct unknown tags counted by name in the warnings (the others are counted
+/// together), and the characters of a tag kept.
+const MAX_SKIPPED_TAGS: usize = 32;
+const MAX_TAG_CHARS: usize = 64;
+
+fn read_g2o_limited(
+    lines: &mut TextLines<'_>,
+    options: &ReadOptions,
+    max_records: usize,
+) -> Result<LoadedGraph> {
+    let file = lines.name().to_owned();
+    let file = file.as_str();
     let qtol = options.quaternion_tolerance;
     let mut vertices: BTreeMap<u64, (Rotation, usize)> = BTreeMap::new();
     let mut raw: Vec<RawEdge> = Vec::new();
+    let mut first_edge_line = None;
+    let mut reversed = 0;
     let mut skipped: BTreeMap<String, (usize, usize)> = BTreeMap::new();
+    let mut skipped_other = (0usize, 0usize);
     let (mut seen_3d, mut seen_2d) = (false, false);
-    for (ln, trimmed) in crate::io::content_lines(text) {
+    while let Some((ln, trimmed)) = lines.next_content()? {
         let mut t = Tokens::new(file, ln, trimmed);
         let tag = t.next_str("tag")?;
         let mut vertex = None;
@@ -309,9 +337,28 @@ pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
                 seen_2d = true;
             }
             other => {
-                let e = skipped.entry(other.to_owned()).or_insert((0, ln));
+                let tag = match other.char_indices().nth(MAX_TAG_CHARS) {
+                    Some((k, _)) => &other[..k],
+                    None => other,
+                };
+                let e = if let Some(e) = skipped.get_mut(tag) {
+                    e
+                } else if skipped.len() < MAX_SKIPPED_TAGS {
+                    skipped.entry(tag.to_owned()).or_insert((0, ln))
+                } else {
+                    if skipped_other.0 == 0 {
+                        skipped_other.1 = ln;
+                    }
+                    &mut skipped_other
+                };
                 e.0 += 1;
             }
+        }
+        if (vertex.is_some() || edge.is_some()) && raw.len() + vertices.len() >= max_records {
+            return Err(t.err(format!(
+                "more than {max_records} edges and vertices, the limit of a view graph \
+                 (rotavg::io::text::MAX_RECORDS)"
+            )));
         }
         if let Some((id, r)) = vertex {
             if let Some((_, first)) = vertices.get(&id) {
@@ -331,19 +378,23 @@ pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
             {
                 return Err(t.err(format!("edge {why}")));
             }
+            first_edge_line.get_or_insert(ln);
+            reversed += usize::from(i > j);
             raw.push(RawEdge {
                 i,
                 j,
                 rotation,
-                weight,
-                line: ln,
+                weight: match options.weights {
+                    WeightSource::File => weight,
+                    WeightSource::Unit => 1.0,
+                },
             });
         }
     }
     if raw.is_empty() {
         return Err(Error::parse(
             Some(file),
-            Some(crate::io::last_line(text)),
+            Some(lines.lines_read().max(1)),
             "no edge lines (EDGE_SE3:QUAT, EDGE3 or EDGE_SE2) in the file",
         ));
     }
@@ -353,27 +404,16 @@ pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
             "skipped {count} line(s) with unknown tag `{tag}` (first at line {first})"
         ));
     }
+    if skipped_other.0 > 0 {
+        warnings.push(format!(
+            "skipped {} line(s) with {MAX_SKIPPED_TAGS}+ other unknown tags (first at line {})",
+            skipped_other.0, skipped_other.1
+        ));
+    }
     if seen_2d && seen_3d {
         warnings.push("the file mixes 2-D and 3-D lines".to_owned());
     }
-    let mut ids: Vec<u64> = vertices.keys().copied().collect();
-    ids.extend(raw.iter().flat_map(|e| [e.i, e.j]));
-    ids.sort_unstable();
-    ids.dedup();
-    let index = |id: u64| ids.binary_search(&id).unwrap_or(0);
-    let edges: Vec<Edge> = raw
-        .iter()
-        .map(|e| Edge {
-            i: index(e.i),
-            j: index(e.j),
-            rotation: e.rotation,
-            weight: match options.weights {
-                WeightSource::File => e.weight,
-                WeightSource::Unit => 1.0,
-            },
-        })
-        .collect();
-    let reversed = raw.iter().filter(|e| e.i > e.j).count();
+    let (ids, edges) = compact_edges(raw, vertices.keys().copied());
     let initial = if vertices.is_empty() {
         None
     } else if vertices.len() == ids.len() {
@@ -386,9 +426,8 @@ pub fn read_g2o(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
         ));
         None
     };
-    let first_line = raw.first().map(|e| e.line);
     let problem =
-        MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(file, first_line))?;
+        MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(file, first_edge_line))?;
     let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
     Ok(LoadedGraph {
         problem,
@@ -440,4 +479,40 @@ pub fn write_g2o(problem: &MultipleProblem, estimate: Option<&[Rotation]>) -> St
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn record_limit_and_skipped_tags() {
+        let text = "VERTEX3 0 0 0 0 0 0 0\nEDGE3 0 1 0 0 0 0 0 0\nEDGE3 1 2 0 0 0 0 0 0\n";
+        let read = |max| {
+            read_g2o_limited(
+                &mut TextLines::from_text("t", text),
+                &ReadOptions::default(),
+                max,
+            )
+        };
+        assert!(read(3).is_ok());
+        let err = read(2).unwrap_err().to_string();
+        assert!(
+            err.starts_with("t:3: more than 2 edges and vertices"),
+            "{err}"
+        );
+        // many distinct unknown tags: a bounded number of warnings
+        let mut text = String::new();
+        for k in 0..100 {
+            text.push_str(&format!("TAG{k} 1 2\n"));
+        }
+        text.push_str("EDGE3 0 1 0 0 0 0 0 0\n");
+        let g = read_g2o(&text, "t", &ReadOptions::default()).unwrap();
+        assert_eq!(g.warnings.len(), MAX_SKIPPED_TAGS + 1);
+        assert!(
+            g.warnings[MAX_SKIPPED_TAGS].starts_with("skipped 68 line(s) with 32+ other"),
+            "{:?}",
+            g.warnings
+        );
+    }
 }

@@ -6,9 +6,9 @@
 //! | function | reads |
 //! |---|---|
 //! | [`read_input`] | a path or `-`: name and text |
-//! | [`detect_problem_kind`], [`read_problem`] | any problem file: kind from the content |
+//! | [`detect_problem_kind`], [`read_problem`], [`load_problem`] | any problem file: kind from the content (`load_problem`: from a path, view graphs streamed) |
 //! | [`read_single_problem`] | single JSON (weights per [`ReadOptions::weights`]) |
-//! | [`load_view_graph`] | g2o, 1DSfM, JSON view graphs ([`crate::io::detect::read_graph`]) |
+//! | [`load_view_graph`] | g2o, 1DSfM (streamed), JSON view graphs ([`crate::io::detect::read_graph_stream`]) |
 //! | [`load_multiple_input`] | a view graph with ground truth, initial estimate, largest component |
 //! | [`load_conjugate`], [`load_conjugate_with`] | conjugate JSON, Tabb and ETH directories, named hand / camera pose streams |
 //! | [`read_ground_truth`], [`load_ground_truth`] | g2o vertices, Bundler, JSON estimate, rotation list, COLMAP `images.txt` / `images.bin` |
@@ -35,7 +35,7 @@ use crate::io::colmap::{
 };
 use crate::io::detect::{
     ComponentSelection, GraphFormat, LoadedGraph, ReadOptions, WeightSource, detect_format,
-    load_graph, read_graph,
+    detect_stream_format, load_graph, read_graph, read_graph_stream,
 };
 use crate::io::handeye::{
     MotionSettings, MotionStats, TimeUnit, find_stream_files, read_conjugate_json,
@@ -45,6 +45,7 @@ use crate::io::json::{Estimate, read_estimate, read_rotations_estimate};
 use crate::io::names::ConjugateFormat;
 use crate::io::sfm::{read_bundler, read_rotation_list, truth_for_nodes};
 use crate::io::single_json::parse_single_json;
+use crate::io::text::{MAX_INPUT_BYTES, TextStream};
 use crate::single::SingleProblem;
 use crate::so3::Rotation;
 use serde::{Deserialize, Serialize};
@@ -94,7 +95,7 @@ pub fn read_input(path: &str) -> Result<Input> {
 }
 
 /// Read a view graph from the file at `path` or, for `-`, from standard input
-/// ([`read_graph`]; `format` `auto` detects it).
+/// ([`read_graph_stream`]: g2o and 1DSfM line by line; `format` `auto` detects it).
 ///
 /// ```
 /// use rotavg::io::input::load_view_graph;
@@ -112,11 +113,47 @@ pub fn load_view_graph(
     options: &ReadOptions,
 ) -> Result<LoadedGraph> {
     if path == "-" {
-        let input = read_input(path)?;
-        read_graph(&input.text, &input.name, format, options)
+        read_graph_stream(TextStream::open(path)?, format, options)
     } else {
         load_graph(Path::new(path), format, options)
     }
+}
+
+/// Read a problem of any kind from the file at `path` (`-`: standard input), as
+/// [`read_problem`] but without holding the text of a view graph: the kind and format come
+/// from the first block; g2o and 1DSfM files are streamed
+/// ([`crate::io::detect::read_graph_stream`]), JSON is read whole (limit
+/// [`crate::io::text::MAX_INPUT_BYTES`]).
+///
+/// ```
+/// use rotavg::io::input::{load_problem, ProblemKind};
+/// use rotavg::io::detect::{GraphFormat, ReadOptions};
+/// let path = std::env::temp_dir().join(format!("rotavg-doc-problem-{}.txt", std::process::id()));
+/// std::fs::write(&path, "EDGE3 0 1 0 0 0 0 0 0.1\n").unwrap();
+/// let p = load_problem(path.to_str().unwrap(), GraphFormat::Auto, &ReadOptions::default());
+/// std::fs::remove_file(&path).unwrap();
+/// assert_eq!(p?.kind(), ProblemKind::Multiple);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn load_problem(
+    path: &str,
+    format: GraphFormat,
+    options: &ReadOptions,
+) -> Result<LoadedProblem> {
+    let mut stream = TextStream::open(path)?;
+    let graph_format = match format {
+        GraphFormat::Auto => detect_stream_format(&mut stream)?,
+        f => f,
+    };
+    if matches!(graph_format, GraphFormat::G2o | GraphFormat::OneDsfm) {
+        return Ok(LoadedProblem::Multiple(read_graph_stream(
+            stream,
+            graph_format,
+            options,
+        )?));
+    }
+    let input = Input::new(path, stream.into_string(MAX_INPUT_BYTES)?);
+    read_problem(&input, format, options)
 }
 
 /// The three problems.

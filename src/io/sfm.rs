@@ -23,6 +23,8 @@
 use crate::error::{Error, Result};
 use crate::io::detect::{GraphFormat, LoadedGraph, ReadOptions};
 use crate::io::g2o::Tokens;
+use crate::io::text::{MAX_RECORDS, TextLines};
+use crate::io::{RawEdge, compact_edges};
 use crate::multiple::MultipleProblem;
 use crate::so3::{Rotation, rotation_from_matrix};
 use nalgebra::Matrix3;
@@ -53,8 +55,36 @@ fn to_rotation(t: &Tokens<'_>, m: &Matrix3<f64>, tol: f64, item: &str) -> Result
 /// assert!(g.problem.chordal_cost(&[rotavg::Rotation::identity(), c7]) < 1e-20);
 /// ```
 pub fn read_egs(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedGraph> {
-    let mut raw: Vec<(u64, u64, Rotation, usize)> = Vec::new();
-    for (ln, trimmed) in crate::io::content_lines(text) {
+    read_egs_lines(&mut TextLines::from_text(file, text), options)
+}
+
+/// Read a 1DSfM `EGs.txt` file line by line ([`read_egs`] on a stream): the text is never held
+/// whole, memory grows with the edges kept (at most [`crate::io::text::MAX_RECORDS`]). Errors
+/// name [`TextLines::name`] and the line.
+///
+/// ```
+/// use rotavg::io::{sfm::read_egs_lines, detect::ReadOptions, text::TextStream};
+/// let text = "0 1 1 0 0 0 1 0 0 0 1\n1 2 1 0 0 0 1 0 0 0 1\n";
+/// let mut lines = TextStream::from_reader("EGs.txt", text.as_bytes(), u64::MAX, None)?.into_lines();
+/// let g = read_egs_lines(&mut lines, &ReadOptions::default())?;
+/// assert_eq!((g.problem.num_rotations(), g.problem.num_edges()), (3, 2));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn read_egs_lines(lines: &mut TextLines<'_>, options: &ReadOptions) -> Result<LoadedGraph> {
+    read_egs_limited(lines, options, MAX_RECORDS)
+}
+
+fn read_egs_limited(
+    lines: &mut TextLines<'_>,
+    options: &ReadOptions,
+    max_records: usize,
+) -> Result<LoadedGraph> {
+    let file = lines.name().to_owned();
+    let file = file.as_str();
+    let mut raw: Vec<RawEdge> = Vec::new();
+    let mut first_edge_line = None;
+    let mut reversed = 0;
+    while let Some((ln, trimmed)) = lines.next_content()? {
         let mut t = Tokens::new(file, ln, trimmed);
         t.expect_count(
             &[14, 11],
@@ -73,20 +103,31 @@ pub fn read_egs(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedG
         }
         let item = format!("edge {} ({i}, {j})", raw.len());
         let r = to_rotation(&t, &m, options.rotation_tolerance, &item)?;
-        raw.push((i, j, r.inverse(), ln)); // R_ij = R^T [F5]
+        if raw.len() >= max_records {
+            return Err(t.err(format!(
+                "more than {max_records} edges, the limit of a view graph \
+                 (rotavg::io::text::MAX_RECORDS)"
+            )));
+        }
+        first_edge_line.get_or_insert(ln);
+        reversed += usize::from(i > j);
+        raw.push(RawEdge {
+            i,
+            j,
+            rotation: r.inverse(), // R_ij = R^T [F5]
+            weight: 1.0,
+        });
     }
     if raw.is_empty() {
         return Err(Error::parse(
             Some(file),
-            Some(crate::io::last_line(text)),
+            Some(lines.lines_read().max(1)),
             "no edge lines in the EGs file",
         ));
     }
-    let (ids, edges) = crate::io::compact_unit_edges(raw.iter().map(|&(i, j, r, _)| (i, j, r)));
-    let reversed = raw.iter().filter(|e| e.0 > e.1).count();
-    let first_line = raw.first().map(|e| e.3);
+    let (ids, edges) = compact_edges(raw, std::iter::empty());
     let problem =
-        MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(file, first_line))?;
+        MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(file, first_edge_line))?;
     let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
     Ok(LoadedGraph {
         problem,
@@ -274,4 +315,24 @@ pub fn truth_for_nodes(
                 .and_then(|k| truth_by_id.get(k).copied().flatten())
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn record_limit() {
+        let text = "0 1 1 0 0 0 1 0 0 0 1\n# c\n1 2 1 0 0 0 1 0 0 0 1\n";
+        let read = |max| {
+            read_egs_limited(
+                &mut TextLines::from_text("t", text),
+                &ReadOptions::default(),
+                max,
+            )
+        };
+        assert!(read(2).is_ok());
+        let err = read(1).unwrap_err().to_string();
+        assert!(err.starts_with("t:3: more than 1 edges"), "{err}");
+    }
 }

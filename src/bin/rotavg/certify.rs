@@ -14,7 +14,7 @@ use clap::Args as ClapArgs;
 use rotavg::Result;
 use rotavg::certify::{CertifyMode, CertifySettings};
 use rotavg::io::detect::GraphFormat;
-use rotavg::io::input::{LoadedProblem, load_estimate, read_input, read_problem};
+use rotavg::io::input::{LoadedProblem, load_estimate, load_problem};
 use rotavg::io::names::Choice;
 use rotavg::report::CertifyReport;
 
@@ -44,9 +44,8 @@ pub struct Args {
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
     let options = args.common.read_options();
-    let input = read_input(&args.input)?;
+    let problem = load_problem(&args.input, args.format, &options)?;
     let estimate = load_estimate(&args.estimate, &options)?;
-    let problem = read_problem(&input, args.format, &options)?;
     if args.plot.is_some() {
         CertifyReport::require_figure(&problem)?;
     }
@@ -72,7 +71,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
             ..Default::default()
         },
     };
-    let report = CertifyReport::certify(&input.name, &problem, estimate, &settings)?;
+    let report = CertifyReport::certify(&args.input, &problem, estimate, &settings)?;
     if let Some(path) = &args.plot {
         report.write_figure(path, &problem)?;
     }
