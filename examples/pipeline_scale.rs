@@ -10,8 +10,9 @@
 //! noise `SIGMA` (default 1e-4 rad). `grid`, `torus`: `SyntheticGrid`, a sqrt(N) x sqrt(N)
 //! sweep with half of the other lattice edges as loop closures (`M` ignored), noise `SIGMA`
 //! (default 1e-3 rad). Prints one line: sizes, solve and certify seconds, Newton
-//! iterations, verdict, relative gap, and the certificate methods tried (and the explanation
-//! when not certified; always with `ROTAVG_EXPLAIN=1`). `ROTAVG_CERTIFY=none` runs the solve
+//! iterations, verdict, relative gap, and the certificate methods tried; then the linear
+//! algebra of the solve (solver, symbolic analyses, numeric factorisations, CG iterations),
+//! and the explanation when not certified (always with `ROTAVG_EXPLAIN=1`). `ROTAVG_CERTIFY=none` runs the solve
 //! alone (to measure its own peak RSS).
 use rotavg::certify::{Budget, CertifyMode, CertifySettings, ToleranceRule};
 use rotavg::multiple::synthetic::{SyntheticChain, SyntheticGraph, SyntheticGrid};
@@ -109,6 +110,12 @@ fn main() {
                     .map(|r| r.method.to_string())
                     .collect::<Vec<_>>()
             );
+            if let Some(la) = &e.solution.linear_algebra {
+                println!(
+                    "  linear algebra: {}, {} symbolic analyses, {} numeric factorisations, {} CG iterations",
+                    la.solver, la.symbolic_analyses, la.numeric_factorizations, la.cg_iterations
+                );
+            }
             if let Some(c) =
                 c.filter(|c| !c.is_certified() || std::env::var_os("ROTAVG_EXPLAIN").is_some())
             {

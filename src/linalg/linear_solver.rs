@@ -215,12 +215,13 @@ impl LinearSolver {
 
 impl Factor<'_> {
     /// Solve `A x = b` in place for each column of `b` (relative residual `rel_tol` for PCG).
-    /// Returns `false` if PCG met non-positive curvature (the matrix is not positive definite).
-    pub(crate) fn solve(&self, b: &mut Mat<f64>, rel_tol: f64, max_iter: usize) -> bool {
+    /// Returns the conjugate-gradient iterations (0 for the direct solver), or `None` if PCG
+    /// met non-positive curvature (the matrix is not positive definite).
+    pub(crate) fn solve(&self, b: &mut Mat<f64>, rel_tol: f64, max_iter: usize) -> Option<usize> {
         match self {
             Factor::Direct(l) => {
                 l.solve_in_place(b.as_mut());
-                true
+                Some(0)
             }
             Factor::Pcg {
                 pattern,
@@ -244,15 +245,13 @@ impl Factor<'_> {
                 let rhs: Vec<Vec<f64>> = (0..b.ncols())
                     .map(|col| (0..b.nrows()).map(|r| b[(r, col)]).collect())
                     .collect();
-                let Some(x) = pcg(pattern, val, &apply, &rhs, rel_tol, max_iter) else {
-                    return false;
-                };
+                let (x, iterations) = pcg(pattern, val, &apply, &rhs, rel_tol, max_iter)?;
                 for (col, xc) in x.into_iter().enumerate() {
                     for (r, v) in xc.into_iter().enumerate() {
                         b[(r, col)] = v;
                     }
                 }
-                true
+                Some(iterations)
             }
         }
     }

@@ -9,7 +9,8 @@ pub(crate) type ApplyPreconditioner<'a> = &'a dyn Fn(&[&[f64]], &mut [&mut [f64]
 /// the same matrix), run in lockstep so that the preconditioner is applied to all active
 /// columns at once: `apply_m(r, z)` sets `z[k] = M^{-1} r[k]` for every column `k` given.
 /// A column stops when its residual is at most `rel_tol ||b_k||`, or after `max_iter`
-/// iterations. `None` on non-positive curvature (the matrix is not positive definite).
+/// iterations. Returns the solutions and the iterations run; `None` on non-positive curvature
+/// (the matrix is not positive definite).
 pub(crate) fn pcg(
     pattern: &BlockPattern,
     val: &[f64],
@@ -17,7 +18,7 @@ pub(crate) fn pcg(
     b: &[Vec<f64>],
     rel_tol: f64,
     max_iter: usize,
-) -> Option<Vec<Vec<f64>>> {
+) -> Option<(Vec<Vec<f64>>, usize)> {
     let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
     let k = b.len();
     let dim = b.first().map_or(0, Vec::len);
@@ -40,10 +41,12 @@ pub(crate) fn pcg(
     let mut p = z.clone();
     let mut rz: Vec<f64> = (0..k).map(|c| dot(&r[c], &z[c])).collect();
     let mut ap = vec![0.0; dim];
+    let mut iterations = 0;
     for _ in 0..max_iter {
         if active.is_empty() {
             break;
         }
+        iterations += 1;
         for &c in &active {
             pattern.sym_mul_flat(val, &p[c], &mut ap);
             let pap = dot(&p[c], &ap);
@@ -70,5 +73,5 @@ pub(crate) fn pcg(
             }
         }
     }
-    Some(x)
+    Some((x, iterations))
 }

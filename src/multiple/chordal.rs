@@ -12,6 +12,7 @@ use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::block_pattern::SymbolicFactor;
 use crate::linalg::linear_solver::{LinearSolver, ScalarLaplacian, SolverKind};
 use crate::multiple::MultipleProblem;
+use crate::multiple::solve::LinearAlgebraCounts;
 use crate::multiple::solve::{MultipleSettings, MultipleSolution};
 use crate::objective::Objective;
 use crate::so3::{Rotation, exp, vee};
@@ -103,6 +104,7 @@ pub(crate) fn choose_solver(problem: &MultipleProblem) -> Result<SolverChoice> {
     Ok(SolverChoice {
         kind,
         grounded_scalar: (kind == SolverKind::Laplacian).then_some(symbolic),
+        symbolic_analyses: 1,
     })
 }
 
@@ -115,6 +117,8 @@ pub(crate) struct SolverChoice {
     /// The symbolic analysis of the scalar Laplacian grounded at node 0
     /// ([`ScalarLaplacian::pattern`] of [`laplacian_edges`] with `grounded`).
     pub(crate) grounded_scalar: Option<SymbolicFactor>,
+    /// Symbolic analyses the choice took (0 or 1).
+    pub(crate) symbolic_analyses: usize,
 }
 
 impl From<SolverKind> for SolverChoice {
@@ -122,6 +126,7 @@ impl From<SolverKind> for SolverChoice {
         SolverChoice {
             kind,
             grounded_scalar: None,
+            symbolic_analyses: 0,
         }
     }
 }
@@ -334,7 +339,12 @@ pub(crate) fn solve_chordal(
     let mut r = init;
     let (mut cost, mut grad) = chordal_gradient(problem, &r);
     let init_cost = cost;
-    let finish = |r: Vec<Rotation>, cost: f64, g: f64, iterations: usize, termination| {
+    let finish = |r: Vec<Rotation>,
+                  cost: f64,
+                  g: f64,
+                  iterations: usize,
+                  termination,
+                  linear_algebra: Option<LinearAlgebraCounts>| {
         Ok(MultipleSolution {
             rotations: r,
             cost,
@@ -349,6 +359,7 @@ pub(crate) fn solve_chordal(
             },
             init_cost,
             residuals: None,
+            linear_algebra,
         })
     };
     let measure = "relative gradient norm ||grad|| / sum(w)";
@@ -364,6 +375,7 @@ pub(crate) fn solve_chordal(
                 value: gn / total_weight,
                 threshold: tol,
             },
+            None,
         );
     }
     let pattern = BlockPattern::new(
@@ -376,7 +388,25 @@ pub(crate) fn solve_chordal(
             .map(|e| (e.i - 1, e.j - 1)),
     );
     let slots = edge_slots(problem, &pattern);
-    let solver = linear_solver(problem, &pattern, solver)?;
+    let choice = match solver {
+        Some(c) => c,
+        None => choose_solver(problem)?,
+    };
+    let mut counts = LinearAlgebraCounts {
+        solver: choice.kind.to_string(),
+        // the choice's own analysis; the direct solver analyses the block pattern, the
+        // Laplacian preconditioner reuses the choice's or analyses its pattern
+        symbolic_analyses: choice.symbolic_analyses
+            + match choice.kind {
+                SolverKind::Direct => 1,
+                SolverKind::Laplacian => usize::from(choice.grounded_scalar.is_none()),
+                SolverKind::Jacobi => 0,
+            },
+        numeric_factorizations: usize::from(choice.kind == SolverKind::Laplacian),
+        cg_iterations: 0,
+    };
+    let solver = linear_solver(problem, &pattern, Some(choice))?;
+    counts.solver = solver.kind().to_string();
     // Levenberg-Marquardt damping `lambda D` [M6]: D = mean Hessian diagonal x I, or, with the
     // Laplacian preconditioner, D = its matrix 4 L ⊗ I_3 (then the damped system stays
     // preconditioned by the one factorisation, [M6b]).
@@ -403,6 +433,7 @@ pub(crate) fn solve_chordal(
                     value: gn / total_weight,
                     threshold: tol,
                 },
+                Some(counts.clone()),
             );
         }
         iterations += 1;
@@ -437,11 +468,14 @@ pub(crate) fn solve_chordal(
                 pattern.add_diagonal(&mut val, lambda);
             }
             let mut x = rhs.clone();
-            let ok = match solver.factor(&pattern, &val) {
-                Some(f) => f.solve(&mut x, eta, 2000),
-                None => false,
-            };
-            if ok {
+            if solver.kind() == SolverKind::Direct {
+                counts.numeric_factorizations += 1;
+            }
+            let solved = solver
+                .factor(&pattern, &val)
+                .and_then(|f| f.solve(&mut x, eta, 2000));
+            counts.cg_iterations += solved.unwrap_or(0);
+            if solved.is_some() {
                 rhs = x;
                 break lambda;
             }
@@ -455,6 +489,7 @@ pub(crate) fn solve_chordal(
                     Termination::NumericalFailure {
                         reason: "damped Newton system not positive definite".into(),
                     },
+                    Some(counts.clone()),
                 );
             }
         };
@@ -484,6 +519,7 @@ pub(crate) fn solve_chordal(
                     value: predicted / cost.abs().max(f64::MIN_POSITIVE),
                     threshold: settings.decrease_tolerance,
                 },
+                Some(counts.clone()),
             );
         }
         if !max_step.is_finite() {
@@ -495,6 +531,7 @@ pub(crate) fn solve_chordal(
                 Termination::NumericalFailure {
                     reason: "non-finite Newton step".into(),
                 },
+                Some(counts.clone()),
             );
         }
         let cand: Vec<Rotation> = r.iter().zip(&step).map(|(ri, s)| ri * exp(s)).collect();
@@ -532,6 +569,7 @@ pub(crate) fn solve_chordal(
                         value: max_step,
                         threshold: settings.step_tolerance,
                     },
+                    Some(counts.clone()),
                 );
             }
         } else {
@@ -546,6 +584,7 @@ pub(crate) fn solve_chordal(
                         value: gn / total_weight,
                         threshold: tol,
                     },
+                    Some(counts.clone()),
                 );
             }
         }
@@ -649,7 +688,7 @@ mod tests {
         let b = Mat::<f64>::from_fn(3 * (n - 1), 1, |k, _| ((k * 7) % 11) as f64 - 5.0);
         let mut x = b.clone();
         let f = solver.factor(&pattern, &h).unwrap();
-        assert!(f.solve(&mut x, 1e-12, 1));
+        assert!(f.solve(&mut x, 1e-12, 1).is_some());
         let hx = pattern.sym_mul(&h, &x);
         let res = (&hx - &b).norm_l2() / b.norm_l2();
         assert!(res < 1e-10, "relative residual after one iteration {res}");

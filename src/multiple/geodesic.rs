@@ -101,6 +101,7 @@ pub(crate) fn lie_algebraic(
             },
             init_cost,
             residuals: None,
+            linear_algebra: None,
         })
     };
     let converged = |g: f64| Termination::Converged {
@@ -207,7 +208,7 @@ pub(crate) fn lie_algebraic(
         }
         let llt = factor.as_ref().expect("factor set above");
         let mut rhs = Mat::<f64>::from_fn(n - 1, 3, |p, a| -ev.grad[p + 1][a]);
-        if !llt.solve(&mut rhs, 1e-10, 5000) {
+        if llt.solve(&mut rhs, 1e-10, 5000).is_none() {
             return finish(
                 r,
                 &ev,

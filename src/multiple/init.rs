@@ -265,7 +265,7 @@ pub(crate) fn spectral_with(
     }
     orthonormalise(&mut y);
     for _ in 0..SPECTRAL_MAX_ITERATIONS {
-        if !llt.solve(&mut y, SPECTRAL_INNER_TOLERANCE, 5000) {
+        if llt.solve(&mut y, SPECTRAL_INNER_TOLERANCE, 5000).is_none() {
             return Err(Error::Solver {
                 message: "spectral initialisation: Q + sigma I not positive definite (CG)".into(),
             });

@@ -41,4 +41,6 @@ pub use chordal::chordal_gradient;
 pub use init::{initialise, spanning_tree, spectral};
 pub use problem::{Edge, MultipleProblem, fix_gauge};
 pub use robust::{objective_cost_gradient, objective_terms};
-pub use solve::{Initialisation, MultipleSettings, MultipleSolution, solve_multiple};
+pub use solve::{
+    Initialisation, LinearAlgebraCounts, MultipleSettings, MultipleSolution, solve_multiple,
+};

@@ -174,6 +174,37 @@ pub struct MultipleSolution {
     /// [`MultipleSettings::inlier_threshold_deg`]); `None` for the L2 losses.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub residuals: Option<crate::multiple::robust::EdgeResiduals>,
+    /// The linear algebra of the chordal Newton-LM solve (`[M6]`, `[M6b]`): which solver, and
+    /// how many symbolic analyses, numeric factorisations and conjugate-gradient iterations it
+    /// took; `None` for the other objectives.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub linear_algebra: Option<LinearAlgebraCounts>,
+}
+
+/// The work of the sparse linear algebra of a local solve (`[M6]`, `[M6b]`). One sparse
+/// factorisation per Newton step is the cost a direct solver pays; the Laplacian-preconditioned
+/// path pays one per solve.
+///
+/// ```
+/// use rotavg::multiple::{solve_multiple, MultipleSettings, synthetic::SyntheticGraph};
+/// let (p, _) = SyntheticGraph { num_rotations: 50, num_edges: 150, noise_sigma: 0.01, ..Default::default() }.generate();
+/// let sol = solve_multiple(&p, &MultipleSettings::default())?;
+/// let la = sol.linear_algebra.unwrap();
+/// assert_eq!(la.solver, "sparse Cholesky");
+/// assert!(la.numeric_factorizations >= sol.report.iterations.saturating_sub(1));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct LinearAlgebraCounts {
+    /// The solver of the Newton systems: `sparse Cholesky`, `PCG (scalar Laplacian
+    /// preconditioner)` or `PCG (block-Jacobi preconditioner)`.
+    pub solver: String,
+    /// Symbolic sparse Cholesky analyses (orderings), including the one that chose the solver.
+    pub symbolic_analyses: usize,
+    /// Numeric sparse Cholesky factorisations (of the Newton systems, or of the preconditioner).
+    pub numeric_factorizations: usize,
+    /// Conjugate-gradient iterations over all Newton steps (0 for the direct solver).
+    pub cg_iterations: usize,
 }
 
 impl fmt::Display for MultipleSolution {
