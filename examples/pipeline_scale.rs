@@ -12,14 +12,32 @@
 //! (default 1e-3 rad). Prints one line: sizes, solve and certify seconds, Newton
 //! iterations, verdict, relative gap, and the certificate methods tried; then the linear
 //! algebra of the solve (solver, symbolic analyses, numeric factorisations, CG iterations),
-//! and the explanation when not certified (always with `ROTAVG_EXPLAIN=1`). `ROTAVG_CERTIFY=none` runs the solve
-//! alone (to measure its own peak RSS).
+//! and the explanation when not certified (always with `ROTAVG_EXPLAIN=1`).
+//! `ROTAVG_CERTIFY=none` runs the solve alone (to measure its own peak RSS).
+//!
+//! `--write-g2o PATH` (anywhere on the line): do not solve; write the generated problem to
+//! `PATH` (edges only, `rotavg::io::g2o::write_g2o`: `Q_ij = R_ij^T`, information `2 w I_3` so
+//! that SE-Sync's weight reads back as `w = 1`) and the ground truth next to it as
+//! `PATH` with `.g2o` replaced by `_gt.g2o` (vertex lines `W_i = R_i^T`, plus the same edges),
+//! the names the peer harness looks for. Both files are read back with `read_g2o` and the
+//! chordal cost of the ground truth is compared with the in-memory problem's (printed; the
+//! program fails when they differ by more than 1e-9 relative). `benches/peers/run.sh scale`
+//! feeds these files to `rotavg multiple` and to GTSAM.
 use rotavg::certify::{Budget, CertifyMode, CertifySettings, ToleranceRule};
+use rotavg::io::detect::ReadOptions;
+use rotavg::io::g2o::{read_g2o, write_g2o};
+use rotavg::multiple::MultipleProblem;
 use rotavg::multiple::synthetic::{SyntheticChain, SyntheticGraph, SyntheticGrid};
 use rotavg::pipeline::{AverageMultipleSettings, average_multiple};
+use rotavg::so3::Rotation;
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
+    let mut args: Vec<String> = std::env::args().collect();
+    let write_g2o: Option<String> = args.iter().position(|a| a == "--write-g2o").map(|k| {
+        let path = args.get(k + 1).cloned().expect("--write-g2o needs a PATH");
+        args.drain(k..k + 2);
+        path
+    });
     let (kind, rest) = match args.get(1).map(String::as_str) {
         Some(k @ ("random" | "chain" | "planar-chain" | "grid" | "torus")) => {
             (k.to_string(), &args[2..])
@@ -40,7 +58,7 @@ fn main() {
     let per_weight: f64 = rest.get(3).and_then(|s| s.parse().ok()).unwrap_or(1e-9);
     // the certificate's memory budget (default 4 GiB, as on the command line)
     let max_memory_gib: Option<u64> = rest.get(4).and_then(|s| s.parse().ok());
-    let (p, _) = match kind.as_str() {
+    let (p, truth) = match kind.as_str() {
         "random" => SyntheticGraph {
             num_rotations: n,
             num_edges: m,
@@ -70,6 +88,10 @@ fn main() {
         }
         .generate(),
     };
+    if let Some(path) = write_g2o {
+        write_and_check(&kind, &p, &truth, &path);
+        return;
+    }
     // ROTAVG_CERTIFY=none: the solve alone (its peak RSS)
     let mode = match std::env::var("ROTAVG_CERTIFY").as_deref() {
         Ok("none") => CertifyMode::None,
@@ -124,4 +146,43 @@ fn main() {
         }
         Err(e) => println!("error: {e}"),
     }
+}
+
+/// Write the problem (and, beside it, the ground truth) as g2o, read both back and check that
+/// the ground truth's chordal cost is the same on the problem as read.
+fn write_and_check(kind: &str, p: &MultipleProblem, truth: &[Rotation], path: &str) {
+    let gt_path = match path.strip_suffix(".g2o") {
+        Some(stem) => format!("{stem}_gt.g2o"),
+        None => format!("{path}_gt.g2o"),
+    };
+    std::fs::write(path, write_g2o(p, None)).expect("write the problem");
+    std::fs::write(&gt_path, write_g2o(p, Some(truth))).expect("write the ground truth");
+    let opts = ReadOptions::default(); // file weights: kappa = 3 / (2 tr((2 w I)^-1)) = w
+    let read = |f: &str| {
+        let text = std::fs::read_to_string(f).expect("read back");
+        read_g2o(&text, f, &opts).expect("parse back")
+    };
+    let (back, back_gt) = (read(path), read(&gt_path));
+    let gt_back = back_gt.initial.expect("ground-truth vertices");
+    assert_eq!(back.problem.num_rotations(), p.num_rotations());
+    assert_eq!(back.problem.num_edges(), p.num_edges());
+    // kappa = 3 / (2 tr((2 I)^-1)) = 1 up to the rounding of the Cholesky inverse
+    let dw = back
+        .problem
+        .edges()
+        .iter()
+        .map(|e| (e.weight - 1.0).abs())
+        .fold(0.0, f64::max);
+    assert!(dw <= 1e-12, "file weights differ from 1 by {dw:e}");
+    let (c0, c1) = (p.chordal_cost(truth), back.problem.chordal_cost(&gt_back));
+    let rel = (c1 - c0).abs() / c0.abs().max(f64::MIN_POSITIVE);
+    println!(
+        "{kind} n {} m {}: wrote {path} and {gt_path}; ground-truth chordal cost {c0:.17e} in memory, {c1:.17e} read back (relative difference {rel:.1e}); file weights 1 within {dw:.1e}",
+        p.num_rotations(),
+        p.num_edges()
+    );
+    assert!(
+        rel <= 1e-9,
+        "the written problem differs from the generated one"
+    );
 }

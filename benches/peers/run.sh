@@ -5,12 +5,22 @@
 #
 #   bash benches/peers/run.sh                 # everything (stages: setup gen peers proc ours table)
 #   bash benches/peers/run.sh ours table      # only some stages
+#   bash benches/peers/run.sh setup scale     # the scale comparison (not in the default set;
+#                                             # ~1 h; writes $WORK/results/scale/ and SCALE.md)
 #   WORK=/tmp/rotavg-peers FORCE=1 JOB_TIMEOUT=600 bash benches/peers/run.sh
 #
 # The peer code is never copied into this repository: it is copied from PEERS_SRC into
 # $WORK/peers (the shared folder is read-only) and its virtualenv is created there once.
 # Peer results are cached ($WORK/results/*.json is not recomputed unless FORCE=1); ours are
 # always recomputed. SKIP_BIG=1 skips the n=5000 synthetic graph.
+# Stage `scale` (never cached): the README's `pipeline_scale` graphs written as g2o
+# (SCALE_KINDS, default "chain grid random"; SCALE_SIZES, default "1000 10000 100000"), each
+# solved by `rotavg multiple`, GTSAM chordal+LM and GTSAM Shonan, one process per job under
+# /usr/bin/time -v and `timeout SCALE_TIMEOUT` (default JOB_TIMEOUT); SCALE_EXTRA adds jobs
+# ("chain:1000000 ..."); SCALE_SHONAN_MAX_N (default 10^5) skips Shonan above that size; the
+# GTSAM processes run under `ulimit -v` of SCALE_PEER_MEM_GIB (default 8) GiB, so that a
+# factorisation that fills cannot take the machine's memory (rotavg has its own 4 GiB budget). The 10^3 graphs are also cross-checked: GTSAM's
+# own cost() of the ground truth and of rotavg's solution against rotavg's costs.
 set -uo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 PEERS_SRC="${PEERS_SRC:-}"
@@ -191,6 +201,97 @@ if has ours; then
   for f in "$INST"/conj_*.json; do
     ours "$RES/conj__$(basename "$f" .json)__rotavg.json" "$BIN/rotavg" conjugate "$f" --json
   done
+fi
+
+# ---- scale: the README's pipeline_scale graphs (same generator, seed and noise) as g2o files,
+# rotavg multiple vs GTSAM chordal+LM and GTSAM Shonan; one process per job, wall time, exit
+# code and peak RSS measured here (/usr/bin/time -v around `timeout`), load average recorded ----
+ST="${SCALE_TIMEOUT:-$T}"
+timed() {  # timed OUT.json cmd args...   (stdout must be one JSON object)
+  local out="$1"; shift
+  local load t0 t1 rc
+  load=$(cut -d' ' -f1-3 /proc/loadavg)
+  log "[load $load] $*"
+  t0=$(date +%s.%N)
+  (if [[ -n "${MEMLIMIT_KB:-}" ]]; then ulimit -v "$MEMLIMIT_KB"; fi
+   exec /usr/bin/time -v -o "${out%.json}.time" timeout "$ST" "$@" > "$out.tmp" 2>"${out%.json}.stderr")
+  rc=$?
+  t1=$(date +%s.%N)
+  stamp "$out" "$t0" "$t1" "$rc"
+  "$PY" - "$out" "${out%.json}.time" "$load" "$(cut -d' ' -f1-3 /proc/loadavg)" "$*" <<'PYEOF'
+import json, re, sys
+out, timef, load0, load1, cmd = sys.argv[1:6]
+d = json.load(open(out))
+try:
+    err = open(out[:-5] + ".stderr").read().strip().splitlines()
+    if err and d.get("exit_code"):
+        d["stderr_tail"] = err[-3:]
+except OSError:
+    pass
+try:
+    m = re.search(r"Maximum resident set size \(kbytes\): (\d+)", open(timef).read())
+    d["peak_rss_kb"] = int(m.group(1)) if m else None
+except OSError:
+    d["peak_rss_kb"] = None
+d["load_before"], d["load_after"], d["command"] = load0, load1, cmd
+json.dump(d, open(out, "w"), indent=1)
+PYEOF
+  rm -f "${out%.json}.time"
+}
+if has scale; then
+  SD="$RES/scale"; SI="$INST/scale"; mkdir -p "$SD" "$SI"
+  (cd "$REPO" && cargo build --release --bin rotavg --example pipeline_scale) || exit 1
+  PEER_MEM_KB=$(( ${SCALE_PEER_MEM_GIB:-8} * 1024 * 1024 ))
+  jobs=()
+  for n in ${SCALE_SIZES:-1000 10000 100000}; do
+    for kind in ${SCALE_KINDS:-chain grid random}; do jobs+=("$kind:$n"); done
+  done
+  for job in "${jobs[@]}" ${SCALE_EXTRA:-}; do
+      kind="${job%%:*}"; n="${job##*:}"
+      tag="${kind}_n${n}"; g="$SI/$tag.g2o"
+      # writes $g and ${g%.g2o}_gt.g2o, reads both back and compares the ground truth's cost
+      "$BIN/examples/pipeline_scale" "$kind" "$n" --write-g2o "$g" > "$SD/${tag}__written.txt" || exit 1
+      log "$(cat "$SD/${tag}__written.txt")"
+      timed "$SD/${tag}__rotavg.json" "$BIN/rotavg" multiple "$g" --weights unit --json --max-seconds "$ST"
+      MEMLIMIT_KB=$PEER_MEM_KB timed "$SD/${tag}__lm.json" "$PY" "$P/shonan.py" "$g" --weights unit \
+        --methods chordal_lm --no-cert --native-run-max-n 0
+      if (( n <= ${SCALE_SHONAN_MAX_N:-100000} )); then
+        MEMLIMIT_KB=$PEER_MEM_KB timed "$SD/${tag}__shonan.json" "$PY" "$P/shonan.py" "$g" --weights unit \
+          --methods shonan --no-cert --native-run-max-n 0
+      fi
+      if (( n <= 1000 )); then  # cross-check of the conventions: GTSAM's own cost() (untimed)
+        "$BIN/rotavg" multiple "$g" --weights unit --quiet --output "$SD/${tag}__rotavg_solution.g2o" >/dev/null 2>&1
+        "$PY" - "$P" "$g" "${g%.g2o}_gt.g2o" "$SD/${tag}__rotavg_solution.g2o" "$SD/${tag}__rotavg.json" \
+          "$SD/${tag}__written.txt" > "$SD/${tag}__check.json" <<'PYEOF'
+import json, re, sys
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+import gtsam
+from common import load_gt_for, load_mra, mra_cost
+from shonan import build_measurements, to_values_rot3
+prob, gtf, solf, oursf, writtenf = sys.argv[2:7]
+P = load_mra(prob)
+sh = gtsam.ShonanAveraging3(build_measurements(P, np.ones(P.m)))  # unit weights, as the runs
+ours = json.load(open(oursf))
+written = open(writtenf).read()
+rust_gt = float(re.search(r"cost (\S+) in memory", written).group(1))
+d = {"n": P.n, "m": P.m, "file_weights_max_dev_from_1": float(np.abs(P.w - 1.0).max()),
+     "rotavg_gt_cost": rust_gt}
+for name, f in (("gt", gtf), ("rotavg_solution", solf)):
+    R, mask = load_gt_for(P, f)
+    assert mask.all(), name
+    d[name + "_gtsam_cost"] = sh.cost(to_values_rot3(R))
+    d[name + "_numpy_cost"] = mra_cost(R, P)
+d["rotavg_solution_cost"] = ours["cost"]
+d["rel_diff_gt_gtsam_vs_rotavg"] = abs(d["gt_gtsam_cost"] - rust_gt) / rust_gt
+d["rel_diff_solution_gtsam_vs_rotavg"] = (abs(d["rotavg_solution_gtsam_cost"] - d["rotavg_solution_cost"])
+                                         / d["rotavg_solution_cost"])
+print(json.dumps(d, indent=1))
+PYEOF
+        log "check $tag: $(tr -d '\n' < "$SD/${tag}__check.json")"
+      fi
+  done
+  "$PY" "$REPO/benches/peers/tables.py" --scale "$RES" "$INST" > "$RES/SCALE.md" && log "wrote $RES/SCALE.md"
 fi
 
 if has table; then

@@ -2,6 +2,7 @@
 """Markdown tables from the JSON results written by benches/peers/run.sh.
 
     python3 tables.py RESULTS_DIR INSTANCES_DIR > TABLES.md
+    python3 tables.py --scale RESULTS_DIR INSTANCES_DIR > SCALE.md   # stage `scale` only
 
 Peer JSON comes from ../shared/peers (shonan.py, sdp_cvxpy.py, single_scipy.py,
 handeye_opencv.py); ours from rotavg's examples / CLI wrapped by run.sh (which adds
@@ -16,6 +17,9 @@ import sys
 
 import numpy as np
 
+SCALE_ONLY = len(sys.argv) > 1 and sys.argv[1] == "--scale"
+if SCALE_ONLY:
+    del sys.argv[1]
 RES, INST = sys.argv[1], sys.argv[2]
 
 
@@ -67,6 +71,124 @@ def gt_err(d):
 
 def tag_of(path, suffix):
     return os.path.basename(path)[: -len(suffix)]
+
+
+def mb(kb):
+    return "-" if kb is None else f"{kb / 1024:.0f} MB"
+
+
+def rel(a, b):
+    """(a - b) / |b|, signed, as text."""
+    if a is None or b is None or b == 0:
+        return "-"
+    return f"{(a - b) / abs(b):+.1e}"
+
+
+def failed(d):
+    """'timeout (600 s)' / 'exit code N' / None for a job record of run.sh's `timed`."""
+    if d is None:
+        return "missing"
+    rc = d.get("exit_code")
+    if rc == 124:
+        return f"timeout ({d.get('process_wall_seconds', 0):.0f} s)"
+    if rc not in (0, None):
+        tail = (d.get("stderr_tail") or [""])[-1][:80].replace("|", "/")
+        return f"exit code {rc}" + (f": {tail}" if tail else "")
+    return None
+
+
+def scale_section(p):
+    sd = os.path.join(RES, "scale")
+    order = {"chain": 0, "grid": 1, "random": 2}
+    tags = sorted({os.path.basename(g)[: -len("__rotavg.json")]
+                   for g in glob.glob(os.path.join(sd, "*__rotavg.json"))},
+                  key=lambda t: (int(t.split("_n")[-1]), order.get(t.split("_n")[0], 9)))
+    if not tags:
+        return
+    p("## Scale: synthetic chain / grid / random graphs (stage `scale`)\n")
+    p("One process per job; `process` is its wall time measured by run.sh (start-up, parsing, "
+      "solve, certificate, output); in parentheses the in-process times: rotavg solve / certify "
+      "(JSON `pipeline`), GTSAM chordal initialisation + LM, and Shonan's staircase (with its own "
+      "certification). RSS: peak resident set from `/usr/bin/time -v`. Costs are the unweighted "
+      "chordal cost (every weight is 1); `vs rotavg` is (peer cost - rotavg cost) / rotavg cost. "
+      "Load: 1-minute load average before the job.\n")
+    p("| graph | n | m | rotavg process (solve / certify) | rotavg verdict (relative gap) | rotavg cost | rotavg RSS "
+      "| chordal+LM process (chordal / LM) | chordal+LM cost vs rotavg | chordal+LM RSS "
+      "| Shonan process (staircase) | Shonan p levels, GTSAM cert (lambda_min) | Shonan cost vs rotavg | Shonan RSS | load |")
+    p("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for tag in tags:
+        ours = load(os.path.join(sd, tag + "__rotavg.json"))
+        lmj = load(os.path.join(sd, tag + "__lm.json"))
+        shj = load(os.path.join(sd, tag + "__shonan.json"))
+        kind, n = tag.rsplit("_n", 1)
+        row = [kind]
+        o = ours or {}
+        det, cert = o.get("pipeline") or {}, o.get("certificate") or {}
+        m = o.get("num_measurements") or (lmj or {}).get("m")
+        row += [f"{int(n):,}" if not (lmj or {}).get("n") else f"{lmj['n']:,}", f"{m:,}" if m else "-"]
+        why = failed(ours)
+        our_cost = o.get("cost")
+        loads = [(ours or {}).get("load_before")]
+        if why or our_cost is None:
+            row += [f"{why or 'error'} ({secs((ours or {}).get('process_wall_seconds'))})", "-", "-", mb((ours or {}).get("peak_rss_kb"))]
+        else:
+            row.append(f"{secs(ours['process_wall_seconds'])} ({secs(det.get('solve_seconds'))} / {secs(det.get('certify_seconds'))})")
+            g = cert.get("relative_gap")
+            row.append(f"{cert.get('verdict', 'none')} ({f(g, 1)})")
+            row.append(f"{our_cost:.10g}")
+            row.append(mb(ours.get("peak_rss_kb")))
+        for j, name in ((lmj, "chordal_lm"), (shj, "shonan")):
+            if j is None:
+                row += ["not run", "-", "-"] if name == "chordal_lm" else ["not run", "-", "-", "-"]
+                continue
+            loads.append(j.get("load_before"))
+            why = failed(j)
+            r = (j.get("results") or {}).get(name) or {}
+            if why or "cost" not in r:
+                if why:
+                    msg = why
+                elif r.get("error") or j.get("error"):
+                    msg = "error: " + str(r.get("error") or j.get("error"))[:80].replace("|", "/")
+                else:  # shonan.py drops chordal_lm when its chordal initialisation raised
+                    msg = f"no result: exception in the {'chordal initialisation' if name == 'chordal_lm' else 'solve'} ({secs(j.get('process_wall_seconds'))})"
+                row.append(msg)
+                row += (["-"] if name == "chordal_lm" else ["-", "-"]) + [mb(j.get("peak_rss_kb"))]
+                continue
+            if name == "chordal_lm":
+                chordal = r.get("time_s_incl_chordal_init", r["time_s"]) - r["time_s"]
+                row.append(f"{secs(j['process_wall_seconds'])} ({secs(chordal)} / {secs(r['time_s'])})")
+                row.append(f"{r['cost']:.10g} ({rel(r['cost'], our_cost)})")
+            else:
+                row.append(f"{secs(j['process_wall_seconds'])} ({secs(r['time_s'])})")
+                lv = r.get("p_levels") or []
+                row.append(f"{lv[0]}..{lv[-1] if lv else '-'}, {f(r.get('certified'))} ({f(r.get('gtsam_min_eig'), 1)})")
+                row.append(f"{r['cost']:.10g} ({rel(r['cost'], our_cost)})")
+            row.append(mb(j.get("peak_rss_kb")))
+        row.append(" / ".join(str(x).split()[0] for x in loads if x))
+        p("| " + " | ".join(row) + " |")
+    checks = sorted(glob.glob(os.path.join(sd, "*__check.json")))
+    if checks:
+        p("\nConvention check (n = 10^3): the chordal cost of the ground truth and of rotavg's "
+          "solution (written by `rotavg multiple --output`, read back by the peer harness) by "
+          "GTSAM's own `cost()`, against rotavg's values.\n")
+        p("| graph | ground truth: rotavg | GTSAM cost() | rel. diff | rotavg solution: rotavg | GTSAM cost() | rel. diff |")
+        p("|---|---|---|---|---|---|---|")
+        for c in checks:
+            d = load(c) or {}
+            if "gt_gtsam_cost" not in d:
+                p(f"| {os.path.basename(c)[:-len('__check.json')]} | check failed | | | | | |")
+                continue
+            p(f"| {os.path.basename(c)[:-len('__check.json')]} | {d['rotavg_gt_cost']:.15g} | {d['gt_gtsam_cost']:.15g} "
+              f"| {d['rel_diff_gt_gtsam_vs_rotavg']:.1e} | {d['rotavg_solution_cost']:.15g} "
+              f"| {d['rotavg_solution_gtsam_cost']:.15g} | {d['rel_diff_solution_gtsam_vs_rotavg']:.1e} |")
+    p("")
+
+
+if SCALE_ONLY:
+    out = []
+    scale_section(out.append)
+    print("\n".join(out))
+    sys.exit(0)
 
 
 out = []
@@ -256,4 +378,5 @@ for g in sorted(glob.glob(os.path.join(RES, "conj__*__opencv.json"))):
         row += [f"error: {(ours or {}).get('error', 'missing')}", "", "", "", ""]
     p("| " + " | ".join(row) + " |")
 p("")
+scale_section(p)
 print("\n".join(out))
