@@ -11,7 +11,7 @@ REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BIN="$REPO/target/release/examples/pipeline_scale"
 [[ -x "$BIN" ]] || { echo "build first: cargo build --release --example pipeline_scale" >&2; exit 1; }
 ROWS="${ROWS:-chain:1000 chain:10000 chain:100000 chain:1000000 grid:10000 grid:100000 grid:1000000 torus:100000 torus:1000000 random:1000 random:10000 random:30000 random:100000:300000:0.1}"
-echo "| graph | nodes | edges | solve (Newton iterations) | certify | verdict (relative gap) | peak RSS solve / whole | load |"
+echo "| graph | nodes | edges | solve (Newton iterations) | certify | verdict (relative gap) | peak RSS, solve alone / whole | load |"
 echo "|---|---|---|---|---|---|---|---|"
 for row in $ROWS; do
   IFS=: read -r kind n m sigma <<<"$row"
@@ -23,8 +23,8 @@ for row in $ROWS; do
   solo=$( { ROTAVG_CERTIFY=none /usr/bin/time -f "RSS %M" "$BIN" "${args[@]}"; } 2>&1 )
   line=$(grep -m1 " n [0-9]" <<<"$out")
   why=$(grep -m1 "why:" <<<"$out" | sed 's/^ *why: //')
-  rss=$(grep -m1 "^RSS" <<<"$out" | awk '{printf "%.0f MB", $2/1024}')
-  rss_solo=$(grep -m1 "^RSS" <<<"$solo" | awk '{printf "%.0f MB", $2/1024}')
+  rss=$(grep -m1 "^RSS" <<<"$out" | awk '{printf "%.0f MiB", $2/1024}')
+  rss_solo=$(grep -m1 "^RSS" <<<"$solo" | awk '{printf "%.0f MiB", $2/1024}')
   edges=$(sed -E 's/.* m ([0-9]+) .*/\1/' <<<"$line")
   solve=$(sed -E 's/.*solve ([0-9.]+) s \(([0-9]+) iterations\).*/\1 s (\2)/' <<<"$line")
   certify=$(sed -E 's/.*certify ([0-9.]+) s.*/\1 s/' <<<"$line")
