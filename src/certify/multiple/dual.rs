@@ -379,11 +379,16 @@ fn verify(
         return Ok(b);
     }
     let terms = entry_terms(problem);
+    let mut known_over_budget = None;
     let (grounded, not_critical) = match rotations {
         Some(rs) => match grounded_bound(problem, rs, lambdas, &s, terms, budget, settings)? {
             Grounded::Bound(b) => (Some(*b), false),
             Grounded::NotCritical => (None, true),
             Grounded::NotApplicable => (None, false),
+            Grounded::OverBudget { factor_values } => {
+                known_over_budget = Some(factor_values);
+                (None, false)
+            }
         },
         None => (None, false),
     };
@@ -406,15 +411,20 @@ fn verify(
         .max_factor_values(n3)
         .min(dual.max_factor_nonzeros);
     // the numeric scratch counts against the memory budget as values of 8 bytes
-    let (mut analysed, factor_nonzeros, scratch_values) =
-        match ShiftedCholesky::new_within(s, terms, cap)? {
+    let (mut analysed, factor_nonzeros, scratch_values) = match known_over_budget {
+        Some(values) => {
+            drop(s);
+            (None, values, 0)
+        }
+        None => match ShiftedCholesky::new_within(s, terms, cap)? {
             Ok(ch) => {
                 let len = ch.factor_len();
                 let scratch = ch.scratch_bytes().div_ceil(8);
                 (Some(ch), len, scratch)
             }
             Err(predicted) => (None, predicted, 0),
-        };
+        },
+    };
     let mut factorizations = 0usize;
     let mut lanczos_iterations = 0usize;
     let mut estimate: Option<LanczosResult> = None;
@@ -677,9 +687,17 @@ enum Grounded {
     /// The estimate is too far from a critical point for a useful bound (`rho^2` large against
     /// the budget and `S_{-g}` not far inside the PD cone): refine it first.
     NotCritical,
-    /// Not applicable: the factor of `S_{-g}` is over the cap, `S_{-g}` is not positive
-    /// definite, or the rotations are far from orthogonal.
+    /// Not applicable: the factor of `S_{-g}` is predicted over the cap, `S_{-g}` is not
+    /// positive definite, or the rotations are far from orthogonal.
     NotApplicable,
+    /// The symbolic analysis of `S_{-g}` found a factor (plus scratch, in values of 8 bytes)
+    /// over the budget. `S` has the same pattern plus one block row and column, so its factor
+    /// is not analysed again (the analysis of a 10^6-node chain's costs seconds); only the
+    /// decision to try depends on this, never a bound.
+    OverBudget {
+        /// Factor values plus scratch of `S_{-g}`.
+        factor_values: usize,
+    },
 }
 
 /// The grounded bound `[D15]` at `rotations` (with their multipliers `lambdas` and
@@ -755,7 +773,9 @@ fn grounded_bound(
                 .factorisation_fits(factor_nonzeros.saturating_add(scratch_values), n3 - 3)
                 .is_err()
         {
-            return Ok(Grounded::NotApplicable);
+            return Ok(Grounded::OverBudget {
+                factor_values: factor_nonzeros.saturating_add(scratch_values),
+            });
         }
         // First the smallest c that makes rho^2 / c negligible against the budget (and a tiny
         // multiple of ||S||): one factorisation when S_{-g} is well inside the PD cone. Then,
