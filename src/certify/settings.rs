@@ -90,7 +90,7 @@ impl fmt::Display for CertifyMode {
 /// in place); see [`Budget::factorisation_bytes`] for the whole model.
 pub const BYTES_PER_FACTOR_VALUE: u64 = 8;
 
-/// Bytes per factor value, for factors of up to [`RESIDUAL_FACTOR_LIMIT`](crate::linalg::cholesky::RESIDUAL_FACTOR_LIMIT) values, of the
+/// Bytes per factor value, for factors of up to [`RESIDUAL_FACTOR_LIMIT`] values, of the
 /// residual-based margin `[D6]` (2) (the factor's columns and rows as `(index, value)` pairs).
 pub const RESIDUAL_MARGIN_BYTES_PER_VALUE: u64 = 32;
 
@@ -178,7 +178,7 @@ impl Budget {
 
     /// The memory a factorisation with `values` stored factor values allocates, bytes:
     /// [`BYTES_PER_FACTOR_VALUE`] per value, plus [`RESIDUAL_MARGIN_BYTES_PER_VALUE`] per value
-    /// for the first [`RESIDUAL_FACTOR_LIMIT`](crate::linalg::cholesky::RESIDUAL_FACTOR_LIMIT) (the residual margin `[D6]` (2), computed only
+    /// for the first [`RESIDUAL_FACTOR_LIMIT`] (the residual margin `[D6]` (2), computed only
     /// for factors up to that size). Callers that know the numeric scratch add it to `values`
     /// in units of 8 bytes. Measured (faer 0.24, supernodal, 10^6-node grid sweep,
     /// `examples/pipeline_scale`): a factor of 1.88e8 values, 2.1 GiB by this model; the whole
