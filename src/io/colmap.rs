@@ -374,7 +374,7 @@ mod database {
             ))
             .map_err(sql)?;
         let mut rows = stmt.query([]).map_err(sql)?;
-        let mut raw: Vec<(u64, u64, Rotation)> = Vec::new();
+        let mut raw: Vec<crate::io::RawEdge> = Vec::new();
         let mut total = 0usize;
         let mut by_config: BTreeMap<i64, usize> = BTreeMap::new();
         let mut no_pose = 0usize;
@@ -441,7 +441,12 @@ mod database {
                     )));
                 }
             }
-            raw.push((id1, id2, rotation));
+            raw.push(crate::io::RawEdge {
+                i: id1,
+                j: id2,
+                rotation,
+                weight: 1.0,
+            });
         }
         let skipped_config: usize = by_config.values().sum();
         let mut warnings = Vec::new();
@@ -469,7 +474,7 @@ mod database {
                 accepted_list()
             )));
         }
-        let (ids, edges) = crate::io::compact_unit_edges(raw.iter().copied());
+        let (ids, edges) = crate::io::compact_edges(raw, std::iter::empty());
         let node_names = ids
             .iter()
             .map(|id| names.get(id).cloned().unwrap_or_default())

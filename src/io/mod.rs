@@ -56,27 +56,6 @@ pub(crate) use crate::validate::weight_out_of_range;
 /// The weight window of every reader and constructor (see [`crate::validate::MAX_WEIGHT`]).
 pub use crate::validate::{MAX_WEIGHT, MIN_WEIGHT};
 
-/// Node ids compacted: the sorted distinct file ids of the edges' endpoints (node `k` is
-/// `ids[k]`) and unit-weight edges between their indices. Shared by the readers whose files
-/// name nodes by sparse ids (1DSfM, COLMAP).
-pub(crate) fn compact_unit_edges(
-    raw: impl Iterator<Item = (u64, u64, crate::so3::Rotation)> + Clone,
-) -> (Vec<u64>, Vec<crate::multiple::Edge>) {
-    let mut ids: Vec<u64> = raw.clone().flat_map(|(i, j, _)| [i, j]).collect();
-    ids.sort_unstable();
-    ids.dedup();
-    let index = |id: u64| ids.binary_search(&id).unwrap_or(0);
-    let edges = raw
-        .map(|(i, j, rotation)| crate::multiple::Edge {
-            i: index(i),
-            j: index(j),
-            rotation,
-            weight: 1.0,
-        })
-        .collect();
-    (ids, edges)
-}
-
 /// An edge as a reader keeps it, with the file's node ids: the size and alignment of
 /// [`crate::multiple::Edge`], so [`compact_edges`] turns the one into the other in place.
 pub(crate) struct RawEdge {
@@ -88,7 +67,7 @@ pub(crate) struct RawEdge {
 
 /// Node ids compacted, for edges read with file ids: the sorted distinct ids of `extra_ids`
 /// (e.g. vertex lines) and of the edges' endpoints (node `k` is `ids[k]`), and the edges
-/// between their indices, in file order. The edge list is converted in place (the two types
+/// between their indices, in file order (1DSfM, g2o, COLMAP). The edge list is converted in place (the two types
 /// have one size), so the peak memory is the edges plus 16 bytes per edge for the ids.
 pub(crate) fn compact_edges(
     raw: Vec<RawEdge>,
