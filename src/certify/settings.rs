@@ -148,6 +148,10 @@ impl Budget {
     /// let v = b.max_factor_values(30_000);
     /// assert!(b.factorisation_fits(v, 30_000).is_ok());
     /// assert!(b.factorisation_fits(v + 1, 30_000).is_err());
+    /// // below 40 bytes x 2e7 values every value carries the residual margin's 32 bytes
+    /// let small = Budget { max_memory_bytes: 100 << 20, max_seconds: None };
+    /// assert_eq!(small.max_factor_values(30_000), (100 << 20) / 40);
+    /// assert_eq!(Budget::factorisation_bytes(v), (8u64 << 30) as f64);
     /// ```
     pub fn max_factor_values(&self, dim: usize) -> usize {
         // the inverse of `factorisation_bytes` (piecewise linear)

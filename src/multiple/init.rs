@@ -1,6 +1,7 @@
 //! Initialisations of the local solvers (`paper-notes/multiple.md`, `[M4]`, `[M5]`): the
-//! shortest-path spanning tree from a central node, and the spectral relaxation (bottom-3 eigenvectors of the connection
-//! Laplacian by sparse block inverse iteration, rounded to SO(3)).
+//! shortest-path spanning tree from a central node, and the spectral relaxation (bottom-3
+//! eigenvectors of the connection Laplacian by sparse block inverse iteration, rounded to
+//! SO(3)).
 
 use crate::error::{Error, Result};
 use crate::linalg::block_pattern::BlockPattern;
