@@ -8,6 +8,7 @@ use crate::io::detect::{ComponentSelection, GraphFormat};
 use crate::io::input::MultipleInput;
 use crate::io::names::MultipleLoss;
 use crate::multiple::accuracy::{AccuracyReport, align_and_compare};
+use crate::multiple::LinearAlgebraCounts;
 use crate::multiple::robust::ResidualSummary;
 use crate::pipeline::{MultipleEstimate, PipelineDetails};
 use crate::termination::SolverReport;
@@ -145,6 +146,7 @@ struct Json<'a> {
     #[serde(skip_serializing_if = "<[String]>::is_empty")]
     node_names: &'a [String],
     solver: &'a SolverReport,
+    linear_algebra: Option<&'a LinearAlgebraCounts>,
     certificate: Option<&'a Certificate>,
     pipeline: &'a PipelineDetails,
     accuracy: Option<&'a AccuracyReport>,
@@ -220,6 +222,7 @@ impl Serialize for MultipleReport {
             node_ids: &self.node_ids,
             node_names: &self.node_names,
             solver: &s.report,
+            linear_algebra: s.linear_algebra.as_ref(),
             certificate: self.result.certificate.as_ref(),
             pipeline: &pipeline,
             accuracy: self.accuracy.as_ref(),
