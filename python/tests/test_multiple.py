@@ -30,6 +30,19 @@ def test_noise_free_graph_is_solved_exactly_and_certified(rng):
     assert np.allclose(res.estimate, truth @ truth[0].T, atol=1e-9)
 
 
+def test_linear_algebra_counts_are_reported(rng):
+    # a small graph: the direct solver, one numeric factorisation per Newton step at most
+    # (the LM damping may refactorise), no CG; a robust loss reports none
+    truth, i, j, rel = synthetic_graph(rng, 40, 120, 0.01)
+    d = rotavg.average_multiple(40, i, j, rel).to_dict()
+    la = d["linear_algebra"]
+    assert la["solver"] == "sparse Cholesky"
+    assert la["cg_iterations"] == 0
+    assert 1 <= la["numeric_factorizations"] and la["symbolic_analyses"] == 2
+    assert d["solver"]["iterations"] <= la["numeric_factorizations"] + 1
+    assert rotavg.average_multiple(40, i, j, rel, loss="huber").to_dict()["linear_algebra"] is None
+
+
 def test_cost_convention_rel_times_r_i_is_r_j(rng):
     truth, i, j, rel = synthetic_graph(rng, 25, 70, 0.05)
     w = rng.uniform(0.5, 2.0, size=len(i))
