@@ -184,17 +184,13 @@ pub(crate) fn root_fixed_steps(n: usize, entry: impl Fn(usize, usize) -> f64) ->
 }
 
 /// The linear solver of the chordal Newton systems on `pattern` (nodes `1..n`, node 0
-/// grounded): `choice`, or for `None` the one [`choose_solver`] picks. The Laplacian
+/// grounded), as [`choose_solver`] chose (or a forced [`SolverKind`]). The Laplacian
 /// preconditioner is `4 L ⊗ I_3`, the Hessian at a consistent estimate `[M6b]`.
 pub(crate) fn linear_solver(
     problem: &MultipleProblem,
     pattern: &BlockPattern,
-    choice: Option<SolverChoice>,
+    choice: SolverChoice,
 ) -> Result<LinearSolver> {
-    let choice = match choice {
-        Some(c) => c,
-        None => choose_solver(problem)?,
-    };
     match choice.kind {
         SolverKind::Direct => LinearSolver::new(pattern, true),
         SolverKind::Jacobi => LinearSolver::new(pattern, false),
@@ -392,21 +388,22 @@ pub(crate) fn solve_chordal(
         Some(c) => c,
         None => choose_solver(problem)?,
     };
+    // the choice's own analysis; the direct solver analyses the block pattern, the Laplacian
+    // preconditioner reuses the choice's (or analyses its pattern) and factorises once
+    let symbolic_analyses = choice.symbolic_analyses
+        + match choice.kind {
+            SolverKind::Direct => 1,
+            SolverKind::Laplacian => usize::from(choice.grounded_scalar.is_none()),
+            SolverKind::Jacobi => 0,
+        };
+    let numeric_factorizations = usize::from(choice.kind == SolverKind::Laplacian);
+    let solver = linear_solver(problem, &pattern, choice)?;
     let mut counts = LinearAlgebraCounts {
-        solver: choice.kind.to_string(),
-        // the choice's own analysis; the direct solver analyses the block pattern, the
-        // Laplacian preconditioner reuses the choice's or analyses its pattern
-        symbolic_analyses: choice.symbolic_analyses
-            + match choice.kind {
-                SolverKind::Direct => 1,
-                SolverKind::Laplacian => usize::from(choice.grounded_scalar.is_none()),
-                SolverKind::Jacobi => 0,
-            },
-        numeric_factorizations: usize::from(choice.kind == SolverKind::Laplacian),
+        solver: solver.kind().to_string(),
+        symbolic_analyses,
+        numeric_factorizations,
         cg_iterations: 0,
     };
-    let solver = linear_solver(problem, &pattern, Some(choice))?;
-    counts.solver = solver.kind().to_string();
     // Levenberg-Marquardt damping `lambda D` [M6]: D = mean Hessian diagonal x I, or, with the
     // Laplacian preconditioner, D = its matrix 4 L ⊗ I_3 (then the damped system stays
     // preconditioned by the one factorisation, [M6b]).
@@ -683,7 +680,7 @@ mod tests {
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
         assert!(diff < 1e-12, "Hessian - 4 L ⊗ I = {diff}");
-        let solver = linear_solver(&p, &pattern, Some(SolverKind::Laplacian.into())).unwrap();
+        let solver = linear_solver(&p, &pattern, SolverKind::Laplacian.into()).unwrap();
         assert_eq!(solver.kind(), SolverKind::Laplacian);
         let b = Mat::<f64>::from_fn(3 * (n - 1), 1, |k, _| ((k * 7) % 11) as f64 - 5.0);
         let mut x = b.clone();

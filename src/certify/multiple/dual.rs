@@ -385,8 +385,11 @@ fn verify(
             Grounded::Bound(b) => (Some(*b), false),
             Grounded::NotCritical => (None, true),
             Grounded::NotApplicable => (None, false),
-            Grounded::OverBudget { factor_values } => {
-                known_over_budget = Some(factor_values);
+            Grounded::OverBudget {
+                reason,
+                factor_values,
+            } => {
+                known_over_budget = Some((reason, factor_values));
                 (None, false)
             }
         },
@@ -411,19 +414,23 @@ fn verify(
         .max_factor_values(n3)
         .min(dual.max_factor_nonzeros);
     // the numeric scratch counts against the memory budget as values of 8 bytes
-    let (mut analysed, factor_nonzeros, scratch_values) = match known_over_budget {
-        Some(values) => {
+    let (mut analysed, factor_nonzeros, budget_exceeded) = match known_over_budget {
+        Some((reason, values)) => {
             drop(s);
-            (None, values, 0)
+            (None, values, Some(reason))
         }
-        None => match ShiftedCholesky::new_within(s, terms, cap)? {
-            Ok(ch) => {
-                let len = ch.factor_len();
-                let scratch = ch.scratch_bytes().div_ceil(8);
-                (Some(ch), len, scratch)
-            }
-            Err(predicted) => (None, predicted, 0),
-        },
+        None => {
+            let (analysed, len, scratch) = match ShiftedCholesky::new_within(s, terms, cap)? {
+                Ok(ch) => {
+                    let len = ch.factor_len();
+                    let scratch = ch.scratch_bytes().div_ceil(8);
+                    (Some(ch), len, scratch)
+                }
+                Err(predicted) => (None, predicted, 0),
+            };
+            let over = factor_over_budget(settings, len, scratch, n3);
+            (analysed, len, over)
+        }
     };
     let mut factorizations = 0usize;
     let mut lanczos_iterations = 0usize;
@@ -461,20 +468,7 @@ fn verify(
 
     // the cap of the dual settings is a budget as well: over it, the verdict is inconclusive
     // with its reason (not a gap that rounding would explain)
-    let budget_exceeded = settings
-        .budget
-        .factorisation_fits(factor_nonzeros.saturating_add(scratch_values), n3)
-        .err()
-        .or_else(|| {
-            (factor_nonzeros > dual.max_factor_nonzeros).then(|| {
-                format!(
-                    "the proof would need a factor of {factor_nonzeros:.1e} values; \
-                     limit dual.max_factor_nonzeros = {:.1e}",
-                    dual.max_factor_nonzeros
-                )
-            })
-        });
-    let skipped = factor_nonzeros > dual.max_factor_nonzeros || budget_exceeded.is_some();
+    let skipped = budget_exceeded.is_some();
     let factor = analysed.as_mut().filter(|_| !skipped);
     if let Some(ch) = factor {
         factorizations += 1;
@@ -680,6 +674,30 @@ fn complement_smallest(
     }
 }
 
+/// Why a factorisation of a `dim x dim` matrix with `factor_nonzeros` stored values and
+/// `scratch_values` of numeric scratch (in values of 8 bytes) is not tried: over the
+/// [`crate::certify::Budget`] or over `dual.max_factor_nonzeros`; `None` when it fits.
+fn factor_over_budget(
+    settings: &CertifySettings,
+    factor_nonzeros: usize,
+    scratch_values: usize,
+    dim: usize,
+) -> Option<String> {
+    let cap = settings.dual.max_factor_nonzeros;
+    settings
+        .budget
+        .factorisation_fits(factor_nonzeros.saturating_add(scratch_values), dim)
+        .err()
+        .or_else(|| {
+            (factor_nonzeros > cap).then(|| {
+                format!(
+                    "the proof would need a factor of {factor_nonzeros:.1e} values; \
+                     limit dual.max_factor_nonzeros = {cap:.1e}"
+                )
+            })
+        })
+}
+
 /// What the grounded bound `[D15]` gave.
 enum Grounded {
     /// A bound.
@@ -695,7 +713,9 @@ enum Grounded {
     /// is not analysed again (the analysis of a 10^6-node chain's costs seconds); only the
     /// decision to try depends on this, never a bound.
     OverBudget {
-        /// Factor values plus scratch of `S_{-g}`.
+        /// What would not fit ([`factor_over_budget`]).
+        reason: String,
+        /// Stored values of the factor of `S_{-g}`.
         factor_values: usize,
     },
 }
@@ -767,14 +787,11 @@ fn grounded_bound(
         };
         factor_nonzeros = ch.factor_len();
         let scratch_values = ch.scratch_bytes().div_ceil(8);
-        if factor_nonzeros > settings.dual.max_factor_nonzeros
-            || settings
-                .budget
-                .factorisation_fits(factor_nonzeros.saturating_add(scratch_values), n3 - 3)
-                .is_err()
+        if let Some(reason) = factor_over_budget(settings, factor_nonzeros, scratch_values, n3 - 3)
         {
             return Ok(Grounded::OverBudget {
-                factor_values: factor_nonzeros.saturating_add(scratch_values),
+                reason,
+                factor_values: factor_nonzeros,
             });
         }
         // First the smallest c that makes rho^2 / c negligible against the budget (and a tiny
