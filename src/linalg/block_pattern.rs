@@ -11,9 +11,6 @@ use faer::{Conj, Mat, MatMut, Par, Side};
 use nalgebra::Matrix3;
 use std::sync::Arc;
 
-/// Factor size (stored values) above which a numeric factorisation runs in parallel.
-const PARALLEL_FACTOR_THRESHOLD: usize = 2_000_000;
-
 /// A symbolic sparse Cholesky analysis (AMD ordering) of a [`BlockPattern`], shared by the
 /// numeric factorisations of matrices with that pattern.
 #[derive(Clone)]
@@ -192,11 +189,7 @@ impl BlockPattern {
     /// (or its scratch space cannot be allocated). Factors above 2e6 values use all threads.
     pub(crate) fn llt(&self, sym: &SymbolicFactor, val: &[f64]) -> Option<SparseLlt> {
         let mat = SparseColMatRef::new(self.symbolic.as_ref(), val);
-        let par = if sym.len_val() > PARALLEL_FACTOR_THRESHOLD {
-            Par::rayon(0)
-        } else {
-            Par::Seq
-        };
+        let par = super::factor_parallelism(sym.len_val());
         let mut values = vec![0.0f64; sym.len_val()];
         let req = sym
             .0

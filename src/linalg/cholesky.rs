@@ -54,8 +54,6 @@ use faer::{Conj, MatMut, Par, Side};
 /// Unit roundoff of `f64`: `u = 2^-53`.
 pub const UNIT_ROUNDOFF: f64 = f64::EPSILON / 2.0;
 
-/// Factor size (stored values) above which the numeric factorisation runs in parallel.
-const PARALLEL_FACTOR_THRESHOLD: usize = 2_000_000;
 /// Factor size (stored values) up to which the residual-based margin `[D6]` (2) is computed
 /// (it holds the factor's columns and rows as `(index, value)` pairs: 32 more bytes per value).
 pub const RESIDUAL_FACTOR_LIMIT: usize = 20_000_000;
@@ -352,11 +350,7 @@ impl ShiftedCholesky {
     /// Large supernodal factorisations use all threads (the margin `[D6]` holds for any
     /// summation order); small ones stay sequential and deterministic.
     fn parallelism(&self) -> Par {
-        if self.symbolic.len_val() > PARALLEL_FACTOR_THRESHOLD {
-            Par::rayon(0)
-        } else {
-            Par::Seq
-        }
+        super::factor_parallelism(self.symbolic.len_val())
     }
 
     /// Factorise `S + shift I`. `None` when a pivot is not positive or not finite (no conclusion:

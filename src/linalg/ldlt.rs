@@ -5,14 +5,11 @@
 //! the floating-point matrix.
 
 use super::cholesky::{for_each_factor_entry, gamma};
+use faer::Side;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::SymbolicCholesky;
-use faer::{Par, Side};
-
-/// Factor size (stored values) above which the numeric factorisation runs in parallel.
-const PARALLEL_FACTOR_THRESHOLD: usize = 2_000_000;
 
 /// The inertia of a factorised matrix, with its backward error.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,11 +37,7 @@ pub(crate) fn ldlt_inertia(
 ) -> Result<Inertia, LdltFailure> {
     let n = a.nrows();
     let mut values = vec![0.0f64; symbolic.len_val()];
-    let par = if symbolic.len_val() > PARALLEL_FACTOR_THRESHOLD {
-        Par::rayon(0)
-    } else {
-        Par::Seq
-    };
+    let par = super::factor_parallelism(symbolic.len_val());
     let req = symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
     let mut mem = MemBuffer::try_new(req).map_err(|_| LdltFailure::Numerical)?;
     // Soundness: `LdltRegularization::default()` has delta = epsilon = 0 and no signs, and faer

@@ -19,6 +19,20 @@ pub(crate) mod ldlt;
 pub(crate) mod linear_solver;
 pub(crate) mod pcg;
 
+/// Factor size (stored values) above which a numeric sparse factorisation runs in parallel.
+const PARALLEL_FACTOR_THRESHOLD: usize = 2_000_000;
+
+/// The parallelism of a numeric sparse factorisation with `len` stored values: all threads
+/// above 2e6 values, sequential (and deterministic) below. The floating-point margins `[D6]`
+/// hold for any summation order. Triangular solves always run sequentially (`SparseLlt`).
+pub(crate) fn factor_parallelism(len: usize) -> faer::Par {
+    if len > PARALLEL_FACTOR_THRESHOLD {
+        faer::Par::rayon(0)
+    } else {
+        faer::Par::Seq
+    }
+}
+
 pub use cholesky::{
     PositiveFactor, ShiftedCholesky, UNIT_ROUNDOFF, gamma, gershgorin_lower_bound, inf_norm,
     rayleigh_quotient, sparse_matvec,
