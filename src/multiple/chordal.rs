@@ -201,31 +201,15 @@ pub(crate) fn linear_solver(
 }
 
 fn max_bfs_level_width(problem: &MultipleProblem) -> usize {
-    let n = problem.num_rotations();
-    let mut adj_ptr = vec![0usize; n + 1];
-    for e in problem.edges() {
-        adj_ptr[e.i + 1] += 1;
-        adj_ptr[e.j + 1] += 1;
-    }
-    for k in 0..n {
-        adj_ptr[k + 1] += adj_ptr[k];
-    }
-    let mut fill = adj_ptr.clone();
-    let mut adj = vec![0usize; adj_ptr[n]];
-    for e in problem.edges() {
-        adj[fill[e.i]] = e.j;
-        fill[e.i] += 1;
-        adj[fill[e.j]] = e.i;
-        fill[e.j] += 1;
-    }
-    let mut seen = vec![false; n];
+    let adjacency = problem.adjacency();
+    let mut seen = vec![false; problem.num_rotations()];
     let mut level = vec![0usize];
     seen[0] = true;
     let mut widest = 1;
     while !level.is_empty() {
         let mut next = Vec::new();
         for &u in &level {
-            for &v in &adj[adj_ptr[u]..adj_ptr[u + 1]] {
+            for &(v, _) in adjacency.neighbours(u) {
                 if !seen[v] {
                     seen[v] = true;
                     next.push(v);

@@ -8,6 +8,7 @@ use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::linear_solver::{LinearSolver, SolverKind};
 use crate::multiple::MultipleProblem;
 use crate::multiple::chordal::{choose_solver, laplacian_solver};
+use crate::multiple::problem::Adjacency;
 use crate::multiple::solve::Initialisation;
 use crate::so3::{Rotation, project_to_so3};
 use faer::Mat;
@@ -60,25 +61,8 @@ pub fn spanning_tree(problem: &MultipleProblem) -> Vec<Rotation> {
         return Vec::new();
     }
     let edges = problem.edges();
-    // adjacency in compressed form: (neighbour, edge index)
-    let mut start = vec![0usize; n + 1];
-    for e in edges {
-        start[e.i + 1] += 1;
-        start[e.j + 1] += 1;
-    }
-    for k in 0..n {
-        start[k + 1] += start[k];
-    }
-    let mut fill = start.clone();
-    let mut adj = vec![(0usize, 0usize); 2 * edges.len()];
-    for (k, e) in edges.iter().enumerate() {
-        adj[fill[e.i]] = (e.j, k);
-        fill[e.i] += 1;
-        adj[fill[e.j]] = (e.i, k);
-        fill[e.j] += 1;
-    }
-    let neighbours = |u: usize| &adj[start[u]..start[u + 1]];
-    let centre = central_node(n, &neighbours);
+    let adjacency = problem.adjacency();
+    let centre = central_node(n, &adjacency);
     // Dijkstra from the centre with lengths 1 / w (ties by node index: deterministic)
     let mut dist = vec![f64::INFINITY; n];
     let mut via: Vec<Option<usize>> = vec![None; n];
@@ -93,7 +77,7 @@ pub fn spanning_tree(problem: &MultipleProblem) -> Vec<Rotation> {
         }
         done[u] = true;
         order.push(u);
-        for &(v, k) in neighbours(u) {
+        for &(v, k) in adjacency.neighbours(u) {
             let w = edges[k].weight;
             let length = if w > 0.0 { 1.0 / w } else { f64::INFINITY };
             let d = dist[u] + length;
@@ -139,7 +123,7 @@ impl Ord for TotalF64 {
 /// A central node of the component of node 0: breadth-first search from node 0 to the
 /// farthest node `a`, from `a` to the farthest node `b`, and the middle of that `a`-`b`
 /// path (hop counts; `O(m)`).
-fn central_node<'a>(n: usize, neighbours: &impl Fn(usize) -> &'a [(usize, usize)]) -> usize {
+fn central_node(n: usize, adjacency: &Adjacency) -> usize {
     let bfs = |root: usize| -> (usize, Vec<usize>) {
         let mut parent = vec![usize::MAX; n];
         parent[root] = root;
@@ -147,7 +131,7 @@ fn central_node<'a>(n: usize, neighbours: &impl Fn(usize) -> &'a [(usize, usize)
         let mut last = root;
         while let Some(u) = queue.pop_front() {
             last = u;
-            for &(v, _) in neighbours(u) {
+            for &(v, _) in adjacency.neighbours(u) {
                 if parent[v] == usize::MAX {
                     parent[v] = u;
                     queue.push_back(v);

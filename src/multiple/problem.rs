@@ -25,6 +25,19 @@ pub struct Edge {
     pub weight: f64,
 }
 
+/// Compressed adjacency of a view graph ([`MultipleProblem::adjacency`]).
+pub(crate) struct Adjacency {
+    start: Vec<usize>,
+    entries: Vec<(usize, usize)>,
+}
+
+impl Adjacency {
+    /// `(neighbour, edge index)` of every edge at node `u`.
+    pub(crate) fn neighbours(&self, u: usize) -> &[(usize, usize)] {
+        &self.entries[self.start[u]..self.start[u + 1]]
+    }
+}
+
 impl Edge {
     /// The same measurement expressed as an edge `(j, i)`: `R_ji = R_ij^T`.
     ///
@@ -161,6 +174,29 @@ impl MultipleProblem {
     /// The edges.
     pub fn edges(&self) -> &[Edge] {
         &self.edges
+    }
+
+    /// The graph's adjacency in compressed form ([`Adjacency`]): every edge listed at both
+    /// endpoints, in edge order.
+    pub(crate) fn adjacency(&self) -> Adjacency {
+        let n = self.num_rotations;
+        let mut start = vec![0usize; n + 1];
+        for e in &self.edges {
+            start[e.i + 1] += 1;
+            start[e.j + 1] += 1;
+        }
+        for k in 0..n {
+            start[k + 1] += start[k];
+        }
+        let mut fill = start.clone();
+        let mut entries = vec![(0usize, 0usize); 2 * self.edges.len()];
+        for (k, e) in self.edges.iter().enumerate() {
+            entries[fill[e.i]] = (e.j, k);
+            fill[e.i] += 1;
+            entries[fill[e.j]] = (e.i, k);
+            fill[e.j] += 1;
+        }
+        Adjacency { start, entries }
     }
 
     /// Connected components as node lists, largest first (ties: smallest first node first).
