@@ -23,6 +23,7 @@ for row in $ROWS; do
   solo=$( { ROTAVG_CERTIFY=none /usr/bin/time -f "RSS %M" "$BIN" "${args[@]}"; } 2>&1 )
   line=$(grep -m1 " n [0-9]" <<<"$out")
   why=$(grep -m1 "why:" <<<"$out" | sed 's/^ *why: //')
+  why=${why%%; randomized Chebyshev*}
   rss=$(grep -m1 "^RSS" <<<"$out" | awk '{printf "%.0f MiB", $2/1024}')
   rss_solo=$(grep -m1 "^RSS" <<<"$solo" | awk '{printf "%.0f MiB", $2/1024}')
   edges=$(sed -E 's/.* m ([0-9]+) .*/\1/' <<<"$line")
@@ -30,5 +31,8 @@ for row in $ROWS; do
   certify=$(sed -E 's/.*certify ([0-9.]+) s.*/\1 s/' <<<"$line")
   verdict=$(sed -E 's/.*verdict ([a-z_]+), relative gap ([^,]+),.*/\1 (\2)/' <<<"$line")
   [[ -n "$why" && "$verdict" != certified* ]] && verdict="$verdict: ${why#*inconclusive: }"
+  # the Monte Carlo bound [D16] beside an inconclusive verdict (never the verdict itself)
+  randomized=$(grep -m1 "randomized \[D16\]:" <<<"$out" | sed 's/^ *randomized \[D16\]: //')
+  [[ -n "$randomized" ]] && verdict="$verdict **Randomized test [D16]: $randomized**"
   echo "| $kind${sigma:+, noise $sigma} | $n | $edges | $solve | $certify | $verdict | $rss_solo / $rss | $load |"
 done

@@ -138,6 +138,18 @@ fn main() {
                     la.solver, la.symbolic_analyses, la.numeric_factorizations, la.cg_iterations
                 );
             }
+            if let Some(r) = c.and_then(|c| c.randomized) {
+                println!(
+                    "  randomized [D16]: {}, relative gap {:.1e}, failure probability {:.0e}",
+                    if r.within_tolerance {
+                        "within tolerance"
+                    } else {
+                        "gap above tolerance"
+                    },
+                    r.relative_gap,
+                    r.failure_probability
+                );
+            }
             if let Some(c) =
                 c.filter(|c| !c.is_certified() || std::env::var_os("ROTAVG_EXPLAIN").is_some())
             {

@@ -270,6 +270,72 @@ pub struct Certificate {
     /// problem's cost. Omitted from JSON when absent (the report's own problem).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub certified_problem: Option<CertifiedProblem>,
+    /// A **Monte Carlo** lower bound `[D16]`, when no deterministic proof fit the budget: it
+    /// holds unless an event of probability at most its `failure_probability` (over the test's
+    /// own random vectors, whatever the data) occurred. Never a proof: the verdict, `lower_bound`
+    /// and `gap` ignore it. Omitted from JSON when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub randomized: Option<RandomizedLowerBound>,
+}
+
+/// A Monte Carlo lower bound on the global minimum `[D16]` against the certificate's cost.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RandomizedLowerBound {
+    /// The lower bound (valid unless the rare event occurred).
+    pub lower_bound: f64,
+    /// `upper_bound - lower_bound`.
+    pub gap: f64,
+    /// `gap / max(|upper_bound|, 1e-12)`.
+    pub relative_gap: f64,
+    /// The gap is within the certificate's tolerance: globally optimal unless the rare event
+    /// occurred.
+    pub within_tolerance: bool,
+    /// The probability of the rare event, over the test's random vectors.
+    pub failure_probability: f64,
+    /// Seed of the random vectors (`dual.randomized.seed` repeats the run).
+    pub seed: u64,
+}
+
+impl RandomizedLowerBound {
+    /// The bound against `upper_bound` under `tolerance` (the rule of
+    /// [`Certificate::from_bounds`]).
+    pub fn new(
+        upper_bound: f64,
+        lower_bound: f64,
+        tolerance: &GapTolerance,
+        failure_probability: f64,
+        seed: u64,
+    ) -> Self {
+        let gap = upper_bound - lower_bound;
+        RandomizedLowerBound {
+            lower_bound,
+            gap,
+            relative_gap: gap / upper_bound.abs().max(1e-12),
+            within_tolerance: gap <= tolerance.allowed_gap(upper_bound),
+            failure_probability,
+            seed,
+        }
+    }
+}
+
+impl fmt::Display for RandomizedLowerBound {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "randomized test [D16] (not a proof): {} unless an event of probability <= {:.0e} \
+             occurred (seed {}): lower bound {:.9e}, gap {:.3e} (relative {:.3e})",
+            if self.within_tolerance {
+                "globally optimal within the tolerance"
+            } else {
+                "the gap is at most as stated"
+            },
+            self.failure_probability,
+            self.seed,
+            self.lower_bound,
+            self.gap,
+            self.relative_gap
+        )
+    }
 }
 
 impl Certificate {
@@ -339,6 +405,7 @@ impl Certificate {
             smallest_eigenvalues: None,
             branch_and_bound: None,
             certified_problem: None,
+            randomized: None,
         }
     }
 
@@ -375,6 +442,15 @@ impl Certificate {
         c.smallest_eigenvalues = self.smallest_eigenvalues.clone();
         c.branch_and_bound = self.branch_and_bound;
         c.certified_problem = self.certified_problem;
+        c.randomized = self.randomized.map(|r| {
+            RandomizedLowerBound::new(
+                upper_bound,
+                r.lower_bound,
+                &c.tolerance,
+                r.failure_probability,
+                r.seed,
+            )
+        });
         c
     }
 

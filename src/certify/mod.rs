@@ -25,14 +25,14 @@ pub mod spectrum;
 
 pub use branch_and_bound::{BranchAndBoundSettings, BranchAndBoundStats, BranchAndBoundStop};
 pub use certificate::{
-    BoundMethod, Certificate, CertifiedProblem, CertifiedProblemKind, GapTolerance, TolerancePart,
-    ToleranceRule, Verdict,
+    BoundMethod, Certificate, CertifiedProblem, CertifiedProblemKind, GapTolerance,
+    RandomizedLowerBound, TolerancePart, ToleranceRule, Verdict,
 };
 pub use certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun, SdpSummary,
 };
 pub use conjugate::certify_conjugate;
 pub use multiple::certify_multiple;
-pub use settings::{Budget, CertifyMode, CertifySettings, DualSettings};
+pub use settings::{Budget, CertifyMode, CertifySettings, DualSettings, RandomizedSettings};
 pub use single::certify_single;
 pub use spectrum::{SpectrumEstimate, SpectrumSettings};

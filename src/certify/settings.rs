@@ -277,6 +277,65 @@ pub struct DualSettings {
     /// usual. `0`: always try it first; `usize::MAX`: never. Only used when the estimate's
     /// rotations are known.
     pub scalar_comparison_above: usize,
+    /// The randomized Chebyshev test `[D16]`, run when no deterministic proof fits the
+    /// [`Budget`]: a Monte Carlo lower bound reported beside the `inconclusive` verdict
+    /// (never as the verdict's proven bound).
+    pub randomized: RandomizedSettings,
+}
+
+/// Settings of the randomized Chebyshev test `[D16]` ([`crate::linalg::ChebyshevTest`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RandomizedSettings {
+    /// Run the test when no deterministic proof fits the budget (default `true`).
+    pub enabled: bool,
+    /// The probability, over the test's own random vectors, that a passing test is wrong
+    /// (default `1e-12`). In `(0, 0.5]`.
+    pub failure_probability: f64,
+    /// Seed of the random vectors; `None` (default): a fresh seed per run, reported with the
+    /// result so that the run can be repeated.
+    pub seed: Option<u64>,
+    /// Most matrix-vector products with `S` the test may use (default 20000, about a minute
+    /// for a 10^5-node graph with 3 10^5 edges); over it the test is not run.
+    pub max_matvecs: usize,
+}
+
+impl Default for RandomizedSettings {
+    fn default() -> Self {
+        RandomizedSettings {
+            enabled: true,
+            failure_probability: 1e-12,
+            seed: None,
+            max_matvecs: 20_000,
+        }
+    }
+}
+
+impl RandomizedSettings {
+    /// Check every value; [`Error::InvalidSettings`] names the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.failure_probability > 0.0 && self.failure_probability <= 0.5) {
+            return Err(Error::InvalidSettings {
+                name: "dual.randomized.failure_probability".into(),
+                reason: format!("must be in (0, 0.5], got {}", self.failure_probability),
+            });
+        }
+        at_least_one("dual.randomized.max_matvecs", self.max_matvecs)
+    }
+
+    /// The seed to use: the configured one, or a fresh one from the process's random state.
+    pub fn resolve_seed(&self) -> u64 {
+        self.seed.unwrap_or_else(|| {
+            use std::hash::{BuildHasher, Hasher};
+            let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+            h.write_u128(
+                std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map_or(0, |d| d.as_nanos()),
+            );
+            h.finish()
+        })
+    }
 }
 
 impl Default for DualSettings {
@@ -288,6 +347,7 @@ impl Default for DualSettings {
             lanczos: LanczosSettings::default(),
             estimate_when_verified: true,
             scalar_comparison_above: 30_000_000,
+            randomized: RandomizedSettings::default(),
         }
     }
 }
@@ -302,6 +362,7 @@ impl DualSettings {
             });
         }
         at_least_one("dual.max_factorizations", self.max_factorizations)?;
+        self.randomized.validate()?;
         self.lanczos.validate("dual.lanczos")
     }
 }

@@ -3,6 +3,8 @@
 //!
 //! - [`cholesky`]: sparse helpers and the verified shifted Cholesky factorisation `[D5]`,
 //!   `[D6]`, `[D8]` (the only source of proven eigenvalue bounds).
+//! - [`chebyshev`]: the randomized Chebyshev test `[D16]` (a Monte Carlo lower bound on the
+//!   smallest eigenvalue from products only, when no factorisation fits the budget).
 //! - `compensated` (crate-internal): double-double sums of products with error bounds `[D15]`.
 //! - `ldlt` (crate-internal): the verified inertia of a sparse `LDL^T` factorisation `[D13]`.
 //! - [`lanczos`](mod@lanczos): the one eigen-estimation engine (block Lanczos with full
@@ -12,6 +14,7 @@
 //!   preconditioned conjugate gradients.
 
 pub(crate) mod block_pattern;
+pub mod chebyshev;
 pub mod cholesky;
 pub(crate) mod compensated;
 pub mod lanczos;
@@ -33,6 +36,7 @@ pub(crate) fn factor_parallelism(len: usize) -> faer::Par {
     }
 }
 
+pub use chebyshev::{ChebyshevOutcome, ChebyshevTest};
 pub use cholesky::{
     PositiveFactor, ShiftedCholesky, UNIT_ROUNDOFF, gamma, gershgorin_lower_bound, inf_norm,
     rayleigh_quotient, sparse_matvec,

@@ -8,8 +8,9 @@
 //! - [`dual_certificate`]: the dual certificate of an estimate (any rotations, critical point or
 //!   not); [`certify_with_multipliers`]: an estimate against multipliers obtained elsewhere.
 
+use super::randomized::{RandomizedBound, randomized_bound};
 use super::scalar::{ScalarAnalysis, scalar_comparison};
-use crate::certify::certificate::{BoundMethod, Certificate};
+use crate::certify::certificate::{BoundMethod, Certificate, RandomizedLowerBound};
 use crate::certify::settings::CertifySettings;
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::PositiveFactor;
@@ -104,6 +105,10 @@ pub struct VerifiedBound {
     /// `lambda_min(S)` on the complement of the gauge directions (never a proof).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub complement_estimate: Option<ComplementEstimate>,
+    /// When no proof fit the budget: the randomized Chebyshev test `[D16]` on the complement
+    /// of the gauge directions (a Monte Carlo bound, never a proof).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub randomized: Option<RandomizedBound>,
 }
 
 /// The smallest eigenvalue of `S` on the orthogonal complement of the gauge directions `Y`
@@ -436,6 +441,7 @@ fn verify(
     let mut lanczos_iterations = 0usize;
     let mut estimate: Option<LanczosResult> = None;
     let mut complement: Option<ComplementEstimate> = None;
+    let mut randomized: Option<RandomizedBound> = None;
     // (shift, margin) of the best verified factorisation
     let mut best: Option<(f64, f64)> = None;
     let mut lz = dual.lanczos;
@@ -541,6 +547,17 @@ fn verify(
             Some(rs) => {
                 let c = complement_smallest(s_copy.as_ref(), rs, norm, &lz_cheap);
                 lanczos_iterations += c.iterations;
+                randomized = randomized_bound(
+                    problem,
+                    rs,
+                    lambdas,
+                    s_copy.as_ref(),
+                    norm,
+                    terms,
+                    &c,
+                    &dual.randomized,
+                    settings.budget.max_seconds,
+                );
                 estimate = Some(LanczosResult {
                     value: c.value.min(c.gauge_rayleigh_quotient),
                     vector: Vec::new(),
@@ -592,6 +609,7 @@ fn verify(
         not_critical,
         budget_exceeded,
         complement_estimate: complement,
+        randomized,
     })
 }
 
@@ -750,26 +768,12 @@ fn grounded_bound(
         return Ok(Grounded::NotApplicable);
     }
     let rinv2 = 3.0 / (1.0 - d) * (1.0 + 4.0 * u);
-    // rho >= ||S Y||_2 and h >= -lambda_min(Y^T S Y): S Y evaluated from the data in
-    // double-double, with its error bound [D15]
-    let (sy, sy_error) = residual_products(problem, rotations, lambdas);
-    let sy_norm = sy.iter().map(|m| m.norm_squared()).sum::<f64>().sqrt();
-    let rho = (sy_norm + sy_error) * (1.0 + 4.0 * u);
-    let y_norm = rotations
-        .iter()
-        .map(|r| r.matrix().norm_squared())
-        .sum::<f64>()
-        .sqrt();
-    let mut gm = Matrix3::<f64>::zeros();
-    let mut abs_gm = Matrix3::<f64>::zeros();
-    for (r, syi) in rotations.iter().zip(&sy) {
-        gm += r.matrix().transpose() * syi;
-        abs_gm += r.matrix().abs().transpose() * syi.abs();
-    }
-    let g_error = (y_norm * sy_error + gamma(n3) * abs_gm.norm()) * (1.0 + 4.0 * u);
-    let sym = 0.5 * (gm + gm.transpose());
-    let lambda_min = sym.symmetric_eigenvalues().min();
-    let h = ((-lambda_min).max(0.0) + g_error + 16.0 * u * gm.norm()) * (1.0 + 4.0 * u);
+    let GaugeTerms {
+        rho,
+        h,
+        sym,
+        y_norm,
+    } = gauge_terms(problem, rotations, lambdas);
     // c: S without the ground's block is verified positive definite
     let mut c = f64::INFINITY;
     let mut factorizations = 0;
@@ -853,12 +857,7 @@ fn grounded_bound(
     let per_unit = rho * rho / c + h;
     let deficit = per_unit * rinv2 * (1.0 + 8.0 * u);
     let trace: f64 = lambdas.iter().map(|l| l.trace()).sum();
-    let abs_trace: f64 = lambdas
-        .iter()
-        .map(|l| l[(0, 0)].abs() + l[(1, 1)].abs() + l[(2, 2)].abs())
-        .sum();
-    let lower_bound =
-        trace - deficit - 2.0 * gamma(n3 + 4) * (abs_trace + deficit) - data_defect(problem);
+    let lower_bound = bound_with_deficit(problem, lambdas, deficit);
     if !lower_bound.is_finite() {
         return Ok(Grounded::NotApplicable);
     }
@@ -890,7 +889,55 @@ fn grounded_bound(
         not_critical: false,
         budget_exceeded: None,
         complement_estimate: None,
+        randomized: None,
     })))
+}
+
+/// The gauge directions' terms of `[D15]` and `[D16]`, for the exact `S` of the data.
+pub(super) struct GaugeTerms {
+    /// Proven `rho >= ||S Y||_F >= ||S Y||_2`.
+    pub rho: f64,
+    /// Proven `h >= 0` with `Y^T S Y >= -h I`.
+    pub h: f64,
+    /// `sym(Y^T S Y)` as computed.
+    pub sym: Matrix3<f64>,
+    /// `||Y||_F` as computed.
+    pub y_norm: f64,
+}
+
+/// `rho >= ||S Y||_2` and `h >= -lambda_min(Y^T S Y)`: `S Y` evaluated from the data in
+/// double-double, with its error bound `[D15]`.
+pub(super) fn gauge_terms(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+) -> GaugeTerms {
+    let u = UNIT_ROUNDOFF;
+    let n3 = 3 * problem.num_rotations();
+    let (sy, sy_error) = residual_products(problem, rotations, lambdas);
+    let sy_norm = sy.iter().map(|m| m.norm_squared()).sum::<f64>().sqrt();
+    let rho = (sy_norm + sy_error) * (1.0 + 4.0 * u);
+    let y_norm = rotations
+        .iter()
+        .map(|r| r.matrix().norm_squared())
+        .sum::<f64>()
+        .sqrt();
+    let mut gm = Matrix3::<f64>::zeros();
+    let mut abs_gm = Matrix3::<f64>::zeros();
+    for (r, syi) in rotations.iter().zip(&sy) {
+        gm += r.matrix().transpose() * syi;
+        abs_gm += r.matrix().abs().transpose() * syi.abs();
+    }
+    let g_error = (y_norm * sy_error + gamma(n3) * abs_gm.norm()) * (1.0 + 4.0 * u);
+    let sym = 0.5 * (gm + gm.transpose());
+    let lambda_min = sym.symmetric_eigenvalues().min();
+    let h = ((-lambda_min).max(0.0) + g_error + 16.0 * u * gm.norm()) * (1.0 + 4.0 * u);
+    GaugeTerms {
+        rho,
+        h,
+        sym,
+        y_norm,
+    }
 }
 
 /// `(S Y)_i = (Q Y)_i - sym(Lambda_i) R_i` for every node, evaluated from the data in
@@ -1046,6 +1093,7 @@ fn try_scalar_comparison(
         not_critical: false,
         budget_exceeded: None,
         complement_estimate: None,
+        randomized: None,
     }))
 }
 
@@ -1062,6 +1110,22 @@ fn bound_from_mu(problem: &MultipleProblem, lambdas: &[Matrix3<f64>], mu: f64) -
     let neg = (-mu).max(0.0);
     let err = 2.0 * gamma(n3 + 4) * (abs_trace + n3 as f64 * neg);
     trace - n3 as f64 * neg - err - data_defect(problem)
+}
+
+/// `sum tr(Lambda_i) - deficit` with the rounding of evaluating it and the data defect
+/// subtracted: the bound of `[D15]` and `[D16]` from a proven `deficit >= 0`.
+pub(super) fn bound_with_deficit(
+    problem: &MultipleProblem,
+    lambdas: &[Matrix3<f64>],
+    deficit: f64,
+) -> f64 {
+    let n3 = 3 * lambdas.len();
+    let trace: f64 = lambdas.iter().map(|l| l.trace()).sum();
+    let abs_trace: f64 = lambdas
+        .iter()
+        .map(|l| l[(0, 0)].abs() + l[(1, 1)].abs() + l[(2, 2)].abs())
+        .sum();
+    trace - deficit - 2.0 * gamma(n3 + 4) * (abs_trace + deficit) - data_defect(problem)
 }
 
 /// An upper bound on `c_0 = sum_e w_e (3 - ||R_ij||_F^2)` `[D4]`: the measured rotations are
@@ -1161,7 +1225,8 @@ pub fn dual_certificate(
         0.0,
     );
     let diagnosis = diagnose(&certificate, &bound, stationarity);
-    let proof = format!("{how}{est}");
+    let randomized = attach_randomized(&mut certificate, bound.randomized);
+    let proof = format!("{how}{est}{randomized}");
     certificate.explanation = format!("{}; {proof}", diagnosis_text(&diagnosis));
     certificate.verified_min_eigenvalue = Some(bound.verified_min_eigenvalue);
     certificate.seconds = start.elapsed().as_secs_f64();
@@ -1172,6 +1237,30 @@ pub fn dual_certificate(
         proof,
         stationarity_residual: stationarity,
     })
+}
+
+/// The randomized bound `[D16]` of `bound`, when the verdict is not certified: attached to the
+/// certificate (when the test passed) and returned as a sentence for the explanation.
+pub(super) fn attach_randomized(
+    certificate: &mut Certificate,
+    randomized: Option<RandomizedBound>,
+) -> String {
+    let Some(r) = randomized.filter(|_| !certificate.is_certified()) else {
+        return String::new();
+    };
+    certificate.randomized = r.lower_bound.map(|lb| {
+        RandomizedLowerBound::new(
+            certificate.upper_bound,
+            lb,
+            &certificate.tolerance,
+            r.failure_probability,
+            r.seed,
+        )
+    });
+    match &certificate.randomized {
+        Some(c) => format!("; {r}; {c}"),
+        None => format!("; {r}"),
+    }
 }
 
 /// Why a dual certificate has its verdict: certified; the estimate is not a critical point (the
@@ -1302,6 +1391,10 @@ pub fn certify_with_multipliers(
         start.elapsed().as_secs_f64(),
     );
     let diagnosis = diagnose(&certificate, &bound, stationarity);
+    let explanation = format!(
+        "{explanation}{}",
+        attach_randomized(&mut certificate, bound.randomized)
+    );
     certificate.explanation = format!("{}; {explanation}", diagnosis_text(&diagnosis));
     certificate.verified_min_eigenvalue = Some(bound.verified_min_eigenvalue);
     Ok(DualCertificate {

@@ -7,11 +7,14 @@
 //!   `[D4]`, rounding polished) or the Riemannian staircase `[D11]`. The largest verified bound
 //!   wins `[D12]`.
 //! - [`dual`]: the dual certificate and the verified bound from *any* multipliers.
+//! - [`randomized`]: the randomized Chebyshev test `[D16]`: a Monte Carlo bound reported
+//!   beside an `inconclusive` verdict when no deterministic proof fits the budget.
 //! - [`scalar`]: the scalar comparison `[D13]`: a proof that `S` is positive semidefinite from
 //!   one factorisation of an `n x n` scalar matrix (fast on graphs whose `3n x 3n` factor fills).
 //! - [`staircase`]: the Riemannian staircase (rank-lifted Burer-Monteiro descent).
 
 pub mod dual;
+pub mod randomized;
 pub mod scalar;
 pub mod staircase;
 
@@ -20,6 +23,7 @@ pub use dual::{
     certificate_matrix, certify_with_multipliers, dual_certificate, laplacian_times,
     lower_bound_from_multipliers, multipliers, stationarity_residual,
 };
+pub use randomized::RandomizedBound;
 
 use super::certificate::{BoundMethod, Certificate};
 use super::certification::{
@@ -33,7 +37,7 @@ use crate::multiple::{
 };
 use crate::relax::relax_multiple;
 use crate::so3::Rotation;
-use dual::{check_rotations, diagnosis_text};
+use dual::{attach_randomized, check_rotations, diagnosis_text};
 use nalgebra::Matrix3;
 use std::time::Instant;
 
@@ -242,7 +246,7 @@ pub fn certify_multiple(
         }
     }
     let seconds = start.elapsed().as_secs_f64();
-    let certificate = final_certificate(
+    let mut certificate = final_certificate(
         problem,
         cost,
         best,
@@ -254,6 +258,9 @@ pub fn certify_multiple(
         settings,
         seconds,
     );
+    // a Monte Carlo bound [D16] is a bound on the global minimum whatever point gave it
+    let randomized = attach_randomized(&mut certificate, last.randomized);
+    certificate.explanation.push_str(&randomized);
     details.seconds = seconds;
     let improvement = match point.solution {
         Some((s, source)) if cost - s.chordal_cost > 1e-15 * cost.abs() => {
@@ -303,6 +310,8 @@ fn refine(problem: &MultipleProblem, point: &mut Point, details: &mut CertifyDet
 #[derive(Debug, Clone)]
 struct DualRun {
     diagnosis: DualDiagnosis,
+    /// The randomized bound `[D16]`, when no deterministic proof fit the budget.
+    randomized: Option<RandomizedBound>,
 }
 
 /// Dual certificate at the point: records the run, offers its bound, returns its diagnosis
@@ -335,10 +344,18 @@ fn run_dual(
             method: BoundMethod::Dual,
             lower_bound: None,
             seconds: c.certificate.seconds,
-            note: format!("dual certificate: {}", diagnosis_text(&c.diagnosis)),
+            note: format!(
+                "dual certificate: {}{}",
+                diagnosis_text(&c.diagnosis),
+                c.bound
+                    .randomized
+                    .map(|r| format!("; {r}"))
+                    .unwrap_or_default()
+            ),
         });
         return Ok(DualRun {
             diagnosis: c.diagnosis,
+            randomized: c.bound.randomized,
         });
     }
     Best::offer(
@@ -376,6 +393,7 @@ fn run_dual(
     });
     Ok(DualRun {
         diagnosis: c.diagnosis,
+        randomized: c.bound.randomized,
     })
 }
 

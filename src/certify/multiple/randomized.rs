@@ -1,0 +1,398 @@
+//! The randomized bound `[D16]`: when no deterministic proof fits the budget (random expander
+//! graphs of 10^5 nodes, whose factors fill), a Monte Carlo lower bound from products with the
+//! certificate matrix only.
+//!
+//! The randomized Chebyshev test ([`ChebyshevTest`]) is run on `A = S + (beta / n) Y Y^T`
+//! (the gauge directions `Y = [R_1; ...; R_n]` lifted to the middle of the spectrum). A pass
+//! says `lambda_min(A) > mu`, hence `x^T S x >= mu ||x||^2` for every `x` orthogonal to `Y`,
+//! unless an event of probability at most `p` over the test's random vectors occurred. With
+//! the proven gauge terms of `[D15]` (`rho >= ||S Y||`, `Y^T S Y >= -h I`) every `X` in
+//! `O(3)^n` has `f(X) >= sum tr(Lambda_i) - (rho^2 / mu + h) 3n / lambda_min(Y^T Y)`.
+//! The result is reported beside the `inconclusive` verdict, never as its proof.
+
+use super::dual::{ComplementEstimate, GaugeTerms, bound_with_deficit, gauge_terms};
+use crate::certify::settings::{PREDICTED_FLOP_RATE, RandomizedSettings};
+use crate::linalg::compensated::Accumulator;
+use crate::linalg::{ChebyshevOutcome, ChebyshevTest, UNIT_ROUNDOFF, gamma, sparse_matvec};
+use crate::multiple::MultipleProblem;
+use crate::so3::Rotation;
+use faer::sparse::SparseColMatRef;
+use nalgebra::Matrix3;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::time::Instant;
+
+/// The randomized bound `[D16]` of a dual certificate: what the test claimed and found.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RandomizedBound {
+    /// The lower bound on the global minimum of the chordal cost when the test passed (valid
+    /// unless an event of probability at most `failure_probability` occurred); `None` when it
+    /// did not pass.
+    pub lower_bound: Option<f64>,
+    /// The probability of that event, over the test's random vectors.
+    pub failure_probability: f64,
+    /// Seed of the random vectors.
+    pub seed: u64,
+    /// The claimed `mu`: `x^T S x >= mu ||x||^2` for `x` orthogonal to the gauge directions
+    /// (the exact `S` of the data; the floating-point forming error is subtracted).
+    pub complement_bound: f64,
+    /// Proven `rho >= ||S Y||_2`.
+    pub rho: f64,
+    /// Proven `h` with `Y^T S Y >= -h I`.
+    pub h: f64,
+    /// `(rho^2 / mu + h) 3n / lambda_min(Y^T Y)`, subtracted from `sum tr(Lambda_i)`.
+    pub deficit: f64,
+    /// The test's interval, degree and vectors.
+    pub test: ChebyshevTest,
+    /// What the test found.
+    pub outcome: ChebyshevOutcome,
+    /// Time spent, in seconds.
+    pub seconds: f64,
+}
+
+impl fmt::Display for RandomizedBound {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "randomized Chebyshev test [D16] ({} vectors of degree {}, {} products with S, \
+             {:.1} s): ",
+            self.test.vectors, self.test.degree, self.outcome.matvecs, self.seconds
+        )?;
+        if self.lower_bound.is_some() {
+            write!(
+                f,
+                "lambda_min(S) >= {:.3e} on the complement of the gauge directions unless an \
+                 event of probability <= {:.0e} occurred (seed {}); deficit {:.1e}",
+                self.complement_bound, self.failure_probability, self.seed, self.deficit
+            )
+        } else {
+            write!(
+                f,
+                "did not pass (lambda_min(S) >= {:.3e} on the complement was not shown; log \
+                 margin {:.2}), no randomized bound",
+                self.complement_bound, self.outcome.log_margin
+            )
+        }
+    }
+}
+
+/// Largest stored entries in a row, and a Gershgorin upper bound on `lambda_max` (with the
+/// rounding of its evaluation).
+fn row_stats(s: SparseColMatRef<'_, usize, f64>) -> (usize, f64) {
+    let n = s.nrows();
+    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
+    let mut count = vec![0usize; n];
+    let mut diag = vec![0.0f64; n];
+    let mut off = vec![0.0f64; n];
+    for c in 0..s.ncols() {
+        for k in cp[c]..cp[c + 1] {
+            let r = ri[k];
+            count[r] += 1;
+            if r == c {
+                diag[r] += val[k];
+            } else {
+                off[r] += val[k].abs();
+            }
+        }
+    }
+    let upper = (0..n)
+        .map(|r| diag[r] + off[r] + gamma(count[r] + 2) * (diag[r].abs() + off[r]))
+        .fold(0.0f64, f64::max);
+    (count.into_iter().max().unwrap_or(0), upper)
+}
+
+/// The randomized bound `[D16]` of `S` (`s`, as stored, with `norm = ||S||_inf` and `terms`
+/// rounded operations per entry) at `rotations` with multipliers `lambdas`, from the Lanczos
+/// estimate on the complement (the test claims a quarter of it). `None` when the test is
+/// disabled or cannot be planned (no positive estimate, rotations far from orthogonal, more
+/// products than `settings.max_matvecs`, or a predicted time over `max_seconds`).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn randomized_bound(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+    s: SparseColMatRef<'_, usize, f64>,
+    norm: f64,
+    terms: usize,
+    estimate: &ComplementEstimate,
+    settings: &RandomizedSettings,
+    max_seconds: Option<f64>,
+) -> Option<RandomizedBound> {
+    let est = estimate.value;
+    if !(settings.enabled && est.is_finite() && est > 0.0) {
+        return None;
+    }
+    let start = Instant::now();
+    let u = UNIT_ROUNDOFF;
+    let n = rotations.len();
+    let n3 = s.nrows();
+    if n == 0 || n3 != 3 * n {
+        return None;
+    }
+    let y: Vec<Vec<f64>> = (0..3)
+        .map(|a| {
+            rotations
+                .iter()
+                .flat_map(|r| (0..3).map(move |row| r.matrix()[(row, a)]))
+                .collect()
+        })
+        .collect();
+    // G = Y^T Y in double-double, and bounds on its extreme eigenvalues
+    let mut gm = Matrix3::<f64>::zeros();
+    let mut g_error = 0.0f64;
+    for a in 0..3 {
+        for b in 0..3 {
+            let mut acc = Accumulator::default();
+            for (p, q) in y[a].iter().zip(&y[b]) {
+                acc.add_product(*p, *q);
+            }
+            gm[(a, b)] = acc.value();
+            g_error += acc.bound() * acc.bound();
+        }
+    }
+    let g_slack = (g_error.sqrt() + 16.0 * u * gm.norm()) * (1.0 + 4.0 * u);
+    let eig = (0.5 * (gm + gm.transpose())).symmetric_eigenvalues();
+    let g_min = eig.min() - g_slack;
+    let g_max = eig.max() + g_slack;
+    if !(g_min > 0.5 * n as f64 && g_max.is_finite()) {
+        return None;
+    }
+    // the claim on S_fl, and on the exact S after the forming error [D6](b)
+    let claim = 0.25 * est;
+    let mu = claim - 2.0 * gamma(terms + 1) * norm;
+    if mu.is_nan() || mu <= 0.0 {
+        return None;
+    }
+    let (row_nnz, s_upper) = row_stats(s);
+    let gb = 0.5 * s_upper / n as f64;
+    let upper = (s_upper + gb * g_max) * (1.0 + 1e-12);
+    // ||Y||_F <= sqrt(3 lambda_max(G)); || |S| ||_2 <= ||S||_inf (computed with gamma(p))
+    let y_f = (3.0 * g_max).sqrt() * (1.0 + 2.0 * u);
+    let s_abs = norm * (1.0 + gamma(row_nnz + 1));
+    let gp = gamma(row_nnz + 1);
+    let g5 = gamma(5);
+    let per_norm = gp * s_abs + g5 * (s_abs * (1.0 + gp) + gb * y_f * g_max.sqrt()) + 1e-15 * gb;
+    let test = ChebyshevTest::plan(
+        n3,
+        0.5 * est,
+        upper,
+        claim,
+        settings.failure_probability,
+        per_norm,
+        settings.max_matvecs,
+    )?;
+    // the products' predicted time against the time budget (the flop rate of the
+    // factorisations' prediction: about 2 nnz(S) + 100 x 3n flops per product)
+    let flops = (2 * s.col_ptr()[n3] + 100 * n3) as f64 * (test.degree * test.vectors) as f64;
+    if max_seconds.is_some_and(|limit| flops / PREDICTED_FLOP_RATE > limit) {
+        return None;
+    }
+    crate::progress::phase(crate::progress::Phase::Certify, || {
+        format!(
+            "randomized Chebyshev test [D16] ({} vectors of degree {})",
+            test.vectors, test.degree
+        )
+    });
+    let seed = settings.resolve_seed();
+    // A x = S_fl x + gb Y (Y^T x): the product rounded (gamma(p)), Y^T x in double-double, the
+    // combination z_i = s_i + sum_a y_ai (gb c_a) as a 4-term sum with the rounded gb c_a
+    let outcome = test.run(
+        n3,
+        |x, z| {
+            sparse_matvec(s, x, z);
+            let mut c = [0.0f64; 3];
+            let mut dc = 0.0f64;
+            for (ca, ya) in c.iter_mut().zip(&y) {
+                let mut acc = Accumulator::default();
+                for (p, q) in ya.iter().zip(x) {
+                    acc.add_product(*p, *q);
+                }
+                *ca = acc.value();
+                dc += acc.bound() * acc.bound();
+            }
+            let cs = [gb * c[0], gb * c[1], gb * c[2]];
+            for (i, zi) in z.iter_mut().enumerate() {
+                *zi += y[0][i] * cs[0] + y[1][i] * cs[1] + y[2][i] * cs[2];
+            }
+            let xn = x.iter().map(|v| v * v).sum::<f64>().sqrt() * (1.0 + gamma(n3 + 2));
+            let cn = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * (1.0 + 4.0 * u);
+            (gp * s_abs * xn
+                + g5 * (s_abs * xn * (1.0 + gp) + gb * y_f * cn)
+                + gb * y_f * dc.sqrt())
+                * (1.0 + 1e-10)
+        },
+        seed,
+    );
+    let GaugeTerms { rho, h, .. } = gauge_terms(problem, rotations, lambdas);
+    let deficit = (rho * rho / mu + h) * (3.0 * n as f64 / g_min) * (1.0 + 8.0 * u);
+    let lower_bound = outcome
+        .passed
+        .then(|| bound_with_deficit(problem, lambdas, deficit))
+        .filter(|b| b.is_finite());
+    Some(RandomizedBound {
+        lower_bound,
+        failure_probability: outcome.failure_probability,
+        seed,
+        complement_bound: mu,
+        rho,
+        h,
+        deficit,
+        test,
+        outcome,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::certify::multiple::{certificate_matrix, multipliers};
+    use crate::linalg::{LanczosStop, inf_norm};
+    use crate::multiple::synthetic::SyntheticGraph;
+    use crate::so3::Rotation;
+    use nalgebra::{DMatrix, Vector3};
+
+    /// `lambda_min(P S P)` by a dense eigendecomposition, `P` the projector onto the
+    /// complement of the gauge directions.
+    fn dense_complement_min(s: SparseColMatRef<'_, usize, f64>, rotations: &[Rotation]) -> f64 {
+        let n3 = s.nrows();
+        let mut m = DMatrix::zeros(n3, n3);
+        let (cp, ri, v) = (s.col_ptr(), s.row_idx(), s.val());
+        for c in 0..n3 {
+            for k in cp[c]..cp[c + 1] {
+                m[(ri[k], c)] += v[k];
+            }
+        }
+        let y = DMatrix::from_fn(n3, 3, |r, a| rotations[r / 3].matrix()[(r % 3, a)]);
+        let gram = (y.transpose() * &y).try_inverse().unwrap();
+        let p = DMatrix::identity(n3, n3) - &y * gram * y.transpose();
+        let psp = &p * m * &p;
+        // P S P: the spectrum of S on the complement plus three zeros whose eigenvectors lie
+        // in span(Y) (dropped: the eigenvectors with the largest part in span(Y))
+        let e = psp.symmetric_eigen();
+        let mut cols: Vec<(f64, f64)> = (0..n3)
+            .map(|k| {
+                let v = e.eigenvectors.column(k);
+                ((y.transpose() * v).norm(), e.eigenvalues[k])
+            })
+            .collect();
+        cols.sort_by(|a, b| b.0.total_cmp(&a.0));
+        cols[3..].iter().map(|c| c.1).fold(f64::INFINITY, f64::min)
+    }
+
+    fn estimate(value: f64) -> ComplementEstimate {
+        ComplementEstimate {
+            value,
+            residual: 0.0,
+            iterations: 0,
+            gauge_rayleigh_quotient: 0.0,
+            stop: LanczosStop::Converged {
+                residual: 0.0,
+                threshold: 0.0,
+            },
+        }
+    }
+
+    /// Soundness: at rotations where `S` has a clearly negative eigenvalue on the complement
+    /// of the gauge directions (one node turned by 2.5 rad), a test told that the smallest
+    /// eigenvalue there is about 1 (an inflated estimate, so that it runs) never passes.
+    #[test]
+    fn never_passes_on_an_indefinite_certificate_matrix() {
+        let (p, gt) = SyntheticGraph {
+            num_rotations: 30,
+            num_edges: 90,
+            noise_sigma: 0.05,
+            seed: 5,
+            ..Default::default()
+        }
+        .generate();
+        let mut rs = gt.clone();
+        rs[7] = Rotation::from_scaled_axis(Vector3::new(2.5, 0.0, 0.0)) * rs[7];
+        let lambdas = multipliers(&p, &rs).unwrap();
+        let s = certificate_matrix(&p, &lambdas).unwrap();
+        let truth = dense_complement_min(s.as_ref(), &rs);
+        assert!(truth < -0.1, "the test wants an indefinite S: {truth}");
+        let norm = inf_norm(s.as_ref());
+        for seed in 0..10 {
+            let settings = RandomizedSettings {
+                seed: Some(seed),
+                ..Default::default()
+            };
+            let r = randomized_bound(
+                &p,
+                &rs,
+                &lambdas,
+                s.as_ref(),
+                norm,
+                20,
+                &estimate(1.0),
+                &settings,
+                None,
+            )
+            .expect("the test runs");
+            // refused by the signal itself (the eigenvector's component grew far past the
+            // threshold), not only by rounding or planning
+            assert!(
+                r.lower_bound.is_none() && !r.outcome.passed && r.outcome.log_margin < -5.0,
+                "seed {seed}: {r}"
+            );
+        }
+    }
+
+    /// At a critical point with a clear gap the test passes, claims no more than the dense
+    /// smallest eigenvalue on the complement, and its bound lies below the cost.
+    #[test]
+    fn passes_at_a_critical_point_and_claims_no_more_than_the_truth() {
+        let (p, gt) = SyntheticGraph {
+            num_rotations: 30,
+            num_edges: 90,
+            noise_sigma: 0.05,
+            seed: 5,
+            ..Default::default()
+        }
+        .generate();
+        let sol = crate::multiple::solve_multiple(
+            &p,
+            &crate::multiple::MultipleSettings {
+                init: crate::multiple::Initialisation::Given(gt),
+                gradient_tolerance: 1e-14,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let rs = sol.rotations;
+        let lambdas = multipliers(&p, &rs).unwrap();
+        let s = certificate_matrix(&p, &lambdas).unwrap();
+        let truth = dense_complement_min(s.as_ref(), &rs);
+        assert!(truth > 0.1, "{truth}");
+        let norm = inf_norm(s.as_ref());
+        let settings = RandomizedSettings {
+            seed: Some(1),
+            ..Default::default()
+        };
+        let r = randomized_bound(
+            &p,
+            &rs,
+            &lambdas,
+            s.as_ref(),
+            norm,
+            20,
+            &estimate(truth),
+            &settings,
+            None,
+        )
+        .expect("the test runs");
+        assert!(r.outcome.passed, "{r}");
+        assert!(
+            r.complement_bound <= truth && r.complement_bound > 0.2 * truth,
+            "{r}"
+        );
+        let cost = p.chordal_cost(&rs);
+        let lb = r.lower_bound.unwrap();
+        assert!(
+            lb <= cost && cost - lb < 1e-9 * cost.max(1.0),
+            "{lb} against {cost}"
+        );
+        assert!(r.failure_probability <= 1e-12 * (1.0 + 1e-9));
+    }
+}
