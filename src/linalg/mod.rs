@@ -39,7 +39,7 @@ pub(crate) fn factor_parallelism(len: usize) -> faer::Par {
 pub use chebyshev::{ChebyshevOutcome, ChebyshevTest};
 pub use cholesky::{
     PositiveFactor, ShiftedCholesky, UNIT_ROUNDOFF, gamma, gershgorin_lower_bound, inf_norm,
-    rayleigh_quotient, sparse_matvec,
+    rayleigh_quotient, sparse_matvec, symmetric_matvec,
 };
 pub use lanczos::{
     EigenEstimate, Extreme, LanczosResult, LanczosSettings, LanczosStop, lanczos, lanczos_extreme,

@@ -670,7 +670,7 @@ fn complement_smallest(
         |x, y| {
             px.copy_from_slice(x);
             project(&mut px);
-            crate::linalg::cholesky::sparse_matvec(s, &px, y);
+            crate::linalg::symmetric_matvec(s, &px, y);
             project(y);
         },
         Extreme::Smallest,

@@ -13,7 +13,7 @@
 use super::dual::{ComplementEstimate, GaugeTerms, bound_with_deficit, gauge_terms};
 use crate::certify::settings::{PREDICTED_FLOP_RATE, RandomizedSettings};
 use crate::linalg::compensated::Accumulator;
-use crate::linalg::{ChebyshevOutcome, ChebyshevTest, UNIT_ROUNDOFF, gamma, sparse_matvec};
+use crate::linalg::{ChebyshevOutcome, ChebyshevTest, UNIT_ROUNDOFF, gamma, symmetric_matvec};
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
 use faer::sparse::SparseColMatRef;
@@ -65,6 +65,13 @@ impl fmt::Display for RandomizedBound {
                  event of probability <= {:.0e} occurred (seed {}); deficit {:.1e}",
                 self.complement_bound, self.failure_probability, self.seed, self.deficit
             )
+        } else if self.outcome.grew {
+            write!(
+                f,
+                "did not pass: the iterates grew, as they do when S has an eigenvalue on the \
+                 complement of the gauge directions below half the Lanczos estimate; no \
+                 randomized bound"
+            )
         } else {
             write!(
                 f,
@@ -104,7 +111,8 @@ fn row_stats(s: SparseColMatRef<'_, usize, f64>) -> (usize, f64) {
 /// The randomized bound `[D16]` of `S` (`s`, as stored, with `norm = ||S||_inf` and `terms`
 /// rounded operations per entry) at `rotations` with multipliers `lambdas`, from the Lanczos
 /// estimate on the complement (the test claims a quarter of it). `None` when the test is
-/// disabled or cannot be planned (no positive estimate, rotations far from orthogonal, more
+/// disabled or cannot be planned (no positive estimate with a Ritz residual at most half of it,
+/// rotations far from orthogonal, more
 /// products than `settings.max_matvecs`, or a predicted time over `max_seconds`).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn randomized_bound(
@@ -119,7 +127,9 @@ pub(super) fn randomized_bound(
     max_seconds: Option<f64>,
 ) -> Option<RandomizedBound> {
     let est = estimate.value;
-    if !(settings.enabled && est.is_finite() && est > 0.0) {
+    // an estimate whose Ritz residual is not well below it (an unconverged Lanczos run) is no
+    // guide to the interval: the test would fail (soundly) after all its products
+    if !(settings.enabled && est.is_finite() && est > 0.0 && estimate.residual <= 0.5 * est) {
         return None;
     }
     let start = Instant::now();
@@ -199,7 +209,7 @@ pub(super) fn randomized_bound(
     let outcome = test.run(
         n3,
         |x, z| {
-            sparse_matvec(s, x, z);
+            symmetric_matvec(s, x, z);
             let mut c = [0.0f64; 3];
             let mut dc = 0.0f64;
             for (ca, ya) in c.iter_mut().zip(&y) {
