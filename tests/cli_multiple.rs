@@ -497,3 +497,47 @@ fn budget_flags_bound_the_certificate() {
     ]);
     assert_eq!(json_of(&out)["certificate"]["verdict"], "certified");
 }
+
+/// Over the budget, the randomized Chebyshev test [D16] reports its Monte Carlo bound beside the
+/// `inconclusive` verdict (`certificate.randomized`, with the seed of `--randomized-seed`);
+/// `--no-randomized` turns it off; `--require-certified` still exits 3 (it is not a proof).
+#[test]
+fn randomized_flags_report_a_monte_carlo_bound_beside_the_verdict() {
+    let g = graph_file("randomized.json");
+    let g = g.to_str().unwrap();
+    let args = [
+        "multiple",
+        g,
+        "--max-memory",
+        "1K",
+        "--randomized-seed",
+        "5",
+    ];
+    let out = run(&[&args[..], &["--json"]].concat());
+    assert_success(&out);
+    let v = json_of(&out);
+    assert_eq!(v["certificate"]["verdict"], "inconclusive");
+    assert!(v["certificate"]["lower_bound"].is_null());
+    let r = &v["certificate"]["randomized"];
+    assert_eq!(r["seed"], 5, "{v}");
+    assert_eq!(r["within_tolerance"], true, "{v}");
+    assert!(r["lower_bound"].as_f64().unwrap() <= v["cost"].as_f64().unwrap());
+    let text = String::from_utf8_lossy(&run(&args).stdout).to_string();
+    assert!(
+        text.contains("[D16]") && text.contains("not a proof"),
+        "{text}"
+    );
+    let out = run(&[&args[..], &["--require-certified"]].concat());
+    assert_eq!(out.status.code(), Some(3));
+    let out = run(&[
+        "multiple",
+        g,
+        "--max-memory",
+        "1K",
+        "--no-randomized",
+        "--json",
+    ]);
+    assert!(json_of(&out)["certificate"].get("randomized").is_none());
+    let out = run(&["multiple", g, "--no-randomized", "--randomized-seed", "1"]);
+    assert_eq!(out.status.code(), Some(2));
+}

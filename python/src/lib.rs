@@ -290,6 +290,13 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     loss_threshold: Huber threshold / Cauchy scale in degrees, and the inlier threshold (an
 ///         edge is an inlier iff its residual is at most this many degrees).
 ///     init: optional ``(n, 3, 3)`` initial estimate (default: spectral initialisation).
+///     max_memory: the certificate's memory budget per factorisation, bytes (default 4 GiB).
+///     max_seconds: its time budget, seconds (default 600; ``None``: no limit). A proof that
+///         does not fit is not started: the verdict is ``"inconclusive"`` with the reason.
+///     randomized: run the randomized Chebyshev test [D16] when no proof fits (default
+///         True): a Monte Carlo lower bound in ``to_dict()["certificate"]["randomized"]``,
+///         beside the verdict and never as its proof.
+///     randomized_seed: its seed (default: a fresh one, reported).
 ///
 /// Returns:
 ///     Result: ``estimate`` is ``(n, 3, 3)`` with the gauge ``estimate[0] = I``;
@@ -299,7 +306,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
 ///         bad weights, a disconnected graph, unknown names.
 #[pyfunction]
-#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="chordal", certify="auto", *, loss_threshold=5.0, init=None))]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="chordal", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None))]
 #[allow(clippy::too_many_arguments)]
 fn average_multiple_py(
     py: Python<'_>,
@@ -312,7 +319,18 @@ fn average_multiple_py(
     certify: &str,
     loss_threshold: f64,
     init: Option<&Bound<'_, PyAny>>,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
+    randomized: bool,
+    randomized_seed: Option<u64>,
 ) -> PyResult<RunResult> {
+    let budget = certify_settings(
+        CertifyMode::Auto,
+        max_memory,
+        max_seconds,
+        randomized,
+        randomized_seed,
+    )?;
     let graph = GraphInput::copy(n, i, j, rel, weights)?;
     let objective = parse::<MultipleLoss>(loss)?.objective(loss_threshold);
     let mode: CertifyMode = parse(certify)?;
@@ -342,7 +360,7 @@ fn average_multiple_py(
                     .then_some(loss_threshold),
                 ..Default::default()
             },
-            certify: CertifySettings::with_mode(mode),
+            certify: CertifySettings { mode, ..budget },
         };
         let result = average_multiple(&problem, &settings)?;
         MultipleReport::new(&input, result)
@@ -359,6 +377,7 @@ fn average_multiple_py(
 ///     estimate: ``(n, 3, 3)`` rotations ``R_i`` (any gauge).
 ///     certify: ``"auto"`` (dual certificate, then the SDP or the staircase), ``"dual"``,
 ///         ``"sdp"`` or ``"staircase"`` (``"none"`` means ``"dual"``, as on the command line).
+///     max_memory, max_seconds, randomized, randomized_seed: as for ``average_multiple``.
 ///
 /// Returns:
 ///     Result: ``solver`` is None; ``to_dict()`` equals
@@ -367,7 +386,7 @@ fn average_multiple_py(
 /// Raises:
 ///     rotavg.Error: as ``average_multiple``, and an estimate of the wrong size.
 #[pyfunction]
-#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto"))]
+#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None))]
 #[allow(clippy::too_many_arguments)]
 fn certify_multiple_py(
     py: Python<'_>,
@@ -378,6 +397,10 @@ fn certify_multiple_py(
     estimate: Option<&Bound<'_, PyAny>>,
     weights: Option<&Bound<'_, PyAny>>,
     certify: &str,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
+    randomized: bool,
+    randomized_seed: Option<u64>,
 ) -> PyResult<RunResult> {
     let graph = GraphInput::copy(n, i, j, rel, weights)?;
     let estimate = optional_matrices(estimate, "estimate")?
@@ -386,6 +409,7 @@ fn certify_multiple_py(
         CertifyMode::None => CertifyMode::Dual,
         m => m,
     };
+    let settings = certify_settings(mode, max_memory, max_seconds, randomized, randomized_seed)?;
     let report = detached(py, move || {
         let input = graph.into_input()?;
         let estimate = LoadedEstimate {
@@ -393,14 +417,30 @@ fn certify_multiple_py(
             estimate: Estimate::Multiple(estimate.rotations()?),
         };
         let problem = LoadedProblem::Multiple(input.graph);
-        CertifyReport::certify(
-            &input.name,
-            &problem,
-            estimate,
-            &CertifySettings::with_mode(mode),
-        )
+        CertifyReport::certify(&input.name, &problem, estimate, &settings)
     })?;
     RunResult::new(py, Report::Certify(report))
+}
+
+/// Certification settings with the budget (`max_memory` bytes, default 4 GiB; `max_seconds`,
+/// `None`: no limit) and the randomized test `[D16]` (`randomized`, `randomized_seed`),
+/// validated.
+fn certify_settings(
+    mode: CertifyMode,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
+    randomized: bool,
+    randomized_seed: Option<u64>,
+) -> PyResult<CertifySettings> {
+    let mut s = CertifySettings::with_mode(mode);
+    if let Some(m) = max_memory {
+        s.budget.max_memory_bytes = m;
+    }
+    s.budget.max_seconds = max_seconds;
+    s.dual.randomized.enabled = randomized;
+    s.dual.randomized.seed = randomized_seed;
+    s.validate().map_err(error)?;
+    Ok(s)
 }
 
 /// Pairs `(left[k], right[k], weights[k])` copied out of Python.

@@ -43,6 +43,24 @@ def test_linear_algebra_counts_are_reported(rng):
     assert rotavg.average_multiple(40, i, j, rel, loss="huber").to_dict()["linear_algebra"] is None
 
 
+def test_budget_and_randomized_bound(rng):
+    # no factorisation fits 1 KiB: inconclusive, with the Monte Carlo bound [D16] beside it
+    _, i, j, rel = synthetic_graph(rng, 40, 120, 0.05)
+    best = rotavg.average_multiple(40, i, j, rel)
+    res = rotavg.certify_multiple(40, i, j, rel, best.estimate, max_memory=1024, randomized_seed=9)
+    c = res.to_dict()["certificate"]
+    assert c["verdict"] == "inconclusive" and c["lower_bound"] is None
+    r = c["randomized"]
+    assert r["seed"] == 9 and r["within_tolerance"] and r["failure_probability"] <= 1e-12
+    assert r["lower_bound"] <= best.chordal_cost
+    assert r["lower_bound"] == pytest.approx(best.certificate.lower_bound, rel=1e-6)
+    off = rotavg.average_multiple(40, i, j, rel, max_memory=1024, randomized=False).to_dict()
+    assert off["certificate"]["verdict"] == "inconclusive"
+    assert "randomized" not in off["certificate"]
+    with pytest.raises(rotavg.Error, match="max_memory|max_seconds"):
+        rotavg.average_multiple(40, i, j, rel, max_seconds=-1.0)
+
+
 def test_cost_convention_rel_times_r_i_is_r_j(rng):
     truth, i, j, rel = synthetic_graph(rng, 25, 70, 0.05)
     w = rng.uniform(0.5, 2.0, size=len(i))

@@ -63,6 +63,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
                 },
                 spectrum: args.plot.as_ref().map(|_| Default::default()),
                 budget: args.common.budget(),
+                dual: args.common.dual(),
                 ..Default::default()
             }
         }

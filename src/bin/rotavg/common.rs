@@ -3,7 +3,7 @@
 
 use clap::Args as ClapArgs;
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
-use rotavg::certify::Budget;
+use rotavg::certify::{Budget, DualSettings};
 use rotavg::io::detect::{ReadOptions, WeightSource};
 use rotavg::io::names::Choice;
 use serde::Serialize;
@@ -36,6 +36,14 @@ pub struct Common {
     /// T (powers of 1024), e.g. `8G`. A proof whose factor would not fit is not started.
     #[arg(long, value_name = "SIZE", default_value = "4G", value_parser = parse_bytes)]
     pub max_memory: u64,
+    /// Seed of the randomized Chebyshev test [D16] (multiple averaging, run when no proof fits
+    /// the budget; its Monte Carlo bound is reported beside the `inconclusive` verdict). Default:
+    /// a fresh seed per run, printed with the result.
+    #[arg(long, value_name = "N")]
+    pub randomized_seed: Option<u64>,
+    /// Do not run the randomized Chebyshev test [D16].
+    #[arg(long, conflicts_with = "randomized_seed")]
+    pub no_randomized: bool,
 }
 
 /// A time limit in seconds, or none.
@@ -99,6 +107,14 @@ impl Common {
             max_memory_bytes: self.max_memory,
             max_seconds: self.max_seconds.0,
         }
+    }
+
+    /// The dual certificate's settings with `--randomized-seed` / `--no-randomized`.
+    pub fn dual(&self) -> DualSettings {
+        let mut d = DualSettings::default();
+        d.randomized.seed = self.randomized_seed;
+        d.randomized.enabled = !self.no_randomized;
+        d
     }
 
     /// Show a progress message on the display line (a terminal's stderr only; never under

@@ -147,6 +147,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
             // the figure shows the smallest eigenvalues of the certificate matrix
             spectrum: args.plot.as_ref().map(|_| Default::default()),
             budget: args.common.budget(),
+            dual: args.common.dual(),
             ..Default::default()
         },
     };
