@@ -5,6 +5,8 @@
 //!    the dual certificate (`certify::multiple::dual_certificate`), timed over several runs. The random graph is certified by the scalar
 //!    comparison `[D13]` (its 3n x 3n Cholesky factor would hold 1.1e8 values), the grid by the
 //!    sparse Cholesky `[D5]`.
+//!    The same random graph with no factorisation allowed (budget 1 byte): the randomized
+//!    Chebyshev test `[D16]` instead of a proof.
 //! 2. Long chains (`SyntheticChain`: odometry with 2 % loop closures, noise 1e-4 rad), 10^4 and
 //!    10^5 nodes, 3-D and planar: the SLAM shape of issue 11, certified by the grounded bound
 //!    `[D15]`.
@@ -83,12 +85,21 @@ fn load_g2o(path: &Path) -> Option<MultipleProblem> {
 }
 
 fn certify_timed(label: &str, p: &MultipleProblem, rs: &[Rotation], runs: usize) {
-    let settings = CertifySettings::default();
+    certify_timed_with(label, p, rs, runs, &CertifySettings::default());
+}
+
+fn certify_timed_with(
+    label: &str,
+    p: &MultipleProblem,
+    rs: &[Rotation],
+    runs: usize,
+    settings: &CertifySettings,
+) {
     let mut times = vec![];
     let mut last = None;
     for _ in 0..runs {
         let t = Instant::now();
-        let c = dual_certificate(p, rs, &settings).expect("certify");
+        let c = dual_certificate(p, rs, settings).expect("certify");
         times.push(t.elapsed().as_secs_f64());
         last = Some(c);
     }
@@ -124,6 +135,18 @@ fn main() {
         t.elapsed().as_secs_f64()
     );
     certify_timed("synthetic random n=10000", &p, &rs, 1);
+    // 1a. the same graph with no factorisation allowed: the randomized Chebyshev test [D16]
+    // (Lanczos estimate on the complement, then its products with S)
+    let mut over = CertifySettings::default();
+    over.budget.max_memory_bytes = 1;
+    over.dual.randomized.seed = Some(1);
+    certify_timed_with(
+        "synthetic random n=10000, randomized [D16]",
+        &p,
+        &rs,
+        3,
+        &over,
+    );
 
     // 1b. a 100 x 100 grid with right, down and diagonal edges (29601 edges): a graph with good
     // separators, like pose graphs

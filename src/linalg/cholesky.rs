@@ -206,9 +206,9 @@ pub fn inf_norm(a: SparseColMatRef<'_, usize, f64>) -> f64 {
     rows.into_iter().fold(0.0, f64::max)
 }
 
-/// A Gershgorin lower bound on `lambda_min(A)`: `min_r (A_rr - sum_{c != r} |A_rc|)`, minus the
-/// rounding error of evaluating it (`[D8]`). Rigorous for the floating-point matrix `A`.
-pub fn gershgorin_lower_bound(a: SparseColMatRef<'_, usize, f64>) -> f64 {
+/// Per row of a sparse matrix (both triangles stored): stored entries, diagonal, and the sum of
+/// the off-diagonal magnitudes.
+fn gershgorin_rows(a: SparseColMatRef<'_, usize, f64>) -> (Vec<usize>, Vec<f64>, Vec<f64>) {
     let n = a.nrows();
     let mut diag = vec![0.0f64; n];
     let mut off = vec![0.0f64; n];
@@ -227,13 +227,30 @@ pub fn gershgorin_lower_bound(a: SparseColMatRef<'_, usize, f64>) -> f64 {
             }
         }
     }
+    (count, diag, off)
+}
+
+/// A Gershgorin lower bound on `lambda_min(A)`: `min_r (A_rr - sum_{c != r} |A_rc|)`, minus the
+/// rounding error of evaluating it (`[D8]`). Rigorous for the floating-point matrix `A`.
+pub fn gershgorin_lower_bound(a: SparseColMatRef<'_, usize, f64>) -> f64 {
+    let (count, diag, off) = gershgorin_rows(a);
     let mut lb = f64::INFINITY;
-    for r in 0..n {
+    for r in 0..diag.len() {
         // the evaluated difference has error <= gamma(count+1) (|diag| + off)
         let err = gamma(count[r] + 2) * (diag[r].abs() + off[r]);
         lb = lb.min(diag[r] - off[r] - err);
     }
-    if n == 0 { 0.0 } else { lb }
+    if diag.is_empty() { 0.0 } else { lb }
+}
+
+/// A Gershgorin upper bound on `lambda_max(A)` with the rounding of its evaluation, and the
+/// largest number of stored entries in a row (for the rounding bound `gamma(p)` of a product).
+pub(crate) fn gershgorin_upper_bound(a: SparseColMatRef<'_, usize, f64>) -> (f64, usize) {
+    let (count, diag, off) = gershgorin_rows(a);
+    let upper = (0..diag.len())
+        .map(|r| diag[r] + off[r] + gamma(count[r] + 2) * (diag[r].abs() + off[r]))
+        .fold(0.0f64, f64::max);
+    (upper, count.into_iter().max().unwrap_or(0))
 }
 
 /// The verification engine `[D5]`: symbolic Cholesky analysis of a symmetric sparse matrix `S`

@@ -1102,14 +1102,7 @@ fn try_scalar_comparison(
 /// product and final subtraction `<= gamma(3n + 2) (sum |Lambda_aa| + 3n |mu|)`; doubled.
 fn bound_from_mu(problem: &MultipleProblem, lambdas: &[Matrix3<f64>], mu: f64) -> f64 {
     let n3 = 3 * lambdas.len();
-    let trace: f64 = lambdas.iter().map(|l| l.trace()).sum();
-    let abs_trace: f64 = lambdas
-        .iter()
-        .map(|l| l[(0, 0)].abs() + l[(1, 1)].abs() + l[(2, 2)].abs())
-        .sum();
-    let neg = (-mu).max(0.0);
-    let err = 2.0 * gamma(n3 + 4) * (abs_trace + n3 as f64 * neg);
-    trace - n3 as f64 * neg - err - data_defect(problem)
+    bound_with_deficit(problem, lambdas, n3 as f64 * (-mu).max(0.0))
 }
 
 /// `sum tr(Lambda_i) - deficit` with the rounding of evaluating it and the data defect

@@ -12,6 +12,7 @@
 
 use super::dual::{ComplementEstimate, GaugeTerms, bound_with_deficit, gauge_terms};
 use crate::certify::settings::{PREDICTED_FLOP_RATE, RandomizedSettings};
+use crate::linalg::cholesky::gershgorin_upper_bound;
 use crate::linalg::compensated::Accumulator;
 use crate::linalg::{ChebyshevOutcome, ChebyshevTest, UNIT_ROUNDOFF, gamma, symmetric_matvec};
 use crate::multiple::MultipleProblem;
@@ -83,31 +84,6 @@ impl fmt::Display for RandomizedBound {
     }
 }
 
-/// Largest stored entries in a row, and a Gershgorin upper bound on `lambda_max` (with the
-/// rounding of its evaluation).
-fn row_stats(s: SparseColMatRef<'_, usize, f64>) -> (usize, f64) {
-    let n = s.nrows();
-    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
-    let mut count = vec![0usize; n];
-    let mut diag = vec![0.0f64; n];
-    let mut off = vec![0.0f64; n];
-    for c in 0..s.ncols() {
-        for k in cp[c]..cp[c + 1] {
-            let r = ri[k];
-            count[r] += 1;
-            if r == c {
-                diag[r] += val[k];
-            } else {
-                off[r] += val[k].abs();
-            }
-        }
-    }
-    let upper = (0..n)
-        .map(|r| diag[r] + off[r] + gamma(count[r] + 2) * (diag[r].abs() + off[r]))
-        .fold(0.0f64, f64::max);
-    (count.into_iter().max().unwrap_or(0), upper)
-}
-
 /// The randomized bound `[D16]` of `S` (`s`, as stored, with `norm = ||S||_inf` and `terms`
 /// rounded operations per entry) at `rotations` with multipliers `lambdas`, from the Lanczos
 /// estimate on the complement (the test claims a quarter of it). `None` when the test is
@@ -173,7 +149,7 @@ pub(super) fn randomized_bound(
     if mu.is_nan() || mu <= 0.0 {
         return None;
     }
-    let (row_nnz, s_upper) = row_stats(s);
+    let (s_upper, row_nnz) = gershgorin_upper_bound(s);
     let gb = 0.5 * s_upper / n as f64;
     let upper = (s_upper + gb * g_max) * (1.0 + 1e-12);
     // ||Y||_F <= sqrt(3 lambda_max(G)); || |S| ||_2 <= ||S||_inf (computed with gamma(p))
@@ -290,6 +266,17 @@ mod tests {
         cols[3..].iter().map(|c| c.1).fold(f64::INFINITY, f64::min)
     }
 
+    fn instance() -> (crate::multiple::MultipleProblem, Vec<Rotation>) {
+        SyntheticGraph {
+            num_rotations: 30,
+            num_edges: 90,
+            noise_sigma: 0.05,
+            seed: 5,
+            ..Default::default()
+        }
+        .generate()
+    }
+
     fn estimate(value: f64) -> ComplementEstimate {
         ComplementEstimate {
             value,
@@ -308,14 +295,7 @@ mod tests {
     /// eigenvalue there is about 1 (an inflated estimate, so that it runs) never passes.
     #[test]
     fn never_passes_on_an_indefinite_certificate_matrix() {
-        let (p, gt) = SyntheticGraph {
-            num_rotations: 30,
-            num_edges: 90,
-            noise_sigma: 0.05,
-            seed: 5,
-            ..Default::default()
-        }
-        .generate();
+        let (p, gt) = instance();
         let mut rs = gt.clone();
         rs[7] = Rotation::from_scaled_axis(Vector3::new(2.5, 0.0, 0.0)) * rs[7];
         let lambdas = multipliers(&p, &rs).unwrap();
@@ -353,14 +333,7 @@ mod tests {
     /// smallest eigenvalue on the complement, and its bound lies below the cost.
     #[test]
     fn passes_at_a_critical_point_and_claims_no_more_than_the_truth() {
-        let (p, gt) = SyntheticGraph {
-            num_rotations: 30,
-            num_edges: 90,
-            noise_sigma: 0.05,
-            seed: 5,
-            ..Default::default()
-        }
-        .generate();
+        let (p, gt) = instance();
         let sol = crate::multiple::solve_multiple(
             &p,
             &crate::multiple::MultipleSettings {
