@@ -299,6 +299,13 @@ pub struct RandomizedLowerBound {
 impl RandomizedLowerBound {
     /// The bound against `upper_bound` under `tolerance` (the rule of
     /// [`Certificate::from_bounds`]).
+    ///
+    /// ```
+    /// use rotavg::certify::{GapTolerance, RandomizedLowerBound};
+    /// let r = RandomizedLowerBound::new(10.0, 10.0 - 5e-6, &GapTolerance::default(), 1e-12, 7);
+    /// assert!(r.within_tolerance && (r.relative_gap - 5e-7).abs() < 1e-12);
+    /// assert!(!RandomizedLowerBound::new(10.0, 9.0, &GapTolerance::default(), 1e-12, 7).within_tolerance);
+    /// ```
     pub fn new(
         upper_bound: f64,
         lower_bound: f64,
