@@ -290,6 +290,35 @@ mod tests {
         }
     }
 
+    /// The test at `rs` told the complement's smallest eigenvalue is about `est` (a value, or
+    /// the dense truth when `None`), with `seed`; and the dense truth.
+    fn run_at(
+        p: &crate::multiple::MultipleProblem,
+        rs: &[Rotation],
+        est: Option<f64>,
+        seed: u64,
+    ) -> (Option<RandomizedBound>, f64) {
+        let lambdas = multipliers(p, rs).unwrap();
+        let s = certificate_matrix(p, &lambdas).unwrap();
+        let truth = dense_complement_min(s.as_ref(), rs);
+        let settings = RandomizedSettings {
+            seed: Some(seed),
+            ..Default::default()
+        };
+        let r = randomized_bound(
+            p,
+            rs,
+            &lambdas,
+            s.as_ref(),
+            inf_norm(s.as_ref()),
+            20,
+            &estimate(est.unwrap_or(truth)),
+            &settings,
+            None,
+        );
+        (r, truth)
+    }
+
     /// Soundness: at rotations where `S` has a clearly negative eigenvalue on the complement
     /// of the gauge directions (one node turned by 2.5 rad), a test told that the smallest
     /// eigenvalue there is about 1 (an inflated estimate, so that it runs) never passes.
@@ -298,28 +327,10 @@ mod tests {
         let (p, gt) = instance();
         let mut rs = gt.clone();
         rs[7] = Rotation::from_scaled_axis(Vector3::new(2.5, 0.0, 0.0)) * rs[7];
-        let lambdas = multipliers(&p, &rs).unwrap();
-        let s = certificate_matrix(&p, &lambdas).unwrap();
-        let truth = dense_complement_min(s.as_ref(), &rs);
-        assert!(truth < -0.1, "the test wants an indefinite S: {truth}");
-        let norm = inf_norm(s.as_ref());
         for seed in 0..10 {
-            let settings = RandomizedSettings {
-                seed: Some(seed),
-                ..Default::default()
-            };
-            let r = randomized_bound(
-                &p,
-                &rs,
-                &lambdas,
-                s.as_ref(),
-                norm,
-                20,
-                &estimate(1.0),
-                &settings,
-                None,
-            )
-            .expect("the test runs");
+            let (r, truth) = run_at(&p, &rs, Some(1.0), seed);
+            assert!(truth < -0.1, "the test wants an indefinite S: {truth}");
+            let r = r.expect("the test runs");
             // refused by the signal itself (the eigenvector's component grew far past the
             // threshold), not only by rounding or planning
             assert!(
@@ -344,27 +355,9 @@ mod tests {
         )
         .unwrap();
         let rs = sol.rotations;
-        let lambdas = multipliers(&p, &rs).unwrap();
-        let s = certificate_matrix(&p, &lambdas).unwrap();
-        let truth = dense_complement_min(s.as_ref(), &rs);
+        let (r, truth) = run_at(&p, &rs, None, 1);
         assert!(truth > 0.1, "{truth}");
-        let norm = inf_norm(s.as_ref());
-        let settings = RandomizedSettings {
-            seed: Some(1),
-            ..Default::default()
-        };
-        let r = randomized_bound(
-            &p,
-            &rs,
-            &lambdas,
-            s.as_ref(),
-            norm,
-            20,
-            &estimate(truth),
-            &settings,
-            None,
-        )
-        .expect("the test runs");
+        let r = r.expect("the test runs");
         assert!(r.outcome.passed, "{r}");
         assert!(
             r.complement_bound <= truth && r.complement_bound > 0.2 * truth,
