@@ -186,16 +186,15 @@ pub(super) fn randomized_bound(
         n3,
         |x, z| {
             symmetric_matvec(s, x, z);
-            let mut c = [0.0f64; 3];
-            let mut dc = 0.0f64;
-            for (ca, ya) in c.iter_mut().zip(&y) {
-                let mut acc = Accumulator::default();
-                for (p, q) in ya.iter().zip(x) {
-                    acc.add_product(*p, *q);
-                }
-                *ca = acc.value();
-                dc += acc.bound() * acc.bound();
+            // the three double-double dot products in one pass over x
+            let mut acc = [Accumulator::default(); 3];
+            for (i, xi) in x.iter().enumerate() {
+                acc[0].add_product(y[0][i], *xi);
+                acc[1].add_product(y[1][i], *xi);
+                acc[2].add_product(y[2][i], *xi);
             }
+            let c = acc.map(|a| a.value());
+            let dc: f64 = acc.iter().map(|a| a.bound() * a.bound()).sum();
             let cs = [gb * c[0], gb * c[1], gb * c[2]];
             for (i, zi) in z.iter_mut().enumerate() {
                 *zi += y[0][i] * cs[0] + y[1][i] * cs[1] + y[2][i] * cs[2];
