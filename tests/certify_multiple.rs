@@ -720,6 +720,50 @@ fn scalar_comparison_agrees_with_the_cholesky_verification() {
     assert!(fast.bound.factor_nonzeros * 4 < full.bound.factor_nonzeros);
 }
 
+/// The memory budget holds for the scalar comparison's exact factor, not only for the
+/// ordering's prediction: with a budget one byte short of the exact factor plus scratch (the
+/// prediction fits it), the `LDL^T` is not run (a 10^5-node random graph's factor was 2x its
+/// prediction and overran `--max-memory 8G` by 14 % before this check).
+#[test]
+fn scalar_comparison_respects_the_budget_with_the_exact_factor() {
+    use rotavg::certify::Budget;
+    use rotavg::certify::multiple::scalar::ScalarAnalysis;
+    let (p, _) = SyntheticGraph {
+        num_rotations: 2000,
+        num_edges: 6000,
+        noise_sigma: 0.05,
+        seed: 11,
+        ..Default::default()
+    }
+    .generate();
+    let sol = solve_multiple(
+        &p,
+        &MultipleSettings {
+            gradient_tolerance: 1e-12,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let analysis = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
+    let needed = analysis.factor_len() + analysis.scratch_bytes().div_ceil(8);
+    let settings = |bytes: u64| CertifySettings {
+        dual: DualSettings {
+            scalar_comparison_above: 0,
+            ..Default::default()
+        },
+        budget: Budget {
+            max_memory_bytes: bytes,
+            max_seconds: None,
+        },
+        ..Default::default()
+    };
+    let exact = Budget::factorisation_bytes(needed) as u64;
+    let fits = dual_certificate(&p, &sol.rotations, &settings(exact)).unwrap();
+    assert_eq!(fits.bound.verification, Verification::ScalarComparison);
+    let short = dual_certificate(&p, &sol.rotations, &settings(exact - 1)).unwrap();
+    assert_ne!(short.bound.verification, Verification::ScalarComparison);
+}
+
 /// When no proof fits the budget, the labelled estimate on the complement of the gauge
 /// directions agrees with a dense eigendecomposition of `S` (built here from a dense `Q`):
 /// at a critical point `S Y ~ 0`, so the eigenvalues of `S` are three near zero (the gauge)

@@ -1033,6 +1033,12 @@ fn try_scalar_comparison(
     if analysis.factor_len().saturating_mul(9) <= settings.dual.scalar_comparison_above {
         return Ok(None);
     }
+    // the budget again with the exact factor and scratch: the ordering's prediction checked
+    // above can be 2x low (10^5-node random graph: 6e8 predicted, 1.21e9 values stored)
+    let scratch = analysis.scratch_bytes().div_ceil(8);
+    if factor_over_budget(settings, analysis.factor_len(), scratch, n).is_some() {
+        return Ok(None);
+    }
     let target = 0.5 * budget / s.nrows().max(1) as f64;
     let proof = match scalar_comparison(problem, &analysis, rotations, lambdas, target)? {
         Ok(p) if p.verified_min_eigenvalue >= -target => p,

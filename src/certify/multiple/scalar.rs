@@ -139,9 +139,20 @@ impl ScalarAnalysis {
         }))
     }
 
-    /// Stored values of the scalar factor.
+    /// Stored values of the scalar factor (exact, from the symbolic analysis: supernodal
+    /// storage, more than the ordering's prediction).
     pub fn factor_len(&self) -> usize {
         self.symbolic.len_val()
+    }
+
+    /// Bytes of numeric scratch the `LDL^T` factorisation allocates besides the factor.
+    pub fn scratch_bytes(&self) -> usize {
+        self.symbolic
+            .factorize_numeric_ldlt_scratch::<f64>(
+                crate::linalg::factor_parallelism(self.factor_len()),
+                Default::default(),
+            )
+            .size_bytes()
     }
 }
 
