@@ -647,13 +647,9 @@ fn external_multipliers_bound_a_non_global_estimate() {
     assert!(lb > own.certificate.lower_bound.unwrap());
 }
 
-/// The scalar comparison [D13] against the 3n x 3n Cholesky verification on a random graph
-/// (2000 nodes, 6000 edges, noise 0.05 rad; the scalar comparison forced first, the default tries
-/// it only above 3e7 factor values): both certify, both bounds are <= the cost, and they agree
-/// to the gap tolerance.
-#[test]
-fn scalar_comparison_agrees_with_the_cholesky_verification() {
-    use rotavg::multiple::{MultipleSettings, solve_multiple};
+/// A random graph (2000 nodes, 6000 edges, noise 0.05 rad) and its local solution to relative
+/// gradient 1e-12: large enough for the scalar comparison [D13] to be worth its factor.
+fn random_2000() -> (MultipleProblem, rotavg::multiple::MultipleSolution) {
     let (p, _) = SyntheticGraph {
         num_rotations: 2000,
         num_edges: 6000,
@@ -670,6 +666,16 @@ fn scalar_comparison_agrees_with_the_cholesky_verification() {
         },
     )
     .unwrap();
+    (p, sol)
+}
+
+/// The scalar comparison [D13] against the 3n x 3n Cholesky verification on a random graph
+/// (2000 nodes, 6000 edges, noise 0.05 rad; the scalar comparison forced first, the default tries
+/// it only above 3e7 factor values): both certify, both bounds are <= the cost, and they agree
+/// to the gap tolerance.
+#[test]
+fn scalar_comparison_agrees_with_the_cholesky_verification() {
+    let (p, sol) = random_2000();
     let fast = dual_certificate(
         &p,
         &sol.rotations,
@@ -728,22 +734,7 @@ fn scalar_comparison_agrees_with_the_cholesky_verification() {
 fn scalar_comparison_respects_the_budget_with_the_exact_factor() {
     use rotavg::certify::Budget;
     use rotavg::certify::multiple::scalar::ScalarAnalysis;
-    let (p, _) = SyntheticGraph {
-        num_rotations: 2000,
-        num_edges: 6000,
-        noise_sigma: 0.05,
-        seed: 11,
-        ..Default::default()
-    }
-    .generate();
-    let sol = solve_multiple(
-        &p,
-        &MultipleSettings {
-            gradient_tolerance: 1e-12,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let (p, sol) = random_2000();
     let analysis = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
     let needed = analysis.factor_len() + analysis.scratch_bytes().div_ceil(8);
     let settings = |bytes: u64| CertifySettings {
