@@ -613,6 +613,14 @@ fn verify(
     })
 }
 
+/// Column `a` of the gauge directions `Y = [R_1; ...; R_n]` (length `3n`).
+pub(super) fn gauge_column(rotations: &[Rotation], a: usize) -> Vec<f64> {
+    rotations
+        .iter()
+        .flat_map(|r| (0..3).map(move |row| r.matrix()[(row, a)]))
+        .collect()
+}
+
 /// [`ComplementEstimate`]: Lanczos on `P S P` with `P = I - Y Y^T / n` (the gauge directions
 /// `Y = [R_1; ...; R_n]`, whose columns are orthogonal with norm `sqrt(n)` for exact rotations;
 /// they are orthonormalised here, so nearly orthogonal rotations are fine too).
@@ -627,10 +635,7 @@ fn complement_smallest(
     let mut ysy = Matrix3::<f64>::zeros();
     let mut sy = vec![0.0f64; n3];
     for a in 0..3 {
-        let mut y: Vec<f64> = rotations
-            .iter()
-            .flat_map(|r| (0..3).map(move |row| r.matrix()[(row, a)]))
-            .collect();
+        let mut y = gauge_column(rotations, a);
         crate::linalg::cholesky::sparse_matvec(s, &y, &mut sy);
         for b in 0..3 {
             ysy[(b, a)] = rotations
@@ -768,25 +773,20 @@ fn grounded_bound(
         return Ok(Grounded::NotApplicable);
     }
     let rinv2 = 3.0 / (1.0 - d) * (1.0 + 4.0 * u);
-    let GaugeTerms {
-        rho,
-        h,
-        sym,
-        y_norm,
-    } = gauge_terms(problem, rotations, lambdas);
     // c: S without the ground's block is verified positive definite
     let mut c = f64::INFINITY;
     let mut factorizations = 0;
     let mut lanczos_iterations = 0;
     let mut factor_nonzeros = 0;
     let mut fp_margin = 0.0;
+    let mut analysed = None;
     if n > 1 {
         let sub = without_block(s, g)?;
         let cap = settings
             .budget
             .max_factor_values(n3 - 3)
             .min(settings.dual.max_factor_nonzeros);
-        let Ok(mut ch) = ShiftedCholesky::new_within(sub, terms, cap)? else {
+        let Ok(ch) = ShiftedCholesky::new_within(sub, terms, cap)? else {
             return Ok(Grounded::NotApplicable);
         };
         factor_nonzeros = ch.factor_len();
@@ -798,6 +798,17 @@ fn grounded_bound(
                 factor_values: factor_nonzeros,
             });
         }
+        analysed = Some(ch);
+    }
+    // the gauge terms only when a factorisation will be tried (O(m) in double-double; over
+    // the budget the randomized bound [D16] computes them itself)
+    let GaugeTerms {
+        rho,
+        h,
+        sym,
+        y_norm,
+    } = gauge_terms(problem, rotations, lambdas);
+    if let Some(mut ch) = analysed {
         // First the smallest c that makes rho^2 / c negligible against the budget (and a tiny
         // multiple of ||S||): one factorisation when S_{-g} is well inside the PD cone. Then,
         // if that fails, c from an estimate of lambda_min(S_{-g}).
@@ -1057,10 +1068,7 @@ fn try_scalar_comparison(
         // Rayleigh quotients are upper bounds on lambda_min too, often far better than a short
         // Lanczos run in the cluster at 0
         for a in 0..3 {
-            let mut v: Vec<f64> = rotations
-                .iter()
-                .flat_map(|r| (0..3).map(move |b| r.matrix()[(b, a)]))
-                .collect();
+            let mut v = gauge_column(rotations, a);
             let nv = v.iter().map(|x| x * x).sum::<f64>().sqrt();
             if nv == 0.0 || !nv.is_finite() {
                 continue;

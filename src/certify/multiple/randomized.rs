@@ -10,7 +10,7 @@
 //! `O(3)^n` has `f(X) >= sum tr(Lambda_i) - (rho^2 / mu + h) 3n / lambda_min(Y^T Y)`.
 //! The result is reported beside the `inconclusive` verdict, never as its proof.
 
-use super::dual::{ComplementEstimate, GaugeTerms, bound_with_deficit, gauge_terms};
+use super::dual::{ComplementEstimate, GaugeTerms, bound_with_deficit, gauge_column, gauge_terms};
 use crate::certify::settings::{PREDICTED_FLOP_RATE, RandomizedSettings};
 use crate::linalg::cholesky::gershgorin_upper_bound;
 use crate::linalg::compensated::Accumulator;
@@ -115,14 +115,7 @@ pub(super) fn randomized_bound(
     if n == 0 || n3 != 3 * n {
         return None;
     }
-    let y: Vec<Vec<f64>> = (0..3)
-        .map(|a| {
-            rotations
-                .iter()
-                .flat_map(|r| (0..3).map(move |row| r.matrix()[(row, a)]))
-                .collect()
-        })
-        .collect();
+    let y: Vec<Vec<f64>> = (0..3).map(|a| gauge_column(rotations, a)).collect();
     // G = Y^T Y in double-double, and bounds on its extreme eigenvalues
     let mut gm = Matrix3::<f64>::zeros();
     let mut g_error = 0.0f64;
