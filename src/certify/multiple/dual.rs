@@ -1260,7 +1260,7 @@ pub(super) fn attach_randomized(
             certificate.upper_bound,
             lb,
             &certificate.tolerance,
-            r.failure_probability,
+            r.outcome.failure_probability,
             r.seed,
         )
     });

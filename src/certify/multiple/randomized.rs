@@ -27,11 +27,9 @@ use std::time::Instant;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RandomizedBound {
     /// The lower bound on the global minimum of the chordal cost when the test passed (valid
-    /// unless an event of probability at most `failure_probability` occurred); `None` when it
-    /// did not pass.
+    /// unless an event of probability at most `outcome.failure_probability`, over the test's
+    /// random vectors, occurred); `None` when it did not pass.
     pub lower_bound: Option<f64>,
-    /// The probability of that event, over the test's random vectors.
-    pub failure_probability: f64,
     /// Seed of the random vectors.
     pub seed: u64,
     /// The claimed `mu`: `x^T S x >= mu ||x||^2` for `x` orthogonal to the gauge directions
@@ -64,7 +62,7 @@ impl fmt::Display for RandomizedBound {
                 f,
                 "lambda_min(S) >= {:.3e} on the complement of the gauge directions unless an \
                  event of probability <= {:.0e} occurred (seed {}); deficit {:.1e}",
-                self.complement_bound, self.failure_probability, self.seed, self.deficit
+                self.complement_bound, self.outcome.failure_probability, self.seed, self.deficit
             )
         } else if self.outcome.grew {
             write!(
@@ -209,7 +207,6 @@ pub(super) fn randomized_bound(
         .filter(|b| b.is_finite());
     Some(RandomizedBound {
         lower_bound,
-        failure_probability: outcome.failure_probability,
         seed,
         complement_bound: mu,
         rho,
@@ -361,6 +358,6 @@ mod tests {
             lb <= cost && cost - lb < 1e-9 * cost.max(1.0),
             "{lb} against {cost}"
         );
-        assert!(r.failure_probability <= 1e-12 * (1.0 + 1e-9));
+        assert!(r.outcome.failure_probability <= 1e-12 * (1.0 + 1e-9));
     }
 }
