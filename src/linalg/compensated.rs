@@ -55,6 +55,27 @@ impl Accumulator {
         self.terms += 1;
     }
 
+    /// Add `w a b c` (a quadruple product: `w a b c = r + f_3 + w f_2 + w f_1 c` exactly with
+    /// the three error-free products; the second-order errors, at most `3 u^2 |w a b c|`, and
+    /// the four additions into the low part are charged in [`Self::bound`] by counting the
+    /// term twice).
+    pub(crate) fn add_quad(&mut self, w: f64, a: f64, b: f64, c: f64) {
+        let (p, f1) = two_prod(a, b);
+        let (q, f2) = two_prod(p, c);
+        let (r, f3) = two_prod(w, q);
+        let (s, t) = two_sum(self.hi, r);
+        self.hi = s;
+        self.lo += t + f3 + w * f2 + w * (f1 * c);
+        self.abs += 2.0 * r.abs();
+        self.terms += 2;
+    }
+
+    /// The unevaluated double-double sum `(hi, lo)`: `hi + lo` exactly is the compensated sum
+    /// ([`Self::bound`] bounds its distance to the exact one, plus the final rounding).
+    pub(crate) fn parts(&self) -> (f64, f64) {
+        (self.hi, self.lo)
+    }
+
     /// The sum, rounded to `f64`.
     pub(crate) fn value(&self) -> f64 {
         self.hi + self.lo
@@ -65,11 +86,17 @@ impl Accumulator {
     /// second-order errors of the triple products `2 u^2 sum |term|`, doubled to cover the
     /// evaluation of the bound.
     pub(crate) fn bound(&self) -> f64 {
+        2.0 * UNIT_ROUNDOFF * self.value().abs() + self.parts_bound()
+    }
+
+    /// A rigorous bound on `|hi + lo - exact|` for the unevaluated pair of [`Self::parts`]:
+    /// [`Self::bound`] without the final rounding to `f64` (the `u |s|` term).
+    pub(crate) fn parts_bound(&self) -> f64 {
         let u = UNIT_ROUNDOFF;
         // the low parts are sums of up to three roundings per term
         let k = 3.0 * self.terms as f64 + 2.0;
         let gamma = k * u / (1.0 - k * u);
-        2.0 * (u * self.value().abs() + (gamma * gamma + 2.0 * u * u) * self.abs * (1.0 + 4.0 * u))
+        2.0 * (gamma * gamma + 2.0 * u * u) * self.abs * (1.0 + 4.0 * u)
     }
 }
 
@@ -91,6 +118,21 @@ mod tests {
         assert!(acc.bound() < 1e-3 * tiny + 1e-30);
         let plain: f64 = (1.0 + 2f64.powi(-52)) - 1.0 - 2f64.powi(-52) + 0.0;
         assert_eq!(plain, 0.0);
+    }
+
+    /// Quadruple products: `(1 + 2^-30)^3 * 5 - 5 - 15 * 2^-30 = 15 * 2^-60 + 5 * 2^-90`
+    /// exactly; plain arithmetic loses the last term and most of the first.
+    #[test]
+    fn quadruple_products_are_exact_to_second_order() {
+        let x = 1.0 + 2f64.powi(-30);
+        let mut acc = Accumulator::default();
+        acc.add_quad(5.0, x, x, x);
+        acc.add_product(-5.0, 1.0);
+        acc.add_product(-15.0, 2f64.powi(-30));
+        let exact = 15.0 * 2f64.powi(-60) + 5.0 * 2f64.powi(-90);
+        assert!((acc.value() - exact).abs() <= acc.bound());
+        assert!((acc.value() - exact).abs() < 1e-6 * exact);
+        assert!(acc.bound() < 1e-3 * exact);
     }
 
     /// Triple products: `(1 + 2^-30)^2 * 3 - 3 - 6 * 2^-30 = 3 * 2^-60` exactly.

@@ -10,20 +10,27 @@
 //! The argument (all steps rigorous, rounding included):
 //! 1. `M = D^T S D` with `D = blkdiag(R_i)` has the same inertia as `S`, and (Ostrowski)
 //!    `lambda_min(S) >= lambda_min(M) / sigma_min(D)^2` when `lambda_min(M) < 0`.
-//! 2. `M = L (x) I_3 + E` with `L` the weighted scalar graph Laplacian; the blocks of `E` are
-//!    `E_ij = -w_ij (R_i^T R_ij^T R_j - I)` on edges and `E_ii = d_i (R_i^T R_i - I) -
-//!    R_i^T Lambda_i R_i`: small when the residuals are small. Block-wise
-//!    `|x^T E x| <= sum_i delta_i |x_i|^2` with `delta_i = ||E_ii|| + sum_j ||E_ij||`.
-//! 3. `M v0 = r'` with `v0 = 1 (x) I_3` and `r'_i = R_i^T (S Y)_i` (zero at a critical point).
+//! 2. Edge by edge, with `P_e = R_a^T R_ab^T R_b = A_e + K_e` (symmetric + skew part),
+//!    `d = x_b - x_a`, `m = (x_a + x_b) / 2`: the edge's part of `x^T M x` is
+//!    `w (d^T A_e d - 2 m^T K_e d)`, and `2 |m^T K d| <= beta |d|^2 + (||K||^2 / beta) |m|^2`.
+//!    So `M >= (L' - diag(delta)) (x) I_3`, with `L'` the Laplacian of the kept weights
+//!    `w (lambda_min(A_e) - beta)` (`beta = 1/2`) and `delta_i` the charges
+//!    `sum_e w ||K_e||^2 / (2 beta)` plus `||G_i||`, `G_i = M_ii - sum_e w A_e`. A residual of
+//!    angle `theta` costs `sin^2 theta`: **second order**, exact on a cycle with equal residuals.
+//!    Edges whose residual is too large for it (outliers) use the first-order bound instead:
+//!    weight `w`, charge `w (||A_e - I|| + ||P_e - I||)`.
+//! 3. `M v0 = r'` with `v0 = 1 (x) I_3` and `r'_i = R_i^T (S Y)_i` (zero at a critical point);
+//!    `v0^T M v0 = sum_i r'_i = sum_i G_i` is evaluated in double-double when the plain
+//!    evaluation's rounding (which grows like `n u d`) would matter.
 //! 4. Split `x = v0 a + x1` with `a` the `delta`-weighted mean of the blocks, so every coordinate
-//!    slice `y` of `x1` has `delta^T y = 0`. If the scalar matrix `L - diag(delta)` has exactly one
-//!    negative eigenvalue, the pencil `(L, diag(delta))` has second eigenvalue `>= 1` (its first
-//!    eigenvector is `1` with eigenvalue 0), so `y^T (L - diag(delta)) y >= 0` on those slices and
-//!    `x1^T M x1 >= 0`. What remains are the cross terms with `r'`:
+//!    slice `y` of `x1` has `delta^T y = 0`. If the scalar matrix `L' - diag(delta)` has exactly
+//!    one negative eigenvalue, the pencil `(L', diag(delta))` has second eigenvalue `>= 1` (its
+//!    first eigenvector is `1` with eigenvalue 0), so `y^T (L' - diag(delta)) y >= 0` on those
+//!    slices and `x1^T M x1 >= 0`. What remains are the cross terms with `r'`:
 //!    `x^T M x >= -(2 kappa (1 + sqrt(n) kappa) ||r'|| + kappa^2 ||sum_i r'_i||) |x|^2`,
 //!    `kappa = ||delta||_2 / sum delta`.
 //! 5. "Exactly one negative eigenvalue" is proven by the inertia of an `LDL^T` factorisation of
-//!    `A = L - diag(delta) - h I` (Sylvester's law of inertia applied to the computed factors,
+//!    `A = L' - diag(delta) - h I` (Sylvester's law of inertia applied to the computed factors,
 //!    which are an exact factorisation of `A + dA`, with the a-posteriori bound
 //!    `|dA| <= gamma_(k+4) |L||D||L^T|`, Higham 2002, Thm 9.3 / 10.x), and the margin
 //!    `h > ||dA|| + forming error` absorbs the perturbation (Weyl).
@@ -34,7 +41,8 @@
 //! what it proves, and it is never used when it cannot be completed.
 
 use crate::error::{Error, Result};
-use crate::linalg::cholesky::{UNIT_ROUNDOFF, gamma, inf_norm, symbolic_cholesky_within};
+use crate::linalg::cholesky::{UNIT_ROUNDOFF, gamma, symbolic_cholesky_within};
+use crate::linalg::compensated::Accumulator;
 use crate::linalg::ldlt::{LdltFailure, ldlt_inertia};
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
@@ -42,6 +50,12 @@ use faer::sparse::linalg::cholesky::SymbolicCholesky;
 use faer::sparse::{SparseColMat, Triplet};
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
+
+/// The split `beta` of the second-order edge comparison (step 2): each edge keeps
+/// `alpha_e - beta` of its weight and charges `k_e^2 / (2 beta)` to its two nodes. `1/2`
+/// maximises `beta (1 - beta)`, which makes the condition exact on a cycle with equal residuals
+/// (`paper-notes/certificates.md` [D13]).
+const SECOND_ORDER_BETA: f64 = 0.5;
 
 /// Largest `||R_i^T R_i - I||_F` accepted (the rotations are validated far tighter than this).
 const MAX_ORTHOGONALITY_DEFECT: f64 = 1e-3;
@@ -51,8 +65,10 @@ const MAX_ORTHOGONALITY_DEFECT: f64 = 1e-3;
 pub struct ScalarComparison {
     /// Proven lower bound on `lambda_min(S)` (non-positive).
     pub verified_min_eigenvalue: f64,
-    /// Largest `delta_i` (the block-row bound on the residual part `E` of `D^T S D`).
+    /// Largest `delta_i`, the charge of the edge comparison (step 2) at one node.
     pub max_delta: f64,
+    /// Edges compared to second order (the others, residuals too large for it, to first order).
+    pub second_order_edges: usize,
     /// The uniform `zeta` added to the weights (its positive term absorbs the cross terms).
     pub zeta: f64,
     /// The margin `h` subtracted from the scalar matrix.
@@ -93,6 +109,8 @@ pub struct ScalarAnalysis {
     symbolic: SymbolicCholesky<usize>,
     pattern: SparseColMat<usize, f64>,
     diag_pos: Vec<usize>,
+    /// Per edge, the positions of its `(i, j)` and `(j, i)` entries in `pattern`'s values.
+    edge_pos: Vec<(usize, usize)>,
 }
 
 impl ScalarAnalysis {
@@ -128,6 +146,19 @@ impl ScalarAnalysis {
                 }
             }
         }
+        let position = |row: usize, col: usize| {
+            ri[cp[col]..cp[col + 1]]
+                .binary_search(&row)
+                .map(|k| cp[col] + k)
+                .map_err(|_| Error::Solver {
+                    message: "scalar Laplacian lost an edge entry".into(),
+                })
+        };
+        let edge_pos = problem
+            .edges()
+            .iter()
+            .map(|e| Ok((position(e.i, e.j)?, position(e.j, e.i)?)))
+            .collect::<Result<Vec<_>>>()?;
         let symbolic = match symbolic_cholesky_within(pattern.symbolic(), max_values)? {
             Ok(symbolic) => symbolic,
             Err(predicted) => return Ok(Err(predicted)),
@@ -136,6 +167,7 @@ impl ScalarAnalysis {
             symbolic,
             pattern,
             diag_pos,
+            edge_pos,
         }))
     }
 
@@ -194,35 +226,87 @@ pub fn scalar_comparison(
     }
     let t_max = t.iter().copied().fold(0.0, f64::max);
 
-    // -- step 2: delta_i >= ||E_ii|| + sum_j ||E_ij||
+    // -- step 2 (second order): per edge e = (a, b), P_e = R_a^T R_ab^T R_b = A_e + K_e
+    // (symmetric + skew part). With d = x_b - x_a and m = (x_a + x_b) / 2 the edge's part of
+    // x^T M x is w (d^T A_e d - 2 m^T K_e d) >= w (alpha_e - beta) |d|^2 - w k_e^2 / (2 beta)
+    // (|x_a|^2 + |x_b|^2), alpha_e <= lambda_min(A_e), k_e >= ||K_e||_2; the rest of the diagonal
+    // blocks is G_i = M_ii - sum_e w A_e, ||G_i||_2 <= g_i. Hence
+    // M >= (L' - diag(delta)) (x) I_3 with L' the Laplacian of the weights w (alpha_e - beta).
+    // The error of fl(P_e) against the exact product: entries of the exact product are <= 3.3
+    // in magnitude (|R| entries <= 1 + 1e-3); the two 3-term products err by < 2e-14 per entry,
+    // 6e-14 in Frobenius; 2e-13 also covers forming the symmetric and skew parts.
+    const PRODUCT_ERROR: f64 = 2e-13;
+    let beta = SECOND_ORDER_BETA;
     let mut deg_w = vec![0.0f64; n];
     let mut deg_n = vec![0usize; n];
     let mut delta = vec![0.0f64; n];
+    let mut sym_sum = vec![Matrix3::zeros(); n];
+    let mut sym_err = vec![0.0f64; n];
+    let mut reduced = Vec::with_capacity(problem.num_edges());
+    let mut second_order_edges = 0usize;
     for e in problem.edges() {
         let (ri, rj, rij) = (
             rotations[e.i].matrix(),
             rotations[e.j].matrix(),
             e.rotation.matrix(),
         );
-        let b = ri.transpose() * (rij.transpose() * rj) - Matrix3::identity();
-        // entries of the exact product are <= 3.3 in magnitude (|R| entries <= 1 + 1e-3); the
-        // two 3-term products and the subtraction err by < 2e-14 per entry, 6e-14 in Frobenius
-        let eps = e.weight * (fro(&b) * (1.0 + 4.0 * u) + 1e-13) * (1.0 + 2.0 * u);
-        delta[e.i] += eps;
-        delta[e.j] += eps;
+        let pm = ri.transpose() * (rij.transpose() * rj);
+        let sym = 0.5 * (pm + pm.transpose());
+        // the axial vector of the skew part: ||K||_2 = |k| for a 3 x 3 skew matrix
+        let axial = nalgebra::Vector3::new(
+            0.5 * (pm[(2, 1)] - pm[(1, 2)]),
+            0.5 * (pm[(0, 2)] - pm[(2, 0)]),
+            0.5 * (pm[(1, 0)] - pm[(0, 1)]),
+        );
+        let k_e = axial.norm() * (1.0 + 8.0 * u) + PRODUCT_ERROR;
+        // lambda_min(A) >= 1 - ||A - I||_2 >= 1 - ||A - I||_F
+        let alpha = 1.0 - (fro(&(sym - Matrix3::identity())) * (1.0 + 4.0 * u) + PRODUCT_ERROR);
+        // first order: w (|d|^2 + x_a^T (A - I) x_a + x_b^T (A - I) x_b - 2 x_a^T (P - I) x_b)
+        // >= w |d|^2 - w c1 (|x_a|^2 + |x_b|^2), c1 >= ||A - I||_2 + ||P - I||_2
+        let c1 = (fro(&(sym - Matrix3::identity())) + fro(&(pm - Matrix3::identity())))
+            * (1.0 + 4.0 * u)
+            + 2.0 * PRODUCT_ERROR;
+        // each edge takes the bound with the smaller charge per unit of weight kept (the
+        // condition is roughly lambda_2 >= charge / weight): second order for small residuals,
+        // first order for outliers, whose alpha_e - beta is negative
+        let coeff = alpha - beta;
+        let charge2 = k_e * k_e / (2.0 * beta);
+        let (coeff, charge) = if coeff > 0.0 && charge2 < c1 * coeff {
+            second_order_edges += 1;
+            (coeff, charge2)
+        } else {
+            (1.0, c1)
+        };
+        // rounded towards -inf: a smaller weight only weakens the comparison
+        let w_red = e.weight * coeff * (1.0 - 4.0 * u);
+        reduced.push(w_red);
+        let dk = e.weight * charge * (1.0 + 8.0 * u);
+        delta[e.i] += dk;
+        delta[e.j] += dk;
+        sym_sum[e.i] += e.weight * sym;
+        sym_sum[e.j] += e.weight * sym;
+        sym_err[e.i] += e.weight * PRODUCT_ERROR;
+        sym_err[e.j] += e.weight * PRODUCT_ERROR;
         deg_w[e.i] += e.weight;
         deg_w[e.j] += e.weight;
         deg_n[e.i] += 1;
         deg_n[e.j] += 1;
     }
     for i in 0..n {
-        // the sums above err by <= gamma(deg) of themselves
+        // the sums above err by <= gamma(deg + 2) of the sums of magnitudes (weights are
+        // positive, entries of A_e <= 3.3: the magnitudes sum to <= 3.3 d_i per entry)
         let g = gamma(deg_n[i] + 2);
         let d_i = deg_w[i] * (1.0 + g);
-        let lam = fro(&lambdas[i]) * (1.0 + 4.0 * u);
-        // ||E_ii|| <= d_i ||R_i^T R_i - I|| + ||Lambda_i|| ||R_i||^2, ||R_i||^2 <= 1 + t_i
-        let e_ii = d_i * t[i] + lam * (1.0 + t[i]);
-        delta[i] = (delta[i] * (1.0 + g) + e_ii) * (1.0 + 4.0 * u);
+        let ri = rotations[i].matrix();
+        let lam = 0.5 * (lambdas[i] + lambdas[i].transpose());
+        // G_i = d_i R_i^T R_i - R_i^T sym(Lambda_i) R_i - sum_e w_e A_e, evaluated with an
+        // entrywise error of at most gamma(12) times the magnitudes (3 x 3 products of entries
+        // <= 1.001 with Lambda's, and three subtractions), plus the sums' errors above
+        let gm = (ri.transpose() * ri) * deg_w[i] - ri.transpose() * lam * ri - sym_sum[i];
+        let magnitude = 1.01 * deg_w[i] + 9.1 * lambdas[i].amax() + 3.3 * d_i;
+        let entry_err = gamma(12) * magnitude * 3.0 + g * 3.3 * d_i * 2.0;
+        let g_i = fro(&gm) * (1.0 + 4.0 * u) + 3.0 * entry_err + sym_err[i] * (1.0 + g);
+        delta[i] = (delta[i] * (1.0 + g) + g_i) * (1.0 + 4.0 * u);
     }
     let d_max = deg_w.iter().copied().fold(0.0, f64::max);
     // a positive floor keeps diag(delta) definite (raising delta only weakens the argument)
@@ -230,7 +314,7 @@ pub fn scalar_comparison(
     for d in delta.iter_mut() {
         *d = d.max(floor);
     }
-    if !delta.iter().all(|d| d.is_finite()) {
+    if !delta.iter().chain(&reduced).all(|d| d.is_finite()) {
         return Ok(Err(ScalarFailure::Numerical));
     }
     let max_delta = delta.iter().copied().fold(0.0, f64::max);
@@ -281,12 +365,19 @@ pub fn scalar_comparison(
         abs_sum += fro(&r);
     }
     let rho1 = rho1_sq.sqrt() * (1.0 + gamma(n + 4));
-    let rho0 = (fro(&sum_r) + err_sum + gamma(n + 4) * abs_sum) * (1.0 + 8.0 * u);
+    let nf = n as f64;
+    let rho0_plain = (fro(&sum_r) + err_sum + gamma(n + 4) * abs_sum) * (1.0 + 8.0 * u);
+    // the plain bound's rounding grows like n u d: above a tiny fraction of the target, evaluate
+    // v0^T M v0 in double-double instead (its true size is the rounding of Lambda, ~sqrt(n) u d)
+    let rho0 = if rho0_plain * 1e3 > target.max(0.0) * nf {
+        rho0_plain.min(gauge_block_bound(problem, rotations, lambdas))
+    } else {
+        rho0_plain
+    };
 
     // -- step 4: the split weights w = delta + zeta. A uniform zeta > 0 buys the positive term
     // zeta |x1|^2, which absorbs the cross terms: x^T M x >= -(rho0 + rho1^2 / zeta) kappa^2 |x|^2.
     // zeta is chosen so that this is at most target / 4 (with kappa ~ its zeta = 0 value).
-    let nf = n as f64;
     let kappa_of = |zeta: f64| {
         let sum: f64 = delta.iter().map(|d| d + zeta).sum::<f64>() * (1.0 - gamma(n + 2));
         let norm = delta
@@ -312,7 +403,7 @@ pub fn scalar_comparison(
     let mut attempt = 0;
     let backward = loop {
         attempt += 1;
-        match factor_inertia(analysis, &deg_w, &weights, headroom, &deg_n) {
+        match factor_inertia(analysis, problem, &reduced, &weights, headroom, &deg_n) {
             Ok((_, bound)) => {
                 if bound <= headroom {
                     break bound;
@@ -343,6 +434,7 @@ pub fn scalar_comparison(
     Ok(Ok(ScalarComparison {
         verified_min_eigenvalue: mu.min(0.0),
         max_delta,
+        second_order_edges,
         zeta,
         headroom,
         backward_error: backward,
@@ -352,22 +444,111 @@ pub fn scalar_comparison(
     }))
 }
 
-/// `LDL^T` of `A = L - diag(delta) - h I` without pivoting (AMD order). Returns
-/// (negative pivots, rigorous bound on `||A_exact - P^T L D L^T P||_2`) when exactly one pivot
-/// is negative and none is zero; a failure otherwise.
+/// A rigorous upper bound on `||v0^T M v0||_F = ||sum_i r'_i||_F` (step 3), evaluated in
+/// double-double from the data: `v0^T M v0 = sum_i G_i` with
+/// `G_i = sum_{e at i} w_e (R_i^T R_i - (P_e + P_e^T) / 2) - R_i^T sym(Lambda_i) R_i`, each a
+/// symmetric 3 x 3 matrix whose entries are sums of triple and quadruple products of stored
+/// numbers ([`Accumulator`]). Summed per node first: each `G_i` cancels to the rounding of
+/// `Lambda_i`, so the compensated sum's error bound (quadratic in the number of terms) stays
+/// at the level of that rounding instead of growing with the number of edges.
+fn gauge_block_bound(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+) -> f64 {
+    // the six entries p <= q
+    const ENTRIES: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+    let adjacency = problem.adjacency();
+    let mut total = [Accumulator::default(); 6];
+    let mut node_bounds = 0.0f64;
+    for (i, (r, lam)) in rotations.iter().zip(lambdas).enumerate() {
+        let r = r.matrix();
+        let mut acc = [Accumulator::default(); 6];
+        for &(_, k) in adjacency.neighbours(i) {
+            let e = &problem.edges()[k];
+            let (ra, rb, rab) = (
+                rotations[e.i].matrix(),
+                rotations[e.j].matrix(),
+                e.rotation.matrix(),
+            );
+            // P_e = R_a^T R_ab^T R_b; halving the weight is exact
+            let half = -0.5 * e.weight;
+            for (x, &(p, q)) in acc.iter_mut().zip(&ENTRIES) {
+                for k in 0..3 {
+                    x.add_triple(e.weight, r[(k, p)], r[(k, q)]);
+                    for l in 0..3 {
+                        x.add_quad(half, ra[(k, p)], rab[(l, k)], rb[(l, q)]);
+                        x.add_quad(half, ra[(k, q)], rab[(l, k)], rb[(l, p)]);
+                    }
+                }
+            }
+        }
+        for (x, &(p, q)) in acc.iter_mut().zip(&ENTRIES) {
+            for k in 0..3 {
+                for l in 0..3 {
+                    // sym(Lambda)_kl = Lambda_kl / 2 + Lambda_lk / 2 (halving is exact)
+                    x.add_triple(-0.5 * lam[(k, l)], r[(k, p)], r[(l, q)]);
+                    x.add_triple(-0.5 * lam[(l, k)], r[(k, p)], r[(l, q)]);
+                }
+            }
+        }
+        for (t, x) in total.iter_mut().zip(&acc) {
+            let (hi, lo) = x.parts();
+            t.add_product(hi, 1.0);
+            t.add_product(lo, 1.0);
+            node_bounds += x.parts_bound();
+        }
+    }
+    let sq: f64 = total
+        .iter()
+        .zip(&ENTRIES)
+        .map(|(x, &(p, q))| {
+            let v = x.value().abs() + x.bound();
+            if p == q { v * v } else { 2.0 * v * v }
+        })
+        .sum();
+    // every entry's error: the total's own bound plus the nodes' bounds (all of them charged
+    // to every entry), with 1 + gamma(6n) for summing the nodes' bounds in floating point
+    let node_bounds = node_bounds * (1.0 + gamma(6 * rotations.len() + 2));
+    let bound = (sq.sqrt() + 3.0 * node_bounds) * (1.0 + 8.0 * UNIT_ROUNDOFF);
+    if bound.is_finite() {
+        bound
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// `LDL^T` of `A = L' - diag(delta) - h I` without pivoting (AMD order), `L'` the Laplacian of
+/// the edge weights `reduced` (any sign). Returns (negative pivots, rigorous bound on
+/// `||A_exact - P^T L D L^T P||_2`) when exactly one pivot is negative and none is zero; a
+/// failure otherwise.
 fn factor_inertia(
     analysis: &ScalarAnalysis,
-    deg_w: &[f64],
+    problem: &MultipleProblem,
+    reduced: &[f64],
     delta: &[f64],
     h: f64,
     deg_n: &[usize],
 ) -> std::result::Result<(usize, f64), ScalarFailure> {
-    let n = deg_w.len();
+    let n = delta.len();
     let mut a = analysis.pattern.clone();
+    // row sums of the magnitudes of the terms that form each entry (the forming error)
+    let mut magnitude = vec![0.0f64; n];
     {
         let val = a.val_mut();
+        val.iter_mut().for_each(|v| *v = 0.0);
+        for ((e, &(p_ij, p_ji)), &w) in problem.edges().iter().zip(&analysis.edge_pos).zip(reduced)
+        {
+            val[p_ij] -= w;
+            val[p_ji] -= w;
+            val[analysis.diag_pos[e.i]] += w;
+            val[analysis.diag_pos[e.j]] += w;
+            magnitude[e.i] += 2.0 * w.abs();
+            magnitude[e.j] += 2.0 * w.abs();
+        }
         for i in 0..n {
-            val[analysis.diag_pos[i]] = deg_w[i] - delta[i] - h;
+            val[analysis.diag_pos[i]] -= delta[i] + h;
+            magnitude[i] += delta[i] + h;
         }
     }
     let inertia = ldlt_inertia(&analysis.symbolic, a.as_ref()).map_err(|f| match f {
@@ -379,9 +560,10 @@ fn factor_inertia(
             negative_pivots: negative,
         });
     }
-    // every entry of A = L - diag(delta) - hI is a sum of at most deg + 3 rounded terms
+    // every entry of A is a sum of at most deg + 3 rounded terms; a row's entries err by at
+    // most gamma(terms + 2) times the magnitudes of their terms
     let terms = deg_n.iter().copied().max().unwrap_or(0) + 3;
-    let forming = gamma(terms + 2) * inf_norm(a.as_ref());
+    let forming = gamma(terms + 2) * magnitude.iter().copied().fold(0.0, f64::max);
     // doubled to cover the rounding in evaluating the bounds themselves
     let bound = inertia.backward_error + 2.0 * forming;
     if !bound.is_finite() {
@@ -458,8 +640,24 @@ mod tests {
                     crate::so3::exp(&nalgebra::Vector3::new(1e-4 * (k % 3) as f64, 0.0, 1e-4)) * r
                 })
                 .collect();
-            for rs in [&sol.rotations, &gt, &perturbed] {
-                let l = multipliers(&p, rs).unwrap();
+            // ... and the local solution with multipliers that are not its own (Lambda + 1e-2 I:
+            // S drops by 1e-2, so it is indefinite; only the G_i term of step 2 sees it)
+            let shifted: Vec<Matrix3<f64>> = multipliers(&p, &sol.rotations)
+                .unwrap()
+                .iter()
+                .map(|l| l + Matrix3::identity() * 1e-2)
+                .collect();
+            for (rs, own) in [
+                (&sol.rotations, true),
+                (&gt, true),
+                (&perturbed, true),
+                (&sol.rotations, false),
+            ] {
+                let l = if own {
+                    multipliers(&p, rs).unwrap()
+                } else {
+                    shifted.clone()
+                };
                 let exact = dense_lambda_min(&p, &l);
                 let scale: f64 = l.iter().map(|m| m.norm()).sum::<f64>() + 20.0 * n as f64;
                 for target in (0..12).map(|k| 10f64.powi(-k)) {
@@ -490,6 +688,73 @@ mod tests {
             tightest > 0.0,
             "some proofs must be at indefinite S (cross terms exercised)"
         );
+    }
+
+    /// The double-double evaluation of `v0^T M v0` against an exact value: signed permutation
+    /// rotations with consistent measurements make every `P_e = I` exactly, and
+    /// `Lambda_i = c_i I` with `c = (1e16, 1, -1e16, 0.5)` gives `v0^T M v0 = -(sum c) I = -1.5 I`,
+    /// which plain summation gets wrong (it returns `-0.5 I`).
+    #[test]
+    fn gauge_block_bound_is_exact_under_cancellation() {
+        // exact entries (a validating constructor may re-orthonormalise in floating point)
+        let perm =
+            |m: [[f64; 3]; 3]| Rotation::from_matrix_unchecked(Matrix3::from_fn(|a, b| m[a][b]));
+        let rs = vec![
+            perm([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
+            perm([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]),
+            perm([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+            perm([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]]),
+        ];
+        let edges = [(0, 1), (1, 2), (2, 3), (3, 0), (0, 2)]
+            .iter()
+            .map(|&(i, j)| crate::multiple::Edge {
+                i,
+                j,
+                rotation: rs[j] * rs[i].inverse(),
+                weight: 0.75,
+            })
+            .collect();
+        let p = MultipleProblem::new(4, edges).unwrap();
+        let c = [1e16, 1.0, -1e16, 0.5];
+        let lambdas: Vec<Matrix3<f64>> = c.iter().map(|&x| Matrix3::identity() * x).collect();
+        assert_eq!(c.iter().sum::<f64>(), 0.5, "plain summation loses the 1");
+        let exact = 1.5 * 3f64.sqrt();
+        let b = gauge_block_bound(&p, &rs, &lambdas);
+        // the error bound charges gamma^2 sum |terms| ~ 1e-10 for terms of size 1e16
+        assert!(b >= exact && b <= exact * (1.0 + 1e-9), "{b} vs {exact}");
+    }
+
+    /// The second-order comparison is exact on a cycle with equal residuals: the winding-0
+    /// critical point (all identity) of an 8-cycle with loop error `phi` about one axis has
+    /// `S >= 0` iff `phi <= pi` (the dense eigenvalues check it here). At `0.5 pi` and `0.8 pi`
+    /// it is proven; a first-order comparison (`delta ~ 2 ||P_e - I||` per node, 1.8 at
+    /// `0.8 pi`, against `lambda_2(L) = 0.59`) cannot. Past `pi`, `S` is indefinite and nothing
+    /// is proven.
+    #[test]
+    fn second_order_comparison_is_tight_on_a_cycle() {
+        for (fraction, provable) in [(0.5, true), (0.8, true), (1.05, false), (1.2, false)] {
+            let p = crate::multiple::synthetic::z_cycle(8, fraction * std::f64::consts::PI);
+            let rs = vec![Rotation::identity(); 8];
+            let l = multipliers(&p, &rs).unwrap();
+            let exact = dense_lambda_min(&p, &l);
+            assert_eq!(
+                exact > -1e-12,
+                provable,
+                "independent check at {fraction} pi: {exact}"
+            );
+            let an = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
+            match scalar_comparison(&p, &an, &rs, &l, 1e-9).unwrap() {
+                Ok(c) => {
+                    assert!(
+                        provable,
+                        "{fraction} pi: proven {c:?} at indefinite S ({exact})"
+                    );
+                    assert!(c.verified_min_eigenvalue <= exact + 1e-12);
+                    assert!(c.verified_min_eigenvalue >= -1e-9, "{c:?}");
+                }
+                Err(f) => assert!(!provable, "{fraction} pi not proven: {f:?}"),
+            }
+        }
     }
 
     /// A planted point that is NOT a global minimum: a cycle with a large loop error at its
