@@ -757,8 +757,52 @@ fn scalar_comparison_respects_the_budget_with_the_exact_factor() {
     let exact = Budget::factorisation_bytes(needed) as u64;
     let fits = dual_certificate(&p, &sol.rotations, &settings(exact)).unwrap();
     assert_eq!(fits.bound.verification, Verification::ScalarComparison);
+    assert_eq!(fits.bound.factor_nonzeros, analysis.factor_len());
+    assert_eq!(fits.bound.scalar_comparison.unwrap().dropped_edges, 0);
+    // one byte short: the whole graph's factorisation is not run (at most a subgraph's, with a
+    // smaller factor)
     let short = dual_certificate(&p, &sol.rotations, &settings(exact - 1)).unwrap();
-    assert_ne!(short.bound.verification, Verification::ScalarComparison);
+    if short.bound.verification == Verification::ScalarComparison {
+        assert!(short.bound.factor_nonzeros < analysis.factor_len());
+        assert!(short.bound.scalar_comparison.unwrap().dropped_edges > 0);
+    }
+}
+
+/// When the whole graph's scalar factor does not fit the budget, the comparison runs on a
+/// subgraph (each node keeping its edges of smallest residual; the dropped edges still charged,
+/// [D13]): with a budget one byte short of the whole factor (and far below the 3n factor), the
+/// 2000-node random graph is still certified, by the scalar comparison with dropped edges, and
+/// its bound agrees with the unbudgeted 3n certificate's.
+#[test]
+fn sparsified_scalar_comparison_certifies_under_a_small_budget() {
+    use rotavg::certify::Budget;
+    use rotavg::certify::multiple::scalar::ScalarAnalysis;
+    let (p, sol) = random_2000();
+    let whole = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
+    let needed = whole.factor_len() + whole.scratch_bytes().div_ceil(8);
+    let small = CertifySettings {
+        dual: DualSettings {
+            scalar_comparison_above: 0,
+            ..Default::default()
+        },
+        budget: Budget {
+            max_memory_bytes: Budget::factorisation_bytes(needed) as u64 - 1,
+            max_seconds: None,
+        },
+        ..Default::default()
+    };
+    let sparse = dual_certificate(&p, &sol.rotations, &small).unwrap();
+    let full = dual_certificate(&p, &sol.rotations, &CertifySettings::default()).unwrap();
+    println!("sparsified: {sparse}\nfull: {full}");
+    assert_eq!(sparse.bound.verification, Verification::ScalarComparison);
+    assert!(sparse.bound.factor_nonzeros < whole.factor_len());
+    assert!(sparse.certificate.is_certified() && full.certificate.is_certified());
+    let cost = sparse.certificate.upper_bound;
+    assert!(sparse.certificate.lower_bound.unwrap() <= cost);
+    assert!(
+        (sparse.certificate.lower_bound.unwrap() - full.certificate.lower_bound.unwrap()).abs()
+            <= 1e-6 * cost
+    );
 }
 
 /// When no proof fits the budget, the labelled estimate on the complement of the gauge

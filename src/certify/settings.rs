@@ -94,16 +94,28 @@ pub const BYTES_PER_FACTOR_VALUE: u64 = 8;
 /// residual-based margin `[D6]` (2) (the factor's columns and rows as `(index, value)` pairs).
 pub const RESIDUAL_MARGIN_BYTES_PER_VALUE: u64 = 32;
 
-/// Floating-point operations per second assumed when predicting a factorisation's time (a
-/// conservative rate for faer's supernodal Cholesky on one core of the reference machine).
-/// Measured against it: the 10^5-node random graph's scalar `LDL^T` (1.21e9 values, n = 10^5)
-/// is predicted at 7300 s and took about 340 s on both cores (dense fronts run at BLAS-3
-/// speed), so a refusal by time can be 20x cautious; the memory budget is the exact one.
+/// Floating-point operations per second assumed when predicting the time of sparse
+/// matrix-vector products (the randomized test [D16]; memory-bound, one core).
 pub const PREDICTED_FLOP_RATE: f64 = 2e9;
 
+/// Multiply-subtracts per second assumed for a sparse factorisation's dense work, which is
+/// about `values^2 / dim` for a factor of `values` stored values of a `dim x dim` matrix
+/// (Cauchy-Schwarz over the column counts: a lower estimate). Calibrated on the reference
+/// 2-core machine (faer 0.24 supernodal, both cores), where the measured rate on that count
+/// was 4.3e10 to 7.8e10 for the scalar `LDL^T` of random graphs (10^4 to 10^5 nodes, factors of
+/// 1.3e7 to 1.2e9 values) and 2e9 to 2.4e9 for the 3n Cholesky of grids and chains, whose
+/// time is mostly per value ([`PREDICTED_SECONDS_PER_FACTOR_VALUE`]).
+pub const PREDICTED_FACTOR_RATE: f64 = 1e10;
+
+/// Seconds per stored factor value assumed on top of the dense work (symbolic bookkeeping,
+/// assembly, small fronts): the 3n Cholesky of a 10^6-node grid sweep (1.88e8 values) took
+/// 4.9 s, predicted 6.8 s; the scalar `LDL^T` of the 10^5-node random graph (1.21e9 values)
+/// took about 340 s, predicted 1500 s. Measured predictions run 0.9x to 8x the times.
+pub const PREDICTED_SECONDS_PER_FACTOR_VALUE: f64 = 3e-8;
+
 /// The memory and time a certification may use, checked *before* each expensive step from a
-/// predicted cost (the factor size from the symbolic analysis, and `len^2 / dim` flops for
-/// it), so that a run never swaps or hangs: a step that does not fit is not started, and the
+/// predicted cost (the factor size from the symbolic analysis, and its time from
+/// [`Budget::predicted_seconds`]), so that a run never swaps or hangs: a step that does not fit is not started, and the
 /// certificate says why (`inconclusive` when no proof fits).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -167,9 +179,12 @@ impl Budget {
                 / BYTES_PER_FACTOR_VALUE
         };
         let by_time = match self.max_seconds {
-            Some(limit) => (limit * dim.max(1) as f64 * PREDICTED_FLOP_RATE)
-                .sqrt()
-                .floor(),
+            // the positive root of values^2 a + values c = limit
+            Some(limit) => {
+                let a = 1.0 / (dim.max(1) as f64 * PREDICTED_FACTOR_RATE);
+                let c = PREDICTED_SECONDS_PER_FACTOR_VALUE;
+                (2.0 * limit / (c + (c * c + 4.0 * a * limit).sqrt())).floor()
+            }
             None => f64::INFINITY,
         };
         let mut v = (by_memory as f64).min(by_time).min(usize::MAX as f64) as usize;
@@ -201,9 +216,24 @@ impl Budget {
             + values.min(RESIDUAL_FACTOR_LIMIT) as f64 * RESIDUAL_MARGIN_BYTES_PER_VALUE as f64
     }
 
+    /// The predicted time of a factorisation with `values` stored factor values of a
+    /// `dim x dim` matrix: `values^2 / dim / PREDICTED_FACTOR_RATE + values *
+    /// PREDICTED_SECONDS_PER_FACTOR_VALUE` (calibration in [`PREDICTED_FACTOR_RATE`]).
+    ///
+    /// ```
+    /// use rotavg::certify::Budget;
+    /// // the 10^5-node random graph's scalar LDL^T: 1.21e9 values, about 340 s measured
+    /// let t = Budget::predicted_seconds(1_210_000_000, 100_000);
+    /// assert!(t > 340.0 && t < 2000.0, "{t}");
+    /// ```
+    pub fn predicted_seconds(values: usize, dim: usize) -> f64 {
+        let v = values as f64;
+        v * v / dim.max(1) as f64 / PREDICTED_FACTOR_RATE + v * PREDICTED_SECONDS_PER_FACTOR_VALUE
+    }
+
     /// `Err(reason)` when a factorisation with `values` stored factor values of a
     /// `dim x dim` matrix does not fit: memory [`Budget::factorisation_bytes`], time
-    /// `values^2 / dim / PREDICTED_FLOP_RATE` (a lower estimate of the flops).
+    /// [`Budget::predicted_seconds`].
     ///
     /// ```
     /// use rotavg::certify::Budget;
@@ -221,10 +251,10 @@ impl Budget {
                 human_bytes(self.max_memory_bytes as f64)
             ));
         }
-        let seconds = (values as f64).powi(2) / dim.max(1) as f64 / PREDICTED_FLOP_RATE;
+        let seconds = Self::predicted_seconds(values, dim);
         match self.max_seconds {
             Some(limit) if seconds > limit => Err(format!(
-                "the proof would need a factorisation of {values:.1e} values, predicted at {seconds:.0} s by the conservative time model (values^2 / dim flops at 2e9 flop/s; large dense fronts run up to 20x faster); time budget {limit} s"
+                "the proof would need a factorisation of {values:.1e} values, predicted at {seconds:.0} s by the time model (values^2 / dim multiply-subtracts at 1e10 per second plus 3e-8 s per value; 0.9x to 8x the measured times); time budget {limit} s"
             )),
             _ => Ok(()),
         }

@@ -9,7 +9,9 @@
 //!   not); [`certify_with_multipliers`]: an estimate against multipliers obtained elsewhere.
 
 use super::randomized::{RandomizedBound, randomized_bound};
-use super::scalar::{ScalarAnalysis, scalar_comparison};
+use super::scalar::{
+    SPARSIFIED_EDGES_PER_NODE, ScalarAnalysis, ScalarComparison, scalar_comparison,
+};
 use crate::certify::certificate::{BoundMethod, Certificate, RandomizedLowerBound};
 use crate::certify::settings::CertifySettings;
 use crate::error::{Error, Result};
@@ -88,6 +90,10 @@ pub struct VerifiedBound {
     pub factorizations: usize,
     /// Stored values of the Cholesky factor (fill indicator).
     pub factor_nonzeros: usize,
+    /// The scalar comparison's quantities, when `verification` is `ScalarComparison` `[D13]`
+    /// (among them how many edges its factorised subgraph dropped).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scalar_comparison: Option<ScalarComparison>,
     /// `true` when the factor exceeded `max_factor_nonzeros` and no factorisation was tried.
     pub factorization_skipped: bool,
     /// The grounded bound's quantities, when `verification` is `Grounded` `[D15]`.
@@ -604,6 +610,7 @@ fn verify(
         lanczos_iterations,
         factorizations,
         factor_nonzeros,
+        scalar_comparison: None,
         factorization_skipped: skipped,
         grounded: None,
         not_critical,
@@ -889,6 +896,7 @@ fn grounded_bound(
         lanczos_iterations,
         factorizations,
         factor_nonzeros,
+        scalar_comparison: None,
         factorization_skipped: false,
         grounded: Some(GroundedBound {
             ground: g,
@@ -1038,18 +1046,37 @@ fn try_scalar_comparison(
         return Ok(None);
     }
     let n = problem.num_rotations();
-    let Ok(analysis) = ScalarAnalysis::new(problem, settings.budget.max_factor_values(n))? else {
-        return Ok(None);
-    };
-    if analysis.factor_len().saturating_mul(9) <= settings.dual.scalar_comparison_above {
-        return Ok(None);
-    }
+    let max_values = settings.budget.max_factor_values(n);
     // the budget again with the exact factor and scratch: the ordering's prediction checked
-    // above can be 2x low (10^5-node random graph: 6e8 predicted, 1.21e9 values stored)
-    let scratch = analysis.scratch_bytes().div_ceil(8);
-    if factor_over_budget(settings, analysis.factor_len(), scratch, n).is_some() {
-        return Ok(None);
-    }
+    // before the symbolic analysis can be 2x low (10^5-node random graph: 6e8 predicted,
+    // 1.21e9 values stored)
+    let fits = |a: &ScalarAnalysis| {
+        let scratch = a.scratch_bytes().div_ceil(8);
+        factor_over_budget(settings, a.factor_len(), scratch, n).is_none()
+    };
+    let analysis = match ScalarAnalysis::new(problem, max_values)? {
+        Ok(a) if a.factor_len().saturating_mul(9) <= settings.dual.scalar_comparison_above => {
+            return Ok(None);
+        }
+        Ok(a) if fits(&a) => a,
+        // the whole graph's factor does not fit: a subgraph's may (expanders), with the
+        // dropped edges' residuals still charged
+        _ => {
+            let mut found = None;
+            for k in SPARSIFIED_EDGES_PER_NODE {
+                if let Ok(a) = ScalarAnalysis::sparsified(problem, rotations, k, max_values)?
+                    && fits(&a)
+                {
+                    found = Some(a);
+                    break;
+                }
+            }
+            match found {
+                Some(a) => a,
+                None => return Ok(None),
+            }
+        }
+    };
     let target = 0.5 * budget / s.nrows().max(1) as f64;
     let proof = match scalar_comparison(problem, &analysis, rotations, lambdas, target)? {
         Ok(p) if p.verified_min_eigenvalue >= -target => p,
@@ -1102,6 +1129,7 @@ fn try_scalar_comparison(
         lanczos_iterations,
         factorizations: 1,
         factor_nonzeros: proof.factor_nonzeros,
+        scalar_comparison: Some(proof.clone()),
         factorization_skipped: false,
         grounded: None,
         not_critical: false,
@@ -1185,8 +1213,17 @@ pub fn dual_certificate(
         ),
         (Verification::ScalarComparison, _) => format!(
             "lambda_min(S) >= {:.3e} verified by the scalar comparison [D13] (inertia of one \
-             LDL^T factorisation of an n x n matrix, {} values; backward error {:.1e})",
-            bound.verified_min_eigenvalue, bound.factor_nonzeros, bound.fp_margin
+             LDL^T factorisation of an n x n matrix, {} values{}; backward error {:.1e})",
+            bound.verified_min_eigenvalue,
+            bound.factor_nonzeros,
+            match &bound.scalar_comparison {
+                Some(c) if c.dropped_edges > 0 => format!(
+                    ", of the graph without {} edges whose residuals stay charged",
+                    c.dropped_edges
+                ),
+                _ => String::new(),
+            },
+            bound.fp_margin
         ),
         (Verification::Grounded, _) => match &bound.grounded {
             Some(g) => format!(
