@@ -95,7 +95,7 @@ pub const BYTES_PER_FACTOR_VALUE: u64 = 8;
 pub const RESIDUAL_MARGIN_BYTES_PER_VALUE: u64 = 32;
 
 /// Floating-point operations per second assumed when predicting the time of sparse
-/// matrix-vector products (the randomized test [D16]; memory-bound, one core).
+/// matrix-vector products (the randomized test `[D16]`; memory-bound, one core).
 pub const PREDICTED_FLOP_RATE: f64 = 2e9;
 
 /// Multiply-subtracts per second assumed for a sparse factorisation's dense work, which is

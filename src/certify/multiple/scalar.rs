@@ -138,7 +138,7 @@ impl ScalarAnalysis {
     }
 
     /// The analysis of a **subgraph** for the sparsified comparison (step 2 with dropped edges,
-    /// `paper-notes/certificates.md` [D13]): every node keeps its `edges_per_node` incident
+    /// `paper-notes/certificates.md` `[D13]`): every node keeps its `edges_per_node` incident
     /// edges of smallest residual `||R_a^T R_ab^T R_b - I||_F` at `rotations` (a fractional
     /// part `f`: a fixed fraction `f` of the nodes keeps one more); an edge is kept when either
     /// endpoint keeps it. Which edges are kept only decides whether the proof succeeds and how
@@ -691,6 +691,19 @@ mod tests {
         SymmetricEigen::new(m).eigenvalues.min()
     }
 
+    /// The all-identity point of `p` with its multipliers and the dense `lambda_min(S)`, which
+    /// must be clearly negative (the independent check of the planted indefinite cases).
+    fn indefinite_at_identity(p: &MultipleProblem) -> (Vec<Rotation>, Vec<Matrix3<f64>>, f64) {
+        let rs = vec![Rotation::identity(); p.num_rotations()];
+        let l = multipliers(p, &rs).unwrap();
+        let exact = dense_lambda_min(p, &l);
+        assert!(
+            exact < -1e-3,
+            "independent check: S is indefinite ({exact})"
+        );
+        (rs, l, exact)
+    }
+
     /// Soundness against a dense eigensolver (independent of the argument): whenever the scalar
     /// comparison proves `mu`, the dense `lambda_min(S)` is >= mu (up to the dense solver's own
     /// error 1e-12 |S|). Over noise levels from 0 to 0.3 rad, local minima and non-critical points.
@@ -903,13 +916,7 @@ mod tests {
             }
         }
         let p = MultipleProblem::new(8, edges).unwrap();
-        let rs = vec![Rotation::identity(); 8];
-        let l = multipliers(&p, &rs).unwrap();
-        let exact = dense_lambda_min(&p, &l);
-        assert!(
-            exact < -1e-3,
-            "independent check: S is indefinite ({exact})"
-        );
+        let (rs, l, exact) = indefinite_at_identity(&p);
         let an = ScalarAnalysis::sparsified(&p, &rs, 4.0, usize::MAX)
             .unwrap()
             .unwrap();
@@ -998,13 +1005,7 @@ mod tests {
         // loop error 1.2 pi on an 8-cycle: all-identity (winding 0) is a critical point by
         // symmetry with cost above the winding-1 solution, so its S must be indefinite
         let p = crate::multiple::synthetic::z_cycle(8, 1.2 * std::f64::consts::PI);
-        let rs = vec![Rotation::identity(); 8];
-        let l = multipliers(&p, &rs).unwrap();
-        let exact = dense_lambda_min(&p, &l);
-        assert!(
-            exact < -1e-3,
-            "independent check: S is indefinite ({exact})"
-        );
+        let (rs, l, exact) = indefinite_at_identity(&p);
         let an = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
         if let Ok(c) = scalar_comparison(&p, &an, &rs, &l, 1e-9).unwrap() {
             assert!(c.verified_min_eigenvalue <= exact + 1e-12);
