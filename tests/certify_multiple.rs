@@ -805,6 +805,51 @@ fn sparsified_scalar_comparison_certifies_under_a_small_budget() {
     );
 }
 
+/// A scalar comparison that ran and failed is named beside the budget refusal: a noisy
+/// (0.3 rad) 2000-node random graph under a budget one byte short of its whole scalar factor
+/// (far below the 3n factor) ends `inconclusive`, and the reason says which subgraph's
+/// comparison was tried and why it did not prove anything.
+#[test]
+fn a_failed_subgraph_comparison_is_named_in_the_reason() {
+    use rotavg::certify::Budget;
+    use rotavg::certify::multiple::scalar::ScalarAnalysis;
+    let (p, _) = SyntheticGraph {
+        num_rotations: 2000,
+        num_edges: 6000,
+        noise_sigma: 0.3,
+        seed: 5,
+        ..Default::default()
+    }
+    .generate();
+    let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    let whole = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
+    let needed = whole.factor_len() + whole.scratch_bytes().div_ceil(8);
+    let settings = CertifySettings {
+        dual: DualSettings {
+            scalar_comparison_above: 0,
+            randomized: rotavg::certify::RandomizedSettings {
+                enabled: false,
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+        budget: Budget {
+            max_memory_bytes: Budget::factorisation_bytes(needed) as u64 - 1,
+            max_seconds: None,
+        },
+        ..Default::default()
+    };
+    let c = dual_certificate(&p, &sol.rotations, &settings).unwrap();
+    println!("{c}");
+    assert_eq!(c.certificate.verdict, Verdict::Inconclusive);
+    let reason = c.bound.budget_exceeded.clone().unwrap();
+    assert!(
+        reason.contains("the scalar comparison [D13] on a subgraph without")
+            && reason.contains("negative pivots"),
+        "{reason}"
+    );
+}
+
 /// When no proof fits the budget, the labelled estimate on the complement of the gauge
 /// directions agrees with a dense eigendecomposition of `S` (built here from a dense `Q`):
 /// at a critical point `S Y ~ 0`, so the eigenvalues of `S` are three near zero (the gauge)

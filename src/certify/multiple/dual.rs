@@ -10,7 +10,7 @@
 
 use super::randomized::{RandomizedBound, randomized_bound};
 use super::scalar::{
-    SPARSIFIED_EDGES_PER_NODE, ScalarAnalysis, ScalarComparison, scalar_comparison,
+    SPARSIFIED_EDGES_PER_NODE, ScalarAnalysis, ScalarComparison, ScalarFailure, scalar_comparison,
 };
 use crate::certify::certificate::{BoundMethod, Certificate, RandomizedLowerBound};
 use crate::certify::settings::CertifySettings;
@@ -384,10 +384,13 @@ fn verify(
         .allowed_gap(scale);
     let dual = &settings.dual;
     let delta0 = dual.shift_budget_fraction * budget / dim;
-    if let Some(rs) = rotations
-        && let Some(b) = try_scalar_comparison(problem, rs, lambdas, &s, norm, budget, settings)?
-    {
-        return Ok(b);
+    // a scalar comparison that ran and failed is named beside a budget refusal
+    let mut scalar_note = None;
+    if let Some(rs) = rotations {
+        match try_scalar_comparison(problem, rs, lambdas, &s, norm, budget, settings)? {
+            Ok(b) => return Ok(b),
+            Err(note) => scalar_note = note,
+        }
     }
     let terms = entry_terms(problem);
     let mut known_over_budget = None;
@@ -614,7 +617,10 @@ fn verify(
         factorization_skipped: skipped,
         grounded: None,
         not_critical,
-        budget_exceeded,
+        budget_exceeded: budget_exceeded.map(|reason| match scalar_note {
+            Some(note) => format!("{reason}; {note}"),
+            None => reason,
+        }),
         complement_estimate: complement,
         randomized,
     })
@@ -1041,9 +1047,9 @@ fn try_scalar_comparison(
     norm: f64,
     budget: f64,
     settings: &CertifySettings,
-) -> Result<Option<VerifiedBound>> {
+) -> Result<std::result::Result<VerifiedBound, Option<String>>> {
     if settings.dual.scalar_comparison_above == usize::MAX {
-        return Ok(None);
+        return Ok(Err(None));
     }
     let n = problem.num_rotations();
     let max_values = settings.budget.max_factor_values(n);
@@ -1056,7 +1062,7 @@ fn try_scalar_comparison(
     };
     let analysis = match ScalarAnalysis::new(problem, max_values)? {
         Ok(a) if a.factor_len().saturating_mul(9) <= settings.dual.scalar_comparison_above => {
-            return Ok(None);
+            return Ok(Err(None));
         }
         Ok(a) if fits(&a) => a,
         // the whole graph's factor does not fit: a subgraph's may (expanders), with the
@@ -1073,14 +1079,41 @@ fn try_scalar_comparison(
             }
             match found {
                 Some(a) => a,
-                None => return Ok(None),
+                None => return Ok(Err(None)),
             }
         }
     };
     let target = 0.5 * budget / s.nrows().max(1) as f64;
     let proof = match scalar_comparison(problem, &analysis, rotations, lambdas, target)? {
         Ok(p) if p.verified_min_eigenvalue >= -target => p,
-        _ => return Ok(None),
+        outcome => {
+            let what = match analysis.dropped_edges() {
+                0 => "the whole graph".to_string(),
+                d => format!("a subgraph without {d} of {} edges", problem.num_edges()),
+            };
+            let why = match outcome {
+                Ok(p) => format!(
+                    "its cross terms give lambda_min(S) >= {:.1e}, below the -{target:.1e} the \
+                     gap budget allows",
+                    p.verified_min_eigenvalue
+                ),
+                Err(ScalarFailure::Inertia { negative_pivots }) => {
+                    format!("{negative_pivots} negative pivots (its condition needs exactly 1)")
+                }
+                Err(ScalarFailure::Numerical) => "a zero or non-finite pivot".into(),
+                Err(ScalarFailure::BackwardError) => {
+                    "the factorisation's backward error exceeded its headroom".into()
+                }
+                Err(ScalarFailure::NotOrthogonal) => {
+                    "the rotations are too far from orthogonal".into()
+                }
+            };
+            return Ok(Err(Some(format!(
+                "the scalar comparison [D13] on {what} ({:.1e} factor values) did not prove it: \
+                 {why}",
+                analysis.factor_len()
+            ))));
+        }
     };
     let n3 = s.nrows();
     let mut estimate = None;
@@ -1116,7 +1149,7 @@ fn try_scalar_comparison(
         }
     }
     let mu = proof.verified_min_eigenvalue;
-    Ok(Some(VerifiedBound {
+    Ok(Ok(VerifiedBound {
         lower_bound: bound_from_mu(problem, lambdas, mu),
         trace: lambdas.iter().map(|l| l.trace()).sum(),
         verified_min_eigenvalue: mu,
