@@ -768,22 +768,21 @@ fn scalar_comparison_respects_the_budget_with_the_exact_factor() {
     }
 }
 
-/// When the whole graph's scalar factor does not fit the budget, the comparison runs on a
-/// subgraph (each node keeping its edges of smallest residual; the dropped edges still charged,
-/// [D13]): with a budget one byte short of the whole factor (and far below the 3n factor), the
-/// 2000-node random graph is still certified, by the scalar comparison with dropped edges, and
-/// its bound agrees with the unbudgeted 3n certificate's.
-#[test]
-fn sparsified_scalar_comparison_certifies_under_a_small_budget() {
+/// Settings whose memory budget is one byte short of `p`'s whole scalar factor plus scratch
+/// (and far below its 3n factor), with the scalar comparison tried first; and that factor's
+/// size.
+fn short_of_the_whole_scalar_factor(
+    p: &MultipleProblem,
+    dual: DualSettings,
+) -> (usize, CertifySettings) {
     use rotavg::certify::Budget;
     use rotavg::certify::multiple::scalar::ScalarAnalysis;
-    let (p, sol) = random_2000();
-    let whole = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
+    let whole = ScalarAnalysis::new(p, usize::MAX).unwrap().unwrap();
     let needed = whole.factor_len() + whole.scratch_bytes().div_ceil(8);
-    let small = CertifySettings {
+    let settings = CertifySettings {
         dual: DualSettings {
             scalar_comparison_above: 0,
-            ..Default::default()
+            ..dual
         },
         budget: Budget {
             max_memory_bytes: Budget::factorisation_bytes(needed) as u64 - 1,
@@ -791,11 +790,23 @@ fn sparsified_scalar_comparison_certifies_under_a_small_budget() {
         },
         ..Default::default()
     };
+    (whole.factor_len(), settings)
+}
+
+/// When the whole graph's scalar factor does not fit the budget, the comparison runs on a
+/// subgraph (each node keeping its edges of smallest residual; the dropped edges still charged,
+/// [D13]): with a budget one byte short of the whole factor (and far below the 3n factor), the
+/// 2000-node random graph is still certified, by the scalar comparison with dropped edges, and
+/// its bound agrees with the unbudgeted 3n certificate's.
+#[test]
+fn sparsified_scalar_comparison_certifies_under_a_small_budget() {
+    let (p, sol) = random_2000();
+    let (whole, small) = short_of_the_whole_scalar_factor(&p, DualSettings::default());
     let sparse = dual_certificate(&p, &sol.rotations, &small).unwrap();
     let full = dual_certificate(&p, &sol.rotations, &CertifySettings::default()).unwrap();
     println!("sparsified: {sparse}\nfull: {full}");
     assert_eq!(sparse.bound.verification, Verification::ScalarComparison);
-    assert!(sparse.bound.factor_nonzeros < whole.factor_len());
+    assert!(sparse.bound.factor_nonzeros < whole);
     assert!(sparse.certificate.is_certified() && full.certificate.is_certified());
     let cost = sparse.certificate.upper_bound;
     assert!(sparse.certificate.lower_bound.unwrap() <= cost);
@@ -811,8 +822,6 @@ fn sparsified_scalar_comparison_certifies_under_a_small_budget() {
 /// comparison was tried and why it did not prove anything.
 #[test]
 fn a_failed_subgraph_comparison_is_named_in_the_reason() {
-    use rotavg::certify::Budget;
-    use rotavg::certify::multiple::scalar::ScalarAnalysis;
     let (p, _) = SyntheticGraph {
         num_rotations: 2000,
         num_edges: 6000,
@@ -822,23 +831,14 @@ fn a_failed_subgraph_comparison_is_named_in_the_reason() {
     }
     .generate();
     let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
-    let whole = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
-    let needed = whole.factor_len() + whole.scratch_bytes().div_ceil(8);
-    let settings = CertifySettings {
-        dual: DualSettings {
-            scalar_comparison_above: 0,
-            randomized: rotavg::certify::RandomizedSettings {
-                enabled: false,
-                ..Default::default()
-            },
+    let no_randomized = DualSettings {
+        randomized: rotavg::certify::RandomizedSettings {
+            enabled: false,
             ..Default::default()
-        },
-        budget: Budget {
-            max_memory_bytes: Budget::factorisation_bytes(needed) as u64 - 1,
-            max_seconds: None,
         },
         ..Default::default()
     };
+    let (_, settings) = short_of_the_whole_scalar_factor(&p, no_randomized);
     let c = dual_certificate(&p, &sol.rotations, &settings).unwrap();
     println!("{c}");
     assert_eq!(c.certificate.verdict, Verdict::Inconclusive);
