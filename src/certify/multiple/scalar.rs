@@ -251,6 +251,28 @@ impl ScalarAnalysis {
         }))
     }
 
+    /// `true` when this analysis was made for `problem`'s graph: same size, and every kept
+    /// edge's two entries sit in its own rows and columns of the pattern (O(m)).
+    fn describes(&self, problem: &MultipleProblem) -> bool {
+        let n = problem.num_rotations();
+        if self.pattern.nrows() != n || self.edge_pos.len() != problem.num_edges() {
+            return false;
+        }
+        let (cp, ri) = (
+            self.pattern.symbolic().col_ptr(),
+            self.pattern.symbolic().row_idx(),
+        );
+        let at =
+            |p: usize, row: usize, col: usize| (cp[col]..cp[col + 1]).contains(&p) && ri[p] == row;
+        problem
+            .edges()
+            .iter()
+            .zip(&self.edge_pos)
+            .all(|(e, &(p_ij, p_ji))| {
+                (p_ij, p_ji) == DROPPED || (at(p_ij, e.i, e.j) && at(p_ji, e.j, e.i))
+            })
+    }
+
     /// Edges left out of the pattern (0 for [`ScalarAnalysis::new`]).
     pub fn dropped_edges(&self) -> usize {
         self.dropped
@@ -290,10 +312,17 @@ pub fn scalar_comparison(
     target: f64,
 ) -> Result<std::result::Result<ScalarComparison, ScalarFailure>> {
     let n = problem.num_rotations();
-    if rotations.len() != n || lambdas.len() != n || analysis.pattern.nrows() != n {
+    if rotations.len() != n || lambdas.len() != n {
         return Err(Error::InvalidSettings {
             name: "rotations".into(),
             reason: "scalar comparison needs one rotation and one multiplier per node".into(),
+        });
+    }
+    // an analysis of another graph would place these weights at the wrong entries
+    if !analysis.describes(problem) {
+        return Err(Error::InvalidSettings {
+            name: "analysis".into(),
+            reason: "the scalar analysis was made for a different view graph".into(),
         });
     }
     let u = UNIT_ROUNDOFF;
@@ -929,6 +958,34 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// An analysis made for another graph is refused with a typed error, never used (its
+    /// entries would receive the wrong weights) and never a panic: same size with other edges,
+    /// and a different number of edges.
+    #[test]
+    fn an_analysis_of_another_graph_is_refused() {
+        let graph = |seed| {
+            SyntheticGraph {
+                num_rotations: 12,
+                num_edges: 30,
+                noise_sigma: 0.01,
+                seed,
+                ..Default::default()
+            }
+            .generate()
+        };
+        let ((p, gt), (q, _)) = (graph(1), graph(2));
+        let l = multipliers(&p, &gt).unwrap();
+        let other = ScalarAnalysis::new(&q, usize::MAX).unwrap().unwrap();
+        let fewer = MultipleProblem::new(12, p.edges()[..25].to_vec()).unwrap();
+        let short = ScalarAnalysis::new(&fewer, usize::MAX).unwrap().unwrap();
+        for an in [&other, &short] {
+            let e = scalar_comparison(&p, an, &gt, &l, 1e-6).unwrap_err();
+            assert!(e.to_string().contains("different view graph"), "{e}");
+        }
+        let own = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
+        assert!(scalar_comparison(&p, &own, &gt, &l, 1e-6).is_ok());
     }
 
     /// The double-double evaluation of `v0^T M v0` against an exact value: signed permutation
