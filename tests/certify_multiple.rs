@@ -816,6 +816,49 @@ fn sparsified_scalar_comparison_certifies_under_a_small_budget() {
     );
 }
 
+/// On a dense view graph (1000 nodes, average degree 20, 0.1 rad) a subgraph that fits would
+/// drop more than half of the edges, so the comparison is split into parts that each prove a
+/// share ([D13], split): with a budget one byte short of the whole scalar factor, certified by
+/// several factorisations, each smaller than the whole, with a bound that agrees with the
+/// unbudgeted 3n certificate's.
+#[test]
+fn split_scalar_comparison_certifies_a_dense_graph_under_a_small_budget() {
+    let (p, _) = SyntheticGraph {
+        num_rotations: 1000,
+        num_edges: 10_000,
+        noise_sigma: 0.1,
+        seed: 8,
+        ..Default::default()
+    }
+    .generate();
+    let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    let (whole, small) = short_of_the_whole_scalar_factor(&p, DualSettings::default());
+    let split = dual_certificate(&p, &sol.rotations, &small).unwrap();
+    let full = dual_certificate(&p, &sol.rotations, &CertifySettings::default()).unwrap();
+    println!("split: {split}\nfull: {full}");
+    assert_eq!(split.bound.verification, Verification::ScalarComparison);
+    let comparison = split.bound.scalar_comparison.clone().unwrap();
+    assert!(
+        comparison.parts > 1 && comparison.dropped_edges == 0,
+        "{comparison:?}"
+    );
+    assert_eq!(split.bound.factorizations, comparison.parts);
+    assert!(split.bound.factor_nonzeros < whole);
+    assert!(split.certificate.is_certified() && full.certificate.is_certified());
+    let cost = split.certificate.upper_bound;
+    assert!(split.certificate.lower_bound.unwrap() <= cost);
+    assert!(
+        (split.certificate.lower_bound.unwrap() - full.certificate.lower_bound.unwrap()).abs()
+            <= 1e-6 * cost
+    );
+    assert!(
+        split
+            .certificate
+            .explanation
+            .contains("LDL^T factorisations of n x n matrices, one per part of a split")
+    );
+}
+
 /// A scalar comparison that ran and failed is named beside the budget refusal: a noisy
 /// (0.3 rad) 2000-node random graph under a budget one byte short of its whole scalar factor
 /// (far below the 3n factor) ends `inconclusive`, and the reason says which subgraph's

@@ -107,6 +107,20 @@ pub const PREDICTED_FLOP_RATE: f64 = 2e9;
 /// time is mostly per value ([`PREDICTED_SECONDS_PER_FACTOR_VALUE`]).
 pub const PREDICTED_FACTOR_RATE: f64 = 1e10;
 
+/// Multiply-adds per second assumed for a sparse `LDL^T` whose symbolic structure is known, so
+/// that its exact count is ([`crate::linalg::cholesky::factor_multiply_adds`]): the scalar
+/// comparison `[D13]`, whose candidates (whole graph, subgraphs, splits) are analysed before one
+/// is chosen ([`Budget::predicted_factor_seconds`]). Calibrated on the reference 2-core machine
+/// (faer 0.24 supernodal, both cores, 2026-11-26, `examples/pipeline_scale`, random graphs at
+/// 0.1 rad): measured 2.3e10 (1.3e7 values, 0.32 s), 3.4e10 (1.1e8 values, 5.7 s), 4.1e10
+/// (4.2e8 values, 35.3 s), 4.4e10 (5.9e8 values, 54.7 s). With
+/// [`PREDICTED_SECONDS_PER_COUNTED_VALUE`] the model is 1.2x to 1.6x those times.
+pub const PREDICTED_MULTIPLY_ADD_RATE: f64 = 3e10;
+
+/// Seconds per stored factor value besides the multiply-adds (assembly, memory traffic), in
+/// the model of [`PREDICTED_MULTIPLY_ADD_RATE`].
+pub const PREDICTED_SECONDS_PER_COUNTED_VALUE: f64 = 1e-8;
+
 /// Seconds per stored factor value assumed on top of the dense work (symbolic bookkeeping,
 /// assembly, small fronts): the 3n Cholesky of a 10^6-node grid sweep (1.88e8 values) took
 /// 4.9 s, predicted 6.8 s; the scalar `LDL^T` of the 10^5-node random graph (1.21e9 values)
@@ -243,6 +257,64 @@ impl Budget {
     /// assert!(why.contains("4.1e10"), "{why}");
     /// ```
     pub fn factorisation_fits(&self, values: usize, dim: usize) -> std::result::Result<(), String> {
+        self.fits_with(
+            values,
+            Self::predicted_seconds(values, dim),
+            "values^2 / dim multiply-subtracts at 1e10 per second plus 3e-8 s per value; 0.9x \
+             to 8x the measured times",
+        )
+    }
+
+    /// The predicted time of factorisations whose multiply-adds are counted from their symbolic
+    /// structure: `multiply_adds / PREDICTED_MULTIPLY_ADD_RATE + values *
+    /// PREDICTED_SECONDS_PER_COUNTED_VALUE` (calibration in [`PREDICTED_MULTIPLY_ADD_RATE`]).
+    ///
+    /// ```
+    /// use rotavg::certify::Budget;
+    /// // one part of the split comparison of a 10^5-node graph with 10^6 edges: 4.5e8 values,
+    /// // 1.6e12 multiply-adds, 37.5 s measured
+    /// let t = Budget::predicted_factor_seconds(1.596e12, 450_389_772);
+    /// assert!(t > 37.5 && t < 80.0, "{t}");
+    /// ```
+    pub fn predicted_factor_seconds(multiply_adds: f64, values: usize) -> f64 {
+        multiply_adds / PREDICTED_MULTIPLY_ADD_RATE
+            + values as f64 * PREDICTED_SECONDS_PER_COUNTED_VALUE
+    }
+
+    /// `Err(reason)` when factorisations, the largest with `values` stored values (held one at
+    /// a time), together of `multiply_adds` counted multiply-adds, do not fit: memory
+    /// [`Budget::factorisation_bytes`] of the largest, time
+    /// [`Budget::predicted_factor_seconds`] of all.
+    ///
+    /// ```
+    /// use rotavg::certify::Budget;
+    /// let b = Budget { max_memory_bytes: 4 << 30, max_seconds: Some(600.0) };
+    /// assert!(b.counted_factorisations_fit(450_000_000, 6.0 * 1.6e12, 6.0 * 4.5e8).is_ok());
+    /// let why = b.counted_factorisations_fit(450_000_000, 6.0 * 4e12, 6.0 * 4.5e8).unwrap_err();
+    /// assert!(why.contains("time budget 600 s"), "{why}");
+    /// ```
+    pub fn counted_factorisations_fit(
+        &self,
+        values: usize,
+        multiply_adds: f64,
+        total_values: f64,
+    ) -> std::result::Result<(), String> {
+        let seconds = multiply_adds / PREDICTED_MULTIPLY_ADD_RATE
+            + total_values * PREDICTED_SECONDS_PER_COUNTED_VALUE;
+        self.fits_with(
+            values,
+            seconds,
+            "counted multiply-adds at 3e10 per second plus 1e-8 s per value; 1.2x to 1.6x the \
+             measured times",
+        )
+    }
+
+    fn fits_with(
+        &self,
+        values: usize,
+        seconds: f64,
+        model: &str,
+    ) -> std::result::Result<(), String> {
         let bytes = Self::factorisation_bytes(values);
         if bytes > self.max_memory_bytes as f64 {
             return Err(format!(
@@ -251,10 +323,10 @@ impl Budget {
                 human_bytes(self.max_memory_bytes as f64)
             ));
         }
-        let seconds = Self::predicted_seconds(values, dim);
         match self.max_seconds {
-            Some(limit) if seconds > limit => Err(format!(
-                "the proof would need a factorisation of {values:.1e} values, predicted at {seconds:.0} s by the time model (values^2 / dim multiply-subtracts at 1e10 per second plus 3e-8 s per value; 0.9x to 8x the measured times); time budget {limit} s"
+            Some(limit) if seconds.is_nan() || seconds > limit => Err(format!(
+                "the proof would need a factorisation of {values:.1e} values, predicted at \
+                 {seconds:.0} s by the time model ({model}); time budget {limit} s"
             )),
             _ => Ok(()),
         }

@@ -333,6 +333,40 @@ pub fn symbolic_cholesky_within(
     .map_err(|e| failed("symbolic Cholesky analysis", e))
 }
 
+/// The multiply-adds of a numeric factorisation with this symbolic structure: per supernode of
+/// `k` columns and `r` rows below its diagonal block, `k^3 / 6` (its dense `LDL^T`),
+/// `r k^2 / 2` (the triangular solve below it) and `r^2 k / 2` (its update of the rest); per
+/// column of a simplicial factor with `c` entries below the diagonal, `c^2 / 2`. Exact for the
+/// structure faer factorises (relaxed supernodes' explicit zeros included); the time model
+/// ([`crate::certify::Budget::predicted_factor_seconds`]) divides it by a measured rate.
+pub fn factor_multiply_adds(symbolic: &SymbolicCholesky<usize>) -> f64 {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let (begin, end, rows) = (
+                s.supernode_begin(),
+                s.supernode_end(),
+                s.col_ptr_for_row_idx(),
+            );
+            (0..s.n_supernodes())
+                .map(|j| {
+                    let k = (end[j] - begin[j]) as f64;
+                    let r = (rows[j + 1] - rows[j]) as f64;
+                    k * k * k / 6.0 + r * k * k / 2.0 + r * r * k / 2.0
+                })
+                .sum()
+        }
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            let cp = s.col_ptr();
+            (0..s.ncols())
+                .map(|j| {
+                    let c = (cp[j + 1] - cp[j]).saturating_sub(1) as f64;
+                    c * c / 2.0
+                })
+                .sum()
+        }
+    }
+}
+
 impl ShiftedCholesky {
     /// Analyse `s` (square, symmetric, both triangles stored, every diagonal entry stored).
     /// `entry_terms` bounds the number of floating-point operations (terms summed) that formed any

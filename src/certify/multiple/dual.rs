@@ -10,7 +10,8 @@
 
 use super::randomized::{RandomizedBound, randomized_bound};
 use super::scalar::{
-    SPARSIFIED_EDGES_PER_NODE, ScalarAnalysis, ScalarComparison, ScalarFailure, scalar_comparison,
+    MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_PARTS, ScalarAnalysis, ScalarComparison,
+    ScalarFailure, scalar_comparison,
 };
 use crate::certify::certificate::{BoundMethod, Certificate, RandomizedLowerBound};
 use crate::certify::settings::CertifySettings;
@@ -1056,9 +1057,17 @@ fn try_scalar_comparison(
     // the budget again with the exact factor and scratch: the ordering's prediction checked
     // before the symbolic analysis can be 2x low (10^5-node random graph: 6e8 predicted,
     // 1.21e9 values stored)
+    // (the parts of a split are factorised one after the other: the largest must fit the
+    // memory budget, and their counted multiply-adds together the time budget)
     let fits = |a: &ScalarAnalysis| {
         let scratch = a.scratch_bytes().div_ceil(8);
-        factor_over_budget(settings, a.factor_len(), scratch, n).is_none()
+        let values = a.factor_len().saturating_add(scratch);
+        let total = a.factor_lens().map(|v| (v + scratch) as f64).sum();
+        settings
+            .budget
+            .counted_factorisations_fit(values, a.factor_multiply_adds(), total)
+            .is_ok()
+            && a.factor_len() <= settings.dual.max_factor_nonzeros
     };
     let analysis = match ScalarAnalysis::new(problem, max_values)? {
         Ok(a) if a.factor_len().saturating_mul(9) <= settings.dual.scalar_comparison_above => {
@@ -1066,30 +1075,24 @@ fn try_scalar_comparison(
         }
         Ok(a) if fits(&a) => a,
         // the whole graph's factor does not fit: a subgraph's may (expanders), with the
-        // dropped edges' residuals still charged
-        _ => {
-            let mut found = None;
-            for k in SPARSIFIED_EDGES_PER_NODE {
-                if let Ok(a) = ScalarAnalysis::sparsified(problem, rotations, k, max_values)?
-                    && fits(&a)
-                {
-                    found = Some(a);
-                    break;
-                }
-            }
-            match found {
-                Some(a) => a,
-                None => return Ok(Err(None)),
-            }
-        }
+        // dropped edges' residuals still charged, or a split into sparser parts that each prove
+        // a share of the condition
+        _ => match sparsified_or_split(problem, rotations, max_values, &fits)? {
+            Some(a) => a,
+            None => return Ok(Err(None)),
+        },
     };
     let target = 0.5 * budget / s.nrows().max(1) as f64;
     let proof = match scalar_comparison(problem, &analysis, rotations, lambdas, target)? {
         Ok(p) if p.verified_min_eigenvalue >= -target => p,
         outcome => {
-            let what = match analysis.dropped_edges() {
-                0 => "the whole graph".to_string(),
-                d => format!("a subgraph without {d} of {} edges", problem.num_edges()),
+            let what = match (analysis.dropped_edges(), analysis.parts()) {
+                (0, 1) => "the whole graph".to_string(),
+                (0, p) => format!(
+                    "the graph split into {p} parts ({} edges shared)",
+                    analysis.shared_edges()
+                ),
+                (d, _) => format!("a subgraph without {d} of {} edges", problem.num_edges()),
             };
             let why = match outcome {
                 Ok(p) => format!(
@@ -1160,7 +1163,7 @@ fn try_scalar_comparison(
         estimate_residual: estimate.as_ref().map(|r| r.residual),
         negative_eigenvector: None,
         lanczos_iterations,
-        factorizations: 1,
+        factorizations: proof.parts,
         factor_nonzeros: proof.factor_nonzeros,
         scalar_comparison: Some(proof.clone()),
         factorization_skipped: false,
@@ -1170,6 +1173,46 @@ fn try_scalar_comparison(
         complement_estimate: None,
         randomized: None,
     }))
+}
+
+/// The analysis of `[D13]` when the whole graph's factor does not fit (`fits`): the first
+/// subgraph of [`SPARSIFIED_EDGES_PER_NODE`] that fits, or the first split of
+/// [`SPLIT_PARTS`] whose every part fits and whose factorisations together fit the time budget
+/// when the subgraph would drop more than half of the edges (its charges then outweigh what it
+/// keeps: a split charges every part only its share).
+fn sparsified_or_split(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    max_values: usize,
+    fits: &dyn Fn(&ScalarAnalysis) -> bool,
+) -> Result<Option<ScalarAnalysis>> {
+    let mut subgraph = None;
+    for k in SPARSIFIED_EDGES_PER_NODE {
+        if let Ok(a) = ScalarAnalysis::sparsified(problem, rotations, k, max_values)?
+            && fits(&a)
+        {
+            subgraph = Some(a);
+            break;
+        }
+    }
+    if subgraph
+        .as_ref()
+        .is_some_and(|a| 2 * a.dropped_edges() <= problem.num_edges())
+    {
+        return Ok(subgraph);
+    }
+    let degree = 2.0 * problem.num_edges() as f64 / problem.num_rotations().max(1) as f64;
+    for parts in SPLIT_PARTS {
+        if (parts as f64) * MIN_SPLIT_DEGREE > degree {
+            break;
+        }
+        if let Ok(a) = ScalarAnalysis::split(problem, parts, max_values)?
+            && fits(&a)
+        {
+            return Ok(Some(a));
+        }
+    }
+    Ok(subgraph)
 }
 
 /// `[D4]` with rounding: `sum tr(Lambda_i) + 3n min(mu, 0)`, minus the rounding error of
@@ -1244,20 +1287,35 @@ pub fn dual_certificate(
              ({:.2e} factor values; floating-point margin {:.1e})",
             bound.verified_min_eigenvalue, s, bound.factor_nonzeros as f64, bound.fp_margin
         ),
-        (Verification::ScalarComparison, _) => format!(
-            "lambda_min(S) >= {:.3e} verified by the scalar comparison [D13] (inertia of one \
-             LDL^T factorisation of an n x n matrix, {} values{}; backward error {:.1e})",
-            bound.verified_min_eigenvalue,
-            bound.factor_nonzeros,
-            match &bound.scalar_comparison {
+        (Verification::ScalarComparison, _) => {
+            let comparison = bound.scalar_comparison.as_ref();
+            let factors = match comparison.map_or(1, |c| c.parts) {
+                1 => format!(
+                    "inertia of one LDL^T factorisation of an n x n matrix, {} values",
+                    bound.factor_nonzeros
+                ),
+                p => format!(
+                    "inertia of {p} LDL^T factorisations of n x n matrices, one per part of a \
+                     split, each proving its share; the largest {} values",
+                    bound.factor_nonzeros
+                ),
+            };
+            let edges = match comparison {
                 Some(c) if c.dropped_edges > 0 => format!(
                     ", of the graph without {} edges whose residuals stay charged",
                     c.dropped_edges
                 ),
+                Some(c) if c.shared_edges > 0 => {
+                    format!(", {} edges shared by several parts", c.shared_edges)
+                }
                 _ => String::new(),
-            },
-            bound.fp_margin
-        ),
+            };
+            format!(
+                "lambda_min(S) >= {:.3e} verified by the scalar comparison [D13] ({factors}{edges}; \
+                 backward error {:.1e})",
+                bound.verified_min_eigenvalue, bound.fp_margin
+            )
+        }
         (Verification::Grounded, _) => match &bound.grounded {
             Some(g) => format!(
                 "gauge null space deflated [D15]: S without node {}'s block >= {:.3e} I verified \

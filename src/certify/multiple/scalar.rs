@@ -35,6 +35,13 @@
 //!    `|dA| <= gamma_(k+4) |L||D||L^T|`, Higham 2002, Thm 9.3 / 10.x), and the margin
 //!    `h > ||dA|| + forming error` absorbs the perturbation (Weyl).
 //!
+//! 6. *(subgraphs and splits)* When the whole graph's factor does not fit the budget, step 5
+//!    may run on a subgraph (dropped edges keep their charges, [`ScalarAnalysis::sparsified`])
+//!    or on `P` sparser parts that each prove a share ([`ScalarAnalysis::split`]): with
+//!    `L' = sum_p L'_p` and charges `c_p` (`sum_p c_p >= w`), at most one negative eigenvalue of
+//!    every `L'_p - diag(c_p)` gives `y^T (L' - diag(w)) y >= -eps |y|^2` on `w^T y = 0`, with
+//!    the split's defect `eps = sum_p ||c_p - s_p w||^2 / 1^T c_p` paid from `zeta`.
+//!
 //! When the residuals are too large for step 4 (noisy data, low algebraic connectivity) the
 //! factorisation shows more than one negative pivot and [`scalar_comparison`] returns `None`:
 //! the caller falls back to the factorisation of `S` itself. The bound is never weaker than
@@ -71,6 +78,17 @@ pub struct ScalarComparison {
     pub second_order_edges: usize,
     /// Edges left out of the factorised Laplacian (a sparsified comparison; 0 otherwise).
     pub dropped_edges: usize,
+    /// Factorisations run: 1, or the parts of a split comparison, each proving its share.
+    #[serde(default = "one_part")]
+    pub parts: usize,
+    /// Edges held by every part of a split comparison, each with an even share of its kept
+    /// weight (0 otherwise).
+    #[serde(default)]
+    pub shared_edges: usize,
+    /// The split's defect `eps`: each part is charged where it is strong (uneven shares),
+    /// which costs `eps |y|^2`, paid from `zeta` (0 for one part).
+    #[serde(default)]
+    pub split_defect: f64,
     /// The uniform `zeta` added to the weights (its positive term absorbs the cross terms).
     pub zeta: f64,
     /// The margin `h` subtracted from the scalar matrix.
@@ -84,6 +102,10 @@ pub struct ScalarComparison {
     pub kappa: f64,
     /// Upper bound on `||r'||_F` (the stationarity part, step 3).
     pub residual_bound: f64,
+}
+
+fn one_part() -> usize {
+    1
 }
 
 /// Why a scalar comparison did not prove anything (the caller falls back to the `3n` factor).
@@ -104,27 +126,44 @@ pub enum ScalarFailure {
     NotOrthogonal,
 }
 
-/// The scalar weighted Laplacian pattern of `problem` (with every diagonal entry), and the
-/// symbolic `LDL^T` analysis of it (AMD ordering). Cheap; also tells the caller how large a
-/// `3n x 3n` factor would be (`about 9 x` this factor).
+/// The scalar weighted Laplacian pattern(s) of `problem` (with every diagonal entry), and the
+/// symbolic `LDL^T` analysis of each (AMD ordering). Cheap; also tells the caller how large a
+/// `3n x 3n` factor would be (`about 9 x` the whole graph's factor).
+///
+/// One part for the whole graph ([`ScalarAnalysis::new`]) or a subgraph
+/// ([`ScalarAnalysis::sparsified`]); several for a split comparison ([`ScalarAnalysis::split`]),
+/// in which every edge's kept weight is shared evenly by the parts that hold it and every part
+/// proves its share of the condition with its own factorisation.
 pub struct ScalarAnalysis {
-    symbolic: SymbolicCholesky<usize>,
-    pattern: SparseColMat<usize, f64>,
-    diag_pos: Vec<usize>,
-    /// Per edge, the positions of its `(i, j)` and `(j, i)` entries in `pattern`'s values;
-    /// [`DROPPED`] for an edge left out of the pattern ([`ScalarAnalysis::sparsified`]).
-    edge_pos: Vec<(usize, usize)>,
-    /// Edges left out of the pattern.
+    parts: Vec<ScalarPart>,
+    /// Per edge, how many parts hold it (0: dropped, left out of every pattern).
+    copies: Vec<u32>,
+    /// Edges left out of every pattern.
     dropped: usize,
 }
 
-/// `edge_pos` of an edge that is not in the pattern.
-const DROPPED: (usize, usize) = (usize::MAX, usize::MAX);
+/// One factorised scalar matrix of a [`ScalarAnalysis`].
+struct ScalarPart {
+    symbolic: SymbolicCholesky<usize>,
+    pattern: SparseColMat<usize, f64>,
+    diag_pos: Vec<usize>,
+    /// The part's edges `(k, position of (i, j), position of (j, i))` in `pattern`'s values,
+    /// by increasing edge index `k`.
+    edges: Vec<(usize, usize, usize)>,
+}
 
 /// The sparsified comparisons tried, in order, when the whole graph's scalar factor does not
 /// fit the budget: each node keeps this many of its edges (the fractional part: that fraction
 /// of the nodes keeps one more), those with the smallest residuals ([`ScalarAnalysis::sparsified`]).
 pub const SPARSIFIED_EDGES_PER_NODE: [f64; 5] = [4.0, 3.5, 3.0, 2.75, 2.5];
+
+/// The split comparisons tried, in order, when a subgraph would drop more than half of the
+/// edges ([`ScalarAnalysis::split`]): the number of parts, each factorised on its own.
+pub const SPLIT_PARTS: [usize; 6] = [2, 3, 4, 5, 6, 8];
+
+/// A split is tried only while each part keeps at least this average degree (sparser random
+/// graphs' spectral gaps, `d - 2 sqrt(d - 1)`, vanish at `d = 2`).
+pub const MIN_SPLIT_DEGREE: f64 = 3.0;
 
 impl ScalarAnalysis {
     /// Analyse the graph of `problem`, refused before the symbolic analysis when the factor is
@@ -134,7 +173,7 @@ impl ScalarAnalysis {
         problem: &MultipleProblem,
         max_values: usize,
     ) -> Result<std::result::Result<Self, usize>> {
-        Self::analyse(problem, None, max_values)
+        Self::analyse(problem, 1, |_| 1, max_values)
     }
 
     /// The analysis of a **subgraph** for the sparsified comparison (step 2 with dropped edges,
@@ -186,18 +225,177 @@ impl ScalarAnalysis {
                 keep[k] = true;
             }
         }
-        Self::analyse(problem, Some(&keep), max_values)
+        Self::analyse(problem, 1, |k| u64::from(keep[k]), max_values)
     }
 
-    fn analyse(
+    /// The analysis of a **split** comparison (`paper-notes/certificates.md` `[D13]`, split): the
+    /// edges are divided among `parts` spanning subgraphs, each node's weight as evenly as the
+    /// edges allow (greedy, in a fixed pseudo-random order), and every part proves its share
+    /// of the condition with its own factorisation (one after the other: one factor in memory
+    /// at a time). A node lends edges to the parts where it has fewer than
+    /// [`MIN_PART_DEGREE`] (all of its edges when it has fewer), and every edge of a node
+    /// outside a part's largest connected component is held by every part; an edge held by
+    /// several parts is **shared**, each with an even share of its kept weight. Each part is
+    /// charged where it is strong (its share of every node's kept weight), so its condition is
+    /// about as strong as the whole graph's, while its factor fills like a graph `parts` times
+    /// sparser. Which edges go where decides only whether the proof succeeds and how large its
+    /// factors are, never what it proves. Refused like [`ScalarAnalysis::new`] when any part's
+    /// factor is predicted above `max_values`; `parts` must be 1 to 64.
+    ///
+    /// ```
+    /// use rotavg::certify::multiple::scalar::ScalarAnalysis;
+    /// use rotavg::multiple::synthetic::SyntheticGraph;
+    /// let (p, _) = SyntheticGraph { num_rotations: 200, num_edges: 2000, ..Default::default() }
+    ///     .generate();
+    /// let split = ScalarAnalysis::split(&p, 4, usize::MAX)?.expect("within usize::MAX");
+    /// let whole = ScalarAnalysis::new(&p, usize::MAX)?.expect("within usize::MAX");
+    /// assert_eq!((split.parts(), split.dropped_edges()), (4, 0));
+    /// assert!(split.factor_len() < whole.factor_len());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn split(
         problem: &MultipleProblem,
-        keep: Option<&[bool]>,
+        parts: usize,
         max_values: usize,
     ) -> Result<std::result::Result<Self, usize>> {
-        let kept = |k: usize| keep.is_none_or(|m| m[k]);
+        if parts == 0 || parts > 64 {
+            return Err(Error::InvalidSettings {
+                name: "parts".into(),
+                reason: format!("a split comparison needs 1 to 64 parts, got {parts}"),
+            });
+        }
+        let membership = split_edges(problem, parts);
+        Self::analyse(problem, parts, |k| membership[k], max_values)
+    }
+
+    /// Analyse `num_parts` parts (at most 64); bit `p` of `member(k)` says whether part `p`
+    /// holds edge `k` (none: dropped).
+    fn analyse(
+        problem: &MultipleProblem,
+        num_parts: usize,
+        member: impl Fn(usize) -> u64,
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
+        let m = problem.num_edges();
+        let copies: Vec<u32> = (0..m).map(|k| member(k).count_ones()).collect();
+        let dropped = copies.iter().filter(|&&c| c == 0).count();
+        let mut parts = Vec::with_capacity(num_parts);
+        for part in 0..num_parts {
+            let holds = |k: usize| member(k) >> part & 1 == 1;
+            match ScalarPart::analyse(problem, holds, max_values)? {
+                Ok(p) => parts.push(p),
+                Err(predicted) => return Ok(Err(predicted)),
+            }
+        }
+        Ok(Ok(ScalarAnalysis {
+            parts,
+            copies,
+            dropped,
+        }))
+    }
+
+    /// `true` when this analysis was made for `problem`'s graph: same size, and in every part
+    /// every edge's two entries sit in its own rows and columns of the pattern, and each edge
+    /// is held by as many parts as `copies` says (O(m) per part).
+    fn describes(&self, problem: &MultipleProblem) -> bool {
+        let n = problem.num_rotations();
+        let edges = problem.edges();
+        if self.copies.len() != edges.len() {
+            return false;
+        }
+        let mut held = vec![0u32; edges.len()];
+        for part in &self.parts {
+            if part.pattern.nrows() != n {
+                return false;
+            }
+            let (cp, ri) = (
+                part.pattern.symbolic().col_ptr(),
+                part.pattern.symbolic().row_idx(),
+            );
+            let at = |p: usize, row: usize, col: usize| {
+                (cp[col]..cp[col + 1]).contains(&p) && ri[p] == row
+            };
+            for &(k, p_ij, p_ji) in &part.edges {
+                match edges.get(k) {
+                    Some(e) if at(p_ij, e.i, e.j) && at(p_ji, e.j, e.i) => held[k] += 1,
+                    _ => return false,
+                }
+            }
+        }
+        held == self.copies
+    }
+
+    /// Edges left out of every pattern (0 for [`ScalarAnalysis::new`] and
+    /// [`ScalarAnalysis::split`]).
+    pub fn dropped_edges(&self) -> usize {
+        self.dropped
+    }
+
+    /// Number of factorisations the comparison runs (1, or the parts of a split).
+    pub fn parts(&self) -> usize {
+        self.parts.len()
+    }
+
+    /// Edges held by more than one part of a split, each part with an even share of its kept
+    /// weight (0 otherwise).
+    pub fn shared_edges(&self) -> usize {
+        self.copies.iter().filter(|&&c| c > 1).count()
+    }
+
+    /// Stored values of the largest scalar factor (exact, from the symbolic analysis:
+    /// supernodal storage, more than the ordering's prediction). The parts of a split are
+    /// factorised one after the other: only one factor is in memory at a time.
+    pub fn factor_len(&self) -> usize {
+        self.factor_lens().max().unwrap_or(0)
+    }
+
+    /// Multiply-adds of all the factorisations ([`crate::linalg::cholesky::factor_multiply_adds`]),
+    /// for the time model.
+    pub fn factor_multiply_adds(&self) -> f64 {
+        self.parts
+            .iter()
+            .map(|p| crate::linalg::cholesky::factor_multiply_adds(&p.symbolic))
+            .sum()
+    }
+
+    /// Stored values of each part's scalar factor.
+    pub fn factor_lens(&self) -> impl Iterator<Item = usize> + '_ {
+        self.parts.iter().map(|p| p.symbolic.len_val())
+    }
+
+    /// Bytes of numeric scratch the largest `LDL^T` factorisation allocates besides the factor.
+    pub fn scratch_bytes(&self) -> usize {
+        self.parts
+            .iter()
+            .map(|p| {
+                p.symbolic
+                    .factorize_numeric_ldlt_scratch::<f64>(
+                        crate::linalg::factor_parallelism(p.symbolic.len_val()),
+                        Default::default(),
+                    )
+                    .size_bytes()
+            })
+            .max()
+            .unwrap_or(0)
+    }
+}
+
+impl ScalarPart {
+    /// The pattern of the edges `holds` selects (every diagonal entry included) and its
+    /// symbolic analysis, refused when the factor is predicted above `max_values`.
+    fn analyse(
+        problem: &MultipleProblem,
+        holds: impl Fn(usize) -> bool,
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
         let n = problem.num_rotations();
         let mut t = Vec::with_capacity(2 * problem.num_edges() + n);
-        for (_, e) in problem.edges().iter().enumerate().filter(|(k, _)| kept(*k)) {
+        for (_, e) in problem
+            .edges()
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| holds(*k))
+        {
             t.push(Triplet::new(e.i, e.j, -e.weight));
             t.push(Triplet::new(e.j, e.i, -e.weight));
         }
@@ -207,6 +405,7 @@ impl ScalarAnalysis {
         let pattern = SparseColMat::try_new_from_triplets(n, n, &t).map_err(|e| Error::Solver {
             message: format!("could not assemble the scalar Laplacian: {e:?}"),
         })?;
+        drop(t);
         let cp = pattern.symbolic().col_ptr();
         let ri = pattern.symbolic().row_idx();
         let mut diag_pos = Vec::with_capacity(n);
@@ -228,70 +427,179 @@ impl ScalarAnalysis {
                     message: "scalar Laplacian lost an edge entry".into(),
                 })
         };
-        let edge_pos = problem
+        let edges = problem
             .edges()
             .iter()
             .enumerate()
-            .map(|(k, e)| match kept(k) {
-                true => Ok((position(e.i, e.j)?, position(e.j, e.i)?)),
-                false => Ok(DROPPED),
-            })
+            .filter(|(k, _)| holds(*k))
+            .map(|(k, e)| Ok((k, position(e.i, e.j)?, position(e.j, e.i)?)))
             .collect::<Result<Vec<_>>>()?;
-        let dropped = edge_pos.iter().filter(|&&p| p == DROPPED).count();
         let symbolic = match symbolic_cholesky_within(pattern.symbolic(), max_values)? {
             Ok(symbolic) => symbolic,
             Err(predicted) => return Ok(Err(predicted)),
         };
-        Ok(Ok(ScalarAnalysis {
+        Ok(Ok(ScalarPart {
             symbolic,
             pattern,
             diag_pos,
-            edge_pos,
-            dropped,
+            edges,
         }))
     }
+}
 
-    /// `true` when this analysis was made for `problem`'s graph: same size, and every kept
-    /// edge's two entries sit in its own rows and columns of the pattern (O(m)).
-    fn describes(&self, problem: &MultipleProblem) -> bool {
-        let n = problem.num_rotations();
-        if self.pattern.nrows() != n || self.edge_pos.len() != problem.num_edges() {
-            return false;
-        }
-        let (cp, ri) = (
-            self.pattern.symbolic().col_ptr(),
-            self.pattern.symbolic().row_idx(),
-        );
-        let at =
-            |p: usize, row: usize, col: usize| (cp[col]..cp[col + 1]).contains(&p) && ri[p] == row;
-        problem
-            .edges()
-            .iter()
-            .zip(&self.edge_pos)
-            .all(|(e, &(p_ij, p_ji))| {
-                (p_ij, p_ji) == DROPPED || (at(p_ij, e.i, e.j) && at(p_ji, e.j, e.i))
+/// Every node keeps at least this many edges in every part of a split (all of its edges when
+/// it has fewer): sparse random parts are weakest at their chains of nodes of degree 1 and 2.
+/// Measured on a 10^5-node graph with 10^6 edges at 0.1 rad, 6 parts: without this rule the
+/// first part's second eigenvector sat on a pendant path of four such nodes (2 negative
+/// pivots); with 2 it proves with factors of 4.5e8 values; 3 proves too, with 5.9e8 (more
+/// edges shared).
+pub const MIN_PART_DEGREE: usize = 2;
+
+/// The edge split of [`ScalarAnalysis::split`], as a bit mask of the parts holding each edge.
+/// 1. Each edge to the part that holds the smallest fractions of its two endpoints' weights so
+///    far (edges in a fixed pseudo-random order, ties to the lighter part).
+/// 2. A node with fewer than [`MIN_PART_DEGREE`] edges in a part lends it edges held by its
+///    other parts (those of the parts where it has the most), which are then shared.
+/// 3. Every edge of a node outside the largest connected component of some part is held by
+///    every part (so every part is connected: the view graph is).
+fn split_edges(problem: &MultipleProblem, parts: usize) -> Vec<u64> {
+    let n = problem.num_rotations();
+    let edges = problem.edges();
+    let m = edges.len();
+    let all: u64 = if parts >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << parts) - 1
+    };
+    if parts <= 1 {
+        return vec![all; m];
+    }
+    let adjacency = problem.adjacency();
+    let mut weight = vec![0.0f64; n];
+    for e in edges {
+        weight[e.i] += e.weight;
+        weight[e.j] += e.weight;
+    }
+    // 1. greedy balance, in a fixed pseudo-random order (multiplication by an odd constant is
+    // a bijection mod 2^64; sorting by it shuffles the edges reproducibly)
+    let mut member = vec![0u64; m];
+    let mut order: Vec<usize> = (0..m).collect();
+    order.sort_by_key(|&k| (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    let mut load = vec![0.0f64; n * parts];
+    let mut total = vec![0.0f64; parts];
+    for &k in &order {
+        let e = &edges[k];
+        let share = |v: usize, p: usize| (load[v * parts + p] + e.weight) / weight[v];
+        let cost = |p: usize| share(e.i, p).max(share(e.j, p)) + share(e.i, p) + share(e.j, p);
+        let best = (0..parts)
+            .min_by(|&p, &q| {
+                cost(p)
+                    .total_cmp(&cost(q))
+                    .then(total[p].total_cmp(&total[q]))
             })
+            .unwrap_or(0);
+        load[e.i * parts + best] += e.weight;
+        load[e.j * parts + best] += e.weight;
+        total[best] += e.weight;
+        member[k] = 1 << best;
+    }
+    // 2. at least MIN_PART_DEGREE edges per node and part
+    let mut count = vec![0usize; n * parts];
+    for (k, e) in edges.iter().enumerate() {
+        for p in (0..parts).filter(|&p| member[k] >> p & 1 == 1) {
+            count[e.i * parts + p] += 1;
+            count[e.j * parts + p] += 1;
+        }
+    }
+    let mut incident = Vec::new();
+    for v in 0..n {
+        for p in 0..parts {
+            while count[v * parts + p] < MIN_PART_DEGREE {
+                // an edge of v that part p lacks, from the part where v has the most edges
+                incident.clear();
+                incident.extend(
+                    adjacency
+                        .neighbours(v)
+                        .iter()
+                        .map(|&(_, k)| k)
+                        .filter(|&k| member[k] >> p & 1 == 0),
+                );
+                let lend = incident.iter().copied().max_by_key(|&k| {
+                    let most = (0..parts)
+                        .filter(|&q| member[k] >> q & 1 == 1)
+                        .map(|q| count[v * parts + q])
+                        .max()
+                        .unwrap_or(0);
+                    (most, std::cmp::Reverse(k))
+                });
+                let Some(k) = lend else { break };
+                member[k] |= 1 << p;
+                count[edges[k].i * parts + p] += 1;
+                count[edges[k].j * parts + p] += 1;
+            }
+        }
+    }
+    // 3. every part connected
+    let mut outside = vec![false; n];
+    for p in 0..parts {
+        let mut uf = UnionFind::new(n);
+        for (k, e) in edges.iter().enumerate() {
+            if member[k] >> p & 1 == 1 {
+                uf.union(e.i, e.j);
+            }
+        }
+        let root: Vec<usize> = (0..n).map(|v| uf.find(v)).collect();
+        let mut size = vec![0usize; n];
+        for &r in &root {
+            size[r] += 1;
+        }
+        let largest = (0..n).max_by_key(|&v| size[v]).unwrap_or(0);
+        for (v, &r) in root.iter().enumerate() {
+            if r != largest {
+                outside[v] = true;
+            }
+        }
+    }
+    for (k, e) in edges.iter().enumerate() {
+        if outside[e.i] || outside[e.j] {
+            member[k] = all;
+        }
+    }
+    member
+}
+
+/// Union-find with path halving and union by size.
+struct UnionFind {
+    parent: Vec<usize>,
+    size: Vec<usize>,
+}
+
+impl UnionFind {
+    fn new(n: usize) -> Self {
+        UnionFind {
+            parent: (0..n).collect(),
+            size: vec![1; n],
+        }
     }
 
-    /// Edges left out of the pattern (0 for [`ScalarAnalysis::new`]).
-    pub fn dropped_edges(&self) -> usize {
-        self.dropped
+    fn find(&mut self, mut v: usize) -> usize {
+        while self.parent[v] != v {
+            self.parent[v] = self.parent[self.parent[v]];
+            v = self.parent[v];
+        }
+        v
     }
 
-    /// Stored values of the scalar factor (exact, from the symbolic analysis: supernodal
-    /// storage, more than the ordering's prediction).
-    pub fn factor_len(&self) -> usize {
-        self.symbolic.len_val()
-    }
-
-    /// Bytes of numeric scratch the `LDL^T` factorisation allocates besides the factor.
-    pub fn scratch_bytes(&self) -> usize {
-        self.symbolic
-            .factorize_numeric_ldlt_scratch::<f64>(
-                crate::linalg::factor_parallelism(self.factor_len()),
-                Default::default(),
-            )
-            .size_bytes()
+    fn union(&mut self, a: usize, b: usize) {
+        let (mut a, mut b) = (self.find(a), self.find(b));
+        if a == b {
+            return;
+        }
+        if self.size[a] < self.size[b] {
+            std::mem::swap(&mut a, &mut b);
+        }
+        self.parent[b] = a;
+        self.size[a] += self.size[b];
     }
 }
 
@@ -383,7 +691,7 @@ pub fn scalar_comparison(
         // each edge takes the bound with the smaller charge per unit of weight kept (the
         // condition is roughly lambda_2 >= charge / weight): second order for small residuals,
         // first order for outliers, whose alpha_e - beta is negative
-        let dropped = analysis.edge_pos[reduced.len()] == DROPPED;
+        let dropped = analysis.copies[reduced.len()] == 0;
         let coeff = alpha - beta;
         let charge2 = k_e * k_e / (2.0 * beta);
         let (coeff, charge) = if dropped {
@@ -512,39 +820,92 @@ pub fn scalar_comparison(
         (norm / sum) * (1.0 + 4.0 * u)
     };
     let k0 = kappa_of(0.0);
-    let zeta = if target > 0.0 && target.is_finite() {
+    let zeta_needed = if target > 0.0 && target.is_finite() {
         (4.0 * rho1 * rho1 * k0 * k0 / target).max(1e-12 * d_max)
     } else {
         0.0
     };
+
+    // -- step 5 (split): part p proves lambda_2(L'_p - diag(c_p)) >= 0 with the charges
+    // c_p = w * f_p, f_p(i) = (part p's kept weight at i) / (node i's kept weight): every part
+    // is charged where it is strong. By the pencil lemma without orthogonality,
+    // y^T (L'_p - C_p) y >= -(c_p^T y)^2 / 1^T c_p for every y, and for w^T y = 0,
+    // c_p^T y = (c_p - s_p w)^T y: summed over the parts (sum_p c_p >= w),
+    // y^T (L' - diag(w)) y >= -eps |y|^2, eps = sum_p ||c_p - s_p w||^2 / 1^T c_p (the split's
+    // defect, 0 for one part). A larger zeta pays for it: zeta - eps is what absorbs the cross
+    // terms below.
+    let shares = part_shares(analysis, problem, &reduced, n);
+    let defect_of = |zeta: f64| -> f64 {
+        let w: Vec<f64> = delta.iter().map(|d| d + zeta).collect();
+        split_defect(&shares, &w)
+    };
+    let mut zeta = zeta_needed;
+    let mut defect = 0.0f64;
+    if shares.len() > 1 {
+        // eps grows with zeta (w does): twice the first estimate, then the exact one checked
+        zeta = zeta_needed + 2.0 * defect_of(zeta_needed);
+        defect = defect_of(zeta);
+        if !(defect.is_finite() && defect <= zeta) {
+            return Ok(Err(ScalarFailure::Numerical));
+        }
+    }
     let weights: Vec<f64> = delta.iter().map(|d| d + zeta).collect();
 
-    // -- step 5: inertia of A = L - diag(w) - h I
+    // -- step 5: inertia of A_p = L'_p - diag(w) / P - h I for each of the P parts (one for
+    // the whole graph or a subgraph). L' = sum_p L'_p (each edge's kept weight shared evenly by
+    // the parts that hold it), so lambda_2(L'_p - diag(w) / P) >= 0 for every p gives, by the
+    // pencil lemma applied to each part (weights w / P, the same orthogonality w^T y = 0),
+    // y^T (L' - diag(w)) y >= 0 whenever w^T y = 0: step 4's premise.
     // h only needs to exceed the backward error (typically ~1e-10 d_max at 10^4 nodes); it
     // tightens the condition by a negligible 1e-6 d_max
-    let mut headroom = 1e-6 * d_max.max(f64::MIN_POSITIVE);
-    let mut attempt = 0;
-    let backward = loop {
-        attempt += 1;
-        match factor_inertia(analysis, problem, &reduced, &weights, headroom, &deg_n) {
-            Ok((_, bound)) => {
-                if bound <= headroom {
-                    break bound;
+    let num_parts = analysis.parts.len().max(1);
+    let mut headroom = 0.0f64;
+    let mut backward = 0.0f64;
+    for (p, part) in analysis.parts.iter().enumerate() {
+        // c_p = w f_p, rounded up so that sum_p c_p >= w (f_p sums to 1 up to (P + 2) u)
+        let charges: Vec<f64> = match shares.get(p) {
+            Some(f) => weights
+                .iter()
+                .zip(f)
+                .map(|(w, f)| w * f * (1.0 + gamma(num_parts + 4)))
+                .collect(),
+            None => weights.clone(),
+        };
+        let mut h = 1e-6 * d_max.max(f64::MIN_POSITIVE) / num_parts as f64;
+        let mut attempt = 0;
+        let bound = loop {
+            attempt += 1;
+            match factor_inertia(
+                part,
+                problem,
+                &analysis.copies,
+                &reduced,
+                &charges,
+                h,
+                &deg_n,
+            ) {
+                Ok((_, bound)) => {
+                    if bound <= h {
+                        break bound;
+                    }
+                    if attempt >= 2 {
+                        return Ok(Err(ScalarFailure::BackwardError));
+                    }
+                    h = 4.0 * bound;
                 }
-                if attempt >= 2 {
-                    return Ok(Err(ScalarFailure::BackwardError));
-                }
-                headroom = 4.0 * bound;
+                Err(f) => return Ok(Err(f)),
             }
-            Err(f) => return Ok(Err(f)),
-        }
-    };
+        };
+        headroom = headroom.max(h);
+        backward = backward.max(bound);
+    }
 
-    // the cross terms (both bounds hold; the better is used)
+    // the cross terms (both bounds hold; the better is used); x1^T M x1 >= (zeta - eps) |x1|^2
     let kappa = kappa_of(zeta);
+    let zeta_free = (zeta - defect) * (1.0 - 4.0 * u);
     let plain = -(2.0 * kappa * (1.0 + nf.sqrt() * kappa) * rho1 + kappa * kappa * rho0);
-    let absorbed = if zeta > 0.0 {
-        -(rho0 + rho1 * rho1 / zeta) * kappa * kappa
+    let absorbed = if zeta_free > 0.0 {
+        -(rho0 + rho1 * rho1 / zeta_free) * kappa * kappa
     } else {
         f64::NEG_INFINITY
     };
@@ -559,6 +920,9 @@ pub fn scalar_comparison(
         max_delta,
         second_order_edges,
         dropped_edges: analysis.dropped,
+        parts: analysis.parts(),
+        shared_edges: analysis.shared_edges(),
+        split_defect: defect,
         zeta,
         headroom,
         backward_error: backward,
@@ -566,6 +930,77 @@ pub fn scalar_comparison(
         kappa,
         residual_bound: rho1,
     }))
+}
+
+/// Per part of a split (none for one part), every node's share `f_p(i)` of its kept weight:
+/// part `p`'s kept weight at `i` over the node's, `1 / P` where a node keeps none.
+fn part_shares(
+    analysis: &ScalarAnalysis,
+    problem: &MultipleProblem,
+    reduced: &[f64],
+    n: usize,
+) -> Vec<Vec<f64>> {
+    let parts = analysis.parts.len();
+    if parts <= 1 {
+        return Vec::new();
+    }
+    let edges = problem.edges();
+    let mut kept = vec![vec![0.0f64; n]; parts];
+    for (part, kept) in analysis.parts.iter().zip(kept.iter_mut()) {
+        for &(k, _, _) in &part.edges {
+            let w = reduced[k].max(0.0) / analysis.copies[k].max(1) as f64;
+            kept[edges[k].i] += w;
+            kept[edges[k].j] += w;
+        }
+    }
+    let mut total = vec![0.0f64; n];
+    for kept in &kept {
+        for (t, k) in total.iter_mut().zip(kept) {
+            *t += k;
+        }
+    }
+    kept.into_iter()
+        .map(|kept| {
+            kept.iter()
+                .zip(&total)
+                .map(|(&k, &t)| if t > 0.0 { k / t } else { 1.0 / parts as f64 })
+                .collect()
+        })
+        .collect()
+}
+
+/// The split's defect `eps >= sum_p ||c_p - s_p w||^2 / 1^T c_p` with `c_p = w f_p` and
+/// `s_p = c_p^T w / w^T w` (any `s_p` is valid; this one minimises the norm), rounded up:
+/// `c_p` is formed with the `1 + gamma(P + 4)` of step 5, and every difference's rounding is
+/// bounded by `gamma(4)` times the magnitudes.
+fn split_defect(shares: &[Vec<f64>], w: &[f64]) -> f64 {
+    let parts = shares.len();
+    let n = w.len();
+    let g = gamma(n + 4);
+    let ww: f64 = w.iter().map(|x| x * x).sum();
+    let mut eps = 0.0f64;
+    for f in shares {
+        let c: Vec<f64> = w
+            .iter()
+            .zip(f)
+            .map(|(w, f)| w * f * (1.0 + gamma(parts + 4)))
+            .collect();
+        let cw: f64 = c.iter().zip(w).map(|(c, w)| c * w).sum();
+        let sp = cw / ww;
+        let (mut sq, mut mag) = (0.0f64, 0.0f64);
+        for (c, w) in c.iter().zip(w) {
+            let d = c - sp * w;
+            sq += d * d;
+            mag += (c.abs() + (sp * w).abs()).powi(2);
+        }
+        let norm = sq.sqrt() * (1.0 + g) + gamma(4) * mag.sqrt() * (1.0 + g);
+        let sum: f64 = c.iter().sum::<f64>() * (1.0 - g);
+        if sum <= 0.0 {
+            return f64::INFINITY;
+        }
+        eps += norm * norm / sum;
+    }
+    eps * (1.0 + gamma(2 * parts + 4))
 }
 
 /// A rigorous upper bound on `||v0^T M v0||_F = ||sum_i r'_i||_F` (step 3), evaluated in
@@ -642,43 +1077,44 @@ fn gauge_block_bound(
     }
 }
 
-/// `LDL^T` of `A = L' - diag(delta) - h I` without pivoting (AMD order), `L'` the Laplacian of
-/// the edge weights `reduced` (any sign). Returns (negative pivots, rigorous bound on
+/// `LDL^T` of `A = L'_p - diag(delta) - h I` without pivoting (AMD order), `L'_p` the Laplacian
+/// of `part`'s edges with the weights `reduced / copies` (any sign). Returns (negative pivots, rigorous bound on
 /// `||A_exact - P^T L D L^T P||_2`) when exactly one pivot is negative and none is zero; a
 /// failure otherwise.
 fn factor_inertia(
-    analysis: &ScalarAnalysis,
+    part: &ScalarPart,
     problem: &MultipleProblem,
+    copies: &[u32],
     reduced: &[f64],
     delta: &[f64],
     h: f64,
     deg_n: &[usize],
 ) -> std::result::Result<(usize, f64), ScalarFailure> {
     let n = delta.len();
-    let mut a = analysis.pattern.clone();
+    let mut a = part.pattern.clone();
     // row sums of the magnitudes of the terms that form each entry (the forming error)
     let mut magnitude = vec![0.0f64; n];
     {
         let val = a.val_mut();
         val.iter_mut().for_each(|v| *v = 0.0);
-        for ((e, &(p_ij, p_ji)), &w) in problem.edges().iter().zip(&analysis.edge_pos).zip(reduced)
-        {
-            if (p_ij, p_ji) == DROPPED {
-                continue;
-            }
+        let edges = problem.edges();
+        for &(k, p_ij, p_ji) in &part.edges {
+            let e = &edges[k];
+            // a shared edge's even share (one division: its rounding is in the forming error)
+            let w = reduced[k] / copies[k].max(1) as f64;
             val[p_ij] -= w;
             val[p_ji] -= w;
-            val[analysis.diag_pos[e.i]] += w;
-            val[analysis.diag_pos[e.j]] += w;
+            val[part.diag_pos[e.i]] += w;
+            val[part.diag_pos[e.j]] += w;
             magnitude[e.i] += 2.0 * w.abs();
             magnitude[e.j] += 2.0 * w.abs();
         }
         for i in 0..n {
-            val[analysis.diag_pos[i]] -= delta[i] + h;
+            val[part.diag_pos[i]] -= delta[i] + h;
             magnitude[i] += delta[i] + h;
         }
     }
-    let inertia = ldlt_inertia(&analysis.symbolic, a.as_ref()).map_err(|f| match f {
+    let inertia = ldlt_inertia(&part.symbolic, a.as_ref()).map_err(|f| match f {
         LdltFailure::Numerical => ScalarFailure::Numerical,
     })?;
     let negative = inertia.negative;
@@ -689,7 +1125,8 @@ fn factor_inertia(
     }
     // every entry of A is a sum of at most deg + 3 rounded terms; a row's entries err by at
     // most gamma(terms + 2) times the magnitudes of their terms
-    let terms = deg_n.iter().copied().max().unwrap_or(0) + 3;
+    // (one more rounding for the division of a shared edge's weight)
+    let terms = deg_n.iter().copied().max().unwrap_or(0) + 4;
     let forming = gamma(terms + 2) * magnitude.iter().copied().fold(0.0, f64::max);
     // doubled to cover the rounding in evaluating the bounds themselves
     let bound = inertia.backward_error + 2.0 * forming;
@@ -739,6 +1176,7 @@ mod tests {
     #[test]
     fn scalar_comparison_is_sound_against_dense_eigenvalues() {
         let (mut proven, mut failed, mut instances, mut sparsified) = (0, 0, 0, 0);
+        let mut split = 0;
         // largest mu / lambda_min over proofs at clearly indefinite S (1 = tight)
         let mut tightest = 0.0f64;
         for seed in 0..150u64 {
@@ -772,7 +1210,7 @@ mod tests {
             let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
             let an = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
             // sparsified comparisons on subgraphs (every edge still charged)
-            let sparse: Vec<ScalarAnalysis> = [1.5, 2.0, 3.0]
+            let mut sparse: Vec<ScalarAnalysis> = [1.5, 2.0, 3.0]
                 .iter()
                 .map(|&k| {
                     ScalarAnalysis::sparsified(&p, &sol.rotations, k, usize::MAX)
@@ -780,6 +1218,14 @@ mod tests {
                         .unwrap()
                 })
                 .collect();
+            // ... and splits, every part proving its (uneven) share
+            for parts in [2, 3] {
+                sparse.push(
+                    ScalarAnalysis::split(&p, parts, usize::MAX)
+                        .unwrap()
+                        .unwrap(),
+                );
+            }
             // the local solution, the ground truth (not critical when noisy), a perturbed point
             let perturbed: Vec<Rotation> = sol
                 .rotations
@@ -818,6 +1264,7 @@ mod tests {
                         Ok(c) => {
                             proven += 1;
                             sparsified += usize::from(c.dropped_edges > 0);
+                            split += usize::from(c.parts > 1);
                             if exact < -1e-12 {
                                 tightest = tightest.max(c.verified_min_eigenvalue / exact);
                             }
@@ -834,9 +1281,11 @@ mod tests {
         }
         println!(
             "scalar comparison: {instances} instances, {proven} proofs ({sparsified} on \
-             subgraphs), {failed} not proven; tightest mu / lambda_min = {tightest:.3}"
+             subgraphs, {split} split), {failed} not proven; tightest mu / lambda_min = \
+             {tightest:.3}"
         );
         assert!(sparsified > 100, "proofs on subgraphs must be exercised");
+        assert!(split > 100, "split proofs must be exercised");
         assert!(proven > 300, "the condition should hold at low noise");
         assert!(failed > 50, "and fail at high noise");
         assert!(
@@ -845,13 +1294,112 @@ mod tests {
         );
     }
 
+    /// The split's parts: every edge held by some part; every part connected; every node keeps
+    /// `MIN_PART_DEGREE` edges in every part (all of its edges when it has fewer); and on a
+    /// dense random graph, few edges shared and the parts' sizes balanced. Checked with the
+    /// problem's own component search on each part's edges (not the union-find of the split).
+    #[test]
+    fn split_parts_are_connected_balanced_and_keep_their_minimum_degree() {
+        for (n, m, parts) in [(400, 4000, 4), (400, 4000, 6), (30, 60, 3), (12, 14, 2)] {
+            let (p, _) = SyntheticGraph {
+                num_rotations: n,
+                num_edges: m,
+                seed: 5,
+                ..Default::default()
+            }
+            .generate();
+            let member = split_edges(&p, parts);
+            assert!(member.iter().all(|&b| b != 0 && b < 1 << parts));
+            let mut sizes = vec![0usize; parts];
+            for (part, size) in sizes.iter_mut().enumerate() {
+                let edges: Vec<_> = p
+                    .edges()
+                    .iter()
+                    .zip(&member)
+                    .filter(|&(_, &b)| b >> part & 1 == 1)
+                    .map(|(e, _)| e.clone())
+                    .collect();
+                *size = edges.len();
+                let sub = MultipleProblem::new(n, edges).unwrap();
+                assert_eq!(
+                    sub.components().len(),
+                    1,
+                    "part {part} of {parts} connected"
+                );
+                for v in 0..n {
+                    let degree = p.adjacency().neighbours(v).len();
+                    let kept = sub.adjacency().neighbours(v).len();
+                    assert!(
+                        kept >= degree.min(MIN_PART_DEGREE),
+                        "node {v}: {kept} of {degree} edges in part {part}"
+                    );
+                }
+            }
+            if m >= 10 * n {
+                let shared = member.iter().filter(|b| b.count_ones() > 1).count();
+                assert!(shared * 5 < m, "{shared} of {m} edges shared");
+                let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+                assert!(hi * 10 < lo * 11, "part sizes {sizes:?}");
+            }
+        }
+    }
+
+    /// The split's defect bounds what uneven shares cost (step 5): for `y` with `w^T y = 0`,
+    /// `sum_p (c_p^T y)^2 / 1^T c_p <= eps |y|^2` with `c_p = w f_p`, checked on random
+    /// shares, weights and vectors (the inequality itself, evaluated independently).
+    #[test]
+    fn split_defect_bounds_the_uneven_shares() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        let mut tightest = 0.0f64;
+        for _ in 0..200 {
+            let (n, parts) = (rng.random_range(2..30), rng.random_range(2..6));
+            let w: Vec<f64> = (0..n).map(|_| rng.random_range(1e-3..2.0)).collect();
+            let raw: Vec<Vec<f64>> = (0..parts)
+                .map(|_| (0..n).map(|_| rng.random_range(0.0..1.0)).collect())
+                .collect();
+            let shares: Vec<Vec<f64>> = raw
+                .iter()
+                .map(|r| {
+                    r.iter()
+                        .enumerate()
+                        .map(|(i, x)| x / raw.iter().map(|q| q[i]).sum::<f64>())
+                        .collect()
+                })
+                .collect();
+            let eps = split_defect(&shares, &w);
+            for _ in 0..50 {
+                let mut y: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
+                let t = y.iter().zip(&w).map(|(y, w)| y * w).sum::<f64>()
+                    / w.iter().map(|w| w * w).sum::<f64>();
+                y.iter_mut().zip(&w).for_each(|(y, w)| *y -= t * w);
+                let yy: f64 = y.iter().map(|y| y * y).sum();
+                let cost: f64 = shares
+                    .iter()
+                    .map(|f| {
+                        let cy: f64 = (0..n).map(|i| w[i] * f[i] * y[i]).sum();
+                        let c1: f64 = (0..n).map(|i| w[i] * f[i]).sum();
+                        cy * cy / c1
+                    })
+                    .sum();
+                assert!(
+                    cost <= eps * yy * (1.0 + 1e-12),
+                    "{cost} > {eps} |y|^2 = {}",
+                    eps * yy
+                );
+                tightest = tightest.max(cost / (eps * yy));
+            }
+        }
+        assert!(tightest > 0.05, "the bound is not vacuous: {tightest}");
+    }
+
     /// Non-global local minima (random restarts on noisy small graphs with outliers): `S` is
     /// indefinite there (checked by dense eigenvalues) while the point is critical, so only the
     /// comparison of step 2 stands between them and a false proof. Every proof, on the whole
     /// graph or on subgraphs (where the dropped edges' charges carry their frustration), must
     /// stay below the dense `lambda_min(S)`.
     #[test]
-    fn no_proof_at_non_global_minima_whole_or_sparsified() {
+    fn no_proof_at_non_global_minima_whole_sparsified_or_split() {
         use crate::multiple::Initialisation;
         use rand::SeedableRng;
         let mut rng = rand::rngs::StdRng::seed_from_u64(11);
@@ -896,6 +1444,13 @@ mod tests {
                 for k in [1.0, 1.5, 2.0, 3.0] {
                     analyses.push(
                         ScalarAnalysis::sparsified(&p, &sol.rotations, k, usize::MAX)
+                            .unwrap()
+                            .unwrap(),
+                    );
+                }
+                for parts in [2, 3, 4] {
+                    analyses.push(
+                        ScalarAnalysis::split(&p, parts, usize::MAX)
                             .unwrap()
                             .unwrap(),
                     );
@@ -1051,6 +1606,39 @@ mod tests {
                     assert!(c.verified_min_eigenvalue >= -1e-9, "{c:?}");
                 }
                 Err(f) => assert!(!provable, "{fraction} pi not proven: {f:?}"),
+            }
+        }
+    }
+
+    /// The split on the same cycles: every node has only its two cycle edges, so every part
+    /// holds all of them with `1 / P` of their weight and `1 / P` of every charge, which is
+    /// the whole graph's condition again: proven at loop errors 0.5 pi and 0.8 pi, not at
+    /// 1.05 pi and 1.2 pi (dense check). Fails when a shared edge's weight is not divided
+    /// among the parts that hold it (each part would count it whole).
+    #[test]
+    fn split_comparison_is_tight_on_a_cycle() {
+        for (fraction, provable) in [(0.5, true), (0.8, true), (1.05, false), (1.2, false)] {
+            let p = crate::multiple::synthetic::z_cycle(8, fraction * std::f64::consts::PI);
+            let rs = vec![Rotation::identity(); 8];
+            let l = multipliers(&p, &rs).unwrap();
+            let exact = dense_lambda_min(&p, &l);
+            assert_eq!(exact > -1e-12, provable, "independent check: {exact}");
+            for parts in [2, 3] {
+                let an = ScalarAnalysis::split(&p, parts, usize::MAX)
+                    .unwrap()
+                    .unwrap();
+                assert_eq!((an.parts(), an.shared_edges()), (parts, 8));
+                match scalar_comparison(&p, &an, &rs, &l, 1e-9).unwrap() {
+                    Ok(c) => {
+                        assert!(
+                            provable,
+                            "{fraction} pi, {parts} parts: proven {c:?} ({exact})"
+                        );
+                        assert!(c.verified_min_eigenvalue <= exact + 1e-12);
+                        assert_eq!(c.parts, parts);
+                    }
+                    Err(f) => assert!(!provable, "{fraction} pi, {parts} parts: {f:?}"),
+                }
             }
         }
     }
