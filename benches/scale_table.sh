@@ -10,7 +10,7 @@ set -uo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BIN="$REPO/target/release/examples/pipeline_scale"
 [[ -x "$BIN" ]] || { echo "build first: cargo build --release --example pipeline_scale" >&2; exit 1; }
-ROWS="${ROWS:-chain:1000 chain:10000 chain:100000 chain:1000000 grid:10000 grid:100000 grid:1000000 torus:100000 torus:1000000 random:1000 random:10000 random:30000 random:100000:300000:0.1}"
+ROWS="${ROWS:-chain:1000 chain:10000 chain:100000 chain:1000000 grid:10000 grid:100000 grid:1000000 torus:100000 torus:1000000 random:1000 random:10000 random:30000 random:100000:300000:0.1 random:100000:1000000:0.1}"
 echo "| graph | nodes | edges | solve (Newton iterations) | certify | verdict (relative gap) | peak RSS, solve alone / whole | load |"
 echo "|---|---|---|---|---|---|---|---|"
 for row in $ROWS; do

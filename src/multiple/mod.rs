@@ -36,6 +36,7 @@ pub mod robust;
 pub mod solve;
 pub mod stats;
 pub mod synthetic;
+pub(crate) mod union_find;
 
 pub use chordal::chordal_gradient;
 pub use init::{initialise, spanning_tree, spectral};

@@ -217,24 +217,13 @@ impl MultipleProblem {
     /// ```
     pub fn components(&self) -> Vec<Vec<usize>> {
         let n = self.num_rotations;
-        let mut parent: Vec<usize> = (0..n).collect();
-        fn find(p: &mut [usize], mut x: usize) -> usize {
-            while p[x] != x {
-                p[x] = p[p[x]];
-                x = p[x];
-            }
-            x
-        }
+        let mut sets = super::union_find::UnionFind::new(n);
         for e in &self.edges {
-            let (a, b) = (find(&mut parent, e.i), find(&mut parent, e.j));
-            if a != b {
-                parent[a.max(b)] = a.min(b);
-            }
+            sets.union(e.i, e.j);
         }
         let mut by_root: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
         for v in 0..n {
-            let r = find(&mut parent, v);
-            by_root.entry(r).or_default().push(v);
+            by_root.entry(sets.find(v)).or_default().push(v);
         }
         let mut comps: Vec<Vec<usize>> = by_root.into_values().collect();
         comps.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));

@@ -52,6 +52,7 @@ use crate::linalg::cholesky::{UNIT_ROUNDOFF, gamma, symbolic_cholesky_within};
 use crate::linalg::compensated::Accumulator;
 use crate::linalg::ldlt::{LdltFailure, ldlt_inertia};
 use crate::multiple::MultipleProblem;
+use crate::multiple::union_find::UnionFind;
 use crate::so3::Rotation;
 use faer::sparse::linalg::cholesky::SymbolicCholesky;
 use faer::sparse::{SparseColMat, Triplet};
@@ -566,41 +567,6 @@ fn split_edges(problem: &MultipleProblem, parts: usize) -> Vec<u64> {
         }
     }
     member
-}
-
-/// Union-find with path halving and union by size.
-struct UnionFind {
-    parent: Vec<usize>,
-    size: Vec<usize>,
-}
-
-impl UnionFind {
-    fn new(n: usize) -> Self {
-        UnionFind {
-            parent: (0..n).collect(),
-            size: vec![1; n],
-        }
-    }
-
-    fn find(&mut self, mut v: usize) -> usize {
-        while self.parent[v] != v {
-            self.parent[v] = self.parent[self.parent[v]];
-            v = self.parent[v];
-        }
-        v
-    }
-
-    fn union(&mut self, a: usize, b: usize) {
-        let (mut a, mut b) = (self.find(a), self.find(b));
-        if a == b {
-            return;
-        }
-        if self.size[a] < self.size[b] {
-            std::mem::swap(&mut a, &mut b);
-        }
-        self.parent[b] = a;
-        self.size[a] += self.size[b];
-    }
 }
 
 /// Frobenius norm.
