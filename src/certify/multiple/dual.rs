@@ -10,11 +10,11 @@
 
 use super::randomized::{RandomizedBound, randomized_bound};
 use super::scalar::{
-    MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_PARTS, ScalarAnalysis, ScalarComparison,
-    ScalarFailure, scalar_comparison,
+    MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_MIN_DEGREES, SPLIT_SHAPES, ScalarAnalysis,
+    ScalarComparison, ScalarFailure, SplitShape, scalar_comparison,
 };
 use crate::certify::certificate::{BoundMethod, Certificate, RandomizedLowerBound};
-use crate::certify::settings::CertifySettings;
+use crate::certify::settings::{Budget, CertifySettings};
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::PositiveFactor;
 use crate::linalg::compensated::Accumulator;
@@ -1059,64 +1059,60 @@ fn try_scalar_comparison(
     // 1.21e9 values stored)
     // (the parts of a split are factorised one after the other: the largest must fit the
     // memory budget, and their counted multiply-adds together the time budget)
+    // the factorisations' predicted seconds (counted multiply-adds; a split's parts together)
+    let seconds = |a: &ScalarAnalysis| {
+        let scratch = a.scratch_bytes().div_ceil(8);
+        let total: usize = a.factor_lens().map(|v| v.saturating_add(scratch)).sum();
+        Budget::predicted_factor_seconds(a.factor_multiply_adds(), total)
+    };
     let fits = |a: &ScalarAnalysis| {
         let scratch = a.scratch_bytes().div_ceil(8);
-        let values = a.factor_len().saturating_add(scratch);
         let total = a.factor_lens().map(|v| (v + scratch) as f64).sum();
         settings
             .budget
-            .counted_factorisations_fit(values, a.factor_multiply_adds(), total)
+            .counted_factorisations_fit(
+                a.factor_len().saturating_add(scratch),
+                a.factor_multiply_adds(),
+                total,
+            )
             .is_ok()
             && a.factor_len() <= settings.dual.max_factor_nonzeros
     };
-    let analysis = match ScalarAnalysis::new(problem, max_values)? {
+    let candidates = match ScalarAnalysis::new(problem, max_values)? {
         Ok(a) if a.factor_len().saturating_mul(9) <= settings.dual.scalar_comparison_above => {
             return Ok(Err(None));
         }
-        Ok(a) if fits(&a) => a,
+        Ok(a) if fits(&a) => vec![a],
         // the whole graph's factor does not fit: a subgraph's may (expanders), with the
         // dropped edges' residuals still charged, or a split into sparser parts that each prove
         // a share of the condition
-        _ => match sparsified_or_split(problem, rotations, max_values, &fits)? {
-            Some(a) => a,
-            None => return Ok(Err(None)),
-        },
+        _ => sparsified_or_split(problem, rotations, max_values, &fits)?,
     };
     let target = 0.5 * budget / s.nrows().max(1) as f64;
-    let proof = match scalar_comparison(problem, &analysis, rotations, lambdas, target)? {
-        Ok(p) if p.verified_min_eigenvalue >= -target => p,
-        outcome => {
-            let what = match (analysis.dropped_edges(), analysis.parts()) {
-                (0, 1) => "the whole graph".to_string(),
-                (0, p) => format!(
-                    "the graph split into {p} parts ({} edges shared)",
-                    analysis.shared_edges()
-                ),
-                (d, _) => format!("a subgraph without {d} of {} edges", problem.num_edges()),
-            };
-            let why = match outcome {
-                Ok(p) => format!(
-                    "its cross terms give lambda_min(S) >= {:.1e}, below the -{target:.1e} the \
-                     gap budget allows",
-                    p.verified_min_eigenvalue
-                ),
-                Err(ScalarFailure::Inertia { negative_pivots }) => {
-                    format!("{negative_pivots} negative pivots (its condition needs exactly 1)")
-                }
-                Err(ScalarFailure::Numerical) => "a zero or non-finite pivot".into(),
-                Err(ScalarFailure::BackwardError) => {
-                    "the factorisation's backward error exceeded its headroom".into()
-                }
-                Err(ScalarFailure::NotOrthogonal) => {
-                    "the rotations are too far from orthogonal".into()
-                }
-            };
-            return Ok(Err(Some(format!(
-                "the scalar comparison [D13] on {what} ({:.1e} factor values) did not prove it: \
-                 {why}",
-                analysis.factor_len()
-            ))));
+    // the candidates in order, each only while what is left of the time budget covers it
+    let started = Instant::now();
+    let mut failures = Vec::new();
+    let mut found = None;
+    for analysis in &candidates {
+        let left = settings
+            .budget
+            .max_seconds
+            .map(|limit| limit - started.elapsed().as_secs_f64());
+        if !failures.is_empty() && left.is_some_and(|left| seconds(analysis) > left) {
+            break;
         }
+        match scalar_comparison(problem, analysis, rotations, lambdas, target)? {
+            Ok(p) if p.verified_min_eigenvalue >= -target => {
+                found = Some(p);
+                break;
+            }
+            outcome => failures.push(failed_comparison(problem, analysis, target, outcome)),
+        }
+    }
+    let proof = match found {
+        Some(p) => p,
+        None if failures.is_empty() => return Ok(Err(None)),
+        None => return Ok(Err(Some(failures.join("; ")))),
     };
     let n3 = s.nrows();
     let mut estimate = None;
@@ -1175,17 +1171,18 @@ fn try_scalar_comparison(
     }))
 }
 
-/// The analysis of `[D13]` when the whole graph's factor does not fit (`fits`): the first
-/// subgraph of [`SPARSIFIED_EDGES_PER_NODE`] that fits, or the first split of
-/// [`SPLIT_PARTS`] whose every part fits and whose factorisations together fit the time budget
-/// when the subgraph would drop more than half of the edges (its charges then outweigh what it
-/// keeps: a split charges every part only its share).
+/// The analyses of `[D13]` to try when the whole graph's factor does not fit (`fits`), in
+/// order: the first subgraph of [`SPARSIFIED_EDGES_PER_NODE`] that fits, alone when it keeps
+/// at least half of the edges; otherwise (its dropped charges would outweigh what it keeps: a
+/// split charges every part only its share) first the splits, for each minimum degree of
+/// [`SPLIT_MIN_DEGREES`] the first shape of [`SPLIT_SHAPES`] whose every part fits and
+/// whose factorisations together fit the time budget, then the subgraph.
 fn sparsified_or_split(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     max_values: usize,
     fits: &dyn Fn(&ScalarAnalysis) -> bool,
-) -> Result<Option<ScalarAnalysis>> {
+) -> Result<Vec<ScalarAnalysis>> {
     let mut subgraph = None;
     for k in SPARSIFIED_EDGES_PER_NODE {
         if let Ok(a) = ScalarAnalysis::sparsified(problem, rotations, k, max_values)?
@@ -1199,20 +1196,75 @@ fn sparsified_or_split(
         .as_ref()
         .is_some_and(|a| 2 * a.dropped_edges() <= problem.num_edges())
     {
-        return Ok(subgraph);
+        return Ok(subgraph.into_iter().collect());
     }
     let degree = 2.0 * problem.num_edges() as f64 / problem.num_rotations().max(1) as f64;
-    for parts in SPLIT_PARTS {
-        if (parts as f64) * MIN_SPLIT_DEGREE > degree {
-            break;
+    let mut candidates = Vec::new();
+    // a larger minimum degree only adds edges: it starts where the smaller one fitted
+    let mut first = 0;
+    for min_degree in SPLIT_MIN_DEGREES {
+        let mut fitted = None;
+        for (at, &(parts, copies)) in SPLIT_SHAPES.iter().enumerate().skip(first) {
+            if (parts as f64) * MIN_SPLIT_DEGREE > degree * copies as f64 {
+                break;
+            }
+            let shape = SplitShape {
+                parts,
+                copies,
+                min_degree,
+            };
+            if let Ok(a) = ScalarAnalysis::split(problem, shape, max_values)?
+                && fits(&a)
+            {
+                candidates.push(a);
+                fitted = Some(at);
+                break;
+            }
         }
-        if let Ok(a) = ScalarAnalysis::split(problem, parts, max_values)?
-            && fits(&a)
-        {
-            return Ok(Some(a));
+        match fitted {
+            Some(at) => first = at,
+            None => break,
         }
     }
-    Ok(subgraph)
+    candidates.extend(subgraph);
+    Ok(candidates)
+}
+
+/// What a scalar comparison that ran and did not prove anything says in an `inconclusive`
+/// reason: which graph (whole, subgraph, split), its factor, and why.
+fn failed_comparison(
+    problem: &MultipleProblem,
+    analysis: &ScalarAnalysis,
+    target: f64,
+    outcome: std::result::Result<ScalarComparison, ScalarFailure>,
+) -> String {
+    let what = match (analysis.dropped_edges(), analysis.parts()) {
+        (0, 1) => "the whole graph".to_string(),
+        (0, p) => format!(
+            "the graph split into {p} parts ({} edges shared)",
+            analysis.shared_edges()
+        ),
+        (d, _) => format!("a subgraph without {d} of {} edges", problem.num_edges()),
+    };
+    let why = match outcome {
+        Ok(p) => format!(
+            "its cross terms give lambda_min(S) >= {:.1e}, below the -{target:.1e} the gap \
+             budget allows",
+            p.verified_min_eigenvalue
+        ),
+        Err(ScalarFailure::Inertia { negative_pivots }) => {
+            format!("{negative_pivots} negative pivots (its condition needs exactly 1)")
+        }
+        Err(ScalarFailure::Numerical) => "a zero or non-finite pivot".into(),
+        Err(ScalarFailure::BackwardError) => {
+            "the factorisation's backward error exceeded its headroom".into()
+        }
+        Err(ScalarFailure::NotOrthogonal) => "the rotations are too far from orthogonal".into(),
+    };
+    format!(
+        "the scalar comparison [D13] on {what} ({:.1e} factor values) did not prove it: {why}",
+        analysis.factor_len()
+    )
 }
 
 /// `[D4]` with rounding: `sum tr(Lambda_i) + 3n min(mu, 0)`, minus the rounding error of

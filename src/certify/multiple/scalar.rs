@@ -158,9 +158,36 @@ struct ScalarPart {
 /// of the nodes keeps one more), those with the smallest residuals ([`ScalarAnalysis::sparsified`]).
 pub const SPARSIFIED_EDGES_PER_NODE: [f64; 5] = [4.0, 3.5, 3.0, 2.75, 2.5];
 
-/// The split comparisons tried, in order, when a subgraph would drop more than half of the
-/// edges ([`ScalarAnalysis::split`]): the number of parts, each factorised on its own.
-pub const SPLIT_PARTS: [usize; 6] = [2, 3, 4, 5, 6, 8];
+/// The shape of a split comparison ([`ScalarAnalysis::split`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SplitShape {
+    /// Number of parts (factorisations), 1 to 64.
+    pub parts: usize,
+    /// Parts that hold each edge (each with `1 / copies` of its kept weight), 1 to `parts`:
+    /// each part then has `copies / parts` of the edges, so `parts / copies` acts as the
+    /// number of parts of a split into whole edges, in half steps for `copies = 2`.
+    pub copies: usize,
+    /// Every node keeps at least this many edges in every part (all of its edges when it has
+    /// fewer), lending edges held by its other parts.
+    pub min_degree: usize,
+}
+
+/// The split shapes tried, in order, when a subgraph would drop more than half of the edges
+/// (`(parts, copies)`: each part holds `copies / parts` of the edges, from a half to an
+/// eighth); for each minimum degree of [`SPLIT_MIN_DEGREES`] the first one that fits runs.
+pub const SPLIT_SHAPES: [(usize, usize); 11] = [
+    (2, 1),
+    (5, 2),
+    (3, 1),
+    (7, 2),
+    (4, 1),
+    (9, 2),
+    (5, 1),
+    (11, 2),
+    (6, 1),
+    (13, 2),
+    (8, 1),
+];
 
 /// A split is tried only while each part keeps at least this average degree (sparser random
 /// graphs' spectral gaps, `d - 2 sqrt(d - 1)`, vanish at `d = 2`).
@@ -233,8 +260,8 @@ impl ScalarAnalysis {
     /// edges are divided among `parts` spanning subgraphs, each node's weight as evenly as the
     /// edges allow (greedy, in a fixed pseudo-random order), and every part proves its share
     /// of the condition with its own factorisation (one after the other: one factor in memory
-    /// at a time). A node lends edges to the parts where it has fewer than
-    /// [`MIN_PART_DEGREE`] (all of its edges when it has fewer), and every edge of a node
+    /// at a time). A node lends edges to the parts where it has fewer than `min_degree` (all
+    /// of its edges when it has fewer; [`SPLIT_MIN_DEGREES`]), and every edge of a node
     /// outside a part's largest connected component is held by every part; an edge held by
     /// several parts is **shared**, each with an even share of its kept weight. Each part is
     /// charged where it is strong (its share of every node's kept weight), so its condition is
@@ -244,11 +271,12 @@ impl ScalarAnalysis {
     /// factor is predicted above `max_values`; `parts` must be 1 to 64.
     ///
     /// ```
-    /// use rotavg::certify::multiple::scalar::ScalarAnalysis;
+    /// use rotavg::certify::multiple::scalar::{ScalarAnalysis, SplitShape};
     /// use rotavg::multiple::synthetic::SyntheticGraph;
     /// let (p, _) = SyntheticGraph { num_rotations: 200, num_edges: 2000, ..Default::default() }
     ///     .generate();
-    /// let split = ScalarAnalysis::split(&p, 4, usize::MAX)?.expect("within usize::MAX");
+    /// let shape = SplitShape { parts: 4, copies: 1, min_degree: 2 };
+    /// let split = ScalarAnalysis::split(&p, shape, usize::MAX)?.expect("within usize::MAX");
     /// let whole = ScalarAnalysis::new(&p, usize::MAX)?.expect("within usize::MAX");
     /// assert_eq!((split.parts(), split.dropped_edges()), (4, 0));
     /// assert!(split.factor_len() < whole.factor_len());
@@ -256,16 +284,24 @@ impl ScalarAnalysis {
     /// ```
     pub fn split(
         problem: &MultipleProblem,
-        parts: usize,
+        shape: SplitShape,
         max_values: usize,
     ) -> Result<std::result::Result<Self, usize>> {
-        if parts == 0 || parts > 64 {
+        let SplitShape {
+            parts,
+            copies,
+            min_degree,
+        } = shape;
+        if parts == 0 || parts > 64 || copies == 0 || copies > parts {
             return Err(Error::InvalidSettings {
-                name: "parts".into(),
-                reason: format!("a split comparison needs 1 to 64 parts, got {parts}"),
+                name: "split".into(),
+                reason: format!(
+                    "a split comparison needs 1 to 64 parts and 1 to parts copies of each edge, \
+                     got {parts} parts and {copies} copies"
+                ),
             });
         }
-        let membership = split_edges(problem, parts);
+        let membership = split_edges(problem, parts, copies, min_degree);
         Self::analyse(problem, parts, |k| membership[k], max_values)
     }
 
@@ -448,22 +484,28 @@ impl ScalarPart {
     }
 }
 
-/// Every node keeps at least this many edges in every part of a split (all of its edges when
-/// it has fewer): sparse random parts are weakest at their chains of nodes of degree 1 and 2.
-/// Measured on a 10^5-node graph with 10^6 edges at 0.1 rad, 6 parts: without this rule the
-/// first part's second eigenvector sat on a pendant path of four such nodes (2 negative
-/// pivots); with 2 it proves with factors of 4.5e8 values; 3 proves too, with 5.9e8 (more
-/// edges shared).
-pub const MIN_PART_DEGREE: usize = 2;
+/// The minimum degrees tried for the parts of a split, in order: every node keeps at least
+/// this many edges in every part (all of its edges when it has fewer). Sparse random parts are
+/// weakest at their chains of nodes of degree 1 and 2. Measured on a 10^5-node graph with 10^6
+/// edges at 0.1 rad, 6 parts: without this rule the first part's second eigenvector sat on a
+/// pendant path of four such nodes (2 negative pivots); with 2 it proves with factors of 4.5e8
+/// values; with 3 too, with 5.9e8 (more edges shared). With 6x10^5 edges (4 parts of average
+/// degree 3), 2 fails and 3 is needed.
+pub const SPLIT_MIN_DEGREES: [usize; 2] = [2, 3];
 
 /// The edge split of [`ScalarAnalysis::split`], as a bit mask of the parts holding each edge.
 /// 1. Each edge to the part that holds the smallest fractions of its two endpoints' weights so
 ///    far (edges in a fixed pseudo-random order, ties to the lighter part).
-/// 2. A node with fewer than [`MIN_PART_DEGREE`] edges in a part lends it edges held by its
+/// 2. A node with fewer than `min_degree` edges in a part lends it edges held by its
 ///    other parts (those of the parts where it has the most), which are then shared.
 /// 3. Every edge of a node outside the largest connected component of some part is held by
 ///    every part (so every part is connected: the view graph is).
-fn split_edges(problem: &MultipleProblem, parts: usize) -> Vec<u64> {
+fn split_edges(
+    problem: &MultipleProblem,
+    parts: usize,
+    copies: usize,
+    min_degree: usize,
+) -> Vec<u64> {
     let n = problem.num_rotations();
     let edges = problem.edges();
     let m = edges.len();
@@ -488,23 +530,27 @@ fn split_edges(problem: &MultipleProblem, parts: usize) -> Vec<u64> {
     order.sort_by_key(|&k| (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
     let mut load = vec![0.0f64; n * parts];
     let mut total = vec![0.0f64; parts];
+    let copies = copies.clamp(1, parts);
+    let mut ranked: Vec<usize> = (0..parts).collect();
     for &k in &order {
         let e = &edges[k];
-        let share = |v: usize, p: usize| (load[v * parts + p] + e.weight) / weight[v];
+        let w = e.weight / copies as f64;
+        let share = |v: usize, p: usize| (load[v * parts + p] + w) / weight[v];
         let cost = |p: usize| share(e.i, p).max(share(e.j, p)) + share(e.i, p) + share(e.j, p);
-        let best = (0..parts)
-            .min_by(|&p, &q| {
-                cost(p)
-                    .total_cmp(&cost(q))
-                    .then(total[p].total_cmp(&total[q]))
-            })
-            .unwrap_or(0);
-        load[e.i * parts + best] += e.weight;
-        load[e.j * parts + best] += e.weight;
-        total[best] += e.weight;
-        member[k] = 1 << best;
+        ranked.sort_by(|&p, &q| {
+            cost(p)
+                .total_cmp(&cost(q))
+                .then(total[p].total_cmp(&total[q]))
+                .then(p.cmp(&q))
+        });
+        for &best in &ranked[..copies] {
+            load[e.i * parts + best] += w;
+            load[e.j * parts + best] += w;
+            total[best] += w;
+            member[k] |= 1 << best;
+        }
     }
-    // 2. at least MIN_PART_DEGREE edges per node and part
+    // 2. at least min_degree edges per node and part
     let mut count = vec![0usize; n * parts];
     for (k, e) in edges.iter().enumerate() {
         for p in (0..parts).filter(|&p| member[k] >> p & 1 == 1) {
@@ -515,7 +561,7 @@ fn split_edges(problem: &MultipleProblem, parts: usize) -> Vec<u64> {
     let mut incident = Vec::new();
     for v in 0..n {
         for p in 0..parts {
-            while count[v * parts + p] < MIN_PART_DEGREE {
+            while count[v * parts + p] < min_degree {
                 // an edge of v that part p lacks, from the part where v has the most edges
                 incident.clear();
                 incident.extend(
@@ -1185,9 +1231,14 @@ mod tests {
                 })
                 .collect();
             // ... and splits, every part proving its (uneven) share
-            for parts in [2, 3] {
+            for (parts, copies, min_degree) in [(2, 1, 2), (3, 1, 3), (5, 2, 2)] {
+                let shape = SplitShape {
+                    parts,
+                    copies,
+                    min_degree,
+                };
                 sparse.push(
-                    ScalarAnalysis::split(&p, parts, usize::MAX)
+                    ScalarAnalysis::split(&p, shape, usize::MAX)
                         .unwrap()
                         .unwrap(),
                 );
@@ -1261,12 +1312,18 @@ mod tests {
     }
 
     /// The split's parts: every edge held by some part; every part connected; every node keeps
-    /// `MIN_PART_DEGREE` edges in every part (all of its edges when it has fewer); and on a
+    /// its minimum degree of edges in every part (all of its edges when it has fewer); and on a
     /// dense random graph, few edges shared and the parts' sizes balanced. Checked with the
     /// problem's own component search on each part's edges (not the union-find of the split).
     #[test]
     fn split_parts_are_connected_balanced_and_keep_their_minimum_degree() {
-        for (n, m, parts) in [(400, 4000, 4), (400, 4000, 6), (30, 60, 3), (12, 14, 2)] {
+        for (n, m, parts, copies, min_degree) in [
+            (400, 4000, 4, 1, 2),
+            (400, 4000, 6, 1, 3),
+            (400, 4000, 7, 2, 2),
+            (30, 60, 3, 1, 2),
+            (12, 14, 2, 1, 3),
+        ] {
             let (p, _) = SyntheticGraph {
                 num_rotations: n,
                 num_edges: m,
@@ -1274,8 +1331,9 @@ mod tests {
                 ..Default::default()
             }
             .generate();
-            let member = split_edges(&p, parts);
+            let member = split_edges(&p, parts, copies, min_degree);
             assert!(member.iter().all(|&b| b != 0 && b < 1 << parts));
+            assert!(member.iter().all(|&b| b.count_ones() as usize >= copies));
             let mut sizes = vec![0usize; parts];
             for (part, size) in sizes.iter_mut().enumerate() {
                 let edges: Vec<_> = p
@@ -1296,13 +1354,16 @@ mod tests {
                     let degree = p.adjacency().neighbours(v).len();
                     let kept = sub.adjacency().neighbours(v).len();
                     assert!(
-                        kept >= degree.min(MIN_PART_DEGREE),
+                        kept >= degree.min(min_degree),
                         "node {v}: {kept} of {degree} edges in part {part}"
                     );
                 }
             }
             if m >= 10 * n {
-                let shared = member.iter().filter(|b| b.count_ones() > 1).count();
+                let shared = member
+                    .iter()
+                    .filter(|b| b.count_ones() as usize > copies)
+                    .count();
                 assert!(shared * 5 < m, "{shared} of {m} edges shared");
                 let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
                 assert!(hi * 10 < lo * 11, "part sizes {sizes:?}");
@@ -1414,9 +1475,14 @@ mod tests {
                             .unwrap(),
                     );
                 }
-                for parts in [2, 3, 4] {
+                for (parts, copies, min_degree) in [(2, 1, 2), (3, 1, 3), (4, 1, 2), (5, 2, 2)] {
+                    let shape = SplitShape {
+                        parts,
+                        copies,
+                        min_degree,
+                    };
                     analyses.push(
-                        ScalarAnalysis::split(&p, parts, usize::MAX)
+                        ScalarAnalysis::split(&p, shape, usize::MAX)
                             .unwrap()
                             .unwrap(),
                     );
@@ -1590,7 +1656,12 @@ mod tests {
             let exact = dense_lambda_min(&p, &l);
             assert_eq!(exact > -1e-12, provable, "independent check: {exact}");
             for parts in [2, 3] {
-                let an = ScalarAnalysis::split(&p, parts, usize::MAX)
+                let shape = SplitShape {
+                    parts,
+                    copies: 1,
+                    min_degree: 2,
+                };
+                let an = ScalarAnalysis::split(&p, shape, usize::MAX)
                     .unwrap()
                     .unwrap();
                 assert_eq!((an.parts(), an.shared_edges()), (parts, 8));
