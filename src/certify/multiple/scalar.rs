@@ -1169,6 +1169,21 @@ mod tests {
         SymmetricEigen::new(m).eigenvalues.min()
     }
 
+    /// The split analysis of `p` with the shape `(parts, copies, min_degree)`, unbounded.
+    fn split_of(
+        p: &MultipleProblem,
+        (parts, copies, min_degree): (usize, usize, usize),
+    ) -> ScalarAnalysis {
+        let shape = SplitShape {
+            parts,
+            copies,
+            min_degree,
+        };
+        ScalarAnalysis::split(p, shape, usize::MAX)
+            .unwrap()
+            .unwrap()
+    }
+
     /// The all-identity point of `p` with its multipliers and the dense `lambda_min(S)`, which
     /// must be clearly negative (the independent check of the planted indefinite cases).
     fn indefinite_at_identity(p: &MultipleProblem) -> (Vec<Rotation>, Vec<Matrix3<f64>>, f64) {
@@ -1231,18 +1246,7 @@ mod tests {
                 })
                 .collect();
             // ... and splits, every part proving its (uneven) share
-            for (parts, copies, min_degree) in [(2, 1, 2), (3, 1, 3), (5, 2, 2)] {
-                let shape = SplitShape {
-                    parts,
-                    copies,
-                    min_degree,
-                };
-                sparse.push(
-                    ScalarAnalysis::split(&p, shape, usize::MAX)
-                        .unwrap()
-                        .unwrap(),
-                );
-            }
+            sparse.extend([(2, 1, 2), (3, 1, 3), (5, 2, 2)].map(|shape| split_of(&p, shape)));
             // the local solution, the ground truth (not critical when noisy), a perturbed point
             let perturbed: Vec<Rotation> = sol
                 .rotations
@@ -1475,18 +1479,9 @@ mod tests {
                             .unwrap(),
                     );
                 }
-                for (parts, copies, min_degree) in [(2, 1, 2), (3, 1, 3), (4, 1, 2), (5, 2, 2)] {
-                    let shape = SplitShape {
-                        parts,
-                        copies,
-                        min_degree,
-                    };
-                    analyses.push(
-                        ScalarAnalysis::split(&p, shape, usize::MAX)
-                            .unwrap()
-                            .unwrap(),
-                    );
-                }
+                analyses.extend(
+                    [(2, 1, 2), (3, 1, 3), (4, 1, 2), (5, 2, 2)].map(|shape| split_of(&p, shape)),
+                );
                 for an in &analyses {
                     for target in [1e-2, 1e-6, 1e-10] {
                         attempts += 1;
@@ -1656,14 +1651,7 @@ mod tests {
             let exact = dense_lambda_min(&p, &l);
             assert_eq!(exact > -1e-12, provable, "independent check: {exact}");
             for parts in [2, 3] {
-                let shape = SplitShape {
-                    parts,
-                    copies: 1,
-                    min_degree: 2,
-                };
-                let an = ScalarAnalysis::split(&p, shape, usize::MAX)
-                    .unwrap()
-                    .unwrap();
+                let an = split_of(&p, (parts, 1, 2));
                 assert_eq!((an.parts(), an.shared_edges()), (parts, 8));
                 match scalar_comparison(&p, &an, &rs, &l, 1e-9).unwrap() {
                     Ok(c) => {
