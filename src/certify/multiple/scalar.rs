@@ -857,11 +857,15 @@ pub fn scalar_comparison(
         // eps grows with zeta (w does): twice the first estimate, then the exact one checked
         zeta = zeta_needed + 2.0 * defect_of(zeta_needed);
         defect = defect_of(zeta);
-        if !(defect.is_finite() && defect <= zeta) {
-            return Ok(Err(ScalarFailure::Numerical));
-        }
     }
     let weights: Vec<f64> = delta.iter().map(|d| d + zeta).collect();
+    // what the weights add to delta: fl(delta_i + zeta) >= delta_i + zeta - u w_i (twice that
+    // for safety), less the split's defect; x1^T M x1 >= zeta_free |x1|^2 needs it >= 0
+    let w_max = weights.iter().copied().fold(0.0, f64::max);
+    let zeta_free = (zeta - 2.0 * u * w_max - defect) * (1.0 - 4.0 * u);
+    if !(zeta_free.is_finite() && (zeta_free >= 0.0 || shares.len() <= 1)) {
+        return Ok(Err(ScalarFailure::Numerical));
+    }
 
     // -- step 5: inertia of A_p = L'_p - diag(w) / P - h I for each of the P parts (one for
     // the whole graph or a subgraph). L' = sum_p L'_p (each edge's kept weight shared evenly by
@@ -914,7 +918,6 @@ pub fn scalar_comparison(
 
     // the cross terms (both bounds hold; the better is used); x1^T M x1 >= (zeta - eps) |x1|^2
     let kappa = kappa_of(zeta);
-    let zeta_free = (zeta - defect) * (1.0 - 4.0 * u);
     let plain = -(2.0 * kappa * (1.0 + nf.sqrt() * kappa) * rho1 + kappa * kappa * rho0);
     let absorbed = if zeta_free > 0.0 {
         -(rho0 + rho1 * rho1 / zeta_free) * kappa * kappa
