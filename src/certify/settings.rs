@@ -289,21 +289,19 @@ impl Budget {
     /// ```
     /// use rotavg::certify::Budget;
     /// let b = Budget { max_memory_bytes: 4 << 30, max_seconds: Some(600.0) };
-    /// assert!(b.counted_factorisations_fit(450_000_000, 6.0 * 1.6e12, 6.0 * 4.5e8).is_ok());
-    /// let why = b.counted_factorisations_fit(450_000_000, 6.0 * 4e12, 6.0 * 4.5e8).unwrap_err();
+    /// assert!(b.counted_factorisations_fit(450_000_000, 6.0 * 1.6e12, 2_700_000_000).is_ok());
+    /// let why = b.counted_factorisations_fit(450_000_000, 6.0 * 4e12, 2_700_000_000).unwrap_err();
     /// assert!(why.contains("time budget 600 s"), "{why}");
     /// ```
     pub fn counted_factorisations_fit(
         &self,
         values: usize,
         multiply_adds: f64,
-        total_values: f64,
+        total_values: usize,
     ) -> std::result::Result<(), String> {
-        let seconds = multiply_adds / PREDICTED_MULTIPLY_ADD_RATE
-            + total_values * PREDICTED_SECONDS_PER_COUNTED_VALUE;
         self.fits_with(
             values,
-            seconds,
+            Self::predicted_factor_seconds(multiply_adds, total_values),
             "counted multiply-adds at 3e10 per second plus 1e-8 s per value; 1.2x to 1.6x the \
              measured times",
         )

@@ -1056,25 +1056,27 @@ fn try_scalar_comparison(
     let max_values = settings.budget.max_factor_values(n);
     // the budget again with the exact factor and scratch: the ordering's prediction checked
     // before the symbolic analysis can be 2x low (10^5-node random graph: 6e8 predicted,
-    // 1.21e9 values stored)
-    // (the parts of a split are factorised one after the other: the largest must fit the
-    // memory budget, and their counted multiply-adds together the time budget)
-    // the factorisations' predicted seconds (counted multiply-adds; a split's parts together)
-    let seconds = |a: &ScalarAnalysis| {
+    // 1.21e9 values stored). A split's parts are factorised one after the other: the largest
+    // (with scratch) must fit the memory budget, their counted multiply-adds together the time
+    // budget. `cost`: (largest values, multiply-adds, values of all parts)
+    let cost = |a: &ScalarAnalysis| {
         let scratch = a.scratch_bytes().div_ceil(8);
         let total: usize = a.factor_lens().map(|v| v.saturating_add(scratch)).sum();
-        Budget::predicted_factor_seconds(a.factor_multiply_adds(), total)
+        (
+            a.factor_len().saturating_add(scratch),
+            a.factor_multiply_adds(),
+            total,
+        )
+    };
+    let seconds = |a: &ScalarAnalysis| {
+        let (_, multiply_adds, total) = cost(a);
+        Budget::predicted_factor_seconds(multiply_adds, total)
     };
     let fits = |a: &ScalarAnalysis| {
-        let scratch = a.scratch_bytes().div_ceil(8);
-        let total = a.factor_lens().map(|v| (v + scratch) as f64).sum();
+        let (largest, multiply_adds, total) = cost(a);
         settings
             .budget
-            .counted_factorisations_fit(
-                a.factor_len().saturating_add(scratch),
-                a.factor_multiply_adds(),
-                total,
-            )
+            .counted_factorisations_fit(largest, multiply_adds, total)
             .is_ok()
             && a.factor_len() <= settings.dual.max_factor_nonzeros
     };

@@ -139,8 +139,6 @@ pub struct ScalarAnalysis {
     parts: Vec<ScalarPart>,
     /// Per edge, how many parts hold it (0: dropped, left out of every pattern).
     copies: Vec<u32>,
-    /// Edges left out of every pattern.
-    dropped: usize,
 }
 
 /// One factorised scalar matrix of a [`ScalarAnalysis`].
@@ -315,7 +313,6 @@ impl ScalarAnalysis {
     ) -> Result<std::result::Result<Self, usize>> {
         let m = problem.num_edges();
         let copies: Vec<u32> = (0..m).map(|k| member(k).count_ones()).collect();
-        let dropped = copies.iter().filter(|&&c| c == 0).count();
         let mut parts = Vec::with_capacity(num_parts);
         for part in 0..num_parts {
             let holds = |k: usize| member(k) >> part & 1 == 1;
@@ -324,11 +321,7 @@ impl ScalarAnalysis {
                 Err(predicted) => return Ok(Err(predicted)),
             }
         }
-        Ok(Ok(ScalarAnalysis {
-            parts,
-            copies,
-            dropped,
-        }))
+        Ok(Ok(ScalarAnalysis { parts, copies }))
     }
 
     /// `true` when this analysis was made for `problem`'s graph: same size, and in every part
@@ -365,7 +358,7 @@ impl ScalarAnalysis {
     /// Edges left out of every pattern (0 for [`ScalarAnalysis::new`] and
     /// [`ScalarAnalysis::split`]).
     pub fn dropped_edges(&self) -> usize {
-        self.dropped
+        self.copies.iter().filter(|&&c| c == 0).count()
     }
 
     /// Number of factorisations the comparison runs (1, or the parts of a split).
@@ -867,24 +860,17 @@ pub fn scalar_comparison(
         return Ok(Err(ScalarFailure::Numerical));
     }
 
-    // -- step 5: inertia of A_p = L'_p - diag(w) / P - h I for each of the P parts (one for
-    // the whole graph or a subgraph). L' = sum_p L'_p (each edge's kept weight shared evenly by
-    // the parts that hold it), so lambda_2(L'_p - diag(w) / P) >= 0 for every p gives, by the
-    // pencil lemma applied to each part (weights w / P, the same orthogonality w^T y = 0),
-    // y^T (L' - diag(w)) y >= 0 whenever w^T y = 0: step 4's premise.
+    // -- step 5: inertia of A_p = L'_p - diag(c_p) - h I for each of the P parts (one part,
+    // c = w, for the whole graph or a subgraph: the pencil lemma, step 4's premise). L' =
+    // sum_p L'_p (each edge's kept weight shared evenly by the parts that hold it).
     // h only needs to exceed the backward error (typically ~1e-10 d_max at 10^4 nodes); it
     // tightens the condition by a negligible 1e-6 d_max
     let num_parts = analysis.parts.len().max(1);
     let mut headroom = 0.0f64;
     let mut backward = 0.0f64;
     for (p, part) in analysis.parts.iter().enumerate() {
-        // c_p = w f_p, rounded up so that sum_p c_p >= w (f_p sums to 1 up to (P + 2) u)
-        let charges: Vec<f64> = match shares.get(p) {
-            Some(f) => weights
-                .iter()
-                .zip(f)
-                .map(|(w, f)| w * f * (1.0 + gamma(num_parts + 4)))
-                .collect(),
+        let charges = match shares.get(p) {
+            Some(f) => part_charges(&weights, f, num_parts),
             None => weights.clone(),
         };
         let mut h = 1e-6 * d_max.max(f64::MIN_POSITIVE) / num_parts as f64;
@@ -934,7 +920,7 @@ pub fn scalar_comparison(
         verified_min_eigenvalue: mu.min(0.0),
         max_delta,
         second_order_edges,
-        dropped_edges: analysis.dropped,
+        dropped_edges: analysis.dropped_edges(),
         parts: analysis.parts(),
         shared_edges: analysis.shared_edges(),
         split_defect: defect,
@@ -984,10 +970,20 @@ fn part_shares(
         .collect()
 }
 
-/// The split's defect `eps >= sum_p ||c_p - s_p w||^2 / 1^T c_p` with `c_p = w f_p` and
-/// `s_p = c_p^T w / w^T w` (any `s_p` is valid; this one minimises the norm), rounded up:
-/// `c_p` is formed with the `1 + gamma(P + 4)` of step 5, and every difference's rounding is
-/// bounded by `gamma(4)` times the magnitudes.
+/// A part's charges `c_p = w f_p`, rounded up by `1 + gamma(P + 4)` so that
+/// `sum_p c_p >= w` holds in floating point (the shares `f_p` sum to 1 up to `(P + 2) u`).
+/// Step 5 factorises with exactly these numbers and [`split_defect`] bounds their defect.
+fn part_charges(w: &[f64], f: &[f64], parts: usize) -> Vec<f64> {
+    w.iter()
+        .zip(f)
+        .map(|(w, f)| w * f * (1.0 + gamma(parts + 4)))
+        .collect()
+}
+
+/// The split's defect `eps >= sum_p ||c_p - s_p w||^2 / 1^T c_p` with `c_p` from
+/// [`part_charges`] and `s_p = c_p^T w / w^T w` (any `s_p` is valid; this one minimises the
+/// norm), rounded up: every difference's rounding is bounded by `gamma(4)` times the
+/// magnitudes.
 fn split_defect(shares: &[Vec<f64>], w: &[f64]) -> f64 {
     let parts = shares.len();
     let n = w.len();
@@ -995,11 +991,7 @@ fn split_defect(shares: &[Vec<f64>], w: &[f64]) -> f64 {
     let ww: f64 = w.iter().map(|x| x * x).sum();
     let mut eps = 0.0f64;
     for f in shares {
-        let c: Vec<f64> = w
-            .iter()
-            .zip(f)
-            .map(|(w, f)| w * f * (1.0 + gamma(parts + 4)))
-            .collect();
+        let c = part_charges(w, f, parts);
         let cw: f64 = c.iter().zip(w).map(|(c, w)| c * w).sum();
         let sp = cw / ww;
         let (mut sq, mut mag) = (0.0f64, 0.0f64);
