@@ -2,7 +2,7 @@
 //! that `/usr/bin/time -v` reports its peak RSS:
 //!
 //! ```text
-//! cargo run --release --example pipeline_scale -- [random|chain|planar-chain|grid|torus] N [M] [SIGMA] [ABSOLUTE_TOLERANCE_PER_MEDIAN_WEIGHT] [MAX_MEMORY_GIB]
+//! cargo run --release --example pipeline_scale -- [random|chain|planar-chain|grid|torus] N [M] [SIGMA] [ABSOLUTE_TOLERANCE_PER_MIN_WEIGHT] [MAX_MEMORY_GIB]
 //! ```
 //!
 //! `random`: `SyntheticGraph` with `M` edges (default `3 N`), noise `SIGMA` (default 0.05 rad).
@@ -101,7 +101,7 @@ fn main() {
         certify: CertifySettings {
             mode,
             tolerance: ToleranceRule {
-                absolute_per_median_weight: per_weight,
+                absolute_per_min_weight: per_weight,
                 ..Default::default()
             },
             budget: Budget {

@@ -110,14 +110,10 @@ pub(crate) fn quantile_sorted(sorted: &[f64], p: f64) -> f64 {
     sorted[lo] + (sorted[hi] - sorted[lo]) * (pos - lo as f64)
 }
 
-/// The median of weights (all finite, the lower middle one for an even count; 0 for none): the
-/// scale of the absolute part of every certificate tolerance, robust to a single weight.
-pub(crate) fn median_weight(weights: impl Iterator<Item = f64>) -> f64 {
-    let mut w: Vec<f64> = weights.collect();
-    if w.is_empty() {
-        return 0.0;
-    }
-    let mid = (w.len() - 1) / 2;
-    let (_, m, _) = w.select_nth_unstable_by(mid, f64::total_cmp);
-    *m
+/// The smallest positive weight (all finite; 0 for none): the scale of the absolute part of
+/// every certificate tolerance (SPEC section 3). Adding measurements can only lower it, so no
+/// set of measurements loosens a tolerance.
+pub(crate) fn min_weight(weights: impl Iterator<Item = f64>) -> f64 {
+    let min = weights.filter(|w| *w > 0.0).fold(f64::INFINITY, f64::min);
+    if min.is_finite() { min } else { 0.0 }
 }

@@ -1,6 +1,6 @@
 //! Certificates on the families of issue 11 (SLAM-like chains with 1-5 % loop closures, planar
 //! and 3-D, odometry noise 1e-4 rad or none; random view graphs): the optimum is certified under
-//! the default tolerance `max(1e-6 |f|, 1e-9 x median weight)`, and planted non-global
+//! the default tolerance `max(1e-6 |f|, 1e-9 x smallest weight)`, and planted non-global
 //! critical points and perturbed optima are never certified. Sizes up to 10^5 nodes (seconds in
 //! a release build). Timings are printed, never asserted.
 
@@ -32,7 +32,7 @@ fn certify_optimum(name: &str, problem: &MultipleProblem) {
         t.elapsed().as_secs_f64(),
     );
     assert_eq!(c.verdict, Verdict::Certified, "{name}: {c}");
-    // the tolerance is the default rule with the median weight (all weights 1 here)
+    // the tolerance is the default rule with the smallest weight (all weights 1 here)
     assert_eq!(c.tolerance.absolute, 1e-9);
 }
 

@@ -124,8 +124,8 @@ fn noise_free_planted_is_certified() {
         // 1e-9. Allow 1e-8 there (see paper-notes/certificates.md, "noise-free problems").
         let settings = CertifySettings {
             tolerance: ToleranceRule {
-                // unit weights: the absolute tolerance is this times the median weight 1
-                absolute_per_median_weight: if n >= 100 { 1e-8 } else { 1e-9 },
+                // unit weights: the absolute tolerance is this times the smallest weight 1
+                absolute_per_min_weight: if n >= 100 { 1e-8 } else { 1e-9 },
                 ..Default::default()
             },
             ..Default::default()

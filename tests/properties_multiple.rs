@@ -391,7 +391,7 @@ proptest! {
         let b = average_multiple(&q, &settings).unwrap();
         let (ca, cb) = (a.certificate.clone().unwrap(), b.certificate.clone().unwrap());
         let (fa, fb) = (a.solution.chordal_cost, b.solution.chordal_cost);
-        let tol = settings.certify.tolerance.resolve(p.median_weight());
+        let tol = settings.certify.tolerance.resolve(p.min_weight());
         let gap_tol = tol.absolute.max(tol.relative * fa.max(fb));
         if ca.is_certified() && cb.is_certified() {
             prop_assert!((fa - fb).abs() <= 2.0 * gap_tol, "{fa} vs {fb}");

@@ -1,5 +1,5 @@
 //! Soundness campaign of the multiple-averaging certificate with the grounded bound [D15] and
-//! the median-weight tolerance (issue 11): more than 10^4 certificates on random view graphs
+//! the smallest-weight tolerance (issues 11, 24): more than 10^4 certificates on random view graphs
 //! (noise 0 to 90 degrees, outliers) and SLAM-like chains (planar and 3-D), at local solutions
 //! from random starts, at perturbed optima and at random points. Checked for every one:
 //! the lower bound is never above the best cost known for the instance, and a certified

@@ -78,7 +78,7 @@ fn campaign_with(
             sols.push(local_solve(&p, &start));
         }
         let best = sols.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
-        let tol = settings.tolerance.resolve(p.median_weight());
+        let tol = settings.tolerance.resolve(p.min_weight());
         let fp_tol = 1e-9 * (1.0 + best);
         let budget = tol.absolute.max(tol.relative * best.abs().max(1e-12));
         for (rs, f) in &sols {

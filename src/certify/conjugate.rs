@@ -161,7 +161,7 @@ pub fn certify_conjugate(
         mode: settings.mode,
         ..Default::default()
     };
-    let tolerance = settings.tolerance.resolve(problem.median_weight());
+    let tolerance = settings.tolerance.resolve(problem.min_weight());
     let small = problem.num_pairs() <= settings.branch_and_bound.auto_max_terms;
     if settings.mode == CertifyMode::BranchAndBound
         || (settings.mode == CertifyMode::Auto && !objective.is_chordal_l2() && small)
@@ -239,7 +239,7 @@ pub fn certify_conjugate(
         bound.map(|b| b.lower_bound),
         BoundMethod::Sdp,
         lam,
-        settings.tolerance.resolve(problem.median_weight()),
+        settings.tolerance.resolve(problem.min_weight()),
         explain(bound.as_ref(), &relax),
         seconds,
     );
@@ -322,7 +322,7 @@ fn with_branch_and_bound(
             Some(lb),
             BoundMethod::BranchAndBound,
             None,
-            settings.tolerance.resolve(problem.median_weight()),
+            settings.tolerance.resolve(problem.min_weight()),
             run.explanation,
             seconds,
         ),

@@ -480,9 +480,9 @@ pub struct CertifySettings {
     /// Which method bounds the global minimum (default `auto`).
     pub mode: CertifyMode,
     /// Gap tolerance of the verdict: certified when
-    /// `gap <= max(relative |f|, absolute_per_median_weight x median weight)` (defaults `1e-6`
-    /// and `1e-9`; the median of the edge, pair or sample weights). Scale-free: multiplying
-    /// every weight by `c` never changes a verdict, and no single measurement can loosen it.
+    /// `gap <= max(relative |f|, absolute_per_min_weight x w_min)` (defaults `1e-6` and `1e-9`;
+    /// `w_min` the smallest edge, pair or sample weight). Scale-free: multiplying every weight
+    /// by `c` never changes a verdict, and no set of measurements can loosen it.
     pub tolerance: ToleranceRule,
     /// Multiple averaging: verification of the dual certificate.
     pub dual: DualSettings,

@@ -14,6 +14,7 @@
 //! Every bound subtracts a floating-point safety margin (`rounding_margin`).
 
 use super::branch_and_bound;
+use super::branch_and_bound::terms::projected_samples;
 use super::certificate::{BoundMethod, Certificate};
 use super::certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun,
@@ -22,7 +23,7 @@ use super::settings::{CertifyMode, CertifySettings};
 use crate::certify::certificate::nonnegative_bound_at_most;
 use crate::error::Result;
 use crate::linalg::compensated::Accumulator;
-use crate::objective::Loss;
+use crate::objective::{Loss, Objective};
 use crate::single::closed_form::{aligned_sum, sample_quaternions, weighted_matrix_sum};
 use crate::single::iterative::{euclidean_median, eval_geodesic};
 use crate::single::solve::Norm;
@@ -79,7 +80,7 @@ pub fn certify_single(
     let start = Instant::now();
     let objective = problem.objective();
     let cost = problem.cost(estimate);
-    let tolerance = settings.tolerance.resolve(problem.median_weight());
+    let tolerance = settings.tolerance.resolve(problem.min_weight());
     let mut details = CertifyDetails {
         mode: settings.mode,
         ..Default::default()
@@ -168,8 +169,58 @@ pub fn certify_single(
     })
 }
 
-/// The theorems `[S1]`-`[S7]` for the estimate (no bound for the other costs).
+/// Samples whose `||R^T R - I||_F` exceeds this are not rotations to rounding (data read within
+/// the validation tolerance, e.g. matrices printed with 6 digits): the theorems `[S2]`-`[S7]`,
+/// which hold for rotations, are applied to their nearest rotations, and the data margin `[B6]`
+/// of that replacement is subtracted (issue 24: the bound is of the cost of the data as given).
+const EXACT_SAMPLE_DEFECT: f64 = 1e-13;
+
+/// The theorems `[S1]`-`[S7]` for the estimate (no bound for the other costs). The chordal L2
+/// closed form `[S1]` holds for any matrices; the others are applied to the samples' nearest
+/// rotations where a sample is not a rotation to rounding, minus the data margin `[B6]`.
 fn theory_bound(problem: &SingleProblem, estimate: &Rotation, cost: f64) -> (Option<f64>, String) {
+    let objective = problem.objective();
+    if objective != Objective::new(Metric::Chordal, Loss::L2)
+        && problem
+            .rotations()
+            .iter()
+            .any(|r| so3::rotation_defect(r.matrix()).0 > EXACT_SAMPLE_DEFECT)
+    {
+        let inexact = |r: &Rotation| so3::rotation_defect(r.matrix()).0 > EXACT_SAMPLE_DEFECT;
+        let (samples, slack) = projected_samples(problem, inexact);
+        let exact = SingleProblem::new(
+            samples
+                .iter()
+                .map(|m| Rotation::from_matrix_unchecked(*m))
+                .collect(),
+            Some(problem.weights().to_vec()),
+        )
+        .and_then(|p| p.with_objective(objective));
+        let Ok(exact) = exact else {
+            return (
+                None,
+                "the samples' nearest rotations do not form a problem".into(),
+            );
+        };
+        let (lb, text) = theory_bound_exact(&exact, estimate, exact.cost(estimate));
+        let lb = lb.map(|l| l - slack).filter(|l| l.is_finite());
+        return (
+            lb,
+            format!(
+                "{text}; applied to the nearest rotations of the samples that are rotations only \
+                 to the validation tolerance, less their data margin [B6] {slack:.1e}"
+            ),
+        );
+    }
+    theory_bound_exact(problem, estimate, cost)
+}
+
+/// [`theory_bound`] for samples that are rotations to rounding (and chordal L2 for any).
+fn theory_bound_exact(
+    problem: &SingleProblem,
+    estimate: &Rotation,
+    cost: f64,
+) -> (Option<f64>, String) {
     let objective = problem.objective();
     match (objective.metric, objective.loss) {
         (Metric::Chordal, Loss::L2) => chordal_l2_bound(problem, cost),

@@ -293,10 +293,10 @@ impl ConjugateProblem {
         self.pairs.len()
     }
 
-    /// The median pair weight (the lower middle one for an even count): the scale of the
-    /// absolute part of the certificate's gap tolerance.
-    pub fn median_weight(&self) -> f64 {
-        crate::validate::median_weight(self.pairs.iter().map(|p| p.weight))
+    /// The smallest pair weight: the scale of the absolute part of the certificate's gap
+    /// tolerance (SPEC section 3; adding pairs can only lower it).
+    pub fn min_weight(&self) -> f64 {
+        crate::validate::min_weight(self.pairs.iter().map(|p| p.weight))
     }
 
     /// Sum of the weights.

@@ -138,7 +138,7 @@ pub fn average_multiple(
 /// (`other_component_sizes`, `isolated_nodes`: nodes with no inlier edge); their nodes keep the
 /// robust rotations in [`InlierGraph::estimate`]. The certificate is of the chordal L2 cost
 /// `sum w ||R_j - R_ij R_i||_F^2` over that component's edges (its `certified_problem` says so),
-/// with the component's median weight in the tolerance: "globally optimal for the inlier
+/// with the component's smallest weight in the tolerance: "globally optimal for the inlier
 /// graph", never a claim about the robust cost on all edges.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct InlierGraph {

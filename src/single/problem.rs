@@ -149,10 +149,10 @@ impl SingleProblem {
         self.rotations.is_empty()
     }
 
-    /// The median weight (the lower middle one for an even count): the scale of the absolute
-    /// part of the certificate's gap tolerance.
-    pub fn median_weight(&self) -> f64 {
-        crate::validate::median_weight(self.weights.iter().copied())
+    /// The smallest sample weight: the scale of the absolute part of the certificate's gap
+    /// tolerance (SPEC section 3; adding samples can only lower it).
+    pub fn min_weight(&self) -> f64 {
+        crate::validate::min_weight(self.weights.iter().copied())
     }
 
     /// `W = sum_i w_i`.

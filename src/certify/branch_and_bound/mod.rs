@@ -162,7 +162,7 @@ fn run<T: search::Terms>(
     terms: &T,
     estimate: &crate::so3::Rotation,
     cost: f64,
-    median_weight: f64,
+    min_weight: f64,
     settings: &crate::certify::CertifySettings,
     elapsed: f64,
 ) -> Run<T::Solution> {
@@ -179,7 +179,7 @@ fn run<T: search::Terms>(
             explanation: "branch and bound not run [B6]: some samples are rotations only to the validation tolerance, and the quaternion distance of such a matrix has no proven perturbation bound; the lower bound is the trivial 0 (project the data onto SO(3), or use another metric)".into(),
         };
     }
-    let tolerance = settings.tolerance.resolve(median_weight);
+    let tolerance = settings.tolerance.resolve(min_weight);
     let out = search::search(
         terms,
         estimate,
@@ -224,7 +224,7 @@ pub(crate) fn run_single(
         &terms,
         estimate,
         cost,
-        problem.median_weight(),
+        problem.min_weight(),
         settings,
         elapsed,
     )
@@ -243,7 +243,7 @@ pub(crate) fn run_conjugate(
         &terms,
         estimate,
         cost,
-        problem.median_weight(),
+        problem.min_weight(),
         settings,
         elapsed,
     )

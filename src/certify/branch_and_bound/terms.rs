@@ -18,19 +18,11 @@ fn projected(r: &Rotation) -> (Matrix3<f64>, f64) {
     }
 }
 
-/// Largest distance `e` of a sample from SO(3) for which the quaternion-metric data margin of
-/// `[B6]` is taken as proven: beyond it, the quaternion distance of a non-orthogonal matrix
-/// (nalgebra's extraction) has no proven perturbation bound.
-const QUATERNION_EXACT_DATA: f64 = 1e-12;
-
-/// The data margin `[B6]` of one term of weight `w` whose matrices are `e` from SO(3):
-/// infinite (no proof) for the quaternion metric beyond [`QUATERNION_EXACT_DATA`].
-fn term_slack(profile: &Profile, metric: so3::Metric, w: f64, e: f64) -> f64 {
-    if metric == so3::Metric::Quaternion && e > QUATERNION_EXACT_DATA {
-        f64::INFINITY
-    } else {
-        w * profile.perturbation(e, 2.0 * e)
-    }
+/// The data margin `[B6]` of one term of weight `w` whose matrices are `e` from SO(3): every
+/// distance of the crate is a function of the angle `atan2(|vee X|, (tr X - 1) / 2)` (the
+/// quaternion distance `2 sin(theta / 4)` included), which moves by at most `2 e`.
+fn term_slack(profile: &Profile, w: f64, e: f64) -> f64 {
+    w * profile.perturbation(e, 2.0 * e)
 }
 
 /// `(theta, sin theta, u)` of a matrix `x` that is a rotation to rounding: `theta =
@@ -55,24 +47,37 @@ pub(crate) struct SingleTerms<'a> {
 impl<'a> SingleTerms<'a> {
     /// The terms of `problem`.
     pub(crate) fn new(problem: &'a SingleProblem) -> Self {
-        let profile = Profile::new(problem.objective());
-        let metric = problem.objective().metric;
-        let mut data_slack = 0.0;
-        let samples = problem
-            .samples()
-            .map(|(_, r, w)| {
-                let (p, e) = projected(r);
-                data_slack += term_slack(&profile, metric, w, e);
-                p
-            })
-            .collect();
+        let (samples, data_slack) = projected_samples(problem, |_| true);
         SingleTerms {
             problem,
-            profile,
+            profile: Profile::new(problem.objective()),
             samples,
-            data_slack: data_slack * (1.0 + 1e-9),
+            data_slack,
         }
     }
+}
+
+/// The samples of `problem` (those `project` selects replaced by their nearest rotations) and
+/// the data margin `[B6]` of the replacement: for every rotation `X`, the cost of the samples
+/// as given is at least that of the returned matrices minus the margin.
+pub(crate) fn projected_samples(
+    problem: &SingleProblem,
+    project: impl Fn(&Rotation) -> bool,
+) -> (Vec<Matrix3<f64>>, f64) {
+    let profile = Profile::new(problem.objective());
+    let mut data_slack = 0.0;
+    let samples = problem
+        .samples()
+        .map(|(_, r, w)| {
+            if !project(r) {
+                return *r.matrix();
+            }
+            let (p, e) = projected(r);
+            data_slack += term_slack(&profile, w, e);
+            p
+        })
+        .collect();
+    (samples, data_slack * (1.0 + 1e-9))
 }
 
 const SINGLE: Geometry = Geometry {
@@ -144,7 +149,6 @@ impl<'a> ConjugateTerms<'a> {
     /// The terms of `problem`.
     pub(crate) fn new(problem: &'a ConjugateProblem) -> Self {
         let profile = Profile::new(problem.objective());
-        let metric = problem.objective().metric;
         let mut data_slack = 0.0;
         let pairs = problem
             .pairs()
@@ -152,7 +156,7 @@ impl<'a> ConjugateTerms<'a> {
             .map(|p| {
                 let (l, el) = projected(&p.left);
                 let (r, er) = projected(&p.right);
-                data_slack += term_slack(&profile, metric, p.weight, el + er);
+                data_slack += term_slack(&profile, p.weight, el + er);
                 (l, r.transpose(), p.weight)
             })
             .collect();

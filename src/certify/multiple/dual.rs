@@ -214,21 +214,45 @@ impl fmt::Display for DualCertificate {
 }
 
 /// `(Q Y)_i` for every node, edge-wise `[D3]`:
-/// `(Q Y)_i = d_i R_i - sum_{(i,j)} w R_ij^T R_j - sum_{(j,i)} w R_ji R_j`.
+/// `(Q Y)_i = d_i R_i - sum_{(i,j)} w R_ij^T R_j - sum_{(j,i)} w R_ji R_j` (plain floating point;
+/// the certificates use its double-double evaluation).
 pub fn laplacian_times(problem: &MultipleProblem, rotations: &[Rotation]) -> Vec<Matrix3<f64>> {
-    let n = problem.num_rotations();
-    let mut qy = vec![Matrix3::zeros(); n];
-    for e in problem.edges() {
-        let r = e.rotation.matrix();
-        let (ri, rj) = (rotations[e.i].matrix(), rotations[e.j].matrix());
-        qy[e.i] += e.weight * (ri - r.transpose() * rj);
-        qy[e.j] += e.weight * (rj - r * ri);
-    }
-    qy
+    laplacian_times_compensated(problem, rotations)
+        .iter()
+        .map(|node| Matrix3::from_fn(|a, b| node[a][b].value()))
+        .collect()
 }
 
-/// The multipliers `Lambda_i = sym((Q Y)_i R_i^T)` of an estimate `[D3]` (SPEC section 3).
-/// Errors if the estimate does not have one rotation per node.
+/// `(Q Y)_i` for every node, each entry accumulated in double-double `[D3]`, `[D15]`: the
+/// heavy terms `w R_i` and `w R_ij^T R_j` cancel to the residual, which plain floating point
+/// would know only to `u w` (issue 24: odometry of weight 1e8 against loop closures of weight 1).
+pub(super) fn laplacian_times_compensated(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+) -> Vec<[[Accumulator; 3]; 3]> {
+    let mut acc = vec![[[Accumulator::default(); 3]; 3]; problem.num_rotations()];
+    for e in problem.edges() {
+        let (w, r) = (e.weight, e.rotation.matrix());
+        let (ri, rj) = (rotations[e.i].matrix(), rotations[e.j].matrix());
+        for a in 0..3 {
+            for b in 0..3 {
+                // node i: w (R_i - R_ij^T R_j); node j: w (R_j - R_ij R_i)   [D3]
+                acc[e.i][a][b].add_product(w, ri[(a, b)]);
+                acc[e.j][a][b].add_product(w, rj[(a, b)]);
+                for c in 0..3 {
+                    acc[e.i][a][b].add_triple(-w, r[(c, a)], rj[(c, b)]);
+                    acc[e.j][a][b].add_triple(-w, r[(a, c)], ri[(c, b)]);
+                }
+            }
+        }
+    }
+    acc
+}
+
+/// The multipliers `Lambda_i = sym((Q Y)_i R_i^T)` of an estimate `[D3]` (SPEC section 3),
+/// evaluated in double-double and rounded once, so that `sum tr(Lambda_i)` equals the cost to
+/// working precision whatever the spread of the weights. Errors if the estimate does not have
+/// one rotation per node.
 ///
 /// ```
 /// use rotavg::certify::multiple::multipliers;
@@ -240,28 +264,55 @@ pub fn laplacian_times(problem: &MultipleProblem, rotations: &[Rotation]) -> Vec
 /// ```
 pub fn multipliers(problem: &MultipleProblem, rotations: &[Rotation]) -> Result<Vec<Matrix3<f64>>> {
     Ok(first_order_blocks(problem, rotations)?
-        .map(|m| 0.5 * (m + m.transpose()))
+        .map(|(sym, _)| sym)
         .collect())
 }
 
-/// The blocks `(Q Y)_i R_i^T` whose symmetric parts are the multipliers and whose skew parts
-/// are the stationarity residual `[D3]`.
+/// The symmetric and skew parts of `(Q Y)_i R_i^T`: the multipliers and the stationarity
+/// residual `[D3]`, each entry a compensated sum of the double-double `(Q Y)_i` times `R_i^T`,
+/// rounded once.
 fn first_order_blocks(
     problem: &MultipleProblem,
     rotations: &[Rotation],
-) -> Result<impl Iterator<Item = Matrix3<f64>>> {
+) -> Result<impl Iterator<Item = (Matrix3<f64>, Matrix3<f64>)>> {
     problem.check_estimate(rotations)?;
-    Ok(laplacian_times(problem, rotations)
-        .into_iter()
-        .zip(rotations)
-        .map(|(g, r)| g * r.matrix().transpose()))
+    let qy = laplacian_times_compensated(problem, rotations);
+    Ok(qy.into_iter().zip(rotations).map(|(node, r)| {
+        let m = r.matrix();
+        // (Q Y R^T)_ab +- (Q Y R^T)_ba, summed in one accumulator
+        let part = |a: usize, b: usize, sign: f64| {
+            let mut s = Accumulator::default();
+            for c in 0..3 {
+                for (x, y, scale) in [(a, b, 1.0), (b, a, sign)] {
+                    let (hi, lo) = node[x][c].parts();
+                    s.add_product(scale * hi, m[(y, c)]);
+                    s.add_product(scale * lo, m[(y, c)]);
+                }
+            }
+            0.5 * s.value()
+        };
+        let sym = Matrix3::from_fn(|a, b| {
+            if a <= b {
+                part(a, b, 1.0)
+            } else {
+                part(b, a, 1.0)
+            }
+        });
+        let skew = Matrix3::from_fn(|a, b| match a.cmp(&b) {
+            std::cmp::Ordering::Less => part(a, b, -1.0),
+            std::cmp::Ordering::Equal => 0.0,
+            std::cmp::Ordering::Greater => -part(b, a, -1.0),
+        });
+        (sym, skew)
+    }))
 }
 
 /// `sqrt(sum_i ||(Q Y)_i - Lambda_i R_i||_F^2)` with `Lambda` from [`multipliers`]: the
-/// first-order residual (zero exactly at a critical point of the cost on `O(3)^n`).
+/// first-order residual (zero exactly at a critical point of the cost on `O(3)^n`), i.e.
+/// `sqrt(sum_i ||skew((Q Y)_i R_i^T)||_F^2)`.
 pub fn stationarity_residual(problem: &MultipleProblem, rotations: &[Rotation]) -> Result<f64> {
     Ok(first_order_blocks(problem, rotations)?
-        .map(|m| (0.5 * (m - m.transpose())).norm_squared())
+        .map(|(_, skew)| skew.norm_squared())
         .sum::<f64>()
         .sqrt())
 }
@@ -381,7 +432,7 @@ fn verify(
     let norm = inf_norm(s.as_ref()).max(f64::MIN_POSITIVE);
     let budget = settings
         .tolerance
-        .resolve(problem.median_weight())
+        .resolve(problem.min_weight())
         .allowed_gap(scale);
     let dual = &settings.dual;
     let delta0 = dual.shift_budget_fraction * budget / dim;
@@ -974,23 +1025,7 @@ fn residual_products(
     rotations: &[Rotation],
     lambdas: &[Matrix3<f64>],
 ) -> (Vec<Matrix3<f64>>, f64) {
-    let n = problem.num_rotations();
-    let mut acc = vec![[[Accumulator::default(); 3]; 3]; n];
-    for e in problem.edges() {
-        let (w, r) = (e.weight, e.rotation.matrix());
-        let (ri, rj) = (rotations[e.i].matrix(), rotations[e.j].matrix());
-        for a in 0..3 {
-            for b in 0..3 {
-                // node i: w (R_i - R_ij^T R_j); node j: w (R_j - R_ij R_i)   [D3]
-                acc[e.i][a][b].add_product(w, ri[(a, b)]);
-                acc[e.j][a][b].add_product(w, rj[(a, b)]);
-                for c in 0..3 {
-                    acc[e.i][a][b].add_triple(-w, r[(c, a)], rj[(c, b)]);
-                    acc[e.j][a][b].add_triple(-w, r[(a, c)], ri[(c, b)]);
-                }
-            }
-        }
-    }
+    let mut acc = laplacian_times_compensated(problem, rotations);
     let mut error2 = 0.0;
     let out = acc
         .iter_mut()
@@ -1409,7 +1444,7 @@ pub fn dual_certificate(
         over_budget(&bound).is_none().then_some(bound.lower_bound),
         BoundMethod::Dual,
         min_eig,
-        settings.tolerance.resolve(problem.median_weight()),
+        settings.tolerance.resolve(problem.min_weight()),
         String::new(),
         0.0,
     );
@@ -1575,7 +1610,7 @@ pub fn certify_with_multipliers(
         Some(bound.lower_bound),
         method,
         min_eig,
-        settings.tolerance.resolve(problem.median_weight()),
+        settings.tolerance.resolve(problem.min_weight()),
         String::new(),
         start.elapsed().as_secs_f64(),
     );

@@ -157,7 +157,7 @@ pub fn certify_multiple(
             None,
             BoundMethod::Dual,
             None,
-            settings.tolerance.resolve(problem.median_weight()),
+            settings.tolerance.resolve(problem.min_weight()),
             why,
             details.seconds,
         );
@@ -554,7 +554,7 @@ fn final_certificate(
     settings: &CertifySettings,
     seconds: f64,
 ) -> Certificate {
-    let tolerance = settings.tolerance.resolve(problem.median_weight());
+    let tolerance = settings.tolerance.resolve(problem.min_weight());
     let Some(b) = best else {
         // say why (e.g. the budget's reason and the labelled estimate), not only that
         return Certificate::from_bounds(

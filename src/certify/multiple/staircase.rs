@@ -344,7 +344,7 @@ pub fn staircase_bound(
         Some(bound.lower_bound),
         BoundMethod::Staircase,
         bound.min_eigenvalue_estimate,
-        certify.tolerance.resolve(problem.median_weight()),
+        certify.tolerance.resolve(problem.min_weight()),
         format!(
             "Riemannian staircase: rank {rank}, lifted cost {lifted:.9e}; {stop_reason}; bound \
              verified from the lifted multipliers (lambda_min(S) >= {:.3e})",
