@@ -12,7 +12,7 @@ use rotavg::certify::multiple::{
     Verification, VerifiedBound, certificate_matrix, dual_certificate,
     lower_bound_from_multipliers, multipliers, stationarity_residual,
 };
-use rotavg::certify::{CertifySettings, DualSettings, ToleranceRule, Verdict};
+use rotavg::certify::{CertifySettings, DualProof, DualSettings, ToleranceRule, Verdict};
 use rotavg::linalg::gamma;
 use rotavg::multiple::laplacian::connection_laplacian;
 use rotavg::multiple::synthetic::{SyntheticGraph, z_cycle};
@@ -697,15 +697,20 @@ fn scalar_comparison_certifies_a_long_chain() {
 }
 
 fn assert_scalar_comparison_agrees(p: &MultipleProblem, rotations: &[Rotation]) {
-    let settings = |above: usize| CertifySettings {
+    let settings = |proofs: &[DualProof]| CertifySettings {
         dual: DualSettings {
-            scalar_comparison_above: above,
+            proofs: proofs.to_vec(),
             ..Default::default()
         },
         ..Default::default()
     };
-    let fast = dual_certificate(p, rotations, &settings(0)).unwrap();
-    let full = dual_certificate(p, rotations, &settings(usize::MAX)).unwrap();
+    let fast = dual_certificate(p, rotations, &settings(&[DualProof::ScalarComparison])).unwrap();
+    let full = dual_certificate(
+        p,
+        rotations,
+        &settings(&[DualProof::Grounded, DualProof::ShiftedCholesky]),
+    )
+    .unwrap();
     println!("scalar: {fast}\nfull: {full}");
     assert_eq!(fast.bound.verification, Verification::ScalarComparison);
     // the 3n-dimensional factorisation: of S + shift I, or of S without one node's block (the
@@ -745,7 +750,7 @@ fn scalar_comparison_respects_the_budget_with_the_exact_factor() {
     let needed = analysis.factor_len() + analysis.scratch_bytes().div_ceil(8);
     let settings = |bytes: u64| CertifySettings {
         dual: DualSettings {
-            scalar_comparison_above: 0,
+            proofs: vec![DualProof::ScalarComparison],
             ..Default::default()
         },
         budget: Budget {
@@ -769,8 +774,7 @@ fn scalar_comparison_respects_the_budget_with_the_exact_factor() {
 }
 
 /// Settings whose memory budget is one byte short of `p`'s whole scalar factor plus scratch
-/// (and far below its 3n factor), with the scalar comparison tried first; and that factor's
-/// size.
+/// (and far below its 3n factor); and that factor's size.
 fn short_of_the_whole_scalar_factor(
     p: &MultipleProblem,
     dual: DualSettings,
@@ -780,10 +784,7 @@ fn short_of_the_whole_scalar_factor(
     let whole = ScalarAnalysis::new(p, usize::MAX).unwrap().unwrap();
     let needed = whole.factor_len() + whole.scratch_bytes().div_ceil(8);
     let settings = CertifySettings {
-        dual: DualSettings {
-            scalar_comparison_above: 0,
-            ..dual
-        },
+        dual,
         budget: Budget {
             max_memory_bytes: Budget::factorisation_bytes(needed) as u64 - 1,
             max_seconds: None,
@@ -887,8 +888,7 @@ fn a_failed_subgraph_comparison_is_named_in_the_reason() {
     assert_eq!(c.certificate.verdict, Verdict::Inconclusive);
     let reason = c.bound.budget_exceeded.clone().unwrap();
     assert!(
-        reason.contains("the scalar comparison [D13] on a subgraph without")
-            && reason.contains("negative pivots"),
+        reason.contains("scalar comparison [D13], subgraph") && reason.contains("negative pivots"),
         "{reason}"
     );
 }

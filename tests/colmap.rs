@@ -512,6 +512,11 @@ fn malformed_sparse_models_are_clear_errors() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("2-D points") && e.contains("truncated"), "{e}");
+    // the bytes they need, exactly (24 x 2^64 - 24, not saturated at 2^64 - 1)
+    assert!(
+        e.contains(&format!("need {} bytes", u128::from(u64::MAX) * 24)),
+        "{e}"
+    );
     // one line per image, no points lines: the second image line is not a points line
     let e = read_images_text(
         "1 1 0 0 0 0 0 0 1 a.jpg\n2 1 0 0 0 0 0 0 1 b.jpg\n",

@@ -14,7 +14,7 @@ use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rotavg::Rotation;
 use rotavg::certify::multiple::{Verification, dual_certificate};
-use rotavg::certify::{CertifySettings, DualSettings};
+use rotavg::certify::{CertifySettings, DualProof, DualSettings};
 use rotavg::multiple::synthetic::SyntheticGraph;
 use rotavg::multiple::{Initialisation, MultipleProblem, MultipleSettings, solve_multiple};
 use rotavg::so3::random_rotation;
@@ -155,13 +155,13 @@ fn soundness_thirty_percent_outliers() {
     );
 }
 
-/// The same campaign with the scalar comparison [D13] tried first on every instance (by default
-/// it only runs on graphs whose 3n x 3n factor would be large): its bounds face the same checks.
+/// The same campaign with the scalar comparison [D13] as the only proof of the ladder (by default
+/// the grounded bound [D15] is tried first on small graphs): its bounds face the same checks.
 #[test]
 fn soundness_scalar_comparison_forced() {
     let settings = CertifySettings {
         dual: DualSettings {
-            scalar_comparison_above: 0,
+            proofs: vec![DualProof::ScalarComparison],
             ..Default::default()
         },
         ..Default::default()

@@ -320,6 +320,12 @@ pub struct Certificate {
     /// and `gap` ignore it. Omitted from JSON when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub randomized: Option<RandomizedLowerBound>,
+    /// Multiple averaging: whose multipliers gave `lower_bound`, `min_eigenvalue` and
+    /// `verified_min_eigenvalue` (the given estimate, its refinement, the SDP, the staircase);
+    /// `upper_bound`, `gap` and `verdict` are always the given estimate's. Omitted from JSON
+    /// when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bound_from: Option<crate::certify::ladder::Point>,
 }
 
 /// A Monte Carlo lower bound on the global minimum `[D16]` against the certificate's cost.
@@ -457,6 +463,7 @@ impl Certificate {
             branch_and_bound: None,
             certified_problem: None,
             randomized: None,
+            bound_from: None,
         }
     }
 
@@ -493,6 +500,7 @@ impl Certificate {
         c.smallest_eigenvalues = self.smallest_eigenvalues.clone();
         c.branch_and_bound = self.branch_and_bound;
         c.certified_problem = self.certified_problem;
+        c.bound_from = self.bound_from;
         c.randomized = self.randomized.map(|r| {
             RandomizedLowerBound::new(
                 upper_bound,

@@ -86,8 +86,12 @@ pub struct CertifyDetails {
     /// The bounding methods that ran, in order.
     pub methods: Vec<MethodRun>,
     /// Multiple averaging: the stationarity residual `[D3]` of the point whose multipliers
-    /// were verified (0 at a critical point).
+    /// were verified last by the dual certificate (the refined estimate when there is one; 0
+    /// at a critical point).
     pub stationarity_residual: Option<f64>,
+    /// Multiple averaging: the stationarity residual `[D3]` of the given estimate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub given_stationarity_residual: Option<f64>,
     /// Why a requested or default method was not run (e.g. the SDP after a dual certificate
     /// limited by floating-point precision), if one was skipped.
     pub skipped_reason: Option<String>,
@@ -100,8 +104,47 @@ pub struct CertifyDetails {
     pub improvement: Option<Improvement>,
     /// Time spent refining the estimate before verifying multipliers (included in `seconds`).
     pub refine_seconds: f64,
+    /// Every rung of the proof ladder considered, in order: which proof, at which point (the
+    /// given estimate, the refined one, the SDP, the staircase), its predicted cost and its
+    /// outcome ([`crate::certify::ladder`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ladder: Vec<crate::certify::ladder::Attempt>,
     /// Total time, seconds.
     pub seconds: f64,
+}
+
+impl CertifyDetails {
+    /// Record a bounding method that ran on the given estimate, as a [`MethodRun`] and as a
+    /// rung of the ladder (single and conjugate averaging; multiple averaging logs its rungs as
+    /// it climbs): proved when it gave a bound (`sufficient` when that bound certifies), failed
+    /// with its note otherwise.
+    pub(crate) fn record(&mut self, run: MethodRun, sufficient: bool) {
+        use crate::certify::ladder::{Attempt, Outcome, Point, Rung};
+        let rung = match run.method {
+            BoundMethod::Theory => Rung::Theory,
+            BoundMethod::Sdp => Rung::Sdp,
+            BoundMethod::Staircase => Rung::Staircase,
+            BoundMethod::BranchAndBound => Rung::BranchAndBound,
+            BoundMethod::Dual => Rung::Grounded,
+        };
+        let outcome = match run.lower_bound {
+            Some(lower_bound) => Outcome::Proved {
+                lower_bound,
+                sufficient,
+            },
+            None => Outcome::Failed {
+                reason: run.note.clone(),
+            },
+        };
+        self.ladder.push(Attempt {
+            rung,
+            point: Point::Given,
+            predicted: None,
+            outcome,
+            seconds: run.seconds,
+        });
+        self.methods.push(run);
+    }
 }
 
 impl fmt::Display for CertifyDetails {

@@ -244,7 +244,7 @@ pub fn certify_conjugate(
         seconds,
     );
     attach_spectrum(&mut certificate, bound.as_ref());
-    details.methods.push(MethodRun {
+    let run = MethodRun {
         method: BoundMethod::Sdp,
         lower_bound: bound.map(|b| b.lower_bound),
         seconds,
@@ -253,7 +253,8 @@ pub fn certify_conjugate(
              eigenvalue check",
             relax.status, relax.iterations, relax.seconds
         ),
-    });
+    };
+    details.record(run, certificate.is_certified());
     details.sdp = Some(SdpSummary {
         status: relax.status,
         iterations: relax.iterations,
@@ -302,12 +303,14 @@ fn with_branch_and_bound(
     let run =
         branch_and_bound::run_conjugate(problem, s, cost, settings, start.elapsed().as_secs_f64());
     let lb = nonnegative_bound_at_most(run.lower_bound, cost);
-    details.methods.push(MethodRun {
+    let tolerance = settings.tolerance.resolve(problem.min_weight());
+    let method = MethodRun {
         method: BoundMethod::BranchAndBound,
         lower_bound: Some(lb),
         seconds: t.elapsed().as_secs_f64(),
         note: run.explanation.clone(),
-    });
+    };
+    details.record(method, cost - lb <= tolerance.allowed_gap(cost));
     details.branch_and_bound = Some(run.stats);
     let seconds = start.elapsed().as_secs_f64();
     details.seconds = seconds;

@@ -11,6 +11,9 @@
 //! a [`Certification`]: the [`Certificate`] (verdict, proven lower bound, gap), what ran, and a
 //! better solution if one was found while bounding.
 //!
+//! Every proof is a rung of one ladder ([`ladder`]): a predicted cost, an attempt, and a verified
+//! bound or a typed refusal; the report lists each rung tried ([`CertifyDetails::ladder`]).
+//!
 //! Soundness rule: [`Verdict::Certified`] is only produced by [`Certificate::from_bounds`] from a
 //! lower bound verified independently of any solver's own report.
 
@@ -18,6 +21,7 @@ pub mod branch_and_bound;
 pub mod certificate;
 pub mod certification;
 pub mod conjugate;
+pub mod ladder;
 pub mod multiple;
 pub mod settings;
 pub mod single;
@@ -32,7 +36,10 @@ pub use certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun, SdpSummary,
 };
 pub use conjugate::certify_conjugate;
+pub use ladder::{Attempt, Outcome, Point, Prediction, Refusal, Rung};
 pub use multiple::certify_multiple;
-pub use settings::{Budget, CertifyMode, CertifySettings, DualSettings, RandomizedSettings};
+pub use settings::{
+    Budget, CertifyMode, CertifySettings, DualProof, DualSettings, RandomizedSettings,
+};
 pub use single::certify_single;
 pub use spectrum::{SpectrumEstimate, SpectrumSettings};

@@ -332,7 +332,7 @@ impl Budget {
 }
 
 /// `bytes` in the largest binary unit that keeps the number at least 1 (`1.5 KiB`, `4.0 GiB`).
-fn human_bytes(bytes: f64) -> String {
+pub(crate) fn human_bytes(bytes: f64) -> String {
     let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB"];
     let mut value = bytes;
     let mut unit = 0;
@@ -349,7 +349,7 @@ fn human_bytes(bytes: f64) -> String {
 
 /// Settings of the verification of the dual certificate of multiple averaging `[D4]`-`[D8]`,
 /// `[D13]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct DualSettings {
     /// Fraction of the gap tolerance spent on the first Cholesky shift:
@@ -373,17 +373,40 @@ pub struct DualSettings {
     /// Also estimate `lambda_min(S)` (shift-invert Lanczos) when the first shift already
     /// verifies. Costs a few triangular solves; the estimate is reported, not used in the bound.
     pub estimate_when_verified: bool,
-    /// Try the scalar comparison `[D13]` first when the `3n x 3n` Cholesky factor of `S` would
-    /// have more than this many stored values (estimated as 9 x the scalar factor). The scalar
-    /// proof needs one factorisation of an `n x n` matrix (about 27 x fewer flops on graphs
-    /// that fill); when it does not succeed within the gap budget the `3n` factorisation runs as
-    /// usual. `0`: always try it first; `usize::MAX`: never. Only used when the estimate's
-    /// rotations are known.
-    pub scalar_comparison_above: usize,
+    /// The proofs of `lambda_min(S) >= mu` the ladder may climb ([`DualProof`]; default all
+    /// three). They run in the order of their predicted time (the strongest first when all are
+    /// cheap, [`crate::certify::ladder::FREE_SECONDS`]), each only when its own prediction fits
+    /// the [`Budget`]: a larger budget never removes a proof. Until 2026-11-26 the scalar
+    /// comparison ran only above a factor size (`scalar_comparison_above`), which let a
+    /// larger budget give a weaker verdict (issue 24).
+    pub proofs: Vec<DualProof>,
     /// The randomized Chebyshev test `[D16]`, run when no deterministic proof fits the
     /// [`Budget`]: a Monte Carlo lower bound reported beside the `inconclusive` verdict
     /// (never as the verdict's proven bound).
     pub randomized: RandomizedSettings,
+}
+
+/// A proof of `lambda_min(S) >= mu` for the dual certificate of multiple averaging (a rung of
+/// the ladder, [`crate::certify::ladder`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DualProof {
+    /// The grounded bound `[D15]` (`3n - 3` Cholesky factorisation).
+    Grounded,
+    /// A shifted Cholesky factorisation of `S` (`3n`) `[D5]`.
+    ShiftedCholesky,
+    /// The scalar comparison `[D13]`: the whole graph's `n x n` factor, or a subgraph's, or a
+    /// split's.
+    ScalarComparison,
+}
+
+impl DualProof {
+    /// Every proof, in the order of their strength.
+    pub const ALL: [DualProof; 3] = [
+        DualProof::Grounded,
+        DualProof::ShiftedCholesky,
+        DualProof::ScalarComparison,
+    ];
 }
 
 /// Settings of the randomized Chebyshev test `[D16]` ([`crate::linalg::ChebyshevTest`]).
@@ -449,7 +472,7 @@ impl Default for DualSettings {
             max_factor_nonzeros: usize::MAX,
             lanczos: LanczosSettings::default(),
             estimate_when_verified: true,
-            scalar_comparison_above: 30_000_000,
+            proofs: DualProof::ALL.to_vec(),
             randomized: RandomizedSettings::default(),
         }
     }

@@ -90,12 +90,14 @@ pub fn certify_single(
     if settings.mode != CertifyMode::BranchAndBound {
         let (lb, explanation) = theory_bound(problem, estimate, cost);
         let lb = lb.map(|l| nonnegative_bound_at_most(l, cost));
-        details.methods.push(MethodRun {
+        let run = MethodRun {
             method: BoundMethod::Theory,
             lower_bound: lb,
             seconds: start.elapsed().as_secs_f64(),
             note: explanation.clone(),
-        });
+        };
+        let certifies = lb.is_some_and(|l| cost - l <= tolerance.allowed_gap(cost));
+        details.record(run, certifies);
         best = lb.map(|l| (l, BoundMethod::Theory, explanation.clone()));
         if lb.is_none() {
             best = None;
@@ -127,12 +129,13 @@ pub fn certify_single(
             start.elapsed().as_secs_f64(),
         );
         let lb = nonnegative_bound_at_most(run.lower_bound, cost);
-        details.methods.push(MethodRun {
+        let method = MethodRun {
             method: BoundMethod::BranchAndBound,
             lower_bound: Some(lb),
             seconds: t.elapsed().as_secs_f64(),
             note: run.explanation.clone(),
-        });
+        };
+        details.record(method, cost - lb <= tolerance.allowed_gap(cost));
         details.branch_and_bound = Some(run.stats);
         stats = Some(run.stats);
         if best.as_ref().is_none_or(|(l, _, _)| lb > *l) {

@@ -190,11 +190,19 @@ fn normal_equations(
     for p in problem.pairs() {
         let (l, r) = (p.left.matrix(), p.right.matrix());
         match objective.metric {
-            Metric::Geodesic => {
+            Metric::Geodesic | Metric::Quaternion => {
                 // e = log(L^T S R S^T); S -> S exp(w) gives e + Jr^-1(e) S (R^T - I) w  [H7]
                 let e = log(&(p.left.inverse() * s * p.right * s.inverse()));
                 let j = right_jacobian_inverse(&e) * sm * (r.transpose() - Matrix3::identity());
-                let omega = p.weight * objective.irls_weight(e.norm(), 1e-12);
+                let theta = e.norm();
+                let omega = p.weight
+                    * match objective.metric {
+                        // rho(theta) = (2 sin(theta / 4))^2 has rho' = sin(theta / 2): the IRLS
+                        // weight rho' / (2 theta) of the angle (1/4 at 0)
+                        Metric::Quaternion if theta > 1e-8 => (0.5 * theta).sin() / (2.0 * theta),
+                        Metric::Quaternion => 0.25,
+                        _ => objective.irls_weight(theta, 1e-12),
+                    };
                 h += j.transpose() * j * omega;
                 b += j.transpose() * e * omega;
             }
@@ -218,10 +226,12 @@ fn normal_equations(
     (h, b)
 }
 
-/// Minimise the problem's objective `sum_i w_i rho(d(R_i, S^T L_i S))` over SO(3): the
-/// quaternion closed form `[H6]` for quaternion L2 (and as the default start); otherwise
-/// Gauss-Newton (L2) or IRLS (robust losses: each iteration one Gauss-Newton step with weights
-/// `w_i psi(d_i)`) from `settings.init` or the closed form, update `S <- S exp(hat(t delta))`
+/// Minimise the problem's objective `sum_i w_i rho(d(R_i, S^T L_i S))` over SO(3): Gauss-Newton
+/// (L2) or IRLS (robust losses, and the quaternion distance `2 sin(theta / 4)` as a loss of the
+/// angle: each iteration one Gauss-Newton step with weights `w_i psi(d_i)`) from
+/// `settings.init` or the quaternion closed form `[H6]` (which minimises the quaternion cost
+/// with the signs of the pairs' quaternions fixed: with outliers not the quaternion distance's
+/// minimum, which takes the nearer sign per pair), update `S <- S exp(hat(t delta))`
 /// with backtracking (Armijo, `c = 1e-4`) `[H7]`. Stops when the gradient norm
 /// `< gradient_tolerance * total weight` ("gradient norm"), the step angle `< step_tolerance`
 /// ("step angle"), when the line search fails and the predicted decrease is below
@@ -252,15 +262,9 @@ pub fn solve_conjugate(
     let start = Instant::now();
     let objective = problem.objective();
     let closed_form = match settings.init {
-        Some(_) if objective.metric != Metric::Quaternion => None,
-        _ => Some(quaternion_closed_form(problem, &settings.diagnostics)?),
+        Some(_) => None,
+        None => Some(quaternion_closed_form(problem, &settings.diagnostics)?),
     };
-    if objective.metric == Metric::Quaternion {
-        // Quaternion L2 is the only quaternion objective (checked by with_objective).
-        return closed_form.ok_or_else(|| Error::Solver {
-            message: "quaternion closed form missing".into(),
-        });
-    }
     let cost_of = |s: &Rotation| problem.cost(s);
     let gtol = settings.gradient_tolerance * problem.total_weight();
     let mut s = match (&settings.init, &closed_form) {
@@ -353,6 +357,7 @@ pub fn solve_conjugate(
     let name = match (objective.metric, objective.loss) {
         (Metric::Chordal, Loss::L2) => "chordal-gauss-newton",
         (Metric::Geodesic, Loss::L2) => "geodesic-gauss-newton",
+        (Metric::Quaternion, _) => "quaternion-irls",
         (Metric::Chordal, _) => "chordal-irls",
         _ => "geodesic-irls",
     };

@@ -736,7 +736,7 @@ pub fn read_images_binary(
         if points > left / 24 {
             return Err(r.err(format!(
                 "image {k} (id {image_id}): {points} 2-D points need {} bytes, only {left} remain: truncated",
-                points.saturating_mul(24)
+                u128::from(points) * 24
             )));
         }
         r.pos += (points * 24) as usize;

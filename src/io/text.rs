@@ -174,6 +174,9 @@ impl TextStream<'static> {
             path: path.into(),
             message,
         };
+        if std::path::Path::new(path).is_dir() {
+            return Err(io_error(folder_message(std::path::Path::new(path))));
+        }
         let file = std::fs::File::open(path).map_err(|e| io_error(e.to_string()))?;
         let file_len = file
             .metadata()
@@ -181,6 +184,24 @@ impl TextStream<'static> {
             .filter(std::fs::Metadata::is_file)
             .map(|m| m.len());
         TextStream::from_reader(path, file, max_bytes, file_len)
+    }
+}
+
+/// Why a folder given as an input file cannot be read as one: the folders the readers do take
+/// (a COLMAP folder whose `database.db` is an SQLite file, for `multiple`; a hand-eye folder, for
+/// `conjugate`), and what is wrong with a `database.db` that is not SQLite.
+fn folder_message(path: &std::path::Path) -> String {
+    let db = path.join("database.db");
+    if db.is_file() {
+        format!(
+            "is a folder whose database.db is not an SQLite file (a COLMAP database starts with \
+             \"SQLite format 3\"): {} cannot be read as a COLMAP database",
+            db.display()
+        )
+    } else {
+        "is a folder, not a file (`multiple` reads a folder holding a COLMAP database.db; \
+         `conjugate` a hand-eye folder)"
+            .into()
     }
 }
 

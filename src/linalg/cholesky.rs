@@ -367,6 +367,42 @@ pub fn factor_multiply_adds(symbolic: &SymbolicCholesky<usize>) -> f64 {
     }
 }
 
+/// The maximal cliques of the chordal extension that the factor's elimination order makes, by
+/// size (nodes): the fronts of the supernodes (columns plus the rows below them); for a
+/// simplicial factor, the columns whose clique `{j} + rows(L_j)` is not inside a child's (a
+/// child `c` of `j` contains it exactly when its column count is `j`'s plus one).
+pub fn front_sizes(symbolic: &SymbolicCholesky<usize>) -> Vec<usize> {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let (begin, end, rows) = (
+                s.supernode_begin(),
+                s.supernode_end(),
+                s.col_ptr_for_row_idx(),
+            );
+            (0..s.n_supernodes())
+                .map(|j| (end[j] - begin[j]) + (rows[j + 1] - rows[j]))
+                .collect()
+        }
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            let (cp, ri) = (s.col_ptr(), s.row_idx());
+            let n = s.ncols();
+            // the column's clique: the column and its rows below the diagonal
+            let clique = |j: usize| (cp[j]..cp[j + 1]).filter(|&p| ri[p] != j).count() + 1;
+            let mut maximal = vec![true; n];
+            for c in 0..n {
+                // the parent: the first row below the diagonal
+                let parent = (cp[c]..cp[c + 1]).map(|p| ri[p]).filter(|&r| r > c).min();
+                if let Some(j) = parent
+                    && clique(c) == clique(j) + 1
+                {
+                    maximal[j] = false;
+                }
+            }
+            (0..n).filter(|&j| maximal[j]).map(clique).collect()
+        }
+    }
+}
+
 impl ShiftedCholesky {
     /// Analyse `s` (square, symmetric, both triangles stored, every diagonal entry stored).
     /// `entry_terms` bounds the number of floating-point operations (terms summed) that formed any

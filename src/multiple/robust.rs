@@ -288,3 +288,63 @@ pub fn edge_residuals(
         summary,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::multiple::{Edge, MultipleProblem};
+    use crate::so3::{Metric, exp};
+
+    /// `[M7]`: the reported robust cost is `sum w rho(theta)` with the table's `rho` (Huber
+    /// `theta^2` inside, `2 c theta - c^2` beyond; Cauchy `c^2 ln(1 + theta^2 / c^2)`), evaluated
+    /// here from the residual angles planted on a two-node graph.
+    #[test]
+    fn huber_and_cauchy_costs_follow_the_table() {
+        let c = 10f64.to_radians();
+        for theta in [0.5 * c, 2.0 * c, 3.0] {
+            let e = |w: f64| Edge {
+                i: 0,
+                j: 1,
+                rotation: exp(&(nalgebra::Vector3::z() * theta)),
+                weight: w,
+            };
+            let y = vec![Rotation::identity(); 2];
+            let huber = Objective::new(
+                Metric::Geodesic,
+                Loss::Huber {
+                    threshold_deg: 10.0,
+                },
+            );
+            let cauchy = Objective::new(Metric::Geodesic, Loss::Cauchy { scale_deg: 10.0 });
+            let expected_huber = if theta <= c {
+                theta * theta
+            } else {
+                2.0 * c * theta - c * c
+            };
+            let expected_cauchy = c * c * (1.0 + theta * theta / (c * c)).ln();
+            for (o, expected) in [(huber, expected_huber), (cauchy, expected_cauchy)] {
+                let p = MultipleProblem::new(2, vec![e(3.0)])
+                    .unwrap()
+                    .with_objective(o)
+                    .unwrap();
+                let cost = p.cost(&y);
+                assert!(
+                    (cost - 3.0 * expected).abs() < 1e-12 * cost.max(1.0),
+                    "{o} {theta}: {cost}"
+                );
+                // the IRLS factor psi = rho' / theta of the table
+                let (rho, psi) = objective_terms(&o, theta, 1e-6);
+                assert!((rho - expected).abs() < 1e-12);
+                let derivative = match o.loss {
+                    Loss::Huber { .. } if theta <= c => 2.0 * theta,
+                    Loss::Huber { .. } => 2.0 * c,
+                    _ => 2.0 * theta / (1.0 + theta * theta / (c * c)),
+                };
+                assert!(
+                    (psi - derivative / theta).abs() < 1e-12,
+                    "{o} {theta}: psi {psi}"
+                );
+            }
+        }
+    }
+}

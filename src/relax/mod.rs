@@ -20,5 +20,5 @@ pub mod settings;
 pub mod svec;
 
 pub use conjugate::{ConjugateRelaxation, relax_conjugate};
-pub use multiple::{MultipleRelaxation, relax_multiple};
+pub use multiple::{MultipleRelaxation, SdpPrediction, predict_relax_multiple, relax_multiple};
 pub use settings::{ChordalMerge, SdpForm, SdpSettings, SdpStatus};

@@ -134,6 +134,73 @@ pub fn relax_multiple(
     })
 }
 
+/// The cost of the SDP relaxation predicted from the graph before Clarabel starts (issue 25):
+/// the chordal decomposition's cliques are modelled by the fronts of the scalar Laplacian's
+/// symbolic Cholesky factor (AMD order, as Clarabel's own decomposition), each a PSD cone of
+/// dimension `d = 3 x` its nodes; an interior-point iteration on a cone of `t = d (d + 1) / 2`
+/// svec entries holds a dense `t x t` block of the KKT system and its factor, and factorises it
+/// in about `t^3 / 3` multiply-adds. Calibration and measurements: `paper-notes/sdp.md` `[P6]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SdpPrediction {
+    /// Predicted peak memory, bytes.
+    pub bytes: f64,
+    /// Predicted wall time, seconds.
+    pub seconds: f64,
+    /// Nodes of the largest clique (front) of the model.
+    pub largest_clique: usize,
+    /// Cliques of the model.
+    pub cliques: usize,
+}
+
+/// Bytes per squared svec entry of a cone (the dense KKT block, its factor and copies).
+/// Calibrated on random view graphs (`examples/sdp_predict`, 2026-11-26, 2-core machine,
+/// Clarabel 0.11, default settings): peak RSS 0.39, 1.49, 0.52, 1.56 and 4.94 GB for
+/// `(n, m)` = (40, 160), (60, 240), (150, 225), (200, 300), (80, 320), which this predicts as
+/// 0.47, 2.0, 0.51, 1.6 and 7.8 GB (at least the measurement but once, within 4 %).
+pub const SDP_BYTES_PER_BLOCK_ENTRY: f64 = 56.0;
+/// Multiply-adds per second of the dense KKT work (with [`SDP_ITERATIONS`]: 5.3, 29.6, 10.2,
+/// 51 and 267 s measured for the graphs above, predicted 6.2, 58, 5.5, 37 and 419 s). Clarabel's
+/// own time limit enforces the budget; the prediction decides whether to start.
+pub const SDP_MULTIPLY_ADD_RATE: f64 = 1e10;
+/// Interior-point iterations assumed by the time model (9 to 12 measured).
+pub const SDP_ITERATIONS: f64 = 20.0;
+
+/// [`SdpPrediction`] of [`relax_multiple`] on `problem` (never errors on a valid problem).
+pub fn predict_relax_multiple(problem: &MultipleProblem) -> Result<SdpPrediction> {
+    let n = problem.num_rotations();
+    let mut t = Vec::with_capacity(2 * problem.num_edges() + n);
+    for e in problem.edges() {
+        t.push(faer::sparse::Triplet::new(e.i, e.j, 1.0));
+        t.push(faer::sparse::Triplet::new(e.j, e.i, 1.0));
+    }
+    for i in 0..n {
+        t.push(faer::sparse::Triplet::new(i, i, 1.0));
+    }
+    let pattern = faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &t)
+        .map_err(|e| Error::Solver {
+            message: format!("could not assemble the view graph's pattern: {e:?}"),
+        })?;
+    let symbolic =
+        match crate::linalg::cholesky::symbolic_cholesky_within(pattern.symbolic(), usize::MAX)? {
+            Ok(s) => s,
+            Err(_) => unreachable!("no limit"),
+        };
+    let fronts = crate::linalg::cholesky::front_sizes(&symbolic);
+    let (mut block_entries, mut multiply_adds) = (0.0f64, 0.0f64);
+    for &c in &fronts {
+        let d = 3.0 * c as f64;
+        let svec = d * (d + 1.0) / 2.0;
+        block_entries += svec * svec;
+        multiply_adds += svec * svec * svec / 3.0;
+    }
+    Ok(SdpPrediction {
+        bytes: SDP_BYTES_PER_BLOCK_ENTRY * block_entries,
+        seconds: SDP_ITERATIONS * multiply_adds / SDP_MULTIPLY_ADD_RATE,
+        largest_clique: fronts.iter().copied().max().unwrap_or(0),
+        cliques: fronts.len(),
+    })
+}
+
 /// What each formulation hands back (scaled problem).
 struct RawSolution {
     lambda_scaled: Vec<Matrix3<f64>>,

@@ -43,6 +43,16 @@ pub struct Args {
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
+    if args.common.init.is_some() {
+        // a usage error (exit status 2): certify never starts a solve from a point of its own
+        clap::Error::raw(
+            clap::error::ErrorKind::ArgumentConflict,
+            "--init does not apply to `rotavg certify`: it evaluates the estimate given by \
+             --estimate and never changes it (--init starts the local solver of single, multiple \
+             and conjugate)\n",
+        )
+        .exit();
+    }
     let options = args.common.read_options();
     let problem = load_problem(&args.input, args.format, &options)?;
     let estimate = load_estimate(&args.estimate, &options)?;

@@ -116,8 +116,35 @@ fn main() -> ExitCode {
             }
         }
         Err(e) => {
-            eprintln!("rotavg: error: {e}");
+            eprintln!("rotavg: error: {}", named(e, input(&cli.command)));
             ExitCode::from(1)
         }
+    }
+}
+
+/// The input file of a subcommand, if it has one.
+fn input(command: &Command) -> Option<&str> {
+    match command {
+        Command::Demo(_) => None,
+        Command::Single(a) => Some(&a.input),
+        Command::Multiple(a) => Some(&a.input),
+        Command::Conjugate(a) => a.input.as_deref(),
+        Command::Certify(a) => Some(&a.input),
+        Command::Info(a) => Some(&a.input),
+    }
+}
+
+/// The error as printed: an error about the data that does not name a file yet (a disconnected
+/// graph, degenerate hand-eye pairs) names the input (issue 24).
+fn named(e: rotavg::Error, input: Option<&str>) -> String {
+    use rotavg::Error;
+    match (e, input) {
+        (
+            e @ (Error::Disconnected { .. } | Error::Degenerate { .. } | Error::Empty { .. }),
+            Some(file),
+        ) if file != "-" => {
+            format!("{file}: {e}")
+        }
+        (e, _) => e.to_string(),
     }
 }

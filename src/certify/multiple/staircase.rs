@@ -9,7 +9,8 @@
 //! The optimiser here is a plain Riemannian gradient descent (Barzilai-Borwein steps, Armijo
 //! backtracking, polar retraction): adequate for moderate sizes; it reports why it stopped.
 
-use super::dual::{VerifiedBound, check_rotations, lower_bound_from_multipliers};
+use super::multipliers::check_rotations;
+use super::verify::{VerifiedBound, lower_bound_from_multipliers};
 use crate::certify::certificate::{BoundMethod, Certificate};
 use crate::certify::settings::CertifySettings;
 use crate::error::{Error, Result};

@@ -1,0 +1,315 @@
+//! The numbers every certificate of chordal L2 multiple averaging is made of (SPEC section 3,
+//! `paper-notes/certificates.md` `[D3]`, `[D4]`, `[D15]`): `Q Y` and the multipliers
+//! `Lambda_i = sym((Q Y)_i R_i^T)` in double-double, the certificate matrix
+//! `S = Q - blkdiag(Lambda)`, the residuals `S Y` with their error bounds, the data defect of
+//! measurements that are orthogonal only to the validation tolerance, and the bound
+//! `sum tr(Lambda_i) - deficit` with its rounding.
+
+use crate::error::{Error, Result};
+use crate::linalg::compensated::Accumulator;
+use crate::linalg::{UNIT_ROUNDOFF, gamma};
+use crate::multiple::MultipleProblem;
+use crate::multiple::laplacian::connection_laplacian_triplets;
+use crate::so3::Rotation;
+use faer::sparse::{SparseColMat, Triplet};
+use nalgebra::Matrix3;
+
+/// `(Q Y)_i` for every node, edge-wise `[D3]`:
+/// `(Q Y)_i = d_i R_i - sum_{(i,j)} w R_ij^T R_j - sum_{(j,i)} w R_ji R_j` (plain floating point;
+/// the certificates use its double-double evaluation).
+pub fn laplacian_times(problem: &MultipleProblem, rotations: &[Rotation]) -> Vec<Matrix3<f64>> {
+    laplacian_times_compensated(problem, rotations)
+        .iter()
+        .map(|node| Matrix3::from_fn(|a, b| node[a][b].value()))
+        .collect()
+}
+
+/// `(Q Y)_i` for every node, each entry accumulated in double-double `[D3]`, `[D15]`: the
+/// heavy terms `w R_i` and `w R_ij^T R_j` cancel to the residual, which plain floating point
+/// would know only to `u w` (issue 24: odometry of weight 1e8 against loop closures of weight 1).
+pub(super) fn laplacian_times_compensated(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+) -> Vec<[[Accumulator; 3]; 3]> {
+    let mut acc = vec![[[Accumulator::default(); 3]; 3]; problem.num_rotations()];
+    for e in problem.edges() {
+        let (w, r) = (e.weight, e.rotation.matrix());
+        let (ri, rj) = (rotations[e.i].matrix(), rotations[e.j].matrix());
+        for a in 0..3 {
+            for b in 0..3 {
+                // node i: w (R_i - R_ij^T R_j); node j: w (R_j - R_ij R_i)   [D3]
+                acc[e.i][a][b].add_product(w, ri[(a, b)]);
+                acc[e.j][a][b].add_product(w, rj[(a, b)]);
+                for c in 0..3 {
+                    acc[e.i][a][b].add_triple(-w, r[(c, a)], rj[(c, b)]);
+                    acc[e.j][a][b].add_triple(-w, r[(a, c)], ri[(c, b)]);
+                }
+            }
+        }
+    }
+    acc
+}
+
+/// The multipliers `Lambda_i = sym((Q Y)_i R_i^T)` of an estimate `[D3]` (SPEC section 3),
+/// evaluated in double-double and rounded once, so that `sum tr(Lambda_i)` equals the cost to
+/// working precision whatever the spread of the weights. Errors if the estimate does not have
+/// one rotation per node.
+///
+/// ```
+/// use rotavg::certify::multiple::multipliers;
+/// use rotavg::multiple::synthetic::SyntheticGraph;
+/// let (p, gt) = SyntheticGraph { num_rotations: 5, num_edges: 8, noise_sigma: 0.0, ..Default::default() }.generate();
+/// let l = multipliers(&p, &gt).unwrap();
+/// // noise-free: every Lambda_i is zero (Q Y = 0)
+/// assert!(l.iter().all(|m| m.norm() < 1e-12));
+/// ```
+pub fn multipliers(problem: &MultipleProblem, rotations: &[Rotation]) -> Result<Vec<Matrix3<f64>>> {
+    Ok(first_order_blocks(problem, rotations)?
+        .map(|(sym, _)| sym)
+        .collect())
+}
+
+/// The symmetric and skew parts of `(Q Y)_i R_i^T`: the multipliers and the stationarity
+/// residual `[D3]`, each entry a compensated sum of the double-double `(Q Y)_i` times `R_i^T`,
+/// rounded once.
+fn first_order_blocks(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+) -> Result<impl Iterator<Item = (Matrix3<f64>, Matrix3<f64>)>> {
+    problem.check_estimate(rotations)?;
+    let qy = laplacian_times_compensated(problem, rotations);
+    Ok(qy.into_iter().zip(rotations).map(|(node, r)| {
+        let m = r.matrix();
+        // (Q Y R^T)_ab +- (Q Y R^T)_ba, summed in one accumulator
+        let part = |a: usize, b: usize, sign: f64| {
+            let mut s = Accumulator::default();
+            for c in 0..3 {
+                for (x, y, scale) in [(a, b, 1.0), (b, a, sign)] {
+                    let (hi, lo) = node[x][c].parts();
+                    s.add_product(scale * hi, m[(y, c)]);
+                    s.add_product(scale * lo, m[(y, c)]);
+                }
+            }
+            0.5 * s.value()
+        };
+        let sym = Matrix3::from_fn(|a, b| {
+            if a <= b {
+                part(a, b, 1.0)
+            } else {
+                part(b, a, 1.0)
+            }
+        });
+        let skew = Matrix3::from_fn(|a, b| match a.cmp(&b) {
+            std::cmp::Ordering::Less => part(a, b, -1.0),
+            std::cmp::Ordering::Equal => 0.0,
+            std::cmp::Ordering::Greater => -part(b, a, -1.0),
+        });
+        (sym, skew)
+    }))
+}
+
+/// `sqrt(sum_i ||(Q Y)_i - Lambda_i R_i||_F^2)` with `Lambda` from [`multipliers`]: the
+/// first-order residual (zero exactly at a critical point of the cost on `O(3)^n`), i.e.
+/// `sqrt(sum_i ||skew((Q Y)_i R_i^T)||_F^2)`.
+pub fn stationarity_residual(problem: &MultipleProblem, rotations: &[Rotation]) -> Result<f64> {
+    Ok(first_order_blocks(problem, rotations)?
+        .map(|(_, skew)| skew.norm_squared())
+        .sum::<f64>()
+        .sqrt())
+}
+
+/// One finite rotation per node.
+pub(crate) fn check_rotations(problem: &MultipleProblem, rotations: &[Rotation]) -> Result<()> {
+    problem.check_estimate(rotations)?;
+    for (i, r) in rotations.iter().enumerate() {
+        if !r.matrix().iter().all(|x| x.is_finite()) {
+            return Err(Error::NonFinite {
+                item: format!("estimate rotation {i}"),
+            });
+        }
+    }
+    Ok(())
+}
+
+pub(super) fn check_lambdas(problem: &MultipleProblem, lambdas: &[Matrix3<f64>]) -> Result<()> {
+    if lambdas.len() != problem.num_rotations() {
+        return Err(Error::InvalidSettings {
+            name: "multipliers".into(),
+            reason: format!(
+                "{} blocks given, the problem has {} nodes",
+                lambdas.len(),
+                problem.num_rotations()
+            ),
+        });
+    }
+    for (i, l) in lambdas.iter().enumerate() {
+        if !l.iter().all(|x| x.is_finite()) {
+            return Err(Error::NonFinite {
+                item: format!("multiplier block {i}"),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The certificate matrix `S = Q - blkdiag(Lambda)` (3n x 3n, sparse, both triangles stored,
+/// every diagonal entry stored). Each `Lambda_i` is symmetrised first (the bound only depends on
+/// the symmetric part).
+pub fn certificate_matrix(
+    problem: &MultipleProblem,
+    lambdas: &[Matrix3<f64>],
+) -> Result<SparseColMat<usize, f64>> {
+    check_lambdas(problem, lambdas)?;
+    let n3 = 3 * problem.num_rotations();
+    let mut t = connection_laplacian_triplets(problem);
+    t.reserve(9 * lambdas.len());
+    for (i, l) in lambdas.iter().enumerate() {
+        let l = symmetrize(l);
+        for a in 0..3 {
+            for b in 0..3 {
+                t.push(Triplet::new(3 * i + a, 3 * i + b, -l[(a, b)]));
+            }
+        }
+    }
+    SparseColMat::try_new_from_triplets(n3, n3, &t).map_err(|e| Error::Solver {
+        message: format!("could not assemble the certificate matrix: {e:?}"),
+    })
+}
+
+pub(super) fn symmetrize(l: &Matrix3<f64>) -> Matrix3<f64> {
+    0.5 * (l + l.transpose())
+}
+
+/// Largest number of rounded operations that formed an entry of `S` from the data: the degree
+/// sum on the diagonal (and multi-edge sums off it), plus the multiplier subtraction.
+pub(super) fn entry_terms(problem: &MultipleProblem) -> usize {
+    let mut deg = vec![0usize; problem.num_rotations()];
+    for e in problem.edges() {
+        deg[e.i] += 1;
+        deg[e.j] += 1;
+    }
+    deg.into_iter().max().unwrap_or(0) + 3
+}
+
+/// Column `a` of the gauge directions `Y = [R_1; ...; R_n]` (length `3n`).
+pub(super) fn gauge_column(rotations: &[Rotation], a: usize) -> Vec<f64> {
+    rotations
+        .iter()
+        .flat_map(|r| (0..3).map(move |row| r.matrix()[(row, a)]))
+        .collect()
+}
+
+/// The gauge directions' terms of `[D15]` and `[D16]`, for the exact `S` of the data.
+pub(super) struct GaugeTerms {
+    /// Proven `rho >= ||S Y||_F >= ||S Y||_2`.
+    pub rho: f64,
+    /// Proven `h >= 0` with `Y^T S Y >= -h I`.
+    pub h: f64,
+    /// `sym(Y^T S Y)` as computed.
+    pub sym: Matrix3<f64>,
+    /// `||Y||_F` as computed.
+    pub y_norm: f64,
+}
+
+/// `rho >= ||S Y||_2` and `h >= -lambda_min(Y^T S Y)`: `S Y` evaluated from the data in
+/// double-double, with its error bound `[D15]`.
+pub(super) fn gauge_terms(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+) -> GaugeTerms {
+    let u = UNIT_ROUNDOFF;
+    let n3 = 3 * problem.num_rotations();
+    let (sy, sy_error) = residual_products(problem, rotations, lambdas);
+    let sy_norm = sy.iter().map(|m| m.norm_squared()).sum::<f64>().sqrt();
+    let rho = (sy_norm + sy_error) * (1.0 + 4.0 * u);
+    let y_norm = rotations
+        .iter()
+        .map(|r| r.matrix().norm_squared())
+        .sum::<f64>()
+        .sqrt();
+    let mut gm = Matrix3::<f64>::zeros();
+    let mut abs_gm = Matrix3::<f64>::zeros();
+    for (r, syi) in rotations.iter().zip(&sy) {
+        gm += r.matrix().transpose() * syi;
+        abs_gm += r.matrix().abs().transpose() * syi.abs();
+    }
+    let g_error = (y_norm * sy_error + gamma(n3) * abs_gm.norm()) * (1.0 + 4.0 * u);
+    let sym = 0.5 * (gm + gm.transpose());
+    let lambda_min = sym.symmetric_eigenvalues().min();
+    let h = ((-lambda_min).max(0.0) + g_error + 16.0 * u * gm.norm()) * (1.0 + 4.0 * u);
+    GaugeTerms {
+        rho,
+        h,
+        sym,
+        y_norm,
+    }
+}
+
+/// `(S Y)_i = (Q Y)_i - sym(Lambda_i) R_i` for every node, evaluated from the data in
+/// double-double (the `S` of [`certificate_matrix`] from the exact data), and a bound on the
+/// Frobenius norm of the whole error `[D15]`.
+pub(super) fn residual_products(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+) -> (Vec<Matrix3<f64>>, f64) {
+    let mut acc = laplacian_times_compensated(problem, rotations);
+    let mut error2 = 0.0;
+    let out = acc
+        .iter_mut()
+        .zip(rotations.iter().zip(lambdas))
+        .map(|(node, (rot, l))| {
+            let l = symmetrize(l);
+            let rm = rot.matrix();
+            Matrix3::from_fn(|a, b| {
+                let cell = &mut node[a][b];
+                for c in 0..3 {
+                    cell.add_product(-l[(a, c)], rm[(c, b)]);
+                }
+                error2 += cell.bound() * cell.bound();
+                cell.value()
+            })
+        })
+        .collect();
+    (out, error2.sqrt() * (1.0 + 4.0 * UNIT_ROUNDOFF))
+}
+
+/// `[D4]` with rounding: `sum tr(Lambda_i) + 3n min(mu, 0)`, minus the rounding error of
+/// evaluating it: the trace sum of `3n` terms has error `<= gamma(3n) sum |Lambda_aa|`, the
+/// product and final subtraction `<= gamma(3n + 2) (sum |Lambda_aa| + 3n |mu|)`; doubled.
+pub(super) fn bound_from_mu(problem: &MultipleProblem, lambdas: &[Matrix3<f64>], mu: f64) -> f64 {
+    let n3 = 3 * lambdas.len();
+    bound_with_deficit(problem, lambdas, n3 as f64 * (-mu).max(0.0))
+}
+
+/// `sum tr(Lambda_i) - deficit` with the rounding of evaluating it and the data defect
+/// subtracted: the bound of `[D15]` and `[D16]` from a proven `deficit >= 0`.
+pub(super) fn bound_with_deficit(
+    problem: &MultipleProblem,
+    lambdas: &[Matrix3<f64>],
+    deficit: f64,
+) -> f64 {
+    let n3 = 3 * lambdas.len();
+    let trace: f64 = lambdas.iter().map(|l| l.trace()).sum();
+    let abs_trace: f64 = lambdas
+        .iter()
+        .map(|l| l[(0, 0)].abs() + l[(1, 1)].abs() + l[(2, 2)].abs())
+        .sum();
+    trace - deficit - 2.0 * gamma(n3 + 4) * (abs_trace + deficit) - data_defect(problem)
+}
+
+/// An upper bound on `c_0 = sum_e w_e (3 - ||R_ij||_F^2)` `[D4]`: the measured rotations are
+/// orthogonal only to rounding, and for rotations `R_i` the chordal cost is
+/// `f(Y) = tr(Y^T Q Y) - c_0`, so a lower bound on `min tr(Y^T Q Y)` bounds `min f` after
+/// subtracting `c_0` (of order `u m w`, either sign). Evaluated in double-double.
+pub(super) fn data_defect(problem: &MultipleProblem) -> f64 {
+    let mut acc = Accumulator::default();
+    for e in problem.edges() {
+        acc.add_product(e.weight, 3.0);
+        for v in e.rotation.matrix().iter() {
+            acc.add_triple(-e.weight, *v, *v);
+        }
+    }
+    (acc.value() + acc.bound()) * (1.0 + 4.0 * UNIT_ROUNDOFF)
+}

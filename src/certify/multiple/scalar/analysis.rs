@@ -1,0 +1,547 @@
+//! The factorised structure of the scalar comparison `[D13]`: the scalar Laplacian pattern of
+//! the whole graph, of a subgraph, or of the parts of a split, with each pattern's symbolic
+//! `LDL^T` analysis (its exact factor size and multiply-adds, for the budget).
+
+use crate::error::{Error, Result};
+use crate::linalg::cholesky::symbolic_cholesky_within;
+use crate::multiple::MultipleProblem;
+use crate::multiple::union_find::UnionFind;
+use crate::so3::Rotation;
+use faer::sparse::linalg::cholesky::SymbolicCholesky;
+use faer::sparse::{SparseColMat, Triplet};
+use nalgebra::Matrix3;
+use serde::{Deserialize, Serialize};
+
+/// The scalar weighted Laplacian pattern(s) of `problem` (with every diagonal entry), and the
+/// symbolic `LDL^T` analysis of each (AMD ordering). Cheap; also tells the caller how large a
+/// `3n x 3n` factor would be (`about 9 x` the whole graph's factor).
+///
+/// One part for the whole graph ([`ScalarAnalysis::new`]) or a subgraph
+/// ([`ScalarAnalysis::sparsified`]); several for a split comparison ([`ScalarAnalysis::split`]),
+/// in which every edge's kept weight is shared evenly by the parts that hold it and every part
+/// proves its share of the condition with its own factorisation.
+pub struct ScalarAnalysis {
+    pub(super) parts: Vec<ScalarPart>,
+    /// Per edge, how many parts hold it (0: dropped, left out of every pattern).
+    pub(super) copies: Vec<u32>,
+    /// How the graph was reduced: `None` whole (or a subgraph, `edges_per_node > 0`), `Some`
+    /// split.
+    shape: Option<SplitShape>,
+    edges_per_node: f64,
+}
+
+/// One factorised scalar matrix of a [`ScalarAnalysis`].
+pub(super) struct ScalarPart {
+    pub(super) symbolic: SymbolicCholesky<usize>,
+    pub(super) pattern: SparseColMat<usize, f64>,
+    pub(super) diag_pos: Vec<usize>,
+    /// The part's edges `(k, position of (i, j), position of (j, i))` in `pattern`'s values,
+    /// by increasing edge index `k`.
+    pub(super) edges: Vec<(usize, usize, usize)>,
+}
+
+/// The sparsified comparisons tried, in order, when the whole graph's scalar factor does not
+/// fit the budget: each node keeps this many of its edges (the fractional part: that fraction
+/// of the nodes keeps one more), those with the smallest residuals ([`ScalarAnalysis::sparsified`]).
+pub const SPARSIFIED_EDGES_PER_NODE: [f64; 5] = [4.0, 3.5, 3.0, 2.75, 2.5];
+
+/// The shape of a split comparison ([`ScalarAnalysis::split`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SplitShape {
+    /// Number of parts (factorisations), 1 to 64.
+    pub parts: usize,
+    /// Parts that hold each edge (each with `1 / copies` of its kept weight), 1 to `parts`:
+    /// each part then has `copies / parts` of the edges, so `parts / copies` acts as the
+    /// number of parts of a split into whole edges, in half steps for `copies = 2`.
+    pub copies: usize,
+    /// Every node keeps at least this many edges in every part (all of its edges when it has
+    /// fewer), lending edges held by its other parts.
+    pub min_degree: usize,
+}
+
+/// The split shapes tried, in order, when a subgraph would drop more than half of the edges
+/// (`(parts, copies)`: each part holds `copies / parts` of the edges, from a half to an
+/// eighth); for each minimum degree of [`SPLIT_MIN_DEGREES`] the first one that fits runs.
+pub const SPLIT_SHAPES: [(usize, usize); 11] = [
+    (2, 1),
+    (5, 2),
+    (3, 1),
+    (7, 2),
+    (4, 1),
+    (9, 2),
+    (5, 1),
+    (11, 2),
+    (6, 1),
+    (13, 2),
+    (8, 1),
+];
+
+/// A split is tried only while each part keeps at least this average degree (sparser random
+/// graphs' spectral gaps, `d - 2 sqrt(d - 1)`, vanish at `d = 2`).
+pub const MIN_SPLIT_DEGREE: f64 = 3.0;
+
+impl ScalarAnalysis {
+    /// Analyse the graph of `problem`, refused before the symbolic analysis when the factor is
+    /// predicted to hold more than `max_values` values: `Ok(Err(predicted))`
+    /// ([`crate::linalg::cholesky::symbolic_cholesky_within`]).
+    pub fn new(
+        problem: &MultipleProblem,
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
+        Self::analyse(problem, 1, |_| 1, max_values)
+    }
+
+    /// The split's shape (`None` for the whole graph or a subgraph).
+    pub fn shape(&self) -> Option<SplitShape> {
+        self.shape
+    }
+
+    /// The edges each node keeps in a subgraph ([`ScalarAnalysis::sparsified`]; 0 otherwise).
+    pub fn edges_per_node(&self) -> f64 {
+        self.edges_per_node
+    }
+
+    /// The analysis of a **subgraph** for the sparsified comparison (step 2 with dropped edges,
+    /// `paper-notes/certificates.md` `[D13]`): every node keeps its `edges_per_node` incident
+    /// edges of smallest residual `||R_a^T R_ab^T R_b - I||_F` at `rotations` (a fractional
+    /// part `f`: a fixed fraction `f` of the nodes keeps one more); an edge is kept when either
+    /// endpoint keeps it. Which edges are kept only decides whether the proof succeeds and how
+    /// large its factor is, never what it proves. Refused like [`ScalarAnalysis::new`].
+    pub fn sparsified(
+        problem: &MultipleProblem,
+        rotations: &[Rotation],
+        edges_per_node: f64,
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
+        let n = problem.num_rotations();
+        if rotations.len() != n {
+            return Err(Error::InvalidSettings {
+                name: "rotations".into(),
+                reason: "sparsified comparison needs one rotation per node".into(),
+            });
+        }
+        if edges_per_node.is_nan() || edges_per_node < 0.0 {
+            return Err(Error::InvalidSettings {
+                name: "edges_per_node".into(),
+                reason: format!("must be a number >= 0, got {edges_per_node}"),
+            });
+        }
+        let residual: Vec<f64> = problem
+            .edges()
+            .iter()
+            .map(|e| {
+                let (ra, rb) = (rotations[e.i].matrix(), rotations[e.j].matrix());
+                let pm = ra.transpose() * (e.rotation.matrix().transpose() * rb);
+                fro(&(pm - Matrix3::identity()))
+            })
+            .collect();
+        let adjacency = problem.adjacency();
+        let mut keep = vec![false; problem.num_edges()];
+        let whole = edges_per_node.floor() as usize;
+        let fraction = edges_per_node - edges_per_node.floor();
+        let mut incident = Vec::new();
+        for v in 0..n {
+            incident.clear();
+            incident.extend(adjacency.neighbours(v).iter().map(|&(_, k)| k));
+            incident.sort_by(|&a, &b| residual[a].total_cmp(&residual[b]).then(a.cmp(&b)));
+            // a fixed pseudo-random subset of the nodes (Knuth's multiplicative hash)
+            let extra = ((v as u64).wrapping_mul(2_654_435_761) % 1000) as f64 / 1000.0 < fraction;
+            for &k in incident.iter().take(whole + usize::from(extra)) {
+                keep[k] = true;
+            }
+        }
+        let analysed = Self::analyse(problem, 1, |k| u64::from(keep[k]), max_values)?;
+        Ok(analysed.map(|a| ScalarAnalysis {
+            edges_per_node,
+            ..a
+        }))
+    }
+
+    /// The analysis of a **split** comparison (`paper-notes/certificates.md` `[D13]`, split): the
+    /// edges are divided among `parts` spanning subgraphs, each node's weight as evenly as the
+    /// edges allow (greedy, in a fixed pseudo-random order), and every part proves its share
+    /// of the condition with its own factorisation (one after the other: one factor in memory
+    /// at a time). A node lends edges to the parts where it has fewer than `min_degree` (all
+    /// of its edges when it has fewer; [`SPLIT_MIN_DEGREES`]), and every edge of a node
+    /// outside a part's largest connected component is held by every part; an edge held by
+    /// several parts is **shared**, each with an even share of its kept weight. Each part is
+    /// charged where it is strong (its share of every node's kept weight), so its condition is
+    /// about as strong as the whole graph's, while its factor fills like a graph `parts` times
+    /// sparser. Which edges go where decides only whether the proof succeeds and how large its
+    /// factors are, never what it proves. Refused like [`ScalarAnalysis::new`] when any part's
+    /// factor is predicted above `max_values`; `parts` must be 1 to 64.
+    ///
+    /// ```
+    /// use rotavg::certify::multiple::scalar::{ScalarAnalysis, SplitShape};
+    /// use rotavg::multiple::synthetic::SyntheticGraph;
+    /// let (p, _) = SyntheticGraph { num_rotations: 200, num_edges: 2000, ..Default::default() }
+    ///     .generate();
+    /// let shape = SplitShape { parts: 4, copies: 1, min_degree: 2 };
+    /// let split = ScalarAnalysis::split(&p, shape, usize::MAX)?.expect("within usize::MAX");
+    /// let whole = ScalarAnalysis::new(&p, usize::MAX)?.expect("within usize::MAX");
+    /// assert_eq!((split.parts(), split.dropped_edges()), (4, 0));
+    /// assert!(split.factor_len() < whole.factor_len());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn split(
+        problem: &MultipleProblem,
+        shape: SplitShape,
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
+        let SplitShape {
+            parts,
+            copies,
+            min_degree,
+        } = shape;
+        if parts == 0 || parts > 64 || copies == 0 || copies > parts {
+            return Err(Error::InvalidSettings {
+                name: "split".into(),
+                reason: format!(
+                    "a split comparison needs 1 to 64 parts and 1 to parts copies of each edge, \
+                     got {parts} parts and {copies} copies"
+                ),
+            });
+        }
+        let membership = split_edges(problem, parts, copies, min_degree);
+        let analysed = Self::analyse(problem, parts, |k| membership[k], max_values)?;
+        Ok(analysed.map(|a| ScalarAnalysis {
+            shape: Some(shape),
+            ..a
+        }))
+    }
+
+    /// Analyse `num_parts` parts (at most 64); bit `p` of `member(k)` says whether part `p`
+    /// holds edge `k` (none: dropped).
+    fn analyse(
+        problem: &MultipleProblem,
+        num_parts: usize,
+        member: impl Fn(usize) -> u64,
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
+        let m = problem.num_edges();
+        let copies: Vec<u32> = (0..m).map(|k| member(k).count_ones()).collect();
+        let mut parts = Vec::with_capacity(num_parts);
+        for part in 0..num_parts {
+            let holds = |k: usize| member(k) >> part & 1 == 1;
+            match ScalarPart::analyse(problem, holds, max_values)? {
+                Ok(p) => parts.push(p),
+                Err(predicted) => return Ok(Err(predicted)),
+            }
+        }
+        Ok(Ok(ScalarAnalysis {
+            parts,
+            copies,
+            shape: None,
+            edges_per_node: 0.0,
+        }))
+    }
+
+    /// `true` when this analysis was made for `problem`'s graph: same size, and in every part
+    /// every edge's two entries sit in its own rows and columns of the pattern, and each edge
+    /// is held by as many parts as `copies` says (O(m) per part).
+    pub(super) fn describes(&self, problem: &MultipleProblem) -> bool {
+        let n = problem.num_rotations();
+        let edges = problem.edges();
+        if self.copies.len() != edges.len() {
+            return false;
+        }
+        let mut held = vec![0u32; edges.len()];
+        for part in &self.parts {
+            if part.pattern.nrows() != n {
+                return false;
+            }
+            let (cp, ri) = (
+                part.pattern.symbolic().col_ptr(),
+                part.pattern.symbolic().row_idx(),
+            );
+            let at = |p: usize, row: usize, col: usize| {
+                (cp[col]..cp[col + 1]).contains(&p) && ri[p] == row
+            };
+            for &(k, p_ij, p_ji) in &part.edges {
+                match edges.get(k) {
+                    Some(e) if at(p_ij, e.i, e.j) && at(p_ji, e.j, e.i) => held[k] += 1,
+                    _ => return false,
+                }
+            }
+        }
+        held == self.copies
+    }
+
+    /// Edges of the graph analysed (held or dropped).
+    pub fn num_edges(&self) -> usize {
+        self.copies.len()
+    }
+
+    /// Edges left out of every pattern (0 for [`ScalarAnalysis::new`] and
+    /// [`ScalarAnalysis::split`]).
+    pub fn dropped_edges(&self) -> usize {
+        self.copies.iter().filter(|&&c| c == 0).count()
+    }
+
+    /// Number of factorisations the comparison runs (1, or the parts of a split).
+    pub fn parts(&self) -> usize {
+        self.parts.len()
+    }
+
+    /// Edges held by more than one part of a split, each part with an even share of its kept
+    /// weight (0 otherwise).
+    pub fn shared_edges(&self) -> usize {
+        self.copies.iter().filter(|&&c| c > 1).count()
+    }
+
+    /// Stored values of the largest scalar factor (exact, from the symbolic analysis:
+    /// supernodal storage, more than the ordering's prediction). The parts of a split are
+    /// factorised one after the other: only one factor is in memory at a time.
+    pub fn factor_len(&self) -> usize {
+        self.factor_lens().max().unwrap_or(0)
+    }
+
+    /// Multiply-adds of all the factorisations ([`crate::linalg::cholesky::factor_multiply_adds`]),
+    /// for the time model.
+    pub fn factor_multiply_adds(&self) -> f64 {
+        self.parts
+            .iter()
+            .map(|p| crate::linalg::cholesky::factor_multiply_adds(&p.symbolic))
+            .sum()
+    }
+
+    /// Stored values of each part's scalar factor.
+    pub fn factor_lens(&self) -> impl Iterator<Item = usize> + '_ {
+        self.parts.iter().map(|p| p.symbolic.len_val())
+    }
+
+    /// Bytes of numeric scratch the largest `LDL^T` factorisation allocates besides the factor.
+    pub fn scratch_bytes(&self) -> usize {
+        self.parts
+            .iter()
+            .map(|p| {
+                p.symbolic
+                    .factorize_numeric_ldlt_scratch::<f64>(
+                        crate::linalg::factor_parallelism(p.symbolic.len_val()),
+                        Default::default(),
+                    )
+                    .size_bytes()
+            })
+            .max()
+            .unwrap_or(0)
+    }
+}
+
+impl ScalarPart {
+    /// The pattern of the edges `holds` selects (every diagonal entry included) and its
+    /// symbolic analysis, refused when the factor is predicted above `max_values`.
+    fn analyse(
+        problem: &MultipleProblem,
+        holds: impl Fn(usize) -> bool,
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
+        let n = problem.num_rotations();
+        let mut t = Vec::with_capacity(2 * problem.num_edges() + n);
+        for (_, e) in problem
+            .edges()
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| holds(*k))
+        {
+            t.push(Triplet::new(e.i, e.j, -e.weight));
+            t.push(Triplet::new(e.j, e.i, -e.weight));
+        }
+        for i in 0..n {
+            t.push(Triplet::new(i, i, 0.0));
+        }
+        let pattern = SparseColMat::try_new_from_triplets(n, n, &t).map_err(|e| Error::Solver {
+            message: format!("could not assemble the scalar Laplacian: {e:?}"),
+        })?;
+        drop(t);
+        let cp = pattern.symbolic().col_ptr();
+        let ri = pattern.symbolic().row_idx();
+        let mut diag_pos = Vec::with_capacity(n);
+        for c in 0..n {
+            match (cp[c]..cp[c + 1]).find(|&k| ri[k] == c) {
+                Some(k) => diag_pos.push(k),
+                None => {
+                    return Err(Error::Solver {
+                        message: "scalar Laplacian lost a diagonal entry".into(),
+                    });
+                }
+            }
+        }
+        let position = |row: usize, col: usize| {
+            ri[cp[col]..cp[col + 1]]
+                .binary_search(&row)
+                .map(|k| cp[col] + k)
+                .map_err(|_| Error::Solver {
+                    message: "scalar Laplacian lost an edge entry".into(),
+                })
+        };
+        let edges = problem
+            .edges()
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| holds(*k))
+            .map(|(k, e)| Ok((k, position(e.i, e.j)?, position(e.j, e.i)?)))
+            .collect::<Result<Vec<_>>>()?;
+        let symbolic = match symbolic_cholesky_within(pattern.symbolic(), max_values)? {
+            Ok(symbolic) => symbolic,
+            Err(predicted) => return Ok(Err(predicted)),
+        };
+        Ok(Ok(ScalarPart {
+            symbolic,
+            pattern,
+            diag_pos,
+            edges,
+        }))
+    }
+}
+
+/// The minimum degrees tried for the parts of a split, in order: every node keeps at least
+/// this many edges in every part (all of its edges when it has fewer). Sparse random parts are
+/// weakest at their chains of nodes of degree 1 and 2. Measured on a 10^5-node graph with 10^6
+/// edges at 0.1 rad, 6 parts: without this rule the first part's second eigenvector sat on a
+/// pendant path of four such nodes (2 negative pivots); with 2 it proves with factors of 4.5e8
+/// values; with 3 too, with 5.9e8 (more edges shared). With 6x10^5 edges (4 parts of average
+/// degree 3), 2 fails and 3 is needed.
+pub const SPLIT_MIN_DEGREES: [usize; 2] = [2, 3];
+
+/// The edge split of [`ScalarAnalysis::split`], as a bit mask of the parts holding each edge.
+/// 1. Each edge to the part that holds the smallest fractions of its two endpoints' weights so
+///    far (edges in a fixed pseudo-random order, ties to the lighter part).
+/// 2. A node with fewer than `min_degree` edges in a part lends it edges held by its
+///    other parts (those of the parts where it has the most), which are then shared.
+/// 3. Every edge of a node outside the largest connected component of some part is held by
+///    every part (so every part is connected: the view graph is).
+pub(super) fn split_edges(
+    problem: &MultipleProblem,
+    parts: usize,
+    copies: usize,
+    min_degree: usize,
+) -> Vec<u64> {
+    let all: u64 = if parts >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << parts) - 1
+    };
+    if parts <= 1 {
+        return vec![all; problem.num_edges()];
+    }
+    let mut member = balance(problem, parts, copies.clamp(1, parts));
+    lend_min_degree(problem, parts, min_degree, &mut member);
+    let outside = outside_largest_components(problem, parts, &member);
+    for (k, e) in problem.edges().iter().enumerate() {
+        if outside[e.i] || outside[e.j] {
+            member[k] = all;
+        }
+    }
+    member
+}
+
+/// Step 1 of [`split_edges`]: each edge to the `copies` parts that hold the smallest fractions
+/// of its endpoints' weights so far (a fixed pseudo-random order: multiplication by an odd
+/// constant is a bijection mod 2^64, so sorting by it shuffles the edges reproducibly).
+fn balance(problem: &MultipleProblem, parts: usize, copies: usize) -> Vec<u64> {
+    let n = problem.num_rotations();
+    let edges = problem.edges();
+    let mut weight = vec![0.0f64; n];
+    for e in edges {
+        weight[e.i] += e.weight;
+        weight[e.j] += e.weight;
+    }
+    let mut member = vec![0u64; edges.len()];
+    let mut order: Vec<usize> = (0..edges.len()).collect();
+    order.sort_by_key(|&k| (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    let mut load = vec![0.0f64; n * parts];
+    let mut total = vec![0.0f64; parts];
+    let mut ranked: Vec<usize> = (0..parts).collect();
+    for &k in &order {
+        let e = &edges[k];
+        let w = e.weight / copies as f64;
+        let share = |v: usize, p: usize| (load[v * parts + p] + w) / weight[v];
+        let cost = |p: usize| share(e.i, p).max(share(e.j, p)) + share(e.i, p) + share(e.j, p);
+        ranked.sort_by(|&p, &q| {
+            cost(p)
+                .total_cmp(&cost(q))
+                .then(total[p].total_cmp(&total[q]))
+                .then(p.cmp(&q))
+        });
+        for &best in &ranked[..copies] {
+            load[e.i * parts + best] += w;
+            load[e.j * parts + best] += w;
+            total[best] += w;
+            member[k] |= 1 << best;
+        }
+    }
+    member
+}
+
+/// Step 2 of [`split_edges`]: a node with fewer than `min_degree` edges in a part borrows
+/// edges it has in other parts (from the part where it has the most), which are then shared.
+fn lend_min_degree(problem: &MultipleProblem, parts: usize, min_degree: usize, member: &mut [u64]) {
+    let edges = problem.edges();
+    let adjacency = problem.adjacency();
+    let mut count = vec![0usize; problem.num_rotations() * parts];
+    for (k, e) in edges.iter().enumerate() {
+        for p in (0..parts).filter(|&p| member[k] >> p & 1 == 1) {
+            count[e.i * parts + p] += 1;
+            count[e.j * parts + p] += 1;
+        }
+    }
+    for v in 0..problem.num_rotations() {
+        for p in 0..parts {
+            while count[v * parts + p] < min_degree {
+                let lend = adjacency
+                    .neighbours(v)
+                    .iter()
+                    .map(|&(_, k)| k)
+                    .filter(|&k| member[k] >> p & 1 == 0)
+                    .max_by_key(|&k| {
+                        let most = (0..parts)
+                            .filter(|&q| member[k] >> q & 1 == 1)
+                            .map(|q| count[v * parts + q])
+                            .max()
+                            .unwrap_or(0);
+                        (most, std::cmp::Reverse(k))
+                    });
+                let Some(k) = lend else { break };
+                member[k] |= 1 << p;
+                count[edges[k].i * parts + p] += 1;
+                count[edges[k].j * parts + p] += 1;
+            }
+        }
+    }
+}
+
+/// Step 3 of [`split_edges`]: the nodes outside the largest connected component of some part
+/// (their edges are then held by every part, so every part is connected: the view graph is).
+fn outside_largest_components(
+    problem: &MultipleProblem,
+    parts: usize,
+    member: &[u64],
+) -> Vec<bool> {
+    let n = problem.num_rotations();
+    let mut outside = vec![false; n];
+    for p in 0..parts {
+        let mut uf = UnionFind::new(n);
+        for (k, e) in problem.edges().iter().enumerate() {
+            if member[k] >> p & 1 == 1 {
+                uf.union(e.i, e.j);
+            }
+        }
+        let root: Vec<usize> = (0..n).map(|v| uf.find(v)).collect();
+        let mut size = vec![0usize; n];
+        for &r in &root {
+            size[r] += 1;
+        }
+        let largest = (0..n).max_by_key(|&v| size[v]).unwrap_or(0);
+        for (v, &r) in root.iter().enumerate() {
+            if r != largest {
+                outside[v] = true;
+            }
+        }
+    }
+    outside
+}
+
+/// Frobenius norm.
+pub(super) fn fro(m: &Matrix3<f64>) -> f64 {
+    m.iter().map(|v| v * v).sum::<f64>().sqrt()
+}

@@ -1,0 +1,227 @@
+//! The shifted Cholesky rung `[D5]`-`[D7]` (`paper-notes/certificates.md`): a successful
+//! sparse Cholesky factorisation of `S + sigma I` proves `lambda_min(S) >= -sigma - margin`
+//! (the floating-point margin `[D6]`). The first shift spends a tenth of the tolerance; when it
+//! fails, Lanczos estimates `lambda_min(S)` (an estimate only: it picks the shifts, and its
+//! negative eigenvector is the staircase's direction of descent) and shifts above it are tried.
+
+use super::verify::{
+    Check, Notes, Proof, Verification, VerifiedBound, factorisation_prediction, first_shift,
+};
+use crate::certify::ladder::{Attempt, Outcome, Prediction, Refusal, Rung};
+use crate::error::Result;
+use crate::linalg::cholesky::PositiveFactor;
+use crate::linalg::{
+    Extreme, LanczosResult, LanczosSettings, ShiftedCholesky, lanczos_extreme, rayleigh_quotient,
+    smallest_eigenpair,
+};
+use std::time::Instant;
+
+/// The shifted Cholesky rung: the analysis of `S` (made by [`Proof::predict`], or by the attempt
+/// when the prediction came from the scalar factor) and its prediction.
+#[derive(Default)]
+pub(super) struct ShiftedProof {
+    analysed: Option<ShiftedCholesky>,
+    predicted: Option<Prediction>,
+}
+
+impl Proof for ShiftedProof {
+    fn rung(&self) -> Rung {
+        Rung::ShiftedCholesky
+    }
+
+    fn predict(&mut self, cx: &Check<'_>) -> Result<std::result::Result<Prediction, Refusal>> {
+        let predicted = match cx.three_n_predicted(cx.s.nrows(), 3.0) {
+            Some(p) => p,
+            None => match analyse(cx)? {
+                Ok((ch, p)) => {
+                    self.analysed = Some(ch);
+                    Ok(p)
+                }
+                Err(refusal) => Err(refusal),
+            },
+        };
+        self.predicted = predicted.as_ref().ok().copied();
+        Ok(predicted)
+    }
+
+    fn attempt(
+        &mut self,
+        cx: &Check<'_>,
+        notes: &mut Notes,
+        log: &mut Vec<Attempt>,
+    ) -> Result<Option<VerifiedBound>> {
+        let since = Instant::now();
+        if self.analysed.is_none() {
+            match analyse(cx)? {
+                Ok((ch, p)) => (self.analysed, self.predicted) = (Some(ch), Some(p)),
+                Err(refusal) => {
+                    let outcome = Outcome::Refused(refusal);
+                    log.push(cx.record(Rung::ShiftedCholesky, self.predicted, outcome, since));
+                    return Ok(None);
+                }
+            }
+        }
+        let (Some(ch), Some(predicted)) = (self.analysed.as_mut(), self.predicted) else {
+            return Ok(None);
+        };
+        let delta0 = first_shift(cx);
+        // a floating-point margin below this costs at most 5 % of the gap budget: the tighter,
+        // more expensive residual margin [D6] (2) is not needed then
+        let margin_target = 0.05 * cx.gap / cx.s.nrows().max(1) as f64;
+        let mut best = None;
+        notes.factorizations += 1;
+        if let Some(f) = ch.factor(delta0, margin_target) {
+            best = Some((f.shift, f.margin));
+            if cx.settings.dual.estimate_when_verified {
+                let mut r = shift_invert(&f, cx.s.nrows(), None, &lanczos(cx, 40));
+                notes.lanczos_iterations += r.iterations;
+                (r.value, r.residual) = rayleigh_quotient(cx.s.as_ref(), &r.vector);
+                notes.estimate = Some(r);
+            }
+        } else if !notes.not_critical {
+            // far from a critical point the bound is weak whatever the shift: no search
+            best = search(cx, ch, delta0, margin_target, notes);
+        }
+        let bound = best.map(|(shift, margin)| {
+            let mut b = VerifiedBound::from_mu(cx, -shift - margin, Verification::Cholesky);
+            b.shift = Some(shift);
+            b.fp_margin = margin;
+            b.factor_nonzeros = ch.factor_len();
+            b
+        });
+        let outcome = match &bound {
+            Some(b) => cx.proved(b),
+            None => Outcome::Failed {
+                reason: match &notes.estimate {
+                    Some(e) => format!(
+                        "no shift verified; Lanczos estimate lambda_min(S) ~ {:.3e}",
+                        e.value
+                    ),
+                    None => "the first shift did not verify".into(),
+                },
+            },
+        };
+        log.push(cx.record(Rung::ShiftedCholesky, Some(predicted), outcome, since));
+        Ok(bound)
+    }
+}
+
+/// The symbolic analysis of `S` within the budget, and its prediction (the first shift, and when
+/// it fails an estimate and a few more). Its refusal is noted for the grounded rung.
+fn analyse(cx: &Check<'_>) -> Result<std::result::Result<(ShiftedCholesky, Prediction), Refusal>> {
+    let dim = cx.s.nrows();
+    let cap = cx
+        .settings
+        .budget
+        .max_factor_values(dim)
+        .min(cx.settings.dual.max_factor_nonzeros);
+    let ch = match ShiftedCholesky::new_within(cx.s.clone(), cx.terms, cap)? {
+        Ok(ch) => ch,
+        Err(predicted) => {
+            let refusal = factorisation_prediction(cx.settings, predicted, 0, dim, 1.0)
+                .err()
+                .unwrap_or_else(|| Refusal::OverBudget {
+                    reason: format!("the ordering predicts {predicted:.1e} factor values"),
+                });
+            cx.note_three_n_refused(&refusal);
+            return Ok(Err(refusal));
+        }
+    };
+    let scratch = ch.scratch_bytes().div_ceil(8);
+    match factorisation_prediction(cx.settings, ch.factor_len(), scratch, dim, 3.0) {
+        Ok(p) => Ok(Ok((ch, p))),
+        Err(refusal) => {
+            cx.note_three_n_refused(&refusal);
+            Ok(Err(refusal))
+        }
+    }
+}
+
+/// The Lanczos settings of the estimates, at most `iterations` (and the dimension).
+fn lanczos(cx: &Check<'_>, iterations: usize) -> LanczosSettings {
+    let mut lz = cx.settings.dual.lanczos;
+    lz.max_iterations = lz.max_iterations.min(iterations).min(cx.s.nrows().max(1));
+    lz
+}
+
+/// Shift-invert estimate through a successful factor: the largest eigenvalue `theta` of
+/// `(S + sigma I)^-1` gives `lambda_min(S) ~ 1 / theta - sigma` `[D7]`.
+fn shift_invert(
+    f: &PositiveFactor<'_>,
+    n: usize,
+    start: Option<&[f64]>,
+    lz: &LanczosSettings,
+) -> LanczosResult {
+    let mut r = lanczos_extreme(
+        n,
+        |x, y| {
+            y.copy_from_slice(x);
+            f.solve_in_place(y);
+        },
+        Extreme::Largest,
+        0.0,
+        lz,
+        start,
+    );
+    r.value = 1.0 / r.value - f.shift;
+    r
+}
+
+/// Estimate `lambda_min(S)` by Lanczos on `S`, then shifts above it `4^j` steps apart until one
+/// factorisation succeeds (refining the estimate by shift-invert from there), then one tighter
+/// shift just above the refined estimate. Returns the best verified `(shift, margin)`.
+fn search(
+    cx: &Check<'_>,
+    ch: &mut ShiftedCholesky,
+    delta0: f64,
+    margin_target: f64,
+    notes: &mut Notes,
+) -> Option<(f64, f64)> {
+    let lz = lanczos(cx, usize::MAX);
+    let mut r = smallest_eigenpair(cx.s.as_ref(), cx.norm, &lz);
+    notes.lanczos_iterations += r.iterations;
+    let max = cx.settings.dual.max_factorizations;
+    let mut tried = 1usize;
+    let base = (-r.value).max(0.0);
+    let step0 = delta0.max(r.residual).max(1e-12 * cx.norm);
+    let gersh_shift = (-crate::linalg::gershgorin_lower_bound(cx.s.as_ref())).max(0.0);
+    let mut best = None;
+    let mut j = 0i32;
+    while tried < max {
+        let sigma = base + step0 * 4f64.powi(j);
+        j += 1;
+        tried += 1;
+        let Some(f) = ch.factor(sigma, margin_target) else {
+            if sigma > gersh_shift {
+                break;
+            }
+            continue;
+        };
+        best = Some((f.shift, f.margin));
+        let mut r2 = shift_invert(&f, cx.s.nrows(), Some(&r.vector), &lz);
+        notes.lanczos_iterations += r2.iterations;
+        (r2.value, r2.residual) = rayleigh_quotient(cx.s.as_ref(), &r2.vector);
+        if r2.value < r.value || r2.residual < r.residual {
+            r = r2;
+        }
+        break;
+    }
+    if let Some((shift, _)) = best {
+        let mut margin = delta0.max(1e-9 * r.value.abs()).max(r.residual);
+        while tried < max {
+            let sigma = (-r.value).max(0.0) + margin;
+            if sigma >= shift {
+                break;
+            }
+            tried += 1;
+            if let Some(f) = ch.factor(sigma, margin_target) {
+                best = Some((f.shift, f.margin));
+                break;
+            }
+            margin *= 10.0;
+        }
+    }
+    notes.factorizations += tried - 1;
+    notes.estimate = Some(r);
+    best
+}
