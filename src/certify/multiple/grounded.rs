@@ -6,7 +6,7 @@
 
 use super::multipliers::{GaugeTerms, bound_with_deficit, gauge_terms};
 use super::verify::{Check, Notes, Proof, Verification, VerifiedBound, factorisation_prediction};
-use crate::certify::ladder::{Attempt, Prediction, Refusal, Rung};
+use crate::certify::ladder::{Prediction, Refusal, Rung};
 use crate::error::{Error, Result};
 use crate::linalg::{Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme};
 use faer::sparse::{SparseColMat, Triplet};
@@ -103,12 +103,7 @@ impl Proof for GroundedProof {
         Ok(Ok(predicted))
     }
 
-    fn attempt(
-        &mut self,
-        cx: &Check<'_>,
-        notes: &mut Notes,
-        log: &mut Vec<Attempt>,
-    ) -> Result<Option<VerifiedBound>> {
+    fn attempt(&mut self, cx: &Check<'_>) -> Result<Option<VerifiedBound>> {
         let since = Instant::now();
         let Some(a) = self.analysed.as_mut() else {
             return Ok(None);
@@ -118,13 +113,13 @@ impl Proof for GroundedProof {
                 Ok((factor, exact)) => (a.factor, a.predicted) = (factor, exact),
                 Err(refusal) => {
                     let outcome = crate::certify::ladder::Outcome::Refused(refusal);
-                    log.push(cx.record(Rung::Grounded, Some(a.predicted), outcome, since));
+                    cx.log(Rung::Grounded, Some(a.predicted), outcome, since);
                     return Ok(None);
                 }
             }
         }
         let proven = match a.factor.as_mut() {
-            Some(ch) => prove_c(cx, ch, a.terms.rho, notes),
+            Some(ch) => prove_c(cx, ch, a.terms.rho, &mut cx.notes()),
             None => Ok((f64::INFINITY, 0.0)),
         };
         let bound = proven.and_then(|(c, margin)| bound(cx, a, c, margin));
@@ -132,7 +127,7 @@ impl Proof for GroundedProof {
             Ok(b) => (cx.proved(&b), Some(b)),
             Err(reason) => (crate::certify::ladder::Outcome::Failed { reason }, None),
         };
-        log.push(cx.record(Rung::Grounded, Some(a.predicted), outcome, since));
+        cx.log(Rung::Grounded, Some(a.predicted), outcome, since);
         Ok(bound)
     }
 }
@@ -566,9 +561,8 @@ mod tests {
             let settings = CertifySettings::default();
             let cx = Check::new(&p, &l, Some(&y), 1.0, &settings, Point::Given).unwrap();
             let mut proof = GroundedProof::default();
-            let mut notes = Notes::default();
             let g = match proof.predict(&cx).unwrap() {
-                Ok(_) => proof.attempt(&cx, &mut notes, &mut Vec::new()).unwrap(),
+                Ok(_) => proof.attempt(&cx).unwrap(),
                 Err(_) => None,
             };
             assert!(g.is_none(), "n={n}: {g:?}");

@@ -7,7 +7,7 @@
 use super::verify::{
     Check, Notes, Proof, Verification, VerifiedBound, factorisation_prediction, first_shift,
 };
-use crate::certify::ladder::{Attempt, Outcome, Prediction, Refusal, Rung};
+use crate::certify::ladder::{Outcome, Prediction, Refusal, Rung};
 use crate::error::Result;
 use crate::linalg::cholesky::PositiveFactor;
 use crate::linalg::{
@@ -44,19 +44,18 @@ impl Proof for ShiftedProof {
         Ok(predicted)
     }
 
-    fn attempt(
-        &mut self,
-        cx: &Check<'_>,
-        notes: &mut Notes,
-        log: &mut Vec<Attempt>,
-    ) -> Result<Option<VerifiedBound>> {
+    fn attempt(&mut self, cx: &Check<'_>) -> Result<Option<VerifiedBound>> {
         let since = Instant::now();
         if self.analysed.is_none() {
             match analyse(cx)? {
                 Ok((ch, p)) => (self.analysed, self.predicted) = (Some(ch), Some(p)),
                 Err(refusal) => {
-                    let outcome = Outcome::Refused(refusal);
-                    log.push(cx.record(Rung::ShiftedCholesky, self.predicted, outcome, since));
+                    cx.log(
+                        Rung::ShiftedCholesky,
+                        self.predicted,
+                        Outcome::Refused(refusal),
+                        since,
+                    );
                     return Ok(None);
                 }
             }
@@ -69,6 +68,7 @@ impl Proof for ShiftedProof {
         // more expensive residual margin [D6] (2) is not needed then
         let margin_target = 0.05 * cx.gap / cx.s.nrows().max(1) as f64;
         let mut best = None;
+        let mut notes = cx.notes();
         notes.factorizations += 1;
         if let Some(f) = ch.factor(delta0, margin_target) {
             best = Some((f.shift, f.margin));
@@ -80,7 +80,7 @@ impl Proof for ShiftedProof {
             }
         } else if !notes.not_critical {
             // far from a critical point the bound is weak whatever the shift: no search
-            best = search(cx, ch, delta0, margin_target, notes);
+            best = search(cx, ch, delta0, margin_target, &mut notes);
         }
         let bound = best.map(|(shift, margin)| {
             let mut b = VerifiedBound::from_mu(cx, -shift - margin, Verification::Cholesky);
@@ -101,7 +101,8 @@ impl Proof for ShiftedProof {
                 },
             },
         };
-        log.push(cx.record(Rung::ShiftedCholesky, Some(predicted), outcome, since));
+        drop(notes);
+        cx.log(Rung::ShiftedCholesky, Some(predicted), outcome, since);
         Ok(bound)
     }
 }

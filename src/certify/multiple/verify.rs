@@ -161,6 +161,10 @@ pub(super) struct Check<'a> {
     pub point: Point,
     started: Instant,
     shared: RefCell<Shared>,
+    /// Every rung considered so far, in order.
+    log: RefCell<Vec<Attempt>>,
+    /// The estimates the rungs found on the way.
+    notes: RefCell<Notes>,
 }
 
 /// What one rung's prediction tells another's.
@@ -193,14 +197,9 @@ pub(super) trait Proof {
     /// Its predicted cost (after the analyses it needs, kept for the attempt), or why it does
     /// not start. `Err` only for errors of the caller's data.
     fn predict(&mut self, cx: &Check<'_>) -> Result<std::result::Result<Prediction, Refusal>>;
-    /// Run it, logging what it tried (a family of shapes logs each); `Some` with a verified
-    /// bound, `None` when it proved nothing.
-    fn attempt(
-        &mut self,
-        cx: &Check<'_>,
-        notes: &mut Notes,
-        log: &mut Vec<Attempt>,
-    ) -> Result<Option<VerifiedBound>>;
+    /// Run it, logging what it tried ([`Check::log`]; a family of shapes logs each); `Some`
+    /// with a verified bound, `None` when it proved nothing.
+    fn attempt(&mut self, cx: &Check<'_>) -> Result<Option<VerifiedBound>>;
 }
 
 impl<'a> Check<'a> {
@@ -231,6 +230,8 @@ impl<'a> Check<'a> {
             point,
             started: Instant::now(),
             shared: RefCell::new(Shared::default()),
+            log: RefCell::new(Vec::new()),
+            notes: RefCell::new(Notes::default()),
         })
     }
 }
@@ -298,6 +299,29 @@ impl Check<'_> {
     /// `bound` leaves at least half of the tolerance for the rest of the gap: the climb stops.
     pub fn sufficient(&self, bound: &VerifiedBound) -> bool {
         self.ceiling() - bound.lower_bound <= 0.5 * self.gap
+    }
+
+    /// Log one rung: `rung` at this point, started at `since`.
+    pub fn log(&self, rung: Rung, predicted: Option<Prediction>, outcome: Outcome, since: Instant) {
+        let attempt = self.record(rung, predicted, outcome, since);
+        self.log.borrow_mut().push(attempt);
+    }
+
+    /// The estimates the rungs leave (for the diagnosis).
+    pub fn notes(&self) -> std::cell::RefMut<'_, Notes> {
+        self.notes.borrow_mut()
+    }
+
+    /// The refusal of a rung predicted to need more than the time left of the budget.
+    pub fn time_refusal(&self, predicted: &Prediction) -> Option<Refusal> {
+        let left = self.seconds_left()?;
+        (predicted.seconds > left).then(|| Refusal::OverBudget {
+            reason: format!(
+                "predicted {:.1} s, {:.1} s of the time budget left",
+                predicted.seconds,
+                left.max(0.0)
+            ),
+        })
     }
 
     /// The log entry of `rung`, started at `since`.
@@ -376,59 +400,45 @@ pub(super) fn verify(
     if enabled(DualProof::ShiftedCholesky) {
         rungs.push(Box::new(ShiftedProof::default()));
     }
-    let mut log = Vec::new();
-    let mut notes = Notes::default();
-    let planned = plan(&cx, &mut rungs, &mut log)?;
+    let planned = plan(&cx, &mut rungs)?;
     let mut best: Option<VerifiedBound> = None;
     let mut ran = false;
-    let mut refused = log.iter().any(over_budget);
     for (k, predicted) in planned {
         let since = Instant::now();
         let rung = rungs[k].rung();
         if best.as_ref().is_some_and(|b| cx.sufficient(b)) {
-            let outcome = Outcome::Refused(Refusal::NotNeeded);
-            log.push(cx.record(rung, Some(predicted), outcome, since));
+            cx.log(
+                rung,
+                Some(predicted),
+                Outcome::Refused(Refusal::NotNeeded),
+                since,
+            );
             continue;
         }
-        if let Some(left) = cx.seconds_left()
-            && ran
-            && predicted.seconds > left
-        {
-            let reason = format!(
-                "predicted {:.1} s, {:.1} s of the time budget left",
-                predicted.seconds,
-                left.max(0.0)
-            );
-            let outcome = Outcome::Refused(Refusal::OverBudget { reason });
-            log.push(cx.record(rung, Some(predicted), outcome, since));
-            refused = true;
+        if let Some(refusal) = cx.time_refusal(&predicted).filter(|_| ran) {
+            cx.log(rung, Some(predicted), Outcome::Refused(refusal), since);
             continue;
         }
         ran = true;
-        if let Some(b) = rungs[k].attempt(&cx, &mut notes, &mut log)?
+        if let Some(b) = rungs[k].attempt(&cx)?
             && best.as_ref().is_none_or(|x| b.lower_bound > x.lower_bound)
         {
             best = Some(b);
         }
     }
-    // a family's own shapes may have been refused by the time left
-    refused |= log.iter().any(over_budget);
-    Ok(finish(&cx, best, !ran || refused, notes, log))
+    let refused = cx.log.borrow().iter().any(over_budget);
+    Ok(finish(&cx, best, !ran || refused))
 }
 
 /// Predict every rung; the refused ones are logged, the others returned (index, prediction) in
 /// the order of the climb: predicted time, the strongest first among the cheap ones.
-fn plan(
-    cx: &Check<'_>,
-    rungs: &mut [Box<dyn Proof>],
-    log: &mut Vec<Attempt>,
-) -> Result<Vec<(usize, Prediction)>> {
+fn plan(cx: &Check<'_>, rungs: &mut [Box<dyn Proof>]) -> Result<Vec<(usize, Prediction)>> {
     let mut planned = Vec::new();
     for (k, r) in rungs.iter_mut().enumerate() {
         let since = Instant::now();
         match r.predict(cx)? {
             Ok(p) => planned.push((k, p)),
-            Err(refusal) => log.push(cx.record(r.rung(), None, Outcome::Refused(refusal), since)),
+            Err(refusal) => cx.log(r.rung(), None, Outcome::Refused(refusal), since),
         }
     }
     planned.sort_by(|(a, p), (b, q)| {
@@ -451,13 +461,7 @@ fn over_budget(a: &Attempt) -> bool {
 /// proved, Gershgorin's. That is claimed only when no proof was kept out by the budget (then
 /// the rungs that ran say the matrix is not provably PSD); otherwise (`budget_limited`) no
 /// lower bound is claimed: the budget's reasons and the labelled estimates `[D7]`, `[D16]`.
-fn finish(
-    cx: &Check<'_>,
-    best: Option<VerifiedBound>,
-    budget_limited: bool,
-    notes: Notes,
-    mut log: Vec<Attempt>,
-) -> VerifiedBound {
+fn finish(cx: &Check<'_>, best: Option<VerifiedBound>, budget_limited: bool) -> VerifiedBound {
     let mut bound = match best {
         Some(b) => b,
         None => {
@@ -466,9 +470,9 @@ fn finish(
             let mut b = VerifiedBound::from_mu(cx, gersh, Verification::Gershgorin);
             if budget_limited {
                 b.factorization_skipped = true;
-                b.budget_exceeded = Some(refusals(&log));
+                b.budget_exceeded = Some(refusals(&cx.log.borrow()));
             } else {
-                log.push(cx.record(Rung::Gershgorin, None, cx.proved(&b), since));
+                cx.log(Rung::Gershgorin, None, cx.proved(&b), since);
             }
             if budget_limited && let Some(rs) = cx.rotations {
                 let since = Instant::now();
@@ -485,7 +489,7 @@ fn finish(
                         ),
                     },
                 };
-                log.push(cx.record(Rung::Randomized, None, outcome, since));
+                cx.log(Rung::Randomized, None, outcome, since);
                 b.min_eigenvalue_estimate =
                     Some(complement.value.min(complement.gauge_rayleigh_quotient));
                 b.estimate_residual = Some(complement.residual);
@@ -496,6 +500,7 @@ fn finish(
             b
         }
     };
+    let notes = cx.notes.take();
     if let Some(e) = notes.estimate {
         if bound.min_eigenvalue_estimate.is_none() {
             bound.min_eigenvalue_estimate = Some(e.value);
@@ -508,7 +513,7 @@ fn finish(
     bound.lanczos_iterations += notes.lanczos_iterations;
     bound.factorizations = bound.factorizations.max(notes.factorizations);
     bound.not_critical |= notes.not_critical || cx.shared.borrow().not_critical;
-    bound.ladder = log;
+    bound.ladder = cx.log.take();
     bound
 }
 

@@ -10,8 +10,8 @@ use super::{
     MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_MIN_DEGREES, SPLIT_SHAPES, ScalarAnalysis,
     ScalarComparison, ScalarFailure, SplitShape, scalar_comparison,
 };
-use crate::certify::ladder::{Attempt, Outcome, Prediction, Refusal, Rung};
-use crate::certify::multiple::verify::{Check, Notes, Proof, Verification, VerifiedBound};
+use crate::certify::ladder::{Outcome, Prediction, Refusal, Rung};
+use crate::certify::multiple::verify::{Check, Proof, Verification, VerifiedBound};
 use crate::certify::settings::{Budget, CertifySettings};
 use crate::error::Result;
 use crate::linalg::{LanczosResult, rayleigh_quotient};
@@ -87,23 +87,22 @@ impl Proof for ScalarFamily {
         })
     }
 
-    fn attempt(
-        &mut self,
-        cx: &Check<'_>,
-        notes: &mut Notes,
-        log: &mut Vec<Attempt>,
-    ) -> Result<Option<VerifiedBound>> {
+    fn attempt(&mut self, cx: &Check<'_>) -> Result<Option<VerifiedBound>> {
         let Some(rotations) = cx.rotations else {
             return Ok(None);
         };
         let target = 0.5 * cx.gap / cx.s.nrows().max(1) as f64;
         if let Some(a) = &self.whole {
-            if let Some(b) = run(cx, a, rotations, target, notes, log)? {
+            if let Some(b) = run(cx, a, rotations, target)? {
                 return Ok(Some(b));
             }
         } else if let Some(refusal) = self.whole_refused.take() {
-            let outcome = Outcome::Refused(refusal);
-            log.push(cx.record(Rung::ScalarWhole, None, outcome, Instant::now()));
+            cx.log(
+                Rung::ScalarWhole,
+                None,
+                Outcome::Refused(refusal),
+                Instant::now(),
+            );
         }
         if self.fallbacks.is_none() {
             let max_values = cx
@@ -114,19 +113,16 @@ impl Proof for ScalarFamily {
         }
         for a in self.fallbacks.as_deref().unwrap_or_default() {
             let predicted = predict(cx.settings, a).ok();
-            if let (Some(left), Some(p)) = (cx.seconds_left(), predicted)
-                && p.seconds > left
-            {
-                let reason = format!(
-                    "predicted {:.1} s, {:.1} s of the time budget left",
-                    p.seconds,
-                    left.max(0.0)
+            if let Some(refusal) = predicted.as_ref().and_then(|p| cx.time_refusal(p)) {
+                cx.log(
+                    rung_of(a),
+                    predicted,
+                    Outcome::Refused(refusal),
+                    Instant::now(),
                 );
-                let outcome = Outcome::Refused(Refusal::OverBudget { reason });
-                log.push(cx.record(rung_of(a), predicted, outcome, Instant::now()));
                 continue;
             }
-            if let Some(b) = run(cx, a, rotations, target, notes, log)? {
+            if let Some(b) = run(cx, a, rotations, target)? {
                 return Ok(Some(b));
             }
         }
@@ -200,18 +196,16 @@ fn run(
     a: &ScalarAnalysis,
     rotations: &[Rotation],
     target: f64,
-    notes: &mut Notes,
-    log: &mut Vec<Attempt>,
 ) -> Result<Option<VerifiedBound>> {
     let since = Instant::now();
     let predicted = predict(cx.settings, a).ok();
-    notes.factorizations += a.parts();
+    cx.notes().factorizations += a.parts();
     let outcome = scalar_comparison(cx.problem, a, rotations, cx.lambdas, target)?;
     let proof = match outcome {
         Ok(p) if p.verified_min_eigenvalue >= -target => p,
         other => {
             let reason = failure(target, other);
-            log.push(cx.record(rung_of(a), predicted, Outcome::Failed { reason }, since));
+            cx.log(rung_of(a), predicted, Outcome::Failed { reason }, since);
             return Ok(None);
         }
     };
@@ -224,12 +218,10 @@ fn run(
     b.factorizations = proof.parts;
     b.factor_nonzeros = proof.factor_nonzeros;
     if cx.settings.dual.estimate_when_verified {
-        let e = gauge_estimate(cx, rotations);
-        notes.lanczos_iterations += e.iterations;
-        notes.estimate = Some(e);
+        cx.notes().estimate = Some(gauge_estimate(cx, rotations));
     }
     b.scalar_comparison = Some(proof);
-    log.push(cx.record(rung_of(a), predicted, cx.proved(&b), since));
+    cx.log(rung_of(a), predicted, cx.proved(&b), since);
     Ok(Some(b))
 }
 
