@@ -271,3 +271,54 @@ fn timing_table() {
         assert!(sol.status.converged());
     }
 }
+
+/// [P6]: the SDP rung is predicted from the graph before Clarabel starts and refused over the
+/// memory budget (issue 25: a 150-node, 600-edge graph with 20 % outliers reached 24 GB and was
+/// killed). The prediction grows with the cliques; under a budget below it the certification
+/// neither solves nor allocates the SDP, and says so in the ladder and the skipped reason.
+#[test]
+fn sdp_is_refused_over_the_memory_budget() {
+    use rotavg::certify::{
+        Budget, CertifyMode, CertifySettings, Outcome, Refusal, Rung, certify_multiple,
+    };
+    use rotavg::relax::predict_relax_multiple;
+    let (sparse, _) = graph(150, 225, 0.05, 1);
+    // the graph of issue 25: 20 % outliers, so that its dual certificate fails
+    let (dense, _) = SyntheticGraph {
+        num_rotations: 150,
+        num_edges: 600,
+        noise_sigma: 0.05,
+        outlier_fraction: 0.2,
+        seed: 25,
+    }
+    .generate();
+    let (ps, pd) = (
+        predict_relax_multiple(&sparse).unwrap(),
+        predict_relax_multiple(&dense).unwrap(),
+    );
+    println!("sparse {ps:?}\ndense {pd:?}");
+    assert!(pd.bytes > 10.0 * ps.bytes && pd.largest_clique > ps.largest_clique);
+    assert!(pd.bytes > (16u64 << 30) as f64, "{pd:?}");
+    let y = rotavg::multiple::solve_multiple(&dense, &Default::default())
+        .unwrap()
+        .rotations;
+    let settings = CertifySettings {
+        mode: CertifyMode::Sdp,
+        budget: Budget {
+            max_memory_bytes: 4 << 30,
+            max_seconds: Some(600.0),
+        },
+        ..Default::default()
+    };
+    let c = certify_multiple(&dense, &y, &settings).unwrap();
+    assert!(c.details.sdp.is_none(), "the SDP ran: {:?}", c.details.sdp);
+    let refused = c.details.ladder.iter().any(|a| {
+        a.rung == Rung::Sdp && matches!(a.outcome, Outcome::Refused(Refusal::OverBudget { .. }))
+    });
+    assert!(refused, "{:?}", c.details.ladder);
+    let why = c.details.skipped_reason.unwrap_or_default();
+    assert!(
+        why.contains("SDP not run") && why.contains("memory budget"),
+        "{why}"
+    );
+}

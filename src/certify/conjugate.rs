@@ -2,13 +2,13 @@
 //! `[H8]`, and [`certify_conjugate`] (SPEC section 3, `paper-notes/conjugate.md`).
 
 use super::branch_and_bound;
+use super::branch_and_bound::terms::ConjugateTerms;
 use super::certificate::{BoundMethod, Certificate};
 use super::certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun, SdpSummary,
 };
 use super::settings::{CertifyMode, CertifySettings};
 use super::spectrum::{SpectrumEstimate, SpectrumMethod};
-use crate::certify::certificate::nonnegative_bound_at_most;
 use crate::conjugate::{ConjugateProblem, ConjugateSettings, ConjugateSolution, solve_conjugate};
 use crate::error::Result;
 use crate::relax::conjugate::{
@@ -17,7 +17,6 @@ use crate::relax::conjugate::{
 };
 use crate::relax::{ConjugateRelaxation, relax_conjugate};
 use crate::so3::Rotation;
-use crate::validate::check_rotation;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -144,16 +143,7 @@ pub fn certify_conjugate(
     s: &Rotation,
     settings: &CertifySettings,
 ) -> Result<Certification<ConjugateSolution>> {
-    settings.validate()?;
-    settings.mode.require(
-        "conjugate",
-        &[
-            CertifyMode::Auto,
-            CertifyMode::Sdp,
-            CertifyMode::BranchAndBound,
-        ],
-    )?;
-    check_rotation(|| "estimate".into(), s)?;
+    settings.check_one_rotation("conjugate", CertifyMode::Sdp, s)?;
     let start = Instant::now();
     let objective = problem.objective();
     let cost = problem.cost(s);
@@ -296,22 +286,18 @@ fn with_branch_and_bound(
     mut details: CertifyDetails,
     start: Instant,
 ) -> Certification<ConjugateSolution> {
-    let t = Instant::now();
     crate::progress::phase(crate::progress::Phase::Certify, || {
         format!("branch and bound over SO(3), {} pairs", problem.num_pairs())
     });
-    let run =
-        branch_and_bound::run_conjugate(problem, s, cost, settings, start.elapsed().as_secs_f64());
-    let lb = nonnegative_bound_at_most(run.lower_bound, cost);
-    let tolerance = settings.tolerance.resolve(problem.min_weight());
-    let method = MethodRun {
-        method: BoundMethod::BranchAndBound,
-        lower_bound: Some(lb),
-        seconds: t.elapsed().as_secs_f64(),
-        note: run.explanation.clone(),
-    };
-    details.record(method, cost - lb <= tolerance.allowed_gap(cost));
-    details.branch_and_bound = Some(run.stats);
+    let (run, lb) = branch_and_bound::run(
+        &ConjugateTerms::new(problem),
+        s,
+        cost,
+        problem.min_weight(),
+        settings,
+        start,
+        &mut details,
+    );
     let seconds = start.elapsed().as_secs_f64();
     details.seconds = seconds;
     let (prior_cert, prior_improvement) = match prior {

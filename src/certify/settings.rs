@@ -9,7 +9,8 @@ use crate::error::{Error, Result};
 use crate::linalg::LanczosSettings;
 use crate::linalg::cholesky::RESIDUAL_FACTOR_LIMIT;
 use crate::relax::SdpSettings;
-use crate::validate::at_least_one;
+use crate::so3::Rotation;
+use crate::validate::{at_least_one, check_rotation};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -574,5 +575,20 @@ impl CertifySettings {
             sp.validate()?;
         }
         Ok(())
+    }
+
+    /// The checks of a certifier of one rotation (`problem` averaging: single or conjugate),
+    /// before any work: every value ([`Self::validate`]), a mode that applies (`auto`, the
+    /// problem's own `bound` or `branch_and_bound`), and an estimate that is a rotation.
+    pub(crate) fn check_one_rotation(
+        &self,
+        problem: &str,
+        bound: CertifyMode,
+        estimate: &Rotation,
+    ) -> Result<()> {
+        self.validate()?;
+        let modes = [CertifyMode::Auto, bound, CertifyMode::BranchAndBound];
+        self.mode.require(problem, &modes)?;
+        check_rotation(|| "estimate".into(), estimate)
     }
 }

@@ -14,7 +14,7 @@
 //! Every bound subtracts a floating-point safety margin (`rounding_margin`).
 
 use super::branch_and_bound;
-use super::branch_and_bound::terms::projected_samples;
+use super::branch_and_bound::terms::{SingleTerms, projected_samples};
 use super::certificate::{BoundMethod, Certificate};
 use super::certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun,
@@ -29,7 +29,6 @@ use crate::single::iterative::{euclidean_median, eval_geodesic};
 use crate::single::solve::Norm;
 use crate::single::{SingleProblem, SingleSettings, SingleSolution};
 use crate::so3::{self, Metric, Rotation};
-use crate::validate::check_rotation;
 use nalgebra::Matrix4;
 use std::f64::consts::FRAC_PI_2;
 use std::time::Instant;
@@ -67,16 +66,7 @@ pub fn certify_single(
     estimate: &Rotation,
     settings: &CertifySettings,
 ) -> Result<Certification<SingleSolution>> {
-    settings.validate()?;
-    settings.mode.require(
-        "single",
-        &[
-            CertifyMode::Auto,
-            CertifyMode::Theory,
-            CertifyMode::BranchAndBound,
-        ],
-    )?;
-    check_rotation(|| "estimate".into(), estimate)?;
+    settings.check_one_rotation("single", CertifyMode::Theory, estimate)?;
     let start = Instant::now();
     let objective = problem.objective();
     let cost = problem.cost(estimate);
@@ -117,26 +107,18 @@ pub fn certify_single(
             settings.branch_and_bound.auto_max_terms
         ));
     } else if settings.mode == CertifyMode::BranchAndBound || auto_bnb {
-        let t = Instant::now();
         crate::progress::phase(crate::progress::Phase::Certify, || {
             format!("branch and bound over SO(3), {} samples", problem.len())
         });
-        let run = branch_and_bound::run_single(
-            problem,
+        let (run, lb) = branch_and_bound::run(
+            &SingleTerms::new(problem),
             estimate,
             cost,
+            problem.min_weight(),
             settings,
-            start.elapsed().as_secs_f64(),
+            start,
+            &mut details,
         );
-        let lb = nonnegative_bound_at_most(run.lower_bound, cost);
-        let method = MethodRun {
-            method: BoundMethod::BranchAndBound,
-            lower_bound: Some(lb),
-            seconds: t.elapsed().as_secs_f64(),
-            note: run.explanation.clone(),
-        };
-        details.record(method, cost - lb <= tolerance.allowed_gap(cost));
-        details.branch_and_bound = Some(run.stats);
         stats = Some(run.stats);
         if best.as_ref().is_none_or(|(l, _, _)| lb > *l) {
             best = Some((lb, BoundMethod::BranchAndBound, run.explanation));

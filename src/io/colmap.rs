@@ -519,24 +519,51 @@ pub struct ColmapImage {
     pub translation: [f64; 3],
 }
 
-impl ColmapImage {
-    /// An image from `qw qx qy qz tx ty tz` (`v`), the quaternion checked against `tol`;
-    /// `Err` names `what`.
-    fn from_values(
+/// The images of an `images.txt` or `images.bin` as they are read: each checked as it comes
+/// (its quaternion), the whole list at the end (not empty, no repeated id or name).
+struct ImageList {
+    images: Vec<ColmapImage>,
+    /// [`ReadOptions::quaternion_tolerance`].
+    tol: f64,
+}
+
+impl ImageList {
+    /// An empty list with room for `capacity` images.
+    fn with_capacity(capacity: usize, options: &ReadOptions) -> Self {
+        ImageList {
+            images: Vec::with_capacity(capacity),
+            tol: options.quaternion_tolerance,
+        }
+    }
+
+    /// Add the image of a record, whose `v` is `qw qx qy qz tx ty tz`, the quaternion checked
+    /// against the tolerance; `Err` names `what`.
+    fn push(
+        &mut self,
         image_id: u32,
-        name: String,
         camera_id: u32,
+        name: String,
         v: &[f64; 7],
-        tol: f64,
         what: &str,
-    ) -> std::result::Result<Self, String> {
-        Ok(ColmapImage {
+    ) -> std::result::Result<(), String> {
+        self.images.push(ColmapImage {
             image_id,
             name,
             camera_id,
-            rotation: quaternion_rotation([v[0], v[1], v[2], v[3]], tol, what)?,
+            rotation: quaternion_rotation([v[0], v[1], v[2], v[3]], self.tol, what)?,
             translation: [v[4], v[5], v[6]],
-        })
+        });
+        Ok(())
+    }
+
+    /// The images of `file`; an error `none` (at `line`) when there are none, or naming a
+    /// repeated image id or name.
+    fn finish(self, file: &str, line: Option<usize>, none: &str) -> Result<Vec<ColmapImage>> {
+        if self.images.is_empty() {
+            return Err(Error::parse(Some(file), line, none));
+        }
+        reject_repeated_images(&self.images, file)?;
+        Ok(self.images)
     }
 }
 
@@ -603,7 +630,7 @@ pub fn is_images_binary(file: &str) -> bool {
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn read_images_text(text: &str, file: &str, options: &ReadOptions) -> Result<Vec<ColmapImage>> {
-    let mut images = Vec::new();
+    let mut images = ImageList::with_capacity(0, options);
     let mut lines = text.lines().enumerate().map(|(k, l)| (k + 1, l.trim()));
     while let Some((ln, line)) = lines.next() {
         if line.is_empty() || line.starts_with('#') {
@@ -640,17 +667,9 @@ pub fn read_images_text(text: &str, file: &str, options: &ReadOptions) -> Result
         let camera_id = id(8, "CAMERA_ID")?;
         // the name is the rest of the line (COLMAP writes names without spaces)
         let name = toks[9..].join(" ");
-        images.push(
-            ColmapImage::from_values(
-                image_id,
-                name,
-                camera_id,
-                &v,
-                options.quaternion_tolerance,
-                &format!("image {image_id}"),
-            )
-            .map_err(perr)?,
-        );
+        images
+            .push(image_id, camera_id, name, &v, &format!("image {image_id}"))
+            .map_err(perr)?;
         // the points line that follows every image line: empty or `X Y POINT3D_ID` triples
         // (a second image line here would otherwise be skipped without a word)
         if let Some((pln, points)) = lines.next() {
@@ -666,15 +685,8 @@ pub fn read_images_text(text: &str, file: &str, options: &ReadOptions) -> Result
             }
         }
     }
-    if images.is_empty() {
-        return Err(Error::parse(
-            Some(file),
-            Some(crate::io::last_line(text)),
-            "no image lines in the COLMAP images.txt",
-        ));
-    }
-    reject_repeated_images(&images, file)?;
-    Ok(images)
+    let last = Some(crate::io::last_line(text));
+    images.finish(file, last, "no image lines in the COLMAP images.txt")
 }
 
 /// Read a COLMAP `images.bin` `[F12]` (little-endian): `u64` number of images, then per image
@@ -721,7 +733,7 @@ pub fn read_images_binary(
         )));
     }
     // n is now bounded by the file size
-    let mut images = Vec::with_capacity(n as usize);
+    let mut images = ImageList::with_capacity(n as usize, options);
     for k in 0..n {
         let start = r.pos;
         let image_id = r.u32(&format!("image {k}: image_id"))?;
@@ -740,17 +752,10 @@ pub fn read_images_binary(
             )));
         }
         r.pos += (points * 24) as usize;
-        images.push(
-            ColmapImage::from_values(
-                image_id,
-                name,
-                camera_id,
-                &v,
-                options.quaternion_tolerance,
-                &format!("image {k} (id {image_id})"),
-            )
-            .map_err(|m| Error::parse(Some(file), None, format!("byte {start}: {m}")))?,
-        );
+        let what = format!("image {k} (id {image_id})");
+        images
+            .push(image_id, camera_id, name, &v, &what)
+            .map_err(|m| Error::parse(Some(file), None, format!("byte {start}: {m}")))?;
     }
     if r.remaining() > 0 {
         return Err(r.err(format!(
@@ -758,15 +763,7 @@ pub fn read_images_binary(
             r.remaining()
         )));
     }
-    if images.is_empty() {
-        return Err(Error::parse(
-            Some(file),
-            None,
-            "no images in the COLMAP images.bin",
-        ));
-    }
-    reject_repeated_images(&images, file)?;
-    Ok(images)
+    images.finish(file, None, "no images in the COLMAP images.bin")
 }
 
 /// A cursor over the bytes of a binary file, with errors naming the file and byte offset.

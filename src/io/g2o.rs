@@ -110,6 +110,81 @@ impl<'a> Tokens<'a> {
     }
 }
 
+/// The edges a line-by-line graph reader (g2o, 1DSfM `EGs.txt`) keeps, in file order, with what
+/// its graph needs beyond them: the file's name and the line of the first edge (the problem's
+/// errors name them), and the number of edges given with `i > j`.
+pub(crate) struct EdgeLines {
+    file: String,
+    raw: Vec<RawEdge>,
+    first_line: Option<usize>,
+    reversed: usize,
+}
+
+impl EdgeLines {
+    /// Read every content line of `lines` with `read_line`, which gets the line's tokens
+    /// (errors name the file and the line) and the edges kept so far. A file without edges is
+    /// the error `no_edges`, at its last line.
+    pub(crate) fn read(
+        lines: &mut TextLines<'_>,
+        no_edges: &str,
+        mut read_line: impl FnMut(&mut Tokens<'_>, &mut EdgeLines) -> Result<()>,
+    ) -> Result<Self> {
+        // the tokens borrow the name while `lines` moves on, so they get their own copy
+        let file = lines.name().to_owned();
+        let mut edges = EdgeLines {
+            file: file.clone(),
+            raw: Vec::new(),
+            first_line: None,
+            reversed: 0,
+        };
+        while let Some((ln, trimmed)) = lines.next_content()? {
+            read_line(&mut Tokens::new(&file, ln, trimmed), &mut edges)?;
+        }
+        if edges.raw.is_empty() {
+            let last = lines.lines_read().max(1);
+            return Err(Error::parse(Some(&file), Some(last), no_edges));
+        }
+        Ok(edges)
+    }
+
+    /// The number of edges kept.
+    pub(crate) fn len(&self) -> usize {
+        self.raw.len()
+    }
+
+    /// Keep `edge`, read on line `line`.
+    pub(crate) fn push(&mut self, line: usize, edge: RawEdge) {
+        self.first_line.get_or_insert(line);
+        self.reversed += usize::from(edge.i > edge.j);
+        self.raw.push(edge);
+    }
+
+    /// The graph of the edges, its nodes the file ids of `vertex_ids` and of the edges'
+    /// endpoints ([`compact_edges`]). It has no initial estimate, node names or warnings and is
+    /// not planar: the reader sets what its format has.
+    pub(crate) fn into_graph(
+        self,
+        vertex_ids: impl Iterator<Item = u64>,
+        format: GraphFormat,
+    ) -> Result<LoadedGraph> {
+        let (ids, edges) = compact_edges(self.raw, vertex_ids);
+        let problem = MultipleProblem::new(ids.len(), edges)
+            .map_err(|e| e.in_file(&self.file, self.first_line))?;
+        let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
+        Ok(LoadedGraph {
+            problem,
+            node_ids: ids,
+            node_names: Vec::new(),
+            initial: None,
+            duplicates,
+            reversed: self.reversed,
+            warnings: Vec::new(),
+            format,
+            planar: false,
+        })
+    }
+}
+
 /// Rotation of a g2o quaternion given scalar last, normalised; rejected if not unit within
 /// `tol` (a zero quaternion is always rejected).
 fn quaternion_rotation(t: &mut Tokens<'_>, tol: f64) -> Result<Rotation> {
@@ -215,18 +290,14 @@ fn read_g2o_limited(
     options: &ReadOptions,
     max_records: usize,
 ) -> Result<LoadedGraph> {
-    let file = lines.name().to_owned();
-    let file = file.as_str();
     let qtol = options.quaternion_tolerance;
     let mut vertices: BTreeMap<u64, (Rotation, usize)> = BTreeMap::new();
-    let mut raw: Vec<RawEdge> = Vec::new();
-    let mut first_edge_line = None;
-    let mut reversed = 0;
     let mut skipped: BTreeMap<String, (usize, usize)> = BTreeMap::new();
     let mut skipped_other = (0usize, 0usize);
     let (mut seen_3d, mut seen_2d) = (false, false);
-    while let Some((ln, trimmed)) = lines.next_content()? {
-        let mut t = Tokens::new(file, ln, trimmed);
+    let no_edges = "no edge lines (EDGE_SE3:QUAT, EDGE3 or EDGE_SE2) in the file";
+    let edges = EdgeLines::read(lines, no_edges, |t, edges| {
+        let ln = t.line;
         let tag = t.next_str("tag")?;
         let mut vertex = None;
         let mut edge = None;
@@ -237,7 +308,7 @@ fn read_g2o_limited(
                 for w in ["x", "y", "z"] {
                     t.next_f64(w)?;
                 }
-                let wi = quaternion_rotation(&mut t, qtol)?;
+                let wi = quaternion_rotation(t, qtol)?;
                 vertex = Some((id, wi.inverse())); // R_i = W_i^T [F1]
                 seen_3d = true;
             }
@@ -251,9 +322,9 @@ fn read_g2o_limited(
                 for w in ["x", "y", "z"] {
                     t.next_f64(w)?;
                 }
-                let z = quaternion_rotation(&mut t, qtol)?;
+                let z = quaternion_rotation(t, qtol)?;
                 let weight = if t.toks.len() == 31 {
-                    3.0 / (2.0 * rotation_information_trace_inv(&mut t)?) // [F3]
+                    3.0 / (2.0 * rotation_information_trace_inv(t)?) // [F3]
                 } else {
                     1.0
                 };
@@ -286,7 +357,7 @@ fn read_g2o_limited(
                 let pitch = t.next_f64("pitch")?;
                 let yaw = t.next_f64("yaw")?;
                 let weight = if t.toks.len() == 30 {
-                    6.0 / rotation_information_trace_inv(&mut t)? // [F3], angle units
+                    6.0 / rotation_information_trace_inv(t)? // [F3], angle units
                 } else {
                     1.0
                 };
@@ -354,7 +425,7 @@ fn read_g2o_limited(
                 e.0 += 1;
             }
         }
-        if (vertex.is_some() || edge.is_some()) && raw.len() + vertices.len() >= max_records {
+        if (vertex.is_some() || edge.is_some()) && edges.len() + vertices.len() >= max_records {
             return Err(t.err(format!(
                 "more than {max_records} edges and vertices, the limit of a view graph \
                  (rotavg::io::text::MAX_RECORDS)"
@@ -378,26 +449,22 @@ fn read_g2o_limited(
             {
                 return Err(t.err(format!("edge {why}")));
             }
-            first_edge_line.get_or_insert(ln);
-            reversed += usize::from(i > j);
-            raw.push(RawEdge {
-                i,
-                j,
-                rotation,
-                weight: match options.weights {
-                    WeightSource::File => weight,
-                    WeightSource::Unit => 1.0,
+            let weight = match options.weights {
+                WeightSource::File => weight,
+                WeightSource::Unit => 1.0,
+            };
+            edges.push(
+                ln,
+                RawEdge {
+                    i,
+                    j,
+                    rotation,
+                    weight,
                 },
-            });
+            );
         }
-    }
-    if raw.is_empty() {
-        return Err(Error::parse(
-            Some(file),
-            Some(lines.lines_read().max(1)),
-            "no edge lines (EDGE_SE3:QUAT, EDGE3 or EDGE_SE2) in the file",
-        ));
-    }
+        Ok(())
+    })?;
     let mut warnings = Vec::new();
     for (tag, (count, first)) in &skipped {
         warnings.push(format!(
@@ -413,32 +480,24 @@ fn read_g2o_limited(
     if seen_2d && seen_3d {
         warnings.push("the file mixes 2-D and 3-D lines".to_owned());
     }
-    let (ids, edges) = compact_edges(raw, vertices.keys().copied());
+    let graph = edges.into_graph(vertices.keys().copied(), GraphFormat::G2o)?;
     let initial = if vertices.is_empty() {
         None
-    } else if vertices.len() == ids.len() {
+    } else if vertices.len() == graph.node_ids.len() {
         Some(vertices.values().map(|(r, _)| *r).collect())
     } else {
         warnings.push(format!(
             "{} of {} nodes have no vertex line: no initial estimate",
-            ids.len() - vertices.len(),
-            ids.len()
+            graph.node_ids.len() - vertices.len(),
+            graph.node_ids.len()
         ));
         None
     };
-    let problem =
-        MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(file, first_edge_line))?;
-    let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
     Ok(LoadedGraph {
-        problem,
-        node_ids: ids,
-        node_names: Vec::new(),
         initial,
-        duplicates,
-        reversed,
         warnings,
-        format: GraphFormat::G2o,
         planar: seen_2d && !seen_3d,
+        ..graph
     })
 }
 
@@ -484,23 +543,15 @@ pub fn write_g2o(problem: &MultipleProblem, estimate: Option<&[Rotation]>) -> St
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::text::check_record_limit;
 
     #[test]
     fn record_limit_and_skipped_tags() {
         let text = "VERTEX3 0 0 0 0 0 0 0\nEDGE3 0 1 0 0 0 0 0 0\nEDGE3 1 2 0 0 0 0 0 0\n";
-        let read = |max| {
-            read_g2o_limited(
-                &mut TextLines::from_text("t", text),
-                &ReadOptions::default(),
-                max,
-            )
-        };
-        assert!(read(3).is_ok());
-        let err = read(2).unwrap_err().to_string();
-        assert!(
-            err.starts_with("t:3: more than 2 edges and vertices"),
-            "{err}"
-        );
+        let expected = "t:3: more than 2 edges and vertices";
+        check_record_limit(text, 3, expected, |lines, max| {
+            read_g2o_limited(lines, &ReadOptions::default(), max)
+        });
         // many distinct unknown tags: a bounded number of warnings
         let mut text = String::new();
         for k in 0..100 {

@@ -21,11 +21,10 @@
 //! Use [`truth_for_nodes`] to reorder ground truth indexed by file id onto a graph's nodes.
 
 use crate::error::{Error, Result};
+use crate::io::RawEdge;
 use crate::io::detect::{GraphFormat, LoadedGraph, ReadOptions};
-use crate::io::g2o::Tokens;
+use crate::io::g2o::{EdgeLines, Tokens};
 use crate::io::text::{MAX_RECORDS, TextLines};
-use crate::io::{RawEdge, compact_edges};
-use crate::multiple::MultipleProblem;
 use crate::so3::{Rotation, rotation_from_matrix};
 use nalgebra::Matrix3;
 
@@ -79,20 +78,14 @@ fn read_egs_limited(
     options: &ReadOptions,
     max_records: usize,
 ) -> Result<LoadedGraph> {
-    let file = lines.name().to_owned();
-    let file = file.as_str();
-    let mut raw: Vec<RawEdge> = Vec::new();
-    let mut first_edge_line = None;
-    let mut reversed = 0;
-    while let Some((ln, trimmed)) = lines.next_content()? {
-        let mut t = Tokens::new(file, ln, trimmed);
+    let edges = EdgeLines::read(lines, "no edge lines in the EGs file", |t, edges| {
         t.expect_count(
             &[14, 11],
             "i j R11 R12 R13 R21 R22 R23 R31 R32 R33 [tx ty tz]",
         )?;
         let i = t.next_id("camera id i")?;
         let j = t.next_id("camera id j")?;
-        let m = read_matrix(&mut t)?;
+        let m = read_matrix(t)?;
         if t.toks.len() == 14 {
             for w in ["tx", "ty", "tz"] {
                 t.next_f64(w)?;
@@ -101,45 +94,26 @@ fn read_egs_limited(
         if i == j {
             return Err(t.err(format!("self loop: edge from camera {i} to itself")));
         }
-        let item = format!("edge {} ({i}, {j})", raw.len());
-        let r = to_rotation(&t, &m, options.rotation_tolerance, &item)?;
-        if raw.len() >= max_records {
+        let item = format!("edge {} ({i}, {j})", edges.len());
+        let r = to_rotation(t, &m, options.rotation_tolerance, &item)?;
+        if edges.len() >= max_records {
             return Err(t.err(format!(
                 "more than {max_records} edges, the limit of a view graph \
                  (rotavg::io::text::MAX_RECORDS)"
             )));
         }
-        first_edge_line.get_or_insert(ln);
-        reversed += usize::from(i > j);
-        raw.push(RawEdge {
-            i,
-            j,
-            rotation: r.inverse(), // R_ij = R^T [F5]
-            weight: 1.0,
-        });
-    }
-    if raw.is_empty() {
-        return Err(Error::parse(
-            Some(file),
-            Some(lines.lines_read().max(1)),
-            "no edge lines in the EGs file",
-        ));
-    }
-    let (ids, edges) = compact_edges(raw, std::iter::empty());
-    let problem =
-        MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(file, first_edge_line))?;
-    let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
-    Ok(LoadedGraph {
-        problem,
-        node_ids: ids,
-        node_names: Vec::new(),
-        initial: None,
-        duplicates,
-        reversed,
-        warnings: Vec::new(),
-        format: GraphFormat::OneDsfm,
-        planar: false,
-    })
+        edges.push(
+            t.line,
+            RawEdge {
+                i,
+                j,
+                rotation: r.inverse(), // R_ij = R^T [F5]
+                weight: 1.0,
+            },
+        );
+        Ok(())
+    })?;
+    edges.into_graph(std::iter::empty(), GraphFormat::OneDsfm)
 }
 
 fn is_zero(m: &Matrix3<f64>) -> bool {
@@ -320,19 +294,13 @@ pub fn truth_for_nodes(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::text::check_record_limit;
 
     #[test]
     fn record_limit() {
         let text = "0 1 1 0 0 0 1 0 0 0 1\n# c\n1 2 1 0 0 0 1 0 0 0 1\n";
-        let read = |max| {
-            read_egs_limited(
-                &mut TextLines::from_text("t", text),
-                &ReadOptions::default(),
-                max,
-            )
-        };
-        assert!(read(2).is_ok());
-        let err = read(1).unwrap_err().to_string();
-        assert!(err.starts_with("t:3: more than 1 edges"), "{err}");
+        check_record_limit(text, 2, "t:3: more than 1 edges", |lines, max| {
+            read_egs_limited(lines, &ReadOptions::default(), max)
+        });
     }
 }

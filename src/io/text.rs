@@ -555,6 +555,22 @@ fn utf8_error(name: &str, before: &[u8], offset: u64, at: usize) -> Error {
     )
 }
 
+/// Check a line-by-line reader's record limit (`read` takes the lines and the limit): the text
+/// `text` of `records` records is read with the limit `records` and refused with one less, the
+/// error starting with `expected` (it names the file `t` and the line).
+#[cfg(test)]
+pub(crate) fn check_record_limit<T>(
+    text: &str,
+    records: usize,
+    expected: &str,
+    read: impl Fn(&mut TextLines<'_>, usize) -> Result<T>,
+) {
+    let read = |max| read(&mut TextLines::from_text("t", text), max);
+    assert!(read(records).is_ok());
+    let err = read(records - 1).err().expect("over the limit").to_string();
+    assert!(err.starts_with(expected), "{err}");
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

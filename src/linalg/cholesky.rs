@@ -46,7 +46,8 @@ use faer::perm::PermRef;
 use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
-    factorize_symbolic_cholesky, supernodal::SupernodalLltRef,
+    factorize_symbolic_cholesky,
+    supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky},
 };
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
@@ -333,6 +334,19 @@ pub fn symbolic_cholesky_within(
     .map_err(|e| failed("symbolic Cholesky analysis", e))
 }
 
+/// The shape of every supernode of a supernodal factor, in order: its number of columns `k`
+/// and of rows below its diagonal block `r` (its front has `k + r` rows).
+fn supernode_shapes(
+    s: &SymbolicSupernodalCholesky<usize>,
+) -> impl Iterator<Item = (usize, usize)> + '_ {
+    let (begin, end, rows) = (
+        s.supernode_begin(),
+        s.supernode_end(),
+        s.col_ptr_for_row_idx(),
+    );
+    (0..s.n_supernodes()).map(move |j| (end[j] - begin[j], rows[j + 1] - rows[j]))
+}
+
 /// The multiply-adds of a numeric factorisation with this symbolic structure: per supernode of
 /// `k` columns and `r` rows below its diagonal block, `k^3 / 6` (its dense `LDL^T`),
 /// `r k^2 / 2` (the triangular solve below it) and `r^2 k / 2` (its update of the rest); per
@@ -341,20 +355,12 @@ pub fn symbolic_cholesky_within(
 /// ([`crate::certify::Budget::predicted_factor_seconds`]) divides it by a measured rate.
 pub fn factor_multiply_adds(symbolic: &SymbolicCholesky<usize>) -> f64 {
     match symbolic.raw() {
-        SymbolicCholeskyRaw::Supernodal(s) => {
-            let (begin, end, rows) = (
-                s.supernode_begin(),
-                s.supernode_end(),
-                s.col_ptr_for_row_idx(),
-            );
-            (0..s.n_supernodes())
-                .map(|j| {
-                    let k = (end[j] - begin[j]) as f64;
-                    let r = (rows[j + 1] - rows[j]) as f64;
-                    k * k * k / 6.0 + r * k * k / 2.0 + r * r * k / 2.0
-                })
-                .sum()
-        }
+        SymbolicCholeskyRaw::Supernodal(s) => supernode_shapes(s)
+            .map(|(k, r)| {
+                let (k, r) = (k as f64, r as f64);
+                k * k * k / 6.0 + r * k * k / 2.0 + r * r * k / 2.0
+            })
+            .sum(),
         SymbolicCholeskyRaw::Simplicial(s) => {
             let cp = s.col_ptr();
             (0..s.ncols())
@@ -373,16 +379,7 @@ pub fn factor_multiply_adds(symbolic: &SymbolicCholesky<usize>) -> f64 {
 /// child `c` of `j` contains it exactly when its column count is `j`'s plus one).
 pub fn front_sizes(symbolic: &SymbolicCholesky<usize>) -> Vec<usize> {
     match symbolic.raw() {
-        SymbolicCholeskyRaw::Supernodal(s) => {
-            let (begin, end, rows) = (
-                s.supernode_begin(),
-                s.supernode_end(),
-                s.col_ptr_for_row_idx(),
-            );
-            (0..s.n_supernodes())
-                .map(|j| (end[j] - begin[j]) + (rows[j + 1] - rows[j]))
-                .collect()
-        }
+        SymbolicCholeskyRaw::Supernodal(s) => supernode_shapes(s).map(|(k, r)| k + r).collect(),
         SymbolicCholeskyRaw::Simplicial(s) => {
             let (cp, ri) = (s.col_ptr(), s.row_idx());
             let n = s.ncols();

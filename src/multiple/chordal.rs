@@ -183,6 +183,21 @@ pub(crate) fn root_fixed_steps(n: usize, entry: impl Fn(usize, usize) -> f64) ->
         .collect()
 }
 
+/// The pattern of a system with node 0 fixed (grounded; `n >= 1` nodes): nodes `1..n` are the
+/// blocks `0..n-1`, of `block` rows each, joined by the edges between them (an edge at node 0
+/// adds to the diagonal block of its other end only).
+pub(crate) fn grounded_pattern(problem: &MultipleProblem, block: usize) -> BlockPattern {
+    BlockPattern::new(
+        problem.num_rotations() - 1,
+        block,
+        problem
+            .edges()
+            .iter()
+            .filter(|e| e.i != 0 && e.j != 0)
+            .map(|e| (e.i - 1, e.j - 1)),
+    )
+}
+
 /// The linear solver of the chordal Newton systems on `pattern` (nodes `1..n`, node 0
 /// grounded), as [`choose_solver`] chose (or a forced [`SolverKind`]). The Laplacian
 /// preconditioner is `4 L ⊗ I_3`, the Hessian at a consistent estimate `[M6b]`.
@@ -358,15 +373,7 @@ pub(crate) fn solve_chordal(
             None,
         );
     }
-    let pattern = BlockPattern::new(
-        n - 1,
-        3,
-        problem
-            .edges()
-            .iter()
-            .filter(|e| e.i != 0 && e.j != 0)
-            .map(|e| (e.i - 1, e.j - 1)),
-    );
+    let pattern = grounded_pattern(problem, 3);
     let slots = edge_slots(problem, &pattern);
     let choice = match solver {
         Some(c) => c,
@@ -645,14 +652,7 @@ mod tests {
         }
         .generate();
         let n = p.num_rotations();
-        let pattern = BlockPattern::new(
-            n - 1,
-            3,
-            p.edges()
-                .iter()
-                .filter(|e| e.i != 0 && e.j != 0)
-                .map(|e| (e.i - 1, e.j - 1)),
-        );
+        let pattern = grounded_pattern(&p, 3);
         let slots = edge_slots(&p, &pattern);
         let mut h = vec![0.0; pattern.nnz()];
         assemble_hessian(&p, &gt, &pattern, &slots, &mut h);

@@ -10,10 +10,9 @@
 //! also computed only once. A backtracking safeguard halves the step until the cost decreases.
 
 use crate::error::Result;
-use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::linear_solver::{LinearSolver, SolverKind};
 use crate::multiple::MultipleProblem;
-use crate::multiple::chordal::{grad_norm as norm, root_fixed_steps};
+use crate::multiple::chordal::{grad_norm as norm, grounded_pattern, root_fixed_steps};
 use crate::multiple::robust::{edge_log, objective_terms};
 use crate::multiple::solve::{IRLS_DECREASE_WINDOW, MultipleSettings, MultipleSolution};
 use crate::objective::{Loss, Objective};
@@ -114,15 +113,7 @@ pub(crate) fn lie_algebraic(
         return finish(r, &ev, 0, converged(g));
     }
     let var = |i: usize| if i == 0 { None } else { Some(i - 1) };
-    let pattern = BlockPattern::new(
-        n - 1,
-        1,
-        problem
-            .edges()
-            .iter()
-            .filter(|e| e.i != 0 && e.j != 0)
-            .map(|e| (e.i - 1, e.j - 1)),
-    );
+    let pattern = grounded_pattern(problem, 1);
     let slots: Vec<usize> = problem
         .edges()
         .iter()

@@ -101,8 +101,18 @@ pub fn relax_multiple(
     }
     let merge = settings.chordal_merge.clarabel_name(n, problem.num_edges());
     let raw = match settings.form {
-        SdpForm::Dual => solve_dual(n, &q_upper, settings, merge)?,
-        SdpForm::Primal => solve_primal(n, &q_upper, settings, merge)?,
+        SdpForm::Dual => solve_dual(&Scaled {
+            n,
+            q_upper: &q_upper,
+            settings,
+            merge,
+        })?,
+        SdpForm::Primal => solve_primal(&Scaled {
+            n,
+            q_upper: &q_upper,
+            settings,
+            merge,
+        })?,
     };
     let multipliers = raw
         .lambda_scaled
@@ -201,6 +211,17 @@ pub fn predict_relax_multiple(problem: &MultipleProblem) -> Result<SdpPrediction
     })
 }
 
+/// The scaled problem `[P4]` handed to a formulation, and how Clarabel runs it.
+struct Scaled<'a> {
+    /// Nodes.
+    n: usize,
+    /// The upper-triangle entries of `Q / s`.
+    q_upper: &'a [(usize, usize, f64)],
+    settings: &'a SdpSettings,
+    /// The clique merge method of the chordal decomposition.
+    merge: &'a str,
+}
+
 /// What each formulation hands back (scaled problem).
 struct RawSolution {
     lambda_scaled: Vec<Matrix3<f64>>,
@@ -209,44 +230,64 @@ struct RawSolution {
     conic: ConicSolution,
 }
 
+/// The upper-triangle entries `(r, c, v)` of a `dim x dim` matrix as a vector in `svec` order,
+/// each times `weight(r, c)`.
+fn upper_svec(
+    upper: &[(usize, usize, f64)],
+    dim: usize,
+    weight: impl Fn(usize, usize) -> f64,
+) -> Vec<f64> {
+    let mut out = vec![0.0; svec_len(dim)];
+    for &(r, c, v) in upper {
+        out[svec_index(r, c)] = v * weight(r, c);
+    }
+    out
+}
+
+/// The upper-triangle entries of the `n` diagonal `3 x 3` blocks: `(k, a, b, e)` with
+/// `k = 6 i + svec_index(a, b)` the entry's index among the blocks' six each (the multipliers of
+/// `[P3]`, the constraints `X_ii = I` of `[P2]`) and `e` its index in `svec` of the `3n x 3n`
+/// matrix.
+fn diagonal_block_entries(n: usize) -> impl Iterator<Item = (usize, usize, usize, usize)> {
+    (0..n).flat_map(|i| {
+        (0..3).flat_map(move |b| {
+            (0..=b).map(move |a| {
+                (
+                    6 * i + svec_index(a, b),
+                    a,
+                    b,
+                    svec_index(3 * i + a, 3 * i + b),
+                )
+            })
+        })
+    })
+}
+
 /// Dual form `[P3]` in Clarabel's standard form `min c'x, b - A x in K`: `x` holds the upper
 /// triangles of the `Lambda_i` (6 per node, order of [`svec_index`] on 3x3),
 /// `c = -(diagonal indicators)`, `b - A x = svec(Q/s - blkdiag(Lambda))` in one PSD cone of
 /// size `3n`. Clarabel's dual variable of that cone is `svec(X)` of the primal `[P2]`
 /// (stationarity `A^T z = -c` is exactly `X_ii = I`).
-fn solve_dual(
-    n: usize,
-    q_upper: &[(usize, usize, f64)],
-    settings: &SdpSettings,
-    merge: &str,
-) -> Result<RawSolution> {
-    let dim = 3 * n;
+fn solve_dual(p: &Scaled<'_>) -> Result<RawSolution> {
+    let dim = 3 * p.n;
     let m = svec_len(dim);
-    let mut b = vec![0.0; m];
-    for &(r, c, v) in q_upper {
-        b[svec_index(r, c)] = v * svec_weight(r, c);
-    }
-    let nv = 6 * n;
+    let b = upper_svec(p.q_upper, dim, svec_weight);
+    let nv = 6 * p.n;
     let mut c = vec![0.0; nv];
     let mut trip = Vec::with_capacity(nv);
-    for i in 0..n {
-        for bb in 0..3 {
-            for a in 0..=bb {
-                let k = 6 * i + svec_index(a, bb);
-                if a == bb {
-                    c[k] = -1.0;
-                }
-                trip.push((svec_index(3 * i + a, 3 * i + bb), k, svec_weight(a, bb)));
-            }
+    for (k, a, bb, entry) in diagonal_block_entries(p.n) {
+        if a == bb {
+            c[k] = -1.0;
         }
+        trip.push((entry, k, svec_weight(a, bb)));
     }
     let a = csc(m, nv, trip);
-    let mut conic = solve_conic(&c, a, &b, &[Cone::Psd(dim)], settings, merge)?;
+    let mut conic = solve_conic(&c, a, &b, &[Cone::Psd(dim)], p.settings, p.merge)?;
     // Clarabel minimises -sum tr(Lambda); its dual objective is -tr(Q X / s)
     (conic.primal_objective, conic.dual_objective) =
         (-conic.dual_objective, -conic.primal_objective);
     let x = &conic.x;
-    let lambda_scaled = (0..n)
+    let lambda_scaled = (0..p.n)
         .map(|i| {
             Matrix3::from_fn(|r, cc| {
                 let v = x[6 * i + svec_index(r, cc)];
@@ -268,29 +309,17 @@ fn solve_dual(
 /// `Q/s` so `c'x = tr(Q X / s)`; `6n` equality rows `X_ii[a,b] = delta_ab` (zero cone) and
 /// `-diag(w) x + s = 0`, `s = svec(X)` in the PSD cone. Multipliers from the equality duals
 /// `y`: `Lambda_aa = -y`, `Lambda_ab = -y/2` (derivation in `paper-notes/sdp.md` `[P3]`).
-fn solve_primal(
-    n: usize,
-    q_upper: &[(usize, usize, f64)],
-    settings: &SdpSettings,
-    merge: &str,
-) -> Result<RawSolution> {
-    let dim = 3 * n;
+fn solve_primal(p: &Scaled<'_>) -> Result<RawSolution> {
+    let dim = 3 * p.n;
     let nv = svec_len(dim);
-    let mut c = vec![0.0; nv];
-    for &(r, cc, v) in q_upper {
-        c[svec_index(r, cc)] = if r == cc { v } else { 2.0 * v };
-    }
-    let neq = 6 * n;
+    // tr(Q X / s) counts each off-diagonal entry twice
+    let c = upper_svec(p.q_upper, dim, |r, cc| if r == cc { 1.0 } else { 2.0 });
+    let neq = 6 * p.n;
     let mut trip = Vec::with_capacity(neq + nv);
     let mut b = vec![0.0; neq + nv];
-    for i in 0..n {
-        for bb in 0..3 {
-            for a in 0..=bb {
-                let row = 6 * i + svec_index(a, bb);
-                trip.push((row, svec_index(3 * i + a, 3 * i + bb), 1.0));
-                b[row] = if a == bb { 1.0 } else { 0.0 };
-            }
-        }
+    for (row, a, bb, entry) in diagonal_block_entries(p.n) {
+        trip.push((row, entry, 1.0));
+        b[row] = if a == bb { 1.0 } else { 0.0 };
     }
     for col in 0..dim {
         for row in 0..=col {
@@ -304,11 +333,11 @@ fn solve_primal(
         a,
         &b,
         &[Cone::Zero(neq), Cone::Psd(dim)],
-        settings,
-        merge,
+        p.settings,
+        p.merge,
     )?;
     let (x, z) = (&conic.x, &conic.z);
-    let lambda_scaled = (0..n)
+    let lambda_scaled = (0..p.n)
         .map(|i| {
             Matrix3::from_fn(|r, cc| {
                 let y = z[6 * i + svec_index(r, cc)];

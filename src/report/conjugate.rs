@@ -1,6 +1,6 @@
 //! The report of `rotavg conjugate`.
 
-use super::{ProblemKind, Rows};
+use super::{ProblemJson, ProblemKind, Rows};
 use crate::certify::{Certificate, SdpSummary, Verdict};
 use crate::conjugate::{ConjugateProblem, DiagnosticSettings, Diagnostics, Identifiability};
 use crate::io::handeye::{MotionSettings, MotionStats};
@@ -135,9 +135,6 @@ struct DiagnosticsJson<'a> {
 
 #[derive(Serialize)]
 struct Json<'a> {
-    problem: ProblemKind,
-    num_rotations: usize,
-    num_measurements: usize,
     metric: Metric,
     loss: &'a Loss,
     cost: f64,
@@ -161,10 +158,7 @@ impl Serialize for ConjugateReport {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
         let s = &self.result.solution;
         let d = &self.diagnostics;
-        Json {
-            problem: ProblemKind::Conjugate,
-            num_rotations: 1,
-            num_measurements: self.num_pairs,
+        let rest = Json {
             metric: s.objective.metric,
             loss: &s.objective.loss,
             cost: s.cost,
@@ -184,8 +178,8 @@ impl Serialize for ConjugateReport {
                 .motion
                 .as_ref()
                 .map(|(stats, settings)| MotionJson { stats, settings }),
-        }
-        .serialize(serializer)
+        };
+        ProblemJson::new(ProblemKind::Conjugate, 1, self.num_pairs, rest).serialize(serializer)
     }
 }
 

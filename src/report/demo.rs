@@ -172,6 +172,27 @@ fn rule(f: &mut fmt::Formatter<'_>, title: &str) -> fmt::Result {
     )
 }
 
+/// A single mean's line: objective, cost, error to `truth`, time, verdict and bounding method,
+/// `detail` (what the method did) after the method.
+fn single_row(
+    f: &mut fmt::Formatter<'_>,
+    est: &SingleEstimate,
+    truth: &Rotation,
+    detail: &str,
+) -> fmt::Result {
+    let (s, c) = (&est.solution, est.certificate.as_ref());
+    writeln!(
+        f,
+        "  {:<15} cost {:12.6}  error to truth {:.4} deg  {:8.3} ms  {} ({}{detail})",
+        format!("{}:", s.objective),
+        s.cost,
+        angle_between(&s.estimate, truth).to_degrees(),
+        s.report.seconds * 1e3,
+        c.map_or(Verdict::Inconclusive, |c| c.verdict),
+        c.map_or("none".to_string(), |c| c.method.to_string()),
+    )
+}
+
 impl fmt::Display for DemoReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         rule(f, "1. single rotation averaging")?;
@@ -180,39 +201,25 @@ impl fmt::Display for DemoReport {
             "{SINGLE_SAMPLES} noisy estimates of one rotation (Gaussian noise, 0.1 rad per axis)"
         )?;
         for est in &self.single {
-            let (s, c) = (&est.solution, est.certificate.as_ref());
-            writeln!(
-                f,
-                "  {:<15} cost {:12.6}  error to truth {:.4} deg  {:8.3} ms  {} ({})",
-                format!("{}:", s.objective),
-                s.cost,
-                angle_between(&s.estimate, &self.single_truth).to_degrees(),
-                s.report.seconds * 1e3,
-                c.map_or(Verdict::Inconclusive, |c| c.verdict),
-                c.map_or("none".to_string(), |c| c.method.to_string()),
-            )?;
+            single_row(f, est, &self.single_truth, "")?;
         }
 
-        let (s, c) = (&self.spread.solution, self.spread.certificate.as_ref());
         writeln!(
             f,
             "the same samples with every fifth replaced by a uniform outlier (beyond the pi/2 ball):"
         )?;
-        writeln!(
-            f,
-            "  {:<15} cost {:12.6}  error to truth {:.4} deg  {:8.3} ms  {} ({}{})",
-            format!("{}:", s.objective),
-            s.cost,
-            angle_between(&s.estimate, &self.single_truth).to_degrees(),
-            s.report.seconds * 1e3,
-            c.map_or(Verdict::Inconclusive, |c| c.verdict),
-            c.map_or("none".to_string(), |c| c.method.to_string()),
-            c.and_then(|c| c.branch_and_bound)
-                .map_or(String::new(), |b| format!(
-                    ": {} cells, depth {}, {:.3} s",
-                    b.cells_explored, b.max_depth, b.seconds
-                )),
-        )?;
+        let stats = self
+            .spread
+            .certificate
+            .as_ref()
+            .and_then(|c| c.branch_and_bound);
+        let search = stats.map_or(String::new(), |b| {
+            format!(
+                ": {} cells, depth {}, {:.3} s",
+                b.cells_explored, b.max_depth, b.seconds
+            )
+        });
+        single_row(f, &self.spread, &self.single_truth, &search)?;
 
         rule(f, "2. multiple rotation averaging (view graph)")?;
         writeln!(

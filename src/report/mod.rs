@@ -62,6 +62,30 @@ enum Rows<'a> {
     Many(#[serde(with = "crate::so3::serde_rows::rotations")] &'a [Rotation]),
 }
 
+/// A problem report's JSON: the SPEC keys every problem report starts with (`problem`,
+/// `num_rotations`, `num_measurements`), then the report's own keys (`rest`, in its order).
+#[derive(Serialize)]
+struct ProblemJson<J> {
+    problem: ProblemKind,
+    num_rotations: usize,
+    num_measurements: usize,
+    #[serde(flatten)]
+    rest: J,
+}
+
+impl<J> ProblemJson<J> {
+    /// The JSON of a `problem` report with `num_rotations` unknowns and `num_measurements`
+    /// measurements (samples, edges or pairs), followed by `rest`.
+    fn new(problem: ProblemKind, num_rotations: usize, num_measurements: usize, rest: J) -> Self {
+        ProblemJson {
+            problem,
+            num_rotations,
+            num_measurements,
+            rest,
+        }
+    }
+}
+
 /// The lines `  METHOD (T s): NOTE` of the bounding methods that ran.
 fn write_methods(f: &mut fmt::Formatter<'_>, methods: &[MethodRun]) -> fmt::Result {
     for m in methods {

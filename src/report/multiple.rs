@@ -1,6 +1,6 @@
 //! The report of `rotavg multiple`.
 
-use super::{ProblemKind, Rows, write_methods};
+use super::{ProblemJson, ProblemKind, Rows, write_methods};
 use crate::certify::CertifiedProblem;
 use crate::certify::{Certificate, Verdict};
 use crate::error::Result;
@@ -135,9 +135,6 @@ impl MultipleReport {
 
 #[derive(Serialize)]
 struct Json<'a> {
-    problem: ProblemKind,
-    num_rotations: usize,
-    num_measurements: usize,
     loss: String,
     cost: f64,
     chordal_cost: f64,
@@ -211,10 +208,7 @@ impl Serialize for MultipleReport {
             inlier_graph: None,
             ..self.result.details.clone()
         };
-        Json {
-            problem: ProblemKind::Multiple,
-            num_rotations: s.rotations.len(),
-            num_measurements: self.num_edges,
+        let rest = Json {
             loss: MultipleLoss::name_of(&s.objective),
             cost: s.cost,
             chordal_cost: s.chordal_cost,
@@ -229,7 +223,13 @@ impl Serialize for MultipleReport {
             other_components: &self.selection.other_component_sizes,
             format: self.format,
             robust,
-        }
+        };
+        ProblemJson::new(
+            ProblemKind::Multiple,
+            s.rotations.len(),
+            self.num_edges,
+            rest,
+        )
         .serialize(serializer)
     }
 }

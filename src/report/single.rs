@@ -1,6 +1,6 @@
 //! The report of `rotavg single`.
 
-use super::{ProblemKind, Rows};
+use super::{ProblemJson, ProblemKind, Rows};
 use crate::certify::{Certificate, Verdict};
 use crate::objective::Loss;
 use crate::pipeline::SingleEstimate;
@@ -50,9 +50,6 @@ impl SingleReport {
 
 #[derive(Serialize)]
 struct Json<'a> {
-    problem: ProblemKind,
-    num_rotations: usize,
-    num_measurements: usize,
     metric: Metric,
     p: Option<u32>,
     cost: f64,
@@ -64,10 +61,7 @@ struct Json<'a> {
 impl Serialize for SingleReport {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
         let s = &self.result.solution;
-        Json {
-            problem: ProblemKind::Single,
-            num_rotations: 1,
-            num_measurements: s.num_samples,
+        let rest = Json {
             metric: s.objective.metric,
             p: match s.objective.loss {
                 Loss::L1 => Some(1),
@@ -78,8 +72,8 @@ impl Serialize for SingleReport {
             estimate: Rows::One(&s.estimate),
             solver: &s.report,
             certificate: self.result.certificate.as_ref(),
-        }
-        .serialize(serializer)
+        };
+        ProblemJson::new(ProblemKind::Single, 1, s.num_samples, rest).serialize(serializer)
     }
 }
 

@@ -146,7 +146,13 @@ where
     F: Fn(&Rotation) -> E,
     S: Fn(&Rotation, &E) -> Option<Vector3<f64>>,
 {
-    let name = method.name;
+    // the method's result: where it stopped, after how many iterations, and why
+    let stop = |estimate, iterations, termination| Local {
+        estimate,
+        iterations,
+        termination,
+        name: method.name,
+    };
     let tol = settings.gradient_tolerance;
     let total = problem.total_weight();
     let mut r = start;
@@ -157,7 +163,7 @@ where
     for it in 1..=settings.max_iterations {
         let g = e.gradient_norm() / total;
         if g <= tol {
-            return converged(r, it - 1, method.measure, g, tol, name);
+            return stop(r, it - 1, converged(method.measure, g, tol));
         }
         if let Some((k, t)) = e.nearest_sample()
             && (t < SAMPLE_TEST_RADIUS || t < 10.0 * last_step)
@@ -168,7 +174,7 @@ where
             let gk = ek.gradient_norm() / total;
             if ek.cost() <= e.cost() && gk <= tol {
                 let measure = "min-norm subgradient / total weight at a sample";
-                return converged(rk, it, measure, gk, tol, name);
+                return stop(rk, it, converged(measure, gk, tol));
             }
             if gk > tol {
                 rejected.push(k);
@@ -186,18 +192,26 @@ where
             )
         });
         let Some((r_new, e_new, step)) = accepted else {
-            return stalled(r, it - 1, g, tol, name);
+            let stalled = Termination::Stalled {
+                value: g,
+                threshold: tol,
+            };
+            return stop(r, it - 1, stalled);
         };
         r = r_new;
         e = e_new;
         last_step = step;
         if step < settings.step_tolerance {
             let measure = "step angle (rad)";
-            return converged(r, it, measure, step, settings.step_tolerance, name);
+            return stop(r, it, converged(measure, step, settings.step_tolerance));
         }
     }
-    let g = e.gradient_norm() / total;
-    limit(r, settings, g, name)
+    let limit = Termination::IterationLimit {
+        iterations: settings.max_iterations,
+        value: e.gradient_norm() / total,
+        threshold: settings.gradient_tolerance,
+    };
+    stop(r, settings.max_iterations, limit)
 }
 
 /// The given start, or the chordal L2 mean `[S1]`.
@@ -215,21 +229,7 @@ pub(crate) fn geodesic_l2_local(
     settings: &SingleSettings,
     init: Option<&Rotation>,
 ) -> Local {
-    let total = problem.total_weight();
-    let start = init_or_chordal_mean(problem, init);
-    descend(
-        problem,
-        settings,
-        start,
-        Method {
-            name: "karcher",
-            measure: "gradient norm / total weight",
-            expand: false,
-            eval: |x: &Rotation| eval_geodesic(problem, x, Norm::L2),
-            step: |_: &Rotation, e: &GeodesicEval| Some(e.descent / total),
-            _iterate: std::marker::PhantomData,
-        },
-    )
+    geodesic_local(problem, settings, init, Norm::L2)
 }
 
 /// Geodesic L1 mean by Weiszfeld on SO(3) (Hartley, Aftab & Trumpf 2011) with the Vardi-Zhang
@@ -242,25 +242,45 @@ pub(crate) fn geodesic_l1_local(
     settings: &SingleSettings,
     init: Option<&Rotation>,
 ) -> Local {
-    let start = init_or_chordal_mean(problem, init);
+    geodesic_local(problem, settings, init, Norm::L1)
+}
+
+/// The geodesic mean with exponent `norm` ([`geodesic_l2_local`], [`geodesic_l1_local`]): the
+/// two differ only in their step, both evaluate [`eval_geodesic`] and start from `init` or the
+/// chordal L2 mean.
+fn geodesic_local(
+    problem: &SingleProblem,
+    settings: &SingleSettings,
+    init: Option<&Rotation>,
+    norm: Norm,
+) -> Local {
+    let total = problem.total_weight();
+    let (name, measure) = match norm {
+        Norm::L2 => ("karcher", "gradient norm / total weight"),
+        Norm::L1 => ("weiszfeld-so3", "min-norm subgradient / total weight"),
+    };
+    let step = |_: &Rotation, e: &GeodesicEval| match norm {
+        Norm::L2 => Some(e.descent / total),
+        Norm::L1 => {
+            let gn = e.descent.norm();
+            // All samples coincide with R, or G = 0: then the gradient test has passed.
+            (gn > 0.0 && e.inverse_distance_weight > 0.0)
+                .then(|| e.descent * ((1.0 - e.coincident_weight / gn) / e.inverse_distance_weight))
+        }
+    };
+    let method = Method {
+        name,
+        measure,
+        expand: false,
+        eval: |x: &Rotation| eval_geodesic(problem, x, norm),
+        step,
+        _iterate: std::marker::PhantomData,
+    };
     descend(
         problem,
         settings,
-        start,
-        Method {
-            name: "weiszfeld-so3",
-            measure: "min-norm subgradient / total weight",
-            expand: false,
-            eval: |x: &Rotation| eval_geodesic(problem, x, Norm::L1),
-            step: |_: &Rotation, e: &GeodesicEval| {
-                let gn = e.descent.norm();
-                // All samples coincide with R, or G = 0: then the gradient test has passed.
-                (gn > 0.0 && e.inverse_distance_weight > 0.0).then(|| {
-                    e.descent * ((1.0 - e.coincident_weight / gn) / e.inverse_distance_weight)
-                })
-            },
-            _iterate: std::marker::PhantomData,
-        },
+        init_or_chordal_mean(problem, init),
+        method,
     )
 }
 
@@ -527,50 +547,11 @@ pub(crate) fn euclidean_median(
     best
 }
 
-fn converged(
-    r: Rotation,
-    iterations: usize,
-    measure: &str,
-    value: f64,
-    threshold: f64,
-    name: &'static str,
-) -> Local {
-    Local {
-        estimate: r,
-        iterations,
-        termination: Termination::Converged {
-            measure: measure.into(),
-            value,
-            threshold,
-        },
-        name,
-    }
-}
-
-fn stalled(
-    r: Rotation,
-    iterations: usize,
-    value: f64,
-    threshold: f64,
-    name: &'static str,
-) -> Local {
-    Local {
-        estimate: r,
-        iterations,
-        termination: Termination::Stalled { value, threshold },
-        name,
-    }
-}
-
-fn limit(r: Rotation, settings: &SingleSettings, value: f64, name: &'static str) -> Local {
-    Local {
-        estimate: r,
-        iterations: settings.max_iterations,
-        termination: Termination::IterationLimit {
-            iterations: settings.max_iterations,
-            value,
-            threshold: settings.gradient_tolerance,
-        },
-        name,
+/// The termination of a mean whose `measure` is `value`, within `threshold`.
+fn converged(measure: &str, value: f64, threshold: f64) -> Termination {
+    Termination::Converged {
+        measure: measure.into(),
+        value,
+        threshold,
     }
 }

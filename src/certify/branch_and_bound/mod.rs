@@ -16,10 +16,13 @@ pub(crate) mod profile;
 pub(crate) mod search;
 pub(crate) mod terms;
 
+use crate::certify::certificate::{BoundMethod, nonnegative_bound_at_most};
+use crate::certify::certification::{CertifyDetails, MethodRun};
 use crate::error::Result;
 use crate::validate::at_least_one;
 use serde::{Deserialize, Serialize};
 use std::fmt;
+use std::time::Instant;
 
 /// Settings of the branch and bound (`CertifySettings::branch_and_bound`); its time limit is
 /// `CertifySettings::budget.max_seconds`.
@@ -158,36 +161,66 @@ fn remaining(settings: &crate::certify::CertifySettings, elapsed: f64) -> Option
     settings.budget.max_seconds.map(|t| (t - elapsed).max(0.0))
 }
 
-fn run<T: search::Terms>(
+/// Branch and bound over the terms of a single- or conjugate-averaging problem
+/// ([`terms::SingleTerms`], [`terms::ConjugateTerms`]) from `estimate` (cost `cost`), as a
+/// method of its certification, which started at `start`: the tolerance is resolved with the
+/// problem's smallest weight `min_weight`, the time limit is what `settings.budget` leaves. The
+/// bound (at least 0, at most `cost`: [`nonnegative_bound_at_most`]), the time and the note of
+/// the run are recorded in `details` (certifying when within the tolerance), with its
+/// statistics. Returns the run and that bound.
+pub(crate) fn run<T: search::Terms>(
     terms: &T,
     estimate: &crate::so3::Rotation,
     cost: f64,
     min_weight: f64,
     settings: &crate::certify::CertifySettings,
-    elapsed: f64,
-) -> Run<T::Solution> {
-    if !terms.data_slack().is_finite() {
-        // every term is >= 0: 0 is the only bound claimed
-        return Run {
-            lower_bound: 0.0,
-            stats: BranchAndBoundStats {
-                best_cost: cost,
-                stop: BranchAndBoundStop::UnprovenData,
-                ..Default::default()
-            },
-            improvement: None,
-            explanation: "branch and bound not run [B6]: some samples are rotations only to the validation tolerance, and the quaternion distance of such a matrix has no proven perturbation bound; the lower bound is the trivial 0 (project the data onto SO(3), or use another metric)".into(),
-        };
-    }
+    start: Instant,
+    details: &mut CertifyDetails,
+) -> (Run<T::Solution>, f64) {
+    let t = Instant::now();
     let tolerance = settings.tolerance.resolve(min_weight);
-    let out = search::search(
-        terms,
-        estimate,
-        cost,
-        tolerance,
-        &settings.branch_and_bound,
-        remaining(settings, elapsed),
-    );
+    let run = if terms.data_slack().is_finite() {
+        let out = search::search(
+            terms,
+            estimate,
+            cost,
+            tolerance,
+            &settings.branch_and_bound,
+            remaining(settings, start.elapsed().as_secs_f64()),
+        );
+        searched(out, cost)
+    } else {
+        unproven_data(cost)
+    };
+    let lb = nonnegative_bound_at_most(run.lower_bound, cost);
+    let method = MethodRun {
+        method: BoundMethod::BranchAndBound,
+        lower_bound: Some(lb),
+        seconds: t.elapsed().as_secs_f64(),
+        note: run.explanation.clone(),
+    };
+    details.record(method, cost - lb <= tolerance.allowed_gap(cost));
+    details.branch_and_bound = Some(run.stats);
+    (run, lb)
+}
+
+/// The run not searched because the data margin `[B6]` has no proof (the estimate's cost is
+/// `cost`): every term is >= 0, so 0 is the only bound claimed.
+fn unproven_data<S>(cost: f64) -> Run<S> {
+    Run {
+        lower_bound: 0.0,
+        stats: BranchAndBoundStats {
+            best_cost: cost,
+            stop: BranchAndBoundStop::UnprovenData,
+            ..Default::default()
+        },
+        improvement: None,
+        explanation: "branch and bound not run [B6]: some samples are rotations only to the validation tolerance, and the quaternion distance of such a matrix has no proven perturbation bound; the lower bound is the trivial 0 (project the data onto SO(3), or use another metric)".into(),
+    }
+}
+
+/// The run of a search from an estimate of cost `cost`, with its sentence.
+fn searched<S>(out: search::Outcome<S>, cost: f64) -> Run<S> {
     // An improvement must be better beyond rounding (a tie is no improvement).
     let improvement = out
         .best
@@ -209,44 +242,6 @@ fn run<T: search::Terms>(
         improvement,
         explanation,
     }
-}
-
-/// Branch and bound for single averaging.
-pub(crate) fn run_single(
-    problem: &crate::single::SingleProblem,
-    estimate: &crate::so3::Rotation,
-    cost: f64,
-    settings: &crate::certify::CertifySettings,
-    elapsed: f64,
-) -> Run<crate::single::SingleSolution> {
-    let terms = terms::SingleTerms::new(problem);
-    run(
-        &terms,
-        estimate,
-        cost,
-        problem.min_weight(),
-        settings,
-        elapsed,
-    )
-}
-
-/// Branch and bound for conjugate averaging.
-pub(crate) fn run_conjugate(
-    problem: &crate::conjugate::ConjugateProblem,
-    estimate: &crate::so3::Rotation,
-    cost: f64,
-    settings: &crate::certify::CertifySettings,
-    elapsed: f64,
-) -> Run<crate::conjugate::ConjugateSolution> {
-    let terms = terms::ConjugateTerms::new(problem);
-    run(
-        &terms,
-        estimate,
-        cost,
-        problem.min_weight(),
-        settings,
-        elapsed,
-    )
 }
 
 /// Every metric x loss (thresholds 20 and 15 degrees): the objectives the unit tests of the

@@ -88,6 +88,15 @@ struct Ball {
     lb: f64,
 }
 
+/// `true` when the ball `B(centre, radius)` (a cell's) lies inside one of the incumbent balls,
+/// whose bounds then cover it (`[B5]`), with twice the error of a computed angle to spare
+/// (`[B6]`).
+fn inside_a_ball(balls: &[Ball], centre: &Rotation, radius: f64) -> bool {
+    balls
+        .iter()
+        .any(|b| so3::angle_between(centre, &b.centre) + radius + 2.0 * ANGLE_ERROR <= b.radius)
+}
+
 /// The largest radius `2^-j pi` (`j = 0..50`) whose ball bound is within `allowed / 4` of
 /// `cost`, with that bound.
 fn incumbent_ball<T: Terms>(terms: &T, centre: &Rotation, cost: f64, allowed: f64) -> Option<Ball> {
@@ -162,10 +171,7 @@ pub(crate) fn search<T: Terms>(
             }
             let centre = cell.centre();
             let r = cell.radius();
-            if balls
-                .iter()
-                .any(|b| so3::angle_between(&centre, &b.centre) + r + 2.0 * ANGLE_ERROR <= b.radius)
-            {
+            if inside_a_ball(&balls, &centre, r) {
                 stats.cells_in_balls += 1;
                 continue;
             }
@@ -212,12 +218,7 @@ pub(crate) fn search<T: Terms>(
             stats.cells_pruned += 1;
             continue;
         }
-        let centre = cell.centre();
-        let r = cell.radius();
-        if balls
-            .iter()
-            .any(|b| so3::angle_between(&centre, &b.centre) + r + 2.0 * ANGLE_ERROR <= b.radius)
-        {
+        if inside_a_ball(&balls, &cell.centre(), cell.radius()) {
             stats.cells_in_balls += 1;
             continue;
         }

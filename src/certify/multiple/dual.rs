@@ -228,7 +228,7 @@ fn estimate_text(bound: &VerifiedBound) -> String {
     bound
         .min_eigenvalue_estimate
         .map(|e| match bound.verification {
-            Verification::Grounded => {
+            Verification::Grounded | Verification::ScalarComparison => {
                 format!("; gauge-direction estimate lambda_min(S) ~ {e:.3e}")
             }
             _ => format!("; Lanczos estimate lambda_min(S) ~ {e:.3e}"),
