@@ -15,6 +15,9 @@
 //! and the explanation when not certified (always with `ROTAVG_EXPLAIN=1`).
 //! `ROTAVG_CERTIFY=none` runs the solve alone (to measure its own peak RSS).
 //!
+//! `--outliers F` (anywhere on the line, `random` only): that fraction of the edges carries a
+//! random rotation instead of a measurement.
+//!
 //! `--write-g2o PATH` (anywhere on the line): do not solve; write the generated problem to
 //! `PATH` (edges only, `rotavg::io::g2o::write_g2o`: `Q_ij = R_ij^T`, information `2 w I_3` so
 //! that SE-Sync's weight reads back as `w = 1`) and the ground truth next to it as
@@ -33,6 +36,19 @@ use rotavg::so3::Rotation;
 
 fn main() {
     let mut args: Vec<String> = std::env::args().collect();
+    // `--outliers F`: that fraction of a random graph's edges replaced by random rotations
+    let outliers: f64 = args
+        .iter()
+        .position(|a| a == "--outliers")
+        .map(|k| {
+            let f = args
+                .get(k + 1)
+                .and_then(|v| v.parse().ok())
+                .expect("--outliers needs F");
+            args.drain(k..k + 2);
+            f
+        })
+        .unwrap_or(0.0);
     let write_g2o: Option<String> = args.iter().position(|a| a == "--write-g2o").map(|k| {
         let path = args.get(k + 1).cloned().expect("--write-g2o needs a PATH");
         args.drain(k..k + 2);
@@ -63,6 +79,7 @@ fn main() {
             num_rotations: n,
             num_edges: m,
             noise_sigma: sigma,
+            outlier_fraction: outliers,
             ..Default::default()
         }
         .generate(),

@@ -5,6 +5,8 @@
 //!   with the rounding of its solution `[P2]`-`[P5]`.
 //! - [`conjugate`]: the 10x10 SDP relaxation of conjugate averaging and the rank-one extraction
 //!   `[H2]`, `[H3]`.
+//! - [`lifted`]: the rank-`p` Burer-Monteiro factorisation of the multiple-averaging SDP,
+//!   solved by a Riemannian trust-region method (the staircase `[D11]`).
 //! - [`svec`]: the vectorisation of symmetric matrices used by Clarabel's PSD cone `[P1]`.
 //! - [`settings`]: one [`SdpSettings`] and one [`SdpStatus`] for both.
 //!
@@ -15,6 +17,7 @@
 
 mod clarabel;
 pub mod conjugate;
+pub mod lifted;
 pub mod multiple;
 pub mod settings;
 pub mod svec;

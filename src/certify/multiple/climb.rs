@@ -250,9 +250,10 @@ impl<'a> Climb<'a> {
         true
     }
 
-    /// The SDP rung: predicted from the graph (`[P6]`), refused over the budget; otherwise
-    /// solved, its multipliers verified (never its objective) and its rounding polished, which
-    /// becomes the current point (and is certified) when it is cheaper.
+    /// The SDP rung: predicted from the graph (`[P6]`), refused over the budget (the staircase
+    /// then takes its place); otherwise solved, its multipliers verified (never its objective)
+    /// and its rounding polished, which becomes the current point (and is certified) when it is
+    /// cheaper.
     pub fn sdp(&mut self) -> Result<()> {
         let since = Instant::now();
         let p = predict_relax_multiple(self.problem)?;
@@ -272,7 +273,8 @@ impl<'a> Climb<'a> {
                 Outcome::Refused(Refusal::OverBudget { reason: why }),
                 since,
             );
-            return Ok(());
+            // the next rung: the staircase solves the same relaxation by its low-rank factors
+            return self.staircase();
         }
         if let Some(polished) = self.run_sdp(predicted, since)?
             && polished.chordal_cost < self.current.cost

@@ -168,6 +168,12 @@ fn shift_invert(
     r
 }
 
+/// The estimate says `S` is indefinite by at least 100 times its Ritz residual plus the first
+/// shift.
+fn clearly_negative(r: &LanczosResult, delta0: f64) -> bool {
+    r.value < -100.0 * (r.residual + delta0)
+}
+
 /// Estimate `lambda_min(S)` by Lanczos on `S`, then shifts above it `4^j` steps apart until one
 /// factorisation succeeds (refining the estimate by shift-invert from there), then one tighter
 /// shift just above the refined estimate. Returns the best verified `(shift, margin)`.
@@ -199,6 +205,12 @@ fn search(
             continue;
         };
         best = Some((f.shift, f.margin));
+        if clearly_negative(&r, delta0) {
+            // S is indefinite by far more than the estimate's uncertainty: the bound is
+            // trace + 3n lambda_min whatever the shift, and tightening or refining the estimate
+            // (two more factorisations, a shift-invert run) changes it by the residual only
+            break;
+        }
         let mut r2 = shift_invert(&f, cx.s.nrows(), Some(&r.vector), &lz);
         notes.lanczos_iterations += r2.iterations;
         (r2.value, r2.residual) = rayleigh_quotient(cx.s.as_ref(), &r2.vector);
@@ -207,7 +219,7 @@ fn search(
         }
         break;
     }
-    if let Some((shift, _)) = best {
+    if let Some((shift, _)) = best.filter(|_| !clearly_negative(&r, delta0)) {
         let mut margin = delta0.max(1e-9 * r.value.abs()).max(r.residual);
         while tried < max {
             let sigma = (-r.value).max(0.0) + margin;

@@ -6,17 +6,24 @@
 //! ([`super::lower_bound_from_multipliers`]), so the bound is proven whatever the
 //! optimiser achieved, and approaches the SDP optimum when the optimiser converges.
 //!
-//! The optimiser here is a plain Riemannian gradient descent (Barzilai-Borwein steps, Armijo
-//! backtracking, polar retraction): adequate for moderate sizes; it reports why it stopped.
+//! Each rank is solved by the Riemannian trust-region method of [`crate::relax::lifted`]
+//! (truncated conjugate gradients on Hessian-vector products with the sparse `S`, polar
+//! retraction), warm-started from the previous rank's point; ranks grow while the verification
+//! finds a negative eigenvector, up to [`StaircaseSettings::max_rank`] and the time budget. The
+//! best verified bound over the ranks is reported.
 
-use super::multipliers::check_rotations;
-use super::verify::{VerifiedBound, lower_bound_from_multipliers};
+use super::multipliers::{certificate_matrix, check_rotations};
+use super::verify::{VerifiedBound, multipliers_bound};
 use crate::certify::certificate::{BoundMethod, Certificate};
+use crate::certify::ladder::Point;
 use crate::certify::settings::CertifySettings;
 use crate::error::{Error, Result};
+use crate::linalg::{LanczosResult, inf_norm, smallest_eigenpair};
 use crate::multiple::MultipleProblem;
+use crate::relax::lifted::{
+    Block, TrustRegionSettings, lifted_cost, lifted_multipliers, polar, trust_region,
+};
 use crate::so3::Rotation;
-use nalgebra::{Matrix3, Matrix3xX, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -24,20 +31,22 @@ use std::time::Instant;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct StaircaseSettings {
-    /// Largest rank `p` tried (`>= 3`).
+    /// Largest rank `p` tried (`>= 3`; default 32: the rank of an SDP solution is at most
+    /// about `sqrt(12 n)` (Barvinok-Pataki), and ranks stop growing when no negative
+    /// eigenvector is left or the time budget is spent).
     pub max_rank: usize,
-    /// Gradient-descent iterations per rank.
+    /// Trust-region iterations per rank.
     pub max_iterations: usize,
-    /// Stop the descent when `||grad|| <= gradient_tolerance * (1 + F)`.
+    /// Converged at a rank when `||grad|| <= gradient_tolerance * (1 + F)`.
     pub gradient_tolerance: f64,
 }
 
 impl Default for StaircaseSettings {
     fn default() -> Self {
         StaircaseSettings {
-            max_rank: 8,
-            max_iterations: 5000,
-            gradient_tolerance: 1e-10,
+            max_rank: 32,
+            max_iterations: 500,
+            gradient_tolerance: 1e-9,
         }
     }
 }
@@ -128,121 +137,13 @@ pub struct StaircaseResult {
     pub rank: usize,
     /// Cost `F(Y)` of the final lifted point (an estimate of the SDP optimum from above).
     pub lifted_cost: f64,
-    /// Total gradient-descent iterations.
+    /// Total trust-region iterations.
     pub iterations: usize,
+    /// Hessian-vector products with `S` (the work of the trust-region subproblems).
+    #[serde(default)]
+    pub hessian_products: usize,
     /// Why the staircase stopped.
     pub stop_reason: StaircaseStop,
-}
-
-type Block = Matrix3xX<f64>;
-
-fn lifted_qy(problem: &MultipleProblem, y: &[Block]) -> Vec<Block> {
-    let p = y[0].ncols();
-    let mut qy = vec![Block::zeros(p); y.len()];
-    for e in problem.edges() {
-        let r = e.rotation.matrix();
-        let (yi, yj) = (&y[e.i], &y[e.j]);
-        qy[e.i] += e.weight * (yi - r.transpose() * yj);
-        qy[e.j] += e.weight * (yj - r * yi);
-    }
-    qy
-}
-
-fn lifted_cost(problem: &MultipleProblem, y: &[Block]) -> f64 {
-    problem
-        .edges()
-        .iter()
-        .map(|e| e.weight * (&y[e.j] - e.rotation.matrix() * &y[e.i]).norm_squared())
-        .sum()
-}
-
-fn lifted_multipliers(problem: &MultipleProblem, y: &[Block]) -> Vec<Matrix3<f64>> {
-    lifted_qy(problem, y)
-        .iter()
-        .zip(y)
-        .map(|(g, yi)| {
-            let m: Matrix3<f64> = g * yi.transpose();
-            0.5 * (m + m.transpose())
-        })
-        .collect()
-}
-
-/// Riemannian gradient `2 ((QY)_i - sym((QY)_i Y_i^T) Y_i)`.
-fn gradient(problem: &MultipleProblem, y: &[Block]) -> Vec<Block> {
-    lifted_qy(problem, y)
-        .iter()
-        .zip(y)
-        .map(|(g, yi)| {
-            let m: Matrix3<f64> = g * yi.transpose();
-            let l = 0.5 * (m + m.transpose());
-            2.0 * (g - l * yi)
-        })
-        .collect()
-}
-
-/// Polar retraction: `(M M^T)^{-1/2} M` (orthonormal rows).
-fn polar(m: &Block) -> Option<Block> {
-    let g: Matrix3<f64> = m * m.transpose();
-    let eig = SymmetricEigen::new(g);
-    if eig.eigenvalues.iter().any(|&v| v.is_nan() || v <= 1e-300) {
-        return None;
-    }
-    let d = Matrix3::from_diagonal(&eig.eigenvalues.map(|v| 1.0 / v.sqrt()));
-    let inv_sqrt = eig.eigenvectors * d * eig.eigenvectors.transpose();
-    Some(inv_sqrt * m)
-}
-
-fn retract(y: &[Block], d: &[Block], t: f64) -> Option<Vec<Block>> {
-    y.iter()
-        .zip(d)
-        .map(|(yi, di)| polar(&(yi + t * di)))
-        .collect()
-}
-
-/// Returns (Y, F, iterations).
-fn descend(
-    problem: &MultipleProblem,
-    mut y: Vec<Block>,
-    settings: &StaircaseSettings,
-) -> (Vec<Block>, f64, usize) {
-    let mut f = lifted_cost(problem, &y);
-    let mut g = gradient(problem, &y);
-    let mut step = 1e-2;
-    let mut prev: Option<(Vec<Block>, f64)> = None;
-    let mut it = 0;
-    while it < settings.max_iterations {
-        let gn2: f64 = g.iter().map(|b| b.norm_squared()).sum();
-        if gn2.sqrt() <= settings.gradient_tolerance * (1.0 + f) {
-            break;
-        }
-        if let Some((gp, tp)) = &prev {
-            let s2 = tp * tp * gp.iter().map(|b| b.norm_squared()).sum::<f64>();
-            let sy: f64 = -tp * gp.iter().zip(&g).map(|(a, b)| a.dot(&(b - a))).sum::<f64>();
-            if sy > 0.0 {
-                step = (s2 / sy).clamp(1e-10, 10.0);
-            }
-        }
-        let dir: Vec<Block> = g.iter().map(|b| -b).collect();
-        let mut t = step;
-        let mut accepted = None;
-        for _ in 0..50 {
-            if let Some(c) = retract(&y, &dir, t) {
-                let fc = lifted_cost(problem, &c);
-                if fc <= f - 1e-4 * t * gn2 {
-                    accepted = Some((c, fc));
-                    break;
-                }
-            }
-            t *= 0.5;
-        }
-        let Some((c, fc)) = accepted else { break };
-        y = c;
-        f = fc;
-        prev = Some((g, t));
-        g = gradient(problem, &y);
-        it += 1;
-    }
-    (y, f, it)
 }
 
 /// Bound the global minimum by a Riemannian staircase started at `rotations` `[D11]`, and
@@ -266,82 +167,80 @@ pub fn staircase_bound(
     check_rotations(problem, rotations)?;
     certify.validate()?;
     let settings = &certify.staircase;
-    let upper = problem.chordal_cost(rotations);
+    let tr = TrustRegionSettings {
+        max_iterations: settings.max_iterations,
+        gradient_tolerance: settings.gradient_tolerance,
+        ..Default::default()
+    };
     let mut y: Vec<Block> = rotations
         .iter()
         .map(|r| Block::from_column_slice(r.matrix().as_slice()))
         .collect();
-    let mut iterations = 0;
-    let mut rank = 3;
-    let (bound, lifted, stop_reason) = loop {
-        let (yn, f, it) = descend(problem, y, settings);
-        y = yn;
-        iterations += it;
-        let lambdas = lifted_multipliers(problem, &y);
-        let bound = lower_bound_from_multipliers(problem, &lambdas, certify)?;
-        let estimate = bound.min_eigenvalue_estimate;
-        let Some(v) = bound.negative_eigenvector.clone() else {
-            break (
-                bound,
-                f,
-                StaircaseStop::Verified {
+    let (mut iterations, mut products, mut rank) = (0, 0, 3);
+    let (lifted, stop_reason, bound) = loop {
+        let r = trust_region(problem, y, &tr);
+        (y, iterations, products) = (
+            r.y,
+            iterations + r.iterations,
+            products + r.hessian_products,
+        );
+        // a clear negative eigenvalue from an estimate (matrix-vector products only) escapes at
+        // once; otherwise the bound is verified, and its verification's (shift-invert)
+        // eigenvector decides
+        let e = negative_direction(problem, &y, certify)?;
+        let (direction, verified) = if e.value < -escape_threshold(&e, r.cost, problem, certify) {
+            (Some(e.vector), None)
+        } else {
+            let lambdas = lifted_multipliers(problem, &y);
+            let b = multipliers_bound(problem, &lambdas, certify, Point::Staircase)?;
+            (b.negative_eigenvector.clone(), Some(b))
+        };
+        let estimate = verified
+            .as_ref()
+            .and_then(|b| b.min_eigenvalue_estimate)
+            .or(Some(e.value));
+        let Some(v) = direction else {
+            let stop = StaircaseStop::Verified {
+                rank,
+                min_eigenvalue_estimate: estimate,
+            };
+            break (r.cost, stop, verified);
+        };
+        let over_time = certify
+            .budget
+            .max_seconds
+            .is_some_and(|limit| start.elapsed().as_secs_f64() > 0.5 * limit);
+        if rank >= settings.max_rank || over_time {
+            let max_rank = if over_time { rank } else { settings.max_rank };
+            let stop = StaircaseStop::MaxRank {
+                max_rank,
+                min_eigenvalue_estimate: estimate,
+            };
+            break (r.cost, stop, verified);
+        }
+        rank += 1;
+        match escape(problem, &y, &v, r.cost) {
+            Some(next) => y = next,
+            None => {
+                let stop = StaircaseStop::EscapeFailed {
                     rank,
                     min_eigenvalue_estimate: estimate,
-                },
-            );
-        };
-        if rank >= settings.max_rank {
-            break (
-                bound,
-                f,
-                StaircaseStop::MaxRank {
-                    max_rank: settings.max_rank,
-                    min_eigenvalue_estimate: estimate,
-                },
-            );
-        }
-        // escape along v in a new column: Y_i <- [Y_i, alpha v_i], retract; second-order
-        // decrease ~ alpha^2 lambda_min
-        rank += 1;
-        let lift = |alpha: f64| -> Option<Vec<Block>> {
-            y.iter()
-                .enumerate()
-                .map(|(i, yi)| {
-                    let mut b = yi.clone().insert_column(rank - 1, 0.0);
-                    for a in 0..3 {
-                        b[(a, rank - 1)] = alpha * v[3 * i + a];
-                    }
-                    polar(&b)
-                })
-                .collect()
-        };
-        let mut alpha = 1.0;
-        let mut next = None;
-        for _ in 0..40 {
-            if let Some(c) = lift(alpha)
-                && lifted_cost(problem, &c) < f
-            {
-                next = Some(c);
-                break;
-            }
-            alpha *= 0.5;
-        }
-        match next {
-            Some(c) => y = c,
-            None => {
-                break (
-                    bound,
-                    f,
-                    StaircaseStop::EscapeFailed {
-                        rank,
-                        min_eigenvalue_estimate: estimate,
-                    },
-                );
+                };
+                break (r.cost, stop, verified);
             }
         }
     };
+    let bound = match bound {
+        Some(b) => b,
+        None => multipliers_bound(
+            problem,
+            &lifted_multipliers(problem, &y),
+            certify,
+            Point::Staircase,
+        )?,
+    };
     let certificate = Certificate::from_bounds(
-        upper,
+        problem.chordal_cost(rotations),
         Some(bound.lower_bound),
         BoundMethod::Staircase,
         bound.min_eigenvalue_estimate,
@@ -359,6 +258,64 @@ pub fn staircase_bound(
         rank,
         lifted_cost: lifted,
         iterations,
+        hessian_products: products,
         stop_reason,
     })
+}
+
+/// The Lanczos estimate of `lambda_min(S)` at the lifted point `y` and its eigenvector (an
+/// estimate: it only chooses where to escape).
+fn negative_direction(
+    problem: &MultipleProblem,
+    y: &[Block],
+    certify: &CertifySettings,
+) -> Result<LanczosResult> {
+    let s = certificate_matrix(problem, &lifted_multipliers(problem, y))?;
+    let norm = inf_norm(s.as_ref()).max(f64::MIN_POSITIVE);
+    Ok(smallest_eigenpair(s.as_ref(), norm, &certify.dual.lanczos))
+}
+
+/// A negative eigenvalue estimate below minus this is worth a new rank: its Ritz residual, and
+/// a tenth of the tolerance spread over the `3n` coordinates (a smaller one changes the bound
+/// `sum tr(Lambda) + 3n lambda_min` by less than that).
+fn escape_threshold(
+    e: &LanczosResult,
+    cost: f64,
+    problem: &MultipleProblem,
+    certify: &CertifySettings,
+) -> f64 {
+    let gap = certify
+        .tolerance
+        .resolve(problem.min_weight())
+        .allowed_gap(cost);
+    e.residual + 0.1 * gap / (3 * problem.num_rotations()) as f64
+}
+
+/// The saddle escape: a new column `alpha v_i` on every block (`v` the negative eigenvector of
+/// `S`, the second-order decrease is about `alpha^2 lambda_min`), retracted, with `alpha` halved
+/// from 1 until the lifted cost falls below `f` (40 halvings at most); `None` when it never does.
+fn escape(problem: &MultipleProblem, y: &[Block], v: &[f64], f: f64) -> Option<Vec<Block>> {
+    let rank = y.first().map_or(3, |b| b.ncols()) + 1;
+    let lift = |alpha: f64| -> Option<Vec<Block>> {
+        y.iter()
+            .enumerate()
+            .map(|(i, yi)| {
+                let mut b = yi.clone().insert_column(rank - 1, 0.0);
+                for a in 0..3 {
+                    b[(a, rank - 1)] = alpha * v[3 * i + a];
+                }
+                polar(&b)
+            })
+            .collect()
+    };
+    let mut alpha = 1.0;
+    for _ in 0..40 {
+        if let Some(c) = lift(alpha)
+            && lifted_cost(problem, &c) < f
+        {
+            return Some(c);
+        }
+        alpha *= 0.5;
+    }
+    None
 }

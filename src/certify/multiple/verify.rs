@@ -372,8 +372,19 @@ pub fn lower_bound_from_multipliers(
     settings: &CertifySettings,
 ) -> Result<VerifiedBound> {
     settings.validate()?;
+    multipliers_bound(problem, lambdas, settings, Point::Sdp)
+}
+
+/// [`lower_bound_from_multipliers`] with `point` labelling the ladder (the SDP's multipliers, the
+/// staircase's).
+pub(super) fn multipliers_bound(
+    problem: &MultipleProblem,
+    lambdas: &[Matrix3<f64>],
+    settings: &CertifySettings,
+    point: Point,
+) -> Result<VerifiedBound> {
     let trace: f64 = lambdas.iter().map(|l| l.trace()).sum();
-    verify(problem, lambdas, None, trace.abs(), settings, Point::Sdp)
+    verify(problem, lambdas, None, trace.abs(), settings, point)
 }
 
 /// Climb the ladder for `lambdas` (and the estimate `rotations` they belong to, when known):
