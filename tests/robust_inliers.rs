@@ -430,3 +430,33 @@ fn accuracy_on_a_1dsfm_like_scene() {
     let a = align_and_compare(&out.solution.rotations, &truth).unwrap();
     assert!(a.robust.median_deg > 1.0, "{}", a.robust.median_deg);
 }
+
+/// Issue 27: a least-squares run on data with outliers says so (in the pipeline's details and, on
+/// the command line, on stderr) and names the robust loss to run instead; clean data, at any
+/// noise level up to 0.2 rad, raise no warning.
+#[test]
+fn least_squares_on_outlier_data_is_flagged() {
+    for (noise, outliers, flagged) in [(0.01, 0.0, false), (0.2, 0.0, false), (0.02, 0.2, true)] {
+        let (p, _) = SyntheticGraph {
+            num_rotations: 120,
+            num_edges: 480,
+            noise_sigma: noise,
+            outlier_fraction: outliers,
+            seed: 27,
+        }
+        .generate();
+        let out = average_multiple(&p, &AverageSettings::default()).unwrap();
+        let w = out.details.outliers.clone();
+        assert_eq!(
+            w.is_some(),
+            flagged,
+            "noise {noise}, outliers {outliers}: {w:?}"
+        );
+        if let Some(w) = w {
+            println!("{w}");
+            // the flagged edges are (mostly) the planted outliers: about 96 of 480
+            assert!(w.suspected >= 40 && w.suspected <= 140, "{w}");
+            assert!(w.suggestion.contains("--loss cauchy"));
+        }
+    }
+}

@@ -289,6 +289,67 @@ pub fn edge_residuals(
     }
 }
 
+/// An estimate of a least-squares cost whose residuals look like the data contain outliers
+/// (issue 27): the chordal L2 answer is then pulled by them, and a robust loss (with the
+/// certificate of its inlier graph) is the better tool. Reported by the pipeline on stderr and in
+/// the JSON (`details.outliers`); never part of a certificate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OutlierWarning {
+    /// Edges whose residual exceeds `threshold_deg`.
+    pub suspected: usize,
+    /// Edges in all.
+    pub num_edges: usize,
+    /// `max(5 deg, 6 x` the median residual`)`: beyond it a residual is far outside the noise.
+    pub threshold_deg: f64,
+    /// The median residual angle, degrees.
+    pub median_deg: f64,
+    /// What to run instead.
+    pub suggestion: String,
+}
+
+impl fmt::Display for OutlierWarning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} of {} edges have residuals above {:.1} deg (median {:.2} deg): the data look like \
+             they contain outliers, which pull the least-squares answer; {}",
+            self.suspected, self.num_edges, self.threshold_deg, self.median_deg, self.suggestion
+        )
+    }
+}
+
+/// The smallest share of the edges (and count) flagged before [`suspected_outliers`] warns.
+const OUTLIER_SHARE: f64 = 0.01;
+
+/// [`OutlierWarning`] for `rotations` when at least 1 % (and 3) of the edges have residual angles
+/// above `max(5 deg, 6 x median)`; `None` otherwise. Gaussian noise of any level stays below six
+/// times its median residual (the chance is below 1e-9 per edge for 3-D isotropic noise), while
+/// a wrong measurement's residual is typically tens of degrees.
+pub fn suspected_outliers(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+) -> Option<OutlierWarning> {
+    let mut deg: Vec<f64> = problem
+        .residual_angles(rotations)
+        .iter()
+        .map(|t| t.to_degrees())
+        .collect();
+    deg.sort_by(f64::total_cmp);
+    let median_deg = crate::validate::quantile_sorted(&deg, 0.5);
+    let threshold_deg = (6.0 * median_deg).max(5.0);
+    let suspected = deg.iter().filter(|&&d| d > threshold_deg).count();
+    let m = deg.len();
+    (suspected >= 3 && suspected as f64 >= OUTLIER_SHARE * m as f64).then(|| OutlierWarning {
+        suspected,
+        num_edges: m,
+        threshold_deg,
+        median_deg,
+        suggestion: "a robust loss (command line `--loss cauchy`, or huber / l1) solves it and \
+                     certifies the chordal L2 problem on its inlier graph"
+            .into(),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

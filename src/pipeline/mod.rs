@@ -100,6 +100,11 @@ pub struct PipelineDetails {
     /// ([`multiple::InlierGraph`]). Omitted from JSON when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub inlier_graph: Option<Box<multiple::InlierGraph>>,
+    /// Multiple averaging with a least-squares loss: the residuals suggest outliers, and what to
+    /// run instead ([`crate::multiple::robust::suspected_outliers`]). Omitted from JSON when
+    /// absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outliers: Option<crate::multiple::robust::OutlierWarning>,
 }
 
 impl<S: fmt::Display> fmt::Display for Averaged<S> {

@@ -13,7 +13,7 @@ use crate::certify::{
     CertifySettings, certify_multiple,
 };
 use crate::error::Result;
-use crate::multiple::robust::inlier_threshold_deg;
+use crate::multiple::robust::{inlier_threshold_deg, suspected_outliers};
 use crate::multiple::{
     Initialisation, MultipleProblem, MultipleSettings, MultipleSolution, solve_multiple,
 };
@@ -97,7 +97,14 @@ pub fn average_multiple(
 ) -> Result<Averaged<MultipleSolution>> {
     let objective = problem.objective();
     let mode = settings.certify.mode;
-    if inlier_threshold_deg(&objective, &settings.solve).is_none() || mode == CertifyMode::None {
+    if inlier_threshold_deg(&objective, &settings.solve).is_none() {
+        // least squares: say when the residuals look like outliers (a robust loss is then the
+        // better tool)
+        let mut out = average(problem, settings)?;
+        out.details.outliers = suspected_outliers(problem, &out.solution.rotations);
+        return Ok(out);
+    }
+    if mode == CertifyMode::None {
         return average(problem, settings);
     }
     let start = Instant::now();

@@ -197,6 +197,11 @@ pub fn run(args: &Args) -> Result<Outcome> {
     report.output = args.output.clone();
     report.edges_output = args.edges_output.clone();
     report.figure = args.plot.clone();
+    if let Some(w) = &report.result.details.outliers
+        && !args.common.quiet
+    {
+        eprintln!("rotavg: warning: {}: {w}", args.input);
+    }
     args.common.print(&report)?;
     Ok(Outcome {
         verdict: report.verdict(),

@@ -173,7 +173,7 @@ impl<'a> Climb<'a> {
         let over = matches!(c.diagnosis, DualDiagnosis::OverBudget { .. });
         let note = format!(
             "dual certificate at {label}: {}{}",
-            diagnosis_text(&c.diagnosis),
+            diagnosis_text(&c.diagnosis, self.problem),
             match (over, &c.bound.randomized) {
                 (true, Some(r)) => format!("; {r}"),
                 _ => String::new(),
@@ -484,7 +484,7 @@ impl<'a> Climb<'a> {
                 tolerance,
                 format!(
                     "no lower bound could be computed; {}",
-                    diagnosis_text(first)
+                    diagnosis_text(first, self.problem)
                 ),
                 seconds,
             ),
@@ -508,13 +508,13 @@ impl<'a> Climb<'a> {
             seconds,
         );
         let mut verdict = if c.is_certified() {
-            diagnosis_text(&DualDiagnosis::Certified)
+            diagnosis_text(&DualDiagnosis::Certified, self.problem)
         } else {
             match first {
                 // the estimate's own dual certificate would certify, but a bound from another
                 // point is what was kept: say it plainly
                 DualDiagnosis::Certified => "not certified within the tolerance".to_string(),
-                d => diagnosis_text(d),
+                d => diagnosis_text(d, self.problem),
             }
         };
         verdict.push_str(&self.improvement_text(&b, &tolerance));

@@ -147,7 +147,7 @@ pub(super) fn dual_certificate_at(
         proof_text(&bound),
         estimate_text(&bound)
     );
-    certificate.explanation = format!("{}; {proof}", diagnosis_text(&diagnosis));
+    certificate.explanation = format!("{}; {proof}", diagnosis_text(&diagnosis, problem));
     certificate.verified_min_eigenvalue = Some(bound.verified_min_eigenvalue);
     certificate.seconds = start.elapsed().as_secs_f64();
     Ok(DualCertificate {
@@ -303,11 +303,13 @@ fn over_budget(bound: &VerifiedBound) -> Option<String> {
 }
 
 /// The verdict sentence of a diagnosis.
-pub(crate) fn diagnosis_text(d: &DualDiagnosis) -> String {
+pub(crate) fn diagnosis_text(d: &DualDiagnosis, problem: &MultipleProblem) -> String {
     match d {
-        DualDiagnosis::Certified => {
-            "certified globally optimal (over O(3)^n, hence SO(3)^n)".into()
-        }
+        DualDiagnosis::Certified => format!(
+            "certified globally optimal for the chordal L2 cost of its {} edges (over O(3)^n, \
+             hence SO(3)^n)",
+            problem.num_edges()
+        ),
         DualDiagnosis::NotCritical { residual } => format!(
             "not certified: the estimate is not a critical point (stationarity residual {residual:.3e}): its cost is above the nearby optimum, and its bound is correspondingly weaker"
         ),
@@ -399,7 +401,7 @@ pub fn certify_with_multipliers(
         "{explanation}{}",
         attach_randomized(&mut certificate, bound.randomized)
     );
-    certificate.explanation = format!("{}; {explanation}", diagnosis_text(&diagnosis));
+    certificate.explanation = format!("{}; {explanation}", diagnosis_text(&diagnosis, problem));
     certificate.verified_min_eigenvalue = Some(bound.verified_min_eigenvalue);
     Ok(DualCertificate {
         certificate,
