@@ -6,6 +6,9 @@
 //! estimate is never worse than that best cost by more than the stated tolerance.
 //! The same points are certified again with no factorisation allowed (budget 1 byte): the
 //! randomized bound [D16] reported beside the `inconclusive` verdict obeys the same two rules.
+//!
+//! Opt-in (`#[ignore]`): the README's test command stays short; CI runs it separately
+//! (`cargo test --release --test soundness_campaign -- --ignored`).
 
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -118,6 +121,7 @@ fn campaign(p: &MultipleProblem, truth: &[Rotation], rng: &mut StdRng, tally: &m
 }
 
 #[test]
+#[ignore = "long campaign (about 4 minutes on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_in_ten_thousand() {
     let mut rng = StdRng::seed_from_u64(2026);
     let mut tally = Tally {

@@ -299,7 +299,8 @@ pub struct OutlierWarning {
     pub suspected: usize,
     /// Edges in all.
     pub num_edges: usize,
-    /// `max(5 deg, 6 x` the median residual`)`: beyond it a residual is far outside the noise.
+    /// The smallest residual angle among the suspected edges, degrees (each is above 5 degrees
+    /// and above six times the median in units of its own noise, [`suspected_outliers`]).
     pub threshold_deg: f64,
     /// The median residual angle, degrees.
     pub median_deg: f64,
@@ -311,8 +312,9 @@ impl fmt::Display for OutlierWarning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} of {} edges have residuals above {:.1} deg (median {:.2} deg): the data look like \
-             they contain outliers, which pull the least-squares answer; {}",
+            "{} of {} edges have residuals of {:.1} deg or more, far outside the noise (median \
+             {:.2} deg): the data look like they contain outliers, which pull the least-squares \
+             answer; {}",
             self.suspected, self.num_edges, self.threshold_deg, self.median_deg, self.suggestion
         )
     }
@@ -321,24 +323,44 @@ impl fmt::Display for OutlierWarning {
 /// The smallest share of the edges (and count) flagged before [`suspected_outliers`] warns.
 const OUTLIER_SHARE: f64 = 0.01;
 
-/// [`OutlierWarning`] for `rotations` when at least 1 % (and 3) of the edges have residual angles
-/// above `max(5 deg, 6 x median)`; `None` otherwise. Gaussian noise of any level stays below six
-/// times its median residual (the chance is below 1e-9 per edge for 3-D isotropic noise), while
-/// a wrong measurement's residual is typically tens of degrees.
+/// [`OutlierWarning`] for `rotations` when at least 1 % (and 3) of the edges have a residual
+/// angle above 5 degrees and a weighted residual `sqrt(w) theta` above 6 times the median
+/// weighted residual (weights are informations, so `sqrt(w) theta` is in units of each edge's own
+/// noise: precise odometry and noisy loop closures are not told apart as outliers); `None`
+/// otherwise. Gaussian noise stays below six times its median (the chance is below 1e-9 per
+/// edge for 3-D isotropic noise), while a wrong measurement's residual is typically tens of
+/// degrees. Only graphs with at least two edges per node are judged: with less redundancy (a
+/// SLAM chain with a few loop closures) most edges are tree edges whose residuals vanish at any
+/// least-squares answer, so the median says nothing about the noise.
 pub fn suspected_outliers(
     problem: &MultipleProblem,
     rotations: &[Rotation],
 ) -> Option<OutlierWarning> {
-    let mut deg: Vec<f64> = problem
-        .residual_angles(rotations)
+    if problem.num_edges() < 2 * problem.num_rotations() {
+        return None;
+    }
+    let theta = problem.residual_angles(rotations);
+    let weighted: Vec<f64> = theta
         .iter()
-        .map(|t| t.to_degrees())
+        .zip(problem.edges())
+        .map(|(t, e)| e.weight.sqrt() * t)
         .collect();
-    deg.sort_by(f64::total_cmp);
-    let median_deg = crate::validate::quantile_sorted(&deg, 0.5);
-    let threshold_deg = (6.0 * median_deg).max(5.0);
-    let suspected = deg.iter().filter(|&&d| d > threshold_deg).count();
-    let m = deg.len();
+    let median = |v: &[f64]| {
+        let mut v = v.to_vec();
+        v.sort_by(f64::total_cmp);
+        crate::validate::quantile_sorted(&v, 0.5)
+    };
+    let cut = 6.0 * median(&weighted);
+    let floor = 5f64.to_radians();
+    let suspect: Vec<f64> = theta
+        .iter()
+        .zip(&weighted)
+        .filter(|&(&t, &w)| t > floor && w > cut)
+        .map(|(t, _)| t.to_degrees())
+        .collect();
+    let (suspected, m) = (suspect.len(), theta.len());
+    let threshold_deg = suspect.iter().copied().fold(f64::INFINITY, f64::min);
+    let median_deg = median(&theta).to_degrees();
     (suspected >= 3 && suspected as f64 >= OUTLIER_SHARE * m as f64).then(|| OutlierWarning {
         suspected,
         num_edges: m,

@@ -1,6 +1,6 @@
 //! The dual certificate of chordal L2 multiple rotation averaging (SPEC section 3,
 //! `paper-notes/certificates.md` `[D3]`-`[D9]`): the multipliers of an estimate
-//! ([`super::multipliers`]), the verified bound from them ([`super::verify`], the ladder of
+//! ([`mod@super::multipliers`]), the verified bound from them ([`super::verify`], the ladder of
 //! proofs), the verdict, and why it is what it is ([`DualDiagnosis`]).
 //!
 //! - [`dual_certificate`]: the dual certificate of an estimate (any rotations, critical point or

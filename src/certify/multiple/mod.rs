@@ -7,7 +7,7 @@
 //!   `[D4]`, rounding polished) or the Riemannian staircase `[D11]`. The largest verified bound
 //!   wins `[D12]`.
 //! - [`dual`]: the dual certificate of an estimate and why it has its verdict.
-//! - [`multipliers`]: `Q Y`, the multipliers, `S`, the residuals and the bound's rounding
+//! - [`mod@multipliers`]: `Q Y`, the multipliers, `S`, the residuals and the bound's rounding
 //!   (the numbers every certificate is made of, in double-double where they cancel).
 //! - [`verify`]: the ladder of proofs that `S` is (nearly) positive semidefinite
 //!   ([`crate::certify::ladder`]): [`grounded`] `[D15]`, the shifted Cholesky of `S` `[D5]`,

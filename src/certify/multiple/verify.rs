@@ -3,8 +3,8 @@
 //! `[D4]`-`[D8]`, `[D12]`, `[D13]`, `[D15]`, `[D16]`; the ladder: [`crate::certify::ladder`]).
 //!
 //! The rungs are the grounded bound `[D15]` ([`super::grounded`]), the shifted Cholesky
-//! factorisation of `S` `[D5]` ([`super::shifted`]) and the scalar comparison `[D13]` on the
-//! whole graph, a subgraph or a split ([`super::scalar::rungs`]). Each predicts its time and
+//! factorisation of `S` `[D5]` (`shifted.rs`) and the scalar comparison `[D13]` on the
+//! whole graph, a subgraph or a split (`scalar/rungs.rs`). Each predicts its time and
 //! memory from the problem; those that fit the [`crate::certify::Budget`] run in the order of
 //! their predicted time (the strongest first when all are cheap), and the first whose bound
 //! leaves at least half of the tolerance for the rest of the gap ends the climb. When none

@@ -1,0 +1,265 @@
+//! The example data of `examples/data/` (every README example runs on them from a fresh clone):
+//! all of it generated here, seeded, so the committed files are reproducible byte for byte. The
+//! test regenerates them and compares; `ROTAVG_BLESS=1 cargo test --release --test example_data`
+//! writes them (after a deliberate change of the generator: review `git diff examples/data`).
+//!
+//! - `slam.g2o`: a 3-D SLAM pose graph (`VERTEX_SE3:QUAT` and `EDGE_SE3:QUAT`): 400 poses on a
+//!   winding trajectory, odometry with rotation information 1e4 (0.01 rad), 40 loop closures
+//!   with information 1e2 (0.1 rad); the vertices are the noise-free poses.
+//! - `sfm_outliers.txt`: a 1DSfM `EGs.txt` view graph of 150 cameras and 1200 pairs, 2 degrees of
+//!   noise, 15 % of the pairs replaced by random rotations (outliers); `sfm_truth.txt` its
+//!   ground truth as a rotation list (`id R11 .. R33`, world-to-camera).
+//! - `single.json`: 50 rotations around one (0.05 rad), 10 % of them random (outliers).
+//! - `handeye/hand.csv`, `handeye/camera.csv`: two time-stamped pose streams (ETH layout:
+//!   `t, x, y, z, qx, qy, qz, qw`): a robot hand in its base and a camera observing a fixed target,
+//!   related by the hand-eye transform `X` (camera to hand) in `handeye/truth.json`; 0.2 degrees of
+//!   noise on the camera rotations.
+//!
+//! Conventions: `paper-notes/formats.md` and the readers in `src/io/`.
+
+use nalgebra::{Translation3, UnitQuaternion, Vector3};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use rotavg::Rotation;
+use rotavg::so3::{exp, gaussian, perturb_gaussian, random_rotation};
+use std::fmt::Write as _;
+use std::path::Path;
+
+type Pose = nalgebra::Isometry3<f64>;
+
+fn quat(r: &Rotation) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_rotation_matrix(r)
+}
+
+fn gaussian_vector(rng: &mut StdRng, sigma: f64) -> Vector3<f64> {
+    Vector3::new(gaussian(rng), gaussian(rng), gaussian(rng)) * sigma
+}
+
+/// One g2o `EDGE_SE3:QUAT` / `VERTEX_SE3:QUAT` pose: `x y z qx qy qz qw`.
+fn pose_fields(p: &Pose) -> String {
+    let (t, q) = (p.translation.vector, p.rotation);
+    format!(
+        "{:.9} {:.9} {:.9} {:.12} {:.12} {:.12} {:.12}",
+        t.x, t.y, t.z, q.i, q.j, q.k, q.w
+    )
+}
+
+/// The upper triangle of a 6x6 information `diag(t, t, t, r, r, r)` (g2o's order).
+fn information(translation: f64, rotation: f64) -> String {
+    let mut s = String::new();
+    for row in 0..6 {
+        for col in row..6 {
+            let v = match (row == col, row < 3) {
+                (true, true) => translation,
+                (true, false) => rotation,
+                _ => 0.0,
+            };
+            let _ = write!(s, " {v}");
+        }
+    }
+    s
+}
+
+/// `slam.g2o`: world-from-body poses `T_i`, edges `T_i^-1 T_j` with noise.
+fn slam(rng: &mut StdRng) -> String {
+    let n = 400;
+    let mut poses: Vec<Pose> = vec![Pose::identity()];
+    for i in 1..n {
+        let turn = Vector3::new(
+            0.02 * gaussian(rng),
+            0.02 * gaussian(rng),
+            0.15 * (i as f64 * 0.05).sin(),
+        );
+        let step = Pose::from_parts(Translation3::new(1.0, 0.0, 0.0), quat(&exp(&turn)));
+        poses.push(poses[i - 1] * step);
+    }
+    let mut s =
+        String::from("# rotavg example data (examples/example_data.rs): a 3-D SLAM pose graph\n");
+    for (i, p) in poses.iter().enumerate() {
+        let _ = writeln!(s, "VERTEX_SE3:QUAT {i} {}", pose_fields(p));
+    }
+    let edge = |s: &mut String, rng: &mut StdRng, i: usize, j: usize, info_t: f64, info_r: f64| {
+        let rel = poses[i].inverse() * poses[j];
+        let noise = Pose::from_parts(
+            Translation3::from(gaussian_vector(rng, info_t.sqrt().recip())),
+            quat(&exp(&gaussian_vector(rng, info_r.sqrt().recip()))),
+        );
+        let _ = writeln!(
+            s,
+            "EDGE_SE3:QUAT {i} {j} {}{}",
+            pose_fields(&(rel * noise)),
+            information(info_t, info_r)
+        );
+    };
+    for i in 1..n {
+        edge(&mut s, rng, i - 1, i, 1e4, 1e4);
+    }
+    for _ in 0..40 {
+        let j = rng.random_range(20..n);
+        let i = rng.random_range(0..j - 10);
+        edge(&mut s, rng, i, j, 1e2, 1e2);
+    }
+    s
+}
+
+/// `sfm_outliers.txt` (1DSfM: `i j R t` with `R = C_i C_j^T`, `C` world-to-camera) and
+/// `sfm_truth.txt` (`id R11 .. R33`, `C_id`).
+fn sfm(rng: &mut StdRng) -> (String, String) {
+    let n = 150;
+    let cams: Vec<Rotation> = (0..n).map(|_| random_rotation(rng)).collect();
+    let mut graph = String::new();
+    let mut pairs = std::collections::BTreeSet::new();
+    while pairs.len() < 1200 {
+        let (i, j) = (rng.random_range(0..n), rng.random_range(0..n));
+        if i < j {
+            pairs.insert((i, j));
+        }
+    }
+    for &(i, j) in &pairs {
+        let exact = cams[i] * cams[j].inverse();
+        let r = if rng.random::<f64>() < 0.15 {
+            random_rotation(rng)
+        } else {
+            perturb_gaussian(&exact, 2f64.to_radians(), rng)
+        };
+        let m = r.matrix();
+        let _ = write!(graph, "{i} {j}");
+        for row in 0..3 {
+            for col in 0..3 {
+                let _ = write!(graph, " {:.12}", m[(row, col)]);
+            }
+        }
+        let t = gaussian_vector(rng, 1.0).normalize();
+        let _ = writeln!(graph, " {:.9} {:.9} {:.9}", t.x, t.y, t.z);
+    }
+    let mut truth =
+        String::from("# ground truth of sfm_outliers.txt: id R11 .. R33 (world-to-camera)\n");
+    for (i, c) in cams.iter().enumerate() {
+        let _ = write!(truth, "{i}");
+        for v in c.matrix().transpose().iter() {
+            let _ = write!(truth, " {v:.15}");
+        }
+        truth.push('\n');
+    }
+    (graph, truth)
+}
+
+/// `single.json`: 50 rotations around a centre, 10 % random.
+fn single(rng: &mut StdRng) -> String {
+    let centre = random_rotation(rng);
+    let rows: Vec<String> = (0..50)
+        .map(|k| {
+            let r = if k % 10 == 9 {
+                random_rotation(rng)
+            } else {
+                perturb_gaussian(&centre, 0.05, rng)
+            };
+            serde_json::to_string(&rotavg::so3::rotation_to_rows(&r)).expect("rows serialise")
+        })
+        .collect();
+    format!("{{\"rotations\": [\n  {}\n]}}\n", rows.join(",\n  "))
+}
+
+/// One ETH pose-stream line: `t, x, y, z, qx, qy, qz, qw`.
+fn stream_line(t: f64, p: &Pose) -> String {
+    let (v, q) = (p.translation.vector, p.rotation);
+    format!(
+        "{t:.4}, {:.9}, {:.9}, {:.9}, {:.12}, {:.12}, {:.12}, {:.12}\n",
+        v.x, v.y, v.z, q.i, q.j, q.k, q.w
+    )
+}
+
+/// `handeye/hand.csv` (`H = T_B_H`, hand in base), `handeye/camera.csv` (`E = T_W_E`, camera in
+/// target) and `handeye/truth.json` (`X`, camera to hand): `H_j^-1 H_i ... ` as in
+/// `src/io/handeye.rs`: `(H_i^-1 H_j) X = X (E_i^-1 E_j)` with the target fixed in the base,
+/// `T_B_W`, so `E_i = T_B_W^-1 H_i X`.
+fn handeye(rng: &mut StdRng) -> (String, String, String) {
+    let x = Pose::from_parts(
+        Translation3::new(0.03, -0.02, 0.08),
+        quat(&random_rotation(rng)),
+    );
+    let target_in_base = Pose::from_parts(
+        Translation3::new(0.8, 0.1, 0.0),
+        quat(&random_rotation(rng)),
+    );
+    let (mut hand, mut camera) = (String::new(), String::new());
+    for k in 0..200 {
+        let t = 1.0 + 0.05 * k as f64;
+        let h = Pose::from_parts(
+            Translation3::from(gaussian_vector(rng, 0.2) + Vector3::new(0.5, 0.0, 0.6)),
+            quat(&exp(&gaussian_vector(rng, 0.6))),
+        );
+        let e = target_in_base.inverse() * h * x;
+        let noisy = Pose::from_parts(
+            e.translation,
+            quat(&exp(&gaussian_vector(rng, 0.2f64.to_radians()))) * e.rotation,
+        );
+        hand.push_str(&stream_line(t, &h));
+        camera.push_str(&stream_line(t, &noisy));
+    }
+    let truth = format!(
+        "{{\"rotation\": {}}}\n",
+        serde_json::to_string(&rotavg::so3::rotation_to_rows(
+            &x.rotation.to_rotation_matrix()
+        ))
+        .expect("rows serialise")
+    );
+    (hand, camera, truth)
+}
+
+/// Every file of the example data, `(relative path, contents)`, from one seed.
+fn files() -> Vec<(&'static str, String)> {
+    let mut rng = StdRng::seed_from_u64(2026);
+    let (graph, truth) = sfm(&mut rng);
+    let (hand, camera, x) = handeye(&mut rng);
+    vec![
+        ("slam.g2o", slam(&mut rng)),
+        ("sfm_outliers.txt", graph),
+        ("sfm_truth.txt", truth),
+        ("single.json", single(&mut rng)),
+        ("handeye/hand.csv", hand),
+        ("handeye/camera.csv", camera),
+        ("handeye/truth.json", x),
+    ]
+}
+
+/// The committed example data are what this generator writes; with `ROTAVG_BLESS=1` it writes
+/// them. Then every file is read back by the command line's readers (a solve and a certificate
+/// each), so the README's examples have data that work.
+#[test]
+fn example_data_is_reproducible_and_reads() {
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/data");
+    let bless = std::env::var_os("ROTAVG_BLESS").is_some();
+    for (name, text) in files() {
+        let path = folder.join(name);
+        if bless {
+            std::fs::create_dir_all(path.parent().expect("a folder")).expect("create the folder");
+            std::fs::write(&path, &text).expect("write the example data");
+        }
+        let stored = std::fs::read_to_string(&path)
+            .unwrap_or_else(|e| panic!("{}: {e} (ROTAVG_BLESS=1 writes it)", path.display()));
+        assert!(
+            stored == text,
+            "{} differs from its generator (ROTAVG_BLESS=1 rewrites it)",
+            path.display()
+        );
+    }
+    let options = rotavg::io::detect::ReadOptions::default();
+    for name in ["slam.g2o", "sfm_outliers.txt"] {
+        let g = rotavg::io::input::load_problem(
+            folder.join(name).to_str().expect("utf-8"),
+            Default::default(),
+            &options,
+        )
+        .expect("the example graph reads");
+        let rotavg::io::input::LoadedProblem::Multiple(g) = g else {
+            panic!("{name} is a multiple problem")
+        };
+        let out =
+            rotavg::pipeline::average_multiple(&g.problem, &Default::default()).expect("solve");
+        assert!(
+            out.certificate.expect("a certificate").is_certified(),
+            "{name}"
+        );
+    }
+}
