@@ -10,18 +10,25 @@ Three problems (Hartley, Trumpf, Dai & Li, "Rotation Averaging", IJCV 2013):
   ``certify_conjugate(...)`` certifies an ``S`` from elsewhere.
 
 Rotations are float64 arrays of shape ``(N, 3, 3)`` (a ``scipy.spatial.transform.Rotation`` is
-accepted wherever rotations are); ``read_graph(path)`` reads g2o, 1DSfM and JSON view graphs.
-Every call returns a ``Result`` with the estimate, its cost, the solver's report and a
-``Certificate`` (a proven lower bound on the global minimum and the gap to it); ``to_dict()`` is
-the object the ``rotavg`` command line prints with ``--json``. Bad input raises ``rotavg.Error``
-(a ``ValueError``) with the library's message. The GIL is released while solving.
+accepted wherever rotations are). Files are read with the command line's readers:
+``read_graph(path)`` (g2o, 1DSfM and JSON view graphs). Every solver call returns a ``Result`` with the
+estimate, its cost, the solver's report and a ``Certificate`` (a proven lower bound on the
+global minimum and the gap to it); ``to_dict()`` is the object the ``rotavg`` command line
+prints with ``--json``. Bad input raises ``rotavg.Error`` (a ``ValueError``) or one of its
+subclasses (``ParseError``, ``FileError``, ``DisconnectedError``, ``DegenerateError``,
+``SolverError``) with the library's message. The GIL is released while solving.
 """
 
 from ._rotavg import (
     Certificate,
+    DegenerateError,
+    DisconnectedError,
     Error,
+    FileError,
     Graph,
+    ParseError,
     Result,
+    SolverError,
     SolverReport,
     __version__,
     average_conjugate,
@@ -35,9 +42,14 @@ from ._rotavg import (
 
 __all__ = [
     "Certificate",
+    "DegenerateError",
+    "DisconnectedError",
     "Error",
+    "FileError",
     "Graph",
+    "ParseError",
     "Result",
+    "SolverError",
     "SolverReport",
     "__version__",
     "average_conjugate",

@@ -5,7 +5,7 @@
 //!
 //! numpy out: rotations as `(N, 3, 3)` or `(3, 3)` float64 arrays (row-major, C order).
 
-use crate::Error;
+use crate::errors::Error;
 use nalgebra::Matrix3;
 use numpy::ndarray::Dimension;
 use numpy::{AllowTypeChange, PyArray1, PyArrayLikeDyn, PyArrayMethods, PyUntypedArray};

@@ -4,14 +4,18 @@
 //! Every function copies its numpy inputs while holding the GIL, then releases the GIL to
 //! validate them with the library's checks, run the library's pipeline (`average_*`) or
 //! certifier (`certify_*`) and build the library's typed report, the same report the command
-//! line prints with `--json`. Library errors become `rotavg.Error` (a `ValueError`) with the
-//! library's message; a panic (a bug) becomes a `RuntimeError`, never an abort.
+//! line prints with `--json`. Library errors become `rotavg.Error` (a `ValueError`) or one of
+//! its subclasses, with messages that name Python keywords (`errors.rs`); a panic (a bug)
+//! becomes a `RuntimeError`, never an abort.
 
 mod convert;
+mod errors;
 mod types;
 
 use convert::{Matrices, indices, matrices, matrix, vector};
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+pub use errors::Error;
+use errors::{argument_error, error};
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use rotavg::certify::{CertifyMode, CertifySettings};
 use rotavg::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings};
@@ -28,20 +32,8 @@ use rotavg::{Loss, Metric, Objective};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use types::{Certificate, Graph, Report, RunResult, SolverReport};
 
-pyo3::create_exception!(
-    rotavg,
-    Error,
-    PyValueError,
-    "Bad input or settings (a subclass of ValueError). The message is the library's: it names \
-     the offending item (e.g. ``rel[3]``) and, for files, the file and line."
-);
-
-/// A library error as `rotavg.Error`.
-fn error(e: rotavg::Error) -> PyErr {
-    Error::new_err(e.to_string())
-}
-
-/// Run `f` without the GIL; a library error becomes `rotavg.Error`, a panic a `RuntimeError`.
+/// Run `f` without the GIL; a library error becomes a `rotavg` exception, a panic a
+/// `RuntimeError`.
 fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> rotavg::Result<T> + Send) -> PyResult<T> {
     match py.detach(|| catch_unwind(AssertUnwindSafe(f))) {
         Ok(result) => result.map_err(error),
@@ -58,9 +50,19 @@ fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> rotavg::Result<T> + Sen
     }
 }
 
-/// Parse a name of one of the library's choices (`chordal`, `auto`, ...).
-fn parse<T: std::str::FromStr<Err = rotavg::Error>>(name: &str) -> PyResult<T> {
-    name.parse().map_err(error)
+/// Parse a name of one of the library's choices (`chordal`, `auto`, ...) given as the keyword
+/// argument `keyword` (which an unknown name's error names).
+fn parse_named<T: std::str::FromStr<Err = rotavg::Error>>(
+    name: &str,
+    keyword: &str,
+) -> PyResult<T> {
+    name.parse().map_err(|e| match e {
+        rotavg::Error::InvalidSettings { reason, .. } => error(rotavg::Error::InvalidSettings {
+            name: keyword.into(),
+            reason,
+        }),
+        other => error(other),
+    })
 }
 
 /// Edge data copied out of Python, validated later by [`EdgeArrays::graph`].
@@ -83,10 +85,10 @@ impl EdgeArrays {
     ) -> PyResult<Self> {
         let n: i64 = n
             .extract()
-            .map_err(|_| Error::new_err("n must be an integer (the number of rotations)"))?;
+            .map_err(|_| argument_error("n must be an integer (the number of rotations)"))?;
         let (i, j, rel) = (indices(i, "i")?, indices(j, "j")?, matrices(rel, "rel")?);
         if i.len() != rel.len() || j.len() != rel.len() {
-            return Err(Error::new_err(format!(
+            return Err(argument_error(format!(
                 "i, j and rel must have one entry per edge: got {}, {} and {}",
                 i.len(),
                 j.len(),
@@ -172,7 +174,7 @@ impl GraphInput {
     ) -> PyResult<Self> {
         if let Ok(g) = n.cast::<Graph>() {
             if i.is_some() || j.is_some() || rel.is_some() || weights.is_some() {
-                return Err(Error::new_err(
+                return Err(argument_error(
                     "pass either a Graph or n, i, j, rel (and weights), not both",
                 ));
             }
@@ -187,7 +189,7 @@ impl GraphInput {
             (Some(i), Some(j), Some(rel)) => {
                 Ok(GraphInput::Arrays(EdgeArrays::copy(n, i, j, rel, weights)?))
             }
-            _ => Err(Error::new_err(
+            _ => Err(argument_error(
                 "a view graph needs n, i, j and rel (or a Graph from read_graph)",
             )),
         }
@@ -248,11 +250,11 @@ fn average_single_py(
 ) -> PyResult<RunResult> {
     let rotations = matrices(rotations, "rotations")?;
     let weights = optional_vector(weights, rotations.len())?;
-    let metric: Metric = parse(metric)?;
+    let metric: Metric = parse_named(metric, "metric")?;
     let loss = match p {
         1 => Loss::L1,
         2 => Loss::L2,
-        _ => return Err(Error::new_err(format!("p must be 1 or 2, got {p}"))),
+        _ => return Err(argument_error(format!("p must be 1 or 2, got {p}"))),
     };
     let report = detached(py, move || {
         let problem = SingleProblem::new(rotations.rotations()?, weights)?
@@ -304,7 +306,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///
 /// Raises:
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
-///         bad weights, a disconnected graph, unknown names.
+///         bad weights, unknown names. rotavg.DisconnectedError: a disconnected graph.
 #[pyfunction]
 #[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="chordal", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None))]
 #[allow(clippy::too_many_arguments)]
@@ -332,8 +334,8 @@ fn average_multiple_py(
         randomized_seed,
     )?;
     let graph = GraphInput::copy(n, i, j, rel, weights)?;
-    let objective = parse::<MultipleLoss>(loss)?.objective(loss_threshold);
-    let mode: CertifyMode = parse(certify)?;
+    let objective = parse_named::<MultipleLoss>(loss, "loss")?.objective(loss_threshold);
+    let mode: CertifyMode = parse_named(certify, "certify")?;
     let init = optional_matrices(init, "init")?;
     let report = detached(py, move || {
         let input = graph.into_input()?;
@@ -404,8 +406,8 @@ fn certify_multiple_py(
 ) -> PyResult<RunResult> {
     let graph = GraphInput::copy(n, i, j, rel, weights)?;
     let estimate = optional_matrices(estimate, "estimate")?
-        .ok_or_else(|| Error::new_err("certify_multiple needs an estimate"))?;
-    let mode = match parse(certify)? {
+        .ok_or_else(|| argument_error("certify_multiple needs an estimate"))?;
+    let mode = match parse_named(certify, "certify")? {
         CertifyMode::None => CertifyMode::Dual,
         m => m,
     };
@@ -458,7 +460,7 @@ impl PairArrays {
     ) -> PyResult<Self> {
         let (left, right) = (matrices(left, "left")?, matrices(right, "right")?);
         if left.len() != right.len() {
-            return Err(Error::new_err(format!(
+            return Err(argument_error(format!(
                 "left and right must have one rotation per pair: got {} and {}",
                 left.len(),
                 right.len()
@@ -506,8 +508,8 @@ impl PairArrays {
 ///     ``rotavg conjugate FILE --json``.
 ///
 /// Raises:
-///     rotavg.Error: bad shapes, NaN, non-rotations, bad weights, data that do not determine
-///         S (all rotation axes parallel), unknown names.
+///     rotavg.Error: bad shapes, NaN, non-rotations, bad weights, unknown names.
+///     rotavg.DegenerateError: data that do not determine S (all rotation axes parallel).
 #[pyfunction]
 #[pyo3(name = "average_conjugate", signature = (left, right, weights=None, *, metric="chordal", loss="l2", certify="auto", loss_threshold=5.0))]
 #[allow(clippy::too_many_arguments)]
@@ -523,10 +525,10 @@ fn average_conjugate_py(
 ) -> PyResult<RunResult> {
     let pairs = PairArrays::copy(left, right, weights)?;
     let objective = Objective::new(
-        parse(metric)?,
-        parse::<LossKind>(loss)?.with_threshold_deg(loss_threshold),
+        parse_named(metric, "metric")?,
+        parse_named::<LossKind>(loss, "loss")?.with_threshold_deg(loss_threshold),
     );
-    let mode: CertifyMode = parse(certify)?;
+    let mode: CertifyMode = parse_named(certify, "certify")?;
     let report = detached(py, move || {
         let problem = pairs.problem()?.with_objective(objective)?;
         let settings = AverageSettings {
@@ -625,7 +627,8 @@ fn certify_single_py(
 ///     Graph: with ``n, i, j, rel, weights`` for ``average_multiple``.
 ///
 /// Raises:
-///     rotavg.Error: unreadable file, or malformed content (the message names file and line).
+///     rotavg.FileError: unreadable file. rotavg.ParseError: malformed content (the message
+///         names file and line).
 #[pyfunction]
 #[pyo3(signature = (path, format="auto", weights="file", largest_component=false))]
 fn read_graph(
@@ -635,8 +638,8 @@ fn read_graph(
     weights: &str,
     largest_component: bool,
 ) -> PyResult<Graph> {
-    let format: GraphFormat = parse(format)?;
-    let weights: WeightSource = parse(weights)?;
+    let format: GraphFormat = parse_named(format, "format")?;
+    let weights: WeightSource = parse_named(weights, "weights")?;
     let name = path.to_string_lossy().into_owned();
     let path_name = name.clone();
     let (loaded, selection) = detached(py, move || {
@@ -658,8 +661,7 @@ fn read_graph(
 /// `rotavg._rotavg`: the compiled part of the `rotavg` package.
 #[pymodule]
 fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    let py = m.py();
-    m.add("Error", py.get_type::<Error>())?;
+    errors::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<RunResult>()?;
     m.add_class::<Certificate>()?;
