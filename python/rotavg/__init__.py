@@ -11,7 +11,8 @@ Three problems (Hartley, Trumpf, Dai & Li, "Rotation Averaging", IJCV 2013):
 
 Rotations are float64 arrays of shape ``(N, 3, 3)`` (a ``scipy.spatial.transform.Rotation`` is
 accepted wherever rotations are). Files are read with the command line's readers:
-``read_graph(path)`` (g2o, 1DSfM and JSON view graphs). Every solver call returns a ``Result`` with the
+``read_graph(path)`` (g2o, 1DSfM and JSON view graphs) and ``read_ground_truth(path, graph)``;
+``accuracy`` compares an estimate with ground truth. Every solver call returns a ``Result`` with the
 estimate, its cost, the solver's report and a ``Certificate`` (a proven lower bound on the
 global minimum and the gap to it); ``to_dict()`` is the object the ``rotavg`` command line
 prints with ``--json``. Bad input raises ``rotavg.Error`` (a ``ValueError``) or one of its
@@ -20,6 +21,7 @@ subclasses (``ParseError``, ``FileError``, ``DisconnectedError``, ``DegenerateEr
 """
 
 from ._rotavg import (
+    Accuracy,
     Certificate,
     DegenerateError,
     DisconnectedError,
@@ -31,6 +33,7 @@ from ._rotavg import (
     SolverError,
     SolverReport,
     __version__,
+    accuracy,
     average_conjugate,
     average_multiple,
     average_single,
@@ -38,9 +41,11 @@ from ._rotavg import (
     certify_multiple,
     certify_single,
     read_graph,
+    read_ground_truth,
 )
 
 __all__ = [
+    "Accuracy",
     "Certificate",
     "DegenerateError",
     "DisconnectedError",
@@ -52,6 +57,7 @@ __all__ = [
     "SolverError",
     "SolverReport",
     "__version__",
+    "accuracy",
     "average_conjugate",
     "average_multiple",
     "average_single",
@@ -59,4 +65,5 @@ __all__ = [
     "certify_multiple",
     "certify_single",
     "read_graph",
+    "read_ground_truth",
 ]

@@ -158,6 +158,26 @@ impl Matrices {
             .collect()
     }
 
+    /// The matrices as rotations where given: a matrix whose nine entries are all NaN is
+    /// `None` (a node without ground truth); any other is checked as in [`Self::rotations`].
+    pub fn optional_rotations(&self) -> rotavg::Result<Vec<Option<Rotation>>> {
+        self.values
+            .chunks_exact(9)
+            .enumerate()
+            .map(|(k, m)| {
+                if m.iter().all(|x| x.is_nan()) {
+                    return Ok(None);
+                }
+                rotation_from_matrix(
+                    &Matrix3::from_row_slice(m),
+                    DEFAULT_ROTATION_TOLERANCE,
+                    &format!("{}[{k}]", self.what),
+                )
+                .map(Some)
+            })
+            .collect()
+    }
+
     /// The single matrix of [`matrix`] as a rotation; the error names `what`.
     pub fn rotation(&self) -> rotavg::Result<Rotation> {
         rotation_from_matrix(
@@ -178,6 +198,28 @@ pub fn rotations_array<'py>(
         let m = r.matrix();
         for row in 0..3 {
             values.extend((0..3).map(|col| m[(row, col)]));
+        }
+    }
+    Ok(PyArray1::from_vec(py, values)
+        .reshape([rotations.len(), 3, 3])?
+        .into_any())
+}
+
+/// Rotations where known as an `(N, 3, 3)` float64 array, a matrix of NaN where not.
+pub fn optional_rotations_array<'py>(
+    py: Python<'py>,
+    rotations: &[Option<Rotation>],
+) -> PyResult<Bound<'py, PyAny>> {
+    let mut values = Vec::with_capacity(9 * rotations.len());
+    for r in rotations {
+        match r {
+            Some(r) => {
+                let m = r.matrix();
+                for row in 0..3 {
+                    values.extend((0..3).map(|col| m[(row, col)]));
+                }
+            }
+            None => values.extend([f64::NAN; 9]),
         }
     }
     Ok(PyArray1::from_vec(py, values)

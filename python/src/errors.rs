@@ -44,7 +44,8 @@ pyo3::create_exception!(
     DisconnectedError,
     Error,
     "The view graph is not connected: ``component_sizes`` lists the sizes of its components, \
-     largest first. Solve the largest one with ``read_graph(path, largest_component=True)``."
+     largest first. Solve the largest one with ``average_multiple(..., \
+     largest_component=True)`` or ``read_graph(path, largest_component=True)``."
 );
 pyo3::create_exception!(
     rotavg,
@@ -61,8 +62,9 @@ pyo3::create_exception!(
 );
 
 /// What to say instead of the command line's `--largest-component`.
-const LARGEST_COMPONENT: &str =
-    "solve the largest component instead (`read_graph(path, largest_component=True)`)";
+const LARGEST_COMPONENT: &str = "solve the largest component instead \
+     (`average_multiple(..., largest_component=True)`, or \
+     `read_graph(path, largest_component=True)` for a file)";
 
 /// The library's phrases that name command-line flags, and what a Python user passes instead.
 /// Applied before the generic rule of [`python_flags`].

@@ -10,6 +10,7 @@
 
 mod convert;
 mod errors;
+mod truth;
 mod types;
 
 use convert::{Matrices, indices, matrices, matrix, vector};
@@ -20,7 +21,9 @@ use pyo3::prelude::*;
 use rotavg::certify::{CertifyMode, CertifySettings};
 use rotavg::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings};
 use rotavg::io::detect::{ComponentSelection, GraphFormat, LoadedGraph, ReadOptions, WeightSource};
-use rotavg::io::input::{LoadedEstimate, LoadedProblem, MultipleInput, load_view_graph};
+use rotavg::io::input::{
+    LoadedEstimate, LoadedProblem, MultipleInput, load_ground_truth, load_view_graph,
+};
 use rotavg::io::json::Estimate;
 use rotavg::io::names::{LossKind, MultipleLoss};
 use rotavg::multiple::stats::duplicate_edge_count;
@@ -28,7 +31,7 @@ use rotavg::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_conjugate, average_multiple, average_single};
 use rotavg::report::{CertifyReport, ConjugateReport, MultipleReport, SingleReport};
 use rotavg::single::SingleProblem;
-use rotavg::{Loss, Metric, Objective};
+use rotavg::{Loss, Metric, Objective, Rotation};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use types::{Certificate, Graph, Report, RunResult, SolverReport};
 
@@ -160,7 +163,13 @@ impl EdgeArrays {
 
 /// A view graph given either as a `Graph` (in place of `n`) or as `n, i, j, rel, weights`.
 enum GraphInput {
-    Loaded(LoadedGraph, ComponentSelection, String),
+    /// A graph read from a file: the graph, its selection, the path, its ground truth.
+    Loaded(
+        LoadedGraph,
+        ComponentSelection,
+        String,
+        Option<Vec<Option<Rotation>>>,
+    ),
     Arrays(EdgeArrays),
 }
 
@@ -183,6 +192,7 @@ impl GraphInput {
                 g.loaded.clone(),
                 g.selection.clone(),
                 g.name.clone(),
+                g.truth.clone(),
             ));
         }
         match (i, j, rel) {
@@ -195,24 +205,70 @@ impl GraphInput {
         }
     }
 
-    /// The validated graph, the component selection and the input's name.
-    fn into_input(self) -> rotavg::Result<MultipleInput> {
-        let (graph, selection, name) = match self {
-            GraphInput::Loaded(g, s, name) => (g, s, name),
+    /// The validated graph as `rotavg multiple` solves it: restricted to its largest component
+    /// when asked (a graph read with `largest_component=True` is already), with the ground
+    /// truth `truth` (one entry per node of the graph as given, or per kept node; NaN where
+    /// unknown) or else the graph's own.
+    fn into_input(
+        self,
+        largest_component: bool,
+        truth: Option<Matrices>,
+    ) -> rotavg::Result<MultipleInput> {
+        let (graph, selection, name, own_truth) = match self {
+            GraphInput::Loaded(g, s, name, t) => (g, s, name, t),
             GraphInput::Arrays(a) => {
                 let g = a.graph()?;
                 let n = g.problem.num_rotations();
-                (g, ComponentSelection::whole(n), "<arrays>".to_string())
+                (
+                    g,
+                    ComponentSelection::whole(n),
+                    "<arrays>".to_string(),
+                    None,
+                )
             }
+        };
+        let (graph, selection, own_truth) = if largest_component && selection.is_whole() {
+            let (graph, selection) = graph.largest_component();
+            let truth = own_truth.and_then(|t| selection.select(&t));
+            (graph, selection, truth)
+        } else {
+            (graph, selection, own_truth)
+        };
+        let truth = match truth {
+            Some(t) => Some(for_kept(
+                t.optional_rotations()?,
+                &selection,
+                "ground_truth",
+            )?),
+            None => own_truth,
         };
         Ok(MultipleInput {
             name,
             graph,
             selection,
-            truth: None,
+            truth,
             init: None,
         })
     }
+}
+
+/// Per-node values given for every node of the graph as given (restricted to the kept ones) or
+/// for the kept nodes only; another count is an error naming the keyword `what`.
+fn for_kept<T: Clone>(
+    values: Vec<T>,
+    selection: &ComponentSelection,
+    what: &str,
+) -> rotavg::Result<Vec<T>> {
+    let kept = selection.kept.len();
+    if values.len() == kept {
+        return Ok(values);
+    }
+    selection
+        .select(&values)
+        .ok_or_else(|| rotavg::Error::InvalidSettings {
+            name: what.into(),
+            reason: format!("{} rotations given for {kept} nodes", values.len()),
+        })
 }
 
 /// Rotations of an optional estimate or initial value.
@@ -299,6 +355,13 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         True): a Monte Carlo lower bound in ``to_dict()["certificate"]["randomized"]``,
 ///         beside the verdict and never as its proof.
 ///     randomized_seed: its seed (default: a fresh one, reported).
+///     largest_component: solve only the largest connected component of a disconnected graph
+///         (``result.node_ids`` says which nodes; ``to_dict()["other_components"]`` the sizes
+///         of the others). Default False: a disconnected graph raises
+///         ``rotavg.DisconnectedError``.
+///     ground_truth: optional ``(n, 3, 3)`` ground truth (NaN matrices where unknown): then
+///         ``result.accuracy`` (and ``to_dict()["accuracy"]``) reports the estimate's errors
+///         after the optimal alignment. Default: the ground truth the ``Graph`` was read with.
 ///
 /// Returns:
 ///     Result: ``estimate`` is ``(n, 3, 3)`` with the gauge ``estimate[0] = I``;
@@ -308,7 +371,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
 ///         bad weights, unknown names. rotavg.DisconnectedError: a disconnected graph.
 #[pyfunction]
-#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="chordal", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None))]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="chordal", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None))]
 #[allow(clippy::too_many_arguments)]
 fn average_multiple_py(
     py: Python<'_>,
@@ -325,6 +388,8 @@ fn average_multiple_py(
     max_seconds: Option<f64>,
     randomized: bool,
     randomized_seed: Option<u64>,
+    largest_component: bool,
+    ground_truth: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunResult> {
     let budget = certify_settings(
         CertifyMode::Auto,
@@ -337,21 +402,12 @@ fn average_multiple_py(
     let objective = parse_named::<MultipleLoss>(loss, "loss")?.objective(loss_threshold);
     let mode: CertifyMode = parse_named(certify, "certify")?;
     let init = optional_matrices(init, "init")?;
+    let truth = optional_matrices(ground_truth, "ground_truth")?;
     let report = detached(py, move || {
-        let input = graph.into_input()?;
+        let input = graph.into_input(largest_component, truth)?;
         let problem = input.graph.problem.clone().with_objective(objective)?;
         let init = match init {
-            Some(m) => {
-                let rotations = m.rotations()?;
-                let n = problem.num_rotations();
-                if rotations.len() != n {
-                    return Err(rotavg::Error::InvalidSettings {
-                        name: "init".into(),
-                        reason: format!("{} rotations given for {n} nodes", rotations.len()),
-                    });
-                }
-                Initialisation::Given(rotations)
-            }
+            Some(m) => Initialisation::Given(for_kept(m.rotations()?, &input.selection, "init")?),
             None => Initialisation::default(),
         };
         let settings = AverageSettings {
@@ -413,7 +469,7 @@ fn certify_multiple_py(
     };
     let settings = certify_settings(mode, max_memory, max_seconds, randomized, randomized_seed)?;
     let report = detached(py, move || {
-        let input = graph.into_input()?;
+        let input = graph.into_input(false, None)?;
         let estimate = LoadedEstimate {
             name: "estimate".into(),
             estimate: Estimate::Multiple(estimate.rotations()?),
@@ -622,6 +678,9 @@ fn certify_single_py(
 ///     format: ``"auto"``, ``"g2o"``, ``"1dsfm"`` or ``"json"``.
 ///     weights: ``"file"`` (the file's weights, e.g. SE-Sync's kappa for g2o) or ``"unit"``.
 ///     largest_component: keep only the largest connected component (nodes renumbered).
+///     ground_truth: a ground-truth file for the graph's nodes (the command line's
+///         ``--ground-truth``; formats: see ``read_ground_truth``): ``g.truth`` holds it, and
+///         ``average_multiple(g)`` then reports ``result.accuracy``.
 ///
 /// Returns:
 ///     Graph: with ``n, i, j, rel, weights`` for ``average_multiple``.
@@ -630,32 +689,56 @@ fn certify_single_py(
 ///     rotavg.FileError: unreadable file. rotavg.ParseError: malformed content (the message
 ///         names file and line).
 #[pyfunction]
-#[pyo3(signature = (path, format="auto", weights="file", largest_component=false))]
+#[pyo3(signature = (path, format="auto", weights="file", largest_component=false, *, ground_truth=None))]
 fn read_graph(
     py: Python<'_>,
     path: std::path::PathBuf,
     format: &str,
     weights: &str,
     largest_component: bool,
+    ground_truth: Option<std::path::PathBuf>,
 ) -> PyResult<Graph> {
     let format: GraphFormat = parse_named(format, "format")?;
     let weights: WeightSource = parse_named(weights, "weights")?;
     let name = path.to_string_lossy().into_owned();
+    let truth_path = ground_truth.map(|p| p.to_string_lossy().into_owned());
     let path_name = name.clone();
-    let (loaded, selection) = detached(py, move || {
+    let (loaded, selection, read, truth) = detached(py, move || {
         let options = ReadOptions {
             weights,
             ..Default::default()
         };
+        // as rotavg::io::input::load_multiple_input, without requiring a connected graph
+        // (average_multiple says how to proceed when it is not)
         let graph = load_view_graph(&path_name, format, &options)?;
-        Ok(if largest_component {
+        let truth = truth_path
+            .as_deref()
+            .map(|p| load_ground_truth(p, &graph, &options).map(|t| (p, t)))
+            .transpose()?;
+        let read = (graph.node_ids.clone(), graph.node_names.clone());
+        let (graph, selection) = if largest_component {
             graph.largest_component()
         } else {
             let n = graph.problem.num_rotations();
             (graph, ComponentSelection::whole(n))
-        })
+        };
+        let truth = match truth {
+            Some((file, t)) => Some(selection.select(&t).ok_or_else(|| {
+                rotavg::Error::parse(
+                    Some(file),
+                    None,
+                    format!(
+                        "ground truth has {} entries, the graph has {} nodes",
+                        t.len(),
+                        selection.num_read
+                    ),
+                )
+            })?),
+            None => None,
+        };
+        Ok((graph, selection, read, truth))
     })?;
-    Graph::new(py, name, loaded, selection)
+    Graph::new(py, name, (loaded, selection), read, truth)
 }
 
 /// `rotavg._rotavg`: the compiled part of the `rotavg` package.
@@ -667,6 +750,7 @@ fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Certificate>()?;
     m.add_class::<SolverReport>()?;
     m.add_class::<Graph>()?;
+    m.add_class::<truth::Accuracy>()?;
     m.add_function(wrap_pyfunction!(average_single_py, m)?)?;
     m.add_function(wrap_pyfunction!(average_multiple_py, m)?)?;
     m.add_function(wrap_pyfunction!(certify_multiple_py, m)?)?;
@@ -674,5 +758,7 @@ fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(certify_conjugate_py, m)?)?;
     m.add_function(wrap_pyfunction!(certify_single_py, m)?)?;
     m.add_function(wrap_pyfunction!(read_graph, m)?)?;
+    m.add_function(wrap_pyfunction!(truth::read_ground_truth, m)?)?;
+    m.add_function(wrap_pyfunction!(truth::accuracy, m)?)?;
     Ok(())
 }

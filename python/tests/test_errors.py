@@ -51,9 +51,12 @@ def test_disconnected_graph_names_the_python_way(tmp_path):
     assert "largest_component=True" in text and "largest-component" not in text
     assert "2 components of sizes [3, 2]" in text
     # what the message says works
+    res = rotavg.average_multiple(5, i, j, rel, largest_component=True)
+    assert res.certificate.certified and list(res.node_ids) == [0, 1, 2]
     path = tmp_path / "two.g2o"
     path.write_text("EDGE3 0 1 0 0 0 0 0 0.1\nEDGE3 1 2 0 0 0 0 0 0.2\nEDGE3 5 7 0 0 0 0 0 0\n")
     message(rotavg.DisconnectedError, rotavg.average_multiple, rotavg.read_graph(path))
+    assert rotavg.average_multiple(rotavg.read_graph(path), largest_component=True).num_rotations == 3
     assert rotavg.average_multiple(rotavg.read_graph(path, largest_component=True)).num_rotations == 3
 
 
