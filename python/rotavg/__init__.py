@@ -7,12 +7,14 @@ Three problems (Hartley, Trumpf, Dai & Li, "Rotation Averaging", IJCV 2013):
   rotations ``R_0..R_{n-1}`` from relative ones, ``rel[k] @ R_i = R_j`` for edge
   ``(i[k], j[k])``; ``certify_multiple(...)`` certifies an estimate from any other solver;
 * ``average_conjugate(left, right, weights=None)``: hand-eye ``S`` with ``right[k] ~ S^-1 left[k] S``;
-  ``certify_conjugate(...)`` certifies an ``S`` from elsewhere.
+  ``certify_conjugate(...)`` certifies an ``S`` from elsewhere; ``hand_eye(robot_poses,
+  camera_poses)`` forms the pairs from absolute poses as OpenCV's ``calibrateHandEye`` does.
 
 Rotations are float64 arrays of shape ``(N, 3, 3)`` (a ``scipy.spatial.transform.Rotation`` is
 accepted wherever rotations are). Files are read with the command line's readers:
-``read_graph(path)`` (g2o, 1DSfM and JSON view graphs) and ``read_ground_truth(path, graph)``;
-``accuracy`` compares an estimate with ground truth. Every solver call returns a ``Result`` with the
+``read_graph(path)`` (g2o, 1DSfM and JSON view graphs), ``read_ground_truth(path, graph)`` and
+``read_handeye(path)`` (conjugate JSON, Tabb, ETH / motion-capture pose streams); ``accuracy``
+compares an estimate with ground truth. Every solver call returns a ``Result`` with the
 estimate, its cost, the solver's report and a ``Certificate`` (a proven lower bound on the
 global minimum and the gap to it); ``to_dict()`` is the object the ``rotavg`` command line
 prints with ``--json``. Bad input raises ``rotavg.Error`` (a ``ValueError``) or one of its
@@ -28,6 +30,7 @@ from ._rotavg import (
     Error,
     FileError,
     Graph,
+    HandEyeData,
     ParseError,
     Result,
     SolverError,
@@ -40,8 +43,11 @@ from ._rotavg import (
     certify_conjugate,
     certify_multiple,
     certify_single,
+    hand_eye,
+    hand_eye_pairs,
     read_graph,
     read_ground_truth,
+    read_handeye,
 )
 
 __all__ = [
@@ -52,6 +58,7 @@ __all__ = [
     "Error",
     "FileError",
     "Graph",
+    "HandEyeData",
     "ParseError",
     "Result",
     "SolverError",
@@ -64,6 +71,9 @@ __all__ = [
     "certify_conjugate",
     "certify_multiple",
     "certify_single",
+    "hand_eye",
+    "hand_eye_pairs",
     "read_graph",
     "read_ground_truth",
+    "read_handeye",
 ]

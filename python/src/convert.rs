@@ -227,6 +227,46 @@ pub fn optional_rotations_array<'py>(
         .into_any())
 }
 
+/// The rotation parts of `(N, 4, 4)` homogeneous transforms (whose last row must be
+/// `0 0 0 1` within the rotation tolerance) or `(N, 3, 3)` rotations (anything with `as_matrix()`, such as a scipy
+/// `Rotation`, gives the latter).
+pub fn pose_rotations(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Matrices> {
+    let (values, shape) = float_values(obj, what)?;
+    match shape.as_slice() {
+        [_, 3, 3] => Ok(Matrices {
+            values,
+            what: what.to_string(),
+        }),
+        [_, 4, 4] => {
+            let mut rotations = Vec::with_capacity(values.len() / 16 * 9);
+            for (k, t) in values.chunks_exact(16).enumerate() {
+                let last = [t[12], t[13], t[14], t[15]];
+                let expected = [0.0, 0.0, 0.0, 1.0];
+                if !last
+                    .iter()
+                    .zip(expected)
+                    .all(|(x, e)| (x - e).abs() <= DEFAULT_ROTATION_TOLERANCE)
+                {
+                    return Err(Error::new_err(format!(
+                        "{what}[{k}] is not a homogeneous transform: its last row is {last:?}, not [0, 0, 0, 1] (tolerance {DEFAULT_ROTATION_TOLERANCE:.0e})"
+                    )));
+                }
+                for row in 0..3 {
+                    rotations.extend_from_slice(&t[4 * row..4 * row + 3]);
+                }
+            }
+            Ok(Matrices {
+                values: rotations,
+                what: what.to_string(),
+            })
+        }
+        _ => Err(Error::new_err(format!(
+            "{what} must have shape (N, 4, 4) (homogeneous transforms) or (N, 3, 3) (rotations), got {}",
+            shape_text(&shape)
+        ))),
+    }
+}
+
 /// One rotation as a `(3, 3)` float64 array.
 pub fn rotation_array<'py>(py: Python<'py>, rotation: &Rotation) -> PyResult<Bound<'py, PyAny>> {
     rotations_array(py, std::slice::from_ref(rotation))?.call_method1("reshape", (3, 3))

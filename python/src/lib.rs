@@ -10,12 +10,14 @@
 
 mod convert;
 mod errors;
+mod handeye;
 mod truth;
 mod types;
 
 use convert::{Matrices, indices, matrices, matrix, vector};
 pub use errors::Error;
 use errors::{argument_error, error};
+use handeye::HandEyeData;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use rotavg::certify::{CertifyMode, CertifySettings};
@@ -547,17 +549,96 @@ impl PairArrays {
     }
 }
 
+/// Conjugate pairs given as arrays or as `HandEyeData`.
+enum PairsInput {
+    Arrays(PairArrays),
+    /// The problem, the report's source line, the motion counts and settings, the path.
+    Data(
+        ConjugateProblem,
+        String,
+        Option<(
+            rotavg::io::handeye::MotionStats,
+            rotavg::io::handeye::MotionSettings,
+        )>,
+        String,
+    ),
+}
+
+impl PairsInput {
+    fn copy(
+        left: &Bound<'_, PyAny>,
+        right: Option<&Bound<'_, PyAny>>,
+        weights: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        if let Ok(d) = left.cast::<HandEyeData>() {
+            if right.is_some_and(|r| !r.is_none()) || weights.is_some_and(|w| !w.is_none()) {
+                return Err(argument_error(
+                    "pass either HandEyeData or left, right (and weights), not both",
+                ));
+            }
+            let d = d.get();
+            return Ok(PairsInput::Data(
+                d.problem.clone(),
+                d.source.clone(),
+                d.motion.clone(),
+                d.name.clone(),
+            ));
+        }
+        match right.filter(|r| !r.is_none()) {
+            Some(right) => Ok(PairsInput::Arrays(PairArrays::copy(left, right, weights)?)),
+            None => Err(argument_error(
+                "conjugate averaging needs left and right (or HandEyeData from hand_eye_pairs or read_handeye)",
+            )),
+        }
+    }
+
+    /// The validated problem, the name of the input and how the report names its source.
+    fn into_parts(self) -> rotavg::Result<ConjugateParts> {
+        Ok(match self {
+            PairsInput::Arrays(a) => ConjugateParts {
+                problem: a.problem()?,
+                name: "<arrays>".into(),
+                source: "<arrays>: conjugate pairs".into(),
+                motion: None,
+            },
+            PairsInput::Data(problem, source, motion, name) => ConjugateParts {
+                problem,
+                name,
+                source,
+                motion,
+            },
+        })
+    }
+}
+
+/// A conjugate problem with what its report says about the input.
+struct ConjugateParts {
+    problem: ConjugateProblem,
+    name: String,
+    source: String,
+    motion: Option<(
+        rotavg::io::handeye::MotionStats,
+        rotavg::io::handeye::MotionSettings,
+    )>,
+}
+
 /// Conjugate (hand-eye) rotation averaging: ``S`` with ``right[k] ~ S^-1 left[k] S``, minimising
 /// ``sum_k w_k ||S right[k] - left[k] S||_F^2`` (chordal L2, certified by a 10x10 SDP), or a
 /// geodesic / robust cost, certified by branch and bound over SO(3).
 ///
 /// Args:
-///     left, right: ``(N, 3, 3)`` rotations ``L_k`` and ``R_k`` (or scipy Rotations).
+///     left, right: ``(N, 3, 3)`` rotations ``L_k`` and ``R_k`` (or scipy Rotations); or
+///         ``left`` a ``HandEyeData`` (``hand_eye_pairs``, ``read_handeye``) and no ``right``:
+///         then ``to_dict()`` is exactly the command line's for those files.
 ///     weights: ``(N,)`` positive weights (default all 1).
 ///     metric: ``"chordal"``, ``"geodesic"`` or ``"quaternion"``.
 ///     loss: ``"l2"``, ``"l1"``, ``"huber"`` or ``"cauchy"``.
 ///     certify: ``"auto"``, ``"sdp"``, ``"branch_and_bound"`` or ``"none"``.
 ///     loss_threshold: Huber threshold / Cauchy scale in degrees.
+///     init: optional ``(3, 3)`` start of the local solver (default: the quaternion closed
+///         form).
+///     max_memory, max_seconds: the certificate's budget (bytes, default 4 GiB; seconds,
+///         default 600, ``None``: no limit), as for ``average_multiple``.
 ///
 /// Returns:
 ///     Result: ``estimate`` is ``S`` (3, 3); ``to_dict()`` equals
@@ -567,46 +648,156 @@ impl PairArrays {
 ///     rotavg.Error: bad shapes, NaN, non-rotations, bad weights, unknown names.
 ///     rotavg.DegenerateError: data that do not determine S (all rotation axes parallel).
 #[pyfunction]
-#[pyo3(name = "average_conjugate", signature = (left, right, weights=None, *, metric="chordal", loss="l2", certify="auto", loss_threshold=5.0))]
+#[pyo3(name = "average_conjugate", signature = (left, right=None, weights=None, *, metric="chordal", loss="l2", certify="auto", loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0))]
 #[allow(clippy::too_many_arguments)]
 fn average_conjugate_py(
     py: Python<'_>,
     left: &Bound<'_, PyAny>,
-    right: &Bound<'_, PyAny>,
+    right: Option<&Bound<'_, PyAny>>,
     weights: Option<&Bound<'_, PyAny>>,
     metric: &str,
     loss: &str,
     certify: &str,
     loss_threshold: f64,
+    init: Option<&Bound<'_, PyAny>>,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
 ) -> PyResult<RunResult> {
-    let pairs = PairArrays::copy(left, right, weights)?;
+    let pairs = PairsInput::copy(left, right, weights)?;
+    conjugate_run(
+        py,
+        pairs,
+        ConjugateOptions {
+            metric,
+            loss,
+            certify,
+            loss_threshold,
+            init,
+            max_memory,
+            max_seconds,
+        },
+    )
+}
+
+/// The keyword arguments of `average_conjugate` and `hand_eye`.
+struct ConjugateOptions<'a, 'py> {
+    metric: &'a str,
+    loss: &'a str,
+    certify: &'a str,
+    loss_threshold: f64,
+    init: Option<&'a Bound<'py, PyAny>>,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
+}
+
+/// Solve and certify conjugate pairs as `rotavg conjugate` does.
+fn conjugate_run(
+    py: Python<'_>,
+    pairs: PairsInput,
+    o: ConjugateOptions<'_, '_>,
+) -> PyResult<RunResult> {
     let objective = Objective::new(
-        parse_named(metric, "metric")?,
-        parse_named::<LossKind>(loss, "loss")?.with_threshold_deg(loss_threshold),
+        parse_named(o.metric, "metric")?,
+        parse_named::<LossKind>(o.loss, "loss")?.with_threshold_deg(o.loss_threshold),
     );
-    let mode: CertifyMode = parse_named(certify, "certify")?;
-    let report = detached(py, move || {
-        let problem = pairs.problem()?.with_objective(objective)?;
-        let settings = AverageSettings {
-            solve: ConjugateSettings::default(),
-            certify: CertifySettings::with_mode(mode),
-        };
-        let result = average_conjugate(&problem, &settings)?;
-        Ok(ConjugateReport::new(
-            &problem,
-            "<arrays>: conjugate pairs".into(),
-            result,
-        ))
-    })?;
+    let mode: CertifyMode = parse_named(o.certify, "certify")?;
+    let mut certify = CertifySettings::with_mode(mode);
+    if let Some(m) = o.max_memory {
+        certify.budget.max_memory_bytes = m;
+    }
+    certify.budget.max_seconds = o.max_seconds;
+    certify.validate().map_err(error)?;
+    let init = o
+        .init
+        .filter(|i| !i.is_none())
+        .map(|i| matrix(i, "init"))
+        .transpose()?;
+    let report =
+        detached(py, move || {
+            let parts = pairs.into_parts()?;
+            let problem = parts.problem.with_objective(objective)?;
+            let settings = AverageSettings {
+                solve: ConjugateSettings {
+                    init: init.map(|m| m.rotation()).transpose()?,
+                    ..Default::default()
+                },
+                certify,
+            };
+            let result = average_conjugate(&problem, &settings)?;
+            let (stats, motion_settings) = match parts.motion {
+                Some((s, m)) => (Some(s), m),
+                None => (None, Default::default()),
+            };
+            Ok(ConjugateReport::new(&problem, parts.source, result)
+                .with_motion(stats, motion_settings))
+        })?;
     RunResult::new(py, Report::Conjugate(report))
+}
+
+/// Hand-eye calibration (rotation) from absolute poses in one call:
+/// ``average_conjugate(hand_eye_pairs(robot_poses, camera_poses, ...), ...)``.
+///
+/// The pairs are formed as OpenCV's ``calibrateHandEye`` forms them (see ``hand_eye_pairs``):
+/// ``robot_poses`` are base-from-gripper (``R_gripper2base``), ``camera_poses``
+/// camera-from-target (``R_target2cam``; ``camera="cam2target"`` for target-from-camera), and
+/// the estimate is ``S = R_cam2gripper`` with ``right[k] ~ S^-1 left[k] S``: the rotation that
+/// OpenCV returns, certified globally optimal for the chordal cost (or with a proven gap).
+///
+/// Args:
+///     robot_poses, camera_poses, camera, pairs, min_angle: as for ``hand_eye_pairs``.
+///     metric, loss, certify, loss_threshold, init, max_memory, max_seconds: as for
+///         ``average_conjugate``.
+///
+/// Returns:
+///     Result: ``estimate`` is ``R_cam2gripper`` (3, 3); ``to_dict()["motion"]`` counts the
+///     poses and pairs.
+///
+/// Raises:
+///     rotavg.Error: as ``hand_eye_pairs`` and ``average_conjugate``.
+///     rotavg.DegenerateError: motions that do not determine the rotation.
+#[pyfunction]
+#[pyo3(signature = (robot_poses, camera_poses, *, camera="target2cam", pairs="all", min_angle=None, metric="chordal", loss="l2", certify="auto", loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0))]
+#[allow(clippy::too_many_arguments)]
+fn hand_eye(
+    py: Python<'_>,
+    robot_poses: &Bound<'_, PyAny>,
+    camera_poses: &Bound<'_, PyAny>,
+    camera: &str,
+    pairs: &str,
+    min_angle: Option<f64>,
+    metric: &str,
+    loss: &str,
+    certify: &str,
+    loss_threshold: f64,
+    init: Option<&Bound<'_, PyAny>>,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
+) -> PyResult<RunResult> {
+    let data = handeye::hand_eye_pairs(py, robot_poses, camera_poses, camera, pairs, min_angle)?;
+    let pairs = PairsInput::Data(data.problem, data.source, data.motion, data.name);
+    conjugate_run(
+        py,
+        pairs,
+        ConjugateOptions {
+            metric,
+            loss,
+            certify,
+            loss_threshold,
+            init,
+            max_memory,
+            max_seconds,
+        },
+    )
 }
 
 /// Certify a hand-eye rotation ``S`` computed elsewhere (e.g. OpenCV's ``calibrateHandEye``),
 /// **without changing it**: its chordal L2 cost and a certificate or a proven gap bound.
 ///
 /// Args:
-///     left, right, weights: the pairs, as for ``average_conjugate``.
-///     estimate: the ``(3, 3)`` rotation ``S`` (or a single scipy Rotation).
+///     left, right, weights: the pairs, as for ``average_conjugate`` (or ``left`` a
+///         ``HandEyeData`` and ``estimate`` by keyword).
+///     estimate: the ``(3, 3)`` rotation ``S`` (or a single scipy Rotation); for
+///         ``hand_eye_pairs`` data, OpenCV's ``R_cam2gripper``.
 ///
 /// Returns:
 ///     Result: ``solver`` is None; ``to_dict()`` equals
@@ -615,23 +806,27 @@ fn average_conjugate_py(
 /// Raises:
 ///     rotavg.Error: as ``average_conjugate``.
 #[pyfunction]
-#[pyo3(name = "certify_conjugate", signature = (left, right, estimate, weights=None))]
+#[pyo3(name = "certify_conjugate", signature = (left, right=None, estimate=None, weights=None))]
 fn certify_conjugate_py(
     py: Python<'_>,
     left: &Bound<'_, PyAny>,
-    right: &Bound<'_, PyAny>,
-    estimate: &Bound<'_, PyAny>,
+    right: Option<&Bound<'_, PyAny>>,
+    estimate: Option<&Bound<'_, PyAny>>,
     weights: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunResult> {
-    let pairs = PairArrays::copy(left, right, weights)?;
+    let pairs = PairsInput::copy(left, right, weights)?;
+    let estimate = estimate
+        .filter(|e| !e.is_none())
+        .ok_or_else(|| argument_error("certify_conjugate needs an estimate"))?;
     let estimate = matrix(estimate, "estimate")?;
     let report = detached(py, move || {
-        let problem = LoadedProblem::Conjugate(pairs.problem()?);
+        let parts = pairs.into_parts()?;
+        let problem = LoadedProblem::Conjugate(parts.problem);
         let estimate = LoadedEstimate {
             name: "estimate".into(),
             estimate: Estimate::Single(estimate.rotation()?),
         };
-        CertifyReport::certify("<arrays>", &problem, estimate, &CertifySettings::default())
+        CertifyReport::certify(&parts.name, &problem, estimate, &CertifySettings::default())
     })?;
     RunResult::new(py, Report::Certify(report))
 }
@@ -751,6 +946,7 @@ fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<SolverReport>()?;
     m.add_class::<Graph>()?;
     m.add_class::<truth::Accuracy>()?;
+    m.add_class::<HandEyeData>()?;
     m.add_function(wrap_pyfunction!(average_single_py, m)?)?;
     m.add_function(wrap_pyfunction!(average_multiple_py, m)?)?;
     m.add_function(wrap_pyfunction!(certify_multiple_py, m)?)?;
@@ -760,5 +956,8 @@ fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_graph, m)?)?;
     m.add_function(wrap_pyfunction!(truth::read_ground_truth, m)?)?;
     m.add_function(wrap_pyfunction!(truth::accuracy, m)?)?;
+    m.add_function(wrap_pyfunction!(handeye::hand_eye_pairs, m)?)?;
+    m.add_function(wrap_pyfunction!(handeye::read_handeye, m)?)?;
+    m.add_function(wrap_pyfunction!(hand_eye, m)?)?;
     Ok(())
 }

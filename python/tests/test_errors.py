@@ -1,6 +1,7 @@
 """Errors that speak Python: the exception classes, their attributes, and messages that name
 Python keywords and functions (never a command-line flag) and no Rust type names."""
 
+import json
 import re
 
 import numpy as np
@@ -77,8 +78,28 @@ def test_settings_name_the_keyword_argument():
     assert "invalid setting `metric`" in text
     _, text = message(rotavg.Error, rotavg.average_conjugate, rel, rel, certify="dual")
     assert "invalid setting `certify`: certify mode `dual` does not apply" in text
+    _, text = message(rotavg.Error, rotavg.average_conjugate, rel, rel, max_seconds=-1.0)
+    assert "`max_seconds`" in text
     _, text = message(rotavg.Error, rotavg.read_graph, "x.g2o", format="xyz")
     assert "invalid setting `format`" in text
+
+
+def test_hand_eye_settings_and_files(tmp_path):
+    (tmp_path / "empty").mkdir()
+    err, text = message(rotavg.FileError, rotavg.read_handeye, tmp_path / "empty")
+    assert "hand=PATH and camera=PATH" in text and err.path.endswith("empty")
+    pairs = tmp_path / "pairs.json"
+    pairs.write_text("{}")
+    _, text = message(rotavg.FileError, rotavg.read_handeye, pairs, format="eth")
+    assert "hand=PATH and camera=PATH" in text
+    _, text = message(rotavg.Error, rotavg.read_handeye, tmp_path, quaternion_order="wxzy")
+    assert "invalid setting `quaternion_order`" in text
+    for kwargs, name in [(dict(stride=0), "stride"), (dict(subsample=0), "subsample"),
+                         (dict(max_gap=-1.0), "max_gap"), (dict(min_angle=-1.0), "min_angle")]:
+        _, text = message(rotavg.Error, rotavg.read_handeye, tmp_path / "empty", **kwargs)
+        assert f"invalid setting `{name}`" in text, text
+    _, text = message(rotavg.Error, rotavg.read_handeye)
+    assert "needs a path, or both hand and camera" in text
 
 
 def test_file_errors_carry_path_and_line(tmp_path):
@@ -93,10 +114,19 @@ def test_file_errors_carry_path_and_line(tmp_path):
 
 
 def test_json_errors_speak_json(tmp_path):
-    path = tmp_path / "graph.json"
-    path.write_text('{"num_rotations": "a", "edges": []}')
-    err, msg = message(rotavg.ParseError, rotavg.read_graph, path)
-    assert "expected a non-negative integer" in msg and err.path == str(path), msg
+    bad = {
+        "pairs.json": ('{"pairs": [1]}', rotavg.read_handeye, "expected a JSON object"),
+        "graph.json": ('{"num_rotations": "a", "edges": []}', rotavg.read_graph,
+                       "expected a non-negative integer"),
+        "weights.json": (json.dumps({"pairs": [{"left": I3.tolist(), "right": I3.tolist(),
+                                                "weight": "heavy"}]}),
+                         rotavg.read_handeye, "expected a number"),
+    }
+    for name, (text, reader, expected) in bad.items():
+        path = tmp_path / name
+        path.write_text(text)
+        err, msg = message(rotavg.ParseError, reader, path)
+        assert expected in msg and err.path == str(path), msg
 
 
 def test_degenerate_data():
