@@ -112,9 +112,9 @@ impl Accuracy {
 ///
 /// Args:
 ///     path: the ground-truth file (str or path-like).
-///     graph: the ``Graph`` from ``read_graph`` the truth is for (with
-///         ``largest_component=True``, entries follow the kept nodes; a node-order JSON file
-///         may list every node of the file or only the kept ones).
+///     graph: the ``Graph`` from ``read_graph`` the truth is for. The file is matched against
+///         the graph as read (a node-order JSON file lists every node of the file); with
+///         ``largest_component=True`` the entries of the kept nodes are returned.
 ///
 /// Returns:
 ///     ``(graph.n, 3, 3)`` float64 array: ``truth[k]`` is node ``k``'s rotation ``R_k`` (this
@@ -133,14 +133,9 @@ pub fn read_ground_truth<'py>(
     let g = graph.get();
     let name = path.to_string_lossy().into_owned();
     let as_read = g.as_read();
-    let selection = g.selection.clone();
-    let kept = g.loaded.node_ids.len();
+    let selection = &g.selection;
     let truth = detached(py, move || {
         let truth = load_ground_truth(&name, &as_read, &ReadOptions::default())?;
-        // a node-order file of the kept nodes only: as given
-        if truth.len() == kept {
-            return Ok(truth);
-        }
         selection.select(&truth).ok_or_else(|| {
             rotavg::Error::parse(
                 Some(&name),
