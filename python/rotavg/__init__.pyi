@@ -1,25 +1,85 @@
-"""Type stubs of rotavg (the compiled module rotavg._rotavg, re-exported by the package)."""
+"""Type stubs of rotavg (the compiled module rotavg._rotavg, re-exported by the package).
+
+Every function, class, attribute and keyword argument that the module exports is declared
+here; python/tests/test_stubs.py checks the declarations against the compiled module, and
+.ci/run type-checks python/tests/typecheck_usage.py (every documented call) against them with
+mypy --strict.
+"""
 
 import os
-from typing import Any, Dict, List, Optional, Protocol, Union, overload
+from typing import Any, Dict, List, Optional, Protocol, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
 
 __version__: str
+__all__ = [
+    "Accuracy",
+    "Certificate",
+    "DegenerateError",
+    "DisconnectedError",
+    "Error",
+    "FileError",
+    "Graph",
+    "HandEyeData",
+    "ParseError",
+    "Result",
+    "SolverError",
+    "SolverReport",
+    "__version__",
+    "accuracy",
+    "average_conjugate",
+    "average_multiple",
+    "average_single",
+    "certify_conjugate",
+    "certify_multiple",
+    "certify_single",
+    "hand_eye",
+    "hand_eye_pairs",
+    "read_graph",
+    "read_ground_truth",
+    "read_handeye",
+]
 
 class _HasAsMatrix(Protocol):
     def as_matrix(self) -> npt.ArrayLike: ...
 
 #: (N, 3, 3) rotation matrices: an array-like or a scipy.spatial.transform.Rotation.
-Rotations = Union[npt.ArrayLike, _HasAsMatrix]
+_Rotations = Union[npt.ArrayLike, _HasAsMatrix]
 #: One (3, 3) rotation matrix (or a single scipy Rotation).
-Rotation3 = Union[npt.ArrayLike, _HasAsMatrix]
-FloatArray = npt.NDArray[np.float64]
+_Rotation3 = Union[npt.ArrayLike, _HasAsMatrix]
+#: (N, 4, 4) homogeneous transforms or (N, 3, 3) rotations (or a scipy Rotation).
+_Poses = Union[npt.ArrayLike, _HasAsMatrix]
+#: A file or directory path.
+_PathLike = Union[str, "os.PathLike[str]"]
+_FloatArray = npt.NDArray[np.float64]
 
 class Error(ValueError):
-    """Bad input or settings; the message is the library's (item, file and line)."""
+    """Bad input or settings (a ValueError), and the base of every rotavg exception."""
 
+class ParseError(Error):
+    """A malformed input file: ``path`` and ``line`` (1-based, or None)."""
+
+    path: Optional[str]
+    line: Optional[int]
+
+class FileError(Error):
+    """A file or directory that cannot be read: ``path``."""
+
+    path: str
+
+class DisconnectedError(Error):
+    """A view graph that is not connected: ``component_sizes``, largest first."""
+
+    component_sizes: List[int]
+
+class DegenerateError(Error):
+    """Data that do not determine the answer (e.g. parallel hand-eye rotation axes)."""
+
+class SolverError(Error):
+    """A numerical solver could not be set up or failed without a result."""
+
+@final
 class Certificate:
     """A proven lower bound on the global minimum, the gap of the estimate to it, the verdict."""
 
@@ -47,6 +107,7 @@ class Certificate:
     def seconds(self) -> float: ...
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
 class SolverReport:
     """What the local solver did: name, iterations, why it stopped, wall time."""
 
@@ -64,13 +125,42 @@ class SolverReport:
     def seconds(self) -> float: ...
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
+class Accuracy:
+    """Angular errors (degrees) of an estimate against ground truth after alignment."""
+
+    @property
+    def mean_deg(self) -> float: ...
+    @property
+    def median_deg(self) -> float: ...
+    @property
+    def rmse_deg(self) -> float: ...
+    @property
+    def max_deg(self) -> float: ...
+    @property
+    def num_compared(self) -> int: ...
+    @property
+    def alignment(self) -> _FloatArray: ...
+    @property
+    def robust_mean_deg(self) -> float: ...
+    @property
+    def robust_median_deg(self) -> float: ...
+    @property
+    def robust_max_deg(self) -> float: ...
+    @property
+    def robust_alignment(self) -> _FloatArray: ...
+    def to_dict(self) -> Dict[str, Any]:
+        """The ``accuracy`` object of ``rotavg multiple --ground-truth GT --json``."""
+    def to_json(self) -> str: ...
+
+@final
 class Result:
     """An estimate with its cost, solver report and certificate."""
 
     @property
     def problem(self) -> str: ...
     @property
-    def estimate(self) -> FloatArray: ...
+    def estimate(self) -> _FloatArray: ...
     @property
     def cost(self) -> float: ...
     @property
@@ -83,10 +173,15 @@ class Result:
     def solver(self) -> Optional[SolverReport]: ...
     @property
     def certificate(self) -> Optional[Certificate]: ...
+    @property
+    def accuracy(self) -> Optional[Accuracy]: ...
+    @property
+    def node_ids(self) -> Optional[npt.NDArray[np.uint64]]: ...
     def to_dict(self) -> Dict[str, Any]:
         """The object ``rotavg SUBCOMMAND --json`` prints."""
     def to_json(self) -> str: ...
 
+@final
 class Graph:
     """A view graph read by ``read_graph``; ``n, i, j, rel, weights`` feed ``average_multiple``."""
 
@@ -97,13 +192,15 @@ class Graph:
     @property
     def j(self) -> npt.NDArray[np.int64]: ...
     @property
-    def rel(self) -> FloatArray: ...
+    def rel(self) -> _FloatArray: ...
     @property
-    def weights(self) -> FloatArray: ...
+    def weights(self) -> _FloatArray: ...
     @property
     def node_ids(self) -> npt.NDArray[np.uint64]: ...
     @property
-    def initial(self) -> Optional[FloatArray]: ...
+    def initial(self) -> Optional[_FloatArray]: ...
+    @property
+    def truth(self) -> Optional[_FloatArray]: ...
     @property
     def num_edges(self) -> int: ...
     @property
@@ -116,8 +213,30 @@ class Graph:
     def path(self) -> str: ...
     def __len__(self) -> int: ...
 
+@final
+class HandEyeData:
+    """Pairs (left[k], right[k]) with right[k] ~ S^-1 left[k] S, from poses or hand-eye files."""
+
+    @property
+    def left(self) -> _FloatArray: ...
+    @property
+    def right(self) -> _FloatArray: ...
+    @property
+    def weights(self) -> _FloatArray: ...
+    @property
+    def num_pairs(self) -> int: ...
+    @property
+    def format(self) -> str: ...
+    @property
+    def source(self) -> str: ...
+    @property
+    def motion(self) -> Optional[Dict[str, Any]]: ...
+    @property
+    def path(self) -> str: ...
+    def __len__(self) -> int: ...
+
 def average_single(
-    rotations: Rotations,
+    rotations: _Rotations,
     weights: Optional[npt.ArrayLike] = None,
     metric: str = "chordal",
     p: int = 2,
@@ -129,67 +248,183 @@ def average_multiple(
     n: int,
     i: npt.ArrayLike,
     j: npt.ArrayLike,
-    rel: Rotations,
+    rel: _Rotations,
     weights: Optional[npt.ArrayLike] = None,
     loss: str = "chordal",
     certify: str = "auto",
     *,
     loss_threshold: float = 5.0,
-    init: Optional[Rotations] = None,
-) -> Result: ...
+    init: Optional[_Rotations] = None,
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
+    randomized: bool = True,
+    randomized_seed: Optional[int] = None,
+    largest_component: bool = False,
+    ground_truth: Optional[npt.ArrayLike] = None,
+) -> Result:
+    """Absolute rotations from relative ones (rel[k] @ R_i = R_j), certified."""
+
 @overload
 def average_multiple(
     n: Graph,
-    *,
+    i: None = None,
+    j: None = None,
+    rel: None = None,
+    weights: None = None,
     loss: str = "chordal",
     certify: str = "auto",
+    *,
     loss_threshold: float = 5.0,
-    init: Optional[Rotations] = None,
-) -> Result: ...
+    init: Optional[_Rotations] = None,
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
+    randomized: bool = True,
+    randomized_seed: Optional[int] = None,
+    largest_component: bool = False,
+    ground_truth: Optional[npt.ArrayLike] = None,
+) -> Result:
+    """A graph from ``read_graph``, solved as ``rotavg multiple FILE`` solves it."""
+
 @overload
 def certify_multiple(
     n: int,
     i: npt.ArrayLike,
     j: npt.ArrayLike,
-    rel: Rotations,
-    estimate: Rotations,
+    rel: _Rotations,
+    estimate: _Rotations,
     weights: Optional[npt.ArrayLike] = None,
     *,
     certify: str = "auto",
-) -> Result: ...
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
+    randomized: bool = True,
+    randomized_seed: Optional[int] = None,
+) -> Result:
+    """Certify an estimate from any other solver, without changing it."""
+
 @overload
-def certify_multiple(n: Graph, *, estimate: Rotations, certify: str = "auto") -> Result: ...
+def certify_multiple(
+    n: Graph,
+    i: None = None,
+    j: None = None,
+    rel: None = None,
+    *,
+    estimate: _Rotations,
+    certify: str = "auto",
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
+    randomized: bool = True,
+    randomized_seed: Optional[int] = None,
+) -> Result:
+    """Certify an estimate for a graph from ``read_graph``."""
+
+@overload
 def average_conjugate(
-    left: Rotations,
-    right: Rotations,
+    left: _Rotations,
+    right: _Rotations,
     weights: Optional[npt.ArrayLike] = None,
     *,
     metric: str = "chordal",
     loss: str = "l2",
     certify: str = "auto",
     loss_threshold: float = 5.0,
+    init: Optional[_Rotation3] = None,
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
 ) -> Result:
     """Hand-eye rotation S with right[k] ~ S^-1 left[k] S, certified by a 10x10 SDP."""
 
+@overload
+def average_conjugate(
+    left: HandEyeData,
+    right: None = None,
+    weights: None = None,
+    *,
+    metric: str = "chordal",
+    loss: str = "l2",
+    certify: str = "auto",
+    loss_threshold: float = 5.0,
+    init: Optional[_Rotation3] = None,
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
+) -> Result:
+    """Pairs from ``hand_eye_pairs`` or ``read_handeye`` (``rotavg conjugate PATH``)."""
+
+@overload
 def certify_conjugate(
-    left: Rotations,
-    right: Rotations,
-    estimate: Rotation3,
+    left: _Rotations,
+    right: _Rotations,
+    estimate: _Rotation3,
     weights: Optional[npt.ArrayLike] = None,
 ) -> Result:
     """Certify a hand-eye rotation computed elsewhere, without changing it."""
 
+@overload
+def certify_conjugate(left: HandEyeData, right: None = None, *, estimate: _Rotation3) -> Result:
+    """Certify a hand-eye rotation (e.g. OpenCV's R_cam2gripper) for ``HandEyeData``."""
+
 def certify_single(
-    rotations: Rotations,
-    estimate: Rotation3,
+    rotations: _Rotations,
+    estimate: _Rotation3,
     weights: Optional[npt.ArrayLike] = None,
 ) -> Result:
     """Certify a chordal L2 mean computed elsewhere, without changing it."""
 
 def read_graph(
-    path: Union[str, "os.PathLike[str]"],
+    path: _PathLike,
     format: str = "auto",
     weights: str = "file",
     largest_component: bool = False,
+    *,
+    ground_truth: Optional[_PathLike] = None,
 ) -> Graph:
     """Read a g2o, 1DSfM or JSON view graph with the library's readers."""
+
+def read_ground_truth(path: _PathLike, graph: Graph) -> _FloatArray:
+    """Ground truth for a graph's nodes (NaN where unknown), the CLI's --ground-truth formats."""
+
+def accuracy(estimate: _Rotations, truth: npt.ArrayLike) -> Accuracy:
+    """Angular errors of an estimate against ground truth after the optimal alignment."""
+
+def hand_eye_pairs(
+    robot_poses: _Poses,
+    camera_poses: _Poses,
+    *,
+    camera: str = "target2cam",
+    pairs: str = "all",
+    min_angle: Optional[float] = None,
+) -> HandEyeData:
+    """Relative motions from absolute poses, formed as OpenCV's calibrateHandEye forms them."""
+
+def hand_eye(
+    robot_poses: _Poses,
+    camera_poses: _Poses,
+    *,
+    camera: str = "target2cam",
+    pairs: str = "all",
+    min_angle: Optional[float] = None,
+    metric: str = "chordal",
+    loss: str = "l2",
+    certify: str = "auto",
+    loss_threshold: float = 5.0,
+    init: Optional[_Rotation3] = None,
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
+) -> Result:
+    """R_cam2gripper from base-from-gripper and camera-from-target poses, certified."""
+
+def read_handeye(
+    path: Optional[_PathLike] = None,
+    *,
+    format: str = "auto",
+    hand: Optional[_PathLike] = None,
+    camera: Optional[_PathLike] = None,
+    stride: Optional[int] = None,
+    subsample: Optional[int] = None,
+    max_gap: Optional[float] = None,
+    time_offset: float = 0.0,
+    min_angle: Optional[float] = None,
+    quaternion_order: str = "xyzw",
+    weights: str = "file",
+) -> HandEyeData:
+    """Hand-eye pairs from the files ``rotavg conjugate`` reads (JSON, Tabb, pose streams)."""

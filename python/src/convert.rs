@@ -5,7 +5,7 @@
 //!
 //! numpy out: rotations as `(N, 3, 3)` or `(3, 3)` float64 arrays (row-major, C order).
 
-use crate::Error;
+use crate::errors::Error;
 use nalgebra::Matrix3;
 use numpy::ndarray::Dimension;
 use numpy::{AllowTypeChange, PyArray1, PyArrayLikeDyn, PyArrayMethods, PyUntypedArray};
@@ -158,6 +158,26 @@ impl Matrices {
             .collect()
     }
 
+    /// The matrices as rotations where given: a matrix whose nine entries are all NaN is
+    /// `None` (a node without ground truth); any other is checked as in [`Self::rotations`].
+    pub fn optional_rotations(&self) -> rotavg::Result<Vec<Option<Rotation>>> {
+        self.values
+            .chunks_exact(9)
+            .enumerate()
+            .map(|(k, m)| {
+                if m.iter().all(|x| x.is_nan()) {
+                    return Ok(None);
+                }
+                rotation_from_matrix(
+                    &Matrix3::from_row_slice(m),
+                    DEFAULT_ROTATION_TOLERANCE,
+                    &format!("{}[{k}]", self.what),
+                )
+                .map(Some)
+            })
+            .collect()
+    }
+
     /// The single matrix of [`matrix`] as a rotation; the error names `what`.
     pub fn rotation(&self) -> rotavg::Result<Rotation> {
         rotation_from_matrix(
@@ -183,6 +203,68 @@ pub fn rotations_array<'py>(
     Ok(PyArray1::from_vec(py, values)
         .reshape([rotations.len(), 3, 3])?
         .into_any())
+}
+
+/// Rotations where known as an `(N, 3, 3)` float64 array, a matrix of NaN where not.
+pub fn optional_rotations_array<'py>(
+    py: Python<'py>,
+    rotations: &[Option<Rotation>],
+) -> PyResult<Bound<'py, PyAny>> {
+    let mut values = Vec::with_capacity(9 * rotations.len());
+    for r in rotations {
+        match r {
+            Some(r) => {
+                let m = r.matrix();
+                for row in 0..3 {
+                    values.extend((0..3).map(|col| m[(row, col)]));
+                }
+            }
+            None => values.extend([f64::NAN; 9]),
+        }
+    }
+    Ok(PyArray1::from_vec(py, values)
+        .reshape([rotations.len(), 3, 3])?
+        .into_any())
+}
+
+/// The rotation parts of `(N, 4, 4)` homogeneous transforms (whose last row must be
+/// `0 0 0 1` within the rotation tolerance) or `(N, 3, 3)` rotations (anything with `as_matrix()`, such as a scipy
+/// `Rotation`, gives the latter).
+pub fn pose_rotations(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Matrices> {
+    let (values, shape) = float_values(obj, what)?;
+    match shape.as_slice() {
+        [_, 3, 3] => Ok(Matrices {
+            values,
+            what: what.to_string(),
+        }),
+        [_, 4, 4] => {
+            let mut rotations = Vec::with_capacity(values.len() / 16 * 9);
+            for (k, t) in values.chunks_exact(16).enumerate() {
+                let last = [t[12], t[13], t[14], t[15]];
+                let expected = [0.0, 0.0, 0.0, 1.0];
+                if !last
+                    .iter()
+                    .zip(expected)
+                    .all(|(x, e)| (x - e).abs() <= DEFAULT_ROTATION_TOLERANCE)
+                {
+                    return Err(Error::new_err(format!(
+                        "{what}[{k}] is not a homogeneous transform: its last row is {last:?}, not [0, 0, 0, 1] (tolerance {DEFAULT_ROTATION_TOLERANCE:.0e})"
+                    )));
+                }
+                for row in 0..3 {
+                    rotations.extend_from_slice(&t[4 * row..4 * row + 3]);
+                }
+            }
+            Ok(Matrices {
+                values: rotations,
+                what: what.to_string(),
+            })
+        }
+        _ => Err(Error::new_err(format!(
+            "{what} must have shape (N, 4, 4) (homogeneous transforms) or (N, 3, 3) (rotations), got {}",
+            shape_text(&shape)
+        ))),
+    }
 }
 
 /// One rotation as a `(3, 3)` float64 array.

@@ -4,19 +4,28 @@
 //! Every function copies its numpy inputs while holding the GIL, then releases the GIL to
 //! validate them with the library's checks, run the library's pipeline (`average_*`) or
 //! certifier (`certify_*`) and build the library's typed report, the same report the command
-//! line prints with `--json`. Library errors become `rotavg.Error` (a `ValueError`) with the
-//! library's message; a panic (a bug) becomes a `RuntimeError`, never an abort.
+//! line prints with `--json`. Library errors become `rotavg.Error` (a `ValueError`) or one of
+//! its subclasses, with messages that name Python keywords (`errors.rs`); a panic (a bug)
+//! becomes a `RuntimeError`, never an abort.
 
 mod convert;
+mod errors;
+mod handeye;
+mod truth;
 mod types;
 
 use convert::{Matrices, indices, matrices, matrix, vector};
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+pub use errors::Error;
+use errors::{argument_error, error};
+use handeye::HandEyeData;
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use rotavg::certify::{CertifyMode, CertifySettings};
 use rotavg::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings};
 use rotavg::io::detect::{ComponentSelection, GraphFormat, LoadedGraph, ReadOptions, WeightSource};
-use rotavg::io::input::{LoadedEstimate, LoadedProblem, MultipleInput, load_view_graph};
+use rotavg::io::input::{
+    LoadedEstimate, LoadedProblem, MultipleInput, load_ground_truth, load_view_graph,
+};
 use rotavg::io::json::Estimate;
 use rotavg::io::names::{LossKind, MultipleLoss};
 use rotavg::multiple::stats::duplicate_edge_count;
@@ -24,24 +33,12 @@ use rotavg::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_conjugate, average_multiple, average_single};
 use rotavg::report::{CertifyReport, ConjugateReport, MultipleReport, SingleReport};
 use rotavg::single::SingleProblem;
-use rotavg::{Loss, Metric, Objective};
+use rotavg::{Loss, Metric, Objective, Rotation};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use types::{Certificate, Graph, Report, RunResult, SolverReport};
 
-pyo3::create_exception!(
-    rotavg,
-    Error,
-    PyValueError,
-    "Bad input or settings (a subclass of ValueError). The message is the library's: it names \
-     the offending item (e.g. ``rel[3]``) and, for files, the file and line."
-);
-
-/// A library error as `rotavg.Error`.
-fn error(e: rotavg::Error) -> PyErr {
-    Error::new_err(e.to_string())
-}
-
-/// Run `f` without the GIL; a library error becomes `rotavg.Error`, a panic a `RuntimeError`.
+/// Run `f` without the GIL; a library error becomes a `rotavg` exception, a panic a
+/// `RuntimeError`.
 fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> rotavg::Result<T> + Send) -> PyResult<T> {
     match py.detach(|| catch_unwind(AssertUnwindSafe(f))) {
         Ok(result) => result.map_err(error),
@@ -58,9 +55,19 @@ fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> rotavg::Result<T> + Sen
     }
 }
 
-/// Parse a name of one of the library's choices (`chordal`, `auto`, ...).
-fn parse<T: std::str::FromStr<Err = rotavg::Error>>(name: &str) -> PyResult<T> {
-    name.parse().map_err(error)
+/// Parse a name of one of the library's choices (`chordal`, `auto`, ...) given as the keyword
+/// argument `keyword` (which an unknown name's error names).
+fn parse_named<T: std::str::FromStr<Err = rotavg::Error>>(
+    name: &str,
+    keyword: &str,
+) -> PyResult<T> {
+    name.parse().map_err(|e| match e {
+        rotavg::Error::InvalidSettings { reason, .. } => error(rotavg::Error::InvalidSettings {
+            name: keyword.into(),
+            reason,
+        }),
+        other => error(other),
+    })
 }
 
 /// Edge data copied out of Python, validated later by [`EdgeArrays::graph`].
@@ -83,10 +90,10 @@ impl EdgeArrays {
     ) -> PyResult<Self> {
         let n: i64 = n
             .extract()
-            .map_err(|_| Error::new_err("n must be an integer (the number of rotations)"))?;
+            .map_err(|_| argument_error("n must be an integer (the number of rotations)"))?;
         let (i, j, rel) = (indices(i, "i")?, indices(j, "j")?, matrices(rel, "rel")?);
         if i.len() != rel.len() || j.len() != rel.len() {
-            return Err(Error::new_err(format!(
+            return Err(argument_error(format!(
                 "i, j and rel must have one entry per edge: got {}, {} and {}",
                 i.len(),
                 j.len(),
@@ -158,7 +165,13 @@ impl EdgeArrays {
 
 /// A view graph given either as a `Graph` (in place of `n`) or as `n, i, j, rel, weights`.
 enum GraphInput {
-    Loaded(LoadedGraph, ComponentSelection, String),
+    /// A graph read from a file: the graph, its selection, the path, its ground truth.
+    Loaded(
+        LoadedGraph,
+        ComponentSelection,
+        String,
+        Option<Vec<Option<Rotation>>>,
+    ),
     Arrays(EdgeArrays),
 }
 
@@ -172,7 +185,7 @@ impl GraphInput {
     ) -> PyResult<Self> {
         if let Ok(g) = n.cast::<Graph>() {
             if i.is_some() || j.is_some() || rel.is_some() || weights.is_some() {
-                return Err(Error::new_err(
+                return Err(argument_error(
                     "pass either a Graph or n, i, j, rel (and weights), not both",
                 ));
             }
@@ -181,36 +194,83 @@ impl GraphInput {
                 g.loaded.clone(),
                 g.selection.clone(),
                 g.name.clone(),
+                g.truth.clone(),
             ));
         }
         match (i, j, rel) {
             (Some(i), Some(j), Some(rel)) => {
                 Ok(GraphInput::Arrays(EdgeArrays::copy(n, i, j, rel, weights)?))
             }
-            _ => Err(Error::new_err(
+            _ => Err(argument_error(
                 "a view graph needs n, i, j and rel (or a Graph from read_graph)",
             )),
         }
     }
 
-    /// The validated graph, the component selection and the input's name.
-    fn into_input(self) -> rotavg::Result<MultipleInput> {
-        let (graph, selection, name) = match self {
-            GraphInput::Loaded(g, s, name) => (g, s, name),
+    /// The validated graph as `rotavg multiple` solves it: restricted to its largest component
+    /// when asked (a graph read with `largest_component=True` is already), with the ground
+    /// truth `truth` (one entry per node of the graph as given, or per kept node; NaN where
+    /// unknown) or else the graph's own.
+    fn into_input(
+        self,
+        largest_component: bool,
+        truth: Option<Matrices>,
+    ) -> rotavg::Result<MultipleInput> {
+        let (graph, selection, name, own_truth) = match self {
+            GraphInput::Loaded(g, s, name, t) => (g, s, name, t),
             GraphInput::Arrays(a) => {
                 let g = a.graph()?;
                 let n = g.problem.num_rotations();
-                (g, ComponentSelection::whole(n), "<arrays>".to_string())
+                (
+                    g,
+                    ComponentSelection::whole(n),
+                    "<arrays>".to_string(),
+                    None,
+                )
             }
+        };
+        let (graph, selection, own_truth) = if largest_component && selection.is_whole() {
+            let (graph, selection) = graph.largest_component();
+            let truth = own_truth.and_then(|t| selection.select(&t));
+            (graph, selection, truth)
+        } else {
+            (graph, selection, own_truth)
+        };
+        let truth = match truth {
+            Some(t) => Some(for_kept(
+                t.optional_rotations()?,
+                &selection,
+                "ground_truth",
+            )?),
+            None => own_truth,
         };
         Ok(MultipleInput {
             name,
             graph,
             selection,
-            truth: None,
+            truth,
             init: None,
         })
     }
+}
+
+/// Per-node values given for every node of the graph as given (restricted to the kept ones) or
+/// for the kept nodes only; another count is an error naming the keyword `what`.
+fn for_kept<T: Clone>(
+    values: Vec<T>,
+    selection: &ComponentSelection,
+    what: &str,
+) -> rotavg::Result<Vec<T>> {
+    let kept = selection.kept.len();
+    if values.len() == kept {
+        return Ok(values);
+    }
+    selection
+        .select(&values)
+        .ok_or_else(|| rotavg::Error::InvalidSettings {
+            name: what.into(),
+            reason: format!("{} rotations given for {kept} nodes", values.len()),
+        })
 }
 
 /// Rotations of an optional estimate or initial value.
@@ -248,11 +308,11 @@ fn average_single_py(
 ) -> PyResult<RunResult> {
     let rotations = matrices(rotations, "rotations")?;
     let weights = optional_vector(weights, rotations.len())?;
-    let metric: Metric = parse(metric)?;
+    let metric: Metric = parse_named(metric, "metric")?;
     let loss = match p {
         1 => Loss::L1,
         2 => Loss::L2,
-        _ => return Err(Error::new_err(format!("p must be 1 or 2, got {p}"))),
+        _ => return Err(argument_error(format!("p must be 1 or 2, got {p}"))),
     };
     let report = detached(py, move || {
         let problem = SingleProblem::new(rotations.rotations()?, weights)?
@@ -297,6 +357,13 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         True): a Monte Carlo lower bound in ``to_dict()["certificate"]["randomized"]``,
 ///         beside the verdict and never as its proof.
 ///     randomized_seed: its seed (default: a fresh one, reported).
+///     largest_component: solve only the largest connected component of a disconnected graph
+///         (``result.node_ids`` says which nodes; ``to_dict()["other_components"]`` the sizes
+///         of the others). Default False: a disconnected graph raises
+///         ``rotavg.DisconnectedError``.
+///     ground_truth: optional ``(n, 3, 3)`` ground truth (NaN matrices where unknown): then
+///         ``result.accuracy`` (and ``to_dict()["accuracy"]``) reports the estimate's errors
+///         after the optimal alignment. Default: the ground truth the ``Graph`` was read with.
 ///
 /// Returns:
 ///     Result: ``estimate`` is ``(n, 3, 3)`` with the gauge ``estimate[0] = I``;
@@ -304,9 +371,9 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///
 /// Raises:
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
-///         bad weights, a disconnected graph, unknown names.
+///         bad weights, unknown names. rotavg.DisconnectedError: a disconnected graph.
 #[pyfunction]
-#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="chordal", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None))]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="chordal", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None))]
 #[allow(clippy::too_many_arguments)]
 fn average_multiple_py(
     py: Python<'_>,
@@ -323,6 +390,8 @@ fn average_multiple_py(
     max_seconds: Option<f64>,
     randomized: bool,
     randomized_seed: Option<u64>,
+    largest_component: bool,
+    ground_truth: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunResult> {
     let budget = certify_settings(
         CertifyMode::Auto,
@@ -332,24 +401,15 @@ fn average_multiple_py(
         randomized_seed,
     )?;
     let graph = GraphInput::copy(n, i, j, rel, weights)?;
-    let objective = parse::<MultipleLoss>(loss)?.objective(loss_threshold);
-    let mode: CertifyMode = parse(certify)?;
+    let objective = parse_named::<MultipleLoss>(loss, "loss")?.objective(loss_threshold);
+    let mode: CertifyMode = parse_named(certify, "certify")?;
     let init = optional_matrices(init, "init")?;
+    let truth = optional_matrices(ground_truth, "ground_truth")?;
     let report = detached(py, move || {
-        let input = graph.into_input()?;
+        let input = graph.into_input(largest_component, truth)?;
         let problem = input.graph.problem.clone().with_objective(objective)?;
         let init = match init {
-            Some(m) => {
-                let rotations = m.rotations()?;
-                let n = problem.num_rotations();
-                if rotations.len() != n {
-                    return Err(rotavg::Error::InvalidSettings {
-                        name: "init".into(),
-                        reason: format!("{} rotations given for {n} nodes", rotations.len()),
-                    });
-                }
-                Initialisation::Given(rotations)
-            }
+            Some(m) => Initialisation::Given(for_kept(m.rotations()?, &input.selection, "init")?),
             None => Initialisation::default(),
         };
         let settings = AverageSettings {
@@ -404,14 +464,14 @@ fn certify_multiple_py(
 ) -> PyResult<RunResult> {
     let graph = GraphInput::copy(n, i, j, rel, weights)?;
     let estimate = optional_matrices(estimate, "estimate")?
-        .ok_or_else(|| Error::new_err("certify_multiple needs an estimate"))?;
-    let mode = match parse(certify)? {
+        .ok_or_else(|| argument_error("certify_multiple needs an estimate"))?;
+    let mode = match parse_named(certify, "certify")? {
         CertifyMode::None => CertifyMode::Dual,
         m => m,
     };
     let settings = certify_settings(mode, max_memory, max_seconds, randomized, randomized_seed)?;
     let report = detached(py, move || {
-        let input = graph.into_input()?;
+        let input = graph.into_input(false, None)?;
         let estimate = LoadedEstimate {
             name: "estimate".into(),
             estimate: Estimate::Multiple(estimate.rotations()?),
@@ -458,7 +518,7 @@ impl PairArrays {
     ) -> PyResult<Self> {
         let (left, right) = (matrices(left, "left")?, matrices(right, "right")?);
         if left.len() != right.len() {
-            return Err(Error::new_err(format!(
+            return Err(argument_error(format!(
                 "left and right must have one rotation per pair: got {} and {}",
                 left.len(),
                 right.len()
@@ -489,66 +549,255 @@ impl PairArrays {
     }
 }
 
+/// Conjugate pairs given as arrays or as `HandEyeData`.
+enum PairsInput {
+    Arrays(PairArrays),
+    /// The problem, the report's source line, the motion counts and settings, the path.
+    Data(
+        ConjugateProblem,
+        String,
+        Option<(
+            rotavg::io::handeye::MotionStats,
+            rotavg::io::handeye::MotionSettings,
+        )>,
+        String,
+    ),
+}
+
+impl PairsInput {
+    fn copy(
+        left: &Bound<'_, PyAny>,
+        right: Option<&Bound<'_, PyAny>>,
+        weights: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        if let Ok(d) = left.cast::<HandEyeData>() {
+            if right.is_some_and(|r| !r.is_none()) || weights.is_some_and(|w| !w.is_none()) {
+                return Err(argument_error(
+                    "pass either HandEyeData or left, right (and weights), not both",
+                ));
+            }
+            let d = d.get();
+            return Ok(PairsInput::Data(
+                d.problem.clone(),
+                d.source.clone(),
+                d.motion.clone(),
+                d.name.clone(),
+            ));
+        }
+        match right.filter(|r| !r.is_none()) {
+            Some(right) => Ok(PairsInput::Arrays(PairArrays::copy(left, right, weights)?)),
+            None => Err(argument_error(
+                "conjugate averaging needs left and right (or HandEyeData from hand_eye_pairs or read_handeye)",
+            )),
+        }
+    }
+
+    /// The validated problem, the name of the input and how the report names its source.
+    fn into_parts(self) -> rotavg::Result<ConjugateParts> {
+        Ok(match self {
+            PairsInput::Arrays(a) => ConjugateParts {
+                problem: a.problem()?,
+                name: "<arrays>".into(),
+                source: "<arrays>: conjugate pairs".into(),
+                motion: None,
+            },
+            PairsInput::Data(problem, source, motion, name) => ConjugateParts {
+                problem,
+                name,
+                source,
+                motion,
+            },
+        })
+    }
+}
+
+/// A conjugate problem with what its report says about the input.
+struct ConjugateParts {
+    problem: ConjugateProblem,
+    name: String,
+    source: String,
+    motion: Option<(
+        rotavg::io::handeye::MotionStats,
+        rotavg::io::handeye::MotionSettings,
+    )>,
+}
+
 /// Conjugate (hand-eye) rotation averaging: ``S`` with ``right[k] ~ S^-1 left[k] S``, minimising
 /// ``sum_k w_k ||S right[k] - left[k] S||_F^2`` (chordal L2, certified by a 10x10 SDP), or a
 /// geodesic / robust cost, certified by branch and bound over SO(3).
 ///
 /// Args:
-///     left, right: ``(N, 3, 3)`` rotations ``L_k`` and ``R_k`` (or scipy Rotations).
+///     left, right: ``(N, 3, 3)`` rotations ``L_k`` and ``R_k`` (or scipy Rotations); or
+///         ``left`` a ``HandEyeData`` (``hand_eye_pairs``, ``read_handeye``) and no ``right``:
+///         then ``to_dict()`` is exactly the command line's for those files.
 ///     weights: ``(N,)`` positive weights (default all 1).
 ///     metric: ``"chordal"``, ``"geodesic"`` or ``"quaternion"``.
 ///     loss: ``"l2"``, ``"l1"``, ``"huber"`` or ``"cauchy"``.
 ///     certify: ``"auto"``, ``"sdp"``, ``"branch_and_bound"`` or ``"none"``.
 ///     loss_threshold: Huber threshold / Cauchy scale in degrees.
+///     init: optional ``(3, 3)`` start of the local solver (default: the quaternion closed
+///         form).
+///     max_memory, max_seconds: the certificate's budget (bytes, default 4 GiB; seconds,
+///         default 600, ``None``: no limit), as for ``average_multiple``.
 ///
 /// Returns:
 ///     Result: ``estimate`` is ``S`` (3, 3); ``to_dict()`` equals
 ///     ``rotavg conjugate FILE --json``.
 ///
 /// Raises:
-///     rotavg.Error: bad shapes, NaN, non-rotations, bad weights, data that do not determine
-///         S (all rotation axes parallel), unknown names.
+///     rotavg.Error: bad shapes, NaN, non-rotations, bad weights, unknown names.
+///     rotavg.DegenerateError: data that do not determine S (all rotation axes parallel).
 #[pyfunction]
-#[pyo3(name = "average_conjugate", signature = (left, right, weights=None, *, metric="chordal", loss="l2", certify="auto", loss_threshold=5.0))]
+#[pyo3(name = "average_conjugate", signature = (left, right=None, weights=None, *, metric="chordal", loss="l2", certify="auto", loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0))]
 #[allow(clippy::too_many_arguments)]
 fn average_conjugate_py(
     py: Python<'_>,
     left: &Bound<'_, PyAny>,
-    right: &Bound<'_, PyAny>,
+    right: Option<&Bound<'_, PyAny>>,
     weights: Option<&Bound<'_, PyAny>>,
     metric: &str,
     loss: &str,
     certify: &str,
     loss_threshold: f64,
+    init: Option<&Bound<'_, PyAny>>,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
 ) -> PyResult<RunResult> {
-    let pairs = PairArrays::copy(left, right, weights)?;
+    let pairs = PairsInput::copy(left, right, weights)?;
+    conjugate_run(
+        py,
+        pairs,
+        ConjugateOptions {
+            metric,
+            loss,
+            certify,
+            loss_threshold,
+            init,
+            max_memory,
+            max_seconds,
+        },
+    )
+}
+
+/// The keyword arguments of `average_conjugate` and `hand_eye`.
+struct ConjugateOptions<'a, 'py> {
+    metric: &'a str,
+    loss: &'a str,
+    certify: &'a str,
+    loss_threshold: f64,
+    init: Option<&'a Bound<'py, PyAny>>,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
+}
+
+/// Solve and certify conjugate pairs as `rotavg conjugate` does.
+fn conjugate_run(
+    py: Python<'_>,
+    pairs: PairsInput,
+    o: ConjugateOptions<'_, '_>,
+) -> PyResult<RunResult> {
     let objective = Objective::new(
-        parse(metric)?,
-        parse::<LossKind>(loss)?.with_threshold_deg(loss_threshold),
+        parse_named(o.metric, "metric")?,
+        parse_named::<LossKind>(o.loss, "loss")?.with_threshold_deg(o.loss_threshold),
     );
-    let mode: CertifyMode = parse(certify)?;
-    let report = detached(py, move || {
-        let problem = pairs.problem()?.with_objective(objective)?;
-        let settings = AverageSettings {
-            solve: ConjugateSettings::default(),
-            certify: CertifySettings::with_mode(mode),
-        };
-        let result = average_conjugate(&problem, &settings)?;
-        Ok(ConjugateReport::new(
-            &problem,
-            "<arrays>: conjugate pairs".into(),
-            result,
-        ))
-    })?;
+    let mode: CertifyMode = parse_named(o.certify, "certify")?;
+    let mut certify = CertifySettings::with_mode(mode);
+    if let Some(m) = o.max_memory {
+        certify.budget.max_memory_bytes = m;
+    }
+    certify.budget.max_seconds = o.max_seconds;
+    certify.validate().map_err(error)?;
+    let init = o
+        .init
+        .filter(|i| !i.is_none())
+        .map(|i| matrix(i, "init"))
+        .transpose()?;
+    let report =
+        detached(py, move || {
+            let parts = pairs.into_parts()?;
+            let problem = parts.problem.with_objective(objective)?;
+            let settings = AverageSettings {
+                solve: ConjugateSettings {
+                    init: init.map(|m| m.rotation()).transpose()?,
+                    ..Default::default()
+                },
+                certify,
+            };
+            let result = average_conjugate(&problem, &settings)?;
+            let (stats, motion_settings) = match parts.motion {
+                Some((s, m)) => (Some(s), m),
+                None => (None, Default::default()),
+            };
+            Ok(ConjugateReport::new(&problem, parts.source, result)
+                .with_motion(stats, motion_settings))
+        })?;
     RunResult::new(py, Report::Conjugate(report))
+}
+
+/// Hand-eye calibration (rotation) from absolute poses in one call:
+/// ``average_conjugate(hand_eye_pairs(robot_poses, camera_poses, ...), ...)``.
+///
+/// The pairs are formed as OpenCV's ``calibrateHandEye`` forms them (see ``hand_eye_pairs``):
+/// ``robot_poses`` are base-from-gripper (``R_gripper2base``), ``camera_poses``
+/// camera-from-target (``R_target2cam``; ``camera="cam2target"`` for target-from-camera), and
+/// the estimate is ``S = R_cam2gripper`` with ``right[k] ~ S^-1 left[k] S``: the rotation that
+/// OpenCV returns, certified globally optimal for the chordal cost (or with a proven gap).
+///
+/// Args:
+///     robot_poses, camera_poses, camera, pairs, min_angle: as for ``hand_eye_pairs``.
+///     metric, loss, certify, loss_threshold, init, max_memory, max_seconds: as for
+///         ``average_conjugate``.
+///
+/// Returns:
+///     Result: ``estimate`` is ``R_cam2gripper`` (3, 3); ``to_dict()["motion"]`` counts the
+///     poses and pairs.
+///
+/// Raises:
+///     rotavg.Error: as ``hand_eye_pairs`` and ``average_conjugate``.
+///     rotavg.DegenerateError: motions that do not determine the rotation.
+#[pyfunction]
+#[pyo3(signature = (robot_poses, camera_poses, *, camera="target2cam", pairs="all", min_angle=None, metric="chordal", loss="l2", certify="auto", loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0))]
+#[allow(clippy::too_many_arguments)]
+fn hand_eye(
+    py: Python<'_>,
+    robot_poses: &Bound<'_, PyAny>,
+    camera_poses: &Bound<'_, PyAny>,
+    camera: &str,
+    pairs: &str,
+    min_angle: Option<f64>,
+    metric: &str,
+    loss: &str,
+    certify: &str,
+    loss_threshold: f64,
+    init: Option<&Bound<'_, PyAny>>,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
+) -> PyResult<RunResult> {
+    let data = handeye::hand_eye_pairs(py, robot_poses, camera_poses, camera, pairs, min_angle)?;
+    let pairs = PairsInput::Data(data.problem, data.source, data.motion, data.name);
+    conjugate_run(
+        py,
+        pairs,
+        ConjugateOptions {
+            metric,
+            loss,
+            certify,
+            loss_threshold,
+            init,
+            max_memory,
+            max_seconds,
+        },
+    )
 }
 
 /// Certify a hand-eye rotation ``S`` computed elsewhere (e.g. OpenCV's ``calibrateHandEye``),
 /// **without changing it**: its chordal L2 cost and a certificate or a proven gap bound.
 ///
 /// Args:
-///     left, right, weights: the pairs, as for ``average_conjugate``.
-///     estimate: the ``(3, 3)`` rotation ``S`` (or a single scipy Rotation).
+///     left, right, weights: the pairs, as for ``average_conjugate`` (or ``left`` a
+///         ``HandEyeData`` and ``estimate`` by keyword).
+///     estimate: the ``(3, 3)`` rotation ``S`` (or a single scipy Rotation); for
+///         ``hand_eye_pairs`` data, OpenCV's ``R_cam2gripper``.
 ///
 /// Returns:
 ///     Result: ``solver`` is None; ``to_dict()`` equals
@@ -557,23 +806,27 @@ fn average_conjugate_py(
 /// Raises:
 ///     rotavg.Error: as ``average_conjugate``.
 #[pyfunction]
-#[pyo3(name = "certify_conjugate", signature = (left, right, estimate, weights=None))]
+#[pyo3(name = "certify_conjugate", signature = (left, right=None, estimate=None, weights=None))]
 fn certify_conjugate_py(
     py: Python<'_>,
     left: &Bound<'_, PyAny>,
-    right: &Bound<'_, PyAny>,
-    estimate: &Bound<'_, PyAny>,
+    right: Option<&Bound<'_, PyAny>>,
+    estimate: Option<&Bound<'_, PyAny>>,
     weights: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunResult> {
-    let pairs = PairArrays::copy(left, right, weights)?;
+    let pairs = PairsInput::copy(left, right, weights)?;
+    let estimate = estimate
+        .filter(|e| !e.is_none())
+        .ok_or_else(|| argument_error("certify_conjugate needs an estimate"))?;
     let estimate = matrix(estimate, "estimate")?;
     let report = detached(py, move || {
-        let problem = LoadedProblem::Conjugate(pairs.problem()?);
+        let parts = pairs.into_parts()?;
+        let problem = LoadedProblem::Conjugate(parts.problem);
         let estimate = LoadedEstimate {
             name: "estimate".into(),
             estimate: Estimate::Single(estimate.rotation()?),
         };
-        CertifyReport::certify("<arrays>", &problem, estimate, &CertifySettings::default())
+        CertifyReport::certify(&parts.name, &problem, estimate, &CertifySettings::default())
     })?;
     RunResult::new(py, Report::Certify(report))
 }
@@ -620,51 +873,80 @@ fn certify_single_py(
 ///     format: ``"auto"``, ``"g2o"``, ``"1dsfm"`` or ``"json"``.
 ///     weights: ``"file"`` (the file's weights, e.g. SE-Sync's kappa for g2o) or ``"unit"``.
 ///     largest_component: keep only the largest connected component (nodes renumbered).
+///     ground_truth: a ground-truth file for the graph's nodes (the command line's
+///         ``--ground-truth``; formats: see ``read_ground_truth``): ``g.truth`` holds it, and
+///         ``average_multiple(g)`` then reports ``result.accuracy``.
 ///
 /// Returns:
 ///     Graph: with ``n, i, j, rel, weights`` for ``average_multiple``.
 ///
 /// Raises:
-///     rotavg.Error: unreadable file, or malformed content (the message names file and line).
+///     rotavg.FileError: unreadable file. rotavg.ParseError: malformed content (the message
+///         names file and line).
 #[pyfunction]
-#[pyo3(signature = (path, format="auto", weights="file", largest_component=false))]
+#[pyo3(signature = (path, format="auto", weights="file", largest_component=false, *, ground_truth=None))]
 fn read_graph(
     py: Python<'_>,
     path: std::path::PathBuf,
     format: &str,
     weights: &str,
     largest_component: bool,
+    ground_truth: Option<std::path::PathBuf>,
 ) -> PyResult<Graph> {
-    let format: GraphFormat = parse(format)?;
-    let weights: WeightSource = parse(weights)?;
+    let format: GraphFormat = parse_named(format, "format")?;
+    let weights: WeightSource = parse_named(weights, "weights")?;
     let name = path.to_string_lossy().into_owned();
+    let truth_path = ground_truth.map(|p| p.to_string_lossy().into_owned());
     let path_name = name.clone();
-    let (loaded, selection) = detached(py, move || {
+    let (loaded, selection, read, truth) = detached(py, move || {
         let options = ReadOptions {
             weights,
             ..Default::default()
         };
+        // as rotavg::io::input::load_multiple_input, without requiring a connected graph
+        // (average_multiple says how to proceed when it is not)
         let graph = load_view_graph(&path_name, format, &options)?;
-        Ok(if largest_component {
+        let truth = truth_path
+            .as_deref()
+            .map(|p| load_ground_truth(p, &graph, &options).map(|t| (p, t)))
+            .transpose()?;
+        let read = (graph.node_ids.clone(), graph.node_names.clone());
+        let (graph, selection) = if largest_component {
             graph.largest_component()
         } else {
             let n = graph.problem.num_rotations();
             (graph, ComponentSelection::whole(n))
-        })
+        };
+        let truth = match truth {
+            Some((file, t)) => Some(selection.select(&t).ok_or_else(|| {
+                rotavg::Error::parse(
+                    Some(file),
+                    None,
+                    format!(
+                        "ground truth has {} entries, the graph has {} nodes",
+                        t.len(),
+                        selection.num_read
+                    ),
+                )
+            })?),
+            None => None,
+        };
+        Ok((graph, selection, read, truth))
     })?;
-    Graph::new(py, name, loaded, selection)
+    Graph::new(py, name, (loaded, selection), read, truth)
 }
 
 /// `rotavg._rotavg`: the compiled part of the `rotavg` package.
 #[pymodule]
 fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    let py = m.py();
-    m.add("Error", py.get_type::<Error>())?;
+    errors::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<RunResult>()?;
     m.add_class::<Certificate>()?;
     m.add_class::<SolverReport>()?;
     m.add_class::<Graph>()?;
+    m.add_class::<truth::Accuracy>()?;
+    m.add_class::<HandEyeData>()?;
     m.add_function(wrap_pyfunction!(average_single_py, m)?)?;
     m.add_function(wrap_pyfunction!(average_multiple_py, m)?)?;
     m.add_function(wrap_pyfunction!(certify_multiple_py, m)?)?;
@@ -672,5 +954,10 @@ fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(certify_conjugate_py, m)?)?;
     m.add_function(wrap_pyfunction!(certify_single_py, m)?)?;
     m.add_function(wrap_pyfunction!(read_graph, m)?)?;
+    m.add_function(wrap_pyfunction!(truth::read_ground_truth, m)?)?;
+    m.add_function(wrap_pyfunction!(truth::accuracy, m)?)?;
+    m.add_function(wrap_pyfunction!(handeye::hand_eye_pairs, m)?)?;
+    m.add_function(wrap_pyfunction!(handeye::read_handeye, m)?)?;
+    m.add_function(wrap_pyfunction!(hand_eye, m)?)?;
     Ok(())
 }

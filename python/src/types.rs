@@ -3,23 +3,26 @@
 //! `to_dict()` / `to_json()` serialise it with serde, so they are exactly the objects the command
 //! line prints with `--json`.
 
-use crate::convert::{rotation_array, rotations_array};
+use crate::convert::{optional_rotations_array, rotation_array, rotations_array};
+use crate::truth::Accuracy;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
+use rotavg::Rotation;
 use rotavg::io::detect::{ComponentSelection, LoadedGraph};
 use rotavg::io::json::Estimate;
 use rotavg::report::{CertifyReport, ConjugateReport, MultipleReport, SingleReport};
 use rotavg::{Certificate as RCertificate, SolverReport as RSolverReport};
 use serde::Serialize;
+use std::borrow::Cow;
 
 /// `json.loads(serde_json::to_string(value))`: a typed value as Python dicts, lists and numbers.
-fn to_python<'py, T: Serialize>(py: Python<'py>, value: &T) -> PyResult<Bound<'py, PyAny>> {
+pub fn to_python<'py, T: Serialize>(py: Python<'py>, value: &T) -> PyResult<Bound<'py, PyAny>> {
     let text = to_json(value)?;
     py.import("json")?.call_method1("loads", (text,))
 }
 
 /// A typed value as one line of JSON (the command line's `--json` text).
-fn to_json<T: Serialize>(value: &T) -> PyResult<String> {
+pub fn to_json<T: Serialize>(value: &T) -> PyResult<String> {
     serde_json::to_string(value)
         .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(format!("serialising: {e}")))
 }
@@ -226,8 +229,11 @@ impl Report {
 /// otherwise), ``cost`` (under the chosen objective), ``chordal_cost`` (multiple and
 /// conjugate: the chordal L2 cost that the certificate bounds; None for single averaging),
 /// ``num_rotations``, ``num_measurements``, ``solver``
-/// (a ``SolverReport``; None for ``certify_*``, which never change the estimate) and
-/// ``certificate`` (a ``Certificate``, or None when none was computed).
+/// (a ``SolverReport``; None for ``certify_*``, which never change the estimate),
+/// ``certificate`` (a ``Certificate``, or None when none was computed), ``accuracy`` (an
+/// ``Accuracy`` against the ground truth given to ``average_multiple``, else None) and
+/// ``node_ids`` (``average_multiple``: the file's id of each node of the estimate, uint64;
+/// else None).
 ///
 /// ``to_dict()`` / ``to_json()`` give exactly the object ``rotavg SUBCOMMAND --json`` prints for
 /// the same problem; ``str(result)`` the text the command line prints.
@@ -258,6 +264,12 @@ pub struct RunResult {
     /// The certificate, or None when none was computed.
     #[pyo3(get)]
     certificate: Option<Py<Certificate>>,
+    /// The accuracy against ground truth (``average_multiple`` with ground truth), or None.
+    #[pyo3(get)]
+    accuracy: Option<Py<Accuracy>>,
+    /// The file's id of each node of the estimate (``average_multiple``), or None.
+    #[pyo3(get)]
+    node_ids: Option<Py<PyAny>>,
     report: Report,
 }
 
@@ -328,7 +340,24 @@ impl RunResult {
         let certificate = certificate
             .map(|c| Py::new(py, Certificate { inner: c.clone() }))
             .transpose()?;
+        let (accuracy, node_ids) = match &report {
+            Report::Multiple(r) => (
+                r.accuracy
+                    .as_ref()
+                    .map(|a| Py::new(py, Accuracy { inner: a.clone() }))
+                    .transpose()?,
+                Some(
+                    crate::convert::read_only(
+                        numpy::PyArray1::from_slice(py, &r.node_ids).into_any(),
+                    )?
+                    .unbind(),
+                ),
+            ),
+            _ => (None, None),
+        };
         Ok(RunResult {
+            accuracy,
+            node_ids,
             problem: problem.to_string(),
             estimate: estimate.unbind(),
             cost,
@@ -403,14 +432,22 @@ impl RunResult {
 /// arrays that feed ``average_multiple(g.n, g.i, g.j, g.rel, g.weights)``; ``node_ids`` (the
 /// file's id of each node), ``format``, ``warnings``, ``initial`` (the vertex rotations of a
 /// g2o file as this crate's ``R_i``, or None), ``other_components`` (sizes of components dropped by
-/// ``largest_component=True``).
+/// ``largest_component=True``), ``truth`` (the ground truth read with
+/// ``read_graph(..., ground_truth=GT)``, ``(n, 3, 3)`` with NaN where unknown, or None).
 /// Passing the graph itself, ``average_multiple(g)``, solves exactly what the command line
-/// solves for the file (same numbers, same ``--json`` object).
+/// solves for the file (same numbers, same ``--json`` object, with the accuracy against the
+/// ground truth when one was read).
 #[pyclass(name = "Graph", module = "rotavg", frozen)]
 pub struct Graph {
     pub loaded: LoadedGraph,
     pub selection: ComponentSelection,
     pub name: String,
+    /// Ground truth of each node of [`Self::loaded`], when read.
+    pub truth: Option<Vec<Option<Rotation>>>,
+    /// The file's ids and names of every node of the graph as read, when a component was
+    /// dropped (otherwise those of [`Self::loaded`]).
+    read_ids: Vec<u64>,
+    read_names: Vec<String>,
     /// Number of nodes.
     #[pyo3(get)]
     n: usize,
@@ -432,15 +469,21 @@ pub struct Graph {
     /// Vertex rotations from the file (``(n, 3, 3)``), or None.
     #[pyo3(get)]
     initial: Option<Py<PyAny>>,
+    /// Ground truth of each node (``(n, 3, 3)``, NaN where unknown), or None.
+    #[pyo3(get, name = "truth")]
+    truth_array: Option<Py<PyAny>>,
 }
 
 impl Graph {
-    /// The Python view of a loaded graph.
+    /// The Python view of a loaded graph: `loaded` is the graph as read restricted to
+    /// `selection`, whose node ids and names as read are `read_ids` and `read_names` (used
+    /// only when a component was dropped), with ground truth for its nodes.
     pub fn new(
         py: Python<'_>,
         name: String,
-        loaded: LoadedGraph,
-        selection: ComponentSelection,
+        (loaded, selection): (LoadedGraph, ComponentSelection),
+        (read_ids, read_names): (Vec<u64>, Vec<String>),
+        truth: Option<Vec<Option<Rotation>>>,
     ) -> PyResult<Self> {
         use crate::convert::read_only;
         use numpy::PyArray1;
@@ -450,6 +493,11 @@ impl Graph {
         let w: Vec<f64> = edges.iter().map(|e| e.weight).collect();
         let rel: Vec<_> = edges.iter().map(|e| e.rotation).collect();
         let arr = |a: Bound<'_, PyAny>| read_only(a).map(Bound::unbind);
+        let (read_ids, read_names) = if selection.is_whole() {
+            (Vec::new(), Vec::new())
+        } else {
+            (read_ids, read_names)
+        };
         Ok(Graph {
             n: loaded.problem.num_rotations(),
             i: arr(PyArray1::from_vec(py, i).into_any())?,
@@ -462,9 +510,30 @@ impl Graph {
                 .as_ref()
                 .map(|r| rotations_array(py, r).and_then(arr))
                 .transpose()?,
+            truth_array: truth
+                .as_ref()
+                .map(|t| optional_rotations_array(py, t).and_then(arr))
+                .transpose()?,
+            truth,
+            read_ids,
+            read_names,
             loaded,
             selection,
             name,
+        })
+    }
+
+    /// The graph as read, as far as ground-truth files are concerned: its nodes' file ids
+    /// and names (the kept graph's problem; `rotavg::io::input::read_ground_truth` matches
+    /// by ids and names only).
+    pub fn as_read(&self) -> Cow<'_, LoadedGraph> {
+        if self.selection.is_whole() {
+            return Cow::Borrowed(&self.loaded);
+        }
+        Cow::Owned(LoadedGraph {
+            node_ids: self.read_ids.clone(),
+            node_names: self.read_names.clone(),
+            ..self.loaded.clone()
         })
     }
 }
