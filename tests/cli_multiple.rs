@@ -541,3 +541,58 @@ fn randomized_flags_report_a_monte_carlo_bound_beside_the_verdict() {
     let out = run(&["multiple", g, "--no-randomized", "--randomized-seed", "1"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// The budget holds under a hard address-space limit (issue 25, item 1): a dense 150-node view
+/// graph with 20 % outliers, whose SDP is predicted at tens of GB, run with `--certify sdp
+/// --max-memory 256M` under `ulimit -v` of [`ADDRESS_SPACE_KIB`]: the SDP is refused before
+/// Clarabel starts, the staircase reports the gap, and the process never needs more address
+/// space than the budget plus the stated margin (binary, thread stacks, allocator arenas).
+#[test]
+fn memory_budget_holds_under_an_address_space_limit() {
+    /// 256 MiB of budget plus a 384 MiB margin for what the budget does not count.
+    const ADDRESS_SPACE_KIB: u64 = 640 * 1024;
+    if !std::path::Path::new("/bin/sh").exists() {
+        eprintln!("skipped: no /bin/sh to set ulimit -v");
+        return;
+    }
+    let (p, _) = SyntheticGraph {
+        num_rotations: 150,
+        num_edges: 600,
+        noise_sigma: 0.05,
+        outlier_fraction: 0.2,
+        seed: 25,
+    }
+    .generate();
+    let g = tmp("outliers150.json", &write_problem_json(&p));
+    let out = std::process::Command::new("/bin/sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {ADDRESS_SPACE_KIB} && exec \"$0\" \"$@\""
+        ))
+        .arg(env!("CARGO_BIN_EXE_rotavg"))
+        .args([
+            "multiple",
+            g.to_str().unwrap(),
+            "--certify",
+            "sdp",
+            "--max-memory",
+            "256M",
+            "--json",
+        ])
+        .output()
+        .expect("run rotavg under ulimit -v");
+    assert_success(&out);
+    let v = json_of(&out);
+    let c = &v["certificate"];
+    assert_eq!(c["verdict"], "gap_reported", "{c}");
+    let (lb, f) = (
+        c["lower_bound"].as_f64().unwrap(),
+        v["cost"].as_f64().unwrap(),
+    );
+    assert!(lb <= f && (f - lb) / f < 0.01, "gap {lb} .. {f}");
+    let text = serde_json::to_string(&v["pipeline"]).unwrap();
+    assert!(
+        text.contains("memory"),
+        "the SDP's refusal names the budget: {text}"
+    );
+}

@@ -24,6 +24,7 @@ pub mod conjugate;
 pub mod ladder;
 pub mod multiple;
 pub mod settings;
+pub mod simultaneous;
 pub mod single;
 pub mod spectrum;
 

@@ -266,6 +266,39 @@ impl Budget {
         )
     }
 
+    /// `Err(reason)` when a rung's predicted memory does not fit, or its predicted time does not
+    /// fit what is left of the time budget after `elapsed` seconds (the SDP rungs of multiple
+    /// and simultaneous averaging).
+    ///
+    /// ```
+    /// use rotavg::certify::{Budget, Prediction};
+    /// let b = Budget { max_memory_bytes: 1 << 30, max_seconds: Some(10.0) };
+    /// assert!(b.prediction_fits(&Prediction { seconds: 1.0, bytes: 1e8 }, 0.0).is_ok());
+    /// assert!(b.prediction_fits(&Prediction { seconds: 1.0, bytes: 7.6e10 }, 0.0).is_err());
+    /// assert!(b.prediction_fits(&Prediction { seconds: 5.0, bytes: 1e8 }, 6.0).is_err());
+    /// ```
+    pub fn prediction_fits(
+        &self,
+        predicted: &crate::certify::ladder::Prediction,
+        elapsed: f64,
+    ) -> std::result::Result<(), String> {
+        if predicted.bytes > self.max_memory_bytes as f64 {
+            return Err(format!(
+                "predicted {:.1} GB, memory budget {:.1} GB",
+                predicted.bytes / 1e9,
+                self.max_memory_bytes as f64 / 1e9
+            ));
+        }
+        match self.max_seconds {
+            Some(limit) if predicted.seconds > limit - elapsed => Err(format!(
+                "predicted {:.0} s, {:.0} s of the time budget left",
+                predicted.seconds,
+                (limit - elapsed).max(0.0)
+            )),
+            _ => Ok(()),
+        }
+    }
+
     /// The predicted time of factorisations whose multiply-adds are counted from their symbolic
     /// structure: `multiply_adds / PREDICTED_MULTIPLY_ADD_RATE + values *
     /// PREDICTED_SECONDS_PER_COUNTED_VALUE` (calibration in [`PREDICTED_MULTIPLY_ADD_RATE`]).

@@ -22,6 +22,7 @@ pub mod single;
 
 pub use conjugate::average_conjugate;
 pub use multiple::{InlierGraph, average_multiple, certify_inlier_graph};
+pub use simultaneous::average_simultaneous;
 pub use single::average_single;
 
 use crate::certify::{

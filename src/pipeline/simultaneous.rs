@@ -8,9 +8,12 @@
 //! I`, which is consistent because `L_0 = S R_0 S^T = I`) and then solves the conjugate problem
 //! on the pairs `(L_i, R_i)`. Small graphs only (dense normal equations, `3n x 3n`).
 
+use super::{AverageSettings, Averaged, PipelineProblem, PipelineSolution, average};
+use crate::certify::simultaneous::certify_simultaneous;
+use crate::certify::{Certification, CertifyMode, CertifySettings};
 use crate::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings, solve_conjugate};
 use crate::error::{Error, Result};
-use crate::multiple::Edge;
+use crate::multiple::{Edge, MultipleProblem};
 use crate::so3::{Rotation, exp, hat};
 use crate::termination::{SolverReport, Termination};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
@@ -347,4 +350,127 @@ pub fn solve_simultaneous(
             seconds: start.elapsed().as_secs_f64(),
         },
     })
+}
+
+/// Settings of the joint local solver (dense Gauss-Newton).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SimultaneousSettings {
+    /// Gauss-Newton iterations at most (default 100).
+    pub max_iterations: usize,
+}
+
+impl Default for SimultaneousSettings {
+    fn default() -> Self {
+        SimultaneousSettings {
+            max_iterations: 100,
+        }
+    }
+}
+
+/// Settings of [`average_simultaneous`].
+pub type AverageSimultaneousSettings = AverageSettings<SimultaneousSettings>;
+
+impl SimultaneousProblem {
+    /// The two view graphs as multiple-averaging problems on the same `n` nodes.
+    pub fn graphs(&self) -> Result<(MultipleProblem, MultipleProblem)> {
+        self.validate()?;
+        Ok((
+            MultipleProblem::new(self.num_nodes, self.right.clone())?,
+            MultipleProblem::new(self.num_nodes, self.left.clone())?,
+        ))
+    }
+}
+
+impl PipelineSolution for SimultaneousSolution {
+    fn certified_cost(&self) -> f64 {
+        self.cost
+    }
+    fn report_mut(&mut self) -> &mut SolverReport {
+        &mut self.report
+    }
+}
+
+impl PipelineProblem for SimultaneousProblem {
+    type Settings = SimultaneousSettings;
+    type Solution = SimultaneousSolution;
+    const NAME: &'static str = "simultaneous";
+    const MODES: &'static [CertifyMode] = &[CertifyMode::Auto, CertifyMode::Sdp, CertifyMode::None];
+    fn validate(settings: &SimultaneousSettings) -> Result<()> {
+        if settings.max_iterations == 0 {
+            return Err(Error::InvalidSettings {
+                name: "max_iterations".into(),
+                reason: "must be at least 1".into(),
+            });
+        }
+        Ok(())
+    }
+    fn uncertifiable(&self, _mode: CertifyMode) -> Option<String> {
+        None
+    }
+    fn solve(&self, settings: &SimultaneousSettings) -> Result<SimultaneousSolution> {
+        solve_simultaneous(self, settings.max_iterations)
+    }
+    /// The SDP `[H12]`; a cheaper rounding is polished by the joint Gauss-Newton and offered
+    /// as the improvement when it beats the solution.
+    fn certify(
+        &self,
+        solution: &SimultaneousSolution,
+        settings: &CertifySettings,
+    ) -> Result<Certification<SimultaneousSolution>> {
+        let (right, left) = self.graphs()?;
+        let c = certify_simultaneous(&right, &left, &solution.rotations, &solution.s, settings)?;
+        let start = Instant::now();
+        let improvement = c.improvement.map(|r| {
+            let (rotations, s, cost, iterations, termination) =
+                gauss_newton(self, Terms::Joint, r.rotations, r.s, 100);
+            SimultaneousSolution {
+                rotations,
+                s,
+                cost,
+                report: SolverReport {
+                    name: "sdp-rounding+simultaneous-gauss-newton".into(),
+                    iterations,
+                    termination,
+                    seconds: start.elapsed().as_secs_f64(),
+                },
+            }
+        });
+        Ok(Certification {
+            certificate: c.certificate,
+            details: c.details,
+            improvement: improvement.filter(|p| p.cost < solution.cost),
+        })
+    }
+}
+
+/// The simultaneous pipeline: the joint local solve ([`solve_simultaneous`]), then (modes
+/// `auto`, `sdp`) the SDP certificate `[H12]` verified by
+/// [`crate::certify::simultaneous::certify_simultaneous`]; a cheaper SDP rounding, polished,
+/// replaces the local solution.
+///
+/// ```
+/// use rotavg::pipeline::simultaneous::{average_simultaneous, SimultaneousProblem};
+/// use rotavg::multiple::Edge;
+/// use rotavg::so3::exp;
+/// use nalgebra::Vector3;
+/// let rs: Vec<_> = (0..5).map(|k| exp(&Vector3::new(0.3 * k as f64, -0.2, 0.1 * k as f64))).collect();
+/// let s = exp(&Vector3::new(0.2, -0.5, 0.4));
+/// let noise = |k: usize| exp(&Vector3::new(0.01 * (k % 3) as f64, -0.01, 0.005 * k as f64));
+/// let pairs = [(0, 1), (1, 2), (2, 3), (3, 4), (4, 0), (0, 2), (1, 3)];
+/// let e = |i: usize, j: usize, rotation| Edge { i, j, rotation, weight: 1.0 };
+/// let right: Vec<_> = pairs.iter().enumerate()
+///     .map(|(k, &(i, j))| e(i, j, noise(k) * rs[j] * rs[i].inverse())).collect();
+/// let left: Vec<_> = pairs.iter().enumerate()
+///     .map(|(k, &(i, j))| e(i, j, noise(k + 1) * s * rs[j] * rs[i].inverse() * s.inverse())).collect();
+/// let p = SimultaneousProblem { num_nodes: 5, right, left };
+/// let avg = average_simultaneous(&p, &Default::default())?;
+/// assert!(avg.certificate.unwrap().is_certified());
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn average_simultaneous(
+    problem: &SimultaneousProblem,
+    settings: &AverageSimultaneousSettings,
+) -> Result<Averaged<SimultaneousSolution>> {
+    average(problem, settings)
 }

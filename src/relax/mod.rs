@@ -20,6 +20,7 @@ pub mod conjugate;
 pub mod lifted;
 pub mod multiple;
 pub mod settings;
+pub mod simultaneous;
 pub mod svec;
 
 pub use conjugate::{ConjugateRelaxation, relax_conjugate};

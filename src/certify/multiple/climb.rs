@@ -267,6 +267,12 @@ impl<'a> Climb<'a> {
                 p.cliques, p.largest_clique
             );
             self.details.skipped_reason = Some(why.clone());
+            self.details.methods.push(MethodRun {
+                method: BoundMethod::Sdp,
+                lower_bound: None,
+                seconds: since.elapsed().as_secs_f64(),
+                note: format!("{why}; the staircase solves the same relaxation instead"),
+            });
             self.log(
                 Rung::Sdp,
                 Some(predicted),
@@ -287,24 +293,8 @@ impl<'a> Climb<'a> {
 
     /// `Err(reason)` when `predicted` does not fit the memory budget or the time left.
     fn fits(&self, predicted: &Prediction) -> std::result::Result<(), String> {
-        let budget = &self.settings.budget;
-        if predicted.bytes > budget.max_memory_bytes as f64 {
-            return Err(format!(
-                "predicted {:.1} GB, memory budget {:.1} GB",
-                predicted.bytes / 1e9,
-                budget.max_memory_bytes as f64 / 1e9
-            ));
-        }
-        match budget.max_seconds {
-            Some(limit) if predicted.seconds > limit - self.start.elapsed().as_secs_f64() => {
-                Err(format!(
-                    "predicted {:.0} s, {:.0} s of the time budget left",
-                    predicted.seconds,
-                    (limit - self.start.elapsed().as_secs_f64()).max(0.0)
-                ))
-            }
-            _ => Ok(()),
-        }
+        let elapsed = self.start.elapsed().as_secs_f64();
+        self.settings.budget.prediction_fits(predicted, elapsed)
     }
 
     /// Log one rung of this climb's own (the SDP, the staircase).
