@@ -355,7 +355,7 @@ fn certifies_a_database_problem_against_a_model_matched_by_name() {
     let v = certify_matches(&db, &model, &est);
     assert_eq!(v["node_ids"][3], sc.ids[3]);
     // the folder holding database.db is the problem too
-    certify_matches(&db.parent().unwrap().to_path_buf(), &model, &est);
+    certify_matches(db.parent().unwrap(), &model, &est);
     // the library: matched by name
     let graph = load_graph(&db, GraphFormat::Auto, &ReadOptions::default()).unwrap();
     let e = load_estimate_for(s(&model), &graph, &ReadOptions::default()).unwrap();
