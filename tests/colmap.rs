@@ -593,5 +593,11 @@ fn malformed_sparse_models_are_clear_errors() {
         "--init",
         partial.to_str().unwrap(),
     ]));
-    assert!(e.contains("has no image in the COLMAP model"), "{e}");
+    // the one estimate loader (issue 27): the file, the node, how it was matched
+    assert!(
+        e.contains(
+            "1 of 3 nodes have no rotation in the file (COLMAP images.txt, matched by image name)"
+        ),
+        "{e}"
+    );
 }

@@ -24,7 +24,8 @@ use rotavg::certify::{CertifyMode, CertifySettings};
 use rotavg::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings};
 use rotavg::io::detect::{ComponentSelection, GraphFormat, LoadedGraph, ReadOptions, WeightSource};
 use rotavg::io::input::{
-    LoadedEstimate, LoadedProblem, MultipleInput, load_ground_truth, load_view_graph,
+    LoadedEstimate, LoadedProblem, MultipleInput, load_estimate_for, load_ground_truth,
+    load_view_graph,
 };
 use rotavg::io::json::Estimate;
 use rotavg::io::names::{LossKind, MultipleLoss};
@@ -434,7 +435,12 @@ fn average_multiple_py(
 ///
 /// Args:
 ///     n, i, j, rel, weights: the view graph as for ``average_multiple`` (or a ``Graph`` as n).
-///     estimate: ``(n, 3, 3)`` rotations ``R_i`` (any gauge).
+///     estimate: ``(n, 3, 3)`` rotations ``R_i`` (any gauge), or the path (``str`` or
+///         ``os.PathLike``) of another tool's estimate in any format ``rotavg certify
+///         --estimate`` reads: JSON, g2o vertices (GTSAM), a COLMAP sparse model folder
+///         (GLOMAP, pycolmap), ``images.bin`` / ``images.txt``, Bundler ``.out``, a rotation
+///         list; matched to the nodes by id, or by image name for a graph read from a COLMAP
+///         database.
 ///     certify: ``"auto"`` (dual certificate, then the SDP or the staircase), ``"dual"``,
 ///         ``"sdp"`` or ``"staircase"`` (``"none"`` means ``"dual"``, as on the command line).
 ///     max_memory, max_seconds, randomized, randomized_seed: as for ``average_multiple``.
@@ -444,7 +450,8 @@ fn average_multiple_py(
 ///     ``rotavg certify FILE --estimate EST --json``.
 ///
 /// Raises:
-///     rotavg.Error: as ``average_multiple``, and an estimate of the wrong size.
+///     rotavg.Error: as ``average_multiple``, an estimate of the wrong size, and (a path) a node
+///         the file lacks or a file that cannot be read (``rotavg.ParseError``, naming the file).
 #[pyfunction]
 #[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None))]
 #[allow(clippy::too_many_arguments)]
@@ -463,8 +470,17 @@ fn certify_multiple_py(
     randomized_seed: Option<u64>,
 ) -> PyResult<RunResult> {
     let graph = GraphInput::copy(n, i, j, rel, weights)?;
-    let estimate = optional_matrices(estimate, "estimate")?
-        .ok_or_else(|| argument_error("certify_multiple needs an estimate"))?;
+    // a path (str or os.PathLike) is read as `rotavg certify --estimate PATH` reads it
+    let path = estimate
+        .filter(|e| !e.is_none())
+        .and_then(|e| e.extract::<std::path::PathBuf>().ok());
+    let estimate = match path {
+        Some(p) => EstimateInput::Path(p.to_string_lossy().into_owned()),
+        None => EstimateInput::Arrays(
+            optional_matrices(estimate, "estimate")?
+                .ok_or_else(|| argument_error("certify_multiple needs an estimate"))?,
+        ),
+    };
     let mode = match parse_named(certify, "certify")? {
         CertifyMode::None => CertifyMode::Dual,
         m => m,
@@ -472,14 +488,25 @@ fn certify_multiple_py(
     let settings = certify_settings(mode, max_memory, max_seconds, randomized, randomized_seed)?;
     let report = detached(py, move || {
         let input = graph.into_input(false, None)?;
-        let estimate = LoadedEstimate {
-            name: "estimate".into(),
-            estimate: Estimate::Multiple(estimate.rotations()?),
+        let estimate = match estimate {
+            EstimateInput::Arrays(m) => LoadedEstimate {
+                name: "estimate".into(),
+                estimate: Estimate::Multiple(m.rotations()?),
+            },
+            EstimateInput::Path(p) => {
+                load_estimate_for(&p, &input.graph, &ReadOptions::default())?.into_loaded()
+            }
         };
         let problem = LoadedProblem::Multiple(input.graph);
         CertifyReport::certify(&input.name, &problem, estimate, &settings)
     })?;
     RunResult::new(py, Report::Certify(report))
+}
+
+/// An estimate given as arrays or as a file path.
+enum EstimateInput {
+    Arrays(Matrices),
+    Path(String),
 }
 
 /// Certification settings with the budget (`max_memory` bytes, default 4 GiB; `max_seconds`,

@@ -171,3 +171,27 @@ def test_same_costs_and_certificates_as_the_command_line(name, data_dir, cli, tm
     est.write_text(json.dumps({"estimate": theirs["estimate"]}))
     certified = rotavg.certify_multiple(g, estimate=np.array(theirs["estimate"]))
     assert untimed(certified.to_dict()) == untimed(cli("certify", path, "--estimate", est))
+
+
+def test_certify_multiple_reads_an_estimate_file_like_the_command_line(tmp_path):
+    """An estimate given as a path (another tool's rotation list ``id R11 .. R33``, shuffled) is
+    matched to the graph's nodes by id, as ``rotavg certify --estimate`` does."""
+    import pathlib
+
+    data = pathlib.Path(__file__).resolve().parents[2] / "examples" / "data" / "slam.g2o"
+    g = rotavg.read_graph(str(data))
+    best = rotavg.average_multiple(g)
+    ids = [int(k) for k in g.node_ids]
+    lines = [
+        f"{ids[k]} " + " ".join(repr(float(x)) for x in best.estimate[k].reshape(9))
+        for k in reversed(range(len(ids)))
+    ]
+    est = tmp_path / "theirs.txt"
+    est.write_text("\n".join(lines) + "\n")
+    res = rotavg.certify_multiple(g, estimate=est)
+    assert np.allclose(res.estimate, best.estimate, atol=1e-12)
+    assert res.certificate.certified
+    missing = tmp_path / "missing.txt"
+    missing.write_text("\n".join(lines[1:]) + "\n")
+    with pytest.raises(rotavg.ParseError, match="1 of 400 nodes have no rotation"):
+        rotavg.certify_multiple(g, estimate=str(missing))

@@ -494,6 +494,175 @@ mod database {
         })
     }
 
+    pub(super) fn cameras(path: &Path) -> Result<(Vec<ColmapCamera>, BTreeMap<u64, u32>)> {
+        let file = path.display().to_string();
+        let err = |msg: String| Error::parse(Some(&file), None, msg);
+        let sql = |e: rusqlite::Error| err(format!("SQLite: {e}"));
+        let conn = Connection::open_with_flags(
+            path,
+            OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
+        )
+        .map_err(sql)?;
+        let mut cameras = Vec::new();
+        {
+            let mut stmt = conn
+                .prepare(
+                    "SELECT camera_id, model, width, height, typeof(params), \
+                     CASE WHEN length(params) <= 1024 THEN params END FROM cameras ORDER BY camera_id",
+                )
+                .map_err(|e| err(format!("no table `cameras` with COLMAP's columns ({e})")))?;
+            let mut rows = stmt.query([]).map_err(sql)?;
+            while let Some(row) = rows.next().map_err(sql)? {
+                let id: i64 = row.get(0).map_err(sql)?;
+                let camera_id = u32::try_from(id)
+                    .map_err(|_| err(format!("table `cameras`: camera_id {id} is not 32-bit")))?;
+                let model: i64 = row.get(1).map_err(sql)?;
+                let (width, height): (i64, i64) =
+                    (row.get(2).map_err(sql)?, row.get(3).map_err(sql)?);
+                let blob: Option<Vec<u8>> = row.get(5).map_err(sql)?;
+                let Some(&(_, name, count)) = CAMERA_MODELS.iter().find(|m| m.0 == model) else {
+                    return Err(err(format!(
+                        "table `cameras`: camera {id}: model {model} is not one of COLMAP's camera models"
+                    )));
+                };
+                let blob = blob.unwrap_or_default();
+                if blob.len() != 8 * count {
+                    return Err(err(format!(
+                        "table `cameras`: camera {id} ({name}): params has {} bytes, expected {} ({count} f64)",
+                        blob.len(),
+                        8 * count
+                    )));
+                }
+                let params = blob
+                    .chunks_exact(8)
+                    .map(|c| {
+                        let mut b = [0u8; 8];
+                        b.copy_from_slice(c);
+                        f64::from_le_bytes(b)
+                    })
+                    .collect();
+                cameras.push(ColmapCamera {
+                    camera_id,
+                    model: name.to_string(),
+                    width: u64::try_from(width).unwrap_or(0),
+                    height: u64::try_from(height).unwrap_or(0),
+                    params,
+                });
+            }
+        }
+        let mut of_image = BTreeMap::new();
+        let mut stmt = conn
+            .prepare("SELECT image_id, camera_id FROM images")
+            .map_err(sql)?;
+        let mut rows = stmt.query([]).map_err(sql)?;
+        while let Some(row) = rows.next().map_err(sql)? {
+            let (image, camera): (i64, i64) = (row.get(0).map_err(sql)?, row.get(1).map_err(sql)?);
+            let (Ok(image), Ok(camera)) = (u64::try_from(image), u32::try_from(camera)) else {
+                return Err(err(format!(
+                    "table `images`: image {image}: camera_id {camera} is not a 32-bit id"
+                )));
+            };
+            if !cameras.iter().any(|c| c.camera_id == camera) {
+                return Err(err(format!(
+                    "table `images`: image {image} names camera {camera}, which the table `cameras` does not have"
+                )));
+            }
+            of_image.insert(image, camera);
+        }
+        Ok((cameras, of_image))
+    }
+
+    pub(super) fn poses(path: &Path, options: &ReadOptions) -> Result<Vec<ColmapImage>> {
+        let file = path.display().to_string();
+        let err = |msg: String| Error::parse(Some(&file), None, msg);
+        let sql = |e: rusqlite::Error| err(format!("SQLite: {e}"));
+        let conn = Connection::open_with_flags(
+            path,
+            OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
+        )
+        .map_err(sql)?;
+        let columns: Vec<String> = conn
+            .prepare("PRAGMA table_info(images)")
+            .and_then(|mut s| s.query_map([], |r| r.get(1))?.collect())
+            .map_err(sql)?;
+        let has = |c: &str| columns.iter().any(|x| x == c);
+        let refuse = || {
+            err(
+                "a COLMAP database holds no estimated camera poses (only two-view geometries, \
+                 and no pose priors here): give the sparse model the mapper wrote (e.g. sparse/0, \
+                 or its images.bin)"
+                    .into(),
+            )
+        };
+        if !["image_id", "name", "camera_id"].iter().all(|c| has(c)) {
+            return Err(err(
+                "not a COLMAP database: no table `images` with image_id, name, camera_id".into(),
+            ));
+        }
+        if !["prior_qw", "prior_qx", "prior_qy", "prior_qz"]
+            .iter()
+            .all(|c| has(c))
+        {
+            return Err(refuse());
+        }
+        let t = if ["prior_tx", "prior_ty", "prior_tz"].iter().all(|c| has(c)) {
+            "prior_tx, prior_ty, prior_tz"
+        } else {
+            "0.0, 0.0, 0.0"
+        };
+        let mut stmt = conn
+            .prepare(&format!(
+                "SELECT image_id, CASE WHEN length(name) <= {MAX_NAME_CHARS} THEN name END, camera_id, \
+                 prior_qw, prior_qx, prior_qy, prior_qz, {t} FROM images \
+                 WHERE prior_qw IS NOT NULL AND prior_qx IS NOT NULL AND prior_qy IS NOT NULL \
+                 AND prior_qz IS NOT NULL ORDER BY image_id"
+            ))
+            .map_err(sql)?;
+        let mut rows = stmt.query([]).map_err(sql)?;
+        let mut images = ImageList::with_capacity(0, options);
+        while let Some(row) = rows.next().map_err(sql)? {
+            let get_f = |k: usize| -> Result<f64> {
+                let v: Option<f64> = row.get(k).map_err(sql)?;
+                Ok(v.unwrap_or(0.0))
+            };
+            let id: i64 = row.get(0).map_err(sql)?;
+            let image_id = u32::try_from(id)
+                .map_err(|_| err(format!("table `images`: image_id {id} is not a 32-bit id")))?;
+            let name: Option<String> = row.get(1).map_err(sql)?;
+            let name = name.ok_or_else(|| {
+                err(format!(
+                    "table `images`: image {id}: no name, or a name too long"
+                ))
+            })?;
+            let cam: i64 = row.get(2).map_err(sql)?;
+            let camera_id = u32::try_from(cam).map_err(|_| {
+                err(format!(
+                    "table `images`: image {id}: camera_id {cam} is not a 32-bit id"
+                ))
+            })?;
+            let mut v = [0.0; 7];
+            for (k, slot) in v.iter_mut().enumerate() {
+                *slot = get_f(3 + k)?;
+            }
+            if v[..4] == [0.0; 4] || v.iter().any(|x| !x.is_finite()) {
+                continue; // no prior stored
+            }
+            images
+                .push(
+                    image_id,
+                    camera_id,
+                    name,
+                    &v,
+                    &format!("table `images`: image {id}: prior"),
+                )
+                .map_err(err)?;
+        }
+        if images.images.is_empty() {
+            return Err(refuse());
+        }
+        images.finish(&file, None, "no pose priors")
+    }
+
     fn accepted_list() -> String {
         ACCEPTED_CONFIGS
             .iter()
@@ -589,6 +758,113 @@ fn reject_repeated_images(images: &[ColmapImage], file: &str) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// What a COLMAP project or model folder holds for absolute rotations ([`find_model_images`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ModelFile {
+    /// A sparse model's `images.bin` or `images.txt`.
+    Images(PathBuf),
+    /// A database (`database.db`) and no model.
+    Database(PathBuf),
+}
+
+/// The file of absolute rotations in the folder `dir`: a sparse model's `images.bin` (COLMAP's
+/// and GLOMAP's default), else its `images.txt`, else a `database.db`. A folder holding model
+/// folders (`sparse/` with `0/`, `1/`) or nothing usable is an error that says what to give.
+///
+/// ```
+/// use rotavg::io::colmap::{find_model_images, ModelFile};
+/// let dir = std::env::temp_dir().join(format!("rotavg-doc-find-model-{}", std::process::id()));
+/// std::fs::create_dir_all(dir.join("0")).unwrap();
+/// std::fs::write(dir.join("0/images.txt"), "").unwrap();
+/// let err = find_model_images(&dir).unwrap_err().to_string();
+/// let found = find_model_images(&dir.join("0"));
+/// std::fs::remove_dir_all(&dir).unwrap();
+/// assert!(err.contains("holds the sparse models 0"), "{err}");
+/// assert!(matches!(found?, ModelFile::Images(p) if p.ends_with("images.txt")));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn find_model_images(dir: &Path) -> Result<ModelFile> {
+    for name in ["images.bin", "images.txt"] {
+        let f = dir.join(name);
+        if f.is_file() {
+            return Ok(ModelFile::Images(f));
+        }
+    }
+    if let Some(db) = find_database(dir) {
+        return Ok(ModelFile::Database(db));
+    }
+    let mut models: Vec<String> = std::fs::read_dir(dir)
+        .map_err(|e| Error::Io {
+            path: dir.display().to_string(),
+            message: e.to_string(),
+        })?
+        .filter_map(|e| e.ok())
+        .filter(|e| {
+            let p = e.path();
+            p.join("images.bin").is_file() || p.join("images.txt").is_file()
+        })
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    models.sort();
+    let message = if models.is_empty() {
+        "a folder without images.bin, images.txt or database.db: give a COLMAP sparse model \
+         folder (e.g. sparse/0) or one of its images files"
+            .to_string()
+    } else {
+        format!(
+            "the folder holds the sparse models {}: give one of them (e.g. {})",
+            models.join(", "),
+            dir.join(&models[0]).display()
+        )
+    };
+    Err(Error::parse(
+        Some(&dir.display().to_string()),
+        None,
+        message,
+    ))
+}
+
+/// An error for the other files of a sparse model (`cameras.*`, `points3D.*`, `frames.*`,
+/// `rigs.*`), which hold no image rotations: "give images.bin / images.txt or the folder".
+pub fn refuse_other_model_file(file: &str) -> Result<()> {
+    let base = Path::new(file)
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    for stem in ["cameras", "points3d", "frames", "rigs"] {
+        if base == format!("{stem}.bin") || base == format!("{stem}.txt") {
+            return Err(Error::parse(
+                Some(file),
+                None,
+                "this file of a COLMAP sparse model holds no image poses: give the model's \
+                 images.bin / images.txt, or the model folder",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Absolute rotations stored in a COLMAP database: the pose priors `prior_qw .. prior_qz` of
+/// the table `images` (COLMAP before 3.9), for the images that have one (with `image_id`,
+/// `name`, `camera_id`; translations from `prior_tx ..` when present). A database stores no
+/// estimated poses, only two-view geometries: without pose priors this is an error saying to
+/// give the sparse model the mapper wrote (`sparse/0`). Needs the cargo feature `colmap`.
+pub fn read_database_poses(path: &Path, options: &ReadOptions) -> Result<Vec<ColmapImage>> {
+    #[cfg(feature = "colmap")]
+    {
+        database::poses(path, options)
+    }
+    #[cfg(not(feature = "colmap"))]
+    {
+        let _ = options;
+        Err(Error::parse(
+            Some(&path.display().to_string()),
+            None,
+            "a COLMAP database (SQLite), but rotavg was built without the cargo feature `colmap`",
+        ))
+    }
 }
 
 /// `true` when `file` / `text` look like a COLMAP `images.txt`: the file name ends in
@@ -897,12 +1173,33 @@ pub fn write_images_text(
     node_ids: &[u64],
     node_names: &[String],
 ) -> Result<String> {
+    write_images_text_with_cameras(rotations, node_ids, node_names, &[])
+}
+
+/// [`write_images_text`] with each image's `CAMERA_ID` (`camera_ids[k]` for node `k`; all 1
+/// when `camera_ids` is empty).
+///
+/// ```
+/// use rotavg::io::colmap::{read_images_text, write_images_text_with_cameras};
+/// use rotavg::io::detect::ReadOptions;
+/// let text = write_images_text_with_cameras(&[rotavg::Rotation::identity()], &[4], &[], &[7])?;
+/// let images = read_images_text(&text, "images.txt", &ReadOptions::default())?;
+/// assert_eq!((images[0].image_id, images[0].camera_id), (4, 7));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn write_images_text_with_cameras(
+    rotations: &[Rotation],
+    node_ids: &[u64],
+    node_names: &[String],
+    camera_ids: &[u32],
+) -> Result<String> {
     let bad = |reason: String| Error::InvalidSettings {
         name: "output".into(),
         reason,
     };
     if node_ids.len() != rotations.len()
         || (!node_names.is_empty() && node_names.len() != rotations.len())
+        || (!camera_ids.is_empty() && camera_ids.len() != rotations.len())
     {
         return Err(bad(format!(
             "{} rotations, {} node ids and {} names: one of each per node",
@@ -920,10 +1217,13 @@ pub fn write_images_text(
         "# Number of images: {}, mean observations per image: 0",
         rotations.len()
     );
-    s.push_str(
+    s.push_str(if camera_ids.is_empty() {
         "# Written by rotavg: rotations only (QW QX QY QZ = world-to-camera, COLMAP's cam_from_world); \
-         translations are not estimated (TX TY TZ = 0), CAMERA_ID is 1, no 2-D points.\n",
-    );
+         translations are not estimated (TX TY TZ = 0), CAMERA_ID is 1, no 2-D points.\n"
+    } else {
+        "# Written by rotavg: rotations only (QW QX QY QZ = world-to-camera, COLMAP's cam_from_world); \
+         translations are not estimated (TX TY TZ = 0), cameras of the input, no 2-D points.\n"
+    });
     for (k, r) in rotations.iter().enumerate() {
         let id = u32::try_from(node_ids[k]).map_err(|_| {
             bad(format!(
@@ -948,12 +1248,158 @@ pub fn write_images_text(
         };
         let _ = writeln!(
             s,
-            "{id} {} {} {} {} 0 0 0 1 {name}\n",
+            "{id} {} {} {} {} 0 0 0 {} {name}\n",
             q.w + 0.0,
             q.i + 0.0,
             q.j + 0.0,
-            q.k + 0.0
+            q.k + 0.0,
+            camera_ids.get(k).copied().unwrap_or(1)
         );
     }
     Ok(s)
+}
+
+/// A camera of a COLMAP model (a line of `cameras.txt`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColmapCamera {
+    /// COLMAP's `camera_id`.
+    pub camera_id: u32,
+    /// The model's name (`PINHOLE`, `SIMPLE_RADIAL`, ...).
+    pub model: String,
+    /// Image width, pixels.
+    pub width: u64,
+    /// Image height, pixels.
+    pub height: u64,
+    /// The model's parameters.
+    pub params: Vec<f64>,
+}
+
+/// COLMAP's camera models: `(model id, name, number of parameters)` (`colmap/sensor/models.h`).
+pub const CAMERA_MODELS: [(i64, &str, usize); 12] = [
+    (0, "SIMPLE_PINHOLE", 3),
+    (1, "PINHOLE", 4),
+    (2, "SIMPLE_RADIAL", 4),
+    (3, "RADIAL", 5),
+    (4, "OPENCV", 8),
+    (5, "OPENCV_FISHEYE", 8),
+    (6, "FULL_OPENCV", 12),
+    (7, "FOV", 5),
+    (8, "SIMPLE_RADIAL_FISHEYE", 4),
+    (9, "RADIAL_FISHEYE", 5),
+    (10, "THIN_PRISM_FISHEYE", 12),
+    (11, "RAD_TAN_THIN_PRISM_FISHEYE", 16),
+];
+
+/// The placeholder camera of a model written for an input without cameras (1DSfM, g2o, JSON):
+/// camera 1, `SIMPLE_PINHOLE`, 1 x 1 pixels, `f = 1`, principal point `(0.5, 0.5)`. It makes
+/// the folder a loadable sparse model; it is not a calibration.
+pub fn placeholder_camera() -> ColmapCamera {
+    ColmapCamera {
+        camera_id: 1,
+        model: "SIMPLE_PINHOLE".into(),
+        width: 1,
+        height: 1,
+        params: vec![1.0, 0.5, 0.5],
+    }
+}
+
+/// The cameras of a COLMAP database and the camera of each image: `(cameras, image_id ->
+/// camera_id)`. A model id COLMAP does not define, or a parameter blob of the wrong size, is an
+/// error. Needs the cargo feature `colmap`.
+pub fn read_database_cameras(path: &Path) -> Result<(Vec<ColmapCamera>, BTreeMap<u64, u32>)> {
+    #[cfg(feature = "colmap")]
+    {
+        database::cameras(path)
+    }
+    #[cfg(not(feature = "colmap"))]
+    {
+        Err(Error::parse(
+            Some(&path.display().to_string()),
+            None,
+            "a COLMAP database (SQLite), but rotavg was built without the cargo feature `colmap`",
+        ))
+    }
+}
+
+/// The text of a COLMAP `cameras.txt`.
+///
+/// ```
+/// use rotavg::io::colmap::{placeholder_camera, write_cameras_text};
+/// assert!(write_cameras_text(&[placeholder_camera()]).ends_with("\n1 SIMPLE_PINHOLE 1 1 1 0.5 0.5\n"));
+/// ```
+pub fn write_cameras_text(cameras: &[ColmapCamera]) -> String {
+    let mut s = String::from(
+        "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n",
+    );
+    let _ = writeln!(s, "# Number of cameras: {}", cameras.len());
+    for c in cameras {
+        let params: Vec<String> = c.params.iter().map(|p| p.to_string()).collect();
+        let _ = writeln!(
+            s,
+            "{} {} {} {} {}",
+            c.camera_id,
+            c.model,
+            c.width,
+            c.height,
+            params.join(" ")
+        );
+    }
+    s
+}
+
+/// The text of an empty COLMAP `points3D.txt` (a model of poses only).
+pub fn empty_points3d_text() -> &'static str {
+    "# 3D point list with one line of data per point:\n\
+     #   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n\
+     # Number of points: 0, mean track length: 0\n"
+}
+
+/// Write a COLMAP sparse model of absolute rotations into the folder `dir` (which must exist):
+/// `images.txt` ([`write_images_text_with_cameras`]; the file name `images` when given, e.g. a
+/// path ending in `images.txt`), `cameras.txt` (`cameras`, or [`placeholder_camera`] when
+/// `None`) and an empty `points3D.txt`. I/O errors name the file.
+///
+/// ```
+/// use rotavg::io::colmap::{load_images, write_sparse_model};
+/// use rotavg::io::detect::ReadOptions;
+/// let dir = std::env::temp_dir().join(format!("rotavg-doc-model-out-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// write_sparse_model(&dir, &dir.join("images.txt"), &[rotavg::Rotation::identity()], &[3], &["a.jpg".into()], None)?;
+/// let images = load_images(dir.join("images.txt").to_str().unwrap(), &ReadOptions::default());
+/// let cameras = std::fs::read_to_string(dir.join("cameras.txt")).unwrap();
+/// assert!(dir.join("points3D.txt").is_file());
+/// std::fs::remove_dir_all(&dir).unwrap();
+/// assert_eq!(images?[0].name, "a.jpg");
+/// assert!(cameras.contains("1 SIMPLE_PINHOLE"));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn write_sparse_model(
+    dir: &Path,
+    images: &Path,
+    rotations: &[Rotation],
+    node_ids: &[u64],
+    node_names: &[String],
+    cameras: Option<(&[ColmapCamera], &[u32])>,
+) -> Result<()> {
+    let (cams, camera_ids): (Vec<ColmapCamera>, &[u32]) = match cameras {
+        Some((c, ids)) => (c.to_vec(), ids),
+        None => (vec![placeholder_camera()], &[]),
+    };
+    let write = |path: &Path, text: &str| {
+        std::fs::write(path, text).map_err(|e| Error::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })
+    };
+    let images_text = write_images_text_with_cameras(rotations, node_ids, node_names, camera_ids)?;
+    let mut cameras_text = write_cameras_text(&cams);
+    if cameras.is_none() {
+        cameras_text.insert_str(
+            0,
+            "# Written by rotavg: a placeholder camera (the input has no camera models), not a calibration.\n",
+        );
+    }
+    write(images, &images_text)?;
+    write(&dir.join("cameras.txt"), &cameras_text)?;
+    write(&dir.join("points3D.txt"), empty_points3d_text())
 }

@@ -246,6 +246,133 @@ fn rotation_information_trace_inv(t: &mut Tokens<'_>) -> Result<f64> {
     Ok(tr)
 }
 
+/// The pose type of a g2o vertex line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VertexKind {
+    /// `VERTEX_SE3:QUAT id x y z qx qy qz qw`.
+    Se3Quat,
+    /// `VERTEX3 id x y z roll pitch yaw` (TORO).
+    Vertex3,
+    /// `VERTEX_SE2 id x y theta`.
+    Se2,
+}
+
+/// One vertex line of a g2o / TORO file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct G2oVertex {
+    /// The vertex id.
+    pub id: u64,
+    /// This crate's `R_i = W_i^T` (world-to-body) `[F1]`.
+    pub rotation: Rotation,
+    /// The vertex translation `x y z` (`z = 0` for `VERTEX_SE2`).
+    pub translation: [f64; 3],
+    /// The line's pose type.
+    pub kind: VertexKind,
+    /// The 1-based line number.
+    pub line: usize,
+}
+
+/// Parse the tokens after the tag of a vertex line (`VERTEX_SE3:QUAT`, `VERTEX3`,
+/// `VERTEX_SE2`); the one parser of vertex lines ([`read_g2o`], [`read_g2o_vertices`]).
+fn parse_vertex(tag: &str, t: &mut Tokens<'_>, qtol: f64) -> Result<G2oVertex> {
+    let line = t.line;
+    let (kind, id, translation, rotation) = match tag {
+        "VERTEX_SE3:QUAT" => {
+            t.expect_count(&[9], "VERTEX_SE3:QUAT id x y z qx qy qz qw")?;
+            let id = t.next_id("vertex id")?;
+            let xyz = [t.next_f64("x")?, t.next_f64("y")?, t.next_f64("z")?];
+            let wi = quaternion_rotation(t, qtol)?;
+            (VertexKind::Se3Quat, id, xyz, wi.inverse()) // R_i = W_i^T [F1]
+        }
+        "VERTEX3" => {
+            t.expect_count(&[8], "VERTEX3 id x y z roll pitch yaw")?;
+            let id = t.next_id("vertex id")?;
+            let xyz = [t.next_f64("x")?, t.next_f64("y")?, t.next_f64("z")?];
+            let roll = t.next_f64("roll")?;
+            let pitch = t.next_f64("pitch")?;
+            let yaw = t.next_f64("yaw")?;
+            let r = rotation_from_ypr(yaw, pitch, roll).inverse();
+            (VertexKind::Vertex3, id, xyz, r)
+        }
+        "VERTEX_SE2" => {
+            t.expect_count(&[5], "VERTEX_SE2 id x y theta")?;
+            let id = t.next_id("vertex id")?;
+            let xy = [t.next_f64("x")?, t.next_f64("y")?, 0.0];
+            let th = t.next_f64("theta")?;
+            let r = Rotation::from_axis_angle(&Vector3::z_axis(), -th);
+            (VertexKind::Se2, id, xy, r)
+        }
+        other => return Err(t.err(format!("`{other}` is not a vertex tag"))),
+    };
+    Ok(G2oVertex {
+        id,
+        rotation,
+        translation,
+        kind,
+        line,
+    })
+}
+
+/// The vertex lines of a g2o / TORO file (`VERTEX_SE3:QUAT`, `VERTEX3`, `VERTEX_SE2`), in file
+/// order, as an estimate: `R_i = W_i^T` `[F1]`. Edge lines and other tags are skipped (a file
+/// with vertices only, as some tools write an estimate, is fine); a file without vertex lines,
+/// a vertex defined twice or a quaternion that is not a unit one within
+/// [`ReadOptions::quaternion_tolerance`] is an error naming the file and line. At most
+/// [`MAX_RECORDS`] vertices.
+///
+/// ```
+/// use rotavg::io::{g2o::read_g2o_vertices, detect::ReadOptions};
+/// let text = "VERTEX_SE3:QUAT 7 1 2 3 0 0 0.70710678118 0.70710678118\nEDGE3 0 1 0 0 0 0 0 0.1\n";
+/// let v = read_g2o_vertices(text, "est.g2o", &ReadOptions::default())?;
+/// assert_eq!((v[0].id, v[0].translation, v[0].line), (7, [1.0, 2.0, 3.0], 1));
+/// let err = read_g2o_vertices("VERTEX_SE3:QUAT 7 0 0 0 0 0 0 2\n", "est.g2o", &ReadOptions::default());
+/// assert!(err.unwrap_err().to_string().starts_with("est.g2o:1: quaternion"));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn read_g2o_vertices(text: &str, file: &str, options: &ReadOptions) -> Result<Vec<G2oVertex>> {
+    read_g2o_vertices_lines(&mut TextLines::from_text(file, text), options)
+}
+
+/// [`read_g2o_vertices`] line by line (a file or standard input never held whole).
+pub fn read_g2o_vertices_lines(
+    lines: &mut TextLines<'_>,
+    options: &ReadOptions,
+) -> Result<Vec<G2oVertex>> {
+    let file = lines.name().to_owned();
+    let file = file.as_str();
+    let mut out: Vec<G2oVertex> = Vec::new();
+    let mut seen: BTreeMap<u64, usize> = BTreeMap::new();
+    while let Some((ln, line)) = lines.next_content()? {
+        let mut t = Tokens::new(file, ln, line);
+        let tag = t.next_str("tag")?;
+        if !matches!(tag, "VERTEX_SE3:QUAT" | "VERTEX3" | "VERTEX_SE2") {
+            continue;
+        }
+        if out.len() >= MAX_RECORDS {
+            return Err(t.err(format!(
+                "more than {MAX_RECORDS} vertices (rotavg::io::text::MAX_RECORDS)"
+            )));
+        }
+        let v = parse_vertex(tag, &mut t, options.quaternion_tolerance)?;
+        if let Some(first) = seen.insert(v.id, ln) {
+            return Err(t.err(format!(
+                "vertex {} defined twice (first at line {first})",
+                v.id
+            )));
+        }
+        out.push(v);
+    }
+    if out.is_empty() {
+        return Err(Error::parse(
+            Some(file),
+            Some(lines.lines_read().max(1)),
+            "no vertex lines (VERTEX_SE3:QUAT, VERTEX3 or VERTEX_SE2): a g2o estimate holds one \
+             vertex per node",
+        ));
+    }
+    Ok(out)
+}
+
 /// Read a g2o / TORO file (see the module documentation for the conventions).
 ///
 /// ```
@@ -302,15 +429,11 @@ fn read_g2o_limited(
         let mut vertex = None;
         let mut edge = None;
         match tag {
-            "VERTEX_SE3:QUAT" => {
-                t.expect_count(&[9], "VERTEX_SE3:QUAT id x y z qx qy qz qw")?;
-                let id = t.next_id("vertex id")?;
-                for w in ["x", "y", "z"] {
-                    t.next_f64(w)?;
-                }
-                let wi = quaternion_rotation(t, qtol)?;
-                vertex = Some((id, wi.inverse())); // R_i = W_i^T [F1]
-                seen_3d = true;
+            "VERTEX_SE3:QUAT" | "VERTEX3" | "VERTEX_SE2" => {
+                let v = parse_vertex(tag, t, qtol)?;
+                seen_3d |= v.kind != VertexKind::Se2;
+                seen_2d |= v.kind == VertexKind::Se2;
+                vertex = Some((v.id, v.rotation));
             }
             "EDGE_SE3:QUAT" => {
                 t.expect_count(
@@ -329,18 +452,6 @@ fn read_g2o_limited(
                     1.0
                 };
                 edge = Some((i, j, z.inverse(), weight)); // R_ij = Z_ij^T [F1]
-                seen_3d = true;
-            }
-            "VERTEX3" => {
-                t.expect_count(&[8], "VERTEX3 id x y z roll pitch yaw")?;
-                let id = t.next_id("vertex id")?;
-                for w in ["x", "y", "z"] {
-                    t.next_f64(w)?;
-                }
-                let roll = t.next_f64("roll")?;
-                let pitch = t.next_f64("pitch")?;
-                let yaw = t.next_f64("yaw")?;
-                vertex = Some((id, rotation_from_ypr(yaw, pitch, roll).inverse()));
                 seen_3d = true;
             }
             "EDGE3" => {
@@ -363,15 +474,6 @@ fn read_g2o_limited(
                 };
                 edge = Some((i, j, rotation_from_ypr(yaw, pitch, roll).inverse(), weight));
                 seen_3d = true;
-            }
-            "VERTEX_SE2" => {
-                t.expect_count(&[5], "VERTEX_SE2 id x y theta")?;
-                let id = t.next_id("vertex id")?;
-                t.next_f64("x")?;
-                t.next_f64("y")?;
-                let th = t.next_f64("theta")?;
-                vertex = Some((id, Rotation::from_axis_angle(&Vector3::z_axis(), -th)));
-                seen_2d = true;
             }
             "EDGE_SE2" => {
                 t.expect_count(
@@ -535,6 +637,173 @@ pub fn write_g2o(problem: &MultipleProblem, estimate: Option<&[Rotation]>) -> St
             e.i,
             e.j,
             quat(&e.rotation.inverse())
+        );
+    }
+    s
+}
+
+/// The g2o vertex line of `kind` for vertex `id` with the translation tokens `xyz` (as read,
+/// or numbers) and this crate's rotation `r` (`W = R^T` `[F1]`; `VERTEX3`: roll pitch yaw of
+/// `W = Rz(yaw) Ry(pitch) Rx(roll)`; `VERTEX_SE2`: the heading of `W`, about z).
+fn vertex_line(kind: VertexKind, id: u64, xyz: &[&str], r: &Rotation) -> String {
+    let w = r.inverse();
+    match kind {
+        VertexKind::Se3Quat => {
+            let q = UnitQuaternion::from_rotation_matrix(&w);
+            let q = q.quaternion();
+            format!(
+                "VERTEX_SE3:QUAT {id} {} {} {} {} {}",
+                xyz.join(" "),
+                q.i + 0.0,
+                q.j + 0.0,
+                q.k + 0.0,
+                q.w + 0.0
+            )
+        }
+        VertexKind::Vertex3 => {
+            let (roll, pitch, yaw) = w.euler_angles();
+            format!("VERTEX3 {id} {} {roll} {pitch} {yaw}", xyz.join(" "))
+        }
+        VertexKind::Se2 => {
+            let m = w.matrix();
+            let theta = m[(1, 0)].atan2(m[(0, 0)]);
+            format!("VERTEX_SE2 {id} {} {theta}", xyz.join(" "))
+        }
+    }
+}
+
+/// Write an estimate in the layout of the g2o / TORO file it was computed from (read again
+/// line by line from `input`): every line as read (edges, comments, other tags, and the
+/// translations of the vertices) except that each vertex line of a node in `estimate` (by
+/// vertex id; this crate's `R_i`) gets the estimate's rotation, in the vertex's own type
+/// (`VERTEX_SE3:QUAT`, `VERTEX3`, `VERTEX_SE2`). Nodes of `estimate` without a vertex line get
+/// one (translation 0) at the top, in the file's vertex type (so vertices precede the edges,
+/// as g2o needs). Reading the result with [`read_g2o`] gives the same edges and the estimate as
+/// [`crate::io::detect::LoadedGraph::initial`].
+///
+/// ```
+/// use rotavg::io::{g2o::{read_g2o, write_g2o_like}, detect::ReadOptions, text::TextLines};
+/// use rotavg::so3::exp;
+/// use std::collections::BTreeMap;
+/// let input = "VERTEX_SE3:QUAT 4 1.5 2 3 0 0 0 1\nEDGE3 4 9 1 0 0 0 0 0.1\n";
+/// let r = exp(&nalgebra::Vector3::new(0.0, 0.0, 0.3));
+/// let estimate = BTreeMap::from([(4, rotavg::Rotation::identity()), (9, r)]);
+/// let out = write_g2o_like(&mut TextLines::from_text("in.g2o", input), &estimate)?;
+/// assert!(out.contains("VERTEX_SE3:QUAT 4 1.5 2 3 0 0 0 1\n") && out.ends_with("EDGE3 4 9 1 0 0 0 0 0.1\n"));
+/// let g = read_g2o(&out, "out.g2o", &ReadOptions::default())?;
+/// assert!((g.initial.unwrap()[1].angle() - 0.3).abs() < 1e-12);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn write_g2o_like(
+    input: &mut TextLines<'_>,
+    estimate: &BTreeMap<u64, Rotation>,
+) -> Result<String> {
+    let mut body = String::new();
+    let mut written: std::collections::BTreeSet<u64> = std::collections::BTreeSet::new();
+    let (mut kinds_3d, mut kinds_2d, mut vertex3) = (0usize, 0usize, 0usize);
+    let file = input.name().to_owned();
+    while let Some((ln, line)) = input.next_line()? {
+        let trimmed = line.trim();
+        let toks: Vec<&str> = trimmed.split_whitespace().collect();
+        let kind = match toks.first().copied() {
+            Some("VERTEX_SE3:QUAT") => Some(VertexKind::Se3Quat),
+            Some("VERTEX3") => Some(VertexKind::Vertex3),
+            Some("VERTEX_SE2") => Some(VertexKind::Se2),
+            _ => None,
+        };
+        match kind {
+            Some(VertexKind::Se2) => kinds_2d += 1,
+            Some(VertexKind::Vertex3) => vertex3 += 1,
+            Some(VertexKind::Se3Quat) => kinds_3d += 1,
+            None => {}
+        }
+        let id = toks.get(1).and_then(|t| t.parse::<u64>().ok());
+        let (Some(kind), Some(id)) = (kind, id) else {
+            body.push_str(line);
+            body.push('\n');
+            continue;
+        };
+        let Some(r) = estimate.get(&id) else {
+            body.push_str(line);
+            body.push('\n');
+            continue;
+        };
+        let n_xyz = if kind == VertexKind::Se2 { 2 } else { 3 };
+        let Some(xyz) = toks.get(2..2 + n_xyz) else {
+            return Err(Error::parse(
+                Some(&file),
+                Some(ln),
+                "a vertex line without its translation (the file changed since it was read?)",
+            ));
+        };
+        body.push_str(&vertex_line(kind, id, xyz, r));
+        body.push('\n');
+        written.insert(id);
+    }
+    let kind = if kinds_2d > kinds_3d + vertex3 {
+        VertexKind::Se2
+    } else if vertex3 > kinds_3d {
+        VertexKind::Vertex3
+    } else {
+        VertexKind::Se3Quat
+    };
+    let mut head = String::new();
+    for (id, r) in estimate.iter().filter(|(id, _)| !written.contains(id)) {
+        let zeros: &[&str] = if kind == VertexKind::Se2 {
+            &["0", "0"]
+        } else {
+            &["0", "0", "0"]
+        };
+        head.push_str(&vertex_line(kind, *id, zeros, r));
+        head.push('\n');
+    }
+    head.push_str(&body);
+    Ok(head)
+}
+
+/// [`write_g2o`] with the file's node ids (`node_ids[k]` names node `k`) instead of `0..n`.
+///
+/// ```
+/// use rotavg::io::{g2o::{read_g2o, write_g2o_with_ids}, detect::ReadOptions};
+/// use rotavg::multiple::{Edge, MultipleProblem};
+/// let p = MultipleProblem::new(2, vec![Edge { i: 0, j: 1, rotation: rotavg::Rotation::identity(), weight: 2.0 }])?;
+/// let text = write_g2o_with_ids(&p, Some(&[rotavg::Rotation::identity(); 2]), &[10, 30]);
+/// let g = read_g2o(&text, "t.g2o", &ReadOptions::default())?;
+/// assert_eq!(g.node_ids, vec![10, 30]);
+/// assert!((g.problem.edges()[0].weight - 2.0).abs() < 1e-12);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn write_g2o_with_ids(
+    problem: &MultipleProblem,
+    estimate: Option<&[Rotation]>,
+    node_ids: &[u64],
+) -> String {
+    let id = |k: usize| node_ids.get(k).copied().unwrap_or(k as u64);
+    let mut s = String::new();
+    if let Some(est) = estimate {
+        for (k, r) in est.iter().enumerate() {
+            s.push_str(&vertex_line(
+                VertexKind::Se3Quat,
+                id(k),
+                &["0", "0", "0"],
+                r,
+            ));
+            s.push('\n');
+        }
+    }
+    for e in problem.edges() {
+        let a = 2.0 * e.weight;
+        let q = UnitQuaternion::from_rotation_matrix(&e.rotation.inverse());
+        let q = q.quaternion();
+        let _ = writeln!(
+            s,
+            "EDGE_SE3:QUAT {} {} 0 0 0 {} {} {} {} 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 {a} 0 0 {a} 0 {a}",
+            id(e.i),
+            id(e.j),
+            q.i,
+            q.j,
+            q.k,
+            q.w
         );
     }
     s

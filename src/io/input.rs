@@ -121,7 +121,8 @@ pub fn load_view_graph(
 
 /// Read a problem of any kind from the file at `path` (`-`: standard input), as
 /// [`read_problem`] but without holding the text of a view graph: the kind and format come
-/// from the first block; g2o and 1DSfM files are streamed
+/// from the first block; a COLMAP database (or a folder holding `database.db`) is a view
+/// graph ([`crate::io::colmap::read_colmap_database`]); g2o and 1DSfM files are streamed
 /// ([`crate::io::detect::read_graph_stream`]), JSON is read whole (limit
 /// [`crate::io::text::MAX_INPUT_BYTES`]).
 ///
@@ -140,6 +141,18 @@ pub fn load_problem(
     format: GraphFormat,
     options: &ReadOptions,
 ) -> Result<LoadedProblem> {
+    // a COLMAP database (a file, or a folder holding database.db) is a view graph
+    if path != "-"
+        && (format == GraphFormat::Colmap
+            || (format == GraphFormat::Auto
+                && crate::io::colmap::find_database(Path::new(path)).is_some()))
+    {
+        return Ok(LoadedProblem::Multiple(load_graph(
+            Path::new(path),
+            format,
+            options,
+        )?));
+    }
     let mut stream = TextStream::open(path)?;
     let graph_format = match format {
         GraphFormat::Auto => detect_stream_format(&mut stream)?,
@@ -562,19 +575,432 @@ pub fn load_conjugate_with(
     })
 }
 
-/// Ground truth for the nodes of `graph` (entry `k` for node `k`, `None` where unknown) from
-/// `text`, matched by file id:
-/// * a JSON estimate (`.json`, or text starting with `{`): one rotation per node, in node order;
-/// * g2o (`.g2o`, or a first token that is a tag): the vertex rotations;
+/// The formats of a file of absolute rotations ([`load_rotations_for_nodes`]): estimates,
+/// initial estimates and ground truth.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EstimateFormat {
+    /// JSON `{"rotations": [...]}` / `{"estimate": [...]}` (node order), or rotavg's own
+    /// `--output` `{"node_ids": [...], "rotations": [...]}` (matched by id).
+    Json,
+    /// g2o / TORO vertex lines (`VERTEX_SE3:QUAT`, `VERTEX3`, `VERTEX_SE2`), by vertex id.
+    G2o,
+    /// A COLMAP `images.txt` (alone or in a sparse model folder).
+    ColmapText,
+    /// A COLMAP `images.bin` (alone or in a sparse model folder).
+    ColmapBinary,
+    /// The pose priors of a COLMAP database's `images` table.
+    ColmapDatabase,
+    /// A Bundler `.out` file (camera `k` is id `k`).
+    Bundler,
+    /// A rotation list (`R11 .. R33` per line, or `id R11 .. R33`).
+    RotationList,
+}
+
+impl EstimateFormat {
+    /// A few words for messages, e.g. `g2o vertex lines`.
+    pub fn describe(self) -> &'static str {
+        match self {
+            EstimateFormat::Json => "JSON estimate",
+            EstimateFormat::G2o => "g2o vertex lines",
+            EstimateFormat::ColmapText => "COLMAP images.txt",
+            EstimateFormat::ColmapBinary => "COLMAP images.bin",
+            EstimateFormat::ColmapDatabase => "COLMAP database pose priors",
+            EstimateFormat::Bundler => "Bundler cameras",
+            EstimateFormat::RotationList => "rotation list",
+        }
+    }
+}
+
+/// How the entries of a rotations file were matched to the nodes of a graph.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MatchedBy {
+    /// Entry `k` is node `k` (a JSON list without `node_ids`).
+    Order,
+    /// By the node's file id (g2o vertex id, COLMAP `image_id`, Bundler camera index, ...).
+    Id,
+    /// By image name (a COLMAP model against a graph with names, e.g. from a COLMAP database).
+    Name,
+}
+
+/// Absolute rotations read from a file and matched to the nodes of a graph
+/// ([`load_rotations_for_nodes`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodeRotations {
+    /// The file read (for a COLMAP model folder, its `images.bin` / `images.txt`).
+    pub file: String,
+    /// What the file is.
+    pub format: EstimateFormat,
+    /// How entries were matched to nodes.
+    pub matched_by: MatchedBy,
+    /// The rotation of each node (`None`: not in the file); with [`MatchedBy::Order`] the
+    /// file's list as it is (its length may differ from the graph's number of nodes).
+    pub rotations: Vec<Option<Rotation>>,
+    /// The entries of the file that match no node (`id 12`, `name x.jpg`), in file order.
+    pub unmatched: Vec<String>,
+}
+
+impl NodeRotations {
+    /// Every node's rotation, or an error naming the file, how it was matched and the nodes
+    /// it lacks (`what` starts the message, e.g. `estimate`).
+    ///
+    /// ```
+    /// use rotavg::io::input::{read_rotations_for_nodes, Input};
+    /// use rotavg::io::detect::{read_graph, GraphFormat, ReadOptions};
+    /// let graph = read_graph("3 7 1 0 0 0 1 0 0 0 1\n", "EGs.txt", GraphFormat::Auto, &ReadOptions::default())?;
+    /// let input = Input::new("est.g2o", "VERTEX_SE3:QUAT 7 0 0 0 0 0 0 1\n");
+    /// let r = read_rotations_for_nodes(&input, &graph, &ReadOptions::default())?;
+    /// let err = r.require_all(&graph, "estimate").unwrap_err().to_string();
+    /// assert!(err.starts_with("est.g2o: estimate: 1 of 2 nodes have no rotation"), "{err}");
+    /// assert!(err.contains("node 0 (id 3)"), "{err}");
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn require_all(self, graph: &LoadedGraph, what: &str) -> Result<Vec<Rotation>> {
+        let n = graph.node_ids.len();
+        if self.matched_by == MatchedBy::Order && self.rotations.len() != n {
+            return Err(Error::parse(
+                Some(&self.file),
+                None,
+                format!(
+                    "{what}: the file has {} rotations, the problem has {n} nodes (a JSON \
+                     list holds one rotation per node, in node order; rotavg's --output adds \
+                     \"node_ids\" to match by id)",
+                    self.rotations.len()
+                ),
+            ));
+        }
+        let missing: Vec<usize> = (0..n)
+            .filter(|&k| self.rotations.get(k).copied().flatten().is_none())
+            .collect();
+        if missing.is_empty() {
+            return Ok(self.rotations.into_iter().flatten().collect());
+        }
+        const SHOWN: usize = 5;
+        let label = |k: usize| {
+            let name = graph
+                .node_names
+                .get(k)
+                .filter(|s| !s.is_empty())
+                .map(|s| format!(", name {s}"))
+                .unwrap_or_default();
+            format!("node {k} (id {}{name})", graph.node_ids[k])
+        };
+        let mut list: Vec<String> = missing.iter().take(SHOWN).map(|&k| label(k)).collect();
+        if missing.len() > SHOWN {
+            list.push(format!("... ({} more)", missing.len() - SHOWN));
+        }
+        let by = match self.matched_by {
+            MatchedBy::Name => "image name",
+            MatchedBy::Id => "id",
+            MatchedBy::Order => "order",
+        };
+        let hint = match self.unmatched.first() {
+            Some(u) if missing.len() == n => format!(
+                "; no entry of the file matches a node (the file has e.g. {u}: another numbering or \
+                 naming?)"
+            ),
+            _ => String::new(),
+        };
+        Err(Error::parse(
+            Some(&self.file),
+            None,
+            format!(
+                "{what}: {} of {n} nodes have no rotation in the file ({}, matched by {by}): {}{hint}",
+                missing.len(),
+                self.format.describe(),
+                list.join(", ")
+            ),
+        ))
+    }
+
+    /// A remark when some entries of the file match no node (they are not used), e.g.
+    /// `est.g2o: 2 vertex / image entries match no node of the problem and are not used: id 40, id 41`.
+    pub fn unmatched_warning(&self) -> Option<String> {
+        if self.unmatched.is_empty() {
+            return None;
+        }
+        const SHOWN: usize = 5;
+        let mut list: Vec<&str> = self
+            .unmatched
+            .iter()
+            .take(SHOWN)
+            .map(String::as_str)
+            .collect();
+        let more = format!("... ({} more)", self.unmatched.len().saturating_sub(SHOWN));
+        if self.unmatched.len() > SHOWN {
+            list.push(&more);
+        }
+        Some(format!(
+            "{}: {} entries ({}) match no node of the problem and are not used: {}",
+            self.file,
+            self.unmatched.len(),
+            self.format.describe(),
+            list.join(", ")
+        ))
+    }
+}
+
+/// The entries of a rotations file before they are matched to nodes.
+enum Entries {
+    /// A list in node order.
+    InOrder(Vec<Rotation>),
+    /// `(id, rotation)` pairs.
+    ById(Vec<(u64, Rotation)>),
+    /// Entry `id` is the rotation of file id `id` (`None`: unknown).
+    Indexed(Vec<Option<Rotation>>),
+    /// COLMAP images: by name when the graph has names, else by id.
+    Images(Vec<crate::io::colmap::ColmapImage>),
+}
+
+fn match_entries(
+    entries: Entries,
+    file: &str,
+    format: EstimateFormat,
+    graph: &LoadedGraph,
+) -> NodeRotations {
+    use std::collections::{BTreeMap, BTreeSet};
+    let node_ids: BTreeSet<u64> = graph.node_ids.iter().copied().collect();
+    let (matched_by, rotations, unmatched) = match entries {
+        Entries::InOrder(rs) => (MatchedBy::Order, rs.into_iter().map(Some).collect(), vec![]),
+        Entries::ById(list) => {
+            let unmatched = list
+                .iter()
+                .filter(|(id, _)| !node_ids.contains(id))
+                .map(|(id, _)| format!("id {id}"))
+                .collect();
+            let by_id: BTreeMap<u64, Rotation> = list.into_iter().collect();
+            let rs = graph
+                .node_ids
+                .iter()
+                .map(|id| by_id.get(id).copied())
+                .collect();
+            (MatchedBy::Id, rs, unmatched)
+        }
+        Entries::Indexed(by_id) => {
+            let unmatched = by_id
+                .iter()
+                .enumerate()
+                .filter(|(id, r)| r.is_some() && !node_ids.contains(&(*id as u64)))
+                .map(|(id, _)| format!("id {id}"))
+                .collect();
+            (
+                MatchedBy::Id,
+                truth_for_nodes(&by_id, &graph.node_ids),
+                unmatched,
+            )
+        }
+        Entries::Images(images) => {
+            let rs = rotations_for_nodes(&images, graph);
+            let by_name =
+                graph.node_names.len() == graph.node_ids.len() && !graph.node_names.is_empty();
+            let unmatched = if by_name {
+                let names: BTreeSet<&str> = graph.node_names.iter().map(String::as_str).collect();
+                images
+                    .iter()
+                    .filter(|im| !names.contains(im.name.as_str()))
+                    .map(|im| format!("name {}", im.name))
+                    .collect()
+            } else {
+                images
+                    .iter()
+                    .filter(|im| !node_ids.contains(&u64::from(im.image_id)))
+                    .map(|im| format!("image_id {}", im.image_id))
+                    .collect()
+            };
+            let by = if by_name {
+                MatchedBy::Name
+            } else {
+                MatchedBy::Id
+            };
+            (by, rs, unmatched)
+        }
+    };
+    NodeRotations {
+        file: file.to_string(),
+        format,
+        matched_by,
+        rotations,
+        unmatched,
+    }
+}
+
+#[derive(Deserialize)]
+struct JsonNodeIds {
+    node_ids: Option<Vec<u64>>,
+}
+
+/// Absolute rotations for the nodes of `graph` from the text of a file
+/// ([`load_rotations_for_nodes`] reads paths, folders, databases and binary files too):
+/// * COLMAP `images.txt` (a name ending in `images.txt`, or COLMAP's header line): by image
+///   name when the graph has names (a COLMAP database), else by image id
+///   ([`crate::io::colmap::rotations_for_nodes`]);
+/// * JSON (`.json`, or text starting with `{`): `{"rotations": [...]}` or `{"estimate": [...]}`
+///   in node order, or with `"node_ids"` (rotavg's `--output`) by id;
+/// * g2o / TORO (`.g2o`, or a first token that is a tag): the vertex lines, by vertex id
+///   ([`crate::io::g2o::read_g2o_vertices`]; edge lines are skipped);
 /// * Bundler (`.out`, or a `# Bundle` header): camera `k` is file id `k`;
-/// * COLMAP `images.txt` (a name ending in `images.txt`, or COLMAP's header line): matched by
-///   image name when the graph has names (a COLMAP database), else by image id
-///   ([`crate::io::colmap::rotations_for_nodes`]); [`load_ground_truth`] also reads
-///   `images.bin`;
 /// * otherwise a rotation list: 9 numbers per line (line `k` = file id `k`), or `id R11 .. R33`
-///   lines (world-to-camera, as many rotation-averaging tools write them)
-///   ([`crate::io::sfm::read_rotation_list`]). An all-zero rotation means "no ground truth for
-///   this camera".
+///   lines ([`crate::io::sfm::read_rotation_list`]; an all-zero rotation means "unknown").
+///
+/// Every rotation is checked as it is read (errors name the file and line).
+///
+/// ```
+/// use rotavg::io::input::{read_rotations_for_nodes, Input, MatchedBy};
+/// use rotavg::io::detect::{read_graph, GraphFormat, ReadOptions};
+/// let graph = read_graph("3 7 1 0 0 0 1 0 0 0 1\n", "EGs.txt", GraphFormat::Auto, &ReadOptions::default())?;
+/// let input = Input::new("est.g2o", "VERTEX_SE2 7 0 0 0.5\nVERTEX_SE2 3 0 0 0\nVERTEX_SE2 9 0 0 0\n");
+/// let r = read_rotations_for_nodes(&input, &graph, &ReadOptions::default())?;
+/// assert_eq!(r.matched_by, MatchedBy::Id);
+/// assert!((r.rotations[1].unwrap().angle() - 0.5).abs() < 1e-15); // node 1 is id 7
+/// assert_eq!(r.unmatched, vec!["id 9".to_string()]);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn read_rotations_for_nodes(
+    input: &Input,
+    graph: &LoadedGraph,
+    options: &ReadOptions,
+) -> Result<NodeRotations> {
+    let (text, file) = (input.text.as_str(), input.name.as_str());
+    let lower = file.to_ascii_lowercase();
+    let trimmed = text.trim_start();
+    let (entries, format) = if is_images_text(file, text) {
+        (
+            Entries::Images(read_images_text(text, file, options)?),
+            EstimateFormat::ColmapText,
+        )
+    } else if lower.ends_with(".json") || trimmed.starts_with('{') {
+        let rs = read_rotations_estimate(text, file, options)?;
+        let ids = serde_json::from_str::<JsonNodeIds>(text)
+            .ok()
+            .and_then(|j| j.node_ids);
+        let entries = match ids {
+            Some(ids) if ids.len() != rs.len() => {
+                return Err(Error::parse(
+                    Some(file),
+                    None,
+                    format!(
+                        "\"node_ids\" has {} entries, \"rotations\" {}: one id per rotation",
+                        ids.len(),
+                        rs.len()
+                    ),
+                ));
+            }
+            Some(ids) => {
+                let mut seen = std::collections::BTreeSet::new();
+                if let Some(id) = ids.iter().find(|&&id| !seen.insert(id)) {
+                    return Err(Error::parse(
+                        Some(file),
+                        None,
+                        format!("\"node_ids\": id {id} appears more than once"),
+                    ));
+                }
+                Entries::ById(ids.into_iter().zip(rs).collect())
+            }
+            None => Entries::InOrder(rs),
+        };
+        (entries, EstimateFormat::Json)
+    } else {
+        let first_token = crate::io::content_lines(text)
+            .next()
+            .and_then(|(_, l)| l.split_whitespace().next())
+            .unwrap_or("");
+        if lower.ends_with(".g2o") || first_token.starts_with(|c: char| c.is_ascii_alphabetic()) {
+            let vertices = crate::io::g2o::read_g2o_vertices(text, file, options)?;
+            (
+                Entries::ById(vertices.into_iter().map(|v| (v.id, v.rotation)).collect()),
+                EstimateFormat::G2o,
+            )
+        } else if lower.ends_with(".out") || trimmed.starts_with("# Bundle") {
+            (
+                Entries::Indexed(read_bundler(text, file, options)?),
+                EstimateFormat::Bundler,
+            )
+        } else {
+            (
+                Entries::Indexed(read_rotation_list(text, file, options)?),
+                EstimateFormat::RotationList,
+            )
+        }
+    };
+    Ok(match_entries(entries, file, format, graph))
+}
+
+/// Absolute rotations for the nodes of `graph` from `path`, in any format rotavg reads or
+/// writes: a COLMAP sparse model folder (its `images.bin`, else `images.txt`), `images.bin`,
+/// a COLMAP database (the pose priors of its `images` table when every image has one;
+/// otherwise an error: a database holds no estimated poses), or a text file
+/// ([`read_rotations_for_nodes`]: COLMAP `images.txt`, JSON, g2o vertices, Bundler, rotation
+/// list). `-` reads standard input (text formats). The one loader of `--estimate` (`rotavg
+/// certify`), `--init` and `--ground-truth`.
+///
+/// ```
+/// use rotavg::io::input::{load_rotations_for_nodes, EstimateFormat, MatchedBy};
+/// use rotavg::io::detect::{read_graph, GraphFormat, ReadOptions};
+/// let graph = read_graph("3 7 1 0 0 0 1 0 0 0 1\n", "EGs.txt", GraphFormat::Auto, &ReadOptions::default())?;
+/// // A sparse model folder holding images.txt (COLMAP's cam_from_world, by image id).
+/// let dir = std::env::temp_dir().join(format!("rotavg-doc-model-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// std::fs::write(dir.join("images.txt"), "3 1 0 0 0 0 0 0 1 a.jpg\n\n7 0 0 0 1 0 0 0 1 b.jpg\n\n").unwrap();
+/// let r = load_rotations_for_nodes(dir.to_str().unwrap(), &graph, &ReadOptions::default());
+/// std::fs::remove_dir_all(&dir).unwrap();
+/// let r = r?;
+/// assert_eq!((r.format, r.matched_by), (EstimateFormat::ColmapText, MatchedBy::Id));
+/// assert!((r.rotations[1].unwrap().angle() - std::f64::consts::PI).abs() < 1e-12);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn load_rotations_for_nodes(
+    path: &str,
+    graph: &LoadedGraph,
+    options: &ReadOptions,
+) -> Result<NodeRotations> {
+    use crate::io::colmap::{find_model_images, is_sqlite_file, read_database_poses};
+    if path != "-" {
+        let p = Path::new(path);
+        let file = if p.is_dir() {
+            match find_model_images(p)? {
+                crate::io::colmap::ModelFile::Images(f) => f,
+                crate::io::colmap::ModelFile::Database(db) => {
+                    let images = read_database_poses(&db, options)?;
+                    let name = db.display().to_string();
+                    return Ok(match_entries(
+                        Entries::Images(images),
+                        &name,
+                        EstimateFormat::ColmapDatabase,
+                        graph,
+                    ));
+                }
+            }
+        } else if is_sqlite_file(p) {
+            let images = read_database_poses(p, options)?;
+            return Ok(match_entries(
+                Entries::Images(images),
+                path,
+                EstimateFormat::ColmapDatabase,
+                graph,
+            ));
+        } else {
+            p.to_path_buf()
+        };
+        let name = file.display().to_string();
+        crate::io::colmap::refuse_other_model_file(&name)?;
+        if is_images_binary(&name) {
+            let images = load_images(&name, options)?;
+            return Ok(match_entries(
+                Entries::Images(images),
+                &name,
+                EstimateFormat::ColmapBinary,
+                graph,
+            ));
+        }
+        return read_rotations_for_nodes(&read_input(&name)?, graph, options);
+    }
+    read_rotations_for_nodes(&read_input(path)?, graph, options)
+}
+
+/// Ground truth for the nodes of `graph` (entry `k` for node `k`, `None` where unknown) from
+/// `text` ([`read_rotations_for_nodes`]); a JSON list without `"node_ids"` must have one rotation
+/// per node.
 ///
 /// ```
 /// use rotavg::io::input::read_ground_truth;
@@ -591,54 +1017,29 @@ pub fn read_ground_truth(
     graph: &LoadedGraph,
     options: &ReadOptions,
 ) -> Result<Vec<Option<Rotation>>> {
-    let lower = file.to_ascii_lowercase();
-    let trimmed = text.trim_start();
-    if is_images_text(file, text) {
-        return Ok(rotations_for_nodes(
-            &read_images_text(text, file, options)?,
-            graph,
-        ));
-    }
-    if lower.ends_with(".json") || trimmed.starts_with('{') {
-        let rs = read_rotations_estimate(text, file, options)?;
-        if rs.len() != graph.node_ids.len() {
-            return Err(Error::parse(
-                Some(file),
-                None,
-                format!(
-                    "ground truth has {} rotations, the graph has {} nodes",
-                    rs.len(),
-                    graph.node_ids.len()
-                ),
-            ));
-        }
-        return Ok(rs.into_iter().map(Some).collect());
-    }
-    let first_token = crate::io::content_lines(text)
-        .next()
-        .and_then(|(_, l)| l.split_whitespace().next())
-        .unwrap_or("");
-    if lower.ends_with(".g2o") || first_token.starts_with(|c: char| c.is_ascii_alphabetic()) {
-        let gt = read_graph(text, file, GraphFormat::G2o, options)?;
-        let init = gt.initial.as_ref();
-        return Ok(graph
-            .node_ids
-            .iter()
-            .map(|&id| {
-                let k = gt.node_of_id(id)?;
-                init.and_then(|v| v.get(k).copied())
-            })
-            .collect());
-    }
-    let by_id = if lower.ends_with(".out") || trimmed.starts_with("# Bundle") {
-        read_bundler(text, file, options)?
-    } else {
-        read_rotation_list(text, file, options)?
-    };
-    Ok(truth_for_nodes(&by_id, &graph.node_ids))
+    truth_of(
+        read_rotations_for_nodes(&Input::new(file, text), graph, options)?,
+        graph,
+    )
 }
 
-/// [`read_ground_truth`] from the file at `path` (or standard input for `-`).
+fn truth_of(r: NodeRotations, graph: &LoadedGraph) -> Result<Vec<Option<Rotation>>> {
+    if r.matched_by == MatchedBy::Order && r.rotations.len() != graph.node_ids.len() {
+        return Err(Error::parse(
+            Some(&r.file),
+            None,
+            format!(
+                "ground truth has {} rotations, the graph has {} nodes",
+                r.rotations.len(),
+                graph.node_ids.len()
+            ),
+        ));
+    }
+    Ok(r.rotations)
+}
+
+/// [`read_ground_truth`] from `path` (or standard input for `-`), in every format of
+/// [`load_rotations_for_nodes`] (COLMAP model folders and `images.bin` too).
 ///
 /// ```
 /// use rotavg::io::input::load_ground_truth;
@@ -656,17 +1057,13 @@ pub fn load_ground_truth(
     graph: &LoadedGraph,
     options: &ReadOptions,
 ) -> Result<Vec<Option<Rotation>>> {
-    if is_images_binary(path) {
-        return Ok(rotations_for_nodes(&load_images(path, options)?, graph));
-    }
-    let input = read_input(path)?;
-    read_ground_truth(&input.text, &input.name, graph, options)
+    truth_of(load_rotations_for_nodes(path, graph, options)?, graph)
 }
 
-/// An initial estimate for the nodes of `graph` (the graph as read), from the file at `path`:
-/// a COLMAP sparse model (`images.txt`, `images.bin`: matched as in [`read_ground_truth`]; every
-/// node must have an image) or a JSON estimate ([`load_estimate`], one rotation per node in node
-/// order, or per kept node).
+/// An initial estimate for the nodes of `graph` (the graph as read), from `path`, in every
+/// format of [`load_rotations_for_nodes`]: every node must have a rotation, except that a JSON
+/// list without `"node_ids"` is returned as it is (one rotation per node in node order, or per
+/// kept node: [`ComponentSelection::estimate_for_kept`]).
 ///
 /// ```
 /// use rotavg::io::input::load_initial_estimate;
@@ -685,45 +1082,97 @@ pub fn load_initial_estimate(
     graph: &LoadedGraph,
     options: &ReadOptions,
 ) -> Result<Vec<Rotation>> {
-    let per_node = if is_images_binary(path) {
-        Some(rotations_for_nodes(&load_images(path, options)?, graph))
-    } else {
-        let input = read_input(path)?;
-        if is_images_text(&input.name, &input.text) {
-            Some(rotations_for_nodes(
-                &read_images_text(&input.text, &input.name, options)?,
-                graph,
-            ))
-        } else {
-            return LoadedEstimate {
-                estimate: read_estimate(&input.text, &input.name, options)?,
-                name: input.name,
-            }
-            .into_rotations();
+    let r = load_rotations_for_nodes(path, graph, options)?;
+    if r.matched_by == MatchedBy::Order {
+        return Ok(r.rotations.into_iter().flatten().collect());
+    }
+    r.require_all(graph, "initial estimate")
+}
+
+/// An estimate of every node of `graph`, as `rotavg certify` reads `--estimate`: any format of
+/// [`load_rotations_for_nodes`] (JSON, g2o vertices, COLMAP `images.txt` / `images.bin` / a
+/// sparse model folder / database pose priors, Bundler `.out`, rotation lists), matched by id,
+/// or by image name for a COLMAP model against a graph with names. A node without a rotation
+/// is an error naming the file and the nodes; entries that match no node are not used and
+/// reported by [`NodeRotations::unmatched_warning`] (kept in [`GraphEstimate::unmatched`]).
+///
+/// ```
+/// use rotavg::io::input::{load_estimate_for, MatchedBy};
+/// use rotavg::io::detect::{read_graph, GraphFormat, ReadOptions};
+/// use rotavg::so3::{angle_between, exp};
+/// use rotavg::nalgebra::Vector3;
+/// // A triangle of g2o nodes 10, 20, 30 whose edges agree with the rotations R below.
+/// let r = [exp(&Vector3::new(0.1, 0.0, 0.0)), exp(&Vector3::new(0.0, 0.2, 0.0)), exp(&Vector3::new(0.0, 0.0, 0.3))];
+/// let quat = |m: &rotavg::Rotation| { let q = rotavg::nalgebra::UnitQuaternion::from_rotation_matrix(m); format!("{} {} {} {}", q.i, q.j, q.k, q.w) };
+/// let mut problem = String::new();
+/// for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+///     // g2o edges measure W_i^T W_j with W = R^T
+///     problem += &format!("EDGE_SE3:QUAT {} {} 0 0 0 {}\n", 10 * (a + 1), 10 * (b + 1), quat(&(r[a] * r[b].inverse())));
+/// }
+/// let graph = read_graph(&problem, "p.g2o", GraphFormat::Auto, &ReadOptions::default())?;
+/// // Another tool's answer: vertices in another order, with translations.
+/// let mut est = String::new();
+/// for k in [2, 0, 1] {
+///     est += &format!("VERTEX_SE3:QUAT {} 1 2 3 {}\n", 10 * (k + 1), quat(&r[k].inverse()));
+/// }
+/// let path = std::env::temp_dir().join(format!("rotavg-doc-est-{}.g2o", std::process::id()));
+/// std::fs::write(&path, est).unwrap();
+/// let e = load_estimate_for(path.to_str().unwrap(), &graph, &ReadOptions::default());
+/// std::fs::remove_file(&path).unwrap();
+/// let e = e?;
+/// assert_eq!(e.matched_by, MatchedBy::Id);
+/// assert!((0..3).all(|k| angle_between(&e.rotations[k], &r[k]) < 1e-9));
+/// assert!(graph.problem.chordal_cost(&e.rotations) < 1e-12);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn load_estimate_for(
+    path: &str,
+    graph: &LoadedGraph,
+    options: &ReadOptions,
+) -> Result<GraphEstimate> {
+    let r = load_rotations_for_nodes(path, graph, options)?;
+    let warning = r.unmatched_warning();
+    let (file, format, matched_by, unmatched) =
+        (r.file.clone(), r.format, r.matched_by, r.unmatched.clone());
+    let rotations = r.require_all(graph, "estimate")?;
+    Ok(GraphEstimate {
+        name: path.to_string(),
+        file,
+        format,
+        matched_by,
+        rotations,
+        unmatched,
+        warning,
+    })
+}
+
+/// An estimate of every node of a graph ([`load_estimate_for`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GraphEstimate {
+    /// The path as given.
+    pub name: String,
+    /// The file read (a model folder's `images.bin` / `images.txt`, a folder's database).
+    pub file: String,
+    /// What the file is.
+    pub format: EstimateFormat,
+    /// How entries were matched to nodes.
+    pub matched_by: MatchedBy,
+    /// The rotation of each node.
+    pub rotations: Vec<Rotation>,
+    /// Entries of the file that match no node (not used).
+    pub unmatched: Vec<String>,
+    /// [`NodeRotations::unmatched_warning`].
+    pub warning: Option<String>,
+}
+
+impl GraphEstimate {
+    /// The estimate as [`crate::report::CertifyReport::certify`] takes it.
+    pub fn into_loaded(self) -> LoadedEstimate {
+        LoadedEstimate {
+            name: self.name,
+            estimate: Estimate::Multiple(self.rotations),
         }
-    };
-    let per_node = per_node.unwrap_or_default();
-    per_node
-        .iter()
-        .enumerate()
-        .map(|(k, r)| {
-            r.ok_or_else(|| {
-                let name = graph
-                    .node_names
-                    .get(k)
-                    .map(|n| format!(", name {n}"))
-                    .unwrap_or_default();
-                Error::parse(
-                    Some(path),
-                    None,
-                    format!(
-                        "initial estimate: node {k} (id {}{name}) has no image in the COLMAP model",
-                        graph.node_ids[k]
-                    ),
-                )
-            })
-        })
-        .collect()
+    }
 }
 
 /// An estimate file and its name (for errors about its size or kind).

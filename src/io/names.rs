@@ -526,12 +526,12 @@ impl Choice for OutputFormat {
     fn help(&self) -> &'static str {
         match self {
             OutputFormat::Auto => {
-                "From the path: *.g2o is g2o, *images.txt COLMAP, anything else JSON"
+                "From the path: *.g2o is g2o, a folder (ending in /) or *images.txt a COLMAP model, anything else JSON"
             }
             OutputFormat::Json => "{\"node_ids\": [...], \"rotations\": [R, ...]}",
             OutputFormat::G2o => "g2o: the edges and the estimate as vertex lines",
             OutputFormat::Colmap => {
-                "COLMAP images.txt: world-to-camera quaternions, zero translations, image names"
+                "COLMAP sparse model (a folder or images.txt): world-to-camera quaternions, zero translations, image names"
             }
         }
     }

@@ -1,13 +1,17 @@
-//! Writing estimates to files, as `rotavg multiple --output FILE [--output-format F]` does:
-//! [`OutputFormat`] `auto` picks g2o for a `.g2o` path, COLMAP `images.txt` for a path ending
-//! in `images.txt`, otherwise JSON `{"node_ids": [...], "rotations": [R, ...]}` (readable by
-//! [`crate::io::json::read_estimate`]).
+//! Writing estimates to files, as `rotavg multiple --output PATH [--output-format F]` does:
+//! [`OutputFormat`] `auto` picks g2o for a `.g2o` path, a COLMAP sparse model for a folder or a
+//! path ending in `images.txt`, otherwise JSON `{"node_ids": [...], "rotations": [R, ...]}`
+//! (readable by [`crate::io::json::read_estimate`]). [`prepare_output`] resolves the path and
+//! creates its folder before the solve; [`EstimateFile::write_planned`] writes outputs that
+//! round-trip (a g2o input's vertices and edges kept, a loadable COLMAP model).
 
 use crate::error::{Error, Result};
+use crate::io::detect::GraphFormat;
 use crate::multiple::MultipleProblem;
 use crate::multiple::robust::EdgeResiduals;
 use crate::so3::Rotation;
 use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
 
 /// The format of an estimate file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -47,6 +51,117 @@ impl OutputFormat {
         } else {
             OutputFormat::Json
         }
+    }
+}
+
+/// Where an estimate goes, resolved before the solve by [`prepare_output`]: the format and,
+/// for a COLMAP sparse model, its folder.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OutputPlan {
+    /// The path as given.
+    pub path: String,
+    /// The format (never `auto`).
+    pub format: OutputFormat,
+    /// COLMAP: the folder that receives `cameras.txt` and `points3D.txt` beside the images
+    /// file (`None` for a single images file under another name).
+    pub model_dir: Option<PathBuf>,
+    /// The file written (for a COLMAP folder, its `images.txt`).
+    pub file: PathBuf,
+}
+
+/// Resolve an output path and create its folder, **before** any work is done: a path ending
+/// in `/` or naming an existing folder is a COLMAP sparse model folder (created when missing;
+/// `auto` and `colmap` only), a path ending in `images.txt` a COLMAP model in its parent folder
+/// (`cameras.txt`, `images.txt`, `points3D.txt`), another path with `--output-format colmap` a
+/// lone images file; g2o and JSON are one file. Missing parent folders are created; an error
+/// (naming the path) when a folder cannot be created or a file would replace a folder.
+///
+/// ```
+/// use rotavg::io::output::{prepare_output, OutputFormat};
+/// let base = std::env::temp_dir().join(format!("rotavg-doc-prepare-{}", std::process::id()));
+/// let dir = format!("{}/sparse/0/", base.display());
+/// let plan = prepare_output(&dir, OutputFormat::Auto)?;
+/// assert_eq!(plan.format, OutputFormat::Colmap);
+/// assert!(plan.file.ends_with("images.txt") && std::path::Path::new(&dir).is_dir());
+/// let json = prepare_output(&format!("{}/out/est.json", base.display()), OutputFormat::Auto)?;
+/// assert!(json.model_dir.is_none() && base.join("out").is_dir());
+/// assert!(prepare_output(&dir, OutputFormat::Json).is_err()); // a folder is not a JSON file
+/// std::fs::remove_dir_all(&base).unwrap();
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn prepare_output(path: &str, format: OutputFormat) -> Result<OutputPlan> {
+    let p = Path::new(path);
+    let folder = path.ends_with('/') || path.ends_with(std::path::MAIN_SEPARATOR) || p.is_dir();
+    let io = |message: String| Error::Io {
+        path: path.into(),
+        message,
+    };
+    let mkdir = |d: &Path| -> Result<()> {
+        if d.as_os_str().is_empty() || d.is_dir() {
+            return Ok(());
+        }
+        std::fs::create_dir_all(d).map_err(|e| Error::Io {
+            path: d.display().to_string(),
+            message: format!("cannot create the output folder: {e}"),
+        })
+    };
+    if folder {
+        return match format {
+            OutputFormat::Auto | OutputFormat::Colmap => {
+                mkdir(p)?;
+                Ok(OutputPlan {
+                    path: path.into(),
+                    format: OutputFormat::Colmap,
+                    model_dir: Some(p.to_path_buf()),
+                    file: p.join("images.txt"),
+                })
+            }
+            f => Err(io(format!(
+                "a folder, but --output-format {} writes one file: give a file name",
+                crate::io::names::Choice::name(&f)
+            ))),
+        };
+    }
+    let format = format.for_path(path);
+    let parent = p.parent().unwrap_or(Path::new(""));
+    mkdir(parent)?;
+    let model_dir = (format == OutputFormat::Colmap
+        && path.to_ascii_lowercase().ends_with("images.txt"))
+    .then(|| parent.to_path_buf());
+    Ok(OutputPlan {
+        path: path.into(),
+        format,
+        model_dir,
+        file: p.to_path_buf(),
+    })
+}
+
+/// Where the problem came from, for outputs that keep what the input had: a g2o input's
+/// vertices and edges, a COLMAP database's cameras.
+#[derive(Debug, Clone, Copy)]
+pub struct OutputSource<'a> {
+    /// The input path as given (`-` for standard input).
+    pub input: &'a str,
+    /// The input's format.
+    pub format: GraphFormat,
+}
+
+impl OutputSource<'_> {
+    /// An error, before the solve, for outputs this source cannot give: g2o output of a g2o
+    /// problem read from standard input (its vertices and edges cannot be read again).
+    pub fn check(&self, plan: &OutputPlan) -> Result<()> {
+        if plan.format == OutputFormat::G2o && self.format == GraphFormat::G2o && self.input == "-"
+        {
+            return Err(Error::InvalidSettings {
+                name: "--output".into(),
+                reason: format!(
+                    "{}: g2o output keeps the input's vertices and edges, which cannot be read \
+                     again from standard input: give the input as a file, or write JSON",
+                    plan.path
+                ),
+            });
+        }
+        Ok(())
     }
 }
 
@@ -101,6 +216,102 @@ impl EstimateFile<'_> {
     /// Write [`Self::text`] to `path`; I/O errors name the path.
     pub fn write(&self, path: &str, format: OutputFormat) -> Result<()> {
         write_text(path, &self.text(path, format)?)
+    }
+
+    /// Write the estimate as `plan` says ([`prepare_output`]), keeping what `source` had:
+    /// * g2o from a g2o file: the input's lines with each vertex's rotation replaced
+    ///   ([`crate::io::g2o::write_g2o_like`]: translations, edges and other lines as read), the
+    ///   estimate turned by the global rotation that best aligns it with the input's vertex
+    ///   rotations (the same estimate: rotation averaging fixes rotations up to one global
+    ///   rotation, and the kept translations are in the input's frame); from other inputs, the
+    ///   problem's edges and the vertices with zero translations, under the file's node ids;
+    /// * COLMAP: a sparse model (`images.txt`, `cameras.txt`, empty `points3D.txt`;
+    ///   [`crate::io::colmap::write_sparse_model`]), with the cameras of a COLMAP database input,
+    ///   else a documented placeholder camera; a lone images file when `plan` has no folder;
+    /// * JSON: [`Self::text`].
+    pub fn write_planned(&self, plan: &OutputPlan, source: &OutputSource<'_>) -> Result<()> {
+        source.check(plan)?;
+        let path = plan.file.display().to_string();
+        match plan.format {
+            OutputFormat::G2o if source.format == GraphFormat::G2o => {
+                // the input's vertex rotations (none: no alignment), streamed
+                let input_vertices = crate::io::g2o::read_g2o_vertices_lines(
+                    &mut crate::io::text::TextStream::open(source.input)?.into_lines(),
+                    &Default::default(),
+                )
+                .unwrap_or_default();
+                let by_id: std::collections::BTreeMap<u64, Rotation> =
+                    input_vertices.iter().map(|v| (v.id, v.rotation)).collect();
+                // G minimising sum ||R_k G - V_k||_F over the nodes with an input vertex
+                let mut m = nalgebra::Matrix3::<f64>::zeros();
+                for (k, r) in self.rotations.iter().enumerate() {
+                    if let Some(v) = self.node_ids.get(k).and_then(|id| by_id.get(id)) {
+                        m += r.matrix().transpose() * v.matrix();
+                    }
+                }
+                let g = if m == nalgebra::Matrix3::zeros() {
+                    Rotation::identity()
+                } else {
+                    crate::so3::project_to_so3(&m).unwrap_or_else(Rotation::identity)
+                };
+                let estimate: std::collections::BTreeMap<u64, Rotation> = self
+                    .node_ids
+                    .iter()
+                    .zip(self.rotations)
+                    .map(|(&id, r)| (id, r * g))
+                    .collect();
+                let mut lines = crate::io::text::TextStream::open(source.input)?.into_lines();
+                write_text(
+                    &path,
+                    &crate::io::g2o::write_g2o_like(&mut lines, &estimate)?,
+                )
+            }
+            OutputFormat::G2o => write_text(
+                &path,
+                &crate::io::g2o::write_g2o_with_ids(
+                    self.problem,
+                    Some(self.rotations),
+                    self.node_ids,
+                ),
+            ),
+            OutputFormat::Colmap => {
+                let Some(dir) = &plan.model_dir else {
+                    return write_text(&path, &self.text(&path, OutputFormat::Colmap)?);
+                };
+                let database = (source.format == GraphFormat::Colmap)
+                    .then(|| crate::io::colmap::find_database(Path::new(source.input)))
+                    .flatten();
+                match database {
+                    Some(db) => {
+                        let (cameras, of_image) = crate::io::colmap::read_database_cameras(&db)?;
+                        let camera_ids: Vec<u32> = self
+                            .node_ids
+                            .iter()
+                            .map(|id| of_image.get(id).copied().unwrap_or(1))
+                            .collect();
+                        crate::io::colmap::write_sparse_model(
+                            dir,
+                            &plan.file,
+                            self.rotations,
+                            self.node_ids,
+                            self.node_names,
+                            Some((&cameras, &camera_ids)),
+                        )
+                    }
+                    None => crate::io::colmap::write_sparse_model(
+                        dir,
+                        &plan.file,
+                        self.rotations,
+                        self.node_ids,
+                        self.node_names,
+                        None,
+                    ),
+                }
+            }
+            OutputFormat::Json | OutputFormat::Auto => {
+                write_text(&path, &self.text(&path, OutputFormat::Json)?)
+            }
+        }
     }
 }
 

@@ -2,8 +2,9 @@
 //! estimate computed elsewhere, or report its proven gap, **without changing it**.
 //!
 //! The problem kind comes from INPUT (`rotavg::io::input::detect_problem_kind`): g2o / 1DSfM
-//! files and JSON with `"edges"` are multiple problems (estimate `{"rotations": [...]}` or
-//! `{"estimate": [...]}`, one rotation per node in node order), JSON with `"rotations"` single
+//! files, COLMAP databases and JSON with `"edges"` are multiple problems (estimate in any
+//! format of `rotavg::io::input::load_estimate_for`: JSON, g2o vertices, COLMAP models, Bundler,
+//! rotation lists, matched to the nodes by id or image name), JSON with `"rotations"` single
 //! and with `"pairs"` conjugate problems (estimate `{"rotation": R}`), all under chordal L2.
 //! Printed as `rotavg::report::CertifyReport`.
 
@@ -14,18 +15,23 @@ use clap::Args as ClapArgs;
 use rotavg::Result;
 use rotavg::certify::{CertifyMode, CertifySettings};
 use rotavg::io::detect::GraphFormat;
-use rotavg::io::input::{LoadedProblem, load_estimate, load_problem};
+use rotavg::io::input::{LoadedProblem, load_estimate, load_estimate_for, load_problem};
 use rotavg::io::names::Choice;
 use rotavg::report::CertifyReport;
 
 /// Arguments of `rotavg certify`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// Problem file, or `-` for standard input.
+    /// Problem file (or a COLMAP database, or the folder holding database.db), or `-` for
+    /// standard input.
     pub input: String,
-    /// The estimate to certify (JSON: `{"rotations": [...]}`, `{"estimate": ...}` or
-    /// `{"rotation": R}`).
-    #[arg(long, value_name = "FILE")]
+    /// The estimate to certify. View graphs: JSON (`{"rotations": [...]}` in node order, or
+    /// rotavg's `--output` with `node_ids`), g2o / TORO vertex lines (e.g. GTSAM's or rotavg's
+    /// g2o output), a COLMAP sparse model folder (e.g. GLOMAP's `sparse/0`), `images.bin` or
+    /// `images.txt`, Bundler `.out`, a rotation list; matched to the nodes by id, or by image
+    /// name when the problem has names (a COLMAP database). Single and conjugate problems:
+    /// JSON `{"rotation": R}`.
+    #[arg(long, value_name = "PATH")]
     pub estimate: String,
     /// Input format (multiple problems).
     #[arg(long, value_parser = choice(GraphFormat::choices()), default_value_t = GraphFormat::Auto)]
@@ -55,7 +61,20 @@ pub fn run(args: &Args) -> Result<Outcome> {
     }
     let options = args.common.read_options();
     let problem = load_problem(&args.input, args.format, &options)?;
-    let estimate = load_estimate(&args.estimate, &options)?;
+    let estimate = match &problem {
+        LoadedProblem::Multiple(g) => {
+            let e = load_estimate_for(&args.estimate, g, &options)?;
+            if let Some(w) = &e.warning
+                && !args.common.quiet
+            {
+                eprintln!("rotavg: warning: {w}");
+            }
+            e.into_loaded()
+        }
+        LoadedProblem::Single(_) | LoadedProblem::Conjugate(_) => {
+            load_estimate(&args.estimate, &options)?
+        }
+    };
     if args.plot.is_some() {
         CertifyReport::require_figure(&problem)?;
     }

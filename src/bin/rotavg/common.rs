@@ -15,8 +15,9 @@ pub struct Common {
     /// Weights from the file (`file`, default) or all 1 (`unit`).
     #[arg(long, value_parser = choice(WeightSource::choices()), default_value_t = WeightSource::File)]
     pub weights: WeightSource,
-    /// Start the local solver from this estimate (JSON estimate file; `multiple` also reads a
-    /// COLMAP `images.txt` / `images.bin`, matched to the images by name or id).
+    /// Start the local solver from this estimate (JSON estimate file; `multiple` reads every
+    /// estimate format of `rotavg certify --estimate`: g2o vertices, a COLMAP model folder /
+    /// `images.bin` / `images.txt`, Bundler, rotation lists, matched by id or image name).
     #[arg(long, value_name = "FILE")]
     pub init: Option<String>,
     /// Exit with status 3 unless the verdict is `certified`.

@@ -11,7 +11,9 @@ use rotavg::certify::{CertifyMode, CertifySettings};
 use rotavg::io::detect::GraphFormat;
 use rotavg::io::input::{MultipleInputOptions, load_multiple_input};
 use rotavg::io::names::{Choice, MultipleLoss};
-use rotavg::io::output::{EstimateFile, OutputFormat, edges_file_text, write_text};
+use rotavg::io::output::{
+    EstimateFile, OutputFormat, OutputSource, edges_file_text, prepare_output, write_text,
+};
 use rotavg::multiple::{Initialisation, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_multiple};
 #[cfg(feature = "plot")]
@@ -62,18 +64,21 @@ pub struct Args {
     #[arg(long, value_parser = choice(certify_modes()), default_value_t = CertifyMode::Auto)]
     pub certify: CertifyMode,
     /// Ground truth: g2o (vertex lines; `.g2o` or a first token that is a tag), Bundler `.out`,
-    /// COLMAP `images.txt` / `images.bin` (matched by image name, or id), JSON estimate (node
-    /// order), or a rotation list (`R11 .. R33` per line, line k = file id
-    /// k, or `id R11 .. R33` per line); matched to nodes by file id. An all-zero rotation
-    /// means "no ground truth for this camera".
+    /// a COLMAP model folder / `images.bin` / `images.txt` (matched by image name, or id), JSON
+    /// estimate (node order, or by `node_ids`), or a rotation list (`R11 .. R33` per line, line
+    /// k = file id k, or `id R11 .. R33` per line); matched to nodes by file id. An all-zero
+    /// rotation means "no ground truth for this camera".
     #[arg(long, value_name = "FILE")]
     pub ground_truth: Option<String>,
     /// Solve the largest connected component of a disconnected graph (and report the others).
     #[arg(long)]
     pub largest_component: bool,
-    /// Write the estimate: JSON `{"rotations": [...], "node_ids": [...]}`, g2o when FILE ends
-    /// in `.g2o`, COLMAP `images.txt` when it ends in `images.txt` (see `--output-format`).
-    #[arg(long, value_name = "FILE")]
+    /// Write the estimate: JSON `{"rotations": [...], "node_ids": [...]}`; g2o when PATH ends
+    /// in `.g2o` (a g2o input's lines with the vertex rotations replaced: translations and
+    /// edges as read); a COLMAP sparse model (cameras.txt, images.txt, empty points3D.txt) when
+    /// PATH is a folder (ends in `/`) or ends in `images.txt`. Folders are created before the
+    /// solve (see `--output-format`).
+    #[arg(long, value_name = "PATH")]
     pub output: Option<String>,
     /// Format of `--output` (`auto`: from the file name).
     #[arg(long, value_parser = choice(OutputFormat::choices()), default_value_t = OutputFormat::Auto)]
@@ -89,6 +94,18 @@ pub struct Args {
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
     crate::common::check_plot(args.plot.as_ref())?;
+    // output folders are created (or refused) before anything is read or solved
+    let output = match &args.output {
+        Some(p) => Some(prepare_output(p, args.output_format)?),
+        None => None,
+    };
+    let inlier_output = match &args.inlier_output {
+        Some(p) => Some(prepare_output(p, args.output_format)?),
+        None => None,
+    };
+    if let Some(p) = &args.edges_output {
+        prepare_output(p, OutputFormat::Json)?;
+    }
     let input = load_multiple_input(
         &args.input,
         &MultipleInputOptions {
@@ -100,6 +117,13 @@ pub fn run(args: &Args) -> Result<Outcome> {
         },
     )?;
     let graph = &input.graph;
+    let source = OutputSource {
+        input: &args.input,
+        format: graph.format,
+    };
+    for plan in output.iter().chain(&inlier_output) {
+        source.check(plan)?;
+    }
     let objective = args.loss.objective(args.loss_threshold);
     let problem = graph.problem.clone().with_objective(objective)?;
     let robust_only = |flag: &str| rotavg::Error::InvalidSettings {
@@ -163,14 +187,14 @@ pub fn run(args: &Args) -> Result<Outcome> {
         &report.result.solution.rotations,
         report.result.certificate.as_ref(),
     );
-    if let Some(path) = &args.output {
+    if let Some(plan) = &output {
         let file = EstimateFile {
             problem: &graph.problem,
             rotations,
             node_ids: &graph.node_ids,
             node_names: &graph.node_names,
         };
-        file.write(path, args.output_format)?;
+        file.write_planned(plan, &source)?;
     }
     if let (Some(path), Some(r)) = (&args.edges_output, &report.result.solution.residuals) {
         write_text(
@@ -178,15 +202,15 @@ pub fn run(args: &Args) -> Result<Outcome> {
             &edges_file_text(path, &graph.problem, r, &graph.node_ids),
         )?;
     }
-    if let (Some(path), Some(g)) = (&args.inlier_output, &report.result.details.inlier_graph) {
+    if let (Some(plan), Some(g)) = (&inlier_output, &report.result.details.inlier_graph) {
         let file = EstimateFile {
             problem: &graph.problem,
             rotations: &g.estimate,
             node_ids: &graph.node_ids,
             node_names: &graph.node_names,
         };
-        file.write(path, args.output_format)?;
-        report.inlier_output = Some(path.clone());
+        file.write_planned(plan, &source)?;
+        report.inlier_output = Some(plan.path.clone());
     }
     #[cfg(feature = "plot")]
     if let Some(path) = &args.plot {
