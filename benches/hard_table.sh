@@ -25,8 +25,8 @@ PEER_TIMEOUT="${PEER_TIMEOUT:-900}"
 WORK="${WORK:-/tmp/rotavg-hard}"
 mkdir -p "$WORK"
 ROWS="${ROWS:-40:160:3:0.2 60:240:3:0.2 100:400:3:0 100:400:3:0.3 150:600:3:0.2 300:1200:3:0.2 1000:4000:3:0.1 1000:4000:30:0 1000:4000:3:0.3 3000:12000:3:0.2 10000:40000:3:0 10000:40000:3:0.2 10000:40000:10:0.3}"
-echo "| n | edges | noise | outliers | rotavg: verdict (method) | relative gap | solve | total | peak RSS | cvxpy + SCS: gap, time | cvxpy + Clarabel: gap, time | load |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| n | edges | noise | outliers | rotavg: verdict (method) | cost | proven lower bound (relative gap) | solve | total | peak RSS | cvxpy + SCS: dual bound, time | cvxpy + Clarabel: dual bound, time | load |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for row in $ROWS; do
   IFS=: read -r n m sdeg frac <<<"$row"
   sigma=$(python3 -c "import math; print(math.radians($sdeg))")
@@ -40,8 +40,9 @@ for row in $ROWS; do
   ours=$(python3 - "$json" <<'PY'
 import json, sys
 v = json.loads(sys.argv[1]); c = v["certificate"]
-g = c.get("relative_gap")
-print(f'{c["verdict"]} ({c.get("method")})|{"-" if g is None else f"{g:.2e}"}|{v["solver"]["seconds"]:.3f} s')
+g, lb = c.get("relative_gap"), c.get("lower_bound")
+bound = "-" if lb is None else f"{lb:.7g} ({g:.2e})"
+print(f'{c["verdict"]} ({c.get("method")})|{v["cost"]:.7g}|{bound}|{v["solver"]["seconds"]:.3f} s')
 PY
 )
   peer() { # solver max_n
@@ -56,13 +57,12 @@ r = v.get("results", v)
 r = r.get(sys.argv[2], r) if isinstance(r, dict) else r
 if isinstance(r, list):
     r = next((x for x in r if x.get("solver") == sys.argv[2]), r[0])
-lb = r.get("dual_bound"); f = r.get("rounded_cost"); t = r.get("time_s")
-gap = (f - lb) / f if lb is not None and f else None
-print(f'{"-" if gap is None else f"{gap:.2e}"}, {t:.1f} s' if t is not None else str(r)[:60])
+lb = r.get("dual_bound"); t = r.get("time_s")
+print(f'{"-" if lb is None else f"{lb:.7g}"}, {t:.1f} s' if t is not None else str(r)[:60])
 PY
   }
   scs=$(peer SCS "$PEER_MAX_N")
   cla=$(peer CLARABEL "$CLARABEL_MAX_N")
-  IFS='|' read -r verdict gap solve <<<"$ours"
-  echo "| $n | $m | ${sdeg} deg | $frac | $verdict | $gap | $solve | $wall | $rss | $scs | $cla | $load |"
+  IFS='|' read -r verdict cost bound solve <<<"$ours"
+  echo "| $n | $m | ${sdeg} deg | $frac | $verdict | $cost | $bound | $solve | $wall | $rss | $scs | $cla | $load |"
 done

@@ -67,6 +67,9 @@ pub enum ImprovementSource {
     SdpRounding,
     /// A local solve started from a cell centre of the branch and bound that beat the estimate.
     BranchAndBound,
+    /// The rounding of the staircase's lifted point, polished by the local solver (multiple
+    /// averaging).
+    StaircaseRounding,
 }
 
 /// A solution of lower cost than the certified estimate, found while bounding.

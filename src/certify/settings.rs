@@ -18,7 +18,7 @@ use std::fmt;
 ///
 /// | mode | single | multiple | conjugate |
 /// |---|---|---|---|
-/// | `auto` | theory, then branch and bound | dual, then SDP (`n <= sdp_max_nodes`) or staircase | SDP (chordal L2), then branch and bound |
+/// | `auto` | theory, then branch and bound | dual, then staircase, then SDP (`n <= sdp_max_nodes`) if the staircase stops short | SDP (chordal L2), then branch and bound |
 /// | `theory` | closed forms, convexity `[S1]`-`[S7]` | — | — |
 /// | `branch_and_bound` | branch and bound `[B1]`-`[B6]` | — | branch and bound |
 /// | `dual` | — | dual certificate only `[D3]`-`[D9]` | — |
@@ -545,9 +545,9 @@ pub struct CertifySettings {
     pub dual: DualSettings,
     /// The SDP solve (Clarabel).
     pub sdp: SdpSettings,
-    /// Multiple averaging, mode `auto`: the SDP runs after a failed dual certificate only when
-    /// the graph has at most this many nodes (default 150; the SDP takes ~5 s at n = 150 on
-    /// sparse graphs on a 2-core machine); larger graphs get the staircase.
+    /// Multiple averaging, mode `auto`: after a failed dual certificate the staircase runs; the
+    /// SDP follows only when the staircase stopped short of a verified point and the graph has
+    /// at most this many nodes (default 150) and its predicted cost fits the budget.
     pub sdp_max_nodes: usize,
     /// Multiple averaging: the Riemannian staircase.
     pub staircase: StaircaseSettings,

@@ -55,9 +55,10 @@ precision, which other multipliers cannot improve (mode sdp or staircase runs th
 ///    certify, at its refinement by the local solver (when a cheap test shows that the
 ///    estimate is not a critical point, its own multipliers are not verified: the refined
 ///    point's bound holds for it too);
-/// 2. when that does not certify and the mode allows: the SDP's verified multipliers
-///    (`n <= sdp_max_nodes` in `auto`, always in `sdp`) or the Riemannian staircase `[D11]`
-///    (larger graphs in `auto`, always in `staircase`).
+/// 2. when that does not certify and the mode allows: the Riemannian staircase `[D11]`
+///    (`auto`, `staircase`) and the SDP's verified multipliers (always in `sdp`; in `auto` only
+///    when the staircase stopped short of a verified point, `n <= sdp_max_nodes` and it fits
+///    the budget).
 ///
 /// Each is a bound on the global minimum whatever point produced it. A refined point or a
 /// polished SDP rounding of lower cost than the estimate is returned as the
@@ -124,8 +125,11 @@ pub fn certify_multiple(
     };
     if escalate {
         match climb.wants_sdp() {
+            Some(true) if settings.mode == CertifyMode::Auto => climb.staircase_then_sdp()?,
             Some(true) => climb.sdp()?,
-            Some(false) => climb.staircase()?,
+            Some(false) => {
+                climb.staircase()?;
+            }
             None if settings.mode == CertifyMode::Auto => {
                 climb.details.skipped_reason = Some(format!(
                     "SDP not run: {} nodes > sdp_max_nodes {}",

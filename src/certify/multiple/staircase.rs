@@ -144,6 +144,48 @@ pub struct StaircaseResult {
     pub hessian_products: usize,
     /// Why the staircase stopped.
     pub stop_reason: StaircaseStop,
+    /// The final lifted point rounded to rotations ([`round_lifted`]): an upper bound on the
+    /// global minimum, to be polished by the local solver.
+    #[serde(with = "crate::so3::serde_rows::rotations", default)]
+    pub rounded: Vec<Rotation>,
+}
+
+/// Rounding of a lifted point `Y` (blocks `Y_i`, `3 x p`), as SE-Sync rounds its staircase:
+/// the top three right singular vectors `V` of the stacked `Y` (eigenvectors of
+/// `sum_i Y_i^T Y_i`), the global reflection fixed by the majority of `det(Y_i V)`, each block
+/// `Y_i V` projected to SO(3), gauge `R_0 = I`. At a rank-3 point this returns the point itself
+/// (up to the gauge).
+pub fn round_lifted(y: &[Block]) -> Vec<Rotation> {
+    let p = y.first().map_or(3, |b| b.ncols());
+    let mut gram = nalgebra::DMatrix::<f64>::zeros(p, p);
+    for b in y {
+        gram += b.transpose() * b;
+    }
+    let eig = nalgebra::SymmetricEigen::new(gram);
+    let mut order: Vec<usize> = (0..p).collect();
+    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+    let mut v = nalgebra::DMatrix::<f64>::zeros(p, 3);
+    for (c, &k) in order.iter().take(3).enumerate() {
+        v.set_column(c, &eig.eigenvectors.column(k));
+    }
+    let mut blocks: Vec<nalgebra::Matrix3<f64>> = y
+        .iter()
+        .map(|b| {
+            let m = b * &v;
+            nalgebra::Matrix3::from_fn(|r, c| m[(r, c)])
+        })
+        .collect();
+    if 2 * blocks.iter().filter(|b| b.determinant() < 0.0).count() > blocks.len() {
+        for b in blocks.iter_mut() {
+            b.set_column(2, &(-b.column(2)));
+        }
+    }
+    let mut rotations: Vec<Rotation> = blocks
+        .iter()
+        .map(|b| crate::so3::project_to_so3(b).unwrap_or_else(Rotation::identity))
+        .collect();
+    crate::multiple::fix_gauge(&mut rotations);
+    rotations
 }
 
 /// Bound the global minimum by a Riemannian staircase started at `rotations` `[D11]`, and
@@ -260,6 +302,7 @@ pub fn staircase_bound(
         iterations,
         hessian_products: products,
         stop_reason,
+        rounded: round_lifted(&y),
     })
 }
 
