@@ -115,7 +115,36 @@ pub use faer;
 // to its Clarabel call, so that order-sensitive linkers (GNU ld.bfd) load them too.
 use rotavg_lapack as _;
 
-/// The README's code blocks are compiled and run as doc tests.
-#[doc = include_str!("../README.md")]
+/// The README and the docs book: every ```` ```rust ```` block is compiled and run as a doc
+/// test (one item per Markdown file; the shell commands run in `tests/docs_examples.rs`).
 #[cfg(doctest)]
-pub struct ReadmeDoctests;
+pub mod doc_markdown {
+    #[doc = include_str!("../README.md")]
+    pub struct Readme;
+    #[doc = include_str!("../docs/introduction.md")]
+    pub struct Introduction;
+    #[doc = include_str!("../docs/library.md")]
+    pub struct Library;
+    #[doc = include_str!("../docs/certificates.md")]
+    pub struct Certificates;
+    #[doc = include_str!("../docs/benchmarks.md")]
+    pub struct Benchmarks;
+    #[doc = include_str!("../docs/status.md")]
+    pub struct Status;
+    #[doc = include_str!("../docs/development.md")]
+    pub struct Development;
+    #[doc = include_str!("../docs/reference/cli.md")]
+    pub struct ReferenceCli;
+    #[doc = include_str!("../docs/reference/conventions.md")]
+    pub struct ReferenceConventions;
+    #[doc = include_str!("../docs/guides/sfm-colmap.md")]
+    pub struct GuideSfmColmap;
+    #[doc = include_str!("../docs/guides/slam-g2o.md")]
+    pub struct GuideSlamG2o;
+    #[doc = include_str!("../docs/guides/hand-eye.md")]
+    pub struct GuideHandEye;
+    #[doc = include_str!("../docs/guides/python.md")]
+    pub struct GuidePython;
+    #[doc = include_str!("../docs/guides/certify-other-tools.md")]
+    pub struct GuideCertifyOtherTools;
+}

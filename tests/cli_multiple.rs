@@ -523,6 +523,9 @@ fn randomized_flags_report_a_monte_carlo_bound_beside_the_verdict() {
     assert_eq!(r["within_tolerance"], true, "{v}");
     assert!(r["lower_bound"].as_f64().unwrap() <= v["cost"].as_f64().unwrap());
     let text = String::from_utf8_lossy(&run(&args).stdout).to_string();
+    assert!(text.contains("not a proof"), "{text}");
+    let verbose = run(&[&args[..], &["--verbose"]].concat());
+    let text = String::from_utf8_lossy(&verbose.stdout).to_string();
     assert!(
         text.contains("[D16]") && text.contains("not a proof"),
         "{text}"

@@ -163,8 +163,8 @@ fn vicon_stream_pair_recovers_the_planted_rotation_with_exact_counts() {
     assert_eq!((pairs + skipped) as usize, starts);
     assert_eq!(v["num_measurements"], pairs);
     assert_eq!(m["settings"]["time_offset"], LAG);
-    // The text report states the counts too.
-    let out = run(&["conjugate", path(&d), "--time-offset", &offset]);
+    // The text report states the counts too (--verbose: its lines unbroken).
+    let out = run(&["conjugate", path(&d), "--time-offset", &offset, "--verbose"]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         text.contains(&format!(

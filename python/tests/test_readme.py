@@ -1,5 +1,6 @@
 """The README examples run as printed: every ```python block of python/README.md (in an empty
-folder) and of README.md's "From Python" section (on the shared data, skipped when absent);
+folder) and of the docs book's Python guide, docs/guides/python.md (on the shared data, skipped
+when absent);
 and, when mypy and scipy-stubs are installed (.ci/run installs them), each type-checks with
 `mypy --strict` against the package's stubs."""
 
@@ -21,16 +22,13 @@ def python_blocks(text):
 
 
 PACKAGE_README = REPO / "python" / "README.md"
-ROOT_README = REPO / "README.md"
+PYTHON_GUIDE = REPO / "docs" / "guides" / "python.md"
 PACKAGE_BLOCKS = python_blocks(PACKAGE_README.read_text())
 
 
 def from_python_section():
-    """The code of README.md's "From Python" section."""
-    text = ROOT_README.read_text()
-    section = text[text.index("## From Python"):]
-    section = section[: section.index("\n## ", 3)]
-    return python_blocks(section)
+    """The code of the Python guide of the docs book (README.md links to it)."""
+    return python_blocks(PYTHON_GUIDE.read_text())
 
 
 def run(code, folder, monkeypatch):
@@ -63,7 +61,7 @@ def test_package_readme_outputs(tmp_path, monkeypatch):
 
 def test_root_readme_example_runs(data_dir, tmp_path, monkeypatch):
     blocks = from_python_section()
-    assert blocks, "README.md has no Python example"
+    assert blocks, "docs/guides/python.md has no Python example"
     for code in blocks:
         code = code.replace("../shared/data", str(data_dir))
         out = run(code, tmp_path, monkeypatch)

@@ -1,6 +1,6 @@
 """Every documented call of the rotavg package, typed: `.ci/run` checks this file against the
 stubs (python/rotavg/__init__.pyi) with `mypy --strict`, and test_stubs.py runs it (`main()`),
-so the calls are also right at run time. The README examples (README.md "From Python" and
+so the calls are also right at run time. The README examples (docs/guides/python.md and
 python/README.md) are type-checked and run by test_readme.py; `readme_*` below repeat their
 calls with every result's type spelt out.
 
@@ -293,7 +293,7 @@ def errors(folder: Path) -> None:
 
 
 def readme_from_python(data: Path) -> None:
-    """README.md "From Python", with the types spelt out (needs the shared data)."""
+    """docs/guides/python.md, with the types spelt out (needs the shared data)."""
     g: rotavg.Graph = rotavg.read_graph(data / "g2o/3d/sesync/sphere2500.g2o")
     res: rotavg.Result = rotavg.average_multiple(g.n, g.i, g.j, g.rel, g.weights)
     assert res.certificate is not None

@@ -519,8 +519,85 @@ impl Certificate {
     }
 }
 
+/// The claim of an explanation, for the short text: its first clause (up to the first `; `),
+/// without the labels of `paper-notes/` (`[D15]`, `[B1]-[B6]`, `[S4b]`).
+fn claim(explanation: &str) -> String {
+    /// `D15`, `S4b`, `B1`: capitals, digits, an optional lower-case letter.
+    fn is_label(s: &str) -> bool {
+        let caps = s.chars().take_while(char::is_ascii_uppercase).count();
+        let digits = s[caps..].chars().take_while(char::is_ascii_digit).count();
+        let tail = &s[caps + digits..];
+        caps > 0
+            && digits > 0
+            && (tail.is_empty()
+                || (tail.len() == 1 && tail.chars().all(|c| c.is_ascii_lowercase())))
+    }
+    let first = explanation.split("; ").next().unwrap_or("");
+    let mut out = String::with_capacity(first.len());
+    let mut rest = first;
+    while let Some(open) = rest.find('[') {
+        let close = rest[open..].find(']').map(|c| open + c);
+        match close {
+            Some(close) if is_label(&rest[open + 1..close]) => {
+                out.push_str(rest[..open].trim_end_matches(['-', ' ']));
+                rest = &rest[close + 1..];
+            }
+            _ => {
+                out.push_str(&rest[..=open]);
+                rest = &rest[open + 1..];
+            }
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+#[cfg(test)]
+mod claim_tests {
+    #[test]
+    fn labels_are_left_out() {
+        assert_eq!(
+            super::claim("branch and bound over SO(3) [B1]-[B6]: proven lower bound 1; more"),
+            "branch and bound over SO(3): proven lower bound 1"
+        );
+        assert_eq!(
+            super::claim("certified [S4b] by the ball"),
+            "certified by the ball"
+        );
+        assert_eq!(super::claim("x [not a label] y"), "x [not a label] y");
+    }
+}
+
+/// The short form (`{}`): verdict, method, cost, lower bound, gap and the claim, on lines of at
+/// most about 100 characters. The alternate form (`{:#}`, `--verbose`): one line with the
+/// lowest eigenvalue, the tolerance rule and the whole explanation of the proof.
 impl fmt::Display for Certificate {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if !f.alternate() {
+            write!(f, "{} (method {})", self.verdict, self.method)?;
+            if let Some(p) = &self.certified_problem {
+                write!(f, " of {p}")?;
+            }
+            write!(f, "\n  cost {:.9e}", self.upper_bound)?;
+            match (self.lower_bound, self.gap, self.relative_gap) {
+                (Some(lb), Some(g), Some(r)) => {
+                    write!(f, ", lower bound {lb:.9e}, gap {g:.3e} (relative {r:.3e})")?
+                }
+                _ => write!(f, ", no lower bound")?,
+            }
+            let claim = claim(&self.explanation);
+            if !claim.is_empty() {
+                write!(f, "\n  {claim}")?;
+            }
+            if let Some(r) = &self.randomized {
+                write!(
+                    f,
+                    "\n  Monte Carlo bound (not a proof; wrong with probability <= {:.0e}): {:.9e}",
+                    r.failure_probability, r.lower_bound
+                )?;
+            }
+            return Ok(());
+        }
         write!(
             f,
             "{} (method {}): cost {:.9e}",

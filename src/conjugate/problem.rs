@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 /// One measured pair: `left = L_i`, `right = R_i` with `R_i ~ S^-1 L_i S` (equivalently
 /// `L_i S ~ S R_i`), weight `w_i > 0`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(expecting = "a pair {\"left\": L, \"right\": R, \"weight\": w} (weight optional)")]
 pub struct ConjugatePair {
     /// `L_i`.
     #[serde(with = "crate::so3::serde_rows::rotation")]

@@ -912,6 +912,7 @@ pub fn read_eth_dir(
 }
 
 #[derive(Serialize, Deserialize)]
+#[serde(expecting = "a JSON object {\"pairs\": [{\"left\": L, \"right\": R, \"weight\": w}, ...]}")]
 struct ConjugateJson {
     pairs: Vec<ConjugatePair>,
 }

@@ -24,13 +24,19 @@ use serde::{Deserialize, Serialize};
 type Rows = [[f64; 3]; 3];
 
 #[derive(Deserialize)]
+#[serde(
+    expecting = "a JSON object {\"num_rotations\": n, \"edges\": [{\"i\": 0, \"j\": 1, \"rotation\": R, \"weight\": w}, ...]}"
+)]
 struct ProblemFile {
     num_rotations: usize,
     edges: Vec<EdgeFile>,
 }
 
 #[derive(Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "an edge {\"i\": 0, \"j\": 1, \"rotation\": R, \"weight\": w} (weight optional)"
+)]
 struct EdgeFile {
     i: usize,
     j: usize,
@@ -195,6 +201,9 @@ impl Estimate {
 }
 
 #[derive(Deserialize)]
+#[serde(
+    expecting = "a JSON object {\"rotations\": [R, ...]} (or {\"estimate\": ...} as `--json` prints it, or {\"rotation\": R})"
+)]
 struct EstimateFile {
     rotations: Option<Vec<Rows>>,
     rotation: Option<Rows>,

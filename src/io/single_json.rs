@@ -154,7 +154,10 @@ impl<'de> Deserialize<'de> for Weights {
 }
 
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a JSON object {\"rotations\": [R, ...], \"weights\": [w, ...]} (weights optional)"
+)]
 struct RawSingle {
     rotations: Rotations,
     #[serde(default)]
@@ -234,6 +237,9 @@ pub fn to_single_json(problem: &SingleProblem) -> String {
 }
 
 #[derive(Deserialize)]
+#[serde(
+    expecting = "a JSON object {\"rotation\": R} (or {\"estimate\": R}, as `--json` prints it)"
+)]
 struct RawEstimate {
     #[serde(default)]
     rotation: Option<[[f64; 3]; 3]>,

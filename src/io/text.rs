@@ -82,6 +82,9 @@ pub fn read_bytes(path: &str) -> Result<Vec<u8>> {
     if path == "-" {
         return read_limited_binary(std::io::stdin().lock(), max_bytes).map_err(io_error);
     }
+    if std::path::Path::new(path).is_dir() {
+        return Err(io_error(folder_message(std::path::Path::new(path))));
+    }
     let file = std::fs::File::open(path).map_err(|e| io_error(e.to_string()))?;
     if let Ok(meta) = file.metadata()
         && meta.is_file()
@@ -199,9 +202,7 @@ fn folder_message(path: &std::path::Path) -> String {
             db.display()
         )
     } else {
-        "is a folder, not a file (`multiple` reads a folder holding a COLMAP database.db; \
-         `conjugate` a hand-eye folder)"
-            .into()
+        "is a folder, not a file".into()
     }
 }
 

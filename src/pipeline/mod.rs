@@ -110,9 +110,13 @@ pub struct PipelineDetails {
 
 impl<S: fmt::Display> fmt::Display for Averaged<S> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "{}", self.solution)?;
+        crate::report::nested(f, &self.solution)?;
+        writeln!(f)?;
         match &self.certificate {
-            Some(c) => write!(f, "certificate: {c}")?,
+            Some(c) => {
+                write!(f, "certificate: ")?;
+                crate::report::nested(f, c)?;
+            }
             None => write!(
                 f,
                 "certificate: none ({})",

@@ -200,7 +200,8 @@ impl fmt::Display for InlierGraph {
         )?;
         match &self.certificate {
             Some(c) => {
-                write!(f, "\ninlier-graph certificate: {c}")?;
+                write!(f, "\ninlier-graph certificate: ")?;
+                crate::report::nested(f, c)?;
                 if c.is_certified() {
                     write!(
                         f,

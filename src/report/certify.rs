@@ -287,7 +287,8 @@ impl fmt::Display for CertifyReport {
             "cost of the given estimate: {:.9e}",
             self.certificate.upper_bound
         )?;
-        write!(f, "certificate: {}", self.certificate)?;
+        write!(f, "certificate: ")?;
+        super::nested(f, &self.certificate)?;
         if let Some(d) = &self.details {
             write_methods(f, &d.methods)?;
         }

@@ -234,7 +234,10 @@ impl fmt::Display for ConjugateReport {
             )?;
         }
         match &self.result.certificate {
-            Some(c) => write!(f, "certificate: {c}")?,
+            Some(c) => {
+                write!(f, "certificate: ")?;
+                super::nested(f, c)?;
+            }
             None => write!(f, "certificate: none")?,
         }
         if let Some(p) = &self.figure {

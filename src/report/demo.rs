@@ -228,7 +228,8 @@ impl fmt::Display for DemoReport {
             self.graph_size.0, self.graph_size.1
         )?;
         writeln!(f, "{}", self.multiple)?;
-        writeln!(f, "{}", self.multiple_certificate)?;
+        super::nested(f, &self.multiple_certificate)?;
+        writeln!(f)?;
         writeln!(f, "{}", self.multiple_accuracy)?;
 
         rule(f, "3. conjugate rotation averaging (hand-eye)")?;
@@ -245,7 +246,9 @@ impl fmt::Display for DemoReport {
             angle_between(&s.estimate, &self.conjugate_truth).to_degrees()
         )?;
         if let Some(c) = &self.conjugate.certificate {
-            writeln!(f, "  {c}")?;
+            write!(f, "  ")?;
+            super::nested(f, c)?;
+            writeln!(f)?;
         }
 
         let v = self.verdicts();

@@ -52,6 +52,58 @@ use crate::so3::Rotation;
 use serde::Serialize;
 use std::fmt;
 
+/// Write `value` in the form `f` asks for: alternate (`{:#}`, verbose) or not.
+pub(crate) fn nested(f: &mut fmt::Formatter<'_>, value: &dyn fmt::Display) -> fmt::Result {
+    if f.alternate() {
+        write!(f, "{value:#}")
+    } else {
+        write!(f, "{value}")
+    }
+}
+
+/// `text` with every line longer than `width` characters broken after a `; ` or `, ` (or else a
+/// space) before the limit, the continuation indented two spaces more than the line: the
+/// command line's default text output (`--verbose` prints the long lines as they are).
+pub fn wrap_lines(text: &str, width: usize) -> String {
+    let mut out = String::with_capacity(text.len() + 64);
+    for (k, line) in text.split('\n').enumerate() {
+        if k > 0 {
+            out.push('\n');
+        }
+        let indent = line.len() - line.trim_start().len();
+        let pad = " ".repeat(indent + 2);
+        let mut rest = line;
+        let mut first = true;
+        loop {
+            let limit = if first { width } else { width - pad.len() };
+            if rest.chars().count() <= limit {
+                out.push_str(rest);
+                break;
+            }
+            let cut = rest
+                .char_indices()
+                .nth(limit)
+                .map_or(rest.len(), |(i, _)| i);
+            let head = &rest[..cut];
+            let at = ["; ", ", ", " "].iter().find_map(|sep| {
+                head.rfind(sep)
+                    .filter(|&i| i > indent + 8)
+                    .map(|i| i + sep.len())
+            });
+            let Some(at) = at else {
+                out.push_str(rest);
+                break;
+            };
+            out.push_str(rest[..at].trim_end());
+            out.push('\n');
+            out.push_str(&pad);
+            rest = rest[at..].trim_start();
+            first = false;
+        }
+    }
+    out
+}
+
 /// An estimate in JSON: one row-major rotation, or a list of them.
 #[derive(Serialize)]
 #[serde(untagged)]
@@ -86,10 +138,36 @@ impl<J> ProblemJson<J> {
     }
 }
 
-/// The lines `  METHOD (T s): NOTE` of the bounding methods that ran.
+/// The lines `  METHOD (T s): NOTE` of the bounding methods that ran (the rungs of the proof
+/// ladder), in the alternate form only (`{:#}`, the command line's `--verbose`).
 fn write_methods(f: &mut fmt::Formatter<'_>, methods: &[MethodRun]) -> fmt::Result {
+    if !f.alternate() {
+        return Ok(());
+    }
     for m in methods {
         write!(f, "\n  {} ({:.3} s): {}", m.method, m.seconds, m.note)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::wrap_lines;
+
+    #[test]
+    fn long_lines_break_after_separators() {
+        let line = format!("head: {}; tail, end", "word ".repeat(20).trim_end());
+        let wrapped = wrap_lines(&line, 40);
+        assert!(
+            wrapped.lines().all(|l| l.chars().count() <= 40),
+            "{wrapped}"
+        );
+        assert!(
+            wrapped.lines().skip(1).all(|l| l.starts_with("  ")),
+            "{wrapped}"
+        );
+        let words = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
+        assert_eq!(words(&wrapped), words(&line));
+        assert_eq!(wrap_lines("short\n  also short", 40), "short\n  also short");
+    }
 }

@@ -1,6 +1,6 @@
 //! The report of `rotavg multiple`.
 
-use super::{ProblemJson, ProblemKind, Rows, write_methods};
+use super::{ProblemJson, ProblemKind, Rows, nested, write_methods};
 use crate::certify::CertifiedProblem;
 use crate::certify::{Certificate, Verdict};
 use crate::error::Result;
@@ -253,7 +253,8 @@ impl fmt::Display for MultipleReport {
         for w in &self.warnings {
             write!(f, "\nwarning: {w}")?;
         }
-        write!(f, "\n{}", self.result)?;
+        writeln!(f)?;
+        nested(f, &self.result)?;
         if let Some(c) = &self.result.details.certify {
             write_methods(f, &c.methods)?;
         }
@@ -267,7 +268,8 @@ impl fmt::Display for MultipleReport {
             )?;
         }
         if let Some(g) = &self.result.details.inlier_graph {
-            write!(f, "\n{g}")?;
+            writeln!(f)?;
+            nested(f, g.as_ref())?;
             if let Some(c) = &g.details.certify {
                 write_methods(f, &c.methods)?;
             }

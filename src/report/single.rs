@@ -79,6 +79,6 @@ impl Serialize for SingleReport {
 
 impl fmt::Display for SingleReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.result)
+        super::nested(f, &self.result)
     }
 }

@@ -23,6 +23,9 @@ pub struct SingleProblem {
 
 /// Unvalidated serde form of [`SingleProblem`].
 #[derive(Deserialize)]
+#[serde(
+    expecting = "a single-averaging problem {\"rotations\": [R, ...], \"weights\": [w, ...]} (weights optional)"
+)]
 struct RawSingleProblem {
     #[serde(with = "crate::so3::serde_rows::rotations")]
     rotations: Vec<Rotation>,

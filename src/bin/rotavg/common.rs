@@ -29,6 +29,10 @@ pub struct Common {
     /// Print one JSON object on stdout (SPEC section 5) instead of the readable summary.
     #[arg(long)]
     pub json: bool,
+    /// Print the proof's details: every rung of the proof ladder that ran, the tolerance rule,
+    /// the whole explanation with the labels of paper-notes/ (e.g. [D15]), long lines unbroken.
+    #[arg(long, short = 'v')]
+    pub verbose: bool,
     /// Time budget of the certificate, seconds (`none`: no limit). A proof step predicted or
     /// found to exceed it is not started; the verdict is then `inconclusive` with the reason.
     #[arg(long, value_name = "SECONDS", default_value = "600", value_parser = parse_seconds)]
@@ -126,13 +130,22 @@ impl Common {
 
     /// Print a report: its JSON with `--json`, its text unless `--quiet`.
     pub fn print<R: Serialize + Display>(&self, report: &R) -> rotavg::Result<()> {
-        print(report, self.json, self.quiet)
+        print(report, self.json, self.quiet, self.verbose)
     }
 }
 
-/// Print a report: `serde_json::to_string(report)` when `json`, else `report.to_string()`
-/// unless `quiet`.
-pub fn print<R: Serialize + Display>(report: &R, json: bool, quiet: bool) -> rotavg::Result<()> {
+/// The width of the default text output: longer lines are broken (`--verbose` does not).
+pub const TEXT_WIDTH: usize = 100;
+
+/// Print a report: `serde_json::to_string(report)` when `json`, else unless `quiet` its text:
+/// the short form broken into lines of at most [`TEXT_WIDTH`] characters, or with `verbose`
+/// the alternate form (`{:#}`: the proof's details).
+pub fn print<R: Serialize + Display>(
+    report: &R,
+    json: bool,
+    quiet: bool,
+    verbose: bool,
+) -> rotavg::Result<()> {
     crate::progress::finish();
     if json {
         let text = serde_json::to_string(report).map_err(|e| rotavg::Error::Io {
@@ -140,8 +153,13 @@ pub fn print<R: Serialize + Display>(report: &R, json: bool, quiet: bool) -> rot
             message: e.to_string(),
         })?;
         println!("{text}");
+    } else if verbose && !quiet {
+        println!("{report:#}");
     } else if !quiet {
-        println!("{report}");
+        println!(
+            "{}",
+            rotavg::report::wrap_lines(&report.to_string(), TEXT_WIDTH)
+        );
     }
     Ok(())
 }

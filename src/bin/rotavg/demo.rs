@@ -13,12 +13,20 @@ pub struct Args {
     /// Number of nodes of the multiple-averaging instance.
     #[arg(long, default_value_t = 1000)]
     pub nodes: usize,
+    /// Print the proof's details (the certificates' whole explanations).
+    #[arg(long, short = 'v')]
+    pub verbose: bool,
 }
 
 /// Run the demo. The verdict returned is the worst of the certificates.
 pub fn run(args: &Args) -> rotavg::Result<Outcome> {
     let report = rotavg::report::DemoReport::run(args.seed, args.nodes)?;
-    println!("{report}");
+    if args.verbose {
+        println!("{report:#}");
+    } else {
+        let text = rotavg::report::wrap_lines(&report.to_string(), crate::common::TEXT_WIDTH);
+        println!("{text}");
+    }
     Ok(Outcome {
         verdict: Some(report.worst_verdict()),
     })

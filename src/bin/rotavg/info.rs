@@ -31,6 +31,6 @@ pub fn run(args: &Args) -> rotavg::Result<Outcome> {
         ..Default::default()
     };
     let report = InfoReport::load(&args.input, args.format, &options)?;
-    crate::common::print(&report, args.json, false)?;
+    crate::common::print(&report, args.json, false, false)?;
     Ok(Outcome { verdict: None })
 }

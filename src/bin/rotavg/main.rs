@@ -116,7 +116,8 @@ fn main() -> ExitCode {
             }
         }
         Err(e) => {
-            eprintln!("rotavg: error: {}", named(e, input(&cli.command)));
+            let text = folder_refused(named(e, input(&cli.command)), &cli.command);
+            eprintln!("rotavg: error: {text}");
             ExitCode::from(1)
         }
     }
@@ -132,6 +133,47 @@ fn input(command: &Command) -> Option<&str> {
         Command::Certify(a) => Some(&a.input),
         Command::Info(a) => Some(&a.input),
     }
+}
+
+/// A folder given as the input of a verb that cannot read it: the reader's error (the
+/// operating system's "Is a directory", or the readers' general note on folders) becomes what
+/// this verb reads instead. Other errors are unchanged.
+fn folder_refused(text: String, command: &Command) -> String {
+    let Some(path) = input(command) else {
+        return text;
+    };
+    let is_folder = path != "-" && std::path::Path::new(path).is_dir();
+    let Some(message) = text.strip_prefix(path).and_then(|t| t.strip_prefix(": ")) else {
+        return text;
+    };
+    // the readers' general note on folders, or the operating system's; a specific diagnosis
+    // (a database.db that is not SQLite, no hand-eye streams found) is kept
+    let general = message.starts_with("is a folder, not a file") || message.contains("os error 21");
+    if !is_folder || !general {
+        return text;
+    }
+    let accepts = match command {
+        Command::Single(_) => {
+            "is a folder: `rotavg single` reads a file (JSON {\"rotations\": [R, ...]}), \
+                     never a folder"
+        }
+        Command::Multiple(_) | Command::Info(_) => {
+            "is a folder: as a folder, `rotavg multiple` and `rotavg info` read only a \
+                     COLMAP project (a folder holding database.db); other view graphs are files \
+                     (g2o, 1DSfM EGs.txt, JSON)"
+        }
+        Command::Conjugate(_) => {
+            "is a folder: as a folder, `rotavg conjugate` reads a Tabb dataset \
+                     (robot_cali.txt) or a hand and a camera pose stream (CSV files named \
+                     *hand*/*base_link*/*vicon* and *camera*/*target*, or --hand/--camera)"
+        }
+        Command::Certify(_) => {
+            "is a folder: `rotavg certify` reads the problem from a file (a view graph: \
+                     g2o, 1DSfM EGs.txt, JSON; a single or conjugate JSON problem)"
+        }
+        Command::Demo(_) => return text,
+    };
+    format!("{path}: {accepts}")
 }
 
 /// The error as printed: an error about the data that does not name a file yet (a disconnected

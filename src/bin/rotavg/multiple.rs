@@ -224,7 +224,11 @@ pub fn run(args: &Args) -> Result<Outcome> {
     if let Some(w) = &report.result.details.outliers
         && !args.common.quiet
     {
-        eprintln!("rotavg: warning: {}: {w}", args.input);
+        let warning = format!("rotavg: warning: {}: {w}", args.input);
+        eprintln!(
+            "{}",
+            rotavg::report::wrap_lines(&warning, crate::common::TEXT_WIDTH)
+        );
     }
     args.common.print(&report)?;
     Ok(Outcome {
