@@ -34,12 +34,12 @@ for row in $ROWS; do
   [[ -f "$g" ]] || "$GEN" random "$n" "$m" "$sigma" --outliers "$frac" --write-g2o "$g" >/dev/null
   load=$(cut -d' ' -f1 /proc/loadavg)
   start=$(date +%s.%N)
-  json=$( { /usr/bin/time -f "RSS %M" -o "$WORK/rss" "$BIN" multiple "$g" --json; } 2>/dev/null )
+  /usr/bin/time -f "RSS %M" -o "$WORK/rss" "$BIN" multiple "$g" --json >"$WORK/out.json" 2>/dev/null
   wall=$(python3 -c "import time; print(f'{time.time() - $start:.2f} s')")
   rss=$(awk '/^RSS/ {printf "%.0f MiB", $2/1024}' "$WORK/rss")
-  ours=$(python3 - "$json" <<'PY'
+  ours=$(python3 - "$WORK/out.json" <<'PY'
 import json, sys
-v = json.loads(sys.argv[1]); c = v["certificate"]
+v = json.load(open(sys.argv[1])); c = v["certificate"]
 g, lb = c.get("relative_gap"), c.get("lower_bound")
 bound = "-" if lb is None else f"{lb:.7g} ({g:.2e})"
 print(f'{c["verdict"]} ({c.get("method")})|{v["cost"]:.7g}|{bound}|{v["solver"]["seconds"]:.3f} s')

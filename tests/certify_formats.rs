@@ -286,7 +286,12 @@ fn certifies_colmap_text_binary_and_model_folders() {
     );
     write("c/model_txt/points3D.txt", "");
     certify_matches(&problem, &folder, &est);
+    // the header names the estimate's file (its own line when the text is wrapped at 100
+    // characters; after `; ` in the --verbose one-line form)
     let text = run(&["certify", s(&problem), "--estimate", s(&folder)]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains(&format!("estimate {}", s(&folder))), "{text}");
+    let text = run(&["certify", s(&problem), "--estimate", s(&folder), "--verbose"]);
     let text = String::from_utf8_lossy(&text.stdout);
     assert!(
         text.contains(&format!("; estimate {}", s(&folder))),
