@@ -291,7 +291,13 @@ fn certifies_colmap_text_binary_and_model_folders() {
     let text = run(&["certify", s(&problem), "--estimate", s(&folder)]);
     let text = String::from_utf8_lossy(&text.stdout);
     assert!(text.contains(&format!("estimate {}", s(&folder))), "{text}");
-    let text = run(&["certify", s(&problem), "--estimate", s(&folder), "--verbose"]);
+    let text = run(&[
+        "certify",
+        s(&problem),
+        "--estimate",
+        s(&folder),
+        "--verbose",
+    ]);
     let text = String::from_utf8_lossy(&text.stdout);
     assert!(
         text.contains(&format!("; estimate {}", s(&folder))),

@@ -189,6 +189,16 @@ fn quaternion_rotation(q: [f64; 4], tol: f64, what: &str) -> std::result::Result
     Ok(UnitQuaternion::from_quaternion(quat).to_rotation_matrix())
 }
 
+/// The error of a database read in a build without the cargo feature `colmap`.
+#[cfg(not(feature = "colmap"))]
+fn without_colmap_feature(path: &Path) -> Error {
+    Error::parse(
+        Some(&path.display().to_string()),
+        None,
+        "a COLMAP database (SQLite), but rotavg was built without the cargo feature `colmap`",
+    )
+}
+
 /// Read a COLMAP database (SQLite) as a view graph `[F12]`: the relative rotations of the
 /// rows of `two_view_geometries` whose `config` is accepted and that store a pose, on the
 /// images they name. The reader's remarks (rows skipped, by reason) are in
@@ -235,11 +245,7 @@ pub fn read_colmap_database(path: &Path, options: &ReadOptions) -> Result<Loaded
     #[cfg(not(feature = "colmap"))]
     {
         let _ = options;
-        Err(Error::parse(
-            Some(&path.display().to_string()),
-            None,
-            "a COLMAP database (SQLite), but rotavg was built without the cargo feature `colmap`",
-        ))
+        Err(without_colmap_feature(path))
     }
 }
 
@@ -859,11 +865,7 @@ pub fn read_database_poses(path: &Path, options: &ReadOptions) -> Result<Vec<Col
     #[cfg(not(feature = "colmap"))]
     {
         let _ = options;
-        Err(Error::parse(
-            Some(&path.display().to_string()),
-            None,
-            "a COLMAP database (SQLite), but rotavg was built without the cargo feature `colmap`",
-        ))
+        Err(without_colmap_feature(path))
     }
 }
 

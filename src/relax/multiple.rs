@@ -364,7 +364,24 @@ fn solve_primal(p: &Scaled<'_>) -> Result<RawSolution> {
 /// blocks `Y_i` have negative determinant, flip the third column (global reflection); project
 /// each block to SO(3); fix the gauge `R_0 = I`. Returns the rotations and the top eigenvalues.
 fn round(x: &Mat<f64>, n: usize) -> Result<(Vec<Rotation>, Vec<f64>)> {
-    let dim = 3 * n;
+    let (y, top) = top_three_blocks(x, n)?;
+    let mut rotations: Vec<Rotation> = y
+        .iter()
+        .map(|b| project_to_so3(b).unwrap_or_else(Rotation::identity))
+        .collect();
+    crate::multiple::fix_gauge(&mut rotations);
+    Ok((rotations, top))
+}
+
+/// The `blocks` `3 x 3` blocks of `Y = V_3 diag(sqrt(lambda_1..3))` from the top eigenpairs of
+/// the `3 blocks x 3 blocks` matrix `X`, the global reflection fixed by the majority of block
+/// determinants, and the largest eigenvalues of `X` (up to 6, descending): the rounding `[P5]`
+/// of every SDP of this crate whose variable is a Gram matrix of rotation blocks.
+pub(crate) fn top_three_blocks(
+    x: &Mat<f64>,
+    blocks: usize,
+) -> Result<(Vec<Matrix3<f64>>, Vec<f64>)> {
+    let dim = 3 * blocks;
     if !x.as_ref().is_all_finite() {
         return Err(Error::Solver {
             message: "the SDP solution contains non-finite values".into(),
@@ -380,7 +397,7 @@ fn round(x: &Mat<f64>, n: usize) -> Result<(Vec<Rotation>, Vec<f64>)> {
     let s = evd.S();
     let u = evd.U();
     let top: Vec<f64> = (0..dim.min(6)).map(|k| s[dim - 1 - k]).collect();
-    let mut y = vec![Matrix3::<f64>::zeros(); n];
+    let mut y = vec![Matrix3::<f64>::zeros(); blocks];
     for c in 0..3 {
         let col = dim - 1 - c;
         let w = s[col].max(0.0).sqrt();
@@ -390,18 +407,10 @@ fn round(x: &Mat<f64>, n: usize) -> Result<(Vec<Rotation>, Vec<f64>)> {
             }
         }
     }
-    let negative = y.iter().filter(|b| b.determinant() < 0.0).count();
-    if 2 * negative > n {
+    if 2 * y.iter().filter(|b| b.determinant() < 0.0).count() > blocks {
         for b in y.iter_mut() {
-            for a in 0..3 {
-                b[(a, 2)] = -b[(a, 2)];
-            }
+            b.set_column(2, &(-b.column(2)));
         }
     }
-    let mut rotations: Vec<Rotation> = y
-        .iter()
-        .map(|b| project_to_so3(b).unwrap_or_else(Rotation::identity))
-        .collect();
-    crate::multiple::fix_gauge(&mut rotations);
-    Ok((rotations, top))
+    Ok((y, top))
 }

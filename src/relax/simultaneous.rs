@@ -17,11 +17,11 @@ use crate::error::{Error, Result};
 use crate::multiple::laplacian::connection_laplacian_triplets;
 use crate::multiple::{Edge, MultipleProblem};
 use crate::relax::clarabel::{Cone, csc, solve_conic};
-use crate::relax::multiple::{SdpPrediction, predict_relax_multiple};
+use crate::relax::multiple::{SdpPrediction, predict_relax_multiple, top_three_blocks};
 use crate::relax::settings::{SdpSettings, SdpStatus};
 use crate::relax::svec::{smat, svec_index, svec_len, svec_weight};
 use crate::so3::{Rotation, project_to_so3};
-use faer::{Mat, Side};
+use faer::Mat;
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -235,36 +235,8 @@ fn round(
     right: &MultipleProblem,
     left: &MultipleProblem,
 ) -> Result<(JointRotations, Vec<f64>)> {
-    let dim = x.nrows();
-    let n = dim / 6;
-    if !x.as_ref().is_all_finite() {
-        return Err(Error::Solver {
-            message: "the SDP solution contains non-finite values".into(),
-        });
-    }
-    let evd = x
-        .as_ref()
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| Error::Solver {
-            message: format!("eigendecomposition of X failed: {e:?}"),
-        })?;
-    let (s, u) = (evd.S(), evd.U());
-    let top: Vec<f64> = (0..dim.min(6)).map(|k| s[dim - 1 - k]).collect();
-    let mut y = vec![Matrix3::<f64>::zeros(); 2 * n];
-    for c in 0..3 {
-        let col = dim - 1 - c;
-        let w = s[col].max(0.0).sqrt();
-        for (a, ya) in y.iter_mut().enumerate() {
-            for r in 0..3 {
-                ya[(r, c)] = u[(3 * a + r, col)] * w;
-            }
-        }
-    }
-    if 2 * y.iter().filter(|b| b.determinant() < 0.0).count() > 2 * n {
-        for b in y.iter_mut() {
-            b.set_column(2, &(-b.column(2)));
-        }
-    }
+    let n = x.nrows() / 6;
+    let (y, top) = top_three_blocks(x, 2 * n)?;
     let blocks: Vec<Rotation> = y
         .iter()
         .map(|b| project_to_so3(b).unwrap_or_else(Rotation::identity))
