@@ -108,14 +108,23 @@ pub struct PipelineDetails {
     pub outliers: Option<crate::multiple::robust::OutlierWarning>,
 }
 
+/// Write `value` in the form `f` asks for: alternate (`{:#}`, verbose) or not.
+pub(crate) fn nested(f: &mut fmt::Formatter<'_>, value: &dyn fmt::Display) -> fmt::Result {
+    if f.alternate() {
+        write!(f, "{value:#}")
+    } else {
+        write!(f, "{value}")
+    }
+}
+
 impl<S: fmt::Display> fmt::Display for Averaged<S> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        crate::report::nested(f, &self.solution)?;
+        nested(f, &self.solution)?;
         writeln!(f)?;
         match &self.certificate {
             Some(c) => {
                 write!(f, "certificate: ")?;
-                crate::report::nested(f, c)?;
+                nested(f, c)?;
             }
             None => write!(
                 f,

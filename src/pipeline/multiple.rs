@@ -201,7 +201,7 @@ impl fmt::Display for InlierGraph {
         match &self.certificate {
             Some(c) => {
                 write!(f, "\ninlier-graph certificate: ")?;
-                crate::report::nested(f, c)?;
+                super::nested(f, c)?;
                 if c.is_certified() {
                     write!(
                         f,

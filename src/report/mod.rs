@@ -52,14 +52,7 @@ use crate::so3::Rotation;
 use serde::Serialize;
 use std::fmt;
 
-/// Write `value` in the form `f` asks for: alternate (`{:#}`, verbose) or not.
-pub(crate) fn nested(f: &mut fmt::Formatter<'_>, value: &dyn fmt::Display) -> fmt::Result {
-    if f.alternate() {
-        write!(f, "{value:#}")
-    } else {
-        write!(f, "{value}")
-    }
-}
+pub(crate) use crate::pipeline::nested;
 
 /// `text` with every line longer than `width` characters broken after a `; ` or `, ` (or else a
 /// space) before the limit, the continuation indented two spaces more than the line: the
