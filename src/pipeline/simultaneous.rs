@@ -465,7 +465,10 @@ impl PipelineProblem for SimultaneousProblem {
 ///     .map(|(k, &(i, j))| e(i, j, noise(k + 1) * s * rs[j] * rs[i].inverse() * s.inverse())).collect();
 /// let p = SimultaneousProblem { num_nodes: 5, right, left };
 /// let avg = average_simultaneous(&p, &Default::default())?;
-/// assert!(avg.certificate.unwrap().is_certified());
+/// // a verified bound on the joint minimum; with noise this relaxation reports a gap (it
+/// // decouples the two graphs, paper-notes/conjugate.md [H12])
+/// let c = avg.certificate.unwrap();
+/// assert!(c.lower_bound.unwrap() <= avg.solution.cost);
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn average_simultaneous(
