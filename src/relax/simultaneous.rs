@@ -17,7 +17,9 @@ use crate::error::{Error, Result};
 use crate::multiple::laplacian::connection_laplacian_triplets;
 use crate::multiple::{Edge, MultipleProblem};
 use crate::relax::clarabel::{Cone, csc, solve_conic};
-use crate::relax::multiple::{SdpPrediction, predict_relax_multiple, top_three_blocks};
+use crate::relax::multiple::{
+    SDP_MULTIPLY_ADD_RATE, SdpPrediction, predict_relax_multiple, top_three_blocks,
+};
 use crate::relax::settings::{SdpSettings, SdpStatus};
 use crate::relax::svec::{smat, svec_index, svec_len, svec_weight};
 use crate::so3::{Rotation, project_to_so3};
@@ -74,7 +76,8 @@ pub fn joint_cost(
 
 /// The sparsity of the relaxation as a view graph on `2n` nodes (right nodes `0..n`, left nodes
 /// `n..2n`, a coupling edge `(i, n + i)` and `(0, n + i)` per node): the SDP's cliques are this
-/// graph's, so [`predict_relax_multiple`] predicts its cost.
+/// graph's, so [`predict_relax_multiple`] predicts its cost; the dense `6n x 6n` matrices of the
+/// rounding and of the verification are added (memory: the larger of the two; time: both).
 pub fn predict_relax_simultaneous(
     right: &MultipleProblem,
     left: &MultipleProblem,
@@ -96,7 +99,15 @@ pub fn predict_relax_simultaneous(
             edges.push(edge(i, n));
         }
     }
-    predict_relax_multiple(&MultipleProblem::new(2 * n, edges)?)
+    let p = predict_relax_multiple(&MultipleProblem::new(2 * n, edges)?)?;
+    // the dense 6n x 6n matrices outside Clarabel: X and its eigenvectors (rounding), the
+    // certificate matrix M and its magnitudes (verification), each a symmetric eigenproblem
+    let dim = 6.0 * n as f64;
+    Ok(SdpPrediction {
+        bytes: p.bytes.max(4.0 * 8.0 * dim * dim),
+        seconds: p.seconds + 2.0 * 10.0 * dim * dim * dim / SDP_MULTIPLY_ADD_RATE,
+        ..p
+    })
 }
 
 /// The upper-triangle entries of `blkdiag(Q_R, Q_L)` (`6n x 6n`).
