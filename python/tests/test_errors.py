@@ -115,7 +115,7 @@ def test_file_errors_carry_path_and_line(tmp_path):
 
 def test_json_errors_speak_json(tmp_path):
     bad = {
-        "pairs.json": ('{"pairs": [1]}', rotavg.read_handeye, "expected a JSON object"),
+        "pairs.json": ('{"pairs": [1]}', rotavg.read_handeye, "expected a pair"),
         "graph.json": ('{"num_rotations": "a", "edges": []}', rotavg.read_graph,
                        "expected a non-negative integer"),
         "weights.json": (json.dumps({"pairs": [{"left": I3.tolist(), "right": I3.tolist(),
