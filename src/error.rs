@@ -55,6 +55,15 @@ pub enum Error {
         /// The weight given.
         weight: f64,
     },
+    /// An edge's 3x3 information matrix is not finite, not exactly symmetric, not positive
+    /// semidefinite, or has a trace outside the weight window
+    /// ([`crate::multiple::anisotropic::Information::new`]).
+    InvalidInformation {
+        /// Which input item, 0-based, with its description.
+        item: String,
+        /// What is wrong with it.
+        reason: String,
+    },
     /// No data where at least some are needed.
     Empty {
         /// What was empty.
@@ -136,6 +145,7 @@ impl fmt::Display for Error {
                     "{item} has weight {weight:e}; weights must lie in [1e-100, 1e100] (they are relative: rescale them)"
                 )
             }
+            Error::InvalidInformation { item, reason } => write!(f, "{item}: information {reason}"),
             Error::Empty { what } => write!(f, "{what} is empty"),
             Error::IndexOutOfRange {
                 edge,

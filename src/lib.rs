@@ -147,4 +147,6 @@ pub mod doc_markdown {
     pub struct GuidePython;
     #[doc = include_str!("../docs/guides/certify-other-tools.md")]
     pub struct GuideCertifyOtherTools;
+    #[doc = include_str!("../docs/guides/anisotropic.md")]
+    pub struct GuideAnisotropic;
 }

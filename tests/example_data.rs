@@ -14,6 +14,9 @@
 //!   `t, x, y, z, qx, qy, qz, qw`): a robot hand in its base and a camera observing a fixed target,
 //!   related by the hand-eye transform `X` (camera to hand) in `handeye/truth.json`; 0.2 degrees of
 //!   noise on the camera rotations.
+//! - `anisotropic.json`: 60 cameras, 240 edges with anisotropic noise (standard deviations 0.5,
+//!   0.5 and 5 degrees along random axes) and each edge's 3x3 information (the inverse
+//!   covariance); `anisotropic_truth.txt` its ground truth as a rotation list.
 //!
 //! Conventions: `paper-notes/formats.md` and the readers in `src/io/`.
 
@@ -207,6 +210,35 @@ fn handeye(rng: &mut StdRng) -> (String, String, String) {
     (hand, camera, truth)
 }
 
+/// `anisotropic.json` (SPEC's JSON with an `information` per edge) and
+/// `anisotropic_truth.txt` (`id R11 .. R33`): [`rotavg::multiple::synthetic::SyntheticAnisotropic`]
+/// with 60 cameras, 240 edges, standard deviations 0.5, 0.5 and 5 degrees along random axes.
+fn anisotropic() -> (String, String) {
+    let (p, truth) = rotavg::multiple::synthetic::SyntheticAnisotropic {
+        num_rotations: 60,
+        num_edges: 240,
+        sigma: 0.5f64.to_radians(),
+        ratio: 10.0,
+        random_axes: true,
+        outlier_fraction: 0.0,
+        seed: 2026,
+    }
+    .generate();
+    let mut list = String::from(
+        "# ground truth of anisotropic.json: id R11 .. R33 (R_i, with R_ij R_i = R_j)\n",
+    );
+    for (i, r) in truth.iter().enumerate() {
+        let _ = write!(list, "{i}");
+        for row in 0..3 {
+            for col in 0..3 {
+                let _ = write!(list, " {:.15}", r.matrix()[(row, col)]);
+            }
+        }
+        list.push('\n');
+    }
+    (rotavg::io::json::write_problem_json(&p), list)
+}
+
 /// Every file of the example data, `(relative path, contents)`, from one seed.
 fn files() -> Vec<(&'static str, String)> {
     let mut rng = StdRng::seed_from_u64(2026);
@@ -220,6 +252,8 @@ fn files() -> Vec<(&'static str, String)> {
         ("handeye/hand.csv", hand),
         ("handeye/camera.csv", camera),
         ("handeye/truth.json", x),
+        ("anisotropic.json", anisotropic().0),
+        ("anisotropic_truth.txt", anisotropic().1),
     ]
 }
 
@@ -245,7 +279,7 @@ fn example_data_is_reproducible_and_reads() {
         );
     }
     let options = rotavg::io::detect::ReadOptions::default();
-    for name in ["slam.g2o", "sfm_outliers.txt"] {
+    for name in ["slam.g2o", "sfm_outliers.txt", "anisotropic.json"] {
         let g = rotavg::io::input::load_problem(
             folder.join(name).to_str().expect("utf-8"),
             Default::default(),

@@ -261,6 +261,7 @@ def average_multiple(
     randomized_seed: Optional[int] = None,
     largest_component: bool = False,
     ground_truth: Optional[npt.ArrayLike] = None,
+    information: Optional[npt.ArrayLike] = None,
 ) -> Result:
     """Absolute rotations from relative ones (rel[k] @ R_i = R_j), certified."""
 
@@ -282,6 +283,7 @@ def average_multiple(
     randomized_seed: Optional[int] = None,
     largest_component: bool = False,
     ground_truth: Optional[npt.ArrayLike] = None,
+    information: None = None,
 ) -> Result:
     """A graph from ``read_graph``, solved as ``rotavg multiple FILE`` solves it."""
 
@@ -299,6 +301,7 @@ def certify_multiple(
     max_seconds: Optional[float] = 600.0,
     randomized: bool = True,
     randomized_seed: Optional[int] = None,
+    information: Optional[npt.ArrayLike] = None,
 ) -> Result:
     """Certify an estimate from any other solver, without changing it."""
 
@@ -315,6 +318,7 @@ def certify_multiple(
     max_seconds: Optional[float] = 600.0,
     randomized: bool = True,
     randomized_seed: Optional[int] = None,
+    information: None = None,
 ) -> Result:
     """Certify an estimate for a graph from ``read_graph``."""
 

@@ -142,6 +142,14 @@ impl Matrices {
         self.values.len() / 9
     }
 
+    /// The matrices as given (row-major `3 x 3`), unchecked.
+    pub fn matrices(&self) -> Vec<Matrix3<f64>> {
+        self.values
+            .chunks_exact(9)
+            .map(Matrix3::from_row_slice)
+            .collect()
+    }
+
     /// The matrices as rotations, each checked by the library
     /// ([`rotation_from_matrix`], default tolerance); errors name `what[k]`.
     pub fn rotations(&self) -> rotavg::Result<Vec<Rotation>> {

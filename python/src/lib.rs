@@ -29,6 +29,7 @@ use rotavg::io::input::{
 };
 use rotavg::io::json::Estimate;
 use rotavg::io::names::{LossKind, MultipleLoss};
+use rotavg::multiple::anisotropic::Information;
 use rotavg::multiple::stats::duplicate_edge_count;
 use rotavg::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_conjugate, average_multiple, average_single};
@@ -78,16 +79,18 @@ struct EdgeArrays {
     j: Vec<i64>,
     rel: Matrices,
     weights: Option<Vec<f64>>,
+    information: Option<Matrices>,
 }
 
 impl EdgeArrays {
-    /// Copy `n, i, j, rel, weights`, checking the shapes.
+    /// Copy `n, i, j, rel, weights, information`, checking the shapes.
     fn copy(
         n: &Bound<'_, PyAny>,
         i: &Bound<'_, PyAny>,
         j: &Bound<'_, PyAny>,
         rel: &Bound<'_, PyAny>,
         weights: Option<&Bound<'_, PyAny>>,
+        information: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let n: i64 = n
             .extract()
@@ -105,12 +108,29 @@ impl EdgeArrays {
             .filter(|w| !w.is_none())
             .map(|w| vector(w, "weights", rel.len()))
             .transpose()?;
+        let information = optional_matrices(information, "information")?;
+        match &information {
+            Some(_) if weights.is_some() => {
+                return Err(argument_error(
+                    "pass weights or information (one 3x3 matrix per edge), not both",
+                ));
+            }
+            Some(h) if h.len() != rel.len() => {
+                return Err(argument_error(format!(
+                    "information must have one 3x3 matrix per edge: got {} for {} edges",
+                    h.len(),
+                    rel.len()
+                )));
+            }
+            _ => {}
+        }
         Ok(EdgeArrays {
             n,
             i,
             j,
             rel,
             weights,
+            information,
         })
     }
 
@@ -149,7 +169,26 @@ impl EdgeArrays {
             });
         }
         let reversed = edges.iter().filter(|e| e.i > e.j).count();
-        let problem = MultipleProblem::new(n, edges)?;
+        let mut problem = MultipleProblem::new(n, edges)?;
+        if let Some(h) = &self.information {
+            let info = h
+                .matrices()
+                .into_iter()
+                .enumerate()
+                .map(|(k, m)| {
+                    Information::new(m).map_err(|e| match e {
+                        rotavg::Error::InvalidInformation { reason, .. } => {
+                            rotavg::Error::InvalidInformation {
+                                item: format!("information[{k}]"),
+                                reason,
+                            }
+                        }
+                        other => other,
+                    })
+                })
+                .collect::<rotavg::Result<Vec<_>>>()?;
+            problem = problem.with_information(info)?;
+        }
         Ok(LoadedGraph {
             duplicates: duplicate_edge_count(&problem),
             problem,
@@ -183,11 +222,17 @@ impl GraphInput {
         j: Option<&Bound<'_, PyAny>>,
         rel: Option<&Bound<'_, PyAny>>,
         weights: Option<&Bound<'_, PyAny>>,
+        information: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         if let Ok(g) = n.cast::<Graph>() {
-            if i.is_some() || j.is_some() || rel.is_some() || weights.is_some() {
+            if i.is_some()
+                || j.is_some()
+                || rel.is_some()
+                || weights.is_some()
+                || information.is_some()
+            {
                 return Err(argument_error(
-                    "pass either a Graph or n, i, j, rel (and weights), not both",
+                    "pass either a Graph or n, i, j, rel (and weights or information), not both",
                 ));
             }
             let g = g.get();
@@ -199,9 +244,14 @@ impl GraphInput {
             ));
         }
         match (i, j, rel) {
-            (Some(i), Some(j), Some(rel)) => {
-                Ok(GraphInput::Arrays(EdgeArrays::copy(n, i, j, rel, weights)?))
-            }
+            (Some(i), Some(j), Some(rel)) => Ok(GraphInput::Arrays(EdgeArrays::copy(
+                n,
+                i,
+                j,
+                rel,
+                weights,
+                information,
+            )?)),
             _ => Err(argument_error(
                 "a view graph needs n, i, j and rel (or a Graph from read_graph)",
             )),
@@ -365,6 +415,10 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     ground_truth: optional ``(n, 3, 3)`` ground truth (NaN matrices where unknown): then
 ///         ``result.accuracy`` (and ``to_dict()["accuracy"]``) reports the estimate's errors
 ///         after the optimal alignment. Default: the ground truth the ``Graph`` was read with.
+///     information: optional ``(M, 3, 3)`` symmetric positive semidefinite information
+///         matrices ``H`` (instead of ``weights``) for the residual ``e`` of
+///         ``R_j R_i^T = rel[k] expm([e]x)``: the anisotropic chordal cost, ``loss="chordal"``
+///         only (SPEC section 1; ``to_dict()["information"]`` summarises them).
 ///
 /// Returns:
 ///     Result: ``estimate`` is ``(n, 3, 3)`` with the gauge ``estimate[0] = I``;
@@ -374,7 +428,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
 ///         bad weights, unknown names. rotavg.DisconnectedError: a disconnected graph.
 #[pyfunction]
-#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="chordal", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None))]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="chordal", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None))]
 #[allow(clippy::too_many_arguments)]
 fn average_multiple_py(
     py: Python<'_>,
@@ -393,6 +447,7 @@ fn average_multiple_py(
     randomized_seed: Option<u64>,
     largest_component: bool,
     ground_truth: Option<&Bound<'_, PyAny>>,
+    information: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunResult> {
     let budget = certify_settings(
         CertifyMode::Auto,
@@ -401,7 +456,7 @@ fn average_multiple_py(
         randomized,
         randomized_seed,
     )?;
-    let graph = GraphInput::copy(n, i, j, rel, weights)?;
+    let graph = GraphInput::copy(n, i, j, rel, weights, information)?;
     let objective = parse_named::<MultipleLoss>(loss, "loss")?.objective(loss_threshold);
     let mode: CertifyMode = parse_named(certify, "certify")?;
     let init = optional_matrices(init, "init")?;
@@ -435,6 +490,7 @@ fn average_multiple_py(
 ///
 /// Args:
 ///     n, i, j, rel, weights: the view graph as for ``average_multiple`` (or a ``Graph`` as n).
+///     information: optional ``(M, 3, 3)`` information matrices, as for ``average_multiple``.
 ///     estimate: ``(n, 3, 3)`` rotations ``R_i`` (any gauge), or the path (``str`` or
 ///         ``os.PathLike``) of another tool's estimate in any format ``rotavg certify
 ///         --estimate`` reads: JSON, g2o vertices (GTSAM), a COLMAP sparse model folder
@@ -453,7 +509,7 @@ fn average_multiple_py(
 ///     rotavg.Error: as ``average_multiple``, an estimate of the wrong size, and (a path) a node
 ///         the file lacks or a file that cannot be read (``rotavg.ParseError``, naming the file).
 #[pyfunction]
-#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None))]
+#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, information=None))]
 #[allow(clippy::too_many_arguments)]
 fn certify_multiple_py(
     py: Python<'_>,
@@ -468,8 +524,9 @@ fn certify_multiple_py(
     max_seconds: Option<f64>,
     randomized: bool,
     randomized_seed: Option<u64>,
+    information: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunResult> {
-    let graph = GraphInput::copy(n, i, j, rel, weights)?;
+    let graph = GraphInput::copy(n, i, j, rel, weights, information)?;
     // a path (str or os.PathLike) is read as `rotavg certify --estimate PATH` reads it
     let path = estimate
         .filter(|e| !e.is_none())

@@ -78,6 +78,11 @@ pub struct ReadOptions {
     /// Tolerance for quaternions (g2o): `| ||q|| - 1 |` must not exceed it; accepted quaternions
     /// are normalised. Files written with 6 decimals are accurate to about 1e-6.
     pub quaternion_tolerance: f64,
+    /// g2o / TORO edges with an information matrix become anisotropic measurements with their
+    /// full 3x3 rotation information (`paper-notes/anisotropic.md` `[A7]`) instead of SE-Sync's
+    /// scalar `kappa` (the default, `false`). Other formats are unaffected (JSON's
+    /// `information` is always read).
+    pub full_information: bool,
 }
 
 impl Default for ReadOptions {
@@ -86,6 +91,7 @@ impl Default for ReadOptions {
             weights: WeightSource::File,
             rotation_tolerance: DEFAULT_ROTATION_TOLERANCE,
             quaternion_tolerance: 1e-3,
+            full_information: false,
         }
     }
 }

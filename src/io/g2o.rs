@@ -39,6 +39,7 @@ use crate::io::detect::{GraphFormat, LoadedGraph, ReadOptions, WeightSource};
 use crate::io::text::{MAX_RECORDS, TextLines};
 use crate::io::{RawEdge, compact_edges};
 use crate::multiple::MultipleProblem;
+use crate::multiple::anisotropic::Information;
 use crate::so3::Rotation;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use std::collections::BTreeMap;
@@ -219,7 +220,9 @@ pub fn rotation_from_ypr(yaw: f64, pitch: f64, roll: f64) -> Rotation {
 
 /// Read the 21 upper-triangular entries of a 6x6 information matrix and return the rotation
 /// block (rows/columns 3..6), validated finite and positive definite, and `tr(block^{-1})`.
-fn rotation_information_trace_inv(t: &mut Tokens<'_>) -> Result<f64> {
+/// The rotation block `Omega_rot` (rows/columns 4..6) of the 21 information entries, checked
+/// positive definite, and `tr(Omega_rot^-1)` `[F3]`.
+fn rotation_information(t: &mut Tokens<'_>) -> Result<(Matrix3<f64>, f64)> {
     let mut info = nalgebra::Matrix6::<f64>::zeros();
     for r in 0..6 {
         for c in r..6 {
@@ -243,7 +246,15 @@ fn rotation_information_trace_inv(t: &mut Tokens<'_>) -> Result<f64> {
             "the rotation block of the information matrix is numerically singular (tr(Omega^-1) = {tr:e})"
         )));
     }
-    Ok(tr)
+    Ok((block, tr))
+}
+
+/// The anisotropic information `H = R_ij^T (scale Omega_rot) R_ij` of an edge `[A7]`
+/// (`scale` 1/2 for g2o's half-angle quaternion error, 2 for TORO's angle units), symmetrised
+/// exactly (a product of the file's numbers, not the file's numbers themselves).
+fn edge_information(r_ij: &Rotation, omega: &Matrix3<f64>, scale: f64) -> Matrix3<f64> {
+    let h = r_ij.matrix().transpose() * (omega * scale) * r_ij.matrix();
+    (h + h.transpose()) * 0.5
 }
 
 /// The pose type of a g2o vertex line.
@@ -423,11 +434,16 @@ fn read_g2o_limited(
     let mut skipped_other = (0usize, 0usize);
     let (mut seen_3d, mut seen_2d) = (false, false);
     let no_edges = "no edge lines (EDGE_SE3:QUAT, EDGE3 or EDGE_SE2) in the file";
+    // [A7]: each kept edge's full rotation information, in edge order (used with
+    // `options.full_information`)
+    let mut infos: Vec<Matrix3<f64>> = Vec::new();
+    let name = lines.name().to_owned();
     let edges = EdgeLines::read(lines, no_edges, |t, edges| {
         let ln = t.line;
         let tag = t.next_str("tag")?;
         let mut vertex = None;
         let mut edge = None;
+        let mut information: Option<Matrix3<f64>> = None;
         match tag {
             "VERTEX_SE3:QUAT" | "VERTEX3" | "VERTEX_SE2" => {
                 let v = parse_vertex(tag, t, qtol)?;
@@ -446,12 +462,16 @@ fn read_g2o_limited(
                     t.next_f64(w)?;
                 }
                 let z = quaternion_rotation(t, qtol)?;
-                let weight = if t.toks.len() == 31 {
-                    3.0 / (2.0 * rotation_information_trace_inv(t)?) // [F3]
+                let r_ij = z.inverse(); // R_ij = Z_ij^T [F1]
+                let (weight, h) = if t.toks.len() == 31 {
+                    let (omega, tr) = rotation_information(t)?;
+                    // [F3] kappa; [A7] H = R_ij^T (Omega / 2) R_ij (kappa I when isotropic)
+                    (3.0 / (2.0 * tr), edge_information(&r_ij, &omega, 0.5))
                 } else {
-                    1.0
+                    (1.0, Matrix3::identity())
                 };
-                edge = Some((i, j, z.inverse(), weight)); // R_ij = Z_ij^T [F1]
+                edge = Some((i, j, r_ij, weight));
+                information = Some(h);
                 seen_3d = true;
             }
             "EDGE3" => {
@@ -467,12 +487,16 @@ fn read_g2o_limited(
                 let roll = t.next_f64("roll")?;
                 let pitch = t.next_f64("pitch")?;
                 let yaw = t.next_f64("yaw")?;
-                let weight = if t.toks.len() == 30 {
-                    6.0 / rotation_information_trace_inv(t)? // [F3], angle units
+                let r_ij = rotation_from_ypr(yaw, pitch, roll).inverse();
+                let (weight, h) = if t.toks.len() == 30 {
+                    let (omega, tr) = rotation_information(t)?;
+                    // [F3], angle units: kappa = 6 / tr; [A7] H = R_ij^T (2 Omega) R_ij
+                    (6.0 / tr, edge_information(&r_ij, &omega, 2.0))
                 } else {
-                    1.0
+                    (1.0, Matrix3::identity())
                 };
-                edge = Some((i, j, rotation_from_ypr(yaw, pitch, roll).inverse(), weight));
+                edge = Some((i, j, r_ij, weight));
+                information = Some(h);
                 seen_3d = true;
             }
             "EDGE_SE2" => {
@@ -496,10 +520,11 @@ fn read_g2o_limited(
                             info[5]
                         )));
                     }
-                    info[5] // [F4] SE-Sync's 2-D kappa
+                    info[5] // [F4] SE-Sync's 2-D kappa; [A7] H = I33 I
                 } else {
                     1.0
                 };
+                information = Some(Matrix3::identity() * weight);
                 // Z = Rz(dtheta), R_ij = Z^T = Rz(-dtheta) [F1], [F4]
                 edge = Some((
                     i,
@@ -555,6 +580,9 @@ fn read_g2o_limited(
                 WeightSource::File => weight,
                 WeightSource::Unit => 1.0,
             };
+            if options.full_information && options.weights == WeightSource::File {
+                infos.push(information.unwrap_or_else(|| Matrix3::identity() * weight));
+            }
             edges.push(
                 ln,
                 RawEdge {
@@ -582,7 +610,26 @@ fn read_g2o_limited(
     if seen_2d && seen_3d {
         warnings.push("the file mixes 2-D and 3-D lines".to_owned());
     }
-    let graph = edges.into_graph(vertices.keys().copied(), GraphFormat::G2o)?;
+    let mut graph = edges.into_graph(vertices.keys().copied(), GraphFormat::G2o)?;
+    if !infos.is_empty() {
+        let info = infos
+            .into_iter()
+            .enumerate()
+            .map(|(k, h)| {
+                Information::new(h).map_err(|e| match e {
+                    Error::InvalidInformation { reason, .. } => Error::InvalidInformation {
+                        item: format!("edge {k}"),
+                        reason,
+                    },
+                    other => other,
+                })
+            })
+            .collect::<Result<Vec<_>>>();
+        graph.problem = graph
+            .problem
+            .with_information(info.map_err(|e| e.in_file(&name, None))?)
+            .map_err(|e| e.in_file(&name, None))?;
+    }
     let initial = if vertices.is_empty() {
         None
     } else if vertices.len() == graph.node_ids.len() {

@@ -5,7 +5,11 @@
 //! * Problem: `{"num_rotations": n, "edges": [{"i": 0, "j": 1, "rotation": R, "weight": w}, ...]}`
 //!   with `R` = `R_ij` (`R_ij R_i = R_j`, this crate's convention, no conversion), a row-major
 //!   nested 3x3 array, indices 0-based, `weight` optional (default 1; within [`crate::io::MIN_WEIGHT`,
-//!   `crate::io::MAX_WEIGHT`] when weights come from the file). Unknown fields in an
+//!   `crate::io::MAX_WEIGHT`] when weights come from the file). Anisotropic measurements (SPEC
+//!   section 1): `"information": H` (a symmetric positive semidefinite 3x3 array for the residual
+//!   `e` of `R_j R_i^T = R_ij exp([e]x)`) instead of `"weight"`; when any edge has one, the problem
+//!   is anisotropic and an edge without it counts as `H = w I` (exactly the isotropic term);
+//!   `--weights unit` ignores every information and weight. Unknown fields in an
 //!   edge are an error (a misspelt `"wieght"` must not silently become 1); unknown top-level
 //!   fields are ignored.
 //! * Estimate: `{"rotations": [R, ...]}`, or `{"estimate": [R, ...]}` as printed by `--json`
@@ -17,6 +21,7 @@
 
 use crate::error::{Error, Result};
 use crate::io::detect::{GraphFormat, LoadedGraph, ReadOptions, WeightSource};
+use crate::multiple::anisotropic::Information;
 use crate::multiple::{Edge, MultipleProblem};
 use crate::so3::{Rotation, rotation_from_rows, rotation_to_rows};
 use serde::{Deserialize, Serialize};
@@ -35,18 +40,16 @@ struct ProblemFile {
 #[derive(Deserialize, Serialize)]
 #[serde(
     deny_unknown_fields,
-    expecting = "an edge {\"i\": 0, \"j\": 1, \"rotation\": R, \"weight\": w} (weight optional)"
+    expecting = "an edge {\"i\": 0, \"j\": 1, \"rotation\": R, \"weight\": w} (weight optional; or \"information\": H, a 3x3 array, instead of the weight)"
 )]
 struct EdgeFile {
     i: usize,
     j: usize,
     rotation: Rows,
-    #[serde(default = "one")]
-    weight: f64,
-}
-
-fn one() -> f64 {
-    1.0
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    weight: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    information: Option<Rows>,
 }
 
 fn syntax_error(file: &str, e: serde_json::Error) -> Error {
@@ -79,27 +82,47 @@ pub fn read_problem_json(text: &str, file: &str, options: &ReadOptions) -> Resul
         ));
     }
     let mut edges = Vec::with_capacity(m);
+    let from_file = options.weights == WeightSource::File;
+    let anisotropic = from_file && pf.edges.iter().any(|e| e.information.is_some());
+    let mut information = Vec::with_capacity(if anisotropic { m } else { 0 });
     for (k, e) in pf.edges.iter().enumerate() {
         let item = format!("edge {k} ({}, {})", e.i, e.j);
         let rotation = rotation_from_rows(&e.rotation, options.rotation_tolerance, &item)
             .map_err(|err| err.in_file(file, None))?;
-        if options.weights == WeightSource::File
-            && let Some(why) = crate::io::weight_out_of_range(e.weight)
-        {
+        if e.weight.is_some() && e.information.is_some() {
+            return Err(Error::parse(
+                Some(file),
+                None,
+                format!("{item}: give \"weight\" or \"information\", not both"),
+            ));
+        }
+        let weight = e.weight.unwrap_or(1.0);
+        if from_file && let Some(why) = crate::io::weight_out_of_range(weight) {
             return Err(Error::parse(Some(file), None, format!("{item}: {why}")));
+        }
+        if anisotropic {
+            let h = match &e.information {
+                Some(rows) => Information::try_from(*rows),
+                None => Information::try_from(isotropic_rows(weight)),
+            };
+            information.push(h.map_err(|reason| {
+                Error::parse(Some(file), None, format!("{item}: information {reason}"))
+            })?);
         }
         edges.push(Edge {
             i: e.i,
             j: e.j,
             rotation,
-            weight: match options.weights {
-                WeightSource::File => e.weight,
-                WeightSource::Unit => 1.0,
-            },
+            weight: if from_file { weight } else { 1.0 },
         });
     }
     let reversed = edges.iter().filter(|e| e.i > e.j).count();
-    let problem = MultipleProblem::new(n, edges).map_err(|e| e.in_file(file, None))?;
+    let mut problem = MultipleProblem::new(n, edges).map_err(|e| e.in_file(file, None))?;
+    if anisotropic {
+        problem = problem
+            .with_information(information)
+            .map_err(|e| e.in_file(file, None))?;
+    }
     let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
     Ok(LoadedGraph {
         node_ids: (0..n as u64).collect(),
@@ -114,7 +137,13 @@ pub fn read_problem_json(text: &str, file: &str, options: &ReadOptions) -> Resul
     })
 }
 
-/// Write a problem as JSON (SPEC section 5), one edge per line; numbers in Rust's shortest
+/// `w I` as rows.
+fn isotropic_rows(w: f64) -> Rows {
+    [[w, 0.0, 0.0], [0.0, w, 0.0], [0.0, 0.0, w]]
+}
+
+/// Write a problem as JSON (SPEC section 5), one edge per line (with its `information` when the
+/// problem is anisotropic, its `weight` otherwise); numbers in Rust's shortest
 /// round-trip form, so [`read_problem_json`] gives back the same problem.
 ///
 /// ```
@@ -129,15 +158,19 @@ pub fn write_problem_json(problem: &MultipleProblem) -> String {
         "{{\"num_rotations\": {}, \"edges\": [\n",
         problem.num_rotations()
     );
+    let info = problem.information();
     let lines: Vec<String> = problem
         .edges()
         .iter()
-        .map(|e| {
+        .enumerate()
+        .map(|(k, e)| {
+            let information = info.map(|h| <[[f64; 3]; 3]>::from(h[k]));
             let ef = EdgeFile {
                 i: e.i,
                 j: e.j,
                 rotation: rotation_to_rows(&e.rotation),
-                weight: e.weight,
+                weight: information.is_none().then_some(e.weight),
+                information,
             };
             format!("  {}", serde_json::to_string(&ef).unwrap_or_default())
         })

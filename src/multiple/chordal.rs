@@ -12,6 +12,7 @@ use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::block_pattern::SymbolicFactor;
 use crate::linalg::linear_solver::{LinearSolver, ScalarLaplacian, SolverKind};
 use crate::multiple::MultipleProblem;
+use crate::multiple::anisotropic::edge_b;
 use crate::multiple::solve::LinearAlgebraCounts;
 use crate::multiple::solve::{MultipleSettings, MultipleSolution};
 use crate::objective::Objective;
@@ -26,7 +27,9 @@ use nalgebra::{Matrix3, Vector3};
 /// `d/dw_i f(R_0 exp(hat w_0), ..., R_{n-1} exp(hat w_{n-1}))` at `w = 0`. Per edge
 /// `e = (i, j)` with `A_e = R_j^T R_ij R_i`: `f_e = w_e ||I - A_e||_F^2`,
 /// `grad_i += 4 w_e vee(A_e)`, `grad_j -= 4 w_e vee(A_e)`, where `vee(A)` is the axial vector of
-/// the skew part `(A - A^T) / 2`. Panics if `rotations.len() != n` (check with
+/// the skew part `(A - A^T) / 2`. Anisotropic problems ([`MultipleProblem::with_information`]):
+/// `f_e = 4 tr M - 4 tr B_e`, `grad_i -= 8 vee(B_e)`, `grad_j += 8 vee(B_e)` with
+/// `B_e = R_i^T M R_ij^T R_j` (`paper-notes/anisotropic.md` `[A4]`). Panics if `rotations.len() != n` (check with
 /// [`MultipleProblem::check_estimate`]).
 ///
 /// ```
@@ -42,6 +45,18 @@ pub fn chordal_gradient(
     assert_eq!(rotations.len(), problem.num_rotations());
     let mut grad = vec![Vector3::zeros(); rotations.len()];
     let mut cost = 0.0;
+    if let Some(info) = problem.information() {
+        // [A4]: f_e = 4 tr M - 4 tr B, grad_i = -8 vee(B), grad_j = 8 vee(B)
+        for (e, h) in problem.edges().iter().zip(info) {
+            let (ri, rj) = (rotations[e.i].matrix(), rotations[e.j].matrix());
+            let b = edge_b(h, e.rotation.matrix(), ri, rj);
+            cost += 4.0 * (h.chordal_matrix().trace() - b.trace());
+            let g = vee(&b) * 8.0;
+            grad[e.i] -= g;
+            grad[e.j] += g;
+        }
+        return (cost, grad);
+    }
     for e in problem.edges() {
         let m = e.rotation.matrix() * rotations[e.i].matrix();
         let rj = rotations[e.j].matrix();
@@ -270,13 +285,18 @@ fn assemble_hessian(
     val: &mut [f64],
 ) {
     val.iter_mut().for_each(|v| *v = 0.0);
-    for (e, s) in problem.edges().iter().zip(slots) {
-        let a = rotations[e.j].matrix().transpose() * e.rotation.matrix() * rotations[e.i].matrix();
-        let t = a.trace();
-        let w2 = 2.0 * e.weight;
-        // [M6]: H_ii = H_jj = 2w (tr(A) I - sym(A)), H_ji = 2w (A^T - tr(A) I)
-        let diag = (Matrix3::identity() * t - (a + a.transpose()) * 0.5) * w2;
-        let off = (a.transpose() - Matrix3::identity() * t) * w2;
+    let info = problem.information();
+    for (k, (e, s)) in problem.edges().iter().zip(slots).enumerate() {
+        let (ri, rj) = (rotations[e.i].matrix(), rotations[e.j].matrix());
+        // [M6]: H_ii = H_jj = 2w (tr(A) I - sym(A)), H_ji = 2w (A^T - tr(A) I), i.e. [A4] with
+        // B = (w / 2) A^T: H_ii = H_jj = 4 (tr(B) I - sym(B)), H_ji = 4 (B - tr(B) I)
+        let b = match info {
+            Some(info) => edge_b(&info[k], e.rotation.matrix(), ri, rj),
+            None => (rj.transpose() * e.rotation.matrix() * ri).transpose() * (0.5 * e.weight),
+        };
+        let t = b.trace();
+        let diag = (Matrix3::identity() * t - (b + b.transpose()) * 0.5) * 4.0;
+        let off = (b - Matrix3::identity() * t) * 4.0;
         if let Some(p) = s.vi {
             pattern.add(val, p, p, 0, &diag);
         }
@@ -673,5 +693,62 @@ mod tests {
         let hx = pattern.sym_mul(&h, &x);
         let res = (&hx - &b).norm_l2() / b.norm_l2();
         assert!(res < 1e-10, "relative residual after one iteration {res}");
+    }
+
+    /// `[A4]`: the anisotropic gradient and Hessian match central differences of the cost in
+    /// the right-perturbation chart (node 0 fixed), with indefinite `M` on some edges.
+    #[test]
+    fn anisotropic_gradient_and_hessian_match_finite_differences() {
+        use crate::multiple::synthetic::SyntheticAnisotropic;
+        let (p, truth) = SyntheticAnisotropic {
+            num_rotations: 6,
+            num_edges: 12,
+            sigma: 0.2,
+            ratio: 8.0,
+            ..Default::default()
+        }
+        .generate();
+        let n = p.num_rotations();
+        let r: Vec<Rotation> = truth
+            .iter()
+            .enumerate()
+            .map(|(k, t)| t * exp(&Vector3::new(0.3, -0.2 * k as f64, 0.1)))
+            .collect();
+        let (_, grad) = chordal_gradient(&p, &r);
+        let pattern = grounded_pattern(&p, 3);
+        let slots = edge_slots(&p, &pattern);
+        let mut h = vec![0.0; pattern.nnz()];
+        assemble_hessian(&p, &r, &pattern, &slots, &mut h);
+        let dir: Vec<Vector3<f64>> = (0..n)
+            .map(|k| match k {
+                0 => Vector3::zeros(),
+                _ => Vector3::new(0.7, -0.3 * k as f64, 0.2 + 0.1 * k as f64),
+            })
+            .collect();
+        let at = |t: f64| {
+            let moved: Vec<Rotation> = r
+                .iter()
+                .zip(&dir)
+                .map(|(ri, d)| ri * exp(&(d * t)))
+                .collect();
+            p.chordal_cost(&moved)
+        };
+        let t = 1e-4;
+        let slope = (at(t) - at(-t)) / (2.0 * t);
+        let g_dot: f64 = grad.iter().zip(&dir).map(|(g, d)| g.dot(d)).sum();
+        assert!(
+            (slope - g_dot).abs() < 1e-6 * (1.0 + g_dot.abs()),
+            "{slope} vs {g_dot}"
+        );
+        let t = 1e-3;
+        let curvature = (at(t) - 2.0 * at(0.0) + at(-t)) / (t * t);
+        let flat: Vec<f64> = dir[1..].iter().flat_map(|d| d.iter().copied()).collect();
+        let mut hd = vec![0.0; flat.len()];
+        pattern.sym_mul_flat(&h, &flat, &mut hd);
+        let dhd: f64 = flat.iter().zip(&hd).map(|(a, b)| a * b).sum();
+        assert!(
+            (curvature - dhd).abs() < 1e-4 * (1.0 + dhd.abs()),
+            "{curvature} vs {dhd}"
+        );
     }
 }

@@ -27,6 +27,7 @@
 //! ```
 
 pub mod accuracy;
+pub mod anisotropic;
 pub mod chordal;
 pub mod geodesic;
 pub mod init;

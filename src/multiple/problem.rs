@@ -6,6 +6,7 @@
 //! the gauge fix [`fix_gauge`].
 
 use crate::error::{Error, Result};
+use crate::multiple::anisotropic::{Information, chordal_term};
 use crate::objective::Objective;
 use crate::so3::{Metric, Rotation, angle_between};
 use crate::validate::check_weight;
@@ -69,6 +70,10 @@ impl Edge {
 pub struct MultipleProblem {
     num_rotations: usize,
     edges: Vec<Edge>,
+    /// One 3x3 information matrix per edge, when the measurements are anisotropic
+    /// ([`MultipleProblem::with_information`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    information: Option<Vec<Information>>,
     #[serde(skip)]
     objective: Objective,
 }
@@ -120,8 +125,62 @@ impl MultipleProblem {
         Ok(MultipleProblem {
             num_rotations,
             edges,
+            information: None,
             objective: Objective::CHORDAL_L2,
         })
+    }
+
+    /// The same graph with anisotropic measurements: one information matrix `H` per edge, in
+    /// edge order (SPEC section 1, `paper-notes/anisotropic.md` `[A1]`). The cost becomes the
+    /// anisotropic chordal cost `sum 4 (tr M - <R_ij M, R_j R_i^T>)`, `M = tr(H)/2 I - H`; each
+    /// edge's `weight` is replaced by `tr(H) / 3`, which only starts and preconditions the
+    /// solvers (it is no part of any cost). Errors: a count that differs from the edges', or an
+    /// objective other than chordal L2 (the anisotropic geodesic and robust costs have no
+    /// solver yet).
+    ///
+    /// ```
+    /// use rotavg::multiple::{Edge, MultipleProblem, anisotropic::Information};
+    /// use rotavg::Rotation;
+    /// use nalgebra::{Matrix3, Vector3};
+    /// let e = |i, j| Edge { i, j, rotation: Rotation::identity(), weight: 1.0 };
+    /// let h = Information::new(Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 10.0)))?;
+    /// let p = MultipleProblem::new(3, vec![e(0, 1), e(1, 2)])?.with_information(vec![h; 2])?;
+    /// assert!(p.is_anisotropic());
+    /// assert_eq!(p.edges()[0].weight, 4.0); // tr(H) / 3
+    /// assert_eq!(p.min_weight(), 1.0); // the smallest eigenvalue of any H
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn with_information(mut self, information: Vec<Information>) -> Result<Self> {
+        if information.len() != self.edges.len() {
+            return Err(Error::InvalidSettings {
+                name: "information".into(),
+                reason: format!(
+                    "{} matrices for {} edges (one per edge, in edge order)",
+                    information.len(),
+                    self.edges.len()
+                ),
+            });
+        }
+        if !self.objective.is_chordal_l2() {
+            return Err(self
+                .objective
+                .unsupported("anisotropic multiple", "chordal l2"));
+        }
+        for (e, h) in self.edges.iter_mut().zip(&information) {
+            e.weight = h.mean_weight();
+        }
+        self.information = Some(information);
+        Ok(self)
+    }
+
+    /// The information matrices, one per edge, when the measurements are anisotropic.
+    pub fn information(&self) -> Option<&[Information]> {
+        self.information.as_deref()
+    }
+
+    /// `true` when the edges carry information matrices ([`Self::with_information`]).
+    pub fn is_anisotropic(&self) -> bool {
+        self.information.is_some()
     }
 
     /// The objectives with a solver: chordal L2, and the geodesic metric with any loss.
@@ -146,6 +205,9 @@ impl MultipleProblem {
         if !(objective.is_chordal_l2() || objective.metric == Metric::Geodesic) {
             return Err(objective.unsupported("multiple", Self::SUPPORTED));
         }
+        if self.is_anisotropic() && !objective.is_chordal_l2() {
+            return Err(objective.unsupported("anisotropic multiple", "chordal l2"));
+        }
         self.objective = objective;
         Ok(self)
     }
@@ -153,7 +215,12 @@ impl MultipleProblem {
     /// The smallest edge weight: the scale of the absolute part of the certificate's gap
     /// tolerance (SPEC section 3; adding edges can only lower it).
     pub fn min_weight(&self) -> f64 {
-        crate::validate::min_weight(self.edges.iter().map(|e| e.weight))
+        match &self.information {
+            Some(info) => {
+                crate::validate::min_weight(info.iter().map(Information::min_positive_eigenvalue))
+            }
+            None => crate::validate::min_weight(self.edges.iter().map(|e| e.weight)),
+        }
     }
 
     /// The objective minimised.
@@ -251,27 +318,34 @@ impl MultipleProblem {
         for (new, &old) in keep.iter().enumerate() {
             new_of_old[old] = new;
         }
-        let edges = self
-            .edges
+        let kept: Vec<usize> = (0..self.edges.len())
+            .filter(|&k| new_of_old[self.edges[k].i] != usize::MAX)
+            .collect();
+        let edges = kept
             .iter()
-            .filter(|e| new_of_old[e.i] != usize::MAX)
-            .map(|e| Edge {
-                i: new_of_old[e.i],
-                j: new_of_old[e.j],
-                ..e.clone()
+            .map(|&k| Edge {
+                i: new_of_old[self.edges[k].i],
+                j: new_of_old[self.edges[k].j],
+                ..self.edges[k].clone()
             })
             .collect();
+        let information = self
+            .information
+            .as_ref()
+            .map(|info| kept.iter().map(|&k| info[k]).collect());
         (
             MultipleProblem {
                 num_rotations: keep.len(),
                 edges,
+                information,
                 objective: self.objective,
             },
             keep,
         )
     }
 
-    /// Chordal L2 cost `sum w_ij ||R_j - R_ij R_i||_F^2` `[M1]`. Panics if `rotations.len() != n`
+    /// Chordal L2 cost `sum w_ij ||R_j - R_ij R_i||_F^2` `[M1]` (anisotropic problems: `sum 4 (tr M -
+    /// <R_ij M, R_j R_i^T>)`, [`crate::multiple::anisotropic`]). Panics if `rotations.len() != n`
     /// (a programming error, not user input: check with [`Self::check_estimate`]).
     ///
     /// ```
@@ -289,6 +363,14 @@ impl MultipleProblem {
     /// ```
     pub fn chordal_cost(&self, rotations: &[Rotation]) -> f64 {
         self.assert_estimate(rotations);
+        if let Some(info) = &self.information {
+            return self
+                .edges
+                .iter()
+                .zip(info)
+                .map(|(e, h)| chordal_term(h, &e.rotation, &rotations[e.i], &rotations[e.j]))
+                .sum();
+        }
         self.edges
             .iter()
             .map(|e| {

@@ -1,13 +1,15 @@
 //! Seeded synthetic view graphs with a planted ground truth, for tests, benchmarks and the demo:
 //! [`SyntheticGraph::generate`] (random connected graph, Gaussian noise, outliers) and
+//! [`SyntheticAnisotropic::generate`] (the same with anisotropic noise and its information matrices),
 //! [`SyntheticChain::generate`] (a SLAM-like trajectory: an odometry chain with loop closures,
 //! planar or 3-D), [`SyntheticGrid::generate`] (a robot sweeping a planar grid or torus, loop
 //! closures between spatially adjacent poses) and [`z_cycle`] (a cycle with a known loop error, whose local minima are known
 //! in closed form).
 
+use crate::multiple::anisotropic::Information;
 use crate::multiple::{Edge, MultipleProblem};
 use crate::so3::{Rotation, exp, perturb_gaussian, random_rotation};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
@@ -71,24 +73,7 @@ impl SyntheticGraph {
         let mut rng = StdRng::seed_from_u64(self.seed);
         let mut gt: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
         crate::multiple::fix_gauge(&mut gt);
-        let mut pairs = Vec::with_capacity(m);
-        // random spanning tree: attach node k to a random earlier node (random order)
-        let mut order: Vec<usize> = (0..n).collect();
-        for k in (1..n).rev() {
-            let j = rng.random_range(0..=k);
-            order.swap(k, j);
-        }
-        for k in 1..n {
-            let parent = order[rng.random_range(0..k)];
-            pairs.push((parent, order[k]));
-        }
-        while pairs.len() < m {
-            let i = rng.random_range(0..n);
-            let j = rng.random_range(0..n);
-            if i != j {
-                pairs.push((i, j));
-            }
-        }
+        let pairs = random_connected_pairs(n, m, &mut rng);
         let mut outlier = Vec::with_capacity(pairs.len());
         let edges = pairs
             .into_iter()
@@ -113,6 +98,123 @@ impl SyntheticGraph {
             gt,
             outlier,
         )
+    }
+}
+
+/// `m >= n - 1` node pairs of a random connected graph on `n >= 2` nodes: a random spanning tree
+/// (node `order[k]` attached to a random earlier one), then uniformly random distinct pairs
+/// (multi-edges possible).
+fn random_connected_pairs(n: usize, m: usize, rng: &mut StdRng) -> Vec<(usize, usize)> {
+    let mut pairs = Vec::with_capacity(m);
+    let mut order: Vec<usize> = (0..n).collect();
+    for k in (1..n).rev() {
+        let j = rng.random_range(0..=k);
+        order.swap(k, j);
+    }
+    for k in 1..n {
+        let parent = order[rng.random_range(0..k)];
+        pairs.push((parent, order[k]));
+    }
+    while pairs.len() < m {
+        let i = rng.random_range(0..n);
+        let j = rng.random_range(0..n);
+        if i != j {
+            pairs.push((i, j));
+        }
+    }
+    pairs
+}
+
+/// Parameters of a random connected view graph with **anisotropic** noise and its information
+/// matrices (`paper-notes/anisotropic.md` `[A1]`): each edge's residual `e` (with `R_j R_i^T =
+/// R_ij exp([e]x)`) is Gaussian with standard deviations `sigma`, `sigma` and `ratio * sigma`
+/// along the axes of a frame `U_e`, and its information is the inverse covariance
+/// `H_e = U_e diag(1, 1, 1 / ratio^2) U_e^T / sigma^2`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SyntheticAnisotropic {
+    /// Number of nodes (>= 2).
+    pub num_rotations: usize,
+    /// Total number of edges (a random spanning tree plus random pairs, as [`SyntheticGraph`]).
+    pub num_edges: usize,
+    /// Standard deviation along the two well-determined axes, radians (> 0).
+    pub sigma: f64,
+    /// Standard deviation of the weak axis over `sigma` (>= 1; 1 is isotropic).
+    pub ratio: f64,
+    /// `true`: a uniformly random frame `U_e` per edge; `false`: the weak axis is the z axis of
+    /// the measurement's frame for every edge (`U_e = I`).
+    pub random_axes: bool,
+    /// Fraction of edges replaced by uniformly random rotations (their information kept).
+    pub outlier_fraction: f64,
+    /// RNG seed.
+    pub seed: u64,
+}
+
+impl Default for SyntheticAnisotropic {
+    fn default() -> Self {
+        SyntheticAnisotropic {
+            num_rotations: 100,
+            num_edges: 400,
+            sigma: 0.5f64.to_radians(),
+            ratio: 10.0,
+            random_axes: true,
+            outlier_fraction: 0.0,
+            seed: 0,
+        }
+    }
+}
+
+impl SyntheticAnisotropic {
+    /// Generate `(problem, ground truth)`; the ground truth has `R_0 = I`. Panics if `sigma` is
+    /// not finite and positive or `ratio < 1` (settings of a test, not user data).
+    ///
+    /// ```
+    /// use rotavg::multiple::synthetic::SyntheticAnisotropic;
+    /// let (p, gt) = SyntheticAnisotropic { num_rotations: 10, num_edges: 20, ..Default::default() }.generate();
+    /// assert!(p.is_anisotropic());
+    /// let h = p.information().unwrap()[0].matrix().symmetric_eigenvalues();
+    /// assert!((h.max() / h.min() - 100.0).abs() < 1e-6); // ratio 10 in standard deviation
+    /// ```
+    pub fn generate(&self) -> (MultipleProblem, Vec<Rotation>) {
+        assert!(self.sigma.is_finite() && self.sigma > 0.0 && self.ratio >= 1.0);
+        let n = self.num_rotations.max(2);
+        let m = self.num_edges.max(n - 1);
+        let mut rng = StdRng::seed_from_u64(self.seed);
+        let mut gt: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
+        crate::multiple::fix_gauge(&mut gt);
+        let pairs = random_connected_pairs(n, m, &mut rng);
+        let stds = Vector3::new(self.sigma, self.sigma, self.sigma * self.ratio);
+        let inverse_variances = stds.map(|s| 1.0 / (s * s));
+        let mut edges = Vec::with_capacity(pairs.len());
+        let mut information = Vec::with_capacity(pairs.len());
+        for (i, j) in pairs {
+            let frame = if self.random_axes {
+                random_rotation(&mut rng)
+            } else {
+                Rotation::identity()
+            };
+            let u = frame.matrix();
+            let h = u * Matrix3::from_diagonal(&inverse_variances) * u.transpose();
+            let h = 0.5 * (h + h.transpose()); // exactly symmetric
+            let is_outlier = rng.random::<f64>() < self.outlier_fraction;
+            let rotation = if is_outlier {
+                random_rotation(&mut rng)
+            } else {
+                let g = Vector3::from_fn(|k, _| stds[k] * crate::so3::gaussian(&mut rng));
+                // R_j R_i^T = R_ij exp([e]x)  =>  R_ij = R_j R_i^T exp(-[e]x)
+                gt[j] * gt[i].inverse() * exp(&(-(u * g)))
+            };
+            edges.push(Edge {
+                i,
+                j,
+                rotation,
+                weight: 1.0,
+            });
+            information.push(Information::new(h).expect("generated information is valid"));
+        }
+        let problem = MultipleProblem::new(n, edges)
+            .and_then(|p| p.with_information(information))
+            .expect("generated graph is valid");
+        (problem, gt)
     }
 }
 

@@ -22,10 +22,20 @@ use serde::{Deserialize, Serialize};
 /// One node's block of a lifted point: `3 x p`, orthonormal rows.
 pub type Block = Matrix3xX<f64>;
 
-/// `(Q Y)_i` for every node (edge-wise, as `[D3]`).
+/// `(Q Y)_i` for every node (edge-wise, as `[D3]`; anisotropic edges: `[A2]`).
 pub fn lifted_qy(problem: &MultipleProblem, y: &[Block]) -> Vec<Block> {
     let p = y.first().map_or(3, |b| b.ncols());
     let mut qy = vec![Block::zeros(p); y.len()];
+    if let Some(info) = problem.information() {
+        // node i: 2M Y_i - 2M R_ij^T Y_j; node j: 2M Y_j - 2 R_ij M Y_i
+        for (e, h) in problem.edges().iter().zip(info) {
+            let (m2, r) = (h.twice_chordal_matrix(), e.rotation.matrix());
+            let (yi, yj) = (&y[e.i], &y[e.j]);
+            qy[e.i] += m2 * (yi - r.transpose() * yj);
+            qy[e.j] += m2 * yj - r * (m2 * yi);
+        }
+        return qy;
+    }
     for e in problem.edges() {
         let r = e.rotation.matrix();
         let (yi, yj) = (&y[e.i], &y[e.j]);
@@ -35,8 +45,15 @@ pub fn lifted_qy(problem: &MultipleProblem, y: &[Block]) -> Vec<Block> {
     qy
 }
 
-/// `F(Y) = sum_e w ||Y_j - R_ij Y_i||_F^2`.
+/// `F(Y) = sum_e w ||Y_j - R_ij Y_i||_F^2` (anisotropic edges: `tr(Y^T Q Y)`, `[A2]`).
 pub fn lifted_cost(problem: &MultipleProblem, y: &[Block]) -> f64 {
+    if problem.is_anisotropic() {
+        return lifted_qy(problem, y)
+            .iter()
+            .zip(y)
+            .map(|(q, yi)| q.dot(yi))
+            .sum();
+    }
     problem
         .edges()
         .iter()

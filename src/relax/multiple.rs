@@ -42,6 +42,12 @@ pub struct MultipleRelaxation {
     pub rounded: Vec<Rotation>,
     /// Chordal cost `f` of [`Self::rounded`] (an upper bound on the global minimum).
     pub rounded_cost: f64,
+    /// Blocks of the top-3 factor of `X` with a negative determinant after the global sign
+    /// choice: a tight `O(3)` solution with reflected blocks is not a point of `SO(3)^n`, and its
+    /// value can lie strictly below every rotation estimate (anisotropic costs,
+    /// `paper-notes/anisotropic.md` `[A5]`).
+    #[serde(default)]
+    pub reflected_blocks: usize,
     /// Solver's value of the primal objective `tr(Q X)`, unscaled. Informational only.
     pub primal_objective: f64,
     /// Solver's value of the dual objective `sum_i tr(Lambda_i)`, unscaled. Informational
@@ -122,7 +128,7 @@ pub fn relax_multiple(
             (l + l.transpose()) * 0.5
         })
         .collect();
-    let (rounded, x_top_eigenvalues) = round(&raw.x, n)?;
+    let (rounded, x_top_eigenvalues, reflected_blocks) = round(&raw.x, n)?;
     let rounded_cost = problem.chordal_cost(&rounded);
     let dim = 3 * n;
     let x_dense = (dim <= settings.dense_x_max_size)
@@ -135,6 +141,7 @@ pub fn relax_multiple(
         x_top_eigenvalues,
         rounded,
         rounded_cost,
+        reflected_blocks,
         primal_objective: raw.conic.primal_objective * scale,
         dual_objective: raw.conic.dual_objective * scale,
         iterations: raw.conic.iterations,
@@ -363,14 +370,15 @@ fn solve_primal(p: &Scaled<'_>) -> Result<RawSolution> {
 /// Rounding `[P5]`: `Y = V_3 diag(sqrt(lambda_1..3))` from the top eigenpairs of `X`; if most
 /// blocks `Y_i` have negative determinant, flip the third column (global reflection); project
 /// each block to SO(3); fix the gauge `R_0 = I`. Returns the rotations and the top eigenvalues.
-fn round(x: &Mat<f64>, n: usize) -> Result<(Vec<Rotation>, Vec<f64>)> {
+fn round(x: &Mat<f64>, n: usize) -> Result<(Vec<Rotation>, Vec<f64>, usize)> {
     let (y, top) = top_three_blocks(x, n)?;
+    let reflected = y.iter().filter(|b| b.determinant() < 0.0).count();
     let mut rotations: Vec<Rotation> = y
         .iter()
         .map(|b| project_to_so3(b).unwrap_or_else(Rotation::identity))
         .collect();
     crate::multiple::fix_gauge(&mut rotations);
-    Ok((rotations, top))
+    Ok((rotations, top, reflected))
 }
 
 /// The `blocks` `3 x 3` blocks of `Y = V_3 diag(sqrt(lambda_1..3))` from the top eigenpairs of

@@ -9,6 +9,7 @@ use crate::io::input::MultipleInput;
 use crate::io::names::MultipleLoss;
 use crate::multiple::LinearAlgebraCounts;
 use crate::multiple::accuracy::{AccuracyReport, align_and_compare};
+use crate::multiple::anisotropic::InformationSummary;
 use crate::multiple::robust::ResidualSummary;
 use crate::pipeline::{MultipleEstimate, PipelineDetails};
 use crate::termination::SolverReport;
@@ -92,6 +93,8 @@ pub struct MultipleReport {
     pub edges_output: Option<String>,
     /// Where the inlier graph's refined estimate was written (`--inlier-output`), if it was.
     pub inlier_output: Option<String>,
+    /// The information matrices' summary, when the measurements are anisotropic.
+    pub information: Option<InformationSummary>,
 }
 
 impl MultipleReport {
@@ -124,6 +127,7 @@ impl MultipleReport {
             inlier_accuracy,
             edges_output: None,
             inlier_output: None,
+            information: g.problem.information().and_then(InformationSummary::of),
         })
     }
 
@@ -150,6 +154,8 @@ struct Json<'a> {
     other_components: &'a [usize],
     format: GraphFormat,
     robust: Option<RobustJson<'a>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    information: Option<&'a InformationSummary>,
 }
 
 /// `robust` of the JSON report.
@@ -223,6 +229,7 @@ impl Serialize for MultipleReport {
             other_components: &self.selection.other_component_sizes,
             format: self.format,
             robust,
+            information: self.information.as_ref(),
         };
         ProblemJson::new(
             ProblemKind::Multiple,
@@ -252,6 +259,9 @@ impl fmt::Display for MultipleReport {
         }
         for w in &self.warnings {
             write!(f, "\nwarning: {w}")?;
+        }
+        if let Some(s) = &self.information {
+            write!(f, "\n{s}")?;
         }
         writeln!(f)?;
         nested(f, &self.result)?;

@@ -15,6 +15,11 @@ pub struct Common {
     /// Weights from the file (`file`, default) or all 1 (`unit`).
     #[arg(long, value_parser = choice(WeightSource::choices()), default_value_t = WeightSource::File)]
     pub weights: WeightSource,
+    /// g2o / TORO edges with an information matrix: SE-Sync's scalar `kappa` (`kappa`,
+    /// default) or their full 3x3 rotation information, which makes the problem anisotropic
+    /// (`full`; docs/guides/anisotropic.md).
+    #[arg(long, value_name = "kappa|full", default_value = "kappa", value_parser = ["kappa", "full"])]
+    pub information: String,
     /// Start the local solver from this estimate (JSON estimate file; `multiple` reads every
     /// estimate format of `rotavg certify --estimate`: g2o vertices, a COLMAP model folder /
     /// `images.bin` / `images.txt`, Bundler, rotation lists, matched by id or image name).
@@ -102,6 +107,7 @@ impl Common {
     pub fn read_options(&self) -> ReadOptions {
         ReadOptions {
             weights: self.weights,
+            full_information: self.information == "full",
             ..Default::default()
         }
     }

@@ -261,7 +261,8 @@ impl<'a> Climb<'a> {
     /// Mode `auto`: the staircase first (it solves the same relaxation: on a 40-node graph with
     /// 20 % outliers its verified bound matched the SDP's to 4e-9 relative in 0.07 s against
     /// 10.3 s), then the SDP only when the staircase stopped short of a verified point (rank
-    /// limit, failed escape) and the bound is not yet enough for the verdict.
+    /// limit, failed escape, or a proven bound below the lifted cost) and the bound is not yet
+    /// enough for the verdict.
     pub fn staircase_then_sdp(&mut self) -> Result<()> {
         let verified = self.staircase()?;
         if verified || self.best_certifies() || self.over_time("SDP") {
@@ -398,8 +399,15 @@ impl<'a> Climb<'a> {
             rounded_cost: Some(sdp.rounded_cost),
             polished_cost: polished.as_ref().map(|p| p.chordal_cost),
         });
+        let reflections = (sdp.reflected_blocks > 0).then(|| {
+            format!(
+                "; {} of {n} blocks of the SDP's rank-3 factor are reflections (det < 0): the O(3) \
+                 relaxation prefers them, so its bound can lie below every rotation estimate",
+                sdp.reflected_blocks
+            )
+        });
         let note = format!(
-            "Clarabel SDP ({:?}, {} iterations, {:.3} s); multipliers verified{}; rounding cost {:.9e}{}",
+            "Clarabel SDP ({:?}, {} iterations, {:.3} s); multipliers verified{}; rounding cost {:.9e}{}{}",
             sdp.status,
             sdp.iterations,
             sdp.solver_seconds,
@@ -414,7 +422,8 @@ impl<'a> Climb<'a> {
             polished
                 .as_ref()
                 .map(|p| format!(", polished {:.9e}", p.chordal_cost))
-                .unwrap_or_default()
+                .unwrap_or_default(),
+            reflections.unwrap_or_default()
         );
         let outcome = match &bound {
             Some(b) => Outcome::Proved {
@@ -459,7 +468,13 @@ impl<'a> Climb<'a> {
         let since = Instant::now();
         crate::progress::phase(crate::progress::Phase::Staircase, String::new);
         let r = staircase::staircase_bound(self.problem, &self.current.rotations, self.settings)?;
-        let verified = matches!(r.stop_reason, staircase::StaircaseStop::Verified { .. });
+        // "verified" only when the proven bound reaches the lifted point's own cost: the stop
+        // reason rests on a Lanczos estimate, which misses a negative eigenvector orthogonal to
+        // its start (a 3-cycle with loop angle pi: lifted cost 7 at rank 4, estimate -2e-16,
+        // proven bound -1, while the SDP certifies 6), and then the SDP must still run
+        let tolerance = self.settings.tolerance.resolve(self.problem.min_weight());
+        let verified = matches!(r.stop_reason, staircase::StaircaseStop::Verified { .. })
+            && r.lifted_cost - r.bound.lower_bound <= tolerance.allowed_gap(r.lifted_cost);
         self.details.ladder.extend(r.bound.ladder.iter().cloned());
         self.offer(Best {
             lower_bound: r.bound.lower_bound,

@@ -306,15 +306,25 @@ fn over_budget(bound: &VerifiedBound) -> Option<String> {
 pub(crate) fn diagnosis_text(d: &DualDiagnosis, problem: &MultipleProblem) -> String {
     match d {
         DualDiagnosis::Certified => format!(
-            "certified globally optimal for the chordal L2 cost of its {} edges (over O(3)^n, \
+            "certified globally optimal for the {}chordal L2 cost of its {} edges (over O(3)^n, \
              hence SO(3)^n)",
+            if problem.is_anisotropic() {
+                "anisotropic "
+            } else {
+                ""
+            },
             problem.num_edges()
         ),
         DualDiagnosis::NotCritical { residual } => format!(
             "not certified: the estimate is not a critical point (stationarity residual {residual:.3e}): its cost is above the nearby optimum, and its bound is correspondingly weaker"
         ),
         DualDiagnosis::Indefinite { min_eigenvalue } => format!(
-            "not certified: the certificate matrix S is indefinite (lambda_min(S) ~ {min_eigenvalue:.3e}): the estimate is a saddle or a non-global local minimum of the nonconvex problem, or the relaxation is not tight"
+            "not certified: the certificate matrix S is indefinite (lambda_min(S) ~ {min_eigenvalue:.3e}): the estimate is a saddle or a non-global local minimum of the nonconvex problem, or the relaxation is not tight{}",
+            if problem.is_anisotropic() {
+                " (with anisotropic information the O(3) relaxation can prefer reflections)"
+            } else {
+                ""
+            }
         ),
         DualDiagnosis::PrecisionLimited { smallest_gap } => format!(
             "not certified: precision ran out: S is positive semidefinite up to the verification's floating-point precision, and the smallest gap it can prove here is {smallest_gap:.3e}"

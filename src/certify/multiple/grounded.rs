@@ -169,7 +169,8 @@ pub(super) fn hopeless(
     gap: f64,
 ) -> Option<String> {
     let n = problem.num_rotations();
-    if n < 2 || rotations.len() != n {
+    // the diagonal of S is the weighted degree minus Lambda only for isotropic data
+    if n < 2 || rotations.len() != n || problem.is_anisotropic() {
         return None;
     }
     let mut degree = vec![0.0f64; n];
@@ -259,9 +260,10 @@ fn prove_c(
     while let Some(shift) = shifts.pop() {
         notes.factorizations += 1;
         if let Some(f) = ch.factor(-shift, 0.25 * shift) {
-            let lower = f.verified_lower_bound();
+            // the anisotropic forming error [A3] (0 for isotropic data) off the proven c
+            let lower = f.verified_lower_bound() - cx.forming;
             if lower > 0.0 {
-                return Ok((lower, f.margin));
+                return Ok((lower, f.margin + cx.forming));
             }
         }
         if estimated {

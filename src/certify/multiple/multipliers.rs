@@ -32,6 +32,12 @@ pub(super) fn laplacian_times_compensated(
     rotations: &[Rotation],
 ) -> Vec<[[Accumulator; 3]; 3]> {
     let mut acc = vec![[[Accumulator::default(); 3]; 3]; problem.num_rotations()];
+    if let Some(info) = problem.information() {
+        for (e, h) in problem.edges().iter().zip(info) {
+            anisotropic_edge_times(&mut acc, e, h.matrix(), rotations);
+        }
+        return acc;
+    }
     for e in problem.edges() {
         let (w, r) = (e.weight, e.rotation.matrix());
         let (ri, rj) = (rotations[e.i].matrix(), rotations[e.j].matrix());
@@ -48,6 +54,53 @@ pub(super) fn laplacian_times_compensated(
         }
     }
     acc
+}
+
+/// One anisotropic edge's part of `(Q Y)` `[A2]`, every term a product of data entries (no
+/// rounded intermediate such as `M`): node i gets `2M R_i - 2M R_ij^T R_j`, node j gets
+/// `2M R_j - 2 R_ij M R_i`, with `2M = tr(H) I - 2H` expanded.
+fn anisotropic_edge_times(
+    acc: &mut [[[Accumulator; 3]; 3]],
+    e: &crate::multiple::Edge,
+    h: &Matrix3<f64>,
+    rotations: &[Rotation],
+) {
+    let r = e.rotation.matrix();
+    let (ri, rj) = (rotations[e.i].matrix(), rotations[e.j].matrix());
+    for a in 0..3 {
+        for b in 0..3 {
+            let node_i = &mut acc[e.i][a][b];
+            for k in 0..3 {
+                // tr(H) R_i - tr(H) R_ij^T R_j
+                node_i.add_product(h[(k, k)], ri[(a, b)]);
+                for d in 0..3 {
+                    node_i.add_triple(-h[(k, k)], r[(d, a)], rj[(d, b)]);
+                }
+            }
+            for c in 0..3 {
+                // - 2 H R_i + 2 H R_ij^T R_j (2 H_ac exact)
+                node_i.add_product(-2.0 * h[(a, c)], ri[(c, b)]);
+                for d in 0..3 {
+                    node_i.add_triple(2.0 * h[(a, c)], r[(d, c)], rj[(d, b)]);
+                }
+            }
+            let node_j = &mut acc[e.j][a][b];
+            for k in 0..3 {
+                // tr(H) R_j - tr(H) R_ij R_i
+                node_j.add_product(h[(k, k)], rj[(a, b)]);
+                for c in 0..3 {
+                    node_j.add_triple(-h[(k, k)], r[(a, c)], ri[(c, b)]);
+                }
+            }
+            for c in 0..3 {
+                // - 2 H R_j + 2 R_ij H R_i
+                node_j.add_product(-2.0 * h[(a, c)], rj[(c, b)]);
+                for d in 0..3 {
+                    node_j.add_triple(2.0 * h[(c, d)], r[(a, c)], ri[(d, b)]);
+                }
+            }
+        }
+    }
 }
 
 /// The multipliers `Lambda_i = sym((Q Y)_i R_i^T)` of an estimate `[D3]` (SPEC section 3),
@@ -191,6 +244,34 @@ pub(super) fn entry_terms(problem: &MultipleProblem) -> usize {
     deg.into_iter().max().unwrap_or(0) + 3
 }
 
+/// A bound on `||S_computed - S_exact||_2` beyond the forming error the factorisations charge
+/// (`gamma(entry_terms + 2) ||S||_inf`, `[D6]`): zero for isotropic data, whose entries are
+/// sums of data entries; for anisotropic data `[A3]`, whose blocks are products with the rounded
+/// `2M = tr(H) I - 2H`, `max_i (48 gamma(d_i + 12) T_i + 4 u max|Lambda_i|)` with `T_i` the sum
+/// of `tr(H)` over the `d_i` edges at node `i`. Subtracted from every proven `lambda_min(S)`.
+pub(super) fn forming_margin(problem: &MultipleProblem, lambdas: &[Matrix3<f64>]) -> f64 {
+    let Some(info) = problem.information() else {
+        return 0.0;
+    };
+    let n = problem.num_rotations();
+    let mut degree = vec![0usize; n];
+    let mut trace = vec![0.0f64; n];
+    for (e, h) in problem.edges().iter().zip(info) {
+        let t = h.matrix().trace();
+        for v in [e.i, e.j] {
+            degree[v] += 1;
+            trace[v] += t;
+        }
+    }
+    (0..n)
+        .map(|i| {
+            let lmax = lambdas.get(i).map_or(0.0, |l| l.amax());
+            48.0 * gamma(degree[i] + 12) * trace[i] + 4.0 * UNIT_ROUNDOFF * lmax
+        })
+        .fold(0.0, f64::max)
+        * (1.0 + 1e-3)
+}
+
 /// Column `a` of the gauge directions `Y = [R_1; ...; R_n]` (length `3n`).
 pub(super) fn gauge_column(rotations: &[Rotation], a: usize) -> Vec<f64> {
     rotations
@@ -304,6 +385,10 @@ pub(super) fn bound_with_deficit(
 /// `f(Y) = tr(Y^T Q Y) - c_0`, so a lower bound on `min tr(Y^T Q Y)` bounds `min f` after
 /// subtracting `c_0` (of order `u m w`, either sign). Evaluated in double-double.
 pub(super) fn data_defect(problem: &MultipleProblem) -> f64 {
+    if problem.is_anisotropic() {
+        // [A2]: the anisotropic Q carries the constant in its diagonal blocks, exactly
+        return 0.0;
+    }
     let mut acc = Accumulator::default();
     for e in problem.edges() {
         acc.add_product(e.weight, 3.0);

@@ -83,6 +83,7 @@ impl Proof for ShiftedProof {
             best = search(cx, ch, delta0, margin_target, &mut notes);
         }
         let bound = best.map(|(shift, margin)| {
+            let margin = margin + cx.forming;
             let mut b = VerifiedBound::from_mu(cx, -shift - margin, Verification::Cholesky);
             b.shift = Some(shift);
             b.fp_margin = margin;

@@ -13,7 +13,9 @@
 //! `[D16]` reports a labelled estimate beside the `inconclusive` verdict.
 
 use super::grounded::{GroundedBound, GroundedProof};
-use super::multipliers::{bound_from_mu, bound_with_deficit, certificate_matrix, entry_terms};
+use super::multipliers::{
+    bound_from_mu, bound_with_deficit, certificate_matrix, entry_terms, forming_margin,
+};
 use super::randomized::{ComplementEstimate, RandomizedBound, over_budget_estimates};
 use super::scalar::ScalarComparison;
 use super::scalar::rungs::ScalarFamily;
@@ -155,6 +157,9 @@ pub(super) struct Check<'a> {
     pub norm: f64,
     /// Rounded operations that formed an entry of `S` (the forming error `[D6]`(b)).
     pub terms: usize,
+    /// The further forming error of anisotropic blocks `[A3]` ([`forming_margin`]; 0 for
+    /// isotropic data): subtracted from every proven `lambda_min`.
+    pub forming: f64,
     /// The gap the verdict allows at the cost: the tolerance.
     pub gap: f64,
     pub settings: &'a CertifySettings,
@@ -222,6 +227,7 @@ impl<'a> Check<'a> {
             s,
             norm,
             terms: entry_terms(problem),
+            forming: forming_margin(problem, lambdas),
             gap: settings
                 .tolerance
                 .resolve(problem.min_weight())
@@ -477,7 +483,9 @@ fn finish(cx: &Check<'_>, best: Option<VerifiedBound>, budget_limited: bool) -> 
         Some(b) => b,
         None => {
             let since = Instant::now();
-            let gersh = gershgorin_lower_bound(cx.s.as_ref()) - 2.0 * gamma(cx.terms + 1) * cx.norm;
+            let gersh = gershgorin_lower_bound(cx.s.as_ref())
+                - 2.0 * gamma(cx.terms + 1) * cx.norm
+                - cx.forming;
             let mut b = VerifiedBound::from_mu(cx, gersh, Verification::Gershgorin);
             if budget_limited {
                 b.factorization_skipped = true;

@@ -53,6 +53,13 @@ impl Proof for ScalarFamily {
                 reason: "the estimate's rotations are not known".into(),
             }));
         };
+        if cx.problem.is_anisotropic() {
+            return Ok(Err(Refusal::NotApplicable {
+                reason: "the scalar comparison needs scalar edge weights; these edges carry 3x3 \
+                         information matrices"
+                    .into(),
+            }));
+        }
         let max_values = cx
             .settings
             .budget

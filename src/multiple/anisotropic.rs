@@ -1,0 +1,289 @@
+//! Anisotropic measurements: a 3x3 information matrix `H` per edge (SPEC section 1,
+//! `paper-notes/anisotropic.md` `[A1]`-`[A4]`, `[A9]`).
+//!
+//! An edge `(i, j)` with information `H` (symmetric positive semidefinite, not zero) measures
+//! `R_ij` with residual `e` defined by `R_j R_i^T = R_ij exp([e]x)`. With `M = tr(H)/2 I - H`:
+//!
+//! - anisotropic chordal cost `f_e = 4 (tr M - <R_ij M, R_j R_i^T>)` `[A1]`, which equals
+//!   `4 (1 - cos theta) u^T H u` for `e = theta u` and `2 e^T H e` to second order;
+//!   `H = w I` gives exactly the isotropic `w ||R_j - R_ij R_i||_F^2` (for exact rotations);
+//! - anisotropic geodesic cost `e^T H e` `[A8]` (reported, not minimised here).
+//!
+//! The chordal cost is linear in the Gram block `R_j R_i^T`, so the connection Laplacian keeps
+//! its shape with 3x3 blocks (`[A2]`: `Q_ii += 2M`, `Q_jj += 2M`, `Q_ij = -2 M R_ij^T`) and the
+//! dual certificate, the SDP and the local Newton solver carry over with `B_e = R_i^T M R_ij^T
+//! R_j` in place of the isotropic `(w / 2) A_e^T` (`[A4]`).
+//!
+//! ```
+//! use rotavg::multiple::anisotropic::{Information, chordal_term, geodesic_term};
+//! use rotavg::so3::exp;
+//! use nalgebra::{Matrix3, Vector3};
+//! let h = Information::new(Matrix3::from_diagonal(&Vector3::new(1.0, 4.0, 100.0))).unwrap();
+//! let (r_ij, r_i) = (exp(&Vector3::new(0.3, -0.2, 0.1)), exp(&Vector3::new(0.0, 0.5, 0.0)));
+//! let e = Vector3::new(0.01, 0.0, 0.002); // R_j R_i^T = R_ij exp([e]x)
+//! let r_j = r_ij * exp(&e) * r_i;
+//! let f = chordal_term(&h, &r_ij, &r_i, &r_j);
+//! let theta = e.norm();
+//! let closed = 4.0 * (1.0 - theta.cos()) * (e / theta).dot(&(h.matrix() * (e / theta)));
+//! assert!((f - closed).abs() < 1e-9 * closed); // the trace form loses digits to cancellation
+//! assert!((geodesic_term(&h, &r_ij, &r_i, &r_j) - e.dot(&(h.matrix() * e))).abs() < 1e-12);
+//! ```
+
+use crate::error::{Error, Result};
+use crate::so3::{Rotation, log};
+use nalgebra::Matrix3;
+use serde::{Deserialize, Serialize};
+
+/// Relative tolerance on negative eigenvalues of an information matrix: `lambda_min >= -1e-12
+/// lambda_max` is accepted as positive semidefinite (an exactly singular matrix computed in
+/// floating point), anything more negative is an error.
+pub const PSD_TOLERANCE: f64 = 1e-12;
+
+/// A validated 3x3 information matrix `H` of one edge: finite, exactly symmetric, positive
+/// semidefinite (to [`PSD_TOLERANCE`]), with `tr(H)` in the weight window
+/// [`crate::validate::MIN_WEIGHT`]..[`crate::validate::MAX_WEIGHT`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "[[f64; 3]; 3]", into = "[[f64; 3]; 3]")]
+pub struct Information {
+    h: Matrix3<f64>,
+}
+
+impl Information {
+    /// Validate `h`. Errors ([`Error::InvalidInformation`]): a non-finite entry, an asymmetric
+    /// matrix (`h != h^T` exactly: pass `(H + H^T) / 2` if that is what is meant; the data are
+    /// used as given, never projected), a negative eigenvalue below `-1e-12 lambda_max`, or a
+    /// trace outside the weight window (`H = 0` carries no information).
+    ///
+    /// ```
+    /// use rotavg::multiple::anisotropic::Information;
+    /// use nalgebra::Matrix3;
+    /// assert!(Information::new(Matrix3::identity() * 2.0).is_ok());
+    /// let mut h = Matrix3::identity();
+    /// h[(0, 1)] = 0.5; // not symmetric
+    /// assert!(Information::new(h).is_err());
+    /// assert!(Information::new(-Matrix3::identity()).is_err()); // not PSD
+    /// assert!(Information::new(Matrix3::zeros()).is_err()); // no information
+    /// ```
+    pub fn new(h: Matrix3<f64>) -> Result<Self> {
+        Self::check(h).map_err(|reason| Error::InvalidInformation {
+            item: "information matrix".into(),
+            reason,
+        })
+    }
+
+    fn check(h: Matrix3<f64>) -> std::result::Result<Self, String> {
+        if !h.iter().all(|x| x.is_finite()) {
+            return Err("contains NaN or infinity".into());
+        }
+        if h != h.transpose() {
+            let asym = (h - h.transpose()).amax();
+            return Err(format!(
+                "is not symmetric (largest |H - H^T| entry {asym:.3e}); pass (H + H^T) / 2 if \
+                 that is the information meant"
+            ));
+        }
+        let eig = h.symmetric_eigenvalues();
+        let (lo, hi) = (eig.min(), eig.max());
+        if hi <= 0.0 || lo < -PSD_TOLERANCE * hi {
+            return Err(format!(
+                "is not positive semidefinite (eigenvalues {:.3e}, {:.3e}, {:.3e})",
+                eig[0], eig[1], eig[2]
+            ));
+        }
+        if let Some(reason) = crate::validate::weight_out_of_range(h.trace()) {
+            return Err(format!("trace: {reason}"));
+        }
+        Ok(Information { h })
+    }
+
+    /// `H = w I`: the isotropic measurement of weight `w` (its chordal cost is exactly the
+    /// isotropic `w ||R_j - R_ij R_i||_F^2`).
+    pub fn isotropic(w: f64) -> Result<Self> {
+        Self::new(Matrix3::identity() * w)
+    }
+
+    /// The matrix `H`.
+    pub fn matrix(&self) -> &Matrix3<f64> {
+        &self.h
+    }
+
+    /// `M = tr(H)/2 I - H`, the matrix of the chordal cost `[A1]` (indefinite when one
+    /// eigenvalue of `H` exceeds the sum of the other two).
+    pub fn chordal_matrix(&self) -> Matrix3<f64> {
+        Matrix3::identity() * (0.5 * self.h.trace()) - self.h
+    }
+
+    /// `2M = tr(H) I - 2H`, as the Laplacian blocks use it `[A2]`.
+    pub fn twice_chordal_matrix(&self) -> Matrix3<f64> {
+        Matrix3::identity() * self.h.trace() - self.h * 2.0
+    }
+
+    /// The isotropic weight with the same trace, `tr(H) / 3` (the weight of spanning trees,
+    /// spectral starts and preconditioners; never of a cost).
+    pub fn mean_weight(&self) -> f64 {
+        self.h.trace() / 3.0
+    }
+
+    /// The smallest positive eigenvalue of `H` (the tolerance's weight scale, SPEC section 3,
+    /// `[A9]`).
+    pub fn min_positive_eigenvalue(&self) -> f64 {
+        let eig = self.h.symmetric_eigenvalues();
+        let hi = eig.max();
+        eig.iter()
+            .copied()
+            .filter(|x| *x > PSD_TOLERANCE * hi)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// `lambda_max(H) / lambda_min(H)` (infinite for a singular `H`): 1 for isotropic edges.
+    pub fn anisotropy(&self) -> f64 {
+        let eig = self.h.symmetric_eigenvalues();
+        let lo = eig.min();
+        if lo > 0.0 {
+            eig.max() / lo
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// `true` when `M` is indefinite (an eigenvalue of `H` above the sum of the other two):
+    /// such edges are what can make the `O(3)` relaxation prefer reflections `[A5]`.
+    pub fn chordal_matrix_indefinite(&self) -> bool {
+        self.chordal_matrix().symmetric_eigenvalues().min() < 0.0
+    }
+}
+
+impl TryFrom<[[f64; 3]; 3]> for Information {
+    type Error = String;
+    fn try_from(rows: [[f64; 3]; 3]) -> std::result::Result<Self, String> {
+        Self::check(Matrix3::from_fn(|a, b| rows[a][b]))
+    }
+}
+
+impl From<Information> for [[f64; 3]; 3] {
+    fn from(h: Information) -> Self {
+        std::array::from_fn(|a| std::array::from_fn(|b| h.h[(a, b)]))
+    }
+}
+
+/// What the reports say about a problem's information matrices.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct InformationSummary {
+    /// Edges with an information matrix (all of them).
+    pub edges: usize,
+    /// Median of `lambda_max(H) / lambda_min(H)` over the edges (infinite for singular `H`).
+    pub median_anisotropy: f64,
+    /// Largest `lambda_max(H) / lambda_min(H)`.
+    pub max_anisotropy: f64,
+    /// Edges whose `M = tr(H)/2 I - H` is indefinite (`[A5]`: where the `O(3)` relaxation may
+    /// prefer reflections).
+    pub indefinite_chordal_matrices: usize,
+}
+
+impl InformationSummary {
+    /// The summary of `info` (`None` when empty).
+    pub fn of(info: &[Information]) -> Option<Self> {
+        if info.is_empty() {
+            return None;
+        }
+        let mut ratios: Vec<f64> = info.iter().map(Information::anisotropy).collect();
+        ratios.sort_by(f64::total_cmp);
+        Some(InformationSummary {
+            edges: info.len(),
+            median_anisotropy: ratios[ratios.len() / 2],
+            max_anisotropy: ratios[ratios.len() - 1],
+            indefinite_chordal_matrices: info
+                .iter()
+                .filter(|h| h.chordal_matrix_indefinite())
+                .count(),
+        })
+    }
+}
+
+impl std::fmt::Display for InformationSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "information: 3x3 on {} edges; anisotropy (eigenvalue max / min) median {:.3}, max {:.3}",
+            self.edges, self.median_anisotropy, self.max_anisotropy
+        )?;
+        if self.indefinite_chordal_matrices > 0 {
+            write!(
+                f,
+                "\n  {} edges with indefinite M: the O(3) relaxation may prefer reflections",
+                self.indefinite_chordal_matrices
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// `B_e = R_i^T M R_ij^T R_j` `[A4]`: the edge's term is `4 tr M - 4 tr(B_e)`, its gradient
+/// `grad_i = -8 vee(B_e)`, `grad_j = 8 vee(B_e)`.
+pub fn edge_b(
+    h: &Information,
+    r_ij: &Matrix3<f64>,
+    r_i: &Matrix3<f64>,
+    r_j: &Matrix3<f64>,
+) -> Matrix3<f64> {
+    r_i.transpose() * h.chordal_matrix() * r_ij.transpose() * r_j
+}
+
+/// The anisotropic chordal term `4 (tr M - <R_ij M, R_j R_i^T>)` of one edge `[A1]`.
+pub fn chordal_term(h: &Information, r_ij: &Rotation, r_i: &Rotation, r_j: &Rotation) -> f64 {
+    let m = h.chordal_matrix();
+    let gram = r_j.matrix() * r_i.matrix().transpose();
+    4.0 * (m.trace() - (r_ij.matrix() * m).dot(&gram))
+}
+
+/// The anisotropic geodesic term `e^T H e`, `e = log(R_ij^T R_j R_i^T)` `[A8]`.
+pub fn geodesic_term(h: &Information, r_ij: &Rotation, r_i: &Rotation, r_j: &Rotation) -> f64 {
+    let e = log(&(r_ij.inverse() * r_j * r_i.inverse()));
+    e.dot(&(h.matrix() * e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::so3::{exp, random_rotation};
+    use nalgebra::Vector3;
+    use rand::SeedableRng;
+
+    /// `H = w I` reproduces the isotropic chordal term to rounding (`[A1]`), for any rotations.
+    #[test]
+    fn isotropic_information_is_the_isotropic_cost() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        for k in 0..50 {
+            let w = 0.1 + k as f64;
+            let (r_ij, r_i, r_j) = (
+                random_rotation(&mut rng),
+                random_rotation(&mut rng),
+                random_rotation(&mut rng),
+            );
+            let iso = w * (r_j.matrix() - r_ij.matrix() * r_i.matrix()).norm_squared();
+            let an = chordal_term(&Information::isotropic(w).unwrap(), &r_ij, &r_i, &r_j);
+            assert!((iso - an).abs() <= 1e-13 * w * 8.0, "{iso} vs {an}");
+        }
+    }
+
+    /// The closed form `4 (1 - cos theta) u^T H u` `[A1]` with a random PSD `H` and a planted
+    /// residual (written independently of `chordal_term`).
+    #[test]
+    fn chordal_term_closed_form() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        for k in 0..50 {
+            let a = Matrix3::from_fn(|p, q| ((p * 7 + q * 3 + k) % 5) as f64 - 2.0);
+            let h = Information::new(a * a.transpose() + Matrix3::identity() * 0.01).unwrap();
+            let e = Vector3::new(0.3, -1.1, 0.7) * (k as f64 / 20.0 + 0.01);
+            let (r_ij, r_i) = (random_rotation(&mut rng), random_rotation(&mut rng));
+            let r_j = r_ij * exp(&e) * r_i;
+            let (t, u) = (e.norm(), e.normalize());
+            let closed = 4.0 * (1.0 - t.cos()) * u.dot(&(h.matrix() * u));
+            let f = chordal_term(&h, &r_ij, &r_i, &r_j);
+            assert!(
+                (f - closed).abs() <= 1e-11 * (1.0 + closed),
+                "{f} vs {closed}"
+            );
+        }
+    }
+}
