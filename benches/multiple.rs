@@ -8,7 +8,7 @@
 
 use criterion::{Criterion, criterion_group};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion};
-use rotavg::multiple::synthetic::SyntheticGraph;
+use rotavg::multiple::synthetic::{SyntheticAnisotropic, SyntheticGraph};
 use rotavg::multiple::{
     Edge, Initialisation, MultipleProblem, MultipleSettings, initialise, solve_multiple,
 };
@@ -150,6 +150,15 @@ fn bench(c: &mut Criterion) {
     }
     .generate();
     cases.push(("synthetic_1e4_3e4".into(), p));
+    // anisotropic noise (standard deviations 0.5 / 0.5 / 5 degrees) with its information
+    let (p, _) = SyntheticAnisotropic {
+        num_rotations: 1000,
+        num_edges: 4000,
+        seed: 1,
+        ..Default::default()
+    }
+    .generate();
+    cases.push(("anisotropic_1e3_4e3".into(), p));
     for (name, p) in &cases {
         g.bench_function(name.as_str(), |b| {
             b.iter(|| solve_multiple(p, &MultipleSettings::default()).unwrap())

@@ -6,7 +6,7 @@
 //! the gauge fix [`fix_gauge`].
 
 use crate::error::{Error, Result};
-use crate::multiple::anisotropic::{Information, chordal_term};
+use crate::multiple::anisotropic::{Information, chordal_cost_compensated};
 use crate::objective::Objective;
 use crate::so3::{Metric, Rotation, angle_between};
 use crate::validate::check_weight;
@@ -345,7 +345,7 @@ impl MultipleProblem {
     }
 
     /// Chordal L2 cost `sum w_ij ||R_j - R_ij R_i||_F^2` `[M1]` (anisotropic problems: `sum 4 (tr M -
-    /// <R_ij M, R_j R_i^T>)`, [`crate::multiple::anisotropic`]). Panics if `rotations.len() != n`
+    /// <R_ij M, R_j R_i^T>)`, [`crate::multiple::anisotropic`], evaluated in double-double). Panics if `rotations.len() != n`
     /// (a programming error, not user input: check with [`Self::check_estimate`]).
     ///
     /// ```
@@ -364,12 +364,7 @@ impl MultipleProblem {
     pub fn chordal_cost(&self, rotations: &[Rotation]) -> f64 {
         self.assert_estimate(rotations);
         if let Some(info) = &self.information {
-            return self
-                .edges
-                .iter()
-                .zip(info)
-                .map(|(e, h)| chordal_term(h, &e.rotation, &rotations[e.i], &rotations[e.j]))
-                .sum();
+            return chordal_cost_compensated(&self.edges, info, rotations);
         }
         self.edges
             .iter()
