@@ -534,3 +534,135 @@ fn g2o_full_information_is_four_times_g2os_chi_squared() {
     let (fa, fb) = (a.problem.chordal_cost(&est), b.problem.chordal_cost(&est));
     assert!((fa - fb).abs() < 1e-9 * fa, "{fa} vs {fb}");
 }
+
+/// The command line on the example data: the JSON report has the `information` summary and a
+/// certificate, the text names the anisotropic cost, `--weights unit` drops the information,
+/// and `--loss huber` is refused with the reason (exit 2 or 1, never a solve).
+#[test]
+fn command_line_reports_anisotropic_measurements() {
+    let rotavg = env!("CARGO_BIN_EXE_rotavg");
+    let data = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/data/anisotropic.json"
+    );
+    let run = |args: &[&str]| {
+        std::process::Command::new(rotavg)
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = run(&["multiple", data, "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["information"]["edges"], 240);
+    assert_eq!(json["certificate"]["verdict"], "certified");
+    let text = String::from_utf8(run(&["multiple", data]).stdout).unwrap();
+    assert!(text.contains("information: 3x3 on 240 edges"), "{text}");
+    assert!(text.contains("anisotropic chordal L2 cost"), "{text}");
+    let unit = run(&["multiple", data, "--weights", "unit", "--json"]);
+    let unit: serde_json::Value = serde_json::from_slice(&unit.stdout).unwrap();
+    assert!(unit.get("information").is_none());
+    let huber = run(&["multiple", data, "--loss", "huber"]);
+    assert!(!huber.status.success());
+    assert!(String::from_utf8_lossy(&huber.stderr).contains("anisotropic"));
+}
+
+/// `[A6]`: the `conv(SO(3))` constraints close the two reflection examples (bounds 0 and 6, the
+/// rotation optima, where the `O(3)` relaxation gives -8 and 0.8), and on random tiny graphs
+/// (indefinite `M`, outliers) the verified bound is never above the best of 40 local solves.
+#[test]
+fn conv_so3_closes_the_reflection_examples() {
+    use rotavg::certify::multiple::conv_bound;
+    use rotavg::relax::SdpSettings;
+    use rotavg::relax::conv_so3::relax_multiple_conv;
+    let sdp = SdpSettings::default();
+    let two = graph(
+        2,
+        &[(
+            0,
+            1,
+            Rotation::identity(),
+            Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 4.0)),
+        )],
+    );
+    let b = conv_bound(&two, &relax_multiple_conv(&two, &sdp).unwrap()).unwrap();
+    assert!(b.lower_bound <= 1e-9 && b.lower_bound > -1e-5, "{b:?}");
+    let rx = exp(&Vector3::new(std::f64::consts::PI, 0.0, 0.0));
+    let d = |x: f64, y: f64, z: f64| Matrix3::from_diagonal(&Vector3::new(x, y, z));
+    let cycle = graph(
+        3,
+        &[
+            (0, 1, Rotation::identity(), d(1.0, 1.0, 1.9)),
+            (1, 2, Rotation::identity(), d(1.0, 1.9, 1.0)),
+            (2, 0, rx, Matrix3::identity()),
+        ],
+    );
+    let b = conv_bound(&cycle, &relax_multiple_conv(&cycle, &sdp).unwrap()).unwrap();
+    assert!(
+        b.lower_bound <= 6.0 + 1e-9 && b.lower_bound > 6.0 - 1e-4,
+        "{b:?}"
+    );
+    let mut rng = rand::rngs::StdRng::seed_from_u64(78);
+    let (mut closed, mut certified) = (0, 0);
+    for case in 0..6 {
+        let n = 4 + case % 2;
+        let truth: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
+        let mut edges = Vec::new();
+        for i in 0..n {
+            for j in (i + 1)..n {
+                let r = if rng.random::<f64>() < 0.2 {
+                    random_rotation(&mut rng)
+                } else {
+                    let e = Vector3::from_fn(|_, _| 0.6 * (rng.random::<f64>() - 0.5));
+                    truth[j] * truth[i].inverse() * exp(&e)
+                };
+                let h = *random_information(&mut rng, 20.0, false).matrix();
+                edges.push((i, j, r, h));
+            }
+        }
+        let p = graph(n, &edges);
+        let o3 = average_multiple(&p, &settings(CertifyMode::Sdp)).unwrap();
+        let o3_bound = o3.certificate.unwrap().lower_bound.unwrap();
+        let b = conv_bound(&p, &relax_multiple_conv(&p, &sdp).unwrap()).unwrap();
+        let mut best = o3.solution.cost;
+        let mut best_point = o3.solution.rotations.clone();
+        for _ in 0..40 {
+            let mut start: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
+            fix_gauge(&mut start);
+            let local = MultipleSettings {
+                init: Initialisation::Given(start),
+                ..Default::default()
+            };
+            let s = solve_multiple(&p, &local).unwrap();
+            if s.cost < best {
+                (best, best_point) = (s.cost, s.rotations);
+            }
+        }
+        let c =
+            rotavg::certify::multiple::certify_conv(&p, &best_point, &Default::default()).unwrap();
+        if c.verdict == Verdict::Certified {
+            certified += 1;
+        }
+        assert!(
+            b.lower_bound <= best * (1.0 + 1e-9) + 1e-9,
+            "case {case}: {b:?} above {best}"
+        );
+        assert!(
+            b.lower_bound >= o3_bound - 1e-6 * best.abs(),
+            "case {case}: weaker than O(3)"
+        );
+        if best - b.lower_bound <= 1e-5 * best {
+            closed += 1;
+        }
+        eprintln!(
+            "case {case}: O(3) bound {o3_bound:.6}, conv bound {:.6}, best local {best:.6}",
+            b.lower_bound
+        );
+    }
+    eprintln!("conv(SO(3)) closed {closed} of 6 gaps, certified {certified} of 6 best points");
+    assert!(closed >= 3, "{closed} of 6 closed");
+}

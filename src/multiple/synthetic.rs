@@ -68,12 +68,7 @@ impl SyntheticGraph {
     /// assert!(k > 30 && k < 90, "{k} of 300 edges"); // about 20 %
     /// ```
     pub fn generate_labelled(&self) -> (MultipleProblem, Vec<Rotation>, Vec<bool>) {
-        let n = self.num_rotations.max(2);
-        let m = self.num_edges.max(n - 1);
-        let mut rng = StdRng::seed_from_u64(self.seed);
-        let mut gt: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
-        crate::multiple::fix_gauge(&mut gt);
-        let pairs = random_connected_pairs(n, m, &mut rng);
+        let (n, mut rng, gt, pairs) = planted_graph(self.num_rotations, self.num_edges, self.seed);
         let mut outlier = Vec::with_capacity(pairs.len());
         let edges = pairs
             .into_iter()
@@ -99,6 +94,23 @@ impl SyntheticGraph {
             outlier,
         )
     }
+}
+
+/// The planted part of [`SyntheticGraph`] and [`SyntheticAnisotropic`]: `n = max(2, nodes)`,
+/// the RNG seeded with `seed`, uniformly random ground truth with `R_0 = I`, and the node pairs
+/// of a random connected graph with `max(edges, n - 1)` edges ([`random_connected_pairs`]); the
+/// RNG continues from there.
+fn planted_graph(
+    nodes: usize,
+    edges: usize,
+    seed: u64,
+) -> (usize, StdRng, Vec<Rotation>, Vec<(usize, usize)>) {
+    let n = nodes.max(2);
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut gt: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
+    crate::multiple::fix_gauge(&mut gt);
+    let pairs = random_connected_pairs(n, edges.max(n - 1), &mut rng);
+    (n, rng, gt, pairs)
 }
 
 /// `m >= n - 1` node pairs of a random connected graph on `n >= 2` nodes: a random spanning tree
@@ -176,12 +188,7 @@ impl SyntheticAnisotropic {
     /// ```
     pub fn generate(&self) -> (MultipleProblem, Vec<Rotation>) {
         assert!(self.sigma.is_finite() && self.sigma > 0.0 && self.ratio >= 1.0);
-        let n = self.num_rotations.max(2);
-        let m = self.num_edges.max(n - 1);
-        let mut rng = StdRng::seed_from_u64(self.seed);
-        let mut gt: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
-        crate::multiple::fix_gauge(&mut gt);
-        let pairs = random_connected_pairs(n, m, &mut rng);
+        let (n, mut rng, gt, pairs) = planted_graph(self.num_rotations, self.num_edges, self.seed);
         let stds = Vector3::new(self.sigma, self.sigma, self.sigma * self.ratio);
         let inverse_variances = stds.map(|s| 1.0 / (s * s));
         let mut edges = Vec::with_capacity(pairs.len());

@@ -5,6 +5,8 @@
 //!   with the rounding of its solution `[P2]`-`[P5]`.
 //! - [`conjugate`]: the 10x10 SDP relaxation of conjugate averaging and the rank-one extraction
 //!   `[H2]`, `[H3]`.
+//! - [`conv_so3`]: the same SDP with `conv(SO(3))` constraints on the Gram blocks of the edges
+//!   (small graphs; what the `O(3)` relaxation misses with anisotropic costs, `[A6]`).
 //! - [`lifted`]: the rank-`p` Burer-Monteiro factorisation of the multiple-averaging SDP,
 //!   solved by a Riemannian trust-region method (the staircase `[D11]`).
 //! - [`svec`]: the vectorisation of symmetric matrices used by Clarabel's PSD cone `[P1]`.
@@ -17,6 +19,7 @@
 
 mod clarabel;
 pub mod conjugate;
+pub mod conv_so3;
 pub mod lifted;
 pub mod multiple;
 pub mod settings;

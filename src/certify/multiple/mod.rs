@@ -17,6 +17,7 @@
 //! - [`staircase`]: the Riemannian staircase (rank-lifted Burer-Monteiro descent).
 
 mod climb;
+pub mod conv;
 pub mod dual;
 pub mod grounded;
 pub mod multipliers;
@@ -26,6 +27,7 @@ mod shifted;
 pub mod staircase;
 pub mod verify;
 
+pub use conv::{ConvBound, certify_conv, conv_bound};
 pub use dual::{DualCertificate, DualDiagnosis, certify_with_multipliers, dual_certificate};
 pub use grounded::GroundedBound;
 pub use multipliers::{certificate_matrix, laplacian_times, multipliers, stationarity_residual};
