@@ -24,9 +24,11 @@ use nalgebra::{Matrix3, Matrix4};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
-/// The largest graph the dense `conv(SO(3))` SDP accepts (its `X` has `(3n)^2` entries and
-/// Clarabel factors a dense system of their order).
-pub const CONV_MAX_NODES: usize = 40;
+/// The largest graph the dense `conv(SO(3))` SDP accepts. Its `X` has `m = 3n (3n + 1) / 2`
+/// free entries and Clarabel's PSD cone scaling is a dense `m x m` matrix: 1830 entries and
+/// 27 MB at 20 nodes, but 7260 entries, 420 MB and `m^3 / 3 = 1.3e11` flops per iteration at
+/// 40 (no budget prediction guards this Rust-only call yet, so the limit does).
+pub const CONV_MAX_NODES: usize = 20;
 
 /// `A(R)` (rows and columns in quaternion order `w, x, y, z`): PSD iff `R` is in
 /// `conv(SO(3))`; `A(R(q)) = 4 q q^T` for a rotation, eigenvalues `(-2, 2, 2, 2)` for a
