@@ -385,41 +385,54 @@ fn graph(n: usize, edges: &[(usize, usize, Rotation, Matrix3<f64>)]) -> Multiple
         .unwrap()
 }
 
-/// `[A5]`: two nodes, `R_01 = I`, `H = diag(1, 1, 4)` (indefinite `M`): the rotation optimum is
-/// 0 (the estimate is exact), but `R_1 = diag(1, 1, -1)` costs -8 on `O(3)`, so no bound of the
-/// `O(3)` relaxation exceeds -8: the verdict is not `certified`, the bound is at most -8, and the
-/// SDP names the reflected block.
-#[test]
-fn reflections_defeat_the_o3_relaxation_and_are_named() {
-    let h = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 4.0));
-    let p = graph(2, &[(0, 1, Rotation::identity(), h)]);
-    let r = average_multiple(&p, &settings(CertifyMode::Sdp)).unwrap();
-    assert!(r.solution.cost.abs() < 1e-12);
-    let c = r.certificate.unwrap();
-    assert_ne!(c.verdict, Verdict::Certified, "{}", c.explanation);
-    let lb = c.lower_bound.unwrap();
-    assert!(lb <= -8.0 + 1e-6, "bound {lb} above the O(3) minimum -8");
-    let notes: Vec<&str> = r
+/// The O(3) SDP's method record (its verified bound and note) of a pipeline run.
+fn o3_sdp(r: &rotavg::pipeline::Averaged<rotavg::multiple::MultipleSolution>) -> (f64, String) {
+    let m = r
         .details
         .certify
         .as_ref()
         .unwrap()
         .methods
         .iter()
-        .map(|m| m.note.as_str())
-        .collect();
-    assert!(
-        notes
-            .iter()
-            .any(|n| n.contains("1 of 2 blocks") && n.contains("reflections")),
-        "{notes:?}"
-    );
+        .find(|m| m.note.starts_with("Clarabel SDP"))
+        .expect("the O(3) SDP ran");
+    (m.lower_bound.unwrap(), m.note.clone())
 }
 
-/// `[A5]`: the 3-cycle `R_01 = R_12 = I`, `R_20 = Rx(pi)` has rotation optimum 6. Isotropic it is
-/// certified; with `H_01 = diag(1, 1, 1.9)`, `H_12 = diag(1, 1.9, 1)`, `H_20 = I` (every `M`
-/// positive definite) the `O(3)` optimum is 8 (2 - 1.9) = 0.8, so it cannot be, and the bound
-/// says so.
+/// `[A5]`: two nodes, `R_01 = I`, `H = diag(1, 1, 4)` (indefinite `M`): the rotation optimum is
+/// 0 (the estimate is exact), but `R_1 = diag(1, 1, -1)` costs -8 on `O(3)`, so the `O(3)` SDP's
+/// bound is at most -8 and its note names the reflected block; the `conv(SO(3))` rung `[A6]`
+/// then bounds the minimum by (nearly) 0, and the certificate's bound is that one.
+#[test]
+fn reflections_defeat_the_o3_relaxation_and_are_named() {
+    let h = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 4.0));
+    let p = graph(2, &[(0, 1, Rotation::identity(), h)]);
+    let r = average_multiple(&p, &settings(CertifyMode::Sdp)).unwrap();
+    assert!(r.solution.cost.abs() < 1e-12);
+    let (o3, note) = o3_sdp(&r);
+    assert!(
+        o3 <= -8.0 + 1e-6,
+        "O(3) bound {o3} above the O(3) minimum -8"
+    );
+    assert!(
+        note.contains("1 of 2 blocks") && note.contains("reflections"),
+        "{note}"
+    );
+    let c = r.certificate.unwrap();
+    let lb = c.lower_bound.unwrap();
+    assert!(
+        lb <= 1e-9 && lb > -1e-5,
+        "conv(SO(3)) bound {lb}: {}",
+        c.explanation
+    );
+    assert_eq!(c.bound_from, Some(rotavg::certify::ladder::Point::ConvSdp));
+}
+
+/// `[A5]`, `[A6]`: the 3-cycle `R_01 = R_12 = I`, `R_20 = Rx(pi)` has rotation optimum 6.
+/// Isotropic it is certified by the `O(3)` relaxation; with `H_01 = diag(1, 1, 1.9)`,
+/// `H_12 = diag(1, 1.9, 1)`, `H_20 = I` (every `M` positive definite) the `O(3)` optimum is
+/// 8 (2 - 1.9) = 0.8, and only the `conv(SO(3))` rung certifies 6, from the command line's
+/// pipeline.
 #[test]
 fn a_three_cycle_with_definite_m_still_prefers_reflections() {
     let rx = exp(&Vector3::new(std::f64::consts::PI, 0.0, 0.0));
@@ -463,13 +476,16 @@ fn a_three_cycle_with_definite_m_still_prefers_reflections() {
         "{}",
         an.solution.cost
     );
-    let c = an.certificate.unwrap();
-    assert_ne!(c.verdict, Verdict::Certified, "{}", c.explanation);
-    let lb = c.lower_bound.unwrap();
+    let (o3, _) = o3_sdp(&an);
     assert!(
-        lb <= 0.8 + 1e-6 && lb > 0.8 - 1e-3,
-        "bound {lb}, the O(3) optimum is 0.8"
+        o3 <= 0.8 + 1e-6 && o3 > 0.8 - 1e-3,
+        "O(3) bound {o3}, its optimum is 0.8"
     );
+    let c = an.certificate.unwrap();
+    assert_eq!(c.verdict, Verdict::Certified, "{}", c.explanation);
+    assert!(c.explanation.contains("conv(SO(3))"), "{}", c.explanation);
+    let auto = average_multiple(&p, &settings(CertifyMode::Auto)).unwrap();
+    assert_eq!(auto.certificate.unwrap().verdict, Verdict::Certified);
 }
 
 /// `[A7]`: with `full_information`, a g2o `EDGE_SE3:QUAT` edge's anisotropic term is exactly 4
@@ -636,7 +652,7 @@ fn conv_so3_closes_the_reflection_examples() {
         }
         let p = graph(n, &edges);
         let o3 = average_multiple(&p, &settings(CertifyMode::Sdp)).unwrap();
-        let o3_bound = o3.certificate.unwrap().lower_bound.unwrap();
+        let o3_bound = o3_sdp(&o3).0;
         let b = conv_bound(&p, &relax_multiple_conv(&p, &sdp).unwrap()).unwrap();
         let mut best_point = best_of_random_starts(&p, 40, &mut rng);
         if o3.solution.cost < p.chordal_cost(&best_point) {

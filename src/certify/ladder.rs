@@ -53,6 +53,10 @@ pub enum Rung {
     Sdp,
     /// The Riemannian staircase `[D11]`, its multipliers verified.
     Staircase,
+    /// The SDP with `conv(SO(3))` constraints on the edges' Gram blocks (anisotropic problems
+    /// of at most [`crate::relax::conv_so3::CONV_MAX_NODES`] nodes), its multipliers verified
+    /// `[A6]`.
+    ConvSdp,
     /// Branch and bound over SO(3) `[B1]`-`[B6]`.
     BranchAndBound,
     /// The randomized Chebyshev test `[D16]`: a Monte Carlo bound, never a proof.
@@ -70,6 +74,7 @@ impl Rung {
             Rung::ScalarSubgraph { .. } => 4,
             Rung::ScalarSplit { .. } => 5,
             Rung::Sdp => 6,
+            Rung::ConvSdp => 6,
             Rung::BranchAndBound => 7,
             Rung::Staircase => 8,
             Rung::Gershgorin => 9,
@@ -99,6 +104,7 @@ impl fmt::Display for Rung {
             ),
             Rung::Gershgorin => f.write_str("Gershgorin discs [D8]"),
             Rung::Sdp => f.write_str("SDP relaxation (Clarabel)"),
+            Rung::ConvSdp => f.write_str("conv(SO(3)) SDP relaxation [A6] (Clarabel)"),
             Rung::Staircase => f.write_str("Riemannian staircase [D11]"),
             Rung::BranchAndBound => f.write_str("branch and bound [B1]-[B6]"),
             Rung::Randomized => f.write_str("randomized test [D16] (not a proof)"),
@@ -216,6 +222,8 @@ pub enum Point {
     Sdp,
     /// The staircase's lifted point.
     Staircase,
+    /// The multipliers of the `conv(SO(3))`-strengthened SDP `[A6]`.
+    ConvSdp,
 }
 
 impl fmt::Display for Point {
@@ -225,6 +233,7 @@ impl fmt::Display for Point {
             Point::Refined => "the refined estimate",
             Point::Sdp => "the SDP",
             Point::Staircase => "the staircase",
+            Point::ConvSdp => "the conv(SO(3)) SDP",
         })
     }
 }

@@ -30,6 +30,22 @@ use std::time::Instant;
 /// 40 (no budget prediction guards this Rust-only call yet, so the limit does).
 pub const CONV_MAX_NODES: usize = 20;
 
+/// The predicted cost of [`relax_multiple_conv`] on `problem`: the dense scaling of its PSD cone
+/// (`m^2` values, `m = 3n (3n + 1) / 2`) held about three times (scaling, KKT factor, copies) and
+/// `m^3 / 3` multiply-adds per interior-point iteration, at the rates of
+/// [`super::multiple::predict_relax_multiple`]. A model for the budget, never a bound.
+pub fn predict_relax_multiple_conv(problem: &MultipleProblem) -> super::SdpPrediction {
+    let m = svec_len(3 * problem.num_rotations()) as f64;
+    let cones = 10.0 * problem.num_edges() as f64;
+    super::SdpPrediction {
+        bytes: 8.0 * (3.0 * m * m + 20.0 * (m + cones)),
+        seconds: super::multiple::SDP_ITERATIONS * (m * m * m / 3.0)
+            / super::multiple::SDP_MULTIPLY_ADD_RATE,
+        largest_clique: problem.num_rotations(),
+        cliques: 1,
+    }
+}
+
 /// `A(R)` (rows and columns in quaternion order `w, x, y, z`): PSD iff `R` is in
 /// `conv(SO(3))`; `A(R(q)) = 4 q q^T` for a rotation, eigenvalues `(-2, 2, 2, 2)` for a
 /// reflection `[A6]`.

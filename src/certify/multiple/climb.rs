@@ -271,6 +271,70 @@ impl<'a> Climb<'a> {
         self.sdp_rung(false)
     }
 
+    /// The `conv(SO(3))` rung `[A6]`: for anisotropic problems of at most
+    /// [`crate::relax::conv_so3::CONV_MAX_NODES`] nodes whose bound does not yet certify the
+    /// current point (the `O(3)` relaxation can prefer reflections, `[A5]`), the strengthened SDP,
+    /// predicted and refused over the budget like every rung, its multipliers verified by
+    /// [`super::conv_bound`].
+    pub fn conv_sdp(&mut self) -> Result<()> {
+        let n = self.problem.num_rotations();
+        if !self.problem.is_anisotropic()
+            || n > crate::relax::conv_so3::CONV_MAX_NODES
+            || self.best_certifies()
+            || self.over_time("conv(SO(3)) SDP")
+        {
+            return Ok(());
+        }
+        let since = Instant::now();
+        let p = crate::relax::conv_so3::predict_relax_multiple_conv(self.problem);
+        let predicted = Prediction {
+            seconds: p.seconds,
+            bytes: p.bytes,
+        };
+        if let Err(reason) = self.fits(&predicted) {
+            let why = format!("conv(SO(3)) SDP not run: {reason}");
+            self.details.methods.push(MethodRun {
+                method: BoundMethod::Sdp,
+                lower_bound: None,
+                seconds: since.elapsed().as_secs_f64(),
+                note: why.clone(),
+            });
+            let outcome = Outcome::Refused(Refusal::OverBudget { reason: why });
+            self.log(Rung::ConvSdp, Some(predicted), outcome, since);
+            return Ok(());
+        }
+        let relaxation =
+            crate::relax::conv_so3::relax_multiple_conv(self.problem, &self.settings.sdp)?;
+        let bound = super::conv_bound(self.problem, &relaxation)?;
+        let explanation = format!(
+            "bound from the conv(SO(3)) relaxation's multipliers [A6] (Clarabel {:?}, {} \
+             iterations), verified independently: lambda_min(S) >= {:.3e}",
+            relaxation.status, relaxation.iterations, bound.verified_min_eigenvalue
+        );
+        self.offer(Best {
+            lower_bound: bound.lower_bound,
+            method: BoundMethod::Sdp,
+            point: Point::ConvSdp,
+            min_eigenvalue: Some(bound.verified_min_eigenvalue),
+            explanation: explanation.clone(),
+            verified_min_eigenvalue: bound.verified_min_eigenvalue,
+            shift: None,
+            lambdas: None,
+        });
+        let outcome = Outcome::Proved {
+            lower_bound: bound.lower_bound,
+            sufficient: false,
+        };
+        self.log(Rung::ConvSdp, Some(predicted), outcome, since);
+        self.details.methods.push(MethodRun {
+            method: BoundMethod::Sdp,
+            lower_bound: Some(bound.lower_bound),
+            seconds: since.elapsed().as_secs_f64(),
+            note: explanation,
+        });
+        Ok(())
+    }
+
     /// The best bound so far certifies the current point.
     fn best_certifies(&self) -> bool {
         let tolerance = self.settings.tolerance.resolve(self.problem.min_weight());
@@ -567,7 +631,14 @@ impl<'a> Climb<'a> {
             String::new(),
             seconds,
         );
-        let mut verdict = if c.is_certified() {
+        let mut verdict = if c.is_certified() && b.point == Point::ConvSdp {
+            format!(
+                "certified globally optimal for the anisotropic chordal L2 cost of its {} edges \
+                 (over conv(SO(3)) Gram blocks, hence SO(3)^n; the O(3) relaxation alone could \
+                 not)",
+                self.problem.num_edges()
+            )
+        } else if c.is_certified() {
             diagnosis_text(&DualDiagnosis::Certified, self.problem)
         } else {
             match first {

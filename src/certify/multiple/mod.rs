@@ -141,6 +141,11 @@ pub fn certify_multiple(
             }
             None => {}
         }
+        // anisotropic data: where the O(3) relaxation leaves a gap (reflections, [A5]), the
+        // conv(SO(3)) relaxation of small graphs [A6]
+        if matches!(settings.mode, CertifyMode::Auto | CertifyMode::Sdp) {
+            climb.conv_sdp()?;
+        }
     }
     let certificate = climb.certificate(&first, Some(&last));
     climb.details.seconds = start.elapsed().as_secs_f64();
