@@ -12,7 +12,7 @@
 //! itself. Commands on the public benchmarks (`../shared/data`, not in a clone) must be in
 //! ```` ```text ```` blocks, with their recorded output: this test fails on any in a `sh` block.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 /// The programs whose commands are shown but not run by this test.
@@ -60,8 +60,9 @@ fn sh_commands(text: &str) -> Vec<String> {
     commands
 }
 
-/// The Markdown files checked: README.md and every `.md` file under `docs/`.
-fn markdown_files(root: &Path) -> Vec<PathBuf> {
+/// The Markdown files checked: README.md and every `.md` file under `docs/`, as `(path relative
+/// to the repository, text)`.
+fn markdown_files(root: &Path) -> Vec<(String, String)> {
     let mut files = vec![root.join("README.md")];
     let mut folders = vec![root.join("docs")];
     while let Some(folder) = folders.pop() {
@@ -76,6 +77,17 @@ fn markdown_files(root: &Path) -> Vec<PathBuf> {
     }
     files.sort();
     files
+        .into_iter()
+        .map(|file| {
+            let text = std::fs::read_to_string(&file).expect("a Markdown file");
+            let name = file
+                .strip_prefix(root)
+                .unwrap_or(&file)
+                .display()
+                .to_string();
+            (name, text)
+        })
+        .collect()
 }
 
 #[test]
@@ -88,17 +100,11 @@ fn shell_commands_of_the_docs_run() {
         std::env::var("PATH").unwrap_or_default()
     );
     let mut ran = 0;
-    for file in markdown_files(root) {
-        let text = std::fs::read_to_string(&file).expect("a Markdown file");
+    for (name, text) in markdown_files(root) {
         let commands = sh_commands(&text);
         if commands.is_empty() {
             continue;
         }
-        let name = file
-            .strip_prefix(root)
-            .unwrap_or(&file)
-            .display()
-            .to_string();
         let folder = std::env::temp_dir().join(format!(
             "rotavg-docs-{}-{}",
             std::process::id(),
@@ -167,16 +173,10 @@ fn commands_are_parsed_as_a_shell_reads_them() {
 fn every_rust_block_of_the_docs_is_a_doc_test() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let lib = std::fs::read_to_string(root.join("src/lib.rs")).expect("src/lib.rs");
-    for file in markdown_files(root) {
-        let text = std::fs::read_to_string(&file).expect("a Markdown file");
+    for (name, text) in markdown_files(root) {
         if !text.lines().any(|l| l.trim() == "```rust") {
             continue;
         }
-        let name = file
-            .strip_prefix(root)
-            .unwrap_or(&file)
-            .display()
-            .to_string();
         assert!(
             lib.contains(&format!("include_str!(\"../{name}\")")),
             "{name} has Rust code blocks but src/lib.rs (doc_markdown) does not include it"

@@ -436,7 +436,7 @@ fn read_g2o_limited(
     let no_edges = "no edge lines (EDGE_SE3:QUAT, EDGE3 or EDGE_SE2) in the file";
     // [A7]: each kept edge's full rotation information, in edge order (used with
     // `options.full_information`)
-    let mut infos: Vec<Matrix3<f64>> = Vec::new();
+    let mut infos: Vec<Information> = Vec::new();
     let name = lines.name().to_owned();
     let edges = EdgeLines::read(lines, no_edges, |t, edges| {
         let ln = t.line;
@@ -581,7 +581,9 @@ fn read_g2o_limited(
                 WeightSource::Unit => 1.0,
             };
             if options.full_information && options.weights == WeightSource::File {
-                infos.push(information.unwrap_or_else(|| Matrix3::identity() * weight));
+                let h = information.unwrap_or_else(|| Matrix3::identity() * weight);
+                // checked here, so that an error names this line
+                infos.push(Information::new(h).map_err(|e| t.err(format!("edge {e}")))?);
             }
             edges.push(
                 ln,
@@ -612,22 +614,9 @@ fn read_g2o_limited(
     }
     let mut graph = edges.into_graph(vertices.keys().copied(), GraphFormat::G2o)?;
     if !infos.is_empty() {
-        let info = infos
-            .into_iter()
-            .enumerate()
-            .map(|(k, h)| {
-                Information::new(h).map_err(|e| match e {
-                    Error::InvalidInformation { reason, .. } => Error::InvalidInformation {
-                        item: format!("edge {k}"),
-                        reason,
-                    },
-                    other => other,
-                })
-            })
-            .collect::<Result<Vec<_>>>();
         graph.problem = graph
             .problem
-            .with_information(info.map_err(|e| e.in_file(&name, None))?)
+            .with_information(infos)
             .map_err(|e| e.in_file(&name, None))?;
     }
     let initial = if vertices.is_empty() {

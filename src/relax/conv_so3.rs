@@ -133,8 +133,7 @@ pub fn relax_multiple_conv(
     let dim = 3 * n;
     let nv = svec_len(dim);
     // the cost scaled by the mean weighted degree [P4]
-    let total: f64 = problem.edges().iter().map(|e| e.weight).sum();
-    let scale = (2.0 * total / n as f64).max(f64::MIN_POSITIVE);
+    let scale = super::multiple::cost_scale(problem);
     let q = connection_laplacian(problem).to_dense();
     let mut c = vec![0.0; nv];
     for col in 0..dim {

@@ -90,9 +90,7 @@ pub fn relax_multiple(
             what: "view graph (edges)".into(),
         });
     }
-    let total_weight: f64 = problem.edges().iter().map(|e| e.weight).sum();
-    // [P4] mean weighted degree; > 0 because weights are validated positive
-    let scale = 2.0 * total_weight / n as f64;
+    let scale = cost_scale(problem);
     let q = connection_laplacian(problem);
     // upper-triangle entries of Q / s
     let mut q_upper: Vec<(usize, usize, f64)> = Vec::new();
@@ -181,6 +179,13 @@ pub const SDP_BYTES_PER_BLOCK_ENTRY: f64 = 56.0;
 pub const SDP_MULTIPLY_ADD_RATE: f64 = 1e10;
 /// Interior-point iterations assumed by the time model (9 to 12 measured).
 pub const SDP_ITERATIONS: f64 = 20.0;
+
+/// The cost scale `s` of the SDPs `[P4]`: the mean weighted degree `2 sum w / n` (> 0: weights are
+/// validated positive; for anisotropic edges `w = tr(H) / 3`).
+pub(crate) fn cost_scale(problem: &MultipleProblem) -> f64 {
+    let total_weight: f64 = problem.edges().iter().map(|e| e.weight).sum();
+    (2.0 * total_weight / problem.num_rotations().max(1) as f64).max(f64::MIN_POSITIVE)
+}
 
 /// [`SdpPrediction`] of [`relax_multiple`] on `problem` (never errors on a valid problem).
 pub fn predict_relax_multiple(problem: &MultipleProblem) -> Result<SdpPrediction> {

@@ -303,8 +303,10 @@ impl<'a> Climb<'a> {
             self.log(Rung::ConvSdp, Some(predicted), outcome, since);
             return Ok(());
         }
-        let relaxation =
-            crate::relax::conv_so3::relax_multiple_conv(self.problem, &self.settings.sdp)?;
+        let relaxation = crate::relax::conv_so3::relax_multiple_conv(
+            self.problem,
+            &self.sdp_settings_within_budget(),
+        )?;
         let bound = super::conv_bound(self.problem, &relaxation)?;
         let explanation = format!(
             "bound from the conv(SO(3)) relaxation's multipliers [A6] (Clarabel {:?}, {} \
@@ -333,6 +335,21 @@ impl<'a> Climb<'a> {
             note: explanation,
         });
         Ok(())
+    }
+
+    /// The SDP settings with Clarabel's time limit at what is left of the time budget (every SDP
+    /// rung: its prediction decides whether it starts, this bounds how long it runs).
+    fn sdp_settings_within_budget(&self) -> crate::relax::SdpSettings {
+        let mut sdp_settings = self.settings.sdp.clone();
+        if let Some(limit) = self.settings.budget.max_seconds {
+            let left = (limit - self.start.elapsed().as_secs_f64()).max(1e-3);
+            sdp_settings.time_limit_seconds = Some(
+                sdp_settings
+                    .time_limit_seconds
+                    .map_or(left, |t| t.min(left)),
+            );
+        }
+        sdp_settings
     }
 
     /// The best bound so far certifies the current point.
@@ -416,17 +433,7 @@ impl<'a> Climb<'a> {
         crate::progress::phase(crate::progress::Phase::Sdp, || {
             format!("{} nodes", self.problem.num_rotations())
         });
-        // the SDP may use what is left of the time budget
-        let mut sdp_settings = self.settings.sdp.clone();
-        if let Some(limit) = self.settings.budget.max_seconds {
-            let left = (limit - self.start.elapsed().as_secs_f64()).max(1e-3);
-            sdp_settings.time_limit_seconds = Some(
-                sdp_settings
-                    .time_limit_seconds
-                    .map_or(left, |t| t.min(left)),
-            );
-        }
-        let sdp = relax_multiple(self.problem, &sdp_settings)?;
+        let sdp = relax_multiple(self.problem, &self.sdp_settings_within_budget())?;
         let n = self.problem.num_rotations();
         let usable = sdp.multipliers.len() == n
             && sdp
