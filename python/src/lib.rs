@@ -417,8 +417,10 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         after the optimal alignment. Default: the ground truth the ``Graph`` was read with.
 ///     information: optional ``(M, 3, 3)`` symmetric positive semidefinite information
 ///         matrices ``H`` (instead of ``weights``) for the residual ``e`` of
-///         ``R_j R_i^T = rel[k] expm([e]x)``: the anisotropic chordal cost, ``loss="chordal"``
-///         only (SPEC section 1; ``to_dict()["information"]`` summarises them).
+///         ``R_j R_i^T = rel[k] expm([e]x)``: the anisotropic chordal cost (certified) for
+///         ``loss="chordal"``, ``sum e^T H e`` for ``"geodesic"``, and the robust losses of the
+///         Mahalanobis angle ``sqrt(e^T H e / (tr H / 3))`` (SPEC section 1;
+///         ``to_dict()["information"]`` summarises them).
 ///
 /// Returns:
 ///     Result: ``estimate`` is ``(n, 3, 3)`` with the gauge ``estimate[0] = I``;

@@ -7,7 +7,9 @@
 //! - anisotropic chordal cost `f_e = 4 (tr M - <R_ij M, R_j R_i^T>)` `[A1]`, which equals
 //!   `4 (1 - cos theta) u^T H u` for `e = theta u` and `2 e^T H e` to second order;
 //!   `H = w I` gives exactly the isotropic `w ||R_j - R_ij R_i||_F^2` (for exact rotations);
-//! - anisotropic geodesic cost `e^T H e` `[A8]` (reported, not minimised here).
+//! - anisotropic geodesic cost `e^T H e` `[A8]`, and the robust losses applied to the
+//!   Mahalanobis angle `theta_H = sqrt(e^T H e / wbar)`, `wbar = tr(H)/3` (`[A10]`, minimised by
+//!   `multiple::geodesic`'s Gauss-Newton / IRLS iteration with 3x3 blocks).
 //!
 //! The chordal cost is linear in the Gram block `R_j R_i^T`, so the connection Laplacian keeps
 //! its shape with 3x3 blocks (`[A2]`: `Q_ii += 2M`, `Q_jj += 2M`, `Q_ij = -2 M R_ij^T`) and the
@@ -30,8 +32,8 @@
 //! ```
 
 use crate::error::{Error, Result};
-use crate::so3::{Rotation, log};
-use nalgebra::Matrix3;
+use crate::so3::{Rotation, log, right_jacobian_inverse};
+use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Relative tolerance on negative eigenvalues of an information matrix: `lambda_min >= -1e-12
@@ -277,11 +279,47 @@ pub fn geodesic_term(h: &Information, r_ij: &Rotation, r_i: &Rotation, r_j: &Rot
     e.dot(&(h.matrix() * e))
 }
 
+/// The Mahalanobis angle `theta_H = sqrt(e^T H e / wbar)` of an edge, `wbar = tr(H) / 3` its
+/// mean weight `[A10]`: the residual angle in the units of the edge's mean noise, equal to the
+/// residual angle `theta` when `H = w I`. The anisotropic geodesic cost is `sum wbar theta_H^2 =
+/// sum e^T H e`, and every loss applies to it (`sum wbar rho(theta_H)`), so the losses' thresholds
+/// keep their meaning in degrees.
+pub fn mahalanobis_angle(h: &Information, r_ij: &Rotation, r_i: &Rotation, r_j: &Rotation) -> f64 {
+    (geodesic_term(h, r_ij, r_i, r_j) / h.mean_weight())
+        .max(0.0)
+        .sqrt()
+}
+
+/// One edge of the anisotropic geodesic costs, linearised `[A10]`.
+pub(crate) struct GeodesicEdge {
+    /// `theta_H` ([`mahalanobis_angle`]).
+    pub angle: f64,
+    /// `H e`.
+    pub he: Vector3<f64>,
+    /// `G = J_r^{-1}(e) R_i`: under `R_k -> R_k exp(hat w_k)`, `e -> e + G (w_j - w_i) + O(|w|^2)`.
+    pub g: Matrix3<f64>,
+}
+
+/// [`GeodesicEdge`] of the edge `(i, j)` with information `h`.
+pub(crate) fn geodesic_edge(
+    h: &Information,
+    r_ij: &Rotation,
+    r_i: &Rotation,
+    r_j: &Rotation,
+) -> GeodesicEdge {
+    let e = log(&(r_ij.inverse() * r_j * r_i.inverse()));
+    let he = h.matrix() * e;
+    GeodesicEdge {
+        angle: (e.dot(&he) / h.mean_weight()).max(0.0).sqrt(),
+        he,
+        g: right_jacobian_inverse(&e) * r_i.matrix(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::so3::{exp, random_rotation};
-    use nalgebra::Vector3;
     use rand::SeedableRng;
 
     /// `H = w I` reproduces the isotropic chordal term to rounding (`[A1]`), for any rotations.

@@ -8,18 +8,24 @@
 //! weighted graph Laplacian (n-1 square, scalar, same for the 3 axes). Its sparsity pattern and
 //! symbolic Cholesky are built once; for the geodesic loss (`psi = 2`) the numeric factor is
 //! also computed only once. A backtracking safeguard halves the step until the cost decreases.
+//!
+//! Anisotropic measurements (`paper-notes/anisotropic.md` `[A10]`): the loss applies to the
+//! Mahalanobis angle `theta_H = sqrt(e^T H e / wbar)` of `e = log(R_ij^T R_j R_i^T)`, which moves
+//! as `e + G (w_j - w_i)`, `G = J_r^{-1}(e) R_i`; the step solves the (reweighted) Gauss-Newton
+//! system with 3x3 blocks `psi G^T H G` (refactorised at every iteration: the blocks turn with
+//! the estimate) against the exact gradient, so the iteration stops at a true stationary point.
 
 use crate::error::Result;
 use crate::linalg::linear_solver::{LinearSolver, SolverKind};
 use crate::multiple::MultipleProblem;
 use crate::multiple::chordal::{grad_norm as norm, grounded_pattern, root_fixed_steps};
-use crate::multiple::robust::{edge_log, objective_terms};
+use crate::multiple::robust::{Eval, evaluate};
 use crate::multiple::solve::{IRLS_DECREASE_WINDOW, MultipleSettings, MultipleSolution};
-use crate::objective::{Loss, Objective};
+use crate::objective::Loss;
 use crate::so3::{Rotation, exp};
 use crate::termination::{SolverReport, Termination};
 use faer::Mat;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Matrix3;
 
 /// The scalar Laplacian systems of the reweighted (robust) Lie-algebraic iterations are
 /// factorised directly when the factor has at most this many values (~40 MB); geodesic L2,
@@ -44,28 +50,6 @@ pub(crate) fn solve_geodesic(
     )
 }
 
-struct Eval {
-    cost: f64,
-    grad: Vec<Vector3<f64>>,
-    psi: Vec<f64>,
-}
-
-fn evaluate(problem: &MultipleProblem, r: &[Rotation], objective: &Objective, eps: f64) -> Eval {
-    let mut grad = vec![Vector3::zeros(); r.len()];
-    let mut psi = Vec::with_capacity(problem.num_edges());
-    let mut cost = 0.0;
-    for e in problem.edges() {
-        let v = edge_log(e, r);
-        let (rho, p) = objective_terms(objective, v.norm(), eps);
-        cost += e.weight * rho;
-        let g = v * (e.weight * p);
-        grad[e.i] += g;
-        grad[e.j] -= g;
-        psi.push(p);
-    }
-    Eval { cost, grad, psi }
-}
-
 /// The (reweighted) Lie-algebraic iteration for the problem's objective `[M8]`, `[M9]`.
 pub(crate) fn lie_algebraic(
     problem: &MultipleProblem,
@@ -82,7 +66,7 @@ pub(crate) fn lie_algebraic(
     let total_weight: f64 = problem.edges().iter().map(|e| e.weight).sum();
     let tol = settings.gradient_tolerance;
     let mut r = init;
-    let mut ev = evaluate(problem, &r, &objective, eps);
+    let mut ev = evaluate(problem, &r, eps);
     let init_cost = ev.cost;
     let measure = "relative gradient norm ||grad|| / sum(w)";
     let finish = |r: Vec<Rotation>, ev: &Eval, iterations: usize, termination| {
@@ -113,7 +97,9 @@ pub(crate) fn lie_algebraic(
         return finish(r, &ev, 0, converged(g));
     }
     let var = |i: usize| if i == 0 { None } else { Some(i - 1) };
-    let pattern = grounded_pattern(problem, 1);
+    // isotropic: one scalar Laplacian for the three axes; anisotropic: 3x3 blocks [A10]
+    let anisotropic = problem.is_anisotropic();
+    let pattern = grounded_pattern(problem, if anisotropic { 3 } else { 1 });
     let slots: Vec<usize> = problem
         .edges()
         .iter()
@@ -129,7 +115,7 @@ pub(crate) fn lie_algebraic(
     // With constant weights (geodesic L2) the one factorisation serves every iteration, so it
     // is used up to the Laplacian preconditioner's limit ([M6b]); reweighted losses refactorise
     // at every iteration and keep the smaller limit.
-    let constant_weights = objective.loss == Loss::L2;
+    let constant_weights = objective.loss == Loss::L2 && !anisotropic;
     let limit = if constant_weights {
         crate::multiple::chordal::LAPLACIAN_PRECONDITIONER_VALUES
     } else {
@@ -169,9 +155,11 @@ pub(crate) fn lie_algebraic(
         if factor.is_none() || !constant_weights {
             // weighted Laplacian with edge weights w_e psi_e, node 0 removed [M8]
             val.iter_mut().for_each(|v| *v = 0.0);
-            for ((e, &slot), &psi) in problem.edges().iter().zip(&slots).zip(&ev.psi) {
-                let c = e.weight * psi;
-                let one = Matrix3::from_element(c);
+            for (k, (e, &slot)) in problem.edges().iter().zip(&slots).enumerate() {
+                let one = match anisotropic {
+                    true => ev.blocks[k],
+                    false => Matrix3::from_element(e.weight * ev.psi[k]),
+                };
                 let (vi, vj) = (var(e.i), var(e.j));
                 if let Some(p) = vi {
                     pattern.add(&mut val, p, p, 0, &one);
@@ -198,7 +186,10 @@ pub(crate) fn lie_algebraic(
             }
         }
         let llt = factor.as_ref().expect("factor set above");
-        let mut rhs = Mat::<f64>::from_fn(n - 1, 3, |p, a| -ev.grad[p + 1][a]);
+        let mut rhs = match anisotropic {
+            true => Mat::<f64>::from_fn(3 * (n - 1), 1, |k, _| -ev.grad[k / 3 + 1][k % 3]),
+            false => Mat::<f64>::from_fn(n - 1, 3, |p, a| -ev.grad[p + 1][a]),
+        };
         if llt.solve(&mut rhs, 1e-10, 5000).is_none() {
             return finish(
                 r,
@@ -209,7 +200,10 @@ pub(crate) fn lie_algebraic(
                 },
             );
         }
-        let step = root_fixed_steps(n, |i, a| rhs[(i, a)]);
+        let step = match anisotropic {
+            true => root_fixed_steps(n, |i, a| rhs[(3 * i + a, 0)]),
+            false => root_fixed_steps(n, |i, a| rhs[(i, a)]),
+        };
         let max_step = step.iter().map(|s| s.norm()).fold(0.0, f64::max);
         if !max_step.is_finite() {
             return finish(
@@ -230,7 +224,7 @@ pub(crate) fn lie_algebraic(
                 .zip(&step)
                 .map(|(ri, s)| ri * exp(&(s * t)))
                 .collect();
-            let cev = evaluate(problem, &cand, &objective, eps);
+            let cev = evaluate(problem, &cand, eps);
             if cev.cost <= ev.cost {
                 accepted = Some((cand, cev));
                 break;

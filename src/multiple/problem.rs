@@ -134,9 +134,10 @@ impl MultipleProblem {
     /// edge order (SPEC section 1, `paper-notes/anisotropic.md` `[A1]`). The cost becomes the
     /// anisotropic chordal cost `sum 4 (tr M - <R_ij M, R_j R_i^T>)`, `M = tr(H)/2 I - H`; each
     /// edge's `weight` is replaced by `tr(H) / 3`, which only starts and preconditions the
-    /// solvers (it is no part of any cost). Errors: a count that differs from the edges', or an
-    /// objective other than chordal L2 (the anisotropic geodesic and robust costs have no
-    /// solver yet).
+    /// solvers (it is no part of any cost). With a geodesic objective
+    /// ([`Self::with_objective`], before or after) the cost is `sum wbar rho(theta_H)` of the
+    /// Mahalanobis angles `theta_H = sqrt(e^T H e / wbar)` (`[A10]`; `sum e^T H e` for L2).
+    /// Errors: a count that differs from the edges'.
     ///
     /// ```
     /// use rotavg::multiple::{Edge, MultipleProblem, anisotropic::Information};
@@ -160,11 +161,6 @@ impl MultipleProblem {
                     self.edges.len()
                 ),
             });
-        }
-        if !self.objective.is_chordal_l2() {
-            return Err(self
-                .objective
-                .unsupported("anisotropic multiple", "chordal l2"));
         }
         for (e, h) in self.edges.iter_mut().zip(&information) {
             e.weight = h.mean_weight();
@@ -204,9 +200,6 @@ impl MultipleProblem {
         objective.validate()?;
         if !(objective.is_chordal_l2() || objective.metric == Metric::Geodesic) {
             return Err(objective.unsupported("multiple", Self::SUPPORTED));
-        }
-        if self.is_anisotropic() && !objective.is_chordal_l2() {
-            return Err(objective.unsupported("anisotropic multiple", "chordal l2"));
         }
         self.objective = objective;
         Ok(self)
@@ -309,6 +302,31 @@ impl MultipleProblem {
         }
     }
 
+    /// The same nodes with the edges whose `keep` entry is `true` (their information too; the
+    /// objective chordal L2, the certifiable one). Panics if `keep.len()` differs from the
+    /// number of edges. Errors: none kept ([`Error::Empty`]).
+    pub fn edge_subset(&self, keep: &[bool]) -> Result<MultipleProblem> {
+        assert_eq!(keep.len(), self.edges.len(), "one flag per edge");
+        let edges = self
+            .edges
+            .iter()
+            .zip(keep)
+            .filter(|(_, k)| **k)
+            .map(|(e, _)| e.clone())
+            .collect();
+        let sub = MultipleProblem::new(self.num_rotations, edges)?;
+        match &self.information {
+            Some(info) => sub.with_information(
+                info.iter()
+                    .zip(keep)
+                    .filter(|(_, k)| **k)
+                    .map(|(h, _)| *h)
+                    .collect(),
+            ),
+            None => Ok(sub),
+        }
+    }
+
     /// The sub-problem on the largest connected component, with nodes renumbered `0..k` in
     /// increasing order, and the map new index -> old index.
     pub fn largest_component(&self) -> (MultipleProblem, Vec<usize>) {
@@ -382,11 +400,35 @@ impl MultipleProblem {
         if self.objective.is_chordal_l2() {
             return self.chordal_cost(rotations);
         }
-        self.residual_angles(rotations)
+        self.objective_angles(rotations)
             .iter()
             .zip(&self.edges)
             .map(|(t, e)| e.weight * self.objective.term(*t))
             .sum()
+    }
+
+    /// The angles the objective's loss applies to, per edge, in radians: the residual angles
+    /// ([`Self::residual_angles`]) for isotropic weights, the Mahalanobis angles
+    /// `theta_H = sqrt(e^T H e / wbar)` for anisotropic measurements (`[A10]`,
+    /// [`crate::multiple::anisotropic::mahalanobis_angle`]; equal to the residual angle for
+    /// `H = w I`). Robust losses and their inlier thresholds apply to these.
+    pub fn objective_angles(&self, rotations: &[Rotation]) -> Vec<f64> {
+        let Some(info) = &self.information else {
+            return self.residual_angles(rotations);
+        };
+        self.assert_estimate(rotations);
+        self.edges
+            .iter()
+            .zip(info)
+            .map(|(e, h)| {
+                crate::multiple::anisotropic::mahalanobis_angle(
+                    h,
+                    &e.rotation,
+                    &rotations[e.i],
+                    &rotations[e.j],
+                )
+            })
+            .collect()
     }
 
     /// Residual angles `theta(R_ij R_i, R_j)` per edge, in radians.

@@ -1,15 +1,17 @@
 //! Robust losses on the residual angle (L1, Huber, Cauchy), minimised by iteratively
-//! reweighted Lie-algebraic least squares (`paper-notes/multiple.md`, `[M7]`, `[M9]`).
+//! reweighted Lie-algebraic least squares (`paper-notes/multiple.md`, `[M7]`, `[M9]`); for
+//! anisotropic measurements on the Mahalanobis angle (`paper-notes/anisotropic.md` `[A10]`).
 
 use crate::error::Result;
 use crate::linalg::linear_solver::SolverKind;
 use crate::multiple::MultipleProblem;
+use crate::multiple::anisotropic::geodesic_edge;
 use crate::multiple::chordal::chordal_gradient;
 use crate::multiple::geodesic::lie_algebraic;
 use crate::multiple::solve::{MultipleSettings, MultipleSolution};
 use crate::objective::{Loss, Objective};
 use crate::so3::{Rotation, log};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -39,7 +41,10 @@ pub fn objective_terms(objective: &Objective, theta: f64, l1_epsilon: f64) -> (f
 /// `R_i exp(hat w_i)` `[M8]`: with `r_e = log(R_j^T R_ij R_i)` (so `theta_e = |r_e|`),
 /// `grad_i += w_e psi(theta_e) r_e`, `grad_j -= w_e psi(theta_e) r_e`. For
 /// chordal L2 this is [`chordal_gradient`]. For L1 the gradient is that of the smoothed
-/// cost (the cost returned is the exact `sum w theta`). Panics if `rotations.len() != n`.
+/// cost (the cost returned is the exact `sum w theta`). Anisotropic measurements: the loss of
+/// the Mahalanobis angle, `sum wbar rho(theta_H)`, with `grad_j += G^T psi H e`,
+/// `grad_i -= G^T psi H e`, `G = J_r^{-1}(e) R_i` (`paper-notes/anisotropic.md` `[A10]`).
+/// Panics if `rotations.len() != n`.
 ///
 /// ```
 /// use rotavg::multiple::{objective_cost_gradient, synthetic::SyntheticGraph};
@@ -55,22 +60,58 @@ pub fn objective_cost_gradient(
     rotations: &[Rotation],
     l1_epsilon: f64,
 ) -> (f64, Vec<Vector3<f64>>) {
-    let objective = problem.objective();
-    if objective.is_chordal_l2() {
+    if problem.objective().is_chordal_l2() {
         return chordal_gradient(problem, rotations);
     }
+    let ev = evaluate(problem, rotations, l1_epsilon);
+    (ev.cost, ev.grad)
+}
+
+/// Cost, gradient and the reweighting of one (reweighted) Gauss-Newton step of a geodesic
+/// objective at an estimate ([`evaluate`]).
+pub(crate) struct Eval {
+    pub cost: f64,
+    pub grad: Vec<Vector3<f64>>,
+    /// Isotropic: the edges' factors `psi(theta_e)` (the step's normal matrix is the scalar
+    /// Laplacian of the weights `w_e psi_e`, [M8]).
+    pub psi: Vec<f64>,
+    /// Anisotropic: the edges' 3x3 blocks `psi G^T H G` of the normal matrix `[A10]` (empty for
+    /// isotropic problems).
+    pub blocks: Vec<Matrix3<f64>>,
+}
+
+/// [`Eval`] of `rotations` under the problem's (geodesic or robust) objective.
+pub(crate) fn evaluate(problem: &MultipleProblem, rotations: &[Rotation], eps: f64) -> Eval {
     assert_eq!(rotations.len(), problem.num_rotations());
-    let mut grad = vec![Vector3::zeros(); rotations.len()];
-    let mut cost = 0.0;
-    for e in problem.edges() {
-        let r = edge_log(e, rotations);
-        let (rho, psi) = objective_terms(&objective, r.norm(), l1_epsilon);
-        cost += e.weight * rho;
-        let g = r * (e.weight * psi);
-        grad[e.i] += g;
-        grad[e.j] -= g;
+    let objective = problem.objective();
+    let mut ev = Eval {
+        cost: 0.0,
+        grad: vec![Vector3::zeros(); rotations.len()],
+        psi: Vec::new(),
+        blocks: Vec::new(),
+    };
+    if let Some(info) = problem.information() {
+        for (e, h) in problem.edges().iter().zip(info) {
+            let ge = geodesic_edge(h, &e.rotation, &rotations[e.i], &rotations[e.j]);
+            let (rho, p) = objective_terms(&objective, ge.angle, eps);
+            ev.cost += e.weight * rho; // weight = tr(H) / 3
+            let g = ge.g.transpose() * (ge.he * p);
+            ev.grad[e.j] += g;
+            ev.grad[e.i] -= g;
+            ev.blocks.push(ge.g.transpose() * h.matrix() * ge.g * p);
+        }
+        return ev;
     }
-    (cost, grad)
+    for e in problem.edges() {
+        let v = edge_log(e, rotations);
+        let (rho, p) = objective_terms(&objective, v.norm(), eps);
+        ev.cost += e.weight * rho;
+        let g = v * (e.weight * p);
+        ev.grad[e.i] += g;
+        ev.grad[e.j] -= g;
+        ev.psi.push(p);
+    }
+    ev
 }
 
 /// `r_e = log(R_j^T R_ij R_i)`.
@@ -205,7 +246,8 @@ impl fmt::Display for ResidualSummary {
 }
 
 /// Per-edge residuals of an estimate, in the problem's edge order: the residual angle
-/// `theta(R_ij R_i, R_j)` in degrees, the final IRLS weight relative to the edge's own weight
+/// `theta(R_ij R_i, R_j)` in degrees (for anisotropic measurements the Mahalanobis angle
+/// `theta_H` the loss applies to, [`MultipleProblem::objective_angles`]), the final IRLS weight relative to the edge's own weight
 /// ([`relative_weight`]), and the inlier flag `residual_deg <= inlier_threshold_deg`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct EdgeResiduals {
@@ -255,7 +297,7 @@ pub fn edge_residuals(
     inlier_threshold_deg: f64,
 ) -> EdgeResiduals {
     let objective = problem.objective();
-    let theta = problem.residual_angles(rotations);
+    let theta = problem.objective_angles(rotations);
     let residual_deg: Vec<f64> = theta.iter().map(|t| t.to_degrees()).collect();
     let weight = theta
         .iter()
@@ -324,7 +366,7 @@ impl fmt::Display for OutlierWarning {
 const OUTLIER_SHARE: f64 = 0.01;
 
 /// [`OutlierWarning`] for `rotations` when at least 1 % (and 3) of the edges have a residual
-/// angle above 5 degrees and a weighted residual `sqrt(w) theta` above 6 times the median
+/// angle (anisotropic: Mahalanobis angle, [`MultipleProblem::objective_angles`]) above 5 degrees and a weighted residual `sqrt(w) theta` above 6 times the median
 /// weighted residual (weights are informations, so `sqrt(w) theta` is in units of each edge's own
 /// noise: precise odometry and noisy loop closures are not told apart as outliers); `None`
 /// otherwise. Gaussian noise stays below six times its median (the chance is below 1e-9 per
@@ -339,7 +381,7 @@ pub fn suspected_outliers(
     if problem.num_edges() < 2 * problem.num_rotations() {
         return None;
     }
-    let theta = problem.residual_angles(rotations);
+    let theta = problem.objective_angles(rotations);
     let weighted: Vec<f64> = theta
         .iter()
         .zip(problem.edges())

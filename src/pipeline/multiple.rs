@@ -267,17 +267,11 @@ pub fn certify_inlier_graph(
             ),
         });
     }
-    let edges: Vec<_> = problem
-        .edges()
-        .iter()
-        .zip(&residuals.inlier)
-        .filter(|(_, inlier)| **inlier)
-        .map(|(e, _)| e.clone())
-        .collect();
-    if edges.is_empty() {
+    if !residuals.inlier.contains(&true) {
         return Ok(None);
     }
-    let inliers = MultipleProblem::new(n, edges)?; // chordal L2
+    // chordal L2 (anisotropic chordal with the inliers' information)
+    let inliers = problem.edge_subset(&residuals.inlier)?;
     let components = inliers.components();
     let isolated_nodes = components.iter().filter(|c| c.len() == 1).count();
     let other_component_sizes = components

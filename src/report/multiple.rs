@@ -262,6 +262,14 @@ impl fmt::Display for MultipleReport {
         }
         if let Some(s) = &self.information {
             write!(f, "\n{s}")?;
+            let objective = self.result.solution.objective;
+            if !objective.is_chordal_l2() {
+                write!(
+                    f,
+                    "\n  the {objective} cost applies to each edge's Mahalanobis angle \
+                     sqrt(e^T H e / (tr H / 3)) (the residuals and inlier threshold below too)"
+                )?;
+            }
         }
         writeln!(f)?;
         nested(f, &self.result)?;
