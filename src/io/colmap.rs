@@ -41,7 +41,11 @@
 //!   the cameras (the cheirality test), which this reader does not redo. A database with no
 //!   usable row is an error that says so. A database without the column `qvec` (older COLMAP)
 //!   is an error too.
-//! * **Weights** are 1 (COLMAP stores none; the inlier count is not a variance).
+//! * **Weights** are 1 (COLMAP stores none; the inlier count is not a variance). With
+//!   [`ReadOptions::full_information`] (`--information full`) each edge instead gets the
+//!   information of its rotation from the row's inlier matches (`data`), the two images'
+//!   `keypoints` and `cameras` (`paper-notes/formats.md` `[F13]`,
+//!   [`crate::io::two_view_information`]); pairs that give none are skipped with a warning.
 //! * **Nodes** are the image ids that occur in a used row, sorted
 //!   ([`LoadedGraph::node_ids`]), with the image names of the table `images`
 //!   ([`LoadedGraph::node_names`]). A used row naming an image the table `images` does not
@@ -381,6 +385,9 @@ mod database {
             .map_err(sql)?;
         let mut rows = stmt.query([]).map_err(sql)?;
         let mut raw: Vec<crate::io::RawEdge> = Vec::new();
+        // (pair_id, tvec) of each edge in `raw`, for --information full
+        let mut poses: Vec<(i64, Option<[f64; 3]>)> = Vec::new();
+        let mut warnings = Vec::new();
         let mut total = 0usize;
         let mut by_config: BTreeMap<i64, usize> = BTreeMap::new();
         let mut no_pose = 0usize;
@@ -453,9 +460,27 @@ mod database {
                 rotation,
                 weight: 1.0,
             });
+            poses.push((pair_id, t));
+        }
+        let mut information = None;
+        if options.full_information && options.weights == crate::io::detect::WeightSource::File {
+            let (kept, info, skipped) = two_view::informations(&conn, path, raw, &poses, &file)?;
+            if kept.is_empty() && skipped.0 > 0 {
+                return Err(err(format!(
+                    "--information full: none of the {} two-view geometries with a relative pose gives an information (first: {})",
+                    skipped.0, skipped.1
+                )));
+            }
+            raw = kept;
+            if skipped.0 > 0 {
+                warnings.push(format!(
+                    "--information full: skipped {} two-view geometries whose inlier correspondences give no information (first: {})",
+                    skipped.0, skipped.1
+                ));
+            }
+            information = Some(info);
         }
         let skipped_config: usize = by_config.values().sum();
-        let mut warnings = Vec::new();
         if skipped_config > 0 {
             let list: Vec<String> = by_config
                 .iter()
@@ -485,7 +510,13 @@ mod database {
             .iter()
             .map(|id| names.get(id).cloned().unwrap_or_default())
             .collect();
-        let problem = MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(&file, None))?;
+        let mut problem =
+            MultipleProblem::new(ids.len(), edges).map_err(|e| e.in_file(&file, None))?;
+        if let Some(info) = information {
+            problem = problem
+                .with_information(info)
+                .map_err(|e| e.in_file(&file, None))?;
+        }
         let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
         Ok(LoadedGraph {
             problem,
@@ -498,6 +529,165 @@ mod database {
             format: GraphFormat::Colmap,
             planar: false,
         })
+    }
+
+    /// `--information full` (`[F13]`): each edge's information from the inlier
+    /// correspondences of its row and the two images' cameras.
+    mod two_view {
+        use super::*;
+        use crate::io::two_view_information::{Camera, rotation_information};
+        use crate::multiple::anisotropic::Information;
+        use nalgebra::{Vector2, Vector3};
+
+        /// The most keypoints or inlier matches read for one image or pair (COLMAP extracts
+        /// at most 8192 SIFT features per image by default); a larger count is an error.
+        const MAX_ROWS: i64 = 10_000_000;
+
+        /// Edges kept (those with an information), their informations, and the number of
+        /// edges skipped with the first reason.
+        pub(super) type Informations = (Vec<crate::io::RawEdge>, Vec<Information>, (usize, String));
+
+        pub(super) fn informations(
+            conn: &Connection,
+            path: &Path,
+            raw: Vec<crate::io::RawEdge>,
+            poses: &[(i64, Option<[f64; 3]>)],
+            file: &str,
+        ) -> Result<Informations> {
+            let err = |msg: String| Error::parse(Some(file), None, msg);
+            let sql = |e: rusqlite::Error| err(format!("SQLite: {e}"));
+            let (cams, of_image) = cameras(path)?;
+            let mut camera_of = BTreeMap::new();
+            for c in &cams {
+                let cam = Camera::from_colmap(&c.model, &c.params)
+                    .map_err(|m| err(format!("table `cameras`: camera {}: {m}", c.camera_id)));
+                camera_of.insert(c.camera_id, cam);
+            }
+            let camera = |image: u64| -> Result<Camera> {
+                let id = of_image
+                    .get(&image)
+                    .ok_or_else(|| err(format!("table `images`: image {image} has no camera")))?;
+                match camera_of.get(id) {
+                    Some(Ok(c)) => Ok(*c),
+                    Some(Err(e)) => Err(e.clone()),
+                    None => Err(err(format!("table `cameras`: no camera {id}"))),
+                }
+            };
+            let mut keypoints_stmt = conn
+                .prepare(&format!(
+                    "SELECT rows, cols, CASE WHEN rows <= {MAX_ROWS} AND cols IN (2, 4, 6) \
+                     AND length(data) = 4 * rows * cols THEN data END FROM keypoints WHERE image_id = ?1"
+                ))
+                .map_err(|e| err(format!("--information full needs the table `keypoints` ({e})")))?;
+            let mut keypoints = |image: u64| -> Result<(usize, Vec<u8>)> {
+                let mut rows = keypoints_stmt.query([image as i64]).map_err(sql)?;
+                let row = rows.next().map_err(sql)?.ok_or_else(|| {
+                    err(format!("table `keypoints`: no keypoints of image {image}"))
+                })?;
+                let (n, cols): (i64, i64) = (row.get(0).map_err(sql)?, row.get(1).map_err(sql)?);
+                let data: Option<Vec<u8>> = row.get(2).map_err(sql)?;
+                let data = data.ok_or_else(|| {
+                    err(format!(
+                        "table `keypoints`: image {image}: {n} x {cols} keypoints, but the blob is not {n} x {cols} float32 (cols 2, 4 or 6, at most {MAX_ROWS} rows)"
+                    ))
+                })?;
+                Ok((cols as usize, data))
+            };
+            let mut matches_stmt = conn
+                .prepare(&format!(
+                    "SELECT rows, cols, CASE WHEN rows <= {MAX_ROWS} AND cols = 2 \
+                     AND length(data) = 8 * rows THEN data END FROM two_view_geometries WHERE pair_id = ?1"
+                ))
+                .map_err(sql)?;
+            let f32_at = |b: &[u8], k: usize| {
+                f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]])
+            };
+            let u32_at = |b: &[u8], k: usize| {
+                u32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]])
+            };
+            let mut kept = Vec::new();
+            let mut info = Vec::new();
+            let mut skipped = (0usize, String::new());
+            let mut first: Option<(u64, (usize, Vec<u8>))> = None;
+            for (edge, &(pair_id, tvec)) in raw.into_iter().zip(poses) {
+                let at = format!(
+                    "two_view_geometries row pair_id {pair_id} (images {}, {})",
+                    edge.i, edge.j
+                );
+                let t = tvec.ok_or_else(|| {
+                    err(format!(
+                        "{at}: no tvec: --information full needs the relative translation"
+                    ))
+                })?;
+                let (c1, c2) = (camera(edge.i)?, camera(edge.j)?);
+                let mut rows = matches_stmt.query([pair_id]).map_err(sql)?;
+                let row = rows
+                    .next()
+                    .map_err(sql)?
+                    .ok_or_else(|| err(format!("{at}: gone")))?;
+                let n: i64 = row.get(0).map_err(sql)?;
+                let data: Option<Vec<u8>> = row.get(2).map_err(sql)?;
+                let Some(matches) = data else {
+                    if n == 0 {
+                        skipped.0 += 1;
+                        if skipped.1.is_empty() {
+                            skipped.1 = format!("{at}: no inlier matches");
+                        }
+                        continue;
+                    }
+                    return Err(err(format!(
+                        "{at}: the inlier matches (data) are not {n} x 2 uint32"
+                    )));
+                };
+                drop(rows);
+                if first.as_ref().map(|f| f.0) != Some(edge.i) {
+                    first = Some((edge.i, keypoints(edge.i)?));
+                }
+                let (cols1, kp1) = &first.as_ref().expect("set above").1;
+                let (cols2, kp2) = keypoints(edge.j)?;
+                let m = matches.len() / 8;
+                let (mut x1, mut x2) = (Vec::with_capacity(m), Vec::with_capacity(m));
+                for k in 0..m {
+                    let (a, b) = (
+                        u32_at(&matches, 2 * k) as usize,
+                        u32_at(&matches, 2 * k + 1) as usize,
+                    );
+                    let (n1, n2) = (kp1.len() / (4 * cols1), kp2.len() / (4 * cols2));
+                    if a >= n1 || b >= n2 {
+                        return Err(err(format!(
+                            "{at}: inlier match {k} names keypoint ({a}, {b}); the images have {n1} and {n2}"
+                        )));
+                    }
+                    let p1 = Vector2::new(
+                        f32_at(kp1, a * cols1) as f64,
+                        f32_at(kp1, a * cols1 + 1) as f64,
+                    );
+                    let p2 = Vector2::new(
+                        f32_at(&kp2, b * cols2) as f64,
+                        f32_at(&kp2, b * cols2 + 1) as f64,
+                    );
+                    if let (Some(u), Some(v)) = (c1.normalise(&p1), c2.normalise(&p2)) {
+                        x1.push(u);
+                        x2.push(v);
+                    }
+                }
+                let h = rotation_information(&edge.rotation, &Vector3::from(t), &x1, &x2, &c1, &c2)
+                    .and_then(|h| Information::new(h).map_err(|e| e.to_string()));
+                match h {
+                    Ok(h) => {
+                        kept.push(edge);
+                        info.push(h);
+                    }
+                    Err(reason) => {
+                        skipped.0 += 1;
+                        if skipped.1.is_empty() {
+                            skipped.1 = format!("{at}: {reason}");
+                        }
+                    }
+                }
+            }
+            Ok((kept, info, skipped))
+        }
     }
 
     pub(super) fn cameras(path: &Path) -> Result<(Vec<ColmapCamera>, BTreeMap<u64, u32>)> {

@@ -80,8 +80,10 @@ pub struct ReadOptions {
     pub quaternion_tolerance: f64,
     /// g2o / TORO edges with an information matrix become anisotropic measurements with their
     /// full 3x3 rotation information (`paper-notes/anisotropic.md` `[A7]`) instead of SE-Sync's
-    /// scalar `kappa` (the default, `false`). Other formats are unaffected (JSON's
-    /// `information` is always read).
+    /// scalar `kappa` (the default, `false`); COLMAP databases get each pair's rotation
+    /// information from its inlier correspondences and the cameras (`paper-notes/formats.md`
+    /// `[F13]`, [`crate::io::two_view_information`]) instead of weights 1. Other formats are
+    /// unaffected (JSON's `information` is always read).
     pub full_information: bool,
 }
 

@@ -17,7 +17,8 @@ pub struct Common {
     pub weights: WeightSource,
     /// g2o / TORO edges with an information matrix: SE-Sync's scalar `kappa` (`kappa`,
     /// default) or their full 3x3 rotation information, which makes the problem anisotropic
-    /// (`full`; docs/guides/anisotropic.md).
+    /// (`full`; docs/guides/anisotropic.md). COLMAP databases: weights 1 (default), or with
+    /// `full` each pair's rotation information from its inlier correspondences and cameras.
     #[arg(long, value_name = "kappa|full", default_value = "kappa", value_parser = ["kappa", "full"])]
     pub information: String,
     /// Start the local solver from this estimate (JSON estimate file; `multiple` reads every

@@ -1,0 +1,334 @@
+//! The information matrix of a two-view relative rotation from its inlier correspondences and
+//! the cameras (`paper-notes/formats.md` `[F13]`; as in Zhang, Larsson, Barath et al.,
+//! "Revisiting Rotation Averaging: Uncertainties and Robust Losses", CVPR 2023): the Fisher
+//! information of the relative pose under isotropic pixel noise, its rotation block
+//! marginalised over the translation direction (a Schur complement). Used by the COLMAP reader
+//! with `--information full` ([`crate::io::colmap`]).
+//!
+//! The relative pose `(R, t)` maps camera 1's frame to camera 2's (`x_2 = R x_1 + t`, COLMAP's
+//! `cam2_from_cam1`), and the residual `e` of this crate's anisotropic model is the right
+//! perturbation `R = R_hat exp([e]x)` (SPEC section 1 with `R_ij = R_hat`), so the returned `H`
+//! is the information of `e`, in units of `pixel^-2` (noise of 1 pixel standard deviation in
+//! every keypoint coordinate; a common factor changes neither minimisers nor certificates).
+//!
+//! ```
+//! use rotavg::io::two_view_information::{Camera, rotation_information};
+//! use rotavg::so3::exp;
+//! use nalgebra::{Vector2, Vector3};
+//! // 40 points in front of two cameras 1 m apart looking along z (focal length 800 px)
+//! let cam = Camera::pinhole(800.0, 800.0, 320.0, 240.0);
+//! let r = exp(&Vector3::new(0.02, -0.1, 0.01));
+//! let t = Vector3::new(-1.0, 0.0, 0.05).normalize();
+//! let (mut x1, mut x2) = (Vec::new(), Vec::new());
+//! for k in 0..40 {
+//!     let p = Vector3::new((k % 8) as f64 - 3.5, (k / 8) as f64 - 2.0, 8.0 + (k % 3) as f64);
+//!     let q = r * p + t;
+//!     x1.push(Vector2::new(p.x / p.z, p.y / p.z));
+//!     x2.push(Vector2::new(q.x / q.z, q.y / q.z));
+//! }
+//! let h = rotation_information(&r, &t, &x1, &x2, &cam, &cam)?;
+//! let eig = h.symmetric_eigenvalues();
+//! assert!(eig.min() > 0.0);
+//! // the rotation about the viewing axis (z) is the best determined
+//! assert!(h[(2, 2)] > h[(0, 0)] && h[(2, 2)] > h[(1, 1)]);
+//! # Ok::<(), String>(())
+//! ```
+
+use crate::so3::Rotation;
+use nalgebra::{Matrix2, Matrix3, SMatrix, Vector2, Vector3};
+
+/// The intrinsics a correspondence needs: the focal lengths (pixels) that scale normalised
+/// coordinates to pixels, the principal point, and the distortion of COLMAP's models
+/// `SIMPLE_PINHOLE`, `PINHOLE`, `SIMPLE_RADIAL`, `RADIAL` and `OPENCV`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Focal lengths `(f_x, f_y)`, pixels.
+    pub focal: Vector2<f64>,
+    /// Principal point `(c_x, c_y)`, pixels (COLMAP's convention: the centre of the top-left
+    /// pixel is `(0.5, 0.5)`, as for its keypoints).
+    pub principal: Vector2<f64>,
+    /// `(k_1, k_2, p_1, p_2)`: radial and tangential distortion (OpenCV's; zeros for none).
+    pub distortion: [f64; 4],
+}
+
+/// The COLMAP camera models supported, by name.
+pub const SUPPORTED_MODELS: &str = "SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV";
+
+impl Camera {
+    /// A pinhole camera without distortion.
+    pub fn pinhole(fx: f64, fy: f64, cx: f64, cy: f64) -> Camera {
+        Camera {
+            focal: Vector2::new(fx, fy),
+            principal: Vector2::new(cx, cy),
+            distortion: [0.0; 4],
+        }
+    }
+
+    /// The camera of a COLMAP model name and its parameters (in COLMAP's order); an error
+    /// names an unsupported model, a wrong parameter count, or a focal length that is not
+    /// finite and positive.
+    pub fn from_colmap(model: &str, p: &[f64]) -> Result<Camera, String> {
+        let need = match model {
+            "SIMPLE_PINHOLE" => 3,
+            "PINHOLE" | "SIMPLE_RADIAL" => 4,
+            "RADIAL" => 5,
+            "OPENCV" => 8,
+            other => {
+                return Err(format!(
+                    "camera model {other}: the information of two-view rotations is computed for {SUPPORTED_MODELS}"
+                ));
+            }
+        };
+        if p.len() != need {
+            return Err(format!(
+                "camera model {model}: {} parameters, expected {need}",
+                p.len()
+            ));
+        }
+        if p.iter().any(|v| !v.is_finite()) {
+            return Err(format!("camera model {model}: a parameter is not finite"));
+        }
+        let cam = match model {
+            "SIMPLE_PINHOLE" => Camera::pinhole(p[0], p[0], p[1], p[2]),
+            "PINHOLE" => Camera::pinhole(p[0], p[1], p[2], p[3]),
+            "SIMPLE_RADIAL" => Camera {
+                distortion: [p[3], 0.0, 0.0, 0.0],
+                ..Camera::pinhole(p[0], p[0], p[1], p[2])
+            },
+            "RADIAL" => Camera {
+                distortion: [p[3], p[4], 0.0, 0.0],
+                ..Camera::pinhole(p[0], p[0], p[1], p[2])
+            },
+            _ => Camera {
+                distortion: [p[4], p[5], p[6], p[7]],
+                ..Camera::pinhole(p[0], p[1], p[2], p[3])
+            },
+        };
+        if !(cam.focal.x > 0.0 && cam.focal.y > 0.0) {
+            return Err(format!(
+                "camera model {model}: focal length {} is not positive",
+                cam.focal.x.min(cam.focal.y)
+            ));
+        }
+        Ok(cam)
+    }
+
+    /// `(u, v)` displaced by the distortion (COLMAP's `Distortion` of its OpenCV-family models).
+    fn distort(&self, u: f64, v: f64) -> (f64, f64) {
+        let [k1, k2, p1, p2] = self.distortion;
+        let (u2, v2, uv) = (u * u, v * v, u * v);
+        let r2 = u2 + v2;
+        let radial = k1 * r2 + k2 * r2 * r2;
+        (
+            u + u * radial + 2.0 * p1 * uv + p2 * (r2 + 2.0 * u2),
+            v + v * radial + 2.0 * p2 * uv + p1 * (r2 + 2.0 * v2),
+        )
+    }
+
+    /// The normalised image coordinates (`z = 1` plane, undistorted) of a keypoint in pixels:
+    /// the distortion is inverted by Newton's method with the finite-difference Jacobian
+    /// (at most 100 steps, to `1e-14`); `None` when it does not converge or a value is not
+    /// finite.
+    pub fn normalise(&self, pixel: &Vector2<f64>) -> Option<Vector2<f64>> {
+        let xd = (pixel - self.principal).component_div(&self.focal);
+        if !xd.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        if self.distortion == [0.0; 4] {
+            return Some(xd);
+        }
+        let mut x = xd;
+        for _ in 0..100 {
+            let (du, dv) = self.distort(x.x, x.y);
+            let r = Vector2::new(du - xd.x, dv - xd.y);
+            if r.norm() <= 1e-14 {
+                return Some(x);
+            }
+            let h = 1e-7;
+            let (a, b) = self.distort(x.x + h, x.y);
+            let (c, d) = self.distort(x.x, x.y + h);
+            let j = Matrix2::new(a - du, c - du, b - dv, d - dv) / h;
+            let step = j.lu().solve(&r)?;
+            x -= step;
+            if !x.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+        }
+        None
+    }
+}
+
+/// Fewest correspondences from which an information is computed (a relative pose has 5
+/// degrees of freedom).
+pub const MIN_CORRESPONDENCES: usize = 5;
+
+/// The information `H` (3x3, `pixel^-2`) of the right perturbation `e` of the relative
+/// rotation `R` (`R_true = R exp([e]x)`), from the normalised, undistorted correspondences
+/// `x1[k] <-> x2[k]` (`z = 1` plane) of cameras `c1`, `c2` and the relative pose
+/// `x_2 = R x_1 + t` (`[F13]`):
+///
+/// - `t != 0`: the Sampson error of the epipolar constraint `x_2^T [t]x R x_1 = 0` in pixels,
+///   linearised in `(e, tau)` with `tau` the 2 degrees of freedom of the direction `t / |t|`;
+///   `H` is the Schur complement of the translation block of the 5x5 Fisher information
+///   `sum J^T J / d^2` (`d` the Sampson denominator in pixels);
+/// - `t = 0` (a pure rotation, COLMAP's panoramic pairs): the transfer error
+///   `pi(R x_1) - x_2` in pixels of camera 2, with variance 2 (noise in both images).
+///
+/// Errors (the reason, for the reader's message): fewer than [`MIN_CORRESPONDENCES`]
+/// correspondences, a non-finite value, or a translation direction the correspondences do not
+/// determine (its Fisher block singular to `1e-12` relative).
+pub fn rotation_information(
+    r: &Rotation,
+    t: &Vector3<f64>,
+    x1: &[Vector2<f64>],
+    x2: &[Vector2<f64>],
+    c1: &Camera,
+    c2: &Camera,
+) -> Result<Matrix3<f64>, String> {
+    if x1.len() != x2.len() || x1.len() < MIN_CORRESPONDENCES {
+        return Err(format!(
+            "{} correspondences (at least {MIN_CORRESPONDENCES} are needed)",
+            x1.len().min(x2.len())
+        ));
+    }
+    let rm = r.matrix();
+    let h = if t.norm() == 0.0 {
+        transfer_information(rm, x1, c2)
+    } else {
+        epipolar_information(rm, &t.normalize(), x1, x2, c1, c2)?
+    };
+    if !h.iter().all(|v| v.is_finite()) {
+        return Err("the information is not finite".into());
+    }
+    // exactly symmetric (the Schur complement is, up to rounding)
+    Ok((h + h.transpose()) * 0.5)
+}
+
+fn epipolar_information(
+    r: &Matrix3<f64>,
+    t: &Vector3<f64>,
+    x1: &[Vector2<f64>],
+    x2: &[Vector2<f64>],
+    c1: &Camera,
+    c2: &Camera,
+) -> Result<Matrix3<f64>, String> {
+    // an orthonormal basis of the tangent plane of the unit sphere at t
+    let helper = if t.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let b1 = t.cross(&helper).normalize();
+    let b2 = t.cross(&b1);
+    let e = crate::so3::hat(t) * r;
+    let mut fisher = SMatrix::<f64, 5, 5>::zeros();
+    for (p, q) in x1.iter().zip(x2) {
+        let (p, q) = (p.push(1.0), q.push(1.0));
+        let (ep, etq) = (e * p, e.transpose() * q);
+        // the Sampson denominator in pixels: (E x1)_{1,2} / f2 and (E^T x2)_{1,2} / f1
+        let d2 = (ep.x / c2.focal.x).powi(2)
+            + (ep.y / c2.focal.y).powi(2)
+            + (etq.x / c1.focal.x).powi(2)
+            + (etq.y / c1.focal.y).powi(2);
+        if d2 <= 0.0 || !d2.is_finite() {
+            continue; // a point on the epipole carries no information
+        }
+        // numerator x2^T [t]x R exp([e]x) x1: d/de = x1 x a, a = R^T [t]x^T x2
+        let a = -(r.transpose() * t.cross(&q));
+        let de = p.cross(&a);
+        // d/dt along b: b . ((R x1) x x2)
+        let m = (r * p).cross(&q);
+        let j = nalgebra::Vector5::new(de.x, de.y, de.z, b1.dot(&m), b2.dot(&m));
+        fisher += j * j.transpose() / d2;
+    }
+    let a = fisher.fixed_view::<3, 3>(0, 0).into_owned();
+    let b = fisher.fixed_view::<3, 2>(0, 3).into_owned();
+    let c = fisher.fixed_view::<2, 2>(3, 3).into_owned();
+    let eig = c.symmetric_eigenvalues();
+    // (NaN fails the comparison too)
+    let determined = eig.min() > 1e-12 * eig.max();
+    if !determined {
+        return Err("the correspondences do not determine the translation direction".into());
+    }
+    let c_inv = c.try_inverse().ok_or_else(|| {
+        "the correspondences do not determine the translation direction".to_string()
+    })?;
+    Ok(a - b * c_inv * b.transpose())
+}
+
+/// The observations `x2` do not enter: the transfer residual's derivative depends on `x1` only.
+fn transfer_information(r: &Matrix3<f64>, x1: &[Vector2<f64>], c2: &Camera) -> Matrix3<f64> {
+    let mut h = Matrix3::zeros();
+    for p in x1 {
+        let p = p.push(1.0);
+        let u = r * p;
+        if u.z <= 0.0 {
+            continue;
+        }
+        // pixels of pi(R exp([e]x) x1): d/de = diag(f) dpi/du (-R [x1]x)
+        let dpi = nalgebra::Matrix2x3::new(
+            c2.focal.x / u.z,
+            0.0,
+            -c2.focal.x * u.x / (u.z * u.z),
+            0.0,
+            c2.focal.y / u.z,
+            -c2.focal.y * u.y / (u.z * u.z),
+        );
+        let j = dpi * (-(r * crate::so3::hat(&p)));
+        h += j.transpose() * j / 2.0;
+    }
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::so3::exp;
+
+    /// Undistortion inverts the distortion of every supported model to 1e-12 over the image.
+    #[test]
+    fn normalise_inverts_the_distortion() {
+        let cams = [
+            Camera::from_colmap("SIMPLE_RADIAL", &[700.0, 320.0, 240.0, -0.1]).unwrap(),
+            Camera::from_colmap("RADIAL", &[700.0, 320.0, 240.0, -0.1, 0.02]).unwrap(),
+            Camera::from_colmap(
+                "OPENCV",
+                &[700.0, 710.0, 320.0, 240.0, -0.1, 0.02, 1e-3, -2e-3],
+            )
+            .unwrap(),
+        ];
+        for cam in cams {
+            for (u, v) in [(0.0, 0.0), (0.3, -0.2), (-0.45, 0.34), (0.1, 0.4)] {
+                let (du, dv) = cam.distort(u, v);
+                let pixel = Vector2::new(
+                    du * cam.focal.x + cam.principal.x,
+                    dv * cam.focal.y + cam.principal.y,
+                );
+                let x = cam.normalise(&pixel).unwrap();
+                assert!(
+                    (x - Vector2::new(u, v)).norm() < 1e-12,
+                    "{cam:?} {u} {v}: {x}"
+                );
+            }
+        }
+        assert!(Camera::from_colmap("FOV", &[1.0; 5]).is_err());
+        assert!(Camera::from_colmap("PINHOLE", &[1.0; 3]).is_err());
+        assert!(Camera::from_colmap("PINHOLE", &[0.0, 1.0, 0.0, 0.0]).is_err());
+    }
+
+    /// The pure-rotation information is positive definite and too few correspondences are an
+    /// error.
+    #[test]
+    fn pure_rotation_and_too_few_points() {
+        let cam = Camera::pinhole(500.0, 500.0, 0.0, 0.0);
+        let r = exp(&Vector3::new(0.0, 0.1, 0.0));
+        let x1: Vec<Vector2<f64>> = (0..9)
+            .map(|k| Vector2::new((k % 3) as f64 * 0.1 - 0.1, (k / 3) as f64 * 0.1 - 0.1))
+            .collect();
+        let x2 = x1.clone();
+        let h = rotation_information(&r, &Vector3::zeros(), &x1, &x2, &cam, &cam).unwrap();
+        assert!(h.symmetric_eigenvalues().min() > 0.0);
+        let err = rotation_information(&r, &Vector3::x(), &x1[..4], &x2[..4], &cam, &cam);
+        assert!(err.unwrap_err().contains("at least 5"));
+    }
+}
