@@ -5,6 +5,8 @@
 #
 #   bash benches/peers/run.sh                 # everything (stages: setup gen peers proc ours table)
 #   bash benches/peers/run.sh ours table      # only some stages
+#   bash benches/peers/run.sh setup aniso     # GTSAM full noise models vs rotavg, anisotropic
+#                                             # graphs (not in the default set; ~1 min)
 #   bash benches/peers/run.sh setup scale     # the scale comparison (not in the default set;
 #                                             # ~1 h; writes $WORK/results/scale/ and SCALE.md)
 #   WORK=/tmp/rotavg-peers FORCE=1 JOB_TIMEOUT=600 bash benches/peers/run.sh
@@ -292,6 +294,22 @@ PYEOF
       fi
   done
   "$PY" "$REPO/benches/peers/tables.py" --scale "$RES" "$INST" > "$RES/SCALE.md" && log "wrote $RES/SCALE.md"
+fi
+
+# ---- aniso (not in the default set): GTSAM with full 3x3 noise models against rotavg on the
+# anisotropic graphs of examples/anisotropic_table.rs (ANISO_MAX_NODES, default 1000), one row
+# each: benches/peers/gtsam_anisotropic.py; table in $RES/aniso/ANISO.md ----
+if has aniso; then
+  AD="$RES/aniso"; mkdir -p "$AD"
+  (cd "$REPO" && cargo build --release --bin rotavg --example anisotropic_table) || exit 1
+  "$BIN/examples/anisotropic_table" --export "$INST/aniso" "${ANISO_MAX_NODES:-1000}" || exit 1
+  for g in "$INST"/aniso/aniso_*[0-9].json; do
+    tag=$(basename "$g" .json)
+    log "aniso $tag"
+    timeout "$T" "$PY" "$REPO/benches/peers/gtsam_anisotropic.py" "$g" "${g%.json}_truth.txt" "$BIN/rotavg" > "$AD/$tag.json" \
+      || log "aniso $tag failed"
+  done
+  "$PY" "$REPO/benches/peers/gtsam_anisotropic.py" --table "$AD" > "$AD/ANISO.md" && log "wrote $AD/ANISO.md"
 fi
 
 if has table; then
