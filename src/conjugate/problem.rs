@@ -42,12 +42,28 @@ impl ConjugatePair {
 
 /// A validated conjugate problem: at least one pair, finite positive weights, exact rotations.
 /// Identifiability is *not* required by the type (see [`ConjugateProblem::identifiability`]);
-/// the solvers refuse data that do not determine `S`.
+/// the solvers refuse data that do not determine `S`. Deserialisation validates like
+/// [`ConjugateProblem::new`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawConjugateProblem")]
 pub struct ConjugateProblem {
     pairs: Vec<ConjugatePair>,
     #[serde(skip)]
     objective: Objective,
+}
+
+/// Unvalidated serde form of [`ConjugateProblem`].
+#[derive(Deserialize)]
+#[serde(expecting = "a conjugate problem {\"pairs\": [{\"left\": L, \"right\": R}, ...]}")]
+struct RawConjugateProblem {
+    pairs: Vec<ConjugatePair>,
+}
+
+impl TryFrom<RawConjugateProblem> for ConjugateProblem {
+    type Error = Error;
+    fn try_from(raw: RawConjugateProblem) -> Result<Self> {
+        ConjugateProblem::new(raw.pairs)
+    }
 }
 
 /// Thresholds of [`ConjugateProblem::diagnose`] and of the identifiability test.
@@ -448,5 +464,27 @@ fn pair_distance(metric: Metric, s: &Rotation, l: &Rotation, r: &Rotation) -> f6
         Metric::Chordal => (s.matrix() * r.matrix() - l.matrix() * s.matrix()).norm(),
         Metric::Geodesic => angle(&(r.inverse() * s.inverse() * l * s)),
         Metric::Quaternion => quaternion_distance(r, &(s.inverse() * l * s)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deserialisation validates like [`ConjugateProblem::new`]: no pairs or a bad weight is an
+    /// error.
+    #[test]
+    fn deserialisation_validates() {
+        let p = ConjugateProblem::new(vec![ConjugatePair::new(
+            Rotation::identity(),
+            Rotation::identity(),
+        )])
+        .unwrap();
+        let text = serde_json::to_string(&p).unwrap();
+        assert_eq!(serde_json::from_str::<ConjugateProblem>(&text).unwrap(), p);
+        assert!(serde_json::from_str::<ConjugateProblem>(r#"{"pairs": []}"#).is_err());
+        let bad = text.replace("\"weight\":1.0", "\"weight\":-1.0");
+        assert_ne!(bad, text);
+        assert!(serde_json::from_str::<ConjugateProblem>(&bad).is_err());
     }
 }

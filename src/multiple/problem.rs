@@ -65,8 +65,10 @@ impl Edge {
 /// A validated view graph: every index in range, no self loops, finite positive weights,
 /// exact rotations. Multi-edges (several measurements of one pair, in either direction) are
 /// kept and all count. Connectivity is *not* required by the type; solvers that need it call
-/// [`MultipleProblem::require_connected`].
+/// [`MultipleProblem::require_connected`]. Deserialisation validates like
+/// [`MultipleProblem::new`] and [`MultipleProblem::with_information`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawMultipleProblem")]
 pub struct MultipleProblem {
     num_rotations: usize,
     edges: Vec<Edge>,
@@ -76,6 +78,29 @@ pub struct MultipleProblem {
     information: Option<Vec<Information>>,
     #[serde(skip)]
     objective: Objective,
+}
+
+/// Unvalidated serde form of [`MultipleProblem`].
+#[derive(Deserialize)]
+#[serde(
+    expecting = "a view graph {\"num_rotations\": n, \"edges\": [...], \"information\": [...]} (information optional)"
+)]
+struct RawMultipleProblem {
+    num_rotations: usize,
+    edges: Vec<Edge>,
+    #[serde(default)]
+    information: Option<Vec<Information>>,
+}
+
+impl TryFrom<RawMultipleProblem> for MultipleProblem {
+    type Error = Error;
+    fn try_from(raw: RawMultipleProblem) -> Result<Self> {
+        let p = MultipleProblem::new(raw.num_rotations, raw.edges)?;
+        match raw.information {
+            Some(info) => p.with_information(info),
+            None => Ok(p),
+        }
+    }
 }
 
 impl MultipleProblem {
@@ -493,5 +518,37 @@ pub fn fix_gauge(rotations: &mut [Rotation]) {
         for r in rotations.iter_mut() {
             *r *= g;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deserialisation validates: a problem round-trips (with its information), and a bad
+    /// index, a missing information or a non-positive weight is an error, never a panic or an
+    /// unvalidated problem.
+    #[test]
+    fn deserialisation_validates() {
+        let (p, _) = crate::multiple::synthetic::SyntheticAnisotropic {
+            num_rotations: 5,
+            num_edges: 8,
+            ..Default::default()
+        }
+        .generate();
+        let text = serde_json::to_string(&p).unwrap();
+        let back: MultipleProblem = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, p);
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        v["information"].as_array_mut().unwrap().pop();
+        let err = serde_json::from_value::<MultipleProblem>(v).unwrap_err();
+        assert!(err.to_string().contains("7 matrices for 8 edges"), "{err}");
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        v["edges"][0]["j"] = serde_json::json!(9);
+        assert!(serde_json::from_value::<MultipleProblem>(v).is_err());
+        let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        v.as_object_mut().unwrap().remove("information");
+        v["edges"][0]["weight"] = serde_json::json!(-1.0);
+        assert!(serde_json::from_value::<MultipleProblem>(v).is_err());
     }
 }
