@@ -662,6 +662,15 @@ fn reflections_defeat_the_o3_relaxation_and_are_named() {
         c.explanation
     );
     assert_eq!(c.bound_from, Some(rotavg::certify::ladder::Point::ConvSdp));
+    // the staircase solves the same O(3) relaxation: its rounding counts the reflected block
+    let st = rotavg::certify::multiple::staircase::staircase_bound(
+        &p,
+        &r.solution.rotations,
+        &CertifySettings::default(),
+    )
+    .unwrap();
+    assert_eq!(st.reflected_blocks, 1, "{:?}", st.stop_reason);
+    assert!(st.bound.lower_bound < -1.0, "{}", st.bound.lower_bound);
 }
 
 /// `[A5]`, `[A6]`: the 3-cycle `R_01 = R_12 = I`, `R_20 = Rx(pi)` has rotation optimum 6.

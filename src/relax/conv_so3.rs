@@ -31,14 +31,18 @@ use std::time::Instant;
 pub const CONV_MAX_NODES: usize = 20;
 
 /// The predicted cost of [`relax_multiple_conv`] on `problem`: the dense scaling of its PSD cone
-/// (`m^2` values, `m = 3n (3n + 1) / 2`) held about three times (scaling, KKT factor, copies) and
-/// `m^3 / 3` multiply-adds per interior-point iteration, at the rates of
-/// [`super::multiple::predict_relax_multiple`]. A model for the budget, never a bound.
+/// (`m^2` values, `m = 3n (3n + 1) / 2`) held seven times (the scaling, the KKT matrix and its
+/// LDL factor with their row indices, copies) and `m^3 / 3` multiply-adds per interior-point
+/// iteration, at the rates of [`super::multiple::predict_relax_multiple`]. A model for the
+/// budget, never a bound. The factor 7 is measured: peak RSS of `rotavg multiple --certify sdp`
+/// on anisotropic graphs of 12, 16 and 20 nodes whose `conv(SO(3))` rung ran (34, 82 and
+/// 193 MB, about 10 MB of them the process) is 6.5-6.8 times `8 m^2` bytes (the factor 3 of
+/// the first model predicted 81 MB for the 193 MB measured at 20 nodes).
 pub fn predict_relax_multiple_conv(problem: &MultipleProblem) -> super::SdpPrediction {
     let m = svec_len(3 * problem.num_rotations()) as f64;
     let cones = 10.0 * problem.num_edges() as f64;
     super::SdpPrediction {
-        bytes: 8.0 * (3.0 * m * m + 20.0 * (m + cones)),
+        bytes: 8.0 * (7.0 * m * m + 20.0 * (m + cones)),
         seconds: super::multiple::SDP_ITERATIONS * (m * m * m / 3.0)
             / super::multiple::SDP_MULTIPLY_ADD_RATE,
         largest_clique: problem.num_rotations(),

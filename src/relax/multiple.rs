@@ -377,19 +377,29 @@ fn solve_primal(p: &Scaled<'_>) -> Result<RawSolution> {
 /// each block to SO(3); fix the gauge `R_0 = I`. Returns the rotations and the top eigenvalues.
 fn round(x: &Mat<f64>, n: usize) -> Result<(Vec<Rotation>, Vec<f64>, usize)> {
     let (y, top) = top_three_blocks(x, n)?;
-    let reflected = y.iter().filter(|b| b.determinant() < 0.0).count();
-    let mut rotations: Vec<Rotation> = y
+    let (rotations, reflected) = project_blocks(y);
+    Ok((rotations, top, reflected))
+}
+
+/// The last step of every rounding `[P5]` (the SDP's rank-3 factor, the staircase's lifted
+/// point): the global reflection fixed by the majority of block determinants, the blocks still
+/// reflected (`det < 0`) counted (the `O(3)` relaxation preferred them: anisotropic costs,
+/// `paper-notes/anisotropic.md` `[A5]`), each block projected to SO(3), gauge `R_0 = I`.
+pub(crate) fn project_blocks(mut blocks: Vec<Matrix3<f64>>) -> (Vec<Rotation>, usize) {
+    fix_global_reflection(&mut blocks);
+    let reflected = blocks.iter().filter(|b| b.determinant() < 0.0).count();
+    let mut rotations: Vec<Rotation> = blocks
         .iter()
         .map(|b| project_to_so3(b).unwrap_or_else(Rotation::identity))
         .collect();
     crate::multiple::fix_gauge(&mut rotations);
-    Ok((rotations, top, reflected))
+    (rotations, reflected)
 }
 
 /// The `blocks` `3 x 3` blocks of `Y = V_3 diag(sqrt(lambda_1..3))` from the top eigenpairs of
 /// the `3 blocks x 3 blocks` matrix `X`, the global reflection fixed by the majority of block
-/// determinants, and the largest eigenvalues of `X` (up to 6, descending): the rounding `[P5]`
-/// of every SDP of this crate whose variable is a Gram matrix of rotation blocks.
+/// determinants, and the largest eigenvalues of `X` (up to 6, descending): the rounding `[P5]` of every SDP of
+/// this crate whose variable is a Gram matrix of rotation blocks.
 pub(crate) fn top_three_blocks(
     x: &Mat<f64>,
     blocks: usize,
@@ -420,10 +430,16 @@ pub(crate) fn top_three_blocks(
             }
         }
     }
-    if 2 * y.iter().filter(|b| b.determinant() < 0.0).count() > blocks {
-        for b in y.iter_mut() {
+    fix_global_reflection(&mut y);
+    Ok((y, top))
+}
+
+/// Flip the third column of every block when most blocks have a negative determinant (`Y` and
+/// `Y diag(1, 1, -1)` are factors of the same Gram matrix).
+fn fix_global_reflection(blocks: &mut [Matrix3<f64>]) {
+    if 2 * blocks.iter().filter(|b| b.determinant() < 0.0).count() > blocks.len() {
+        for b in blocks.iter_mut() {
             b.set_column(2, &(-b.column(2)));
         }
     }
-    Ok((y, top))
 }

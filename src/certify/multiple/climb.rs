@@ -579,14 +579,22 @@ impl<'a> Climb<'a> {
             lower_bound: Some(r.bound.lower_bound),
             seconds: since.elapsed().as_secs_f64(),
             note: format!(
-                "Riemannian staircase: rank {}, {} iterations, lifted cost {:.9e}; {}{}",
+                "Riemannian staircase: rank {}, {} iterations, lifted cost {:.9e}; {}{}{}",
                 r.rank,
                 r.iterations,
                 r.lifted_cost,
                 r.stop_reason,
                 polished_cost
                     .map(|c| format!("; rounding polished to {c:.9e}"))
-                    .unwrap_or_default()
+                    .unwrap_or_default(),
+                match r.reflected_blocks {
+                    0 => String::new(),
+                    k => format!(
+                        "; {k} of {} blocks of the rounding are reflections (det < 0): the O(3) \
+                         relaxation prefers them, so its bound can lie below every rotation estimate",
+                        r.rounded.len()
+                    ),
+                }
             ),
         });
         if let Some(p) = polished

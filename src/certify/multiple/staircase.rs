@@ -148,6 +148,10 @@ pub struct StaircaseResult {
     /// global minimum, to be polished by the local solver.
     #[serde(with = "crate::so3::serde_rows::rotations", default)]
     pub rounded: Vec<Rotation>,
+    /// Blocks of the rounding still reflected after the global flip ([`round_lifted`]): the
+    /// `O(3)` relaxation prefers reflections there (anisotropic costs, `[A5]`).
+    #[serde(default)]
+    pub reflected_blocks: usize,
 }
 
 /// Rounding of a lifted point `Y` (blocks `Y_i`, `3 x p`), as SE-Sync rounds its staircase:
@@ -156,6 +160,12 @@ pub struct StaircaseResult {
 /// `Y_i V` projected to SO(3), gauge `R_0 = I`. At a rank-3 point this returns the point itself
 /// (up to the gauge).
 pub fn round_lifted(y: &[Block]) -> Vec<Rotation> {
+    round_lifted_counted(y).0
+}
+
+/// [`round_lifted`] and the number of blocks `Y_i V` still reflected (`det < 0`) after the
+/// global flip: the lifted point prefers reflections there (anisotropic costs, `[A5]`).
+pub(crate) fn round_lifted_counted(y: &[Block]) -> (Vec<Rotation>, usize) {
     let p = y.first().map_or(3, |b| b.ncols());
     let mut gram = nalgebra::DMatrix::<f64>::zeros(p, p);
     for b in y {
@@ -168,24 +178,14 @@ pub fn round_lifted(y: &[Block]) -> Vec<Rotation> {
     for (c, &k) in order.iter().take(3).enumerate() {
         v.set_column(c, &eig.eigenvectors.column(k));
     }
-    let mut blocks: Vec<nalgebra::Matrix3<f64>> = y
+    let blocks: Vec<nalgebra::Matrix3<f64>> = y
         .iter()
         .map(|b| {
             let m = b * &v;
             nalgebra::Matrix3::from_fn(|r, c| m[(r, c)])
         })
         .collect();
-    if 2 * blocks.iter().filter(|b| b.determinant() < 0.0).count() > blocks.len() {
-        for b in blocks.iter_mut() {
-            b.set_column(2, &(-b.column(2)));
-        }
-    }
-    let mut rotations: Vec<Rotation> = blocks
-        .iter()
-        .map(|b| crate::so3::project_to_so3(b).unwrap_or_else(Rotation::identity))
-        .collect();
-    crate::multiple::fix_gauge(&mut rotations);
-    rotations
+    crate::relax::multiple::project_blocks(blocks)
 }
 
 /// Bound the global minimum by a Riemannian staircase started at `rotations` `[D11]`, and
@@ -294,6 +294,7 @@ pub fn staircase_bound(
         ),
         start.elapsed().as_secs_f64(),
     );
+    let (rounded, reflected_blocks) = round_lifted_counted(&y);
     Ok(StaircaseResult {
         certificate,
         bound,
@@ -302,7 +303,8 @@ pub fn staircase_bound(
         iterations,
         hessian_products: products,
         stop_reason,
-        rounded: round_lifted(&y),
+        rounded,
+        reflected_blocks,
     })
 }
 
