@@ -21,7 +21,7 @@ use rotavg::objective::{Loss, Objective};
 use rotavg::pipeline::{AverageMultipleSettings, average_multiple};
 use rotavg::so3::{angle_between, perturb, random_rotation};
 
-mod common;
+use crate::common;
 use common::{max_gauge_error, scale_weights};
 
 /// Deterministic proptest configuration: a fixed RNG seed (so a failure reproduces and the suite
