@@ -5,7 +5,7 @@
 #
 #   bash benches/fetch-data.sh [FOLDER]     # default: ../shared/data beside the repository
 #
-# Layout of FOLDER (what tests/common finds): g2o/3d/sesync, g2o/3d/gtsam, g2o/3d/mrob,
+# Layout of FOLDER (what tests/suite/common finds): g2o/3d/sesync, g2o/3d/gtsam, g2o/3d/mrob,
 # g2o/2d/sesync, 1dsfm/Madrid_Metropolis. Needs curl and sha256sum. Provenance and licenses:
 # SE-Sync data LGPL-3.0 repository (data from L. Carlone, Intel Research Lab / Radish), GTSAM
 # BSD, mrob Apache-2.0, 1DSfM (Wilson & Snavely, ECCV 2014) via GlobalSfMpy (GPL-3.0 repository).

@@ -1,6 +1,6 @@
 //! Criterion benchmarks of the multiple-averaging SDP relaxation (dual form, chordal
 //! decomposition, faer KKT solver). Larger sizes take seconds to minutes per solve: their
-//! single-run timings are produced by `tests/relax_multiple.rs::timing_table` and recorded in
+//! single-run timings are produced by `tests/suite/relax_multiple.rs::timing_table` and recorded in
 //! `paper-notes/sdp.md`.
 
 use criterion::{Criterion, criterion_group, criterion_main};

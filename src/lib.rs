@@ -36,7 +36,7 @@
 //! # Layers
 //!
 //! Each layer is a folder (or a file) of `src/`, and a module imports only from its own layer
-//! or the layers below (checked by `tests/layers.rs`):
+//! or the layers below (checked by `tests/suite/layers.rs`):
 //!
 //! ```text
 //!  bin/rotavg          the command line: parse arguments, print reports
@@ -116,7 +116,7 @@ pub use faer;
 use rotavg_lapack as _;
 
 /// The README and the docs book: every ```` ```rust ```` block is compiled and run as a doc
-/// test (one item per Markdown file; the shell commands run in `tests/docs_examples.rs`).
+/// test (one item per Markdown file; the shell commands run in `tests/suite/docs_examples.rs`).
 #[cfg(doctest)]
 pub mod doc_markdown {
     #[doc = include_str!("../README.md")]

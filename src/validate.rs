@@ -11,7 +11,7 @@ pub const MIN_WEIGHT: f64 = 1e-100;
 /// leaves the minimiser unchanged), but the solvers and certificates form squares of weighted
 /// sums, which overflow or underflow in `f64` for extreme weights: fuzzing found NaN estimates
 /// of `rotavg single` for weights of about `1e154` and above, and wrong "certified" answers for
-/// weights `1e-200` and `1e308` (`tests/fuzz_regressions.rs`). Constructors and readers
+/// weights `1e-200` and `1e308` (`tests/suite/fuzz_regressions.rs`). Constructors and readers
 /// therefore reject a weight outside `[MIN_WEIGHT, MAX_WEIGHT]`; rescale such data.
 pub const MAX_WEIGHT: f64 = 1e100;
 

@@ -8,7 +8,7 @@
 //!
 //! with the 4x4 matrix `A(R)` ([`conv_matrix`]) that is PSD exactly when `R` lies in the convex
 //! hull of SO(3). The `O(3)` relaxation's reflected solutions (`[A5]`) violate it: on the two
-//! examples of `tests/anisotropic.rs` it gives 0 and 6 (the rotation optima) where the `O(3)`
+//! examples of `tests/suite/anisotropic.rs` it gives 0 and 6 (the rotation optima) where the `O(3)`
 //! relaxation gives -8 and 0.8. Solved densely in primal form with Clarabel, for small graphs
 //! ([`CONV_MAX_NODES`]); the multipliers `Lambda_i` and `Z_e` it returns are verified
 //! independently by [`crate::certify::multiple::conv_bound`]. Its objective values are never a

@@ -6,7 +6,7 @@ use rotavg::conjugate::synthetic::random_instance;
 use rotavg::io::handeye::write_conjugate_json;
 use rotavg::so3::{angle_between, rotation_from_rows};
 
-mod common;
+use crate::common;
 use common::{bin, temp_file as tmp};
 
 #[test]

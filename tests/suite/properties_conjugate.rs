@@ -1,6 +1,6 @@
 //! Property tests of conjugate (hand-eye) rotation averaging (`rotavg::conjugate`,
 //! `paper-notes/conjugate.md`), extending the fixed-seed loop of
-//! `tests/conjugate.rs::invariance_under_simultaneous_conjugation`.
+//! `tests/suite/conjugate.rs::invariance_under_simultaneous_conjugation`.
 //!
 //! Convention (SPEC section 1): `R_i ~ S^-1 L_i S`, i.e. `L_i ~ S R_i S^T`, with the chordal
 //! cost `g(S) = sum_i w_i ||S R_i - L_i S||_F^2` ([H1]). Independent sources of the expected

@@ -1,7 +1,8 @@
 //! Helpers shared by the integration tests: running the `rotavg` binary, temporary input
 //! files, the shared benchmark data, and small comparisons of estimates.
 //!
-//! Each test file that needs them declares `mod common;`; not every file uses every helper.
+//! `tests/suite/main.rs` declares `mod common;`; each test module that needs them has
+//! `use crate::common;`. Not every module uses every helper.
 #![allow(dead_code)]
 
 use rotavg::Rotation;
@@ -60,18 +61,23 @@ pub fn json_of(out: &Output) -> serde_json::Value {
     })
 }
 
-/// A temporary directory of this test binary and process.
+/// A temporary directory of the calling test file (`rotavg-<file stem>-<pid>`, e.g.
+/// `rotavg-cli_multiple-1234`) and process: the test files share one binary and process, and
+/// use the same file names in their directories.
+#[track_caller]
 pub fn temp_dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "rotavg-{}-{}",
-        env!("CARGO_CRATE_NAME"),
-        std::process::id()
-    ));
+    let caller = Path::new(std::panic::Location::caller().file());
+    let stem = caller
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .expect("a test file name");
+    let d = std::env::temp_dir().join(format!("rotavg-{stem}-{}", std::process::id()));
     std::fs::create_dir_all(&d).expect("create temporary directory");
     d
 }
 
-/// Writes `text` to the file `name` of [`temp_dir`] and returns its path.
+/// Writes `text` to the file `name` of [`temp_dir`] (the calling file's) and returns its path.
+#[track_caller]
 pub fn temp_file(name: &str, text: &str) -> PathBuf {
     let p = temp_dir().join(name);
     std::fs::write(&p, text).expect("write temporary file");

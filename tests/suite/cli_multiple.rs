@@ -7,7 +7,7 @@ use rotavg::io::json::write_problem_json;
 use rotavg::multiple::synthetic::SyntheticGraph;
 use std::path::PathBuf;
 
-mod common;
+use crate::common;
 use common::{assert_success, json_of, run, run_with_stdin, shared, temp_dir, temp_file as tmp};
 
 /// A synthetic graph (n = 30, 90 edges, sigma = 0.05 rad) written as SPEC JSON.

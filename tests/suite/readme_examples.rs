@@ -3,7 +3,7 @@
 //! the README and of `docs/library.md` is a complete program (`fn main` visible, no hidden
 //! lines), so what a reader pastes into a `main.rs` is what `cargo run --example` and the
 //! downstream fixture (`fixtures/downstream/`) build and run. (The blocks are compiled and run
-//! as doc tests: `src/lib.rs`, `doc_markdown`; the shell commands: `tests/docs_examples.rs`.)
+//! as doc tests: `src/lib.rs`, `doc_markdown`; the shell commands: `tests/suite/docs_examples.rs`.)
 
 fn rust_blocks(text: &str) -> Vec<String> {
     let mut blocks = Vec::new();

@@ -6,7 +6,7 @@
 //! Errors: a node missing, names that match nothing, a non-rotation, a database without poses,
 //! a folder of models.
 
-mod common;
+use crate::common;
 
 use common::{json_of, run, temp_dir};
 use rotavg::Rotation;

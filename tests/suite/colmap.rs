@@ -3,7 +3,7 @@
 //! absolute rotations; sparse models (`images.txt`, `images.bin`) in COLMAP's layout; the
 //! command line end to end; and the errors of malformed inputs.
 
-mod common;
+use crate::common;
 
 use common::{assert_success, json_of, max_gauge_error, run, temp_dir};
 use rotavg::Rotation;

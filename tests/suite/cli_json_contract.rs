@@ -8,8 +8,8 @@
 //! count as a contract change, while a changed cost or bound does); the free-text fields
 //! `explanation` and `note` only need to stay strings.
 //!
-//! A deliberate change of the contract: run `ROTAVG_BLESS=1 cargo test --test
-//! cli_json_contract`, review `git diff tests/cli_json_contract/`, and say in the commit what
+//! A deliberate change of the contract: run `ROTAVG_BLESS=1 cargo test --test suite
+//! cli_json_contract::`, review `git diff tests/cli_json_contract/`, and say in the commit what
 //! changed for scripts. `ROTAVG_CONTRACT_BIN=/path/to/rotavg` checks another binary (e.g. an
 //! older build) against the stored objects.
 

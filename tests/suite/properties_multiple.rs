@@ -21,7 +21,7 @@ use rotavg::objective::{Loss, Objective};
 use rotavg::pipeline::{AverageMultipleSettings, average_multiple};
 use rotavg::so3::{angle_between, perturb, random_rotation};
 
-mod common;
+use crate::common;
 use common::{max_gauge_error, scale_weights};
 
 /// Deterministic proptest configuration: a fixed RNG seed (so a failure reproduces and the suite
@@ -232,7 +232,7 @@ proptest! {
         // The residual angles theta(R_ij R_i, R_j) transform the same way (theta of a reversed
         // edge: theta(R_ij^T R_j, R_i) = theta(R_j, R_ij R_i); conjugation by H preserves
         // angles), so the argument holds for the geodesic and robust losses too; the L1 loss is
-        // left out (non-smooth, its IRLS stops at ~1e-4 rad, see tests/multiple_solvers.rs).
+        // left out (non-smooth, its IRLS stops at ~1e-4 rad, see tests/suite/multiple_solvers.rs).
         for loss in [
             Objective::CHORDAL_L2,
             Objective::new(Metric::Geodesic, Loss::L2),

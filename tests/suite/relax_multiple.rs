@@ -228,8 +228,9 @@ fn invalid_settings_are_rejected() {
     assert_eq!(back, SdpSettings::default());
 }
 
-/// Timing table of `paper-notes/sdp.md` (run: `cargo test --release --test relax_multiple
-/// -- --ignored --nocapture`). Prints, asserts only that each solve converged.
+/// Timing table of `paper-notes/sdp.md` (run: `cargo test --release --test suite
+/// relax_multiple::timing_table -- --ignored --nocapture`). Prints, asserts only that each
+/// solve converged.
 #[test]
 #[ignore = "benchmark table (minutes)"]
 fn timing_table() {

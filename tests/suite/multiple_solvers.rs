@@ -15,7 +15,7 @@ use rotavg::objective::{Loss, Objective};
 use rotavg::so3::{exp, perturb, random_rotation, random_unit_vector};
 use rotavg::{Metric, Rotation, Termination};
 
-mod common;
+use crate::common;
 use common::{max_gauge_error, mean_gauge_error as mean_error};
 
 const GEODESIC_L2: Objective = Objective {

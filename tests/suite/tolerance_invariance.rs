@@ -15,7 +15,7 @@ use rotavg::single::SingleProblem;
 use rotavg::so3::{exp, gaussian, perturb_gaussian, random_rotation};
 use rotavg::{Rotation, Verdict};
 
-mod common;
+use crate::common;
 use common::scale_weights;
 
 /// Moves `y` along a fixed random direction until the cost is `(1 + excess) f*`

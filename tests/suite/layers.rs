@@ -122,7 +122,7 @@ fn modules_import_only_downward() {
         }
         let Some(&own) = layer.get(module) else {
             violations.push(format!(
-                "{}: module `{module}` is not in the layer table of tests/layers.rs",
+                "{}: module `{module}` is not in the layer table of tests/suite/layers.rs",
                 rel.display()
             ));
             continue;

@@ -11,7 +11,7 @@ use rotavg::multiple::{Initialisation, MultipleProblem, MultipleSettings, solve_
 use rotavg::so3::exp;
 use rotavg::{Rotation, Verdict};
 
-mod common;
+use crate::common;
 use common::scale_weights;
 
 fn instance() -> (MultipleProblem, Vec<Rotation>) {

@@ -9,7 +9,7 @@ use rand::SeedableRng;
 use rand::rngs::StdRng;
 use serde_json::Value;
 
-mod common;
+use crate::common;
 use common::{assert_success, json_of, run, temp_file};
 
 /// 1 - 2.8e-6: `||(cR)^T (cR) - I||_F = 2.8e-6 (2 - 2.8e-6) sqrt(3) ~ 9.7e-6`, inside the

@@ -1,7 +1,7 @@
 //! Property tests of single rotation averaging (`rotavg::single`, `paper-notes/single.md`),
-//! extending `tests/single.rs` (which has brute-force optima, planted symmetric data, fixed-instance
-//! left/right invariance for all five means and a proptest of bi-invariance for chordal and
-//! geodesic L2 only).
+//! extending `tests/suite/single.rs` (which has brute-force optima, planted symmetric data,
+//! fixed-instance left/right invariance for all five means and a proptest of bi-invariance for
+//! chordal and geodesic L2 only).
 //!
 //! Independent sources: exact symmetries of the cost `F(R) = sum_i w_i d(R_i, R)^p`, which only
 //! depends on the angles `theta(R_i, R)` ([C2]); and the definition of a global minimum (its

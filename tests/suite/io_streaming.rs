@@ -5,7 +5,7 @@
 //! (binary data, over-long lines, bad lines deep in a file, bad UTF-8) with their line numbers;
 //! standard input through the command line.
 
-mod common;
+use crate::common;
 use common::{assert_success, bin, json_of, run_with_stdin, temp_dir, temp_file};
 use rotavg::io::detect::{
     GraphFormat, LoadedGraph, ReadOptions, load_graph, read_graph, read_graph_stream,

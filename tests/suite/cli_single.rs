@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-mod common;
+use crate::common;
 use common::{assert_success, json_of, run, run_with_stdin, rz_json as rz, temp_file};
 
 fn problem_file(name: &str) -> PathBuf {

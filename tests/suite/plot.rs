@@ -155,7 +155,8 @@ fn dir() -> PathBuf {
 
 #[test]
 fn cli_multiple_and_certify_write_svg() {
-    // n = 12, 30 edges, sigma = 0.05 rad: certified by the dual (as in tests/cli_multiple.rs).
+    // n = 12, 30 edges, sigma = 0.05 rad: certified by the dual (as in
+    // tests/suite/cli_multiple.rs).
     let (p, _) = SyntheticGraph {
         num_rotations: 12,
         num_edges: 30,

@@ -1,7 +1,7 @@
 //! `rotavg info` run as a process: readable and JSON output, exit codes, error messages with
 //! file and line.
 
-mod common;
+use crate::common;
 use common::{bin, run_with_stdin, shared_data, temp_file as tmp};
 
 /// A 4-cycle of planar edges plus a duplicate that contradicts by 30 deg: n = 4, m = 5.

@@ -12,7 +12,7 @@ use rotavg::pipeline::{AverageSettings, MultipleEstimate, average_multiple};
 use rotavg::so3::{angle_between, exp};
 use rotavg::{Metric, Rotation, Verdict};
 
-mod common;
+use crate::common;
 use common::{assert_success, json_of, run, scale_weights, temp_file};
 
 const LOSSES: [Loss; 3] = [

@@ -10,7 +10,7 @@ use rotavg::io::handeye::{MotionSettings, read_pose_stream};
 use rotavg::so3::{Rotation, angle_between, exp, rotation_from_rows};
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 use common::{json_of, run};
 
 /// The planted camera-to-hand rotation `X`.

@@ -1,7 +1,8 @@
 //! The example data of `examples/data/` (every README example runs on them from a fresh clone):
 //! all of it generated here, seeded, so the committed files are reproducible byte for byte. The
-//! test regenerates them and compares; `ROTAVG_BLESS=1 cargo test --release --test example_data`
-//! writes them (after a deliberate change of the generator: review `git diff examples/data`).
+//! test regenerates them and compares; `ROTAVG_BLESS=1 cargo test --release --test suite
+//! example_data::` writes them (after a deliberate change of the generator: review
+//! `git diff examples/data`).
 //!
 //! - `slam.g2o`: a 3-D SLAM pose graph (`VERTEX_SE3:QUAT` and `EDGE_SE3:QUAT`): 400 poses on a
 //!   winding trajectory, odometry with rotation information 1e4 (0.01 rad), 40 loop closures
