@@ -168,7 +168,7 @@ fn instance(k: usize) -> (MultipleProblem, Vec<Rotation>) {
 }
 
 #[test]
-#[ignore = "long campaign (about 4 minutes on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
+#[ignore = "long campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_in_ten_thousand() {
     let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
     let next = AtomicUsize::new(0);
