@@ -817,17 +817,18 @@ fn sparsified_scalar_comparison_certifies_under_a_small_budget() {
     );
 }
 
-/// On a dense view graph (1000 nodes, average degree 20, 0.1 rad) a subgraph that fits would
-/// drop more than half of the edges, so the comparison is split into parts that each prove a
-/// share ([D13], split): with a budget one byte short of the whole scalar factor, certified by
-/// several factorisations, each smaller than the whole, with a bound that agrees with the
-/// unbudgeted 3n certificate's.
+/// On a dense view graph (1000 nodes, average degree 20, 0.15 rad) the subgraphs drop most of
+/// the edges and their charges outweigh what they keep (their inertia tests fail; at 0.1 rad
+/// the sparsest subgraph already proves it), so the comparison is split into parts that each
+/// prove a share ([D13], split): with a budget one byte short of the whole scalar factor,
+/// certified by several factorisations, each smaller than the whole, with a bound that agrees
+/// with the unbudgeted 3n certificate's.
 #[test]
 fn split_scalar_comparison_certifies_a_dense_graph_under_a_small_budget() {
     let (p, _) = SyntheticGraph {
         num_rotations: 1000,
         num_edges: 10_000,
-        noise_sigma: 0.1,
+        noise_sigma: 0.15,
         seed: 8,
         ..Default::default()
     }
@@ -843,7 +844,8 @@ fn split_scalar_comparison_certifies_a_dense_graph_under_a_small_budget() {
         comparison.parts > 1 && comparison.dropped_edges == 0,
         "{comparison:?}"
     );
-    assert_eq!(split.bound.factorizations, comparison.parts);
+    // the failed subgraphs' factorisations are counted too
+    assert!(split.bound.factorizations > comparison.parts);
     assert!(split.bound.factor_nonzeros < whole);
     assert!(split.certificate.is_certified() && full.certificate.is_certified());
     let cost = split.certificate.upper_bound;

@@ -40,10 +40,12 @@ pub(super) struct ScalarPart {
     pub(super) edges: Vec<(usize, usize, usize)>,
 }
 
-/// The sparsified comparisons tried, in order, when the whole graph's scalar factor does not
-/// fit the budget: each node keeps this many of its edges (the fractional part: that fraction
-/// of the nodes keeps one more), those with the smallest residuals ([`ScalarAnalysis::sparsified`]).
-pub const SPARSIFIED_EDGES_PER_NODE: [f64; 5] = [4.0, 3.5, 3.0, 2.75, 2.5];
+/// The sparsified comparisons, sparsest first (the cheapest factor; denser subgraphs are
+/// tried when it fails), when the whole graph's scalar factor does not fit the budget: each
+/// node keeps this many of its edges (the fractional part: that fraction of the nodes keeps
+/// one more), those with the smallest residuals, plus the edges that connect the result
+/// ([`ScalarAnalysis::sparsified`]).
+pub const SPARSIFIED_EDGES_PER_NODE: [f64; 7] = [2.0, 2.25, 2.5, 2.75, 3.0, 3.5, 4.0];
 
 /// The shape of a split comparison ([`ScalarAnalysis::split`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -59,8 +61,8 @@ pub struct SplitShape {
     pub min_degree: usize,
 }
 
-/// The split shapes tried, in order, when a subgraph would drop more than half of the edges
-/// (`(parts, copies)`: each part holds `copies / parts` of the edges, from a half to an
+/// The split shapes tried, in order, after the subgraphs (for dense view graphs, whose
+/// subgraphs drop most of the edges; `(parts, copies)`: each part holds `copies / parts` of the edges, from a half to an
 /// eighth); for each minimum degree of [`SPLIT_MIN_DEGREES`] the first one that fits runs.
 pub const SPLIT_SHAPES: [(usize, usize); 11] = [
     (2, 1),
@@ -105,8 +107,12 @@ impl ScalarAnalysis {
     /// `paper-notes/certificates.md` `[D13]`): every node keeps its `edges_per_node` incident
     /// edges of smallest residual `||R_a^T R_ab^T R_b - I||_F` at `rotations` (a fractional
     /// part `f`: a fixed fraction `f` of the nodes keeps one more); an edge is kept when either
-    /// endpoint keeps it. Which edges are kept only decides whether the proof succeeds and how
-    /// large its factor is, never what it proves. Refused like [`ScalarAnalysis::new`].
+    /// endpoint keeps it. When that subgraph is disconnected, its components are joined by
+    /// the edges of smallest residual between them (Kruskal): every further component would
+    /// be one more zero eigenvalue of its Laplacian, i.e. one more negative pivot, and the
+    /// proof would fail (a 10^5-node random graph at 0.02 rad: one such edge turned 2 negative
+    /// pivots into a proof). Which edges are kept only decides whether the proof succeeds and
+    /// how large its factor is, never what it proves. Refused like [`ScalarAnalysis::new`].
     pub fn sparsified(
         problem: &MultipleProblem,
         rotations: &[Rotation],
@@ -150,6 +156,7 @@ impl ScalarAnalysis {
                 keep[k] = true;
             }
         }
+        connect(problem, &residual, &mut keep);
         let analysed = Self::analyse(problem, 1, |k| u64::from(keep[k]), max_values)?;
         Ok(analysed.map(|a| ScalarAnalysis {
             edges_per_node,
@@ -544,4 +551,22 @@ fn outside_largest_components(
 /// Frobenius norm.
 pub(super) fn fro(m: &Matrix3<f64>) -> f64 {
     m.iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+/// Join the components of the kept edges with the dropped edges of smallest `residual` between
+/// them (Kruskal's rule on the components), so that a connected graph's subgraph is connected.
+fn connect(problem: &MultipleProblem, residual: &[f64], keep: &mut [bool]) {
+    let mut components = UnionFind::new(problem.num_rotations());
+    for (e, _) in problem.edges().iter().zip(keep.iter()).filter(|(_, k)| **k) {
+        components.union(e.i, e.j);
+    }
+    let mut dropped: Vec<usize> = (0..keep.len()).filter(|&k| !keep[k]).collect();
+    dropped.sort_by(|&a, &b| residual[a].total_cmp(&residual[b]).then(a.cmp(&b)));
+    for k in dropped {
+        let e = &problem.edges()[k];
+        if components.find(e.i) != components.find(e.j) {
+            components.union(e.i, e.j);
+            keep[k] = true;
+        }
+    }
 }

@@ -24,26 +24,33 @@ use std::time::Instant;
 /// 22,216 edges, 2026-11-26, `rotavg multiple`: 0.10 s of which 3e-3 s of factorisation).
 pub const SECONDS_PER_EDGE: f64 = 4.5e-6;
 
-/// The scalar comparison's shapes: the whole graph, then the fallbacks (built when needed).
+/// When the whole graph's factor fits but is predicted to take more than this many seconds, the
+/// subgraphs are tried before it, sparsest first, while together they are predicted to take at
+/// most [`SUBGRAPHS_BEFORE_THE_WHOLE_FRACTION`] of the whole graph's time.
+pub const SUBGRAPHS_BEFORE_THE_WHOLE_ABOVE_SECONDS: f64 = 1.0;
+
+/// See [`SUBGRAPHS_BEFORE_THE_WHOLE_ABOVE_SECONDS`].
+pub const SUBGRAPHS_BEFORE_THE_WHOLE_FRACTION: f64 = 0.5;
+
+/// The scalar comparison's shapes: the whole graph, then the fallbacks (analysed when reached).
 #[derive(Default)]
 pub(in crate::certify::multiple) struct ScalarFamily {
     /// The whole graph's analysis when it fits the budget.
     whole: Option<ScalarAnalysis>,
     /// Why the whole graph's factor does not fit, when it does not.
     whole_refused: Option<Refusal>,
-    /// The fallback shapes (subgraphs, splits) that fit, in order; `None` until built.
-    fallbacks: Option<Vec<ScalarAnalysis>>,
+    /// The first fallback (the sparsest subgraph, else the first split that fits), analysed by
+    /// `predict`: its prediction is the family's when the whole graph does not fit.
+    first_fallback: Option<ScalarAnalysis>,
+    /// Where the fallbacks after the first continue.
+    fallbacks: Fallbacks,
 }
 
 impl Proof for ScalarFamily {
     fn rung(&self) -> Rung {
-        match &self.whole {
-            Some(_) => Rung::ScalarWhole,
-            None => self
-                .fallbacks
-                .as_ref()
-                .and_then(|f| f.first())
-                .map_or(Rung::ScalarWhole, rung_of),
+        match (&self.whole, &self.first_fallback) {
+            (None, Some(a)) => rung_of(a),
+            _ => Rung::ScalarWhole,
         }
     }
 
@@ -80,11 +87,9 @@ impl Proof for ScalarFamily {
                 self.whole_refused = Some(over_ordering(cx, predicted));
             }
         }
-        let fallbacks = fallbacks(cx.problem, rotations, max_values, cx.settings)?;
-        let first = fallbacks.first().map(|a| predict(cx.settings, a));
-        self.fallbacks = Some(fallbacks);
-        Ok(match first {
-            Some(p) => p,
+        self.first_fallback = self.fallbacks.next(cx, rotations, None)?;
+        Ok(match &self.first_fallback {
+            Some(a) => predict(cx.settings, a),
             None => Err(self
                 .whole_refused
                 .clone()
@@ -100,8 +105,31 @@ impl Proof for ScalarFamily {
         };
         let target = 0.5 * cx.gap / cx.s.nrows().max(1) as f64;
         if let Some(a) = &self.whole {
-            if let Some(b) = run(cx, a, rotations, target)? {
-                return Ok(Some(b));
+            // subgraphs first, sparsest first, while together they are predicted to take at
+            // most a fraction of the whole graph's factorisation (random graphs of 3x10^4
+            // nodes: the whole graph's scalar factor fits but fills)
+            let whole_seconds = predict(cx.settings, a).map_or(0.0, |p| p.seconds);
+            if whole_seconds > SUBGRAPHS_BEFORE_THE_WHOLE_ABOVE_SECONDS {
+                let allowed = SUBGRAPHS_BEFORE_THE_WHOLE_FRACTION * whole_seconds;
+                let (mut spent, mut failure) = (0.0, None);
+                while let Some(sub) = self.fallbacks.next(cx, rotations, failure.take())? {
+                    let seconds = predict(cx.settings, &sub).map_or(f64::INFINITY, |p| p.seconds);
+                    if sub.shape().is_some() || spent + seconds > allowed {
+                        self.first_fallback = Some(sub);
+                        break;
+                    }
+                    spent += seconds;
+                    match run(cx, &sub, rotations, target)? {
+                        (Some(b), _) => return Ok(Some(b)),
+                        (None, failed) => failure = failed,
+                    }
+                }
+            }
+            match run(cx, a, rotations, target)? {
+                (Some(b), _) => return Ok(Some(b)),
+                // a subgraph's or a split's condition is harder than the whole graph's
+                (None, Some(ScalarFailure::Inertia { .. })) => return Ok(None),
+                (None, _) => {}
             }
         } else if let Some(refusal) = self.whole_refused.take() {
             cx.log(
@@ -111,30 +139,95 @@ impl Proof for ScalarFamily {
                 Instant::now(),
             );
         }
-        if self.fallbacks.is_none() {
-            let max_values = cx
-                .settings
-                .budget
-                .max_factor_values(cx.problem.num_rotations());
-            self.fallbacks = Some(fallbacks(cx.problem, rotations, max_values, cx.settings)?);
-        }
-        for a in self.fallbacks.as_deref().unwrap_or_default() {
-            let predicted = predict(cx.settings, a).ok();
+        let mut next = match self.first_fallback.take() {
+            Some(a) => Some(a),
+            None => self.fallbacks.next(cx, rotations, None)?,
+        };
+        while let Some(a) = next {
+            let predicted = predict(cx.settings, &a).ok();
             if let Some(refusal) = predicted.as_ref().and_then(|p| cx.time_refusal(p)) {
                 cx.log(
-                    rung_of(a),
+                    rung_of(&a),
                     predicted,
                     Outcome::Refused(refusal),
                     Instant::now(),
                 );
-                continue;
+                // the later shapes are larger (subgraphs) or as large (splits)
+                return Ok(None);
             }
-            if let Some(b) = run(cx, a, rotations, target)? {
-                return Ok(Some(b));
+            let (bound, failure) = run(cx, &a, rotations, target)?;
+            if bound.is_some() {
+                return Ok(bound);
             }
+            next = self.fallbacks.next(cx, rotations, failure)?;
         }
         Ok(None)
     }
+}
+
+/// The fallbacks when the whole graph's factor does not fit or does not prove, analysed one at a
+/// time as they are reached: the subgraphs of [`SPARSIFIED_EDGES_PER_NODE`] from the sparsest
+/// (the cheapest factor; at 0.02 rad a 10^5-node random graph is proven by the first, at 0.1 rad
+/// by the fourth), while they fit the budget, then, for each minimum degree of
+/// [`SPLIT_MIN_DEGREES`], the first split shape of [`SPLIT_SHAPES`] that fits (dense view graphs,
+/// whose subgraphs drop most of the charges they must carry). A subgraph that fails with `p`
+/// negative pivots skips `floor(log16 p)` of the next subgraphs (measured: each quarter edge per
+/// node removes about 17x of them, 1546 -> 90 -> 5 -> 0 at 0.1 rad), so that a hopeless start
+/// costs one cheap factorisation. "Fits" is the budget's test of each one's own prediction: a
+/// larger budget only allows more shapes. Which shapes run decides only whether the proof
+/// succeeds and what it costs, never what is proven.
+#[derive(Default)]
+struct Fallbacks {
+    /// The next subgraph of [`SPARSIFIED_EDGES_PER_NODE`] to analyse (past the end: none left).
+    subgraph: usize,
+    /// The splits, computed when the subgraphs are exhausted; `None` until then.
+    splits: Option<std::vec::IntoIter<ScalarAnalysis>>,
+}
+
+impl Fallbacks {
+    /// The next analysis to run after the last one's `failure` (`None`: the first), or `None`
+    /// when no shape is left that fits.
+    fn next(
+        &mut self,
+        cx: &Check<'_>,
+        rotations: &[Rotation],
+        failure: Option<ScalarFailure>,
+    ) -> Result<Option<ScalarAnalysis>> {
+        if let Some(ScalarFailure::Inertia { negative_pivots }) = failure
+            && self.splits.is_none()
+        {
+            self.subgraph += skipped_subgraphs(negative_pivots);
+        }
+        let max_values = cx
+            .settings
+            .budget
+            .max_factor_values(cx.problem.num_rotations());
+        let fits = |a: &ScalarAnalysis| predict(cx.settings, a).is_ok();
+        while self.splits.is_none() && self.subgraph < SPARSIFIED_EDGES_PER_NODE.len() {
+            let k = SPARSIFIED_EDGES_PER_NODE[self.subgraph];
+            self.subgraph += 1;
+            match ScalarAnalysis::sparsified(cx.problem, rotations, k, max_values)? {
+                Ok(a) if fits(&a) => return Ok(Some(a)),
+                // denser subgraphs have larger factors
+                _ => self.subgraph = SPARSIFIED_EDGES_PER_NODE.len(),
+            }
+        }
+        if self.splits.is_none() {
+            self.splits = Some(splits(cx.problem, max_values, &fits)?.into_iter());
+        }
+        Ok(self.splits.as_mut().and_then(Iterator::next))
+    }
+}
+
+/// Subgraphs to skip after one fails with `negative_pivots` (`floor(log16 p)`; 0 for `p < 16`).
+fn skipped_subgraphs(negative_pivots: usize) -> usize {
+    let mut skip = 0;
+    let mut p = negative_pivots;
+    while p >= 16 {
+        p /= 16;
+        skip += 1;
+    }
+    skip
 }
 
 /// The rung of an analysis: the whole graph, a subgraph or a split.
@@ -197,13 +290,14 @@ fn predict(
     })
 }
 
-/// Run one analysis: a bound when it proves `lambda_min(S) >= -target`; logged either way.
+/// Run one analysis: a bound when it proves `lambda_min(S) >= -target`, else why not (`None`
+/// when it ran but its cross terms were too large); logged either way.
 fn run(
     cx: &Check<'_>,
     a: &ScalarAnalysis,
     rotations: &[Rotation],
     target: f64,
-) -> Result<Option<VerifiedBound>> {
+) -> Result<(Option<VerifiedBound>, Option<ScalarFailure>)> {
     let since = Instant::now();
     let predicted = predict(cx.settings, a).ok();
     cx.notes().factorizations += a.parts();
@@ -211,9 +305,10 @@ fn run(
     let proof = match outcome {
         Ok(p) if p.verified_min_eigenvalue >= -target => p,
         other => {
+            let failed = other.as_ref().err().cloned();
             let reason = failure(target, other);
             cx.log(rung_of(a), predicted, Outcome::Failed { reason }, since);
-            return Ok(None);
+            return Ok((None, failed));
         }
     };
     let mut b = VerifiedBound::from_mu(
@@ -229,7 +324,7 @@ fn run(
     }
     b.scalar_comparison = Some(proof);
     cx.log(rung_of(a), predicted, cx.proved(&b), since);
-    Ok(Some(b))
+    Ok((Some(b), None))
 }
 
 /// An estimate of `lambda_min(S)` (never a bound): the smallest Rayleigh quotient of the gauge
@@ -262,40 +357,6 @@ fn gauge_estimate(cx: &Check<'_>, rotations: &[Rotation]) -> LanczosResult {
         }
     }
     best
-}
-
-/// The analyses to try when the whole graph's factor does not fit or does not prove, in order:
-/// the first subgraph of [`SPARSIFIED_EDGES_PER_NODE`] that fits, alone when it keeps at least
-/// half of the edges; otherwise (its dropped charges would outweigh what it keeps: a split
-/// charges every part only its share) first the splits, for each minimum degree of
-/// [`SPLIT_MIN_DEGREES`] the first shape of [`SPLIT_SHAPES`] that fits, then the subgraph.
-/// "Fits" is the budget's test of each one's own prediction, so a larger budget only allows
-/// stronger shapes (more edges kept, fewer parts).
-fn fallbacks(
-    problem: &MultipleProblem,
-    rotations: &[Rotation],
-    max_values: usize,
-    settings: &CertifySettings,
-) -> Result<Vec<ScalarAnalysis>> {
-    let fits = |a: &ScalarAnalysis| predict(settings, a).is_ok();
-    let mut subgraph = None;
-    for k in SPARSIFIED_EDGES_PER_NODE {
-        if let Ok(a) = ScalarAnalysis::sparsified(problem, rotations, k, max_values)?
-            && fits(&a)
-        {
-            subgraph = Some(a);
-            break;
-        }
-    }
-    if subgraph
-        .as_ref()
-        .is_some_and(|a| 2 * a.dropped_edges() <= problem.num_edges())
-    {
-        return Ok(subgraph.into_iter().collect());
-    }
-    let mut candidates = splits(problem, max_values, &fits)?;
-    candidates.extend(subgraph);
-    Ok(candidates)
 }
 
 /// For each minimum degree, the first split shape that fits (a larger minimum degree only adds
@@ -351,5 +412,20 @@ fn failure(target: f64, outcome: std::result::Result<ScalarComparison, ScalarFai
             "the factorisation's backward error exceeded its headroom".into()
         }
         Err(ScalarFailure::NotOrthogonal) => "the rotations are too far from orthogonal".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::skipped_subgraphs;
+
+    /// `floor(log16 p)`: a near miss goes on to the next subgraph, a hopeless start skips ahead.
+    #[test]
+    fn failed_subgraphs_skip_by_their_negative_pivots() {
+        let skips: Vec<usize> = [2, 5, 15, 16, 90, 255, 256, 1546, 5760, usize::MAX]
+            .into_iter()
+            .map(skipped_subgraphs)
+            .collect();
+        assert_eq!(skips, [0, 0, 0, 1, 1, 1, 2, 2, 3, 15]);
     }
 }

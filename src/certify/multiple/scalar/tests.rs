@@ -7,7 +7,7 @@ use super::*;
 use crate::certify::multiple::{certificate_matrix, multipliers};
 use crate::multiple::synthetic::SyntheticGraph;
 use crate::multiple::{MultipleSettings, solve_multiple};
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::{DMatrix, SymmetricEigen, Vector3};
 
 fn dense_lambda_min(p: &MultipleProblem, lambdas: &[Matrix3<f64>]) -> f64 {
     let s = certificate_matrix(p, lambdas).unwrap();
@@ -506,4 +506,55 @@ fn no_proof_for_an_indefinite_certificate() {
     if let Ok(c) = scalar_comparison(&p, &an, &rs, &l, 1e-9).unwrap() {
         assert!(c.verified_min_eigenvalue <= exact + 1e-12);
     }
+}
+
+/// A subgraph is connected when the graph is: two 4-cliques joined by two bridges whose
+/// residuals are the largest of their nodes' edges, so keeping 2 edges per node keeps the
+/// cliques only; the bridge of smaller residual joins them (without it the
+/// Laplacian has two zero eigenvalues, the inertia test two negative pivots, and no proof).
+/// The proof at the optimum with that subgraph is checked against dense eigenvalues.
+#[test]
+fn a_subgraph_is_joined_by_its_cheapest_bridge() {
+    let mut edges = Vec::new();
+    for base in [0, 4] {
+        for a in 0..4 {
+            for b in a + 1..4 {
+                edges.push(crate::multiple::Edge {
+                    i: base + a,
+                    j: base + b,
+                    rotation: Rotation::identity(),
+                    weight: 1.0,
+                });
+            }
+        }
+    }
+    for (i, j, axis, angle) in [(3, 4, Vector3::z(), 0.02), (0, 7, Vector3::x(), 0.04)] {
+        edges.push(crate::multiple::Edge {
+            i,
+            j,
+            rotation: crate::so3::exp(&(axis * angle)),
+            weight: 1.0,
+        });
+    }
+    let p = MultipleProblem::new(8, edges).unwrap();
+    let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    // chosen at the all-identity point: the clique edges have residual 0, the bridges theirs
+    let identity = vec![Rotation::identity(); 8];
+    let an = ScalarAnalysis::sparsified(&p, &identity, 2.0, usize::MAX)
+        .unwrap()
+        .unwrap();
+    let kept: Vec<usize> = (0..p.num_edges()).filter(|&k| an.copies[k] > 0).collect();
+    assert!(
+        kept.contains(&12) && !kept.contains(&13),
+        "the bridge of smaller residual joins the cliques, the other is dropped: {kept:?}"
+    );
+    let l = multipliers(&p, &sol.rotations).unwrap();
+    let proof = scalar_comparison(&p, &an, &sol.rotations, &l, 1e-9)
+        .unwrap()
+        .expect("the joined subgraph proves it");
+    let exact = dense_lambda_min(&p, &l);
+    assert!(
+        proof.verified_min_eigenvalue <= exact + 1e-12,
+        "{proof:?} vs {exact}"
+    );
 }
