@@ -484,6 +484,11 @@ impl ShiftedCholesky {
         self.symbolic.len_val()
     }
 
+    /// Multiply-adds of one numeric factorisation ([`factor_multiply_adds`]).
+    pub fn multiply_adds(&self) -> f64 {
+        factor_multiply_adds(&self.symbolic)
+    }
+
     /// Bytes of the numeric factorisation's work space (faer's scratch for the supernodal
     /// fronts; about half a byte per factor value on grid and chain graphs).
     pub fn scratch_bytes(&self) -> usize {

@@ -5,7 +5,10 @@
 //! factor, and no margin at the null space.
 
 use super::multipliers::{GaugeTerms, bound_with_deficit, gauge_terms};
-use super::verify::{Check, Notes, Proof, Verification, VerifiedBound, factorisation_prediction};
+use super::verify::{
+    Check, Notes, Proof, Verification, VerifiedBound, counted_factorisation_prediction,
+    factorisation_prediction,
+};
 use crate::certify::ladder::{Prediction, Refusal, Rung};
 use crate::error::{Error, Result};
 use crate::linalg::{Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme};
@@ -235,7 +238,13 @@ fn analyse(
         }
     };
     let scratch = ch.scratch_bytes().div_ceil(8);
-    match factorisation_prediction(cx.settings, ch.factor_len(), scratch, dim, 2.0) {
+    match counted_factorisation_prediction(
+        cx.settings,
+        ch.factor_len(),
+        scratch,
+        ch.multiply_adds(),
+        2.0,
+    ) {
         Ok(p) => Ok(Ok((Some(ch), p))),
         Err(refusal) => {
             cx.note_three_n_refused(&refusal);

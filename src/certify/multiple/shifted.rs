@@ -5,7 +5,8 @@
 //! negative eigenvector is the staircase's direction of descent) and shifts above it are tried.
 
 use super::verify::{
-    Check, Notes, Proof, Verification, VerifiedBound, factorisation_prediction, first_shift,
+    Check, Notes, Proof, Verification, VerifiedBound, counted_factorisation_prediction,
+    factorisation_prediction, first_shift,
 };
 use crate::certify::ladder::{Outcome, Prediction, Refusal, Rung};
 use crate::error::Result;
@@ -130,7 +131,13 @@ fn analyse(cx: &Check<'_>) -> Result<std::result::Result<(ShiftedCholesky, Predi
         }
     };
     let scratch = ch.scratch_bytes().div_ceil(8);
-    match factorisation_prediction(cx.settings, ch.factor_len(), scratch, dim, 3.0) {
+    match counted_factorisation_prediction(
+        cx.settings,
+        ch.factor_len(),
+        scratch,
+        ch.multiply_adds(),
+        3.0,
+    ) {
         Ok(p) => Ok(Ok((ch, p))),
         Err(refusal) => {
             cx.note_three_n_refused(&refusal);

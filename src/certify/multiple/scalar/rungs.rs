@@ -11,7 +11,9 @@ use super::{
     ScalarComparison, ScalarFailure, SplitShape, scalar_comparison,
 };
 use crate::certify::ladder::{Outcome, Prediction, Refusal, Rung};
-use crate::certify::multiple::verify::{Check, Proof, Verification, VerifiedBound};
+use crate::certify::multiple::verify::{
+    Check, Proof, Verification, VerifiedBound, over_factor_cap,
+};
 use crate::certify::settings::{Budget, CertifySettings};
 use crate::error::Result;
 use crate::linalg::{LanczosResult, rayleigh_quotient};
@@ -73,7 +75,7 @@ impl Proof for ScalarFamily {
             .max_factor_values(cx.problem.num_rotations());
         match ScalarAnalysis::new(cx.problem, max_values)? {
             Ok(a) => {
-                cx.note_scalar_values(a.factor_len());
+                cx.note_scalar_values(a.factor_len(), Some(a.factor_multiply_adds()));
                 match predict(cx.settings, &a) {
                     Ok(p) => {
                         self.whole = Some(a);
@@ -83,7 +85,7 @@ impl Proof for ScalarFamily {
                 }
             }
             Err(predicted) => {
-                cx.note_scalar_values(predicted);
+                cx.note_scalar_values(predicted, None);
                 self.whole_refused = Some(over_ordering(cx, predicted));
             }
         }
@@ -274,14 +276,8 @@ fn predict(
     {
         return Err(Refusal::OverBudget { reason });
     }
-    let cap = settings.dual.max_factor_nonzeros;
-    if a.factor_len() > cap {
-        return Err(Refusal::OverBudget {
-            reason: format!(
-                "the proof would need a factor of {:.1e} values; limit dual.max_factor_nonzeros = {cap:.1e}",
-                a.factor_len()
-            ),
-        });
+    if let Some(refusal) = over_factor_cap(settings, a.factor_len()) {
+        return Err(refusal);
     }
     Ok(Prediction {
         seconds: Budget::predicted_factor_seconds(multiply_adds, total)
