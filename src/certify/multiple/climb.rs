@@ -544,8 +544,15 @@ impl<'a> Climb<'a> {
         // its start (a 3-cycle with loop angle pi: lifted cost 7 at rank 4, estimate -2e-16,
         // proven bound -1, while the SDP certifies 6), and then the SDP must still run
         let tolerance = self.settings.tolerance.resolve(self.problem.min_weight());
-        let verified = matches!(r.stop_reason, staircase::StaircaseStop::Verified { .. })
-            && r.lifted_cost - r.bound.lower_bound <= tolerance.allowed_gap(r.lifted_cost);
+        // (a bracketed stop rests on the proven bound and the lifted cost alone: the SDP could
+        // raise the bound by at most `staircase.bracket_tolerance` of the gap)
+        let verified = match r.stop_reason {
+            staircase::StaircaseStop::Verified { .. } => {
+                r.lifted_cost - r.bound.lower_bound <= tolerance.allowed_gap(r.lifted_cost)
+            }
+            staircase::StaircaseStop::Bracketed { .. } => true,
+            _ => false,
+        };
         self.details.ladder.extend(r.bound.ladder.iter().cloned());
         self.offer(Best {
             lower_bound: r.bound.lower_bound,
@@ -597,9 +604,12 @@ impl<'a> Climb<'a> {
                 }
             ),
         });
+        // the rounding's own dual certificate cannot beat a verified or bracketed staircase
+        // (every dual bound is at most the relaxation's value, at most the lifted cost)
         if let Some(p) = polished
             && p.chordal_cost < self.current.cost
             && self.adopt(p, ImprovementSource::StaircaseRounding, Point::Staircase)
+            && !verified
         {
             self.dual()?;
         }

@@ -8,9 +8,14 @@
 //!
 //! Each rank is solved by the Riemannian trust-region method of [`crate::relax::lifted`]
 //! (truncated conjugate gradients on Hessian-vector products with the sparse `S`, polar
-//! retraction), warm-started from the previous rank's point; ranks grow while the verification
-//! finds a negative eigenvector, up to [`StaircaseSettings::max_rank`] and the time budget. The
-//! best verified bound over the ranks is reported.
+//! retraction), warm-started from the previous rank's point, first to
+//! [`ESCAPE_GRADIENT_TOLERANCE`]: a negative Rayleigh quotient of a Lanczos estimate there is a
+//! direction of descent, and the next rank starts along it without a verification. Otherwise the
+//! rank is solved to [`StaircaseSettings::gradient_tolerance`] and its multipliers verified;
+//! ranks grow while the verification finds a negative eigenvector, until the verified bound and
+//! the lifted cost bracket the relaxation's value within [`StaircaseSettings::bracket_tolerance`]
+//! of the gap, up to [`StaircaseSettings::max_rank`] and the time budget. The best verified
+//! bound over the ranks is reported.
 
 use super::multipliers::{certificate_matrix, check_rotations};
 use super::verify::{VerifiedBound, multipliers_bound};
@@ -39,6 +44,13 @@ pub struct StaircaseSettings {
     pub max_iterations: usize,
     /// Converged at a rank when `||grad|| <= gradient_tolerance * (1 + F)`.
     pub gradient_tolerance: f64,
+    /// Stop once the relaxation's value is bracketed this tightly: the lifted cost `F(Y)` (a
+    /// feasible point's, so at least the SDP optimum) is within `bracket_tolerance` times the
+    /// reported gap (cost minus the verified bound) of the verified bound, or within the
+    /// certificate's tolerance. A higher rank could then improve the bound by at most that
+    /// fraction of the gap (in `[0, 1)`, default `1e-2`; `0` climbs while a negative eigenvector
+    /// is left): the reported gap is then at most `1 / (1 - t)` times the relaxation's own.
+    pub bracket_tolerance: f64,
 }
 
 impl Default for StaircaseSettings {
@@ -47,6 +59,7 @@ impl Default for StaircaseSettings {
             max_rank: 32,
             max_iterations: 500,
             gradient_tolerance: 1e-9,
+            bracket_tolerance: 1e-2,
         }
     }
 }
@@ -62,7 +75,15 @@ impl StaircaseSettings {
             });
         }
         crate::validate::at_least_one("staircase.max_iterations", self.max_iterations)?;
-        crate::validate::positive("staircase.gradient_tolerance", self.gradient_tolerance)
+        crate::validate::positive("staircase.gradient_tolerance", self.gradient_tolerance)?;
+        // t >= 1 would stop at the first verification: the lifted cost is below the estimate's
+        if !(0.0..1.0).contains(&self.bracket_tolerance) {
+            return Err(Error::InvalidSettings {
+                name: "staircase.bracket_tolerance".into(),
+                reason: format!("must be a number in [0, 1), got {}", self.bracket_tolerance),
+            });
+        }
+        Ok(())
     }
 }
 
@@ -84,6 +105,14 @@ pub enum StaircaseStop {
         max_rank: usize,
         /// The negative eigenvalue estimate left.
         min_eigenvalue_estimate: Option<f64>,
+    },
+    /// The verified bound and the lifted cost bracket the relaxation's value within
+    /// [`StaircaseSettings::bracket_tolerance`]: a higher rank cannot improve the bound by more.
+    Bracketed {
+        /// The rank.
+        rank: usize,
+        /// The lifted cost `F(Y)` minus the verified bound.
+        bracket: f64,
     },
     /// Moving along the negative eigenvector did not decrease the lifted cost (40 halvings).
     EscapeFailed {
@@ -113,6 +142,11 @@ impl std::fmt::Display for StaircaseStop {
                 f,
                 "maximum rank {max_rank} reached (lambda_min estimate {} < 0)",
                 est(min_eigenvalue_estimate)
+            ),
+            StaircaseStop::Bracketed { rank, bracket } => write!(
+                f,
+                "the relaxation's value is bracketed at rank {rank}: the lifted cost is {bracket:.3e} \
+                 above the verified bound"
             ),
             StaircaseStop::EscapeFailed {
                 rank,
@@ -214,27 +248,69 @@ pub fn staircase_bound(
         gradient_tolerance: settings.gradient_tolerance,
         ..Default::default()
     };
+    // the intermediate ranks only need a direction of negative curvature: a looser tolerance
+    // first, the strict one before a verification
+    let loose = TrustRegionSettings {
+        gradient_tolerance: settings.gradient_tolerance.max(ESCAPE_GRADIENT_TOLERANCE),
+        ..tr
+    };
     let mut y: Vec<Block> = rotations
         .iter()
         .map(|r| Block::from_column_slice(r.matrix().as_slice()))
         .collect();
     let (mut iterations, mut products, mut rank) = (0, 0, 3);
+    let cost = problem.chordal_cost(rotations);
+    let tolerance = certify.tolerance.resolve(problem.min_weight());
+    // the relaxation's value lies in [bound, F(Y)]: close enough, a higher rank cannot help
+    let bracketed = |lifted: f64, bound: f64| {
+        lifted - bound
+            <= tolerance
+                .allowed_gap(cost)
+                .max(settings.bracket_tolerance * (cost - bound))
+    };
     let (lifted, stop_reason, bound) = loop {
-        let r = trust_region(problem, y, &tr);
+        let mut r = trust_region(problem, y, &loose);
         (y, iterations, products) = (
-            r.y,
+            std::mem::take(&mut r.y),
             iterations + r.iterations,
             products + r.hessian_products,
         );
-        // a clear negative eigenvalue from an estimate (matrix-vector products only) escapes at
-        // once; otherwise the bound is verified, and its verification's (shift-invert)
+        let converged = loose.gradient_tolerance <= tr.gradient_tolerance;
+        // a negative Rayleigh quotient from an estimate (matrix-vector products only) is a
+        // direction of descent: escape at once unless the estimated bound already brackets the
+        // relaxation's value; otherwise verify the bound, and its verification's (shift-invert)
         // eigenvector decides
-        let e = negative_direction(problem, &y, certify)?;
-        let (direction, verified) = if e.value < -escape_threshold(&e, r.cost, problem, certify) {
+        let mut lambdas = lifted_multipliers(problem, &y);
+        let mut e = negative_direction(problem, &lambdas, certify)?;
+        let mut estimated_bound = lambdas.iter().map(|l| l.trace()).sum::<f64>()
+            + 3.0 * problem.num_rotations() as f64 * e.value.min(0.0);
+        let escapes = |e: &LanczosResult, cost: f64, bound: f64| {
+            e.value < -escape_threshold(cost, problem, certify) && !bracketed(cost, bound)
+        };
+        if !converged && !escapes(&e, r.cost, estimated_bound) {
+            // about to verify: converge at this rank first
+            r = trust_region(problem, y, &tr);
+            (y, iterations, products) = (
+                std::mem::take(&mut r.y),
+                iterations + r.iterations,
+                products + r.hessian_products,
+            );
+            lambdas = lifted_multipliers(problem, &y);
+            e = negative_direction(problem, &lambdas, certify)?;
+            estimated_bound = lambdas.iter().map(|l| l.trace()).sum::<f64>()
+                + 3.0 * problem.num_rotations() as f64 * e.value.min(0.0);
+        }
+        let (direction, verified) = if escapes(&e, r.cost, estimated_bound) {
             (Some(e.vector), None)
         } else {
-            let lambdas = lifted_multipliers(problem, &y);
             let b = multipliers_bound(problem, &lambdas, certify, Point::Staircase)?;
+            if bracketed(r.cost, b.lower_bound) {
+                let stop = StaircaseStop::Bracketed {
+                    rank,
+                    bracket: r.cost - b.lower_bound,
+                };
+                break (r.cost, stop, Some(b));
+            }
             (b.negative_eigenvector.clone(), Some(b))
         };
         let estimate = verified
@@ -282,7 +358,7 @@ pub fn staircase_bound(
         )?,
     };
     let certificate = Certificate::from_bounds(
-        problem.chordal_cost(rotations),
+        cost,
         Some(bound.lower_bound),
         BoundMethod::Staircase,
         bound.min_eigenvalue_estimate,
@@ -308,32 +384,33 @@ pub fn staircase_bound(
     })
 }
 
-/// The Lanczos estimate of `lambda_min(S)` at the lifted point `y` and its eigenvector (an
-/// estimate: it only chooses where to escape).
+/// The Lanczos estimate of `lambda_min(S)` for the lifted multipliers and its eigenvector (an
+/// estimate: it only chooses where to escape; a negative Rayleigh quotient is a direction of
+/// descent whether or not the estimate has converged).
 fn negative_direction(
     problem: &MultipleProblem,
-    y: &[Block],
+    lambdas: &[nalgebra::Matrix3<f64>],
     certify: &CertifySettings,
 ) -> Result<LanczosResult> {
-    let s = certificate_matrix(problem, &lifted_multipliers(problem, y))?;
+    let s = certificate_matrix(problem, lambdas)?;
     let norm = inf_norm(s.as_ref()).max(f64::MIN_POSITIVE);
     Ok(smallest_eigenpair(s.as_ref(), norm, &certify.dual.lanczos))
 }
 
-/// A negative eigenvalue estimate below minus this is worth a new rank: its Ritz residual, and
-/// a tenth of the tolerance spread over the `3n` coordinates (a smaller one changes the bound
+/// The trust-region gradient tolerance (`||grad F|| / (1 + F)`) at ranks that escape: a point
+/// near enough to a critical point for Lanczos to find its direction of negative curvature.
+/// Before a verification the rank is solved to [`StaircaseSettings::gradient_tolerance`].
+pub const ESCAPE_GRADIENT_TOLERANCE: f64 = 1e-6;
+
+/// A negative eigenvalue estimate below minus this is worth a new rank: a tenth of the
+/// tolerance spread over the `3n` coordinates (a smaller one changes the bound
 /// `sum tr(Lambda) + 3n lambda_min` by less than that).
-fn escape_threshold(
-    e: &LanczosResult,
-    cost: f64,
-    problem: &MultipleProblem,
-    certify: &CertifySettings,
-) -> f64 {
+fn escape_threshold(cost: f64, problem: &MultipleProblem, certify: &CertifySettings) -> f64 {
     let gap = certify
         .tolerance
         .resolve(problem.min_weight())
         .allowed_gap(cost);
-    e.residual + 0.1 * gap / (3 * problem.num_rotations()) as f64
+    0.1 * gap / (3 * problem.num_rotations()) as f64
 }
 
 /// The saddle escape: a new column `alpha v_i` on every block (`v` the negative eigenvector of
@@ -363,4 +440,34 @@ fn escape(problem: &MultipleProblem, y: &[Block], v: &[f64], f: f64) -> Option<V
         alpha *= 0.5;
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::StaircaseSettings;
+
+    /// Every setting is validated, the bracket included (0 is allowed: climb while a negative
+    /// eigenvector is left).
+    #[test]
+    fn settings_are_validated() {
+        assert!(StaircaseSettings::default().validate().is_ok());
+        let zero = StaircaseSettings {
+            bracket_tolerance: 0.0,
+            ..Default::default()
+        };
+        assert!(zero.validate().is_ok());
+        for bad in [-1e-3, 1.0, f64::NAN, f64::INFINITY] {
+            let s = StaircaseSettings {
+                bracket_tolerance: bad,
+                ..Default::default()
+            };
+            let e = s.validate().unwrap_err().to_string();
+            assert!(e.contains("staircase.bracket_tolerance"), "{e}");
+        }
+        let low_rank = StaircaseSettings {
+            max_rank: 2,
+            ..Default::default()
+        };
+        assert!(low_rank.validate().is_err());
+    }
 }
