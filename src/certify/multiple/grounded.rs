@@ -7,7 +7,7 @@
 use super::multipliers::{GaugeTerms, bound_with_deficit, gauge_terms};
 use super::verify::{
     Check, Notes, Proof, Verification, VerifiedBound, counted_factorisation_prediction,
-    factorisation_prediction,
+    ordering_refusal,
 };
 use crate::certify::ladder::{Prediction, Refusal, Rung};
 use crate::error::{Error, Result};
@@ -230,8 +230,7 @@ fn analyse(
     let ch = match ShiftedCholesky::new_within(without_block(&cx.s, ground)?, cx.terms, cap)? {
         Ok(ch) => ch,
         Err(predicted) => {
-            let refusal = factorisation_prediction(cx.settings, predicted, 0, dim, 1.0)
-                .err()
+            let refusal = ordering_refusal(cx.settings, predicted, dim)
                 .unwrap_or_else(|| not_applicable("the ordering's prediction is over the cap"));
             cx.note_three_n_refused(&refusal);
             return Ok(Err(refusal));

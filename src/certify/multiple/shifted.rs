@@ -6,7 +6,7 @@
 
 use super::verify::{
     Check, Notes, Proof, Verification, VerifiedBound, counted_factorisation_prediction,
-    factorisation_prediction, first_shift,
+    first_shift, ordering_refusal,
 };
 use crate::certify::ladder::{Outcome, Prediction, Refusal, Rung};
 use crate::error::Result;
@@ -121,11 +121,11 @@ fn analyse(cx: &Check<'_>) -> Result<std::result::Result<(ShiftedCholesky, Predi
     let ch = match ShiftedCholesky::new_within(cx.s.clone(), cx.terms, cap)? {
         Ok(ch) => ch,
         Err(predicted) => {
-            let refusal = factorisation_prediction(cx.settings, predicted, 0, dim, 1.0)
-                .err()
-                .unwrap_or_else(|| Refusal::OverBudget {
+            let refusal = ordering_refusal(cx.settings, predicted, dim).unwrap_or_else(|| {
+                Refusal::OverBudget {
                     reason: format!("the ordering predicts {predicted:.1e} factor values"),
-                });
+                }
+            });
             cx.note_three_n_refused(&refusal);
             return Ok(Err(refusal));
         }

@@ -296,9 +296,7 @@ impl Check<'_> {
         }
         let v = shared.scalar_values?;
         let blocks = v.saturating_mul(9).saturating_sub(dim);
-        if let Err(Refusal::OverBudget { reason }) =
-            factorisation_prediction(self.settings, blocks, 0, dim, 1.0)
-        {
+        if let Some(Refusal::OverBudget { reason }) = ordering_refusal(self.settings, blocks, dim) {
             let reason = format!("at least 9 x the scalar factor: {reason}");
             return Some(Err(Refusal::OverBudget { reason }));
         }
@@ -629,25 +627,16 @@ pub(super) fn counted_factorisation_prediction(
     })
 }
 
-/// Why a factorisation of a `dim x dim` matrix with `factor_nonzeros` stored values and
-/// `scratch_values` of numeric scratch (in values of 8 bytes) does not start: over the
-/// [`crate::certify::Budget`] or over `dual.max_factor_nonzeros`; its prediction otherwise.
-pub(super) fn factorisation_prediction(
+/// Why a factorisation of a `dim x dim` matrix whose factor is predicted (by the ordering, before
+/// any symbolic analysis) to hold `factor_nonzeros` values does not start: over the
+/// [`crate::certify::Budget`] (`values^2 / dim` time model) or over `dual.max_factor_nonzeros`.
+pub(super) fn ordering_refusal(
     settings: &CertifySettings,
     factor_nonzeros: usize,
-    scratch_values: usize,
     dim: usize,
-    factorisations: f64,
-) -> std::result::Result<Prediction, Refusal> {
-    let values = factor_nonzeros.saturating_add(scratch_values);
-    if let Err(reason) = settings.budget.factorisation_fits(values, dim) {
-        return Err(Refusal::OverBudget { reason });
+) -> Option<Refusal> {
+    if let Err(reason) = settings.budget.factorisation_fits(factor_nonzeros, dim) {
+        return Some(Refusal::OverBudget { reason });
     }
-    if let Some(refusal) = over_factor_cap(settings, factor_nonzeros) {
-        return Err(refusal);
-    }
-    Ok(Prediction {
-        seconds: factorisations * crate::certify::Budget::predicted_seconds(values, dim),
-        bytes: crate::certify::Budget::factorisation_bytes(values),
-    })
+    over_factor_cap(settings, factor_nonzeros)
 }
