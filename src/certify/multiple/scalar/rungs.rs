@@ -127,6 +127,18 @@ impl Proof for ScalarFamily {
                     }
                 }
             }
+            // the subgraphs spent part of the budget: the whole graph still has to fit what is
+            // left (the plan checked it before they ran)
+            let predicted = predict(cx.settings, a).ok();
+            if let Some(refusal) = predicted.as_ref().and_then(|p| cx.time_refusal(p)) {
+                cx.log(
+                    Rung::ScalarWhole,
+                    predicted,
+                    Outcome::Refused(refusal),
+                    Instant::now(),
+                );
+                return Ok(None);
+            }
             match run(cx, a, rotations, target)? {
                 (Some(b), _) => return Ok(Some(b)),
                 // a subgraph's or a split's condition is harder than the whole graph's
