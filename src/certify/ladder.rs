@@ -57,6 +57,10 @@ pub enum Rung {
     /// of at most [`crate::relax::conv_so3::CONV_MAX_NODES`] nodes), its multipliers verified
     /// `[A6]`.
     ConvSdp,
+    /// The `conv(SO(3))` dual certificate at the estimate `[A11]`: its multipliers searched by
+    /// cutting planes, the `O(3)` certificate of the penalised surrogate verified by the rungs
+    /// above (logged at [`Point::ConvDual`]), minus the verified offsets.
+    ConvDual,
     /// Branch and bound over SO(3) `[B1]`-`[B6]`.
     BranchAndBound,
     /// The randomized Chebyshev test `[D16]`: a Monte Carlo bound, never a proof.
@@ -75,6 +79,7 @@ impl Rung {
             Rung::ScalarSplit { .. } => 5,
             Rung::Sdp => 6,
             Rung::ConvSdp => 6,
+            Rung::ConvDual => 2,
             Rung::BranchAndBound => 7,
             Rung::Staircase => 8,
             Rung::Gershgorin => 9,
@@ -105,6 +110,7 @@ impl fmt::Display for Rung {
             Rung::Gershgorin => f.write_str("Gershgorin discs [D8]"),
             Rung::Sdp => f.write_str("SDP relaxation (Clarabel)"),
             Rung::ConvSdp => f.write_str("conv(SO(3)) SDP relaxation [A6] (Clarabel)"),
+            Rung::ConvDual => f.write_str("conv(SO(3)) dual certificate at the estimate [A11]"),
             Rung::Staircase => f.write_str("Riemannian staircase [D11]"),
             Rung::BranchAndBound => f.write_str("branch and bound [B1]-[B6]"),
             Rung::Randomized => f.write_str("randomized test [D16] (not a proof)"),
@@ -224,6 +230,8 @@ pub enum Point {
     Staircase,
     /// The multipliers of the `conv(SO(3))`-strengthened SDP `[A6]`.
     ConvSdp,
+    /// The current estimate with its `conv(SO(3))` multipliers recovered by a search `[A11]`.
+    ConvDual,
 }
 
 impl fmt::Display for Point {
@@ -234,6 +242,7 @@ impl fmt::Display for Point {
             Point::Sdp => "the SDP",
             Point::Staircase => "the staircase",
             Point::ConvSdp => "the conv(SO(3)) SDP",
+            Point::ConvDual => "the conv(SO(3)) multipliers at the estimate",
         })
     }
 }

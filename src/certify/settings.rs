@@ -418,6 +418,9 @@ pub struct DualSettings {
     /// [`Budget`]: a Monte Carlo lower bound reported beside the `inconclusive` verdict
     /// (never as the verdict's proven bound).
     pub randomized: RandomizedSettings,
+    /// The `conv(SO(3))` dual certificate of anisotropic problems `[A11]` (its multipliers'
+    /// search).
+    pub conv: crate::certify::multiple::conv_dual::ConvDualSettings,
 }
 
 /// A proof of `lambda_min(S) >= mu` for the dual certificate of multiple averaging (a rung of
@@ -508,6 +511,7 @@ impl Default for DualSettings {
             estimate_when_verified: true,
             proofs: DualProof::ALL.to_vec(),
             randomized: RandomizedSettings::default(),
+            conv: Default::default(),
         }
     }
 }
@@ -523,6 +527,7 @@ impl DualSettings {
         }
         at_least_one("dual.max_factorizations", self.max_factorizations)?;
         self.randomized.validate()?;
+        self.conv.validate()?;
         self.lanczos.validate("dual.lanczos")
     }
 }

@@ -474,6 +474,12 @@ impl ShiftedCholesky {
         self.s.as_ref()
     }
 
+    /// The stored values of `S`, to be overwritten by those of another matrix of the same
+    /// pattern (the analysis is re-used; the forming bound `entry_terms` is the caller's).
+    pub fn values_mut(&mut self) -> &mut [f64] {
+        self.s.val_mut()
+    }
+
     /// Dimension of `S`.
     pub fn dim(&self) -> usize {
         self.s.nrows()

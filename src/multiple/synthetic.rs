@@ -140,8 +140,11 @@ fn random_connected_pairs(n: usize, m: usize, rng: &mut StdRng) -> Vec<(usize, u
 /// Parameters of a random connected view graph with **anisotropic** noise and its information
 /// matrices (`paper-notes/anisotropic.md` `[A1]`): each edge's residual `e` (with `R_j R_i^T =
 /// R_ij exp([e]x)`) is Gaussian with standard deviations `sigma`, `sigma` and `ratio * sigma`
-/// along the axes of a frame `U_e`, and its information is the inverse covariance
-/// `H_e = U_e diag(1, 1, 1 / ratio^2) U_e^T / sigma^2`.
+/// along the axes of a frame `U_e` (one weak axis), or `sigma`, `ratio * sigma`, `ratio * sigma`
+/// (`weak_axes = 2`: one well-determined axis), and its information is the inverse covariance,
+/// e.g. `H_e = U_e diag(1, 1, 1 / ratio^2) U_e^T / sigma^2`. With two weak axes and `ratio >
+/// sqrt(2)` every `M_e` is indefinite: the data on which the `O(3)` relaxation can prefer
+/// reflections `[A5]`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SyntheticAnisotropic {
     /// Number of nodes (>= 2).
@@ -159,6 +162,13 @@ pub struct SyntheticAnisotropic {
     pub outlier_fraction: f64,
     /// RNG seed.
     pub seed: u64,
+    /// Axes whose standard deviation is `ratio * sigma`: 1 (default) or 2.
+    #[serde(default = "one_weak_axis")]
+    pub weak_axes: usize,
+}
+
+fn one_weak_axis() -> usize {
+    1
 }
 
 impl Default for SyntheticAnisotropic {
@@ -171,13 +181,15 @@ impl Default for SyntheticAnisotropic {
             random_axes: true,
             outlier_fraction: 0.0,
             seed: 0,
+            weak_axes: 1,
         }
     }
 }
 
 impl SyntheticAnisotropic {
     /// Generate `(problem, ground truth)`; the ground truth has `R_0 = I`. Panics if `sigma` is
-    /// not finite and positive or `ratio < 1` (settings of a test, not user data).
+    /// not finite and positive, `ratio < 1` or `weak_axes` is not 1 or 2 (settings of a test,
+    /// not user data).
     ///
     /// ```
     /// use rotavg::multiple::synthetic::SyntheticAnisotropic;
@@ -188,8 +200,14 @@ impl SyntheticAnisotropic {
     /// ```
     pub fn generate(&self) -> (MultipleProblem, Vec<Rotation>) {
         assert!(self.sigma.is_finite() && self.sigma > 0.0 && self.ratio >= 1.0);
+        assert!(matches!(self.weak_axes, 1 | 2), "weak_axes is 1 or 2");
         let (n, mut rng, gt, pairs) = planted_graph(self.num_rotations, self.num_edges, self.seed);
-        let stds = Vector3::new(self.sigma, self.sigma, self.sigma * self.ratio);
+        let weak = self.sigma * self.ratio;
+        let stds = if self.weak_axes == 2 {
+            Vector3::new(self.sigma, weak, weak)
+        } else {
+            Vector3::new(self.sigma, self.sigma, weak)
+        };
         let inverse_variances = stds.map(|s| 1.0 / (s * s));
         let mut edges = Vec::with_capacity(pairs.len());
         let mut information = Vec::with_capacity(pairs.len());

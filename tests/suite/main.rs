@@ -37,6 +37,7 @@ mod conjugate_cli;
 mod conjugate_io;
 mod conjugate_sdp;
 mod conjugate_simultaneous;
+mod conv_dual;
 #[cfg(feature = "cli")]
 mod data_as_given;
 #[cfg(feature = "cli")]

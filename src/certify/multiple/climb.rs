@@ -337,6 +337,95 @@ impl<'a> Climb<'a> {
         Ok(())
     }
 
+    /// The `conv(SO(3))` dual certificate `[A11]` at the current point: anisotropic problems not
+    /// yet certified, any size. The search for its multipliers may spend
+    /// `dual.conv.time_fraction` of the time left (its memory is predicted and refused over
+    /// the budget); the surrogate's bound is verified by the `O(3)` ladder, whose rungs are
+    /// logged at [`Point::ConvDual`].
+    pub fn conv_dual(&mut self) -> Result<()> {
+        let conv = &self.settings.dual.conv;
+        if !self.problem.is_anisotropic()
+            || !conv.enabled
+            || self.best_certifies()
+            || self.over_time("conv(SO(3)) dual certificate")
+        {
+            return Ok(());
+        }
+        let since = Instant::now();
+        crate::progress::phase(crate::progress::Phase::Certify, || {
+            format!(
+                "conv(SO(3)) dual certificate at {} ({} nodes)",
+                self.current.label,
+                self.problem.num_rotations()
+            )
+        });
+        let predicted = super::conv_dual::predict_search(self.problem, conv);
+        if let Err(reason) = self.fits(&predicted) {
+            let why = format!("conv(SO(3)) dual certificate not run: {reason}");
+            self.details.methods.push(MethodRun {
+                method: BoundMethod::Dual,
+                lower_bound: None,
+                seconds: since.elapsed().as_secs_f64(),
+                note: why.clone(),
+            });
+            let outcome = Outcome::Refused(Refusal::OverBudget { reason: why });
+            self.log(Rung::ConvDual, Some(predicted), outcome, since);
+            return Ok(());
+        }
+        let deadline = self.settings.budget.max_seconds.map(|limit| {
+            let left = (limit - self.start.elapsed().as_secs_f64()).max(0.0);
+            since + std::time::Duration::from_secs_f64(left * conv.time_fraction)
+        });
+        let b = super::conv_dual::conv_dual_bound(
+            self.problem,
+            &self.current.rotations,
+            self.settings,
+            Point::ConvDual,
+            deadline,
+        )?;
+        self.details
+            .ladder
+            .extend(b.surrogate.ladder.iter().cloned());
+        let explanation = format!(
+            "bound from the conv(SO(3)) multipliers recovered at {} [A11] ({} rounds of their \
+             search, {} cuts, stopped: {}): the O(3) certificate of the penalised surrogate, \
+             lambda_min(S') >= {:.3e}, minus its verified offsets {:.6e}",
+            self.current.label,
+            b.search.rounds,
+            b.search.cuts,
+            b.search.stop,
+            b.surrogate.verified_min_eigenvalue,
+            b.offset
+        );
+        self.offer(Best {
+            lower_bound: b.lower_bound,
+            method: BoundMethod::Dual,
+            point: Point::ConvDual,
+            min_eigenvalue: b
+                .surrogate
+                .min_eigenvalue_estimate
+                .or(Some(b.surrogate.verified_min_eigenvalue)),
+            explanation: explanation.clone(),
+            verified_min_eigenvalue: b.surrogate.verified_min_eigenvalue,
+            shift: None,
+            lambdas: None,
+        });
+        let tolerance = self.settings.tolerance.resolve(self.problem.min_weight());
+        let outcome = Outcome::Proved {
+            lower_bound: b.lower_bound,
+            sufficient: self.current.cost - b.lower_bound
+                <= tolerance.allowed_gap(self.current.cost),
+        };
+        self.log(Rung::ConvDual, Some(predicted), outcome, since);
+        self.details.methods.push(MethodRun {
+            method: BoundMethod::Dual,
+            lower_bound: Some(b.lower_bound),
+            seconds: since.elapsed().as_secs_f64(),
+            note: explanation,
+        });
+        Ok(())
+    }
+
     /// The SDP settings with Clarabel's time limit at what is left of the time budget (every SDP
     /// rung: its prediction decides whether it starts, this bounds how long it runs).
     fn sdp_settings_within_budget(&self) -> crate::relax::SdpSettings {
@@ -353,7 +442,7 @@ impl<'a> Climb<'a> {
     }
 
     /// The best bound so far certifies the current point.
-    fn best_certifies(&self) -> bool {
+    pub fn best_certifies(&self) -> bool {
         let tolerance = self.settings.tolerance.resolve(self.problem.min_weight());
         self.best.as_ref().is_some_and(|b| {
             self.current.cost - b.lower_bound <= tolerance.allowed_gap(self.current.cost)
@@ -656,11 +745,12 @@ impl<'a> Climb<'a> {
             String::new(),
             seconds,
         );
-        let mut verdict = if c.is_certified() && b.point == Point::ConvSdp {
+        let mut verdict = if c.is_certified() && matches!(b.point, Point::ConvSdp | Point::ConvDual)
+        {
             format!(
                 "certified globally optimal for the anisotropic chordal L2 cost of its {} edges \
-                 (over conv(SO(3)) Gram blocks, hence SO(3)^n; the O(3) relaxation alone could \
-                 not)",
+                 (a bound over conv(SO(3)) Gram blocks, hence over SO(3)^n: on these data the \
+                 O(3) relaxation can prefer reflections)",
                 self.problem.num_edges()
             )
         } else if c.is_certified() {

@@ -18,6 +18,7 @@
 
 mod climb;
 pub mod conv;
+pub mod conv_dual;
 pub mod dual;
 pub mod grounded;
 pub mod multipliers;
@@ -112,8 +113,38 @@ pub fn certify_multiple(
         settings,
         start,
     );
-    let (first, last) = dual_steps(&mut climb)?;
+    // anisotropic data with an indefinite M on some edge, whose O(3) relaxation can prefer
+    // reflections [A5]: the conv(SO(3)) dual certificate at the given estimate first [A11]
+    let conv = matches!(settings.mode, CertifyMode::Auto | CertifyMode::Dual);
+    let reflective = problem
+        .information()
+        .is_some_and(|info| info.iter().any(|h| h.chordal_matrix_indefinite()));
+    if conv && reflective {
+        climb.conv_dual()?;
+    }
+    let (first, last) = if climb.best_certifies() {
+        let certified = climb::DualRun {
+            diagnosis: DualDiagnosis::Certified,
+            randomized: None,
+        };
+        (DualDiagnosis::Certified, certified)
+    } else {
+        let at = climb.current.label;
+        let steps = dual_steps(&mut climb)?;
+        // then at the refined point, or for any anisotropic data whose O(3) certificate failed
+        if conv
+            && (climb.current.label != at || !reflective)
+            && matches!(
+                steps.1.diagnosis,
+                DualDiagnosis::Indefinite { .. } | DualDiagnosis::NotCritical { .. }
+            )
+        {
+            climb.conv_dual()?;
+        }
+        steps
+    };
     let escalate = match &last.diagnosis {
+        _ if climb.best_certifies() => false,
         DualDiagnosis::Certified => {
             if matches!(settings.mode, CertifyMode::Sdp | CertifyMode::Staircase) {
                 climb.details.skipped_reason = Some(format!(

@@ -1,0 +1,864 @@
+//! The dual certificate of the `conv(SO(3))` relaxation at an estimate, for graphs of any size
+//! (`paper-notes/anisotropic.md` `[A11]`): the `O(3)` dual certificate of a *surrogate*
+//! problem whose edges are penalised against reflections.
+//!
+//! For every edge `e` (with `X_e = R_j R_i^T` at the estimate, `N_e = R_ij (2 tr(H) I - 4 H)`,
+//! the edge's term `f_e(X) = 2 tr H - <N_e, X>`), a symmetric `P_e` in the cone
+//! `C = { P : tr(P) I - P PSD }` gives the surrogate term with `N'_e = N_e - X_e P_e`, which is
+//! stored as an ordinary anisotropic edge (`R'_e`, `H'_e` from the polar decomposition of
+//! `X_e^T N'_e`). Whatever the surrogate's data, for every rotation `X`:
+//! `f_e(X) >= f'_e(X) - delta_e` with `delta_e = max over SO(3) of (f'_e - f_e)
+//! = 2 tr H'_e - 2 tr H_e + h(N_e - N'_e)`, `h(D) = max_{R in SO(3)} <D, R> = s_1 + s_2 +
+//! sign(det D) s_3` ([`special_support`]); so a verified bound `L'` of the surrogate gives
+//! `L' - sum delta_e` for the problem. With `P_e` in `C` the maximum is attained at the estimate
+//! (the bound loses nothing there), and the surrogate's certificate matrix is
+//! `S' = S - 1/2 sum_e B_e^T P_e B_e` with `B_e x = x_i - X_e^T x_j`: the `conv(SO(3))`
+//! relaxation's dual with its multipliers in the estimate's frame. `P_e` starts at the edge's own
+//! reflection price and is improved by cutting planes from the Lanczos vectors of negative
+//! Ritz value ([`search_penalties`]); the bound itself is checked by the `O(3)` ladder of
+//! [`super::verify`] on the surrogate and by the verified offsets, never by the search.
+
+use super::multipliers::{certificate_matrix, multipliers};
+use crate::certify::ladder::Prediction;
+use crate::error::{Error, Result};
+use crate::linalg::cholesky::{ShiftedCholesky, sparse_matvec};
+use crate::linalg::compensated::Accumulator;
+use crate::linalg::{Extreme, LanczosSettings, UNIT_ROUNDOFF, gamma, lanczos};
+use crate::multiple::anisotropic::Information;
+use crate::multiple::{Edge, MultipleProblem};
+use crate::so3::{DEFAULT_ROTATION_TOLERANCE, Rotation, rotation_from_matrix};
+use faer::sparse::SparseColMat;
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::time::Instant;
+
+/// Settings of the search for the `conv(SO(3))` multipliers `[A11]` (`dual.conv`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ConvDualSettings {
+    /// Run it (anisotropic problems whose `O(3)` dual certificate did not certify; modes `auto`
+    /// and `dual`). Default `true`.
+    pub enabled: bool,
+    /// Rounds of the search: each one Lanczos run on `S'` and the projections onto its cuts
+    /// (0: only the edges' own reflection prices). Default 300.
+    pub max_rounds: usize,
+    /// Cuts (Ritz vectors of negative Ritz value) kept, the newest. Default 60.
+    pub cuts_kept: usize,
+    /// Most passes of cyclic projections over the kept cuts in a round (a round stops passing
+    /// when no cut is violated). Default 30.
+    pub passes: usize,
+    /// Krylov subspace dimension of a round's Lanczos run (block size 3). Default 90.
+    pub lanczos_iterations: usize,
+    /// Fraction of the time left that the search may spend (the rest is the proof's). In
+    /// `(0, 1)`, default 0.5.
+    pub time_fraction: f64,
+    /// Rounds without a 0.1 % rise of the smallest Ritz value after which the search stops
+    /// (stalled). Default 40.
+    pub stall_rounds: usize,
+    /// Largest factor (stored values) of `S' + sigma I` for shift-invert rounds; above it (or
+    /// above the memory budget) the rounds run Lanczos on `S'` itself, whose smallest Ritz
+    /// values converge slowly. Default 2e7.
+    pub shift_invert_max_factor: usize,
+}
+
+impl Default for ConvDualSettings {
+    fn default() -> Self {
+        ConvDualSettings {
+            enabled: true,
+            max_rounds: 300,
+            cuts_kept: 60,
+            passes: 30,
+            lanczos_iterations: 90,
+            time_fraction: 0.5,
+            stall_rounds: 40,
+            shift_invert_max_factor: 20_000_000,
+        }
+    }
+}
+
+impl ConvDualSettings {
+    /// Checks `cuts_kept`, `passes` and `lanczos_iterations >= 1` (the Lanczos dimension at
+    /// least 6) and `time_fraction` in `(0, 1)`.
+    pub fn validate(&self) -> Result<()> {
+        crate::validate::at_least_one("dual.conv.cuts_kept", self.cuts_kept)?;
+        crate::validate::at_least_one("dual.conv.passes", self.passes)?;
+        crate::validate::at_least_one("dual.conv.stall_rounds", self.stall_rounds)?;
+        if self.lanczos_iterations < 6 {
+            return Err(Error::InvalidSettings {
+                name: "dual.conv.lanczos_iterations".into(),
+                reason: format!("must be >= 6, got {}", self.lanczos_iterations),
+            });
+        }
+        if !(self.time_fraction > 0.0 && self.time_fraction < 1.0) {
+            return Err(Error::InvalidSettings {
+                name: "dual.conv.time_fraction".into(),
+                reason: format!("must be in (0, 1), got {}", self.time_fraction),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Why the search stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "reason", rename_all = "snake_case")]
+pub enum ConvSearchStop {
+    /// The Lanczos run found no Ritz value below `-threshold` (an estimate, converged or not:
+    /// the proof decides).
+    NoNegativeRitzValue {
+        /// Smallest Ritz value on the complement of the estimate's null space.
+        smallest: f64,
+        /// `1e-9 x` the multipliers' scale.
+        threshold: f64,
+        /// Lanczos met its residual tolerance.
+        converged: bool,
+    },
+    /// `max_rounds` rounds done.
+    RoundLimit,
+    /// `stall_rounds` rounds without progress.
+    Stalled,
+    /// Its share of the time budget spent.
+    TimeLimit,
+}
+
+impl fmt::Display for ConvSearchStop {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ConvSearchStop::NoNegativeRitzValue {
+                smallest,
+                threshold,
+                converged,
+            } => write!(
+                f,
+                "no Ritz value below -{threshold:.1e} (smallest {smallest:.3e}{})",
+                if *converged { "" } else { ", not converged" }
+            ),
+            ConvSearchStop::RoundLimit => f.write_str("round limit"),
+            ConvSearchStop::Stalled => f.write_str("stalled"),
+            ConvSearchStop::TimeLimit => f.write_str("its share of the time budget spent"),
+        }
+    }
+}
+
+/// What the search did.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConvSearch {
+    /// One `P_e` per edge (in the estimate's frame of the edge, in the cone `C`).
+    pub penalties: Vec<Matrix3<f64>>,
+    /// Rounds run (0: the initial prices were not improved).
+    pub rounds: usize,
+    /// The rounds ran shift-invert Lanczos on a factorisation of `S' + sigma I`.
+    pub shift_invert: bool,
+    /// Cuts added.
+    pub cuts: usize,
+    /// The smallest Ritz value of the last round (an estimate of `lambda_min(S')` on the
+    /// complement of the estimate's null space), if a round ran.
+    pub smallest_ritz_value: Option<f64>,
+    /// Why it stopped.
+    pub stop: ConvSearchStop,
+    /// Wall time, seconds.
+    pub seconds: f64,
+}
+
+/// The surrogate problem and the verified offsets of its edges.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Surrogate {
+    /// The penalised problem (same nodes and edges; data `R'_e`, `H'_e`).
+    pub problem: MultipleProblem,
+    /// A verified upper bound on `sum_e max over SO(3) of (f'_e - f_e)`.
+    pub offset: f64,
+}
+
+/// The estimate's relative rotation `X_e = R_j R_i^T` and the edge's linear coefficient in its
+/// frame, `K_e = X_e^T N_e`.
+struct Frame {
+    x: Matrix3<f64>,
+    k: Matrix3<f64>,
+}
+
+fn edge_coefficient(edge: &Edge, h: &Matrix3<f64>) -> Matrix3<f64> {
+    edge.rotation.matrix() * (Matrix3::identity() * (2.0 * h.trace()) - h * 4.0)
+}
+
+fn frames(problem: &MultipleProblem, rotations: &[Rotation]) -> Result<Vec<Frame>> {
+    let info = anisotropic(problem)?;
+    Ok(problem
+        .edges()
+        .iter()
+        .zip(info)
+        .map(|(e, h)| {
+            let x = rotations[e.j].matrix() * rotations[e.i].matrix().transpose();
+            let k = x.transpose() * edge_coefficient(e, h.matrix());
+            Frame { x, k }
+        })
+        .collect())
+}
+
+fn anisotropic(problem: &MultipleProblem) -> Result<&[Information]> {
+    problem.information().ok_or_else(|| Error::InvalidSettings {
+        name: "dual.conv".into(),
+        reason: "the conv(SO(3)) dual certificate needs information matrices".into(),
+    })
+}
+
+/// The eigenvalues of a symmetric 3x3 matrix in ascending order, with their vectors.
+fn sorted_eigen(m: &Matrix3<f64>) -> ([f64; 3], [Vector3<f64>; 3]) {
+    let e = SymmetricEigen::new((m + m.transpose()) * 0.5);
+    let mut idx = [0usize, 1, 2];
+    idx.sort_by(|&a, &b| e.eigenvalues[a].total_cmp(&e.eigenvalues[b]));
+    (
+        idx.map(|k| e.eigenvalues[k]),
+        idx.map(|k| e.eigenvectors.column(k).into_owned()),
+    )
+}
+
+/// An edge's own reflection price: `P = beta (I - 2 u u^T)` with `beta = max(-kappa_1, 0)`,
+/// `kappa_1` the smallest eigenvalue of `sym(K_e)` and `u` its vector (the reflection across
+/// the plane normal to `u` is what the edge alone would gain `2 kappa_1` from).
+fn initial_penalty(k: &Matrix3<f64>) -> Matrix3<f64> {
+    let (values, vectors) = sorted_eigen(k);
+    let u = vectors[0];
+    (Matrix3::identity() - u * u.transpose() * 2.0) * (-values[0]).max(0.0)
+}
+
+/// The Euclidean projection of a symmetric `P` onto the cone `C = { tr(P) I - P PSD }` (in
+/// eigenvalues `p_1 <= p_2 <= p_3`: `p_1 + p_2 >= 0`).
+///
+/// ```
+/// use rotavg::certify::multiple::conv_dual::project_to_cone;
+/// use nalgebra::{Matrix3, Vector3};
+/// let p = Matrix3::from_diagonal(&Vector3::new(-3.0, 1.0, 5.0));
+/// let q = project_to_cone(&p);
+/// let e = (Matrix3::identity() * q.trace() - q).symmetric_eigenvalues();
+/// assert!(e.min() > -1e-12);
+/// assert_eq!(project_to_cone(&Matrix3::identity()), Matrix3::identity());
+/// ```
+pub fn project_to_cone(p: &Matrix3<f64>) -> Matrix3<f64> {
+    let (v, vectors) = sorted_eigen(p);
+    if v[0] + v[1] >= 0.0 {
+        return (p + p.transpose()) * 0.5;
+    }
+    // the projection of the eigenvalues onto the polyhedral cone {q_a + q_b >= 0}: the closest
+    // feasible solution of the equality-constrained problems of the 7 nonempty active sets
+    let pairs = [(0usize, 1usize), (0, 2), (1, 2)];
+    let mut best: Option<(f64, [f64; 3])> = None;
+    for mask in 1u8..8 {
+        let active: Vec<(usize, usize)> = (0..3)
+            .filter(|k| mask & (1 << k) != 0)
+            .map(|k| pairs[k])
+            .collect();
+        let k = active.len();
+        // q = v - sum_c mu_c (e_a + e_b), with (e_a + e_b) . q = 0 for every active pair
+        let gram = nalgebra::DMatrix::from_fn(k, k, |r, c| {
+            let (a, b) = (active[r], active[c]);
+            [a.0, a.1]
+                .iter()
+                .filter(|x| **x == b.0 || **x == b.1)
+                .count() as f64
+        });
+        let rhs = nalgebra::DVector::from_fn(k, |r, _| v[active[r].0] + v[active[r].1]);
+        let Some(mu) = gram.lu().solve(&rhs) else {
+            continue;
+        };
+        let mut q = v;
+        for (c, &(a, b)) in active.iter().enumerate() {
+            q[a] -= mu[c];
+            q[b] -= mu[c];
+        }
+        let slack = 1e-12 * v.iter().map(|x| x.abs()).sum::<f64>();
+        let feasible = pairs.iter().all(|&(a, b)| q[a] + q[b] >= -slack);
+        let distance: f64 = q.iter().zip(&v).map(|(x, y)| (x - y).powi(2)).sum();
+        if feasible && best.is_none_or(|(d, _)| distance < d) {
+            best = Some((distance, q));
+        }
+    }
+    let q = best.map_or([0.0; 3], |(_, q)| q);
+    let mut out = Matrix3::zeros();
+    for (value, u) in q.iter().zip(&vectors) {
+        out += u * u.transpose() * *value;
+    }
+    out
+}
+
+/// `B_e x = x_i - X_e^T x_j`.
+fn apply_b(e: &Edge, x_e: &Matrix3<f64>, x: &[f64]) -> Vector3<f64> {
+    let xi = Vector3::new(x[3 * e.i], x[3 * e.i + 1], x[3 * e.i + 2]);
+    let xj = Vector3::new(x[3 * e.j], x[3 * e.j + 1], x[3 * e.j + 2]);
+    xi - x_e.transpose() * xj
+}
+
+/// A violated constraint `v^T S'(P) v >= target`, linear in the `P_e`:
+/// `v^T S v - 1/2 sum_e w_e^T P_e w_e`.
+struct Cut {
+    base: f64,
+    w: Vec<Vector3<f64>>,
+    norm_sq: f64,
+}
+
+impl Cut {
+    fn value(&self, penalties: &[Matrix3<f64>]) -> f64 {
+        let pen: f64 = self
+            .w
+            .iter()
+            .zip(penalties)
+            .map(|(w, p)| w.dot(&(p * w)))
+            .sum();
+        self.base - 0.5 * pen
+    }
+}
+
+/// The predicted peak memory of the search, bytes: the Lanczos basis, the kept cuts and the
+/// multipliers. Its time is bounded by its share of the budget, not predicted.
+pub fn predict_search(problem: &MultipleProblem, settings: &ConvDualSettings) -> Prediction {
+    let dim = 3.0 * problem.num_rotations() as f64;
+    let m = problem.num_edges() as f64;
+    Prediction {
+        seconds: 0.0,
+        bytes: 8.0 * (settings.lanczos_iterations as f64 + 8.0) * dim
+            + 24.0 * m * settings.cuts_kept as f64
+            + 2.0 * 72.0 * m,
+    }
+}
+
+/// Positions of an edge's 36 entries of `S` in its stored values: the blocks `(i, i)`,
+/// `(j, j)`, `(i, j)`, `(j, i)`, each row-major.
+type EdgePositions = [usize; 36];
+
+/// Shift-invert rounds: the analysis of `S'`'s pattern, `S`'s values and where each edge adds.
+struct Inverse {
+    cholesky: ShiftedCholesky,
+    base: Vec<f64>,
+    positions: Vec<EdgePositions>,
+    shift: f64,
+}
+
+impl Inverse {
+    /// `None` when a block entry is not stored or the factor is too large.
+    fn new(
+        s: &SparseColMat<usize, f64>,
+        edges: &[Edge],
+        max_values: usize,
+    ) -> Result<Option<Inverse>> {
+        let cp = s.symbolic().col_ptr();
+        let ri = s.symbolic().row_idx();
+        let find = |row: usize, col: usize| -> Option<usize> {
+            let range = cp[col]..cp[col + 1];
+            ri[range.clone()]
+                .binary_search(&row)
+                .ok()
+                .map(|k| range.start + k)
+        };
+        let mut positions = Vec::with_capacity(edges.len());
+        for e in edges {
+            let mut p = [0usize; 36];
+            let blocks = [(e.i, e.i), (e.j, e.j), (e.i, e.j), (e.j, e.i)];
+            for (b, &(r, c)) in blocks.iter().enumerate() {
+                for a in 0..3 {
+                    for d in 0..3 {
+                        match find(3 * r + a, 3 * c + d) {
+                            Some(k) => p[9 * b + 3 * a + d] = k,
+                            None => return Ok(None),
+                        }
+                    }
+                }
+            }
+            positions.push(p);
+        }
+        let base = s.val().to_vec();
+        // the forming bound is not used: these factorisations only estimate eigenvectors
+        Ok(ShiftedCholesky::new_within(s.clone(), 1, max_values)?
+            .ok()
+            .map(|cholesky| Inverse {
+                cholesky,
+                base,
+                positions,
+                shift: 0.0,
+            }))
+    }
+
+    /// Overwrite the analysed values with those of `S'(P)`.
+    fn assemble(&mut self, frames: &[Frame], penalties: &[Matrix3<f64>]) {
+        let values = self.cholesky.values_mut();
+        values.copy_from_slice(&self.base);
+        for ((pos, f), p) in self.positions.iter().zip(frames).zip(penalties) {
+            let x = &f.x;
+            let blocks = [
+                -p * 0.5,
+                -(x * p * x.transpose()) * 0.5,
+                p * x.transpose() * 0.5,
+                x * p * 0.5,
+            ];
+            for (b, block) in blocks.iter().enumerate() {
+                for a in 0..3 {
+                    for d in 0..3 {
+                        values[pos[9 * b + 3 * a + d]] += block[(a, d)];
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The Ritz pairs of one round: `(lambda, vector)` estimates of the smallest eigenpairs of
+/// `S'` on the complement of the null space, and whether Lanczos converged.
+struct Ritz {
+    pairs: Vec<(f64, Vec<f64>)>,
+    converged: bool,
+}
+
+/// Search for multipliers `P_e` that make `S' = S - 1/2 sum B_e^T P_e B_e` positive
+/// semidefinite at `rotations` (the estimate's own `S`): start at the edges' reflection prices,
+/// then rounds of (a Lanczos run on `S'`, shift-inverted when its factor fits, deflated by the
+/// estimate's null space `Y`; every Ritz vector of negative Ritz value becomes a cut; cyclic
+/// projections onto the kept cuts, each followed by the projection onto `C`) until no negative
+/// Ritz value is left (converged or not: the proof decides), `max_rounds`, a stall, or
+/// `deadline`. `max_bytes` bounds the factor of
+/// the shift-invert rounds. Errors: an isotropic problem, an estimate of the wrong size.
+pub fn search_penalties(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    settings: &ConvDualSettings,
+    deadline: Option<Instant>,
+    max_bytes: f64,
+) -> Result<ConvSearch> {
+    let start = Instant::now();
+    settings.validate()?;
+    super::multipliers::check_rotations(problem, rotations)?;
+    let frames = frames(problem, rotations)?;
+    let mut penalties: Vec<Matrix3<f64>> = frames.iter().map(|f| initial_penalty(&f.k)).collect();
+    let n = problem.num_rotations();
+    let dim = 3 * n;
+    let lambdas = multipliers(problem, rotations)?;
+    let s = certificate_matrix(problem, &lambdas)?;
+    let s_scale = crate::linalg::cholesky::inf_norm(s.as_ref());
+    let p_scale = penalties.iter().map(|p| p.norm()).fold(0.0, f64::max);
+    let scale = s_scale.max(p_scale).max(f64::MIN_POSITIVE);
+    let target = 1e-6 * scale;
+    let threshold = 1e-9 * scale;
+    // the estimate's null space: the columns of Y, orthonormal after 1/sqrt(n)
+    let null: Vec<Vec<f64>> = (0..3)
+        .map(|c| {
+            let mut v = vec![0.0; dim];
+            for (i, r) in rotations.iter().enumerate() {
+                for a in 0..3 {
+                    v[3 * i + a] = r.matrix()[(a, c)] / (n as f64).sqrt();
+                }
+            }
+            v
+        })
+        .collect();
+    let edges = problem.edges();
+    let max_values = settings
+        .shift_invert_max_factor
+        .min((max_bytes / 16.0).max(0.0) as usize);
+    let mut inverse = Inverse::new(&s, edges, max_values)?;
+    let shift_invert = inverse.is_some();
+    let mut cuts: Vec<Cut> = Vec::new();
+    let mut added = 0;
+    let mut smallest = None;
+    let mut best = f64::NEG_INFINITY;
+    let mut best_round = 0;
+    let mut stop = ConvSearchStop::RoundLimit;
+    let mut rounds = 0;
+    while rounds < settings.max_rounds {
+        if deadline.is_some_and(|d| Instant::now() >= d) {
+            stop = ConvSearchStop::TimeLimit;
+            break;
+        }
+        let ritz = match inverse.as_mut() {
+            Some(inv) => inverse_round(inv, &frames, &penalties, &null, scale, settings),
+            None => direct_round(&s, edges, &frames, &penalties, &null, scale, settings),
+        };
+        rounds += 1;
+        let low = ritz.pairs.first().map_or(0.0, |p| p.0);
+        smallest = Some(low);
+        if best == f64::NEG_INFINITY || low > best + 1e-3 * best.abs() {
+            best = low;
+            best_round = rounds;
+        } else if rounds - best_round >= settings.stall_rounds {
+            stop = ConvSearchStop::Stalled;
+            break;
+        }
+        let negative: Vec<&Vec<f64>> = ritz
+            .pairs
+            .iter()
+            .filter(|(v, _)| *v < -threshold)
+            .map(|(_, x)| x)
+            .collect();
+        // (an unconverged run with no negative Ritz value would repeat itself: the multipliers
+        // are unchanged, so the proof decides)
+        if negative.is_empty() {
+            stop = ConvSearchStop::NoNegativeRitzValue {
+                smallest: low,
+                threshold,
+                converged: ritz.converged,
+            };
+            break;
+        }
+        for v in negative {
+            let mut sv = vec![0.0; dim];
+            sparse_matvec(s.as_ref(), v, &mut sv);
+            let base: f64 = v.iter().zip(&sv).map(|(a, b)| a * b).sum();
+            let w: Vec<Vector3<f64>> = edges
+                .iter()
+                .zip(&frames)
+                .map(|(e, f)| apply_b(e, &f.x, v))
+                .collect();
+            let norm_sq = 0.25 * w.iter().map(|x| x.norm_squared().powi(2)).sum::<f64>();
+            if norm_sq > 0.0 {
+                cuts.push(Cut { base, w, norm_sq });
+                added += 1;
+            }
+        }
+        if cuts.len() > settings.cuts_kept {
+            cuts.drain(..cuts.len() - settings.cuts_kept);
+        }
+        project_onto_cuts(&mut penalties, &cuts, target, settings.passes);
+    }
+    Ok(ConvSearch {
+        penalties,
+        rounds,
+        shift_invert,
+        cuts: added,
+        smallest_ritz_value: smallest,
+        stop,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Cyclic projections onto the cuts `value >= target`, each pass followed by the projection of
+/// every `P_e` onto `C`; at most `passes`, fewer when no cut is violated.
+fn project_onto_cuts(penalties: &mut [Matrix3<f64>], cuts: &[Cut], target: f64, passes: usize) {
+    for _ in 0..passes {
+        let mut violated = false;
+        for cut in cuts {
+            let value = cut.value(penalties);
+            if value >= target {
+                continue;
+            }
+            violated = true;
+            let alpha = 0.5 * (target - value) / cut.norm_sq;
+            for (p, w) in penalties.iter_mut().zip(&cut.w) {
+                *p -= w * w.transpose() * alpha;
+            }
+        }
+        for p in penalties.iter_mut() {
+            *p = project_to_cone(p);
+        }
+        if !violated {
+            break;
+        }
+    }
+}
+
+fn lanczos_settings(settings: &ConvDualSettings) -> LanczosSettings {
+    LanczosSettings {
+        max_iterations: settings.lanczos_iterations,
+        tolerance: 1e-6,
+        block_size: 3,
+        ..Default::default()
+    }
+}
+
+/// One round of Lanczos on `S'` itself.
+fn direct_round(
+    s: &SparseColMat<usize, f64>,
+    edges: &[Edge],
+    frames: &[Frame],
+    penalties: &[Matrix3<f64>],
+    null: &[Vec<f64>],
+    scale: f64,
+    settings: &ConvDualSettings,
+) -> Ritz {
+    let op = |x: &[f64], y: &mut [f64]| {
+        sparse_matvec(s.as_ref(), x, y);
+        for ((e, f), p) in edges.iter().zip(frames).zip(penalties) {
+            let z = p * apply_b(e, &f.x, x) * 0.5;
+            let zj = f.x * z;
+            for a in 0..3 {
+                y[3 * e.i + a] -= z[a];
+                y[3 * e.j + a] += zj[a];
+            }
+        }
+    };
+    let dim = s.nrows();
+    let est = lanczos(
+        dim,
+        op,
+        Extreme::Smallest,
+        6,
+        scale,
+        &lanczos_settings(settings),
+        null,
+        None,
+    );
+    Ritz {
+        pairs: est.values.into_iter().zip(est.vectors).collect(),
+        converged: est.stop.converged(),
+    }
+}
+
+/// One round of shift-invert Lanczos: `S'(P) + sigma I` factorised (sigma from a quarter of the
+/// last round's, at least `1e-6` of the scale, raised fourfold until it factors), its 12 largest
+/// inverse eigenvalues `theta` giving `lambda = 1 / theta - sigma`.
+fn inverse_round(
+    inv: &mut Inverse,
+    frames: &[Frame],
+    penalties: &[Matrix3<f64>],
+    null: &[Vec<f64>],
+    scale: f64,
+    settings: &ConvDualSettings,
+) -> Ritz {
+    inv.assemble(frames, penalties);
+    // the smallest shift that factors (from a quarter of the last one) separates the negative
+    // eigenvalues best: a large one clusters every 1 / (lambda + sigma) near 1 / sigma
+    let mut shift = (inv.shift / 4.0).max(1e-6 * scale);
+    let dim = null.first().map_or(0, |v| v.len());
+    for _ in 0..12 {
+        let Some(factor) = inv.cholesky.factor(shift, f64::INFINITY) else {
+            shift *= 4.0;
+            continue;
+        };
+        let op = |x: &[f64], y: &mut [f64]| {
+            y.copy_from_slice(x);
+            factor.solve_in_place(y);
+        };
+        let est = lanczos(
+            dim,
+            op,
+            Extreme::Largest,
+            12,
+            1.0 / shift,
+            &LanczosSettings {
+                max_iterations: settings.lanczos_iterations.min(60),
+                ..lanczos_settings(settings)
+            },
+            null,
+            None,
+        );
+        let pairs: Vec<(f64, Vec<f64>)> = est
+            .values
+            .iter()
+            .zip(est.vectors)
+            .filter(|(theta, _)| **theta > 0.0)
+            .map(|(theta, v)| (1.0 / theta - shift, v))
+            .collect();
+        inv.shift = shift;
+        return Ritz {
+            pairs,
+            converged: est.stop.converged(),
+        };
+    }
+    // not factorisable with any shift tried: no estimate (the search stalls)
+    Ritz {
+        pairs: Vec::new(),
+        converged: false,
+    }
+}
+
+/// A verified upper bound on `h(D) = max over SO(3) of <D, R> = s_1 + s_2 + sign(det D) s_3`
+/// (the special orthogonal Procrustes problem), for `D` as computed: the singular values'
+/// backward error `64 u ||D||_F` each, and `+s_3` when the sign of the determinant is not
+/// certain.
+///
+/// ```
+/// use rotavg::certify::multiple::conv_dual::special_support;
+/// use nalgebra::{Matrix3, Vector3};
+/// // h(I) = 3; a reflection's best rotation reaches only 1
+/// assert!((special_support(&Matrix3::identity()) - 3.0).abs() < 1e-12);
+/// let f = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
+/// assert!((special_support(&f) - 1.0).abs() < 1e-12);
+/// assert!(special_support(&f) >= 1.0);
+/// ```
+pub fn special_support(d: &Matrix3<f64>) -> f64 {
+    let mut s: Vec<f64> = d
+        .svd(false, false)
+        .singular_values
+        .iter()
+        .copied()
+        .collect();
+    s.sort_by(|a, b| b.total_cmp(a));
+    let norm = d.norm();
+    let svd_error = 64.0 * UNIT_ROUNDOFF * norm;
+    // the cofactor determinant's error bound: 6 triple products, 2 roundings each, 5 sums
+    let perm = |m: &Matrix3<f64>| {
+        let a = m.abs();
+        a[(0, 0)] * (a[(1, 1)] * a[(2, 2)] + a[(1, 2)] * a[(2, 1)])
+            + a[(0, 1)] * (a[(1, 0)] * a[(2, 2)] + a[(1, 2)] * a[(2, 0)])
+            + a[(0, 2)] * (a[(1, 0)] * a[(2, 1)] + a[(1, 1)] * a[(2, 0)])
+    };
+    let det = d.determinant();
+    let negative = det < -gamma(8) * perm(d) && s[2] > 2.0 * svd_error;
+    let third = if negative { -s[2] } else { s[2] };
+    (s[0] + s[1] + third + 3.0 * svd_error) * (1.0 + 4.0 * UNIT_ROUNDOFF)
+}
+
+/// The polar decomposition `J = U T` with `U` a rotation and `T` symmetric (indefinite when
+/// `det J < 0`).
+fn polar(j: &Matrix3<f64>) -> (Matrix3<f64>, Matrix3<f64>) {
+    let svd = j.svd(true, true);
+    let (mut u, v_t) = match (svd.u, svd.v_t) {
+        (Some(u), Some(v_t)) => (u, v_t),
+        _ => return (Matrix3::identity(), (j + j.transpose()) * 0.5),
+    };
+    let mut sigma = svd.singular_values;
+    if (u * v_t).determinant() < 0.0 {
+        let k = (0..3)
+            .min_by(|&a, &b| sigma[a].total_cmp(&sigma[b]))
+            .unwrap_or(2);
+        for r in 0..3 {
+            u[(r, k)] = -u[(r, k)];
+        }
+        sigma[k] = -sigma[k];
+    }
+    let t = v_t.transpose() * Matrix3::from_diagonal(&sigma) * v_t;
+    (u * v_t, (t + t.transpose()) * 0.5)
+}
+
+/// Build the surrogate of `problem` at `rotations` for the multipliers `penalties` (one per
+/// edge, in the estimate's frame), and the verified sum of its offsets. An edge whose
+/// surrogate data are not valid (`H'_e` not positive semidefinite or a trace outside the
+/// weight window, after rounding) keeps its own data (offset 0). Errors: an isotropic problem,
+/// an estimate or multipliers of the wrong size.
+pub fn surrogate(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    penalties: &[Matrix3<f64>],
+) -> Result<Surrogate> {
+    super::multipliers::check_rotations(problem, rotations)?;
+    if penalties.len() != problem.num_edges() {
+        return Err(Error::InvalidSettings {
+            name: "penalties".into(),
+            reason: format!(
+                "{} multipliers for {} edges",
+                penalties.len(),
+                problem.num_edges()
+            ),
+        });
+    }
+    let info = anisotropic(problem)?;
+    let frames = frames(problem, rotations)?;
+    let mut edges = Vec::with_capacity(problem.num_edges());
+    let mut infos = Vec::with_capacity(problem.num_edges());
+    let mut offset = Accumulator::default();
+    let mut magnitude = 0.0;
+    for (((e, h), f), p) in problem.edges().iter().zip(info).zip(&frames).zip(penalties) {
+        let keep = |edges: &mut Vec<Edge>, infos: &mut Vec<Information>| {
+            edges.push(e.clone());
+            infos.push(*h);
+        };
+        if p.iter().all(|x| *x == 0.0) {
+            keep(&mut edges, &mut infos);
+            continue;
+        }
+        let (u, t) = polar(&(f.k - p));
+        let m = t * 0.25;
+        let hp = Matrix3::identity() * m.trace() - m;
+        let hp = (hp + hp.transpose()) * 0.5;
+        let rotation = rotation_from_matrix(&(f.x * u), DEFAULT_ROTATION_TOLERANCE, "surrogate");
+        let (Ok(rotation), Ok(hp)) = (rotation, Information::new(hp)) else {
+            keep(&mut edges, &mut infos);
+            continue;
+        };
+        let edge = Edge {
+            i: e.i,
+            j: e.j,
+            rotation,
+            weight: e.weight,
+        };
+        let delta = edge_offset(e, h, &edge, &hp);
+        offset.add_product(1.0, delta);
+        magnitude += delta.abs();
+        edges.push(edge);
+        infos.push(hp);
+    }
+    let problem = MultipleProblem::new(problem.num_rotations(), edges)?.with_information(infos)?;
+    let sum = offset.value() + offset.bound();
+    Ok(Surrogate {
+        problem,
+        offset: sum + 4.0 * UNIT_ROUNDOFF * magnitude,
+    })
+}
+
+/// A verified upper bound on `max over SO(3) of (f'_e - f_e) = 2 tr H' - 2 tr H + h(N - N')`
+/// for the data as given: `N`, `N'` formed in floating point (`gamma(8)` of their magnitude,
+/// each), `h` Lipschitz in the nuclear norm (`sqrt(3)` times the Frobenius norm).
+fn edge_offset(e: &Edge, h: &Information, e2: &Edge, h2: &Information) -> f64 {
+    let (h, h2) = (h.matrix(), h2.matrix());
+    let a = Matrix3::identity() * (2.0 * h.trace()) - h * 4.0;
+    let a2 = Matrix3::identity() * (2.0 * h2.trace()) - h2 * 4.0;
+    let (r, r2) = (e.rotation.matrix(), e2.rotation.matrix());
+    let d = r * a - r2 * a2;
+    let magnitude = r.abs().norm() * a.abs().norm() + r2.abs().norm() * a2.abs().norm();
+    let traces = 2.0 * h2.trace() - 2.0 * h.trace();
+    let trace_error = gamma(4) * 2.0 * (h.abs().trace() + h2.abs().trace());
+    let forming = 3f64.sqrt() * (gamma(8) * magnitude + UNIT_ROUNDOFF * d.norm());
+    (traces + special_support(&d) + trace_error + forming) * (1.0 + 4.0 * UNIT_ROUNDOFF)
+}
+
+/// The verified bound of the `conv(SO(3))` dual certificate at an estimate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConvDualBound {
+    /// The proven lower bound on the minimum of the chordal cost over `SO(3)^n`: the
+    /// surrogate's bound minus the verified offsets.
+    pub lower_bound: f64,
+    /// The surrogate's own verified bound (the `O(3)` ladder of [`super::verify`]).
+    pub surrogate: super::verify::VerifiedBound,
+    /// The verified sum of the edges' offsets.
+    pub offset: f64,
+    /// The search that chose the multipliers.
+    pub search: ConvSearch,
+}
+
+/// The `conv(SO(3))` dual certificate's bound at `rotations` `[A11]`: the multipliers of
+/// [`search_penalties`] (stopped at `deadline`), the [`surrogate`], its bound verified by the
+/// `O(3)` ladder with `point` labelling the rungs, minus the verified offsets. Errors: an
+/// isotropic problem, an estimate of the wrong size, invalid settings.
+///
+/// ```
+/// use rotavg::certify::CertifySettings;
+/// use rotavg::certify::ladder::Point;
+/// use rotavg::certify::multiple::conv_dual::conv_dual_bound;
+/// use rotavg::multiple::{Edge, MultipleProblem, anisotropic::Information};
+/// use nalgebra::{Matrix3, Vector3};
+/// // the O(3) relaxation's bound of this exact answer is -8 (a reflection); conv(SO(3)) proves 0
+/// let edge = Edge { i: 0, j: 1, rotation: rotavg::Rotation::identity(), weight: 1.0 };
+/// let h = Information::new(Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 4.0)))?;
+/// let p = MultipleProblem::new(2, vec![edge])?.with_information(vec![h])?;
+/// let r = [rotavg::Rotation::identity(); 2];
+/// let b = conv_dual_bound(&p, &r, &CertifySettings::default(), Point::ConvDual, None)?;
+/// assert!(b.lower_bound > -1e-9 && b.lower_bound <= 0.0);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn conv_dual_bound(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    settings: &crate::certify::CertifySettings,
+    point: crate::certify::ladder::Point,
+    deadline: Option<Instant>,
+) -> Result<ConvDualBound> {
+    settings.validate()?;
+    let max_bytes = settings.budget.max_memory_bytes as f64;
+    let search = search_penalties(problem, rotations, &settings.dual.conv, deadline, max_bytes)?;
+    let sur = surrogate(problem, rotations, &search.penalties)?;
+    let lambdas = multipliers(&sur.problem, rotations)?;
+    let cost = problem.chordal_cost(rotations);
+    let bound = super::verify::verify(
+        &sur.problem,
+        &lambdas,
+        Some(rotations),
+        cost.abs(),
+        settings,
+        point,
+    )?;
+    let difference = bound.lower_bound - sur.offset;
+    let lower_bound =
+        difference - 2.0 * UNIT_ROUNDOFF * (bound.lower_bound.abs() + sur.offset.abs());
+    Ok(ConvDualBound {
+        lower_bound,
+        surrogate: bound,
+        offset: sur.offset,
+        search,
+    })
+}
