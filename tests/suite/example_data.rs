@@ -18,6 +18,10 @@
 //! - `anisotropic.json`: 60 cameras, 240 edges with anisotropic noise (standard deviations 0.5,
 //!   0.5 and 5 degrees along random axes) and each edge's 3x3 information (the inverse
 //!   covariance); `anisotropic_truth.txt` its ground truth as a rotation list.
+//! - `strong_axis.json`: 60 cameras, 240 edges with one well-determined axis per edge (standard
+//!   deviations 0.5, 5 and 5 degrees along random axes): every `M` is indefinite, the `O(3)`
+//!   relaxation prefers reflections and the `conv(SO(3))` dual certificate `[A11]` certifies;
+//!   `strong_axis_truth.txt` its ground truth.
 //!
 //! Conventions: `paper-notes/formats.md` and the readers in `src/io/`.
 
@@ -213,8 +217,9 @@ fn handeye(rng: &mut StdRng) -> (String, String, String) {
 
 /// `anisotropic.json` (SPEC's JSON with an `information` per edge) and
 /// `anisotropic_truth.txt` (`id R11 .. R33`): [`rotavg::multiple::synthetic::SyntheticAnisotropic`]
-/// with 60 cameras, 240 edges, standard deviations 0.5, 0.5 and 5 degrees along random axes.
-fn anisotropic() -> (String, String) {
+/// with 60 cameras, 240 edges, standard deviations 0.5, 0.5 and 5 degrees along random axes
+/// (`weak_axes = 1`), or 0.5, 5 and 5 degrees (`weak_axes = 2`, `strong_axis.json`).
+fn anisotropic(weak_axes: usize, name: &str) -> (String, String) {
     let (p, truth) = rotavg::multiple::synthetic::SyntheticAnisotropic {
         num_rotations: 60,
         num_edges: 240,
@@ -223,11 +228,10 @@ fn anisotropic() -> (String, String) {
         random_axes: true,
         outlier_fraction: 0.0,
         seed: 2026,
+        weak_axes,
     }
     .generate();
-    let mut list = String::from(
-        "# ground truth of anisotropic.json: id R11 .. R33 (R_i, with R_ij R_i = R_j)\n",
-    );
+    let mut list = format!("# ground truth of {name}: id R11 .. R33 (R_i, with R_ij R_i = R_j)\n");
     for (i, r) in truth.iter().enumerate() {
         let _ = write!(list, "{i}");
         for row in 0..3 {
@@ -253,8 +257,16 @@ fn files() -> Vec<(&'static str, String)> {
         ("handeye/hand.csv", hand),
         ("handeye/camera.csv", camera),
         ("handeye/truth.json", x),
-        ("anisotropic.json", anisotropic().0),
-        ("anisotropic_truth.txt", anisotropic().1),
+        ("anisotropic.json", anisotropic(1, "anisotropic.json").0),
+        (
+            "anisotropic_truth.txt",
+            anisotropic(1, "anisotropic.json").1,
+        ),
+        ("strong_axis.json", anisotropic(2, "strong_axis.json").0),
+        (
+            "strong_axis_truth.txt",
+            anisotropic(2, "strong_axis.json").1,
+        ),
     ]
 }
 
@@ -280,7 +292,12 @@ fn example_data_is_reproducible_and_reads() {
         );
     }
     let options = rotavg::io::detect::ReadOptions::default();
-    for name in ["slam.g2o", "sfm_outliers.txt", "anisotropic.json"] {
+    for name in [
+        "slam.g2o",
+        "sfm_outliers.txt",
+        "anisotropic.json",
+        "strong_axis.json",
+    ] {
         let g = rotavg::io::input::load_problem(
             folder.join(name).to_str().expect("utf-8"),
             Default::default(),
