@@ -72,6 +72,8 @@ pub(super) struct Climb<'a> {
     pub cost: f64,
     pub best: Option<Best>,
     pub current: Current,
+    /// The point where the `conv(SO(3))` dual certificate last ran, if it did.
+    pub conv_dual_at: Option<Point>,
     pub details: CertifyDetails,
 }
 
@@ -89,6 +91,7 @@ impl<'a> Climb<'a> {
             start,
             cost,
             best: None,
+            conv_dual_at: None,
             current: Current {
                 rotations: rotations.to_vec(),
                 cost,
@@ -351,6 +354,10 @@ impl<'a> Climb<'a> {
         {
             return Ok(());
         }
+        if self.conv_dual_at == Some(self.current.label) {
+            return Ok(());
+        }
+        self.conv_dual_at = Some(self.current.label);
         let since = Instant::now();
         crate::progress::phase(crate::progress::Phase::Certify, || {
             format!(

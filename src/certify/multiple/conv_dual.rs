@@ -213,14 +213,28 @@ fn sorted_eigen(m: &Matrix3<f64>) -> ([f64; 3], [Vector3<f64>; 3]) {
     )
 }
 
-/// An edge's own reflection price: `P = beta (I - 2 u u^T)` with `beta = max(-kappa_1, 0)`,
-/// `kappa_1` the smallest eigenvalue of `sym(K_e)` and `u` its vector (the reflection across
-/// the plane normal to `u` is what the edge alone would gain `2 kappa_1` from).
+/// An edge's own reflection price: `P = beta (I - 2 u u^T)`, `kappa_1 <= kappa_2` the smallest
+/// eigenvalues of `sym(K_e)` and `u` the first one's vector (the reflection across the plane
+/// normal to `u` is what the edge alone would gain `2 kappa_1` from). `beta = -kappa_1` removes
+/// that gain exactly and leaves the edge's `sym(K_e) - P` singular along `u`; the price is
+/// [`REFLECTION_PRICE_MARGIN`] of `kappa_1 + kappa_2` above it, so that no such singular
+/// direction survives in the surrogate's `S'` (on a 60-node graph the exact price left a fourth
+/// zero eigenvalue, which its stationarity residual of 6.5e-5 turned into -6e-6, above the
+/// tolerance's share). Edges with `kappa_1 >= 0` pay nothing.
 fn initial_penalty(k: &Matrix3<f64>) -> Matrix3<f64> {
     let (values, vectors) = sorted_eigen(k);
+    if values[0] >= 0.0 {
+        return Matrix3::zeros();
+    }
     let u = vectors[0];
-    (Matrix3::identity() - u * u.transpose() * 2.0) * (-values[0]).max(0.0)
+    let beta = -values[0] + REFLECTION_PRICE_MARGIN * (values[0] + values[1]).max(0.0);
+    (Matrix3::identity() - u * u.transpose() * 2.0) * beta
 }
+
+/// The initial reflection price's margin above the exact price, as a fraction of
+/// `kappa_1 + kappa_2` (`(0, 1)`: the price stays at most `kappa_2`, where the edge's remaining
+/// curvature would vanish).
+pub const REFLECTION_PRICE_MARGIN: f64 = 0.25;
 
 /// The Euclidean projection of a symmetric `P` onto the cone `C = { tr(P) I - P PSD }` (in
 /// eigenvalues `p_1 <= p_2 <= p_3`: `p_1 + p_2 >= 0`).

@@ -115,6 +115,8 @@ pub fn certify_multiple(
     );
     // anisotropic data with an indefinite M on some edge, whose O(3) relaxation can prefer
     // reflections [A5]: the conv(SO(3)) dual certificate at the given estimate first [A11]
+    // (on definite data a failed O(3) certificate is outliers or noise far more often: there the
+    // dense conv(SO(3)) SDP of small graphs is the rung, [A6])
     let conv = matches!(settings.mode, CertifyMode::Auto | CertifyMode::Dual);
     let reflective = problem
         .information()
@@ -129,11 +131,10 @@ pub fn certify_multiple(
         };
         (DualDiagnosis::Certified, certified)
     } else {
-        let at = climb.current.label;
         let steps = dual_steps(&mut climb)?;
-        // then at the refined point, or for any anisotropic data whose O(3) certificate failed
+        // then at the refined point (once per point)
         if conv
-            && (climb.current.label != at || !reflective)
+            && reflective
             && matches!(
                 steps.1.diagnosis,
                 DualDiagnosis::Indefinite { .. } | DualDiagnosis::NotCritical { .. }
@@ -178,6 +179,11 @@ pub fn certify_multiple(
                 ));
             }
             None => {}
+        }
+        // a better point found on the way (staircase or SDP rounding): its conv(SO(3)) dual
+        // certificate [A11]
+        if conv && reflective {
+            climb.conv_dual()?;
         }
         // anisotropic data: where the O(3) relaxation leaves a gap (reflections, [A5]), the
         // conv(SO(3)) relaxation of small graphs [A6]
