@@ -11,13 +11,13 @@ use rotavg::io::json::{read_problem_json, write_problem_json};
 use rotavg::multiple::accuracy::align_and_compare;
 use rotavg::multiple::anisotropic::Information;
 use rotavg::multiple::synthetic::{SyntheticAnisotropic, SyntheticGraph};
-use rotavg::multiple::{
-    Edge, Initialisation, MultipleProblem, MultipleSettings, fix_gauge, solve_multiple,
-};
+use rotavg::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings, solve_multiple};
 use rotavg::objective::{Loss, Objective};
 use rotavg::pipeline::{AverageSettings, average_multiple};
 use rotavg::so3::{angle_between, exp, log, random_rotation};
 use rotavg::{Error, Rotation};
+
+use crate::common::{anisotropic_graph as graph, best_of_random_starts};
 
 /// The anisotropic cost written independently of the crate: `4 (1 - cos theta) u^T H u` per edge
 /// with `theta u = log(R_ij^T R_j R_i^T)` `[A1]`.
@@ -176,26 +176,6 @@ fn random_information(rng: &mut impl Rng, ratio: f64, weak_axis: bool) -> Inform
     };
     let h = u.matrix() * Matrix3::from_diagonal(&d) * u.matrix().transpose();
     Information::new(0.5 * (h + h.transpose())).unwrap()
-}
-
-/// The cheapest of `starts` local solves from uniformly random starts (a brute-force reference
-/// on tiny graphs).
-fn best_of_random_starts(p: &MultipleProblem, starts: usize, rng: &mut impl Rng) -> Vec<Rotation> {
-    let n = p.num_rotations();
-    let mut best: Option<(f64, Vec<Rotation>)> = None;
-    for _ in 0..starts {
-        let mut start: Vec<Rotation> = (0..n).map(|_| random_rotation(rng)).collect();
-        fix_gauge(&mut start);
-        let local = MultipleSettings {
-            init: Initialisation::Given(start),
-            ..Default::default()
-        };
-        let s = solve_multiple(p, &local).unwrap();
-        if best.as_ref().is_none_or(|(c, _)| s.cost < *c) {
-            best = Some((s.cost, s.rotations));
-        }
-    }
-    best.expect("at least one start").1
 }
 
 /// Brute force on tiny graphs: half with large noise, outliers and one strong axis per edge
@@ -590,27 +570,6 @@ fn robust_anisotropic_losses_and_their_certified_inlier_graph() {
         "gap {} of {closed}",
         closed - lb
     );
-}
-
-/// A graph of `n` nodes with the given `(i, j, R_ij, H)` edges.
-fn graph(n: usize, edges: &[(usize, usize, Rotation, Matrix3<f64>)]) -> MultipleProblem {
-    let info = edges
-        .iter()
-        .map(|(_, _, _, h)| Information::new(*h).unwrap())
-        .collect();
-    let edges = edges
-        .iter()
-        .map(|(i, j, r, _)| Edge {
-            i: *i,
-            j: *j,
-            rotation: *r,
-            weight: 1.0,
-        })
-        .collect();
-    MultipleProblem::new(n, edges)
-        .unwrap()
-        .with_information(info)
-        .unwrap()
 }
 
 /// The O(3) SDP's method record (its verified bound and note) of a pipeline run.

@@ -7,59 +7,16 @@
 use nalgebra::{Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
 use rotavg::Rotation;
+
+use crate::common::{anisotropic_graph as graph, best_of_random_starts};
 use rotavg::certify::ladder::{Outcome, Point, Refusal, Rung};
 use rotavg::certify::multiple::conv_dual::{
     conv_dual_bound, project_to_cone, special_support, surrogate,
 };
 use rotavg::certify::{CertifyMode, CertifySettings, Verdict, certify_multiple};
-use rotavg::multiple::anisotropic::Information;
 use rotavg::multiple::synthetic::SyntheticAnisotropic;
-use rotavg::multiple::{
-    Edge, Initialisation, MultipleProblem, MultipleSettings, fix_gauge, solve_multiple,
-};
+use rotavg::multiple::{MultipleSettings, solve_multiple};
 use rotavg::so3::{exp, random_rotation};
-
-fn graph(n: usize, edges: &[(usize, usize, Rotation, Matrix3<f64>)]) -> MultipleProblem {
-    let info = edges
-        .iter()
-        .map(|(_, _, _, h)| Information::new(*h).unwrap())
-        .collect();
-    let edges = edges
-        .iter()
-        .map(|(i, j, r, _)| Edge {
-            i: *i,
-            j: *j,
-            rotation: *r,
-            weight: 1.0,
-        })
-        .collect();
-    MultipleProblem::new(n, edges)
-        .unwrap()
-        .with_information(info)
-        .unwrap()
-}
-
-/// The best of `starts` local solves from random rotations (a brute-force stand-in for the
-/// global minimum of a tiny graph).
-fn best_of_random_starts(p: &MultipleProblem, starts: usize, rng: &mut impl Rng) -> Vec<Rotation> {
-    let mut best: Option<(f64, Vec<Rotation>)> = None;
-    for _ in 0..starts {
-        let mut init: Vec<Rotation> = (0..p.num_rotations())
-            .map(|_| random_rotation(rng))
-            .collect();
-        fix_gauge(&mut init);
-        let s = MultipleSettings {
-            init: Initialisation::Given(init),
-            ..Default::default()
-        };
-        if let Ok(sol) = solve_multiple(p, &s)
-            && best.as_ref().is_none_or(|b| sol.chordal_cost < b.0)
-        {
-            best = Some((sol.chordal_cost, sol.rotations));
-        }
-    }
-    best.expect("a local solve").1
-}
 
 /// A random information with one strong axis (`ratio` in standard deviation) along a random
 /// frame: its `M` is indefinite for `ratio > sqrt(2)`.

@@ -475,14 +475,20 @@ pub fn search_penalties(
     let mut best_round = 0;
     let mut stop = ConvSearchStop::RoundLimit;
     let mut rounds = 0;
+    let rounds_of = Round {
+        frames: &frames,
+        null: &null,
+        scale,
+        settings,
+    };
     while rounds < settings.max_rounds {
         if deadline.is_some_and(|d| Instant::now() >= d) {
             stop = ConvSearchStop::TimeLimit;
             break;
         }
         let ritz = match inverse.as_mut() {
-            Some(inv) => inverse_round(inv, &frames, &penalties, &null, scale, settings),
-            None => direct_round(&s, edges, &frames, &penalties, &null, scale, settings),
+            Some(inv) => rounds_of.inverse(inv, &penalties),
+            None => rounds_of.direct(&s, edges, &penalties),
         };
         rounds += 1;
         let low = ritz.pairs.first().map_or(0.0, |p| p.0);
@@ -575,99 +581,102 @@ fn lanczos_settings(settings: &ConvDualSettings) -> LanczosSettings {
     }
 }
 
-/// One round of Lanczos on `S'` itself.
-fn direct_round(
-    s: &SparseColMat<usize, f64>,
-    edges: &[Edge],
-    frames: &[Frame],
-    penalties: &[Matrix3<f64>],
-    null: &[Vec<f64>],
+/// What every round of the search reads: the edges' frames, the estimate's null space, the
+/// scale and the settings.
+struct Round<'a> {
+    frames: &'a [Frame],
+    null: &'a [Vec<f64>],
     scale: f64,
-    settings: &ConvDualSettings,
-) -> Ritz {
-    let op = |x: &[f64], y: &mut [f64]| {
-        sparse_matvec(s.as_ref(), x, y);
-        for ((e, f), p) in edges.iter().zip(frames).zip(penalties) {
-            let z = p * apply_b(e, &f.x, x) * 0.5;
-            let zj = f.x * z;
-            for a in 0..3 {
-                y[3 * e.i + a] -= z[a];
-                y[3 * e.j + a] += zj[a];
-            }
-        }
-    };
-    let dim = s.nrows();
-    let est = lanczos(
-        dim,
-        op,
-        Extreme::Smallest,
-        6,
-        scale,
-        &lanczos_settings(settings),
-        null,
-        None,
-    );
-    Ritz {
-        pairs: est.values.into_iter().zip(est.vectors).collect(),
-        converged: est.stop.converged(),
-    }
+    settings: &'a ConvDualSettings,
 }
 
-/// One round of shift-invert Lanczos: `S'(P) + sigma I` factorised (sigma from a quarter of the
-/// last round's, at least `1e-6` of the scale, raised fourfold until it factors), its 12 largest
-/// inverse eigenvalues `theta` giving `lambda = 1 / theta - sigma`.
-fn inverse_round(
-    inv: &mut Inverse,
-    frames: &[Frame],
-    penalties: &[Matrix3<f64>],
-    null: &[Vec<f64>],
-    scale: f64,
-    settings: &ConvDualSettings,
-) -> Ritz {
-    inv.assemble(frames, penalties);
-    // the smallest shift that factors (from a quarter of the last one) separates the negative
-    // eigenvalues best: a large one clusters every 1 / (lambda + sigma) near 1 / sigma
-    let mut shift = (inv.shift / 4.0).max(1e-6 * scale);
-    let dim = null.first().map_or(0, |v| v.len());
-    for _ in 0..12 {
-        let Some(factor) = inv.cholesky.factor(shift, f64::INFINITY) else {
-            shift *= 4.0;
-            continue;
-        };
+impl Round<'_> {
+    /// One round of Lanczos on `S'` itself.
+    fn direct(
+        &self,
+        s: &SparseColMat<usize, f64>,
+        edges: &[Edge],
+        penalties: &[Matrix3<f64>],
+    ) -> Ritz {
+        let (frames, null, scale, settings) = (self.frames, self.null, self.scale, self.settings);
         let op = |x: &[f64], y: &mut [f64]| {
-            y.copy_from_slice(x);
-            factor.solve_in_place(y);
+            sparse_matvec(s.as_ref(), x, y);
+            for ((e, f), p) in edges.iter().zip(frames).zip(penalties) {
+                let z = p * apply_b(e, &f.x, x) * 0.5;
+                let zj = f.x * z;
+                for a in 0..3 {
+                    y[3 * e.i + a] -= z[a];
+                    y[3 * e.j + a] += zj[a];
+                }
+            }
         };
+        let dim = s.nrows();
         let est = lanczos(
             dim,
             op,
-            Extreme::Largest,
-            12,
-            1.0 / shift,
-            &LanczosSettings {
-                max_iterations: settings.lanczos_iterations.min(60),
-                ..lanczos_settings(settings)
-            },
+            Extreme::Smallest,
+            6,
+            scale,
+            &lanczos_settings(settings),
             null,
             None,
         );
-        let pairs: Vec<(f64, Vec<f64>)> = est
-            .values
-            .iter()
-            .zip(est.vectors)
-            .filter(|(theta, _)| **theta > 0.0)
-            .map(|(theta, v)| (1.0 / theta - shift, v))
-            .collect();
-        inv.shift = shift;
-        return Ritz {
-            pairs,
+        Ritz {
+            pairs: est.values.into_iter().zip(est.vectors).collect(),
             converged: est.stop.converged(),
-        };
+        }
     }
-    // not factorisable with any shift tried: no estimate (the search stalls)
-    Ritz {
-        pairs: Vec::new(),
-        converged: false,
+
+    /// One round of shift-invert Lanczos: `S'(P) + sigma I` factorised (sigma from a quarter of the
+    /// last round's, at least `1e-6` of the scale, raised fourfold until it factors), its 12 largest
+    /// inverse eigenvalues `theta` giving `lambda = 1 / theta - sigma`.
+    fn inverse(&self, inv: &mut Inverse, penalties: &[Matrix3<f64>]) -> Ritz {
+        let (frames, null, scale, settings) = (self.frames, self.null, self.scale, self.settings);
+        inv.assemble(frames, penalties);
+        // the smallest shift that factors (from a quarter of the last one) separates the negative
+        // eigenvalues best: a large one clusters every 1 / (lambda + sigma) near 1 / sigma
+        let mut shift = (inv.shift / 4.0).max(1e-6 * scale);
+        let dim = null.first().map_or(0, |v| v.len());
+        for _ in 0..12 {
+            let Some(factor) = inv.cholesky.factor(shift, f64::INFINITY) else {
+                shift *= 4.0;
+                continue;
+            };
+            let op = |x: &[f64], y: &mut [f64]| {
+                y.copy_from_slice(x);
+                factor.solve_in_place(y);
+            };
+            let est = lanczos(
+                dim,
+                op,
+                Extreme::Largest,
+                12,
+                1.0 / shift,
+                &LanczosSettings {
+                    max_iterations: settings.lanczos_iterations.min(60),
+                    ..lanczos_settings(settings)
+                },
+                null,
+                None,
+            );
+            let pairs: Vec<(f64, Vec<f64>)> = est
+                .values
+                .iter()
+                .zip(est.vectors)
+                .filter(|(theta, _)| **theta > 0.0)
+                .map(|(theta, v)| (1.0 / theta - shift, v))
+                .collect();
+            inv.shift = shift;
+            return Ritz {
+                pairs,
+                converged: est.stop.converged(),
+            };
+        }
+        // not factorisable with any shift tried: no estimate (the search stalls)
+        Ritz {
+            pairs: Vec::new(),
+            converged: false,
+        }
     }
 }
 

@@ -134,3 +134,54 @@ pub fn scale_weights(p: &MultipleProblem, c: f64) -> MultipleProblem {
         .collect();
     MultipleProblem::new(p.num_rotations(), edges).expect("scaled weights stay valid")
 }
+
+/// An anisotropic view graph from `(i, j, R_ij, H)` per edge (weights 1; every `H` must be a
+/// valid information).
+pub fn anisotropic_graph(
+    n: usize,
+    edges: &[(usize, usize, Rotation, nalgebra::Matrix3<f64>)],
+) -> MultipleProblem {
+    let info = edges
+        .iter()
+        .map(|(_, _, _, h)| rotavg::multiple::anisotropic::Information::new(*h).unwrap())
+        .collect();
+    let edges = edges
+        .iter()
+        .map(|(i, j, r, _)| Edge {
+            i: *i,
+            j: *j,
+            rotation: *r,
+            weight: 1.0,
+        })
+        .collect();
+    MultipleProblem::new(n, edges)
+        .unwrap()
+        .with_information(info)
+        .unwrap()
+}
+
+/// The best of `starts` local solves (chordal) from random rotations: a brute-force stand-in
+/// for the global minimum of a tiny graph.
+pub fn best_of_random_starts(
+    p: &MultipleProblem,
+    starts: usize,
+    rng: &mut impl rand::Rng,
+) -> Vec<Rotation> {
+    let mut best: Option<(f64, Vec<Rotation>)> = None;
+    for _ in 0..starts {
+        let mut init: Vec<Rotation> = (0..p.num_rotations())
+            .map(|_| rotavg::so3::random_rotation(rng))
+            .collect();
+        fix_gauge(&mut init);
+        let local = rotavg::multiple::MultipleSettings {
+            init: rotavg::multiple::Initialisation::Given(init),
+            ..Default::default()
+        };
+        if let Ok(sol) = rotavg::multiple::solve_multiple(p, &local)
+            && best.as_ref().is_none_or(|b| sol.chordal_cost < b.0)
+        {
+            best = Some((sol.chordal_cost, sol.rotations));
+        }
+    }
+    best.expect("a local solve").1
+}
