@@ -321,3 +321,34 @@ fn the_search_is_refused_over_the_memory_budget() {
         o => panic!("{o:?}"),
     }
 }
+
+/// The shift-invert factor of the search counts against the memory budget: with 4 GiB it is
+/// used, with a budget that only fits the search's own vectors the rounds run Lanczos on `S'`
+/// itself (and still certify this graph, whose initial prices suffice).
+#[test]
+fn the_search_factor_fits_the_memory_budget() {
+    use rotavg::certify::Budget;
+    use rotavg::certify::multiple::conv_dual::{
+        ConvDualSettings, predict_search, search_penalties,
+    };
+    let (p, _) = SyntheticAnisotropic {
+        num_rotations: 100,
+        num_edges: 400,
+        ratio: 20.0,
+        weak_axes: 2,
+        seed: 5,
+        ..Default::default()
+    }
+    .generate();
+    let est = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    let settings = ConvDualSettings::default();
+    let roomy = Budget::default();
+    let s = search_penalties(&p, &est.rotations, &settings, None, &roomy).unwrap();
+    assert!(s.shift_invert);
+    let tight = Budget {
+        max_memory_bytes: predict_search(&p, &settings).bytes as u64 + 1000,
+        max_seconds: None,
+    };
+    let s = search_penalties(&p, &est.rotations, &settings, None, &tight).unwrap();
+    assert!(!s.shift_invert, "{s:?}");
+}

@@ -74,6 +74,9 @@ pub(super) struct Climb<'a> {
     pub current: Current,
     /// The point where the `conv(SO(3))` dual certificate last ran, if it did.
     pub conv_dual_at: Option<Point>,
+    /// Some edge's `M` is indefinite: the `O(3)` relaxation can prefer reflections `[A5]`, and
+    /// the `conv(SO(3))` dual certificate `[A11]` applies.
+    reflective: bool,
     pub details: CertifyDetails,
 }
 
@@ -92,6 +95,9 @@ impl<'a> Climb<'a> {
             cost,
             best: None,
             conv_dual_at: None,
+            reflective: problem
+                .information()
+                .is_some_and(|info| info.iter().any(|h| h.chordal_matrix_indefinite())),
             current: Current {
                 rotations: rotations.to_vec(),
                 cost,
@@ -340,15 +346,18 @@ impl<'a> Climb<'a> {
         Ok(())
     }
 
-    /// The `conv(SO(3))` dual certificate `[A11]` at the current point: anisotropic problems not
-    /// yet certified, any size. The search for its multipliers may spend
-    /// `dual.conv.time_fraction` of the time left (its memory is predicted and refused over
-    /// the budget); the surrogate's bound is verified by the `O(3)` ladder, whose rungs are
-    /// logged at [`Point::ConvDual`].
+    /// The `conv(SO(3))` dual certificate `[A11]` at the current point, once per point: modes
+    /// `auto` and `dual`, anisotropic problems with some indefinite `M` (on definite data a
+    /// failed `O(3)` certificate is outliers or noise far more often; the dense SDP of small
+    /// graphs, `[A6]`, is the rung there) not yet certified, any size. The search for its
+    /// multipliers may spend `dual.conv.time_fraction` of the time left (its memory is
+    /// predicted and refused over the budget); the surrogate's bound is verified by the `O(3)`
+    /// ladder, whose rungs are logged at [`Point::ConvDual`].
     pub fn conv_dual(&mut self) -> Result<()> {
         let conv = &self.settings.dual.conv;
-        if !self.problem.is_anisotropic()
+        if !self.reflective
             || !conv.enabled
+            || !matches!(self.settings.mode, CertifyMode::Auto | CertifyMode::Dual)
             || self.best_certifies()
             || self.over_time("conv(SO(3)) dual certificate")
         {

@@ -19,6 +19,7 @@
 //! [`super::verify`] on the surrogate and by the verified offsets, never by the search.
 
 use super::multipliers::{certificate_matrix, multipliers};
+use crate::certify::Budget;
 use crate::certify::ladder::Prediction;
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::{ShiftedCholesky, sparse_matvec};
@@ -57,8 +58,8 @@ pub struct ConvDualSettings {
     /// (stalled). Default 40.
     pub stall_rounds: usize,
     /// Largest factor (stored values) of `S' + sigma I` for shift-invert rounds; above it (or
-    /// above the memory budget) the rounds run Lanczos on `S'` itself, whose smallest Ritz
-    /// values converge slowly. Default 2e7.
+    /// above what the memory budget leaves beside the search) the rounds run Lanczos on `S'`
+    /// itself, whose smallest Ritz values converge slowly. Default 2e7.
     pub shift_invert_max_factor: usize,
 }
 
@@ -427,14 +428,16 @@ struct Ritz {
 /// estimate's null space `Y`; every Ritz vector of negative Ritz value becomes a cut; cyclic
 /// projections onto the kept cuts, each followed by the projection onto `C`) until no negative
 /// Ritz value is left (converged or not: the proof decides), `max_rounds`, a stall, or
-/// `deadline`. `max_bytes` bounds the factor of
-/// the shift-invert rounds. Errors: an isotropic problem, an estimate of the wrong size.
+/// `deadline` (checked before every factorisation: a round ends at most one factorisation past
+/// it). The factor of the shift-invert rounds fits what `budget` leaves beside the search's own
+/// memory ([`predict_search`]); above it the rounds use Lanczos on `S'` itself. Errors: an
+/// isotropic problem, an estimate of the wrong size.
 pub fn search_penalties(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     settings: &ConvDualSettings,
     deadline: Option<Instant>,
-    max_bytes: f64,
+    budget: &Budget,
 ) -> Result<ConvSearch> {
     let start = Instant::now();
     settings.validate()?;
@@ -463,9 +466,16 @@ pub fn search_penalties(
         })
         .collect();
     let edges = problem.edges();
+    // the shift-invert factor within what the budget leaves beside the search's own memory and
+    // the two copies of S it keeps (values and row indices: 16 bytes per stored entry each)
+    let own = predict_search(problem, settings).bytes + 32.0 * s.val().len() as f64;
+    let left = Budget {
+        max_memory_bytes: (budget.max_memory_bytes as f64 - own).max(0.0) as u64,
+        ..*budget
+    };
     let max_values = settings
         .shift_invert_max_factor
-        .min((max_bytes / 16.0).max(0.0) as usize);
+        .min(left.max_factor_values(dim));
     let mut inverse = Inverse::new(&s, edges, max_values)?;
     let shift_invert = inverse.is_some();
     let mut cuts: Vec<Cut> = Vec::new();
@@ -487,7 +497,7 @@ pub fn search_penalties(
             break;
         }
         let ritz = match inverse.as_mut() {
-            Some(inv) => rounds_of.inverse(inv, &penalties),
+            Some(inv) => rounds_of.inverse(inv, &penalties, deadline),
             None => rounds_of.direct(&s, edges, &penalties),
         };
         rounds += 1;
@@ -506,6 +516,15 @@ pub fn search_penalties(
             .filter(|(v, _)| *v < -threshold)
             .map(|(_, x)| x)
             .collect();
+        if ritz.pairs.is_empty() {
+            // no shift factored (or past the deadline): no estimate to go on
+            stop = if deadline.is_some_and(|d| Instant::now() >= d) {
+                ConvSearchStop::TimeLimit
+            } else {
+                ConvSearchStop::Stalled
+            };
+            break;
+        }
         // (an unconverged run with no negative Ritz value would repeat itself: the multipliers
         // are unchanged, so the proof decides)
         if negative.is_empty() {
@@ -630,7 +649,12 @@ impl Round<'_> {
     /// One round of shift-invert Lanczos: `S'(P) + sigma I` factorised (sigma from a quarter of the
     /// last round's, at least `1e-6` of the scale, raised fourfold until it factors), its 12 largest
     /// inverse eigenvalues `theta` giving `lambda = 1 / theta - sigma`.
-    fn inverse(&self, inv: &mut Inverse, penalties: &[Matrix3<f64>]) -> Ritz {
+    fn inverse(
+        &self,
+        inv: &mut Inverse,
+        penalties: &[Matrix3<f64>],
+        deadline: Option<Instant>,
+    ) -> Ritz {
         let (frames, null, scale, settings) = (self.frames, self.null, self.scale, self.settings);
         inv.assemble(frames, penalties);
         // the smallest shift that factors (from a quarter of the last one) separates the negative
@@ -638,6 +662,9 @@ impl Round<'_> {
         let mut shift = (inv.shift / 4.0).max(1e-6 * scale);
         let dim = null.first().map_or(0, |v| v.len());
         for _ in 0..12 {
+            if deadline.is_some_and(|d| Instant::now() >= d) {
+                break;
+            }
             let Some(factor) = inv.cholesky.factor(shift, f64::INFINITY) else {
                 shift *= 4.0;
                 continue;
@@ -672,7 +699,7 @@ impl Round<'_> {
                 converged: est.stop.converged(),
             };
         }
-        // not factorisable with any shift tried: no estimate (the search stalls)
+        // not factorisable with any shift tried, or past the deadline: no estimate
         Ritz {
             pairs: Vec::new(),
             converged: false,
@@ -714,7 +741,13 @@ pub fn special_support(d: &Matrix3<f64>) -> f64 {
     let det = d.determinant();
     let negative = det < -gamma(8) * perm(d) && s[2] > 2.0 * svd_error;
     let third = if negative { -s[2] } else { s[2] };
-    (s[0] + s[1] + third + 3.0 * svd_error) * (1.0 + 4.0 * UNIT_ROUNDOFF)
+    round_up(s[0] + s[1] + third + 3.0 * svd_error)
+}
+
+/// `x` raised by the rounding of a sum of up to four terms, whatever its sign (multiplying by
+/// `1 + 4u` would lower a negative `x`).
+fn round_up(x: f64) -> f64 {
+    x + 4.0 * UNIT_ROUNDOFF * x.abs()
 }
 
 /// The polar decomposition `J = U T` with `U` a rotation and `T` symmetric (indefinite when
@@ -817,7 +850,7 @@ fn edge_offset(e: &Edge, h: &Information, e2: &Edge, h2: &Information) -> f64 {
     let traces = 2.0 * h2.trace() - 2.0 * h.trace();
     let trace_error = gamma(4) * 2.0 * (h.abs().trace() + h2.abs().trace());
     let forming = 3f64.sqrt() * (gamma(8) * magnitude + UNIT_ROUNDOFF * d.norm());
-    (traces + special_support(&d) + trace_error + forming) * (1.0 + 4.0 * UNIT_ROUNDOFF)
+    round_up(traces + special_support(&d) + trace_error + forming)
 }
 
 /// The verified bound of the `conv(SO(3))` dual certificate at an estimate.
@@ -862,8 +895,13 @@ pub fn conv_dual_bound(
     deadline: Option<Instant>,
 ) -> Result<ConvDualBound> {
     settings.validate()?;
-    let max_bytes = settings.budget.max_memory_bytes as f64;
-    let search = search_penalties(problem, rotations, &settings.dual.conv, deadline, max_bytes)?;
+    let search = search_penalties(
+        problem,
+        rotations,
+        &settings.dual.conv,
+        deadline,
+        &settings.budget,
+    )?;
     let sur = surrogate(problem, rotations, &search.penalties)?;
     let lambdas = multipliers(&sur.problem, rotations)?;
     let cost = problem.chordal_cost(rotations);
@@ -884,4 +922,19 @@ pub fn conv_dual_bound(
         offset: sur.offset,
         search,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_up;
+
+    /// The upward rounding raises sums of either sign (a factor `1 + 4u` would lower a negative
+    /// offset, loosening the bound).
+    #[test]
+    fn round_up_raises_negative_sums_too() {
+        for x in [-3.0, -1e-300, 0.0, 1e-300, 2.5, -1e10] {
+            assert!(round_up(x) >= x);
+        }
+        assert!(round_up(-1.0) > -1.0);
+    }
 }

@@ -115,16 +115,11 @@ pub fn certify_multiple(
     );
     // anisotropic data with an indefinite M on some edge, whose O(3) relaxation can prefer
     // reflections [A5]: the conv(SO(3)) dual certificate at the given estimate first [A11]
-    // (on definite data a failed O(3) certificate is outliers or noise far more often: there the
-    // dense conv(SO(3)) SDP of small graphs is the rung, [A6])
-    let conv = matches!(settings.mode, CertifyMode::Auto | CertifyMode::Dual);
-    let reflective = problem
-        .information()
-        .is_some_and(|info| info.iter().any(|h| h.chordal_matrix_indefinite()));
-    if conv && reflective {
-        climb.conv_dual()?;
-    }
+    // (a no-op on other data)
+    climb.conv_dual()?;
     let (first, last) = if climb.best_certifies() {
+        // the O(3) dual certificate of the given estimate is not needed (nor run): its
+        // diagnosis is the conv(SO(3)) certificate's
         let certified = climb::DualRun {
             diagnosis: DualDiagnosis::Certified,
             randomized: None,
@@ -132,16 +127,8 @@ pub fn certify_multiple(
         (DualDiagnosis::Certified, certified)
     } else {
         let steps = dual_steps(&mut climb)?;
-        // then at the refined point (once per point)
-        if conv
-            && reflective
-            && matches!(
-                steps.1.diagnosis,
-                DualDiagnosis::Indefinite { .. } | DualDiagnosis::NotCritical { .. }
-            )
-        {
-            climb.conv_dual()?;
-        }
+        // then at the refined point (a no-op when the point did not move)
+        climb.conv_dual()?;
         steps
     };
     let escalate = match &last.diagnosis {
@@ -182,9 +169,7 @@ pub fn certify_multiple(
         }
         // a better point found on the way (staircase or SDP rounding): its conv(SO(3)) dual
         // certificate [A11]
-        if conv && reflective {
-            climb.conv_dual()?;
-        }
+        climb.conv_dual()?;
         // anisotropic data: where the O(3) relaxation leaves a gap (reflections, [A5]), the
         // conv(SO(3)) relaxation of small graphs [A6]
         if matches!(settings.mode, CertifyMode::Auto | CertifyMode::Sdp) {

@@ -302,15 +302,10 @@ impl Check<'_> {
         }
         let typical = (v as f64 * THREE_N_PER_SCALAR_VALUE) as usize;
         let one = match shared.scalar_multiply_adds {
-            // per value at the dense model's rate, as in `counted_factorisation_prediction`
-            Some(m) => {
-                crate::certify::Budget::predicted_factor_seconds(
-                    THREE_N_PER_SCALAR_MULTIPLY_ADD * m,
-                    typical,
-                ) + (crate::certify::settings::PREDICTED_SECONDS_PER_FACTOR_VALUE
-                    - crate::certify::settings::PREDICTED_SECONDS_PER_COUNTED_VALUE)
-                    * typical as f64
-            }
+            Some(m) => crate::certify::Budget::predicted_factor_seconds(
+                THREE_N_PER_SCALAR_MULTIPLY_ADD * m + per_value_multiply_adds(typical),
+                typical,
+            ),
             None => crate::certify::Budget::predicted_seconds(typical, dim),
         };
         Some(Ok(Prediction {
@@ -611,18 +606,9 @@ pub(super) fn counted_factorisation_prediction(
     multiply_adds: f64,
     factorisations: f64,
 ) -> std::result::Result<Prediction, Refusal> {
-    use crate::certify::settings::{
-        PREDICTED_MULTIPLY_ADD_RATE, PREDICTED_SECONDS_PER_COUNTED_VALUE,
-        PREDICTED_SECONDS_PER_FACTOR_VALUE,
-    };
     let values = factor_nonzeros.saturating_add(scratch_values);
     let total = (values as f64 * factorisations) as usize;
-    // the 3n Cholesky of sparse grids and chains is mostly per value (measured 4.9 s for 1.88e8
-    // values on a 10^6-node grid): charged at the dense model's 3e-8 s per value, the 1e-8 s of
-    // the counted model plus the difference expressed as multiply-adds
-    let per_value = (PREDICTED_SECONDS_PER_FACTOR_VALUE - PREDICTED_SECONDS_PER_COUNTED_VALUE)
-        * PREDICTED_MULTIPLY_ADD_RATE;
-    let multiply_adds = multiply_adds + per_value * values as f64;
+    let multiply_adds = multiply_adds + per_value_multiply_adds(values);
     if let Err(reason) =
         settings
             .budget
@@ -640,6 +626,20 @@ pub(super) fn counted_factorisation_prediction(
         ),
         bytes: crate::certify::Budget::factorisation_bytes(values),
     })
+}
+
+/// The per-value cost of a `3n` Cholesky factor of `values` values, as multiply-adds: the 3n
+/// Cholesky of sparse grids and chains is mostly per value (measured 4.9 s for 1.88e8 values on
+/// a 10^6-node grid), so it is charged at the dense model's 3e-8 s per value, the counted
+/// model's 1e-8 s plus this difference.
+fn per_value_multiply_adds(values: usize) -> f64 {
+    use crate::certify::settings::{
+        PREDICTED_MULTIPLY_ADD_RATE, PREDICTED_SECONDS_PER_COUNTED_VALUE,
+        PREDICTED_SECONDS_PER_FACTOR_VALUE,
+    };
+    (PREDICTED_SECONDS_PER_FACTOR_VALUE - PREDICTED_SECONDS_PER_COUNTED_VALUE)
+        * PREDICTED_MULTIPLY_ADD_RATE
+        * values as f64
 }
 
 /// Why a factorisation of a `dim x dim` matrix whose factor is predicted (by the ordering, before

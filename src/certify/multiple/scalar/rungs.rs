@@ -110,7 +110,8 @@ impl Proof for ScalarFamily {
             // subgraphs first, sparsest first, while together they are predicted to take at
             // most a fraction of the whole graph's factorisation (random graphs of 3x10^4
             // nodes: the whole graph's scalar factor fits but fills)
-            let whole_seconds = predict(cx.settings, a).map_or(0.0, |p| p.seconds);
+            let whole = predict(cx.settings, a).ok();
+            let whole_seconds = whole.map_or(0.0, |p| p.seconds);
             if whole_seconds > SUBGRAPHS_BEFORE_THE_WHOLE_ABOVE_SECONDS {
                 let allowed = SUBGRAPHS_BEFORE_THE_WHOLE_FRACTION * whole_seconds;
                 let (mut spent, mut failure) = (0.0, None);
@@ -129,11 +130,10 @@ impl Proof for ScalarFamily {
             }
             // the subgraphs spent part of the budget: the whole graph still has to fit what is
             // left (the plan checked it before they ran)
-            let predicted = predict(cx.settings, a).ok();
-            if let Some(refusal) = predicted.as_ref().and_then(|p| cx.time_refusal(p)) {
+            if let Some(refusal) = whole.as_ref().and_then(|p| cx.time_refusal(p)) {
                 cx.log(
                     Rung::ScalarWhole,
-                    predicted,
+                    whole,
                     Outcome::Refused(refusal),
                     Instant::now(),
                 );
