@@ -122,7 +122,7 @@ impl CertifyDetails {
     /// it climbs): proved when it gave a bound (`sufficient` when that bound certifies), failed
     /// with its note otherwise.
     pub(crate) fn record(&mut self, run: MethodRun, sufficient: bool) {
-        use crate::certify::ladder::{Attempt, Outcome, Point, Rung};
+        use crate::certify::ladder::Rung;
         let rung = match run.method {
             BoundMethod::Theory => Rung::Theory,
             BoundMethod::Sdp => Rung::Sdp,
@@ -130,6 +130,18 @@ impl CertifyDetails {
             BoundMethod::BranchAndBound => Rung::BranchAndBound,
             BoundMethod::Dual => Rung::Grounded,
         };
+        self.record_rung(run, rung, None, sufficient);
+    }
+
+    /// [`Self::record`] on a named rung with its prediction.
+    pub(crate) fn record_rung(
+        &mut self,
+        run: MethodRun,
+        rung: crate::certify::ladder::Rung,
+        predicted: Option<crate::certify::ladder::Prediction>,
+        sufficient: bool,
+    ) {
+        use crate::certify::ladder::{Attempt, Outcome, Point};
         let outcome = match run.lower_bound {
             Some(lower_bound) => Outcome::Proved {
                 lower_bound,
@@ -142,7 +154,7 @@ impl CertifyDetails {
         self.ladder.push(Attempt {
             rung,
             point: Point::Given,
-            predicted: None,
+            predicted,
             outcome,
             seconds: run.seconds,
         });

@@ -61,6 +61,10 @@ pub enum Rung {
     /// cutting planes, the `O(3)` certificate of the penalised surrogate verified by the rungs
     /// above (logged at [`Point::ConvDual`]), minus the verified offsets.
     ConvDual,
+    /// The dual certificate of the simultaneous problem at the estimate `[H15]`: multipliers of
+    /// the trace-coupled relaxation `[H14]` from the joint stationarity, couplings of least norm,
+    /// verified by dense eigen-decompositions.
+    SimultaneousDual,
     /// Branch and bound over SO(3) `[B1]`-`[B6]`.
     BranchAndBound,
     /// The randomized Chebyshev test `[D16]`: a Monte Carlo bound, never a proof.
@@ -80,6 +84,7 @@ impl Rung {
             Rung::Sdp => 6,
             Rung::ConvSdp => 6,
             Rung::ConvDual => 2,
+            Rung::SimultaneousDual => 2,
             Rung::BranchAndBound => 7,
             Rung::Staircase => 8,
             Rung::Gershgorin => 9,
@@ -111,6 +116,9 @@ impl fmt::Display for Rung {
             Rung::Sdp => f.write_str("SDP relaxation (Clarabel)"),
             Rung::ConvSdp => f.write_str("conv(SO(3)) SDP relaxation [A6] (Clarabel)"),
             Rung::ConvDual => f.write_str("conv(SO(3)) dual certificate at the estimate [A11]"),
+            Rung::SimultaneousDual => {
+                f.write_str("trace-coupled dual certificate at the estimate [H15]")
+            }
             Rung::Staircase => f.write_str("Riemannian staircase [D11]"),
             Rung::BranchAndBound => f.write_str("branch and bound [B1]-[B6]"),
             Rung::Randomized => f.write_str("randomized test [D16] (not a proof)"),

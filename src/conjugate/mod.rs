@@ -11,7 +11,7 @@
 //!   [`crate::pipeline::simultaneous`].
 //! * [`synthetic`]: seeded instances with a planted `S`.
 //!
-//! Every equation is stated in `paper-notes/conjugate.md` with a label `[H1]`..`[H12]`.
+//! Every equation is stated in `paper-notes/conjugate.md` with a label `[H1]`..`[H15]`.
 
 pub mod problem;
 pub mod solve;

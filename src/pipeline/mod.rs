@@ -13,7 +13,7 @@
 //! | multiple | [`average_multiple`] | [`AverageSettings<MultipleSettings>`](AverageSettings) |
 //! | conjugate | [`average_conjugate`] | [`AverageSettings<ConjugateSettings>`](AverageSettings) |
 //!
-//! [`simultaneous`] estimates the hand-eye rotation jointly with two view graphs `[H12]`.
+//! [`simultaneous`] estimates the hand-eye rotation jointly with two view graphs `[H12]`, certified by the trace-coupled relaxation `[H14]`.
 
 pub mod conjugate;
 pub mod multiple;

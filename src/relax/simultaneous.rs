@@ -1,24 +1,30 @@
-//! The SDP relaxation of the simultaneous problem `[H12]` (`paper-notes/conjugate.md`): two
+//! The SDP relaxation of the simultaneous problem `[H14]` (`paper-notes/conjugate.md`): two
 //! view graphs over the same `n` nodes, right edges `R_ij` (`R_ij R_i = R_j`) and left edges
 //! `L_ij ~ S R_ij S^T`, with unknown absolutes `R_i` and hand-eye rotation `S`.
 //!
-//! With `C_i = S R_i`, `Y = [R_1; ...; R_n; C_1; ...; C_n]` (`6n x 3`) and `X = Y Y^T`, the
-//! joint cost is `tr(blkdiag(Q_R, Q_L) X)` (two connection Laplacians), every diagonal block is
-//! `I_3`, and `X_{C_i, R_i} = C_i R_i^T = S` for every `i`: the `9 (n - 1)` linear equalities
-//! `X_{C_i, R_i} = X_{C_0, R_0}` (`i >= 1`). The dual, solved here with Clarabel:
+//! With `C_i = S R_i`, the right graph's Gram matrix `X_R` (blocks `R_i R_j^T`) and the left
+//! graph's `X_C` (blocks `C_i C_j^T = S R_i R_j^T S^T`), the joint cost is
+//! `tr(Q_R X_R) + tr(Q_C X_C)` (two connection Laplacians), every diagonal block is `I_3`, and
+//! conjugation keeps traces: `tr(X_C)_ij = tr(X_R)_ij` for **every** pair `i < j`. This is the
+//! gauge-averaged form of Shor's relaxation in `vec R_i`, `vec C_i` with the coupling
+//! `C_i^T C_j = R_i^T R_j` (`[H14]`); the pairs that are no edge are what makes it tight. The
+//! dual, solved here with Clarabel (two dense PSD cones of size `3n`):
 //!
-//! `max sum_a tr(Lambda_a)` s.t. `Q - blkdiag(Lambda) - sum_i E(Gamma_i)` PSD,
+//! `max sum_a tr(Lambda_a)` s.t. `Q_R - blkdiag(Lambda_R) - sum gamma_ij E_ij` PSD and
+//! `Q_C - blkdiag(Lambda_C) + sum gamma_ij E_ij` PSD,
 //!
-//! `E(Gamma_i)` the symmetric matrix with `Gamma_i` in block `(C_i, R_i)` and `-Gamma_i` in
-//! `(C_0, R_0)` (and their transposes). [`relax_simultaneous`] returns the multipliers; a bound
-//! is only what [`crate::certify::simultaneous::verify_simultaneous_bound`] proves from them.
+//! `E_ij` the symmetric matrix with `I_3 / 2` in blocks `(i, j)` and `(j, i)`.
+//! [`relax_simultaneous`] returns the multipliers; a bound is only what
+//! [`crate::certify::simultaneous::verify_simultaneous_bound`] proves from them.
 
+use crate::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings, solve_conjugate};
 use crate::error::{Error, Result};
+use crate::multiple::MultipleProblem;
 use crate::multiple::laplacian::connection_laplacian_triplets;
-use crate::multiple::{Edge, MultipleProblem};
 use crate::relax::clarabel::{Cone, csc, solve_conic};
 use crate::relax::multiple::{
-    SDP_MULTIPLY_ADD_RATE, SdpPrediction, predict_relax_multiple, top_three_blocks,
+    SDP_BYTES_PER_BLOCK_ENTRY, SDP_ITERATIONS, SDP_MULTIPLY_ADD_RATE, SdpPrediction,
+    top_three_blocks,
 };
 use crate::relax::settings::{SdpSettings, SdpStatus};
 use crate::relax::svec::{smat, svec_index, svec_len, svec_weight};
@@ -48,12 +54,13 @@ pub struct SimultaneousRelaxation {
     pub status: SdpStatus,
     /// `Lambda_a`, `a = 0..2n` (the `R_i` blocks, then the `C_i` blocks), symmetrised, unscaled.
     pub lambdas: Vec<Matrix3<f64>>,
-    /// `Gamma_i`, `i = 1..n` (index `i - 1`), unscaled.
-    pub gammas: Vec<Matrix3<f64>>,
-    /// Largest eigenvalues of `X` (up to 6), descending: tight when the fourth is negligible.
+    /// `gamma_ij` for the pairs `i < j` in the order of [`coupling_pairs`], unscaled.
+    pub couplings: Vec<f64>,
+    /// Largest eigenvalues of `X_R` (up to 6), descending: tight when the fourth is negligible.
     pub x_top_eigenvalues: Vec<f64>,
-    /// The rounding of `X`: top three eigenvectors, blocks projected to SO(3), `S` the polar
-    /// factor of `sum_i C_i R_i^T`, gauge `R_0 = I`; its joint cost is an upper bound.
+    /// The rounding: top three eigenvectors of `X_R` and of `X_C`, blocks projected to SO(3),
+    /// gauge `R_0 = I`, `S` the conjugate average of the pairs `(C_i C_0^T, R_i R_0^T)`; its
+    /// joint cost is an upper bound.
     pub rounded: JointRotations,
     /// Interior-point iterations.
     pub iterations: u32,
@@ -74,54 +81,28 @@ pub fn joint_cost(
     right.chordal_cost(rs) + left.chordal_cost(&cs)
 }
 
-/// The sparsity of the relaxation as a view graph on `2n` nodes (right nodes `0..n`, left nodes
-/// `n..2n`, a coupling edge `(i, n + i)` and `(0, n + i)` per node): the SDP's cliques are this
-/// graph's, so [`predict_relax_multiple`] predicts its cost; the dense `6n x 6n` matrices of the
-/// rounding and of the verification are added (memory: the larger of the two; time: both).
-pub fn predict_relax_simultaneous(
-    right: &MultipleProblem,
-    left: &MultipleProblem,
-) -> Result<SdpPrediction> {
-    let n = right.num_rotations();
-    let id = Rotation::identity();
-    let edge = |i, j| Edge {
-        i,
-        j,
-        rotation: id,
-        weight: 1.0,
-    };
-    let mut edges: Vec<Edge> = right.edges().iter().map(|e| edge(e.i, e.j)).collect();
-    edges.extend(left.edges().iter().map(|e| edge(n + e.i, n + e.j)));
-    for i in 0..n {
-        edges.push(edge(i, n + i));
-        if i > 0 {
-            edges.push(edge(0, n + i));
-            edges.push(edge(i, n));
-        }
-    }
-    let p = predict_relax_multiple(&MultipleProblem::new(2 * n, edges)?)?;
-    // the dense 6n x 6n matrices outside Clarabel: X and its eigenvectors (rounding), the
-    // certificate matrix M and its magnitudes (verification), each a symmetric eigenproblem
-    let dim = 6.0 * n as f64;
-    Ok(SdpPrediction {
-        bytes: p.bytes.max(4.0 * 8.0 * dim * dim),
-        seconds: p.seconds + 2.0 * 10.0 * dim * dim * dim / SDP_MULTIPLY_ADD_RATE,
-        ..p
-    })
+/// The pairs `(i, j)`, `i < j`, of the trace couplings, in the order of
+/// [`SimultaneousRelaxation::couplings`]: `(0, 1), (0, 2), ..., (0, n-1), (1, 2), ...`.
+pub fn coupling_pairs(n: usize) -> impl Iterator<Item = (usize, usize)> {
+    (0..n).flat_map(move |i| (i + 1..n).map(move |j| (i, j)))
 }
 
-/// The upper-triangle entries of `blkdiag(Q_R, Q_L)` (`6n x 6n`).
-fn cost_upper(right: &MultipleProblem, left: &MultipleProblem) -> Vec<(usize, usize, f64)> {
-    let n3 = 3 * right.num_rotations();
-    let mut out = Vec::new();
-    for (offset, p) in [(0, right), (n3, left)] {
-        for t in connection_laplacian_triplets(p) {
-            if t.row <= t.col {
-                out.push((offset + t.row, offset + t.col, t.val));
-            }
-        }
+/// The cost of the relaxation on `n` nodes, before Clarabel starts: two dense PSD cones of size
+/// `3n` (the trace couplings join every pair, so there is no chordal structure), each a dense
+/// `svec x svec` block of the KKT system, by the calibrated model of
+/// [`crate::relax::multiple::predict_relax_multiple`]; the dense `3n x 3n` matrices of the
+/// rounding and of the verification are added (memory: the larger; time: both).
+pub fn predict_relax_simultaneous(n: usize) -> SdpPrediction {
+    let d = 3.0 * n as f64;
+    let svec = d * (d + 1.0) / 2.0;
+    let (block_entries, multiply_adds) = (2.0 * svec * svec, 2.0 * svec * svec * svec / 3.0);
+    SdpPrediction {
+        bytes: (SDP_BYTES_PER_BLOCK_ENTRY * block_entries).max(8.0 * 8.0 * d * d),
+        seconds: SDP_ITERATIONS * multiply_adds / SDP_MULTIPLY_ADD_RATE
+            + 4.0 * 10.0 * d * d * d / SDP_MULTIPLY_ADD_RATE,
+        largest_clique: n,
+        cliques: 2,
     }
-    out
 }
 
 /// Checks the two graphs share their node count.
@@ -140,8 +121,9 @@ fn check_sizes(right: &MultipleProblem, left: &MultipleProblem) -> Result<usize>
     Ok(n)
 }
 
-/// Solves the dual `[H12]` with Clarabel (one PSD cone of size `6n`, chordal decomposition as
-/// in [`crate::relax::relax_multiple`]), cost scaled by the mean weighted degree `[P4]`.
+/// Solves the dual `[H14]` with Clarabel (two dense PSD cones of size `3n`; variables the
+/// `12n` upper-triangle entries of the `Lambda_a` and the `n (n - 1) / 2` couplings
+/// `gamma_ij`), cost scaled by the mean weighted degree `[P4]`.
 /// Errors: graphs of different sizes, a setup failure; a non-converged solve is a status.
 ///
 /// ```
@@ -150,7 +132,12 @@ fn check_sizes(right: &MultipleProblem, left: &MultipleProblem) -> Result<usize>
 /// use rotavg::relax::SdpSettings;
 /// use rotavg::so3::exp;
 /// use nalgebra::Vector3;
-/// let rs: Vec<_> = (0..4).map(|k| exp(&Vector3::new(0.3 * k as f64, -0.2, 0.1 * k as f64))).collect();
+/// // rotations about different axes (with a common axis, S would be determined only up to a
+/// // rotation about it)
+/// let rs: Vec<_> = [[0.0, 0.0, 0.0], [0.4, 0.0, 0.1], [0.0, 0.6, -0.2], [0.3, -0.3, 0.8]]
+///     .iter()
+///     .map(|v| exp(&Vector3::from(*v)))
+///     .collect();
 /// let s = exp(&Vector3::new(0.2, -0.5, 0.4));
 /// let pairs = [(0, 1), (1, 2), (2, 3), (3, 0), (0, 2)];
 /// let e = |i: usize, j: usize, rotation| Edge { i, j, rotation, weight: 1.0 };
@@ -159,9 +146,9 @@ fn check_sizes(right: &MultipleProblem, left: &MultipleProblem) -> Result<usize>
 /// let (right, left) = (MultipleProblem::new(4, right)?, MultipleProblem::new(4, left)?);
 /// let sol = relax_simultaneous(&right, &left, &SdpSettings::default())?;
 /// assert!(sol.status.converged());
-/// assert_eq!((sol.lambdas.len(), sol.gammas.len()), (8, 3)); // 2n blocks, n - 1 couplings
-/// // the rounding is a feasible joint point: its cost is an upper bound, finite and >= 0
-/// assert!(sol.rounded.cost.is_finite() && sol.rounded.cost >= 0.0);
+/// assert_eq!((sol.lambdas.len(), sol.couplings.len()), (8, 6)); // 2n blocks, n(n-1)/2 pairs
+/// // noise-free: the rounding recovers the planted point (joint cost ~0)
+/// assert!(sol.rounded.cost < 1e-6);
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn relax_simultaneous(
@@ -179,41 +166,54 @@ pub fn relax_simultaneous(
         .map(|e| e.weight)
         .sum();
     let scale = total / n as f64; // [P4]: mean weighted degree over 2n nodes
-    let dim = 6 * n;
-    let mut b = vec![0.0; svec_len(dim)];
-    for (r, c, v) in cost_upper(right, left) {
-        b[svec_index(r, c)] += v / scale * svec_weight(r, c);
+    let dim = 3 * n;
+    let len = svec_len(dim);
+    // rows: svec(Z_R), then svec(Z_C)
+    let mut b = vec![0.0; 2 * len];
+    for (cone, p) in [right, left].into_iter().enumerate() {
+        for t in connection_laplacian_triplets(p) {
+            if t.row <= t.col {
+                b[cone * len + svec_index(t.row, t.col)] +=
+                    t.val / scale * svec_weight(t.row, t.col);
+            }
+        }
     }
-    // variables: 6 per diagonal block (2n blocks), then 9 per Gamma_i (i = 1..n)
-    let nv = 12 * n + 9 * (n - 1);
+    // variables: 6 per diagonal block (n right, then n left), then one per pair
+    let pairs = n * (n - 1) / 2;
+    let nv = 12 * n + pairs;
     let mut c = vec![0.0; nv];
-    let mut trip = Vec::with_capacity(12 * n + 18 * (n - 1));
+    let mut trip = Vec::with_capacity(12 * n + 6 * pairs);
     for a in 0..2 * n {
+        let (cone, node) = (a / n, a % n);
         for col in 0..3 {
             for row in 0..=col {
                 let k = 6 * a + svec_index(row, col);
                 if row == col {
                     c[k] = -1.0;
                 }
-                let entry = svec_index(3 * a + row, 3 * a + col);
+                let entry = cone * len + svec_index(3 * node + row, 3 * node + col);
                 trip.push((entry, k, svec_weight(row, col)));
             }
         }
     }
-    for i in 1..n {
-        for (r, cc) in (0..3).flat_map(|r| (0..3).map(move |cc| (r, cc))) {
-            let k = 12 * n + 9 * (i - 1) + 3 * r + cc;
-            // Gamma_i[r][cc] at (C_i row r, R_i column cc), minus it at (C_0, R_0)
-            let (ci, ri, c0) = (3 * (n + i) + r, 3 * i + cc, 3 * n + r);
-            trip.push((svec_index(ri, ci), k, svec_weight(ri, ci)));
-            trip.push((svec_index(cc, c0), k, -svec_weight(cc, c0)));
+    // Z_R = Q_R - ... - gamma E_ij, Z_C = Q_C - ... + gamma E_ij; b - A x = svec(Z)
+    for (k, (i, j)) in coupling_pairs(n).enumerate() {
+        for d in 0..3 {
+            let (r, cc) = (3 * i + d, 3 * j + d);
+            let v = 0.5 * svec_weight(r, cc);
+            trip.push((svec_index(r, cc), 12 * n + k, v));
+            trip.push((len + svec_index(r, cc), 12 * n + k, -v));
         }
     }
-    let a = csc(svec_len(dim), nv, trip);
-    let merge = settings
-        .chordal_merge
-        .clarabel_name(2 * n, right.num_edges() + left.num_edges());
-    let conic = solve_conic(&c, a, &b, &[Cone::Psd(dim)], settings, merge)?;
+    let a = csc(2 * len, nv, trip);
+    let conic = solve_conic(
+        &c,
+        a,
+        &b,
+        &[Cone::Psd(dim), Cone::Psd(dim)],
+        settings,
+        settings.chordal_merge.clarabel_name(n, pairs),
+    )?;
     let x = &conic.x;
     let finite = |v: f64| if v.is_finite() { v * scale } else { f64::NAN };
     let lambdas = (0..2 * n)
@@ -222,17 +222,21 @@ pub fn relax_simultaneous(
             (l + l.transpose()) * 0.5
         })
         .collect();
-    let gammas = (1..n)
-        .map(|i| Matrix3::from_fn(|r, cc| finite(x[12 * n + 9 * (i - 1) + 3 * r + cc])))
-        .collect();
-    let xm = smat(&conic.z, dim).ok_or_else(|| Error::Solver {
-        message: "Clarabel returned a dual vector of the wrong length".into(),
-    })?;
-    let (rounded, x_top_eigenvalues) = round(&xm, right, left)?;
+    let couplings = (0..pairs).map(|k| finite(x[12 * n + k])).collect();
+    let gram = |cone: usize| {
+        conic
+            .z
+            .get(cone * len..(cone + 1) * len)
+            .and_then(|z| smat(z, dim))
+            .ok_or_else(|| Error::Solver {
+                message: "Clarabel returned a dual vector of the wrong length".into(),
+            })
+    };
+    let (rounded, x_top_eigenvalues) = round(&gram(0)?, &gram(1)?, right, left)?;
     Ok(SimultaneousRelaxation {
         status: conic.status,
         lambdas,
-        gammas,
+        couplings,
         x_top_eigenvalues,
         rounded,
         iterations: conic.iterations,
@@ -241,36 +245,36 @@ pub fn relax_simultaneous(
     })
 }
 
-/// Rounding: `Y = V_3 diag(sqrt(lambda_1..3))` from the top eigenpairs of `X`, the global
-/// reflection fixed by the majority of block determinants, blocks projected to SO(3), `S` the
-/// rotation nearest `sum_i C_i R_i^T`, then the gauge `R_0 = I`.
+/// Rounding: `Y = V_3 diag(sqrt(lambda_1..3))` from the top eigenpairs of `X_R` and of `X_C`
+/// (the global reflection fixed by the majority of block determinants), blocks projected to
+/// SO(3), gauge `R_0 = I`; the two factors have independent gauges, so `S` is the conjugate
+/// average of the gauge-free pairs `(C_i C_0^T, R_i R_0^T)` (identity when that problem is
+/// degenerate: the rounding is only a candidate, judged by its cost).
 fn round(
-    x: &Mat<f64>,
+    x_r: &Mat<f64>,
+    x_c: &Mat<f64>,
     right: &MultipleProblem,
     left: &MultipleProblem,
 ) -> Result<(JointRotations, Vec<f64>)> {
-    let n = x.nrows() / 6;
-    let (y, top) = top_three_blocks(x, 2 * n)?;
-    let blocks: Vec<Rotation> = y
-        .iter()
-        .map(|b| project_to_so3(b).unwrap_or_else(Rotation::identity))
+    let n = x_r.nrows() / 3;
+    let blocks = |x| -> Result<(Vec<Rotation>, Vec<f64>)> {
+        let (y, top) = top_three_blocks(x, n)?;
+        let b: Vec<Rotation> = y
+            .iter()
+            .map(|b| project_to_so3(b).unwrap_or_else(Rotation::identity))
+            .collect();
+        let g = b[0].inverse();
+        Ok((b.iter().map(|r| r * g).collect(), top))
+    };
+    let (rotations, top) = blocks(x_r)?;
+    let (ls, _) = blocks(x_c)?;
+    let pairs: Vec<_> = (1..n)
+        .map(|i| ConjugatePair::new(ls[i], rotations[i]))
         .collect();
-    let (rs, cs) = blocks.split_at(n);
-    let sum: Matrix3<f64> = cs
-        .iter()
-        .zip(rs)
-        .map(|(c, r)| c.matrix() * r.matrix().transpose())
-        .sum();
-    let s_hat = project_to_so3(&sum).unwrap_or_else(Rotation::identity);
-    let g = rs[0].inverse();
-    let rotations: Vec<Rotation> = rs.iter().map(|r| r * g).collect();
-    let cost = joint_cost(right, left, &rotations, &s_hat);
-    Ok((
-        JointRotations {
-            rotations,
-            s: s_hat,
-            cost,
-        },
-        top,
-    ))
+    let s = ConjugateProblem::new(pairs)
+        .and_then(|p| solve_conjugate(&p, &ConjugateSettings::default()))
+        .map(|c| c.estimate)
+        .unwrap_or_else(|_| Rotation::identity());
+    let cost = joint_cost(right, left, &rotations, &s);
+    Ok((JointRotations { rotations, s, cost }, top))
 }

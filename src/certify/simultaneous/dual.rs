@@ -1,0 +1,139 @@
+//! The dual certificate of the simultaneous problem at the estimate `[H15]`
+//! (`paper-notes/conjugate.md`): multipliers of the trace-coupled relaxation `[H14]` read off a
+//! critical point `(R, S)` of the joint cost, without an SDP.
+//!
+//! Complementary slackness at the point (`Z_R Y_R = 0`, `Z_C Y_C = 0`, `Y_R = [R_i]`,
+//! `Y_C = [S R_i]`) fixes each `Lambda_a` once the couplings are chosen:
+//! `Lambda_R,i = sym((G_R,i - 1/2 sum_j gamma_ij R_j) R_i^T)`,
+//! `Lambda_C,i = sym((G_C,i + 1/2 sum_j gamma_ij C_j) C_i^T)` (`G = Q Y`), and the skew parts
+//! must vanish: `a_i = 1/2 sum_j gamma_ij u_ij` with `a_i = vee(G_R,i R_i^T)`,
+//! `b_i = S^T vee(G_C,i C_i^T)`, `u_ij = vee(R_j R_i^T)` (`u_ji = -u_ij`), and `b_i = -a_i`,
+//! which is the joint stationarity in `R_i`; solvable because `sum_i a_i = 0` is the
+//! stationarity in `S`. Of the couplings that solve it, this takes the one of least norm,
+//! `gamma = A^T (A A^T)^+ (a - b) / 2` (`A A^T` is a `3n x 3n` Laplacian of the complete graph
+//! with `u_ij u_ij^T / 4` weights; its kernel, the constant vectors and the gauge directions
+//! `(R_i w)_i`, is filled by multiples of their projectors). Whether `Z_R` and `Z_C` are then positive semidefinite is what the
+//! verification decides ([`super::verify_simultaneous_bound`], which recomputes everything
+//! from the multipliers); on noisy rigs where the relaxation is tight this choice usually is
+//! (docs/benchmarks.md), and when it is not the SDP is the next rung.
+
+use crate::certify::ladder::Prediction;
+use crate::multiple::MultipleProblem;
+use crate::multiple::laplacian::connection_laplacian_triplets;
+use crate::relax::multiple::SDP_MULTIPLY_ADD_RATE;
+use crate::relax::simultaneous::coupling_pairs;
+use crate::so3::{Rotation, vee};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+/// Time and memory of [`multipliers_at_estimate`] and of its verification on `n` nodes: a dense
+/// `3n x 3n` Cholesky factorisation and two dense symmetric eigen-decompositions (taken as
+/// `10 (3n)^3` multiply-adds each), and six dense `3n x 3n` matrices alive at once.
+pub fn predict_multipliers_at_estimate(n: usize) -> Prediction {
+    let d = 3.0 * n as f64;
+    Prediction {
+        seconds: (d * d * d / 3.0 + 2.0 * 10.0 * d * d * d) / SDP_MULTIPLY_ADD_RATE,
+        bytes: 6.0 * 8.0 * d * d,
+    }
+}
+
+/// `G = Q Y` by blocks: `G_i = sum_j Q_ij Y_j` from the connection Laplacian's triplets.
+fn laplacian_times(p: &MultipleProblem, y: &[Matrix3<f64>]) -> Vec<Matrix3<f64>> {
+    let mut g = vec![Matrix3::zeros(); y.len()];
+    for t in connection_laplacian_triplets(p) {
+        let (bi, r) = (t.row / 3, t.row % 3);
+        let (bj, c) = (t.col / 3, t.col % 3);
+        let row = y[bj].row(c) * t.val;
+        let mut target = g[bi].row_mut(r);
+        target += row;
+    }
+    g
+}
+
+/// The multipliers `(Lambda_a for a = 0..2n, gamma_ij in the order of [`coupling_pairs`])`
+/// at the point `(rotations, s)`, or `None` when the point does not fit the graphs or the
+/// coupling system is numerically singular.
+pub fn multipliers_at_estimate(
+    right: &MultipleProblem,
+    left: &MultipleProblem,
+    rotations: &[Rotation],
+    s: &Rotation,
+) -> Option<(Vec<Matrix3<f64>>, Vec<f64>)> {
+    let n = rotations.len();
+    if right.num_rotations() != n || left.num_rotations() != n || n < 2 {
+        return None;
+    }
+    let rs: Vec<Matrix3<f64>> = rotations.iter().map(|r| *r.matrix()).collect();
+    let sm = *s.matrix();
+    let cs: Vec<Matrix3<f64>> = rs.iter().map(|r| sm * r).collect();
+    let (gr, gc) = (laplacian_times(right, &rs), laplacian_times(left, &cs));
+    // rhs_i = (a_i - b_i) / 2, its mean removed (zero at an exact critical point)
+    let mut rhs: Vec<Vector3<f64>> = (0..n)
+        .map(|i| {
+            let a = vee(&(gr[i] * rs[i].transpose()));
+            let b = sm.transpose() * vee(&(gc[i] * cs[i].transpose()));
+            (a - b) * 0.5
+        })
+        .collect();
+    let mean = rhs.iter().sum::<Vector3<f64>>() / n as f64;
+    rhs.iter_mut().for_each(|r| *r -= mean);
+    let pairs: Vec<(usize, usize)> = coupling_pairs(n).collect();
+    let us: Vec<Vector3<f64>> = pairs
+        .iter()
+        .map(|&(i, j)| vee(&(rs[j] * rs[i].transpose())))
+        .collect();
+    let d = 3 * n;
+    let mut k = DMatrix::<f64>::zeros(d, d);
+    for (&(i, j), u) in pairs.iter().zip(&us) {
+        let uu = u * u.transpose() * 0.25;
+        for (bi, bj, sign) in [(i, i, 1.0), (j, j, 1.0), (i, j, -1.0), (j, i, -1.0)] {
+            let mut blk = k.fixed_view_mut::<3, 3>(3 * bi, 3 * bj);
+            blk += uu * sign;
+        }
+    }
+    // the kernel of A A^T: the constant vectors and the gauge directions (R_i w)_i (because
+    // u_ij is the axis of R_j R_i^T, u_ij . (R_i w - R_j w) = 0); the right-hand side is
+    // orthogonal to both at a critical point (stationarity in S, and the gauge invariance), and
+    // is projected onto their complement here
+    let fill = k.trace() / d as f64 / n as f64;
+    for bi in 0..n {
+        for bj in 0..n {
+            let mut blk = k.fixed_view_mut::<3, 3>(3 * bi, 3 * bj);
+            blk += (Matrix3::identity() + rs[bi] * rs[bj].transpose()) * fill;
+        }
+    }
+    let gauge = rs
+        .iter()
+        .zip(&rhs)
+        .map(|(r, v)| r.transpose() * v)
+        .sum::<Vector3<f64>>()
+        / n as f64;
+    for (r, v) in rs.iter().zip(rhs.iter_mut()) {
+        *v -= r * gauge;
+    }
+    let y = k.cholesky()?.solve(&DVector::from_iterator(
+        d,
+        rhs.iter().flat_map(|v| v.iter().copied()),
+    ));
+    let yb = |i: usize| Vector3::new(y[3 * i], y[3 * i + 1], y[3 * i + 2]);
+    let couplings: Vec<f64> = pairs
+        .iter()
+        .zip(&us)
+        .map(|(&(i, j), u)| 0.5 * u.dot(&(yb(i) - yb(j))))
+        .collect();
+    // H_i = sum_j gamma_ij Y_j, per side
+    let (mut hr, mut hc) = (vec![Matrix3::zeros(); n], vec![Matrix3::zeros(); n]);
+    for (&(i, j), g) in pairs.iter().zip(&couplings) {
+        hr[i] += rs[j] * *g;
+        hr[j] += rs[i] * *g;
+        hc[i] += cs[j] * *g;
+        hc[j] += cs[i] * *g;
+    }
+    let sym = |m: Matrix3<f64>| (m + m.transpose()) * 0.5;
+    let mut lambdas: Vec<Matrix3<f64>> = (0..n)
+        .map(|i| sym((gr[i] - hr[i] * 0.5) * rs[i].transpose()))
+        .collect();
+    lambdas.extend((0..n).map(|i| sym((gc[i] + hc[i] * 0.5) * cs[i].transpose())));
+    let finite = lambdas.iter().all(|l| l.iter().all(|x| x.is_finite()))
+        && couplings.iter().all(|g| g.is_finite());
+    finite.then_some((lambdas, couplings))
+}
