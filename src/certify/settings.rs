@@ -584,6 +584,18 @@ impl Default for CertifySettings {
 }
 
 impl CertifySettings {
+    /// The SDP settings with Clarabel's time limit at what is left of the time budget after
+    /// `elapsed` seconds (every SDP rung: its prediction decides whether it starts, this bounds
+    /// how long it runs).
+    pub(crate) fn sdp_within_budget(&self, elapsed: f64) -> crate::relax::SdpSettings {
+        let mut sdp = self.sdp.clone();
+        if let Some(limit) = self.budget.max_seconds {
+            let left = (limit - elapsed).max(1e-3);
+            sdp.time_limit_seconds = Some(sdp.time_limit_seconds.map_or(left, |t| t.min(left)));
+        }
+        sdp
+    }
+
     /// Default settings with the given mode.
     pub fn with_mode(mode: CertifyMode) -> Self {
         CertifySettings {

@@ -487,7 +487,8 @@ impl PipelineProblem for SimultaneousProblem {
     fn solve(&self, settings: &SimultaneousSettings) -> Result<SimultaneousSolution> {
         solve_simultaneous(self, settings.max_iterations)
     }
-    /// The SDP `[H14]`; a cheaper rounding is polished by the joint Gauss-Newton and offered
+    /// The dual certificate at the estimate `[H15]`, then the SDP `[H14]`; a cheaper rounding of
+    /// the SDP is polished by the joint Gauss-Newton and offered
     /// as the improvement when it beats the solution.
     fn certify(
         &self,
@@ -496,22 +497,14 @@ impl PipelineProblem for SimultaneousProblem {
     ) -> Result<Certification<SimultaneousSolution>> {
         let (right, left) = self.graphs()?;
         let c = certify_simultaneous(&right, &left, &solution.rotations, &solution.s, settings)?;
-        let start = Instant::now();
-        let improvement = c.improvement.map(|r| {
-            let (rotations, s, cost, iterations, termination) =
-                gauss_newton(self, Terms::Joint, r.rotations, r.s, 100);
-            SimultaneousSolution {
-                rotations,
-                s,
-                cost,
-                report: SolverReport {
-                    name: "sdp-rounding+simultaneous-gauss-newton".into(),
-                    iterations,
-                    termination,
-                    seconds: start.elapsed().as_secs_f64(),
-                },
+        let improvement = match c.improvement {
+            Some(r) => {
+                let mut polished = solve_simultaneous_from(self, &r.rotations, &r.s, 100)?;
+                polished.report.name = "sdp-rounding+simultaneous-gauss-newton".into();
+                Some(polished)
             }
-        });
+            None => None,
+        };
         Ok(Certification {
             certificate: c.certificate,
             details: c.details,
@@ -521,7 +514,7 @@ impl PipelineProblem for SimultaneousProblem {
 }
 
 /// The simultaneous pipeline: the joint local solve ([`solve_simultaneous`]), then (modes
-/// `auto`, `sdp`) the SDP certificate `[H14]` verified by
+/// `auto`, `dual`, `sdp`) the dual certificate at the estimate `[H15]` and the SDP `[H14]`, verified by
 /// [`crate::certify::simultaneous::certify_simultaneous`]; a cheaper SDP rounding, polished,
 /// replaces the local solution.
 ///

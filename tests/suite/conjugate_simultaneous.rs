@@ -357,3 +357,32 @@ fn over_budget_the_sdp_is_refused() {
         Outcome::Refused(Refusal::OverBudget { .. })
     ));
 }
+
+/// Measurements orthogonal only to the validation tolerance (every matrix scaled by
+/// `1 - 1e-6`, kept as given): `tr(Q X)` then exceeds the joint cost by the data defect
+/// `sum w (3 - ||R_ij||_F^2)` (about `6e-6` per edge), so a bound that forgot it would exceed the
+/// cost of the planted point (`3e-12` per edge). Both rungs' raw bounds stay below it.
+#[test]
+fn bounds_account_for_measurements_orthogonal_only_to_tolerance() {
+    use rotavg::certify::simultaneous::dual::multipliers_at_estimate;
+    use rotavg::relax::simultaneous::relax_simultaneous;
+    let mut rng = StdRng::seed_from_u64(69);
+    let (mut p, rs, s) = planted(8, 8, 0.0, &mut rng);
+    for e in p.right.iter_mut().chain(p.left.iter_mut()) {
+        e.rotation = Rotation::from_matrix_unchecked(e.rotation.matrix() * (1.0 - 1e-6));
+    }
+    let (right, left) = p.graphs().unwrap();
+    let planted = planted_cost(&p, &rs, &s);
+    let (lambdas, couplings) = multipliers_at_estimate(&right, &left, &rs, &s).unwrap();
+    let dual = verify_simultaneous_bound(&right, &left, &lambdas, &couplings).unwrap();
+    let sdp = relax_simultaneous(&right, &left, &Default::default()).unwrap();
+    let sdp = verify_simultaneous_bound(&right, &left, &sdp.lambdas, &sdp.couplings).unwrap();
+    println!(
+        "planted cost {planted:.3e}; dual bound {:.3e}; SDP bound {:.3e}",
+        dual.lower_bound, sdp.lower_bound
+    );
+    for lb in [dual.lower_bound, sdp.lower_bound] {
+        assert!(lb <= planted, "bound {lb} above the planted cost {planted}");
+        assert!(lb > -1e-8, "bound {lb} far below");
+    }
+}

@@ -314,7 +314,9 @@ impl<'a> Climb<'a> {
         }
         let relaxation = crate::relax::conv_so3::relax_multiple_conv(
             self.problem,
-            &self.sdp_settings_within_budget(),
+            &self
+                .settings
+                .sdp_within_budget(self.start.elapsed().as_secs_f64()),
         )?;
         let bound = super::conv_bound(self.problem, &relaxation)?;
         let explanation = format!(
@@ -442,21 +444,6 @@ impl<'a> Climb<'a> {
         Ok(())
     }
 
-    /// The SDP settings with Clarabel's time limit at what is left of the time budget (every SDP
-    /// rung: its prediction decides whether it starts, this bounds how long it runs).
-    fn sdp_settings_within_budget(&self) -> crate::relax::SdpSettings {
-        let mut sdp_settings = self.settings.sdp.clone();
-        if let Some(limit) = self.settings.budget.max_seconds {
-            let left = (limit - self.start.elapsed().as_secs_f64()).max(1e-3);
-            sdp_settings.time_limit_seconds = Some(
-                sdp_settings
-                    .time_limit_seconds
-                    .map_or(left, |t| t.min(left)),
-            );
-        }
-        sdp_settings
-    }
-
     /// The best bound so far certifies the current point.
     pub fn best_certifies(&self) -> bool {
         let tolerance = self.settings.tolerance.resolve(self.problem.min_weight());
@@ -538,7 +525,12 @@ impl<'a> Climb<'a> {
         crate::progress::phase(crate::progress::Phase::Sdp, || {
             format!("{} nodes", self.problem.num_rotations())
         });
-        let sdp = relax_multiple(self.problem, &self.sdp_settings_within_budget())?;
+        let sdp = relax_multiple(
+            self.problem,
+            &self
+                .settings
+                .sdp_within_budget(self.start.elapsed().as_secs_f64()),
+        )?;
         let n = self.problem.num_rotations();
         let usable = sdp.multipliers.len() == n
             && sdp

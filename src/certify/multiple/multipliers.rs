@@ -384,7 +384,7 @@ pub(super) fn bound_with_deficit(
 /// orthogonal only to rounding, and for rotations `R_i` the chordal cost is
 /// `f(Y) = tr(Y^T Q Y) - c_0`, so a lower bound on `min tr(Y^T Q Y)` bounds `min f` after
 /// subtracting `c_0` (of order `u m w`, either sign). Evaluated in double-double.
-pub(super) fn data_defect(problem: &MultipleProblem) -> f64 {
+pub(crate) fn data_defect(problem: &MultipleProblem) -> f64 {
     if problem.is_anisotropic() {
         // [A2]: the anisotropic Q carries the constant in its diagonal blocks, exactly
         return 0.0;

@@ -18,8 +18,8 @@
 //! (docs/benchmarks.md), and when it is not the SDP is the next rung.
 
 use crate::certify::ladder::Prediction;
+use crate::certify::multiple::multipliers::laplacian_times;
 use crate::multiple::MultipleProblem;
-use crate::multiple::laplacian::connection_laplacian_triplets;
 use crate::relax::multiple::SDP_MULTIPLY_ADD_RATE;
 use crate::relax::simultaneous::coupling_pairs;
 use crate::so3::{Rotation, vee};
@@ -36,19 +36,6 @@ pub fn predict_multipliers_at_estimate(n: usize) -> Prediction {
     }
 }
 
-/// `G = Q Y` by blocks: `G_i = sum_j Q_ij Y_j` from the connection Laplacian's triplets.
-fn laplacian_times(p: &MultipleProblem, y: &[Matrix3<f64>]) -> Vec<Matrix3<f64>> {
-    let mut g = vec![Matrix3::zeros(); y.len()];
-    for t in connection_laplacian_triplets(p) {
-        let (bi, r) = (t.row / 3, t.row % 3);
-        let (bj, c) = (t.col / 3, t.col % 3);
-        let row = y[bj].row(c) * t.val;
-        let mut target = g[bi].row_mut(r);
-        target += row;
-    }
-    g
-}
-
 /// The multipliers `(Lambda_a for a = 0..2n, gamma_ij in the order of [`coupling_pairs`])`
 /// at the point `(rotations, s)`, or `None` when the point does not fit the graphs or the
 /// coupling system is numerically singular.
@@ -62,10 +49,15 @@ pub fn multipliers_at_estimate(
     if right.num_rotations() != n || left.num_rotations() != n || n < 2 {
         return None;
     }
+    let c_rotations: Vec<Rotation> = rotations.iter().map(|r| s * r).collect();
+    // G = Q Y by blocks, in double-double [D3]
+    let (gr, gc) = (
+        laplacian_times(right, rotations),
+        laplacian_times(left, &c_rotations),
+    );
     let rs: Vec<Matrix3<f64>> = rotations.iter().map(|r| *r.matrix()).collect();
+    let cs: Vec<Matrix3<f64>> = c_rotations.iter().map(|r| *r.matrix()).collect();
     let sm = *s.matrix();
-    let cs: Vec<Matrix3<f64>> = rs.iter().map(|r| sm * r).collect();
-    let (gr, gc) = (laplacian_times(right, &rs), laplacian_times(left, &cs));
     // rhs_i = (a_i - b_i) / 2, its mean removed (zero at an exact critical point)
     let mut rhs: Vec<Vector3<f64>> = (0..n)
         .map(|i| {

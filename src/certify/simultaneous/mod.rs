@@ -20,6 +20,7 @@ use super::certification::{Certification, CertifyDetails, Improvement, Improveme
 use super::certification::{MethodRun, SdpSummary};
 use super::ladder::{Attempt, Outcome, Point, Prediction, Refusal, Rung};
 use super::settings::{CertifyMode, CertifySettings};
+use crate::certify::multiple::multipliers::data_defect;
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;
 use crate::multiple::laplacian::connection_laplacian_triplets;
@@ -27,7 +28,7 @@ use crate::relax::simultaneous::{
     JointRotations, coupling_pairs, joint_cost, predict_relax_simultaneous, relax_simultaneous,
 };
 use crate::so3::Rotation;
-use nalgebra::{DMatrix, Matrix3, SymmetricEigen};
+use nalgebra::{DMatrix, Matrix3};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -35,10 +36,11 @@ use std::time::Instant;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SimultaneousBound {
     /// `sum_a tr(Lambda_a) + 3n (min(verified lambda_min(Z_R), 0) + min(verified
-    /// lambda_min(Z_C), 0)) - rounding`.
+    /// lambda_min(Z_C), 0)) - rounding - the two graphs' data defects` (`[D4]`: measurements
+    /// orthogonal only to the validation tolerance).
     pub lower_bound: f64,
     /// The smaller of `lambda_min(Z_R)` and `lambda_min(Z_C)` from nalgebra's dense symmetric
-    /// eigen-decomposition.
+    /// eigenvalue solver.
     pub min_eigenvalue: f64,
     /// Proven lower bound on that smaller `lambda_min` of the exact matrices: each computed
     /// value minus `10 (3n) eps ||(|Q| + |blkdiag Lambda| + sum |gamma_ij E_ij|)||_F`, which
@@ -47,38 +49,38 @@ pub struct SimultaneousBound {
     pub verified_min_eigenvalue: f64,
 }
 
-/// The dense `Z_R` and `Z_C` and the entrywise magnitudes of their terms.
-fn certificate_matrices(
-    right: &MultipleProblem,
-    left: &MultipleProblem,
+/// One side's dense certificate matrix (`Z_R` for the right graph with `sign = -1/2`, `Z_C` for
+/// the left with `+1/2`; `lambdas` that side's `n` blocks) and the entrywise magnitudes of its
+/// terms.
+fn certificate_matrix(
+    p: &MultipleProblem,
     lambdas: &[Matrix3<f64>],
     couplings: &[f64],
-) -> [(DMatrix<f64>, DMatrix<f64>); 2] {
-    let n = right.num_rotations();
+    sign: f64,
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let n = p.num_rotations();
     let dim = 3 * n;
-    [(right, 0usize, -0.5), (left, n, 0.5)].map(|(p, first, sign)| {
-        let mut m = DMatrix::zeros(dim, dim);
-        let mut mag = DMatrix::zeros(dim, dim);
-        let mut add = |r: usize, c: usize, v: f64| {
-            m[(r, c)] += v;
-            mag[(r, c)] += v.abs();
-        };
-        for t in connection_laplacian_triplets(p) {
-            add(t.row, t.col, t.val);
+    let mut m = DMatrix::zeros(dim, dim);
+    let mut mag = DMatrix::zeros(dim, dim);
+    let mut add = |r: usize, c: usize, v: f64| {
+        m[(r, c)] += v;
+        mag[(r, c)] += v.abs();
+    };
+    for t in connection_laplacian_triplets(p) {
+        add(t.row, t.col, t.val);
+    }
+    for (a, l) in lambdas.iter().enumerate() {
+        for (r, c) in (0..3).flat_map(|r| (0..3).map(move |c| (r, c))) {
+            add(3 * a + r, 3 * a + c, -l[(r, c)]);
         }
-        for (a, l) in lambdas[first..first + n].iter().enumerate() {
-            for (r, c) in (0..3).flat_map(|r| (0..3).map(move |c| (r, c))) {
-                add(3 * a + r, 3 * a + c, -l[(r, c)]);
-            }
+    }
+    for ((i, j), g) in coupling_pairs(n).zip(couplings) {
+        for d in 0..3 {
+            add(3 * i + d, 3 * j + d, sign * g);
+            add(3 * j + d, 3 * i + d, sign * g);
         }
-        for ((i, j), g) in coupling_pairs(n).zip(couplings) {
-            for d in 0..3 {
-                add(3 * i + d, 3 * j + d, sign * g);
-                add(3 * j + d, 3 * i + d, sign * g);
-            }
-        }
-        (m, mag)
-    })
+    }
+    (m, mag)
 }
 
 /// Verify a lower bound on the global minimum of the joint cost from any multipliers (the SDP's,
@@ -116,8 +118,10 @@ pub fn verify_simultaneous_bound(
     }
     let dim = 3.0 * n as f64;
     let (mut lam, mut verified, mut slack) = (f64::INFINITY, f64::INFINITY, 0.0);
-    for (m, mag) in certificate_matrices(right, left, lambdas, couplings) {
-        let l = SymmetricEigen::new(m).eigenvalues.min();
+    // one side at a time (two dense matrices alive, not four); eigenvalues only
+    for (p, side, sign) in [(right, &lambdas[..n], -0.5), (left, &lambdas[n..], 0.5)] {
+        let (m, mag) = certificate_matrix(p, side, couplings, sign);
+        let l = m.symmetric_eigenvalues().min();
         let v = l - 10.0 * dim * f64::EPSILON * mag.norm();
         lam = lam.min(l);
         verified = verified.min(v);
@@ -128,12 +132,81 @@ pub fn verify_simultaneous_bound(
         trace += l.trace();
         trace_abs += l[(0, 0)].abs() + l[(1, 1)].abs() + l[(2, 2)].abs();
     }
-    let lb = trace + dim * slack - 2.0 * dim * f64::EPSILON * trace_abs;
+    // the joint cost is tr(Q_R X_R) + tr(Q_C X_C) minus each graph's data defect
+    // sum w (3 - ||R_ij||_F^2) (measurements orthogonal only to the validation tolerance, [D4])
+    let defect = data_defect(right) + data_defect(left);
+    let lb = trace + dim * slack - 2.0 * dim * f64::EPSILON * trace_abs - defect;
     lb.is_finite().then_some(SimultaneousBound {
         lower_bound: lb,
         min_eigenvalue: lam,
         verified_min_eigenvalue: verified,
     })
+}
+
+/// One rung that ran: its verified bound (`None`: nothing proved) and how it is reported.
+struct Run {
+    rung: Rung,
+    method: BoundMethod,
+    predicted: Prediction,
+    bound: Option<SimultaneousBound>,
+    seconds: f64,
+    note: String,
+}
+
+/// The best verified bound of a rung so far, and its note.
+struct Best {
+    lower_bound: f64,
+    method: BoundMethod,
+    verified_min_eigenvalue: f64,
+    note: String,
+}
+
+/// The climb of [`certify_simultaneous`]: the estimate's cost, the tolerance's gap at it, and
+/// the best bound proved.
+struct Climbed {
+    cost: f64,
+    allowed_gap: f64,
+    best: Option<Best>,
+}
+
+impl Climbed {
+    fn sufficient(&self, lb: f64) -> bool {
+        self.cost - lb <= self.allowed_gap
+    }
+
+    fn certified(&self) -> bool {
+        self.best
+            .as_ref()
+            .is_some_and(|b| self.sufficient(b.lower_bound))
+    }
+
+    /// Record a rung in `details` and keep its bound when it is the best.
+    fn record(&mut self, details: &mut CertifyDetails, run: Run) {
+        let lb = run
+            .bound
+            .map(|b| nonnegative_bound_at_most(b.lower_bound, self.cost));
+        details.record_rung(
+            MethodRun {
+                method: run.method,
+                lower_bound: lb,
+                seconds: run.seconds,
+                note: run.note.clone(),
+            },
+            run.rung,
+            Some(run.predicted),
+            lb.is_some_and(|l| self.sufficient(l)),
+        );
+        if let (Some(lb), Some(b)) = (lb, run.bound)
+            && self.best.as_ref().is_none_or(|x| lb > x.lower_bound)
+        {
+            self.best = Some(Best {
+                lower_bound: lb,
+                method: run.method,
+                verified_min_eigenvalue: b.verified_min_eigenvalue,
+                note: run.note,
+            });
+        }
+    }
 }
 
 /// Certify a joint estimate `(R, S)` of the simultaneous problem (right graph `right`, left
@@ -185,11 +258,14 @@ pub fn certify_simultaneous(
         });
         why
     };
-    // the best verified bound so far: (bound, method, verified lambda_min, note)
-    let mut best: Option<(f64, BoundMethod, f64, String)> = None;
+    let mut climb = Climbed {
+        cost,
+        allowed_gap: tolerance.allowed_gap(cost),
+        best: None,
+    };
+    // the explanation when no rung proves a bound: the last refusal or failure
     let mut why = String::new();
     let mut improvement = None;
-    let sufficient = |lb: f64| cost - lb <= tolerance.allowed_gap(cost);
     let (dual, sdp) = match settings.mode {
         CertifyMode::Auto => (true, true),
         CertifyMode::Dual => (true, false),
@@ -226,7 +302,6 @@ pub fn certify_simultaneous(
                 let t = Instant::now();
                 let bound = dual::multipliers_at_estimate(right, left, rotations, s)
                     .and_then(|(l, g)| verify_simultaneous_bound(right, left, &l, &g));
-                let lb = bound.map(|b| nonnegative_bound_at_most(b.lower_bound, cost));
                 let note = match bound {
                     Some(b) => format!(
                         "multipliers at the estimate (couplings of least norm) verified, lambda_min(Z) >= {:.3e}",
@@ -235,32 +310,22 @@ pub fn certify_simultaneous(
                     None => "multipliers at the estimate not finite (singular coupling system)"
                         .to_string(),
                 };
-                let ok = lb.is_some_and(sufficient);
-                details.record_rung(
-                    MethodRun {
+                why = note.clone();
+                climb.record(
+                    &mut details,
+                    Run {
+                        rung: Rung::SimultaneousDual,
                         method: BoundMethod::Dual,
-                        lower_bound: lb,
+                        predicted,
+                        bound,
                         seconds: t.elapsed().as_secs_f64(),
-                        note: note.clone(),
+                        note,
                     },
-                    Rung::SimultaneousDual,
-                    Some(predicted),
-                    ok,
                 );
-                if let (Some(lb), Some(b)) = (lb, bound) {
-                    best = Some((
-                        lb,
-                        BoundMethod::Dual,
-                        b.verified_min_eigenvalue,
-                        note.clone(),
-                    ));
-                }
-                why = note;
             }
         }
     }
-    let certified = best.as_ref().is_some_and(|b| sufficient(b.0));
-    if sdp && !certified {
+    if sdp && !climb.certified() {
         let p = predict_relax_simultaneous(n);
         let predicted = Prediction {
             seconds: p.seconds,
@@ -277,19 +342,9 @@ pub fn certify_simultaneous(
                 },
             );
         } else {
-            let mut sdp_settings = settings.sdp.clone();
-            if let Some(limit) = settings.budget.max_seconds {
-                let left_s = (limit - elapsed).max(1e-3);
-                let t = sdp_settings
-                    .time_limit_seconds
-                    .unwrap_or(left_s)
-                    .min(left_s);
-                sdp_settings.time_limit_seconds = Some(t.max(1e-3));
-            }
-            let relaxation = relax_simultaneous(right, left, &sdp_settings)?;
+            let relaxation = relax_simultaneous(right, left, &settings.sdp_within_budget(elapsed))?;
             let bound =
                 verify_simultaneous_bound(right, left, &relaxation.lambdas, &relaxation.couplings);
-            let lb = bound.map(|b| nonnegative_bound_at_most(b.lower_bound, cost));
             let top = &relaxation.x_top_eigenvalues;
             details.sdp = Some(SdpSummary {
                 status: relaxation.status,
@@ -312,41 +367,36 @@ pub fn certify_simultaneous(
                 ),
                 None => format!("SDP ({:?}): multipliers not finite", relaxation.status),
             };
-            improvement = (relaxation.rounded.cost < cost).then(|| relaxation.rounded.clone());
+            let seconds = relaxation.seconds;
+            improvement = (relaxation.rounded.cost < cost).then_some(relaxation.rounded);
             if let Some(r) = &improvement {
                 details.improvement = Some(Improvement {
                     source: ImprovementSource::SdpRounding,
                     cost: r.cost,
                 });
             }
-            details.record_rung(
-                MethodRun {
+            why = note.clone();
+            climb.record(
+                &mut details,
+                Run {
+                    rung: Rung::Sdp,
                     method: BoundMethod::Sdp,
-                    lower_bound: lb,
-                    seconds: relaxation.seconds,
-                    note: note.clone(),
+                    predicted,
+                    bound,
+                    seconds,
+                    note,
                 },
-                Rung::Sdp,
-                Some(predicted),
-                lb.is_some_and(sufficient),
             );
-            if let (Some(lb), Some(b)) = (lb, bound)
-                && best.as_ref().is_none_or(|x| lb > x.0)
-            {
-                best = Some((
-                    lb,
-                    BoundMethod::Sdp,
-                    b.verified_min_eigenvalue,
-                    note.clone(),
-                ));
-            }
-            why = note;
         }
     }
-    let (lb, method, lam) = match &best {
-        Some((lb, m, lam, note)) => {
-            why = note.clone();
-            (Some(*lb), *m, Some(*lam))
+    let (lb, method, lam) = match climb.best {
+        Some(b) => {
+            why = b.note;
+            (
+                Some(b.lower_bound),
+                b.method,
+                Some(b.verified_min_eigenvalue),
+            )
         }
         None => (None, BoundMethod::Sdp, None),
     };
