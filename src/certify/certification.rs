@@ -100,6 +100,10 @@ pub struct CertifyDetails {
     pub skipped_reason: Option<String>,
     /// The SDP solve, when one ran.
     pub sdp: Option<SdpSummary>,
+    /// The Riemannian staircase, when it ran: every rank, its estimate of `lambda_min(S)`
+    /// and whether it was verified (multiple averaging).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub staircase_steps: Vec<crate::certify::multiple::staircase::StaircaseStep>,
     /// The branch and bound, when one ran.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub branch_and_bound: Option<crate::certify::branch_and_bound::BranchAndBoundStats>,

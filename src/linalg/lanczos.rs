@@ -244,6 +244,7 @@ pub fn lanczos(
     let mut basis: Vec<Vec<f64>> = Vec::new();
     // h[j][i] = v_i^T A v_j for i <= j
     let mut h: Vec<Vec<f64>> = Vec::new();
+    let mut next_check = 0;
     loop {
         // add the pending block (orthonormalised), apply the operator
         let first = basis.len();
@@ -272,13 +273,29 @@ pub fn lanczos(
                 w
             })
             .collect();
+        let invariant = remainders.iter().all(|r| dot(r, r).sqrt() <= 1e-14 * scale);
+        // Rayleigh-Ritz (a dense eigendecomposition of the whole projected matrix) on a
+        // geometric schedule, an eighth of the basis apart, and before every stop: done at
+        // every step its cost grows as m^4 and dominates long runs
+        let due = m >= next_check || invariant || m >= max_m || m == first;
+        if !due {
+            pending.extend(remainders.into_iter().map(|r| {
+                let n = dot(&r, &r).sqrt();
+                if n > 1e-14 * scale {
+                    r
+                } else {
+                    random(&mut rng)
+                }
+            }));
+            continue;
+        }
+        next_check = m + (m / 8).max(b);
         let (values, coefficients, residuals) = rayleigh_ritz(&h, k, which, first, &remainders);
         let worst = values
             .iter()
             .zip(&residuals)
             .map(|(v, r)| r / scale.max(v.abs()))
             .fold(0.0, f64::max);
-        let invariant = remainders.iter().all(|r| dot(r, r).sqrt() <= 1e-14 * scale);
         let stop = if values.len() == k && worst <= tol {
             Some(LanczosStop::Converged {
                 residual: worst,

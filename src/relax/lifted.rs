@@ -128,9 +128,9 @@ pub struct TrustRegionSettings {
     pub max_iterations: usize,
     /// Conjugate-gradient steps per subproblem at most.
     pub max_inner: usize,
-    /// Converged when `||grad F|| <= gradient_tolerance (1 + F)`.
+    /// Converged when `||grad F|| <= gradient_tolerance (w_min + F)` (`w_min` the smallest weight: invariant under scaling every weight).
     pub gradient_tolerance: f64,
-    /// Converged when a step decreases `F` by less than this times `1 + F` (twice running).
+    /// Converged when a step decreases `F` by less than this times `w_min + F` (twice running).
     pub decrease_tolerance: f64,
 }
 
@@ -151,7 +151,7 @@ impl Default for TrustRegionSettings {
 pub enum TrustRegionStop {
     /// The gradient norm met its tolerance.
     Gradient {
-        /// `||grad F|| / (1 + F)`.
+        /// `||grad F|| / (w_min + F)`.
         value: f64,
     },
     /// Two accepted steps in a row decreased `F` by less than the tolerance.
@@ -161,12 +161,12 @@ pub enum TrustRegionStop {
     },
     /// The iteration limit.
     IterationLimit {
-        /// `||grad F|| / (1 + F)` left.
+        /// `||grad F|| / (w_min + F)` left.
         value: f64,
     },
     /// The trust region shrank below rounding: no representable progress.
     Radius {
-        /// `||grad F|| / (1 + F)` left.
+        /// `||grad F|| / (w_min + F)` left.
         value: f64,
     },
 }
@@ -248,6 +248,9 @@ pub fn trust_region(
     settings: &TrustRegionSettings,
 ) -> TrustRegionResult {
     let mut f = lifted_cost(problem, &y);
+    // the cost's unit, so that scaling every weight scales nothing else: the smallest weight
+    // (the tolerance's absolute part, SPEC 3; 1 for unit weights)
+    let unit = problem.min_weight().max(f64::MIN_POSITIVE);
     let mut radius = (y.len() as f64).sqrt();
     let max_radius = 10.0 * radius;
     let (mut iterations, mut products, mut small) = (0, 0, 0);
@@ -255,7 +258,7 @@ pub fn trust_region(
         let lambdas = lifted_multipliers(problem, &y);
         let mut g = twice_s_times(problem, &lambdas, &y);
         project(&y, &mut g);
-        let gn = inner(&g, &g).sqrt() / (1.0 + f);
+        let gn = inner(&g, &g).sqrt() / (unit + f);
         if gn <= settings.gradient_tolerance {
             break TrustRegionStop::Gradient { value: gn };
         }
@@ -287,7 +290,7 @@ pub fn trust_region(
         if rho > 0.1
             && let Some(c) = candidate
         {
-            let decrease = (f - fc) / (1.0 + f);
+            let decrease = (f - fc) / (unit + f);
             small = if decrease < settings.decrease_tolerance {
                 small + 1
             } else {

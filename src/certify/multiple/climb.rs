@@ -651,6 +651,7 @@ impl<'a> Climb<'a> {
             _ => false,
         };
         self.details.ladder.extend(r.bound.ladder.iter().cloned());
+        self.details.staircase_steps.extend(r.steps.iter().cloned());
         self.offer(Best {
             lower_bound: r.bound.lower_bound,
             method: BoundMethod::Staircase,

@@ -912,6 +912,7 @@ pub fn conv_dual_bound(
         cost.abs(),
         settings,
         point,
+        None,
     )?;
     let difference = bound.lower_bound - sur.offset;
     let lower_bound =

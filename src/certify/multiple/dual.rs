@@ -127,6 +127,7 @@ pub(super) fn dual_certificate_at(
         cost.abs(),
         settings,
         point,
+        None,
     )?;
     let min_eig = bound
         .min_eigenvalue_estimate
@@ -383,6 +384,7 @@ pub fn certify_with_multipliers(
         cost.abs(),
         settings,
         Point::Sdp,
+        None,
     )?;
     let explanation = format!(
         "bound from supplied multipliers ({method}): lambda_min(Q - blkdiag(Lambda)) >= {:.3e} verified by {}",

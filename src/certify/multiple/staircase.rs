@@ -18,12 +18,14 @@
 //! bound over the ranks is reported.
 
 use super::multipliers::{certificate_matrix, check_rotations};
-use super::verify::{VerifiedBound, multipliers_bound};
+use super::verify::{CurvatureHint, VerifiedBound, multipliers_bound};
 use crate::certify::certificate::{BoundMethod, Certificate};
 use crate::certify::ladder::Point;
 use crate::certify::settings::CertifySettings;
 use crate::error::{Error, Result};
-use crate::linalg::{LanczosResult, inf_norm, smallest_eigenpair};
+use crate::linalg::cholesky::sparse_matvec;
+use crate::linalg::two_pass_lanczos::{TwoPassSettings, two_pass_smallest};
+use crate::linalg::{LanczosResult, LanczosStop, inf_norm, rayleigh_quotient};
 use crate::multiple::MultipleProblem;
 use crate::relax::lifted::{
     Block, TrustRegionSettings, lifted_cost, lifted_multipliers, polar, trust_region,
@@ -42,7 +44,7 @@ pub struct StaircaseSettings {
     pub max_rank: usize,
     /// Trust-region iterations per rank.
     pub max_iterations: usize,
-    /// Converged at a rank when `||grad|| <= gradient_tolerance * (1 + F)`.
+    /// Converged at a rank when `||grad|| <= gradient_tolerance * (w_min + F)` (`w_min` the smallest weight).
     pub gradient_tolerance: f64,
     /// Stop once the relaxation's value is bracketed this tightly: the lifted cost `F(Y)` (a
     /// feasible point's, so at least the SDP optimum) is within `bracket_tolerance` times the
@@ -160,6 +162,35 @@ impl std::fmt::Display for StaircaseStop {
     }
 }
 
+/// One rank of the staircase, as it ran: what the trust region reached, what the estimate of
+/// `lambda_min(S)` said and whether the rank was verified (the trace behind
+/// [`StaircaseResult::stop_reason`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StaircaseStep {
+    /// The rank `p`.
+    pub rank: usize,
+    /// Trust-region iterations at this rank (loose and strict solves together).
+    pub iterations: usize,
+    /// Whether the rank was solved to [`StaircaseSettings::gradient_tolerance`] (a strict
+    /// solve, before a verification) rather than only to [`ESCAPE_GRADIENT_TOLERANCE`].
+    pub strict: bool,
+    /// The lifted cost `F(Y)` reached.
+    pub lifted_cost: f64,
+    /// The matrix-free Lanczos estimate of `lambda_min(S)` (deflated by the columns of `Y`,
+    /// the null space of `S` at a critical point) and its Ritz residual.
+    pub estimate: f64,
+    /// The Ritz residual of [`StaircaseStep::estimate`].
+    pub estimate_residual: f64,
+    /// The estimate of `lambda_min(S)` on the whole space: the null-space block `B^T S B` of
+    /// the columns `B` of `Y` coupled to the complement's estimate (the smaller eigenvalue of
+    /// `[[lambda_min(B^T S B), ||S B - B B^T S B||_F], [., estimate]]`).
+    pub full_estimate: f64,
+    /// The verified bound at this rank, when the rank was verified.
+    pub verified_bound: Option<f64>,
+    /// Seconds since the staircase started, at the end of this rank.
+    pub seconds: f64,
+}
+
 /// Result of [`staircase_bound`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StaircaseResult {
@@ -178,6 +209,9 @@ pub struct StaircaseResult {
     pub hessian_products: usize,
     /// Why the staircase stopped.
     pub stop_reason: StaircaseStop,
+    /// Every rank that ran, in order.
+    #[serde(default)]
+    pub steps: Vec<StaircaseStep>,
     /// The final lifted point rounded to rotations ([`round_lifted`]): an upper bound on the
     /// global minimum, to be polished by the local solver.
     #[serde(with = "crate::so3::serde_rows::rotations", default)]
@@ -259,6 +293,7 @@ pub fn staircase_bound(
         .map(|r| Block::from_column_slice(r.matrix().as_slice()))
         .collect();
     let (mut iterations, mut products, mut rank) = (0, 0, 3);
+    let mut steps: Vec<StaircaseStep> = Vec::new();
     let cost = problem.chordal_cost(rotations);
     let tolerance = certify.tolerance.resolve(problem.min_weight());
     // the relaxation's value lies in [bound, F(Y)]: close enough, a higher rank cannot help
@@ -275,48 +310,97 @@ pub fn staircase_bound(
             iterations + r.iterations,
             products + r.hessian_products,
         );
-        let converged = loose.gradient_tolerance <= tr.gradient_tolerance;
+        let mut strict = loose.gradient_tolerance <= tr.gradient_tolerance;
+        let mut step = StaircaseStep {
+            rank,
+            iterations: r.iterations,
+            strict,
+            lifted_cost: r.cost,
+            estimate: 0.0,
+            estimate_residual: 0.0,
+            full_estimate: 0.0,
+            verified_bound: None,
+            seconds: 0.0,
+        };
         // a negative Rayleigh quotient from an estimate (matrix-vector products only) is a
         // direction of descent: escape at once unless the estimated bound already brackets the
-        // relaxation's value; otherwise verify the bound, and its verification's (shift-invert)
-        // eigenvector decides
-        let mut lambdas = lifted_multipliers(problem, &y);
-        let mut e = negative_direction(problem, &lambdas, certify)?;
-        let mut estimated_bound = lambdas.iter().map(|l| l.trace()).sum::<f64>()
-            + 3.0 * problem.num_rotations() as f64 * e.value.min(0.0);
-        let escapes = |e: &LanczosResult, cost: f64, bound: f64| {
-            e.value < -escape_threshold(cost, problem, certify) && !bracketed(cost, bound)
+        // relaxation's value. Otherwise verify the bound: at once when the estimated bound
+        // brackets it, after solving the rank strictly when it does not (or when the loose
+        // point's verified bound falls short); the verification's eigenvector decides.
+        let escapes = |e: &CurvatureEstimate, cost: f64| {
+            e.complement.value < -escape_threshold(cost, problem, certify)
+                && !bracketed(cost, e.estimated_bound)
         };
-        if !converged && !escapes(&e, r.cost, estimated_bound) {
-            // about to verify: converge at this rank first
-            r = trust_region(problem, y, &tr);
-            (y, iterations, products) = (
-                std::mem::take(&mut r.y),
-                iterations + r.iterations,
-                products + r.hessian_products,
-            );
-            lambdas = lifted_multipliers(problem, &y);
-            e = negative_direction(problem, &lambdas, certify)?;
-            estimated_bound = lambdas.iter().map(|l| l.trace()).sum::<f64>()
-                + 3.0 * problem.num_rotations() as f64 * e.value.min(0.0);
-        }
-        let (direction, verified) = if escapes(&e, r.cost, estimated_bound) {
-            (Some(e.vector), None)
-        } else {
-            let b = multipliers_bound(problem, &lambdas, certify, Point::Staircase)?;
-            if bracketed(r.cost, b.lower_bound) {
-                let stop = StaircaseStop::Bracketed {
-                    rank,
-                    bracket: r.cost - b.lower_bound,
-                };
-                break (r.cost, stop, Some(b));
+        let (direction, verified) = loop {
+            let lambdas = lifted_multipliers(problem, &y);
+            let e = curvature_estimate(problem, &y, &lambdas)?;
+            (step.estimate, step.estimate_residual, step.full_estimate) =
+                (e.complement.value, e.complement.residual, e.full.value);
+            if escapes(&e, r.cost) {
+                break (Some(e.complement.vector), None);
             }
-            (b.negative_eigenvector.clone(), Some(b))
+            if !strict && !bracketed(r.cost, e.estimated_bound) {
+                // about to verify: converge at this rank first
+                r = trust_region(problem, y, &tr);
+                (y, iterations, products) = (
+                    std::mem::take(&mut r.y),
+                    iterations + r.iterations,
+                    products + r.hessian_products,
+                );
+                (step.iterations, step.lifted_cost) = (step.iterations + r.iterations, r.cost);
+                (strict, step.strict) = (true, true);
+                continue;
+            }
+            let b = multipliers_bound(
+                problem,
+                &lambdas,
+                certify,
+                Point::Staircase,
+                Some(CurvatureHint {
+                    low: e.full.clone(),
+                    high: e.optimistic,
+                }),
+            )?;
+            step.verified_bound = Some(b.lower_bound);
+            if !strict && !bracketed(r.cost, b.lower_bound) && b.negative_eigenvector.is_none() {
+                // the estimate promised more than the loose point's multipliers proved
+                strict = true;
+                r = trust_region(problem, y, &tr);
+                (y, iterations, products) = (
+                    std::mem::take(&mut r.y),
+                    iterations + r.iterations,
+                    products + r.hessian_products,
+                );
+                (step.iterations, step.lifted_cost, step.strict) =
+                    (step.iterations + r.iterations, r.cost, true);
+                continue;
+            }
+            let b = if !bracketed(r.cost, b.lower_bound) && b.negative_eigenvector.is_none() {
+                // short of the bracket with no direction to climb along: the verification's own
+                // estimates (shift-invert through its factor) look for one
+                multipliers_bound(problem, &lambdas, certify, Point::Staircase, None)?
+            } else {
+                b
+            };
+            step.verified_bound = Some(b.lower_bound);
+            break (b.negative_eigenvector.clone(), Some(b));
         };
+        step.seconds = start.elapsed().as_secs_f64();
+        steps.push(step);
+        if let Some(b) = verified
+            .as_ref()
+            .filter(|b| bracketed(r.cost, b.lower_bound))
+        {
+            let stop = StaircaseStop::Bracketed {
+                rank,
+                bracket: r.cost - b.lower_bound,
+            };
+            break (r.cost, stop, verified);
+        }
         let estimate = verified
             .as_ref()
             .and_then(|b| b.min_eigenvalue_estimate)
-            .or(Some(e.value));
+            .or(steps.last().map(|s| s.full_estimate));
         let Some(v) = direction else {
             let stop = StaircaseStop::Verified {
                 rank,
@@ -355,6 +439,7 @@ pub fn staircase_bound(
             &lifted_multipliers(problem, &y),
             certify,
             Point::Staircase,
+            None,
         )?,
     };
     let certificate = Certificate::from_bounds(
@@ -379,25 +464,182 @@ pub fn staircase_bound(
         iterations,
         hessian_products: products,
         stop_reason,
+        steps,
         rounded,
         reflected_blocks,
     })
 }
 
-/// The Lanczos estimate of `lambda_min(S)` for the lifted multipliers and its eigenvector (an
-/// estimate: it only chooses where to escape; a negative Rayleigh quotient is a direction of
-/// descent whether or not the estimate has converged).
-fn negative_direction(
-    problem: &MultipleProblem,
-    lambdas: &[nalgebra::Matrix3<f64>],
-    certify: &CertifySettings,
-) -> Result<LanczosResult> {
-    let s = certificate_matrix(problem, lambdas)?;
-    let norm = inf_norm(s.as_ref()).max(f64::MIN_POSITIVE);
-    Ok(smallest_eigenpair(s.as_ref(), norm, &certify.dual.lanczos))
+/// What the staircase estimates of the curvature at a lifted point (estimates: they choose
+/// where to escape and where to place the verification's shift; no bound rests on them).
+struct CurvatureEstimate {
+    /// `lambda_min(S)` on the orthogonal complement of the columns of `Y`, by two-pass Lanczos
+    /// (matrix-vector products only), and its vector: a negative value is a direction of
+    /// descent whether or not the estimate has converged.
+    complement: LanczosResult,
+    /// `lambda_min(S)` on the whole space ([`StaircaseStep::full_estimate`]), its residual the
+    /// complement's, its vector the complement's.
+    full: LanczosResult,
+    /// `sum tr(Lambda_i) + 3n min(full, 0)`: the bound a verification would give.
+    estimated_bound: f64,
+    /// `min(lambda_min(B^T S B), complement)`: Rayleigh quotients, so at least `lambda_min(S)`
+    /// (the full estimate, without the coupling, is at most it when the complement's is exact).
+    optimistic: f64,
 }
 
-/// The trust-region gradient tolerance (`||grad F|| / (1 + F)`) at ranks that escape: a point
+/// The curvature of `S = Q - blkdiag(Lambda)` at the lifted point `Y` (`[D11]`). The `p`
+/// columns of `Y` (stacked `3n` vectors, orthonormalised to `B`) span the null space of `S` at
+/// a critical point: Lanczos runs on their orthogonal complement, where the smallest eigenvalue
+/// is the negative curvature the next rank escapes along, not a Ritz value mixing it with the
+/// null space's zeros (at 10^4 nodes plain Lanczos returned +1e-4 where the shift-invert
+/// estimate found -8e-4). Away from a critical point `B` is only nearly null: the whole-space
+/// estimate couples `lambda_min(B^T S B)` to the complement's through `||S B - B (B^T S B)||_F`.
+fn curvature_estimate(
+    problem: &MultipleProblem,
+    y: &[Block],
+    lambdas: &[nalgebra::Matrix3<f64>],
+) -> Result<CurvatureEstimate> {
+    let s = certificate_matrix(problem, lambdas)?;
+    let norm = inf_norm(s.as_ref()).max(f64::MIN_POSITIVE);
+    let null = null_space_basis(y);
+    let dim = s.nrows();
+    let mut complement = if dim <= DENSE_ESTIMATE_DIMENSION {
+        // small: the dense eigenvalues of P S P + (||S|| + 1) B B^T (the deflated directions
+        // moved above the spectrum), exact
+        let mut dense = nalgebra::DMatrix::<f64>::zeros(dim, dim);
+        let mut unit = vec![0.0; dim];
+        let mut out = vec![0.0; dim];
+        for j in 0..dim {
+            unit[j] = 1.0;
+            sparse_matvec(s.as_ref(), &unit, &mut out);
+            unit[j] = 0.0;
+            dense.set_column(j, &nalgebra::DVector::from_column_slice(&out));
+        }
+        let mut proj = nalgebra::DMatrix::<f64>::identity(dim, dim);
+        let mut lift = nalgebra::DMatrix::<f64>::zeros(dim, dim);
+        for u in &null {
+            let u = nalgebra::DVector::from_column_slice(u);
+            let uu = &u * u.transpose();
+            proj -= &uu;
+            lift += uu;
+        }
+        let shifted = &proj * &dense * &proj + (norm + 1.0) * lift;
+        let eig = nalgebra::SymmetricEigen::new(0.5 * (&shifted + shifted.transpose()));
+        let k = (0..dim)
+            .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
+            .unwrap_or(0);
+        let vector: Vec<f64> = eig.eigenvectors.column(k).iter().copied().collect();
+        let value = if vector.is_empty() {
+            0.0
+        } else {
+            rayleigh_quotient(s.as_ref(), &vector).0
+        };
+        LanczosResult {
+            value,
+            vector,
+            residual: 0.0,
+            iterations: 0,
+            stop: LanczosStop::InvariantSubspace { dimension: dim },
+        }
+    } else {
+        two_pass_smallest(
+            dim,
+            |x, out| sparse_matvec(s.as_ref(), x, out),
+            norm,
+            &TwoPassSettings::default(),
+            &null,
+        )
+    };
+    if complement.vector.iter().all(|x| *x == 0.0) {
+        complement.value = 0.0;
+    }
+    // B^T S B and the coupling ||S B - B B^T S B||_F
+    let k = null.len();
+    let sb: Vec<Vec<f64>> = null
+        .iter()
+        .map(|b| {
+            let mut out = vec![0.0; b.len()];
+            sparse_matvec(s.as_ref(), b, &mut out);
+            out
+        })
+        .collect();
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let m = nalgebra::DMatrix::<f64>::from_fn(k, k, |i, j| {
+        0.5 * (dot(&null[i], &sb[j]) + dot(&null[j], &sb[i]))
+    });
+    let mut coupling = 0.0;
+    for (j, sbj) in sb.iter().enumerate() {
+        let mut r = sbj.clone();
+        for (i, bi) in null.iter().enumerate() {
+            let c = m[(i, j)];
+            r.iter_mut().zip(bi).for_each(|(x, b)| *x -= c * b);
+        }
+        coupling += dot(&r, &r);
+    }
+    let coupling = coupling.sqrt();
+    let mu = if k > 0 {
+        m.symmetric_eigenvalues().min()
+    } else {
+        f64::INFINITY
+    };
+    let theta = complement.value;
+    let whole = if mu.is_finite() {
+        0.5 * (mu + theta) - (0.25 * (theta - mu).powi(2) + coupling * coupling).sqrt()
+    } else {
+        theta
+    };
+    // the vector goes with the hint only when it is a direction of negative curvature
+    let full = LanczosResult {
+        value: whole,
+        vector: if complement.value < 0.0 {
+            complement.vector.clone()
+        } else {
+            Vec::new()
+        },
+        ..complement.clone()
+    };
+    let estimated_bound =
+        lambdas.iter().map(|l| l.trace()).sum::<f64>() + 3.0 * y.len() as f64 * whole.min(0.0);
+    Ok(CurvatureEstimate {
+        optimistic: mu.min(complement.value),
+        complement,
+        full,
+        estimated_bound,
+    })
+}
+
+/// An orthonormal basis of the column space of `Y` (blocks `3 x p` stacked into `3n` vectors):
+/// `Y^T v_k / sigma_k` for the eigenpairs `(sigma_k^2, v_k)` of `sum_i Y_i^T Y_i` with
+/// `sigma_k >= 1e-4 sigma_1`. Directions of smaller singular values are left out: dividing by
+/// `sigma_k` would amplify the point's stationarity residual `S Y^T` into a false coupling.
+fn null_space_basis(y: &[Block]) -> Vec<Vec<f64>> {
+    let p = y.first().map_or(0, |b| b.ncols());
+    let mut gram = nalgebra::DMatrix::<f64>::zeros(p, p);
+    for b in y {
+        gram += b.transpose() * b;
+    }
+    let eig = nalgebra::SymmetricEigen::new(gram);
+    let top = eig.eigenvalues.iter().copied().fold(0.0f64, f64::max);
+    (0..p)
+        .filter(|&k| eig.eigenvalues[k] >= 1e-8 * top && eig.eigenvalues[k] > 0.0)
+        .map(|k| {
+            let v = eig.eigenvectors.column(k);
+            let sigma = eig.eigenvalues[k].sqrt();
+            y.iter()
+                .flat_map(|b| {
+                    let col = b * v;
+                    [col[0] / sigma, col[1] / sigma, col[2] / sigma]
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Up to this dimension of `S` the curvature estimate is a dense eigendecomposition (exact);
+/// above it, two-pass Lanczos (a few stored vectors).
+const DENSE_ESTIMATE_DIMENSION: usize = 300;
+
+/// The trust-region gradient tolerance (`||grad F|| / (w_min + F)`) at ranks that escape: a point
 /// near enough to a critical point for Lanczos to find its direction of negative curvature.
 /// Before a verification the rank is solved to [`StaircaseSettings::gradient_tolerance`].
 pub const ESCAPE_GRADIENT_TOLERANCE: f64 = 1e-6;

@@ -169,12 +169,27 @@ pub(super) struct Check<'a> {
     pub gap: f64,
     pub settings: &'a CertifySettings,
     pub point: Point,
+    /// Estimates of `lambda_min(S)` made before the verification (the staircase's): the
+    /// shifted Cholesky rung places its shift from them instead of estimating again. Estimates
+    /// only: the shift they suggest is still proved by a factorisation.
+    pub hint: Option<CurvatureHint>,
     started: Instant,
     shared: RefCell<Shared>,
     /// Every rung considered so far, in order.
     log: RefCell<Vec<Attempt>>,
     /// The estimates the rungs found on the way.
     notes: RefCell<Notes>,
+}
+
+/// Estimates of `lambda_min(S)` handed to a verification ([`Check::hint`]).
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct CurvatureHint {
+    /// A pessimistic estimate (value; `residual` as its uncertainty; a direction of negative
+    /// curvature when one is known): the shift above it is expected to verify.
+    pub low: LanczosResult,
+    /// An optimistic estimate (a Rayleigh quotient, at least `lambda_min`): the first shift
+    /// `delta_0` is skipped only when this too is clearly below `-delta_0`.
+    pub high: f64,
 }
 
 /// What one rung's prediction tells another's.
@@ -202,6 +217,8 @@ pub(super) struct Notes {
     pub lanczos_iterations: usize,
     pub factorizations: usize,
     pub not_critical: bool,
+    /// Why a rung proved nothing without trying (e.g. the estimate predicts a bound below 0).
+    pub skipped: Option<String>,
 }
 
 /// One rung of the verification.
@@ -243,6 +260,7 @@ impl<'a> Check<'a> {
                 .allowed_gap(scale),
             settings,
             point,
+            hint: None,
             started: Instant::now(),
             shared: RefCell::new(Shared::default()),
             log: RefCell::new(Vec::new()),
@@ -395,19 +413,20 @@ pub fn lower_bound_from_multipliers(
     settings: &CertifySettings,
 ) -> Result<VerifiedBound> {
     settings.validate()?;
-    multipliers_bound(problem, lambdas, settings, Point::Sdp)
+    multipliers_bound(problem, lambdas, settings, Point::Sdp, None)
 }
 
 /// [`lower_bound_from_multipliers`] with `point` labelling the ladder (the SDP's multipliers, the
-/// staircase's).
+/// staircase's) and, when known, an estimate of `lambda_min(S)` for the shifts.
 pub(super) fn multipliers_bound(
     problem: &MultipleProblem,
     lambdas: &[Matrix3<f64>],
     settings: &CertifySettings,
     point: Point,
+    hint: Option<CurvatureHint>,
 ) -> Result<VerifiedBound> {
     let trace: f64 = lambdas.iter().map(|l| l.trace()).sum();
-    verify(problem, lambdas, None, trace.abs(), settings, point)
+    verify(problem, lambdas, None, trace.abs(), settings, point, hint)
 }
 
 /// Climb the ladder for `lambdas` (and the estimate `rotations` they belong to, when known):
@@ -419,8 +438,10 @@ pub(super) fn verify(
     scale: f64,
     settings: &CertifySettings,
     point: Point,
+    hint: Option<CurvatureHint>,
 ) -> Result<VerifiedBound> {
-    let cx = Check::new(problem, lambdas, rotations, scale, settings, point)?;
+    let mut cx = Check::new(problem, lambdas, rotations, scale, settings, point)?;
+    cx.hint = hint;
     // predicted in this order: the scalar analysis (n x n) first, so that the 3n ones can be
     // refused from it without their own ordering; climbed in the order of their predictions
     let mut rungs: Vec<Box<dyn Proof>> = Vec::new();
