@@ -116,6 +116,15 @@ pub enum Error {
         /// The operating system's message.
         message: String,
     },
+    /// A step whose predicted memory is over the budget, refused before it allocated.
+    OverBudget {
+        /// The step and its size.
+        what: String,
+        /// Its predicted memory, bytes.
+        predicted_bytes: f64,
+        /// The budget, bytes.
+        max_memory_bytes: u64,
+    },
     /// A numerical solver could not be set up or failed in a way that leaves no result.
     Solver {
         /// What happened.
@@ -170,6 +179,17 @@ impl fmt::Display for Error {
             }
             Error::Parse { location, message } => write!(f, "{location}{message}"),
             Error::Io { path, message } => write!(f, "{path}: {message}"),
+            Error::OverBudget {
+                what,
+                predicted_bytes,
+                max_memory_bytes,
+            } => write!(
+                f,
+                "{what} would need about {:.2} GiB, over the memory budget of {:.2} GiB; nothing \
+                 was allocated",
+                predicted_bytes / (1u64 << 30) as f64,
+                *max_memory_bytes as f64 / (1u64 << 30) as f64
+            ),
             Error::Solver { message } => write!(f, "solver failure: {message}"),
         }
     }

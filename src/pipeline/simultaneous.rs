@@ -429,14 +429,33 @@ pub fn solve_simultaneous_from(
 pub struct SimultaneousSettings {
     /// Gauss-Newton iterations at most (default 100).
     pub max_iterations: usize,
+    /// Largest memory the solve may need, bytes (default 4 GiB, as
+    /// [`crate::certify::Budget`]): its dense normal equations are predicted by
+    /// [`predict_simultaneous_solve_bytes`] and refused over it ([`Error::OverBudget`]).
+    pub max_memory_bytes: u64,
 }
 
 impl Default for SimultaneousSettings {
     fn default() -> Self {
         SimultaneousSettings {
             max_iterations: 100,
+            max_memory_bytes: crate::certify::Budget::default().max_memory_bytes,
         }
     }
+}
+
+/// The memory of the joint Gauss-Newton on `n` nodes, bytes: its dense `(3n) x (3n)` normal
+/// matrix and the Cholesky factor made from it (the matrix is consumed), twice `8 (3n)^2`, plus
+/// `O(n)` vectors. 10^4 nodes: about 14 GiB.
+///
+/// ```
+/// use rotavg::pipeline::simultaneous::predict_simultaneous_solve_bytes;
+/// assert!(predict_simultaneous_solve_bytes(200) < 1e7);
+/// assert!(predict_simultaneous_solve_bytes(10_000) > 4.0 * (1u64 << 30) as f64);
+/// ```
+pub fn predict_simultaneous_solve_bytes(n: usize) -> f64 {
+    let nv = 3.0 * n as f64;
+    2.0 * 8.0 * nv * nv + 64.0 * 8.0 * n as f64
 }
 
 /// Settings of [`average_simultaneous`].
@@ -479,12 +498,31 @@ impl PipelineProblem for SimultaneousProblem {
                 reason: "must be at least 1".into(),
             });
         }
+        if settings.max_memory_bytes == 0 {
+            return Err(Error::InvalidSettings {
+                name: "max_memory_bytes".into(),
+                reason: "must be at least 1".into(),
+            });
+        }
         Ok(())
     }
     fn uncertifiable(&self, _mode: CertifyMode) -> Option<String> {
         None
     }
     fn solve(&self, settings: &SimultaneousSettings) -> Result<SimultaneousSolution> {
+        let predicted = predict_simultaneous_solve_bytes(self.num_nodes);
+        if predicted > settings.max_memory_bytes as f64 {
+            return Err(Error::OverBudget {
+                what: format!(
+                    "the joint Gauss-Newton of {} nodes (dense {}x{} normal equations)",
+                    self.num_nodes,
+                    3 * self.num_nodes,
+                    3 * self.num_nodes
+                ),
+                predicted_bytes: predicted,
+                max_memory_bytes: settings.max_memory_bytes,
+            });
+        }
         solve_simultaneous(self, settings.max_iterations)
     }
     /// The dual certificate at the estimate `[H15]`, then the SDP `[H14]`; a cheaper rounding of

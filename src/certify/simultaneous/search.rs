@@ -1,0 +1,211 @@
+//! A search over the couplings of the simultaneous dual certificate `[H15]`
+//! (`paper-notes/conjugate.md`): when the couplings of least norm leave `Z_R` or `Z_C` with a
+//! negative eigenvalue, other couplings in the same affine set (the ones complementary slackness
+//! allows at the estimate) may not. Both `lambda_min(Z_R(gamma))` and `lambda_min(Z_C(gamma))`
+//! are concave in `gamma` (the `Lambda_a` are affine in it): every negative eigenpair `(w, v)`
+//! gives the cut `w + d . (gamma' - gamma) >= w / 4`-ish, `d` the gradient `v^T (dZ / dgamma) v`
+//! projected onto the kernel of `A`, and cyclic projections onto the cuts (as `[A11]`'s search)
+//! move `gamma`; a round recomputes both spectra. Nothing here is proved: the couplings found are
+//! handed to [`super::verify_simultaneous_bound`] like any others.
+
+use super::certificate_matrix;
+use super::dual::EstimateMultipliers;
+use crate::multiple::MultipleProblem;
+use nalgebra::{Matrix3, SymmetricEigen};
+use std::time::Instant;
+
+/// Rounds at most (each two dense eigendecompositions with vectors, `3n x 3n`).
+pub const MAX_SEARCH_ROUNDS: usize = 40;
+
+/// Negative eigenpairs turned into cuts per side and round at most.
+const CUTS_PER_SIDE: usize = 10;
+
+/// Sweeps of cyclic projections over all cuts per round.
+const SWEEPS: usize = 20;
+
+/// What the search did.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct SearchOutcome {
+    /// The multipliers and couplings it ended with.
+    pub lambdas: Vec<Matrix3<f64>>,
+    pub couplings: Vec<f64>,
+    /// The smaller `lambda_min` of `Z_R`, `Z_C` there (an estimate; the verification decides).
+    pub min_eigenvalue: f64,
+    pub rounds: usize,
+    pub cuts: usize,
+}
+
+/// Search from the least-norm couplings of `at` until both `lambda_min` are at least `-target`,
+/// [`MAX_SEARCH_ROUNDS`] rounds, `seconds` (checked between rounds), or `max_cut_bytes` of
+/// stored cuts (`8 n (n - 1) / 2` bytes each).
+pub(crate) fn search_couplings(
+    right: &MultipleProblem,
+    left: &MultipleProblem,
+    at: &EstimateMultipliers,
+    target: f64,
+    seconds: Option<f64>,
+    max_cut_bytes: f64,
+) -> SearchOutcome {
+    let start = Instant::now();
+    let n = at.rs.len();
+    let mut g = at.least_norm.clone();
+    // dZ/dgamma_ij (i, i) and (j, j) blocks: sym(R_j R_i^T) / 2 on the right, minus
+    // S sym(R_j R_i^T) S^T / 2 = sym(C_j C_i^T) / 2 on the left
+    let sym = |m: Matrix3<f64>| (m + m.transpose()) * 0.5;
+    let m_r: Vec<Matrix3<f64>> = at
+        .pairs
+        .iter()
+        .map(|&(i, j)| sym(at.rs[j] * at.rs[i].transpose()))
+        .collect();
+    let m_c: Vec<Matrix3<f64>> = at
+        .pairs
+        .iter()
+        .map(|&(i, j)| sym(at.cs[j] * at.cs[i].transpose()))
+        .collect();
+    let spectra = |g: &[f64]| {
+        let lambdas = at.lambdas(g);
+        let eig = |p: &MultipleProblem, side: &[Matrix3<f64>], sign: f64| {
+            let (m, _) = certificate_matrix(p, side, g, sign);
+            SymmetricEigen::new(m)
+        };
+        let er = eig(right, &lambdas[..n], -0.5);
+        let ec = eig(left, &lambdas[n..], 0.5);
+        let min = er.eigenvalues.min().min(ec.eigenvalues.min());
+        (lambdas, er, ec, min)
+    };
+    let (mut lambdas, mut er, mut ec, mut min) = spectra(&g);
+    let mut cuts: Vec<(Vec<f64>, f64)> = Vec::new();
+    let max_cuts = (max_cut_bytes / (8.0 * at.pairs.len().max(1) as f64)) as usize;
+    let mut rounds = 0;
+    while min < -target && rounds < MAX_SEARCH_ROUNDS {
+        if seconds.is_some_and(|s| start.elapsed().as_secs_f64() > s) {
+            break;
+        }
+        rounds += 1;
+        let before = cuts.len();
+        for (eig, ms, sign) in [(&er, &m_r, 1.0), (&ec, &m_c, -1.0)] {
+            let mut order: Vec<usize> = (0..eig.eigenvalues.len())
+                .filter(|&k| eig.eigenvalues[k] < -target)
+                .collect();
+            order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+            for &k in order.iter().take(CUTS_PER_SIDE) {
+                if cuts.len() >= max_cuts {
+                    break;
+                }
+                let w = eig.eigenvalues[k];
+                let v = eig.eigenvectors.column(k);
+                let vb = |i: usize| nalgebra::Vector3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+                // v^T (dZ / dgamma_ij) v = sign (v_i^T M v_i / 2 + v_j^T M v_j / 2 - v_i . v_j)
+                let mut d: Vec<f64> = at
+                    .pairs
+                    .iter()
+                    .zip(ms)
+                    .map(|(&(i, j), m)| {
+                        let (vi, vj) = (vb(i), vb(j));
+                        sign * (0.5 * vi.dot(&(m * vi)) + 0.5 * vj.dot(&(m * vj)) - vi.dot(&vj))
+                    })
+                    .collect();
+                at.project(&mut d);
+                let dd: f64 = d.iter().map(|x| x * x).sum();
+                if dd > 0.0 && dd.is_finite() {
+                    // aim a quarter of |w| above zero: w + d . (gamma' - gamma) >= |w| / 4
+                    let dg: f64 = d.iter().zip(&g).map(|(a, b)| a * b).sum();
+                    cuts.push((d, 0.25 * w.abs() - w + dg));
+                }
+            }
+        }
+        if cuts.len() == before {
+            break;
+        }
+        for _ in 0..SWEEPS {
+            for (d, rhs) in &cuts {
+                let dg: f64 = d.iter().zip(&g).map(|(a, b)| a * b).sum();
+                let violation = rhs - dg;
+                if violation > 0.0 {
+                    let dd: f64 = d.iter().map(|x| x * x).sum();
+                    g.iter_mut()
+                        .zip(d)
+                        .for_each(|(x, di)| *x += violation * di / dd);
+                }
+            }
+        }
+        (lambdas, er, ec, min) = spectra(&g);
+    }
+    SearchOutcome {
+        lambdas,
+        couplings: g,
+        min_eigenvalue: min,
+        rounds,
+        cuts: cuts.len(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::multiple::synthetic::SyntheticGraph;
+
+    /// The cut's gradient is the derivative of `v^T Z(gamma) v` along a projected direction
+    /// (finite differences on a 6-node rig), and projected directions keep the multipliers'
+    /// complementary slackness (`Z_R Y_R` unchanged).
+    #[test]
+    fn gradient_matches_finite_differences() {
+        // two unrelated noisy graphs and any point: the identities hold everywhere
+        let graph = |seed| SyntheticGraph {
+            num_rotations: 6,
+            num_edges: 12,
+            noise_sigma: 0.2,
+            seed,
+            ..Default::default()
+        };
+        let (right, truth) = graph(9).generate();
+        let (left, _) = graph(10).generate();
+        let s = crate::so3::exp(&nalgebra::Vector3::new(0.3, -0.2, 0.5));
+        let at = EstimateMultipliers::new(&right, &left, &truth, &s).unwrap();
+        let n = 6;
+        let g0 = at.least_norm.clone();
+        let mut dir: Vec<f64> = (0..g0.len())
+            .map(|k| ((k * 37) % 11) as f64 - 5.0)
+            .collect();
+        at.project(&mut dir);
+        let sym = |m: Matrix3<f64>| (m + m.transpose()) * 0.5;
+        for (side, sign) in [(0usize, 1.0), (1, -1.0)] {
+            let z = |g: &[f64]| {
+                let l = at.lambdas(g);
+                if side == 0 {
+                    certificate_matrix(&right, &l[..n], g, -0.5).0
+                } else {
+                    certificate_matrix(&left, &l[n..], g, 0.5).0
+                }
+            };
+            let v = nalgebra::DVector::<f64>::from_fn(3 * n, |k, _| ((k * 13) % 7) as f64 - 3.0);
+            let h = 1e-6;
+            let plus: Vec<f64> = g0.iter().zip(&dir).map(|(a, b)| a + h * b).collect();
+            let minus: Vec<f64> = g0.iter().zip(&dir).map(|(a, b)| a - h * b).collect();
+            let fd = ((v.transpose() * z(&plus) * &v)[0] - (v.transpose() * z(&minus) * &v)[0])
+                / (2.0 * h);
+            let ys = if side == 0 { &at.rs } else { &at.cs };
+            let analytic: f64 = at
+                .pairs
+                .iter()
+                .zip(&dir)
+                .map(|(&(i, j), d)| {
+                    let m = sym(ys[j] * ys[i].transpose());
+                    let vb =
+                        |a: usize| nalgebra::Vector3::new(v[3 * a], v[3 * a + 1], v[3 * a + 2]);
+                    let (vi, vj) = (vb(i), vb(j));
+                    d * sign * (0.5 * vi.dot(&(m * vi)) + 0.5 * vj.dot(&(m * vj)) - vi.dot(&vj))
+                })
+                .sum();
+            assert!(
+                (fd - analytic).abs() <= 1e-5 * (1.0 + fd.abs()),
+                "side {side}: {fd} vs {analytic}"
+            );
+            // Z Y at the moved couplings equals Z Y at the least-norm ones (both ~ 0)
+            let y = nalgebra::DMatrix::<f64>::from_fn(3 * n, 3, |r, c| ys[r / 3][(r % 3, c)]);
+            let zy0 = (z(&g0) * &y).norm();
+            let zy1 = (z(&plus) * &y).norm();
+            assert!((zy1 - zy0).abs() < 1e-8, "side {side}: {zy0} -> {zy1}");
+        }
+    }
+}
