@@ -101,13 +101,13 @@ impl Proof for ShiftedProof {
         let outcome = match &bound {
             Some(b) => cx.proved(b),
             None => Outcome::Failed {
-                reason: match &notes.estimate {
-                    _ if notes.skipped.is_some() => notes.skipped.clone().unwrap_or_default(),
-                    Some(e) => format!(
+                reason: match (&notes.skipped, &notes.estimate) {
+                    (Some(skipped), _) => skipped.clone(),
+                    (None, Some(e)) => format!(
                         "no shift verified; Lanczos estimate lambda_min(S) ~ {:.3e}",
                         e.value
                     ),
-                    None => "the first shift did not verify".into(),
+                    (None, None) => "the first shift did not verify".into(),
                 },
             },
         };
@@ -244,11 +244,10 @@ fn search(
         };
         best = Some((f.shift, f.margin));
         if hinted || clearly_negative(&r, delta0) {
-            // (a hint is already the estimate a shift-invert run would refine, and the shift
-            // above it the tight one)
-            // S is indefinite by far more than the estimate's uncertainty: the bound is
-            // trace + 3n lambda_min whatever the shift, and tightening or refining the estimate
-            // (two more factorisations, a shift-invert run) changes it by the residual only
+            // a hint is already the estimate a shift-invert run would refine, and the shift
+            // above it the tight one; and when S is indefinite by far more than the estimate's
+            // uncertainty, the bound is trace + 3n lambda_min whatever the shift: tightening or
+            // refining (two more factorisations, a shift-invert run) changes it by the residual
             break;
         }
         let mut r2 = shift_invert(&f, cx.s.nrows(), Some(&r.vector), &lz);

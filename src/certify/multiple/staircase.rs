@@ -303,13 +303,19 @@ pub fn staircase_bound(
                 .allowed_gap(cost)
                 .max(settings.bracket_tolerance * (cost - bound))
     };
+    // one trust-region solve of the current rank from `y`, its work counted
+    let solve = |y: &mut Vec<Block>,
+                 settings: &TrustRegionSettings,
+                 iterations: &mut usize,
+                 products: &mut usize| {
+        let mut r = trust_region(problem, std::mem::take(y), settings);
+        *y = std::mem::take(&mut r.y);
+        *iterations += r.iterations;
+        *products += r.hessian_products;
+        r
+    };
     let (lifted, stop_reason, bound) = loop {
-        let mut r = trust_region(problem, y, &loose);
-        (y, iterations, products) = (
-            std::mem::take(&mut r.y),
-            iterations + r.iterations,
-            products + r.hessian_products,
-        );
+        let mut r = solve(&mut y, &loose, &mut iterations, &mut products);
         let mut strict = loose.gradient_tolerance <= tr.gradient_tolerance;
         let mut step = StaircaseStep {
             rank,
@@ -341,12 +347,7 @@ pub fn staircase_bound(
             }
             if !strict && !bracketed(r.cost, e.estimated_bound) {
                 // about to verify: converge at this rank first
-                r = trust_region(problem, y, &tr);
-                (y, iterations, products) = (
-                    std::mem::take(&mut r.y),
-                    iterations + r.iterations,
-                    products + r.hessian_products,
-                );
+                r = solve(&mut y, &tr, &mut iterations, &mut products);
                 (step.iterations, step.lifted_cost) = (step.iterations + r.iterations, r.cost);
                 (strict, step.strict) = (true, true);
                 continue;
@@ -361,18 +362,11 @@ pub fn staircase_bound(
                     high: e.optimistic,
                 }),
             )?;
-            step.verified_bound = Some(b.lower_bound);
             if !strict && !bracketed(r.cost, b.lower_bound) && b.negative_eigenvector.is_none() {
                 // the estimate promised more than the loose point's multipliers proved
-                strict = true;
-                r = trust_region(problem, y, &tr);
-                (y, iterations, products) = (
-                    std::mem::take(&mut r.y),
-                    iterations + r.iterations,
-                    products + r.hessian_products,
-                );
-                (step.iterations, step.lifted_cost, step.strict) =
-                    (step.iterations + r.iterations, r.cost, true);
+                r = solve(&mut y, &tr, &mut iterations, &mut products);
+                (step.iterations, step.lifted_cost) = (step.iterations + r.iterations, r.cost);
+                (strict, step.strict) = (true, true);
                 continue;
             }
             let b = if !bracketed(r.cost, b.lower_bound) && b.negative_eigenvector.is_none() {

@@ -318,35 +318,43 @@ pub fn certify_simultaneous(
                     && !bound.is_some_and(|b| climb.sufficient(b.lower_bound))
                 {
                     // other couplings complementary slackness allows [H15]: a cutting-plane
-                    // search, within half the time left and a quarter of the memory budget
+                    // search, its rounds within half the time left, its cuts within the memory
+                    // the rung's prediction leaves
                     let target = 0.25 * climb.allowed_gap / (3 * n) as f64;
                     let seconds = settings
                         .budget
                         .max_seconds
                         .map(|m| 0.5 * (m - start.elapsed().as_secs_f64()));
-                    let found = search::search_couplings(
-                        right,
-                        left,
-                        at,
-                        target,
-                        seconds,
-                        0.25 * settings.budget.max_memory_bytes as f64,
-                    );
-                    let searched =
-                        verify_simultaneous_bound(right, left, &found.lambdas, &found.couplings);
-                    if let Some(b) = searched
-                        && bound.is_none_or(|x| b.lower_bound > x.lower_bound)
-                    {
-                        note = format!(
-                            "multipliers at the estimate, couplings from a search ({} rounds, {} cuts) from the least-norm ones, verified, lambda_min(Z) >= {:.3e}",
-                            found.rounds, found.cuts, b.verified_min_eigenvalue
-                        );
-                        bound = Some(b);
-                    } else {
-                        note = format!(
-                            "{note}; a search over the couplings ({} rounds, {} cuts) found no better bound",
-                            found.rounds, found.cuts
-                        );
+                    let cut_bytes =
+                        (settings.budget.max_memory_bytes as f64 - predicted.bytes).max(0.0);
+                    match search::search_couplings(right, left, at, target, seconds, cut_bytes) {
+                        None => {
+                            note = format!(
+                                "{note}; no search over the couplings: one round is predicted past half the time left"
+                            );
+                        }
+                        Some(found) => {
+                            let searched = verify_simultaneous_bound(
+                                right,
+                                left,
+                                &found.lambdas,
+                                &found.couplings,
+                            );
+                            if let Some(b) = searched
+                                && bound.is_none_or(|x| b.lower_bound > x.lower_bound)
+                            {
+                                note = format!(
+                                    "multipliers at the estimate, couplings from a search ({} rounds, {} cuts) from the least-norm ones, verified, lambda_min(Z) >= {:.3e}",
+                                    found.rounds, found.cuts, b.verified_min_eigenvalue
+                                );
+                                bound = Some(b);
+                            } else {
+                                note = format!(
+                                    "{note}; a search over the couplings ({} rounds, {} cuts) found no better bound",
+                                    found.rounds, found.cuts
+                                );
+                            }
+                        }
                     }
                 }
                 why = note.clone();

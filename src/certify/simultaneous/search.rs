@@ -40,21 +40,28 @@ fn stalled(history: &[f64]) -> bool {
     best(recent).abs() > 0.5 * best(before).abs()
 }
 
-/// What the search did.
-#[derive(Debug, Clone, PartialEq)]
+/// What the search ended with (for the verification) and how long it ran (for the note).
 pub(crate) struct SearchOutcome {
     /// The multipliers and couplings it ended with.
     pub lambdas: Vec<Matrix3<f64>>,
     pub couplings: Vec<f64>,
-    /// The smaller `lambda_min` of `Z_R`, `Z_C` there (an estimate; the verification decides).
-    pub min_eigenvalue: f64,
+    /// Rounds of cuts and projections, and cuts made.
     pub rounds: usize,
     pub cuts: usize,
 }
 
+/// The time of one round on `n` nodes: two dense symmetric eigendecompositions of `3n x 3n`
+/// with vectors (taken as `20 (3n)^3` multiply-adds each). A round is started only when it fits.
+fn predicted_round_seconds(n: usize) -> f64 {
+    let d = 3.0 * n as f64;
+    2.0 * 20.0 * d * d * d / crate::relax::multiple::SDP_MULTIPLY_ADD_RATE
+}
+
 /// Search from the least-norm couplings of `at` until both `lambda_min` are at least `-target`,
-/// [`MAX_SEARCH_ROUNDS`] rounds, `seconds` (checked between rounds), or `max_cut_bytes` of
-/// stored cuts (`8 n (n - 1) / 2` bytes each).
+/// [`MAX_SEARCH_ROUNDS`] rounds, a stall ([`stalled`]), a round predicted past `seconds`, or
+/// `max_cut_bytes` of stored cuts (`8 n (n - 1) / 2` bytes each). Memory besides the cuts: one
+/// side's eigenvectors while the other's are computed (with `at`'s factor, at most five dense
+/// `3n x 3n` matrices). `None` when not even one round fits the time.
 pub(crate) fn search_couplings(
     right: &MultipleProblem,
     left: &MultipleProblem,
@@ -62,46 +69,33 @@ pub(crate) fn search_couplings(
     target: f64,
     seconds: Option<f64>,
     max_cut_bytes: f64,
-) -> SearchOutcome {
+) -> Option<SearchOutcome> {
     let start = Instant::now();
     let n = at.rs.len();
-    let mut g = at.least_norm.clone();
-    // dZ/dgamma_ij (i, i) and (j, j) blocks: sym(R_j R_i^T) / 2 on the right, minus
-    // S sym(R_j R_i^T) S^T / 2 = sym(C_j C_i^T) / 2 on the left
-    let sym = |m: Matrix3<f64>| (m + m.transpose()) * 0.5;
-    let m_r: Vec<Matrix3<f64>> = at
-        .pairs
-        .iter()
-        .map(|&(i, j)| sym(at.rs[j] * at.rs[i].transpose()))
-        .collect();
-    let m_c: Vec<Matrix3<f64>> = at
-        .pairs
-        .iter()
-        .map(|&(i, j)| sym(at.cs[j] * at.cs[i].transpose()))
-        .collect();
-    let spectra = |g: &[f64]| {
-        let lambdas = at.lambdas(g);
-        let eig = |p: &MultipleProblem, side: &[Matrix3<f64>], sign: f64| {
-            let (m, _) = certificate_matrix(p, side, g, sign);
-            SymmetricEigen::new(m)
-        };
-        let er = eig(right, &lambdas[..n], -0.5);
-        let ec = eig(left, &lambdas[n..], 0.5);
-        let min = er.eigenvalues.min().min(ec.eigenvalues.min());
-        (lambdas, er, ec, min)
-    };
-    let (mut lambdas, mut er, mut ec, mut min) = spectra(&g);
-    let mut cuts: Vec<(Vec<f64>, f64)> = Vec::new();
+    let round_seconds = predicted_round_seconds(n);
+    let fits = || seconds.is_none_or(|s| start.elapsed().as_secs_f64() + round_seconds <= s);
+    if !fits() {
+        return None;
+    }
     let max_cuts = (max_cut_bytes / (8.0 * at.pairs.len().max(1) as f64)) as usize;
-    let mut rounds = 0;
-    let mut history = vec![min];
-    while min < -target && rounds < MAX_SEARCH_ROUNDS {
-        if seconds.is_some_and(|s| start.elapsed().as_secs_f64() > s) {
-            break;
-        }
-        rounds += 1;
+    let mut g = at.least_norm.clone();
+    let mut cuts: Vec<(Vec<f64>, f64)> = Vec::new();
+    let (mut rounds, mut history) = (0, Vec::new());
+    loop {
+        let lambdas = at.lambdas(&g);
         let before = cuts.len();
-        for (eig, ms, sign) in [(&er, &m_r, 1.0), (&ec, &m_c, -1.0)] {
+        let mut min = f64::INFINITY;
+        // one side at a time: its spectrum, its cuts, then it is dropped
+        for (p, side, sign, ys) in [
+            (right, &lambdas[..n], -0.5, &at.rs),
+            (left, &lambdas[n..], 0.5, &at.cs),
+        ] {
+            let z = {
+                let (z, _magnitudes) = certificate_matrix(p, side, &g, sign);
+                z
+            };
+            let eig = SymmetricEigen::new(z);
+            min = min.min(eig.eigenvalues.min());
             let mut order: Vec<usize> = (0..eig.eigenvalues.len())
                 .filter(|&k| eig.eigenvalues[k] < -target)
                 .collect();
@@ -113,14 +107,17 @@ pub(crate) fn search_couplings(
                 let w = eig.eigenvalues[k];
                 let v = eig.eigenvectors.column(k);
                 let vb = |i: usize| nalgebra::Vector3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
-                // v^T (dZ / dgamma_ij) v = sign (v_i^T M v_i / 2 + v_j^T M v_j / 2 - v_i . v_j)
+                // v^T (dZ / dgamma_ij) v = -2 sign (v_i^T M v_i / 2 + v_j^T M v_j / 2 - v_i . v_j),
+                // M = sym(Y_j Y_i^T) (R on the right, C on the left)
                 let mut d: Vec<f64> = at
                     .pairs
                     .iter()
-                    .zip(ms)
-                    .map(|(&(i, j), m)| {
+                    .map(|&(i, j)| {
+                        let m = ys[j] * ys[i].transpose();
+                        let m = (m + m.transpose()) * 0.5;
                         let (vi, vj) = (vb(i), vb(j));
-                        sign * (0.5 * vi.dot(&(m * vi)) + 0.5 * vj.dot(&(m * vj)) - vi.dot(&vj))
+                        -2.0 * sign
+                            * (0.5 * vi.dot(&(m * vi)) + 0.5 * vj.dot(&(m * vj)) - vi.dot(&vj))
                     })
                     .collect();
                 at.project(&mut d);
@@ -132,9 +129,21 @@ pub(crate) fn search_couplings(
                 }
             }
         }
-        if cuts.len() == before {
-            break;
+        history.push(min);
+        let done = min >= -target
+            || rounds >= MAX_SEARCH_ROUNDS
+            || cuts.len() == before
+            || stalled(&history)
+            || !fits();
+        if done {
+            return Some(SearchOutcome {
+                lambdas,
+                couplings: g,
+                rounds,
+                cuts: cuts.len(),
+            });
         }
+        rounds += 1;
         for _ in 0..SWEEPS {
             for (d, rhs) in &cuts {
                 let dg: f64 = d.iter().zip(&g).map(|(a, b)| a * b).sum();
@@ -147,18 +156,6 @@ pub(crate) fn search_couplings(
                 }
             }
         }
-        (lambdas, er, ec, min) = spectra(&g);
-        history.push(min);
-        if stalled(&history) {
-            break;
-        }
-    }
-    SearchOutcome {
-        lambdas,
-        couplings: g,
-        min_eigenvalue: min,
-        rounds,
-        cuts: cuts.len(),
     }
 }
 
