@@ -9,6 +9,8 @@
 //! - `ldlt` (crate-internal): the verified inertia of a sparse `LDL^T` factorisation `[D13]`.
 //! - [`lanczos`](mod@lanczos): the one eigen-estimation engine (block Lanczos with full
 //!   reorthogonalisation) `[D7]`, `[D14]`.
+//! - [`symmetric3`]: eigenvalues of a symmetric 3x3 matrix to high relative accuracy from its
+//!   exactly evaluated invariants `[A12]` (the information matrices' weight scale and sign).
 //! - [`two_pass_lanczos`]: the smallest eigenpair when thousands of steps are needed (no stored
 //!   basis; the Ritz vector from a second pass), for the staircase's negative curvature `[D11]`.
 //! - `block_pattern`, `linear_solver`, `pcg` (crate-internal): the block-sparse Newton systems
@@ -23,6 +25,7 @@ pub mod lanczos;
 pub(crate) mod ldlt;
 pub(crate) mod linear_solver;
 pub(crate) mod pcg;
+pub mod symmetric3;
 pub mod two_pass_lanczos;
 
 /// Factor size (stored values) above which a numeric sparse factorisation runs in parallel.

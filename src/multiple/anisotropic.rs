@@ -36,18 +36,23 @@ use crate::so3::{Rotation, log, right_jacobian_inverse};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
-/// Relative tolerance on negative eigenvalues of an information matrix: `lambda_min >= -1e-12
-/// lambda_max` is accepted as positive semidefinite (an exactly singular matrix computed in
-/// floating point), anything more negative is an error.
+/// Relative tolerance on negative eigenvalues: `lambda_min >= -1e-12 lambda_max` is accepted (a
+/// singular matrix rounded in floating point, e.g. numpy's `J.T @ W @ J` of a rank-deficient
+/// `J`), anything more negative is an error. The eigenvalues are those of the matrix as given,
+/// computed to high relative accuracy ([`crate::linalg::symmetric3`], `[A12]`); an accepted
+/// negative part is **carried**, not rounded away: the cost is that of `H` as given, and every
+/// lower bound of the certificates holds for any symmetric `H` (`[A12]`).
 pub const PSD_TOLERANCE: f64 = 1e-12;
 
 /// A validated 3x3 information matrix `H` of one edge: finite, exactly symmetric, positive
-/// semidefinite (to [`PSD_TOLERANCE`]), with `tr(H)` in the weight window
-/// [`crate::validate::MIN_WEIGHT`]..[`crate::validate::MAX_WEIGHT`].
+/// semidefinite (to [`PSD_TOLERANCE`], eigenvalues from [`crate::linalg::symmetric3`]), with
+/// `tr(H)` in the weight window [`crate::validate::MIN_WEIGHT`]..[`crate::validate::MAX_WEIGHT`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "[[f64; 3]; 3]", into = "[[f64; 3]; 3]")]
 pub struct Information {
     h: Matrix3<f64>,
+    /// The eigenvalues of `h`, ascending, to [`crate::linalg::symmetric3::RELATIVE_ACCURACY`].
+    eigenvalues: [f64; 3],
 }
 
 impl Information {
@@ -84,8 +89,8 @@ impl Information {
                  that is the information meant"
             ));
         }
-        let eig = h.symmetric_eigenvalues();
-        let (lo, hi) = (eig.min(), eig.max());
+        let eig = crate::linalg::symmetric3::eigenvalues(&h)?;
+        let (lo, hi) = (eig[0], eig[2]);
         if hi <= 0.0 || lo < -PSD_TOLERANCE * hi {
             return Err(format!(
                 "is not positive semidefinite (eigenvalues {:.3e}, {:.3e}, {:.3e})",
@@ -95,7 +100,10 @@ impl Information {
         if let Some(reason) = crate::validate::weight_out_of_range(h.trace()) {
             return Err(format!("trace: {reason}"));
         }
-        Ok(Information { h })
+        Ok(Information {
+            h,
+            eigenvalues: eig,
+        })
     }
 
     /// `H = w I`: the isotropic measurement of weight `w` (its chordal cost is exactly the
@@ -127,25 +135,43 @@ impl Information {
     }
 
     /// The smallest positive eigenvalue of `H` (the tolerance's weight scale, SPEC section 3,
-    /// `[A9]`).
+    /// `[A9]`, `[A12]`): the smallest **nonzero magnitude** of its eigenvalues, so that an
+    /// accepted negative part (within [`PSD_TOLERANCE`]) counts with its size instead of leaving
+    /// the scale to the larger ones; rounded **down** by the eigenvalues' relative accuracy
+    /// ([`crate::linalg::symmetric3::RELATIVE_ACCURACY`]) so that it never loosens the
+    /// tolerance, however far below `lambda_max` it lies (`diag(1e8, 1e8, 1e-8)` gives `1e-8`).
+    /// Only an exact zero is left out.
+    ///
+    /// ```
+    /// use rotavg::multiple::anisotropic::Information;
+    /// use nalgebra::{Matrix3, Vector3};
+    /// let h = Information::new(Matrix3::from_diagonal(&Vector3::new(1e8, 1e8, 1e-8)))?;
+    /// assert!((h.min_positive_eigenvalue() / 1e-8 - 1.0).abs() < 1e-6);
+    /// let singular = Information::new(Matrix3::from_diagonal(&Vector3::new(2.0, 0.0, 5.0)))?;
+    /// assert!((singular.min_positive_eigenvalue() / 2.0 - 1.0).abs() < 1e-6);
+    /// let rounded = Information::new(Matrix3::from_diagonal(&Vector3::new(1e8, 1e8, -1e-5)))?;
+    /// assert!((rounded.min_positive_eigenvalue() / 1e-5 - 1.0).abs() < 1e-6);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
     pub fn min_positive_eigenvalue(&self) -> f64 {
-        let eig = self.h.symmetric_eigenvalues();
-        let hi = eig.max();
-        eig.iter()
-            .copied()
-            .filter(|x| *x > PSD_TOLERANCE * hi)
-            .fold(f64::INFINITY, f64::min)
+        let lowest = self
+            .eigenvalues
+            .iter()
+            .map(|x| x.abs())
+            .filter(|x| *x > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        lowest * (1.0 - crate::linalg::symmetric3::RELATIVE_ACCURACY)
+    }
+
+    /// The eigenvalues of `H`, ascending, to high relative accuracy (`[A12]`).
+    pub fn eigenvalues(&self) -> [f64; 3] {
+        self.eigenvalues
     }
 
     /// `lambda_max(H) / lambda_min(H)` (infinite for a singular `H`): 1 for isotropic edges.
     pub fn anisotropy(&self) -> f64 {
-        let eig = self.h.symmetric_eigenvalues();
-        let lo = eig.min();
-        if lo > 0.0 {
-            eig.max() / lo
-        } else {
-            f64::INFINITY
-        }
+        let [lo, _, hi] = self.eigenvalues;
+        if lo > 0.0 { hi / lo } else { f64::INFINITY }
     }
 
     /// `true` when `M` is indefinite (an eigenvalue of `H` above the sum of the other two):

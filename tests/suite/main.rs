@@ -69,3 +69,4 @@ mod single;
 mod soundness_multiple;
 mod spectrum;
 mod tolerance_invariance;
+mod tolerance_spectrum;
