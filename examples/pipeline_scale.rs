@@ -145,7 +145,7 @@ fn main() {
                 e.details
                     .certify
                     .iter()
-                    .flat_map(|c| &c.methods)
+                    .flat_map(|c| c.methods())
                     .map(|r| r.method.to_string())
                     .collect::<Vec<_>>()
             );

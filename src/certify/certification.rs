@@ -1,6 +1,8 @@
 //! What every `certify_*` function returns: one shape for the three problems.
 
-use super::certificate::{BoundMethod, Certificate};
+use super::certificate::Certificate;
+use super::log::{Attempt, Outcome, Refusal};
+use super::proof::BoundMethod;
 use super::settings::CertifyMode;
 use crate::relax::SdpStatus;
 use serde::{Deserialize, Serialize};
@@ -81,95 +83,129 @@ pub struct Improvement {
     pub cost: f64,
 }
 
-/// What a certification did.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+/// What a certification did. Its one record is the log ([`CertifyDetails::ladder`]); the
+/// report's `methods` are derived from it ([`CertifyDetails::methods`]).
+#[derive(Debug, Clone, PartialEq, Default, Deserialize)]
+#[serde(default)]
 pub struct CertifyDetails {
     /// The mode requested.
     pub mode: CertifyMode,
-    /// The bounding methods that ran, in order.
-    pub methods: Vec<MethodRun>,
     /// Multiple averaging: the stationarity residual `[D3]` of the point whose multipliers
     /// were verified last by the dual certificate (the refined estimate when there is one; 0
     /// at a critical point).
     pub stationarity_residual: Option<f64>,
     /// Multiple averaging: the stationarity residual `[D3]` of the given estimate.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub given_stationarity_residual: Option<f64>,
     /// Why a requested or default method was not run (e.g. the SDP after a dual certificate
-    /// limited by floating-point precision), if one was skipped.
+    /// limited by floating-point precision), if one was skipped: the last rung of the
+    /// certification refused, unless the entry point states another reason.
     pub skipped_reason: Option<String>,
     /// The SDP solve, when one ran.
     pub sdp: Option<SdpSummary>,
     /// The Riemannian staircase, when it ran: every rank, its estimate of `lambda_min(S)`
     /// and whether it was verified (multiple averaging).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub staircase_steps: Vec<crate::certify::multiple::staircase::StaircaseStep>,
     /// The branch and bound, when one ran.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub branch_and_bound: Option<crate::certify::branch_and_bound::BranchAndBoundStats>,
     /// The improvement found, if any (the solution is in [`Certification::improvement`]).
     pub improvement: Option<Improvement>,
     /// Time spent refining the estimate before verifying multipliers (included in `seconds`).
     pub refine_seconds: f64,
-    /// Every rung of the proof ladder considered, in order: which proof, at which point (the
-    /// given estimate, the refined one, the SDP, the staircase), its predicted cost and its
-    /// outcome ([`crate::certify::ladder`]).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub ladder: Vec<crate::certify::ladder::Attempt>,
+    /// Every rung considered, in order: the rungs of the certification itself and the checks
+    /// inside each proof ([`Attempt::within`]): which proof, at which point (the given
+    /// estimate, the refined one, the SDP, the staircase), its predicted cost, its outcome and
+    /// what it did ([`crate::certify::log`]).
+    pub ladder: Vec<Attempt>,
     /// Total time, seconds.
     pub seconds: f64,
 }
 
+/// The JSON form of [`CertifyDetails`]: its fields and the derived `methods`.
+#[derive(Serialize)]
+struct DetailsJson<'a> {
+    mode: CertifyMode,
+    methods: Vec<MethodRun>,
+    stationarity_residual: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    given_stationarity_residual: Option<f64>,
+    skipped_reason: &'a Option<String>,
+    sdp: &'a Option<SdpSummary>,
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    staircase_steps: &'a [crate::certify::multiple::staircase::StaircaseStep],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    branch_and_bound: &'a Option<crate::certify::branch_and_bound::BranchAndBoundStats>,
+    improvement: &'a Option<Improvement>,
+    refine_seconds: f64,
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    ladder: &'a [Attempt],
+    seconds: f64,
+}
+
+impl Serialize for CertifyDetails {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        DetailsJson {
+            mode: self.mode,
+            methods: self.methods(),
+            stationarity_residual: self.stationarity_residual,
+            given_stationarity_residual: self.given_stationarity_residual,
+            skipped_reason: &self.skipped_reason,
+            sdp: &self.sdp,
+            staircase_steps: &self.staircase_steps,
+            branch_and_bound: &self.branch_and_bound,
+            improvement: &self.improvement,
+            refine_seconds: self.refine_seconds,
+            ladder: &self.ladder,
+            seconds: self.seconds,
+        }
+        .serialize(serializer)
+    }
+}
+
 impl CertifyDetails {
-    /// Record a bounding method that ran on the given estimate, as a [`MethodRun`] and as a
-    /// rung of the ladder (single and conjugate averaging; multiple averaging logs its rungs as
-    /// it climbs): proved when it gave a bound (`sufficient` when that bound certifies), failed
-    /// with its note otherwise.
-    pub(crate) fn record(&mut self, run: MethodRun, sufficient: bool) {
-        use crate::certify::ladder::Rung;
-        let rung = match run.method {
-            BoundMethod::Theory => Rung::Theory,
-            BoundMethod::Sdp => Rung::Sdp,
-            BoundMethod::Staircase => Rung::Staircase,
-            BoundMethod::BranchAndBound => Rung::BranchAndBound,
-            BoundMethod::Dual => Rung::Grounded,
-        };
-        self.record_rung(run, rung, None, sufficient);
+    /// The details of a certification in `mode` whose log is `ladder`, `seconds` long; the
+    /// skipped reason is the last refusal of a rung of the certification itself.
+    pub(crate) fn from_log(mode: CertifyMode, ladder: Vec<Attempt>, seconds: f64) -> Self {
+        let skipped_reason = ladder
+            .iter()
+            .rev()
+            .filter(|a| a.within.is_none())
+            .find_map(|a| match &a.outcome {
+                Outcome::Refused(Refusal::OverBudget { reason })
+                | Outcome::Refused(Refusal::NotApplicable { reason }) => {
+                    Some(format!("{} not run: {reason}", a.rung))
+                }
+                _ => None,
+            });
+        CertifyDetails {
+            mode,
+            skipped_reason,
+            ladder,
+            seconds,
+            ..Default::default()
+        }
     }
 
-    /// [`Self::record`] on a named rung with its prediction.
-    pub(crate) fn record_rung(
-        &mut self,
-        run: MethodRun,
-        rung: crate::certify::ladder::Rung,
-        predicted: Option<crate::certify::ladder::Prediction>,
-        sufficient: bool,
-    ) {
-        use crate::certify::ladder::{Attempt, Outcome, Point};
-        let outcome = match run.lower_bound {
-            Some(lower_bound) => Outcome::Proved {
-                lower_bound,
-                sufficient,
-            },
-            None => Outcome::Failed {
-                reason: run.note.clone(),
-            },
-        };
-        self.ladder.push(Attempt {
-            rung,
-            point: Point::Given,
-            predicted,
-            outcome,
-            seconds: run.seconds,
-        });
-        self.methods.push(run);
+    /// The bounding methods that ran (or were refused), in order: the rungs of the
+    /// certification itself ([`Attempt::within`] absent), not those not needed.
+    pub fn methods(&self) -> Vec<MethodRun> {
+        self.ladder
+            .iter()
+            .filter(|a| a.within.is_none())
+            .filter(|a| !matches!(a.outcome, Outcome::Refused(Refusal::NotNeeded)))
+            .map(|a| MethodRun {
+                method: a.rung.method(),
+                lower_bound: a.lower_bound(),
+                seconds: a.seconds,
+                note: a.words(),
+            })
+            .collect()
     }
 }
 
 impl fmt::Display for CertifyDetails {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "mode {}", self.mode)?;
-        for m in &self.methods {
+        for m in &self.methods() {
             write!(f, "; {} ({:.3} s): {}", m.method, m.seconds, m.note)?;
         }
         if let Some(r) = &self.skipped_reason {

@@ -1,46 +1,64 @@
 //! Certificates of global optimality and proven suboptimality gaps (SPEC section 3,
-//! `paper-notes/certificates.md`), one verb for the three problems:
+//! `paper-notes/certificates.md`), one verb for each problem:
 //!
-//! | problem | function | methods |
+//! | problem | function | rungs |
 //! |---|---|---|
-//! | single | [`certify_single`] | theorems: closed forms, convexity `[S1]`-`[S7]` ([`single`]), then branch and bound `[B1]`-`[B6]` ([`branch_and_bound`]) |
-//! | multiple | [`certify_multiple`] | dual certificate, SDP, staircase `[D3]`-`[D14]` ([`multiple`]) |
+//! | single | [`certify_single`] | theorems: closed forms, convexity `[S1]`-`[S7]` ([`single`]), branch and bound `[B1]`-`[B6]` ([`branch_and_bound`]) |
+//! | multiple | [`certify_multiple`] | dual certificate, staircase, SDP, conv(SO(3)) dual and SDP `[D3]`-`[D16]`, `[A6]`, `[A11]` ([`multiple`]) |
 //! | conjugate | [`certify_conjugate`] | SDP with verified multipliers `[H8]` ([`conjugate`]), branch and bound `[B1]`-`[B6]` |
+//! | simultaneous | [`certify_simultaneous`] | dual certificate at the estimate `[H15]`, SDP `[H14]` ([`simultaneous`]) |
 //!
-//! Each takes `(&problem, &estimate, &CertifySettings)`, never changes the estimate, and returns
-//! a [`Certification`]: the [`Certificate`] (verdict, proven lower bound, gap), what ran, and a
-//! better solution if one was found while bounding.
+//! Each takes the problem, the estimate and a [`CertifySettings`], never changes the estimate,
+//! and returns a [`Certification`]: the [`Certificate`] (verdict, proven lower bound, gap), the
+//! log of what ran, and a better solution if one was found while bounding.
 //!
-//! Every proof is a rung of one ladder ([`ladder`]): a predicted cost, an attempt, and a verified
-//! bound or a typed refusal; the report lists each rung tried ([`CertifyDetails::ladder`]).
+//! The layers, one way (checked by `tests/suite/layers.rs`):
+//!
+//! 1. the vocabulary: [`tolerance`], [`proof`] (the one enum naming proofs), [`budget`] (the
+//!    budget, its prediction models and the one clock), [`log`], [`certificate`], [`settings`],
+//!    [`certification`], [`rung`] (what a proof is to a climb);
+//! 2. the rungs and their kernels, one file a proof: [`single`], [`conjugate`],
+//!    [`branch_and_bound`], [`simultaneous`], [`multiple`] (each problem's folder; [`spectrum`]);
+//! 3. [`ladder`]: the one climb;
+//! 4. the entry points (each problem folder's `mod.rs`), which choose the rungs and climb.
 //!
 //! Soundness rule: [`Verdict::Certified`] is only produced by [`Certificate::from_bounds`] from a
 //! lower bound verified independently of any solver's own report.
 
 pub mod branch_and_bound;
+pub mod budget;
 pub mod certificate;
 pub mod certification;
 pub mod conjugate;
 pub mod ladder;
+pub mod log;
 pub mod multiple;
+pub mod one_rotation;
+pub mod proof;
+pub mod rung;
 pub mod settings;
 pub mod simultaneous;
 pub mod single;
 pub mod spectrum;
+pub mod tolerance;
 
-pub use branch_and_bound::{BranchAndBoundSettings, BranchAndBoundStats, BranchAndBoundStop};
+pub use branch_and_bound::{BranchAndBoundStats, BranchAndBoundStop};
+pub use budget::{Budget, Deadline};
 pub use certificate::{
-    BoundMethod, Certificate, CertifiedProblem, CertifiedProblemKind, GapTolerance,
-    RandomizedLowerBound, TolerancePart, ToleranceRule, Verdict,
+    Certificate, CertifiedProblem, CertifiedProblemKind, RandomizedLowerBound, Verdict,
 };
 pub use certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun, SdpSummary,
 };
 pub use conjugate::certify_conjugate;
-pub use ladder::{Attempt, Outcome, Point, Prediction, Refusal, Rung};
+pub use log::{Attempt, Outcome, Point, Prediction, Refusal};
 pub use multiple::certify_multiple;
+pub use proof::{BoundMethod, Proof};
 pub use settings::{
-    Budget, CertifyMode, CertifySettings, DualProof, DualSettings, RandomizedSettings,
+    BranchAndBoundSettings, CertifyMode, CertifySettings, ConvDualSettings, DualSettings,
+    RandomizedSettings, SpectrumSettings, StaircaseSettings,
 };
+pub use simultaneous::certify_simultaneous;
 pub use single::certify_single;
-pub use spectrum::{SpectrumEstimate, SpectrumSettings};
+pub use spectrum::SpectrumEstimate;
+pub use tolerance::{GapTolerance, TolerancePart, ToleranceRule};

@@ -1,13 +1,11 @@
 //! The settings of every `certify_*` function: one [`CertifySettings`] for the three problems
 //! (each reads the parts that apply to it), with the [`CertifyMode`] that chooses the method.
 
-use super::branch_and_bound::BranchAndBoundSettings;
-use super::certificate::ToleranceRule;
-use super::multiple::staircase::StaircaseSettings;
-use super::spectrum::SpectrumSettings;
+use super::budget::Budget;
+use super::proof::Proof;
+use super::tolerance::ToleranceRule;
 use crate::error::{Error, Result};
 use crate::linalg::LanczosSettings;
-use crate::linalg::cholesky::RESIDUAL_FACTOR_LIMIT;
 use crate::relax::SdpSettings;
 use crate::so3::Rotation;
 use crate::validate::{at_least_one, check_rotation};
@@ -86,301 +84,6 @@ impl fmt::Display for CertifyMode {
     }
 }
 
-/// Bytes a factorisation needs per stored factor value (an `f64`). The matrix factorised is
-/// not counted (it exists before the factorisation is tried: the shift is added to its diagonal
-/// in place); see [`Budget::factorisation_bytes`] for the whole model.
-pub const BYTES_PER_FACTOR_VALUE: u64 = 8;
-
-/// Bytes per factor value, for factors of up to [`RESIDUAL_FACTOR_LIMIT`] values, of the
-/// residual-based margin `[D6]` (2) (the factor's columns and rows as `(index, value)` pairs).
-pub const RESIDUAL_MARGIN_BYTES_PER_VALUE: u64 = 32;
-
-/// Floating-point operations per second assumed when predicting the time of sparse
-/// matrix-vector products (the randomized test `[D16]`; memory-bound, one core).
-pub const PREDICTED_FLOP_RATE: f64 = 2e9;
-
-/// Multiply-subtracts per second assumed for a sparse factorisation's dense work, which is
-/// about `values^2 / dim` for a factor of `values` stored values of a `dim x dim` matrix
-/// (Cauchy-Schwarz over the column counts: a lower estimate). Calibrated on the reference
-/// 2-core machine (faer 0.24 supernodal, both cores), where the measured rate on that count
-/// was 4.3e10 to 7.8e10 for the scalar `LDL^T` of random graphs (10^4 to 10^5 nodes, factors of
-/// 1.3e7 to 1.2e9 values) and 2e9 to 2.4e9 for the 3n Cholesky of grids and chains, whose
-/// time is mostly per value ([`PREDICTED_SECONDS_PER_FACTOR_VALUE`]).
-pub const PREDICTED_FACTOR_RATE: f64 = 1e10;
-
-/// Multiply-adds per second assumed for a sparse `LDL^T` whose symbolic structure is known, so
-/// that its exact count is ([`crate::linalg::cholesky::factor_multiply_adds`]): the scalar
-/// comparison `[D13]`, whose candidates (whole graph, subgraphs, splits) are analysed before one
-/// is chosen ([`Budget::predicted_factor_seconds`]). Calibrated on the reference 2-core machine
-/// (faer 0.24 supernodal, both cores, 2026-11-26, `examples/pipeline_scale`, random graphs at
-/// 0.1 rad): measured 2.3e10 (1.3e7 values, 0.32 s), 3.4e10 (1.1e8 values, 5.7 s), 4.1e10
-/// (4.2e8 values, 35.3 s), 4.4e10 (5.9e8 values, 54.7 s). With
-/// [`PREDICTED_SECONDS_PER_COUNTED_VALUE`] the model is 1.2x to 1.6x those times.
-pub const PREDICTED_MULTIPLY_ADD_RATE: f64 = 3e10;
-
-/// Seconds per stored factor value besides the multiply-adds (assembly, memory traffic), in
-/// the model of [`PREDICTED_MULTIPLY_ADD_RATE`].
-pub const PREDICTED_SECONDS_PER_COUNTED_VALUE: f64 = 1e-8;
-
-/// Seconds per stored factor value assumed on top of the dense work (symbolic bookkeeping,
-/// assembly, small fronts): the 3n Cholesky of a 10^6-node grid sweep (1.88e8 values) took
-/// 4.9 s, predicted 6.8 s; the scalar `LDL^T` of the 10^5-node random graph (1.21e9 values)
-/// took about 340 s, predicted 1500 s. Measured predictions run 0.9x to 8x the times.
-pub const PREDICTED_SECONDS_PER_FACTOR_VALUE: f64 = 3e-8;
-
-/// The memory and time a certification may use, checked *before* each expensive step from a
-/// predicted cost (the factor size from the symbolic analysis, and its time from
-/// [`Budget::predicted_seconds`]), so that a run never swaps or hangs: a step that does not fit is not started, and the
-/// certificate says why (`inconclusive` when no proof fits).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Budget {
-    /// Largest memory one factorisation may need, bytes (default 4 GiB).
-    pub max_memory_bytes: u64,
-    /// Wall-clock limit of the certification, seconds (default 600; `None`: none). Checked
-    /// before each step (dual certificate, refinement, SDP, staircase) and against each
-    /// factorisation's predicted time.
-    pub max_seconds: Option<f64>,
-}
-
-impl Default for Budget {
-    fn default() -> Self {
-        Budget {
-            max_memory_bytes: 4 << 30,
-            max_seconds: Some(600.0),
-        }
-    }
-}
-
-impl Budget {
-    /// Check the values; [`Error::InvalidSettings`] names `budget.max_memory_bytes` or
-    /// `budget.max_seconds`.
-    pub fn validate(&self) -> Result<()> {
-        if self.max_memory_bytes == 0 {
-            return Err(Error::InvalidSettings {
-                name: "budget.max_memory_bytes".into(),
-                reason: "must be at least 1".into(),
-            });
-        }
-        if let Some(t) = self.max_seconds {
-            crate::validate::positive("budget.max_seconds", t)?;
-        }
-        Ok(())
-    }
-
-    /// The most factor values a factorisation of a `dim x dim` matrix may store within this
-    /// budget: the inverse of [`Budget::factorisation_fits`], used to refuse a factorisation
-    /// before its symbolic analysis (which itself costs time proportional to the factor).
-    ///
-    /// ```
-    /// use rotavg::certify::Budget;
-    /// let b = Budget { max_memory_bytes: 8 << 30, max_seconds: None };
-    /// let v = b.max_factor_values(30_000);
-    /// assert!(b.factorisation_fits(v, 30_000).is_ok());
-    /// assert!(b.factorisation_fits(v + 1, 30_000).is_err());
-    /// // below 40 bytes x 2e7 values every value carries the residual margin's 32 bytes
-    /// let small = Budget { max_memory_bytes: 100 << 20, max_seconds: None };
-    /// assert_eq!(small.max_factor_values(30_000), (100 << 20) / 40);
-    /// assert_eq!(Budget::factorisation_bytes(v), (8u64 << 30) as f64);
-    /// ```
-    pub fn max_factor_values(&self, dim: usize) -> usize {
-        // the inverse of `factorisation_bytes` (piecewise linear)
-        let full = BYTES_PER_FACTOR_VALUE + RESIDUAL_MARGIN_BYTES_PER_VALUE;
-        let limit = RESIDUAL_FACTOR_LIMIT as u64;
-        let by_memory = if self.max_memory_bytes <= full * limit {
-            self.max_memory_bytes / full
-        } else {
-            (self.max_memory_bytes - RESIDUAL_MARGIN_BYTES_PER_VALUE * limit)
-                / BYTES_PER_FACTOR_VALUE
-        };
-        let by_time = match self.max_seconds {
-            // the positive root of values^2 a + values c = limit
-            Some(limit) => {
-                let a = 1.0 / (dim.max(1) as f64 * PREDICTED_FACTOR_RATE);
-                let c = PREDICTED_SECONDS_PER_FACTOR_VALUE;
-                (2.0 * limit / (c + (c * c + 4.0 * a * limit).sqrt())).floor()
-            }
-            None => f64::INFINITY,
-        };
-        let mut v = (by_memory as f64).min(by_time).min(usize::MAX as f64) as usize;
-        // the float round trip may land one off the exact boundary of `factorisation_fits`
-        while v > 0 && self.factorisation_fits(v, dim).is_err() {
-            v -= 1;
-        }
-        while self.factorisation_fits(v.saturating_add(1), dim).is_ok() && v < usize::MAX {
-            v += 1;
-        }
-        v
-    }
-
-    /// The memory a factorisation with `values` stored factor values allocates, bytes:
-    /// [`BYTES_PER_FACTOR_VALUE`] per value, plus [`RESIDUAL_MARGIN_BYTES_PER_VALUE`] per value
-    /// for the first [`RESIDUAL_FACTOR_LIMIT`] (the residual margin `[D6]` (2), computed only
-    /// for factors up to that size). Callers that know the numeric scratch add it to `values`
-    /// in units of 8 bytes. Measured (faer 0.24, supernodal, 10^6-node grid sweep,
-    /// `examples/pipeline_scale`): a factor of 1.88e8 values, 2.1 GiB by this model; the whole
-    /// process peaked at 3.8 GB RSS, against 1.7 GB for the solve alone.
-    ///
-    /// ```
-    /// use rotavg::certify::Budget;
-    /// assert_eq!(Budget::factorisation_bytes(1_000), 40_000.0);
-    /// assert_eq!(Budget::factorisation_bytes(100_000_000), 8e8 + 6.4e8);
-    /// ```
-    pub fn factorisation_bytes(values: usize) -> f64 {
-        values as f64 * BYTES_PER_FACTOR_VALUE as f64
-            + values.min(RESIDUAL_FACTOR_LIMIT) as f64 * RESIDUAL_MARGIN_BYTES_PER_VALUE as f64
-    }
-
-    /// The predicted time of a factorisation with `values` stored factor values of a
-    /// `dim x dim` matrix: `values^2 / dim / PREDICTED_FACTOR_RATE + values *
-    /// PREDICTED_SECONDS_PER_FACTOR_VALUE` (calibration in [`PREDICTED_FACTOR_RATE`]).
-    ///
-    /// ```
-    /// use rotavg::certify::Budget;
-    /// // the 10^5-node random graph's scalar LDL^T: 1.21e9 values, about 340 s measured
-    /// let t = Budget::predicted_seconds(1_210_000_000, 100_000);
-    /// assert!(t > 340.0 && t < 2000.0, "{t}");
-    /// ```
-    pub fn predicted_seconds(values: usize, dim: usize) -> f64 {
-        let v = values as f64;
-        v * v / dim.max(1) as f64 / PREDICTED_FACTOR_RATE + v * PREDICTED_SECONDS_PER_FACTOR_VALUE
-    }
-
-    /// `Err(reason)` when a factorisation with `values` stored factor values of a
-    /// `dim x dim` matrix does not fit: memory [`Budget::factorisation_bytes`], time
-    /// [`Budget::predicted_seconds`].
-    ///
-    /// ```
-    /// use rotavg::certify::Budget;
-    /// let b = Budget { max_memory_bytes: 8 << 30, max_seconds: None };
-    /// assert!(b.factorisation_fits(10_000_000, 30_000).is_ok());
-    /// let why = b.factorisation_fits(41_000_000_000, 300_000).unwrap_err();
-    /// assert!(why.contains("4.1e10"), "{why}");
-    /// ```
-    pub fn factorisation_fits(&self, values: usize, dim: usize) -> std::result::Result<(), String> {
-        self.fits_with(
-            values,
-            Self::predicted_seconds(values, dim),
-            "values^2 / dim multiply-subtracts at 1e10 per second plus 3e-8 s per value; 0.9x \
-             to 8x the measured times",
-        )
-    }
-
-    /// `Err(reason)` when a rung's predicted memory does not fit, or its predicted time does not
-    /// fit what is left of the time budget after `elapsed` seconds (the SDP rungs of multiple
-    /// and simultaneous averaging).
-    ///
-    /// ```
-    /// use rotavg::certify::{Budget, Prediction};
-    /// let b = Budget { max_memory_bytes: 1 << 30, max_seconds: Some(10.0) };
-    /// assert!(b.prediction_fits(&Prediction { seconds: 1.0, bytes: 1e8 }, 0.0).is_ok());
-    /// assert!(b.prediction_fits(&Prediction { seconds: 1.0, bytes: 7.6e10 }, 0.0).is_err());
-    /// assert!(b.prediction_fits(&Prediction { seconds: 5.0, bytes: 1e8 }, 6.0).is_err());
-    /// ```
-    pub fn prediction_fits(
-        &self,
-        predicted: &crate::certify::ladder::Prediction,
-        elapsed: f64,
-    ) -> std::result::Result<(), String> {
-        if predicted.bytes > self.max_memory_bytes as f64 {
-            return Err(format!(
-                "predicted {:.1} GB, memory budget {:.1} GB",
-                predicted.bytes / 1e9,
-                self.max_memory_bytes as f64 / 1e9
-            ));
-        }
-        match self.max_seconds {
-            Some(limit) if predicted.seconds > limit - elapsed => Err(format!(
-                "predicted {:.0} s, {:.0} s of the time budget left",
-                predicted.seconds,
-                (limit - elapsed).max(0.0)
-            )),
-            _ => Ok(()),
-        }
-    }
-
-    /// The predicted time of factorisations whose multiply-adds are counted from their symbolic
-    /// structure: `multiply_adds / PREDICTED_MULTIPLY_ADD_RATE + values *
-    /// PREDICTED_SECONDS_PER_COUNTED_VALUE` (calibration in [`PREDICTED_MULTIPLY_ADD_RATE`]).
-    ///
-    /// ```
-    /// use rotavg::certify::Budget;
-    /// // one part of the split comparison of a 10^5-node graph with 10^6 edges: 4.5e8 values,
-    /// // 1.6e12 multiply-adds, 37.5 s measured
-    /// let t = Budget::predicted_factor_seconds(1.596e12, 450_389_772);
-    /// assert!(t > 37.5 && t < 80.0, "{t}");
-    /// ```
-    pub fn predicted_factor_seconds(multiply_adds: f64, values: usize) -> f64 {
-        multiply_adds / PREDICTED_MULTIPLY_ADD_RATE
-            + values as f64 * PREDICTED_SECONDS_PER_COUNTED_VALUE
-    }
-
-    /// `Err(reason)` when factorisations, the largest with `values` stored values (held one at
-    /// a time), together of `multiply_adds` counted multiply-adds, do not fit: memory
-    /// [`Budget::factorisation_bytes`] of the largest, time
-    /// [`Budget::predicted_factor_seconds`] of all.
-    ///
-    /// ```
-    /// use rotavg::certify::Budget;
-    /// let b = Budget { max_memory_bytes: 4 << 30, max_seconds: Some(600.0) };
-    /// assert!(b.counted_factorisations_fit(450_000_000, 6.0 * 1.6e12, 2_700_000_000).is_ok());
-    /// let why = b.counted_factorisations_fit(450_000_000, 6.0 * 4e12, 2_700_000_000).unwrap_err();
-    /// assert!(why.contains("time budget 600 s"), "{why}");
-    /// ```
-    pub fn counted_factorisations_fit(
-        &self,
-        values: usize,
-        multiply_adds: f64,
-        total_values: usize,
-    ) -> std::result::Result<(), String> {
-        self.fits_with(
-            values,
-            Self::predicted_factor_seconds(multiply_adds, total_values),
-            "counted multiply-adds at 3e10 per second plus 1e-8 s per value; 1.2x to 1.6x the \
-             measured times",
-        )
-    }
-
-    fn fits_with(
-        &self,
-        values: usize,
-        seconds: f64,
-        model: &str,
-    ) -> std::result::Result<(), String> {
-        let bytes = Self::factorisation_bytes(values);
-        if bytes > self.max_memory_bytes as f64 {
-            return Err(format!(
-                "the proof would need a factor of {values:.1e} values ({}); memory budget {}",
-                human_bytes(bytes),
-                human_bytes(self.max_memory_bytes as f64)
-            ));
-        }
-        match self.max_seconds {
-            Some(limit) if seconds.is_nan() || seconds > limit => Err(format!(
-                "the proof would need a factorisation of {values:.1e} values, predicted at \
-                 {seconds:.0} s by the time model ({model}); time budget {limit} s"
-            )),
-            _ => Ok(()),
-        }
-    }
-}
-
-/// `bytes` in the largest binary unit that keeps the number at least 1 (`1.5 KiB`, `4.0 GiB`).
-pub(crate) fn human_bytes(bytes: f64) -> String {
-    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB"];
-    let mut value = bytes;
-    let mut unit = 0;
-    while value >= 1024.0 && unit + 1 < units.len() {
-        value /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{value:.0} bytes")
-    } else {
-        format!("{value:.1} {}", units[unit])
-    }
-}
-
 /// Settings of the verification of the dual certificate of multiple averaging `[D4]`-`[D8]`,
 /// `[D13]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -407,43 +110,21 @@ pub struct DualSettings {
     /// Also estimate `lambda_min(S)` (shift-invert Lanczos) when the first shift already
     /// verifies. Costs a few triangular solves; the estimate is reported, not used in the bound.
     pub estimate_when_verified: bool,
-    /// The proofs of `lambda_min(S) >= mu` the ladder may climb ([`DualProof`]; default all
-    /// three). They run in the order of their predicted time (the strongest first when all are
-    /// cheap, [`crate::certify::ladder::FREE_SECONDS`]), each only when its own prediction fits
+    /// The proofs of `lambda_min(S) >= mu` the ladder may climb (default
+    /// [`Proof::MATRIX_CHECKS`]: grounded, shifted Cholesky, scalar comparison; others are
+    /// ignored). They run in the order of their predicted time (the strongest first when all are
+    /// cheap, [`crate::certify::log::FREE_SECONDS`]), each only when its own prediction fits
     /// the [`Budget`]: a larger budget never removes a proof. Until 2026-11-26 the scalar
     /// comparison ran only above a factor size (`scalar_comparison_above`), which let a
     /// larger budget give a weaker verdict (issue 24).
-    pub proofs: Vec<DualProof>,
+    pub proofs: Vec<Proof>,
     /// The randomized Chebyshev test `[D16]`, run when no deterministic proof fits the
     /// [`Budget`]: a Monte Carlo lower bound reported beside the `inconclusive` verdict
     /// (never as the verdict's proven bound).
     pub randomized: RandomizedSettings,
     /// The `conv(SO(3))` dual certificate of anisotropic problems `[A11]` (its multipliers'
     /// search).
-    pub conv: crate::certify::multiple::conv_dual::ConvDualSettings,
-}
-
-/// A proof of `lambda_min(S) >= mu` for the dual certificate of multiple averaging (a rung of
-/// the ladder, [`crate::certify::ladder`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum DualProof {
-    /// The grounded bound `[D15]` (`3n - 3` Cholesky factorisation).
-    Grounded,
-    /// A shifted Cholesky factorisation of `S` (`3n`) `[D5]`.
-    ShiftedCholesky,
-    /// The scalar comparison `[D13]`: the whole graph's `n x n` factor, or a subgraph's, or a
-    /// split's.
-    ScalarComparison,
-}
-
-impl DualProof {
-    /// Every proof, in the order of their strength.
-    pub const ALL: [DualProof; 3] = [
-        DualProof::Grounded,
-        DualProof::ShiftedCholesky,
-        DualProof::ScalarComparison,
-    ];
+    pub conv: ConvDualSettings,
 }
 
 /// Settings of the randomized Chebyshev test `[D16]` ([`crate::linalg::ChebyshevTest`]).
@@ -509,7 +190,7 @@ impl Default for DualSettings {
             max_factor_nonzeros: usize::MAX,
             lanczos: LanczosSettings::default(),
             estimate_when_verified: true,
-            proofs: DualProof::ALL.to_vec(),
+            proofs: Proof::MATRIX_CHECKS.to_vec(),
             randomized: RandomizedSettings::default(),
             conv: Default::default(),
         }
@@ -584,16 +265,24 @@ impl Default for CertifySettings {
 }
 
 impl CertifySettings {
-    /// The SDP settings with Clarabel's time limit at what is left of the time budget after
-    /// `elapsed` seconds (every SDP rung: its prediction decides whether it starts, this bounds
-    /// how long it runs).
-    pub(crate) fn sdp_within_budget(&self, elapsed: f64) -> crate::relax::SdpSettings {
+    /// The SDP settings with Clarabel's time limit at what `deadline` leaves minus `reserve`
+    /// seconds (kept for what follows the solve: the verification of its multipliers, its
+    /// rounding's polish); `None` when nothing is left. Every SDP rung: its prediction decides
+    /// whether it starts, this bounds how long it runs.
+    pub(crate) fn sdp_until(
+        &self,
+        deadline: &crate::certify::budget::Deadline,
+        reserve: f64,
+    ) -> Option<crate::relax::SdpSettings> {
         let mut sdp = self.sdp.clone();
-        if let Some(limit) = self.budget.max_seconds {
-            let left = (limit - elapsed).max(1e-3);
-            sdp.time_limit_seconds = Some(sdp.time_limit_seconds.map_or(left, |t| t.min(left)));
+        if let Some(left) = deadline.left() {
+            let limit = left - reserve;
+            if limit <= 0.0 {
+                return None;
+            }
+            sdp.time_limit_seconds = Some(sdp.time_limit_seconds.map_or(limit, |t| t.min(limit)));
         }
-        sdp
+        Some(sdp)
     }
 
     /// Default settings with the given mode.
@@ -640,5 +329,226 @@ impl CertifySettings {
         let modes = [CertifyMode::Auto, bound, CertifyMode::BranchAndBound];
         self.mode.require(problem, &modes)?;
         check_rotation(|| "estimate".into(), estimate)
+    }
+}
+
+/// Settings of the Riemannian staircase `[D11]` (`crate::certify::multiple::staircase`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct StaircaseSettings {
+    /// Largest rank `p` tried (`>= 3`; default 32: the rank of an SDP solution is at most
+    /// about `sqrt(12 n)` (Barvinok-Pataki), and ranks stop growing when no negative
+    /// eigenvector is left or the time budget is spent).
+    pub max_rank: usize,
+    /// Trust-region iterations per rank.
+    pub max_iterations: usize,
+    /// Converged at a rank when `||grad|| <= gradient_tolerance * (w_min + F)` (`w_min` the smallest weight).
+    pub gradient_tolerance: f64,
+    /// Stop once the relaxation's value is bracketed this tightly: the lifted cost `F(Y)` (a
+    /// feasible point's, so at least the SDP optimum) is within `bracket_tolerance` times the
+    /// reported gap (cost minus the verified bound) of the verified bound, or within the
+    /// certificate's tolerance. A higher rank could then improve the bound by at most that
+    /// fraction of the gap (in `[0, 1)`, default `1e-2`; `0` climbs while a negative eigenvector
+    /// is left): the reported gap is then at most `1 / (1 - t)` times the relaxation's own.
+    pub bracket_tolerance: f64,
+}
+
+impl Default for StaircaseSettings {
+    fn default() -> Self {
+        StaircaseSettings {
+            max_rank: 32,
+            max_iterations: 500,
+            gradient_tolerance: 1e-9,
+            bracket_tolerance: 1e-2,
+        }
+    }
+}
+
+impl StaircaseSettings {
+    /// Check every value; [`Error::InvalidSettings`] names the first bad one
+    /// (`staircase.<field>`).
+    pub fn validate(&self) -> Result<()> {
+        if self.max_rank < 3 {
+            return Err(Error::InvalidSettings {
+                name: "staircase.max_rank".into(),
+                reason: format!("must be at least 3, got {}", self.max_rank),
+            });
+        }
+        crate::validate::at_least_one("staircase.max_iterations", self.max_iterations)?;
+        crate::validate::positive("staircase.gradient_tolerance", self.gradient_tolerance)?;
+        // t >= 1 would stop at the first verification: the lifted cost is below the estimate's
+        if !(0.0..1.0).contains(&self.bracket_tolerance) {
+            return Err(Error::InvalidSettings {
+                name: "staircase.bracket_tolerance".into(),
+                reason: format!("must be a number in [0, 1), got {}", self.bracket_tolerance),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Settings of the branch and bound (`CertifySettings::branch_and_bound`); its time limit is
+/// `CertifySettings::budget.max_seconds`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct BranchAndBoundSettings {
+    /// Largest number of cells bounded (default 2 000 000; >= 1).
+    pub max_cells: usize,
+    /// The axis-angle cube `[-pi, pi]^3` is first split into `k^3` cells (default 4; >= 1; measured on 10^4 samples with outliers: k = 4 bounds 15 % fewer cells than k = 8).
+    pub initial_divisions: usize,
+    /// Largest number of local solves started from cell centres that beat the incumbent
+    /// (default 16).
+    pub max_local_solves: usize,
+    /// Mode `auto` falls back to the branch and bound only for problems with at most this many
+    /// samples / pairs (default 20 000: each cell costs one pass over the terms, ~0.1 us per
+    /// term, and a search bounds a few thousand cells); mode `branch_and_bound` has no limit.
+    pub auto_max_terms: usize,
+}
+
+impl Default for BranchAndBoundSettings {
+    fn default() -> Self {
+        BranchAndBoundSettings {
+            max_cells: 2_000_000,
+            initial_divisions: 4,
+            max_local_solves: 16,
+            auto_max_terms: 20_000,
+        }
+    }
+}
+
+impl BranchAndBoundSettings {
+    /// Check every value; [`crate::Error::InvalidSettings`] names the first bad one.
+    ///
+    /// ```
+    /// use rotavg::certify::BranchAndBoundSettings;
+    /// assert!(BranchAndBoundSettings::default().validate().is_ok());
+    /// let bad = BranchAndBoundSettings { max_cells: 0, ..Default::default() };
+    /// assert!(bad.validate().unwrap_err().to_string().contains("max_cells"));
+    /// ```
+    pub fn validate(&self) -> Result<()> {
+        at_least_one("branch_and_bound.max_cells", self.max_cells)?;
+        at_least_one("branch_and_bound.initial_divisions", self.initial_divisions)
+    }
+}
+
+/// Settings of the smallest-eigenvalue estimates (`crate::certify::spectrum`, `[D14]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SpectrumSettings {
+    /// How many of the smallest eigenvalues (default 10; fewer when the matrix is smaller).
+    pub count: usize,
+    /// Dense eigen-decomposition up to this dimension (default 600).
+    pub dense_max_dim: usize,
+    /// Block size of the block Lanczos iteration (default 3, >= 1).
+    pub block_size: usize,
+    /// Largest Krylov subspace dimension (default 150; also capped so that the basis holds at
+    /// most `4e7` numbers, 320 MB).
+    pub max_subspace: usize,
+    /// Converged when every residual `||S x - lambda x|| <= tolerance * ||S||_inf`
+    /// (default `1e-8`).
+    pub tolerance: f64,
+    /// Seed of the random start block.
+    pub seed: u64,
+}
+
+impl Default for SpectrumSettings {
+    fn default() -> Self {
+        SpectrumSettings {
+            count: 10,
+            dense_max_dim: 600,
+            block_size: 3,
+            max_subspace: 150,
+            tolerance: 1e-8,
+            seed: 0x05ee_de16,
+        }
+    }
+}
+
+impl SpectrumSettings {
+    /// Check every value; [`Error::InvalidSettings`] names the first bad one (`spectrum.<field>`).
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &str, reason: &str| {
+            Err(Error::InvalidSettings {
+                name: name.into(),
+                reason: reason.into(),
+            })
+        };
+        if self.count == 0 {
+            return bad("spectrum.count", "must be at least 1");
+        }
+        if self.block_size == 0 {
+            return bad("spectrum.block_size", "must be at least 1");
+        }
+        if self.tolerance.is_nan() || self.tolerance <= 0.0 {
+            return bad("spectrum.tolerance", "must be > 0");
+        }
+        Ok(())
+    }
+}
+
+/// Settings of the search for the `conv(SO(3))` multipliers `[A11]` (`dual.conv`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ConvDualSettings {
+    /// Run it (anisotropic problems whose `O(3)` dual certificate did not certify; modes `auto`
+    /// and `dual`). Default `true`.
+    pub enabled: bool,
+    /// Rounds of the search: each one Lanczos run on `S'` and the projections onto its cuts
+    /// (0: only the edges' own reflection prices). Default 300.
+    pub max_rounds: usize,
+    /// Cuts (Ritz vectors of negative Ritz value) kept, the newest. Default 60.
+    pub cuts_kept: usize,
+    /// Most passes of cyclic projections over the kept cuts in a round (a round stops passing
+    /// when no cut is violated). Default 30.
+    pub passes: usize,
+    /// Krylov subspace dimension of a round's Lanczos run (block size 3). Default 90.
+    pub lanczos_iterations: usize,
+    /// Fraction of the time left that the search may spend (the rest is the proof's). In
+    /// `(0, 1)`, default 0.5.
+    pub time_fraction: f64,
+    /// Rounds without a 0.1 % rise of the smallest Ritz value after which the search stops
+    /// (stalled). Default 40.
+    pub stall_rounds: usize,
+    /// Largest factor (stored values) of `S' + sigma I` for shift-invert rounds; above it (or
+    /// above what the memory budget leaves beside the search) the rounds run Lanczos on `S'`
+    /// itself, whose smallest Ritz values converge slowly. Default 2e7.
+    pub shift_invert_max_factor: usize,
+}
+
+impl Default for ConvDualSettings {
+    fn default() -> Self {
+        ConvDualSettings {
+            enabled: true,
+            max_rounds: 300,
+            cuts_kept: 60,
+            passes: 30,
+            lanczos_iterations: 90,
+            time_fraction: 0.5,
+            stall_rounds: 40,
+            shift_invert_max_factor: 20_000_000,
+        }
+    }
+}
+
+impl ConvDualSettings {
+    /// Checks `cuts_kept`, `passes` and `lanczos_iterations >= 1` (the Lanczos dimension at
+    /// least 6) and `time_fraction` in `(0, 1)`.
+    pub fn validate(&self) -> Result<()> {
+        crate::validate::at_least_one("dual.conv.cuts_kept", self.cuts_kept)?;
+        crate::validate::at_least_one("dual.conv.passes", self.passes)?;
+        crate::validate::at_least_one("dual.conv.stall_rounds", self.stall_rounds)?;
+        if self.lanczos_iterations < 6 {
+            return Err(Error::InvalidSettings {
+                name: "dual.conv.lanczos_iterations".into(),
+                reason: format!("must be >= 6, got {}", self.lanczos_iterations),
+            });
+        }
+        if !(self.time_fraction > 0.0 && self.time_fraction < 1.0) {
+            return Err(Error::InvalidSettings {
+                name: "dual.conv.time_fraction".into(),
+                reason: format!("must be in (0, 1), got {}", self.time_fraction),
+            });
+        }
+        Ok(())
     }
 }

@@ -18,6 +18,7 @@
 //! copy of a multiple eigenvalue.
 
 use crate::certify::multiple::certificate_matrix;
+pub use crate::certify::settings::SpectrumSettings;
 use crate::error::{Error, Result};
 use crate::linalg::{
     Extreme, LanczosSettings, LanczosStop, ShiftedCholesky, inf_norm, lanczos, rayleigh_quotient,
@@ -28,39 +29,6 @@ use faer::sparse::{SparseColMat, SparseColMatRef};
 use nalgebra::{DMatrix, Matrix3, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
-
-/// Settings of [`smallest_eigenvalues`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct SpectrumSettings {
-    /// How many of the smallest eigenvalues (default 10; fewer when the matrix is smaller).
-    pub count: usize,
-    /// Dense eigen-decomposition up to this dimension (default 600).
-    pub dense_max_dim: usize,
-    /// Block size of the block Lanczos iteration (default 3, >= 1).
-    pub block_size: usize,
-    /// Largest Krylov subspace dimension (default 150; also capped so that the basis holds at
-    /// most `4e7` numbers, 320 MB).
-    pub max_subspace: usize,
-    /// Converged when every residual `||S x - lambda x|| <= tolerance * ||S||_inf`
-    /// (default `1e-8`).
-    pub tolerance: f64,
-    /// Seed of the random start block.
-    pub seed: u64,
-}
-
-impl Default for SpectrumSettings {
-    fn default() -> Self {
-        SpectrumSettings {
-            count: 10,
-            dense_max_dim: 600,
-            block_size: 3,
-            max_subspace: 150,
-            tolerance: 1e-8,
-            seed: 0x05ee_de16,
-        }
-    }
-}
 
 /// How the estimates were computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -99,28 +67,6 @@ impl SpectrumEstimate {
     /// converged.
     pub fn converged(&self) -> bool {
         self.stop.is_none_or(|s| s.converged())
-    }
-}
-
-impl SpectrumSettings {
-    /// Check every value; [`Error::InvalidSettings`] names the first bad one (`spectrum.<field>`).
-    pub fn validate(&self) -> Result<()> {
-        let bad = |name: &str, reason: &str| {
-            Err(Error::InvalidSettings {
-                name: name.into(),
-                reason: reason.into(),
-            })
-        };
-        if self.count == 0 {
-            return bad("spectrum.count", "must be at least 1");
-        }
-        if self.block_size == 0 {
-            return bad("spectrum.block_size", "must be at least 1");
-        }
-        if self.tolerance.is_nan() || self.tolerance <= 0.0 {
-            return bad("spectrum.tolerance", "must be > 0");
-        }
-        Ok(())
     }
 }
 

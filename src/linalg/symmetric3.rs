@@ -27,7 +27,7 @@ pub const RELATIVE_ACCURACY: f64 = 1e-7;
 
 /// Entries smaller than `2^-300` times the largest (after which the products' rounding errors
 /// could underflow and the invariants would no longer be exact) make a matrix unresolvable.
-const MIN_RELATIVE_ENTRY: f64 = 4.9090934652977266e-91; // 2^-300
+const MIN_RELATIVE_ENTRY: f64 = 4.909_093_465_297_727e-91; // 2^-300
 
 /// Eigenvalues at least this fraction of the largest keep the dense solver's value (its error,
 /// a few `u lambda_1`, is then below `1e-11` relative); smaller ones come from the invariants.

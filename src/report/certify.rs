@@ -290,7 +290,7 @@ impl fmt::Display for CertifyReport {
         write!(f, "certificate: ")?;
         super::nested(f, &self.certificate)?;
         if let Some(d) = &self.details {
-            write_methods(f, &d.methods)?;
+            write_methods(f, &d.methods())?;
         }
         Ok(())
     }

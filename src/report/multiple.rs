@@ -274,7 +274,7 @@ impl fmt::Display for MultipleReport {
         writeln!(f)?;
         nested(f, &self.result)?;
         if let Some(c) = &self.result.details.certify {
-            write_methods(f, &c.methods)?;
+            write_methods(f, &c.methods())?;
         }
         let robust = &self.result.solution;
         if let Some(r) = &robust.residuals {
@@ -289,7 +289,7 @@ impl fmt::Display for MultipleReport {
             writeln!(f)?;
             nested(f, g.as_ref())?;
             if let Some(c) = &g.details.certify {
-                write_methods(f, &c.methods)?;
+                write_methods(f, &c.methods())?;
             }
         }
         if let Some(a) = &self.accuracy {

@@ -579,8 +579,8 @@ fn o3_sdp(r: &rotavg::pipeline::Averaged<rotavg::multiple::MultipleSolution>) ->
         .certify
         .as_ref()
         .unwrap()
-        .methods
-        .iter()
+        .methods()
+        .into_iter()
         .find(|m| m.note.starts_with("Clarabel SDP"))
         .expect("the O(3) SDP ran");
     (m.lower_bound.unwrap(), m.note.clone())
@@ -612,7 +612,7 @@ fn reflections_defeat_the_o3_relaxation_and_are_named() {
         "conv(SO(3)) bound {lb}: {}",
         c.explanation
     );
-    assert_eq!(c.bound_from, Some(rotavg::certify::ladder::Point::ConvSdp));
+    assert_eq!(c.bound_from, Some(rotavg::certify::log::Point::ConvSdp));
     // the staircase solves the same O(3) relaxation: its rounding counts the reflected block
     let st = rotavg::certify::multiple::staircase::staircase_bound(
         &p,

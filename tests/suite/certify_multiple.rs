@@ -9,10 +9,10 @@ use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rotavg::Rotation;
 use rotavg::certify::multiple::{
-    Verification, VerifiedBound, certificate_matrix, dual_certificate,
-    lower_bound_from_multipliers, multipliers, stationarity_residual,
+    VerifiedBound, certificate_matrix, dual_certificate, lower_bound_from_multipliers, multipliers,
+    stationarity_residual,
 };
-use rotavg::certify::{CertifySettings, DualProof, DualSettings, ToleranceRule, Verdict};
+use rotavg::certify::{CertifySettings, DualSettings, Proof, ToleranceRule, Verdict};
 use rotavg::linalg::gamma;
 use rotavg::multiple::laplacian::connection_laplacian;
 use rotavg::multiple::synthetic::{SyntheticGraph, z_cycle};
@@ -138,7 +138,7 @@ fn noise_free_planted_is_certified() {
         assert!(
             matches!(
                 c.bound.verification,
-                Verification::Cholesky | Verification::Grounded
+                Proof::ShiftedCholesky | Proof::Grounded
             ),
             "{:?}",
             c.bound.verification
@@ -399,7 +399,7 @@ fn factor_size_guard_falls_back_to_gershgorin() {
     println!("{c}");
     assert!(c.bound.factorization_skipped);
     assert_eq!(c.bound.factorizations, 0);
-    assert_eq!(c.bound.verification, Verification::Gershgorin);
+    assert_eq!(c.bound.verification, Proof::Gershgorin);
     let mu = dense_min_eig(dense_s(&p, &multipliers(&p, &rs).unwrap()));
     assert!(c.bound.verified_min_eigenvalue <= mu);
     assert!(c.bound.lower_bound <= f);
@@ -697,28 +697,28 @@ fn scalar_comparison_certifies_a_long_chain() {
 }
 
 fn assert_scalar_comparison_agrees(p: &MultipleProblem, rotations: &[Rotation]) {
-    let settings = |proofs: &[DualProof]| CertifySettings {
+    let settings = |proofs: &[Proof]| CertifySettings {
         dual: DualSettings {
             proofs: proofs.to_vec(),
             ..Default::default()
         },
         ..Default::default()
     };
-    let fast = dual_certificate(p, rotations, &settings(&[DualProof::ScalarComparison])).unwrap();
+    let fast = dual_certificate(p, rotations, &settings(&[Proof::ScalarComparison])).unwrap();
     let full = dual_certificate(
         p,
         rotations,
-        &settings(&[DualProof::Grounded, DualProof::ShiftedCholesky]),
+        &settings(&[Proof::Grounded, Proof::ShiftedCholesky]),
     )
     .unwrap();
     println!("scalar: {fast}\nfull: {full}");
-    assert_eq!(fast.bound.verification, Verification::ScalarComparison);
+    assert_eq!(fast.bound.verification, Proof::ScalarComparison);
     // the 3n-dimensional factorisation: of S + shift I, or of S without one node's block (the
     // grounded bound [D15], tried first)
     assert!(
         matches!(
             full.bound.verification,
-            Verification::Cholesky | Verification::Grounded
+            Proof::ShiftedCholesky | Proof::Grounded
         ),
         "{:?}",
         full.bound.verification
@@ -750,7 +750,7 @@ fn scalar_comparison_respects_the_budget_with_the_exact_factor() {
     let needed = analysis.factor_len() + analysis.scratch_bytes().div_ceil(8);
     let settings = |bytes: u64| CertifySettings {
         dual: DualSettings {
-            proofs: vec![DualProof::ScalarComparison],
+            proofs: vec![Proof::ScalarComparison],
             ..Default::default()
         },
         budget: Budget {
@@ -761,13 +761,13 @@ fn scalar_comparison_respects_the_budget_with_the_exact_factor() {
     };
     let exact = Budget::factorisation_bytes(needed) as u64;
     let fits = dual_certificate(&p, &sol.rotations, &settings(exact)).unwrap();
-    assert_eq!(fits.bound.verification, Verification::ScalarComparison);
+    assert_eq!(fits.bound.verification, Proof::ScalarComparison);
     assert_eq!(fits.bound.factor_nonzeros, analysis.factor_len());
     assert_eq!(fits.bound.scalar_comparison.unwrap().dropped_edges, 0);
     // one byte short: the whole graph's factorisation is not run (at most a subgraph's, with a
     // smaller factor)
     let short = dual_certificate(&p, &sol.rotations, &settings(exact - 1)).unwrap();
-    if short.bound.verification == Verification::ScalarComparison {
+    if short.bound.verification == Proof::ScalarComparison {
         assert!(short.bound.factor_nonzeros < analysis.factor_len());
         assert!(short.bound.scalar_comparison.unwrap().dropped_edges > 0);
     }
@@ -806,7 +806,7 @@ fn sparsified_scalar_comparison_certifies_under_a_small_budget() {
     let sparse = dual_certificate(&p, &sol.rotations, &small).unwrap();
     let full = dual_certificate(&p, &sol.rotations, &CertifySettings::default()).unwrap();
     println!("sparsified: {sparse}\nfull: {full}");
-    assert_eq!(sparse.bound.verification, Verification::ScalarComparison);
+    assert_eq!(sparse.bound.verification, Proof::ScalarComparison);
     assert!(sparse.bound.factor_nonzeros < whole);
     assert!(sparse.certificate.is_certified() && full.certificate.is_certified());
     let cost = sparse.certificate.upper_bound;
@@ -838,7 +838,7 @@ fn split_scalar_comparison_certifies_a_dense_graph_under_a_small_budget() {
     let split = dual_certificate(&p, &sol.rotations, &small).unwrap();
     let full = dual_certificate(&p, &sol.rotations, &CertifySettings::default()).unwrap();
     println!("split: {split}\nfull: {full}");
-    assert_eq!(split.bound.verification, Verification::ScalarComparison);
+    assert_eq!(split.bound.verification, Proof::ScalarComparison);
     let comparison = split.bound.scalar_comparison.clone().unwrap();
     assert!(
         comparison.parts > 1 && comparison.dropped_edges == 0,
@@ -890,7 +890,7 @@ fn a_failed_subgraph_comparison_is_named_in_the_reason() {
     assert_eq!(c.certificate.verdict, Verdict::Inconclusive);
     let reason = c.bound.budget_exceeded.clone().unwrap();
     assert!(
-        reason.contains("scalar comparison [D13], subgraph") && reason.contains("negative pivots"),
+        reason.contains("scalar comparison [D13]: subgraph") && reason.contains("negative pivots"),
         "{reason}"
     );
 }

@@ -9,11 +9,11 @@ use rand::{Rng, SeedableRng};
 use rotavg::Rotation;
 
 use crate::common::{anisotropic_graph as graph, best_of_random_starts};
-use rotavg::certify::ladder::{Outcome, Point, Refusal, Rung};
 use rotavg::certify::multiple::conv_dual::{
     conv_dual_bound, project_to_cone, special_support, surrogate,
 };
 use rotavg::certify::{CertifyMode, CertifySettings, Verdict, certify_multiple};
+use rotavg::certify::{Outcome, Point, Proof, Refusal};
 use rotavg::multiple::synthetic::SyntheticAnisotropic;
 use rotavg::multiple::{MultipleSettings, solve_multiple};
 use rotavg::so3::{exp, random_rotation};
@@ -163,7 +163,7 @@ fn conv_dual_closes_the_reflection_examples() {
     assert_eq!(c.certificate.bound_from, Some(Point::ConvDual));
     let lb = c.certificate.lower_bound.unwrap();
     assert!(lb <= 1e-12 && lb > -1e-9, "{lb}");
-    assert!(o3.details.ladder.iter().any(|a| a.rung == Rung::ConvDual));
+    assert!(o3.details.ladder.iter().any(|a| a.rung == Proof::ConvDual));
     let rx = exp(&Vector3::new(std::f64::consts::PI, 0.0, 0.0));
     let cycle = graph(
         3,
@@ -278,7 +278,7 @@ fn one_strong_axis_graphs_are_certified_at_scale() {
         &est.rotations,
         &CertifySettings {
             dual: rotavg::certify::DualSettings {
-                conv: rotavg::certify::multiple::conv_dual::ConvDualSettings {
+                conv: rotavg::certify::ConvDualSettings {
                     enabled: false,
                     ..Default::default()
                 },
@@ -312,7 +312,7 @@ fn the_search_is_refused_over_the_memory_budget() {
         .details
         .ladder
         .iter()
-        .find(|a| a.rung == Rung::ConvDual)
+        .find(|a| a.rung == Proof::ConvDual)
         .unwrap();
     match &refused.outcome {
         Outcome::Refused(Refusal::OverBudget { reason }) => {
@@ -328,9 +328,8 @@ fn the_search_is_refused_over_the_memory_budget() {
 #[test]
 fn the_search_factor_fits_the_memory_budget() {
     use rotavg::certify::Budget;
-    use rotavg::certify::multiple::conv_dual::{
-        ConvDualSettings, predict_search, search_penalties,
-    };
+    use rotavg::certify::ConvDualSettings;
+    use rotavg::certify::multiple::conv_dual::{predict_search, search_penalties};
     let (p, _) = SyntheticAnisotropic {
         num_rotations: 100,
         num_edges: 400,

@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rotavg::Metric;
-use rotavg::certify::certificate::DEFAULT_ABSOLUTE_GAP_PER_MIN_WEIGHT;
+use rotavg::certify::tolerance::DEFAULT_ABSOLUTE_GAP_PER_MIN_WEIGHT;
 use rotavg::certify::{CertifyMode, CertifySettings, ImprovementSource, certify_multiple};
 use rotavg::multiple::synthetic::{SyntheticGraph, z_cycle};
 use rotavg::multiple::{Initialisation, MultipleSettings};
@@ -141,8 +141,8 @@ fn winding_configuration_is_bounded_not_certified_and_unchanged() {
                 // cheaper estimate: the global optimum f_0, certified by its dual certificate
                 let run = c
                     .details
-                    .methods
-                    .iter()
+                    .methods()
+                    .into_iter()
                     .find(|m| m.method == BoundMethod::Staircase)
                     .expect("the staircase ran");
                 let stair_lb = run.lower_bound.unwrap();

@@ -280,7 +280,7 @@ fn timing_table() {
 #[test]
 fn sdp_is_refused_over_the_memory_budget() {
     use rotavg::certify::{
-        Budget, CertifyMode, CertifySettings, Outcome, Refusal, Rung, certify_multiple,
+        Budget, CertifyMode, CertifySettings, Outcome, Proof, Refusal, certify_multiple,
     };
     use rotavg::relax::predict_relax_multiple;
     let (sparse, _) = graph(150, 225, 0.05, 1);
@@ -314,12 +314,12 @@ fn sdp_is_refused_over_the_memory_budget() {
     let c = certify_multiple(&dense, &y, &settings).unwrap();
     assert!(c.details.sdp.is_none(), "the SDP ran: {:?}", c.details.sdp);
     let refused = c.details.ladder.iter().any(|a| {
-        a.rung == Rung::Sdp && matches!(a.outcome, Outcome::Refused(Refusal::OverBudget { .. }))
+        a.rung == Proof::Sdp && matches!(a.outcome, Outcome::Refused(Refusal::OverBudget { .. }))
     });
     assert!(refused, "{:?}", c.details.ladder);
     let why = c.details.skipped_reason.unwrap_or_default();
     assert!(
-        why.contains("SDP not run") && why.contains("memory budget"),
+        why.contains("SDP relaxation (Clarabel) not run") && why.contains("memory budget"),
         "{why}"
     );
 }

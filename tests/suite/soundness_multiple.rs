@@ -13,8 +13,8 @@
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rotavg::Rotation;
-use rotavg::certify::multiple::{Verification, dual_certificate};
-use rotavg::certify::{CertifySettings, DualProof, DualSettings};
+use rotavg::certify::multiple::dual_certificate;
+use rotavg::certify::{CertifySettings, DualSettings, Proof};
 use rotavg::multiple::synthetic::SyntheticGraph;
 use rotavg::multiple::{Initialisation, MultipleProblem, MultipleSettings, solve_multiple};
 use rotavg::so3::random_rotation;
@@ -85,7 +85,7 @@ fn campaign_with(
             let c = dual_certificate(&p, rs, &settings).expect("valid input");
             let lb = c.certificate.lower_bound.expect("a bound always exists");
             assert!(lb.is_finite());
-            if c.bound.verification == Verification::ScalarComparison {
+            if c.bound.verification == Proof::ScalarComparison {
                 t.scalar += 1;
             }
             assert!(
@@ -161,7 +161,7 @@ fn soundness_thirty_percent_outliers() {
 fn soundness_scalar_comparison_forced() {
     let settings = CertifySettings {
         dual: DualSettings {
-            proofs: vec![DualProof::ScalarComparison],
+            proofs: vec![Proof::ScalarComparison],
             ..Default::default()
         },
         ..Default::default()

@@ -10,10 +10,9 @@ use faer::sparse::SparseColMat;
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rotavg::certify::CertifySettings;
+use rotavg::certify::SpectrumSettings;
 use rotavg::certify::multiple::{certificate_matrix, lower_bound_from_multipliers, multipliers};
-use rotavg::certify::spectrum::{
-    SpectrumMethod, SpectrumSettings, certificate_spectrum, smallest_eigenvalues,
-};
+use rotavg::certify::spectrum::{SpectrumMethod, certificate_spectrum, smallest_eigenvalues};
 use rotavg::multiple::MultipleProblem;
 use rotavg::multiple::synthetic::SyntheticGraph;
 use rotavg::so3::random_rotation;

@@ -16,57 +16,16 @@ pub(crate) mod profile;
 pub(crate) mod search;
 pub(crate) mod terms;
 
-use crate::certify::certificate::{BoundMethod, nonnegative_bound_at_most};
-use crate::certify::certification::{CertifyDetails, MethodRun};
+use crate::certify::certification::ImprovementSource;
+use crate::certify::log::{Prediction, Refusal};
+use crate::certify::one_rotation::{Bound, RotationState};
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, Plan, Rung};
+pub use crate::certify::settings::BranchAndBoundSettings;
+use crate::certify::settings::CertifyMode;
 use crate::error::Result;
-use crate::validate::at_least_one;
 use serde::{Deserialize, Serialize};
 use std::fmt;
-use std::time::Instant;
-
-/// Settings of the branch and bound (`CertifySettings::branch_and_bound`); its time limit is
-/// `CertifySettings::budget.max_seconds`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct BranchAndBoundSettings {
-    /// Largest number of cells bounded (default 2 000 000; >= 1).
-    pub max_cells: usize,
-    /// The axis-angle cube `[-pi, pi]^3` is first split into `k^3` cells (default 4; >= 1; measured on 10^4 samples with outliers: k = 4 bounds 15 % fewer cells than k = 8).
-    pub initial_divisions: usize,
-    /// Largest number of local solves started from cell centres that beat the incumbent
-    /// (default 16).
-    pub max_local_solves: usize,
-    /// Mode `auto` falls back to the branch and bound only for problems with at most this many
-    /// samples / pairs (default 20 000: each cell costs one pass over the terms, ~0.1 us per
-    /// term, and a search bounds a few thousand cells); mode `branch_and_bound` has no limit.
-    pub auto_max_terms: usize,
-}
-
-impl Default for BranchAndBoundSettings {
-    fn default() -> Self {
-        BranchAndBoundSettings {
-            max_cells: 2_000_000,
-            initial_divisions: 4,
-            max_local_solves: 16,
-            auto_max_terms: 20_000,
-        }
-    }
-}
-
-impl BranchAndBoundSettings {
-    /// Check every value; [`crate::Error::InvalidSettings`] names the first bad one.
-    ///
-    /// ```
-    /// use rotavg::certify::BranchAndBoundSettings;
-    /// assert!(BranchAndBoundSettings::default().validate().is_ok());
-    /// let bad = BranchAndBoundSettings { max_cells: 0, ..Default::default() };
-    /// assert!(bad.validate().unwrap_err().to_string().contains("max_cells"));
-    /// ```
-    pub fn validate(&self) -> Result<()> {
-        at_least_one("branch_and_bound.max_cells", self.max_cells)?;
-        at_least_one("branch_and_bound.initial_divisions", self.initial_divisions)
-    }
-}
 
 /// Why the branch and bound stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -156,52 +115,93 @@ pub(crate) struct Run<S> {
     pub explanation: String,
 }
 
-/// The time left of `budget` after `elapsed` seconds.
-fn remaining(settings: &crate::certify::CertifySettings, elapsed: f64) -> Option<f64> {
-    settings.budget.max_seconds.map(|t| (t - elapsed).max(0.0))
+/// Seconds predicted per term and cell (each cell costs one pass over the terms, about 0.1 us
+/// per term) and the cells of a typical search (a few thousand).
+pub const SECONDS_PER_TERM_CELL: f64 = 1e-7;
+
+/// See [`SECONDS_PER_TERM_CELL`].
+pub const TYPICAL_CELLS: f64 = 4000.0;
+
+/// The branch and bound over SO(3) `[B1]`-`[B6]` as a rung of a single or conjugate
+/// certification: mode `branch_and_bound` always, mode `auto` for problems of at most
+/// `branch_and_bound.auto_max_terms` terms; once. Its search stops at the time left.
+pub(crate) struct BranchAndBoundRung<'t, T> {
+    terms: &'t T,
+    /// Terms of the problem (samples, pairs).
+    len: usize,
+    done: bool,
 }
 
-/// Branch and bound over the terms of a single- or conjugate-averaging problem
-/// ([`terms::SingleTerms`], [`terms::ConjugateTerms`]) from `estimate` (cost `cost`), as a
-/// method of its certification, which started at `start`: the tolerance is resolved with the
-/// problem's smallest weight `min_weight`, the time limit is what `settings.budget` leaves. The
-/// bound (at least 0, at most `cost`: [`nonnegative_bound_at_most`]), the time and the note of
-/// the run are recorded in `details` (certifying when within the tolerance), with its
-/// statistics. Returns the run and that bound.
-pub(crate) fn run<T: search::Terms>(
-    terms: &T,
-    estimate: &crate::so3::Rotation,
-    cost: f64,
-    min_weight: f64,
-    settings: &crate::certify::CertifySettings,
-    start: Instant,
-    details: &mut CertifyDetails,
-) -> (Run<T::Solution>, f64) {
-    let t = Instant::now();
-    let tolerance = settings.tolerance.resolve(min_weight);
-    let run = if terms.data_slack().is_finite() {
-        let out = search::search(
+impl<'t, T> BranchAndBoundRung<'t, T> {
+    /// The rung over `terms`, `len` of them.
+    pub fn new(terms: &'t T, len: usize) -> Self {
+        BranchAndBoundRung {
             terms,
-            estimate,
-            cost,
-            tolerance,
-            &settings.branch_and_bound,
-            remaining(settings, start.elapsed().as_secs_f64()),
-        );
-        searched(out, cost)
-    } else {
-        unproven_data(cost)
-    };
-    let lb = nonnegative_bound_at_most(run.lower_bound, cost);
-    let method = MethodRun {
-        method: BoundMethod::BranchAndBound,
-        lower_bound: Some(lb),
-        seconds: t.elapsed().as_secs_f64(),
-        note: run.explanation.clone(),
-    };
-    details.record(method, cost - lb <= tolerance.allowed_gap(cost));
-    details.branch_and_bound = Some(run.stats);
-    (run, lb)
+            len,
+            done: false,
+        }
+    }
+}
+
+impl<'a, T: search::Terms> Rung<RotationState<'a, T::Solution>> for BranchAndBoundRung<'_, T> {
+    fn proof(&self) -> Proof {
+        Proof::BranchAndBound
+    }
+
+    fn plan(&mut self, cx: &RotationState<'a, T::Solution>) -> Result<Plan> {
+        let settings = cx.settings;
+        if self.done
+            || !matches!(
+                settings.mode,
+                CertifyMode::Auto | CertifyMode::BranchAndBound
+            )
+        {
+            return Ok(Plan::Done);
+        }
+        let max = settings.branch_and_bound.auto_max_terms;
+        if settings.mode == CertifyMode::Auto && self.len > max {
+            let reason = format!(
+                "{} terms > branch_and_bound.auto_max_terms = {max} (use mode branch_and_bound)",
+                self.len
+            );
+            return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
+        }
+        let seconds = SECONDS_PER_TERM_CELL * TYPICAL_CELLS * self.len as f64;
+        Ok(Plan::Run(Prediction::new(seconds, 0.0)))
+    }
+
+    fn attempt(&mut self, cx: &mut RotationState<'a, T::Solution>) -> Result<Found> {
+        self.done = true;
+        crate::progress::phase(crate::progress::Phase::Certify, || {
+            format!("branch and bound over SO(3), {} terms", self.len)
+        });
+        let run = if self.terms.data_slack().is_finite() {
+            let out = search::search(
+                self.terms,
+                &cx.estimate,
+                cx.cost,
+                cx.tolerance,
+                &cx.settings.branch_and_bound,
+                cx.deadline.left().map(|l| l.max(0.0)),
+            );
+            searched(out, cx.cost)
+        } else {
+            unproven_data(cx.cost)
+        };
+        cx.branch_and_bound = Some(run.stats);
+        if let Some((s, c)) = run.improvement {
+            cx.improve(s, c, ImprovementSource::BranchAndBound);
+        }
+        let lb = cx.offer(Bound {
+            lower_bound: run.lower_bound,
+            proof: Proof::BranchAndBound,
+            explanation: run.explanation.clone(),
+            min_eigenvalue: None,
+            verified_min_eigenvalue: None,
+            spectrum: None,
+        });
+        Ok(Found::proved(lb, cx.certifies(lb), run.explanation))
+    }
 }
 
 /// The run not searched because the data margin `[B6]` has no proof (the estimate's cost is

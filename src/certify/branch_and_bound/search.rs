@@ -2,8 +2,9 @@
 //! around incumbents (`[B5]`), for any cost whose balls can be bounded (`[B2]`-`[B4]`).
 
 use super::bound::{ANGLE_ERROR, BallBound};
-use super::{BranchAndBoundSettings, BranchAndBoundStats, BranchAndBoundStop};
-use crate::certify::certificate::GapTolerance;
+use super::{BranchAndBoundStats, BranchAndBoundStop};
+use crate::certify::settings::BranchAndBoundSettings;
+use crate::certify::tolerance::GapTolerance;
 use crate::so3::{self, Rotation};
 use nalgebra::Vector3;
 use std::cmp::Ordering;

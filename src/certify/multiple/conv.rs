@@ -9,6 +9,11 @@
 //! dense (small graphs) and its smallest eigenvalue is taken with a backward-error margin.
 
 use super::multipliers::{check_lambdas, data_defect, forming_margin, symmetrize};
+use super::state::{Best, State};
+use crate::certify::log::{Point, Prediction, Refusal};
+use crate::certify::proof::{BoundMethod, Proof};
+use crate::certify::rung::{Found, Plan, Rung};
+use crate::certify::settings::CertifyMode;
 use crate::error::{Error, Result};
 use crate::linalg::{UNIT_ROUNDOFF, gamma};
 use crate::multiple::MultipleProblem;
@@ -159,7 +164,7 @@ pub fn certify_conv(
     Ok(crate::certify::Certificate::from_bounds(
         problem.chordal_cost(rotations),
         Some(bound.lower_bound),
-        crate::certify::BoundMethod::Sdp,
+        BoundMethod::Sdp,
         Some(bound.verified_min_eigenvalue),
         tolerance,
         format!(
@@ -173,4 +178,69 @@ pub fn certify_conv(
         ),
         start.elapsed().as_secs_f64(),
     ))
+}
+
+/// The `conv(SO(3))` SDP `[A6]` as a rung of a certification (modes `auto` and `sdp`): for
+/// anisotropic problems of at most [`crate::relax::conv_so3::CONV_MAX_NODES`] nodes, once,
+/// after the dual certificates (the `O(3)` relaxation can prefer reflections, `[A5]`); solved
+/// within the time left, its multipliers verified by [`conv_bound`].
+#[derive(Default)]
+pub(crate) struct ConvSdpRung {
+    done: bool,
+}
+
+impl<'a> Rung<State<'a>> for ConvSdpRung {
+    fn proof(&self) -> Proof {
+        Proof::ConvSdp
+    }
+
+    fn plan(&mut self, cx: &State<'a>) -> Result<Plan> {
+        let n = cx.problem.num_rotations();
+        if self.done
+            || !cx.problem.is_anisotropic()
+            || n > crate::relax::conv_so3::CONV_MAX_NODES
+            || !matches!(cx.settings.mode, CertifyMode::Auto | CertifyMode::Sdp)
+        {
+            return Ok(Plan::Done);
+        }
+        Ok(match cx.escalation() {
+            Err(reason) => Plan::Refuse(Refusal::NotApplicable { reason }, None),
+            Ok(false) => Plan::Wait,
+            Ok(true) => {
+                let p = crate::relax::conv_so3::predict_relax_multiple_conv(cx.problem);
+                Plan::Run(Prediction::new(p.seconds, p.bytes))
+            }
+        })
+    }
+
+    fn attempt(&mut self, cx: &mut State<'a>) -> Result<Found> {
+        self.done = true;
+        let Some(sdp) = cx.settings.sdp_until(&cx.deadline, 0.0) else {
+            return Ok(Found::refused(Refusal::OverBudget {
+                reason: "the time budget is spent".into(),
+            }));
+        };
+        let relaxation = crate::relax::conv_so3::relax_multiple_conv(cx.problem, &sdp)?;
+        let bound = conv_bound(cx.problem, &relaxation)?;
+        let note = format!(
+            "bound from the conv(SO(3)) relaxation's multipliers [A6] (Clarabel {:?}, {} \
+             iterations), verified independently: lambda_min(S) >= {:.3e}",
+            relaxation.status, relaxation.iterations, bound.verified_min_eigenvalue
+        );
+        cx.offer(Best {
+            lower_bound: bound.lower_bound,
+            method: BoundMethod::Sdp,
+            point: Point::ConvSdp,
+            min_eigenvalue: Some(bound.verified_min_eigenvalue),
+            explanation: note.clone(),
+            verified_min_eigenvalue: bound.verified_min_eigenvalue,
+            shift: None,
+            lambdas: None,
+        });
+        Ok(Found::proved(
+            bound.lower_bound,
+            cx.certifies(bound.lower_bound),
+            note,
+        ))
+    }
 }

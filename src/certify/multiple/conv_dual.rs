@@ -18,9 +18,18 @@
 //! Ritz value ([`search_penalties`]); the bound itself is checked by the `O(3)` ladder of
 //! [`super::verify`] on the surrogate and by the verified offsets, never by the search.
 
+use super::check::Scope;
 use super::multipliers::{certificate_matrix, multipliers};
-use crate::certify::Budget;
-use crate::certify::ladder::Prediction;
+use super::state::{Best, State};
+use super::verified::VerifiedBound;
+use crate::certify::budget::Deadline;
+use crate::certify::budget::{Budget, PREDICTED_FLOP_RATE};
+use crate::certify::log::Point;
+use crate::certify::log::Prediction;
+use crate::certify::proof::{BoundMethod, Proof};
+use crate::certify::rung::{Found, Plan, Rung};
+use crate::certify::settings::CertifyMode;
+pub use crate::certify::settings::ConvDualSettings;
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::{ShiftedCholesky, sparse_matvec};
 use crate::linalg::compensated::Accumulator;
@@ -33,73 +42,6 @@ use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::time::Instant;
-
-/// Settings of the search for the `conv(SO(3))` multipliers `[A11]` (`dual.conv`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct ConvDualSettings {
-    /// Run it (anisotropic problems whose `O(3)` dual certificate did not certify; modes `auto`
-    /// and `dual`). Default `true`.
-    pub enabled: bool,
-    /// Rounds of the search: each one Lanczos run on `S'` and the projections onto its cuts
-    /// (0: only the edges' own reflection prices). Default 300.
-    pub max_rounds: usize,
-    /// Cuts (Ritz vectors of negative Ritz value) kept, the newest. Default 60.
-    pub cuts_kept: usize,
-    /// Most passes of cyclic projections over the kept cuts in a round (a round stops passing
-    /// when no cut is violated). Default 30.
-    pub passes: usize,
-    /// Krylov subspace dimension of a round's Lanczos run (block size 3). Default 90.
-    pub lanczos_iterations: usize,
-    /// Fraction of the time left that the search may spend (the rest is the proof's). In
-    /// `(0, 1)`, default 0.5.
-    pub time_fraction: f64,
-    /// Rounds without a 0.1 % rise of the smallest Ritz value after which the search stops
-    /// (stalled). Default 40.
-    pub stall_rounds: usize,
-    /// Largest factor (stored values) of `S' + sigma I` for shift-invert rounds; above it (or
-    /// above what the memory budget leaves beside the search) the rounds run Lanczos on `S'`
-    /// itself, whose smallest Ritz values converge slowly. Default 2e7.
-    pub shift_invert_max_factor: usize,
-}
-
-impl Default for ConvDualSettings {
-    fn default() -> Self {
-        ConvDualSettings {
-            enabled: true,
-            max_rounds: 300,
-            cuts_kept: 60,
-            passes: 30,
-            lanczos_iterations: 90,
-            time_fraction: 0.5,
-            stall_rounds: 40,
-            shift_invert_max_factor: 20_000_000,
-        }
-    }
-}
-
-impl ConvDualSettings {
-    /// Checks `cuts_kept`, `passes` and `lanczos_iterations >= 1` (the Lanczos dimension at
-    /// least 6) and `time_fraction` in `(0, 1)`.
-    pub fn validate(&self) -> Result<()> {
-        crate::validate::at_least_one("dual.conv.cuts_kept", self.cuts_kept)?;
-        crate::validate::at_least_one("dual.conv.passes", self.passes)?;
-        crate::validate::at_least_one("dual.conv.stall_rounds", self.stall_rounds)?;
-        if self.lanczos_iterations < 6 {
-            return Err(Error::InvalidSettings {
-                name: "dual.conv.lanczos_iterations".into(),
-                reason: format!("must be >= 6, got {}", self.lanczos_iterations),
-            });
-        }
-        if !(self.time_fraction > 0.0 && self.time_fraction < 1.0) {
-            return Err(Error::InvalidSettings {
-                name: "dual.conv.time_fraction".into(),
-                reason: format!("must be in (0, 1), got {}", self.time_fraction),
-            });
-        }
-        Ok(())
-    }
-}
 
 /// Why the search stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -323,17 +265,26 @@ impl Cut {
     }
 }
 
-/// The predicted peak memory of the search, bytes: the Lanczos basis, the kept cuts and the
-/// multipliers. Its time is bounded by its share of the budget, not predicted.
+/// Rounds predicted for a search (searches that certify end within a few tens of rounds; the
+/// others stop at their stall rule or their share of the time).
+pub const TYPICAL_ROUNDS: f64 = 20.0;
+
+/// The predicted cost of the search: [`TYPICAL_ROUNDS`] rounds of products with `S'` (at
+/// most `time_fraction` of the time left, whatever the prediction), and its peak memory: the
+/// Lanczos basis, the kept cuts and the multipliers.
 pub fn predict_search(problem: &MultipleProblem, settings: &ConvDualSettings) -> Prediction {
     let dim = 3.0 * problem.num_rotations() as f64;
     let m = problem.num_edges() as f64;
-    Prediction {
-        seconds: 0.0,
-        bytes: 8.0 * (settings.lanczos_iterations as f64 + 8.0) * dim
+    // a round: a Lanczos run of products with S' (36 values an edge, two flops each); a search
+    // that certifies typically ends within TYPICAL_ROUNDS (it may spend up to
+    // `time_fraction` of the time left)
+    let round = settings.lanczos_iterations as f64 * 72.0 * m / PREDICTED_FLOP_RATE;
+    Prediction::new(
+        TYPICAL_ROUNDS * round,
+        8.0 * (settings.lanczos_iterations as f64 + 8.0) * dim
             + 24.0 * m * settings.cuts_kept as f64
             + 2.0 * 72.0 * m,
-    }
+    )
 }
 
 /// Positions of an edge's 36 entries of `S` in its stored values: the blocks `(i, i)`,
@@ -860,7 +811,7 @@ pub struct ConvDualBound {
     /// surrogate's bound minus the verified offsets.
     pub lower_bound: f64,
     /// The surrogate's own verified bound (the `O(3)` ladder of [`super::verify`]).
-    pub surrogate: super::verify::VerifiedBound,
+    pub surrogate: VerifiedBound,
     /// The verified sum of the edges' offsets.
     pub offset: f64,
     /// The search that chose the multipliers.
@@ -874,7 +825,7 @@ pub struct ConvDualBound {
 ///
 /// ```
 /// use rotavg::certify::CertifySettings;
-/// use rotavg::certify::ladder::Point;
+/// use rotavg::certify::log::Point;
 /// use rotavg::certify::multiple::conv_dual::conv_dual_bound;
 /// use rotavg::multiple::{Edge, MultipleProblem, anisotropic::Information};
 /// use nalgebra::{Matrix3, Vector3};
@@ -891,10 +842,23 @@ pub fn conv_dual_bound(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     settings: &crate::certify::CertifySettings,
-    point: crate::certify::ladder::Point,
+    point: crate::certify::log::Point,
     deadline: Option<Instant>,
 ) -> Result<ConvDualBound> {
     settings.validate()?;
+    let clock = Deadline::start(&settings.budget);
+    conv_dual_within(problem, rotations, settings, point, deadline, clock)
+}
+
+/// [`conv_dual_bound`] on a certification's clock `clock`, its search stopped at `deadline`.
+pub(crate) fn conv_dual_within(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    settings: &crate::certify::CertifySettings,
+    point: crate::certify::log::Point,
+    deadline: Option<Instant>,
+    clock: Deadline,
+) -> Result<ConvDualBound> {
     let search = search_penalties(
         problem,
         rotations,
@@ -905,13 +869,18 @@ pub fn conv_dual_bound(
     let sur = surrogate(problem, rotations, &search.penalties)?;
     let lambdas = multipliers(&sur.problem, rotations)?;
     let cost = problem.chordal_cost(rotations);
+    let scope = Scope {
+        point,
+        within: Proof::ConvDual,
+        deadline: clock,
+    };
     let bound = super::verify::verify(
         &sur.problem,
         &lambdas,
         Some(rotations),
         cost.abs(),
         settings,
-        point,
+        scope,
         None,
     )?;
     let difference = bound.lower_bound - sur.offset;
@@ -923,6 +892,89 @@ pub fn conv_dual_bound(
         offset: sur.offset,
         search,
     })
+}
+
+/// The `conv(SO(3))` dual certificate `[A11]` as a rung of a certification: at every point
+/// once (the given estimate, its refinement, a better point found by another rung), modes
+/// `auto` and `dual`, on anisotropic data with some indefinite `M` (on definite data a failed
+/// `O(3)` certificate is outliers or noise far more often; the dense SDP of small graphs,
+/// `[A6]`, is the rung there). The search for its multipliers may spend
+/// `dual.conv.time_fraction` of the time left; the surrogate's bound is verified by the `O(3)`
+/// checks, logged within it.
+#[derive(Default)]
+pub(crate) struct ConvDualRung;
+
+impl<'a> Rung<State<'a>> for ConvDualRung {
+    fn proof(&self) -> Proof {
+        Proof::ConvDual
+    }
+
+    fn plan(&mut self, cx: &State<'a>) -> Result<Plan> {
+        let conv = &cx.settings.dual.conv;
+        if !cx.reflective
+            || !conv.enabled
+            || !matches!(cx.settings.mode, CertifyMode::Auto | CertifyMode::Dual)
+        {
+            return Ok(Plan::Done);
+        }
+        if cx.conv_dual_at.contains(&cx.current.label) {
+            return Ok(Plan::Wait);
+        }
+        Ok(Plan::Run(predict_search(cx.problem, conv)))
+    }
+
+    fn attempt(&mut self, cx: &mut State<'a>) -> Result<Found> {
+        let label = cx.current.label;
+        cx.conv_dual_at.push(label);
+        crate::progress::phase(crate::progress::Phase::Certify, || {
+            format!(
+                "conv(SO(3)) dual certificate at {label} ({} nodes)",
+                cx.problem.num_rotations()
+            )
+        });
+        let search = cx
+            .deadline
+            .share(cx.settings.dual.conv.time_fraction)
+            .instant();
+        let rotations = cx.current.rotations.clone();
+        let b = conv_dual_within(
+            cx.problem,
+            &rotations,
+            cx.settings,
+            Point::ConvDual,
+            search,
+            cx.deadline,
+        )?;
+        cx.log.extend(b.surrogate.ladder.iter().cloned());
+        let note = format!(
+            "bound from the conv(SO(3)) multipliers recovered at {label} [A11] ({} rounds of their \
+             search, {} cuts, stopped: {}): the O(3) certificate of the penalised surrogate, \
+             lambda_min(S') >= {:.3e}, minus its verified offsets {:.6e}",
+            b.search.rounds,
+            b.search.cuts,
+            b.search.stop,
+            b.surrogate.verified_min_eigenvalue,
+            b.offset
+        );
+        cx.offer(Best {
+            lower_bound: b.lower_bound,
+            method: BoundMethod::Dual,
+            point: Point::ConvDual,
+            min_eigenvalue: b
+                .surrogate
+                .min_eigenvalue_estimate
+                .or(Some(b.surrogate.verified_min_eigenvalue)),
+            explanation: note.clone(),
+            verified_min_eigenvalue: b.surrogate.verified_min_eigenvalue,
+            shift: None,
+            lambdas: None,
+        });
+        Ok(Found::proved(
+            b.lower_bound,
+            cx.certifies(b.lower_bound),
+            note,
+        ))
+    }
 }
 
 #[cfg(test)]

@@ -6,57 +6,27 @@
 //! - [`dual_certificate`]: the dual certificate of an estimate (any rotations, critical point or
 //!   not); [`certify_with_multipliers`]: an estimate against multipliers obtained elsewhere.
 
+use super::check::Scope;
+use super::diagnosis::{DualDiagnosis, diagnose, diagnosis_text, over_budget};
 use super::multipliers::{check_lambdas, check_rotations, multipliers, stationarity_residual};
-use super::randomized::{ComplementEstimate, RandomizedBound};
-use super::verify::{Verification, VerifiedBound, verify};
-use crate::certify::certificate::{BoundMethod, Certificate, RandomizedLowerBound};
-use crate::certify::ladder::Point;
+use super::state::{Best, DualRun, State};
+use super::verified::{RandomizedBound, VerifiedBound};
+use super::verify::verify;
+use crate::certify::budget::Deadline;
+use crate::certify::certificate::{Certificate, RandomizedLowerBound};
+use crate::certify::certification::ImprovementSource;
+use crate::certify::log::{Outcome, Point, Prediction, Refusal};
+use crate::certify::proof::{BoundMethod, Proof};
+use crate::certify::rung::{Found, Plan, Rung};
 use crate::certify::settings::CertifySettings;
 use crate::error::Result;
 use crate::multiple::MultipleProblem;
+use crate::multiple::{Initialisation, MultipleSettings, solve_multiple};
 use crate::so3::Rotation;
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::time::Instant;
-
-/// Why a dual certificate has its verdict `[D9]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "diagnosis", rename_all = "snake_case")]
-pub enum DualDiagnosis {
-    /// The gap is within the tolerance.
-    Certified,
-    /// The estimate is not a critical point: its stationarity residual `[D3]` is too large for
-    /// a bound within the tolerance (the cost is above the nearby optimum by about
-    /// `residual^2 / c`); refining it is the remedy.
-    NotCritical {
-        /// The stationarity residual.
-        residual: f64,
-    },
-    /// `S` has a negative eigenvalue (estimate below): the estimate is a saddle or a non-global
-    /// local minimum of the nonconvex problem, or the relaxation is not tight.
-    Indefinite {
-        /// The (Lanczos) estimate of `lambda_min(S)`.
-        min_eigenvalue: f64,
-    },
-    /// `S` is positive semidefinite up to the verification's precision, but the gap that
-    /// precision allows is above the tolerance.
-    PrecisionLimited {
-        /// The smallest gap the verification proved.
-        smallest_gap: f64,
-    },
-    /// No proof fits the budget ([`crate::certify::Budget`]): no lower bound is claimed.
-    OverBudget {
-        /// What would not fit.
-        reason: String,
-        /// The Lanczos *estimate* of `lambda_min(S)` (never a proof), if computed.
-        min_eigenvalue_estimate: Option<f64>,
-        /// The estimate on the complement of the gauge directions, when the rotations were
-        /// known (never a proof).
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        complement_estimate: Option<ComplementEstimate>,
-    },
-}
 
 /// The dual certificate of an estimate: the common [`Certificate`] plus diagnostics.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -104,29 +74,37 @@ pub fn dual_certificate(
     rotations: &[Rotation],
     settings: &CertifySettings,
 ) -> Result<DualCertificate> {
-    dual_certificate_at(problem, rotations, settings, Point::Given)
-}
-
-/// [`dual_certificate`] with `point` labelling its ladder (the given or the refined estimate).
-pub(super) fn dual_certificate_at(
-    problem: &MultipleProblem,
-    rotations: &[Rotation],
-    settings: &CertifySettings,
-    point: Point,
-) -> Result<DualCertificate> {
-    let start = Instant::now();
     settings.validate()?;
     check_rotations(problem, rotations)?;
-    let cost = problem.chordal_cost(rotations);
     let lambdas = multipliers(problem, rotations)?;
     let stationarity = stationarity_residual(problem, rotations)?;
+    let scope = Scope {
+        point: Point::Given,
+        within: Proof::DualCertificate,
+        deadline: Deadline::start(&settings.budget),
+    };
+    dual_certificate_with(problem, rotations, &lambdas, stationarity, settings, scope)
+}
+
+/// [`dual_certificate`] of `rotations` with their multipliers `lambdas` and stationarity
+/// residual already computed, in `scope` (the point and the clock of a certification).
+pub(crate) fn dual_certificate_with(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+    stationarity: f64,
+    settings: &CertifySettings,
+    scope: Scope,
+) -> Result<DualCertificate> {
+    let start = Instant::now();
+    let cost = problem.chordal_cost(rotations);
     let bound = verify(
         problem,
-        &lambdas,
+        lambdas,
         Some(rotations),
         cost.abs(),
         settings,
-        point,
+        scope,
         None,
     )?;
     let min_eig = bound
@@ -163,13 +141,13 @@ pub(super) fn dual_certificate_at(
 /// How the bound was proven, in words.
 fn proof_text(bound: &VerifiedBound) -> String {
     match (bound.verification, bound.shift) {
-        (Verification::Cholesky, Some(s)) => format!(
+        (Proof::ShiftedCholesky, Some(s)) => format!(
             "lambda_min(S) >= {:.3e} verified by a sparse Cholesky factorisation of S + {:.3e} I \
              ({:.2e} factor values; floating-point margin {:.1e})",
             bound.verified_min_eigenvalue, s, bound.factor_nonzeros as f64, bound.fp_margin
         ),
-        (Verification::ScalarComparison, _) => scalar_text(bound),
-        (Verification::Grounded, _) => match &bound.grounded {
+        (Proof::ScalarComparison, _) => scalar_text(bound),
+        (Proof::Grounded, _) => match &bound.grounded {
             Some(g) => format!(
                 "gauge null space deflated [D15]: S without node {}'s block >= {:.3e} I verified \
                  by a sparse Cholesky factorisation ({:.2e} factor values; floating-point margin \
@@ -229,7 +207,7 @@ fn estimate_text(bound: &VerifiedBound) -> String {
     bound
         .min_eigenvalue_estimate
         .map(|e| match bound.verification {
-            Verification::Grounded | Verification::ScalarComparison => {
+            Proof::Grounded | Proof::ScalarComparison => {
                 format!("; gauge-direction estimate lambda_min(S) ~ {e:.3e}")
             }
             _ => format!("; Lanczos estimate lambda_min(S) ~ {e:.3e}"),
@@ -239,7 +217,7 @@ fn estimate_text(bound: &VerifiedBound) -> String {
 
 /// The randomized bound `[D16]` of `bound`, when the verdict is not certified: attached to the
 /// certificate (when the test passed) and returned as a sentence for the explanation.
-pub(super) fn attach_randomized(
+pub(crate) fn attach_randomized(
     certificate: &mut Certificate,
     randomized: Option<RandomizedBound>,
 ) -> String {
@@ -258,93 +236,6 @@ pub(super) fn attach_randomized(
     match &certificate.randomized {
         Some(c) => format!("; {r}; {c}"),
         None => format!("; {r}"),
-    }
-}
-
-/// Why a dual certificate has its verdict: certified; the estimate is not a critical point (the
-/// grounded bound said so, or its deficit dominates); `S` is indefinite (a negative eigenvalue
-/// estimate beyond the verification's precision); or the precision ran out.
-fn diagnose(certificate: &Certificate, bound: &VerifiedBound, residual: f64) -> DualDiagnosis {
-    if certificate.is_certified() {
-        return DualDiagnosis::Certified;
-    }
-    if let Some(reason) = over_budget(bound) {
-        return DualDiagnosis::OverBudget {
-            reason,
-            min_eigenvalue_estimate: bound.min_eigenvalue_estimate,
-            complement_estimate: bound.complement_estimate.clone(),
-        };
-    }
-    let gap = certificate.gap.unwrap_or(f64::INFINITY);
-    if bound.not_critical
-        || bound
-            .grounded
-            .is_some_and(|g| g.deficit >= 0.5 * gap && g.rho * g.rho / g.c >= g.h)
-    {
-        return DualDiagnosis::NotCritical { residual };
-    }
-    let precision = -(bound.verified_min_eigenvalue.min(0.0));
-    match bound.min_eigenvalue_estimate {
-        Some(e) if bound.grounded.is_none() && e < -2.0 * precision.max(f64::MIN_POSITIVE) => {
-            DualDiagnosis::Indefinite { min_eigenvalue: e }
-        }
-        _ if bound.negative_eigenvector.is_some() => DualDiagnosis::Indefinite {
-            min_eigenvalue: bound.min_eigenvalue_estimate.unwrap_or(f64::NAN),
-        },
-        _ => DualDiagnosis::PrecisionLimited { smallest_gap: gap },
-    }
-}
-
-/// The budget's reason when no factorisation fit and only Gershgorin's bound is left: no
-/// lower bound is claimed then (the verdict is `inconclusive`, issue 15).
-fn over_budget(bound: &VerifiedBound) -> Option<String> {
-    (bound.verification == Verification::Gershgorin)
-        .then(|| bound.budget_exceeded.clone())
-        .flatten()
-}
-
-/// The verdict sentence of a diagnosis.
-pub(crate) fn diagnosis_text(d: &DualDiagnosis, problem: &MultipleProblem) -> String {
-    match d {
-        DualDiagnosis::Certified => format!(
-            "certified globally optimal for the {}chordal L2 cost of its {} edges (over O(3)^n, \
-             hence SO(3)^n)",
-            if problem.is_anisotropic() {
-                "anisotropic "
-            } else {
-                ""
-            },
-            problem.num_edges()
-        ),
-        DualDiagnosis::NotCritical { residual } => format!(
-            "not certified: the estimate is not a critical point (stationarity residual {residual:.3e}): its cost is above the nearby optimum, and its bound is correspondingly weaker"
-        ),
-        DualDiagnosis::Indefinite { min_eigenvalue } => format!(
-            "not certified: the certificate matrix S is indefinite (lambda_min(S) ~ {min_eigenvalue:.3e}): the estimate is a saddle or a non-global local minimum of the nonconvex problem, or the relaxation is not tight{}",
-            if problem.is_anisotropic() {
-                " (with anisotropic information the O(3) relaxation can prefer reflections)"
-            } else {
-                ""
-            }
-        ),
-        DualDiagnosis::PrecisionLimited { smallest_gap } => format!(
-            "not certified: precision ran out: S is positive semidefinite up to the verification's floating-point precision, and the smallest gap it can prove here is {smallest_gap:.3e}"
-        ),
-        DualDiagnosis::OverBudget {
-            reason,
-            min_eigenvalue_estimate,
-            complement_estimate,
-        } => match complement_estimate {
-            Some(c) => format!("inconclusive: {reason}; {c}"),
-            None => format!(
-                "inconclusive: {reason}{}",
-                min_eigenvalue_estimate
-                    .map(|e| format!(
-                        "; Lanczos estimate lambda_min(S) ~ {e:.3e} (an estimate, not a proof)"
-                    ))
-                    .unwrap_or_default()
-            ),
-        },
     }
 }
 
@@ -377,23 +268,28 @@ pub fn certify_with_multipliers(
     check_lambdas(problem, lambdas)?;
     let cost = problem.chordal_cost(rotations);
     let stationarity = stationarity_residual(problem, rotations)?;
+    let scope = Scope {
+        point: Point::Sdp,
+        within: Proof::Sdp,
+        deadline: Deadline::start(&settings.budget),
+    };
     let bound = verify(
         problem,
         lambdas,
         Some(rotations),
         cost.abs(),
         settings,
-        Point::Sdp,
+        scope,
         None,
     )?;
     let explanation = format!(
         "bound from supplied multipliers ({method}): lambda_min(Q - blkdiag(Lambda)) >= {:.3e} verified by {}",
         bound.verified_min_eigenvalue,
         match bound.verification {
-            Verification::Cholesky => "a sparse Cholesky factorisation",
-            Verification::Gershgorin => "Gershgorin discs",
-            Verification::ScalarComparison => "the scalar comparison [D13]",
-            Verification::Grounded => "the grounded bound [D15]",
+            Proof::ShiftedCholesky => "a sparse Cholesky factorisation",
+            Proof::ScalarComparison => "the scalar comparison [D13]",
+            Proof::Grounded => "the grounded bound [D15]",
+            _ => "Gershgorin discs",
         }
     );
     let min_eig = bound
@@ -423,3 +319,192 @@ pub fn certify_with_multipliers(
         stationarity_residual: stationarity,
     })
 }
+
+/// Seconds per edge predicted for a dual certificate at a point: the multipliers, `S` and the
+/// cheapest check (measured 4.5e-6 s per edge for the scalar comparison's work besides its
+/// factorisation; a check's own factorisation is predicted inside the verification).
+pub const DUAL_SECONDS_PER_EDGE: f64 = 1e-5;
+
+/// The dual certificate as the rung of a certification `[D3]`-`[D9]`, at every point once: the
+/// given estimate (unless a cheap test shows its own multipliers cannot certify it, `[D15]`),
+/// its refinement by the local solver (when the given estimate's certificate did not settle
+/// it), and every better point found by another rung (an SDP's or the staircase's polished
+/// rounding).
+#[derive(Default)]
+pub(crate) struct DualRung;
+
+impl<'a> Rung<State<'a>> for DualRung {
+    fn proof(&self) -> Proof {
+        Proof::DualCertificate
+    }
+
+    fn plan(&mut self, cx: &State<'a>) -> Result<Plan> {
+        let label = cx.current.label;
+        let seconds = DUAL_SECONDS_PER_EDGE * cx.problem.num_edges() as f64;
+        // on data where the O(3) relaxation can prefer reflections it rarely proves [A5]
+        let success = if cx.reflective { 0.2 } else { 1.0 };
+        if !cx.dual_at.contains(&label) {
+            // a verified (or bracketed) staircase: its rounding's certificate cannot do better
+            if label == Point::Staircase && cx.staircase_verified == Some(true) {
+                return Ok(Plan::Wait);
+            }
+            return Ok(Plan::Run(
+                Prediction::new(seconds, 0.0).with_success(success),
+            ));
+        }
+        Ok(if cx.wants_refinement() {
+            // the refinement's local solve and the certificate of the refined point
+            Plan::Run(Prediction::new(2.0 * seconds, 0.0).with_success(success))
+        } else {
+            Plan::Wait
+        })
+    }
+
+    fn attempt(&mut self, cx: &mut State<'a>) -> Result<Found> {
+        if cx.dual_at.contains(&cx.current.label) {
+            return refine_and_certify(cx);
+        }
+        certify_current(cx, true)
+    }
+}
+
+/// `Some(why)` when the given estimate is cheaply shown not to be a critical point whose own
+/// multipliers could certify it (`[D15]`): its ladder is skipped, its refinement's certificate
+/// bounds it as well, in a fraction of the time (issue 24). Records nothing.
+fn given_hopeless(cx: &State<'_>) -> Result<Option<String>> {
+    let rotations = &cx.current.rotations;
+    let lambdas = multipliers(cx.problem, rotations)?;
+    let gap = cx.allowed_gap(cx.cost);
+    Ok(super::grounded::hopeless(
+        cx.problem, rotations, &lambdas, gap,
+    ))
+}
+
+/// The dual certificate at the current point: its checks logged, its bound offered, its
+/// diagnosis kept (at the given estimate, `test_hopeless` first runs the cheap test of
+/// [`given_hopeless`]).
+fn certify_current(cx: &mut State<'_>, test_hopeless: bool) -> Result<Found> {
+    let label = cx.current.label;
+    crate::progress::phase(crate::progress::Phase::Certify, || {
+        format!(
+            "dual certificate at {label} ({} nodes)",
+            cx.problem.num_rotations()
+        )
+    });
+    if !cx.dual_at.contains(&label) {
+        cx.dual_at.push(label);
+    }
+    let rotations = cx.current.rotations.clone();
+    let lambdas = multipliers(cx.problem, &rotations)?;
+    let stationarity = stationarity_residual(cx.problem, &rotations)?;
+    if label == Point::Given {
+        cx.given_stationarity_residual = Some(stationarity);
+    }
+    if label == Point::Given
+        && test_hopeless
+        && let Some(reason) = given_hopeless(cx)?
+    {
+        // not a critical point: the refinement's certificate is what can help
+        cx.first = Some(DualDiagnosis::NotCritical {
+            residual: stationarity,
+        });
+        return Ok(Found::refused(Refusal::NotApplicable { reason }));
+    }
+    let scope = Scope {
+        point: label,
+        within: Proof::DualCertificate,
+        deadline: cx.deadline,
+    };
+    let c = dual_certificate_with(
+        cx.problem,
+        &rotations,
+        &lambdas,
+        stationarity,
+        cx.settings,
+        scope,
+    )?;
+    cx.log.extend(c.bound.ladder.iter().cloned());
+    Ok(record(cx, c, lambdas))
+}
+
+/// Keep what one dual certificate found: the diagnosis (the given estimate's first), its bound
+/// (unless no check fitted the budget), and its outcome for the log.
+fn record(cx: &mut State<'_>, c: DualCertificate, lambdas: Vec<Matrix3<f64>>) -> Found {
+    let label = cx.current.label;
+    let over = matches!(c.diagnosis, DualDiagnosis::OverBudget { .. });
+    let note = format!(
+        "dual certificate at {label}: {}{}",
+        diagnosis_text(&c.diagnosis, cx.problem),
+        match (over, &c.bound.randomized) {
+            (true, Some(r)) => format!("; {r}"),
+            _ => String::new(),
+        }
+    );
+    if label == Point::Given && cx.first.is_none() {
+        cx.first = Some(c.diagnosis.clone());
+    }
+    cx.last = Some(DualRun {
+        diagnosis: c.diagnosis.clone(),
+        randomized: c.bound.randomized,
+    });
+    if let DualDiagnosis::OverBudget { reason, .. } = &c.diagnosis {
+        // no proof fits: the Gershgorin bound is not offered (no lower bound is claimed)
+        let refusal = Refusal::OverBudget {
+            reason: reason.clone(),
+        };
+        return Found::new(Outcome::Refused(refusal), note);
+    }
+    cx.stationarity_residual = Some(c.stationarity_residual);
+    let lower_bound = c.bound.lower_bound;
+    cx.offer(Best {
+        lower_bound,
+        method: BoundMethod::Dual,
+        point: label,
+        min_eigenvalue: c.certificate.min_eigenvalue,
+        explanation: c.proof.clone(),
+        verified_min_eigenvalue: c.bound.verified_min_eigenvalue,
+        // the grounded bound [D15] verifies no shift of S, but its lambda_min bound makes
+        // S + (-mu) I positive semidefinite: the same shift-invert hint
+        shift: c.bound.shift.or_else(|| {
+            (c.bound.verification == Proof::Grounded)
+                .then_some((-c.bound.verified_min_eigenvalue).max(0.0))
+        }),
+        lambdas: Some(lambdas),
+    });
+    Found::proved(lower_bound, cx.certifies(lower_bound), note)
+}
+
+/// Refine the given estimate with the local solver (the default gradient tolerance times
+/// [`REFINE_FACTOR`]) and certify the refined point; when the refinement finds nothing cheaper
+/// and the given estimate's own certificate was skipped (hopeless), certify the given estimate
+/// after all.
+fn refine_and_certify(cx: &mut State<'_>) -> Result<Found> {
+    cx.refined = true;
+    let t = Instant::now();
+    crate::progress::phase(crate::progress::Phase::Refine, String::new);
+    let local = MultipleSettings {
+        init: Initialisation::Given(cx.current.rotations.clone()),
+        gradient_tolerance: MultipleSettings::default().gradient_tolerance * REFINE_FACTOR,
+        ..Default::default()
+    };
+    let adopted = match solve_multiple(cx.problem, &local) {
+        Ok(r) => cx.adopt(r, ImprovementSource::Refinement, Point::Refined),
+        Err(_) => false,
+    };
+    cx.refine_seconds += t.elapsed().as_secs_f64();
+    if adopted {
+        return Ok(certify_current(cx, true)?.at(Point::Refined));
+    }
+    if cx.last.is_none() {
+        // not a critical point, and the refinement found nothing cheaper: its own ladder
+        return certify_current(cx, false);
+    }
+    Ok(Found::failed(
+        "the refinement found no point of lower cost (the given estimate's certificate stands)",
+    ))
+}
+
+/// When the dual certificate fails, the estimate is refined once with the local solver's
+/// default gradient tolerance multiplied by this factor, and the dual certificate is tried at
+/// the refined point.
+pub const REFINE_FACTOR: f64 = 1e-6;

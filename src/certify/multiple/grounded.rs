@@ -4,38 +4,22 @@
 //! double-double residuals), `f* >= sum tr(Lambda_i) - (rho^2 / c + h) ||R_g^-1||_F^2`: no `3n`
 //! factor, and no margin at the null space.
 
+use super::check::{Check, Notes, counted_factorisation_prediction, ordering_refusal};
 use super::multipliers::{GaugeTerms, bound_with_deficit, gauge_terms};
-use super::verify::{
-    Check, Notes, Proof, Verification, VerifiedBound, counted_factorisation_prediction,
-    ordering_refusal,
-};
-use crate::certify::ladder::{Prediction, Refusal, Rung};
+use super::verified::{GroundedBound, VerifiedBound};
+use crate::certify::log::{Prediction, Refusal};
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, Plan, Rung};
 use crate::error::{Error, Result};
 use crate::linalg::{Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme};
 use faer::sparse::{SparseColMat, Triplet};
 use nalgebra::Matrix3;
-use serde::{Deserialize, Serialize};
-use std::time::Instant;
 
-/// The quantities of the grounded bound `[D15]`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct GroundedBound {
-    /// The ground node `g` whose block is removed.
-    pub ground: usize,
-    /// Proven `c > 0` with `S_{-g} >= c I`.
-    pub c: f64,
-    /// Proven `rho >= ||S Y||_2`.
-    pub rho: f64,
-    /// Proven `h >= 0` with `Y^T S Y >= -h I`.
-    pub h: f64,
-    /// The deficit `(rho^2 / c + h) ||R_g^-1||_F^2` subtracted from `sum tr(Lambda)`.
-    pub deficit: f64,
-}
-
-/// The grounded rung: its analysis of `S_{-g}` (made by [`Proof::predict`]) and the ground.
+/// The grounded rung: its analysis of `S_{-g}` (made when planned) and the ground.
 #[derive(Default)]
 pub(super) struct GroundedProof {
     analysed: Option<Analysed>,
+    done: bool,
 }
 
 struct Analysed {
@@ -53,11 +37,51 @@ struct Analysed {
     predicted: Prediction,
 }
 
-impl Proof for GroundedProof {
-    fn rung(&self) -> Rung {
-        Rung::Grounded
+impl<'a> Rung<Check<'a>> for GroundedProof {
+    fn proof(&self) -> Proof {
+        Proof::Grounded
     }
 
+    fn plan(&mut self, cx: &Check<'a>) -> Result<Plan> {
+        if self.done {
+            return Ok(Plan::Done);
+        }
+        if let Some(a) = &self.analysed {
+            return Ok(Plan::Run(a.predicted));
+        }
+        Ok(match self.predict(cx)? {
+            Ok(p) => Plan::Run(p),
+            Err(refusal) => Plan::Refuse(refusal, None),
+        })
+    }
+
+    fn attempt(&mut self, cx: &mut Check<'a>) -> Result<Found> {
+        self.done = true;
+        let Some(a) = self.analysed.as_mut() else {
+            return Ok(Found::failed("not analysed"));
+        };
+        if a.pending {
+            match analyse(cx, a.ground)? {
+                Ok((factor, exact)) => (a.factor, a.predicted) = (factor, exact),
+                Err(refusal) => return Ok(Found::refused(refusal)),
+            }
+        }
+        let proven = match a.factor.as_mut() {
+            Some(ch) => prove_c(cx, ch, a.terms.rho, &mut cx.notes()),
+            None => Ok((f64::INFINITY, 0.0)),
+        };
+        Ok(
+            match proven.and_then(|(c, margin)| bound(cx, a, c, margin)) {
+                Ok(b) => Found::new(cx.offer(b), ""),
+                Err(reason) => Found::failed(reason),
+            },
+        )
+    }
+}
+
+impl GroundedProof {
+    /// The ground, the cheap test of criticality, and the analysis of `S_{-g}` (or its
+    /// prediction from the scalar factor).
     fn predict(&mut self, cx: &Check<'_>) -> Result<std::result::Result<Prediction, Refusal>> {
         let Some(rotations) = cx.rotations else {
             return Ok(Err(not_applicable(
@@ -80,10 +104,7 @@ impl Proof for GroundedProof {
                 terms.rho
             ))));
         }
-        let free = Prediction {
-            seconds: 0.0,
-            bytes: 0.0,
-        };
+        let free = Prediction::new(0.0, 0.0);
         let (factor, pending, predicted) =
             match (n > 1, cx.three_n_predicted(cx.s.nrows() - 3, 2.0)) {
                 (false, _) => (None, false, free),
@@ -104,34 +125,6 @@ impl Proof for GroundedProof {
             predicted,
         });
         Ok(Ok(predicted))
-    }
-
-    fn attempt(&mut self, cx: &Check<'_>) -> Result<Option<VerifiedBound>> {
-        let since = Instant::now();
-        let Some(a) = self.analysed.as_mut() else {
-            return Ok(None);
-        };
-        if a.pending {
-            match analyse(cx, a.ground)? {
-                Ok((factor, exact)) => (a.factor, a.predicted) = (factor, exact),
-                Err(refusal) => {
-                    let outcome = crate::certify::ladder::Outcome::Refused(refusal);
-                    cx.log(Rung::Grounded, Some(a.predicted), outcome, since);
-                    return Ok(None);
-                }
-            }
-        }
-        let proven = match a.factor.as_mut() {
-            Some(ch) => prove_c(cx, ch, a.terms.rho, &mut cx.notes()),
-            None => Ok((f64::INFINITY, 0.0)),
-        };
-        let bound = proven.and_then(|(c, margin)| bound(cx, a, c, margin));
-        let (outcome, bound) = match bound {
-            Ok(b) => (cx.proved(&b), Some(b)),
-            Err(reason) => (crate::certify::ladder::Outcome::Failed { reason }, None),
-        };
-        cx.log(Rung::Grounded, Some(a.predicted), outcome, since);
-        Ok(bound)
     }
 }
 
@@ -353,7 +346,7 @@ fn bound(
         .map(|k| sym[(k, k)] / (y_norm * y_norm / 3.0).max(f64::MIN_POSITIVE))
         .fold(f64::INFINITY, f64::min);
     let mu = -per_unit / (1.0 - a.defect);
-    let mut b = VerifiedBound::from_mu(cx, mu, Verification::Grounded);
+    let mut b = cx.bound_from_mu(mu, Proof::Grounded);
     b.lower_bound = lower_bound;
     b.fp_margin = margin;
     b.min_eigenvalue_estimate = Some(estimate);
@@ -397,7 +390,7 @@ fn without_block(s: &SparseColMat<usize, f64>, g: usize) -> Result<SparseColMat<
 mod tests {
     use super::*;
     use crate::certify::CertifySettings;
-    use crate::certify::ladder::Point;
+    use crate::certify::log::Point;
     use crate::certify::multiple::dual::dual_certificate;
     use crate::certify::multiple::multipliers::{certificate_matrix, multipliers};
     use crate::linalg::inf_norm;
@@ -487,7 +480,7 @@ mod tests {
                     "case {case}: bound {} above the best cost {best}",
                     b.lower_bound
                 );
-                if b.verification == Verification::Grounded {
+                if b.verification == Proof::Grounded {
                     grounded += 1;
                     let l = multipliers(&p, rotations).unwrap();
                     let s = certificate_matrix(&p, &l).unwrap();
@@ -569,13 +562,19 @@ mod tests {
                 .collect();
             let l = multipliers(&p, &y).unwrap();
             let settings = CertifySettings::default();
-            let cx = Check::new(&p, &l, Some(&y), 1.0, &settings, Point::Given).unwrap();
-            let mut proof = GroundedProof::default();
-            let g = match proof.predict(&cx).unwrap() {
-                Ok(_) => proof.attempt(&cx).unwrap(),
-                Err(_) => None,
+            let scope = crate::certify::multiple::check::Scope {
+                point: Point::Given,
+                within: Proof::DualCertificate,
+                deadline: crate::certify::Deadline::start(&settings.budget),
             };
-            assert!(g.is_none(), "n={n}: {g:?}");
+            let mut cx = Check::new(&p, &l, Some(&y), 1.0, &settings, scope).unwrap();
+            let mut proof = GroundedProof::default();
+            if let Plan::Run(_) = proof.plan(&cx).unwrap() {
+                let found = proof.attempt(&mut cx).unwrap();
+                let proved = matches!(found.outcome, crate::certify::log::Outcome::Proved { .. });
+                assert!(!proved, "n={n}: {found:?}");
+            }
+            assert!(cx.best.is_none(), "n={n}");
         }
     }
 }

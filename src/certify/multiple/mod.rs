@@ -16,46 +16,43 @@
 //!   `inconclusive` verdict when no deterministic proof fits the budget).
 //! - [`staircase`]: the Riemannian staircase (rank-lifted Burer-Monteiro descent).
 
-mod climb;
+mod check;
 pub mod conv;
 pub mod conv_dual;
+pub mod diagnosis;
 pub mod dual;
+mod gershgorin;
 pub mod grounded;
 pub mod multipliers;
 pub mod randomized;
 pub mod scalar;
+mod sdp;
 mod shifted;
 pub mod staircase;
+mod state;
+mod verdict;
+pub mod verified;
 pub mod verify;
 
 pub use conv::{ConvBound, certify_conv, conv_bound};
-pub use dual::{DualCertificate, DualDiagnosis, certify_with_multipliers, dual_certificate};
-pub use grounded::GroundedBound;
+pub use diagnosis::DualDiagnosis;
+pub use dual::{DualCertificate, REFINE_FACTOR, certify_with_multipliers, dual_certificate};
 pub use multipliers::{certificate_matrix, laplacian_times, multipliers, stationarity_residual};
-pub use randomized::{ComplementEstimate, RandomizedBound};
-pub use verify::{Verification, VerifiedBound, lower_bound_from_multipliers};
+pub use state::REFINE_INDEFINITE_RATIO;
+pub use verified::{ComplementEstimate, GroundedBound, RandomizedBound, VerifiedBound};
+pub use verify::lower_bound_from_multipliers;
 
-use super::certificate::{BoundMethod, Certificate};
-use super::certification::{Certification, CertifyDetails};
-use super::settings::{CertifyMode, CertifySettings};
+use crate::certify::budget::Deadline;
+use crate::certify::certificate::Certificate;
+use crate::certify::certification::{Certification, CertifyDetails};
+use crate::certify::ladder::{Rungs, climb};
+use crate::certify::proof::BoundMethod;
+use crate::certify::settings::{CertifyMode, CertifySettings};
 use crate::error::Result;
 use crate::multiple::{MultipleProblem, MultipleSolution};
 use crate::so3::Rotation;
-use climb::Climb;
-pub use climb::REFINE_FACTOR;
 use multipliers::check_rotations;
-use std::time::Instant;
-
-/// The given estimate is not refined (nor its refinement certified) when its certificate
-/// matrix's negative eigenvalue estimate is at least this many times its stationarity residual
-/// (both in units of the edge weights): refining moves the point, and `S`, by about the
-/// residual. On a 10^4-node graph with 20 % outliers (`lambda_min ~ -1.6`, residual 1.4e-4)
-/// the refinement's certificate took 15 s and found the same.
-pub const REFINE_INDEFINITE_RATIO: f64 = 1e3;
-
-const MARGIN_LIMITED: &str = "SDP / staircase skipped: the estimate is a critical point whose \
-certificate matrix is PSD up to the floating-point precision of the verification; the gap is that \
-precision, which other multipliers cannot improve (mode sdp or staircase runs them anyway)";
+use state::State;
 
 /// Certify an estimate of chordal L2 multiple rotation averaging **without changing it** (modes
 /// `auto`, `dual`, `sdp`, `staircase`). Upper bound: its chordal cost. Lower bound: the largest
@@ -91,7 +88,7 @@ pub fn certify_multiple(
     rotations: &[Rotation],
     settings: &CertifySettings,
 ) -> Result<Certification<MultipleSolution>> {
-    let start = Instant::now();
+    let deadline = Deadline::start(&settings.budget);
     settings.validate()?;
     settings.mode.require(
         "multiple",
@@ -104,127 +101,45 @@ pub fn certify_multiple(
     )?;
     check_rotations(problem, rotations)?;
     if !problem.objective().is_chordal_l2() {
-        return Ok(no_bound(problem, rotations, settings, start));
+        return Ok(no_bound(problem, rotations, settings, deadline));
     }
-    let mut climb = Climb::new(
-        problem,
-        rotations,
-        problem.chordal_cost(rotations),
-        settings,
-        start,
-    );
-    // anisotropic data with an indefinite M on some edge, whose O(3) relaxation can prefer
-    // reflections [A5]: the conv(SO(3)) dual certificate at the given estimate first [A11]
-    // (a no-op on other data)
-    climb.conv_dual()?;
-    let (first, last) = if climb.best_certifies() {
-        // the O(3) dual certificate of the given estimate is not needed (nor run): its
-        // diagnosis is the conv(SO(3)) certificate's
-        let certified = climb::DualRun {
-            diagnosis: DualDiagnosis::Certified,
-            randomized: None,
-        };
-        (DualDiagnosis::Certified, certified)
-    } else {
-        let steps = dual_steps(&mut climb)?;
-        // then at the refined point (a no-op when the point did not move)
-        climb.conv_dual()?;
-        steps
-    };
-    let escalate = match &last.diagnosis {
-        _ if climb.best_certifies() => false,
-        DualDiagnosis::Certified => {
-            if matches!(settings.mode, CertifyMode::Sdp | CertifyMode::Staircase) {
-                climb.details.skipped_reason = Some(format!(
-                    "{} not run: the dual certificate at {} already certified it",
-                    settings.mode, climb.current.label
-                ));
-            }
-            false
-        }
-        DualDiagnosis::PrecisionLimited { .. }
-            if !matches!(settings.mode, CertifyMode::Sdp | CertifyMode::Staircase) =>
-        {
-            climb.details.skipped_reason = Some(MARGIN_LIMITED.into());
-            false
-        }
-        DualDiagnosis::OverBudget { .. } => false,
-        _ => !climb.over_time("SDP / staircase"),
-    };
-    if escalate {
-        match climb.wants_sdp() {
-            Some(true) if settings.mode == CertifyMode::Auto => climb.staircase_then_sdp()?,
-            Some(true) => climb.sdp()?,
-            Some(false) => {
-                climb.staircase()?;
-            }
-            None if settings.mode == CertifyMode::Auto => {
-                climb.details.skipped_reason = Some(format!(
-                    "SDP not run: {} nodes > sdp_max_nodes {}",
-                    problem.num_rotations(),
-                    settings.sdp_max_nodes
-                ));
-            }
-            None => {}
-        }
-        // a better point found on the way (staircase or SDP rounding): its conv(SO(3)) dual
-        // certificate [A11]
-        climb.conv_dual()?;
-        // anisotropic data: where the O(3) relaxation leaves a gap (reflections, [A5]), the
-        // conv(SO(3)) relaxation of small graphs [A6]
-        if matches!(settings.mode, CertifyMode::Auto | CertifyMode::Sdp) {
-            climb.conv_sdp()?;
-        }
-    }
-    let certificate = climb.certificate(&first, Some(&last));
-    climb.details.seconds = start.elapsed().as_secs_f64();
-    let improvement = climb.improvement();
+    let cost = problem.chordal_cost(rotations);
+    let mut state = State::new(problem, rotations, cost, settings, deadline);
+    climb(&mut state, rungs(settings.mode))?;
+    let certificate = verdict::certificate(&mut state);
+    let improvement = verdict::improvement(&mut state);
+    let mut details = CertifyDetails::from_log(settings.mode, state.log, deadline.elapsed());
+    details.stationarity_residual = state.stationarity_residual;
+    details.given_stationarity_residual = state.given_stationarity_residual;
+    details.sdp = state.sdp;
+    details.staircase_steps = state.staircase_steps;
+    details.refine_seconds = state.refine_seconds;
+    details.improvement = improvement.as_ref().map(|(_, i)| *i);
     Ok(Certification {
         certificate,
-        details: climb.details,
-        improvement,
+        details,
+        improvement: improvement.map(|(s, _)| s),
     })
 }
 
-/// The dual certificates: at the given estimate (unless it is cheaply shown not to be a critical
-/// point), then, when that does not certify (and precision or the budget is not what limits
-/// it), at its refinement. Returns the given estimate's diagnosis and the last run.
-fn dual_steps(climb: &mut Climb<'_>) -> Result<(DualDiagnosis, climb::DualRun)> {
-    let first = climb.given()?;
-    let settled = first.as_ref().is_some_and(|r| {
-        matches!(
-            r.diagnosis,
-            DualDiagnosis::Certified
-                | DualDiagnosis::PrecisionLimited { .. }
-                | DualDiagnosis::OverBudget { .. }
-        )
-    });
-    let mut last = first.clone();
-    // a critical point whose S is clearly indefinite stays so when refined: the staircase (or
-    // the SDP) is what can help, not a second dual certificate at nearly the same point
-    let hopeless_to_refine = first.as_ref().is_some_and(|r| {
-        matches!(r.diagnosis, DualDiagnosis::Indefinite { min_eigenvalue }
-            if -min_eigenvalue >= REFINE_INDEFINITE_RATIO
-                * climb.details.given_stationarity_residual.unwrap_or(f64::INFINITY))
-    });
-    if !settled && !hopeless_to_refine && !climb.over_time("refinement") && climb.refine() {
-        last = Some(climb.dual()?);
+/// The rungs of a certification in `mode`: the dual certificate (at the given estimate, its
+/// refinement, every better point) and the `conv(SO(3))` dual certificate always; the
+/// staircase in `auto` and `staircase` (in `sdp` in the place of an SDP refused over the
+/// budget); the SDP and the `conv(SO(3))` SDP in `auto` and `sdp`.
+fn rungs<'a>(mode: CertifyMode) -> Rungs<'a, State<'a>> {
+    let mut rungs: Rungs<'a, State<'a>> =
+        vec![Box::new(dual::DualRung), Box::new(conv_dual::ConvDualRung)];
+    if matches!(
+        mode,
+        CertifyMode::Auto | CertifyMode::Staircase | CertifyMode::Sdp
+    ) {
+        rungs.push(Box::new(staircase::StaircaseRung::default()));
     }
-    let last = match last {
-        Some(l) => l,
-        // not a critical point, and the refinement found nothing cheaper: its own ladder after all
-        None => climb.dual()?,
-    };
-    let given = match first {
-        Some(r) => r.diagnosis,
-        None => DualDiagnosis::NotCritical {
-            residual: climb
-                .details
-                .given_stationarity_residual
-                .unwrap_or(f64::NAN),
-        },
-    };
-    Ok((given, last))
+    if matches!(mode, CertifyMode::Auto | CertifyMode::Sdp) {
+        rungs.push(Box::new(sdp::SdpRung::default()));
+        rungs.push(Box::new(conv::ConvSdpRung::default()));
+    }
+    rungs
 }
 
 /// Objectives other than chordal L2: no lower bound, and why.
@@ -232,12 +147,12 @@ fn no_bound(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     settings: &CertifySettings,
-    start: Instant,
+    deadline: Deadline,
 ) -> Certification<MultipleSolution> {
     let objective = problem.objective();
     let why =
         format!("no lower bound for the {objective} cost: the certificates bound chordal L2 only");
-    let seconds = start.elapsed().as_secs_f64();
+    let seconds = deadline.elapsed();
     let details = CertifyDetails {
         mode: settings.mode,
         skipped_reason: Some(why.clone()),

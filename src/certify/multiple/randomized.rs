@@ -10,108 +10,82 @@
 //! `O(3)^n` has `f(X) >= sum tr(Lambda_i) - (rho^2 / mu + h) 3n / lambda_min(Y^T Y)`.
 //! The result is reported beside the `inconclusive` verdict, never as its proof.
 
+use super::check::Check;
 use super::multipliers::{GaugeTerms, bound_with_deficit, gauge_column, gauge_terms};
-use super::verify::Check;
-use crate::certify::settings::{PREDICTED_FLOP_RATE, RandomizedSettings};
+use super::verified::{ComplementEstimate, RandomizedBound};
+use crate::certify::budget::PREDICTED_FLOP_RATE;
+use crate::certify::log::{Outcome, Prediction};
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, Plan, Rung};
+use crate::certify::settings::RandomizedSettings;
+use crate::error::Result;
 use crate::linalg::cholesky::gershgorin_upper_bound;
 use crate::linalg::compensated::Accumulator;
-use crate::linalg::{ChebyshevOutcome, ChebyshevTest, UNIT_ROUNDOFF, gamma, symmetric_matvec};
-use crate::linalg::{Extreme, LanczosSettings, LanczosStop};
+use crate::linalg::{ChebyshevTest, UNIT_ROUNDOFF, gamma, symmetric_matvec};
+use crate::linalg::{Extreme, LanczosSettings};
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
 use faer::sparse::SparseColMatRef;
 use nalgebra::Matrix3;
-use serde::{Deserialize, Serialize};
-use std::fmt;
 use std::time::Instant;
 
-/// The smallest eigenvalue of `S` on the orthogonal complement of the gauge directions `Y`
-/// (the rotations stacked, `S Y ~ 0` at a critical point), estimated by Lanczos on
-/// `P S P`, `P = I - Y Y^T / n`: an *estimate*, never a proof. Positive with a small residual,
-/// it says `S` looks positive semidefinite with that much room; it is reported when no proof
-/// fits the budget ([`crate::certify::Budget`]).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ComplementEstimate {
-    /// The Ritz value.
-    pub value: f64,
-    /// Its Ritz residual `||P S P x - value x||` (some eigenvalue of `P S P` lies within it).
-    pub residual: f64,
-    /// Krylov subspace dimension reached.
-    pub iterations: usize,
-    /// The gauge directions' smallest Rayleigh quotient `lambda_min(sym(Y^T S Y)) / n`.
-    pub gauge_rayleigh_quotient: f64,
-    /// Why the Lanczos iteration stopped.
-    pub stop: LanczosStop,
+/// The randomized test `[D16]` as the last fallback of a verification: when a check was kept
+/// out by the budget and nothing was proved, the estimate of `lambda_min(S)` on the complement
+/// of the gauge directions and the randomized bound are attached to the unclaimed bound
+/// (never a proof: the outcome is `estimated`).
+#[derive(Default)]
+pub(super) struct RandomizedCheck {
+    done: bool,
 }
 
-impl fmt::Display for ComplementEstimate {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "Lanczos estimates (not a proof): lambda_min(S) on the complement of the gauge \
-             directions ~ {:.3e} (Ritz residual {:.1e} after {} iterations), on the gauge \
-             directions ~ {:.3e}",
-            self.value, self.residual, self.iterations, self.gauge_rayleigh_quotient
+/// Floating-point operations of the complement estimate (its Lanczos run is kept near this).
+const COMPLEMENT_FLOPS: f64 = 1e9;
+
+impl<'a> Rung<Check<'a>> for RandomizedCheck {
+    fn proof(&self) -> Proof {
+        Proof::Randomized
+    }
+
+    fn plan(&mut self, cx: &Check<'a>) -> Result<Plan> {
+        Ok(
+            if self.done || cx.best.is_some() || cx.rotations.is_none() {
+                Plan::Done
+            } else if cx.unclaimed.is_none() {
+                // after Gershgorin's check, and only when it was left unclaimed
+                Plan::Wait
+            } else {
+                Plan::Fallback(Prediction::new(COMPLEMENT_FLOPS / PREDICTED_FLOP_RATE, 0.0))
+            },
         )
     }
-}
 
-/// The randomized bound `[D16]` of a dual certificate: what the test claimed and found.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RandomizedBound {
-    /// The lower bound on the global minimum of the chordal cost when the test passed (valid
-    /// unless an event of probability at most `outcome.failure_probability`, over the test's
-    /// random vectors, occurred); `None` when it did not pass.
-    pub lower_bound: Option<f64>,
-    /// Seed of the random vectors.
-    pub seed: u64,
-    /// The claimed `mu`: `x^T S x >= mu ||x||^2` for `x` orthogonal to the gauge directions
-    /// (the exact `S` of the data; the floating-point forming error is subtracted).
-    pub complement_bound: f64,
-    /// Proven `rho >= ||S Y||_2`.
-    pub rho: f64,
-    /// Proven `h` with `Y^T S Y >= -h I`.
-    pub h: f64,
-    /// `(rho^2 / mu + h) 3n / lambda_min(Y^T Y)`, subtracted from `sum tr(Lambda_i)`.
-    pub deficit: f64,
-    /// The test's interval, degree and vectors.
-    pub test: ChebyshevTest,
-    /// What the test found.
-    pub outcome: ChebyshevOutcome,
-    /// Time spent, in seconds.
-    pub seconds: f64,
-}
-
-impl fmt::Display for RandomizedBound {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "randomized Chebyshev test [D16] ({} vectors of degree {}, {} products with S, \
-             {:.1} s): ",
-            self.test.vectors, self.test.degree, self.outcome.matvecs, self.seconds
-        )?;
-        if self.lower_bound.is_some() {
-            write!(
-                f,
-                "lambda_min(S) >= {:.3e} on the complement of the gauge directions unless an \
-                 event of probability <= {:.0e} occurred (seed {}); deficit {:.1e}",
-                self.complement_bound, self.outcome.failure_probability, self.seed, self.deficit
-            )
-        } else if self.outcome.grew {
-            write!(
-                f,
-                "did not pass: the iterates grew, as they do when S has an eigenvalue on the \
-                 complement of the gauge directions below half the Lanczos estimate; no \
-                 randomized bound"
-            )
-        } else {
-            write!(
-                f,
-                "did not pass (lambda_min(S) >= {:.3e} on the complement was not shown; log \
-                 margin {:.2}), no randomized bound",
-                self.complement_bound, self.outcome.log_margin
-            )
+    fn attempt(&mut self, cx: &mut Check<'a>) -> Result<Found> {
+        self.done = true;
+        let Some(rotations) = cx.rotations else {
+            return Ok(Found::failed("the estimate's rotations are not known"));
+        };
+        let (complement, randomized) = over_budget_estimates(cx, rotations);
+        let outcome = match randomized.as_ref().and_then(|r| r.lower_bound) {
+            Some(lower_bound) => Outcome::Estimated {
+                lower_bound,
+                failure_probability: cx.settings.dual.randomized.failure_probability,
+            },
+            None => Outcome::Failed {
+                reason: randomized.as_ref().map_or_else(
+                    || "not run (no converged positive estimate to test)".into(),
+                    |r| r.to_string(),
+                ),
+            },
+        };
+        if let Some(b) = cx.unclaimed.as_mut() {
+            b.min_eigenvalue_estimate =
+                Some(complement.value.min(complement.gauge_rayleigh_quotient));
+            b.estimate_residual = Some(complement.residual);
+            b.lanczos_iterations += complement.iterations;
+            b.complement_estimate = Some(complement);
+            b.randomized = randomized;
         }
+        Ok(Found::new(outcome, ""))
     }
 }
 
@@ -137,7 +111,7 @@ pub(super) fn over_budget_estimates(
         cx.terms,
         &c,
         &cx.settings.dual.randomized,
-        cx.settings.budget.max_seconds,
+        cx.deadline.left().map(|l| l.max(0.0)),
     );
     (c, randomized)
 }

@@ -4,33 +4,38 @@
 //! fails, Lanczos estimates `lambda_min(S)` (an estimate only: it picks the shifts, and its
 //! negative eigenvector is the staircase's direction of descent) and shifts above it are tried.
 
-use super::verify::{
-    Check, Notes, Proof, Verification, VerifiedBound, counted_factorisation_prediction,
-    first_shift, ordering_refusal,
-};
-use crate::certify::ladder::{Outcome, Prediction, Refusal, Rung};
+use super::check::{Check, Notes, counted_factorisation_prediction, first_shift, ordering_refusal};
+use crate::certify::log::{Prediction, Refusal};
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, Plan, Rung};
 use crate::error::Result;
 use crate::linalg::cholesky::PositiveFactor;
 use crate::linalg::{
     Extreme, LanczosResult, LanczosSettings, ShiftedCholesky, lanczos_extreme, rayleigh_quotient,
     smallest_eigenpair,
 };
-use std::time::Instant;
 
-/// The shifted Cholesky rung: the analysis of `S` (made by [`Proof::predict`], or by the attempt
-/// when the prediction came from the scalar factor) and its prediction.
+/// The shifted Cholesky rung: the analysis of `S` (made when planned, or by the attempt when
+/// the prediction came from the scalar factor) and its prediction.
 #[derive(Default)]
 pub(super) struct ShiftedProof {
     analysed: Option<ShiftedCholesky>,
     predicted: Option<Prediction>,
+    done: bool,
 }
 
-impl Proof for ShiftedProof {
-    fn rung(&self) -> Rung {
-        Rung::ShiftedCholesky
+impl<'a> Rung<Check<'a>> for ShiftedProof {
+    fn proof(&self) -> Proof {
+        Proof::ShiftedCholesky
     }
 
-    fn predict(&mut self, cx: &Check<'_>) -> Result<std::result::Result<Prediction, Refusal>> {
+    fn plan(&mut self, cx: &Check<'a>) -> Result<Plan> {
+        if self.done {
+            return Ok(Plan::Done);
+        }
+        if let Some(p) = self.predicted {
+            return Ok(Plan::Run(p));
+        }
         let predicted = match cx.three_n_predicted(cx.s.nrows(), 3.0) {
             Some(p) => p,
             None => match analyse(cx)? {
@@ -42,79 +47,80 @@ impl Proof for ShiftedProof {
             },
         };
         self.predicted = predicted.as_ref().ok().copied();
-        Ok(predicted)
+        Ok(match predicted {
+            Ok(p) => Plan::Run(p),
+            Err(refusal) => Plan::Refuse(refusal, None),
+        })
     }
 
-    fn attempt(&mut self, cx: &Check<'_>) -> Result<Option<VerifiedBound>> {
-        let since = Instant::now();
+    fn attempt(&mut self, cx: &mut Check<'a>) -> Result<Found> {
+        self.done = true;
         if self.analysed.is_none() {
             match analyse(cx)? {
-                Ok((ch, p)) => (self.analysed, self.predicted) = (Some(ch), Some(p)),
-                Err(refusal) => {
-                    cx.log(
-                        Rung::ShiftedCholesky,
-                        self.predicted,
-                        Outcome::Refused(refusal),
-                        since,
-                    );
-                    return Ok(None);
-                }
+                Ok((ch, _)) => self.analysed = Some(ch),
+                Err(refusal) => return Ok(Found::refused(refusal)),
             }
         }
-        let (Some(ch), Some(predicted)) = (self.analysed.as_mut(), self.predicted) else {
-            return Ok(None);
+        let Some(ch) = self.analysed.as_mut() else {
+            return Ok(Found::failed("no analysis of S"));
         };
-        let delta0 = first_shift(cx);
-        // a floating-point margin below this costs at most 5 % of the gap budget: the tighter,
-        // more expensive residual margin [D6] (2) is not needed then
-        let margin_target = 0.05 * cx.gap / cx.s.nrows().max(1) as f64;
-        let mut best = None;
-        let mut notes = cx.notes();
-        // an estimate handed in that is clearly below -delta0: that shift would only fail
-        let hinted_below = cx.hint.as_ref().is_some_and(|h| {
-            h.high < -2.0 * delta0 && h.low.value + h.low.residual < -2.0 * delta0
-        });
-        let first = (!hinted_below).then(|| {
-            notes.factorizations += 1;
-            ch.factor(delta0, margin_target)
-        });
-        if let Some(f) = first.flatten() {
-            best = Some((f.shift, f.margin));
-            if cx.settings.dual.estimate_when_verified {
-                let mut r = shift_invert(&f, cx.s.nrows(), None, &lanczos(cx, 40));
-                notes.lanczos_iterations += r.iterations;
-                (r.value, r.residual) = rayleigh_quotient(cx.s.as_ref(), &r.vector);
-                notes.estimate = Some(r);
-            }
-        } else if !notes.not_critical {
-            // far from a critical point the bound is weak whatever the shift: no search
-            best = search(cx, ch, delta0, margin_target, &mut notes);
-        }
-        let bound = best.map(|(shift, margin)| {
-            let margin = margin + cx.forming;
-            let mut b = VerifiedBound::from_mu(cx, -shift - margin, Verification::Cholesky);
-            b.shift = Some(shift);
-            b.fp_margin = margin;
-            b.factor_nonzeros = ch.factor_len();
-            b
-        });
-        let outcome = match &bound {
-            Some(b) => cx.proved(b),
-            None => Outcome::Failed {
-                reason: match (&notes.skipped, &notes.estimate) {
-                    (Some(skipped), _) => skipped.clone(),
-                    (None, Some(e)) => format!(
-                        "no shift verified; Lanczos estimate lambda_min(S) ~ {:.3e}",
-                        e.value
-                    ),
-                    (None, None) => "the first shift did not verify".into(),
-                },
-            },
-        };
-        drop(notes);
-        cx.log(Rung::ShiftedCholesky, Some(predicted), outcome, since);
-        Ok(bound)
+        let (bound, reason) = verify_shifted(cx, ch);
+        Ok(match bound {
+            Some(b) => Found::new(cx.offer(b), ""),
+            None => Found::failed(reason),
+        })
     }
+}
+
+/// The first shift, and when it fails the search: a verified bound, or why not.
+fn verify_shifted(
+    cx: &Check<'_>,
+    ch: &mut ShiftedCholesky,
+) -> (Option<super::verified::VerifiedBound>, String) {
+    let delta0 = first_shift(cx);
+    // a floating-point margin below this costs at most 5 % of the gap budget: the tighter,
+    // more expensive residual margin [D6] (2) is not needed then
+    let margin_target = 0.05 * cx.gap / cx.s.nrows().max(1) as f64;
+    let mut best = None;
+    let mut notes = cx.notes();
+    // an estimate handed in that is clearly below -delta0: that shift would only fail
+    let hinted_below = cx
+        .hint
+        .as_ref()
+        .is_some_and(|h| h.high < -2.0 * delta0 && h.low.value + h.low.residual < -2.0 * delta0);
+    let first = (!hinted_below).then(|| {
+        notes.factorizations += 1;
+        ch.factor(delta0, margin_target)
+    });
+    if let Some(f) = first.flatten() {
+        best = Some((f.shift, f.margin));
+        if cx.settings.dual.estimate_when_verified {
+            let mut r = shift_invert(&f, cx.s.nrows(), None, &lanczos(cx, 40));
+            notes.lanczos_iterations += r.iterations;
+            (r.value, r.residual) = rayleigh_quotient(cx.s.as_ref(), &r.vector);
+            notes.estimate = Some(r);
+        }
+    } else if !notes.not_critical {
+        // far from a critical point the bound is weak whatever the shift: no search
+        best = search(cx, ch, delta0, margin_target, &mut notes);
+    }
+    let bound = best.map(|(shift, margin)| {
+        let margin = margin + cx.forming;
+        let mut b = cx.bound_from_mu(-shift - margin, Proof::ShiftedCholesky);
+        b.shift = Some(shift);
+        b.fp_margin = margin;
+        b.factor_nonzeros = ch.factor_len();
+        b
+    });
+    let reason = match (&notes.skipped, &notes.estimate) {
+        (Some(skipped), _) => skipped.clone(),
+        (None, Some(e)) => format!(
+            "no shift verified; Lanczos estimate lambda_min(S) ~ {:.3e}",
+            e.value
+        ),
+        (None, None) => "the first shift did not verify".into(),
+    };
+    (bound, reason)
 }
 
 /// The symbolic analysis of `S` within the budget, and its prediction (the first shift, and when

@@ -13,12 +13,18 @@
 //! `gamma = A^T (A A^T)^+ (a - b) / 2` (`A A^T` is a `3n x 3n` Laplacian of the complete graph
 //! with `u_ij u_ij^T / 4` weights; its kernel, the constant vectors and the gauge directions
 //! `(R_i w)_i`, is filled by multiples of their projectors). Whether `Z_R` and `Z_C` are then positive semidefinite is what the
-//! verification decides ([`super::verify_simultaneous_bound`], which recomputes everything
+//! verification decides ([`super::bound::verify_simultaneous_bound`], which recomputes everything
 //! from the multipliers); on noisy rigs where the relaxation is tight this choice usually is
 //! (docs/benchmarks.md), and when it is not the SDP is the next rung.
 
-use crate::certify::ladder::Prediction;
+use super::bound::{SimultaneousBound, verify_simultaneous_bound};
+use super::state::SimState;
+use crate::certify::log::{Prediction, Refusal};
 use crate::certify::multiple::multipliers::laplacian_times;
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, Plan, Rung};
+use crate::certify::settings::CertifyMode;
+use crate::error::Result;
 use crate::multiple::MultipleProblem;
 use crate::relax::multiple::SDP_MULTIPLY_ADD_RATE;
 use crate::relax::simultaneous::coupling_pairs;
@@ -30,10 +36,10 @@ use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 /// `10 (3n)^3` multiply-adds each), and six dense `3n x 3n` matrices alive at once.
 pub fn predict_multipliers_at_estimate(n: usize) -> Prediction {
     let d = 3.0 * n as f64;
-    Prediction {
-        seconds: (d * d * d / 3.0 + 2.0 * 10.0 * d * d * d) / SDP_MULTIPLY_ADD_RATE,
-        bytes: 6.0 * 8.0 * d * d,
-    }
+    Prediction::new(
+        (d * d * d / 3.0 + 2.0 * 10.0 * d * d * d) / SDP_MULTIPLY_ADD_RATE,
+        6.0 * 8.0 * d * d,
+    )
 }
 
 /// The multipliers `(Lambda_a for a = 0..2n, gamma_ij in the order of [`coupling_pairs`])`
@@ -203,5 +209,123 @@ impl EstimateMultipliers {
             .collect();
         lambdas.extend((0..n).map(|i| sym((self.gc[i] + hc[i] * 0.5) * self.cs[i].transpose())));
         lambdas
+    }
+}
+
+/// The dual certificate at the estimate `[H15]` as the first rung of a simultaneous
+/// certification (modes `auto` and `dual`), once: the couplings of least norm, then, when they
+/// do not certify, a cutting-plane search over the couplings complementary slackness allows
+/// (its rounds within half the time left, its cuts within the memory the prediction leaves);
+/// every candidate verified by [`super::bound::verify_simultaneous_bound`].
+#[derive(Default)]
+pub(crate) struct DualRung {
+    done: bool,
+}
+
+impl<'a> Rung<SimState<'a>> for DualRung {
+    fn proof(&self) -> Proof {
+        Proof::SimultaneousDual
+    }
+
+    fn plan(&mut self, cx: &SimState<'a>) -> Result<Plan> {
+        let mode = cx.settings.mode;
+        if self.done || mode == CertifyMode::Sdp {
+            return Ok(Plan::Done);
+        }
+        if !matches!(mode, CertifyMode::Auto | CertifyMode::Dual) {
+            let reason = format!(
+                "the simultaneous problem is certified by its dual certificate and its SDP \
+                 (modes auto, dual and sdp), not {}",
+                mode.name()
+            );
+            return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
+        }
+        Ok(Plan::Run(predict_multipliers_at_estimate(
+            cx.right.num_rotations(),
+        )))
+    }
+
+    fn attempt(&mut self, cx: &mut SimState<'a>) -> Result<Found> {
+        self.done = true;
+        let n = cx.right.num_rotations();
+        let at = EstimateMultipliers::new(cx.right, cx.left, cx.rotations, cx.s);
+        let mut bound = at.as_ref().and_then(|at| {
+            let g = at.least_norm.clone();
+            verify_simultaneous_bound(cx.right, cx.left, &at.lambdas(&g), &g)
+        });
+        let mut note = match bound {
+            Some(b) => format!(
+                "multipliers at the estimate (couplings of least norm) verified, lambda_min(Z) >= {:.3e}",
+                b.verified_min_eigenvalue
+            ),
+            None => "multipliers at the estimate not finite (singular coupling system)".into(),
+        };
+        if let Some(at) = &at
+            && !bound.is_some_and(|b| cx.certifies(b.lower_bound))
+        {
+            let predicted = predict_multipliers_at_estimate(n);
+            let (searched, words) = search(cx, at, &predicted, bound);
+            note = match words {
+                Some(w) if searched.is_some() => w,
+                Some(w) => format!("{note}; {w}"),
+                None => note,
+            };
+            bound = searched.or(bound);
+        }
+        Ok(match bound {
+            Some(b) => {
+                let lb = cx.offer(
+                    b.lower_bound,
+                    Proof::SimultaneousDual,
+                    b.verified_min_eigenvalue,
+                    &note,
+                );
+                Found::proved(lb, cx.certifies(lb), note)
+            }
+            None => Found::failed(note),
+        })
+    }
+}
+
+/// Other couplings complementary slackness allows `[H15]`: a cutting-plane search (its rounds
+/// within half the time left, its cuts within the memory the rung's prediction leaves). Returns
+/// a better verified bound than `bound`, if found, and what the search did in words.
+fn search(
+    cx: &SimState<'_>,
+    at: &EstimateMultipliers,
+    predicted: &Prediction,
+    bound: Option<SimultaneousBound>,
+) -> (Option<SimultaneousBound>, Option<String>) {
+    let n = cx.right.num_rotations();
+    let target = 0.25 * cx.allowed_gap / (3 * n) as f64;
+    let seconds = cx.deadline.left().map(|l| 0.5 * l.max(0.0));
+    let cut_bytes = (cx.settings.budget.max_memory_bytes as f64 - predicted.bytes).max(0.0);
+    let Some(found) =
+        super::search::search_couplings(cx.right, cx.left, at, target, seconds, cut_bytes)
+    else {
+        return (
+            None,
+            Some(
+                "no search over the couplings: one round is predicted past half the time left"
+                    .into(),
+            ),
+        );
+    };
+    let searched = verify_simultaneous_bound(cx.right, cx.left, &found.lambdas, &found.couplings);
+    match searched {
+        Some(b) if bound.is_none_or(|x| b.lower_bound > x.lower_bound) => (
+            Some(b),
+            Some(format!(
+                "multipliers at the estimate, couplings from a search ({} rounds, {} cuts) from the least-norm ones, verified, lambda_min(Z) >= {:.3e}",
+                found.rounds, found.cuts, b.verified_min_eigenvalue
+            )),
+        ),
+        _ => (
+            None,
+            Some(format!(
+                "a search over the couplings ({} rounds, {} cuts) found no better bound",
+                found.rounds, found.cuts
+            )),
+        ),
     }
 }

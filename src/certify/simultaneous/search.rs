@@ -8,7 +8,7 @@
 //! move `gamma`; a round recomputes both spectra. Nothing here is proved: the couplings found are
 //! handed to [`super::verify_simultaneous_bound`] like any others.
 
-use super::certificate_matrix;
+use super::bound::certificate_matrix;
 use super::dual::EstimateMultipliers;
 use crate::multiple::MultipleProblem;
 use nalgebra::{Matrix3, SymmetricEigen};

@@ -10,11 +10,13 @@ use super::{
     MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_MIN_DEGREES, SPLIT_SHAPES, ScalarAnalysis,
     ScalarComparison, ScalarFailure, SplitShape, scalar_comparison,
 };
-use crate::certify::ladder::{Outcome, Prediction, Refusal, Rung};
-use crate::certify::multiple::verify::{
-    Check, Proof, Verification, VerifiedBound, over_factor_cap,
-};
-use crate::certify::settings::{Budget, CertifySettings};
+use crate::certify::budget::Budget;
+use crate::certify::log::{Outcome, Prediction, Refusal};
+use crate::certify::multiple::check::{Check, over_factor_cap};
+use crate::certify::multiple::verified::VerifiedBound;
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, Plan, Rung};
+use crate::certify::settings::CertifySettings;
 use crate::error::Result;
 use crate::linalg::{LanczosResult, rayleigh_quotient};
 use crate::multiple::MultipleProblem;
@@ -34,28 +36,57 @@ pub const SUBGRAPHS_BEFORE_THE_WHOLE_ABOVE_SECONDS: f64 = 1.0;
 /// See [`SUBGRAPHS_BEFORE_THE_WHOLE_ABOVE_SECONDS`].
 pub const SUBGRAPHS_BEFORE_THE_WHOLE_FRACTION: f64 = 0.5;
 
-/// The scalar comparison's shapes: the whole graph, then the fallbacks (analysed when reached).
+/// The scalar comparison's shapes: the whole graph (its analysis is the check's,
+/// [`Check::scalar`]), then the fallbacks (analysed when reached).
 #[derive(Default)]
 pub(in crate::certify::multiple) struct ScalarFamily {
-    /// The whole graph's analysis when it fits the budget.
-    whole: Option<ScalarAnalysis>,
+    /// The whole graph's prediction when its factor fits the budget.
+    whole: Option<Prediction>,
     /// Why the whole graph's factor does not fit, when it does not.
     whole_refused: Option<Refusal>,
     /// The first fallback (the sparsest subgraph, else the first split that fits), analysed by
-    /// `predict`: its prediction is the family's when the whole graph does not fit.
+    /// the plan: its prediction is the family's when the whole graph does not fit.
     first_fallback: Option<ScalarAnalysis>,
     /// Where the fallbacks after the first continue.
     fallbacks: Fallbacks,
+    planned: Option<std::result::Result<Prediction, Refusal>>,
+    done: bool,
 }
 
-impl Proof for ScalarFamily {
-    fn rung(&self) -> Rung {
-        match (&self.whole, &self.first_fallback) {
-            (None, Some(a)) => rung_of(a),
-            _ => Rung::ScalarWhole,
-        }
+impl<'a> Rung<Check<'a>> for ScalarFamily {
+    fn proof(&self) -> Proof {
+        Proof::ScalarComparison
     }
 
+    fn plan(&mut self, cx: &Check<'a>) -> Result<Plan> {
+        if self.done {
+            return Ok(Plan::Done);
+        }
+        if self.planned.is_none() {
+            self.planned = Some(self.predict(cx)?);
+        }
+        Ok(match self.planned.clone() {
+            Some(Ok(p)) => Plan::Run(p),
+            Some(Err(refusal)) => Plan::Refuse(refusal, None),
+            None => Plan::Done,
+        })
+    }
+
+    fn attempt(&mut self, cx: &mut Check<'a>) -> Result<Found> {
+        self.done = true;
+        let bound = self.climb_shapes(cx)?;
+        // every shape tried is in the log
+        Ok(Found::logged(match bound {
+            Some(b) => cx.offer(b),
+            None => Outcome::Failed {
+                reason: "no shape proved enough".into(),
+            },
+        }))
+    }
+}
+
+impl ScalarFamily {
+    /// The whole graph's prediction, else the first fallback's, else why none fits.
     fn predict(&mut self, cx: &Check<'_>) -> Result<std::result::Result<Prediction, Refusal>> {
         let Some(rotations) = cx.rotations else {
             return Ok(Err(Refusal::NotApplicable {
@@ -69,25 +100,16 @@ impl Proof for ScalarFamily {
                     .into(),
             }));
         }
-        let max_values = cx
-            .settings
-            .budget
-            .max_factor_values(cx.problem.num_rotations());
-        match ScalarAnalysis::new(cx.problem, max_values)? {
-            Ok(a) => {
-                cx.note_scalar_values(a.factor_len(), Some(a.factor_multiply_adds()));
-                match predict(cx.settings, &a) {
-                    Ok(p) => {
-                        self.whole = Some(a);
-                        return Ok(Ok(p));
-                    }
-                    Err(refusal) => self.whole_refused = Some(refusal),
+        match &cx.scalar {
+            Some(Ok(a)) => match predict(cx.settings, a) {
+                Ok(p) => {
+                    self.whole = Some(p);
+                    return Ok(Ok(p));
                 }
-            }
-            Err(predicted) => {
-                cx.note_scalar_values(predicted, None);
-                self.whole_refused = Some(over_ordering(cx, predicted));
-            }
+                Err(refusal) => self.whole_refused = Some(refusal),
+            },
+            Some(Err(predicted)) => self.whole_refused = Some(over_ordering(cx, *predicted)),
+            None => {}
         }
         self.first_fallback = self.fallbacks.next(cx, rotations, None)?;
         Ok(match &self.first_fallback {
@@ -101,40 +123,24 @@ impl Proof for ScalarFamily {
         })
     }
 
-    fn attempt(&mut self, cx: &Check<'_>) -> Result<Option<VerifiedBound>> {
+    /// Try the shapes in order, each logged: a verified bound, or `None`.
+    fn climb_shapes(&mut self, cx: &Check<'_>) -> Result<Option<VerifiedBound>> {
         let Some(rotations) = cx.rotations else {
             return Ok(None);
         };
         let target = 0.5 * cx.gap / cx.s.nrows().max(1) as f64;
-        if let Some(a) = &self.whole {
-            // subgraphs first, sparsest first, while together they are predicted to take at
-            // most a fraction of the whole graph's factorisation (random graphs of 3x10^4
-            // nodes: the whole graph's scalar factor fits but fills)
-            let whole = predict(cx.settings, a).ok();
-            let whole_seconds = whole.map_or(0.0, |p| p.seconds);
-            if whole_seconds > SUBGRAPHS_BEFORE_THE_WHOLE_ABOVE_SECONDS {
-                let allowed = SUBGRAPHS_BEFORE_THE_WHOLE_FRACTION * whole_seconds;
-                let (mut spent, mut failure) = (0.0, None);
-                while let Some(sub) = self.fallbacks.next(cx, rotations, failure.take())? {
-                    let seconds = predict(cx.settings, &sub).map_or(f64::INFINITY, |p| p.seconds);
-                    if sub.shape().is_some() || spent + seconds > allowed {
-                        self.first_fallback = Some(sub);
-                        break;
-                    }
-                    spent += seconds;
-                    match run(cx, &sub, rotations, target)? {
-                        (Some(b), _) => return Ok(Some(b)),
-                        (None, failed) => failure = failed,
-                    }
-                }
+        if let (Some(whole), Some(Ok(a))) = (self.whole, &cx.scalar) {
+            if let Some(b) = self.subgraphs_first(cx, rotations, whole, target)? {
+                return Ok(Some(b));
             }
             // the subgraphs spent part of the budget: the whole graph still has to fit what is
             // left (the plan checked it before they ran)
-            if let Some(refusal) = whole.as_ref().and_then(|p| cx.time_refusal(p)) {
+            if let Some(refusal) = cx.time_refusal(&whole) {
+                let outcome = Outcome::Refused(refusal);
                 cx.log(
-                    Rung::ScalarWhole,
-                    whole,
-                    Outcome::Refused(refusal),
+                    Proof::ScalarComparison,
+                    Some(whole),
+                    outcome,
                     Instant::now(),
                 );
                 return Ok(None);
@@ -146,13 +152,49 @@ impl Proof for ScalarFamily {
                 (None, _) => {}
             }
         } else if let Some(refusal) = self.whole_refused.take() {
-            cx.log(
-                Rung::ScalarWhole,
-                None,
-                Outcome::Refused(refusal),
-                Instant::now(),
-            );
+            let outcome = Outcome::Refused(refusal);
+            cx.log(Proof::ScalarComparison, None, outcome, Instant::now());
         }
+        self.fallbacks_after(cx, rotations, target)
+    }
+
+    /// Subgraphs before the whole graph, sparsest first, while together they are predicted to
+    /// take at most a fraction of the whole graph's factorisation (random graphs of 3x10^4
+    /// nodes: the whole graph's scalar factor fits but fills).
+    fn subgraphs_first(
+        &mut self,
+        cx: &Check<'_>,
+        rotations: &[Rotation],
+        whole: Prediction,
+        target: f64,
+    ) -> Result<Option<VerifiedBound>> {
+        if whole.seconds <= SUBGRAPHS_BEFORE_THE_WHOLE_ABOVE_SECONDS {
+            return Ok(None);
+        }
+        let allowed = SUBGRAPHS_BEFORE_THE_WHOLE_FRACTION * whole.seconds;
+        let (mut spent, mut failure) = (0.0, None);
+        while let Some(sub) = self.fallbacks.next(cx, rotations, failure.take())? {
+            let seconds = predict(cx.settings, &sub).map_or(f64::INFINITY, |p| p.seconds);
+            if sub.shape().is_some() || spent + seconds > allowed {
+                self.first_fallback = Some(sub);
+                break;
+            }
+            spent += seconds;
+            match run(cx, &sub, rotations, target)? {
+                (Some(b), _) => return Ok(Some(b)),
+                (None, failed) => failure = failed,
+            }
+        }
+        Ok(None)
+    }
+
+    /// The fallbacks, one after the other while they fit what is left of the time budget.
+    fn fallbacks_after(
+        &mut self,
+        cx: &Check<'_>,
+        rotations: &[Rotation],
+        target: f64,
+    ) -> Result<Option<VerifiedBound>> {
         let mut next = match self.first_fallback.take() {
             Some(a) => Some(a),
             None => self.fallbacks.next(cx, rotations, None)?,
@@ -160,12 +202,8 @@ impl Proof for ScalarFamily {
         while let Some(a) = next {
             let predicted = predict(cx.settings, &a).ok();
             if let Some(refusal) = predicted.as_ref().and_then(|p| cx.time_refusal(p)) {
-                cx.log(
-                    rung_of(&a),
-                    predicted,
-                    Outcome::Refused(refusal),
-                    Instant::now(),
-                );
+                let outcome = Outcome::Refused(refusal);
+                cx.log(Proof::ScalarComparison, predicted, outcome, Instant::now());
                 // the later shapes are larger (subgraphs) or as large (splits)
                 return Ok(None);
             }
@@ -244,18 +282,15 @@ fn skipped_subgraphs(negative_pivots: usize) -> usize {
     skip
 }
 
-/// The rung of an analysis: the whole graph, a subgraph or a split.
-fn rung_of(a: &ScalarAnalysis) -> Rung {
+/// The shape of an analysis in words: the whole graph, a subgraph or a split.
+fn shape_of(a: &ScalarAnalysis) -> String {
     match (a.dropped_edges(), a.shape()) {
-        (0, None) => Rung::ScalarWhole,
-        (_, None) => Rung::ScalarSubgraph {
-            edges_per_node: a.edges_per_node(),
-        },
-        (_, Some(s)) => Rung::ScalarSplit {
-            parts: s.parts,
-            copies: s.copies,
-            min_degree: s.min_degree,
-        },
+        (0, None) => "whole graph".into(),
+        (_, None) => format!("subgraph of {} edges per node", a.edges_per_node()),
+        (_, Some(s)) => format!(
+            "split into {} parts ({} per edge, degree >= {})",
+            s.parts, s.copies, s.min_degree
+        ),
     }
 }
 
@@ -291,11 +326,11 @@ fn predict(
     if let Some(refusal) = over_factor_cap(settings, a.factor_len()) {
         return Err(refusal);
     }
-    Ok(Prediction {
-        seconds: Budget::predicted_factor_seconds(multiply_adds, total)
+    Ok(Prediction::new(
+        Budget::predicted_factor_seconds(multiply_adds, total)
             + SECONDS_PER_EDGE * a.num_edges() as f64,
-        bytes: Budget::factorisation_bytes(largest),
-    })
+        Budget::factorisation_bytes(largest),
+    ))
 }
 
 /// Run one analysis: a bound when it proves `lambda_min(S) >= -target`, else why not (`None`
@@ -314,16 +349,17 @@ fn run(
         Ok(p) if p.verified_min_eigenvalue >= -target => p,
         other => {
             let failed = other.as_ref().err().cloned();
-            let reason = failure(target, other);
-            cx.log(rung_of(a), predicted, Outcome::Failed { reason }, since);
+            let reason = format!("{}: {}", shape_of(a), failure(target, other));
+            cx.log(
+                Proof::ScalarComparison,
+                predicted,
+                Outcome::Failed { reason },
+                since,
+            );
             return Ok((None, failed));
         }
     };
-    let mut b = VerifiedBound::from_mu(
-        cx,
-        proof.verified_min_eigenvalue,
-        Verification::ScalarComparison,
-    );
+    let mut b = cx.bound_from_mu(proof.verified_min_eigenvalue, Proof::ScalarComparison);
     b.fp_margin = proof.backward_error;
     b.factorizations = proof.parts;
     b.factor_nonzeros = proof.factor_nonzeros;
@@ -331,7 +367,13 @@ fn run(
         cx.notes().estimate = Some(gauge_estimate(cx, rotations));
     }
     b.scalar_comparison = Some(proof);
-    cx.log(rung_of(a), predicted, cx.proved(&b), since);
+    cx.log_with_note(
+        Proof::ScalarComparison,
+        predicted,
+        cx.proved(&b),
+        since,
+        shape_of(a),
+    );
     Ok((Some(b), None))
 }
 

@@ -1,6 +1,6 @@
 //! Certificates for single rotation averaging (`paper-notes/single.md`): a proven lower bound on
 //! the global minimum of `sum_i w_i d(R_i, R)^p`, computed from the data and the estimate only
-//! (never from a solver's own claims), and the verdict of [`Certificate::from_bounds`].
+//! (never from a solver's own claims), and the verdict of [`crate::Certificate::from_bounds`].
 //!
 //! - chordal L2 `[S1]`: the global minimum value `6W - 2 (s1 + s2 + sign(det M) s3)` from the
 //!   singular values of `M = sum w_i R_i`;
@@ -11,16 +11,15 @@
 //!   else no bound (inconclusive, naming the farthest sample);
 //! - chordal L1 `[S7]`: `f_E(M) - |g| (sqrt 3 + |M|_F)` at a Euclidean geometric-median iterate.
 //!
-//! Every bound subtracts a floating-point safety margin (`rounding_margin`).
+//! Every bound subtracts a floating-point safety margin (`rounding_margin`). The theorems are
+//! one rung (`TheoryRung`) of a single certification.
 
-use super::branch_and_bound;
-use super::branch_and_bound::terms::{SingleTerms, projected_samples};
-use super::certificate::{BoundMethod, Certificate};
-use super::certification::{
-    Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun,
-};
-use super::settings::{CertifyMode, CertifySettings};
-use crate::certify::certificate::nonnegative_bound_at_most;
+use crate::certify::branch_and_bound::terms::projected_samples;
+use crate::certify::log::Prediction;
+use crate::certify::one_rotation::{Bound, RotationState};
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, Plan, Rung};
+use crate::certify::settings::CertifyMode;
 use crate::error::Result;
 use crate::linalg::compensated::Accumulator;
 use crate::objective::{Loss, Objective};
@@ -31,7 +30,6 @@ use crate::single::{SingleProblem, SingleSettings, SingleSolution};
 use crate::so3::{self, Metric, Rotation};
 use nalgebra::Matrix4;
 use std::f64::consts::FRAC_PI_2;
-use std::time::Instant;
 
 /// Above this many samples the O(n^2) pairwise test of `[S2b]` is skipped (the O(n) ball test
 /// is still applied).
@@ -43,116 +41,6 @@ const ENCLOSING_ITERATIONS: usize = 100;
 /// Margin added to measured angles before comparing with pi/2 (their computed accuracy is a few
 /// ulps; `[S4]`).
 const ANGLE_MARGIN: f64 = 1e-12;
-
-/// Certify `estimate` for `problem` under its objective, without changing it. The upper bound
-/// is the cost of `estimate`; the lower bound is proven (see the module docs); the verdict
-/// compares the gap with `settings.tolerance`. Modes: `theory` (the theorems only),
-/// `branch_and_bound` (the branch and bound over SO(3) only, `[B1]`-`[B6]`), `auto` (the
-/// theorems, then the branch and bound when they do not certify; the larger bound is
-/// reported). When the branch and bound finds a solution of lower cost it is returned as the
-/// [`Certification::improvement`] (the estimate's verdict is then `gap_reported`).
-///
-/// ```
-/// use rotavg::certify::{certify_single, CertifySettings};
-/// use rotavg::single::SingleProblem;
-/// use rotavg::{Rotation, Verdict};
-/// let p = SingleProblem::new(vec![Rotation::identity(); 4], None)?;
-/// let c = certify_single(&p, &Rotation::identity(), &CertifySettings::default())?;
-/// assert_eq!(c.certificate.verdict, Verdict::Certified);
-/// # Ok::<(), rotavg::Error>(())
-/// ```
-pub fn certify_single(
-    problem: &SingleProblem,
-    estimate: &Rotation,
-    settings: &CertifySettings,
-) -> Result<Certification<SingleSolution>> {
-    settings.check_one_rotation("single", CertifyMode::Theory, estimate)?;
-    let start = Instant::now();
-    let objective = problem.objective();
-    let cost = problem.cost(estimate);
-    let tolerance = settings.tolerance.resolve(problem.min_weight());
-    let mut details = CertifyDetails {
-        mode: settings.mode,
-        ..Default::default()
-    };
-    // A computed bound above the computed cost can only be rounding: f* <= f(estimate).
-    let mut best: Option<(f64, BoundMethod, String)> = None;
-    if settings.mode != CertifyMode::BranchAndBound {
-        let (lb, explanation) = theory_bound(problem, estimate, cost);
-        let lb = lb.map(|l| nonnegative_bound_at_most(l, cost));
-        let run = MethodRun {
-            method: BoundMethod::Theory,
-            lower_bound: lb,
-            seconds: start.elapsed().as_secs_f64(),
-            note: explanation.clone(),
-        };
-        let certifies = lb.is_some_and(|l| cost - l <= tolerance.allowed_gap(cost));
-        details.record(run, certifies);
-        best = lb.map(|l| (l, BoundMethod::Theory, explanation.clone()));
-        if lb.is_none() {
-            best = None;
-            details.skipped_reason = Some(explanation);
-        }
-    }
-    let theory_certified = best
-        .as_ref()
-        .is_some_and(|(l, _, _)| cost - l <= tolerance.allowed_gap(cost));
-    let mut improvement = None;
-    let mut stats = None;
-    let auto_bnb = settings.mode == CertifyMode::Auto && !theory_certified;
-    if auto_bnb && problem.len() > settings.branch_and_bound.auto_max_terms {
-        details.skipped_reason = Some(format!(
-            "branch and bound skipped: {} samples > branch_and_bound.auto_max_terms = {} (use mode branch_and_bound)",
-            problem.len(),
-            settings.branch_and_bound.auto_max_terms
-        ));
-    } else if settings.mode == CertifyMode::BranchAndBound || auto_bnb {
-        crate::progress::phase(crate::progress::Phase::Certify, || {
-            format!("branch and bound over SO(3), {} samples", problem.len())
-        });
-        let (run, lb) = branch_and_bound::run(
-            &SingleTerms::new(problem),
-            estimate,
-            cost,
-            problem.min_weight(),
-            settings,
-            start,
-            &mut details,
-        );
-        stats = Some(run.stats);
-        if best.as_ref().is_none_or(|(l, _, _)| lb > *l) {
-            best = Some((lb, BoundMethod::BranchAndBound, run.explanation));
-        }
-        if let Some((s, c)) = run.improvement {
-            details.improvement = Some(Improvement {
-                source: ImprovementSource::BranchAndBound,
-                cost: c,
-            });
-            improvement = Some(s);
-        }
-    }
-    let seconds = start.elapsed().as_secs_f64();
-    details.seconds = seconds;
-    let (lb, method, explanation) = match best {
-        Some((l, m, e)) => (Some(l), m, e),
-        None => (
-            None,
-            BoundMethod::Theory,
-            details
-                .skipped_reason
-                .clone()
-                .unwrap_or_else(|| format!("no lower bound for the {objective} cost")),
-        ),
-    };
-    let mut certificate =
-        Certificate::from_bounds(cost, lb, method, None, tolerance, explanation, seconds);
-    certificate.branch_and_bound = stats;
-    Ok(Certification {
-        certificate,
-        details,
-        improvement,
-    })
-}
 
 /// Samples whose `||R^T R - I||_F` exceeds this are not rotations to rounding (data read within
 /// the validation tolerance, e.g. matrices printed with 6 digits): the theorems `[S2]`-`[S7]`,
@@ -421,6 +309,58 @@ fn chordal_l1_bound(problem: &SingleProblem) -> (Option<f64>, String) {
     )
 }
 
+/// The theorems `[S1]`-`[S7]` as a rung of a single certification (every mode but
+/// `branch_and_bound`): free, once; no bound for a cost no theorem covers.
+pub(crate) struct TheoryRung<'p> {
+    problem: &'p SingleProblem,
+    done: bool,
+}
+
+impl<'p> TheoryRung<'p> {
+    /// The rung for `problem`.
+    pub fn new(problem: &'p SingleProblem) -> Self {
+        TheoryRung {
+            problem,
+            done: false,
+        }
+    }
+}
+
+impl<'a> Rung<RotationState<'a, SingleSolution>> for TheoryRung<'_> {
+    fn proof(&self) -> Proof {
+        Proof::Theory
+    }
+
+    fn plan(&mut self, cx: &RotationState<'a, SingleSolution>) -> Result<Plan> {
+        Ok(
+            if self.done || cx.settings.mode == CertifyMode::BranchAndBound {
+                Plan::Done
+            } else {
+                Plan::Run(Prediction::new(0.0, 0.0))
+            },
+        )
+    }
+
+    fn attempt(&mut self, cx: &mut RotationState<'a, SingleSolution>) -> Result<Found> {
+        self.done = true;
+        let (lb, explanation) = theory_bound(self.problem, &cx.estimate, cx.cost);
+        Ok(match lb {
+            Some(lb) => {
+                let lb = cx.offer(Bound {
+                    lower_bound: lb,
+                    proof: Proof::Theory,
+                    explanation: explanation.clone(),
+                    min_eigenvalue: None,
+                    verified_min_eigenvalue: None,
+                    spectrum: None,
+                });
+                Found::proved(lb, cx.certifies(lb), explanation)
+            }
+            None => Found::failed(explanation),
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -445,11 +385,11 @@ mod tests {
             assert!((fstar - 1.2e-10).abs() < 1e-14);
             let worse = r0 * exp(&Vector3::new(1e-4, 0.0, 0.0));
             assert!(p.cost(&worse) > fstar + 5e-8);
-            let c = certify_single(&p, &worse, &CertifySettings::default()).unwrap();
+            let c = crate::certify::certify_single(&p, &worse, &Default::default()).unwrap();
             assert!(!c.certificate.is_certified(), "{}", c.certificate);
             let lb = c.certificate.lower_bound.unwrap();
             assert!(lb <= fstar + 1e-14, "bound {lb} above the minimum {fstar}");
-            let c = certify_single(&p, &r0, &CertifySettings::default()).unwrap();
+            let c = crate::certify::certify_single(&p, &r0, &Default::default()).unwrap();
             assert!(c.certificate.is_certified(), "{}", c.certificate);
         }
     }

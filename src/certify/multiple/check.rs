@@ -1,0 +1,470 @@
+//! The state of one verification of multipliers `Lambda` (`paper-notes/certificates.md`
+//! `[D4]`-`[D8]`, `[D13]`, `[D15]`): the certificate matrix `S = Q - blkdiag(Lambda)`, the gap the
+//! verdict allows, the one clock, the analyses the checks share (each computed once, whichever
+//! check asks first), the best verified bound and the log. The checks are the rungs of its
+//! climb ([`super::verify`]).
+
+use super::multipliers::{
+    bound_from_mu, bound_with_deficit, certificate_matrix, entry_terms, forming_margin,
+};
+use super::scalar::ScalarAnalysis;
+use super::verified::VerifiedBound;
+use crate::certify::budget::{Budget, Deadline};
+use crate::certify::log::{Attempt, Outcome, Point, Prediction, Refusal};
+use crate::certify::proof::Proof;
+use crate::certify::rung::Climb;
+use crate::certify::settings::CertifySettings;
+use crate::error::Result;
+use crate::linalg::{LanczosResult, inf_norm};
+use crate::multiple::MultipleProblem;
+use crate::so3::Rotation;
+use faer::sparse::SparseColMat;
+use nalgebra::Matrix3;
+use std::cell::RefCell;
+use std::time::Instant;
+
+/// Stored values of the `3n` supernodal factor per value of the scalar one, for the time
+/// predicted before its own analysis (measured 20 on a 15k-node grid, 2026-11-26: 2.4e6 against
+/// 1.2e5; the block structure alone gives 9).
+pub const THREE_N_PER_SCALAR_VALUE: f64 = 20.0;
+
+/// Multiply-adds of the `3n` factorisation per counted multiply-add of the scalar one
+/// ([`crate::linalg::cholesky::factor_multiply_adds`]): every supernode of `k` columns and `r`
+/// rows below becomes one of `3k` and `3r`, and each term of the count is cubic.
+pub const THREE_N_PER_SCALAR_MULTIPLY_ADD: f64 = 27.0;
+
+/// Where a verification runs: which point's multipliers, inside which proof, on which clock.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Scope {
+    /// The point the multipliers belong to (the log's `point`).
+    pub point: Point,
+    /// The proof whose multipliers are verified (the log's `within`).
+    pub within: Proof,
+    /// The certification's clock.
+    pub deadline: Deadline,
+}
+
+/// What the checks of one verification share: the data, `S`, the gap the verdict allows, the
+/// clock, the analyses computed once, the best bound and the log.
+pub(crate) struct Check<'a> {
+    pub problem: &'a MultipleProblem,
+    pub lambdas: &'a [Matrix3<f64>],
+    /// The estimate whose multipliers these are, when known (the scalar comparison and the
+    /// grounded bound need it).
+    pub rotations: Option<&'a [Rotation]>,
+    /// `S = Q - blkdiag(sym Lambda)`, as stored.
+    pub s: SparseColMat<usize, f64>,
+    /// `||S||_inf`.
+    pub norm: f64,
+    /// Rounded operations that formed an entry of `S` (the forming error `[D6]`(b)).
+    pub terms: usize,
+    /// The further forming error of anisotropic blocks `[A3]` (`forming_margin`; 0 for
+    /// isotropic data): subtracted from every proven `lambda_min`.
+    pub forming: f64,
+    /// The gap the verdict allows at the cost: the tolerance.
+    pub gap: f64,
+    pub settings: &'a CertifySettings,
+    pub point: Point,
+    /// The proof whose multipliers are verified (the log's `within`).
+    pub within: Proof,
+    /// Estimates of `lambda_min(S)` made before the verification (the staircase's): the
+    /// shifted Cholesky rung places its shift from them instead of estimating again. Estimates
+    /// only: the shift they suggest is still proved by a factorisation.
+    pub hint: Option<CurvatureHint>,
+    /// The certification's clock.
+    pub deadline: Deadline,
+    /// The whole graph's scalar analysis `[D13]` (the factor, or the ordering's predicted size
+    /// when over the budget), made when the check is created if the scalar comparison is on its
+    /// ladder: the scalar rung runs it, the `3n` rungs predict from it (no `3n` analysis then).
+    pub scalar: Option<std::result::Result<ScalarAnalysis, usize>>,
+    /// The `3n` factorisations (of `S` and of `S_{-g}`, one block row and column apart) are
+    /// over the budget (found by whichever analysed first): the other is not analysed again.
+    three_n_refused: RefCell<Option<Refusal>>,
+    /// The best verified bound so far.
+    pub best: Option<VerifiedBound>,
+    /// Gershgorin's bound when a check was kept out by the budget: reported, never claimed.
+    pub unclaimed: Option<VerifiedBound>,
+    /// The estimates the rungs found on the way.
+    notes: RefCell<Notes>,
+    /// Every rung considered so far, in order.
+    log: RefCell<Vec<Attempt>>,
+}
+
+/// Estimates of `lambda_min(S)` handed to a verification ([`Check::hint`]).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct CurvatureHint {
+    /// A pessimistic estimate (value; `residual` as its uncertainty; a direction of negative
+    /// curvature when one is known): the shift above it is expected to verify.
+    pub low: LanczosResult,
+    /// An optimistic estimate (a Rayleigh quotient, at least `lambda_min`): the first shift
+    /// `delta_0` is skipped only when this too is clearly below `-delta_0`.
+    pub high: f64,
+}
+
+/// Estimates the rungs found on the way (for the diagnosis and the staircase; never bounds).
+#[derive(Default)]
+pub(super) struct Notes {
+    pub estimate: Option<LanczosResult>,
+    pub lanczos_iterations: usize,
+    pub factorizations: usize,
+    pub not_critical: bool,
+    /// Why a rung proved nothing without trying (e.g. the estimate predicts a bound below 0).
+    pub skipped: Option<String>,
+}
+
+impl<'a> Check<'a> {
+    /// The verification of `lambdas` (of the estimate `rotations`, when known) for a cost
+    /// `scale` (whose tolerance is the gap budget) in `scope`.
+    pub fn new(
+        problem: &'a MultipleProblem,
+        lambdas: &'a [Matrix3<f64>],
+        rotations: Option<&'a [Rotation]>,
+        scale: f64,
+        settings: &'a CertifySettings,
+        scope: Scope,
+    ) -> Result<Self> {
+        let s = certificate_matrix(problem, lambdas)?;
+        let norm = inf_norm(s.as_ref()).max(f64::MIN_POSITIVE);
+        let scalar = match rotations {
+            Some(_)
+                if settings.dual.proofs.contains(&Proof::ScalarComparison)
+                    && !problem.is_anisotropic() =>
+            {
+                let max_values = settings.budget.max_factor_values(problem.num_rotations());
+                Some(ScalarAnalysis::new(problem, max_values)?)
+            }
+            _ => None,
+        };
+        Ok(Check {
+            problem,
+            lambdas,
+            rotations,
+            s,
+            norm,
+            terms: entry_terms(problem),
+            forming: forming_margin(problem, lambdas),
+            gap: settings
+                .tolerance
+                .resolve(problem.min_weight())
+                .allowed_gap(scale),
+            settings,
+            point: scope.point,
+            within: scope.within,
+            hint: None,
+            deadline: scope.deadline,
+            scalar,
+            three_n_refused: RefCell::new(None),
+            best: None,
+            unclaimed: None,
+            notes: RefCell::new(Notes::default()),
+            log: RefCell::new(Vec::new()),
+        })
+    }
+
+    /// Record that the `3n` factorisations do not fit (`refusal`).
+    pub fn note_three_n_refused(&self, refusal: &Refusal) {
+        *self.three_n_refused.borrow_mut() = Some(refusal.clone());
+    }
+
+    /// The prediction of a `dim x dim` factorisation of the `3n` family (`factorisations` of
+    /// them) before its own analysis, from the whole graph's scalar factor (the same graph's
+    /// `3 x 3` blocks), or why it does not start: the other one was refused, or even `9 v`
+    /// values (the blocks of the scalar factor, a lower estimate) are over the budget. The time
+    /// is predicted for [`THREE_N_PER_SCALAR_VALUE`]` v` values (supernodal storage). `None`
+    /// when nothing is known (no scalar analysis): the rung analyses its own matrix.
+    pub fn three_n_predicted(
+        &self,
+        dim: usize,
+        factorisations: f64,
+    ) -> Option<std::result::Result<Prediction, Refusal>> {
+        if let Some(r) = &*self.three_n_refused.borrow() {
+            return Some(Err(r.clone()));
+        }
+        let (v, multiply_adds) = match self.scalar.as_ref()? {
+            Ok(a) => (a.factor_len(), Some(a.factor_multiply_adds())),
+            Err(predicted) => (*predicted, None),
+        };
+        let blocks = v.saturating_mul(9).saturating_sub(dim);
+        if let Some(Refusal::OverBudget { reason }) = ordering_refusal(self.settings, blocks, dim) {
+            let reason = format!("at least 9 x the scalar factor: {reason}");
+            return Some(Err(Refusal::OverBudget { reason }));
+        }
+        let typical = (v as f64 * THREE_N_PER_SCALAR_VALUE) as usize;
+        let one = match multiply_adds {
+            Some(m) => Budget::predicted_factor_seconds(
+                THREE_N_PER_SCALAR_MULTIPLY_ADD * m + per_value_multiply_adds(typical),
+                typical,
+            ),
+            None => Budget::predicted_seconds(typical, dim),
+        };
+        Some(Ok(Prediction::new(
+            factorisations * one,
+            Budget::factorisation_bytes(typical),
+        )))
+    }
+
+    /// The bound with no deficit: what a perfect proof would give.
+    pub fn ceiling(&self) -> f64 {
+        bound_with_deficit(self.problem, self.lambdas, 0.0)
+    }
+
+    /// `bound` leaves at least half of the tolerance for the rest of the gap: the climb stops.
+    pub fn sufficient(&self, bound: &VerifiedBound) -> bool {
+        self.ceiling() - bound.lower_bound <= 0.5 * self.gap
+    }
+
+    /// Keep `bound` when it is the best so far; its outcome for the log.
+    pub fn offer(&mut self, bound: VerifiedBound) -> Outcome {
+        let outcome = self.proved(&bound);
+        if self
+            .best
+            .as_ref()
+            .is_none_or(|b| bound.lower_bound > b.lower_bound)
+        {
+            self.best = Some(bound);
+        }
+        outcome
+    }
+
+    /// Log one try inside a rung (a family of shapes logs each): `rung` at this point, started
+    /// at `since`, with `note`.
+    pub fn log(
+        &self,
+        rung: Proof,
+        predicted: Option<Prediction>,
+        outcome: Outcome,
+        since: Instant,
+    ) {
+        self.log.borrow_mut().push(Attempt {
+            rung,
+            point: self.point,
+            predicted,
+            outcome,
+            seconds: since.elapsed().as_secs_f64(),
+            note: String::new(),
+            within: Some(self.within),
+        });
+    }
+
+    /// [`Self::log`] with a note (a shape of a family, in words).
+    pub fn log_with_note(
+        &self,
+        rung: Proof,
+        predicted: Option<Prediction>,
+        outcome: Outcome,
+        since: Instant,
+        note: String,
+    ) {
+        self.log(rung, predicted, outcome, since);
+        if let Some(last) = self.log.borrow_mut().last_mut() {
+            last.note = note;
+        }
+    }
+
+    /// The log so far (taken).
+    pub fn take_log(&self) -> Vec<Attempt> {
+        self.log.take()
+    }
+
+    /// Record that the estimate is not a critical point (no check's bound can be within the
+    /// tolerance: the shifted Cholesky rung does not search then).
+    pub fn mark_not_critical(&self) {
+        self.notes.borrow_mut().not_critical = true;
+    }
+
+    /// The estimates the rungs left (taken).
+    pub fn take_notes(&self) -> Notes {
+        self.notes.take()
+    }
+
+    /// The budget's reasons of the checks refused over it, or failed, joined (the
+    /// `inconclusive` reason); `None` when no check was kept out by the budget and one ran.
+    pub fn budget_limited(&self) -> Option<String> {
+        let log = self.log.borrow();
+        let refused = log
+            .iter()
+            .any(|a| matches!(a.outcome, Outcome::Refused(Refusal::OverBudget { .. })));
+        let ran = log
+            .iter()
+            .any(|a| !matches!(a.outcome, Outcome::Refused(_)) && a.rung != Proof::Gershgorin);
+        if ran && !refused {
+            return None;
+        }
+        let reasons: Vec<String> = log
+            .iter()
+            .filter_map(|a| match &a.outcome {
+                Outcome::Refused(Refusal::OverBudget { reason }) => {
+                    Some(format!("{}: {reason}", a.rung))
+                }
+                Outcome::Failed { reason } => Some(format!("{}: {reason}", a.rung)),
+                _ => None,
+            })
+            .collect();
+        Some(if reasons.is_empty() {
+            "no proof fits the budget".into()
+        } else {
+            reasons.join("; ")
+        })
+    }
+
+    /// The estimates the rungs leave (for the diagnosis).
+    pub fn notes(&self) -> std::cell::RefMut<'_, Notes> {
+        self.notes.borrow_mut()
+    }
+
+    /// The refusal of a rung predicted to need more than the time left of the budget.
+    pub fn time_refusal(&self, predicted: &Prediction) -> Option<Refusal> {
+        let left = self.deadline.left()?;
+        (predicted.seconds > left).then(|| Refusal::OverBudget {
+            reason: format!(
+                "predicted {:.1} s, {:.1} s of the time budget left",
+                predicted.seconds,
+                left.max(0.0)
+            ),
+        })
+    }
+
+    /// The outcome of a rung that returned `bound`.
+    pub fn proved(&self, bound: &VerifiedBound) -> Outcome {
+        Outcome::Proved {
+            lower_bound: bound.lower_bound,
+            sufficient: self.sufficient(bound),
+        }
+    }
+}
+
+impl Check<'_> {
+    /// A bound from a proven `mu <= lambda_min(S)` by `verification` `[D4]`, with nothing else
+    /// known yet.
+    pub fn bound_from_mu(&self, mu: f64, verification: Proof) -> VerifiedBound {
+        VerifiedBound {
+            lower_bound: bound_from_mu(self.problem, self.lambdas, mu),
+            trace: self.lambdas.iter().map(|l| l.trace()).sum(),
+            verified_min_eigenvalue: mu,
+            verification,
+            shift: None,
+            fp_margin: 0.0,
+            min_eigenvalue_estimate: None,
+            estimate_residual: None,
+            negative_eigenvector: None,
+            lanczos_iterations: 0,
+            factorizations: 0,
+            factor_nonzeros: 0,
+            scalar_comparison: None,
+            factorization_skipped: false,
+            grounded: None,
+            not_critical: false,
+            budget_exceeded: None,
+            complement_estimate: None,
+            randomized: None,
+            ladder: Vec::new(),
+        }
+    }
+}
+
+impl Climb for Check<'_> {
+    fn deadline(&self) -> &Deadline {
+        &self.deadline
+    }
+
+    fn budget(&self) -> &Budget {
+        &self.settings.budget
+    }
+
+    fn point(&self) -> Point {
+        self.point
+    }
+
+    fn within(&self) -> Option<Proof> {
+        Some(self.within)
+    }
+
+    fn enough(&self) -> bool {
+        self.best.as_ref().is_some_and(|b| self.sufficient(b))
+    }
+
+    fn record(&mut self, attempt: Attempt) {
+        self.log.get_mut().push(attempt);
+    }
+}
+
+/// The shifts of `[D5]` start at this: a verified `lambda_min >= -delta_0` costs a fraction
+/// `dual.shift_budget_fraction` of the gap budget.
+pub(crate) fn first_shift(cx: &Check<'_>) -> f64 {
+    cx.settings.dual.shift_budget_fraction * cx.gap / cx.s.nrows().max(1) as f64
+}
+
+/// The refusal of a factor of `factor_nonzeros` values over `dual.max_factor_nonzeros`.
+pub(super) fn over_factor_cap(
+    settings: &CertifySettings,
+    factor_nonzeros: usize,
+) -> Option<Refusal> {
+    let cap = settings.dual.max_factor_nonzeros;
+    (factor_nonzeros > cap).then(|| Refusal::OverBudget {
+        reason: format!(
+            "the proof would need a factor of {factor_nonzeros:.1e} values; limit \
+             dual.max_factor_nonzeros = {cap:.1e}"
+        ),
+    })
+}
+
+/// Why `factorisations` factorisations of an analysed matrix (`factor_nonzeros` stored values,
+/// `scratch_values` of numeric scratch, `multiply_adds` counted multiply-adds each,
+/// [`crate::linalg::cholesky::factor_multiply_adds`]) do not start: over the
+/// [`crate::certify::Budget`] or over `dual.max_factor_nonzeros`; their prediction otherwise
+/// ([`Budget::counted_factorisations_fit`], the model of the scalar comparison:
+/// the `values^2 / dim` model predicted 329 s for a 3n Cholesky of a 10^4-node random graph with
+/// 20 % outliers that took 12 s).
+pub(super) fn counted_factorisation_prediction(
+    settings: &CertifySettings,
+    factor_nonzeros: usize,
+    scratch_values: usize,
+    multiply_adds: f64,
+    factorisations: f64,
+) -> std::result::Result<Prediction, Refusal> {
+    let values = factor_nonzeros.saturating_add(scratch_values);
+    let total = (values as f64 * factorisations) as usize;
+    let multiply_adds = multiply_adds + per_value_multiply_adds(values);
+    if let Err(reason) =
+        settings
+            .budget
+            .counted_factorisations_fit(values, factorisations * multiply_adds, total)
+    {
+        return Err(Refusal::OverBudget { reason });
+    }
+    if let Some(refusal) = over_factor_cap(settings, factor_nonzeros) {
+        return Err(refusal);
+    }
+    Ok(Prediction::new(
+        Budget::predicted_factor_seconds(factorisations * multiply_adds, total),
+        Budget::factorisation_bytes(values),
+    ))
+}
+
+/// The per-value cost of a `3n` Cholesky factor of `values` values, as multiply-adds: the 3n
+/// Cholesky of sparse grids and chains is mostly per value (measured 4.9 s for 1.88e8 values on
+/// a 10^6-node grid), so it is charged at the dense model's 3e-8 s per value, the counted
+/// model's 1e-8 s plus this difference.
+fn per_value_multiply_adds(values: usize) -> f64 {
+    use crate::certify::budget::{
+        PREDICTED_MULTIPLY_ADD_RATE, PREDICTED_SECONDS_PER_COUNTED_VALUE,
+        PREDICTED_SECONDS_PER_FACTOR_VALUE,
+    };
+    (PREDICTED_SECONDS_PER_FACTOR_VALUE - PREDICTED_SECONDS_PER_COUNTED_VALUE)
+        * PREDICTED_MULTIPLY_ADD_RATE
+        * values as f64
+}
+
+/// Why a factorisation of a `dim x dim` matrix whose factor is predicted (by the ordering, before
+/// any symbolic analysis) to hold `factor_nonzeros` values does not start: over the
+/// [`crate::certify::Budget`] (`values^2 / dim` time model) or over `dual.max_factor_nonzeros`.
+pub(super) fn ordering_refusal(
+    settings: &CertifySettings,
+    factor_nonzeros: usize,
+    dim: usize,
+) -> Option<Refusal> {
+    if let Err(reason) = settings.budget.factorisation_fits(factor_nonzeros, dim) {
+        return Some(Refusal::OverBudget { reason });
+    }
+    over_factor_cap(settings, factor_nonzeros)
+}
