@@ -5,6 +5,58 @@ use crate::error::{Error, Result};
 use crate::linalg::cholesky::RESIDUAL_FACTOR_LIMIT;
 use serde::{Deserialize, Serialize};
 
+/// Predicted times below this many seconds are not told apart: such rungs run strongest first
+/// (the timer and the time model resolve no finer; `paper-notes/certificates.md` `[D12]`).
+pub const FREE_SECONDS: f64 = 0.05;
+
+/// The cost of a rung predicted from the problem before it runs (the models of
+/// [`crate::certify::budget::Budget`]), and its chance of proving what the verdict needs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Prediction {
+    /// Predicted wall time, seconds.
+    pub seconds: f64,
+    /// Predicted peak memory of its largest allocation (a factor and its scratch), bytes.
+    pub bytes: f64,
+    /// The predicted chance, in `(0, 1]`, that it proves what the verdict needs (from cheap
+    /// observables of the problem; 1 when nothing predicts a failure). Omitted from JSON at 1.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub success: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn is_one(x: &f64) -> bool {
+    *x == 1.0
+}
+
+impl Prediction {
+    /// A prediction of `seconds` and `bytes` with nothing predicting a failure.
+    pub fn new(seconds: f64, bytes: f64) -> Self {
+        Prediction {
+            seconds,
+            bytes,
+            success: 1.0,
+        }
+    }
+
+    /// The same prediction with a chance of success `p` (clamped to `[1e-3, 1]`).
+    pub fn with_success(self, p: f64) -> Self {
+        Prediction {
+            success: if p.is_nan() { 1.0 } else { p.clamp(1e-3, 1.0) },
+            ..self
+        }
+    }
+
+    /// The order of the climb: the expected time to a proof, `seconds / success` (the order
+    /// that minimises the expected time of a sequence of independent tries), with times below
+    /// [`FREE_SECONDS`] tied.
+    pub(crate) fn order_key(&self) -> f64 {
+        self.seconds.max(FREE_SECONDS) / self.success
+    }
+}
+
 /// Bytes a factorisation needs per stored factor value (an `f64`). The matrix factorised is
 /// not counted (it exists before the factorisation is tried: the shift is added to its diagonal
 /// in place); see [`Budget::factorisation_bytes`] for the whole model.
@@ -198,7 +250,7 @@ impl Budget {
     /// ```
     pub fn prediction_fits(
         &self,
-        predicted: &crate::certify::log::Prediction,
+        predicted: &Prediction,
         elapsed: f64,
     ) -> std::result::Result<(), String> {
         if predicted.bytes > self.max_memory_bytes as f64 {
@@ -344,11 +396,7 @@ impl Deadline {
     }
 
     /// `Err(reason)` when `predicted` does not fit the memory budget or the time left.
-    pub fn fits(
-        &self,
-        budget: &Budget,
-        predicted: &crate::certify::log::Prediction,
-    ) -> std::result::Result<(), String> {
+    pub fn fits(&self, budget: &Budget, predicted: &Prediction) -> std::result::Result<(), String> {
         budget.prediction_fits(predicted, self.elapsed())
     }
 

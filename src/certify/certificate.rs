@@ -118,11 +118,11 @@ pub struct Certificate {
     /// computed only on request (e.g. the CLI's `--plot`), `[D14]`. Omitted from JSON when
     /// absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub smallest_eigenvalues: Option<crate::certify::spectrum::SpectrumEstimate>,
+    pub smallest_eigenvalues: Option<crate::certify::evidence::SpectrumEstimate>,
     /// What the branch and bound did, when it produced the bound (cells, depth, time, why it
     /// stopped). Omitted from JSON when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub branch_and_bound: Option<crate::certify::branch_and_bound::BranchAndBoundStats>,
+    pub branch_and_bound: Option<crate::certify::evidence::BranchAndBoundStats>,
     /// The problem certified when it is not the one whose cost the report states (the
     /// inlier graph of a robust solve, [`CertifiedProblemKind`]); the bounds are then of that
     /// problem's cost. Omitted from JSON when absent (the report's own problem).

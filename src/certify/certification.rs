@@ -1,10 +1,10 @@
 //! What every `certify_*` function returns: one shape for the three problems.
 
 use super::certificate::Certificate;
+pub use super::evidence::SdpSummary;
 use super::log::{Attempt, Outcome, Refusal};
 use super::proof::BoundMethod;
 use super::settings::CertifyMode;
-use crate::relax::SdpStatus;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -38,24 +38,6 @@ pub struct MethodRun {
     pub seconds: f64,
     /// What happened, in words.
     pub note: String,
-}
-
-/// Statistics of an SDP solve inside a certification.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SdpSummary {
-    /// Clarabel's outcome.
-    pub status: SdpStatus,
-    /// Interior-point iterations.
-    pub iterations: u32,
-    /// Time of the solve (setup, solve, rounding), seconds.
-    pub seconds: f64,
-    /// Tightness indicator of the primal solution: multiple averaging `lambda_4(X) / lambda_3(X)`,
-    /// conjugate `lambda_2(Z) / lambda_1(Z)` (0 for a tight, exactly low-rank solution).
-    pub eigenvalue_ratio: f64,
-    /// Cost of the rounded (multiple) or extracted (conjugate) estimate, before polishing.
-    pub rounded_cost: Option<f64>,
-    /// Cost after polishing it with the local solver.
-    pub polished_cost: Option<f64>,
 }
 
 /// Where an improvement came from.
@@ -104,9 +86,9 @@ pub struct CertifyDetails {
     pub sdp: Option<SdpSummary>,
     /// The Riemannian staircase, when it ran: every rank, its estimate of `lambda_min(S)`
     /// and whether it was verified (multiple averaging).
-    pub staircase_steps: Vec<crate::certify::multiple::staircase::StaircaseStep>,
+    pub staircase_steps: Vec<crate::certify::evidence::StaircaseStep>,
     /// The branch and bound, when one ran.
-    pub branch_and_bound: Option<crate::certify::branch_and_bound::BranchAndBoundStats>,
+    pub branch_and_bound: Option<crate::certify::evidence::BranchAndBoundStats>,
     /// The improvement found, if any (the solution is in [`Certification::improvement`]).
     pub improvement: Option<Improvement>,
     /// Time spent refining the estimate before verifying multipliers (included in `seconds`).
@@ -131,9 +113,9 @@ struct DetailsJson<'a> {
     skipped_reason: &'a Option<String>,
     sdp: &'a Option<SdpSummary>,
     #[serde(skip_serializing_if = "<[_]>::is_empty")]
-    staircase_steps: &'a [crate::certify::multiple::staircase::StaircaseStep],
+    staircase_steps: &'a [crate::certify::evidence::StaircaseStep],
     #[serde(skip_serializing_if = "Option::is_none")]
-    branch_and_bound: &'a Option<crate::certify::branch_and_bound::BranchAndBoundStats>,
+    branch_and_bound: &'a Option<crate::certify::evidence::BranchAndBoundStats>,
     improvement: &'a Option<Improvement>,
     refine_seconds: f64,
     #[serde(skip_serializing_if = "<[_]>::is_empty")]

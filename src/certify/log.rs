@@ -1,62 +1,11 @@
 //! The log of a certification: every rung considered, with its prediction and outcome
-//! ([`Attempt`]), and the vocabulary of both ([`Prediction`], [`Refusal`], [`Outcome`],
-//! [`Point`]).
+//! ([`Attempt`]), and the vocabulary of both ([`Refusal`], [`Outcome`], [`Point`]; the
+//! [`Prediction`] is the budget's).
 
+pub use super::budget::{FREE_SECONDS, Prediction};
 use super::proof::Proof;
 use serde::{Deserialize, Serialize};
 use std::fmt;
-
-/// Predicted times below this many seconds are not told apart: such rungs run strongest first
-/// (the timer and the time model resolve no finer; `paper-notes/certificates.md` `[D12]`).
-pub const FREE_SECONDS: f64 = 0.05;
-
-/// The cost of a rung predicted from the problem before it runs (the models of
-/// [`crate::certify::Budget`]), and its chance of proving what the verdict needs.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Prediction {
-    /// Predicted wall time, seconds.
-    pub seconds: f64,
-    /// Predicted peak memory of its largest allocation (a factor and its scratch), bytes.
-    pub bytes: f64,
-    /// The predicted chance, in `(0, 1]`, that it proves what the verdict needs (from cheap
-    /// observables of the problem; 1 when nothing predicts a failure). Omitted from JSON at 1.
-    #[serde(default = "one", skip_serializing_if = "is_one")]
-    pub success: f64,
-}
-
-fn one() -> f64 {
-    1.0
-}
-
-fn is_one(x: &f64) -> bool {
-    *x == 1.0
-}
-
-impl Prediction {
-    /// A prediction of `seconds` and `bytes` with nothing predicting a failure.
-    pub fn new(seconds: f64, bytes: f64) -> Self {
-        Prediction {
-            seconds,
-            bytes,
-            success: 1.0,
-        }
-    }
-
-    /// The same prediction with a chance of success `p` (clamped to `[1e-3, 1]`).
-    pub fn with_success(self, p: f64) -> Self {
-        Prediction {
-            success: if p.is_nan() { 1.0 } else { p.clamp(1e-3, 1.0) },
-            ..self
-        }
-    }
-
-    /// The order of the climb: the expected time to a proof, `seconds / success` (the order
-    /// that minimises the expected time of a sequence of independent tries), with times below
-    /// [`FREE_SECONDS`] tied.
-    pub(crate) fn order_key(&self) -> f64 {
-        self.seconds.max(FREE_SECONDS) / self.success
-    }
-}
 
 /// Why a rung was not started.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -15,12 +15,12 @@
 //! The layers, one way (checked by `tests/suite/layers.rs`):
 //!
 //! 1. the vocabulary: [`tolerance`], [`proof`] (the one enum naming proofs), [`budget`] (the
-//!    budget, its prediction models and the one clock), [`log`], [`certificate`], [`settings`],
-//!    [`certification`], [`rung`] (what a proof is to a climb);
+//!    budget, its prediction models and the one clock), [`log`], [`evidence`] (what proofs
+//!    report beside a bound), [`certificate`], [`settings`], [`certification`], [`rung`] (what
+//!    a proof is to a climb) and [`ladder`] (the one climb, generic over the rungs);
 //! 2. the rungs and their kernels, one file a proof: [`single`], [`conjugate`],
 //!    [`branch_and_bound`], [`simultaneous`], [`multiple`] (each problem's folder; [`spectrum`]);
-//! 3. [`ladder`]: the one climb;
-//! 4. the entry points (each problem folder's `mod.rs`), which choose the rungs and climb.
+//! 3. the entry points (each problem folder's `mod.rs`), which choose the rungs and climb.
 //!
 //! Soundness rule: [`Verdict::Certified`] is only produced by [`Certificate::from_bounds`] from a
 //! lower bound verified independently of any solver's own report.
@@ -30,6 +30,7 @@ pub mod budget;
 pub mod certificate;
 pub mod certification;
 pub mod conjugate;
+pub mod evidence;
 pub mod ladder;
 pub mod log;
 pub mod multiple;

@@ -5,17 +5,17 @@
 //! nonnegative terms, capped at the estimate's cost
 //! (`nonnegative_bound_at_most`).
 
-use super::branch_and_bound::BranchAndBoundStats;
 use super::budget::{Budget, Deadline};
 use super::certificate::{Certificate, nonnegative_bound_at_most};
 use super::certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, SdpSummary,
 };
+use super::evidence::BranchAndBoundStats;
+use super::evidence::SpectrumEstimate;
 use super::log::{Attempt, Point};
 use super::proof::Proof;
 use super::rung::Climb;
 use super::settings::CertifySettings;
-use super::spectrum::SpectrumEstimate;
 use super::tolerance::GapTolerance;
 use crate::so3::Rotation;
 

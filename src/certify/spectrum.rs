@@ -17,58 +17,18 @@
 //! is similar to `L (x) I_3` at a noise-free optimum): single-vector Lanczos finds only one
 //! copy of a multiple eigenvalue.
 
-use crate::certify::multiple::certificate_matrix;
+pub use crate::certify::evidence::{SpectrumEstimate, SpectrumMethod};
+use crate::certify::multiple::multipliers::certificate_matrix;
 pub use crate::certify::settings::SpectrumSettings;
 use crate::error::{Error, Result};
 use crate::linalg::{
-    Extreme, LanczosSettings, LanczosStop, ShiftedCholesky, inf_norm, lanczos, rayleigh_quotient,
-    sparse_matvec,
+    Extreme, LanczosSettings, ShiftedCholesky, inf_norm, lanczos, rayleigh_quotient, sparse_matvec,
 };
 use crate::multiple::MultipleProblem;
 use faer::sparse::{SparseColMat, SparseColMatRef};
 use nalgebra::{DMatrix, Matrix3, SymmetricEigen};
-use serde::{Deserialize, Serialize};
+
 use std::time::Instant;
-
-/// How the estimates were computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SpectrumMethod {
-    /// Dense symmetric eigen-decomposition (all eigenvalues, accurate to `~ u ||S||`).
-    Dense,
-    /// Block Lanczos on `(S + shift I)^-1` through a sparse Cholesky factor.
-    ShiftInvertLanczos,
-    /// Block Lanczos on `S`.
-    Lanczos,
-}
-
-/// The `k` smallest eigenvalues of a symmetric matrix: **estimates**, not bounds.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SpectrumEstimate {
-    /// Estimated smallest eigenvalues, ascending (Rayleigh quotients of the Ritz vectors).
-    pub values: Vec<f64>,
-    /// Residual `||S x - value x||_2` of each value (unit `x`): some eigenvalue of `S` lies
-    /// within it.
-    pub residuals: Vec<f64>,
-    /// How they were computed.
-    pub method: SpectrumMethod,
-    /// The shift of the shift-invert iteration, if used.
-    pub shift: Option<f64>,
-    /// Why the Lanczos iteration stopped (`None` for `Dense`, which is exact up to rounding).
-    pub stop: Option<LanczosStop>,
-    /// Krylov subspace dimension reached (the matrix dimension for `Dense`).
-    pub subspace_dim: usize,
-    /// Wall time, seconds.
-    pub seconds: f64,
-}
-
-impl SpectrumEstimate {
-    /// `true` when the estimates are exact up to rounding (dense) or the Lanczos iteration
-    /// converged.
-    pub fn converged(&self) -> bool {
-        self.stop.is_none_or(|s| s.converged())
-    }
-}
 
 /// Estimates of the `settings.count` smallest eigenvalues of the symmetric sparse matrix `s`
 /// (both triangles stored, as [`certificate_matrix`] builds it). `shift_hint`: a shift

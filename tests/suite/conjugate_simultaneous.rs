@@ -366,7 +366,7 @@ fn over_budget_the_sdp_is_refused() {
 /// cost of the planted point (`3e-12` per edge). Both rungs' raw bounds stay below it.
 #[test]
 fn bounds_account_for_measurements_orthogonal_only_to_tolerance() {
-    use rotavg::certify::simultaneous::dual::multipliers_at_estimate;
+    use rotavg::certify::simultaneous::multipliers::multipliers_at_estimate;
     use rotavg::relax::simultaneous::relax_simultaneous;
     let mut rng = StdRng::seed_from_u64(69);
     let (mut p, rs, s) = planted(8, 8, 0.0, &mut rng);
@@ -434,7 +434,7 @@ fn the_joint_solve_is_refused_over_the_memory_budget() {
 /// the planted point's cost and the best of 8 random starts, and the note names the search.
 #[test]
 fn the_coupling_search_certifies_what_least_norm_misses() {
-    use rotavg::certify::simultaneous::dual::multipliers_at_estimate;
+    use rotavg::certify::simultaneous::multipliers::multipliers_at_estimate;
     use rotavg::multiple::synthetic::SyntheticGraph;
     use rotavg::pipeline::simultaneous::SyntheticRig;
     let mut rng = StdRng::seed_from_u64(71);

@@ -16,6 +16,7 @@ mod budget_monotone;
 mod certify_families;
 #[cfg(all(feature = "cli", feature = "colmap"))]
 mod certify_formats;
+mod certify_layers;
 mod certify_multiple;
 mod certify_randomized;
 mod clarabel_sdp;

@@ -17,6 +17,7 @@ pub(crate) mod search;
 pub(crate) mod terms;
 
 use crate::certify::certification::ImprovementSource;
+pub use crate::certify::evidence::{BranchAndBoundStats, BranchAndBoundStop};
 use crate::certify::log::{Prediction, Refusal};
 use crate::certify::one_rotation::{Bound, RotationState};
 use crate::certify::proof::Proof;
@@ -24,83 +25,6 @@ use crate::certify::rung::{Found, Plan, Rung};
 pub use crate::certify::settings::BranchAndBoundSettings;
 use crate::certify::settings::CertifyMode;
 use crate::error::Result;
-use serde::{Deserialize, Serialize};
-use std::fmt;
-
-/// Why the branch and bound stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum BranchAndBoundStop {
-    /// Every cell was bounded within the tolerance of the best cost found.
-    #[default]
-    Converged,
-    /// `max_cells` cells were bounded.
-    CellBudget,
-    /// The time budget (`budget.max_seconds`) ran out.
-    TimeBudget,
-    /// A cell to split was below the resolution of the floating-point margins.
-    Resolution,
-    /// Not searched: the data margin `[B6]` has no proof (quaternion metric, samples that are
-    /// rotations only to the validation tolerance); the bound is the trivial 0.
-    UnprovenData,
-}
-
-impl fmt::Display for BranchAndBoundStop {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            BranchAndBoundStop::Converged => "converged",
-            BranchAndBoundStop::CellBudget => "cell budget",
-            BranchAndBoundStop::TimeBudget => "time budget",
-            BranchAndBoundStop::Resolution => "resolution limit",
-            BranchAndBoundStop::UnprovenData => "unproven data margin",
-        })
-    }
-}
-
-/// What a branch and bound did (in the certificate's JSON as `branch_and_bound`).
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-pub struct BranchAndBoundStats {
-    /// Cells whose bound was computed.
-    pub cells_explored: usize,
-    /// Cells discarded because their bound reached the best cost minus half the tolerance.
-    pub cells_pruned: usize,
-    /// Cells discarded because they lie in a ball around an incumbent (`[B5]`).
-    pub cells_in_balls: usize,
-    /// Cells still open when the search stopped (0 when converged).
-    pub live_cells: usize,
-    /// Deepest level of subdivision reached (0: the initial cells).
-    pub max_depth: u32,
-    /// Radius (rad) of the ball around the estimate bounded at once (`[B5]`; 0 if none).
-    pub ball_radius: f64,
-    /// Local solves started from cell centres.
-    pub local_solves: usize,
-    /// The proven lower bound of the global minimum.
-    pub lower_bound: f64,
-    /// The best cost seen (estimate, cell centres, local solves).
-    pub best_cost: f64,
-    /// Why it stopped.
-    pub stop: BranchAndBoundStop,
-    /// Wall time, seconds.
-    pub seconds: f64,
-}
-
-impl fmt::Display for BranchAndBoundStats {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "branch and bound ({}): {} cells bounded, {} pruned, {} in the incumbent balls, {} open, depth {}, ball radius {:.3e} rad, {} local solves, {:.3} s",
-            self.stop,
-            self.cells_explored,
-            self.cells_pruned,
-            self.cells_in_balls,
-            self.live_cells,
-            self.max_depth,
-            self.ball_radius,
-            self.local_solves,
-            self.seconds
-        )
-    }
-}
 
 /// A branch and bound run for an estimate: the proven bound, what it did, a better local
 /// solution if one was found, and a sentence for the certificate.

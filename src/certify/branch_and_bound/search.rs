@@ -2,7 +2,7 @@
 //! around incumbents (`[B5]`), for any cost whose balls can be bounded (`[B2]`-`[B4]`).
 
 use super::bound::{ANGLE_ERROR, BallBound};
-use super::{BranchAndBoundStats, BranchAndBoundStop};
+use crate::certify::evidence::{BranchAndBoundStats, BranchAndBoundStop};
 use crate::certify::settings::BranchAndBoundSettings;
 use crate::certify::tolerance::GapTolerance;
 use crate::so3::{self, Rotation};

@@ -411,7 +411,7 @@ pub(super) fn over_factor_cap(
 /// Why `factorisations` factorisations of an analysed matrix (`factor_nonzeros` stored values,
 /// `scratch_values` of numeric scratch, `multiply_adds` counted multiply-adds each,
 /// [`crate::linalg::cholesky::factor_multiply_adds`]) do not start: over the
-/// [`crate::certify::Budget`] or over `dual.max_factor_nonzeros`; their prediction otherwise
+/// [`crate::certify::budget::Budget`] or over `dual.max_factor_nonzeros`; their prediction otherwise
 /// ([`Budget::counted_factorisations_fit`], the model of the scalar comparison:
 /// the `values^2 / dim` model predicted 329 s for a 3n Cholesky of a 10^4-node random graph with
 /// 20 % outliers that took 12 s).
@@ -457,7 +457,7 @@ fn per_value_multiply_adds(values: usize) -> f64 {
 
 /// Why a factorisation of a `dim x dim` matrix whose factor is predicted (by the ordering, before
 /// any symbolic analysis) to hold `factor_nonzeros` values does not start: over the
-/// [`crate::certify::Budget`] (`values^2 / dim` time model) or over `dual.max_factor_nonzeros`.
+/// [`crate::certify::budget::Budget`] (`values^2 / dim` time model) or over `dual.max_factor_nonzeros`.
 pub(super) fn ordering_refusal(
     settings: &CertifySettings,
     factor_nonzeros: usize,

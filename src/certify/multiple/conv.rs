@@ -153,15 +153,15 @@ pub fn conv_bound(problem: &MultipleProblem, relaxation: &ConvRelaxation) -> Res
 pub fn certify_conv(
     problem: &MultipleProblem,
     rotations: &[crate::so3::Rotation],
-    settings: &crate::certify::CertifySettings,
-) -> Result<crate::certify::Certificate> {
+    settings: &crate::certify::settings::CertifySettings,
+) -> Result<crate::certify::certificate::Certificate> {
     let start = std::time::Instant::now();
     settings.validate()?;
     super::multipliers::check_rotations(problem, rotations)?;
     let relaxation = crate::relax::conv_so3::relax_multiple_conv(problem, &settings.sdp)?;
     let bound = conv_bound(problem, &relaxation)?;
     let tolerance = settings.tolerance.resolve(problem.min_weight());
-    Ok(crate::certify::Certificate::from_bounds(
+    Ok(crate::certify::certificate::Certificate::from_bounds(
         problem.chordal_cost(rotations),
         Some(bound.lower_bound),
         BoundMethod::Sdp,

@@ -841,7 +841,7 @@ pub struct ConvDualBound {
 pub fn conv_dual_bound(
     problem: &MultipleProblem,
     rotations: &[Rotation],
-    settings: &crate::certify::CertifySettings,
+    settings: &crate::certify::settings::CertifySettings,
     point: crate::certify::log::Point,
     deadline: Option<Instant>,
 ) -> Result<ConvDualBound> {
@@ -854,7 +854,7 @@ pub fn conv_dual_bound(
 pub(crate) fn conv_dual_within(
     problem: &MultipleProblem,
     rotations: &[Rotation],
-    settings: &crate::certify::CertifySettings,
+    settings: &crate::certify::settings::CertifySettings,
     point: crate::certify::log::Point,
     deadline: Option<Instant>,
     clock: Deadline,

@@ -33,7 +33,7 @@ pub enum DualDiagnosis {
         /// The smallest gap the verification proved.
         smallest_gap: f64,
     },
-    /// No proof fits the budget ([`crate::certify::Budget`]): no lower bound is claimed.
+    /// No proof fits the budget ([`crate::certify::budget::Budget`]): no lower bound is claimed.
     OverBudget {
         /// What would not fit.
         reason: String,

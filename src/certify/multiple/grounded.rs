@@ -389,10 +389,10 @@ fn without_block(s: &SparseColMat<usize, f64>, g: usize) -> Result<SparseColMat<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::certify::CertifySettings;
     use crate::certify::log::Point;
     use crate::certify::multiple::dual::dual_certificate;
     use crate::certify::multiple::multipliers::{certificate_matrix, multipliers};
+    use crate::certify::settings::CertifySettings;
     use crate::linalg::inf_norm;
     use crate::multiple::MultipleProblem;
     use crate::multiple::synthetic::{SyntheticGraph, z_cycle};
@@ -565,7 +565,7 @@ mod tests {
             let scope = crate::certify::multiple::check::Scope {
                 point: Point::Given,
                 within: Proof::DualCertificate,
-                deadline: crate::certify::Deadline::start(&settings.budget),
+                deadline: crate::certify::budget::Deadline::start(&settings.budget),
             };
             let mut cx = Check::new(&p, &l, Some(&y), 1.0, &settings, scope).unwrap();
             let mut proof = GroundedProof::default();

@@ -331,7 +331,7 @@ pub(super) fn randomized_bound(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::certify::multiple::{certificate_matrix, multipliers};
+    use crate::certify::multiple::multipliers::{certificate_matrix, multipliers};
     use crate::linalg::{LanczosStop, inf_norm};
     use crate::multiple::synthetic::SyntheticGraph;
     use crate::so3::Rotation;

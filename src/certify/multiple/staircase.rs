@@ -25,6 +25,7 @@ use super::verify::multipliers_bound;
 use crate::certify::budget::Deadline;
 use crate::certify::certificate::Certificate;
 use crate::certify::certification::ImprovementSource;
+pub use crate::certify::evidence::StaircaseStep;
 use crate::certify::log::{Point, Prediction, Refusal};
 use crate::certify::proof::BoundMethod;
 use crate::certify::proof::Proof;
@@ -116,35 +117,6 @@ impl std::fmt::Display for StaircaseStop {
             ),
         }
     }
-}
-
-/// One rank of the staircase, as it ran: what the trust region reached, what the estimate of
-/// `lambda_min(S)` said and whether the rank was verified (the trace behind
-/// [`StaircaseResult::stop_reason`]).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct StaircaseStep {
-    /// The rank `p`.
-    pub rank: usize,
-    /// Trust-region iterations at this rank (loose and strict solves together).
-    pub iterations: usize,
-    /// Whether the rank was solved to [`StaircaseSettings::gradient_tolerance`] (a strict
-    /// solve, before a verification) rather than only to [`ESCAPE_GRADIENT_TOLERANCE`].
-    pub strict: bool,
-    /// The lifted cost `F(Y)` reached.
-    pub lifted_cost: f64,
-    /// The matrix-free Lanczos estimate of `lambda_min(S)` (deflated by the columns of `Y`,
-    /// the null space of `S` at a critical point) and its Ritz residual.
-    pub estimate: f64,
-    /// The Ritz residual of [`StaircaseStep::estimate`].
-    pub estimate_residual: f64,
-    /// The estimate of `lambda_min(S)` on the whole space: the null-space block `B^T S B` of
-    /// the columns `B` of `Y` coupled to the complement's estimate (the smaller eigenvalue of
-    /// `[[lambda_min(B^T S B), ||S B - B B^T S B||_F], [., estimate]]`).
-    pub full_estimate: f64,
-    /// The verified bound at this rank, when the rank was verified.
-    pub verified_bound: Option<f64>,
-    /// Seconds since the staircase started, at the end of this rank.
-    pub seconds: f64,
 }
 
 /// Result of [`staircase_bound`].

@@ -5,10 +5,10 @@
 //! own files; the verdict is [`super::verdict`]'s.
 
 use super::diagnosis::DualDiagnosis;
-use super::staircase::StaircaseStep;
 use super::verified::RandomizedBound;
 use crate::certify::budget::{Budget, Deadline};
 use crate::certify::certification::{ImprovementSource, SdpSummary};
+use crate::certify::evidence::StaircaseStep;
 use crate::certify::log::{Attempt, Outcome, Point, Refusal};
 use crate::certify::proof::{BoundMethod, Proof};
 use crate::certify::rung::Climb;

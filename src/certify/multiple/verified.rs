@@ -52,7 +52,7 @@ pub struct VerifiedBound {
     /// stationarity residual `rho` against the largest possible curvature `c`, `[D15]`).
     #[serde(default)]
     pub not_critical: bool,
-    /// Why no proof was tried when none fitted the budget ([`crate::certify::Budget`]); the
+    /// Why no proof was tried when none fitted the budget ([`crate::certify::budget::Budget`]); the
     /// bound is then Gershgorin's, and no lower bound is claimed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub budget_exceeded: Option<String>,
@@ -89,7 +89,7 @@ pub struct GroundedBound {
 /// (the rotations stacked, `S Y ~ 0` at a critical point), estimated by Lanczos on
 /// `P S P`, `P = I - Y Y^T / n`: an *estimate*, never a proof. Positive with a small residual,
 /// it says `S` looks positive semidefinite with that much room; it is reported when no proof
-/// fits the budget ([`crate::certify::Budget`]).
+/// fits the budget ([`crate::certify::budget::Budget`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ComplementEstimate {
     /// The Ritz value.

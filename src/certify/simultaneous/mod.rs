@@ -7,11 +7,14 @@
 
 pub mod bound;
 pub mod dual;
+pub mod multipliers;
 mod sdp;
 mod search;
 mod state;
 
 pub use bound::{SimultaneousBound, verify_simultaneous_bound};
+pub use dual::predict_multipliers_at_estimate;
+pub use multipliers::multipliers_at_estimate;
 
 use crate::certify::budget::Deadline;
 use crate::certify::certificate::Certificate;

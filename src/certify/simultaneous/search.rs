@@ -9,7 +9,7 @@
 //! handed to [`super::verify_simultaneous_bound`] like any others.
 
 use super::bound::certificate_matrix;
-use super::dual::EstimateMultipliers;
+use super::multipliers::EstimateMultipliers;
 use crate::multiple::MultipleProblem;
 use nalgebra::{Matrix3, SymmetricEigen};
 use std::time::Instant;

@@ -385,11 +385,12 @@ mod tests {
             assert!((fstar - 1.2e-10).abs() < 1e-14);
             let worse = r0 * exp(&Vector3::new(1e-4, 0.0, 0.0));
             assert!(p.cost(&worse) > fstar + 5e-8);
-            let c = crate::certify::certify_single(&p, &worse, &Default::default()).unwrap();
+            let c =
+                crate::certify::single::certify_single(&p, &worse, &Default::default()).unwrap();
             assert!(!c.certificate.is_certified(), "{}", c.certificate);
             let lb = c.certificate.lower_bound.unwrap();
             assert!(lb <= fstar + 1e-14, "bound {lb} above the minimum {fstar}");
-            let c = crate::certify::certify_single(&p, &r0, &Default::default()).unwrap();
+            let c = crate::certify::single::certify_single(&p, &r0, &Default::default()).unwrap();
             assert!(c.certificate.is_certified(), "{}", c.certificate);
         }
     }

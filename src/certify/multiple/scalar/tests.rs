@@ -4,7 +4,7 @@ use super::analysis::split_edges;
 use super::residuals::gauge_block_bound;
 use super::split::split_defect;
 use super::*;
-use crate::certify::multiple::{certificate_matrix, multipliers};
+use crate::certify::multiple::multipliers::{certificate_matrix, multipliers};
 use crate::multiple::synthetic::SyntheticGraph;
 use crate::multiple::{MultipleSettings, solve_multiple};
 use nalgebra::{DMatrix, SymmetricEigen, Vector3};
