@@ -91,8 +91,8 @@ pub struct StaircaseStep {
     pub rank: usize,
     /// Trust-region iterations at this rank (loose and strict solves together).
     pub iterations: usize,
-    /// Whether the rank was solved to [`StaircaseSettings::gradient_tolerance`] (a strict
-    /// solve, before a verification) rather than only to [`ESCAPE_GRADIENT_TOLERANCE`].
+    /// Whether the rank was solved to [`crate::certify::settings::StaircaseSettings::gradient_tolerance`] (a strict
+    /// solve, before a verification) rather than only to [`crate::certify::multiple::staircase::ESCAPE_GRADIENT_TOLERANCE`].
     pub strict: bool,
     /// The lifted cost `F(Y)` reached.
     pub lifted_cost: f64,
