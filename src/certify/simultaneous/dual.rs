@@ -1,6 +1,6 @@
 //! The dual certificate of the simultaneous problem at the estimate `[H15]` as a rung: the
 //! multipliers complementary slackness fixes at the estimate ([`super::multipliers`]), the
-//! couplings of least norm, then a search over the others ([`super::search`]), every
+//! couplings of least norm, then a search over the others (`search.rs`), every
 //! candidate verified by [`super::bound::verify_simultaneous_bound`].
 
 use super::bound::{SimultaneousBound, verify_simultaneous_bound};
@@ -13,7 +13,7 @@ use crate::certify::settings::CertifyMode;
 use crate::error::Result;
 use crate::relax::multiple::SDP_MULTIPLY_ADD_RATE;
 
-/// Time and memory of [`multipliers_at_estimate`] and of its verification on `n` nodes: a dense
+/// Time and memory of [`super::multipliers::multipliers_at_estimate`] and of its verification on `n` nodes: a dense
 /// `3n x 3n` Cholesky factorisation and two dense symmetric eigen-decompositions (taken as
 /// `10 (3n)^3` multiply-adds each), and six dense `3n x 3n` matrices alive at once.
 pub fn predict_multipliers_at_estimate(n: usize) -> Prediction {
