@@ -230,7 +230,6 @@ fn multiple_estimates_are_rotations_for_every_start_loss_and_defect() {
         noise_sigma: 0.05,
         outlier_fraction: 0.1,
         seed: 35,
-        ..Default::default()
     }
     .generate();
     check_multiple(&p, &truth, 1);
@@ -598,8 +597,9 @@ mod cli {
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
     }
 
-    #[test]
-    fn command_line_estimates_and_outputs_are_rotations() {
+    /// A JSON view graph with measurements carrying the defect 9e-6 (25 nodes, 10 % outliers),
+    /// written to `name`: the file and the problem it holds.
+    fn multiple_input(name: &str) -> (std::path::PathBuf, MultipleProblem) {
         let mut rng = StdRng::seed_from_u64(8);
         let (p, _) = SyntheticGraph {
             num_rotations: 25,
@@ -607,46 +607,45 @@ mod cli {
             noise_sigma: 0.03,
             outlier_fraction: 0.1,
             seed: 8,
-            ..Default::default()
         }
         .generate();
         let p = with_defects(&p, 9e-6, &mut rng);
-        let edges: Vec<String> = p
-            .edges()
-            .iter()
-            .map(|e| {
-                format!(
-                    r#"{{"i": {}, "j": {}, "rotation": {}, "weight": {}}}"#,
-                    e.i,
-                    e.j,
-                    rows(&e.rotation),
-                    e.weight
-                )
-            })
-            .collect();
+        let edge = |e: &rotavg::multiple::Edge| {
+            let (i, j, r, w) = (e.i, e.j, rows(&e.rotation), e.weight);
+            format!(r#"{{"i": {i}, "j": {j}, "rotation": {r}, "weight": {w}}}"#)
+        };
+        let edges: Vec<String> = p.edges().iter().map(edge).collect();
+        let n = p.num_rotations();
         let text = format!(
-            r#"{{"num_rotations": {}, "edges": [{}]}}"#,
-            p.num_rotations(),
+            r#"{{"num_rotations": {n}, "edges": [{}]}}"#,
             edges.join(", ")
         );
-        let input = temp_file("defective.json", &text);
+        (temp_file(name, &text), p)
+    }
+
+    fn arg(p: &std::path::Path) -> String {
+        p.to_str().unwrap().to_owned()
+    }
+
+    /// `multiple --init-method tree --json --output` (JSON, g2o): the printed estimate, its cost
+    /// (the file's at exactly that estimate) and the written files.
+    #[test]
+    fn multiple_json_and_output_files_are_rotations() {
+        let (input, p) = multiple_input("defective.json");
         let dir = temp_dir();
-        let (out_json, out_g2o, inliers) = (
-            dir.join("estimate.json"),
-            dir.join("estimate.g2o"),
-            dir.join("inliers.json"),
-        );
-        let arg = |p: &std::path::Path| p.to_str().unwrap().to_owned();
+        let (out_json, out_g2o) = (dir.join("estimate.json"), dir.join("estimate.g2o"));
         for output in [&out_json, &out_g2o] {
-            let out = run(&[
+            let (input, output) = (arg(&input), arg(output));
+            let args = [
                 "multiple",
-                &arg(&input),
+                &input,
                 "--init-method",
                 "tree",
                 "--json",
                 "--output",
-                &arg(output),
-            ]);
+                &output,
+            ];
+            let out = run(&args);
             assert_success(&out);
             let v = json_of(&out);
             let estimate = rotations(&v["estimate"]);
@@ -660,10 +659,8 @@ mod cli {
                 1e-9,
             );
         }
-        assert_rotations(
-            "--output JSON",
-            &rotations(&read_json(&out_json)["rotations"]),
-        );
+        let written = rotations(&read_json(&out_json)["rotations"]);
+        assert_rotations("--output JSON", &written);
         let g2o = std::fs::read_to_string(&out_g2o).unwrap();
         let mut vertices = 0;
         for line in g2o.lines().filter(|l| l.starts_with("VERTEX_SE3:QUAT")) {
@@ -681,25 +678,35 @@ mod cli {
             vertices += 1;
         }
         assert_eq!(vertices, p.num_rotations());
-        let out = run(&[
+    }
+
+    /// `multiple --loss huber --inlier-output`: the robust estimate printed and the inlier
+    /// graph's refinement written.
+    #[test]
+    fn robust_and_inlier_graph_estimates_are_rotations() {
+        let (input, _) = multiple_input("defective_robust.json");
+        let inliers = temp_dir().join("inliers.json");
+        let (input, output) = (arg(&input), arg(&inliers));
+        let args = [
             "multiple",
-            &arg(&input),
+            &input,
             "--loss",
             "huber",
             "--init-method",
             "tree",
             "--json",
-            "--inlier-output",
-            &arg(&inliers),
-        ]);
+        ];
+        let out = run(&[&args[..], &["--inlier-output", &output]].concat());
         assert_success(&out);
         assert_rotations("robust --json", &rotations(&json_of(&out)["estimate"]));
-        assert_rotations(
-            "--inlier-output",
-            &rotations(&read_json(&inliers)["rotations"]),
-        );
+        let written = rotations(&read_json(&inliers)["rotations"]);
+        assert_rotations("--inlier-output", &written);
+    }
 
-        // single: the geodesic L1 mean of samples with the defect, one of which is the minimiser
+    /// `single --json`: every metric x p on samples with the defect, the L1 minimiser a sample.
+    #[test]
+    fn single_json_estimates_are_rotations() {
+        let mut rng = StdRng::seed_from_u64(9);
         let centre = random_rotation(&mut rng);
         let samples: Vec<String> = (0..9)
             .map(|_| rows(&defective(&perturb(&centre, 0.2, &mut rng), 9e-6, &mut rng)))
@@ -709,26 +716,21 @@ mod cli {
             r#"{{"rotations": [{}], "weights": {weights}}}"#,
             samples.join(", ")
         );
-        let input = temp_file("defective_single.json", &text);
+        let input = arg(&temp_file("defective_single.json", &text));
         for metric in ["chordal", "geodesic", "quaternion"] {
             for p in ["1", "2"] {
-                let args = [
-                    "single",
-                    &arg(&input),
-                    "--metric",
-                    metric,
-                    "--p",
-                    p,
-                    "--json",
-                ];
-                let out = run(&args);
+                let out = run(&["single", &input, "--metric", metric, "--p", p, "--json"]);
                 assert_success(&out);
                 let estimate = rotation(&json_of(&out)["estimate"]);
                 assert_rotation(&format!("single {metric} p = {p}"), &estimate);
             }
         }
+    }
 
-        // conjugate: pairs with the defect
+    /// `conjugate --json` on pairs with the defect.
+    #[test]
+    fn conjugate_json_estimates_are_rotations() {
+        let mut rng = StdRng::seed_from_u64(10);
         let s = random_rotation(&mut rng);
         let pairs: Vec<String> = (0..12)
             .map(|_| {
@@ -738,14 +740,12 @@ mod cli {
                 format!(r#"{{"left": {}, "right": {}}}"#, rows(&l), rows(&r))
             })
             .collect();
-        let input = temp_file(
-            "defective_pairs.json",
-            &format!(r#"{{"pairs": [{}]}}"#, pairs.join(", ")),
-        );
+        let text = format!(r#"{{"pairs": [{}]}}"#, pairs.join(", "));
+        let input = arg(&temp_file("defective_pairs.json", &text));
         for (metric, loss) in [("chordal", "l2"), ("geodesic", "l1"), ("quaternion", "l2")] {
             let args = [
                 "conjugate",
-                &arg(&input),
+                &input,
                 "--metric",
                 metric,
                 "--loss",
