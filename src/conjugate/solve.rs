@@ -5,7 +5,7 @@
 use super::problem::{ConjugateProblem, DiagnosticSettings};
 use crate::error::{Error, Result};
 use crate::objective::{Loss, Objective};
-use crate::so3::{Metric, Rotation, exp, hat, log, to_quaternion};
+use crate::so3::{Metric, Rotation, exp, hat, log, nearest_rotation, to_quaternion};
 use crate::termination::{SolverReport, Termination};
 use crate::validate::{at_least_one, check_rotation, non_negative};
 use nalgebra::{Matrix3, Matrix4, Quaternion, SMatrix, SymmetricEigen, UnitQuaternion, Vector3};
@@ -147,18 +147,13 @@ pub fn quaternion_closed_form(
             message: "quaternion closed form: non-finite eigenvector".into(),
         });
     }
-    Ok(ConjugateSolution {
-        estimate: s,
-        cost: problem.cost_under(&s, QUATERNION_L2),
-        chordal_cost: problem.chordal_cost(&s),
-        objective: QUATERNION_L2,
-        report: SolverReport {
-            name: "quaternion-closed-form".into(),
-            iterations: 0,
-            termination: Termination::ClosedForm,
-            seconds: start.elapsed().as_secs_f64(),
-        },
-    })
+    let report = SolverReport {
+        name: "quaternion-closed-form".into(),
+        iterations: 0,
+        termination: Termination::ClosedForm,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok(on_so3(problem, &s, QUATERNION_L2, report))
 }
 
 /// Inverse right Jacobian of SO(3): `log(exp(phi) exp(d)) ~ phi + Jr^-1(phi) d`.
@@ -260,19 +255,62 @@ pub fn solve_conjugate(
     settings.validate()?;
     problem.require_identifiable(&settings.diagnostics)?;
     let start = Instant::now();
+    // the given start (a rotation to the validation tolerance) replaced by its nearest rotation,
+    // so that the iteration stays on SO(3) (SPEC section 1)
+    let (s, closed_form_seconds) = match &settings.init {
+        Some(r) => (nearest_rotation(r), 0.0),
+        None => {
+            let c = quaternion_closed_form(problem, &settings.diagnostics)?;
+            (c.estimate, c.report.seconds)
+        }
+    };
+    let (s, iterations, termination) = gauss_newton(problem, settings, s);
     let objective = problem.objective();
-    let closed_form = match settings.init {
-        Some(_) => None,
-        None => Some(quaternion_closed_form(problem, &settings.diagnostics)?),
+    let name = match (objective.metric, objective.loss) {
+        (Metric::Chordal, Loss::L2) => "chordal-gauss-newton",
+        (Metric::Geodesic, Loss::L2) => "geodesic-gauss-newton",
+        (Metric::Quaternion, _) => "quaternion-irls",
+        (Metric::Chordal, _) => "chordal-irls",
+        _ => "geodesic-irls",
     };
-    let cost_of = |s: &Rotation| problem.cost(s);
+    let report = SolverReport {
+        name: name.into(),
+        iterations,
+        termination,
+        seconds: start.elapsed().as_secs_f64() + closed_form_seconds,
+    };
+    Ok(on_so3(problem, &s, objective, report))
+}
+
+/// The solution at `s` (SPEC section 1): `s` replaced by its nearest rotation (the last
+/// iterate carries the rounding of its steps), its cost under `objective` and chordal cost
+/// those of the problem at exactly that estimate.
+fn on_so3(
+    problem: &ConjugateProblem,
+    s: &Rotation,
+    objective: Objective,
+    report: SolverReport,
+) -> ConjugateSolution {
+    let estimate = nearest_rotation(s);
+    ConjugateSolution {
+        estimate,
+        cost: problem.cost_under(&estimate, objective),
+        chordal_cost: problem.chordal_cost(&estimate),
+        objective,
+        report,
+    }
+}
+
+/// Gauss-Newton / IRLS steps of [`solve_conjugate`] from `s` `[H7]`: the last iterate, the
+/// iterations and why they stopped.
+fn gauss_newton(
+    problem: &ConjugateProblem,
+    settings: &ConjugateSettings,
+    mut s: Rotation,
+) -> (Rotation, usize, Termination) {
+    let objective = problem.objective();
     let gtol = settings.gradient_tolerance * problem.total_weight();
-    let mut s = match (&settings.init, &closed_form) {
-        (Some(r), _) => *r,
-        (None, Some(c)) => c.estimate,
-        (None, None) => Rotation::identity(),
-    };
-    let mut cost = cost_of(&s);
+    let mut cost = problem.cost(&s);
     let mut iterations = 0;
     let termination = loop {
         let (h, b) = normal_equations(problem, &s, objective);
@@ -304,73 +342,73 @@ pub fn solve_conjugate(
             None => -b,
         };
         let slope = 2.0 * b.dot(&delta); // directional derivative (< 0)
-        let mut t = 1.0;
-        let mut accepted = None;
-        for _ in 0..40 {
-            let cand = s * exp(&(delta * t));
-            let c = cost_of(&cand);
-            if c <= cost + 1e-4 * t * slope {
-                accepted = Some((cand, c));
-                break;
-            }
-            t *= 0.5;
-        }
-        match accepted {
-            Some((cand, c)) => {
-                let step = t * delta.norm();
-                s = cand;
-                s.renormalize();
-                cost = c;
-                if step < settings.step_tolerance {
-                    break Termination::Converged {
-                        measure: "step angle".into(),
-                        value: step,
-                        threshold: settings.step_tolerance,
-                    };
-                }
-            }
-            None => {
-                // The model predicts a decrease below the rounding level of the cost: no
-                // representable progress is possible, the iterate is stationary to precision.
-                let resolution = 1e3 * f64::EPSILON * cost.abs();
-                if -slope <= resolution {
-                    break Termination::Converged {
-                        measure: "predicted decrease (cost rounding level)".into(),
-                        value: -slope,
-                        threshold: resolution,
-                    };
-                }
-                if delta.norm() < settings.step_tolerance.max(1e-10) {
-                    break Termination::Converged {
-                        measure: "step angle".into(),
-                        value: delta.norm(),
-                        threshold: settings.step_tolerance.max(1e-10),
-                    };
-                }
-                break Termination::Stalled {
-                    value: gnorm,
-                    threshold: gtol,
-                };
-            }
+        let Some((cand, c, t)) = armijo(problem, &s, cost, &delta, slope) else {
+            break failed_line_search(cost, slope, &delta, gnorm, gtol, settings);
+        };
+        s = cand;
+        cost = c;
+        let step = t * delta.norm();
+        if step < settings.step_tolerance {
+            break Termination::Converged {
+                measure: "step angle".into(),
+                value: step,
+                threshold: settings.step_tolerance,
+            };
         }
     };
-    let name = match (objective.metric, objective.loss) {
-        (Metric::Chordal, Loss::L2) => "chordal-gauss-newton",
-        (Metric::Geodesic, Loss::L2) => "geodesic-gauss-newton",
-        (Metric::Quaternion, _) => "quaternion-irls",
-        (Metric::Chordal, _) => "chordal-irls",
-        _ => "geodesic-irls",
-    };
-    Ok(ConjugateSolution {
-        estimate: s,
-        cost,
-        chordal_cost: problem.chordal_cost(&s),
-        objective,
-        report: SolverReport {
-            name: name.into(),
-            iterations,
-            termination,
-            seconds: start.elapsed().as_secs_f64() + closed_form.map_or(0.0, |c| c.report.seconds),
-        },
-    })
+    (s, iterations, termination)
+}
+
+/// Backtracking along `S exp(hat(t delta))` from `t = 1` (halved, at most 40 times) until the
+/// Armijo condition `cost(t) <= cost + 1e-4 t slope` holds: the point, its cost and `t`.
+fn armijo(
+    problem: &ConjugateProblem,
+    s: &Rotation,
+    cost: f64,
+    delta: &Vector3<f64>,
+    slope: f64,
+) -> Option<(Rotation, f64, f64)> {
+    let mut t = 1.0;
+    for _ in 0..40 {
+        let cand = s * exp(&(delta * t));
+        let c = problem.cost(&cand);
+        if c <= cost + 1e-4 * t * slope {
+            return Some((cand, c, t));
+        }
+        t *= 0.5;
+    }
+    None
+}
+
+/// Why the iteration stops when no step decreases the cost: converged when the model predicts
+/// a decrease below the rounding level of the cost (no representable progress: stationary to
+/// precision) or the step is below the step tolerance, stalled otherwise.
+fn failed_line_search(
+    cost: f64,
+    slope: f64,
+    delta: &Vector3<f64>,
+    gnorm: f64,
+    gtol: f64,
+    settings: &ConjugateSettings,
+) -> Termination {
+    let resolution = 1e3 * f64::EPSILON * cost.abs();
+    if -slope <= resolution {
+        return Termination::Converged {
+            measure: "predicted decrease (cost rounding level)".into(),
+            value: -slope,
+            threshold: resolution,
+        };
+    }
+    let step_tolerance = settings.step_tolerance.max(1e-10);
+    if delta.norm() < step_tolerance {
+        return Termination::Converged {
+            measure: "step angle".into(),
+            value: delta.norm(),
+            threshold: step_tolerance,
+        };
+    }
+    Termination::Stalled {
+        value: gnorm,
+        threshold: gtol,
+    }
 }

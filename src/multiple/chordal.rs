@@ -348,254 +348,290 @@ pub(crate) fn solve_chordal(
     solver: Option<SolverChoice>,
 ) -> Result<MultipleSolution> {
     let start = std::time::Instant::now();
-    let n = problem.num_rotations();
     let total_weight: f64 = problem.edges().iter().map(|e| e.weight).sum();
     let tol = settings.gradient_tolerance;
-    let mut r = init;
-    let (mut cost, mut grad) = chordal_gradient(problem, &r);
-    let init_cost = cost;
-    let finish = |r: Vec<Rotation>,
-                  cost: f64,
-                  g: f64,
-                  iterations: usize,
-                  termination,
-                  linear_algebra: Option<LinearAlgebraCounts>| {
-        Ok(MultipleSolution {
-            rotations: r,
-            cost,
-            chordal_cost: cost,
-            gradient_norm: g,
-            objective: Objective::CHORDAL_L2,
-            report: SolverReport {
-                name: "riemannian-newton-lm".into(),
-                iterations,
-                termination,
-                seconds: start.elapsed().as_secs_f64(),
-            },
-            init_cost,
-            residuals: None,
-            linear_algebra,
-        })
+    let mut point = Point::at(problem, init);
+    let init_cost = point.cost;
+    let solution = |point: Point, iterations, termination, linear_algebra| MultipleSolution {
+        chordal_cost: point.cost,
+        cost: point.cost,
+        gradient_norm: point.gn,
+        rotations: point.r,
+        objective: Objective::CHORDAL_L2,
+        report: SolverReport {
+            name: "riemannian-newton-lm".into(),
+            iterations,
+            termination,
+            seconds: start.elapsed().as_secs_f64(),
+        },
+        init_cost,
+        residuals: None,
+        linear_algebra,
     };
-    let measure = "relative gradient norm ||grad|| / sum(w)";
-    let mut gn = grad_norm(&grad);
-    if gn == 0.0 || n < 2 {
-        return finish(
-            r,
-            cost,
-            gn,
-            0,
-            Termination::Converged {
-                measure: measure.into(),
-                value: gn / total_weight,
-                threshold: tol,
-            },
-            None,
-        );
-    }
-    let pattern = grounded_pattern(problem, 3);
-    let slots = edge_slots(problem, &pattern);
-    let choice = match solver {
-        Some(c) => c,
-        None => choose_solver(problem)?,
-    };
-    // the choice's own analysis; the direct solver analyses the block pattern, the Laplacian
-    // preconditioner reuses the choice's (or analyses its pattern) and factorises once
-    let symbolic_analyses = choice.symbolic_analyses
-        + match choice.kind {
-            SolverKind::Direct => 1,
-            SolverKind::Laplacian => usize::from(choice.grounded_scalar.is_none()),
-            SolverKind::Jacobi => 0,
+    if point.gn == 0.0 || problem.num_rotations() < 2 {
+        let converged = Termination::Converged {
+            measure: "relative gradient norm ||grad|| / sum(w)".into(),
+            value: point.gn / total_weight,
+            threshold: tol,
         };
-    let numeric_factorizations = usize::from(choice.kind == SolverKind::Laplacian);
-    let solver = linear_solver(problem, &pattern, choice)?;
-    let mut counts = LinearAlgebraCounts {
-        solver: solver.kind().to_string(),
-        symbolic_analyses,
-        numeric_factorizations,
-        cg_iterations: 0,
-    };
-    // Levenberg-Marquardt damping `lambda D` [M6]: D = mean Hessian diagonal x I, or, with the
-    // Laplacian preconditioner, D = its matrix 4 L ⊗ I_3 (then the damped system stays
-    // preconditioned by the one factorisation, [M6b]).
-    let laplacian_damping = solver.kind() == SolverKind::Laplacian;
-    let mut dval = vec![0.0; pattern.nnz()];
-    if laplacian_damping {
-        assemble_laplacian(problem, &pattern, &slots, &mut dval);
+        return Ok(solution(point, 0, converged, None));
     }
-    let mut hval = vec![0.0; pattern.nnz()];
-    let mut val = vec![0.0; pattern.nnz()];
-    let mut mu = 1e-6; // damping relative to the mean Hessian diagonal
+    let mut lm = NewtonLm::new(problem, settings, solver)?;
     let mut iterations = 0;
-    let mut need_hessian = true;
-    let mut mean_diag = 0.0;
-    loop {
+    let termination = loop {
         if iterations >= settings.max_iterations {
-            return finish(
-                r,
-                cost,
-                gn,
+            break Termination::IterationLimit {
                 iterations,
-                Termination::IterationLimit {
-                    iterations,
-                    value: gn / total_weight,
-                    threshold: tol,
-                },
-                Some(counts.clone()),
-            );
+                value: point.gn / total_weight,
+                threshold: tol,
+            };
         }
         iterations += 1;
         crate::progress::emit(|| crate::progress::Event::Iteration {
             phase: crate::progress::Phase::Solve,
             iteration: iterations,
-            cost,
-            measure: gn / total_weight,
+            cost: point.cost,
+            measure: point.gn / total_weight,
         });
-        if need_hessian {
-            assemble_hessian(problem, &r, &pattern, &slots, &mut hval);
-            let d = pattern.diagonal(&hval);
-            mean_diag = d.iter().map(|x| x.abs()).sum::<f64>() / d.len() as f64;
-            need_hessian = false;
+        if let Some(t) = lm.iterate(&mut point) {
+            break t;
         }
-        // rhs = -grad (variables 1..n)
-        let mut rhs = Mat::<f64>::zeros(3 * (n - 1), 1);
-        for i in 1..n {
-            for a in 0..3 {
-                rhs[(3 * (i - 1) + a, 0)] = -grad[i][a];
-            }
-        }
-        // factorise H + lambda I, increasing lambda until positive definite; inexact Newton
-        // tolerance for PCG: eta = min(1e-2, sqrt(relative gradient)) ([M6])
-        let eta = (gn / total_weight).sqrt().clamp(1e-12, 1e-2);
-        let lambda = loop {
-            let lambda = mu * mean_diag.max(f64::MIN_POSITIVE);
-            val.copy_from_slice(&hval);
-            if laplacian_damping {
-                val.iter_mut().zip(&dval).for_each(|(v, d)| *v += mu * d);
-            } else {
-                pattern.add_diagonal(&mut val, lambda);
-            }
-            let mut x = rhs.clone();
-            if solver.kind() == SolverKind::Direct {
-                counts.numeric_factorizations += 1;
-            }
-            let solved = solver
-                .factor(&pattern, &val)
-                .and_then(|f| f.solve(&mut x, eta, 2000));
-            counts.cg_iterations += solved.unwrap_or(0);
-            if solved.is_some() {
-                rhs = x;
-                break lambda;
-            }
-            mu *= 10.0;
-            if mu > 1e16 {
-                return finish(
-                    r,
-                    cost,
-                    gn,
-                    iterations,
-                    Termination::NumericalFailure {
-                        reason: "damped Newton system not positive definite".into(),
-                    },
-                    Some(counts.clone()),
-                );
-            }
+    };
+    Ok(solution(point, iterations, termination, Some(lm.counts)))
+}
+
+/// An iterate of the Newton-LM solve: the rotations, their chordal cost, gradient and its norm.
+struct Point {
+    r: Vec<Rotation>,
+    cost: f64,
+    grad: Vec<Vector3<f64>>,
+    gn: f64,
+}
+
+impl Point {
+    /// The cost and gradient at `r` ([`chordal_gradient`]).
+    fn at(problem: &MultipleProblem, r: Vec<Rotation>) -> Self {
+        let (cost, grad) = chordal_gradient(problem, &r);
+        let gn = grad_norm(&grad);
+        Point { r, cost, grad, gn }
+    }
+}
+
+/// The Newton-LM machinery of [`solve_chordal`] `[M6]`: the grounded block pattern and its
+/// linear solver (chosen once), the Hessian at the current point, the Levenberg-Marquardt
+/// damping and the work counted.
+struct NewtonLm<'a> {
+    problem: &'a MultipleProblem,
+    settings: &'a MultipleSettings,
+    total_weight: f64,
+    pattern: BlockPattern,
+    slots: Vec<EdgeSlots>,
+    solver: LinearSolver,
+    counts: LinearAlgebraCounts,
+    /// The damping matrix `4 L ⊗ I_3` with the Laplacian preconditioner (`None`: the mean
+    /// Hessian diagonal x I).
+    damping: Option<Vec<f64>>,
+    /// The Hessian at the current point, and the damped system's values.
+    hval: Vec<f64>,
+    val: Vec<f64>,
+    need_hessian: bool,
+    mean_diag: f64,
+    /// The damping relative to the mean Hessian diagonal (or to `4 L ⊗ I_3`).
+    mu: f64,
+}
+
+impl<'a> NewtonLm<'a> {
+    fn new(
+        problem: &'a MultipleProblem,
+        settings: &'a MultipleSettings,
+        solver: Option<SolverChoice>,
+    ) -> Result<Self> {
+        let pattern = grounded_pattern(problem, 3);
+        let slots = edge_slots(problem, &pattern);
+        let choice = match solver {
+            Some(c) => c,
+            None => choose_solver(problem)?,
         };
-        let step = root_fixed_steps(n, |i, a| rhs[(3 * i + a, 0)]);
-        let g_dot_s: f64 = grad.iter().zip(&step).map(|(g, s)| g.dot(s)).sum();
-        let s2: f64 = step.iter().map(|s| s.norm_squared()).sum();
-        let max_step = step.iter().map(|s| s.norm()).fold(0.0, f64::max);
-        // predicted decrease of the quadratic model: -(g.s + s^T H s / 2)
-        let flat: Vec<f64> = (0..3 * (n - 1)).map(|k| rhs[(k, 0)]).collect();
-        let mut hs = vec![0.0; flat.len()];
-        pattern.sym_mul_flat(&hval, &flat, &mut hs);
-        let shs: f64 = flat.iter().zip(&hs).map(|(a, b)| a * b).sum();
-        let predicted = -(g_dot_s + 0.5 * shs);
-        let _ = (lambda, s2);
-        // converged: the gradient is small and the model cannot decrease the cost materially
-        let decrease_limit = settings.decrease_tolerance * cost.abs() + 1e-30 * total_weight;
-        if gn / total_weight <= tol && predicted <= decrease_limit {
-            return finish(
-                r,
-                cost,
-                gn,
-                iterations,
-                Termination::Converged {
-                    measure:
-                        "predicted Newton decrease / cost (with ||grad|| / sum(w) <= its tolerance)"
-                            .into(),
-                    value: predicted / cost.abs().max(f64::MIN_POSITIVE),
-                    threshold: settings.decrease_tolerance,
-                },
-                Some(counts.clone()),
+        // the choice's own analysis; the direct solver analyses the block pattern, the
+        // Laplacian preconditioner reuses the choice's (or analyses its pattern) and
+        // factorises once
+        let symbolic_analyses = choice.symbolic_analyses
+            + match choice.kind {
+                SolverKind::Direct => 1,
+                SolverKind::Laplacian => usize::from(choice.grounded_scalar.is_none()),
+                SolverKind::Jacobi => 0,
+            };
+        let numeric_factorizations = usize::from(choice.kind == SolverKind::Laplacian);
+        let solver = linear_solver(problem, &pattern, choice)?;
+        let counts = LinearAlgebraCounts {
+            solver: solver.kind().to_string(),
+            symbolic_analyses,
+            numeric_factorizations,
+            cg_iterations: 0,
+        };
+        // Levenberg-Marquardt damping `lambda D` [M6]: D = mean Hessian diagonal x I, or, with
+        // the Laplacian preconditioner, D = its matrix 4 L ⊗ I_3 (then the damped system stays
+        // preconditioned by the one factorisation, [M6b]).
+        let damping = (solver.kind() == SolverKind::Laplacian).then(|| {
+            let mut d = vec![0.0; pattern.nnz()];
+            assemble_laplacian(problem, &pattern, &slots, &mut d);
+            d
+        });
+        Ok(NewtonLm {
+            problem,
+            settings,
+            total_weight: problem.edges().iter().map(|e| e.weight).sum(),
+            hval: vec![0.0; pattern.nnz()],
+            val: vec![0.0; pattern.nnz()],
+            pattern,
+            slots,
+            solver,
+            counts,
+            damping,
+            need_hessian: true,
+            mean_diag: 0.0,
+            mu: 1e-6,
+        })
+    }
+
+    /// One Newton-LM iteration from `p` (moved when the step is accepted); `Some` when the
+    /// solve stops.
+    fn iterate(&mut self, p: &mut Point) -> Option<Termination> {
+        if self.need_hessian {
+            assemble_hessian(
+                self.problem,
+                &p.r,
+                &self.pattern,
+                &self.slots,
+                &mut self.hval,
             );
+            let d = self.pattern.diagonal(&self.hval);
+            self.mean_diag = d.iter().map(|x| x.abs()).sum::<f64>() / d.len() as f64;
+            self.need_hessian = false;
+        }
+        let Some(x) = self.damped_step(p) else {
+            return Some(Termination::NumericalFailure {
+                reason: "damped Newton system not positive definite".into(),
+            });
+        };
+        let step = root_fixed_steps(p.r.len(), |i, a| x[(3 * i + a, 0)]);
+        let max_step = step.iter().map(|s| s.norm()).fold(0.0, f64::max);
+        let predicted = self.predicted_decrease(&p.grad, &step, &x);
+        // converged: the gradient is small and the model cannot decrease the cost materially
+        let settings = self.settings;
+        let decrease_limit = settings.decrease_tolerance * p.cost.abs() + 1e-30 * self.total_weight;
+        if p.gn / self.total_weight <= settings.gradient_tolerance && predicted <= decrease_limit {
+            return Some(Termination::Converged {
+                measure:
+                    "predicted Newton decrease / cost (with ||grad|| / sum(w) <= its tolerance)"
+                        .into(),
+                value: predicted / p.cost.abs().max(f64::MIN_POSITIVE),
+                threshold: settings.decrease_tolerance,
+            });
         }
         if !max_step.is_finite() {
-            return finish(
-                r,
-                cost,
-                gn,
-                iterations,
-                Termination::NumericalFailure {
-                    reason: "non-finite Newton step".into(),
-                },
-                Some(counts.clone()),
-            );
+            return Some(Termination::NumericalFailure {
+                reason: "non-finite Newton step".into(),
+            });
         }
-        let cand: Vec<Rotation> = r.iter().zip(&step).map(|(ri, s)| ri * exp(s)).collect();
-        let (c_cost, c_grad) = chordal_gradient(problem, &cand);
-        let c_gn = grad_norm(&c_grad);
-        let actual = cost - c_cost;
+        self.trial(p, &step, predicted, max_step)
+    }
+
+    /// The step `x` (variables of nodes `1..n`) of `(H + lambda D) x = -grad`, the damping
+    /// multiplied by 10 until the system is solved (positive definite); `None` past `mu = 1e16`.
+    /// Inexact Newton tolerance for PCG: `eta = min(1e-2, sqrt(relative gradient))` `[M6]`.
+    fn damped_step(&mut self, p: &Point) -> Option<Mat<f64>> {
+        let rhs = Mat::<f64>::from_fn(3 * (p.r.len() - 1), 1, |k, _| -p.grad[k / 3 + 1][k % 3]);
+        let eta = (p.gn / self.total_weight).sqrt().clamp(1e-12, 1e-2);
+        loop {
+            self.val.copy_from_slice(&self.hval);
+            match &self.damping {
+                Some(d) => self
+                    .val
+                    .iter_mut()
+                    .zip(d)
+                    .for_each(|(v, d)| *v += self.mu * d),
+                None => {
+                    let lambda = self.mu * self.mean_diag.max(f64::MIN_POSITIVE);
+                    self.pattern.add_diagonal(&mut self.val, lambda);
+                }
+            }
+            let mut x = rhs.clone();
+            if self.solver.kind() == SolverKind::Direct {
+                self.counts.numeric_factorizations += 1;
+            }
+            let solved = self
+                .solver
+                .factor(&self.pattern, &self.val)
+                .and_then(|f| f.solve(&mut x, eta, 2000));
+            self.counts.cg_iterations += solved.unwrap_or(0);
+            if solved.is_some() {
+                return Some(x);
+            }
+            self.mu *= 10.0;
+            if self.mu > 1e16 {
+                return None;
+            }
+        }
+    }
+
+    /// The decrease `-(g.s + s^T H s / 2)` the quadratic model predicts for the per-node step
+    /// `step` (stacked: `x`).
+    fn predicted_decrease(
+        &self,
+        grad: &[Vector3<f64>],
+        step: &[Vector3<f64>],
+        x: &Mat<f64>,
+    ) -> f64 {
+        let g_dot_s: f64 = grad.iter().zip(step).map(|(g, s)| g.dot(s)).sum();
+        let flat: Vec<f64> = (0..x.nrows()).map(|k| x[(k, 0)]).collect();
+        let mut hs = vec![0.0; flat.len()];
+        self.pattern.sym_mul_flat(&self.hval, &flat, &mut hs);
+        let shs: f64 = flat.iter().zip(&hs).map(|(a, b)| a * b).sum();
+        -(g_dot_s + 0.5 * shs)
+    }
+
+    /// Try `R_i exp(step_i)`: accept it when the cost decreased by at least 1e-4 of the
+    /// prediction (or, at the noise floor where the decrease drowns in rounding ~1e-16 f, when
+    /// the gradient decreased, `[M6]`) and adapt the damping; `Some` when the solve stops
+    /// (converged on a tiny accepted step, stalled when no damping makes progress).
+    fn trial(
+        &mut self,
+        p: &mut Point,
+        step: &[Vector3<f64>],
+        predicted: f64,
+        max_step: f64,
+    ) -> Option<Termination> {
+        let moved = p.r.iter().zip(step).map(|(ri, s)| ri * exp(s)).collect();
+        let cand = Point::at(self.problem, moved);
         let rho = if predicted > 0.0 {
-            actual / predicted
+            (p.cost - cand.cost) / predicted
         } else {
             -1.0
         };
-        // Near convergence the cost decrease drowns in rounding (~1e-16 f): then accept when the
-        // gradient decreases instead ([M6]).
-        let at_noise_floor = predicted <= 1e-12 * cost.max(f64::MIN_POSITIVE);
-        let accept = rho > 1e-4 || (at_noise_floor && c_gn < gn);
-        if accept {
-            r = cand;
-            cost = c_cost;
-            grad = c_grad;
-            gn = c_gn;
-            need_hessian = true;
+        let at_noise_floor = predicted <= 1e-12 * p.cost.max(f64::MIN_POSITIVE);
+        let step_tolerance = self.settings.step_tolerance;
+        if rho > 1e-4 || (at_noise_floor && cand.gn < p.gn) {
+            *p = cand;
+            self.need_hessian = true;
             if rho > 0.75 || at_noise_floor {
-                mu = (mu / 4.0).max(1e-14);
+                self.mu = (self.mu / 4.0).max(1e-14);
             } else if rho < 0.25 {
-                mu *= 4.0;
+                self.mu *= 4.0;
             }
-            if max_step < settings.step_tolerance {
-                return finish(
-                    r,
-                    cost,
-                    gn,
-                    iterations,
-                    Termination::Converged {
-                        measure: "max step angle (rad)".into(),
-                        value: max_step,
-                        threshold: settings.step_tolerance,
-                    },
-                    Some(counts.clone()),
-                );
-            }
-        } else {
-            mu *= 8.0;
-            if mu > 1e16 || (at_noise_floor && max_step < settings.step_tolerance) {
-                return finish(
-                    r,
-                    cost,
-                    gn,
-                    iterations,
-                    Termination::Stalled {
-                        value: gn / total_weight,
-                        threshold: tol,
-                    },
-                    Some(counts.clone()),
-                );
-            }
+            return (max_step < step_tolerance).then(|| Termination::Converged {
+                measure: "max step angle (rad)".into(),
+                value: max_step,
+                threshold: step_tolerance,
+            });
         }
+        self.mu *= 8.0;
+        (self.mu > 1e16 || (at_noise_floor && max_step < step_tolerance)).then(|| {
+            Termination::Stalled {
+                value: p.gn / self.total_weight,
+                threshold: self.settings.gradient_tolerance,
+            }
+        })
     }
 }
 

@@ -16,7 +16,8 @@
 //! the estimate) against the exact gradient, so the iteration stops at a true stationary point.
 
 use crate::error::Result;
-use crate::linalg::linear_solver::{LinearSolver, SolverKind};
+use crate::linalg::block_pattern::BlockPattern;
+use crate::linalg::linear_solver::{Factor, LinearSolver, SolverKind};
 use crate::multiple::MultipleProblem;
 use crate::multiple::chordal::{grad_norm as norm, grounded_pattern, root_fixed_steps};
 use crate::multiple::robust::{Eval, evaluate};
@@ -25,7 +26,8 @@ use crate::objective::Loss;
 use crate::so3::{Rotation, exp};
 use crate::termination::{SolverReport, Termination};
 use faer::Mat;
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Vector3};
+use std::collections::VecDeque;
 
 /// The scalar Laplacian systems of the reweighted (robust) Lie-algebraic iterations are
 /// factorised directly when the factor has at most this many values (~40 MB); geodesic L2,
@@ -60,229 +62,276 @@ pub(crate) fn lie_algebraic(
     solver_kind: Option<SolverKind>,
 ) -> Result<MultipleSolution> {
     let start = std::time::Instant::now();
-    let objective = problem.objective();
-    let eps = settings.l1_epsilon;
-    let n = problem.num_rotations();
-    let total_weight: f64 = problem.edges().iter().map(|e| e.weight).sum();
-    let tol = settings.gradient_tolerance;
     let mut r = init;
-    let mut ev = evaluate(problem, &r, eps);
+    let mut ev = evaluate(problem, &r, settings.l1_epsilon);
     let init_cost = ev.cost;
-    let measure = "relative gradient norm ||grad|| / sum(w)";
-    let finish = |r: Vec<Rotation>, ev: &Eval, iterations: usize, termination| {
-        Ok(MultipleSolution {
-            chordal_cost: problem.chordal_cost(&r),
-            rotations: r,
-            cost: ev.cost,
-            gradient_norm: norm(&ev.grad),
-            objective,
-            report: SolverReport {
-                name: name.into(),
-                iterations,
-                termination,
-                seconds: start.elapsed().as_secs_f64(),
-            },
-            init_cost,
-            residuals: None,
-            linear_algebra: None,
-        })
+    let solution = |r: Vec<Rotation>, ev: &Eval, iterations, termination| MultipleSolution {
+        chordal_cost: problem.chordal_cost(&r),
+        rotations: r,
+        cost: ev.cost,
+        gradient_norm: norm(&ev.grad),
+        objective: problem.objective(),
+        report: SolverReport {
+            name: name.into(),
+            iterations,
+            termination,
+            seconds: start.elapsed().as_secs_f64(),
+        },
+        init_cost,
+        residuals: None,
+        linear_algebra: None,
     };
-    let converged = |g: f64| Termination::Converged {
-        measure: measure.into(),
-        value: g / total_weight,
-        threshold: tol,
-    };
-    if norm(&ev.grad) / total_weight <= tol || n < 2 {
-        let g = norm(&ev.grad);
-        return finish(r, &ev, 0, converged(g));
+    let total_weight: f64 = problem.edges().iter().map(|e| e.weight).sum();
+    let g = norm(&ev.grad);
+    if g / total_weight <= settings.gradient_tolerance || problem.num_rotations() < 2 {
+        return Ok(solution(r, &ev, 0, converged(g, total_weight, settings)));
     }
-    let var = |i: usize| if i == 0 { None } else { Some(i - 1) };
-    // isotropic: one scalar Laplacian for the three axes; anisotropic: 3x3 blocks [A10]
-    let anisotropic = problem.is_anisotropic();
-    let pattern = grounded_pattern(problem, if anisotropic { 3 } else { 1 });
-    let slots: Vec<usize> = problem
-        .edges()
-        .iter()
-        .map(|e| match (var(e.i), var(e.j)) {
-            (Some(p), Some(q)) => pattern.slot(p, q),
-            _ => 0,
+    let irls = Reweighted::new(problem, settings, solver_kind)?;
+    let (iterations, termination) = irls.run(&mut r, &mut ev, max_iterations);
+    Ok(solution(r, &ev, iterations, termination))
+}
+
+/// The gradient test passed: `||grad|| / sum(w) <= gradient_tolerance`.
+fn converged(g: f64, total_weight: f64, settings: &MultipleSettings) -> Termination {
+    Termination::Converged {
+        measure: "relative gradient norm ||grad|| / sum(w)".into(),
+        value: g / total_weight,
+        threshold: settings.gradient_tolerance,
+    }
+}
+
+/// The node index of variable block `i - 1` (node 0 is fixed: `None`).
+fn var(i: usize) -> Option<usize> {
+    i.checked_sub(1)
+}
+
+/// The weighted least-squares steps of [`lie_algebraic`] `[M8]`, `[M9]`, `[A10]`: the grounded
+/// pattern of the (scalar or 3x3-block) weighted Laplacian and its linear solver.
+struct Reweighted<'a> {
+    problem: &'a MultipleProblem,
+    settings: &'a MultipleSettings,
+    total_weight: f64,
+    /// isotropic: one scalar Laplacian for the three axes; anisotropic: 3x3 blocks [A10]
+    anisotropic: bool,
+    /// Geodesic L2 (isotropic): the weights never change, one factorisation serves every step.
+    constant_weights: bool,
+    pattern: BlockPattern,
+    /// The pattern slot of each edge (0 for edges at node 0).
+    slots: Vec<usize>,
+    solver: LinearSolver,
+}
+
+impl<'a> Reweighted<'a> {
+    fn new(
+        problem: &'a MultipleProblem,
+        settings: &'a MultipleSettings,
+        solver_kind: Option<SolverKind>,
+    ) -> Result<Self> {
+        let anisotropic = problem.is_anisotropic();
+        let pattern = grounded_pattern(problem, if anisotropic { 3 } else { 1 });
+        let slots: Vec<usize> = problem
+            .edges()
+            .iter()
+            .map(|e| match (var(e.i), var(e.j)) {
+                (Some(p), Some(q)) => pattern.slot(p, q),
+                _ => 0,
+            })
+            .collect();
+        // The system is scalar (one row per node): a sparse Cholesky is cheap far beyond the
+        // fill budget of the 3 x 3 block systems, and it is refactorised at every reweighting,
+        // where PCG to 1e-10 would cost hundreds of products ([M8], measured on 1DSfM Madrid:
+        // 23784 edges on 394 nodes, 67 ms per IRLS iteration with PCG).
+        // With constant weights (geodesic L2) the one factorisation serves every iteration, so
+        // it is used up to the Laplacian preconditioner's limit ([M6b]); reweighted losses
+        // refactorise at every iteration and keep the smaller limit.
+        let constant_weights = problem.objective().loss == Loss::L2 && !anisotropic;
+        let limit = if constant_weights {
+            crate::multiple::chordal::LAPLACIAN_PRECONDITIONER_VALUES
+        } else {
+            SCALAR_DIRECT_VALUES
+        };
+        let solver = match solver_kind {
+            Some(SolverKind::Direct) => LinearSolver::new(&pattern, true)?,
+            _ => LinearSolver::direct_up_to(&pattern, limit)?,
+        };
+        Ok(Reweighted {
+            problem,
+            settings,
+            total_weight: problem.edges().iter().map(|e| e.weight).sum(),
+            anisotropic,
+            constant_weights,
+            pattern,
+            slots,
+            solver,
         })
-        .collect();
-    // The system is scalar (one row per node): a sparse Cholesky is cheap far beyond the fill
-    // budget of the 3 x 3 block systems, and it is refactorised at every reweighting, where
-    // PCG to 1e-10 would cost hundreds of products ([M8], measured on 1DSfM Madrid: 23784
-    // edges on 394 nodes, 67 ms per IRLS iteration with PCG).
-    // With constant weights (geodesic L2) the one factorisation serves every iteration, so it
-    // is used up to the Laplacian preconditioner's limit ([M6b]); reweighted losses refactorise
-    // at every iteration and keep the smaller limit.
-    let constant_weights = objective.loss == Loss::L2 && !anisotropic;
-    let limit = if constant_weights {
-        crate::multiple::chordal::LAPLACIAN_PRECONDITIONER_VALUES
-    } else {
-        SCALAR_DIRECT_VALUES
-    };
-    let solver = match solver_kind {
-        Some(SolverKind::Direct) => LinearSolver::new(&pattern, true)?,
-        _ => LinearSolver::direct_up_to(&pattern, limit)?,
-    };
-    let mut factor = None;
-    let mut val = vec![0.0; pattern.nnz()];
-    let mut iterations = 0;
-    // costs of the last IRLS_DECREASE_WINDOW + 1 iterates, oldest first
-    let mut recent = std::collections::VecDeque::with_capacity(IRLS_DECREASE_WINDOW + 1);
-    recent.push_back(ev.cost);
-    loop {
-        if iterations >= max_iterations {
+    }
+
+    /// Iterate from `r` (evaluated: `ev`) until a stopping test, `max_iterations` or a failure;
+    /// `r` and `ev` end at the last accepted iterate. Returns the iterations and why it stopped.
+    fn run(
+        &self,
+        r: &mut Vec<Rotation>,
+        ev: &mut Eval,
+        max_iterations: usize,
+    ) -> (usize, Termination) {
+        let mut factor = None;
+        let mut val = vec![0.0; self.pattern.nnz()];
+        // costs of the last IRLS_DECREASE_WINDOW + 1 iterates, oldest first
+        let mut recent = VecDeque::with_capacity(IRLS_DECREASE_WINDOW + 1);
+        recent.push_back(ev.cost);
+        let failure = |reason: &str| Termination::NumericalFailure {
+            reason: reason.into(),
+        };
+        let mut iterations = 0;
+        loop {
             let g = norm(&ev.grad);
-            return finish(
-                r,
-                &ev,
-                iterations,
-                Termination::IterationLimit {
+            if iterations >= max_iterations {
+                let value = g / self.total_weight;
+                let threshold = self.settings.gradient_tolerance;
+                let limit = Termination::IterationLimit {
                     iterations,
-                    value: g / total_weight,
-                    threshold: tol,
-                },
-            );
-        }
-        iterations += 1;
-        crate::progress::emit(|| crate::progress::Event::Iteration {
-            phase: crate::progress::Phase::Solve,
-            iteration: iterations,
-            cost: ev.cost,
-            measure: norm(&ev.grad) / total_weight,
-        });
-        if factor.is_none() || !constant_weights {
-            // weighted Laplacian with edge weights w_e psi_e, node 0 removed [M8]
-            val.iter_mut().for_each(|v| *v = 0.0);
-            for (k, (e, &slot)) in problem.edges().iter().zip(&slots).enumerate() {
-                let one = match anisotropic {
-                    true => ev.blocks[k],
-                    false => Matrix3::from_element(e.weight * ev.psi[k]),
+                    value,
+                    threshold,
                 };
-                let (vi, vj) = (var(e.i), var(e.j));
-                if let Some(p) = vi {
-                    pattern.add(&mut val, p, p, 0, &one);
-                }
-                if let Some(q) = vj {
-                    pattern.add(&mut val, q, q, 0, &one);
-                }
-                if let (Some(p), Some(q)) = (vi, vj) {
-                    pattern.add(&mut val, q, p, slot, &(-one));
+                return (iterations, limit);
+            }
+            iterations += 1;
+            crate::progress::emit(|| crate::progress::Event::Iteration {
+                phase: crate::progress::Phase::Solve,
+                iteration: iterations,
+                cost: ev.cost,
+                measure: g / self.total_weight,
+            });
+            if factor.is_none() || !self.constant_weights {
+                self.laplacian_values(ev, &mut val);
+                match self.solver.factor(&self.pattern, &val) {
+                    Some(l) => factor = Some(l),
+                    None => {
+                        return (
+                            iterations,
+                            failure("weighted Laplacian not positive definite"),
+                        );
+                    }
                 }
             }
-            match solver.factor(&pattern, &val) {
-                Some(l) => factor = Some(l),
-                None => {
-                    return finish(
-                        r,
-                        &ev,
-                        iterations,
-                        Termination::NumericalFailure {
-                            reason: "weighted Laplacian not positive definite".into(),
-                        },
-                    );
-                }
+            let Some(llt) = factor.as_ref() else {
+                return (iterations, failure("no factorisation"));
+            };
+            let Some(step) = self.step(llt, ev) else {
+                return (
+                    iterations,
+                    failure("weighted Laplacian not positive definite (CG)"),
+                );
+            };
+            let max_step = step.iter().map(|s| s.norm()).fold(0.0, f64::max);
+            if !max_step.is_finite() {
+                return (iterations, failure("non-finite step"));
+            }
+            let Some((cand, cev, t)) = self.backtrack(r, ev, &step) else {
+                let value = g / self.total_weight;
+                let threshold = self.settings.gradient_tolerance;
+                return (iterations, Termination::Stalled { value, threshold });
+            };
+            *r = cand;
+            *ev = cev;
+            if t < 1.0 {
+                // the weights changed along a shortened step: refactor next time
+                factor = None;
+            }
+            if let Some(stop) = self.stop(ev, &mut recent, max_step * t) {
+                return (iterations, stop);
             }
         }
-        let llt = factor.as_ref().expect("factor set above");
-        let mut rhs = match anisotropic {
+    }
+
+    /// The weighted Laplacian with edge weights `w_e psi_e` (anisotropic: the blocks
+    /// `psi G^T H G`), node 0 removed `[M8]`, `[A10]`, into `val`.
+    fn laplacian_values(&self, ev: &Eval, val: &mut [f64]) {
+        val.iter_mut().for_each(|v| *v = 0.0);
+        for (k, (e, &slot)) in self.problem.edges().iter().zip(&self.slots).enumerate() {
+            let one = match self.anisotropic {
+                true => ev.blocks[k],
+                false => Matrix3::from_element(e.weight * ev.psi[k]),
+            };
+            let (vi, vj) = (var(e.i), var(e.j));
+            if let Some(p) = vi {
+                self.pattern.add(val, p, p, 0, &one);
+            }
+            if let Some(q) = vj {
+                self.pattern.add(val, q, q, 0, &one);
+            }
+            if let (Some(p), Some(q)) = (vi, vj) {
+                self.pattern.add(val, q, p, slot, &(-one));
+            }
+        }
+    }
+
+    /// The per-node step solving the weighted least-squares system against `-grad`; `None`
+    /// when the (PCG) solve meets non-positive curvature.
+    fn step(&self, llt: &Factor<'_>, ev: &Eval) -> Option<Vec<Vector3<f64>>> {
+        let n = self.problem.num_rotations();
+        let mut rhs = match self.anisotropic {
             true => Mat::<f64>::from_fn(3 * (n - 1), 1, |k, _| -ev.grad[k / 3 + 1][k % 3]),
             false => Mat::<f64>::from_fn(n - 1, 3, |p, a| -ev.grad[p + 1][a]),
         };
-        if llt.solve(&mut rhs, 1e-10, 5000).is_none() {
-            return finish(
-                r,
-                &ev,
-                iterations,
-                Termination::NumericalFailure {
-                    reason: "weighted Laplacian not positive definite (CG)".into(),
-                },
-            );
-        }
-        let step = match anisotropic {
+        llt.solve(&mut rhs, 1e-10, 5000)?;
+        Some(match self.anisotropic {
             true => root_fixed_steps(n, |i, a| rhs[(3 * i + a, 0)]),
             false => root_fixed_steps(n, |i, a| rhs[(i, a)]),
-        };
-        let max_step = step.iter().map(|s| s.norm()).fold(0.0, f64::max);
-        if !max_step.is_finite() {
-            return finish(
-                r,
-                &ev,
-                iterations,
-                Termination::NumericalFailure {
-                    reason: "non-finite step".into(),
-                },
-            );
-        }
-        // backtracking: halve until the cost does not increase (up to 30 halvings)
+        })
+    }
+
+    /// Backtracking along `R_i exp(t step_i)`: `t` halved from 1 until the cost does not
+    /// increase (up to 30 halvings). Returns the point, its evaluation and `t`.
+    fn backtrack(
+        &self,
+        r: &[Rotation],
+        ev: &Eval,
+        step: &[Vector3<f64>],
+    ) -> Option<(Vec<Rotation>, Eval, f64)> {
         let mut t = 1.0;
-        let mut accepted = None;
         for _ in 0..30 {
             let cand: Vec<Rotation> = r
                 .iter()
-                .zip(&step)
+                .zip(step)
                 .map(|(ri, s)| ri * exp(&(s * t)))
                 .collect();
-            let cev = evaluate(problem, &cand, eps);
+            let cev = evaluate(self.problem, &cand, self.settings.l1_epsilon);
             if cev.cost <= ev.cost {
-                accepted = Some((cand, cev));
-                break;
+                return Some((cand, cev, t));
             }
             t *= 0.5;
         }
-        let Some((cand, cev)) = accepted else {
-            let g = norm(&ev.grad);
-            return finish(
-                r,
-                &ev,
-                iterations,
-                Termination::Stalled {
-                    value: g / total_weight,
-                    threshold: tol,
-                },
-            );
-        };
-        r = cand;
-        ev = cev;
-        if t < 1.0 {
-            // the weights changed along a shortened step: refactor next time
-            factor = None;
-        }
+        None
+    }
+
+    /// The stopping tests after an accepted step of angle `step` (at most, over the nodes):
+    /// the gradient, for L1 the relative cost decrease over the last
+    /// [`IRLS_DECREASE_WINDOW`] iterations (`recent`, updated here), the step angle.
+    fn stop(&self, ev: &Eval, recent: &mut VecDeque<f64>, step: f64) -> Option<Termination> {
+        let settings = self.settings;
         let g = norm(&ev.grad);
-        if g / total_weight <= tol {
-            return finish(r, &ev, iterations, converged(g));
+        if g / self.total_weight <= settings.gradient_tolerance {
+            return Some(converged(g, self.total_weight, settings));
         }
         recent.push_back(ev.cost);
-        if objective.loss == Loss::L1 && recent.len() > IRLS_DECREASE_WINDOW {
+        if self.problem.objective().loss == Loss::L1 && recent.len() > IRLS_DECREASE_WINDOW {
             let oldest = recent.pop_front().unwrap_or(ev.cost);
             let decrease = (oldest - ev.cost) / ev.cost.abs().max(f64::MIN_POSITIVE);
             if decrease <= settings.irls_decrease_tolerance {
-                return finish(
-                    r,
-                    &ev,
-                    iterations,
-                    Termination::Converged {
-                        measure: format!(
-                            "relative cost decrease over the last {IRLS_DECREASE_WINDOW} iterations"
-                        ),
-                        value: decrease,
-                        threshold: settings.irls_decrease_tolerance,
-                    },
-                );
+                return Some(Termination::Converged {
+                    measure: format!(
+                        "relative cost decrease over the last {IRLS_DECREASE_WINDOW} iterations"
+                    ),
+                    value: decrease,
+                    threshold: settings.irls_decrease_tolerance,
+                });
             }
         }
-        if max_step * t < settings.step_tolerance {
-            return finish(
-                r,
-                &ev,
-                iterations,
-                Termination::Converged {
-                    measure: "max step angle (rad)".into(),
-                    value: max_step * t,
-                    threshold: settings.step_tolerance,
-                },
-            );
-        }
+        (step < settings.step_tolerance).then(|| Termination::Converged {
+            measure: "max step angle (rad)".into(),
+            value: step,
+            threshold: settings.step_tolerance,
+        })
     }
 }

@@ -5,16 +5,18 @@
 
 use crate::error::{Error, Result};
 use crate::linalg::block_pattern::BlockPattern;
-use crate::linalg::linear_solver::{LinearSolver, SolverKind};
+use crate::linalg::linear_solver::{Factor, LinearSolver, SolverKind};
 use crate::multiple::MultipleProblem;
 use crate::multiple::chordal::{choose_solver, laplacian_solver};
 use crate::multiple::problem::Adjacency;
 use crate::multiple::solve::Initialisation;
-use crate::so3::{Rotation, project_to_so3};
+use crate::so3::{Rotation, nearest_rotation, project_to_so3};
 use faer::Mat;
 use nalgebra::{Matrix3, SymmetricEigen};
 
-/// Compute a starting estimate (one rotation per node; gauge not fixed). The graph must be
+/// Compute a starting estimate (one rotation per node; gauge not fixed), in SO(3) to rounding
+/// (a given estimate is replaced by its nearest rotations, [`nearest_rotation`]: a start read
+/// from a file is a rotation only to the validation tolerance). The graph must be
 /// connected ([`Error::Disconnected`]); a given estimate must have one rotation per node.
 ///
 /// ```
@@ -32,7 +34,7 @@ pub fn initialise(problem: &MultipleProblem, init: &Initialisation) -> Result<Ve
         Initialisation::Spectral => spectral_with(problem, None),
         Initialisation::Given(r) => {
             problem.check_estimate(r)?;
-            Ok(r.clone())
+            Ok(r.iter().map(nearest_rotation).collect())
         }
     }
 }
@@ -44,7 +46,10 @@ pub fn initialise(problem: &MultipleProblem, init: &Initialisation) -> Result<Ve
 /// gauge is fixed by `R_0 = I`. Every node's rotation is the product of the measurements on
 /// its tree path, so the tree that minimises each path's summed variance from a central root
 /// minimises the drift of the start (a 10^6-node grid sweep: paths of about 10^3 edges, where
-/// the sweep's own odometry chain has 10^6). Nodes not reached (only if the graph is
+/// the sweep's own odometry chain has 10^6). Each product is replaced by its nearest rotation
+/// ([`nearest_rotation`]): measurements accepted within the validation tolerance (1DSfM files
+/// are orthonormal to ~2.5e-6) would otherwise compose their defects along the path, and the
+/// solvers would iterate off SO(3) (SPEC section 1). Nodes not reached (only if the graph is
 /// disconnected) keep the identity.
 ///
 /// ```
@@ -94,11 +99,11 @@ pub fn spanning_tree(problem: &MultipleProblem) -> Vec<Rotation> {
         let Some(k) = via[v] else { continue };
         let e = &edges[k];
         // R_ij R_i = R_j  =>  R_j = R_ij R_i,  R_i = R_ij^T R_j
-        r[v] = if e.j == v {
+        r[v] = nearest_rotation(&if e.j == v {
             e.rotation * r[e.i]
         } else {
             e.rotation.inverse() * r[e.j]
-        };
+        });
     }
     // gauge: R_0 = I (the start does not depend on which node was the root)
     let g = r[0].inverse();
@@ -195,27 +200,7 @@ pub(crate) fn spectral_with(
     if n < 2 {
         return Ok(tree);
     }
-    let pattern = BlockPattern::new(n, 3, problem.edges().iter().map(|e| (e.i, e.j)));
-    let mut qval = vec![0.0; pattern.nnz()];
-    let mut degree = vec![0.0; n];
-    for e in problem.edges() {
-        degree[e.i] += e.weight;
-        degree[e.j] += e.weight;
-        // [M2]: Q_ji = -w R_ij (block row j, column i)
-        let slot = pattern.slot(e.i, e.j);
-        pattern.add(
-            &mut qval,
-            e.j,
-            e.i,
-            slot,
-            &(-e.weight * e.rotation.matrix()),
-        );
-    }
-    for (i, d) in degree.iter().enumerate() {
-        pattern.add(&mut qval, i, i, 0, &(Matrix3::identity() * *d));
-    }
-    let mean_degree = degree.iter().sum::<f64>() / n as f64;
-    let mut sigma = 1e-6 * mean_degree;
+    let q = ConnectionLaplacian::new(problem);
     let kind = match kind {
         Some(k) => k,
         None => choose_solver(problem)?.kind,
@@ -223,66 +208,123 @@ pub(crate) fn spectral_with(
     let solver = match kind {
         SolverKind::Laplacian => {
             let frames = tree.iter().map(|r| *r.matrix()).collect();
+            let sigma = SHIFT * q.mean_degree;
             laplacian_solver(problem, false, 1.0, sigma, Some(frames), None)?
         }
-        k => LinearSolver::new(&pattern, k == SolverKind::Direct)?,
+        k => LinearSolver::new(&q.pattern, k == SolverKind::Direct)?,
     };
-    let llt = loop {
-        let mut val = qval.clone();
-        pattern.add_diagonal(&mut val, sigma);
-        if let Some(l) = solver.factor(&pattern, &val) {
-            break l;
+    let llt = q.shifted_factor(&solver)?;
+    let y = q.bottom_subspace(&llt, &tree)?;
+    Ok(round_blocks(&y, &tree))
+}
+
+/// The shift `sigma` of the spectral inverse iteration, relative to the mean weighted degree:
+/// `Q + sigma I` is positive definite (`Q` is PSD) and its inverse has the bottom eigenvectors
+/// of `Q` on top `[M5]`.
+const SHIFT: f64 = 1e-6;
+
+/// The connection Laplacian `Q` of [`spectral_with`] (lower triangle on a block pattern) and the
+/// mean weighted degree, its scale.
+struct ConnectionLaplacian {
+    pattern: BlockPattern,
+    values: Vec<f64>,
+    mean_degree: f64,
+}
+
+impl ConnectionLaplacian {
+    /// `Q` of the problem's (isotropic) weights `[M2]`.
+    fn new(problem: &MultipleProblem) -> Self {
+        let n = problem.num_rotations();
+        let pattern = BlockPattern::new(n, 3, problem.edges().iter().map(|e| (e.i, e.j)));
+        let mut values = vec![0.0; pattern.nnz()];
+        let mut degree = vec![0.0; n];
+        for e in problem.edges() {
+            degree[e.i] += e.weight;
+            degree[e.j] += e.weight;
+            // [M2]: Q_ji = -w R_ij (block row j, column i)
+            let slot = pattern.slot(e.i, e.j);
+            let block = -e.weight * e.rotation.matrix();
+            pattern.add(&mut values, e.j, e.i, slot, &block);
         }
-        sigma *= 100.0;
-        if sigma > mean_degree {
-            return Err(Error::Solver {
-                message: "spectral initialisation: Cholesky of Q + sigma I failed".into(),
-            });
+        for (i, d) in degree.iter().enumerate() {
+            pattern.add(&mut values, i, i, 0, &(Matrix3::identity() * *d));
         }
-    };
-    let mut y = Mat::<f64>::zeros(3 * n, 3);
-    for (i, r) in tree.iter().enumerate() {
-        for a in 0..3 {
-            for b in 0..3 {
-                y[(3 * i + a, b)] = r[(a, b)];
+        let mean_degree = degree.iter().sum::<f64>() / n as f64;
+        ConnectionLaplacian {
+            pattern,
+            values,
+            mean_degree,
+        }
+    }
+
+    /// `Q + sigma I` factorised (or preconditioned) by `solver`, `sigma` from [`SHIFT`] x the
+    /// mean degree, multiplied by 100 while the factorisation fails (up to the mean degree).
+    fn shifted_factor<'a>(&'a self, solver: &'a LinearSolver) -> Result<Factor<'a>> {
+        let mut sigma = SHIFT * self.mean_degree;
+        loop {
+            let mut val = self.values.clone();
+            self.pattern.add_diagonal(&mut val, sigma);
+            if let Some(l) = solver.factor(&self.pattern, &val) {
+                return Ok(l);
+            }
+            sigma *= 100.0;
+            if sigma > self.mean_degree {
+                return Err(Error::Solver {
+                    message: "spectral initialisation: Cholesky of Q + sigma I failed".into(),
+                });
             }
         }
     }
-    orthonormalise(&mut y);
-    for _ in 0..SPECTRAL_MAX_ITERATIONS {
-        if llt.solve(&mut y, SPECTRAL_INNER_TOLERANCE, 5000).is_none() {
-            return Err(Error::Solver {
-                message: "spectral initialisation: Q + sigma I not positive definite (CG)".into(),
-            });
-        }
+
+    /// Block inverse iteration with `llt` from the stacked `start` rotations: an orthonormal
+    /// basis (3n x 3) of the bottom-3 invariant subspace of `Q`, to the residual
+    /// `||Q Y - Y (Y^T Q Y)||_F <= SPECTRAL_TOLERANCE x mean degree` or after
+    /// [`SPECTRAL_MAX_ITERATIONS`] `[M5]`.
+    fn bottom_subspace(&self, llt: &Factor<'_>, start: &[Rotation]) -> Result<Mat<f64>> {
+        let mut y = Mat::<f64>::from_fn(3 * start.len(), 3, |k, b| start[k / 3][(k % 3, b)]);
         orthonormalise(&mut y);
-        let qy = pattern.sym_mul(&qval, &y);
-        // residual ||QY - Y (Y^T Q Y)||_F
-        let m = y.transpose() * &qy;
-        let res = (&qy - &y * &m).norm_l2();
-        if !res.is_finite() {
-            return Err(Error::Solver {
-                message: "spectral initialisation: non-finite iterate".into(),
-            });
+        for _ in 0..SPECTRAL_MAX_ITERATIONS {
+            if llt.solve(&mut y, SPECTRAL_INNER_TOLERANCE, 5000).is_none() {
+                return Err(Error::Solver {
+                    message: "spectral initialisation: Q + sigma I not positive definite (CG)"
+                        .into(),
+                });
+            }
+            orthonormalise(&mut y);
+            let qy = self.pattern.sym_mul(&self.values, &y);
+            let m = y.transpose() * &qy;
+            let res = (&qy - &y * &m).norm_l2();
+            if !res.is_finite() {
+                return Err(Error::Solver {
+                    message: "spectral initialisation: non-finite iterate".into(),
+                });
+            }
+            if res <= SPECTRAL_TOLERANCE * self.mean_degree {
+                break;
+            }
         }
-        if res <= SPECTRAL_TOLERANCE * mean_degree {
-            break;
-        }
+        Ok(y)
     }
-    // round [M5]
+}
+
+/// The rounding of [`spectral_with`] `[M5]`: the blocks of `Y` scaled by `sqrt(n)`, the third
+/// column negated when most blocks have a negative determinant, each block projected to SO(3)
+/// (`fallback[i]` when not finite).
+fn round_blocks(y: &Mat<f64>, fallback: &[Rotation]) -> Vec<Rotation> {
+    let n = fallback.len();
     let scale = (n as f64).sqrt();
     let block = |i: usize| Matrix3::from_fn(|a, b| y[(3 * i + a, b)] * scale);
     let negative = (0..n).filter(|&i| block(i).determinant() < 0.0).count();
     let flip = 2 * negative > n;
-    Ok((0..n)
+    (0..n)
         .map(|i| {
             let mut m = block(i);
             if flip {
                 m.column_mut(2).neg_mut();
             }
-            project_to_so3(&m).unwrap_or(tree[i])
+            project_to_so3(&m).unwrap_or(fallback[i])
         })
-        .collect())
+        .collect()
 }
 
 /// `Y <- Y (Y^T Y)^{-1/2}` (3 columns).

@@ -5,7 +5,7 @@ use crate::error::{Error, Result};
 use crate::linalg::linear_solver::SolverKind;
 use crate::multiple::{MultipleProblem, fix_gauge};
 use crate::objective::{Loss, Objective};
-use crate::so3::Rotation;
+use crate::so3::{Rotation, nearest_rotation};
 use crate::termination::SolverReport;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -222,9 +222,32 @@ impl fmt::Display for MultipleSolution {
     }
 }
 
+/// The exit of every local solve (SPEC section 1): each rotation replaced by its nearest
+/// rotation ([`nearest_rotation`]: the last iterate carries the rounding of its steps, and a
+/// solver that stopped at once keeps its start), the gauge fixed (`R_0 = I` exactly), and the
+/// costs those of the problem at exactly this estimate. The termination measures (gradient
+/// norm, iterations) stay those of the last iterate.
+fn on_so3(problem: &MultipleProblem, out: &mut MultipleSolution) {
+    for r in &mut out.rotations {
+        *r = nearest_rotation(r);
+    }
+    fix_gauge(&mut out.rotations);
+    if let Some(r0) = out.rotations.first_mut() {
+        *r0 = Rotation::identity();
+    }
+    out.chordal_cost = problem.chordal_cost(&out.rotations);
+    out.cost = match problem.objective().is_chordal_l2() {
+        true => out.chordal_cost,
+        false => problem.cost(&out.rotations),
+    };
+}
+
 /// Solve multiple rotation averaging locally: initialise ([`Initialisation`]), then minimise the
 /// problem's objective. The graph must be connected ([`Error::Disconnected`] otherwise; solve
-/// [`MultipleProblem::largest_component`] to go on). The output has `R_0 = I`.
+/// [`MultipleProblem::largest_component`] to go on). The output has `R_0 = I`; whatever the
+/// defect of the measurements (used as given), the start and the estimate are rotations to
+/// rounding (SPEC section 1), and `cost` and `chordal_cost` are the problem's costs at exactly
+/// the returned estimate.
 ///
 /// ```
 /// use rotavg::multiple::synthetic::SyntheticGraph;
@@ -271,12 +294,7 @@ pub fn solve_multiple(
     } else {
         crate::multiple::robust::solve_robust(problem, init, settings, kind)?
     };
-    fix_gauge(&mut out.rotations);
-    // R_0 R_0^T is I up to rounding; make it exact.
-    if let Some(r0) = out.rotations.first_mut() {
-        *r0 = Rotation::identity();
-    }
-    out.chordal_cost = problem.chordal_cost(&out.rotations);
+    on_so3(problem, &mut out);
     out.residuals = crate::multiple::robust::inlier_threshold_deg(&objective, settings)
         .map(|t| crate::multiple::robust::edge_residuals(problem, &out.rotations, t));
     out.report.seconds = start.elapsed().as_secs_f64();

@@ -13,8 +13,8 @@ use crate::certify::simultaneous::certify_simultaneous;
 use crate::certify::{Certification, CertifyMode, CertifySettings};
 use crate::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings, solve_conjugate};
 use crate::error::{Error, Result};
-use crate::multiple::{Edge, MultipleProblem};
-use crate::so3::{Rotation, exp, hat};
+use crate::multiple::{Edge, MultipleProblem, fix_gauge};
+use crate::so3::{Rotation, exp, hat, nearest_rotation};
 use crate::termination::{SolverReport, Termination};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -79,8 +79,7 @@ impl SimultaneousProblem {
     pub fn cost(&self, rs: &[Rotation], s: &Rotation) -> f64 {
         let (sm, mut c) = (s.matrix(), 0.0);
         for e in &self.right {
-            c += e.weight
-                * (rs[e.j].matrix() - e.rotation.matrix() * rs[e.i].matrix()).norm_squared();
+            c += right_term(e, rs);
         }
         for e in &self.left {
             c += e.weight
@@ -91,6 +90,11 @@ impl SimultaneousProblem {
     }
 }
 
+/// The term `w ||R_j - R_ij R_i||_F^2` of a right edge.
+fn right_term(e: &Edge, rs: &[Rotation]) -> f64 {
+    e.weight * (rs[e.j].matrix() - e.rotation.matrix() * rs[e.i].matrix()).norm_squared()
+}
+
 /// Which blocks a Gauss-Newton run optimises.
 #[derive(Clone, Copy)]
 enum Terms {
@@ -98,7 +102,9 @@ enum Terms {
     Joint,
 }
 
-/// Spanning-tree (BFS) initialisation of absolutes from one graph, `X_0 = I`.
+/// Spanning-tree (BFS) initialisation of absolutes from one graph, `X_0 = I`; each product
+/// replaced by its nearest rotation (the measurements are rotations only to the validation
+/// tolerance, and the start must be on SO(3), SPEC section 1).
 fn spanning_tree(n: usize, edges: &[Edge]) -> Result<Vec<Rotation>> {
     let mut adj = vec![Vec::new(); n];
     for e in edges {
@@ -112,7 +118,7 @@ fn spanning_tree(n: usize, edges: &[Edge]) -> Result<Vec<Rotation>> {
         let ri = out[i].unwrap_or_else(Rotation::identity);
         for &(j, rij) in &adj[i] {
             if out[j].is_none() {
-                out[j] = Some(rij * ri);
+                out[j] = Some(nearest_rotation(&(rij * ri)));
                 queue.push_back(j);
             }
         }
@@ -130,6 +136,7 @@ fn spanning_tree(n: usize, edges: &[Edge]) -> Result<Vec<Rotation>> {
 }
 
 /// Dense Gauss-Newton on the chosen terms; variables `R_1..R_{n-1}` (and `S` for `Joint`).
+/// Returns the last iterate, its cost, the iterations and why it stopped.
 fn gauss_newton(
     p: &SimultaneousProblem,
     terms: Terms,
@@ -137,66 +144,12 @@ fn gauss_newton(
     mut s: Rotation,
     max_iter: usize,
 ) -> (Vec<Rotation>, Rotation, f64, usize, Termination) {
-    let n = p.num_nodes;
-    let nv = 3 * (n - 1) + if matches!(terms, Terms::Joint) { 3 } else { 0 };
-    let right_only = SimultaneousProblem {
-        num_nodes: n,
-        right: p.right.clone(),
-        left: vec![],
-    };
-    let cost_fn = |rs: &[Rotation], s: &Rotation| match terms {
-        Terms::Right => right_only.cost(rs, s),
-        Terms::Joint => p.cost(rs, s),
-    };
     let total_w: f64 = p.right.iter().chain(&p.left).map(|e| e.weight).sum();
     let gtol = 1e-12 * total_w;
-    let basis = [Vector3::x(), Vector3::y(), Vector3::z()];
-    let mut cost = cost_fn(&rs, &s);
+    let mut cost = terms_cost(p, terms, &rs, &s);
     let mut it = 0;
     let term = loop {
-        let mut h = DMatrix::<f64>::zeros(nv, nv);
-        let mut b = DVector::<f64>::zeros(nv);
-        // accumulate one 9-residual term with Jacobian blocks (var offset, 3 columns)
-        let mut add = |res: Matrix3<f64>, blocks: &[(Option<usize>, [Matrix3<f64>; 3])], w: f64| {
-            let cols: Vec<(usize, DVector<f64>)> = blocks
-                .iter()
-                .filter_map(|(off, m)| off.map(|o| (o, m)))
-                .flat_map(|(o, m)| {
-                    (0..3).map(move |k| (o + k, DVector::from_column_slice(m[k].as_slice())))
-                })
-                .collect();
-            let rv = DVector::from_column_slice(res.as_slice());
-            for (a, ca) in &cols {
-                b[*a] += w * ca.dot(&rv);
-                for (c, cc) in &cols {
-                    h[(*a, *c)] += w * ca.dot(cc);
-                }
-            }
-        };
-        let off = |i: usize| if i == 0 { None } else { Some(3 * (i - 1)) };
-        let s_off = Some(3 * (n - 1));
-        let sm = *s.matrix();
-        for e in &p.right {
-            let (ri, rj, rij) = (rs[e.i].matrix(), rs[e.j].matrix(), e.rotation.matrix());
-            let res = rj - rij * ri;
-            let jj = basis.map(|v| rj * hat(&v));
-            let ji = basis.map(|v| -(rij * ri * hat(&v)));
-            add(res, &[(off(e.j), jj), (off(e.i), ji)], e.weight);
-        }
-        if matches!(terms, Terms::Joint) {
-            for e in &p.left {
-                let (ri, rj, lij) = (rs[e.i].matrix(), rs[e.j].matrix(), e.rotation.matrix());
-                let res = sm * rj - lij * sm * ri;
-                let jj = basis.map(|v| sm * rj * hat(&v));
-                let ji = basis.map(|v| -(lij * sm * ri * hat(&v)));
-                let js = basis.map(|v| sm * hat(&v) * rj - lij * sm * hat(&v) * ri);
-                add(
-                    res,
-                    &[(off(e.j), jj), (off(e.i), ji), (s_off, js)],
-                    e.weight,
-                );
-            }
-        }
+        let (mut h, b) = normal_equations(p, terms, &rs, &s);
         let gnorm = 2.0 * b.norm();
         if gnorm < gtol {
             break Termination::Converged {
@@ -214,7 +167,7 @@ fn gauss_newton(
         }
         it += 1;
         let damp = 1e-12 * h.trace().abs() + 1e-300;
-        for k in 0..nv {
+        for k in 0..h.nrows() {
             h[(k, k)] += damp;
         }
         let delta = match h.cholesky() {
@@ -222,31 +175,7 @@ fn gauss_newton(
             None => -b.clone(),
         };
         let slope = 2.0 * b.dot(&delta);
-        let mut t = 1.0;
-        let mut accepted = None;
-        for _ in 0..40 {
-            let mut rs2 = rs.clone();
-            for (i, r) in rs2.iter_mut().enumerate().skip(1) {
-                let d = Vector3::new(
-                    delta[3 * (i - 1)],
-                    delta[3 * (i - 1) + 1],
-                    delta[3 * (i - 1) + 2],
-                );
-                *r *= exp(&(d * t));
-            }
-            let mut s2 = s;
-            if matches!(terms, Terms::Joint) {
-                let o = 3 * (n - 1);
-                s2 *= exp(&(Vector3::new(delta[o], delta[o + 1], delta[o + 2]) * t));
-            }
-            let c = cost_fn(&rs2, &s2);
-            if c <= cost + 1e-4 * t * slope {
-                accepted = Some((rs2, s2, c));
-                break;
-            }
-            t *= 0.5;
-        }
-        match accepted {
+        match armijo(p, terms, (&rs, &s), cost, &delta, slope) {
             Some((r2, s2, c)) => {
                 rs = r2;
                 s = s2;
@@ -271,6 +200,124 @@ fn gauss_newton(
     (rs, s, cost, it, term)
 }
 
+/// The cost of the terms a Gauss-Newton run optimises: the right graph's, or `J(R, S)`.
+fn terms_cost(p: &SimultaneousProblem, terms: Terms, rs: &[Rotation], s: &Rotation) -> f64 {
+    match terms {
+        Terms::Right => p.right.iter().map(|e| right_term(e, rs)).sum(),
+        Terms::Joint => p.cost(rs, s),
+    }
+}
+
+/// The Gauss-Newton normal equations `(J^T W J, J^T W r)` of the chosen terms at `(rs, s)`,
+/// in the right-perturbation chart of `R_1..R_{n-1}` (and `S` for `Joint`, last 3 variables).
+fn normal_equations(
+    p: &SimultaneousProblem,
+    terms: Terms,
+    rs: &[Rotation],
+    s: &Rotation,
+) -> (DMatrix<f64>, DVector<f64>) {
+    let n = p.num_nodes;
+    let nv = 3 * (n - 1) + if matches!(terms, Terms::Joint) { 3 } else { 0 };
+    let basis = [Vector3::x(), Vector3::y(), Vector3::z()];
+    let mut h = DMatrix::<f64>::zeros(nv, nv);
+    let mut b = DVector::<f64>::zeros(nv);
+    // accumulate one 9-residual term with Jacobian blocks (var offset, 3 columns)
+    let mut add = |res: Matrix3<f64>, blocks: &[(Option<usize>, [Matrix3<f64>; 3])], w: f64| {
+        let cols: Vec<(usize, DVector<f64>)> = blocks
+            .iter()
+            .filter_map(|(off, m)| off.map(|o| (o, m)))
+            .flat_map(|(o, m)| {
+                (0..3).map(move |k| (o + k, DVector::from_column_slice(m[k].as_slice())))
+            })
+            .collect();
+        let rv = DVector::from_column_slice(res.as_slice());
+        for (a, ca) in &cols {
+            b[*a] += w * ca.dot(&rv);
+            for (c, cc) in &cols {
+                h[(*a, *c)] += w * ca.dot(cc);
+            }
+        }
+    };
+    let off = |i: usize| if i == 0 { None } else { Some(3 * (i - 1)) };
+    let s_off = Some(3 * (n - 1));
+    let sm = *s.matrix();
+    for e in &p.right {
+        let (ri, rj, rij) = (rs[e.i].matrix(), rs[e.j].matrix(), e.rotation.matrix());
+        let res = rj - rij * ri;
+        let jj = basis.map(|v| rj * hat(&v));
+        let ji = basis.map(|v| -(rij * ri * hat(&v)));
+        add(res, &[(off(e.j), jj), (off(e.i), ji)], e.weight);
+    }
+    if matches!(terms, Terms::Joint) {
+        for e in &p.left {
+            let (ri, rj, lij) = (rs[e.i].matrix(), rs[e.j].matrix(), e.rotation.matrix());
+            let res = sm * rj - lij * sm * ri;
+            let jj = basis.map(|v| sm * rj * hat(&v));
+            let ji = basis.map(|v| -(lij * sm * ri * hat(&v)));
+            let js = basis.map(|v| sm * hat(&v) * rj - lij * sm * hat(&v) * ri);
+            add(
+                res,
+                &[(off(e.j), jj), (off(e.i), ji), (s_off, js)],
+                e.weight,
+            );
+        }
+    }
+    (h, b)
+}
+
+/// Backtracking along `R_i exp(t delta_i)` (and `S exp(t delta_S)`) from `t = 1`, halved at most
+/// 40 times, until the Armijo condition `cost(t) <= cost + 1e-4 t slope` holds.
+fn armijo(
+    p: &SimultaneousProblem,
+    terms: Terms,
+    (rs, s): (&[Rotation], &Rotation),
+    cost: f64,
+    delta: &DVector<f64>,
+    slope: f64,
+) -> Option<(Vec<Rotation>, Rotation, f64)> {
+    let block = |o: usize| Vector3::new(delta[o], delta[o + 1], delta[o + 2]);
+    let mut t = 1.0;
+    for _ in 0..40 {
+        let mut rs2 = rs.to_vec();
+        for (i, r) in rs2.iter_mut().enumerate().skip(1) {
+            *r *= exp(&(block(3 * (i - 1)) * t));
+        }
+        let mut s2 = *s;
+        if matches!(terms, Terms::Joint) {
+            s2 *= exp(&(block(3 * (p.num_nodes - 1)) * t));
+        }
+        let c = terms_cost(p, terms, &rs2, &s2);
+        if c <= cost + 1e-4 * t * slope {
+            return Some((rs2, s2, c));
+        }
+        t *= 0.5;
+    }
+    None
+}
+
+/// The joint estimate `(rs, s)` as returned (SPEC section 1): every rotation replaced by its
+/// nearest rotation (the last iterate carries the rounding of its steps), the gauge `R_0 = I`
+/// exactly, the cost `J` at exactly that estimate.
+fn on_so3(
+    p: &SimultaneousProblem,
+    rs: &[Rotation],
+    s: &Rotation,
+    report: SolverReport,
+) -> SimultaneousSolution {
+    let mut rotations: Vec<Rotation> = rs.iter().map(nearest_rotation).collect();
+    fix_gauge(&mut rotations);
+    if let Some(r0) = rotations.first_mut() {
+        *r0 = Rotation::identity();
+    }
+    let s = nearest_rotation(s);
+    SimultaneousSolution {
+        cost: p.cost(&rotations, &s),
+        rotations,
+        s,
+        report,
+    }
+}
+
 /// Baseline: average each graph separately (spanning tree + chordal Gauss-Newton, gauge
 /// `X_0 = I`), then solve the conjugate problem on `(L_i, R_i)`, `i >= 1`.
 pub fn average_then_conjugate(p: &SimultaneousProblem) -> Result<SimultaneousSolution> {
@@ -284,7 +331,8 @@ pub fn average_then_conjugate(p: &SimultaneousProblem) -> Result<SimultaneousSol
             right: edges.to_vec(),
             left: vec![],
         };
-        Ok(gauss_newton(&q, Terms::Right, init, Rotation::identity(), 100).0)
+        let rs = gauss_newton(&q, Terms::Right, init, Rotation::identity(), 100).0;
+        Ok(rs.iter().map(nearest_rotation).collect())
     };
     let rs = avg(&p.right)?;
     let ls = avg(&p.left)?;
@@ -293,18 +341,13 @@ pub fn average_then_conjugate(p: &SimultaneousProblem) -> Result<SimultaneousSol
         &ConjugateProblem::new(pairs)?,
         &ConjugateSettings::default(),
     )?;
-    let cost = p.cost(&rs, &conj.estimate);
-    Ok(SimultaneousSolution {
-        rotations: rs,
-        s: conj.estimate,
-        cost,
-        report: SolverReport {
-            name: "average-then-conjugate".into(),
-            iterations: 0,
-            termination: conj.report.termination,
-            seconds: start.elapsed().as_secs_f64(),
-        },
-    })
+    let report = SolverReport {
+        name: "average-then-conjugate".into(),
+        iterations: 0,
+        termination: conj.report.termination,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok(on_so3(p, &rs, &conj.estimate, report))
 }
 
 /// Joint Gauss-Newton on `J(R, S)` initialised by [`average_then_conjugate`] (so its cost is
@@ -407,20 +450,18 @@ pub fn solve_simultaneous_from(
         });
     }
     let start = Instant::now();
-    let g = rotations[0].inverse();
-    let rs: Vec<Rotation> = rotations.iter().map(|r| r * g).collect();
-    let (rs, s, cost, it, term) = gauss_newton(p, Terms::Joint, rs, *s, max_iterations);
-    Ok(SimultaneousSolution {
-        rotations: rs,
-        s,
-        cost,
-        report: SolverReport {
-            name: "simultaneous-gauss-newton".into(),
-            iterations: it,
-            termination: term,
-            seconds: start.elapsed().as_secs_f64(),
-        },
-    })
+    // the start on SO(3) (a given estimate is a rotation only to the validation tolerance)
+    let mut rs: Vec<Rotation> = rotations.iter().map(nearest_rotation).collect();
+    fix_gauge(&mut rs);
+    let (rs, s, _, it, term) =
+        gauss_newton(p, Terms::Joint, rs, nearest_rotation(s), max_iterations);
+    let report = SolverReport {
+        name: "simultaneous-gauss-newton".into(),
+        iterations: it,
+        termination: term,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok(on_so3(p, &rs, &s, report))
 }
 
 /// Settings of the joint local solver (dense Gauss-Newton).

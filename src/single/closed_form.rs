@@ -178,7 +178,6 @@ pub(crate) fn quaternion_l1_local(
     settings: &SingleSettings,
     init: Option<&Rotation>,
 ) -> Local {
-    const NAME: &str = "quaternion-l1-weiszfeld";
     let quats = sample_quaternions(problem);
     let weights = problem.weights();
     let start = init
@@ -186,91 +185,98 @@ pub(crate) fn quaternion_l1_local(
         .unwrap_or_else(|| chordal_l2_local(problem).estimate);
     let mut q = so3::to_quaternion(&start).into_inner().coords;
     let mut cost = quaternion_l1_cost(&quats, weights, &q);
-    let slack = |c: f64| (quats.len() as f64 + 8.0) * f64::EPSILON * c.abs();
-    let done = |q: &Vector4<f64>, it: usize, termination: Termination| Local {
+    let done = |q: &Vector4<f64>, iterations: usize, termination: Termination| Local {
         estimate: quaternion_to_rotation(q),
-        iterations: it,
+        iterations,
         termination,
-        name: NAME,
+        name: "quaternion-l1-weiszfeld",
     };
     for it in 1..=settings.max_iterations {
-        let mut num = Vector4::zeros();
-        let mut zero = 0.0;
-        for (p, &w) in quats.iter().zip(weights) {
-            let p = if p.dot(&q) < 0.0 { -p } else { *p };
-            let c = (p - q).norm();
-            if c <= 1e-12 {
-                zero += w;
-            } else {
-                num += p * (w / c);
-            }
-        }
+        let (num, zero) = weiszfeld_numerator(&quats, weights, &q);
         let tangent = num - q * num.dot(&q);
         let tn = tangent.norm();
         if tn <= zero || tn <= settings.gradient_tolerance * problem.total_weight() {
-            return done(
-                &q,
-                it - 1,
-                Termination::Converged {
-                    measure: "tangential Weiszfeld numerator minus coincident weight".into(),
-                    value: (tn - zero).max(0.0),
-                    threshold: settings.gradient_tolerance,
-                },
-            );
+            let converged = Termination::Converged {
+                measure: "tangential Weiszfeld numerator minus coincident weight".into(),
+                value: (tn - zero).max(0.0),
+                threshold: settings.gradient_tolerance,
+            };
+            return done(&q, it - 1, converged);
         }
         let Some(target) = num.try_normalize(0.0) else {
-            return done(
-                &q,
-                it - 1,
-                Termination::NumericalFailure {
-                    reason: "the Weiszfeld numerator vanished".into(),
-                },
-            );
+            let failure = Termination::NumericalFailure {
+                reason: "the Weiszfeld numerator vanished".into(),
+            };
+            return done(&q, it - 1, failure);
         };
-        let mut frac = if zero > 0.0 { 1.0 - zero / tn } else { 1.0 };
-        let mut accepted = None;
-        for _ in 0..40 {
-            if let Some(cand) = (q + (target - q) * frac).try_normalize(0.0) {
-                let c = quaternion_l1_cost(&quats, weights, &cand);
-                if c <= cost + slack(cost) {
-                    accepted = Some((cand, c));
-                    break;
-                }
-            }
-            frac *= 0.5;
-        }
-        let Some((cand, c)) = accepted else {
-            return done(
-                &q,
-                it - 1,
-                Termination::Stalled {
-                    value: tn,
-                    threshold: zero,
-                },
-            );
+        let frac = if zero > 0.0 { 1.0 - zero / tn } else { 1.0 };
+        let Some((cand, c)) = toward(&quats, weights, &q, cost, &target, frac) else {
+            let stalled = Termination::Stalled {
+                value: tn,
+                threshold: zero,
+            };
+            return done(&q, it - 1, stalled);
         };
         let step = (cand - q).norm();
         q = cand;
         cost = c;
         if step < settings.step_tolerance {
-            return done(
-                &q,
-                it,
-                Termination::Converged {
-                    measure: "step (quaternion distance)".into(),
-                    value: step,
-                    threshold: settings.step_tolerance,
-                },
-            );
+            let converged = Termination::Converged {
+                measure: "step (quaternion distance)".into(),
+                value: step,
+                threshold: settings.step_tolerance,
+            };
+            return done(&q, it, converged);
         }
     }
-    done(
-        &q,
-        settings.max_iterations,
-        Termination::IterationLimit {
-            iterations: settings.max_iterations,
-            value: 1.0,
-            threshold: settings.gradient_tolerance,
-        },
-    )
+    let limit = Termination::IterationLimit {
+        iterations: settings.max_iterations,
+        value: 1.0,
+        threshold: settings.gradient_tolerance,
+    };
+    done(&q, settings.max_iterations, limit)
+}
+
+/// The Weiszfeld numerator `sum_i (w_i / c_i) s_i q_i` at `q` over the samples not coinciding
+/// with it (`c_i = |s_i q_i - q| > 1e-12`), and the total weight of those that do.
+fn weiszfeld_numerator(
+    quats: &[Vector4<f64>],
+    weights: &[f64],
+    q: &Vector4<f64>,
+) -> (Vector4<f64>, f64) {
+    let mut num = Vector4::zeros();
+    let mut zero = 0.0;
+    for (p, &w) in quats.iter().zip(weights) {
+        let p = if p.dot(q) < 0.0 { -p } else { *p };
+        let c = (p - q).norm();
+        if c <= 1e-12 {
+            zero += w;
+        } else {
+            num += p * (w / c);
+        }
+    }
+    (num, zero)
+}
+
+/// The point `normalise(q + frac (target - q))`, `frac` halved (at most 40 times) while it
+/// would increase the quaternion L1 cost `cost` at `q` beyond rounding: the point and its cost.
+fn toward(
+    quats: &[Vector4<f64>],
+    weights: &[f64],
+    q: &Vector4<f64>,
+    cost: f64,
+    target: &Vector4<f64>,
+    mut frac: f64,
+) -> Option<(Vector4<f64>, f64)> {
+    let slack = (quats.len() as f64 + 8.0) * f64::EPSILON * cost.abs();
+    for _ in 0..40 {
+        if let Some(cand) = (q + (target - q) * frac).try_normalize(0.0) {
+            let c = quaternion_l1_cost(quats, weights, &cand);
+            if c <= cost + slack {
+                return Some((cand, c));
+            }
+        }
+        frac *= 0.5;
+    }
+    None
 }

@@ -154,7 +154,10 @@ pub fn solve_single(problem: &SingleProblem, settings: &SingleSettings) -> Resul
     settings.validate()?;
     let objective = problem.objective();
     let start = Instant::now();
-    let init = settings.init.as_ref();
+    // a given start (a rotation to the validation tolerance) replaced by its nearest rotation:
+    // the iterations then stay on SO(3) (SPEC section 1)
+    let init = settings.init.as_ref().map(so3::nearest_rotation);
+    let init = init.as_ref();
     let local = match (objective.metric, objective.loss) {
         (Metric::Chordal, Loss::L2) => closed_form::chordal_l2_local(problem),
         (Metric::Quaternion, Loss::L2) => closed_form::quaternion_l2_local(problem, settings, init),
@@ -165,11 +168,15 @@ pub fn solve_single(problem: &SingleProblem, settings: &SingleSettings) -> Resul
         _ => return Err(objective.unsupported("single", SingleProblem::SUPPORTED)),
     };
     let seconds = start.elapsed().as_secs_f64();
+    // SPEC section 1: the estimate in SO(3) to rounding (a mean that stopped at a sample, which
+    // is a rotation only to the validation tolerance, or the last iterate), its cost the
+    // problem's at exactly that estimate
+    let estimate = so3::nearest_rotation(&local.estimate);
     Ok(SingleSolution {
         objective,
         num_samples: problem.len(),
-        estimate: local.estimate,
-        cost: problem.cost(&local.estimate),
+        estimate,
+        cost: problem.cost(&estimate),
         report: SolverReport {
             name: local.name.into(),
             iterations: local.iterations,

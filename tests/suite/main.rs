@@ -45,6 +45,7 @@ mod data_as_given;
 mod docs_examples;
 #[cfg(feature = "cli")]
 mod error_words;
+mod estimates_in_so3;
 mod example_data;
 mod fuzz_regressions;
 #[cfg(feature = "cli")]
