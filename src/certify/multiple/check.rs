@@ -5,7 +5,8 @@
 //! climb ([`super::verify`]).
 
 use super::multipliers::{
-    bound_from_mu, bound_with_deficit, certificate_matrix, entry_terms, forming_margin,
+    FirstOrder, GaugeTerms, bound_from_mu, bound_with_deficit, certificate_matrix, entry_terms,
+    forming_margin, gauge_terms,
 };
 use super::scalar::ScalarAnalysis;
 use super::verified::VerifiedBound;
@@ -80,6 +81,11 @@ pub(crate) struct Check<'a> {
     /// The `3n` factorisations (of `S` and of `S_{-g}`, one block row and column apart) are
     /// over the budget (found by whichever analysed first): the other is not analysed again.
     three_n_refused: RefCell<Option<Refusal>>,
+    /// The first-order quantities of the estimate, when the multipliers are its own (their
+    /// gauge terms are made once for every check that needs them).
+    pub first: Option<&'a FirstOrder>,
+    /// The gauge terms when there is no `first`, made on the first request.
+    gauge: std::cell::OnceCell<GaugeTerms>,
     /// The best verified bound so far.
     pub best: Option<VerifiedBound>,
     /// Gershgorin's bound when a check was kept out by the budget: reported, never claimed.
@@ -154,11 +160,24 @@ impl<'a> Check<'a> {
             deadline: scope.deadline,
             scalar,
             three_n_refused: RefCell::new(None),
+            first: None,
+            gauge: std::cell::OnceCell::new(),
             best: None,
             unclaimed: None,
             notes: RefCell::new(Notes::default()),
             log: RefCell::new(Vec::new()),
         })
+    }
+
+    /// The gauge terms of `S Y` at the estimate `rotations` these multipliers belong to
+    /// (`[D15]`), made once.
+    pub fn gauge_terms(&self, rotations: &[Rotation]) -> &GaugeTerms {
+        match self.first {
+            Some(f) => f.gauge_terms(rotations),
+            None => self
+                .gauge
+                .get_or_init(|| gauge_terms(self.problem, rotations, self.lambdas)),
+        }
     }
 
     /// Record that the `3n` factorisations do not fit (`refusal`).

@@ -8,10 +8,10 @@
 
 use super::check::Scope;
 use super::diagnosis::{DualDiagnosis, diagnose, diagnosis_text, over_budget};
-use super::multipliers::{check_lambdas, check_rotations, multipliers, stationarity_residual};
+use super::multipliers::{FirstOrder, check_lambdas, check_rotations, stationarity_residual};
 use super::state::{Best, DualRun, State};
 use super::verified::{RandomizedBound, VerifiedBound};
-use super::verify::verify;
+use super::verify::{verify, verify_own};
 use crate::certify::budget::Deadline;
 use crate::certify::certificate::{Certificate, RandomizedLowerBound};
 use crate::certify::certification::ImprovementSource;
@@ -76,37 +76,29 @@ pub fn dual_certificate(
 ) -> Result<DualCertificate> {
     settings.validate()?;
     check_rotations(problem, rotations)?;
-    let lambdas = multipliers(problem, rotations)?;
-    let stationarity = stationarity_residual(problem, rotations)?;
+    let first = FirstOrder::at(problem, rotations)?;
     let scope = Scope {
         point: Point::Given,
         within: Proof::DualCertificate,
         deadline: Deadline::start(&settings.budget),
     };
-    dual_certificate_with(problem, rotations, &lambdas, stationarity, settings, scope)
+    let cost = problem.chordal_cost(rotations);
+    dual_certificate_with(problem, rotations, cost, &first, settings, scope)
 }
 
-/// [`dual_certificate`] of `rotations` with their multipliers `lambdas` and stationarity
-/// residual already computed, in `scope` (the point and the clock of a certification).
+/// [`dual_certificate`] of `rotations` (cost `cost`) with their first-order quantities
+/// already computed, in `scope` (the point and the clock of a certification).
 pub(crate) fn dual_certificate_with(
     problem: &MultipleProblem,
     rotations: &[Rotation],
-    lambdas: &[Matrix3<f64>],
-    stationarity: f64,
+    cost: f64,
+    first: &FirstOrder,
     settings: &CertifySettings,
     scope: Scope,
 ) -> Result<DualCertificate> {
     let start = Instant::now();
-    let cost = problem.chordal_cost(rotations);
-    let bound = verify(
-        problem,
-        lambdas,
-        Some(rotations),
-        cost.abs(),
-        settings,
-        scope,
-        None,
-    )?;
+    let stationarity = first.stationarity;
+    let bound = verify_own(problem, rotations, first, cost.abs(), settings, scope)?;
     let min_eig = bound
         .min_eigenvalue_estimate
         .or(Some(bound.verified_min_eigenvalue));
@@ -371,13 +363,11 @@ impl<'a> Rung<State<'a>> for DualRung {
 /// `Some(why)` when the given estimate is cheaply shown not to be a critical point whose own
 /// multipliers could certify it (`[D15]`): its ladder is skipped, its refinement's certificate
 /// bounds it as well, in a fraction of the time (issue 24). Records nothing.
-fn given_hopeless(cx: &State<'_>) -> Result<Option<String>> {
+fn given_hopeless(cx: &State<'_>, first: &FirstOrder) -> Option<String> {
     let rotations = &cx.current.rotations;
-    let lambdas = multipliers(cx.problem, rotations)?;
     let gap = cx.allowed_gap(cx.cost);
-    Ok(super::grounded::hopeless(
-        cx.problem, rotations, &lambdas, gap,
-    ))
+    let terms = first.gauge_terms(rotations);
+    super::grounded::hopeless(cx.problem, rotations, &first.lambdas, terms, gap)
 }
 
 /// The dual certificate at the current point: its checks logged, its bound offered, its
@@ -395,14 +385,14 @@ fn certify_current(cx: &mut State<'_>, test_hopeless: bool) -> Result<Found> {
         cx.dual_at.push(label);
     }
     let rotations = cx.current.rotations.clone();
-    let lambdas = multipliers(cx.problem, &rotations)?;
-    let stationarity = stationarity_residual(cx.problem, &rotations)?;
+    let first = FirstOrder::at(cx.problem, &rotations)?;
+    let stationarity = first.stationarity;
     if label == Point::Given {
         cx.given_stationarity_residual = Some(stationarity);
     }
     if label == Point::Given
         && test_hopeless
-        && let Some(reason) = given_hopeless(cx)?
+        && let Some(reason) = given_hopeless(cx, &first)
     {
         // not a critical point: the refinement's certificate is what can help
         cx.first = Some(DualDiagnosis::NotCritical {
@@ -415,16 +405,10 @@ fn certify_current(cx: &mut State<'_>, test_hopeless: bool) -> Result<Found> {
         within: Proof::DualCertificate,
         deadline: cx.deadline,
     };
-    let c = dual_certificate_with(
-        cx.problem,
-        &rotations,
-        &lambdas,
-        stationarity,
-        cx.settings,
-        scope,
-    )?;
+    let cost = cx.current.cost;
+    let c = dual_certificate_with(cx.problem, &rotations, cost, &first, cx.settings, scope)?;
     cx.log.extend(c.bound.ladder.iter().cloned());
-    Ok(record(cx, c, lambdas))
+    Ok(record(cx, c, first.lambdas.clone()))
 }
 
 /// Keep what one dual certificate found: the diagnosis (the given estimate's first), its bound

@@ -5,7 +5,7 @@
 //! factor, and no margin at the null space.
 
 use super::check::{Check, Notes, counted_factorisation_prediction, ordering_refusal};
-use super::multipliers::{GaugeTerms, bound_with_deficit, gauge_terms};
+use super::multipliers::{GaugeTerms, bound_with_deficit};
 use super::verified::{GroundedBound, VerifiedBound};
 use crate::certify::log::{Prediction, Refusal};
 use crate::certify::proof::Proof;
@@ -95,7 +95,7 @@ impl GroundedProof {
                 "the ground's rotation is far from orthogonal",
             )));
         }
-        let terms = gauge_terms(cx.problem, rotations, cx.lambdas);
+        let terms = *cx.gauge_terms(rotations);
         if not_critical(cx, &terms, ground) {
             cx.mark_not_critical();
             return Ok(Err(not_applicable(&format!(
@@ -162,6 +162,7 @@ pub(super) fn hopeless(
     problem: &crate::multiple::MultipleProblem,
     rotations: &[crate::so3::Rotation],
     lambdas: &[Matrix3<f64>],
+    terms: &GaugeTerms,
     gap: f64,
 ) -> Option<String> {
     let n = problem.num_rotations();
@@ -180,7 +181,6 @@ pub(super) fn hopeless(
         .flat_map(|i| (0..3).map(move |a| (i, a)))
         .map(|(i, a)| degree[i] - lambdas[i][(a, a)])
         .fold(f64::INFINITY, f64::min);
-    let terms = gauge_terms(problem, rotations, lambdas);
     let deficit = 3.0 * terms.rho * terms.rho / c_upper;
     (c_upper > 0.0 && c_upper.is_finite() && deficit > gap).then(|| {
         format!(

@@ -117,58 +117,89 @@ fn anisotropic_edge_times(
 /// assert!(l.iter().all(|m| m.norm() < 1e-12));
 /// ```
 pub fn multipliers(problem: &MultipleProblem, rotations: &[Rotation]) -> Result<Vec<Matrix3<f64>>> {
-    Ok(first_order_blocks(problem, rotations)?
-        .map(|(sym, _)| sym)
-        .collect())
-}
-
-/// The symmetric and skew parts of `(Q Y)_i R_i^T`: the multipliers and the stationarity
-/// residual `[D3]`, each entry a compensated sum of the double-double `(Q Y)_i` times `R_i^T`,
-/// rounded once.
-fn first_order_blocks(
-    problem: &MultipleProblem,
-    rotations: &[Rotation],
-) -> Result<impl Iterator<Item = (Matrix3<f64>, Matrix3<f64>)>> {
-    problem.check_estimate(rotations)?;
-    let qy = laplacian_times_compensated(problem, rotations);
-    Ok(qy.into_iter().zip(rotations).map(|(node, r)| {
-        let m = r.matrix();
-        // (Q Y R^T)_ab +- (Q Y R^T)_ba, summed in one accumulator
-        let part = |a: usize, b: usize, sign: f64| {
-            let mut s = Accumulator::default();
-            for c in 0..3 {
-                for (x, y, scale) in [(a, b, 1.0), (b, a, sign)] {
-                    let (hi, lo) = node[x][c].parts();
-                    s.add_product(scale * hi, m[(y, c)]);
-                    s.add_product(scale * lo, m[(y, c)]);
-                }
-            }
-            0.5 * s.value()
-        };
-        let sym = Matrix3::from_fn(|a, b| {
-            if a <= b {
-                part(a, b, 1.0)
-            } else {
-                part(b, a, 1.0)
-            }
-        });
-        let skew = Matrix3::from_fn(|a, b| match a.cmp(&b) {
-            std::cmp::Ordering::Less => part(a, b, -1.0),
-            std::cmp::Ordering::Equal => 0.0,
-            std::cmp::Ordering::Greater => -part(b, a, -1.0),
-        });
-        (sym, skew)
-    }))
+    Ok(FirstOrder::at(problem, rotations)?.lambdas)
 }
 
 /// `sqrt(sum_i ||(Q Y)_i - Lambda_i R_i||_F^2)` with `Lambda` from [`multipliers`]: the
 /// first-order residual (zero exactly at a critical point of the cost on `O(3)^n`), i.e.
 /// `sqrt(sum_i ||skew((Q Y)_i R_i^T)||_F^2)`.
 pub fn stationarity_residual(problem: &MultipleProblem, rotations: &[Rotation]) -> Result<f64> {
-    Ok(first_order_blocks(problem, rotations)?
-        .map(|(_, skew)| skew.norm_squared())
-        .sum::<f64>()
-        .sqrt())
+    Ok(FirstOrder::at(problem, rotations)?.stationarity)
+}
+
+/// What the first-order conditions say at an estimate, from one double-double evaluation of
+/// `Q Y` `[D3]`, `[D15]`: the multipliers, the stationarity residual, and (on request) the
+/// gauge terms of `S Y`. One per point of a certification (issue 35: `Q Y` was evaluated seven
+/// times per dual certificate, most of its time outside the factorisations).
+pub(crate) struct FirstOrder {
+    /// `(Q Y)_i`, each entry a double-double sum with its error bookkeeping.
+    qy: Vec<[[Accumulator; 3]; 3]>,
+    /// `Lambda_i = sym((Q Y)_i R_i^T)`, rounded once.
+    pub lambdas: Vec<Matrix3<f64>>,
+    /// `sqrt(sum_i ||skew((Q Y)_i R_i^T)||_F^2)`.
+    pub stationarity: f64,
+    /// The gauge terms, made on the first request.
+    gauge: std::cell::OnceCell<GaugeTerms>,
+}
+
+impl FirstOrder {
+    /// The first-order quantities at `rotations` (one per node, else an error).
+    pub fn at(problem: &MultipleProblem, rotations: &[Rotation]) -> Result<Self> {
+        problem.check_estimate(rotations)?;
+        let qy = laplacian_times_compensated(problem, rotations);
+        let mut lambdas = Vec::with_capacity(qy.len());
+        let mut skew2 = 0.0;
+        for (node, r) in qy.iter().zip(rotations) {
+            let (sym, skew) = first_order_block(node, r);
+            lambdas.push(sym);
+            skew2 += skew.norm_squared();
+        }
+        Ok(FirstOrder {
+            qy,
+            lambdas,
+            stationarity: skew2.sqrt(),
+            gauge: std::cell::OnceCell::new(),
+        })
+    }
+
+    /// The gauge terms of `S Y` for the estimate's own multipliers ([`gauge_terms`]), at
+    /// `rotations` (the estimate this was made at), made once.
+    pub fn gauge_terms(&self, rotations: &[Rotation]) -> &GaugeTerms {
+        self.gauge
+            .get_or_init(|| gauge_terms_from(self.qy.clone(), rotations, &self.lambdas))
+    }
+}
+
+/// The symmetric and skew parts of `(Q Y)_i R_i^T`: the multiplier and the stationarity
+/// residual `[D3]`, each entry a compensated sum of the double-double `(Q Y)_i` times `R_i^T`,
+/// rounded once.
+fn first_order_block(node: &[[Accumulator; 3]; 3], r: &Rotation) -> (Matrix3<f64>, Matrix3<f64>) {
+    let m = r.matrix();
+    // (Q Y R^T)_ab +- (Q Y R^T)_ba, summed in one accumulator
+    let part = |a: usize, b: usize, sign: f64| {
+        let mut s = Accumulator::default();
+        for c in 0..3 {
+            for (x, y, scale) in [(a, b, 1.0), (b, a, sign)] {
+                let (hi, lo) = node[x][c].parts();
+                s.add_product(scale * hi, m[(y, c)]);
+                s.add_product(scale * lo, m[(y, c)]);
+            }
+        }
+        0.5 * s.value()
+    };
+    let sym = Matrix3::from_fn(|a, b| {
+        if a <= b {
+            part(a, b, 1.0)
+        } else {
+            part(b, a, 1.0)
+        }
+    });
+    let skew = Matrix3::from_fn(|a, b| match a.cmp(&b) {
+        std::cmp::Ordering::Less => part(a, b, -1.0),
+        std::cmp::Ordering::Equal => 0.0,
+        std::cmp::Ordering::Greater => -part(b, a, -1.0),
+    });
+    (sym, skew)
 }
 
 /// One finite rotation per node.
@@ -281,7 +312,8 @@ pub(super) fn gauge_column(rotations: &[Rotation], a: usize) -> Vec<f64> {
 }
 
 /// The gauge directions' terms of `[D15]` and `[D16]`, for the exact `S` of the data.
-pub(super) struct GaugeTerms {
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct GaugeTerms {
     /// Proven `rho >= ||S Y||_F >= ||S Y||_2`.
     pub rho: f64,
     /// Proven `h >= 0` with `Y^T S Y >= -h I`.
@@ -294,14 +326,27 @@ pub(super) struct GaugeTerms {
 
 /// `rho >= ||S Y||_2` and `h >= -lambda_min(Y^T S Y)`: `S Y` evaluated from the data in
 /// double-double, with its error bound `[D15]`.
-pub(super) fn gauge_terms(
+pub(crate) fn gauge_terms(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     lambdas: &[Matrix3<f64>],
 ) -> GaugeTerms {
+    gauge_terms_from(
+        laplacian_times_compensated(problem, rotations),
+        rotations,
+        lambdas,
+    )
+}
+
+/// [`gauge_terms`] from the double-double `Q Y` already evaluated.
+fn gauge_terms_from(
+    qy: Vec<[[Accumulator; 3]; 3]>,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+) -> GaugeTerms {
     let u = UNIT_ROUNDOFF;
-    let n3 = 3 * problem.num_rotations();
-    let (sy, sy_error) = residual_products(problem, rotations, lambdas);
+    let n3 = 3 * rotations.len();
+    let (sy, sy_error) = residual_products_from(qy, rotations, lambdas);
     let sy_norm = sy.iter().map(|m| m.norm_squared()).sum::<f64>().sqrt();
     let rho = (sy_norm + sy_error) * (1.0 + 4.0 * u);
     let y_norm = rotations
@@ -330,12 +375,11 @@ pub(super) fn gauge_terms(
 /// `(S Y)_i = (Q Y)_i - sym(Lambda_i) R_i` for every node, evaluated from the data in
 /// double-double (the `S` of [`certificate_matrix`] from the exact data), and a bound on the
 /// Frobenius norm of the whole error `[D15]`.
-pub(super) fn residual_products(
-    problem: &MultipleProblem,
+fn residual_products_from(
+    mut acc: Vec<[[Accumulator; 3]; 3]>,
     rotations: &[Rotation],
     lambdas: &[Matrix3<f64>],
 ) -> (Vec<Matrix3<f64>>, f64) {
-    let mut acc = laplacian_times_compensated(problem, rotations);
     let mut error2 = 0.0;
     let out = acc
         .iter_mut()

@@ -15,6 +15,7 @@
 use super::check::{Check, CurvatureHint, Scope, first_shift};
 use super::gershgorin::GershgorinCheck;
 use super::grounded::GroundedProof;
+use super::multipliers::FirstOrder;
 use super::randomized::RandomizedCheck;
 use super::scalar::rungs::ScalarFamily;
 use super::shifted::ShiftedProof;
@@ -85,6 +86,34 @@ pub(crate) fn verify(
 ) -> Result<VerifiedBound> {
     let mut cx = Check::new(problem, lambdas, rotations, scale, settings, scope)?;
     cx.hint = hint;
+    climb_checks(cx)
+}
+
+/// [`verify`] of an estimate's own multipliers, with its first-order quantities `first`
+/// (made once: the checks read its gauge terms).
+pub(crate) fn verify_own(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    first: &FirstOrder,
+    scale: f64,
+    settings: &CertifySettings,
+    scope: Scope,
+) -> Result<VerifiedBound> {
+    let mut cx = Check::new(
+        problem,
+        &first.lambdas,
+        Some(rotations),
+        scale,
+        settings,
+        scope,
+    )?;
+    cx.first = Some(first);
+    climb_checks(cx)
+}
+
+/// The climb of the checks on `cx`, and its bound.
+fn climb_checks(mut cx: Check<'_>) -> Result<VerifiedBound> {
+    let settings = cx.settings;
     let mut rungs: Rungs<'_, Check<'_>> = Vec::new();
     for proof in &settings.dual.proofs {
         match proof {
