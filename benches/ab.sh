@@ -17,6 +17,8 @@
 #   - the 1DSfM Madrid_Metropolis EGs.txt: default loss and `--loss cauchy`;
 #   - random expander graphs (benches/gen_graph.py, standard-library Python): n in $EXPANDERS,
 #     average degree $DEGREE, noise $SIGMA rad per axis, seeded;
+#   - SLAM-like chains (gen_graph.py chain): n in $CHAINS, 2 % loop closures, noise $CHAIN_SIGMA,
+#     3-D (`chain-N`) and planar (`planar-chain-N`, the smallest n only);
 #   - perturbed estimates: `certify FILE --estimate EST --json`, EST the optimum (B's
 #     `multiple --output`) with every rotation turned by $PERTURB_DEG degrees about a random
 #     axis, for the graphs of $PERTURB.
@@ -24,8 +26,8 @@
 #
 # Environment: K (repetitions, default 5), DATA (default ../shared/data beside the repository),
 # WORK (scratch, default /tmp/rotavg-ab), EXPANDERS ("1000 3000 10000"), DEGREE (7), SIGMA
-# (0.05), PERTURB_DEG (1e-4), PERTURB (case labels, default "sphere2500 mrob-sphere
-# expander-3000"), ONLY (a regular expression: run only the cases whose label matches),
+# (0.05), CHAINS ("5000 50000"), CHAIN_SIGMA (0.01), PERTURB_DEG (1e-4), PERTURB (case labels, default "sphere2500 mrob-sphere
+# expander-3000 chain-5000"), ONLY (a regular expression: run only the cases whose label matches),
 # TIMEOUT (seconds per run, default 900), A_LABEL / B_LABEL (the commits, printed in the
 # header; default: the binaries' paths and `--version`), REPORT_ONLY=1 (print the table of the
 # runs already in WORK, with the same K, without running anything).
@@ -47,7 +49,9 @@ EXPANDERS="${EXPANDERS:-1000 3000 10000}"
 DEGREE="${DEGREE:-7}"
 SIGMA="${SIGMA:-0.05}"
 PERTURB_DEG="${PERTURB_DEG:-1e-4}"
-PERTURB="${PERTURB:-sphere2500 mrob-sphere expander-3000}"
+PERTURB="${PERTURB:-sphere2500 mrob-sphere expander-3000 chain-5000}"
+CHAINS="${CHAINS:-5000 50000}"
+CHAIN_SIGMA="${CHAIN_SIGMA:-0.01}"
 ONLY="${ONLY:-.}"
 TIMEOUT="${TIMEOUT:-900}"
 A_LABEL="${A_LABEL:-$A_BIN ($("$A_BIN" --version 2>/dev/null))}"
@@ -97,6 +101,20 @@ for n in $EXPANDERS; do
   fi
   add "expander-$n" multiple "$g"
 done
+first=1
+for n in $CHAINS; do
+  for kind in chain planar-chain; do
+    [[ $kind == planar-chain && $first -eq 0 ]] && continue
+    g="$WORK/graphs/${kind}_${n}_${CHAIN_SIGMA}.json"
+    [[ "$kind-$n" =~ $ONLY || " $PERTURB " == *" $kind-$n "* ]] || continue
+    if [[ ! -s "$g" ]]; then
+      python3 "$GEN" chain "$n" 0.02 "$CHAIN_SIGMA" "$n" "$g" $([[ $kind == planar-chain ]] && echo planar) ||
+        { note "generator failed for $kind n = $n"; continue; }
+    fi
+    add "$kind-$n" multiple "$g"
+  done
+  first=0
+done
 # perturbed estimates: the optimum from B, turned by PERTURB_DEG degrees per node
 for label in $PERTURB; do
   file=""
@@ -107,6 +125,7 @@ for label in $PERTURB; do
   if [[ -z "$file" ]]; then
     case "$label" in
       expander-*) file="$WORK/graphs/expander_${label#expander-}_${DEGREE}_${SIGMA}.json" ;;
+      chain-*) file="$WORK/graphs/chain_${label#chain-}_${CHAIN_SIGMA}.json" ;;
       mrob-*) file="$DATA/g2o/3d/mrob/${label#mrob-}.g2o" ;;
       *) file="$DATA/g2o/3d/sesync/$label.g2o" ;;
     esac

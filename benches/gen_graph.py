@@ -10,6 +10,12 @@
         measurement is R_ij = R_j R_i^T exp([e]x) with e ~ N(0, SIGMA^2 I_3) (radians), so
         R_ij R_i = R_j without noise.
 
+    python3 benches/gen_graph.py chain N CLOSURES SIGMA SEED OUT.json [planar]
+        A SLAM-like pose graph (as rotavg's `SyntheticChain`): headings on a random walk
+        (R_{i+1} = exp([t]x) R_i, t ~ N(0, 0.1^2 I_3), or a turn about z with `planar`),
+        odometry edges (i, i + 1) and round(CLOSURES * N) loop closures joining a random node
+        j >= 10 to a random earlier node i < j - 5; measurement noise as for `expander`.
+
     python3 benches/gen_graph.py perturb IN.json DEGREES SEED OUT.json
         Reads an estimate file ({"rotations": [...]} as `rotavg multiple --output` writes it,
         or {"estimate": [...]} as `--json` prints it) and writes {"rotations": [...]} with each
@@ -90,6 +96,28 @@ def expander(n, degree, sigma, seed):
     return {"num_rotations": n, "edges": edges}
 
 
+def chain(n, closures, sigma, seed, planar):
+    if n < 17:
+        raise SystemExit("chain: n must be at least 17")
+    rng = random.Random(seed)
+
+    def step(s):
+        return [0.0, 0.0, rng.gauss(0.0, s)] if planar else [rng.gauss(0.0, s) for _ in range(3)]
+
+    truth = [quat_to_matrix(1.0, 0.0, 0.0, 0.0)]
+    for _ in range(1, n):
+        truth.append(mul(exp_so3(step(0.1)), truth[-1]))
+    pairs = [(i - 1, i) for i in range(1, n)]
+    for _ in range(int(round(closures * n))):
+        j = rng.randrange(10, n)
+        pairs.append((rng.randrange(0, j - 5), j))
+    edges = []
+    for i, j in pairs:
+        rij = mul(mul(truth[j], transpose(truth[i])), exp_so3(step(sigma)))
+        edges.append({"i": i, "j": j, "rotation": rij, "weight": 1})
+    return {"num_rotations": n, "edges": edges}
+
+
 def perturb(path, degrees, seed):
     with open(path) as f:
         doc = json.load(f)
@@ -116,6 +144,9 @@ def main(argv):
     if len(argv) == 7 and argv[1] == "expander":
         n, degree, sigma, seed = int(argv[2]), float(argv[3]), float(argv[4]), int(argv[5])
         write(expander(n, degree, sigma, seed), argv[6])
+    elif len(argv) in (7, 8) and argv[1] == "chain" and argv[7:] in ([], ["planar"]):
+        n, closures, sigma, seed = int(argv[2]), float(argv[3]), float(argv[4]), int(argv[5])
+        write(chain(n, closures, sigma, seed, len(argv) == 8), argv[6])
     elif len(argv) == 6 and argv[1] == "perturb":
         write(perturb(argv[2], float(argv[3]), int(argv[4])), argv[5])
     else:
