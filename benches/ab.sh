@@ -28,7 +28,10 @@
 # WORK (scratch, default /tmp/rotavg-ab), EXPANDERS ("1000 3000 10000"), DEGREE (7), SIGMA
 # (0.05), CHAINS ("5000 50000"), CHAIN_SIGMA (0.01), PERTURB_DEG (1e-4), PERTURB (case labels, default "sphere2500 mrob-sphere
 # expander-3000 chain-5000"), ONLY (a regular expression: run only the cases whose label matches),
-# TIMEOUT (seconds per run, default 900), A_LABEL / B_LABEL (the commits, printed in the
+# TIMEOUT (seconds per run, default 900), CALLGRIND=1 (also run every case once per binary under
+# valgrind's callgrind and report the instructions executed inside
+# `rotavg::certify::multiple::certify_multiple`: a count the machine's load does not change;
+# about 50x slower than a plain run), A_LABEL / B_LABEL (the commits, printed in the
 # header; default: the binaries' paths and `--version`), REPORT_ONLY=1 (print the table of the
 # runs already in WORK, with the same K, without running anything).
 set -uo pipefail
@@ -155,6 +158,20 @@ run() { # side label verb file extra rep
   t1=$EPOCHREALTIME
   printf '{"rc": %d, "wall": %s}\n' "$rc" "$(awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}')" >"$out.meta"
 }
+CALLGRIND="${CALLGRIND:-}"
+if [[ -n "$CALLGRIND" ]] && ! command -v valgrind >/dev/null; then
+  note "CALLGRIND=1 but no valgrind: instruction counts skipped"
+  CALLGRIND=""
+fi
+count() { # side key verb file extra: instructions inside certify_multiple, one run
+  local out="$WORK/json/$2.$1"
+  # shellcheck disable=SC2086 # the extra arguments are words
+  timeout "$((TIMEOUT * 60))" valgrind --tool=callgrind --callgrind-out-file="$out.callgrind" \
+    --toggle-collect='rotavg::certify::multiple::certify_multiple' \
+    "$( [[ $1 == A ]] && echo "$A_BIN" || echo "$B_BIN")" "$3" "$4" $5 --json >/dev/null 2>&1 &&
+    awk '/^(summary|totals):/ {print $2; exit}' "$out.callgrind" >"$out.ir"
+  rm -f "$out.callgrind"
+}
 i=0
 for c in "${CASES[@]}"; do
   IFS='|' read -r label verb file extra <<<"$c"
@@ -166,6 +183,10 @@ for c in "${CASES[@]}"; do
     run A "$key" "$verb" "$file" "$extra" "$r"
     run B "$key" "$verb" "$file" "$extra" "$r"
   done
+  if [[ -n "$CALLGRIND" ]]; then
+    count A "$key" "$verb" "$file" "$extra"
+    count B "$key" "$verb" "$file" "$extra"
+  fi
 done
 load_after="$(cut -d' ' -f1-3 /proc/loadavg)"
 printf '%s\n%s\n%s\n' "$load_before" "$load_after" "$(date -u '+%Y-%m-%d %H:%M UTC')" >"$WORK/json/run.info"
@@ -226,6 +247,13 @@ def ladder_steps(doc):
 def certify_seconds(doc):
     v = get(doc, "pipeline", "certify_seconds")
     return v if v is not None else get(doc, "certificate", "seconds")
+
+
+def instructions(key, side):
+    try:
+        return int(open(f"{root}/{key}.{side}.ir").read().split()[0])
+    except (OSError, ValueError, IndexError):
+        return None
 
 
 def median(values):
@@ -310,7 +338,7 @@ def proof(doc):
     return f"{c.get('verdict')}{inliers} ({c.get('method')})"
 
 
-rows, ladders, info = [], [], {}
+rows, ladders, info, irs = [], [], {}, []
 for path in sorted(glob.glob(f"{root}/*.label")):
     key = os.path.basename(path)[:-6]
     label = open(path).read().strip()
@@ -326,6 +354,7 @@ for path in sorted(glob.glob(f"{root}/*.label")):
             by=proved_by(good[0]) if good else "-",
             ladder=ladder(good[len(good) // 2]) if good else None,
             doc=good[0] if good else None,
+            ir=instructions(key, side),
         )
     doc = cell["B"]["doc"] or cell["A"]["doc"]
     n, m = get(doc, "num_rotations"), get(doc, "num_measurements")
@@ -344,6 +373,10 @@ for path in sorted(glob.glob(f"{root}/*.label")):
         if cell[side]["ladder"]:
             ladders.append(f"| {label} | {side} | {cell[side]['ladder']} |")
     info[label] = cell
+    if cell["A"]["ir"] or cell["B"]["ir"]:
+        mi = lambda v: "-" if v is None else f"{v / 1e6:.1f}"
+        irs.append(f"| {label} | {mi(cell['A']['ir'])} | {mi(cell['B']['ir'])} | "
+                   f"{ratio(cell['B']['ir'], cell['A']['ir'])} |")
 
 print("Times in seconds (medians). run: the process's wall clock; solve: `solver.seconds`;")
 print("certify: `pipeline.certify_seconds` (`certificate.seconds` for `certify`); cert/solve:")
@@ -354,18 +387,31 @@ print("| case | n | edges | loss | verdict (method) | run A | run B | B/A | solv
       "| certify A | certify B | certify B/A | cert/solve A | cert/solve B | proved by A | proved by B |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 print("\n".join(rows))
+if irs:
+    print()
+    print("Instructions executed inside `certify_multiple` (millions, callgrind, one run each):")
+    print()
+    print("| case | A | B | B/A |")
+    print("|---|---|---|---|")
+    print("\n".join(irs))
 pairs = [(l, l + " full") for l in info if l + " full" in info]
 if pairs:
     print()
     print("`--information full` against the default (scalar kappa) weights, same binary:")
-    print("certify seconds (medians) and full / default.")
+    print("certify seconds (medians) and full / default; anisotropy: the largest ratio of an")
+    print("information matrix's eigenvalues (`information.max_anisotropy`, 1: isotropic).")
     print()
-    print("| graph | A default | A full | A full/default | B default | B full | B full/default |")
-    print("|---|---|---|---|---|---|---|")
+    print("| graph | anisotropy | A default | A full | A full/default | B default | B full "
+          "| B full/default | B instructions full/default |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for d, f in pairs:
         c = [info[d]["A"]["cert"], info[f]["A"]["cert"], info[d]["B"]["cert"], info[f]["B"]["cert"]]
-        print(f"| {d} | {fmt(c[0])} | {fmt(c[1])} | {ratio(c[1], c[0])} | {fmt(c[2])} | "
-              f"{fmt(c[3])} | {ratio(c[3], c[2])} |")
+        doc = info[f]["B"]["doc"] or info[f]["A"]["doc"]
+        an = get(doc, "information", "max_anisotropy")
+        an = "-" if an is None else f"{an:.3g}"
+        print(f"| {d} | {an} | {fmt(c[0])} | {fmt(c[1])} | {ratio(c[1], c[0])} | {fmt(c[2])} | "
+              f"{fmt(c[3])} | {ratio(c[3], c[2])} | "
+              f"{ratio(info[f]['B']['ir'], info[d]['B']['ir'])} |")
 if ladders:
     print()
     print("Proof ladders (`pipeline.certify.ladder` of the middle run: rung@point outcome "
