@@ -18,7 +18,8 @@
 #   - random expander graphs (benches/gen_graph.py, standard-library Python): n in $EXPANDERS,
 #     average degree $DEGREE, noise $SIGMA rad per axis, seeded;
 #   - SLAM-like chains (gen_graph.py chain): n in $CHAINS, 2 % loop closures, noise $CHAIN_SIGMA,
-#     3-D (`chain-N`) and planar (`planar-chain-N`, the smallest n only);
+#     3-D (`chain-N`) and planar (`planar-chain-N`, the smallest n only); SLAM-like lattices
+#     (gen_graph.py grid): n in $GRIDS, half of the row-to-row closures, noise $CHAIN_SIGMA;
 #   - perturbed estimates: `certify FILE --estimate EST --json`, EST the optimum (B's
 #     `multiple --output`) with every rotation turned by $PERTURB_DEG degrees about a random
 #     axis, for the graphs of $PERTURB.
@@ -26,7 +27,7 @@
 #
 # Environment: K (repetitions, default 5), DATA (default ../shared/data beside the repository),
 # WORK (scratch, default /tmp/rotavg-ab), EXPANDERS ("1000 3000 10000"), DEGREE (7), SIGMA
-# (0.05), CHAINS ("5000 50000"), CHAIN_SIGMA (0.01), PERTURB_DEG (1e-4), PERTURB (case labels, default "sphere2500 mrob-sphere
+# (0.05), CHAINS ("5000 50000"), GRIDS ("5000"), CHAIN_SIGMA (0.01), PERTURB_DEG (1e-4), PERTURB (case labels, default "sphere2500 mrob-sphere
 # expander-3000 chain-5000"), ONLY (a regular expression: run only the cases whose label matches),
 # TIMEOUT (seconds per run, default 900), CALLGRIND=1 (also run every case once per binary under
 # valgrind's callgrind and report the instructions executed inside
@@ -55,6 +56,7 @@ PERTURB_DEG="${PERTURB_DEG:-1e-4}"
 PERTURB="${PERTURB:-sphere2500 mrob-sphere expander-3000 chain-5000}"
 CHAINS="${CHAINS:-5000 50000}"
 CHAIN_SIGMA="${CHAIN_SIGMA:-0.01}"
+GRIDS="${GRIDS:-5000}"
 ONLY="${ONLY:-.}"
 TIMEOUT="${TIMEOUT:-900}"
 A_LABEL="${A_LABEL:-$A_BIN ($("$A_BIN" --version 2>/dev/null))}"
@@ -117,6 +119,14 @@ for n in $CHAINS; do
     add "$kind-$n" multiple "$g"
   done
   first=0
+done
+for n in $GRIDS; do
+  g="$WORK/graphs/grid_${n}_${CHAIN_SIGMA}.json"
+  [[ "grid-$n" =~ $ONLY ]] || continue
+  if [[ ! -s "$g" ]]; then
+    python3 "$GEN" grid "$n" 0.5 "$CHAIN_SIGMA" "$n" "$g" || { note "generator failed for grid n = $n"; continue; }
+  fi
+  add "grid-$n" multiple "$g"
 done
 # perturbed estimates: the optimum from B, turned by PERTURB_DEG degrees per node
 for label in $PERTURB; do

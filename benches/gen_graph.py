@@ -16,6 +16,12 @@
         odometry edges (i, i + 1) and round(CLOSURES * N) loop closures joining a random node
         j >= 10 to a random earlier node i < j - 5; measurement noise as for `expander`.
 
+    python3 benches/gen_graph.py grid N CLOSURES SIGMA SEED OUT.json
+        A SLAM-like lattice (as rotavg's `SyntheticGrid`): a robot sweeps a sqrt(N) x sqrt(N)
+        grid row by row (odometry edges along the path, headings on a random walk as for
+        `chain`), and every other lattice edge to the next row is a loop closure kept with
+        probability CLOSURES; measurement noise as for `expander`.
+
     python3 benches/gen_graph.py perturb IN.json DEGREES SEED OUT.json
         Reads an estimate file ({"rotations": [...]} as `rotavg multiple --output` writes it,
         or {"estimate": [...]} as `--json` prints it) and writes {"rotations": [...]} with each
@@ -118,6 +124,31 @@ def chain(n, closures, sigma, seed, planar):
     return {"num_rotations": n, "edges": edges}
 
 
+def grid(n, closures, sigma, seed):
+    w = max(2, int(round(math.sqrt(n))))
+    h = w
+    rng = random.Random(seed)
+    truth = [quat_to_matrix(1.0, 0.0, 0.0, 0.0)]
+    for _ in range(1, w * h):
+        truth.append(mul(exp_so3([rng.gauss(0.0, 0.1) for _ in range(3)]), truth[-1]))
+
+    def node(r, c):
+        return r * w + (c if r % 2 == 0 else w - 1 - c)
+
+    pairs = [(k - 1, k) for k in range(1, w * h)]
+    for r in range(h - 1):
+        for c in range(w):
+            a, b = node(r, c), node(r + 1, c)
+            if abs(a - b) != 1 and rng.random() < closures:
+                pairs.append((min(a, b), max(a, b)))
+    edges = []
+    for i, j in pairs:
+        noise = exp_so3([rng.gauss(0.0, sigma) for _ in range(3)])
+        edges.append({"i": i, "j": j, "rotation": mul(mul(truth[j], transpose(truth[i])), noise),
+                      "weight": 1})
+    return {"num_rotations": w * h, "edges": edges}
+
+
 def perturb(path, degrees, seed):
     with open(path) as f:
         doc = json.load(f)
@@ -147,6 +178,9 @@ def main(argv):
     elif len(argv) in (7, 8) and argv[1] == "chain" and argv[7:] in ([], ["planar"]):
         n, closures, sigma, seed = int(argv[2]), float(argv[3]), float(argv[4]), int(argv[5])
         write(chain(n, closures, sigma, seed, len(argv) == 8), argv[6])
+    elif len(argv) == 7 and argv[1] == "grid":
+        n, closures, sigma, seed = int(argv[2]), float(argv[3]), float(argv[4]), int(argv[5])
+        write(grid(n, closures, sigma, seed), argv[6])
     elif len(argv) == 6 and argv[1] == "perturb":
         write(perturb(argv[2], float(argv[3]), int(argv[4])), argv[5])
     else:
