@@ -32,7 +32,8 @@
 # TIMEOUT (seconds per run, default 900), CALLGRIND=1 (also run every case once per binary under
 # valgrind's callgrind and report the instructions executed inside
 # `rotavg::certify::multiple::certify_multiple`: a count the machine's load does not change;
-# about 50x slower than a plain run), A_LABEL / B_LABEL (the commits, printed in the
+# about 50x slower than a plain run, so only for the cases whose median run took at most
+# CALLGRIND_MAX_SECONDS, default 1, with both binaries), A_LABEL / B_LABEL (the commits, printed in the
 # header; default: the binaries' paths and `--version`), REPORT_ONLY=1 (print the table of the
 # runs already in WORK, with the same K, without running anything).
 set -uo pipefail
@@ -173,6 +174,17 @@ if [[ -n "$CALLGRIND" ]] && ! command -v valgrind >/dev/null; then
   note "CALLGRIND=1 but no valgrind: instruction counts skipped"
   CALLGRIND=""
 fi
+CALLGRIND_MAX_SECONDS="${CALLGRIND_MAX_SECONDS:-1}"
+quick() { # key: every run of the case (both binaries) has a median wall time within the limit
+  python3 - "$WORK/json" "$1" "$CALLGRIND_MAX_SECONDS" <<'PY'
+import glob, json, statistics, sys
+root, key, limit = sys.argv[1], sys.argv[2], float(sys.argv[3])
+for side in "AB":
+    walls = [json.load(open(f))["wall"] for f in glob.glob(f"{root}/{key}.{side}.*.meta")]
+    if walls and statistics.median(walls) > limit:
+        sys.exit(1)
+PY
+}
 count() { # side key verb file extra: instructions inside certify_multiple, one run
   local out="$WORK/json/$2.$1"
   # shellcheck disable=SC2086 # the extra arguments are words
@@ -193,7 +205,7 @@ for c in "${CASES[@]}"; do
     run A "$key" "$verb" "$file" "$extra" "$r"
     run B "$key" "$verb" "$file" "$extra" "$r"
   done
-  if [[ -n "$CALLGRIND" ]]; then
+  if [[ -n "$CALLGRIND" ]] && quick "$key"; then
     count A "$key" "$verb" "$file" "$extra"
     count B "$key" "$verb" "$file" "$extra"
   fi
