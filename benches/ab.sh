@@ -27,15 +27,16 @@
 #
 # Environment: K (repetitions, default 5), DATA (default ../shared/data beside the repository),
 # WORK (scratch, default /tmp/rotavg-ab), EXPANDERS ("1000 3000 10000"), DEGREE (7), SIGMA
-# (0.05), CHAINS ("5000 50000"), GRIDS ("5000"), CHAIN_SIGMA (0.01), PERTURB_DEG (1e-4), PERTURB (case labels, default "sphere2500 mrob-sphere
-# expander-3000 chain-5000"), ONLY (a regular expression: run only the cases whose label matches),
-# TIMEOUT (seconds per run, default 900), CALLGRIND=1 (also run every case once per binary under
+# (0.05), CHAINS ("5000 50000"), GRIDS ("5000"), CHAIN_SIGMA (0.01), PERTURB_DEG (1e-4),
+# PERTURB (case labels, default "sphere2500 mrob-sphere expander-3000 chain-5000"), ONLY (a
+# regular expression: run only the cases whose label matches), TIMEOUT (seconds per run,
+# default 900), A_LABEL / B_LABEL (the commits, printed in the header; default: the binaries'
+# paths and `--version`), REPORT_ONLY=1 (print the table of the runs already in WORK, with the
+# same K, without running anything), CALLGRIND=1 (also run every case once per binary under
 # valgrind's callgrind and report the instructions executed inside
-# `rotavg::certify::multiple::certify_multiple`: a count the machine's load does not change;
+# `rotavg::certify::multiple::certify_multiple`, a count the machine's load does not change;
 # about 50x slower than a plain run, so only for the cases whose median run took at most
-# CALLGRIND_MAX_SECONDS, default 1, with both binaries), A_LABEL / B_LABEL (the commits, printed in the
-# header; default: the binaries' paths and `--version`), REPORT_ONLY=1 (print the table of the
-# runs already in WORK, with the same K, without running anything).
+# CALLGRIND_MAX_SECONDS, default 1, with both binaries).
 set -uo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 if [[ $# -lt 2 ]]; then
