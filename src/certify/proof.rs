@@ -34,6 +34,9 @@ pub enum Proof {
     ConvDual,
     /// The dual certificate of the simultaneous problem at the estimate `[H15]`.
     SimultaneousDual,
+    /// Information isotropic to rounding compared with scalar weights `lambda_min(H_e)` `[A13]`:
+    /// the isotropic problem's dual certificate plus a proven constant.
+    ScalarWeights,
     /// Branch and bound over SO(3) `[B1]`-`[B6]`.
     BranchAndBound,
     /// The grounded bound `[D15]`: `S` without one node's block verified positive definite.
@@ -63,6 +66,8 @@ impl Proof {
         match self {
             Proof::Theory => 0,
             Proof::Grounded => 1,
+            // the isotropic path of the same bound: first among the cheap ones
+            Proof::ScalarWeights => 1,
             Proof::DualCertificate | Proof::ConvDual | Proof::SimultaneousDual => 2,
             Proof::ShiftedCholesky => 2,
             Proof::ScalarComparison => 3,
@@ -84,6 +89,7 @@ impl Proof {
             Proof::DualCertificate
             | Proof::ConvDual
             | Proof::SimultaneousDual
+            | Proof::ScalarWeights
             | Proof::Grounded
             | Proof::ShiftedCholesky
             | Proof::ScalarComparison
@@ -103,6 +109,7 @@ impl fmt::Display for Proof {
             Proof::ConvSdp => "conv(SO(3)) SDP relaxation [A6] (Clarabel)",
             Proof::ConvDual => "conv(SO(3)) dual certificate at the estimate [A11]",
             Proof::SimultaneousDual => "trace-coupled dual certificate at the estimate [H15]",
+            Proof::ScalarWeights => "comparison with scalar weights [A13]",
             Proof::BranchAndBound => "branch and bound [B1]-[B6]",
             Proof::Grounded => "grounded bound [D15]",
             Proof::ShiftedCholesky => "shifted Cholesky of S [D5]",

@@ -67,6 +67,7 @@ mod readme_examples;
 mod relax_multiple;
 #[cfg(feature = "cli")]
 mod robust_inliers;
+mod scalar_weights;
 mod single;
 mod soundness_multiple;
 mod spectrum;

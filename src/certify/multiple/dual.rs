@@ -332,7 +332,13 @@ impl<'a> Rung<State<'a>> for DualRung {
 
     fn plan(&mut self, cx: &State<'a>) -> Result<Plan> {
         let label = cx.current.label;
-        let seconds = DUAL_SECONDS_PER_EDGE * cx.problem.num_edges() as f64;
+        // anisotropic blocks cost about three times the scalar path (issue 35)
+        let per_edge = if cx.problem.is_anisotropic() {
+            3.0
+        } else {
+            1.0
+        } * DUAL_SECONDS_PER_EDGE;
+        let seconds = per_edge * cx.problem.num_edges() as f64;
         // on data where the O(3) relaxation can prefer reflections it rarely proves [A5]
         let success = if cx.reflective { 0.2 } else { 1.0 };
         if !cx.dual_at.contains(&label) {

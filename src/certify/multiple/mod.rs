@@ -26,6 +26,7 @@ pub mod grounded;
 pub mod multipliers;
 pub mod randomized;
 pub mod scalar;
+pub mod scalar_weights;
 mod sdp;
 mod shifted;
 pub mod staircase;
@@ -127,8 +128,11 @@ pub fn certify_multiple(
 /// staircase in `auto` and `staircase` (in `sdp` in the place of an SDP refused over the
 /// budget); the SDP and the `conv(SO(3))` SDP in `auto` and `sdp`.
 fn rungs<'a>(mode: CertifyMode) -> Rungs<'a, State<'a>> {
-    let mut rungs: Rungs<'a, State<'a>> =
-        vec![Box::new(dual::DualRung), Box::new(conv_dual::ConvDualRung)];
+    let mut rungs: Rungs<'a, State<'a>> = vec![
+        Box::new(dual::DualRung),
+        Box::new(conv_dual::ConvDualRung),
+        Box::new(scalar_weights::ScalarWeightsRung::default()),
+    ];
     if matches!(
         mode,
         CertifyMode::Auto | CertifyMode::Staircase | CertifyMode::Sdp

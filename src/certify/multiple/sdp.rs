@@ -49,17 +49,14 @@ impl<'a> Rung<State<'a>> for SdpRung {
         if self.done {
             return Ok(Plan::Done);
         }
-        if cx.settings.mode == CertifyMode::Auto && n > cx.settings.sdp_max_nodes {
-            let reason = format!(
-                "SDP not run: {n} nodes > sdp_max_nodes {}",
-                cx.settings.sdp_max_nodes
-            );
-            return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
-        }
         match cx.escalation() {
             Err(reason) => return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None)),
             Ok(false) => return Ok(Plan::Wait),
             Ok(true) => {}
+        }
+        if cx.settings.mode == CertifyMode::Auto && n > cx.settings.sdp_max_nodes {
+            let reason = format!("{n} nodes > sdp_max_nodes {}", cx.settings.sdp_max_nodes);
+            return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
         }
         if cx.settings.mode == CertifyMode::Auto {
             // the staircase first (it solves the same relaxation: on a 40-node graph with 20 %
