@@ -889,7 +889,7 @@ pub fn placeholder_camera() -> ColmapCamera {
 pub fn read_database_cameras(path: &Path) -> Result<(Vec<ColmapCamera>, BTreeMap<u64, u32>)> {
     #[cfg(feature = "colmap")]
     {
-        database::cameras(path)
+        database::read_cameras(path)
     }
     #[cfg(not(feature = "colmap"))]
     {

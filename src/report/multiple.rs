@@ -241,8 +241,10 @@ impl Serialize for MultipleReport {
     }
 }
 
-impl fmt::Display for MultipleReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl MultipleReport {
+    /// What was read: the input's sizes, the component solved, the reader's warnings and the
+    /// information summary.
+    fn fmt_input(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let n = self.result.solution.rotations.len();
         write!(
             f,
@@ -271,6 +273,42 @@ impl fmt::Display for MultipleReport {
                 )?;
             }
         }
+        Ok(())
+    }
+
+    /// Which estimate is reported, and the files written.
+    fn fmt_outputs(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let robust = &self.result.solution;
+        if robust.residuals.is_some() {
+            write!(
+                f,
+                "\nreported estimate: the robust ({}) one{}",
+                robust.objective.loss.name(),
+                match (&self.result.details.inlier_graph, &self.inlier_output) {
+                    (Some(_), Some(p)) =>
+                        format!("; the inlier graph's refined estimate written to {p}"),
+                    (Some(_), None) =>
+                        "; the inlier graph's refined estimate: --inlier-output FILE".into(),
+                    _ => String::new(),
+                }
+            )?;
+        }
+        if let Some(p) = &self.edges_output {
+            write!(f, "\nper-edge residuals written to {p}")?;
+        }
+        if let Some(p) = &self.output {
+            write!(f, "\nestimate written to {p}")?;
+        }
+        if let Some(p) = &self.figure {
+            write!(f, "\nfigure written to {p}")?;
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Display for MultipleReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.fmt_input(f)?;
         writeln!(f)?;
         nested(f, &self.result)?;
         if let Some(c) = &self.result.details.certify {
@@ -298,29 +336,6 @@ impl fmt::Display for MultipleReport {
         if let Some(a) = &self.inlier_accuracy {
             write!(f, "\ninlier graph estimate: {a}")?;
         }
-        if robust.residuals.is_some() {
-            write!(
-                f,
-                "\nreported estimate: the robust ({}) one{}",
-                robust.objective.loss.name(),
-                match (&self.result.details.inlier_graph, &self.inlier_output) {
-                    (Some(_), Some(p)) =>
-                        format!("; the inlier graph's refined estimate written to {p}"),
-                    (Some(_), None) =>
-                        "; the inlier graph's refined estimate: --inlier-output FILE".into(),
-                    _ => String::new(),
-                }
-            )?;
-        }
-        if let Some(p) = &self.edges_output {
-            write!(f, "\nper-edge residuals written to {p}")?;
-        }
-        if let Some(p) = &self.output {
-            write!(f, "\nestimate written to {p}")?;
-        }
-        if let Some(p) = &self.figure {
-            write!(f, "\nfigure written to {p}")?;
-        }
-        Ok(())
+        self.fmt_outputs(f)
     }
 }
