@@ -6,9 +6,10 @@
 //! round-trip (a g2o input's vertices and edges kept, a loadable COLMAP model).
 
 use crate::error::{Error, Result};
-use crate::io::detect::GraphFormat;
+use crate::io::detect::{GraphFormat, LoadedGraph};
 use crate::multiple::MultipleProblem;
 use crate::multiple::robust::EdgeResiduals;
+use crate::pipeline::MultipleEstimate;
 use crate::so3::Rotation;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -319,6 +320,81 @@ impl EstimateFile<'_> {
                 .as_ref()
                 .map(|(c, ids)| (c.as_slice(), ids.as_slice())),
         )
+    }
+}
+
+/// The files of a multiple averaging besides its report (`rotavg multiple`'s `--output`,
+/// `--inlier-output` and `--edges-output`): planned before the solve ([`Self::prepare`]:
+/// folders created or refused, formats resolved) and written from its result
+/// ([`Self::write`]).
+#[derive(Debug, Clone, Default)]
+pub struct MultipleOutputs {
+    /// The estimate.
+    pub estimate: Option<OutputPlan>,
+    /// The inlier graph's refined estimate (robust losses).
+    pub inlier_estimate: Option<OutputPlan>,
+    /// The per-edge residuals (robust losses; [`edges_file_text`]).
+    pub edges: Option<String>,
+}
+
+impl MultipleOutputs {
+    /// Plan the outputs ([`prepare_output`]; both estimates in `format`).
+    pub fn prepare(
+        estimate: Option<&str>,
+        inlier_estimate: Option<&str>,
+        edges: Option<&str>,
+        format: OutputFormat,
+    ) -> Result<Self> {
+        let plan = |path: Option<&str>, format| path.map(|p| prepare_output(p, format)).transpose();
+        let outputs = MultipleOutputs {
+            estimate: plan(estimate, format)?,
+            inlier_estimate: plan(inlier_estimate, format)?,
+            edges: edges.map(str::to_owned),
+        };
+        plan(edges, OutputFormat::Json)?;
+        Ok(outputs)
+    }
+
+    /// An error, before the solve, for an estimate file `source` cannot give
+    /// ([`OutputSource::check`]).
+    pub fn check(&self, source: &OutputSource<'_>) -> Result<()> {
+        for plan in self.estimate.iter().chain(&self.inlier_estimate) {
+            source.check(plan)?;
+        }
+        Ok(())
+    }
+
+    /// Write the files from `result`, a solution of `graph`'s problem read from `source`
+    /// ([`EstimateFile::write_planned`]); the path of the inlier graph's estimate when it was
+    /// written (there is an inlier graph only when a robust estimate was certified).
+    pub fn write(
+        &self,
+        graph: &LoadedGraph,
+        result: &MultipleEstimate,
+        source: &OutputSource<'_>,
+    ) -> Result<Option<String>> {
+        let file = |rotations| EstimateFile {
+            problem: &graph.problem,
+            rotations,
+            node_ids: &graph.node_ids,
+            node_names: &graph.node_names,
+        };
+        if let Some(plan) = &self.estimate {
+            file(&result.solution.rotations).write_planned(plan, source)?;
+        }
+        if let (Some(path), Some(r)) = (&self.edges, &result.solution.residuals) {
+            write_text(
+                path,
+                &edges_file_text(path, &graph.problem, r, &graph.node_ids),
+            )?;
+        }
+        match (&self.inlier_estimate, &result.details.inlier_graph) {
+            (Some(plan), Some(g)) => {
+                file(&g.estimate).write_planned(plan, source)?;
+                Ok(Some(plan.path.clone()))
+            }
+            _ => Ok(None),
+        }
     }
 }
 

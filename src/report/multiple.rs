@@ -8,6 +8,8 @@ use crate::io::detect::{ComponentSelection, GraphFormat};
 use crate::io::input::MultipleInput;
 use crate::io::names::MultipleLoss;
 use crate::multiple::LinearAlgebraCounts;
+#[cfg(feature = "plot")]
+use crate::multiple::MultipleProblem;
 use crate::multiple::accuracy::{AccuracyReport, align_and_compare};
 use crate::multiple::anisotropic::InformationSummary;
 use crate::multiple::robust::ResidualSummary;
@@ -129,6 +131,22 @@ impl MultipleReport {
             inlier_output: None,
             information: g.problem.information().and_then(InformationSummary::of),
         })
+    }
+
+    /// Write the `--plot` figure of the estimate, a solution of `problem` (the problem read):
+    /// residual angles and the certificate (`rotavg::plot::write_multiple_figure`), and record
+    /// its path in [`Self::figure`].
+    #[cfg(feature = "plot")]
+    pub fn write_figure(&mut self, path: &str, problem: &MultipleProblem) -> Result<()> {
+        crate::plot::write_multiple_figure(
+            path,
+            problem,
+            &self.result.solution.rotations,
+            self.result.certificate.as_ref(),
+            &self.input,
+        )?;
+        self.figure = Some(path.to_owned());
+        Ok(())
     }
 
     /// The certificate's verdict, when one was computed.
