@@ -423,210 +423,261 @@ pub fn read_g2o_lines(lines: &mut TextLines<'_>, options: &ReadOptions) -> Resul
 const MAX_SKIPPED_TAGS: usize = 32;
 const MAX_TAG_CHARS: usize = 64;
 
+/// An edge line as parsed: `R_ij`, SE-Sync's weight (`[F3]`, `[F4]`; 1 without an
+/// information matrix) and the rotation information `H` (`[A7]`).
+struct ParsedEdge {
+    i: u64,
+    j: u64,
+    rotation: Rotation,
+    weight: f64,
+    information: Matrix3<f64>,
+}
+
+/// A 3-D edge (the tag read): `EDGE_SE3:QUAT i j x y z qx qy qz qw [+ 21 information
+/// entries]` when `quaternion`, else TORO's `EDGE3 i j x y z roll pitch yaw [+ 21 ...]`.
+fn parse_edge_3d(t: &mut Tokens<'_>, quaternion: bool, qtol: f64) -> Result<ParsedEdge> {
+    let full = if quaternion {
+        t.expect_count(
+            &[31, 10],
+            "EDGE_SE3:QUAT i j x y z qx qy qz qw + 21 information entries",
+        )?;
+        31
+    } else {
+        t.expect_count(
+            &[9, 30],
+            "EDGE3 i j x y z roll pitch yaw [+ 21 information entries]",
+        )?;
+        30
+    };
+    let i = t.next_id("edge id i")?;
+    let j = t.next_id("edge id j")?;
+    for w in ["x", "y", "z"] {
+        t.next_f64(w)?;
+    }
+    let rotation = if quaternion {
+        quaternion_rotation(t, qtol)?.inverse() // R_ij = Z_ij^T [F1]
+    } else {
+        let roll = t.next_f64("roll")?;
+        let pitch = t.next_f64("pitch")?;
+        let yaw = t.next_f64("yaw")?;
+        rotation_from_ypr(yaw, pitch, roll).inverse()
+    };
+    let (weight, information) = if t.toks.len() != full {
+        (1.0, Matrix3::identity())
+    } else if quaternion {
+        let (omega, tr) = rotation_information(t)?;
+        // [F3] kappa; [A7] H = R_ij^T (Omega / 2) R_ij (kappa I when isotropic)
+        (3.0 / (2.0 * tr), edge_information(&rotation, &omega, 0.5))
+    } else {
+        let (omega, tr) = rotation_information(t)?;
+        // [F3], angle units: kappa = 6 / tr; [A7] H = R_ij^T (2 Omega) R_ij
+        (6.0 / tr, edge_information(&rotation, &omega, 2.0))
+    };
+    Ok(ParsedEdge {
+        i,
+        j,
+        rotation,
+        weight,
+        information,
+    })
+}
+
+/// `EDGE_SE2 i j dx dy dtheta [I11 I12 I13 I22 I23 I33]` (the tag read).
+fn parse_edge_se2(t: &mut Tokens<'_>) -> Result<ParsedEdge> {
+    t.expect_count(
+        &[12, 6],
+        "EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33",
+    )?;
+    let i = t.next_id("edge id i")?;
+    let j = t.next_id("edge id j")?;
+    t.next_f64("dx")?;
+    t.next_f64("dy")?;
+    let th = t.next_f64("dtheta")?;
+    let weight = if t.toks.len() == 12 {
+        let mut info = [0.0; 6];
+        for (n, v) in info.iter_mut().enumerate() {
+            *v = t.next_f64(&format!("information entry {}", n + 1))?;
+        }
+        if info[5] <= 0.0 {
+            return Err(t.err(format!(
+                "the rotation information I33 = {} must be > 0",
+                info[5]
+            )));
+        }
+        info[5] // [F4] SE-Sync's 2-D kappa; [A7] H = I33 I
+    } else {
+        1.0
+    };
+    Ok(ParsedEdge {
+        i,
+        j,
+        // Z = Rz(dtheta), R_ij = Z^T = Rz(-dtheta) [F1], [F4]
+        rotation: Rotation::from_axis_angle(&Vector3::z_axis(), -th),
+        weight,
+        information: Matrix3::identity() * weight,
+    })
+}
+
+/// What a g2o file holds besides its edges, gathered line by line.
+#[derive(Default)]
+struct G2oContents {
+    /// Each vertex's rotation and line.
+    vertices: BTreeMap<u64, (Rotation, usize)>,
+    /// Lines with an unknown tag: count and first line, by tag (at most
+    /// [`MAX_SKIPPED_TAGS`]), and of the other tags together.
+    skipped: BTreeMap<String, (usize, usize)>,
+    skipped_other: (usize, usize),
+    seen_3d: bool,
+    seen_2d: bool,
+    /// [A7]: each kept edge's full rotation information, in edge order (used with
+    /// `options.full_information`).
+    infos: Vec<Information>,
+}
+
+impl G2oContents {
+    /// Count a line with the unknown tag `tag` at line `ln`.
+    fn skip(&mut self, tag: &str, ln: usize) {
+        let tag = match tag.char_indices().nth(MAX_TAG_CHARS) {
+            Some((k, _)) => &tag[..k],
+            None => tag,
+        };
+        let e = if let Some(e) = self.skipped.get_mut(tag) {
+            e
+        } else if self.skipped.len() < MAX_SKIPPED_TAGS {
+            self.skipped.entry(tag.to_owned()).or_insert((0, ln))
+        } else {
+            if self.skipped_other.0 == 0 {
+                self.skipped_other.1 = ln;
+            }
+            &mut self.skipped_other
+        };
+        e.0 += 1;
+    }
+
+    /// Keep the vertex `id` with rotation `r` (an error if it was defined before).
+    fn vertex(&mut self, t: &Tokens<'_>, id: u64, r: Rotation) -> Result<()> {
+        if let Some((_, first)) = self.vertices.get(&id) {
+            return Err(t.err(format!("vertex {id} defined twice (first at line {first})")));
+        }
+        self.vertices.insert(id, (r, t.line));
+        Ok(())
+    }
+
+    /// The edge `e` checked and weighted as `options` say (its information kept with
+    /// `options.full_information`).
+    fn edge(&mut self, t: &Tokens<'_>, e: ParsedEdge, options: &ReadOptions) -> Result<RawEdge> {
+        let ParsedEdge { i, j, weight, .. } = e;
+        if i == j {
+            return Err(t.err(format!("self loop: edge from node {i} to itself")));
+        }
+        if !(weight.is_finite() && weight > 0.0) {
+            return Err(t.err(format!("edge weight {weight:e} is not finite and > 0")));
+        }
+        if options.weights == WeightSource::File
+            && let Some(why) = crate::io::weight_out_of_range(weight)
+        {
+            return Err(t.err(format!("edge {why}")));
+        }
+        let weight = match options.weights {
+            WeightSource::File => weight,
+            WeightSource::Unit => 1.0,
+        };
+        if options.full_information && options.weights == WeightSource::File {
+            // checked here, so that an error names this line
+            let h = Information::new(e.information).map_err(|e| t.err(format!("edge {e}")))?;
+            self.infos.push(h);
+        }
+        Ok(RawEdge {
+            i,
+            j,
+            rotation: e.rotation,
+            weight,
+        })
+    }
+
+    /// The reader's remarks: lines skipped by tag, 2-D and 3-D lines mixed.
+    fn warnings(&self) -> Vec<String> {
+        let mut warnings = Vec::new();
+        for (tag, (count, first)) in &self.skipped {
+            warnings.push(format!(
+                "skipped {count} line(s) with unknown tag `{tag}` (first at line {first})"
+            ));
+        }
+        if self.skipped_other.0 > 0 {
+            warnings.push(format!(
+                "skipped {} line(s) with {MAX_SKIPPED_TAGS}+ other unknown tags (first at line {})",
+                self.skipped_other.0, self.skipped_other.1
+            ));
+        }
+        if self.seen_2d && self.seen_3d {
+            warnings.push("the file mixes 2-D and 3-D lines".to_owned());
+        }
+        warnings
+    }
+}
+
 fn read_g2o_limited(
     lines: &mut TextLines<'_>,
     options: &ReadOptions,
     max_records: usize,
 ) -> Result<LoadedGraph> {
     let qtol = options.quaternion_tolerance;
-    let mut vertices: BTreeMap<u64, (Rotation, usize)> = BTreeMap::new();
-    let mut skipped: BTreeMap<String, (usize, usize)> = BTreeMap::new();
-    let mut skipped_other = (0usize, 0usize);
-    let (mut seen_3d, mut seen_2d) = (false, false);
+    let mut c = G2oContents::default();
     let no_edges = "no edge lines (EDGE_SE3:QUAT, EDGE3 or EDGE_SE2) in the file";
-    // [A7]: each kept edge's full rotation information, in edge order (used with
-    // `options.full_information`)
-    let mut infos: Vec<Information> = Vec::new();
     let name = lines.name().to_owned();
     let edges = EdgeLines::read(lines, no_edges, |t, edges| {
-        let ln = t.line;
         let tag = t.next_str("tag")?;
-        let mut vertex = None;
-        let mut edge = None;
-        let mut information: Option<Matrix3<f64>> = None;
-        match tag {
+        let (vertex, edge) = match tag {
             "VERTEX_SE3:QUAT" | "VERTEX3" | "VERTEX_SE2" => {
                 let v = parse_vertex(tag, t, qtol)?;
-                seen_3d |= v.kind != VertexKind::Se2;
-                seen_2d |= v.kind == VertexKind::Se2;
-                vertex = Some((v.id, v.rotation));
+                c.seen_3d |= v.kind != VertexKind::Se2;
+                c.seen_2d |= v.kind == VertexKind::Se2;
+                (Some((v.id, v.rotation)), None)
             }
-            "EDGE_SE3:QUAT" => {
-                t.expect_count(
-                    &[31, 10],
-                    "EDGE_SE3:QUAT i j x y z qx qy qz qw + 21 information entries",
-                )?;
-                let i = t.next_id("edge id i")?;
-                let j = t.next_id("edge id j")?;
-                for w in ["x", "y", "z"] {
-                    t.next_f64(w)?;
-                }
-                let z = quaternion_rotation(t, qtol)?;
-                let r_ij = z.inverse(); // R_ij = Z_ij^T [F1]
-                let (weight, h) = if t.toks.len() == 31 {
-                    let (omega, tr) = rotation_information(t)?;
-                    // [F3] kappa; [A7] H = R_ij^T (Omega / 2) R_ij (kappa I when isotropic)
-                    (3.0 / (2.0 * tr), edge_information(&r_ij, &omega, 0.5))
-                } else {
-                    (1.0, Matrix3::identity())
-                };
-                edge = Some((i, j, r_ij, weight));
-                information = Some(h);
-                seen_3d = true;
-            }
-            "EDGE3" => {
-                t.expect_count(
-                    &[9, 30],
-                    "EDGE3 i j x y z roll pitch yaw [+ 21 information entries]",
-                )?;
-                let i = t.next_id("edge id i")?;
-                let j = t.next_id("edge id j")?;
-                for w in ["x", "y", "z"] {
-                    t.next_f64(w)?;
-                }
-                let roll = t.next_f64("roll")?;
-                let pitch = t.next_f64("pitch")?;
-                let yaw = t.next_f64("yaw")?;
-                let r_ij = rotation_from_ypr(yaw, pitch, roll).inverse();
-                let (weight, h) = if t.toks.len() == 30 {
-                    let (omega, tr) = rotation_information(t)?;
-                    // [F3], angle units: kappa = 6 / tr; [A7] H = R_ij^T (2 Omega) R_ij
-                    (6.0 / tr, edge_information(&r_ij, &omega, 2.0))
-                } else {
-                    (1.0, Matrix3::identity())
-                };
-                edge = Some((i, j, r_ij, weight));
-                information = Some(h);
-                seen_3d = true;
+            "EDGE_SE3:QUAT" | "EDGE3" => {
+                c.seen_3d = true;
+                (None, Some(parse_edge_3d(t, tag == "EDGE_SE3:QUAT", qtol)?))
             }
             "EDGE_SE2" => {
-                t.expect_count(
-                    &[12, 6],
-                    "EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33",
-                )?;
-                let i = t.next_id("edge id i")?;
-                let j = t.next_id("edge id j")?;
-                t.next_f64("dx")?;
-                t.next_f64("dy")?;
-                let th = t.next_f64("dtheta")?;
-                let weight = if t.toks.len() == 12 {
-                    let mut info = [0.0; 6];
-                    for (n, v) in info.iter_mut().enumerate() {
-                        *v = t.next_f64(&format!("information entry {}", n + 1))?;
-                    }
-                    if info[5] <= 0.0 {
-                        return Err(t.err(format!(
-                            "the rotation information I33 = {} must be > 0",
-                            info[5]
-                        )));
-                    }
-                    info[5] // [F4] SE-Sync's 2-D kappa; [A7] H = I33 I
-                } else {
-                    1.0
-                };
-                information = Some(Matrix3::identity() * weight);
-                // Z = Rz(dtheta), R_ij = Z^T = Rz(-dtheta) [F1], [F4]
-                edge = Some((
-                    i,
-                    j,
-                    Rotation::from_axis_angle(&Vector3::z_axis(), -th),
-                    weight,
-                ));
-                seen_2d = true;
+                c.seen_2d = true;
+                (None, Some(parse_edge_se2(t)?))
             }
             other => {
-                let tag = match other.char_indices().nth(MAX_TAG_CHARS) {
-                    Some((k, _)) => &other[..k],
-                    None => other,
-                };
-                let e = if let Some(e) = skipped.get_mut(tag) {
-                    e
-                } else if skipped.len() < MAX_SKIPPED_TAGS {
-                    skipped.entry(tag.to_owned()).or_insert((0, ln))
-                } else {
-                    if skipped_other.0 == 0 {
-                        skipped_other.1 = ln;
-                    }
-                    &mut skipped_other
-                };
-                e.0 += 1;
+                c.skip(other, t.line);
+                return Ok(());
             }
-        }
-        if (vertex.is_some() || edge.is_some()) && edges.len() + vertices.len() >= max_records {
+        };
+        if edges.len() + c.vertices.len() >= max_records {
             return Err(t.err(format!(
                 "more than {max_records} edges and vertices, the limit of a view graph \
                  (rotavg::io::text::MAX_RECORDS)"
             )));
         }
         if let Some((id, r)) = vertex {
-            if let Some((_, first)) = vertices.get(&id) {
-                return Err(t.err(format!("vertex {id} defined twice (first at line {first})")));
-            }
-            vertices.insert(id, (r, ln));
+            c.vertex(t, id, r)?;
         }
-        if let Some((i, j, rotation, weight)) = edge {
-            if i == j {
-                return Err(t.err(format!("self loop: edge from node {i} to itself")));
-            }
-            if !(weight.is_finite() && weight > 0.0) {
-                return Err(t.err(format!("edge weight {weight:e} is not finite and > 0")));
-            }
-            if options.weights == WeightSource::File
-                && let Some(why) = crate::io::weight_out_of_range(weight)
-            {
-                return Err(t.err(format!("edge {why}")));
-            }
-            let weight = match options.weights {
-                WeightSource::File => weight,
-                WeightSource::Unit => 1.0,
-            };
-            if options.full_information && options.weights == WeightSource::File {
-                let h = information.unwrap_or_else(|| Matrix3::identity() * weight);
-                // checked here, so that an error names this line
-                infos.push(Information::new(h).map_err(|e| t.err(format!("edge {e}")))?);
-            }
-            edges.push(
-                ln,
-                RawEdge {
-                    i,
-                    j,
-                    rotation,
-                    weight,
-                },
-            );
+        if let Some(e) = edge {
+            let raw = c.edge(t, e, options)?;
+            edges.push(t.line, raw);
         }
         Ok(())
     })?;
-    let mut warnings = Vec::new();
-    for (tag, (count, first)) in &skipped {
-        warnings.push(format!(
-            "skipped {count} line(s) with unknown tag `{tag}` (first at line {first})"
-        ));
-    }
-    if skipped_other.0 > 0 {
-        warnings.push(format!(
-            "skipped {} line(s) with {MAX_SKIPPED_TAGS}+ other unknown tags (first at line {})",
-            skipped_other.0, skipped_other.1
-        ));
-    }
-    if seen_2d && seen_3d {
-        warnings.push("the file mixes 2-D and 3-D lines".to_owned());
-    }
-    let mut graph = edges.into_graph(vertices.keys().copied(), GraphFormat::G2o)?;
-    if !infos.is_empty() {
+    let mut warnings = c.warnings();
+    let mut graph = edges.into_graph(c.vertices.keys().copied(), GraphFormat::G2o)?;
+    if !c.infos.is_empty() {
         graph.problem = graph
             .problem
-            .with_information(infos)
+            .with_information(c.infos)
             .map_err(|e| e.in_file(&name, None))?;
     }
-    let initial = if vertices.is_empty() {
+    let initial = if c.vertices.is_empty() {
         None
-    } else if vertices.len() == graph.node_ids.len() {
-        Some(vertices.values().map(|(r, _)| *r).collect())
+    } else if c.vertices.len() == graph.node_ids.len() {
+        Some(c.vertices.values().map(|(r, _)| *r).collect())
     } else {
         warnings.push(format!(
             "{} of {} nodes have no vertex line: no initial estimate",
-            graph.node_ids.len() - vertices.len(),
+            graph.node_ids.len() - c.vertices.len(),
             graph.node_ids.len()
         ));
         None
@@ -634,7 +685,7 @@ fn read_g2o_limited(
     Ok(LoadedGraph {
         initial,
         warnings,
-        planar: seen_2d && !seen_3d,
+        planar: c.seen_2d && !c.seen_3d,
         ..graph
     })
 }

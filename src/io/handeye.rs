@@ -505,7 +505,6 @@ fn ambiguous_integer_stamp(tok: &str) -> bool {
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn read_pose_stream(text: &str, file: &str, settings: &MotionSettings) -> Result<PoseStream> {
-    let tol = settings.rotation_tolerance;
     let mut poses: Vec<StampedPose> = Vec::new();
     let mut stats = StreamStats {
         file: file.to_string(),
@@ -521,65 +520,18 @@ pub fn read_pose_stream(text: &str, file: &str, settings: &MotionSettings) -> Re
             first_header.get_or_insert((line, l));
             continue;
         }
+        let err = |msg: String| Error::parse(Some(file), Some(line), msg);
         if f.len() != 8 {
-            return Err(Error::parse(
-                Some(file),
-                Some(line),
-                format!(
-                    "expected 8 fields (t, x, y, z and the quaternion, separated by commas or spaces), found {}",
-                    f.len()
-                ),
-            ));
+            return Err(err(format!(
+                "expected 8 fields (t, x, y, z and the quaternion, separated by commas or spaces), found {}",
+                f.len()
+            )));
         }
-        if unit.is_none() && ambiguous_integer_stamp(f[0]) {
-            return Err(Error::parse(
-                Some(file),
-                Some(line),
-                format!(
-                    "time stamp `{}`: an integer between 1e12 and 1e17 is neither seconds nor nanoseconds since the epoch (milliseconds or microseconds?); convert the stamps to seconds",
-                    f[0]
-                ),
-            ));
-        }
-        let unit = *unit.get_or_insert(if nanoseconds(f[0]).is_some() {
-            TimeUnit::Nanoseconds
-        } else {
-            TimeUnit::Seconds
-        });
-        let time = match unit {
-            TimeUnit::Seconds => number(f[0], line, file)?,
-            TimeUnit::Nanoseconds => {
-                let ns = nanoseconds(f[0]).ok_or_else(|| {
-                    Error::parse(
-                        Some(file),
-                        Some(line),
-                        format!(
-                            "expected an integer nanosecond time stamp (as the first one), found `{}`",
-                            f[0]
-                        ),
-                    )
-                })?;
-                (ns / 1_000_000_000) as f64 + (ns % 1_000_000_000) as f64 * 1e-9
-            }
+        let unit = match unit {
+            Some(u) => u,
+            None => *unit.insert(time_unit(f[0]).map_err(err)?),
         };
-        let mut v = [0.0; 7];
-        for (slot, t) in v.iter_mut().zip(&f[1..]) {
-            *slot = number(t, line, file)?;
-        }
-        let q = match settings.quaternion_order {
-            QuaternionOrder::Xyzw => Quaternion::new(v[6], v[3], v[4], v[5]),
-            QuaternionOrder::Wxyz => Quaternion::new(v[3], v[4], v[5], v[6]),
-        };
-        // A (near-)zero quaternion has no direction, whatever the tolerance: normalising it
-        // would give NaN (found by fuzzing, tests/fuzz_regressions.rs).
-        let norm = q.norm();
-        if !(norm > 1e-12 && (norm - 1.0).abs() <= tol) {
-            return Err(Error::parse(
-                Some(file),
-                Some(line),
-                format!("quaternion norm {norm} is not 1 (tolerance {tol:.1e})"),
-            ));
-        }
+        let (time, pose) = stream_sample(&f, unit, line, file, settings)?;
         stats.samples += 1;
         if let Some(prev) = poses.last() {
             if time == prev.time {
@@ -587,24 +539,14 @@ pub fn read_pose_stream(text: &str, file: &str, settings: &MotionSettings) -> Re
                 continue;
             }
             if time < prev.time {
-                return Err(Error::parse(
-                    Some(file),
-                    Some(line),
-                    format!(
-                        "time stamp {} is before the previous one {} (line {prev_line}); repeated stamps are dropped, decreasing ones are an error",
-                        f[0], prev.time
-                    ),
-                ));
+                return Err(err(format!(
+                    "time stamp {} is before the previous one {} (line {prev_line}); repeated stamps are dropped, decreasing ones are an error",
+                    f[0], prev.time
+                )));
             }
         }
         prev_line = line;
-        poses.push(StampedPose {
-            time,
-            pose: Pose {
-                rotation: UnitQuaternion::from_quaternion(q).to_rotation_matrix(),
-                translation: Vector3::new(v[0], v[1], v[2]),
-            },
-        });
+        poses.push(StampedPose { time, pose });
     }
     if poses.is_empty() {
         let why = match first_header {
@@ -620,6 +562,67 @@ pub fn read_pose_stream(text: &str, file: &str, settings: &MotionSettings) -> Re
     stats.kept = poses.len();
     stats.time_unit = unit.unwrap_or_default();
     Ok(PoseStream { poses, stats })
+}
+
+/// The time unit of a stream from its first stamp `first`; an error for an integer stamp
+/// that is neither seconds nor nanoseconds.
+fn time_unit(first: &str) -> std::result::Result<TimeUnit, String> {
+    if ambiguous_integer_stamp(first) {
+        return Err(format!(
+            "time stamp `{first}`: an integer between 1e12 and 1e17 is neither seconds nor nanoseconds since the epoch (milliseconds or microseconds?); convert the stamps to seconds"
+        ));
+    }
+    Ok(if nanoseconds(first).is_some() {
+        TimeUnit::Nanoseconds
+    } else {
+        TimeUnit::Seconds
+    })
+}
+
+/// The time (seconds) and pose of the 8 fields `f` of a stream's line `line`: time stamp in
+/// `unit`, translation, quaternion in `settings.quaternion_order` (its norm 1 within
+/// `settings.rotation_tolerance`).
+fn stream_sample(
+    f: &[&str],
+    unit: TimeUnit,
+    line: usize,
+    file: &str,
+    settings: &MotionSettings,
+) -> Result<(f64, Pose)> {
+    let err = |msg: String| Error::parse(Some(file), Some(line), msg);
+    let time = match unit {
+        TimeUnit::Seconds => number(f[0], line, file)?,
+        TimeUnit::Nanoseconds => {
+            let ns = nanoseconds(f[0]).ok_or_else(|| {
+                err(format!(
+                    "expected an integer nanosecond time stamp (as the first one), found `{}`",
+                    f[0]
+                ))
+            })?;
+            (ns / 1_000_000_000) as f64 + (ns % 1_000_000_000) as f64 * 1e-9
+        }
+    };
+    let mut v = [0.0; 7];
+    for (slot, t) in v.iter_mut().zip(&f[1..]) {
+        *slot = number(t, line, file)?;
+    }
+    let q = match settings.quaternion_order {
+        QuaternionOrder::Xyzw => Quaternion::new(v[6], v[3], v[4], v[5]),
+        QuaternionOrder::Wxyz => Quaternion::new(v[3], v[4], v[5], v[6]),
+    };
+    // A (near-)zero quaternion has no direction, whatever the tolerance: normalising it
+    // would give NaN (found by fuzzing, tests/fuzz_regressions.rs).
+    let (norm, tol) = (q.norm(), settings.rotation_tolerance);
+    if !(norm > 1e-12 && (norm - 1.0).abs() <= tol) {
+        return Err(err(format!(
+            "quaternion norm {norm} is not 1 (tolerance {tol:.1e})"
+        )));
+    }
+    let pose = Pose {
+        rotation: UnitQuaternion::from_quaternion(q).to_rotation_matrix(),
+        translation: Vector3::new(v[0], v[1], v[2]),
+    };
+    Ok((time, pose))
 }
 
 /// Read an ETH ASL CSV (`t, x, y, z, qx, qy, qz, qw`, seconds): the samples of

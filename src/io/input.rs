@@ -491,25 +491,7 @@ pub fn load_conjugate_with(
 ) -> Result<LoadedConjugate> {
     let named = handeye.hand.is_some() || handeye.camera.is_some();
     let is_dir = path.is_some_and(|p| p != "-" && Path::new(p).is_dir());
-    let format = match format {
-        ConjugateFormat::Auto | ConjugateFormat::Eth if named => ConjugateFormat::Eth,
-        f if named => {
-            return Err(Error::InvalidSettings {
-                name: "hand/camera".into(),
-                reason: format!(
-                    "named hand and camera files are pose streams (format eth), not format {f}"
-                ),
-            });
-        }
-        ConjugateFormat::Auto
-            if is_dir && path.is_some_and(|p| Path::new(p).join("robot_cali.txt").is_file()) =>
-        {
-            ConjugateFormat::Tabb
-        }
-        ConjugateFormat::Auto if is_dir => ConjugateFormat::Eth,
-        ConjugateFormat::Auto => ConjugateFormat::Json,
-        f => f,
-    };
+    let format = conjugate_format(path, format, named, is_dir)?;
     let motion_settings = MotionSettings {
         rotation_tolerance: options.rotation_tolerance,
         ..handeye.motion
@@ -546,19 +528,7 @@ pub fn load_conjugate_with(
                     message: "not a directory (pose streams: a directory, or name both files with --hand and --camera)".into(),
                 });
             }
-            let in_dir = |f: &Option<String>| {
-                f.as_ref().map(|f| {
-                    let p = Path::new(f);
-                    if p.exists() {
-                        p.to_path_buf()
-                    } else {
-                        dir.join(p)
-                    }
-                })
-            };
-            let (hand, camera) = (in_dir(&handeye.hand), in_dir(&handeye.camera));
-            let (h, c) = find_stream_files(dir, hand.as_deref(), camera.as_deref())?;
-            let (p, s) = read_stream_pair(&h, &c, &motion_settings)?;
+            let (p, s) = read_stream_dir(dir, handeye, &motion_settings)?;
             (p, Some(s))
         }
         ConjugateFormat::Json | ConjugateFormat::Auto => {
@@ -573,6 +543,58 @@ pub fn load_conjugate_with(
         motion,
         motion_settings,
     })
+}
+
+/// The format of a conjugate input: `format`, or when `auto` from `path` (a Tabb directory
+/// holds `robot_cali.txt`, other directories hold pose streams, files are JSON); pose streams
+/// when hand or camera files are `named` (then `format` must be `auto` or `eth`).
+fn conjugate_format(
+    path: Option<&str>,
+    format: ConjugateFormat,
+    named: bool,
+    is_dir: bool,
+) -> Result<ConjugateFormat> {
+    Ok(match format {
+        ConjugateFormat::Auto | ConjugateFormat::Eth if named => ConjugateFormat::Eth,
+        f if named => {
+            return Err(Error::InvalidSettings {
+                name: "hand/camera".into(),
+                reason: format!(
+                    "named hand and camera files are pose streams (format eth), not format {f}"
+                ),
+            });
+        }
+        ConjugateFormat::Auto
+            if is_dir && path.is_some_and(|p| Path::new(p).join("robot_cali.txt").is_file()) =>
+        {
+            ConjugateFormat::Tabb
+        }
+        ConjugateFormat::Auto if is_dir => ConjugateFormat::Eth,
+        ConjugateFormat::Auto => ConjugateFormat::Json,
+        f => f,
+    })
+}
+
+/// The hand and camera pose streams of the directory `dir` (the files `handeye` names, as
+/// given or inside `dir`, else found by name), paired into motions.
+fn read_stream_dir(
+    dir: &Path,
+    handeye: &HandEyeOptions,
+    settings: &MotionSettings,
+) -> Result<(ConjugateProblem, MotionStats)> {
+    let in_dir = |f: &Option<String>| {
+        f.as_ref().map(|f| {
+            let p = Path::new(f);
+            if p.exists() {
+                p.to_path_buf()
+            } else {
+                dir.join(p)
+            }
+        })
+    };
+    let (hand, camera) = (in_dir(&handeye.hand), in_dir(&handeye.camera));
+    let (h, c) = find_stream_files(dir, hand.as_deref(), camera.as_deref())?;
+    read_stream_pair(&h, &c, settings)
 }
 
 /// The formats of a file of absolute rotations ([`load_rotations_for_nodes`]): estimates,

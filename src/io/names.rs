@@ -380,6 +380,24 @@ impl MultipleLoss {
         }
     }
 
+    /// The inlier threshold (degrees) of a robust loss: `given` (`--inlier-threshold`), or for
+    /// L1 `threshold_deg` (`--loss-threshold`) when none is given; none for least squares.
+    ///
+    /// ```
+    /// use rotavg::io::names::MultipleLoss;
+    /// assert_eq!(MultipleLoss::L1.inlier_threshold_deg(5.0, None), Some(5.0));
+    /// assert_eq!(MultipleLoss::Huber.inlier_threshold_deg(5.0, None), None);
+    /// assert_eq!(MultipleLoss::Cauchy.inlier_threshold_deg(5.0, Some(2.0)), Some(2.0));
+    /// assert_eq!(MultipleLoss::Chordal.inlier_threshold_deg(5.0, Some(2.0)), None);
+    /// ```
+    pub fn inlier_threshold_deg(self, threshold_deg: f64, given: Option<f64>) -> Option<f64> {
+        match self {
+            MultipleLoss::L1 => Some(given.unwrap_or(threshold_deg)),
+            MultipleLoss::Huber | MultipleLoss::Cauchy => given,
+            MultipleLoss::Chordal | MultipleLoss::Geodesic => None,
+        }
+    }
+
     /// The name of an objective in this vocabulary (`chordal`, `geodesic`, `l1`, `huber`,
     /// `cauchy`), or `metric loss` (e.g. `chordal l1`) for one outside it.
     pub fn name_of(objective: &Objective) -> String {

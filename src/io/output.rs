@@ -6,11 +6,13 @@
 //! round-trip (a g2o input's vertices and edges kept, a loadable COLMAP model).
 
 use crate::error::{Error, Result};
-use crate::io::detect::GraphFormat;
+use crate::io::detect::{GraphFormat, LoadedGraph};
 use crate::multiple::MultipleProblem;
 use crate::multiple::robust::EdgeResiduals;
+use crate::pipeline::MultipleEstimate;
 use crate::so3::Rotation;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// The format of an estimate file.
@@ -234,32 +236,7 @@ impl EstimateFile<'_> {
         let path = plan.file.display().to_string();
         match plan.format {
             OutputFormat::G2o if source.format == GraphFormat::G2o => {
-                // the input's vertex rotations (none: no alignment), streamed
-                let input_vertices = crate::io::g2o::read_g2o_vertices_lines(
-                    &mut crate::io::text::TextStream::open(source.input)?.into_lines(),
-                    &Default::default(),
-                )
-                .unwrap_or_default();
-                let by_id: std::collections::BTreeMap<u64, Rotation> =
-                    input_vertices.iter().map(|v| (v.id, v.rotation)).collect();
-                // G minimising sum ||R_k G - V_k||_F over the nodes with an input vertex
-                let mut m = nalgebra::Matrix3::<f64>::zeros();
-                for (k, r) in self.rotations.iter().enumerate() {
-                    if let Some(v) = self.node_ids.get(k).and_then(|id| by_id.get(id)) {
-                        m += r.matrix().transpose() * v.matrix();
-                    }
-                }
-                let g = if m == nalgebra::Matrix3::zeros() {
-                    Rotation::identity()
-                } else {
-                    crate::so3::project_to_so3(&m).unwrap_or_else(Rotation::identity)
-                };
-                let estimate: std::collections::BTreeMap<u64, Rotation> = self
-                    .node_ids
-                    .iter()
-                    .zip(self.rotations)
-                    .map(|(&id, r)| (id, r * g))
-                    .collect();
+                let estimate = self.aligned_to_vertices(source.input)?;
                 let mut lines = crate::io::text::TextStream::open(source.input)?.into_lines();
                 write_text(
                     &path,
@@ -274,43 +251,149 @@ impl EstimateFile<'_> {
                     self.node_ids,
                 ),
             ),
-            OutputFormat::Colmap => {
-                let Some(dir) = &plan.model_dir else {
-                    return write_text(&path, &self.text(&path, OutputFormat::Colmap)?);
-                };
-                let database = (source.format == GraphFormat::Colmap)
-                    .then(|| crate::io::colmap::find_database(Path::new(source.input)))
-                    .flatten();
-                match database {
-                    Some(db) => {
-                        let (cameras, of_image) = crate::io::colmap::read_database_cameras(&db)?;
-                        let camera_ids: Vec<u32> = self
-                            .node_ids
-                            .iter()
-                            .map(|id| of_image.get(id).copied().unwrap_or(1))
-                            .collect();
-                        crate::io::colmap::write_sparse_model(
-                            dir,
-                            &plan.file,
-                            self.rotations,
-                            self.node_ids,
-                            self.node_names,
-                            Some((&cameras, &camera_ids)),
-                        )
-                    }
-                    None => crate::io::colmap::write_sparse_model(
-                        dir,
-                        &plan.file,
-                        self.rotations,
-                        self.node_ids,
-                        self.node_names,
-                        None,
-                    ),
-                }
-            }
+            OutputFormat::Colmap => match &plan.model_dir {
+                Some(dir) => self.write_model(dir, &plan.file, source),
+                None => write_text(&path, &self.text(&path, OutputFormat::Colmap)?),
+            },
             OutputFormat::Json | OutputFormat::Auto => {
                 write_text(&path, &self.text(&path, OutputFormat::Json)?)
             }
+        }
+    }
+
+    /// The estimate by file id, turned by the global rotation `G` that best aligns it with the
+    /// vertex rotations of the g2o file `input` (`G` minimises `sum ||R_k G - V_k||_F` over the
+    /// nodes with a vertex; the identity when there are none).
+    fn aligned_to_vertices(&self, input: &str) -> Result<BTreeMap<u64, Rotation>> {
+        // the input's vertex rotations (none: no alignment), streamed
+        let input_vertices = crate::io::g2o::read_g2o_vertices_lines(
+            &mut crate::io::text::TextStream::open(input)?.into_lines(),
+            &Default::default(),
+        )
+        .unwrap_or_default();
+        let by_id: BTreeMap<u64, Rotation> =
+            input_vertices.iter().map(|v| (v.id, v.rotation)).collect();
+        let mut m = nalgebra::Matrix3::<f64>::zeros();
+        for (k, r) in self.rotations.iter().enumerate() {
+            if let Some(v) = self.node_ids.get(k).and_then(|id| by_id.get(id)) {
+                m += r.matrix().transpose() * v.matrix();
+            }
+        }
+        let g = if m == nalgebra::Matrix3::zeros() {
+            Rotation::identity()
+        } else {
+            crate::so3::project_to_so3(&m).unwrap_or_else(Rotation::identity)
+        };
+        Ok(self
+            .node_ids
+            .iter()
+            .zip(self.rotations)
+            .map(|(&id, r)| (id, r * g))
+            .collect())
+    }
+
+    /// A COLMAP sparse model in `dir` (images file `file`), with the cameras of the COLMAP
+    /// database `source` reads, if any.
+    fn write_model(&self, dir: &Path, file: &Path, source: &OutputSource<'_>) -> Result<()> {
+        let database = (source.format == GraphFormat::Colmap)
+            .then(|| crate::io::colmap::find_database(Path::new(source.input)))
+            .flatten();
+        let cameras = match database {
+            Some(db) => {
+                let (cameras, of_image) = crate::io::colmap::read_database_cameras(&db)?;
+                let camera_ids: Vec<u32> = self
+                    .node_ids
+                    .iter()
+                    .map(|id| of_image.get(id).copied().unwrap_or(1))
+                    .collect();
+                Some((cameras, camera_ids))
+            }
+            None => None,
+        };
+        crate::io::colmap::write_sparse_model(
+            dir,
+            file,
+            self.rotations,
+            self.node_ids,
+            self.node_names,
+            cameras
+                .as_ref()
+                .map(|(c, ids)| (c.as_slice(), ids.as_slice())),
+        )
+    }
+}
+
+/// The files of a multiple averaging besides its report (`rotavg multiple`'s `--output`,
+/// `--inlier-output` and `--edges-output`): planned before the solve ([`Self::prepare`]:
+/// folders created or refused, formats resolved) and written from its result
+/// ([`Self::write`]).
+#[derive(Debug, Clone, Default)]
+pub struct MultipleOutputs {
+    /// The estimate.
+    pub estimate: Option<OutputPlan>,
+    /// The inlier graph's refined estimate (robust losses).
+    pub inlier_estimate: Option<OutputPlan>,
+    /// The per-edge residuals (robust losses; [`edges_file_text`]).
+    pub edges: Option<String>,
+}
+
+impl MultipleOutputs {
+    /// Plan the outputs ([`prepare_output`]; both estimates in `format`).
+    pub fn prepare(
+        estimate: Option<&str>,
+        inlier_estimate: Option<&str>,
+        edges: Option<&str>,
+        format: OutputFormat,
+    ) -> Result<Self> {
+        let plan = |path: Option<&str>, format| path.map(|p| prepare_output(p, format)).transpose();
+        let outputs = MultipleOutputs {
+            estimate: plan(estimate, format)?,
+            inlier_estimate: plan(inlier_estimate, format)?,
+            edges: edges.map(str::to_owned),
+        };
+        plan(edges, OutputFormat::Json)?;
+        Ok(outputs)
+    }
+
+    /// An error, before the solve, for an estimate file `source` cannot give
+    /// ([`OutputSource::check`]).
+    pub fn check(&self, source: &OutputSource<'_>) -> Result<()> {
+        for plan in self.estimate.iter().chain(&self.inlier_estimate) {
+            source.check(plan)?;
+        }
+        Ok(())
+    }
+
+    /// Write the files from `result`, a solution of `graph`'s problem read from `source`
+    /// ([`EstimateFile::write_planned`]); the path of the inlier graph's estimate when it was
+    /// written (there is an inlier graph only when a robust estimate was certified).
+    pub fn write(
+        &self,
+        graph: &LoadedGraph,
+        result: &MultipleEstimate,
+        source: &OutputSource<'_>,
+    ) -> Result<Option<String>> {
+        let file = |rotations| EstimateFile {
+            problem: &graph.problem,
+            rotations,
+            node_ids: &graph.node_ids,
+            node_names: &graph.node_names,
+        };
+        if let Some(plan) = &self.estimate {
+            file(&result.solution.rotations).write_planned(plan, source)?;
+        }
+        if let (Some(path), Some(r)) = (&self.edges, &result.solution.residuals) {
+            write_text(
+                path,
+                &edges_file_text(path, &graph.problem, r, &graph.node_ids),
+            )?;
+        }
+        match (&self.inlier_estimate, &result.details.inlier_graph) {
+            (Some(plan), Some(g)) => {
+                file(&g.estimate).write_planned(plan, source)?;
+                Ok(Some(plan.path.clone()))
+            }
+            _ => Ok(None),
         }
     }
 }

@@ -195,7 +195,7 @@ pub fn rotation_information(
     let h = if t.norm() == 0.0 {
         transfer_information(rm, x1, c2)
     } else {
-        epipolar_information(rm, &t.normalize(), x1, x2, c1, c2)?
+        epipolar_information(rm, &t.normalize(), &Views { x1, x2, c1, c2 })?
     };
     if !h.iter().all(|v| v.is_finite()) {
         return Err("the information is not finite".into());
@@ -204,14 +204,21 @@ pub fn rotation_information(
     Ok((h + h.transpose()) * 0.5)
 }
 
+/// The correspondences `x1[k] <-> x2[k]` of two views and their cameras.
+struct Views<'a> {
+    x1: &'a [Vector2<f64>],
+    x2: &'a [Vector2<f64>],
+    c1: &'a Camera,
+    c2: &'a Camera,
+}
+
+/// The Sampson case of [`rotation_information`] (`t` a unit vector).
 fn epipolar_information(
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
-    x1: &[Vector2<f64>],
-    x2: &[Vector2<f64>],
-    c1: &Camera,
-    c2: &Camera,
+    views: &Views<'_>,
 ) -> Result<Matrix3<f64>, String> {
+    let Views { x1, x2, c1, c2 } = views;
     // an orthonormal basis of the tangent plane of the unit sphere at t
     let helper = if t.x.abs() < 0.9 {
         Vector3::x()
@@ -222,7 +229,7 @@ fn epipolar_information(
     let b2 = t.cross(&b1);
     let e = crate::so3::hat(t) * r;
     let mut fisher = SMatrix::<f64, 5, 5>::zeros();
-    for (p, q) in x1.iter().zip(x2) {
+    for (p, q) in x1.iter().zip(x2.iter()) {
         let (p, q) = (p.push(1.0), q.push(1.0));
         let (ep, etq) = (e * p, e.transpose() * q);
         // the Sampson denominator in pixels: (E x1)_{1,2} / f2 and (E^T x2)_{1,2} / f1

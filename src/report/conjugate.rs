@@ -109,6 +109,25 @@ impl ConjugateReport {
         self
     }
 
+    /// Write the `--plot` figure of the estimate, a solution of `problem` read from `input`:
+    /// residual angles and the certificate (`rotavg::plot::write_conjugate_figure`), and
+    /// record its path in [`Self::figure`].
+    #[cfg(feature = "plot")]
+    pub fn write_figure(
+        &mut self,
+        path: &str,
+        problem: &ConjugateProblem,
+        input: &str,
+    ) -> crate::Result<()> {
+        let (s, certificate) = (
+            &self.result.solution.estimate,
+            self.result.certificate.as_ref(),
+        );
+        crate::plot::write_conjugate_figure(path, problem, s, certificate, input)?;
+        self.figure = Some(path.to_owned());
+        Ok(())
+    }
+
     /// The certificate's verdict, when one was computed.
     pub fn verdict(&self) -> Option<Verdict> {
         self.result.certificate.as_ref().map(|c| c.verdict)

@@ -8,6 +8,8 @@ use crate::io::detect::{ComponentSelection, GraphFormat};
 use crate::io::input::MultipleInput;
 use crate::io::names::MultipleLoss;
 use crate::multiple::LinearAlgebraCounts;
+#[cfg(feature = "plot")]
+use crate::multiple::MultipleProblem;
 use crate::multiple::accuracy::{AccuracyReport, align_and_compare};
 use crate::multiple::anisotropic::InformationSummary;
 use crate::multiple::robust::ResidualSummary;
@@ -131,6 +133,22 @@ impl MultipleReport {
         })
     }
 
+    /// Write the `--plot` figure of the estimate, a solution of `problem` (the problem read):
+    /// residual angles and the certificate (`rotavg::plot::write_multiple_figure`), and record
+    /// its path in [`Self::figure`].
+    #[cfg(feature = "plot")]
+    pub fn write_figure(&mut self, path: &str, problem: &MultipleProblem) -> Result<()> {
+        crate::plot::write_multiple_figure(
+            path,
+            problem,
+            &self.result.solution.rotations,
+            self.result.certificate.as_ref(),
+            &self.input,
+        )?;
+        self.figure = Some(path.to_owned());
+        Ok(())
+    }
+
     /// The certificate's verdict, when one was computed.
     pub fn verdict(&self) -> Option<Verdict> {
         self.result.certificate.as_ref().map(|c| c.verdict)
@@ -241,8 +259,10 @@ impl Serialize for MultipleReport {
     }
 }
 
-impl fmt::Display for MultipleReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl MultipleReport {
+    /// What was read: the input's sizes, the component solved, the reader's warnings and the
+    /// information summary.
+    fn fmt_input(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let n = self.result.solution.rotations.len();
         write!(
             f,
@@ -271,6 +291,42 @@ impl fmt::Display for MultipleReport {
                 )?;
             }
         }
+        Ok(())
+    }
+
+    /// Which estimate is reported, and the files written.
+    fn fmt_outputs(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let robust = &self.result.solution;
+        if robust.residuals.is_some() {
+            write!(
+                f,
+                "\nreported estimate: the robust ({}) one{}",
+                robust.objective.loss.name(),
+                match (&self.result.details.inlier_graph, &self.inlier_output) {
+                    (Some(_), Some(p)) =>
+                        format!("; the inlier graph's refined estimate written to {p}"),
+                    (Some(_), None) =>
+                        "; the inlier graph's refined estimate: --inlier-output FILE".into(),
+                    _ => String::new(),
+                }
+            )?;
+        }
+        if let Some(p) = &self.edges_output {
+            write!(f, "\nper-edge residuals written to {p}")?;
+        }
+        if let Some(p) = &self.output {
+            write!(f, "\nestimate written to {p}")?;
+        }
+        if let Some(p) = &self.figure {
+            write!(f, "\nfigure written to {p}")?;
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Display for MultipleReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.fmt_input(f)?;
         writeln!(f)?;
         nested(f, &self.result)?;
         if let Some(c) = &self.result.details.certify {
@@ -298,29 +354,6 @@ impl fmt::Display for MultipleReport {
         if let Some(a) = &self.inlier_accuracy {
             write!(f, "\ninlier graph estimate: {a}")?;
         }
-        if robust.residuals.is_some() {
-            write!(
-                f,
-                "\nreported estimate: the robust ({}) one{}",
-                robust.objective.loss.name(),
-                match (&self.result.details.inlier_graph, &self.inlier_output) {
-                    (Some(_), Some(p)) =>
-                        format!("; the inlier graph's refined estimate written to {p}"),
-                    (Some(_), None) =>
-                        "; the inlier graph's refined estimate: --inlier-output FILE".into(),
-                    _ => String::new(),
-                }
-            )?;
-        }
-        if let Some(p) = &self.edges_output {
-            write!(f, "\nper-edge residuals written to {p}")?;
-        }
-        if let Some(p) = &self.output {
-            write!(f, "\nestimate written to {p}")?;
-        }
-        if let Some(p) = &self.figure {
-            write!(f, "\nfigure written to {p}")?;
-        }
-        Ok(())
+        self.fmt_outputs(f)
     }
 }

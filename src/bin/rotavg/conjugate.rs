@@ -1,21 +1,16 @@
-//! `rotavg conjugate INPUT [--format auto|json|tabb|eth] [--certify auto|sdp|branch_and_bound|none] [--json]`:
-//! hand-eye (conjugate) rotation averaging, `R_i ~ S^-1 L_i S`
-//! (`rotavg::pipeline::average_conjugate`, printed as `rotavg::report::ConjugateReport`).
-//! Pose streams: `[DIR] [--hand FILE] [--camera FILE] [--stride N] [--subsample K]
-//! [--max-gap S] [--time-offset S] [--min-angle DEG] [--quaternion-order xyzw|wxyz]`
-//! (`rotavg::io::input::load_conjugate_with`).
+//! `rotavg conjugate INPUT`: hand-eye (conjugate) rotation averaging, `R_i ~ S^-1 L_i S`
+//! (`rotavg::pipeline::average_conjugate`, printed as `rotavg::report::ConjugateReport`), from
+//! JSON, Tabb or ETH datasets, or pose streams (`rotavg::io::input::load_conjugate_with`).
 
 use crate::Outcome;
-use crate::common::{Common, choice};
+use crate::common::{Common, InitArgs, PlotArgs, choice};
 use clap::Args as ClapArgs;
-use rotavg::certify::{CertifyMode, CertifySettings};
+use rotavg::certify::CertifyMode;
 use rotavg::conjugate::ConjugateSettings;
 use rotavg::io::handeye::{MotionSettings, QuaternionOrder};
-use rotavg::io::input::{HandEyeOptions, load_conjugate_with, load_estimate};
+use rotavg::io::input::{HandEyeOptions, load_conjugate_with};
 use rotavg::io::names::{Choice, ConjugateFormat, LossKind};
 use rotavg::pipeline::{AverageSettings, average_conjugate};
-#[cfg(feature = "plot")]
-use rotavg::plot::write_conjugate_figure;
 use rotavg::report::ConjugateReport;
 use rotavg::{Metric, Objective, Result};
 
@@ -29,28 +24,24 @@ pub struct Args {
     /// Input format.
     #[arg(long, value_parser = choice(ConjugateFormat::choices()), default_value_t = ConjugateFormat::Auto)]
     pub format: ConjugateFormat,
-    /// Certification: `auto` (the SDP for the chordal L2 cost, then branch and bound over SO(3)
-    /// when it does not certify; branch and bound for every other cost), `sdp`,
-    /// `branch_and_bound`, `none`.
+    /// Certification (`auto`: the SDP for the chordal L2 cost, then branch and bound).
     #[arg(long, value_parser = choice(vec![CertifyMode::Auto, CertifyMode::Sdp, CertifyMode::BranchAndBound, CertifyMode::None]), default_value_t = CertifyMode::Auto)]
     pub certify: CertifyMode,
-    /// Distance between R_i and S^T L_i S (chordal with `--loss l2` is certified; quaternion
-    /// has the closed form).
+    /// Distance between R_i and S^T L_i S (quaternion has the closed form).
     #[arg(long, value_parser = choice(vec![Metric::Chordal, Metric::Geodesic, Metric::Quaternion]), default_value_t = Metric::Chordal)]
     pub metric: Metric,
     /// Loss.
     #[arg(long, value_parser = choice(LossKind::choices()), default_value_t = LossKind::L2)]
     pub loss: LossKind,
-    /// Huber threshold / Cauchy scale as a residual angle in degrees (converted to the
-    /// metric's unit).
+    /// Huber threshold / Cauchy scale, a residual angle in degrees (in the metric's unit).
     #[arg(long, value_name = "DEG", default_value_t = 5.0)]
     pub loss_threshold: f64,
-    /// Write an SVG figure: histogram of the residual angles (degrees), the certificate, and
-    /// the eigenvalues of the 10x10 certificate matrix with the proven bound.
-    #[arg(long, value_name = "FILE.svg")]
-    pub plot: Option<String>,
+    #[command(flatten)]
+    pub plot: PlotArgs,
     #[command(flatten)]
     pub streams: StreamArgs,
+    #[command(flatten)]
+    pub init: InitArgs,
     #[command(flatten)]
     pub common: Common,
 }
@@ -111,7 +102,7 @@ impl StreamArgs {
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
-    crate::common::check_plot(args.plot.as_ref())?;
+    args.plot.check()?;
     let options = args.common.read_options();
     let loaded = load_conjugate_with(
         args.input.as_deref(),
@@ -124,35 +115,20 @@ pub fn run(args: &Args) -> Result<Outcome> {
         args.loss.with_threshold_deg(args.loss_threshold),
     );
     let problem = loaded.problem.clone().with_objective(objective)?;
-    let init = match &args.common.init {
-        Some(path) => Some(load_estimate(path, &options)?.into_rotation()?),
-        None => None,
-    };
     let settings = AverageSettings {
         solve: ConjugateSettings {
-            init,
+            init: args.init.rotation(&options)?,
             ..Default::default()
         },
-        certify: CertifySettings {
-            budget: args.common.budget(),
-            ..CertifySettings::with_mode(args.certify)
-        },
+        certify: args.common.settings(args.certify),
     };
     let result = average_conjugate(&problem, &settings)?;
     #[cfg_attr(not(feature = "plot"), allow(unused_mut))] // the figure path is recorded
     let mut report = ConjugateReport::new(&problem, loaded.to_string(), result)
         .with_motion(loaded.motion, loaded.motion_settings);
     #[cfg(feature = "plot")]
-    if let Some(path) = &args.plot {
-        let (s, certificate) = (
-            &report.result.solution.estimate,
-            report.result.certificate.as_ref(),
-        );
-        write_conjugate_figure(path, &problem, s, certificate, &loaded.name)?;
-        report.figure = Some(path.clone());
+    if let Some(path) = &args.plot.plot {
+        report.write_figure(path, &problem, &loaded.name)?;
     }
-    args.common.print(&report)?;
-    Ok(Outcome {
-        verdict: report.verdict(),
-    })
+    args.common.finish(&report, report.verdict())
 }

@@ -2,10 +2,9 @@
 //! `rotavg::report::DemoReport`).
 
 use crate::Outcome;
-use clap::Args as ClapArgs;
 
 /// Arguments of `rotavg demo`.
-#[derive(ClapArgs, Debug)]
+#[derive(clap::Args, Debug)]
 pub struct Args {
     /// Seed of the synthetic instances.
     #[arg(long, default_value_t = 1)]
@@ -21,13 +20,6 @@ pub struct Args {
 /// Run the demo. The verdict returned is the worst of the certificates.
 pub fn run(args: &Args) -> rotavg::Result<Outcome> {
     let report = rotavg::report::DemoReport::run(args.seed, args.nodes)?;
-    if args.verbose {
-        println!("{report:#}");
-    } else {
-        let text = rotavg::report::wrap_lines(&report.to_string(), crate::common::TEXT_WIDTH);
-        println!("{text}");
-    }
-    Ok(Outcome {
-        verdict: Some(report.worst_verdict()),
-    })
+    crate::common::print_text(&report, args.verbose);
+    Ok(Some(report.worst_verdict()))
 }

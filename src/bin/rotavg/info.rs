@@ -3,13 +3,12 @@
 
 use crate::Outcome;
 use crate::common::choice;
-use clap::Args as ClapArgs;
 use rotavg::io::detect::{GraphFormat, ReadOptions, WeightSource};
 use rotavg::io::names::Choice;
 use rotavg::report::InfoReport;
 
 /// Arguments of `rotavg info`.
-#[derive(ClapArgs, Debug)]
+#[derive(clap::Args, Debug)]
 pub struct Args {
     /// Input file (or a folder holding a COLMAP database.db), or `-` for standard input.
     pub input: String,
@@ -32,5 +31,5 @@ pub fn run(args: &Args) -> rotavg::Result<Outcome> {
     };
     let report = InfoReport::load(&args.input, args.format, &options)?;
     crate::common::print(&report, args.json, false, false)?;
-    Ok(Outcome { verdict: None })
+    Ok(None)
 }

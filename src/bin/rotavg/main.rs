@@ -1,17 +1,7 @@
-//! The `rotavg` command-line tool. The contract is SPEC section 5 (see README.md):
-//!
-//! ```text
-//! rotavg demo
-//! rotavg single    INPUT [--metric chordal|quaternion|geodesic] [--p 1|2] [--json]
-//! rotavg multiple  INPUT [--format auto|g2o|1dsfm|json] [--loss chordal|geodesic|l1|huber|cauchy]
-//!                        [--certify auto|dual|sdp|none] [--json] [--output FILE]
-//! rotavg conjugate INPUT [--format auto|json|...] [--certify auto|sdp|none] [--json]
-//! rotavg certify   INPUT --estimate FILE [--json]
-//! rotavg info      INPUT
-//! ```
-//!
-//! Exit status: 0 success (whatever the verdict), 1 bad input or failure, 2 usage error,
-//! 3 with `--require-certified` when the verdict is not `certified`.
+//! The `rotavg` command line: the verbs `demo`, `single`, `multiple`, `conjugate`, `certify`
+//! and `info` (the contract is SPEC section 5; docs/reference/cli.md). The option groups the
+//! verbs share are in `common.rs`. Exit status: 0 success (whatever the verdict), 1 bad input
+//! or failure, 2 usage error, 3 with `--require-certified` when the verdict is not `certified`.
 
 mod certify;
 mod common;
@@ -54,11 +44,9 @@ enum Command {
     Info(info::Args),
 }
 
-/// What a subcommand reports back for the exit status.
-pub struct Outcome {
-    /// The verdict of the certificate, if one was computed.
-    pub verdict: Option<Verdict>,
-}
+/// What a subcommand reports back for the exit status: the verdict of the certificate, if one
+/// was computed.
+pub type Outcome = Option<Verdict>;
 
 /// Exit quietly (status 141, as a shell reports a process ended by SIGPIPE) when stdout is
 /// closed by the reader, e.g. `rotavg demo | head`, instead of panicking in `println!`.
@@ -81,12 +69,13 @@ fn exit_quietly_on_broken_pipe() {
 fn main() -> ExitCode {
     exit_quietly_on_broken_pipe();
     let cli = Cli::parse();
-    let common: Option<&Common> = match &cli.command {
-        Command::Demo(_) | Command::Info(_) => None,
-        Command::Single(a) => Some(&a.common),
-        Command::Multiple(a) => Some(&a.common),
-        Command::Conjugate(a) => Some(&a.common),
-        Command::Certify(a) => Some(&a.common),
+    let (input, common): (Option<&str>, Option<&Common>) = match &cli.command {
+        Command::Demo(_) => (None, None),
+        Command::Single(a) => (Some(&a.input), Some(&a.common)),
+        Command::Multiple(a) => (Some(&a.input), Some(&a.common)),
+        Command::Conjugate(a) => (a.input.as_deref(), Some(&a.common)),
+        Command::Certify(a) => (Some(&a.input), Some(&a.common)),
+        Command::Info(a) => (Some(&a.input), None),
     };
     progress::Display::install(common.is_some_and(|c| !c.quiet && !c.json));
     let result = match &cli.command {
@@ -99,94 +88,64 @@ fn main() -> ExitCode {
     };
     progress::finish();
     match result {
-        Ok(outcome) => {
-            let require = common.is_some_and(|c| c.require_certified);
-            if require && outcome.verdict != Some(Verdict::Certified) {
-                if !common.is_some_and(|c| c.quiet) {
-                    eprintln!(
-                        "rotavg: --require-certified: verdict is {}",
-                        outcome
-                            .verdict
-                            .map_or("none".to_string(), |v| v.to_string())
-                    );
-                }
-                ExitCode::from(3)
-            } else {
-                ExitCode::SUCCESS
+        Ok(verdict) if common.is_some_and(|c| c.require_certified) => {
+            if verdict == Some(Verdict::Certified) {
+                return ExitCode::SUCCESS;
             }
+            if !common.is_some_and(|c| c.quiet) {
+                let v = verdict.map_or("none".to_string(), |v| v.to_string());
+                eprintln!("rotavg: --require-certified: verdict is {v}");
+            }
+            ExitCode::from(3)
         }
+        Ok(_) => ExitCode::SUCCESS,
         Err(e) => {
-            let text = folder_refused(named(e, input(&cli.command)), &cli.command);
-            eprintln!("rotavg: error: {text}");
+            eprintln!("rotavg: error: {}", error_text(e, input, &cli.command));
             ExitCode::from(1)
         }
     }
 }
 
-/// The input file of a subcommand, if it has one.
-fn input(command: &Command) -> Option<&str> {
-    match command {
-        Command::Demo(_) => None,
-        Command::Single(a) => Some(&a.input),
-        Command::Multiple(a) => Some(&a.input),
-        Command::Conjugate(a) => a.input.as_deref(),
-        Command::Certify(a) => Some(&a.input),
-        Command::Info(a) => Some(&a.input),
-    }
-}
-
-/// A folder given as the input of a verb that cannot read it: the reader's error (the
-/// operating system's "Is a directory", or the readers' general note on folders) becomes what
-/// this verb reads instead. Other errors are unchanged.
-fn folder_refused(text: String, command: &Command) -> String {
-    let Some(path) = input(command) else {
-        return text;
-    };
-    let is_folder = path != "-" && std::path::Path::new(path).is_dir();
-    let Some(message) = text.strip_prefix(path).and_then(|t| t.strip_prefix(": ")) else {
-        return text;
-    };
-    // the readers' general note on folders, or the operating system's; a specific diagnosis
-    // (a database.db that is not SQLite, no hand-eye streams found) is kept
-    let general = message.starts_with("is a folder, not a file") || message.contains("os error 21");
-    if !is_folder || !general {
-        return text;
-    }
-    let accepts = match command {
-        Command::Single(_) => {
-            "is a folder: `rotavg single` reads a file (JSON {\"rotations\": [R, ...]}), \
-                     never a folder"
-        }
-        Command::Multiple(_) | Command::Info(_) => {
-            "is a folder: as a folder, `rotavg multiple` and `rotavg info` read only a \
-                     COLMAP project (a folder holding database.db); other view graphs are files \
-                     (g2o, 1DSfM EGs.txt, JSON)"
-        }
-        Command::Conjugate(_) => {
-            "is a folder: as a folder, `rotavg conjugate` reads a Tabb dataset \
-                     (robot_cali.txt) or a hand and a camera pose stream (CSV files named \
-                     *hand*/*base_link*/*vicon* and *camera*/*target*, or --hand/--camera)"
-        }
-        Command::Certify(_) => {
-            "is a folder: `rotavg certify` reads the problem from a file (a view graph: \
-                     g2o, 1DSfM EGs.txt, JSON; a single or conjugate JSON problem)"
-        }
-        Command::Demo(_) => return text,
-    };
-    format!("{path}: {accepts}")
-}
-
-/// The error as printed: an error about the data that does not name a file yet (a disconnected
-/// graph, degenerate hand-eye pairs) names the input (issue 24).
-fn named(e: rotavg::Error, input: Option<&str>) -> String {
+/// The error as printed. An error about the data that does not name a file yet (a
+/// disconnected graph, degenerate hand-eye pairs) names the input (issue 24). A folder given
+/// as the input of a verb that cannot read it: the reader's error (the operating system's "Is a
+/// directory", or the readers' general note on folders) becomes what this verb reads instead;
+/// a specific diagnosis (a database.db that is not SQLite, no hand-eye streams found) is kept.
+fn error_text(e: rotavg::Error, input: Option<&str>, command: &Command) -> String {
     use rotavg::Error;
-    match (e, input) {
+    let text = match (e, input) {
         (
             e @ (Error::Disconnected { .. } | Error::Degenerate { .. } | Error::Empty { .. }),
             Some(file),
-        ) if file != "-" => {
-            format!("{file}: {e}")
-        }
+        ) if file != "-" => format!("{file}: {e}"),
         (e, _) => e.to_string(),
+    };
+    let accepts = match command {
+        Command::Single(_) => {
+            "`rotavg single` reads a file (JSON {\"rotations\": [R, ...]}), never a folder"
+        }
+        Command::Multiple(_) | Command::Info(_) => {
+            "as a folder, `rotavg multiple` and `rotavg info` read only a COLMAP project (a \
+             folder holding database.db); other view graphs are files (g2o, 1DSfM EGs.txt, JSON)"
+        }
+        Command::Conjugate(_) => {
+            "as a folder, `rotavg conjugate` reads a Tabb dataset (robot_cali.txt) or a hand \
+             and a camera pose stream (CSV files named *hand*/*base_link*/*vicon* and \
+             *camera*/*target*, or --hand/--camera)"
+        }
+        Command::Certify(_) => {
+            "`rotavg certify` reads the problem from a file (a view graph: g2o, 1DSfM \
+             EGs.txt, JSON; a single or conjugate JSON problem)"
+        }
+        Command::Demo(_) => return text,
+    };
+    let Some(path) = input.filter(|p| *p != "-" && std::path::Path::new(p).is_dir()) else {
+        return text;
+    };
+    match text.strip_prefix(path).and_then(|t| t.strip_prefix(": ")) {
+        Some(m) if m.starts_with("is a folder, not a file") || m.contains("os error 21") => {
+            format!("{path}: is a folder: {accepts}")
+        }
+        _ => text,
     }
 }

@@ -1,39 +1,24 @@
-//! `rotavg multiple INPUT [--format auto|g2o|1dsfm|json|colmap] [--loss ...] [--certify ...]
-//! [--json] [--output FILE [--output-format auto|json|g2o|colmap]]`: multiple rotation averaging with a certificate
-//! (`rotavg::pipeline::average_multiple`); input loading is `rotavg::io::input`, the printed
-//! object `rotavg::report::MultipleReport`.
+//! `rotavg multiple INPUT`: multiple rotation averaging with a certificate
+//! (`rotavg::pipeline::average_multiple`, printed as `rotavg::report::MultipleReport`).
 
 use crate::Outcome;
-use crate::common::{Common, choice};
-use clap::Args as ClapArgs;
-use rotavg::Result;
-use rotavg::certify::{CertifyMode, CertifySettings};
-use rotavg::io::detect::GraphFormat;
+use crate::common::{Common, GraphArgs, InitArgs, PlotArgs, choice};
+use rotavg::certify::CertifyMode;
 use rotavg::io::input::{MultipleInputOptions, load_multiple_input};
 use rotavg::io::names::{Choice, MultipleLoss};
-use rotavg::io::output::{
-    EstimateFile, OutputFormat, OutputSource, edges_file_text, prepare_output, write_text,
-};
+use rotavg::io::output::{MultipleOutputs, OutputFormat, OutputSource};
 use rotavg::multiple::{Initialisation, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_multiple};
-#[cfg(feature = "plot")]
-use rotavg::plot::write_multiple_figure;
 use rotavg::report::MultipleReport;
-
-/// The certify modes of multiple averaging.
-pub fn certify_modes() -> Vec<CertifyMode> {
-    use CertifyMode::*;
-    vec![Auto, Dual, Sdp, Staircase, None]
-}
+use rotavg::{Error, Result};
 
 /// Arguments of `rotavg multiple`.
-#[derive(ClapArgs, Debug)]
+#[derive(clap::Args, Debug)]
 pub struct Args {
     /// Input file (or a folder holding a COLMAP database.db), or `-` for standard input.
     pub input: String,
-    /// Input format.
-    #[arg(long, value_parser = choice(GraphFormat::choices()), default_value_t = GraphFormat::Auto)]
-    pub format: GraphFormat,
+    #[command(flatten)]
+    pub graph: GraphArgs,
     /// Loss.
     #[arg(long, value_parser = choice(MultipleLoss::choices()), default_value_t = MultipleLoss::Chordal)]
     pub loss: MultipleLoss,
@@ -50,70 +35,57 @@ pub struct Args {
     /// inlier`, nodes by their file ids): JSON when FILE ends in `.json`, otherwise CSV.
     #[arg(long, value_name = "FILE")]
     pub edges_output: Option<String>,
-    /// Robust losses: write the inlier graph's refined (chordal L2) estimate, in the format
-    /// given by `--output-format` (or its path), as `--output` (the estimate printed and
-    /// written by `--output` is the robust one).
+    /// Robust losses: write the inlier graph's refined (chordal L2) estimate as `--output` (which
+    /// writes the robust one, as printed) in `--output-format` (or from its path).
     #[arg(long, value_name = "FILE")]
     pub inlier_output: Option<String>,
-    /// Initialisation of the local solver (ignored with `--init FILE`; `spectral` on graphs
-    /// whose Newton systems use the Laplacian preconditioner, long chains and large grids,
-    /// starts from the spanning tree instead: paper-notes [M6b]).
+    /// Initialisation of the local solver (ignored with `--init FILE`; `spectral` starts from the
+    /// spanning tree on long chains and large grids, whose Newton systems use [M6b]).
     #[arg(long, value_parser = choice(Initialisation::choices()), default_value_t = Initialisation::Spectral)]
     pub init_method: Initialisation,
-    /// Certification.
-    #[arg(long, value_parser = choice(certify_modes()), default_value_t = CertifyMode::Auto)]
-    pub certify: CertifyMode,
-    /// Ground truth: g2o (vertex lines; `.g2o` or a first token that is a tag), Bundler `.out`,
-    /// a COLMAP model folder / `images.bin` / `images.txt` (matched by image name, or id), JSON
-    /// estimate (node order, or by `node_ids`), or a rotation list (`R11 .. R33` per line, line
-    /// k = file id k, or `id R11 .. R33` per line); matched to nodes by file id. An all-zero
-    /// rotation means "no ground truth for this camera".
+    #[command(flatten)]
+    pub init: InitArgs,
+    /// Ground truth: g2o vertices, Bundler `.out`, a COLMAP model folder / `images.bin` /
+    /// `images.txt` (by image name, or id), a JSON estimate (node order, or `node_ids`), or a
+    /// rotation list (`R11 .. R33` per line: line k = file id k; or `id R11 .. R33`), matched to
+    /// nodes by file id. An all-zero rotation means "no ground truth for this camera".
     #[arg(long, value_name = "FILE")]
     pub ground_truth: Option<String>,
     /// Solve the largest connected component of a disconnected graph (and report the others).
     #[arg(long)]
     pub largest_component: bool,
-    /// Write the estimate: JSON `{"rotations": [...], "node_ids": [...]}`; g2o when PATH ends
-    /// in `.g2o` (a g2o input's lines with the vertex rotations replaced: translations and
-    /// edges as read); a COLMAP sparse model (cameras.txt, images.txt, empty points3D.txt) when
-    /// PATH is a folder (ends in `/`) or ends in `images.txt`. Folders are created before the
-    /// solve (see `--output-format`).
+    /// Write the estimate: JSON `{"rotations": [...], "node_ids": [...]}`; g2o for `*.g2o` (a g2o
+    /// input's lines with the vertex rotations replaced); a COLMAP sparse model for a folder
+    /// (`.../`) or `*images.txt`, created before the solve (see `--output-format`).
     #[arg(long, value_name = "PATH")]
     pub output: Option<String>,
     /// Format of `--output` (`auto`: from the file name).
     #[arg(long, value_parser = choice(OutputFormat::choices()), default_value_t = OutputFormat::Auto)]
     pub output_format: OutputFormat,
-    /// Write an SVG figure: histogram of the residual angles (degrees), the certificate, and
-    /// the 10 smallest eigenvalues of the certificate matrix (estimates) with the proven bound.
-    #[arg(long, value_name = "FILE.svg")]
-    pub plot: Option<String>,
+    #[command(flatten)]
+    pub plot: PlotArgs,
     #[command(flatten)]
     pub common: Common,
 }
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
-    crate::common::check_plot(args.plot.as_ref())?;
+    args.plot.check()?;
     // output folders are created (or refused) before anything is read or solved
-    let output = match &args.output {
-        Some(p) => Some(prepare_output(p, args.output_format)?),
-        None => None,
-    };
-    let inlier_output = match &args.inlier_output {
-        Some(p) => Some(prepare_output(p, args.output_format)?),
-        None => None,
-    };
-    if let Some(p) = &args.edges_output {
-        prepare_output(p, OutputFormat::Json)?;
-    }
+    let outputs = MultipleOutputs::prepare(
+        args.output.as_deref(),
+        args.inlier_output.as_deref(),
+        args.edges_output.as_deref(),
+        args.output_format,
+    )?;
     let input = load_multiple_input(
         &args.input,
         &MultipleInputOptions {
-            format: args.format,
-            read: args.common.read_options(),
+            format: args.graph.format,
+            read: args.graph.read_options(&args.common),
             largest_component: args.largest_component,
             ground_truth: args.ground_truth.clone(),
-            init: args.common.init.clone(),
+            init: args.init.init.clone(),
         },
     )?;
     let graph = &input.graph;
@@ -121,61 +93,24 @@ pub fn run(args: &Args) -> Result<Outcome> {
         input: &args.input,
         format: graph.format,
     };
-    for plan in output.iter().chain(&inlier_output) {
-        source.check(plan)?;
-    }
+    outputs.check(&source)?;
     let objective = args.loss.objective(args.loss_threshold);
     let problem = graph.problem.clone().with_objective(objective)?;
-    let robust_only = |flag: &str| rotavg::Error::InvalidSettings {
-        name: flag.into(),
-        reason: format!(
-            "needs a robust loss (--loss l1, huber or cauchy), not {}",
-            args.loss
-        ),
-    };
-    let inlier_threshold_deg = match args.loss {
-        MultipleLoss::L1 => Some(args.inlier_threshold.unwrap_or(args.loss_threshold)),
-        MultipleLoss::Huber | MultipleLoss::Cauchy => args.inlier_threshold,
-        MultipleLoss::Chordal | MultipleLoss::Geodesic => {
-            for (flag, given) in [
-                ("--inlier-threshold", args.inlier_threshold.is_some()),
-                ("--edges-output", args.edges_output.is_some()),
-                ("--inlier-output", args.inlier_output.is_some()),
-            ] {
-                if given {
-                    return Err(robust_only(flag));
-                }
-            }
-            None
-        }
-    };
-    if args.inlier_output.is_some() && args.certify == CertifyMode::None {
-        return Err(rotavg::Error::InvalidSettings {
-            name: "--inlier-output".into(),
-            reason:
-                "the inlier graph is refined only when it is certified (not with --certify none)"
-                    .into(),
-        });
-    }
+    check_robust_options(args)?;
     let settings = AverageSettings {
         solve: MultipleSettings {
             init: input
                 .init
                 .clone()
                 .map_or_else(|| args.init_method.clone(), Initialisation::Given),
-            inlier_threshold_deg,
+            inlier_threshold_deg: args
+                .loss
+                .inlier_threshold_deg(args.loss_threshold, args.inlier_threshold),
             ..Default::default()
         },
-        certify: CertifySettings {
-            mode: args.certify,
-            // the figure shows the smallest eigenvalues of the certificate matrix
-            spectrum: args.plot.as_ref().map(|_| Default::default()),
-            budget: args.common.budget(),
-            dual: args.common.dual(),
-            ..Default::default()
-        },
+        certify: args.graph.settings(&args.common, &args.plot),
     };
-    args.common.progress(format_args!(
+    crate::progress::say(format_args!(
         "{} nodes, {} edges: solving ({} loss) and certifying ({})...",
         problem.num_rotations(),
         problem.num_edges(),
@@ -183,55 +118,45 @@ pub fn run(args: &Args) -> Result<Outcome> {
         settings.certify.mode
     ));
     let mut report = MultipleReport::new(&input, average_multiple(&problem, &settings)?)?;
-    let (rotations, certificate) = (
-        &report.result.solution.rotations,
-        report.result.certificate.as_ref(),
-    );
-    if let Some(plan) = &output {
-        let file = EstimateFile {
-            problem: &graph.problem,
-            rotations,
-            node_ids: &graph.node_ids,
-            node_names: &graph.node_names,
-        };
-        file.write_planned(plan, &source)?;
-    }
-    if let (Some(path), Some(r)) = (&args.edges_output, &report.result.solution.residuals) {
-        write_text(
-            path,
-            &edges_file_text(path, &graph.problem, r, &graph.node_ids),
-        )?;
-    }
-    if let (Some(plan), Some(g)) = (&inlier_output, &report.result.details.inlier_graph) {
-        let file = EstimateFile {
-            problem: &graph.problem,
-            rotations: &g.estimate,
-            node_ids: &graph.node_ids,
-            node_names: &graph.node_names,
-        };
-        file.write_planned(plan, &source)?;
-        report.inlier_output = Some(plan.path.clone());
-    }
+    report.inlier_output = outputs.write(graph, &report.result, &source)?;
     #[cfg(feature = "plot")]
-    if let Some(path) = &args.plot {
-        write_multiple_figure(path, &graph.problem, rotations, certificate, &args.input)?;
+    if let Some(path) = &args.plot.plot {
+        report.write_figure(path, &graph.problem)?;
     }
-    #[cfg(not(feature = "plot"))]
-    let _ = certificate;
     report.output = args.output.clone();
     report.edges_output = args.edges_output.clone();
-    report.figure = args.plot.clone();
-    if let Some(w) = &report.result.details.outliers
-        && !args.common.quiet
-    {
-        let warning = format!("rotavg: warning: {}: {w}", args.input);
-        eprintln!(
-            "{}",
-            rotavg::report::wrap_lines(&warning, crate::common::TEXT_WIDTH)
-        );
+    if let Some(w) = &report.result.details.outliers {
+        args.common.warn(&format!("{}: {w}", args.input));
     }
-    args.common.print(&report)?;
-    Ok(Outcome {
-        verdict: report.verdict(),
+    args.common.finish(&report, report.verdict())
+}
+
+/// An error for an option of the robust losses given with another loss, and for
+/// `--inlier-output` with `--certify none`.
+fn check_robust_options(args: &Args) -> Result<()> {
+    let given = [
+        ("--inlier-threshold", args.inlier_threshold.is_some()),
+        ("--edges-output", args.edges_output.is_some()),
+        ("--inlier-output", args.inlier_output.is_some()),
+    ];
+    let robust = !matches!(args.loss, MultipleLoss::Chordal | MultipleLoss::Geodesic);
+    let (name, reason) = match given.iter().find(|(_, given)| *given) {
+        Some((flag, _)) if !robust => (
+            flag,
+            format!(
+                "needs a robust loss (--loss l1, huber or cauchy), not {}",
+                args.loss
+            ),
+        ),
+        _ if args.inlier_output.is_some() && args.graph.certify == CertifyMode::None => (
+            &"--inlier-output",
+            "the inlier graph is refined only when it is certified (not with --certify none)"
+                .into(),
+        ),
+        _ => return Ok(()),
+    };
+    Err(Error::InvalidSettings {
+        name: name.to_string(),
+        reason,
     })
 }
