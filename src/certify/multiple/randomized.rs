@@ -234,16 +234,14 @@ pub(super) fn randomized_bound(
     if mu.is_nan() || mu <= 0.0 {
         return None;
     }
-    let (s_upper, row_nnz) = gershgorin_upper_bound(s);
-    let a = Lifted::new(s, &y, norm, 0.5 * s_upper / n as f64, row_nnz, g_max);
-    let upper = (s_upper + a.gb * g_max) * (1.0 + 1e-12);
+    let a = Lifted::new(s, &y, norm, g_max, n);
     let test = ChebyshevTest::plan(
         n3,
         0.5 * est,
-        upper,
+        a.upper(),
         claim,
         settings.failure_probability,
-        a.per_norm(g_max),
+        a.per_norm(),
         settings.max_matvecs,
     )?;
     // the products' predicted time against the time budget (the flop rate of the
@@ -299,12 +297,15 @@ fn gram_bounds(y: &[Vec<f64>]) -> Option<(f64, f64)> {
     Some((eig.min() - g_slack, eig.max() + g_slack))
 }
 
-/// The tested operator `A = S_fl + gb Y Y^T` (`[D16]`) and what bounds the rounding of its
-/// products: `|| |S| ||_2 <= s_abs`, `||Y||_F <= y_f`, `gamma(p)` and `gamma(5)`.
+/// The tested operator `A = S_fl + gb Y Y^T` (`[D16]`) and what bounds its spectrum and the
+/// rounding of its products: `lambda_max(S) <= s_upper` (Gershgorin), `lambda_max(Y^T Y) <=
+/// g_max`, `|| |S| ||_2 <= s_abs`, `||Y||_F <= y_f`, `gamma(p)` and `gamma(5)`.
 struct Lifted<'a> {
     s: SparseColMatRef<'a, usize, f64>,
     y: &'a [Vec<f64>],
     gb: f64,
+    s_upper: f64,
+    g_max: f64,
     s_abs: f64,
     y_f: f64,
     gp: f64,
@@ -312,21 +313,24 @@ struct Lifted<'a> {
 }
 
 impl<'a> Lifted<'a> {
-    /// `A` with the lift `gb`, for `S` of norm `norm` (`||S||_inf`) with at most `row_nnz`
-    /// entries a row, and `lambda_max(Y^T Y) <= g_max`.
+    /// `A` for `S` of norm `norm` (`||S||_inf`) on `n` nodes and `lambda_max(Y^T Y) <= g_max`,
+    /// with the lift `gb = lambda_max(S) / (2n)` (the gauge directions to the middle of the
+    /// spectrum).
     fn new(
         s: SparseColMatRef<'a, usize, f64>,
         y: &'a [Vec<f64>],
         norm: f64,
-        gb: f64,
-        row_nnz: usize,
         g_max: f64,
+        n: usize,
     ) -> Self {
+        let (s_upper, row_nnz) = gershgorin_upper_bound(s);
         // ||Y||_F <= sqrt(3 lambda_max(G)); || |S| ||_2 <= ||S||_inf (computed with gamma(p))
         Lifted {
             s,
             y,
-            gb,
+            gb: 0.5 * s_upper / n as f64,
+            s_upper,
+            g_max,
             s_abs: norm * (1.0 + gamma(row_nnz + 1)),
             y_f: (3.0 * g_max).sqrt() * (1.0 + 2.0 * UNIT_ROUNDOFF),
             gp: gamma(row_nnz + 1),
@@ -334,10 +338,15 @@ impl<'a> Lifted<'a> {
         }
     }
 
+    /// An upper bound on `lambda_max(A)`.
+    fn upper(&self) -> f64 {
+        (self.s_upper + self.gb * self.g_max) * (1.0 + 1e-12)
+    }
+
     /// The rounding error of a product per unit norm of `x`.
-    fn per_norm(&self, g_max: f64) -> f64 {
+    fn per_norm(&self) -> f64 {
         let (gp, g5, s_abs, gb) = (self.gp, self.g5, self.s_abs, self.gb);
-        gp * s_abs + g5 * (s_abs * (1.0 + gp) + gb * self.y_f * g_max.sqrt()) + 1e-15 * gb
+        gp * s_abs + g5 * (s_abs * (1.0 + gp) + gb * self.y_f * self.g_max.sqrt()) + 1e-15 * gb
     }
 
     /// `z = A x` and a bound on its rounding error: the product rounded (gamma(p)), `Y^T x` in
