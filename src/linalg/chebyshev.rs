@@ -212,7 +212,6 @@ impl ChebyshevTest {
         mut apply: impl FnMut(&[f64], &mut [f64]) -> f64,
         seed: u64,
     ) -> ChebyshevOutcome {
-        let u = UNIT_ROUNDOFF;
         let (c0, kappa) = self.map();
         let k = self.degree.max(1);
         let failure_probability = (self.level * TWO_OVER_PI_SQRT).powi(self.vectors as i32);
@@ -230,61 +229,17 @@ impl ChebyshevTest {
         };
         let mut rng = StdRng::seed_from_u64(seed);
         let mut all = true;
-        let g3 = gamma(3);
         for _ in 0..self.vectors {
-            let mut prev = gaussian(dim, &mut rng);
-            // the stored g is the Gaussian to a few units of rounding per entry
-            let mut e_total = 16.0 * u * norm_up(&prev);
-            let mut z = vec![0.0f64; dim];
-            let err = apply(&prev, &mut z);
-            outcome.matvecs += 1;
-            let mut cur: Vec<f64> = prev
-                .iter()
-                .zip(&z)
-                .map(|(x, z)| c0 * x - kappa * z)
-                .collect();
-            let phi = kappa * err + gamma(2) * (c0.abs() * norm_up(&prev) + kappa * norm_up(&z));
-            e_total += k as f64 * phi;
-            let gn = norm_up(&prev);
-            let mut grew = false;
-            for j in 1..k {
-                let err = apply(&cur, &mut z);
-                outcome.matvecs += 1;
-                let (nc, nz, np) = (norm_up(&cur), norm_up(&z), norm_up(&prev));
-                // with the spectrum inside the interval every iterate stays within ||g|| plus
-                // rounding; growth past 1e3 ||g|| means an eigenvalue below the interval's
-                // lower end: stop (a failed test, never a pass)
-                if nc.is_nan() || nc > 1e3 * gn {
-                    grew = true;
-                    break;
-                }
-                let phi = 2.0 * kappa * err + g3 * (2.0 * c0.abs() * nc + 2.0 * kappa * nz + np);
-                e_total += (k - j) as f64 * phi;
-                for ((p, c), zi) in prev.iter_mut().zip(&cur).zip(&z) {
-                    *p = 2.0 * (c0 * c - kappa * zi) - *p;
-                }
-                std::mem::swap(&mut prev, &mut cur);
-            }
-            if grew {
+            let g = gaussian(dim, &mut rng);
+            let Some((e_total, y)) = self.recurrence(g, &mut apply, &mut outcome.matvecs) else {
                 outcome.grew = true;
                 outcome.log_margin = f64::NEG_INFINITY;
                 all = false;
                 break;
-            }
+            };
             let e_total = e_total * (1.0 + 1e-10);
             outcome.rounding = outcome.rounding.max(e_total);
-            let y = norm_up(&cur);
-            let room = (self.level - e_total) * (1.0 - 4.0 * u);
-            let margin = if room > 0.0 && y.is_finite() {
-                log_growth + room.ln() - y.ln() - 1e-9
-            } else {
-                f64::NEG_INFINITY
-            };
-            let margin = if margin.is_nan() {
-                f64::NEG_INFINITY
-            } else {
-                margin
-            };
+            let margin = self.log_margin(log_growth, e_total, y);
             outcome.log_margin = outcome.log_margin.min(margin);
             all &= margin > 0.0;
             if !all {
@@ -293,6 +248,69 @@ impl ChebyshevTest {
         }
         outcome.passed = all && self.vectors > 0;
         outcome
+    }
+
+    /// The Chebyshev recurrence of degree `max(degree, 1)` on the mapped operator from the
+    /// Gaussian `g`, its products counted in `matvecs`: a bound on the accumulated rounding
+    /// (before its final margin) and an upper bound on the final iterate's norm; `None` when the
+    /// iterates grew past `1e3 ||g||`.
+    fn recurrence(
+        &self,
+        mut prev: Vec<f64>,
+        apply: &mut impl FnMut(&[f64], &mut [f64]) -> f64,
+        matvecs: &mut usize,
+    ) -> Option<(f64, f64)> {
+        let (c0, kappa) = self.map();
+        let k = self.degree.max(1);
+        let g3 = gamma(3);
+        // the stored g is the Gaussian to a few units of rounding per entry
+        let mut e_total = 16.0 * UNIT_ROUNDOFF * norm_up(&prev);
+        let mut z = vec![0.0f64; prev.len()];
+        let err = apply(&prev, &mut z);
+        *matvecs += 1;
+        let mut cur: Vec<f64> = prev
+            .iter()
+            .zip(&z)
+            .map(|(x, z)| c0 * x - kappa * z)
+            .collect();
+        let phi = kappa * err + gamma(2) * (c0.abs() * norm_up(&prev) + kappa * norm_up(&z));
+        e_total += k as f64 * phi;
+        let gn = norm_up(&prev);
+        for j in 1..k {
+            let err = apply(&cur, &mut z);
+            *matvecs += 1;
+            let (nc, nz, np) = (norm_up(&cur), norm_up(&z), norm_up(&prev));
+            // with the spectrum inside the interval every iterate stays within ||g|| plus
+            // rounding; growth past 1e3 ||g|| means an eigenvalue below the interval's
+            // lower end: stop (a failed test, never a pass)
+            if nc.is_nan() || nc > 1e3 * gn {
+                return None;
+            }
+            let phi = 2.0 * kappa * err + g3 * (2.0 * c0.abs() * nc + 2.0 * kappa * nz + np);
+            e_total += (k - j) as f64 * phi;
+            for ((p, c), zi) in prev.iter_mut().zip(&cur).zip(&z) {
+                *p = 2.0 * (c0 * c - kappa * zi) - *p;
+            }
+            std::mem::swap(&mut prev, &mut cur);
+        }
+        Some((e_total, norm_up(&cur)))
+    }
+
+    /// The log margin of one vector: how far its final iterate's norm `y` stays below the
+    /// growth a pass needs, with the rounding `e_total` taken from the level (negative
+    /// infinity when nothing is left).
+    fn log_margin(&self, log_growth: f64, e_total: f64, y: f64) -> f64 {
+        let room = (self.level - e_total) * (1.0 - 4.0 * UNIT_ROUNDOFF);
+        let margin = if room > 0.0 && y.is_finite() {
+            log_growth + room.ln() - y.ln() - 1e-9
+        } else {
+            f64::NEG_INFINITY
+        };
+        if margin.is_nan() {
+            f64::NEG_INFINITY
+        } else {
+            margin
+        }
     }
 }
 

@@ -603,6 +603,23 @@ impl ShiftedCholesky {
     ///
     /// Returns (bound, smallest pivot).
     fn backward_error_bound(&self, values: &[f64], target: f64) -> (f64, f64) {
+        let l = self.factor_norms(values);
+        let higham = gamma(l.k + 1) * l.llt_norm;
+        if self.symbolic.len_val() > RESIDUAL_FACTOR_LIMIT || higham <= target {
+            return (higham, l.min_pivot);
+        }
+        let (cols, rows) = self.factor_lists(values);
+        let Some(abs_rowsum) = self.residual_row_sums(&cols, &rows) else {
+            return (higham, l.min_pivot);
+        };
+        let g = gamma(l.k + 2);
+        let residual = 1.01 * abs_rowsum.into_iter().fold(0.0, f64::max) + 2.0 * g * g * l.llt_norm;
+        (higham.min(residual), l.min_pivot)
+    }
+
+    /// What Higham's bound needs of the factor `L` (`values`): `|| |L| |L|^T ||_inf`, the largest
+    /// row count `k`, and the smallest pivot `min L_ii^2`.
+    fn factor_norms(&self, values: &[f64]) -> FactorNorms {
         let n = self.dim();
         let visit =
             |f: &mut dyn FnMut(usize, usize, f64)| for_each_factor_entry(&self.symbolic, values, f);
@@ -620,27 +637,45 @@ impl ShiftedCholesky {
         visit(&mut |r, c, v| {
             rowsum[r] += v.abs() * colsum[c];
         });
-        let k = rowcount.iter().copied().max().unwrap_or(0);
-        let llt_norm = rowsum.into_iter().fold(0.0, f64::max);
-        let higham = gamma(k + 1) * llt_norm;
-        if self.symbolic.len_val() > RESIDUAL_FACTOR_LIMIT || higham <= target {
-            return (higham, min_pivot);
+        FactorNorms {
+            k: rowcount.iter().copied().max().unwrap_or(0),
+            llt_norm: rowsum.into_iter().fold(0.0, f64::max),
+            min_pivot,
         }
-        // Columns of L and rows of L (transpose), lower triangle, permuted coordinates.
+    }
+
+    /// The nonzero entries of the factor `L` (`values`) by columns and by rows (of `L^T`), in
+    /// permuted coordinates; rows ascending within each column.
+    #[allow(clippy::type_complexity)]
+    fn factor_lists(&self, values: &[f64]) -> (Vec<Vec<(usize, f64)>>, Vec<Vec<(usize, f64)>>) {
+        let n = self.dim();
         let mut cols: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
         let mut rows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
-        visit(&mut |r, c, v| {
+        for_each_factor_entry(&self.symbolic, values, &mut |r, c, v| {
             if v != 0.0 {
                 cols[c].push((r, v));
                 rows[r].push((c, v));
             }
         });
-        // rows ascending within each column (the partition_point below relies on it)
+        // rows ascending within each column (the partition_point of the residual relies on it)
         for col in cols.iter_mut() {
             if !col.is_sorted_by_key(|e| e.0) {
                 col.sort_unstable_by_key(|e| e.0);
             }
         }
+        (cols, rows)
+    }
+
+    /// The row sums of `|A - L L^T|` (`A` permuted as the factor), each entry evaluated on the
+    /// filled pattern in double-double arithmetic from the factor's columns `cols` and rows
+    /// `rows`; `None` when an entry of `A` lies outside the factor's pattern (cannot happen for
+    /// a correct symbolic analysis).
+    fn residual_row_sums(
+        &self,
+        cols: &[Vec<(usize, f64)>],
+        rows: &[Vec<(usize, f64)>],
+    ) -> Option<Vec<f64>> {
+        let n = self.dim();
         let (fwd, inv): (Vec<usize>, Vec<usize>) = match self.symbolic.perm() {
             Some(p) => {
                 let (f, i) = p.arrays();
@@ -659,7 +694,7 @@ impl ShiftedCholesky {
             // -(L L^T)_{ij} for i >= j, in double-double
             for &(m, ljm) in &rows[j] {
                 let col = &cols[m];
-                // rows within a column are ascending (ensured above)
+                // rows within a column are ascending (ensured by factor_lists)
                 let first = col.partition_point(|&(i, _)| i < j);
                 for &(i, lim) in &col[first..] {
                     let p = -(lim * ljm);
@@ -681,9 +716,7 @@ impl ShiftedCholesky {
                     continue;
                 }
                 if !touched[i] {
-                    // an entry of A outside the factor's pattern: cannot happen for a correct
-                    // symbolic analysis; fall back to the a-priori bound
-                    return (higham, min_pivot);
+                    return None;
                 }
                 let (sh, se) = two_sum(hi[i], aval[kk]);
                 hi[i] = sh;
@@ -701,10 +734,16 @@ impl ShiftedCholesky {
             }
             list.clear();
         }
-        let g = gamma(k + 2);
-        let residual = 1.01 * abs_rowsum.into_iter().fold(0.0, f64::max) + 2.0 * g * g * llt_norm;
-        (higham.min(residual), min_pivot)
+        Some(abs_rowsum)
     }
+}
+
+/// What [`ShiftedCholesky::backward_error_bound`] reads off a factor `L`: the largest row count
+/// `k`, `|| |L| |L|^T ||_inf` and the smallest pivot `min L_ii^2`.
+struct FactorNorms {
+    k: usize,
+    llt_norm: f64,
+    min_pivot: f64,
 }
 
 impl PositiveFactor<'_> {

@@ -224,52 +224,23 @@ pub fn lanczos(
     }
     let b = settings.block_size.clamp(1, space);
     let mem_cap = (40_000_000 / dim.max(1)).max(k + b);
-    let max_m = settings.max_iterations.max(k).min(mem_cap).min(space);
+    let limits = Limits {
+        k,
+        max_m: settings.max_iterations.max(k).min(mem_cap).min(space),
+        tol: settings.tolerance,
+    };
     let scale = scale.abs().max(f64::MIN_POSITIVE);
-    let tol = settings.tolerance;
-    let mut rng = StdRng::seed_from_u64(settings.seed);
-    let random =
-        |rng: &mut StdRng| -> Vec<f64> { (0..dim).map(|_| rng.random::<f64>() - 0.5).collect() };
-    let mut pending: Vec<Vec<f64>> = Vec::with_capacity(b);
-    if let Some(s) = start.filter(|s| s.len() == dim && s.iter().any(|x| *x != 0.0)) {
-        pending.push(
-            s.iter()
-                .map(|x| x + 1e-3 * (rng.random::<f64>() - 0.5) / (dim as f64).sqrt())
-                .collect(),
-        );
-    }
-    while pending.len() < b {
-        pending.push(random(&mut rng));
-    }
-    let mut basis: Vec<Vec<f64>> = Vec::new();
-    // h[j][i] = v_i^T A v_j for i <= j
-    let mut h: Vec<Vec<f64>> = Vec::new();
+    let mut krylov = Krylov::start(dim, b, settings.seed, start, scale);
     let mut next_check = 0;
     loop {
-        // add the pending block (orthonormalised), apply the operator
-        let first = basis.len();
-        let mut images: Vec<Vec<f64>> = Vec::new();
-        for mut v in pending.drain(..) {
-            if basis.len() >= max_m {
-                break;
-            }
-            let (before, after) = orthogonalize(&[deflate, &basis], &mut v);
-            if !(after.is_finite() && after > 1e-10 * before) {
-                continue;
-            }
-            v.iter_mut().for_each(|x| *x /= after);
-            let mut w = vec![0.0; dim];
-            op(&v, &mut w);
-            basis.push(v);
-            h.push(basis.iter().map(|vi| dot(vi, &w)).collect());
-            images.push(w);
-        }
-        let m = basis.len();
+        let first = krylov.basis.len();
+        let images = krylov.extend(&mut op, deflate, limits.max_m);
+        let m = krylov.basis.len();
         // remainders (I - V V^T) A v_j of the new block: the next block, and the residuals
         let remainders: Vec<Vec<f64>> = images
             .into_iter()
             .map(|mut w| {
-                orthogonalize(&[deflate, &basis], &mut w);
+                orthogonalize(&[deflate, &krylov.basis], &mut w);
                 w
             })
             .collect();
@@ -277,46 +248,24 @@ pub fn lanczos(
         // Rayleigh-Ritz (a dense eigendecomposition of the whole projected matrix) on a
         // geometric schedule, an eighth of the basis apart, and before every stop: done at
         // every step its cost grows as m^4 and dominates long runs
-        let due = m >= next_check || invariant || m >= max_m || m == first;
+        let due = m >= next_check || invariant || m >= limits.max_m || m == first;
         if !due {
-            pending.extend(remainders.into_iter().map(|r| {
-                let n = dot(&r, &r).sqrt();
-                if n > 1e-14 * scale {
-                    r
-                } else {
-                    random(&mut rng)
-                }
-            }));
+            krylov.refill(remainders);
             continue;
         }
         next_check = m + (m / 8).max(b);
-        let (values, coefficients, residuals) = rayleigh_ritz(&h, k, which, first, &remainders);
+        let (values, coefficients, residuals) =
+            rayleigh_ritz(&krylov.h, k, which, first, &remainders);
         let worst = values
             .iter()
             .zip(&residuals)
             .map(|(v, r)| r / scale.max(v.abs()))
             .fold(0.0, f64::max);
-        let stop = if values.len() == k && worst <= tol {
-            Some(LanczosStop::Converged {
-                residual: worst,
-                threshold: tol,
-            })
-        } else if invariant && m >= k {
-            Some(LanczosStop::InvariantSubspace { dimension: m })
-        } else if m >= max_m || m == first {
-            Some(LanczosStop::SubspaceLimit {
-                dimension: m,
-                residual: worst,
-                threshold: tol,
-            })
-        } else {
-            None
-        };
-        if let Some(stop) = stop {
+        if let Some(stop) = limits.stop(values.len(), worst, invariant, m, first) {
             return EigenEstimate {
                 vectors: coefficients
                     .iter()
-                    .map(|c| ritz_vector(&basis, c))
+                    .map(|c| ritz_vector(&krylov.basis, c))
                     .collect(),
                 values,
                 residuals,
@@ -324,17 +273,139 @@ pub fn lanczos(
                 stop,
             };
         }
-        // next block: the normalised remainders; a random vector replaces a deflated one
+        krylov.refill(remainders);
+    }
+}
+
+/// What ends a [`lanczos`] run: `k` wanted pairs, at most `max_m` basis vectors, the relative
+/// residual tolerance `tol`.
+struct Limits {
+    k: usize,
+    max_m: usize,
+    tol: f64,
+}
+
+impl Limits {
+    /// Why the run stops after a Rayleigh-Ritz step that found `found` pairs with the largest
+    /// relative residual `worst` on a basis of `m` vectors (`first` before the last block), if
+    /// it does.
+    fn stop(
+        &self,
+        found: usize,
+        worst: f64,
+        invariant: bool,
+        m: usize,
+        first: usize,
+    ) -> Option<LanczosStop> {
+        if found == self.k && worst <= self.tol {
+            Some(LanczosStop::Converged {
+                residual: worst,
+                threshold: self.tol,
+            })
+        } else if invariant && m >= self.k {
+            Some(LanczosStop::InvariantSubspace { dimension: m })
+        } else if m >= self.max_m || m == first {
+            Some(LanczosStop::SubspaceLimit {
+                dimension: m,
+                residual: worst,
+                threshold: self.tol,
+            })
+        } else {
+            None
+        }
+    }
+}
+
+/// The Krylov basis of a [`lanczos`] run, its projected matrix and the block waiting to join.
+struct Krylov {
+    dim: usize,
+    /// A norm estimate: a remainder below `1e-14 scale` is a deflated direction.
+    scale: f64,
+    rng: StdRng,
+    basis: Vec<Vec<f64>>,
+    /// `h[j][i] = v_i^T A v_j` for `i <= j`.
+    h: Vec<Vec<f64>>,
+    pending: Vec<Vec<f64>>,
+}
+
+impl Krylov {
+    /// The first block of `b` vectors: `start` (randomly perturbed, so a start orthogonal to
+    /// the target still works) when given and nonzero, then random vectors from `seed`.
+    fn start(dim: usize, b: usize, seed: u64, start: Option<&[f64]>, scale: f64) -> Krylov {
+        let mut rng = StdRng::seed_from_u64(seed);
+        let mut pending: Vec<Vec<f64>> = Vec::with_capacity(b);
+        if let Some(s) = start.filter(|s| s.len() == dim && s.iter().any(|x| *x != 0.0)) {
+            pending.push(
+                s.iter()
+                    .map(|x| x + 1e-3 * (rng.random::<f64>() - 0.5) / (dim as f64).sqrt())
+                    .collect(),
+            );
+        }
+        let mut krylov = Krylov {
+            dim,
+            scale,
+            rng,
+            basis: Vec::new(),
+            h: Vec::new(),
+            pending,
+        };
+        while krylov.pending.len() < b {
+            let r = krylov.random();
+            krylov.pending.push(r);
+        }
+        krylov
+    }
+
+    fn random(&mut self) -> Vec<f64> {
+        (0..self.dim)
+            .map(|_| self.rng.random::<f64>() - 0.5)
+            .collect()
+    }
+
+    /// Add the pending block (orthonormalised against `deflate` and the basis; a vector that
+    /// does not survive is dropped) while the basis holds fewer than `max_m` vectors, and
+    /// apply the operator: the images `A v` of the vectors added.
+    fn extend(
+        &mut self,
+        op: &mut impl FnMut(&[f64], &mut [f64]),
+        deflate: &[Vec<f64>],
+        max_m: usize,
+    ) -> Vec<Vec<f64>> {
+        let mut images: Vec<Vec<f64>> = Vec::new();
+        for mut v in std::mem::take(&mut self.pending) {
+            if self.basis.len() >= max_m {
+                break;
+            }
+            let (before, after) = orthogonalize(&[deflate, &self.basis], &mut v);
+            if !(after.is_finite() && after > 1e-10 * before) {
+                continue;
+            }
+            v.iter_mut().for_each(|x| *x /= after);
+            let mut w = vec![0.0; self.dim];
+            op(&v, &mut w);
+            self.basis.push(v);
+            self.h
+                .push(self.basis.iter().map(|vi| dot(vi, &w)).collect());
+            images.push(w);
+        }
+        images
+    }
+
+    /// The next block: the remainders; a random vector replaces a deflated one, and stands in
+    /// for an empty block.
+    fn refill(&mut self, remainders: Vec<Vec<f64>>) {
         for r in remainders {
             let n = dot(&r, &r).sqrt();
-            if n > 1e-14 * scale {
-                pending.push(r);
+            if n > 1e-14 * self.scale {
+                self.pending.push(r);
             } else {
-                pending.push(random(&mut rng));
+                let r = self.random();
+                self.pending.push(r);
             }
         }
-        if pending.is_empty() {
-            pending.push(random(&mut rng));
+        if self.pending.is_empty() {
+            let r = self.random();
+            self.pending.push(r);
         }
     }
 }

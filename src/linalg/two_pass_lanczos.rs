@@ -233,34 +233,78 @@ pub fn two_pass_smallest(
         return empty(LanczosStop::InvariantSubspace { dimension: 0 });
     }
     start.iter_mut().for_each(|x| *x /= norm);
+    let Some(first) = first_pass(&mut op, deflate, &start, scale, settings) else {
+        return empty(LanczosStop::InvariantSubspace { dimension: 0 });
+    };
+    let z = &first.z;
+    let mut x = second_pass(&mut op, deflate, start, z, &first.betas);
+    project_off(deflate, &mut x);
+    let nx = dot(&x, &x).sqrt();
+    if nx > 0.0 {
+        x.iter_mut().for_each(|xi| *xi /= nx);
+    }
+    let mut ax = vec![0.0; dim];
+    op(&x, &mut ax);
+    let value = dot(&x, &ax);
+    LanczosResult {
+        value,
+        vector: x,
+        residual: first.residual,
+        iterations: z.len(),
+        stop: first.stop,
+    }
+}
+
+/// One step of the recurrence on `P A P`: from `(v_prev, v, beta_prev)` to
+/// `w = A v - alpha v - beta_prev v_prev` (projected off `deflate`); returns `alpha`.
+fn recurrence_step(
+    op: &mut dyn FnMut(&[f64], &mut [f64]),
+    deflate: &[Vec<f64>],
+    v_prev: &[f64],
+    v: &[f64],
+    beta_prev: f64,
+    w: &mut [f64],
+) -> f64 {
+    op(v, w);
+    project_off(deflate, w);
+    let alpha = dot(w, v);
+    w.iter_mut()
+        .zip(v)
+        .zip(v_prev)
+        .for_each(|((w, v), p)| *w -= alpha * v + beta_prev * p);
+    // one local reorthogonalisation against v (cheap; keeps alpha accurate)
+    let c = dot(w, v);
+    w.iter_mut().zip(v).for_each(|(w, v)| *w -= c * v);
+    alpha + c
+}
+
+/// What the first pass found: the eigenvector `z` of `T_m` for its smallest eigenvalue, the
+/// residual estimate `beta_m |z_m|`, the recurrence's `beta`s (for the second pass) and why it
+/// stopped.
+struct FirstPass {
+    z: Vec<f64>,
+    residual: f64,
+    betas: Vec<f64>,
+    stop: LanczosStop,
+}
+
+/// The first pass from the unit vector `start`: the recurrence, keeping only `T_m`, tested every
+/// `check_every` steps, at the last and when the subspace is invariant; `None` when no step ran.
+fn first_pass(
+    op: &mut dyn FnMut(&[f64], &mut [f64]),
+    deflate: &[Vec<f64>],
+    start: &[f64],
+    scale: f64,
+    settings: &TwoPassSettings,
+) -> Option<FirstPass> {
+    let dim = start.len();
     let max = settings.max_iterations.max(1).min(dim);
     let every = settings.check_every.max(1);
-    // one step of the recurrence: from (v_prev, v, beta_prev) to w = A v - alpha v - beta v_prev
-    let step = |op: &mut dyn FnMut(&[f64], &mut [f64]),
-                v_prev: &[f64],
-                v: &[f64],
-                beta_prev: f64,
-                w: &mut Vec<f64>|
-     -> f64 {
-        op(v, w);
-        project_off(deflate, w);
-        let alpha = dot(w, v);
-        w.iter_mut()
-            .zip(v)
-            .zip(v_prev)
-            .for_each(|((w, v), p)| *w -= alpha * v + beta_prev * p);
-        // one local reorthogonalisation against v (cheap; keeps alpha accurate)
-        let c = dot(w, v);
-        w.iter_mut().zip(v).for_each(|(w, v)| *w -= c * v);
-        alpha + c
-    };
     let (mut alphas, mut betas): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
-    let (mut v_prev, mut v, mut w) = (vec![0.0; dim], start.clone(), vec![0.0; dim]);
+    let (mut v_prev, mut v, mut w) = (vec![0.0; dim], start.to_vec(), vec![0.0; dim]);
     let mut beta_prev = 0.0;
-    let mut found: Option<(f64, Vec<f64>, f64)> = None;
-    let mut stop = None;
     for j in 0..max {
-        let alpha = step(&mut op, &v_prev, &v, beta_prev, &mut w);
+        let alpha = recurrence_step(op, deflate, &v_prev, &v, beta_prev, &mut w);
         alphas.push(alpha);
         let beta = dot(&w, &w).sqrt();
         let last = j + 1 == max;
@@ -275,22 +319,27 @@ pub fn two_pass_smallest(
             };
             let converged = residual <= settings.tolerance * scale;
             if converged || last || invariant {
-                stop = Some(if invariant {
+                let relative = residual / scale;
+                let stop = if invariant {
                     LanczosStop::InvariantSubspace { dimension: j + 1 }
                 } else if converged {
                     LanczosStop::Converged {
-                        residual: residual / scale,
+                        residual: relative,
                         threshold: settings.tolerance,
                     }
                 } else {
                     LanczosStop::SubspaceLimit {
                         dimension: j + 1,
-                        residual: residual / scale,
+                        residual: relative,
                         threshold: settings.tolerance,
                     }
+                };
+                return Some(FirstPass {
+                    z,
+                    residual,
+                    betas,
+                    stop,
                 });
-                found = Some((theta, z, residual));
-                break;
             }
         }
         betas.push(beta);
@@ -299,10 +348,19 @@ pub fn two_pass_smallest(
         std::mem::swap(&mut v, &mut w);
         beta_prev = beta;
     }
-    let (Some((_, z, residual)), Some(stop)) = (found, stop) else {
-        return empty(LanczosStop::InvariantSubspace { dimension: 0 });
-    };
-    // second pass: the same vectors again, accumulating x = V z
+    None
+}
+
+/// The second pass: the same vectors again from `start` (the recurrence is deterministic, its
+/// `beta`s known), accumulating `x = V z`.
+fn second_pass(
+    op: &mut dyn FnMut(&[f64], &mut [f64]),
+    deflate: &[Vec<f64>],
+    start: Vec<f64>,
+    z: &[f64],
+    betas: &[f64],
+) -> Vec<f64> {
+    let dim = start.len();
     let mut x = vec![0.0; dim];
     let (mut v_prev, mut v, mut w) = (vec![0.0; dim], start, vec![0.0; dim]);
     let mut beta_prev = 0.0;
@@ -311,28 +369,14 @@ pub fn two_pass_smallest(
         if j + 1 == z.len() {
             break;
         }
-        step(&mut op, &v_prev, &v, beta_prev, &mut w);
+        recurrence_step(op, deflate, &v_prev, &v, beta_prev, &mut w);
         let beta = betas[j];
         w.iter_mut().for_each(|x| *x /= beta);
         std::mem::swap(&mut v_prev, &mut v);
         std::mem::swap(&mut v, &mut w);
         beta_prev = beta;
     }
-    project_off(deflate, &mut x);
-    let nx = dot(&x, &x).sqrt();
-    if nx > 0.0 {
-        x.iter_mut().for_each(|xi| *xi /= nx);
-    }
-    let mut ax = vec![0.0; dim];
-    op(&x, &mut ax);
-    let value = dot(&x, &ax);
-    LanczosResult {
-        value,
-        vector: x,
-        residual,
-        iterations: z.len(),
-        stop,
-    }
+    x
 }
 
 #[cfg(test)]

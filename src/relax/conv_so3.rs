@@ -138,64 +138,11 @@ pub fn relax_multiple_conv(
     let nv = svec_len(dim);
     // the cost scaled by the mean weighted degree [P4]
     let scale = super::multiple::cost_scale(problem);
-    let q = connection_laplacian(problem).to_dense();
-    let mut c = vec![0.0; nv];
-    for col in 0..dim {
-        for row in 0..=col {
-            let w = if row == col { 1.0 } else { 2.0 };
-            c[svec_index(row, col)] = w * q[(row, col)] / scale;
-        }
-    }
-    let mut pairs: Vec<(usize, usize)> = problem
-        .edges()
-        .iter()
-        .map(|e| (e.i.min(e.j), e.i.max(e.j)))
-        .collect();
-    pairs.sort_unstable();
-    pairs.dedup();
+    let c = scaled_cost(problem, scale);
+    let pairs = edge_pairs(problem);
     let neq = 6 * n;
     let rows = neq + nv + 10 * pairs.len();
-    let mut trip = Vec::new();
-    let mut b = vec![0.0; rows];
-    // X_ii = I (6 rows per node)
-    for i in 0..n {
-        for bb in 0..3 {
-            for a in 0..=bb {
-                let row = 6 * i + svec_index(a, bb);
-                trip.push((row, svec_index(3 * i + a, 3 * i + bb), 1.0));
-                b[row] = if a == bb { 1.0 } else { 0.0 };
-            }
-        }
-    }
-    // X PSD: s = svec(X)
-    for col in 0..dim {
-        for row in 0..=col {
-            let k = svec_index(row, col);
-            trip.push((neq + k, k, -svec_weight(row, col)));
-        }
-    }
-    // A(X_ij) PSD: s = svec(I + L(X_ij)), L's coefficients from the unit matrices
-    let zero = conv_matrix(&Matrix3::zeros());
-    for (e, &(i, j)) in pairs.iter().enumerate() {
-        let offset = neq + nv + 10 * e;
-        for qq in 0..4 {
-            for p in 0..=qq {
-                let row = offset + svec_index(p, qq);
-                let w = svec_weight(p, qq);
-                b[row] = w * zero[(p, qq)];
-                for k in 0..3 {
-                    for l in 0..3 {
-                        let mut unit = Matrix3::zeros();
-                        unit[(k, l)] = 1.0;
-                        let coef = conv_matrix(&unit)[(p, qq)] - zero[(p, qq)];
-                        if coef != 0.0 {
-                            trip.push((row, svec_index(3 * i + k, 3 * j + l), -w * coef));
-                        }
-                    }
-                }
-            }
-        }
-    }
+    let (trip, b) = constraints(n, &pairs);
     let mut cones = vec![Cone::Zero(neq), Cone::Psd(dim)];
     cones.extend(pairs.iter().map(|_| Cone::Psd(4)));
     let dense = SdpSettings {
@@ -209,6 +156,113 @@ pub fn relax_multiple_conv(
             message: "Clarabel returned no dual solution".into(),
         });
     }
+    let (multipliers, conv_multipliers) = read_multipliers(z, n, &pairs, scale);
+    Ok(ConvRelaxation {
+        status: conic.status,
+        multipliers,
+        conv_multipliers,
+        primal_objective: conic.primal_objective * scale,
+        dual_objective: conic.dual_objective * scale,
+        iterations: conic.iterations,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The cost `svec` of `Q / scale` (off-diagonal entries twice: `<C, svec(X)> = tr(Q X) /
+/// scale`).
+fn scaled_cost(problem: &MultipleProblem, scale: f64) -> Vec<f64> {
+    let dim = 3 * problem.num_rotations();
+    let q = connection_laplacian(problem).to_dense();
+    let mut c = vec![0.0; svec_len(dim)];
+    for col in 0..dim {
+        for row in 0..=col {
+            let w = if row == col { 1.0 } else { 2.0 };
+            c[svec_index(row, col)] = w * q[(row, col)] / scale;
+        }
+    }
+    c
+}
+
+/// The distinct node pairs `(min, max)` with an edge, sorted.
+fn edge_pairs(problem: &MultipleProblem) -> Vec<(usize, usize)> {
+    let mut pairs: Vec<(usize, usize)> = problem
+        .edges()
+        .iter()
+        .map(|e| (e.i.min(e.j), e.i.max(e.j)))
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    pairs
+}
+
+/// The constraints `A svec(X) + s = b` in primal form: `X_ii = I` (6 rows per node), `X` PSD
+/// (`s = svec(X)`), and `A(X_ij)` PSD for every pair (10 rows each).
+fn constraints(n: usize, pairs: &[(usize, usize)]) -> (Vec<(usize, usize, f64)>, Vec<f64>) {
+    let dim = 3 * n;
+    let nv = svec_len(dim);
+    let neq = 6 * n;
+    let mut trip = Vec::new();
+    let mut b = vec![0.0; neq + nv + 10 * pairs.len()];
+    for i in 0..n {
+        for bb in 0..3 {
+            for a in 0..=bb {
+                let row = 6 * i + svec_index(a, bb);
+                trip.push((row, svec_index(3 * i + a, 3 * i + bb), 1.0));
+                b[row] = if a == bb { 1.0 } else { 0.0 };
+            }
+        }
+    }
+    for col in 0..dim {
+        for row in 0..=col {
+            let k = svec_index(row, col);
+            trip.push((neq + k, k, -svec_weight(row, col)));
+        }
+    }
+    for (e, &(i, j)) in pairs.iter().enumerate() {
+        conv_rows(neq + nv + 10 * e, i, j, &mut trip, &mut b);
+    }
+    (trip, b)
+}
+
+/// The rows of `A(X_ij)` PSD from `offset`: `s = svec(I + L(X_ij))`, `L`'s coefficients from
+/// the unit matrices.
+fn conv_rows(
+    offset: usize,
+    i: usize,
+    j: usize,
+    trip: &mut Vec<(usize, usize, f64)>,
+    b: &mut [f64],
+) {
+    let zero = conv_matrix(&Matrix3::zeros());
+    for qq in 0..4 {
+        for p in 0..=qq {
+            let row = offset + svec_index(p, qq);
+            let w = svec_weight(p, qq);
+            b[row] = w * zero[(p, qq)];
+            for k in 0..3 {
+                for l in 0..3 {
+                    let mut unit = Matrix3::zeros();
+                    unit[(k, l)] = 1.0;
+                    let coef = conv_matrix(&unit)[(p, qq)] - zero[(p, qq)];
+                    if coef != 0.0 {
+                        trip.push((row, svec_index(3 * i + k, 3 * j + l), -w * coef));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The multipliers `Lambda_i` of `X_ii = I` and `Z_e` of `A(X_ij)` PSD in the dual solution
+/// `z`, unscaled.
+#[allow(clippy::type_complexity)]
+fn read_multipliers(
+    z: &[f64],
+    n: usize,
+    pairs: &[(usize, usize)],
+    scale: f64,
+) -> (Vec<Matrix3<f64>>, Vec<(usize, usize, Matrix4<f64>)>) {
+    let offset0 = 6 * n + svec_len(3 * n);
     let multipliers = (0..n)
         .map(|i| {
             Matrix3::from_fn(|r, cc| {
@@ -221,18 +275,10 @@ pub fn relax_multiple_conv(
         .iter()
         .enumerate()
         .map(|(e, &(i, j))| {
-            let offset = neq + nv + 10 * e;
+            let offset = offset0 + 10 * e;
             let m = smat(&z[offset..offset + 10], 4).unwrap_or_else(|| faer::Mat::zeros(4, 4));
             (i, j, Matrix4::from_fn(|p, qq| scale * m[(p, qq)]))
         })
         .collect();
-    Ok(ConvRelaxation {
-        status: conic.status,
-        multipliers,
-        conv_multipliers,
-        primal_objective: conic.primal_objective * scale,
-        dual_objective: conic.dual_objective * scale,
-        iterations: conic.iterations,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+    (multipliers, conv_multipliers)
 }

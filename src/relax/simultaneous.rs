@@ -168,43 +168,10 @@ pub fn relax_simultaneous(
     let scale = total / n as f64; // [P4]: mean weighted degree over 2n nodes
     let dim = 3 * n;
     let len = svec_len(dim);
-    // rows: svec(Z_R), then svec(Z_C)
-    let mut b = vec![0.0; 2 * len];
-    for (cone, p) in [right, left].into_iter().enumerate() {
-        for t in connection_laplacian_triplets(p) {
-            if t.row <= t.col {
-                b[cone * len + svec_index(t.row, t.col)] +=
-                    t.val / scale * svec_weight(t.row, t.col);
-            }
-        }
-    }
-    // variables: 6 per diagonal block (n right, then n left), then one per pair
+    let b = laplacian_rows(right, left, scale, len);
     let pairs = n * (n - 1) / 2;
     let nv = 12 * n + pairs;
-    let mut c = vec![0.0; nv];
-    let mut trip = Vec::with_capacity(12 * n + 6 * pairs);
-    for a in 0..2 * n {
-        let (cone, node) = (a / n, a % n);
-        for col in 0..3 {
-            for row in 0..=col {
-                let k = 6 * a + svec_index(row, col);
-                if row == col {
-                    c[k] = -1.0;
-                }
-                let entry = cone * len + svec_index(3 * node + row, 3 * node + col);
-                trip.push((entry, k, svec_weight(row, col)));
-            }
-        }
-    }
-    // Z_R = Q_R - ... - gamma E_ij, Z_C = Q_C - ... + gamma E_ij; b - A x = svec(Z)
-    for (k, (i, j)) in coupling_pairs(n).enumerate() {
-        for d in 0..3 {
-            let (r, cc) = (3 * i + d, 3 * j + d);
-            let v = 0.5 * svec_weight(r, cc);
-            trip.push((svec_index(r, cc), 12 * n + k, v));
-            trip.push((len + svec_index(r, cc), 12 * n + k, -v));
-        }
-    }
+    let (c, trip) = dual_columns(n, len);
     let a = csc(2 * len, nv, trip);
     let conic = solve_conic(
         &c,
@@ -214,15 +181,7 @@ pub fn relax_simultaneous(
         settings,
         settings.chordal_merge.clarabel_name(n, pairs),
     )?;
-    let x = &conic.x;
-    let finite = |v: f64| if v.is_finite() { v * scale } else { f64::NAN };
-    let lambdas = (0..2 * n)
-        .map(|a| {
-            let l = Matrix3::from_fn(|r, cc| finite(x[6 * a + svec_index(r, cc)]));
-            (l + l.transpose()) * 0.5
-        })
-        .collect();
-    let couplings = (0..pairs).map(|k| finite(x[12 * n + k])).collect();
+    let (lambdas, couplings) = read_multipliers(&conic.x, n, scale);
     let gram = |cone: usize| {
         conic
             .z
@@ -243,6 +202,73 @@ pub fn relax_simultaneous(
         solver_seconds: conic.solve_seconds,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The dual's right-hand side: the rows `svec(Q_R)`, then `svec(Q_C)`, scaled by `1 / scale`
+/// (`len` rows each).
+fn laplacian_rows(
+    right: &MultipleProblem,
+    left: &MultipleProblem,
+    scale: f64,
+    len: usize,
+) -> Vec<f64> {
+    let mut b = vec![0.0; 2 * len];
+    for (cone, p) in [right, left].into_iter().enumerate() {
+        for t in connection_laplacian_triplets(p) {
+            if t.row <= t.col {
+                b[cone * len + svec_index(t.row, t.col)] +=
+                    t.val / scale * svec_weight(t.row, t.col);
+            }
+        }
+    }
+    b
+}
+
+/// The dual's objective and constraint columns: the variables are 6 per diagonal block (`n`
+/// right, then `n` left; objective `-tr(Lambda_a)`), then one per pair `gamma_ij`;
+/// `Z_R = Q_R - ... - gamma E_ij`, `Z_C = Q_C - ... + gamma E_ij`, `b - A x = svec(Z)`.
+fn dual_columns(n: usize, len: usize) -> (Vec<f64>, Vec<(usize, usize, f64)>) {
+    let pairs = n * (n - 1) / 2;
+    let mut c = vec![0.0; 12 * n + pairs];
+    let mut trip = Vec::with_capacity(12 * n + 6 * pairs);
+    for a in 0..2 * n {
+        let (cone, node) = (a / n, a % n);
+        for col in 0..3 {
+            for row in 0..=col {
+                let k = 6 * a + svec_index(row, col);
+                if row == col {
+                    c[k] = -1.0;
+                }
+                let entry = cone * len + svec_index(3 * node + row, 3 * node + col);
+                trip.push((entry, k, svec_weight(row, col)));
+            }
+        }
+    }
+    for (k, (i, j)) in coupling_pairs(n).enumerate() {
+        for d in 0..3 {
+            let (r, cc) = (3 * i + d, 3 * j + d);
+            let v = 0.5 * svec_weight(r, cc);
+            trip.push((svec_index(r, cc), 12 * n + k, v));
+            trip.push((len + svec_index(r, cc), 12 * n + k, -v));
+        }
+    }
+    (c, trip)
+}
+
+/// The multipliers `Lambda_a` (symmetrised) and couplings `gamma_ij` of the dual solution `x`,
+/// unscaled (`NaN` where the solver's value is not finite).
+fn read_multipliers(x: &[f64], n: usize, scale: f64) -> (Vec<Matrix3<f64>>, Vec<f64>) {
+    let finite = |v: f64| if v.is_finite() { v * scale } else { f64::NAN };
+    let lambdas = (0..2 * n)
+        .map(|a| {
+            let l = Matrix3::from_fn(|r, cc| finite(x[6 * a + svec_index(r, cc)]));
+            (l + l.transpose()) * 0.5
+        })
+        .collect();
+    let couplings = (0..n * (n - 1) / 2)
+        .map(|k| finite(x[12 * n + k]))
+        .collect();
+    (lambdas, couplings)
 }
 
 /// Rounding: `Y = V_3 diag(sqrt(lambda_1..3))` from the top eigenpairs of `X_R` and of `X_C`

@@ -61,6 +61,20 @@ impl Cell {
     fn centre(&self) -> Rotation {
         so3::exp(&Vector3::new(self.c[0], self.c[1], self.c[2]))
     }
+    /// The eight cells of half the side.
+    fn children(&self) -> impl Iterator<Item = Cell> + '_ {
+        let h = 0.5 * self.h;
+        [-h, h].into_iter().flat_map(move |dx| {
+            [-h, h].into_iter().flat_map(move |dy| {
+                [-h, h].into_iter().map(move |dz| Cell {
+                    c: [self.c[0] + dx, self.c[1] + dy, self.c[2] + dz],
+                    h,
+                    depth: self.depth + 1,
+                    lb: 0.0,
+                })
+            })
+        })
+    }
 }
 
 impl PartialEq for Cell {
@@ -137,24 +151,45 @@ pub(crate) fn search<T: Terms>(
     max_seconds: Option<f64>,
 ) -> Outcome<T::Solution> {
     let start = Instant::now();
-    let mut best_cost = cost;
-    let mut best: Option<(T::Solution, f64)> = None;
-    let mut stats = BranchAndBoundStats::default();
-    let mut balls: Vec<Ball> = Vec::new();
-    if let Some(b) = incumbent_ball(terms, estimate, cost, tolerance.allowed_gap(cost)) {
-        stats.ball_radius = b.radius;
-        balls.push(b);
+    let mut s = Search::new(terms, estimate, cost, tolerance, settings);
+    let mut pending = initial_cells(settings.initial_divisions.max(1));
+    let mut stop = BranchAndBoundStop::Converged;
+    loop {
+        for cell in pending.drain(..) {
+            s.bound_cell(cell);
+        }
+        // The next cell to split.
+        let threshold = s.prune_threshold();
+        let Some(cell) = s.heap.pop() else { break };
+        if cell.lb >= threshold {
+            s.pruned_min = s.pruned_min.min(cell.lb);
+            s.stats.cells_pruned += 1;
+            continue;
+        }
+        if inside_a_ball(&s.balls, &cell.centre(), cell.radius()) {
+            s.stats.cells_in_balls += 1;
+            continue;
+        }
+        let over_time = max_seconds.is_some_and(|t| start.elapsed().as_secs_f64() > t);
+        if let Some(reason) = s.budget_stop(&cell, over_time) {
+            stop = reason;
+            s.heap.push(cell);
+            break;
+        }
+        pending.extend(cell.children());
     }
-    let mut heap: BinaryHeap<Cell> = BinaryHeap::new();
-    let mut pruned_min = f64::INFINITY;
-    let k = settings.initial_divisions.max(1);
+    s.finish(stop, start)
+}
+
+/// The `k^3` cells of half side `pi / k` covering the cube `[-pi, pi]^3`.
+fn initial_cells(k: usize) -> Vec<Cell> {
     let h0 = PI / k as f64;
-    let mut pending: Vec<Cell> = Vec::with_capacity(k * k * k);
+    let mut cells: Vec<Cell> = Vec::with_capacity(k * k * k);
     for i in 0..k {
         for j in 0..k {
             for l in 0..k {
                 let at = |m: usize| -PI + (2 * m + 1) as f64 * h0;
-                pending.push(Cell {
+                cells.push(Cell {
                     c: [at(i), at(j), at(l)],
                     h: h0,
                     depth: 0,
@@ -163,68 +198,117 @@ pub(crate) fn search<T: Terms>(
             }
         }
     }
-    let mut stop = BranchAndBoundStop::Converged;
-    loop {
-        // Bound the pending cells.
-        for mut cell in pending.drain(..) {
-            if cell.outside_pi_ball() {
-                continue;
-            }
-            let centre = cell.centre();
-            let r = cell.radius();
-            if inside_a_ball(&balls, &centre, r) {
-                stats.cells_in_balls += 1;
-                continue;
-            }
-            let bound = terms.ball(&centre, r);
-            stats.cells_explored += 1;
-            stats.max_depth = stats.max_depth.max(cell.depth);
-            cell.lb = bound.lower_bound;
-            let allowed = tolerance.allowed_gap(best_cost);
-            if bound.centre_cost < best_cost - allowed {
-                let exact = terms.cost(&centre);
-                if exact < best_cost - allowed && stats.local_solves < settings.max_local_solves {
-                    stats.local_solves += 1;
-                    let (point, c) = match terms.local_solve(&centre) {
-                        Some((s, c)) if c < exact => (Some(s), c),
-                        _ => (None, exact),
-                    };
-                    if c < best_cost {
-                        best_cost = c;
-                        if let Some(s) = point {
-                            let at = T::rotation(&s);
-                            if let Some(b) = incumbent_ball(terms, &at, c, tolerance.allowed_gap(c))
-                            {
-                                balls.push(b);
-                            }
-                            best = Some((s, c));
-                        }
+    cells
+}
+
+/// The state of a search: the incumbent, the balls around incumbents, the live cells, the
+/// smallest bound of a pruned cell and the statistics.
+struct Search<'a, T: Terms> {
+    terms: &'a T,
+    tolerance: GapTolerance,
+    settings: &'a BranchAndBoundSettings,
+    best_cost: f64,
+    best: Option<(T::Solution, f64)>,
+    stats: BranchAndBoundStats,
+    balls: Vec<Ball>,
+    heap: BinaryHeap<Cell>,
+    pruned_min: f64,
+}
+
+impl<'a, T: Terms> Search<'a, T> {
+    /// The search before any cell: the estimate the incumbent, with its ball.
+    fn new(
+        terms: &'a T,
+        estimate: &Rotation,
+        cost: f64,
+        tolerance: GapTolerance,
+        settings: &'a BranchAndBoundSettings,
+    ) -> Self {
+        let mut stats = BranchAndBoundStats::default();
+        let mut balls: Vec<Ball> = Vec::new();
+        if let Some(b) = incumbent_ball(terms, estimate, cost, tolerance.allowed_gap(cost)) {
+            stats.ball_radius = b.radius;
+            balls.push(b);
+        }
+        Search {
+            terms,
+            tolerance,
+            settings,
+            best_cost: cost,
+            best: None,
+            stats,
+            balls,
+            heap: BinaryHeap::new(),
+            pruned_min: f64::INFINITY,
+        }
+    }
+
+    /// Cells bounded at or above this are pruned: half the allowed gap below the incumbent.
+    fn prune_threshold(&self) -> f64 {
+        self.best_cost - 0.5 * self.tolerance.allowed_gap(self.best_cost)
+    }
+
+    /// Bound a pending cell (unless it is outside the ball of radius `pi` or inside an
+    /// incumbent's ball), improve the incumbent from its centre, then prune or keep it.
+    fn bound_cell(&mut self, mut cell: Cell) {
+        if cell.outside_pi_ball() {
+            return;
+        }
+        let centre = cell.centre();
+        let r = cell.radius();
+        if inside_a_ball(&self.balls, &centre, r) {
+            self.stats.cells_in_balls += 1;
+            return;
+        }
+        let bound = self.terms.ball(&centre, r);
+        self.stats.cells_explored += 1;
+        self.stats.max_depth = self.stats.max_depth.max(cell.depth);
+        cell.lb = bound.lower_bound;
+        let allowed = self.tolerance.allowed_gap(self.best_cost);
+        if bound.centre_cost < self.best_cost - allowed {
+            self.improve_from(&centre, allowed);
+        }
+        if cell.lb >= self.prune_threshold() {
+            self.pruned_min = self.pruned_min.min(cell.lb);
+            self.stats.cells_pruned += 1;
+        } else {
+            self.heap.push(cell);
+        }
+    }
+
+    /// A centre whose cost estimate beats the incumbent by more than `allowed`: its exact
+    /// cost, and a local solve from it while the budget of local solves lasts; a solution
+    /// that improves becomes the incumbent, with its ball.
+    fn improve_from(&mut self, centre: &Rotation, allowed: f64) {
+        let exact = self.terms.cost(centre);
+        if exact < self.best_cost - allowed
+            && self.stats.local_solves < self.settings.max_local_solves
+        {
+            self.stats.local_solves += 1;
+            let (point, c) = match self.terms.local_solve(centre) {
+                Some((s, c)) if c < exact => (Some(s), c),
+                _ => (None, exact),
+            };
+            if c < self.best_cost {
+                self.best_cost = c;
+                if let Some(s) = point {
+                    let at = T::rotation(&s);
+                    let allowed = self.tolerance.allowed_gap(c);
+                    if let Some(b) = incumbent_ball(self.terms, &at, c, allowed) {
+                        self.balls.push(b);
                     }
-                } else if exact < best_cost {
-                    best_cost = exact;
+                    self.best = Some((s, c));
                 }
             }
-            if cell.lb >= best_cost - 0.5 * tolerance.allowed_gap(best_cost) {
-                pruned_min = pruned_min.min(cell.lb);
-                stats.cells_pruned += 1;
-            } else {
-                heap.push(cell);
-            }
+        } else if exact < self.best_cost {
+            self.best_cost = exact;
         }
-        // The next cell to split.
-        let threshold = best_cost - 0.5 * tolerance.allowed_gap(best_cost);
-        let Some(cell) = heap.pop() else { break };
-        if cell.lb >= threshold {
-            pruned_min = pruned_min.min(cell.lb);
-            stats.cells_pruned += 1;
-            continue;
-        }
-        if inside_a_ball(&balls, &cell.centre(), cell.radius()) {
-            stats.cells_in_balls += 1;
-            continue;
-        }
-        let over_time = max_seconds.is_some_and(|t| start.elapsed().as_secs_f64() > t);
-        let reason = if stats.cells_explored + 8 > settings.max_cells {
+    }
+
+    /// Why the search stops before splitting `cell`, if it does: the cell budget, the time
+    /// budget (`over_time`) or the resolution.
+    fn budget_stop(&self, cell: &Cell, over_time: bool) -> Option<BranchAndBoundStop> {
+        if self.stats.cells_explored + 8 > self.settings.max_cells {
             Some(BranchAndBoundStop::CellBudget)
         } else if over_time {
             Some(BranchAndBoundStop::TimeBudget)
@@ -232,49 +316,37 @@ pub(crate) fn search<T: Terms>(
             Some(BranchAndBoundStop::Resolution)
         } else {
             None
-        };
-        if let Some(reason) = reason {
-            stop = reason;
-            heap.push(cell);
-            break;
-        }
-        let h = 0.5 * cell.h;
-        for dx in [-h, h] {
-            for dy in [-h, h] {
-                for dz in [-h, h] {
-                    pending.push(Cell {
-                        c: [cell.c[0] + dx, cell.c[1] + dy, cell.c[2] + dz],
-                        h,
-                        depth: cell.depth + 1,
-                        lb: 0.0,
-                    });
-                }
-            }
         }
     }
-    // a NaN cell bound counts as the trivial 0 (f64::min would skip it)
-    let valid = |lb: f64| if lb.is_nan() { 0.0 } else { lb };
-    let live_min = heap
-        .iter()
-        .map(|c| valid(c.lb))
-        .fold(f64::INFINITY, f64::min);
-    let ball_min = balls
-        .iter()
-        .map(|b| valid(b.lb))
-        .fold(f64::INFINITY, f64::min);
-    let mut lower_bound = live_min.min(pruned_min).min(ball_min);
-    if !lower_bound.is_finite() {
-        // Nothing was bounded (cannot happen: the cells cover SO(3)); 0 is always a bound.
-        lower_bound = 0.0;
-    }
-    stats.live_cells = heap.len();
-    stats.stop = stop;
-    stats.lower_bound = lower_bound;
-    stats.best_cost = best_cost;
-    stats.seconds = start.elapsed().as_secs_f64();
-    Outcome {
-        lower_bound,
-        best,
-        stats,
+
+    /// The proven lower bound: the smallest bound of a live cell, a pruned cell or a ball.
+    fn finish(mut self, stop: BranchAndBoundStop, start: Instant) -> Outcome<T::Solution> {
+        // a NaN cell bound counts as the trivial 0 (f64::min would skip it)
+        let valid = |lb: f64| if lb.is_nan() { 0.0 } else { lb };
+        let live_min = self
+            .heap
+            .iter()
+            .map(|c| valid(c.lb))
+            .fold(f64::INFINITY, f64::min);
+        let ball_min = self
+            .balls
+            .iter()
+            .map(|b| valid(b.lb))
+            .fold(f64::INFINITY, f64::min);
+        let mut lower_bound = live_min.min(self.pruned_min).min(ball_min);
+        if !lower_bound.is_finite() {
+            // Nothing was bounded (cannot happen: the cells cover SO(3)); 0 is always a bound.
+            lower_bound = 0.0;
+        }
+        self.stats.live_cells = self.heap.len();
+        self.stats.stop = stop;
+        self.stats.lower_bound = lower_bound;
+        self.stats.best_cost = self.best_cost;
+        self.stats.seconds = start.elapsed().as_secs_f64();
+        Outcome {
+            lower_bound,
+            best: self.best,
+            stats: self.stats,
+        }
     }
 }

@@ -62,10 +62,58 @@ pub fn conv_bound(problem: &MultipleProblem, relaxation: &ConvRelaxation) -> Res
             }
         }
     }
-    let mut z_trace = 0.0;
-    let mut z_abs = 0.0;
-    let mut e_norm = 0.0;
-    let mut largest_z_shift = 0.0f64;
+    let conv = subtract_conv_multipliers(problem, relaxation, &mut s)?;
+    // margins: the eigensolver's backward error, forming S from the data (the anisotropic
+    // blocks [A3], the sums of the isotropic ones, the multipliers and the E_e)
+    let degree = max_degree(problem);
+    let s_norm = s.norm();
+    let l_norm: f64 = lambdas.iter().map(|l| l.norm()).sum();
+    let forming = forming_margin(problem, lambdas)
+        + 2.0 * gamma(degree + 16) * (q.norm_l2() + l_norm + conv.e_norm);
+    let margin = 10.0 * dim as f64 * UNIT_ROUNDOFF * s_norm + forming;
+    let computed = s.symmetric_eigenvalues().min();
+    let mu = computed - margin;
+    let trace: f64 = lambdas.iter().map(|l| l.trace()).sum();
+    let abs_trace: f64 = lambdas
+        .iter()
+        .map(|l| l[(0, 0)].abs() + l[(1, 1)].abs() + l[(2, 2)].abs())
+        .sum();
+    let deficit = dim as f64 * (-mu).max(0.0);
+    let terms = dim + 4 * relaxation.conv_multipliers.len() + 4;
+    let lower_bound = trace
+        - conv.trace
+        - deficit
+        - 2.0 * gamma(terms) * (abs_trace + conv.abs_trace + deficit)
+        - data_defect(problem);
+    Ok(ConvBound {
+        lower_bound,
+        verified_min_eigenvalue: mu,
+        largest_z_shift: conv.largest_shift,
+    })
+}
+
+/// What the `Z_e` (made PSD) put into the bound: `sum tr(Z_e)` and `sum |tr(Z_e)|`, the sum of
+/// the Frobenius norms of the `E_e(Z_e)`, and the largest PSD shift.
+struct ConvTerms {
+    trace: f64,
+    abs_trace: f64,
+    e_norm: f64,
+    largest_shift: f64,
+}
+
+/// Subtract every `E_e(Z_e)` from `s`, each `Z_e` first made PSD by a diagonal shift. Errors: a
+/// multiplier that is not finite or not an edge's.
+fn subtract_conv_multipliers(
+    problem: &MultipleProblem,
+    relaxation: &ConvRelaxation,
+    s: &mut DMatrix<f64>,
+) -> Result<ConvTerms> {
+    let mut terms = ConvTerms {
+        trace: 0.0,
+        abs_trace: 0.0,
+        e_norm: 0.0,
+        largest_shift: 0.0f64,
+    };
     for &(i, j, z) in &relaxation.conv_multipliers {
         let is_edge = problem
             .edges()
@@ -81,12 +129,12 @@ pub fn conv_bound(problem: &MultipleProblem, relaxation: &ConvRelaxation) -> Res
         let zs = (z + z.transpose()) * 0.5;
         let lo = zs.symmetric_eigenvalues().min();
         let shift = (-lo).max(0.0) + 16.0 * UNIT_ROUNDOFF * zs.norm();
-        largest_z_shift = largest_z_shift.max(shift);
+        terms.largest_shift = terms.largest_shift.max(shift);
         let zp: Matrix4<f64> = zs + Matrix4::identity() * shift;
-        z_trace += zp.trace();
-        z_abs += zp.trace().abs();
+        terms.trace += zp.trace();
+        terms.abs_trace += zp.trace().abs();
         let g = conv_adjoint(&zp) * 0.5;
-        e_norm += 2.0 * g.norm();
+        terms.e_norm += 2.0 * g.norm();
         for a in 0..3 {
             for b in 0..3 {
                 s[(3 * i + a, 3 * j + b)] -= g[(a, b)];
@@ -94,9 +142,12 @@ pub fn conv_bound(problem: &MultipleProblem, relaxation: &ConvRelaxation) -> Res
             }
         }
     }
-    // margins: the eigensolver's backward error, forming S from the data (the anisotropic
-    // blocks [A3], the sums of the isotropic ones, the multipliers and the E_e)
-    let degree = (0..n)
+    Ok(terms)
+}
+
+/// The largest number of edges at a node.
+fn max_degree(problem: &MultipleProblem) -> usize {
+    (0..problem.num_rotations())
         .map(|v| {
             problem
                 .edges()
@@ -105,31 +156,7 @@ pub fn conv_bound(problem: &MultipleProblem, relaxation: &ConvRelaxation) -> Res
                 .count()
         })
         .max()
-        .unwrap_or(0);
-    let s_norm = s.norm();
-    let l_norm: f64 = lambdas.iter().map(|l| l.norm()).sum();
-    let forming = forming_margin(problem, lambdas)
-        + 2.0 * gamma(degree + 16) * (q.norm_l2() + l_norm + e_norm);
-    let margin = 10.0 * dim as f64 * UNIT_ROUNDOFF * s_norm + forming;
-    let computed = s.symmetric_eigenvalues().min();
-    let mu = computed - margin;
-    let trace: f64 = lambdas.iter().map(|l| l.trace()).sum();
-    let abs_trace: f64 = lambdas
-        .iter()
-        .map(|l| l[(0, 0)].abs() + l[(1, 1)].abs() + l[(2, 2)].abs())
-        .sum();
-    let deficit = dim as f64 * (-mu).max(0.0);
-    let terms = dim + 4 * relaxation.conv_multipliers.len() + 4;
-    let lower_bound = trace
-        - z_trace
-        - deficit
-        - 2.0 * gamma(terms) * (abs_trace + z_abs + deficit)
-        - data_defect(problem);
-    Ok(ConvBound {
-        lower_bound,
-        verified_min_eigenvalue: mu,
-        largest_z_shift,
-    })
+        .unwrap_or(0)
 }
 
 /// Certify `rotations` against the `conv(SO(3))` relaxation (graphs of at most

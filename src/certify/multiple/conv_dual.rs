@@ -395,17 +395,40 @@ pub fn search_penalties(
     super::multipliers::check_rotations(problem, rotations)?;
     let frames = frames(problem, rotations)?;
     let mut penalties: Vec<Matrix3<f64>> = frames.iter().map(|f| initial_penalty(&f.k)).collect();
-    let n = problem.num_rotations();
-    let dim = 3 * n;
     let lambdas = multipliers(problem, rotations)?;
     let s = certificate_matrix(problem, &lambdas)?;
     let s_scale = crate::linalg::cholesky::inf_norm(s.as_ref());
     let p_scale = penalties.iter().map(|p| p.norm()).fold(0.0, f64::max);
     let scale = s_scale.max(p_scale).max(f64::MIN_POSITIVE);
-    let target = 1e-6 * scale;
-    let threshold = 1e-9 * scale;
-    // the estimate's null space: the columns of Y, orthonormal after 1/sqrt(n)
-    let null: Vec<Vec<f64>> = (0..3)
+    let null = estimate_null_space(rotations);
+    let edges = problem.edges();
+    let max_values = shift_invert_max_values(problem, settings, &s, budget);
+    let mut inverse = Inverse::new(&s, edges, max_values)?;
+    let shift_invert = inverse.is_some();
+    let rounds_of = Round {
+        frames: &frames,
+        null: &null,
+        scale,
+        settings,
+    };
+    let (progress, stop) = rounds_of.run(&s, edges, inverse.as_mut(), &mut penalties, deadline);
+    Ok(ConvSearch {
+        penalties,
+        rounds: progress.rounds,
+        shift_invert,
+        cuts: progress.added,
+        smallest_ritz_value: progress.smallest,
+        stop,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The estimate's null space: the columns of `Y` (the stacked rotations), orthonormal after
+/// `1 / sqrt(n)`.
+fn estimate_null_space(rotations: &[Rotation]) -> Vec<Vec<f64>> {
+    let n = rotations.len();
+    let dim = 3 * n;
+    (0..3)
         .map(|c| {
             let mut v = vec![0.0; dim];
             for (i, r) in rotations.iter().enumerate() {
@@ -415,106 +438,88 @@ pub fn search_penalties(
             }
             v
         })
-        .collect();
-    let edges = problem.edges();
-    // the shift-invert factor within what the budget leaves beside the search's own memory and
-    // the two copies of S it keeps (values and row indices: 16 bytes per stored entry each)
+        .collect()
+}
+
+/// The shift-invert factor's size limit: within what the budget leaves beside the search's own
+/// memory and the two copies of `S` it keeps (values and row indices: 16 bytes per stored
+/// entry each), and at most [`ConvDualSettings::shift_invert_max_factor`].
+fn shift_invert_max_values(
+    problem: &MultipleProblem,
+    settings: &ConvDualSettings,
+    s: &SparseColMat<usize, f64>,
+    budget: &Budget,
+) -> usize {
     let own = predict_search(problem, settings).bytes + 32.0 * s.val().len() as f64;
     let left = Budget {
         max_memory_bytes: (budget.max_memory_bytes as f64 - own).max(0.0) as u64,
         ..*budget
     };
-    let max_values = settings
+    settings
         .shift_invert_max_factor
-        .min(left.max_factor_values(dim));
-    let mut inverse = Inverse::new(&s, edges, max_values)?;
-    let shift_invert = inverse.is_some();
-    let mut cuts: Vec<Cut> = Vec::new();
-    let mut added = 0;
-    let mut smallest = None;
-    let mut best = f64::NEG_INFINITY;
-    let mut best_round = 0;
-    let mut stop = ConvSearchStop::RoundLimit;
-    let mut rounds = 0;
-    let rounds_of = Round {
-        frames: &frames,
-        null: &null,
-        scale,
-        settings,
-    };
-    while rounds < settings.max_rounds {
-        if deadline.is_some_and(|d| Instant::now() >= d) {
-            stop = ConvSearchStop::TimeLimit;
-            break;
+        .min(left.max_factor_values(3 * problem.num_rotations()))
+}
+
+/// The rounds of a search so far: their count, the last smallest Ritz value, the best one and
+/// its round, and the cuts added.
+struct Progress {
+    rounds: usize,
+    smallest: Option<f64>,
+    best: f64,
+    best_round: usize,
+    added: usize,
+}
+
+impl Progress {
+    fn new() -> Self {
+        Progress {
+            rounds: 0,
+            smallest: None,
+            best: f64::NEG_INFINITY,
+            best_round: 0,
+            added: 0,
         }
-        let ritz = match inverse.as_mut() {
-            Some(inv) => rounds_of.inverse(inv, &penalties, deadline),
-            None => rounds_of.direct(&s, edges, &penalties),
-        };
-        rounds += 1;
-        let low = ritz.pairs.first().map_or(0.0, |p| p.0);
-        smallest = Some(low);
-        if best == f64::NEG_INFINITY || low > best + 1e-3 * best.abs() {
-            best = low;
-            best_round = rounds;
-        } else if rounds - best_round >= settings.stall_rounds {
-            stop = ConvSearchStop::Stalled;
-            break;
-        }
-        let negative: Vec<&Vec<f64>> = ritz
-            .pairs
-            .iter()
-            .filter(|(v, _)| *v < -threshold)
-            .map(|(_, x)| x)
-            .collect();
-        if ritz.pairs.is_empty() {
-            // no shift factored (or past the deadline): no estimate to go on
-            stop = if deadline.is_some_and(|d| Instant::now() >= d) {
-                ConvSearchStop::TimeLimit
-            } else {
-                ConvSearchStop::Stalled
-            };
-            break;
-        }
-        // (an unconverged run with no negative Ritz value would repeat itself: the multipliers
-        // are unchanged, so the proof decides)
-        if negative.is_empty() {
-            stop = ConvSearchStop::NoNegativeRitzValue {
-                smallest: low,
-                threshold,
-                converged: ritz.converged,
-            };
-            break;
-        }
-        for v in negative {
-            let mut sv = vec![0.0; dim];
-            sparse_matvec(s.as_ref(), v, &mut sv);
-            let base: f64 = v.iter().zip(&sv).map(|(a, b)| a * b).sum();
-            let w: Vec<Vector3<f64>> = edges
-                .iter()
-                .zip(&frames)
-                .map(|(e, f)| apply_b(e, &f.x, v))
-                .collect();
-            let norm_sq = 0.25 * w.iter().map(|x| x.norm_squared().powi(2)).sum::<f64>();
-            if norm_sq > 0.0 {
-                cuts.push(Cut { base, w, norm_sq });
-                added += 1;
-            }
-        }
-        if cuts.len() > settings.cuts_kept {
-            cuts.drain(..cuts.len() - settings.cuts_kept);
-        }
-        project_onto_cuts(&mut penalties, &cuts, target, settings.passes);
     }
-    Ok(ConvSearch {
-        penalties,
-        rounds,
-        shift_invert,
-        cuts: added,
-        smallest_ritz_value: smallest,
-        stop,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+
+    /// Count a round whose smallest Ritz value is `low`; `true` when the search has stalled:
+    /// `stall_rounds` rounds without raising the best by `1e-3` of itself.
+    fn record(&mut self, low: f64, stall_rounds: usize) -> bool {
+        self.rounds += 1;
+        self.smallest = Some(low);
+        if self.best == f64::NEG_INFINITY || low > self.best + 1e-3 * self.best.abs() {
+            self.best = low;
+            self.best_round = self.rounds;
+            false
+        } else {
+            self.rounds - self.best_round >= stall_rounds
+        }
+    }
+}
+
+/// Why the search stops after a round's Ritz pairs, if it does: none (no shift factored, or past
+/// the deadline: no estimate to go on), or none below `-threshold` (converged or not: an
+/// unconverged run would repeat itself, the multipliers being unchanged, so the proof decides).
+fn ritz_stop(
+    ritz: &Ritz,
+    low: f64,
+    threshold: f64,
+    deadline: Option<Instant>,
+) -> Option<ConvSearchStop> {
+    if ritz.pairs.is_empty() {
+        return Some(if deadline.is_some_and(|d| Instant::now() >= d) {
+            ConvSearchStop::TimeLimit
+        } else {
+            ConvSearchStop::Stalled
+        });
+    }
+    if !ritz.pairs.iter().any(|(v, _)| *v < -threshold) {
+        return Some(ConvSearchStop::NoNegativeRitzValue {
+            smallest: low,
+            threshold,
+            converged: ritz.converged,
+        });
+    }
+    None
 }
 
 /// Cyclic projections onto the cuts `value >= target`, each pass followed by the projection of
@@ -561,6 +566,65 @@ struct Round<'a> {
 }
 
 impl Round<'_> {
+    /// The rounds of [`search_penalties`] from `penalties` (improved in place), with the
+    /// shift-invert factor when there is one.
+    fn run(
+        &self,
+        s: &SparseColMat<usize, f64>,
+        edges: &[Edge],
+        mut inverse: Option<&mut Inverse>,
+        penalties: &mut [Matrix3<f64>],
+        deadline: Option<Instant>,
+    ) -> (Progress, ConvSearchStop) {
+        let settings = self.settings;
+        let target = 1e-6 * self.scale;
+        let threshold = 1e-9 * self.scale;
+        let mut progress = Progress::new();
+        let mut cuts: Vec<Cut> = Vec::new();
+        while progress.rounds < settings.max_rounds {
+            if deadline.is_some_and(|d| Instant::now() >= d) {
+                return (progress, ConvSearchStop::TimeLimit);
+            }
+            let ritz = match inverse.as_deref_mut() {
+                Some(inv) => self.inverse(inv, penalties, deadline),
+                None => self.direct(s, edges, penalties),
+            };
+            let low = ritz.pairs.first().map_or(0.0, |p| p.0);
+            if progress.record(low, settings.stall_rounds) {
+                return (progress, ConvSearchStop::Stalled);
+            }
+            if let Some(stop) = ritz_stop(&ritz, low, threshold, deadline) {
+                return (progress, stop);
+            }
+            for (_, v) in ritz.pairs.iter().filter(|(v, _)| *v < -threshold) {
+                if let Some(cut) = self.cut(s, edges, v) {
+                    cuts.push(cut);
+                    progress.added += 1;
+                }
+            }
+            if cuts.len() > settings.cuts_kept {
+                cuts.drain(..cuts.len() - settings.cuts_kept);
+            }
+            project_onto_cuts(penalties, &cuts, target, settings.passes);
+        }
+        (progress, ConvSearchStop::RoundLimit)
+    }
+
+    /// The cut of a Ritz vector `v` (`v^T S'(P) v >= target`), unless it does not depend on the
+    /// penalties.
+    fn cut(&self, s: &SparseColMat<usize, f64>, edges: &[Edge], v: &[f64]) -> Option<Cut> {
+        let mut sv = vec![0.0; v.len()];
+        sparse_matvec(s.as_ref(), v, &mut sv);
+        let base: f64 = v.iter().zip(&sv).map(|(a, b)| a * b).sum();
+        let w: Vec<Vector3<f64>> = edges
+            .iter()
+            .zip(self.frames)
+            .map(|(e, f)| apply_b(e, &f.x, v))
+            .collect();
+        let norm_sq = 0.25 * w.iter().map(|x| x.norm_squared().powi(2)).sum::<f64>();
+        (norm_sq > 0.0).then_some(Cut { base, w, norm_sq })
+    }
+
     /// One round of Lanczos on `S'` itself.
     fn direct(
         &self,

@@ -396,7 +396,7 @@ mod tests {
     use crate::linalg::inf_norm;
     use crate::multiple::MultipleProblem;
     use crate::multiple::synthetic::{SyntheticGraph, z_cycle};
-    use crate::multiple::{Initialisation, MultipleSettings, solve_multiple};
+    use crate::multiple::{Initialisation, MultipleSettings, MultipleSolution, solve_multiple};
     use crate::so3::Rotation;
     use crate::so3::random_rotation;
     use nalgebra::{DMatrix, SymmetricEigen};
@@ -424,7 +424,7 @@ mod tests {
     #[test]
     fn grounded_bound_is_sound_against_dense_eigenvalues() {
         let mut rng = StdRng::seed_from_u64(15);
-        let (mut grounded, mut non_global) = (0, 0);
+        let mut counts = GroundedCounts::default();
         for case in 0..120 {
             let n = 3 + case % 8;
             let spec = SyntheticGraph {
@@ -435,75 +435,121 @@ mod tests {
                 seed: case as u64,
             };
             let (p, truth) = spec.generate();
-            let mut starts = vec![truth];
-            for _ in 0..11 {
-                starts.push((0..n).map(|_| random_rotation(&mut rng)).collect());
-            }
-            let sols: Vec<_> = starts
-                .into_iter()
-                .filter_map(|s| {
-                    let st = MultipleSettings {
-                        init: Initialisation::Given(s),
-                        gradient_tolerance: 1e-14,
-                        ..Default::default()
-                    };
-                    solve_multiple(&p, &st).ok()
-                })
-                .collect();
+            let sols = local_solutions(&p, truth, &mut rng);
             let best = sols
                 .iter()
                 .map(|s| s.chordal_cost)
                 .fold(f64::INFINITY, f64::min);
-            // perturbed optima: not critical points, so rho (and the deficit) matter
-            let mut points: Vec<(Vec<Rotation>, f64)> = sols
-                .iter()
-                .map(|s| (s.rotations.clone(), s.chordal_cost))
-                .collect();
-            if let Some(opt) = sols.iter().find(|s| s.chordal_cost <= best) {
-                for eps in [1e-7, 1e-5, 1e-3, 1e-1] {
-                    let y: Vec<Rotation> = opt
-                        .rotations
-                        .iter()
-                        .map(|r| {
-                            r * crate::so3::perturb_gaussian(&Rotation::identity(), eps, &mut rng)
-                        })
-                        .collect();
-                    let f = p.chordal_cost(&y);
-                    points.push((y, f));
-                }
-            }
-            for (rotations, cost) in &points {
-                let c = dual_certificate(&p, rotations, &CertifySettings::default()).unwrap();
-                let b = &c.bound;
-                assert!(
-                    b.lower_bound <= best + 1e-10 * (1.0 + best),
-                    "case {case}: bound {} above the best cost {best}",
-                    b.lower_bound
-                );
-                if b.verification == Proof::Grounded {
-                    grounded += 1;
-                    let l = multipliers(&p, rotations).unwrap();
-                    let s = certificate_matrix(&p, &l).unwrap();
-                    let dense = dense_lambda_min(&s);
-                    let scale = inf_norm(s.as_ref());
-                    assert!(
-                        b.verified_min_eigenvalue <= dense + 1e-12 * (1.0 + scale),
-                        "case {case}: verified {} above the dense lambda_min {dense}",
-                        b.verified_min_eigenvalue
-                    );
-                }
-                if *cost > best + 1e-6 * (1.0 + best) {
-                    non_global += 1;
-                    assert!(
-                        !c.certificate.is_certified(),
-                        "case {case}: a non-global local solution was certified: {c}"
-                    );
-                }
+            for (rotations, cost) in &sampled_points(&p, &sols, best, &mut rng) {
+                counts.check(&p, rotations, *cost, best, case);
             }
         }
+        let GroundedCounts {
+            grounded,
+            non_global,
+        } = counts;
         println!("[D15]: {grounded} grounded bounds, {non_global} non-global solutions");
         assert!(grounded > 200, "only {grounded} grounded bounds");
         assert!(non_global > 20, "only {non_global} non-global solutions");
+    }
+
+    /// 12 local solutions of `p` (tight gradient tolerance): from the planted `truth` and from
+    /// 11 random starts.
+    fn local_solutions(
+        p: &MultipleProblem,
+        truth: Vec<Rotation>,
+        rng: &mut StdRng,
+    ) -> Vec<MultipleSolution> {
+        let n = p.num_rotations();
+        let mut starts = vec![truth];
+        for _ in 0..11 {
+            starts.push((0..n).map(|_| random_rotation(rng)).collect());
+        }
+        starts
+            .into_iter()
+            .filter_map(|s| {
+                let st = MultipleSettings {
+                    init: Initialisation::Given(s),
+                    gradient_tolerance: 1e-14,
+                    ..Default::default()
+                };
+                solve_multiple(p, &st).ok()
+            })
+            .collect()
+    }
+
+    /// The local solutions with their costs, and perturbed optima (1e-7 to 0.1 rad per node):
+    /// not critical points, so rho (and the deficit) matter.
+    fn sampled_points(
+        p: &MultipleProblem,
+        sols: &[MultipleSolution],
+        best: f64,
+        rng: &mut StdRng,
+    ) -> Vec<(Vec<Rotation>, f64)> {
+        let mut points: Vec<(Vec<Rotation>, f64)> = sols
+            .iter()
+            .map(|s| (s.rotations.clone(), s.chordal_cost))
+            .collect();
+        if let Some(opt) = sols.iter().find(|s| s.chordal_cost <= best) {
+            for eps in [1e-7, 1e-5, 1e-3, 1e-1] {
+                let y: Vec<Rotation> = opt
+                    .rotations
+                    .iter()
+                    .map(|r| r * crate::so3::perturb_gaussian(&Rotation::identity(), eps, rng))
+                    .collect();
+                let f = p.chordal_cost(&y);
+                points.push((y, f));
+            }
+        }
+        points
+    }
+
+    /// How many grounded bounds and non-global points the soundness test checked.
+    #[derive(Default)]
+    struct GroundedCounts {
+        grounded: usize,
+        non_global: usize,
+    }
+
+    impl GroundedCounts {
+        /// The dual certificate at `rotations` (cost `cost`): its bound at most the best cost
+        /// `best` of the local solutions; a grounded bound's verified `lambda_min` at most the
+        /// dense one; a point above `best` never certified.
+        fn check(
+            &mut self,
+            p: &MultipleProblem,
+            rotations: &[Rotation],
+            cost: f64,
+            best: f64,
+            case: usize,
+        ) {
+            let c = dual_certificate(p, rotations, &CertifySettings::default()).unwrap();
+            let b = &c.bound;
+            assert!(
+                b.lower_bound <= best + 1e-10 * (1.0 + best),
+                "case {case}: bound {} above the best cost {best}",
+                b.lower_bound
+            );
+            if b.verification == Proof::Grounded {
+                self.grounded += 1;
+                let l = multipliers(p, rotations).unwrap();
+                let s = certificate_matrix(p, &l).unwrap();
+                let dense = dense_lambda_min(&s);
+                let scale = inf_norm(s.as_ref());
+                assert!(
+                    b.verified_min_eigenvalue <= dense + 1e-12 * (1.0 + scale),
+                    "case {case}: verified {} above the dense lambda_min {dense}",
+                    b.verified_min_eigenvalue
+                );
+            }
+            if cost > best + 1e-6 * (1.0 + best) {
+                self.non_global += 1;
+                assert!(
+                    !c.certificate.is_certified(),
+                    "case {case}: a non-global local solution was certified: {c}"
+                );
+            }
+        }
     }
 
     /// Regression (found when [D15] made the gaps tiny): on a tree the global minimum is ~0, and

@@ -224,23 +224,7 @@ pub(super) fn randomized_bound(
         return None;
     }
     let y: Vec<Vec<f64>> = (0..3).map(|a| gauge_column(rotations, a)).collect();
-    // G = Y^T Y in double-double, and bounds on its extreme eigenvalues
-    let mut gm = Matrix3::<f64>::zeros();
-    let mut g_error = 0.0f64;
-    for a in 0..3 {
-        for b in 0..3 {
-            let mut acc = Accumulator::default();
-            for (p, q) in y[a].iter().zip(&y[b]) {
-                acc.add_product(*p, *q);
-            }
-            gm[(a, b)] = acc.value();
-            g_error += acc.bound() * acc.bound();
-        }
-    }
-    let g_slack = (g_error.sqrt() + 16.0 * u * gm.norm()) * (1.0 + 4.0 * u);
-    let eig = (0.5 * (gm + gm.transpose())).symmetric_eigenvalues();
-    let g_min = eig.min() - g_slack;
-    let g_max = eig.max() + g_slack;
+    let (g_min, g_max) = gram_bounds(&y)?;
     if !(g_min > 0.5 * n as f64 && g_max.is_finite()) {
         return None;
     }
@@ -250,22 +234,14 @@ pub(super) fn randomized_bound(
     if mu.is_nan() || mu <= 0.0 {
         return None;
     }
-    let (s_upper, row_nnz) = gershgorin_upper_bound(s);
-    let gb = 0.5 * s_upper / n as f64;
-    let upper = (s_upper + gb * g_max) * (1.0 + 1e-12);
-    // ||Y||_F <= sqrt(3 lambda_max(G)); || |S| ||_2 <= ||S||_inf (computed with gamma(p))
-    let y_f = (3.0 * g_max).sqrt() * (1.0 + 2.0 * u);
-    let s_abs = norm * (1.0 + gamma(row_nnz + 1));
-    let gp = gamma(row_nnz + 1);
-    let g5 = gamma(5);
-    let per_norm = gp * s_abs + g5 * (s_abs * (1.0 + gp) + gb * y_f * g_max.sqrt()) + 1e-15 * gb;
+    let a = Lifted::new(s, &y, norm, g_max, n);
     let test = ChebyshevTest::plan(
         n3,
         0.5 * est,
-        upper,
+        a.upper(),
         claim,
         settings.failure_probability,
-        per_norm,
+        a.per_norm(),
         settings.max_matvecs,
     )?;
     // the products' predicted time against the time budget (the flop rate of the
@@ -281,34 +257,7 @@ pub(super) fn randomized_bound(
         )
     });
     let seed = settings.resolve_seed();
-    // A x = S_fl x + gb Y (Y^T x): the product rounded (gamma(p)), Y^T x in double-double, the
-    // combination z_i = s_i + sum_a y_ai (gb c_a) as a 4-term sum with the rounded gb c_a
-    let outcome = test.run(
-        n3,
-        |x, z| {
-            symmetric_matvec(s, x, z);
-            // the three double-double dot products in one pass over x
-            let mut acc = [Accumulator::default(); 3];
-            for (i, xi) in x.iter().enumerate() {
-                acc[0].add_product(y[0][i], *xi);
-                acc[1].add_product(y[1][i], *xi);
-                acc[2].add_product(y[2][i], *xi);
-            }
-            let c = acc.map(|a| a.value());
-            let dc: f64 = acc.iter().map(|a| a.bound() * a.bound()).sum();
-            let cs = [gb * c[0], gb * c[1], gb * c[2]];
-            for (i, zi) in z.iter_mut().enumerate() {
-                *zi += y[0][i] * cs[0] + y[1][i] * cs[1] + y[2][i] * cs[2];
-            }
-            let xn = x.iter().map(|v| v * v).sum::<f64>().sqrt() * (1.0 + gamma(n3 + 2));
-            let cn = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * (1.0 + 4.0 * u);
-            (gp * s_abs * xn
-                + g5 * (s_abs * xn * (1.0 + gp) + gb * y_f * cn)
-                + gb * y_f * dc.sqrt())
-                * (1.0 + 1e-10)
-        },
-        seed,
-    );
+    let outcome = test.run(n3, |x, z| a.apply(x, z), seed);
     let GaugeTerms { rho, h, .. } = gauge_terms(problem, rotations, lambdas);
     let deficit = (rho * rho / mu + h) * (3.0 * n as f64 / g_min) * (1.0 + 8.0 * u);
     let lower_bound = outcome
@@ -326,6 +275,106 @@ pub(super) fn randomized_bound(
         outcome,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// `G = Y^T Y` in double-double, and bounds `(lower, upper)` on its extreme eigenvalues.
+fn gram_bounds(y: &[Vec<f64>]) -> Option<(f64, f64)> {
+    let u = UNIT_ROUNDOFF;
+    let mut gm = Matrix3::<f64>::zeros();
+    let mut g_error = 0.0f64;
+    for a in 0..3 {
+        for b in 0..3 {
+            let mut acc = Accumulator::default();
+            for (p, q) in y.get(a)?.iter().zip(y.get(b)?) {
+                acc.add_product(*p, *q);
+            }
+            gm[(a, b)] = acc.value();
+            g_error += acc.bound() * acc.bound();
+        }
+    }
+    let g_slack = (g_error.sqrt() + 16.0 * u * gm.norm()) * (1.0 + 4.0 * u);
+    let eig = (0.5 * (gm + gm.transpose())).symmetric_eigenvalues();
+    Some((eig.min() - g_slack, eig.max() + g_slack))
+}
+
+/// The tested operator `A = S_fl + gb Y Y^T` (`[D16]`) and what bounds its spectrum and the
+/// rounding of its products: `lambda_max(S) <= s_upper` (Gershgorin), `lambda_max(Y^T Y) <=
+/// g_max`, `|| |S| ||_2 <= s_abs`, `||Y||_F <= y_f`, `gamma(p)` and `gamma(5)`.
+struct Lifted<'a> {
+    s: SparseColMatRef<'a, usize, f64>,
+    y: &'a [Vec<f64>],
+    gb: f64,
+    s_upper: f64,
+    g_max: f64,
+    s_abs: f64,
+    y_f: f64,
+    gp: f64,
+    g5: f64,
+}
+
+impl<'a> Lifted<'a> {
+    /// `A` for `S` of norm `norm` (`||S||_inf`) on `n` nodes and `lambda_max(Y^T Y) <= g_max`,
+    /// with the lift `gb = lambda_max(S) / (2n)` (the gauge directions to the middle of the
+    /// spectrum).
+    fn new(
+        s: SparseColMatRef<'a, usize, f64>,
+        y: &'a [Vec<f64>],
+        norm: f64,
+        g_max: f64,
+        n: usize,
+    ) -> Self {
+        let (s_upper, row_nnz) = gershgorin_upper_bound(s);
+        // ||Y||_F <= sqrt(3 lambda_max(G)); || |S| ||_2 <= ||S||_inf (computed with gamma(p))
+        Lifted {
+            s,
+            y,
+            gb: 0.5 * s_upper / n as f64,
+            s_upper,
+            g_max,
+            s_abs: norm * (1.0 + gamma(row_nnz + 1)),
+            y_f: (3.0 * g_max).sqrt() * (1.0 + 2.0 * UNIT_ROUNDOFF),
+            gp: gamma(row_nnz + 1),
+            g5: gamma(5),
+        }
+    }
+
+    /// An upper bound on `lambda_max(A)`.
+    fn upper(&self) -> f64 {
+        (self.s_upper + self.gb * self.g_max) * (1.0 + 1e-12)
+    }
+
+    /// The rounding error of a product per unit norm of `x`.
+    fn per_norm(&self) -> f64 {
+        let (gp, g5, s_abs, gb) = (self.gp, self.g5, self.s_abs, self.gb);
+        gp * s_abs + g5 * (s_abs * (1.0 + gp) + gb * self.y_f * self.g_max.sqrt()) + 1e-15 * gb
+    }
+
+    /// `z = A x` and a bound on its rounding error: the product rounded (gamma(p)), `Y^T x` in
+    /// double-double, the combination `z_i = s_i + sum_a y_ai (gb c_a)` as a 4-term sum with
+    /// the rounded `gb c_a`.
+    fn apply(&self, x: &[f64], z: &mut [f64]) -> f64 {
+        let (y, gb, u) = (self.y, self.gb, UNIT_ROUNDOFF);
+        symmetric_matvec(self.s, x, z);
+        // the three double-double dot products in one pass over x
+        let mut acc = [Accumulator::default(); 3];
+        for (i, xi) in x.iter().enumerate() {
+            acc[0].add_product(y[0][i], *xi);
+            acc[1].add_product(y[1][i], *xi);
+            acc[2].add_product(y[2][i], *xi);
+        }
+        let c = acc.map(|a| a.value());
+        let dc: f64 = acc.iter().map(|a| a.bound() * a.bound()).sum();
+        let cs = [gb * c[0], gb * c[1], gb * c[2]];
+        for (i, zi) in z.iter_mut().enumerate() {
+            *zi += y[0][i] * cs[0] + y[1][i] * cs[1] + y[2][i] * cs[2];
+        }
+        let n3 = x.len();
+        let xn = x.iter().map(|v| v * v).sum::<f64>().sqrt() * (1.0 + gamma(n3 + 2));
+        let cn = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * (1.0 + 4.0 * u);
+        let (gp, g5, s_abs, y_f) = (self.gp, self.g5, self.s_abs, self.y_f);
+        (gp * s_abs * xn + g5 * (s_abs * xn * (1.0 + gp) + gb * y_f * cn) + gb * y_f * dc.sqrt())
+            * (1.0 + 1e-10)
+    }
 }
 
 #[cfg(test)]

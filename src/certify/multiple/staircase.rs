@@ -33,6 +33,7 @@ use crate::certify::rung::{Found, Plan, Rung};
 use crate::certify::settings::CertifyMode;
 use crate::certify::settings::CertifySettings;
 pub use crate::certify::settings::StaircaseSettings;
+use crate::certify::tolerance::GapTolerance;
 use crate::error::Result;
 use crate::linalg::cholesky::sparse_matvec;
 use crate::linalg::two_pass_lanczos::{TwoPassSettings, two_pass_smallest};
@@ -40,9 +41,11 @@ use crate::linalg::{LanczosResult, LanczosStop, inf_norm, rayleigh_quotient};
 use crate::multiple::MultipleProblem;
 use crate::multiple::{Initialisation, MultipleSettings, MultipleSolution, solve_multiple};
 use crate::relax::lifted::{
-    Block, TrustRegionSettings, lifted_cost, lifted_multipliers, polar, trust_region,
+    Block, TrustRegionResult, TrustRegionSettings, lifted_cost, lifted_multipliers, polar,
+    trust_region,
 };
 use crate::so3::Rotation;
+use faer::sparse::SparseColMatRef;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -218,59 +221,137 @@ pub(crate) fn staircase_within(
     certify: &CertifySettings,
     deadline: Deadline,
 ) -> Result<StaircaseResult> {
-    let start = Instant::now();
-    check_rotations(problem, rotations)?;
-    let half = deadline.share(0.5);
-    let scope = Scope {
-        point: Point::Staircase,
-        within: Proof::Staircase,
-        deadline,
-    };
-    let settings = &certify.staircase;
-    let tr = TrustRegionSettings {
-        max_iterations: settings.max_iterations,
-        gradient_tolerance: settings.gradient_tolerance,
-        ..Default::default()
-    };
-    // the intermediate ranks only need a direction of negative curvature: a looser tolerance
-    // first, the strict one before a verification
-    let loose = TrustRegionSettings {
-        gradient_tolerance: settings.gradient_tolerance.max(ESCAPE_GRADIENT_TOLERANCE),
-        ..tr
-    };
-    let mut y: Vec<Block> = rotations
-        .iter()
-        .map(|r| Block::from_column_slice(r.matrix().as_slice()))
-        .collect();
-    let (mut iterations, mut products, mut rank) = (0, 0, 3);
-    let mut steps: Vec<StaircaseStep> = Vec::new();
-    let cost = problem.chordal_cost(rotations);
-    let tolerance = certify.tolerance.resolve(problem.min_weight());
-    // the relaxation's value lies in [bound, F(Y)]: close enough, a higher rank cannot help
-    let bracketed = |lifted: f64, bound: f64| {
-        lifted - bound
-            <= tolerance
-                .allowed_gap(cost)
-                .max(settings.bracket_tolerance * (cost - bound))
-    };
-    // one trust-region solve of the current rank from `y`, its work counted
-    let solve = |y: &mut Vec<Block>,
-                 settings: &TrustRegionSettings,
-                 iterations: &mut usize,
-                 products: &mut usize| {
-        let mut r = trust_region(problem, std::mem::take(y), settings);
-        *y = std::mem::take(&mut r.y);
-        *iterations += r.iterations;
-        *products += r.hessian_products;
-        r
-    };
-    let (lifted, stop_reason, bound) = loop {
-        let mut r = solve(&mut y, &loose, &mut iterations, &mut products);
-        let mut strict = loose.gradient_tolerance <= tr.gradient_tolerance;
-        let mut step = StaircaseStep {
-            rank,
-            iterations: r.iterations,
+    let mut stairs = Staircase::new(problem, rotations, certify, deadline)?;
+    loop {
+        let end = stairs.climb_rank()?;
+        if let Some(stop) = stairs.stop_or_escape(&end) {
+            return stairs.finish(end.lifted, stop, end.verified);
+        }
+    }
+}
+
+/// The staircase between ranks (`[D11]`): the lifted point, its rank, the work counted and the
+/// ranks that ran, with what every rank shares (the data, the settings, the clock).
+struct Staircase<'a> {
+    problem: &'a MultipleProblem,
+    certify: &'a CertifySettings,
+    scope: Scope,
+    /// Half of the time left at the start: no new rank after it.
+    half: Deadline,
+    start: Instant,
+    /// The trust region to [`StaircaseSettings::gradient_tolerance`] (before a verification).
+    strict: TrustRegionSettings,
+    /// The trust region to [`ESCAPE_GRADIENT_TOLERANCE`] at least (ranks that may escape).
+    loose: TrustRegionSettings,
+    /// The given estimate's cost.
+    cost: f64,
+    tolerance: GapTolerance,
+    y: Vec<Block>,
+    rank: usize,
+    iterations: usize,
+    products: usize,
+    steps: Vec<StaircaseStep>,
+}
+
+/// How one rank ended: its lifted cost, the direction of negative curvature to escape along
+/// (none: the verification found none) and the verified bound when the rank was verified.
+struct RankEnd {
+    lifted: f64,
+    direction: Option<Vec<f64>>,
+    verified: Option<VerifiedBound>,
+}
+
+impl<'a> Staircase<'a> {
+    /// Rank 3 at `rotations`, no work done yet.
+    fn new(
+        problem: &'a MultipleProblem,
+        rotations: &[Rotation],
+        certify: &'a CertifySettings,
+        deadline: Deadline,
+    ) -> Result<Self> {
+        let start = Instant::now();
+        check_rotations(problem, rotations)?;
+        let half = deadline.share(0.5);
+        let scope = Scope {
+            point: Point::Staircase,
+            within: Proof::Staircase,
+            deadline,
+        };
+        let settings = &certify.staircase;
+        let strict = TrustRegionSettings {
+            max_iterations: settings.max_iterations,
+            gradient_tolerance: settings.gradient_tolerance,
+            ..Default::default()
+        };
+        // the intermediate ranks only need a direction of negative curvature: a looser
+        // tolerance first, the strict one before a verification
+        let loose = TrustRegionSettings {
+            gradient_tolerance: settings.gradient_tolerance.max(ESCAPE_GRADIENT_TOLERANCE),
+            ..strict
+        };
+        let y = rotations
+            .iter()
+            .map(|r| Block::from_column_slice(r.matrix().as_slice()))
+            .collect();
+        Ok(Staircase {
+            problem,
+            certify,
+            scope,
+            half,
+            start,
             strict,
+            loose,
+            cost: problem.chordal_cost(rotations),
+            tolerance: certify.tolerance.resolve(problem.min_weight()),
+            y,
+            rank: 3,
+            iterations: 0,
+            products: 0,
+            steps: Vec::new(),
+        })
+    }
+
+    /// The relaxation's value lies in `[bound, F(Y)]`: close enough, a higher rank cannot help.
+    fn bracketed(&self, lifted: f64, bound: f64) -> bool {
+        lifted - bound
+            <= self
+                .tolerance
+                .allowed_gap(self.cost)
+                .max(self.certify.staircase.bracket_tolerance * (self.cost - bound))
+    }
+
+    /// A negative Rayleigh quotient from an estimate (matrix-vector products only) is a
+    /// direction of descent: escape at once unless the estimated bound already brackets the
+    /// relaxation's value.
+    fn escapes(&self, e: &CurvatureEstimate, lifted: f64) -> bool {
+        e.complement.value < -escape_threshold(lifted, self.problem, self.certify)
+            && !self.bracketed(lifted, e.estimated_bound)
+    }
+
+    /// One trust-region solve of the current rank from `y`, its work counted.
+    fn solve(&mut self, settings: TrustRegionSettings) -> TrustRegionResult {
+        let mut r = trust_region(self.problem, std::mem::take(&mut self.y), &settings);
+        self.y = std::mem::take(&mut r.y);
+        self.iterations += r.iterations;
+        self.products += r.hessian_products;
+        r
+    }
+
+    /// Solve the rank strictly (about to verify), counted in `step`.
+    fn solve_strictly(&mut self, step: &mut StaircaseStep) {
+        let r = self.solve(self.strict);
+        (step.iterations, step.lifted_cost) = (step.iterations + r.iterations, r.cost);
+        step.strict = true;
+    }
+
+    /// One rank: the loose solve, then the escape or the verification ([`Self::verify`]),
+    /// recorded as a step.
+    fn climb_rank(&mut self) -> Result<RankEnd> {
+        let r = self.solve(self.loose);
+        let mut step = StaircaseStep {
+            rank: self.rank,
+            iterations: r.iterations,
+            strict: self.loose.gradient_tolerance <= self.strict.gradient_tolerance,
             lifted_cost: r.cost,
             estimate: 0.0,
             estimate_residual: 0.0,
@@ -278,48 +359,53 @@ pub(crate) fn staircase_within(
             verified_bound: None,
             seconds: 0.0,
         };
-        // a negative Rayleigh quotient from an estimate (matrix-vector products only) is a
-        // direction of descent: escape at once unless the estimated bound already brackets the
-        // relaxation's value. Otherwise verify the bound: at once when the estimated bound
-        // brackets it, after solving the rank strictly when it does not (or when the loose
-        // point's verified bound falls short); the verification's eigenvector decides.
-        let escapes = |e: &CurvatureEstimate, cost: f64| {
-            e.complement.value < -escape_threshold(cost, problem, certify)
-                && !bracketed(cost, e.estimated_bound)
-        };
-        let (direction, verified) = loop {
-            let lambdas = lifted_multipliers(problem, &y);
-            let e = curvature_estimate(problem, &y, &lambdas)?;
+        let (direction, verified) = self.verify(&mut step)?;
+        step.seconds = self.start.elapsed().as_secs_f64();
+        let lifted = step.lifted_cost;
+        self.steps.push(step);
+        Ok(RankEnd {
+            lifted,
+            direction,
+            verified,
+        })
+    }
+
+    /// The escape direction of the current point, or its verification: escape along a
+    /// negative estimate ([`Self::escapes`]). Otherwise verify the bound: at once when the
+    /// estimated bound brackets the relaxation's value, after solving the rank strictly when it
+    /// does not (or when the loose point's verified bound falls short); the verification's
+    /// eigenvector decides.
+    fn verify(
+        &mut self,
+        step: &mut StaircaseStep,
+    ) -> Result<(Option<Vec<f64>>, Option<VerifiedBound>)> {
+        let (problem, certify, scope) = (self.problem, self.certify, self.scope);
+        loop {
+            let lifted = step.lifted_cost;
+            let lambdas = lifted_multipliers(problem, &self.y);
+            let e = curvature_estimate(problem, &self.y, &lambdas)?;
             (step.estimate, step.estimate_residual, step.full_estimate) =
                 (e.complement.value, e.complement.residual, e.full.value);
-            if escapes(&e, r.cost) {
-                break (Some(e.complement.vector), None);
+            if self.escapes(&e, lifted) {
+                return Ok((Some(e.complement.vector), None));
             }
-            if !strict && !bracketed(r.cost, e.estimated_bound) {
+            if !step.strict && !self.bracketed(lifted, e.estimated_bound) {
                 // about to verify: converge at this rank first
-                r = solve(&mut y, &tr, &mut iterations, &mut products);
-                (step.iterations, step.lifted_cost) = (step.iterations + r.iterations, r.cost);
-                (strict, step.strict) = (true, true);
+                self.solve_strictly(step);
                 continue;
             }
-            let b = multipliers_bound(
-                problem,
-                &lambdas,
-                certify,
-                scope,
-                Some(CurvatureHint {
-                    low: e.full.clone(),
-                    high: e.optimistic,
-                }),
-            )?;
-            if !strict && !bracketed(r.cost, b.lower_bound) && b.negative_eigenvector.is_none() {
+            let hint = CurvatureHint {
+                low: e.full.clone(),
+                high: e.optimistic,
+            };
+            let b = multipliers_bound(problem, &lambdas, certify, scope, Some(hint))?;
+            let short = !self.bracketed(lifted, b.lower_bound) && b.negative_eigenvector.is_none();
+            if !step.strict && short {
                 // the estimate promised more than the loose point's multipliers proved
-                r = solve(&mut y, &tr, &mut iterations, &mut products);
-                (step.iterations, step.lifted_cost) = (step.iterations + r.iterations, r.cost);
-                (strict, step.strict) = (true, true);
+                self.solve_strictly(step);
                 continue;
             }
-            let b = if !bracketed(r.cost, b.lower_bound) && b.negative_eigenvector.is_none() {
+            let b = if short {
                 // short of the bracket with no direction to climb along: the verification's own
                 // estimates (shift-invert through its factor) look for one
                 multipliers_bound(problem, &lambdas, certify, scope, None)?
@@ -327,88 +413,100 @@ pub(crate) fn staircase_within(
                 b
             };
             step.verified_bound = Some(b.lower_bound);
-            break (b.negative_eigenvector.clone(), Some(b));
-        };
-        step.seconds = start.elapsed().as_secs_f64();
-        steps.push(step);
-        if let Some(b) = verified
-            .as_ref()
-            .filter(|b| bracketed(r.cost, b.lower_bound))
-        {
-            let stop = StaircaseStop::Bracketed {
-                rank,
-                bracket: r.cost - b.lower_bound,
-            };
-            break (r.cost, stop, verified);
+            return Ok((b.negative_eigenvector.clone(), Some(b)));
         }
-        let estimate = verified
+    }
+
+    /// Why the staircase stops after a rank, or `None` after escaping to the next rank.
+    fn stop_or_escape(&mut self, end: &RankEnd) -> Option<StaircaseStop> {
+        if let Some(b) = end
+            .verified
+            .as_ref()
+            .filter(|b| self.bracketed(end.lifted, b.lower_bound))
+        {
+            return Some(StaircaseStop::Bracketed {
+                rank: self.rank,
+                bracket: end.lifted - b.lower_bound,
+            });
+        }
+        let estimate = end
+            .verified
             .as_ref()
             .and_then(|b| b.min_eigenvalue_estimate)
-            .or(steps.last().map(|s| s.full_estimate));
-        let Some(v) = direction else {
-            let stop = StaircaseStop::Verified {
-                rank,
+            .or(self.steps.last().map(|s| s.full_estimate));
+        let Some(v) = &end.direction else {
+            return Some(StaircaseStop::Verified {
+                rank: self.rank,
                 min_eigenvalue_estimate: estimate,
-            };
-            break (r.cost, stop, verified);
+            });
         };
-        let over_time = half.passed();
-        if rank >= settings.max_rank || over_time {
-            let max_rank = if over_time { rank } else { settings.max_rank };
-            let stop = StaircaseStop::MaxRank {
-                max_rank,
+        let over_time = self.half.passed();
+        let max_rank = self.certify.staircase.max_rank;
+        if self.rank >= max_rank || over_time {
+            return Some(StaircaseStop::MaxRank {
+                max_rank: if over_time { self.rank } else { max_rank },
                 min_eigenvalue_estimate: estimate,
-            };
-            break (r.cost, stop, verified);
+            });
         }
-        rank += 1;
-        match escape(problem, &y, &v, r.cost) {
-            Some(next) => y = next,
-            None => {
-                let stop = StaircaseStop::EscapeFailed {
-                    rank,
-                    min_eigenvalue_estimate: estimate,
-                };
-                break (r.cost, stop, verified);
+        self.rank += 1;
+        match escape(self.problem, &self.y, v, end.lifted) {
+            Some(next) => {
+                self.y = next;
+                None
             }
+            None => Some(StaircaseStop::EscapeFailed {
+                rank: self.rank,
+                min_eigenvalue_estimate: estimate,
+            }),
         }
-    };
-    let bound = match bound {
-        Some(b) => b,
-        None => multipliers_bound(
-            problem,
-            &lifted_multipliers(problem, &y),
-            certify,
-            scope,
-            None,
-        )?,
-    };
-    let certificate = Certificate::from_bounds(
-        cost,
-        Some(bound.lower_bound),
-        BoundMethod::Staircase,
-        bound.min_eigenvalue_estimate,
-        certify.tolerance.resolve(problem.min_weight()),
-        format!(
-            "Riemannian staircase: rank {rank}, lifted cost {lifted:.9e}; {stop_reason}; bound \
-             verified from the lifted multipliers (lambda_min(S) >= {:.3e})",
-            bound.verified_min_eigenvalue
-        ),
-        start.elapsed().as_secs_f64(),
-    );
-    let (rounded, reflected_blocks) = round_lifted_counted(&y);
-    Ok(StaircaseResult {
-        certificate,
-        bound,
-        rank,
-        lifted_cost: lifted,
-        iterations,
-        hessian_products: products,
-        stop_reason,
-        steps,
-        rounded,
-        reflected_blocks,
-    })
+    }
+
+    /// The result at the final point: its verified bound (verified now when the last rank
+    /// escaped), the certificate of the given estimate and the rounding.
+    fn finish(
+        self,
+        lifted: f64,
+        stop_reason: StaircaseStop,
+        bound: Option<VerifiedBound>,
+    ) -> Result<StaircaseResult> {
+        let bound = match bound {
+            Some(b) => b,
+            None => multipliers_bound(
+                self.problem,
+                &lifted_multipliers(self.problem, &self.y),
+                self.certify,
+                self.scope,
+                None,
+            )?,
+        };
+        let rank = self.rank;
+        let certificate = Certificate::from_bounds(
+            self.cost,
+            Some(bound.lower_bound),
+            BoundMethod::Staircase,
+            bound.min_eigenvalue_estimate,
+            self.tolerance,
+            format!(
+                "Riemannian staircase: rank {rank}, lifted cost {lifted:.9e}; {stop_reason}; bound \
+                 verified from the lifted multipliers (lambda_min(S) >= {:.3e})",
+                bound.verified_min_eigenvalue
+            ),
+            self.start.elapsed().as_secs_f64(),
+        );
+        let (rounded, reflected_blocks) = round_lifted_counted(&self.y);
+        Ok(StaircaseResult {
+            certificate,
+            bound,
+            rank,
+            lifted_cost: lifted,
+            iterations: self.iterations,
+            hessian_products: self.products,
+            stop_reason,
+            steps: self.steps,
+            rounded,
+            reflected_blocks,
+        })
+    }
 }
 
 /// What the staircase estimates of the curvature at a lifted point (estimates: they choose
@@ -441,88 +539,9 @@ fn curvature_estimate(
     lambdas: &[nalgebra::Matrix3<f64>],
 ) -> Result<CurvatureEstimate> {
     let s = certificate_matrix(problem, lambdas)?;
-    let norm = inf_norm(s.as_ref()).max(f64::MIN_POSITIVE);
     let null = null_space_basis(y);
-    let dim = s.nrows();
-    let mut complement = if dim <= DENSE_ESTIMATE_DIMENSION {
-        // small: the dense eigenvalues of P S P + (||S|| + 1) B B^T (the deflated directions
-        // moved above the spectrum), exact
-        let mut dense = nalgebra::DMatrix::<f64>::zeros(dim, dim);
-        let mut unit = vec![0.0; dim];
-        let mut out = vec![0.0; dim];
-        for j in 0..dim {
-            unit[j] = 1.0;
-            sparse_matvec(s.as_ref(), &unit, &mut out);
-            unit[j] = 0.0;
-            dense.set_column(j, &nalgebra::DVector::from_column_slice(&out));
-        }
-        let mut proj = nalgebra::DMatrix::<f64>::identity(dim, dim);
-        let mut lift = nalgebra::DMatrix::<f64>::zeros(dim, dim);
-        for u in &null {
-            let u = nalgebra::DVector::from_column_slice(u);
-            let uu = &u * u.transpose();
-            proj -= &uu;
-            lift += uu;
-        }
-        let shifted = &proj * &dense * &proj + (norm + 1.0) * lift;
-        let eig = nalgebra::SymmetricEigen::new(0.5 * (&shifted + shifted.transpose()));
-        let k = (0..dim)
-            .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
-            .unwrap_or(0);
-        let vector: Vec<f64> = eig.eigenvectors.column(k).iter().copied().collect();
-        let value = if vector.is_empty() {
-            0.0
-        } else {
-            rayleigh_quotient(s.as_ref(), &vector).0
-        };
-        LanczosResult {
-            value,
-            vector,
-            residual: 0.0,
-            iterations: 0,
-            stop: LanczosStop::InvariantSubspace { dimension: dim },
-        }
-    } else {
-        two_pass_smallest(
-            dim,
-            |x, out| sparse_matvec(s.as_ref(), x, out),
-            norm,
-            &TwoPassSettings::default(),
-            &null,
-        )
-    };
-    if complement.vector.iter().all(|x| *x == 0.0) {
-        complement.value = 0.0;
-    }
-    // B^T S B and the coupling ||S B - B B^T S B||_F
-    let k = null.len();
-    let sb: Vec<Vec<f64>> = null
-        .iter()
-        .map(|b| {
-            let mut out = vec![0.0; b.len()];
-            sparse_matvec(s.as_ref(), b, &mut out);
-            out
-        })
-        .collect();
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    let m = nalgebra::DMatrix::<f64>::from_fn(k, k, |i, j| {
-        0.5 * (dot(&null[i], &sb[j]) + dot(&null[j], &sb[i]))
-    });
-    let mut coupling = 0.0;
-    for (j, sbj) in sb.iter().enumerate() {
-        let mut r = sbj.clone();
-        for (i, bi) in null.iter().enumerate() {
-            let c = m[(i, j)];
-            r.iter_mut().zip(bi).for_each(|(x, b)| *x -= c * b);
-        }
-        coupling += dot(&r, &r);
-    }
-    let coupling = coupling.sqrt();
-    let mu = if k > 0 {
-        m.symmetric_eigenvalues().min()
-    } else {
-        f64::INFINITY
-    };
+    let complement = complement_estimate(s.as_ref(), &null);
+    let (mu, coupling) = null_space_block(s.as_ref(), &null);
     let theta = complement.value;
     let whole = if mu.is_finite() {
         0.5 * (mu + theta) - (0.25 * (theta - mu).powi(2) + coupling * coupling).sqrt()
@@ -547,6 +566,107 @@ fn curvature_estimate(
         full,
         estimated_bound,
     })
+}
+
+/// `lambda_min(S)` on the orthogonal complement of `null` (orthonormal vectors) and its
+/// vector: dense up to [`DENSE_ESTIMATE_DIMENSION`], two-pass Lanczos above; value 0 when the
+/// vector is zero.
+fn complement_estimate(s: SparseColMatRef<'_, usize, f64>, null: &[Vec<f64>]) -> LanczosResult {
+    let norm = inf_norm(s).max(f64::MIN_POSITIVE);
+    let dim = s.nrows();
+    let mut complement = if dim <= DENSE_ESTIMATE_DIMENSION {
+        dense_complement(s, null, norm)
+    } else {
+        two_pass_smallest(
+            dim,
+            |x, out| sparse_matvec(s, x, out),
+            norm,
+            &TwoPassSettings::default(),
+            null,
+        )
+    };
+    if complement.vector.iter().all(|x| *x == 0.0) {
+        complement.value = 0.0;
+    }
+    complement
+}
+
+/// The complement's estimate for a small `S`: the dense eigenvalues of
+/// `P S P + (||S|| + 1) B B^T` (the deflated directions moved above the spectrum), exact.
+fn dense_complement(
+    s: SparseColMatRef<'_, usize, f64>,
+    null: &[Vec<f64>],
+    norm: f64,
+) -> LanczosResult {
+    let dim = s.nrows();
+    let mut dense = nalgebra::DMatrix::<f64>::zeros(dim, dim);
+    let mut unit = vec![0.0; dim];
+    let mut out = vec![0.0; dim];
+    for j in 0..dim {
+        unit[j] = 1.0;
+        sparse_matvec(s, &unit, &mut out);
+        unit[j] = 0.0;
+        dense.set_column(j, &nalgebra::DVector::from_column_slice(&out));
+    }
+    let mut proj = nalgebra::DMatrix::<f64>::identity(dim, dim);
+    let mut lift = nalgebra::DMatrix::<f64>::zeros(dim, dim);
+    for u in null {
+        let u = nalgebra::DVector::from_column_slice(u);
+        let uu = &u * u.transpose();
+        proj -= &uu;
+        lift += uu;
+    }
+    let shifted = &proj * &dense * &proj + (norm + 1.0) * lift;
+    let eig = nalgebra::SymmetricEigen::new(0.5 * (&shifted + shifted.transpose()));
+    let k = (0..dim)
+        .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
+        .unwrap_or(0);
+    let vector: Vec<f64> = eig.eigenvectors.column(k).iter().copied().collect();
+    let value = if vector.is_empty() {
+        0.0
+    } else {
+        rayleigh_quotient(s, &vector).0
+    };
+    LanczosResult {
+        value,
+        vector,
+        residual: 0.0,
+        iterations: 0,
+        stop: LanczosStop::InvariantSubspace { dimension: dim },
+    }
+}
+
+/// `lambda_min(B^T S B)` (infinite when `B` is empty) and the coupling
+/// `||S B - B B^T S B||_F` of the null-space block `B` (`null`) to its complement.
+fn null_space_block(s: SparseColMatRef<'_, usize, f64>, null: &[Vec<f64>]) -> (f64, f64) {
+    let k = null.len();
+    let sb: Vec<Vec<f64>> = null
+        .iter()
+        .map(|b| {
+            let mut out = vec![0.0; b.len()];
+            sparse_matvec(s, b, &mut out);
+            out
+        })
+        .collect();
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let m = nalgebra::DMatrix::<f64>::from_fn(k, k, |i, j| {
+        0.5 * (dot(&null[i], &sb[j]) + dot(&null[j], &sb[i]))
+    });
+    let mut coupling = 0.0;
+    for (j, sbj) in sb.iter().enumerate() {
+        let mut r = sbj.clone();
+        for (i, bi) in null.iter().enumerate() {
+            let c = m[(i, j)];
+            r.iter_mut().zip(bi).for_each(|(x, b)| *x -= c * b);
+        }
+        coupling += dot(&r, &r);
+    }
+    let mu = if k > 0 {
+        m.symmetric_eigenvalues().min()
+    } else {
+        f64::INFINITY
+    };
+    (mu, coupling.sqrt())
 }
 
 /// An orthonormal basis of the column space of `Y` (blocks `3 x p` stacked into `3n` vectors):

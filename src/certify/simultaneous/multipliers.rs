@@ -60,6 +60,68 @@ pub(crate) struct EstimateMultipliers {
     pub least_norm: Vec<f64>,
 }
 
+/// The right-hand side of the coupling system: `rhs_i = (a_i - b_i) / 2` (`a_i =
+/// vee(G_R,i R_i^T)`, `b_i = S^T vee(G_C,i C_i^T)`), its mean and its component along the
+/// gauge directions `(R_i w)_i` removed (both zero at an exact critical point).
+fn coupling_rhs(
+    gr: &[Matrix3<f64>],
+    gc: &[Matrix3<f64>],
+    rs: &[Matrix3<f64>],
+    cs: &[Matrix3<f64>],
+    sm: &Matrix3<f64>,
+) -> Vec<Vector3<f64>> {
+    let n = rs.len();
+    let mut rhs: Vec<Vector3<f64>> = (0..n)
+        .map(|i| {
+            let a = vee(&(gr[i] * rs[i].transpose()));
+            let b = sm.transpose() * vee(&(gc[i] * cs[i].transpose()));
+            (a - b) * 0.5
+        })
+        .collect();
+    let mean = rhs.iter().sum::<Vector3<f64>>() / n as f64;
+    rhs.iter_mut().for_each(|r| *r -= mean);
+    let gauge = rs
+        .iter()
+        .zip(&rhs)
+        .map(|(r, v)| r.transpose() * v)
+        .sum::<Vector3<f64>>()
+        / n as f64;
+    for (r, v) in rs.iter().zip(rhs.iter_mut()) {
+        *v -= r * gauge;
+    }
+    rhs
+}
+
+/// `A A^T` (a `3n x 3n` Laplacian of the complete graph with `u_ij u_ij^T / 4` weights) plus
+/// multiples of its kernel's projectors: the constant vectors and the gauge directions
+/// `(R_i w)_i` (because `u_ij` is the axis of `R_j R_i^T`, `u_ij . (R_i w - R_j w) = 0`); the
+/// right-hand side is orthogonal to both at a critical point (stationarity in `S`, and the gauge
+/// invariance), and is projected onto their complement by [`coupling_rhs`].
+fn coupling_gram(
+    pairs: &[(usize, usize)],
+    us: &[Vector3<f64>],
+    rs: &[Matrix3<f64>],
+) -> DMatrix<f64> {
+    let n = rs.len();
+    let d = 3 * n;
+    let mut k = DMatrix::<f64>::zeros(d, d);
+    for (&(i, j), u) in pairs.iter().zip(us) {
+        let uu = u * u.transpose() * 0.25;
+        for (bi, bj, sign) in [(i, i, 1.0), (j, j, 1.0), (i, j, -1.0), (j, i, -1.0)] {
+            let mut blk = k.fixed_view_mut::<3, 3>(3 * bi, 3 * bj);
+            blk += uu * sign;
+        }
+    }
+    let fill = k.trace() / d as f64 / n as f64;
+    for bi in 0..n {
+        for bj in 0..n {
+            let mut blk = k.fixed_view_mut::<3, 3>(3 * bi, 3 * bj);
+            blk += (Matrix3::identity() + rs[bi] * rs[bj].transpose()) * fill;
+        }
+    }
+    k
+}
+
 impl EstimateMultipliers {
     /// `None` when the point does not fit the graphs or the coupling system is singular.
     pub fn new(
@@ -80,51 +142,14 @@ impl EstimateMultipliers {
         );
         let rs: Vec<Matrix3<f64>> = rotations.iter().map(|r| *r.matrix()).collect();
         let cs: Vec<Matrix3<f64>> = c_rotations.iter().map(|r| *r.matrix()).collect();
-        let sm = *s.matrix();
-        // rhs_i = (a_i - b_i) / 2, its mean removed (zero at an exact critical point)
-        let mut rhs: Vec<Vector3<f64>> = (0..n)
-            .map(|i| {
-                let a = vee(&(gr[i] * rs[i].transpose()));
-                let b = sm.transpose() * vee(&(gc[i] * cs[i].transpose()));
-                (a - b) * 0.5
-            })
-            .collect();
-        let mean = rhs.iter().sum::<Vector3<f64>>() / n as f64;
-        rhs.iter_mut().for_each(|r| *r -= mean);
+        let rhs = coupling_rhs(&gr, &gc, &rs, &cs, s.matrix());
         let pairs: Vec<(usize, usize)> = coupling_pairs(n).collect();
         let us: Vec<Vector3<f64>> = pairs
             .iter()
             .map(|&(i, j)| vee(&(rs[j] * rs[i].transpose())))
             .collect();
         let d = 3 * n;
-        let mut k = DMatrix::<f64>::zeros(d, d);
-        for (&(i, j), u) in pairs.iter().zip(&us) {
-            let uu = u * u.transpose() * 0.25;
-            for (bi, bj, sign) in [(i, i, 1.0), (j, j, 1.0), (i, j, -1.0), (j, i, -1.0)] {
-                let mut blk = k.fixed_view_mut::<3, 3>(3 * bi, 3 * bj);
-                blk += uu * sign;
-            }
-        }
-        // the kernel of A A^T: the constant vectors and the gauge directions (R_i w)_i (because
-        // u_ij is the axis of R_j R_i^T, u_ij . (R_i w - R_j w) = 0); the right-hand side is
-        // orthogonal to both at a critical point (stationarity in S, and the gauge invariance),
-        // and is projected onto their complement here
-        let fill = k.trace() / d as f64 / n as f64;
-        for bi in 0..n {
-            for bj in 0..n {
-                let mut blk = k.fixed_view_mut::<3, 3>(3 * bi, 3 * bj);
-                blk += (Matrix3::identity() + rs[bi] * rs[bj].transpose()) * fill;
-            }
-        }
-        let gauge = rs
-            .iter()
-            .zip(&rhs)
-            .map(|(r, v)| r.transpose() * v)
-            .sum::<Vector3<f64>>()
-            / n as f64;
-        for (r, v) in rs.iter().zip(rhs.iter_mut()) {
-            *v -= r * gauge;
-        }
+        let k = coupling_gram(&pairs, &us, &rs);
         let k = k.cholesky()?;
         let y = k.solve(&DVector::from_iterator(
             d,

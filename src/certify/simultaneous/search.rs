@@ -90,44 +90,11 @@ pub(crate) fn search_couplings(
             (right, &lambdas[..n], -0.5, &at.rs),
             (left, &lambdas[n..], 0.5, &at.cs),
         ] {
-            let z = {
-                let (z, _magnitudes) = certificate_matrix(p, side, &g, sign);
-                z
-            };
+            let (z, _) = certificate_matrix(p, side, &g, sign);
             let eig = SymmetricEigen::new(z);
             min = min.min(eig.eigenvalues.min());
-            let mut order: Vec<usize> = (0..eig.eigenvalues.len())
-                .filter(|&k| eig.eigenvalues[k] < -target)
-                .collect();
-            order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-            for &k in order.iter().take(CUTS_PER_SIDE) {
-                if cuts.len() >= max_cuts {
-                    break;
-                }
-                let w = eig.eigenvalues[k];
-                let v = eig.eigenvectors.column(k);
-                let vb = |i: usize| nalgebra::Vector3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
-                // v^T (dZ / dgamma_ij) v = -2 sign (v_i^T M v_i / 2 + v_j^T M v_j / 2 - v_i . v_j),
-                // M = sym(Y_j Y_i^T) (R on the right, C on the left)
-                let mut d: Vec<f64> = at
-                    .pairs
-                    .iter()
-                    .map(|&(i, j)| {
-                        let m = ys[j] * ys[i].transpose();
-                        let m = (m + m.transpose()) * 0.5;
-                        let (vi, vj) = (vb(i), vb(j));
-                        -2.0 * sign
-                            * (0.5 * vi.dot(&(m * vi)) + 0.5 * vj.dot(&(m * vj)) - vi.dot(&vj))
-                    })
-                    .collect();
-                at.project(&mut d);
-                let dd: f64 = d.iter().map(|x| x * x).sum();
-                if dd > 0.0 && dd.is_finite() {
-                    // aim a quarter of |w| above zero: w + d . (gamma' - gamma) >= |w| / 4
-                    let dg: f64 = d.iter().zip(&g).map(|(a, b)| a * b).sum();
-                    cuts.push((d, 0.25 * w.abs() - w + dg));
-                }
-            }
+            let side = Side { at, ys, sign };
+            side.cuts(&eig, &g, target, max_cuts, &mut cuts);
         }
         history.push(min);
         let done = min >= -target
@@ -144,16 +111,80 @@ pub(crate) fn search_couplings(
             });
         }
         rounds += 1;
-        for _ in 0..SWEEPS {
-            for (d, rhs) in &cuts {
-                let dg: f64 = d.iter().zip(&g).map(|(a, b)| a * b).sum();
-                let violation = rhs - dg;
-                if violation > 0.0 {
-                    let dd: f64 = d.iter().map(|x| x * x).sum();
-                    g.iter_mut()
-                        .zip(d)
-                        .for_each(|(x, di)| *x += violation * di / dd);
-                }
+        project_onto_cuts(&mut g, &cuts);
+    }
+}
+
+/// One side of the certificate (`Z_R` or `Z_C`): the multipliers at the estimate, the side's
+/// rotations `Y` and the sign of its couplings.
+struct Side<'a> {
+    at: &'a EstimateMultipliers,
+    ys: &'a [Matrix3<f64>],
+    sign: f64,
+}
+
+impl Side<'_> {
+    /// The cuts of the side's [`CUTS_PER_SIDE`] most negative eigenpairs below `-target` at the
+    /// couplings `g`, appended to `cuts` while they hold fewer than `max_cuts`.
+    fn cuts(
+        &self,
+        eig: &SymmetricEigen<f64, nalgebra::Dyn>,
+        g: &[f64],
+        target: f64,
+        max_cuts: usize,
+        cuts: &mut Vec<(Vec<f64>, f64)>,
+    ) {
+        let mut order: Vec<usize> = (0..eig.eigenvalues.len())
+            .filter(|&k| eig.eigenvalues[k] < -target)
+            .collect();
+        order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+        for &k in order.iter().take(CUTS_PER_SIDE) {
+            if cuts.len() >= max_cuts {
+                break;
+            }
+            let w = eig.eigenvalues[k];
+            let mut d = self.gradient(eig.eigenvectors.column(k));
+            self.at.project(&mut d);
+            let dd: f64 = d.iter().map(|x| x * x).sum();
+            if dd > 0.0 && dd.is_finite() {
+                // aim a quarter of |w| above zero: w + d . (gamma' - gamma) >= |w| / 4
+                let dg: f64 = d.iter().zip(g).map(|(a, b)| a * b).sum();
+                cuts.push((d, 0.25 * w.abs() - w + dg));
+            }
+        }
+    }
+
+    /// The gradient of `v^T Z(gamma) v` in the couplings:
+    /// `v^T (dZ / dgamma_ij) v = -2 sign (v_i^T M v_i / 2 + v_j^T M v_j / 2 - v_i . v_j)`,
+    /// `M = sym(Y_j Y_i^T)` (R on the right, C on the left).
+    fn gradient(&self, v: nalgebra::DVectorView<'_, f64>) -> Vec<f64> {
+        let (ys, sign) = (self.ys, self.sign);
+        let vb = |i: usize| nalgebra::Vector3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+        self.at
+            .pairs
+            .iter()
+            .map(|&(i, j)| {
+                let m = ys[j] * ys[i].transpose();
+                let m = (m + m.transpose()) * 0.5;
+                let (vi, vj) = (vb(i), vb(j));
+                -2.0 * sign * (0.5 * vi.dot(&(m * vi)) + 0.5 * vj.dot(&(m * vj)) - vi.dot(&vj))
+            })
+            .collect()
+    }
+}
+
+/// [`SWEEPS`] sweeps of cyclic projections of the couplings `g` onto the cuts
+/// `d . g >= rhs`.
+fn project_onto_cuts(g: &mut [f64], cuts: &[(Vec<f64>, f64)]) {
+    for _ in 0..SWEEPS {
+        for (d, rhs) in cuts {
+            let dg: f64 = d.iter().zip(g.iter()).map(|(a, b)| a * b).sum();
+            let violation = rhs - dg;
+            if violation > 0.0 {
+                let dd: f64 = d.iter().map(|x| x * x).sum();
+                g.iter_mut()
+                    .zip(d)
+                    .for_each(|(x, di)| *x += violation * di / dd);
             }
         }
     }

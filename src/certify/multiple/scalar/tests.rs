@@ -50,108 +50,147 @@ fn indefinite_at_identity(p: &MultipleProblem) -> (Vec<Rotation>, Vec<Matrix3<f6
     (rs, l, exact)
 }
 
+/// What the soundness test counts over its instances.
+#[derive(Default)]
+struct Tally {
+    instances: usize,
+    proven: usize,
+    failed: usize,
+    sparsified: usize,
+    split: usize,
+    /// The largest mu / lambda_min over proofs at clearly indefinite S (1 = tight).
+    tightest: f64,
+}
+
+/// Instance `seed` of the soundness test: 6-25 nodes, noise 0 to 0.3 rad, every other instance
+/// with non-uniform weights in [0.1, 3.1); with its ground truth.
+fn comparison_instance(seed: u64) -> (MultipleProblem, Vec<Rotation>) {
+    let n = 6 + (seed as usize % 20);
+    let sigma = [0.0, 0.01, 0.05, 0.1, 0.2, 0.3][seed as usize % 6];
+    let (p, gt) = SyntheticGraph {
+        num_rotations: n,
+        num_edges: 2 * n + (seed as usize % 7),
+        noise_sigma: sigma,
+        seed,
+        ..Default::default()
+    }
+    .generate();
+    if seed % 2 == 0 {
+        return (p, gt);
+    }
+    let edges = p
+        .edges()
+        .iter()
+        .enumerate()
+        .map(|(k, e)| crate::multiple::Edge {
+            weight: 0.1 + 3.0 * (((k as u64 * 2654435761 + seed) % 1000) as f64 / 1000.0),
+            ..e.clone()
+        })
+        .collect();
+    (MultipleProblem::new(n, edges).unwrap(), gt)
+}
+
+/// The analyses compared: the whole graph's, sparsified comparisons on subgraphs (every edge
+/// still charged) at the local solution `at`, and splits, every part proving its (uneven) share.
+fn comparison_analyses(p: &MultipleProblem, at: &[Rotation]) -> Vec<ScalarAnalysis> {
+    let mut analyses = vec![ScalarAnalysis::new(p, usize::MAX).unwrap().unwrap()];
+    analyses.extend([1.5, 2.0, 3.0].iter().map(|&k| {
+        ScalarAnalysis::sparsified(p, at, k, usize::MAX)
+            .unwrap()
+            .unwrap()
+    }));
+    analyses.extend([(2, 1, 2), (3, 1, 3), (5, 2, 2)].map(|shape| split_of(p, shape)));
+    analyses
+}
+
+/// The points and multipliers compared: the local solution `sol`, the ground truth `gt` (not
+/// critical when noisy), a perturbed point, each with its own multipliers; and the local
+/// solution with multipliers that are not its own (Lambda + 1e-2 I: S drops by 1e-2, so it is
+/// indefinite; only the G_i term of step 2 sees it).
+fn comparison_points(
+    p: &MultipleProblem,
+    sol: &[Rotation],
+    gt: &[Rotation],
+) -> Vec<(Vec<Rotation>, Vec<Matrix3<f64>>)> {
+    let perturbed: Vec<Rotation> = sol
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            crate::so3::exp(&nalgebra::Vector3::new(1e-4 * (k % 3) as f64, 0.0, 1e-4)) * r
+        })
+        .collect();
+    let shifted: Vec<Matrix3<f64>> = multipliers(p, sol)
+        .unwrap()
+        .iter()
+        .map(|l| l + Matrix3::identity() * 1e-2)
+        .collect();
+    let mut points: Vec<(Vec<Rotation>, Vec<Matrix3<f64>>)> = [sol, gt, &perturbed]
+        .into_iter()
+        .map(|rs| (rs.to_vec(), multipliers(p, rs).unwrap()))
+        .collect();
+    points.push((sol.to_vec(), shifted));
+    points
+}
+
+/// Every analysis at every target `10^-k` (`k = 0..12`) on the point `rs` with multipliers
+/// `l`: each proven `mu` at most the dense `lambda_min(S)` (up to the dense solver's own error
+/// 1e-13 x the scale); counted in `tally`.
+fn check_comparisons(
+    tally: &mut Tally,
+    p: &MultipleProblem,
+    analyses: &[ScalarAnalysis],
+    (rs, l): (&[Rotation], &[Matrix3<f64>]),
+    seed: u64,
+) {
+    let exact = dense_lambda_min(p, l);
+    let n = p.num_rotations();
+    let scale: f64 = l.iter().map(|m| m.norm()).sum::<f64>() + 20.0 * n as f64;
+    for (target, an) in (0..12)
+        .map(|k| 10f64.powi(-k))
+        .flat_map(|t| analyses.iter().map(move |a| (t, a)))
+    {
+        match scalar_comparison(p, an, rs, l, target).unwrap() {
+            Ok(c) => {
+                tally.proven += 1;
+                tally.sparsified += usize::from(c.dropped_edges > 0);
+                tally.split += usize::from(c.parts > 1);
+                if exact < -1e-12 {
+                    tally.tightest = tally.tightest.max(c.verified_min_eigenvalue / exact);
+                }
+                assert!(
+                    c.verified_min_eigenvalue <= exact + 1e-13 * scale,
+                    "seed {seed}: proven {} > dense {exact}",
+                    c.verified_min_eigenvalue
+                );
+            }
+            Err(_) => tally.failed += 1,
+        }
+    }
+}
+
 /// Soundness against a dense eigensolver (independent of the argument): whenever the scalar
 /// comparison proves `mu`, the dense `lambda_min(S)` is >= mu (up to the dense solver's own
 /// error 1e-12 |S|). Over noise levels from 0 to 0.3 rad, local minima and non-critical points.
 #[test]
 fn scalar_comparison_is_sound_against_dense_eigenvalues() {
-    let (mut proven, mut failed, mut instances, mut sparsified) = (0, 0, 0, 0);
-    let mut split = 0;
-    // largest mu / lambda_min over proofs at clearly indefinite S (1 = tight)
-    let mut tightest = 0.0f64;
+    let mut tally = Tally::default();
     for seed in 0..150u64 {
-        let n = 6 + (seed as usize % 20);
-        let sigma = [0.0, 0.01, 0.05, 0.1, 0.2, 0.3][seed as usize % 6];
-        let (p, gt) = SyntheticGraph {
-            num_rotations: n,
-            num_edges: 2 * n + (seed as usize % 7),
-            noise_sigma: sigma,
-            seed,
-            ..Default::default()
-        }
-        .generate();
-        // every other instance: non-uniform weights in [0.1, 3.1)
-        let p = if seed % 2 == 1 {
-            let edges = p
-                .edges()
-                .iter()
-                .enumerate()
-                .map(|(k, e)| crate::multiple::Edge {
-                    weight: 0.1 + 3.0 * (((k as u64 * 2654435761 + seed) % 1000) as f64 / 1000.0),
-                    ..e.clone()
-                })
-                .collect();
-            MultipleProblem::new(n, edges).unwrap()
-        } else {
-            p
-        };
-        instances += 1;
+        let (p, gt) = comparison_instance(seed);
+        tally.instances += 1;
         let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
-        let an = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
-        // sparsified comparisons on subgraphs (every edge still charged)
-        let mut sparse: Vec<ScalarAnalysis> = [1.5, 2.0, 3.0]
-            .iter()
-            .map(|&k| {
-                ScalarAnalysis::sparsified(&p, &sol.rotations, k, usize::MAX)
-                    .unwrap()
-                    .unwrap()
-            })
-            .collect();
-        // ... and splits, every part proving its (uneven) share
-        sparse.extend([(2, 1, 2), (3, 1, 3), (5, 2, 2)].map(|shape| split_of(&p, shape)));
-        // the local solution, the ground truth (not critical when noisy), a perturbed point
-        let perturbed: Vec<Rotation> = sol
-            .rotations
-            .iter()
-            .enumerate()
-            .map(|(k, r)| {
-                crate::so3::exp(&nalgebra::Vector3::new(1e-4 * (k % 3) as f64, 0.0, 1e-4)) * r
-            })
-            .collect();
-        // ... and the local solution with multipliers that are not its own (Lambda + 1e-2 I:
-        // S drops by 1e-2, so it is indefinite; only the G_i term of step 2 sees it)
-        let shifted: Vec<Matrix3<f64>> = multipliers(&p, &sol.rotations)
-            .unwrap()
-            .iter()
-            .map(|l| l + Matrix3::identity() * 1e-2)
-            .collect();
-        for (rs, own) in [
-            (&sol.rotations, true),
-            (&gt, true),
-            (&perturbed, true),
-            (&sol.rotations, false),
-        ] {
-            let l = if own {
-                multipliers(&p, rs).unwrap()
-            } else {
-                shifted.clone()
-            };
-            let exact = dense_lambda_min(&p, &l);
-            let scale: f64 = l.iter().map(|m| m.norm()).sum::<f64>() + 20.0 * n as f64;
-            let analyses = std::iter::once(&an).chain(&sparse);
-            for (target, an) in (0..12)
-                .map(|k| 10f64.powi(-k))
-                .flat_map(|t| analyses.clone().map(move |a| (t, a)))
-            {
-                match scalar_comparison(&p, an, rs, &l, target).unwrap() {
-                    Ok(c) => {
-                        proven += 1;
-                        sparsified += usize::from(c.dropped_edges > 0);
-                        split += usize::from(c.parts > 1);
-                        if exact < -1e-12 {
-                            tightest = tightest.max(c.verified_min_eigenvalue / exact);
-                        }
-                        assert!(
-                            c.verified_min_eigenvalue <= exact + 1e-13 * scale,
-                            "seed {seed}: proven {} > dense {exact}",
-                            c.verified_min_eigenvalue
-                        );
-                    }
-                    Err(_) => failed += 1,
-                }
-            }
+        let analyses = comparison_analyses(&p, &sol.rotations);
+        for (rs, l) in comparison_points(&p, &sol.rotations, &gt) {
+            check_comparisons(&mut tally, &p, &analyses, (&rs, &l), seed);
         }
     }
+    let Tally {
+        instances,
+        proven,
+        failed,
+        sparsified,
+        split,
+        tightest,
+    } = tally;
     println!(
         "scalar comparison: {instances} instances, {proven} proofs ({sparsified} on \
              subgraphs, {split} split), {failed} not proven; tightest mu / lambda_min = \
