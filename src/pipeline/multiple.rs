@@ -13,7 +13,7 @@ use crate::certify::{
     CertifySettings, certify_multiple,
 };
 use crate::error::Result;
-use crate::multiple::robust::{inlier_threshold_deg, suspected_outliers};
+use crate::multiple::robust::{EdgeResiduals, inlier_threshold_deg, suspected_outliers};
 use crate::multiple::{
     Initialisation, MultipleProblem, MultipleSettings, MultipleSolution, solve_multiple,
 };
@@ -256,18 +256,7 @@ pub fn certify_inlier_graph(
         return Ok(None);
     };
     let n = problem.num_rotations();
-    problem.check_estimate(&robust.rotations)?;
-    if residuals.inlier.len() != problem.num_edges() {
-        return Err(crate::error::Error::InvalidSettings {
-            name: "robust solution".into(),
-            reason: format!(
-                "its residuals cover {} edges, the problem has {}",
-                residuals.inlier.len(),
-                problem.num_edges()
-            ),
-        });
-    }
-    if !residuals.inlier.contains(&true) {
+    if !has_inliers(problem, robust, residuals)? {
         return Ok(None);
     }
     // chordal L2 (anisotropic chordal with the inliers' information)
@@ -291,25 +280,7 @@ pub fn certify_inlier_graph(
         certify: settings.certify.clone(),
     };
     let refined = average(&sub, &sub_settings)?;
-    // the gauge G of the refinement: R_0 G = I when node 0 is in the component (as the robust
-    // estimate), else the best alignment to the robust estimate, max tr(G^T sum R_k^T R_v);
-    // nodes outside the component keep their robust rotations exactly
-    let g = if nodes.first() == Some(&0) {
-        refined.solution.rotations[0].inverse()
-    } else {
-        let mut m = Matrix3::zeros();
-        for (k, &v) in nodes.iter().enumerate() {
-            m += refined.solution.rotations[k].matrix().transpose() * robust.rotations[v].matrix();
-        }
-        project_to_so3(&m).unwrap_or_else(Rotation::identity)
-    };
-    let mut estimate = robust.rotations.clone();
-    for (k, &v) in nodes.iter().enumerate() {
-        estimate[v] = refined.solution.rotations[k] * g;
-    }
-    if nodes.first() == Some(&0) {
-        estimate[0] = Rotation::identity();
-    }
+    let estimate = place_refinement(&nodes, &refined.solution.rotations, &robust.rotations);
     // the cost of the reported rotations (equal to the refinement's up to rounding: a gauge)
     let reported: Vec<Rotation> = nodes.iter().map(|&v| estimate[v]).collect();
     let chordal_cost = sub.chordal_cost(&reported);
@@ -336,4 +307,49 @@ pub fn certify_inlier_graph(
         certificate,
         details: refined.details,
     }))
+}
+
+/// Whether the robust solution is an estimate of `problem` with residuals on its every edge
+/// (an error when not), and has at least one inlier.
+fn has_inliers(
+    problem: &MultipleProblem,
+    robust: &MultipleSolution,
+    residuals: &EdgeResiduals,
+) -> Result<bool> {
+    problem.check_estimate(&robust.rotations)?;
+    if residuals.inlier.len() != problem.num_edges() {
+        return Err(crate::error::Error::InvalidSettings {
+            name: "robust solution".into(),
+            reason: format!(
+                "its residuals cover {} edges, the problem has {}",
+                residuals.inlier.len(),
+                problem.num_edges()
+            ),
+        });
+    }
+    Ok(residuals.inlier.contains(&true))
+}
+
+/// The robust estimate with the refinement of the component `nodes` in place, in the robust
+/// estimate's gauge: `R_0 G = I` when node 0 is in the component (as the robust estimate),
+/// else the best alignment to the robust estimate, `max tr(G^T sum R_k^T R_v)`; nodes outside
+/// the component keep their robust rotations exactly.
+fn place_refinement(nodes: &[usize], refined: &[Rotation], robust: &[Rotation]) -> Vec<Rotation> {
+    let g = if nodes.first() == Some(&0) {
+        refined[0].inverse()
+    } else {
+        let mut m = Matrix3::zeros();
+        for (k, &v) in nodes.iter().enumerate() {
+            m += refined[k].matrix().transpose() * robust[v].matrix();
+        }
+        project_to_so3(&m).unwrap_or_else(Rotation::identity)
+    };
+    let mut estimate = robust.to_vec();
+    for (k, &v) in nodes.iter().enumerate() {
+        estimate[v] = refined[k] * g;
+    }
+    if nodes.first() == Some(&0) {
+        estimate[0] = Rotation::identity();
+    }
+    estimate
 }

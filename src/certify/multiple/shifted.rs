@@ -196,22 +196,17 @@ fn clearly_negative(r: &LanczosResult, delta0: f64) -> bool {
     r.value < -100.0 * (r.residual + delta0)
 }
 
-/// Estimate `lambda_min(S)` by Lanczos on `S`, then shifts above it `4^j` steps apart until one
-/// factorisation succeeds (refining the estimate by shift-invert from there), then one tighter
-/// shift just above the refined estimate. Returns the best verified `(shift, margin)`.
-fn search(
+/// The first estimate of `lambda_min(S)`: the hint's, or Lanczos on `S`; `None` (with the
+/// reason in `notes`) when no shift can prove a bound above the trivial 0.
+fn first_estimate(
     cx: &Check<'_>,
-    ch: &mut ShiftedCholesky,
-    delta0: f64,
-    margin_target: f64,
+    lz: &LanczosSettings,
     notes: &mut Notes,
-) -> Option<(f64, f64)> {
-    let lz = lanczos(cx, usize::MAX);
-    let hinted = cx.hint.is_some();
-    let mut r = match &cx.hint {
+) -> Option<LanczosResult> {
+    let r = match &cx.hint {
         Some(h) => h.low.clone(),
         None => {
-            let r = smallest_eigenpair(cx.s.as_ref(), cx.norm, &lz);
+            let r = smallest_eigenpair(cx.s.as_ref(), cx.norm, lz);
             notes.lanczos_iterations += r.iterations;
             r
         }
@@ -231,17 +226,34 @@ fn search(
         notes.estimate = Some(r);
         return None;
     }
-    let max = cx.settings.dual.max_factorizations;
-    let mut tried = 1usize;
+    Some(r)
+}
+
+/// Estimate `lambda_min(S)` by Lanczos on `S`, then shifts above it `4^j` steps apart until one
+/// factorisation succeeds (refining the estimate by shift-invert from there), then one tighter
+/// shift just above the refined estimate. Returns the best verified `(shift, margin)`.
+fn search(
+    cx: &Check<'_>,
+    ch: &mut ShiftedCholesky,
+    delta0: f64,
+    margin_target: f64,
+    notes: &mut Notes,
+) -> Option<(f64, f64)> {
+    let lz = lanczos(cx, usize::MAX);
+    let hinted = cx.hint.is_some();
+    let mut r = first_estimate(cx, &lz, notes)?;
+    let mut tries = Tries {
+        tried: 1,
+        max: cx.settings.dual.max_factorizations,
+    };
     let base = (-r.value).max(0.0);
     let step0 = delta0.max(r.residual).max(1e-12 * cx.norm);
     let gersh_shift = (-crate::linalg::gershgorin_lower_bound(cx.s.as_ref())).max(0.0);
     let mut best = None;
     let mut j = 0i32;
-    while tried < max {
+    while tries.next() {
         let sigma = base + step0 * 4f64.powi(j);
         j += 1;
-        tried += 1;
         let Some(f) = ch.factor(sigma, margin_target) else {
             if sigma > gersh_shift {
                 break;
@@ -265,21 +277,47 @@ fn search(
         break;
     }
     if let Some((shift, _)) = best.filter(|_| !hinted && !clearly_negative(&r, delta0)) {
-        let mut margin = delta0.max(1e-9 * r.value.abs()).max(r.residual);
-        while tried < max {
-            let sigma = (-r.value).max(0.0) + margin;
-            if sigma >= shift {
-                break;
-            }
-            tried += 1;
-            if let Some(f) = ch.factor(sigma, margin_target) {
-                best = Some((f.shift, f.margin));
-                break;
-            }
-            margin *= 10.0;
-        }
+        best = tighten(ch, &r, shift, delta0, margin_target, &mut tries).or(best);
     }
-    notes.factorizations += tried - 1;
+    notes.factorizations += tries.tried - 1;
     notes.estimate = Some(r);
     best
+}
+
+/// The factorisations tried so far and the most allowed.
+struct Tries {
+    tried: usize,
+    max: usize,
+}
+
+impl Tries {
+    /// Counts one more factorisation, if one is allowed.
+    fn next(&mut self) -> bool {
+        let allowed = self.tried < self.max;
+        self.tried += usize::from(allowed);
+        allowed
+    }
+}
+
+/// Shifts just above the refined estimate `r`, below the verified `shift`, margins 10x apart:
+/// the first that factors.
+fn tighten(
+    ch: &mut ShiftedCholesky,
+    r: &LanczosResult,
+    shift: f64,
+    delta0: f64,
+    margin_target: f64,
+    tries: &mut Tries,
+) -> Option<(f64, f64)> {
+    let mut margin = delta0.max(1e-9 * r.value.abs()).max(r.residual);
+    loop {
+        let sigma = (-r.value).max(0.0) + margin;
+        if sigma >= shift || !tries.next() {
+            return None;
+        }
+        if let Some(f) = ch.factor(sigma, margin_target) {
+            return Some((f.shift, f.margin));
+        }
+        margin *= 10.0;
+    }
 }

@@ -75,7 +75,7 @@ fn comparison_instance(seed: u64) -> (MultipleProblem, Vec<Rotation>) {
         ..Default::default()
     }
     .generate();
-    if seed % 2 == 0 {
+    if seed.is_multiple_of(2) {
         return (p, gt);
     }
     let edges = p
