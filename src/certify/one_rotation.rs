@@ -12,7 +12,7 @@ use super::certification::{
 };
 use super::evidence::BranchAndBoundStats;
 use super::evidence::SpectrumEstimate;
-use super::log::{Attempt, Point};
+use super::log::Attempt;
 use super::proof::Proof;
 use super::rung::Climb;
 use super::settings::CertifySettings;
@@ -156,14 +156,6 @@ impl<S> Climb for RotationState<'_, S> {
 
     fn budget(&self) -> &Budget {
         &self.settings.budget
-    }
-
-    fn point(&self) -> Point {
-        Point::Given
-    }
-
-    fn within(&self) -> Option<Proof> {
-        None
     }
 
     fn enough(&self) -> bool {

@@ -111,10 +111,16 @@ pub trait Climb {
     fn deadline(&self) -> &Deadline;
     /// The memory and time budget.
     fn budget(&self) -> &Budget;
-    /// The point the next attempt works on (for the log).
-    fn point(&self) -> Point;
-    /// The proof whose multipliers this climb verifies; `None` for a certification's own.
-    fn within(&self) -> Option<Proof>;
+    /// The point the next attempt works on (for the log); the given estimate unless the state
+    /// moves between points.
+    fn point(&self) -> Point {
+        Point::Given
+    }
+    /// The proof whose multipliers this climb verifies; `None` (the default) for a
+    /// certification's own.
+    fn within(&self) -> Option<Proof> {
+        None
+    }
     /// The best bound so far is enough: the climb stops.
     fn enough(&self) -> bool;
     /// Append one attempt to the log.

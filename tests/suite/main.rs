@@ -41,6 +41,7 @@ mod conjugate_simultaneous;
 mod conv_dual;
 #[cfg(feature = "cli")]
 mod data_as_given;
+mod deadline;
 #[cfg(feature = "cli")]
 mod docs_examples;
 #[cfg(feature = "cli")]

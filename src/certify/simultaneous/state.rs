@@ -4,7 +4,7 @@
 use crate::certify::budget::{Budget, Deadline};
 use crate::certify::certificate::nonnegative_bound_at_most;
 use crate::certify::certification::SdpSummary;
-use crate::certify::log::{Attempt, Point};
+use crate::certify::log::Attempt;
 use crate::certify::proof::Proof;
 use crate::certify::rung::Climb;
 use crate::certify::settings::CertifySettings;
@@ -72,14 +72,6 @@ impl Climb for SimState<'_> {
 
     fn budget(&self) -> &Budget {
         &self.settings.budget
-    }
-
-    fn point(&self) -> Point {
-        Point::Given
-    }
-
-    fn within(&self) -> Option<Proof> {
-        None
     }
 
     fn enough(&self) -> bool {

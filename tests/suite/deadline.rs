@@ -1,0 +1,110 @@
+//! The time budget (issue 35, item 0): every rung's work, including what follows an SDP
+//! solver's own time limit (the bound's extraction, its independent verification, the polish of
+//! the rounding), is counted against `Budget::max_seconds`. With a budget far below what the
+//! proof needs unbounded, a certification ends within the stated margin
+//! (`docs/reference/cli.md`, `--max-seconds`): `max_seconds * (1 + DEADLINE_RELATIVE_MARGIN) +
+//! DEADLINE_ABSOLUTE_MARGIN_SECONDS`. The margin is generous against a loaded machine's noise
+//! (the runs measured here end within a few hundredths of a second of the budget), and two
+//! orders of magnitude below what the same proofs take unbounded.
+
+use rotavg::certify::{Budget, CertifyMode, CertifySettings, certify_multiple};
+use rotavg::multiple::synthetic::SyntheticGraph;
+use rotavg::multiple::{MultipleSettings, solve_multiple};
+use std::time::Instant;
+
+/// The relative part of the stated margin.
+const DEADLINE_RELATIVE_MARGIN: f64 = 0.1;
+/// The absolute part of the stated margin, seconds.
+const DEADLINE_ABSOLUTE_MARGIN_SECONDS: f64 = 0.5;
+
+fn budget(seconds: f64) -> Budget {
+    Budget {
+        max_seconds: Some(seconds),
+        ..Budget::default()
+    }
+}
+
+/// The issue's reproducer: 50 nodes, 200 edges, 30 % outliers, `--certify sdp` (and the
+/// staircase), the estimate the chordal local solver's.
+#[test]
+fn heavy_rungs_end_within_the_margin_of_a_tiny_budget() {
+    let (p, _) = SyntheticGraph {
+        num_rotations: 50,
+        num_edges: 200,
+        noise_sigma: 0.05,
+        outlier_fraction: 0.3,
+        seed: 7,
+        ..Default::default()
+    }
+    .generate();
+    let est = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    for mode in [CertifyMode::Sdp, CertifyMode::Staircase, CertifyMode::Auto] {
+        for seconds in [0.05, 0.3] {
+            let settings = CertifySettings {
+                mode,
+                budget: budget(seconds),
+                ..Default::default()
+            };
+            let start = Instant::now();
+            let c = certify_multiple(&p, &est.rotations, &settings).unwrap();
+            let took = start.elapsed().as_secs_f64();
+            eprintln!(
+                "{} {seconds} s: {took:.3} s, {:?} ({})",
+                mode.name(),
+                c.certificate.verdict,
+                c.details.skipped_reason.clone().unwrap_or_default()
+            );
+            let limit =
+                seconds * (1.0 + DEADLINE_RELATIVE_MARGIN) + DEADLINE_ABSOLUTE_MARGIN_SECONDS;
+            assert!(
+                took <= limit,
+                "{}: {took} s for a budget of {seconds} s",
+                mode.name()
+            );
+        }
+    }
+}
+/// An SDP that starts (its prediction fits) and reaches the solver's time limit: a 20-node
+/// graph with 30 % outliers whose SDP is predicted at 0.39 s and takes 0.67-0.79 s unbounded
+/// (measured). Under budgets between the prediction and the unbounded time Clarabel stops at
+/// its time limit (the budget less the reserve for what follows it), and the extraction of its
+/// multipliers, their verification and the polish of its rounding fit in the reserve.
+#[test]
+fn an_sdp_stopped_by_its_time_limit_ends_within_the_margin() {
+    let (p, _) = SyntheticGraph {
+        num_rotations: 20,
+        num_edges: 80,
+        noise_sigma: 0.05,
+        outlier_fraction: 0.3,
+        seed: 7,
+        ..Default::default()
+    }
+    .generate();
+    let est = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    let mut sdp_ran = 0;
+    for seconds in [0.45, 0.5, 0.55, 0.6] {
+        let settings = CertifySettings {
+            mode: CertifyMode::Sdp,
+            budget: budget(seconds),
+            ..Default::default()
+        };
+        let start = Instant::now();
+        let c = certify_multiple(&p, &est.rotations, &settings).unwrap();
+        let took = start.elapsed().as_secs_f64();
+        sdp_ran += usize::from(c.details.sdp.is_some());
+        eprintln!(
+            "sdp under {seconds} s: {took:.3} s, {:?}",
+            c.certificate.verdict
+        );
+        assert!(
+            took <= within_margin(seconds),
+            "{took} s for a budget of {seconds} s"
+        );
+    }
+    // the instance still makes the SDP start (else the test proves nothing about it)
+    assert!(sdp_ran > 0, "the SDP never started");
+}
+
+fn within_margin(seconds: f64) -> f64 {
+    seconds * (1.0 + DEADLINE_RELATIVE_MARGIN) + DEADLINE_ABSOLUTE_MARGIN_SECONDS
+}
