@@ -10,7 +10,7 @@
 //! randomized bound [D16] reported beside the `inconclusive` verdict obeys the same two rules.
 //!
 //! Opt-in (`#[ignore]`): the README's test command stays short; CI runs it separately
-//! (`cargo test --release --test soundness_campaign -- --ignored`).
+//! (`cargo test --release --workspace --test soundness_campaign -- --ignored`).
 //!
 //! The instances are shared out among `available_parallelism()` threads. Instance `k` is
 //! generated from `k` alone and its random starts, perturbations and randomized-bound seeds come
@@ -197,7 +197,7 @@ fn instance(k: usize) -> (MultipleProblem, Vec<Rotation>) {
 }
 
 #[test]
-#[ignore = "long campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
+#[ignore = "long campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_in_ten_thousand() {
     let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
     let next = AtomicUsize::new(0);
@@ -251,7 +251,7 @@ fn no_false_certificate_in_ten_thousand() {
 /// polished. Checked: no bound above it, no certified point worse than it by more than the
 /// tolerance.
 #[test]
-#[ignore = "campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
+#[ignore = "campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_on_simultaneous_rigs() {
     use rotavg::certify::simultaneous::certify_simultaneous;
     use rotavg::pipeline::simultaneous::{
