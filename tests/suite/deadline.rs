@@ -34,7 +34,6 @@ fn heavy_rungs_end_within_the_margin_of_a_tiny_budget() {
         noise_sigma: 0.05,
         outlier_fraction: 0.3,
         seed: 7,
-        ..Default::default()
     }
     .generate();
     let est = solve_multiple(&p, &MultipleSettings::default()).unwrap();
@@ -77,7 +76,6 @@ fn an_sdp_stopped_by_its_time_limit_ends_within_the_margin() {
         noise_sigma: 0.05,
         outlier_fraction: 0.3,
         seed: 7,
-        ..Default::default()
     }
     .generate();
     let est = solve_multiple(&p, &MultipleSettings::default()).unwrap();

@@ -5,8 +5,8 @@
 //! climb ([`super::verify`]).
 
 use super::multipliers::{
-    FirstOrder, GaugeTerms, bound_from_mu, bound_with_deficit, certificate_matrix, entry_terms,
-    forming_margin, gauge_terms,
+    FirstOrder, GaugeTerms, TraceBound, certificate_matrix, entry_terms, forming_margin,
+    gauge_terms,
 };
 use super::scalar::ScalarAnalysis;
 use super::verified::VerifiedBound;
@@ -86,6 +86,8 @@ pub(crate) struct Check<'a> {
     pub first: Option<&'a FirstOrder>,
     /// The gauge terms when there is no `first`, made on the first request.
     gauge: std::cell::OnceCell<GaugeTerms>,
+    /// The terms every bound from these multipliers shares, made once.
+    trace_bound: std::cell::OnceCell<TraceBound>,
     /// The best verified bound so far.
     pub best: Option<VerifiedBound>,
     /// Gershgorin's bound when a check was kept out by the budget: reported, never claimed.
@@ -162,6 +164,7 @@ impl<'a> Check<'a> {
             three_n_refused: RefCell::new(None),
             first: None,
             gauge: std::cell::OnceCell::new(),
+            trace_bound: std::cell::OnceCell::new(),
             best: None,
             unclaimed: None,
             notes: RefCell::new(Notes::default()),
@@ -169,8 +172,14 @@ impl<'a> Check<'a> {
         })
     }
 
+    /// The terms every bound from these multipliers shares (`[D4]`), made once.
+    pub fn trace_bound(&self) -> &TraceBound {
+        self.trace_bound
+            .get_or_init(|| TraceBound::new(self.problem, self.lambdas))
+    }
+
     /// The gauge terms of `S Y` at the estimate `rotations` these multipliers belong to
-    /// (`[D15]`), made once.
+    /// (`[D15]`): the first-order quantities' when the check has them, else made once here.
     pub fn gauge_terms(&self, rotations: &[Rotation]) -> &GaugeTerms {
         match self.first {
             Some(f) => f.gauge_terms(rotations),
@@ -224,7 +233,7 @@ impl<'a> Check<'a> {
 
     /// The bound with no deficit: what a perfect proof would give.
     pub fn ceiling(&self) -> f64 {
-        bound_with_deficit(self.problem, self.lambdas, 0.0)
+        self.trace_bound().with_deficit(0.0)
     }
 
     /// `bound` leaves at least half of the tolerance for the rest of the gap: the climb stops.
@@ -357,7 +366,7 @@ impl Check<'_> {
     /// known yet.
     pub fn bound_from_mu(&self, mu: f64, verification: Proof) -> VerifiedBound {
         VerifiedBound {
-            lower_bound: bound_from_mu(self.problem, self.lambdas, mu),
+            lower_bound: self.trace_bound().at_mu(mu),
             trace: self.lambdas.iter().map(|l| l.trace()).sum(),
             verified_min_eigenvalue: mu,
             verification,

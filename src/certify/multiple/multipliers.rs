@@ -187,18 +187,18 @@ fn first_order_block(node: &[[Accumulator; 3]; 3], r: &Rotation) -> (Matrix3<f64
         }
         0.5 * s.value()
     };
-    let sym = Matrix3::from_fn(|a, b| {
-        if a <= b {
-            part(a, b, 1.0)
-        } else {
-            part(b, a, 1.0)
+    // each entry once (the lower triangle mirrors the upper)
+    let mut sym = Matrix3::zeros();
+    let mut skew = Matrix3::zeros();
+    for a in 0..3 {
+        sym[(a, a)] = part(a, a, 1.0);
+        for b in a + 1..3 {
+            sym[(a, b)] = part(a, b, 1.0);
+            sym[(b, a)] = sym[(a, b)];
+            skew[(a, b)] = part(a, b, -1.0);
+            skew[(b, a)] = -skew[(a, b)];
         }
-    });
-    let skew = Matrix3::from_fn(|a, b| match a.cmp(&b) {
-        std::cmp::Ordering::Less => part(a, b, -1.0),
-        std::cmp::Ordering::Equal => 0.0,
-        std::cmp::Ordering::Greater => -part(b, a, -1.0),
-    });
+    }
     (sym, skew)
 }
 
@@ -400,14 +400,6 @@ fn residual_products_from(
     (out, error2.sqrt() * (1.0 + 4.0 * UNIT_ROUNDOFF))
 }
 
-/// `[D4]` with rounding: `sum tr(Lambda_i) + 3n min(mu, 0)`, minus the rounding error of
-/// evaluating it: the trace sum of `3n` terms has error `<= gamma(3n) sum |Lambda_aa|`, the
-/// product and final subtraction `<= gamma(3n + 2) (sum |Lambda_aa| + 3n |mu|)`; doubled.
-pub(super) fn bound_from_mu(problem: &MultipleProblem, lambdas: &[Matrix3<f64>], mu: f64) -> f64 {
-    let n3 = 3 * lambdas.len();
-    bound_with_deficit(problem, lambdas, n3 as f64 * (-mu).max(0.0))
-}
-
 /// `sum tr(Lambda_i) - deficit` with the rounding of evaluating it and the data defect
 /// subtracted: the bound of `[D15]` and `[D16]` from a proven `deficit >= 0`.
 pub(super) fn bound_with_deficit(
@@ -415,13 +407,46 @@ pub(super) fn bound_with_deficit(
     lambdas: &[Matrix3<f64>],
     deficit: f64,
 ) -> f64 {
-    let n3 = 3 * lambdas.len();
-    let trace: f64 = lambdas.iter().map(|l| l.trace()).sum();
-    let abs_trace: f64 = lambdas
-        .iter()
-        .map(|l| l[(0, 0)].abs() + l[(1, 1)].abs() + l[(2, 2)].abs())
-        .sum();
-    trace - deficit - 2.0 * gamma(n3 + 4) * (abs_trace + deficit) - data_defect(problem)
+    TraceBound::new(problem, lambdas).with_deficit(deficit)
+}
+
+/// What every bound from one set of multipliers shares (`[D4]`): `sum tr(Lambda_i)`, the sum
+/// of the magnitudes its rounding is bounded by, and the data defect; made once per check
+/// (the defect is a double-double sum over the edges).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct TraceBound {
+    n3: usize,
+    trace: f64,
+    abs_trace: f64,
+    defect: f64,
+}
+
+impl TraceBound {
+    /// The shared terms of `lambdas` for `problem`.
+    pub(super) fn new(problem: &MultipleProblem, lambdas: &[Matrix3<f64>]) -> Self {
+        TraceBound {
+            n3: 3 * lambdas.len(),
+            trace: lambdas.iter().map(|l| l.trace()).sum(),
+            abs_trace: lambdas
+                .iter()
+                .map(|l| l[(0, 0)].abs() + l[(1, 1)].abs() + l[(2, 2)].abs())
+                .sum(),
+            defect: data_defect(problem),
+        }
+    }
+
+    /// `sum tr(Lambda_i) - deficit`, less the evaluation's rounding and the data defect.
+    pub(super) fn with_deficit(&self, deficit: f64) -> f64 {
+        self.trace - deficit - 2.0 * gamma(self.n3 + 4) * (self.abs_trace + deficit) - self.defect
+    }
+
+    /// The bound from a proven `mu <= lambda_min(S)`: the deficit `3n max(-mu, 0)`. `[D4]` with
+    /// rounding: `sum tr(Lambda_i) + 3n min(mu, 0)`, minus the rounding error of evaluating
+    /// it: the trace sum of `3n` terms has error `<= gamma(3n) sum |Lambda_aa|`, the product
+    /// and final subtraction `<= gamma(3n + 2) (sum |Lambda_aa| + 3n |mu|)`; doubled.
+    pub(super) fn at_mu(&self, mu: f64) -> f64 {
+        self.with_deficit(self.n3 as f64 * (-mu).max(0.0))
+    }
 }
 
 /// An upper bound on `c_0 = sum_e w_e (3 - ||R_ij||_F^2)` `[D4]`: the measured rotations are

@@ -216,7 +216,7 @@ fn first_estimate(
     // nodes with outliers, 12 s for a bound of -4.7e3 at a local minimum the staircase then
     // bounds within 0.2 %)
     // (only at an estimate: bare multipliers get their bound, whatever its sign)
-    let at_best = super::multipliers::bound_from_mu(cx.problem, cx.lambdas, r.value);
+    let at_best = cx.trace_bound().at_mu(r.value);
     if cx.rotations.is_some() && at_best < 0.0 {
         notes.skipped = Some(format!(
             "the estimate lambda_min(S) ~ {:.3e} predicts a bound of at most {at_best:.3e} < 0, \
