@@ -270,33 +270,59 @@ pub fn chordal_term(h: &Information, r_ij: &Rotation, r_i: &Rotation, r_j: &Rota
 /// know only to `u tr(H)` per edge (a negative cost on noise-free data, and a gap of heavy
 /// information off by more than the tolerance's absolute part). Expanded:
 /// `2 tr H - 2 sum H_kk R_ij[a][b] R_j[a][d] R_i[b][d] + 4 sum R_ij[a][c] H_cb R_j[a][d] R_i[b][d]`.
+/// Evaluated as `2 tr H - 2 tr H <R_ij, P> + 4 <R_ij H, P>` with `P = R_j R_i^T` and `R_ij H`
+/// formed in double-double first (each entry a compensated sum of three exact products, error
+/// `O(u^2)` of its terms): about 120 error-free products per edge instead of the expansion's
+/// 486 (`--information full` on mrob/sphere spent 94 M of its 322 M certify instructions here).
 pub(crate) fn chordal_cost_compensated(
     edges: &[crate::multiple::Edge],
     info: &[Information],
     rotations: &[Rotation],
 ) -> f64 {
-    let mut acc = crate::linalg::compensated::Accumulator::default();
+    use crate::linalg::compensated::Accumulator;
+    let mut acc = Accumulator::default();
     for (e, h) in edges.iter().zip(info) {
         let (h, r) = (h.matrix(), e.rotation.matrix());
         let (ri, rj) = (rotations[e.i].matrix(), rotations[e.j].matrix());
+        let p = product_dd(|a, b, d| (rj[(a, d)], ri[(b, d)]));
+        let m = product_dd(|a, b, c| (r[(a, c)], h[(c, b)]));
+        // tr E = <R_ij, P> for E = R_ij^T R_j R_i^T
+        let mut tr_e = Accumulator::default();
+        for (a, b) in (0..3).flat_map(|a| (0..3).map(move |b| (a, b))) {
+            let (hi, lo) = p[a][b];
+            tr_e.add_product(r[(a, b)], hi);
+            tr_e.add_product(r[(a, b)], lo);
+        }
+        let (te_hi, te_lo) = tr_e.parts();
         for k in 0..3 {
             acc.add_product(2.0, h[(k, k)]);
+            acc.add_product(-2.0 * h[(k, k)], te_hi);
+            acc.add_product(-2.0 * h[(k, k)], te_lo);
         }
-        for a in 0..3 {
-            for b in 0..3 {
-                for d in 0..3 {
-                    let (x, y) = (rj[(a, d)], ri[(b, d)]);
-                    for k in 0..3 {
-                        acc.add_quad(-2.0 * h[(k, k)], r[(a, b)], x, y);
-                    }
-                    for c in 0..3 {
-                        acc.add_quad(4.0 * h[(c, b)], r[(a, c)], x, y);
-                    }
-                }
+        // 4 <H, E> = 4 <R_ij H, P>
+        for (a, b) in (0..3).flat_map(|a| (0..3).map(move |b| (a, b))) {
+            let ((mh, ml), (ph, pl)) = (m[a][b], p[a][b]);
+            for (x, y) in [(mh, ph), (mh, pl), (ml, ph), (ml, pl)] {
+                acc.add_product(4.0 * x, y);
             }
         }
     }
     acc.value()
+}
+
+/// The entries `sum_d x_abd y_abd` of a 3 x 3 product, `(x, y) = f(a, b, d)`, each as an
+/// unevaluated double-double pair.
+fn product_dd(f: impl Fn(usize, usize, usize) -> (f64, f64)) -> [[(f64, f64); 3]; 3] {
+    std::array::from_fn(|a| {
+        std::array::from_fn(|b| {
+            let mut s = crate::linalg::compensated::Accumulator::default();
+            for d in 0..3 {
+                let (x, y) = f(a, b, d);
+                s.add_product(x, y);
+            }
+            s.parts()
+        })
+    })
 }
 
 /// The anisotropic geodesic term `e^T H e`, `e = log(R_ij^T R_j R_i^T)` `[A8]`.
@@ -427,5 +453,84 @@ mod tests {
             .with_information(info)
             .unwrap();
         assert_eq!(p.chordal_cost(&truth), 0.0, "plain trace form: {plain:e}");
+    }
+}
+
+#[cfg(test)]
+mod chordal_cost_tests {
+    use super::*;
+    use crate::multiple::Edge;
+    use crate::so3::{exp, random_rotation};
+    use nalgebra::Vector3;
+    use rand::rngs::StdRng;
+    use rand::{Rng, SeedableRng};
+
+    /// The expansion the evaluation replaced, every term an exact quadruple product summed in
+    /// double-double: an independent reference.
+    fn expanded(edges: &[Edge], info: &[Information], rotations: &[Rotation]) -> f64 {
+        let mut acc = crate::linalg::compensated::Accumulator::default();
+        for (e, h) in edges.iter().zip(info) {
+            let (h, r) = (h.matrix(), e.rotation.matrix());
+            let (ri, rj) = (rotations[e.i].matrix(), rotations[e.j].matrix());
+            for k in 0..3 {
+                acc.add_product(2.0, h[(k, k)]);
+            }
+            for a in 0..3 {
+                for b in 0..3 {
+                    for d in 0..3 {
+                        let (x, y) = (rj[(a, d)], ri[(b, d)]);
+                        for k in 0..3 {
+                            acc.add_quad(-2.0 * h[(k, k)], r[(a, b)], x, y);
+                        }
+                        for c in 0..3 {
+                            acc.add_quad(4.0 * h[(c, b)], r[(a, c)], x, y);
+                        }
+                    }
+                }
+            }
+        }
+        acc.value()
+    }
+
+    /// The double-double evaluation agrees with the expansion to the final rounding, on noise
+    /// from 0 (the cost cancels to the rounding of the data) to 0.1 rad and information spreads
+    /// up to 1e8, including measurements off SO(3) by 1e-9.
+    #[test]
+    fn chordal_cost_compensated_matches_the_expansion() {
+        let mut rng = StdRng::seed_from_u64(11);
+        for noise in [0.0, 1e-9, 1e-6, 1e-3, 0.1] {
+            for spread in [1.0f64, 1e4, 1e8] {
+                let n = 6;
+                let truth: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
+                let mut edges = Vec::new();
+                let mut info = Vec::new();
+                for i in 0..n {
+                    for j in i + 1..n {
+                        let e = Vector3::from_fn(|_, _| noise * (rng.random::<f64>() - 0.5));
+                        let mut r = exp(&e) * truth[j] * truth[i].inverse();
+                        let defect = Matrix3::from_fn(|_, _| 1e-9 * (rng.random::<f64>() - 0.5));
+                        r = Rotation::from_matrix_unchecked(r.matrix() + defect);
+                        edges.push(Edge {
+                            i,
+                            j,
+                            rotation: r,
+                            weight: 1.0,
+                        });
+                        let q = random_rotation(&mut rng);
+                        let d = Matrix3::from_diagonal(&Vector3::new(1.0, spread.sqrt(), spread));
+                        let h = q.matrix() * d * q.matrix().transpose();
+                        info.push(Information::new((h + h.transpose()) * 0.5).unwrap());
+                    }
+                }
+                let new = chordal_cost_compensated(&edges, &info, &truth);
+                let old = expanded(&edges, &info, &truth);
+                let scale: f64 = info.iter().map(|h| h.matrix().trace()).sum();
+                let tol = 4.0 * f64::EPSILON * old.abs() + 1e-28 * scale;
+                assert!(
+                    (new - old).abs() <= tol,
+                    "noise {noise}, spread {spread}: {new} vs {old}"
+                );
+            }
+        }
     }
 }
