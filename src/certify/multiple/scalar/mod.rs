@@ -49,6 +49,7 @@
 
 mod analysis;
 mod charges;
+mod forecast;
 mod inertia;
 mod residuals;
 pub(super) mod rungs;

@@ -6,12 +6,13 @@
 //! factorisation when it fits, else its first fallback's); its attempt climbs its own shapes in
 //! order, each logged, each only while what is left of the time budget covers its prediction.
 
+use super::forecast::{FORECAST_FAILURE_SUCCESS, forecast_fails};
 use super::{
     MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_MIN_DEGREES, SPLIT_SHAPES, ScalarAnalysis,
     ScalarComparison, ScalarFailure, SplitShape, scalar_comparison,
 };
 use crate::certify::budget::Budget;
-use crate::certify::log::{Outcome, Prediction, Refusal};
+use crate::certify::log::{FREE_SECONDS, Outcome, Prediction, Refusal};
 use crate::certify::multiple::check::{Check, over_factor_cap};
 use crate::certify::multiple::verified::VerifiedBound;
 use crate::certify::proof::Proof;
@@ -102,7 +103,11 @@ impl ScalarFamily {
         }
         match &cx.scalar {
             Some(Ok(a)) => match predict(cx.settings, a) {
-                Ok(p) => {
+                Ok(mut p) => {
+                    // a failure worth avoiding: forecast it (free predictions are not)
+                    if p.seconds > FREE_SECONDS && forecast_fails(cx.problem, rotations) {
+                        p = p.with_success(FORECAST_FAILURE_SUCCESS);
+                    }
                     self.whole = Some(p);
                     return Ok(Ok(p));
                 }

@@ -597,3 +597,49 @@ fn a_subgraph_is_joined_by_its_cheapest_bridge() {
         "{proof:?} vs {exact}"
     );
 }
+
+/// The failure forecast (`forecast.rs`) is right whenever it speaks, and speaks on a large noisy
+/// lattice: on SLAM lattices of 20x20 to 120x120 nodes at noise 1e-3 to 3e-2 rad (the optimum
+/// from the local solver, the comparison run on the whole graph with an unbounded target), every
+/// instance forecast to fail does fail, and at least one is forecast (else the test proves
+/// nothing), while an expander that the comparison proves is not forecast to fail.
+#[test]
+fn failure_forecast_is_right_when_it_speaks() {
+    use super::forecast::forecast_fails;
+    use crate::multiple::synthetic::SyntheticGrid;
+    let mut forecast = 0;
+    for side in [20usize, 60, 120] {
+        for noise in [1e-3, 1e-2, 3e-2] {
+            let (p, _) = SyntheticGrid {
+                width: side,
+                height: side,
+                noise_sigma: noise,
+                seed: side as u64,
+                ..Default::default()
+            }
+            .generate();
+            let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+            if !forecast_fails(&p, &sol.rotations) {
+                continue;
+            }
+            forecast += 1;
+            let l = multipliers(&p, &sol.rotations).unwrap();
+            let an = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
+            let outcome = scalar_comparison(&p, &an, &sol.rotations, &l, 1e300).unwrap();
+            assert!(
+                outcome.is_err(),
+                "{side}x{side} at {noise}: forecast to fail, proved"
+            );
+        }
+    }
+    assert!(forecast > 0, "no lattice was forecast to fail");
+    let (p, _) = SyntheticGraph {
+        num_rotations: 300,
+        num_edges: 1500,
+        noise_sigma: 0.05,
+        ..Default::default()
+    }
+    .generate();
+    let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    assert!(!forecast_fails(&p, &sol.rotations));
+}
