@@ -61,6 +61,15 @@ impl Accumulator {
         self.terms += 1;
     }
 
+    /// Add `x`, a term far below the sum (a product with a double-double's low part, itself
+    /// at most `u` of its high part): rounded into the low part, its error second order.
+    #[inline]
+    pub(crate) fn add_low(&mut self, x: f64) {
+        self.lo += x;
+        self.abs += x.abs();
+        self.terms += 1;
+    }
+
     /// Add `w a b` (a triple product; the second-order error `u^2 |w a b|` is charged in
     /// [`Self::bound`]).
     #[inline]

@@ -171,31 +171,32 @@ impl FirstOrder {
 }
 
 /// The symmetric and skew parts of `(Q Y)_i R_i^T`: the multiplier and the stationarity
-/// residual `[D3]`, each entry a compensated sum of the double-double `(Q Y)_i` times `R_i^T`,
-/// rounded once.
+/// residual `[D3]`, each entry a compensated sum of the double-double `(Q Y)_i` times `R_i^T`
+/// (the high parts' products exact, the low parts' rounded: second order), rounded once.
+/// Neither is part of a bound (any multipliers give one, `[D4]`).
 fn first_order_block(node: &[[Accumulator; 3]; 3], r: &Rotation) -> (Matrix3<f64>, Matrix3<f64>) {
     let m = r.matrix();
-    // (Q Y R^T)_ab +- (Q Y R^T)_ba, summed in one accumulator
-    let part = |a: usize, b: usize, sign: f64| {
+    // sum_c (Q Y)_xc R_yc for the pairs (x, y) with their signs, in one accumulator
+    let sum = |terms: &[(usize, usize, f64)]| {
         let mut s = Accumulator::default();
-        for c in 0..3 {
-            for (x, y, scale) in [(a, b, 1.0), (b, a, sign)] {
+        for &(x, y, sign) in terms {
+            for c in 0..3 {
                 let (hi, lo) = node[x][c].parts();
-                s.add_product(scale * hi, m[(y, c)]);
-                s.add_product(scale * lo, m[(y, c)]);
+                s.add_product(sign * hi, m[(y, c)]);
+                s.add_low(sign * lo * m[(y, c)]);
             }
         }
-        0.5 * s.value()
+        s.value()
     };
     // each entry once (the lower triangle mirrors the upper)
     let mut sym = Matrix3::zeros();
     let mut skew = Matrix3::zeros();
     for a in 0..3 {
-        sym[(a, a)] = part(a, a, 1.0);
+        sym[(a, a)] = sum(&[(a, a, 1.0)]);
         for b in a + 1..3 {
-            sym[(a, b)] = part(a, b, 1.0);
+            sym[(a, b)] = 0.5 * sum(&[(a, b, 1.0), (b, a, 1.0)]);
             sym[(b, a)] = sym[(a, b)];
-            skew[(a, b)] = part(a, b, -1.0);
+            skew[(a, b)] = 0.5 * sum(&[(a, b, 1.0), (b, a, -1.0)]);
             skew[(b, a)] = -skew[(a, b)];
         }
     }
