@@ -67,7 +67,7 @@ pub fn spanning_tree(problem: &MultipleProblem) -> Vec<Rotation> {
     }
     let edges = problem.edges();
     let adjacency = problem.adjacency();
-    let centre = central_node(n, &adjacency);
+    let centre = central_node(&adjacency);
     // Dijkstra from the centre with lengths 1 / w (ties by node index: deterministic)
     let mut dist = vec![f64::INFINITY; n];
     let mut via: Vec<Option<usize>> = vec![None; n];
@@ -128,25 +128,10 @@ impl Ord for TotalF64 {
 /// A central node of the component of node 0: breadth-first search from node 0 to the
 /// farthest node `a`, from `a` to the farthest node `b`, and the middle of that `a`-`b`
 /// path (hop counts; `O(m)`).
-fn central_node(n: usize, adjacency: &Adjacency) -> usize {
-    let bfs = |root: usize| -> (usize, Vec<usize>) {
-        let mut parent = vec![usize::MAX; n];
-        parent[root] = root;
-        let mut queue = std::collections::VecDeque::from([root]);
-        let mut last = root;
-        while let Some(u) = queue.pop_front() {
-            last = u;
-            for &(v, _) in adjacency.neighbours(u) {
-                if parent[v] == usize::MAX {
-                    parent[v] = u;
-                    queue.push_back(v);
-                }
-            }
-        }
-        (last, parent)
-    };
-    let (a, _) = bfs(0);
-    let (b, parent) = bfs(a);
+fn central_node(adjacency: &Adjacency) -> usize {
+    let a = adjacency.breadth_first(0).last;
+    let far = adjacency.breadth_first(a);
+    let (b, parent) = (far.last, far.parent);
     let mut path = vec![b];
     let mut u = b;
     while u != a {

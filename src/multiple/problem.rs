@@ -37,6 +37,43 @@ impl Adjacency {
     pub(crate) fn neighbours(&self, u: usize) -> &[(usize, usize)] {
         &self.entries[self.start[u]..self.start[u + 1]]
     }
+
+    /// Breadth-first search from `root` over its component (`O(n + m)`).
+    pub(crate) fn breadth_first(&self, root: usize) -> BreadthFirst {
+        let n = self.start.len() - 1;
+        let mut parent = vec![usize::MAX; n];
+        let mut depth = vec![usize::MAX; n];
+        parent[root] = root;
+        depth[root] = 0;
+        let mut queue = std::collections::VecDeque::from([root]);
+        let mut last = root;
+        while let Some(u) = queue.pop_front() {
+            last = u;
+            for &(v, _) in self.neighbours(u) {
+                if parent[v] == usize::MAX {
+                    parent[v] = u;
+                    depth[v] = depth[u] + 1;
+                    queue.push_back(v);
+                }
+            }
+        }
+        BreadthFirst {
+            last,
+            parent,
+            depth,
+        }
+    }
+}
+
+/// A breadth-first search ([`Adjacency::breadth_first`]): `usize::MAX` marks the nodes outside
+/// the root's component.
+pub(crate) struct BreadthFirst {
+    /// The last node reached: one of the farthest from the root.
+    pub last: usize,
+    /// Each reached node's parent (the root its own).
+    pub parent: Vec<usize>,
+    /// Each reached node's hop count from the root.
+    pub depth: Vec<usize>,
 }
 
 impl Edge {

@@ -372,7 +372,7 @@ impl Check<'_> {
     pub fn bound_from_mu(&self, mu: f64, verification: Proof) -> VerifiedBound {
         VerifiedBound {
             lower_bound: self.trace_bound().at_mu(mu),
-            trace: self.lambdas.iter().map(|l| l.trace()).sum(),
+            trace: self.trace_bound().trace(),
             verified_min_eigenvalue: mu,
             verification,
             shift: None,

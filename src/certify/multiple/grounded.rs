@@ -11,10 +11,12 @@ use crate::certify::log::{Prediction, Refusal};
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Plan, Rung};
 use crate::error::{Error, Result};
-use crate::linalg::lanczos::smallest_ritz_value;
+use crate::linalg::two_pass_lanczos::smallest_ritz_value;
 use crate::linalg::{Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme};
 use faer::sparse::{SparseColMat, Triplet};
 use nalgebra::Matrix3;
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
 
 /// The grounded rung: its analysis of `S_{-g}` (made when planned) and the ground.
 #[derive(Default)]
@@ -229,23 +231,16 @@ const RITZ_TEST_STEPS: usize = 30;
 /// An upper estimate of `lambda_min(S_{-g})`: the smallest Ritz value of
 /// [`RITZ_TEST_STEPS`] plain Lanczos steps on `S` with the ground's block masked out (the Krylov
 /// space stays in the vectors that vanish there, where `S` acts as `S_{-g}`), plus
-/// `1e-10 ||S||_inf` for rounding ([`smallest_ritz_value`]). 3 ms on sphere2500.
+/// `1e-10 ||S||_inf` for rounding ([`smallest_ritz_value`]). 2.7 ms on sphere2500.
 fn ritz_upper(cx: &Check<'_>, ground: usize) -> Option<f64> {
     let n3 = cx.s.nrows();
     if n3 <= 6 {
         return None;
     }
     let block = 3 * ground..3 * ground + 3;
-    // a seeded pseudo-random start (xorshift), zero on the ground's block
-    let mut state = cx.settings.dual.lanczos.seed | 1;
-    let mut start: Vec<f64> = (0..n3)
-        .map(|_| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        })
-        .collect();
+    // a seeded random start, zero on the ground's block
+    let mut rng = StdRng::seed_from_u64(cx.settings.dual.lanczos.seed);
+    let mut start: Vec<f64> = (0..n3).map(|_| rng.random::<f64>() - 0.5).collect();
     start[block.clone()].fill(0.0);
     let s = cx.s.as_ref();
     let op = |x: &[f64], y: &mut [f64]| {
@@ -253,7 +248,8 @@ fn ritz_upper(cx: &Check<'_>, ground: usize) -> Option<f64> {
         y[block.clone()].fill(0.0);
     };
     cx.notes().lanczos_iterations += RITZ_TEST_STEPS;
-    smallest_ritz_value(n3, op, RITZ_TEST_STEPS.min(n3 - 3), &start).map(|v| v + 1e-10 * cx.norm)
+    smallest_ritz_value(op, RITZ_TEST_STEPS.min(n3 - 3), cx.norm, &start)
+        .map(|v| v + 1e-10 * cx.norm)
 }
 
 /// The symbolic analysis of `S_{-g}` within the budget, and its prediction (a few

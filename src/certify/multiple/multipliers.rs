@@ -423,6 +423,11 @@ pub(super) struct TraceBound {
 }
 
 impl TraceBound {
+    /// `sum tr(Lambda_i)`, rounded.
+    pub(super) fn trace(&self) -> f64 {
+        self.trace
+    }
+
     /// The shared terms of `lambdas` for `problem`.
     pub(super) fn new(problem: &MultipleProblem, lambdas: &[Matrix3<f64>]) -> Self {
         TraceBound {

@@ -13,7 +13,6 @@
 
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
-use std::collections::VecDeque;
 
 /// The chance of proving given to a comparison forecast to fail (the rungs forecast to work
 /// run first; it still runs when they do not prove).
@@ -26,17 +25,25 @@ pub(crate) fn forecast_fails(problem: &MultipleProblem, rotations: &[Rotation]) 
     if n < 3 || rotations.len() != n {
         return false;
     }
-    let adjacency = adjacency(problem);
-    let far = farthest(&adjacency, 0);
-    let mut x = distances(&adjacency, far);
+    let adjacency = problem.adjacency();
+    let far = adjacency.breadth_first(0).last;
+    let depth = adjacency.breadth_first(far).depth;
+    // hop counts from a peripheral node (unreached nodes at 0), centred
+    let mut x: Vec<f64> = depth
+        .iter()
+        .map(|&d| if d == usize::MAX { 0.0 } else { d as f64 })
+        .collect();
     let mean = x.iter().sum::<f64>() / n as f64;
     x.iter_mut().for_each(|v| *v -= mean);
     // a = 1^T M 1, b = 1^T M x, c = x^T M x for M = L' - diag(charges)
     let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
-    for e in problem.edges() {
-        let gram = rotations[e.j].matrix() * rotations[e.i].matrix().transpose();
-        let cos = ((e.rotation.matrix().dot(&gram) - 1.0) / 2.0).clamp(-1.0, 1.0);
-        let charge = e.weight * (1.0 - cos * cos);
+    for (e, theta) in problem
+        .edges()
+        .iter()
+        .zip(problem.residual_angles(rotations))
+    {
+        let cos = theta.cos();
+        let charge = e.weight * theta.sin().powi(2);
         let kept = e.weight * (cos - 0.5);
         let (xi, xj) = (x[e.i], x[e.j]);
         a -= 2.0 * charge;
@@ -44,39 +51,4 @@ pub(crate) fn forecast_fails(problem: &MultipleProblem, rotations: &[Rotation]) 
         c += kept * (xi - xj) * (xi - xj) - charge * (xi * xi + xj * xj);
     }
     a < 0.0 && c < 0.0 && a * c > b * b
-}
-
-fn adjacency(problem: &MultipleProblem) -> Vec<Vec<usize>> {
-    let mut adjacency = vec![Vec::new(); problem.num_rotations()];
-    for e in problem.edges() {
-        adjacency[e.i].push(e.j);
-        adjacency[e.j].push(e.i);
-    }
-    adjacency
-}
-
-/// Breadth-first distances from `source` (unreached nodes: 0).
-fn distances(adjacency: &[Vec<usize>], source: usize) -> Vec<f64> {
-    let mut d = vec![f64::NAN; adjacency.len()];
-    d[source] = 0.0;
-    let mut queue = VecDeque::from([source]);
-    while let Some(u) = queue.pop_front() {
-        for &v in &adjacency[u] {
-            if d[v].is_nan() {
-                d[v] = d[u] + 1.0;
-                queue.push_back(v);
-            }
-        }
-    }
-    d.iter()
-        .map(|v| if v.is_nan() { 0.0 } else { *v })
-        .collect()
-}
-
-/// The node farthest from `source` (a peripheral node, for a smooth distance vector).
-fn farthest(adjacency: &[Vec<usize>], source: usize) -> usize {
-    let d = distances(adjacency, source);
-    (0..d.len())
-        .max_by(|&p, &q| d[p].total_cmp(&d[q]))
-        .unwrap_or(source)
 }
