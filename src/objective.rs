@@ -130,7 +130,7 @@ impl Objective {
     };
 
     /// `Objective { metric, loss }`.
-    pub fn new(metric: Metric, loss: Loss) -> Self {
+    pub const fn new(metric: Metric, loss: Loss) -> Self {
         Objective { metric, loss }
     }
 

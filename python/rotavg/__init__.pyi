@@ -174,6 +174,8 @@ class Result:
     @property
     def certificate(self) -> Optional[Certificate]: ...
     @property
+    def verdict(self) -> Optional[str]: ...
+    @property
     def accuracy(self) -> Optional[Accuracy]: ...
     @property
     def node_ids(self) -> Optional[npt.NDArray[np.uint64]]: ...
@@ -250,7 +252,7 @@ def average_multiple(
     j: npt.ArrayLike,
     rel: _Rotations,
     weights: Optional[npt.ArrayLike] = None,
-    loss: str = "chordal",
+    loss: str = "auto",
     certify: str = "auto",
     *,
     loss_threshold: float = 5.0,
@@ -272,7 +274,7 @@ def average_multiple(
     j: None = None,
     rel: None = None,
     weights: None = None,
-    loss: str = "chordal",
+    loss: str = "auto",
     certify: str = "auto",
     *,
     loss_threshold: float = 5.0,

@@ -392,14 +392,19 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     i, j: ``(M,)`` integer arrays of node indices in ``0..n``.
 ///     rel: ``(M, 3, 3)`` relative rotations with ``rel[k] @ R_i = R_j``.
 ///     weights: ``(M,)`` positive edge weights (default all 1).
-///     loss: ``"chordal"`` (L2, certified), ``"geodesic"`` (L2), ``"l1"``, ``"huber"``,
-///         ``"cauchy"`` (the last four on the residual angle; no certificate of their cost:
-///         for ``"l1"``, ``"huber"`` and ``"cauchy"``, ``to_dict()["robust"]`` has the inlier
-///         counts and residual quantiles, and unless ``certify="none"`` the certificate of the
-///         chordal L2 problem on the inlier graph, ``["robust"]["inlier_graph"]["certificate"]``).
+///     loss: ``"auto"`` (default, as the command line: ``"chordal"`` unless the least-squares
+///         residuals show outliers, then ``"cauchy"``; ``to_dict()["pipeline"]["loss_choice"]``
+///         says which and why), ``"chordal"`` (L2, certified), ``"geodesic"`` (L2), ``"l1"``,
+///         ``"huber"``, ``"cauchy"`` (the last four on the residual angle; no certificate of
+///         their cost: for ``"l1"``, ``"huber"`` and ``"cauchy"``, ``to_dict()["robust"]`` has
+///         the inlier counts and residual quantiles, and unless ``certify="none"`` the
+///         certificate of the chordal L2 problem on the inlier graph,
+///         ``["robust"]["inlier_graph"]["certificate"]``). ``result.verdict`` and
+///         ``to_dict()["verdict"]`` name the problem certified.
 ///     certify: ``"auto"``, ``"dual"``, ``"sdp"``, ``"staircase"`` or ``"none"``.
-///     loss_threshold: Huber threshold / Cauchy scale in degrees, and the inlier threshold (an
-///         edge is an inlier iff its residual is at most this many degrees).
+///     loss_threshold: Huber threshold / Cauchy scale in degrees (also ``"auto"``'s), and the
+///         inlier threshold (an edge is an inlier iff its residual is at most this many
+///         degrees).
 ///     init: optional ``(n, 3, 3)`` initial estimate (default: spectral initialisation).
 ///     max_memory: the certificate's memory budget per factorisation, bytes (default 4 GiB).
 ///     max_seconds: its time budget, seconds (default 600; ``None``: no limit). A proof that
@@ -430,7 +435,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
 ///         bad weights, unknown names. rotavg.DisconnectedError: a disconnected graph.
 #[pyfunction]
-#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="chordal", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None))]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None))]
 #[allow(clippy::too_many_arguments)]
 fn average_multiple_py(
     py: Python<'_>,
@@ -459,7 +464,8 @@ fn average_multiple_py(
         randomized_seed,
     )?;
     let graph = GraphInput::copy(n, i, j, rel, weights, information)?;
-    let objective = parse_named::<MultipleLoss>(loss, "loss")?.objective(loss_threshold);
+    let loss = parse_named::<MultipleLoss>(loss, "loss")?;
+    let objective = loss.objective(loss_threshold);
     let mode: CertifyMode = parse_named(certify, "certify")?;
     let init = optional_matrices(init, "init")?;
     let truth = optional_matrices(ground_truth, "ground_truth")?;
@@ -476,6 +482,7 @@ fn average_multiple_py(
                 // as the command line: the L1 inlier threshold is --loss-threshold
                 inlier_threshold_deg: (objective.loss == rotavg::Loss::L1)
                     .then_some(loss_threshold),
+                robust_on_outliers: loss.robust_on_outliers(loss_threshold),
                 ..Default::default()
             },
             certify: CertifySettings { mode, ..budget },

@@ -230,7 +230,8 @@ impl Report {
 /// conjugate: the chordal L2 cost that the certificate bounds; None for single averaging),
 /// ``num_rotations``, ``num_measurements``, ``solver``
 /// (a ``SolverReport``; None for ``certify_*``, which never change the estimate),
-/// ``certificate`` (a ``Certificate``, or None when none was computed), ``accuracy`` (an
+/// ``certificate`` (a ``Certificate``, or None when none was computed), ``verdict`` (the
+/// certificate's, or a robust run's inlier graph's; None without one), ``accuracy`` (an
 /// ``Accuracy`` against the ground truth given to ``average_multiple``, else None) and
 /// ``node_ids`` (``average_multiple``: the file's id of each node of the estimate, uint64;
 /// else None).
@@ -264,6 +265,11 @@ pub struct RunResult {
     /// The certificate, or None when none was computed.
     #[pyo3(get)]
     certificate: Option<Py<Certificate>>,
+    /// The run's verdict (``"certified"``, ``"gap_reported"``, ``"inconclusive"``), or None:
+    /// the certificate's, or for a robust ``average_multiple`` (whose cost has none) its
+    /// inlier graph's; ``to_dict()["verdict"]`` names the problem it is about.
+    #[pyo3(get)]
+    verdict: Option<String>,
     /// The accuracy against ground truth (``average_multiple`` with ground truth), or None.
     #[pyo3(get)]
     accuracy: Option<Py<Accuracy>>,
@@ -355,9 +361,15 @@ impl RunResult {
             ),
             _ => (None, None),
         };
+        let verdict = match &report {
+            Report::Multiple(r) => r.verdict(),
+            _ => certificate.as_ref().map(|c| c.get().inner.verdict),
+        }
+        .map(|v| v.to_string());
         Ok(RunResult {
             accuracy,
             node_ids,
+            verdict,
             problem: problem.to_string(),
             estimate: estimate.unbind(),
             cost,

@@ -116,7 +116,18 @@ def test_robust_losses_report_inliers_and_certify_the_inlier_graph(rng):
         assert cert["certified_problem"]["num_edges"] == 147
     d = rotavg.average_multiple(30, i, j, rel, loss="huber", certify="none").to_dict()
     assert d["robust"]["inlier_graph"] is None and d["robust"]["num_outliers"] == 3
-    assert rotavg.average_multiple(30, i, j, rel).to_dict()["robust"] is None
+    # the default loss follows the data: the residuals of least squares show the three outliers,
+    # so the run is the Cauchy run, and its verdict is the inlier graph's, named
+    res = rotavg.average_multiple(30, i, j, rel)
+    d = res.to_dict()
+    assert d["loss"] == "cauchy" and d["pipeline"]["loss_choice"]["diagnosis"]["suspected"] >= 3
+    assert np.array_equal(res.estimate, rotavg.average_multiple(30, i, j, rel, loss="cauchy").estimate)
+    assert res.certificate is None and res.verdict == "certified"
+    assert d["verdict"]["problem"]["kind"] == "chordal_l2_inliers"
+    assert d["verdict"]["estimate"] == "inlier_graph"
+    least_squares = rotavg.average_multiple(30, i, j, rel, loss="chordal")
+    assert least_squares.to_dict()["robust"] is None and least_squares.verdict == "certified"
+    assert least_squares.to_dict()["verdict"]["problem"]["kind"] == "chordal_l2"
     d = rotavg.average_multiple(30, i, j, rel, loss="l1", loss_threshold=2.0).to_dict()
     assert d["robust"]["inlier_threshold_deg"] == 2.0  # as `rotavg multiple --loss-threshold 2`
 

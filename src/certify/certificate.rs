@@ -42,6 +42,10 @@ pub enum CertifiedProblemKind {
     /// connected component when they do not connect). The claim is about that problem only,
     /// never about the robust cost on all edges.
     ChordalL2Inliers,
+    /// Chordal L2 multiple rotation averaging on every edge of the problem solved (with its
+    /// information matrices when it has them). Named in a report's verdict; never set on a
+    /// certificate (absent there means this).
+    ChordalL2,
 }
 
 /// The problem a certificate is about, with its size against the whole input's.
@@ -66,6 +70,11 @@ impl fmt::Display for CertifiedProblem {
                 f,
                 "the chordal L2 problem on the inlier graph ({} of {} edges, {} of {} nodes)",
                 self.num_edges, self.total_edges, self.num_nodes, self.total_nodes
+            ),
+            CertifiedProblemKind::ChordalL2 => write!(
+                f,
+                "the chordal L2 problem on all {} edges ({} nodes)",
+                self.num_edges, self.num_nodes
             ),
         }
     }

@@ -8,7 +8,7 @@
 //! |---|---|
 //! | [`Metric`] | `chordal`, `quaternion`, `geodesic` |
 //! | [`LossKind`] (a [`Loss`] without its threshold) | `l2`, `l1`, `huber`, `cauchy` |
-//! | [`MultipleLoss`] (the objectives of `rotavg multiple --loss`) | `chordal`, `geodesic`, `l1`, `huber`, `cauchy` |
+//! | [`MultipleLoss`] (the objectives of `rotavg multiple --loss`) | `auto`, `chordal`, `geodesic`, `l1`, `huber`, `cauchy` |
 //! | [`CertifyMode`] | `auto`, `theory`, `dual`, `sdp`, `staircase`, `none` |
 //! | [`GraphFormat`] | `auto`, `g2o`, `1dsfm`, `json`, `colmap` |
 //! | [`OutputFormat`] | `auto`, `json`, `g2o`, `colmap` |
@@ -342,8 +342,11 @@ impl FromStr for LossKind {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MultipleLoss {
-    /// Chordal L2 (certifiable).
+    /// The data decide (the default): chordal L2, unless its residuals show outliers; then
+    /// Cauchy, with its inlier graph certified ([`MultipleLoss::robust_on_outliers`]).
     #[default]
+    Auto,
+    /// Chordal L2 (certifiable).
     Chordal,
     /// Geodesic L2.
     Geodesic,
@@ -372,7 +375,7 @@ impl MultipleLoss {
             Objective::new(Metric::Geodesic, kind.with_threshold_deg(threshold_deg))
         };
         match self {
-            MultipleLoss::Chordal => Objective::CHORDAL_L2,
+            MultipleLoss::Auto | MultipleLoss::Chordal => Objective::CHORDAL_L2,
             MultipleLoss::Geodesic => geodesic(LossKind::L2),
             MultipleLoss::L1 => geodesic(LossKind::L1),
             MultipleLoss::Huber => geodesic(LossKind::Huber),
@@ -393,9 +396,27 @@ impl MultipleLoss {
     pub fn inlier_threshold_deg(self, threshold_deg: f64, given: Option<f64>) -> Option<f64> {
         match self {
             MultipleLoss::L1 => Some(given.unwrap_or(threshold_deg)),
-            MultipleLoss::Huber | MultipleLoss::Cauchy => given,
+            MultipleLoss::Auto | MultipleLoss::Huber | MultipleLoss::Cauchy => given,
             MultipleLoss::Chordal | MultipleLoss::Geodesic => None,
         }
+    }
+
+    /// The robust objective `auto` switches to when the least-squares residuals show outliers
+    /// ([`MultipleSettings::robust_on_outliers`](crate::multiple::MultipleSettings::robust_on_outliers)):
+    /// Cauchy with scale `threshold_deg`; none for the other names (their loss is fixed).
+    ///
+    /// ```
+    /// use rotavg::io::names::MultipleLoss;
+    /// use rotavg::{Loss, Metric, Objective};
+    /// assert_eq!(MultipleLoss::Auto.objective(5.0), Objective::CHORDAL_L2); // solved first
+    /// assert_eq!(
+    ///     MultipleLoss::Auto.robust_on_outliers(5.0),
+    ///     Some(Objective::new(Metric::Geodesic, Loss::Cauchy { scale_deg: 5.0 }))
+    /// );
+    /// assert_eq!(MultipleLoss::Chordal.robust_on_outliers(5.0), None);
+    /// ```
+    pub fn robust_on_outliers(self, threshold_deg: f64) -> Option<Objective> {
+        (self == MultipleLoss::Auto).then(|| MultipleLoss::Cauchy.objective(threshold_deg))
     }
 
     /// The name of an objective in this vocabulary (`chordal`, `geodesic`, `l1`, `huber`,
@@ -419,6 +440,7 @@ impl MultipleLoss {
 impl Choice for MultipleLoss {
     fn choices() -> Vec<Self> {
         vec![
+            MultipleLoss::Auto,
             MultipleLoss::Chordal,
             MultipleLoss::Geodesic,
             MultipleLoss::L1,
@@ -428,6 +450,7 @@ impl Choice for MultipleLoss {
     }
     fn name(&self) -> &'static str {
         match self {
+            MultipleLoss::Auto => "auto",
             MultipleLoss::Chordal => "chordal",
             MultipleLoss::Geodesic => "geodesic",
             MultipleLoss::L1 => "l1",
@@ -437,6 +460,10 @@ impl Choice for MultipleLoss {
     }
     fn help(&self) -> &'static str {
         match self {
+            MultipleLoss::Auto => {
+                "Chordal L2, unless its residuals show outliers: then cauchy, and its inlier \
+                 graph's chordal L2 problem certified"
+            }
             MultipleLoss::Chordal => "Chordal L2 (certifiable)",
             MultipleLoss::Geodesic => "Geodesic L2",
             MultipleLoss::L1 => "Geodesic L1",

@@ -365,6 +365,11 @@ impl fmt::Display for OutlierWarning {
 /// The smallest share of the edges (and count) flagged before [`suspected_outliers`] warns.
 const OUTLIER_SHARE: f64 = 0.01;
 
+/// Whether [`suspected_outliers`] judges `problem` at all: at least two edges per node.
+pub fn judges_residuals(problem: &MultipleProblem) -> bool {
+    problem.num_edges() >= 2 * problem.num_rotations()
+}
+
 /// [`OutlierWarning`] for `rotations` when at least 1 % (and 3) of the edges have a residual
 /// angle (anisotropic: Mahalanobis angle, [`MultipleProblem::objective_angles`]) above 5 degrees and a weighted residual `sqrt(w) theta` above 6 times the median
 /// weighted residual (weights are informations, so `sqrt(w) theta` is in units of each edge's own
@@ -378,7 +383,7 @@ pub fn suspected_outliers(
     problem: &MultipleProblem,
     rotations: &[Rotation],
 ) -> Option<OutlierWarning> {
-    if problem.num_edges() < 2 * problem.num_rotations() {
+    if !judges_residuals(problem) {
         return None;
     }
     let theta = problem.objective_angles(rotations);

@@ -87,6 +87,13 @@ pub struct MultipleSettings {
     /// ([`crate::multiple::robust::inlier_threshold_deg`]). The solution's
     /// [`MultipleSolution::residuals`] and the inlier-graph certificate of the pipeline use it.
     pub inlier_threshold_deg: Option<f64>,
+    /// The rule `auto` of the pipeline ([`crate::pipeline::average_multiple`]; the command
+    /// line's and Python's default `--loss auto`): for a chordal L2 problem, when the
+    /// least-squares estimate's residuals show outliers
+    /// ([`suspected_outliers`](crate::multiple::robust::suspected_outliers)), solve this robust
+    /// objective instead and certify its inlier graph. `None` (default): the problem's
+    /// objective as given (least squares only warns). [`solve_multiple`] ignores it.
+    pub robust_on_outliers: Option<crate::objective::Objective>,
 }
 
 impl Default for MultipleSettings {
@@ -100,6 +107,7 @@ impl Default for MultipleSettings {
             step_tolerance: 1e-12,
             l1_epsilon: 1e-6,
             inlier_threshold_deg: None,
+            robust_on_outliers: None,
         }
     }
 }
@@ -144,6 +152,17 @@ impl MultipleSettings {
                 "inlier_threshold_deg",
                 format!("must be a finite angle in (0, 180] degrees, got {t}"),
             );
+        }
+        if let Some(o) = self.robust_on_outliers {
+            o.validate()?;
+            if o.loss == crate::objective::Loss::L2 || o.metric != crate::so3::Metric::Geodesic {
+                return bad(
+                    "robust_on_outliers",
+                    format!(
+                        "must be a robust loss of the geodesic angle (l1, huber, cauchy), got {o}"
+                    ),
+                );
+            }
         }
         Ok(())
     }

@@ -16,11 +16,13 @@
 //! [`simultaneous`] estimates the hand-eye rotation jointly with two view graphs `[H12]`, certified by the trace-coupled relaxation `[H14]`.
 
 pub mod conjugate;
+pub mod loss_choice;
 pub mod multiple;
 pub mod simultaneous;
 pub mod single;
 
 pub use conjugate::average_conjugate;
+pub use loss_choice::LossChoice;
 pub use multiple::{InlierGraph, average_multiple, certify_inlier_graph};
 pub use simultaneous::average_simultaneous;
 pub use single::average_single;
@@ -106,6 +108,11 @@ pub struct PipelineDetails {
     /// absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub outliers: Option<crate::multiple::robust::OutlierWarning>,
+    /// Multiple averaging under the rule `auto`
+    /// ([`MultipleSettings::robust_on_outliers`](crate::multiple::MultipleSettings::robust_on_outliers)):
+    /// which loss the data chose, and why. Omitted from JSON when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loss_choice: Option<LossChoice>,
 }
 
 /// Write `value` in the form `f` asks for: alternate (`{:#}`, verbose) or not.
@@ -194,6 +201,17 @@ pub(crate) fn average<P: PipelineProblem>(
     settings: &AverageSettings<P::Settings>,
 ) -> Result<Averaged<P::Solution>> {
     let start = Instant::now();
+    let skip = validate(problem, settings)?;
+    let solution = problem.solve(&settings.solve)?;
+    certify_solved(problem, solution, settings, skip, start)
+}
+
+/// Validate every setting of [`average`] for `problem`; why no certificate will be computed
+/// (mode `none`, or an objective without one under mode `auto`), if so.
+pub(crate) fn validate<P: PipelineProblem>(
+    problem: &P,
+    settings: &AverageSettings<P::Settings>,
+) -> Result<Option<String>> {
     P::validate(&settings.solve)?;
     settings.certify.validate()?;
     let mode = settings.certify.mode;
@@ -208,12 +226,22 @@ pub(crate) fn average<P: PipelineProblem>(
             reason: format!("certify mode `{mode}` was requested, but {why}"),
         });
     }
-    let mut solution = problem.solve(&settings.solve)?;
+    Ok(skip.or_else(|| (mode == CertifyMode::None).then(|| "certify mode none".into())))
+}
+
+/// The second half of [`average`]: certify `solution` (solved from `start`) unless `skip`
+/// says why not, and adopt an improvement.
+pub(crate) fn certify_solved<P: PipelineProblem>(
+    problem: &P,
+    mut solution: P::Solution,
+    settings: &AverageSettings<P::Settings>,
+    skip: Option<String>,
+    start: Instant,
+) -> Result<Averaged<P::Solution>> {
     let mut details = PipelineDetails {
         solve_seconds: solution.report_mut().seconds,
         ..Default::default()
     };
-    let skip = skip.or_else(|| (mode == CertifyMode::None).then(|| "certify mode none".into()));
     if let Some(why) = skip {
         details.skipped_reason = Some(why);
         details.total_seconds = start.elapsed().as_secs_f64();

@@ -97,6 +97,11 @@ pub fn average_multiple(
 ) -> Result<Averaged<MultipleSolution>> {
     let objective = problem.objective();
     let mode = settings.certify.mode;
+    if let Some(robust) = settings.solve.robust_on_outliers
+        && objective.is_chordal_l2()
+    {
+        return super::loss_choice::average_by_residuals(problem, settings, robust);
+    }
     if inlier_threshold_deg(&objective, &settings.solve).is_none() {
         // least squares: say when the residuals look like outliers (a robust loss is then the
         // better tool)

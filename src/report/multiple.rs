@@ -1,8 +1,8 @@
 //! The report of `rotavg multiple`.
 
 use super::{ProblemJson, ProblemKind, Rows, nested, write_methods};
-use crate::certify::CertifiedProblem;
 use crate::certify::{Certificate, Verdict};
+use crate::certify::{CertifiedProblem, CertifiedProblemKind};
 use crate::error::Result;
 use crate::io::detect::{ComponentSelection, GraphFormat};
 use crate::io::input::MultipleInput;
@@ -25,7 +25,8 @@ use std::fmt;
 /// `loss` ([`MultipleLoss::name_of`]), `cost` (under the loss), `chordal_cost`, `estimate`
 /// (row-major, `R_0 = I`), `node_ids` (the file id of each node of the estimate), `node_names`
 /// (only when the format names nodes: COLMAP image names), `solver`,
-/// `certificate` (or null), `pipeline` ([`PipelineDetails`]: certification methods, times),
+/// `certificate` (or null), `verdict` ([`VerdictOf`]: the verdict with the problem and estimate
+/// it is about, or null), `pipeline` ([`PipelineDetails`]: certification methods, times),
 /// `accuracy` (against ground truth, or null), `other_components` (sizes of the components not
 /// solved), `format`, `robust` (null for the L2 losses).
 ///
@@ -38,7 +39,9 @@ use std::fmt;
 /// `chordal_cost` (of the refined estimate), `solver`, `certificate` (its `certified_problem`
 /// says which problem it is about), `accuracy` of the refined estimate, `estimate_output` (the
 /// refined estimate's file, or null) and `pipeline`. The top-level `certificate` stays null:
-/// the robust cost has no certificate.
+/// the robust cost has no certificate; `verdict` is the inlier graph's. Under the rule `auto`
+/// (`--loss auto`) `pipeline.loss_choice` says which loss the data chose
+/// ([`crate::pipeline::LossChoice`]).
 ///
 /// Text: the input line, warnings, the solution and certificate, the bounding methods, the
 /// residuals and the inlier graph's certificate (robust losses), the accuracy, and the files
@@ -149,15 +152,64 @@ impl MultipleReport {
         Ok(())
     }
 
-    /// The certificate's verdict, when one was computed.
+    /// The verdict of the run, when a certificate was computed: the returned estimate's, or
+    /// for a robust loss (which has none) its inlier graph's ([`Self::verdict_of`]).
     pub fn verdict(&self) -> Option<Verdict> {
-        self.result.certificate.as_ref().map(|c| c.verdict)
+        self.verdict_of().map(|v| v.verdict)
+    }
+
+    /// The verdict with the problem and estimate it is about.
+    pub fn verdict_of(&self) -> Option<VerdictOf> {
+        let whole = CertifiedProblem {
+            kind: CertifiedProblemKind::ChordalL2,
+            num_nodes: self.result.solution.rotations.len(),
+            total_nodes: self.result.solution.rotations.len(),
+            num_edges: self.num_edges,
+            total_edges: self.num_edges,
+        };
+        if let Some(c) = &self.result.certificate {
+            return Some(VerdictOf {
+                verdict: c.verdict,
+                estimate: "returned",
+                problem: c.certified_problem.unwrap_or(whole),
+            });
+        }
+        let g = self.result.details.inlier_graph.as_deref()?;
+        let c = g.certificate.as_ref()?;
+        Some(VerdictOf {
+            verdict: c.verdict,
+            estimate: "inlier_graph",
+            problem: c.certified_problem.unwrap_or(g.problem),
+        })
+    }
+}
+
+/// A run's verdict and what it is about (`verdict` of the JSON report).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct VerdictOf {
+    /// The certificate's verdict.
+    pub verdict: Verdict,
+    /// The estimate certified: `"returned"` (`estimate`), or `"inlier_graph"` (the robust
+    /// run's refined inlier-graph estimate, `--inlier-output`).
+    pub estimate: &'static str,
+    /// The problem certified (kind and size against the input's).
+    pub problem: CertifiedProblem,
+}
+
+impl fmt::Display for VerdictOf {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "verdict: {} for {}", self.verdict, self.problem)?;
+        if self.estimate == "inlier_graph" {
+            write!(f, ", at its refined estimate (not the returned robust one)")?;
+        }
+        Ok(())
     }
 }
 
 #[derive(Serialize)]
 struct Json<'a> {
     loss: String,
+    verdict: Option<VerdictOf>,
     cost: f64,
     chordal_cost: f64,
     estimate: Rows<'a>,
@@ -234,6 +286,7 @@ impl Serialize for MultipleReport {
         };
         let rest = Json {
             loss: MultipleLoss::name_of(&s.objective),
+            verdict: self.verdict_of(),
             cost: s.cost,
             chordal_cost: s.chordal_cost,
             estimate: Rows::Many(&s.rotations),
@@ -280,6 +333,9 @@ impl MultipleReport {
         for w in &self.warnings {
             write!(f, "\nwarning: {w}")?;
         }
+        if let Some(choice) = &self.result.details.loss_choice {
+            write!(f, "\n{choice}")?;
+        }
         if let Some(s) = &self.information {
             write!(f, "\n{s}")?;
             let objective = self.result.solution.objective;
@@ -296,6 +352,9 @@ impl MultipleReport {
 
     /// Which estimate is reported, and the files written.
     fn fmt_outputs(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(v) = self.verdict_of() {
+            write!(f, "\n{v}")?;
+        }
         let robust = &self.result.solution;
         if robust.residuals.is_some() {
             write!(

@@ -639,6 +639,8 @@ mod cli {
             let args = [
                 "multiple",
                 &input,
+                "--loss",
+                "chordal",
                 "--init-method",
                 "tree",
                 "--json",

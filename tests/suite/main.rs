@@ -56,6 +56,7 @@ mod io_shared_data;
 #[cfg(feature = "cli")]
 mod io_streaming;
 mod layers;
+mod loss_auto;
 mod multiple_solvers;
 mod pipeline_multiple;
 #[cfg(all(feature = "cli", feature = "plot"))]

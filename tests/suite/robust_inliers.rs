@@ -389,7 +389,14 @@ fn command_line_writes_the_edges_and_the_inlier_estimate() {
     assert_eq!(e["edges"].as_array().unwrap().len(), 53);
     assert_eq!(e["edges"][0]["inlier"], true);
     // the flags need a robust loss; the inlier estimate needs the inlier graph
-    let out = run(&["multiple", egs, "--edges-output", csv.to_str().unwrap()]);
+    let out = run(&[
+        "multiple",
+        egs,
+        "--loss",
+        "chordal",
+        "--edges-output",
+        csv.to_str().unwrap(),
+    ]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("needs a robust loss"));
     let out = run(&[

@@ -19,23 +19,24 @@ pub struct Args {
     pub input: String,
     #[command(flatten)]
     pub graph: GraphArgs,
-    /// Loss.
-    #[arg(long, value_parser = choice(MultipleLoss::choices()), default_value_t = MultipleLoss::Chordal)]
+    /// Loss (`auto`: least squares unless its residuals show outliers; then cauchy, and the
+    /// chordal L2 problem on its inlier graph is the one certified).
+    #[arg(long, value_parser = choice(MultipleLoss::choices()), default_value_t = MultipleLoss::Auto)]
     pub loss: MultipleLoss,
-    /// Huber / Cauchy threshold in degrees (for L1: the inlier threshold unless
-    /// `--inlier-threshold` is given).
+    /// Huber / Cauchy threshold in degrees, also `auto`'s Cauchy scale (for L1: the inlier
+    /// threshold unless `--inlier-threshold` is given).
     #[arg(long, value_name = "DEG", default_value_t = 5.0)]
     pub loss_threshold: f64,
-    /// Robust losses (l1, huber, cauchy): an edge is an inlier iff its residual angle at the
+    /// Robust losses (l1, huber, cauchy; auto when it chooses cauchy): an edge is an inlier iff its residual angle at the
     /// robust estimate is at most DEG (default: `--loss-threshold`). The inlier graph's
     /// chordal L2 problem is refined and certified unless `--certify none`.
     #[arg(long, value_name = "DEG")]
     pub inlier_threshold: Option<f64>,
-    /// Robust losses: write the per-edge residuals, one row per edge (`i j residual_deg weight
+    /// Robust losses (auto: when it chooses cauchy): write the per-edge residuals, one row per edge (`i j residual_deg weight
     /// inlier`, nodes by their file ids): JSON when FILE ends in `.json`, otherwise CSV.
     #[arg(long, value_name = "FILE")]
     pub edges_output: Option<String>,
-    /// Robust losses: write the inlier graph's refined (chordal L2) estimate as `--output` (which
+    /// Robust losses (auto: when it chooses cauchy): write the inlier graph's refined (chordal L2) estimate as `--output` (which
     /// writes the robust one, as printed) in `--output-format` (or from its path).
     #[arg(long, value_name = "FILE")]
     pub inlier_output: Option<String>,
@@ -106,6 +107,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
             inlier_threshold_deg: args
                 .loss
                 .inlier_threshold_deg(args.loss_threshold, args.inlier_threshold),
+            robust_on_outliers: args.loss.robust_on_outliers(args.loss_threshold),
             ..Default::default()
         },
         certify: args.graph.settings(&args.common, &args.plot),
@@ -124,9 +126,17 @@ pub fn run(args: &Args) -> Result<Outcome> {
         report.write_figure(path, &graph.problem)?;
     }
     report.output = args.output.clone();
-    report.edges_output = args.edges_output.clone();
+    let robust = report.result.solution.residuals.is_some();
+    report.edges_output = args.edges_output.clone().filter(|_| robust);
     if let Some(w) = &report.result.details.outliers {
         args.common.warn(&format!("{}: {w}", args.input));
+    }
+    if !robust && (args.edges_output.is_some() || args.inlier_output.is_some()) {
+        // `--loss auto` kept least squares: there is no robust solve to write
+        args.common.warn(
+            "--edges-output / --inlier-output not written: `--loss auto` kept least squares \
+             (no outliers); `--loss cauchy` forces the robust solve",
+        );
     }
     args.common.finish(&report, report.verdict())
 }

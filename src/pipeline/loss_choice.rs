@@ -1,0 +1,115 @@
+//! The loss follows the data (issue 37; `docs/reference/cli.md`, "The default loss"): multiple
+//! averaging under the rule `auto` solves least squares first and keeps it unless its residuals
+//! show outliers ([`suspected_outliers`]); then it solves the robust loss instead and certifies
+//! the chordal L2 problem on the robust estimate's inlier graph. `paper-notes/certificates.md`
+//! `[D17]` states what each verdict is about.
+
+use super::{AverageSettings, MultipleEstimate, average_multiple, certify_solved, validate};
+use crate::error::Result;
+use crate::multiple::robust::{OutlierWarning, judges_residuals, suspected_outliers};
+use crate::multiple::{MultipleProblem, MultipleSettings, solve_multiple};
+use crate::objective::Objective;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::time::Instant;
+
+/// How the rule `auto` ([`MultipleSettings::robust_on_outliers`]) chose the loss of a run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LossChoice {
+    /// The rule: `"auto"`.
+    pub rule: String,
+    /// The objective the returned estimate minimises: chordal L2, or `robust`.
+    pub chosen: Objective,
+    /// The robust objective the rule switches to when the diagnosis fires.
+    pub robust: Objective,
+    /// The outlier diagnosis at the least-squares estimate, when it fired (then `chosen` is
+    /// `robust`).
+    pub diagnosis: Option<OutlierWarning>,
+    /// Why, in words.
+    pub reason: String,
+    /// Chordal cost of the least-squares estimate that was judged.
+    pub least_squares_cost: f64,
+    /// Time of that least-squares solve, seconds (in the run's `total_seconds`; when the
+    /// robust loss was chosen, not in its `solve_seconds`).
+    pub least_squares_seconds: f64,
+}
+
+impl LossChoice {
+    /// Whether the robust loss was chosen.
+    pub fn is_robust(&self) -> bool {
+        self.diagnosis.is_some()
+    }
+}
+
+impl fmt::Display for LossChoice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.diagnosis {
+            Some(w) => write!(
+                f,
+                "loss: {} chose {} (the least-squares residuals show outliers: {} of {} edges \
+                 at {:.1} deg or more, median {:.2} deg); its inlier graph's chordal L2 problem \
+                 is the one certified; `--loss chordal` keeps least squares over all edges",
+                self.rule, self.chosen, w.suspected, w.num_edges, w.threshold_deg, w.median_deg
+            ),
+            None => write!(
+                f,
+                "loss: {} kept {} ({})",
+                self.rule, self.chosen, self.reason
+            ),
+        }
+    }
+}
+
+/// [`average_multiple`] under the rule `auto` for a chordal L2 `problem`: solve it; when
+/// [`suspected_outliers`] fires at its estimate, return `average_multiple` of the same problem
+/// with the objective `robust` (exactly what that loss gives on its own: the robust estimate,
+/// and unless the mode is `none` the certificate of its inlier graph), else certify the
+/// least-squares estimate. `details.loss_choice` records the choice and the diagnosis (not a
+/// warning: the rule acted on it; `details.outliers` stays empty).
+pub(super) fn average_by_residuals(
+    problem: &MultipleProblem,
+    settings: &AverageSettings<MultipleSettings>,
+    robust: Objective,
+) -> Result<MultipleEstimate> {
+    let start = Instant::now();
+    let skip = validate(problem, settings)?;
+    let least_squares = solve_multiple(problem, &settings.solve)?;
+    let mut choice = LossChoice {
+        rule: "auto".into(),
+        chosen: problem.objective(),
+        robust,
+        diagnosis: None,
+        reason: if judges_residuals(problem) {
+            "the least-squares residuals show no outliers".into()
+        } else {
+            "fewer than two edges per node: residuals cannot reveal outliers".into()
+        },
+        least_squares_cost: least_squares.chordal_cost,
+        least_squares_seconds: least_squares.report.seconds,
+    };
+    let Some(mut diagnosis) = suspected_outliers(problem, &least_squares.rotations) else {
+        let mut out = certify_solved(problem, least_squares, settings, skip, start)?;
+        out.details.loss_choice = Some(choice);
+        return Ok(out);
+    };
+    diagnosis.suggestion = format!(
+        "solved with the {} loss instead (the default `--loss auto`; `--loss chordal` keeps \
+         least squares over all edges)",
+        robust.loss.name()
+    );
+    choice.reason = "the least-squares residuals show outliers".into();
+    choice.diagnosis = Some(diagnosis);
+    let robust_problem = problem.clone().with_objective(robust)?;
+    let robust_settings = AverageSettings {
+        solve: MultipleSettings {
+            robust_on_outliers: None,
+            ..settings.solve.clone()
+        },
+        certify: settings.certify.clone(),
+    };
+    let mut out = average_multiple(&robust_problem, &robust_settings)?;
+    choice.chosen = robust;
+    out.details.loss_choice = Some(choice);
+    out.details.total_seconds = start.elapsed().as_secs_f64();
+    Ok(out)
+}

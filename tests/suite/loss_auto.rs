@@ -1,0 +1,257 @@
+//! The default loss follows the data (`--loss auto`, `MultipleSettings::robust_on_outliers`):
+//! on planted outliers it is exactly the Cauchy run (same estimate, the inlier graph's verdict)
+//! and as accurate as the best robust loss against the planted truth; without outliers, or on
+//! graphs too sparse to judge, it is exactly least squares; weight scaling never changes the
+//! choice; the command line names the problem its verdict is about.
+
+use rotavg::certify::{CertifiedProblemKind, CertifyMode, CertifySettings};
+use rotavg::multiple::synthetic::{SyntheticAnisotropic, SyntheticGraph};
+use rotavg::multiple::{MultipleProblem, MultipleSettings};
+use rotavg::objective::{Loss, Objective};
+use rotavg::pipeline::{AverageSettings, MultipleEstimate, average_multiple};
+use rotavg::{Metric, Rotation, Verdict};
+
+use crate::common;
+use common::{assert_success, gauge_errors, json_of, run, scale_weights};
+
+const CAUCHY: Objective = Objective::new(Metric::Geodesic, Loss::Cauchy { scale_deg: 5.0 });
+
+fn settings(auto: bool) -> AverageSettings<MultipleSettings> {
+    AverageSettings {
+        solve: MultipleSettings {
+            robust_on_outliers: auto.then_some(CAUCHY),
+            ..Default::default()
+        },
+        certify: CertifySettings::with_mode(CertifyMode::Auto),
+    }
+}
+
+fn run_auto(p: &MultipleProblem) -> MultipleEstimate {
+    average_multiple(p, &settings(true)).expect("the auto pipeline runs")
+}
+
+fn run_with(p: &MultipleProblem, objective: Objective) -> MultipleEstimate {
+    let p = p
+        .clone()
+        .with_objective(objective)
+        .expect("a loss of multiple");
+    average_multiple(&p, &settings(false)).expect("the pipeline runs")
+}
+
+fn median_error_deg(estimate: &[Rotation], truth: &[Rotation]) -> f64 {
+    let mut e = gauge_errors(estimate, truth);
+    e.sort_by(f64::total_cmp);
+    e[e.len() / 2].to_degrees()
+}
+
+/// 1DSfM-like: 2 degrees RMS noise, `outliers` of the edges uniformly random rotations.
+fn scene(outliers: f64, seed: u64) -> (MultipleProblem, Vec<Rotation>) {
+    SyntheticGraph {
+        num_rotations: 80,
+        num_edges: 1200,
+        noise_sigma: (2.0f64 / 3f64.sqrt()).to_radians(),
+        outlier_fraction: outliers,
+        seed,
+    }
+    .generate()
+}
+
+#[test]
+fn with_planted_outliers_auto_is_the_cauchy_run_and_as_accurate_as_the_best_robust_loss() {
+    for seed in [1, 2] {
+        let (p, truth) = scene(0.2, seed);
+        let auto = run_auto(&p);
+        let cauchy = run_with(&p, CAUCHY);
+        assert_eq!(
+            auto.solution.rotations, cauchy.solution.rotations,
+            "seed {seed}"
+        );
+        let choice = auto.details.loss_choice.as_ref().expect("the choice");
+        assert!(choice.is_robust() && choice.chosen == CAUCHY, "{choice}");
+        assert!(auto.details.outliers.is_none(), "acted on, not a warning");
+        assert!(
+            auto.certificate.is_none(),
+            "the cauchy cost has no certificate"
+        );
+        let graph = auto.details.inlier_graph.as_ref().expect("an inlier graph");
+        let c = graph.certificate.as_ref().expect("its certificate");
+        assert_eq!(c.verdict, Verdict::Certified, "{}", c.explanation);
+        let certified = c.certified_problem.expect("names its problem");
+        assert_eq!(certified.kind, CertifiedProblemKind::ChordalL2Inliers);
+        assert!(certified.num_edges < p.num_edges());
+        // judged against the planted truth, not against the code's own numbers
+        let e_auto = median_error_deg(&auto.solution.rotations, &truth);
+        let e_l2 = median_error_deg(
+            &run_with(&p, Objective::CHORDAL_L2).solution.rotations,
+            &truth,
+        );
+        let best = [
+            Loss::L1,
+            Loss::Huber { threshold_deg: 5.0 },
+            Loss::Cauchy { scale_deg: 5.0 },
+        ]
+        .into_iter()
+        .map(|l| {
+            let r = run_with(&p, Objective::new(Metric::Geodesic, l));
+            median_error_deg(&r.solution.rotations, &truth)
+        })
+        .fold(f64::INFINITY, f64::min);
+        assert!(
+            e_auto <= 1.1 * best,
+            "seed {seed}: auto {e_auto} deg, best robust {best}"
+        );
+        assert!(
+            3.0 * e_auto < e_l2,
+            "seed {seed}: auto {e_auto} deg, least squares {e_l2}"
+        );
+    }
+}
+
+#[test]
+fn without_outliers_auto_is_least_squares() {
+    let (p, _) = scene(0.0, 3);
+    let auto = run_auto(&p);
+    let l2 = run_with(&p, Objective::CHORDAL_L2);
+    assert_eq!(auto.solution.rotations, l2.solution.rotations);
+    let (a, b) = (auto.certificate.unwrap(), l2.certificate.unwrap());
+    assert_eq!((a.verdict, a.lower_bound), (b.verdict, b.lower_bound));
+    let choice = auto.details.loss_choice.expect("the choice");
+    assert!(!choice.is_robust() && choice.chosen == Objective::CHORDAL_L2);
+    assert!(choice.reason.contains("no outliers"), "{}", choice.reason);
+}
+
+#[test]
+fn graphs_too_sparse_to_judge_keep_least_squares() {
+    // a chain with a few closures: every residual of a tree edge vanishes at least squares
+    let (p, _) = SyntheticGraph {
+        num_rotations: 60,
+        num_edges: 70,
+        noise_sigma: 0.02,
+        outlier_fraction: 0.1,
+        seed: 4,
+    }
+    .generate();
+    let choice = run_auto(&p).details.loss_choice.expect("the choice");
+    assert!(!choice.is_robust());
+    assert!(
+        choice.reason.contains("fewer than two edges per node"),
+        "{}",
+        choice.reason
+    );
+}
+
+#[test]
+fn scaling_every_weight_never_changes_the_choice() {
+    for (outliers, seed) in [(0.0, 5), (0.15, 6)] {
+        let (p, _) = scene(outliers, seed);
+        let base = run_auto(&p);
+        for c in [1e-6, 1e6] {
+            let scaled = run_auto(&scale_weights(&p, c));
+            let (a, b) = (
+                base.details.loss_choice.as_ref().unwrap(),
+                scaled.details.loss_choice.as_ref().unwrap(),
+            );
+            assert_eq!(
+                a.is_robust(),
+                b.is_robust(),
+                "outliers {outliers}, scale {c}"
+            );
+            let verdict = |r: &MultipleEstimate| {
+                r.certificate.as_ref().map(|c| c.verdict).or_else(|| {
+                    let g = r.details.inlier_graph.as_ref()?;
+                    g.certificate.as_ref().map(|c| c.verdict)
+                })
+            };
+            assert_eq!(
+                verdict(&base),
+                verdict(&scaled),
+                "outliers {outliers}, scale {c}"
+            );
+        }
+    }
+}
+
+/// Anisotropic measurements with outliers: auto's Cauchy is on the Mahalanobis angle and
+/// beats least squares against the planted truth.
+#[test]
+fn with_information_auto_is_the_anisotropic_robust_run() {
+    let (p, truth) = SyntheticAnisotropic {
+        num_rotations: 80,
+        num_edges: 480,
+        sigma: 0.5f64.to_radians(),
+        ratio: 10.0,
+        outlier_fraction: 0.15,
+        seed: 7,
+        ..Default::default()
+    }
+    .generate();
+    assert!(p.is_anisotropic());
+    let auto = run_auto(&p);
+    assert!(auto.details.loss_choice.as_ref().unwrap().is_robust());
+    assert_eq!(
+        auto.solution.rotations,
+        run_with(&p, CAUCHY).solution.rotations
+    );
+    let e_auto = median_error_deg(&auto.solution.rotations, &truth);
+    let e_l2 = median_error_deg(
+        &run_with(&p, Objective::CHORDAL_L2).solution.rotations,
+        &truth,
+    );
+    assert!(
+        3.0 * e_auto < e_l2,
+        "auto {e_auto} deg, least squares {e_l2}"
+    );
+    let graph = auto.details.inlier_graph.expect("an inlier graph");
+    assert_eq!(graph.certificate.unwrap().verdict, Verdict::Certified);
+}
+
+#[test]
+fn the_command_line_default_names_the_inlier_problem_it_certifies() {
+    let file = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/data/sfm_outliers.txt"
+    );
+    let auto = run(&["multiple", file, "--json", "--require-certified", "--quiet"]);
+    assert_success(&auto);
+    let j = json_of(&auto);
+    assert_eq!(j["loss"], "cauchy");
+    assert_eq!(j["pipeline"]["loss_choice"]["rule"], "auto");
+    assert!(j["pipeline"]["loss_choice"]["diagnosis"]["suspected"].as_u64() > Some(0));
+    assert_eq!(j["verdict"]["verdict"], "certified");
+    assert_eq!(j["verdict"]["estimate"], "inlier_graph");
+    assert_eq!(j["verdict"]["problem"]["kind"], "chordal_l2_inliers");
+    assert_eq!(
+        j["verdict"]["problem"]["num_edges"],
+        j["robust"]["num_inliers"]
+    );
+    let cauchy = json_of(&run(&["multiple", file, "--json", "--loss", "cauchy"]));
+    assert_eq!(j["estimate"], cauchy["estimate"]);
+    // least squares over all edges is one flag away, and its verdict is about all edges
+    let l2 = json_of(&run(&["multiple", file, "--json", "--loss", "chordal"]));
+    assert_eq!(l2["loss"], "chordal");
+    assert_eq!(l2["verdict"]["problem"]["kind"], "chordal_l2");
+    assert_eq!(l2["verdict"]["problem"]["num_edges"], 1200);
+    assert!(l2["pipeline"]["outliers"]["suspected"].as_u64() > Some(0));
+    assert!(l2["pipeline"].get("loss_choice").is_none());
+    // the text says what was chosen and why
+    let text = run(&["multiple", file]);
+    let out = String::from_utf8_lossy(&text.stdout);
+    assert!(out.contains("loss: auto chose geodesic cauchy"), "{out}");
+    assert!(
+        out.contains("verdict: certified for the chordal L2 problem on the inlier graph"),
+        "{out}"
+    );
+}
+
+#[test]
+fn robust_outputs_are_not_claimed_when_auto_keeps_least_squares() {
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data/slam.g2o");
+    let edges = common::temp_dir().join("auto_kept_edges.csv");
+    let out = run(&["multiple", file, "--edges-output", edges.to_str().unwrap()]);
+    assert_success(&out);
+    assert!(!edges.exists());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains("per-edge residuals written"), "{text}");
+    assert!(text.contains("loss: auto kept chordal l2"), "{text}");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not written"));
+}
