@@ -8,10 +8,12 @@
 
 use criterion::{Criterion, criterion_group};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion};
+use rotavg::Metric;
 use rotavg::multiple::synthetic::{SyntheticAnisotropic, SyntheticGraph};
 use rotavg::multiple::{
     Edge, Initialisation, MultipleProblem, MultipleSettings, initialise, solve_multiple,
 };
+use rotavg::objective::{Loss, Objective};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -159,6 +161,35 @@ fn bench(c: &mut Criterion) {
     }
     .generate();
     cases.push(("anisotropic_1e3_4e3".into(), p));
+    // issue 37's two-view anisotropy (ratio log-normal around 9) with 10 % outliers under
+    // Cauchy: the information against its scalar weights tr(H) / 3
+    let (p, _) = SyntheticAnisotropic {
+        num_rotations: 1000,
+        num_edges: 4000,
+        ratio: 9.0,
+        ratio_spread: 1.0,
+        outlier_fraction: 0.1,
+        seed: 1,
+        ..Default::default()
+    }
+    .generate();
+    let cauchy = Objective::new(Metric::Geodesic, Loss::Cauchy { scale_deg: 5.0 });
+    let scalar: Vec<Edge> = p
+        .edges()
+        .iter()
+        .zip(p.information().unwrap_or_default())
+        .map(|(e, h)| Edge {
+            weight: h.matrix().trace() / 3.0,
+            ..e.clone()
+        })
+        .collect();
+    let scalar =
+        MultipleProblem::new(p.num_rotations(), scalar).and_then(|s| s.with_objective(cauchy));
+    cases.push(("cauchy_scalar_1e3_4e3".into(), scalar.unwrap()));
+    cases.push((
+        "cauchy_anisotropic_1e3_4e3".into(),
+        p.with_objective(cauchy).unwrap(),
+    ));
     for (name, p) in &cases {
         g.bench_function(name.as_str(), |b| {
             b.iter(|| solve_multiple(p, &MultipleSettings::default()).unwrap())

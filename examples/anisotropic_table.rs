@@ -81,6 +81,7 @@ fn main() -> rotavg::Result<()> {
             outlier_fraction: outliers,
             seed: 1,
             weak_axes,
+            ratio_spread: 0.0,
         }
         .generate();
         if let Some(dir) = &export {

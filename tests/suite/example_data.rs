@@ -229,6 +229,7 @@ fn anisotropic(weak_axes: usize, name: &str) -> (String, String) {
         outlier_fraction: 0.0,
         seed: 2026,
         weak_axes,
+        ratio_spread: 0.0,
     }
     .generate();
     let mut list = format!("# ground truth of {name}: id R11 .. R33 (R_i, with R_ij R_i = R_j)\n");
