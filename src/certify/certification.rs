@@ -54,6 +54,9 @@ pub enum ImprovementSource {
     /// The rounding of the staircase's lifted point, polished by the local solver (multiple
     /// averaging).
     StaircaseRounding,
+    /// The rounding of the `conv(SO(3))` SDP's solution, polished by the local solver
+    /// (anisotropic multiple averaging).
+    ConvSdpRounding,
 }
 
 /// A solution of lower cost than the certified estimate, found while bounding.

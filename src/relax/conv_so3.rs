@@ -111,6 +111,11 @@ pub struct ConvRelaxation {
     pub dual_objective: f64,
     /// Interior-point iterations.
     pub iterations: u32,
+    /// The rounding `[P5]` of the primal `X` (top three eigenpairs, blocks projected to SO(3),
+    /// `R_0 = I`): a feasible estimate whose cost bounds the minimum from above (empty when `X`
+    /// is unusable). The certification polishes it and adopts it when it beats its estimate.
+    #[serde(with = "crate::so3::serde_rows::rotations")]
+    pub rounded: Vec<crate::so3::Rotation>,
     /// Total time, seconds.
     pub seconds: f64,
 }
@@ -157,7 +162,9 @@ pub fn relax_multiple_conv(
         });
     }
     let (multipliers, conv_multipliers) = read_multipliers(z, n, &pairs, scale);
+    let rounded = round_primal(&conic.x, n).unwrap_or_default();
     Ok(ConvRelaxation {
+        rounded,
         status: conic.status,
         multipliers,
         conv_multipliers,
@@ -166,6 +173,20 @@ pub fn relax_multiple_conv(
         iterations: conic.iterations,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The rounding `[P5]` of the primal solution `x` (the entries `X_ab`, `a <= b`, in svec
+/// order: the variable is `X` itself, its cone slack carries the svec weights).
+fn round_primal(x: &[f64], n: usize) -> Result<Vec<crate::so3::Rotation>> {
+    let dim = 3 * n;
+    if x.len() != svec_len(dim) {
+        return Err(Error::Solver {
+            message: "Clarabel returned no primal solution".into(),
+        });
+    }
+    let full = faer::Mat::from_fn(dim, dim, |a, b| x[svec_index(a.min(b), a.max(b))]);
+    let (blocks, _) = super::multiple::top_three_blocks(&full, n)?;
+    Ok(super::multiple::project_blocks(blocks).0)
 }
 
 /// The cost `svec` of `Q / scale` (off-diagonal entries twice: `<C, svec(X)> = tr(Q X) /

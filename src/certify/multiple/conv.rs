@@ -10,6 +10,7 @@
 
 use super::multipliers::{check_lambdas, data_defect, forming_margin, symmetrize};
 use super::state::{Best, State};
+use crate::certify::certification::ImprovementSource;
 use crate::certify::log::{Point, Prediction, Refusal};
 use crate::certify::proof::{BoundMethod, Proof};
 use crate::certify::rung::{Found, Plan, Rung};
@@ -254,6 +255,14 @@ impl<'a> Rung<State<'a>> for ConvSdpRung {
              iterations), verified independently: lambda_min(S) >= {:.3e}",
             relaxation.status, relaxation.iterations, bound.verified_min_eigenvalue
         );
+        // the rounding, polished while time is left, is the answer when it beats the estimate
+        // (the bound holds without it)
+        if !cx.deadline.passed()
+            && let Some(p) = super::staircase::polish(cx.problem, &relaxation.rounded)
+            && p.chordal_cost < cx.current.cost
+        {
+            cx.adopt(p, ImprovementSource::ConvSdpRounding, Point::ConvSdp);
+        }
         cx.offer(Best {
             lower_bound: bound.lower_bound,
             method: BoundMethod::Sdp,

@@ -115,6 +115,9 @@ fn improvement_text(cx: &State<'_>, b: &Best, tolerance: &GapTolerance) -> Strin
             ImprovementSource::StaircaseRounding => {
                 "the staircase rounding polished by the local solver"
             }
+            ImprovementSource::ConvSdpRounding => {
+                "the conv(SO(3)) SDP rounding polished by the local solver"
+            }
         },
         if certified {
             ", which the bound below certifies globally optimal"
