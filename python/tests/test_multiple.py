@@ -175,8 +175,13 @@ def test_same_costs_and_certificates_as_the_command_line(name, data_dir, cli, tm
     from_arrays = rotavg.average_multiple(g.n, g.i, g.j, g.rel, g.weights)
     c, t = from_arrays.certificate, theirs["certificate"]
     assert from_arrays.cost == pytest.approx(theirs["cost"], rel=1e-9, abs=1e-12)
-    assert (c.verdict, c.method) == (t["verdict"], t["method"])
-    assert c.lower_bound == pytest.approx(t["lower_bound"], rel=1e-8, abs=1e-10)
+    # the default loss follows the data (Madrid's outliers choose Cauchy: no certificate of
+    # its cost, the verdict is the inlier graph's)
+    assert from_arrays.verdict == theirs["verdict"]["verdict"]
+    assert (c is None) == (t is None)
+    if c is not None:
+        assert (c.verdict, c.method) == (t["verdict"], t["method"])
+        assert c.lower_bound == pytest.approx(t["lower_bound"], rel=1e-8, abs=1e-10)
     # certify: the same report for the command line's own estimate.
     est = tmp_path / "estimate.json"
     est.write_text(json.dumps({"estimate": theirs["estimate"]}))
