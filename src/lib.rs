@@ -91,6 +91,7 @@ pub mod single;
 pub mod so3;
 pub mod termination;
 pub mod validate;
+pub mod warning;
 
 pub use certify::{BoundMethod, Certificate, Verdict};
 pub use error::{Error, Result};

@@ -568,7 +568,7 @@ impl Graph {
     /// The reader's remarks (skipped line types, missing vertices, ...).
     #[getter]
     fn warnings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        PyList::new(py, &self.loaded.warnings)
+        PyList::new(py, self.loaded.warnings.iter().map(|w| w.message.as_str()))
     }
     /// Sizes of the connected components not kept (``read_graph(..., largest_component=True)``).
     #[getter]

@@ -117,7 +117,7 @@ pub struct LoadedGraph {
     /// Number of edges given with `i > j` (kept as given; `R_ij` keeps its meaning).
     pub reversed: usize,
     /// Non-fatal remarks (skipped line types, missing vertices, ...), one per kind.
-    pub warnings: Vec<String>,
+    pub warnings: Vec<crate::warning::Warning>,
     /// The format that was read.
     pub format: GraphFormat,
     /// `true` when every measurement is a planar rotation about z (g2o `EDGE_SE2`).

@@ -41,6 +41,7 @@ use crate::io::{RawEdge, compact_edges};
 use crate::multiple::MultipleProblem;
 use crate::multiple::anisotropic::Information;
 use crate::so3::Rotation;
+use crate::warning::Warning;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -431,6 +432,8 @@ struct ParsedEdge {
     rotation: Rotation,
     weight: f64,
     information: Matrix3<f64>,
+    /// Whether the line gave an information matrix (else `weight` 1, `information` I).
+    informed: bool,
 }
 
 /// A 3-D edge (the tag read): `EDGE_SE3:QUAT i j x y z qx qy qz qw [+ 21 information
@@ -479,6 +482,7 @@ fn parse_edge_3d(t: &mut Tokens<'_>, quaternion: bool, qtol: f64) -> Result<Pars
         rotation,
         weight,
         information,
+        informed: t.toks.len() == full,
     })
 }
 
@@ -493,7 +497,8 @@ fn parse_edge_se2(t: &mut Tokens<'_>) -> Result<ParsedEdge> {
     t.next_f64("dx")?;
     t.next_f64("dy")?;
     let th = t.next_f64("dtheta")?;
-    let weight = if t.toks.len() == 12 {
+    let informed = t.toks.len() == 12;
+    let weight = if informed {
         let mut info = [0.0; 6];
         for (n, v) in info.iter_mut().enumerate() {
             *v = t.next_f64(&format!("information entry {}", n + 1))?;
@@ -515,6 +520,7 @@ fn parse_edge_se2(t: &mut Tokens<'_>) -> Result<ParsedEdge> {
         rotation: Rotation::from_axis_angle(&Vector3::z_axis(), -th),
         weight,
         information: Matrix3::identity() * weight,
+        informed,
     })
 }
 
@@ -527,6 +533,8 @@ struct G2oContents {
     /// [`MAX_SKIPPED_TAGS`]), and of the other tags together.
     skipped: BTreeMap<String, (usize, usize)>,
     skipped_other: (usize, usize),
+    /// Edge lines without an information matrix under `--weights file`: count and first line.
+    uninformed: (usize, usize),
     seen_3d: bool,
     seen_2d: bool,
     /// [A7]: each kept edge's full rotation information, in edge order (used with
@@ -582,6 +590,12 @@ impl G2oContents {
             WeightSource::File => weight,
             WeightSource::Unit => 1.0,
         };
+        if !e.informed && options.weights == WeightSource::File {
+            if self.uninformed.0 == 0 {
+                self.uninformed.1 = t.line;
+            }
+            self.uninformed.0 += 1;
+        }
         if options.full_information && options.weights == WeightSource::File {
             // checked here, so that an error names this line
             let h = Information::new(e.information).map_err(|e| t.err(format!("edge {e}")))?;
@@ -596,21 +610,34 @@ impl G2oContents {
     }
 
     /// The reader's remarks: lines skipped by tag, 2-D and 3-D lines mixed.
-    fn warnings(&self) -> Vec<String> {
+    fn warnings(&self) -> Vec<Warning> {
         let mut warnings = Vec::new();
         for (tag, (count, first)) in &self.skipped {
-            warnings.push(format!(
-                "skipped {count} line(s) with unknown tag `{tag}` (first at line {first})"
-            ));
+            let message =
+                format!("skipped {count} line(s) with unknown tag `{tag}` (first at line {first})");
+            warnings.push(Warning::new("skipped_lines", message).with_count(*count));
         }
         if self.skipped_other.0 > 0 {
-            warnings.push(format!(
+            let message = format!(
                 "skipped {} line(s) with {MAX_SKIPPED_TAGS}+ other unknown tags (first at line {})",
                 self.skipped_other.0, self.skipped_other.1
-            ));
+            );
+            warnings.push(Warning::new("skipped_lines", message).with_count(self.skipped_other.0));
+        }
+        if self.uninformed.0 > 0 {
+            let message = format!(
+                "{} edge line(s) carry no information matrix (first at line {}): weight 1 \
+                 (identity information)",
+                self.uninformed.0, self.uninformed.1
+            );
+            warnings
+                .push(Warning::new("without_information", message).with_count(self.uninformed.0));
         }
         if self.seen_2d && self.seen_3d {
-            warnings.push("the file mixes 2-D and 3-D lines".to_owned());
+            warnings.push(Warning::new(
+                "mixed_dimensions",
+                "the file mixes 2-D and 3-D lines",
+            ));
         }
         warnings
     }
@@ -675,11 +702,12 @@ fn read_g2o_limited(
     } else if c.vertices.len() == graph.node_ids.len() {
         Some(c.vertices.values().map(|(r, _)| *r).collect())
     } else {
-        warnings.push(format!(
-            "{} of {} nodes have no vertex line: no initial estimate",
-            graph.node_ids.len() - c.vertices.len(),
+        let missing = graph.node_ids.len() - c.vertices.len();
+        let message = format!(
+            "{missing} of {} nodes have no vertex line: no initial estimate",
             graph.node_ids.len()
-        ));
+        );
+        warnings.push(Warning::new("no_initial_estimate", message).with_count(missing));
         None
     };
     Ok(LoadedGraph {
@@ -915,11 +943,26 @@ mod tests {
         }
         text.push_str("EDGE3 0 1 0 0 0 0 0 0\n");
         let g = read_g2o(&text, "t", &ReadOptions::default()).unwrap();
-        assert_eq!(g.warnings.len(), MAX_SKIPPED_TAGS + 1);
+        let skipped: Vec<&Warning> = g
+            .warnings
+            .iter()
+            .filter(|w| w.code == "skipped_lines")
+            .collect();
+        assert_eq!(skipped.len(), MAX_SKIPPED_TAGS + 1);
         assert!(
-            g.warnings[MAX_SKIPPED_TAGS].starts_with("skipped 68 line(s) with 32+ other"),
+            skipped[MAX_SKIPPED_TAGS]
+                .message
+                .starts_with("skipped 68 line(s) with 32+ other"),
             "{:?}",
             g.warnings
         );
+        // the EDGE3 line carries no information: weight 1, said so
+        let uninformed: Vec<&Warning> = g
+            .warnings
+            .iter()
+            .filter(|w| w.code == "without_information")
+            .collect();
+        assert_eq!(uninformed.len(), 1);
+        assert_eq!(uninformed[0].count, Some(1));
     }
 }

@@ -1,7 +1,7 @@
 //! The report of `rotavg certify`: an estimate computed elsewhere, certified or bounded
 //! **without changing it**.
 
-use super::{ProblemKind, Rows, write_methods};
+use super::{ProblemJson, ProblemKind, Rows, write_methods};
 use crate::certify::{
     Certificate, CertifyDetails, CertifySettings, Verdict, certify_conjugate, certify_multiple,
     certify_single,
@@ -10,6 +10,7 @@ use crate::error::{Error, Result};
 use crate::io::input::{LoadedEstimate, LoadedProblem};
 use crate::io::json::Estimate;
 use crate::termination::SolverReport;
+use crate::warning::Warning;
 use serde::{Serialize, Serializer};
 use std::fmt;
 
@@ -60,6 +61,8 @@ pub struct CertifyReport {
     pub certificate: Certificate,
     /// Multiple averaging: what the certification did.
     pub details: Option<CertifyDetails>,
+    /// The reader's and the estimate's warnings (printed on `warning:` lines).
+    pub warnings: Vec<Warning>,
 }
 
 impl CertifyReport {
@@ -86,6 +89,7 @@ impl CertifyReport {
                 node_ids: None,
                 certificate,
                 details: None,
+                warnings: Vec::new(),
             };
         match problem {
             LoadedProblem::Multiple(graph) => {
@@ -106,6 +110,7 @@ impl CertifyReport {
                 Ok(CertifyReport {
                     node_ids: Some(graph.node_ids.clone()),
                     details: Some(c.details),
+                    warnings: graph.warnings.clone(),
                     ..report(
                         ProblemKind::Multiple,
                         n,
@@ -229,9 +234,6 @@ fn no_figure() -> Error {
 
 #[derive(Serialize)]
 struct Json<'a> {
-    problem: ProblemKind,
-    num_rotations: usize,
-    num_measurements: usize,
     cost: f64,
     estimate: Rows<'a>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -244,10 +246,7 @@ struct Json<'a> {
 
 impl Serialize for CertifyReport {
     fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
-        Json {
-            problem: self.problem,
-            num_rotations: self.num_rotations,
-            num_measurements: self.num_measurements,
+        let rest = Json {
             cost: self.cost,
             estimate: match &self.estimate {
                 Estimate::Single(r) => Rows::One(r),
@@ -257,7 +256,14 @@ impl Serialize for CertifyReport {
             solver: None,
             certificate: &self.certificate,
             pipeline: self.details.as_ref(),
-        }
+        };
+        ProblemJson::new(
+            self.problem,
+            self.num_rotations,
+            self.num_measurements,
+            rest,
+        )
+        .with_warnings(self.warnings.clone())
         .serialize(serializer)
     }
 }
@@ -282,6 +288,9 @@ impl fmt::Display for CertifyReport {
             )?,
         }
         writeln!(f, "; estimate {}", self.estimate_file)?;
+        for w in &self.warnings {
+            writeln!(f, "warning: {w}")?;
+        }
         writeln!(
             f,
             "cost of the given estimate: {:.9e}",

@@ -87,7 +87,7 @@ impl InfoReport {
             reversed_edges: g.reversed,
             node_ids_contiguous: g.node_ids.iter().enumerate().all(|(k, &id)| id == k as u64),
             has_initial: g.initial.is_some(),
-            warnings: g.warnings,
+            warnings: g.warnings.iter().map(|w| w.message.clone()).collect(),
             load_seconds,
             stats,
             id_range: g.node_ids.first().copied().zip(g.node_ids.last().copied()),

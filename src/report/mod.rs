@@ -114,20 +114,29 @@ struct ProblemJson<J> {
     problem: ProblemKind,
     num_rotations: usize,
     num_measurements: usize,
+    /// Every warning the text prints ([`crate::warning`]), on every verb.
+    warnings: Vec<crate::warning::Warning>,
     #[serde(flatten)]
     rest: J,
 }
 
 impl<J> ProblemJson<J> {
     /// The JSON of a `problem` report with `num_rotations` unknowns and `num_measurements`
-    /// measurements (samples, edges or pairs), followed by `rest`.
+    /// measurements (samples, edges or pairs), no warnings, followed by `rest`.
     fn new(problem: ProblemKind, num_rotations: usize, num_measurements: usize, rest: J) -> Self {
         ProblemJson {
             problem,
             num_rotations,
             num_measurements,
+            warnings: Vec::new(),
             rest,
         }
+    }
+
+    /// The same with `warnings`.
+    fn with_warnings(mut self, warnings: Vec<crate::warning::Warning>) -> Self {
+        self.warnings = warnings;
+        self
     }
 }
 

@@ -15,6 +15,7 @@ use crate::multiple::anisotropic::InformationSummary;
 use crate::multiple::robust::ResidualSummary;
 use crate::pipeline::{MultipleEstimate, PipelineDetails};
 use crate::termination::SolverReport;
+use crate::warning::Warning;
 use serde::{Serialize, Serializer};
 use std::fmt;
 
@@ -76,8 +77,11 @@ pub struct MultipleReport {
     pub duplicates: usize,
     /// Edges given with `i > j`.
     pub reversed: usize,
-    /// The reader's remarks.
-    pub warnings: Vec<String>,
+    /// The reader's remarks (printed on `warning:` lines of the text).
+    pub warnings: Vec<Warning>,
+    /// Warnings of the run printed on stderr by the command line (`output_not_written`); the
+    /// outlier diagnosis of a least-squares run is added from the result.
+    pub run_warnings: Vec<Warning>,
     /// The file id of each node of the estimate.
     pub node_ids: Vec<u64>,
     /// The file's name of each node (COLMAP image names), or empty.
@@ -122,6 +126,7 @@ impl MultipleReport {
             duplicates: g.duplicates,
             reversed: g.reversed,
             warnings: g.warnings.clone(),
+            run_warnings: Vec::new(),
             node_ids: g.node_ids.clone(),
             node_names: g.node_names.clone(),
             num_edges: g.problem.num_edges(),
@@ -156,6 +161,19 @@ impl MultipleReport {
     /// for a robust loss (which has none) its inlier graph's ([`Self::verdict_of`]).
     pub fn verdict(&self) -> Option<Verdict> {
         self.verdict_of().map(|v| v.verdict)
+    }
+
+    /// Every warning of the run, as the JSON's `warnings`: the reader's, the outlier
+    /// diagnosis of a least-squares run (`outliers_suspected`), and [`Self::run_warnings`].
+    pub fn all_warnings(&self) -> Vec<Warning> {
+        let outliers = self.result.details.outliers.as_ref().map(|w| {
+            Warning::new("outliers_suspected", format!("{}: {w}", self.input))
+                .with_count(w.suspected)
+        });
+        let mut all = self.warnings.clone();
+        all.extend(outliers);
+        all.extend(self.run_warnings.iter().cloned());
+        all
     }
 
     /// The verdict with the problem and estimate it is about.
@@ -308,6 +326,7 @@ impl Serialize for MultipleReport {
             self.num_edges,
             rest,
         )
+        .with_warnings(self.all_warnings())
         .serialize(serializer)
     }
 }

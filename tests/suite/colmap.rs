@@ -212,7 +212,8 @@ fn database_convention_recovers_planted_rotations() {
     );
     assert_eq!(g.node_names, s.names);
     assert_eq!(g.problem.num_edges(), used);
-    let w = g.warnings.join("\n");
+    let w: Vec<String> = g.warnings.iter().map(|w| w.message.clone()).collect();
+    let w = w.join("\n");
     assert!(
         w.contains("skipped 5 of")
             && w.contains("1 UNDEFINED (0)")
@@ -346,6 +347,18 @@ fn cli_solves_a_noisy_database_with_ground_truth_and_writes_images_txt() {
     let stdout = String::from_utf8_lossy(&text_out.stdout);
     assert!(stdout.contains("colmap format, 15 nodes"), "{stdout}");
     assert!(stdout.contains("warning: skipped 5 of"), "{stdout}");
+    // the JSON carries it too, with its code and count (tests/suite/warnings_json.rs)
+    let j = json_of(&run(&["multiple", p, "--json"]));
+    let skipped: Vec<&serde_json::Value> = j["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|w| w["count"] == 5)
+        .collect();
+    assert_eq!(skipped.len(), 1, "{}", j["warnings"]);
+    let message = skipped[0]["message"].as_str().unwrap();
+    let flat = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(flat(&stdout).contains(&flat(message)), "{message}");
     let again = read_images_text(
         &std::fs::read_to_string(&other).unwrap(),
         "rotations.txt",

@@ -73,7 +73,7 @@ fn g2o_se3_convention_is_noise_free_and_matches_sesync_cost() {
     assert_eq!(g.duplicates, 1); // (1,0) repeats {0,1} (see duplicate_count_of_pairs)
     assert_eq!(g.reversed, 3); // (3,0), (2,0), (1,0)
     assert!(
-        g.warnings.iter().any(|s| s.contains("FIX")),
+        g.warnings.iter().any(|s| s.message.contains("FIX")),
         "{:?}",
         g.warnings
     );

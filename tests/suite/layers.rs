@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 /// Modules of one layer may import each other only where `PEERS_MAY_IMPORT` says so.
 const LAYERS: &[(&str, u32)] = &[
     ("error", 0),
+    ("warning", 0),
     ("so3", 1),
     ("termination", 1),
     ("progress", 1),

@@ -75,3 +75,4 @@ mod soundness_multiple;
 mod spectrum;
 mod tolerance_invariance;
 mod tolerance_spectrum;
+mod warnings_json;

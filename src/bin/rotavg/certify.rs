@@ -9,6 +9,7 @@ use rotavg::Result;
 use rotavg::certify::CertifyMode;
 use rotavg::io::input::{LoadedProblem, load_estimate, load_estimate_for, load_problem};
 use rotavg::report::CertifyReport;
+use rotavg::warning::Warning;
 
 /// Arguments of `rotavg certify`.
 #[derive(clap::Args, Debug)]
@@ -34,14 +35,11 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<Outcome> {
     let options = args.graph.read_options(&args.common);
     let problem = load_problem(&args.input, args.graph.format, &options)?;
+    let mut unmatched = None;
     let estimate = match &problem {
         LoadedProblem::Multiple(g) => {
             let e = load_estimate_for(&args.estimate, g, &options)?;
-            if let Some(w) = &e.warning
-                && !args.common.quiet
-            {
-                eprintln!("rotavg: warning: {w}");
-            }
+            unmatched = e.warning.clone();
             e.into_loaded()
         }
         LoadedProblem::Single(_) | LoadedProblem::Conjugate(_) => {
@@ -67,7 +65,11 @@ pub fn run(args: &Args) -> Result<Outcome> {
         }
         _ => args.common.settings(CertifyMode::Auto),
     };
-    let report = CertifyReport::certify(&args.input, &problem, estimate, &settings)?;
+    let mut report = CertifyReport::certify(&args.input, &problem, estimate, &settings)?;
+    // printed with the report's `warning:` lines, and in its JSON
+    report
+        .warnings
+        .extend(unmatched.map(|w| Warning::new("estimate_unmatched", w)));
     if let Some(path) = &args.plot.plot {
         report.write_figure(path, &problem)?;
     }

@@ -10,6 +10,7 @@ use rotavg::io::output::{MultipleOutputs, OutputFormat, OutputSource};
 use rotavg::multiple::{Initialisation, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_multiple};
 use rotavg::report::MultipleReport;
+use rotavg::warning::Warning;
 use rotavg::{Error, Result};
 
 /// Arguments of `rotavg multiple`.
@@ -128,15 +129,21 @@ pub fn run(args: &Args) -> Result<Outcome> {
     report.output = args.output.clone();
     let robust = report.result.solution.residuals.is_some();
     report.edges_output = args.edges_output.clone().filter(|_| robust);
-    if let Some(w) = &report.result.details.outliers {
-        args.common.warn(&format!("{}: {w}", args.input));
-    }
-    if !robust && (args.edges_output.is_some() || args.inlier_output.is_some()) {
+    let unwritten = [&args.edges_output, &args.inlier_output]
+        .iter()
+        .filter(|o| o.is_some())
+        .count();
+    if !robust && unwritten > 0 {
         // `--loss auto` kept least squares: there is no robust solve to write
-        args.common.warn(
-            "--edges-output / --inlier-output not written: `--loss auto` kept least squares \
-             (no outliers); `--loss cauchy` forces the robust solve",
-        );
+        let message = "--edges-output / --inlier-output not written: `--loss auto` kept least \
+                       squares (no outliers); `--loss cauchy` forces the robust solve";
+        report
+            .run_warnings
+            .push(Warning::new("output_not_written", message).with_count(unwritten));
+    }
+    // the reader's warnings are lines of the report; these go to stderr
+    for w in report.all_warnings().iter().skip(report.warnings.len()) {
+        args.common.warn(&w.message);
     }
     args.common.finish(&report, report.verdict())
 }

@@ -6,6 +6,7 @@ use super::*;
 use crate::io::RawEdge;
 use crate::io::detect::{GraphFormat, WeightSource};
 use crate::multiple::MultipleProblem;
+use crate::warning::Warning;
 use rusqlite::{Connection, OpenFlags};
 
 /// A little-endian f64 of 8 bytes.
@@ -88,10 +89,12 @@ pub(super) fn read(path: &Path, options: &ReadOptions) -> Result<LoadedGraph> {
         }
         rows.raw = kept;
         if skipped.0 > 0 {
-            warnings.push(format!(
+            let message = format!(
                 "--information full: skipped {} two-view geometries whose inlier correspondences give no information (first: {})",
                 skipped.0, skipped.1
-            ));
+            );
+            warnings
+                .push(Warning::new("skipped_without_information", message).with_count(skipped.0));
         }
         information = Some(info);
     }
@@ -117,7 +120,7 @@ fn view_graph(
     raw: Vec<RawEdge>,
     names: &BTreeMap<u64, String>,
     information: Option<Vec<crate::multiple::anisotropic::Information>>,
-    warnings: Vec<String>,
+    warnings: Vec<Warning>,
 ) -> Result<LoadedGraph> {
     let (ids, edges) = crate::io::compact_edges(raw, std::iter::empty());
     let node_names = ids
@@ -242,7 +245,7 @@ impl Geometries {
     }
 
     /// The reader's remarks: rows skipped by config, rows without a relative pose.
-    fn warnings(&self) -> Vec<String> {
+    fn warnings(&self) -> Vec<Warning> {
         let (total, skipped_config) = (self.total, self.skipped_by_config());
         let mut warnings = Vec::new();
         if skipped_config > 0 {
@@ -251,17 +254,19 @@ impl Geometries {
                 .iter()
                 .map(|(c, k)| format!("{k} {} ({c})", config_name(*c)))
                 .collect();
-            warnings.push(format!(
+            let message = format!(
                 "skipped {skipped_config} of {total} two-view geometries by config: {} (only {} carry a relative rotation)",
                 list.join(", "),
                 accepted_list()
-            ));
+            );
+            warnings.push(Warning::new("skipped_by_config", message).with_count(skipped_config));
         }
         if self.no_pose > 0 {
-            warnings.push(format!(
+            let message = format!(
                 "skipped {} of {total} two-view geometries without a stored relative pose (qvec NULL or zero, or COLMAP's default identity with zero tvec)",
                 self.no_pose
-            ));
+            );
+            warnings.push(Warning::new("skipped_without_pose", message).with_count(self.no_pose));
         }
         warnings
     }

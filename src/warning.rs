@@ -1,0 +1,61 @@
+//! A warning: what the text output says on a `warning:` line, with a stable code and a count,
+//! so that the JSON carries every warning the text prints (`warnings` of every `--json`
+//! report, `docs/reference/cli.md`).
+//!
+//! | code | from | count |
+//! |---|---|---|
+//! | `skipped_lines` | g2o: lines with an unknown tag | lines |
+//! | `mixed_dimensions` | g2o: 2-D and 3-D lines in one file | |
+//! | `no_initial_estimate` | g2o: nodes without a vertex line | nodes |
+//! | `without_information` | g2o / TORO: edge lines without an information matrix (weight 1) | edges |
+//! | `skipped_by_config` | COLMAP: two-view geometries of a config without a rotation | geometries |
+//! | `skipped_without_pose` | COLMAP: two-view geometries without a stored relative pose | geometries |
+//! | `skipped_without_information` | COLMAP `--information full`: geometries whose correspondences give none | geometries |
+//! | `outliers_suspected` | least squares whose residuals look like outliers | suspected edges |
+//! | `output_not_written` | `--edges-output` / `--inlier-output` with no robust solve | files |
+//! | `estimate_unmatched` | `certify --estimate`: entries matching no node, or nodes missing | |
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// A warning with its stable `code`, the `message` the text prints, and a count where the
+/// warning counts something (lines, edges, geometries).
+///
+/// ```
+/// use rotavg::warning::Warning;
+/// let w = Warning::new("skipped_lines", "skipped 2 line(s) with unknown tag `FIX`").with_count(2);
+/// assert_eq!(w.to_string(), "skipped 2 line(s) with unknown tag `FIX`");
+/// assert_eq!(serde_json::to_value(&w).unwrap()["count"], 2);
+/// ```
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Warning {
+    /// Stable identifier of the kind of warning (the table of [`crate::warning`]).
+    pub code: String,
+    /// What the text output prints.
+    pub message: String,
+    /// What it counts, if anything.
+    pub count: Option<usize>,
+}
+
+impl Warning {
+    /// A warning without a count.
+    pub fn new(code: &str, message: impl Into<String>) -> Self {
+        Warning {
+            code: code.to_owned(),
+            message: message.into(),
+            count: None,
+        }
+    }
+
+    /// The same warning counting `count` things.
+    pub fn with_count(mut self, count: usize) -> Self {
+        self.count = Some(count);
+        self
+    }
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}

@@ -1,0 +1,130 @@
+//! The JSON carries every warning the text prints (issue 38, `rotavg::warning`): for every
+//! reader warning path and every warning of a run, the `--json` object's `warnings` entry (code,
+//! message, count) says what the text run printed, on stdout or stderr; verbs without warnings
+//! have an empty array.
+
+use crate::common;
+use common::{assert_success, json_of, run, temp_dir, temp_file};
+use std::process::Output;
+
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/data");
+
+/// Whitespace runs collapsed (the text output breaks long lines).
+fn flat(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// The JSON run's warnings, each checked against the text run's stdout and stderr; their codes.
+fn warnings_of(text: &Output, json: &Output) -> Vec<(String, Option<u64>)> {
+    assert_success(text);
+    assert_success(json);
+    let printed = flat(&format!(
+        "{}\n{}",
+        String::from_utf8_lossy(&text.stdout),
+        String::from_utf8_lossy(&text.stderr)
+    ));
+    let j = json_of(json);
+    let list = j["warnings"].as_array().expect("a warnings array");
+    list.iter()
+        .map(|w| {
+            let message = w["message"].as_str().expect("a message");
+            assert!(
+                printed.contains(&flat(message)),
+                "not in the text: {message}\n{printed}"
+            );
+            let code = w["code"].as_str().expect("a code").to_owned();
+            (code, w["count"].as_u64())
+        })
+        .collect()
+}
+
+/// Runs `rotavg ARGS` as text and with `--json`.
+fn both(args: &[&str]) -> Vec<(String, Option<u64>)> {
+    let mut with_json = args.to_vec();
+    with_json.push("--json");
+    warnings_of(&run(args), &run(&with_json))
+}
+
+#[test]
+fn g2o_reader_warnings_are_in_the_json() {
+    // three 3-D edges of a triangle (one without information), an unknown tag twice, a 2-D
+    // vertex line, vertices for two of the three nodes
+    let q = "0 0 0 1";
+    let info = "1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1";
+    let text = format!(
+        "VERTEX_SE3:QUAT 0 0 0 0 {q}\nVERTEX_SE2 1 0 0 0\nFIX 0\nFIX 1\n\
+         EDGE_SE3:QUAT 0 1 1 0 0 {q} {info}\nEDGE_SE3:QUAT 1 2 1 0 0 {q} {info}\n\
+         EDGE_SE3:QUAT 2 0 1 0 0 {q}\n"
+    );
+    let path = temp_file("warnings.g2o", &text);
+    let codes = both(&["multiple", path.to_str().unwrap()]);
+    assert!(
+        codes.contains(&("skipped_lines".into(), Some(2))),
+        "{codes:?}"
+    );
+    assert!(
+        codes.iter().any(|(c, _)| c == "mixed_dimensions"),
+        "{codes:?}"
+    );
+    assert!(
+        codes.contains(&("no_initial_estimate".into(), Some(1))),
+        "{codes:?}"
+    );
+    assert!(
+        codes.contains(&("without_information".into(), Some(1))),
+        "{codes:?}"
+    );
+    assert_eq!(codes.len(), 4, "{codes:?}");
+}
+
+#[test]
+fn run_warnings_are_in_the_json() {
+    // least squares on a view graph with outliers: the diagnosis, with the suspected count
+    let sfm = format!("{DATA}/sfm_outliers.txt");
+    let codes = both(&["multiple", &sfm, "--loss", "chordal"]);
+    assert_eq!(codes, [("outliers_suspected".into(), Some(185))]);
+    // the default acts on it instead: no warning
+    assert_eq!(both(&["multiple", &sfm]), []);
+    // robust outputs asked for where `auto` keeps least squares
+    let slam = format!("{DATA}/slam.g2o");
+    let edges = temp_dir().join("warnings_edges.csv");
+    let codes = both(&["multiple", &slam, "--edges-output", edges.to_str().unwrap()]);
+    assert_eq!(codes, [("output_not_written".into(), Some(1))]);
+}
+
+#[test]
+fn certify_warnings_are_in_the_json_and_other_verbs_have_none() {
+    let slam = format!("{DATA}/slam.g2o");
+    let estimate = temp_dir().join("warnings_estimate.json");
+    assert_success(&run(&[
+        "multiple",
+        &slam,
+        "--output",
+        estimate.to_str().unwrap(),
+        "--quiet",
+    ]));
+    // one more entry than the graph has nodes: matched by id, the extra one reported
+    let mut e: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&estimate).unwrap()).unwrap();
+    let first = e["rotations"][0].clone();
+    e["rotations"].as_array_mut().unwrap().push(first);
+    e["node_ids"].as_array_mut().unwrap().push(99_999.into());
+    let extra = temp_file("warnings_extra.json", &e.to_string());
+    let codes = both(&["certify", &slam, "--estimate", extra.to_str().unwrap()]);
+    assert_eq!(codes.len(), 1, "{codes:?}");
+    assert_eq!(codes[0].0, "estimate_unmatched");
+    for args in [
+        vec!["single".to_string(), format!("{DATA}/single.json")],
+        vec![
+            "conjugate".to_string(),
+            "--hand".into(),
+            format!("{DATA}/handeye/hand.csv"),
+            "--camera".into(),
+            format!("{DATA}/handeye/camera.csv"),
+        ],
+        vec!["multiple".to_string(), slam.clone()],
+    ] {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        assert_eq!(both(&args), [], "{args:?}");
+    }
+}
