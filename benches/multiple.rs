@@ -163,16 +163,7 @@ fn bench(c: &mut Criterion) {
     cases.push(("anisotropic_1e3_4e3".into(), p));
     // issue 37's two-view anisotropy (ratio log-normal around 9) with 10 % outliers under
     // Cauchy: the information against its scalar weights tr(H) / 3
-    let (p, _) = SyntheticAnisotropic {
-        num_rotations: 1000,
-        num_edges: 4000,
-        ratio: 9.0,
-        ratio_spread: 1.0,
-        outlier_fraction: 0.1,
-        seed: 1,
-        ..Default::default()
-    }
-    .generate();
+    let (p, _) = SyntheticAnisotropic::two_view_like(1000, 4000, 0.1).generate();
     let cauchy = Objective::new(Metric::Geodesic, Loss::Cauchy { scale_deg: 5.0 });
     let scalar: Vec<Edge> = p
         .edges()

@@ -6,10 +6,10 @@
 //! cargo run --release --example robust_anisotropic_table -- [MAX_NODES] [CERTIFY_UP_TO]
 //! ```
 //!
-//! Each size is one graph from [`SyntheticAnisotropic`]: 0.5 degrees along the well-determined
-//! axes, a weak axis whose standard-deviation ratio is log-normal around 9 (`ratio_spread` 1:
-//! eigenvalue ratios around 80 with a tail past 10^5), random axes, 10 % of the edges replaced
-//! by random rotations (their information kept: confident wrong pairs), seed 1. The solve rows
+//! Each size is one graph from [`SyntheticAnisotropic::two_view_like`] with 10 % outliers: 0.5
+//! degrees along the well-determined axes, a weak axis whose standard-deviation ratio is
+//! log-normal around 9 (eigenvalue ratios around 80 with a tail past 10^5), random axes, the
+//! outliers random rotations with their information kept (confident wrong pairs), seed 1. The solve rows
 //! are `solve_multiple` alone (seconds, IRLS iterations, median error after the optimal
 //! alignment); "auto" is `average_multiple` with the command line's default rule and
 //! `--certify auto` (total seconds, its choice and verdict), run up to `CERTIFY_UP_TO` nodes
@@ -38,16 +38,7 @@ fn main() -> Result<()> {
         if n > max_nodes {
             continue;
         }
-        let (p, truth) = SyntheticAnisotropic {
-            num_rotations: n,
-            num_edges: m,
-            ratio: 9.0,
-            ratio_spread: 1.0,
-            outlier_fraction: 0.1,
-            seed: 1,
-            ..Default::default()
-        }
-        .generate();
+        let (p, truth) = SyntheticAnisotropic::two_view_like(n, m, 0.1).generate();
         let truth: Vec<Option<Rotation>> = truth.into_iter().map(Some).collect();
         let scalar = with_weights(&p, |h| h.trace() / 3.0)?;
         let unit = with_weights(&p, |_| 1.0)?;

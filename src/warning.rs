@@ -13,7 +13,8 @@
 //! | `skipped_without_information` | COLMAP `--information full`: geometries whose correspondences give none | geometries |
 //! | `outliers_suspected` | least squares whose residuals look like outliers | suspected edges |
 //! | `output_not_written` | `--edges-output` / `--inlier-output` with no robust solve | files |
-//! | `estimate_unmatched` | `certify --estimate`: entries matching no node, or nodes missing | |
+//! | `estimate_unmatched` | `certify --estimate`: entries that match no node (not used) | entries |
+//! | `translations_not_finite` | `certify --estimate`: COLMAP images with NaN translations (not used) | images |
 
 use serde::{Deserialize, Serialize};
 use std::fmt;

@@ -558,6 +558,7 @@ fn certify_multiple_py(
             EstimateInput::Arrays(m) => LoadedEstimate {
                 name: "estimate".into(),
                 estimate: Estimate::Multiple(m.rotations()?),
+                warnings: Vec::new(),
             },
             EstimateInput::Path(p) => {
                 load_estimate_for(&p, &input.graph, &ReadOptions::default())?.into_loaded()
@@ -918,6 +919,7 @@ fn certify_conjugate_py(
         let estimate = LoadedEstimate {
             name: "estimate".into(),
             estimate: Estimate::Single(estimate.rotation()?),
+            warnings: Vec::new(),
         };
         CertifyReport::certify(&parts.name, &problem, estimate, &CertifySettings::default())
     })?;
@@ -952,6 +954,7 @@ fn certify_single_py(
         let estimate = LoadedEstimate {
             name: "estimate".into(),
             estimate: Estimate::Single(estimate.rotation()?),
+            warnings: Vec::new(),
         };
         CertifyReport::certify("<arrays>", &problem, estimate, &CertifySettings::default())
     })?;

@@ -268,7 +268,8 @@ pub struct ColmapImage {
     /// World-to-camera rotation (COLMAP's `cam_from_world`): this crate's `R_k`.
     #[serde(with = "crate::so3::serde_rows::rotation")]
     pub rotation: Rotation,
-    /// COLMAP's `cam_from_world` translation.
+    /// COLMAP's `cam_from_world` translation, as written: NaN where the writer had none
+    /// (pycolmap's rotation averaging writes NaN translations; no rotation uses them).
     pub translation: [f64; 3],
 }
 
@@ -514,10 +515,11 @@ pub fn read_images_text(text: &str, file: &str, options: &ReadOptions) -> Result
             .iter()
             .enumerate()
         {
+            // translations (k >= 4) are kept as written, NaN included (no rotation uses them)
             v[k] = toks[k + 1]
                 .parse::<f64>()
                 .ok()
-                .filter(|x| x.is_finite())
+                .filter(|x| k >= 4 || x.is_finite())
                 .ok_or_else(|| perr(format!("{what}: `{}` is not a finite number", toks[k + 1])))?;
         }
         let camera_id = id(8, "CAMERA_ID")?;
@@ -594,8 +596,15 @@ pub fn read_images_binary(
         let start = r.pos;
         let image_id = r.u32(&format!("image {k}: image_id"))?;
         let mut v = [0.0; 7];
-        for (slot, what) in v.iter_mut().zip(["qw", "qx", "qy", "qz", "tx", "ty", "tz"]) {
-            *slot = r.f64(&format!("image {k} (id {image_id}): {what}"))?;
+        let names = ["qw", "qx", "qy", "qz", "tx", "ty", "tz"];
+        for (c, (slot, what)) in v.iter_mut().zip(names).enumerate() {
+            let what = format!("image {k} (id {image_id}): {what}");
+            // translations (c >= 4) are kept as written, NaN included (no rotation uses them)
+            *slot = if c >= 4 {
+                f64::from_le_bytes(r.take::<8>(&what)?)
+            } else {
+                r.f64(&what)?
+            };
         }
         let camera_id = r.u32(&format!("image {k} (id {image_id}): camera_id"))?;
         let name = r.name(&format!("image {k} (id {image_id}): name"))?;

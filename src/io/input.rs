@@ -48,6 +48,7 @@ use crate::io::single_json::parse_single_json;
 use crate::io::text::{MAX_INPUT_BYTES, TextStream};
 use crate::single::SingleProblem;
 use crate::so3::Rotation;
+use crate::warning::Warning;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::Path;
@@ -661,6 +662,9 @@ pub struct NodeRotations {
     pub rotations: Vec<Option<Rotation>>,
     /// The entries of the file that match no node (`id 12`, `name x.jpg`), in file order.
     pub unmatched: Vec<String>,
+    /// COLMAP images whose translation is not finite (NaN: a model written after rotation
+    /// averaging alone); their rotations are used, the translations never are.
+    pub non_finite_translations: usize,
 }
 
 impl NodeRotations {
@@ -736,6 +740,29 @@ impl NodeRotations {
         ))
     }
 
+    /// What to say about the file besides its rotations: entries that match no node
+    /// (`estimate_unmatched`, [`Self::unmatched_warning`]) and translations that are not
+    /// finite (`translations_not_finite`, counted).
+    pub fn warnings(&self) -> Vec<Warning> {
+        let mut warnings: Vec<Warning> = self
+            .unmatched_warning()
+            .map(|w| Warning::new("estimate_unmatched", w).with_count(self.unmatched.len()))
+            .into_iter()
+            .collect();
+        if self.non_finite_translations > 0 {
+            let message = format!(
+                "{}: {} images have translations that are not finite (NaN): not used, a \
+                 rotation certificate needs none",
+                self.file, self.non_finite_translations
+            );
+            warnings.push(
+                Warning::new("translations_not_finite", message)
+                    .with_count(self.non_finite_translations),
+            );
+        }
+        warnings
+    }
+
     /// A remark when some entries of the file match no node (they are not used), e.g.
     /// `est.g2o: 2 vertex / image entries match no node of the problem and are not used: id 40, id 41`.
     pub fn unmatched_warning(&self) -> Option<String> {
@@ -783,6 +810,13 @@ fn match_entries(
 ) -> NodeRotations {
     use std::collections::{BTreeMap, BTreeSet};
     let node_ids: BTreeSet<u64> = graph.node_ids.iter().copied().collect();
+    let non_finite_translations = match &entries {
+        Entries::Images(images) => images
+            .iter()
+            .filter(|im| !im.translation.iter().all(|t| t.is_finite()))
+            .count(),
+        _ => 0,
+    };
     let (matched_by, rotations, unmatched) = match entries {
         Entries::InOrder(rs) => (MatchedBy::Order, rs.into_iter().map(Some).collect(), vec![]),
         Entries::ById(list) => {
@@ -844,6 +878,7 @@ fn match_entries(
         matched_by,
         rotations,
         unmatched,
+        non_finite_translations,
     }
 }
 
@@ -1154,6 +1189,7 @@ pub fn load_estimate_for(
 ) -> Result<GraphEstimate> {
     let r = load_rotations_for_nodes(path, graph, options)?;
     let warning = r.unmatched_warning();
+    let warnings = r.warnings();
     let (file, format, matched_by, unmatched) =
         (r.file.clone(), r.format, r.matched_by, r.unmatched.clone());
     let rotations = r.require_all(graph, "estimate")?;
@@ -1165,6 +1201,7 @@ pub fn load_estimate_for(
         rotations,
         unmatched,
         warning,
+        warnings,
     })
 }
 
@@ -1185,6 +1222,8 @@ pub struct GraphEstimate {
     pub unmatched: Vec<String>,
     /// [`NodeRotations::unmatched_warning`].
     pub warning: Option<String>,
+    /// [`NodeRotations::warnings`] (the unmatched entries among them).
+    pub warnings: Vec<Warning>,
 }
 
 impl GraphEstimate {
@@ -1193,6 +1232,7 @@ impl GraphEstimate {
         LoadedEstimate {
             name: self.name,
             estimate: Estimate::Multiple(self.rotations),
+            warnings: self.warnings,
         }
     }
 }
@@ -1204,6 +1244,9 @@ pub struct LoadedEstimate {
     pub name: String,
     /// The rotations read.
     pub estimate: Estimate,
+    /// What the reader said about the file ([`NodeRotations::warnings`]; none for single and
+    /// conjugate estimates).
+    pub warnings: Vec<Warning>,
 }
 
 impl LoadedEstimate {
@@ -1236,6 +1279,7 @@ pub fn load_estimate(path: &str, options: &ReadOptions) -> Result<LoadedEstimate
     Ok(LoadedEstimate {
         estimate: read_estimate(&input.text, &input.name, options)?,
         name: input.name,
+        warnings: Vec::new(),
     })
 }
 

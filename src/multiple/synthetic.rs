@@ -251,6 +251,29 @@ impl SyntheticAnisotropic {
         (problem, gt)
     }
 
+    /// Issue 37's two-view-like anisotropy: 0.5 degrees along the well-determined axes, one weak
+    /// axis whose standard-deviation ratio is log-normal around 9 (`ratio_spread` 1: eigenvalue
+    /// ratios around 80 with a tail past 10^5), random axes, `outlier_fraction` of the edges
+    /// random rotations with their information kept (confident wrong pairs), seed 1.
+    ///
+    /// ```
+    /// use rotavg::multiple::synthetic::SyntheticAnisotropic;
+    /// let spec = SyntheticAnisotropic::two_view_like(50, 200, 0.1);
+    /// assert_eq!((spec.ratio, spec.ratio_spread, spec.seed), (9.0, 1.0, 1));
+    /// assert!(spec.generate().0.is_anisotropic());
+    /// ```
+    pub fn two_view_like(num_rotations: usize, num_edges: usize, outlier_fraction: f64) -> Self {
+        SyntheticAnisotropic {
+            num_rotations,
+            num_edges,
+            ratio: 9.0,
+            ratio_spread: 1.0,
+            outlier_fraction,
+            seed: 1,
+            ..Default::default()
+        }
+    }
+
     /// The standard deviations along an edge's frame for a ratio `ratio`.
     fn standard_deviations(&self, ratio: f64) -> Vector3<f64> {
         let weak = self.sigma * ratio;

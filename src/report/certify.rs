@@ -31,7 +31,7 @@ use std::fmt;
 /// use rotavg::Rotation;
 /// let input = Input::new("p.json", r#"{"rotations": [[[1,0,0],[0,1,0],[0,0,1]]]}"#);
 /// let problem = read_problem(&input, GraphFormat::Auto, &ReadOptions::default())?;
-/// let estimate = LoadedEstimate { name: "e.json".into(), estimate: Estimate::Single(Rotation::identity()) };
+/// let estimate = LoadedEstimate { name: "e.json".into(), estimate: Estimate::Single(Rotation::identity()), warnings: vec![] };
 /// let report = CertifyReport::certify(&input.name, &problem, estimate, &CertifySettings::default())?;
 /// assert!(report.certificate.is_certified());
 /// let json = serde_json::to_value(&report).unwrap();
@@ -77,6 +77,7 @@ impl CertifyReport {
         settings: &CertifySettings,
     ) -> Result<Self> {
         let estimate_file = estimate.name.clone();
+        let estimate_warnings = estimate.warnings.clone();
         let report =
             |problem, num_rotations, num_measurements, cost, estimate, certificate| CertifyReport {
                 problem,
@@ -89,7 +90,7 @@ impl CertifyReport {
                 node_ids: None,
                 certificate,
                 details: None,
-                warnings: Vec::new(),
+                warnings: estimate_warnings.clone(),
             };
         match problem {
             LoadedProblem::Multiple(graph) => {
@@ -110,7 +111,7 @@ impl CertifyReport {
                 Ok(CertifyReport {
                     node_ids: Some(graph.node_ids.clone()),
                     details: Some(c.details),
-                    warnings: graph.warnings.clone(),
+                    warnings: [graph.warnings.clone(), estimate_warnings.clone()].concat(),
                     ..report(
                         ProblemKind::Multiple,
                         n,

@@ -416,6 +416,51 @@ fn certifies_a_database_problem_against_a_model_matched_by_name() {
     assert!(err.contains("holds no estimated camera poses"), "{err}");
 }
 
+/// pycolmap's rotation averaging writes a model whose translations are NaN: its rotations are
+/// certified in one line, the translations reported (issue 38) and never used.
+#[test]
+fn models_with_nan_translations_are_certified_with_a_warning() {
+    let mut sc = scene(9, 6);
+    let db = temp_dir().join("nan/database.db");
+    std::fs::create_dir_all(db.parent().unwrap()).unwrap();
+    database(&db, &sc);
+    sc.translations = vec![[f64::NAN; 3]; 9];
+    let order = shuffled(9);
+    let est = perturbed(&sc);
+    let bin = write(
+        "nan/sparse/0/images.bin",
+        images_bin(&sc, &est, &order, &sc.ids),
+    );
+    // C++ streams write `nan`, Rust `NaN`: both are read
+    let txt = write(
+        "nan/sparse/1/images.txt",
+        images_txt(&sc, &est, &order, &sc.ids).replace("NaN", "nan"),
+    );
+    for model in [bin, txt] {
+        let v = certify_matches(&db, &model, &est);
+        let w = v["warnings"].as_array().unwrap();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!(w[0]["code"], "translations_not_finite");
+        assert_eq!(w[0]["count"], 9);
+        assert!(v["certificate"]["lower_bound"].is_number());
+    }
+    // a NaN rotation is still an error naming the file
+    let text = images_txt(&sc, &est, &order, &sc.ids);
+    let first = text
+        .lines()
+        .find(|l| !l.starts_with('#') && !l.is_empty())
+        .unwrap();
+    let mut toks: Vec<&str> = first.split(' ').collect();
+    toks[1] = "nan"; // QW
+    let bad = write(
+        "nan/sparse/2/images.txt",
+        text.replace(first, &toks.join(" ")),
+    );
+    let out = run(&["certify", s(&db), "--estimate", s(&bad)]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("images.txt"));
+}
+
 #[test]
 fn certifies_json_with_ids_bundler_and_rotation_lists() {
     let sc = scene(8, 5);

@@ -9,7 +9,6 @@ use rotavg::Result;
 use rotavg::certify::CertifyMode;
 use rotavg::io::input::{LoadedProblem, load_estimate, load_estimate_for, load_problem};
 use rotavg::report::CertifyReport;
-use rotavg::warning::Warning;
 
 /// Arguments of `rotavg certify`.
 #[derive(clap::Args, Debug)]
@@ -35,13 +34,8 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<Outcome> {
     let options = args.graph.read_options(&args.common);
     let problem = load_problem(&args.input, args.graph.format, &options)?;
-    let mut unmatched = None;
     let estimate = match &problem {
-        LoadedProblem::Multiple(g) => {
-            let e = load_estimate_for(&args.estimate, g, &options)?;
-            unmatched = e.warning.clone();
-            e.into_loaded()
-        }
+        LoadedProblem::Multiple(g) => load_estimate_for(&args.estimate, g, &options)?.into_loaded(),
         LoadedProblem::Single(_) | LoadedProblem::Conjugate(_) => {
             load_estimate(&args.estimate, &options)?
         }
@@ -65,11 +59,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
         }
         _ => args.common.settings(CertifyMode::Auto),
     };
-    let mut report = CertifyReport::certify(&args.input, &problem, estimate, &settings)?;
-    // printed with the report's `warning:` lines, and in its JSON
-    report
-        .warnings
-        .extend(unmatched.map(|w| Warning::new("estimate_unmatched", w)));
+    let report = CertifyReport::certify(&args.input, &problem, estimate, &settings)?;
     if let Some(path) = &args.plot.plot {
         report.write_figure(path, &problem)?;
     }
