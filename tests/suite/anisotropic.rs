@@ -816,6 +816,33 @@ fn command_line_reports_anisotropic_measurements() {
     assert!((cost - closed).abs() <= 1e-8 * closed, "{cost} vs {closed}");
 }
 
+/// A complete graph on `n` nodes with planted rotations, noise uniform in `[-0.3, 0.3]` rad per
+/// axis, each edge a random rotation with probability `outliers`, and random information of
+/// anisotropy `ratio` (one strong axis when `weak_axis`).
+fn tiny_outlier_graph(
+    rng: &mut impl Rng,
+    n: usize,
+    outliers: f64,
+    ratio: f64,
+    weak_axis: bool,
+) -> MultipleProblem {
+    let truth: Vec<Rotation> = (0..n).map(|_| random_rotation(rng)).collect();
+    let mut edges = Vec::new();
+    for i in 0..n {
+        for j in (i + 1)..n {
+            let r = if rng.random::<f64>() < outliers {
+                random_rotation(rng)
+            } else {
+                let e = Vector3::from_fn(|_, _| 0.6 * (rng.random::<f64>() - 0.5));
+                truth[j] * truth[i].inverse() * exp(&e)
+            };
+            let h = *random_information(rng, ratio, weak_axis).matrix();
+            edges.push((i, j, r, h));
+        }
+    }
+    graph(n, &edges)
+}
+
 /// `[A6]`: the `conv(SO(3))` constraints close the two reflection examples (bounds 0 and 6, the
 /// rotation optima, where the `O(3)` relaxation gives -8 and 0.8), and on random tiny graphs
 /// (indefinite `M`, outliers) the verified bound is never above the best of 40 local solves.
@@ -854,22 +881,7 @@ fn conv_so3_closes_the_reflection_examples() {
     let mut rng = rand::rngs::StdRng::seed_from_u64(78);
     let (mut closed, mut certified) = (0, 0);
     for case in 0..6 {
-        let n = 4 + case % 2;
-        let truth: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
-        let mut edges = Vec::new();
-        for i in 0..n {
-            for j in (i + 1)..n {
-                let r = if rng.random::<f64>() < 0.2 {
-                    random_rotation(&mut rng)
-                } else {
-                    let e = Vector3::from_fn(|_, _| 0.6 * (rng.random::<f64>() - 0.5));
-                    truth[j] * truth[i].inverse() * exp(&e)
-                };
-                let h = *random_information(&mut rng, 20.0, false).matrix();
-                edges.push((i, j, r, h));
-            }
-        }
-        let p = graph(n, &edges);
+        let p = tiny_outlier_graph(&mut rng, 4 + case % 2, 0.2, 20.0, false);
         let o3 = average_multiple(&p, &settings(CertifyMode::Sdp)).unwrap();
         let o3_bound = o3_sdp(&o3).0;
         let b = conv_bound(&p, &relax_multiple_conv(&p, &sdp).unwrap()).unwrap();
@@ -917,22 +929,7 @@ fn the_conv_sdp_rounding_is_returned_when_it_beats_the_local_solve() {
     let mut rng = rand::rngs::StdRng::seed_from_u64(2037);
     let (mut tight, mut rescued) = (0, 0);
     for case in 0..16 {
-        let n = 5;
-        let truth: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
-        let mut edges = Vec::new();
-        for i in 0..n {
-            for j in (i + 1)..n {
-                let r = if rng.random::<f64>() < 0.3 {
-                    random_rotation(&mut rng)
-                } else {
-                    let e = Vector3::from_fn(|_, _| 0.6 * (rng.random::<f64>() - 0.5));
-                    truth[j] * truth[i].inverse() * exp(&e)
-                };
-                let h = *random_information(&mut rng, 30.0, true).matrix();
-                edges.push((i, j, r, h));
-            }
-        }
-        let p = graph(n, &edges);
+        let p = tiny_outlier_graph(&mut rng, 5, 0.3, 30.0, true);
         let local = solve_multiple(&p, &MultipleSettings::default()).unwrap();
         let out = average_multiple(&p, &settings(CertifyMode::Auto)).unwrap();
         let bound = conv_bound(
