@@ -211,3 +211,27 @@ def test_certify_multiple_reads_an_estimate_file_like_the_command_line(tmp_path)
     missing.write_text("\n".join(lines[1:]) + "\n")
     with pytest.raises(rotavg.ParseError, match="1 of 400 nodes have no rotation"):
         rotavg.certify_multiple(g, estimate=str(missing))
+
+
+def test_certify_a_colmap_model_with_nan_translations(tmp_path):
+    """pycolmap's rotation averaging writes a model whose translations are NaN: its rotations
+    are certified from Python as from the command line, the translations reported."""
+    import pathlib
+
+    from scipy.spatial.transform import Rotation
+
+    data = pathlib.Path(__file__).resolve().parents[2] / "examples" / "data" / "slam.g2o"
+    g = rotavg.read_graph(data)
+    est = rotavg.average_multiple(g, loss="chordal").estimate
+    x, y, z, w = Rotation.from_matrix(est).as_quat().T  # COLMAP's cam_from_world is R_i
+    lines = [
+        f"{int(k)} {w[n]} {x[n]} {y[n]} {z[n]} nan nan nan 1 img{int(k)}.jpg\n\n"
+        for n, k in enumerate(g.node_ids)
+    ]
+    model = tmp_path / "images.txt"
+    model.write_text("".join(lines))
+    res = rotavg.certify_multiple(g, estimate=model)
+    d = res.to_dict()
+    assert res.certificate.certified
+    assert [x["code"] for x in d["warnings"]] == ["translations_not_finite"]
+    assert d["warnings"][0]["count"] == g.n
