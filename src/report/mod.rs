@@ -44,7 +44,7 @@ pub use certify::CertifyReport;
 pub use conjugate::ConjugateReport;
 pub use demo::DemoReport;
 pub use info::InfoReport;
-pub use multiple::{MultipleReport, VerdictOf};
+pub use multiple::{CertifiedEstimate, MultipleReport, VerdictOf};
 pub use single::SingleReport;
 
 use crate::certify::MethodRun;

@@ -163,17 +163,23 @@ impl MultipleReport {
         self.verdict_of().map(|v| v.verdict)
     }
 
-    /// Every warning of the run, as the JSON's `warnings`: the reader's, the outlier
-    /// diagnosis of a least-squares run (`outliers_suspected`), and [`Self::run_warnings`].
+    /// Every warning of the run, as the JSON's `warnings`: the reader's (lines of the report)
+    /// and [`Self::stderr_warnings`].
     pub fn all_warnings(&self) -> Vec<Warning> {
+        [self.warnings.clone(), self.stderr_warnings()].concat()
+    }
+
+    /// The warnings the command line prints on stderr: the outlier diagnosis of a
+    /// least-squares run (`outliers_suspected`) and [`Self::run_warnings`].
+    pub fn stderr_warnings(&self) -> Vec<Warning> {
         let outliers = self.result.details.outliers.as_ref().map(|w| {
             Warning::new("outliers_suspected", format!("{}: {w}", self.input))
                 .with_count(w.suspected)
         });
-        let mut all = self.warnings.clone();
-        all.extend(outliers);
-        all.extend(self.run_warnings.iter().cloned());
-        all
+        outliers
+            .into_iter()
+            .chain(self.run_warnings.iter().cloned())
+            .collect()
     }
 
     /// The verdict with the problem and estimate it is about.
@@ -188,7 +194,7 @@ impl MultipleReport {
         if let Some(c) = &self.result.certificate {
             return Some(VerdictOf {
                 verdict: c.verdict,
-                estimate: "returned",
+                estimate: CertifiedEstimate::Returned,
                 problem: c.certified_problem.unwrap_or(whole),
             });
         }
@@ -196,7 +202,7 @@ impl MultipleReport {
         let c = g.certificate.as_ref()?;
         Some(VerdictOf {
             verdict: c.verdict,
-            estimate: "inlier_graph",
+            estimate: CertifiedEstimate::InlierGraph,
             problem: c.certified_problem.unwrap_or(g.problem),
         })
     }
@@ -207,17 +213,27 @@ impl MultipleReport {
 pub struct VerdictOf {
     /// The certificate's verdict.
     pub verdict: Verdict,
-    /// The estimate certified: `"returned"` (`estimate`), or `"inlier_graph"` (the robust
-    /// run's refined inlier-graph estimate, `--inlier-output`).
-    pub estimate: &'static str,
+    /// The estimate certified.
+    pub estimate: CertifiedEstimate,
     /// The problem certified (kind and size against the input's).
     pub problem: CertifiedProblem,
+}
+
+/// Which estimate a run's verdict is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CertifiedEstimate {
+    /// The returned estimate (`estimate`, `--output`).
+    Returned,
+    /// A robust run's refined inlier-graph estimate (`--inlier-output`); the returned one is
+    /// the robust estimate, which has no certificate.
+    InlierGraph,
 }
 
 impl fmt::Display for VerdictOf {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "verdict: {} for {}", self.verdict, self.problem)?;
-        if self.estimate == "inlier_graph" {
+        if self.estimate == CertifiedEstimate::InlierGraph {
             write!(f, ", at its refined estimate (not the returned robust one)")?;
         }
         Ok(())

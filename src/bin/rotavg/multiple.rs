@@ -142,7 +142,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
             .push(Warning::new("output_not_written", message).with_count(unwritten));
     }
     // the reader's warnings are lines of the report; these go to stderr
-    for w in report.all_warnings().iter().skip(report.warnings.len()) {
+    for w in report.stderr_warnings() {
         args.common.warn(&w.message);
     }
     args.common.finish(&report, report.verdict())
