@@ -69,6 +69,32 @@ pub struct OutputPlan {
     pub model_dir: Option<PathBuf>,
     /// The file written (for a COLMAP folder, its `images.txt`).
     pub file: PathBuf,
+    /// The folders [`prepare_output`] created for it, outermost first (none when they all
+    /// existed): [`Self::remove_empty_folders`] takes them back when nothing was written.
+    pub created: Vec<PathBuf>,
+}
+
+impl OutputPlan {
+    /// Remove the folders this plan created that are still empty, innermost first: what a run
+    /// that wrote nothing there (it failed, or had nothing to write) leaves behind. Folders
+    /// holding anything, and folders that existed before, are kept.
+    pub fn remove_empty_folders(&self) {
+        for dir in self.created.iter().rev() {
+            // fails, harmlessly, on a folder that is not empty
+            let _ = std::fs::remove_dir(dir);
+        }
+    }
+}
+
+/// The folders `create_dir_all(dir)` would create, outermost first.
+fn missing_folders(dir: &Path) -> Vec<PathBuf> {
+    let mut missing: Vec<PathBuf> = dir
+        .ancestors()
+        .take_while(|d| !d.as_os_str().is_empty() && !d.exists())
+        .map(Path::to_path_buf)
+        .collect();
+    missing.reverse();
+    missing
 }
 
 /// Resolve an output path and create its folder, **before** any work is done: a path ending
@@ -110,12 +136,14 @@ pub fn prepare_output(path: &str, format: OutputFormat) -> Result<OutputPlan> {
     if folder {
         return match format {
             OutputFormat::Auto | OutputFormat::Colmap => {
+                let created = missing_folders(p);
                 mkdir(p)?;
                 Ok(OutputPlan {
                     path: path.into(),
                     format: OutputFormat::Colmap,
                     model_dir: Some(p.to_path_buf()),
                     file: p.join("images.txt"),
+                    created,
                 })
             }
             f => Err(io(format!(
@@ -126,6 +154,7 @@ pub fn prepare_output(path: &str, format: OutputFormat) -> Result<OutputPlan> {
     }
     let format = format.for_path(path);
     let parent = p.parent().unwrap_or(Path::new(""));
+    let created = missing_folders(parent);
     mkdir(parent)?;
     let model_dir = (format == OutputFormat::Colmap
         && path.to_ascii_lowercase().ends_with("images.txt"))
@@ -135,6 +164,7 @@ pub fn prepare_output(path: &str, format: OutputFormat) -> Result<OutputPlan> {
         format,
         model_dir,
         file: p.to_path_buf(),
+        created,
     })
 }
 
@@ -335,6 +365,8 @@ pub struct MultipleOutputs {
     pub inlier_estimate: Option<OutputPlan>,
     /// The per-edge residuals (robust losses; [`edges_file_text`]).
     pub edges: Option<String>,
+    /// The per-edge residuals' plan (its folder).
+    pub edges_plan: Option<OutputPlan>,
 }
 
 impl MultipleOutputs {
@@ -346,13 +378,22 @@ impl MultipleOutputs {
         format: OutputFormat,
     ) -> Result<Self> {
         let plan = |path: Option<&str>, format| path.map(|p| prepare_output(p, format)).transpose();
-        let outputs = MultipleOutputs {
+        Ok(MultipleOutputs {
             estimate: plan(estimate, format)?,
             inlier_estimate: plan(inlier_estimate, format)?,
             edges: edges.map(str::to_owned),
-        };
-        plan(edges, OutputFormat::Json)?;
-        Ok(outputs)
+            edges_plan: plan(edges, OutputFormat::Json)?,
+        })
+    }
+
+    /// Remove the folders the plans created that are still empty
+    /// ([`OutputPlan::remove_empty_folders`]): after a failed run, or for outputs a run had
+    /// nothing to write (`--loss auto` keeping least squares).
+    pub fn remove_empty_folders(&self) {
+        let plans = [&self.estimate, &self.inlier_estimate, &self.edges_plan];
+        for plan in plans.into_iter().flatten() {
+            plan.remove_empty_folders();
+        }
     }
 
     /// An error, before the solve, for an estimate file `source` cannot give

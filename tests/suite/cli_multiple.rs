@@ -609,3 +609,39 @@ fn memory_budget_holds_under_an_address_space_limit() {
         "the SDP's refusal names the budget: {text}"
     );
 }
+
+#[test]
+fn runs_leave_no_empty_output_folder_behind() {
+    let base = temp_dir().join("no_empty_folders");
+    let _ = std::fs::remove_dir_all(&base);
+    let folder = |name: &str| format!("{}/{name}/", base.display());
+    // a failed run (the input is malformed): the folders planned before reading are removed
+    let bad = tmp("no_empty_folders_bad.txt", "1 2 3\n");
+    let out = run(&[
+        "multiple",
+        bad.to_str().unwrap(),
+        "--output",
+        &folder("failed/model"),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        !base.join("failed").exists(),
+        "the failed run's folder stayed"
+    );
+    // `--loss auto` keeping least squares writes no robust outputs: their folders go, the
+    // estimate's stays with its files
+    let g = graph_file("no_empty_folders_graph.json");
+    let out = run(&[
+        "multiple",
+        g.to_str().unwrap(),
+        "--output",
+        &folder("est"),
+        "--inlier-output",
+        &folder("inliers"),
+        "--edges-output",
+        &format!("{}/edges/e.csv", base.display()),
+    ]);
+    assert_success(&out);
+    assert!(base.join("est/images.txt").is_file());
+    assert!(!base.join("inliers").exists() && !base.join("edges").exists());
+}

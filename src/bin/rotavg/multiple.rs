@@ -80,6 +80,14 @@ pub fn run(args: &Args) -> Result<Outcome> {
         args.edges_output.as_deref(),
         args.output_format,
     )?;
+    let outcome = solve_and_write(args, &outputs);
+    // a failed run, or an output a run had nothing to write, leaves no folder behind
+    outputs.remove_empty_folders();
+    outcome
+}
+
+/// Read, solve, certify, write the planned outputs and print the report.
+fn solve_and_write(args: &Args, outputs: &MultipleOutputs) -> Result<Outcome> {
     let input = load_multiple_input(
         &args.input,
         &MultipleInputOptions {
