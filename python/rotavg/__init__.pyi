@@ -304,6 +304,9 @@ def certify_multiple(
     randomized: bool = True,
     randomized_seed: Optional[int] = None,
     information: Optional[npt.ArrayLike] = None,
+    loss: str = "chordal",
+    loss_threshold: float = 5.0,
+    inlier_threshold: Optional[float] = None,
 ) -> Result:
     """Certify an estimate from any other solver, without changing it."""
 
@@ -321,6 +324,9 @@ def certify_multiple(
     randomized: bool = True,
     randomized_seed: Optional[int] = None,
     information: None = None,
+    loss: str = "chordal",
+    loss_threshold: float = 5.0,
+    inlier_threshold: Optional[float] = None,
 ) -> Result:
     """Certify an estimate for a graph from ``read_graph``."""
 

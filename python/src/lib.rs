@@ -509,16 +509,25 @@ fn average_multiple_py(
 ///     certify: ``"auto"`` (dual certificate, then the SDP or the staircase), ``"dual"``,
 ///         ``"sdp"`` or ``"staircase"`` (``"none"`` means ``"dual"``, as on the command line).
 ///     max_memory, max_seconds, randomized, randomized_seed: as for ``average_multiple``.
+///     loss: ``"chordal"`` (default: the chordal L2 problem on all edges), or ``"l1"``,
+///         ``"huber"``, ``"cauchy"``: also judge the estimate, unchanged, on the chordal L2
+///         problem of its own inlier graph (the edges whose residual at the estimate is at
+///         most the inlier threshold, their largest connected component); the verdict
+///         (``to_dict()["verdict"]``) is then that problem's, and ``to_dict()["inlier_graph"]``
+///         states the inlier set and its certificate. The time budget is shared (half for all
+///         edges).
+///     loss_threshold: the inlier threshold in degrees unless ``inlier_threshold`` is given.
+///     inlier_threshold: the inlier threshold in degrees.
 ///
 /// Returns:
 ///     Result: ``solver`` is None; ``to_dict()`` equals
-///     ``rotavg certify FILE --estimate EST --json``.
+///     ``rotavg certify FILE --estimate EST --json`` (with the same ``--loss``).
 ///
 /// Raises:
 ///     rotavg.Error: as ``average_multiple``, an estimate of the wrong size, and (a path) a node
 ///         the file lacks or a file that cannot be read (``rotavg.ParseError``, naming the file).
 #[pyfunction]
-#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, information=None))]
+#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, information=None, loss="chordal", loss_threshold=5.0, inlier_threshold=None))]
 #[allow(clippy::too_many_arguments)]
 fn certify_multiple_py(
     py: Python<'_>,
@@ -534,8 +543,15 @@ fn certify_multiple_py(
     randomized: bool,
     randomized_seed: Option<u64>,
     information: Option<&Bound<'_, PyAny>>,
+    loss: &str,
+    loss_threshold: f64,
+    inlier_threshold: Option<f64>,
 ) -> PyResult<RunResult> {
     let graph = GraphInput::copy(n, i, j, rel, weights, information)?;
+    let loss: MultipleLoss = parse_named(loss, "loss")?;
+    let threshold = loss
+        .certify_inlier_threshold_deg(loss_threshold, inlier_threshold)
+        .map_err(error)?;
     // a path (str or os.PathLike) is read as `rotavg certify --estimate PATH` reads it
     let path = estimate
         .filter(|e| !e.is_none())
@@ -565,7 +581,17 @@ fn certify_multiple_py(
             }
         };
         let problem = LoadedProblem::Multiple(input.graph);
-        CertifyReport::certify(&input.name, &problem, estimate, &settings)
+        match threshold {
+            None => CertifyReport::certify(&input.name, &problem, estimate, &settings),
+            Some(t) => CertifyReport::certify_on_inliers(
+                &input.name,
+                &problem,
+                estimate,
+                &loss.to_string(),
+                t,
+                &settings,
+            ),
+        }
     })?;
     RunResult::new(py, Report::Certify(report))
 }

@@ -235,3 +235,62 @@ def test_certify_a_colmap_model_with_nan_translations(tmp_path):
     assert res.certificate.certified
     assert [x["code"] for x in d["warnings"]] == ["translations_not_finite"]
     assert d["warnings"][0]["count"] == g.n
+
+
+def test_certify_multiple_judges_an_estimate_on_its_inlier_graph(rng, cli, tmp_path):
+    """``loss="cauchy"``: the truth of noise-free inliers is certified on the chordal L2 problem
+    of its inlier graph (three planted outliers left out), as ``rotavg certify --loss cauchy``
+    says; on all edges it is not."""
+    truth, i, j, rel = synthetic_graph(rng, 20, 80, 0.0)
+    rel = rel.copy()
+    bad = np.array([2, 30, 61])  # edges off the spanning tree (the first 19)
+    rel[bad] = np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]) @ rel[bad]
+    res = rotavg.certify_multiple(20, i, j, rel, truth, loss="cauchy")
+    d = res.to_dict()
+    assert d["loss"] == "cauchy" and not res.certificate.certified
+    assert d["verdict"]["verdict"] == "certified" and d["verdict"]["estimate"] == "given"
+    problem = d["verdict"]["problem"]
+    assert problem["kind"] == "chordal_l2_inliers" and problem["num_edges"] == 80 - 3
+    assert d["inlier_graph"]["residuals"]["num_outliers"] == 3
+    assert np.array_equal(res.estimate, truth)  # unchanged
+    path = tmp_path / "graph.json"
+    edges = [{"i": int(a), "j": int(b), "rotation": r.tolist()} for a, b, r in zip(i, j, rel)]
+    path.write_text(json.dumps({"num_rotations": 20, "edges": edges}))
+    est = tmp_path / "truth.json"
+    est.write_text(json.dumps({"rotations": truth.tolist()}))
+    theirs = cli("certify", path, "--estimate", est, "--loss", "cauchy")
+    ours = rotavg.certify_multiple(20, i, j, rel, est, loss="cauchy").to_dict()
+    assert untimed(ours)["verdict"] == untimed(theirs)["verdict"]
+    assert untimed(ours)["inlier_graph"]["certificate"] == untimed(theirs)["inlier_graph"]["certificate"]
+    with pytest.raises(rotavg.Error, match="not with auto"):
+        rotavg.certify_multiple(20, i, j, rel, truth, loss="auto")
+    with pytest.raises(rotavg.Error, match="inlier_threshold"):
+        rotavg.certify_multiple(20, i, j, rel, truth, loss="l1", inlier_threshold=-1.0)
+
+
+def test_certify_multiple_reads_numpy_files(rng, tmp_path):
+    """``np.save`` / ``np.savez`` files (C or Fortran order, float32) are estimates, in node
+    order; ``np.savez_compressed`` is refused with what to do."""
+    _, i, j, rel = synthetic_graph(rng, 12, 30, 0.02)
+    est = rotavg.average_multiple(12, i, j, rel).estimate
+    expected = rotavg.certify_multiple(12, i, j, rel, est).cost
+    files = {
+        "c.npy": lambda p: np.save(p, est),
+        "f.npy": lambda p: np.save(p, np.asfortranarray(est)),
+        "nine.npy": lambda p: np.save(p, est.reshape(12, 9)),
+        "named.npz": lambda p: np.savez(p, rotations=est, other=np.zeros(2)),
+        "one.npz": lambda p: np.savez(p, est),
+    }
+    for name, save in files.items():
+        path = tmp_path / name
+        save(path)
+        res = rotavg.certify_multiple(12, i, j, rel, path)
+        assert res.cost == pytest.approx(expected, rel=1e-12), name
+        assert np.allclose(res.estimate, est, atol=1e-12), name
+    single = tmp_path / "single.npy"
+    np.save(single, est.astype(np.float32))
+    assert rotavg.certify_multiple(12, i, j, rel, single).cost == pytest.approx(expected, rel=1e-3)
+    packed = tmp_path / "packed.npz"
+    np.savez_compressed(packed, est)
+    with pytest.raises(rotavg.Error, match="savez_compressed"):
+        rotavg.certify_multiple(12, i, j, rel, packed)

@@ -204,6 +204,8 @@ def multiple(folder: Path) -> None:
     assert from_graph.accuracy is not None
     check_result(rotavg.certify_multiple(g, estimate=from_graph.estimate))
     check_result(rotavg.certify_multiple(g, estimate=from_graph.estimate, certify="dual"))
+    check_result(rotavg.certify_multiple(g, estimate=from_graph.estimate, loss="cauchy",
+                                         loss_threshold=5.0, inlier_threshold=None))
     t: FloatArray = rotavg.read_ground_truth(gt, g)
     acc: rotavg.Accuracy = rotavg.accuracy(from_graph.estimate, t)
     check_accuracy(acc)

@@ -125,6 +125,30 @@ pub struct LoadedGraph {
 }
 
 impl LoadedGraph {
+    /// A problem built in memory, as the JSON reader would return it: node ids `0..n`, no
+    /// names, no initial estimate or warnings, its duplicate edges counted.
+    ///
+    /// ```
+    /// use rotavg::io::detect::LoadedGraph;
+    /// use rotavg::multiple::synthetic::SyntheticGraph;
+    /// let (p, _) = SyntheticGraph { num_rotations: 5, num_edges: 8, ..Default::default() }.generate();
+    /// let g = LoadedGraph::from_problem(p);
+    /// assert_eq!(g.node_ids, vec![0, 1, 2, 3, 4]);
+    /// ```
+    pub fn from_problem(problem: MultipleProblem) -> Self {
+        LoadedGraph {
+            node_ids: (0..problem.num_rotations() as u64).collect(),
+            node_names: Vec::new(),
+            initial: None,
+            duplicates: crate::multiple::stats::duplicate_edge_count(&problem),
+            reversed: 0,
+            warnings: Vec::new(),
+            format: GraphFormat::Json,
+            planar: false,
+            problem,
+        }
+    }
+
     /// The node index of a file id, if the id occurs.
     pub fn node_of_id(&self, id: u64) -> Option<usize> {
         self.node_ids.binary_search(&id).ok()

@@ -618,6 +618,9 @@ pub enum EstimateFormat {
     Bundler,
     /// A rotation list (`R11 .. R33` per line, or `id R11 .. R33`).
     RotationList,
+    /// A NumPy array (`.npy`, or a `.npz` archive's array): shape `(n, 3, 3)` or `(n, 9)` in
+    /// node order ([`crate::io::numpy`]).
+    Numpy,
 }
 
 impl EstimateFormat {
@@ -631,6 +634,7 @@ impl EstimateFormat {
             EstimateFormat::ColmapDatabase => "COLMAP database pose priors",
             EstimateFormat::Bundler => "Bundler cameras",
             EstimateFormat::RotationList => "rotation list",
+            EstimateFormat::Numpy => "NumPy array",
         }
     }
 }
@@ -1041,6 +1045,14 @@ pub fn load_rotations_for_nodes(
         };
         let name = file.display().to_string();
         crate::io::colmap::refuse_other_model_file(&name)?;
+        if let Some(rotations) = load_numpy(&name, options)? {
+            return Ok(match_entries(
+                Entries::InOrder(rotations),
+                &name,
+                EstimateFormat::Numpy,
+                graph,
+            ));
+        }
         if is_images_binary(&name) {
             let images = load_images(&name, options)?;
             return Ok(match_entries(
@@ -1053,6 +1065,41 @@ pub fn load_rotations_for_nodes(
         return read_rotations_for_nodes(&read_input(&name)?, graph, options);
     }
     read_rotations_for_nodes(&read_input(path)?, graph, options)
+}
+
+/// The rotations of the NumPy file at `path` ([`crate::io::numpy`]) when it is one: a `.npy`
+/// file (by its magic bytes), or a zip archive named `*.npz`; `None` for any other file (and
+/// for `-`). A name ending in `.npy` / `.npz` whose content is not NumPy's is an error.
+fn load_numpy(path: &str, options: &ReadOptions) -> Result<Option<Vec<Rotation>>> {
+    use crate::io::numpy::{is_npy, is_zip, read_numpy_rotations};
+    let lower = path.to_ascii_lowercase();
+    let named = lower.ends_with(".npy") || lower.ends_with(".npz");
+    if path == "-" || !(named || Path::new(path).is_file()) {
+        return Ok(None);
+    }
+    let io = |e: std::io::Error| Error::Io {
+        path: path.to_string(),
+        message: e.to_string(),
+    };
+    let mut head = Vec::with_capacity(8);
+    {
+        use std::io::Read;
+        let file = std::fs::File::open(path).map_err(io)?;
+        file.take(8).read_to_end(&mut head).map_err(io)?;
+    }
+    if !(is_npy(&head) || (is_zip(&head) && lower.ends_with(".npz"))) {
+        return if named {
+            Err(Error::parse(
+                Some(path),
+                None,
+                "named as a NumPy file, but it is not one (np.save writes .npy, np.savez .npz)",
+            ))
+        } else {
+            Ok(None)
+        };
+    }
+    let bytes = std::fs::read(path).map_err(io)?;
+    read_numpy_rotations(&bytes, path, options).map(Some)
 }
 
 /// Ground truth for the nodes of `graph` (entry `k` for node `k`, `None` where unknown) from
@@ -1275,6 +1322,17 @@ impl LoadedEstimate {
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn load_estimate(path: &str, options: &ReadOptions) -> Result<LoadedEstimate> {
+    if let Some(rotations) = load_numpy(path, options)? {
+        let estimate = match <[Rotation; 1]>::try_from(rotations) {
+            Ok([one]) => Estimate::Single(one),
+            Err(many) => Estimate::Multiple(many),
+        };
+        return Ok(LoadedEstimate {
+            name: path.to_string(),
+            estimate,
+            warnings: Vec::new(),
+        });
+    }
     let input = read_input(path)?;
     Ok(LoadedEstimate {
         estimate: read_estimate(&input.text, &input.name, options)?,

@@ -20,7 +20,7 @@
 //! as `edge k` / `rotation k`.
 
 use crate::error::{Error, Result};
-use crate::io::detect::{GraphFormat, LoadedGraph, ReadOptions, WeightSource};
+use crate::io::detect::{LoadedGraph, ReadOptions, WeightSource};
 use crate::multiple::anisotropic::Information;
 use crate::multiple::{Edge, MultipleProblem};
 use crate::so3::{Rotation, rotation_from_rows, rotation_to_rows};
@@ -123,17 +123,9 @@ pub fn read_problem_json(text: &str, file: &str, options: &ReadOptions) -> Resul
             .with_information(information)
             .map_err(|e| e.in_file(file, None))?;
     }
-    let duplicates = crate::multiple::stats::duplicate_edge_count(&problem);
     Ok(LoadedGraph {
-        node_ids: (0..n as u64).collect(),
-        node_names: Vec::new(),
-        problem,
-        initial: None,
-        duplicates,
         reversed,
-        warnings: Vec::new(),
-        format: GraphFormat::Json,
-        planar: false,
+        ..LoadedGraph::from_problem(problem)
     })
 }
 

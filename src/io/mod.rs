@@ -47,6 +47,7 @@ pub mod handeye;
 pub mod input;
 pub mod json;
 pub mod names;
+pub mod numpy;
 pub mod output;
 pub mod sfm;
 pub mod single_json;

@@ -401,6 +401,43 @@ impl MultipleLoss {
         }
     }
 
+    /// The inlier threshold (degrees) with which `rotavg certify --loss` judges an estimate:
+    /// `None` for `chordal` (all edges only); for `l1`, `huber`, `cauchy` `given`
+    /// (`--inlier-threshold`) or else `threshold_deg` (`--loss-threshold`), which must be
+    /// positive and finite. `auto` and `geodesic` are refused ([`Error::InvalidSettings`],
+    /// field `loss`): an estimate is judged on all edges or on an inlier set.
+    ///
+    /// ```
+    /// use rotavg::io::names::MultipleLoss;
+    /// assert_eq!(MultipleLoss::Chordal.certify_inlier_threshold_deg(5.0, None)?, None);
+    /// assert_eq!(MultipleLoss::Huber.certify_inlier_threshold_deg(5.0, None)?, Some(5.0));
+    /// assert_eq!(MultipleLoss::L1.certify_inlier_threshold_deg(5.0, Some(2.0))?, Some(2.0));
+    /// assert!(MultipleLoss::Auto.certify_inlier_threshold_deg(5.0, None).is_err());
+    /// assert!(MultipleLoss::Cauchy.certify_inlier_threshold_deg(5.0, Some(0.0)).is_err());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn certify_inlier_threshold_deg(
+        self,
+        threshold_deg: f64,
+        given: Option<f64>,
+    ) -> Result<Option<f64>> {
+        match self {
+            MultipleLoss::Chordal => Ok(None),
+            MultipleLoss::L1 | MultipleLoss::Huber | MultipleLoss::Cauchy => {
+                let t = given.unwrap_or(threshold_deg);
+                crate::validate::positive("inlier_threshold", t)?;
+                Ok(Some(t))
+            }
+            MultipleLoss::Auto | MultipleLoss::Geodesic => Err(Error::InvalidSettings {
+                name: "loss".into(),
+                reason: format!(
+                    "certify judges an estimate on all edges (chordal) or on a robust loss's \
+                     inlier set (l1, huber, cauchy), not with {self}"
+                ),
+            }),
+        }
+    }
+
     /// The robust objective `auto` switches to when the least-squares residuals show outliers
     /// ([`MultipleSettings::robust_on_outliers`](crate::multiple::MultipleSettings::robust_on_outliers)):
     /// Cauchy with scale `threshold_deg`; none for the other names (their loss is fixed).

@@ -16,14 +16,18 @@
 //! [`simultaneous`] estimates the hand-eye rotation jointly with two view graphs `[H12]`, certified by the trace-coupled relaxation `[H14]`.
 
 pub mod conjugate;
+pub mod inlier_graph;
 pub mod loss_choice;
 pub mod multiple;
 pub mod simultaneous;
 pub mod single;
 
 pub use conjugate::average_conjugate;
+pub use inlier_graph::{
+    EstimateInlierGraph, InlierGraph, certify_estimate_inliers, certify_inlier_graph,
+};
 pub use loss_choice::LossChoice;
-pub use multiple::{InlierGraph, average_multiple, certify_inlier_graph};
+pub use multiple::average_multiple;
 pub use simultaneous::average_simultaneous;
 pub use single::average_single;
 
@@ -100,9 +104,9 @@ pub struct PipelineDetails {
     pub total_seconds: f64,
     /// Multiple averaging with a robust loss (L1, Huber, Cauchy) and a certify mode other
     /// than `none`: the chordal L2 refinement and certificate of the inlier graph
-    /// ([`multiple::InlierGraph`]). Omitted from JSON when absent.
+    /// ([`InlierGraph`]). Omitted from JSON when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub inlier_graph: Option<Box<multiple::InlierGraph>>,
+    pub inlier_graph: Option<Box<InlierGraph>>,
     /// Multiple averaging with a least-squares loss: the residuals suggest outliers, and what to
     /// run instead ([`crate::multiple::robust::suspected_outliers`]). Omitted from JSON when
     /// absent.

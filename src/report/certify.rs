@@ -1,14 +1,15 @@
 //! The report of `rotavg certify`: an estimate computed elsewhere, certified or bounded
 //! **without changing it**.
 
-use super::{ProblemJson, ProblemKind, Rows, write_methods};
+use super::{CertifiedEstimate, ProblemJson, ProblemKind, Rows, VerdictOf, write_methods};
 use crate::certify::{
-    Certificate, CertifyDetails, CertifySettings, Verdict, certify_conjugate, certify_multiple,
-    certify_single,
+    Certificate, CertifiedProblem, CertifiedProblemKind, CertifyDetails, CertifySettings, Verdict,
+    certify_conjugate, certify_multiple, certify_single,
 };
 use crate::error::{Error, Result};
 use crate::io::input::{LoadedEstimate, LoadedProblem};
 use crate::io::json::Estimate;
+use crate::pipeline::{EstimateInlierGraph, certify_estimate_inliers};
 use crate::termination::SolverReport;
 use crate::warning::Warning;
 use serde::{Serialize, Serializer};
@@ -63,6 +64,12 @@ pub struct CertifyReport {
     pub details: Option<CertifyDetails>,
     /// The reader's and the estimate's warnings (printed on `warning:` lines).
     pub warnings: Vec<Warning>,
+    /// Multiple averaging judged on a robust loss's inlier set ([`Self::certify_on_inliers`],
+    /// `rotavg certify --loss`): the given estimate on the chordal L2 problem of its own
+    /// inlier graph. `None` otherwise, or when no edge is an inlier.
+    pub inlier_graph: Option<EstimateInlierGraph>,
+    /// The loss whose inlier set was judged (`--loss`; `None`: all edges only).
+    pub loss: Option<String>,
 }
 
 impl CertifyReport {
@@ -91,6 +98,8 @@ impl CertifyReport {
                 certificate,
                 details: None,
                 warnings: estimate_warnings.clone(),
+                inlier_graph: None,
+                loss: None,
             };
         match problem {
             LoadedProblem::Multiple(graph) => {
@@ -151,9 +160,98 @@ impl CertifyReport {
         }
     }
 
-    /// The certificate's verdict.
+    /// [`Self::certify`], and for a multiple-averaging estimate also the chordal L2 problem of
+    /// its own inlier graph under `loss` (its name, as `rotavg certify --loss` takes it): the
+    /// edges whose residual at the estimate is at most `inlier_threshold_deg`
+    /// ([`certify_estimate_inliers`]). The report's verdict is then that certificate's. The
+    /// time budget is shared: the all-edges certification gets half of
+    /// `settings.budget.max_seconds`, the inlier graph's what is left, so the whole call keeps
+    /// the margin of one certification. Single and conjugate problems are refused
+    /// ([`Error::InvalidSettings`], field `loss`), as is a threshold not positive and finite.
+    ///
+    /// ```
+    /// use rotavg::certify::{CertifiedProblemKind, CertifySettings};
+    /// use rotavg::io::detect::LoadedGraph;
+    /// use rotavg::io::input::{LoadedEstimate, LoadedProblem};
+    /// use rotavg::io::json::Estimate;
+    /// use rotavg::multiple::synthetic::SyntheticGraph;
+    /// use rotavg::report::CertifyReport;
+    /// let spec = SyntheticGraph { num_rotations: 20, num_edges: 80, noise_sigma: 0.0, outlier_fraction: 0.2, ..Default::default() };
+    /// let (p, truth) = spec.generate();
+    /// let problem = LoadedProblem::Multiple(LoadedGraph::from_problem(p));
+    /// let estimate = LoadedEstimate { name: "truth".into(), estimate: Estimate::Multiple(truth), warnings: vec![] };
+    /// let r = CertifyReport::certify_on_inliers("g.json", &problem, estimate, "cauchy", 5.0, &CertifySettings::default())?;
+    /// assert!(!r.certificate.is_certified()); // all edges: the outliers' cost is not minimal
+    /// let v = r.verdict_of().unwrap(); // the inlier graph's: the truth is exact on its edges
+    /// assert!(v.verdict == rotavg::Verdict::Certified && v.problem.kind == CertifiedProblemKind::ChordalL2Inliers);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn certify_on_inliers(
+        input: &str,
+        problem: &LoadedProblem,
+        estimate: LoadedEstimate,
+        loss: &str,
+        inlier_threshold_deg: f64,
+        settings: &CertifySettings,
+    ) -> Result<Self> {
+        crate::validate::positive("inlier_threshold_deg", inlier_threshold_deg)?;
+        let LoadedProblem::Multiple(graph) = problem else {
+            return Err(Error::InvalidSettings {
+                name: "loss".into(),
+                reason: format!(
+                    "a {loss} loss's inlier set judges view graphs (multiple averaging); single \
+                     and conjugate problems are certified on their one cost"
+                ),
+            });
+        };
+        let start = std::time::Instant::now();
+        let mut whole = settings.clone();
+        whole.budget.max_seconds = settings.budget.max_seconds.map(|t| t / 2.0);
+        let mut report = Self::certify(input, problem, estimate, &whole)?;
+        let mut rest = settings.clone();
+        rest.budget.max_seconds = settings
+            .budget
+            .max_seconds
+            .map(|t| (t - start.elapsed().as_secs_f64()).max(1e-3));
+        if let Estimate::Multiple(rotations) = &report.estimate {
+            report.inlier_graph =
+                certify_estimate_inliers(&graph.problem, rotations, inlier_threshold_deg, &rest)?;
+        }
+        report.loss = Some(loss.to_string());
+        Ok(report)
+    }
+
+    /// The verdict the report gives, with the problem it is about: the inlier graph's when
+    /// the estimate was judged on one ([`Self::certify_on_inliers`]), else the certificate's
+    /// (multiple averaging: the chordal L2 problem on all edges). `None` for single and
+    /// conjugate problems, whose certificate is about the one problem read.
+    pub fn verdict_of(&self) -> Option<VerdictOf> {
+        if let Some(g) = &self.inlier_graph {
+            return Some(VerdictOf {
+                verdict: g.certificate.verdict,
+                estimate: CertifiedEstimate::Given,
+                problem: g.problem,
+            });
+        }
+        (self.problem == ProblemKind::Multiple).then_some(VerdictOf {
+            verdict: self.certificate.verdict,
+            estimate: CertifiedEstimate::Given,
+            problem: CertifiedProblem {
+                kind: CertifiedProblemKind::ChordalL2,
+                num_nodes: self.num_rotations,
+                total_nodes: self.num_rotations,
+                num_edges: self.num_measurements,
+                total_edges: self.num_measurements,
+            },
+        })
+    }
+
+    /// The report's verdict: that of [`Self::verdict_of`] for multiple averaging (the inlier
+    /// graph's under `--loss`), else the certificate's. Under `--loss` with no inlier edge, the
+    /// all-edges certificate's.
     pub fn verdict(&self) -> Verdict {
-        self.certificate.verdict
+        self.verdict_of()
+            .map_or(self.certificate.verdict, |v| v.verdict)
     }
 
     /// `Ok` when [`Self::write_figure`] can draw `problem`: multiple and conjugate problems;
@@ -235,6 +333,10 @@ fn no_figure() -> Error {
 
 #[derive(Serialize)]
 struct Json<'a> {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    verdict: Option<VerdictOf>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    loss: Option<&'a str>,
     cost: f64,
     estimate: Rows<'a>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -243,11 +345,15 @@ struct Json<'a> {
     certificate: &'a Certificate,
     #[serde(skip_serializing_if = "Option::is_none")]
     pipeline: Option<&'a CertifyDetails>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    inlier_graph: Option<&'a EstimateInlierGraph>,
 }
 
 impl Serialize for CertifyReport {
     fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
         let rest = Json {
+            verdict: self.verdict_of(),
+            loss: self.loss.as_deref(),
             cost: self.cost,
             estimate: match &self.estimate {
                 Estimate::Single(r) => Rows::One(r),
@@ -257,6 +363,7 @@ impl Serialize for CertifyReport {
             solver: None,
             certificate: &self.certificate,
             pipeline: self.details.as_ref(),
+            inlier_graph: self.inlier_graph.as_ref(),
         };
         ProblemJson::new(
             self.problem,
@@ -301,6 +408,18 @@ impl fmt::Display for CertifyReport {
         super::nested(f, &self.certificate)?;
         if let Some(d) = &self.details {
             write_methods(f, &d.methods())?;
+        }
+        if let Some(loss) = &self.loss {
+            match &self.inlier_graph {
+                Some(g) => write!(f, "\nloss {loss}: {g}")?,
+                None => write!(
+                    f,
+                    "\nloss {loss}: no edge is an inlier at the given estimate; only the all-edges problem was judged"
+                )?,
+            }
+        }
+        if let Some(v) = self.verdict_of() {
+            write!(f, "\n{v}")?;
         }
         Ok(())
     }

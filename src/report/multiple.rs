@@ -228,6 +228,8 @@ pub enum CertifiedEstimate {
     /// A robust run's refined inlier-graph estimate (`--inlier-output`); the returned one is
     /// the robust estimate, which has no certificate.
     InlierGraph,
+    /// `rotavg certify`: the estimate as given (unchanged), on the problem named.
+    Given,
 }
 
 impl fmt::Display for VerdictOf {

@@ -873,3 +873,152 @@ fn output_problems_are_refused_before_the_input_is_read() {
     );
     assert!(!g2o_out.exists());
 }
+
+/// A `.npy` file as NumPy's format 1.0 defines it (written here, not by the reader under
+/// test): magic, version, a little-endian header length, the header dict padded with spaces
+/// to a multiple of 64 bytes and ended by a newline, then the data.
+fn npy(descr: &str, fortran: bool, shape: &str, data: &[u8]) -> Vec<u8> {
+    let dict = format!(
+        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
+        if fortran { "True" } else { "False" }
+    );
+    let total = (10 + dict.len() + 1).div_ceil(64) * 64;
+    let header = format!("{dict:<width$}\n", width = total - 10 - 1);
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(data);
+    out
+}
+
+/// A zip archive of stored members, each local header with a zip64 extra field, as NumPy's
+/// `np.savez` writes them (its central directory is not read, so it is left out here).
+fn npz(members: &[(&str, &[u8], u16)]) -> Vec<u8> {
+    let mut out = Vec::new();
+    for (name, data, method) in members {
+        out.extend_from_slice(b"PK\x03\x04");
+        out.extend_from_slice(&45u16.to_le_bytes()); // version needed
+        out.extend_from_slice(&0u16.to_le_bytes()); // flags
+        out.extend_from_slice(&method.to_le_bytes());
+        out.extend_from_slice(&[0; 8]); // time, date, crc (not checked)
+        out.extend_from_slice(&u32::MAX.to_le_bytes()); // sizes in the zip64 field
+        out.extend_from_slice(&u32::MAX.to_le_bytes());
+        out.extend_from_slice(&(name.len() as u16).to_le_bytes());
+        out.extend_from_slice(&20u16.to_le_bytes()); // extra field length
+        out.extend_from_slice(name.as_bytes());
+        out.extend_from_slice(&1u16.to_le_bytes());
+        out.extend_from_slice(&16u16.to_le_bytes());
+        out.extend_from_slice(&(data.len() as u64).to_le_bytes());
+        out.extend_from_slice(&(data.len() as u64).to_le_bytes());
+        out.extend_from_slice(data);
+    }
+    out
+}
+
+#[test]
+fn certifies_numpy_arrays_in_every_layout() {
+    let sc = scene(6, 8);
+    let problem = write("np/problem.g2o", g2o_problem(&sc));
+    let est = perturbed(&sc);
+    let n = est.len();
+    // element (k, r, c) in C order, then in Fortran order
+    let c_order: Vec<f64> = (0..n * 9)
+        .map(|x| est[x / 9].matrix()[((x % 9) / 3, x % 3)])
+        .collect();
+    let f_order: Vec<f64> = (0..n * 9)
+        .map(|x| est[x % n].matrix()[((x / n) % 3, x / (3 * n))])
+        .collect();
+    let le = |v: &[f64]| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
+    let be: Vec<u8> = c_order.iter().flat_map(|x| x.to_be_bytes()).collect();
+    let shape3 = format!("({n}, 3, 3)");
+    let cases = [
+        ("c.npy", npy("<f8", false, &shape3, &le(&c_order))),
+        ("f.npy", npy("<f8", true, &shape3, &le(&f_order))),
+        (
+            "nine.npy",
+            npy("<f8", false, &format!("({n}, 9)"), &le(&c_order)),
+        ),
+        ("big.npy", npy(">f8", false, &shape3, &be)),
+        (
+            "named.npz",
+            npz(&[
+                ("other.npy", &npy("<f8", false, "(1,)", &le(&[0.0])), 0),
+                (
+                    "rotations.npy",
+                    &npy("<f8", false, &shape3, &le(&c_order)),
+                    0,
+                ),
+            ]),
+        ),
+        (
+            "one.npz",
+            npz(&[("arr_0.npy", &npy("<f8", false, &shape3, &le(&c_order)), 0)]),
+        ),
+    ];
+    for (name, bytes) in cases {
+        certify_matches(&problem, &write(&format!("np/{name}"), bytes), &est);
+    }
+    // float32: the same rotations to single precision, brought onto SO(3)
+    let single: Vec<u8> = c_order
+        .iter()
+        .flat_map(|&x| (x as f32).to_le_bytes())
+        .collect();
+    let f4 = write("np/f4.npy", npy("<f4", false, &shape3, &single));
+    let out = json_of(&run(&[
+        "certify",
+        s(&problem),
+        "--estimate",
+        s(&f4),
+        "--json",
+    ]));
+    for (a, b) in estimate_of(&out).iter().zip(&est) {
+        assert!(angle_between(a, b) < 1e-6);
+    }
+}
+
+#[test]
+fn numpy_files_it_cannot_read_are_refused_by_name() {
+    let sc = scene(6, 8);
+    let problem = write("npx/problem.g2o", g2o_problem(&sc));
+    let data = vec![0u8; 6 * 9 * 8];
+    let cases: [(&str, Vec<u8>, &str); 6] = [
+        (
+            "shape.npy",
+            npy("<f8", false, "(6, 3)", &data[..144]),
+            "shape [6, 3]",
+        ),
+        (
+            "int.npy",
+            npy("<i8", false, "(6, 3, 3)", &data),
+            "dtype <i8",
+        ),
+        (
+            "huge.npy",
+            npy("<f8", false, "(1000000000000, 3, 3)", &data),
+            "more than the file holds",
+        ),
+        (
+            "compressed.npz",
+            npz(&[("arr_0.npy", &data, 8)]),
+            "np.savez_compressed",
+        ),
+        (
+            "two.npz",
+            npz(&[("a.npy", &data, 0), ("b.npy", &data, 0)]),
+            "2 arrays (a.npy, b.npy)",
+        ),
+        ("text.npy", b"1 0 0 0 1 0 0 0 1\n".to_vec(), "not one"),
+    ];
+    for (name, bytes, words) in cases {
+        let est = write(&format!("npx/{name}"), bytes);
+        let out = run(&["certify", s(&problem), "--estimate", s(&est)]);
+        assert_eq!(out.status.code(), Some(1), "{name}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(words) && err.contains(name), "{name}: {err}");
+    }
+    // the zero matrices of a well-formed array are not rotations
+    let zeros = write("npx/zeros.npy", npy("<f8", false, "(6, 3, 3)", &data));
+    let out = run(&["certify", s(&problem), "--estimate", s(&zeros)]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("rotation 0"), "{err}");
+}

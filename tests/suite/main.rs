@@ -17,6 +17,7 @@ mod certify_families;
 #[cfg(all(feature = "cli", feature = "colmap"))]
 mod certify_formats;
 mod certify_layers;
+mod certify_loss;
 mod certify_multiple;
 mod certify_randomized;
 mod clarabel_sdp;

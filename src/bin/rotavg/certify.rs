@@ -4,10 +4,11 @@
 //! it (`load_estimate_for`); printed as `rotavg::report::CertifyReport`.
 
 use crate::Outcome;
-use crate::common::{Common, GraphArgs, PlotArgs};
+use crate::common::{Common, GraphArgs, PlotArgs, choice};
 use rotavg::Result;
 use rotavg::certify::CertifyMode;
 use rotavg::io::input::{LoadedProblem, load_estimate, load_estimate_for, load_problem};
+use rotavg::io::names::{Choice, MultipleLoss};
 use rotavg::report::CertifyReport;
 
 /// Arguments of `rotavg certify`.
@@ -18,10 +19,25 @@ pub struct Args {
     pub input: String,
     /// The estimate to certify. View graphs: JSON (`{"rotations": [...]}` in node order, or with
     /// `node_ids`), g2o / TORO vertices, a COLMAP sparse model folder (e.g. GLOMAP's `sparse/0`),
-    /// `images.bin` or `images.txt`, Bundler `.out`, a rotation list; matched to the nodes by id,
-    /// or by image name (COLMAP). Single and conjugate problems: JSON `{"rotation": R}`.
+    /// `images.bin` or `images.txt`, Bundler `.out`, a rotation list, a NumPy `.npy` / `.npz`
+    /// array (n, 3, 3) in node order; matched to the nodes by id, or by image name (COLMAP).
+    /// Single and conjugate problems: JSON `{"rotation": R}`, or a NumPy (3, 3) array.
     #[arg(long, value_name = "PATH")]
     pub estimate: String,
+    /// View graphs: also judge the estimate on a robust loss's inlier set (l1, huber,
+    /// cauchy): the chordal L2 problem on the edges whose residual at the estimate is at most
+    /// the inlier threshold (their largest connected component), the estimate unchanged; the
+    /// verdict is then that problem's. `chordal` (default): all edges only.
+    #[arg(long, value_parser = choice(MultipleLoss::choices()), default_value_t = MultipleLoss::Chordal)]
+    pub loss: MultipleLoss,
+    /// `--loss l1|huber|cauchy`: the inlier threshold in degrees (an edge is an inlier iff its
+    /// residual at the estimate is at most DEG; default `--loss-threshold`).
+    #[arg(long, value_name = "DEG")]
+    pub inlier_threshold: Option<f64>,
+    /// `--loss huber|cauchy|l1`: the loss's threshold in degrees, the inlier threshold unless
+    /// `--inlier-threshold` is given.
+    #[arg(long, value_name = "DEG", default_value_t = 5.0)]
+    pub loss_threshold: f64,
     #[command(flatten)]
     pub graph: GraphArgs,
     #[command(flatten)]
@@ -32,6 +48,9 @@ pub struct Args {
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
+    let inlier_threshold = args
+        .loss
+        .certify_inlier_threshold_deg(args.loss_threshold, args.inlier_threshold)?;
     let options = args.graph.read_options(&args.common);
     let problem = load_problem(&args.input, args.graph.format, &options)?;
     let estimate = match &problem {
@@ -59,7 +78,17 @@ pub fn run(args: &Args) -> Result<Outcome> {
         }
         _ => args.common.settings(CertifyMode::Auto),
     };
-    let report = CertifyReport::certify(&args.input, &problem, estimate, &settings)?;
+    let report = match inlier_threshold {
+        None => CertifyReport::certify(&args.input, &problem, estimate, &settings)?,
+        Some(threshold) => CertifyReport::certify_on_inliers(
+            &args.input,
+            &problem,
+            estimate,
+            &args.loss.to_string(),
+            threshold,
+            &settings,
+        )?,
+    };
     if let Some(path) = &args.plot.plot {
         report.write_figure(path, &problem)?;
     }
