@@ -314,6 +314,21 @@ pub fn read_rotations_estimate(
     read_estimate(text, file, options)?.into_rotations(file)
 }
 
+/// Write a single or conjugate estimate `{"rotation": R}` (what [`read_estimate`],
+/// `rotavg certify --estimate` and `--init` read), shortest round-trip numbers.
+///
+/// ```
+/// use rotavg::io::{json::{write_rotation_json, read_estimate, Estimate}, detect::ReadOptions};
+/// let r = rotavg::so3::exp(&nalgebra::Vector3::new(0.1, -0.2, 0.3));
+/// let back = read_estimate(&write_rotation_json(&r), "-", &ReadOptions::default())?;
+/// assert_eq!(back, Estimate::Single(r));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn write_rotation_json(rotation: &Rotation) -> String {
+    let rows = serde_json::to_string(&rotation_to_rows(rotation)).unwrap_or_default();
+    format!("{{\"rotation\": {rows}}}\n")
+}
+
 /// Write an estimate `{"rotations": [R, ...]}`, one rotation per line, shortest round-trip
 /// numbers.
 ///

@@ -516,3 +516,69 @@ fn extreme_pairing_flags_and_ambiguous_integer_stamps() {
         2
     );
 }
+
+#[test]
+fn conjugate_writes_its_estimate_and_certify_reads_the_same_streams() {
+    let d = dir("output_certify");
+    write_streams(&d, "arm_hand.csv", "arm_camera.txt", false);
+    let (hand, camera) = (d.join("arm_hand.csv"), d.join("arm_camera.txt"));
+    let streams = [
+        "--hand",
+        path(&hand),
+        "--camera",
+        path(&camera),
+        "--time-offset",
+        &format!("{LAG}"),
+    ];
+    let out_file = d.join("out/s.json");
+    let solved = json_of(&run(&[
+        &["conjugate", "--output", path(&out_file), "--json"][..],
+        &streams[..],
+    ]
+    .concat()));
+    // the file holds exactly the reported estimate, in the estimate format certify reads
+    let text = std::fs::read_to_string(&out_file).expect("--output written");
+    let written: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(written["rotation"], solved["estimate"]);
+    let certified = json_of(&run(&[
+        &["certify", "--estimate", path(&out_file), "--json"][..],
+        &streams[..],
+    ]
+    .concat()));
+    assert_eq!(certified["problem"], "conjugate");
+    assert_eq!(certified["num_measurements"], solved["num_measurements"]);
+    assert_eq!(certified["certificate"]["verdict"], "certified");
+    let cost = |v: &serde_json::Value| v["certificate"]["upper_bound"].as_f64().unwrap();
+    assert!((cost(&certified) - cost(&solved)).abs() <= 1e-12 * cost(&solved).max(1e-300));
+    // the planted rotation, judged on the same pairs: its cost is above the proven bound,
+    // within the pairing's interpolation error of the optimum
+    let planted_file = d.join("planted.json");
+    let rows = rotavg::so3::rotation_to_rows(&planted());
+    std::fs::write(
+        &planted_file,
+        serde_json::json!({ "rotation": rows }).to_string(),
+    )
+    .unwrap();
+    let judged = json_of(&run(&[
+        &["certify", "--estimate", path(&planted_file), "--json"][..],
+        &streams[..],
+    ]
+    .concat()));
+    let lb = judged["certificate"]["lower_bound"].as_f64().unwrap();
+    assert!(lb <= cost(&judged) && lb <= cost(&solved) * (1.0 + 1e-9));
+    // a failed run (an estimate that is not a rotation) leaves no folder
+    let failed = d.join("failed/deeper/s.json");
+    let out = run(&[
+        &[
+            "conjugate",
+            "--output",
+            path(&failed),
+            "--init",
+            path(&hand),
+        ][..],
+        &streams[..],
+    ]
+    .concat());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(!d.join("failed").exists());
+}

@@ -1,22 +1,31 @@
 //! `rotavg certify INPUT --estimate FILE`: certify an estimate computed elsewhere, or report
 //! its proven gap, **without changing it**. The problem kind comes from INPUT (view graph,
-//! single or conjugate problem: `rotavg::io::input::load_problem`), the estimate is matched to
-//! it (`load_estimate_for`); printed as `rotavg::report::CertifyReport`.
+//! single or conjugate problem: `rotavg::io::input::load_problem`; a hand-eye dataset folder
+//! or `--hand` / `--camera` pose streams: `load_conjugate_with`, as `rotavg conjugate` reads
+//! them), the estimate is matched to it (`load_estimate_for`); printed as
+//! `rotavg::report::CertifyReport`.
 
 use crate::Outcome;
 use crate::common::{Common, GraphArgs, PlotArgs, choice};
+use crate::conjugate::StreamArgs;
 use rotavg::Result;
 use rotavg::certify::CertifyMode;
-use rotavg::io::input::{LoadedProblem, load_estimate, load_estimate_for, load_problem};
-use rotavg::io::names::{Choice, MultipleLoss};
+use rotavg::io::detect::ReadOptions;
+use rotavg::io::input::{
+    LoadedProblem, load_conjugate_with, load_estimate, load_estimate_for, load_problem,
+};
+use rotavg::io::names::{Choice, ConjugateFormat, MultipleLoss};
 use rotavg::report::CertifyReport;
+use std::path::Path;
 
 /// Arguments of `rotavg certify`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Problem file (or a COLMAP database, or the folder holding database.db), or `-` for
-    /// standard input.
-    pub input: String,
+    /// Problem file (or a COLMAP database, or the folder holding database.db; or a hand-eye
+    /// dataset folder: Tabb, ETH, pose streams), or `-` for standard input. Optional when
+    /// both `--hand` and `--camera` are given.
+    #[arg(required_unless_present_all = ["hand", "camera"])]
+    pub input: Option<String>,
     /// The estimate to certify. View graphs: JSON (`{"rotations": [...]}` in node order, or with
     /// `node_ids`), g2o / TORO vertices, a COLMAP sparse model folder (e.g. GLOMAP's `sparse/0`),
     /// `images.bin` or `images.txt`, Bundler `.out`, a rotation list, a NumPy `.npy` / `.npz`
@@ -42,6 +51,9 @@ pub struct Args {
     pub graph: GraphArgs,
     #[command(flatten)]
     pub plot: PlotArgs,
+    /// Hand-eye pose streams and their pairing, as `rotavg conjugate` reads them.
+    #[command(flatten)]
+    pub streams: StreamArgs,
     #[command(flatten)]
     pub common: Common,
 }
@@ -52,7 +64,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
         .loss
         .certify_inlier_threshold_deg(args.loss_threshold, args.inlier_threshold)?;
     let options = args.graph.read_options(&args.common);
-    let problem = load_problem(&args.input, args.graph.format, &options)?;
+    let (input, problem) = load(args, &options)?;
     let estimate = match &problem {
         LoadedProblem::Multiple(g) => load_estimate_for(&args.estimate, g, &options)?.into_loaded(),
         LoadedProblem::Single(_) | LoadedProblem::Conjugate(_) => {
@@ -79,9 +91,9 @@ pub fn run(args: &Args) -> Result<Outcome> {
         _ => args.common.settings(CertifyMode::Auto),
     };
     let report = match inlier_threshold {
-        None => CertifyReport::certify(&args.input, &problem, estimate, &settings)?,
+        None => CertifyReport::certify(&input, &problem, estimate, &settings)?,
         Some(threshold) => CertifyReport::certify_on_inliers(
-            &args.input,
+            &input,
             &problem,
             estimate,
             &args.loss.to_string(),
@@ -93,4 +105,31 @@ pub fn run(args: &Args) -> Result<Outcome> {
         report.write_figure(path, &problem)?;
     }
     args.common.finish(&report, Some(report.verdict()))
+}
+
+/// The problem, and the name it is reported under: hand-eye data (`--hand` / `--camera`, or a
+/// folder that holds no COLMAP database) as `rotavg conjugate` reads them, any other input
+/// with `load_problem`.
+fn load(args: &Args, options: &ReadOptions) -> Result<(String, LoadedProblem)> {
+    let streams = args.streams.hand.is_some() || args.streams.camera.is_some();
+    let folder = args
+        .input
+        .as_deref()
+        .map(Path::new)
+        .is_some_and(|p| p.is_dir() && rotavg::io::colmap::find_database(p).is_none());
+    match args.input.as_deref() {
+        Some(path) if !(streams || folder) => Ok((
+            path.to_string(),
+            load_problem(path, args.graph.format, options)?,
+        )),
+        input => {
+            let loaded = load_conjugate_with(
+                input,
+                ConjugateFormat::Auto,
+                options,
+                &args.streams.options(),
+            )?;
+            Ok((loaded.name, LoadedProblem::Conjugate(loaded.problem)))
+        }
+    }
 }

@@ -78,6 +78,48 @@ impl Common {
     }
 }
 
+/// `--output` of `single` and `conjugate`: the estimate as JSON `{"rotation": R}`.
+#[derive(Args, Debug)]
+pub struct RotationOutputArgs {
+    /// Write the estimate as JSON `{"rotation": R}` (what `--init` and `rotavg certify
+    /// --estimate` read); its folder is created before the solve.
+    #[arg(long, value_name = "FILE")]
+    pub output: Option<String>,
+}
+
+impl RotationOutputArgs {
+    /// Run `work` (read, solve, certify) and write the estimate `estimate(&result)` to
+    /// `--output` when given: its folder is created before `work`, and removed again (when
+    /// empty) if `work` or the writing fails.
+    pub fn around<R>(
+        &self,
+        work: impl FnOnce() -> Result<R>,
+        estimate: impl FnOnce(&R) -> Rotation,
+    ) -> Result<R> {
+        use rotavg::io::output::{OutputFormat, prepare_output};
+        let plan = match &self.output {
+            Some(path) => Some(prepare_output(path, OutputFormat::Json)?),
+            None => None,
+        };
+        let written = work().and_then(|result| {
+            if let Some(plan) = &plan {
+                let text = rotavg::io::json::write_rotation_json(&estimate(&result));
+                std::fs::write(&plan.file, text).map_err(|e| rotavg::Error::Io {
+                    path: plan.path.clone(),
+                    message: e.to_string(),
+                })?;
+            }
+            Ok(result)
+        });
+        if written.is_err()
+            && let Some(plan) = &plan
+        {
+            plan.remove_empty_folders();
+        }
+        written
+    }
+}
+
 /// `--init` (`single`, `multiple`, `conjugate`).
 #[derive(Args, Debug)]
 pub struct InitArgs {

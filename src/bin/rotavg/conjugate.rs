@@ -3,7 +3,7 @@
 //! JSON, Tabb or ETH datasets, or pose streams (`rotavg::io::input::load_conjugate_with`).
 
 use crate::Outcome;
-use crate::common::{Common, InitArgs, PlotArgs, choice};
+use crate::common::{Common, InitArgs, PlotArgs, RotationOutputArgs, choice};
 use clap::Args as ClapArgs;
 use rotavg::certify::CertifyMode;
 use rotavg::conjugate::ConjugateSettings;
@@ -42,6 +42,8 @@ pub struct Args {
     pub streams: StreamArgs,
     #[command(flatten)]
     pub init: InitArgs,
+    #[command(flatten)]
+    pub output: RotationOutputArgs,
     #[command(flatten)]
     pub common: Common,
 }
@@ -83,7 +85,7 @@ pub struct StreamArgs {
 
 impl StreamArgs {
     /// The library's hand-eye options.
-    fn options(&self) -> HandEyeOptions {
+    pub fn options(&self) -> HandEyeOptions {
         HandEyeOptions {
             hand: self.hand.clone(),
             camera: self.camera.clone(),
@@ -103,6 +105,14 @@ impl StreamArgs {
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
     args.plot.check()?;
+    let report = args
+        .output
+        .around(|| solve(args), |r| r.result.solution.estimate)?;
+    args.common.finish(&report, report.verdict())
+}
+
+/// Read, solve, certify, and draw the figure.
+fn solve(args: &Args) -> Result<ConjugateReport> {
     let options = args.common.read_options();
     let loaded = load_conjugate_with(
         args.input.as_deref(),
@@ -130,5 +140,5 @@ pub fn run(args: &Args) -> Result<Outcome> {
     if let Some(path) = &args.plot.plot {
         report.write_figure(path, &problem, &loaded.name)?;
     }
-    args.common.finish(&report, report.verdict())
+    Ok(report)
 }

@@ -74,7 +74,7 @@ fn main() -> ExitCode {
         Command::Single(a) => (Some(&a.input), Some(&a.common)),
         Command::Multiple(a) => (Some(&a.input), Some(&a.common)),
         Command::Conjugate(a) => (a.input.as_deref(), Some(&a.common)),
-        Command::Certify(a) => (Some(&a.input), Some(&a.common)),
+        Command::Certify(a) => (a.input.as_deref(), Some(&a.common)),
         Command::Info(a) => (Some(&a.input), None),
     };
     progress::Display::install(common.is_some_and(|c| !c.quiet && !c.json));

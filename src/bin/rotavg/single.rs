@@ -2,7 +2,7 @@
 //! (`rotavg::pipeline::average_single`, printed as `rotavg::report::SingleReport`).
 
 use crate::Outcome;
-use crate::common::{Common, InitArgs, choice};
+use crate::common::{Common, InitArgs, RotationOutputArgs, choice};
 use rotavg::certify::CertifyMode;
 use rotavg::io::input::{read_input, read_single_problem};
 use rotavg::io::names::Choice;
@@ -28,11 +28,21 @@ pub struct Args {
     #[command(flatten)]
     pub init: InitArgs,
     #[command(flatten)]
+    pub output: RotationOutputArgs,
+    #[command(flatten)]
     pub common: Common,
 }
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> rotavg::Result<Outcome> {
+    let report = args
+        .output
+        .around(|| solve(args), |r| r.result.solution.estimate)?;
+    args.common.finish(&report, report.verdict())
+}
+
+/// Read, solve and certify.
+fn solve(args: &Args) -> rotavg::Result<SingleReport> {
     let options = args.common.read_options();
     let input = read_input(&args.input)?;
     let problem = read_single_problem(&input.text, &input.name, &options)?;
@@ -46,6 +56,5 @@ pub fn run(args: &Args) -> rotavg::Result<Outcome> {
         },
         certify: args.common.settings(args.certify),
     };
-    let report = SingleReport::new(average_single(&problem, &settings)?);
-    args.common.finish(&report, report.verdict())
+    Ok(SingleReport::new(average_single(&problem, &settings)?))
 }
