@@ -30,7 +30,6 @@ use rotavg::io::input::{
 use rotavg::io::json::Estimate;
 use rotavg::io::names::{LossKind, MultipleLoss};
 use rotavg::multiple::anisotropic::Information;
-use rotavg::multiple::stats::duplicate_edge_count;
 use rotavg::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_conjugate, average_multiple, average_single};
 use rotavg::report::{CertifyReport, ConjugateReport, MultipleReport, SingleReport};
@@ -190,15 +189,8 @@ impl EdgeArrays {
             problem = problem.with_information(info)?;
         }
         Ok(LoadedGraph {
-            duplicates: duplicate_edge_count(&problem),
-            problem,
-            node_ids: (0..n as u64).collect(),
-            node_names: Vec::new(),
-            initial: None,
             reversed,
-            warnings: Vec::new(),
-            format: GraphFormat::Json,
-            planar: false,
+            ..LoadedGraph::from_problem(problem)
         })
     }
 }

@@ -131,3 +131,20 @@ def test_geodesic_and_robust_losses_apply_to_the_mahalanobis_angle(rng):
     t, c = np.sqrt(quad / wbar), np.radians(2.0)
     rho = np.where(t <= c, t**2, 2 * c * t - c**2)
     assert h.cost == pytest.approx(float(np.sum(wbar * rho)), rel=1e-9)
+
+
+def test_information_built_as_jt_w_j_is_accepted(rng):
+    """``J.T @ W @ J`` in numpy is symmetric only to rounding: accepted (its symmetric part),
+    with the same result as the symmetrised matrices and a warning that says so."""
+    _, i, j, rel, _ = anisotropic_graph(rng, 10, 24, 0.05, 3.0)
+    jac = rng.normal(size=(len(i), 5, 3))
+    w = np.einsum("ka,ab->kab", rng.uniform(0.5, 2.0, size=(len(i), 5)), np.eye(5))
+    info = jac.transpose(0, 2, 1) @ w @ jac
+    asym = np.abs(info - info.transpose(0, 2, 1)).max()
+    sym = 0.5 * (info + info.transpose(0, 2, 1))
+    a = rotavg.average_multiple(10, i, j, rel, information=info, loss="chordal")
+    b = rotavg.average_multiple(10, i, j, rel, information=sym, loss="chordal")
+    assert a.cost == pytest.approx(b.cost, rel=1e-12)
+    codes = [w["code"] for w in a.to_dict()["warnings"]]
+    assert codes == (["information_symmetrized"] if asym > 0 else [])
+    assert b.to_dict()["warnings"] == []

@@ -126,7 +126,8 @@ pub struct LoadedGraph {
 
 impl LoadedGraph {
     /// A problem built in memory, as the JSON reader would return it: node ids `0..n`, no
-    /// names, no initial estimate or warnings, its duplicate edges counted.
+    /// names, no initial estimate, its duplicate edges counted, and the warning
+    /// `information_symmetrized` when information matrices were given asymmetric by rounding.
     ///
     /// ```
     /// use rotavg::io::detect::LoadedGraph;
@@ -142,7 +143,9 @@ impl LoadedGraph {
             initial: None,
             duplicates: crate::multiple::stats::duplicate_edge_count(&problem),
             reversed: 0,
-            warnings: Vec::new(),
+            warnings: crate::warning::information_symmetrized(&problem)
+                .into_iter()
+                .collect(),
             format: GraphFormat::Json,
             planar: false,
             problem,
@@ -286,18 +289,23 @@ impl ComponentSelection {
     }
 }
 
-/// Guess the format of a file from its extension (`.json`, `.g2o`) and otherwise from its
-/// content: a first non-blank character `{` means JSON; a first data line starting with a
-/// letter (a tag such as `EDGE_SE3:QUAT`, `VERTEX3`) means g2o; a first data line of 11 or 14
-/// numbers means 1DSfM `EGs.txt`.
+/// Guess the format of a file from its content, and only when the content does not say, from
+/// its extension (`.json`, `.g2o`): a first non-blank character `{` means JSON; a first data
+/// line starting with a letter (a tag such as `EDGE_SE3:QUAT`, `VERTEX3`) means g2o; a first
+/// data line of 11 or 14 numbers means 1DSfM `EGs.txt` ([`detect_by_content`]). A g2o file
+/// named `*.json` is read as g2o.
 ///
 /// ```
 /// use rotavg::io::detect::{detect_format, GraphFormat};
 /// assert_eq!(detect_format("x.txt", "EDGE3 0 1 0 0 0 0 0 0").unwrap(), GraphFormat::G2o);
 /// assert_eq!(detect_format("-", " {\"num_rotations\": 2}").unwrap(), GraphFormat::Json);
 /// assert_eq!(detect_format("EGs.txt", "0 1 1 0 0 0 1 0 0 0 1 1 0 0").unwrap(), GraphFormat::OneDsfm);
+/// assert_eq!(detect_format("misnamed.json", "EDGE3 0 1 0 0 0 0 0 0").unwrap(), GraphFormat::G2o);
 /// ```
 pub fn detect_format(file: &str, text: &str) -> Result<GraphFormat> {
+    if let Some(format) = detect_by_content(text) {
+        return Ok(format);
+    }
     let lower = file.to_ascii_lowercase();
     if lower.ends_with(".json") {
         return Ok(GraphFormat::Json);
@@ -305,31 +313,63 @@ pub fn detect_format(file: &str, text: &str) -> Result<GraphFormat> {
     if lower.ends_with(".g2o") {
         return Ok(GraphFormat::G2o);
     }
-    if text.trim_start().starts_with('{') {
-        return Ok(GraphFormat::Json);
-    }
-    // the first content line decides
-    if let Some((ln, t)) = crate::io::content_lines(text).next() {
-        let first = t.split_whitespace().next().unwrap_or("");
-        if first.starts_with(|c: char| c.is_ascii_alphabetic()) {
-            return Ok(GraphFormat::G2o);
-        }
-        let count = t.split_whitespace().count();
-        if count == 14 || count == 11 {
-            return Ok(GraphFormat::OneDsfm);
-        }
-        return Err(Error::parse(
+    match crate::io::content_lines(text).next() {
+        Some((ln, t)) => Err(Error::parse(
             Some(file),
             Some(ln),
             format!(
-                "cannot detect the file format from this line ({count} tokens); pass --format g2o|1dsfm|json"
+                "cannot detect the file format from this line ({} tokens); pass --format \
+                 g2o|1dsfm|json",
+                t.split_whitespace().count()
             ),
-        ));
+        )),
+        None => Err(Error::parse(
+            Some(file),
+            None,
+            "empty input: no data lines, cannot detect the format",
+        )),
     }
-    Err(Error::parse(
+}
+
+/// The format a view graph's text shows, if it shows one: JSON (first non-blank character
+/// `{`), g2o (a first data line starting with a letter), 1DSfM (a first data line of 11 or 14
+/// numbers).
+pub fn detect_by_content(text: &str) -> Option<GraphFormat> {
+    if text.trim_start().starts_with('{') {
+        return Some(GraphFormat::Json);
+    }
+    let (_, t) = crate::io::content_lines(text).next()?;
+    let first = t.split_whitespace().next().unwrap_or("");
+    if first.starts_with(|c: char| c.is_ascii_alphabetic()) {
+        return Some(GraphFormat::G2o);
+    }
+    matches!(t.split_whitespace().count(), 11 | 14).then_some(GraphFormat::OneDsfm)
+}
+
+/// The error for a JSON reader of `verb` (`single`, `conjugate`) given a view graph: when
+/// `text` is g2o or 1DSfM (not JSON), an error naming the format and the verb that reads it;
+/// `None` otherwise (the reader's own error stands).
+///
+/// ```
+/// use rotavg::io::detect::read_by_another_verb;
+/// let e = read_by_another_verb("pose.g2o", "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\n", "single").unwrap();
+/// assert!(e.to_string().contains("rotavg multiple pose.g2o"), "{e}");
+/// assert!(read_by_another_verb("p.json", "{\"rotations\": 3}", "single").is_none());
+/// ```
+pub fn read_by_another_verb(file: &str, text: &str, verb: &str) -> Option<Error> {
+    let format = detect_by_content(text).filter(|f| *f != GraphFormat::Json)?;
+    let what = match verb {
+        "conjugate" => "pairs {\"pairs\": [{\"left\": L, \"right\": R}, ...]}",
+        _ => "rotations {\"rotations\": [R, ...]}",
+    };
+    Some(Error::parse(
         Some(file),
         None,
-        "empty input: no data lines, cannot detect the format",
+        format!(
+            "this is a {} view graph (multiple rotation averaging): `rotavg multiple {file}` \
+             reads it; `rotavg {verb}` reads JSON {what}",
+            crate::io::names::Choice::name(&format)
+        ),
     ))
 }
 

@@ -943,8 +943,10 @@ struct ConjugateJson {
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn read_conjugate_json(text: &str, file: &str) -> Result<ConjugateProblem> {
-    let parsed: ConjugateJson = serde_json::from_str(text)
-        .map_err(|e| Error::parse(Some(file), Some(e.line()), e.to_string()))?;
+    let parsed: ConjugateJson = serde_json::from_str(text).map_err(|e| {
+        crate::io::detect::read_by_another_verb(file, text, "conjugate")
+            .unwrap_or_else(|| Error::parse(Some(file), Some(e.line()), e.to_string()))
+    })?;
     for (k, p) in parsed.pairs.iter().enumerate() {
         if let Some(why) = crate::io::weight_out_of_range(p.weight) {
             return Err(Error::parse(Some(file), None, format!("pair {k}: {why}")));

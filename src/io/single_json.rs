@@ -196,7 +196,10 @@ pub(crate) fn json_error(file: &str, e: &serde_json::Error) -> Error {
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn parse_single_json(text: &str, file: &str) -> Result<SingleProblem> {
-    let raw: RawSingle = serde_json::from_str(text).map_err(|e| json_error(file, &e))?;
+    let raw: RawSingle = serde_json::from_str(text).map_err(|e| {
+        crate::io::detect::read_by_another_verb(file, text, "single")
+            .unwrap_or_else(|| json_error(file, &e))
+    })?;
     let weights = raw.weights.map(|w| w.0);
     SingleProblem::new(raw.rotations.0, weights).map_err(|e| {
         // Remaining errors are about the whole lists (empty, length mismatch): point at the key.

@@ -44,6 +44,12 @@ use serde::{Deserialize, Serialize};
 /// lower bound of the certificates holds for any symmetric `H` (`[A12]`).
 pub const PSD_TOLERANCE: f64 = 1e-12;
 
+/// The asymmetry an information matrix may have, relative to its largest entry: `max |H -
+/// H^T| <= 1e-12 max |H|` is rounding (numpy's `J.T @ W @ J` is asymmetric by ~1e-16
+/// relative), and the symmetric part `(H + H^T) / 2` is used (the quadratic form `e^T H e` is
+/// the same); anything larger is an error (SPEC section 1).
+pub const SYMMETRY_TOLERANCE: f64 = 1e-12;
+
 /// A validated 3x3 information matrix `H` of one edge: finite, exactly symmetric, positive
 /// semidefinite (to [`PSD_TOLERANCE`], eigenvalues from [`crate::linalg::symmetric3`]), with
 /// `tr(H)` in the weight window [`crate::validate::MIN_WEIGHT`]..[`crate::validate::MAX_WEIGHT`].
@@ -53,13 +59,18 @@ pub struct Information {
     h: Matrix3<f64>,
     /// The eigenvalues of `h`, ascending, to [`crate::linalg::symmetric3::RELATIVE_ACCURACY`].
     eigenvalues: [f64; 3],
+    /// `max |H - H^T| / max |H|` of the matrix as given (0: exactly symmetric; `h` is then its
+    /// symmetric part).
+    asymmetry: f64,
 }
 
 impl Information {
     /// Validate `h`. Errors ([`Error::InvalidInformation`]): a non-finite entry, an asymmetric
-    /// matrix (`h != h^T` exactly: pass `(H + H^T) / 2` if that is what is meant; the data are
-    /// used as given, never projected), a negative eigenvalue below `-1e-12 lambda_max`, or a
-    /// trace outside the weight window (`H = 0` carries no information).
+    /// matrix beyond rounding (`max |H - H^T| > 1e-12 max |H|`, [`SYMMETRY_TOLERANCE`]: pass
+    /// `(H + H^T) / 2` if that is what is meant; within it the symmetric part is used and the
+    /// asymmetry kept in [`Self::asymmetry`] for the readers to report), a negative eigenvalue
+    /// below `-1e-12 lambda_max`, or a trace outside the weight window (`H = 0` carries no
+    /// information).
     ///
     /// ```
     /// use rotavg::multiple::anisotropic::Information;
@@ -68,8 +79,13 @@ impl Information {
     /// let mut h = Matrix3::identity();
     /// h[(0, 1)] = 0.5; // not symmetric
     /// assert!(Information::new(h).is_err());
+    /// h[(0, 1)] = 1e-17; // asymmetric by rounding: its symmetric part
+    /// let rounded = Information::new(h)?;
+    /// assert_eq!(rounded.matrix()[(0, 1)], 5e-18);
+    /// assert_eq!(rounded.asymmetry(), 1e-17);
     /// assert!(Information::new(-Matrix3::identity()).is_err()); // not PSD
     /// assert!(Information::new(Matrix3::zeros()).is_err()); // no information
+    /// # Ok::<(), rotavg::Error>(())
     /// ```
     pub fn new(h: Matrix3<f64>) -> Result<Self> {
         Self::check(h).map_err(|reason| Error::InvalidInformation {
@@ -82,13 +98,20 @@ impl Information {
         if !h.iter().all(|x| x.is_finite()) {
             return Err("contains NaN or infinity".into());
         }
-        if h != h.transpose() {
-            let asym = (h - h.transpose()).amax();
+        let asym = (h - h.transpose()).amax();
+        let asymmetry = if asym == 0.0 { 0.0 } else { asym / h.amax() };
+        if asymmetry > SYMMETRY_TOLERANCE {
             return Err(format!(
-                "is not symmetric (largest |H - H^T| entry {asym:.3e}); pass (H + H^T) / 2 if \
-                 that is the information meant"
+                "is not symmetric (largest |H - H^T| entry {asym:.3e}, {asymmetry:.1e} of the \
+                 largest entry; rounding is up to {SYMMETRY_TOLERANCE:.0e}); pass (H + H^T) / 2 \
+                 if that is the information meant"
             ));
         }
+        let h = if asym == 0.0 {
+            h
+        } else {
+            (h + h.transpose()) * 0.5
+        };
         let eig = crate::linalg::symmetric3::eigenvalues(&h)?;
         let (lo, hi) = (eig[0], eig[2]);
         if hi <= 0.0 || lo < -PSD_TOLERANCE * hi {
@@ -103,6 +126,7 @@ impl Information {
         Ok(Information {
             h,
             eigenvalues: eig,
+            asymmetry,
         })
     }
 
@@ -112,9 +136,15 @@ impl Information {
         Self::new(Matrix3::identity() * w)
     }
 
-    /// The matrix `H`.
+    /// The matrix `H` (the symmetric part of the matrix given).
     pub fn matrix(&self) -> &Matrix3<f64> {
         &self.h
+    }
+
+    /// `max |H - H^T| / max |H|` of the matrix as given: 0 when it was exactly symmetric, at
+    /// most [`SYMMETRY_TOLERANCE`] (rounding; its symmetric part is [`Self::matrix`]).
+    pub fn asymmetry(&self) -> f64 {
+        self.asymmetry
     }
 
     /// `M = tr(H)/2 I - H`, the matrix of the chordal cost `[A1]` (indefinite when one

@@ -964,3 +964,58 @@ fn the_conv_sdp_rounding_is_returned_when_it_beats_the_local_solve() {
     eprintln!("{tight} tight, {rescued} rescued by the conv SDP's rounding");
     assert!(rescued >= 1, "no case exercises the rounding");
 }
+
+/// Information asymmetric by rounding (numpy's `J.T @ W @ J`: ~1e-16 relative) is accepted:
+/// its symmetric part is the problem (same cost, bound for bound), and the reader says so; an
+/// asymmetry beyond 1e-12 of the largest entry is still an error naming the edge.
+#[test]
+fn information_symmetric_to_rounding_is_accepted_and_reported() {
+    let (p, truth) = SyntheticAnisotropic {
+        num_rotations: 8,
+        num_edges: 20,
+        ..Default::default()
+    }
+    .generate();
+    let exact = write_problem_json(&p);
+    let v: serde_json::Value = serde_json::from_str(&exact).unwrap();
+    let with_asymmetry = |relative: f64| {
+        let mut v = v.clone();
+        for k in [0, 3, 7] {
+            let h = &mut v["edges"][k]["information"];
+            let largest = (0..3)
+                .flat_map(|a| (0..3).map(move |b| (a, b)))
+                .map(|(a, b)| h[a][b].as_f64().unwrap().abs())
+                .fold(0.0, f64::max);
+            let entry = h[0][1].as_f64().unwrap();
+            h[0][1] = serde_json::json!(entry + relative * largest);
+        }
+        v.to_string()
+    };
+    let read = |text: &str| read_problem_json(text, "near.json", &ReadOptions::default());
+    let near = read(&with_asymmetry(3e-15)).expect("asymmetric by rounding");
+    let w = &near.warnings;
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert_eq!(
+        (w[0].code.as_str(), w[0].count),
+        ("information_symmetrized", Some(3))
+    );
+    // the symmetric part, entry by entry, against the exact matrices
+    for (a, b) in near
+        .problem
+        .information()
+        .unwrap()
+        .iter()
+        .zip(p.information().unwrap())
+    {
+        assert!((a.matrix() - b.matrix()).amax() <= 1e-14 * b.matrix().amax());
+        assert_eq!(a.matrix(), &a.matrix().transpose());
+    }
+    let (c0, c1) = (p.chordal_cost(&truth), near.problem.chordal_cost(&truth));
+    assert!((c0 - c1).abs() <= 1e-12 * c0.max(1e-300), "{c0} vs {c1}");
+    assert!(read(&exact).unwrap().warnings.is_empty());
+    let err = read(&with_asymmetry(1e-9)).unwrap_err().to_string();
+    assert!(
+        err.contains("not symmetric") && err.contains("edge 0"),
+        "{err}"
+    );
+}

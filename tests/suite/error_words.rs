@@ -144,7 +144,7 @@ fn a_folder_given_to_the_wrong_verb_says_which_folders_it_reads() {
         (&["multiple", "examples/data/handeye"], "COLMAP"),
         (&["info", "examples/data/handeye"], "COLMAP"),
         (
-            &["certify", "examples/data/handeye", "--estimate", "x.json"],
+            &["certify", "examples/data", "--estimate", "x.json"],
             "certify",
         ),
         (&["conjugate", "examples/data"], "hand"),
@@ -162,5 +162,21 @@ fn a_folder_given_to_the_wrong_verb_says_which_folders_it_reads() {
             folder && stderr.contains(expected),
             "{args:?} does not say which folders it reads: {stderr}"
         );
+    }
+}
+
+#[test]
+fn a_view_graph_given_to_single_or_conjugate_names_the_verb_that_reads_it() {
+    for file in ["examples/data/slam.g2o", "examples/data/sfm_outliers.txt"] {
+        for verb in ["single", "conjugate"] {
+            let (status, stderr) = rotavg(&[verb, file]);
+            assert_eq!(status, Some(1), "{verb} {file}: {stderr}");
+            assert!(
+                stderr.contains(&format!("`rotavg multiple {file}` reads it"))
+                    && stderr.contains(&format!("`rotavg {verb}` reads JSON")),
+                "{verb} {file}: {stderr}"
+            );
+            assert!(!stderr.contains("expected value"), "{stderr}");
+        }
     }
 }

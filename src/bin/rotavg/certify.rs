@@ -128,7 +128,18 @@ fn load(args: &Args, options: &ReadOptions) -> Result<(String, LoadedProblem)> {
                 ConjugateFormat::Auto,
                 options,
                 &args.streams.options(),
-            )?;
+            )
+            .map_err(|e| match (streams, e) {
+                (false, rotavg::Error::Io { message, .. }) => rotavg::Error::Io {
+                    path: input.unwrap_or("-").to_string(),
+                    message: format!(
+                        "certify reads a folder holding a COLMAP database.db, or hand-eye \
+                         data (Tabb's robot_cali.txt, or hand and camera pose streams); \
+                         this folder has neither: {message}"
+                    ),
+                },
+                (_, e) => e,
+            })?;
             Ok((loaded.name, LoadedProblem::Conjugate(loaded.problem)))
         }
     }
