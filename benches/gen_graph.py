@@ -2,7 +2,7 @@
 """Random expander view graphs and perturbed estimates for benches/ab.sh (standard library only).
 
     python3 benches/gen_graph.py expander N DEGREE SIGMA SEED OUT.json
-        A multiple-averaging problem in the JSON format of SPEC section 5:
+        A multiple-averaging problem in the JSON format of contract section 5:
         {"num_rotations": n, "edges": [{"i", "j", "rotation": R_ij, "weight": 1}]}.
         Ground truth R_i uniform on SO(3); the edges are a random Hamiltonian cycle (so the
         graph is connected) plus distinct uniformly random pairs up to an average degree DEGREE

@@ -20,7 +20,7 @@
 //! cargo run --release --example anisotropic_table -- --export DIR [MAX_NODES]
 //! ```
 //!
-//! writes each row's graph instead, as `DIR/aniso_<n>_<ratio>_<outlier %>.json` (SPEC's JSON
+//! writes each row's graph instead, as `DIR/aniso_<n>_<ratio>_<outlier %>.json` (the contract's JSON
 //! with an `information` per edge) and `..._truth.txt` (`id R11 .. R33`), for the GTSAM
 //! comparison of `benches/peers/run.sh aniso` (docs/benchmarks.md).
 use rotavg::multiple::MultipleProblem;

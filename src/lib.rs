@@ -134,6 +134,8 @@ pub mod doc_markdown {
     pub struct Status;
     #[doc = include_str!("../docs/development.md")]
     pub struct Development;
+    #[doc = include_str!("../docs/reference/contract.md")]
+    pub struct ReferenceContract;
     #[doc = include_str!("../docs/reference/cli.md")]
     pub struct ReferenceCli;
     #[doc = include_str!("../docs/reference/conventions.md")]

@@ -15,7 +15,7 @@ use std::fmt;
 /// assert_eq!(t.to_string(), "converged: gradient norm 3.200e-11 < 1.0e-10");
 /// let t = Termination::IterationLimit { iterations: 100, value: 1e-3, threshold: 1e-10 };
 /// assert!(!t.is_converged());
-/// // JSON form (SPEC section 5): a `status` tag plus the variant's fields.
+/// // JSON form (contract section 5): a `status` tag plus the variant's fields.
 /// let json = serde_json::to_value(&t).unwrap();
 /// assert_eq!(json["status"], "iteration_limit");
 /// ```
@@ -110,7 +110,7 @@ impl fmt::Display for Termination {
     }
 }
 
-/// The common part of every solver's report (SPEC section 5, `"solver"`).
+/// The common part of every solver's report (contract section 5, `"solver"`).
 ///
 /// ```
 /// use rotavg::{SolverReport, Termination};

@@ -111,7 +111,7 @@ pub(crate) fn quantile_sorted(sorted: &[f64], p: f64) -> f64 {
 }
 
 /// The smallest positive weight (all finite; 0 for none): the scale of the absolute part of
-/// every certificate tolerance (SPEC section 3). Adding measurements can only lower it, so no
+/// every certificate tolerance (contract section 3). Adding measurements can only lower it, so no
 /// set of measurements loosens a tolerance.
 pub(crate) fn min_weight(weights: impl Iterator<Item = f64>) -> f64 {
     let min = weights.filter(|w| *w > 0.0).fold(f64::INFINITY, f64::min);

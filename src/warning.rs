@@ -8,7 +8,7 @@
 //! | `mixed_dimensions` | g2o: 2-D and 3-D lines in one file | |
 //! | `no_initial_estimate` | g2o: nodes without a vertex line | nodes |
 //! | `without_information` | g2o / TORO: edge lines without an information matrix (weight 1) | edges |
-//! | `information_symmetrized` | JSON, Python: information matrices asymmetric by rounding (their symmetric part used) | edges |
+//! | `information_symmetrized` | JSON, Python: information matrices asymmetric by rounding (their symmetric part used; `io::detect::information_symmetrized`) | edges |
 //! | `skipped_by_config` | COLMAP: two-view geometries of a config without a rotation | geometries |
 //! | `skipped_without_pose` | COLMAP: two-view geometries without a stored relative pose | geometries |
 //! | `skipped_without_information` | COLMAP `--information full`: geometries whose correspondences give none | geometries |
@@ -19,45 +19,6 @@
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
-
-/// The warning for information matrices given asymmetric by rounding (`information_symmetrized`,
-/// their symmetric part used: [`crate::multiple::anisotropic::SYMMETRY_TOLERANCE`]), or `None`
-/// when every one was exactly symmetric (or the problem has none).
-///
-/// ```
-/// use rotavg::multiple::{Edge, MultipleProblem};
-/// use rotavg::multiple::anisotropic::Information;
-/// use rotavg::Rotation;
-/// let e = |i, j| Edge { i, j, rotation: Rotation::identity(), weight: 1.0 };
-/// let mut h = nalgebra::Matrix3::identity();
-/// h[(0, 1)] = 1e-15; // numpy's J.T @ W @ J can be this far from symmetric
-/// let info = vec![Information::new(h)?, Information::isotropic(1.0)?];
-/// let p = MultipleProblem::new(2, vec![e(0, 1), e(1, 0)])?.with_information(info)?;
-/// let w = rotavg::warning::information_symmetrized(&p).unwrap();
-/// assert_eq!((w.code.as_str(), w.count), ("information_symmetrized", Some(1)));
-/// # Ok::<(), rotavg::Error>(())
-/// ```
-pub fn information_symmetrized(problem: &crate::multiple::MultipleProblem) -> Option<Warning> {
-    let asymmetric: Vec<f64> = problem
-        .information()?
-        .iter()
-        .map(|h| h.asymmetry())
-        .filter(|&a| a > 0.0)
-        .collect();
-    let largest = asymmetric.iter().copied().fold(0.0, f64::max);
-    (!asymmetric.is_empty()).then(|| {
-        Warning::new(
-            "information_symmetrized",
-            format!(
-                "{} information matrices are asymmetric by rounding (largest |H - H^T| {:.1e} \
-                 of the largest entry): their symmetric parts are used",
-                asymmetric.len(),
-                largest
-            ),
-        )
-        .with_count(asymmetric.len())
-    })
-}
 
 /// A warning with its stable `code`, the `message` the text prints, and a count where the
 /// warning counts something (lines, edges, geometries).

@@ -9,7 +9,7 @@ GTSAM: one BetweenFactorRot3 per edge with noiseModel.Gaussian.Information(H_g),
 Marquardt (GTSAM's defaults) from GTSAM's own chordal initialisation
 (InitializePose3.computeOrientationsChordal on the same edges with zero translations).
 
-Conventions (SPEC section 1): our edge (i, j, R_ij, H) measures R_j R_i^T = R_ij exp([e]x) with
+Conventions (contract section 1): our edge (i, j, R_ij, H) measures R_j R_i^T = R_ij exp([e]x) with
 information H for e. GTSAM's variables are world-from-body, X_i = R_i^T, and the factor's measured
 value is Z = X_i^-1 X_j at zero noise, i.e. Z = R_ij^T. Its error is
 g = Logmap(Z^-1 X_i^-1 X_j) = log(R_ij R_i R_j^T) = -R_ij e (because R_j R_i^T = R_ij exp([e]x)),

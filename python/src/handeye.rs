@@ -3,7 +3,7 @@
 //! command line reads (`read_handeye`: `rotavg::io::input::load_conjugate_with`), held by the
 //! `HandEyeData` class that `average_conjugate` and `certify_conjugate` accept.
 //!
-//! The convention (SPEC section 1): `R_k ~ S^-1 L_k S`, i.e. `L_k S = S R_k`, OpenCV's
+//! The convention (contract section 1): `R_k ~ S^-1 L_k S`, i.e. `L_k S = S R_k`, OpenCV's
 //! `A X = X B` with `A = L` (the gripper motion), `B = R` (the camera motion) and
 //! `X = S = R_cam2gripper`. For stations `i < j` (every pair, as OpenCV's Tsai, Park, Horaud,
 //! Andreff and Daniilidis methods form them):

@@ -134,7 +134,7 @@ impl EdgeArrays {
     }
 
     /// The validated view graph (library checks: rotations, indices, self loops, weights), as a
-    /// loaded graph of `n` nodes with ids `0..n` (format `json`: the SPEC's data model).
+    /// loaded graph of `n` nodes with ids `0..n` (format `json`: the contract's data model).
     fn graph(self) -> rotavg::Result<LoadedGraph> {
         let n = usize::try_from(self.n).map_err(|_| rotavg::Error::InvalidSettings {
             name: "n".into(),
@@ -416,7 +416,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         matrices ``H`` (instead of ``weights``) for the residual ``e`` of
 ///         ``R_j R_i^T = rel[k] expm([e]x)``: the anisotropic chordal cost (certified) for
 ///         ``loss="chordal"``, ``sum e^T H e`` for ``"geodesic"``, and the robust losses of the
-///         Mahalanobis angle ``sqrt(e^T H e / (tr H / 3))`` (SPEC section 1;
+///         Mahalanobis angle ``sqrt(e^T H e / (tr H / 3))`` (contract section 1;
 ///         ``to_dict()["information"]`` summarises them).
 ///
 /// Returns:

@@ -1,4 +1,4 @@
-//! The certificate object shared by all problems (SPEC section 3): an upper bound (the cost of
+//! The certificate object shared by all problems (contract section 3): an upper bound (the cost of
 //! the returned estimate), a proven lower bound on the global minimum, the gap, and a verdict.
 //!
 //! Soundness rule: [`Verdict::Certified`] is only produced by [`Certificate::from_bounds`] from a
@@ -92,7 +92,7 @@ pub(crate) fn nonnegative_bound_at_most(lower_bound: f64, cost: f64) -> f64 {
     }
 }
 
-/// A certificate of (sub)optimality for an estimate (SPEC sections 3 and 5).
+/// A certificate of (sub)optimality for an estimate (contract sections 3 and 5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Certificate {
     /// The verdict.

@@ -1,4 +1,4 @@
-//! Certificates of global optimality and proven suboptimality gaps (SPEC section 3,
+//! Certificates of global optimality and proven suboptimality gaps (contract section 3,
 //! `paper-notes/certificates.md`), one verb for each problem:
 //!
 //! | problem | function | rungs |

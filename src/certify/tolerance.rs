@@ -1,4 +1,4 @@
-//! The tolerance of a verdict (SPEC section 3): certified when `gap <= max(relative |f|,
+//! The tolerance of a verdict (contract section 3): certified when `gap <= max(relative |f|,
 //! absolute_per_min_weight w_min)`, `w_min` the smallest positive weight of the measurements.
 
 use serde::{Deserialize, Serialize};
@@ -11,7 +11,7 @@ pub const DEFAULT_RELATIVE_GAP_TOLERANCE: f64 = 1e-6;
 /// weight (for information matrices, their smallest positive eigenvalue).
 pub const DEFAULT_ABSOLUTE_GAP_PER_MIN_WEIGHT: f64 = 1e-9;
 
-/// The rule of the verdict's tolerance (SPEC section 3): certified when
+/// The rule of the verdict's tolerance (contract section 3): certified when
 /// `gap <= max(relative * |f|, absolute_per_min_weight * w_min)`, `w_min` the smallest positive
 /// weight of the problem's measurements. Both parts scale with the weights, so multiplying every
 /// weight by `c` never changes a verdict; and adding measurements can only lower `w_min`, so no

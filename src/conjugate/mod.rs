@@ -1,5 +1,5 @@
 //! Conjugate rotation averaging (hand-eye calibration's rotation part): find `S` with
-//! `R_i ~ S^-1 L_i S` from weighted pairs `(L_i, R_i)` (SPEC sections 1-3).
+//! `R_i ~ S^-1 L_i S` from weighted pairs `(L_i, R_i)` (contract sections 1-3).
 //!
 //! * [`ConjugateProblem`]: validated pairs with their [`Objective`](crate::objective::Objective)
 //!   (default the chordal cost `g(S) = sum w_i ||S R_i - L_i S||_F^2`), diagnostics (angle

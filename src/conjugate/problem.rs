@@ -1,5 +1,5 @@
 //! The validated conjugate (hand-eye) rotation-averaging problem: pairs `(L_i, R_i)` with
-//! weights, `R_i ~ S^-1 L_i S` (SPEC section 1), the chordal cost `g(S)` and data diagnostics
+//! weights, `R_i ~ S^-1 L_i S` (contract section 1), the chordal cost `g(S)` and data diagnostics
 //! (angle mismatch, uninformative pairs, identifiability). Equations: `paper-notes/conjugate.md`.
 
 use crate::error::{Error, Result};
@@ -311,7 +311,7 @@ impl ConjugateProblem {
     }
 
     /// The smallest pair weight: the scale of the absolute part of the certificate's gap
-    /// tolerance (SPEC section 3; adding pairs can only lower it).
+    /// tolerance (contract section 3; adding pairs can only lower it).
     pub fn min_weight(&self) -> f64 {
         crate::validate::min_weight(self.pairs.iter().map(|p| p.weight))
     }

@@ -65,7 +65,7 @@ impl ConjugateSettings {
 }
 
 /// A local solution: the estimate `S`, its cost `sum_i w_i rho(d(R_i, S^T L_i S))` under the
-/// problem's objective, the chordal cost `g(S)` (SPEC section 1), and the solver report.
+/// problem's objective, the chordal cost `g(S)` (contract section 1), and the solver report.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConjugateSolution {
     /// The estimate `S`.
@@ -256,7 +256,7 @@ pub fn solve_conjugate(
     problem.require_identifiable(&settings.diagnostics)?;
     let start = Instant::now();
     // the given start (a rotation to the validation tolerance) replaced by its nearest rotation,
-    // so that the iteration stays on SO(3) (SPEC section 1)
+    // so that the iteration stays on SO(3) (contract section 1)
     let (s, closed_form_seconds) = match &settings.init {
         Some(r) => (nearest_rotation(r), 0.0),
         None => {
@@ -282,7 +282,7 @@ pub fn solve_conjugate(
     Ok(on_so3(problem, &s, objective, report))
 }
 
-/// The solution at `s` (SPEC section 1): `s` replaced by its nearest rotation (the last
+/// The solution at `s` (contract section 1): `s` replaced by its nearest rotation (the last
 /// iterate carries the rounding of its steps), its cost under `objective` and chordal cost
 /// those of the problem at exactly that estimate.
 fn on_so3(

@@ -9,6 +9,7 @@ use crate::io::names::Choice;
 use crate::io::text::{MAX_INPUT_BYTES, TextStream};
 use crate::multiple::MultipleProblem;
 use crate::so3::{DEFAULT_ROTATION_TOLERANCE, Rotation};
+use crate::warning::Warning;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::Path;
@@ -36,7 +37,7 @@ pub enum GraphFormat {
     G2o,
     /// 1DSfM `EGs.txt`: `i j R11..R33 [tx ty tz]` per line.
     OneDsfm,
-    /// The JSON problem format of SPEC section 5.
+    /// The JSON problem format of contract section 5.
     Json,
     /// A COLMAP database (SQLite: tables `images` and `two_view_geometries`,
     /// [`crate::io::colmap::read_colmap_database`]); read from a path, never from text.
@@ -143,9 +144,7 @@ impl LoadedGraph {
             initial: None,
             duplicates: crate::multiple::stats::duplicate_edge_count(&problem),
             reversed: 0,
-            warnings: crate::warning::information_symmetrized(&problem)
-                .into_iter()
-                .collect(),
+            warnings: information_symmetrized(&problem).into_iter().collect(),
             format: GraphFormat::Json,
             planar: false,
             problem,
@@ -287,6 +286,45 @@ impl ComponentSelection {
             )
         })
     }
+}
+
+/// The warning for information matrices given asymmetric by rounding (`information_symmetrized`,
+/// their symmetric part used: [`crate::multiple::anisotropic::SYMMETRY_TOLERANCE`]), or `None`
+/// when every one was exactly symmetric (or the problem has none).
+///
+/// ```
+/// use rotavg::multiple::{Edge, MultipleProblem};
+/// use rotavg::multiple::anisotropic::Information;
+/// use rotavg::Rotation;
+/// let e = |i, j| Edge { i, j, rotation: Rotation::identity(), weight: 1.0 };
+/// let mut h = nalgebra::Matrix3::identity();
+/// h[(0, 1)] = 1e-15; // numpy's J.T @ W @ J can be this far from symmetric
+/// let info = vec![Information::new(h)?, Information::isotropic(1.0)?];
+/// let p = MultipleProblem::new(2, vec![e(0, 1), e(1, 0)])?.with_information(info)?;
+/// let w = rotavg::io::detect::information_symmetrized(&p).unwrap();
+/// assert_eq!((w.code.as_str(), w.count), ("information_symmetrized", Some(1)));
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn information_symmetrized(problem: &MultipleProblem) -> Option<Warning> {
+    let asymmetric: Vec<f64> = problem
+        .information()?
+        .iter()
+        .map(|h| h.asymmetry())
+        .filter(|&a| a > 0.0)
+        .collect();
+    let largest = asymmetric.iter().copied().fold(0.0, f64::max);
+    (!asymmetric.is_empty()).then(|| {
+        Warning::new(
+            "information_symmetrized",
+            format!(
+                "{} information matrices are asymmetric by rounding (largest |H - H^T| {:.1e} \
+                 of the largest entry): their symmetric parts are used",
+                asymmetric.len(),
+                largest
+            ),
+        )
+        .with_count(asymmetric.len())
+    })
 }
 
 /// Guess the format of a file from its content, and only when the content does not say, from

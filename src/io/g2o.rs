@@ -4,7 +4,7 @@
 //!
 //! A g2o vertex pose `T_i = (W_i, t_i)` maps body-i coordinates to world coordinates
 //! (`W_i` is world-from-body), and an edge measures `T_i^{-1} T_j`, so its rotation is
-//! `Z_ij = W_i^T W_j` `[F1]`. This crate's convention is `R_ij R_i = R_j` (SPEC section 1), so we
+//! `Z_ij = W_i^T W_j` `[F1]`. This crate's convention is `R_ij R_i = R_j` (contract section 1), so we
 //! set **`R_i = W_i^T`** (world-to-body) and **`R_ij = Z_ij^T`**: then
 //! `R_ij R_i = Z_ij^T W_i^T = (W_i Z_ij)^T = W_j^T = R_j`, and the chordal cost
 //! `||R_j - R_ij R_i||_F = ||W_j - W_i Z_ij||_F` is SE-Sync's and GTSAM's rotation term.

@@ -1,11 +1,11 @@
 //! Hand-eye data: Tabb's `robot_cali.txt` / `cali.txt`, the ETH ASL CSV pose streams, and the
-//! conjugate JSON of SPEC section 5; and the relative motions `(L_i, R_i)` they define.
+//! conjugate JSON of contract section 5; and the relative motions `(L_i, R_i)` they define.
 //!
 //! Conventions (data README section 3 item 4, and `paper-notes/conjugate.md` `[H11]`):
 //! * **Tabb**: `B_i` (robot_cali.txt) maps robot-base to hand coordinates, `A_i` (cali.txt)
 //!   maps pattern to camera coordinates, and `A_i X = Z B_i` with `Z` hand -> camera. Then for
 //!   stations `i < j`: `(A_j A_i^-1) Z = Z (B_j B_i^-1)`, so with `L = rot(A_j A_i^-1)` and
-//!   `R = rot(B_j B_i^-1)` we have `R = Z^-1 L Z`: SPEC's `R_i ~ S^-1 L_i S` with `S = rot(Z)`.
+//!   `R = rot(B_j B_i^-1)` we have `R = Z^-1 L Z`: the contract's `R_i ~ S^-1 L_i S` with `S = rot(Z)`.
 //! * **ETH**: the hand file holds `H = T_B_H` (hand in base), the camera file `E = T_W_E`
 //!   (camera in target); `(H_i^-1 H_j) X = X (E_i^-1 E_j)`, so `L = rot(H_i^-1 H_j)`,
 //!   `R = rot(E_i^-1 E_j)`, `S = rot(X)` (camera -> hand rotation).
@@ -920,7 +920,7 @@ struct ConjugateJson {
     pairs: Vec<ConjugatePair>,
 }
 
-/// Read the conjugate JSON of SPEC section 5: `{"pairs": [{"left": L, "right": R, "weight": w}]}`
+/// Read the conjugate JSON of contract section 5: `{"pairs": [{"left": L, "right": R, "weight": w}]}`
 /// (row-major rotations; weight optional, default 1, within
 /// [`[MIN_WEIGHT, MAX_WEIGHT]`](crate::io::MAX_WEIGHT); `R_i ~ S^-1 L_i S`).
 ///
@@ -955,7 +955,7 @@ pub fn read_conjugate_json(text: &str, file: &str) -> Result<ConjugateProblem> {
     ConjugateProblem::new(parsed.pairs).map_err(|e| e.in_file(file, None))
 }
 
-/// Write a problem as conjugate JSON (SPEC section 5).
+/// Write a problem as conjugate JSON (contract section 5).
 pub fn write_conjugate_json(problem: &ConjugateProblem) -> String {
     let pairs: Vec<serde_json::Value> = problem
         .pairs()

@@ -1,11 +1,11 @@
-//! JSON files of SPEC section 5: multiple-averaging problems and estimates.
+//! JSON files of contract section 5: multiple-averaging problems and estimates.
 //!
 //! # Formats (`paper-notes/formats.md`, `[F8]`)
 //!
 //! * Problem: `{"num_rotations": n, "edges": [{"i": 0, "j": 1, "rotation": R, "weight": w}, ...]}`
 //!   with `R` = `R_ij` (`R_ij R_i = R_j`, this crate's convention, no conversion), a row-major
 //!   nested 3x3 array, indices 0-based, `weight` optional (default 1; within [`crate::io::MIN_WEIGHT`,
-//!   `crate::io::MAX_WEIGHT`] when weights come from the file). Anisotropic measurements (SPEC
+//!   `crate::io::MAX_WEIGHT`] when weights come from the file). Anisotropic measurements (contract
 //!   section 1): `"information": H` (a symmetric positive semidefinite 3x3 array for the residual
 //!   `e` of `R_j R_i^T = R_ij exp([e]x)`) instead of `"weight"`; when any edge has one, the problem
 //!   is anisotropic and an edge without it counts as `H = w I` (exactly the isotropic term);
@@ -57,7 +57,7 @@ fn syntax_error(file: &str, e: serde_json::Error) -> Error {
     Error::parse(Some(file), line, format!("invalid JSON: {e}"))
 }
 
-/// Read a multiple-averaging problem in the JSON format of SPEC section 5 `[F8]`.
+/// Read a multiple-averaging problem in the JSON format of contract section 5 `[F8]`.
 ///
 /// ```
 /// use rotavg::io::{json::read_problem_json, detect::ReadOptions};
@@ -134,7 +134,7 @@ fn isotropic_rows(w: f64) -> Rows {
     [[w, 0.0, 0.0], [0.0, w, 0.0], [0.0, 0.0, w]]
 }
 
-/// Write a problem as JSON (SPEC section 5), one edge per line (with its `information` when the
+/// Write a problem as JSON (contract section 5), one edge per line (with its `information` when the
 /// problem is anisotropic, its `weight` otherwise); numbers in Rust's shortest
 /// round-trip form, so [`read_problem_json`] gives back the same problem.
 ///

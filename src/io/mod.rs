@@ -1,4 +1,4 @@
-//! Readers and writers for the file formats: JSON (SPEC section 5), g2o (3-D and 2-D), TORO
+//! Readers and writers for the file formats: JSON (contract section 5), g2o (3-D and 2-D), TORO
 //! `EDGE3`, 1DSfM `EGs.txt`, Bundler ground truth, COLMAP databases and sparse models,
 //! hand-eye pose files. Each reader documents,
 //! where it reads, how the format maps onto this crate's conventions.

@@ -174,7 +174,7 @@ impl Choice for GraphFormat {
             GraphFormat::Auto => "From the extension, then the content",
             GraphFormat::G2o => "g2o / TORO pose graph",
             GraphFormat::OneDsfm => "1DSfM EGs.txt",
-            GraphFormat::Json => "JSON problem (SPEC section 5)",
+            GraphFormat::Json => "JSON problem (contract section 5)",
             GraphFormat::Colmap => {
                 "COLMAP database (SQLite; a database.db file or the folder holding it)"
             }
@@ -530,7 +530,7 @@ pub enum ConjugateFormat {
     /// A directory with `robot_cali.txt` is Tabb, another directory ETH, anything else JSON.
     #[default]
     Auto,
-    /// `{"pairs": [{"left": L, "right": R, "weight": w}]}` (SPEC section 5).
+    /// `{"pairs": [{"left": L, "right": R, "weight": w}]}` (contract section 5).
     Json,
     /// Tabb dataset directory (`robot_cali.txt`, `cali.txt`): relative motions of all station
     /// pairs ([`crate::io::handeye::read_tabb_dir`]).
@@ -563,7 +563,7 @@ impl Choice for ConjugateFormat {
                 "Directory with robot_cali.txt + cali.txt is Tabb, a directory of CSVs is ETH, anything else JSON"
             }
             ConjugateFormat::Json => {
-                "{\"pairs\": [{\"left\": L, \"right\": R, \"weight\": w}]} (SPEC section 5)"
+                "{\"pairs\": [{\"left\": L, \"right\": R, \"weight\": w}]} (contract section 5)"
             }
             ConjugateFormat::Tabb => {
                 "Tabb dataset directory (robot_cali.txt, cali.txt): relative motions of all station pairs"

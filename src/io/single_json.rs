@@ -1,4 +1,4 @@
-//! The JSON file of a single-averaging problem (SPEC section 5):
+//! The JSON file of a single-averaging problem (contract section 5):
 //!
 //! ```text
 //! {"rotations": [R, ...], "weights": [w, ...]}

@@ -7,7 +7,7 @@
 //!
 //! The relative pose `(R, t)` maps camera 1's frame to camera 2's (`x_2 = R x_1 + t`, COLMAP's
 //! `cam2_from_cam1`), and the residual `e` of this crate's anisotropic model is the right
-//! perturbation `R = R_hat exp([e]x)` (SPEC section 1 with `R_ij = R_hat`), so the returned `H`
+//! perturbation `R = R_hat exp([e]x)` (contract section 1 with `R_ij = R_hat`), so the returned `H`
 //! is the information of `e`, in units of `pixel^-2` (noise of 1 pixel standard deviation in
 //! every keypoint coordinate; a common factor changes neither minimisers nor certificates).
 //!

@@ -5,7 +5,7 @@
 //! eigenvalue far below `lambda_max` is lost: `diag(1e8, 1e8, 1e-8)` rotated by a random
 //! rotation may come back with its smallest eigenvalue anywhere in `±1e-8`. The information
 //! matrices of the anisotropic problems need that eigenvalue exactly: it is the weight scale of
-//! the verdict's tolerance (SPEC section 3), and its sign decides positive semidefiniteness.
+//! the verdict's tolerance (contract section 3), and its sign decides positive semidefiniteness.
 //!
 //! The invariants `c1 = sum of the principal 2x2 minors` and `c0 = det H` are sums of products
 //! of the entries; they are evaluated **exactly** with error-free transformations into a

@@ -1,4 +1,4 @@
-//! Anisotropic measurements: a 3x3 information matrix `H` per edge (SPEC section 1,
+//! Anisotropic measurements: a 3x3 information matrix `H` per edge (contract section 1,
 //! `paper-notes/anisotropic.md` `[A1]`-`[A4]`, `[A9]`).
 //!
 //! An edge `(i, j)` with information `H` (symmetric positive semidefinite, not zero) measures
@@ -47,7 +47,7 @@ pub const PSD_TOLERANCE: f64 = 1e-12;
 /// The asymmetry an information matrix may have, relative to its largest entry: `max |H -
 /// H^T| <= 1e-12 max |H|` is rounding (numpy's `J.T @ W @ J` is asymmetric by ~1e-16
 /// relative), and the symmetric part `(H + H^T) / 2` is used (the quadratic form `e^T H e` is
-/// the same); anything larger is an error (SPEC section 1).
+/// the same); anything larger is an error (contract section 1).
 pub const SYMMETRY_TOLERANCE: f64 = 1e-12;
 
 /// A validated 3x3 information matrix `H` of one edge: finite, exactly symmetric, positive
@@ -164,7 +164,7 @@ impl Information {
         self.h.trace() / 3.0
     }
 
-    /// The smallest positive eigenvalue of `H` (the tolerance's weight scale, SPEC section 3,
+    /// The smallest positive eigenvalue of `H` (the tolerance's weight scale, contract section 3,
     /// `[A9]`, `[A12]`): the smallest **nonzero magnitude** of its eigenvalues, so that an
     /// accepted negative part (within [`PSD_TOLERANCE`]) counts with its size instead of leaving
     /// the scale to the larger ones; rounded **down** by the eigenvalues' relative accuracy

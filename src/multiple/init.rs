@@ -49,7 +49,7 @@ pub fn initialise(problem: &MultipleProblem, init: &Initialisation) -> Result<Ve
 /// the sweep's own odometry chain has 10^6). Each product is replaced by its nearest rotation
 /// ([`nearest_rotation`]): measurements accepted within the validation tolerance (1DSfM files
 /// are orthonormal to ~2.5e-6) would otherwise compose their defects along the path, and the
-/// solvers would iterate off SO(3) (SPEC section 1). Nodes not reached (only if the graph is
+/// solvers would iterate off SO(3) (contract section 1). Nodes not reached (only if the graph is
 /// disconnected) keep the identity.
 ///
 /// ```

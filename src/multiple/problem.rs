@@ -193,7 +193,7 @@ impl MultipleProblem {
     }
 
     /// The same graph with anisotropic measurements: one information matrix `H` per edge, in
-    /// edge order (SPEC section 1, `paper-notes/anisotropic.md` `[A1]`). The cost becomes the
+    /// edge order (contract section 1, `paper-notes/anisotropic.md` `[A1]`). The cost becomes the
     /// anisotropic chordal cost `sum 4 (tr M - <R_ij M, R_j R_i^T>)`, `M = tr(H)/2 I - H`; each
     /// edge's `weight` is replaced by `tr(H) / 3`, which only starts and preconditions the
     /// solvers (it is no part of any cost). With a geodesic objective
@@ -269,7 +269,7 @@ impl MultipleProblem {
     }
 
     /// The smallest edge weight: the scale of the absolute part of the certificate's gap
-    /// tolerance (SPEC section 3; adding edges can only lower it).
+    /// tolerance (contract section 3; adding edges can only lower it).
     pub fn min_weight(&self) -> f64 {
         match &self.information {
             Some(info) => {

@@ -241,7 +241,7 @@ impl fmt::Display for MultipleSolution {
     }
 }
 
-/// The exit of every local solve (SPEC section 1): each rotation replaced by its nearest
+/// The exit of every local solve (contract section 1): each rotation replaced by its nearest
 /// rotation ([`nearest_rotation`]: the last iterate carries the rounding of its steps, and a
 /// solver that stopped at once keeps its start), the gauge fixed (`R_0 = I` exactly), and the
 /// costs those of the problem at exactly this estimate. The termination measures (gradient
@@ -265,7 +265,7 @@ fn on_so3(problem: &MultipleProblem, out: &mut MultipleSolution) {
 /// problem's objective. The graph must be connected ([`Error::Disconnected`] otherwise; solve
 /// [`MultipleProblem::largest_component`] to go on). The output has `R_0 = I`; whatever the
 /// defect of the measurements (used as given), the start and the estimate are rotations to
-/// rounding (SPEC section 1), and `cost` and `chordal_cost` are the problem's costs at exactly
+/// rounding (contract section 1), and `cost` and `chordal_cost` are the problem's costs at exactly
 /// the returned estimate.
 ///
 /// ```

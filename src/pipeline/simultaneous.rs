@@ -104,7 +104,7 @@ enum Terms {
 
 /// Spanning-tree (BFS) initialisation of absolutes from one graph, `X_0 = I`; each product
 /// replaced by its nearest rotation (the measurements are rotations only to the validation
-/// tolerance, and the start must be on SO(3), SPEC section 1).
+/// tolerance, and the start must be on SO(3), contract section 1).
 fn spanning_tree(n: usize, edges: &[Edge]) -> Result<Vec<Rotation>> {
     let mut adj = vec![Vec::new(); n];
     for e in edges {
@@ -295,7 +295,7 @@ fn armijo(
     None
 }
 
-/// The joint estimate `(rs, s)` as returned (SPEC section 1): every rotation replaced by its
+/// The joint estimate `(rs, s)` as returned (contract section 1): every rotation replaced by its
 /// nearest rotation (the last iterate carries the rounding of its steps), the gauge `R_0 = I`
 /// exactly, the cost `J` at exactly that estimate.
 fn on_so3(

@@ -1,4 +1,4 @@
-//! The SDP relaxation of conjugate averaging (SPEC section 3) and the rank-one extraction of
+//! The SDP relaxation of conjugate averaging (contract section 3) and the rank-one extraction of
 //! its solution; the verified lower bound from its multipliers is in
 //! [`crate::certify::conjugate`].
 //!
@@ -214,7 +214,7 @@ pub struct ConjugateRelaxation {
 }
 
 /// Solve the SDP relaxation `[H3]` with Clarabel. The cost is divided by the total weight
-/// before solving (Clarabel ended `AlmostSolved` on unscaled 100-pair instances, SPEC 6) and the
+/// before solving (Clarabel ended `AlmostSolved` on unscaled 100-pair instances, contract section 6) and the
 /// multipliers are scaled back.
 ///
 /// The solver's objective is never used as a bound: verify one from the multipliers with

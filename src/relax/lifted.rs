@@ -249,7 +249,7 @@ pub fn trust_region(
 ) -> TrustRegionResult {
     let mut f = lifted_cost(problem, &y);
     // the cost's unit, so that scaling every weight scales nothing else: the smallest weight
-    // (the tolerance's absolute part, SPEC 3; 1 for unit weights)
+    // (the tolerance's absolute part, contract section 3; 1 for unit weights)
     let unit = problem.min_weight().max(f64::MIN_POSITIVE);
     let mut radius = (y.len() as f64).sqrt();
     let max_radius = 10.0 * radius;

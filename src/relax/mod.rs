@@ -15,7 +15,7 @@
 //! Clarabel's types never appear in this public API (the glue is private). **The solver's
 //! objective values are informational only and never a bound**: a rigorous lower bound is
 //! recomputed from the returned multipliers with an independent eigenvalue computation in
-//! [`crate::certify`] (SPEC section 3).
+//! [`crate::certify`] (contract section 3).
 
 mod clarabel;
 pub mod conjugate;

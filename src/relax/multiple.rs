@@ -1,4 +1,4 @@
-//! The SDP relaxation of chordal L2 multiple rotation averaging (SPEC section 3,
+//! The SDP relaxation of chordal L2 multiple rotation averaging (contract section 3,
 //! `paper-notes/sdp.md`):
 //!
 //! - primal `[P2]`: `min tr(Q X)` s.t. `X` PSD (`3n x 3n`), `X_ii = I_3`;

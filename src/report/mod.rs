@@ -1,7 +1,7 @@
 //! Typed reports: what the `rotavg` command prints, as values. Each report is built from a
 //! pipeline's result ([`crate::pipeline::Averaged`]) or a certification, plus the context of
 //! its input (file name, format, node ids, ground-truth accuracy, other components,
-//! diagnostics). Its `Serialize` is the `--json` object of the subcommand (SPEC section 5) and
+//! diagnostics). Its `Serialize` is the `--json` object of the subcommand (contract section 5) and
 //! its `Display` is the text the subcommand prints; the command line prints nothing else.
 //!
 //! | subcommand | report | JSON `problem` |
@@ -13,7 +13,7 @@
 //! | `rotavg info` | [`InfoReport`] | — (a file description) |
 //! | `rotavg demo` | [`DemoReport`] (text only) | — |
 //!
-//! Every problem report has the SPEC keys first, in SPEC order: `problem`, `num_rotations`,
+//! Every problem report has the contract's keys first, in its order: `problem`, `num_rotations`,
 //! `num_measurements`, the objective (`metric`, `p`, `loss` where the subcommand prints them),
 //! `cost`, `estimate`, `solver`, `certificate`; then the keys of its subcommand.
 //!
@@ -107,7 +107,7 @@ enum Rows<'a> {
     Many(#[serde(with = "crate::so3::serde_rows::rotations")] &'a [Rotation]),
 }
 
-/// A problem report's JSON: the SPEC keys every problem report starts with (`problem`,
+/// A problem report's JSON: the contract's keys every problem report starts with (`problem`,
 /// `num_rotations`, `num_measurements`), then the report's own keys (`rest`, in its order).
 #[derive(Serialize)]
 struct ProblemJson<J> {

@@ -1,6 +1,6 @@
 //! Single rotation averaging: the L1 and L2 means `argmin_R sum_i w_i d(R_i, R)^p` of many
 //! estimates `R_i` of one rotation, under the angle (geodesic), chordal and quaternion
-//! distances (SPEC sections 1 and 2; `paper-notes/single.md`, labels `[S1]`..`[S8]`).
+//! distances (contract sections 1 and 2; `paper-notes/single.md`, labels `[S1]`..`[S8]`).
 //!
 //! The problem ([`SingleProblem`]) carries its [`Objective`](crate::objective::Objective)
 //! (metric and loss); [`solve_single`] picks the method:

@@ -153,7 +153,7 @@ impl SingleProblem {
     }
 
     /// The smallest sample weight: the scale of the absolute part of the certificate's gap
-    /// tolerance (SPEC section 3; adding samples can only lower it).
+    /// tolerance (contract section 3; adding samples can only lower it).
     pub fn min_weight(&self) -> f64 {
         crate::validate::min_weight(self.weights.iter().copied())
     }

@@ -155,7 +155,7 @@ pub fn solve_single(problem: &SingleProblem, settings: &SingleSettings) -> Resul
     let objective = problem.objective();
     let start = Instant::now();
     // a given start (a rotation to the validation tolerance) replaced by its nearest rotation:
-    // the iterations then stay on SO(3) (SPEC section 1)
+    // the iterations then stay on SO(3) (contract section 1)
     let init = settings.init.as_ref().map(so3::nearest_rotation);
     let init = init.as_ref();
     let local = match (objective.metric, objective.loss) {
@@ -168,7 +168,7 @@ pub fn solve_single(problem: &SingleProblem, settings: &SingleSettings) -> Resul
         _ => return Err(objective.unsupported("single", SingleProblem::SUPPORTED)),
     };
     let seconds = start.elapsed().as_secs_f64();
-    // SPEC section 1: the estimate in SO(3) to rounding (a mean that stopped at a sample, which
+    // contract section 1: the estimate in SO(3) to rounding (a mean that stopped at a sample, which
     // is a rotation only to the validation tolerance, or the last iterate), its cost the
     // problem's at exactly that estimate
     let estimate = so3::nearest_rotation(&local.estimate);

@@ -37,7 +37,7 @@ pub type Rotation = Rotation3<f64>;
 /// are printed to ~1e-7, hence 1e-5.
 pub const DEFAULT_ROTATION_TOLERANCE: f64 = 1e-5;
 
-/// The distance used to compare two rotations (SPEC section 1, `[C2]`).
+/// The distance used to compare two rotations (contract section 1, `[C2]`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum Metric {
@@ -181,7 +181,7 @@ pub fn chordal_distance(r: &Rotation, s: &Rotation) -> f64 {
 }
 
 /// Quaternion distance `min(||q_R - q_S||, ||q_R + q_S||) = 2 sin(theta / 4)`, evaluated as
-/// `2 sin(theta / 4)` of the angle `theta` of [`angle_between`] (SPEC section 1: every distance
+/// `2 sin(theta / 4)` of the angle `theta` of [`angle_between`] (contract section 1: every distance
 /// is a function of `theta`), so that it is defined by the same formula for a matrix that is a
 /// rotation only to the validation tolerance (its proven perturbation bound is the angle's,
 /// `paper-notes/branch_and_bound.md` `[B6]`).
@@ -339,7 +339,7 @@ fn newton_schulz_polar(mut x: Matrix3<f64>) -> Matrix3<f64> {
 /// `det`): [`project_to_so3`] of its matrix, `r` itself when that is not finite. For matrices
 /// that are rotations only approximately: a measurement accepted within the validation
 /// tolerance, products of such (a spanning-tree start), a start read from a file, an iterate
-/// after many steps. Every estimate rotavg returns passes through it (SPEC section 1): the
+/// after many steps. Every estimate rotavg returns passes through it (contract section 1): the
 /// unknowns are rotations, whatever the defect of the data (the data themselves are used as
 /// given, `[C6]`).
 ///
@@ -374,7 +374,7 @@ pub fn rotation_defect(m: &Matrix3<f64>) -> (f64, f64) {
 
 /// Accept `m` as a rotation when it is finite, `||m^T m - I||_F <= tol` and `|det m - 1| <= tol`
 /// `[C6]`. The accepted matrix is kept **as given**, not replaced by its nearest rotation: every
-/// cost and bound is then that of the data in the file (SPEC section 3), and the certificates
+/// cost and bound is then that of the data in the file (contract section 3), and the certificates
 /// carry the matrix's defect exactly (`paper-notes/single.md` `[S1]`,
 /// `paper-notes/certificates.md` `[D4]`, `paper-notes/branch_and_bound.md` `[B6]`).
 /// `item` names the matrix in the error message (e.g. `"edge 12"`).

@@ -1,5 +1,5 @@
 //! Serde helpers: rotations as row-major nested arrays `[[r11, r12, r13], [..], [..]]`, the JSON
-//! layout of SPEC section 5. Use with `#[serde(with = "rotavg::so3::serde_rows::rotation")]` or
+//! layout of contract section 5. Use with `#[serde(with = "rotavg::so3::serde_rows::rotation")]` or
 //! `#[serde(with = "rotavg::so3::serde_rows::rotations")]`. Deserialisation validates the rotation with
 //! [`crate::so3::DEFAULT_ROTATION_TOLERANCE`].
 //!

@@ -1,4 +1,4 @@
-//! Anisotropic measurements (SPEC section 1, `paper-notes/anisotropic.md`): `H = w I` is the
+//! Anisotropic measurements (contract section 1, `paper-notes/anisotropic.md`): `H = w I` is the
 //! isotropic problem, the anisotropic solver is more accurate than the isotropic one on
 //! anisotropic noise, certificates never claim a point above a brute-force minimum, verdicts
 //! are invariant under scaling every `H`, and the JSON format carries the matrices.
@@ -243,7 +243,7 @@ fn certificates_never_beat_brute_force_on_tiny_graphs() {
 }
 
 /// The verdict does not change when every information matrix is scaled (the tolerance's
-/// absolute part scales with the smallest eigenvalue, SPEC section 3).
+/// absolute part scales with the smallest eigenvalue, contract section 3).
 #[test]
 fn verdicts_are_invariant_under_scaling_the_information() {
     let (p, _) = SyntheticAnisotropic {

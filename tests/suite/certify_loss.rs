@@ -22,7 +22,7 @@ fn rotation_json(r: &Rotation) -> String {
     format!("[{}]", rows.join(","))
 }
 
-/// The problem as a JSON problem file (SPEC section 5), written here from its edges.
+/// The problem as a JSON problem file (contract section 5), written here from its edges.
 fn problem_json(n: usize, edges: &[Edge]) -> String {
     let edges: Vec<String> = edges
         .iter()

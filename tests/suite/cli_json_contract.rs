@@ -1,4 +1,4 @@
-//! The `--json` contract of the command line (SPEC section 5), pinned: every subcommand with
+//! The `--json` contract of the command line (contract section 5), pinned: every subcommand with
 //! `--json` (single, multiple, conjugate, certify, info) runs on small inputs this test writes
 //! itself, and its output must equal the stored object in `tests/cli_json_contract/` key for
 //! key and value for value, timings excepted (every key containing `seconds` is removed).
@@ -352,7 +352,7 @@ fn check(name: &str, actual: &Value) -> Vec<String> {
     out.into_iter().map(|d| format!("{name}: {d}")).collect()
 }
 
-/// The SPEC section 5 keys every problem object has.
+/// The contract section 5 keys every problem object has.
 fn assert_spec_keys(name: &str, v: &Value) {
     for key in [
         "problem",

@@ -1,4 +1,4 @@
-//! `rotavg multiple` and `rotavg certify` run as processes: JSON fields (SPEC section 5),
+//! `rotavg multiple` and `rotavg certify` run as processes: JSON fields (contract section 5),
 //! `--require-certified` exit codes, `--output` round trips, certifying our own output and a
 //! perturbed one, malformed and disconnected inputs, and the shared benchmark files when present.
 
@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use crate::common;
 use common::{assert_success, json_of, run, run_with_stdin, shared, temp_dir, temp_file as tmp};
 
-/// A synthetic graph (n = 30, 90 edges, sigma = 0.05 rad) written as SPEC JSON.
+/// A synthetic graph (n = 30, 90 edges, sigma = 0.05 rad) written as contract JSON.
 fn graph_file(name: &str) -> PathBuf {
     let (p, _) = SyntheticGraph {
         num_rotations: 30,

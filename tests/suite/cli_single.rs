@@ -1,5 +1,5 @@
 //! `rotavg single` end to end: runs the built binary on temporary JSON files and checks the
-//! SPEC section 5 fields and exit codes.
+//! contract section 5 fields and exit codes.
 
 use std::path::PathBuf;
 

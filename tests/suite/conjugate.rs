@@ -29,7 +29,7 @@ fn exact_pairs(s: &Rotation, rs: &[Rotation]) -> ConjugateProblem {
 
 #[test]
 fn cost_definition_matches_chordal_distance_form() {
-    // SPEC 1: g(S) = sum w ||S R - L S||^2 = sum w d_chord(R_i, S^T L_i S)^2.
+    // contract section 1: g(S) = sum w ||S R - L S||^2 = sum w d_chord(R_i, S^T L_i S)^2.
     let mut rng = StdRng::seed_from_u64(11);
     let (p, _) = random_instance(7, 0.3, 0.0, &mut rng);
     let s = random_rotation(&mut rng);

@@ -1,4 +1,4 @@
-//! `rotavg conjugate` end to end: JSON output fields (SPEC section 5), exit codes, errors.
+//! `rotavg conjugate` end to end: JSON output fields (contract section 5), exit codes, errors.
 
 use rand::SeedableRng;
 use rand::rngs::StdRng;

@@ -1,4 +1,4 @@
-//! The numbers are those of the data as given (SPEC section 3, issue 24): a matrix accepted within
+//! The numbers are those of the data as given (contract section 3, issue 24): a matrix accepted within
 //! the validation tolerance (1e-5) but not exactly orthogonal is kept, and every reported cost
 //! and proven lower bound is that of the file's matrices, never of their projections onto SO(3).
 //! Costs and minima are recomputed here from their definitions with nalgebra, independently of

@@ -1,4 +1,4 @@
-//! SPEC section 1 (issue 35 item 1): the data are used as given, but every estimate rotavg
+//! contract section 1 (issue 35 item 1): the data are used as given, but every estimate rotavg
 //! returns is a rotation to 1e-12 (`||R^T R - I||_F` and `|det R - 1|`), from every start, loss
 //! and problem, and its reported cost is the problem's cost at exactly that estimate.
 //!
@@ -11,7 +11,7 @@
 //!
 //! The checks are independent of the crate: orthogonality and determinant, and each cost
 //! recomputed here from its definition with nalgebra (the angle as `atan2(|vee X|, (tr X - 1) / 2)`,
-//! SPEC section 1), besides equality with the problem's own cost function.
+//! contract section 1), besides equality with the problem's own cost function.
 
 use nalgebra::{Matrix3, Vector3};
 use rand::SeedableRng;
@@ -96,7 +96,7 @@ fn log_of(x: &Matrix3<f64>) -> Vector3<f64> {
     v * (s.atan2(0.5 * (x.trace() - 1.0)) / s)
 }
 
-/// The distance of angle `theta` under `metric` (SPEC section 1).
+/// The distance of angle `theta` under `metric` (contract section 1).
 fn distance_of_angle(metric: Metric, theta: f64) -> f64 {
     match metric {
         Metric::Geodesic => theta,

@@ -215,7 +215,7 @@ fn handeye(rng: &mut StdRng) -> (String, String, String) {
     (hand, camera, truth)
 }
 
-/// `anisotropic.json` (SPEC's JSON with an `information` per edge) and
+/// `anisotropic.json` (the contract's JSON with an `information` per edge) and
 /// `anisotropic_truth.txt` (`id R11 .. R33`): [`rotavg::multiple::synthetic::SyntheticAnisotropic`]
 /// with 60 cameras, 240 edges, standard deviations 0.5, 0.5 and 5 degrees along random axes
 /// (`weak_axes = 1`), or 0.5, 5 and 5 degrees (`weak_axes = 2`, `strong_axis.json`).

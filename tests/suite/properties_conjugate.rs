@@ -2,7 +2,7 @@
 //! `paper-notes/conjugate.md`), extending the fixed-seed loop of
 //! `tests/suite/conjugate.rs::invariance_under_simultaneous_conjugation`.
 //!
-//! Convention (SPEC section 1): `R_i ~ S^-1 L_i S`, i.e. `L_i ~ S R_i S^T`, with the chordal
+//! Convention (contract section 1): `R_i ~ S^-1 L_i S`, i.e. `L_i ~ S R_i S^T`, with the chordal
 //! cost `g(S) = sum_i w_i ||S R_i - L_i S||_F^2` ([H1]). Independent sources of the expected
 //! values: the exact transformation laws of `g` derived below by hand, planted noise-free data
 //! (`g(S_true) = 0 = min g`), and the definition of a lower bound.

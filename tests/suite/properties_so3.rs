@@ -261,7 +261,7 @@ proptest! {
         }
     }
 
-    /// The JSON layout is row-major (SPEC section 5): `rows[i][j] = R_ij`, and reading the rows
+    /// The JSON layout is row-major (contract section 5): `rows[i][j] = R_ij`, and reading the rows
     /// back validates and returns the same rotation (re-projection of an exact rotation is the
     /// identity up to rounding, [C5]).
     #[test]
@@ -299,7 +299,7 @@ proptest! {
         nan[k] = f64::INFINITY;
         prop_assert!(matches!(rotation_from_matrix(&nan, tol, "x"), Err(Error::NonFinite { .. })), "inf");
         let noisy = r.matrix() + Matrix3::from_row_slice(&small);
-        // accepted within the tolerance and kept exactly as given (SPEC section 3)
+        // accepted within the tolerance and kept exactly as given (contract section 3)
         let ok = rotation_from_matrix(&noisy, tol, "x").unwrap();
         prop_assert_eq!(*ok.matrix(), noisy);
     }

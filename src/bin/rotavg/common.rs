@@ -1,4 +1,4 @@
-//! The option groups the verbs share (SPEC section 5, "Common options"), each flattened into the
+//! The option groups the verbs share (contract section 5, "Common options"), each flattened into the
 //! verbs that take it; the parser of the library's named choices; printing a report.
 
 use crate::Outcome;
@@ -23,7 +23,8 @@ pub struct Common {
     /// Print nothing on stdout/stderr except errors and `--json` output.
     #[arg(long)]
     pub quiet: bool,
-    /// Print one JSON object on stdout (SPEC section 5) instead of the readable summary.
+    /// Print one JSON object on stdout (docs/reference/contract.md, section 5) instead of the
+    /// readable summary.
     #[arg(long)]
     pub json: bool,
     /// Print the proof's details: every rung of the proof ladder that ran, the tolerance rule,

@@ -1,5 +1,5 @@
 //! The `rotavg` command line: the verbs `demo`, `single`, `multiple`, `conjugate`, `certify`
-//! and `info` (the contract is SPEC section 5; docs/reference/cli.md). The option groups the
+//! and `info` (the contract: docs/reference/contract.md section 5, and docs/reference/cli.md). The option groups the
 //! verbs share are in `common.rs`. Exit status: 0 success (whatever the verdict), 1 bad input
 //! or failure, 2 usage error, 3 with `--require-certified` when the verdict is not `certified`.
 

@@ -1,4 +1,4 @@
-//! `rotavg single INPUT`: the L^p mean of the JSON file of SPEC section 5, certified
+//! `rotavg single INPUT`: the L^p mean of the JSON file of contract section 5, certified
 //! (`rotavg::pipeline::average_single`, printed as `rotavg::report::SingleReport`).
 
 use crate::Outcome;

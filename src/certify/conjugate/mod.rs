@@ -1,4 +1,4 @@
-//! Certificates for conjugate averaging (hand-eye; SPEC section 3, `paper-notes/conjugate.md`):
+//! Certificates for conjugate averaging (hand-eye; contract section 3, `paper-notes/conjugate.md`):
 //! the rungs are the SDP relaxation with verified multipliers `[H8]` ([`sdp`]) and the branch
 //! and bound over SO(3) `[B1]`-`[B6]` ([`crate::certify::branch_and_bound`]).
 

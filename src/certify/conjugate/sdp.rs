@@ -1,5 +1,5 @@
 //! The verified lower bound of conjugate averaging from the multipliers of its SDP relaxation
-//! `[H8]` (SPEC section 3, `paper-notes/conjugate.md`), and the SDP as a rung of a conjugate
+//! `[H8]` (contract section 3, `paper-notes/conjugate.md`), and the SDP as a rung of a conjugate
 //! certification (`SdpRung`).
 
 use crate::certify::certification::{ImprovementSource, SdpSummary};

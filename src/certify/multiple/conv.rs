@@ -163,7 +163,7 @@ fn max_degree(problem: &MultipleProblem) -> usize {
 /// Certify `rotations` against the `conv(SO(3))` relaxation (graphs of at most
 /// [`crate::relax::conv_so3::CONV_MAX_NODES`] nodes): the SDP of `settings.sdp` solved by
 /// Clarabel, its multipliers verified by [`conv_bound`], the verdict under the tolerance of
-/// SPEC section 3 (method `sdp`). Errors as [`crate::relax::conv_so3::relax_multiple_conv`]
+/// contract section 3 (method `sdp`). Errors as [`crate::relax::conv_so3::relax_multiple_conv`]
 /// and [`conv_bound`], or an estimate of the wrong size.
 ///
 /// ```

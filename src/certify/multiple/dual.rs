@@ -1,4 +1,4 @@
-//! The dual certificate of chordal L2 multiple rotation averaging (SPEC section 3,
+//! The dual certificate of chordal L2 multiple rotation averaging (contract section 3,
 //! `paper-notes/certificates.md` `[D3]`-`[D9]`): the multipliers of an estimate
 //! ([`mod@super::multipliers`]), the verified bound from them ([`super::verify`], the ladder of
 //! proofs), the verdict, and why it is what it is ([`DualDiagnosis`]).
@@ -54,7 +54,7 @@ impl fmt::Display for DualCertificate {
     }
 }
 
-/// The dual certificate of an estimate of chordal L2 multiple rotation averaging (SPEC section
+/// The dual certificate of an estimate of chordal L2 multiple rotation averaging (contract section
 /// 3), with no escalation (see [`super::certify_multiple`] for the whole method): multipliers
 /// from the first-order conditions `[D3]`, the verified bound `[D4]`, and the verdict from
 /// `Certificate::from_bounds(f(Y), Some(lb), ..)`. Works for any rotations: at a point that is

@@ -1,4 +1,4 @@
-//! Certificates of chordal L2 multiple rotation averaging (SPEC section 3,
+//! Certificates of chordal L2 multiple rotation averaging (contract section 3,
 //! `paper-notes/certificates.md`, `[D3]`-`[D14]`).
 //!
 //! - [`certify_multiple`]: the whole method for an estimate: the dual certificate `[D3]`-`[D9]`

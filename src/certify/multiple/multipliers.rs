@@ -1,4 +1,4 @@
-//! The numbers every certificate of chordal L2 multiple averaging is made of (SPEC section 3,
+//! The numbers every certificate of chordal L2 multiple averaging is made of (contract section 3,
 //! `paper-notes/certificates.md` `[D3]`, `[D4]`, `[D15]`): `Q Y` and the multipliers
 //! `Lambda_i = sym((Q Y)_i R_i^T)` in double-double, the certificate matrix
 //! `S = Q - blkdiag(Lambda)`, the residuals `S Y` with their error bounds, the data defect of
@@ -103,7 +103,7 @@ fn anisotropic_edge_times(
     }
 }
 
-/// The multipliers `Lambda_i = sym((Q Y)_i R_i^T)` of an estimate `[D3]` (SPEC section 3),
+/// The multipliers `Lambda_i = sym((Q Y)_i R_i^T)` of an estimate `[D3]` (contract section 3),
 /// evaluated in double-double and rounded once, so that `sum tr(Lambda_i)` equals the cost to
 /// working precision whatever the spread of the weights. Errors if the estimate does not have
 /// one rotation per node.
