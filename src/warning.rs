@@ -16,6 +16,8 @@
 //! | `output_not_written` | `--edges-output` / `--inlier-output` with no robust solve | files |
 //! | `estimate_unmatched` | `certify --estimate`: entries that match no node (not used) | entries |
 //! | `translations_not_finite` | `certify --estimate`: COLMAP images with NaN translations (not used) | images |
+//! | `duplicates_disagree` | view graphs: pairs measured more than once whose measurements disagree by more than 5 deg | pairs |
+//! | `convention_suspected` | `certify`: the estimate transposed costs less than a quarter of the estimate as given | |
 
 use serde::{Deserialize, Serialize};
 use std::fmt;

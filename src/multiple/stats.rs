@@ -14,6 +14,7 @@
 use crate::linalg::{Extreme, LanczosSettings, LanczosStop, lanczos};
 use crate::multiple::MultipleProblem;
 use crate::so3::{Rotation, angle_between};
+use crate::warning::Warning;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -270,6 +271,49 @@ pub fn duplicate_disagreements(problem: &MultipleProblem) -> Vec<((usize, usize)
         }
     }
     out
+}
+
+/// The warning `duplicates_disagree` when pairs measured more than once disagree by more than
+/// `threshold_deg` ([`duplicate_disagreements`]; every measurement is used, as given): the
+/// count of such pairs and the worst, named by the file ids `node_ids` of its nodes.
+///
+/// ```
+/// use rotavg::multiple::{Edge, MultipleProblem, stats::duplicates_disagree};
+/// use rotavg::so3::exp;
+/// use rotavg::Rotation;
+/// let e = |i, j, r| Edge { i, j, rotation: r, weight: 1.0 };
+/// let turn = exp(&nalgebra::Vector3::new(0.0, 0.0, 90f64.to_radians()));
+/// let p = MultipleProblem::new(3, vec![e(0, 1, Rotation::identity()), e(1, 2, Rotation::identity()), e(1, 0, turn)])?;
+/// let w = duplicates_disagree(&p, &[10, 20, 30], 5.0).unwrap();
+/// assert_eq!(w.count, Some(1));
+/// assert!(w.message.contains("90.0 deg") && w.message.contains("(10, 20)"), "{}", w.message);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn duplicates_disagree(
+    problem: &MultipleProblem,
+    node_ids: &[u64],
+    threshold_deg: f64,
+) -> Option<Warning> {
+    let bad: Vec<((usize, usize), f64)> = duplicate_disagreements(problem)
+        .into_iter()
+        .filter(|(_, angle)| angle.to_degrees() > threshold_deg)
+        .collect();
+    let ((a, b), worst) = bad.iter().copied().max_by(|x, y| x.1.total_cmp(&y.1))?;
+    let id = |k: usize| node_ids.get(k).copied().unwrap_or(k as u64);
+    Some(
+        Warning::new(
+            "duplicates_disagree",
+            format!(
+                "{} pairs measured more than once disagree by more than {threshold_deg} deg \
+                 (worst: pair ({}, {}), {:.1} deg); every measurement is used as given",
+                bad.len(),
+                id(a),
+                id(b),
+                worst.to_degrees()
+            ),
+        )
+        .with_count(bad.len()),
+    )
 }
 
 /// Weighted degrees and adjacency (multi-edges summed) of the scalar graph Laplacian.

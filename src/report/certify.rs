@@ -10,6 +10,7 @@ use crate::error::{Error, Result};
 use crate::io::input::{LoadedEstimate, LoadedProblem};
 use crate::io::json::Estimate;
 use crate::pipeline::{EstimateInlierGraph, certify_estimate_inliers};
+use crate::so3::Rotation;
 use crate::termination::SolverReport;
 use crate::warning::Warning;
 use serde::{Serialize, Serializer};
@@ -120,7 +121,12 @@ impl CertifyReport {
                 Ok(CertifyReport {
                     node_ids: Some(graph.node_ids.clone()),
                     details: Some(c.details),
-                    warnings: [graph.warnings.clone(), estimate_warnings.clone()].concat(),
+                    warnings: [
+                        super::input_warnings(graph),
+                        estimate_warnings.clone(),
+                        convention_suspected(cost, transposed_cost(&graph.problem, &rotations)),
+                    ]
+                    .concat(),
                     ..report(
                         ProblemKind::Multiple,
                         n,
@@ -148,14 +154,18 @@ impl CertifyReport {
                 let s = estimate.into_rotation()?;
                 let c = certify_conjugate(p, &s, settings)?.certificate;
                 let cost = c.upper_bound;
-                Ok(report(
-                    ProblemKind::Conjugate,
-                    1,
-                    p.num_pairs(),
-                    cost,
-                    Estimate::Single(s),
-                    c,
-                ))
+                let inverse = convention_suspected(cost, p.chordal_cost(&s.inverse()));
+                Ok(CertifyReport {
+                    warnings: [estimate_warnings.clone(), inverse].concat(),
+                    ..report(
+                        ProblemKind::Conjugate,
+                        1,
+                        p.num_pairs(),
+                        cost,
+                        Estimate::Single(s),
+                        c,
+                    )
+                })
             }
         }
     }
@@ -311,6 +321,34 @@ impl CertifyReport {
     pub fn write_figure(&self, _path: &str, _problem: &LoadedProblem) -> Result<()> {
         Err(no_plot_feature())
     }
+}
+
+/// The chordal cost of `rotations` with every rotation transposed (the other convention:
+/// camera-to-world instead of world-to-camera).
+fn transposed_cost(problem: &crate::multiple::MultipleProblem, rotations: &[Rotation]) -> f64 {
+    let transposed: Vec<Rotation> = rotations.iter().map(Rotation::inverse).collect();
+    problem.chordal_cost(&transposed)
+}
+
+/// The warning `convention_suspected` when the estimate transposed costs less than a quarter
+/// of the estimate as given: it is likely in the other convention (`R^T`: camera-to-world, or
+/// the inverse hand-eye rotation), which the certificate does not guess.
+fn convention_suspected(given: f64, transposed: f64) -> Vec<Warning> {
+    // NaN costs (impossible for rotations) never warn
+    let far_better = transposed < 0.25 * given;
+    if !far_better {
+        return Vec::new();
+    }
+    vec![Warning::new(
+        "convention_suspected",
+        format!(
+            "the estimate transposed (every R -> R^T) costs {transposed:.6e}, {:.1}x less than \
+             as given ({given:.6e}): it may be in the other convention (rotavg's R_i is \
+             world-to-camera, R_ij R_i = R_j; conjugate: R_i ~ S^-1 L_i S); certify its \
+             transpose if so",
+            given / transposed.max(f64::MIN_POSITIVE)
+        ),
+    )]
 }
 
 /// The error for `--plot` in a build without the `plot` feature.

@@ -49,6 +49,7 @@ pub use single::SingleReport;
 
 use crate::certify::MethodRun;
 use crate::so3::Rotation;
+use crate::warning::Warning;
 use serde::Serialize;
 use std::fmt;
 
@@ -142,6 +143,16 @@ impl<J> ProblemJson<J> {
 
 /// The lines `  METHOD (T s): NOTE` of the bounding methods that ran (the rungs of the proof
 /// ladder), in the alternate form only (`{:#}`, the command line's `--verbose`).
+/// The warnings of a view graph as read: the reader's, and `duplicates_disagree` for pairs
+/// measured more than once whose measurements disagree by more than
+/// [`StatsSettings::contradiction_deg`](crate::multiple::stats::StatsSettings) (5 degrees).
+pub(crate) fn input_warnings(graph: &crate::io::detect::LoadedGraph) -> Vec<Warning> {
+    use crate::multiple::stats::{StatsSettings, duplicates_disagree};
+    let threshold = StatsSettings::default().contradiction_deg;
+    let disagree = duplicates_disagree(&graph.problem, &graph.node_ids, threshold);
+    graph.warnings.iter().cloned().chain(disagree).collect()
+}
+
 fn write_methods(f: &mut fmt::Formatter<'_>, methods: &[MethodRun]) -> fmt::Result {
     if !f.alternate() {
         return Ok(());

@@ -125,7 +125,7 @@ impl MultipleReport {
             format: g.format,
             duplicates: g.duplicates,
             reversed: g.reversed,
-            warnings: g.warnings.clone(),
+            warnings: super::input_warnings(g),
             run_warnings: Vec::new(),
             node_ids: g.node_ids.clone(),
             node_names: g.node_names.clone(),

@@ -128,3 +128,74 @@ fn certify_warnings_are_in_the_json_and_other_verbs_have_none() {
         assert_eq!(both(&args), [], "{args:?}");
     }
 }
+
+#[test]
+fn input_checks_are_warned_in_text_and_json() {
+    // a triangle measured twice on one pair, the second time turned by 90 degrees about z
+    let i = "1 0 0 0 1 0 0 0 1";
+    let turned = "0 -1 0 1 0 0 0 0 1";
+    let egs = format!("3 7 {i}\n7 9 {i}\n3 9 {i}\n3 7 {turned}\n9 3 {i}\n");
+    let path = temp_file("warnings_dup_EGs.txt", &egs);
+    let codes = both(&["multiple", path.to_str().unwrap()]);
+    assert_eq!(codes, [("duplicates_disagree".to_string(), Some(1))]);
+    let printed = run(&["multiple", path.to_str().unwrap()]);
+    let printed = flat(&String::from_utf8_lossy(&printed.stdout));
+    assert!(printed.contains("pair (3, 7), 90.0 deg"), "{printed}");
+    // information asymmetric by rounding
+    let h = |x: &str| format!("[[2,{x},0],[0,1,0],[0,0,3]]");
+    let r = "[[1,0,0],[0,1,0],[0,0,1]]";
+    let json = format!(
+        r#"{{"num_rotations": 3, "edges": [
+        {{"i":0,"j":1,"rotation":{r},"information":{}}},
+        {{"i":1,"j":2,"rotation":{r},"information":{}}},
+        {{"i":2,"j":0,"rotation":{r},"information":{}}}]}}"#,
+        h("1e-15"),
+        h("0"),
+        h("0")
+    );
+    let path = temp_file("warnings_asym.json", &json);
+    let codes = both(&["multiple", path.to_str().unwrap()]);
+    assert_eq!(codes, [("information_symmetrized".to_string(), Some(1))]);
+    // an estimate in the other convention: the hand-eye truth transposed, and the optimum of a
+    // view graph transposed
+    let dir = temp_dir();
+    let truth: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(format!("{DATA}/handeye/truth.json")).unwrap(),
+    )
+    .unwrap();
+    let rows: [[f64; 3]; 3] = serde_json::from_value(truth["rotation"].clone()).unwrap();
+    let transposed: Vec<Vec<f64>> = (0..3)
+        .map(|a| (0..3).map(|b| rows[b][a]).collect())
+        .collect();
+    let s_t = dir.join("warnings_s_transposed.json");
+    std::fs::write(
+        &s_t,
+        serde_json::json!({ "rotation": transposed }).to_string(),
+    )
+    .unwrap();
+    let handeye = format!("{DATA}/handeye");
+    let codes = both(&["certify", &handeye, "--estimate", s_t.to_str().unwrap()]);
+    assert_eq!(codes, [("convention_suspected".to_string(), None)]);
+    let right = both(&[
+        "certify",
+        &handeye,
+        "--estimate",
+        &format!("{DATA}/handeye/truth.json"),
+    ]);
+    assert!(right.is_empty(), "{right:?}");
+    let slam = format!("{DATA}/slam.g2o");
+    let solved = json_of(&run(&["multiple", &slam, "--json"]));
+    let estimate: Vec<[[f64; 3]; 3]> = serde_json::from_value(solved["estimate"].clone()).unwrap();
+    let flipped: Vec<[[f64; 3]; 3]> = estimate
+        .iter()
+        .map(|m| [0, 1, 2].map(|a| [0, 1, 2].map(|b| m[b][a])))
+        .collect();
+    let est = dir.join("warnings_transposed.json");
+    std::fs::write(
+        &est,
+        serde_json::json!({ "rotations": flipped }).to_string(),
+    )
+    .unwrap();
+    let codes = both(&["certify", &slam, "--estimate", est.to_str().unwrap()]);
+    assert_eq!(codes, [("convention_suspected".to_string(), None)]);
+}
