@@ -123,6 +123,10 @@ pub struct LoadedGraph {
     pub format: GraphFormat,
     /// `true` when every measurement is a planar rotation about z (g2o `EDGE_SE2`).
     pub planar: bool,
+    /// The options it was read with (weights from the file or unit, `--information`,
+    /// tolerances): the JSON reports record them (`input.read`).
+    #[serde(default)]
+    pub read: ReadOptions,
 }
 
 impl LoadedGraph {
@@ -147,8 +151,15 @@ impl LoadedGraph {
             warnings: information_symmetrized(&problem).into_iter().collect(),
             format: GraphFormat::Json,
             planar: false,
+            read: ReadOptions::default(),
             problem,
         }
+    }
+
+    /// This graph, recorded as read with `options`.
+    pub fn read_with(mut self, options: &ReadOptions) -> Self {
+        self.read = *options;
+        self
     }
 
     /// The node index of a file id, if the id occurs.
@@ -430,7 +441,7 @@ pub fn read_graph(
         GraphFormat::Auto => detect_format(file, text)?,
         f => f,
     };
-    match format {
+    let graph = match format {
         GraphFormat::Colmap => Err(Error::parse(
             Some(file),
             None,
@@ -440,7 +451,8 @@ pub fn read_graph(
         GraphFormat::Json => crate::io::json::read_problem_json(text, file, options),
         // `Auto` was resolved above; detect_format never returns it.
         GraphFormat::G2o | GraphFormat::Auto => crate::io::g2o::read_g2o(text, file, options),
-    }
+    };
+    graph.map(|g| g.read_with(options))
 }
 
 /// Read a file from disk ([`read_graph`]); I/O errors name the path. A COLMAP database
@@ -463,17 +475,15 @@ pub fn read_graph(
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn load_graph(path: &Path, format: GraphFormat, options: &ReadOptions) -> Result<LoadedGraph> {
-    match format {
+    let database = match format {
         GraphFormat::Colmap => {
-            let db = crate::io::colmap::find_database(path).unwrap_or_else(|| path.to_path_buf());
-            return crate::io::colmap::read_colmap_database(&db, options);
+            Some(crate::io::colmap::find_database(path).unwrap_or_else(|| path.to_path_buf()))
         }
-        GraphFormat::Auto => {
-            if let Some(db) = crate::io::colmap::find_database(path) {
-                return crate::io::colmap::read_colmap_database(&db, options);
-            }
-        }
-        _ => {}
+        GraphFormat::Auto => crate::io::colmap::find_database(path),
+        _ => None,
+    };
+    if let Some(db) = database {
+        return crate::io::colmap::read_colmap_database(&db, options).map(|g| g.read_with(options));
     }
     let name = path.display().to_string();
     read_graph_stream(TextStream::open(&name)?, format, options)
@@ -513,7 +523,7 @@ pub fn detect_stream_format(stream: &mut TextStream<'_>) -> Result<GraphFormat> 
             return detect_format(file, complete);
         }
         if let Ok(f) = detect_format(file, "") {
-            return Ok(f); // from the extension, as detect_format decides first
+            return Ok(f); // no complete line yet: the extension decides
         }
         if head.trim_start().starts_with('{') {
             return Ok(GraphFormat::Json);
@@ -567,7 +577,7 @@ pub fn read_graph_stream(
         GraphFormat::Auto => detect_stream_format(&mut stream)?,
         f => f,
     };
-    match format {
+    let graph = match format {
         GraphFormat::Json => {
             let name = stream.name().to_owned();
             let text = stream.into_string(MAX_INPUT_BYTES)?;
@@ -578,5 +588,6 @@ pub fn read_graph_stream(
             crate::io::g2o::read_g2o_lines(&mut stream.into_lines(), options)
         }
         GraphFormat::Colmap => read_graph("", stream.name(), format, options),
-    }
+    };
+    graph.map(|g| g.read_with(options))
 }

@@ -183,6 +183,7 @@ impl EdgeLines {
             warnings: Vec::new(),
             format,
             planar: false,
+            read: ReadOptions::default(),
         })
     }
 }

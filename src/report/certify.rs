@@ -7,6 +7,7 @@ use crate::certify::{
     certify_conjugate, certify_multiple, certify_single,
 };
 use crate::error::{Error, Result};
+use crate::io::detect::{GraphFormat, ReadOptions};
 use crate::io::input::{LoadedEstimate, LoadedProblem};
 use crate::io::json::Estimate;
 use crate::pipeline::{EstimateInlierGraph, certify_estimate_inliers};
@@ -71,6 +72,8 @@ pub struct CertifyReport {
     pub inlier_graph: Option<EstimateInlierGraph>,
     /// The loss whose inlier set was judged (`--loss`; `None`: all edges only).
     pub loss: Option<String>,
+    /// Multiple averaging: the view graph's format and the options it was read with.
+    pub read: Option<(GraphFormat, ReadOptions)>,
 }
 
 impl CertifyReport {
@@ -101,6 +104,7 @@ impl CertifyReport {
                 warnings: estimate_warnings.clone(),
                 inlier_graph: None,
                 loss: None,
+                read: None,
             };
         match problem {
             LoadedProblem::Multiple(graph) => {
@@ -119,6 +123,7 @@ impl CertifyReport {
                 let c = certify_multiple(&graph.problem, &rotations, settings)?;
                 let cost = graph.problem.chordal_cost(&rotations);
                 Ok(CertifyReport {
+                    read: Some((graph.format, graph.read)),
                     node_ids: Some(graph.node_ids.clone()),
                     details: Some(c.details),
                     warnings: [
@@ -371,6 +376,7 @@ fn no_figure() -> Error {
 
 #[derive(Serialize)]
 struct Json<'a> {
+    input: super::InputJson<'a>,
     #[serde(skip_serializing_if = "Option::is_none")]
     verdict: Option<VerdictOf>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -390,6 +396,12 @@ struct Json<'a> {
 impl Serialize for CertifyReport {
     fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
         let rest = Json {
+            input: super::InputJson {
+                path: &self.input,
+                format: self.read.map(|(f, _)| f),
+                read: self.read.as_ref().map(|(_, r)| r),
+                estimate: Some(&self.estimate_file),
+            },
             verdict: self.verdict_of(),
             loss: self.loss.as_deref(),
             cost: self.cost,

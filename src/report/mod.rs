@@ -143,6 +143,19 @@ impl<J> ProblemJson<J> {
 
 /// The lines `  METHOD (T s): NOTE` of the bounding methods that ran (the rungs of the proof
 /// ladder), in the alternate form only (`{:#}`, the command line's `--verbose`).
+/// What a report's input was (`input` of the JSON): the path as given, its format and the
+/// options it was read with (view graphs), and the estimate file (`certify`).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub(crate) struct InputJson<'a> {
+    pub path: &'a str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub format: Option<crate::io::detect::GraphFormat>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub read: Option<&'a crate::io::detect::ReadOptions>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimate: Option<&'a str>,
+}
+
 /// The warnings of a view graph as read: the reader's, and `duplicates_disagree` for pairs
 /// measured more than once whose measurements disagree by more than
 /// [`StatsSettings::contradiction_deg`](crate::multiple::stats::StatsSettings) (5 degrees).

@@ -4,7 +4,7 @@ use super::{ProblemJson, ProblemKind, Rows, nested, write_methods};
 use crate::certify::{Certificate, Verdict};
 use crate::certify::{CertifiedProblem, CertifiedProblemKind};
 use crate::error::Result;
-use crate::io::detect::{ComponentSelection, GraphFormat};
+use crate::io::detect::{ComponentSelection, GraphFormat, ReadOptions};
 use crate::io::input::MultipleInput;
 use crate::io::names::MultipleLoss;
 use crate::multiple::LinearAlgebraCounts;
@@ -73,6 +73,8 @@ pub struct MultipleReport {
     pub input: String,
     /// The format read.
     pub format: GraphFormat,
+    /// The options the graph was read with.
+    pub read: ReadOptions,
     /// Edges given twice (same unordered pair).
     pub duplicates: usize,
     /// Edges given with `i > j`.
@@ -123,6 +125,7 @@ impl MultipleReport {
             result,
             input: input.name.clone(),
             format: g.format,
+            read: g.read,
             duplicates: g.duplicates,
             reversed: g.reversed,
             warnings: super::input_warnings(g),
@@ -244,6 +247,7 @@ impl fmt::Display for VerdictOf {
 
 #[derive(Serialize)]
 struct Json<'a> {
+    input: super::InputJson<'a>,
     loss: String,
     verdict: Option<VerdictOf>,
     cost: f64,
@@ -321,6 +325,12 @@ impl Serialize for MultipleReport {
             ..self.result.details.clone()
         };
         let rest = Json {
+            input: super::InputJson {
+                path: &self.input,
+                format: Some(self.format),
+                read: Some(&self.read),
+                estimate: None,
+            },
             loss: MultipleLoss::name_of(&s.objective),
             verdict: self.verdict_of(),
             cost: s.cost,

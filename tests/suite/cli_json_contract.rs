@@ -626,12 +626,18 @@ fn exit_codes_streams_and_stdin() {
         let text = std::fs::read_to_string(inputs.dir.join(file)).expect("read");
         let (code, stdout, stderr) = run_raw(&inputs, &[sub, "-", "--json"], Some(&text));
         assert_eq!(code, Some(0), "{sub} -: {stderr}");
-        let from_stdin: Value = serde_json::from_str(&stdout).expect("JSON");
-        assert_eq!(
-            without_timings(&from_stdin, &inputs.dir),
-            run(&inputs, &[sub, file, "--json"]),
-            "{sub}"
-        );
+        let mut from_stdin: Value = serde_json::from_str(&stdout).expect("JSON");
+        let mut from_file = run(&inputs, &[sub, file, "--json"]);
+        // the same object but for the input's path, which says where it came from
+        if let Some(path) = from_stdin.pointer_mut("/input/path") {
+            assert_eq!(path, "-");
+            *path = Value::from(file);
+        }
+        from_stdin = without_timings(&from_stdin, &inputs.dir);
+        if let Some(path) = from_file.pointer_mut("/input/path") {
+            assert_eq!(path, file);
+        }
+        assert_eq!(from_stdin, from_file, "{sub}");
     }
     let _ = std::fs::remove_dir_all(&inputs.dir);
 }

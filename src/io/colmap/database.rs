@@ -144,6 +144,7 @@ fn view_graph(
         warnings,
         format: GraphFormat::Colmap,
         planar: false,
+        read: Default::default(), // set by the caller (io::detect::load_graph)
     })
 }
 
