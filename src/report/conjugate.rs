@@ -21,7 +21,8 @@ use std::fmt;
 /// `small_rotation_pairs`, `identifiability`), `motion` (null for pairs read as such; for Tabb
 /// and pose streams the [`MotionStats`] counts `poses`, `pairs`, `skipped_small`, `unmatched`,
 /// `hand` and `camera` (per stream: `file`, `samples`, `kept`, `repeated_stamps`,
-/// `header_lines`, `time_unit`; null for Tabb), and `settings`, the [`MotionSettings`] used).
+/// `header_lines`, `time_unit`; null for Tabb), and `settings`, the [`MotionSettings`] used,
+/// with `min_angle` in radians and `min_angle_deg` in degrees, as `--min-angle` takes it).
 /// Text: where the data came from, the diagnostics, `S`, costs, solver, SDP and certificate.
 ///
 /// ```
@@ -170,7 +171,16 @@ struct Json<'a> {
 struct MotionJson<'a> {
     #[serde(flatten)]
     stats: &'a MotionStats,
+    settings: MotionSettingsJson<'a>,
+}
+
+/// The motion settings with the unit of `min_angle` stated: `min_angle` stays in radians (the
+/// library's field, as before), `min_angle_deg` is the same angle as `--min-angle` takes it.
+#[derive(Serialize)]
+struct MotionSettingsJson<'a> {
+    #[serde(flatten)]
     settings: &'a MotionSettings,
+    min_angle_deg: f64,
 }
 
 impl Serialize for ConjugateReport {
@@ -193,10 +203,13 @@ impl Serialize for ConjugateReport {
                 small_rotation_pairs: &d.small_rotation_pairs,
                 identifiability: &d.identifiability,
             },
-            motion: self
-                .motion
-                .as_ref()
-                .map(|(stats, settings)| MotionJson { stats, settings }),
+            motion: self.motion.as_ref().map(|(stats, settings)| MotionJson {
+                stats,
+                settings: MotionSettingsJson {
+                    settings,
+                    min_angle_deg: settings.min_angle.to_degrees(),
+                },
+            }),
         };
         ProblemJson::new(ProblemKind::Conjugate, 1, self.num_pairs, rest).serialize(serializer)
     }
