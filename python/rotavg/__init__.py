@@ -13,8 +13,9 @@ Three problems (Hartley, Trumpf, Dai & Li, "Rotation Averaging", IJCV 2013):
 Rotations are float64 arrays of shape ``(N, 3, 3)`` (a ``scipy.spatial.transform.Rotation`` is
 accepted wherever rotations are). Files are read with the command line's readers:
 ``read_graph(path)`` (g2o, 1DSfM and JSON view graphs), ``read_ground_truth(path, graph)`` and
-``read_handeye(path)`` (conjugate JSON, Tabb, ETH / motion-capture pose streams); ``accuracy``
-compares an estimate with ground truth. Every solver call returns a ``Result`` with the
+``read_handeye(path)`` (conjugate JSON, Tabb, ETH / motion-capture pose streams), and written
+with its writers: ``write_estimate(graph, estimate, path)`` (JSON, g2o, a COLMAP model, as
+``rotavg multiple --output``); ``accuracy`` compares an estimate with ground truth. Every solver call returns a ``Result`` with the
 estimate, its cost, the solver's report and a ``Certificate`` (a proven lower bound on the
 global minimum and the gap to it); ``to_dict()`` is the object the ``rotavg`` command line
 prints with ``--json``. Bad input raises ``rotavg.Error`` (a ``ValueError``) or one of its
@@ -48,6 +49,7 @@ from ._rotavg import (
     read_graph,
     read_ground_truth,
     read_handeye,
+    write_estimate,
 )
 
 __all__ = [
@@ -76,4 +78,5 @@ __all__ = [
     "read_graph",
     "read_ground_truth",
     "read_handeye",
+    "write_estimate",
 ]

@@ -39,6 +39,7 @@ __all__ = [
     "read_graph",
     "read_ground_truth",
     "read_handeye",
+    "write_estimate",
 ]
 
 class _HasAsMatrix(Protocol):
@@ -394,6 +395,11 @@ def read_graph(
 
 def read_ground_truth(path: _PathLike, graph: Graph) -> _FloatArray:
     """Ground truth for a graph's nodes (NaN where unknown), the CLI's --ground-truth formats."""
+
+def write_estimate(
+    graph: Graph, estimate: _Rotations, path: _PathLike, format: str = "auto"
+) -> None:
+    """Write an estimate of the graph's nodes as ``rotavg multiple --output`` writes it."""
 
 def accuracy(estimate: _Rotations, truth: npt.ArrayLike) -> Accuracy:
     """Angular errors of an estimate against ground truth after the optimal alignment."""

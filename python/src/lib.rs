@@ -11,6 +11,7 @@
 mod convert;
 mod errors;
 mod handeye;
+mod output;
 mod truth;
 mod types;
 
@@ -40,7 +41,10 @@ use types::{Certificate, Graph, Report, RunResult, SolverReport};
 
 /// Run `f` without the GIL; a library error becomes a `rotavg` exception, a panic a
 /// `RuntimeError`.
-fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> rotavg::Result<T> + Send) -> PyResult<T> {
+pub(crate) fn detached<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce() -> rotavg::Result<T> + Send,
+) -> PyResult<T> {
     match py.detach(|| catch_unwind(AssertUnwindSafe(f))) {
         Ok(result) => result.map_err(error),
         Err(payload) => {
@@ -58,7 +62,7 @@ fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> rotavg::Result<T> + Sen
 
 /// Parse a name of one of the library's choices (`chordal`, `auto`, ...) given as the keyword
 /// argument `keyword` (which an unknown name's error names).
-fn parse_named<T: std::str::FromStr<Err = rotavg::Error>>(
+pub(crate) fn parse_named<T: std::str::FromStr<Err = rotavg::Error>>(
     name: &str,
     keyword: &str,
 ) -> PyResult<T> {
@@ -1068,6 +1072,7 @@ fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(certify_conjugate_py, m)?)?;
     m.add_function(wrap_pyfunction!(certify_single_py, m)?)?;
     m.add_function(wrap_pyfunction!(read_graph, m)?)?;
+    m.add_function(wrap_pyfunction!(output::write_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(truth::read_ground_truth, m)?)?;
     m.add_function(wrap_pyfunction!(truth::accuracy, m)?)?;
     m.add_function(wrap_pyfunction!(handeye::hand_eye_pairs, m)?)?;

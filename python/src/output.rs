@@ -1,0 +1,69 @@
+//! `write_estimate`: an estimate of a graph written as `rotavg multiple --output` writes it
+//! (`rotavg::io::output`: JSON with node ids, g2o, a COLMAP sparse model).
+
+use crate::convert::matrices;
+use crate::errors::argument_error;
+use crate::{detached, parse_named};
+use pyo3::prelude::*;
+use rotavg::io::output::{EstimateFile, OutputFormat, OutputSource, prepare_output};
+
+use crate::types::Graph;
+
+/// Write an estimate of ``graph``'s nodes to ``path``, exactly as ``rotavg multiple FILE
+/// --output PATH`` writes it.
+///
+/// Args:
+///     graph: the ``Graph`` the estimate is of (from ``read_graph``): its node ids (and image
+///         names) go into the file, and a g2o output of a g2o input keeps the input's lines
+///         with the vertex rotations replaced.
+///     estimate: ``(n, 3, 3)`` rotations ``R_i`` (world-to-camera), one per node of the graph.
+///     path: ``*.json`` (``{"node_ids": [...], "rotations": [...]}``), ``*.g2o``, a folder
+///         (``.../``: a COLMAP sparse model, ``images.txt``, ``cameras.txt``, ``points3D.txt``)
+///         or ``*images.txt``; other names are JSON.
+///     format: ``"auto"`` (from the path), ``"json"``, ``"g2o"`` or ``"colmap"``.
+///
+/// Raises:
+///     rotavg.Error: an estimate of the wrong size or not of rotations, a format the path
+///         cannot take; rotavg.FileError: the file or folder cannot be written (a folder this
+///         call created is removed again).
+#[pyfunction]
+#[pyo3(signature = (graph, estimate, path, format="auto"))]
+pub fn write_estimate(
+    py: Python<'_>,
+    graph: &Graph,
+    estimate: &Bound<'_, PyAny>,
+    path: std::path::PathBuf,
+    format: &str,
+) -> PyResult<()> {
+    let format: OutputFormat = parse_named(format, "format")?;
+    let rotations = matrices(estimate, "estimate")?
+        .rotations()
+        .map_err(crate::errors::error)?;
+    let loaded = &graph.loaded;
+    if rotations.len() != loaded.node_ids.len() {
+        return Err(argument_error(format!(
+            "the estimate has {} rotations, the graph has {} nodes",
+            rotations.len(),
+            loaded.node_ids.len()
+        )));
+    }
+    let path = path.to_string_lossy().into_owned();
+    detached(py, move || {
+        let plan = prepare_output(&path, format)?;
+        let source = OutputSource {
+            input: &graph.name,
+            format: loaded.format,
+        };
+        let file = EstimateFile {
+            problem: &loaded.problem,
+            rotations: &rotations,
+            node_ids: &loaded.node_ids,
+            node_names: &loaded.node_names,
+        };
+        let written = file.write_planned(&plan, &source);
+        if written.is_err() {
+            plan.remove_empty_folders();
+        }
+        written
+    })
+}
