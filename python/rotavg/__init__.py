@@ -20,7 +20,8 @@ estimate, its cost, the solver's report and a ``Certificate`` (a proven lower bo
 global minimum and the gap to it); ``to_dict()`` is the object the ``rotavg`` command line
 prints with ``--json``. Bad input raises ``rotavg.Error`` (a ``ValueError``) or one of its
 subclasses (``ParseError``, ``FileError``, ``DisconnectedError``, ``DegenerateError``,
-``SolverError``) with the library's message. The GIL is released while solving.
+``SolverError``) with the library's message. The GIL is released while solving;
+``set_progress(callback)`` receives the progress events of long runs.
 """
 
 from ._rotavg import (
@@ -49,6 +50,7 @@ from ._rotavg import (
     read_graph,
     read_ground_truth,
     read_handeye,
+    set_progress,
     write_estimate,
 )
 
@@ -78,5 +80,6 @@ __all__ = [
     "read_graph",
     "read_ground_truth",
     "read_handeye",
+    "set_progress",
     "write_estimate",
 ]

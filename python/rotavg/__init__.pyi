@@ -7,7 +7,7 @@ mypy --strict.
 """
 
 import os
-from typing import Any, Dict, List, Optional, Protocol, Union, final, overload
+from typing import Any, Callable, Dict, List, Optional, Protocol, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -39,6 +39,7 @@ __all__ = [
     "read_graph",
     "read_ground_truth",
     "read_handeye",
+    "set_progress",
     "write_estimate",
 ]
 
@@ -395,6 +396,9 @@ def read_graph(
 
 def read_ground_truth(path: _PathLike, graph: Graph) -> _FloatArray:
     """Ground truth for a graph's nodes (NaN where unknown), the CLI's --ground-truth formats."""
+
+def set_progress(callback: Optional[Callable[[Dict[str, Any]], object]]) -> None:
+    """Receive every following call's progress events (process-wide); None stops it."""
 
 def write_estimate(
     graph: Graph, estimate: _Rotations, path: _PathLike, format: str = "auto"

@@ -12,6 +12,7 @@ mod convert;
 mod errors;
 mod handeye;
 mod output;
+mod progress;
 mod truth;
 mod types;
 
@@ -1073,6 +1074,7 @@ fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(certify_single_py, m)?)?;
     m.add_function(wrap_pyfunction!(read_graph, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(progress::set_progress, m)?)?;
     m.add_function(wrap_pyfunction!(truth::read_ground_truth, m)?)?;
     m.add_function(wrap_pyfunction!(truth::accuracy, m)?)?;
     m.add_function(wrap_pyfunction!(handeye::hand_eye_pairs, m)?)?;

@@ -320,3 +320,36 @@ def test_write_estimate_writes_what_the_command_line_writes(cli, tmp_path):
     with pytest.raises(rotavg.Error, match="format"):
         rotavg.write_estimate(g, est, tmp_path / "x.json", format="png")
     assert not (tmp_path / "short.json").exists()
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_set_progress_delivers_the_events_of_a_run(rng):
+    """``set_progress`` receives the phases and iterations the command line shows; a failing
+    callback does not stop the solve; ``None`` stops the events."""
+    _, i, j, rel = synthetic_graph(rng, 40, 120, 0.05)
+    events = []
+    rotavg.set_progress(events.append)
+    try:
+        res = rotavg.average_multiple(40, i, j, rel, loss="chordal")
+    finally:
+        rotavg.set_progress(None)
+    phases = {e["phase"] for e in events if e["event"] == "phase"}
+    assert {"solve", "certify"} <= phases, phases
+    iterations = [e for e in events if e["event"] == "iteration"]
+    assert iterations and all(e["cost"] >= 0 and "message" in e for e in iterations)
+    assert res.certificate.certified
+
+    def boom(event):
+        raise RuntimeError("a broken callback")
+
+    rotavg.set_progress(boom)
+    try:
+        again = rotavg.average_multiple(40, i, j, rel, loss="chordal")
+    finally:
+        rotavg.set_progress(None)
+    assert again.cost == pytest.approx(res.cost, rel=1e-12)
+    before = len(events)
+    rotavg.average_multiple(40, i, j, rel, loss="chordal")
+    assert len(events) == before
+    with pytest.raises(rotavg.Error, match="callable"):
+        rotavg.set_progress(3)  # type: ignore[arg-type]

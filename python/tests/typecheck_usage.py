@@ -206,6 +206,9 @@ def multiple(folder: Path) -> None:
     check_result(rotavg.certify_multiple(g, estimate=from_graph.estimate, certify="dual"))
     check_result(rotavg.certify_multiple(g, estimate=from_graph.estimate, loss="cauchy",
                                          loss_threshold=5.0, inlier_threshold=None))
+    seen: List[Dict[str, Any]] = []
+    rotavg.set_progress(seen.append)
+    rotavg.set_progress(None)
     rotavg.write_estimate(g, from_graph.estimate, folder / "written.json")
     rotavg.write_estimate(g, from_graph.estimate, str(folder / "written.g2o"), format="g2o")
     t: FloatArray = rotavg.read_ground_truth(gt, g)
