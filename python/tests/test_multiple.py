@@ -335,6 +335,9 @@ def test_set_progress_delivers_the_events_of_a_run(rng):
         rotavg.set_progress(None)
     phases = {e["phase"] for e in events if e["event"] == "phase"}
     assert {"solve", "certify"} <= phases, phases
+    # every rung of the certificate's ladder is announced with its predicted time
+    rungs = [e["detail"] for e in events if e["event"] == "phase" and e["phase"] == "certify"]
+    assert any("predicted" in d for d in rungs), rungs
     iterations = [e for e in events if e["event"] == "iteration"]
     assert iterations and all(e["cost"] >= 0 and "message" in e for e in iterations)
     assert res.certificate.certified

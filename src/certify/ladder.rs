@@ -56,6 +56,14 @@ pub fn climb<C: Climb + ?Sized>(cx: &mut C, mut rungs: Rungs<'_, C>) -> Result<(
         ran = true;
         last[k] = None;
         let point = cx.point();
+        // what runs now, and for how long it is predicted to (the progress line)
+        crate::progress::phase(crate::progress::Phase::Certify, || {
+            format!(
+                "{} (predicted {:.2} s)",
+                rungs[k].proof(),
+                predicted.seconds
+            )
+        });
         let found = rungs[k].attempt(cx)?;
         if found.logged {
             continue;

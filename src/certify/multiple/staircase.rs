@@ -347,6 +347,8 @@ impl<'a> Staircase<'a> {
     /// One rank: the loose solve, then the escape or the verification ([`Self::verify`]),
     /// recorded as a step.
     fn climb_rank(&mut self) -> Result<RankEnd> {
+        let rank = self.rank;
+        crate::progress::phase(crate::progress::Phase::Staircase, || format!("rank {rank}"));
         let r = self.solve(self.loose);
         let mut step = StaircaseStep {
             rank: self.rank,
