@@ -266,6 +266,7 @@ def average_multiple(
     largest_component: bool = False,
     ground_truth: Optional[npt.ArrayLike] = None,
     information: Optional[npt.ArrayLike] = None,
+    rotation_tolerance: float = 1e-5,
 ) -> Result:
     """Absolute rotations from relative ones (rel[k] @ R_i = R_j), certified."""
 
@@ -288,6 +289,7 @@ def average_multiple(
     largest_component: bool = False,
     ground_truth: Optional[npt.ArrayLike] = None,
     information: None = None,
+    rotation_tolerance: float = 1e-5,
 ) -> Result:
     """A graph from ``read_graph``, solved as ``rotavg multiple FILE`` solves it."""
 
@@ -309,6 +311,7 @@ def certify_multiple(
     loss: str = "chordal",
     loss_threshold: float = 5.0,
     inlier_threshold: Optional[float] = None,
+    rotation_tolerance: float = 1e-5,
 ) -> Result:
     """Certify an estimate from any other solver, without changing it."""
 
@@ -329,6 +332,7 @@ def certify_multiple(
     loss: str = "chordal",
     loss_threshold: float = 5.0,
     inlier_threshold: Optional[float] = None,
+    rotation_tolerance: float = 1e-5,
 ) -> Result:
     """Certify an estimate for a graph from ``read_graph``."""
 
@@ -391,6 +395,7 @@ def read_graph(
     largest_component: bool = False,
     *,
     ground_truth: Optional[_PathLike] = None,
+    rotation_tolerance: float = 1e-5,
 ) -> Graph:
     """Read a g2o, 1DSfM or JSON view graph with the library's readers."""
 

@@ -80,6 +80,7 @@ pub fn matrices(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Matrices> {
         [_, 3, 3] => Ok(Matrices {
             values,
             what: what.to_string(),
+            tolerance: DEFAULT_ROTATION_TOLERANCE,
         }),
         _ => Err(Error::new_err(format!(
             "{what} must have shape (N, 3, 3), got {}",
@@ -95,6 +96,7 @@ pub fn matrix(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Matrices> {
         [3, 3] => Ok(Matrices {
             values,
             what: what.to_string(),
+            tolerance: DEFAULT_ROTATION_TOLERANCE,
         }),
         _ => Err(Error::new_err(format!(
             "{what} must have shape (3, 3), got {}",
@@ -134,9 +136,24 @@ pub fn indices(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<i64>> {
 pub struct Matrices {
     values: Vec<f64>,
     what: String,
+    /// The rotation tolerance of [`Self::rotations`] (default
+    /// [`DEFAULT_ROTATION_TOLERANCE`]; [`Self::within`]).
+    tolerance: f64,
 }
 
 impl Matrices {
+    /// These matrices, checked as rotations with `tolerance` (a `rotation_tolerance` keyword,
+    /// validated by [`rotation_tolerance`]).
+    pub fn within(mut self, tolerance: f64) -> Self {
+        self.tolerance = tolerance;
+        self
+    }
+
+    /// The rotation tolerance ([`Self::within`]).
+    pub fn tolerance(&self) -> f64 {
+        self.tolerance
+    }
+
     /// Number of matrices.
     pub fn len(&self) -> usize {
         self.values.len() / 9
@@ -150,8 +167,8 @@ impl Matrices {
             .collect()
     }
 
-    /// The matrices as rotations, each checked by the library
-    /// ([`rotation_from_matrix`], default tolerance); errors name `what[k]`.
+    /// The matrices as rotations, each checked by the library ([`rotation_from_matrix`], with
+    /// the tolerance of [`Self::within`]); errors name `what[k]`.
     pub fn rotations(&self) -> rotavg::Result<Vec<Rotation>> {
         self.values
             .chunks_exact(9)
@@ -159,7 +176,7 @@ impl Matrices {
             .map(|(k, m)| {
                 rotation_from_matrix(
                     &Matrix3::from_row_slice(m),
-                    DEFAULT_ROTATION_TOLERANCE,
+                    self.tolerance,
                     &format!("{}[{k}]", self.what),
                 )
             })
@@ -178,7 +195,7 @@ impl Matrices {
                 }
                 rotation_from_matrix(
                     &Matrix3::from_row_slice(m),
-                    DEFAULT_ROTATION_TOLERANCE,
+                    self.tolerance,
                     &format!("{}[{k}]", self.what),
                 )
                 .map(Some)
@@ -190,7 +207,7 @@ impl Matrices {
     pub fn rotation(&self) -> rotavg::Result<Rotation> {
         rotation_from_matrix(
             &Matrix3::from_row_slice(&self.values),
-            DEFAULT_ROTATION_TOLERANCE,
+            self.tolerance,
             &self.what,
         )
     }
@@ -244,6 +261,7 @@ pub fn pose_rotations(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Matrices> 
         [_, 3, 3] => Ok(Matrices {
             values,
             what: what.to_string(),
+            tolerance: DEFAULT_ROTATION_TOLERANCE,
         }),
         [_, 4, 4] => {
             let mut rotations = Vec::with_capacity(values.len() / 16 * 9);
@@ -266,6 +284,7 @@ pub fn pose_rotations(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Matrices> 
             Ok(Matrices {
                 values: rotations,
                 what: what.to_string(),
+                tolerance: DEFAULT_ROTATION_TOLERANCE,
             })
         }
         _ => Err(Error::new_err(format!(
@@ -284,4 +303,16 @@ pub fn rotation_array<'py>(py: Python<'py>, rotation: &Rotation) -> PyResult<Bou
 pub fn read_only<'py>(array: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
     array.getattr("flags")?.setattr("writeable", false)?;
     Ok(array)
+}
+
+/// A `rotation_tolerance` keyword: positive and finite (the tolerance on `||R^T R - I||_F` and
+/// `|det R - 1|` of every matrix given as a rotation, the command line's 1e-5 by default).
+pub fn rotation_tolerance(tolerance: f64) -> PyResult<f64> {
+    if tolerance.is_finite() && tolerance > 0.0 {
+        Ok(tolerance)
+    } else {
+        Err(Error::new_err(format!(
+            "rotation_tolerance must be positive and finite, got {tolerance}"
+        )))
+    }
 }

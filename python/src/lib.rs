@@ -155,6 +155,10 @@ impl EdgeArrays {
             });
         }
         let rel = self.rel.rotations()?;
+        let read = ReadOptions {
+            rotation_tolerance: self.rel.tolerance(),
+            ..Default::default()
+        };
         let mut edges = Vec::with_capacity(m);
         for (k, rotation) in rel.into_iter().enumerate() {
             let node = |v: i64| {
@@ -195,7 +199,7 @@ impl EdgeArrays {
         }
         Ok(LoadedGraph {
             reversed,
-            ..LoadedGraph::from_problem(problem)
+            ..LoadedGraph::from_problem(problem).read_with(&read)
         })
     }
 }
@@ -213,6 +217,18 @@ enum GraphInput {
 }
 
 impl GraphInput {
+    /// Edge arrays checked as rotations with `tolerance` (a graph read from a file was
+    /// checked by its reader, with `read_graph`'s own `rotation_tolerance`).
+    fn within(self, tolerance: f64) -> Self {
+        match self {
+            GraphInput::Arrays(a) => GraphInput::Arrays(EdgeArrays {
+                rel: a.rel.within(tolerance),
+                ..a
+            }),
+            loaded => loaded,
+        }
+    }
+
     fn copy(
         n: &Bound<'_, PyAny>,
         i: Option<&Bound<'_, PyAny>>,
@@ -423,6 +439,8 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         ``loss="chordal"``, ``sum e^T H e`` for ``"geodesic"``, and the robust losses of the
 ///         Mahalanobis angle ``sqrt(e^T H e / (tr H / 3))`` (contract section 1;
 ///         ``to_dict()["information"]`` summarises them).
+///     rotation_tolerance: the tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` of every
+///         matrix given as a rotation (``rel``, ``init``) (default 1e-5, the command line's); beyond it, an error.
 ///
 /// Returns:
 ///     Result: ``estimate`` is ``(n, 3, 3)`` with the gauge ``estimate[0] = I``;
@@ -432,7 +450,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
 ///         bad weights, unknown names. rotavg.DisconnectedError: a disconnected graph.
 #[pyfunction]
-#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None))]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None, rotation_tolerance=1e-5))]
 #[allow(clippy::too_many_arguments)]
 fn average_multiple_py(
     py: Python<'_>,
@@ -452,7 +470,9 @@ fn average_multiple_py(
     largest_component: bool,
     ground_truth: Option<&Bound<'_, PyAny>>,
     information: Option<&Bound<'_, PyAny>>,
+    rotation_tolerance: f64,
 ) -> PyResult<RunResult> {
+    let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
     let budget = certify_settings(
         CertifyMode::Auto,
         max_memory,
@@ -460,11 +480,11 @@ fn average_multiple_py(
         randomized,
         randomized_seed,
     )?;
-    let graph = GraphInput::copy(n, i, j, rel, weights, information)?;
+    let graph = GraphInput::copy(n, i, j, rel, weights, information)?.within(tolerance);
     let loss = parse_named::<MultipleLoss>(loss, "loss")?;
     let objective = loss.objective(loss_threshold);
     let mode: CertifyMode = parse_named(certify, "certify")?;
-    let init = optional_matrices(init, "init")?;
+    let init = optional_matrices(init, "init")?.map(|m| m.within(tolerance));
     let truth = optional_matrices(ground_truth, "ground_truth")?;
     let report = detached(py, move || {
         let input = graph.into_input(largest_component, truth)?;
@@ -505,7 +525,8 @@ fn average_multiple_py(
 ///         database.
 ///     certify: ``"auto"`` (dual certificate, then the SDP or the staircase), ``"dual"``,
 ///         ``"sdp"`` or ``"staircase"`` (``"none"`` means ``"dual"``, as on the command line).
-///     max_memory, max_seconds, randomized, randomized_seed: as for ``average_multiple``.
+///     max_memory, max_seconds, randomized, randomized_seed, rotation_tolerance: as for
+///         ``average_multiple`` (the tolerance also applies to an estimate read from a path).
 ///     loss: ``"chordal"`` (default: the chordal L2 problem on all edges), or ``"l1"``,
 ///         ``"huber"``, ``"cauchy"``: also judge the estimate, unchanged, on the chordal L2
 ///         problem of its own inlier graph (the edges whose residual at the estimate is at
@@ -524,7 +545,7 @@ fn average_multiple_py(
 ///     rotavg.Error: as ``average_multiple``, an estimate of the wrong size, and (a path) a node
 ///         the file lacks or a file that cannot be read (``rotavg.ParseError``, naming the file).
 #[pyfunction]
-#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, information=None, loss="chordal", loss_threshold=5.0, inlier_threshold=None))]
+#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, information=None, loss="chordal", loss_threshold=5.0, inlier_threshold=None, rotation_tolerance=1e-5))]
 #[allow(clippy::too_many_arguments)]
 fn certify_multiple_py(
     py: Python<'_>,
@@ -543,8 +564,10 @@ fn certify_multiple_py(
     loss: &str,
     loss_threshold: f64,
     inlier_threshold: Option<f64>,
+    rotation_tolerance: f64,
 ) -> PyResult<RunResult> {
-    let graph = GraphInput::copy(n, i, j, rel, weights, information)?;
+    let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
+    let graph = GraphInput::copy(n, i, j, rel, weights, information)?.within(tolerance);
     let loss: MultipleLoss = parse_named(loss, "loss")?;
     let threshold = loss
         .certify_inlier_threshold_deg(loss_threshold, inlier_threshold)
@@ -557,7 +580,8 @@ fn certify_multiple_py(
         Some(p) => EstimateInput::Path(p.to_string_lossy().into_owned()),
         None => EstimateInput::Arrays(
             optional_matrices(estimate, "estimate")?
-                .ok_or_else(|| argument_error("certify_multiple needs an estimate"))?,
+                .ok_or_else(|| argument_error("certify_multiple needs an estimate"))?
+                .within(tolerance),
         ),
     };
     let mode = match parse_named(certify, "certify")? {
@@ -574,7 +598,11 @@ fn certify_multiple_py(
                 warnings: Vec::new(),
             },
             EstimateInput::Path(p) => {
-                load_estimate_for(&p, &input.graph, &ReadOptions::default())?.into_loaded()
+                let options = ReadOptions {
+                    rotation_tolerance: tolerance,
+                    ..Default::default()
+                };
+                load_estimate_for(&p, &input.graph, &options)?.into_loaded()
             }
         };
         let problem = LoadedProblem::Multiple(input.graph);
@@ -992,6 +1020,8 @@ fn certify_single_py(
 ///     format: ``"auto"``, ``"g2o"``, ``"1dsfm"`` or ``"json"``.
 ///     weights: ``"file"`` (the file's weights, e.g. SE-Sync's kappa for g2o) or ``"unit"``.
 ///     largest_component: keep only the largest connected component (nodes renumbered).
+///     rotation_tolerance: the tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` of every
+///         rotation the file gives (the command line's ``--rotation-tolerance``) (default 1e-5, the command line's); beyond it, an error.
 ///     ground_truth: a ground-truth file for the graph's nodes (the command line's
 ///         ``--ground-truth``; formats: see ``read_ground_truth``): ``g.truth`` holds it, and
 ///         ``average_multiple(g)`` then reports ``result.accuracy``.
@@ -1003,7 +1033,7 @@ fn certify_single_py(
 ///     rotavg.FileError: unreadable file. rotavg.ParseError: malformed content (the message
 ///         names file and line).
 #[pyfunction]
-#[pyo3(signature = (path, format="auto", weights="file", largest_component=false, *, ground_truth=None))]
+#[pyo3(signature = (path, format="auto", weights="file", largest_component=false, *, ground_truth=None, rotation_tolerance=1e-5))]
 fn read_graph(
     py: Python<'_>,
     path: std::path::PathBuf,
@@ -1011,7 +1041,9 @@ fn read_graph(
     weights: &str,
     largest_component: bool,
     ground_truth: Option<std::path::PathBuf>,
+    rotation_tolerance: f64,
 ) -> PyResult<Graph> {
+    let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
     let format: GraphFormat = parse_named(format, "format")?;
     let weights: WeightSource = parse_named(weights, "weights")?;
     let name = path.to_string_lossy().into_owned();
@@ -1020,6 +1052,7 @@ fn read_graph(
     let (loaded, selection, read, truth) = detached(py, move || {
         let options = ReadOptions {
             weights,
+            rotation_tolerance: tolerance,
             ..Default::default()
         };
         // as rotavg::io::input::load_multiple_input, without requiring a connected graph

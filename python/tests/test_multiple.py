@@ -356,3 +356,30 @@ def test_set_progress_delivers_the_events_of_a_run(rng):
     assert len(events) == before
     with pytest.raises(rotavg.Error, match="callable"):
         rotavg.set_progress(3)  # type: ignore[arg-type]
+
+
+def test_rotation_tolerance_is_a_keyword(rng, tmp_path):
+    """Matrices orthonormal to 2e-4 only are refused at the default tolerance (1e-5, the command
+    line's) and accepted with ``rotation_tolerance=1e-3``, from arrays and from files."""
+    _, i, j, rel = synthetic_graph(rng, 10, 30, 0.01)
+    rel = rel.copy()
+    rel[4] = rel[4] * 1.0001
+    with pytest.raises(rotavg.Error, match="rel\\[4\\]"):
+        rotavg.average_multiple(10, i, j, rel)
+    res = rotavg.average_multiple(10, i, j, rel, rotation_tolerance=1e-3)
+    assert res.to_dict()["input"]["read"]["rotation_tolerance"] == 1e-3
+    assert np.allclose(res.estimate[0], np.eye(3))
+    est = res.estimate.copy()
+    est[2] = est[2] * 1.0001
+    with pytest.raises(rotavg.Error, match="rel\\[4\\]"):
+        rotavg.certify_multiple(10, i, j, rel, est)
+    rotavg.certify_multiple(10, i, j, rel, est, rotation_tolerance=1e-3)
+    path = tmp_path / "g.json"
+    edges = [{"i": int(a), "j": int(b), "rotation": r.tolist()} for a, b, r in zip(i, j, rel)]
+    path.write_text(json.dumps({"num_rotations": 10, "edges": edges}))
+    with pytest.raises(rotavg.ParseError):
+        rotavg.read_graph(path)
+    g = rotavg.read_graph(path, rotation_tolerance=1e-3)
+    assert g.n == 10
+    with pytest.raises(rotavg.Error, match="rotation_tolerance"):
+        rotavg.average_multiple(10, i, j, rel, rotation_tolerance=0.0)

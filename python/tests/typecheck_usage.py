@@ -206,6 +206,9 @@ def multiple(folder: Path) -> None:
     check_result(rotavg.certify_multiple(g, estimate=from_graph.estimate, certify="dual"))
     check_result(rotavg.certify_multiple(g, estimate=from_graph.estimate, loss="cauchy",
                                          loss_threshold=5.0, inlier_threshold=None))
+    check_graph(rotavg.read_graph(path, rotation_tolerance=1e-4))
+    check_result(rotavg.average_multiple(g, rotation_tolerance=1e-4))
+    check_result(rotavg.certify_multiple(g, estimate=from_graph.estimate, rotation_tolerance=1e-4))
     seen: List[Dict[str, Any]] = []
     rotavg.set_progress(seen.append)
     rotavg.set_progress(None)

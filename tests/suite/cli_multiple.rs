@@ -645,3 +645,25 @@ fn runs_leave_no_empty_output_folder_behind() {
     assert!(base.join("est/images.txt").is_file());
     assert!(!base.join("inliers").exists() && !base.join("edges").exists());
 }
+
+#[test]
+fn rotation_tolerance_is_an_option_of_view_graph_verbs() {
+    // an edge orthonormal to 2e-4 only: refused at the default 1e-5, read at 1e-3
+    let egs = tmp(
+        "tolerance_EGs.txt",
+        "0 1 1.0001 0 0 0 1 0 0 0 1\n1 2 1 0 0 0 1 0 0 0 1\n2 0 1 0 0 0 1 0 0 0 1\n",
+    );
+    let egs = egs.to_str().unwrap();
+    let out = run(&["multiple", egs]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("tolerance 1.0e-5") && err.contains(":1:"),
+        "{err}"
+    );
+    let out = run(&["multiple", egs, "--rotation-tolerance", "1e-3", "--json"]);
+    assert_success(&out);
+    assert_eq!(json_of(&out)["input"]["read"]["rotation_tolerance"], 1e-3);
+    let out = run(&["multiple", egs, "--rotation-tolerance", "-1"]);
+    assert_eq!(out.status.code(), Some(2), "a usage error");
+}

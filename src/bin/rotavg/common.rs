@@ -145,6 +145,11 @@ pub struct GraphArgs {
     /// Input format (view graphs).
     #[arg(long, value_parser = choice(GraphFormat::choices()), default_value_t = GraphFormat::Auto)]
     pub format: GraphFormat,
+    /// Tolerance on ||R^T R - I||_F and |det R - 1| of every matrix a view graph, an estimate,
+    /// `--init` or `--ground-truth` gives as a rotation; beyond it, an error naming the file
+    /// and line.
+    #[arg(long, value_name = "TOL", default_value_t = rotavg::so3::DEFAULT_ROTATION_TOLERANCE, value_parser = parse_tolerance)]
+    pub rotation_tolerance: f64,
     /// g2o / TORO edges with an information matrix: SE-Sync's scalar `kappa` (`kappa`,
     /// default) or their full 3x3 rotation information, which makes the problem anisotropic
     /// (`full`; docs/guides/anisotropic.md). COLMAP databases: weights 1 (default), or with
@@ -179,6 +184,7 @@ impl GraphArgs {
     pub fn read_options(&self, common: &Common) -> ReadOptions {
         ReadOptions {
             full_information: self.information == "full",
+            rotation_tolerance: self.rotation_tolerance,
             ..common.read_options()
         }
     }
@@ -226,6 +232,14 @@ fn parse_seconds(text: &str) -> std::result::Result<f64, String> {
         _ => Err(format!(
             "`{text}` is not a positive number of seconds or `none`"
         )),
+    }
+}
+
+/// A positive, finite tolerance.
+fn parse_tolerance(text: &str) -> std::result::Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 => Ok(t),
+        _ => Err(format!("`{text}` is not a positive number")),
     }
 }
 
