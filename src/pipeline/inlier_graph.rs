@@ -70,18 +70,15 @@ pub struct InlierGraph {
 impl fmt::Display for InlierGraph {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let p = &self.problem;
-        write!(
-            f,
-            "inlier graph: {} of {} edges (residual <= {} deg), {} of {} nodes",
-            p.num_edges, p.total_edges, self.inlier_threshold_deg, p.num_nodes, p.total_nodes
-        )?;
-        if !self.other_component_sizes.is_empty() || self.isolated_nodes > 0 {
-            write!(
-                f,
-                " (its largest component; other components of sizes {:?} and {} nodes without an inlier edge not certified)",
-                self.other_component_sizes, self.isolated_nodes
-            )?;
-        }
+        let extent = Extent {
+            what: "inlier graph",
+            problem: p,
+            threshold_deg: self.inlier_threshold_deg,
+            other_component_sizes: &self.other_component_sizes,
+            isolated_nodes: self.isolated_nodes,
+            left_out: "not certified",
+        };
+        write!(f, "{extent}")?;
         write!(
             f,
             "\ninlier graph chordal L2: cost {:.6e} (robust estimate {:.6e}); {}",
@@ -264,19 +261,15 @@ pub struct EstimateInlierGraph {
 
 impl fmt::Display for EstimateInlierGraph {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let p = &self.problem;
-        write!(
-            f,
-            "inlier graph of the given estimate: {} of {} edges (residual <= {} deg), {} of {} nodes",
-            p.num_edges, p.total_edges, self.inlier_threshold_deg, p.num_nodes, p.total_nodes
-        )?;
-        if !self.other_component_sizes.is_empty() || self.isolated_nodes > 0 {
-            write!(
-                f,
-                " (its largest component; other components of sizes {:?} and {} nodes without an inlier edge not judged)",
-                self.other_component_sizes, self.isolated_nodes
-            )?;
-        }
+        let extent = Extent {
+            what: "inlier graph of the given estimate",
+            problem: &self.problem,
+            threshold_deg: self.inlier_threshold_deg,
+            other_component_sizes: &self.other_component_sizes,
+            isolated_nodes: self.isolated_nodes,
+            left_out: "not judged",
+        };
+        write!(f, "{extent}")?;
         write!(
             f,
             "
@@ -343,6 +336,38 @@ pub fn certify_estimate_inliers(
         other_component_sizes: component.other_component_sizes,
         isolated_nodes: component.isolated_nodes,
     }))
+}
+
+/// The first line of an inlier graph's text: its size against the whole graph's, and what its
+/// largest component leaves out.
+struct Extent<'a> {
+    what: &'a str,
+    problem: &'a CertifiedProblem,
+    threshold_deg: f64,
+    other_component_sizes: &'a [usize],
+    isolated_nodes: usize,
+    /// What happens to the rest (`not certified`, `not judged`).
+    left_out: &'a str,
+}
+
+impl fmt::Display for Extent<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let p = self.problem;
+        write!(
+            f,
+            "{}: {} of {} edges (residual <= {} deg), {} of {} nodes",
+            self.what, p.num_edges, p.total_edges, self.threshold_deg, p.num_nodes, p.total_nodes
+        )?;
+        if !self.other_component_sizes.is_empty() || self.isolated_nodes > 0 {
+            write!(
+                f,
+                " (its largest component; other components of sizes {:?} and {} nodes without an \
+                 inlier edge {})",
+                self.other_component_sizes, self.isolated_nodes, self.left_out
+            )?;
+        }
+        Ok(())
+    }
 }
 
 /// The largest connected component of the edges flagged in `inlier`, as a problem of its own,

@@ -87,92 +87,80 @@ impl CertifyReport {
         estimate: LoadedEstimate,
         settings: &CertifySettings,
     ) -> Result<Self> {
-        let estimate_file = estimate.name.clone();
-        let estimate_warnings = estimate.warnings.clone();
-        let report =
-            |problem, num_rotations, num_measurements, cost, estimate, certificate| CertifyReport {
-                problem,
-                input: input.to_string(),
-                estimate_file: estimate_file.clone(),
-                num_rotations,
-                num_measurements,
-                cost,
-                estimate,
-                node_ids: None,
-                certificate,
-                details: None,
-                warnings: estimate_warnings.clone(),
-                inlier_graph: None,
-                loss: None,
-                read: None,
-            };
+        let given = Given {
+            input,
+            file: estimate.name.clone(),
+            warnings: estimate.warnings.clone(),
+        };
         match problem {
             LoadedProblem::Multiple(graph) => {
                 let rotations = estimate.into_rotations()?;
-                let n = graph.problem.num_rotations();
-                if rotations.len() != n {
-                    return Err(Error::parse(
-                        Some(&estimate_file),
-                        None,
-                        format!(
-                            "the estimate has {} rotations, the problem has {n} nodes",
-                            rotations.len()
-                        ),
-                    ));
-                }
-                let c = certify_multiple(&graph.problem, &rotations, settings)?;
-                let cost = graph.problem.chordal_cost(&rotations);
-                Ok(CertifyReport {
-                    read: Some((graph.format, graph.read)),
-                    node_ids: Some(graph.node_ids.clone()),
-                    details: Some(c.details),
-                    warnings: [
-                        super::input_warnings(graph),
-                        estimate_warnings.clone(),
-                        convention_suspected(cost, transposed_cost(&graph.problem, &rotations)),
-                    ]
-                    .concat(),
-                    ..report(
-                        ProblemKind::Multiple,
-                        n,
-                        graph.problem.num_edges(),
-                        cost,
-                        Estimate::Multiple(rotations),
-                        c.certificate,
-                    )
-                })
+                Self::certify_graph(given, graph, rotations, settings)
             }
             LoadedProblem::Single(p) => {
                 let r = estimate.into_rotation()?;
                 let c = certify_single(p, &r, settings)?.certificate;
                 let cost = c.upper_bound;
-                Ok(report(
-                    ProblemKind::Single,
-                    1,
-                    p.len(),
-                    cost,
-                    Estimate::Single(r),
-                    c,
-                ))
+                Ok(given.report(ProblemKind::Single, p.len(), cost, Estimate::Single(r), c))
             }
             LoadedProblem::Conjugate(p) => {
                 let s = estimate.into_rotation()?;
                 let c = certify_conjugate(p, &s, settings)?.certificate;
                 let cost = c.upper_bound;
                 let inverse = convention_suspected(cost, p.chordal_cost(&s.inverse()));
-                Ok(CertifyReport {
-                    warnings: [estimate_warnings.clone(), inverse].concat(),
-                    ..report(
-                        ProblemKind::Conjugate,
-                        1,
-                        p.num_pairs(),
-                        cost,
-                        Estimate::Single(s),
-                        c,
-                    )
-                })
+                let mut report = given.report(
+                    ProblemKind::Conjugate,
+                    p.num_pairs(),
+                    cost,
+                    Estimate::Single(s),
+                    c,
+                );
+                report.warnings.extend(inverse);
+                Ok(report)
             }
         }
+    }
+
+    /// [`Self::certify`] of a view graph's estimate, one rotation per node.
+    fn certify_graph(
+        given: Given<'_>,
+        graph: &crate::io::detect::LoadedGraph,
+        rotations: Vec<Rotation>,
+        settings: &CertifySettings,
+    ) -> Result<Self> {
+        let n = graph.problem.num_rotations();
+        if rotations.len() != n {
+            return Err(Error::parse(
+                Some(&given.file),
+                None,
+                format!(
+                    "the estimate has {} rotations, the problem has {n} nodes",
+                    rotations.len()
+                ),
+            ));
+        }
+        let c = certify_multiple(&graph.problem, &rotations, settings)?;
+        let cost = graph.problem.chordal_cost(&rotations);
+        let transposed = transposed_cost(&graph.problem, &rotations);
+        let m = graph.problem.num_edges();
+        let mut report = given.report(
+            ProblemKind::Multiple,
+            m,
+            cost,
+            Estimate::Multiple(rotations),
+            c.certificate,
+        );
+        report.num_rotations = n;
+        report.read = Some((graph.format, graph.read));
+        report.node_ids = Some(graph.node_ids.clone());
+        report.details = Some(c.details);
+        report.warnings = [
+            super::input_warnings(graph),
+            std::mem::take(&mut report.warnings),
+            convention_suspected(cost, transposed),
+        ]
+        .concat();
+        Ok(report)
     }
 
     /// [`Self::certify`], and for a multiple-averaging estimate also the chordal L2 problem of
@@ -325,6 +313,44 @@ impl CertifyReport {
     #[cfg(not(feature = "plot"))]
     pub fn write_figure(&self, _path: &str, _problem: &LoadedProblem) -> Result<()> {
         Err(no_plot_feature())
+    }
+}
+
+/// Where a certified estimate came from: the problem file, the estimate file and the
+/// estimate's own warnings.
+struct Given<'a> {
+    input: &'a str,
+    file: String,
+    warnings: Vec<Warning>,
+}
+
+impl Given<'_> {
+    /// The report of one certification (one rotation estimated; [`CertifyReport::certify_graph`]
+    /// sets the view graph's fields).
+    fn report(
+        self,
+        problem: ProblemKind,
+        num_measurements: usize,
+        cost: f64,
+        estimate: Estimate,
+        certificate: Certificate,
+    ) -> CertifyReport {
+        CertifyReport {
+            problem,
+            input: self.input.to_string(),
+            estimate_file: self.file,
+            num_rotations: 1,
+            num_measurements,
+            cost,
+            estimate,
+            node_ids: None,
+            certificate,
+            details: None,
+            warnings: self.warnings,
+            inlier_graph: None,
+            loss: None,
+            read: None,
+        }
     }
 }
 

@@ -237,37 +237,20 @@ fn requests_it_cannot_answer_are_refused_by_name() {
             rotation_json(&Rotation::identity())
         ),
     );
+    let (single, single_estimate) = (single.to_str().unwrap(), single_estimate.to_str().unwrap());
+    let graph = ["certify", problem.as_str(), "--estimate", estimate.as_str()];
     let cases: [(Vec<&str>, &str); 3] = [
+        ([&graph[..], &["--loss", "auto"]].concat(), "not with auto"),
         (
-            vec![
-                "certify",
-                &problem,
-                "--estimate",
-                &estimate,
-                "--loss",
-                "auto",
-            ],
-            "not with auto",
-        ),
-        (
-            vec![
-                "certify",
-                &problem,
-                "--estimate",
-                &estimate,
-                "--loss",
-                "cauchy",
-                "--inlier-threshold",
-                "0",
-            ],
+            [&graph[..], &["--loss", "cauchy", "--inlier-threshold", "0"]].concat(),
             "inlier_threshold",
         ),
         (
             vec![
                 "certify",
-                single.to_str().unwrap(),
+                single,
                 "--estimate",
-                single_estimate.to_str().unwrap(),
+                single_estimate,
                 "--loss",
                 "huber",
             ],
