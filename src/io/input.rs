@@ -1186,7 +1186,11 @@ pub fn load_initial_estimate(
     graph: &LoadedGraph,
     options: &ReadOptions,
 ) -> Result<Vec<Rotation>> {
-    let r = load_rotations_for_nodes(path, graph, options)?;
+    initial_of(load_rotations_for_nodes(path, graph, options)?, graph)
+}
+
+/// The initial estimate of [`load_initial_estimate`] from the rotations read.
+fn initial_of(r: NodeRotations, graph: &LoadedGraph) -> Result<Vec<Rotation>> {
     if r.matched_by == MatchedBy::Order {
         return Ok(r.rotations.into_iter().flatten().collect());
     }
@@ -1400,13 +1404,27 @@ pub struct MultipleInput {
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn load_multiple_input(path: &str, options: &MultipleInputOptions) -> Result<MultipleInput> {
-    let graph = load_view_graph(path, options.format, &options.read)?;
+    let mut graph = load_view_graph(path, options.format, &options.read)?;
     let truth = match &options.ground_truth {
-        Some(p) => Some((p, load_ground_truth(p, &graph, &options.read)?)),
+        Some(p) => {
+            let r = load_rotations_for_nodes(p, &graph, &options.read)?;
+            // a ground truth of more cameras than the graph's is common: only what is not
+            // used of the entries that match (NaN translations) is said
+            let said = r
+                .warnings()
+                .into_iter()
+                .filter(|w| w.code != "estimate_unmatched");
+            graph.warnings.extend(said);
+            Some((p, truth_of(r, &graph)?))
+        }
         None => None,
     };
     let init = match &options.init {
-        Some(p) => Some((p, load_initial_estimate(p, &graph, &options.read)?)),
+        Some(p) => {
+            let r = load_rotations_for_nodes(p, &graph, &options.read)?;
+            graph.warnings.extend(r.warnings());
+            Some((p, initial_of(r, &graph)?))
+        }
         None => None,
     };
     let (graph, selection) = if options.largest_component {

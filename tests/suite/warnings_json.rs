@@ -199,3 +199,55 @@ fn input_checks_are_warned_in_text_and_json() {
     let codes = both(&["certify", &slam, "--estimate", est.to_str().unwrap()]);
     assert_eq!(codes, [("convention_suspected".to_string(), None)]);
 }
+
+#[test]
+fn init_and_ground_truth_warnings_are_reported() {
+    // the least-squares estimate of the committed SLAM file as a COLMAP images.txt (NaN
+    // translations, as pycolmap's rotation averaging writes), with one image the graph lacks
+    let slam = format!("{DATA}/slam.g2o");
+    let solved = json_of(&run(&["multiple", &slam, "--loss", "chordal", "--json"]));
+    let ids: Vec<u64> = serde_json::from_value(solved["node_ids"].clone()).unwrap();
+    let estimate: Vec<[[f64; 3]; 3]> = serde_json::from_value(solved["estimate"].clone()).unwrap();
+    let mut text = String::new();
+    for (id, m) in ids.iter().zip(&estimate) {
+        let r =
+            rotavg::Rotation::from_matrix_unchecked(rotavg::nalgebra::Matrix3::from_fn(|a, b| {
+                m[a][b]
+            }));
+        let q = rotavg::nalgebra::UnitQuaternion::from_rotation_matrix(&r);
+        text += &format!(
+            "{id} {} {} {} {} nan nan nan 1 img{id}.jpg\n\n",
+            q.w, q.i, q.j, q.k
+        );
+    }
+    text += "99999 1 0 0 0 0 0 0 1 extra.jpg\n\n";
+    let model = temp_file("warnings_init_images.txt", &text);
+    let model = model.to_str().unwrap();
+    let codes = both(&["multiple", &slam, "--loss", "chordal", "--init", model]);
+    assert_eq!(
+        codes,
+        [
+            ("estimate_unmatched".to_string(), Some(1)),
+            (
+                "translations_not_finite".to_string(),
+                Some(ids.len() as u64)
+            )
+        ]
+    );
+    // as ground truth, entries the graph lacks are expected (not said); NaN translations are
+    let codes = both(&[
+        "multiple",
+        &slam,
+        "--loss",
+        "chordal",
+        "--ground-truth",
+        model,
+    ]);
+    assert_eq!(
+        codes,
+        [(
+            "translations_not_finite".to_string(),
+            Some(ids.len() as u64)
+        )]
+    );
+}
