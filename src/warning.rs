@@ -16,6 +16,7 @@
 //! | `output_not_written` | `--edges-output` / `--inlier-output` with no robust solve | files |
 //! | `estimate_unmatched` | `certify --estimate`: entries that match no node (not used) | entries |
 //! | `translations_not_finite` | `certify --estimate`: COLMAP images with NaN translations (not used) | images |
+//! | `name_not_format` | a text view graph named like a COLMAP database (`*.db`): read by its content | |
 //! | `duplicates_disagree` | view graphs: pairs measured more than once whose measurements disagree by more than 5 deg | pairs |
 //! | `convention_suspected` | `certify`: the estimate transposed costs less than a quarter of the estimate as given | |
 

@@ -486,7 +486,21 @@ pub fn load_graph(path: &Path, format: GraphFormat, options: &ReadOptions) -> Re
         return crate::io::colmap::read_colmap_database(&db, options).map(|g| g.read_with(options));
     }
     let name = path.display().to_string();
-    read_graph_stream(TextStream::open(&name)?, format, options)
+    let mut graph = read_graph_stream(TextStream::open(&name)?, format, options)?;
+    // the content decides the format, not the name: say so when the name says otherwise
+    let named_database = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("db") || e.eq_ignore_ascii_case("sqlite"));
+    if named_database {
+        let message = format!(
+            "{name}: named like a COLMAP database, but it is a text file: read as {}",
+            graph.format.name()
+        );
+        graph
+            .warnings
+            .push(Warning::new("name_not_format", message));
+    }
+    Ok(graph)
 }
 
 /// The most bytes read ahead to find the first data line for format detection (4 MiB).

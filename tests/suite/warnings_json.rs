@@ -138,6 +138,10 @@ fn input_checks_are_warned_in_text_and_json() {
     let path = temp_file("warnings_dup_EGs.txt", &egs);
     let codes = both(&["multiple", path.to_str().unwrap()]);
     assert_eq!(codes, [("duplicates_disagree".to_string(), Some(1))]);
+    // a text graph named like a COLMAP database is read by its content, and said so
+    let db = temp_file("warnings_text.db", &format!("3 7 {i}\n7 9 {i}\n3 9 {i}\n"));
+    let codes = both(&["multiple", db.to_str().unwrap()]);
+    assert_eq!(codes, [("name_not_format".to_string(), None)]);
     let printed = run(&["multiple", path.to_str().unwrap()]);
     let printed = flat(&String::from_utf8_lossy(&printed.stdout));
     assert!(printed.contains("pair (3, 7), 90.0 deg"), "{printed}");
