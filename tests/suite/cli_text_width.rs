@@ -147,3 +147,15 @@ fn json_is_the_same_with_and_without_verbose() {
     let verbose = strip_times(stdout(&[&args[..], &["--verbose"]].concat()));
     assert_eq!(plain, verbose);
 }
+
+#[test]
+fn help_is_wrapped_for_every_verb() {
+    for verb in ["demo", "single", "multiple", "conjugate", "certify", "info"] {
+        for args in [vec!["help", verb], vec![verb, "--help"]] {
+            let text = stdout(&args);
+            assert!(text.contains("Usage:"), "{args:?}: {text}");
+            let long: Vec<&str> = text.lines().filter(|l| l.chars().count() > WIDTH).collect();
+            assert!(long.is_empty(), "{args:?}: {long:?}");
+        }
+    }
+}

@@ -68,7 +68,10 @@ fn exit_quietly_on_broken_pipe() {
 
 fn main() -> ExitCode {
     exit_quietly_on_broken_pipe();
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage(e),
+    };
     let (input, common): (Option<&str>, Option<&Common>) = match &cli.command {
         Command::Demo(_) => (None, None),
         Command::Single(a) => (Some(&a.input), Some(&a.common)),
@@ -147,5 +150,19 @@ fn error_text(e: rotavg::Error, input: Option<&str>, command: &Command) -> Strin
             format!("{path}: is a folder: {accepts}")
         }
         _ => text,
+    }
+}
+
+/// Help and version on stdout, the help in lines of [`common::TEXT_WIDTH`] (clap writes each
+/// option's paragraph on one line); any other parse error as clap prints it (exit status 2).
+fn usage(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    match e.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+            let text = e.render().to_string();
+            print!("{}", rotavg::report::wrap_lines(&text, common::TEXT_WIDTH));
+            ExitCode::SUCCESS
+        }
+        _ => e.exit(),
     }
 }
