@@ -15,7 +15,8 @@ accepted wherever rotations are). Files are read with the command line's readers
 ``read_graph(path)`` (g2o, 1DSfM and JSON view graphs), ``read_ground_truth(path, graph)`` and
 ``read_handeye(path)`` (conjugate JSON, Tabb, ETH / motion-capture pose streams), and written
 with its writers: ``write_estimate(graph, estimate, path)`` (JSON, g2o, a COLMAP model, as
-``rotavg multiple --output``); ``accuracy`` compares an estimate with ground truth. Every solver call returns a ``Result`` with the
+``rotavg multiple --output``) and ``write_edges(graph, result, path)`` (``--edges-output``);
+``accuracy`` compares an estimate with ground truth. Every solver call returns a ``Result`` with the
 estimate, its cost, the solver's report and a ``Certificate`` (a proven lower bound on the
 global minimum and the gap to it); ``to_dict()`` is the object the ``rotavg`` command line
 prints with ``--json``. Bad input raises ``rotavg.Error`` (a ``ValueError``) or one of its
@@ -51,6 +52,7 @@ from ._rotavg import (
     read_ground_truth,
     read_handeye,
     set_progress,
+    write_edges,
     write_estimate,
 )
 
@@ -81,5 +83,6 @@ __all__ = [
     "read_ground_truth",
     "read_handeye",
     "set_progress",
+    "write_edges",
     "write_estimate",
 ]

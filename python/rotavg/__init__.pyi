@@ -40,6 +40,7 @@ __all__ = [
     "read_ground_truth",
     "read_handeye",
     "set_progress",
+    "write_edges",
     "write_estimate",
 ]
 
@@ -167,6 +168,8 @@ class Result:
     def cost(self) -> float: ...
     @property
     def chordal_cost(self) -> Optional[float]: ...
+    @property
+    def inlier_estimate(self) -> Optional[_FloatArray]: ...
     @property
     def num_rotations(self) -> int: ...
     @property
@@ -404,6 +407,9 @@ def read_ground_truth(path: _PathLike, graph: Graph) -> _FloatArray:
 
 def set_progress(callback: Optional[Callable[[Dict[str, Any]], object]]) -> None:
     """Receive every following call's progress events (process-wide); None stops it."""
+
+def write_edges(graph: Graph, result: Result, path: _PathLike) -> None:
+    """Write a robust result's per-edge residuals as ``rotavg multiple --edges-output``."""
 
 def write_estimate(
     graph: Graph, estimate: _Rotations, path: _PathLike, format: str = "auto"

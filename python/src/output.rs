@@ -7,7 +7,7 @@ use crate::{detached, parse_named};
 use pyo3::prelude::*;
 use rotavg::io::output::{EstimateFile, OutputFormat, OutputSource, prepare_output};
 
-use crate::types::Graph;
+use crate::types::{Graph, RunResult};
 
 /// Write an estimate of ``graph``'s nodes to ``path``, exactly as ``rotavg multiple FILE
 /// --output PATH`` writes it.
@@ -61,6 +61,59 @@ pub fn write_estimate(
             node_names: &loaded.node_names,
         };
         let written = file.write_planned(&plan, &source);
+        if written.is_err() {
+            plan.remove_empty_folders();
+        }
+        written
+    })
+}
+
+/// Write the per-edge residuals of a robust ``average_multiple`` result of ``graph``, exactly as
+/// ``rotavg multiple FILE --loss cauchy --edges-output PATH`` writes them: one row per edge
+/// ``i, j, residual_deg, weight, inlier`` with the graph's node ids, JSON for ``*.json``,
+/// otherwise CSV.
+///
+/// Raises:
+///     rotavg.Error: the result has no residuals (not a robust run: ``loss="auto"`` may have
+///         kept least squares) or is not of this graph; rotavg.FileError: it cannot be written.
+#[pyfunction]
+#[pyo3(signature = (graph, result, path))]
+pub fn write_edges(
+    py: Python<'_>,
+    graph: &Graph,
+    result: &RunResult,
+    path: std::path::PathBuf,
+) -> PyResult<()> {
+    let residuals = result
+        .multiple()
+        .and_then(|r| r.result.solution.residuals.as_ref())
+        .ok_or_else(|| {
+            argument_error(
+                "the result has no per-edge residuals: a robust average_multiple (loss \
+                 \"cauchy\", \"huber\" or \"l1\", or \"auto\" when it chose cauchy) has them",
+            )
+        })?;
+    let loaded = &graph.loaded;
+    if residuals.residual_deg.len() != loaded.problem.num_edges() {
+        return Err(argument_error(format!(
+            "the result has residuals of {} edges, the graph has {}: not a result of this graph",
+            residuals.residual_deg.len(),
+            loaded.problem.num_edges()
+        )));
+    }
+    let path = path.to_string_lossy().into_owned();
+    detached(py, move || {
+        let plan = prepare_output(&path, OutputFormat::Json)?;
+        let text = rotavg::io::output::edges_file_text(
+            &path,
+            &loaded.problem,
+            residuals,
+            &loaded.node_ids,
+        );
+        let written = std::fs::write(&plan.file, text).map_err(|e| rotavg::Error::Io {
+            path: path.clone(),
+            message: e.to_string(),
+        });
         if written.is_err() {
             plan.remove_empty_folders();
         }

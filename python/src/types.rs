@@ -383,8 +383,29 @@ impl RunResult {
     }
 }
 
+impl RunResult {
+    /// The multiple-averaging report, if this is one.
+    pub fn multiple(&self) -> Option<&MultipleReport> {
+        match &self.report {
+            Report::Multiple(r) => Some(r),
+            _ => None,
+        }
+    }
+}
+
 #[pymethods]
 impl RunResult {
+    /// A robust ``average_multiple``'s refined inlier-graph estimate (``(n, 3, 3)``, what the
+    /// command line's ``--inlier-output`` writes: ``write_estimate(graph,
+    /// result.inlier_estimate, path)``), or None (no inlier graph was certified).
+    #[getter]
+    fn inlier_estimate<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let graph = self
+            .multiple()
+            .and_then(|r| r.result.details.inlier_graph.as_deref());
+        graph.map(|g| rotations_array(py, &g.estimate)).transpose()
+    }
+
     /// The result as a dict: the object ``rotavg SUBCOMMAND --json`` prints (built from the
     /// library's typed report, so keys and values are the command line's).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {

@@ -383,3 +383,30 @@ def test_rotation_tolerance_is_a_keyword(rng, tmp_path):
     assert g.n == 10
     with pytest.raises(rotavg.Error, match="rotation_tolerance"):
         rotavg.average_multiple(10, i, j, rel, rotation_tolerance=0.0)
+
+
+def test_robust_outputs_are_the_command_lines(cli, tmp_path):
+    """``write_edges`` and ``write_estimate(graph, result.inlier_estimate, ...)`` write the files
+    of ``--edges-output`` and ``--inlier-output`` byte for byte; a least-squares result has no
+    residuals to write."""
+    import pathlib
+
+    data = pathlib.Path(__file__).resolve().parents[2] / "examples" / "data" / "sfm_outliers.txt"
+    g = rotavg.read_graph(data)
+    res = rotavg.average_multiple(g, loss="cauchy")
+    assert res.inlier_estimate is not None and res.inlier_estimate.shape == (g.n, 3, 3)
+    cli(
+        "multiple", data, "--loss", "cauchy",
+        "--edges-output", tmp_path / "cli_edges.csv",
+        "--inlier-output", tmp_path / "cli_inliers.json",
+    )
+    rotavg.write_edges(g, res, tmp_path / "py_edges.csv")
+    rotavg.write_estimate(g, res.inlier_estimate, tmp_path / "py_inliers.json")
+    for name in ["edges.csv", "inliers.json"]:
+        assert (tmp_path / f"py_{name}").read_bytes() == (tmp_path / f"cli_{name}").read_bytes()
+    rotavg.write_edges(g, res, tmp_path / "edges.json")
+    assert json.loads((tmp_path / "edges.json").read_text())
+    plain = rotavg.average_multiple(g, loss="chordal")
+    assert plain.inlier_estimate is None
+    with pytest.raises(rotavg.Error, match="no per-edge residuals"):
+        rotavg.write_edges(g, plain, tmp_path / "none.csv")

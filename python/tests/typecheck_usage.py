@@ -213,6 +213,11 @@ def multiple(folder: Path) -> None:
     rotavg.set_progress(seen.append)
     rotavg.set_progress(None)
     rotavg.write_estimate(g, from_graph.estimate, folder / "written.json")
+    robust = rotavg.average_multiple(g, loss="cauchy")
+    inliers: Optional[FloatArray] = robust.inlier_estimate
+    if inliers is not None:
+        rotavg.write_estimate(g, inliers, folder / "inliers.json")
+    rotavg.write_edges(g, robust, folder / "edges.csv")
     rotavg.write_estimate(g, from_graph.estimate, str(folder / "written.g2o"), format="g2o")
     t: FloatArray = rotavg.read_ground_truth(gt, g)
     acc: rotavg.Accuracy = rotavg.accuracy(from_graph.estimate, t)
