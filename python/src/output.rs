@@ -60,11 +60,7 @@ pub fn write_estimate(
             node_ids: &loaded.node_ids,
             node_names: &loaded.node_names,
         };
-        let written = file.write_planned(&plan, &source);
-        if written.is_err() {
-            plan.remove_empty_folders();
-        }
-        written
+        plan.cleaned(file.write_planned(&plan, &source))
     })
 }
 
@@ -110,13 +106,6 @@ pub fn write_edges(
             residuals,
             &loaded.node_ids,
         );
-        let written = std::fs::write(&plan.file, text).map_err(|e| rotavg::Error::Io {
-            path: path.clone(),
-            message: e.to_string(),
-        });
-        if written.is_err() {
-            plan.remove_empty_folders();
-        }
-        written
+        plan.write_text(&text)
     })
 }

@@ -61,6 +61,9 @@ pub fn read_numpy_rotations(
 /// The rotations of one `.npy` array.
 fn read_npy(bytes: &[u8], file: &str, options: &ReadOptions) -> Result<Vec<Rotation>> {
     let bad = |reason: String| Error::parse(Some(file), None, reason);
+    // npyz allocates the header length the file announces and multiplies the shape's
+    // dimensions unchecked: both are checked here first
+    check_header(bytes).map_err(bad)?;
     let npy = npyz::NpyFile::new(bytes).map_err(|e| bad(format!("not a .npy array: {e}")))?;
     let shape = npy.shape().to_vec();
     let strides = npy.strides().to_vec();
@@ -89,6 +92,52 @@ fn read_npy(bytes: &[u8], file: &str, options: &ReadOptions) -> Result<Vec<Rotat
                 .map_err(|e| e.in_file(file, None))
         })
         .collect()
+}
+
+/// The header of a `.npy` file checked before `npyz` reads it: its announced length within
+/// the file (version 1: 2 bytes at offset 8; versions 2 and 3: 4 bytes), and a `shape` tuple
+/// of at most three dimensions whose product does not overflow.
+fn check_header(bytes: &[u8]) -> std::result::Result<(), String> {
+    let (len_at, len_bytes) = match bytes.get(6) {
+        Some(1) => (8, 2),
+        Some(2 | 3) => (8, 4),
+        _ => return Err("not a .npy array: unknown format version".into()),
+    };
+    let field = bytes
+        .get(len_at..len_at + len_bytes)
+        .ok_or("not a .npy array: truncated header")?;
+    let header_len = field
+        .iter()
+        .rev()
+        .fold(0usize, |acc, &b| (acc << 8) | b as usize);
+    let header = bytes
+        .get(len_at + len_bytes..len_at + len_bytes + header_len)
+        .ok_or("not a .npy array: the header is longer than the file")?;
+    let text = String::from_utf8_lossy(header);
+    let shape = text
+        .split_once("'shape'")
+        .and_then(|(_, rest)| rest.split_once('('))
+        .and_then(|(_, rest)| rest.split_once(')'))
+        .map(|(dims, _)| dims)
+        .ok_or("not a .npy array: no 'shape' tuple in the header")?;
+    let dims: Vec<&str> = shape
+        .split(',')
+        .map(str::trim)
+        .filter(|d| !d.is_empty())
+        .collect();
+    if dims.len() > 3 {
+        return Err(format!(
+            "an array of {} dimensions; rotations are saved as shape (n, 3, 3), (n, 9) or (3, 3)",
+            dims.len()
+        ));
+    }
+    dims.iter().try_fold(1u64, |product, d| {
+        d.parse::<u64>()
+            .ok()
+            .and_then(|d| product.checked_mul(d))
+            .ok_or_else(|| format!("not a .npy array: shape ({shape}) is not a product of sizes"))
+    })?;
+    Ok(())
 }
 
 /// The array's `len` values as f64 (float64 or float32 data), after checking that the file

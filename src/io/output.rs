@@ -84,6 +84,20 @@ impl OutputPlan {
             let _ = std::fs::remove_dir(dir);
         }
     }
+
+    /// `outcome` of writing this plan's output, with [`Self::remove_empty_folders`] when it
+    /// failed: what a writer returns so that a failure leaves no folder behind.
+    pub fn cleaned(&self, outcome: Result<()>) -> Result<()> {
+        if outcome.is_err() {
+            self.remove_empty_folders();
+        }
+        outcome
+    }
+
+    /// Write `text` to [`Self::file`] ([`write_text`]), leaving no new folder if it fails.
+    pub fn write_text(&self, text: &str) -> Result<()> {
+        self.cleaned(write_text(&self.file.display().to_string(), text))
+    }
 }
 
 /// The folders `create_dir_all(dir)` would create, outermost first.

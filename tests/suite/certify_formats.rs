@@ -981,7 +981,18 @@ fn numpy_files_it_cannot_read_are_refused_by_name() {
     let sc = scene(6, 8);
     let problem = write("npx/problem.g2o", g2o_problem(&sc));
     let data = vec![0u8; 6 * 9 * 8];
-    let cases: [(&str, Vec<u8>, &str); 6] = [
+    // a header announcing 4 GB, and a shape whose product overflows: refused before npyz
+    // allocates or multiplies
+    let mut long = b"\x93NUMPY\x02\x00".to_vec();
+    long.extend_from_slice(&u32::MAX.to_le_bytes());
+    long.extend_from_slice(b"{'descr'");
+    let cases: [(&str, Vec<u8>, &str); 8] = [
+        ("long.npy", long, "longer than the file"),
+        (
+            "overflow.npy",
+            npy("<f8", false, "(4294967296, 4294967296, 9)", &data),
+            "not a product of sizes",
+        ),
         (
             "shape.npy",
             npy("<f8", false, "(6, 3)", &data[..144]),

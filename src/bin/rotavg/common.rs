@@ -102,22 +102,20 @@ impl RotationOutputArgs {
             Some(path) => Some(prepare_output(path, OutputFormat::Json)?),
             None => None,
         };
-        let written = work().and_then(|result| {
-            if let Some(plan) = &plan {
-                let text = rotavg::io::json::write_rotation_json(&estimate(&result));
-                std::fs::write(&plan.file, text).map_err(|e| rotavg::Error::Io {
-                    path: plan.path.clone(),
-                    message: e.to_string(),
-                })?;
+        let result = work();
+        let Some(plan) = &plan else {
+            return result;
+        };
+        match result {
+            Ok(r) => {
+                plan.write_text(&rotavg::io::json::write_rotation_json(&estimate(&r)))?;
+                Ok(r)
             }
-            Ok(result)
-        });
-        if written.is_err()
-            && let Some(plan) = &plan
-        {
-            plan.remove_empty_folders();
+            Err(e) => {
+                plan.remove_empty_folders();
+                Err(e)
+            }
         }
-        written
     }
 }
 
