@@ -6,6 +6,7 @@
 //! | single | [`certify_single`] | theorems: closed forms, convexity `[S1]`-`[S7]` ([`single`]), branch and bound `[B1]`-`[B6]` ([`branch_and_bound`]) |
 //! | multiple | [`certify_multiple`] | dual certificate, staircase, SDP, conv(SO(3)) dual and SDP `[D3]`-`[D16]`, `[A6]`, `[A11]` ([`multiple`]) |
 //! | conjugate | [`certify_conjugate`] | SDP with verified multipliers `[H8]` ([`conjugate`]), branch and bound `[B1]`-`[B6]` |
+//! | gravity priors | [`certify_gravity`] | SO(2) dual certificate `[G3]`, the view graph's bound `[G7]` ([`gravity`]) |
 //! | simultaneous | [`certify_simultaneous`] | dual certificate at the estimate `[H15]`, SDP `[H14]` ([`simultaneous`]) |
 //!
 //! Each takes the problem, the estimate and a [`CertifySettings`], never changes the estimate,
@@ -19,7 +20,7 @@
 //!    report beside a bound), [`certificate`], [`settings`], [`certification`], [`rung`] (what
 //!    a proof is to a climb) and [`ladder`] (the one climb, generic over the rungs);
 //! 2. the rungs and their kernels, one file a proof: [`single`], [`conjugate`],
-//!    [`branch_and_bound`], [`simultaneous`], [`multiple`] (each problem's folder; [`spectrum`]);
+//!    [`branch_and_bound`], [`simultaneous`], [`multiple`], [`gravity`] (each problem's folder; [`spectrum`]);
 //! 3. the entry points (each problem folder's `mod.rs`), which choose the rungs and climb.
 //!
 //! Soundness rule: [`Verdict::Certified`] is only produced by [`Certificate::from_bounds`] from a
@@ -31,6 +32,7 @@ pub mod certificate;
 pub mod certification;
 pub mod conjugate;
 pub mod evidence;
+pub mod gravity;
 pub mod ladder;
 pub mod log;
 pub mod multiple;
@@ -52,6 +54,7 @@ pub use certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun, SdpSummary,
 };
 pub use conjugate::certify_conjugate;
+pub use gravity::certify_gravity;
 pub use log::{Attempt, Outcome, Point, Prediction, Refusal};
 pub use multiple::certify_multiple;
 pub use proof::{BoundMethod, Proof};

@@ -34,6 +34,11 @@ pub enum Proof {
     ConvDual,
     /// The dual certificate of the simultaneous problem at the estimate `[H15]`.
     SimultaneousDual,
+    /// The SO(2) dual certificate of the full-gravity problem at the estimate `[G3]`.
+    GravityDual,
+    /// The gravity problem's constraints dropped `[G7]`: the certified bound of the view graph
+    /// alone (every rung of [`crate::certify::certify_multiple`]).
+    GravityRelaxed,
     /// Information isotropic to rounding compared with scalar weights `lambda_min(H_e)` `[A13]`:
     /// the isotropic problem's dual certificate plus a proven constant.
     ScalarWeights,
@@ -68,7 +73,11 @@ impl Proof {
             Proof::Grounded => 1,
             // the isotropic path of the same bound: first among the cheap ones
             Proof::ScalarWeights => 1,
-            Proof::DualCertificate | Proof::ConvDual | Proof::SimultaneousDual => 2,
+            Proof::DualCertificate
+            | Proof::ConvDual
+            | Proof::SimultaneousDual
+            | Proof::GravityDual => 2,
+            Proof::GravityRelaxed => 5,
             Proof::ShiftedCholesky => 2,
             Proof::ScalarComparison => 3,
             Proof::Sdp | Proof::ConvSdp => 6,
@@ -89,6 +98,8 @@ impl Proof {
             Proof::DualCertificate
             | Proof::ConvDual
             | Proof::SimultaneousDual
+            | Proof::GravityDual
+            | Proof::GravityRelaxed
             | Proof::ScalarWeights
             | Proof::Grounded
             | Proof::ShiftedCholesky
@@ -109,6 +120,8 @@ impl fmt::Display for Proof {
             Proof::ConvSdp => "conv(SO(3)) SDP relaxation [A6] (Clarabel)",
             Proof::ConvDual => "conv(SO(3)) dual certificate at the estimate [A11]",
             Proof::SimultaneousDual => "trace-coupled dual certificate at the estimate [H15]",
+            Proof::GravityDual => "SO(2) dual certificate at the estimate [G3]",
+            Proof::GravityRelaxed => "the view graph without its gravity priors [G7]",
             Proof::ScalarWeights => "comparison with scalar weights [A13]",
             Proof::BranchAndBound => "branch and bound [B1]-[B6]",
             Proof::Grounded => "grounded bound [D15]",

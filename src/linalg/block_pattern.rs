@@ -159,6 +159,22 @@ impl BlockPattern {
         }
     }
 
+    /// Decouple the pinned rows and columns (`pinned[k]`: row/column `k` of the matrix): their
+    /// off-diagonal entries become 0 and their diagonal 1, so that a solve with a zero
+    /// right-hand side there leaves those unknowns at 0 (the constrained directions of a
+    /// Newton system, `[G4]`). One pass over the stored values.
+    pub(crate) fn pin(&self, val: &mut [f64], pinned: &[bool]) {
+        let rows = self.symbolic.row_idx();
+        for c in 0..self.col_ptr.len() - 1 {
+            for idx in self.col_ptr[c]..self.col_ptr[c + 1] {
+                let r = rows[idx];
+                if pinned[r] || pinned[c] {
+                    val[idx] = if r == c { 1.0 } else { 0.0 };
+                }
+            }
+        }
+    }
+
     /// Diagonal entries.
     pub(crate) fn diagonal(&self, val: &[f64]) -> Vec<f64> {
         (0..self.col_ptr.len() - 1)

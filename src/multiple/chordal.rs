@@ -347,10 +347,23 @@ pub(crate) fn solve_chordal(
     settings: &MultipleSettings,
     solver: Option<SolverChoice>,
 ) -> Result<MultipleSolution> {
+    solve_chordal_tilt_fixed(problem, init, settings, solver, None)
+}
+
+/// [`solve_chordal`] with the tilt of the nodes `tilt_fixed[i]` held: those only turn about
+/// their own third axis, `R_i exp(t hat e_3)` (so `R_i e_3`, the gravity direction, stays,
+/// `[G4]`). Node 0 is grounded, so it must be tilt-fixed whenever any node is.
+pub(crate) fn solve_chordal_tilt_fixed(
+    problem: &MultipleProblem,
+    init: Vec<Rotation>,
+    settings: &MultipleSettings,
+    solver: Option<SolverChoice>,
+    tilt_fixed: Option<&[bool]>,
+) -> Result<MultipleSolution> {
     let start = std::time::Instant::now();
     let total_weight: f64 = problem.edges().iter().map(|e| e.weight).sum();
     let tol = settings.gradient_tolerance;
-    let mut point = Point::at(problem, init);
+    let mut point = Point::at(problem, init, tilt_fixed);
     let init_cost = point.cost;
     let solution = |point: Point, iterations, termination, linear_algebra| MultipleSolution {
         chordal_cost: point.cost,
@@ -377,6 +390,8 @@ pub(crate) fn solve_chordal(
         return Ok(solution(point, 0, converged, None));
     }
     let mut lm = NewtonLm::new(problem, settings, solver)?;
+    lm.tilt_fixed = tilt_fixed;
+    lm.pinned = tilt_fixed.map(grounded_pins);
     let mut iterations = 0;
     let termination = loop {
         if iterations >= settings.max_iterations {
@@ -409,9 +424,15 @@ struct Point {
 }
 
 impl Point {
-    /// The cost and gradient at `r` ([`chordal_gradient`]).
-    fn at(problem: &MultipleProblem, r: Vec<Rotation>) -> Self {
-        let (cost, grad) = chordal_gradient(problem, &r);
+    /// The cost and gradient at `r` ([`chordal_gradient`]), the gradient's first two
+    /// components zero at the tilt-fixed nodes (the projection onto their tangent, `[G4]`).
+    fn at(problem: &MultipleProblem, r: Vec<Rotation>, tilt_fixed: Option<&[bool]>) -> Self {
+        let (cost, mut grad) = chordal_gradient(problem, &r);
+        if let Some(fixed) = tilt_fixed {
+            for (g, _) in grad.iter_mut().zip(fixed).filter(|(_, f)| **f) {
+                (g.x, g.y) = (0.0, 0.0);
+            }
+        }
         let gn = grad_norm(&grad);
         Point { r, cost, grad, gn }
     }
@@ -438,6 +459,20 @@ struct NewtonLm<'a> {
     mean_diag: f64,
     /// The damping relative to the mean Hessian diagonal (or to `4 L ⊗ I_3`).
     mu: f64,
+    /// The nodes whose tilt is held, and the rows of the grounded system held at zero for
+    /// them (`[G4]`).
+    tilt_fixed: Option<&'a [bool]>,
+    pinned: Option<Vec<bool>>,
+}
+
+/// The pinned rows of the grounded system (nodes `1..n`, 3 rows each) for tilt-fixed nodes:
+/// their first two components.
+fn grounded_pins(tilt_fixed: &[bool]) -> Vec<bool> {
+    tilt_fixed
+        .iter()
+        .skip(1)
+        .flat_map(|&f| [f, f, false])
+        .collect()
 }
 
 impl<'a> NewtonLm<'a> {
@@ -491,6 +526,8 @@ impl<'a> NewtonLm<'a> {
             need_hessian: true,
             mean_diag: 0.0,
             mu: 1e-6,
+            tilt_fixed: None,
+            pinned: None,
         })
     }
 
@@ -556,6 +593,9 @@ impl<'a> NewtonLm<'a> {
                     self.pattern.add_diagonal(&mut self.val, lambda);
                 }
             }
+            if let Some(pinned) = &self.pinned {
+                self.pattern.pin(&mut self.val, pinned);
+            }
             let mut x = rhs.clone();
             if self.solver.kind() == SolverKind::Direct {
                 self.counts.numeric_factorizations += 1;
@@ -566,6 +606,12 @@ impl<'a> NewtonLm<'a> {
                 .and_then(|f| f.solve(&mut x, eta, 2000));
             self.counts.cg_iterations += solved.unwrap_or(0);
             if solved.is_some() {
+                if let Some(pinned) = &self.pinned {
+                    // an inexact (PCG) solve leaves rounding there
+                    for (k, _) in pinned.iter().enumerate().filter(|(_, p)| **p) {
+                        x[(k, 0)] = 0.0;
+                    }
+                }
                 return Some(x);
             }
             self.mu *= 10.0;
@@ -603,7 +649,7 @@ impl<'a> NewtonLm<'a> {
         max_step: f64,
     ) -> Option<Termination> {
         let moved = p.r.iter().zip(step).map(|(ri, s)| ri * exp(s)).collect();
-        let cand = Point::at(self.problem, moved);
+        let cand = Point::at(self.problem, moved, self.tilt_fixed);
         let rho = if predicted > 0.0 {
             (p.cost - cand.cost) / predicted
         } else {

@@ -8,6 +8,7 @@
 use crate::multiple::MultipleProblem;
 use crate::multiple::anisotropic::Information;
 use faer::sparse::{SparseColMat, Triplet};
+use nalgebra::Matrix3;
 
 /// Triplets of `Q` (duplicates summed by the sparse constructor). Both triangles are present.
 pub fn connection_laplacian_triplets(problem: &MultipleProblem) -> Vec<Triplet<usize, usize, f64>> {
@@ -42,6 +43,28 @@ pub fn connection_laplacian_triplets(problem: &MultipleProblem) -> Vec<Triplet<u
         }
     }
     t
+}
+
+/// Each edge's part of `Q` as blocks `(i, j, Q_ii part, Q_jj part, Q_ij)` (`Q_ji = Q_ij^T`):
+/// `(w I, w I, -w R_ij^T)`, or `(2M, 2M, -2M R_ij^T)` with information `[A2]`. The same
+/// matrix as [`connection_laplacian_triplets`], block by block.
+pub fn edge_blocks(
+    problem: &MultipleProblem,
+) -> impl Iterator<Item = (usize, usize, Matrix3<f64>, Matrix3<f64>, Matrix3<f64>)> + '_ {
+    let info = problem.information();
+    problem.edges().iter().enumerate().map(move |(k, e)| {
+        let r_t = e.rotation.matrix().transpose();
+        match info {
+            Some(info) => {
+                let m2 = info[k].twice_chordal_matrix();
+                (e.i, e.j, m2, m2, -(m2 * r_t))
+            }
+            None => {
+                let d = Matrix3::identity() * e.weight;
+                (e.i, e.j, d, d, -(r_t * e.weight))
+            }
+        }
+    })
 }
 
 /// `[A2]`: per edge the 6x6 block `[[2M, -2M R_ij^T], [-2 R_ij M, 2M]]` at `(i, j)`.

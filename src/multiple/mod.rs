@@ -30,6 +30,7 @@ pub mod accuracy;
 pub mod anisotropic;
 pub mod chordal;
 pub mod geodesic;
+pub mod gravity;
 pub mod init;
 pub mod laplacian;
 pub mod problem;

@@ -425,6 +425,29 @@ impl MultipleProblem {
         )
     }
 
+    /// The same problem with node `k` renamed `new_of_old[k]` (a permutation of `0..n`; panics
+    /// otherwise: a programming error). Edges keep their order, measurements and information.
+    pub(crate) fn relabelled(&self, new_of_old: &[usize]) -> MultipleProblem {
+        let mut seen = vec![false; self.num_rotations];
+        for &k in new_of_old {
+            assert!(!std::mem::replace(&mut seen[k], true), "a permutation");
+        }
+        assert_eq!(new_of_old.len(), self.num_rotations, "a permutation");
+        let edges = self
+            .edges
+            .iter()
+            .map(|e| Edge {
+                i: new_of_old[e.i],
+                j: new_of_old[e.j],
+                ..e.clone()
+            })
+            .collect();
+        MultipleProblem {
+            edges,
+            ..self.clone()
+        }
+    }
+
     /// Chordal L2 cost `sum w_ij ||R_j - R_ij R_i||_F^2` `[M1]` (anisotropic problems: `sum 4 (tr M -
     /// <R_ij M, R_j R_i^T>)`, [`crate::multiple::anisotropic`], evaluated in double-double). Panics if `rotations.len() != n`
     /// (a programming error, not user input: check with [`Self::check_estimate`]).

@@ -509,3 +509,50 @@ pub fn z_cycle(n: usize, phi: f64) -> MultipleProblem {
         .collect();
     MultipleProblem::new(n, edges).expect("cycle is valid")
 }
+
+/// Seeded gravity priors for a planted truth (`paper-notes/gravity.md`): image `i`'s prior is
+/// `R_i e_3` (the world's down direction `e_3` seen by camera `i`) turned by a Gaussian angle
+/// of standard deviation `noise_deg` about a uniformly random axis orthogonal to it; an image
+/// has no prior with probability `missing_fraction` (image 0 always has one).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SyntheticGravity {
+    /// Standard deviation of the angle between a prior and the truth, degrees.
+    pub noise_deg: f64,
+    /// Fraction of images without a prior, in `[0, 1)`.
+    pub missing_fraction: f64,
+    /// RNG seed.
+    pub seed: u64,
+}
+
+impl SyntheticGravity {
+    /// The priors of `truth`.
+    ///
+    /// ```
+    /// use rotavg::multiple::synthetic::{SyntheticGraph, SyntheticGravity};
+    /// let (_, truth) = SyntheticGraph::default().generate();
+    /// let g = SyntheticGravity { noise_deg: 0.5, missing_fraction: 0.25, seed: 1 }.priors(&truth)?;
+    /// assert!(g.num_known() > 60 && g.num_known() < 90 && g.direction(0).is_some());
+    /// let off = (truth[0] * nalgebra::Vector3::z()).angle(&g.direction(0).unwrap()).to_degrees();
+    /// assert!(off < 3.0);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn priors(&self, truth: &[Rotation]) -> crate::Result<super::gravity::GravityPriors> {
+        let mut rng = StdRng::seed_from_u64(self.seed);
+        let dirs = truth
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let g = r * Vector3::z();
+                let axis = g.cross(&crate::so3::random_unit_vector(&mut rng));
+                let turn = crate::so3::gaussian(&mut rng) * self.noise_deg.to_radians();
+                let noisy = match axis.try_normalize(1e-9) {
+                    Some(a) => exp(&(a * turn)) * g,
+                    None => g,
+                };
+                let missing = i > 0 && rng.random::<f64>() < self.missing_fraction;
+                (!missing).then(|| noisy.into())
+            })
+            .collect();
+        super::gravity::GravityPriors::new(dirs)
+    }
+}

@@ -12,10 +12,12 @@
 //! | single | [`average_single`] | [`AverageSettings<SingleSettings>`](AverageSettings) |
 //! | multiple | [`average_multiple`] | [`AverageSettings<MultipleSettings>`](AverageSettings) |
 //! | conjugate | [`average_conjugate`] | [`AverageSettings<ConjugateSettings>`](AverageSettings) |
+//! | multiple with gravity priors | [`average_with_gravity`] | [`AverageSettings<MultipleSettings>`](AverageSettings) |
 //!
 //! [`simultaneous`] estimates the hand-eye rotation jointly with two view graphs `[H12]`, certified by the trace-coupled relaxation `[H14]`.
 
 pub mod conjugate;
+pub mod gravity;
 pub mod inlier_graph;
 pub mod loss_choice;
 pub mod multiple;
@@ -23,6 +25,7 @@ pub mod simultaneous;
 pub mod single;
 
 pub use conjugate::average_conjugate;
+pub use gravity::{GravityDetails, average_with_gravity};
 pub use inlier_graph::{
     EstimateInlierGraph, InlierGraph, certify_estimate_inliers, certify_inlier_graph,
 };

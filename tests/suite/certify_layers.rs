@@ -27,6 +27,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("certify::multiple", 8),
     ("certify::conjugate", 8),
     ("certify::simultaneous", 8),
+    ("certify::gravity", 8),
     ("certify", 9),
 ];
 

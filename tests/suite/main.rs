@@ -50,6 +50,7 @@ mod error_words;
 mod estimates_in_so3;
 mod example_data;
 mod fuzz_regressions;
+mod gravity;
 #[cfg(feature = "cli")]
 mod handeye_streams;
 mod io_formats;

@@ -1,0 +1,117 @@
+//! Certificates for chordal L2 averaging with gravity priors (contract section 5, "Rigs and
+//! gravity"; `paper-notes/gravity.md`): two rungs, climbed by the one ladder.
+//!
+//! | rung | when | bound |
+//! |---|---|---|
+//! | [`planar`]: the SO(2) dual certificate at the estimate `[G2]`, `[G3]` | every image has a prior | `K + sum lambda_i + n min(mu, 0)`, `mu` proven by a shifted sparse Cholesky |
+//! | [`relaxed`]: the priors dropped `[G7]` | the mixed problem; the fallback of full gravity | the view graph's own certified bound |
+
+pub mod planar;
+mod relaxed;
+mod state;
+
+pub use planar::{PlanarBound, PlanarForm, verify_planar};
+
+use crate::certify::budget::Deadline;
+use crate::certify::certificate::Certificate;
+use crate::certify::certification::{Certification, CertifyDetails};
+use crate::certify::ladder::{Rungs, climb};
+use crate::certify::multiple::certify_multiple;
+use crate::certify::proof::{BoundMethod, Proof};
+use crate::certify::settings::CertifySettings;
+use crate::error::{Error, Result};
+use crate::multiple::MultipleSolution;
+use crate::multiple::gravity::GravityProblem;
+use crate::so3::Rotation;
+use state::GravityState;
+
+/// The largest angle (radians) between `R_i g_world` and `g_i` an estimate may have to be
+/// certified as one of the gravity problem (its own solver's are within rounding).
+pub const GRAVITY_FEASIBILITY_RAD: f64 = 1e-6;
+
+/// Certify `rotations` (never changed) for the chordal L2 problem of `problem`'s view graph
+/// with its gravity priors as hard constraints. Full gravity: the SO(2) dual certificate
+/// `[G3]`, and when it does not certify, the view graph's own bound `[G7]`; mixed: that bound
+/// only (a gap, unless the priors cost nothing). Errors: a count of rotations that differs from
+/// the graph's, an estimate off its priors by more than [`GRAVITY_FEASIBILITY_RAD`].
+///
+/// ```
+/// use rotavg::certify::{certify_gravity, CertifySettings};
+/// use rotavg::multiple::gravity::GravityProblem;
+/// use rotavg::multiple::synthetic::SyntheticGraph;
+/// let (graph, truth) = SyntheticGraph { num_rotations: 20, num_edges: 60, noise_sigma: 0.0, ..Default::default() }.generate();
+/// let p = GravityProblem::from_truth(graph, &truth)?;
+/// let c = certify_gravity(&p, &truth, &CertifySettings::default())?;
+/// assert!(c.certificate.is_certified());
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn certify_gravity(
+    problem: &GravityProblem,
+    rotations: &[Rotation],
+    settings: &CertifySettings,
+) -> Result<Certification<MultipleSolution>> {
+    let deadline = Deadline::start(&settings.budget);
+    settings.validate()?;
+    let graph = problem.problem();
+    graph.check_estimate(rotations)?;
+    let off = problem.max_prior_violation_deg(rotations);
+    if off.is_nan() || off.to_radians() > GRAVITY_FEASIBILITY_RAD {
+        return Err(Error::InvalidSettings {
+            name: "estimate".into(),
+            reason: format!(
+                "the estimate is {off:.3e} degrees off its gravity priors (R_i g_world = g_i \
+                 within {GRAVITY_FEASIBILITY_RAD:e} rad): it is not a point of the gravity \
+                 problem; certify it without --gravity, or project it onto the priors"
+            ),
+        });
+    }
+    let cost = graph.chordal_cost(rotations);
+    let tolerance = settings.tolerance.resolve(graph.min_weight());
+    let mut state = GravityState {
+        problem,
+        rotations,
+        settings,
+        deadline,
+        cost,
+        allowed_gap: tolerance.allowed_gap(cost),
+        best: None,
+        log: Vec::new(),
+        relaxed_method: None,
+    };
+    let rungs: Rungs<'_, GravityState<'_>> = vec![
+        Box::new(planar::PlanarRung::default()),
+        Box::new(relaxed::RelaxedRung::new(|graph, rotations, settings| {
+            Ok(certify_multiple(graph, rotations, settings)?.certificate)
+        })),
+    ];
+    climb(&mut state, rungs)?;
+    let seconds = deadline.elapsed();
+    let details = CertifyDetails::from_log(settings.mode, state.log, seconds);
+    let (lb, method, mu, why) = match state.best {
+        Some(b) => (
+            Some(b.lower_bound),
+            match b.proof {
+                Proof::GravityRelaxed => state.relaxed_method.unwrap_or(BoundMethod::Dual),
+                p => p.method(),
+            },
+            b.verified_min_eigenvalue,
+            b.note,
+        ),
+        None => (
+            None,
+            BoundMethod::Dual,
+            None,
+            details
+                .methods()
+                .last()
+                .map_or_else(|| "no rung ran".into(), |m| m.note.clone()),
+        ),
+    };
+    let mut certificate = Certificate::from_bounds(cost, lb, method, mu, tolerance, why, seconds);
+    certificate.verified_min_eigenvalue = mu;
+    Ok(Certification {
+        certificate,
+        details,
+        improvement: None,
+    })
+}

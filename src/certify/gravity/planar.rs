@@ -1,0 +1,293 @@
+//! The SO(2) dual certificate of the full-gravity problem (`paper-notes/gravity.md`, `[G2]`,
+//! `[G3]`): with every image's gravity known, `R_i = F_i Rz(theta_i)` (standard convention),
+//! and the chordal cost is `f = K + x^H H x` over unit complex numbers `x_i = e^{i theta_i}`
+//! (`K` fixed by the priors, `H` Hermitian `n x n` with the graph's sparsity). For any real
+//! multipliers `lambda`, `f* >= K + sum lambda_i + n min(lambda_min(H - diag lambda), 0)`; at the
+//! estimate's phases `lambda_i = Re(conj(x_i) (H x)_i)` make `S = H - diag lambda` vanish on
+//! `x`, and `S >= 0` certifies it. `lambda_min(S)` is proven by a shifted sparse Cholesky of
+//! `S`'s real `2n x 2n` form (`[D5]`, `[D6]`).
+
+use super::state::GravityState;
+use crate::certify::log::{Prediction, Refusal};
+use crate::certify::multiple::multipliers::data_defect;
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, Plan, Rung};
+use crate::certify::settings::CertifyMode;
+use crate::error::Result;
+use crate::linalg::cholesky::gamma;
+use crate::linalg::{
+    Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme, sparse_matvec,
+};
+use crate::multiple::gravity::GravityProblem;
+use crate::multiple::laplacian::edge_blocks;
+use crate::so3::Rotation;
+use faer::sparse::{SparseColMat, Triplet};
+use nalgebra::{Matrix3, Matrix3x2, Vector3};
+
+/// The full-gravity cost in its planar form `[G2]`: `f = K + x^H H x` on `|x_i| = 1`.
+pub struct PlanarForm {
+    n: usize,
+    /// `K = c_0 + sum_i d_i` (the part the priors fix) and a bound on its rounding.
+    constant: f64,
+    constant_error: f64,
+    /// The off-diagonal entries `H_ij` (`i < j` not required; both orders summed): `(i, j,
+    /// re, im)` per edge.
+    entries: Vec<(usize, usize, f64, f64)>,
+    /// The most edges at one node (for the forming error of `S`'s entries).
+    max_degree: usize,
+    /// An upper bound on `||Q||_2` and on the frames' distance to exact frames (`[G3]`, the
+    /// frame term).
+    q_norm: f64,
+    frame_defect: f64,
+}
+
+/// The first two columns of `f` (`B_i`, a basis of the plane orthogonal to `g_i`).
+fn basis(f: &Matrix3<f64>) -> Matrix3x2<f64> {
+    f.fixed_columns::<2>(0).into()
+}
+
+/// `sum |m_kl|`.
+fn abs_sum(m: &Matrix3<f64>) -> f64 {
+    m.iter().map(|v| v.abs()).sum()
+}
+
+impl PlanarForm {
+    /// The planar form of a full-gravity problem (standard convention), `None` when some image
+    /// has no prior.
+    pub fn new(problem: &GravityProblem) -> Option<Self> {
+        let n = problem.problem().num_rotations();
+        let frames: Vec<Matrix3<f64>> = (0..n)
+            .map(|i| problem.frame(i).map(|f| f.into_inner()))
+            .collect::<Option<_>>()?;
+        let graph = problem.problem();
+        let mut degree = vec![0usize; n];
+        let mut row_abs = vec![0.0f64; n];
+        let (mut constant, mut magnitude) = (0.0, 0.0);
+        let mut entries = Vec::with_capacity(graph.num_edges());
+        for (i, j, a, b, c) in edge_blocks(graph) {
+            let (fi, fj) = (&frames[i], &frames[j]);
+            let (gi, gj) = (fi.column(2), fj.column(2));
+            let (bi, bj) = (basis(fi), basis(fj));
+            constant += (gi.transpose() * a * gi)[0]
+                + (gj.transpose() * b * gj)[0]
+                + 2.0 * (gi.transpose() * c * gj)[0]
+                + (bi.transpose() * a * bi).trace()
+                + (bj.transpose() * b * bj).trace();
+            magnitude += 4.0 * (abs_sum(&a) + abs_sum(&b) + 2.0 * abs_sum(&c));
+            let m = bi.transpose() * c * bj;
+            entries.push((i, j, m[(0, 0)] + m[(1, 1)], m[(1, 0)] - m[(0, 1)]));
+            degree[i] += 1;
+            degree[j] += 1;
+            row_abs[i] += abs_sum(&a) + abs_sum(&c);
+            row_abs[j] += abs_sum(&b) + abs_sum(&c);
+        }
+        let frame_defect = (0..n)
+            .map(|i| {
+                let f = &frames[i];
+                let g = problem.priors().direction(i).unwrap_or(Vector3::z());
+                (f.transpose() * f - Matrix3::identity()).norm() + (f.column(2) - g).norm()
+            })
+            .fold(0.0, f64::max)
+            + 8.0 * UNIT_ROUNDOFF;
+        Some(PlanarForm {
+            n,
+            constant,
+            constant_error: gamma(graph.num_edges() + 64) * magnitude,
+            entries,
+            max_degree: degree.into_iter().max().unwrap_or(0),
+            q_norm: row_abs.into_iter().fold(0.0, f64::max) * (1.0 + 1e-12),
+            frame_defect,
+        })
+    }
+
+    /// The phases `x_i = (cos theta_i, sin theta_i)` of `rotations` (standard convention):
+    /// `theta_i` the turn of `F_i^T R_i` about `e_3`.
+    pub fn phases(problem: &GravityProblem, rotations: &[Rotation]) -> Vec<(f64, f64)> {
+        rotations
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let m = (problem
+                    .frame(i)
+                    .unwrap_or_else(Rotation::identity)
+                    .inverse()
+                    * r)
+                    .into_inner();
+                let t = (m[(1, 0)] - m[(0, 1)]).atan2(m[(0, 0)] + m[(1, 1)]);
+                (t.cos(), t.sin())
+            })
+            .collect()
+    }
+
+    /// `S = H - diag(lambda)` at phases `x` in its real `2n x 2n` form (both triangles), with
+    /// `lambda_i = d_i + Re(conj(x_i) sum_j H_ij x_j)`: its diagonal `s_i = -Re(conj(x_i)
+    /// sum_j H_ij x_j)` is stored exactly (it defines `lambda`). Returns `S`, `sum s_i` and
+    /// `sum |s_i|`.
+    fn certificate_matrix(&self, x: &[(f64, f64)]) -> (SparseColMat<usize, f64>, f64, f64) {
+        let mut s = vec![0.0f64; self.n];
+        let mut t = Vec::with_capacity(8 * self.entries.len() + 2 * self.n);
+        for &(i, j, re, im) in &self.entries {
+            // conj(x_i) z x_j and conj(x_j) conj(z) x_i
+            let zx = (re * x[j].0 - im * x[j].1, re * x[j].1 + im * x[j].0);
+            s[i] -= x[i].0 * zx.0 + x[i].1 * zx.1;
+            let zx = (re * x[i].0 + im * x[i].1, re * x[i].1 - im * x[i].0);
+            s[j] -= x[j].0 * zx.0 + x[j].1 * zx.1;
+            // block (i, j) = [[re, -im], [im, re]], block (j, i) its transpose
+            for (a, b, v) in [(0, 0, re), (0, 1, -im), (1, 0, im), (1, 1, re)] {
+                t.push(Triplet::new(2 * i + a, 2 * j + b, v));
+                t.push(Triplet::new(2 * j + b, 2 * i + a, v));
+            }
+        }
+        for (i, si) in s.iter().enumerate() {
+            t.push(Triplet::new(2 * i, 2 * i, *si));
+            t.push(Triplet::new(2 * i + 1, 2 * i + 1, *si));
+        }
+        let m = SparseColMat::try_new_from_triplets(2 * self.n, 2 * self.n, &t)
+            .expect("indices within 2n");
+        let sum: f64 = s.iter().sum();
+        let abs: f64 = s.iter().map(|v| v.abs()).sum();
+        (m, sum, abs)
+    }
+
+    /// `K - sum s_i + n min(mu, 0)` less every rounding and data term: the constant's
+    /// rounding, the sum's, the data defect of the measurements ([`data_defect`]) and the frame
+    /// term `||Q|| (2 sqrt(3) n d (1 + d) + n d^2)` (`[G3]`).
+    fn bound(&self, graph_defect: f64, sum_s: f64, abs_s: f64, mu: f64) -> f64 {
+        let n = self.n as f64;
+        let d = self.frame_defect;
+        let frames = self.q_norm * (2.0 * 3f64.sqrt() * n * d * (1.0 + d) + n * d * d);
+        let deficit = n * (-mu).max(0.0);
+        let value = self.constant - sum_s - deficit;
+        let rounding = 2.0 * gamma(self.n + 4) * (self.constant.abs() + abs_s + deficit);
+        value - rounding - self.constant_error - graph_defect - frames
+    }
+}
+
+/// A verified bound of the planar dual, and how it was proven.
+#[derive(Debug, Clone, Copy)]
+pub struct PlanarBound {
+    /// The lower bound on the full-gravity problem's minimum.
+    pub lower_bound: f64,
+    /// The proven `lambda_min(S) >= mu`.
+    pub verified_min_eigenvalue: f64,
+}
+
+/// The bound `[G3]` at phases `x`: the shifts `sigma` tried from the one whose deficit
+/// `n sigma` is a quarter of `allowed_gap`, then at Lanczos's estimate of `-lambda_min(S)`,
+/// then doubled (at most 40 factorisations); `None` when no factorisation succeeds or the
+/// factor is over `max_values`.
+pub fn verify_planar(
+    problem: &GravityProblem,
+    form: &PlanarForm,
+    x: &[(f64, f64)],
+    allowed_gap: f64,
+    max_values: usize,
+) -> Result<Option<PlanarBound>> {
+    let (s, sum_s, abs_s) = form.certificate_matrix(x);
+    let terms = 30 * form.max_degree + 16;
+    let Ok(mut ch) = ShiftedCholesky::new_within(s, terms, max_values)? else {
+        return Ok(None);
+    };
+    let floor = 0.25 * allowed_gap / form.n as f64;
+    let graph_defect = data_defect(problem.problem());
+    let mut shift = floor;
+    for attempt in 0..40 {
+        if let Some(f) = ch.factor(shift, 0.1 * floor) {
+            let mu = f.verified_lower_bound();
+            return Ok(Some(PlanarBound {
+                lower_bound: form.bound(graph_defect, sum_s, abs_s, mu),
+                verified_min_eigenvalue: mu,
+            }));
+        }
+        shift = match attempt {
+            // not positive semidefinite at the tolerance: start from Lanczos's estimate
+            0 => shift.max(-smallest_eigenvalue(&ch, form.q_norm) * (1.0 + 1e-6)),
+            _ => 2.0 * shift,
+        };
+    }
+    Ok(None)
+}
+
+/// An estimate (never a bound) of `lambda_min(S)`, less its Ritz residual.
+fn smallest_eigenvalue(ch: &ShiftedCholesky, q_norm: f64) -> f64 {
+    let s = ch.matrix();
+    let e = lanczos_extreme(
+        s.nrows(),
+        |v, y| sparse_matvec(s, v, y),
+        Extreme::Smallest,
+        2.0 * q_norm.max(f64::MIN_POSITIVE),
+        &LanczosSettings::default(),
+        None,
+    );
+    e.value - e.residual
+}
+
+/// The planar dual certificate as a rung (full gravity only; modes `auto` and `dual`).
+#[derive(Default)]
+pub(crate) struct PlanarRung {
+    done: bool,
+}
+
+impl<'a> Rung<GravityState<'a>> for PlanarRung {
+    fn proof(&self) -> Proof {
+        Proof::GravityDual
+    }
+
+    fn plan(&mut self, cx: &GravityState<'a>) -> Result<Plan> {
+        if self.done {
+            return Ok(Plan::Done);
+        }
+        if !cx.problem.priors().is_full() {
+            let reason = "some images have no gravity prior (the mixed problem has no SO(2) form)";
+            return Ok(Plan::Refuse(
+                Refusal::NotApplicable {
+                    reason: reason.into(),
+                },
+                None,
+            ));
+        }
+        if !matches!(cx.settings.mode, CertifyMode::Auto | CertifyMode::Dual) {
+            let reason = format!(
+                "the gravity problem is certified by its SO(2) dual certificate (modes auto \
+                 and dual), not {}",
+                cx.settings.mode.name()
+            );
+            return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
+        }
+        // a sparse factorisation of 2n x 2n: about what the multiple problem's dual costs
+        let n = cx.problem.problem().num_rotations() as f64;
+        let m = cx.problem.problem().num_edges() as f64;
+        Ok(Plan::Run(Prediction::new(2e-7 * (n + m), 400.0 * (n + m))))
+    }
+
+    fn attempt(&mut self, cx: &mut GravityState<'a>) -> Result<Found> {
+        self.done = true;
+        let Some(form) = PlanarForm::new(cx.problem) else {
+            return Ok(Found::failed("some image has no gravity prior"));
+        };
+        let standard = cx.problem.to_standard(cx.rotations);
+        let x = PlanarForm::phases(cx.problem, &standard);
+        let dim = 2 * cx.problem.problem().num_rotations();
+        let max_values = cx.settings.budget.max_factor_values(dim);
+        Ok(
+            match verify_planar(cx.problem, &form, &x, cx.allowed_gap, max_values)? {
+                Some(b) => {
+                    let note = format!(
+                        "SO(2) multipliers at the estimate verified, lambda_min(S) >= {:.3e}",
+                        b.verified_min_eigenvalue
+                    );
+                    let lb = cx.offer(
+                        b.lower_bound,
+                        Proof::GravityDual,
+                        Some(b.verified_min_eigenvalue),
+                        &note,
+                    );
+                    Found::proved(lb, cx.certifies(lb), note)
+                }
+                None => Found::failed(
+                    "no shifted factorisation of the SO(2) certificate matrix succeeded",
+                ),
+            },
+        )
+    }
+}

@@ -1,0 +1,93 @@
+//! The gravity problem's constraints dropped (`paper-notes/gravity.md`, `[G7]`): every
+//! feasible point of the gravity problem is one of the view graph alone, so a proven lower
+//! bound on the view graph's chordal minimum bounds the gravity problem's. The view graph is
+//! solved from the estimate (the unconstrained chordal Newton-LM) and certified by the view
+//! graph's own certification (the entry point hands it in: `certify_multiple`) within the time
+//! left. The only bound of the mixed problem; for full gravity, the fallback of the SO(2)
+//! certificate.
+
+use super::state::GravityState;
+use crate::certify::certificate::Certificate;
+use crate::certify::log::Prediction;
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, Plan, Rung};
+use crate::certify::settings::CertifySettings;
+use crate::error::Result;
+use crate::multiple::chordal::solve_chordal;
+use crate::multiple::{MultipleProblem, MultipleSettings, fix_gauge};
+use crate::so3::Rotation;
+
+/// The view graph's certification: its certificate of a local minimum.
+pub(crate) type GraphCertifier =
+    fn(&MultipleProblem, &[Rotation], &CertifySettings) -> Result<Certificate>;
+
+/// The relaxed bound as a rung: run first for the mixed problem, as the fallback for full
+/// gravity.
+pub(crate) struct RelaxedRung {
+    done: bool,
+    certify: GraphCertifier,
+}
+
+impl RelaxedRung {
+    /// The rung, certifying the view graph with `certify`.
+    pub(crate) fn new(certify: GraphCertifier) -> Self {
+        RelaxedRung {
+            done: false,
+            certify,
+        }
+    }
+}
+
+impl<'a> Rung<GravityState<'a>> for RelaxedRung {
+    fn proof(&self) -> Proof {
+        Proof::GravityRelaxed
+    }
+
+    fn plan(&mut self, cx: &GravityState<'a>) -> Result<Plan> {
+        if self.done {
+            return Ok(Plan::Done);
+        }
+        // a local solve and the view graph's certification: a few sparse factorisations
+        let g = cx.problem.problem();
+        let size = (g.num_rotations() + g.num_edges()) as f64;
+        let predicted = Prediction::new(2e-6 * size, 2000.0 * size);
+        Ok(if cx.problem.priors().is_full() {
+            Plan::Fallback(predicted)
+        } else {
+            Plan::Run(predicted)
+        })
+    }
+
+    fn attempt(&mut self, cx: &mut GravityState<'a>) -> Result<Found> {
+        self.done = true;
+        let graph = cx.problem.problem();
+        let mut free = solve_chordal(
+            graph,
+            cx.rotations.to_vec(),
+            &MultipleSettings::default(),
+            None,
+        )?;
+        fix_gauge(&mut free.rotations);
+        let mut settings = cx.settings.clone();
+        settings.budget.max_seconds = cx.deadline.left().map(|l| l.max(0.0));
+        let inner = (self.certify)(graph, &free.rotations, &settings)?;
+        let Some(lb) = inner.lower_bound else {
+            return Ok(Found::failed(format!(
+                "the view graph alone has no bound: {}",
+                inner.explanation
+            )));
+        };
+        let note = format!(
+            "the view graph without its priors: local minimum {:.9e} ({}), its bound by {}",
+            free.cost, inner.verdict, inner.method
+        );
+        let lb = cx.offer(
+            lb,
+            Proof::GravityRelaxed,
+            inner.verified_min_eigenvalue,
+            &note,
+        );
+        cx.relaxed_method = Some(inner.method);
+        Ok(Found::proved(lb, cx.certifies(lb), note))
+    }
+}

@@ -1,0 +1,481 @@
+//! Gravity priors (contract section 5, "Rigs and gravity"; `paper-notes/gravity.md`,
+//! `[G1]`-`[G7]`): per image `i`, the unit vector `g_i`, the world's down direction expressed in
+//! camera `i`'s frame, so that **`R_i g_world = g_i`** (`g_world = (0, 0, 1)` unless the priors
+//! state another, [`GravityPriors::with_world_down`]). With a prior, `R_i` keeps one degree of
+//! freedom: a turn about `g_world` (`R_i = F_i Rz(theta_i) W^T`, `[G1]`).
+//!
+//! - Data: [`GravityPriors`] (all images, or some: the mixed problem), and the problem
+//!   [`GravityProblem`]: a view graph with its priors.
+//! - Local solver: [`solve_gravity`] (the unconstrained chordal solve, aligned to the priors and
+//!   projected onto them, then the chordal Newton-LM with the tilt of each image with a prior
+//!   held, `[G4]`).
+//! - Conventions: [`GravityProblem::check_conventions`] compares each edge's `R_ij g_i` with
+//!   `g_j` (no estimate needed), and names a better-fitting axis convention when there is one.
+//! - Certificate: [`crate::certify::certify_gravity`]; pipeline:
+//!   [`crate::pipeline::average_with_gravity`].
+//!
+//! ```
+//! use rotavg::multiple::gravity::{GravityProblem, solve_gravity};
+//! use rotavg::multiple::synthetic::SyntheticGraph;
+//! use rotavg::multiple::MultipleSettings;
+//! let (graph, truth) = SyntheticGraph { num_rotations: 30, num_edges: 90, noise_sigma: 0.02, ..Default::default() }.generate();
+//! // exact gravity: the world's down direction seen by each camera
+//! let gravity = GravityProblem::from_truth(graph, &truth)?;
+//! let sol = solve_gravity(&gravity, &MultipleSettings::default())?;
+//! assert!(sol.report.termination.is_converged());
+//! assert!(gravity.max_prior_violation_deg(&sol.rotations) < 1e-9);
+//! # Ok::<(), rotavg::Error>(())
+//! ```
+
+use super::chordal::solve_chordal_tilt_fixed;
+use super::problem::MultipleProblem;
+use super::solve::{MultipleSettings, MultipleSolution, solve_multiple};
+use crate::error::{Error, Result};
+use crate::objective::Objective;
+use crate::so3::Rotation;
+use nalgebra::{Matrix3, Unit, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// The smallest norm a gravity vector may have before it is normalised (a zero vector has no
+/// direction).
+pub const MIN_GRAVITY_NORM: f64 = 1e-9;
+
+/// Per-image gravity directions: `directions[i]` is `g_i` (normalised), the world's down
+/// direction in camera `i`'s frame, or `None` for an image without a prior. Invariant: at least
+/// one prior, every direction a finite unit vector, `world_down` too.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawGravityPriors")]
+pub struct GravityPriors {
+    directions: Vec<Option<[f64; 3]>>,
+    world_down: [f64; 3],
+}
+
+/// Unvalidated serde form of [`GravityPriors`] (`world_down` optional, default `(0, 0, 1)`).
+#[derive(Deserialize)]
+struct RawGravityPriors {
+    directions: Vec<Option<[f64; 3]>>,
+    #[serde(default)]
+    world_down: Option<[f64; 3]>,
+}
+
+impl TryFrom<RawGravityPriors> for GravityPriors {
+    type Error = Error;
+    fn try_from(raw: RawGravityPriors) -> Result<Self> {
+        let p = GravityPriors::new(raw.directions)?;
+        match raw.world_down {
+            Some(w) => p.with_world_down(w),
+            None => Ok(p),
+        }
+    }
+}
+
+/// `v / |v|`, or an error naming `item` when `v` is not finite or (nearly) zero.
+fn unit(v: [f64; 3], item: &str) -> Result<[f64; 3]> {
+    let v = Vector3::from(v);
+    if !v.iter().all(|x| x.is_finite()) {
+        return Err(Error::NonFinite { item: item.into() });
+    }
+    let norm = v.norm();
+    if norm < MIN_GRAVITY_NORM {
+        return Err(Error::Degenerate {
+            reason: format!(
+                "{item} has norm {norm:.3e}: a gravity direction needs a nonzero vector"
+            ),
+        });
+    }
+    Ok((v / norm).into())
+}
+
+impl GravityPriors {
+    /// Validate and normalise: each known direction finite and nonzero (any length: an
+    /// accelerometer reading in m/s^2 is fine). Errors: no prior at all, a non-finite or zero
+    /// vector.
+    ///
+    /// ```
+    /// use rotavg::multiple::gravity::GravityPriors;
+    /// let p = GravityPriors::new(vec![Some([0.0, 9.81, 0.0]), None])?;
+    /// assert_eq!(p.direction(0).unwrap(), nalgebra::Vector3::new(0.0, 1.0, 0.0));
+    /// assert!(p.direction(1).is_none() && !p.is_full());
+    /// assert!(GravityPriors::new(vec![Some([0.0, 0.0, 0.0])]).is_err());
+    /// assert!(GravityPriors::new(vec![None]).is_err());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn new(directions: Vec<Option<[f64; 3]>>) -> Result<Self> {
+        let directions = directions
+            .into_iter()
+            .enumerate()
+            .map(|(i, d)| {
+                d.map(|v| unit(v, &format!("gravity of image {i}")))
+                    .transpose()
+            })
+            .collect::<Result<Vec<_>>>()?;
+        if directions.iter().all(Option::is_none) {
+            return Err(Error::Empty {
+                what: "the gravity priors (no image has one)".into(),
+            });
+        }
+        Ok(GravityPriors {
+            directions,
+            world_down: [0.0, 0.0, 1.0],
+        })
+    }
+
+    /// The same priors with another world down direction (`R_i world_down = g_i`).
+    pub fn with_world_down(mut self, world_down: [f64; 3]) -> Result<Self> {
+        self.world_down = unit(world_down, "the world's down direction")?;
+        Ok(self)
+    }
+
+    /// Number of images (with or without a prior).
+    pub fn len(&self) -> usize {
+        self.directions.len()
+    }
+
+    /// Never true (the priors hold at least one direction); for clippy's `len` rule.
+    pub fn is_empty(&self) -> bool {
+        self.directions.is_empty()
+    }
+
+    /// Images with a prior.
+    pub fn num_known(&self) -> usize {
+        self.directions.iter().filter(|d| d.is_some()).count()
+    }
+
+    /// Every image has a prior (the full-gravity problem, `[G2]`).
+    pub fn is_full(&self) -> bool {
+        self.directions.iter().all(Option::is_some)
+    }
+
+    /// `g_i`, the unit down direction in camera `i`'s frame, if image `i` has a prior.
+    pub fn direction(&self, i: usize) -> Option<Vector3<f64>> {
+        self.directions.get(i).copied().flatten().map(Vector3::from)
+    }
+
+    /// The world's down direction (unit).
+    pub fn world_down(&self) -> Vector3<f64> {
+        Vector3::from(self.world_down)
+    }
+
+    /// `W`, the smallest rotation with `W e_3 = world_down` (`[G1]`): `R_i W` satisfies the
+    /// standard convention `(R_i W) e_3 = g_i`.
+    pub fn world_frame(&self) -> Rotation {
+        frame_of(&self.world_down())
+    }
+
+    /// These priors with every direction replaced by `t g_i` (a convention being tested).
+    fn transformed(&self, t: &Matrix3<f64>) -> Vec<Option<Vector3<f64>>> {
+        (0..self.len())
+            .map(|i| self.direction(i).map(|g| t * g))
+            .collect()
+    }
+}
+
+/// A rotation `F` with `F e_3 = g` (unit `g`), accurate to rounding for every `g`: the
+/// smallest one, `I + hat(v) + hat(v)^2 / (1 + c)` with `v = e_3 x g`, `c = g_z`, when
+/// `g_z > -1/2`; otherwise the smallest rotation from `-e_3` to `g` after a half turn about
+/// `e_1` (the smallest rotation's formula loses half the digits as `g -> -e_3`).
+///
+/// ```
+/// use rotavg::multiple::gravity::frame_of;
+/// use nalgebra::Vector3;
+/// for g in [Vector3::new(0.3, -0.2, 0.9), Vector3::new(1e-9, 0.0, -1.0), Vector3::new(0.0, 1.0, 0.0)] {
+///     let g = g.normalize();
+///     let f = frame_of(&g);
+///     assert!((f * Vector3::z() - g).norm() < 1e-15);
+///     assert!((f.matrix().transpose() * f.matrix() - nalgebra::Matrix3::identity()).norm() < 1e-15);
+/// }
+/// ```
+pub fn frame_of(g: &Vector3<f64>) -> Rotation {
+    let smallest = |a: Vector3<f64>| {
+        let v = a.cross(g);
+        let h = crate::so3::hat(&v);
+        Matrix3::identity() + h + h * h / (1.0 + a.dot(g))
+    };
+    let m = if g.z > -0.5 {
+        smallest(Vector3::z())
+    } else {
+        smallest(-Vector3::z()) * Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0))
+    };
+    Rotation::from_matrix_unchecked(m)
+}
+
+/// `Rz(theta)`, the turn by `theta` about `e_3`.
+fn rz(theta: f64) -> Rotation {
+    Rotation::from_axis_angle(&Unit::new_unchecked(Vector3::z()), theta)
+}
+
+/// A view graph with gravity priors (one per node, some may be missing), validated together.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GravityProblem {
+    problem: MultipleProblem,
+    priors: GravityPriors,
+}
+
+/// How well the priors agree with the relative rotations, without an estimate (`[G6]`): for
+/// each edge `(i, j)` with both priors, the angle between `R_ij g_i` and `g_j` (zero for exact
+/// data, whatever the absolute rotations).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GravityCheck {
+    /// Edges with a prior at both ends.
+    pub edges_checked: usize,
+    /// Median of those angles as given, degrees.
+    pub median_deg: f64,
+    /// 90th percentile, degrees.
+    pub p90_deg: f64,
+    /// A convention that fits far better (median below a quarter of the given one, and the
+    /// given one above 2 degrees), with its median: the likely mistake, in words.
+    pub better_convention: Option<(String, f64)>,
+    /// Fraction of images whose `g_i` points up the image (`-y` in OpenCV / COLMAP camera
+    /// axes, x right, y down, z forward): above one half, the vectors are probably up vectors.
+    pub pointing_up_fraction: f64,
+}
+
+/// The axis conventions [`GravityProblem::check_conventions`] tries, with what each means.
+fn conventions() -> [(&'static str, Matrix3<f64>); 4] {
+    [
+        (
+            "y and z negated (OpenGL camera axes: y up, z backward)",
+            Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0)),
+        ),
+        (
+            "x and z negated",
+            Matrix3::from_diagonal(&Vector3::new(-1.0, 1.0, -1.0)),
+        ),
+        (
+            "x and y negated (sensor turned upside down in the image plane)",
+            Matrix3::from_diagonal(&Vector3::new(-1.0, -1.0, 1.0)),
+        ),
+        (
+            "x and y swapped, z negated (device axes of a phone in landscape)",
+            Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0),
+        ),
+    ]
+}
+
+impl GravityProblem {
+    /// Pair a view graph with its priors. Errors: a count that differs from the graph's nodes.
+    pub fn new(problem: MultipleProblem, priors: GravityPriors) -> Result<Self> {
+        if priors.len() != problem.num_rotations() {
+            return Err(Error::InvalidSettings {
+                name: "gravity".into(),
+                reason: format!(
+                    "{} gravity entries for a view graph of {} images (one entry per image, \
+                     null where an image has none)",
+                    priors.len(),
+                    problem.num_rotations()
+                ),
+            });
+        }
+        Ok(GravityProblem { problem, priors })
+    }
+
+    /// Exact priors from absolute rotations (`g_i = R_i e_3`): planted test cases.
+    pub fn from_truth(problem: MultipleProblem, truth: &[Rotation]) -> Result<Self> {
+        let dirs = truth
+            .iter()
+            .map(|r| Some((r * Vector3::z()).into()))
+            .collect();
+        GravityProblem::new(problem, GravityPriors::new(dirs)?)
+    }
+
+    /// The view graph.
+    pub fn problem(&self) -> &MultipleProblem {
+        &self.problem
+    }
+
+    /// The priors.
+    pub fn priors(&self) -> &GravityPriors {
+        &self.priors
+    }
+
+    /// `F_i` with `F_i e_3 = g_i` ([`frame_of`]), when image `i` has a prior.
+    pub fn frame(&self, i: usize) -> Option<Rotation> {
+        self.priors.direction(i).map(|g| frame_of(&g))
+    }
+
+    /// Which nodes have a prior (their tilt is fixed, `[G4]`).
+    pub fn tilt_fixed(&self) -> Vec<bool> {
+        (0..self.priors.len())
+            .map(|i| self.priors.direction(i).is_some())
+            .collect()
+    }
+
+    /// The largest angle between `R_i world_down` and `g_i` over the images with a prior,
+    /// degrees (0 for a feasible estimate, up to rounding).
+    pub fn max_prior_violation_deg(&self, rotations: &[Rotation]) -> f64 {
+        let w = self.priors.world_down();
+        rotations
+            .iter()
+            .enumerate()
+            .filter_map(|(i, r)| self.priors.direction(i).map(|g| (r * w).angle(&g)))
+            .fold(0.0, f64::max)
+            .to_degrees()
+    }
+
+    /// In the standard convention (`world_down = e_3`): `R_i W`.
+    pub(crate) fn to_standard(&self, rotations: &[Rotation]) -> Vec<Rotation> {
+        let w = self.priors.world_frame();
+        rotations.iter().map(|r| r * w).collect()
+    }
+
+    /// Back from the standard convention: `R_i W^T`.
+    pub(crate) fn out_of_standard(&self, rotations: &[Rotation]) -> Vec<Rotation> {
+        let w = self.priors.world_frame().inverse();
+        rotations.iter().map(|r| r * w).collect()
+    }
+
+    /// Standard convention: the rotation about `e_3` applied on the right (the gravity
+    /// problem's gauge) that best aligns `R_i^T g_i` with `e_3` for an unconstrained estimate
+    /// (defined up to `R_i -> R_i G`), then each constrained `R_i` projected onto its prior:
+    /// the nearest `F_i Rz(theta)` (`[G5]`).
+    pub(crate) fn aligned_and_projected(&self, rotations: &[Rotation]) -> Vec<Rotation> {
+        let mean: Vector3<f64> = rotations
+            .iter()
+            .enumerate()
+            .filter_map(|(i, r)| self.priors.direction(i).map(|g| r.inverse() * g))
+            .sum();
+        let align = frame_of(&mean.try_normalize(0.0).unwrap_or(Vector3::z()));
+        rotations
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let r = r * align;
+                match self.frame(i) {
+                    Some(f) => f * rz(yaw(&(f.inverse() * r))),
+                    None => r,
+                }
+            })
+            .collect()
+    }
+
+    /// The edges' agreement with the priors and the conventions that would fit better
+    /// (`[G6]`); `None` when no edge has a prior at both ends.
+    ///
+    /// ```
+    /// use rotavg::multiple::gravity::GravityProblem;
+    /// use rotavg::multiple::synthetic::SyntheticGraph;
+    /// use rotavg::so3::exp;
+    /// let (graph, truth) = SyntheticGraph { num_rotations: 20, num_edges: 60, noise_sigma: 0.0, ..Default::default() }.generate();
+    /// let ok = GravityProblem::from_truth(graph.clone(), &truth)?.check_conventions().unwrap();
+    /// assert!(ok.median_deg < 1e-9 && ok.better_convention.is_none());
+    /// // the same vectors written with OpenGL camera axes (y up, z backward)
+    /// let flip = nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, -1.0, -1.0));
+    /// let gl: Vec<_> = truth.iter().map(|r| Some((flip * (r * nalgebra::Vector3::z())).into())).collect();
+    /// let p = GravityProblem::new(graph, rotavg::multiple::gravity::GravityPriors::new(gl)?)?;
+    /// let bad = p.check_conventions().unwrap();
+    /// assert!(bad.median_deg > 10.0);
+    /// assert!(bad.better_convention.unwrap().0.starts_with("y and z negated"));
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn check_conventions(&self) -> Option<GravityCheck> {
+        let given = self.priors.transformed(&Matrix3::identity());
+        let (median, p90, count) = edge_disagreement(&self.problem, &given)?;
+        let better = conventions()
+            .into_iter()
+            .map(|(name, t)| {
+                let (m, _, _) = edge_disagreement(&self.problem, &self.priors.transformed(&t))
+                    .unwrap_or((f64::INFINITY, 0.0, 0));
+                (name.to_string(), m)
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .filter(|(_, m)| median > 2.0 && *m < 0.25 * median);
+        let up = given.iter().flatten().filter(|g| g.y < -0.5).count();
+        Some(GravityCheck {
+            edges_checked: count,
+            median_deg: median,
+            p90_deg: p90,
+            better_convention: better,
+            pointing_up_fraction: up as f64 / self.priors.num_known() as f64,
+        })
+    }
+}
+
+/// Median and 90th percentile (degrees) of the angles between `R_ij g_i` and `g_j` over the
+/// edges with both directions, and their count; `None` when there is no such edge.
+fn edge_disagreement(
+    problem: &MultipleProblem,
+    dirs: &[Option<Vector3<f64>>],
+) -> Option<(f64, f64, usize)> {
+    let mut angles: Vec<f64> = problem
+        .edges()
+        .iter()
+        .filter_map(|e| match (dirs[e.i], dirs[e.j]) {
+            (Some(gi), Some(gj)) => Some((e.rotation * gi).angle(&gj).to_degrees()),
+            _ => None,
+        })
+        .collect();
+    if angles.is_empty() {
+        return None;
+    }
+    angles.sort_by(f64::total_cmp);
+    let at = |q: f64| angles[((angles.len() - 1) as f64 * q).round() as usize];
+    Some((at(0.5), at(0.9), angles.len()))
+}
+
+/// The angle `theta` of the turn about `e_3` nearest to `m` (`argmax tr(Rz(theta)^T m)`).
+fn yaw(m: &Rotation) -> f64 {
+    let m = m.matrix();
+    (m[(1, 0)] - m[(0, 1)]).atan2(m[(0, 0)] + m[(1, 1)])
+}
+
+/// The gravity problem's gauge (standard convention): the turn about `e_3`, applied on the
+/// right of every rotation, that brings `R_0` nearest to `I` (for a node 0 with a prior:
+/// `R_0 = F_0`, the smallest rotation with `R_0 e_3 = g_0`).
+fn fix_gravity_gauge(rotations: &mut [Rotation]) {
+    let Some(r0) = rotations.first() else { return };
+    let m = r0.matrix();
+    let alpha = (m[(0, 1)] - m[(1, 0)]).atan2(m[(0, 0)] + m[(1, 1)]);
+    let g = rz(alpha);
+    for r in rotations.iter_mut() {
+        *r *= g;
+    }
+}
+
+/// Chordal L2 averaging with gravity as a hard constraint (`[G4]`, `[G5]`): the unconstrained
+/// chordal solve ([`solve_multiple`] with `settings`), aligned to the priors and projected
+/// onto them, then the chordal Newton-LM in which every image with a prior only turns about
+/// its gravity axis. Images without a prior (the mixed problem) move freely. The cost is the
+/// view graph's chordal L2 cost (`[M1]`; with its information matrices when it has them) at the
+/// returned estimate, which satisfies every prior to rounding (`R_i g_world = g_i`). Gauge: the
+/// turn about `g_world` that brings `R_0` nearest to `I`. Errors: a disconnected graph, a
+/// robust or geodesic objective (least squares only, for now).
+pub fn solve_gravity(
+    problem: &GravityProblem,
+    settings: &MultipleSettings,
+) -> Result<MultipleSolution> {
+    let graph = &problem.problem;
+    if !graph.objective().is_chordal_l2() || settings.robust_on_outliers.is_some() {
+        return Err(Error::InvalidSettings {
+            name: "loss".into(),
+            reason: "gravity priors are solved with the chordal L2 loss (least squares) only"
+                .into(),
+        });
+    }
+    graph.require_connected()?;
+    let start = std::time::Instant::now();
+    let free = solve_multiple(graph, settings)?;
+    let init = problem.aligned_and_projected(&problem.to_standard(&free.rotations));
+    // node 0 is grounded by the Newton-LM: it must be a node with a prior (its one degree of
+    // freedom is the gauge); relabel so
+    let fixed = problem.tilt_fixed();
+    let ground = fixed.iter().position(|&f| f).unwrap_or(0);
+    let mut new_of_old: Vec<usize> = (0..fixed.len()).collect();
+    new_of_old.swap(0, ground);
+    let relabelled = graph.relabelled(&new_of_old);
+    let (mut init, mut fixed) = (init, fixed);
+    init.swap(0, ground);
+    fixed.swap(0, ground);
+    let mut sol = solve_chordal_tilt_fixed(&relabelled, init, settings, None, Some(&fixed))?;
+    sol.rotations.swap(0, ground);
+    fix_gravity_gauge(&mut sol.rotations);
+    sol.rotations = problem.out_of_standard(&sol.rotations);
+    // the reported cost is the file's, at exactly the returned rotations
+    sol.chordal_cost = graph.chordal_cost(&sol.rotations);
+    sol.cost = sol.chordal_cost;
+    sol.objective = Objective::CHORDAL_L2;
+    sol.init_cost = free.cost;
+    sol.report.iterations += free.report.iterations;
+    sol.report.name = "riemannian-newton-lm (gravity: tilt held)".into();
+    sol.report.seconds = start.elapsed().as_secs_f64();
+    Ok(sol)
+}
