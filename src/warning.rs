@@ -19,6 +19,10 @@
 //! | `name_not_format` | a text view graph named like a COLMAP database (`*.db`): read by its content | |
 //! | `duplicates_disagree` | view graphs: pairs measured more than once whose measurements disagree by more than 5 deg | pairs |
 //! | `convention_suspected` | `certify`: the estimate transposed costs less than a quarter of the estimate as given | |
+//! | `gravity_convention` | `--gravity`: the priors fit the relative rotations far better in another axis convention (named) | |
+//! | `gravity_inconsistent` | `--gravity`: the priors disagree with the relative rotations by more than 5 deg in median | |
+//! | `gravity_points_up` | `--gravity`: most priors point up the image (`-y` in OpenCV / COLMAP axes) | |
+//! | `gravity_unmatched` | `--gravity`: entries whose key is no node of the graph (not used) | entries |
 
 use serde::{Deserialize, Serialize};
 use std::fmt;

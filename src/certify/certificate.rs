@@ -46,6 +46,9 @@ pub enum CertifiedProblemKind {
     /// information matrices when it has them). Named in a report's verdict; never set on a
     /// certificate (absent there means this).
     ChordalL2,
+    /// Chordal L2 multiple rotation averaging on every edge with the gravity priors held as
+    /// constraints (`R_i world_down = g_i` for each image with a prior, `paper-notes/gravity.md`).
+    ChordalL2Gravity,
 }
 
 /// The problem a certificate is about, with its size against the whole input's.
@@ -74,6 +77,11 @@ impl fmt::Display for CertifiedProblem {
             CertifiedProblemKind::ChordalL2 => write!(
                 f,
                 "the chordal L2 problem on all {} edges ({} nodes)",
+                self.num_edges, self.num_nodes
+            ),
+            CertifiedProblemKind::ChordalL2Gravity => write!(
+                f,
+                "the chordal L2 problem on all {} edges ({} nodes) with the gravity priors held",
                 self.num_edges, self.num_nodes
             ),
         }

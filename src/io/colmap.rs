@@ -254,7 +254,7 @@ pub fn read_colmap_database(path: &Path, options: &ReadOptions) -> Result<Loaded
 }
 
 #[cfg(feature = "colmap")]
-mod database;
+pub(crate) mod database;
 
 /// One image of a COLMAP sparse model (`images.txt` / `images.bin`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -43,6 +43,7 @@
 pub mod colmap;
 pub mod detect;
 pub mod g2o;
+pub mod gravity;
 pub mod handeye;
 pub mod input;
 pub mod json;

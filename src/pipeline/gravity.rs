@@ -4,12 +4,17 @@
 //! the relative rotations ([`GravityProblem::check_conventions`]) is part of the report.
 
 use super::{AverageSettings, Averaged, PipelineProblem, average};
-use crate::certify::{Certification, CertifyMode, CertifySettings, certify_gravity};
+use crate::certify::{
+    Certification, CertifiedProblem, CertifiedProblemKind, CertifyMode, CertifySettings,
+    certify_gravity,
+};
 use crate::error::Result;
 use crate::multiple::gravity::{GravityCheck, GravityProblem, solve_gravity};
 use crate::multiple::robust::suspected_outliers;
 use crate::multiple::{MultipleSettings, MultipleSolution};
+use crate::warning::Warning;
 use serde::{Deserialize, Serialize};
+use std::fmt;
 
 impl PipelineProblem for GravityProblem {
     type Settings = MultipleSettings;
@@ -57,8 +62,9 @@ pub struct GravityDetails {
 /// ([`solve_gravity`]) and the certificate ([`certify_gravity`]: SO(2) dual certificate for
 /// full gravity, the view graph's bound otherwise). Least squares only: a robust loss in
 /// `settings.solve` is an error, and the rule `auto` (`robust_on_outliers`) keeps least
-/// squares, with the outlier diagnosis in `details.outliers`. Returns the pipeline result and
-/// the priors' details.
+/// squares, with the outlier diagnosis in `details.outliers`. The priors and their agreement
+/// with the view graph are in `details.gravity`; the certificate names its problem
+/// ([`CertifiedProblemKind::ChordalL2Gravity`]).
 ///
 /// ```
 /// use rotavg::pipeline::{average_with_gravity, AverageSettings};
@@ -66,26 +72,118 @@ pub struct GravityDetails {
 /// use rotavg::multiple::synthetic::SyntheticGraph;
 /// let (graph, truth) = SyntheticGraph { num_rotations: 30, num_edges: 90, noise_sigma: 0.05, ..Default::default() }.generate();
 /// let p = GravityProblem::from_truth(graph, &truth)?;
-/// let (est, details) = average_with_gravity(&p, &AverageSettings::default())?;
+/// let est = average_with_gravity(&p, &AverageSettings::default())?;
+/// assert_eq!(est.details.gravity.as_ref().unwrap().kind, "full");
 /// assert!(est.certificate.unwrap().is_certified());
-/// assert_eq!(details.kind, "full");
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn average_with_gravity(
     problem: &GravityProblem,
     settings: &AverageSettings<MultipleSettings>,
-) -> Result<(Averaged<MultipleSolution>, GravityDetails)> {
+) -> Result<Averaged<MultipleSolution>> {
     let mut settings = settings.clone();
     settings.solve.robust_on_outliers = None;
     let mut out = average(problem, &settings)?;
     out.details.outliers = suspected_outliers(problem.problem(), &out.solution.rotations);
-    let priors = problem.priors();
-    let details = GravityDetails {
-        num_with_prior: priors.num_known(),
-        num_images: priors.len(),
-        kind: if priors.is_full() { "full" } else { "mixed" }.into(),
-        world_down: priors.world_down().into(),
-        check: problem.check_conventions(),
-    };
-    Ok((out, details))
+    let graph = problem.problem();
+    out.certificate = out.certificate.map(|c| {
+        c.for_problem(CertifiedProblem {
+            kind: CertifiedProblemKind::ChordalL2Gravity,
+            num_nodes: graph.num_rotations(),
+            total_nodes: graph.num_rotations(),
+            num_edges: graph.num_edges(),
+            total_edges: graph.num_edges(),
+        })
+    });
+    out.details.gravity = Some(GravityDetails::of(problem));
+    Ok(out)
+}
+
+impl GravityDetails {
+    /// The priors of `problem` and their check (`[G6]`).
+    pub fn of(problem: &GravityProblem) -> Self {
+        let priors = problem.priors();
+        GravityDetails {
+            num_with_prior: priors.num_known(),
+            num_images: priors.len(),
+            kind: if priors.is_full() { "full" } else { "mixed" }.into(),
+            world_down: priors.world_down().into(),
+            check: problem.check_conventions(),
+        }
+    }
+
+    /// What the priors' check says that a user must hear (`[G6]`): a convention that fits far
+    /// better (`gravity_convention`), priors that disagree with the relative rotations by more
+    /// than 5 degrees in median (`gravity_inconsistent`), most priors pointing up the image
+    /// (`gravity_points_up`).
+    pub fn warnings(&self) -> Vec<Warning> {
+        let Some(c) = &self.check else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        let disagree = format!(
+            "the gravity priors disagree with the relative rotations: R_ij g_i and g_j are a \
+             median {:.2} degrees apart (90th percentile {:.2}) over {} edges",
+            c.median_deg, c.p90_deg, c.edges_checked
+        );
+        match &c.better_convention {
+            Some((name, median)) => out.push(Warning::new(
+                "gravity_convention",
+                format!(
+                    "{disagree}; with {name} they agree to {median:.2} degrees: were they \
+                     written in that convention? (rotavg reads g_i in the camera frame of \
+                     R_ij R_i = R_j, pointing down)"
+                ),
+            )),
+            None if c.median_deg > 5.0 => out.push(Warning::new(
+                "gravity_inconsistent",
+                format!(
+                    "{disagree}: check that each g_i is the down direction in camera i's frame"
+                ),
+            )),
+            None => {}
+        }
+        if c.pointing_up_fraction > 0.5 {
+            out.push(Warning::new(
+                "gravity_points_up",
+                format!(
+                    "{:.0} % of the priors point up the image (-y in OpenCV / COLMAP camera \
+                     axes): for upright cameras these are up vectors, or vectors written with \
+                     OpenGL camera axes (y up, z backward); negating them (or y and z) gives \
+                     the right frame",
+                    100.0 * c.pointing_up_fraction
+                ),
+            ));
+        }
+        out
+    }
+}
+
+impl fmt::Display for GravityDetails {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let w = self.world_down;
+        write!(
+            f,
+            "gravity: {} of {} images with a prior, held as constraints ({}), world down \
+             ({}, {}, {})",
+            self.num_with_prior,
+            self.num_images,
+            if self.kind == "full" {
+                "full: the SO(2) certificate [G3] applies"
+            } else {
+                "mixed: bounded by the view graph alone [G7]"
+            },
+            w[0],
+            w[1],
+            w[2]
+        )?;
+        if let Some(c) = &self.check {
+            write!(
+                f,
+                "; R_ij g_i vs g_j over {} edges: median {:.3} deg, 90th percentile {:.3} deg",
+                c.edges_checked, c.median_deg, c.p90_deg
+            )?;
+        }
+        Ok(())
+    }
 }

@@ -120,6 +120,10 @@ pub struct PipelineDetails {
     /// which loss the data chose, and why. Omitted from JSON when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub loss_choice: Option<LossChoice>,
+    /// Multiple averaging with gravity priors ([`average_with_gravity`]): the priors and their
+    /// agreement with the view graph. Omitted from JSON when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<GravityDetails>,
 }
 
 /// Write `value` in the form `f` asks for: alternate (`{:#}`, verbose) or not.

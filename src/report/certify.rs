@@ -95,7 +95,7 @@ impl CertifyReport {
         match problem {
             LoadedProblem::Multiple(graph) => {
                 let rotations = estimate.into_rotations()?;
-                Self::certify_graph(given, graph, rotations, settings)
+                Self::certify_graph(given, graph, rotations, None, settings)
             }
             LoadedProblem::Single(p) => {
                 let r = estimate.into_rotation()?;
@@ -121,11 +121,33 @@ impl CertifyReport {
         }
     }
 
-    /// [`Self::certify`] of a view graph's estimate, one rotation per node.
+    /// Certify a view graph's estimate (one rotation per node, never changed) for the chordal
+    /// L2 problem with the gravity `priors` held ([`crate::certify::certify_gravity`]): the
+    /// verdict names that problem, and the priors' check adds its warnings (`[G6]`).
+    pub fn certify_with_gravity(
+        input: &str,
+        graph: &crate::io::detect::LoadedGraph,
+        estimate: LoadedEstimate,
+        priors: crate::multiple::gravity::GravityPriors,
+        settings: &CertifySettings,
+    ) -> Result<Self> {
+        let given = Given {
+            input,
+            file: estimate.name.clone(),
+            warnings: estimate.warnings.clone(),
+        };
+        let rotations = estimate.into_rotations()?;
+        let p = crate::multiple::gravity::GravityProblem::new(graph.problem.clone(), priors)?;
+        Self::certify_graph(given, graph, rotations, Some(&p), settings)
+    }
+
+    /// [`Self::certify`] of a view graph's estimate, one rotation per node (with `gravity`:
+    /// on the gravity problem).
     fn certify_graph(
         given: Given<'_>,
         graph: &crate::io::detect::LoadedGraph,
         rotations: Vec<Rotation>,
+        gravity: Option<&crate::multiple::gravity::GravityProblem>,
         settings: &CertifySettings,
     ) -> Result<Self> {
         let n = graph.problem.num_rotations();
@@ -139,7 +161,13 @@ impl CertifyReport {
                 ),
             ));
         }
-        let c = certify_multiple(&graph.problem, &rotations, settings)?;
+        let (c, gravity_warnings) = match gravity {
+            Some(p) => gravity_certification(p, &rotations, settings)?,
+            None => (
+                certify_multiple(&graph.problem, &rotations, settings)?,
+                Vec::new(),
+            ),
+        };
         let cost = graph.problem.chordal_cost(&rotations);
         let transposed = transposed_cost(&graph.problem, &rotations);
         let m = graph.problem.num_edges();
@@ -158,6 +186,7 @@ impl CertifyReport {
             super::input_warnings(graph),
             std::mem::take(&mut report.warnings),
             convention_suspected(cost, transposed),
+            gravity_warnings,
         ]
         .concat();
         Ok(report)
@@ -239,13 +268,16 @@ impl CertifyReport {
         (self.problem == ProblemKind::Multiple).then_some(VerdictOf {
             verdict: self.certificate.verdict,
             estimate: CertifiedEstimate::Given,
-            problem: CertifiedProblem {
-                kind: CertifiedProblemKind::ChordalL2,
-                num_nodes: self.num_rotations,
-                total_nodes: self.num_rotations,
-                num_edges: self.num_measurements,
-                total_edges: self.num_measurements,
-            },
+            problem: self
+                .certificate
+                .certified_problem
+                .unwrap_or(CertifiedProblem {
+                    kind: CertifiedProblemKind::ChordalL2,
+                    num_nodes: self.num_rotations,
+                    total_nodes: self.num_rotations,
+                    num_edges: self.num_measurements,
+                    total_edges: self.num_measurements,
+                }),
         })
     }
 
@@ -499,4 +531,27 @@ impl fmt::Display for CertifyReport {
         }
         Ok(())
     }
+}
+
+/// The gravity problem's certification of `rotations`, stated as one of that problem, and the
+/// priors' warnings.
+fn gravity_certification(
+    p: &crate::multiple::gravity::GravityProblem,
+    rotations: &[Rotation],
+    settings: &CertifySettings,
+) -> Result<(
+    crate::certify::Certification<crate::multiple::MultipleSolution>,
+    Vec<Warning>,
+)> {
+    let mut c = crate::certify::certify_gravity(p, rotations, settings)?;
+    let g = p.problem();
+    c.certificate = c.certificate.for_problem(crate::certify::CertifiedProblem {
+        kind: crate::certify::CertifiedProblemKind::ChordalL2Gravity,
+        num_nodes: g.num_rotations(),
+        total_nodes: g.num_rotations(),
+        num_edges: g.num_edges(),
+        total_edges: g.num_edges(),
+    });
+    let details = crate::pipeline::GravityDetails::of(p);
+    Ok((c, details.warnings()))
 }

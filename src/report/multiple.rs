@@ -121,6 +121,12 @@ impl MultipleReport {
             _ => None,
         };
         let g = &input.graph;
+        let gravity_warnings = result
+            .details
+            .gravity
+            .as_ref()
+            .map(|d| d.warnings())
+            .unwrap_or_default();
         Ok(MultipleReport {
             result,
             input: input.name.clone(),
@@ -128,7 +134,7 @@ impl MultipleReport {
             read: g.read,
             duplicates: g.duplicates,
             reversed: g.reversed,
-            warnings: super::input_warnings(g),
+            warnings: [super::input_warnings(g), gravity_warnings].concat(),
             run_warnings: Vec::new(),
             node_ids: g.node_ids.clone(),
             node_names: g.node_names.clone(),
@@ -382,6 +388,9 @@ impl MultipleReport {
         }
         if let Some(choice) = &self.result.details.loss_choice {
             write!(f, "\n{choice}")?;
+        }
+        if let Some(g) = &self.result.details.gravity {
+            write!(f, "\n{g}")?;
         }
         if let Some(s) = &self.information {
             write!(f, "\n{s}")?;

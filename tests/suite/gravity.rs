@@ -141,7 +141,7 @@ fn solve_and_certificate_match_brute_force_on_tiny_graphs() {
         let (graph, g) = tiny(n, seed);
         let fstar = brute_force(&graph, &g, if n == 3 { 720 } else { 120 });
         let p = gravity_problem(graph.clone(), &g);
-        let (est, _) = average_with_gravity(&p, &AverageSettings::default()).unwrap();
+        let est = average_with_gravity(&p, &AverageSettings::default()).unwrap();
         let c = est.certificate.unwrap();
         let lb = c.lower_bound.unwrap();
         let scale = fstar.abs().max(1e-12);
@@ -181,7 +181,8 @@ fn planted_truth_is_found_and_certified() {
     }
     .generate();
     let p = GravityProblem::from_truth(graph, &truth).unwrap();
-    let (est, details) = average_with_gravity(&p, &AverageSettings::default()).unwrap();
+    let est = average_with_gravity(&p, &AverageSettings::default()).unwrap();
+    let details = est.details.gravity.clone().unwrap();
     let c = est.certificate.unwrap();
     assert_eq!(c.verdict, Verdict::Certified, "{c}");
     assert_eq!(details.kind, "full");
@@ -218,7 +219,7 @@ fn gravity_improves_accuracy() {
     .priors(&truth)
     .unwrap();
     let p = GravityProblem::new(graph.clone(), priors).unwrap();
-    let (est, _) = average_with_gravity(&p, &AverageSettings::default()).unwrap();
+    let est = average_with_gravity(&p, &AverageSettings::default()).unwrap();
     assert_eq!(est.certificate.unwrap().verdict, Verdict::Certified);
     let free = solve_multiple(&graph, &MultipleSettings::default()).unwrap();
     let truth: Vec<_> = truth.into_iter().map(Some).collect();
@@ -261,9 +262,7 @@ fn verdict_is_scale_free() {
             .collect();
         let g = MultipleProblem::new(graph.num_rotations(), edges).unwrap();
         let p = GravityProblem::new(g, priors.clone()).unwrap();
-        average_with_gravity(&p, &AverageSettings::default())
-            .unwrap()
-            .0
+        average_with_gravity(&p, &AverageSettings::default()).unwrap()
     };
     let base = run(1.0);
     for c in [1e-6, 1e6] {
@@ -299,7 +298,8 @@ fn mixed_priors_are_held_and_bounded() {
     .unwrap();
     assert!(!priors.is_full());
     let p = GravityProblem::new(graph.clone(), priors).unwrap();
-    let (est, details) = average_with_gravity(&p, &AverageSettings::default()).unwrap();
+    let est = average_with_gravity(&p, &AverageSettings::default()).unwrap();
+    let details = est.details.gravity.clone().unwrap();
     assert_eq!(details.kind, "mixed");
     let off = p.max_prior_violation_deg(&est.solution.rotations);
     assert!(off < 1e-10, "{off} degrees off");

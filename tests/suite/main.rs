@@ -51,6 +51,7 @@ mod estimates_in_so3;
 mod example_data;
 mod fuzz_regressions;
 mod gravity;
+mod gravity_cli;
 #[cfg(feature = "cli")]
 mod handeye_streams;
 mod io_formats;

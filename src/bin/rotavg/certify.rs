@@ -6,7 +6,7 @@
 //! `rotavg::report::CertifyReport`.
 
 use crate::Outcome;
-use crate::common::{Common, GraphArgs, PlotArgs, choice};
+use crate::common::{Common, GraphArgs, GravityArgs, PlotArgs, choice};
 use crate::conjugate::StreamArgs;
 use rotavg::Result;
 use rotavg::certify::CertifyMode;
@@ -50,6 +50,8 @@ pub struct Args {
     #[command(flatten)]
     pub graph: GraphArgs,
     #[command(flatten)]
+    pub gravity: GravityArgs,
+    #[command(flatten)]
     pub plot: PlotArgs,
     /// Hand-eye pose streams and their pairing, as `rotavg conjugate` reads them.
     #[command(flatten)]
@@ -90,9 +92,33 @@ pub fn run(args: &Args) -> Result<Outcome> {
         }
         _ => args.common.settings(CertifyMode::Auto),
     };
-    let report = match inlier_threshold {
-        None => CertifyReport::certify(&input, &problem, estimate, &settings)?,
-        Some(threshold) => CertifyReport::certify_on_inliers(
+    let gravity = match &problem {
+        LoadedProblem::Multiple(g) => args.gravity.read(g)?,
+        _ if args.gravity.gravity.is_some() => {
+            return Err(rotavg::Error::InvalidSettings {
+                name: "--gravity".into(),
+                reason: "gravity priors apply to view graphs only".into(),
+            });
+        }
+        _ => None,
+    };
+    let report = match (inlier_threshold, gravity, &problem) {
+        (None, Some((priors, unmatched)), LoadedProblem::Multiple(g)) => {
+            let mut r =
+                CertifyReport::certify_with_gravity(&input, g, estimate, priors, &settings)?;
+            r.warnings.extend(unmatched);
+            r
+        }
+        (Some(_), Some(_), _) => {
+            return Err(rotavg::Error::InvalidSettings {
+                name: "--gravity".into(),
+                reason: "gravity priors are certified on all edges (least squares), not with \
+                         --loss"
+                    .into(),
+            });
+        }
+        (None, _, _) => CertifyReport::certify(&input, &problem, estimate, &settings)?,
+        (Some(threshold), None, _) => CertifyReport::certify_on_inliers(
             &input,
             &problem,
             estimate,

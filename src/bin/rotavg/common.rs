@@ -5,8 +5,10 @@ use crate::Outcome;
 use clap::Args;
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use rotavg::certify::{Budget, CertifyMode, CertifySettings, DualSettings};
-use rotavg::io::detect::{GraphFormat, ReadOptions, WeightSource};
+use rotavg::io::detect::{GraphFormat, LoadedGraph, ReadOptions, WeightSource};
 use rotavg::io::names::Choice;
+use rotavg::multiple::gravity::GravityPriors;
+use rotavg::warning::Warning;
 use rotavg::{Result, Rotation};
 use serde::Serialize;
 use std::fmt::Display;
@@ -134,6 +136,54 @@ impl InitArgs {
         let init = self.init.as_ref();
         init.map(|p| rotavg::io::input::load_estimate(p, options)?.into_rotation())
             .transpose()
+    }
+}
+
+/// `--gravity` (`multiple`, `certify`): gravity priors held as constraints.
+#[derive(Args, Debug)]
+pub struct GravityArgs {
+    /// Gravity priors, held as hard constraints: per image `g_i`, the world's down direction in
+    /// the camera's frame (`R_i world_down = g_i`; docs/guides/gravity.md). JSON `{"gravity":
+    /// [g | null, ...]}` in node order (or an object keyed by image name or file id), text lines
+    /// `KEY gx gy gz`, or a COLMAP database's `pose_priors.gravity`. Least squares only.
+    #[arg(long, value_name = "FILE")]
+    pub gravity: Option<String>,
+    /// The world's down direction the priors refer to, `X,Y,Z` (default: the file's; else
+    /// `0,0,1`; COLMAP databases `0,1,0`).
+    #[arg(long, value_name = "X,Y,Z", requires = "gravity", value_parser = parse_vector)]
+    pub world_down: Option<[f64; 3]>,
+}
+
+impl GravityArgs {
+    /// The priors of `--gravity` for `graph`, with the warning for entries no node matches.
+    pub fn read(&self, graph: &LoadedGraph) -> Result<Option<(GravityPriors, Vec<Warning>)>> {
+        let Some(path) = &self.gravity else {
+            return Ok(None);
+        };
+        let read = rotavg::io::gravity::read_gravity(path, graph, self.world_down)?;
+        let unmatched = (read.unmatched > 0).then(|| {
+            Warning::new(
+                "gravity_unmatched",
+                format!(
+                    "{path}: {} gravity entries match no node of the graph (not used)",
+                    read.unmatched
+                ),
+            )
+            .with_count(read.unmatched)
+        });
+        Ok(Some((read.priors, unmatched.into_iter().collect())))
+    }
+}
+
+/// `X,Y,Z`: three finite numbers.
+fn parse_vector(s: &str) -> std::result::Result<[f64; 3], String> {
+    let parts: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().map_err(|e| format!("`{p}`: {e}")))
+        .collect::<std::result::Result<_, _>>()?;
+    match parts[..] {
+        [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok([x, y, z]),
+        _ => Err("expected three finite numbers X,Y,Z".into()),
     }
 }
 

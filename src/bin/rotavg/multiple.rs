@@ -2,13 +2,14 @@
 //! (`rotavg::pipeline::average_multiple`, printed as `rotavg::report::MultipleReport`).
 
 use crate::Outcome;
-use crate::common::{Common, GraphArgs, InitArgs, PlotArgs, choice};
+use crate::common::{Common, GraphArgs, GravityArgs, InitArgs, PlotArgs, choice};
 use rotavg::certify::CertifyMode;
 use rotavg::io::input::{MultipleInputOptions, load_multiple_input};
 use rotavg::io::names::{Choice, MultipleLoss};
 use rotavg::io::output::{MultipleOutputs, OutputFormat, OutputSource};
+use rotavg::multiple::gravity::GravityProblem;
 use rotavg::multiple::{Initialisation, MultipleSettings};
-use rotavg::pipeline::{AverageSettings, average_multiple};
+use rotavg::pipeline::{AverageSettings, average_multiple, average_with_gravity};
 use rotavg::report::MultipleReport;
 use rotavg::warning::Warning;
 use rotavg::{Error, Result};
@@ -47,6 +48,8 @@ pub struct Args {
     pub init_method: Initialisation,
     #[command(flatten)]
     pub init: InitArgs,
+    #[command(flatten)]
+    pub gravity: GravityArgs,
     /// Ground truth: g2o vertices, Bundler `.out`, a COLMAP model folder / `images.bin` /
     /// `images.txt` (by image name, or id), a JSON estimate (node order, or `node_ids`), or a
     /// rotation list (`R11 .. R33` per line: line k = file id k; or `id R11 .. R33`), matched to
@@ -128,7 +131,16 @@ fn solve_and_write(args: &Args, outputs: &MultipleOutputs) -> Result<Outcome> {
         args.loss,
         settings.certify.mode
     ));
-    let mut report = MultipleReport::new(&input, average_multiple(&problem, &settings)?)?;
+    let (result, gravity_warnings) = match args.gravity.read(graph)? {
+        Some((priors, warnings)) => {
+            check_gravity_options(args)?;
+            let p = GravityProblem::new(graph.problem.clone(), priors)?;
+            (average_with_gravity(&p, &settings)?, warnings)
+        }
+        None => (average_multiple(&problem, &settings)?, Vec::new()),
+    };
+    let mut report = MultipleReport::new(&input, result)?;
+    report.run_warnings.extend(gravity_warnings);
     report.inlier_output = outputs.write(graph, &report.result, &source)?;
     #[cfg(feature = "plot")]
     if let Some(path) = &args.plot.plot {
@@ -154,6 +166,25 @@ fn solve_and_write(args: &Args, outputs: &MultipleOutputs) -> Result<Outcome> {
         args.common.warn(&w.message);
     }
     args.common.finish(&report, report.verdict())
+}
+
+/// `--gravity` solves least squares: a robust or geodesic `--loss` (or its options) is an
+/// error (`auto` keeps least squares and reports the outlier diagnosis).
+fn check_gravity_options(args: &Args) -> Result<()> {
+    let robust_flags = args.inlier_threshold.is_some()
+        || args.edges_output.is_some()
+        || args.inlier_output.is_some();
+    if matches!(args.loss, MultipleLoss::Auto | MultipleLoss::Chordal) && !robust_flags {
+        return Ok(());
+    }
+    Err(Error::InvalidSettings {
+        name: "--gravity".into(),
+        reason: format!(
+            "gravity priors are solved with the chordal L2 loss (least squares) only, not \
+             `--loss {}` or the robust outputs",
+            args.loss
+        ),
+    })
 }
 
 /// An error for an option of the robust losses given with another loss, and for

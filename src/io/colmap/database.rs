@@ -768,3 +768,44 @@ fn accepted_list() -> String {
         .collect::<Vec<_>>()
         .join(", ")
 }
+
+/// COLMAP 4's gravity priors: `(image id, g)` for every camera row of `pose_priors` whose
+/// `gravity` is three finite numbers, not all zero (`[F15]`). Errors: no `pose_priors` table with
+/// a `gravity` column (older databases store positions only).
+pub(crate) fn gravity_priors(path: &Path) -> Result<Vec<(u64, [f64; 3])>> {
+    let db = Db::open(path)?;
+    let columns = db.columns("pose_priors")?;
+    let has = |c: &str| columns.iter().any(|x| x == c);
+    if !has("gravity") {
+        return Err(db.err(
+            "no gravity priors: the database has no `pose_priors.gravity` column (COLMAP 4 \
+             stores them there); give a JSON or text file instead"
+                .into(),
+        ));
+    }
+    // COLMAP 4: priors attach to sensor data (`corr_data_id`, a camera's is its image id);
+    // sensor type 0 is a camera
+    let sql = if has("corr_data_id") {
+        "SELECT corr_data_id, gravity FROM pose_priors WHERE corr_sensor_type = 0"
+    } else {
+        "SELECT image_id, gravity FROM pose_priors"
+    };
+    let mut stmt = db.conn.prepare(sql).map_err(|e| db.sql(e))?;
+    let mut rows = stmt.query([]).map_err(|e| db.sql(e))?;
+    let mut out = Vec::new();
+    while let Some(row) = rows.next().map_err(|e| db.sql(e))? {
+        let id: i64 = row.get(0).map_err(|e| db.sql(e))?;
+        let blob: Option<Vec<u8>> = row.get(1).unwrap_or(None);
+        let Some(blob) = blob.filter(|b| b.len() == 24) else {
+            continue;
+        };
+        let g = f64s::<3>(&blob);
+        if let Ok(id) = u64::try_from(id)
+            && g.iter().all(|x| x.is_finite())
+            && g.iter().any(|x| *x != 0.0)
+        {
+            out.push((id, g));
+        }
+    }
+    Ok(out)
+}
