@@ -7,7 +7,7 @@ mypy --strict.
 """
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Protocol, Union, final, overload
+from typing import Any, Callable, Dict, List, Optional, Protocol, Sequence, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -270,6 +270,8 @@ def average_multiple(
     ground_truth: Optional[npt.ArrayLike] = None,
     information: Optional[npt.ArrayLike] = None,
     rotation_tolerance: float = 1e-5,
+    gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
+    world_down: Optional[Sequence[float]] = None,
 ) -> Result:
     """Absolute rotations from relative ones (rel[k] @ R_i = R_j), certified."""
 
@@ -293,6 +295,8 @@ def average_multiple(
     ground_truth: Optional[npt.ArrayLike] = None,
     information: None = None,
     rotation_tolerance: float = 1e-5,
+    gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
+    world_down: Optional[Sequence[float]] = None,
 ) -> Result:
     """A graph from ``read_graph``, solved as ``rotavg multiple FILE`` solves it."""
 
@@ -315,6 +319,8 @@ def certify_multiple(
     loss_threshold: float = 5.0,
     inlier_threshold: Optional[float] = None,
     rotation_tolerance: float = 1e-5,
+    gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
+    world_down: Optional[Sequence[float]] = None,
 ) -> Result:
     """Certify an estimate from any other solver, without changing it."""
 
@@ -336,6 +342,8 @@ def certify_multiple(
     loss_threshold: float = 5.0,
     inlier_threshold: Optional[float] = None,
     rotation_tolerance: float = 1e-5,
+    gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
+    world_down: Optional[Sequence[float]] = None,
 ) -> Result:
     """Certify an estimate for a graph from ``read_graph``."""
 

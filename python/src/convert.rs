@@ -117,6 +117,18 @@ pub fn vector(obj: &Bound<'_, PyAny>, what: &str, len: usize) -> PyResult<Vec<f6
     }
 }
 
+/// Rows of an `(N, 3)` real array-like (gravity vectors; NaN allowed: the caller decides).
+pub fn rows3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
+    let (values, shape) = float_values(obj, what)?;
+    match shape.as_slice() {
+        [_, 3] => Ok(values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()),
+        _ => Err(Error::new_err(format!(
+            "{what} must have shape (N, 3), got {}",
+            shape_text(&shape)
+        ))),
+    }
+}
+
 /// A 1-D integer array-like (node indices).
 pub fn indices(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<i64>> {
     let array = ndarray(obj, what, "iu")?;

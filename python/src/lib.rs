@@ -10,6 +10,7 @@
 
 mod convert;
 mod errors;
+mod gravity;
 mod handeye;
 mod output;
 mod progress;
@@ -320,7 +321,7 @@ impl GraphInput {
 
 /// Per-node values given for every node of the graph as given (restricted to the kept ones) or
 /// for the kept nodes only; another count is an error naming the keyword `what`.
-fn for_kept<T: Clone>(
+pub(crate) fn for_kept<T: Clone>(
     values: Vec<T>,
     selection: &ComponentSelection,
     what: &str,
@@ -441,16 +442,26 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         ``to_dict()["information"]`` summarises them).
 ///     rotation_tolerance: the tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` of every
 ///         matrix given as a rotation (``rel``, ``init``) (default 1e-5, the command line's); beyond it, an error.
+///     gravity: optional gravity priors held as hard constraints, ``R_i world_down = g[i]``
+///         (``g[i]`` the world's down direction in camera ``i``'s frame): an ``(n, 3)`` array
+///         (a row of NaN: no prior for that image), or the path of a priors file as
+///         ``rotavg multiple --gravity`` reads it (JSON, ``KEY gx gy gz`` lines, a COLMAP
+///         database). Least squares only (``loss`` ``"auto"`` or ``"chordal"``); every image
+///         with a prior: the SO(2) certificate; some: the view graph's bound.
+///         ``to_dict()["pipeline"]["gravity"]`` has the priors' check.
+///     world_down: the world's down direction the priors refer to (default ``(0, 0, 1)``,
+///         the file's, or COLMAP's ``(0, 1, 0)``).
 ///
 /// Returns:
-///     Result: ``estimate`` is ``(n, 3, 3)`` with the gauge ``estimate[0] = I``;
+///     Result: ``estimate`` is ``(n, 3, 3)`` with the gauge ``estimate[0] = I`` (with
+///     ``gravity``: ``estimate[0]`` the rotation nearest to ``I`` that keeps its prior);
 ///     ``to_dict()`` equals ``rotavg multiple FILE --json``.
 ///
 /// Raises:
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
 ///         bad weights, unknown names. rotavg.DisconnectedError: a disconnected graph.
 #[pyfunction]
-#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None, rotation_tolerance=1e-5))]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None, rotation_tolerance=1e-5, gravity=None, world_down=None))]
 #[allow(clippy::too_many_arguments)]
 fn average_multiple_py(
     py: Python<'_>,
@@ -471,8 +482,17 @@ fn average_multiple_py(
     ground_truth: Option<&Bound<'_, PyAny>>,
     information: Option<&Bound<'_, PyAny>>,
     rotation_tolerance: f64,
+    gravity: Option<&Bound<'_, PyAny>>,
+    world_down: Option<[f64; 3]>,
 ) -> PyResult<RunResult> {
     let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
+    let gravity = gravity::GravityInput::from_py(gravity)?;
+    if gravity.is_some() && !matches!(loss, "auto" | "chordal") {
+        return Err(argument_error(
+            "gravity priors are solved with the chordal L2 loss (least squares) only: loss \
+             \"auto\" or \"chordal\"",
+        ));
+    }
     let budget = certify_settings(
         CertifyMode::Auto,
         max_memory,
@@ -504,8 +524,16 @@ fn average_multiple_py(
             },
             certify: CertifySettings { mode, ..budget },
         };
-        let result = average_multiple(&problem, &settings)?;
-        MultipleReport::new(&input, result)
+        let (result, warnings) = match gravity {
+            Some(g) => {
+                let (p, w) = g.problem(&input.graph, &input.selection, world_down)?;
+                (rotavg::pipeline::average_with_gravity(&p, &settings)?, w)
+            }
+            None => (average_multiple(&problem, &settings)?, Vec::new()),
+        };
+        let mut report = MultipleReport::new(&input, result)?;
+        report.run_warnings.extend(warnings);
+        Ok(report)
     })?;
     RunResult::new(py, Report::Multiple(report))
 }
@@ -536,6 +564,9 @@ fn average_multiple_py(
 ///         edges).
 ///     loss_threshold: the inlier threshold in degrees unless ``inlier_threshold`` is given.
 ///     inlier_threshold: the inlier threshold in degrees.
+///     gravity, world_down: gravity priors as for ``average_multiple``: the estimate is then
+///         certified for the chordal L2 problem with the priors held (it must satisfy them to
+///         1e-6 rad); not with ``loss``.
 ///
 /// Returns:
 ///     Result: ``solver`` is None; ``to_dict()`` equals
@@ -545,7 +576,7 @@ fn average_multiple_py(
 ///     rotavg.Error: as ``average_multiple``, an estimate of the wrong size, and (a path) a node
 ///         the file lacks or a file that cannot be read (``rotavg.ParseError``, naming the file).
 #[pyfunction]
-#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, information=None, loss="chordal", loss_threshold=5.0, inlier_threshold=None, rotation_tolerance=1e-5))]
+#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, information=None, loss="chordal", loss_threshold=5.0, inlier_threshold=None, rotation_tolerance=1e-5, gravity=None, world_down=None))]
 #[allow(clippy::too_many_arguments)]
 fn certify_multiple_py(
     py: Python<'_>,
@@ -565,9 +596,12 @@ fn certify_multiple_py(
     loss_threshold: f64,
     inlier_threshold: Option<f64>,
     rotation_tolerance: f64,
+    gravity: Option<&Bound<'_, PyAny>>,
+    world_down: Option<[f64; 3]>,
 ) -> PyResult<RunResult> {
     let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
     let graph = GraphInput::copy(n, i, j, rel, weights, information)?.within(tolerance);
+    let gravity = gravity::GravityInput::from_py(gravity)?;
     let loss: MultipleLoss = parse_named(loss, "loss")?;
     let threshold = loss
         .certify_inlier_threshold_deg(loss_threshold, inlier_threshold)
@@ -605,6 +639,25 @@ fn certify_multiple_py(
                 load_estimate_for(&p, &input.graph, &options)?.into_loaded()
             }
         };
+        if let Some(g) = gravity {
+            if threshold.is_some() {
+                return Err(rotavg::Error::InvalidSettings {
+                    name: "gravity".into(),
+                    reason: "gravity priors are certified on all edges, not with loss".into(),
+                });
+            }
+            let (p, warnings) = g.problem(&input.graph, &input.selection, world_down)?;
+            let priors = p.priors().clone();
+            let mut r = CertifyReport::certify_with_gravity(
+                &input.name,
+                &input.graph,
+                estimate,
+                priors,
+                &settings,
+            )?;
+            r.warnings.extend(warnings);
+            return Ok(r);
+        }
         let problem = LoadedProblem::Multiple(input.graph);
         match threshold {
             None => CertifyReport::certify(&input.name, &problem, estimate, &settings),

@@ -187,6 +187,10 @@ def multiple(folder: Path) -> None:
         )
     )
     assert check_certificate(cert.certificate)
+    # gravity priors: exact R_i e_3, held; the estimate certified for that problem
+    down: FloatArray = truth[:, :, 2].copy()
+    grav = check_result(rotavg.average_multiple(n, i, j, rel, gravity=down, world_down=[0.0, 0.0, 1.0]))
+    check_result(rotavg.certify_multiple(n, i, j, rel, grav.estimate, gravity=down))
     # files: a view graph and its ground truth
     path = folder / "graph.json"
     edges = [{"i": int(a), "j": int(b), "rotation": r.tolist()} for a, b, r in zip(i, j, rel)]

@@ -974,3 +974,67 @@ fn information_full_errors_are_clear() {
     let e = read_colmap_database(&path, &full).unwrap_err().to_string();
     assert!(e.contains("camera 1: camera model FOV"), "{e}");
 }
+
+/// COLMAP 4's gravity priors (`pose_priors.gravity`, camera rows keyed by image id, `[F15]`):
+/// read from the database itself with `--gravity`, world down `+y` (COLMAP's global mapper).
+/// Planted `g_i = R_i (0, 1, 0)` on all images but one; an IMU row and a NaN gravity are
+/// skipped. Noise-free: cost 0, certified, every prior held.
+#[test]
+fn gravity_priors_from_a_colmap_4_database() {
+    let s = scene(10, 21);
+    let (rows, _) = rows(&s, 0.0, 22);
+    let path = db_path("gravity.db");
+    write_db(&path, SCHEMA, &images_of(&s), &rows);
+    let db = rusqlite::Connection::open(&path).expect("open");
+    db.execute_batch(
+        "CREATE TABLE pose_priors (pose_prior_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, \
+         corr_data_id INTEGER NOT NULL, corr_sensor_id INTEGER NOT NULL, corr_sensor_type \
+         INTEGER NOT NULL, position BLOB, position_covariance BLOB, gravity BLOB, \
+         coordinate_system INTEGER NOT NULL);",
+    )
+    .expect("pose_priors");
+    let down = nalgebra::Vector3::new(0.0, 1.0, 0.0);
+    for (k, (id, r)) in s.ids.iter().zip(&s.truth).enumerate().skip(1) {
+        let g = r * down;
+        db.execute(
+            "INSERT INTO pose_priors (corr_data_id, corr_sensor_id, corr_sensor_type, gravity, \
+             coordinate_system) VALUES (?1, 1, ?2, ?3, -1)",
+            rusqlite::params![id, if k == 5 { 1 } else { 0 }, blob(&[g.x, g.y, g.z])],
+        )
+        .expect("prior");
+    }
+    db.execute(
+        "INSERT INTO pose_priors (corr_data_id, corr_sensor_id, corr_sensor_type, gravity, \
+         coordinate_system) VALUES (?1, 1, 0, ?2, -1)",
+        rusqlite::params![s.ids[0], blob(&[f64::NAN, 0.0, 1.0])],
+    )
+    .expect("NaN prior");
+    drop(db);
+    let p = path.to_str().unwrap();
+    let out_path = temp_dir().join("gravity_estimate.json");
+    let out = run(&[
+        "multiple",
+        p,
+        "--gravity",
+        p,
+        "--output",
+        out_path.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_success(&out);
+    let v = json_of(&out);
+    let g = &v["pipeline"]["gravity"];
+    assert_eq!(g["num_with_prior"], 8, "{g}"); // image 0 (NaN) and the IMU row skipped
+    assert_eq!(g["world_down"], serde_json::json!([0.0, 1.0, 0.0]));
+    assert_eq!(v["verdict"]["verdict"], "certified");
+    let est: Vec<Rotation> =
+        rotavg::io::input::load_estimate(out_path.to_str().unwrap(), &ReadOptions::default())
+            .unwrap()
+            .into_rotations()
+            .unwrap();
+    for (k, (r, t)) in est.iter().zip(&s.truth).enumerate() {
+        if k != 0 && k != 5 {
+            assert!((r * down - t * down).norm() < 1e-9, "image {k}");
+        }
+    }
+}
