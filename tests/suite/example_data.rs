@@ -248,8 +248,9 @@ fn anisotropic(weak_axes: usize, name: &str) -> (String, String) {
 /// `gravity/`: 200 upright cameras (OpenCV axes: x right, y down the image, z forward; tilted
 /// by 5 degrees at most), 1000 random pairs with 2 degrees of noise per axis as a JSON view
 /// graph, gravity priors (the world's down direction `e_3` seen by each camera, 0.5 degrees of
-/// noise, 10 % of the images without one) as `KEY gx gy gz` lines, and the truth.
-fn gravity() -> (String, String, String) {
+/// noise, 10 % of the images without one) as `KEY gx gy gz` lines, the same for every image
+/// (`gravity_all.txt`), and the truth.
+fn gravity() -> (String, String, String, String) {
     let mut rng = StdRng::seed_from_u64(2027);
     let n = 200;
     let cams: Vec<Rotation> = (0..n)
@@ -285,13 +286,16 @@ fn gravity() -> (String, String, String) {
     let mut priors = String::from(
         "# gravity priors of graph.json: image gx gy gz (the world's down direction in the camera frame)\n",
     );
+    let mut all = priors.clone();
     let mut truth =
         String::from("# ground truth of graph.json: id R11 .. R33 (R_i, with R_ij R_i = R_j)\n");
     for (i, r) in cams.iter().enumerate() {
         let g = exp(&(gaussian_vector(&mut rng, 0.5f64.to_radians()))) * (r * Vector3::z());
+        let line = format!("{i} {:.12} {:.12} {:.12}\n", g.x, g.y, g.z);
         if rng.random::<f64>() >= 0.1 {
-            let _ = writeln!(priors, "{i} {:.12} {:.12} {:.12}", g.x, g.y, g.z);
+            priors.push_str(&line);
         }
+        all.push_str(&line);
         let _ = write!(truth, "{i}");
         for row in 0..3 {
             for col in 0..3 {
@@ -300,7 +304,7 @@ fn gravity() -> (String, String, String) {
         }
         truth.push('\n');
     }
-    (rotavg::io::json::write_problem_json(&p), priors, truth)
+    (rotavg::io::json::write_problem_json(&p), priors, all, truth)
 }
 
 /// Every file of the example data, `(relative path, contents)`, from one seed.
@@ -308,10 +312,11 @@ fn files() -> Vec<(&'static str, String)> {
     let mut rng = StdRng::seed_from_u64(2026);
     let (graph, truth) = sfm(&mut rng);
     let (hand, camera, x) = handeye(&mut rng);
-    let (gravity_graph, gravity_priors, gravity_truth) = gravity();
+    let (gravity_graph, gravity_priors, gravity_all, gravity_truth) = gravity();
     vec![
         ("gravity/graph.json", gravity_graph),
         ("gravity/gravity.txt", gravity_priors),
+        ("gravity/gravity_all.txt", gravity_all),
         ("gravity/truth.txt", gravity_truth),
         ("slam.g2o", slam(&mut rng)),
         ("sfm_outliers.txt", graph),
