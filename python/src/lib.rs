@@ -487,10 +487,10 @@ fn average_multiple_py(
 ) -> PyResult<RunResult> {
     let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
     let gravity = gravity::GravityInput::from_py(gravity)?;
-    if gravity.is_some() && !matches!(loss, "auto" | "chordal") {
+    if gravity.is_some() && loss == "geodesic" {
         return Err(argument_error(
-            "gravity priors are solved with the chordal L2 loss (least squares) only: loss \
-             \"auto\" or \"chordal\"",
+            "gravity priors are solved with the chordal L2 loss or a robust loss (l1, huber, \
+             cauchy), not loss=\"geodesic\"",
         ));
     }
     let budget = certify_settings(

@@ -54,8 +54,8 @@ def test_another_world_down_direction():
 
 def test_errors():
     graph = rotavg.read_graph(EXAMPLE / "graph.json")
-    with pytest.raises(rotavg.Error, match="least squares"):
-        rotavg.average_multiple(graph, loss="cauchy", gravity=np.tile([0.0, 0.0, 1.0], (200, 1)))
+    with pytest.raises(rotavg.Error, match="geodesic"):
+        rotavg.average_multiple(graph, loss="geodesic", gravity=np.tile([0.0, 0.0, 1.0], (200, 1)))
     with pytest.raises(rotavg.Error, match=r"shape \(N, 3\)"):
         rotavg.average_multiple(graph, gravity=np.zeros((200, 2)))
     with pytest.raises(rotavg.Error, match="gravity"):

@@ -49,6 +49,9 @@ pub enum CertifiedProblemKind {
     /// Chordal L2 multiple rotation averaging on every edge with the gravity priors held as
     /// constraints (`R_i world_down = g_i` for each image with a prior, `paper-notes/gravity.md`).
     ChordalL2Gravity,
+    /// [`CertifiedProblemKind::ChordalL2Inliers`] with the gravity priors of the component's
+    /// images held as constraints (a robust solve with gravity priors).
+    ChordalL2GravityInliers,
 }
 
 /// The problem a certificate is about, with its size against the whole input's.
@@ -78,6 +81,12 @@ impl fmt::Display for CertifiedProblem {
                 f,
                 "the chordal L2 problem on all {} edges ({} nodes)",
                 self.num_edges, self.num_nodes
+            ),
+            CertifiedProblemKind::ChordalL2GravityInliers => write!(
+                f,
+                "the chordal L2 problem with the gravity priors held on the inlier graph ({} of \
+                 {} edges, {} of {} nodes)",
+                self.num_edges, self.total_edges, self.num_nodes, self.total_nodes
             ),
             CertifiedProblemKind::ChordalL2Gravity => write!(
                 f,

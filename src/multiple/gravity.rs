@@ -29,10 +29,14 @@
 
 use super::chordal::solve_chordal_tilt_fixed;
 use super::problem::MultipleProblem;
+use super::robust::{
+    edge_residuals, inlier_threshold_deg, objective_cost_gradient, relative_weight,
+};
 use super::solve::{MultipleSettings, MultipleSolution, solve_multiple};
 use crate::error::{Error, Result};
-use crate::objective::Objective;
+use crate::objective::Loss;
 use crate::so3::Rotation;
+use crate::termination::{SolverReport, Termination};
 use nalgebra::{Matrix3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -160,6 +164,16 @@ impl GravityPriors {
     /// standard convention `(R_i W) e_3 = g_i`.
     pub fn world_frame(&self) -> Rotation {
         frame_of(&self.world_down())
+    }
+
+    /// The priors of the images `nodes` (indices into these priors), in that order, with the
+    /// same world down direction. Errors: none of them has a prior.
+    pub fn restricted(&self, nodes: &[usize]) -> Result<Self> {
+        let directions = nodes
+            .iter()
+            .map(|&v| self.directions.get(v).copied().flatten())
+            .collect();
+        GravityPriors::new(directions)?.with_world_down(self.world_down)
     }
 
     /// These priors with every direction replaced by `t g_i` (a convention being tested).
@@ -307,7 +321,11 @@ impl GravityProblem {
         rotations
             .iter()
             .enumerate()
-            .filter_map(|(i, r)| self.priors.direction(i).map(|g| (r * w).angle(&g)))
+            .filter_map(|(i, r)| {
+                self.priors
+                    .direction(i)
+                    .map(|g| angle_between(&(r * w), &g))
+            })
             .fold(0.0, f64::max)
             .to_degrees()
     }
@@ -346,6 +364,19 @@ impl GravityProblem {
                 }
             })
             .collect()
+    }
+
+    /// `||grad||` of the objective on the constrained manifold at `rotations` (standard
+    /// convention): the chart gradient with the tilt components of the images with a prior
+    /// removed (`[G4]`).
+    fn constrained_gradient_norm(&self, rotations: &[Rotation], l1_epsilon: f64) -> f64 {
+        let (_, mut grad) = objective_cost_gradient(&self.problem, rotations, l1_epsilon);
+        for (g, fixed) in grad.iter_mut().zip(self.tilt_fixed()) {
+            if fixed {
+                (g.x, g.y) = (0.0, 0.0);
+            }
+        }
+        grad.iter().map(|g| g.norm_squared()).sum::<f64>().sqrt()
     }
 
     /// The edges' agreement with the priors and the conventions that would fit better
@@ -390,6 +421,12 @@ impl GravityProblem {
     }
 }
 
+/// The angle between two vectors, accurate near 0 (`atan2(|a x b|, a . b)`; `acos` of the
+/// cosine resolves no angle below `1.5e-8` rad).
+fn angle_between(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    a.cross(b).norm().atan2(a.dot(b))
+}
+
 /// Median and 90th percentile (degrees) of the angles between `R_ij g_i` and `g_j` over the
 /// edges with both directions, and their count; `None` when there is no such edge.
 fn edge_disagreement(
@@ -400,7 +437,7 @@ fn edge_disagreement(
         .edges()
         .iter()
         .filter_map(|e| match (dirs[e.i], dirs[e.j]) {
-            (Some(gi), Some(gj)) => Some((e.rotation * gi).angle(&gj).to_degrees()),
+            (Some(gi), Some(gj)) => Some(angle_between(&(e.rotation * gi), &gj).to_degrees()),
             _ => None,
         })
         .collect();
@@ -431,23 +468,27 @@ fn fix_gravity_gauge(rotations: &mut [Rotation]) {
     }
 }
 
-/// Chordal L2 averaging with gravity as a hard constraint (`[G4]`, `[G5]`): the unconstrained
-/// chordal solve ([`solve_multiple`] with `settings`), aligned to the priors and projected
-/// onto them, then the chordal Newton-LM in which every image with a prior only turns about
-/// its gravity axis. Images without a prior (the mixed problem) move freely. The cost is the
-/// view graph's chordal L2 cost (`[M1]`; with its information matrices when it has them) at the
-/// returned estimate, which satisfies every prior to rounding (`R_i g_world = g_i`). Gauge: the
-/// turn about `g_world` that brings `R_0` nearest to `I`. Errors: a disconnected graph, a
-/// robust or geodesic objective (least squares only, for now).
+/// Averaging with gravity as a hard constraint (`[G4]`, `[G5]`, `[G8]`): the unconstrained
+/// solve ([`solve_multiple`] with `settings`, under the view graph's objective), aligned to the
+/// priors and projected onto them, then, for chordal L2, the chordal Newton-LM in which every
+/// image with a prior only turns about its gravity axis; for a robust loss (L1, Huber, Cauchy
+/// of the residual or Mahalanobis angle), iteratively reweighted constrained chordal solves
+/// (`[G8]`). Images without a prior (the mixed problem) move freely. The costs are the view
+/// graph's at the returned estimate, which satisfies every prior to rounding
+/// (`R_i g_world = g_i`); robust solves carry the per-edge residuals
+/// ([`MultipleSolution::residuals`]). Gauge: the turn about `g_world` that brings `R_0`
+/// nearest to `I`. Errors: a disconnected graph, the geodesic L2 objective.
 pub fn solve_gravity(
     problem: &GravityProblem,
     settings: &MultipleSettings,
 ) -> Result<MultipleSolution> {
     let graph = &problem.problem;
-    if !graph.objective().is_chordal_l2() || settings.robust_on_outliers.is_some() {
+    let objective = graph.objective();
+    if objective.loss == Loss::L2 && !objective.is_chordal_l2() {
         return Err(Error::InvalidSettings {
             name: "loss".into(),
-            reason: "gravity priors are solved with the chordal L2 loss (least squares) only"
+            reason: "gravity priors are solved with the chordal L2 loss or a robust loss \
+                     (l1, huber, cauchy), not geodesic L2"
                 .into(),
         });
     }
@@ -455,8 +496,52 @@ pub fn solve_gravity(
     let start = std::time::Instant::now();
     let free = solve_multiple(graph, settings)?;
     let init = problem.aligned_and_projected(&problem.to_standard(&free.rotations));
-    // node 0 is grounded by the Newton-LM: it must be a node with a prior (its one degree of
-    // freedom is the gauge); relabel so
+    let (rotations, iterations, termination) = if objective.is_chordal_l2() {
+        let s = solve_constrained(problem, graph, init, settings)?;
+        (s.rotations, s.report.iterations, s.report.termination)
+    } else {
+        reweighted(problem, init, settings)?
+    };
+    let mut rotations = rotations;
+    fix_gravity_gauge(&mut rotations);
+    let gradient_norm = problem.constrained_gradient_norm(&rotations, settings.l1_epsilon);
+    let rotations = problem.out_of_standard(&rotations);
+    // the reported costs are the file's, at exactly the returned rotations
+    let chordal_cost = graph.chordal_cost(&rotations);
+    let residuals =
+        inlier_threshold_deg(&objective, settings).map(|t| edge_residuals(graph, &rotations, t));
+    Ok(MultipleSolution {
+        cost: graph.cost(&rotations),
+        chordal_cost,
+        gradient_norm,
+        rotations,
+        objective,
+        report: SolverReport {
+            name: if objective.is_chordal_l2() {
+                "riemannian-newton-lm (gravity: tilt held)".into()
+            } else {
+                format!("irls-{} (gravity: tilt held)", objective.loss.name())
+            },
+            iterations: free.report.iterations + iterations,
+            termination,
+            seconds: start.elapsed().as_secs_f64(),
+        },
+        init_cost: free.cost,
+        residuals,
+        linear_algebra: None,
+    })
+}
+
+/// The chordal Newton-LM with the tilt of every image with a prior held, on `graph` (the
+/// problem's view graph or a reweighting of it), from `init` (standard convention); the result
+/// in the standard convention, gauge not fixed. Node 0 is grounded by the Newton-LM: it must
+/// be a node with a prior (its one degree of freedom is the gauge), so the nodes are relabelled.
+fn solve_constrained(
+    problem: &GravityProblem,
+    graph: &MultipleProblem,
+    init: Vec<Rotation>,
+    settings: &MultipleSettings,
+) -> Result<MultipleSolution> {
     let fixed = problem.tilt_fixed();
     let ground = fixed.iter().position(|&f| f).unwrap_or(0);
     let mut new_of_old: Vec<usize> = (0..fixed.len()).collect();
@@ -467,15 +552,57 @@ pub fn solve_gravity(
     fixed.swap(0, ground);
     let mut sol = solve_chordal_tilt_fixed(&relabelled, init, settings, None, Some(&fixed))?;
     sol.rotations.swap(0, ground);
-    fix_gravity_gauge(&mut sol.rotations);
-    sol.rotations = problem.out_of_standard(&sol.rotations);
-    // the reported cost is the file's, at exactly the returned rotations
-    sol.chordal_cost = graph.chordal_cost(&sol.rotations);
-    sol.cost = sol.chordal_cost;
-    sol.objective = Objective::CHORDAL_L2;
-    sol.init_cost = free.cost;
-    sol.report.iterations += free.report.iterations;
-    sol.report.name = "riemannian-newton-lm (gravity: tilt held)".into();
-    sol.report.seconds = start.elapsed().as_secs_f64();
     Ok(sol)
+}
+
+/// The largest change of the IRLS weights between two passes below which [`reweighted`] stops.
+pub const IRLS_WEIGHT_TOLERANCE: f64 = 1e-6;
+
+/// Robust averaging with the priors held (`[G8]`): passes of the constrained chordal solve on
+/// the view graph with each edge's weight (information) multiplied by its relative IRLS weight
+/// at the current estimate ([`relative_weight`] of the residual or Mahalanobis angle), until
+/// no weight changes by more than [`IRLS_WEIGHT_TOLERANCE`] (at most `settings.max_iterations`
+/// passes). Returns the rotations (standard convention), the passes and why it stopped.
+fn reweighted(
+    problem: &GravityProblem,
+    init: Vec<Rotation>,
+    settings: &MultipleSettings,
+) -> Result<(Vec<Rotation>, usize, Termination)> {
+    let graph = &problem.problem;
+    let objective = graph.objective();
+    let threshold = inlier_threshold_deg(&objective, settings).unwrap_or(5.0);
+    let weights_at = |r: &[Rotation]| -> Vec<f64> {
+        graph
+            .objective_angles(r)
+            .iter()
+            .map(|t| relative_weight(&objective, *t, threshold).max(1e-12))
+            .collect()
+    };
+    let mut rotations = init;
+    let mut weights = weights_at(&rotations);
+    for pass in 1..=settings.max_iterations {
+        let reweighted = graph.reweighted(&weights)?;
+        rotations = solve_constrained(problem, &reweighted, rotations, settings)?.rotations;
+        let next = weights_at(&rotations);
+        let change = next
+            .iter()
+            .zip(&weights)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        weights = next;
+        if change <= IRLS_WEIGHT_TOLERANCE {
+            let t = Termination::Converged {
+                measure: "largest change of the IRLS weights".into(),
+                value: change,
+                threshold: IRLS_WEIGHT_TOLERANCE,
+            };
+            return Ok((rotations, pass, t));
+        }
+    }
+    let t = Termination::IterationLimit {
+        iterations: settings.max_iterations,
+        value: f64::NAN,
+        threshold: IRLS_WEIGHT_TOLERANCE,
+    };
+    Ok((rotations, settings.max_iterations, t))
 }

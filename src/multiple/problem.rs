@@ -425,6 +425,32 @@ impl MultipleProblem {
         )
     }
 
+    /// The same edges with weight `w_e weights[e]` (information `H_e weights[e]`), objective
+    /// chordal L2: one pass of iteratively reweighted least squares. Panics if `weights.len()`
+    /// differs from the number of edges. Errors: a product outside the weight window.
+    pub(crate) fn reweighted(&self, weights: &[f64]) -> Result<MultipleProblem> {
+        assert_eq!(weights.len(), self.edges.len(), "one weight per edge");
+        let edges = self
+            .edges
+            .iter()
+            .zip(weights)
+            .map(|(e, c)| Edge {
+                weight: e.weight * c,
+                ..e.clone()
+            })
+            .collect();
+        let p = MultipleProblem::new(self.num_rotations, edges)?;
+        match &self.information {
+            Some(info) => p.with_information(
+                info.iter()
+                    .zip(weights)
+                    .map(|(h, c)| Information::new(h.matrix() * *c))
+                    .collect::<Result<_>>()?,
+            ),
+            None => Ok(p),
+        }
+    }
+
     /// The same problem with node `k` renamed `new_of_old[k]` (a permutation of `0..n`; panics
     /// otherwise: a programming error). Edges keep their order, measurements and information.
     pub(crate) fn relabelled(&self, new_of_old: &[usize]) -> MultipleProblem {

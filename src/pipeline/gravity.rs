@@ -3,15 +3,17 @@
 //! [`crate::certify::certify_gravity`], in the one pipeline shape. The priors' agreement with
 //! the relative rotations ([`GravityProblem::check_conventions`]) is part of the report.
 
-use super::{AverageSettings, Averaged, PipelineProblem, average};
+use super::inlier_graph::ViewGraphProblem;
+use super::{AverageSettings, Averaged, MultipleEstimate, PipelineProblem};
 use crate::certify::{
     Certification, CertifiedProblem, CertifiedProblemKind, CertifyMode, CertifySettings,
     certify_gravity,
 };
 use crate::error::Result;
 use crate::multiple::gravity::{GravityCheck, GravityProblem, solve_gravity};
-use crate::multiple::robust::suspected_outliers;
-use crate::multiple::{MultipleSettings, MultipleSolution};
+use crate::multiple::{MultipleProblem, MultipleSettings, MultipleSolution};
+use crate::objective::Objective;
+use crate::so3::Rotation;
 use crate::warning::Warning;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -58,12 +60,15 @@ pub struct GravityDetails {
     pub check: Option<GravityCheck>,
 }
 
-/// Chordal L2 averaging with gravity as a hard constraint, certified: the local solve
-/// ([`solve_gravity`]) and the certificate ([`certify_gravity`]: SO(2) dual certificate for
-/// full gravity, the view graph's bound otherwise). Least squares only: a robust loss in
-/// `settings.solve` is an error, and the rule `auto` (`robust_on_outliers`) keeps least
-/// squares, with the outlier diagnosis in `details.outliers`. The priors and their agreement
-/// with the view graph are in `details.gravity`; the certificate names its problem
+/// Averaging with gravity as a hard constraint, certified, in the shape of
+/// [`crate::pipeline::average_multiple`]: least squares ([`solve_gravity`], then
+/// [`certify_gravity`]: the SO(2) dual certificate for full gravity, the view graph's bound
+/// otherwise) with its outlier diagnosis; under the rule `auto` (`robust_on_outliers`) the
+/// robust loss when the least-squares residuals show outliers; a robust loss solved by
+/// reweighted constrained solves, then the chordal L2 problem with the priors held on its inlier
+/// graph refined and certified (`details.inlier_graph`, kind
+/// [`CertifiedProblemKind::ChordalL2GravityInliers`]). The priors and their agreement with the
+/// view graph are in `details.gravity`; the least-squares certificate names its problem
 /// ([`CertifiedProblemKind::ChordalL2Gravity`]).
 ///
 /// ```
@@ -81,10 +86,7 @@ pub fn average_with_gravity(
     problem: &GravityProblem,
     settings: &AverageSettings<MultipleSettings>,
 ) -> Result<Averaged<MultipleSolution>> {
-    let mut settings = settings.clone();
-    settings.solve.robust_on_outliers = None;
-    let mut out = average(problem, &settings)?;
-    out.details.outliers = suspected_outliers(problem.problem(), &out.solution.rotations);
+    let mut out = super::multiple::average_view_graph(problem, settings)?;
     let graph = problem.problem();
     out.certificate = out.certificate.map(|c| {
         c.for_problem(CertifiedProblem {
@@ -97,6 +99,45 @@ pub fn average_with_gravity(
     });
     out.details.gravity = Some(GravityDetails::of(problem));
     Ok(out)
+}
+
+impl ViewGraphProblem for GravityProblem {
+    const INLIERS: CertifiedProblemKind = CertifiedProblemKind::ChordalL2GravityInliers;
+    fn graph(&self) -> &MultipleProblem {
+        self.problem()
+    }
+    fn with_objective(&self, objective: Objective) -> Result<Self> {
+        GravityProblem::new(
+            self.problem().clone().with_objective(objective)?,
+            self.priors().clone(),
+        )
+    }
+    fn average_all(
+        &self,
+        settings: &AverageSettings<MultipleSettings>,
+    ) -> Result<MultipleEstimate> {
+        average_with_gravity(self, settings)
+    }
+    fn restricted(&self, sub: MultipleProblem, nodes: &[usize]) -> Result<Self> {
+        GravityProblem::new(sub, self.priors().restricted(nodes)?)
+    }
+    /// The refinement turned about the world's down axis only (the one gauge the priors leave)
+    /// to best match the robust estimate; the other nodes keep their robust rotations.
+    fn place(&self, nodes: &[usize], refined: &[Rotation], robust: &[Rotation]) -> Vec<Rotation> {
+        let w = self.priors().world_frame();
+        let mut m = nalgebra::Matrix3::zeros();
+        for (k, &v) in nodes.iter().enumerate() {
+            m += (refined[k] * w).matrix().transpose() * (robust[v] * w).matrix();
+        }
+        // the turn G = W Rz(a) W^T maximising tr(G^T sum R_k^T R_v)
+        let a = (m[(1, 0)] - m[(0, 1)]).atan2(m[(0, 0)] + m[(1, 1)]);
+        let g = w * Rotation::from_axis_angle(&nalgebra::Vector3::z_axis(), a) * w.inverse();
+        let mut estimate = robust.to_vec();
+        for (k, &v) in nodes.iter().enumerate() {
+            estimate[v] = refined[k] * g;
+        }
+        estimate
+    }
 }
 
 impl GravityDetails {

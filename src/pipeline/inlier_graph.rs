@@ -11,7 +11,7 @@
 //! Either certificate is about the chordal L2 problem on those edges (`chordal_l2_inliers`),
 //! never about the robust cost on all edges.
 
-use super::{AverageSettings, PipelineDetails, average};
+use super::{AverageSettings, MultipleEstimate, PipelineDetails, PipelineProblem, average};
 use crate::certify::{
     Certificate, CertifiedProblem, CertifiedProblemKind, CertifyDetails, CertifySettings,
     certify_multiple,
@@ -19,6 +19,7 @@ use crate::certify::{
 use crate::error::Result;
 use crate::multiple::robust::{EdgeResiduals, ResidualSummary, edge_residuals};
 use crate::multiple::{Initialisation, MultipleProblem, MultipleSettings, MultipleSolution};
+use crate::objective::Objective;
 use crate::so3::{Rotation, project_to_so3};
 use crate::termination::SolverReport;
 use nalgebra::Matrix3;
@@ -138,10 +139,22 @@ pub fn certify_inlier_graph(
     robust: &MultipleSolution,
     settings: &AverageSettings<MultipleSettings>,
 ) -> Result<Option<InlierGraph>> {
+    inlier_graph_of(problem, robust, settings)
+}
+
+/// [`certify_inlier_graph`] for any problem on a view graph ([`ViewGraphProblem`]): the
+/// inlier component is refined and certified as a problem of the same kind
+/// ([`ViewGraphProblem::restricted`]: with gravity, the component's priors held).
+pub(crate) fn inlier_graph_of<P: ViewGraphProblem>(
+    problem: &P,
+    robust: &MultipleSolution,
+    settings: &AverageSettings<MultipleSettings>,
+) -> Result<Option<InlierGraph>> {
+    let graph = problem.graph();
     let Some(residuals) = &robust.residuals else {
         return Ok(None);
     };
-    if !has_inliers(problem, robust, residuals)? {
+    if !has_inliers(graph, robust, residuals)? {
         return Ok(None);
     }
     let InlierComponent {
@@ -150,21 +163,23 @@ pub fn certify_inlier_graph(
         problem: certified,
         other_component_sizes,
         isolated_nodes,
-    } = InlierComponent::of(problem, &residuals.inlier)?;
+    } = InlierComponent::of(graph, &residuals.inlier, P::INLIERS)?;
     let init: Vec<Rotation> = nodes.iter().map(|&v| robust.rotations[v]).collect();
     let robust_chordal_cost = sub.chordal_cost(&init);
     let sub_settings = AverageSettings {
         solve: MultipleSettings {
             init: Initialisation::Given(init),
+            robust_on_outliers: None,
             ..settings.solve.clone()
         },
         certify: settings.certify.clone(),
     };
-    let refined = average(&sub, &sub_settings)?;
-    let estimate = place_refinement(&nodes, &refined.solution.rotations, &robust.rotations);
+    let sub_problem = problem.restricted(sub, &nodes)?;
+    let refined = average(&sub_problem, &sub_settings)?;
+    let estimate = problem.place(&nodes, &refined.solution.rotations, &robust.rotations);
     // the cost of the reported rotations (equal to the refinement's up to rounding: a gauge)
     let reported: Vec<Rotation> = nodes.iter().map(|&v| estimate[v]).collect();
-    let chordal_cost = sub.chordal_cost(&reported);
+    let chordal_cost = sub_problem.graph().chordal_cost(&reported);
     let certificate = refined
         .certificate
         .map(|c| c.with_upper_bound(chordal_cost).for_problem(certified));
@@ -181,6 +196,47 @@ pub fn certify_inlier_graph(
         certificate,
         details: refined.details,
     }))
+}
+
+/// What the rule `auto` and the inlier graph need of a problem on a view graph: multiple
+/// averaging, and multiple averaging with gravity priors (one shape for both).
+pub(crate) trait ViewGraphProblem:
+    PipelineProblem<Settings = MultipleSettings, Solution = MultipleSolution> + Sized
+{
+    /// The kind of its inlier graph's problem.
+    const INLIERS: CertifiedProblemKind;
+    /// The view graph.
+    fn graph(&self) -> &MultipleProblem;
+    /// The same problem under another objective.
+    fn with_objective(&self, objective: Objective) -> Result<Self>;
+    /// Its whole pipeline (`average_multiple`, `average_with_gravity`).
+    fn average_all(&self, settings: &AverageSettings<MultipleSettings>)
+    -> Result<MultipleEstimate>;
+    /// The problem on the component `nodes` (indices of this problem) whose view graph is `sub`.
+    fn restricted(&self, sub: MultipleProblem, nodes: &[usize]) -> Result<Self>;
+    /// The robust estimate with a component's refinement in place ([`place_refinement`]).
+    fn place(&self, nodes: &[usize], refined: &[Rotation], robust: &[Rotation]) -> Vec<Rotation> {
+        place_refinement(nodes, refined, robust)
+    }
+}
+
+impl ViewGraphProblem for MultipleProblem {
+    const INLIERS: CertifiedProblemKind = CertifiedProblemKind::ChordalL2Inliers;
+    fn graph(&self) -> &MultipleProblem {
+        self
+    }
+    fn with_objective(&self, objective: Objective) -> Result<Self> {
+        self.clone().with_objective(objective)
+    }
+    fn average_all(
+        &self,
+        settings: &AverageSettings<MultipleSettings>,
+    ) -> Result<MultipleEstimate> {
+        super::average_multiple(self, settings)
+    }
+    fn restricted(&self, sub: MultipleProblem, _nodes: &[usize]) -> Result<Self> {
+        Ok(sub)
+    }
 }
 
 /// Whether the robust solution is an estimate of `problem` with residuals on its every edge
@@ -208,7 +264,11 @@ fn has_inliers(
 /// estimate's gauge: `R_0 G = I` when node 0 is in the component (as the robust estimate),
 /// else the best alignment to the robust estimate, `max tr(G^T sum R_k^T R_v)`; nodes outside
 /// the component keep their robust rotations exactly.
-fn place_refinement(nodes: &[usize], refined: &[Rotation], robust: &[Rotation]) -> Vec<Rotation> {
+pub(crate) fn place_refinement(
+    nodes: &[usize],
+    refined: &[Rotation],
+    robust: &[Rotation],
+) -> Vec<Rotation> {
     let g = if nodes.first() == Some(&0) {
         refined[0].inverse()
     } else {
@@ -322,7 +382,11 @@ pub fn certify_estimate_inliers(
     if !residuals.inlier.contains(&true) {
         return Ok(None);
     }
-    let component = InlierComponent::of(problem, &residuals.inlier)?;
+    let component = InlierComponent::of(
+        problem,
+        &residuals.inlier,
+        CertifiedProblemKind::ChordalL2Inliers,
+    )?;
     let given: Vec<Rotation> = component.nodes.iter().map(|&v| rotations[v]).collect();
     let c = certify_multiple(&component.sub, &given, settings)?;
     Ok(Some(EstimateInlierGraph {
@@ -388,7 +452,7 @@ struct InlierComponent {
 impl InlierComponent {
     /// The component of `problem`'s edges with `inlier[k]` (chordal L2: the anisotropic
     /// chordal cost with the inliers' information where the problem has it).
-    fn of(problem: &MultipleProblem, inlier: &[bool]) -> Result<Self> {
+    fn of(problem: &MultipleProblem, inlier: &[bool], kind: CertifiedProblemKind) -> Result<Self> {
         let inliers = problem.edge_subset(inlier)?;
         let components = inliers.components();
         let isolated_nodes = components.iter().filter(|c| c.len() == 1).count();
@@ -400,7 +464,7 @@ impl InlierComponent {
             .collect();
         let (sub, nodes) = inliers.largest_component();
         let certified = CertifiedProblem {
-            kind: CertifiedProblemKind::ChordalL2Inliers,
+            kind,
             num_nodes: sub.num_rotations(),
             total_nodes: problem.num_rotations(),
             num_edges: sub.num_edges(),

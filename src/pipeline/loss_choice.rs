@@ -4,10 +4,11 @@
 //! the chordal L2 problem on the robust estimate's inlier graph. `paper-notes/certificates.md`
 //! `[D17]` states what each verdict is about.
 
-use super::{AverageSettings, MultipleEstimate, average_multiple, certify_solved, validate};
+use super::inlier_graph::ViewGraphProblem;
+use super::{AverageSettings, MultipleEstimate, certify_solved, validate};
 use crate::error::Result;
+use crate::multiple::MultipleSettings;
 use crate::multiple::robust::{OutlierWarning, judges_residuals, suspected_outliers};
-use crate::multiple::{MultipleProblem, MultipleSettings, solve_multiple};
 use crate::objective::Objective;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -60,26 +61,28 @@ impl fmt::Display for LossChoice {
     }
 }
 
-/// [`average_multiple`] under the rule `auto` for a chordal L2 `problem`: solve it; when
-/// [`suspected_outliers`] fires at its estimate, return `average_multiple` of the same problem
+/// The pipeline under the rule `auto` for a chordal L2 `problem` (multiple averaging, with or
+/// without gravity priors): solve it; when [`suspected_outliers`] fires at its estimate, return
+/// the pipeline of the same problem
 /// with the objective `robust` (exactly what that loss gives on its own: the robust estimate,
 /// and unless the mode is `none` the certificate of its inlier graph), else certify the
 /// least-squares estimate. `details.loss_choice` records the choice and the diagnosis (not a
 /// warning: the rule acted on it; `details.outliers` stays empty).
-pub(super) fn average_by_residuals(
-    problem: &MultipleProblem,
+pub(super) fn average_by_residuals<P: ViewGraphProblem>(
+    problem: &P,
     settings: &AverageSettings<MultipleSettings>,
     robust: Objective,
 ) -> Result<MultipleEstimate> {
     let start = Instant::now();
     let skip = validate(problem, settings)?;
-    let least_squares = solve_multiple(problem, &settings.solve)?;
+    let least_squares = problem.solve(&settings.solve)?;
+    let graph = problem.graph();
     let mut choice = LossChoice {
         rule: "auto".into(),
-        chosen: problem.objective(),
+        chosen: graph.objective(),
         robust,
         diagnosis: None,
-        reason: if judges_residuals(problem) {
+        reason: if judges_residuals(graph) {
             "the least-squares residuals show no outliers".into()
         } else {
             "fewer than two edges per node: residuals cannot reveal outliers".into()
@@ -87,7 +90,7 @@ pub(super) fn average_by_residuals(
         least_squares_cost: least_squares.chordal_cost,
         least_squares_seconds: least_squares.report.seconds,
     };
-    let Some(mut diagnosis) = suspected_outliers(problem, &least_squares.rotations) else {
+    let Some(mut diagnosis) = suspected_outliers(graph, &least_squares.rotations) else {
         let mut out = certify_solved(problem, least_squares, settings, skip, start)?;
         out.details.loss_choice = Some(choice);
         return Ok(out);
@@ -99,7 +102,7 @@ pub(super) fn average_by_residuals(
     );
     choice.reason = "the least-squares residuals show outliers".into();
     choice.diagnosis = Some(diagnosis);
-    let robust_problem = problem.clone().with_objective(robust)?;
+    let robust_problem = problem.with_objective(robust)?;
     let robust_settings = AverageSettings {
         solve: MultipleSettings {
             robust_on_outliers: None,
@@ -107,7 +110,7 @@ pub(super) fn average_by_residuals(
         },
         certify: settings.certify.clone(),
     };
-    let mut out = average_multiple(&robust_problem, &robust_settings)?;
+    let mut out = robust_problem.average_all(&robust_settings)?;
     choice.chosen = robust;
     out.details.loss_choice = Some(choice);
     out.details.total_seconds = start.elapsed().as_secs_f64();

@@ -5,7 +5,7 @@
 //! robust cost has no certificate; the pipeline certifies instead the chordal L2 problem on the
 //! edges the robust solver kept ([`super::InlierGraph`], [`certify_inlier_graph`]).
 
-use super::inlier_graph::certify_inlier_graph;
+use super::inlier_graph::{ViewGraphProblem, inlier_graph_of};
 use super::{AverageSettings, Averaged, PipelineProblem, PipelineSolution, average};
 use crate::certify::{Certification, CertifyMode, CertifySettings, certify_multiple};
 use crate::error::Result;
@@ -85,8 +85,18 @@ pub fn average_multiple(
     problem: &MultipleProblem,
     settings: &AverageSettings<MultipleSettings>,
 ) -> Result<Averaged<MultipleSolution>> {
-    let objective = problem.objective();
-    let mode = settings.certify.mode;
+    average_view_graph(problem, settings)
+}
+
+/// [`average_multiple`] for any problem on a view graph (with or without gravity priors): the
+/// rule `auto`, least squares with its outlier diagnosis, or a robust loss with its inlier
+/// graph.
+pub(super) fn average_view_graph<P: ViewGraphProblem>(
+    problem: &P,
+    settings: &AverageSettings<MultipleSettings>,
+) -> Result<Averaged<MultipleSolution>> {
+    let graph = problem.graph();
+    let objective = graph.objective();
     if let Some(robust) = settings.solve.robust_on_outliers
         && objective.is_chordal_l2()
     {
@@ -96,18 +106,26 @@ pub fn average_multiple(
         // least squares: say when the residuals look like outliers (a robust loss is then the
         // better tool)
         let mut out = average(problem, settings)?;
-        out.details.outliers = suspected_outliers(problem, &out.solution.rotations);
+        out.details.outliers = suspected_outliers(graph, &out.solution.rotations);
         return Ok(out);
     }
-    if mode == CertifyMode::None {
+    average_robust(problem, settings)
+}
+
+/// The pipeline of a robust loss (L1, Huber, Cauchy) on a view graph: the robust solve, then,
+/// unless the mode is `none`, the chordal L2 problem on its inlier graph refined and certified
+/// ([`inlier_graph_of`]); the robust estimate is the one returned (its cost has no certificate).
+pub(super) fn average_robust<P: ViewGraphProblem>(
+    problem: &P,
+    settings: &AverageSettings<MultipleSettings>,
+) -> Result<Averaged<MultipleSolution>> {
+    let objective = problem.graph().objective();
+    if settings.certify.mode == CertifyMode::None {
         return average(problem, settings);
     }
     let start = Instant::now();
     settings.certify.validate()?;
-    mode.require(
-        <MultipleProblem as PipelineProblem>::NAME,
-        <MultipleProblem as PipelineProblem>::MODES,
-    )?;
+    settings.certify.mode.require(P::NAME, P::MODES)?;
     let robust_only = AverageSettings {
         solve: settings.solve.clone(),
         certify: CertifySettings {
@@ -117,7 +135,7 @@ pub fn average_multiple(
     };
     let mut out = average(problem, &robust_only)?;
     let t = Instant::now();
-    let graph = certify_inlier_graph(problem, &out.solution, settings)?;
+    let graph = inlier_graph_of(problem, &out.solution, settings)?;
     out.details.skipped_reason = Some(format!(
         "the {objective} cost has no certificate (only chordal L2 is certifiable); {}",
         match &graph {

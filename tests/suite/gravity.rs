@@ -365,3 +365,58 @@ fn bad_priors_and_estimates_are_errors() {
     let e = certify_gravity(&p, &off, &CertifySettings::default()).unwrap_err();
     assert!(e.to_string().contains("off its gravity priors"), "{e}");
 }
+
+/// Outliers: under the rule `auto` the least-squares residuals call for the Cauchy loss, the
+/// robust estimate holds every prior, the chordal L2 problem with the priors on its inlier
+/// graph is certified (`chordal_l2_gravity_inliers`), and the result is more accurate than
+/// least squares with gravity and than the robust run without gravity.
+#[test]
+fn robust_gravity_on_outliers() {
+    use rotavg::certify::CertifiedProblemKind;
+    let (graph, truth) = SyntheticGraph {
+        num_rotations: 150,
+        num_edges: 1200,
+        noise_sigma: (2f64 / 3f64.sqrt()).to_radians(),
+        outlier_fraction: 0.15,
+        seed: 11,
+    }
+    .generate();
+    let priors = SyntheticGravity {
+        noise_deg: 0.3,
+        missing_fraction: 0.0,
+        seed: 11,
+    }
+    .priors(&truth)
+    .unwrap();
+    let p = GravityProblem::new(graph.clone(), priors).unwrap();
+    let auto = AverageSettings {
+        solve: MultipleSettings {
+            robust_on_outliers: rotavg::io::names::MultipleLoss::Auto.robust_on_outliers(5.0),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let est = average_with_gravity(&p, &auto).unwrap();
+    assert!(est.details.loss_choice.as_ref().unwrap().is_robust());
+    let off = p.max_prior_violation_deg(&est.solution.rotations);
+    assert!(off < 1e-10, "{off} deg; {}", est.solution.report);
+    let g = est.details.inlier_graph.as_ref().expect("an inlier graph");
+    assert!(p.max_prior_violation_deg(&g.estimate) < 1e-10);
+    let c = g.certificate.as_ref().unwrap();
+    assert_eq!(c.verdict, Verdict::Certified, "{c}");
+    assert_eq!(
+        c.certified_problem.unwrap().kind,
+        CertifiedProblemKind::ChordalL2GravityInliers
+    );
+    let truth: Vec<_> = truth.into_iter().map(Some).collect();
+    let err = |r: &[Rotation]| align_and_compare(r, &truth).unwrap().robust.median_deg;
+    let least_squares = average_with_gravity(&p, &AverageSettings::default()).unwrap();
+    let plain = rotavg::pipeline::average_multiple(&graph, &auto).unwrap();
+    let (with, ls, without) = (
+        err(&est.solution.rotations),
+        err(&least_squares.solution.rotations),
+        err(&plain.solution.rotations),
+    );
+    assert!(with < 0.5 * ls, "robust {with} vs least squares {ls}");
+    assert!(with < without, "with gravity {with} vs without {without}");
+}

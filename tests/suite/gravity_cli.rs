@@ -159,7 +159,7 @@ fn full_gravity_is_certified_and_certify_reads_priors() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("off its gravity priors"));
 }
 
-/// Keyed JSON, unmatched keys counted; bad lines named; a robust loss refused.
+/// Keyed JSON, unmatched keys counted; bad lines named; the geodesic L2 loss refused.
 #[test]
 fn file_forms_and_errors() {
     let graph = example("graph.json");
@@ -202,8 +202,8 @@ fn file_forms_and_errors() {
         "--gravity",
         &gravity,
         "--loss",
-        "cauchy",
+        "geodesic",
     ]);
     assert_ne!(out.status.code(), Some(0));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("least squares"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not `--loss geodesic`"));
 }

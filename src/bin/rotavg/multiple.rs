@@ -168,22 +168,17 @@ fn solve_and_write(args: &Args, outputs: &MultipleOutputs) -> Result<Outcome> {
     args.common.finish(&report, report.verdict())
 }
 
-/// `--gravity` solves least squares: a robust or geodesic `--loss` (or its options) is an
-/// error (`auto` keeps least squares and reports the outlier diagnosis).
+/// `--gravity` takes the chordal L2 loss (with `auto`, least squares or the robust one the
+/// residuals call for) and the robust losses; the geodesic L2 loss is an error.
 fn check_gravity_options(args: &Args) -> Result<()> {
-    let robust_flags = args.inlier_threshold.is_some()
-        || args.edges_output.is_some()
-        || args.inlier_output.is_some();
-    if matches!(args.loss, MultipleLoss::Auto | MultipleLoss::Chordal) && !robust_flags {
+    if args.loss != MultipleLoss::Geodesic {
         return Ok(());
     }
     Err(Error::InvalidSettings {
         name: "--gravity".into(),
-        reason: format!(
-            "gravity priors are solved with the chordal L2 loss (least squares) only, not \
-             `--loss {}` or the robust outputs",
-            args.loss
-        ),
+        reason: "gravity priors are solved with the chordal L2 loss or a robust loss (l1, \
+                 huber, cauchy), not `--loss geodesic`"
+            .into(),
     })
 }
 
