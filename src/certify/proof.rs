@@ -34,6 +34,9 @@ pub enum Proof {
     ConvDual,
     /// The dual certificate of the simultaneous problem at the estimate `[H15]`.
     SimultaneousDual,
+    /// The decoupled bound of the simultaneous problem `[H16]`: the two view graphs' certified
+    /// minima, summed.
+    SimultaneousDecoupled,
     /// The SO(2) dual certificate of the full-gravity problem at the estimate `[G3]`.
     GravityDual,
     /// The gravity problem's constraints dropped `[G7]`: the certified bound of the view graph
@@ -77,7 +80,7 @@ impl Proof {
             | Proof::ConvDual
             | Proof::SimultaneousDual
             | Proof::GravityDual => 2,
-            Proof::GravityRelaxed => 5,
+            Proof::GravityRelaxed | Proof::SimultaneousDecoupled => 5,
             Proof::ShiftedCholesky => 2,
             Proof::ScalarComparison => 3,
             Proof::Sdp | Proof::ConvSdp => 6,
@@ -100,6 +103,7 @@ impl Proof {
             | Proof::SimultaneousDual
             | Proof::GravityDual
             | Proof::GravityRelaxed
+            | Proof::SimultaneousDecoupled
             | Proof::ScalarWeights
             | Proof::Grounded
             | Proof::ShiftedCholesky
@@ -120,6 +124,7 @@ impl fmt::Display for Proof {
             Proof::ConvSdp => "conv(SO(3)) SDP relaxation [A6] (Clarabel)",
             Proof::ConvDual => "conv(SO(3)) dual certificate at the estimate [A11]",
             Proof::SimultaneousDual => "trace-coupled dual certificate at the estimate [H15]",
+            Proof::SimultaneousDecoupled => "the two view graphs' bounds, decoupled [H16]",
             Proof::GravityDual => "SO(2) dual certificate at the estimate [G3]",
             Proof::GravityRelaxed => "the view graph without its gravity priors [G7]",
             Proof::ScalarWeights => "comparison with scalar weights [A13]",

@@ -13,6 +13,11 @@ use crate::certify::settings::CertifyMode;
 use crate::error::Result;
 use crate::relax::multiple::SDP_MULTIPLY_ADD_RATE;
 
+/// The most nodes of a rig the dense dual certificate `[H15]` is tried on (its `3n x 3n`
+/// dense eigenproblems and coupling search: 153 s at 1000 nodes, measured); larger rigs are
+/// bounded by the decoupled bound `[H16]`, and solved by the sparse alternation `[H17]`.
+pub const DENSE_MAX_NODES: usize = 500;
+
 /// Time and memory of [`super::multipliers::multipliers_at_estimate`] and of its verification on `n` nodes: a dense
 /// `3n x 3n` Cholesky factorisation and two dense symmetric eigen-decompositions (taken as
 /// `10 (3n)^3` multiply-adds each), and six dense `3n x 3n` matrices alive at once.
@@ -49,6 +54,14 @@ impl<'a> Rung<SimState<'a>> for DualRung {
                 "the simultaneous problem is certified by its dual certificate and its SDP \
                  (modes auto, dual and sdp), not {}",
                 mode.name()
+            );
+            return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
+        }
+        let n = cx.right.num_rotations();
+        if n > DENSE_MAX_NODES {
+            let reason = format!(
+                "{n} nodes: the dense dual certificate is for rigs of at most {DENSE_MAX_NODES} \
+                 (the decoupled bound [H16] applies)"
             );
             return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
         }

@@ -3,9 +3,11 @@
 //! dual certificate at the estimate ([`dual`], `[H15]`), then the SDP of
 //! [`crate::relax::simultaneous`] (`[H14]`, `sdp.rs`), each predicted from its size and refused
 //! over the budget; their multipliers are verified by an independent dense eigenvalue
-//! computation ([`bound`]).
+//! computation ([`bound`]). When neither proves enough (or fits), the decoupled bound
+//! (`decoupled.rs`, `[H16]`): the two graphs' own certified minima, summed, at any size.
 
 pub mod bound;
+mod decoupled;
 pub mod dual;
 pub mod multipliers;
 mod sdp;
@@ -80,6 +82,14 @@ pub fn certify_simultaneous(
     let rungs: Rungs<'_, SimState<'_>> = vec![
         Box::new(dual::DualRung::default()),
         Box::new(sdp::SdpRung::default()),
+        Box::new(decoupled::DecoupledRung::new(
+            |graph, rotations, settings| {
+                Ok(
+                    crate::certify::multiple::certify_multiple(graph, rotations, settings)?
+                        .certificate,
+                )
+            },
+        )),
     ];
     climb(&mut state, rungs)?;
     let seconds = deadline.elapsed();
@@ -93,7 +103,7 @@ pub fn certify_simultaneous(
         Some(b) => (
             Some(b.lower_bound),
             b.proof.method(),
-            Some(b.verified_min_eigenvalue),
+            Some(b.verified_min_eigenvalue).filter(|v| v.is_finite()),
             b.note,
         ),
         None => (

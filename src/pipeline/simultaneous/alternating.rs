@@ -1,0 +1,118 @@
+//! The sparse joint solver of the simultaneous problem (`paper-notes/conjugate.md`, `[H17]`):
+//! block-coordinate descent on `J(R, S)`. With `S` fixed, `J` is the chordal cost of one view
+//! graph over the rig frames, the right edges and the left edges turned into frame measurements
+//! `S^T L_ij S` (`||S R_j - L_ij S R_i|| = ||R_j - S^T L_ij S R_i||`), solved by the sparse
+//! chordal Newton-LM; with `R` fixed, `J` is the conjugate cost of the pairs
+//! `(L_ij, R_j R_i^T)` (`||S R_j R_i^T - L_ij S||`), solved by the conjugate solver. Each pass
+//! does not increase `J`; no dense `3n x 3n` system is formed.
+
+use super::{SimultaneousProblem, SimultaneousSolution};
+use crate::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings, solve_conjugate};
+use crate::error::Result;
+use crate::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings, solve_multiple};
+use crate::so3::Rotation;
+use crate::termination::{SolverReport, Termination};
+use std::time::Instant;
+
+/// The relative decrease of `J` in one pass below which the alternation stops.
+pub const ALTERNATING_DECREASE_TOLERANCE: f64 = 1e-10;
+
+/// The start: each graph averaged on its own (sparse, gauge `R_0 = L_0 = I`), then `S` from
+/// the conjugate problem on the pairs `(L_i, R_i)`, `i >= 1`.
+fn start(p: &SimultaneousProblem) -> Result<(Vec<Rotation>, Rotation)> {
+    let (right, left) = p.graphs()?;
+    let settings = MultipleSettings::default();
+    let rs = solve_multiple(&right, &settings)?.rotations;
+    let ls = solve_multiple(&left, &settings)?.rotations;
+    let pairs = (1..p.num_nodes)
+        .map(|i| ConjugatePair::new(ls[i], rs[i]))
+        .collect();
+    let s = solve_conjugate(
+        &ConjugateProblem::new(pairs)?,
+        &ConjugateSettings::default(),
+    )?;
+    Ok((rs, s.estimate))
+}
+
+/// The frames' view graph at fixed `s`: the right edges, and each left edge as `S^T L_ij S`.
+fn frame_graph(p: &SimultaneousProblem, s: &Rotation) -> Result<MultipleProblem> {
+    let st = s.inverse();
+    let left = p.left.iter().map(|e| Edge {
+        rotation: st * e.rotation * s,
+        ..e.clone()
+    });
+    MultipleProblem::new(p.num_nodes, p.right.iter().cloned().chain(left).collect())
+}
+
+/// `S` at fixed frames: the conjugate problem of the pairs `(L_ij, R_j R_i^T)`, from `s`.
+fn sensor_step(p: &SimultaneousProblem, rs: &[Rotation], s: &Rotation) -> Result<Rotation> {
+    let pairs = p
+        .left
+        .iter()
+        .map(|e| ConjugatePair {
+            weight: e.weight,
+            ..ConjugatePair::new(e.rotation, rs[e.j] * rs[e.i].inverse())
+        })
+        .collect();
+    let settings = ConjugateSettings {
+        init: Some(*s),
+        ..Default::default()
+    };
+    Ok(solve_conjugate(&ConjugateProblem::new(pairs)?, &settings)?.estimate)
+}
+
+/// Block-coordinate descent on `J` from the separate averages (`[H17]`), at most `max_passes`
+/// passes, until a pass decreases `J` by less than [`ALTERNATING_DECREASE_TOLERANCE`] of it.
+///
+/// ```
+/// use rotavg::multiple::synthetic::SyntheticGraph;
+/// use rotavg::pipeline::simultaneous::{SyntheticRig, solve_simultaneous, alternating::solve_alternating};
+/// let graph = SyntheticGraph { num_rotations: 60, num_edges: 240, noise_sigma: 0.02, ..Default::default() };
+/// let (p, _, _) = SyntheticRig { graph }.generate();
+/// let sparse = solve_alternating(&p, 100)?;
+/// let dense = solve_simultaneous(&p, 100)?;
+/// assert!(sparse.report.termination.is_converged());
+/// assert!((sparse.cost - dense.cost).abs() <= 1e-6 * dense.cost);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn solve_alternating(
+    p: &SimultaneousProblem,
+    max_passes: usize,
+) -> Result<SimultaneousSolution> {
+    let clock = Instant::now();
+    let (mut rs, mut s) = start(p)?;
+    let mut cost = p.cost(&rs, &s);
+    let mut termination = Termination::IterationLimit {
+        iterations: max_passes,
+        value: f64::NAN,
+        threshold: ALTERNATING_DECREASE_TOLERANCE,
+    };
+    let mut passes = 0;
+    while passes < max_passes {
+        passes += 1;
+        let settings = MultipleSettings {
+            init: Initialisation::Given(rs.clone()),
+            ..Default::default()
+        };
+        rs = solve_multiple(&frame_graph(p, &s)?, &settings)?.rotations;
+        s = sensor_step(p, &rs, &s)?;
+        let next = p.cost(&rs, &s);
+        let decrease = (cost - next) / cost.abs().max(f64::MIN_POSITIVE);
+        cost = next;
+        if decrease < ALTERNATING_DECREASE_TOLERANCE {
+            termination = Termination::Converged {
+                measure: "relative decrease of J in one pass".into(),
+                value: decrease.max(0.0),
+                threshold: ALTERNATING_DECREASE_TOLERANCE,
+            };
+            break;
+        }
+    }
+    let report = SolverReport {
+        name: "simultaneous-alternating (sparse)".into(),
+        iterations: passes,
+        termination,
+        seconds: clock.elapsed().as_secs_f64(),
+    };
+    Ok(super::on_so3(p, &rs, &s, report))
+}
