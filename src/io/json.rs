@@ -350,3 +350,23 @@ pub fn write_estimate_json(rotations: &[Rotation]) -> String {
         .collect();
     format!("{{\"rotations\": [\n{}\n]}}\n", lines.join(",\n"))
 }
+
+/// Write a rig's estimate `{"rotations": [R, ...], "node_ids": [...], "sensor_from_rig": S}`
+/// (`rotavg rig --output`): the frames one per line, then the frames' file ids and `S`.
+///
+/// ```
+/// use rotavg::io::json::write_rig_json;
+/// let text = write_rig_json(&[rotavg::Rotation::identity(); 2], &[4, 7], &rotavg::Rotation::identity());
+/// let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+/// assert_eq!(v["node_ids"], serde_json::json!([4, 7]));
+/// assert_eq!(v["sensor_from_rig"][2][2], 1.0);
+/// ```
+pub fn write_rig_json(rotations: &[Rotation], node_ids: &[u64], s: &Rotation) -> String {
+    let frames = write_estimate_json(rotations);
+    let head = frames.trim_end().trim_end_matches('}');
+    format!(
+        "{head}, \"node_ids\": {}, \"sensor_from_rig\": {}}}\n",
+        serde_json::to_string(node_ids).unwrap_or_default(),
+        serde_json::to_string(&rotation_to_rows(s)).unwrap_or_default()
+    )
+}

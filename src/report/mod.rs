@@ -37,6 +37,7 @@ pub mod conjugate;
 pub mod demo;
 pub mod info;
 pub mod multiple;
+pub mod rig;
 pub mod single;
 
 pub use crate::io::input::ProblemKind;
@@ -45,6 +46,7 @@ pub use conjugate::ConjugateReport;
 pub use demo::DemoReport;
 pub use info::InfoReport;
 pub use multiple::{CertifiedEstimate, MultipleReport, VerdictOf};
+pub use rig::{RigReport, rig_problem};
 pub use single::SingleReport;
 
 use crate::certify::MethodRun;

@@ -307,13 +307,45 @@ fn gravity() -> (String, String, String, String) {
     (rotavg::io::json::write_problem_json(&p), priors, all, truth)
 }
 
+/// `rig/`: a two-sensor rig of 120 frames (`SyntheticRig`: 480 pairs measured by both sensors,
+/// 0.02 rad of noise per axis): the reference sensor's view graph (`right.json`), the other
+/// sensor's (`left.json`, `L_ij ~ S R_ij S^T`) and the truth (`truth.json`: the frames and
+/// `sensor_from_rig`).
+fn rig() -> (String, String, String) {
+    use rotavg::multiple::MultipleProblem;
+    let graph = rotavg::multiple::synthetic::SyntheticGraph {
+        num_rotations: 120,
+        num_edges: 480,
+        noise_sigma: 0.02,
+        outlier_fraction: 0.0,
+        seed: 2028,
+    };
+    let (p, frames, s) = rotavg::pipeline::simultaneous::SyntheticRig { graph }.generate();
+    let write = |edges: &[rotavg::multiple::Edge]| {
+        let g = MultipleProblem::new(p.num_nodes, edges.to_vec()).expect("a valid graph");
+        rotavg::io::json::write_problem_json(&g)
+    };
+    let rows =
+        |r: &Rotation| serde_json::to_string(&rotavg::so3::rotation_to_rows(r)).expect("rows");
+    let truth = format!(
+        "{{\"rotations\": [\n  {}\n], \"sensor_from_rig\": {}}}\n",
+        frames.iter().map(rows).collect::<Vec<_>>().join(",\n  "),
+        rows(&s)
+    );
+    (write(&p.right), write(&p.left), truth)
+}
+
 /// Every file of the example data, `(relative path, contents)`, from one seed.
 fn files() -> Vec<(&'static str, String)> {
     let mut rng = StdRng::seed_from_u64(2026);
     let (graph, truth) = sfm(&mut rng);
     let (hand, camera, x) = handeye(&mut rng);
     let (gravity_graph, gravity_priors, gravity_all, gravity_truth) = gravity();
+    let (rig_right, rig_left, rig_truth) = rig();
     vec![
+        ("rig/right.json", rig_right),
+        ("rig/left.json", rig_left),
+        ("rig/truth.json", rig_truth),
         ("gravity/graph.json", gravity_graph),
         ("gravity/gravity.txt", gravity_priors),
         ("gravity/gravity_all.txt", gravity_all),

@@ -70,6 +70,7 @@ mod properties_single;
 mod properties_so3;
 mod readme_examples;
 mod relax_multiple;
+mod rig_cli;
 #[cfg(feature = "cli")]
 mod robust_inliers;
 mod scalar_weights;

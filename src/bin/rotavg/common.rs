@@ -254,7 +254,7 @@ impl GraphArgs {
 }
 
 /// `--plot` (`multiple`, `conjugate`, `certify`).
-#[derive(Args, Debug)]
+#[derive(Args, Debug, Default)]
 pub struct PlotArgs {
     /// Write an SVG figure: histogram of the residual angles (degrees), the certificate, and
     /// the smallest eigenvalues of the certificate matrix (estimates) with the proven bound.

@@ -1,5 +1,5 @@
-//! The `rotavg` command line: the verbs `demo`, `single`, `multiple`, `conjugate`, `certify`
-//! and `info` (the contract: docs/reference/contract.md section 5, and docs/reference/cli.md). The option groups the
+//! The `rotavg` command line: the verbs `demo`, `single`, `multiple`, `conjugate`, `rig`,
+//! `certify` and `info` (the contract: docs/reference/contract.md section 5, and docs/reference/cli.md). The option groups the
 //! verbs share are in `common.rs`. Exit status: 0 success (whatever the verdict), 1 bad input
 //! or failure, 2 usage error, 3 with `--require-certified` when the verdict is not `certified`.
 
@@ -10,6 +10,7 @@ mod demo;
 mod info;
 mod multiple;
 mod progress;
+mod rig;
 mod single;
 
 use clap::{Parser, Subcommand};
@@ -38,6 +39,8 @@ enum Command {
     Multiple(multiple::Args),
     /// Conjugate (hand-eye) averaging: S with R_i ~ S^-1 L_i S.
     Conjugate(conjugate::Args),
+    /// A two-sensor rig: frames and sensor_from_rig from two view graphs, jointly.
+    Rig(rig::Args),
     /// Certify (or bound the gap of) an estimate computed elsewhere, without changing it.
     Certify(certify::Args),
     /// Describe an input file: sizes, components, degrees, spectral gap.
@@ -78,6 +81,7 @@ fn main() -> ExitCode {
         Command::Multiple(a) => (Some(&a.input), Some(&a.common)),
         Command::Conjugate(a) => (a.input.as_deref(), Some(&a.common)),
         Command::Certify(a) => (a.input.as_deref(), Some(&a.common)),
+        Command::Rig(a) => (Some(&a.right), Some(&a.common)),
         Command::Info(a) => (Some(&a.input), None),
     };
     progress::Display::install(common.is_some_and(|c| !c.quiet && !c.json));
@@ -87,6 +91,7 @@ fn main() -> ExitCode {
         Command::Multiple(a) => multiple::run(a),
         Command::Conjugate(a) => conjugate::run(a),
         Command::Certify(a) => certify::run(a),
+        Command::Rig(a) => rig::run(a),
         Command::Info(a) => info::run(a),
     };
     progress::finish();
@@ -127,7 +132,7 @@ fn error_text(e: rotavg::Error, input: Option<&str>, command: &Command) -> Strin
         Command::Single(_) => {
             "`rotavg single` reads a file (JSON {\"rotations\": [R, ...]}), never a folder"
         }
-        Command::Multiple(_) | Command::Info(_) => {
+        Command::Multiple(_) | Command::Info(_) | Command::Rig(_) => {
             "as a folder, `rotavg multiple` and `rotavg info` read only a COLMAP project (a \
              folder holding database.db); other view graphs are files (g2o, 1DSfM EGs.txt, JSON)"
         }

@@ -568,12 +568,16 @@ impl PipelineProblem for SimultaneousProblem {
         if self.num_nodes > DENSE_MAX_NODES || predicted > settings.max_memory_bytes as f64 {
             return Ok(sparse);
         }
-        let polished = solve_simultaneous_from(self, &sparse.rotations, &sparse.s, 20)?;
-        Ok(if polished.cost <= sparse.cost {
-            sparse.adopt(polished)
-        } else {
-            sparse
-        })
+        let mut polished = solve_simultaneous_from(self, &sparse.rotations, &sparse.s, 20)?;
+        if polished.cost > sparse.cost {
+            return Ok(sparse);
+        }
+        // the alternation's stopping test decided; the polish only refines
+        polished.report.name = "simultaneous-alternating + gauss-newton polish".into();
+        if !polished.report.termination.is_converged() {
+            polished.report.termination = sparse.report.termination.clone();
+        }
+        Ok(sparse.adopt(polished))
     }
     /// The dual certificate at the estimate `[H15]`, then the SDP `[H14]`; a cheaper rounding of
     /// the SDP is polished by the joint Gauss-Newton and offered

@@ -1,0 +1,169 @@
+//! `rotavg rig RIGHT LEFT`: a two-sensor rig calibrated and its frames averaged jointly (the
+//! simultaneous problem, [`crate::pipeline::simultaneous`]), as text and JSON.
+
+use super::{Rows, nested};
+use crate::io::detect::{GraphFormat, LoadedGraph};
+use crate::pipeline::Averaged;
+use crate::pipeline::simultaneous::{SimultaneousProblem, SimultaneousSolution};
+use crate::so3::{Rotation, angle, log};
+use crate::warning::Warning;
+use crate::{Error, Result};
+use serde::{Serialize, Serializer};
+use std::fmt;
+
+/// A rig's report: the two view graphs as read, and the joint estimate with its certificate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigReport {
+    /// The right (reference sensor's) and left view graphs' files, as given.
+    pub inputs: [String; 2],
+    /// Their formats.
+    pub formats: [GraphFormat; 2],
+    /// The frames' file ids (the two graphs' common node ids).
+    pub node_ids: Vec<u64>,
+    /// Edges of each graph.
+    pub num_edges: [usize; 2],
+    /// The readers' warnings.
+    pub warnings: Vec<Warning>,
+    /// The joint estimate: the frames (the reference sensor's rotations, `R_0 = I`) and
+    /// `S = sensor_from_rig` of the left sensor.
+    pub result: Averaged<SimultaneousSolution>,
+}
+
+/// The simultaneous problem of two view graphs read from files: the right graph is the
+/// reference sensor's (its rotations are the frames'), the left one the other sensor's,
+/// `L_ij ~ S R_ij S^T` with `S` its `sensor_from_rig`. Frames are paired by file id; the two
+/// graphs must have the same ids. Errors: different ids, anisotropic information (rigs take
+/// scalar weights).
+pub fn rig_problem(right: &LoadedGraph, left: &LoadedGraph) -> Result<SimultaneousProblem> {
+    if right.node_ids != left.node_ids {
+        let only = |a: &LoadedGraph, b: &LoadedGraph| {
+            a.node_ids
+                .iter()
+                .filter(|id| b.node_ids.binary_search(id).is_err())
+                .count()
+        };
+        return Err(Error::InvalidSettings {
+            name: "rig".into(),
+            reason: format!(
+                "the two view graphs must have the same frames (node ids): {} only in the \
+                 first, {} only in the second",
+                only(right, left),
+                only(left, right)
+            ),
+        });
+    }
+    if right.problem.is_anisotropic() || left.problem.is_anisotropic() {
+        return Err(Error::InvalidSettings {
+            name: "rig".into(),
+            reason: "rigs take scalar weights (no --information full)".into(),
+        });
+    }
+    Ok(SimultaneousProblem {
+        num_nodes: right.problem.num_rotations(),
+        right: right.problem.edges().to_vec(),
+        left: left.problem.edges().to_vec(),
+    })
+}
+
+impl RigReport {
+    /// The report of `result`, the estimate of the rig of `right` and `left` (read from the
+    /// files `inputs`).
+    pub fn new(
+        inputs: [String; 2],
+        right: &LoadedGraph,
+        left: &LoadedGraph,
+        result: Averaged<SimultaneousSolution>,
+    ) -> Self {
+        RigReport {
+            inputs,
+            formats: [right.format, left.format],
+            node_ids: right.node_ids.clone(),
+            num_edges: [right.problem.num_edges(), left.problem.num_edges()],
+            warnings: [super::input_warnings(right), super::input_warnings(left)].concat(),
+            result,
+        }
+    }
+
+    /// The verdict of the joint estimate's certificate, if one was computed.
+    pub fn verdict(&self) -> Option<crate::Verdict> {
+        self.result.certificate.as_ref().map(|c| c.verdict)
+    }
+}
+
+impl fmt::Display for SimultaneousSolution {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let axis = log(&self.s).try_normalize(0.0).unwrap_or_default();
+        write!(
+            f,
+            "joint chordal cost {:.9e}; sensor_from_rig S: {:.6} deg about ({:.6}, {:.6}, {:.6}); {}",
+            self.cost,
+            angle(&self.s).to_degrees(),
+            axis.x,
+            axis.y,
+            axis.z,
+            self.report
+        )
+    }
+}
+
+impl fmt::Display for RigReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "rig: {} ({} format, {} edges) and {} ({} format, {} edges), {} frames",
+            self.inputs[0],
+            self.formats[0],
+            self.num_edges[0],
+            self.inputs[1],
+            self.formats[1],
+            self.num_edges[1],
+            self.node_ids.len()
+        )?;
+        for w in &self.warnings {
+            write!(f, "\nwarning: {w}")?;
+        }
+        writeln!(f)?;
+        nested(f, &self.result)
+    }
+}
+
+#[derive(Serialize)]
+struct Json<'a> {
+    problem: &'static str,
+    num_rotations: usize,
+    num_measurements: usize,
+    warnings: &'a [Warning],
+    inputs: &'a [String; 2],
+    formats: [GraphFormat; 2],
+    cost: f64,
+    estimate: Rows<'a>,
+    #[serde(with = "crate::so3::serde_rows::rotation")]
+    sensor_from_rig: &'a Rotation,
+    node_ids: &'a [u64],
+    solver: &'a crate::termination::SolverReport,
+    certificate: Option<&'a crate::certify::Certificate>,
+    pipeline: &'a crate::pipeline::PipelineDetails,
+}
+
+impl Serialize for RigReport {
+    fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+        let s = &self.result.solution;
+        // the contract's first keys; `problem` is "rig" (an extension of section 5's kinds)
+        Json {
+            problem: "rig",
+            num_rotations: s.rotations.len() + 1,
+            num_measurements: self.num_edges[0] + self.num_edges[1],
+            warnings: &self.warnings,
+            inputs: &self.inputs,
+            formats: self.formats,
+            cost: s.cost,
+            estimate: Rows::Many(&s.rotations),
+            sensor_from_rig: &s.s,
+            node_ids: &self.node_ids,
+            solver: &s.report,
+            certificate: self.result.certificate.as_ref(),
+            pipeline: &self.result.details,
+        }
+        .serialize(serializer)
+    }
+}

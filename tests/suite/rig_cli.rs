@@ -1,0 +1,95 @@
+//! `rotavg rig RIGHT LEFT` (issue 36 item 1): the committed two-sensor rig
+//! (`examples/data/rig/`) calibrated and certified, checked against its planted truth; the
+//! written estimate; the errors of graphs that do not pair.
+
+use crate::common::{assert_success, json_of, run, temp_dir, temp_file};
+use rotavg::Rotation;
+use rotavg::so3::{angle_between, rotation_from_rows};
+use std::path::Path;
+
+fn example(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/data/rig")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+fn rotation(v: &serde_json::Value) -> Rotation {
+    let rows: [[f64; 3]; 3] = serde_json::from_value(v.clone()).unwrap();
+    rotation_from_rows(&rows, 1e-9, "test").unwrap()
+}
+
+/// The example rig: `sensor_from_rig` within 0.2 degrees of the planted one, the frames within
+/// 2 degrees (after the gauge `R_0`), certified; the JSON names the problem `rig`, and
+/// `--output` writes the frames, their ids and `S`.
+#[test]
+fn the_example_rig_is_calibrated_and_certified() {
+    let out_path = temp_dir().join("rig.json");
+    let out = run(&[
+        "rig",
+        &example("right.json"),
+        &example("left.json"),
+        "--json",
+        "--output",
+        out_path.to_str().unwrap(),
+    ]);
+    assert_success(&out);
+    let v = json_of(&out);
+    assert_eq!(v["problem"], "rig");
+    assert_eq!(v["num_measurements"], 960);
+    assert_eq!(
+        v["certificate"]["verdict"], "certified",
+        "{}",
+        v["certificate"]
+    );
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(example("truth.json")).unwrap()).unwrap();
+    let s = rotation(&v["sensor_from_rig"]);
+    let s_true = rotation(&truth["sensor_from_rig"]);
+    assert!(angle_between(&s, &s_true).to_degrees() < 0.2);
+    let frames: Vec<Rotation> = v["estimate"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(rotation)
+        .collect();
+    let planted: Vec<Rotation> = truth["rotations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(rotation)
+        .collect();
+    // both in the gauge R_0 = I
+    let worst = frames
+        .iter()
+        .zip(&planted)
+        .map(|(a, b)| angle_between(a, b).to_degrees())
+        .fold(0.0, f64::max);
+    assert!(worst < 2.0, "{worst} degrees");
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out_path).unwrap()).unwrap();
+    assert_eq!(written["rotations"].as_array().unwrap().len(), 120);
+    assert_eq!(written["node_ids"][119], 119);
+    assert!(angle_between(&rotation(&written["sensor_from_rig"]), &s) < 1e-12);
+}
+
+/// Graphs over different frames, and anisotropic information, are errors that say so.
+#[test]
+fn graphs_that_do_not_pair_are_errors() {
+    let text = std::fs::read_to_string(example("left.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["num_rotations"] = serde_json::json!(121);
+    let edges = v["edges"].as_array_mut().unwrap();
+    let mut extra = edges[0].clone();
+    extra["j"] = serde_json::json!(120);
+    edges.push(extra);
+    let more = temp_file("left_more.json", &v.to_string());
+    let out = run(&["rig", &example("right.json"), more.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("same frames") && err.contains("1 only in the second"),
+        "{err}"
+    );
+}
