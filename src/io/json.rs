@@ -370,3 +370,29 @@ pub fn write_rig_json(rotations: &[Rotation], node_ids: &[u64], s: &Rotation) ->
         serde_json::to_string(&rotation_to_rows(s)).unwrap_or_default()
     )
 }
+
+/// The `"sensor_from_rig"` rotation of a rig estimate file (`rotavg rig --output`), a rotation
+/// within `options.rotation_tolerance`. Errors: no such field, not a rotation, not JSON.
+pub fn read_sensor_from_rig(path: &str, options: &ReadOptions) -> Result<Rotation> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+        path: path.into(),
+        message: e.to_string(),
+    })?;
+    #[derive(Deserialize)]
+    struct Rig {
+        sensor_from_rig: Option<[[f64; 3]; 3]>,
+    }
+    let rig: Rig = serde_json::from_str(&text).map_err(|e| syntax_error(path, e))?;
+    let rows = rig.sensor_from_rig.ok_or_else(|| {
+        Error::parse(
+            Some(path),
+            None,
+            "a rig estimate needs \"sensor_from_rig\": S (as `rotavg rig --output` writes it)",
+        )
+    })?;
+    crate::so3::rotation_from_rows(
+        &rows,
+        options.rotation_tolerance,
+        &format!("{path}: sensor_from_rig"),
+    )
+}

@@ -84,6 +84,49 @@ impl RigReport {
         }
     }
 
+    /// Certify a rig estimate computed elsewhere (`rotations` of the frames, `s` its
+    /// `sensor_from_rig`), never changed: `rotavg certify RIGHT --left LEFT --estimate FILE`.
+    pub fn certify(
+        inputs: [String; 2],
+        right: &LoadedGraph,
+        left: &LoadedGraph,
+        rotations: Vec<Rotation>,
+        s: Rotation,
+        settings: &crate::certify::CertifySettings,
+    ) -> Result<Self> {
+        let p = rig_problem(right, left)?;
+        let c = crate::certify::certify_simultaneous(
+            &right.problem,
+            &left.problem,
+            &rotations,
+            &s,
+            settings,
+        )?;
+        let solution = SimultaneousSolution {
+            cost: p.cost(&rotations, &s),
+            rotations,
+            s,
+            report: crate::termination::SolverReport {
+                name: "given (certified, not changed)".into(),
+                iterations: 0,
+                termination: crate::termination::Termination::ClosedForm,
+                seconds: 0.0,
+            },
+        };
+        let details = crate::pipeline::PipelineDetails {
+            certify_seconds: c.details.seconds,
+            total_seconds: c.details.seconds,
+            certify: Some(c.details),
+            ..Default::default()
+        };
+        let result = Averaged {
+            solution,
+            certificate: Some(c.certificate),
+            details,
+        };
+        Ok(RigReport::new(inputs, right, left, result))
+    }
+
     /// The verdict of the joint estimate's certificate, if one was computed.
     pub fn verdict(&self) -> Option<crate::Verdict> {
         self.result.certificate.as_ref().map(|c| c.verdict)

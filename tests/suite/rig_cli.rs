@@ -93,3 +93,59 @@ fn graphs_that_do_not_pair_are_errors() {
         "{err}"
     );
 }
+
+/// `rotavg certify RIGHT --left LEFT --estimate FILE`: the written rig estimate is certified
+/// unchanged (the same cost), the planted truth (not a minimum under noise) is not, and its bound
+/// stays below the rig's own cost; an estimate without `sensor_from_rig` is an error.
+#[test]
+fn certify_reads_a_rig_estimate() {
+    let est = temp_dir().join("rig_for_certify.json");
+    let est = est.to_str().unwrap();
+    let (right, left) = (example("right.json"), example("left.json"));
+    let solved = run(&["rig", &right, &left, "--output", est, "--json"]);
+    assert_success(&solved);
+    let cost = json_of(&solved)["cost"].as_f64().unwrap();
+    let out = run(&[
+        "certify",
+        &right,
+        "--left",
+        &left,
+        "--estimate",
+        est,
+        "--json",
+    ]);
+    assert_success(&out);
+    let v = json_of(&out);
+    assert_eq!(v["certificate"]["verdict"], "certified");
+    assert!((v["cost"].as_f64().unwrap() - cost).abs() <= 1e-12 * cost);
+    let truth = example("truth.json");
+    let out = run(&[
+        "certify",
+        &right,
+        "--left",
+        &left,
+        "--estimate",
+        &truth,
+        "--json",
+    ]);
+    assert_success(&out);
+    let v = json_of(&out);
+    assert_eq!(v["certificate"]["verdict"], "gap_reported");
+    assert!(v["certificate"]["lower_bound"].as_f64().unwrap() <= cost * (1.0 + 1e-9));
+    let plain = temp_file(
+        "no_s.json",
+        &std::fs::read_to_string(est)
+            .unwrap()
+            .replace("sensor_from_rig", "other"),
+    );
+    let out = run(&[
+        "certify",
+        &right,
+        "--left",
+        &left,
+        "--estimate",
+        plain.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("sensor_from_rig"));
+}

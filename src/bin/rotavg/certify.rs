@@ -51,6 +51,11 @@ pub struct Args {
     pub graph: GraphArgs,
     #[command(flatten)]
     pub gravity: GravityArgs,
+    /// A two-sensor rig: INPUT is the reference sensor's view graph and FILE the other
+    /// sensor's; the estimate (as `rotavg rig --output` writes it) holds the frames and
+    /// `"sensor_from_rig": S`. The joint cost is certified, the estimate unchanged.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["gravity", "hand", "camera"])]
+    pub left: Option<String>,
     #[command(flatten)]
     pub plot: PlotArgs,
     /// Hand-eye pose streams and their pairing, as `rotavg conjugate` reads them.
@@ -62,6 +67,9 @@ pub struct Args {
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
+    if let Some(left) = &args.left {
+        return certify_rig(args, left);
+    }
     let inlier_threshold = args
         .loss
         .certify_inlier_threshold_deg(args.loss_threshold, args.inlier_threshold)?;
@@ -169,4 +177,30 @@ fn load(args: &Args, options: &ReadOptions) -> Result<(String, LoadedProblem)> {
             Ok((loaded.name, LoadedProblem::Conjugate(loaded.problem)))
         }
     }
+}
+
+/// `--left`: certify a rig estimate (frames and `sensor_from_rig`) on the two view graphs.
+fn certify_rig(args: &Args, left_path: &str) -> Result<Outcome> {
+    let options = args.graph.read_options(&args.common);
+    let right_path = args.input.clone().unwrap_or_else(|| "-".into());
+    let right =
+        rotavg::io::detect::load_graph(Path::new(&right_path), args.graph.format, &options)?;
+    let left = rotavg::io::detect::load_graph(Path::new(left_path), args.graph.format, &options)?;
+    let rotations = load_estimate_for(&args.estimate, &right, &options)?
+        .into_loaded()
+        .into_rotations()?;
+    let s = rotavg::io::json::read_sensor_from_rig(&args.estimate, &options)?;
+    let mut settings = args.graph.settings(&args.common, &args.plot);
+    if settings.mode == CertifyMode::None {
+        settings.mode = CertifyMode::Dual;
+    }
+    let report = rotavg::report::RigReport::certify(
+        [right_path, left_path.to_string()],
+        &right,
+        &left,
+        rotations,
+        s,
+        &settings,
+    )?;
+    args.common.finish(&report, report.verdict())
 }
