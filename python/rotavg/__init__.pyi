@@ -30,9 +30,11 @@ __all__ = [
     "accuracy",
     "average_conjugate",
     "average_multiple",
+    "average_rig",
     "average_single",
     "certify_conjugate",
     "certify_multiple",
+    "certify_rig",
     "certify_single",
     "hand_eye",
     "hand_eye_pairs",
@@ -398,6 +400,28 @@ def certify_single(
     weights: Optional[npt.ArrayLike] = None,
 ) -> Result:
     """Certify a chordal L2 mean computed elsewhere, without changing it."""
+
+def average_rig(
+    right: Graph,
+    left: Graph,
+    *,
+    certify: str = "auto",
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
+) -> Result:
+    """A two-sensor rig's frames and sensor_from_rig, jointly from two view graphs, certified."""
+
+def certify_rig(
+    right: Graph,
+    left: Graph,
+    frames: _Rotations,
+    sensor_from_rig: npt.ArrayLike,
+    *,
+    certify: str = "auto",
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
+) -> Result:
+    """Certify a rig estimate computed elsewhere, without changing it."""
 
 def read_graph(
     path: _PathLike,

@@ -14,6 +14,7 @@ mod gravity;
 mod handeye;
 mod output;
 mod progress;
+mod rig;
 mod truth;
 mod types;
 
@@ -683,7 +684,7 @@ enum EstimateInput {
 /// Certification settings with the budget (`max_memory` bytes, default 4 GiB; `max_seconds`,
 /// `None`: no limit) and the randomized test `[D16]` (`randomized`, `randomized_seed`),
 /// validated.
-fn certify_settings(
+pub(crate) fn certify_settings(
     mode: CertifyMode,
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
@@ -1159,6 +1160,8 @@ fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(certify_conjugate_py, m)?)?;
     m.add_function(wrap_pyfunction!(certify_single_py, m)?)?;
     m.add_function(wrap_pyfunction!(read_graph, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::average_rig, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::certify_rig, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_edges, m)?)?;
     m.add_function(wrap_pyfunction!(progress::set_progress, m)?)?;

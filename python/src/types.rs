@@ -200,6 +200,7 @@ pub enum Report {
     Multiple(MultipleReport),
     Conjugate(ConjugateReport),
     Certify(CertifyReport),
+    Rig(rotavg::report::RigReport),
 }
 
 impl Report {
@@ -209,6 +210,7 @@ impl Report {
             Report::Multiple(r) => to_json(r),
             Report::Conjugate(r) => to_json(r),
             Report::Certify(r) => to_json(r),
+            Report::Rig(r) => to_json(r),
         }
     }
 
@@ -218,6 +220,7 @@ impl Report {
             Report::Multiple(r) => r.to_string(),
             Report::Conjugate(r) => r.to_string(),
             Report::Certify(r) => r.to_string(),
+            Report::Rig(r) => r.to_string(),
         }
     }
 }
@@ -318,6 +321,19 @@ impl RunResult {
                     Some(s.chordal_cost),
                     1,
                     r.num_pairs,
+                    Some(&s.report),
+                    r.result.certificate.as_ref(),
+                )
+            }
+            Report::Rig(r) => {
+                let s = &r.result.solution;
+                (
+                    "rig",
+                    rotations_array(py, &s.rotations)?,
+                    s.cost,
+                    None,
+                    s.rotations.len(),
+                    r.num_edges[0] + r.num_edges[1],
                     Some(&s.report),
                     r.result.certificate.as_ref(),
                 )

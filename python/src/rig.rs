@@ -1,0 +1,95 @@
+//! Two-sensor rigs from Python (`average_rig`, `certify_rig`): the reports of `rotavg rig` and
+//! `rotavg certify --left`.
+
+use crate::convert::{matrices, matrix};
+use crate::types::{Graph, Report, RunResult};
+use crate::{certify_settings, detached, parse_named};
+use pyo3::prelude::*;
+use rotavg::certify::CertifyMode;
+use rotavg::pipeline::AverageSettings;
+use rotavg::pipeline::simultaneous::{SimultaneousSettings, average_simultaneous};
+use rotavg::report::{RigReport, rig_problem};
+
+/// A two-sensor rig: the frames and the second sensor's ``sensor_from_rig`` rotation ``S``,
+/// estimated jointly from two view graphs over the same frames and certified, exactly as
+/// ``rotavg rig RIGHT LEFT``.
+///
+/// Args:
+///     right: the reference sensor's ``Graph`` (``read_graph``): its rotations are the frames'.
+///     left: the other sensor's ``Graph`` over the same node ids (``L_ij ~ S R_ij S^T``).
+///     certify: ``"auto"``, ``"dual"``, ``"sdp"`` or ``"none"``.
+///     max_memory, max_seconds: the certificate's budget, as for ``average_multiple``.
+///
+/// Returns:
+///     Result: ``estimate`` is the frames ``(n, 3, 3)`` (gauge ``estimate[0] = I``);
+///     ``to_dict()["sensor_from_rig"]`` is ``S``; ``to_dict()`` equals ``rotavg rig ... --json``.
+///
+/// Raises:
+///     rotavg.Error: graphs over different node ids, anisotropic information.
+#[pyfunction]
+#[pyo3(name = "average_rig", signature = (right, left, *, certify="auto", max_memory=None, max_seconds=600.0))]
+pub fn average_rig(
+    py: Python<'_>,
+    right: PyRef<'_, Graph>,
+    left: PyRef<'_, Graph>,
+    certify: &str,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
+) -> PyResult<RunResult> {
+    let mode: CertifyMode = parse_named(certify, "certify")?;
+    let certify = certify_settings(mode, max_memory, max_seconds, true, None)?;
+    let (r, l) = (right.loaded.clone(), left.loaded.clone());
+    let names = [right.name.clone(), left.name.clone()];
+    let report = detached(py, move || {
+        let problem = rig_problem(&r, &l)?;
+        let settings = AverageSettings {
+            solve: SimultaneousSettings {
+                max_memory_bytes: certify.budget.max_memory_bytes,
+                ..Default::default()
+            },
+            certify,
+        };
+        let result = average_simultaneous(&problem, &settings)?;
+        Ok(RigReport::new(names, &r, &l, result))
+    })?;
+    RunResult::new(py, Report::Rig(report))
+}
+
+/// Certify a rig estimate computed elsewhere, **without changing it**, as ``rotavg certify
+/// RIGHT --left LEFT --estimate FILE``.
+///
+/// Args:
+///     right, left: the two ``Graph`` objects, as for ``average_rig``.
+///     frames: ``(n, 3, 3)`` frame rotations in node order.
+///     sensor_from_rig: ``(3, 3)`` rotation ``S``.
+///     certify, max_memory, max_seconds: as for ``average_rig`` (``"none"`` means ``"dual"``).
+#[pyfunction]
+#[pyo3(name = "certify_rig", signature = (right, left, frames, sensor_from_rig, *, certify="auto", max_memory=None, max_seconds=600.0))]
+#[allow(clippy::too_many_arguments)]
+pub fn certify_rig(
+    py: Python<'_>,
+    right: PyRef<'_, Graph>,
+    left: PyRef<'_, Graph>,
+    frames: &Bound<'_, PyAny>,
+    sensor_from_rig: &Bound<'_, PyAny>,
+    certify: &str,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
+) -> PyResult<RunResult> {
+    let mode = match parse_named(certify, "certify")? {
+        CertifyMode::None => CertifyMode::Dual,
+        m => m,
+    };
+    let settings = certify_settings(mode, max_memory, max_seconds, true, None)?;
+    let frames = matrices(frames, "frames")?;
+    let s = matrix(sensor_from_rig, "sensor_from_rig")?;
+    let (r, l) = (right.loaded.clone(), left.loaded.clone());
+    let names = [right.name.clone(), left.name.clone()];
+    let report = detached(py, move || {
+        let s = s.rotations()?.pop().ok_or_else(|| rotavg::Error::Empty {
+            what: "sensor_from_rig".into(),
+        })?;
+        RigReport::certify(names, &r, &l, frames.rotations()?, s, &settings)
+    })?;
+    RunResult::new(py, Report::Rig(report))
+}
