@@ -170,6 +170,32 @@ impl CertifyDetails {
         }
     }
 
+    /// The certificate of `cost` from a climb's best verified bound `best` (its value, family,
+    /// proven `lambda_min` and note), under `tolerance`; without one, an `inconclusive`
+    /// certificate of family `none_method` explained by the last rung's note.
+    pub(crate) fn certificate_of(
+        &self,
+        cost: f64,
+        best: Option<(f64, BoundMethod, Option<f64>, String)>,
+        none_method: BoundMethod,
+        tolerance: super::tolerance::GapTolerance,
+    ) -> Certificate {
+        let (lb, method, mu, why) = match best {
+            Some((lb, method, mu, note)) => (Some(lb), method, mu.filter(|v| v.is_finite()), note),
+            None => (
+                None,
+                none_method,
+                None,
+                self.methods()
+                    .last()
+                    .map_or_else(|| "no rung ran".into(), |m| m.note.clone()),
+            ),
+        };
+        let mut c = Certificate::from_bounds(cost, lb, method, mu, tolerance, why, self.seconds);
+        c.verified_min_eigenvalue = mu;
+        c
+    }
+
     /// The bounding methods that ran (or were refused), in order: the rungs of the
     /// certification itself ([`Attempt::within`] absent), not those not needed.
     pub fn methods(&self) -> Vec<MethodRun> {

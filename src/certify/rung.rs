@@ -137,3 +137,37 @@ pub trait Rung<C: ?Sized> {
     /// Run it; it offers what it proves to the state itself (`C`'s own methods).
     fn attempt(&mut self, cx: &mut C) -> Result<Found>;
 }
+
+/// A view graph's certification handed to a rung by its entry point (the rungs sit below the
+/// entry points, `tests/suite/certify_layers.rs`): the certificate of an estimate of `graph`
+/// (in practice [`crate::certify::multiple::graph_certificate`]).
+pub(crate) type GraphCertifier = fn(
+    &crate::multiple::MultipleProblem,
+    &[crate::so3::Rotation],
+    &super::settings::CertifySettings,
+) -> Result<super::certificate::Certificate>;
+
+/// [`Climb`] for a certification state with the fields `deadline`, `settings`, `best` (with
+/// its `lower_bound`) and `log`, and a method `certifies(lower_bound)`: the gravity and the
+/// simultaneous problems' states.
+macro_rules! climb_by_best_bound {
+    ($state:ident) => {
+        impl $crate::certify::rung::Climb for $state<'_> {
+            fn deadline(&self) -> &$crate::certify::budget::Deadline {
+                &self.deadline
+            }
+            fn budget(&self) -> &$crate::certify::budget::Budget {
+                &self.settings.budget
+            }
+            fn enough(&self) -> bool {
+                self.best
+                    .as_ref()
+                    .is_some_and(|b| self.certifies(b.lower_bound))
+            }
+            fn record(&mut self, attempt: $crate::certify::log::Attempt) {
+                self.log.push(attempt);
+            }
+        }
+    };
+}
+pub(crate) use climb_by_best_bound;

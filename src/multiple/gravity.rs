@@ -555,7 +555,8 @@ fn solve_constrained(
     Ok(sol)
 }
 
-/// The largest change of the IRLS weights between two passes below which [`reweighted`] stops.
+/// The largest change of the IRLS weights between two passes below which the reweighted
+/// solve of a robust loss with gravity priors (`[G8]`) stops.
 pub const IRLS_WEIGHT_TOLERANCE: f64 = 1e-6;
 
 /// Robust averaging with the priors held (`[G8]`): passes of the constrained chordal solve on

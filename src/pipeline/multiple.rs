@@ -3,7 +3,7 @@
 //! dual certificate, then the SDP or the staircase when needed) and adopt the refined estimate
 //! or the polished SDP rounding when it is better. With a robust loss (L1, Huber, Cauchy) the
 //! robust cost has no certificate; the pipeline certifies instead the chordal L2 problem on the
-//! edges the robust solver kept ([`super::InlierGraph`], [`certify_inlier_graph`]).
+//! edges the robust solver kept ([`super::InlierGraph`], [`super::certify_inlier_graph`]).
 
 use super::inlier_graph::{ViewGraphProblem, inlier_graph_of};
 use super::{AverageSettings, Averaged, PipelineProblem, PipelineSolution, average};
@@ -69,7 +69,7 @@ impl PipelineProblem for MultipleProblem {
 /// certificate. The robust losses (L1, Huber, Cauchy) get no certificate of their cost either
 /// (`certificate` is `None`); unless the mode is `none`, the pipeline then refines and
 /// certifies the chordal L2 problem on their inlier graph with that mode
-/// ([`certify_inlier_graph`], in `details.inlier_graph`), leaving the robust estimate as the
+/// ([`super::certify_inlier_graph`], in `details.inlier_graph`), leaving the robust estimate as the
 /// returned solution. All settings are validated before any work.
 ///
 /// ```

@@ -87,11 +87,7 @@ impl CertifyReport {
         estimate: LoadedEstimate,
         settings: &CertifySettings,
     ) -> Result<Self> {
-        let given = Given {
-            input,
-            file: estimate.name.clone(),
-            warnings: estimate.warnings.clone(),
-        };
+        let given = Given::of(input, &estimate);
         match problem {
             LoadedProblem::Multiple(graph) => {
                 let rotations = estimate.into_rotations()?;
@@ -131,11 +127,7 @@ impl CertifyReport {
         priors: crate::multiple::gravity::GravityPriors,
         settings: &CertifySettings,
     ) -> Result<Self> {
-        let given = Given {
-            input,
-            file: estimate.name.clone(),
-            warnings: estimate.warnings.clone(),
-        };
+        let given = Given::of(input, &estimate);
         let rotations = estimate.into_rotations()?;
         let p = crate::multiple::gravity::GravityProblem::new(graph.problem.clone(), priors)?;
         Self::certify_graph(given, graph, rotations, Some(&p), settings)
@@ -356,7 +348,16 @@ struct Given<'a> {
     warnings: Vec<Warning>,
 }
 
-impl Given<'_> {
+impl<'a> Given<'a> {
+    /// The estimate file of `estimate`, read for the problem file `input`.
+    fn of(input: &'a str, estimate: &LoadedEstimate) -> Self {
+        Given {
+            input,
+            file: estimate.name.clone(),
+            warnings: estimate.warnings.clone(),
+        }
+    }
+
     /// The report of one certification (one rotation estimated; [`CertifyReport::certify_graph`]
     /// sets the view graph's fields).
     fn report(

@@ -252,15 +252,7 @@ fn verdict_is_scale_free() {
     .priors(&truth)
     .unwrap();
     let run = |c: f64| {
-        let edges = graph
-            .edges()
-            .iter()
-            .map(|e| Edge {
-                weight: e.weight * c,
-                ..e.clone()
-            })
-            .collect();
-        let g = MultipleProblem::new(graph.num_rotations(), edges).unwrap();
+        let g = crate::common::scale_weights(&graph, c);
         let p = GravityProblem::new(g, priors.clone()).unwrap();
         average_with_gravity(&p, &AverageSettings::default()).unwrap()
     };

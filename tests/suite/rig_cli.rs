@@ -105,31 +105,27 @@ fn certify_reads_a_rig_estimate() {
     let solved = run(&["rig", &right, &left, "--output", est, "--json"]);
     assert_success(&solved);
     let cost = json_of(&solved)["cost"].as_f64().unwrap();
-    let out = run(&[
-        "certify",
-        &right,
-        "--left",
-        &left,
-        "--estimate",
-        est,
-        "--json",
-    ]);
-    assert_success(&out);
-    let v = json_of(&out);
+    let run_certify = |estimate: &str| {
+        let args = [
+            "certify",
+            &right,
+            "--left",
+            &left,
+            "--estimate",
+            estimate,
+            "--json",
+        ];
+        run(&args)
+    };
+    let certify = |estimate: &str| {
+        let out = run_certify(estimate);
+        assert_success(&out);
+        json_of(&out)
+    };
+    let v = certify(est);
     assert_eq!(v["certificate"]["verdict"], "certified");
     assert!((v["cost"].as_f64().unwrap() - cost).abs() <= 1e-12 * cost);
-    let truth = example("truth.json");
-    let out = run(&[
-        "certify",
-        &right,
-        "--left",
-        &left,
-        "--estimate",
-        &truth,
-        "--json",
-    ]);
-    assert_success(&out);
-    let v = json_of(&out);
+    let v = certify(&example("truth.json"));
     assert_eq!(v["certificate"]["verdict"], "gap_reported");
     assert!(v["certificate"]["lower_bound"].as_f64().unwrap() <= cost * (1.0 + 1e-9));
     let plain = temp_file(
@@ -138,14 +134,7 @@ fn certify_reads_a_rig_estimate() {
             .unwrap()
             .replace("sensor_from_rig", "other"),
     );
-    let out = run(&[
-        "certify",
-        &right,
-        "--left",
-        &left,
-        "--estimate",
-        plain.to_str().unwrap(),
-    ]);
+    let out = run_certify(plain.to_str().unwrap());
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("sensor_from_rig"));
 }

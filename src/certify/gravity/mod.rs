@@ -4,7 +4,7 @@
 //! | rung | when | bound |
 //! |---|---|---|
 //! | [`planar`]: the SO(2) dual certificate at the estimate `[G2]`, `[G3]` | every image has a prior | `K + sum lambda_i + n min(mu, 0)`, `mu` proven by a shifted sparse Cholesky |
-//! | [`relaxed`]: the priors dropped `[G7]` | the mixed problem; the fallback of full gravity | the view graph's own certified bound |
+//! | `relaxed.rs`: the priors dropped `[G7]` | the mixed problem; the fallback of full gravity | the view graph's own certified bound |
 
 pub mod planar;
 mod relaxed;
@@ -13,10 +13,9 @@ mod state;
 pub use planar::{PlanarBound, PlanarForm, verify_planar};
 
 use crate::certify::budget::Deadline;
-use crate::certify::certificate::Certificate;
 use crate::certify::certification::{Certification, CertifyDetails};
 use crate::certify::ladder::{Rungs, climb};
-use crate::certify::multiple::certify_multiple;
+use crate::certify::multiple::graph_certificate;
 use crate::certify::proof::{BoundMethod, Proof};
 use crate::certify::settings::CertifySettings;
 use crate::error::{Error, Result};
@@ -80,35 +79,19 @@ pub fn certify_gravity(
     };
     let rungs: Rungs<'_, GravityState<'_>> = vec![
         Box::new(planar::PlanarRung::default()),
-        Box::new(relaxed::RelaxedRung::new(|graph, rotations, settings| {
-            Ok(certify_multiple(graph, rotations, settings)?.certificate)
-        })),
+        Box::new(relaxed::RelaxedRung::new(graph_certificate)),
     ];
     climb(&mut state, rungs)?;
-    let seconds = deadline.elapsed();
-    let details = CertifyDetails::from_log(settings.mode, state.log, seconds);
-    let (lb, method, mu, why) = match state.best {
-        Some(b) => (
-            Some(b.lower_bound),
-            match b.proof {
-                Proof::GravityRelaxed => state.relaxed_method.unwrap_or(BoundMethod::Dual),
-                p => p.method(),
-            },
-            b.verified_min_eigenvalue,
-            b.note,
-        ),
-        None => (
-            None,
-            BoundMethod::Dual,
-            None,
-            details
-                .methods()
-                .last()
-                .map_or_else(|| "no rung ran".into(), |m| m.note.clone()),
-        ),
-    };
-    let mut certificate = Certificate::from_bounds(cost, lb, method, mu, tolerance, why, seconds);
-    certificate.verified_min_eigenvalue = mu;
+    let details = CertifyDetails::from_log(settings.mode, state.log, deadline.elapsed());
+    let relaxed = state.relaxed_method.unwrap_or(BoundMethod::Dual);
+    let best = state.best.map(|b| {
+        let method = match b.proof {
+            Proof::GravityRelaxed => relaxed,
+            p => p.method(),
+        };
+        (b.lower_bound, method, b.verified_min_eigenvalue, b.note)
+    });
+    let certificate = details.certificate_of(cost, best, BoundMethod::Dual, tolerance);
     Ok(Certification {
         certificate,
         details,

@@ -7,19 +7,12 @@
 //! certificate.
 
 use super::state::GravityState;
-use crate::certify::certificate::Certificate;
 use crate::certify::log::Prediction;
 use crate::certify::proof::Proof;
-use crate::certify::rung::{Found, Plan, Rung};
-use crate::certify::settings::CertifySettings;
+use crate::certify::rung::{Found, GraphCertifier, Plan, Rung};
 use crate::error::Result;
 use crate::multiple::chordal::solve_chordal;
-use crate::multiple::{MultipleProblem, MultipleSettings, fix_gauge};
-use crate::so3::Rotation;
-
-/// The view graph's certification: its certificate of a local minimum.
-pub(crate) type GraphCertifier =
-    fn(&MultipleProblem, &[Rotation], &CertifySettings) -> Result<Certificate>;
+use crate::multiple::{MultipleSettings, fix_gauge};
 
 /// The relaxed bound as a rung: run first for the mixed problem, as the fallback for full
 /// gravity.

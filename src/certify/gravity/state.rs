@@ -1,10 +1,10 @@
 //! The state of one certification of the gravity problem: the estimate, its cost, the best
 //! verified bound and the one log.
 
-use crate::certify::budget::{Budget, Deadline};
+use crate::certify::budget::Deadline;
 use crate::certify::log::Attempt;
 use crate::certify::proof::{BoundMethod, Proof};
-use crate::certify::rung::Climb;
+use crate::certify::rung::climb_by_best_bound;
 use crate::certify::settings::CertifySettings;
 use crate::multiple::gravity::GravityProblem;
 use crate::so3::Rotation;
@@ -58,22 +58,4 @@ impl GravityState<'_> {
     }
 }
 
-impl Climb for GravityState<'_> {
-    fn deadline(&self) -> &Deadline {
-        &self.deadline
-    }
-
-    fn budget(&self) -> &Budget {
-        &self.settings.budget
-    }
-
-    fn enough(&self) -> bool {
-        self.best
-            .as_ref()
-            .is_some_and(|b| self.certifies(b.lower_bound))
-    }
-
-    fn record(&mut self, attempt: Attempt) {
-        self.log.push(attempt);
-    }
-}
+climb_by_best_bound!(GravityState);

@@ -178,3 +178,13 @@ fn no_bound(
         improvement: None,
     }
 }
+
+/// [`certify_multiple`]'s certificate alone: the view graph's certification that the gravity
+/// and rig rungs are handed ([`crate::certify::rung::GraphCertifier`]).
+pub(crate) fn graph_certificate(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    settings: &CertifySettings,
+) -> Result<crate::certify::certificate::Certificate> {
+    Ok(certify_multiple(problem, rotations, settings)?.certificate)
+}

@@ -8,20 +8,15 @@
 //! one `S` (noise-free rigs), a gap otherwise (the coupling's cost).
 
 use super::state::SimState;
-use crate::certify::certificate::Certificate;
 use crate::certify::log::Prediction;
 use crate::certify::proof::Proof;
-use crate::certify::rung::{Found, Plan, Rung};
-use crate::certify::settings::{CertifyMode, CertifySettings};
+use crate::certify::rung::{Found, GraphCertifier, Plan, Rung};
+use crate::certify::settings::CertifyMode;
 use crate::error::Result;
 use crate::multiple::MultipleProblem;
 use crate::multiple::MultipleSettings;
 use crate::multiple::chordal::solve_chordal;
 use crate::so3::Rotation;
-
-/// A view graph's certification: its certificate of a local minimum.
-pub(crate) type GraphCertifier =
-    fn(&MultipleProblem, &[Rotation], &CertifySettings) -> Result<Certificate>;
 
 /// The decoupled bound as the last rung of a simultaneous certification (modes `auto` and
 /// `dual`; mode `sdp` is the SDP alone).

@@ -19,7 +19,6 @@ pub use dual::predict_multipliers_at_estimate;
 pub use multipliers::multipliers_at_estimate;
 
 use crate::certify::budget::Deadline;
-use crate::certify::certificate::Certificate;
 use crate::certify::certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource,
 };
@@ -83,12 +82,7 @@ pub fn certify_simultaneous(
         Box::new(dual::DualRung::default()),
         Box::new(sdp::SdpRung::default()),
         Box::new(decoupled::DecoupledRung::new(
-            |graph, rotations, settings| {
-                Ok(
-                    crate::certify::multiple::certify_multiple(graph, rotations, settings)?
-                        .certificate,
-                )
-            },
+            crate::certify::multiple::graph_certificate,
         )),
     ];
     climb(&mut state, rungs)?;
@@ -99,25 +93,11 @@ pub fn certify_simultaneous(
         source: ImprovementSource::SdpRounding,
         cost: r.cost,
     });
-    let (lb, method, lam, why) = match state.best {
-        Some(b) => (
-            Some(b.lower_bound),
-            b.proof.method(),
-            Some(b.verified_min_eigenvalue).filter(|v| v.is_finite()),
-            b.note,
-        ),
-        None => (
-            None,
-            BoundMethod::Sdp,
-            None,
-            details
-                .methods()
-                .last()
-                .map_or_else(String::new, |m| m.note.clone()),
-        ),
-    };
-    let mut certificate = Certificate::from_bounds(cost, lb, method, lam, tolerance, why, seconds);
-    certificate.verified_min_eigenvalue = lam;
+    let best = state.best.map(|b| {
+        let mu = Some(b.verified_min_eigenvalue);
+        (b.lower_bound, b.proof.method(), mu, b.note)
+    });
+    let certificate = details.certificate_of(cost, best, BoundMethod::Sdp, tolerance);
     Ok(Certification {
         certificate,
         details,

@@ -1,12 +1,12 @@
 //! The state of one certification of the simultaneous problem: the joint estimate, its cost,
 //! the best verified bound, the improvement (a cheaper SDP rounding) and the one log.
 
-use crate::certify::budget::{Budget, Deadline};
+use crate::certify::budget::Deadline;
 use crate::certify::certificate::nonnegative_bound_at_most;
 use crate::certify::certification::SdpSummary;
 use crate::certify::log::Attempt;
 use crate::certify::proof::Proof;
-use crate::certify::rung::Climb;
+use crate::certify::rung::climb_by_best_bound;
 use crate::certify::settings::CertifySettings;
 use crate::multiple::MultipleProblem;
 use crate::relax::simultaneous::JointRotations;
@@ -65,22 +65,4 @@ impl SimState<'_> {
     }
 }
 
-impl Climb for SimState<'_> {
-    fn deadline(&self) -> &Deadline {
-        &self.deadline
-    }
-
-    fn budget(&self) -> &Budget {
-        &self.settings.budget
-    }
-
-    fn enough(&self) -> bool {
-        self.best
-            .as_ref()
-            .is_some_and(|b| self.certifies(b.lower_bound))
-    }
-
-    fn record(&mut self, attempt: Attempt) {
-        self.log.push(attempt);
-    }
-}
+climb_by_best_bound!(SimState);
