@@ -218,11 +218,27 @@ fn rz(theta: f64) -> Rotation {
     Rotation::from_axis_angle(&Unit::new_unchecked(Vector3::z()), theta)
 }
 
-/// A view graph with gravity priors (one per node, some may be missing), validated together.
+/// A view graph with gravity priors (one per node, some may be missing), validated together
+/// (deserialisation too: [`GravityProblem::new`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawGravityProblem")]
 pub struct GravityProblem {
     problem: MultipleProblem,
     priors: GravityPriors,
+}
+
+/// Unvalidated serde form of [`GravityProblem`].
+#[derive(Deserialize)]
+struct RawGravityProblem {
+    problem: MultipleProblem,
+    priors: GravityPriors,
+}
+
+impl TryFrom<RawGravityProblem> for GravityProblem {
+    type Error = Error;
+    fn try_from(raw: RawGravityProblem) -> Result<Self> {
+        GravityProblem::new(raw.problem, raw.priors)
+    }
 }
 
 /// How well the priors agree with the relative rotations, without an estimate (`[G6]`): for
@@ -359,7 +375,7 @@ impl GravityProblem {
             .map(|(i, r)| {
                 let r = r * align;
                 match self.frame(i) {
-                    Some(f) => f * rz(yaw(&(f.inverse() * r))),
+                    Some(f) => f * rz(yaw((f.inverse() * r).matrix())),
                     None => r,
                 }
             })
@@ -449,9 +465,9 @@ fn edge_disagreement(
     Some((at(0.5), at(0.9), angles.len()))
 }
 
-/// The angle `theta` of the turn about `e_3` nearest to `m` (`argmax tr(Rz(theta)^T m)`).
-fn yaw(m: &Rotation) -> f64 {
-    let m = m.matrix();
+/// The angle `theta` of the turn about `e_3` nearest to `m` (`argmax tr(Rz(theta)^T m)`, any
+/// 3x3 `m`): the heading of `F^T R`, and the best turn aligning two estimates (`[G1]`, `[G5]`).
+pub(crate) fn yaw(m: &Matrix3<f64>) -> f64 {
     (m[(1, 0)] - m[(0, 1)]).atan2(m[(0, 0)] + m[(1, 1)])
 }
 
@@ -460,9 +476,8 @@ fn yaw(m: &Rotation) -> f64 {
 /// `R_0 = F_0`, the smallest rotation with `R_0 e_3 = g_0`).
 fn fix_gravity_gauge(rotations: &mut [Rotation]) {
     let Some(r0) = rotations.first() else { return };
-    let m = r0.matrix();
-    let alpha = (m[(0, 1)] - m[(1, 0)]).atan2(m[(0, 0)] + m[(1, 1)]);
-    let g = rz(alpha);
+    // tr(R_0 Rz(a)) = tr(Rz(a)^T R_0^T) is largest at the yaw of R_0^T
+    let g = rz(yaw(&r0.matrix().transpose()));
     for r in rotations.iter_mut() {
         *r *= g;
     }

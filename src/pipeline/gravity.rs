@@ -130,7 +130,7 @@ impl ViewGraphProblem for GravityProblem {
             m += (refined[k] * w).matrix().transpose() * (robust[v] * w).matrix();
         }
         // the turn G = W Rz(a) W^T maximising tr(G^T sum R_k^T R_v)
-        let a = (m[(1, 0)] - m[(0, 1)]).atan2(m[(0, 0)] + m[(1, 1)]);
+        let a = crate::multiple::gravity::yaw(&m);
         let g = w * Rotation::from_axis_angle(&nalgebra::Vector3::z_axis(), a) * w.inverse();
         let mut estimate = robust.to_vec();
         for (k, &v) in nodes.iter().enumerate() {

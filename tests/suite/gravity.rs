@@ -412,3 +412,30 @@ fn robust_gravity_on_outliers() {
     assert!(with < 0.5 * ls, "robust {with} vs least squares {ls}");
     assert!(with < without, "with gravity {with} vs without {without}");
 }
+
+/// A budget that cannot hold one factorisation: nothing is certified and no factorisation runs
+/// past it; a serialised problem whose priors do not match its graph is an error, not a panic.
+#[test]
+fn tiny_budgets_and_bad_serialisations() {
+    let (graph, truth) = SyntheticGraph {
+        num_rotations: 300,
+        num_edges: 1200,
+        noise_sigma: 0.02,
+        ..Default::default()
+    }
+    .generate();
+    let p = GravityProblem::from_truth(graph.clone(), &truth).unwrap();
+    let mut settings = CertifySettings::default();
+    settings.budget.max_seconds = Some(1e-9);
+    let c = certify_gravity(&p, &truth, &settings).unwrap();
+    assert_ne!(
+        c.certificate.verdict,
+        Verdict::Certified,
+        "{}",
+        c.certificate
+    );
+    let mut json = serde_json::to_value(&p).unwrap();
+    json["priors"]["directions"].as_array_mut().unwrap().pop();
+    let e = serde_json::from_value::<GravityProblem>(json).unwrap_err();
+    assert!(e.to_string().contains("299 gravity entries"), "{e}");
+}

@@ -1,13 +1,14 @@
 //! The SO(2) dual certificate of the full-gravity problem (`paper-notes/gravity.md`, `[G2]`,
 //! `[G3]`): with every image's gravity known, `R_i = F_i Rz(theta_i)` (standard convention),
-//! and the chordal cost is `f = K + x^H H x` over unit complex numbers `x_i = e^{i theta_i}`
-//! (`K` fixed by the priors, `H` Hermitian `n x n` with the graph's sparsity). For any real
-//! multipliers `lambda`, `f* >= K + sum lambda_i + n min(lambda_min(H - diag lambda), 0)`; at the
+//! and the chordal cost is `f = c_0 + x^H H x` over unit complex numbers `x_i = e^{i theta_i}`
+//! (`c_0` fixed by the priors, `H` Hermitian `n x n` with the graph's sparsity). For any real
+//! multipliers `lambda`, `f* >= c_0 + sum lambda_i + n min(lambda_min(H - diag lambda), 0)`; at the
 //! estimate's phases `lambda_i = Re(conj(x_i) (H x)_i)` make `S = H - diag lambda` vanish on
 //! `x`, and `S >= 0` certifies it. `lambda_min(S)` is proven by a shifted sparse Cholesky of
 //! `S`'s real `2n x 2n` form (`[D5]`, `[D6]`).
 
 use super::state::GravityState;
+use crate::certify::budget::{Budget, Deadline};
 use crate::certify::log::{Prediction, Refusal};
 use crate::certify::multiple::multipliers::data_defect;
 use crate::certify::proof::Proof;
@@ -18,16 +19,17 @@ use crate::linalg::cholesky::gamma;
 use crate::linalg::{
     Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme, sparse_matvec,
 };
-use crate::multiple::gravity::GravityProblem;
+use crate::multiple::gravity::{GravityProblem, yaw};
 use crate::multiple::laplacian::edge_blocks;
 use crate::so3::Rotation;
 use faer::sparse::{SparseColMat, Triplet};
 use nalgebra::{Matrix3, Matrix3x2, Vector3};
 
-/// The full-gravity cost in its planar form `[G2]`: `f = K + x^H H x` on `|x_i| = 1`.
+/// The full-gravity cost in its planar form `[G2]`: `f = c_0 + x^H H x` on `|x_i| = 1`.
 pub struct PlanarForm {
     n: usize,
-    /// `K = c_0 + sum_i d_i` (the part the priors fix) and a bound on its rounding.
+    /// `K = c_0 + sum_i d_i` (`c_0` and `H`'s diagonal: on unit `x` both are constants) and a
+    /// bound on its rounding.
     constant: f64,
     constant_error: f64,
     /// The off-diagonal entries `H_ij` (`i < j` not required; both orders summed): `(i, j,
@@ -107,13 +109,8 @@ impl PlanarForm {
             .iter()
             .enumerate()
             .map(|(i, r)| {
-                let m = (problem
-                    .frame(i)
-                    .unwrap_or_else(Rotation::identity)
-                    .inverse()
-                    * r)
-                    .into_inner();
-                let t = (m[(1, 0)] - m[(0, 1)]).atan2(m[(0, 0)] + m[(1, 1)]);
+                let f = problem.frame(i).unwrap_or_else(Rotation::identity);
+                let t = yaw((f.inverse() * r).matrix());
                 (t.cos(), t.sin())
             })
             .collect()
@@ -174,27 +171,42 @@ pub struct PlanarBound {
 
 /// The bound `[G3]` at phases `x`: the shifts `sigma` tried from the one whose deficit
 /// `n sigma` is a quarter of `allowed_gap`, then at Lanczos's estimate of `-lambda_min(S)`,
-/// then doubled (at most 40 factorisations); `None` when no factorisation succeeds or the
-/// factor is over `max_values`.
+/// then doubled (at most 40 factorisations); `Err` with the reason when no factorisation
+/// succeeds, the factor is over the memory budget, or the next factorisation is predicted past
+/// the deadline.
 pub fn verify_planar(
     problem: &GravityProblem,
     form: &PlanarForm,
     x: &[(f64, f64)],
     allowed_gap: f64,
-    max_values: usize,
-) -> Result<Option<PlanarBound>> {
+    budget: &Budget,
+    deadline: &Deadline,
+) -> Result<std::result::Result<PlanarBound, String>> {
     let (s, sum_s, abs_s) = form.certificate_matrix(x);
     let terms = 30 * form.max_degree + 16;
-    let Ok(mut ch) = ShiftedCholesky::new_within(s, terms, max_values)? else {
-        return Ok(None);
+    let max_values = budget.max_factor_values(s.nrows());
+    let mut ch = match ShiftedCholesky::new_within(s, terms, max_values)? {
+        Ok(ch) => ch,
+        Err(predicted) => {
+            return Ok(Err(format!(
+                "its factor ({predicted} values) is over the memory budget ({max_values})"
+            )));
+        }
     };
+    // each factorisation must fit the time left (`[D5]`'s prediction), else stop
+    let one = Budget::predicted_factor_seconds(ch.multiply_adds(), ch.factor_len());
     let floor = 0.25 * allowed_gap / form.n as f64;
     let graph_defect = data_defect(problem.problem());
     let mut shift = floor;
     for attempt in 0..40 {
+        if deadline.left().is_some_and(|l| l < one) {
+            return Ok(Err(format!(
+                "a factorisation is predicted at {one:.2e} s, past the time left (after {attempt})"
+            )));
+        }
         if let Some(f) = ch.factor(shift, 0.1 * floor) {
             let mu = f.verified_lower_bound();
-            return Ok(Some(PlanarBound {
+            return Ok(Ok(PlanarBound {
                 lower_bound: form.bound(graph_defect, sum_s, abs_s, mu),
                 verified_min_eigenvalue: mu,
             }));
@@ -205,7 +217,9 @@ pub fn verify_planar(
             _ => 2.0 * shift,
         };
     }
-    Ok(None)
+    Ok(Err(
+        "no shifted factorisation of the SO(2) certificate matrix succeeded".into(),
+    ))
 }
 
 /// An estimate (never a bound) of `lambda_min(S)`, less its Ritz residual.
@@ -267,27 +281,29 @@ impl<'a> Rung<GravityState<'a>> for PlanarRung {
         };
         let standard = cx.problem.to_standard(cx.rotations);
         let x = PlanarForm::phases(cx.problem, &standard);
-        let dim = 2 * cx.problem.problem().num_rotations();
-        let max_values = cx.settings.budget.max_factor_values(dim);
-        Ok(
-            match verify_planar(cx.problem, &form, &x, cx.allowed_gap, max_values)? {
-                Some(b) => {
-                    let note = format!(
-                        "SO(2) multipliers at the estimate verified, lambda_min(S) >= {:.3e}",
-                        b.verified_min_eigenvalue
-                    );
-                    let lb = cx.offer(
-                        b.lower_bound,
-                        Proof::GravityDual,
-                        Some(b.verified_min_eigenvalue),
-                        &note,
-                    );
-                    Found::proved(lb, cx.certifies(lb), note)
-                }
-                None => Found::failed(
-                    "no shifted factorisation of the SO(2) certificate matrix succeeded",
-                ),
-            },
-        )
+        let found = verify_planar(
+            cx.problem,
+            &form,
+            &x,
+            cx.allowed_gap,
+            &cx.settings.budget,
+            &cx.deadline,
+        )?;
+        Ok(match found {
+            Ok(b) => {
+                let note = format!(
+                    "SO(2) multipliers at the estimate verified, lambda_min(S) >= {:.3e}",
+                    b.verified_min_eigenvalue
+                );
+                let lb = cx.offer(
+                    b.lower_bound,
+                    Proof::GravityDual,
+                    Some(b.verified_min_eigenvalue),
+                    &note,
+                );
+                Found::proved(lb, cx.certifies(lb), note)
+            }
+            Err(reason) => Found::failed(reason),
+        })
     }
 }
