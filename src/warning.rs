@@ -18,6 +18,7 @@
 //! | `translations_not_finite` | `certify --estimate`: COLMAP images with NaN translations (not used) | images |
 //! | `name_not_format` | a text view graph named like a COLMAP database (`*.db`): read by its content | |
 //! | `duplicates_disagree` | view graphs: pairs measured more than once whose measurements disagree by more than 5 deg | pairs |
+//! | `estimate_projected` | `certify --nearest-rotations`: the estimate's matrices replaced by their nearest rotations (negated first when all are reflections) | matrices |
 //! | `convention_suspected` | `certify`: the estimate transposed costs less than a quarter of the estimate as given | |
 //! | `gravity_convention` | `--gravity`: the priors fit the relative rotations far better in another axis convention (named) | |
 //! | `gravity_inconsistent` | `--gravity`: the priors disagree with the relative rotations by more than 5 deg in median | |

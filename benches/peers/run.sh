@@ -7,6 +7,9 @@
 #   bash benches/peers/run.sh ours table      # only some stages
 #   bash benches/peers/run.sh setup aniso     # GTSAM full noise models vs rotavg, anisotropic
 #                                             # graphs (not in the default set; ~1 min)
+#   bash benches/peers/run.sh certifiable     # GTSAM's 2026 certifiable staircase vs rotavg on
+#                                             # every shared 3-D file and generated graphs (not
+#                                             # in the default set; ~5 min; CERT.md)
 #   bash benches/peers/run.sh setup scale     # the scale comparison (not in the default set;
 #                                             # ~1 h; writes $WORK/results/scale/ and SCALE.md)
 #   WORK=/tmp/rotavg-peers FORCE=1 JOB_TIMEOUT=600 bash benches/peers/run.sh
@@ -36,6 +39,7 @@ fi
 WORK="${WORK:-/tmp/rotavg-peers}"
 T="${JOB_TIMEOUT:-600}"
 P="$WORK/peers"; PY="$P/.venv/bin/python"; INST="$WORK/inst"; RES="$WORK/results"
+HPY="$PY"; [[ -x "$HPY" ]] || HPY=python3   # runs the harness's own JSON helpers
 BIN="$REPO/target/release"
 STAGES="${*:-setup gen peers proc ours table}"
 has() { [[ " $STAGES " == *" $1 "* ]]; }
@@ -103,7 +107,7 @@ peer() {  # peer OUT.json script args...   (cached)
 
 stamp() {  # stamp OUT.json T0 T1 RC: OUT.json.tmp (the command's JSON) + wall time -> OUT.json
   local out="$1"
-  "$PY" - "$out.tmp" "$out" "$2" "$3" "$4" <<'PYEOF'
+  "$HPY" - "$out.tmp" "$out" "$2" "$3" "$4" <<'PYEOF'
 import json, sys
 src, dst, t0, t1, rc = sys.argv[1], sys.argv[2], float(sys.argv[3]), float(sys.argv[4]), int(sys.argv[5])
 try:
@@ -220,7 +224,7 @@ timed() {  # timed OUT.json cmd args...   (stdout must be one JSON object)
   rc=$?
   t1=$(date +%s.%N)
   stamp "$out" "$t0" "$t1" "$rc"
-  "$PY" - "$out" "${out%.json}.time" "$load" "$(cut -d' ' -f1-3 /proc/loadavg)" "$*" <<'PYEOF'
+  "$HPY" - "$out" "${out%.json}.time" "$load" "$(cut -d' ' -f1-3 /proc/loadavg)" "$*" <<'PYEOF'
 import json, re, sys
 out, timef, load0, load1, cmd = sys.argv[1:6]
 d = json.load(open(out))
@@ -310,6 +314,50 @@ if has aniso; then
       || log "aniso $tag failed"
   done
   "$PY" "$REPO/benches/peers/gtsam_anisotropic.py" --table "$AD" > "$AD/ANISO.md" && log "wrote $AD/ANISO.md"
+fi
+
+# ---- certifiable (not in the default set): GTSAM's certifiable Riemannian staircase (2026,
+# ../shared/peers/setup_certifiable.sh and certifiable_gtsam.py, its own venv) against rotavg on
+# every shared 3-D file and the generated chain / grid / random graphs (CERT_SIZES, default
+# "1000 10000"), unit weights, one process per job (wall time and peak RSS measured here). Per
+# file: the peer's run (its flag, rank, minimum eigenvalue, the costs of its values as returned
+# and at their nearest rotations), `rotavg multiple`, `rotavg certify` of the peer's nearest
+# rotations, and of its values as returned (gtsam_raw_rounding.py): without and with
+# --nearest-rotations. Table: $RES/certifiable/CERT.md (benches/peers/certifiable_table.py). ----
+if has certifiable; then
+  CD="$RES/certifiable"; CI="$INST/certifiable"; mkdir -p "$CD" "$CI" "$P"
+  [[ -n "$PEERS_SRC" ]] || { echo "peers folder not found (set PEERS_SRC)" >&2; exit 1; }
+  for f in setup_certifiable.sh certifiable_gtsam.py; do [[ -f "$P/$f" ]] || cp "$PEERS_SRC/$f" "$P/"; done
+  CPY="$P/.venv-certifiable/bin/python"
+  [[ -x "$CPY" ]] || bash "$P/setup_certifiable.sh" || exit 1
+  (cd "$REPO" && cargo build --release --bin rotavg --example pipeline_scale) || exit 1
+  files=()
+  for f in "$DATA"/g2o/3d/*/*; do
+    case "$f" in *.g2o|*.txt) files+=("$f");; esac
+  done
+  for n in ${CERT_SIZES:-1000 10000}; do
+    for kind in chain grid random; do
+      g="$CI/${kind}_n${n}.g2o"
+      [[ -s "$g" ]] || "$BIN/examples/pipeline_scale" "$kind" "$n" --write-g2o "$g" >/dev/null || exit 1
+      files+=("$g")
+    done
+  done
+  for f in "${files[@]}"; do
+    tag=$(basename "${f%.*}")
+    est="$CD/${tag}__gtsam_nearest.json"; raw="$CD/${tag}__gtsam_raw.json"
+    timed "$CD/${tag}__gtsam.json" "$CPY" "$P/certifiable_gtsam.py" "$f" --estimate-out "$est"
+    timed "$CD/${tag}__rotavg.json" "$BIN/rotavg" multiple "$f" --weights unit --json
+    if [[ -s "$est" ]]; then
+      timed "$CD/${tag}__certify_nearest.json" "$BIN/rotavg" certify "$f" --weights unit --estimate "$est" --json
+    fi
+    timeout "$T" "$CPY" "$REPO/benches/peers/gtsam_raw_rounding.py" "$f" "$raw" > "$CD/${tag}__raw_stats.json" 2>/dev/null
+    if [[ -s "$raw" ]]; then
+      timed "$CD/${tag}__certify_raw.json" "$BIN/rotavg" certify "$f" --weights unit --estimate "$raw" --json
+      timed "$CD/${tag}__certify_raw_projected.json" "$BIN/rotavg" certify "$f" --weights unit \
+        --estimate "$raw" --nearest-rotations --json
+    fi
+  done
+  "$HPY" "$REPO/benches/peers/certifiable_table.py" "$CD" > "$CD/CERT.md" && log "wrote $CD/CERT.md"
 fi
 
 if has table; then

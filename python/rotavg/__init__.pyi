@@ -323,6 +323,7 @@ def certify_multiple(
     rotation_tolerance: float = 1e-5,
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
+    nearest_rotations: bool = False,
 ) -> Result:
     """Certify an estimate from any other solver, without changing it."""
 
@@ -346,6 +347,7 @@ def certify_multiple(
     rotation_tolerance: float = 1e-5,
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
+    nearest_rotations: bool = False,
 ) -> Result:
     """Certify an estimate for a graph from ``read_graph``."""
 

@@ -568,6 +568,11 @@ fn average_multiple_py(
 ///     gravity, world_down: gravity priors as for ``average_multiple``: the estimate is then
 ///         certified for the chordal L2 problem with the priors held (it must satisfy them to
 ///         1e-6 rad); not with ``loss``.
+///     nearest_rotations: certify the nearest rotations of an estimate whose matrices are
+///         rotations only approximately (beyond ``rotation_tolerance``) or all reflections
+///         (det -1, as a relaxation's rounding may return: negated first, the chordal cost
+///         unchanged), with the warning ``estimate_projected``; ``rotavg certify
+///         --nearest-rotations``. Without it such an estimate raises ``rotavg.Error``.
 ///
 /// Returns:
 ///     Result: ``solver`` is None; ``to_dict()`` equals
@@ -577,7 +582,7 @@ fn average_multiple_py(
 ///     rotavg.Error: as ``average_multiple``, an estimate of the wrong size, and (a path) a node
 ///         the file lacks or a file that cannot be read (``rotavg.ParseError``, naming the file).
 #[pyfunction]
-#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, information=None, loss="chordal", loss_threshold=5.0, inlier_threshold=None, rotation_tolerance=1e-5, gravity=None, world_down=None))]
+#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, information=None, loss="chordal", loss_threshold=5.0, inlier_threshold=None, rotation_tolerance=1e-5, gravity=None, world_down=None, nearest_rotations=false))]
 #[allow(clippy::too_many_arguments)]
 fn certify_multiple_py(
     py: Python<'_>,
@@ -599,9 +604,16 @@ fn certify_multiple_py(
     rotation_tolerance: f64,
     gravity: Option<&Bound<'_, PyAny>>,
     world_down: Option<[f64; 3]>,
+    nearest_rotations: bool,
 ) -> PyResult<RunResult> {
     let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
     let graph = GraphInput::copy(n, i, j, rel, weights, information)?.within(tolerance);
+    // the estimate's matrices are checked by `project_estimate` with nearest_rotations
+    let estimate_tolerance = if nearest_rotations {
+        f64::INFINITY
+    } else {
+        tolerance
+    };
     let gravity = gravity::GravityInput::from_py(gravity)?;
     let loss: MultipleLoss = parse_named(loss, "loss")?;
     let threshold = loss
@@ -616,7 +628,7 @@ fn certify_multiple_py(
         None => EstimateInput::Arrays(
             optional_matrices(estimate, "estimate")?
                 .ok_or_else(|| argument_error("certify_multiple needs an estimate"))?
-                .within(tolerance),
+                .within(estimate_tolerance),
         ),
     };
     let mode = match parse_named(certify, "certify")? {
@@ -626,19 +638,25 @@ fn certify_multiple_py(
     let settings = certify_settings(mode, max_memory, max_seconds, randomized, randomized_seed)?;
     let report = detached(py, move || {
         let input = graph.into_input(false, None)?;
-        let estimate = match estimate {
-            EstimateInput::Arrays(m) => LoadedEstimate {
-                name: "estimate".into(),
-                estimate: Estimate::Multiple(m.rotations()?),
-                warnings: Vec::new(),
-            },
-            EstimateInput::Path(p) => {
-                let options = ReadOptions {
-                    rotation_tolerance: tolerance,
-                    ..Default::default()
-                };
-                load_estimate_for(&p, &input.graph, &options)?.into_loaded()
-            }
+        let read = || -> rotavg::Result<LoadedEstimate> {
+            Ok(match estimate {
+                EstimateInput::Arrays(m) => LoadedEstimate {
+                    name: "estimate".into(),
+                    estimate: Estimate::Multiple(m.rotations()?),
+                    warnings: Vec::new(),
+                },
+                EstimateInput::Path(p) => {
+                    let options = ReadOptions {
+                        rotation_tolerance: estimate_tolerance,
+                        ..Default::default()
+                    };
+                    load_estimate_for(&p, &input.graph, &options)?.into_loaded()
+                }
+            })
+        };
+        let estimate = match nearest_rotations {
+            true => read()?.into_nearest_rotations()?,
+            false => read().map_err(rotavg::io::nearest::with_nearest_hint)?,
         };
         if let Some(g) = gravity {
             if threshold.is_some() {

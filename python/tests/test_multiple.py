@@ -410,3 +410,29 @@ def test_robust_outputs_are_the_command_lines(cli, tmp_path):
     assert plain.inlier_estimate is None
     with pytest.raises(rotavg.Error, match="no per-edge residuals"):
         rotavg.write_edges(g, plain, tmp_path / "none.csv")
+
+
+def test_certify_multiple_takes_the_nearest_rotations_of_a_mirrored_estimate(rng):
+    """A relaxation solver's mirror image (every det -1, orthogonal to 1e-6 only) is refused
+    without ``nearest_rotations`` and certified with it, as ``rotavg certify
+    --nearest-rotations``; the cost is the test's own cost of the test's own polar factors."""
+    truth, i, j, rel = synthetic_graph(rng, 30, 90, 0.05)
+    best = rotavg.average_multiple(30, i, j, rel)
+    skew = np.eye(3) + 1e-6 * rng.standard_normal((30, 3, 3))
+    mirrored = -best.estimate @ skew
+    with pytest.raises(rotavg.Error, match="with `nearest_rotations`, certify takes"):
+        rotavg.certify_multiple(30, i, j, rel, mirrored)
+    res = rotavg.certify_multiple(30, i, j, rel, mirrored, nearest_rotations=True)
+    u, _, vt = np.linalg.svd(-mirrored)
+    polar = u @ vt
+    assert np.all(np.linalg.det(polar) > 0)
+    cost = sum(float(np.sum((polar[b] - r @ polar[a]) ** 2)) for a, b, r in zip(i, j, rel))
+    assert res.cost == pytest.approx(cost, rel=1e-12)
+    assert res.certificate.certified
+    (w,) = [w for w in res.to_dict()["warnings"] if w["code"] == "estimate_projected"]
+    assert w["count"] == 30 and "negated" in w["message"]
+    # one reflection among rotations is no estimate up to sign
+    mixed = best.estimate.copy()
+    mixed[4] = -mixed[4]
+    with pytest.raises(rotavg.Error, match="1 of its 30 matrices are reflections"):
+        rotavg.certify_multiple(30, i, j, rel, mixed, nearest_rotations=True)

@@ -48,6 +48,7 @@ pub mod handeye;
 pub mod input;
 pub mod json;
 pub mod names;
+pub mod nearest;
 pub mod numpy;
 pub mod output;
 pub mod sfm;

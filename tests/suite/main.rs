@@ -61,6 +61,7 @@ mod io_streaming;
 mod layers;
 mod loss_auto;
 mod multiple_solvers;
+mod nearest_rotations;
 mod pipeline_multiple;
 #[cfg(all(feature = "cli", feature = "plot"))]
 mod plot;

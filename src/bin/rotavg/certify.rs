@@ -12,9 +12,11 @@ use rotavg::Result;
 use rotavg::certify::CertifyMode;
 use rotavg::io::detect::ReadOptions;
 use rotavg::io::input::{
-    LoadedProblem, load_conjugate_with, load_estimate, load_estimate_for, load_problem,
+    LoadedEstimate, LoadedProblem, load_conjugate_with, load_estimate, load_estimate_for,
+    load_problem,
 };
 use rotavg::io::names::{Choice, ConjugateFormat, MultipleLoss};
+use rotavg::io::nearest;
 use rotavg::report::CertifyReport;
 use std::path::Path;
 
@@ -33,6 +35,12 @@ pub struct Args {
     /// Single and conjugate problems: JSON `{"rotation": R}`, or a NumPy (3, 3) array.
     #[arg(long, value_name = "PATH")]
     pub estimate: String,
+    /// Certify the nearest rotations of an estimate whose matrices are rotations only
+    /// approximately (beyond `--rotation-tolerance`), or all reflections (det -1, as a
+    /// relaxation's rounding may return: negated first, the chordal cost unchanged); the
+    /// report says so (warning `estimate_projected`). Without it such an estimate is an error.
+    #[arg(long, conflicts_with = "left")]
+    pub nearest_rotations: bool,
     /// View graphs: also judge the estimate on a robust loss's inlier set (l1, huber,
     /// cauchy): the chordal L2 problem on the edges whose residual at the estimate is at most
     /// the inlier threshold (their largest connected component), the estimate unchanged; the
@@ -65,6 +73,29 @@ pub struct Args {
     pub common: Common,
 }
 
+/// The estimate of `--estimate` for `problem`, at its nearest rotations with
+/// `--nearest-rotations` (`rotavg::io::nearest`); otherwise a matrix that is not a rotation is
+/// an error naming the option.
+fn load_given(
+    args: &Args,
+    problem: &LoadedProblem,
+    options: &ReadOptions,
+) -> Result<LoadedEstimate> {
+    let read = |options: &ReadOptions| match problem {
+        LoadedProblem::Multiple(g) => {
+            Ok(load_estimate_for(&args.estimate, g, options)?.into_loaded())
+        }
+        LoadedProblem::Single(_) | LoadedProblem::Conjugate(_) => {
+            load_estimate(&args.estimate, options)
+        }
+    };
+    if args.nearest_rotations {
+        read(&nearest::permissive(options))?.into_nearest_rotations()
+    } else {
+        read(options).map_err(nearest::with_nearest_hint)
+    }
+}
+
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
     if let Some(left) = &args.left {
@@ -75,12 +106,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
         .certify_inlier_threshold_deg(args.loss_threshold, args.inlier_threshold)?;
     let options = args.graph.read_options(&args.common);
     let (input, problem) = load(args, &options)?;
-    let estimate = match &problem {
-        LoadedProblem::Multiple(g) => load_estimate_for(&args.estimate, g, &options)?.into_loaded(),
-        LoadedProblem::Single(_) | LoadedProblem::Conjugate(_) => {
-            load_estimate(&args.estimate, &options)?
-        }
-    };
+    let estimate = load_given(args, &problem, &options)?;
     if args.plot.plot.is_some() {
         CertifyReport::require_figure(&problem)?;
     }
