@@ -45,19 +45,28 @@ pub(crate) fn check_weight(item: impl FnOnce() -> String, w: f64) -> Result<()> 
 /// [`Error::NonFinite`] or [`Error::NotARotation`] for `item` unless `r` is a rotation within
 /// [`DEFAULT_ROTATION_TOLERANCE`] (`[C6]`).
 pub(crate) fn check_rotation(item: impl FnOnce() -> String, r: &Rotation) -> Result<()> {
+    check_rotation_within(item, r, DEFAULT_ROTATION_TOLERANCE)
+}
+
+/// [`check_rotation`] with the tolerance `tol` on `||R^T R - I||_F` and `|det R - 1|`.
+pub(crate) fn check_rotation_within(
+    item: impl FnOnce() -> String,
+    r: &Rotation,
+    tol: f64,
+) -> Result<()> {
     let m = r.matrix();
     if !m.iter().all(|x| x.is_finite()) {
         return Err(Error::NonFinite { item: item() });
     }
     let (orth, det) = so3::rotation_defect(m);
-    if orth <= DEFAULT_ROTATION_TOLERANCE && (det - 1.0).abs() <= DEFAULT_ROTATION_TOLERANCE {
+    if orth <= tol && (det - 1.0).abs() <= tol {
         Ok(())
     } else {
         Err(Error::NotARotation {
             item: item(),
             orthogonality_error: orth,
             determinant: det,
-            tolerance: DEFAULT_ROTATION_TOLERANCE,
+            tolerance: tol,
         })
     }
 }

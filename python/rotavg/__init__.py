@@ -22,8 +22,14 @@ global minimum and the gap to it); ``to_dict()`` is the object the ``rotavg`` co
 prints with ``--json``. Bad input raises ``rotavg.Error`` (a ``ValueError``) or one of its
 subclasses (``ParseError``, ``FileError``, ``DisconnectedError``, ``DegenerateError``,
 ``SolverError``) with the library's message. The GIL is released while solving;
-``set_progress(callback)`` receives the progress events of long runs.
+``set_progress(callback)`` receives the progress events of long runs, and ``with
+progress_bar(): ...`` shows them on one line of stderr as the command line does;
+``write_figure(problem, result, path)`` draws the command line's ``--plot`` figure.
 """
+
+import sys
+import time
+from typing import Any, Dict, Optional, TextIO
 
 from ._rotavg import (
     Accuracy,
@@ -56,6 +62,7 @@ from ._rotavg import (
     set_progress,
     write_edges,
     write_estimate,
+    write_figure,
 )
 
 __all__ = [
@@ -89,4 +96,51 @@ __all__ = [
     "set_progress",
     "write_edges",
     "write_estimate",
+    "write_figure",
+    "progress_bar",
 ]
+
+
+class progress_bar:
+    """Show the progress of every call inside a ``with`` block on one line of ``stream``
+    (default ``sys.stderr``), as the command line's progress line does: each event's
+    ``message`` (phase, iteration, proof, predicted time), rewritten in place at most every
+    ``min_interval`` seconds; the line is cleared when the block ends. It installs itself with
+    ``set_progress`` (process-wide) and removes itself on exit (``set_progress(None)``).
+
+    >>> import numpy as np, rotavg
+    >>> with rotavg.progress_bar():
+    ...     res = rotavg.average_single(np.eye(3)[None].repeat(3, axis=0))
+    >>> res.certificate.certified
+    True
+    """
+
+    def __init__(self, stream: Optional[TextIO] = None, min_interval: float = 0.1) -> None:
+        self.stream = stream
+        self.min_interval = min_interval
+        self._last = float("-inf")
+        self._width = 0
+
+    def __enter__(self) -> "progress_bar":
+        set_progress(self)
+        return self
+
+    def __call__(self, event: Dict[str, Any]) -> None:
+        now = time.monotonic()
+        if now - self._last < self.min_interval:
+            return
+        self._last = now
+        line = str(event.get("message", ""))[:120]
+        self._write("\r" + line.ljust(self._width))
+        self._width = len(line)
+
+    def __exit__(self, *exc: object) -> None:
+        set_progress(None)
+        if self._width:
+            self._write("\r" + " " * self._width + "\r")
+            self._width = 0
+
+    def _write(self, text: str) -> None:
+        out = self.stream if self.stream is not None else sys.stderr
+        out.write(text)
+        out.flush()

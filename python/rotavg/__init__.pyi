@@ -7,7 +7,7 @@ mypy --strict.
 """
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Protocol, Sequence, Union, final, overload
+from typing import Any, Callable, Dict, List, Optional, Protocol, Sequence, TextIO, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -44,6 +44,8 @@ __all__ = [
     "set_progress",
     "write_edges",
     "write_estimate",
+    "write_figure",
+    "progress_bar",
 ]
 
 class _HasAsMatrix(Protocol):
@@ -249,6 +251,8 @@ def average_single(
     weights: Optional[npt.ArrayLike] = None,
     metric: str = "chordal",
     p: int = 2,
+    *,
+    rotation_tolerance: float = 1e-5,
 ) -> Result:
     """L^p mean of rotations under the chordal, quaternion or geodesic metric, certified."""
 
@@ -364,6 +368,7 @@ def average_conjugate(
     init: Optional[_Rotation3] = None,
     max_memory: Optional[int] = None,
     max_seconds: Optional[float] = 600.0,
+    rotation_tolerance: float = 1e-5,
 ) -> Result:
     """Hand-eye rotation S with right[k] ~ S^-1 left[k] S, certified by a 10x10 SDP."""
 
@@ -380,6 +385,7 @@ def average_conjugate(
     init: Optional[_Rotation3] = None,
     max_memory: Optional[int] = None,
     max_seconds: Optional[float] = 600.0,
+    rotation_tolerance: float = 1e-5,
 ) -> Result:
     """Pairs from ``hand_eye_pairs`` or ``read_handeye`` (``rotavg conjugate PATH``)."""
 
@@ -387,19 +393,35 @@ def average_conjugate(
 def certify_conjugate(
     left: _Rotations,
     right: _Rotations,
-    estimate: _Rotation3,
+    estimate: Union[_Rotation3, str, os.PathLike[str]],
     weights: Optional[npt.ArrayLike] = None,
+    *,
+    rotation_tolerance: float = 1e-5,
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
 ) -> Result:
     """Certify a hand-eye rotation computed elsewhere, without changing it."""
 
 @overload
-def certify_conjugate(left: HandEyeData, right: None = None, *, estimate: _Rotation3) -> Result:
+def certify_conjugate(
+    left: HandEyeData,
+    right: None = None,
+    *,
+    estimate: Union[_Rotation3, str, os.PathLike[str]],
+    rotation_tolerance: float = 1e-5,
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
+) -> Result:
     """Certify a hand-eye rotation (e.g. OpenCV's R_cam2gripper) for ``HandEyeData``."""
 
 def certify_single(
     rotations: _Rotations,
-    estimate: _Rotation3,
+    estimate: Union[_Rotation3, str, os.PathLike[str]],
     weights: Optional[npt.ArrayLike] = None,
+    *,
+    rotation_tolerance: float = 1e-5,
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
 ) -> Result:
     """Certify a chordal L2 mean computed elsewhere, without changing it."""
 
@@ -441,6 +463,17 @@ def read_ground_truth(path: _PathLike, graph: Graph) -> _FloatArray:
 
 def set_progress(callback: Optional[Callable[[Dict[str, Any]], object]]) -> None:
     """Receive every following call's progress events (process-wide); None stops it."""
+
+def write_figure(problem: Union[Graph, HandEyeData], result: Result, path: _PathLike) -> None:
+    """Write the SVG figure of a result as the command line's ``--plot PATH`` draws it."""
+
+class progress_bar:
+    """Show the progress of the calls inside a ``with`` block on one line of stderr."""
+
+    def __init__(self, stream: Optional[TextIO] = None, min_interval: float = 0.1) -> None: ...
+    def __enter__(self) -> progress_bar: ...
+    def __call__(self, event: Dict[str, Any]) -> None: ...
+    def __exit__(self, *exc: object) -> None: ...
 
 def write_edges(graph: Graph, result: Result, path: _PathLike) -> None:
     """Write a robust result's per-edge residuals as ``rotavg multiple --edges-output``."""

@@ -355,24 +355,29 @@ fn optional_matrices(obj: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Opt
 ///     weights: ``(N,)`` positive weights (default all 1).
 ///     metric: ``"chordal"``, ``"quaternion"`` or ``"geodesic"`` (the angle).
 ///     p: 1 or 2 (quaternion only with 2).
+///     rotation_tolerance: the tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` of every
+///         sample (default 1e-5); the samples are used as given, and the certificate subtracts
+///         their defect.
 ///
 /// Returns:
 ///     Result: ``estimate`` is the ``(3, 3)`` mean; ``to_dict()`` equals
 ///     ``rotavg single FILE --json``.
 ///
 /// Raises:
-///     rotavg.Error: bad shapes, NaN, a matrix that is not a rotation (tolerance 1e-5),
+///     rotavg.Error: bad shapes, NaN, a matrix that is not a rotation (``rotation_tolerance``),
 ///         a weight that is not positive, an unknown metric or p.
 #[pyfunction]
-#[pyo3(name = "average_single", signature = (rotations, weights=None, metric="chordal", p=2))]
+#[pyo3(name = "average_single", signature = (rotations, weights=None, metric="chordal", p=2, *, rotation_tolerance=1e-5))]
 fn average_single_py(
     py: Python<'_>,
     rotations: &Bound<'_, PyAny>,
     weights: Option<&Bound<'_, PyAny>>,
     metric: &str,
     p: i64,
+    rotation_tolerance: f64,
 ) -> PyResult<RunResult> {
-    let rotations = matrices(rotations, "rotations")?;
+    let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
+    let rotations = matrices(rotations, "rotations")?.within(tolerance);
     let weights = optional_vector(weights, rotations.len())?;
     let metric: Metric = parse_named(metric, "metric")?;
     let loss = match p {
@@ -381,7 +386,7 @@ fn average_single_py(
         _ => return Err(argument_error(format!("p must be 1 or 2, got {p}"))),
     };
     let report = detached(py, move || {
-        let problem = SingleProblem::new(rotations.rotations()?, weights)?
+        let problem = SingleProblem::new_within(rotations.rotations()?, weights, tolerance)?
             .with_objective(Objective::new(metric, loss))?;
         let result = average_single(&problem, &AverageSettings::default())?;
         Ok(SingleReport::new(result))
@@ -732,8 +737,12 @@ impl PairArrays {
         left: &Bound<'_, PyAny>,
         right: &Bound<'_, PyAny>,
         weights: Option<&Bound<'_, PyAny>>,
+        tolerance: f64,
     ) -> PyResult<Self> {
-        let (left, right) = (matrices(left, "left")?, matrices(right, "right")?);
+        let (left, right) = (
+            matrices(left, "left")?.within(tolerance),
+            matrices(right, "right")?.within(tolerance),
+        );
         if left.len() != right.len() {
             return Err(argument_error(format!(
                 "left and right must have one rotation per pair: got {} and {}",
@@ -782,10 +791,13 @@ enum PairsInput {
 }
 
 impl PairsInput {
+    /// The pairs of `left` (a `HandEyeData`, checked by its reader) or of the arrays `left`,
+    /// `right`, whose matrices must be rotations within `tolerance`.
     fn copy(
         left: &Bound<'_, PyAny>,
         right: Option<&Bound<'_, PyAny>>,
         weights: Option<&Bound<'_, PyAny>>,
+        tolerance: f64,
     ) -> PyResult<Self> {
         if let Ok(d) = left.cast::<HandEyeData>() {
             if right.is_some_and(|r| !r.is_none()) || weights.is_some_and(|w| !w.is_none()) {
@@ -802,7 +814,9 @@ impl PairsInput {
             ));
         }
         match right.filter(|r| !r.is_none()) {
-            Some(right) => Ok(PairsInput::Arrays(PairArrays::copy(left, right, weights)?)),
+            Some(right) => Ok(PairsInput::Arrays(PairArrays::copy(
+                left, right, weights, tolerance,
+            )?)),
             None => Err(argument_error(
                 "conjugate averaging needs left and right (or HandEyeData from hand_eye_pairs or read_handeye)",
             )),
@@ -856,6 +870,8 @@ struct ConjugateParts {
 ///         form).
 ///     max_memory, max_seconds: the certificate's budget (bytes, default 4 GiB; seconds,
 ///         default 600, ``None``: no limit), as for ``average_multiple``.
+///     rotation_tolerance: the tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` of every
+///         matrix of ``left`` and ``right`` (default 1e-5); beyond it, an error.
 ///
 /// Returns:
 ///     Result: ``estimate`` is ``S`` (3, 3); ``to_dict()`` equals
@@ -865,7 +881,7 @@ struct ConjugateParts {
 ///     rotavg.Error: bad shapes, NaN, non-rotations, bad weights, unknown names.
 ///     rotavg.DegenerateError: data that do not determine S (all rotation axes parallel).
 #[pyfunction]
-#[pyo3(name = "average_conjugate", signature = (left, right=None, weights=None, *, metric="chordal", loss="l2", certify="auto", loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0))]
+#[pyo3(name = "average_conjugate", signature = (left, right=None, weights=None, *, metric="chordal", loss="l2", certify="auto", loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5))]
 #[allow(clippy::too_many_arguments)]
 fn average_conjugate_py(
     py: Python<'_>,
@@ -879,8 +895,10 @@ fn average_conjugate_py(
     init: Option<&Bound<'_, PyAny>>,
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
+    rotation_tolerance: f64,
 ) -> PyResult<RunResult> {
-    let pairs = PairsInput::copy(left, right, weights)?;
+    let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
+    let pairs = PairsInput::copy(left, right, weights, tolerance)?;
     conjugate_run(
         py,
         pairs,
@@ -1014,46 +1032,82 @@ fn hand_eye(
 ///     left, right, weights: the pairs, as for ``average_conjugate`` (or ``left`` a
 ///         ``HandEyeData`` and ``estimate`` by keyword).
 ///     estimate: the ``(3, 3)`` rotation ``S`` (or a single scipy Rotation); for
-///         ``hand_eye_pairs`` data, OpenCV's ``R_cam2gripper``.
+///         ``hand_eye_pairs`` data, OpenCV's ``R_cam2gripper``; or a path, read as ``rotavg
+///         certify --estimate`` reads it (JSON ``{"rotation": S}``, a NumPy ``(3, 3)`` array).
+///     rotation_tolerance: as for ``average_conjugate`` (the pairs' matrices).
+///     max_memory, max_seconds: the certificate's budget, as for ``average_conjugate``.
 ///
 /// Returns:
 ///     Result: ``solver`` is None; ``to_dict()`` equals
 ///     ``rotavg certify FILE --estimate EST --json``.
 ///
 /// Raises:
-///     rotavg.Error: as ``average_conjugate``.
+///     rotavg.Error: as ``average_conjugate``; rotavg.ParseError: an estimate file that
+///         cannot be read (naming it).
 #[pyfunction]
-#[pyo3(name = "certify_conjugate", signature = (left, right=None, estimate=None, weights=None))]
+#[pyo3(name = "certify_conjugate", signature = (left, right=None, estimate=None, weights=None, *, rotation_tolerance=1e-5, max_memory=None, max_seconds=600.0))]
+#[allow(clippy::too_many_arguments)]
 fn certify_conjugate_py(
     py: Python<'_>,
     left: &Bound<'_, PyAny>,
     right: Option<&Bound<'_, PyAny>>,
     estimate: Option<&Bound<'_, PyAny>>,
     weights: Option<&Bound<'_, PyAny>>,
+    rotation_tolerance: f64,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
 ) -> PyResult<RunResult> {
-    let pairs = PairsInput::copy(left, right, weights)?;
-    let estimate = estimate
-        .filter(|e| !e.is_none())
-        .ok_or_else(|| argument_error("certify_conjugate needs an estimate"))?;
-    let estimate = matrix(estimate, "estimate")?;
+    let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
+    let pairs = PairsInput::copy(left, right, weights, tolerance)?;
+    let estimate = OneEstimate::of(
+        estimate
+            .filter(|e| !e.is_none())
+            .ok_or_else(|| argument_error("certify_conjugate needs an estimate"))?,
+    )?;
+    let settings = certify_settings(CertifyMode::Auto, max_memory, max_seconds, true, None)?;
     let report = detached(py, move || {
         let parts = pairs.into_parts()?;
         let problem = LoadedProblem::Conjugate(parts.problem);
-        let estimate = LoadedEstimate {
-            name: "estimate".into(),
-            estimate: Estimate::Single(estimate.rotation()?),
-            warnings: Vec::new(),
-        };
-        CertifyReport::certify(&parts.name, &problem, estimate, &CertifySettings::default())
+        CertifyReport::certify(&parts.name, &problem, estimate.load()?, &settings)
     })?;
     RunResult::new(py, Report::Certify(report))
+}
+
+/// The estimate of a single or conjugate problem: a `(3, 3)` array, or a path.
+enum OneEstimate {
+    Matrix(Matrices),
+    Path(String),
+}
+
+impl OneEstimate {
+    /// A path (str or os.PathLike) or an array.
+    fn of(estimate: &Bound<'_, PyAny>) -> PyResult<Self> {
+        if estimate.is_instance_of::<pyo3::types::PyString>() || estimate.hasattr("__fspath__")? {
+            let path: std::path::PathBuf = estimate.extract()?;
+            return Ok(OneEstimate::Path(path.to_string_lossy().into_owned()));
+        }
+        Ok(OneEstimate::Matrix(matrix(estimate, "estimate")?))
+    }
+
+    /// The estimate as `rotavg certify --estimate` takes it.
+    fn load(self) -> rotavg::Result<LoadedEstimate> {
+        match self {
+            OneEstimate::Matrix(m) => Ok(LoadedEstimate {
+                name: "estimate".into(),
+                estimate: Estimate::Single(m.rotation()?),
+                warnings: Vec::new(),
+            }),
+            OneEstimate::Path(p) => rotavg::io::input::load_estimate(&p, &ReadOptions::default()),
+        }
+    }
 }
 
 /// Certify a single-rotation chordal L2 mean computed elsewhere, **without changing it**.
 ///
 /// Args:
-///     rotations, weights: the samples, as for ``average_single``.
-///     estimate: the ``(3, 3)`` rotation to certify.
+///     rotations, weights, rotation_tolerance: the samples, as for ``average_single``.
+///     estimate: the ``(3, 3)`` rotation to certify, or a path (as for ``certify_conjugate``).
+///     max_memory, max_seconds: the certificate's budget, as for ``average_multiple``.
 ///
 /// Returns:
 ///     Result: ``solver`` is None; ``to_dict()`` equals
@@ -1062,24 +1116,25 @@ fn certify_conjugate_py(
 /// Raises:
 ///     rotavg.Error: as ``average_single``.
 #[pyfunction]
-#[pyo3(name = "certify_single", signature = (rotations, estimate, weights=None))]
+#[pyo3(name = "certify_single", signature = (rotations, estimate, weights=None, *, rotation_tolerance=1e-5, max_memory=None, max_seconds=600.0))]
 fn certify_single_py(
     py: Python<'_>,
     rotations: &Bound<'_, PyAny>,
     estimate: &Bound<'_, PyAny>,
     weights: Option<&Bound<'_, PyAny>>,
+    rotation_tolerance: f64,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
 ) -> PyResult<RunResult> {
-    let rotations = matrices(rotations, "rotations")?;
+    let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
+    let rotations = matrices(rotations, "rotations")?.within(tolerance);
     let weights = optional_vector(weights, rotations.len())?;
-    let estimate = matrix(estimate, "estimate")?;
+    let estimate = OneEstimate::of(estimate)?;
+    let settings = certify_settings(CertifyMode::Auto, max_memory, max_seconds, true, None)?;
     let report = detached(py, move || {
-        let problem = LoadedProblem::Single(SingleProblem::new(rotations.rotations()?, weights)?);
-        let estimate = LoadedEstimate {
-            name: "estimate".into(),
-            estimate: Estimate::Single(estimate.rotation()?),
-            warnings: Vec::new(),
-        };
-        CertifyReport::certify("<arrays>", &problem, estimate, &CertifySettings::default())
+        let samples = SingleProblem::new_within(rotations.rotations()?, weights, tolerance)?;
+        let problem = LoadedProblem::Single(samples);
+        CertifyReport::certify("<arrays>", &problem, estimate.load()?, &settings)
     })?;
     RunResult::new(py, Report::Certify(report))
 }
@@ -1182,6 +1237,7 @@ fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rig::certify_rig, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_edges, m)?)?;
+    m.add_function(wrap_pyfunction!(output::write_figure, m)?)?;
     m.add_function(wrap_pyfunction!(progress::set_progress, m)?)?;
     m.add_function(wrap_pyfunction!(truth::read_ground_truth, m)?)?;
     m.add_function(wrap_pyfunction!(truth::accuracy, m)?)?;

@@ -109,3 +109,66 @@ pub fn write_edges(
         plan.write_text(&text)
     })
 }
+
+/// Write the SVG figure of a result, as the command line's ``--plot PATH`` draws it: the
+/// histogram of the residual angles (degrees) of the problem's edges or pairs at the result's
+/// estimate, with its certificate (and the certificate matrix's smallest eigenvalues when the
+/// certificate has them).
+///
+/// Args:
+///     problem: the ``Graph`` (``average_multiple`` / ``certify_multiple`` results of it) or
+///         the ``HandEyeData`` (``average_conjugate`` / ``certify_conjugate`` results) the
+///         result is of.
+///     result: the ``Result``.
+///     path: the SVG file to write.
+///
+/// Raises:
+///     rotavg.Error: a result of another kind or size than the problem (single-rotation
+///         results have no figure, as on the command line); rotavg.FileError: the file cannot
+///         be written.
+#[pyfunction]
+#[pyo3(signature = (problem, result, path))]
+pub fn write_figure(
+    py: Python<'_>,
+    problem: &Bound<'_, PyAny>,
+    result: &RunResult,
+    path: std::path::PathBuf,
+) -> PyResult<()> {
+    let path = path.to_string_lossy().into_owned();
+    let (rotations, certificate) = result.figure_parts();
+    if let Ok(graph) = problem.cast::<Graph>() {
+        let graph = graph.get();
+        let rotations = rotations
+            .filter(|r| r.len() == graph.loaded.problem.num_rotations())
+            .ok_or_else(|| argument_error("the result is not an estimate of this graph"))?;
+        let input = graph.name.clone();
+        return detached(py, || {
+            rotavg::plot::write_multiple_figure(
+                &path,
+                &graph.loaded.problem,
+                &rotations,
+                certificate.as_ref(),
+                &input,
+            )
+        });
+    }
+    if let Ok(data) = problem.cast::<crate::handeye::HandEyeData>() {
+        let data = data.get();
+        let s = match (result.problem(), rotations.as_deref()) {
+            ("conjugate", Some([s])) => *s,
+            _ => return Err(argument_error("the result is not a hand-eye rotation")),
+        };
+        return detached(py, || {
+            rotavg::plot::write_conjugate_figure(
+                &path,
+                &data.problem,
+                &s,
+                certificate.as_ref(),
+                &data.name,
+            )
+        });
+    }
+    Err(argument_error(
+        "problem must be a Graph (read_graph) or HandEyeData (read_handeye, hand_eye_pairs)",
+    ))
+}

@@ -400,6 +400,38 @@ impl RunResult {
 }
 
 impl RunResult {
+    /// ``"single"``, ``"multiple"``, ``"conjugate"`` or ``"rig"``.
+    pub fn problem(&self) -> &str {
+        &self.problem
+    }
+
+    /// The estimate's rotations (one for single and conjugate results) and the certificate,
+    /// for a figure; no rotations for a rig.
+    pub fn figure_parts(&self) -> (Option<Vec<Rotation>>, Option<rotavg::Certificate>) {
+        match &self.report {
+            Report::Single(r) => (
+                Some(vec![r.result.solution.estimate]),
+                r.result.certificate.clone(),
+            ),
+            Report::Multiple(r) => (
+                Some(r.result.solution.rotations.clone()),
+                r.result.certificate.clone(),
+            ),
+            Report::Conjugate(r) => (
+                Some(vec![r.result.solution.estimate]),
+                r.result.certificate.clone(),
+            ),
+            Report::Certify(r) => {
+                let rotations = match &r.estimate {
+                    Estimate::Multiple(rs) => rs.clone(),
+                    Estimate::Single(one) => vec![*one],
+                };
+                (Some(rotations), Some(r.certificate.clone()))
+            }
+            Report::Rig(_) => (None, None),
+        }
+    }
+
     /// The multiple-averaging report, if this is one.
     pub fn multiple(&self) -> Option<&MultipleReport> {
         match &self.report {

@@ -4,7 +4,7 @@
 use crate::error::{Error, Result};
 use crate::objective::{Loss, Objective};
 use crate::so3::{self, Rotation};
-use crate::validate::{check_rotation, check_weight};
+use crate::validate::{check_rotation_within, check_weight};
 use serde::{Deserialize, Serialize};
 
 /// Validated data of a single-averaging problem: samples `R_i`, weights `w_i > 0` and the
@@ -62,13 +62,33 @@ impl SingleProblem {
     /// assert!(SingleProblem::new(vec![Rotation::identity()], Some(vec![-1.0])).is_err());
     /// ```
     pub fn new(rotations: Vec<Rotation>, weights: Option<Vec<f64>>) -> Result<Self> {
+        Self::new_within(rotations, weights, crate::so3::DEFAULT_ROTATION_TOLERANCE)
+    }
+
+    /// [`Self::new`] with the tolerance `rotation_tolerance` on `||R^T R - I||_F` and
+    /// `|det R - 1|` of every sample (the readers' `--rotation-tolerance`; Python's
+    /// `rotation_tolerance`). The samples are used as given (`[C6]`); the certificates
+    /// subtract their defect (`[B6]`).
+    ///
+    /// ```
+    /// use rotavg::single::SingleProblem;
+    /// use rotavg::Rotation;
+    /// let loose = Rotation::from_matrix_unchecked(nalgebra::Matrix3::identity() * (1.0 + 1e-4));
+    /// assert!(SingleProblem::new(vec![loose], None).is_err());
+    /// assert!(SingleProblem::new_within(vec![loose], None, 1e-3).is_ok());
+    /// ```
+    pub fn new_within(
+        rotations: Vec<Rotation>,
+        weights: Option<Vec<f64>>,
+        rotation_tolerance: f64,
+    ) -> Result<Self> {
         if rotations.is_empty() {
             return Err(Error::Empty {
                 what: "the list of rotations".into(),
             });
         }
         for (k, r) in rotations.iter().enumerate() {
-            check_rotation(|| format!("rotation {k}"), r)?;
+            check_rotation_within(|| format!("rotation {k}"), r, rotation_tolerance)?;
         }
         let weights = match weights {
             None => vec![1.0; rotations.len()],

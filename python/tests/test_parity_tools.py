@@ -1,0 +1,116 @@
+"""What the command line has, from Python: figures (``write_figure``, as ``--plot``), a progress
+line (``progress_bar``), rotation tolerances and budgets for single and conjugate problems, and
+their estimates given as files."""
+
+import io
+import json
+
+import numpy as np
+import pytest
+
+import rotavg
+from conftest import random_rotations, small_rotations, synthetic_graph
+
+
+def conjugate_pairs(rng, n, sigma):
+    s = random_rotations(rng, 1)[0]
+    right = random_rotations(rng, n)
+    return s, s @ right @ s.T, small_rotations(rng, n, sigma) @ right
+
+
+def test_write_figure_draws_the_residuals_of_a_graph_and_of_hand_eye_pairs(rng, tmp_path):
+    _, i, j, rel = synthetic_graph(rng, 20, 60, 0.02)
+    g = rotavg.read_graph(str(_write_graph(tmp_path, i, j, rel)))
+    ours = rotavg.average_multiple(g)
+    rotavg.write_figure(g, ours, tmp_path / "multiple.svg")
+    svg = (tmp_path / "multiple.svg").read_text()
+    assert svg.startswith("<svg") and "residual angles of 60 edges" in svg
+    certified = rotavg.certify_multiple(g, estimate=ours.estimate)
+    rotavg.write_figure(g, certified, tmp_path / "certify.svg")
+    assert "residual angles of 60 edges" in (tmp_path / "certify.svg").read_text()
+    _, left, right = conjugate_pairs(rng, 10, 0.01)
+    conj = rotavg.average_conjugate(left, right)
+    with pytest.raises(rotavg.Error, match="must be a Graph"):
+        rotavg.write_figure(left, conj, tmp_path / "x.svg")
+    with pytest.raises(rotavg.Error, match="not an estimate of this graph"):
+        rotavg.write_figure(g, conj, tmp_path / "x.svg")
+
+
+def _write_graph(tmp_path, i, j, rel):
+    path = tmp_path / "graph.json"
+    edges = [
+        {"i": int(a), "j": int(b), "rotation": r.tolist()} for a, b, r in zip(i, j, rel)
+    ]
+    path.write_text(json.dumps({"num_rotations": 20, "edges": edges}))
+    return path
+
+
+def test_write_figure_of_hand_eye_data(tmp_path, data_dir):
+    folder = data_dir / "handeye" / "tabb_rwhe_dataset1"
+    if not folder.is_dir():
+        pytest.skip(f"{folder} not present")
+    data = rotavg.read_handeye(str(folder))
+    res = rotavg.average_conjugate(data)
+    rotavg.write_figure(data, res, tmp_path / "conjugate.svg")
+    assert "pairs" in (tmp_path / "conjugate.svg").read_text()
+    single = rotavg.average_single(np.eye(3)[None].repeat(3, axis=0))
+    with pytest.raises(rotavg.Error, match="not a hand-eye rotation"):
+        rotavg.write_figure(data, single, tmp_path / "y.svg")
+
+
+def test_progress_bar_shows_messages_on_one_line_and_clears_it(rng):
+    _, i, j, rel = synthetic_graph(rng, 200, 1000, 0.05)
+    out = io.StringIO()
+    with rotavg.progress_bar(stream=out, min_interval=0.0):
+        res = rotavg.average_multiple(200, i, j, rel)
+    text = out.getvalue()
+    assert res.certificate.certified
+    assert text.startswith("\r") and text.endswith("\r"), text[:80]
+    assert "\n" not in text
+    # every message was written over the previous one, then blanked
+    assert text.rstrip("\r").split("\r")[-1].strip() == ""
+    # the callback is removed on exit: nothing more is written
+    rotavg.average_multiple(200, i, j, rel)
+    assert out.getvalue() == text
+
+
+def test_rotation_tolerance_for_single_and_conjugate_samples(rng):
+    samples = small_rotations(rng, 10, 0.1)
+    loose = samples.copy()
+    loose[3] = loose[3] * (1 + 1e-4)  # ||R^T R - I||_F ~ 3.5e-4
+    with pytest.raises(rotavg.Error, match="not a rotation"):
+        rotavg.average_single(loose)
+    res = rotavg.average_single(loose, rotation_tolerance=1e-3)
+    assert res.certificate.certified
+    assert rotavg.certify_single(loose, res.estimate, rotation_tolerance=1e-3).certificate.certified
+    _, left, right = conjugate_pairs(rng, 12, 0.01)
+    right[2] = right[2] * (1 + 1e-4)
+    with pytest.raises(rotavg.Error, match="not a rotation"):
+        rotavg.average_conjugate(left, right)
+    conj = rotavg.average_conjugate(left, right, rotation_tolerance=1e-3)
+    again = rotavg.certify_conjugate(left, right, conj.estimate, rotation_tolerance=1e-3)
+    assert again.certificate.certified
+    with pytest.raises(rotavg.Error, match="rotation_tolerance must be positive"):
+        rotavg.average_single(samples, rotation_tolerance=0.0)
+
+
+def test_single_and_conjugate_estimates_from_files_and_budgets(rng, tmp_path):
+    samples = small_rotations(rng, 10, 0.1)
+    mean = rotavg.average_single(samples).estimate
+    path = tmp_path / "mean.json"
+    path.write_text(json.dumps({"rotation": mean.tolist()}))
+    from_file = rotavg.certify_single(samples, path, max_seconds=30.0)
+    from_array = rotavg.certify_single(samples, mean)
+    assert from_file.cost == from_array.cost
+    assert from_file.to_dict()["certificate"]["verdict"] == "certified"
+    np.save(tmp_path / "s.npy", mean)
+    assert rotavg.certify_single(samples, str(tmp_path / "s.npy")).cost == from_array.cost
+    _, left, right = conjugate_pairs(rng, 12, 0.01)
+    s = rotavg.average_conjugate(left, right).estimate
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps({"rotation": s.tolist()}))
+    a = rotavg.certify_conjugate(left, right, path, max_memory=1 << 30)
+    b = rotavg.certify_conjugate(left, right, s)
+    assert a.cost == b.cost and a.certificate.certified
+    with pytest.raises(rotavg.FileError, match="missing.json"):
+        rotavg.certify_single(samples, tmp_path / "missing.json")
