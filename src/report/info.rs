@@ -12,7 +12,9 @@ use std::time::Instant;
 /// of the file's initial guess, spectral gap ([`GraphStats`]).
 ///
 /// JSON (`--json`, the fields in this order): `file`, `format`, `planar`, `num_rotations`,
-/// `num_measurements`, `reversed_edges`, `node_ids_contiguous`, `has_initial`, `warnings`,
+/// `num_measurements`, `reversed_edges`, `node_ids_contiguous`, `has_initial`, `warnings` (the
+/// messages, as strings: the contract of `info` since its first version), `warning_details`
+/// (the same warnings as every other verb writes them: `{code, message, count}`),
 /// `load_seconds`, `stats`.
 ///
 /// ```
@@ -23,7 +25,9 @@ use std::time::Instant;
 /// let info = InfoReport::read(&input, GraphFormat::Auto, &ReadOptions::default())?;
 /// assert_eq!((info.num_rotations, info.num_measurements), (3, 2));
 /// assert!(info.to_string().contains("nodes:          3"));
-/// assert_eq!(serde_json::to_value(&info).unwrap()["format"], "one_dsfm"); // serde's name
+/// let json = serde_json::to_value(&info).unwrap();
+/// assert_eq!(json["format"], "one_dsfm"); // serde's name
+/// assert_eq!(json["warning_details"], serde_json::json!([]));
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -44,8 +48,10 @@ pub struct InfoReport {
     pub node_ids_contiguous: bool,
     /// The file has an initial guess (vertex lines) for every node.
     pub has_initial: bool,
-    /// The reader's remarks.
+    /// The reader's remarks (their messages).
     pub warnings: Vec<String>,
+    /// The same remarks with their codes and counts ([`crate::warning`]).
+    pub warning_details: Vec<crate::warning::Warning>,
     /// Time to read the file, seconds.
     pub load_seconds: f64,
     /// The graph's statistics.
@@ -88,6 +94,7 @@ impl InfoReport {
             node_ids_contiguous: g.node_ids.iter().enumerate().all(|(k, &id)| id == k as u64),
             has_initial: g.initial.is_some(),
             warnings: g.warnings.iter().map(|w| w.message.clone()).collect(),
+            warning_details: g.warnings.clone(),
             load_seconds,
             stats,
             id_range: g.node_ids.first().copied().zip(g.node_ids.last().copied()),

@@ -75,6 +75,20 @@ fn g2o_reader_warnings_are_in_the_json() {
         "{codes:?}"
     );
     assert_eq!(codes.len(), 4, "{codes:?}");
+    // `info --json`: the messages as strings (its contract) and the same warnings coded
+    let info = run(&["info", path.to_str().unwrap(), "--json"]);
+    assert_success(&info);
+    let j = json_of(&info);
+    let details = j["warning_details"].as_array().expect("warning_details");
+    let strings = j["warnings"].as_array().expect("warnings");
+    assert_eq!(details.len(), strings.len());
+    for (d, s) in details.iter().zip(strings) {
+        assert_eq!(d["message"], *s);
+    }
+    let info_codes: Vec<&str> = details.iter().map(|d| d["code"].as_str().unwrap()).collect();
+    for (code, _) in &codes {
+        assert!(info_codes.contains(&code.as_str()), "{code} not in {info_codes:?}");
+    }
 }
 
 #[test]
