@@ -53,7 +53,10 @@ for peer_file in sorted(folder.glob("*__gtsam.json")):
     near = load(folder / f"{tag}__certify_nearest.json")
     raw, proj = load(folder / f"{tag}__certify_raw.json"), load(folder / f"{tag}__certify_raw_projected.json")
     if not g or "n" not in g:
-        rows.append(f"| {tag} | | | peer failed (exit {g and g.get('exit_code')}) | | | | | | | | | | | |")
+        why = f"exit {g.get('exit_code')} after {secs(g)} s (124: timeout)" if g else "no result"
+        cost_r = f"{r['cost']:.10g}" if r and "cost" in r else "-"
+        rows.append(f"| {tag} | {r and r.get('num_rotations', '')} | {r and r.get('num_measurements', '')} "
+                    f"| {why} | | | | | | {secs(r)} | {cost_r} | {verdict(r)} | | | |")
         continue
     det = f"{g['det_min']:.6f}..{g['det_max']:.6f}" if "det_min" in g else "-"
     orth = f"{g['orthogonality_error']:.1e}" if "orthogonality_error" in g else "-"
