@@ -278,6 +278,7 @@ def average_multiple(
     rotation_tolerance: float = 1e-5,
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
+    init_method: str = "spectral",
 ) -> Result:
     """Absolute rotations from relative ones (rel[k] @ R_i = R_j), certified."""
 
@@ -303,6 +304,7 @@ def average_multiple(
     rotation_tolerance: float = 1e-5,
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
+    init_method: str = "spectral",
 ) -> Result:
     """A graph from ``read_graph``, solved as ``rotavg multiple FILE`` solves it."""
 
@@ -455,6 +457,7 @@ def read_graph(
     *,
     ground_truth: Optional[_PathLike] = None,
     rotation_tolerance: float = 1e-5,
+    information: str = "kappa",
 ) -> Graph:
     """Read a g2o, 1DSfM or JSON view graph with the library's readers."""
 

@@ -457,6 +457,8 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         ``to_dict()["pipeline"]["gravity"]`` has the priors' check.
 ///     world_down: the world's down direction the priors refer to (default ``(0, 0, 1)``,
 ///         the file's, or COLMAP's ``(0, 1, 0)``).
+///     init_method: the local solver's start without ``init``: ``"spectral"`` (default) or
+///         ``"tree"`` (the maximum-weight spanning tree), as ``--init-method``.
 ///
 /// Returns:
 ///     Result: ``estimate`` is ``(n, 3, 3)`` with the gauge ``estimate[0] = I`` (with
@@ -467,7 +469,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
 ///         bad weights, unknown names. rotavg.DisconnectedError: a disconnected graph.
 #[pyfunction]
-#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None, rotation_tolerance=1e-5, gravity=None, world_down=None))]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None, rotation_tolerance=1e-5, gravity=None, world_down=None, init_method="spectral"))]
 #[allow(clippy::too_many_arguments)]
 fn average_multiple_py(
     py: Python<'_>,
@@ -490,8 +492,10 @@ fn average_multiple_py(
     rotation_tolerance: f64,
     gravity: Option<&Bound<'_, PyAny>>,
     world_down: Option<[f64; 3]>,
+    init_method: &str,
 ) -> PyResult<RunResult> {
     let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
+    let init_method: Initialisation = parse_named(init_method, "init_method")?;
     let gravity = gravity::GravityInput::from_py(gravity)?;
     if gravity.is_some() && loss == "geodesic" {
         return Err(argument_error(
@@ -517,7 +521,7 @@ fn average_multiple_py(
         let problem = input.graph.problem.clone().with_objective(objective)?;
         let init = match init {
             Some(m) => Initialisation::Given(for_kept(m.rotations()?, &input.selection, "init")?),
-            None => Initialisation::default(),
+            None => init_method,
         };
         let settings = AverageSettings {
             solve: MultipleSettings {
@@ -1152,6 +1156,10 @@ fn certify_single_py(
 ///     ground_truth: a ground-truth file for the graph's nodes (the command line's
 ///         ``--ground-truth``; formats: see ``read_ground_truth``): ``g.truth`` holds it, and
 ///         ``average_multiple(g)`` then reports ``result.accuracy``.
+///     information: ``"kappa"`` (default) or ``"full"``, the command line's ``--information``:
+///         g2o / TORO edges with their full 3x3 rotation information (an anisotropic problem)
+///         instead of SE-Sync's scalar kappa; COLMAP databases with each pair's information
+///         from its inlier correspondences and cameras instead of weights 1.
 ///
 /// Returns:
 ///     Graph: with ``n, i, j, rel, weights`` for ``average_multiple``.
@@ -1160,7 +1168,8 @@ fn certify_single_py(
 ///     rotavg.FileError: unreadable file. rotavg.ParseError: malformed content (the message
 ///         names file and line).
 #[pyfunction]
-#[pyo3(signature = (path, format="auto", weights="file", largest_component=false, *, ground_truth=None, rotation_tolerance=1e-5))]
+#[pyo3(signature = (path, format="auto", weights="file", largest_component=false, *, ground_truth=None, rotation_tolerance=1e-5, information="kappa"))]
+#[allow(clippy::too_many_arguments)]
 fn read_graph(
     py: Python<'_>,
     path: std::path::PathBuf,
@@ -1169,7 +1178,17 @@ fn read_graph(
     largest_component: bool,
     ground_truth: Option<std::path::PathBuf>,
     rotation_tolerance: f64,
+    information: &str,
 ) -> PyResult<Graph> {
+    let full_information = match information {
+        "kappa" => false,
+        "full" => true,
+        other => {
+            return Err(argument_error(format!(
+                "information must be \"kappa\" or \"full\", got {other:?}"
+            )));
+        }
+    };
     let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
     let format: GraphFormat = parse_named(format, "format")?;
     let weights: WeightSource = parse_named(weights, "weights")?;
@@ -1180,6 +1199,7 @@ fn read_graph(
         let options = ReadOptions {
             weights,
             rotation_tolerance: tolerance,
+            full_information,
             ..Default::default()
         };
         // as rotavg::io::input::load_multiple_input, without requiring a connected graph

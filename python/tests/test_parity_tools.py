@@ -114,3 +114,19 @@ def test_single_and_conjugate_estimates_from_files_and_budgets(rng, tmp_path):
     assert a.cost == b.cost and a.certificate.certified
     with pytest.raises(rotavg.FileError, match="missing.json"):
         rotavg.certify_single(samples, tmp_path / "missing.json")
+
+
+def test_read_graph_information_full_and_init_method_match_the_command_line(cli):
+    import pathlib
+
+    slam = pathlib.Path(__file__).resolve().parents[2] / "examples" / "data" / "slam.g2o"
+    g = rotavg.read_graph(slam, information="full")
+    res = rotavg.average_multiple(g, init_method="tree")
+    theirs = cli("multiple", str(slam), "--information", "full", "--init-method", "tree")
+    assert res.to_dict()["information"] == theirs["information"]
+    assert res.cost == pytest.approx(theirs["cost"], rel=1e-12)
+    assert not rotavg.average_multiple(rotavg.read_graph(slam)).to_dict().get("information")
+    with pytest.raises(rotavg.Error, match='information must be "kappa" or "full"'):
+        rotavg.read_graph(slam, information="diagonal")
+    with pytest.raises(rotavg.Error, match="init"):
+        rotavg.average_multiple(g, init_method="random")

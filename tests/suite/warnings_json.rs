@@ -85,9 +85,15 @@ fn g2o_reader_warnings_are_in_the_json() {
     for (d, s) in details.iter().zip(strings) {
         assert_eq!(d["message"], *s);
     }
-    let info_codes: Vec<&str> = details.iter().map(|d| d["code"].as_str().unwrap()).collect();
+    let info_codes: Vec<&str> = details
+        .iter()
+        .map(|d| d["code"].as_str().unwrap())
+        .collect();
     for (code, _) in &codes {
-        assert!(info_codes.contains(&code.as_str()), "{code} not in {info_codes:?}");
+        assert!(
+            info_codes.contains(&code.as_str()),
+            "{code} not in {info_codes:?}"
+        );
     }
 }
 
