@@ -279,6 +279,7 @@ def average_multiple(
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
     init_method: str = "spectral",
+    inlier_threshold: Optional[float] = None,
 ) -> Result:
     """Absolute rotations from relative ones (rel[k] @ R_i = R_j), certified."""
 
@@ -305,6 +306,7 @@ def average_multiple(
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
     init_method: str = "spectral",
+    inlier_threshold: Optional[float] = None,
 ) -> Result:
     """A graph from ``read_graph``, solved as ``rotavg multiple FILE`` solves it."""
 

@@ -459,6 +459,9 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         the file's, or COLMAP's ``(0, 1, 0)``).
 ///     init_method: the local solver's start without ``init``: ``"spectral"`` (default) or
 ///         ``"tree"`` (the maximum-weight spanning tree), as ``--init-method``.
+///     inlier_threshold: robust losses: an edge is an inlier iff its residual angle at the
+///         robust estimate is at most this many degrees (default ``loss_threshold``), as
+///         ``--inlier-threshold``; the inlier graph is refined and certified.
 ///
 /// Returns:
 ///     Result: ``estimate`` is ``(n, 3, 3)`` with the gauge ``estimate[0] = I`` (with
@@ -469,7 +472,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
 ///         bad weights, unknown names. rotavg.DisconnectedError: a disconnected graph.
 #[pyfunction]
-#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None, rotation_tolerance=1e-5, gravity=None, world_down=None, init_method="spectral"))]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None, rotation_tolerance=1e-5, gravity=None, world_down=None, init_method="spectral", inlier_threshold=None))]
 #[allow(clippy::too_many_arguments)]
 fn average_multiple_py(
     py: Python<'_>,
@@ -493,6 +496,7 @@ fn average_multiple_py(
     gravity: Option<&Bound<'_, PyAny>>,
     world_down: Option<[f64; 3]>,
     init_method: &str,
+    inlier_threshold: Option<f64>,
 ) -> PyResult<RunResult> {
     let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
     let init_method: Initialisation = parse_named(init_method, "init_method")?;
@@ -512,6 +516,12 @@ fn average_multiple_py(
     )?;
     let graph = GraphInput::copy(n, i, j, rel, weights, information)?.within(tolerance);
     let loss = parse_named::<MultipleLoss>(loss, "loss")?;
+    if inlier_threshold.is_some() && matches!(loss, MultipleLoss::Chordal | MultipleLoss::Geodesic)
+    {
+        return Err(argument_error(format!(
+            "inlier_threshold needs a robust loss (\"l1\", \"huber\", \"cauchy\" or \"auto\"), not \"{loss}\""
+        )));
+    }
     let objective = loss.objective(loss_threshold);
     let mode: CertifyMode = parse_named(certify, "certify")?;
     let init = optional_matrices(init, "init")?.map(|m| m.within(tolerance));
@@ -526,9 +536,8 @@ fn average_multiple_py(
         let settings = AverageSettings {
             solve: MultipleSettings {
                 init,
-                // as the command line: the L1 inlier threshold is --loss-threshold
-                inlier_threshold_deg: (objective.loss == rotavg::Loss::L1)
-                    .then_some(loss_threshold),
+                // as the command line: --inlier-threshold, else for L1 --loss-threshold
+                inlier_threshold_deg: loss.inlier_threshold_deg(loss_threshold, inlier_threshold),
                 robust_on_outliers: loss.robust_on_outliers(loss_threshold),
                 ..Default::default()
             },

@@ -130,3 +130,20 @@ def test_read_graph_information_full_and_init_method_match_the_command_line(cli)
         rotavg.read_graph(slam, information="diagonal")
     with pytest.raises(rotavg.Error, match="init"):
         rotavg.average_multiple(g, init_method="random")
+
+
+def test_inlier_threshold_as_the_command_line(cli, tmp_path):
+    import pathlib
+
+    sfm = pathlib.Path(__file__).resolve().parents[2] / "examples" / "data" / "sfm_outliers.txt"
+    g = rotavg.read_graph(sfm)
+    res = rotavg.average_multiple(g, loss="cauchy", inlier_threshold=3.0)
+    theirs = cli("multiple", str(sfm), "--loss", "cauchy", "--inlier-threshold", "3")
+    ours = res.to_dict()["robust"]
+    keys = ["inlier_threshold_deg", "num_inliers", "num_outliers", "median_deg"]
+    assert [ours[k] for k in keys] == [theirs["robust"][k] for k in keys]
+    assert ours["inlier_graph"]["certified_problem"] == theirs["robust"]["inlier_graph"]["certified_problem"]
+    loose = rotavg.average_multiple(g, loss="cauchy", inlier_threshold=10.0).to_dict()["robust"]
+    assert loose["num_inliers"] > ours["num_inliers"]
+    with pytest.raises(rotavg.Error, match="inlier_threshold needs a robust loss"):
+        rotavg.average_multiple(g, loss="chordal", inlier_threshold=3.0)
