@@ -63,6 +63,7 @@ from ._rotavg import (
     write_edges,
     write_estimate,
     write_figure,
+    write_output,
 )
 
 __all__ = [
@@ -97,6 +98,7 @@ __all__ = [
     "write_edges",
     "write_estimate",
     "write_figure",
+    "write_output",
     "progress_bar",
 ]
 

@@ -45,6 +45,7 @@ __all__ = [
     "write_edges",
     "write_estimate",
     "write_figure",
+    "write_output",
     "progress_bar",
 ]
 
@@ -471,6 +472,9 @@ def set_progress(callback: Optional[Callable[[Dict[str, Any]], object]]) -> None
 
 def write_figure(problem: Union[Graph, HandEyeData], result: Result, path: _PathLike) -> None:
     """Write the SVG figure of a result as the command line's ``--plot PATH`` draws it."""
+
+def write_output(result: Result, path: _PathLike) -> None:
+    """Write what ``--output`` writes for a single, conjugate or rig result."""
 
 class progress_bar:
     """Show the progress of the calls inside a ``with`` block on one line of stderr."""

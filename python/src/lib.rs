@@ -1267,6 +1267,7 @@ fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(output::write_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_edges, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_figure, m)?)?;
+    m.add_function(wrap_pyfunction!(output::write_output, m)?)?;
     m.add_function(wrap_pyfunction!(progress::set_progress, m)?)?;
     m.add_function(wrap_pyfunction!(truth::read_ground_truth, m)?)?;
     m.add_function(wrap_pyfunction!(truth::accuracy, m)?)?;

@@ -172,3 +172,35 @@ pub fn write_figure(
         "problem must be a Graph (read_graph) or HandEyeData (read_handeye, hand_eye_pairs)",
     ))
 }
+
+/// Write what the command line's ``--output PATH`` writes for the verb of ``result``:
+/// ``average_single`` / ``average_conjugate`` (and their ``certify_*``) results
+/// ``{"rotation": R}`` (what ``certify --estimate`` and ``init`` read back), ``average_rig``
+/// results the frames with ``node_ids`` and ``"sensor_from_rig"`` (``rotavg rig --output``,
+/// what ``certify_rig`` reads back). View-graph results need their graph:
+/// ``write_estimate(graph, result.estimate, path)``.
+///
+/// Raises:
+///     rotavg.Error: a view-graph result; rotavg.FileError: the file cannot be written.
+#[pyfunction]
+#[pyo3(signature = (result, path))]
+pub fn write_output(py: Python<'_>, result: &RunResult, path: std::path::PathBuf) -> PyResult<()> {
+    let text = match (
+        result.rig_output(),
+        result.problem(),
+        result.figure_parts().0,
+    ) {
+        (Some(text), _, _) => text,
+        (None, "single" | "conjugate", Some(r)) if r.len() == 1 => {
+            rotavg::io::json::write_rotation_json(&r[0])
+        }
+        _ => {
+            return Err(argument_error(
+                "a view graph's estimate is written with its graph: write_estimate(graph, \
+                 result.estimate, path)",
+            ));
+        }
+    };
+    let path = path.to_string_lossy().into_owned();
+    detached(py, move || rotavg::io::output::write_text(&path, &text))
+}

@@ -432,6 +432,21 @@ impl RunResult {
         }
     }
 
+    /// The file `rotavg rig --output` writes for a rig result, else None.
+    pub fn rig_output(&self) -> Option<String> {
+        match &self.report {
+            Report::Rig(r) => {
+                let s = &r.result.solution;
+                Some(rotavg::io::json::write_rig_json(
+                    &s.rotations,
+                    &r.node_ids,
+                    &s.s,
+                ))
+            }
+            _ => None,
+        }
+    }
+
     /// The multiple-averaging report, if this is one.
     pub fn multiple(&self) -> Option<&MultipleReport> {
         match &self.report {

@@ -147,3 +147,26 @@ def test_inlier_threshold_as_the_command_line(cli, tmp_path):
     assert loose["num_inliers"] > ours["num_inliers"]
     with pytest.raises(rotavg.Error, match="inlier_threshold needs a robust loss"):
         rotavg.average_multiple(g, loss="chordal", inlier_threshold=3.0)
+
+
+def test_write_output_writes_what_output_writes(rng, tmp_path, cli):
+    samples = small_rotations(rng, 10, 0.1)
+    res = rotavg.average_single(samples)
+    rotavg.write_output(res, tmp_path / "mean.json")
+    back = json.loads((tmp_path / "mean.json").read_text())
+    assert np.array_equal(np.array(back["rotation"]), res.estimate)
+    assert rotavg.certify_single(samples, tmp_path / "mean.json").certificate.certified
+    import pathlib
+
+    rig = pathlib.Path(__file__).resolve().parents[2] / "examples" / "data" / "rig"
+    right, left = rotavg.read_graph(rig / "right.json"), rotavg.read_graph(rig / "left.json")
+    ours = rotavg.average_rig(right, left)
+    rotavg.write_output(ours, tmp_path / "rig.json")
+    written = json.loads((tmp_path / "rig.json").read_text())
+    assert np.allclose(np.array(written["sensor_from_rig"]), ours.to_dict()["sensor_from_rig"])
+    # the command line certifies it as rotavg rig --output wrote it
+    theirs = cli("certify", rig / "right.json", "--left", rig / "left.json", "--estimate", tmp_path / "rig.json")
+    assert theirs["cost"] == pytest.approx(ours.cost, rel=1e-12)
+    _, i, j, rel = synthetic_graph(rng, 10, 30, 0.01)
+    with pytest.raises(rotavg.Error, match="write_estimate"):
+        rotavg.write_output(rotavg.average_multiple(10, i, j, rel), tmp_path / "x.json")
