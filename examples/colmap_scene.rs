@@ -69,7 +69,14 @@ fn parse(args: &[String]) -> rotavg::Result<(SfmScene, String)> {
     Ok((s, out))
 }
 
-fn main() -> rotavg::Result<()> {
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("colmap_scene: {e}");
+        std::process::exit(2);
+    }
+}
+
+fn run() -> rotavg::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (settings, out) = parse(&args)?;
     let start = Instant::now();
