@@ -255,6 +255,8 @@ pub fn read_colmap_database(path: &Path, options: &ReadOptions) -> Result<Loaded
 
 #[cfg(feature = "colmap")]
 pub(crate) mod database;
+#[cfg(feature = "colmap")]
+pub mod scene;
 
 /// One image of a COLMAP sparse model (`images.txt` / `images.bin`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -33,6 +33,8 @@ mod cli_single;
 mod cli_text_width;
 #[cfg(all(feature = "cli", feature = "colmap"))]
 mod colmap;
+#[cfg(all(feature = "cli", feature = "colmap"))]
+mod colmap_scene;
 mod conjugate;
 #[cfg(feature = "cli")]
 mod conjugate_cli;
