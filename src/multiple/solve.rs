@@ -311,6 +311,7 @@ pub fn solve_multiple(
     } else if objective.loss == Loss::L2 {
         crate::multiple::geodesic::solve_geodesic(problem, init, settings, kind)?
     } else {
+        let init = l1_start(problem, init, settings, kind)?;
         crate::multiple::robust::solve_robust(problem, init, settings, kind)?
     };
     on_so3(problem, &mut out);
@@ -318,4 +319,31 @@ pub fn solve_multiple(
         .map(|t| crate::multiple::robust::edge_residuals(problem, &out.rotations, t));
     out.report.seconds = start.elapsed().as_secs_f64();
     Ok(out)
+}
+
+/// The start of a Huber or Cauchy solve `[M9]`: without a given estimate, the L1 solution
+/// (same metric, weights and information) from `init`, as L1-then-IRLS averaging does
+/// (Chatterjee & Govindu; COLMAP's global mapper): these losses are not convex on SO(3), and
+/// Cauchy's IRLS from the basin that many outliers create stays in it (a generated
+/// 10^4-camera scene with 8 % twisted and repeated-structure pairs: Cauchy from the spectral
+/// start 65.8 deg median error, from the L1 solution 1.9 deg). `init` itself for L1, for
+/// the least-squares losses and for a given start.
+fn l1_start(
+    problem: &MultipleProblem,
+    init: Vec<Rotation>,
+    settings: &MultipleSettings,
+    kind: Option<SolverKind>,
+) -> Result<Vec<Rotation>> {
+    let objective = problem.objective();
+    let redescending = matches!(objective.loss, Loss::Huber { .. } | Loss::Cauchy { .. });
+    if !redescending || matches!(settings.init, Initialisation::Given(_)) {
+        return Ok(init);
+    }
+    crate::progress::phase(crate::progress::Phase::Solve, || {
+        format!("{} start", Objective::new(objective.metric, Loss::L1))
+    });
+    let l1 = problem
+        .clone()
+        .with_objective(Objective::new(objective.metric, Loss::L1))?;
+    Ok(crate::multiple::robust::solve_robust(&l1, init, settings, kind)?.rotations)
 }
