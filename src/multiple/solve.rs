@@ -321,7 +321,7 @@ pub fn solve_multiple(
     Ok(out)
 }
 
-/// The start of a Huber or Cauchy solve `[M9]`: without a given estimate, the L1 solution
+/// The start of an isotropic Huber or Cauchy solve `[M9]`: without a given estimate, the L1 solution
 /// (same metric, weights and information) from `init`, as L1-then-IRLS averaging does
 /// (Chatterjee & Govindu; COLMAP's global mapper): these losses are not convex on SO(3), and
 /// Cauchy's IRLS from the basin that many outliers create stays in it (a generated
@@ -336,7 +336,11 @@ fn l1_start(
 ) -> Result<Vec<Rotation>> {
     let objective = problem.objective();
     let redescending = matches!(objective.loss, Loss::Huber { .. } | Loss::Cauchy { .. });
-    if !redescending || matches!(settings.init, Initialisation::Given(_)) {
+    // anisotropic problems keep their start: the L1 cost of the Mahalanobis angle, weighted by
+    // tr(H) / 3, lets confidently wrong pairs lead (generated scenes of 36 and 100 cameras:
+    // 50 and 35 deg median error from the L1 start, 2.4 and 1.7 deg without)
+    let anisotropic = problem.information().is_some();
+    if !redescending || anisotropic || matches!(settings.init, Initialisation::Given(_)) {
         return Ok(init);
     }
     crate::progress::phase(crate::progress::Phase::Solve, || {
