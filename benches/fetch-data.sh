@@ -6,9 +6,12 @@
 #   bash benches/fetch-data.sh [FOLDER]     # default: ../shared/data beside the repository
 #
 # Layout of FOLDER (what tests/suite/common finds): g2o/3d/sesync, g2o/3d/gtsam, g2o/3d/mrob,
-# g2o/2d/sesync, 1dsfm/Madrid_Metropolis. Needs curl and sha256sum. Provenance and licenses:
+# g2o/2d/sesync, 1dsfm/Madrid_Metropolis, handeye/ethz_robot_arm_real. Needs curl, sha256sum
+# and python3 (to take the hand-eye streams out of their zip). Provenance and licenses:
 # SE-Sync data LGPL-3.0 repository (data from L. Carlone, Intel Research Lab / Radish), GTSAM
-# BSD, mrob Apache-2.0, 1DSfM (Wilson & Snavely, ECCV 2014) via GlobalSfMpy (GPL-3.0 repository).
+# BSD, mrob Apache-2.0, 1DSfM (Wilson & Snavely, ECCV 2014) via GlobalSfMpy (GPL-3.0 repository),
+# the ETH robot-arm pose streams BSD-3-Clause (ethz-asl/hand_eye_calibration). Tabb's hand-eye
+# dataset is not fetched: its camera file was re-typed from an index (../shared/data/README.md).
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 OUT="${1:-$REPO/../shared/data}"
@@ -16,6 +19,7 @@ SESYNC=https://raw.githubusercontent.com/david-m-rosen/SE-Sync/9b631b6b82d8aa7d3
 GTSAM=https://raw.githubusercontent.com/borglab/gtsam/0ffe6c930302ebd297484e65e6e8d467c91d26b0/examples/Data
 MROB=https://raw.githubusercontent.com/MobileRoboticsSkoltech/mrob/d7698211d90463339f109f582750b9453ac13312/benchmarks
 SFM=https://raw.githubusercontent.com/zhangganlin/GlobalSfMpy/ac6a0564d84e1d6e9a4077195e384d379aa20492/datasets
+ETH=https://raw.githubusercontent.com/ethz-asl/hand_eye_calibration/966cd92518f24aa7dfdacc8ba9c5fa4a441270cd/datasets/robot_arm_w_color_camera_real.zip
 # path in FOLDER | URL | SHA-256
 FILES="
 g2o/3d/sesync/sphere2500.g2o|$SESYNC/sphere2500.g2o|104ab57593394f24351d9f692f3b923f8b98fff1eb638c64356cf5049e06cf3c
@@ -31,7 +35,41 @@ g2o/3d/mrob/sphere.g2o|$MROB/sphere.g2o|be8dbad53b43695bfa3246add2f92307c3d7340f
 g2o/3d/mrob/sphere_gt.g2o|$MROB/sphere_gt.g2o|3c6295c9dcbfe595c5f6e773ef2fb05a9440388ed3acdbd588aec242d8329d72
 1dsfm/Madrid_Metropolis/EGs.txt|$SFM/Madrid_Metropolis/EGs.txt|98c7ec54758770068b44e08e4db234a7a99e02fab1e8e908b3ed0b57667c50c6
 "
+# path in FOLDER | zip URL | SHA-256 (the file of that name in the zip)
+ZIPPED="
+handeye/ethz_robot_arm_real/robot_arm_complete_bag_color_and_ir_base_link_sr300_hinge.csv|$ETH|3ca5f8d9858c0310a659f9c9a560509c75d2e0c0606bcef320e2f1700c9cc35c
+handeye/ethz_robot_arm_real/robot_arm_complete_bag_color_and_ir_target_ir.csv|$ETH|7b5abe41d3b95b20a1abc081fc91de7181db257f9bf8777413f5ca07514cbd7d
+"
+# unzip_member ZIP NAME DEST: the member of ZIP whose file name is NAME, written to DEST
+unzip_member() {
+  python3 - "$1" "$2" "$3" <<'PYEOF'
+import sys, zipfile, os
+archive, name, dest = sys.argv[1:4]
+with zipfile.ZipFile(archive) as z:
+    members = [m for m in z.namelist() if os.path.basename(m) == name]
+    if not members:
+        sys.exit(f"{name} is not in {archive}")
+    with open(dest, "wb") as out:
+        out.write(z.read(members[0]))
+PYEOF
+}
 failed=0
+for line in $ZIPPED; do
+  IFS='|' read -r path url sum <<<"$line"
+  dest="$OUT/$path"
+  mkdir -p "$(dirname "$dest")"
+  if [[ ! -f "$dest" ]] || ! echo "$sum  $dest" | sha256sum --check --status; then
+    zip="$OUT/.$(basename "$url")"
+    [[ -s "$zip" ]] || curl -fsSL --retry 3 -o "$zip" "$url" || { echo "download failed: $url" >&2; failed=1; continue; }
+    unzip_member "$zip" "$(basename "$path")" "$dest" || { failed=1; continue; }
+  fi
+  if echo "$sum  $dest" | sha256sum --check --status; then
+    echo "ok $path"
+  else
+    echo "CHECKSUM MISMATCH $path (expected $sum)" >&2
+    failed=1
+  fi
+done
 for line in $FILES; do
   IFS='|' read -r path url sum <<<"$line"
   dest="$OUT/$path"

@@ -12,7 +12,7 @@ use rotavg::io::colmap::scene::{GeneratedScene, PairKind, SfmScene};
 use rotavg::io::detect::ReadOptions;
 use rotavg::io::two_view_information::{Camera, rotation_information};
 use rotavg::so3::{angle_between, log};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// A scene of `cameras` images with every kind of pair.
 fn settings(cameras: usize, seed: u64) -> SfmScene {
@@ -32,33 +32,6 @@ fn folder(name: &str) -> PathBuf {
     dir
 }
 
-/// Every table of a database, rows in key order, as text (blobs in hex).
-fn dump(path: &Path) -> Vec<String> {
-    let db = rusqlite::Connection::open(path).unwrap();
-    let mut out = Vec::new();
-    for table in [
-        "cameras",
-        "images",
-        "keypoints",
-        "descriptors",
-        "matches",
-        "two_view_geometries",
-    ] {
-        let mut stmt = db
-            .prepare(&format!("SELECT * FROM {table} ORDER BY 1"))
-            .unwrap();
-        let n = stmt.column_count();
-        let mut rows = stmt.query([]).unwrap();
-        while let Some(row) = rows.next().unwrap() {
-            let cells: Vec<String> = (0..n)
-                .map(|k| format!("{:?}", row.get::<_, rusqlite::types::Value>(k).unwrap()))
-                .collect();
-            out.push(format!("{table}: {}", cells.join(" | ")));
-        }
-    }
-    out
-}
-
 /// Same seed, same scene (in memory, and the files' content); another seed, another scene.
 #[test]
 fn seeded() {
@@ -68,7 +41,10 @@ fn seeded() {
     let (da, db) = (folder("seed_a"), folder("seed_b"));
     a.write(&da).unwrap();
     b.write(&db).unwrap();
-    assert_eq!(dump(&da.join("database.db")), dump(&db.join("database.db")));
+    assert_eq!(
+        crate::common::database_rows(&da.join("database.db")),
+        crate::common::database_rows(&db.join("database.db"))
+    );
     for f in ["pairs.json", "truth/images.txt", "truth/cameras.txt"] {
         assert_eq!(
             std::fs::read(da.join(f)).unwrap(),

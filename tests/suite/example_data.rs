@@ -434,39 +434,6 @@ fn colmap_scene_settings() -> rotavg::io::colmap::scene::SfmScene {
     }
 }
 
-/// Every row of the tables of a COLMAP database, as text (blobs as bytes).
-#[cfg(feature = "colmap")]
-fn database_rows(path: &Path) -> Vec<String> {
-    let db = rusqlite::Connection::open(path).expect("open the database");
-    let mut out = Vec::new();
-    for table in [
-        "cameras",
-        "images",
-        "keypoints",
-        "descriptors",
-        "matches",
-        "two_view_geometries",
-    ] {
-        let mut stmt = db
-            .prepare(&format!("SELECT * FROM {table} ORDER BY 1"))
-            .expect("a COLMAP table");
-        let n = stmt.column_count();
-        let mut rows = stmt.query([]).expect("query");
-        while let Some(row) = rows.next().expect("a row") {
-            let cells: Vec<String> = (0..n)
-                .map(|k| {
-                    format!(
-                        "{:?}",
-                        row.get::<_, rusqlite::types::Value>(k).expect("a cell")
-                    )
-                })
-                .collect();
-            out.push(format!("{table}: {}", cells.join(" | ")));
-        }
-    }
-    out
-}
-
 /// `colmap_scene/` (`database.db`, `truth/`, `pairs.json`) is what the generator writes (the
 /// text files byte for byte, the database row for row: SQLite's file header holds its library
 /// version); with `ROTAVG_BLESS=1` it writes them. The database reads with `--information full`,
@@ -495,7 +462,8 @@ fn colmap_scene_is_reproducible_and_reads() {
         );
     }
     assert!(
-        database_rows(&folder.join("database.db")) == database_rows(&fresh.join("database.db")),
+        crate::common::database_rows(&folder.join("database.db"))
+            == crate::common::database_rows(&fresh.join("database.db")),
         "colmap_scene/database.db differs from its generator (ROTAVG_BLESS=1 rewrites it)"
     );
     std::fs::remove_dir_all(&fresh).expect("remove the scratch folder");

@@ -106,6 +106,7 @@ use std::path::Path;
 mod geometry;
 mod output;
 pub use geometry::{Frustum, View, relative_pose, wahba_rotation, wxyz};
+pub use output::SCHEMA;
 
 /// The settings of a generated scene (see the module docs for what each part models).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

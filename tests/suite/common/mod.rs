@@ -185,3 +185,37 @@ pub fn best_of_random_starts(
     }
     best.expect("a local solve").1
 }
+
+/// Every row of the tables of a COLMAP database, as text (blobs as bytes): two databases with
+/// the same rows compare equal whatever SQLite version wrote them.
+#[cfg(feature = "colmap")]
+pub fn database_rows(path: &Path) -> Vec<String> {
+    let db = rusqlite::Connection::open(path).expect("open the database");
+    let mut out = Vec::new();
+    for table in [
+        "cameras",
+        "images",
+        "keypoints",
+        "descriptors",
+        "matches",
+        "two_view_geometries",
+    ] {
+        let mut stmt = db
+            .prepare(&format!("SELECT * FROM {table} ORDER BY 1"))
+            .expect("a COLMAP table");
+        let n = stmt.column_count();
+        let mut rows = stmt.query([]).expect("query");
+        while let Some(row) = rows.next().expect("a row") {
+            let cells: Vec<String> = (0..n)
+                .map(|k| {
+                    format!(
+                        "{:?}",
+                        row.get::<_, rusqlite::types::Value>(k).expect("a cell")
+                    )
+                })
+                .collect();
+            out.push(format!("{table}: {}", cells.join(" | ")));
+        }
+    }
+    out
+}

@@ -7,8 +7,9 @@ use rand::{Rng, SeedableRng};
 use serde::Serialize;
 use std::path::Path;
 
-/// COLMAP's schema of the tables written (`database.cc` of COLMAP 3.8 to 3.11).
-pub(super) const SCHEMA: &str = "
+/// COLMAP's schema of the tables written (`database.cc` of COLMAP 3.8 to 3.11): `images` with
+/// pose priors, `two_view_geometries` with `qvec` / `tvec`.
+pub const SCHEMA: &str = "
 CREATE TABLE IF NOT EXISTS cameras (camera_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, model INTEGER NOT NULL, width INTEGER NOT NULL, height INTEGER NOT NULL, params BLOB, prior_focal_length INTEGER NOT NULL);
 CREATE TABLE IF NOT EXISTS images (image_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, name TEXT NOT NULL UNIQUE, camera_id INTEGER NOT NULL, prior_qw REAL, prior_qx REAL, prior_qy REAL, prior_qz REAL, prior_tx REAL, prior_ty REAL, prior_tz REAL, CONSTRAINT image_id_check CHECK(image_id >= 0 and image_id < 2147483647), FOREIGN KEY(camera_id) REFERENCES cameras(camera_id));
 CREATE TABLE IF NOT EXISTS keypoints (image_id INTEGER PRIMARY KEY NOT NULL, rows INTEGER NOT NULL, cols INTEGER NOT NULL, data BLOB, FOREIGN KEY(image_id) REFERENCES images(image_id) ON DELETE CASCADE);
