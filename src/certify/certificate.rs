@@ -52,6 +52,10 @@ pub enum CertifiedProblemKind {
     /// [`CertifiedProblemKind::ChordalL2Inliers`] with the gravity priors of the component's
     /// images held as constraints (a robust solve with gravity priors).
     ChordalL2GravityInliers,
+    /// The joint chordal L2 cost of a two-sensor rig: the frames on the reference sensor's view
+    /// graph and `S R_i` on the other's (`rotavg rig`, `paper-notes/conjugate.md` `[H17]`).
+    /// Named in a rig report's verdict; `num_edges` counts both graphs' edges.
+    ChordalL2Rig,
 }
 
 /// The problem a certificate is about, with its size against the whole input's.
@@ -91,6 +95,12 @@ impl fmt::Display for CertifiedProblem {
             CertifiedProblemKind::ChordalL2Gravity => write!(
                 f,
                 "the chordal L2 problem on all {} edges ({} nodes) with the gravity priors held",
+                self.num_edges, self.num_nodes
+            ),
+            CertifiedProblemKind::ChordalL2Rig => write!(
+                f,
+                "the rig's joint chordal L2 problem on all {} edges of its two view graphs ({} \
+                 frames and sensor_from_rig)",
                 self.num_edges, self.num_nodes
             ),
         }

@@ -131,6 +131,25 @@ impl RigReport {
     pub fn verdict(&self) -> Option<crate::Verdict> {
         self.result.certificate.as_ref().map(|c| c.verdict)
     }
+
+    /// The verdict and what it is about (`verdict` of the JSON report, as `multiple`'s): the
+    /// returned frames and `sensor_from_rig` on the rig's joint chordal problem.
+    pub fn verdict_of(&self) -> Option<super::VerdictOf> {
+        let c = self.result.certificate.as_ref()?;
+        let frames = self.result.solution.rotations.len();
+        let edges = self.num_edges[0] + self.num_edges[1];
+        Some(super::VerdictOf {
+            verdict: c.verdict,
+            estimate: super::CertifiedEstimate::Returned,
+            problem: crate::certify::CertifiedProblem {
+                kind: crate::certify::CertifiedProblemKind::ChordalL2Rig,
+                num_nodes: frames,
+                total_nodes: frames,
+                num_edges: edges,
+                total_edges: edges,
+            },
+        })
+    }
 }
 
 impl fmt::Display for SimultaneousSolution {
@@ -166,7 +185,11 @@ impl fmt::Display for RigReport {
             write!(f, "\nwarning: {w}")?;
         }
         writeln!(f)?;
-        nested(f, &self.result)
+        nested(f, &self.result)?;
+        if let Some(v) = self.verdict_of() {
+            write!(f, "\n{v}")?;
+        }
+        Ok(())
     }
 }
 
@@ -185,6 +208,7 @@ struct Json<'a> {
     node_ids: &'a [u64],
     solver: &'a crate::termination::SolverReport,
     certificate: Option<&'a crate::certify::Certificate>,
+    verdict: Option<super::VerdictOf>,
     pipeline: &'a crate::pipeline::PipelineDetails,
 }
 
@@ -205,6 +229,7 @@ impl Serialize for RigReport {
             node_ids: &self.node_ids,
             solver: &s.report,
             certificate: self.result.certificate.as_ref(),
+            verdict: self.verdict_of(),
             pipeline: &self.result.details,
         }
         .serialize(serializer)

@@ -43,6 +43,22 @@ fn the_example_rig_is_calibrated_and_certified() {
         "{}",
         v["certificate"]
     );
+    // the verdict names the problem as multiple's does: both graphs' 480 + 480 edges
+    assert_eq!(v["verdict"]["verdict"], "certified");
+    assert_eq!(v["verdict"]["estimate"], "returned");
+    assert_eq!(v["verdict"]["problem"]["kind"], "chordal_l2_rig");
+    assert_eq!(v["verdict"]["problem"]["num_edges"], 960);
+    assert_eq!(v["verdict"]["problem"]["num_nodes"], 120);
+    let text = run(&["rig", &example("right.json"), &example("left.json")]);
+    let printed = String::from_utf8_lossy(&text.stdout)
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert!(
+        printed
+            .contains("verdict: certified for the rig's joint chordal L2 problem on all 960 edges"),
+        "{printed}"
+    );
     let truth: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(example("truth.json")).unwrap()).unwrap();
     let s = rotation(&v["sensor_from_rig"]);
