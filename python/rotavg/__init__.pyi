@@ -443,8 +443,8 @@ def average_rig(
 def certify_rig(
     right: Graph,
     left: Graph,
-    frames: _Rotations,
-    sensor_from_rig: npt.ArrayLike,
+    frames: Union[_Rotations, str, os.PathLike[str]],
+    sensor_from_rig: Optional[npt.ArrayLike] = None,
     *,
     certify: str = "auto",
     max_memory: Optional[int] = None,

@@ -60,18 +60,24 @@ pub fn average_rig(
 ///
 /// Args:
 ///     right, left: the two ``Graph`` objects, as for ``average_rig``.
-///     frames: ``(n, 3, 3)`` frame rotations in node order.
-///     sensor_from_rig: ``(3, 3)`` rotation ``S``.
+///     frames: ``(n, 3, 3)`` frame rotations in node order; or the path of a rig estimate as
+///         ``rotavg rig --output`` (``write_output``) writes it, frames matched by node id and
+///         ``"sensor_from_rig"`` read from it (then leave ``sensor_from_rig`` out).
+///     sensor_from_rig: ``(3, 3)`` rotation ``S`` (with array frames).
 ///     certify, max_memory, max_seconds: as for ``average_rig`` (``"none"`` means ``"dual"``).
+///
+/// Raises:
+///     rotavg.Error: ``sensor_from_rig`` missing with arrays, or given with a path;
+///         rotavg.ParseError / FileError: a file that cannot be read (naming it).
 #[pyfunction]
-#[pyo3(name = "certify_rig", signature = (right, left, frames, sensor_from_rig, *, certify="auto", max_memory=None, max_seconds=600.0))]
+#[pyo3(name = "certify_rig", signature = (right, left, frames, sensor_from_rig=None, *, certify="auto", max_memory=None, max_seconds=600.0))]
 #[allow(clippy::too_many_arguments)]
 pub fn certify_rig(
     py: Python<'_>,
     right: PyRef<'_, Graph>,
     left: PyRef<'_, Graph>,
     frames: &Bound<'_, PyAny>,
-    sensor_from_rig: &Bound<'_, PyAny>,
+    sensor_from_rig: Option<&Bound<'_, PyAny>>,
     certify: &str,
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
@@ -81,15 +87,66 @@ pub fn certify_rig(
         m => m,
     };
     let settings = certify_settings(mode, max_memory, max_seconds, true, None)?;
-    let frames = matrices(frames, "frames")?;
-    let s = matrix(sensor_from_rig, "sensor_from_rig")?;
+    let estimate = RigEstimate::of(frames, sensor_from_rig.filter(|s| !s.is_none()))?;
     let (r, l) = (right.loaded.clone(), left.loaded.clone());
     let names = [right.name.clone(), left.name.clone()];
     let report = detached(py, move || {
-        let s = s.rotations()?.pop().ok_or_else(|| rotavg::Error::Empty {
-            what: "sensor_from_rig".into(),
-        })?;
-        RigReport::certify(names, &r, &l, frames.rotations()?, s, &settings)
+        let (frames, s) = estimate.load(&r)?;
+        RigReport::certify(names, &r, &l, frames, s, &settings)
     })?;
     RunResult::new(py, Report::Rig(report))
+}
+
+/// A rig estimate: arrays, or a file as `rotavg rig --output` writes it.
+enum RigEstimate {
+    Arrays(crate::convert::Matrices, crate::convert::Matrices),
+    Path(String),
+}
+
+impl RigEstimate {
+    fn of(frames: &Bound<'_, PyAny>, s: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let is_path =
+            frames.is_instance_of::<pyo3::types::PyString>() || frames.hasattr("__fspath__")?;
+        match (is_path, s) {
+            (true, None) => {
+                let p: std::path::PathBuf = frames.extract()?;
+                Ok(RigEstimate::Path(p.to_string_lossy().into_owned()))
+            }
+            (false, Some(s)) => Ok(RigEstimate::Arrays(
+                matrices(frames, "frames")?,
+                matrix(s, "sensor_from_rig")?,
+            )),
+            (true, Some(_)) => Err(crate::errors::argument_error(
+                "a rig estimate file holds sensor_from_rig: leave the argument out",
+            )),
+            (false, None) => Err(crate::errors::argument_error(
+                "certify_rig needs sensor_from_rig with array frames",
+            )),
+        }
+    }
+
+    /// The frames (in `right`'s node order) and `S`.
+    fn load(
+        self,
+        right: &rotavg::io::detect::LoadedGraph,
+    ) -> rotavg::Result<(Vec<rotavg::Rotation>, rotavg::Rotation)> {
+        match self {
+            RigEstimate::Arrays(frames, s) => {
+                let s = s.rotations()?.pop().ok_or_else(|| rotavg::Error::Empty {
+                    what: "sensor_from_rig".into(),
+                })?;
+                Ok((frames.rotations()?, s))
+            }
+            RigEstimate::Path(p) => {
+                let options = rotavg::io::detect::ReadOptions::default();
+                let frames = rotavg::io::input::load_estimate_for(&p, right, &options)?
+                    .into_loaded()
+                    .into_rotations()?;
+                Ok((
+                    frames,
+                    rotavg::io::json::read_sensor_from_rig(&p, &options)?,
+                ))
+            }
+        }
+    }
 }

@@ -167,6 +167,13 @@ def test_write_output_writes_what_output_writes(rng, tmp_path, cli):
     # the command line certifies it as rotavg rig --output wrote it
     theirs = cli("certify", rig / "right.json", "--left", rig / "left.json", "--estimate", tmp_path / "rig.json")
     assert theirs["cost"] == pytest.approx(ours.cost, rel=1e-12)
+    # and Python reads it back too
+    again = rotavg.certify_rig(right, left, tmp_path / "rig.json")
+    assert again.cost == pytest.approx(ours.cost, rel=1e-12)
+    with pytest.raises(rotavg.Error, match="leave the argument out"):
+        rotavg.certify_rig(right, left, tmp_path / "rig.json", np.eye(3))
+    with pytest.raises(rotavg.Error, match="needs sensor_from_rig"):
+        rotavg.certify_rig(right, left, ours.estimate)
     _, i, j, rel = synthetic_graph(rng, 10, 30, 0.01)
     with pytest.raises(rotavg.Error, match="write_estimate"):
         rotavg.write_output(rotavg.average_multiple(10, i, j, rel), tmp_path / "x.json")
