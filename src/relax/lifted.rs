@@ -169,6 +169,11 @@ pub enum TrustRegionStop {
         /// `||grad F|| / (w_min + F)` left.
         value: f64,
     },
+    /// The time limit passed (checked before each iteration: one iteration past it at most).
+    TimeLimit {
+        /// `||grad F|| / (w_min + F)` left.
+        value: f64,
+    },
 }
 
 /// A local minimiser of the rank-`p` problem found by [`trust_region`].
@@ -244,8 +249,20 @@ fn truncated_cg(
 /// doubled above `0.75` at the boundary).
 pub fn trust_region(
     problem: &MultipleProblem,
+    y: Vec<Block>,
+    settings: &TrustRegionSettings,
+) -> TrustRegionResult {
+    trust_region_until(problem, y, settings, None)
+}
+
+/// [`trust_region`] that also stops ([`TrustRegionStop::TimeLimit`]) once `until` has passed,
+/// checked before each iteration (one iteration, at most `max_inner` Hessian products, past
+/// it).
+pub fn trust_region_until(
+    problem: &MultipleProblem,
     mut y: Vec<Block>,
     settings: &TrustRegionSettings,
+    until: Option<std::time::Instant>,
 ) -> TrustRegionResult {
     let mut f = lifted_cost(problem, &y);
     // the cost's unit, so that scaling every weight scales nothing else: the smallest weight
@@ -267,6 +284,9 @@ pub fn trust_region(
         }
         if radius < 1e-14 * (1.0 + max_radius) {
             break TrustRegionStop::Radius { value: gn };
+        }
+        if until.is_some_and(|t| std::time::Instant::now() >= t) {
+            break TrustRegionStop::TimeLimit { value: gn };
         }
         iterations += 1;
         let hess = |z: &[Block]| {

@@ -232,6 +232,15 @@ fn anisotropic(weak_axes: usize, name: &str) -> (String, String) {
         ratio_spread: 0.0,
     }
     .generate();
+    problem_and_truth(&p, &truth, name)
+}
+
+/// A view graph as the contract's JSON and its truth as `id R11 .. R33` lines.
+fn problem_and_truth(
+    p: &rotavg::multiple::MultipleProblem,
+    truth: &[Rotation],
+    name: &str,
+) -> (String, String) {
     let mut list = format!("# ground truth of {name}: id R11 .. R33 (R_i, with R_ij R_i = R_j)\n");
     for (i, r) in truth.iter().enumerate() {
         let _ = write!(list, "{i}");
@@ -242,7 +251,17 @@ fn anisotropic(weak_axes: usize, name: &str) -> (String, String) {
         }
         list.push('\n');
     }
-    (rotavg::io::json::write_problem_json(&p), list)
+    (rotavg::io::json::write_problem_json(p), list)
+}
+
+/// `slam_anisotropic.json`: issue 37's strongly anisotropic SLAM class
+/// ([`rotavg::multiple::synthetic::SyntheticAnisotropicSlam::strongly_anisotropic`], 200 poses, seed 1:
+/// eigenvalue ratios 1.4e3 to 1.7e7, median 1.3e5, every `M` indefinite) and its truth.
+fn slam_anisotropic() -> (String, String) {
+    let (p, truth) =
+        rotavg::multiple::synthetic::SyntheticAnisotropicSlam::strongly_anisotropic(200, 1)
+            .generate();
+    problem_and_truth(&p, &truth, "slam_anisotropic.json")
 }
 
 /// `gravity/`: 200 upright cameras (OpenCV axes: x right, y down the image, z forward; tilted
@@ -367,6 +386,8 @@ fn files() -> Vec<(&'static str, String)> {
             "strong_axis_truth.txt",
             anisotropic(2, "strong_axis.json").1,
         ),
+        ("slam_anisotropic.json", slam_anisotropic().0),
+        ("slam_anisotropic_truth.txt", slam_anisotropic().1),
     ]
 }
 

@@ -42,7 +42,7 @@ use crate::multiple::MultipleProblem;
 use crate::multiple::{Initialisation, MultipleSettings, MultipleSolution, solve_multiple};
 use crate::relax::lifted::{
     Block, TrustRegionResult, TrustRegionSettings, lifted_cost, lifted_multipliers, polar,
-    trust_region,
+    trust_region_until,
 };
 use crate::so3::Rotation;
 use faer::sparse::SparseColMatRef;
@@ -330,7 +330,8 @@ impl<'a> Staircase<'a> {
 
     /// One trust-region solve of the current rank from `y`, its work counted.
     fn solve(&mut self, settings: TrustRegionSettings) -> TrustRegionResult {
-        let mut r = trust_region(self.problem, std::mem::take(&mut self.y), &settings);
+        let until = self.scope.deadline.instant();
+        let mut r = trust_region_until(self.problem, std::mem::take(&mut self.y), &settings, until);
         self.y = std::mem::take(&mut r.y);
         self.iterations += r.iterations;
         self.products += r.hessian_products;
