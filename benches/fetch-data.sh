@@ -53,35 +53,37 @@ with zipfile.ZipFile(archive) as z:
         out.write(z.read(members[0]))
 PYEOF
 }
+# fetch_zipped DEST URL: DEST, the member of the zip at URL named as DEST is (zip kept beside)
+fetch_zipped() {
+  local zip
+  zip="$OUT/.$(basename "$2")"
+  [[ -s "$zip" ]] || curl -fsSL --retry 3 -o "$zip" "$2" || { echo "download failed: $2" >&2; return 1; }
+  unzip_member "$zip" "$(basename "$1")" "$1"
+}
+# fetch_plain DEST URL: DEST downloaded from URL
+fetch_plain() {
+  curl -fsSL --retry 3 -o "$1.part" "$2" && mv "$1.part" "$1" || { echo "download failed: $2" >&2; return 1; }
+}
 failed=0
-for line in $ZIPPED; do
-  IFS='|' read -r path url sum <<<"$line"
-  dest="$OUT/$path"
-  mkdir -p "$(dirname "$dest")"
-  if [[ ! -f "$dest" ]] || ! echo "$sum  $dest" | sha256sum --check --status; then
-    zip="$OUT/.$(basename "$url")"
-    [[ -s "$zip" ]] || curl -fsSL --retry 3 -o "$zip" "$url" || { echo "download failed: $url" >&2; failed=1; continue; }
-    unzip_member "$zip" "$(basename "$path")" "$dest" || { failed=1; continue; }
-  fi
-  if echo "$sum  $dest" | sha256sum --check --status; then
-    echo "ok $path"
-  else
-    echo "CHECKSUM MISMATCH $path (expected $sum)" >&2
-    failed=1
-  fi
-done
-for line in $FILES; do
-  IFS='|' read -r path url sum <<<"$line"
-  dest="$OUT/$path"
-  mkdir -p "$(dirname "$dest")"
-  if [[ ! -f "$dest" ]] || ! echo "$sum  $dest" | sha256sum --check --status; then
-    curl -fsSL --retry 3 -o "$dest.part" "$url" && mv "$dest.part" "$dest" || { echo "download failed: $url" >&2; failed=1; continue; }
-  fi
-  if echo "$sum  $dest" | sha256sum --check --status; then
-    echo "ok $path"
-  else
-    echo "CHECKSUM MISMATCH $path (expected $sum)" >&2
-    failed=1
-  fi
-done
+# fetch LINES HOW: each `path|url|sum` line fetched by HOW unless present with its checksum,
+# then checked
+fetch() {
+  local line path url sum dest
+  for line in $1; do
+    IFS='|' read -r path url sum <<<"$line"
+    dest="$OUT/$path"
+    mkdir -p "$(dirname "$dest")"
+    if [[ ! -f "$dest" ]] || ! echo "$sum  $dest" | sha256sum --check --status; then
+      "$2" "$dest" "$url" || { failed=1; continue; }
+    fi
+    if echo "$sum  $dest" | sha256sum --check --status; then
+      echo "ok $path"
+    else
+      echo "CHECKSUM MISMATCH $path (expected $sum)" >&2
+      failed=1
+    fi
+  done
+}
+fetch "$ZIPPED" fetch_zipped
+fetch "$FILES" fetch_plain
 exit $failed
