@@ -325,6 +325,33 @@ def readme_from_python(data: Path) -> None:
     assert theirs.certificate is not None and ours.certificate is not None
 
 
+def command_line_parity(folder: Path) -> None:
+    """Writers, the progress line, tolerances, budgets and estimate files (issue 38)."""
+    n, truth, i, j, rel = graph_arrays()
+    res = check_result(rotavg.average_multiple(n, i, j, rel, init_method="tree"))
+    mirrored: FloatArray = -res.estimate
+    check_result(rotavg.certify_multiple(n, i, j, rel, mirrored, nearest_rotations=True))
+    path = folder / "parity.json"
+    edges = [{"i": int(a), "j": int(b), "rotation": r.tolist()} for a, b, r in zip(i, j, rel)]
+    path.write_text(json.dumps({"num_rotations": n, "edges": edges}))
+    g = rotavg.read_graph(path, information="kappa")
+    robust = check_result(rotavg.average_multiple(g, loss="cauchy", inlier_threshold=3.0))
+    rotavg.write_figure(g, robust, folder / "figure.svg")
+    with rotavg.progress_bar(min_interval=0.0):
+        check_result(rotavg.average_multiple(g))
+    samples = rotations(6, 10)
+    mean = check_result(rotavg.average_single(samples, rotation_tolerance=1e-4))
+    rotavg.write_output(mean, folder / "mean.json")
+    check_result(rotavg.certify_single(samples, folder / "mean.json", max_seconds=30.0))
+    left, right = rotations(7, 8), rotations(8, 8)
+    s = check_result(rotavg.average_conjugate(left, right, rotation_tolerance=1e-4))
+    check_result(rotavg.certify_conjugate(left, right, s.estimate, max_memory=1 << 30))
+    rig = check_result(rotavg.average_rig(g, g, certify="dual"))
+    rotavg.write_output(rig, folder / "rig.json")
+    check_result(rotavg.certify_rig(g, g, folder / "rig.json", certify="dual"))
+    del truth
+
+
 def main() -> None:
     version: str = rotavg.__version__
     names: List[str] = rotavg.__all__
@@ -334,6 +361,7 @@ def main() -> None:
         single()
         multiple(folder)
         conjugate(folder)
+        command_line_parity(folder)
         errors(folder)
     # the shared benchmark data, where conftest.py looks for it
     repo = Path(__file__).resolve().parents[2]
