@@ -317,6 +317,14 @@ pub fn read_only<'py>(array: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
     Ok(array)
 }
 
+/// The path an argument names when it is a `str` or an `os.PathLike` (then read as the command
+/// line reads that file), else None (an array).
+pub fn path_of(obj: &Bound<'_, PyAny>) -> Option<String> {
+    obj.extract::<std::path::PathBuf>()
+        .ok()
+        .map(|p| p.to_string_lossy().into_owned())
+}
+
 /// A `rotation_tolerance` keyword: positive and finite (the tolerance on `||R^T R - I||_F` and
 /// `|det R - 1|` of every matrix given as a rotation, the command line's 1e-5 by default).
 pub fn rotation_tolerance(tolerance: f64) -> PyResult<f64> {

@@ -22,8 +22,8 @@ impl GravityInput {
         let Some(obj) = obj.filter(|o| !o.is_none()) else {
             return Ok(None);
         };
-        if let Ok(p) = obj.extract::<std::path::PathBuf>() {
-            return Ok(Some(GravityInput::Path(p.to_string_lossy().into_owned())));
+        if let Some(p) = crate::convert::path_of(obj) {
+            return Ok(Some(GravityInput::Path(p)));
         }
         Ok(Some(GravityInput::Rows(rows3(obj, "gravity")?)))
     }

@@ -638,11 +638,9 @@ fn certify_multiple_py(
         .certify_inlier_threshold_deg(loss_threshold, inlier_threshold)
         .map_err(error)?;
     // a path (str or os.PathLike) is read as `rotavg certify --estimate PATH` reads it
-    let path = estimate
-        .filter(|e| !e.is_none())
-        .and_then(|e| e.extract::<std::path::PathBuf>().ok());
+    let path = estimate.filter(|e| !e.is_none()).and_then(convert::path_of);
     let estimate = match path {
-        Some(p) => EstimateInput::Path(p.to_string_lossy().into_owned()),
+        Some(p) => EstimateInput::Path(p),
         None => EstimateInput::Arrays(
             optional_matrices(estimate, "estimate")?
                 .ok_or_else(|| argument_error("certify_multiple needs an estimate"))?
@@ -1095,11 +1093,10 @@ enum OneEstimate {
 impl OneEstimate {
     /// A path (str or os.PathLike) or an array.
     fn of(estimate: &Bound<'_, PyAny>) -> PyResult<Self> {
-        if estimate.is_instance_of::<pyo3::types::PyString>() || estimate.hasattr("__fspath__")? {
-            let path: std::path::PathBuf = estimate.extract()?;
-            return Ok(OneEstimate::Path(path.to_string_lossy().into_owned()));
-        }
-        Ok(OneEstimate::Matrix(matrix(estimate, "estimate")?))
+        Ok(match convert::path_of(estimate) {
+            Some(p) => OneEstimate::Path(p),
+            None => OneEstimate::Matrix(matrix(estimate, "estimate")?),
+        })
     }
 
     /// The estimate as `rotavg certify --estimate` takes it.

@@ -105,21 +105,16 @@ enum RigEstimate {
 
 impl RigEstimate {
     fn of(frames: &Bound<'_, PyAny>, s: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
-        let is_path =
-            frames.is_instance_of::<pyo3::types::PyString>() || frames.hasattr("__fspath__")?;
-        match (is_path, s) {
-            (true, None) => {
-                let p: std::path::PathBuf = frames.extract()?;
-                Ok(RigEstimate::Path(p.to_string_lossy().into_owned()))
-            }
-            (false, Some(s)) => Ok(RigEstimate::Arrays(
+        match (crate::convert::path_of(frames), s) {
+            (Some(p), None) => Ok(RigEstimate::Path(p)),
+            (None, Some(s)) => Ok(RigEstimate::Arrays(
                 matrices(frames, "frames")?,
                 matrix(s, "sensor_from_rig")?,
             )),
-            (true, Some(_)) => Err(crate::errors::argument_error(
+            (Some(_), Some(_)) => Err(crate::errors::argument_error(
                 "a rig estimate file holds sensor_from_rig: leave the argument out",
             )),
-            (false, None) => Err(crate::errors::argument_error(
+            (None, None) => Err(crate::errors::argument_error(
                 "certify_rig needs sensor_from_rig with array frames",
             )),
         }
