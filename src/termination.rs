@@ -50,6 +50,18 @@ pub enum Termination {
         /// Its threshold.
         threshold: f64,
     },
+    /// The solve's time limit was reached before the stopping test was met (multiple
+    /// averaging's [`crate::multiple::MultipleSettings::max_seconds`], the command line's
+    /// `--max-seconds`); the last accepted iterate is returned.
+    TimeLimit {
+        /// The time this iteration loop was given, seconds: the solve's limit less what came
+        /// before the loop (the initialisation, an L1 start, a first stage).
+        seconds: f64,
+        /// The stopping quantity at the last iterate.
+        value: f64,
+        /// Its threshold.
+        threshold: f64,
+    },
     /// A numerical failure (non-finite values, failed factorisation) ended the iteration; the
     /// best iterate so far is returned.
     NumericalFailure {
@@ -68,13 +80,14 @@ impl Termination {
     }
 
     /// Short machine-readable name: `closed_form`, `converged`, `iteration_limit`, `stalled`,
-    /// `numerical_failure`.
+    /// `time_limit`, `numerical_failure`.
     pub fn name(&self) -> &'static str {
         match self {
             Termination::ClosedForm => "closed_form",
             Termination::Converged { .. } => "converged",
             Termination::IterationLimit { .. } => "iteration_limit",
             Termination::Stalled { .. } => "stalled",
+            Termination::TimeLimit { .. } => "time_limit",
             Termination::NumericalFailure { .. } => "numerical_failure",
         }
     }
@@ -105,6 +118,14 @@ impl fmt::Display for Termination {
                     "stalled: no further decrease (stopping value {value:.3e}, threshold {threshold:.1e})"
                 )
             }
+            Termination::TimeLimit {
+                seconds,
+                value,
+                threshold,
+            } => write!(
+                f,
+                "time limit reached ({seconds:.3} s left to this loop; stopping value {value:.3e}, threshold {threshold:.1e})"
+            ),
             Termination::NumericalFailure { reason } => write!(f, "numerical failure: {reason}"),
         }
     }

@@ -427,8 +427,10 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         degrees).
 ///     init: optional ``(n, 3, 3)`` initial estimate (default: spectral initialisation).
 ///     max_memory: the certificate's memory budget per factorisation, bytes (default 4 GiB).
-///     max_seconds: its time budget, seconds (default 600; ``None``: no limit). A proof that
-///         does not fit is not started: the verdict is ``"inconclusive"`` with the reason.
+///     max_seconds: the run's time budget, seconds (default 600; ``None``: no limit), one
+///         clock for the local solve (which stops at it: termination ``"time_limit"``, its
+///         last iterate) and the certificate (what the solve left). A proof that does not
+///         fit is not started: the verdict is ``"inconclusive"`` with the reason.
 ///     randomized: run the randomized Chebyshev test [D16] when no proof fits (default
 ///         True): a Monte Carlo lower bound in ``to_dict()["certificate"]["randomized"]``,
 ///         beside the verdict and never as its proof.
@@ -539,6 +541,8 @@ fn average_multiple_py(
                 // as the command line: --inlier-threshold, else for L1 --loss-threshold
                 inlier_threshold_deg: loss.inlier_threshold_deg(loss_threshold, inlier_threshold),
                 robust_on_outliers: loss.robust_on_outliers(loss_threshold),
+                // one clock for the solve and the certificate, as the command line
+                max_seconds: budget.budget.max_seconds,
                 ..Default::default()
             },
             certify: CertifySettings { mode, ..budget },

@@ -134,7 +134,8 @@ impl Certificate {
 }
 
 /// What the local solver did: ``name``, ``iterations``, ``termination`` (``"closed_form"``,
-/// ``"converged"``, ``"iteration_limit"``, ``"stalled"`` or ``"numerical_failure"``),
+/// ``"converged"``, ``"iteration_limit"``, ``"stalled"``, ``"time_limit"`` or
+/// ``"numerical_failure"``),
 /// ``termination_detail`` (with the measured value and its threshold) and ``seconds``.
 /// ``to_dict()`` is the ``solver`` object of the command line's ``--json`` output.
 #[pyclass(name = "SolverReport", module = "rotavg", frozen)]

@@ -124,6 +124,17 @@ impl Default for Budget {
 }
 
 impl Budget {
+    /// The same budget with the time limit reduced by the time since `start`, to at least
+    /// 1 microsecond (a valid budget: a certification with nothing left ends inconclusive).
+    /// The pipelines hand their certificate what their solves left of one clock.
+    pub fn after(&self, start: std::time::Instant) -> Budget {
+        let spent = start.elapsed().as_secs_f64();
+        Budget {
+            max_seconds: self.max_seconds.map(|t| (t - spent).max(1e-6)),
+            ..*self
+        }
+    }
+
     /// Check the values; [`Error::InvalidSettings`] names `budget.max_memory_bytes` or
     /// `budget.max_seconds`.
     pub fn validate(&self) -> Result<()> {

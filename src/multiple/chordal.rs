@@ -393,11 +393,22 @@ pub(crate) fn solve_chordal_tilt_fixed(
     lm.tilt_fixed = tilt_fixed;
     lm.pinned = tilt_fixed.map(grounded_pins);
     let mut iterations = 0;
+    let deadline = settings.deadline();
     let termination = loop {
         if iterations >= settings.max_iterations {
             break Termination::IterationLimit {
                 iterations,
                 value: point.gn / total_weight,
+                threshold: tol,
+            };
+        }
+        if let (Some(d), Some(seconds)) = (deadline, settings.max_seconds)
+            && std::time::Instant::now() >= d
+        {
+            let value = point.gn / total_weight;
+            break Termination::TimeLimit {
+                seconds,
+                value,
                 threshold: tol,
             };
         }

@@ -187,13 +187,23 @@ impl<'a> Reweighted<'a> {
             reason: reason.into(),
         };
         let mut iterations = 0;
+        let deadline = self.settings.deadline();
         loop {
             let g = norm(&ev.grad);
+            let (value, threshold) = (g / self.total_weight, self.settings.gradient_tolerance);
             if iterations >= max_iterations {
-                let value = g / self.total_weight;
-                let threshold = self.settings.gradient_tolerance;
                 let limit = Termination::IterationLimit {
                     iterations,
+                    value,
+                    threshold,
+                };
+                return (iterations, limit);
+            }
+            if let (Some(d), Some(seconds)) = (deadline, self.settings.max_seconds)
+                && std::time::Instant::now() >= d
+            {
+                let limit = Termination::TimeLimit {
+                    seconds,
                     value,
                     threshold,
                 };

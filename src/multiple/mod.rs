@@ -38,6 +38,7 @@ pub mod robust;
 pub mod solve;
 pub mod stats;
 pub mod synthetic;
+pub(crate) mod two_stage;
 pub(crate) mod union_find;
 
 pub use chordal::chordal_gradient;

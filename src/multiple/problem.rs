@@ -587,6 +587,34 @@ impl MultipleProblem {
     }
 }
 
+/// `robust` with the estimate `refined` of the component `nodes` in place, in `robust`'s
+/// gauge: `R_0 G = I` when node 0 is in the component (as the robust estimate),
+/// else the best alignment to the robust estimate, `max tr(G^T sum R_k^T R_v)`; nodes outside
+/// the component keep their robust rotations exactly.
+pub(crate) fn place_component(
+    nodes: &[usize],
+    refined: &[Rotation],
+    robust: &[Rotation],
+) -> Vec<Rotation> {
+    let g = if nodes.first() == Some(&0) {
+        refined[0].inverse()
+    } else {
+        let mut m = nalgebra::Matrix3::zeros();
+        for (k, &v) in nodes.iter().enumerate() {
+            m += refined[k].matrix().transpose() * robust[v].matrix();
+        }
+        crate::so3::project_to_so3(&m).unwrap_or_else(Rotation::identity)
+    };
+    let mut estimate = robust.to_vec();
+    for (k, &v) in nodes.iter().enumerate() {
+        estimate[v] = refined[k] * g;
+    }
+    if nodes.first() == Some(&0) {
+        estimate[0] = Rotation::identity();
+    }
+    estimate
+}
+
 /// Fix the gauge: `R_i -> R_i R_0^T`, so that `R_0 = I`. Costs are invariant.
 ///
 /// ```

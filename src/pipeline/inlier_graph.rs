@@ -17,12 +17,12 @@ use crate::certify::{
     certify_multiple,
 };
 use crate::error::Result;
+use crate::multiple::problem::place_component;
 use crate::multiple::robust::{EdgeResiduals, ResidualSummary, edge_residuals};
 use crate::multiple::{Initialisation, MultipleProblem, MultipleSettings, MultipleSolution};
 use crate::objective::Objective;
-use crate::so3::{Rotation, project_to_so3};
+use crate::so3::Rotation;
 use crate::termination::SolverReport;
-use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -214,9 +214,9 @@ pub(crate) trait ViewGraphProblem:
     -> Result<MultipleEstimate>;
     /// The problem on the component `nodes` (indices of this problem) whose view graph is `sub`.
     fn restricted(&self, sub: MultipleProblem, nodes: &[usize]) -> Result<Self>;
-    /// The robust estimate with a component's refinement in place ([`place_refinement`]).
+    /// The robust estimate with a component's refinement in place ([`place_component`]).
     fn place(&self, nodes: &[usize], refined: &[Rotation], robust: &[Rotation]) -> Vec<Rotation> {
-        place_refinement(nodes, refined, robust)
+        place_component(nodes, refined, robust)
     }
 }
 
@@ -258,34 +258,6 @@ fn has_inliers(
         });
     }
     Ok(residuals.inlier.contains(&true))
-}
-
-/// The robust estimate with the refinement of the component `nodes` in place, in the robust
-/// estimate's gauge: `R_0 G = I` when node 0 is in the component (as the robust estimate),
-/// else the best alignment to the robust estimate, `max tr(G^T sum R_k^T R_v)`; nodes outside
-/// the component keep their robust rotations exactly.
-pub(crate) fn place_refinement(
-    nodes: &[usize],
-    refined: &[Rotation],
-    robust: &[Rotation],
-) -> Vec<Rotation> {
-    let g = if nodes.first() == Some(&0) {
-        refined[0].inverse()
-    } else {
-        let mut m = Matrix3::zeros();
-        for (k, &v) in nodes.iter().enumerate() {
-            m += refined[k].matrix().transpose() * robust[v].matrix();
-        }
-        project_to_so3(&m).unwrap_or_else(Rotation::identity)
-    };
-    let mut estimate = robust.to_vec();
-    for (k, &v) in nodes.iter().enumerate() {
-        estimate[v] = refined[k] * g;
-    }
-    if nodes.first() == Some(&0) {
-        estimate[0] = Rotation::identity();
-    }
-    estimate
 }
 
 /// An estimate computed elsewhere, judged on the chordal L2 problem of **its own** inlier

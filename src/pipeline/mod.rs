@@ -64,6 +64,17 @@ impl<S> AverageSettings<S> {
     }
 }
 
+impl AverageSettings<MultipleSettings> {
+    /// What is left of both time limits at `start.elapsed()`: the solve's
+    /// ([`MultipleSettings::max_seconds`]) and the certificate's ([`crate::certify::Budget::after`]).
+    pub(crate) fn remaining(&self, start: Instant) -> Self {
+        let mut left = self.clone();
+        left.solve = self.solve.remaining(start);
+        left.certify.budget = self.certify.budget.after(start);
+        left
+    }
+}
+
 /// Settings of [`average_single`].
 pub type AverageSingleSettings = AverageSettings<SingleSettings>;
 /// Settings of [`average_multiple`].
@@ -263,7 +274,10 @@ pub(crate) fn certify_solved<P: PipelineProblem>(
         });
     }
     let t = Instant::now();
-    let c = problem.certify(&solution, &settings.certify)?;
+    // one clock: the certificate gets what the solve left of the time limit
+    let mut certify = settings.certify.clone();
+    certify.budget = certify.budget.after(start);
+    let c = problem.certify(&solution, &certify)?;
     let (solution, certificate) = match c.improvement {
         Some(better) => {
             details.improved_by = c.details.improvement.map(|i| i.source);

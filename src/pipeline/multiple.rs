@@ -135,7 +135,7 @@ pub(super) fn average_robust<P: ViewGraphProblem>(
     };
     let mut out = average(problem, &robust_only)?;
     let t = Instant::now();
-    let graph = inlier_graph_of(problem, &out.solution, settings)?;
+    let graph = inlier_graph_of(problem, &out.solution, &settings.remaining(start))?;
     out.details.skipped_reason = Some(format!(
         "the {objective} cost has no certificate (only chordal L2 is certifiable); {}",
         match &graph {

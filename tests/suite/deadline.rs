@@ -134,3 +134,70 @@ fn the_staircase_stops_at_the_deadline_on_strongly_anisotropic_slam() {
         "{took} s for a budget of {seconds} s"
     );
 }
+
+/// The local solve shares the clock (`MultipleSettings::max_seconds`, the command line's
+/// `--max-seconds`): on a graph whose Newton-LM, IRLS and two-stage anisotropic robust solves
+/// take many iterations unbounded, a limit of a few milliseconds ends each with `time_limit`
+/// after fewer iterations, at an estimate in SO(3) whose stated cost is the problem's there.
+#[test]
+fn local_solves_stop_at_their_time_limit() {
+    use rotavg::Termination;
+    use rotavg::multiple::synthetic::SyntheticAnisotropic;
+    use rotavg::objective::{Loss, Objective};
+    let (p, _) = SyntheticAnisotropic::two_view_like(1500, 6000, 0.1).generate();
+    let cauchy = Objective::new(rotavg::Metric::Geodesic, Loss::Cauchy { scale_deg: 5.0 });
+    let problems = [
+        ("least squares", p.clone()),
+        ("cauchy", p.clone().with_objective(cauchy).unwrap()),
+    ];
+    for (name, problem) in problems {
+        let unbounded = solve_multiple(&problem, &MultipleSettings::default()).unwrap();
+        let limited = MultipleSettings {
+            max_seconds: Some(0.002),
+            ..Default::default()
+        };
+        let start = Instant::now();
+        let s = solve_multiple(&problem, &limited).unwrap();
+        let took = start.elapsed().as_secs_f64();
+        eprintln!(
+            "{name}: {took:.3} s under 0.002 s ({}); unbounded {}",
+            s.report, unbounded.report
+        );
+        assert!(
+            matches!(s.report.termination, Termination::TimeLimit { .. }),
+            "{name}: {}",
+            s.report
+        );
+        assert!(s.report.iterations < unbounded.report.iterations, "{name}");
+        for r in &s.rotations {
+            let m = r.matrix();
+            let defect = (m.transpose() * m - nalgebra::Matrix3::identity()).norm();
+            assert!(defect <= 1e-12 && (m.determinant() - 1.0).abs() <= 1e-12);
+        }
+        let cost = rotavg::multiple::objective_cost_gradient(&problem, &s.rotations, 1e-6).0;
+        assert!((s.cost - cost).abs() <= 1e-12 * cost.abs(), "{name}");
+    }
+}
+
+/// The command line: `--max-seconds` bounds the solve and the certificate together; the
+/// solver's JSON termination says `time_limit`, and the estimate written is in SO(3).
+#[test]
+fn the_command_line_stops_the_solve_at_max_seconds() {
+    use rotavg::multiple::synthetic::SyntheticAnisotropic;
+    let (p, _) = SyntheticAnisotropic::two_view_like(1500, 6000, 0.0).generate();
+    let file =
+        crate::common::temp_file("time_limit.json", &rotavg::io::json::write_problem_json(&p));
+    let out = crate::common::run(&[
+        "multiple",
+        file.to_str().unwrap(),
+        "--json",
+        "--max-seconds",
+        "0.001",
+    ]);
+    let json = crate::common::json_of(&out);
+    assert_eq!(
+        json["solver"]["termination"]["status"], "time_limit",
+        "{json}"
+    );
+    assert_ne!(json["certificate"]["verdict"], "certified", "{json}");
+}

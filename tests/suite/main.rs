@@ -82,4 +82,5 @@ mod soundness_multiple;
 mod spectrum;
 mod tolerance_invariance;
 mod tolerance_spectrum;
+mod two_stage;
 mod warnings_json;

@@ -33,8 +33,10 @@ pub struct Common {
     /// the whole explanation with the labels of paper-notes/ (e.g. [D15]), long lines unbroken.
     #[arg(long, short = 'v')]
     pub verbose: bool,
-    /// Time budget of the certificate, seconds (`none`: no limit). A proof step predicted or
-    /// found to exceed it is not started; the verdict is then `inconclusive` with the reason.
+    /// Time budget, seconds (`none`: no limit). `multiple`: one clock for the local solve
+    /// (stopped at it: `time_limit`, its last iterate) and the certificate (what is left). A
+    /// proof step predicted or found to exceed it is not started; the verdict is then
+    /// `inconclusive` with the reason.
     #[arg(long, value_name = "SECONDS", default_value = "600", value_parser = parse_seconds)]
     pub max_seconds: f64,
 }
