@@ -87,8 +87,16 @@ impl fmt::Display for ConvSearchStop {
 /// What the search did.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConvSearch {
-    /// One `P_e` per edge (in the estimate's frame of the edge, in the cone `C`).
+    /// One `P_e` per edge (in the estimate's frame of the edge, in the cone `C`): those of
+    /// the round with the largest estimated bound (`kept_round`), else the initial ones.
     pub penalties: Vec<Matrix3<f64>>,
+    /// The round whose penalties are returned (1-based; 0: no round ran).
+    #[serde(default)]
+    pub kept_round: usize,
+    /// Their estimated bound: the surrogate's cost at the estimate, plus `3n` times the
+    /// round's smallest Ritz value when negative, minus the offsets (not verified).
+    #[serde(default)]
+    pub estimated_bound: Option<f64>,
     /// Rounds run (0: the initial prices were not improved).
     pub rounds: usize,
     /// The rounds ran shift-invert Lanczos on a factorisation of `S' + sigma I`.
@@ -410,10 +418,21 @@ pub fn search_penalties(
         null: &null,
         scale,
         settings,
+        problem,
+        rotations,
     };
-    let (progress, stop) = rounds_of.run(&s, edges, inverse.as_mut(), &mut penalties, deadline);
+    let (mut progress, stop) = rounds_of.run(&s, edges, inverse.as_mut(), &mut penalties, deadline);
+    let (kept_round, estimated_bound) = match progress.kept.take() {
+        Some(kept) => {
+            penalties = kept.penalties;
+            (kept.round, Some(kept.estimate))
+        }
+        None => (0, None),
+    };
     Ok(ConvSearch {
         penalties,
+        kept_round,
+        estimated_bound,
         rounds: progress.rounds,
         shift_invert,
         cuts: progress.added,
@@ -461,13 +480,23 @@ fn shift_invert_max_values(
 }
 
 /// The rounds of a search so far: their count, the last smallest Ritz value, the best one and
-/// its round, and the cuts added.
+/// its round, the cuts added, and the penalties of the round with the largest estimated bound.
 struct Progress {
     rounds: usize,
     smallest: Option<f64>,
     best: f64,
     best_round: usize,
     added: usize,
+    kept: Option<Kept>,
+}
+
+/// The penalties a search returns: those of the round (1-based) whose estimated bound was the
+/// largest ([`Round::estimated_bound`]), not the last round's, so that more rounds never return
+/// worse penalties by that estimate.
+struct Kept {
+    round: usize,
+    estimate: f64,
+    penalties: Vec<Matrix3<f64>>,
 }
 
 impl Progress {
@@ -478,7 +507,21 @@ impl Progress {
             best: f64::NEG_INFINITY,
             best_round: 0,
             added: 0,
+            kept: None,
         }
+    }
+
+    /// Keep `penalties` (evaluated in the round just recorded) when their estimated bound is
+    /// the largest so far.
+    fn keep(&mut self, estimate: f64, penalties: &[Matrix3<f64>]) {
+        if self.kept.as_ref().is_some_and(|k| k.estimate >= estimate) {
+            return;
+        }
+        self.kept = Some(Kept {
+            round: self.rounds,
+            estimate,
+            penalties: penalties.to_vec(),
+        });
     }
 
     /// Count a round whose smallest Ritz value is `low`; `true` when the search has stalled:
@@ -563,6 +606,8 @@ struct Round<'a> {
     null: &'a [Vec<f64>],
     scale: f64,
     settings: &'a ConvDualSettings,
+    problem: &'a MultipleProblem,
+    rotations: &'a [Rotation],
 }
 
 impl Round<'_> {
@@ -590,7 +635,13 @@ impl Round<'_> {
                 None => self.direct(s, edges, penalties),
             };
             let low = ritz.pairs.first().map_or(0.0, |p| p.0);
-            if progress.record(low, settings.stall_rounds) {
+            let stalled = progress.record(low, settings.stall_rounds);
+            // a round that did not raise the best Ritz value is not kept (its offsets, grown
+            // with the penalties, rarely make up for it), and costs no surrogate
+            if !ritz.pairs.is_empty() && progress.best_round == progress.rounds {
+                progress.keep(self.estimated_bound(penalties, low), penalties);
+            }
+            if stalled {
                 return (progress, ConvSearchStop::Stalled);
             }
             if let Some(stop) = ritz_stop(&ritz, low, threshold, deadline) {
@@ -608,6 +659,43 @@ impl Round<'_> {
             project_onto_cuts(penalties, &cuts, target, settings.passes);
         }
         (progress, ConvSearchStop::RoundLimit)
+    }
+
+    /// The bound the penalties `P` would give if `low` were `lambda_min(S'(P))` (`[D4]`, `[A11]`):
+    /// the surrogate's cost at the estimate, plus `3n min(low, 0)`, minus its offsets. An
+    /// estimate (a Ritz value lies above the smallest eigenvalue), used only to choose which
+    /// round's penalties the search returns; the bound itself is verified afterwards.
+    /// Computed edge by edge as [`surrogate`] forms the data, without building or validating
+    /// the surrogate problem (an edge whose surrogate data would be refused counts as there).
+    fn estimated_bound(&self, penalties: &[Matrix3<f64>], low: f64) -> f64 {
+        let Some(info) = self.problem.information() else {
+            return f64::NEG_INFINITY;
+        };
+        let r = self.rotations;
+        let mut total = 3.0 * r.len() as f64 * low.min(0.0);
+        for (((e, h), f), p) in self
+            .problem
+            .edges()
+            .iter()
+            .zip(info)
+            .zip(self.frames)
+            .zip(penalties)
+        {
+            let gram = r[e.j].matrix() * r[e.i].matrix().transpose();
+            let (data, h2) = if p.iter().all(|x| *x == 0.0) {
+                (*e.rotation.matrix(), *h.matrix())
+            } else {
+                let (u, t) = polar(&(f.k - p));
+                let m = t * 0.25;
+                let h2 = Matrix3::identity() * m.trace() - m;
+                let data = f.x * u;
+                total -= offset_of(e.rotation.matrix(), h.matrix(), &data, &h2);
+                (data, (h2 + h2.transpose()) * 0.5)
+            };
+            let m2 = Matrix3::identity() * (0.5 * h2.trace()) - h2;
+            total += 4.0 * (m2.trace() - (data * m2).dot(&gram));
+        }
+        total
     }
 
     /// The cut of a Ritz vector `v` (`v^T S'(P) v >= target`), unless it does not depend on the
@@ -856,10 +944,18 @@ pub fn surrogate(
 /// for the data as given: `N`, `N'` formed in floating point (`gamma(8)` of their magnitude,
 /// each), `h` Lipschitz in the nuclear norm (`sqrt(3)` times the Frobenius norm).
 fn edge_offset(e: &Edge, h: &Information, e2: &Edge, h2: &Information) -> f64 {
-    let (h, h2) = (h.matrix(), h2.matrix());
+    offset_of(
+        e.rotation.matrix(),
+        h.matrix(),
+        e2.rotation.matrix(),
+        h2.matrix(),
+    )
+}
+
+/// [`edge_offset`] of the data `(r, h)` and `(r2, h2)` as matrices.
+fn offset_of(r: &Matrix3<f64>, h: &Matrix3<f64>, r2: &Matrix3<f64>, h2: &Matrix3<f64>) -> f64 {
     let a = Matrix3::identity() * (2.0 * h.trace()) - h * 4.0;
     let a2 = Matrix3::identity() * (2.0 * h2.trace()) - h2 * 4.0;
-    let (r, r2) = (e.rotation.matrix(), e2.rotation.matrix());
     let d = r * a - r2 * a2;
     let magnitude = r.abs().norm() * a.abs().norm() + r2.abs().norm() * a2.abs().norm();
     let traces = 2.0 * h2.trace() - 2.0 * h.trace();
@@ -1012,9 +1108,10 @@ impl<'a> Rung<State<'a>> for ConvDualRung {
         cx.log.extend(b.surrogate.ladder.iter().cloned());
         let note = format!(
             "bound from the conv(SO(3)) multipliers recovered at {label} [A11] ({} rounds of their \
-             search, {} cuts, stopped: {}): the O(3) certificate of the penalised surrogate, \
-             lambda_min(S') >= {:.3e}, minus its verified offsets {:.6e}",
+             search, those of round {} kept, {} cuts, stopped: {}): the O(3) certificate of the \
+             penalised surrogate, lambda_min(S') >= {:.3e}, minus its verified offsets {:.6e}",
             b.search.rounds,
+            b.search.kept_round,
             b.search.cuts,
             b.search.stop,
             b.surrogate.verified_min_eigenvalue,
