@@ -395,22 +395,11 @@ pub(crate) fn solve_chordal_tilt_fixed(
     let mut iterations = 0;
     let deadline = settings.deadline();
     let termination = loop {
-        if iterations >= settings.max_iterations {
-            break Termination::IterationLimit {
-                iterations,
-                value: point.gn / total_weight,
-                threshold: tol,
-            };
-        }
-        if let (Some(d), Some(seconds)) = (deadline, settings.max_seconds)
-            && std::time::Instant::now() >= d
+        let measure = (point.gn / total_weight, tol);
+        if let Some(limit) =
+            settings.limit_reached(iterations, settings.max_iterations, deadline, measure)
         {
-            let value = point.gn / total_weight;
-            break Termination::TimeLimit {
-                seconds,
-                value,
-                threshold: tol,
-            };
+            break limit;
         }
         iterations += 1;
         crate::progress::emit(|| crate::progress::Event::Iteration {

@@ -190,23 +190,11 @@ impl<'a> Reweighted<'a> {
         let deadline = self.settings.deadline();
         loop {
             let g = norm(&ev.grad);
-            let (value, threshold) = (g / self.total_weight, self.settings.gradient_tolerance);
-            if iterations >= max_iterations {
-                let limit = Termination::IterationLimit {
-                    iterations,
-                    value,
-                    threshold,
-                };
-                return (iterations, limit);
-            }
-            if let (Some(d), Some(seconds)) = (deadline, self.settings.max_seconds)
-                && std::time::Instant::now() >= d
-            {
-                let limit = Termination::TimeLimit {
-                    seconds,
-                    value,
-                    threshold,
-                };
+            let measure = (g / self.total_weight, self.settings.gradient_tolerance);
+            let limit = self
+                .settings
+                .limit_reached(iterations, max_iterations, deadline, measure);
+            if let Some(limit) = limit {
                 return (iterations, limit);
             }
             iterations += 1;
@@ -242,8 +230,7 @@ impl<'a> Reweighted<'a> {
                 return (iterations, failure("non-finite step"));
             }
             let Some((cand, cev, t)) = self.backtrack(r, ev, &step) else {
-                let value = g / self.total_weight;
-                let threshold = self.settings.gradient_tolerance;
+                let (value, threshold) = measure;
                 return (iterations, Termination::Stalled { value, threshold });
             };
             *r = cand;
