@@ -10,6 +10,7 @@ use crate::error::Result;
 use crate::multiple::robust::{OutlierWarning, judges_residuals, suspected_outliers};
 use crate::multiple::{Initialisation, MultipleSettings};
 use crate::objective::Objective;
+use crate::termination::Termination;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::time::Instant;
@@ -119,7 +120,8 @@ pub const JUDGE_AFTER_ITERATIONS: usize = 30;
 /// The least-squares solve the rule judges. It runs at most [`JUDGE_AFTER_ITERATIONS`]
 /// iterations first; when it has not converged by then and its residuals there already show
 /// outliers, that estimate is judged (the rule discards it for the robust solve); otherwise
-/// the solve goes on from it to its own stopping test (iterations and time summed). Confident
+/// the solve goes on from it to its own stopping test (iterations and time summed; one clock
+/// for [`MultipleSettings::max_seconds`], and a first part stopped by it is judged as it is). Confident
 /// wrong pairs make least squares slow: a generated 10^4-image scene with `--information full`
 /// ran 100 Newton iterations (7.1 s) without converging before the rule chose Cauchy.
 fn judged_least_squares<P: ViewGraphProblem>(
@@ -133,8 +135,11 @@ fn judged_least_squares<P: ViewGraphProblem>(
         max_iterations: JUDGE_AFTER_ITERATIONS,
         ..settings.clone()
     };
+    let start = Instant::now();
     let early = problem.solve(&first)?;
+    let timed_out = matches!(early.report.termination, Termination::TimeLimit { .. });
     if early.report.termination.is_converged()
+        || timed_out
         || suspected_outliers(problem.graph(), &early.rotations).is_some()
     {
         return Ok(early);
@@ -142,7 +147,7 @@ fn judged_least_squares<P: ViewGraphProblem>(
     let rest = MultipleSettings {
         init: Initialisation::Given(early.rotations.clone()),
         max_iterations: settings.max_iterations - JUDGE_AFTER_ITERATIONS,
-        ..settings.clone()
+        ..settings.remaining(start)
     };
     let mut out = problem.solve(&rest)?;
     out.report.iterations += early.report.iterations;
