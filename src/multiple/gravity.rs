@@ -511,11 +511,13 @@ pub fn solve_gravity(
     let start = std::time::Instant::now();
     let free = solve_multiple(graph, settings)?;
     let init = problem.aligned_and_projected(&problem.to_standard(&free.rotations));
+    // one clock for MultipleSettings::max_seconds: the constrained solve gets what is left
+    let left = settings.remaining(start);
     let (rotations, iterations, termination) = if objective.is_chordal_l2() {
-        let s = solve_constrained(problem, graph, init, settings)?;
+        let s = solve_constrained(problem, graph, init, &left)?;
         (s.rotations, s.report.iterations, s.report.termination)
     } else {
-        reweighted(problem, init, settings)?
+        reweighted(problem, init, &left)?
     };
     let mut rotations = rotations;
     fix_gravity_gauge(&mut rotations);
@@ -578,7 +580,8 @@ pub const IRLS_WEIGHT_TOLERANCE: f64 = 1e-6;
 /// the view graph with each edge's weight (information) multiplied by its relative IRLS weight
 /// at the current estimate ([`relative_weight`] of the residual or Mahalanobis angle), until
 /// no weight changes by more than [`IRLS_WEIGHT_TOLERANCE`] (at most `settings.max_iterations`
-/// passes). Returns the rotations (standard convention), the passes and why it stopped.
+/// passes, within `settings.max_seconds`). Returns the rotations (standard convention), the
+/// passes and why it stopped.
 fn reweighted(
     problem: &GravityProblem,
     init: Vec<Rotation>,
@@ -596,11 +599,20 @@ fn reweighted(
     };
     let mut rotations = init;
     let mut weights = weights_at(&rotations);
+    let (begun, deadline) = (std::time::Instant::now(), settings.deadline());
+    let mut change = f64::NAN;
     for pass in 1..=settings.max_iterations {
+        let measure = (change, IRLS_WEIGHT_TOLERANCE);
+        if let Some(limit) =
+            settings.limit_reached(pass - 1, settings.max_iterations, deadline, measure)
+        {
+            return Ok((rotations, pass - 1, limit));
+        }
         let reweighted = graph.reweighted(&weights)?;
-        rotations = solve_constrained(problem, &reweighted, rotations, settings)?.rotations;
+        let left = settings.remaining(begun);
+        rotations = solve_constrained(problem, &reweighted, rotations, &left)?.rotations;
         let next = weights_at(&rotations);
-        let change = next
+        change = next
             .iter()
             .zip(&weights)
             .map(|(a, b)| (a - b).abs())

@@ -201,3 +201,50 @@ fn the_command_line_stops_the_solve_at_max_seconds() {
     );
     assert_ne!(json["certificate"]["verdict"], "certified", "{json}");
 }
+
+/// Gravity priors share the clock too (`solve_gravity`: the free solve, then the constrained
+/// Newton-LM or the reweighted passes get what is left; the passes check it between them).
+#[test]
+fn gravity_solves_stop_at_their_time_limit() {
+    use rotavg::Termination;
+    use rotavg::multiple::gravity::{GravityProblem, solve_gravity};
+    use rotavg::multiple::synthetic::SyntheticGravity;
+    use rotavg::objective::{Loss, Objective};
+    let (graph, truth) = SyntheticGraph {
+        num_rotations: 1500,
+        num_edges: 6000,
+        noise_sigma: 0.05,
+        outlier_fraction: 0.1,
+        seed: 5,
+    }
+    .generate();
+    let priors = SyntheticGravity {
+        noise_deg: 0.5,
+        missing_fraction: 0.0,
+        seed: 5,
+    }
+    .priors(&truth)
+    .unwrap();
+    let cauchy = Objective::new(rotavg::Metric::Geodesic, Loss::Cauchy { scale_deg: 5.0 });
+    for graph in [graph.clone(), graph.with_objective(cauchy).unwrap()] {
+        let p = GravityProblem::new(graph, priors.clone()).unwrap();
+        let unbounded = solve_gravity(&p, &MultipleSettings::default()).unwrap();
+        let limited = MultipleSettings {
+            max_seconds: Some(0.002),
+            ..Default::default()
+        };
+        let s = solve_gravity(&p, &limited).unwrap();
+        eprintln!("{}; unbounded {}", s.report, unbounded.report);
+        assert!(
+            matches!(s.report.termination, Termination::TimeLimit { .. }),
+            "{}",
+            s.report
+        );
+        assert!(s.report.iterations < unbounded.report.iterations);
+        for r in &s.rotations {
+            let m = r.matrix();
+            let defect = (m.transpose() * m - nalgebra::Matrix3::identity()).norm();
+            assert!(defect <= 1e-12 && (m.determinant() - 1.0).abs() <= 1e-12);
+        }
+    }
+}
