@@ -128,7 +128,8 @@ fn judged_least_squares<P: ViewGraphProblem>(
     problem: &P,
     settings: &MultipleSettings,
 ) -> Result<crate::multiple::MultipleSolution> {
-    if settings.max_iterations <= JUDGE_AFTER_ITERATIONS {
+    // a graph whose residuals cannot be judged (`judges_residuals`) is solved in one piece
+    if settings.max_iterations <= JUDGE_AFTER_ITERATIONS || !judges_residuals(problem.graph()) {
         return problem.solve(settings);
     }
     let first = MultipleSettings {

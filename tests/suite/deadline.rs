@@ -7,9 +7,10 @@
 //! (the runs measured here end within a few hundredths of a second of the budget), and two
 //! orders of magnitude below what the same proofs take unbounded.
 
-use rotavg::certify::{Budget, CertifyMode, CertifySettings, certify_multiple};
+use rotavg::Rotation;
+use rotavg::certify::{Budget, Certification, CertifyMode, CertifySettings, certify_multiple};
 use rotavg::multiple::synthetic::SyntheticGraph;
-use rotavg::multiple::{MultipleSettings, solve_multiple};
+use rotavg::multiple::{MultipleProblem, MultipleSettings, MultipleSolution, solve_multiple};
 use std::time::Instant;
 
 /// The relative part of the stated margin.
@@ -44,9 +45,7 @@ fn heavy_rungs_end_within_the_margin_of_a_tiny_budget() {
                 budget: budget(seconds),
                 ..Default::default()
             };
-            let start = Instant::now();
-            let c = certify_multiple(&p, &est.rotations, &settings).unwrap();
-            let took = start.elapsed().as_secs_f64();
+            let (c, took) = timed_certify(&p, &est.rotations, &settings);
             eprintln!(
                 "{} {seconds} s: {took:.3} s, {:?} ({})",
                 mode.name(),
@@ -86,9 +85,7 @@ fn an_sdp_stopped_by_its_time_limit_ends_within_the_margin() {
             budget: budget(seconds),
             ..Default::default()
         };
-        let start = Instant::now();
-        let c = certify_multiple(&p, &est.rotations, &settings).unwrap();
-        let took = start.elapsed().as_secs_f64();
+        let (c, took) = timed_certify(&p, &est.rotations, &settings);
         sdp_ran += usize::from(c.details.sdp.is_some());
         eprintln!(
             "sdp under {seconds} s: {took:.3} s, {:?}",
@@ -101,6 +98,17 @@ fn an_sdp_stopped_by_its_time_limit_ends_within_the_margin() {
     }
     // the instance still makes the SDP start (else the test proves nothing about it)
     assert!(sdp_ran > 0, "the SDP never started");
+}
+
+/// `certify_multiple` and its wall time, seconds.
+fn timed_certify(
+    p: &MultipleProblem,
+    rotations: &[Rotation],
+    settings: &CertifySettings,
+) -> (Certification<MultipleSolution>, f64) {
+    let start = Instant::now();
+    let c = certify_multiple(p, rotations, settings).unwrap();
+    (c, start.elapsed().as_secs_f64())
 }
 
 fn within_margin(seconds: f64) -> f64 {
@@ -122,9 +130,7 @@ fn the_staircase_stops_at_the_deadline_on_strongly_anisotropic_slam() {
         budget: budget(seconds),
         ..Default::default()
     };
-    let start = Instant::now();
-    let c = certify_multiple(&p, &est.rotations, &settings).unwrap();
-    let took = start.elapsed().as_secs_f64();
+    let (c, took) = timed_certify(&p, &est.rotations, &settings);
     eprintln!(
         "strongly anisotropic SLAM, 500 poses, under {seconds} s: {took:.3} s, {:?}",
         c.certificate.verdict
@@ -169,11 +175,7 @@ fn local_solves_stop_at_their_time_limit() {
             s.report
         );
         assert!(s.report.iterations < unbounded.report.iterations, "{name}");
-        for r in &s.rotations {
-            let m = r.matrix();
-            let defect = (m.transpose() * m - nalgebra::Matrix3::identity()).norm();
-            assert!(defect <= 1e-12 && (m.determinant() - 1.0).abs() <= 1e-12);
-        }
+        crate::common::assert_in_so3(&s.rotations, "time-limited estimate");
         let cost = rotavg::multiple::objective_cost_gradient(&problem, &s.rotations, 1e-6).0;
         assert!((s.cost - cost).abs() <= 1e-12 * cost.abs(), "{name}");
     }
@@ -241,10 +243,6 @@ fn gravity_solves_stop_at_their_time_limit() {
             s.report
         );
         assert!(s.report.iterations < unbounded.report.iterations);
-        for r in &s.rotations {
-            let m = r.matrix();
-            let defect = (m.transpose() * m - nalgebra::Matrix3::identity()).norm();
-            assert!(defect <= 1e-12 && (m.determinant() - 1.0).abs() <= 1e-12);
-        }
+        crate::common::assert_in_so3(&s.rotations, "time-limited estimate");
     }
 }

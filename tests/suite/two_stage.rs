@@ -113,14 +113,7 @@ fn the_two_stage_estimate_states_the_problems_cost_on_every_edge() {
     let (p, _, _) = confident_outliers(60);
     let robust = p.with_objective(CAUCHY).unwrap();
     let s = solve_multiple(&robust, &MultipleSettings::default()).unwrap();
-    for r in &s.rotations {
-        let m = r.matrix();
-        let defect = (m.transpose() * m - nalgebra::Matrix3::identity()).norm();
-        assert!(
-            defect <= 1e-12 && (m.determinant() - 1.0).abs() <= 1e-12,
-            "{defect}"
-        );
-    }
+    crate::common::assert_in_so3(&s.rotations, "two-stage estimate");
     let (cost, _) = objective_cost_gradient(&robust, &s.rotations, 1e-6);
     assert!(
         (s.cost - cost).abs() <= 1e-12 * cost,

@@ -291,7 +291,8 @@ pub fn predict_search(problem: &MultipleProblem, settings: &ConvDualSettings) ->
         TYPICAL_ROUNDS * round,
         8.0 * (settings.lanczos_iterations as f64 + 8.0) * dim
             + 24.0 * m * settings.cuts_kept as f64
-            + 2.0 * 72.0 * m,
+            // the multipliers, the frames' data, and the kept round's copy of the multipliers
+            + 3.0 * 72.0 * m,
     )
 }
 

@@ -219,3 +219,17 @@ pub fn database_rows(path: &Path) -> Vec<String> {
     }
     out
 }
+
+/// Assert that every rotation is in SO(3) to 1e-12 (`||R^T R - I||_F` and `|det R - 1|`),
+/// computed here from the matrices, not by the crate.
+pub fn assert_in_so3(rotations: &[Rotation], what: &str) {
+    for (k, r) in rotations.iter().enumerate() {
+        let m = r.matrix();
+        let defect = (m.transpose() * m - nalgebra::Matrix3::identity()).norm();
+        let det = m.determinant();
+        assert!(
+            defect <= 1e-12 && (det - 1.0).abs() <= 1e-12,
+            "{what}: rotation {k} off SO(3): defect {defect:e}, det {det}"
+        );
+    }
+}
