@@ -11,8 +11,7 @@ use crate::linalg::linear_solver::SolverKind;
 use crate::multiple::problem::place_component;
 use crate::multiple::robust::{edge_residuals, inlier_threshold_deg, solve_robust};
 use crate::multiple::solve::{MultipleSettings, MultipleSolution, solve_multiple};
-use crate::multiple::{Edge, MultipleProblem, objective_cost_gradient};
-use crate::objective::Objective;
+use crate::multiple::{Edge, MultipleProblem};
 
 /// The two-stage solve of `problem`, an anisotropic problem under a robust loss (L1, Huber,
 /// Cauchy) with no given start `[A14]`:
@@ -24,7 +23,7 @@ use crate::objective::Objective;
 ///    problem's loss with their information (IRLS from the first estimate).
 ///
 /// Nodes outside that component keep the first estimate's rotations (aligned). The solution's
-/// `cost` and `chordal_cost` are the problem's on every edge; `gradient_norm` and the report's
+/// `cost` and `chordal_cost` are the problem's on every edge (set by the caller's exit); `gradient_norm` and the report's
 /// termination are those of the second stage (of the cost on the edges it kept); iterations
 /// and time are both stages'.
 pub(crate) fn solve_two_stage(
@@ -37,9 +36,9 @@ pub(crate) fn solve_two_stage(
     let first = solve_multiple(&unit_weights(problem)?, settings)?;
     let threshold = inlier_threshold_deg(&objective, settings).unwrap_or(180.0);
     let kept = edge_residuals(problem, &first.rotations, threshold).inlier;
-    let start_cost = objective_cost_gradient(problem, &first.rotations, settings.l1_epsilon).0;
+    let start_cost = problem.cost(&first.rotations);
     if !kept.contains(&true) {
-        return Ok(restated(problem, first, settings, start_cost));
+        return Ok(restated(problem, first, start_cost));
     }
     let (sub, nodes) = problem
         .edge_subset(&kept)?
@@ -56,7 +55,7 @@ pub(crate) fn solve_two_stage(
     };
     out.report.name = format!("two-stage {}", out.report.name);
     out.report.iterations += first.report.iterations;
-    Ok(restated(problem, out, settings, start_cost))
+    Ok(restated(problem, out, start_cost))
 }
 
 /// The same edges with weight 1 and no information, under the same objective.
@@ -72,19 +71,15 @@ fn unit_weights(problem: &MultipleProblem) -> Result<MultipleProblem> {
     MultipleProblem::new(problem.num_rotations(), edges)?.with_objective(problem.objective())
 }
 
-/// `solution`'s costs restated for `problem` (the first stage's were of the unit-weight
-/// problem): the objective and chordal cost on every edge; the initial cost is `start_cost`,
-/// the problem's cost at the first stage's estimate (where the second starts).
+/// `solution` as a solution of `problem`: its objective, and as its initial cost `start_cost`,
+/// the problem's cost at the first stage's estimate (where the second starts). Its `cost` and
+/// `chordal_cost` are restated on every edge by `solve_multiple`'s exit (`on_so3`).
 fn restated(
     problem: &MultipleProblem,
     mut solution: MultipleSolution,
-    settings: &MultipleSettings,
     start_cost: f64,
 ) -> MultipleSolution {
-    let objective: Objective = problem.objective();
-    solution.objective = objective;
-    solution.cost = objective_cost_gradient(problem, &solution.rotations, settings.l1_epsilon).0;
-    solution.chordal_cost = problem.chordal_cost(&solution.rotations);
+    solution.objective = problem.objective();
     solution.init_cost = start_cost;
     solution
 }
