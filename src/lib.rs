@@ -76,6 +76,7 @@
 
 pub mod certify;
 pub mod conjugate;
+mod deadline;
 pub mod error;
 pub mod io;
 pub mod linalg;

@@ -883,8 +883,9 @@ struct ConjugateParts {
 ///     loss_threshold: Huber threshold / Cauchy scale in degrees.
 ///     init: optional ``(3, 3)`` start of the local solver (default: the quaternion closed
 ///         form).
-///     max_memory, max_seconds: the certificate's budget (bytes, default 4 GiB; seconds,
-///         default 600, ``None``: no limit), as for ``average_multiple``.
+///     max_memory, max_seconds: the run's budget (bytes, default 4 GiB; seconds, default 600,
+///         ``None``: no limit), as for ``average_multiple``: one clock for the local solve and
+///         the certificate.
 ///     rotation_tolerance: the tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` of every
 ///         matrix of ``left`` and ``right`` (default 1e-5); beyond it, an error.
 ///
@@ -969,6 +970,7 @@ fn conjugate_run(
             let settings = AverageSettings {
                 solve: ConjugateSettings {
                     init: init.map(|m| m.rotation()).transpose()?,
+                    max_seconds: certify.budget.max_seconds,
                     ..Default::default()
                 },
                 certify,

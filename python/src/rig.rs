@@ -18,7 +18,8 @@ use rotavg::report::{RigReport, rig_problem};
 ///     right: the reference sensor's ``Graph`` (``read_graph``): its rotations are the frames'.
 ///     left: the other sensor's ``Graph`` over the same node ids (``L_ij ~ S R_ij S^T``).
 ///     certify: ``"auto"``, ``"dual"``, ``"sdp"`` or ``"none"``.
-///     max_memory, max_seconds: the certificate's budget, as for ``average_multiple``.
+///     max_memory, max_seconds: the run's budget, as for ``average_multiple`` (one clock for
+///         the joint solve and the certificate).
 ///
 /// Returns:
 ///     Result: ``estimate`` is the frames ``(n, 3, 3)`` (gauge ``estimate[0] = I``);
@@ -45,6 +46,7 @@ pub fn average_rig(
         let settings = AverageSettings {
             solve: SimultaneousSettings {
                 max_memory_bytes: certify.budget.max_memory_bytes,
+                max_seconds: certify.budget.max_seconds,
                 ..Default::default()
             },
             certify,

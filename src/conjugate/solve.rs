@@ -3,6 +3,7 @@
 //! squared, L1, Huber or Cauchy loss `[H7]`. Equations: `paper-notes/conjugate.md`.
 
 use super::problem::{ConjugateProblem, DiagnosticSettings};
+use crate::deadline::{Deadline, limit_reached, remaining};
 use crate::error::{Error, Result};
 use crate::objective::{Loss, Objective};
 use crate::so3::{Metric, Rotation, exp, hat, log, nearest_rotation, to_quaternion};
@@ -29,6 +30,12 @@ pub struct ConjugateSettings {
     /// Start of the iterative solver (default `None`: the quaternion closed form `[H6]`).
     #[serde(with = "crate::so3::serde_rows::optional_rotation")]
     pub init: Option<Rotation>,
+    /// Time limit of the solve, seconds (`None`, the default: no limit; the command line's
+    /// `--max-seconds`). Checked before each Gauss-Newton / IRLS iteration; when reached the
+    /// solve ends with [`Termination::TimeLimit`](crate::Termination::TimeLimit) at its last
+    /// iterate, within one iteration (`O(n)` work) of the limit. The closed-form start is not
+    /// interrupted.
+    pub max_seconds: Option<f64>,
 }
 
 impl Default for ConjugateSettings {
@@ -39,6 +46,7 @@ impl Default for ConjugateSettings {
             step_tolerance: 1e-13,
             diagnostics: DiagnosticSettings::default(),
             init: None,
+            max_seconds: None,
         }
     }
 }
@@ -56,6 +64,7 @@ impl ConjugateSettings {
         at_least_one("max_iterations", self.max_iterations)?;
         non_negative("gradient_tolerance", self.gradient_tolerance)?;
         non_negative("step_tolerance", self.step_tolerance)?;
+        crate::deadline::validate_max_seconds(self.max_seconds)?;
         self.diagnostics.validate()?;
         if let Some(r) = &self.init {
             check_rotation(|| "init".into(), r)?;
@@ -257,14 +266,11 @@ pub fn solve_conjugate(
     let start = Instant::now();
     // the given start (a rotation to the validation tolerance) replaced by its nearest rotation,
     // so that the iteration stays on SO(3) (contract section 1)
-    let (s, closed_form_seconds) = match &settings.init {
-        Some(r) => (nearest_rotation(r), 0.0),
-        None => {
-            let c = quaternion_closed_form(problem, &settings.diagnostics)?;
-            (c.estimate, c.report.seconds)
-        }
+    let s = match &settings.init {
+        Some(r) => nearest_rotation(r),
+        None => quaternion_closed_form(problem, &settings.diagnostics)?.estimate,
     };
-    let (s, iterations, termination) = gauss_newton(problem, settings, s);
+    let (s, iterations, termination) = gauss_newton(problem, settings, (s, start));
     let objective = problem.objective();
     let name = match (objective.metric, objective.loss) {
         (Metric::Chordal, Loss::L2) => "chordal-gauss-newton",
@@ -277,7 +283,7 @@ pub fn solve_conjugate(
         name: name.into(),
         iterations,
         termination,
-        seconds: start.elapsed().as_secs_f64() + closed_form_seconds,
+        seconds: start.elapsed().as_secs_f64(),
     };
     Ok(on_so3(problem, &s, objective, report))
 }
@@ -306,12 +312,13 @@ fn on_so3(
 fn gauss_newton(
     problem: &ConjugateProblem,
     settings: &ConjugateSettings,
-    mut s: Rotation,
+    (mut s, start): (Rotation, Instant),
 ) -> (Rotation, usize, Termination) {
     let objective = problem.objective();
     let gtol = settings.gradient_tolerance * problem.total_weight();
     let mut cost = problem.cost(&s);
     let mut iterations = 0;
+    let deadline = Deadline::after(remaining(settings.max_seconds, start));
     let termination = loop {
         let (h, b) = normal_equations(problem, &s, objective);
         let gnorm = 2.0 * b.norm();
@@ -327,12 +334,9 @@ fn gauss_newton(
                 threshold: gtol,
             };
         }
-        if iterations >= settings.max_iterations {
-            break Termination::IterationLimit {
-                iterations,
-                value: gnorm,
-                threshold: gtol,
-            };
+        let limit = limit_reached(iterations, settings.max_iterations, deadline, (gnorm, gtol));
+        if let Some(limit) = limit {
+            break limit;
         }
         iterations += 1;
         // Levenberg damping only to keep H invertible.

@@ -397,7 +397,7 @@ pub(crate) fn solve_chordal_tilt_fixed(
     let termination = loop {
         let measure = (point.gn / total_weight, tol);
         if let Some(limit) =
-            settings.limit_reached(iterations, settings.max_iterations, deadline, measure)
+            crate::deadline::limit_reached(iterations, settings.max_iterations, deadline, measure)
         {
             break limit;
         }

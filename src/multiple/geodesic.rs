@@ -191,9 +191,8 @@ impl<'a> Reweighted<'a> {
         loop {
             let g = norm(&ev.grad);
             let measure = (g / self.total_weight, self.settings.gradient_tolerance);
-            let limit = self
-                .settings
-                .limit_reached(iterations, max_iterations, deadline, measure);
+            let limit =
+                crate::deadline::limit_reached(iterations, max_iterations, deadline, measure);
             if let Some(limit) = limit {
                 return (iterations, limit);
             }

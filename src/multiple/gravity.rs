@@ -604,7 +604,7 @@ fn reweighted(
     for pass in 1..=settings.max_iterations {
         let measure = (change, IRLS_WEIGHT_TOLERANCE);
         if let Some(limit) =
-            settings.limit_reached(pass - 1, settings.max_iterations, deadline, measure)
+            crate::deadline::limit_reached(pass - 1, settings.max_iterations, deadline, measure)
         {
             return Ok((rotations, pass - 1, limit));
         }

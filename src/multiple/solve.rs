@@ -163,11 +163,7 @@ impl MultipleSettings {
                 format!("must be a finite angle in (0, 180] degrees, got {t}"),
             );
         }
-        if let Some(t) = self.max_seconds
-            && !(t.is_finite() && t >= 0.0)
-        {
-            return bad("max_seconds", format!("must be finite and >= 0, got {t}"));
-        }
+        crate::deadline::validate_max_seconds(self.max_seconds)?;
         if let Some(o) = self.robust_on_outliers {
             o.validate()?;
             if o.loss == crate::objective::Loss::L2 || o.metric != crate::so3::Metric::Geodesic {
@@ -186,43 +182,15 @@ impl MultipleSettings {
 impl MultipleSettings {
     /// The same settings with the time limit reduced by the time since `start` (at least 0).
     pub(crate) fn remaining(&self, start: std::time::Instant) -> MultipleSettings {
-        let spent = start.elapsed().as_secs_f64();
         MultipleSettings {
-            max_seconds: self.max_seconds.map(|t| (t - spent).max(0.0)),
+            max_seconds: crate::deadline::remaining(self.max_seconds, start),
             ..self.clone()
         }
     }
 
-    /// The instant the time limit ends, counted from now (`None` without a limit, or one too
-    /// far to represent).
-    pub(crate) fn deadline(&self) -> Option<std::time::Instant> {
-        let limit = std::time::Duration::try_from_secs_f64(self.max_seconds?).ok()?;
-        std::time::Instant::now().checked_add(limit)
-    }
-
-    /// Why an iteration loop stops before its next iteration, if it does: `max_iterations`
-    /// done, or the [`Self::deadline`] it took at its start passed. `value` and `threshold`:
-    /// its stopping quantity at the last iterate and the tolerance.
-    pub(crate) fn limit_reached(
-        &self,
-        iterations: usize,
-        max_iterations: usize,
-        deadline: Option<std::time::Instant>,
-        (value, threshold): (f64, f64),
-    ) -> Option<crate::Termination> {
-        if iterations >= max_iterations {
-            return Some(crate::Termination::IterationLimit {
-                iterations,
-                value,
-                threshold,
-            });
-        }
-        let seconds = self.max_seconds?;
-        (std::time::Instant::now() >= deadline?).then_some(crate::Termination::TimeLimit {
-            seconds,
-            value,
-            threshold,
-        })
+    /// The instant the time limit ends, counted from now (`None` without a limit).
+    pub(crate) fn deadline(&self) -> Option<crate::deadline::Deadline> {
+        crate::deadline::Deadline::after(self.max_seconds)
     }
 }
 

@@ -3,6 +3,7 @@
 
 use super::problem::SingleProblem;
 use super::solve::{Local, SingleSettings};
+use crate::deadline::{Deadline, limit_reached};
 use crate::so3::{self, Rotation};
 use crate::termination::Termination;
 use nalgebra::{Matrix3, Vector4};
@@ -92,7 +93,17 @@ pub(crate) fn quaternion_l2_local(
         .unwrap_or_else(|| chordal_l2_local(problem).estimate);
     let mut q = so3::to_quaternion(&start).into_inner().coords;
     let (mut m, mut signs) = aligned_sum(&quats, problem.weights(), &q);
+    let (deadline, mut changes) = (Deadline::after(settings.max_seconds), signs.len());
     for it in 1..=settings.max_iterations {
+        let measure = (changes as f64, 1.0);
+        if let Some(limit) = limit_reached(it - 1, settings.max_iterations, deadline, measure) {
+            return Local {
+                estimate: quaternion_to_rotation(&q),
+                iterations: it - 1,
+                termination: limit,
+                name: "quaternion-l2-aligned-sum",
+            };
+        }
         let norm = m.norm();
         if !(norm.is_finite() && norm > 0.0) {
             return Local {
@@ -108,7 +119,7 @@ pub(crate) fn quaternion_l2_local(
         }
         q = m / norm;
         let (m_new, signs_new) = aligned_sum(&quats, problem.weights(), &q);
-        let changes = signs.iter().zip(&signs_new).filter(|(a, b)| a != b).count();
+        changes = signs.iter().zip(&signs_new).filter(|(a, b)| a != b).count();
         m = m_new;
         signs = signs_new;
         if changes == 0 {
@@ -191,17 +202,24 @@ pub(crate) fn quaternion_l1_local(
         termination,
         name: "quaternion-l1-weiszfeld",
     };
+    let deadline = Deadline::after(settings.max_seconds);
     for it in 1..=settings.max_iterations {
         let (num, zero) = weiszfeld_numerator(&quats, weights, &q);
         let tangent = num - q * num.dot(&q);
         let tn = tangent.norm();
-        if tn <= zero || tn <= settings.gradient_tolerance * problem.total_weight() {
+        let total = problem.total_weight();
+        let measure = ((tn - zero).max(0.0) / total, settings.gradient_tolerance);
+        if tn <= zero || tn <= settings.gradient_tolerance * total {
             let converged = Termination::Converged {
-                measure: "tangential Weiszfeld numerator minus coincident weight".into(),
-                value: (tn - zero).max(0.0),
-                threshold: settings.gradient_tolerance,
+                measure: "(tangential Weiszfeld numerator - coincident weight) / total weight"
+                    .into(),
+                value: measure.0,
+                threshold: measure.1,
             };
             return done(&q, it - 1, converged);
+        }
+        if let Some(limit) = limit_reached(it - 1, settings.max_iterations, deadline, measure) {
+            return done(&q, it - 1, limit);
         }
         let Some(target) = num.try_normalize(0.0) else {
             let failure = Termination::NumericalFailure {

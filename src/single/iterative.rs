@@ -8,6 +8,7 @@
 use super::closed_form::chordal_l2_local;
 use super::problem::SingleProblem;
 use super::solve::{Local, Norm, SingleSettings};
+use crate::deadline::{Deadline, limit_reached, remaining};
 use crate::so3::{self, Rotation};
 use crate::termination::Termination;
 use nalgebra::{Matrix3, Vector3};
@@ -160,11 +161,17 @@ where
     let mut last_step = 0.0;
     // Samples whose optimality test failed (the test depends on the sample only).
     let mut rejected: Vec<usize> = Vec::new();
-    for it in 1..=settings.max_iterations {
+    let deadline = Deadline::after(settings.max_seconds);
+    let mut it = 0;
+    loop {
         let g = e.gradient_norm() / total;
         if g <= tol {
-            return stop(r, it - 1, converged(method.measure, g, tol));
+            return stop(r, it, converged(method.measure, g, tol));
         }
+        if let Some(limit) = limit_reached(it, settings.max_iterations, deadline, (g, tol)) {
+            return stop(r, it, limit);
+        }
+        it += 1;
         if let Some((k, t)) = e.nearest_sample()
             && (t < SAMPLE_TEST_RADIUS || t < 10.0 * last_step)
             && !rejected.contains(&k)
@@ -206,12 +213,6 @@ where
             return stop(r, it, converged(measure, step, settings.step_tolerance));
         }
     }
-    let limit = Termination::IterationLimit {
-        iterations: settings.max_iterations,
-        value: e.gradient_norm() / total,
-        threshold: settings.gradient_tolerance,
-    };
-    stop(r, settings.max_iterations, limit)
 }
 
 /// The given start, or the chordal L2 mean `[S1]`.
@@ -400,6 +401,7 @@ pub(crate) fn chordal_l1_local(
     settings: &SingleSettings,
     init: Option<&Rotation>,
 ) -> Local {
+    let begun = std::time::Instant::now();
     let r = match init {
         Some(r) => *r,
         None => {
@@ -407,9 +409,15 @@ pub(crate) fn chordal_l1_local(
                 problem,
                 settings.max_iterations,
                 settings.gradient_tolerance,
+                Deadline::after(settings.max_seconds),
             );
             so3::project_to_so3(&median.point).unwrap_or_else(|| chordal_l2_local(problem).estimate)
         }
+    };
+    // one clock: the descent gets what the start left
+    let settings = &SingleSettings {
+        max_seconds: remaining(settings.max_seconds, begun),
+        ..settings.clone()
     };
     descend(
         problem,
@@ -513,6 +521,7 @@ pub(crate) fn euclidean_median(
     problem: &SingleProblem,
     max_iterations: usize,
     gradient_tolerance: f64,
+    deadline: Option<Deadline>,
 ) -> EuclideanMedian {
     let total = problem.total_weight();
     let bound = |m: &EuclideanMedian| {
@@ -523,7 +532,7 @@ pub(crate) fn euclidean_median(
     let mut best = cur.clone();
     let mut flat = 0;
     for _ in 0..max_iterations {
-        if cur.gradient_norm / total <= gradient_tolerance {
+        if cur.gradient_norm / total <= gradient_tolerance || deadline.is_some_and(|d| d.passed()) {
             break;
         }
         let (cand, cand_next, _) = eval_euclidean(problem, &next);

@@ -30,6 +30,12 @@ pub struct SingleSettings {
     /// docs; the closed-form chordal L2 mean ignores it).
     #[serde(with = "crate::so3::serde_rows::optional_rotation")]
     pub init: Option<Rotation>,
+    /// Time limit of the iterative methods, seconds (`None`, the default: no limit; the
+    /// command line's `--max-seconds`). Checked before each iteration (and of the chordal L1
+    /// start's Euclidean median); when reached the method ends with
+    /// [`Termination::TimeLimit`](crate::Termination::TimeLimit) at its last iterate, within
+    /// one iteration (`O(n)` work) of the limit. The closed forms are not interrupted.
+    pub max_seconds: Option<f64>,
 }
 
 impl Default for SingleSettings {
@@ -39,6 +45,7 @@ impl Default for SingleSettings {
             step_tolerance: 1e-12,
             gradient_tolerance: 1e-12,
             init: None,
+            max_seconds: None,
         }
     }
 }
@@ -56,6 +63,7 @@ impl SingleSettings {
         at_least_one("max_iterations", self.max_iterations)?;
         positive("step_tolerance", self.step_tolerance)?;
         non_negative("gradient_tolerance", self.gradient_tolerance)?;
+        crate::deadline::validate_max_seconds(self.max_seconds)?;
         if let Some(r) = &self.init {
             check_rotation(|| "init".into(), r)?;
         }

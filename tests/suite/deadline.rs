@@ -246,3 +246,167 @@ fn gravity_solves_stop_at_their_time_limit() {
         crate::common::assert_in_so3(&s.rotations, "time-limited estimate");
     }
 }
+
+/// Single averaging shares the clock (`SingleSettings::max_seconds`, `--max-seconds`): every
+/// iterative mean (chordal L1 with its Euclidean-median start, the geodesic Weiszfeld means,
+/// the quaternion means) given no time stops with `time_limit` before its first iteration,
+/// where the unbounded solve iterates, at a rotation whose stated cost is the problem's there.
+#[test]
+fn single_means_stop_at_their_time_limit() {
+    use rotavg::Termination;
+    use rotavg::objective::{Loss, Objective};
+    use rotavg::single::{SingleProblem, SingleSettings, solve_single};
+    use rotavg::so3::exp;
+    let samples: Vec<Rotation> = (0..20_000)
+        .map(|k| {
+            let t = k as f64;
+            let spread = if k % 5 == 0 { 1.5 } else { 0.1 }; // a fifth far away
+            exp(&nalgebra::Vector3::new(
+                spread * (0.37 * t).sin(),
+                spread * (0.71 * t).cos(),
+                spread * (1.13 * t).sin(),
+            ))
+        })
+        .collect();
+    let base = SingleProblem::new(samples, None).unwrap();
+    for (metric, loss) in [
+        (rotavg::Metric::Chordal, Loss::L1),
+        (rotavg::Metric::Geodesic, Loss::L1),
+        (rotavg::Metric::Geodesic, Loss::L2),
+        (rotavg::Metric::Quaternion, Loss::L1),
+    ] {
+        let p = base
+            .clone()
+            .with_objective(Objective::new(metric, loss))
+            .unwrap();
+        let unbounded = solve_single(&p, &SingleSettings::default()).unwrap();
+        let limited = SingleSettings {
+            max_seconds: Some(0.0),
+            ..Default::default()
+        };
+        let s = solve_single(&p, &limited).unwrap();
+        let name = format!("{metric:?} {loss:?}");
+        eprintln!("{name}: {}; unbounded {}", s.report, unbounded.report);
+        assert!(
+            matches!(s.report.termination, Termination::TimeLimit { .. }),
+            "{name}: {}",
+            s.report
+        );
+        assert!(s.report.iterations < unbounded.report.iterations, "{name}");
+        crate::common::assert_in_so3(&[s.estimate], "time-limited mean");
+        assert!(
+            (s.cost - p.cost(&s.estimate)).abs() <= 1e-12 * s.cost,
+            "{name}"
+        );
+    }
+}
+
+/// Conjugate averaging shares the clock (`ConjugateSettings::max_seconds`): the robust IRLS
+/// from the identity given no time stops with `time_limit` at its start.
+#[test]
+fn conjugate_solves_stop_at_their_time_limit() {
+    use rand::SeedableRng;
+    use rotavg::Termination;
+    use rotavg::conjugate::synthetic::random_instance;
+    use rotavg::conjugate::{ConjugateSettings, solve_conjugate};
+    use rotavg::objective::{Loss, Objective};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+    let (p, _) = random_instance(5000, 0.01, 0.2, &mut rng);
+    let p = p
+        .with_objective(Objective::new(rotavg::Metric::Geodesic, Loss::L1))
+        .unwrap();
+    let from_identity = ConjugateSettings {
+        init: Some(Rotation::identity()),
+        ..Default::default()
+    };
+    let unbounded = solve_conjugate(&p, &from_identity).unwrap();
+    let limited = ConjugateSettings {
+        max_seconds: Some(0.0),
+        ..from_identity
+    };
+    let s = solve_conjugate(&p, &limited).unwrap();
+    eprintln!("{}; unbounded {}", s.report, unbounded.report);
+    assert!(matches!(
+        s.report.termination,
+        Termination::TimeLimit { .. }
+    ));
+    assert!(s.report.iterations < unbounded.report.iterations);
+    crate::common::assert_in_so3(&[s.estimate], "time-limited S");
+}
+
+/// Rigs share the clock (`SimultaneousSettings::max_seconds`, `rotavg rig --max-seconds`): the
+/// sparse alternation's start, passes and the solves inside them, and the dense polish. Given
+/// 2 ms, a 300-frame rig (dense polish size) and a 1500-frame one end with `time_limit` within
+/// the margin, in SO(3); through the command line the JSON says `time_limit` too.
+#[test]
+fn rig_solves_stop_at_their_time_limit() {
+    use rotavg::Termination;
+    use rotavg::pipeline::AverageSettings;
+    use rotavg::pipeline::simultaneous::{
+        SimultaneousSettings, SyntheticRig, average_simultaneous,
+    };
+    for n in [300, 1500] {
+        let graph = SyntheticGraph {
+            num_rotations: n,
+            num_edges: 4 * n,
+            noise_sigma: 0.05,
+            outlier_fraction: 0.0,
+            seed: 7,
+        };
+        let (p, _, _) = SyntheticRig { graph }.generate();
+        let settings = AverageSettings {
+            solve: SimultaneousSettings {
+                max_seconds: Some(0.002),
+                ..Default::default()
+            },
+            ..Default::default()
+        }
+        .with_mode(CertifyMode::None);
+        let start = Instant::now();
+        let avg = average_simultaneous(&p, &settings).unwrap();
+        let took = start.elapsed().as_secs_f64();
+        let s = &avg.solution;
+        eprintln!(
+            "rig of {n} frames: {took:.3} s under 0.002 s ({})",
+            s.report
+        );
+        assert!(
+            matches!(s.report.termination, Termination::TimeLimit { .. }),
+            "{}",
+            s.report
+        );
+        assert!(took <= within_margin(0.002), "{took} s");
+        crate::common::assert_in_so3(&s.rotations, "time-limited frames");
+        crate::common::assert_in_so3(&[s.s], "time-limited sensor_from_rig");
+        assert!((s.cost - p.cost(&s.rotations, &s.s)).abs() <= 1e-12 * s.cost);
+    }
+    let graph = SyntheticGraph {
+        num_rotations: 1500,
+        num_edges: 6000,
+        noise_sigma: 0.05,
+        ..Default::default()
+    };
+    let (p, _, _) = SyntheticRig { graph }.generate();
+    let write = |name: &str, edges: &[rotavg::multiple::Edge]| {
+        let g = MultipleProblem::new(p.num_nodes, edges.to_vec()).unwrap();
+        crate::common::temp_file(name, &rotavg::io::json::write_problem_json(&g))
+    };
+    let (right, left) = (
+        write("rig_right.json", &p.right),
+        write("rig_left.json", &p.left),
+    );
+    let out = crate::common::run(&[
+        "rig",
+        right.to_str().unwrap(),
+        left.to_str().unwrap(),
+        "--json",
+        "--max-seconds",
+        "0.001",
+    ]);
+    let json = crate::common::json_of(&out);
+    assert_eq!(
+        json["solver"]["termination"]["status"], "time_limit",
+        "{json}"
+    );
+    assert_ne!(json["certificate"]["verdict"], "certified", "{json}");
+}

@@ -33,8 +33,8 @@ pub struct Common {
     /// the whole explanation with the labels of paper-notes/ (e.g. [D15]), long lines unbroken.
     #[arg(long, short = 'v')]
     pub verbose: bool,
-    /// Time budget, seconds (`none`: no limit). `multiple`: one clock for the local solve
-    /// (stopped at it: `time_limit`, its last iterate) and the certificate (what is left). A
+    /// Time budget, seconds (`none`: no limit). One clock for the local solve (stopped at it:
+    /// `time_limit`, its last iterate) and the certificate (what is left). A
     /// proof step predicted or found to exceed it is not started; the verdict is then
     /// `inconclusive` with the reason.
     #[arg(long, value_name = "SECONDS", default_value = "600", value_parser = parse_seconds)]
@@ -50,12 +50,17 @@ impl Common {
         }
     }
 
+    /// The local solve's time limit: `--max-seconds` (`None` for `none`). The certificate gets
+    /// what the solve leaves of it (one clock).
+    pub fn solve_seconds(&self) -> Option<f64> {
+        Some(self.max_seconds).filter(|t| t.is_finite())
+    }
+
     /// The certificate's budget: `--max-seconds` and `max_memory_bytes`.
     fn budget(&self, max_memory_bytes: u64) -> Budget {
-        let max_seconds = Some(self.max_seconds).filter(|t| t.is_finite());
         Budget {
             max_memory_bytes,
-            max_seconds,
+            max_seconds: self.solve_seconds(),
         }
     }
 

@@ -128,6 +128,7 @@ fn solve(args: &Args) -> Result<ConjugateReport> {
     let settings = AverageSettings {
         solve: ConjugateSettings {
             init: args.init.rotation(&options)?,
+            max_seconds: args.common.solve_seconds(),
             ..Default::default()
         },
         certify: args.common.settings(args.certify),

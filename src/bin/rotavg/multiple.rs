@@ -121,7 +121,7 @@ fn solve_and_write(args: &Args, outputs: &MultipleOutputs) -> Result<Outcome> {
                 .inlier_threshold_deg(args.loss_threshold, args.inlier_threshold),
             robust_on_outliers: args.loss.robust_on_outliers(args.loss_threshold),
             // --max-seconds is one clock for the solve and the certificate
-            max_seconds: Some(args.common.max_seconds).filter(|t| t.is_finite()),
+            max_seconds: args.common.solve_seconds(),
             ..Default::default()
         },
         certify: args.graph.settings(&args.common, &args.plot),

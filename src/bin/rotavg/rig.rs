@@ -40,6 +40,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let settings = AverageSettings {
         solve: SimultaneousSettings {
             max_memory_bytes: certify.budget.max_memory_bytes,
+            max_seconds: args.common.solve_seconds(),
             ..Default::default()
         },
         certify,

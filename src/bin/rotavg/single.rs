@@ -52,6 +52,7 @@ fn solve(args: &Args) -> rotavg::Result<SingleReport> {
     let settings = AverageSettings {
         solve: SingleSettings {
             init,
+            max_seconds: args.common.solve_seconds(),
             ..Default::default()
         },
         certify: args.common.settings(args.certify),

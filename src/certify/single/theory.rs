@@ -293,6 +293,7 @@ fn chordal_l1_bound(problem: &SingleProblem) -> (Option<f64>, String) {
         problem,
         settings.max_iterations.max(100),
         settings.gradient_tolerance,
+        None,
     );
     let g = med.gradient_norm + 16.0 * f64::EPSILON * total;
     let radius = 3f64.sqrt() + med.point.norm();

@@ -8,6 +8,7 @@
 
 use super::{SimultaneousProblem, SimultaneousSolution};
 use crate::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings, solve_conjugate};
+use crate::deadline::{Deadline, limit_reached, remaining};
 use crate::error::Result;
 use crate::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings, solve_multiple};
 use crate::so3::Rotation;
@@ -19,18 +20,26 @@ pub const ALTERNATING_DECREASE_TOLERANCE: f64 = 1e-10;
 
 /// The start: each graph averaged on its own (sparse, gauge `R_0 = L_0 = I`), then `S` from
 /// the conjugate problem on the pairs `(L_i, R_i)`, `i >= 1`.
-fn start(p: &SimultaneousProblem) -> Result<(Vec<Rotation>, Rotation)> {
+/// Within `max_seconds` from `clock`.
+fn start(
+    p: &SimultaneousProblem,
+    (clock, max_seconds): (Instant, Option<f64>),
+) -> Result<(Vec<Rotation>, Rotation)> {
     let (right, left) = p.graphs()?;
-    let settings = MultipleSettings::default();
-    let rs = solve_multiple(&right, &settings)?.rotations;
-    let ls = solve_multiple(&left, &settings)?.rotations;
+    let settings = || MultipleSettings {
+        max_seconds: remaining(max_seconds, clock),
+        ..Default::default()
+    };
+    let rs = solve_multiple(&right, &settings())?.rotations;
+    let ls = solve_multiple(&left, &settings())?.rotations;
     let pairs = (1..p.num_nodes)
         .map(|i| ConjugatePair::new(ls[i], rs[i]))
         .collect();
-    let s = solve_conjugate(
-        &ConjugateProblem::new(pairs)?,
-        &ConjugateSettings::default(),
-    )?;
+    let settings = ConjugateSettings {
+        max_seconds: remaining(max_seconds, clock),
+        ..Default::default()
+    };
+    let s = solve_conjugate(&ConjugateProblem::new(pairs)?, &settings)?;
     Ok((rs, s.estimate))
 }
 
@@ -44,8 +53,14 @@ fn frame_graph(p: &SimultaneousProblem, s: &Rotation) -> Result<MultipleProblem>
     MultipleProblem::new(p.num_nodes, p.right.iter().cloned().chain(left).collect())
 }
 
-/// `S` at fixed frames: the conjugate problem of the pairs `(L_ij, R_j R_i^T)`, from `s`.
-fn sensor_step(p: &SimultaneousProblem, rs: &[Rotation], s: &Rotation) -> Result<Rotation> {
+/// `S` at fixed frames: the conjugate problem of the pairs `(L_ij, R_j R_i^T)`, from `s`,
+/// within `max_seconds`.
+fn sensor_step(
+    p: &SimultaneousProblem,
+    rs: &[Rotation],
+    s: &Rotation,
+    max_seconds: Option<f64>,
+) -> Result<Rotation> {
     let pairs = p
         .left
         .iter()
@@ -56,6 +71,7 @@ fn sensor_step(p: &SimultaneousProblem, rs: &[Rotation], s: &Rotation) -> Result
         .collect();
     let settings = ConjugateSettings {
         init: Some(*s),
+        max_seconds,
         ..Default::default()
     };
     Ok(solve_conjugate(&ConjugateProblem::new(pairs)?, &settings)?.estimate)
@@ -79,35 +95,46 @@ pub fn solve_alternating(
     p: &SimultaneousProblem,
     max_passes: usize,
 ) -> Result<SimultaneousSolution> {
+    solve_within(p, max_passes, None)
+}
+
+/// [`solve_alternating`] within `max_seconds` (`None`: no limit): the start, the passes and
+/// the solves inside them share one clock, each checked before its next iteration.
+pub(crate) fn solve_within(
+    p: &SimultaneousProblem,
+    max_passes: usize,
+    max_seconds: Option<f64>,
+) -> Result<SimultaneousSolution> {
     let clock = Instant::now();
-    let (mut rs, mut s) = start(p)?;
+    let (mut rs, mut s) = start(p, (clock, max_seconds))?;
     let mut cost = p.cost(&rs, &s);
-    let mut termination = Termination::IterationLimit {
-        iterations: max_passes,
-        value: f64::NAN,
-        threshold: ALTERNATING_DECREASE_TOLERANCE,
-    };
-    let mut passes = 0;
-    while passes < max_passes {
+    let deadline = Deadline::after(remaining(max_seconds, clock));
+    let (mut passes, mut decrease) = (0, f64::NAN);
+    let termination = loop {
+        let measure = (decrease, ALTERNATING_DECREASE_TOLERANCE);
+        if let Some(limit) = limit_reached(passes, max_passes, deadline, measure) {
+            break limit;
+        }
         passes += 1;
         let settings = MultipleSettings {
             init: Initialisation::Given(rs.clone()),
+            max_seconds: remaining(max_seconds, clock),
             ..Default::default()
         };
         rs = solve_multiple(&frame_graph(p, &s)?, &settings)?.rotations;
-        s = sensor_step(p, &rs, &s)?;
+        s = sensor_step(p, &rs, &s, remaining(max_seconds, clock))?;
         let next = p.cost(&rs, &s);
-        let decrease = (cost - next) / cost.abs().max(f64::MIN_POSITIVE);
+        decrease = (cost - next) / cost.abs().max(f64::MIN_POSITIVE);
         cost = next;
-        if decrease < ALTERNATING_DECREASE_TOLERANCE {
-            termination = Termination::Converged {
+        // a pass the time limit cut short is no evidence of convergence
+        if decrease < ALTERNATING_DECREASE_TOLERANCE && !deadline.is_some_and(|d| d.passed()) {
+            break Termination::Converged {
                 measure: "relative decrease of J in one pass".into(),
                 value: decrease.max(0.0),
                 threshold: ALTERNATING_DECREASE_TOLERANCE,
             };
-            break;
         }
-    }
+    };
     let report = SolverReport {
         name: "simultaneous-alternating (sparse)".into(),
         iterations: passes,

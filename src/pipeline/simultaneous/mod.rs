@@ -15,6 +15,7 @@ use super::{AverageSettings, Averaged, PipelineProblem, PipelineSolution, averag
 use crate::certify::simultaneous::certify_simultaneous;
 use crate::certify::{Certification, CertifyMode, CertifySettings};
 use crate::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings, solve_conjugate};
+use crate::deadline::{Deadline, limit_reached, remaining};
 use crate::error::{Error, Result};
 use crate::multiple::{Edge, MultipleProblem, fix_gauge};
 use crate::so3::{Rotation, exp, hat, nearest_rotation};
@@ -145,7 +146,7 @@ fn gauss_newton(
     terms: Terms,
     mut rs: Vec<Rotation>,
     mut s: Rotation,
-    max_iter: usize,
+    (max_iter, deadline): (usize, Option<Deadline>),
 ) -> (Vec<Rotation>, Rotation, f64, usize, Termination) {
     let total_w: f64 = p.right.iter().chain(&p.left).map(|e| e.weight).sum();
     let gtol = 1e-12 * total_w;
@@ -161,12 +162,8 @@ fn gauss_newton(
                 threshold: gtol,
             };
         }
-        if it >= max_iter {
-            break Termination::IterationLimit {
-                iterations: it,
-                value: gnorm,
-                threshold: gtol,
-            };
+        if let Some(limit) = limit_reached(it, max_iter, deadline, (gnorm, gtol)) {
+            break limit;
         }
         it += 1;
         let damp = 1e-12 * h.trace().abs() + 1e-300;
@@ -334,7 +331,7 @@ pub fn average_then_conjugate(p: &SimultaneousProblem) -> Result<SimultaneousSol
             right: edges.to_vec(),
             left: vec![],
         };
-        let rs = gauss_newton(&q, Terms::Right, init, Rotation::identity(), 100).0;
+        let rs = gauss_newton(&q, Terms::Right, init, Rotation::identity(), (100, None)).0;
         Ok(rs.iter().map(nearest_rotation).collect())
     };
     let rs = avg(&p.right)?;
@@ -445,6 +442,17 @@ pub fn solve_simultaneous_from(
     s: &Rotation,
     max_iterations: usize,
 ) -> Result<SimultaneousSolution> {
+    joint_from(p, rotations, s, max_iterations, None)
+}
+
+/// [`solve_simultaneous_from`] within `max_seconds` (checked before each iteration).
+fn joint_from(
+    p: &SimultaneousProblem,
+    rotations: &[Rotation],
+    s: &Rotation,
+    max_iterations: usize,
+    max_seconds: Option<f64>,
+) -> Result<SimultaneousSolution> {
     p.validate()?;
     if rotations.len() != p.num_nodes {
         return Err(Error::InvalidSettings {
@@ -456,8 +464,11 @@ pub fn solve_simultaneous_from(
     // the start on SO(3) (a given estimate is a rotation only to the validation tolerance)
     let mut rs: Vec<Rotation> = rotations.iter().map(nearest_rotation).collect();
     fix_gauge(&mut rs);
-    let (rs, s, _, it, term) =
-        gauss_newton(p, Terms::Joint, rs, nearest_rotation(s), max_iterations);
+    let limits = (
+        max_iterations,
+        Deadline::after(remaining(max_seconds, start)),
+    );
+    let (rs, s, _, it, term) = gauss_newton(p, Terms::Joint, rs, nearest_rotation(s), limits);
     let report = SolverReport {
         name: "simultaneous-gauss-newton".into(),
         iterations: it,
@@ -482,6 +493,12 @@ pub struct SimultaneousSettings {
     /// [`predict_simultaneous_solve_bytes`]; over it (or above [`DENSE_MAX_NODES`] nodes) the
     /// sparse alternation runs instead.
     pub max_memory_bytes: u64,
+    /// Time limit of the solve, seconds (`None`, the default: no limit; the command line's
+    /// `--max-seconds`). The alternation's passes, the view-graph solves and conjugate solves
+    /// inside them, and the dense polish share one clock, each checked before its next
+    /// iteration; when it is reached the solve ends with
+    /// [`Termination::TimeLimit`](crate::Termination::TimeLimit) at its last iterate.
+    pub max_seconds: Option<f64>,
 }
 
 impl Default for SimultaneousSettings {
@@ -489,6 +506,7 @@ impl Default for SimultaneousSettings {
         SimultaneousSettings {
             max_iterations: 100,
             max_memory_bytes: crate::certify::Budget::default().max_memory_bytes,
+            max_seconds: None,
         }
     }
 }
@@ -553,7 +571,7 @@ impl PipelineProblem for SimultaneousProblem {
                 reason: "must be at least 1".into(),
             });
         }
-        Ok(())
+        crate::deadline::validate_max_seconds(settings.max_seconds)
     }
     fn uncertifiable(&self, _mode: CertifyMode) -> Option<String> {
         None
@@ -563,12 +581,19 @@ impl PipelineProblem for SimultaneousProblem {
     /// most) up to [`DENSE_MAX_NODES`] nodes when its normal equations fit
     /// `max_memory_bytes`: the better of the two is returned.
     fn solve(&self, settings: &SimultaneousSettings) -> Result<SimultaneousSolution> {
-        let sparse = alternating::solve_alternating(self, settings.max_iterations)?;
+        let start = Instant::now();
+        let sparse =
+            alternating::solve_within(self, settings.max_iterations, settings.max_seconds)?;
         let predicted = predict_simultaneous_solve_bytes(self.num_nodes);
-        if self.num_nodes > DENSE_MAX_NODES || predicted > settings.max_memory_bytes as f64 {
+        let timed_out = matches!(sparse.report.termination, Termination::TimeLimit { .. });
+        if self.num_nodes > DENSE_MAX_NODES
+            || predicted > settings.max_memory_bytes as f64
+            || timed_out
+        {
             return Ok(sparse);
         }
-        let mut polished = solve_simultaneous_from(self, &sparse.rotations, &sparse.s, 20)?;
+        let left = remaining(settings.max_seconds, start);
+        let mut polished = joint_from(self, &sparse.rotations, &sparse.s, 20, left)?;
         if polished.cost > sparse.cost {
             return Ok(sparse);
         }
@@ -587,11 +612,14 @@ impl PipelineProblem for SimultaneousProblem {
         solution: &SimultaneousSolution,
         settings: &CertifySettings,
     ) -> Result<Certification<SimultaneousSolution>> {
+        let start = Instant::now();
         let (right, left) = self.graphs()?;
         let c = certify_simultaneous(&right, &left, &solution.rotations, &solution.s, settings)?;
         let improvement = match c.improvement {
             Some(r) => {
-                let mut polished = solve_simultaneous_from(self, &r.rotations, &r.s, 100)?;
+                // within what the certificate left of its budget
+                let left = remaining(settings.budget.max_seconds, start);
+                let mut polished = joint_from(self, &r.rotations, &r.s, 100, left)?;
                 polished.report.name = "sdp-rounding+simultaneous-gauss-newton".into();
                 Some(polished)
             }
