@@ -439,3 +439,55 @@ fn tiny_budgets_and_bad_serialisations() {
     let e = serde_json::from_value::<GravityProblem>(json).unwrap_err();
     assert!(e.to_string().contains("299 gravity entries"), "{e}");
 }
+
+/// `[G9]`: on a graph large enough for the scalar comparison to run first (4000 cameras, 4
+/// edges each), the full-gravity estimate is certified by it; its bound agrees within the
+/// allowed gap with the shifted Cholesky's on the same `2n x 2n` matrix (`verify_planar`, the
+/// proof of `[G3]`, run here beside it), and scaling every weight by `1e-6` or `1e6` keeps the
+/// verdict and the proof.
+#[test]
+fn large_full_gravity_is_certified_by_the_scalar_comparison() {
+    use rotavg::certify::gravity::{PlanarForm, verify_planar};
+    use rotavg::certify::{Budget, Deadline};
+    let (graph, truth) = SyntheticGraph {
+        num_rotations: 4000,
+        num_edges: 16000,
+        noise_sigma: 0.05,
+        seed: 11,
+        ..Default::default()
+    }
+    .generate();
+    let priors = SyntheticGravity {
+        noise_deg: 0.5,
+        missing_fraction: 0.0,
+        seed: 11,
+    }
+    .priors(&truth)
+    .unwrap();
+    for scale in [1.0, 1e-6, 1e6] {
+        let g = crate::common::scale_weights(&graph, scale);
+        let p = GravityProblem::new(g, priors.clone()).unwrap();
+        let est = solve_gravity(&p, &MultipleSettings::default()).unwrap();
+        let c = certify_gravity(&p, &est.rotations, &CertifySettings::default()).unwrap();
+        let note = c.details.methods()[0].note.clone();
+        assert!(c.certificate.is_certified(), "scale {scale}: {note}");
+        assert!(note.contains("[G9]"), "scale {scale}: {note}");
+        let lb = c.certificate.lower_bound.unwrap();
+        assert!(lb <= est.cost, "scale {scale}");
+        if scale == 1.0 {
+            let form = PlanarForm::new(&p).unwrap();
+            let x = PlanarForm::phases(&p, &est.rotations);
+            let allowed = c.certificate.tolerance.allowed_gap(est.cost);
+            let budget = Budget::default();
+            let cholesky =
+                verify_planar(&p, &form, &x, allowed, &budget, &Deadline::start(&budget))
+                    .unwrap()
+                    .unwrap();
+            eprintln!(
+                "4000 cameras: [G9] bound {lb:.9e}, [G3] shifted Cholesky {:.9e}, cost {:.9e}",
+                cholesky.lower_bound, est.cost
+            );
+            assert!((cholesky.lower_bound - lb).abs() <= 1e-6 * est.cost);
+        }
+    }
+}

@@ -3,11 +3,12 @@
 //!
 //! | rung | when | bound |
 //! |---|---|---|
-//! | [`planar`]: the SO(2) dual certificate at the estimate `[G2]`, `[G3]` | every image has a prior | `K + sum lambda_i + n min(mu, 0)`, `mu` proven by a shifted sparse Cholesky |
+//! | [`planar`]: the SO(2) dual certificate at the estimate `[G2]`, `[G3]` | every image has a prior | `K + sum lambda_i + n min(mu, 0)`, `mu` proven by the scalar comparison on large graphs (`scalar.rs`, `[G9]`), else (or when it does not certify) by a shifted sparse Cholesky |
 //! | `relaxed.rs`: the priors dropped `[G7]` | the mixed problem; the fallback of full gravity | the view graph's own certified bound |
 
 pub mod planar;
 mod relaxed;
+mod scalar;
 mod state;
 
 pub use planar::{PlanarBound, PlanarForm, verify_planar};

@@ -7,6 +7,7 @@
 //! `x`, and `S >= 0` certifies it. `lambda_min(S)` is proven by a shifted sparse Cholesky of
 //! `S`'s real `2n x 2n` form (`[D5]`, `[D6]`).
 
+use super::scalar::verify_planar_scalar;
 use super::state::GravityState;
 use crate::certify::budget::{Budget, Deadline};
 use crate::certify::log::{Prediction, Refusal};
@@ -116,19 +117,42 @@ impl PlanarForm {
             .collect()
     }
 
-    /// `S = H - diag(lambda)` at phases `x` in its real `2n x 2n` form (both triangles), with
-    /// `lambda_i = d_i + Re(conj(x_i) sum_j H_ij x_j)`: its diagonal `s_i = -Re(conj(x_i)
-    /// sum_j H_ij x_j)` is stored exactly (it defines `lambda`). Returns `S`, `sum s_i` and
-    /// `sum |s_i|`.
-    fn certificate_matrix(&self, x: &[(f64, f64)]) -> (SparseColMat<usize, f64>, f64, f64) {
+    /// The number of images `n`.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Whether there is no image.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// The off-diagonal entries `H_ij` as `(i, j, re, im)`, one per edge (repeated pairs
+    /// summed by the matrix).
+    pub fn entries(&self) -> &[(usize, usize, f64, f64)] {
+        &self.entries
+    }
+
+    /// The diagonal `s_i = -Re(conj(x_i) sum_j H_ij x_j)` of `S = H - diag(lambda)` at phases
+    /// `x`, stored exactly: it defines `lambda_i = d_i - s_i`.
+    pub fn certificate_diagonal(&self, x: &[(f64, f64)]) -> Vec<f64> {
         let mut s = vec![0.0f64; self.n];
-        let mut t = Vec::with_capacity(8 * self.entries.len() + 2 * self.n);
         for &(i, j, re, im) in &self.entries {
             // conj(x_i) z x_j and conj(x_j) conj(z) x_i
             let zx = (re * x[j].0 - im * x[j].1, re * x[j].1 + im * x[j].0);
             s[i] -= x[i].0 * zx.0 + x[i].1 * zx.1;
             let zx = (re * x[i].0 + im * x[i].1, re * x[i].1 - im * x[i].0);
             s[j] -= x[j].0 * zx.0 + x[j].1 * zx.1;
+        }
+        s
+    }
+
+    /// `S = H - diag(lambda)` at phases `x` in its real `2n x 2n` form (both triangles), its
+    /// diagonal [`Self::certificate_diagonal`]. Returns `S`, `sum s_i` and `sum |s_i|`.
+    fn certificate_matrix(&self, x: &[(f64, f64)]) -> (SparseColMat<usize, f64>, f64, f64) {
+        let s = self.certificate_diagonal(x);
+        let mut t = Vec::with_capacity(8 * self.entries.len() + 2 * self.n);
+        for &(i, j, re, im) in &self.entries {
             // block (i, j) = [[re, -im], [im, re]], block (j, i) its transpose
             for (a, b, v) in [(0, 0, re), (0, 1, -im), (1, 0, im), (1, 1, re)] {
                 t.push(Triplet::new(2 * i + a, 2 * j + b, v));
@@ -149,6 +173,14 @@ impl PlanarForm {
     /// `K - sum s_i + n min(mu, 0)` less every rounding and data term: the constant's
     /// rounding, the sum's, the data defect of the measurements ([`data_defect`]) and the frame
     /// term `||Q|| (2 sqrt(3) n d (1 + d) + n d^2)` (`[G3]`).
+    /// [`Self::bound`] at phases `x` (the sums of [`Self::certificate_diagonal`]).
+    pub(super) fn bound_at(&self, graph_defect: f64, x: &[(f64, f64)], mu: f64) -> f64 {
+        let s = self.certificate_diagonal(x);
+        let sum: f64 = s.iter().sum();
+        let abs: f64 = s.iter().map(|v| v.abs()).sum();
+        self.bound(graph_defect, sum, abs, mu)
+    }
+
     fn bound(&self, graph_defect: f64, sum_s: f64, abs_s: f64, mu: f64) -> f64 {
         let n = self.n as f64;
         let d = self.frame_defect;
@@ -281,6 +313,28 @@ impl<'a> Rung<GravityState<'a>> for PlanarRung {
         };
         let standard = cx.problem.to_standard(cx.rotations);
         let x = PlanarForm::phases(cx.problem, &standard);
+        // on large graphs the scalar comparison [G9] first: one n x n factor
+        let graph_defect = data_defect(cx.problem.problem());
+        let gaps = (cx.allowed_gap, graph_defect);
+        let first = verify_planar_scalar(&form, &x, gaps, cx.settings, &cx.deadline)?;
+        let mut tried = String::new();
+        match first {
+            Some(Ok(b)) => {
+                let note = format!(
+                    "SO(2) multipliers at the estimate verified by the scalar comparison [G9], \
+                     lambda_min(S) >= {:.3e}",
+                    b.verified_min_eigenvalue
+                );
+                let mu = Some(b.verified_min_eigenvalue);
+                let lb = cx.offer(b.lower_bound, Proof::GravityDual, mu, &note);
+                if cx.certifies(lb) {
+                    return Ok(Found::proved(lb, true, note));
+                }
+                tried = format!("{note}, not enough; ");
+            }
+            Some(Err(why)) => tried = format!("scalar comparison [G9]: {why}; "),
+            None => {}
+        }
         let found = verify_planar(
             cx.problem,
             &form,
@@ -292,7 +346,7 @@ impl<'a> Rung<GravityState<'a>> for PlanarRung {
         Ok(match found {
             Ok(b) => {
                 let note = format!(
-                    "SO(2) multipliers at the estimate verified, lambda_min(S) >= {:.3e}",
+                    "{tried}SO(2) multipliers at the estimate verified, lambda_min(S) >= {:.3e}",
                     b.verified_min_eigenvalue
                 );
                 let lb = cx.offer(
@@ -303,7 +357,7 @@ impl<'a> Rung<GravityState<'a>> for PlanarRung {
                 );
                 Found::proved(lb, cx.certifies(lb), note)
             }
-            Err(reason) => Found::failed(reason),
+            Err(reason) => Found::failed(format!("{tried}{reason}")),
         })
     }
 }

@@ -52,7 +52,7 @@ mod charges;
 mod forecast;
 mod inertia;
 mod residuals;
-pub(super) mod rungs;
+pub(in crate::certify) mod rungs;
 mod split;
 #[cfg(test)]
 mod tests;
