@@ -32,7 +32,7 @@ pub struct ConjugateSettings {
     pub init: Option<Rotation>,
     /// Time limit of the solve, seconds (`None`, the default: no limit; the command line's
     /// `--max-seconds`). Checked before each Gauss-Newton / IRLS iteration; when reached the
-    /// solve ends with [`Termination::TimeLimit`](crate::Termination::TimeLimit) at its last
+    /// solve ends with [`Termination::TimeLimit`] at its last
     /// iterate, within one iteration (`O(n)` work) of the limit. The closed-form start is not
     /// interrupted.
     pub max_seconds: Option<f64>,

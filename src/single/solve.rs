@@ -33,7 +33,7 @@ pub struct SingleSettings {
     /// Time limit of the iterative methods, seconds (`None`, the default: no limit; the
     /// command line's `--max-seconds`). Checked before each iteration (and of the chordal L1
     /// start's Euclidean median); when reached the method ends with
-    /// [`Termination::TimeLimit`](crate::Termination::TimeLimit) at its last iterate, within
+    /// [`Termination::TimeLimit`] at its last iterate, within
     /// one iteration (`O(n)` work) of the limit. The closed forms are not interrupted.
     pub max_seconds: Option<f64>,
 }

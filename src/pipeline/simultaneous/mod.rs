@@ -497,7 +497,7 @@ pub struct SimultaneousSettings {
     /// `--max-seconds`). The alternation's passes, the view-graph solves and conjugate solves
     /// inside them, and the dense polish share one clock, each checked before its next
     /// iteration; when it is reached the solve ends with
-    /// [`Termination::TimeLimit`](crate::Termination::TimeLimit) at its last iterate.
+    /// [`Termination::TimeLimit`] at its last iterate.
     pub max_seconds: Option<f64>,
 }
 
