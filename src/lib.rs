@@ -47,7 +47,7 @@
 //!  relax               relax_*: the SDP relaxations (Clarabel glue, svec, rounding)
 //!  single multiple conjugate   problem data + objective + cost + local solvers (solve_*)
 //!  linalg              verified factorisations, Lanczos, block-sparse systems
-//!  objective validate  metric x loss; input checks
+//!  objective validate deadline   metric x loss; input checks; the local solvers' time limit
 //!  so3 termination     rotations, distances, serde; why a solver stopped
 //!  error               the one Error enum
 //! ```

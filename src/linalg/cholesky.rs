@@ -59,6 +59,14 @@ pub const UNIT_ROUNDOFF: f64 = f64::EPSILON / 2.0;
 /// (it holds the factor's columns and rows as `(index, value)` pairs: 32 more bytes per value).
 pub const RESIDUAL_FACTOR_LIMIT: usize = 20_000_000;
 
+/// Multiply-adds of the factorisation ([`factor_multiply_adds`]) up to which the
+/// residual-based margin `[D6]` (2) is computed: its double-double products are as many as the
+/// factorisation's, unblocked, about 5e-9 s each on the 2-core reference machine (a 2n x 2n
+/// SO(2) certificate matrix of a 4000-camera expander: 7.3e9 multiply-adds, 36 s of residual
+/// after a 0.37 s factorisation, not interruptible by the time limit). At this limit it takes
+/// about 1 s; above it the a-priori margin (1) is used.
+pub const RESIDUAL_MAX_MULTIPLY_ADDS: f64 = 2e8;
+
 /// `gamma_k = k u / (1 - k u)` (Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed.,
 /// Lemma 3.1): the relative error bound of a sum or inner product of `k` terms. Returns
 /// `+inf` when `k u >= 1/2` (the bound is then useless and no verification succeeds).
@@ -596,7 +604,8 @@ impl ShiftedCholesky {
     ///    terms in an inner product, at most the largest row count of `L`; then
     ///    `||dA||_2 <= gamma(k+1) || |L| |L|^T ||_inf`, the row sums being `sum_m |L_im| c_m`
     ///    with `c_m = sum_j |L_jm|`.
-    /// 2. (factors up to `RESIDUAL_FACTOR_LIMIT` values) the residual `R = A - L L^T` evaluated
+    /// 2. (factors up to `RESIDUAL_FACTOR_LIMIT` values and `RESIDUAL_MAX_MULTIPLY_ADDS`
+    ///    multiply-adds) the residual `R = A - L L^T` evaluated
     ///    on the filled pattern in double-double arithmetic (error-free products and sums),
     ///    `||R||_2 <= ||R||_inf`, plus the evaluation error `2 gamma(k+2)^2 || |L||L|^T ||_inf`
     ///    (Ogita-Rump-Oishi, Dot2), inflated by 1%.
@@ -605,7 +614,10 @@ impl ShiftedCholesky {
     fn backward_error_bound(&self, values: &[f64], target: f64) -> (f64, f64) {
         let l = self.factor_norms(values);
         let higham = gamma(l.k + 1) * l.llt_norm;
-        if self.symbolic.len_val() > RESIDUAL_FACTOR_LIMIT || higham <= target {
+        if self.symbolic.len_val() > RESIDUAL_FACTOR_LIMIT
+            || self.multiply_adds() > RESIDUAL_MAX_MULTIPLY_ADDS
+            || higham <= target
+        {
             return (higham, l.min_pivot);
         }
         let (cols, rows) = self.factor_lists(values);

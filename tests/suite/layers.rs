@@ -15,6 +15,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("progress", 1),
     ("objective", 2),
     ("validate", 2),
+    ("deadline", 2),
     ("linalg", 3),
     ("single", 4),
     ("multiple", 4),

@@ -8,6 +8,7 @@
 
 pub mod planar;
 mod relaxed;
+mod rung;
 mod scalar;
 mod state;
 
@@ -79,7 +80,7 @@ pub fn certify_gravity(
         relaxed_method: None,
     };
     let rungs: Rungs<'_, GravityState<'_>> = vec![
-        Box::new(planar::PlanarRung::default()),
+        Box::new(rung::PlanarRung::default()),
         Box::new(relaxed::RelaxedRung::new(graph_certificate)),
     ];
     climb(&mut state, rungs)?;

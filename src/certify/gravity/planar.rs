@@ -7,14 +7,8 @@
 //! `x`, and `S >= 0` certifies it. `lambda_min(S)` is proven by a shifted sparse Cholesky of
 //! `S`'s real `2n x 2n` form (`[D5]`, `[D6]`).
 
-use super::scalar::verify_planar_scalar;
-use super::state::GravityState;
 use crate::certify::budget::{Budget, Deadline};
-use crate::certify::log::{Prediction, Refusal};
 use crate::certify::multiple::multipliers::data_defect;
-use crate::certify::proof::Proof;
-use crate::certify::rung::{Found, Plan, Rung};
-use crate::certify::settings::CertifyMode;
 use crate::error::Result;
 use crate::linalg::cholesky::gamma;
 use crate::linalg::{
@@ -266,98 +260,4 @@ fn smallest_eigenvalue(ch: &ShiftedCholesky, q_norm: f64) -> f64 {
         None,
     );
     e.value - e.residual
-}
-
-/// The planar dual certificate as a rung (full gravity only; modes `auto` and `dual`).
-#[derive(Default)]
-pub(crate) struct PlanarRung {
-    done: bool,
-}
-
-impl<'a> Rung<GravityState<'a>> for PlanarRung {
-    fn proof(&self) -> Proof {
-        Proof::GravityDual
-    }
-
-    fn plan(&mut self, cx: &GravityState<'a>) -> Result<Plan> {
-        if self.done {
-            return Ok(Plan::Done);
-        }
-        if !cx.problem.priors().is_full() {
-            let reason = "some images have no gravity prior (the mixed problem has no SO(2) form)";
-            return Ok(Plan::Refuse(
-                Refusal::NotApplicable {
-                    reason: reason.into(),
-                },
-                None,
-            ));
-        }
-        if !matches!(cx.settings.mode, CertifyMode::Auto | CertifyMode::Dual) {
-            let reason = format!(
-                "the gravity problem is certified by its SO(2) dual certificate (modes auto \
-                 and dual), not {}",
-                cx.settings.mode.name()
-            );
-            return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
-        }
-        // a sparse factorisation of 2n x 2n: about what the multiple problem's dual costs
-        let n = cx.problem.problem().num_rotations() as f64;
-        let m = cx.problem.problem().num_edges() as f64;
-        Ok(Plan::Run(Prediction::new(2e-7 * (n + m), 400.0 * (n + m))))
-    }
-
-    fn attempt(&mut self, cx: &mut GravityState<'a>) -> Result<Found> {
-        self.done = true;
-        let Some(form) = PlanarForm::new(cx.problem) else {
-            return Ok(Found::failed("some image has no gravity prior"));
-        };
-        let standard = cx.problem.to_standard(cx.rotations);
-        let x = PlanarForm::phases(cx.problem, &standard);
-        // on large graphs the scalar comparison [G9] first: one n x n factor
-        let graph_defect = data_defect(cx.problem.problem());
-        let gaps = (cx.allowed_gap, graph_defect);
-        let first = verify_planar_scalar(&form, &x, gaps, cx.settings, &cx.deadline)?;
-        let mut tried = String::new();
-        match first {
-            Some(Ok(b)) => {
-                let note = format!(
-                    "SO(2) multipliers at the estimate verified by the scalar comparison [G9], \
-                     lambda_min(S) >= {:.3e}",
-                    b.verified_min_eigenvalue
-                );
-                let mu = Some(b.verified_min_eigenvalue);
-                let lb = cx.offer(b.lower_bound, Proof::GravityDual, mu, &note);
-                if cx.certifies(lb) {
-                    return Ok(Found::proved(lb, true, note));
-                }
-                tried = format!("{note}, not enough; ");
-            }
-            Some(Err(why)) => tried = format!("scalar comparison [G9]: {why}; "),
-            None => {}
-        }
-        let found = verify_planar(
-            cx.problem,
-            &form,
-            &x,
-            cx.allowed_gap,
-            &cx.settings.budget,
-            &cx.deadline,
-        )?;
-        Ok(match found {
-            Ok(b) => {
-                let note = format!(
-                    "{tried}SO(2) multipliers at the estimate verified, lambda_min(S) >= {:.3e}",
-                    b.verified_min_eigenvalue
-                );
-                let lb = cx.offer(
-                    b.lower_bound,
-                    Proof::GravityDual,
-                    Some(b.verified_min_eigenvalue),
-                    &note,
-                );
-                Found::proved(lb, cx.certifies(lb), note)
-            }
-            Err(reason) => Found::failed(format!("{tried}{reason}")),
-        })
-    }
 }
