@@ -1024,3 +1024,62 @@ fn staircase_reaches_the_sdp_value_when_the_relaxation_is_not_tight() {
     );
     assert!(gap <= 1e-2, "{}", r.certificate);
 }
+
+/// Issue 35 (the 10^6-node lattice): once a check finds the given estimate not critical, the
+/// dearer checks of its own multipliers do not start (they cannot certify it: a shifted
+/// Cholesky and a scalar comparison spent 19 s there); its refinement is certified instead,
+/// and the refusals say why.
+#[test]
+fn checks_after_a_not_critical_finding_give_way_to_the_refinement() {
+    use rotavg::certify::{Outcome, Point, Proof, Refusal};
+    let (p, gt) = SyntheticGraph {
+        num_rotations: 400,
+        num_edges: 1200,
+        noise_sigma: 0.05,
+        seed: 4,
+        ..Default::default()
+    }
+    .generate();
+    let (best, fbest, _) = local_solve(&p, &gt, 20000, 1e-12);
+    // off the optimum by 1e-6 and 3e-6 rad per node: not a critical point to the tolerance
+    // (found by the grounded proof's estimate, then by its cheap test)
+    let mut rng = StdRng::seed_from_u64(4);
+    for amp in [1e-6, 3e-6] {
+        let est: Vec<Rotation> = best
+            .iter()
+            .map(|r| rotavg::so3::perturb_gaussian(r, amp, &mut rng))
+            .collect();
+        let c = rotavg::certify::certify_multiple(&p, &est, &CertifySettings::default()).unwrap();
+        // the certificate is the given estimate's (never changed); its refinement is certified
+        let better = c.improvement.as_ref().expect("the refinement is cheaper");
+        let lb = c.certificate.lower_bound.unwrap();
+        assert!(lb <= fbest && better.chordal_cost - lb <= 1e-6 * better.chordal_cost);
+        let given: Vec<_> = c
+            .details
+            .ladder
+            .iter()
+            .filter(|a| a.point == Point::Given && a.within == Some(Proof::DualCertificate))
+            .collect();
+        let found = given
+            .iter()
+            .position(|a| format!("{:?}", a.outcome).contains("not a critical point"))
+            .expect("a check finds the given estimate not critical");
+        let rest: Vec<_> = given[found + 1..]
+            .iter()
+            .filter(|a| matches!(a.rung, Proof::ShiftedCholesky | Proof::ScalarComparison))
+            .collect();
+        assert!(!rest.is_empty());
+        for a in rest {
+            assert!(
+                matches!(&a.outcome, Outcome::Refused(Refusal::NotApplicable { reason })
+                    if reason.contains("earlier check")),
+                "{:?}",
+                a.outcome
+            );
+        }
+        assert!(
+            !given.iter().any(|a| a.rung == Proof::Randomized),
+            "the randomized test gave way too"
+        );
+    }
+}

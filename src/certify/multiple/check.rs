@@ -43,6 +43,12 @@ pub(crate) struct Scope {
     pub within: Proof,
     /// The certification's clock.
     pub deadline: Deadline,
+    /// A finding that the point is not a critical point ends the checks of `lambda_min(S)` at
+    /// it (the dearer ones refuse, [`Check::cut_by_not_critical`]): the point's refinement and
+    /// its certificate follow, which is what can certify (the given estimate in the multiple
+    /// ladder, issue 35: a 10^6-node lattice spent 19 s on a shifted Cholesky and a scalar
+    /// comparison that could not certify it after the grounded proof found it not critical).
+    pub refinement_follows: bool,
 }
 
 /// What the checks of one verification share: the data, `S`, the gap the verdict allows, the
@@ -68,6 +74,8 @@ pub(crate) struct Check<'a> {
     pub point: Point,
     /// The proof whose multipliers are verified (the log's `within`).
     pub within: Proof,
+    /// [`Scope::refinement_follows`].
+    pub refinement_follows: bool,
     /// Estimates of `lambda_min(S)` made before the verification (the staircase's): the
     /// shifted Cholesky rung places its shift from them instead of estimating again. Estimates
     /// only: the shift they suggest is still proved by a factorisation.
@@ -158,6 +166,7 @@ impl<'a> Check<'a> {
             settings,
             point: scope.point,
             within: scope.within,
+            refinement_follows: scope.refinement_follows,
             hint: None,
             deadline: scope.deadline,
             scalar,
@@ -303,6 +312,18 @@ impl<'a> Check<'a> {
     /// tolerance: the shifted Cholesky rung does not search then).
     pub fn mark_not_critical(&self) {
         self.notes.borrow_mut().not_critical = true;
+    }
+
+    /// Why a check does not start: the point was found not critical and its refinement
+    /// follows ([`Scope::refinement_follows`]).
+    pub fn cut_by_not_critical(&self) -> Option<Refusal> {
+        (self.refinement_follows && self.notes.borrow().not_critical).then(|| {
+            Refusal::NotApplicable {
+                reason: "not a critical point (found by an earlier check): its refinement's \
+                         certificate follows"
+                    .into(),
+            }
+        })
     }
 
     /// The estimates the rungs left (taken).

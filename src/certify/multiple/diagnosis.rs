@@ -57,6 +57,11 @@ pub(crate) fn diagnose(
     if certificate.is_certified() {
         return DualDiagnosis::Certified;
     }
+    // found not critical (which may have cut the checks short, `Scope::refinement_follows`):
+    // the refinement is what can certify, whether or not a check fitted the budget
+    if bound.not_critical {
+        return DualDiagnosis::NotCritical { residual };
+    }
     if let Some(reason) = over_budget(bound) {
         return DualDiagnosis::OverBudget {
             reason,
@@ -65,10 +70,9 @@ pub(crate) fn diagnose(
         };
     }
     let gap = certificate.gap.unwrap_or(f64::INFINITY);
-    if bound.not_critical
-        || bound
-            .grounded
-            .is_some_and(|g| g.deficit >= 0.5 * gap && g.rho * g.rho / g.c >= g.h)
+    if bound
+        .grounded
+        .is_some_and(|g| g.deficit >= 0.5 * gap && g.rho * g.rho / g.c >= g.h)
     {
         return DualDiagnosis::NotCritical { residual };
     }

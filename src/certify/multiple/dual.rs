@@ -81,6 +81,7 @@ pub fn dual_certificate(
         point: Point::Given,
         within: Proof::DualCertificate,
         deadline: Deadline::start(&settings.budget),
+        refinement_follows: false,
     };
     let cost = problem.chordal_cost(rotations);
     dual_certificate_with(problem, rotations, cost, &first, settings, scope)
@@ -264,6 +265,7 @@ pub fn certify_with_multipliers(
         point: Point::Sdp,
         within: Proof::Sdp,
         deadline: Deadline::start(&settings.budget),
+        refinement_follows: false,
     };
     let bound = verify(
         problem,
@@ -410,6 +412,9 @@ fn certify_current(cx: &mut State<'_>, test_hopeless: bool) -> Result<Found> {
         point: label,
         within: Proof::DualCertificate,
         deadline: cx.deadline,
+        // the given estimate's refinement follows a finding that it is not critical (unless
+        // this is the full ladder run after a refinement that found nothing cheaper)
+        refinement_follows: label == Point::Given && test_hopeless,
     };
     let cost = cx.current.cost;
     let c = dual_certificate_with(cx.problem, &rotations, cost, &first, cx.settings, scope)?;
@@ -421,7 +426,8 @@ fn certify_current(cx: &mut State<'_>, test_hopeless: bool) -> Result<Found> {
 /// (unless no check fitted the budget), and its outcome for the log.
 fn record(cx: &mut State<'_>, c: DualCertificate, lambdas: Vec<Matrix3<f64>>) -> Found {
     let label = cx.current.label;
-    let over = matches!(c.diagnosis, DualDiagnosis::OverBudget { .. });
+    // no proof fitted (or ran): only Gershgorin's bound, not claimed
+    let over = over_budget(&c.bound).is_some();
     let note = format!(
         "dual certificate at {label}: {}{}",
         diagnosis_text(&c.diagnosis, cx.problem),
@@ -437,11 +443,9 @@ fn record(cx: &mut State<'_>, c: DualCertificate, lambdas: Vec<Matrix3<f64>>) ->
         diagnosis: c.diagnosis.clone(),
         randomized: c.bound.randomized,
     });
-    if let DualDiagnosis::OverBudget { reason, .. } = &c.diagnosis {
+    if let Some(reason) = over_budget(&c.bound) {
         // no proof fits: the Gershgorin bound is not offered (no lower bound is claimed)
-        let refusal = Refusal::OverBudget {
-            reason: reason.clone(),
-        };
+        let refusal = Refusal::OverBudget { reason };
         return Found::new(Outcome::Refused(refusal), note);
     }
     cx.stationarity_residual = Some(c.stationarity_residual);
@@ -477,21 +481,45 @@ fn refine_and_certify(cx: &mut State<'_>) -> Result<Found> {
         gradient_tolerance: MultipleSettings::default().gradient_tolerance * REFINE_FACTOR,
         ..Default::default()
     };
+    let given = (cx.current.rotations.clone(), cx.current.cost);
     let adopted = match solve_multiple(cx.problem, &local) {
         Ok(r) => cx.adopt(r, ImprovementSource::Refinement, Point::Refined),
         Err(_) => false,
     };
     cx.refine_seconds += t.elapsed().as_secs_f64();
+    // the given estimate's checks were cut short by the finding that it is not critical
+    let cut = matches!(cx.first, Some(DualDiagnosis::NotCritical { .. }));
     if adopted {
-        return Ok(certify_current(cx, true)?.at(Point::Refined));
+        let found = certify_current(cx, true)?.at(Point::Refined);
+        if cut && !cx.best_certifies() {
+            given_in_full(cx, given)?;
+        }
+        return Ok(found);
     }
-    if cx.last.is_none() {
+    if cx.last.is_none() || cut {
         // not a critical point, and the refinement found nothing cheaper: its own ladder
+        // (skipped, or cut short by that finding), in full
         return certify_current(cx, false);
     }
     Ok(Found::failed(
         "the refinement found no point of lower cost (the given estimate's certificate stands)",
     ))
+}
+
+/// The given estimate's checks in full, after its refinement's certificate did not certify
+/// (they were cut short when it was found not critical): their bound may still be the best.
+/// The refined point stays the current one.
+fn given_in_full(cx: &mut State<'_>, (rotations, cost): (Vec<Rotation>, f64)) -> Result<()> {
+    let given = super::state::Current {
+        rotations,
+        cost,
+        label: Point::Given,
+        solution: None,
+    };
+    let refined = std::mem::replace(&mut cx.current, given);
+    let found = certify_current(cx, false);
+    cx.current = refined;
+    found.map(|_| ())
 }
 
 /// When the dual certificate fails, the estimate is refined once with the local solver's

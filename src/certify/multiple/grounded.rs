@@ -656,6 +656,7 @@ mod tests {
                 point: Point::Given,
                 within: Proof::DualCertificate,
                 deadline: crate::certify::budget::Deadline::start(&settings.budget),
+                refinement_follows: false,
             };
             let mut cx = Check::new(&p, &l, Some(&y), 1.0, &settings, scope).unwrap();
             let mut proof = GroundedProof::default();

@@ -48,7 +48,11 @@ impl<'a> Rung<Check<'a>> for RandomizedCheck {
 
     fn plan(&mut self, cx: &Check<'a>) -> Result<Plan> {
         Ok(
-            if self.done || cx.best.is_some() || cx.rotations.is_none() {
+            if self.done
+                || cx.best.is_some()
+                || cx.rotations.is_none()
+                || cx.cut_by_not_critical().is_some()
+            {
                 Plan::Done
             } else if cx.unclaimed.is_none() {
                 // after Gershgorin's check, and only when it was left unclaimed

@@ -33,6 +33,9 @@ impl<'a> Rung<Check<'a>> for ShiftedProof {
         if self.done {
             return Ok(Plan::Done);
         }
+        if let Some(refusal) = cx.cut_by_not_critical() {
+            return Ok(Plan::Refuse(refusal, None));
+        }
         if let Some(p) = self.predicted {
             return Ok(Plan::Run(p));
         }

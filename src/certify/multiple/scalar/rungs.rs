@@ -63,6 +63,9 @@ impl<'a> Rung<Check<'a>> for ScalarFamily {
         if self.done {
             return Ok(Plan::Done);
         }
+        if let Some(refusal) = cx.cut_by_not_critical() {
+            return Ok(Plan::Refuse(refusal, None));
+        }
         if self.planned.is_none() {
             self.planned = Some(self.predict(cx)?);
         }
