@@ -93,6 +93,12 @@ pub struct DualSettings {
     /// `delta_0 = fraction * max(abs_tol, rel_tol |f|) / (3n)` (so that a verified
     /// `lambda_min >= -delta_0` costs at most this fraction of the tolerance). In `(0, 1)`.
     pub shift_budget_fraction: f64,
+    /// At an estimate found not critical whose refinement follows, a check of its own
+    /// multipliers predicted to take more than this many seconds, and more than a dual
+    /// certificate, gives way to the refinement (default 1 s; issue 35: the dearer checks
+    /// proved too little on a 10^6-node lattice, while on small graphs a shifted Cholesky
+    /// often certifies a point slightly off critical faster than the refinement would).
+    pub give_way_above_seconds: f64,
     /// Maximum number of numeric Cholesky factorisations tried (>= 1).
     pub max_factorizations: usize,
     /// Lanczos settings for the eigenvalue *estimates* (never used as bounds by themselves).
@@ -186,6 +192,7 @@ impl Default for DualSettings {
     fn default() -> Self {
         DualSettings {
             shift_budget_fraction: 0.1,
+            give_way_above_seconds: 1.0,
             max_factorizations: 24,
             max_factor_nonzeros: usize::MAX,
             lanczos: LanczosSettings::default(),
@@ -200,6 +207,15 @@ impl Default for DualSettings {
 impl DualSettings {
     /// Check every value; [`Error::InvalidSettings`] names the first bad one.
     pub fn validate(&self) -> Result<()> {
+        if !(self.give_way_above_seconds.is_finite() && self.give_way_above_seconds >= 0.0) {
+            return Err(Error::InvalidSettings {
+                name: "dual.give_way_above_seconds".into(),
+                reason: format!(
+                    "must be finite and >= 0, got {}",
+                    self.give_way_above_seconds
+                ),
+            });
+        }
         if !(self.shift_budget_fraction > 0.0 && self.shift_budget_fraction < 1.0) {
             return Err(Error::InvalidSettings {
                 name: "dual.shift_budget_fraction".into(),

@@ -43,12 +43,16 @@ pub(crate) struct Scope {
     pub within: Proof,
     /// The certification's clock.
     pub deadline: Deadline,
-    /// A finding that the point is not a critical point ends the checks of `lambda_min(S)` at
-    /// it (the dearer ones refuse, [`Check::cut_by_not_critical`]): the point's refinement and
-    /// its certificate follow, which is what can certify (the given estimate in the multiple
-    /// ladder, issue 35: a 10^6-node lattice spent 19 s on a shifted Cholesky and a scalar
-    /// comparison that could not certify it after the grounded proof found it not critical).
-    pub refinement_follows: bool,
+    /// The predicted seconds of a dual certificate at the point, when its refinement and the
+    /// refined point's certificate follow a finding that the point is not a critical point
+    /// (the given estimate in the multiple ladder). The checks of `lambda_min(S)` predicted to
+    /// cost more than that and more than `DualSettings::give_way_above_seconds` then refuse
+    /// ([`Check::cut_by_not_critical`]): the refinement is what certifies such a point (issue
+    /// 35: a 10^6-node lattice spent 15 s on a shifted Cholesky that proved too little there).
+    /// Cheaper checks still run: at a point only slightly off critical the shifted Cholesky
+    /// often certifies it (a perturbed sphere2500 optimum: 20 ms, against 50 ms for the
+    /// refinement).
+    pub refinement_follows: Option<f64>,
 }
 
 /// What the checks of one verification share: the data, `S`, the gap the verdict allows, the
@@ -75,7 +79,7 @@ pub(crate) struct Check<'a> {
     /// The proof whose multipliers are verified (the log's `within`).
     pub within: Proof,
     /// [`Scope::refinement_follows`].
-    pub refinement_follows: bool,
+    pub refinement_follows: Option<f64>,
     /// Estimates of `lambda_min(S)` made before the verification (the staircase's): the
     /// shifted Cholesky rung places its shift from them instead of estimating again. Estimates
     /// only: the shift they suggest is still proved by a factorisation.
@@ -124,6 +128,8 @@ pub(super) struct Notes {
     pub lanczos_iterations: usize,
     pub factorizations: usize,
     pub not_critical: bool,
+    /// A check gave way to the refinement ([`Check::cut_by_not_critical`]).
+    pub cut: bool,
     /// Why a rung proved nothing without trying (e.g. the estimate predicts a bound below 0).
     pub skipped: Option<String>,
 }
@@ -314,15 +320,19 @@ impl<'a> Check<'a> {
         self.notes.borrow_mut().not_critical = true;
     }
 
-    /// Why a check does not start: the point was found not critical and its refinement
-    /// follows ([`Scope::refinement_follows`]).
-    pub fn cut_by_not_critical(&self) -> Option<Refusal> {
-        (self.refinement_follows && self.notes.borrow().not_critical).then(|| {
-            Refusal::NotApplicable {
-                reason: "not a critical point (found by an earlier check): its refinement's \
-                         certificate follows"
-                    .into(),
-            }
+    /// Why a check predicted to take `seconds` does not start: the point was found not
+    /// critical and its refinement, predicted cheaper, follows ([`Scope::refinement_follows`]).
+    pub fn cut_by_not_critical(&self, seconds: f64) -> Option<Refusal> {
+        let refinement = self.refinement_follows?;
+        let floor = self.settings.dual.give_way_above_seconds.max(refinement);
+        let mut notes = self.notes.borrow_mut();
+        let cut = notes.not_critical && seconds > floor;
+        notes.cut |= cut;
+        cut.then(|| Refusal::NotApplicable {
+            reason: format!(
+                "not a critical point (found by an earlier check): its refinement comes \
+                     first (this check predicted at {seconds:.2e} s, above {floor:.2e} s)"
+            ),
         })
     }
 

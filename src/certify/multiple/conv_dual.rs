@@ -1034,7 +1034,7 @@ pub(crate) fn conv_dual_within(
         point,
         within: Proof::ConvDual,
         deadline: clock,
-        refinement_follows: false,
+        refinement_follows: None,
     };
     let bound = super::verify::verify(
         &sur.problem,

@@ -81,7 +81,7 @@ pub fn dual_certificate(
         point: Point::Given,
         within: Proof::DualCertificate,
         deadline: Deadline::start(&settings.budget),
-        refinement_follows: false,
+        refinement_follows: None,
     };
     let cost = problem.chordal_cost(rotations);
     dual_certificate_with(problem, rotations, cost, &first, settings, scope)
@@ -265,7 +265,7 @@ pub fn certify_with_multipliers(
         point: Point::Sdp,
         within: Proof::Sdp,
         deadline: Deadline::start(&settings.budget),
-        refinement_follows: false,
+        refinement_follows: None,
     };
     let bound = verify(
         problem,
@@ -319,6 +319,13 @@ pub fn certify_with_multipliers(
 /// factorisation; a check's own factorisation is predicted inside the verification).
 pub const DUAL_SECONDS_PER_EDGE: f64 = 1e-5;
 
+/// The predicted seconds of a dual certificate at one point ([`DUAL_SECONDS_PER_EDGE`];
+/// anisotropic blocks cost about three times the scalar path, issue 35).
+fn dual_seconds(problem: &MultipleProblem) -> f64 {
+    let per_edge = if problem.is_anisotropic() { 3.0 } else { 1.0 } * DUAL_SECONDS_PER_EDGE;
+    per_edge * problem.num_edges() as f64
+}
+
 /// The dual certificate as the rung of a certification `[D3]`-`[D9]`, at every point once: the
 /// given estimate (unless a cheap test shows its own multipliers cannot certify it, `[D15]`),
 /// its refinement by the local solver (when the given estimate's certificate did not settle
@@ -334,13 +341,7 @@ impl<'a> Rung<State<'a>> for DualRung {
 
     fn plan(&mut self, cx: &State<'a>) -> Result<Plan> {
         let label = cx.current.label;
-        // anisotropic blocks cost about three times the scalar path (issue 35)
-        let per_edge = if cx.problem.is_anisotropic() {
-            3.0
-        } else {
-            1.0
-        } * DUAL_SECONDS_PER_EDGE;
-        let seconds = per_edge * cx.problem.num_edges() as f64;
+        let seconds = dual_seconds(cx.problem);
         // on data where the O(3) relaxation can prefer reflections it rarely proves [A5]
         let success = if cx.reflective { 0.2 } else { 1.0 };
         if !cx.dual_at.contains(&label) {
@@ -414,7 +415,8 @@ fn certify_current(cx: &mut State<'_>, test_hopeless: bool) -> Result<Found> {
         deadline: cx.deadline,
         // the given estimate's refinement follows a finding that it is not critical (unless
         // this is the full ladder run after a refinement that found nothing cheaper)
-        refinement_follows: label == Point::Given && test_hopeless,
+        refinement_follows: (label == Point::Given && test_hopeless)
+            .then(|| dual_seconds(cx.problem)),
     };
     let cost = cx.current.cost;
     let c = dual_certificate_with(cx.problem, &rotations, cost, &first, cx.settings, scope)?;

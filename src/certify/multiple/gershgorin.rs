@@ -5,7 +5,7 @@
 
 use super::check::Check;
 use super::verified::VerifiedBound;
-use crate::certify::log::{Outcome, Prediction, Refusal};
+use crate::certify::log::{Outcome, Prediction};
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Plan, Rung};
 use crate::error::Result;
@@ -30,12 +30,12 @@ impl GershgorinCheck {
     pub(super) fn unclaimed(cx: &Check<'_>) -> VerifiedBound {
         let mut b = Self::bound(cx);
         b.factorization_skipped = true;
-        b.budget_exceeded = Some(match cx.cut_by_not_critical() {
-            // the checks gave way to the refinement's certificate
-            Some(Refusal::NotApplicable { reason }) => reason,
-            _ => cx
-                .budget_limited()
-                .unwrap_or_else(|| "no proof fits the budget".into()),
+        let cut = cx.notes().cut;
+        b.budget_exceeded = Some(if cut {
+            "not a critical point: the checks gave way to its refinement".into()
+        } else {
+            cx.budget_limited()
+                .unwrap_or_else(|| "no proof fits the budget".into())
         });
         b
     }

@@ -656,7 +656,7 @@ mod tests {
                 point: Point::Given,
                 within: Proof::DualCertificate,
                 deadline: crate::certify::budget::Deadline::start(&settings.budget),
-                refinement_follows: false,
+                refinement_follows: None,
             };
             let mut cx = Check::new(&p, &l, Some(&y), 1.0, &settings, scope).unwrap();
             let mut proof = GroundedProof::default();

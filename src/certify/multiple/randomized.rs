@@ -41,6 +41,9 @@ pub(super) struct RandomizedCheck {
 /// Floating-point operations of the complement estimate (its Lanczos run is kept near this).
 const COMPLEMENT_FLOPS: f64 = 1e9;
 
+/// The randomized test's predicted seconds.
+const RANDOMIZED_SECONDS: f64 = COMPLEMENT_FLOPS / PREDICTED_FLOP_RATE;
+
 impl<'a> Rung<Check<'a>> for RandomizedCheck {
     fn proof(&self) -> Proof {
         Proof::Randomized
@@ -51,14 +54,14 @@ impl<'a> Rung<Check<'a>> for RandomizedCheck {
             if self.done
                 || cx.best.is_some()
                 || cx.rotations.is_none()
-                || cx.cut_by_not_critical().is_some()
+                || cx.cut_by_not_critical(RANDOMIZED_SECONDS).is_some()
             {
                 Plan::Done
             } else if cx.unclaimed.is_none() {
                 // after Gershgorin's check, and only when it was left unclaimed
                 Plan::Wait
             } else {
-                Plan::Fallback(Prediction::new(COMPLEMENT_FLOPS / PREDICTED_FLOP_RATE, 0.0))
+                Plan::Fallback(Prediction::new(RANDOMIZED_SECONDS, 0.0))
             },
         )
     }

@@ -92,7 +92,7 @@ impl<'a> Rung<State<'a>> for ScalarWeightsRung {
             point: label,
             within: Proof::ScalarWeights,
             deadline: cx.deadline,
-            refinement_follows: false,
+            refinement_follows: None,
         };
         let cost = c.scalar.chordal_cost(&rotations);
         let d = dual_certificate_with(&c.scalar, &rotations, cost, &first, cx.settings, scope)?;

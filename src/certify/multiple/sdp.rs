@@ -139,7 +139,7 @@ fn verify_sdp(cx: &mut State<'_>, sdp: &MultipleRelaxation) -> Result<Option<Ver
         point: Point::Sdp,
         within: Proof::Sdp,
         deadline: cx.deadline,
-        refinement_follows: false,
+        refinement_follows: None,
     };
     let b = multipliers_bound(cx.problem, &sdp.multipliers, cx.settings, scope, None)?;
     cx.log.extend(b.ladder.iter().cloned());

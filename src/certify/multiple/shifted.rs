@@ -33,10 +33,10 @@ impl<'a> Rung<Check<'a>> for ShiftedProof {
         if self.done {
             return Ok(Plan::Done);
         }
-        if let Some(refusal) = cx.cut_by_not_critical() {
-            return Ok(Plan::Refuse(refusal, None));
-        }
         if let Some(p) = self.predicted {
+            if let Some(refusal) = cx.cut_by_not_critical(p.seconds) {
+                return Ok(Plan::Refuse(refusal, Some(p)));
+            }
             return Ok(Plan::Run(p));
         }
         let predicted = match cx.three_n_predicted(cx.s.nrows(), 3.0) {
@@ -51,7 +51,10 @@ impl<'a> Rung<Check<'a>> for ShiftedProof {
         };
         self.predicted = predicted.as_ref().ok().copied();
         Ok(match predicted {
-            Ok(p) => Plan::Run(p),
+            Ok(p) => match cx.cut_by_not_critical(p.seconds) {
+                Some(refusal) => Plan::Refuse(refusal, Some(p)),
+                None => Plan::Run(p),
+            },
             Err(refusal) => Plan::Refuse(refusal, None),
         })
     }

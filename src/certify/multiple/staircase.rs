@@ -276,7 +276,7 @@ impl<'a> Staircase<'a> {
             point: Point::Staircase,
             within: Proof::Staircase,
             deadline,
-            refinement_follows: false,
+            refinement_follows: None,
         };
         let settings = &certify.staircase;
         let strict = TrustRegionSettings {

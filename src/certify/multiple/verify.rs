@@ -56,7 +56,7 @@ pub fn lower_bound_from_multipliers(
         point: Point::Sdp,
         within: Proof::Sdp,
         deadline: Deadline::start(&settings.budget),
-        refinement_follows: false,
+        refinement_follows: None,
     };
     multipliers_bound(problem, lambdas, settings, scope, None)
 }

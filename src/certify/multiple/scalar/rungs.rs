@@ -63,14 +63,14 @@ impl<'a> Rung<Check<'a>> for ScalarFamily {
         if self.done {
             return Ok(Plan::Done);
         }
-        if let Some(refusal) = cx.cut_by_not_critical() {
-            return Ok(Plan::Refuse(refusal, None));
-        }
         if self.planned.is_none() {
             self.planned = Some(self.predict(cx)?);
         }
         Ok(match self.planned.clone() {
-            Some(Ok(p)) => Plan::Run(p),
+            Some(Ok(p)) => match cx.cut_by_not_critical(p.seconds) {
+                Some(refusal) => Plan::Refuse(refusal, Some(p)),
+                None => Plan::Run(p),
+            },
             Some(Err(refusal)) => Plan::Refuse(refusal, None),
             None => Plan::Done,
         })
