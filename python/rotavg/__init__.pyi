@@ -254,6 +254,7 @@ def average_single(
     p: int = 2,
     *,
     rotation_tolerance: float = 1e-5,
+    max_seconds: Optional[float] = 600.0,
 ) -> Result:
     """L^p mean of rotations under the chordal, quaternion or geodesic metric, certified."""
 

@@ -37,7 +37,7 @@ use rotavg::multiple::anisotropic::Information;
 use rotavg::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_conjugate, average_multiple, average_single};
 use rotavg::report::{CertifyReport, ConjugateReport, MultipleReport, SingleReport};
-use rotavg::single::SingleProblem;
+use rotavg::single::{SingleProblem, SingleSettings};
 use rotavg::{Loss, Metric, Objective, Rotation};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use types::{Certificate, Graph, Report, RunResult, SolverReport};
@@ -358,6 +358,9 @@ fn optional_matrices(obj: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Opt
 ///     rotation_tolerance: the tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` of every
 ///         sample (default 1e-5); the samples are used as given, and the certificate subtracts
 ///         their defect.
+///     max_seconds: the run's time budget, seconds (default 600; ``None``: no limit), one
+///         clock for the iterative mean (which stops at it: termination ``"time_limit"``, its
+///         last iterate) and the certificate, as ``rotavg single --max-seconds``.
 ///
 /// Returns:
 ///     Result: ``estimate`` is the ``(3, 3)`` mean; ``to_dict()`` equals
@@ -367,7 +370,7 @@ fn optional_matrices(obj: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Opt
 ///     rotavg.Error: bad shapes, NaN, a matrix that is not a rotation (``rotation_tolerance``),
 ///         a weight that is not positive, an unknown metric or p.
 #[pyfunction]
-#[pyo3(name = "average_single", signature = (rotations, weights=None, metric="chordal", p=2, *, rotation_tolerance=1e-5))]
+#[pyo3(name = "average_single", signature = (rotations, weights=None, metric="chordal", p=2, *, rotation_tolerance=1e-5, max_seconds=600.0))]
 fn average_single_py(
     py: Python<'_>,
     rotations: &Bound<'_, PyAny>,
@@ -375,7 +378,9 @@ fn average_single_py(
     metric: &str,
     p: i64,
     rotation_tolerance: f64,
+    max_seconds: Option<f64>,
 ) -> PyResult<RunResult> {
+    let certify = certify_settings(CertifyMode::Auto, None, max_seconds, true, None)?;
     let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
     let rotations = matrices(rotations, "rotations")?.within(tolerance);
     let weights = optional_vector(weights, rotations.len())?;
@@ -388,7 +393,14 @@ fn average_single_py(
     let report = detached(py, move || {
         let problem = SingleProblem::new_within(rotations.rotations()?, weights, tolerance)?
             .with_objective(Objective::new(metric, loss))?;
-        let result = average_single(&problem, &AverageSettings::default())?;
+        let settings = AverageSettings {
+            solve: SingleSettings {
+                max_seconds,
+                ..Default::default()
+            },
+            certify,
+        };
+        let result = average_single(&problem, &settings)?;
         Ok(SingleReport::new(result))
     })?;
     RunResult::new(py, Report::Single(report))

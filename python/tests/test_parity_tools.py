@@ -177,3 +177,22 @@ def test_write_output_writes_what_output_writes(rng, tmp_path, cli):
     _, i, j, rel = synthetic_graph(rng, 10, 30, 0.01)
     with pytest.raises(rotavg.Error, match="write_estimate"):
         rotavg.write_output(rotavg.average_multiple(10, i, j, rel), tmp_path / "x.json")
+
+
+def test_average_single_stops_at_max_seconds() -> None:
+    """``max_seconds=1e-6`` stops the iterative mean before its first iteration (``time_limit``),
+    at a rotation; the default runs it to convergence."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(3)
+    axes = rng.normal(size=(2000, 3))
+    angles = np.where(np.arange(2000) % 5 == 0, 1.5, 0.1)[:, None]
+    vecs = axes / np.linalg.norm(axes, axis=1, keepdims=True) * angles
+    samples = Rotation.from_rotvec(vecs).as_matrix()
+    full = rotavg.average_single(samples, metric="geodesic", p=1).to_dict()
+    assert full["solver"]["termination"]["status"] == "converged"
+    cut = rotavg.average_single(samples, metric="geodesic", p=1, max_seconds=1e-6)
+    d = cut.to_dict()
+    assert d["solver"]["termination"]["status"] == "time_limit", d["solver"]
+    r = cut.estimate
+    assert np.allclose(r.T @ r, np.eye(3), atol=1e-12) and np.linalg.det(r) > 0
