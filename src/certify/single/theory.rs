@@ -20,6 +20,7 @@ use crate::certify::one_rotation::{Bound, RotationState};
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Plan, Rung};
 use crate::certify::settings::CertifyMode;
+use crate::deadline::Deadline;
 use crate::error::Result;
 use crate::linalg::compensated::Accumulator;
 use crate::objective::{Loss, Objective};
@@ -51,7 +52,12 @@ const EXACT_SAMPLE_DEFECT: f64 = 1e-13;
 /// The theorems `[S1]`-`[S7]` for the estimate (no bound for the other costs). The chordal L2
 /// closed form `[S1]` holds for any matrices; the others are applied to the samples' nearest
 /// rotations where a sample is not a rotation to rounding, minus the data margin `[B6]`.
-fn theory_bound(problem: &SingleProblem, estimate: &Rotation, cost: f64) -> (Option<f64>, String) {
+fn theory_bound(
+    problem: &SingleProblem,
+    estimate: &Rotation,
+    cost: f64,
+    deadline: Option<Deadline>,
+) -> (Option<f64>, String) {
     let objective = problem.objective();
     if objective != Objective::new(Metric::Chordal, Loss::L2)
         && problem
@@ -75,7 +81,7 @@ fn theory_bound(problem: &SingleProblem, estimate: &Rotation, cost: f64) -> (Opt
                 "the samples' nearest rotations do not form a problem".into(),
             );
         };
-        let (lb, text) = theory_bound_exact(&exact, estimate, exact.cost(estimate));
+        let (lb, text) = theory_bound_exact(&exact, estimate, exact.cost(estimate), deadline);
         let lb = lb.map(|l| l - slack).filter(|l| l.is_finite());
         return (
             lb,
@@ -85,7 +91,7 @@ fn theory_bound(problem: &SingleProblem, estimate: &Rotation, cost: f64) -> (Opt
             ),
         );
     }
-    theory_bound_exact(problem, estimate, cost)
+    theory_bound_exact(problem, estimate, cost, deadline)
 }
 
 /// [`theory_bound`] for samples that are rotations to rounding (and chordal L2 for any).
@@ -93,6 +99,7 @@ fn theory_bound_exact(
     problem: &SingleProblem,
     estimate: &Rotation,
     cost: f64,
+    deadline: Option<Deadline>,
 ) -> (Option<f64>, String) {
     let objective = problem.objective();
     match (objective.metric, objective.loss) {
@@ -100,7 +107,7 @@ fn theory_bound_exact(
         (Metric::Quaternion, Loss::L2) => quaternion_l2_bound(problem, estimate, cost),
         (Metric::Geodesic, Loss::L2) => geodesic_ball_bound(problem, estimate, Norm::L2),
         (Metric::Geodesic, Loss::L1) => geodesic_ball_bound(problem, estimate, Norm::L1),
-        (Metric::Chordal, Loss::L1) => chordal_l1_bound(problem),
+        (Metric::Chordal, Loss::L1) => chordal_l1_bound(problem, deadline),
         _ => (None, format!("no theorem bounds the {objective} cost")),
     }
 }
@@ -285,15 +292,17 @@ fn enclosing_centre(problem: &SingleProblem, start: &Rotation) -> Rotation {
     best
 }
 
-/// `[S7]`: `f(R) >= f_E(M) - |g| (sqrt 3 + |M|_F)` for every rotation `R`.
-fn chordal_l1_bound(problem: &SingleProblem) -> (Option<f64>, String) {
+/// `[S7]`: `f(R) >= f_E(M) - |g| (sqrt 3 + |M|_F)` for every rotation `R`, at the
+/// Euclidean median's best iterate `M` within `deadline` (any `M` gives a bound: one cut
+/// short by the time limit gives a weaker one).
+fn chordal_l1_bound(problem: &SingleProblem, deadline: Option<Deadline>) -> (Option<f64>, String) {
     let settings = SingleSettings::default();
     let total = problem.total_weight();
     let med = euclidean_median(
         problem,
         settings.max_iterations.max(100),
         settings.gradient_tolerance,
-        None,
+        deadline,
     );
     let g = med.gradient_norm + 16.0 * f64::EPSILON * total;
     let radius = 3f64.sqrt() + med.point.norm();
@@ -344,7 +353,9 @@ impl<'a> Rung<RotationState<'a, SingleSolution>> for TheoryRung<'_> {
 
     fn attempt(&mut self, cx: &mut RotationState<'a, SingleSolution>) -> Result<Found> {
         self.done = true;
-        let (lb, explanation) = theory_bound(self.problem, &cx.estimate, cx.cost);
+        // the certificate's time left, for the iterative bound [S7]
+        let deadline = Deadline::after(cx.deadline.left());
+        let (lb, explanation) = theory_bound(self.problem, &cx.estimate, cx.cost, deadline);
         Ok(match lb {
             Some(lb) => {
                 let lb = cx.offer(Bound {
