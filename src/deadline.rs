@@ -1,4 +1,6 @@
-//! The local solvers' time limit (the command line's `--max-seconds`, the `max_seconds` field
+//! The crate's one clock, [`Deadline`]: a certification's (`crate::certify::Deadline`, with
+//! the budget's constructor) and the local solvers' time limit (the command line's
+//! `--max-seconds`, the `max_seconds` field
 //! of [`crate::multiple::MultipleSettings`], [`crate::single::SingleSettings`],
 //! [`crate::conjugate::ConjugateSettings`] and
 //! [`crate::pipeline::simultaneous::SimultaneousSettings`]): one shape for every iteration
@@ -10,24 +12,60 @@
 use crate::termination::Termination;
 use std::time::{Duration, Instant};
 
-/// When a loop's time limit ends, and how many seconds it was given.
+/// A clock: when it started and its time limit in seconds from then (`None`: never). The one
+/// clock of a local solve, and of a certification ([`crate::certify::Deadline`] is this type,
+/// with the budget's constructor and checks).
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Deadline {
-    seconds: f64,
-    at: Instant,
+pub struct Deadline {
+    start: Instant,
+    limit: Option<f64>,
 }
 
 impl Deadline {
-    /// `seconds` from now; `None` without a limit (or one too far to represent: no limit).
-    pub(crate) fn after(seconds: Option<f64>) -> Option<Deadline> {
-        let seconds = seconds?;
-        let at = Instant::now().checked_add(Duration::try_from_secs_f64(seconds).ok()?)?;
-        Some(Deadline { seconds, at })
+    /// A clock started at `start` with the time limit `limit` seconds.
+    pub fn started_at(start: Instant, limit: Option<f64>) -> Self {
+        Deadline { start, limit }
     }
 
-    /// Whether the limit has passed.
-    pub(crate) fn passed(&self) -> bool {
-        Instant::now() >= self.at
+    /// A loop's clock: `seconds` from now; `None` without a limit.
+    pub(crate) fn after(seconds: Option<f64>) -> Option<Deadline> {
+        seconds.map(|s| Deadline::started_at(Instant::now(), Some(s)))
+    }
+
+    /// Seconds since the start.
+    pub fn elapsed(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    /// The time limit, seconds from the start.
+    pub fn limit(&self) -> Option<f64> {
+        self.limit
+    }
+
+    /// Seconds left (`None`: no limit; negative once passed).
+    pub fn left(&self) -> Option<f64> {
+        self.limit.map(|l| l - self.elapsed())
+    }
+
+    /// The limit is passed.
+    pub fn passed(&self) -> bool {
+        self.left().is_some_and(|l| l <= 0.0)
+    }
+
+    /// A clock that ends when `fraction` of the time now left is spent (the share of a step
+    /// inside a rung); the same clock without a limit.
+    pub fn share(&self, fraction: f64) -> Deadline {
+        match self.left() {
+            Some(left) => Deadline::started_at(Instant::now(), Some(left.max(0.0) * fraction)),
+            None => *self,
+        }
+    }
+
+    /// The instant the limit is reached, if any (`None` also for a limit too far to
+    /// represent, e.g. `--max-seconds 1e300`: no limit in practice).
+    pub fn instant(&self) -> Option<Instant> {
+        let limit = Duration::try_from_secs_f64(self.limit?.max(0.0)).ok()?;
+        self.start.checked_add(limit)
     }
 }
 
@@ -55,7 +93,7 @@ pub(crate) fn limit_reached(
     }
     let deadline = deadline?;
     deadline.passed().then_some(Termination::TimeLimit {
-        seconds: deadline.seconds,
+        seconds: deadline.limit().unwrap_or(f64::INFINITY),
         value,
         threshold,
     })
@@ -94,6 +132,8 @@ mod tests {
             Some(Termination::IterationLimit { iterations: 10, .. })
         ));
         assert_eq!(remaining(Some(0.0), Instant::now()), Some(0.0));
+        let far = Deadline::started_at(Instant::now(), Some(1e300));
+        assert!(far.instant().is_none() && !far.passed());
         assert!(validate_max_seconds(Some(f64::NAN)).is_err());
         assert!(validate_max_seconds(Some(-1.0)).is_err());
         assert!(validate_max_seconds(None).is_ok() && validate_max_seconds(Some(0.0)).is_ok());

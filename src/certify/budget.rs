@@ -363,69 +363,19 @@ pub(crate) fn human_bytes(bytes: f64) -> String {
     }
 }
 
-/// The one clock of a certification: started once, when the certification starts, and read by
-/// every rung and every check inside one (so a verification after an SDP solve gets what is
-/// left, never a fresh budget). `limit` is [`Budget::max_seconds`].
-#[derive(Debug, Clone, Copy)]
-pub struct Deadline {
-    start: std::time::Instant,
-    limit: Option<f64>,
-}
+// The one clock of a certification is the crate's one clock ([`crate::deadline`]): started
+// once, when the certification starts, and read by every rung and every check inside one (so a
+// verification after an SDP solve gets what is left, never a fresh budget).
+pub use crate::deadline::Deadline;
 
 impl Deadline {
     /// A clock started now, ending `budget.max_seconds` from now (never, without a limit).
     pub fn start(budget: &Budget) -> Self {
-        Deadline {
-            start: std::time::Instant::now(),
-            limit: budget.max_seconds,
-        }
-    }
-
-    /// A clock started at `start` with the time limit `limit` seconds.
-    pub fn started_at(start: std::time::Instant, limit: Option<f64>) -> Self {
-        Deadline { start, limit }
-    }
-
-    /// Seconds since the start.
-    pub fn elapsed(&self) -> f64 {
-        self.start.elapsed().as_secs_f64()
-    }
-
-    /// The time limit, seconds from the start.
-    pub fn limit(&self) -> Option<f64> {
-        self.limit
-    }
-
-    /// Seconds left (`None`: no limit; negative once passed).
-    pub fn left(&self) -> Option<f64> {
-        self.limit.map(|l| l - self.elapsed())
-    }
-
-    /// The limit is passed.
-    pub fn passed(&self) -> bool {
-        self.left().is_some_and(|l| l <= 0.0)
+        Deadline::started_at(std::time::Instant::now(), budget.max_seconds)
     }
 
     /// `Err(reason)` when `predicted` does not fit the memory budget or the time left.
     pub fn fits(&self, budget: &Budget, predicted: &Prediction) -> std::result::Result<(), String> {
         budget.prediction_fits(predicted, self.elapsed())
-    }
-
-    /// A clock that ends when `fraction` of the time now left is spent (the share of a step
-    /// inside a rung); the same clock without a limit.
-    pub fn share(&self, fraction: f64) -> Deadline {
-        match self.left() {
-            Some(left) => Deadline {
-                start: std::time::Instant::now(),
-                limit: Some(left.max(0.0) * fraction),
-            },
-            None => *self,
-        }
-    }
-
-    /// The instant the limit is reached, if any.
-    pub fn instant(&self) -> Option<std::time::Instant> {
-        self.limit
-            .map(|l| self.start + std::time::Duration::from_secs_f64(l.max(0.0)))
     }
 }

@@ -54,12 +54,12 @@ impl<'a> Rung<GravityState<'a>> for RelaxedRung {
     fn attempt(&mut self, cx: &mut GravityState<'a>) -> Result<Found> {
         self.done = true;
         let graph = cx.problem.problem();
-        let mut free = solve_chordal(
-            graph,
-            cx.rotations.to_vec(),
-            &MultipleSettings::default(),
-            None,
-        )?;
+        // within the certification's time left (one clock)
+        let local = MultipleSettings {
+            max_seconds: cx.deadline.left().map(|l| l.max(0.0)),
+            ..Default::default()
+        };
+        let mut free = solve_chordal(graph, cx.rotations.to_vec(), &local, None)?;
         fix_gauge(&mut free.rotations);
         let mut settings = cx.settings.clone();
         settings.budget.max_seconds = cx.deadline.left().map(|l| l.max(0.0));

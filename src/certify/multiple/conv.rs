@@ -258,7 +258,7 @@ impl<'a> Rung<State<'a>> for ConvSdpRung {
         // the rounding, polished while time is left, is the answer when it beats the estimate
         // (the bound holds without it)
         if !cx.deadline.passed()
-            && let Some(p) = super::staircase::polish(cx.problem, &relaxation.rounded)
+            && let Some(p) = super::staircase::polish(cx.problem, &relaxation.rounded, &cx.deadline)
             && p.chordal_cost < cx.current.cost
         {
             cx.adopt(p, ImprovementSource::ConvSdpRounding, Point::ConvSdp);

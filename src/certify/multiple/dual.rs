@@ -481,6 +481,8 @@ fn refine_and_certify(cx: &mut State<'_>) -> Result<Found> {
     let local = MultipleSettings {
         init: Initialisation::Given(cx.current.rotations.clone()),
         gradient_tolerance: MultipleSettings::default().gradient_tolerance * REFINE_FACTOR,
+        // within the certification's time left (one clock)
+        max_seconds: cx.deadline.left().map(|l| l.max(0.0)),
         ..Default::default()
     };
     let given = (cx.current.rotations.clone(), cx.current.cost);

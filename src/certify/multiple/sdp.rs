@@ -93,7 +93,7 @@ impl<'a> Rung<State<'a>> for SdpRung {
         let bound = verify_sdp(cx, &sdp)?;
         // the polish only while time is left (the bound holds without it)
         let polished = (!cx.deadline.passed())
-            .then(|| polish(cx.problem, &sdp.rounded))
+            .then(|| polish(cx.problem, &sdp.rounded, &cx.deadline))
             .flatten();
         cx.sdp = Some(summary(&sdp, polished.as_ref()));
         let note = sdp_note(

@@ -853,7 +853,7 @@ impl<'a> Rung<State<'a>> for StaircaseRung {
             shift: r.bound.shift,
             lambdas: None,
         });
-        let polished = polish(cx.problem, &r.rounded);
+        let polished = polish(cx.problem, &r.rounded, &cx.deadline);
         let note = staircase_note(&r, polished.as_ref().map(|p| p.chordal_cost));
         let sufficient = cx.certifies(lower_bound);
         // its rounding, polished, becomes the current point when cheaper (then certified by
@@ -868,10 +868,16 @@ impl<'a> Rung<State<'a>> for StaircaseRung {
     }
 }
 
-/// `rounded` polished by the local solver (chordal), when it is a whole estimate.
-pub(crate) fn polish(problem: &MultipleProblem, rounded: &[Rotation]) -> Option<MultipleSolution> {
+/// `rounded` polished by the local solver (chordal), when it is a whole estimate, within the
+/// certification's time left (`deadline`).
+pub(crate) fn polish(
+    problem: &MultipleProblem,
+    rounded: &[Rotation],
+    deadline: &Deadline,
+) -> Option<MultipleSolution> {
     let local = MultipleSettings {
         init: Initialisation::Given(rounded.to_vec()),
+        max_seconds: deadline.left().map(|l| l.max(0.0)),
         ..Default::default()
     };
     (rounded.len() == problem.num_rotations())
