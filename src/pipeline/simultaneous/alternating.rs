@@ -126,6 +126,11 @@ pub(crate) fn solve_within(
         let next = p.cost(&rs, &s);
         decrease = (cost - next) / cost.abs().max(f64::MIN_POSITIVE);
         cost = next;
+        crate::progress::phase(crate::progress::Phase::Solve, || {
+            format!(
+                "rig alternation pass {passes}: J = {cost:.6e}, relative decrease {decrease:.1e}"
+            )
+        });
         // a pass the time limit cut short is no evidence of convergence
         if decrease < ALTERNATING_DECREASE_TOLERANCE && !deadline.is_some_and(|d| d.passed()) {
             break Termination::Converged {
