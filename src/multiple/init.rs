@@ -3,6 +3,7 @@
 //! eigenvectors of the connection Laplacian by sparse block inverse iteration, rounded to
 //! SO(3)).
 
+use crate::deadline::Deadline;
 use crate::error::{Error, Result};
 use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::linear_solver::{Factor, LinearSolver, SolverKind};
@@ -180,6 +181,17 @@ pub(crate) fn spectral_with(
     problem: &MultipleProblem,
     kind: Option<SolverKind>,
 ) -> Result<Vec<Rotation>> {
+    spectral_within(problem, kind, None)
+}
+
+/// [`spectral_with`] that stops its inverse iteration at `deadline` (checked before each
+/// iteration; the one factorisation and the inner solve under way are not interrupted): the
+/// iterate so far is rounded, the spanning tree when no iteration ran.
+pub(crate) fn spectral_within(
+    problem: &MultipleProblem,
+    kind: Option<SolverKind>,
+    deadline: Option<Deadline>,
+) -> Result<Vec<Rotation>> {
     let n = problem.num_rotations();
     let tree = spanning_tree(problem);
     if n < 2 {
@@ -199,7 +211,10 @@ pub(crate) fn spectral_with(
         k => LinearSolver::new(&q.pattern, k == SolverKind::Direct)?,
     };
     let llt = q.shifted_factor(&solver)?;
-    let y = q.bottom_subspace(&llt, &tree)?;
+    if deadline.is_some_and(|d| d.passed()) {
+        return Ok(tree);
+    }
+    let y = q.bottom_subspace(&llt, &tree, deadline)?;
     Ok(round_blocks(&y, &tree))
 }
 
@@ -265,10 +280,18 @@ impl ConnectionLaplacian {
     /// basis (3n x 3) of the bottom-3 invariant subspace of `Q`, to the residual
     /// `||Q Y - Y (Y^T Q Y)||_F <= SPECTRAL_TOLERANCE x mean degree` or after
     /// [`SPECTRAL_MAX_ITERATIONS`] `[M5]`.
-    fn bottom_subspace(&self, llt: &Factor<'_>, start: &[Rotation]) -> Result<Mat<f64>> {
+    fn bottom_subspace(
+        &self,
+        llt: &Factor<'_>,
+        start: &[Rotation],
+        deadline: Option<Deadline>,
+    ) -> Result<Mat<f64>> {
         let mut y = Mat::<f64>::from_fn(3 * start.len(), 3, |k, b| start[k / 3][(k % 3, b)]);
         orthonormalise(&mut y);
-        for _ in 0..SPECTRAL_MAX_ITERATIONS {
+        for k in 0..SPECTRAL_MAX_ITERATIONS {
+            if k > 0 && deadline.is_some_and(|d| d.passed()) {
+                break;
+            }
             if llt.solve(&mut y, SPECTRAL_INNER_TOLERANCE, 5000).is_none() {
                 return Err(Error::Solver {
                     message: "spectral initialisation: Q + sigma I not positive definite (CG)"

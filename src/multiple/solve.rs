@@ -192,6 +192,15 @@ impl MultipleSettings {
     pub(crate) fn deadline(&self) -> Option<crate::deadline::Deadline> {
         crate::deadline::Deadline::after(self.max_seconds)
     }
+
+    /// The time limit counted from `start` (`None` without a limit).
+    pub(crate) fn deadline_from(
+        &self,
+        start: std::time::Instant,
+    ) -> Option<crate::deadline::Deadline> {
+        self.max_seconds
+            .map(|_| crate::deadline::Deadline::started_at(start, self.max_seconds))
+    }
 }
 
 /// The result of [`solve_multiple`].
@@ -339,7 +348,9 @@ pub fn solve_multiple(
         Initialisation::Spectral if kind == Some(SolverKind::Laplacian) => {
             crate::multiple::init::spanning_tree(problem)
         }
-        Initialisation::Spectral => crate::multiple::init::spectral_with(problem, kind)?,
+        Initialisation::Spectral => {
+            crate::multiple::init::spectral_within(problem, kind, settings.deadline_from(start))?
+        }
         other => crate::multiple::init::initialise(problem, other)?,
     };
     let objective = problem.objective();

@@ -181,6 +181,47 @@ fn local_solves_stop_at_their_time_limit() {
     }
 }
 
+/// The spectral start's inverse iteration stops at the solve's time limit: given 1 ns, the
+/// solve returns the spanning-tree start (the iteration's own start, rounded) with
+/// `time_limit` and no Newton iteration; unbounded, the spectral start differs from the tree
+/// and is cheaper (so the test sees which one ran).
+#[test]
+fn the_spectral_start_stops_at_the_time_limit() {
+    use rotavg::Termination;
+    use rotavg::multiple::spanning_tree;
+    let (p, _) = SyntheticGraph {
+        num_rotations: 400,
+        num_edges: 1600,
+        noise_sigma: 0.1,
+        seed: 5,
+        ..Default::default()
+    }
+    .generate();
+    let limited = MultipleSettings {
+        max_seconds: Some(1e-9),
+        ..Default::default()
+    };
+    let s = solve_multiple(&p, &limited).unwrap();
+    assert!(matches!(
+        s.report.termination,
+        Termination::TimeLimit { .. }
+    ));
+    assert_eq!(s.report.iterations, 0);
+    let tree = spanning_tree(&p);
+    let gauge = |r: &[Rotation]| -> Vec<Rotation> {
+        let r0 = r[0].inverse();
+        r.iter().map(|x| x * r0).collect()
+    };
+    let worst = gauge(&s.rotations)
+        .iter()
+        .zip(gauge(&tree))
+        .map(|(a, b)| rotavg::so3::angle_between(a, &b))
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-9, "{worst} rad from the spanning tree");
+    let spectral = rotavg::multiple::spectral(&p).unwrap();
+    assert!(p.chordal_cost(&spectral) < 0.9 * p.chordal_cost(&tree));
+}
+
 /// The command line: `--max-seconds` bounds the solve and the certificate together; the
 /// solver's JSON termination says `time_limit`, and the estimate written is in SO(3).
 #[test]
