@@ -558,7 +558,13 @@ impl<'a> NewtonLm<'a> {
         let settings = self.settings;
         let decrease_limit = settings.decrease_tolerance * p.cost.abs() + 1e-30 * self.total_weight;
         if p.gn / self.total_weight <= settings.gradient_tolerance && predicted <= decrease_limit {
-            self.last_step(p, &step, decrease_limit);
+            // the cost's own rounding: the anisotropic trace form cancels, u tr(H_e) per edge
+            let rounding = if self.problem.is_anisotropic() {
+                64.0 * f64::EPSILON * self.total_weight
+            } else {
+                0.0
+            };
+            self.last_step(p, &step, decrease_limit + rounding);
             return Some(Termination::Converged {
                 measure:
                     "predicted Newton decrease / cost (with ||grad|| / sum(w) <= its tolerance)"
@@ -576,9 +582,10 @@ impl<'a> NewtonLm<'a> {
     }
 
     /// Converged: the step already solved for is taken when it lowers the gradient without
-    /// raising the cost by more than `noise` (the convergence test's decrease limit, relative
-    /// `1e-12`: at that floor the cost's evaluation rounds, the trace form's with cancellation,
-    /// and `trial` also judges by the gradient). One cost and gradient evaluation, no
+    /// raising the cost by more than `noise`: the convergence test's decrease limit (relative
+    /// `1e-12`, the floor where `trial` also judges by the gradient), plus, on anisotropic
+    /// problems, the rounding of their trace-form cost (`64 u sum w`: it cancels to its small
+    /// value and is known only to `u tr(H_e)` per edge; the isotropic form has no cancellation). One cost and gradient evaluation, no
     /// factorisation: Newton's last step squares the stationarity residual (PCG: multiplies it
     /// by about `eta`), so the estimate is critical to the certificate's precision `[D3]`
     /// without the certificate's refinement (a 10^6-node lattice: residual 4.8e-6 before,

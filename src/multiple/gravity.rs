@@ -579,8 +579,8 @@ pub const IRLS_WEIGHT_TOLERANCE: f64 = 1e-6;
 /// Robust averaging with the priors held (`[G8]`): passes of the constrained chordal solve on
 /// the view graph with each edge's weight (information) multiplied by its relative IRLS weight
 /// at the current estimate ([`relative_weight`] of the residual or Mahalanobis angle), until
-/// no weight changes by more than [`IRLS_WEIGHT_TOLERANCE`] (at most `settings.max_iterations`
-/// passes, within `settings.max_seconds`). Returns the rotations (standard convention), the
+/// no weight changes by more than [`IRLS_WEIGHT_TOLERANCE`] (at most a tenth of
+/// `settings.max_iterations` passes, each a whole solve; within `settings.max_seconds`). Returns the rotations (standard convention), the
 /// passes and why it stopped.
 fn reweighted(
     problem: &GravityProblem,
@@ -601,10 +601,10 @@ fn reweighted(
     let mut weights = weights_at(&rotations);
     let (begun, deadline) = (std::time::Instant::now(), settings.deadline());
     let mut change = f64::NAN;
-    for pass in 1..=settings.max_iterations {
+    let max_passes = (settings.max_iterations / 10).max(1);
+    for pass in 1..=max_passes {
         let measure = (change, IRLS_WEIGHT_TOLERANCE);
-        if let Some(limit) =
-            crate::deadline::limit_reached(pass - 1, settings.max_iterations, deadline, measure)
+        if let Some(limit) = crate::deadline::limit_reached(pass - 1, max_passes, deadline, measure)
         {
             return Ok((rotations, pass - 1, limit));
         }
@@ -628,9 +628,9 @@ fn reweighted(
         }
     }
     let t = Termination::IterationLimit {
-        iterations: settings.max_iterations,
+        iterations: max_passes,
         value: f64::NAN,
         threshold: IRLS_WEIGHT_TOLERANCE,
     };
-    Ok((rotations, settings.max_iterations, t))
+    Ok((rotations, max_passes, t))
 }

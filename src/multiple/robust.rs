@@ -119,7 +119,7 @@ pub(crate) fn edge_log(e: &crate::multiple::Edge, rotations: &[Rotation]) -> Vec
     log(&(rotations[e.j].inverse() * e.rotation * rotations[e.i]))
 }
 
-/// IRLS for L1 / Huber / Cauchy from `init` `[M9]`. At most `10 * max_iterations` iterations.
+/// IRLS for L1 / Huber / Cauchy from `init` `[M9]`. At most `max_iterations` iterations.
 pub(crate) fn solve_robust(
     problem: &MultipleProblem,
     init: Vec<Rotation>,
@@ -139,7 +139,7 @@ pub(crate) fn solve_robust(
         init,
         settings,
         name,
-        10 * settings.max_iterations,
+        settings.max_iterations,
         solver_kind,
     )
 }
