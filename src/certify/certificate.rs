@@ -263,6 +263,9 @@ impl Certificate {
     /// let c = Certificate::from_bounds(10.0, Some(9.0), BoundMethod::Sdp, None, tol, "", 0.0);
     /// assert_eq!(c.verdict, Verdict::GapReported);
     /// assert!((c.relative_gap.unwrap() - 0.1).abs() < 1e-12);
+    /// // A verified bound above the computed cost (the cost's rounding) is capped at it.
+    /// let c = Certificate::from_bounds(10.0, Some(10.0 + 1e-14), BoundMethod::Dual, None, tol, "", 0.0);
+    /// assert_eq!((c.lower_bound, c.gap), (Some(10.0), Some(0.0)));
     /// // No (finite) lower bound: never certified.
     /// let c = Certificate::from_bounds(10.0, Some(f64::NAN), BoundMethod::Dual, None, tol, "", 0.0);
     /// assert_eq!(c.verdict, Verdict::Inconclusive);
@@ -277,7 +280,12 @@ impl Certificate {
         explanation: impl Into<String>,
         seconds: f64,
     ) -> Self {
-        let lb = lower_bound.filter(|l| l.is_finite());
+        // capped at the upper bound: a verified bound above the computed cost is that cost's
+        // rounding (`f* <= f(estimate)`; a point critical to ~1e-15 shows it), and lowering a
+        // lower bound keeps it valid (a NaN upper bound leaves it as it is)
+        let lb = lower_bound
+            .filter(|l| l.is_finite())
+            .map(|l| if l > upper_bound { upper_bound } else { l });
         let scale = upper_bound.abs().max(1e-12);
         let (gap, rel, verdict) = match lb {
             Some(l) if upper_bound.is_finite() => {
