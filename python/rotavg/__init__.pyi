@@ -435,6 +435,7 @@ def average_rig(
     right: Graph,
     left: Graph,
     *,
+    sensor_from_rig: Optional[npt.ArrayLike] = None,
     certify: str = "auto",
     max_memory: Optional[int] = None,
     max_seconds: Optional[float] = 600.0,

@@ -6,9 +6,7 @@ use crate::types::{Graph, Report, RunResult};
 use crate::{certify_settings, detached, parse_named};
 use pyo3::prelude::*;
 use rotavg::certify::CertifyMode;
-use rotavg::pipeline::AverageSettings;
-use rotavg::pipeline::simultaneous::{SimultaneousSettings, average_simultaneous};
-use rotavg::report::{RigReport, rig_problem};
+use rotavg::report::RigReport;
 
 /// A two-sensor rig: the frames and the second sensor's ``sensor_from_rig`` rotation ``S``,
 /// estimated jointly from two view graphs over the same frames and certified, exactly as
@@ -17,6 +15,9 @@ use rotavg::report::{RigReport, rig_problem};
 /// Args:
 ///     right: the reference sensor's ``Graph`` (``read_graph``): its rotations are the frames'.
 ///     left: the other sensor's ``Graph`` over the same node ids (``L_ij ~ S R_ij S^T``).
+///     sensor_from_rig: a known ``(3, 3)`` rotation ``S`` to hold, as ``rotavg rig
+///         --sensor-from-rig``: only the frames are estimated, on one view graph, and certified
+///         by the multiple-averaging ladder (``paper-notes/conjugate.md`` [H18]).
 ///     certify: ``"auto"``, ``"dual"``, ``"sdp"`` or ``"none"``.
 ///     max_memory, max_seconds: the run's budget, as for ``average_multiple`` (one clock for
 ///         the joint solve and the certificate).
@@ -26,35 +27,40 @@ use rotavg::report::{RigReport, rig_problem};
 ///     ``to_dict()["sensor_from_rig"]`` is ``S``; ``to_dict()`` equals ``rotavg rig ... --json``.
 ///
 /// Raises:
-///     rotavg.Error: graphs over different node ids, anisotropic information.
+///     rotavg.Error: graphs over different node ids, anisotropic information, a
+///         ``sensor_from_rig`` that is not a rotation.
 #[pyfunction]
-#[pyo3(name = "average_rig", signature = (right, left, *, certify="auto", max_memory=None, max_seconds=600.0))]
+#[pyo3(name = "average_rig", signature = (right, left, *, sensor_from_rig=None, certify="auto", max_memory=None, max_seconds=600.0))]
 pub fn average_rig(
     py: Python<'_>,
     right: PyRef<'_, Graph>,
     left: PyRef<'_, Graph>,
+    sensor_from_rig: Option<&Bound<'_, PyAny>>,
     certify: &str,
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
 ) -> PyResult<RunResult> {
     let mode: CertifyMode = parse_named(certify, "certify")?;
     let certify = certify_settings(mode, max_memory, max_seconds, true, None)?;
+    let held = match sensor_from_rig.filter(|s| !s.is_none()) {
+        Some(s) => Some(matrix(s, "sensor_from_rig")?),
+        None => None,
+    };
     let (r, l) = (right.loaded.clone(), left.loaded.clone());
     let names = [right.name.clone(), left.name.clone()];
     let report = detached(py, move || {
-        let problem = rig_problem(&r, &l)?;
-        let settings = AverageSettings {
-            solve: SimultaneousSettings {
-                max_memory_bytes: certify.budget.max_memory_bytes,
-                max_seconds: certify.budget.max_seconds,
-                ..Default::default()
-            },
-            certify,
-        };
-        let result = average_simultaneous(&problem, &settings)?;
-        Ok(RigReport::new(names, &r, &l, result))
+        let held = held.map(one_rotation).transpose()?;
+        let max_seconds = certify.budget.max_seconds;
+        RigReport::average(names, (&r, &l), held, certify, max_seconds)
     })?;
     RunResult::new(py, Report::Rig(report))
+}
+
+/// The rotation `sensor_from_rig` of a `(3, 3)` array.
+fn one_rotation(s: crate::convert::Matrices) -> rotavg::Result<rotavg::Rotation> {
+    s.rotations()?.pop().ok_or_else(|| rotavg::Error::Empty {
+        what: "sensor_from_rig".into(),
+    })
 }
 
 /// Certify a rig estimate computed elsewhere, **without changing it**, as ``rotavg certify
@@ -128,12 +134,7 @@ impl RigEstimate {
         right: &rotavg::io::detect::LoadedGraph,
     ) -> rotavg::Result<(Vec<rotavg::Rotation>, rotavg::Rotation)> {
         match self {
-            RigEstimate::Arrays(frames, s) => {
-                let s = s.rotations()?.pop().ok_or_else(|| rotavg::Error::Empty {
-                    what: "sensor_from_rig".into(),
-                })?;
-                Ok((frames.rotations()?, s))
-            }
+            RigEstimate::Arrays(frames, s) => Ok((frames.rotations()?, one_rotation(s)?)),
             RigEstimate::Path(p) => {
                 let options = rotavg::io::detect::ReadOptions::default();
                 let frames = rotavg::io::input::load_estimate_for(&p, right, &options)?

@@ -38,3 +38,20 @@ def test_certify_rig_keeps_the_estimate():
     with pytest.raises(rotavg.Error, match="same frames"):
         rotavg.certify_rig(right, rotavg.read_graph(REPO / "examples" / "data" / "gravity" / "graph.json"),
                            solved.estimate, s)
+
+
+def test_a_held_sensor_from_rig_is_the_command_line_s(cli):
+    """``average_rig(..., sensor_from_rig=S)`` is ``rotavg rig --sensor-from-rig``: the frames
+    on one view graph with the planted ``S`` held, certified, the same report."""
+    right, left = rotavg.read_graph(RIG / "right.json"), rotavg.read_graph(RIG / "left.json")
+    truth = json.loads((RIG / "truth.json").read_text())
+    s = np.array(truth["sensor_from_rig"])
+    ours = rotavg.average_rig(right, left, sensor_from_rig=s)
+    theirs = cli("rig", RIG / "right.json", RIG / "left.json", "--sensor-from-rig", RIG / "truth.json")
+    assert untimed(ours.to_dict()) == untimed(theirs)
+    d = ours.to_dict()
+    assert d["sensor_from_rig_held"] is True and ours.verdict == "certified"
+    assert d["verdict"]["problem"]["kind"] == "chordal_l2_rig_sensor_held"
+    assert angle(np.array(d["sensor_from_rig"]), s) < 1e-9
+    with pytest.raises(rotavg.Error, match="not a rotation"):
+        rotavg.average_rig(right, left, sensor_from_rig=np.diag([1.0, 1.0, 2.0]))

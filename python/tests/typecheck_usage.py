@@ -205,6 +205,7 @@ def multiple(folder: Path) -> None:
     # a two-sensor rig: the same graph seen by both sensors (S = I)
     rig = check_result(rotavg.average_rig(g, g, certify="dual", max_seconds=60.0))
     check_result(rotavg.certify_rig(g, g, rig.estimate, np.eye(3), certify="dual"))
+    check_result(rotavg.average_rig(g, g, sensor_from_rig=np.eye(3), certify="dual"))
     from_graph = check_result(rotavg.average_multiple(g))
     from_graph = check_result(rotavg.average_multiple(g, loss="chordal", certify="auto",
                                                       largest_component=True))

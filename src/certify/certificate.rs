@@ -56,6 +56,11 @@ pub enum CertifiedProblemKind {
     /// graph and `S R_i` on the other's (`rotavg rig`, `paper-notes/conjugate.md` `[H17]`).
     /// Named in a rig report's verdict; `num_edges` counts both graphs' edges.
     ChordalL2Rig,
+    /// The same rig with the other sensor's `sensor_from_rig` held at a given rotation
+    /// (`rotavg rig --sensor-from-rig`, `paper-notes/conjugate.md` `[H18]`): exactly the chordal
+    /// L2 problem of the frames' view graph, the other sensor's edges turned by `S`.
+    /// `num_edges` counts both graphs' edges.
+    ChordalL2RigSensorHeld,
 }
 
 /// The problem a certificate is about, with its size against the whole input's.
@@ -101,6 +106,12 @@ impl fmt::Display for CertifiedProblem {
                 f,
                 "the rig's joint chordal L2 problem on all {} edges of its two view graphs ({} \
                  frames and sensor_from_rig)",
+                self.num_edges, self.num_nodes
+            ),
+            CertifiedProblemKind::ChordalL2RigSensorHeld => write!(
+                f,
+                "the rig's chordal L2 problem with sensor_from_rig held: the frames' view graph of \
+                 all {} edges of the two sensors (the other sensor's turned by S), {} frames",
                 self.num_edges, self.num_nodes
             ),
         }

@@ -3,8 +3,12 @@
 
 use super::{Rows, nested};
 use crate::io::detect::{GraphFormat, LoadedGraph};
-use crate::pipeline::Averaged;
-use crate::pipeline::simultaneous::{SimultaneousProblem, SimultaneousSolution};
+use crate::multiple::MultipleSettings;
+use crate::pipeline::simultaneous::{
+    SimultaneousProblem, SimultaneousSettings, SimultaneousSolution, average_simultaneous,
+    average_with_sensor_held,
+};
+use crate::pipeline::{AverageSettings, Averaged};
 use crate::so3::{Rotation, angle, log};
 use crate::warning::Warning;
 use crate::{Error, Result};
@@ -27,6 +31,8 @@ pub struct RigReport {
     /// The joint estimate: the frames (the reference sensor's rotations, `R_0 = I`) and
     /// `S = sensor_from_rig` of the left sensor.
     pub result: Averaged<SimultaneousSolution>,
+    /// `S` was given and held (`rotavg rig --sensor-from-rig`, `[H18]`), not estimated.
+    pub sensor_from_rig_held: bool,
 }
 
 /// The simultaneous problem of two view graphs read from files: the right graph is the
@@ -81,7 +87,44 @@ impl RigReport {
             num_edges: [right.problem.num_edges(), left.problem.num_edges()],
             warnings: [super::input_warnings(right), super::input_warnings(left)].concat(),
             result,
+            sensor_from_rig_held: false,
         }
+    }
+
+    /// The report of `result` with the other sensor's `sensor_from_rig` held, not estimated
+    /// (`rotavg rig --sensor-from-rig`): its verdict is about the frames' view graph `[H18]`.
+    pub fn sensor_held(mut self) -> Self {
+        self.sensor_from_rig_held = true;
+        self
+    }
+
+    /// Average the rig of `right` and `left` (read from the files `inputs`) as `rotavg rig`
+    /// does: jointly ([`average_simultaneous`]), or with `held` as the other sensor's
+    /// `sensor_from_rig` ([`average_with_sensor_held`], `[H18]`); the solve within
+    /// `max_seconds`, the certificate under `certify`.
+    pub fn average(
+        inputs: [String; 2],
+        (right, left): (&LoadedGraph, &LoadedGraph),
+        held: Option<Rotation>,
+        certify: crate::certify::CertifySettings,
+        max_seconds: Option<f64>,
+    ) -> Result<Self> {
+        let problem = rig_problem(right, left)?;
+        let Some(s) = held else {
+            let solve = SimultaneousSettings {
+                max_memory_bytes: certify.budget.max_memory_bytes,
+                max_seconds,
+                ..Default::default()
+            };
+            let result = average_simultaneous(&problem, &AverageSettings { solve, certify })?;
+            return Ok(RigReport::new(inputs, right, left, result));
+        };
+        let solve = MultipleSettings {
+            max_seconds,
+            ..Default::default()
+        };
+        let result = average_with_sensor_held(&problem, &s, &AverageSettings { solve, certify })?;
+        Ok(RigReport::new(inputs, right, left, result).sensor_held())
     }
 
     /// Certify a rig estimate computed elsewhere (`rotations` of the frames, `s` its
@@ -142,7 +185,11 @@ impl RigReport {
             verdict: c.verdict,
             estimate: super::CertifiedEstimate::Returned,
             problem: crate::certify::CertifiedProblem {
-                kind: crate::certify::CertifiedProblemKind::ChordalL2Rig,
+                kind: if self.sensor_from_rig_held {
+                    crate::certify::CertifiedProblemKind::ChordalL2RigSensorHeld
+                } else {
+                    crate::certify::CertifiedProblemKind::ChordalL2Rig
+                },
                 num_nodes: frames,
                 total_nodes: frames,
                 num_edges: edges,
@@ -181,6 +228,9 @@ impl fmt::Display for RigReport {
             self.num_edges[1],
             self.node_ids.len()
         )?;
+        if self.sensor_from_rig_held {
+            write!(f, ", sensor_from_rig held")?;
+        }
         for w in &self.warnings {
             write!(f, "\nwarning: {w}")?;
         }
@@ -205,6 +255,7 @@ struct Json<'a> {
     estimate: Rows<'a>,
     #[serde(with = "crate::so3::serde_rows::rotation")]
     sensor_from_rig: &'a Rotation,
+    sensor_from_rig_held: bool,
     node_ids: &'a [u64],
     solver: &'a crate::termination::SolverReport,
     certificate: Option<&'a crate::certify::Certificate>,
@@ -218,7 +269,8 @@ impl Serialize for RigReport {
         // the contract's first keys; `problem` is "rig" (an extension of section 5's kinds)
         Json {
             problem: "rig",
-            num_rotations: s.rotations.len() + 1,
+            // the frames, and S unless it was held
+            num_rotations: s.rotations.len() + usize::from(!self.sensor_from_rig_held),
             num_measurements: self.num_edges[0] + self.num_edges[1],
             warnings: &self.warnings,
             inputs: &self.inputs,
@@ -226,6 +278,7 @@ impl Serialize for RigReport {
             cost: s.cost,
             estimate: Rows::Many(&s.rotations),
             sensor_from_rig: &s.s,
+            sensor_from_rig_held: self.sensor_from_rig_held,
             node_ids: &self.node_ids,
             solver: &s.report,
             certificate: self.result.certificate.as_ref(),

@@ -154,3 +154,93 @@ fn certify_reads_a_rig_estimate() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("sensor_from_rig"));
 }
+
+/// `rotavg rig RIGHT LEFT --sensor-from-rig FILE` (`[H18]`): with the planted `S` held, only
+/// the frames are estimated; they are the chordal minimiser of the frames' view graph built
+/// here by hand (right edges and `S^T L_ij S`, solved by `multiple`), the verdict names that
+/// problem, and the joint cost is at least the jointly calibrated rig's (which also minimises
+/// over `S`). Held at the joint estimate's own `S`, the cost is the joint one. A file whose
+/// `sensor_from_rig` is not a rotation is an error naming it.
+#[test]
+fn a_held_sensor_from_rig_averages_the_frames_on_one_graph() {
+    let (right, left) = (example("right.json"), example("left.json"));
+    let truth = example("truth.json");
+    let held = run(&["rig", &right, &left, "--sensor-from-rig", &truth, "--json"]);
+    assert_success(&held);
+    let v = json_of(&held);
+    assert_eq!(v["sensor_from_rig_held"], true);
+    assert_eq!(v["num_rotations"], 120);
+    assert_eq!(v["verdict"]["verdict"], "certified", "{}", v["certificate"]);
+    assert_eq!(
+        v["verdict"]["problem"]["kind"],
+        "chordal_l2_rig_sensor_held"
+    );
+    let truth_v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    let s_true = rotation(&truth_v["sensor_from_rig"]);
+    assert!(angle_between(&rotation(&v["sensor_from_rig"]), &s_true) < 1e-12);
+    // the frames' graph by hand, as a `multiple` input
+    let graph = |path: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+    };
+    let (mut frames, l) = (graph(&right), graph(&left));
+    for e in l["edges"].as_array().unwrap() {
+        let mut turned = e.clone();
+        let r = rotation(&e["rotation"]);
+        let m = (s_true.inverse() * r * s_true).into_inner();
+        turned["rotation"] = serde_json::json!(
+            (0..3)
+                .map(|a| (0..3).map(|b| m[(a, b)]).collect::<Vec<_>>())
+                .collect::<Vec<_>>()
+        );
+        frames["edges"].as_array_mut().unwrap().push(turned);
+    }
+    let frames_file = temp_file("rig_frames.json", &frames.to_string());
+    let m = run(&["multiple", frames_file.to_str().unwrap(), "--json"]);
+    assert_success(&m);
+    let m = json_of(&m);
+    let cost = v["cost"].as_f64().unwrap();
+    assert!((m["cost"].as_f64().unwrap() - cost).abs() <= 1e-9 * cost);
+    let worst = v["estimate"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(m["estimate"].as_array().unwrap())
+        .map(|(a, b)| angle_between(&rotation(a), &rotation(b)))
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-7, "{worst} rad from multiple's estimate");
+    // the joint calibration minimises over S too; held at its S, the same cost
+    let joint_out = temp_dir().join("rig_joint.json");
+    let joint_out = joint_out.to_str().unwrap();
+    let joint = json_of(&run(&[
+        "rig", &right, &left, "--json", "--output", joint_out,
+    ]));
+    let joint_cost = joint["cost"].as_f64().unwrap();
+    assert!(joint_cost <= cost * (1.0 + 1e-9), "{joint_cost} vs {cost}");
+    let again = json_of(&run(&[
+        "rig",
+        &right,
+        &left,
+        "--sensor-from-rig",
+        joint_out,
+        "--json",
+    ]));
+    assert!((again["cost"].as_f64().unwrap() - joint_cost).abs() <= 1e-7 * joint_cost);
+    let bad = temp_file(
+        "bad_s.json",
+        r#"{"sensor_from_rig": [[1, 0, 0], [0, 1, 0], [0, 0, 2]]}"#,
+    );
+    let out = run(&[
+        "rig",
+        &right,
+        &left,
+        "--sensor-from-rig",
+        bad.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad_s.json") && err.contains("not a rotation"),
+        "{err}"
+    );
+}

@@ -1,14 +1,13 @@
 //! `rotavg rig RIGHT LEFT`: a two-sensor rig (two sensors rigidly mounted, each with its own
-//! view graph over the same frames) calibrated and averaged jointly, certified
+//! view graph over the same frames) calibrated and averaged jointly (or, with
+//! `--sensor-from-rig`, averaged with the calibration held), certified
 //! (`rotavg::pipeline::simultaneous`, printed as `rotavg::report::RigReport`).
 
 use crate::Outcome;
 use crate::common::{Common, GraphArgs};
 use rotavg::Result;
 use rotavg::io::detect::load_graph;
-use rotavg::pipeline::AverageSettings;
-use rotavg::pipeline::simultaneous::{SimultaneousSettings, average_simultaneous};
-use rotavg::report::{RigReport, rig_problem};
+use rotavg::report::RigReport;
 use std::path::Path;
 
 /// Arguments of `rotavg rig`.
@@ -26,6 +25,11 @@ pub struct Args {
     /// "sensor_from_rig": S}`.
     #[arg(long, value_name = "FILE")]
     pub output: Option<String>,
+    /// Hold the other sensor's `sensor_from_rig` at the rotation `"sensor_from_rig"` of FILE
+    /// (a JSON object, as `--output` writes): only the frames are estimated, on one view graph,
+    /// and certified by the multiple-averaging ladder (paper-notes/conjugate.md [H18]).
+    #[arg(long, value_name = "FILE")]
+    pub sensor_from_rig: Option<String>,
     #[command(flatten)]
     pub common: Common,
 }
@@ -35,29 +39,30 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let options = args.graph.read_options(&args.common);
     let right = load_graph(Path::new(&args.right), args.graph.format, &options)?;
     let left = load_graph(Path::new(&args.left), args.graph.format, &options)?;
-    let problem = rig_problem(&right, &left)?;
     let certify = args.graph.settings(&args.common, &Default::default());
-    let settings = AverageSettings {
-        solve: SimultaneousSettings {
-            max_memory_bytes: certify.budget.max_memory_bytes,
-            max_seconds: args.common.solve_seconds(),
-            ..Default::default()
-        },
-        certify,
+    let held = match &args.sensor_from_rig {
+        Some(file) => Some(rotavg::io::json::read_sensor_from_rig(file, &options)?),
+        None => None,
     };
     crate::progress::say(format_args!(
-        "rig of {} frames, {} + {} edges: solving and certifying...",
-        problem.num_nodes,
-        problem.right.len(),
-        problem.left.len()
+        "rig of {} frames, {} + {} edges{}: solving and certifying...",
+        right.problem.num_rotations(),
+        right.problem.num_edges(),
+        left.problem.num_edges(),
+        if held.is_some() {
+            ", sensor_from_rig held"
+        } else {
+            ""
+        }
     ));
-    let result = average_simultaneous(&problem, &settings)?;
-    let report = RigReport::new(
-        [args.right.clone(), args.left.clone()],
-        &right,
-        &left,
-        result,
-    );
+    let inputs = [args.right.clone(), args.left.clone()];
+    let max_seconds = args.common.solve_seconds();
+    let report = RigReport::average(inputs, (&right, &left), held, certify, max_seconds)?;
+    finish(args, report)
+}
+
+/// Write `--output` and print the report.
+fn finish(args: &Args, report: RigReport) -> Result<Outcome> {
     if let Some(path) = &args.output {
         let s = &report.result.solution;
         let text = rotavg::io::json::write_rig_json(&s.rotations, &report.node_ids, &s.s);

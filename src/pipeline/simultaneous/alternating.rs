@@ -10,7 +10,7 @@ use super::{SimultaneousProblem, SimultaneousSolution};
 use crate::conjugate::{ConjugatePair, ConjugateProblem, ConjugateSettings, solve_conjugate};
 use crate::deadline::{Deadline, limit_reached, remaining};
 use crate::error::Result;
-use crate::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings, solve_multiple};
+use crate::multiple::{Initialisation, MultipleSettings, solve_multiple};
 use crate::so3::Rotation;
 use crate::termination::{SolverReport, Termination};
 use std::time::Instant;
@@ -41,16 +41,6 @@ fn start(
     };
     let s = solve_conjugate(&ConjugateProblem::new(pairs)?, &settings)?;
     Ok((rs, s.estimate))
-}
-
-/// The frames' view graph at fixed `s`: the right edges, and each left edge as `S^T L_ij S`.
-fn frame_graph(p: &SimultaneousProblem, s: &Rotation) -> Result<MultipleProblem> {
-    let st = s.inverse();
-    let left = p.left.iter().map(|e| Edge {
-        rotation: st * e.rotation * s,
-        ..e.clone()
-    });
-    MultipleProblem::new(p.num_nodes, p.right.iter().cloned().chain(left).collect())
 }
 
 /// `S` at fixed frames: the conjugate problem of the pairs `(L_ij, R_j R_i^T)`, from `s`,
@@ -121,7 +111,7 @@ pub(crate) fn solve_within(
             max_seconds: remaining(max_seconds, clock),
             ..Default::default()
         };
-        rs = solve_multiple(&frame_graph(p, &s)?, &settings)?.rotations;
+        rs = solve_multiple(&p.frame_graph(&s)?, &settings)?.rotations;
         s = sensor_step(p, &rs, &s, remaining(max_seconds, clock))?;
         let next = p.cost(&rs, &s);
         decrease = (cost - next) / cost.abs().max(f64::MIN_POSITIVE);

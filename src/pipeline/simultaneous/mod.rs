@@ -10,6 +10,9 @@
 //! equations); larger ones are solved by the sparse alternation of [`alternating`].
 
 pub mod alternating;
+mod held;
+
+pub use held::average_with_sensor_held;
 
 use super::{AverageSettings, Averaged, PipelineProblem, PipelineSolution, average};
 use crate::certify::simultaneous::certify_simultaneous;
@@ -529,6 +532,22 @@ pub fn predict_simultaneous_solve_bytes(n: usize) -> f64 {
 pub type AverageSimultaneousSettings = AverageSettings<SimultaneousSettings>;
 
 impl SimultaneousProblem {
+    /// The frames' view graph at a fixed `s` (`[H17]`, `[H18]`): the right edges, and each left
+    /// edge as `S^T L_ij S`. For a rotation `S`, `||S R_j - L_ij S R_i||_F = ||R_j - S^T L_ij S
+    /// R_i||_F`, so its chordal cost at `R` is the joint cost `J(R, S)`.
+    pub fn frame_graph(&self, s: &Rotation) -> Result<MultipleProblem> {
+        self.validate()?;
+        let st = s.inverse();
+        let left = self.left.iter().map(|e| Edge {
+            rotation: st * e.rotation * s,
+            ..e.clone()
+        });
+        MultipleProblem::new(
+            self.num_nodes,
+            self.right.iter().cloned().chain(left).collect(),
+        )
+    }
+
     /// The two view graphs as multiple-averaging problems on the same `n` nodes.
     pub fn graphs(&self) -> Result<(MultipleProblem, MultipleProblem)> {
         self.validate()?;
