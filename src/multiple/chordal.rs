@@ -585,17 +585,22 @@ impl<'a> NewtonLm<'a> {
     /// raising the cost by more than `noise`: the convergence test's decrease limit (relative
     /// `1e-12`, the floor where `trial` also judges by the gradient), plus, on anisotropic
     /// problems, the rounding of their trace-form cost (`64 u sum w`: it cancels to its small
-    /// value and is known only to `u tr(H_e)` per edge; the isotropic form has no cancellation). One cost and gradient evaluation, no
-    /// factorisation: Newton's last step squares the stationarity residual (PCG: multiplies it
+    /// value and is known only to `u tr(H_e)` per edge; the isotropic form has no cancellation).
+    /// One cost and gradient evaluation, no factorisation: Newton's last step squares the stationarity residual (PCG: multiplies it
     /// by about `eta`), so the estimate is critical to the certificate's precision `[D3]`
     /// without the certificate's refinement (a 10^6-node lattice: residual 4.8e-6 before,
-    /// 2.8e-9 after; its certify 52 s -> 14 s).
+    /// 2.8e-9 after; its certify 52 s -> 20 s).
     fn last_step(&self, p: &mut Point, step: &[Vector3<f64>], noise: f64) {
-        let moved = p.r.iter().zip(step).map(|(ri, s)| ri * exp(s)).collect();
-        let cand = Point::at(self.problem, moved, self.tilt_fixed);
+        let cand = self.stepped(p, step);
         if cand.gn < p.gn && cand.cost <= p.cost + noise {
             *p = cand;
         }
+    }
+
+    /// The point `R_i exp(step_i)`, evaluated.
+    fn stepped(&self, p: &Point, step: &[Vector3<f64>]) -> Point {
+        let moved = p.r.iter().zip(step).map(|(ri, s)| ri * exp(s)).collect();
+        Point::at(self.problem, moved, self.tilt_fixed)
     }
 
     /// The step `x` (variables of nodes `1..n`) of `(H + lambda D) x = -grad`, the damping
@@ -672,8 +677,7 @@ impl<'a> NewtonLm<'a> {
         predicted: f64,
         max_step: f64,
     ) -> Option<Termination> {
-        let moved = p.r.iter().zip(step).map(|(ri, s)| ri * exp(s)).collect();
-        let cand = Point::at(self.problem, moved, self.tilt_fixed);
+        let cand = self.stepped(p, step);
         let rho = if predicted > 0.0 {
             (p.cost - cand.cost) / predicted
         } else {

@@ -580,8 +580,8 @@ pub const IRLS_WEIGHT_TOLERANCE: f64 = 1e-6;
 /// the view graph with each edge's weight (information) multiplied by its relative IRLS weight
 /// at the current estimate ([`relative_weight`] of the residual or Mahalanobis angle), until
 /// no weight changes by more than [`IRLS_WEIGHT_TOLERANCE`] (at most a tenth of
-/// `settings.max_iterations` passes, each a whole solve; within `settings.max_seconds`). Returns the rotations (standard convention), the
-/// passes and why it stopped.
+/// `settings.max_iterations` passes, each a whole solve; within `settings.max_seconds`).
+/// Returns the rotations (standard convention), the passes and why it stopped.
 fn reweighted(
     problem: &GravityProblem,
     init: Vec<Rotation>,

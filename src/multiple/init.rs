@@ -211,9 +211,6 @@ pub(crate) fn spectral_within(
         k => LinearSolver::new(&q.pattern, k == SolverKind::Direct)?,
     };
     let llt = q.shifted_factor(&solver)?;
-    if deadline.is_some_and(|d| d.passed()) {
-        return Ok(tree);
-    }
     let y = q.bottom_subspace(&llt, &tree, deadline)?;
     Ok(round_blocks(&y, &tree))
 }
@@ -288,8 +285,9 @@ impl ConnectionLaplacian {
     ) -> Result<Mat<f64>> {
         let mut y = Mat::<f64>::from_fn(3 * start.len(), 3, |k, b| start[k / 3][(k % 3, b)]);
         orthonormalise(&mut y);
-        for k in 0..SPECTRAL_MAX_ITERATIONS {
-            if k > 0 && deadline.is_some_and(|d| d.passed()) {
+        for _ in 0..SPECTRAL_MAX_ITERATIONS {
+            // the orthonormalised start rounds back to the spanning tree
+            if deadline.is_some_and(|d| d.passed()) {
                 break;
             }
             if llt.solve(&mut y, SPECTRAL_INNER_TOLERANCE, 5000).is_none() {

@@ -195,15 +195,6 @@ impl MultipleSettings {
     pub(crate) fn deadline(&self) -> Option<crate::deadline::Deadline> {
         crate::deadline::Deadline::after(self.max_seconds)
     }
-
-    /// The time limit counted from `start` (`None` without a limit).
-    pub(crate) fn deadline_from(
-        &self,
-        start: std::time::Instant,
-    ) -> Option<crate::deadline::Deadline> {
-        self.max_seconds
-            .map(|_| crate::deadline::Deadline::started_at(start, self.max_seconds))
-    }
 }
 
 /// The result of [`solve_multiple`].
@@ -351,9 +342,11 @@ pub fn solve_multiple(
         Initialisation::Spectral if kind == Some(SolverKind::Laplacian) => {
             crate::multiple::init::spanning_tree(problem)
         }
-        Initialisation::Spectral => {
-            crate::multiple::init::spectral_within(problem, kind, settings.deadline_from(start))?
-        }
+        Initialisation::Spectral => crate::multiple::init::spectral_within(
+            problem,
+            kind,
+            settings.remaining(start).deadline(),
+        )?,
         other => crate::multiple::init::initialise(problem, other)?,
     };
     let objective = problem.objective();
