@@ -88,6 +88,7 @@ pub mod plot;
 pub mod progress;
 pub mod relax;
 pub mod report;
+pub mod rig;
 pub mod single;
 pub mod so3;
 pub mod termination;

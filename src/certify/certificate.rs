@@ -61,6 +61,13 @@ pub enum CertifiedProblemKind {
     /// L2 problem of the frames' view graph, the other sensor's edges turned by `S`.
     /// `num_edges` counts both graphs' edges.
     ChordalL2RigSensorHeld,
+    /// The chordal L2 problem of a rig of any number of sensors (`rotavg rig FILE`,
+    /// `paper-notes/conjugate.md` `[H19]`): the frames and the unknown `sensor_from_rig`
+    /// rotations, on every edge between its images. `num_nodes` counts frames.
+    ChordalL2RigImages,
+    /// [`CertifiedProblemKind::ChordalL2RigImages`] with every sensor's `sensor_from_rig` known
+    /// (held): the frames' view graph plus the within-frame edges' constant cost.
+    ChordalL2RigImagesSensorsHeld,
 }
 
 /// The problem a certificate is about, with its size against the whole input's.
@@ -112,6 +119,18 @@ impl fmt::Display for CertifiedProblem {
                 f,
                 "the rig's chordal L2 problem with sensor_from_rig held: the frames' view graph of \
                  all {} edges of the two sensors (the other sensor's turned by S), {} frames",
+                self.num_edges, self.num_nodes
+            ),
+            CertifiedProblemKind::ChordalL2RigImages => write!(
+                f,
+                "the rig's chordal L2 problem on all {} edges between its images ({} frames and \
+                 the unknown sensor_from_rig rotations)",
+                self.num_edges, self.num_nodes
+            ),
+            CertifiedProblemKind::ChordalL2RigImagesSensorsHeld => write!(
+                f,
+                "the rig's chordal L2 problem on all {} edges between its images with every \
+                 sensor_from_rig held ({} frames)",
                 self.num_edges, self.num_nodes
             ),
         }

@@ -38,6 +38,7 @@ pub mod log;
 pub mod multiple;
 pub mod one_rotation;
 pub mod proof;
+pub mod rig;
 pub mod rung;
 pub mod settings;
 pub mod simultaneous;
@@ -58,6 +59,7 @@ pub use gravity::certify_gravity;
 pub use log::{Attempt, Outcome, Point, Prediction, Refusal};
 pub use multiple::certify_multiple;
 pub use proof::{BoundMethod, Proof};
+pub use rig::certify_rig;
 pub use settings::{
     BranchAndBoundSettings, CertifyMode, CertifySettings, ConvDualSettings, DualSettings,
     RandomizedSettings, SpectrumSettings, StaircaseSettings,

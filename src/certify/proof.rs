@@ -37,6 +37,12 @@ pub enum Proof {
     /// The decoupled bound of the simultaneous problem `[H16]`: the two view graphs' certified
     /// minima, summed.
     SimultaneousDecoupled,
+    /// A rig with every sensor held `[H19]`: the frames' view graph's certified bound (every
+    /// rung of [`crate::certify::certify_multiple`]) plus its within-frame edges' cost.
+    RigFrames,
+    /// A rig's constraints dropped `[H19]`: the certified bounds of the images' view graph's
+    /// components, summed.
+    RigImages,
     /// The SO(2) dual certificate of the full-gravity problem at the estimate `[G3]`.
     GravityDual,
     /// The gravity problem's constraints dropped `[G7]`: the certified bound of the view graph
@@ -80,7 +86,8 @@ impl Proof {
             | Proof::ConvDual
             | Proof::SimultaneousDual
             | Proof::GravityDual => 2,
-            Proof::GravityRelaxed | Proof::SimultaneousDecoupled => 5,
+            Proof::RigFrames => 4,
+            Proof::GravityRelaxed | Proof::SimultaneousDecoupled | Proof::RigImages => 5,
             Proof::ShiftedCholesky => 2,
             Proof::ScalarComparison => 3,
             Proof::Sdp | Proof::ConvSdp => 6,
@@ -104,6 +111,8 @@ impl Proof {
             | Proof::GravityDual
             | Proof::GravityRelaxed
             | Proof::SimultaneousDecoupled
+            | Proof::RigFrames
+            | Proof::RigImages
             | Proof::ScalarWeights
             | Proof::Grounded
             | Proof::ShiftedCholesky
@@ -125,6 +134,8 @@ impl fmt::Display for Proof {
             Proof::ConvDual => "conv(SO(3)) dual certificate at the estimate [A11]",
             Proof::SimultaneousDual => "trace-coupled dual certificate at the estimate [H15]",
             Proof::SimultaneousDecoupled => "the two view graphs' bounds, decoupled [H16]",
+            Proof::RigFrames => "the frames' view graph, every sensor held [H19]",
+            Proof::RigImages => "the images' view graph, the rig's constraints dropped [H19]",
             Proof::GravityDual => "SO(2) dual certificate at the estimate [G3]",
             Proof::GravityRelaxed => "the view graph without its gravity priors [G7]",
             Proof::ScalarWeights => "comparison with scalar weights [A13]",

@@ -195,7 +195,7 @@ fn quaternion_rotation(q: [f64; 4], tol: f64, what: &str) -> std::result::Result
 
 /// The error of a database read in a build without the cargo feature `colmap`.
 #[cfg(not(feature = "colmap"))]
-fn without_colmap_feature(path: &Path) -> Error {
+pub(crate) fn without_colmap_feature(path: &Path) -> Error {
     Error::parse(
         Some(&path.display().to_string()),
         None,

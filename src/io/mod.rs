@@ -51,6 +51,7 @@ pub mod names;
 pub mod nearest;
 pub mod numpy;
 pub mod output;
+pub mod rig;
 pub mod sfm;
 pub mod single_json;
 pub mod text;

@@ -393,14 +393,32 @@ impl MultipleProblem {
     /// The sub-problem on the largest connected component, with nodes renumbered `0..k` in
     /// increasing order, and the map new index -> old index.
     pub fn largest_component(&self) -> (MultipleProblem, Vec<usize>) {
-        let comps = self.components();
-        let keep = comps.into_iter().next().unwrap_or_default();
+        let keep = self.components().into_iter().next().unwrap_or_default();
+        (self.induced(&keep), keep)
+    }
+
+    /// The problem on `nodes` (distinct, each below [`Self::num_rotations`]; node `k` of the
+    /// result is `nodes[k]`) with the edges whose both ends are among them, their information
+    /// and the objective. Panics on a node out of range.
+    ///
+    /// ```
+    /// use rotavg::multiple::{Edge, MultipleProblem};
+    /// use rotavg::Rotation;
+    /// let e = |i, j| Edge { i, j, rotation: Rotation::identity(), weight: 1.0 };
+    /// let p = MultipleProblem::new(4, vec![e(0, 1), e(2, 3), e(1, 3)])?;
+    /// let q = p.induced(&[3, 1]);
+    /// assert_eq!((q.num_rotations(), q.num_edges()), (2, 1));
+    /// assert_eq!((q.edges()[0].i, q.edges()[0].j), (1, 0));
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn induced(&self, nodes: &[usize]) -> MultipleProblem {
         let mut new_of_old = vec![usize::MAX; self.num_rotations];
-        for (new, &old) in keep.iter().enumerate() {
+        for (new, &old) in nodes.iter().enumerate() {
             new_of_old[old] = new;
         }
+        let inside = |e: &Edge| new_of_old[e.i] != usize::MAX && new_of_old[e.j] != usize::MAX;
         let kept: Vec<usize> = (0..self.edges.len())
-            .filter(|&k| new_of_old[self.edges[k].i] != usize::MAX)
+            .filter(|&k| inside(&self.edges[k]))
             .collect();
         let edges = kept
             .iter()
@@ -414,15 +432,12 @@ impl MultipleProblem {
             .information
             .as_ref()
             .map(|info| kept.iter().map(|&k| info[k]).collect());
-        (
-            MultipleProblem {
-                num_rotations: keep.len(),
-                edges,
-                information,
-                objective: self.objective,
-            },
-            keep,
-        )
+        MultipleProblem {
+            num_rotations: nodes.len(),
+            edges,
+            information,
+            objective: self.objective,
+        }
     }
 
     /// The same edges with weight `w_e weights[e]` (information `H_e weights[e]`), objective

@@ -21,6 +21,7 @@ pub mod gravity;
 pub mod inlier_graph;
 pub mod loss_choice;
 pub mod multiple;
+pub mod rig;
 pub mod simultaneous;
 pub mod single;
 
@@ -31,6 +32,7 @@ pub use inlier_graph::{
 };
 pub use loss_choice::LossChoice;
 pub use multiple::average_multiple;
+pub use rig::average_rig;
 pub use simultaneous::average_simultaneous;
 pub use single::average_single;
 

@@ -38,6 +38,7 @@ pub mod demo;
 pub mod info;
 pub mod multiple;
 pub mod rig;
+pub mod rig_file;
 pub mod single;
 
 pub use crate::io::input::ProblemKind;
@@ -47,6 +48,7 @@ pub use demo::DemoReport;
 pub use info::InfoReport;
 pub use multiple::{CertifiedEstimate, MultipleReport, VerdictOf};
 pub use rig::{RigReport, rig_problem};
+pub use rig_file::RigFileReport;
 pub use single::SingleReport;
 
 use crate::certify::MethodRun;

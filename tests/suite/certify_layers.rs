@@ -28,6 +28,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("certify::conjugate", 8),
     ("certify::simultaneous", 8),
     ("certify::gravity", 8),
+    ("certify::rig", 8),
     ("certify", 9),
 ];
 

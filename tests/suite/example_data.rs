@@ -354,6 +354,43 @@ fn rig() -> (String, String, String) {
     (write(&p.right), write(&p.left), truth)
 }
 
+/// `rig_sensors/`: a rig of 40 frames and 3 sensors (`RigScene`, seed 2026: every sensor
+/// photographs every frame, 0.01 rad of noise, 30 % of frames with an edge between two
+/// sensors), sensor 0 the reference (the identity) and sensor 2 known, sensor 1 estimated, in
+/// the JSON rig format (`rig.json`), and the truth (`truth.json`: frames and sensors).
+fn rig_sensors() -> (String, String) {
+    use rotavg::rig::{RigProblem, RigScene, Sensor};
+    let scene = RigScene {
+        frames: 40,
+        sensors: 3,
+        noise_sigma: 0.01,
+        seed: 2026,
+        ..Default::default()
+    };
+    let (p, truth) = scene.generate();
+    let mut sensors = p.sensors().to_vec();
+    sensors[0] = Sensor {
+        sensor_from_rig: Some(Rotation::identity()),
+    };
+    sensors[2] = Sensor {
+        sensor_from_rig: Some(truth.sensors[2]),
+    };
+    let p = RigProblem::new(
+        p.num_frames(),
+        sensors,
+        p.images().to_vec(),
+        p.edges().to_vec(),
+    )
+    .expect("a valid rig");
+    let rows = |rs: &[Rotation]| {
+        rs.iter()
+            .map(rotavg::so3::rotation_to_rows)
+            .collect::<Vec<_>>()
+    };
+    let truth = serde_json::json!({"frames": rows(&truth.frames), "sensors_from_rig": rows(&truth.sensors)});
+    (rotavg::io::rig::write_rig_json(&p), format!("{truth}\n"))
+}
+
 /// Every file of the example data, `(relative path, contents)`, from one seed.
 fn files() -> Vec<(&'static str, String)> {
     let mut rng = StdRng::seed_from_u64(2026);
@@ -361,7 +398,10 @@ fn files() -> Vec<(&'static str, String)> {
     let (hand, camera, x) = handeye(&mut rng);
     let (gravity_graph, gravity_priors, gravity_all, gravity_truth) = gravity();
     let (rig_right, rig_left, rig_truth) = rig();
+    let (rig_sensors, rig_sensors_truth) = rig_sensors();
     vec![
+        ("rig_sensors/rig.json", rig_sensors),
+        ("rig_sensors/truth.json", rig_sensors_truth),
         ("rig/right.json", rig_right),
         ("rig/left.json", rig_left),
         ("rig/truth.json", rig_truth),

@@ -21,6 +21,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("multiple", 4),
     ("conjugate", 4),
     ("relax", 5),
+    ("rig", 5),
     ("certify", 6),
     ("pipeline", 7),
     ("io", 8),

@@ -74,6 +74,7 @@ mod properties_so3;
 mod readme_examples;
 mod relax_multiple;
 mod rig_cli;
+mod rig_sensors;
 #[cfg(feature = "cli")]
 mod robust_inliers;
 mod scalar_weights;

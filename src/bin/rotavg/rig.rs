@@ -2,27 +2,32 @@
 //! view graph over the same frames) calibrated and averaged jointly (or, with
 //! `--sensor-from-rig`, averaged with the calibration held), certified
 //! (`rotavg::pipeline::simultaneous`, printed as `rotavg::report::RigReport`).
+//! `rotavg rig FILE`: a rig of any number of sensors from a JSON rig file or a COLMAP
+//! database's rig configuration (`rotavg::pipeline::average_rig`, printed as
+//! `rotavg::report::RigFileReport`).
 
 use crate::Outcome;
 use crate::common::{Common, GraphArgs};
 use rotavg::Result;
 use rotavg::io::detect::load_graph;
-use rotavg::report::RigReport;
+use rotavg::report::{RigFileReport, RigReport};
 use std::path::Path;
 
 /// Arguments of `rotavg rig`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The reference sensor's view graph (any format `multiple` reads): its rotations are the
-    /// rig frames'.
+    /// rig frames'. Alone: a rig of any number of sensors, as a JSON rig file or a COLMAP
+    /// database with a rig configuration (tables rigs, rig_sensors, frames, frame_data).
     pub right: String,
     /// The other sensor's view graph over the same frames (node ids): `L_ij ~ S R_ij S^T`,
     /// `S` its `sensor_from_rig` rotation.
-    pub left: String,
+    pub left: Option<String>,
     #[command(flatten)]
     pub graph: GraphArgs,
     /// Write the estimate: JSON `{"rotations": [...], "node_ids": [...],
-    /// "sensor_from_rig": S}`.
+    /// "sensor_from_rig": S}` (two graphs), or `{"frames": [...], "frame_ids": [...],
+    /// "sensors_from_rig": [...], "sensor_ids": [...]}` (a rig file).
     #[arg(long, value_name = "FILE")]
     pub output: Option<String>,
     /// Hold the other sensor's `sensor_from_rig` at the rotation `"sensor_from_rig"` of FILE
@@ -36,9 +41,12 @@ pub struct Args {
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<Outcome> {
+    let Some(left) = &args.left else {
+        return run_file(args);
+    };
     let options = args.graph.read_options(&args.common);
     let right = load_graph(Path::new(&args.right), args.graph.format, &options)?;
-    let left = load_graph(Path::new(&args.left), args.graph.format, &options)?;
+    let left = load_graph(Path::new(left), args.graph.format, &options)?;
     let certify = args.graph.settings(&args.common, &Default::default());
     let held = match &args.sensor_from_rig {
         Some(file) => Some(rotavg::io::json::read_sensor_from_rig(file, &options)?),
@@ -55,7 +63,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
             ""
         }
     ));
-    let inputs = [args.right.clone(), args.left.clone()];
+    let inputs = [args.right.clone(), args.left.clone().unwrap_or_default()];
     let max_seconds = args.common.solve_seconds();
     let report = RigReport::average(inputs, (&right, &left), held, certify, max_seconds)?;
     finish(args, report)
@@ -66,6 +74,37 @@ fn finish(args: &Args, report: RigReport) -> Result<Outcome> {
     if let Some(path) = &args.output {
         let s = &report.result.solution;
         let text = rotavg::io::json::write_rig_json(&s.rotations, &report.node_ids, &s.s);
+        rotavg::io::output::write_text(path, &text)?;
+    }
+    args.common.finish(&report, report.verdict())
+}
+
+/// `rotavg rig FILE`: a rig of any number of sensors read from a rig file.
+fn run_file(args: &Args) -> Result<Outcome> {
+    if args.sensor_from_rig.is_some() {
+        return Err(rotavg::Error::InvalidSettings {
+            name: "--sensor-from-rig".into(),
+            reason: "applies to two view graphs (rotavg rig RIGHT LEFT); a rig file gives each \
+                     sensor's known sensor_from_rig itself"
+                .into(),
+        });
+    }
+    let options = args.graph.read_options(&args.common);
+    let rig = rotavg::io::rig::load_rig(Path::new(&args.right), &options)?;
+    let p = &rig.problem;
+    crate::progress::say(format_args!(
+        "rig of {} frames, {} sensors, {} images, {} edges: solving and certifying...",
+        p.num_frames(),
+        p.sensors().len(),
+        p.images().len(),
+        p.edges().len()
+    ));
+    let certify = args.graph.settings(&args.common, &Default::default());
+    let max_seconds = args.common.solve_seconds();
+    let report = RigFileReport::average(args.right.clone(), rig, certify, max_seconds)?;
+    if let Some(path) = &args.output {
+        let s = &report.result.solution;
+        let text = rotavg::io::rig::write_rig_estimate_json(&s.frames, &s.sensors, &report.rig);
         rotavg::io::output::write_text(path, &text)?;
     }
     args.common.finish(&report, report.verdict())

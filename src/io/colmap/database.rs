@@ -391,6 +391,8 @@ fn geometry_row(
 
 /// `--information full` (`[F13]`): each edge's information from the inlier
 /// correspondences of its row and the two images' cameras.
+pub(crate) mod rig;
+
 mod two_view {
     use super::*;
     use crate::io::two_view_information::{Camera, rotation_information};

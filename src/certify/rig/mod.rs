@@ -1,0 +1,109 @@
+//! Certificates of a rig of any number of sensors (`paper-notes/conjugate.md` `[H19]`). Two
+//! rungs, each a sum of view-graph certifications (handed in by the entry point:
+//! `certify_multiple`), so they reach any size the view-graph ladder does:
+//!
+//! * [`Proof::RigFrames`](crate::certify::Proof::RigFrames) (every sensor held): `J(F, S)` is the frames' view graph's cost plus
+//!   the within-frame edges' constant, exactly up to rounding that `rounding.rs` charges.
+//! * [`Proof::RigImages`](crate::certify::Proof::RigImages): every rig point is a point of the images' view graph without the
+//!   rig's constraints (`X_a = S_{s_a} F_{f_a}` is a tuple of rotations), so the sum of its
+//!   components' certified minima bounds `J*`. Tight when the images' optimum is a rig
+//!   (noise-free data); a gap otherwise (the constraints' cost).
+
+mod frames;
+mod images;
+mod rounding;
+mod state;
+
+use crate::certify::budget::Deadline;
+use crate::certify::certification::{Certification, CertifyDetails};
+use crate::certify::ladder::{Rungs, climb};
+use crate::certify::proof::BoundMethod;
+use crate::certify::rung::GraphCertifier;
+use crate::certify::settings::CertifySettings;
+use crate::error::{Error, Result};
+use crate::rig::RigProblem;
+use crate::so3::Rotation;
+use state::RigState;
+
+/// Certify a rig estimate (`frames` `F_f`, `sensors` `S_s`, never changed; `[H19]`): when
+/// every sensor is held, the frames' view graph; always, the images' view graph without the
+/// rig's constraints; each certified by `certify` (the view graph's ladder) within the
+/// budget. The verdict uses the best bound. Errors: estimates of the wrong length, a held
+/// sensor not at its held rotation.
+///
+/// ```
+/// use rotavg::certify::certify_rig;
+/// use rotavg::rig::{RigScene, RigSettings, solve_rig};
+/// let (p, _) = RigScene { frames: 30, sensors: 3, noise_sigma: 0.0, ..Default::default() }.generate();
+/// let s = solve_rig(&p, &RigSettings::default())?;
+/// let c = certify_rig(&p, &s.frames, &s.sensors, &Default::default())?;
+/// assert!(c.certificate.is_certified()); // noise-free: the images' optimum is a rig
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn certify_rig(
+    problem: &RigProblem,
+    frames: &[Rotation],
+    sensors: &[Rotation],
+    settings: &CertifySettings,
+) -> Result<Certification<()>> {
+    let certify: GraphCertifier = crate::certify::multiple::graph_certificate;
+    let deadline = Deadline::start(&settings.budget);
+    settings.validate()?;
+    check_estimate(problem, frames, sensors)?;
+    let cost = problem.cost(frames, sensors);
+    let tolerance = settings.tolerance.resolve(problem.min_weight());
+    let mut state = RigState {
+        problem,
+        frames,
+        sensors,
+        settings,
+        deadline,
+        cost,
+        allowed_gap: tolerance.allowed_gap(cost),
+        best: None,
+        log: Vec::new(),
+    };
+    let rungs: Rungs<'_, RigState<'_>> = vec![
+        Box::new(frames::FramesRung::new(certify)),
+        Box::new(images::ImagesRung::new(certify)),
+    ];
+    climb(&mut state, rungs)?;
+    let details = CertifyDetails::from_log(settings.mode, state.log, deadline.elapsed());
+    let best = state
+        .best
+        .map(|b| (b.lower_bound, b.proof.method(), None, b.note));
+    let certificate = details.certificate_of(cost, best, BoundMethod::Dual, tolerance);
+    Ok(Certification {
+        certificate,
+        details,
+        improvement: None,
+    })
+}
+
+/// One rotation per frame and per sensor; the held sensors at their held rotations.
+fn check_estimate(p: &RigProblem, frames: &[Rotation], sensors: &[Rotation]) -> Result<()> {
+    let invalid = |reason: String| Error::InvalidSettings {
+        name: "estimate".into(),
+        reason,
+    };
+    if frames.len() != p.num_frames() || sensors.len() != p.sensors().len() {
+        return Err(invalid(format!(
+            "{} frames and {} sensors for a rig of {} frames and {} sensors",
+            frames.len(),
+            sensors.len(),
+            p.num_frames(),
+            p.sensors().len()
+        )));
+    }
+    for (s, (held, given)) in p.held().iter().zip(sensors).enumerate() {
+        if let Some(h) = held
+            && crate::so3::angle_between(h, given) > 1e-9
+        {
+            return Err(invalid(format!(
+                "sensor {s} is held at a rotation {:.3e} rad from the estimate's",
+                crate::so3::angle_between(h, given)
+            )));
+        }
+    }
+    Ok(())
+}

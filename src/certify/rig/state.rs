@@ -1,0 +1,63 @@
+//! The state of one rig certification: the estimate, its cost, the best bound, the one log.
+
+use crate::certify::budget::Deadline;
+use crate::certify::log::Attempt;
+use crate::certify::proof::Proof;
+use crate::certify::rung::climb_by_best_bound;
+use crate::certify::settings::CertifySettings;
+use crate::rig::RigProblem;
+use crate::so3::Rotation;
+
+/// The best verified bound so far.
+pub(crate) struct Best {
+    pub lower_bound: f64,
+    pub proof: Proof,
+    pub note: String,
+}
+
+/// One certification's state.
+pub(crate) struct RigState<'a> {
+    pub problem: &'a RigProblem,
+    pub frames: &'a [Rotation],
+    pub sensors: &'a [Rotation],
+    pub settings: &'a CertifySettings,
+    pub deadline: Deadline,
+    /// The estimate's cost and the gap the verdict allows there.
+    pub cost: f64,
+    pub allowed_gap: f64,
+    pub best: Option<Best>,
+    pub log: Vec<Attempt>,
+}
+
+impl RigState<'_> {
+    /// `lower_bound` certifies the estimate.
+    pub fn certifies(&self, lower_bound: f64) -> bool {
+        self.cost - lower_bound <= self.allowed_gap
+    }
+
+    /// Keep `lower_bound` (capped at the cost, at least 0) when it is the best so far; the
+    /// capped value.
+    pub fn offer(&mut self, lower_bound: f64, proof: Proof, note: &str) -> f64 {
+        let lb = crate::certify::certificate::nonnegative_bound_at_most(lower_bound, self.cost);
+        if self.best.as_ref().is_none_or(|b| lb > b.lower_bound) {
+            self.best = Some(Best {
+                lower_bound: lb,
+                proof,
+                note: note.to_string(),
+            });
+        }
+        lb
+    }
+
+    /// The certification's time left (`None`: no limit), never negative.
+    pub fn left(&self) -> Option<f64> {
+        self.deadline.left().map(|l| l.max(0.0))
+    }
+
+    /// The sum of the edges' weights.
+    pub fn total_weight(&self) -> f64 {
+        self.problem.edges().iter().map(|e| e.weight).sum()
+    }
+}
+
+climb_by_best_bound!(RigState);

@@ -1,0 +1,287 @@
+//! Rigs of any number of sensors read from files (`paper-notes/formats.md` `[F16]`): the JSON
+//! rig format and a COLMAP database's rig configuration, as a [`RigProblem`] with the files'
+//! ids; and the estimate written back.
+//!
+//! The JSON rig format (`rotavg rig FILE`):
+//!
+//! ```text
+//! {"num_frames": F,
+//!  "sensors": [{"sensor_from_rig": S} | {}, ...],        // S known, or unknown
+//!  "images": [{"frame": f, "sensor": s}, ...],
+//!  "edges": [{"i": a, "j": b, "rotation": R, "weight": w}, ...]}   // between images
+//! ```
+//!
+//! with `R X_a ~ X_b`, `X_a = S_{s_a} F_{f_a}` (world-to-camera; `S` is `sensor_from_rig`, as
+//! COLMAP's). A sensor without a known `S` is estimated; a rig without any known sensor has its
+//! first sensor held at the identity (COLMAP's reference sensor).
+
+use crate::error::{Error, Result};
+use crate::io::detect::{LoadedGraph, ReadOptions};
+use crate::multiple::Edge;
+use crate::rig::{Image, RigProblem, Sensor};
+use crate::so3::{Rotation, rotation_from_rows, rotation_to_rows};
+use crate::warning::Warning;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+type Rows = [[f64; 3]; 3];
+
+/// A rig read from a file, with the file's ids.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LoadedRig {
+    /// The validated problem.
+    pub problem: RigProblem,
+    /// The file's id of each frame (COLMAP's `frame_id`; the index in a JSON file).
+    pub frame_ids: Vec<u64>,
+    /// The file's id of each sensor (COLMAP's `camera_id`; the index in a JSON file).
+    pub sensor_ids: Vec<u64>,
+    /// The file's id of each image (COLMAP's `image_id`; the index in a JSON file).
+    pub image_ids: Vec<u64>,
+    /// `"json"` or `"colmap"`.
+    pub format: String,
+    /// The reader's remarks.
+    pub warnings: Vec<Warning>,
+}
+
+#[derive(Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a JSON rig {\"num_frames\": F, \"sensors\": [...], \"images\": [{\"frame\": f, \"sensor\": s}, ...], \"edges\": [...]}"
+)]
+struct RigFile {
+    num_frames: usize,
+    sensors: Vec<SensorFile>,
+    images: Vec<Image>,
+    edges: Vec<EdgeFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SensorFile {
+    #[serde(default)]
+    sensor_from_rig: Option<Rows>,
+}
+
+#[derive(Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "an edge {\"i\": a, \"j\": b, \"rotation\": R, \"weight\": w} between two images (weight optional)"
+)]
+struct EdgeFile {
+    i: usize,
+    j: usize,
+    rotation: Rows,
+    #[serde(default)]
+    weight: Option<f64>,
+}
+
+/// Read the JSON rig format (module docs) from `text` (of `file`). Errors name the file (and
+/// the line of a syntax error): a rotation off SO(3) beyond `options.rotation_tolerance`, a
+/// weight out of range, more frames than images, any error of [`RigProblem::new`].
+///
+/// ```
+/// use rotavg::io::{detect::ReadOptions, rig::read_rig_json};
+/// let text = r#"{"num_frames": 2, "sensors": [{}, {}],
+///   "images": [{"frame": 0, "sensor": 0}, {"frame": 1, "sensor": 0}, {"frame": 1, "sensor": 1}],
+///   "edges": [{"i": 0, "j": 1, "rotation": [[1,0,0],[0,1,0],[0,0,1]]},
+///             {"i": 1, "j": 2, "rotation": [[0,-1,0],[1,0,0],[0,0,1]]}]}"#;
+/// let rig = read_rig_json(text, "rig.json", &ReadOptions::default())?;
+/// assert_eq!(rig.problem.images().len(), 3);
+/// assert!(rig.problem.held()[1].is_none()); // sensor 1 is estimated
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn read_rig_json(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedRig> {
+    let rf: RigFile = serde_json::from_str(text).map_err(|e| {
+        let line = (e.line() > 0).then_some(e.line());
+        Error::parse(Some(file), line, format!("invalid JSON: {e}"))
+    })?;
+    let in_file = |e: Error| e.in_file(file, None);
+    if rf.num_frames > rf.images.len() {
+        return Err(Error::parse(
+            Some(file),
+            None,
+            format!(
+                "num_frames = {}, but only {} images",
+                rf.num_frames,
+                rf.images.len()
+            ),
+        ));
+    }
+    let sensors = rf
+        .sensors
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let known = s.sensor_from_rig.as_ref().map(|rows| {
+                rotation_from_rows(rows, options.rotation_tolerance, &format!("sensor {k}"))
+            });
+            Ok(Sensor {
+                sensor_from_rig: known.transpose()?,
+            })
+        })
+        .collect::<Result<Vec<_>>>()
+        .map_err(in_file)?;
+    let mut edges = Vec::with_capacity(rf.edges.len());
+    for (k, e) in rf.edges.iter().enumerate() {
+        let item = format!("edge {k} ({}, {})", e.i, e.j);
+        let rotation =
+            rotation_from_rows(&e.rotation, options.rotation_tolerance, &item).map_err(in_file)?;
+        let weight = e.weight.unwrap_or(1.0);
+        if let Some(why) = crate::io::weight_out_of_range(weight) {
+            return Err(Error::parse(Some(file), None, format!("{item}: {why}")));
+        }
+        edges.push(Edge {
+            i: e.i,
+            j: e.j,
+            rotation,
+            weight,
+        });
+    }
+    let (frames, sensors_n, images_n) = (rf.num_frames, rf.sensors.len(), rf.images.len());
+    let problem = RigProblem::new(frames, sensors, rf.images, edges).map_err(in_file)?;
+    Ok(LoadedRig {
+        problem,
+        frame_ids: (0..frames as u64).collect(),
+        sensor_ids: (0..sensors_n as u64).collect(),
+        image_ids: (0..images_n as u64).collect(),
+        format: "json".into(),
+        warnings: Vec::new(),
+    })
+}
+
+/// Read a rig from `path`: a COLMAP database (or a folder holding `database.db`) with a rig
+/// configuration, else the JSON rig format.
+pub fn load_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> {
+    if let Some(db) = crate::io::colmap::find_database(path) {
+        return read_colmap_rig(&db, options);
+    }
+    let file = path.display().to_string();
+    let text = crate::io::text::read_text(&file)?;
+    read_rig_json(&text, &file, options)
+}
+
+/// The rig of a COLMAP database (`[F16]`): the view graph of its two-view geometries over the
+/// images (as `rotavg multiple` reads it), each image placed at its frame and camera by the
+/// tables `frames` and `frame_data`, the cameras' `sensor_from_rig` from `rigs` (reference
+/// sensors: the identity) and `rig_sensors` (known, or `NULL`: estimated). Errors: no rig
+/// tables, an image of the view graph in no frame, any error of the view graph's reader.
+pub fn read_colmap_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> {
+    #[cfg(feature = "colmap")]
+    {
+        let file = path.display().to_string();
+        let graph = crate::io::colmap::read_colmap_database(path, options)?;
+        let layout =
+            crate::io::colmap::database::rig::rig_layout(path, options.quaternion_tolerance)?;
+        rig_of_layout(&graph, &layout.images, &layout.sensors).map_err(|e| e.in_file(&file, None))
+    }
+    #[cfg(not(feature = "colmap"))]
+    {
+        let _ = options;
+        Err(crate::io::colmap::without_colmap_feature(path))
+    }
+}
+
+/// The rig of `graph`'s images placed by `images` (image id -> frame id, camera id), the
+/// cameras' `sensor_from_rig` in `known` (a camera in no rig: its own reference, the identity).
+fn rig_of_layout(
+    graph: &LoadedGraph,
+    images: &std::collections::BTreeMap<u64, (u64, u64)>,
+    known: &std::collections::BTreeMap<u64, Option<Rotation>>,
+) -> Result<LoadedRig> {
+    let mut frame_ids: Vec<u64> = Vec::new();
+    let mut sensor_ids: Vec<u64> = Vec::new();
+    let mut placed = Vec::with_capacity(graph.node_ids.len());
+    for &id in &graph.node_ids {
+        let &(frame, camera) = images.get(&id).ok_or_else(|| Error::InvalidSettings {
+            name: "rig".into(),
+            reason: format!("image {id} has two-view geometries but is in no frame (frame_data)"),
+        })?;
+        placed.push((frame, camera));
+        frame_ids.push(frame);
+        sensor_ids.push(camera);
+    }
+    frame_ids.sort_unstable();
+    frame_ids.dedup();
+    sensor_ids.sort_unstable();
+    sensor_ids.dedup();
+    let index = |ids: &[u64], v: u64| ids.binary_search(&v).unwrap_or_default();
+    let rig_images = placed
+        .iter()
+        .map(|&(f, c)| Image {
+            frame: index(&frame_ids, f),
+            sensor: index(&sensor_ids, c),
+        })
+        .collect();
+    let sensors = sensor_ids
+        .iter()
+        .map(|c| Sensor {
+            sensor_from_rig: known.get(c).copied().unwrap_or(Some(Rotation::identity())),
+        })
+        .collect();
+    let problem = RigProblem::new(
+        frame_ids.len(),
+        sensors,
+        rig_images,
+        graph.problem.edges().to_vec(),
+    )?;
+    Ok(LoadedRig {
+        problem,
+        frame_ids,
+        sensor_ids,
+        image_ids: graph.node_ids.clone(),
+        format: "colmap".into(),
+        warnings: graph.warnings.clone(),
+    })
+}
+
+/// The estimate as JSON: `{"frames": [F...], "frame_ids": [...], "sensors_from_rig": [S...],
+/// "sensor_ids": [...]}` (rotations as row-major 3x3 arrays).
+pub fn write_rig_estimate_json(
+    frames: &[Rotation],
+    sensors: &[Rotation],
+    rig: &LoadedRig,
+) -> String {
+    let rows = |rs: &[Rotation]| rs.iter().map(rotation_to_rows).collect::<Vec<_>>();
+    let value = serde_json::json!({
+        "frames": rows(frames),
+        "frame_ids": rig.frame_ids,
+        "sensors_from_rig": rows(sensors),
+        "sensor_ids": rig.sensor_ids,
+    });
+    format!("{value:#}\n")
+}
+
+/// `problem` in the JSON rig format (module docs), as [`read_rig_json`] reads it back.
+///
+/// ```
+/// use rotavg::io::{detect::ReadOptions, rig::{read_rig_json, write_rig_json}};
+/// use rotavg::rig::RigScene;
+/// let (p, _) = RigScene { frames: 5, sensors: 2, ..Default::default() }.generate();
+/// let back = read_rig_json(&write_rig_json(&p), "rig.json", &ReadOptions::default())?;
+/// assert_eq!(back.problem, p);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn write_rig_json(problem: &RigProblem) -> String {
+    let sensors: Vec<serde_json::Value> = problem
+        .sensors()
+        .iter()
+        .map(|s| match &s.sensor_from_rig {
+            Some(r) => serde_json::json!({ "sensor_from_rig": rotation_to_rows(r) }),
+            None => serde_json::json!({}),
+        })
+        .collect();
+    let edges: Vec<serde_json::Value> = problem
+        .edges()
+        .iter()
+        .map(|e| {
+            serde_json::json!({"i": e.i, "j": e.j, "rotation": rotation_to_rows(&e.rotation), "weight": e.weight})
+        })
+        .collect();
+    let value = serde_json::json!({
+        "num_frames": problem.num_frames(),
+        "sensors": sensors,
+        "images": problem.images(),
+        "edges": edges,
+    });
+    format!("{value}\n")
+}

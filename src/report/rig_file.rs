@@ -1,0 +1,172 @@
+//! `rotavg rig FILE`: a rig of any number of sensors read from a JSON rig file or a COLMAP
+//! database's rig configuration ([`crate::io::rig`]), solved and certified
+//! ([`crate::pipeline::average_rig`], `paper-notes/conjugate.md` `[H19]`), as text and JSON.
+
+use super::{Rows, nested};
+use crate::Result;
+use crate::certify::{CertifiedProblem, CertifiedProblemKind, CertifySettings};
+use crate::io::rig::LoadedRig;
+use crate::pipeline::{AverageSettings, Averaged, average_rig};
+use crate::rig::{RigSettings, RigSolution};
+use crate::so3::{angle, log};
+use crate::warning::Warning;
+use serde::{Serialize, Serializer};
+use std::fmt;
+
+/// A rig file's report: the rig as read and its estimate with the certificate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigFileReport {
+    /// The file, as given.
+    pub input: String,
+    /// The rig as read (with the file's ids and the reader's warnings).
+    pub rig: LoadedRig,
+    /// The estimate: the frames (`F_0 = I`) and every sensor's `sensor_from_rig`.
+    pub result: Averaged<RigSolution>,
+}
+
+impl RigFileReport {
+    /// Solve and certify the rig read from `input`: the solve within `max_seconds`, the
+    /// certificate under `certify`.
+    pub fn average(
+        input: String,
+        rig: LoadedRig,
+        certify: CertifySettings,
+        max_seconds: Option<f64>,
+    ) -> Result<Self> {
+        let solve = RigSettings {
+            max_seconds,
+            ..Default::default()
+        };
+        let result = average_rig(&rig.problem, &AverageSettings { solve, certify })?;
+        Ok(RigFileReport { input, rig, result })
+    }
+
+    /// The verdict of the certificate, if one was computed.
+    pub fn verdict(&self) -> Option<crate::Verdict> {
+        self.result.certificate.as_ref().map(|c| c.verdict)
+    }
+
+    /// The verdict and the problem it is about.
+    pub fn verdict_of(&self) -> Option<super::VerdictOf> {
+        let c = self.result.certificate.as_ref()?;
+        let p = &self.rig.problem;
+        let (frames, edges) = (p.num_frames(), p.edges().len());
+        Some(super::VerdictOf {
+            verdict: c.verdict,
+            estimate: super::CertifiedEstimate::Returned,
+            problem: CertifiedProblem {
+                kind: if p.all_held() {
+                    CertifiedProblemKind::ChordalL2RigImagesSensorsHeld
+                } else {
+                    CertifiedProblemKind::ChordalL2RigImages
+                },
+                num_nodes: frames,
+                total_nodes: frames,
+                num_edges: edges,
+                total_edges: edges,
+            },
+        })
+    }
+
+    /// How many sensors were estimated (not held).
+    fn estimated(&self) -> usize {
+        self.rig
+            .problem
+            .held()
+            .iter()
+            .filter(|h| h.is_none())
+            .count()
+    }
+}
+
+impl fmt::Display for RigSolution {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "rig chordal cost {:.9e}; {}", self.cost, self.report)?;
+        for (s, r) in self.sensors.iter().enumerate() {
+            let axis = log(r).try_normalize(0.0).unwrap_or_default();
+            write!(
+                f,
+                "\n  sensor {s}: sensor_from_rig {:.6} deg about ({:.6}, {:.6}, {:.6})",
+                angle(r).to_degrees(),
+                axis.x,
+                axis.y,
+                axis.z
+            )?;
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Display for RigFileReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let p = &self.rig.problem;
+        write!(
+            f,
+            "rig: {} ({} format): {} frames, {} sensors ({} estimated), {} images, {} edges",
+            self.input,
+            self.rig.format,
+            p.num_frames(),
+            p.sensors().len(),
+            self.estimated(),
+            p.images().len(),
+            p.edges().len()
+        )?;
+        for w in &self.rig.warnings {
+            write!(f, "\nwarning: {w}")?;
+        }
+        writeln!(f)?;
+        nested(f, &self.result)?;
+        if let Some(v) = self.verdict_of() {
+            write!(f, "\n{v}")?;
+        }
+        Ok(())
+    }
+}
+
+#[derive(Serialize)]
+struct Json<'a> {
+    problem: &'static str,
+    num_rotations: usize,
+    num_measurements: usize,
+    warnings: &'a [Warning],
+    input: &'a str,
+    format: &'a str,
+    cost: f64,
+    estimate: Rows<'a>,
+    frame_ids: &'a [u64],
+    sensors_from_rig: Rows<'a>,
+    sensor_ids: &'a [u64],
+    sensors_held: Vec<bool>,
+    num_images: usize,
+    solver: &'a crate::termination::SolverReport,
+    certificate: Option<&'a crate::certify::Certificate>,
+    verdict: Option<super::VerdictOf>,
+    pipeline: &'a crate::pipeline::PipelineDetails,
+}
+
+impl Serialize for RigFileReport {
+    fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+        let (s, p) = (&self.result.solution, &self.rig.problem);
+        Json {
+            problem: "rig",
+            // the frames and the estimated sensors
+            num_rotations: s.frames.len() + self.estimated(),
+            num_measurements: p.edges().len(),
+            warnings: &self.rig.warnings,
+            input: &self.input,
+            format: &self.rig.format,
+            cost: s.cost,
+            estimate: Rows::Many(&s.frames),
+            frame_ids: &self.rig.frame_ids,
+            sensors_from_rig: Rows::Many(&s.sensors),
+            sensor_ids: &self.rig.sensor_ids,
+            sensors_held: p.held().iter().map(Option::is_some).collect(),
+            num_images: p.images().len(),
+            solver: &s.report,
+            certificate: self.result.certificate.as_ref(),
+            verdict: self.verdict_of(),
+            pipeline: &self.result.details,
+        }
+        .serialize(serializer)
+    }
+}

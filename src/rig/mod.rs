@@ -1,0 +1,24 @@
+//! Rigs of any number of sensors (`paper-notes/conjugate.md` `[H19]`; contract section 5's rig
+//! convention): frames `F_f` and sensors `S_s` (`sensor_from_rig`, known or unknown), images
+//! `X_a = S_{s_a} F_{f_a}`, and relative rotations between any two images, as COLMAP's rig
+//! configurations produce.
+//!
+//! * [`RigProblem`]: the validated problem, its chordal cost `J(F, S)`, the frames' view graph
+//!   at fixed sensors and the images' view graph.
+//! * [`solve_rig`]: the local solver (frames by the sparse chordal Newton-LM, sensors by a
+//!   small dense Levenberg-Marquardt, alternated).
+//! * The certificate is [`crate::certify::certify_rig`], the pipeline
+//!   [`crate::pipeline::average_rig`].
+//! * [`RigScene`]: seeded rigs with planted frames and sensors.
+//!
+//! The two-sensor problem whose sensors each see their own view graph over the same frames
+//! (with its coupled certificates) is [`crate::pipeline::simultaneous`].
+
+mod problem;
+mod solve;
+mod start;
+mod synthetic;
+
+pub use problem::{Image, RigProblem, Sensor};
+pub use solve::{RIG_DECREASE_TOLERANCE, RigSettings, RigSolution, solve_rig};
+pub use synthetic::{RigScene, RigTruth};

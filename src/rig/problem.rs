@@ -1,0 +1,258 @@
+//! The rig problem (`paper-notes/conjugate.md` `[H19]`): frames, sensors and the images they
+//! take, measured by relative rotations between images.
+
+use crate::error::{Error, Result};
+use crate::multiple::{Edge, MultipleProblem};
+use crate::so3::{Rotation, nearest_rotation};
+use serde::{Deserialize, Serialize};
+
+/// One sensor (camera) of a rig: its `sensor_from_rig` rotation `S_s`, known or unknown.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Sensor {
+    /// `S_s` when it is known (held, never estimated); `None`: estimated.
+    #[serde(with = "crate::so3::serde_rows::optional_rotation", default)]
+    pub sensor_from_rig: Option<Rotation>,
+}
+
+/// One image: taken by `sensor` at `frame`, its absolute rotation `X = S_sensor F_frame`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Image {
+    /// The frame (rig pose) index.
+    pub frame: usize,
+    /// The sensor index.
+    pub sensor: usize,
+}
+
+/// A rig problem: `num_frames` unknown frame rotations `F_f`, sensors with `sensor_from_rig`
+/// rotations `S_s` (known or unknown), images `a = (f_a, s_a)` with absolute rotations
+/// `X_a = S_{s_a} F_{f_a}` (world-to-camera, contract section 5), and edges between images
+/// (`i`, `j` index [`Self::images`]) with `R_ab X_a ~ X_b`. Edges may join images of any two
+/// sensors and any two frames (two images of one frame measure the sensors only). Chordal cost
+/// `J(F, S) = sum w ||S_{s_b} F_{f_b} - R_ab S_{s_a} F_{f_a}||_F^2`.
+///
+/// Gauges: `F -> F G` (fixed by `F_0 = I`) and, for each rig (a set of frames and sensors joined
+/// by images) with no known sensor, `S -> S H`, `F -> H^T F`, fixed by holding that rig's first
+/// sensor at the identity, as COLMAP's reference sensor ([`Self::held`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RigData")]
+pub struct RigProblem {
+    num_frames: usize,
+    sensors: Vec<Sensor>,
+    images: Vec<Image>,
+    edges: Vec<Edge>,
+    #[serde(skip)]
+    held: Vec<Option<Rotation>>,
+}
+
+/// A rig problem as read (validated into a [`RigProblem`] on deserialisation).
+#[derive(Deserialize)]
+struct RigData {
+    num_frames: usize,
+    sensors: Vec<Sensor>,
+    images: Vec<Image>,
+    edges: Vec<Edge>,
+}
+
+impl TryFrom<RigData> for RigProblem {
+    type Error = Error;
+    fn try_from(d: RigData) -> Result<Self> {
+        RigProblem::new(d.num_frames, d.sensors, d.images, d.edges)
+    }
+}
+
+impl RigProblem {
+    /// A validated rig problem. Known `sensor_from_rig` rotations are projected to the nearest
+    /// rotation. Errors: no frames or no edges, an image's frame or sensor out of range, two
+    /// images of one sensor at one frame, an edge's image out of range, a self loop, a weight
+    /// that is not finite and positive, a non-finite rotation.
+    ///
+    /// ```
+    /// use rotavg::multiple::Edge;
+    /// use rotavg::rig::{Image, RigProblem, Sensor};
+    /// use rotavg::Rotation;
+    /// let sensors = vec![Sensor { sensor_from_rig: None }; 2];
+    /// let images = vec![Image { frame: 0, sensor: 0 }, Image { frame: 0, sensor: 1 }];
+    /// let e = Edge { i: 0, j: 1, rotation: Rotation::identity(), weight: 1.0 };
+    /// let p = RigProblem::new(1, sensors, images, vec![e])?;
+    /// // sensor 0 is the rig's reference: held at the identity
+    /// assert_eq!(p.held()[0], Some(Rotation::identity()));
+    /// assert_eq!(p.held()[1], None);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn new(
+        num_frames: usize,
+        sensors: Vec<Sensor>,
+        images: Vec<Image>,
+        edges: Vec<Edge>,
+    ) -> Result<Self> {
+        check_images(num_frames, sensors.len(), &images)?;
+        // the edges as a view graph over the images: the same checks as `multiple`'s
+        MultipleProblem::new(images.len(), edges.clone())?;
+        let sensors: Vec<Sensor> = sensors
+            .into_iter()
+            .map(|s| Sensor {
+                sensor_from_rig: s.sensor_from_rig.as_ref().map(nearest_rotation),
+            })
+            .collect();
+        let held = held_sensors(num_frames, &sensors, &images);
+        Ok(RigProblem {
+            num_frames,
+            sensors,
+            images,
+            edges,
+            held,
+        })
+    }
+
+    /// Number of frames.
+    pub fn num_frames(&self) -> usize {
+        self.num_frames
+    }
+
+    /// The sensors as given.
+    pub fn sensors(&self) -> &[Sensor] {
+        &self.sensors
+    }
+
+    /// The images.
+    pub fn images(&self) -> &[Image] {
+        &self.images
+    }
+
+    /// The edges between images.
+    pub fn edges(&self) -> &[Edge] {
+        &self.edges
+    }
+
+    /// The sensors held fixed, by index: the known ones, and the first sensor of every rig
+    /// without a known one, at the identity (the gauge). `None`: estimated.
+    pub fn held(&self) -> &[Option<Rotation>] {
+        &self.held
+    }
+
+    /// Every sensor is held: the frames alone are unknown, and the problem is one view graph
+    /// over them ([`Self::frame_graph`], `[H19]`).
+    pub fn all_held(&self) -> bool {
+        self.held.iter().all(Option::is_some)
+    }
+
+    /// The smallest weight of any edge (the tolerance's `w_min`).
+    pub fn min_weight(&self) -> f64 {
+        self.edges
+            .iter()
+            .map(|e| e.weight)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The absolute rotations `X_a = S_{s_a} F_{f_a}` of the images.
+    pub fn image_rotations(&self, frames: &[Rotation], sensors: &[Rotation]) -> Vec<Rotation> {
+        self.images
+            .iter()
+            .map(|im| sensors[im.sensor] * frames[im.frame])
+            .collect()
+    }
+
+    /// The chordal cost `J(F, S)`.
+    pub fn cost(&self, frames: &[Rotation], sensors: &[Rotation]) -> f64 {
+        let x = self.image_rotations(frames, sensors);
+        self.edges
+            .iter()
+            .map(|e| {
+                e.weight * (x[e.j].matrix() - e.rotation.matrix() * x[e.i].matrix()).norm_squared()
+            })
+            .sum()
+    }
+
+    /// The frames' view graph at fixed sensors `S` (`[H19]`): each edge between images of two
+    /// frames as the frame edge `S_b^T R_ab S_a` (`||S_b F_b - R S_a F_a|| = ||F_b - S_b^T R S_a
+    /// F_a||`), and the cost of the edges within one frame, which `F` does not change. Errors:
+    /// no edge joins two frames.
+    pub fn frame_graph(&self, sensors: &[Rotation]) -> Result<(MultipleProblem, f64)> {
+        let (mut edges, mut constant) = (Vec::new(), 0.0);
+        for e in &self.edges {
+            let (a, b) = (self.images[e.i], self.images[e.j]);
+            let (sa, sb) = (sensors[a.sensor], sensors[b.sensor]);
+            if a.frame == b.frame {
+                constant +=
+                    e.weight * (sb.matrix() - e.rotation.matrix() * sa.matrix()).norm_squared();
+            } else {
+                edges.push(Edge {
+                    i: a.frame,
+                    j: b.frame,
+                    rotation: sb.inverse() * e.rotation * sa,
+                    weight: e.weight,
+                });
+            }
+        }
+        Ok((MultipleProblem::new(self.num_frames, edges)?, constant))
+    }
+
+    /// The view graph over the images, with the rig's constraints dropped (`[H19]`'s
+    /// relaxation): its chordal cost at `X = S F` is `J(F, S)`.
+    pub fn image_graph(&self) -> Result<MultipleProblem> {
+        MultipleProblem::new(self.images.len(), self.edges.clone())
+    }
+
+    /// The images of a rig of `frames` frames in which every one of `sensors` sensors
+    /// photographs every frame: image `f * sensors + s` is sensor `s` at frame `f`.
+    pub fn full_images(frames: usize, sensors: usize) -> Vec<Image> {
+        (0..frames)
+            .flat_map(|frame| (0..sensors).map(move |sensor| Image { frame, sensor }))
+            .collect()
+    }
+}
+
+/// Every image's frame and sensor in range, at most one image per (frame, sensor).
+fn check_images(num_frames: usize, num_sensors: usize, images: &[Image]) -> Result<()> {
+    if num_frames == 0 || num_sensors == 0 {
+        return Err(Error::Empty {
+            what: "the rig (no frames or no sensors)".into(),
+        });
+    }
+    let mut seen = std::collections::HashSet::new();
+    for (k, im) in images.iter().enumerate() {
+        if im.frame >= num_frames || im.sensor >= num_sensors {
+            return Err(Error::InvalidSettings {
+                name: "rig images".into(),
+                reason: format!(
+                    "image {k} has frame {} and sensor {}: the rig has {num_frames} frames and \
+                     {num_sensors} sensors",
+                    im.frame, im.sensor
+                ),
+            });
+        }
+        if !seen.insert((im.frame, im.sensor)) {
+            return Err(Error::InvalidSettings {
+                name: "rig images".into(),
+                reason: format!(
+                    "image {k} is a second image of sensor {} at frame {}",
+                    im.sensor, im.frame
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The held sensors: the known ones, and the first sensor of every rig (component of frames and
+/// sensors joined by images) without one, at the identity.
+fn held_sensors(num_frames: usize, sensors: &[Sensor], images: &[Image]) -> Vec<Option<Rotation>> {
+    // the rigs: components of frames 0..F and sensors F..F+K joined by images
+    let mut rigs = crate::multiple::union_find::UnionFind::new(num_frames + sensors.len());
+    for im in images {
+        rigs.union(im.frame, num_frames + im.sensor);
+    }
+    let mut held: Vec<Option<Rotation>> = sensors.iter().map(|s| s.sensor_from_rig).collect();
+    let mut anchored = std::collections::HashSet::new();
+    for (s, h) in held.iter().enumerate() {
+        if h.is_some() {
+            anchored.insert(rigs.find(num_frames + s));
+        }
+    }
+    for (s, h) in held.iter_mut().enumerate() {
+        if anchored.insert(rigs.find(num_frames + s)) {
+            *h = Some(Rotation::identity());
+        }
+    }
+    held
+}

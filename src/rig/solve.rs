@@ -1,0 +1,249 @@
+//! The rig's local solver (`paper-notes/conjugate.md` `[H19]`): block-coordinate descent on
+//! `J(F, S)`. With the sensors fixed, `J` is the frames' view graph's chordal cost plus a
+//! constant ([`RigProblem::frame_graph`]), solved by the sparse chordal Newton-LM; with the
+//! frames fixed, `J` is a least-squares problem in the unknown sensors alone (`3K` unknowns for
+//! `K` of them), solved by Levenberg-Marquardt on dense `3K x 3K` normal equations. Neither step
+//! increases `J`.
+
+use super::problem::RigProblem;
+use super::start::start_sensors;
+use crate::deadline::{Deadline, limit_reached, remaining};
+use crate::error::{Error, Result};
+use crate::multiple::{Initialisation, MultipleSettings, solve_multiple};
+use crate::so3::{Rotation, exp, hat, nearest_rotation};
+use crate::termination::{SolverReport, Termination};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// The relative decrease of `J` in one pass below which the alternation stops.
+pub const RIG_DECREASE_TOLERANCE: f64 = 1e-10;
+
+/// Settings of [`solve_rig`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RigSettings {
+    /// Alternation passes at most (default 1000).
+    pub max_passes: usize,
+    /// Time limit, seconds (`None`, the default: none): the start, the passes and the solves
+    /// inside them share one clock, each checked before its next iteration.
+    pub max_seconds: Option<f64>,
+}
+
+impl Default for RigSettings {
+    fn default() -> Self {
+        RigSettings {
+            max_passes: 1000,
+            max_seconds: None,
+        }
+    }
+}
+
+impl RigSettings {
+    /// Errors: no passes, a time limit that is not finite and nonnegative.
+    pub fn validate(&self) -> Result<()> {
+        if self.max_passes == 0 {
+            return Err(Error::InvalidSettings {
+                name: "max_passes".into(),
+                reason: "must be at least 1".into(),
+            });
+        }
+        crate::deadline::validate_max_seconds(self.max_seconds)
+    }
+}
+
+/// A rig estimate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RigSolution {
+    /// The frames `F_f` (rig-from-world), `F_0 = I`.
+    #[serde(with = "crate::so3::serde_rows::rotations")]
+    pub frames: Vec<Rotation>,
+    /// Every sensor's `sensor_from_rig` `S_s` (the held ones as held).
+    #[serde(with = "crate::so3::serde_rows::rotations")]
+    pub sensors: Vec<Rotation>,
+    /// The chordal cost `J(F, S)`.
+    pub cost: f64,
+    /// Passes, why it stopped, wall time.
+    pub report: SolverReport,
+}
+
+/// Estimate a rig's frames and unknown sensors (`[H19]`): the start of [`start_sensors`], then
+/// passes of a frame step and a sensor step until one decreases `J` by less than
+/// [`RIG_DECREASE_TOLERANCE`] of it, `max_passes` or `max_seconds`.
+///
+/// ```
+/// use rotavg::rig::{RigScene, RigSettings, solve_rig};
+/// let (p, truth) = RigScene { frames: 50, sensors: 3, noise_sigma: 0.0, ..Default::default() }.generate();
+/// let s = solve_rig(&p, &RigSettings::default())?;
+/// assert!(s.cost < 1e-20);
+/// assert!(rotavg::so3::angle_between(&s.sensors[2], &truth.sensors[2]) < 1e-9);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn solve_rig(p: &RigProblem, settings: &RigSettings) -> Result<RigSolution> {
+    settings.validate()?;
+    let clock = Instant::now();
+    let left = || remaining(settings.max_seconds, clock);
+    let mut sensors = start_sensors(p, left())?;
+    let mut frames = frame_step(p, &sensors, None, left())?;
+    let mut cost = p.cost(&frames, &sensors);
+    let deadline = Deadline::after(left());
+    let (mut passes, mut decrease) = (0, f64::NAN);
+    let termination = loop {
+        let measure = (decrease, RIG_DECREASE_TOLERANCE);
+        if let Some(limit) = limit_reached(passes, settings.max_passes, deadline, measure) {
+            break limit;
+        }
+        passes += 1;
+        sensors = sensor_step(p, &frames, sensors, Deadline::after(left()));
+        frames = frame_step(p, &sensors, Some(frames), left())?;
+        let next = p.cost(&frames, &sensors);
+        decrease = (cost - next) / cost.abs().max(f64::MIN_POSITIVE);
+        cost = next;
+        crate::progress::phase(crate::progress::Phase::Solve, || {
+            format!("rig pass {passes}: J = {cost:.6e}, relative decrease {decrease:.1e}")
+        });
+        if decrease < RIG_DECREASE_TOLERANCE && !deadline.is_some_and(|d| d.passed()) {
+            break Termination::Converged {
+                measure: "relative decrease of J in one pass".into(),
+                value: decrease.max(0.0),
+                threshold: RIG_DECREASE_TOLERANCE,
+            };
+        }
+    };
+    let sensors: Vec<Rotation> = sensors.iter().map(nearest_rotation).collect();
+    Ok(RigSolution {
+        cost: p.cost(&frames, &sensors),
+        frames,
+        sensors,
+        report: SolverReport {
+            name: "rig-alternating (sparse frames, dense sensors)".into(),
+            iterations: passes,
+            termination,
+            seconds: clock.elapsed().as_secs_f64(),
+        },
+    })
+}
+
+/// The frames at fixed sensors: the frames' view graph solved from `frames` (the spectral start
+/// when `None`), gauge `F_0 = I`.
+fn frame_step(
+    p: &RigProblem,
+    sensors: &[Rotation],
+    frames: Option<Vec<Rotation>>,
+    max_seconds: Option<f64>,
+) -> Result<Vec<Rotation>> {
+    let (graph, _) = p.frame_graph(sensors)?;
+    let settings = MultipleSettings {
+        init: frames.map(Initialisation::Given).unwrap_or_default(),
+        max_seconds,
+        ..Default::default()
+    };
+    Ok(solve_multiple(&graph, &settings)?.rotations)
+}
+
+/// Levenberg-Marquardt iterations of the sensor step at most.
+const SENSOR_MAX_ITERATIONS: usize = 50;
+
+/// The unknown sensors at fixed frames: Levenberg-Marquardt on `J` over `S_s exp([d_s]x)` from
+/// `sensors`, each step accepted only when it does not increase `J`; stops when a step changes
+/// `J` by less than 1e-15 of it, after [`SENSOR_MAX_ITERATIONS`], or at `deadline`.
+fn sensor_step(
+    p: &RigProblem,
+    frames: &[Rotation],
+    mut sensors: Vec<Rotation>,
+    deadline: Option<Deadline>,
+) -> Vec<Rotation> {
+    let unknown: Vec<usize> = (0..sensors.len())
+        .filter(|&s| p.held()[s].is_none())
+        .collect();
+    if unknown.is_empty() {
+        return sensors;
+    }
+    let mut column = vec![None; sensors.len()];
+    for (k, &s) in unknown.iter().enumerate() {
+        column[s] = Some(3 * k);
+    }
+    let (mut cost, mut damping) = (p.cost(frames, &sensors), 1e-8);
+    for _ in 0..SENSOR_MAX_ITERATIONS {
+        if deadline.is_some_and(|d| d.passed()) {
+            break;
+        }
+        let (h, g) = sensor_normal_equations(p, frames, &sensors, &column, 3 * unknown.len());
+        let mut improved = false;
+        while damping < 1e12 {
+            let mut a = h.clone();
+            for k in 0..a.nrows() {
+                a[(k, k)] += damping * h[(k, k)].max(f64::MIN_POSITIVE);
+            }
+            let Some(step) = a.cholesky().map(|c| c.solve(&(-&g))) else {
+                damping *= 10.0;
+                continue;
+            };
+            let trial = stepped(&sensors, &unknown, &step);
+            let next = p.cost(frames, &trial);
+            if next <= cost {
+                let change = (cost - next) / cost.max(f64::MIN_POSITIVE);
+                (sensors, cost, damping, improved) = (trial, next, damping * 0.1, change > 1e-15);
+                break;
+            }
+            damping *= 10.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    sensors
+}
+
+/// `sensors` with each unknown one `S_s exp([d_s]x)`.
+fn stepped(sensors: &[Rotation], unknown: &[usize], step: &DVector<f64>) -> Vec<Rotation> {
+    let mut out = sensors.to_vec();
+    for (k, &s) in unknown.iter().enumerate() {
+        let d = Vector3::new(step[3 * k], step[3 * k + 1], step[3 * k + 2]);
+        out[s] = nearest_rotation(&(sensors[s] * exp(&d)));
+    }
+    out
+}
+
+/// The Gauss-Newton normal equations `(J^T J, J^T r)` of `J` in the unknown sensors' tangent
+/// steps (`column[s]`: the first of sensor `s`'s three columns): each edge's residual
+/// `E = S_b A - R S_a`, `A = F_b F_a^T`, has derivatives `S_b [e_k]x A` in `d_b` and
+/// `-R S_a [e_k]x` in `d_a`.
+fn sensor_normal_equations(
+    p: &RigProblem,
+    frames: &[Rotation],
+    sensors: &[Rotation],
+    column: &[Option<usize>],
+    size: usize,
+) -> (DMatrix<f64>, DVector<f64>) {
+    let (mut h, mut g) = (DMatrix::zeros(size, size), DVector::zeros(size));
+    let basis = [Vector3::x(), Vector3::y(), Vector3::z()].map(|v| hat(&v));
+    for e in p.edges() {
+        let (a, b) = (p.images()[e.i], p.images()[e.j]);
+        let (ca, cb) = (column[a.sensor], column[b.sensor]);
+        if ca.is_none() && cb.is_none() {
+            continue;
+        }
+        let rel = (frames[b.frame] * frames[a.frame].inverse()).into_inner();
+        let (sa, sb, r) = (
+            sensors[a.sensor].matrix(),
+            sensors[b.sensor].matrix(),
+            e.rotation.matrix(),
+        );
+        let residual = sb * rel - r * sa;
+        let mut derivatives: Vec<(usize, Matrix3<f64>)> = Vec::with_capacity(6);
+        if let Some(c) = cb {
+            derivatives.extend((0..3).map(|k| (c + k, sb * basis[k] * rel)));
+        }
+        if let Some(c) = ca {
+            derivatives.extend((0..3).map(|k| (c + k, -(r * sa * basis[k]))));
+        }
+        for (u, du) in &derivatives {
+            g[*u] += e.weight * du.dot(&residual);
+            for (v, dv) in &derivatives {
+                h[(*u, *v)] += e.weight * du.dot(dv);
+            }
+        }
+    }
+    (h, g)
+}

@@ -1,0 +1,136 @@
+//! Seeded rigs with planted frames and sensors (`[H19]`).
+
+use super::problem::{RigProblem, Sensor};
+use crate::multiple::Edge;
+use crate::so3::{Rotation, perturb_gaussian, random_rotation};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use serde::{Deserialize, Serialize};
+
+/// A generated rig: `frames` frames with random rotations, `sensors` sensors (sensor 0 the
+/// reference, `S_0 = I`; the others random), every sensor photographing every frame. Each
+/// sensor's images are joined along the frame sequence (`f`, `f + 1`) and by
+/// `extra_edges_per_frame` random frame pairs; a fraction `cross_fraction` of frames adds an
+/// edge from the reference sensor's image to another sensor's, of the same frame or of a random
+/// one. Measurements are perturbed by Gaussian noise of `noise_sigma` radians; a fraction
+/// `outlier_fraction` replaced by random rotations. With `known`, every sensor's
+/// `sensor_from_rig` is given.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RigScene {
+    /// Frames.
+    pub frames: usize,
+    /// Sensors.
+    pub sensors: usize,
+    /// Random same-sensor edges per frame, besides the sequence's.
+    pub extra_edges_per_frame: usize,
+    /// Fraction of frames with an edge between two sensors.
+    pub cross_fraction: f64,
+    /// Gaussian noise, radians.
+    pub noise_sigma: f64,
+    /// Fraction of edges replaced by random rotations.
+    pub outlier_fraction: f64,
+    /// Every sensor's `sensor_from_rig` given.
+    pub known: bool,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl Default for RigScene {
+    fn default() -> Self {
+        RigScene {
+            frames: 100,
+            sensors: 3,
+            extra_edges_per_frame: 2,
+            cross_fraction: 0.3,
+            noise_sigma: 0.01,
+            outlier_fraction: 0.0,
+            known: false,
+            seed: 0,
+        }
+    }
+}
+
+/// The planted rig: frames (`F_0 = I`) and sensors (`S_0 = I`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RigTruth {
+    /// `F_f`.
+    #[serde(with = "crate::so3::serde_rows::rotations")]
+    pub frames: Vec<Rotation>,
+    /// `S_s`.
+    #[serde(with = "crate::so3::serde_rows::rotations")]
+    pub sensors: Vec<Rotation>,
+}
+
+impl RigScene {
+    /// The problem and its planted truth. Panics only on an empty scene (fewer than 2 frames
+    /// or no sensor), never on a seed.
+    pub fn generate(&self) -> (RigProblem, RigTruth) {
+        assert!(
+            self.frames >= 2 && self.sensors >= 1,
+            "a rig needs 2 frames and a sensor"
+        );
+        let mut rng = StdRng::seed_from_u64(self.seed);
+        let mut frames: Vec<Rotation> = (0..self.frames)
+            .map(|_| random_rotation(&mut rng))
+            .collect();
+        let f0 = frames[0].inverse();
+        frames.iter_mut().for_each(|f| *f *= f0);
+        let mut sensors: Vec<Rotation> = (0..self.sensors)
+            .map(|_| random_rotation(&mut rng))
+            .collect();
+        sensors[0] = Rotation::identity();
+        let k = self.sensors;
+        let images = RigProblem::full_images(self.frames, k);
+        let mut edges = Vec::new();
+        let mut add = |rng: &mut StdRng, (fa, sa): (usize, usize), (fb, sb): (usize, usize)| {
+            let xa = sensors[sa] * frames[fa];
+            let xb = sensors[sb] * frames[fb];
+            let exact = xb * xa.inverse();
+            let rotation = if rng.random::<f64>() < self.outlier_fraction {
+                random_rotation(rng)
+            } else {
+                perturb_gaussian(&exact, self.noise_sigma, rng)
+            };
+            edges.push(Edge {
+                i: fa * k + sa,
+                j: fb * k + sb,
+                rotation,
+                weight: 1.0,
+            });
+        };
+        for s in 0..k {
+            for f in 0..self.frames {
+                if f + 1 < self.frames {
+                    add(&mut rng, (f, s), (f + 1, s));
+                }
+                for _ in 0..self.extra_edges_per_frame {
+                    let g = rng.random_range(0..self.frames);
+                    if g != f {
+                        add(&mut rng, (f, s), (g, s));
+                    }
+                }
+            }
+        }
+        for f in 0..self.frames {
+            if k > 1 && rng.random::<f64>() < self.cross_fraction {
+                let t = rng.random_range(1..k);
+                let g = if rng.random::<bool>() {
+                    f
+                } else {
+                    rng.random_range(0..self.frames)
+                };
+                add(&mut rng, (f, 0), (g, t));
+            }
+        }
+        let sensor_list = sensors
+            .iter()
+            .map(|s| Sensor {
+                sensor_from_rig: self.known.then_some(*s),
+            })
+            .collect();
+        let problem = RigProblem::new(self.frames, sensor_list, images, edges)
+            .expect("a generated rig is valid");
+        (problem, RigTruth { frames, sensors })
+    }
+}
