@@ -31,6 +31,7 @@ __all__ = [
     "average_conjugate",
     "average_multiple",
     "average_rig",
+    "average_rig_file",
     "average_single",
     "certify_conjugate",
     "certify_multiple",
@@ -441,6 +442,16 @@ def average_rig(
     max_seconds: Optional[float] = 600.0,
 ) -> Result:
     """A two-sensor rig's frames and sensor_from_rig, jointly from two view graphs, certified."""
+
+def average_rig_file(
+    path: _PathLike,
+    *,
+    certify: str = "auto",
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
+    rotation_tolerance: float = 1e-5,
+) -> Result:
+    """A rig of any number of sensors from a JSON rig file or a COLMAP rig configuration."""
 
 def certify_rig(
     right: Graph,

@@ -1,12 +1,12 @@
-//! Two-sensor rigs from Python (`average_rig`, `certify_rig`): the reports of `rotavg rig` and
-//! `rotavg certify --left`.
+//! Rigs from Python (`average_rig`, `certify_rig`, `average_rig_file`): the reports of
+//! `rotavg rig RIGHT LEFT`, `rotavg certify --left` and `rotavg rig FILE`.
 
 use crate::convert::{matrices, matrix};
 use crate::types::{Graph, Report, RunResult};
 use crate::{certify_settings, detached, parse_named};
 use pyo3::prelude::*;
 use rotavg::certify::CertifyMode;
-use rotavg::report::RigReport;
+use rotavg::report::{RigFileReport, RigReport};
 
 /// A two-sensor rig: the frames and the second sensor's ``sensor_from_rig`` rotation ``S``,
 /// estimated jointly from two view graphs over the same frames and certified, exactly as
@@ -54,6 +54,51 @@ pub fn average_rig(
         RigReport::average(names, (&r, &l), held, certify, max_seconds)
     })?;
     RunResult::new(py, Report::Rig(report))
+}
+
+/// A rig of any number of sensors read from a file, solved and certified, exactly as ``rotavg
+/// rig FILE`` (``paper-notes/conjugate.md`` [H19]).
+///
+/// Args:
+///     path: a JSON rig file (``{"num_frames", "sensors", "images", "edges"}``) or a COLMAP
+///         database with a rig configuration (tables rigs, rig_sensors, frames, frame_data).
+///     certify: ``"auto"``, ``"dual"`` or ``"none"``.
+///     max_memory, max_seconds: the run's budget, as for ``average_multiple``.
+///     rotation_tolerance: how far a rotation in a JSON rig file may be from SO(3).
+///
+/// Returns:
+///     Result: ``estimate`` is the frames ``(F, 3, 3)`` (``estimate[0] = I``);
+///     ``to_dict()["sensors_from_rig"]`` every sensor's ``sensor_from_rig`` (the known ones as
+///     given), ``to_dict()["sensors_held"]`` which were held; ``to_dict()`` equals ``rotavg rig
+///     FILE --json``.
+///
+/// Raises:
+///     rotavg.ParseError / FileError: a file that cannot be read (naming it); rotavg.Error: a
+///         rig that is not valid (an image out of range, a sensor no edge places).
+#[pyfunction]
+#[pyo3(name = "average_rig_file", signature = (path, *, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5))]
+pub fn average_rig_file(
+    py: Python<'_>,
+    path: &Bound<'_, PyAny>,
+    certify: &str,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
+    rotation_tolerance: f64,
+) -> PyResult<RunResult> {
+    let mode: CertifyMode = parse_named(certify, "certify")?;
+    let certify = certify_settings(mode, max_memory, max_seconds, true, None)?;
+    let path = crate::convert::path_of(path)
+        .ok_or_else(|| crate::errors::argument_error("path must be a str or os.PathLike"))?;
+    let report = detached(py, move || {
+        let options = rotavg::io::detect::ReadOptions {
+            rotation_tolerance,
+            ..Default::default()
+        };
+        let rig = rotavg::io::rig::load_rig(std::path::Path::new(&path), &options)?;
+        let max_seconds = certify.budget.max_seconds;
+        RigFileReport::average(path, rig, certify, max_seconds)
+    })?;
+    RunResult::new(py, Report::RigFile(report))
 }
 
 /// The rotation `sensor_from_rig` of a `(3, 3)` array.

@@ -202,6 +202,7 @@ pub enum Report {
     Conjugate(ConjugateReport),
     Certify(CertifyReport),
     Rig(rotavg::report::RigReport),
+    RigFile(rotavg::report::RigFileReport),
 }
 
 impl Report {
@@ -212,6 +213,7 @@ impl Report {
             Report::Conjugate(r) => to_json(r),
             Report::Certify(r) => to_json(r),
             Report::Rig(r) => to_json(r),
+            Report::RigFile(r) => to_json(r),
         }
     }
 
@@ -222,6 +224,7 @@ impl Report {
             Report::Conjugate(r) => r.to_string(),
             Report::Certify(r) => r.to_string(),
             Report::Rig(r) => r.to_string(),
+            Report::RigFile(r) => r.to_string(),
         }
     }
 }
@@ -339,6 +342,19 @@ impl RunResult {
                     r.result.certificate.as_ref(),
                 )
             }
+            Report::RigFile(r) => {
+                let s = &r.result.solution;
+                (
+                    "rig",
+                    rotations_array(py, &s.frames)?,
+                    s.cost,
+                    None,
+                    s.frames.len(),
+                    r.rig.problem.edges().len(),
+                    Some(&s.report),
+                    r.result.certificate.as_ref(),
+                )
+            }
             Report::Certify(r) => (
                 match r.problem {
                     rotavg::report::ProblemKind::Single => "single",
@@ -429,7 +445,7 @@ impl RunResult {
                 };
                 (Some(rotations), Some(r.certificate.clone()))
             }
-            Report::Rig(_) => (None, None),
+            Report::Rig(_) | Report::RigFile(_) => (None, None),
         }
     }
 
@@ -442,6 +458,12 @@ impl RunResult {
                     &s.rotations,
                     &r.node_ids,
                     &s.s,
+                ))
+            }
+            Report::RigFile(r) => {
+                let s = &r.result.solution;
+                Some(rotavg::io::rig::write_rig_estimate_json(
+                    &s.frames, &s.sensors, &r.rig,
                 ))
             }
             _ => None,

@@ -206,6 +206,7 @@ def multiple(folder: Path) -> None:
     rig = check_result(rotavg.average_rig(g, g, certify="dual", max_seconds=60.0))
     check_result(rotavg.certify_rig(g, g, rig.estimate, np.eye(3), certify="dual"))
     check_result(rotavg.average_rig(g, g, sensor_from_rig=np.eye(3), certify="dual"))
+    check_result(rotavg.average_rig_file("examples/data/rig_sensors/rig.json", certify="none", max_seconds=60.0))
     from_graph = check_result(rotavg.average_multiple(g))
     from_graph = check_result(rotavg.average_multiple(g, loss="chordal", certify="auto",
                                                       largest_component=True))

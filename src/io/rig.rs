@@ -1,4 +1,4 @@
-//! Rigs of any number of sensors read from files (`paper-notes/formats.md` `[F16]`): the JSON
+//! Rigs of any number of sensors read from files (`paper-notes/formats.md` `[F17]`): the JSON
 //! rig format and a COLMAP database's rig configuration, as a [`RigProblem`] with the files'
 //! ids; and the estimate written back.
 //!
@@ -160,7 +160,7 @@ pub fn load_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> {
     read_rig_json(&text, &file, options)
 }
 
-/// The rig of a COLMAP database (`[F16]`): the view graph of its two-view geometries over the
+/// The rig of a COLMAP database (`[F17]`): the view graph of its two-view geometries over the
 /// images (as `rotavg multiple` reads it), each image placed at its frame and camera by the
 /// tables `frames` and `frame_data`, the cameras' `sensor_from_rig` from `rigs` (reference
 /// sensors: the identity) and `rig_sensors` (known, or `NULL`: estimated). Errors: no rig

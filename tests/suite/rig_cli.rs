@@ -293,7 +293,7 @@ fn a_rig_file_of_three_sensors_is_calibrated() {
     assert_eq!(written["sensor_ids"], serde_json::json!([0, 1, 2]));
 }
 
-/// COLMAP's rig configuration (`[F16]`), written here with COLMAP 4's schema: camera 1 the
+/// COLMAP's rig configuration (`[F17]`), written here with COLMAP 4's schema: camera 1 the
 /// reference, camera 2 known (its `Rigid3d` blob), camera 3 unknown (`NULL`), frames with ids
 /// from 10; noise-free geometries within each camera and across cameras. The planted rig is
 /// recovered and certified; the frames and sensors carry COLMAP's ids. A database without rig

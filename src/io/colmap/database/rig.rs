@@ -1,4 +1,4 @@
-//! COLMAP's rig configuration (`[F16]`, COLMAP 3.12 and later): which frame and which sensor
+//! COLMAP's rig configuration (`[F17]`, COLMAP 3.12 and later): which frame and which sensor
 //! took each image, and each sensor's `sensor_from_rig` rotation when it is known.
 //!
 //! * `rigs (rig_id, ref_sensor_id, ref_sensor_type)`: the reference sensor of a rig, whose
