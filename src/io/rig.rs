@@ -16,7 +16,7 @@
 //! first sensor held at the identity (COLMAP's reference sensor).
 
 use crate::error::{Error, Result};
-use crate::io::detect::{LoadedGraph, ReadOptions};
+use crate::io::detect::ReadOptions;
 use crate::multiple::Edge;
 use crate::rig::{Image, RigProblem, Sensor};
 use crate::so3::{Rotation, rotation_from_rows, rotation_to_rows};
@@ -183,8 +183,9 @@ pub fn read_colmap_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> 
 
 /// The rig of `graph`'s images placed by `images` (image id -> frame id, camera id), the
 /// cameras' `sensor_from_rig` in `known` (a camera in no rig: its own reference, the identity).
+#[cfg(feature = "colmap")]
 fn rig_of_layout(
-    graph: &LoadedGraph,
+    graph: &crate::io::detect::LoadedGraph,
     images: &std::collections::BTreeMap<u64, (u64, u64)>,
     known: &std::collections::BTreeMap<u64, Option<Rotation>>,
 ) -> Result<LoadedRig> {
