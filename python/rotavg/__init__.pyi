@@ -32,6 +32,7 @@ __all__ = [
     "average_multiple",
     "average_rig",
     "average_rig_file",
+    "certify_rig_file",
     "average_single",
     "certify_conjugate",
     "certify_multiple",
@@ -452,6 +453,18 @@ def average_rig_file(
     rotation_tolerance: float = 1e-5,
 ) -> Result:
     """A rig of any number of sensors from a JSON rig file or a COLMAP rig configuration."""
+
+def certify_rig_file(
+    path: _PathLike,
+    frames: Union[_Rotations, str, os.PathLike[str]],
+    sensors_from_rig: Optional[_Rotations] = None,
+    *,
+    certify: str = "auto",
+    max_memory: Optional[int] = None,
+    max_seconds: Optional[float] = 600.0,
+    rotation_tolerance: float = 1e-5,
+) -> Result:
+    """Certify a rig file's estimate computed elsewhere, without changing it."""
 
 def certify_rig(
     right: Graph,

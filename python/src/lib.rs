@@ -1280,6 +1280,7 @@ fn _rotavg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rig::average_rig, m)?)?;
     m.add_function(wrap_pyfunction!(rig::certify_rig, m)?)?;
     m.add_function(wrap_pyfunction!(rig::average_rig_file, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::certify_rig_file, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_edges, m)?)?;
     m.add_function(wrap_pyfunction!(output::write_figure, m)?)?;

@@ -101,6 +101,92 @@ pub fn average_rig_file(
     RunResult::new(py, Report::RigFile(report))
 }
 
+/// Certify a rig estimate computed elsewhere, **without changing it** (its matrices taken at
+/// their nearest rotations), as ``rotavg certify FILE --rig --estimate EST``.
+///
+/// Args:
+///     path: the rig file, as for ``average_rig_file``.
+///     frames: ``(F, 3, 3)`` frame rotations in the rig's order; or the path of the file
+///         ``rotavg rig FILE --output`` (``write_output``) writes (then leave
+///         ``sensors_from_rig`` out).
+///     sensors_from_rig: ``(K, 3, 3)``, every sensor's rotation (with array frames).
+///     certify, max_memory, max_seconds, rotation_tolerance: as for ``average_rig_file``
+///         (``"none"`` means ``"dual"``).
+///
+/// Raises:
+///     rotavg.Error: counts or ids that do not match the rig, a matrix that is not a rotation,
+///         ``sensors_from_rig`` missing with arrays or given with a path.
+#[pyfunction]
+#[pyo3(name = "certify_rig_file", signature = (path, frames, sensors_from_rig=None, *, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5))]
+#[allow(clippy::too_many_arguments)]
+pub fn certify_rig_file(
+    py: Python<'_>,
+    path: &Bound<'_, PyAny>,
+    frames: &Bound<'_, PyAny>,
+    sensors_from_rig: Option<&Bound<'_, PyAny>>,
+    certify: &str,
+    max_memory: Option<u64>,
+    max_seconds: Option<f64>,
+    rotation_tolerance: f64,
+) -> PyResult<RunResult> {
+    let mode = match parse_named(certify, "certify")? {
+        CertifyMode::None => CertifyMode::Dual,
+        m => m,
+    };
+    let settings = certify_settings(mode, max_memory, max_seconds, true, None)?;
+    let path = crate::convert::path_of(path)
+        .ok_or_else(|| crate::errors::argument_error("path must be a str or os.PathLike"))?;
+    let (text, name) = match (
+        crate::convert::path_of(frames),
+        sensors_from_rig.filter(|s| !s.is_none()),
+    ) {
+        (Some(p), None) => (None, p),
+        (None, Some(s)) => {
+            let rows = |m: crate::convert::Matrices| {
+                m.matrices()
+                    .iter()
+                    .map(|r| {
+                        [
+                            [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+                            [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+                            [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
+                        ]
+                    })
+                    .collect::<Vec<_>>()
+            };
+            let value = serde_json::json!({
+                "frames": rows(matrices(frames, "frames")?),
+                "sensors_from_rig": rows(matrices(s, "sensors_from_rig")?),
+            });
+            (Some(value.to_string()), "the arrays".to_string())
+        }
+        (Some(_), Some(_)) => {
+            return Err(crate::errors::argument_error(
+                "a rig estimate file holds sensors_from_rig: leave the argument out",
+            ));
+        }
+        (None, None) => {
+            return Err(crate::errors::argument_error(
+                "certify_rig_file needs sensors_from_rig with array frames",
+            ));
+        }
+    };
+    let report = detached(py, move || {
+        let options = rotavg::io::detect::ReadOptions {
+            rotation_tolerance,
+            ..Default::default()
+        };
+        let rig = rotavg::io::rig::load_rig(std::path::Path::new(&path), &options)?;
+        let text = match text {
+            Some(t) => t,
+            None => rotavg::io::text::read_text(&name)?,
+        };
+        let estimate = rotavg::io::rig::read_rig_estimate(&text, &name, &rig, &options, false)?;
+        RigFileReport::certify(path, rig, estimate, &settings)
+    })?;
+    RunResult::new(py, Report::RigFile(report))
+}
+
 /// The rotation `sensor_from_rig` of a `(3, 3)` array.
 fn one_rotation(s: crate::convert::Matrices) -> rotavg::Result<rotavg::Rotation> {
     s.rotations()?.pop().ok_or_else(|| rotavg::Error::Empty {

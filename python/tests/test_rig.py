@@ -81,3 +81,21 @@ def test_a_rig_file_is_the_command_line_s(cli, tmp_path):
     bad.write_text('{"num_frames": 5, "sensors": [{}], "images": [], "edges": []}')
     with pytest.raises(rotavg.Error, match="bad.json"):
         rotavg.average_rig_file(bad)
+
+
+def test_certify_rig_file_keeps_the_estimate(tmp_path):
+    """``certify_rig_file`` with arrays and with the ``--output`` file: the same cost and bound
+    as the solve; counts that do not match the rig are errors."""
+    solved = rotavg.average_rig_file(RIG_SENSORS / "rig.json")
+    d = solved.to_dict()
+    sensors = np.array(d["sensors_from_rig"])
+    checked = rotavg.certify_rig_file(RIG_SENSORS / "rig.json", solved.estimate, sensors)
+    assert checked.cost == pytest.approx(solved.cost, rel=1e-12)
+    assert checked.to_dict()["certificate"]["lower_bound"] == pytest.approx(
+        d["certificate"]["lower_bound"], rel=1e-12)
+    out = tmp_path / "estimate.json"
+    rotavg.write_output(solved, out)
+    from_file = rotavg.certify_rig_file(RIG_SENSORS / "rig.json", out)
+    assert from_file.cost == pytest.approx(solved.cost, rel=1e-12)
+    with pytest.raises(rotavg.Error, match="40 frames"):
+        rotavg.certify_rig_file(RIG_SENSORS / "rig.json", solved.estimate[:5], sensors)

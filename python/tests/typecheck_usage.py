@@ -207,6 +207,8 @@ def multiple(folder: Path) -> None:
     check_result(rotavg.certify_rig(g, g, rig.estimate, np.eye(3), certify="dual"))
     check_result(rotavg.average_rig(g, g, sensor_from_rig=np.eye(3), certify="dual"))
     check_result(rotavg.average_rig_file("examples/data/rig_sensors/rig.json", certify="none", max_seconds=60.0))
+    rig_file = rotavg.average_rig_file("examples/data/rig_sensors/rig.json")
+    check_result(rotavg.certify_rig_file("examples/data/rig_sensors/rig.json", rig_file.estimate, np.array(rig_file.to_dict()["sensors_from_rig"]), certify="dual"))
     from_graph = check_result(rotavg.average_multiple(g))
     from_graph = check_result(rotavg.average_multiple(g, loss="chordal", certify="auto",
                                                       largest_component=True))

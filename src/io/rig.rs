@@ -286,3 +286,93 @@ pub fn write_rig_json(problem: &RigProblem) -> String {
     });
     format!("{value}\n")
 }
+
+/// A rig estimate as [`write_rig_estimate_json`] writes it, for `rig`: `"frames"` (one per frame)
+/// and `"sensors_from_rig"` (one per sensor), in the rig's order; `"frame_ids"` and
+/// `"sensor_ids"`, when present, must be the rig's. Each matrix must be a rotation within
+/// `options.rotation_tolerance` and is then taken at its nearest rotation (the certificate is
+/// about rotations); with `nearest`, as `certify --nearest-rotations`, any matrix near O(3)
+/// ([`crate::io::nearest::project_estimate`], all of them negated first when every one is a
+/// reflection), and what was done is returned. Errors name the file.
+pub fn read_rig_estimate(
+    text: &str,
+    file: &str,
+    rig: &LoadedRig,
+    options: &ReadOptions,
+    nearest: bool,
+) -> Result<RigEstimate> {
+    #[derive(Deserialize)]
+    struct EstimateFile {
+        frames: Vec<Rows>,
+        sensors_from_rig: Vec<Rows>,
+        #[serde(default)]
+        frame_ids: Option<Vec<u64>>,
+        #[serde(default)]
+        sensor_ids: Option<Vec<u64>>,
+    }
+    let bad = |msg: String| Error::parse(Some(file), None, msg);
+    let e: EstimateFile = serde_json::from_str(text).map_err(|e| {
+        let line = (e.line() > 0).then_some(e.line());
+        Error::parse(Some(file), line, format!("invalid rig estimate: {e}"))
+    })?;
+    let p = &rig.problem;
+    if e.frames.len() != p.num_frames() || e.sensors_from_rig.len() != p.sensors().len() {
+        return Err(bad(format!(
+            "{} frames and {} sensors for a rig of {} frames and {} sensors",
+            e.frames.len(),
+            e.sensors_from_rig.len(),
+            p.num_frames(),
+            p.sensors().len()
+        )));
+    }
+    for (name, given, ours) in [
+        ("frame_ids", &e.frame_ids, &rig.frame_ids),
+        ("sensor_ids", &e.sensor_ids, &rig.sensor_ids),
+    ] {
+        if given.as_ref().is_some_and(|g| g != ours) {
+            return Err(bad(format!("{name} differ from the rig's")));
+        }
+    }
+    let tolerance = if nearest {
+        f64::INFINITY
+    } else {
+        options.rotation_tolerance
+    };
+    let mut all = e
+        .frames
+        .iter()
+        .chain(&e.sensors_from_rig)
+        .enumerate()
+        .map(|(k, rows)| {
+            let item = match k.checked_sub(e.frames.len()) {
+                None => format!("frame {k}"),
+                Some(s) => format!("sensor {s}"),
+            };
+            rotation_from_rows(rows, tolerance, &item).map_err(|err| err.in_file(file, None))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let projection = if nearest {
+        Some(crate::io::nearest::project_estimate(&mut all, file)?)
+    } else {
+        all.iter_mut()
+            .for_each(|r| *r = crate::so3::nearest_rotation(r));
+        None
+    };
+    let sensors = all.split_off(e.frames.len());
+    Ok(RigEstimate {
+        frames: all,
+        sensors,
+        projection,
+    })
+}
+
+/// A rig estimate read by [`read_rig_estimate`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigEstimate {
+    /// The frames, in the rig's order.
+    pub frames: Vec<Rotation>,
+    /// Every sensor's `sensor_from_rig`.
+    pub sensors: Vec<Rotation>,
+    /// What `--nearest-rotations` did, when it was asked for.
+    pub projection: Option<crate::io::nearest::Projection>,
+}

@@ -102,6 +102,35 @@ pub fn wrap_lines(text: &str, width: usize) -> String {
     out
 }
 
+/// The solver report of an estimate computed elsewhere and certified unchanged.
+pub(crate) fn given_report() -> crate::termination::SolverReport {
+    crate::termination::SolverReport {
+        name: "given (certified, not changed)".into(),
+        iterations: 0,
+        termination: crate::termination::Termination::ClosedForm,
+        seconds: 0.0,
+    }
+}
+
+/// A given `solution` with the certification `c` of it, as a pipeline's result (its time all
+/// the certificate's).
+pub(crate) fn given_result<S, T>(
+    solution: S,
+    c: crate::certify::Certification<T>,
+) -> crate::pipeline::Averaged<S> {
+    let details = crate::pipeline::PipelineDetails {
+        certify_seconds: c.details.seconds,
+        total_seconds: c.details.seconds,
+        certify: Some(c.details),
+        ..Default::default()
+    };
+    crate::pipeline::Averaged {
+        solution,
+        certificate: Some(c.certificate),
+        details,
+    }
+}
+
 /// An estimate in JSON: one row-major rotation, or a list of them.
 #[derive(Serialize)]
 #[serde(untagged)]

@@ -149,24 +149,9 @@ impl RigReport {
             cost: p.cost(&rotations, &s),
             rotations,
             s,
-            report: crate::termination::SolverReport {
-                name: "given (certified, not changed)".into(),
-                iterations: 0,
-                termination: crate::termination::Termination::ClosedForm,
-                seconds: 0.0,
-            },
+            report: super::given_report(),
         };
-        let details = crate::pipeline::PipelineDetails {
-            certify_seconds: c.details.seconds,
-            total_seconds: c.details.seconds,
-            certify: Some(c.details),
-            ..Default::default()
-        };
-        let result = Averaged {
-            solution,
-            certificate: Some(c.certificate),
-            details,
-        };
+        let result = super::given_result(solution, c);
         Ok(RigReport::new(inputs, right, left, result))
     }
 

@@ -41,6 +41,30 @@ impl RigFileReport {
         Ok(RigFileReport { input, rig, result })
     }
 
+    /// Certify a rig estimate computed elsewhere (read by [`crate::io::rig::read_rig_estimate`]),
+    /// never changed: `rotavg certify FILE --rig --estimate EST`. A projection of the estimate
+    /// (`--nearest-rotations`) is a warning of the report.
+    pub fn certify(
+        input: String,
+        mut rig: LoadedRig,
+        estimate: crate::io::rig::RigEstimate,
+        settings: &CertifySettings,
+    ) -> Result<Self> {
+        let (frames, sensors) = (estimate.frames, estimate.sensors);
+        let c = crate::certify::certify_rig(&rig.problem, &frames, &sensors, settings)?;
+        if let Some(p) = &estimate.projection {
+            rig.warnings.push(p.warning());
+        }
+        let solution = RigSolution {
+            cost: rig.problem.cost(&frames, &sensors),
+            frames,
+            sensors,
+            report: super::given_report(),
+        };
+        let result = super::given_result(solution, c);
+        Ok(RigFileReport { input, rig, result })
+    }
+
     /// The verdict of the certificate, if one was computed.
     pub fn verdict(&self) -> Option<crate::Verdict> {
         self.result.certificate.as_ref().map(|c| c.verdict)

@@ -429,3 +429,101 @@ fn a_colmap_rig_configuration_is_read_and_certified() {
         "{err}"
     );
 }
+
+/// `rotavg certify FILE --rig --estimate EST` on the committed 3-sensor rig: `rotavg rig`'s own
+/// estimate gets the same cost and bound (to 1e-12), its matrices changed only by rounding; the estimate with every frame turned by
+/// 0.05 rad gets a higher cost and a bound still below `rotavg rig`'s cost (the optimum is at
+/// most that); an estimate 1e-4 off SO(3) needs `--nearest-rotations` (then a warning says
+/// so); ids or counts that do not match are errors naming the file.
+#[test]
+fn certify_reads_a_rig_file_estimate() {
+    let rig = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/data/rig_sensors/rig.json");
+    let rig = rig.to_str().unwrap();
+    let est = temp_dir().join("rig_sensors_for_certify.json");
+    let solved = json_of(&run(&[
+        "rig",
+        rig,
+        "--json",
+        "--output",
+        est.to_str().unwrap(),
+    ]));
+    let certify = |file: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "certify",
+            rig,
+            "--rig",
+            "--estimate",
+            file.to_str().unwrap(),
+            "--json",
+        ];
+        args.extend(extra);
+        run(&args)
+    };
+    let v = json_of(&certify(&est, &[]));
+    let close = |a: &serde_json::Value, b: &serde_json::Value| {
+        (a.as_f64().unwrap() - b.as_f64().unwrap()).abs() <= 1e-12 * b.as_f64().unwrap()
+    };
+    assert!(close(&v["cost"], &solved["cost"]));
+    assert!(close(
+        &v["certificate"]["lower_bound"],
+        &solved["certificate"]["lower_bound"]
+    ));
+    // the estimate as given, at its nearest rotations (a change of rounding only)
+    for f in 0..40 {
+        let (a, b) = (
+            rotation(&v["estimate"][f]),
+            rotation(&solved["estimate"][f]),
+        );
+        assert!((a.matrix() - b.matrix()).norm() < 1e-15);
+    }
+    let mut text: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&est).unwrap()).unwrap();
+    let turn = rotavg::so3::exp(&nalgebra::Vector3::new(0.05, 0.0, 0.0));
+    let frames: Vec<Rotation> = (0..40).map(|f| rotation(&text["frames"][f])).collect();
+    text["frames"] = serde_json::json!(
+        frames
+            .iter()
+            .map(|f| rotavg::so3::rotation_to_rows(&(turn * f)))
+            .collect::<Vec<_>>()
+    );
+    let off = temp_file("rig_sensors_off.json", &text.to_string());
+    let w = json_of(&certify(&off, &[]));
+    let cost = solved["cost"].as_f64().unwrap();
+    assert!(w["cost"].as_f64().unwrap() > cost);
+    assert!(w["certificate"]["lower_bound"].as_f64().unwrap() <= cost);
+    assert_eq!(w["certificate"]["verdict"], "gap_reported");
+    // 1e-4 off SO(3): refused without --nearest-rotations, certified at the nearest rotations with
+    let mut scaled = text.clone();
+    scaled["frames"] = serde_json::json!(
+        frames
+            .iter()
+            .map(|f| {
+                let m = f.matrix() * (1.0 + 1e-4);
+                [
+                    [m[(0, 0)], m[(0, 1)], m[(0, 2)]],
+                    [m[(1, 0)], m[(1, 1)], m[(1, 2)]],
+                    [m[(2, 0)], m[(2, 1)], m[(2, 2)]],
+                ]
+            })
+            .collect::<Vec<_>>()
+    );
+    let scaled = temp_file("rig_sensors_scaled.json", &scaled.to_string());
+    assert!(!certify(&scaled, &[]).status.success());
+    let x = json_of(&certify(&scaled, &["--nearest-rotations"]));
+    assert_eq!(x["warnings"][0]["code"], "estimate_projected");
+    assert!((x["cost"].as_f64().unwrap() - cost).abs() < 1e-9 * cost);
+    for (key, value) in [
+        ("sensor_ids", serde_json::json!([0, 1, 5])),
+        ("frames", serde_json::json!([])),
+    ] {
+        let mut bad = text.clone();
+        bad[key] = value;
+        let bad = temp_file("rig_sensors_bad.json", &bad.to_string());
+        let out = certify(&bad, &[]);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(
+            !out.status.success() && err.contains("rig_sensors_bad.json"),
+            "{key}: {err}"
+        );
+    }
+}

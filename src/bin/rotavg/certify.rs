@@ -64,6 +64,12 @@ pub struct Args {
     /// `"sensor_from_rig": S`. The joint cost is certified, the estimate unchanged.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["gravity", "hand", "camera"])]
     pub left: Option<String>,
+    /// A rig of any number of sensors: INPUT is a rig file (the JSON rig format or a COLMAP
+    /// database with a rig configuration, as `rotavg rig FILE` reads it) and the estimate the
+    /// file `rotavg rig FILE --output` writes (`"frames"`, `"sensors_from_rig"`); the rig's cost
+    /// is certified, the estimate unchanged (`--nearest-rotations`: its nearest rotations).
+    #[arg(long, conflicts_with_all = ["left", "gravity", "hand", "camera"])]
+    pub rig: bool,
     #[command(flatten)]
     pub plot: PlotArgs,
     /// Hand-eye pose streams and their pairing, as `rotavg conjugate` reads them.
@@ -100,6 +106,9 @@ fn load_given(
 pub fn run(args: &Args) -> Result<Outcome> {
     if let Some(left) = &args.left {
         return certify_rig(args, left);
+    }
+    if args.rig {
+        return certify_rig_file(args);
     }
     let inlier_threshold = args
         .loss
@@ -228,5 +237,26 @@ fn certify_rig(args: &Args, left_path: &str) -> Result<Outcome> {
         s,
         &settings,
     )?;
+    args.common.finish(&report, report.verdict())
+}
+
+/// `--rig`: certify a rig file's estimate (frames and every sensor's `sensor_from_rig`).
+fn certify_rig_file(args: &Args) -> Result<Outcome> {
+    let options = args.graph.read_options(&args.common);
+    let input = args.input.clone().unwrap_or_else(|| "-".into());
+    let rig = rotavg::io::rig::load_rig(Path::new(&input), &options)?;
+    let text = rotavg::io::text::read_text(&args.estimate)?;
+    let estimate = rotavg::io::rig::read_rig_estimate(
+        &text,
+        &args.estimate,
+        &rig,
+        &options,
+        args.nearest_rotations,
+    )?;
+    let mut settings = args.graph.settings(&args.common, &args.plot);
+    if settings.mode == CertifyMode::None {
+        settings.mode = CertifyMode::Dual;
+    }
+    let report = rotavg::report::RigFileReport::certify(input, rig, estimate, &settings)?;
     args.common.finish(&report, report.verdict())
 }
