@@ -20,5 +20,5 @@ mod start;
 mod synthetic;
 
 pub use problem::{Image, RigProblem, Sensor};
-pub use solve::{RIG_DECREASE_TOLERANCE, RigSettings, RigSolution, solve_rig};
+pub use solve::{RIG_DECREASE_TOLERANCE, RigSettings, RigSolution, solve_rig, solve_rig_from};
 pub use synthetic::{RigScene, RigTruth};

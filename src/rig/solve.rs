@@ -83,8 +83,60 @@ pub fn solve_rig(p: &RigProblem, settings: &RigSettings) -> Result<RigSolution> 
     settings.validate()?;
     let clock = Instant::now();
     let left = || remaining(settings.max_seconds, clock);
-    let mut sensors = start_sensors(p, left())?;
-    let mut frames = frame_step(p, &sensors, None, left())?;
+    let sensors = start_sensors(p, left())?;
+    let frames = frame_step(p, &sensors, None, left())?;
+    alternate(p, (frames, sensors), settings, clock)
+}
+
+/// [`solve_rig`]'s passes from a given estimate (`frames`, `sensors`: one rotation each, each
+/// replaced by its nearest rotation; the held sensors set to their held rotations): for
+/// many-start searches and for polishing another tool's estimate. Errors: estimates of the
+/// wrong length, invalid settings.
+///
+/// ```
+/// use rotavg::rig::{RigScene, RigSettings, solve_rig, solve_rig_from};
+/// let (p, truth) = RigScene { frames: 30, sensors: 3, noise_sigma: 0.02, ..Default::default() }.generate();
+/// let from_truth = solve_rig_from(&p, &truth.frames, &truth.sensors, &RigSettings::default())?;
+/// let own = solve_rig(&p, &RigSettings::default())?;
+/// assert!((from_truth.cost - own.cost).abs() < 1e-6 * own.cost);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn solve_rig_from(
+    p: &RigProblem,
+    frames: &[Rotation],
+    sensors: &[Rotation],
+    settings: &RigSettings,
+) -> Result<RigSolution> {
+    settings.validate()?;
+    if frames.len() != p.num_frames() || sensors.len() != p.sensors().len() {
+        return Err(Error::InvalidSettings {
+            name: "start".into(),
+            reason: format!(
+                "{} frames and {} sensors for a rig of {} frames and {} sensors",
+                frames.len(),
+                sensors.len(),
+                p.num_frames(),
+                p.sensors().len()
+            ),
+        });
+    }
+    let frames = frames.iter().map(nearest_rotation).collect();
+    let sensors = sensors
+        .iter()
+        .zip(p.held())
+        .map(|(s, held)| held.unwrap_or_else(|| nearest_rotation(s)))
+        .collect();
+    alternate(p, (frames, sensors), settings, Instant::now())
+}
+
+/// The passes from `(frames, sensors)`, on the clock started at `clock`.
+fn alternate(
+    p: &RigProblem,
+    (mut frames, mut sensors): (Vec<Rotation>, Vec<Rotation>),
+    settings: &RigSettings,
+    clock: Instant,
+) -> Result<RigSolution> {
+    let left = || remaining(settings.max_seconds, clock);
     let mut cost = p.cost(&frames, &sensors);
     let deadline = Deadline::after(left());
     let (mut passes, mut decrease) = (0, f64::NAN);
