@@ -447,6 +447,8 @@ def average_rig(
 def average_rig_file(
     path: _PathLike,
     *,
+    loss: str = "auto",
+    loss_threshold: float = 5.0,
     certify: str = "auto",
     max_memory: Optional[int] = None,
     max_seconds: Optional[float] = 600.0,

@@ -6,6 +6,7 @@ use crate::types::{Graph, Report, RunResult};
 use crate::{certify_settings, detached, parse_named};
 use pyo3::prelude::*;
 use rotavg::certify::CertifyMode;
+use rotavg::pipeline::rig::RigLoss;
 use rotavg::report::{RigFileReport, RigReport};
 
 /// A two-sensor rig: the frames and the second sensor's ``sensor_from_rig`` rotation ``S``,
@@ -62,6 +63,10 @@ pub fn average_rig(
 /// Args:
 ///     path: a JSON rig file (``{"num_frames", "sensors", "images", "edges"}``) or a COLMAP
 ///         database with a rig configuration (tables rigs, rig_sensors, frames, frame_data).
+///     loss: ``"auto"`` (least squares, the Cauchy loss instead when the residuals look like
+///         outliers), ``"chordal"`` or ``"cauchy"`` (then the inlier edges' problem is returned
+///         and certified), as ``rotavg rig FILE --loss``.
+///     loss_threshold: the Cauchy loss's scale and the inlier threshold, degrees.
 ///     certify: ``"auto"``, ``"dual"`` or ``"none"``.
 ///     max_memory, max_seconds: the run's budget, as for ``average_multiple``.
 ///     rotation_tolerance: how far a rotation in a JSON rig file may be from SO(3).
@@ -76,10 +81,13 @@ pub fn average_rig(
 ///     rotavg.ParseError / FileError: a file that cannot be read (naming it); rotavg.Error: a
 ///         rig that is not valid (an image out of range, a sensor no edge places).
 #[pyfunction]
-#[pyo3(name = "average_rig_file", signature = (path, *, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5))]
+#[pyo3(name = "average_rig_file", signature = (path, *, loss="auto", loss_threshold=5.0, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5))]
+#[allow(clippy::too_many_arguments)]
 pub fn average_rig_file(
     py: Python<'_>,
     path: &Bound<'_, PyAny>,
+    loss: &str,
+    loss_threshold: f64,
     certify: &str,
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
@@ -89,6 +97,21 @@ pub fn average_rig_file(
     let certify = certify_settings(mode, max_memory, max_seconds, true, None)?;
     let path = crate::convert::path_of(path)
         .ok_or_else(|| crate::errors::argument_error("path must be a str or os.PathLike"))?;
+    let loss = match loss {
+        "auto" => RigLoss::Auto,
+        "chordal" => RigLoss::Chordal,
+        "cauchy" => RigLoss::Cauchy,
+        other => {
+            return Err(crate::errors::argument_error(format!(
+                "loss must be \"auto\", \"chordal\" or \"cauchy\", got {other:?}"
+            )));
+        }
+    };
+    let robust = rotavg::rig::RigRobust {
+        threshold_deg: loss_threshold,
+        inlier_threshold_deg: loss_threshold,
+        ..Default::default()
+    };
     let report = detached(py, move || {
         let options = rotavg::io::detect::ReadOptions {
             rotation_tolerance,
@@ -96,7 +119,7 @@ pub fn average_rig_file(
         };
         let rig = rotavg::io::rig::load_rig(std::path::Path::new(&path), &options)?;
         let max_seconds = certify.budget.max_seconds;
-        RigFileReport::average(path, rig, certify, max_seconds)
+        RigFileReport::average(path, rig, (loss, robust), certify, max_seconds)
     })?;
     RunResult::new(py, Report::RigFile(report))
 }

@@ -77,6 +77,9 @@ def test_a_rig_file_is_the_command_line_s(cli, tmp_path):
     rotavg.write_output(ours, out)
     written = json.loads(out.read_text())
     assert written["sensors_from_rig"] == d["sensors_from_rig"]
+    assert rotavg.average_rig_file(RIG_SENSORS / "rig.json", loss="cauchy").to_dict()["robust"]["robust"]
+    with pytest.raises(rotavg.Error, match="loss"):
+        rotavg.average_rig_file(RIG_SENSORS / "rig.json", loss="huber")
     bad = tmp_path / "bad.json"
     bad.write_text('{"num_frames": 5, "sensors": [{}], "images": [], "edges": []}')
     with pytest.raises(rotavg.Error, match="bad.json"):

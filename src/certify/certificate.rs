@@ -68,6 +68,10 @@ pub enum CertifiedProblemKind {
     /// [`CertifiedProblemKind::ChordalL2RigImages`] with every sensor's `sensor_from_rig` known
     /// (held): the frames' view graph plus the within-frame edges' constant cost.
     ChordalL2RigImagesSensorsHeld,
+    /// [`CertifiedProblemKind::ChordalL2RigImages`] on the rig's **inlier edges** after a robust
+    /// solve (`paper-notes/conjugate.md` `[H20]`): the edges whose residual at the Cauchy
+    /// estimate is within the inlier threshold. The claim is about that problem only.
+    ChordalL2RigImagesInliers,
 }
 
 /// The problem a certificate is about, with its size against the whole input's.
@@ -126,6 +130,11 @@ impl fmt::Display for CertifiedProblem {
                 "the rig's chordal L2 problem on all {} edges between its images ({} frames and \
                  the unknown sensor_from_rig rotations)",
                 self.num_edges, self.num_nodes
+            ),
+            CertifiedProblemKind::ChordalL2RigImagesInliers => write!(
+                f,
+                "the rig's chordal L2 problem on its inlier edges ({} of {} edges, {} frames)",
+                self.num_edges, self.total_edges, self.num_nodes
             ),
             CertifiedProblemKind::ChordalL2RigImagesSensorsHeld => write!(
                 f,

@@ -4,8 +4,10 @@
 use super::{AverageSettings, Averaged, PipelineProblem, PipelineSolution, average};
 use crate::certify::{Certification, CertifyMode, CertifySettings, certify_rig};
 use crate::error::Result;
-use crate::rig::{RigProblem, RigSettings, RigSolution, solve_rig};
+use crate::multiple::robust::suspected_outliers;
+use crate::rig::{RigProblem, RigRobust, RigSettings, RigSolution, solve_rig, solve_rig_robust};
 use crate::termination::SolverReport;
+use serde::{Deserialize, Serialize};
 
 /// Settings of [`average_rig`].
 pub type AverageRigSettings = AverageSettings<RigSettings>;
@@ -66,4 +68,96 @@ impl PipelineProblem for RigProblem {
             improvement: None,
         })
     }
+}
+
+/// The loss of a rig's solve (`rotavg rig FILE --loss`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RigLoss {
+    /// Least squares on every edge ([`average_rig`]).
+    Chordal,
+    /// The Cauchy loss, then the inlier problem certified ([`solve_rig_robust`], `[H20]`).
+    Cauchy,
+    /// Least squares, and the Cauchy loss instead when its residuals look like outliers
+    /// ([`suspected_outliers`] on the images' view graph, the rule of view graphs).
+    #[default]
+    Auto,
+}
+
+/// What a robust rig solve did: the loss that ran, why, and the inlier problem certified.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RigRobustDetails {
+    /// The loss asked for.
+    pub requested: RigLoss,
+    /// `true` when the Cauchy loss ran (asked for, or chosen by `auto`).
+    pub robust: bool,
+    /// The outlier diagnosis of the least-squares estimate (`auto`), when it fired.
+    pub outliers: Option<crate::multiple::robust::OutlierWarning>,
+    /// Reweighted alternations of the Cauchy solve.
+    pub reweights: usize,
+    /// Inlier edges (residual at the robust estimate within the inlier threshold), of all.
+    pub inlier_edges: usize,
+    /// Edges in all.
+    pub total_edges: usize,
+    /// The inlier threshold, degrees.
+    pub inlier_threshold_deg: f64,
+}
+
+/// A rig solved with `loss` (`rotavg rig FILE`): least squares ([`average_rig`]); or the Cauchy
+/// loss, the inlier problem's chordal L2 estimate returned and certified (`[H20]`); `auto` runs
+/// least squares and turns robust when [`suspected_outliers`] fires on the images' view graph at
+/// its estimate. The diagnosis of a least-squares estimate is in `details.outliers` (as
+/// `average_multiple`'s). Returns the result, the problem certified (`problem` itself, or its inlier
+/// rig) and, for a robust solve or an `auto` choice, what was done.
+pub fn average_rig_with_loss(
+    problem: &RigProblem,
+    loss: RigLoss,
+    robust: &RigRobust,
+    settings: &AverageRigSettings,
+) -> Result<(Averaged<RigSolution>, RigProblem, Option<RigRobustDetails>)> {
+    let start = std::time::Instant::now();
+    let skip = super::validate(problem, settings)?;
+    let mut outliers = None;
+    if loss != RigLoss::Cauchy {
+        let ls = solve_rig(problem, &settings.solve)?;
+        let x = problem.image_rotations(&ls.frames, &ls.sensors);
+        outliers = suspected_outliers(&problem.image_graph()?, &x).map(|mut w| {
+            w.suggestion = if loss == RigLoss::Chordal {
+                "`--loss cauchy` (or the default `--loss auto`) solves it and certifies the \
+                 chordal L2 problem on the inlier edges"
+            } else {
+                "so the Cauchy loss ran instead (`--loss auto`; `--loss chordal` keeps least \
+                 squares)"
+            }
+            .into();
+            w
+        });
+        if loss == RigLoss::Chordal || outliers.is_none() {
+            let mut out = super::certify_solved(problem, ls, settings, skip, start)?;
+            out.details.outliers = outliers;
+            return Ok((out, problem.clone(), None));
+        }
+    }
+    let solve = RigSettings {
+        max_seconds: crate::deadline::remaining(settings.solve.max_seconds, start),
+        ..settings.solve
+    };
+    let rr = solve_rig_robust(problem, robust, &solve)?;
+    let details = RigRobustDetails {
+        requested: loss,
+        robust: true,
+        outliers,
+        reweights: rr.reweights,
+        inlier_edges: rr.inliers.iter().filter(|k| **k).count(),
+        total_edges: problem.edges().len(),
+        inlier_threshold_deg: robust.inlier_threshold_deg,
+    };
+    let mut certify = settings.certify.clone();
+    certify.budget = certify.budget.after(start);
+    let inner = AverageSettings { solve, certify };
+    let mut out =
+        super::certify_solved(&rr.inlier_problem, rr.inlier_solution, &inner, skip, start)?;
+    out.details.solve_seconds = start.elapsed().as_secs_f64() - out.details.certify_seconds;
+    out.details.outliers = details.outliers.clone();
+    Ok((out, rr.inlier_problem, Some(details)))
 }

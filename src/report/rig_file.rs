@@ -6,8 +6,9 @@ use super::{Rows, nested};
 use crate::Result;
 use crate::certify::{CertifiedProblem, CertifiedProblemKind, CertifySettings};
 use crate::io::rig::LoadedRig;
-use crate::pipeline::{AverageSettings, Averaged, average_rig};
-use crate::rig::{RigSettings, RigSolution};
+use crate::pipeline::rig::{RigLoss, RigRobustDetails, average_rig_with_loss};
+use crate::pipeline::{AverageSettings, Averaged};
+use crate::rig::{RigRobust, RigSettings, RigSolution};
 use crate::so3::{angle, log};
 use crate::warning::Warning;
 use serde::{Serialize, Serializer};
@@ -22,14 +23,21 @@ pub struct RigFileReport {
     pub rig: LoadedRig,
     /// The estimate: the frames (`F_0 = I`) and every sensor's `sensor_from_rig`.
     pub result: Averaged<RigSolution>,
+    /// A robust solve's loss, inliers and diagnosis (`--loss cauchy`, or `auto` on outliers);
+    /// then the estimate and its certificate are the inlier problem's.
+    pub robust: Option<RigRobustDetails>,
 }
 
 impl RigFileReport {
     /// Solve and certify the rig read from `input`: the solve within `max_seconds`, the
     /// certificate under `certify`.
+    /// Solve the rig read from `input` with `loss` (`robust`: the Cauchy loss's thresholds) and
+    /// certify it: the solve within `max_seconds`, the certificate under `certify`
+    /// ([`average_rig_with_loss`]).
     pub fn average(
         input: String,
         rig: LoadedRig,
+        (loss, robust): (RigLoss, RigRobust),
         certify: CertifySettings,
         max_seconds: Option<f64>,
     ) -> Result<Self> {
@@ -37,8 +45,14 @@ impl RigFileReport {
             max_seconds,
             ..Default::default()
         };
-        let result = average_rig(&rig.problem, &AverageSettings { solve, certify })?;
-        Ok(RigFileReport { input, rig, result })
+        let settings = AverageSettings { solve, certify };
+        let (result, _, robust) = average_rig_with_loss(&rig.problem, loss, &robust, &settings)?;
+        Ok(RigFileReport {
+            input,
+            rig,
+            result,
+            robust,
+        })
     }
 
     /// Certify a rig estimate computed elsewhere (read by [`crate::io::rig::read_rig_estimate`]),
@@ -62,7 +76,12 @@ impl RigFileReport {
             report: super::given_report(),
         };
         let result = super::given_result(solution, c);
-        Ok(RigFileReport { input, rig, result })
+        Ok(RigFileReport {
+            input,
+            rig,
+            result,
+            robust: None,
+        })
     }
 
     /// The verdict of the certificate, if one was computed.
@@ -75,21 +94,32 @@ impl RigFileReport {
         let c = self.result.certificate.as_ref()?;
         let p = &self.rig.problem;
         let (frames, edges) = (p.num_frames(), p.edges().len());
+        let kind = match (&self.robust, p.all_held()) {
+            (Some(_), _) => CertifiedProblemKind::ChordalL2RigImagesInliers,
+            (None, true) => CertifiedProblemKind::ChordalL2RigImagesSensorsHeld,
+            (None, false) => CertifiedProblemKind::ChordalL2RigImages,
+        };
         Some(super::VerdictOf {
             verdict: c.verdict,
             estimate: super::CertifiedEstimate::Returned,
             problem: CertifiedProblem {
-                kind: if p.all_held() {
-                    CertifiedProblemKind::ChordalL2RigImagesSensorsHeld
-                } else {
-                    CertifiedProblemKind::ChordalL2RigImages
-                },
+                kind,
                 num_nodes: frames,
                 total_nodes: frames,
-                num_edges: edges,
+                num_edges: self.robust.as_ref().map_or(edges, |r| r.inlier_edges),
                 total_edges: edges,
             },
         })
+    }
+
+    /// Every warning: the reader's, and the outlier diagnosis of the least-squares estimate
+    /// (which turned the solve robust under `auto`).
+    pub fn warnings(&self) -> Vec<Warning> {
+        let outliers = self.result.details.outliers.as_ref().map(|w| {
+            Warning::new("outliers_suspected", format!("{}: {w}", self.input))
+                .with_count(w.suspected)
+        });
+        self.rig.warnings.iter().cloned().chain(outliers).collect()
     }
 
     /// How many sensors were estimated (not held).
@@ -135,8 +165,16 @@ impl fmt::Display for RigFileReport {
             p.images().len(),
             p.edges().len()
         )?;
-        for w in &self.rig.warnings {
+        for w in &self.warnings() {
             write!(f, "\nwarning: {w}")?;
+        }
+        if let Some(r) = &self.robust {
+            write!(
+                f,
+                "\nCauchy loss ({} reweighted alternations): {} of {} edges inliers (residual <= \
+                 {} deg); the estimate and certificate are the inlier problem's",
+                r.reweights, r.inlier_edges, r.total_edges, r.inlier_threshold_deg
+            )?;
         }
         writeln!(f)?;
         nested(f, &self.result)?;
@@ -152,7 +190,7 @@ struct Json<'a> {
     problem: &'static str,
     num_rotations: usize,
     num_measurements: usize,
-    warnings: &'a [Warning],
+    warnings: Vec<Warning>,
     input: &'a str,
     format: &'a str,
     cost: f64,
@@ -162,6 +200,8 @@ struct Json<'a> {
     sensor_ids: &'a [u64],
     sensors_held: Vec<bool>,
     num_images: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    robust: Option<&'a RigRobustDetails>,
     solver: &'a crate::termination::SolverReport,
     certificate: Option<&'a crate::certify::Certificate>,
     verdict: Option<super::VerdictOf>,
@@ -176,7 +216,7 @@ impl Serialize for RigFileReport {
             // the frames and the estimated sensors
             num_rotations: s.frames.len() + self.estimated(),
             num_measurements: p.edges().len(),
-            warnings: &self.rig.warnings,
+            warnings: self.warnings(),
             input: &self.input,
             format: &self.rig.format,
             cost: s.cost,
@@ -186,6 +226,7 @@ impl Serialize for RigFileReport {
             sensor_ids: &self.rig.sensor_ids,
             sensors_held: p.held().iter().map(Option::is_some).collect(),
             num_images: p.images().len(),
+            robust: self.robust.as_ref(),
             solver: &s.report,
             certificate: self.result.certificate.as_ref(),
             verdict: self.verdict_of(),

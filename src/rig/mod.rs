@@ -15,10 +15,12 @@
 //! (with its coupled certificates) is [`crate::pipeline::simultaneous`].
 
 mod problem;
+mod robust;
 mod solve;
 mod start;
 mod synthetic;
 
 pub use problem::{Image, RigProblem, Sensor};
+pub use robust::{RigRobust, RobustRig, residual_angles, solve_rig_robust};
 pub use solve::{RIG_DECREASE_TOLERANCE, RigSettings, RigSolution, solve_rig, solve_rig_from};
 pub use synthetic::{RigScene, RigTruth};

@@ -104,6 +104,16 @@ impl RigProblem {
         })
     }
 
+    /// The same rig measured by `edges` instead (validated as by [`Self::new`]).
+    pub fn with_edges(&self, edges: Vec<Edge>) -> Result<Self> {
+        RigProblem::new(
+            self.num_frames,
+            self.sensors.clone(),
+            self.images.clone(),
+            edges,
+        )
+    }
+
     /// Number of frames.
     pub fn num_frames(&self) -> usize {
         self.num_frames

@@ -527,3 +527,60 @@ fn certify_reads_a_rig_file_estimate() {
         );
     }
 }
+
+/// A rig file with 15 % outliers (random rotations): the default `--loss auto` finds them in
+/// the least-squares residuals (`outliers_suspected`), runs the Cauchy loss and certifies the
+/// inlier edges' problem (named in the verdict); its frames and sensors are at least 5 times
+/// closer to the planted rig than least squares' (`--loss chordal`, which keeps the warning);
+/// every outlier the generator planted at more than 10 degrees is among the edges dropped.
+#[test]
+fn outliers_in_a_rig_file_turn_the_default_robust() {
+    use rotavg::rig::{RigScene, residual_angles};
+    let scene = RigScene {
+        frames: 80,
+        sensors: 3,
+        noise_sigma: 0.01,
+        outlier_fraction: 0.15,
+        seed: 31,
+        ..Default::default()
+    };
+    let (p, truth) = scene.generate();
+    let file = temp_file("rig_outliers.json", &rotavg::io::rig::write_rig_json(&p));
+    let file = file.to_str().unwrap();
+    let auto = json_of(&run(&["rig", file, "--json"]));
+    let ls = json_of(&run(&["rig", file, "--json", "--loss", "chordal"]));
+    assert_eq!(auto["warnings"][0]["code"], "outliers_suspected");
+    assert_eq!(ls["warnings"][0]["code"], "outliers_suspected");
+    assert_eq!(
+        auto["verdict"]["problem"]["kind"],
+        "chordal_l2_rig_images_inliers"
+    );
+    assert!(auto["robust"]["robust"].as_bool().unwrap());
+    let error = |v: &serde_json::Value| {
+        let frames: f64 = (0..80)
+            .map(|f| angle_between(&rotation(&v["estimate"][f]), &truth.frames[f]))
+            .sum::<f64>()
+            / 80.0;
+        let sensors = (0..3)
+            .map(|s| angle_between(&rotation(&v["sensors_from_rig"][s]), &truth.sensors[s]))
+            .fold(0.0, f64::max);
+        (frames, sensors)
+    };
+    let (a, b) = (error(&auto), error(&ls));
+    assert!(
+        a.0 * 5.0 < b.0 && a.1 * 5.0 < b.1,
+        "robust {a:?}, least squares {b:?}"
+    );
+    // the planted outliers (residual above 10 degrees at the truth) are all dropped
+    let at_truth = residual_angles(&p, &truth.frames, &truth.sensors);
+    let planted = at_truth.iter().filter(|t| t.to_degrees() > 10.0).count();
+    let kept = auto["robust"]["inlier_edges"].as_u64().unwrap() as usize;
+    assert!(
+        kept + planted <= p.edges().len(),
+        "{kept} kept, {planted} planted outliers"
+    );
+    assert!(
+        kept + planted + p.edges().len() / 50 >= p.edges().len(),
+        "too many dropped: {kept}"
+    );
+}

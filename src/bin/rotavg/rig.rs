@@ -10,6 +10,7 @@ use crate::Outcome;
 use crate::common::{Common, GraphArgs};
 use rotavg::Result;
 use rotavg::io::detect::load_graph;
+use rotavg::pipeline::rig::RigLoss;
 use rotavg::report::{RigFileReport, RigReport};
 use std::path::Path;
 
@@ -35,6 +36,15 @@ pub struct Args {
     /// and certified by the multiple-averaging ladder (paper-notes/conjugate.md [H18]).
     #[arg(long, value_name = "FILE")]
     pub sensor_from_rig: Option<String>,
+    /// A rig file's loss: `auto` (least squares, and the Cauchy loss instead when the residuals
+    /// look like outliers), `chordal` (least squares on every edge) or `cauchy` (then the
+    /// inlier edges' chordal L2 problem is solved and certified; paper-notes/conjugate.md [H20]).
+    /// Two view graphs: least squares only.
+    #[arg(long, value_name = "auto|chordal|cauchy", default_value = "auto", value_parser = ["auto", "chordal", "cauchy"])]
+    pub loss: String,
+    /// The Cauchy loss's scale and the inlier threshold, degrees.
+    #[arg(long, value_name = "DEG", default_value_t = 5.0)]
+    pub loss_threshold: f64,
     #[command(flatten)]
     pub common: Common,
 }
@@ -44,6 +54,14 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let Some(left) = &args.left else {
         return run_file(args);
     };
+    if args.loss == "cauchy" {
+        return Err(rotavg::Error::InvalidSettings {
+            name: "--loss".into(),
+            reason: "a rig of two view graphs is solved by least squares; robust losses apply to \
+                     rig files (rotavg rig FILE)"
+                .into(),
+        });
+    }
     let options = args.graph.read_options(&args.common);
     let right = load_graph(Path::new(&args.right), args.graph.format, &options)?;
     let left = load_graph(Path::new(left), args.graph.format, &options)?;
@@ -101,7 +119,18 @@ fn run_file(args: &Args) -> Result<Outcome> {
     ));
     let certify = args.graph.settings(&args.common, &Default::default());
     let max_seconds = args.common.solve_seconds();
-    let report = RigFileReport::average(args.right.clone(), rig, certify, max_seconds)?;
+    let loss = match args.loss.as_str() {
+        "chordal" => RigLoss::Chordal,
+        "cauchy" => RigLoss::Cauchy,
+        _ => RigLoss::Auto,
+    };
+    let robust = rotavg::rig::RigRobust {
+        threshold_deg: args.loss_threshold,
+        inlier_threshold_deg: args.loss_threshold,
+        ..Default::default()
+    };
+    let input = args.right.clone();
+    let report = RigFileReport::average(input, rig, (loss, robust), certify, max_seconds)?;
     if let Some(path) = &args.output {
         let s = &report.result.solution;
         let text = rotavg::io::rig::write_rig_estimate_json(&s.frames, &s.sensors, &report.rig);
