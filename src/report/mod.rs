@@ -102,6 +102,21 @@ pub fn wrap_lines(text: &str, width: usize) -> String {
     out
 }
 
+/// The end of a report's text: a line break, the result (`{:#}` in the alternate form) and the
+/// verdict with its problem, when there is one.
+pub(crate) fn result_and_verdict(
+    f: &mut fmt::Formatter<'_>,
+    result: &dyn fmt::Display,
+    verdict: Option<VerdictOf>,
+) -> fmt::Result {
+    writeln!(f)?;
+    nested(f, result)?;
+    if let Some(v) = verdict {
+        write!(f, "\n{v}")?;
+    }
+    Ok(())
+}
+
 /// The solver report of an estimate computed elsewhere and certified unchanged.
 pub(crate) fn given_report() -> crate::termination::SolverReport {
     crate::termination::SolverReport {

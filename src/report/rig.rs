@@ -1,7 +1,7 @@
 //! `rotavg rig RIGHT LEFT`: a two-sensor rig calibrated and its frames averaged jointly (the
 //! simultaneous problem, [`crate::pipeline::simultaneous`]), as text and JSON.
 
-use super::{Rows, nested};
+use super::Rows;
 use crate::io::detect::{GraphFormat, LoadedGraph};
 use crate::multiple::MultipleSettings;
 use crate::pipeline::simultaneous::{
@@ -219,12 +219,7 @@ impl fmt::Display for RigReport {
         for w in &self.warnings {
             write!(f, "\nwarning: {w}")?;
         }
-        writeln!(f)?;
-        nested(f, &self.result)?;
-        if let Some(v) = self.verdict_of() {
-            write!(f, "\n{v}")?;
-        }
-        Ok(())
+        super::result_and_verdict(f, &self.result, self.verdict_of())
     }
 }
 

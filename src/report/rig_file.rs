@@ -2,7 +2,7 @@
 //! database's rig configuration ([`crate::io::rig`]), solved and certified
 //! ([`crate::pipeline::average_rig`], `paper-notes/conjugate.md` `[H19]`), as text and JSON.
 
-use super::{Rows, nested};
+use super::Rows;
 use crate::Result;
 use crate::certify::{CertifiedProblem, CertifiedProblemKind, CertifySettings};
 use crate::io::rig::LoadedRig;
@@ -176,12 +176,7 @@ impl fmt::Display for RigFileReport {
                 r.reweights, r.inlier_edges, r.total_edges, r.inlier_threshold_deg
             )?;
         }
-        writeln!(f)?;
-        nested(f, &self.result)?;
-        if let Some(v) = self.verdict_of() {
-            write!(f, "\n{v}")?;
-        }
-        Ok(())
+        super::result_and_verdict(f, &self.result, self.verdict_of())
     }
 }
 

@@ -37,6 +37,24 @@ impl Default for RigRobust {
     }
 }
 
+impl RigRobust {
+    /// Errors: a threshold that is not a positive number of degrees.
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [
+            ("threshold_deg", self.threshold_deg),
+            ("inlier_threshold_deg", self.inlier_threshold_deg),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(crate::Error::InvalidSettings {
+                    name: name.into(),
+                    reason: format!("must be a positive number of degrees, got {v}"),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
 /// A robust rig estimate and its inlier problem.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RobustRig {
@@ -85,17 +103,7 @@ pub fn solve_rig_robust(
     robust: &RigRobust,
     settings: &RigSettings,
 ) -> Result<RobustRig> {
-    for (name, v) in [
-        ("threshold_deg", robust.threshold_deg),
-        ("inlier_threshold_deg", robust.inlier_threshold_deg),
-    ] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(crate::Error::InvalidSettings {
-                name: name.into(),
-                reason: format!("must be a positive number of degrees, got {v}"),
-            });
-        }
-    }
+    robust.validate()?;
     let clock = Instant::now();
     let within = |s: &RigSettings| RigSettings {
         max_seconds: remaining(settings.max_seconds, clock),
