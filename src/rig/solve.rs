@@ -67,9 +67,10 @@ pub struct RigSolution {
     pub report: SolverReport,
 }
 
-/// Estimate a rig's frames and unknown sensors (`[H19]`): the start of [`start_sensors`], then
-/// passes of a frame step and a sensor step until one decreases `J` by less than
-/// [`RIG_DECREASE_TOLERANCE`] of it, `max_passes` or `max_seconds`.
+/// Estimate a rig's frames and unknown sensors (`[H19]`): a start (the held sensors' frames, then
+/// each unknown sensor from the edges that place it), then passes of a frame step and a sensor
+/// step until one decreases `J` by less than [`RIG_DECREASE_TOLERANCE`] of it, `max_passes` or
+/// `max_seconds`. Errors: a sensor no edge places, frames the edges do not join.
 ///
 /// ```
 /// use rotavg::rig::{RigScene, RigSettings, solve_rig};
