@@ -64,8 +64,12 @@ impl RigFileReport {
         estimate: crate::io::rig::RigEstimate,
         settings: &CertifySettings,
     ) -> Result<Self> {
-        let (frames, sensors) = (estimate.frames, estimate.sensors);
-        let c = crate::certify::certify_rig(&rig.problem, &frames, &sensors, settings)?;
+        let frames = estimate.frames;
+        let c = crate::certify::certify_rig(&rig.problem, &frames, &estimate.sensors, settings)?;
+        // the held sensors as held, as certified (the estimate's are within 1e-9 rad of them)
+        let sensors: Vec<_> = (estimate.sensors.iter().zip(rig.problem.held()))
+            .map(|(s, held)| held.unwrap_or(*s))
+            .collect();
         if let Some(p) = &estimate.projection {
             rig.warnings.push(p.warning());
         }

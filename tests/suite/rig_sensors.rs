@@ -189,6 +189,19 @@ fn known_sensors_give_the_frame_graph_and_a_certificate() {
             "a weak bound"
         );
         assert!(!c.is_certified());
+        // held sensors given 1e-10 rad off are taken as held: the same cost and bound
+        let nudged: Vec<Rotation> = truth
+            .sensors
+            .iter()
+            .map(|r| perturb(r, 1e-10, &mut rng))
+            .collect();
+        let d = certify_rig(&p, &off, &nudged, &Default::default())
+            .unwrap()
+            .certificate;
+        assert_eq!(
+            (d.upper_bound, d.lower_bound),
+            (c.upper_bound, c.lower_bound)
+        );
     }
 }
 

@@ -28,8 +28,9 @@ use state::RigState;
 /// Certify a rig estimate (`frames` `F_f`, `sensors` `S_s`, never changed; `[H19]`): when
 /// every sensor is held, the frames' view graph; always, the images' view graph without the
 /// rig's constraints; each certified by `certify` (the view graph's ladder) within the
-/// budget. The verdict uses the best bound. Errors: estimates of the wrong length, a held
-/// sensor not at its held rotation.
+/// budget. The verdict uses the best bound, and is about the estimate with its held sensors at
+/// their held rotations. Errors: estimates of the wrong length, a held sensor farther than 1e-9
+/// rad from its held rotation.
 ///
 /// ```
 /// use rotavg::certify::certify_rig;
@@ -50,6 +51,14 @@ pub fn certify_rig(
     let deadline = Deadline::start(&settings.budget);
     settings.validate()?;
     check_estimate(problem, frames, sensors)?;
+    // the held sensors at their held rotations (the estimate's are within 1e-9 rad of them):
+    // the bounds and the cost are of the problem as posed
+    let sensors: Vec<Rotation> = sensors
+        .iter()
+        .zip(problem.held())
+        .map(|(s, held)| held.unwrap_or(*s))
+        .collect();
+    let sensors = &sensors[..];
     let cost = problem.cost(frames, sensors);
     let tolerance = settings.tolerance.resolve(problem.min_weight());
     let mut state = RigState {
