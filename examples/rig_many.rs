@@ -2,13 +2,55 @@
 //! 2-6 sensors and 100 to 10^4 frames, solved and certified by `rotavg::pipeline::average_rig`,
 //! with every sensor estimated and with every sensor known; the error against the planted rig.
 //!
-//! `cargo run --release --example rig_many [frames ...]`
+//! `cargo run --release --example rig_many [frames ...]`; `-- write DIR FRAMES SENSORS OUTLIERS
+//! SEED` writes one rig (`RigScene`, 0.01 rad of noise, that fraction of random-rotation
+//! outliers) as `DIR/rig.json` and its truth `DIR/truth.json`, for `rotavg rig` and
+//! `benches/colmap_rig.py`.
 
 use rotavg::pipeline::average_rig;
 use rotavg::rig::RigScene;
 use rotavg::so3::angle_between;
 
+/// `write DIR FRAMES SENSORS OUTLIERS SEED`: one rig and its truth.
+fn write(args: &[String]) -> rotavg::Result<()> {
+    let bad = || rotavg::Error::InvalidSettings {
+        name: "write".into(),
+        reason: "usage: write DIR FRAMES SENSORS OUTLIERS SEED".into(),
+    };
+    let [dir, frames, sensors, outliers, seed] = args else {
+        return Err(bad());
+    };
+    let scene = RigScene {
+        frames: frames.parse().map_err(|_| bad())?,
+        sensors: sensors.parse().map_err(|_| bad())?,
+        outlier_fraction: outliers.parse().map_err(|_| bad())?,
+        seed: seed.parse().map_err(|_| bad())?,
+        noise_sigma: 0.01,
+        ..Default::default()
+    };
+    let (p, truth) = scene.generate();
+    let rows = |rs: &[rotavg::Rotation]| {
+        rs.iter()
+            .map(rotavg::so3::rotation_to_rows)
+            .collect::<Vec<_>>()
+    };
+    let truth = serde_json::json!({"frames": rows(&truth.frames), "sensors_from_rig": rows(&truth.sensors)});
+    std::fs::create_dir_all(dir).map_err(|e| rotavg::Error::Io {
+        path: dir.clone(),
+        message: e.to_string(),
+    })?;
+    rotavg::io::output::write_text(
+        &format!("{dir}/rig.json"),
+        &rotavg::io::rig::write_rig_json(&p),
+    )?;
+    rotavg::io::output::write_text(&format!("{dir}/truth.json"), &format!("{truth}\n"))
+}
+
 fn main() -> rotavg::Result<()> {
+    let all: Vec<String> = std::env::args().skip(1).collect();
+    if all.first().is_some_and(|a| a == "write") {
+        return write(&all[1..]);
+    }
     let args: Vec<usize> = std::env::args()
         .skip(1)
         .filter_map(|a| a.parse().ok())
