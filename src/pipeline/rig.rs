@@ -5,7 +5,9 @@ use super::{AverageSettings, Averaged, PipelineProblem, PipelineSolution, averag
 use crate::certify::{Certification, CertifyMode, CertifySettings, certify_rig};
 use crate::error::Result;
 use crate::multiple::robust::suspected_outliers;
-use crate::rig::{RigProblem, RigRobust, RigSettings, RigSolution, solve_rig, solve_rig_robust};
+use crate::rig::{
+    RigProblem, RigRobust, RigSettings, RigSolution, solve_rig, solve_rig_robust_from,
+};
 use crate::termination::SolverReport;
 use serde::{Deserialize, Serialize};
 
@@ -118,8 +120,8 @@ pub fn average_rig_with_loss(
     let start = std::time::Instant::now();
     let skip = super::validate(problem, settings)?;
     let mut outliers = None;
+    let ls = solve_rig(problem, &settings.solve)?;
     if loss != RigLoss::Cauchy {
-        let ls = solve_rig(problem, &settings.solve)?;
         let x = problem.image_rotations(&ls.frames, &ls.sensors);
         outliers = suspected_outliers(&problem.image_graph()?, &x).map(|mut w| {
             w.suggestion = if loss == RigLoss::Chordal {
@@ -142,7 +144,7 @@ pub fn average_rig_with_loss(
         max_seconds: crate::deadline::remaining(settings.solve.max_seconds, start),
         ..settings.solve
     };
-    let rr = solve_rig_robust(problem, robust, &solve)?;
+    let rr = solve_rig_robust_from(problem, ls, robust, &solve)?;
     let details = RigRobustDetails {
         requested: loss,
         robust: true,

@@ -12,6 +12,9 @@ use crate::so3::Rotation;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
+/// Alternation passes per reweighting of [`solve_rig_robust`].
+pub const REWEIGHT_PASSES: usize = 5;
+
 /// Settings of [`solve_rig_robust`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -105,11 +108,29 @@ pub fn solve_rig_robust(
 ) -> Result<RobustRig> {
     robust.validate()?;
     let clock = Instant::now();
+    let least_squares = solve_rig(p, settings)?;
+    let settings = RigSettings {
+        max_seconds: remaining(settings.max_seconds, clock),
+        ..*settings
+    };
+    solve_rig_robust_from(p, least_squares, robust, &settings)
+}
+
+/// [`solve_rig_robust`] from its least-squares estimate `least_squares` (a [`solve_rig`] of
+/// `p`, already computed).
+pub fn solve_rig_robust_from(
+    p: &RigProblem,
+    least_squares: RigSolution,
+    robust: &RigRobust,
+    settings: &RigSettings,
+) -> Result<RobustRig> {
+    robust.validate()?;
+    let clock = Instant::now();
     let within = |s: &RigSettings| RigSettings {
         max_seconds: remaining(settings.max_seconds, clock),
         ..*s
     };
-    let mut estimate = solve_rig(p, &within(settings))?;
+    let mut estimate = least_squares;
     let c = robust.threshold_deg.to_radians();
     let (mut reweights, mut last) = (0, f64::INFINITY);
     while reweights < robust.max_reweights {
@@ -140,7 +161,13 @@ pub fn solve_rig_robust(
             })
             .collect();
         let q = p.with_edges(edges)?;
-        estimate = solve_rig_from(&q, &estimate.frames, &estimate.sensors, &within(settings))?;
+        // a few passes per reweighting: the weights change anyway (the inlier problem below
+        // is solved to convergence)
+        let inner = RigSettings {
+            max_passes: REWEIGHT_PASSES.min(settings.max_passes),
+            ..within(settings)
+        };
+        estimate = solve_rig_from(&q, &estimate.frames, &estimate.sensors, &inner)?;
     }
     estimate.cost = p.cost(&estimate.frames, &estimate.sensors);
     let inliers: Vec<bool> = residual_angles(p, &estimate.frames, &estimate.sensors)
