@@ -216,12 +216,13 @@ fn sensor_step(
     for (k, &s) in unknown.iter().enumerate() {
         column[s] = Some(3 * k);
     }
-    let (mut cost, mut damping) = (p.cost(frames, &sensors), 1e-8);
+    let terms = SensorTerms::new(p, frames, &column);
+    let (mut cost, mut damping) = (terms.cost(&sensors), 1e-8);
     for _ in 0..SENSOR_MAX_ITERATIONS {
         if deadline.is_some_and(|d| d.passed()) {
             break;
         }
-        let (h, g) = sensor_normal_equations(p, frames, &sensors, &column, 3 * unknown.len());
+        let (h, g) = terms.normal_equations(&sensors, 3 * unknown.len());
         let mut improved = false;
         while damping < 1e12 {
             let mut a = h.clone();
@@ -233,7 +234,7 @@ fn sensor_step(
                 continue;
             };
             let trial = stepped(&sensors, &unknown, &step);
-            let next = p.cost(frames, &trial);
+            let next = terms.cost(&trial);
             if next <= cost {
                 let change = (cost - next) / cost.max(f64::MIN_POSITIVE);
                 (sensors, cost, damping, improved) = (trial, next, damping * 0.1, change > 1e-15);
@@ -258,45 +259,75 @@ fn stepped(sensors: &[Rotation], unknown: &[usize], step: &DVector<f64>) -> Vec<
     out
 }
 
-/// The Gauss-Newton normal equations `(J^T J, J^T r)` of `J` in the unknown sensors' tangent
-/// steps (`column[s]`: the first of sensor `s`'s three columns): each edge's residual
-/// `E = S_b A - R S_a`, `A = F_b F_a^T`, has derivatives `S_b [e_k]x A` in `d_b` and
-/// `-R S_a [e_k]x` in `d_a`.
-fn sensor_normal_equations(
-    p: &RigProblem,
-    frames: &[Rotation],
-    sensors: &[Rotation],
-    column: &[Option<usize>],
-    size: usize,
-) -> (DMatrix<f64>, DVector<f64>) {
-    let (mut h, mut g) = (DMatrix::zeros(size, size), DVector::zeros(size));
-    let basis = [Vector3::x(), Vector3::y(), Vector3::z()].map(|v| hat(&v));
-    for e in p.edges() {
-        let (a, b) = (p.images()[e.i], p.images()[e.j]);
-        let (ca, cb) = (column[a.sensor], column[b.sensor]);
-        if ca.is_none() && cb.is_none() {
-            continue;
-        }
-        let rel = (frames[b.frame] * frames[a.frame].inverse()).into_inner();
-        let (sa, sb, r) = (
-            sensors[a.sensor].matrix(),
-            sensors[b.sensor].matrix(),
-            e.rotation.matrix(),
-        );
-        let residual = sb * rel - r * sa;
-        let mut derivatives: Vec<(usize, Matrix3<f64>)> = Vec::with_capacity(6);
-        if let Some(c) = cb {
-            derivatives.extend((0..3).map(|k| (c + k, sb * basis[k] * rel)));
-        }
-        if let Some(c) = ca {
-            derivatives.extend((0..3).map(|k| (c + k, -(r * sa * basis[k]))));
-        }
-        for (u, du) in &derivatives {
-            g[*u] += e.weight * du.dot(&residual);
-            for (v, dv) in &derivatives {
-                h[(*u, *v)] += e.weight * du.dot(dv);
-            }
+/// One edge of [`SensorTerms`]: sensors `a` and `b`, weight, `R`, `A = F_b F_a^T`.
+type SensorTerm = (usize, usize, f64, Matrix3<f64>, Matrix3<f64>);
+
+/// The edges of the sensor step at fixed frames, each with an unknown sensor: its sensors, its
+/// weight, `R` and `A = F_b F_a^T` (computed once per step), and the unknowns' columns. Their
+/// cost `sum w ||S_b A - R S_a||_F^2` is `J` less the edges between held sensors (equal to
+/// `J_e` for rotations `F_a`, `||(S_b A - R S_a) F_a|| = ||S_b F_b - R S_a F_a||`).
+struct SensorTerms {
+    edges: Vec<SensorTerm>,
+    column: Vec<Option<usize>>,
+}
+
+impl SensorTerms {
+    fn new(p: &RigProblem, frames: &[Rotation], column: &[Option<usize>]) -> Self {
+        let edges = p
+            .edges()
+            .iter()
+            .filter_map(|e| {
+                let (a, b) = (p.images()[e.i], p.images()[e.j]);
+                let touches = column[a.sensor].is_some() || column[b.sensor].is_some();
+                let rel = (frames[b.frame] * frames[a.frame].inverse()).into_inner();
+                touches.then_some((a.sensor, b.sensor, e.weight, *e.rotation.matrix(), rel))
+            })
+            .collect();
+        SensorTerms {
+            edges,
+            column: column.to_vec(),
         }
     }
-    (h, g)
+
+    fn cost(&self, sensors: &[Rotation]) -> f64 {
+        self.edges
+            .iter()
+            .map(|(sa, sb, w, r, rel)| {
+                w * (sensors[*sb].matrix() * rel - r * sensors[*sa].matrix()).norm_squared()
+            })
+            .sum()
+    }
+
+    /// The Gauss-Newton normal equations `(J^T J, J^T r)` in the unknown sensors' tangent steps:
+    /// each residual `E = S_b A - R S_a` has derivatives `S_b [e_k]x A` in `d_b` and
+    /// `-R S_a [e_k]x` in `d_a`.
+    fn normal_equations(&self, sensors: &[Rotation], size: usize) -> (DMatrix<f64>, DVector<f64>) {
+        let (mut h, mut g) = (DMatrix::zeros(size, size), DVector::zeros(size));
+        let basis = [Vector3::x(), Vector3::y(), Vector3::z()].map(|v| hat(&v));
+        let mut derivatives = [(0usize, Matrix3::zeros()); 6];
+        for (sa, sb, w, r, rel) in &self.edges {
+            let (ma, mb) = (sensors[*sa].matrix(), sensors[*sb].matrix());
+            let residual = mb * rel - r * ma;
+            let mut n = 0;
+            if let Some(c) = self.column[*sb] {
+                for (k, e) in basis.iter().enumerate() {
+                    derivatives[n] = (c + k, mb * e * rel);
+                    n += 1;
+                }
+            }
+            if let Some(c) = self.column[*sa] {
+                for (k, e) in basis.iter().enumerate() {
+                    derivatives[n] = (c + k, -(r * ma * e));
+                    n += 1;
+                }
+            }
+            for (u, du) in &derivatives[..n] {
+                g[*u] += w * du.dot(&residual);
+                for (v, dv) in &derivatives[..n] {
+                    h[(*u, *v)] += w * du.dot(dv);
+                }
+            }
+        }
+        (h, g)
+    }
 }
