@@ -164,7 +164,8 @@ pub fn load_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> {
 /// images (as `rotavg multiple` reads it), each image placed at its frame and camera by the
 /// tables `frames` and `frame_data`, the cameras' `sensor_from_rig` from `rigs` (reference
 /// sensors: the identity) and `rig_sensors` (known, or `NULL`: estimated). Errors: no rig
-/// tables, an image of the view graph in no frame, any error of the view graph's reader.
+/// tables, an image of the view graph in no frame, `--information full` (rigs take scalar
+/// weights), any error of the view graph's reader.
 pub fn read_colmap_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> {
     #[cfg(feature = "colmap")]
     {
@@ -189,6 +190,12 @@ fn rig_of_layout(
     images: &std::collections::BTreeMap<u64, (u64, u64)>,
     known: &std::collections::BTreeMap<u64, Option<Rotation>>,
 ) -> Result<LoadedRig> {
+    if graph.problem.is_anisotropic() {
+        return Err(Error::InvalidSettings {
+            name: "rig".into(),
+            reason: "rigs take scalar weights (no --information full)".into(),
+        });
+    }
     let mut frame_ids: Vec<u64> = Vec::new();
     let mut sensor_ids: Vec<u64> = Vec::new();
     let mut placed = Vec::with_capacity(graph.node_ids.len());

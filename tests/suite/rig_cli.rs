@@ -414,6 +414,9 @@ fn a_colmap_rig_configuration_is_read_and_certified() {
             "frame {f}"
         );
     }
+    let out = run(&["rig", path.to_str().unwrap(), "--information", "full"]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!out.status.success(), "{err}");
     write(true, true);
     let out = run(&["rig", path.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr).to_string();
