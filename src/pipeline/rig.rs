@@ -78,7 +78,7 @@ impl PipelineProblem for RigProblem {
 pub enum RigLoss {
     /// Least squares on every edge ([`average_rig`]).
     Chordal,
-    /// The Cauchy loss, then the inlier problem certified ([`solve_rig_robust`], `[H20]`).
+    /// The Cauchy loss, then the inlier problem certified ([`crate::rig::solve_rig_robust`], `[H20]`).
     Cauchy,
     /// Least squares, and the Cauchy loss instead when its residuals look like outliers
     /// ([`suspected_outliers`] on the images' view graph, the rule of view graphs).
