@@ -24,5 +24,8 @@ pub use problem::{Image, RigProblem, Sensor};
 pub use robust::{
     REWEIGHT_PASSES, RigRobust, RobustRig, residual_angles, solve_rig_robust, solve_rig_robust_from,
 };
-pub use solve::{RIG_DECREASE_TOLERANCE, RigSettings, RigSolution, solve_rig, solve_rig_from};
+pub use solve::{
+    MAX_ESTIMATED_SENSORS, RIG_DECREASE_TOLERANCE, RigSettings, RigSolution, solve_rig,
+    solve_rig_from,
+};
 pub use synthetic::{RigScene, RigTruth};

@@ -84,8 +84,11 @@ pub fn solve_rig(p: &RigProblem, settings: &RigSettings) -> Result<RigSolution> 
     settings.validate()?;
     let clock = Instant::now();
     let left = || remaining(settings.max_seconds, clock);
-    let sensors = start_sensors(p, left())?;
-    let frames = frame_step(p, &sensors, None, left())?;
+    check_estimated_sensors(p)?;
+    let (sensors, placed) = start_sensors(p, left())?;
+    // from the held sensors' frames when they place every frame (every sensor held: already
+    // the frame step's answer), else the spectral start
+    let frames = frame_step(p, &sensors, placed, left())?;
     alternate(p, (frames, sensors), settings, clock)
 }
 
@@ -109,6 +112,7 @@ pub fn solve_rig_from(
     settings: &RigSettings,
 ) -> Result<RigSolution> {
     settings.validate()?;
+    check_estimated_sensors(p)?;
     if frames.len() != p.num_frames() || sensors.len() != p.sensors().len() {
         return Err(Error::InvalidSettings {
             name: "start".into(),
@@ -175,6 +179,25 @@ fn alternate(
             seconds: clock.elapsed().as_secs_f64(),
         },
     })
+}
+
+/// The most sensors the solver estimates: its sensor step factors dense `3K x 3K` normal
+/// equations (300: 7 MB, about 0.1 s per factorisation), many times per pass.
+pub const MAX_ESTIMATED_SENSORS: usize = 300;
+
+/// Errors: more than [`MAX_ESTIMATED_SENSORS`] sensors to estimate.
+fn check_estimated_sensors(p: &RigProblem) -> Result<()> {
+    let unknown = p.held().iter().filter(|h| h.is_none()).count();
+    if unknown > MAX_ESTIMATED_SENSORS {
+        return Err(Error::InvalidSettings {
+            name: "rig".into(),
+            reason: format!(
+                "{unknown} sensors to estimate, more than the {MAX_ESTIMATED_SENSORS} the sensor \
+                 step's dense normal equations take; give the known sensors' sensor_from_rig"
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// The frames at fixed sensors: the frames' view graph solved from `frames` (the spectral start

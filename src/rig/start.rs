@@ -11,8 +11,12 @@ use nalgebra::Matrix3;
 /// The start's sensors: the held ones as held; each unknown one from the edges linking it to an
 /// image of a placed sensor (the chordal mean of the rotations they imply), else from its own
 /// edges between two frames of the held sensors' view graph (the conjugate problem of the pairs
-/// `(R_ab, F_b F_a^T)`). Errors: a sensor that no edge links to the placed ones.
-pub(crate) fn start_sensors(p: &RigProblem, max_seconds: Option<f64>) -> Result<Vec<Rotation>> {
+/// `(R_ab, F_b F_a^T)`). Also the held sensors' frames, when they place every frame (the first
+/// frame step starts from them). Errors: a sensor that no edge links to the placed ones.
+pub(crate) fn start_sensors(
+    p: &RigProblem,
+    max_seconds: Option<f64>,
+) -> Result<(Vec<Rotation>, Option<Vec<Rotation>>)> {
     let frames = reference_frames(p, max_seconds)?;
     let mut placed: Vec<Option<Rotation>> = p.held().to_vec();
     loop {
@@ -31,7 +35,7 @@ pub(crate) fn start_sensors(p: &RigProblem, max_seconds: Option<f64>) -> Result<
             break;
         }
     }
-    placed
+    let sensors = placed
         .iter()
         .enumerate()
         .map(|(s, r)| {
@@ -44,7 +48,8 @@ pub(crate) fn start_sensors(p: &RigProblem, max_seconds: Option<f64>) -> Result<
                 ),
             })
         })
-        .collect()
+        .collect::<Result<_>>()?;
+    Ok((sensors, frames.into_iter().collect()))
 }
 
 /// The frames of the held sensors' view graph (edges between images of held sensors at two

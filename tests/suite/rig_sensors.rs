@@ -335,6 +335,19 @@ fn bad_rigs_are_clear_errors() {
         .unwrap_err()
         .to_string();
     assert!(why.contains("sensor 1 cannot be placed"), "{why}");
+    // more sensors to estimate than the dense sensor step takes: refused before any solve
+    let k = rotavg::rig::MAX_ESTIMATED_SENSORS + 2;
+    let many = RigProblem::new(
+        1,
+        s(k),
+        (0..k).map(|sensor| im(0, sensor)).collect(),
+        (1..k).map(|a| e(a - 1, a)).collect(),
+    )
+    .unwrap();
+    let why = solve_rig(&many, &RigSettings::default())
+        .unwrap_err()
+        .to_string();
+    assert!(why.contains("sensors to estimate"), "{why}");
     // an estimate whose held sensor is not at its held rotation
     let (q, truth) = scene(10, 2, 0.0, true, 1).generate();
     let mut wrong = truth.sensors.clone();
