@@ -43,6 +43,9 @@ pub enum Proof {
     /// A rig's constraints dropped `[H19]`: the certified bounds of the images' view graph's
     /// components, summed.
     RigImages,
+    /// A rig's within-frame couplings `[H21]`: the certified bounds of the components of the
+    /// images' view graph with pseudo-edges inside each frame, less their constant on rig points.
+    RigCoupled,
     /// The SO(2) dual certificate of the full-gravity problem at the estimate `[G3]`.
     GravityDual,
     /// The gravity problem's constraints dropped `[G7]`: the certified bound of the view graph
@@ -86,7 +89,7 @@ impl Proof {
             | Proof::ConvDual
             | Proof::SimultaneousDual
             | Proof::GravityDual => 2,
-            Proof::RigFrames => 4,
+            Proof::RigFrames | Proof::RigCoupled => 4,
             Proof::GravityRelaxed | Proof::SimultaneousDecoupled | Proof::RigImages => 5,
             Proof::ShiftedCholesky => 2,
             Proof::ScalarComparison => 3,
@@ -113,6 +116,7 @@ impl Proof {
             | Proof::SimultaneousDecoupled
             | Proof::RigFrames
             | Proof::RigImages
+            | Proof::RigCoupled
             | Proof::ScalarWeights
             | Proof::Grounded
             | Proof::ShiftedCholesky
@@ -136,6 +140,7 @@ impl fmt::Display for Proof {
             Proof::SimultaneousDecoupled => "the two view graphs' bounds, decoupled [H16]",
             Proof::RigFrames => "the frames' view graph, every sensor held [H19]",
             Proof::RigImages => "the images' view graph, the rig's constraints dropped [H19]",
+            Proof::RigCoupled => "the images' view graph with within-frame couplings [H21]",
             Proof::GravityDual => "SO(2) dual certificate at the estimate [G3]",
             Proof::GravityRelaxed => "the view graph without its gravity priors [G7]",
             Proof::ScalarWeights => "comparison with scalar weights [A13]",

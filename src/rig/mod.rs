@@ -17,6 +17,7 @@
 mod problem;
 mod robust;
 mod solve;
+pub(crate) use solve::polish_passes;
 mod start;
 mod synthetic;
 

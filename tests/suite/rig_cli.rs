@@ -467,10 +467,17 @@ fn certify_reads_a_rig_file_estimate() {
         (a.as_f64().unwrap() - b.as_f64().unwrap()).abs() <= 1e-12 * b.as_f64().unwrap()
     };
     assert!(close(&v["cost"], &solved["cost"]));
-    assert!(close(
-        &v["certificate"]["lower_bound"],
-        &solved["certificate"]["lower_bound"]
-    ));
+    // the same verdict; the bound within the tolerance of the solve's (the coupled bound is of
+    // a point polished from the estimate as written, a change of rounding away [H21])
+    assert_eq!(
+        v["certificate"]["verdict"],
+        solved["certificate"]["verdict"]
+    );
+    let (lb, solved_lb) = (
+        v["certificate"]["lower_bound"].as_f64().unwrap(),
+        solved["certificate"]["lower_bound"].as_f64().unwrap(),
+    );
+    assert!(lb <= v["cost"].as_f64().unwrap() && (lb - solved_lb).abs() <= 1e-6 * solved_lb);
     // the estimate as given, at its nearest rotations (a change of rounding only)
     for f in 0..40 {
         let (a, b) = (

@@ -7,6 +7,7 @@ use super::state::RigState;
 use crate::certify::log::Prediction;
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, GraphCertifier, Plan, Rung};
+use crate::certify::settings::CertifySettings;
 use crate::error::Result;
 use crate::multiple::chordal::solve_chordal;
 use crate::multiple::{MultipleProblem, MultipleSettings, fix_gauge};
@@ -26,27 +27,6 @@ impl ImagesRung {
             certify,
         }
     }
-
-    /// A proven lower bound on `graph`'s chordal minimum: its local minimum from `start`,
-    /// certified within `seconds`; `Err` with the reason when none was proven.
-    fn bound(
-        &self,
-        graph: &MultipleProblem,
-        start: Vec<Rotation>,
-        cx: &RigState<'_>,
-        seconds: Option<f64>,
-    ) -> Result<std::result::Result<f64, String>> {
-        let local = MultipleSettings {
-            max_seconds: seconds,
-            ..Default::default()
-        };
-        let mut free = solve_chordal(graph, start, &local, None)?;
-        fix_gauge(&mut free.rotations);
-        let mut settings = cx.settings.clone();
-        settings.budget.max_seconds = cx.left();
-        let c = (self.certify)(graph, &free.rotations, &settings)?;
-        Ok(c.lower_bound.ok_or(c.explanation))
-    }
 }
 
 impl<'a> Rung<RigState<'a>> for ImagesRung {
@@ -58,43 +38,72 @@ impl<'a> Rung<RigState<'a>> for ImagesRung {
         if self.done {
             return Ok(Plan::Done);
         }
-        // a local solve and a certification of sparse view graphs
+        // a local solve and a certification of sparse view graphs; a fallback after the coupled
+        // bound `[H21]`, which certifies the noisy rigs this bound leaves a gap on
         let size = (cx.problem.images().len() + cx.problem.edges().len()) as f64;
-        Ok(Plan::Run(Prediction::new(4e-6 * size, 4000.0 * size)))
+        Ok(Plan::Fallback(Prediction::new(4e-6 * size, 4000.0 * size)))
     }
 
     fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {
         self.done = true;
         let x = cx.problem.image_rotations(cx.frames, cx.sensors);
         let images = cx.problem.image_graph()?;
-        let parts: Vec<Vec<usize>> = images
-            .components()
-            .into_iter()
-            .filter(|c| c.len() > 1)
-            .collect();
-        let mut sum = 0.0;
-        for nodes in &parts {
-            let graph = images.induced(nodes);
-            let share = graph.num_edges() as f64 / images.num_edges() as f64;
-            let seconds = cx.left().map(|l| l * share);
-            let start = nodes.iter().map(|&a| x[a]).collect();
-            match self.bound(&graph, start, cx, seconds)? {
-                Ok(lb) => sum += lb,
-                Err(why) => {
-                    return Ok(Found::failed(format!(
-                        "a component of the images' view graph ({} images) has no bound: {why}",
-                        nodes.len()
-                    )));
-                }
-            }
-        }
+        let (parts, sum) =
+            match components_minimum(self.certify, &images, &x, cx, cx.settings, cx.left())? {
+                Ok(found) => found,
+                Err(why) => return Ok(Found::failed(why)),
+            };
         let bound = super::rounding::rounding_floor(sum, cx.total_weight());
         let note = format!(
-            "the images' view graph without the rig's constraints: {} component(s), certified \
-             minima summing to {sum:.9e} [H19]",
-            parts.len()
+            "the images' view graph without the rig's constraints: {parts} component(s), certified \
+             minima summing to {sum:.9e} [H19]"
         );
         let bound = cx.offer(bound, Proof::RigImages, &note);
         Ok(Found::proved(bound, cx.certifies(bound), note))
     }
+}
+
+/// The sum of the certified minima of `graph`'s components (of more than one node), each
+/// solved from `x` by the chordal Newton-LM and certified by `certify` with `settings`, with a
+/// share of `seconds` in proportion to its edges; the number of components, or why one has no
+/// bound.
+pub(super) fn components_minimum(
+    certify: GraphCertifier,
+    graph: &MultipleProblem,
+    x: &[Rotation],
+    cx: &RigState<'_>,
+    settings: &CertifySettings,
+    seconds: Option<f64>,
+) -> Result<std::result::Result<(usize, f64), String>> {
+    let parts: Vec<Vec<usize>> = graph
+        .components()
+        .into_iter()
+        .filter(|c| c.len() > 1)
+        .collect();
+    let mut sum = 0.0;
+    for nodes in &parts {
+        let part = graph.induced(nodes);
+        let share = part.num_edges() as f64 / graph.num_edges() as f64;
+        let local = MultipleSettings {
+            max_seconds: seconds.map(|l| l * share),
+            ..Default::default()
+        };
+        let start = nodes.iter().map(|&a| x[a]).collect();
+        let mut free = solve_chordal(&part, start, &local, None)?;
+        fix_gauge(&mut free.rotations);
+        let mut settings = settings.clone();
+        settings.budget.max_seconds = cx.left().map(|l| seconds.map_or(l, |s| l.min(s)));
+        let c = certify(&part, &free.rotations, &settings)?;
+        match c.lower_bound {
+            Some(lb) => sum += lb,
+            None => {
+                return Ok(Err(format!(
+                    "a component of {} images has no bound: {}",
+                    nodes.len(),
+                    c.explanation
+                )));
+            }
+        }
+    }
+    Ok(Ok((parts.len(), sum)))
 }

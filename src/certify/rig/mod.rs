@@ -9,6 +9,8 @@
 //!   components' certified minima bounds `J*`. Tight when the images' optimum is a rig
 //!   (noise-free data); a gap otherwise (the constraints' cost).
 
+mod coupled;
+mod couplings;
 mod frames;
 mod images;
 mod rounding;
@@ -74,6 +76,7 @@ pub fn certify_rig(
     };
     let rungs: Rungs<'_, RigState<'_>> = vec![
         Box::new(frames::FramesRung::new(certify)),
+        Box::new(coupled::CoupledRung::new(certify)),
         Box::new(images::ImagesRung::new(certify)),
     ];
     climb(&mut state, rungs)?;

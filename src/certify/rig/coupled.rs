@@ -1,0 +1,128 @@
+//! The coupled bound of a rig (`paper-notes/conjugate.md` `[H21]`): the images' view graph with
+//! pseudo-edges inside each frame ([`super::couplings`]), whose cost on rig points is the
+//! rig's cost plus a constant. Its components' certified minima, less that constant, bound `J*`;
+//! tight on the noisy rigs where the images' bound `[H19]` leaves a gap.
+
+use super::couplings::{Coupled, couple};
+use super::images::components_minimum;
+use super::state::RigState;
+use crate::certify::log::Prediction;
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, GraphCertifier, Plan, Rung};
+use crate::certify::settings::CertifyMode;
+use crate::deadline::Deadline;
+use crate::error::Result;
+use crate::rig::polish_passes;
+use crate::so3::Rotation;
+
+/// The coupled bound as a rung.
+pub(crate) struct CoupledRung {
+    done: bool,
+    certify: GraphCertifier,
+}
+
+impl CoupledRung {
+    /// The rung, certifying each component with `certify`.
+    pub(crate) fn new(certify: GraphCertifier) -> Self {
+        CoupledRung {
+            done: false,
+            certify,
+        }
+    }
+}
+
+impl<'a> Rung<RigState<'a>> for CoupledRung {
+    fn proof(&self) -> Proof {
+        Proof::RigCoupled
+    }
+
+    fn plan(&mut self, cx: &RigState<'a>) -> Result<Plan> {
+        if self.done {
+            return Ok(Plan::Done);
+        }
+        // the images' view graph with up to three pseudo-edges per pair of images of a frame
+        let images = cx.problem.images().len() as f64;
+        let size = 4.0 * images + cx.problem.edges().len() as f64;
+        Ok(Plan::Run(Prediction::new(6e-6 * size, 6000.0 * size)))
+    }
+
+    fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {
+        self.done = true;
+        let (frames, sensors, coupled, passes) = match polished(cx)? {
+            Ok(found) => found,
+            Err(why) => return Ok(Found::failed(why)),
+        };
+        // the augmented cost is about `cost + offset`: its tolerance made a quarter of the rig's
+        let mut settings = cx.settings.clone();
+        // the couplings are chosen for the estimate's own multipliers: the dual certificate at
+        // it is the proof that can use them (no SDP or staircase of the augmented graph)
+        // at the estimate; its pseudo-edges are far from consistent (rotations by pi/2 and pi),
+        // so the scalar comparison [D13] never holds: the 3n factorisations alone
+        if settings.mode == CertifyMode::Auto {
+            settings.mode = CertifyMode::Dual;
+        }
+        settings
+            .dual
+            .proofs
+            .retain(|p| matches!(p, Proof::Grounded | Proof::ShiftedCholesky));
+        // a labelled estimate is no bound of the rig's: not run
+        settings.dual.randomized.enabled = false;
+        let augmented = cx.cost + coupled.offset.max(0.0);
+        if augmented > 0.0 {
+            let relative = 0.25 * cx.allowed_gap / augmented;
+            settings.tolerance.relative = settings.tolerance.relative.min(relative);
+        }
+        let x = cx.problem.image_rotations(&frames, &sensors);
+        let seconds = cx.left().map(|l| 0.6 * l);
+        let (parts, sum) =
+            match components_minimum(self.certify, &coupled.graph, &x, cx, &settings, seconds)? {
+                Ok(found) => found,
+                Err(why) => return Ok(Found::failed(why)),
+            };
+        let bound = super::rounding::rounding_floor(sum - coupled.offset, cx.total_weight());
+        let note = format!(
+            "the images' view graph with {} within-frame coupling edges{}: {parts} component(s), \
+             certified minima summing to {sum:.9e}, less the couplings' constant {:.9e} [H21]",
+            coupled.pseudo_edges,
+            match passes {
+                0 => String::new(),
+                n => format!(" (at the estimate polished by {n} alternation passes)"),
+            },
+            coupled.offset
+        );
+        let bound = cx.offer(bound, Proof::RigCoupled, &note);
+        Ok(Found::proved(bound, cx.certifies(bound), note))
+    }
+}
+
+/// Alternation passes added per round of [`polished`], and the most in all.
+const POLISH_ROUND: usize = 5;
+const POLISH_MAX: usize = 200;
+
+/// The couplings at the estimate, or, while their charge for the sensors' gradient (linear in it,
+/// `[H21]`) is above a quarter of the allowed gap, at the estimate polished by alternation
+/// passes (at most [`POLISH_MAX`], within a third of the time left): the bound holds for the
+/// global minimum from any point. The point, its couplings and the passes run.
+#[allow(clippy::type_complexity)]
+fn polished(
+    cx: &RigState<'_>,
+) -> Result<std::result::Result<(Vec<Rotation>, Vec<Rotation>, Coupled, usize), String>> {
+    let (mut frames, mut sensors) = (cx.frames.to_vec(), cx.sensors.to_vec());
+    let deadline = Deadline::after(cx.left().map(|l| l / 3.0));
+    let mut passes = 0;
+    loop {
+        let coupled = match couple(cx.problem, &frames, &sensors)? {
+            Ok(c) => c,
+            Err(why) => return Ok(Err(why)),
+        };
+        let done = coupled.charge <= 0.25 * cx.allowed_gap
+            || passes >= POLISH_MAX
+            || deadline.is_some_and(|d| d.passed());
+        if done {
+            return Ok(Ok((frames, sensors, coupled, passes)));
+        }
+        let seconds = deadline.map(|d| d.left().unwrap_or(0.0));
+        (frames, sensors) = polish_passes(cx.problem, (frames, sensors), POLISH_ROUND, seconds)?;
+        passes += POLISH_ROUND;
+    }
+}

@@ -1,0 +1,409 @@
+//! The within-frame couplings of a rig (`paper-notes/conjugate.md` `[H21]`): pseudo-edges
+//! between the images of one frame whose weighted rotations, summed over the frames, vanish for
+//! each pair of sensors, so that on every rig point they add a constant to the images' view
+//! graph's cost. Their flows are the least-norm ones that make the estimate a critical point of
+//! the images' view graph with them; the bound is the certified minimum of that graph less the
+//! constant (and the charge for the sums' rounding), whatever the flows are.
+
+use crate::error::Result;
+use crate::linalg::compensated::Accumulator;
+use crate::multiple::{Edge, MultipleProblem};
+use crate::rig::RigProblem;
+use crate::so3::{Rotation, hat, vee};
+use nalgebra::{DMatrix, Matrix3, Vector3};
+use std::collections::HashMap;
+
+/// Most sensors photographing one frame that the couplings handle (`k (k - 1) / 2` pairs per
+/// frame, a `p x p` projector each).
+pub(crate) const MAX_SENSORS_PER_FRAME: usize = 16;
+
+/// Most pairs of sensors photographing a frame together (a dense `P x P` eigen-decomposition).
+pub(crate) const MAX_COUPLED_PAIRS: usize = 500;
+
+/// The images' view graph with the couplings, and what they add on a rig point.
+pub(crate) struct Coupled {
+    /// The images' edges, then the pseudo-edges.
+    pub graph: MultipleProblem,
+    pub pseudo_edges: usize,
+    /// `L` with `J(F, S) >= J_aug(S F) - L` on every rig point of exact rotations: the
+    /// pseudo-edges' constant, their sums' charge, minus the held pairs' terms (`[H21]`).
+    pub offset: f64,
+    /// The part of `offset` charged for the constrained pairs' sums `r_st` (nonzero where the
+    /// estimate is not exactly critical in its sensors): `2 sqrt(3) sum ||r_st||_F`.
+    pub charge: f64,
+}
+
+/// The couplings at the estimate (`frames`, `sensors`, held sensors at their held rotations),
+/// or why there are none.
+pub(crate) fn couple(
+    problem: &RigProblem,
+    frames: &[Rotation],
+    sensors: &[Rotation],
+) -> Result<std::result::Result<Coupled, String>> {
+    let per_frame = frame_images(problem);
+    if per_frame.iter().any(|f| f.len() > MAX_SENSORS_PER_FRAME) {
+        return Ok(Err(format!(
+            "a frame photographed by more than {MAX_SENSORS_PER_FRAME} sensors"
+        )));
+    }
+    let pairs = Pairs::new(problem, &per_frame);
+    if pairs.ids.is_empty() {
+        return Ok(Err("no frame is photographed by two sensors".into()));
+    }
+    if pairs.ids.len() > MAX_COUPLED_PAIRS {
+        return Ok(Err(format!(
+            "{} pairs of sensors share a frame (at most {MAX_COUPLED_PAIRS})",
+            pairs.ids.len()
+        )));
+    }
+    let x = problem.image_rotations(frames, sensors);
+    let images = problem.image_graph()?;
+    let demand = demands(problem, &images, &x, sensors);
+    let flows = least_norm_flows(&per_frame, &demand, &pairs);
+    let pseudo = pseudo_edges(&per_frame, &flows, sensors);
+    let (offset, charge) = offset(&pseudo, &pairs, sensors);
+    let pseudo_edges = pseudo.len();
+    let mut edges = images.edges().to_vec();
+    edges.extend(pseudo.into_iter().map(|(_, e)| e));
+    Ok(Ok(Coupled {
+        graph: MultipleProblem::new(problem.images().len(), edges)?,
+        pseudo_edges,
+        offset,
+        charge,
+    }))
+}
+
+/// Each frame's `(sensor, image)`, sorted by sensor.
+fn frame_images(problem: &RigProblem) -> Vec<Vec<(usize, usize)>> {
+    let mut per_frame = vec![Vec::new(); problem.num_frames()];
+    for (a, im) in problem.images().iter().enumerate() {
+        per_frame[im.frame].push((im.sensor, a));
+    }
+    for f in &mut per_frame {
+        f.sort_unstable();
+    }
+    per_frame
+}
+
+/// The pairs `(s, t)`, `s < t`, of sensors photographing a frame together, numbered; a pair
+/// is *constrained* (its pseudo-edges' rotations must sum to zero) unless both are held.
+struct Pairs {
+    ids: HashMap<(usize, usize), usize>,
+    constrained: Vec<bool>,
+    sensors: Vec<(usize, usize)>,
+}
+
+impl Pairs {
+    fn new(problem: &RigProblem, per_frame: &[Vec<(usize, usize)>]) -> Self {
+        let held = problem.held();
+        let mut p = Pairs {
+            ids: HashMap::new(),
+            constrained: Vec::new(),
+            sensors: Vec::new(),
+        };
+        for f in per_frame {
+            for (i, j) in local_pairs(f.len()) {
+                let key = (f[i].0, f[j].0);
+                if !p.ids.contains_key(&key) {
+                    p.ids.insert(key, p.sensors.len());
+                    p.sensors.push(key);
+                    p.constrained
+                        .push(held[key.0].is_none() || held[key.1].is_none());
+                }
+            }
+        }
+        p
+    }
+
+    fn id(&self, s: usize, t: usize) -> usize {
+        self.ids[&(s, t)]
+    }
+}
+
+/// The pairs `(i, j)`, `i < j`, of `k` local indices.
+fn local_pairs(k: usize) -> Vec<(usize, usize)> {
+    (0..k)
+        .flat_map(|i| (i + 1..k).map(move |j| (i, j)))
+        .collect()
+}
+
+/// Each image's demand in rig coordinates: `d_a = -S_s^T vee(skew((Q Y)_a X_a^T))`, what the
+/// couplings' torques at `a` must supply for the images' view graph with them to be critical.
+fn demands(
+    problem: &RigProblem,
+    images: &MultipleProblem,
+    x: &[Rotation],
+    sensors: &[Rotation],
+) -> Vec<Vector3<f64>> {
+    let qy = crate::certify::multiple::multipliers::laplacian_times(images, x);
+    problem
+        .images()
+        .iter()
+        .enumerate()
+        .map(|(a, im)| {
+            let torque = vee(&(qy[a] * x[a].matrix().transpose()));
+            -(sensors[im.sensor].matrix().transpose() * torque)
+        })
+        .collect()
+}
+
+/// Entry `(a, b)` of the projector `I - B^T L^+ B` onto the circulations of the complete graph
+/// on `k` nodes (`B` its incidence, `+1` at `i` and `-1` at `j` for the pair `(i, j)`;
+/// `L^+ = (I - 11^T / k) / k`, so the projector is `I - B^T B / k`).
+fn circulation(a: (usize, usize), b: (usize, usize), k: f64) -> f64 {
+    let overlap = |x: usize, y: usize| f64::from(u8::from(x == y));
+    let btb = overlap(a.0, b.0) + overlap(a.1, b.1) - overlap(a.0, b.1) - overlap(a.1, b.0);
+    overlap(a.0, b.0) * overlap(a.1, b.1) - btb / k
+}
+
+/// The least-norm flows (one 3-vector per frame and local pair, `+u` at the pair's first
+/// sensor, `-u` at its second) with divergence the demands in every frame and, on every
+/// constrained pair, zero sum over the frames (`[H21]`): `u_f = u0_f + Pi_f E_f^T beta` with
+/// `u0_f` the frame's least-norm flow, `Pi_f` its circulation projector and `beta` from the
+/// pairs' `P x P` system `(sum_f E_f Pi_f E_f^T) beta = -sum_f E_f u0_f` (pseudo-inverse).
+fn least_norm_flows(
+    per_frame: &[Vec<(usize, usize)>],
+    demand: &[Vector3<f64>],
+    pairs: &Pairs,
+) -> Vec<Vec<Vector3<f64>>> {
+    let np = pairs.sensors.len();
+    let mut m = DMatrix::<f64>::zeros(np, np);
+    let mut c = DMatrix::<f64>::zeros(np, 3);
+    let mut particular = Vec::with_capacity(per_frame.len());
+    for f in per_frame {
+        let (local, k) = (local_pairs(f.len()), f.len() as f64);
+        let ids: Vec<Option<usize>> = local
+            .iter()
+            .map(|&(i, j)| Some(pairs.id(f[i].0, f[j].0)).filter(|&g| pairs.constrained[g]))
+            .collect();
+        let u0: Vec<Vector3<f64>> = local
+            .iter()
+            .map(|&(i, j)| (demand[f[i].1] - demand[f[j].1]) / k)
+            .collect();
+        for (e, g) in ids
+            .iter()
+            .enumerate()
+            .filter_map(|(e, g)| g.map(|g| (e, g)))
+        {
+            for r in 0..3 {
+                c[(g, r)] += u0[e][r];
+            }
+            for (e2, g2) in ids
+                .iter()
+                .enumerate()
+                .filter_map(|(e, g)| g.map(|g| (e, g)))
+            {
+                m[(g, g2)] += circulation(local[e], local[e2], k);
+            }
+        }
+        particular.push((local, ids, u0, k));
+    }
+    let beta = -pseudo_inverse(m) * c;
+    particular
+        .into_iter()
+        .map(|(local, ids, mut u, k)| {
+            for (e, ue) in u.iter_mut().enumerate() {
+                for (e2, g2) in ids
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(e, g)| g.map(|g| (e, g)))
+                {
+                    let w = circulation(local[e], local[e2], k);
+                    *ue += w * Vector3::new(beta[(g2, 0)], beta[(g2, 1)], beta[(g2, 2)]);
+                }
+            }
+            u
+        })
+        .collect()
+}
+
+/// The pseudo-inverse of the symmetric positive semidefinite `m` (eigenvalues below `1e-10` of
+/// the largest dropped).
+fn pseudo_inverse(m: DMatrix<f64>) -> DMatrix<f64> {
+    let eig = m.symmetric_eigen();
+    let top = eig.eigenvalues.amax();
+    let inv = eig.eigenvalues.map(|l| {
+        if l > 1e-10 * top && top > 0.0 {
+            1.0 / l
+        } else {
+            0.0
+        }
+    });
+    &eig.eigenvectors * DMatrix::from_diagonal(&inv) * eig.eigenvectors.transpose()
+}
+
+/// Positive weights `c_k` and rotations `N_k` with `sum c_k N_k = hat(u)`: `|u| N(u/|u|, pi/2) +
+/// |u|/2 (N(b, pi) + N(c, pi))` for an orthonormal frame `(u/|u|, b, c)` (`[H21]`).
+fn skew_as_rotations(u: &Vector3<f64>) -> [(f64, Matrix3<f64>); 3] {
+    let n = u.norm();
+    let a = u / n;
+    let helper = if a.x.abs() < 0.6 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let b = a.cross(&helper).normalize();
+    let c = a.cross(&b);
+    let half_turn = |v: &Vector3<f64>| 2.0 * v * v.transpose() - Matrix3::identity();
+    [
+        (n, hat(&a) + a * a.transpose()),
+        (0.5 * n, half_turn(&b)),
+        (0.5 * n, half_turn(&c)),
+    ]
+}
+
+/// The pseudo-edges of the flows, each with its pair's number: from image `(f, s)` to image
+/// `(f, t)`, rotation `S_t N_k S_s^T`, weight `c_k` (those outside `[1e-100, 1e100]` dropped:
+/// any pseudo-edges give a sound bound).
+fn pseudo_edges(
+    per_frame: &[Vec<(usize, usize)>],
+    flows: &[Vec<Vector3<f64>>],
+    sensors: &[Rotation],
+) -> Vec<((usize, usize), Edge)> {
+    let mut out = Vec::new();
+    for (f, u) in per_frame.iter().zip(flows) {
+        for ((i, j), ue) in local_pairs(f.len()).into_iter().zip(u) {
+            let ((s, a), (t, b)) = (f[i], f[j]);
+            if !(ue.norm() >= 2e-100 && ue.norm() <= 1e100) {
+                continue;
+            }
+            for (w, n) in skew_as_rotations(ue) {
+                let r = sensors[t].matrix() * n * sensors[s].matrix().transpose();
+                let edge = Edge {
+                    i: a,
+                    j: b,
+                    rotation: Rotation::from_matrix_unchecked(r),
+                    weight: w,
+                };
+                out.push(((s, t), edge));
+            }
+        }
+    }
+    out
+}
+
+/// `L` of [`Coupled::offset`]: `c_P = sum c_k (3 + ||R'_k||_F^2)` rounded up, plus
+/// `2 sqrt(3) ||r_st||_F` for each constrained pair (`r_st = sum c_k R'_k` over its
+/// pseudo-edges, `||M||_2 = 1` for `M = S_s S_t^T`), minus `2 tr(r_st S_s S_t^T)` for each held
+/// pair; every sum in double-double with its error bound charged. With the constrained pairs'
+/// part apart.
+fn offset(pseudo: &[((usize, usize), Edge)], pairs: &Pairs, sensors: &[Rotation]) -> (f64, f64) {
+    let mut constant = Accumulator::default();
+    let mut sums = vec![[Accumulator::default(); 9]; pairs.sensors.len()];
+    for (key, e) in pseudo {
+        let r = e.rotation.matrix();
+        constant.add_product(e.weight, 3.0 + r.norm_squared());
+        for (acc, v) in sums[pairs.id(key.0, key.1)].iter_mut().zip(r.iter()) {
+            acc.add_product(e.weight, *v);
+        }
+    }
+    let mut offset = (constant.value() + constant.bound()) * (1.0 + 1e-13);
+    let mut charge = 0.0;
+    for (g, sum) in sums.iter().enumerate() {
+        let r = Matrix3::from_iterator(sum.iter().map(Accumulator::value));
+        let r_norm = sum
+            .iter()
+            .map(|a| (a.value().abs() + a.bound()).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            * (1.0 + 1e-15);
+        if pairs.constrained[g] {
+            charge += 2.0 * 3f64.sqrt() * r_norm * (1.0 + 1e-15);
+        } else {
+            let (s, t) = pairs.sensors[g];
+            let m = sensors[s].matrix() * sensors[t].matrix().transpose();
+            // |tr(r (M_exact - M))| <= ||r|| 1e-13; the trace's rounding far below 1e-12 ||r||
+            offset -= 2.0 * ((r * m).trace() - 1e-12 * r_norm);
+        }
+    }
+    (offset + charge * (1.0 + 1e-15), charge)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::certify::multiple::multipliers::stationarity_residual;
+    use crate::rig::{RigScene, RigSettings, polish_passes, solve_rig};
+    use crate::so3::random_rotation;
+    use rand::SeedableRng;
+    use rand::rngs::StdRng;
+
+    /// A solved noisy rig (every sensor estimated, or some known), polished, with its held
+    /// sensors at their held rotations.
+    fn solved(known: bool, seed: u64) -> (RigProblem, Vec<Rotation>, Vec<Rotation>) {
+        let scene = RigScene {
+            frames: 30,
+            sensors: 3,
+            noise_sigma: 0.01,
+            known,
+            seed,
+            ..Default::default()
+        };
+        let (p, _) = scene.generate();
+        let s = solve_rig(&p, &RigSettings::default()).unwrap();
+        let (frames, sensors) = polish_passes(&p, (s.frames, s.sensors), 30, None).unwrap();
+        let sensors = sensors
+            .iter()
+            .zip(p.held())
+            .map(|(s, h)| h.unwrap_or(*s))
+            .collect();
+        (p, frames, sensors)
+    }
+
+    #[test]
+    fn the_couplings_make_the_estimate_critical() {
+        let (p, frames, sensors) = solved(false, 1);
+        let c = couple(&p, &frames, &sensors).unwrap().unwrap();
+        let x = p.image_rotations(&frames, &sensors);
+        let images = p.image_graph().unwrap();
+        let before = stationarity_residual(&images, &x).unwrap();
+        let after = stationarity_residual(&c.graph, &x).unwrap();
+        assert!(
+            before > 1e-3 && after < 1e-9 * before,
+            "{before} -> {after}"
+        );
+        assert!(c.charge >= 0.0 && c.charge < 1e-6 * p.cost(&frames, &sensors));
+    }
+
+    /// On every rig point the images' view graph with the couplings costs the rig's cost plus at
+    /// most `offset` (less at most the charge): checked on random rig points from the two
+    /// costs' own evaluations; on points that are no rig the difference is not constant.
+    #[test]
+    fn on_rig_points_the_couplings_add_a_constant() {
+        let mut rng = StdRng::seed_from_u64(5);
+        for known in [false, true] {
+            let (p, frames, sensors) = solved(known, 2);
+            let c = couple(&p, &frames, &sensors).unwrap().unwrap();
+            assert!(c.pseudo_edges > 0);
+            let mut differences = Vec::new();
+            for _ in 0..20 {
+                let f: Vec<Rotation> = (0..p.num_frames())
+                    .map(|_| random_rotation(&mut rng))
+                    .collect();
+                let s: Vec<Rotation> = p
+                    .held()
+                    .iter()
+                    .map(|h| h.unwrap_or_else(|| random_rotation(&mut rng)))
+                    .collect();
+                let j = p.cost(&f, &s);
+                let augmented = c.graph.cost(&p.image_rotations(&f, &s));
+                let slack = 1e-9 * augmented;
+                assert!(
+                    j >= augmented - c.offset - slack,
+                    "{j} < {augmented} - {}",
+                    c.offset
+                );
+                assert!(j <= augmented - c.offset + 2.0 * c.charge + slack);
+                // not a rig: every image rotated on its own
+                let x: Vec<Rotation> = (0..p.images().len())
+                    .map(|_| random_rotation(&mut rng))
+                    .collect();
+                let images = p.image_graph().unwrap();
+                differences.push(c.graph.cost(&x) - images.cost(&x));
+            }
+            let spread = differences.iter().cloned().fold(f64::MIN, f64::max)
+                - differences.iter().cloned().fold(f64::MAX, f64::min);
+            assert!(spread > 1e-3 * c.offset.abs(), "{spread}");
+        }
+    }
+}
