@@ -124,6 +124,11 @@ pub struct DualSettings {
     /// comparison ran only above a factor size (`scalar_comparison_above`), which let a
     /// larger budget give a weaker verdict (issue 24).
     pub proofs: Vec<Proof>,
+    /// Let the scalar comparison `[D13]` fall back to sparsified subgraphs and splits of the
+    /// graph when the whole graph's factor does not fit or fails (default `true`). Off for
+    /// graphs whose extra edges are far from consistent, where they fail (a rig's couplings,
+    /// `paper-notes/conjugate.md` `[H21]`).
+    pub scalar_fallbacks: bool,
     /// The randomized Chebyshev test `[D16]`, run when no deterministic proof fits the
     /// [`Budget`]: a Monte Carlo lower bound reported beside the `inconclusive` verdict
     /// (never as the verdict's proven bound).
@@ -198,6 +203,7 @@ impl Default for DualSettings {
             lanczos: LanczosSettings::default(),
             estimate_when_verified: true,
             proofs: Proof::MATRIX_CHECKS.to_vec(),
+            scalar_fallbacks: true,
             randomized: RandomizedSettings::default(),
             conv: Default::default(),
         }

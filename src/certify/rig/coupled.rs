@@ -55,16 +55,13 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
         // the augmented cost is about `cost + offset`: its tolerance made a quarter of the rig's
         let mut settings = cx.settings.clone();
         // the couplings are chosen for the estimate's own multipliers: the dual certificate at
-        // it is the proof that can use them (no SDP or staircase of the augmented graph)
-        // at the estimate; its pseudo-edges are far from consistent (rotations by pi/2 and pi),
-        // so the scalar comparison [D13] never holds: the 3n factorisations alone
+        // it is the proof that can use them (no SDP or staircase of the augmented graph); its
+        // pseudo-edges are far from consistent (rotations by pi/2 and pi), so the scalar
+        // comparison's sparsified subgraphs and splits fail: the whole graph's alone
         if settings.mode == CertifyMode::Auto {
             settings.mode = CertifyMode::Dual;
         }
-        settings
-            .dual
-            .proofs
-            .retain(|p| matches!(p, Proof::Grounded | Proof::ShiftedCholesky));
+        settings.dual.scalar_fallbacks = false;
         // a labelled estimate is no bound of the rig's: not run
         settings.dual.randomized.enabled = false;
         let augmented = cx.cost + coupled.offset.max(0.0);

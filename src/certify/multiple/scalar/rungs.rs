@@ -253,6 +253,9 @@ impl Fallbacks {
         rotations: &[Rotation],
         failure: Option<ScalarFailure>,
     ) -> Result<Option<ScalarAnalysis>> {
+        if !cx.settings.dual.scalar_fallbacks {
+            return Ok(None);
+        }
         if let Some(ScalarFailure::Inertia { negative_pivots }) = failure
             && self.splits.is_none()
         {
