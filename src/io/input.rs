@@ -443,6 +443,40 @@ pub fn load_conjugate(
     load_conjugate_with(Some(path), format, options, &HandEyeOptions::default())
 }
 
+/// The problem `rotavg certify` reads, and the name it is reported under: hand-eye data
+/// (pose streams named in `handeye`, or a folder that holds no COLMAP database) as
+/// [`load_conjugate_with`] reads them, any other input with [`load_problem`]. A folder with
+/// neither is an error that says what certify reads.
+pub fn load_certify_problem(
+    path: Option<&str>,
+    format: GraphFormat,
+    options: &ReadOptions,
+    handeye: &HandEyeOptions,
+) -> Result<(String, LoadedProblem)> {
+    let streams = handeye.hand.is_some() || handeye.camera.is_some();
+    let folder = path
+        .map(Path::new)
+        .is_some_and(|p| p.is_dir() && crate::io::colmap::find_database(p).is_none());
+    match path {
+        Some(p) if !(streams || folder) => Ok((p.to_string(), load_problem(p, format, options)?)),
+        input => {
+            let loaded = load_conjugate_with(input, ConjugateFormat::Auto, options, handeye)
+                .map_err(|e| match (streams, e) {
+                    (false, Error::Io { message, .. }) => Error::Io {
+                        path: input.unwrap_or("-").to_string(),
+                        message: format!(
+                            "certify reads a folder holding a COLMAP database.db, or hand-eye \
+                             data (Tabb's robot_cali.txt, or hand and camera pose streams); \
+                             this folder has neither: {message}"
+                        ),
+                    },
+                    (_, e) => e,
+                })?;
+            Ok((loaded.name, LoadedProblem::Conjugate(loaded.problem)))
+        }
+    }
+}
+
 /// [`load_conjugate`] with the hand-eye options: named hand / camera pose streams (then
 /// `path`, a directory, may be `None` when both are named, and `format` must be `auto` or
 /// `eth`) and the pairing settings.

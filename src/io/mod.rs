@@ -56,6 +56,7 @@ pub mod sfm;
 pub mod single_json;
 pub mod text;
 pub mod two_view_information;
+pub mod values;
 
 pub(crate) use crate::validate::weight_out_of_range;
 /// The weight window of every reader and constructor (see [`crate::validate::MAX_WEIGHT`]).

@@ -359,6 +359,44 @@ pub enum MultipleLoss {
 }
 
 impl MultipleLoss {
+    /// The options of `rotavg multiple` that only a robust loss takes (`given`: each flag's
+    /// name and whether it was given) are an error with another loss; `--inlier-output` needs
+    /// the inlier graph certified (`certify_none`: `--certify none` was given).
+    pub fn check_robust_flags(self, given: &[(&str, bool)], certify_none: bool) -> Result<()> {
+        let robust = !matches!(self, MultipleLoss::Chordal | MultipleLoss::Geodesic);
+        let inlier_output = given.iter().any(|&(f, g)| g && f == "--inlier-output");
+        let (name, reason) = match given.iter().find(|(_, given)| *given) {
+            Some((flag, _)) if !robust => (
+                *flag,
+                format!("needs a robust loss (--loss l1, huber or cauchy), not {self}"),
+            ),
+            _ if inlier_output && certify_none => (
+                "--inlier-output",
+                "the inlier graph is refined only when it is certified (not with --certify none)"
+                    .into(),
+            ),
+            _ => return Ok(()),
+        };
+        Err(Error::InvalidSettings {
+            name: name.to_string(),
+            reason,
+        })
+    }
+
+    /// Gravity priors take the chordal L2 loss (with `auto`, least squares or the robust one
+    /// the residuals call for) and the robust losses; the geodesic L2 loss is an error.
+    pub fn check_gravity(self) -> Result<()> {
+        if self != MultipleLoss::Geodesic {
+            return Ok(());
+        }
+        Err(Error::InvalidSettings {
+            name: "--gravity".into(),
+            reason: "gravity priors are solved with the chordal L2 loss or a robust loss (l1, \
+                     huber, cauchy), not `--loss geodesic`"
+                .into(),
+        })
+    }
+
     /// The objective, with `threshold_deg` as the Huber threshold or Cauchy scale (degrees).
     ///
     /// ```

@@ -35,6 +35,7 @@
 pub mod certify;
 pub mod conjugate;
 pub mod demo;
+mod errors;
 pub mod info;
 pub mod multiple;
 pub mod rig;
@@ -45,6 +46,7 @@ pub use crate::io::input::ProblemKind;
 pub use certify::CertifyReport;
 pub use conjugate::ConjugateReport;
 pub use demo::DemoReport;
+pub use errors::error_text;
 pub use info::InfoReport;
 pub use multiple::{CertifiedEstimate, MultipleReport, VerdictOf};
 pub use rig::{RigReport, rig_problem};

@@ -109,6 +109,21 @@ pub struct MultipleReport {
 }
 
 impl MultipleReport {
+    /// Name `--edges-output` (`edges`) in the report when a robust solve wrote it; when `--loss
+    /// auto` kept least squares and `edges` or `--inlier-output` (`inlier_output`) was asked
+    /// for, there is no robust solve to write: the warning `output_not_written` says so.
+    pub fn note_robust_outputs(&mut self, edges: Option<&str>, inlier_output: bool) {
+        let robust = self.result.solution.residuals.is_some();
+        self.edges_output = edges.filter(|_| robust).map(str::to_string);
+        let unwritten = usize::from(edges.is_some()) + usize::from(inlier_output);
+        if !robust && unwritten > 0 {
+            let message = "--edges-output / --inlier-output not written: `--loss auto` kept \
+                           least squares (no outliers); `--loss cauchy` forces the robust solve";
+            self.run_warnings
+                .push(Warning::new("output_not_written", message).with_count(unwritten));
+        }
+    }
+
     /// The report of `result`, a solution of `input.graph.problem`; the accuracy is computed
     /// when `input` has ground truth (an error when no node has any).
     pub fn new(input: &MultipleInput, result: MultipleEstimate) -> Result<Self> {

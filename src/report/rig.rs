@@ -72,6 +72,14 @@ pub fn rig_problem(right: &LoadedGraph, left: &LoadedGraph) -> Result<Simultaneo
 }
 
 impl RigReport {
+    /// Write the estimate to `path` (`rotavg rig --output`): JSON `{"rotations": [...],
+    /// "node_ids": [...], "sensor_from_rig": S}`.
+    pub fn write_output(&self, path: &str) -> crate::Result<()> {
+        let s = &self.result.solution;
+        let text = crate::io::json::write_rig_json(&s.rotations, &self.node_ids, &s.s);
+        crate::io::output::write_text(path, &text)
+    }
+
     /// The report of `result`, the estimate of the rig of `right` and `left` (read from the
     /// files `inputs`).
     pub fn new(

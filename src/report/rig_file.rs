@@ -29,6 +29,14 @@ pub struct RigFileReport {
 }
 
 impl RigFileReport {
+    /// Write the estimate to `path` (`rotavg rig FILE --output`): JSON `{"frames": [...],
+    /// "frame_ids": [...], "sensors_from_rig": [...], "sensor_ids": [...]}`.
+    pub fn write_output(&self, path: &str) -> crate::Result<()> {
+        let s = &self.result.solution;
+        let text = crate::io::rig::write_rig_estimate_json(&s.frames, &s.sensors, &self.rig);
+        crate::io::output::write_text(path, &text)
+    }
+
     /// Solve and certify the rig read from `input`: the solve within `max_seconds`, the
     /// certificate under `certify`.
     /// Solve the rig read from `input` with `loss` (`robust`: the Cauchy loss's thresholds) and

@@ -12,10 +12,9 @@ use rotavg::Result;
 use rotavg::certify::CertifyMode;
 use rotavg::io::detect::ReadOptions;
 use rotavg::io::input::{
-    LoadedEstimate, LoadedProblem, load_conjugate_with, load_estimate, load_estimate_for,
-    load_problem,
+    LoadedEstimate, LoadedProblem, load_certify_problem, load_estimate, load_estimate_for,
 };
-use rotavg::io::names::{Choice, ConjugateFormat, MultipleLoss};
+use rotavg::io::names::{Choice, MultipleLoss};
 use rotavg::io::nearest;
 use rotavg::report::CertifyReport;
 use std::path::Path;
@@ -114,7 +113,12 @@ pub fn run(args: &Args) -> Result<Outcome> {
         .loss
         .certify_inlier_threshold_deg(args.loss_threshold, args.inlier_threshold)?;
     let options = args.graph.read_options(&args.common);
-    let (input, problem) = load(args, &options)?;
+    let (input, problem) = load_certify_problem(
+        args.input.as_deref(),
+        args.graph.format,
+        &options,
+        &args.streams.options(),
+    )?;
     let estimate = load_given(args, &problem, &options)?;
     if args.plot.plot.is_some() {
         CertifyReport::require_figure(&problem)?;
@@ -127,11 +131,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
                 "certifying an estimate of {} rotations...",
                 g.problem.num_rotations()
             ));
-            let mut settings = args.graph.settings(&args.common, &args.plot);
-            if settings.mode == CertifyMode::None {
-                settings.mode = CertifyMode::Dual;
-            }
-            settings
+            args.graph.certify_settings(&args.common, &args.plot)
         }
         _ => args.common.settings(CertifyMode::Auto),
     };
@@ -176,44 +176,6 @@ pub fn run(args: &Args) -> Result<Outcome> {
     args.common.finish(&report, Some(report.verdict()))
 }
 
-/// The problem, and the name it is reported under: hand-eye data (`--hand` / `--camera`, or a
-/// folder that holds no COLMAP database) as `rotavg conjugate` reads them, any other input
-/// with `load_problem`.
-fn load(args: &Args, options: &ReadOptions) -> Result<(String, LoadedProblem)> {
-    let streams = args.streams.hand.is_some() || args.streams.camera.is_some();
-    let folder = args
-        .input
-        .as_deref()
-        .map(Path::new)
-        .is_some_and(|p| p.is_dir() && rotavg::io::colmap::find_database(p).is_none());
-    match args.input.as_deref() {
-        Some(path) if !(streams || folder) => Ok((
-            path.to_string(),
-            load_problem(path, args.graph.format, options)?,
-        )),
-        input => {
-            let loaded = load_conjugate_with(
-                input,
-                ConjugateFormat::Auto,
-                options,
-                &args.streams.options(),
-            )
-            .map_err(|e| match (streams, e) {
-                (false, rotavg::Error::Io { message, .. }) => rotavg::Error::Io {
-                    path: input.unwrap_or("-").to_string(),
-                    message: format!(
-                        "certify reads a folder holding a COLMAP database.db, or hand-eye \
-                         data (Tabb's robot_cali.txt, or hand and camera pose streams); \
-                         this folder has neither: {message}"
-                    ),
-                },
-                (_, e) => e,
-            })?;
-            Ok((loaded.name, LoadedProblem::Conjugate(loaded.problem)))
-        }
-    }
-}
-
 /// `--left`: certify a rig estimate (frames and `sensor_from_rig`) on the two view graphs.
 fn certify_rig(args: &Args, left_path: &str) -> Result<Outcome> {
     let options = args.graph.read_options(&args.common);
@@ -225,10 +187,7 @@ fn certify_rig(args: &Args, left_path: &str) -> Result<Outcome> {
         .into_loaded()
         .into_rotations()?;
     let s = rotavg::io::json::read_sensor_from_rig(&args.estimate, &options)?;
-    let mut settings = args.graph.settings(&args.common, &args.plot);
-    if settings.mode == CertifyMode::None {
-        settings.mode = CertifyMode::Dual;
-    }
+    let settings = args.graph.certify_settings(&args.common, &args.plot);
     let report = rotavg::report::RigReport::certify(
         [right_path, left_path.to_string()],
         &right,
@@ -253,10 +212,7 @@ fn certify_rig_file(args: &Args) -> Result<Outcome> {
         &options,
         args.nearest_rotations,
     )?;
-    let mut settings = args.graph.settings(&args.common, &args.plot);
-    if settings.mode == CertifyMode::None {
-        settings.mode = CertifyMode::Dual;
-    }
+    let settings = args.graph.certify_settings(&args.common, &args.plot);
     let report = rotavg::report::RigFileReport::certify(input, rig, estimate, &settings)?;
     args.common.finish(&report, report.verdict())
 }

@@ -7,6 +7,7 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use rotavg::certify::{Budget, CertifyMode, CertifySettings, DualSettings};
 use rotavg::io::detect::{GraphFormat, LoadedGraph, ReadOptions, WeightSource};
 use rotavg::io::names::Choice;
+use rotavg::io::values::{parse_bytes, parse_seconds, parse_tolerance, parse_vector};
 use rotavg::multiple::gravity::GravityPriors;
 use rotavg::warning::Warning;
 use rotavg::{Result, Rotation};
@@ -182,18 +183,6 @@ impl GravityArgs {
     }
 }
 
-/// `X,Y,Z`: three finite numbers.
-fn parse_vector(s: &str) -> std::result::Result<[f64; 3], String> {
-    let parts: Vec<f64> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f64>().map_err(|e| format!("`{p}`: {e}")))
-        .collect::<std::result::Result<_, _>>()?;
-    match parts[..] {
-        [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok([x, y, z]),
-        _ => Err("expected three finite numbers X,Y,Z".into()),
-    }
-}
-
 /// The options of view graphs (`multiple`, `certify`): how one is read and certified.
 #[derive(Args, Debug)]
 pub struct GraphArgs {
@@ -260,6 +249,17 @@ impl GraphArgs {
     }
 }
 
+impl GraphArgs {
+    /// [`Self::settings`] for `rotavg certify`, where `--certify none` is the dual certificate.
+    pub fn certify_settings(&self, common: &Common, plot: &PlotArgs) -> CertifySettings {
+        let mut settings = self.settings(common, plot);
+        if settings.mode == CertifyMode::None {
+            settings.mode = CertifyMode::Dual;
+        }
+        settings
+    }
+}
+
 /// `--plot` (`multiple`, `conjugate`, `certify`).
 #[derive(Args, Debug, Default)]
 pub struct PlotArgs {
@@ -276,47 +276,6 @@ impl PlotArgs {
             Some(_) if !cfg!(feature = "plot") => Err(rotavg::report::certify::no_plot_feature()),
             _ => Ok(()),
         }
-    }
-}
-
-/// `none` (infinity: no limit), or a positive finite number of seconds.
-fn parse_seconds(text: &str) -> std::result::Result<f64, String> {
-    match text.parse::<f64>() {
-        _ if text.eq_ignore_ascii_case("none") => Ok(f64::INFINITY),
-        Ok(t) if t.is_finite() && t > 0.0 => Ok(t),
-        _ => Err(format!(
-            "`{text}` is not a positive number of seconds or `none`"
-        )),
-    }
-}
-
-/// A positive, finite tolerance.
-fn parse_tolerance(text: &str) -> std::result::Result<f64, String> {
-    match text.parse::<f64>() {
-        Ok(t) if t.is_finite() && t > 0.0 => Ok(t),
-        _ => Err(format!("`{text}` is not a positive number")),
-    }
-}
-
-/// A positive size in bytes with an optional K, M, G or T suffix (powers of 1024; a trailing
-/// `B` or `iB` is accepted).
-fn parse_bytes(text: &str) -> std::result::Result<u64, String> {
-    let upper = text.trim().to_ascii_uppercase();
-    let stem = upper
-        .strip_suffix("IB")
-        .or_else(|| upper.strip_suffix('B'))
-        .unwrap_or(&upper);
-    let (number, shift) = match stem.char_indices().last() {
-        Some((i, c)) if c.is_ascii_alphabetic() => match "KMGT".find(c) {
-            Some(k) => (&stem[..i], 10 * (k + 1)),
-            None => return Err(format!("`{text}`: unknown unit (use K, M, G or T)")),
-        },
-        _ => (stem, 0),
-    };
-    let scale = (1u64 << shift) as f64;
-    match number.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 1.0 && v * scale < 2f64.powi(63) => Ok((v * scale) as u64),
-        _ => Err(format!("`{text}` is not a size of at least 1 byte")),
     }
 }
 
@@ -366,26 +325,4 @@ pub fn choice<T: Choice>(values: Vec<T>) -> impl TypedValueParser<Value = T> {
         .collect();
     PossibleValuesParser::new(possible)
         .try_map(|name| T::from_name(&name).ok_or_else(|| format!("unknown value `{name}`")))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sizes_and_seconds_parse() {
-        assert_eq!(parse_bytes("4G"), Ok(4 << 30));
-        assert_eq!(parse_bytes("512MiB"), Ok(512 << 20));
-        assert_eq!(parse_bytes("1.5k"), Ok(1536));
-        assert_eq!(parse_bytes("1000"), Ok(1000));
-        assert!(parse_bytes("0").is_err());
-        assert!(parse_bytes("-3G").is_err());
-        assert!(parse_bytes("4X").is_err());
-        assert!(parse_bytes("nan").is_err());
-        assert!(parse_bytes("1e30T").is_err());
-        assert_eq!(parse_seconds("none"), Ok(f64::INFINITY));
-        assert_eq!(parse_seconds("2.5"), Ok(2.5));
-        assert!(parse_seconds("0").is_err());
-        assert!(parse_seconds("inf").is_err());
-    }
 }

@@ -75,14 +75,14 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => return usage(e),
     };
-    let (input, common): (Option<&str>, Option<&Common>) = match &cli.command {
-        Command::Demo(_) => (None, None),
-        Command::Single(a) => (Some(&a.input), Some(&a.common)),
-        Command::Multiple(a) => (Some(&a.input), Some(&a.common)),
-        Command::Conjugate(a) => (a.input.as_deref(), Some(&a.common)),
-        Command::Certify(a) => (a.input.as_deref(), Some(&a.common)),
-        Command::Rig(a) => (Some(&a.right), Some(&a.common)),
-        Command::Info(a) => (Some(&a.input), None),
+    let (verb, input, common): (&str, Option<&str>, Option<&Common>) = match &cli.command {
+        Command::Demo(_) => ("demo", None, None),
+        Command::Single(a) => ("single", Some(&a.input), Some(&a.common)),
+        Command::Multiple(a) => ("multiple", Some(&a.input), Some(&a.common)),
+        Command::Conjugate(a) => ("conjugate", a.input.as_deref(), Some(&a.common)),
+        Command::Certify(a) => ("certify", a.input.as_deref(), Some(&a.common)),
+        Command::Rig(a) => ("rig", Some(&a.right), Some(&a.common)),
+        Command::Info(a) => ("info", Some(&a.input), None),
     };
     progress::Display::install(common.is_some_and(|c| !c.quiet && !c.json));
     let result = match &cli.command {
@@ -108,53 +108,10 @@ fn main() -> ExitCode {
         }
         Ok(_) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("rotavg: error: {}", error_text(e, input, &cli.command));
+            let text = rotavg::report::error_text(e, input, verb);
+            eprintln!("rotavg: error: {text}");
             ExitCode::from(1)
         }
-    }
-}
-
-/// The error as printed. An error about the data that does not name a file yet (a
-/// disconnected graph, degenerate hand-eye pairs) names the input (issue 24). A folder given
-/// as the input of a verb that cannot read it: the reader's error (the operating system's "Is a
-/// directory", or the readers' general note on folders) becomes what this verb reads instead;
-/// a specific diagnosis (a database.db that is not SQLite, no hand-eye streams found) is kept.
-fn error_text(e: rotavg::Error, input: Option<&str>, command: &Command) -> String {
-    use rotavg::Error;
-    let text = match (e, input) {
-        (
-            e @ (Error::Disconnected { .. } | Error::Degenerate { .. } | Error::Empty { .. }),
-            Some(file),
-        ) if file != "-" => format!("{file}: {e}"),
-        (e, _) => e.to_string(),
-    };
-    let accepts = match command {
-        Command::Single(_) => {
-            "`rotavg single` reads a file (JSON {\"rotations\": [R, ...]}), never a folder"
-        }
-        Command::Multiple(_) | Command::Info(_) | Command::Rig(_) => {
-            "as a folder, `rotavg multiple` and `rotavg info` read only a COLMAP project (a \
-             folder holding database.db); other view graphs are files (g2o, 1DSfM EGs.txt, JSON)"
-        }
-        Command::Conjugate(_) => {
-            "as a folder, `rotavg conjugate` reads a Tabb dataset (robot_cali.txt) or a hand \
-             and a camera pose stream (CSV files named *hand*/*base_link*/*vicon* and \
-             *camera*/*target*, or --hand/--camera)"
-        }
-        Command::Certify(_) => {
-            "`rotavg certify` reads the problem from a file (a view graph: g2o, 1DSfM \
-             EGs.txt, JSON; a single or conjugate JSON problem)"
-        }
-        Command::Demo(_) => return text,
-    };
-    let Some(path) = input.filter(|p| *p != "-" && std::path::Path::new(p).is_dir()) else {
-        return text;
-    };
-    match text.strip_prefix(path).and_then(|t| t.strip_prefix(": ")) {
-        Some(m) if m.starts_with("is a folder, not a file") || m.contains("os error 21") => {
-            format!("{path}: is a folder: {accepts}")
-        }
-        _ => text,
     }
 }
 

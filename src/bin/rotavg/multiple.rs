@@ -3,6 +3,7 @@
 
 use crate::Outcome;
 use crate::common::{Common, GraphArgs, GravityArgs, InitArgs, PlotArgs, choice};
+use rotavg::Result;
 use rotavg::certify::CertifyMode;
 use rotavg::io::input::{MultipleInputOptions, load_multiple_input};
 use rotavg::io::names::{Choice, MultipleLoss};
@@ -11,8 +12,6 @@ use rotavg::multiple::gravity::GravityProblem;
 use rotavg::multiple::{Initialisation, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_multiple, average_with_gravity};
 use rotavg::report::MultipleReport;
-use rotavg::warning::Warning;
-use rotavg::{Error, Result};
 
 /// Arguments of `rotavg multiple`.
 #[derive(clap::Args, Debug)]
@@ -109,7 +108,13 @@ fn solve_and_write(args: &Args, outputs: &MultipleOutputs) -> Result<Outcome> {
     outputs.check(&source)?;
     let objective = args.loss.objective(args.loss_threshold);
     let problem = graph.problem.clone().with_objective(objective)?;
-    check_robust_options(args)?;
+    let flags = [
+        ("--inlier-threshold", args.inlier_threshold.is_some()),
+        ("--edges-output", args.edges_output.is_some()),
+        ("--inlier-output", args.inlier_output.is_some()),
+    ];
+    let certify_none = args.graph.certify == CertifyMode::None;
+    args.loss.check_robust_flags(&flags, certify_none)?;
     let settings = AverageSettings {
         solve: MultipleSettings {
             init: input
@@ -135,7 +140,7 @@ fn solve_and_write(args: &Args, outputs: &MultipleOutputs) -> Result<Outcome> {
     ));
     let (result, gravity_warnings) = match args.gravity.read(graph)? {
         Some((priors, warnings)) => {
-            check_gravity_options(args)?;
+            args.loss.check_gravity()?;
             let p = GravityProblem::new(graph.problem.clone(), priors)?;
             (average_with_gravity(&p, &settings)?, warnings)
         }
@@ -149,67 +154,10 @@ fn solve_and_write(args: &Args, outputs: &MultipleOutputs) -> Result<Outcome> {
         report.write_figure(path, &graph.problem)?;
     }
     report.output = args.output.clone();
-    let robust = report.result.solution.residuals.is_some();
-    report.edges_output = args.edges_output.clone().filter(|_| robust);
-    let unwritten = [&args.edges_output, &args.inlier_output]
-        .iter()
-        .filter(|o| o.is_some())
-        .count();
-    if !robust && unwritten > 0 {
-        // `--loss auto` kept least squares: there is no robust solve to write
-        let message = "--edges-output / --inlier-output not written: `--loss auto` kept least \
-                       squares (no outliers); `--loss cauchy` forces the robust solve";
-        report
-            .run_warnings
-            .push(Warning::new("output_not_written", message).with_count(unwritten));
-    }
+    report.note_robust_outputs(args.edges_output.as_deref(), args.inlier_output.is_some());
     // the reader's warnings are lines of the report; these go to stderr
     for w in report.stderr_warnings() {
         args.common.warn(&w.message);
     }
     args.common.finish(&report, report.verdict())
-}
-
-/// `--gravity` takes the chordal L2 loss (with `auto`, least squares or the robust one the
-/// residuals call for) and the robust losses; the geodesic L2 loss is an error.
-fn check_gravity_options(args: &Args) -> Result<()> {
-    if args.loss != MultipleLoss::Geodesic {
-        return Ok(());
-    }
-    Err(Error::InvalidSettings {
-        name: "--gravity".into(),
-        reason: "gravity priors are solved with the chordal L2 loss or a robust loss (l1, \
-                 huber, cauchy), not `--loss geodesic`"
-            .into(),
-    })
-}
-
-/// An error for an option of the robust losses given with another loss, and for
-/// `--inlier-output` with `--certify none`.
-fn check_robust_options(args: &Args) -> Result<()> {
-    let given = [
-        ("--inlier-threshold", args.inlier_threshold.is_some()),
-        ("--edges-output", args.edges_output.is_some()),
-        ("--inlier-output", args.inlier_output.is_some()),
-    ];
-    let robust = !matches!(args.loss, MultipleLoss::Chordal | MultipleLoss::Geodesic);
-    let (name, reason) = match given.iter().find(|(_, given)| *given) {
-        Some((flag, _)) if !robust => (
-            flag,
-            format!(
-                "needs a robust loss (--loss l1, huber or cauchy), not {}",
-                args.loss
-            ),
-        ),
-        _ if args.inlier_output.is_some() && args.graph.certify == CertifyMode::None => (
-            &"--inlier-output",
-            "the inlier graph is refined only when it is certified (not with --certify none)"
-                .into(),
-        ),
-        _ => return Ok(()),
-    };
-    Err(Error::InvalidSettings {
-        name: name.to_string(),
-        reason,
-    })
 }

@@ -84,15 +84,8 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let inputs = [args.right.clone(), args.left.clone().unwrap_or_default()];
     let max_seconds = args.common.solve_seconds();
     let report = RigReport::average(inputs, (&right, &left), held, certify, max_seconds)?;
-    finish(args, report)
-}
-
-/// Write `--output` and print the report.
-fn finish(args: &Args, report: RigReport) -> Result<Outcome> {
     if let Some(path) = &args.output {
-        let s = &report.result.solution;
-        let text = rotavg::io::json::write_rig_json(&s.rotations, &report.node_ids, &s.s);
-        rotavg::io::output::write_text(path, &text)?;
+        report.write_output(path)?;
     }
     args.common.finish(&report, report.verdict())
 }
@@ -132,9 +125,7 @@ fn run_file(args: &Args) -> Result<Outcome> {
     let input = args.right.clone();
     let report = RigFileReport::average(input, rig, (loss, robust), certify, max_seconds)?;
     if let Some(path) = &args.output {
-        let s = &report.result.solution;
-        let text = rotavg::io::rig::write_rig_estimate_json(&s.frames, &s.sensors, &report.rig);
-        rotavg::io::output::write_text(path, &text)?;
+        report.write_output(path)?;
     }
     args.common.finish(&report, report.verdict())
 }
