@@ -394,27 +394,40 @@ impl MultipleProblem {
     /// increasing order, and the map new index -> old index.
     pub fn largest_component(&self) -> (MultipleProblem, Vec<usize>) {
         let keep = self.components().into_iter().next().unwrap_or_default();
-        (self.induced(&keep), keep)
+        let sub = self
+            .induced(&keep)
+            .expect("a component's nodes are distinct and in range");
+        (sub, keep)
     }
 
     /// The problem on `nodes` (distinct, each below [`Self::num_rotations`]; node `k` of the
     /// result is `nodes[k]`) with the edges whose both ends are among them, their information
-    /// and the objective. Panics on a node out of range.
+    /// and the objective. Errors: a node out of range or given twice
+    /// ([`Error::InvalidSettings`] naming `nodes`).
     ///
     /// ```
     /// use rotavg::multiple::{Edge, MultipleProblem};
     /// use rotavg::Rotation;
     /// let e = |i, j| Edge { i, j, rotation: Rotation::identity(), weight: 1.0 };
     /// let p = MultipleProblem::new(4, vec![e(0, 1), e(2, 3), e(1, 3)])?;
-    /// let q = p.induced(&[3, 1]);
+    /// let q = p.induced(&[3, 1])?;
     /// assert_eq!((q.num_rotations(), q.num_edges()), (2, 1));
     /// assert_eq!((q.edges()[0].i, q.edges()[0].j), (1, 0));
+    /// assert!(p.induced(&[1, 4]).is_err() && p.induced(&[1, 1]).is_err());
     /// # Ok::<(), rotavg::Error>(())
     /// ```
-    pub fn induced(&self, nodes: &[usize]) -> MultipleProblem {
+    pub fn induced(&self, nodes: &[usize]) -> Result<MultipleProblem> {
         let mut new_of_old = vec![usize::MAX; self.num_rotations];
         for (new, &old) in nodes.iter().enumerate() {
-            new_of_old[old] = new;
+            let bad = |why: &str| Error::InvalidSettings {
+                name: "nodes".into(),
+                reason: format!("node {old} {why} (the graph has {})", self.num_rotations),
+            };
+            match new_of_old.get_mut(old) {
+                None => return Err(bad("is out of range")),
+                Some(slot) if *slot != usize::MAX => return Err(bad("is given twice")),
+                Some(slot) => *slot = new,
+            }
         }
         let inside = |e: &Edge| new_of_old[e.i] != usize::MAX && new_of_old[e.j] != usize::MAX;
         let kept: Vec<usize> = (0..self.edges.len())
@@ -432,12 +445,12 @@ impl MultipleProblem {
             .information
             .as_ref()
             .map(|info| kept.iter().map(|&k| info[k]).collect());
-        MultipleProblem {
+        Ok(MultipleProblem {
             num_rotations: nodes.len(),
             edges,
             information,
             objective: self.objective,
-        }
+        })
     }
 
     /// The same edges with weight `w_e weights[e]` (information `H_e weights[e]`), objective

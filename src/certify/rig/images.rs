@@ -82,7 +82,7 @@ pub(super) fn components_minimum(
         .collect();
     let mut sum = 0.0;
     for nodes in &parts {
-        let part = graph.induced(nodes);
+        let part = graph.induced(nodes)?;
         let share = part.num_edges() as f64 / graph.num_edges() as f64;
         let local = MultipleSettings {
             max_seconds: seconds.map(|l| l * share),
