@@ -147,6 +147,17 @@ pub(crate) type GraphCertifier = fn(
     &super::settings::CertifySettings,
 ) -> Result<super::certificate::Certificate>;
 
+/// The simultaneous problem's certification handed to a rung by its entry point (as
+/// [`GraphCertifier`]): the certificate of a joint estimate `(R, S)` of two view graphs (in
+/// practice [`crate::certify::simultaneous::joint_certificate`]).
+pub(crate) type JointCertifier = fn(
+    &crate::multiple::MultipleProblem,
+    &crate::multiple::MultipleProblem,
+    &[crate::so3::Rotation],
+    &crate::so3::Rotation,
+    &super::settings::CertifySettings,
+) -> Result<super::certificate::Certificate>;
+
 /// [`Climb`] for a certification state with the fields `deadline`, `settings`, `best` (with
 /// its `lower_bound`) and `log`, and a method `certifies(lower_bound)`: the gravity and the
 /// simultaneous problems' states.

@@ -238,7 +238,10 @@ fn no_conflict_markers_in_the_repository() {
 #[test]
 fn the_command_line_stays_under_a_thousand_lines() {
     let mut files = Vec::new();
-    rust_files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src/bin"), &mut files);
+    rust_files(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("src/bin"),
+        &mut files,
+    );
     let lines: usize = files
         .iter()
         .map(|f| {

@@ -132,6 +132,34 @@ fn noisy_rigs_with_estimated_sensors_are_certified_by_their_couplings() {
     assert!(out.certificate.unwrap().is_certified());
 }
 
+/// Two-sensor rigs with no edge between the sensors (the simultaneous problem's shape, where the
+/// couplings of `[H21]` do not certify) are certified by the simultaneous certificates `[H22]`;
+/// the bound below the test's own local minima from perturbed truths.
+#[test]
+fn two_sensor_rigs_without_cross_edges_are_certified_as_two_graphs() {
+    let mut rng = StdRng::seed_from_u64(23);
+    for (noise, seed) in [(0.01, 3), (0.05, 4)] {
+        let s = RigScene {
+            cross_fraction: 0.0,
+            ..scene(40, 2, noise, false, seed)
+        };
+        let (p, truth) = s.generate();
+        let out = average_rig(&p, &Default::default()).unwrap();
+        let c = out.certificate.unwrap();
+        assert!(c.is_certified(), "{c:?}");
+        assert!(c.explanation.contains("[H22]"), "{}", c.explanation);
+        let lb = c.lower_bound.unwrap();
+        let frames: Vec<Rotation> = truth
+            .frames
+            .iter()
+            .map(|f| perturb(f, 0.1, &mut rng))
+            .collect();
+        let sensors = vec![truth.sensors[0], perturb(&truth.sensors[1], 0.1, &mut rng)];
+        let other = local_minimum(&p, frames, sensors);
+        assert!(lb <= other, "bound {lb} above a local minimum {other}");
+    }
+}
+
 /// Block-coordinate descent written here from the problem's own costs: frames by `multiple` on
 /// the frame graph built by the test, sensors by brute refinement on a shrinking grid of axis
 /// angles (no code of the rig solver).

@@ -15,6 +15,7 @@ mod frames;
 mod images;
 mod rounding;
 mod state;
+mod two_graphs;
 
 use crate::certify::budget::Deadline;
 use crate::certify::certification::{Certification, CertifyDetails};
@@ -77,6 +78,9 @@ pub fn certify_rig(
     let rungs: Rungs<'_, RigState<'_>> = vec![
         Box::new(frames::FramesRung::new(certify)),
         Box::new(coupled::CoupledRung::new(certify)),
+        Box::new(two_graphs::TwoGraphsRung::new(
+            crate::certify::simultaneous::joint_certificate,
+        )),
         Box::new(images::ImagesRung::new(certify)),
     ];
     climb(&mut state, rungs)?;

@@ -104,3 +104,15 @@ pub fn certify_simultaneous(
         improvement: state.improvement,
     })
 }
+
+/// The certificate of [`certify_simultaneous`] alone (the rungs of other problems take it as a
+/// [`crate::certify::rung::JointCertifier`]).
+pub(crate) fn joint_certificate(
+    right: &MultipleProblem,
+    left: &MultipleProblem,
+    rotations: &[Rotation],
+    s: &Rotation,
+    settings: &CertifySettings,
+) -> Result<crate::certify::certificate::Certificate> {
+    Ok(certify_simultaneous(right, left, rotations, s, settings)?.certificate)
+}

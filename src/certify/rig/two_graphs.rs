@@ -1,0 +1,118 @@
+//! A rig shaped like the simultaneous problem (`paper-notes/conjugate.md` `[H22]`): two sensors,
+//! at least one estimated, and no edge between them. With `R_f = S_a F_f` (sensor `a`'s images)
+//! and `S = S_b S_a^T`, the rig's cost is the joint cost of the two sensors' view graphs over
+//! the frames, `f_R(R) + f_L(S R)`, and its minimum over rigs is at least the simultaneous
+//! problem's (where `S` is free even when `S_a` is held); so the simultaneous certificates
+//! (`[H14]`-`[H16]`: the trace-coupled dual at the estimate and its search, the SDP) bound it,
+//! where the within-frame couplings `[H21]` have no edge between sensors to work with.
+
+use super::state::RigState;
+use crate::certify::log::{Prediction, Refusal};
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, JointCertifier, Plan, Rung};
+use crate::error::Result;
+use crate::multiple::{Edge, MultipleProblem};
+use crate::rig::RigProblem;
+use crate::so3::Rotation;
+
+/// The simultaneous certificates of a two-sensor rig as a rung.
+pub(crate) struct TwoGraphsRung {
+    done: bool,
+    certify: JointCertifier,
+}
+
+impl TwoGraphsRung {
+    /// The rung, certifying the two graphs with `certify`.
+    pub(crate) fn new(certify: JointCertifier) -> Self {
+        TwoGraphsRung {
+            done: false,
+            certify,
+        }
+    }
+}
+
+impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
+    fn proof(&self) -> Proof {
+        Proof::SimultaneousDual
+    }
+
+    fn plan(&mut self, cx: &RigState<'a>) -> Result<Plan> {
+        if self.done {
+            return Ok(Plan::Done);
+        }
+        if let Some(why) = not_two_graphs(cx.problem) {
+            return Ok(Plan::Refuse(Refusal::NotApplicable { reason: why }, None));
+        }
+        // the dense dual certificate of [H15] (3n x 3n eigenvalues), refused by it past 500
+        let n = cx.problem.num_frames() as f64;
+        Ok(Plan::Run(Prediction::new(
+            4e-8 * (3.0 * n).powi(3),
+            8.0 * 6.0 * (3.0 * n).powi(2),
+        )))
+    }
+
+    fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {
+        self.done = true;
+        // a sensor without edges, or a graph the simultaneous certificate refuses: no bound
+        let (right, left) = match two_graphs(cx.problem) {
+            Ok(graphs) => graphs,
+            Err(e) => return Ok(Found::failed(e.to_string())),
+        };
+        let (a, b) = (cx.sensors[0], cx.sensors[1]);
+        let rotations: Vec<Rotation> = cx.frames.iter().map(|f| a * f).collect();
+        let s = b * a.inverse();
+        let mut settings = cx.settings.clone();
+        settings.budget.max_seconds = cx.left();
+        let c = match (self.certify)(&right, &left, &rotations, &s, &settings) {
+            Ok(c) => c,
+            Err(e) => return Ok(Found::failed(e.to_string())),
+        };
+        let Some(lb) = c.lower_bound else {
+            return Ok(Found::failed(c.explanation));
+        };
+        let bound = super::rounding::rounding_floor(lb, cx.total_weight());
+        let note = format!(
+            "the two sensors' view graphs as the simultaneous problem [H22]: {}",
+            c.explanation.lines().last().unwrap_or("").trim()
+        );
+        let bound = cx.offer(bound, Proof::SimultaneousDual, &note);
+        Ok(Found::proved(bound, cx.certifies(bound), note))
+    }
+}
+
+/// Why the rig is not the simultaneous problem's shape, or `None` when it is.
+fn not_two_graphs(p: &RigProblem) -> Option<String> {
+    let images = p.images();
+    if p.sensors().len() != 2 {
+        return Some(format!("{} sensors, not 2", p.sensors().len()));
+    }
+    if p.held().iter().all(Option::is_some) {
+        return Some("both sensors held (the frames' bound is exact)".into());
+    }
+    if p.edges()
+        .iter()
+        .any(|e| images[e.i].sensor != images[e.j].sensor)
+    {
+        return Some("an edge joins the two sensors".into());
+    }
+    None
+}
+
+/// The two sensors' view graphs over the frames (sensor 0's: the right graph).
+fn two_graphs(p: &RigProblem) -> Result<(MultipleProblem, MultipleProblem)> {
+    let images = p.images();
+    let mut graphs = [Vec::new(), Vec::new()];
+    for e in p.edges() {
+        graphs[images[e.i].sensor].push(Edge {
+            i: images[e.i].frame,
+            j: images[e.j].frame,
+            ..e.clone()
+        });
+    }
+    let [right, left] = graphs;
+    let n = p.num_frames();
+    Ok((
+        MultipleProblem::new(n, right)?,
+        MultipleProblem::new(n, left)?,
+    ))
+}
