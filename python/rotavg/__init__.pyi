@@ -438,6 +438,8 @@ def average_rig(
     left: Graph,
     *,
     sensor_from_rig: Optional[npt.ArrayLike] = None,
+    loss: str = "auto",
+    loss_threshold: float = 5.0,
     certify: str = "auto",
     max_memory: Optional[int] = None,
     max_seconds: Optional[float] = 600.0,

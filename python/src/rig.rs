@@ -19,6 +19,11 @@ use rotavg::report::{RigFileReport, RigReport};
 ///     sensor_from_rig: a known ``(3, 3)`` rotation ``S`` to hold, as ``rotavg rig
 ///         --sensor-from-rig``: only the frames are estimated, on one view graph, and certified
 ///         by the multiple-averaging ladder (``paper-notes/conjugate.md`` [H18]).
+///     loss: ``"auto"`` (least squares, the Cauchy loss instead when the residuals look like
+///         outliers), ``"chordal"`` or ``"cauchy"`` (then the inlier edges' problem is returned
+///         and certified, ``paper-notes/conjugate.md`` [H20], [H22]), as ``rotavg rig RIGHT
+///         LEFT --loss``; with ``sensor_from_rig``, least squares (``"cauchy"`` is an error).
+///     loss_threshold: the Cauchy loss's scale and the inlier threshold, degrees.
 ///     certify: ``"auto"``, ``"dual"``, ``"sdp"`` or ``"none"``.
 ///     max_memory, max_seconds: the run's budget, as for ``average_multiple`` (one clock for
 ///         the joint solve and the certificate).
@@ -31,16 +36,20 @@ use rotavg::report::{RigFileReport, RigReport};
 ///     rotavg.Error: graphs over different node ids, anisotropic information, a
 ///         ``sensor_from_rig`` that is not a rotation.
 #[pyfunction]
-#[pyo3(name = "average_rig", signature = (right, left, *, sensor_from_rig=None, certify="auto", max_memory=None, max_seconds=600.0))]
+#[pyo3(name = "average_rig", signature = (right, left, *, sensor_from_rig=None, loss="auto", loss_threshold=5.0, certify="auto", max_memory=None, max_seconds=600.0))]
+#[allow(clippy::too_many_arguments)]
 pub fn average_rig(
     py: Python<'_>,
     right: PyRef<'_, Graph>,
     left: PyRef<'_, Graph>,
     sensor_from_rig: Option<&Bound<'_, PyAny>>,
+    loss: &str,
+    loss_threshold: f64,
     certify: &str,
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
 ) -> PyResult<RunResult> {
+    let (loss, robust) = rig_loss(loss, loss_threshold)?;
     let mode: CertifyMode = parse_named(certify, "certify")?;
     let certify = certify_settings(mode, max_memory, max_seconds, true, None)?;
     let held = match sensor_from_rig.filter(|s| !s.is_none()) {
@@ -52,7 +61,17 @@ pub fn average_rig(
     let report = detached(py, move || {
         let held = held.map(one_rotation).transpose()?;
         let max_seconds = certify.budget.max_seconds;
-        RigReport::average(names, (&r, &l), held, certify, max_seconds)
+        match held {
+            Some(_) if loss == RigLoss::Cauchy => Err(rotavg::Error::InvalidSettings {
+                name: "loss".into(),
+                reason: "a rig with its sensor_from_rig held is solved by least squares".into(),
+            }),
+            Some(_) => RigReport::average(names, (&r, &l), held, certify, max_seconds),
+            None => {
+                let graphs = (&r, &l);
+                RigReport::average_with_loss(names, graphs, (loss, robust), certify, max_seconds)
+            }
+        }
     })?;
     RunResult::new(py, Report::Rig(report))
 }
@@ -97,21 +116,7 @@ pub fn average_rig_file(
     let certify = certify_settings(mode, max_memory, max_seconds, true, None)?;
     let path = crate::convert::path_of(path)
         .ok_or_else(|| crate::errors::argument_error("path must be a str or os.PathLike"))?;
-    let loss = match loss {
-        "auto" => RigLoss::Auto,
-        "chordal" => RigLoss::Chordal,
-        "cauchy" => RigLoss::Cauchy,
-        other => {
-            return Err(crate::errors::argument_error(format!(
-                "loss must be \"auto\", \"chordal\" or \"cauchy\", got {other:?}"
-            )));
-        }
-    };
-    let robust = rotavg::rig::RigRobust {
-        threshold_deg: loss_threshold,
-        inlier_threshold_deg: loss_threshold,
-        ..Default::default()
-    };
+    let (loss, robust) = rig_loss(loss, loss_threshold)?;
     let report = detached(py, move || {
         let options = rotavg::io::detect::ReadOptions {
             rotation_tolerance,
@@ -301,4 +306,25 @@ impl RigEstimate {
             }
         }
     }
+}
+
+/// `loss` and `loss_threshold` of the rig functions: the loss and the Cauchy scale and inlier
+/// threshold.
+fn rig_loss(loss: &str, threshold: f64) -> PyResult<(RigLoss, rotavg::rig::RigRobust)> {
+    let loss = match loss {
+        "auto" => RigLoss::Auto,
+        "chordal" => RigLoss::Chordal,
+        "cauchy" => RigLoss::Cauchy,
+        other => {
+            return Err(crate::errors::argument_error(format!(
+                "loss must be \"auto\", \"chordal\" or \"cauchy\", got {other:?}"
+            )));
+        }
+    };
+    let robust = rotavg::rig::RigRobust {
+        threshold_deg: threshold,
+        inlier_threshold_deg: threshold,
+        ..Default::default()
+    };
+    Ok((loss, robust))
 }

@@ -40,6 +40,7 @@ pub mod info;
 pub mod multiple;
 pub mod rig;
 pub mod rig_file;
+mod rig_robust;
 pub mod single;
 
 pub use crate::io::input::ProblemKind;

@@ -33,6 +33,9 @@ pub struct RigReport {
     pub result: Averaged<SimultaneousSolution>,
     /// `S` was given and held (`rotavg rig --sensor-from-rig`, `[H18]`), not estimated.
     pub sensor_from_rig_held: bool,
+    /// What a robust solve did (`--loss auto` when it turned robust, or `cauchy`): the result is
+    /// then the inlier problem's, certified (`[H20]`, `[H22]`).
+    pub robust: Option<crate::pipeline::rig::RigRobustDetails>,
 }
 
 /// The simultaneous problem of two view graphs read from files: the right graph is the
@@ -96,6 +99,7 @@ impl RigReport {
             warnings: [super::input_warnings(right), super::input_warnings(left)].concat(),
             result,
             sensor_from_rig_held: false,
+            robust: None,
         }
     }
 
@@ -174,18 +178,20 @@ impl RigReport {
         let c = self.result.certificate.as_ref()?;
         let frames = self.result.solution.rotations.len();
         let edges = self.num_edges[0] + self.num_edges[1];
+        use crate::certify::CertifiedProblemKind as Kind;
+        let kind = match (&self.robust, self.sensor_from_rig_held) {
+            (Some(_), _) => Kind::ChordalL2RigImagesInliers,
+            (None, true) => Kind::ChordalL2RigSensorHeld,
+            (None, false) => Kind::ChordalL2Rig,
+        };
         Some(super::VerdictOf {
             verdict: c.verdict,
             estimate: super::CertifiedEstimate::Returned,
             problem: crate::certify::CertifiedProblem {
-                kind: if self.sensor_from_rig_held {
-                    crate::certify::CertifiedProblemKind::ChordalL2RigSensorHeld
-                } else {
-                    crate::certify::CertifiedProblemKind::ChordalL2Rig
-                },
+                kind,
                 num_nodes: frames,
                 total_nodes: frames,
-                num_edges: edges,
+                num_edges: self.robust.as_ref().map_or(edges, |r| r.inlier_edges),
                 total_edges: edges,
             },
         })
@@ -244,6 +250,8 @@ struct Json<'a> {
     #[serde(with = "crate::so3::serde_rows::rotation")]
     sensor_from_rig: &'a Rotation,
     sensor_from_rig_held: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    robust: Option<&'a crate::pipeline::rig::RigRobustDetails>,
     node_ids: &'a [u64],
     solver: &'a crate::termination::SolverReport,
     certificate: Option<&'a crate::certify::Certificate>,
@@ -267,6 +275,7 @@ impl Serialize for RigReport {
             estimate: Rows::Many(&s.rotations),
             sensor_from_rig: &s.s,
             sensor_from_rig_held: self.sensor_from_rig_held,
+            robust: self.robust.as_ref(),
             node_ids: &self.node_ids,
             solver: &s.report,
             certificate: self.result.certificate.as_ref(),

@@ -594,3 +594,78 @@ fn outliers_in_a_rig_file_turn_the_default_robust() {
         "too many dropped: {kept}"
     );
 }
+
+/// Two view graphs with 15 % random-rotation outliers on each: `--loss auto` (the default)
+/// turns robust (warning `outliers_suspected`), returns and certifies the inlier problem
+/// (`[H20]`, `[H22]`), its frames and `sensor_from_rig` at least 5 times closer to the planted
+/// rig than least squares'; `--loss chordal` keeps least squares; with `--sensor-from-rig`
+/// `cauchy` is an error.
+#[test]
+fn outliers_in_two_view_graphs_turn_the_default_robust() {
+    use rotavg::multiple::MultipleProblem;
+    use rotavg::multiple::synthetic::SyntheticGraph;
+    use rotavg::pipeline::simultaneous::SyntheticRig;
+    let graph = SyntheticGraph {
+        num_rotations: 60,
+        num_edges: 300,
+        noise_sigma: 0.01,
+        outlier_fraction: 0.15,
+        seed: 41,
+    };
+    let (p, truth, s) = SyntheticRig { graph }.generate();
+    let write = |name: &str, edges: &[rotavg::multiple::Edge]| {
+        let g = MultipleProblem::new(p.num_nodes, edges.to_vec()).unwrap();
+        temp_file(name, &rotavg::io::json::write_problem_json(&g))
+    };
+    let (right, left) = (
+        write("rig_r_out.json", &p.right),
+        write("rig_l_out.json", &p.left),
+    );
+    let (right, left) = (right.to_str().unwrap(), left.to_str().unwrap());
+    let auto = json_of(&run(&["rig", right, left, "--json"]));
+    let ls = json_of(&run(&["rig", right, left, "--json", "--loss", "chordal"]));
+    let codes = |v: &serde_json::Value| -> Vec<String> {
+        let w = v["warnings"].as_array().unwrap();
+        w.iter()
+            .map(|w| w["code"].as_str().unwrap().to_string())
+            .collect()
+    };
+    assert!(codes(&auto).contains(&"outliers_suspected".to_string()));
+    assert!(codes(&ls).contains(&"outliers_suspected".to_string()));
+    assert_eq!(
+        auto["verdict"]["problem"]["kind"],
+        "chordal_l2_rig_images_inliers"
+    );
+    assert_eq!(auto["certificate"]["verdict"], "certified");
+    assert!(auto["robust"]["robust"].as_bool().unwrap());
+    assert!(ls["robust"].is_null());
+    let error = |v: &serde_json::Value| {
+        let frames: f64 = (0..60)
+            .map(|f| angle_between(&rotation(&v["estimate"][f]), &truth[f]))
+            .sum::<f64>()
+            / 60.0;
+        (frames, angle_between(&rotation(&v["sensor_from_rig"]), &s))
+    };
+    let (a, b) = (error(&auto), error(&ls));
+    assert!(
+        a.0 * 5.0 < b.0 && a.1 * 5.0 < b.1,
+        "robust {a:?}, least squares {b:?}"
+    );
+    let held = temp_file(
+        "rig_held_out.json",
+        &format!(
+            "{{\"sensor_from_rig\": {}}}",
+            serde_json::to_string(&rotavg::so3::rotation_to_rows(&s)).unwrap()
+        ),
+    );
+    let out = run(&[
+        "rig",
+        right,
+        left,
+        "--loss",
+        "cauchy",
+        "--sensor-from-rig",
+        held.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+}

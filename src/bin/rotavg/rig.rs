@@ -36,10 +36,10 @@ pub struct Args {
     /// and certified by the multiple-averaging ladder (paper-notes/conjugate.md [H18]).
     #[arg(long, value_name = "FILE")]
     pub sensor_from_rig: Option<String>,
-    /// A rig file's loss: `auto` (least squares, and the Cauchy loss instead when the residuals
-    /// look like outliers), `chordal` (least squares on every edge) or `cauchy` (then the
-    /// inlier edges' chordal L2 problem is solved and certified; paper-notes/conjugate.md [H20]).
-    /// Two view graphs: least squares only.
+    /// The loss: `auto` (least squares, and the Cauchy loss instead when the residuals look like
+    /// outliers), `chordal` (least squares on every edge) or `cauchy` (then the inlier edges'
+    /// chordal L2 problem is solved and certified; paper-notes/conjugate.md [H20]). With
+    /// `--sensor-from-rig`: least squares.
     #[arg(long, value_name = "auto|chordal|cauchy", default_value = "auto", value_parser = ["auto", "chordal", "cauchy"])]
     pub loss: String,
     /// The Cauchy loss's scale and the inlier threshold, degrees.
@@ -54,11 +54,11 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let Some(left) = &args.left else {
         return run_file(args);
     };
-    if args.loss == "cauchy" {
+    if args.loss == "cauchy" && args.sensor_from_rig.is_some() {
         return Err(rotavg::Error::InvalidSettings {
             name: "--loss".into(),
-            reason: "a rig of two view graphs is solved by least squares; robust losses apply to \
-                     rig files (rotavg rig FILE)"
+            reason: "a rig with its sensor_from_rig held is solved by least squares (on one \
+                     view graph); `--loss cauchy` estimates the sensor"
                 .into(),
         });
     }
@@ -83,7 +83,11 @@ pub fn run(args: &Args) -> Result<Outcome> {
     ));
     let inputs = [args.right.clone(), args.left.clone().unwrap_or_default()];
     let max_seconds = args.common.solve_seconds();
-    let report = RigReport::average(inputs, (&right, &left), held, certify, max_seconds)?;
+    let graphs = (&right, &left);
+    let report = match held {
+        Some(_) => RigReport::average(inputs, graphs, held, certify, max_seconds)?,
+        None => RigReport::average_with_loss(inputs, graphs, loss(args), certify, max_seconds)?,
+    };
     if let Some(path) = &args.output {
         report.write_output(path)?;
     }
@@ -112,6 +116,16 @@ fn run_file(args: &Args) -> Result<Outcome> {
     ));
     let certify = args.graph.settings(&args.common, &Default::default());
     let max_seconds = args.common.solve_seconds();
+    let input = args.right.clone();
+    let report = RigFileReport::average(input, rig, loss(args), certify, max_seconds)?;
+    if let Some(path) = &args.output {
+        report.write_output(path)?;
+    }
+    args.common.finish(&report, report.verdict())
+}
+
+/// `--loss` and `--loss-threshold` (the Cauchy scale and the inlier threshold).
+fn loss(args: &Args) -> (RigLoss, rotavg::rig::RigRobust) {
     let loss = match args.loss.as_str() {
         "chordal" => RigLoss::Chordal,
         "cauchy" => RigLoss::Cauchy,
@@ -122,10 +136,5 @@ fn run_file(args: &Args) -> Result<Outcome> {
         inlier_threshold_deg: args.loss_threshold,
         ..Default::default()
     };
-    let input = args.right.clone();
-    let report = RigFileReport::average(input, rig, (loss, robust), certify, max_seconds)?;
-    if let Some(path) = &args.output {
-        report.write_output(path)?;
-    }
-    args.common.finish(&report, report.verdict())
+    (loss, robust)
 }
