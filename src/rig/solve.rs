@@ -145,14 +145,14 @@ fn alternate(
     let mut cost = p.cost(&frames, &sensors);
     let deadline = Deadline::after(left());
     let (mut passes, mut decrease) = (0, f64::NAN);
+    let mut run = Passes::default();
     let termination = loop {
         let measure = (decrease, RIG_DECREASE_TOLERANCE);
         if let Some(limit) = limit_reached(passes, settings.max_passes, deadline, measure) {
             break limit;
         }
         passes += 1;
-        sensors = sensor_step(p, &frames, sensors, Deadline::after(left()));
-        frames = frame_step(p, &sensors, Some(frames), left())?;
+        (frames, sensors) = run.pass(p, (frames, sensors), left())?;
         let next = p.cost(&frames, &sensors);
         decrease = (cost - next) / cost.abs().max(f64::MIN_POSITIVE);
         cost = next;
@@ -181,13 +181,9 @@ fn alternate(
     })
 }
 
-/// `passes` alternation passes from `(frames, sensors)` with no convergence test: the polish
-/// before a certificate that needs the sensors' gradient far below what the passes' stopping
-/// rule leaves (`paper-notes/conjugate.md` `[H21]`). The passes converge linearly (a ratio
-/// `rho` of about 0.7 per pass on the generated rigs), so after two passes whose sensor moves
-/// shrink by `rho` in `(0.2, 0.98)` the sensors are extrapolated by `rho / (1 - rho)` times the
-/// last move (Aitken) and the frames solved again, kept only when `J` decreases. Stops early at
-/// `max_seconds`.
+/// `passes` alternation passes ([`Passes`]) from `(frames, sensors)` with no convergence test:
+/// the polish before a certificate that needs the sensors' gradient far below what the solve's
+/// stopping rule leaves (`paper-notes/conjugate.md` `[H21]`). Stops early at `max_seconds`.
 pub(crate) fn polish_passes(
     p: &RigProblem,
     (mut frames, mut sensors): (Vec<Rotation>, Vec<Rotation>),
@@ -196,37 +192,62 @@ pub(crate) fn polish_passes(
 ) -> Result<(Vec<Rotation>, Vec<Rotation>)> {
     let clock = Instant::now();
     let left = || remaining(max_seconds, clock);
-    let mut previous: Option<f64> = None;
+    let mut run = Passes::default();
     for _ in 0..passes {
         if left().is_some_and(|l| l <= 0.0) {
             break;
         }
-        let before = sensors.clone();
-        sensors = sensor_step(p, &frames, sensors, Deadline::after(left()));
-        frames = frame_step(p, &sensors, Some(frames), left())?;
+        (frames, sensors) = run.pass(p, (frames, sensors), left())?;
+    }
+    let sensors = sensors.iter().map(nearest_rotation).collect();
+    Ok((frames, sensors))
+}
+
+/// Alternation passes with an Aitken step on the sensors. The passes converge linearly (a ratio
+/// `rho` of about 0.7 per pass on the generated rigs), so after two passes whose sensor moves
+/// shrink by `rho` in `(0.2, 0.98)` the sensors are extrapolated by `rho / (1 - rho)` times the
+/// last move and the frames solved again, kept only when `J` decreases (`[H21]`).
+#[derive(Default)]
+struct Passes {
+    /// The size of the last pass's sensor move (none after an extrapolation).
+    previous: Option<f64>,
+}
+
+impl Passes {
+    /// One pass (the sensor step, the frame step) and, when the moves call for it, the Aitken
+    /// step; neither raises `J`.
+    fn pass(
+        &mut self,
+        p: &RigProblem,
+        (frames, before): (Vec<Rotation>, Vec<Rotation>),
+        seconds: Option<f64>,
+    ) -> Result<(Vec<Rotation>, Vec<Rotation>)> {
+        let sensors = sensor_step(p, &frames, before.clone(), Deadline::after(seconds));
+        let frames = frame_step(p, &sensors, Some(frames), seconds)?;
         let moves: Vec<Vector3<f64>> = before
             .iter()
             .zip(&sensors)
             .map(|(a, b)| crate::so3::log(&(a.inverse() * b)))
             .collect();
         let size = moves.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt();
-        let ratio = previous.map(|q| size / q);
-        previous = Some(size);
-        if let Some(rho) = ratio.filter(|r| (0.2..0.98).contains(r)) {
-            let factor = rho / (1.0 - rho);
-            let trial: Vec<Rotation> = sensors
-                .iter()
-                .zip(&moves)
-                .map(|(s, v)| s * exp(&(factor * v)))
-                .collect();
-            let trial_frames = frame_step(p, &trial, Some(frames.clone()), left())?;
-            if p.cost(&trial_frames, &trial) < p.cost(&frames, &sensors) {
-                (frames, sensors, previous) = (trial_frames, trial, None);
-            }
+        let ratio = self.previous.map(|q| size / q);
+        self.previous = Some(size);
+        let Some(rho) = ratio.filter(|r| (0.2..0.98).contains(r)) else {
+            return Ok((frames, sensors));
+        };
+        let factor = rho / (1.0 - rho);
+        let trial: Vec<Rotation> = sensors
+            .iter()
+            .zip(&moves)
+            .map(|(s, v)| s * exp(&(factor * v)))
+            .collect();
+        let trial_frames = frame_step(p, &trial, Some(frames.clone()), seconds)?;
+        if p.cost(&trial_frames, &trial) < p.cost(&frames, &sensors) {
+            self.previous = None;
+            return Ok((trial_frames, trial));
         }
+        Ok((frames, sensors))
     }
-    let sensors = sensors.iter().map(nearest_rotation).collect();
-    Ok((frames, sensors))
 }
 
 /// The most sensors the solver estimates: its sensor step factors dense `3K x 3K` normal
