@@ -67,6 +67,47 @@ fn sensor_step(
     Ok(solve_conjugate(&ConjugateProblem::new(pairs)?, &settings)?.estimate)
 }
 
+/// The frames at fixed `s`: the frames' view graph solved from `rs` within `max_seconds`.
+fn frames_at(
+    p: &SimultaneousProblem,
+    s: &Rotation,
+    rs: Vec<Rotation>,
+    max_seconds: Option<f64>,
+) -> Result<Vec<Rotation>> {
+    let settings = MultipleSettings {
+        init: Initialisation::Given(rs),
+        max_seconds,
+        ..Default::default()
+    };
+    Ok(solve_multiple(&p.frame_graph(s)?, &settings)?.rotations)
+}
+
+/// The Aitken step of `[H17]` (as the rig files' `[H19]`): the passes converge linearly, so when
+/// the sensor's move from `before` shrinks by a ratio `rho` in `(0.2, 0.98)` against the last
+/// pass's (`previous`), `S` is moved on by `rho / (1 - rho)` times it and the frames solved
+/// again, kept only when `J` decreases.
+fn aitken(
+    p: &SimultaneousProblem,
+    (rs, s): (Vec<Rotation>, Rotation),
+    before: &Rotation,
+    previous: &mut Option<f64>,
+    max_seconds: Option<f64>,
+) -> Result<(Vec<Rotation>, Rotation)> {
+    let step = crate::so3::log(&(before.inverse() * s));
+    let ratio = previous.map(|q| step.norm() / q);
+    *previous = Some(step.norm());
+    let Some(rho) = ratio.filter(|r| (0.2..0.98).contains(r)) else {
+        return Ok((rs, s));
+    };
+    let trial = s * crate::so3::exp(&(rho / (1.0 - rho) * step));
+    let trial_rs = frames_at(p, &trial, rs.clone(), max_seconds)?;
+    if p.cost(&trial_rs, &trial) < p.cost(&rs, &s) {
+        *previous = None;
+        return Ok((trial_rs, trial));
+    }
+    Ok((rs, s))
+}
+
 /// Block-coordinate descent on `J` from the separate averages (`[H17]`), at most `max_passes`
 /// passes, until a pass decreases `J` by less than [`ALTERNATING_DECREASE_TOLERANCE`] of it.
 ///
@@ -100,19 +141,23 @@ pub(crate) fn solve_within(
     let mut cost = p.cost(&rs, &s);
     let deadline = Deadline::after(remaining(max_seconds, clock));
     let (mut passes, mut decrease) = (0, f64::NAN);
+    let mut previous = None;
     let termination = loop {
         let measure = (decrease, ALTERNATING_DECREASE_TOLERANCE);
         if let Some(limit) = limit_reached(passes, max_passes, deadline, measure) {
             break limit;
         }
         passes += 1;
-        let settings = MultipleSettings {
-            init: Initialisation::Given(rs.clone()),
-            max_seconds: remaining(max_seconds, clock),
-            ..Default::default()
-        };
-        rs = solve_multiple(&p.frame_graph(&s)?, &settings)?.rotations;
+        let before = s;
+        rs = frames_at(p, &s, rs, remaining(max_seconds, clock))?;
         s = sensor_step(p, &rs, &s, remaining(max_seconds, clock))?;
+        (rs, s) = aitken(
+            p,
+            (rs, s),
+            &before,
+            &mut previous,
+            remaining(max_seconds, clock),
+        )?;
         let next = p.cost(&rs, &s);
         decrease = (cost - next) / cost.abs().max(f64::MIN_POSITIVE);
         cost = next;
