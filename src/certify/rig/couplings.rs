@@ -350,6 +350,47 @@ mod tests {
         (p, frames, sensors)
     }
 
+    /// `hat(u)` as three positively weighted rotations, for directions near every axis.
+    #[test]
+    fn a_skew_matrix_is_a_positive_combination_of_three_rotations() {
+        let mut rng = StdRng::seed_from_u64(3);
+        let mut us: Vec<Vector3<f64>> = vec![Vector3::x(), Vector3::y(), -Vector3::z() * 1e-30];
+        us.extend((0..50).map(|_| random_rotation(&mut rng) * Vector3::new(0.0, 0.0, 2.5)));
+        for u in us {
+            let parts = skew_as_rotations(&u);
+            let mut sum = Matrix3::zeros();
+            for (w, n) in &parts {
+                assert!(*w > 0.0);
+                assert!((n.transpose() * n - Matrix3::identity()).norm() < 1e-14);
+                assert!((n.determinant() - 1.0).abs() < 1e-14);
+                sum += *w * n;
+            }
+            assert!((sum - hat(&u)).norm() <= 1e-14 * u.norm(), "{u}");
+        }
+    }
+
+    /// The circulation projector of the complete graph on `k` nodes: symmetric, idempotent, and
+    /// every column a circulation (zero divergence), checked against its definition.
+    #[test]
+    fn the_circulation_projector_is_one() {
+        for k in 2..=6usize {
+            let pairs = local_pairs(k);
+            let p = DMatrix::from_fn(pairs.len(), pairs.len(), |a, b| {
+                circulation(pairs[a], pairs[b], k as f64)
+            });
+            assert!((&p - p.transpose()).norm() < 1e-14);
+            assert!((&p * &p - &p).norm() < 1e-12, "k = {k}");
+            let b = DMatrix::from_fn(k, pairs.len(), |n, e| {
+                let (i, j) = pairs[e];
+                f64::from(u8::from(n == i)) - f64::from(u8::from(n == j))
+            });
+            assert!((&b * &p).norm() < 1e-12);
+            // rank: the cycle space of K_k has dimension p - (k - 1)
+            let trace: f64 = (0..pairs.len()).map(|a| p[(a, a)]).sum();
+            assert!((trace - (pairs.len() + 1 - k) as f64).abs() < 1e-12);
+        }
+    }
+
     #[test]
     fn the_couplings_make_the_estimate_critical() {
         let (p, frames, sensors) = solved(false, 1);
