@@ -77,6 +77,16 @@ impl AverageSettings<MultipleSettings> {
     }
 }
 
+impl AverageSettings<crate::rig::RigSettings> {
+    /// What is left of both time limits at `start.elapsed()`, as for view graphs.
+    pub(crate) fn remaining(&self, start: Instant) -> Self {
+        let mut left = self.clone();
+        left.solve.max_seconds = crate::deadline::remaining(self.solve.max_seconds, start);
+        left.certify.budget = self.certify.budget.after(start);
+        left
+    }
+}
+
 /// Settings of [`average_single`].
 pub type AverageSingleSettings = AverageSettings<SingleSettings>;
 /// Settings of [`average_multiple`].
@@ -228,6 +238,15 @@ pub(crate) fn average<P: PipelineProblem>(
     let skip = validate(problem, settings)?;
     let solution = problem.solve(&settings.solve)?;
     certify_solved(problem, solution, settings, skip, start)
+}
+
+impl PipelineDetails {
+    /// Count `seconds` more of solving (work a caller did before this pipeline ran) in the solve
+    /// and the total times.
+    pub(crate) fn add_solve_seconds(&mut self, seconds: f64) {
+        self.solve_seconds += seconds.max(0.0);
+        self.total_seconds += seconds.max(0.0);
+    }
 }
 
 /// Validate every setting of [`average`] for `problem`; why no certificate will be computed

@@ -140,13 +140,35 @@ pub fn average_rig_with_loss(
             return Ok((out, problem.clone(), None));
         }
     }
+    let rest = settings.remaining(start);
+    let (mut out, inliers, details) = robust_from(problem, ls, (loss, outliers), robust, &rest)?;
+    out.details
+        .add_solve_seconds(start.elapsed().as_secs_f64() - out.details.total_seconds);
+    Ok((out, inliers, Some(details)))
+}
+
+/// The robust part of [`average_rig_with_loss`] from the least-squares estimate `ls` of
+/// `problem` (solved by the caller, whose clock the settings' budgets already count: `rotavg
+/// rig RIGHT LEFT` judges its own joint least squares): the Cauchy solve, the inlier problem
+/// certified, and what was done (`requested` loss, the diagnosis `outliers` that chose it). Its
+/// times and budgets start when it is called (`AverageSettings::remaining` gives the budgets
+/// the caller has left; [`crate::pipeline::PipelineDetails::add_solve_seconds`] the times).
+pub(crate) fn robust_from(
+    problem: &RigProblem,
+    ls: RigSolution,
+    (requested, outliers): (RigLoss, Option<crate::multiple::robust::OutlierWarning>),
+    robust: &RigRobust,
+    settings: &AverageRigSettings,
+) -> Result<(Averaged<RigSolution>, RigProblem, RigRobustDetails)> {
+    let start = std::time::Instant::now();
+    let skip = super::validate(problem, settings)?;
     let solve = RigSettings {
         max_seconds: crate::deadline::remaining(settings.solve.max_seconds, start),
         ..settings.solve
     };
     let rr = solve_rig_robust_from(problem, ls, robust, &solve)?;
     let details = RigRobustDetails {
-        requested: loss,
+        requested,
         robust: true,
         outliers,
         reweights: rr.reweights,
@@ -161,5 +183,5 @@ pub fn average_rig_with_loss(
         super::certify_solved(&rr.inlier_problem, rr.inlier_solution, &inner, skip, start)?;
     out.details.solve_seconds = start.elapsed().as_secs_f64() - out.details.certify_seconds;
     out.details.outliers = details.outliers.clone();
-    Ok((out, rr.inlier_problem, Some(details)))
+    Ok((out, rr.inlier_problem, details))
 }

@@ -10,10 +10,13 @@ use crate::certify::CertifySettings;
 use crate::io::detect::LoadedGraph;
 use crate::multiple::Edge;
 use crate::multiple::robust::suspected_outliers;
-use crate::pipeline::rig::{RigLoss, average_rig_with_loss};
-use crate::pipeline::simultaneous::{SimultaneousProblem, SimultaneousSolution};
-use crate::pipeline::{AverageSettings, Averaged};
+use crate::pipeline::rig::{RigLoss, robust_from};
+use crate::pipeline::simultaneous::{
+    SimultaneousProblem, SimultaneousSettings, SimultaneousSolution,
+};
+use crate::pipeline::{AverageSettings, Averaged, PipelineProblem};
 use crate::rig::{Image, RigProblem, RigRobust, RigSettings, RigSolution, Sensor};
+use crate::so3::Rotation;
 
 impl RigReport {
     /// Average the rig of `right` and `left` with `loss` (`rotavg rig RIGHT LEFT --loss`):
@@ -28,48 +31,63 @@ impl RigReport {
         certify: CertifySettings,
         max_seconds: Option<f64>,
     ) -> Result<Self> {
-        let graphs = (right, left);
-        let clock = std::time::Instant::now();
-        let rig = two_sensor_rig(&rig_problem(right, left)?)?;
-        let (mut diagnosis, mut judged_seconds) = (None, 0.0);
-        if loss != RigLoss::Cauchy {
-            let mut ls = Self::average(inputs.clone(), graphs, None, certify.clone(), max_seconds)?;
-            let s = &ls.result.solution;
-            let x = rig.image_rotations(&s.rotations, &[crate::Rotation::identity(), s.s]);
-            diagnosis = suspected_outliers(&rig.image_graph()?, &x);
-            judged_seconds = ls.result.details.total_seconds;
-            if loss == RigLoss::Chordal || diagnosis.is_none() {
-                if let Some(w) = &mut diagnosis {
-                    w.suggestion = "`--loss cauchy` (or the default `--loss auto`) solves it and \
-                                    certifies the chordal L2 problem on the inlier edges"
-                        .into();
-                    ls.outliers_warning(w);
-                }
-                return Ok(ls);
-            }
-        }
-        let solve = RigSettings {
-            max_seconds: crate::deadline::remaining(max_seconds, clock),
+        let start = std::time::Instant::now();
+        let problem = rig_problem(right, left)?;
+        let rig = two_sensor_rig(&problem)?;
+        let solve = SimultaneousSettings {
+            max_memory_bytes: certify.budget.max_memory_bytes,
+            max_seconds,
             ..Default::default()
         };
         let settings = AverageSettings { solve, certify };
-        let (mut out, _, details) =
-            average_rig_with_loss(&rig, RigLoss::Cauchy, &robust, &settings)?;
-        // the least-squares run judged before it is part of the solve
-        out.details.solve_seconds += judged_seconds;
-        out.details.total_seconds += judged_seconds;
-        let mut report = RigReport::new(inputs, right, left, as_joint(out));
+        let skip = crate::pipeline::validate(&problem, &settings)?;
+        // the joint least squares, judged before anything is certified
+        let ls = problem.solve(&settings.solve)?;
+        let x = rig.image_rotations(&ls.rotations, &[Rotation::identity(), ls.s]);
+        let mut diagnosis = match loss {
+            RigLoss::Cauchy => None,
+            _ => suspected_outliers(&rig.image_graph()?, &x),
+        };
+        if loss == RigLoss::Chordal || (loss == RigLoss::Auto && diagnosis.is_none()) {
+            let result = crate::pipeline::certify_solved(&problem, ls, &settings, skip, start)?;
+            let mut report = RigReport::new(inputs, right, left, result);
+            if let Some(w) = &mut diagnosis {
+                w.suggestion = "`--loss cauchy` (or the default `--loss auto`) solves it and \
+                                certifies the chordal L2 problem on the inlier edges"
+                    .into();
+                report.outliers_warning(w);
+            }
+            return Ok(report);
+        }
         if let Some(w) = &mut diagnosis {
             w.suggestion = "so the Cauchy loss ran instead (`--loss auto`; `--loss chordal` keeps \
                             least squares)"
                 .into();
+        }
+        let sensors = vec![Rotation::identity(), ls.s];
+        let ls = RigSolution {
+            cost: rig.cost(&ls.rotations, &sensors),
+            frames: ls.rotations,
+            sensors,
+            report: ls.report,
+        };
+        let rig_settings = AverageSettings {
+            solve: RigSettings {
+                max_seconds,
+                ..Default::default()
+            },
+            certify: settings.certify,
+        }
+        .remaining(start);
+        let (mut out, _, details) =
+            robust_from(&rig, ls, (loss, diagnosis.clone()), &robust, &rig_settings)?;
+        out.details
+            .add_solve_seconds(start.elapsed().as_secs_f64() - out.details.total_seconds);
+        let mut report = RigReport::new(inputs, right, left, as_joint(out));
+        if let Some(w) = &diagnosis {
             report.outliers_warning(w);
         }
-        report.robust = details.map(|d| crate::pipeline::rig::RigRobustDetails {
-            requested: loss,
-            outliers: diagnosis,
-            ..d
-        });
+        report.robust = Some(details);
         Ok(report)
     }
 }

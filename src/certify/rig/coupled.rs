@@ -139,10 +139,13 @@ fn polished(
     let (mut frames, mut sensors) = (cx.frames.to_vec(), cx.sensors.to_vec());
     let deadline = Deadline::after(cx.left().map(|l| l / 3.0));
     let mut passes = 0;
+    let max_bytes = cx.settings.budget.max_memory_bytes;
     loop {
-        let coupled = match couple(cx.problem, &frames, &sensors)? {
-            Ok(c) => c,
-            Err(why) => return Ok(Err(why)),
+        // an estimate the couplings or the passes cannot take fails the rung, not the certificate
+        let coupled = match couple(cx.problem, &frames, &sensors, max_bytes) {
+            Ok(Ok(c)) => c,
+            Ok(Err(why)) => return Ok(Err(why)),
+            Err(e) => return Ok(Err(e.to_string())),
         };
         let done = coupled.charge <= 0.25 * cx.allowed_gap
             || passes >= POLISH_MAX
@@ -151,7 +154,11 @@ fn polished(
             return Ok(Ok((frames, sensors, coupled, passes)));
         }
         let seconds = deadline.map(|d| d.left().unwrap_or(0.0));
-        (frames, sensors) = polish_passes(cx.problem, (frames, sensors), POLISH_ROUND, seconds)?;
+        (frames, sensors) =
+            match polish_passes(cx.problem, (frames, sensors), POLISH_ROUND, seconds) {
+                Ok(polished) => polished,
+                Err(e) => return Ok(Err(format!("the polish failed: {e}"))),
+            };
         passes += POLISH_ROUND;
     }
 }

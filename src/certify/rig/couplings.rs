@@ -33,17 +33,34 @@ pub(crate) struct Coupled {
     pub charge: f64,
 }
 
+/// Bytes an edge of the augmented graph is charged (the edge, 96 bytes, in the graph, its
+/// component's copy and the local solve's and the checks' per-edge arrays).
+const BYTES_PER_EDGE: u64 = 400;
+
 /// The couplings at the estimate (`frames`, `sensors`, held sensors at their held rotations),
-/// or why there are none.
+/// or why there are none (among the reasons: the augmented graph's edges would take more than
+/// half of `max_bytes`).
 pub(crate) fn couple(
     problem: &RigProblem,
     frames: &[Rotation],
     sensors: &[Rotation],
+    max_bytes: u64,
 ) -> Result<std::result::Result<Coupled, String>> {
     let per_frame = frame_images(problem);
     if per_frame.iter().any(|f| f.len() > MAX_SENSORS_PER_FRAME) {
         return Ok(Err(format!(
             "a frame photographed by more than {MAX_SENSORS_PER_FRAME} sensors"
+        )));
+    }
+    let pseudo: usize = per_frame
+        .iter()
+        .map(|f| 3 * f.len() * f.len().saturating_sub(1) / 2)
+        .sum();
+    let bytes = (pseudo + problem.edges().len()) as u64 * BYTES_PER_EDGE;
+    if bytes > max_bytes / 2 {
+        return Ok(Err(format!(
+            "{pseudo} pseudo-edges: the augmented graph would take about {bytes} bytes, more \
+             than half of the memory budget"
         )));
     }
     let pairs = Pairs::new(problem, &per_frame);
@@ -394,7 +411,7 @@ mod tests {
     #[test]
     fn the_couplings_make_the_estimate_critical() {
         let (p, frames, sensors) = solved(false, 1);
-        let c = couple(&p, &frames, &sensors).unwrap().unwrap();
+        let c = couple(&p, &frames, &sensors, u64::MAX).unwrap().unwrap();
         let x = p.image_rotations(&frames, &sensors);
         let images = p.image_graph().unwrap();
         let before = stationarity_residual(&images, &x).unwrap();
@@ -414,7 +431,7 @@ mod tests {
         let mut rng = StdRng::seed_from_u64(5);
         for known in [false, true] {
             let (p, frames, sensors) = solved(known, 2);
-            let c = couple(&p, &frames, &sensors).unwrap().unwrap();
+            let c = couple(&p, &frames, &sensors, u64::MAX).unwrap().unwrap();
             assert!(c.pseudo_edges > 0);
             let mut differences = Vec::new();
             for _ in 0..20 {

@@ -75,7 +75,13 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
             "the two sensors' view graphs as the simultaneous problem [H22]: {}",
             c.explanation.lines().last().unwrap_or("").trim()
         );
-        let bound = cx.offer(bound, Proof::SimultaneousDual, &note);
+        // the family of the simultaneous certificate's bound (its note names the proof: the
+        // dual certificate [H15] or the decoupled bound [H16] are both of the dual family)
+        let proof = match c.method {
+            crate::certify::BoundMethod::Sdp => Proof::Sdp,
+            _ => Proof::SimultaneousDual,
+        };
+        let bound = cx.offer(bound, proof, &note);
         Ok(Found::proved(bound, cx.certifies(bound), note))
     }
 }
