@@ -78,7 +78,7 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
         // the family of the simultaneous certificate's bound (its note names the proof: the
         // dual certificate [H15] or the decoupled bound [H16] are both of the dual family)
         let proof = match c.method {
-            crate::certify::BoundMethod::Sdp => Proof::Sdp,
+            crate::certify::proof::BoundMethod::Sdp => Proof::Sdp,
             _ => Proof::SimultaneousDual,
         };
         let bound = cx.offer(bound, proof, &note);
