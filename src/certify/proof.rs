@@ -63,6 +63,9 @@ pub enum Proof {
     /// The scalar comparison `[D13]`: the inertia of `n x n` factorisations (the whole graph,
     /// a subgraph, or a split into parts; the attempt's note says which).
     ScalarComparison,
+    /// The block comparison `[A15]`: the inertia of the `3n` block Laplacian of a subgraph
+    /// (anisotropic edges; the attempt's note says which subgraph).
+    BlockComparison,
     /// Gershgorin discs `[D8]`: always available, usually weak.
     Gershgorin,
     /// The randomized Chebyshev test `[D16]`: a Monte Carlo bound, never a proof.
@@ -72,10 +75,11 @@ pub enum Proof {
 impl Proof {
     /// The checks of `lambda_min(S) >= mu` that a dual certificate may climb, strongest first
     /// (the default of `dual.proofs`).
-    pub const MATRIX_CHECKS: [Proof; 3] = [
+    pub const MATRIX_CHECKS: [Proof; 4] = [
         Proof::Grounded,
         Proof::ShiftedCholesky,
         Proof::ScalarComparison,
+        Proof::BlockComparison,
     ];
 
     /// Rank among rungs of (nearly) equal predicted time: the stronger first.
@@ -92,7 +96,7 @@ impl Proof {
             Proof::RigFrames | Proof::RigCoupled => 4,
             Proof::GravityRelaxed | Proof::SimultaneousDecoupled | Proof::RigImages => 5,
             Proof::ShiftedCholesky => 2,
-            Proof::ScalarComparison => 3,
+            Proof::ScalarComparison | Proof::BlockComparison => 3,
             Proof::Sdp | Proof::ConvSdp => 6,
             Proof::BranchAndBound => 7,
             Proof::Staircase => 8,
@@ -121,6 +125,7 @@ impl Proof {
             | Proof::Grounded
             | Proof::ShiftedCholesky
             | Proof::ScalarComparison
+            | Proof::BlockComparison
             | Proof::Gershgorin
             | Proof::Randomized => BoundMethod::Dual,
         }
@@ -148,6 +153,7 @@ impl fmt::Display for Proof {
             Proof::Grounded => "grounded bound [D15]",
             Proof::ShiftedCholesky => "shifted Cholesky of S [D5]",
             Proof::ScalarComparison => "scalar comparison [D13]",
+            Proof::BlockComparison => "block comparison [A15]",
             Proof::Gershgorin => "Gershgorin discs [D8]",
             Proof::Randomized => "randomized test [D16] (not a proof)",
         })

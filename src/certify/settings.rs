@@ -117,7 +117,7 @@ pub struct DualSettings {
     /// verifies. Costs a few triangular solves; the estimate is reported, not used in the bound.
     pub estimate_when_verified: bool,
     /// The proofs of `lambda_min(S) >= mu` the ladder may climb (default
-    /// [`Proof::MATRIX_CHECKS`]: grounded, shifted Cholesky, scalar comparison; others are
+    /// [`Proof::MATRIX_CHECKS`]: grounded, shifted Cholesky, scalar and block comparisons; others are
     /// ignored). They run in the order of their predicted time (the strongest first when all are
     /// cheap, [`crate::certify::log::FREE_SECONDS`]), each only when its own prediction fits
     /// the [`Budget`]: a larger budget never removes a proof. Until 2026-11-26 the scalar
@@ -129,6 +129,13 @@ pub struct DualSettings {
     /// graphs whose extra edges are far from consistent, where they fail (a rig's couplings,
     /// `paper-notes/conjugate.md` `[H21]`).
     pub scalar_fallbacks: bool,
+    /// The block comparison `[A15]` (anisotropic edges) runs only when the whole graph's `3n`
+    /// factor, that of `S` itself, is predicted above this many values (default 5e7: below,
+    /// the grounded and shifted Cholesky proofs factorise `S` in a few seconds at most, and the
+    /// comparison's sufficient condition can fail where they prove: a 3000-camera graph of 1.6e7
+    /// values, three failed subgraphs in 1.0 s before the grounded bound's 0.3 s). The threshold
+    /// is on the graph, not the budget, so a larger budget never removes the rung.
+    pub block_comparison_above: usize,
     /// The randomized Chebyshev test `[D16]`, run when no deterministic proof fits the
     /// [`Budget`]: a Monte Carlo lower bound reported beside the `inconclusive` verdict
     /// (never as the verdict's proven bound).
@@ -204,6 +211,7 @@ impl Default for DualSettings {
             estimate_when_verified: true,
             proofs: Proof::MATRIX_CHECKS.to_vec(),
             scalar_fallbacks: true,
+            block_comparison_above: 50_000_000,
             randomized: RandomizedSettings::default(),
             conv: Default::default(),
         }

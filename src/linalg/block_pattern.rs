@@ -187,6 +187,22 @@ impl BlockPattern {
         Ok(self.symbolic_llt()?.len_val())
     }
 
+    /// The symbolic Cholesky analysis (AMD ordering) refused before its column counts when the
+    /// ordering predicts more than `max_values` stored values
+    /// ([`super::cholesky::symbolic_cholesky_within`]; the lower triangle is the pattern of
+    /// `A + A^T` the ordering reads).
+    pub(crate) fn symbolic_within(
+        &self,
+        max_values: usize,
+    ) -> Result<std::result::Result<SymbolicCholesky<usize>, usize>> {
+        super::cholesky::symbolic_cholesky_within(self.symbolic.as_ref(), max_values)
+    }
+
+    /// The matrix with this pattern and the values `val` (lower triangle).
+    pub(crate) fn matrix<'a>(&'a self, val: &'a [f64]) -> SparseColMatRef<'a, usize, f64> {
+        SparseColMatRef::new(self.symbolic.as_ref(), val)
+    }
+
     /// Symbolic Cholesky (once).
     pub(crate) fn symbolic_llt(&self) -> Result<SymbolicFactor> {
         factorize_symbolic_cholesky(

@@ -13,6 +13,8 @@
 //!   exactly evaluated invariants `[A12]` (the information matrices' weight scale and sign).
 //! - [`two_pass_lanczos`]: the smallest eigenpair when thousands of steps are needed (no stored
 //!   basis; the Ritz vector from a second pass), for the staircase's negative curvature `[D11]`.
+//! - `small_symmetric` (crate-internal): a proven lower bound on the smallest eigenvalue of a
+//!   small dense symmetric matrix (the edge comparisons of `[A15]`).
 //! - `block_pattern`, `linear_solver`, `pcg` (crate-internal): the block-sparse Newton systems
 //!   of the local solvers `[M6]`: pattern and assembly, sparse Cholesky or block-Jacobi
 //!   preconditioned conjugate gradients.
@@ -25,6 +27,7 @@ pub mod lanczos;
 pub(crate) mod ldlt;
 pub(crate) mod linear_solver;
 pub(crate) mod pcg;
+pub(crate) mod small_symmetric;
 pub mod symmetric3;
 pub mod two_pass_lanczos;
 

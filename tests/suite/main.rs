@@ -11,6 +11,7 @@ mod common;
 
 #[cfg(feature = "cli")]
 mod anisotropic;
+mod block_comparison;
 mod branch_and_bound;
 mod budget_monotone;
 mod certify_families;

@@ -13,7 +13,7 @@ use super::verified::VerifiedBound;
 use crate::certify::budget::{Budget, Deadline};
 use crate::certify::log::{Attempt, Outcome, Point, Prediction, Refusal};
 use crate::certify::proof::Proof;
-use crate::certify::rung::Climb;
+use crate::certify::rung::{Climb, Plan};
 use crate::certify::settings::CertifySettings;
 use crate::error::Result;
 use crate::linalg::{LanczosResult, inf_norm};
@@ -274,6 +274,19 @@ impl<'a> Check<'a> {
         outcome
     }
 
+    /// The plan of a rung from its last prediction (or refusal): run, unless the estimate's
+    /// refinement follows and the prediction is too dear for that ([`Self::cut_by_not_critical`]).
+    pub fn plan_from(&self, planned: Option<std::result::Result<Prediction, Refusal>>) -> Plan {
+        match planned {
+            Some(Ok(p)) => match self.cut_by_not_critical(p.seconds) {
+                Some(refusal) => Plan::Refuse(refusal, Some(p)),
+                None => Plan::Run(p),
+            },
+            Some(Err(refusal)) => Plan::Refuse(refusal, None),
+            None => Plan::Done,
+        }
+    }
+
     /// Log one try inside a rung (a family of shapes logs each): `rung` at this point, started
     /// at `since`, with `note`.
     pub fn log(
@@ -415,6 +428,7 @@ impl Check<'_> {
             factorizations: 0,
             factor_nonzeros: 0,
             scalar_comparison: None,
+            block_comparison: None,
             factorization_skipped: false,
             grounded: None,
             not_critical: false,
@@ -456,6 +470,32 @@ impl Climb for Check<'_> {
 /// `dual.shift_budget_fraction` of the gap budget.
 pub(crate) fn first_shift(cx: &Check<'_>) -> f64 {
     cx.settings.dual.shift_budget_fraction * cx.gap / cx.s.nrows().max(1) as f64
+}
+/// The budget's verdict on counted factorisations and their predicted time: the `largest`
+/// factor (values, scratch included) must fit the memory, `total` values and `multiply_adds`
+/// the time (the model of the scalar comparison: [`Budget::counted_factorisations_fit`]), the
+/// stored `factor_len` the cap; `other_seconds` is the proof's work besides them.
+pub(super) fn counted_prediction(
+    settings: &CertifySettings,
+    largest: usize,
+    total: usize,
+    multiply_adds: f64,
+    factor_len: usize,
+    other_seconds: f64,
+) -> std::result::Result<Prediction, Refusal> {
+    if let Err(reason) = settings
+        .budget
+        .counted_factorisations_fit(largest, multiply_adds, total)
+    {
+        return Err(Refusal::OverBudget { reason });
+    }
+    if let Some(refusal) = over_factor_cap(settings, factor_len) {
+        return Err(refusal);
+    }
+    Ok(Prediction::new(
+        Budget::predicted_factor_seconds(multiply_adds, total) + other_seconds,
+        Budget::factorisation_bytes(largest),
+    ))
 }
 
 /// The refusal of a factor of `factor_nonzeros` values over `dual.max_factor_nonzeros`.

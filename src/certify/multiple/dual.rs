@@ -140,6 +140,21 @@ fn proof_text(bound: &VerifiedBound) -> String {
             bound.verified_min_eigenvalue, s, bound.factor_nonzeros as f64, bound.fp_margin
         ),
         (Proof::ScalarComparison, _) => scalar_text(bound),
+        (Proof::BlockComparison, _) => format!(
+            "lambda_min(S) >= {:.3e} verified by the block comparison [A15] (inertia of one \
+             LDL^T factorisation of a 3n x 3n block Laplacian, {} values{}; backward error \
+             {:.1e})",
+            bound.verified_min_eigenvalue,
+            bound.factor_nonzeros,
+            match &bound.block_comparison {
+                Some(c) if c.dropped_edges > 0 => format!(
+                    ", of the graph without {} edges whose residuals stay charged",
+                    c.dropped_edges
+                ),
+                _ => String::new(),
+            },
+            bound.fp_margin
+        ),
         (Proof::Grounded, _) => match &bound.grounded {
             Some(g) => format!(
                 "gauge null space deflated [D15]: S without node {}'s block >= {:.3e} I verified \
@@ -282,6 +297,7 @@ pub fn certify_with_multipliers(
         match bound.verification {
             Proof::ShiftedCholesky => "a sparse Cholesky factorisation",
             Proof::ScalarComparison => "the scalar comparison [D13]",
+            Proof::BlockComparison => "the block comparison [A15]",
             Proof::Grounded => "the grounded bound [D15]",
             _ => "Gershgorin discs",
         }

@@ -12,10 +12,12 @@
 //! - [`verify`]: the ladder of proofs that `S` is (nearly) positive semidefinite
 //!   ([`crate::certify::ladder`]): [`grounded`] `[D15]`, the shifted Cholesky of `S` `[D5]`,
 //!   [`scalar`] `[D13]` (one factorisation of an `n x n` scalar matrix, a subgraph's, or a
-//!   split's), Gershgorin `[D8]`; [`randomized`] `[D16]` (a Monte Carlo bound reported beside an
+//!   split's), [`block`] `[A15]` (its anisotropic form: a subgraph's `3n` block Laplacian),
+//!   Gershgorin `[D8]`; [`randomized`] `[D16]` (a Monte Carlo bound reported beside an
 //!   `inconclusive` verdict when no deterministic proof fits the budget).
 //! - [`staircase`]: the Riemannian staircase (rank-lifted Burer-Monteiro descent).
 
+pub mod block;
 mod check;
 pub mod conv;
 pub mod conv_dual;

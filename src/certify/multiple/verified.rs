@@ -2,6 +2,7 @@
 //! quantities of the check that gave it (`paper-notes/certificates.md` `[D4]`-`[D8]`, `[D13]`,
 //! `[D15]`, `[D16]`).
 
+use super::block::BlockComparison;
 use super::scalar::ScalarComparison;
 use crate::certify::log::Attempt;
 use crate::certify::proof::Proof;
@@ -42,6 +43,9 @@ pub struct VerifiedBound {
     /// (among them how many edges its factorised subgraph dropped).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scalar_comparison: Option<ScalarComparison>,
+    /// The block comparison's quantities, when `verification` is `BlockComparison` `[A15]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub block_comparison: Option<BlockComparison>,
     /// `true` when nothing was proved and a proof was kept out by the budget (then no lower
     /// bound is claimed: the verdict is `inconclusive` with [`VerifiedBound::budget_exceeded`]).
     pub factorization_skipped: bool,

@@ -12,6 +12,7 @@
 //! first bound that leaves at least half of the tolerance for the rest of the gap ends the
 //! climb.
 
+use super::block::rungs::BlockFamily;
 use super::check::{Check, CurvatureHint, Scope, first_shift};
 use super::gershgorin::GershgorinCheck;
 use super::grounded::GroundedProof;
@@ -121,6 +122,7 @@ fn climb_checks(mut cx: Check<'_>) -> Result<VerifiedBound> {
             Proof::Grounded => rungs.push(Box::new(GroundedProof::default())),
             Proof::ShiftedCholesky => rungs.push(Box::new(ShiftedProof::default())),
             Proof::ScalarComparison => rungs.push(Box::new(ScalarFamily::default())),
+            Proof::BlockComparison => rungs.push(Box::new(BlockFamily::default())),
             _ => {}
         }
     }

@@ -132,31 +132,7 @@ impl ScalarAnalysis {
                 reason: format!("must be a number >= 0, got {edges_per_node}"),
             });
         }
-        let residual: Vec<f64> = problem
-            .edges()
-            .iter()
-            .map(|e| {
-                let (ra, rb) = (rotations[e.i].matrix(), rotations[e.j].matrix());
-                let pm = ra.transpose() * (e.rotation.matrix().transpose() * rb);
-                fro(&(pm - Matrix3::identity()))
-            })
-            .collect();
-        let adjacency = problem.adjacency();
-        let mut keep = vec![false; problem.num_edges()];
-        let whole = edges_per_node.floor() as usize;
-        let fraction = edges_per_node - edges_per_node.floor();
-        let mut incident = Vec::new();
-        for v in 0..n {
-            incident.clear();
-            incident.extend(adjacency.neighbours(v).iter().map(|&(_, k)| k));
-            incident.sort_by(|&a, &b| residual[a].total_cmp(&residual[b]).then(a.cmp(&b)));
-            // a fixed pseudo-random subset of the nodes (Knuth's multiplicative hash)
-            let extra = ((v as u64).wrapping_mul(2_654_435_761) % 1000) as f64 / 1000.0 < fraction;
-            for &k in incident.iter().take(whole + usize::from(extra)) {
-                keep[k] = true;
-            }
-        }
-        connect(problem, &residual, &mut keep);
+        let keep = subgraph_edges(problem, rotations, edges_per_node);
         let analysed = Self::analyse(problem, 1, |k| u64::from(keep[k]), max_values)?;
         Ok(analysed.map(|a| ScalarAnalysis {
             edges_per_node,
@@ -549,13 +525,56 @@ fn outside_largest_components(
 }
 
 /// Frobenius norm.
-pub(super) fn fro(m: &Matrix3<f64>) -> f64 {
+pub(in crate::certify::multiple) fn fro(m: &Matrix3<f64>) -> f64 {
     m.iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+/// The edges of the subgraph of [`ScalarAnalysis::sparsified`] (also the block comparison's,
+/// `[A15]`): every node keeps its `edges_per_node` (`>= 0`, fractional part: a fixed fraction of
+/// the nodes keeps one more) incident edges of smallest residual `||R_a^T R_ab^T R_b - I||_F`,
+/// an edge is kept when either endpoint keeps it, and the components are joined by the dropped
+/// edges of smallest residual between them. `rotations` has one rotation per node.
+pub(in crate::certify::multiple) fn subgraph_edges(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    edges_per_node: f64,
+) -> Vec<bool> {
+    let n = problem.num_rotations();
+    let residual: Vec<f64> = problem
+        .edges()
+        .iter()
+        .map(|e| {
+            let (ra, rb) = (rotations[e.i].matrix(), rotations[e.j].matrix());
+            let pm = ra.transpose() * (e.rotation.matrix().transpose() * rb);
+            fro(&(pm - Matrix3::identity()))
+        })
+        .collect();
+    let adjacency = problem.adjacency();
+    let mut keep = vec![false; problem.num_edges()];
+    let whole = edges_per_node.floor() as usize;
+    let fraction = edges_per_node - edges_per_node.floor();
+    let mut incident = Vec::new();
+    for v in 0..n {
+        incident.clear();
+        incident.extend(adjacency.neighbours(v).iter().map(|&(_, k)| k));
+        incident.sort_by(|&a, &b| residual[a].total_cmp(&residual[b]).then(a.cmp(&b)));
+        // a fixed pseudo-random subset of the nodes (Knuth's multiplicative hash)
+        let extra = ((v as u64).wrapping_mul(2_654_435_761) % 1000) as f64 / 1000.0 < fraction;
+        for &k in incident.iter().take(whole + usize::from(extra)) {
+            keep[k] = true;
+        }
+    }
+    connect(problem, &residual, &mut keep);
+    keep
 }
 
 /// Join the components of the kept edges with the dropped edges of smallest `residual` between
 /// them (Kruskal's rule on the components), so that a connected graph's subgraph is connected.
-fn connect(problem: &MultipleProblem, residual: &[f64], keep: &mut [bool]) {
+pub(in crate::certify::multiple) fn connect(
+    problem: &MultipleProblem,
+    residual: &[f64],
+    keep: &mut [bool],
+) {
     let mut components = UnionFind::new(problem.num_rotations());
     for (e, _) in problem.edges().iter().zip(keep.iter()).filter(|(_, k)| **k) {
         components.union(e.i, e.j);

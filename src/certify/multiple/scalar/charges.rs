@@ -16,7 +16,7 @@ pub(super) const PRODUCT_ERROR: f64 = 2e-13;
 
 /// Step 1: `t_max >= max_i ||R_i^T R_i - I||_F` (entries of `R^T R` are inner products of 3
 /// terms bounded by ~1: error <= `gamma_3 3 + u` per entry; 1e-14 covers 3x that).
-pub(super) fn orthogonality_defect(
+pub(in crate::certify::multiple) fn orthogonality_defect(
     rotations: &[Rotation],
 ) -> std::result::Result<f64, ScalarFailure> {
     let mut t_max = 0.0f64;

@@ -61,6 +61,8 @@ pub use analysis::{
     MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_MIN_DEGREES, SPLIT_SHAPES, ScalarAnalysis,
     SplitShape,
 };
+pub(in crate::certify::multiple) use analysis::{connect, fro, subgraph_edges};
+pub(in crate::certify::multiple) use charges::orthogonality_defect;
 
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;

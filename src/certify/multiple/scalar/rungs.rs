@@ -9,11 +9,10 @@
 use super::forecast::{FORECAST_FAILURE_SUCCESS, forecast_fails};
 use super::{
     MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_MIN_DEGREES, SPLIT_SHAPES, ScalarAnalysis,
-    ScalarComparison, ScalarFailure, SplitShape, scalar_comparison,
+    ScalarFailure, SplitShape, scalar_comparison,
 };
-use crate::certify::budget::Budget;
 use crate::certify::log::{FREE_SECONDS, Outcome, Prediction, Refusal};
-use crate::certify::multiple::check::{Check, over_factor_cap};
+use crate::certify::multiple::check::{Check, counted_prediction};
 use crate::certify::multiple::verified::VerifiedBound;
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Plan, Rung};
@@ -66,14 +65,7 @@ impl<'a> Rung<Check<'a>> for ScalarFamily {
         if self.planned.is_none() {
             self.planned = Some(self.predict(cx)?);
         }
-        Ok(match self.planned.clone() {
-            Some(Ok(p)) => match cx.cut_by_not_critical(p.seconds) {
-                Some(refusal) => Plan::Refuse(refusal, Some(p)),
-                None => Plan::Run(p),
-            },
-            Some(Err(refusal)) => Plan::Refuse(refusal, None),
-            None => Plan::Done,
-        })
+        Ok(cx.plan_from(self.planned.clone()))
     }
 
     fn attempt(&mut self, cx: &mut Check<'a>) -> Result<Found> {
@@ -283,7 +275,7 @@ impl Fallbacks {
 }
 
 /// Subgraphs to skip after one fails with `negative_pivots` (`floor(log16 p)`; 0 for `p < 16`).
-fn skipped_subgraphs(negative_pivots: usize) -> usize {
+pub(in crate::certify::multiple) fn skipped_subgraphs(negative_pivots: usize) -> usize {
     let mut skip = 0;
     let mut p = negative_pivots;
     while p >= 16 {
@@ -327,21 +319,16 @@ fn predict(
     let scratch = a.scratch_bytes().div_ceil(8);
     let largest = a.factor_len().saturating_add(scratch);
     let total: usize = a.factor_lens().map(|v| v.saturating_add(scratch)).sum();
+    let other = SECONDS_PER_EDGE * a.num_edges() as f64;
     let multiply_adds = a.factor_multiply_adds();
-    if let Err(reason) = settings
-        .budget
-        .counted_factorisations_fit(largest, multiply_adds, total)
-    {
-        return Err(Refusal::OverBudget { reason });
-    }
-    if let Some(refusal) = over_factor_cap(settings, a.factor_len()) {
-        return Err(refusal);
-    }
-    Ok(Prediction::new(
-        Budget::predicted_factor_seconds(multiply_adds, total)
-            + SECONDS_PER_EDGE * a.num_edges() as f64,
-        Budget::factorisation_bytes(largest),
-    ))
+    counted_prediction(
+        settings,
+        largest,
+        total,
+        multiply_adds,
+        a.factor_len(),
+        other,
+    )
 }
 
 /// Run one analysis: a bound when it proves `lambda_min(S) >= -target`, else why not (`None`
@@ -360,7 +347,8 @@ fn run(
         Ok(p) if p.verified_min_eigenvalue >= -target => p,
         other => {
             let failed = other.as_ref().err().cloned();
-            let reason = format!("{}: {}", shape_of(a), failure(target, other));
+            let mu = other.map(|p| p.verified_min_eigenvalue);
+            let reason = format!("{}: {}", shape_of(a), failure_text(target, mu, 1));
             cx.log(
                 Proof::ScalarComparison,
                 predicted,
@@ -457,16 +445,21 @@ fn splits(
     Ok(candidates)
 }
 
-/// Why a scalar comparison that ran did not prove enough, with the numbers.
-fn failure(target: f64, outcome: std::result::Result<ScalarComparison, ScalarFailure>) -> String {
+/// Why a comparison that ran did not prove enough, with the numbers: its proven
+/// `lambda_min(S)` when the cross terms were too large, else its failure (`needed`: the
+/// negative pivots its inertia condition needs, 1 for the scalar comparison, 3 for the block).
+pub(in crate::certify::multiple) fn failure_text(
+    target: f64,
+    outcome: std::result::Result<f64, ScalarFailure>,
+    needed: usize,
+) -> String {
     match outcome {
-        Ok(p) => format!(
-            "its cross terms give lambda_min(S) >= {:.1e}, below the -{target:.1e} the gap \
-             budget allows",
-            p.verified_min_eigenvalue
+        Ok(mu) => format!(
+            "its cross terms give lambda_min(S) >= {mu:.1e}, below the -{target:.1e} the gap \
+             budget allows"
         ),
         Err(ScalarFailure::Inertia { negative_pivots }) => {
-            format!("{negative_pivots} negative pivots (its condition needs exactly 1)")
+            format!("{negative_pivots} negative pivots (its condition needs exactly {needed})")
         }
         Err(ScalarFailure::Numerical) => "a zero or non-finite pivot".into(),
         Err(ScalarFailure::BackwardError) => {

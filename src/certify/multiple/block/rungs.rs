@@ -1,0 +1,235 @@
+//! The block comparison `[A15]` as one rung of the verification ladder: block Laplacians of
+//! subgraphs chosen by strength ([`BLOCK_EDGES_PER_NODE`] edges per node, sparsest first), one
+//! per attempt, each planned with its own prediction; the first that proves ends the rung.
+//! Anisotropic problems only (the scalar comparison `[D13]` is the isotropic form).
+
+use super::outcome::BlockFailure;
+use super::{BlockAnalysis, block_comparison};
+use crate::certify::log::{Outcome, Prediction, Refusal};
+use crate::certify::multiple::check::{Check, counted_prediction};
+use crate::certify::multiple::scalar::ScalarAnalysis;
+use crate::certify::multiple::scalar::rungs::{failure_text, skipped_subgraphs};
+use crate::certify::multiple::verified::VerifiedBound;
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, Plan, Rung};
+use crate::certify::settings::CertifySettings;
+use crate::error::Result;
+use crate::so3::Rotation;
+use std::time::Instant;
+
+/// The subgraphs tried, sparsest first: each node keeps this many of its edges, chosen by
+/// strength. Measured on the realistic two-view generator (10^4 cameras, 10^5 edges,
+/// 2026-11-30, `cargo run --release --example block_sweep -- 10000 100000 2 3 4`): 2 and 3 edges
+/// per node leave 963 and 35 negative pivots (1.7 s and 5.5 s), 4 proves (1.9e8 factor values,
+/// 9.2 s), where `S`'s own factor has 3.9e8 values (the grounded bound: 24 s). Sparser
+/// subgraphs never proved on this class, so the climb starts at 4.
+pub const BLOCK_EDGES_PER_NODE: [f64; 4] = [4.0, 5.0, 6.0, 8.0];
+
+/// The comparison's work besides the factorisation, per edge (the `6 x 6` checks, the
+/// double-double gauge terms and the choice of the subgraph): measured 2.3e-5 s on the
+/// 10^4-camera case above (0.23 s of choice and analysis, 0.4 s of edge checks for 10^5 edges).
+pub const SECONDS_PER_EDGE: f64 = 2.3e-5;
+
+/// The block comparison's subgraphs, one per attempt: the ladder plans again after each, so a
+/// cheaper rung (the grounded bound of `S` itself) overtakes the next, denser subgraph once the
+/// failures make it unlikely to prove.
+#[derive(Default)]
+pub(in crate::certify::multiple) struct BlockFamily {
+    /// The next entry of [`BLOCK_EDGES_PER_NODE`] to analyse.
+    next: usize,
+    /// The subgraph the next attempt runs, analysed by the plan.
+    pending: Option<BlockAnalysis>,
+    /// The negative pivots of the failures so far.
+    failures: Vec<usize>,
+    /// The last plan (refusals are kept: a refused rung is dropped).
+    planned: Option<std::result::Result<Prediction, Refusal>>,
+    done: bool,
+}
+
+impl<'a> Rung<Check<'a>> for BlockFamily {
+    fn proof(&self) -> Proof {
+        Proof::BlockComparison
+    }
+
+    fn plan(&mut self, cx: &Check<'a>) -> Result<Plan> {
+        // scalar weights: the scalar comparison is the isotropic form (not logged: every
+        // isotropic ladder would carry the line)
+        if self.done || !cx.problem.is_anisotropic() {
+            return Ok(Plan::Done);
+        }
+        if self.planned.is_none() {
+            self.planned = Some(self.predict(cx)?);
+        }
+        Ok(match self.planned.clone() {
+            // no denser subgraph fits after a failure: the rung is done (its refusal was not
+            // the reason it did not prove)
+            Some(Err(_)) if !self.failures.is_empty() => Plan::Done,
+            planned => cx.plan_from(planned),
+        })
+    }
+
+    fn attempt(&mut self, cx: &mut Check<'a>) -> Result<Found> {
+        self.planned = None;
+        let (Some(a), Some(rotations)) = (self.pending.take(), cx.rotations) else {
+            self.done = true;
+            return Ok(Found::logged(Outcome::Failed {
+                reason: "no subgraph to try".into(),
+            }));
+        };
+        let predicted = predict(cx.settings, &a).ok();
+        let target = 0.5 * cx.gap / cx.s.nrows().max(1) as f64;
+        Ok(Found::logged(
+            match run(cx, &a, rotations, target, predicted)? {
+                Ok(b) => {
+                    self.done = true;
+                    cx.offer(b)
+                }
+                Err(failure) => {
+                    match failure {
+                        Some(BlockFailure::Inertia { negative_pivots }) => {
+                            self.next += skipped_subgraphs(negative_pivots);
+                            self.failures.push(negative_pivots);
+                        }
+                        // not a question of the subgraph: the denser ones fail alike
+                        _ => self.done = true,
+                    }
+                    Outcome::Failed {
+                        reason: format!("{}: did not prove", shape_of(&a)),
+                    }
+                }
+            },
+        ))
+    }
+}
+
+impl BlockFamily {
+    /// The next subgraph's prediction (its chance from the failures so far), or why the rung
+    /// does not apply.
+    fn predict(&mut self, cx: &Check<'_>) -> Result<std::result::Result<Prediction, Refusal>> {
+        let Some(rotations) = cx.rotations else {
+            return Ok(Err(Refusal::NotApplicable {
+                reason: "the estimate's rotations are not known".into(),
+            }));
+        };
+        if self.next == 0 {
+            // the 3n factor of the whole graph is about 9 x its scalar one (the same
+            // elimination in 3 x 3 blocks), whose ordering costs a ninth
+            let above = cx.settings.dual.block_comparison_above;
+            if let Ok(a) = ScalarAnalysis::new(cx.problem, above / 9)? {
+                return Ok(Err(Refusal::NotApplicable {
+                    reason: format!(
+                        "the whole graph's 3n factor (about {:.1e} values) is small enough to \
+                         factorise directly",
+                        9.0 * a.factor_len() as f64
+                    ),
+                }));
+            }
+        }
+        self.pending = self.next_analysis(cx, rotations)?;
+        Ok(match &self.pending {
+            Some(a) => predict(cx.settings, a).map(|p| p.with_success(self.chance())),
+            None => Err(Refusal::OverBudget {
+                reason: "no subgraph's block factor fits the budget".into(),
+            }),
+        })
+    }
+
+    /// The chance that the next subgraph proves, from the failures so far: 1 before any; after
+    /// a near miss (at most 16 negative pivots: the next subgraph is not skipped) 1/2, and 1/10
+    /// when the last two near misses had the same count (a node the comparison cannot cover,
+    /// not the subgraph's connectivity: measured on a 3000-camera graph, 4 negative pivots at
+    /// 5, 6 and 8 edges per node).
+    fn chance(&self) -> f64 {
+        match self.failures.as_slice() {
+            [.., a, b] if a == b && *b <= 16 => 0.1,
+            [.., b] if *b <= 16 => 0.5,
+            _ => 1.0,
+        }
+    }
+
+    /// The next subgraph that fits the budget, or `None`.
+    fn next_analysis(
+        &mut self,
+        cx: &Check<'_>,
+        rotations: &[Rotation],
+    ) -> Result<Option<BlockAnalysis>> {
+        let max_values = cx
+            .settings
+            .budget
+            .max_factor_values(3 * cx.problem.num_rotations());
+        while self.next < BLOCK_EDGES_PER_NODE.len() {
+            let k = BLOCK_EDGES_PER_NODE[self.next];
+            self.next += 1;
+            match BlockAnalysis::new(cx.problem, rotations, Some(k), max_values)? {
+                Ok(a) if predict(cx.settings, &a).is_ok() => return Ok(Some(a)),
+                // denser subgraphs have larger factors
+                _ => self.next = BLOCK_EDGES_PER_NODE.len(),
+            }
+        }
+        Ok(None)
+    }
+}
+
+/// The budget's verdict on one subgraph's factorisation, and its predicted time.
+fn predict(
+    settings: &CertifySettings,
+    a: &BlockAnalysis,
+) -> std::result::Result<Prediction, Refusal> {
+    let values = a.factor_len().saturating_add(a.scratch_bytes().div_ceil(8));
+    let other = SECONDS_PER_EDGE * a.num_edges() as f64;
+    counted_prediction(
+        settings,
+        values,
+        values,
+        a.factor_multiply_adds(),
+        a.factor_len(),
+        other,
+    )
+}
+
+/// Run one subgraph: a bound when it proves `lambda_min(S) >= -target`, else why not (`None`
+/// when its cross terms were too large); logged either way.
+fn run(
+    cx: &Check<'_>,
+    a: &BlockAnalysis,
+    rotations: &[Rotation],
+    target: f64,
+    predicted: Option<Prediction>,
+) -> Result<std::result::Result<VerifiedBound, Option<BlockFailure>>> {
+    let since = Instant::now();
+    cx.notes().factorizations += 1;
+    let outcome = block_comparison(cx.problem, a, rotations, cx.lambdas, target)?;
+    let proof = match outcome {
+        Ok(p) if p.verified_min_eigenvalue >= -target => p,
+        other => {
+            let failed = other.as_ref().err().cloned();
+            let mu = other.map(|p| p.verified_min_eigenvalue);
+            let reason = format!("{}: {}", shape_of(a), failure_text(target, mu, 3));
+            let outcome = Outcome::Failed { reason };
+            cx.log(Proof::BlockComparison, predicted, outcome, since);
+            return Ok(Err(failed));
+        }
+    };
+    let mut b = cx.bound_from_mu(proof.verified_min_eigenvalue, Proof::BlockComparison);
+    b.fp_margin = proof.backward_error;
+    b.factorizations = 1;
+    b.factor_nonzeros = proof.factor_nonzeros;
+    b.block_comparison = Some(proof);
+    let outcome = cx.proved(&b);
+    cx.log_with_note(
+        Proof::BlockComparison,
+        predicted,
+        outcome,
+        since,
+        shape_of(a),
+    );
+    Ok(Ok(b))
+}
+
+/// The subgraph in words.
+fn shape_of(a: &BlockAnalysis) -> String {
+    match a.edges_per_node() {
+        Some(k) => format!("subgraph of {k} edges per node"),
+        None => "whole graph".into(),
+    }
+}
