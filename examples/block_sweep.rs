@@ -6,7 +6,8 @@
 //! cargo run --release --example block_sweep -- CAMERAS EDGES EDGES_PER_NODE...
 //! ```
 //!
-//! e.g. `-- 10000 100000 3 4` (`paper-notes/anisotropic.md` `[A15]`).
+//! e.g. `-- 10000 100000 3 4` (`paper-notes/anisotropic.md` `[A15]`); with `outliers`, 10 % of
+//! the pairs are wrong and the sweep runs on the edges within 5 degrees of the truth.
 use rotavg::certify::multiple::block::{BlockAnalysis, block_comparison};
 use rotavg::certify::multiple::multipliers;
 use rotavg::multiple::synthetic::SyntheticAnisotropic;
@@ -21,7 +22,25 @@ fn main() -> rotavg::Result<()> {
     if ks.is_empty() {
         ks = vec![4.0, 5.0];
     }
-    let (p, _) = SyntheticAnisotropic::two_view_like(n, m, 0.0).generate();
+    let outliers = args.iter().any(|a| a == "outliers");
+    let (p, truth) =
+        SyntheticAnisotropic::two_view_like(n, m, if outliers { 0.1 } else { 0.0 }).generate();
+    // with outliers: the graph of the edges within 5 degrees of the truth (the inlier graph a
+    // robust solve finds, up to a few edges)
+    let p = if outliers {
+        let keep: Vec<bool> = p
+            .edges()
+            .iter()
+            .map(|e| {
+                let r = e.rotation.matrix() * truth[e.i].matrix() * truth[e.j].matrix().transpose();
+                rotavg::so3::log(&rotavg::Rotation::from_matrix_unchecked(r)).norm()
+                    <= 5f64.to_radians()
+            })
+            .collect();
+        p.edge_subset(&keep)?
+    } else {
+        p
+    };
     let s = solve_multiple(&p, &MultipleSettings::default())?;
     let lambdas = multipliers(&p, &s.rotations)?;
     let target = 0.5 * 1e-6 * s.cost / (3 * n) as f64;

@@ -61,7 +61,15 @@ impl Tally {
     }
 }
 
-fn campaign(p: &MultipleProblem, truth: &[Rotation], rng: &mut StdRng, tally: &mut Tally) {
+/// `with_block`: also certify every point with the block comparison `[A15]` alone (anisotropic
+/// graphs only).
+fn campaign(
+    p: &MultipleProblem,
+    truth: &[Rotation],
+    rng: &mut StdRng,
+    tally: &mut Tally,
+    with_block: bool,
+) {
     let n = p.num_rotations();
     let settings = CertifySettings::with_mode(CertifyMode::Dual);
     let mut over_budget = settings.clone();
@@ -118,7 +126,7 @@ fn campaign(p: &MultipleProblem, truth: &[Rotation], rng: &mut StdRng, tally: &m
             best = best.min(better.chordal_cost);
         }
         assert!(!r.certificate.is_certified(), "{}", r.certificate);
-        if p.is_anisotropic() {
+        if with_block && p.is_anisotropic() {
             let b = certify_multiple(p, y, &block_only).unwrap();
             if let Some(better) = &b.improvement {
                 best = best.min(better.chordal_cost);
@@ -237,7 +245,9 @@ fn no_false_certificate_in_ten_thousand() {
                         }
                         let (p, truth) = instance(k);
                         let mut rng = StdRng::seed_from_u64(2026 + k as u64);
-                        campaign(&p, &truth, &mut rng, &mut tally);
+                        // the block comparison alone on every other anisotropic graph (each of
+                        // its certificates repeats the conv(SO(3)) search: CI time)
+                        campaign(&p, &truth, &mut rng, &mut tally, k % 2 == 0);
                     }
                 })
             })
