@@ -7,7 +7,8 @@
 //! ```
 //!
 //! e.g. `-- 10000 100000 3 4` (`paper-notes/anisotropic.md` `[A15]`); with `outliers`, 10 % of
-//! the pairs are wrong and the sweep runs on the edges within 5 degrees of the truth.
+//! the pairs are wrong and the sweep runs on the edges within 5 degrees of the truth, or, with
+//! `outliers robust` too, on the inliers of the Cauchy solve (the pipeline's inlier graph).
 use rotavg::certify::multiple::block::{BlockAnalysis, block_comparison};
 use rotavg::certify::multiple::multipliers;
 use rotavg::multiple::synthetic::SyntheticAnisotropic;
@@ -27,7 +28,25 @@ fn main() -> rotavg::Result<()> {
         SyntheticAnisotropic::two_view_like(n, m, if outliers { 0.1 } else { 0.0 }).generate();
     // with outliers: the graph of the edges within 5 degrees of the truth (the inlier graph a
     // robust solve finds, up to a few edges)
-    let p = if outliers {
+    let robust = args.iter().any(|a| a == "robust");
+    let p = if robust {
+        // the inlier flags of the Cauchy solve, as the pipeline's inlier graph takes them
+        let cauchy = rotavg::objective::Objective::new(
+            rotavg::Metric::Geodesic,
+            rotavg::objective::Loss::Cauchy { scale_deg: 5.0 },
+        );
+        let r = solve_multiple(
+            &p.clone().with_objective(cauchy)?,
+            &MultipleSettings::default(),
+        )?;
+        let keep = r.residuals.map(|x| x.inlier).unwrap_or_default();
+        println!(
+            "{} of {} edges inliers",
+            keep.iter().filter(|k| **k).count(),
+            keep.len()
+        );
+        p.edge_subset(&keep)?
+    } else if outliers {
         let keep: Vec<bool> = p
             .edges()
             .iter()
