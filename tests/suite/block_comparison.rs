@@ -90,3 +90,23 @@ fn the_default_keeps_the_block_comparison_off_graphs_that_factor_cheaply() {
         c.details.ladder
     );
 }
+
+/// Its subgraph's choice and analysis come before any prediction: refused, with the reason,
+/// when even that work would pass the time left.
+#[test]
+fn the_block_comparison_is_refused_when_its_work_passes_the_time_left() {
+    let (p, _) = SyntheticAnisotropic::two_view_like(300, 1500, 0.0).generate();
+    let s = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    let mut settings = block_only();
+    settings.budget.max_seconds = Some(1e-6);
+    let c = certify_multiple(&p, &s.rotations, &settings).unwrap();
+    assert!(!proved_by_block(&c), "{:?}", c.details.ladder);
+    assert!(
+        c.details
+            .ladder
+            .iter()
+            .any(|a| a.rung == Proof::BlockComparison && matches!(a.outcome, Outcome::Refused(_))),
+        "{:?}",
+        c.details.ladder
+    );
+}

@@ -125,6 +125,18 @@ impl BlockFamily {
                 }));
             }
         }
+        // the choice of a subgraph and its analysis are work before any prediction: refused
+        // when even the per-edge work would pass the time left
+        let work = SECONDS_PER_EDGE * cx.problem.num_edges() as f64;
+        if let Some(left) = cx.deadline.left()
+            && work > left
+        {
+            return Ok(Err(Refusal::OverBudget {
+                reason: format!(
+                    "its per-edge work alone is predicted at {work:.1} s, {left:.1} s are left"
+                ),
+            }));
+        }
         self.pending = self.next_analysis(cx, rotations)?;
         Ok(match &self.pending {
             Some(a) => predict(cx.settings, a).map(|p| p.with_success(self.chance())),
