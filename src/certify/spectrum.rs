@@ -162,13 +162,7 @@ pub fn dense_eigenvalues(m: &DMatrix<f64>) -> Vec<f64> {
 
 fn dense(s: SparseColMatRef<'_, usize, f64>, k: usize) -> SpectrumEstimate {
     let n = s.nrows();
-    let mut a = DMatrix::<f64>::zeros(n, n);
-    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
-    for c in 0..n {
-        for p in cp[c]..cp[c + 1] {
-            a[(ri[p], c)] += val[p];
-        }
-    }
+    let a = crate::linalg::cholesky::to_dense(s);
     let a = (&a + a.transpose()) * 0.5;
     let eig = SymmetricEigen::new(a.clone());
     let mut idx: Vec<usize> = (0..n).collect();

@@ -79,6 +79,19 @@ pub fn gamma(k: usize) -> f64 {
     }
 }
 
+/// The dense matrix of a sparse one (duplicate entries summed): for eigenvalues of small
+/// matrices, as estimates or as the independent reference of tests.
+pub(crate) fn to_dense(a: SparseColMatRef<'_, usize, f64>) -> nalgebra::DMatrix<f64> {
+    let mut m = nalgebra::DMatrix::zeros(a.nrows(), a.ncols());
+    let (cp, ri, v) = (a.col_ptr(), a.row_idx(), a.val());
+    for c in 0..a.ncols() {
+        for k in cp[c]..cp[c + 1] {
+            m[(ri[k], c)] += v[k];
+        }
+    }
+    m
+}
+
 /// `y = A x` for a sparse matrix with both triangles stored (column-major traversal).
 pub fn sparse_matvec(a: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64]) {
     y.iter_mut().for_each(|v| *v = 0.0);

@@ -443,20 +443,14 @@ mod tests {
     use crate::multiple::{Initialisation, MultipleSettings, MultipleSolution, solve_multiple};
     use crate::so3::Rotation;
     use crate::so3::random_rotation;
-    use nalgebra::{DMatrix, SymmetricEigen};
+    use nalgebra::SymmetricEigen;
     use rand::SeedableRng;
     use rand::rngs::StdRng;
 
     fn dense_lambda_min(s: &SparseColMat<usize, f64>) -> f64 {
-        let n = s.nrows();
-        let mut m = DMatrix::zeros(n, n);
-        let (cp, ri, v) = (s.col_ptr(), s.row_idx(), s.val());
-        for c in 0..n {
-            for k in cp[c]..cp[c + 1] {
-                m[(ri[k], c)] = v[k];
-            }
-        }
-        SymmetricEigen::new(m).eigenvalues.min()
+        SymmetricEigen::new(crate::linalg::cholesky::to_dense(s.as_ref()))
+            .eigenvalues
+            .min()
     }
 
     /// [D15] against independent references, on small instances where they are cheap: the

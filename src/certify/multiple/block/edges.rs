@@ -134,10 +134,7 @@ fn second_order_bound(
     cover: [&Matrix3<f64>; 2],
 ) -> Option<EdgeBound> {
     let u = UNIT_ROUNDOFF;
-    if s.symmetric_eigenvalues().max().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-        return None;
-    }
-    let (b_inv, b) = floored_inverse(s, cover);
+    let (b_inv, b) = floored_inverse(s, cover)?;
     let (w, z) = if dropped {
         (Matrix3::zeros(), k * b_inv * k.transpose())
     } else {
@@ -193,16 +190,23 @@ struct EdgeBound {
     iso: f64,
 }
 
-/// `(B^{-1}, B)` for `B = S` with its eigenvalues floored at `EIGENVALUE_FLOOR` of the largest,
+/// `(B^{-1}, B)` (`None` when `S` has no positive eigenvalue) for `B = S` with its eigenvalues floored at `EIGENVALUE_FLOOR` of the largest,
 /// but in each eigenvector `v` at most `COVER_FRACTION` of `v^T N v` at either endpoint, `N`
 /// the endpoint's kept strength per edge (`sum_e S_e / deg`): a floor raises `B` above `S`
 /// and so makes the kept `S - beta B` negative along `v`, which other edges must cover (a
 /// node of degree 2 whose two edges share a weak direction could not: one negative pivot too
 /// many on 3000- and 10^4-camera graphs). Only a choice: the check of [`edge_bound`] proves
 /// whatever it gives.
-fn floored_inverse(s: &Matrix3<f64>, cover: [&Matrix3<f64>; 2]) -> (Matrix3<f64>, Matrix3<f64>) {
+fn floored_inverse(
+    s: &Matrix3<f64>,
+    cover: [&Matrix3<f64>; 2],
+) -> Option<(Matrix3<f64>, Matrix3<f64>)> {
     let eig = SymmetricEigen::new(*s);
-    let top = eig.eigenvalues.max().max(0.0);
+    let top = eig.eigenvalues.max();
+    // no positive eigenvalue: nothing to keep (NaN included)
+    if top.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
     let floor = (EIGENVALUE_FLOOR * top).max(f64::MIN_POSITIVE);
     let v = eig.eigenvectors;
     let d = Vector3::from_fn(|c, _| {
@@ -217,7 +221,7 @@ fn floored_inverse(s: &Matrix3<f64>, cover: [&Matrix3<f64>; 2]) -> (Matrix3<f64>
     });
     let b = v * Matrix3::from_diagonal(&d) * v.transpose();
     let b_inv = v * Matrix3::from_diagonal(&d.map(|x| 1.0 / x)) * v.transpose();
-    (symmetrize(&b_inv), symmetrize(&b))
+    Some((symmetrize(&b_inv), symmetrize(&b)))
 }
 
 /// Step 2 for every edge (`keep[k]`: edge `k` is in `C`), then the diagonal blocks' rest

@@ -111,19 +111,10 @@ impl BlockFamily {
                 reason: "the estimate's rotations are not known".into(),
             }));
         };
-        if self.next == 0 {
-            // the 3n factor of the whole graph is about 9 x its scalar one (the same
-            // elimination in 3 x 3 blocks), whose ordering costs a ninth
-            let above = cx.settings.dual.block_comparison_above;
-            if let Ok(a) = ScalarAnalysis::new(cx.problem, above / 9)? {
-                return Ok(Err(Refusal::NotApplicable {
-                    reason: format!(
-                        "the whole graph's 3n factor (about {:.1e} values) is small enough to \
-                         factorise directly",
-                        9.0 * a.factor_len() as f64
-                    ),
-                }));
-            }
+        if self.next == 0
+            && let Some(refusal) = factors_directly(cx)?
+        {
+            return Ok(Err(refusal));
         }
         // the choice of a subgraph and its analysis are work before any prediction: refused
         // when even the per-edge work would pass the time left
@@ -180,6 +171,30 @@ impl BlockFamily {
         }
         Ok(None)
     }
+}
+
+/// The refusal of the rung when the whole graph's `3n` factor is at most
+/// `DualSettings::block_comparison_above` values: certainly so when even a dense lower
+/// triangle of `n` blocks is (no ordering needed: graphs of up to about 3300 nodes at the
+/// default, the shared SLAM files among them), else when 9 times its scalar factor is (the
+/// same elimination in `3 x 3` blocks, whose ordering costs a ninth).
+fn factors_directly(cx: &Check<'_>) -> Result<Option<Refusal>> {
+    let above = cx.settings.dual.block_comparison_above;
+    let n = cx.problem.num_rotations() as f64;
+    let values = if 4.5 * n * (n + 1.0) <= above as f64 {
+        4.5 * n * (n + 1.0)
+    } else {
+        match ScalarAnalysis::new(cx.problem, above / 9)? {
+            Ok(a) => 9.0 * a.factor_len() as f64,
+            Err(_) => return Ok(None),
+        }
+    };
+    Ok(Some(Refusal::NotApplicable {
+        reason: format!(
+            "the whole graph's 3n factor (at most about {values:.1e} values) is small enough to \
+             factorise directly"
+        ),
+    }))
 }
 
 /// The budget's verdict on one subgraph's factorisation, and its predicted time.

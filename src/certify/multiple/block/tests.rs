@@ -38,14 +38,7 @@ fn instance(k: u64) -> (MultipleProblem, Vec<Rotation>) {
 }
 
 fn dense(m: &faer::sparse::SparseColMat<usize, f64>) -> DMatrix<f64> {
-    let mut d = DMatrix::zeros(m.nrows(), m.ncols());
-    for c in 0..m.ncols() {
-        let range = m.col_ptr()[c]..m.col_ptr()[c + 1];
-        for idx in range {
-            d[(m.row_idx()[idx], c)] += m.val()[idx];
-        }
-    }
-    d
+    crate::linalg::cholesky::to_dense(m.as_ref())
 }
 
 fn lambda_min(m: &DMatrix<f64>) -> f64 {

@@ -7,19 +7,13 @@ use super::*;
 use crate::certify::multiple::multipliers::{certificate_matrix, multipliers};
 use crate::multiple::synthetic::SyntheticGraph;
 use crate::multiple::{MultipleSettings, solve_multiple};
-use nalgebra::{DMatrix, SymmetricEigen, Vector3};
+use nalgebra::{SymmetricEigen, Vector3};
 
 fn dense_lambda_min(p: &MultipleProblem, lambdas: &[Matrix3<f64>]) -> f64 {
     let s = certificate_matrix(p, lambdas).unwrap();
-    let n3 = s.nrows();
-    let mut m = DMatrix::zeros(n3, n3);
-    let (cp, ri, v) = (s.col_ptr(), s.row_idx(), s.val());
-    for c in 0..n3 {
-        for k in cp[c]..cp[c + 1] {
-            m[(ri[k], c)] = v[k];
-        }
-    }
-    SymmetricEigen::new(m).eigenvalues.min()
+    SymmetricEigen::new(crate::linalg::cholesky::to_dense(s.as_ref()))
+        .eigenvalues
+        .min()
 }
 
 /// The split analysis of `p` with the shape `(parts, copies, min_degree)`, unbounded.
