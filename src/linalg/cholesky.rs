@@ -228,6 +228,11 @@ pub(crate) fn for_each_factor_entry(
 
 /// Maximum absolute row sum `||A||_inf` (for a symmetric matrix an upper bound on `||A||_2`).
 pub fn inf_norm(a: SparseColMatRef<'_, usize, f64>) -> f64 {
+    abs_row_sums(a).into_iter().fold(0.0, f64::max)
+}
+
+/// The absolute row sums `sum_j |A_ij|` of a sparse matrix (its stored entries).
+fn abs_row_sums(a: SparseColMatRef<'_, usize, f64>) -> Vec<f64> {
     let mut rows = vec![0.0f64; a.nrows()];
     let cp = a.col_ptr();
     let ri = a.row_idx();
@@ -237,7 +242,7 @@ pub fn inf_norm(a: SparseColMatRef<'_, usize, f64>) -> f64 {
             rows[ri[k]] += val[k].abs();
         }
     }
-    rows.into_iter().fold(0.0, f64::max)
+    rows
 }
 
 /// Per row of a sparse matrix (both triangles stored): stored entries, diagonal, and the sum of
@@ -310,6 +315,11 @@ pub struct PositiveFactor<'a> {
     pub shift: f64,
     /// Rigorous margin: `lambda_min(S_exact) >= -shift - margin` `[D6]`.
     pub margin: f64,
+    /// Rigorous margin by rows `[D6]` (3): `S_exact >= -shift I - D` for a nonnegative
+    /// diagonal `D` with `tr(D) <= margin_sum` (and every `D_rr <= margin`). A bound
+    /// `sum tr(Lambda_i) - 3n shift - margin_sum` then holds where one row (a hub) would
+    /// make `3n margin` large.
+    pub margin_sum: f64,
     /// Smallest diagonal entry of the computed factor (squared: the smallest pivot).
     pub min_pivot: f64,
 }
@@ -558,12 +568,13 @@ impl ShiftedCholesky {
         for (&k, &d) in self.diag_pos.iter().zip(&diagonal) {
             val[k] = d;
         }
-        let (values, margin, min_pivot) = result?;
+        let (values, margins, min_pivot) = result?;
         Some(PositiveFactor {
             owner: self,
             values,
             shift,
-            margin,
+            margin: margins.max,
+            margin_sum: margins.sum,
             min_pivot,
         })
     }
@@ -571,7 +582,7 @@ impl ShiftedCholesky {
     /// The numeric factorisation of the (already shifted) matrix held in `self.s`, with the
     /// margin `[D6]`: `(factor values, margin, smallest pivot)`, or `None` as in
     /// [`ShiftedCholesky::factor`].
-    fn factor_shifted(&self, margin_target: f64) -> Option<(Vec<f64>, f64, f64)> {
+    fn factor_shifted(&self, margin_target: f64) -> Option<(Vec<f64>, Margins, f64)> {
         let mut values = vec![0.0f64; self.symbolic.len_val()];
         let par = self.parallelism();
         let req = self
@@ -599,15 +610,24 @@ impl ShiftedCholesky {
         let (backward, min_pivot) = self.backward_error_bound(&values, margin_target / 2.0);
         // (b) forming error: every entry of S + shift I is the rounded result of at most
         // entry_terms + 1 operations on exact data, so |E_1| <= gamma(entry_terms + 1) |S + shift I|
-        // entrywise and ||E_1||_2 <= gamma(...) || |S + shift I| ||_inf.
-        let forming = gamma(self.entry_terms + 2) * inf_norm(self.s.as_ref());
+        // entrywise and ||E_1||_2 <= gamma(...) || |S + shift I| ||_inf; by rows (3), the row
+        // sums of that symmetric nonnegative majorant.
+        let rows = abs_row_sums(self.s.as_ref());
+        let g = gamma(self.entry_terms + 2);
+        let forming = Margins {
+            max: g * rows.iter().copied().fold(0.0, f64::max),
+            sum: g * rows.iter().sum::<f64>(),
+        };
         // Factor 2 covers the rounding in evaluating these bounds themselves (they are sums of
         // nonnegative terms of the same order, each computed with relative error << 1).
-        let margin = 2.0 * (backward + forming);
-        if !margin.is_finite() {
+        let margins = Margins {
+            max: 2.0 * (backward.max + forming.max),
+            sum: 2.0 * (backward.sum + forming.sum),
+        };
+        if !(margins.max.is_finite() && margins.sum.is_finite()) {
             return None;
         }
-        Some((values, margin, min_pivot))
+        Some((values, margins, min_pivot))
     }
 
     /// `[D6]` part (a). Two rigorous bounds on `||A - P^T L L^T P||_2` (`L` the computed
@@ -623,13 +643,22 @@ impl ShiftedCholesky {
     ///    `||R||_2 <= ||R||_inf`, plus the evaluation error `2 gamma(k+2)^2 || |L||L|^T ||_inf`
     ///    (Ogita-Rump-Oishi, Dot2), inflated by 1%.
     ///
-    /// Returns (bound, smallest pivot).
-    fn backward_error_bound(&self, values: &[f64], target: f64) -> (f64, f64) {
+    /// Both are entrywise bounds by symmetric nonnegative matrices, so their row sums also
+    /// bound `dA` by rows (`[D6]` (3): `x^T dA x <= sum_r b_r x_r^2` for row sums `b_r`): the
+    /// smaller of the two row sums, row by row, gives [`Margins::sum`].
+    ///
+    /// Returns (bounds, smallest pivot).
+    fn backward_error_bound(&self, values: &[f64], target: f64) -> (Margins, f64) {
         let l = self.factor_norms(values);
-        let higham = gamma(l.k + 1) * l.llt_norm;
+        let g1 = gamma(l.k + 1);
+        let llt_norm = l.rowsum.iter().copied().fold(0.0, f64::max);
+        let higham = Margins {
+            max: g1 * llt_norm,
+            sum: g1 * l.rowsum.iter().sum::<f64>(),
+        };
         if self.symbolic.len_val() > RESIDUAL_FACTOR_LIMIT
             || self.multiply_adds() > RESIDUAL_MAX_MULTIPLY_ADDS
-            || higham <= target
+            || higham.max <= target
         {
             return (higham, l.min_pivot);
         }
@@ -638,8 +667,17 @@ impl ShiftedCholesky {
             return (higham, l.min_pivot);
         };
         let g = gamma(l.k + 2);
-        let residual = 1.01 * abs_rowsum.into_iter().fold(0.0, f64::max) + 2.0 * g * g * l.llt_norm;
-        (higham.min(residual), l.min_pivot)
+        let by_row = |r: usize| 1.01 * abs_rowsum[r] + 2.0 * g * g * l.rowsum[r];
+        let residual_max =
+            1.01 * abs_rowsum.iter().copied().fold(0.0, f64::max) + 2.0 * g * g * llt_norm;
+        let sum = (0..abs_rowsum.len())
+            .map(|r| by_row(r).min(g1 * l.rowsum[r]))
+            .sum::<f64>();
+        let margins = Margins {
+            max: higham.max.min(residual_max),
+            sum: higham.sum.min(sum),
+        };
+        (margins, l.min_pivot)
     }
 
     /// What Higham's bound needs of the factor `L` (`values`): `|| |L| |L|^T ||_inf`, the largest
@@ -664,7 +702,7 @@ impl ShiftedCholesky {
         });
         FactorNorms {
             k: rowcount.iter().copied().max().unwrap_or(0),
-            llt_norm: rowsum.into_iter().fold(0.0, f64::max),
+            rowsum,
             min_pivot,
         }
     }
@@ -767,8 +805,17 @@ impl ShiftedCholesky {
 /// `k`, `|| |L| |L|^T ||_inf` and the smallest pivot `min L_ii^2`.
 struct FactorNorms {
     k: usize,
-    llt_norm: f64,
+    /// The row sums of `|L| |L|^T`.
+    rowsum: Vec<f64>,
     min_pivot: f64,
+}
+
+/// A floating-point margin `[D6]`: the largest per-row bound (a bound on the spectral norm)
+/// and the sum of the per-row bounds (a bound on the trace of a diagonal majorant, (3)).
+#[derive(Debug, Clone, Copy)]
+struct Margins {
+    max: f64,
+    sum: f64,
 }
 
 impl PositiveFactor<'_> {

@@ -6,7 +6,7 @@
 
 use super::multipliers::{
     FirstOrder, GaugeTerms, TraceBound, certificate_matrix, entry_terms, forming_margin,
-    gauge_terms,
+    forming_margins, gauge_terms,
 };
 use super::scalar::ScalarAnalysis;
 use super::verified::VerifiedBound;
@@ -72,6 +72,9 @@ pub(crate) struct Check<'a> {
     /// The further forming error of anisotropic blocks `[A3]` (`forming_margin`; 0 for
     /// isotropic data): subtracted from every proven `lambda_min`.
     pub forming: f64,
+    /// The same by rows (`[D6]` (3)): three times the sum of the per-node margins of `[A3]`,
+    /// the trace of a diagonal majorant of that error (0 for isotropic data).
+    pub forming_sum: f64,
     /// The gap the verdict allows at the cost: the tolerance.
     pub gap: f64,
     pub settings: &'a CertifySettings,
@@ -165,6 +168,8 @@ impl<'a> Check<'a> {
             norm,
             terms: entry_terms(problem),
             forming: forming_margin(problem, lambdas),
+            forming_sum: forming_margins(problem, lambdas)
+                .map_or(0.0, |m| 3.0 * m.iter().sum::<f64>()),
             gap: settings
                 .tolerance
                 .resolve(problem.min_weight())

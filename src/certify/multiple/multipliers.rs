@@ -282,9 +282,17 @@ pub(super) fn entry_terms(problem: &MultipleProblem) -> usize {
 /// `2M = tr(H) I - 2H`, `max_i (48 gamma(d_i + 12) T_i + 4 u max|Lambda_i|)` with `T_i` the sum
 /// of `tr(H)` over the `d_i` edges at node `i`. Subtracted from every proven `lambda_min(S)`.
 pub(super) fn forming_margin(problem: &MultipleProblem, lambdas: &[Matrix3<f64>]) -> f64 {
-    let Some(info) = problem.information() else {
-        return 0.0;
-    };
+    forming_margins(problem, lambdas).map_or(0.0, |m| m.iter().copied().fold(0.0, f64::max))
+}
+
+/// The per-node forming margins of `[A3]` (each bounds the row sums of the forming error in
+/// that node's three rows, so their sum times 3 bounds the trace of a diagonal majorant,
+/// `[D6]` (3)); `None` for isotropic problems (no further forming error).
+pub(super) fn forming_margins(
+    problem: &MultipleProblem,
+    lambdas: &[Matrix3<f64>],
+) -> Option<Vec<f64>> {
+    let info = problem.information()?;
     let n = problem.num_rotations();
     let mut degree = vec![0usize; n];
     let mut trace = vec![0.0f64; n];
@@ -295,13 +303,13 @@ pub(super) fn forming_margin(problem: &MultipleProblem, lambdas: &[Matrix3<f64>]
             trace[v] += t;
         }
     }
-    (0..n)
+    let margins = (0..n)
         .map(|i| {
             let lmax = lambdas.get(i).map_or(0.0, |l| l.amax());
-            48.0 * gamma(degree[i] + 12) * trace[i] + 4.0 * UNIT_ROUNDOFF * lmax
+            (48.0 * gamma(degree[i] + 12) * trace[i] + 4.0 * UNIT_ROUNDOFF * lmax) * (1.0 + 1e-3)
         })
-        .fold(0.0, f64::max)
-        * (1.0 + 1e-3)
+        .collect();
+    Some(margins)
 }
 
 /// Column `a` of the gauge directions `Y = [R_1; ...; R_n]` (length `3n`).

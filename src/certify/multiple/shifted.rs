@@ -78,6 +78,24 @@ impl<'a> Rung<Check<'a>> for ShiftedProof {
     }
 }
 
+/// A shift that factorised, with its margins ([`PositiveFactor`]).
+#[derive(Debug, Clone, Copy)]
+struct Verified {
+    shift: f64,
+    margin: f64,
+    margin_sum: f64,
+}
+
+impl Verified {
+    fn of(f: &PositiveFactor<'_>) -> Self {
+        Verified {
+            shift: f.shift,
+            margin: f.margin,
+            margin_sum: f.margin_sum,
+        }
+    }
+}
+
 /// The first shift, and when it fails the search: a verified bound, or why not.
 fn verify_shifted(
     cx: &Check<'_>,
@@ -99,7 +117,7 @@ fn verify_shifted(
         ch.factor(delta0, margin_target)
     });
     if let Some(f) = first.flatten() {
-        best = Some((f.shift, f.margin));
+        best = Some(Verified::of(&f));
         if cx.settings.dual.estimate_when_verified {
             let mut r = shift_invert(&f, cx.s.nrows(), None, &lanczos(cx, 40));
             notes.lanczos_iterations += r.iterations;
@@ -110,10 +128,14 @@ fn verify_shifted(
         // far from a critical point the bound is weak whatever the shift: no search
         best = search(cx, ch, delta0, margin_target, &mut notes);
     }
-    let bound = best.map(|(shift, margin)| {
-        let margin = margin + cx.forming;
-        let mut b = cx.bound_from_mu(-shift - margin, Proof::ShiftedCholesky);
-        b.shift = Some(shift);
+    let bound = best.map(|v| {
+        let margin = v.margin + cx.forming;
+        let mut b = cx.bound_from_mu(-v.shift - margin, Proof::ShiftedCholesky);
+        // [D6] (3): the margins by rows, S >= -shift I - D with tr(D) <= margin_sum + forming_sum
+        let n3 = cx.s.nrows() as f64;
+        let by_rows = n3 * v.shift + v.margin_sum + cx.forming_sum;
+        b.lower_bound = b.lower_bound.max(cx.trace_bound().with_deficit(by_rows));
+        b.shift = Some(v.shift);
         b.fp_margin = margin;
         b.factor_nonzeros = ch.factor_len();
         b
@@ -237,14 +259,14 @@ fn first_estimate(
 
 /// Estimate `lambda_min(S)` by Lanczos on `S`, then shifts above it `4^j` steps apart until one
 /// factorisation succeeds (refining the estimate by shift-invert from there), then one tighter
-/// shift just above the refined estimate. Returns the best verified `(shift, margin)`.
+/// shift just above the refined estimate. Returns the best verified shift with its margins.
 fn search(
     cx: &Check<'_>,
     ch: &mut ShiftedCholesky,
     delta0: f64,
     margin_target: f64,
     notes: &mut Notes,
-) -> Option<(f64, f64)> {
+) -> Option<Verified> {
     let lz = lanczos(cx, usize::MAX);
     let hinted = cx.hint.is_some();
     let mut r = first_estimate(cx, &lz, notes)?;
@@ -266,7 +288,7 @@ fn search(
             }
             continue;
         };
-        best = Some((f.shift, f.margin));
+        best = Some(Verified::of(&f));
         if hinted || clearly_negative(&r, delta0) {
             // a hint is already the estimate a shift-invert run would refine, and the shift
             // above it the tight one; and when S is indefinite by far more than the estimate's
@@ -282,8 +304,8 @@ fn search(
         }
         break;
     }
-    if let Some((shift, _)) = best.filter(|_| !hinted && !clearly_negative(&r, delta0)) {
-        best = tighten(ch, &r, shift, delta0, margin_target, &mut tries).or(best);
+    if let Some(v) = best.filter(|_| !hinted && !clearly_negative(&r, delta0)) {
+        best = tighten(ch, &r, v.shift, delta0, margin_target, &mut tries).or(best);
     }
     notes.factorizations += tries.tried - 1;
     notes.estimate = Some(r);
@@ -314,7 +336,7 @@ fn tighten(
     delta0: f64,
     margin_target: f64,
     tries: &mut Tries,
-) -> Option<(f64, f64)> {
+) -> Option<Verified> {
     let mut margin = delta0.max(1e-9 * r.value.abs()).max(r.residual);
     loop {
         let sigma = (-r.value).max(0.0) + margin;
@@ -322,7 +344,7 @@ fn tighten(
             return None;
         }
         if let Some(f) = ch.factor(sigma, margin_target) {
-            return Some((f.shift, f.margin));
+            return Some(Verified::of(&f));
         }
         margin *= 10.0;
     }
