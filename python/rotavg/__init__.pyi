@@ -284,6 +284,7 @@ def average_multiple(
     world_down: Optional[Sequence[float]] = None,
     init_method: str = "spectral",
     inlier_threshold: Optional[float] = None,
+    gravity_weight: Optional[float] = None,
 ) -> Result:
     """Absolute rotations from relative ones (rel[k] @ R_i = R_j), certified."""
 
@@ -311,6 +312,7 @@ def average_multiple(
     world_down: Optional[Sequence[float]] = None,
     init_method: str = "spectral",
     inlier_threshold: Optional[float] = None,
+    gravity_weight: Optional[float] = None,
 ) -> Result:
     """A graph from ``read_graph``, solved as ``rotavg multiple FILE`` solves it."""
 
@@ -336,6 +338,7 @@ def certify_multiple(
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
     nearest_rotations: bool = False,
+    gravity_weight: Optional[float] = None,
 ) -> Result:
     """Certify an estimate from any other solver, without changing it."""
 
@@ -360,6 +363,7 @@ def certify_multiple(
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
     nearest_rotations: bool = False,
+    gravity_weight: Optional[float] = None,
 ) -> Result:
     """Certify an estimate for a graph from ``read_graph``."""
 

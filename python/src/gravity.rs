@@ -1,4 +1,5 @@
-//! Gravity priors for `average_multiple` / `certify_multiple` (`gravity=`, `world_down=`): an
+//! Gravity priors for `average_multiple` / `certify_multiple` (`gravity=`, `world_down=`,
+//! `gravity_weight=`: soft priors of that weight instead of constraints): an
 //! `(n, 3)` array (a row of NaN: no prior for that image) or the path of a priors file, read
 //! as `rotavg multiple --gravity` reads it.
 
@@ -28,27 +29,19 @@ impl GravityInput {
         Ok(Some(GravityInput::Rows(rows3(obj, "gravity")?)))
     }
 
-    /// The gravity problem of `graph` (the nodes `selection` kept), and the warning for file
-    /// entries no node matches.
+    /// The gravity problem of `graph` (the nodes `selection` kept), soft of weight `weight`
+    /// when given, and the warning for file entries no node matches.
     pub fn problem(
         self,
         graph: &LoadedGraph,
         selection: &ComponentSelection,
         world_down: Option<[f64; 3]>,
+        weight: Option<f64>,
     ) -> rotavg::Result<(GravityProblem, Vec<Warning>)> {
         let (priors, warnings) = match self {
             GravityInput::Path(p) => {
                 let read = rotavg::io::gravity::read_gravity(&p, graph, world_down)?;
-                let w = (read.unmatched > 0).then(|| {
-                    Warning::new(
-                        "gravity_unmatched",
-                        format!(
-                            "{p}: {} gravity entries match no node of the graph (not used)",
-                            read.unmatched
-                        ),
-                    )
-                    .with_count(read.unmatched)
-                });
+                let w = read.unmatched_warning(&p);
                 (read.priors, w.into_iter().collect())
             }
             GravityInput::Rows(rows) => {
@@ -65,6 +58,7 @@ impl GravityInput {
                 (priors, Vec::new())
             }
         };
+        let priors = priors.soft_if(weight)?;
         Ok((
             GravityProblem::new(graph.problem.clone(), priors)?,
             warnings,

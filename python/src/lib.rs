@@ -471,6 +471,10 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         ``to_dict()["pipeline"]["gravity"]`` has the priors' check.
 ///     world_down: the world's down direction the priors refer to (default ``(0, 0, 1)``,
 ///         the file's, or COLMAP's ``(0, 1, 0)``).
+///     gravity_weight: the priors as soft terms of this weight instead of constraints
+///         (``rotavg multiple --gravity-weight``): each adds ``2 w ||R_i world_down - g_i||^2``
+///         to the chordal cost, like an edge of weight ``w`` for a tilt error; certified with
+///         the view graph (every image with a prior or some).
 ///     init_method: the local solver's start without ``init``: ``"spectral"`` (default) or
 ///         ``"tree"`` (the maximum-weight spanning tree), as ``--init-method``.
 ///     inlier_threshold: robust losses: an edge is an inlier iff its residual angle at the
@@ -486,7 +490,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
 ///         bad weights, unknown names. rotavg.DisconnectedError: a disconnected graph.
 #[pyfunction]
-#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None, rotation_tolerance=1e-5, gravity=None, world_down=None, init_method="spectral", inlier_threshold=None))]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None, rotation_tolerance=1e-5, gravity=None, world_down=None, init_method="spectral", inlier_threshold=None, gravity_weight=None))]
 #[allow(clippy::too_many_arguments)]
 fn average_multiple_py(
     py: Python<'_>,
@@ -511,6 +515,7 @@ fn average_multiple_py(
     world_down: Option<[f64; 3]>,
     init_method: &str,
     inlier_threshold: Option<f64>,
+    gravity_weight: Option<f64>,
 ) -> PyResult<RunResult> {
     let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
     let init_method: Initialisation = parse_named(init_method, "init_method")?;
@@ -561,7 +566,8 @@ fn average_multiple_py(
         };
         let (result, warnings) = match gravity {
             Some(g) => {
-                let (p, w) = g.problem(&input.graph, &input.selection, world_down)?;
+                let (p, w) =
+                    g.problem(&input.graph, &input.selection, world_down, gravity_weight)?;
                 (rotavg::pipeline::average_with_gravity(&p, &settings)?, w)
             }
             None => (average_multiple(&problem, &settings)?, Vec::new()),
@@ -599,9 +605,10 @@ fn average_multiple_py(
 ///         edges).
 ///     loss_threshold: the inlier threshold in degrees unless ``inlier_threshold`` is given.
 ///     inlier_threshold: the inlier threshold in degrees.
-///     gravity, world_down: gravity priors as for ``average_multiple``: the estimate is then
-///         certified for the chordal L2 problem with the priors held (it must satisfy them to
-///         1e-6 rad); not with ``loss``.
+///     gravity, world_down, gravity_weight: gravity priors as for ``average_multiple``: the
+///         estimate is then certified for the chordal L2 problem with the priors held (it must
+///         satisfy them to 1e-6 rad) or, with ``gravity_weight``, with the priors' soft terms;
+///         not with ``loss``.
 ///     nearest_rotations: certify the nearest rotations of an estimate whose matrices are
 ///         rotations only approximately (beyond ``rotation_tolerance``) or all reflections
 ///         (det -1, as a relaxation's rounding may return: negated first, the chordal cost
@@ -616,7 +623,7 @@ fn average_multiple_py(
 ///     rotavg.Error: as ``average_multiple``, an estimate of the wrong size, and (a path) a node
 ///         the file lacks or a file that cannot be read (``rotavg.ParseError``, naming the file).
 #[pyfunction]
-#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, information=None, loss="chordal", loss_threshold=5.0, inlier_threshold=None, rotation_tolerance=1e-5, gravity=None, world_down=None, nearest_rotations=false))]
+#[pyo3(name = "certify_multiple", signature = (n, i=None, j=None, rel=None, estimate=None, weights=None, *, certify="auto", max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, information=None, loss="chordal", loss_threshold=5.0, inlier_threshold=None, rotation_tolerance=1e-5, gravity=None, world_down=None, nearest_rotations=false, gravity_weight=None))]
 #[allow(clippy::too_many_arguments)]
 fn certify_multiple_py(
     py: Python<'_>,
@@ -639,6 +646,7 @@ fn certify_multiple_py(
     gravity: Option<&Bound<'_, PyAny>>,
     world_down: Option<[f64; 3]>,
     nearest_rotations: bool,
+    gravity_weight: Option<f64>,
 ) -> PyResult<RunResult> {
     let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
     let graph = GraphInput::copy(n, i, j, rel, weights, information)?.within(tolerance);
@@ -697,7 +705,8 @@ fn certify_multiple_py(
                     reason: "gravity priors are certified on all edges, not with loss".into(),
                 });
             }
-            let (p, warnings) = g.problem(&input.graph, &input.selection, world_down)?;
+            let (p, warnings) =
+                g.problem(&input.graph, &input.selection, world_down, gravity_weight)?;
             let priors = p.priors().clone();
             let mut r = CertifyReport::certify_with_gravity(
                 &input.name,

@@ -2,6 +2,8 @@
 --gravity`` on the committed example, priors as arrays (NaN rows: none) held by the estimate,
 ``certify_multiple`` of the gravity problem, and the errors."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -62,3 +64,36 @@ def test_errors():
         rotavg.average_multiple(graph, gravity=np.full((200, 3), np.nan))
     with pytest.raises(rotavg.Error, match="norm"):
         rotavg.average_multiple(graph, gravity=np.zeros((200, 3)))
+
+
+def test_soft_priors_match_the_command_line_and_are_certified(cli):
+    graph = rotavg.read_graph(EXAMPLE / "graph.json")
+    ours = rotavg.average_multiple(graph, gravity=EXAMPLE / "gravity.txt", gravity_weight=16.0)
+    theirs = cli(
+        "multiple", EXAMPLE / "graph.json", "--gravity", EXAMPLE / "gravity.txt",
+        "--gravity-weight", "16",
+    )
+    assert untimed(ours.to_dict()) == untimed(theirs)
+    assert ours.verdict == "certified"
+    assert ours.to_dict()["verdict"]["problem"]["kind"] == "chordal_l2_gravity_soft"
+    # the soft cost, written out here: the graph's chordal cost plus 2 w ||R_i e_3 - g_i||^2
+    est = np.asarray(ours.estimate)
+    d = ours.to_dict()
+    edges = json.loads((EXAMPLE / "graph.json").read_text())["edges"]
+    graph_cost = sum(
+        e["weight"] * np.sum((est[e["j"]] - np.asarray(e["rotation"]) @ est[e["i"]]) ** 2)
+        for e in edges
+    )
+    rows = np.loadtxt(EXAMPLE / "gravity.txt", comments="#")
+    prior = sum(
+        2.0 * 16.0 * np.sum((est[int(r[0])][:, 2] - r[1:] / np.linalg.norm(r[1:])) ** 2)
+        for r in rows
+    )
+    assert abs(d["cost"] - (graph_cost + prior)) <= 1e-9 * d["cost"]
+    c = rotavg.certify_multiple(
+        graph, estimate=est, gravity=EXAMPLE / "gravity.txt", gravity_weight=16.0
+    )
+    assert c.verdict == "certified"
+    assert abs(c.to_dict()["cost"] - d["cost"]) <= 1e-9 * d["cost"]
+    with pytest.raises(rotavg.Error, match="weight"):
+        rotavg.average_multiple(graph, gravity=EXAMPLE / "gravity.txt", gravity_weight=-1.0)

@@ -52,6 +52,13 @@ pub enum CertifiedProblemKind {
     /// [`CertifiedProblemKind::ChordalL2Inliers`] with the gravity priors of the component's
     /// images held as constraints (a robust solve with gravity priors).
     ChordalL2GravityInliers,
+    /// Chordal L2 multiple rotation averaging on every edge plus the gravity priors as soft
+    /// terms `2 w ||R_i world_down - g_i||^2` (`paper-notes/gravity.md` `[G10]`): the cost
+    /// stated is the view graph's plus the priors'.
+    ChordalL2GravitySoft,
+    /// [`CertifiedProblemKind::ChordalL2Inliers`] plus the soft gravity priors of the
+    /// component's images (a robust solve with soft priors).
+    ChordalL2GravitySoftInliers,
     /// The joint chordal L2 cost of a two-sensor rig: the frames on the reference sensor's view
     /// graph and `S R_i` on the other's (`rotavg rig`, `paper-notes/conjugate.md` `[H17]`).
     /// Named in a rig report's verdict; `num_edges` counts both graphs' edges.
@@ -111,6 +118,17 @@ impl fmt::Display for CertifiedProblem {
             CertifiedProblemKind::ChordalL2Gravity => write!(
                 f,
                 "the chordal L2 problem on all {} edges ({} nodes) with the gravity priors held",
+                self.num_edges, self.num_nodes
+            ),
+            CertifiedProblemKind::ChordalL2GravitySoftInliers => write!(
+                f,
+                "the chordal L2 problem plus the soft gravity priors on the inlier graph ({} of \
+                 {} edges, {} of {} nodes)",
+                self.num_edges, self.total_edges, self.num_nodes, self.total_nodes
+            ),
+            CertifiedProblemKind::ChordalL2GravitySoft => write!(
+                f,
+                "the chordal L2 problem on all {} edges ({} nodes) plus the soft gravity priors",
                 self.num_edges, self.num_nodes
             ),
             CertifiedProblemKind::ChordalL2Rig => write!(

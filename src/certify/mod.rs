@@ -55,7 +55,7 @@ pub use certification::{
     Certification, CertifyDetails, Improvement, ImprovementSource, MethodRun, SdpSummary,
 };
 pub use conjugate::certify_conjugate;
-pub use gravity::certify_gravity;
+pub use gravity::{certify_gravity, gravity_problem_kind};
 pub use log::{Attempt, Outcome, Point, Prediction, Refusal};
 pub use multiple::certify_multiple;
 pub use proof::{BoundMethod, Proof};

@@ -31,6 +31,23 @@ pub struct GravityRead {
     pub unmatched: usize,
 }
 
+impl GravityRead {
+    /// The warning `gravity_unmatched` for the entries of the file `path` that match no node
+    /// (`None` when all match).
+    pub fn unmatched_warning(&self, path: &str) -> Option<crate::warning::Warning> {
+        (self.unmatched > 0).then(|| {
+            crate::warning::Warning::new(
+                "gravity_unmatched",
+                format!(
+                    "{path}: {} gravity entries match no node of the graph (not used)",
+                    self.unmatched
+                ),
+            )
+            .with_count(self.unmatched)
+        })
+    }
+}
+
 /// Where a node's prior comes from: its index by file id and by name.
 struct Keys<'a> {
     by_id: HashMap<u64, usize>,

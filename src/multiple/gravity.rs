@@ -27,6 +27,8 @@
 //! # Ok::<(), rotavg::Error>(())
 //! ```
 
+mod soft;
+
 use super::chordal::solve_chordal_tilt_fixed;
 use super::problem::MultipleProblem;
 use super::robust::{
@@ -52,6 +54,10 @@ pub const MIN_GRAVITY_NORM: f64 = 1e-9;
 pub struct GravityPriors {
     directions: Vec<Option<[f64; 3]>>,
     world_down: [f64; 3],
+    /// `None`: hard constraints; `Some(w)`: soft terms `2 w ||R_i world_down - g_i||^2`
+    /// ([`GravityPriors::with_weight`], `[G10]`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    weight: Option<f64>,
 }
 
 /// Unvalidated serde form of [`GravityPriors`] (`world_down` optional, default `(0, 0, 1)`).
@@ -60,14 +66,20 @@ struct RawGravityPriors {
     directions: Vec<Option<[f64; 3]>>,
     #[serde(default)]
     world_down: Option<[f64; 3]>,
+    #[serde(default)]
+    weight: Option<f64>,
 }
 
 impl TryFrom<RawGravityPriors> for GravityPriors {
     type Error = Error;
     fn try_from(raw: RawGravityPriors) -> Result<Self> {
         let p = GravityPriors::new(raw.directions)?;
-        match raw.world_down {
-            Some(w) => p.with_world_down(w),
+        let p = match raw.world_down {
+            Some(w) => p.with_world_down(w)?,
+            None => p,
+        };
+        match raw.weight {
+            Some(w) => p.with_weight(w),
             None => Ok(p),
         }
     }
@@ -121,6 +133,7 @@ impl GravityPriors {
         Ok(GravityPriors {
             directions,
             world_down: [0.0, 0.0, 1.0],
+            weight: None,
         })
     }
 
@@ -128,6 +141,39 @@ impl GravityPriors {
     pub fn with_world_down(mut self, world_down: [f64; 3]) -> Result<Self> {
         self.world_down = unit(world_down, "the world's down direction")?;
         Ok(self)
+    }
+
+    /// The same priors as **soft terms** of weight `weight` (`[G10]`): each adds
+    /// `2 weight ||R_i world_down - g_i||^2` to the chordal cost, as an edge of that weight
+    /// would for a tilt error (`~ 2 weight theta^2`), and leaves the heading free. A prior of
+    /// standard deviation `sigma` radians per tilt axis, on edges weighted `1 / sigma_ij^2`,
+    /// has `weight = 1 / sigma^2`. Errors: a weight that is not finite and positive.
+    ///
+    /// ```
+    /// use rotavg::multiple::gravity::GravityPriors;
+    /// let p = GravityPriors::new(vec![Some([0.0, 0.0, 1.0])])?.with_weight(4.0)?;
+    /// assert_eq!(p.weight(), Some(4.0));
+    /// assert!(GravityPriors::new(vec![Some([0.0, 0.0, 1.0])])?.with_weight(f64::NAN).is_err());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn with_weight(mut self, weight: f64) -> Result<Self> {
+        crate::validate::check_weight(|| "the gravity priors' weight".into(), weight)?;
+        self.weight = Some(weight);
+        Ok(self)
+    }
+
+    /// [`Self::with_weight`] when `weight` is given, else the priors unchanged (the readers'
+    /// optional `--gravity-weight`).
+    pub fn soft_if(self, weight: Option<f64>) -> Result<Self> {
+        match weight {
+            Some(w) => self.with_weight(w),
+            None => Ok(self),
+        }
+    }
+
+    /// The soft priors' weight (`None`: hard constraints).
+    pub fn weight(&self) -> Option<f64> {
+        self.weight
     }
 
     /// Number of images (with or without a prior).
@@ -173,7 +219,9 @@ impl GravityPriors {
             .iter()
             .map(|&v| self.directions.get(v).copied().flatten())
             .collect();
-        GravityPriors::new(directions)?.with_world_down(self.world_down)
+        let mut out = GravityPriors::new(directions)?.with_world_down(self.world_down)?;
+        out.weight = self.weight;
+        Ok(out)
     }
 
     /// These priors with every direction replaced by `t g_i` (a convention being tested).
@@ -514,30 +562,40 @@ pub fn solve_gravity(
     // one clock for MultipleSettings::max_seconds: the constrained solve gets what is left
     let left = settings.remaining(start);
     let (rotations, iterations, termination) = if objective.is_chordal_l2() {
-        let s = solve_constrained(problem, graph, init, &left)?;
+        let s = solve_step(problem, graph, init, &left)?;
         (s.rotations, s.report.iterations, s.report.termination)
     } else {
         reweighted(problem, init, &left)?
     };
     let mut rotations = rotations;
     fix_gravity_gauge(&mut rotations);
-    let gradient_norm = problem.constrained_gradient_norm(&rotations, settings.l1_epsilon);
+    let gradient_norm = match problem.priors.weight() {
+        Some(_) => problem.soft_gradient_norm(&rotations, settings.l1_epsilon),
+        None => problem.constrained_gradient_norm(&rotations, settings.l1_epsilon),
+    };
     let rotations = problem.out_of_standard(&rotations);
-    // the reported costs are the file's, at exactly the returned rotations
-    let chordal_cost = graph.chordal_cost(&rotations);
+    // the reported costs are the file's (with the soft priors' terms), at exactly the returned
+    // rotations
+    let prior_cost = problem.prior_cost(&rotations);
+    let chordal_cost = graph.chordal_cost(&rotations) + prior_cost;
     let residuals =
         inlier_threshold_deg(&objective, settings).map(|t| edge_residuals(graph, &rotations, t));
+    let held = if problem.priors.weight().is_some() {
+        "soft priors"
+    } else {
+        "tilt held"
+    };
     Ok(MultipleSolution {
-        cost: graph.cost(&rotations),
+        cost: graph.cost(&rotations) + prior_cost,
         chordal_cost,
         gradient_norm,
         rotations,
         objective,
         report: SolverReport {
             name: if objective.is_chordal_l2() {
-                "riemannian-newton-lm (gravity: tilt held)".into()
+                format!("riemannian-newton-lm (gravity: {held})")
             } else {
-                format!("irls-{} (gravity: tilt held)", objective.loss.name())
+                format!("irls-{} (gravity: {held})", objective.loss.name())
             },
             iterations: free.report.iterations + iterations,
             termination,
@@ -547,6 +605,21 @@ pub fn solve_gravity(
         residuals,
         linear_algebra: None,
     })
+}
+
+/// One chordal solve of the gravity problem on `graph` (its view graph or a reweighting of
+/// it) from `init` (standard convention): the priors held ([`solve_constrained`]) or as soft
+/// terms (`[G10]`).
+fn solve_step(
+    problem: &GravityProblem,
+    graph: &MultipleProblem,
+    init: Vec<Rotation>,
+    settings: &MultipleSettings,
+) -> Result<MultipleSolution> {
+    match problem.priors.weight() {
+        Some(_) => soft::solve_soft(problem, graph, init, settings),
+        None => solve_constrained(problem, graph, init, settings),
+    }
 }
 
 /// The chordal Newton-LM with the tilt of every image with a prior held, on `graph` (the
@@ -610,7 +683,7 @@ fn reweighted(
         }
         let reweighted = graph.reweighted(&weights)?;
         let left = settings.remaining(begun);
-        rotations = solve_constrained(problem, &reweighted, rotations, &left)?.rotations;
+        rotations = solve_step(problem, &reweighted, rotations, &left)?.rotations;
         let next = weights_at(&rotations);
         change = next
             .iter()

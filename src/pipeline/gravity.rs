@@ -7,7 +7,7 @@ use super::inlier_graph::ViewGraphProblem;
 use super::{AverageSettings, Averaged, MultipleEstimate, PipelineProblem};
 use crate::certify::{
     Certification, CertifiedProblem, CertifiedProblemKind, CertifyMode, CertifySettings,
-    certify_gravity,
+    certify_gravity, gravity_problem_kind,
 };
 use crate::error::Result;
 use crate::multiple::gravity::{GravityCheck, GravityProblem, solve_gravity};
@@ -90,7 +90,7 @@ pub fn average_with_gravity(
     let graph = problem.problem();
     out.certificate = out.certificate.map(|c| {
         c.for_problem(CertifiedProblem {
-            kind: CertifiedProblemKind::ChordalL2Gravity,
+            kind: gravity_problem_kind(problem, false),
             num_nodes: graph.num_rotations(),
             total_nodes: graph.num_rotations(),
             num_edges: graph.num_edges(),
@@ -102,7 +102,12 @@ pub fn average_with_gravity(
 }
 
 impl ViewGraphProblem for GravityProblem {
-    const INLIERS: CertifiedProblemKind = CertifiedProblemKind::ChordalL2GravityInliers;
+    fn inliers_kind(&self) -> CertifiedProblemKind {
+        gravity_problem_kind(self, true)
+    }
+    fn certified_cost(&self, rotations: &[Rotation]) -> f64 {
+        self.problem().chordal_cost(rotations) + self.prior_cost(rotations)
+    }
     fn graph(&self) -> &MultipleProblem {
         self.problem()
     }

@@ -163,9 +163,10 @@ pub(crate) fn inlier_graph_of<P: ViewGraphProblem>(
         problem: certified,
         other_component_sizes,
         isolated_nodes,
-    } = InlierComponent::of(graph, &residuals.inlier, P::INLIERS)?;
+    } = InlierComponent::of(graph, &residuals.inlier, problem.inliers_kind())?;
     let init: Vec<Rotation> = nodes.iter().map(|&v| robust.rotations[v]).collect();
-    let robust_chordal_cost = sub.chordal_cost(&init);
+    let sub_problem = problem.restricted(sub, &nodes)?;
+    let robust_chordal_cost = sub_problem.certified_cost(&init);
     let sub_settings = AverageSettings {
         solve: MultipleSettings {
             init: Initialisation::Given(init),
@@ -174,12 +175,11 @@ pub(crate) fn inlier_graph_of<P: ViewGraphProblem>(
         },
         certify: settings.certify.clone(),
     };
-    let sub_problem = problem.restricted(sub, &nodes)?;
     let refined = average(&sub_problem, &sub_settings)?;
     let estimate = problem.place(&nodes, &refined.solution.rotations, &robust.rotations);
     // the cost of the reported rotations (equal to the refinement's up to rounding: a gauge)
     let reported: Vec<Rotation> = nodes.iter().map(|&v| estimate[v]).collect();
-    let chordal_cost = sub_problem.graph().chordal_cost(&reported);
+    let chordal_cost = sub_problem.certified_cost(&reported);
     let certificate = refined
         .certificate
         .map(|c| c.with_upper_bound(chordal_cost).for_problem(certified));
@@ -204,7 +204,12 @@ pub(crate) trait ViewGraphProblem:
     PipelineProblem<Settings = MultipleSettings, Solution = MultipleSolution> + Sized
 {
     /// The kind of its inlier graph's problem.
-    const INLIERS: CertifiedProblemKind;
+    fn inliers_kind(&self) -> CertifiedProblemKind;
+    /// The cost its certificate bounds at `rotations`: the view graph's chordal cost (with
+    /// soft gravity priors, plus theirs).
+    fn certified_cost(&self, rotations: &[Rotation]) -> f64 {
+        self.graph().chordal_cost(rotations)
+    }
     /// The view graph.
     fn graph(&self) -> &MultipleProblem;
     /// The same problem under another objective.
@@ -221,7 +226,9 @@ pub(crate) trait ViewGraphProblem:
 }
 
 impl ViewGraphProblem for MultipleProblem {
-    const INLIERS: CertifiedProblemKind = CertifiedProblemKind::ChordalL2Inliers;
+    fn inliers_kind(&self) -> CertifiedProblemKind {
+        CertifiedProblemKind::ChordalL2Inliers
+    }
     fn graph(&self) -> &MultipleProblem {
         self
     }

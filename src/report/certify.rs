@@ -160,13 +160,15 @@ impl CertifyReport {
                 Vec::new(),
             ),
         };
-        let cost = graph.problem.chordal_cost(&rotations);
+        let graph_cost = graph.problem.chordal_cost(&rotations);
         let transposed = transposed_cost(&graph.problem, &rotations);
         let m = graph.problem.num_edges();
+        // soft gravity priors' terms are part of the cost certified ([G10])
+        let priors_cost = gravity.map_or(0.0, |p| p.prior_cost(&rotations));
         let mut report = given.report(
             ProblemKind::Multiple,
             m,
-            cost,
+            graph_cost + priors_cost,
             Estimate::Multiple(rotations),
             c.certificate,
         );
@@ -177,7 +179,7 @@ impl CertifyReport {
         report.warnings = [
             super::input_warnings(graph),
             std::mem::take(&mut report.warnings),
-            convention_suspected(cost, transposed),
+            convention_suspected(graph_cost, transposed),
             gravity_warnings,
         ]
         .concat();
@@ -547,7 +549,7 @@ fn gravity_certification(
     let mut c = crate::certify::certify_gravity(p, rotations, settings)?;
     let g = p.problem();
     c.certificate = c.certificate.for_problem(crate::certify::CertifiedProblem {
-        kind: crate::certify::CertifiedProblemKind::ChordalL2Gravity,
+        kind: crate::certify::gravity_problem_kind(p, false),
         num_nodes: g.num_rotations(),
         total_nodes: g.num_rotations(),
         num_edges: g.num_edges(),

@@ -207,3 +207,67 @@ fn file_forms_and_errors() {
     assert_ne!(out.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not `--loss geodesic`"));
 }
+
+/// `--gravity-weight`: soft priors on the mixed example are certified and named, more accurate
+/// than held ones, `certify` states the same cost and verdict for the estimate written, and a
+/// weight that is not positive, or one without priors, is an error.
+#[test]
+fn soft_priors_from_the_command_line() {
+    let (graph, truth, gravity) = (
+        example("graph.json"),
+        example("truth.txt"),
+        example("gravity.txt"),
+    );
+    let out = temp_file("soft_estimate.json", "");
+    let out = out.display().to_string();
+    let args = [
+        "multiple",
+        &graph,
+        "--ground-truth",
+        &truth,
+        "--json",
+        "--gravity",
+        &gravity,
+    ];
+    let held = json_of(&run(&args));
+    let soft = run(&[&args[..], &["--gravity-weight", "16", "--output", &out]].concat());
+    assert_success(&soft);
+    let soft = json_of(&soft);
+    assert_eq!(
+        soft["verdict"]["problem"]["kind"],
+        "chordal_l2_gravity_soft"
+    );
+    assert_eq!(soft["certificate"]["verdict"], "certified");
+    let mean = |v: &serde_json::Value| v["accuracy"]["mean_deg"].as_f64().unwrap();
+    assert!(
+        mean(&soft) < mean(&held),
+        "{} vs {}",
+        mean(&soft),
+        mean(&held)
+    );
+    let certify = run(&[
+        "certify",
+        &graph,
+        "--estimate",
+        &out,
+        "--gravity",
+        &gravity,
+        "--gravity-weight",
+        "16",
+        "--json",
+    ]);
+    assert_success(&certify);
+    let c = json_of(&certify);
+    assert_eq!(c["certificate"]["verdict"], "certified");
+    let (a, b) = (c["cost"].as_f64().unwrap(), soft["cost"].as_f64().unwrap());
+    assert!((a - b).abs() <= 1e-9 * b, "{a} vs {b}");
+    for bad in [
+        &["--gravity-weight", "-1", "--gravity", &gravity][..],
+        &["--gravity-weight", "2"],
+    ] {
+        let r = run(&[&["multiple", &graph][..], bad].concat());
+        assert!(!r.status.success());
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(err.contains("weight") || err.contains("gravity"), "{err}");
+    }
+}

@@ -55,6 +55,7 @@ mod example_data;
 mod fuzz_regressions;
 mod gravity;
 mod gravity_cli;
+mod gravity_soft;
 #[cfg(feature = "cli")]
 mod handeye_streams;
 mod io_formats;

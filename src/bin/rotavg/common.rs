@@ -147,19 +147,32 @@ impl InitArgs {
     }
 }
 
-/// `--gravity` (`multiple`, `certify`): gravity priors held as constraints.
+/// `--gravity` (`multiple`, `certify`): gravity priors, held as constraints or (with
+/// `--gravity-weight`) as soft terms.
 #[derive(Args, Debug)]
 pub struct GravityArgs {
-    /// Gravity priors, held as hard constraints: per image `g_i`, the world's down direction in
+    /// Gravity priors, held as hard constraints (or soft terms: `--gravity-weight`): per image
+    /// `g_i`, the world's down direction in
     /// the camera's frame (`R_i world_down = g_i`; docs/guides/gravity.md). JSON `{"gravity":
     /// [g | null, ...]}` in node order (or an object keyed by image name or file id), text lines
-    /// `KEY gx gy gz`, or a COLMAP database's `pose_priors.gravity`. Least squares only.
+    /// `KEY gx gy gz`, or a COLMAP database's `pose_priors.gravity`.
     #[arg(long, value_name = "FILE")]
     pub gravity: Option<String>,
     /// The world's down direction the priors refer to, `X,Y,Z` (default: the file's; else
     /// `0,0,1`; COLMAP databases `0,1,0`).
     #[arg(long, value_name = "X,Y,Z", requires = "gravity", value_parser = parse_vector)]
     pub world_down: Option<[f64; 3]>,
+    /// The priors as soft terms of this weight instead of constraints: each adds
+    /// `2 W ||R_i world_down - g_i||^2` to the chordal cost, like an edge of weight `W` for a
+    /// tilt error (`W = 1 / sigma^2` for priors of `sigma` radians per axis on edges weighted
+    /// `1 / sigma_ij^2`); certified with the view graph by the multiple-averaging ladder.
+    #[arg(
+        long,
+        value_name = "W",
+        requires = "gravity",
+        allow_negative_numbers = true
+    )]
+    pub gravity_weight: Option<f64>,
 }
 
 impl GravityArgs {
@@ -169,17 +182,9 @@ impl GravityArgs {
             return Ok(None);
         };
         let read = rotavg::io::gravity::read_gravity(path, graph, self.world_down)?;
-        let unmatched = (read.unmatched > 0).then(|| {
-            Warning::new(
-                "gravity_unmatched",
-                format!(
-                    "{path}: {} gravity entries match no node of the graph (not used)",
-                    read.unmatched
-                ),
-            )
-            .with_count(read.unmatched)
-        });
-        Ok(Some((read.priors, unmatched.into_iter().collect())))
+        let unmatched = read.unmatched_warning(path);
+        let priors = read.priors.soft_if(self.gravity_weight)?;
+        Ok(Some((priors, unmatched.into_iter().collect())))
     }
 }
 
