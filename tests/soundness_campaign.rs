@@ -227,37 +227,50 @@ fn instance(k: usize) -> (MultipleProblem, Vec<Rotation>) {
     }
 }
 
-#[test]
-#[ignore = "long campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
-fn no_false_certificate_in_ten_thousand() {
+/// `one(k)` for every instance `k < count`, shared out among `available_parallelism()` threads
+/// (the results in no particular order; a failed assertion in a worker fails the test with its
+/// own message).
+fn in_parallel<T: Send>(count: usize, one: impl Fn(usize) -> T + Sync) -> Vec<T> {
     let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
     let next = AtomicUsize::new(0);
-    let mut tally = Tally::default();
     std::thread::scope(|scope| {
         let workers: Vec<_> = (0..threads)
             .map(|_| {
                 scope.spawn(|| {
-                    let mut tally = Tally::default();
+                    let mut out = Vec::new();
                     loop {
                         let k = next.fetch_add(1, Ordering::Relaxed);
-                        if k >= INSTANCES {
-                            break tally;
+                        if k >= count {
+                            break out;
                         }
-                        let (p, truth) = instance(k);
-                        let mut rng = StdRng::seed_from_u64(2026 + k as u64);
-                        // the block comparison alone on every other anisotropic graph (each of
-                        // its certificates repeats the conv(SO(3)) search: CI time)
-                        campaign(&p, &truth, &mut rng, &mut tally, k.is_multiple_of(2));
+                        out.push(one(k));
                     }
                 })
             })
             .collect();
-        for w in workers {
-            // a failed assertion in a worker fails the test with its own message
-            let t = w.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
-            tally.add(&t);
-        }
+        workers
+            .into_iter()
+            .flat_map(|w| w.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
+}
+
+#[test]
+#[ignore = "long campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
+fn no_false_certificate_in_ten_thousand() {
+    let tallies = in_parallel(INSTANCES, |k| {
+        let (p, truth) = instance(k);
+        let mut rng = StdRng::seed_from_u64(2026 + k as u64);
+        let mut tally = Tally::default();
+        // the block comparison alone on every other anisotropic graph (each of its
+        // certificates repeats the conv(SO(3)) search: CI time)
+        campaign(&p, &truth, &mut rng, &mut tally, k.is_multiple_of(2));
+        tally
     });
+    let mut tally = Tally::default();
+    for t in &tallies {
+        tally.add(t);
+    }
     println!(
         "{INSTANCES} instances, {} certificates, {} certified, {} non-optimal points (none certified); \
          over budget: {} randomized bounds, {} within the tolerance (none at a non-optimal point); \
@@ -429,7 +442,6 @@ fn no_false_certificate_on_rigs_of_many_sensors() {
     use rotavg::certify::certify_rig;
     use rotavg::rig::{RigProblem, RigScene, RigSettings, solve_rig, solve_rig_from};
     const RIGS: usize = 160;
-    let next = AtomicUsize::new(0);
     let one = |k: usize| -> (usize, usize) {
         let mut rng = StdRng::seed_from_u64(777 + k as u64);
         let scene = RigScene {
@@ -515,25 +527,7 @@ fn no_false_certificate_on_rigs_of_many_sensors() {
         }
         (points.len(), certified)
     };
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
-    let totals: Vec<(usize, usize)> = std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..threads)
-            .map(|_| {
-                scope.spawn(|| {
-                    let mut t = (0, 0);
-                    loop {
-                        let k = next.fetch_add(1, Ordering::Relaxed);
-                        if k >= RIGS {
-                            break t;
-                        }
-                        let (a, b) = one(k);
-                        t = (t.0 + a, t.1 + b);
-                    }
-                })
-            })
-            .collect();
-        workers.into_iter().map(|w| w.join().unwrap()).collect()
-    });
+    let totals = in_parallel(RIGS, one);
     let (certificates, certified) = totals.iter().fold((0, 0), |a, t| (a.0 + t.0, a.1 + t.1));
     eprintln!("rigs of many sensors: {certificates} certificates, {certified} certified");
     assert!(
@@ -556,7 +550,6 @@ fn no_false_certificate_with_soft_gravity_priors() {
     use rotavg::multiple::gravity::{GravityProblem, solve_gravity};
     use rotavg::multiple::synthetic::SyntheticGravity;
     const GRAPHS: usize = 160;
-    let next = AtomicUsize::new(0);
     let one = |k: usize| -> (usize, usize) {
         let mut rng = StdRng::seed_from_u64(4242 + k as u64);
         let n = 4 + k % 6;
@@ -624,25 +617,7 @@ fn no_false_certificate_with_soft_gravity_priors() {
         }
         (points.len(), certified)
     };
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
-    let totals: Vec<(usize, usize)> = std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..threads)
-            .map(|_| {
-                scope.spawn(|| {
-                    let mut t = (0, 0);
-                    loop {
-                        let k = next.fetch_add(1, Ordering::Relaxed);
-                        if k >= GRAPHS {
-                            break t;
-                        }
-                        let (a, b) = one(k);
-                        t = (t.0 + a, t.1 + b);
-                    }
-                })
-            })
-            .collect();
-        workers.into_iter().map(|w| w.join().unwrap()).collect()
-    });
+    let totals = in_parallel(GRAPHS, one);
     let (certificates, certified) = totals.iter().fold((0, 0), |a, t| (a.0 + t.0, a.1 + t.1));
     eprintln!("soft gravity priors: {certificates} certificates, {certified} certified");
     assert!(

@@ -381,17 +381,22 @@ impl GravityProblem {
     /// The largest angle between `R_i world_down` and `g_i` over the images with a prior,
     /// degrees (0 for a feasible estimate, up to rounding).
     pub fn max_prior_violation_deg(&self, rotations: &[Rotation]) -> f64 {
+        self.prior_pairs(rotations)
+            .map(|(down, g)| angle_between(&down, &g))
+            .fold(0.0, f64::max)
+            .to_degrees()
+    }
+
+    /// `(R_i world_down, g_i)` for every image `i` with a prior.
+    fn prior_pairs<'a>(
+        &'a self,
+        rotations: &'a [Rotation],
+    ) -> impl Iterator<Item = (Vector3<f64>, Vector3<f64>)> + 'a {
         let w = self.priors.world_down();
         rotations
             .iter()
             .enumerate()
-            .filter_map(|(i, r)| {
-                self.priors
-                    .direction(i)
-                    .map(|g| angle_between(&(r * w), &g))
-            })
-            .fold(0.0, f64::max)
-            .to_degrees()
+            .filter_map(move |(i, r)| self.priors.direction(i).map(|g| (r * w, g)))
     }
 
     /// In the standard convention (`world_down = e_3`): `R_i W`.
@@ -428,6 +433,15 @@ impl GravityProblem {
                 }
             })
             .collect()
+    }
+
+    /// The gradient norm of the problem at `rotations` (standard convention): the tilt of each
+    /// image with a prior held, or with soft priors their terms added (`[G10]`).
+    fn gradient_norm(&self, rotations: &[Rotation], l1_epsilon: f64) -> f64 {
+        match self.priors.weight() {
+            Some(_) => self.soft_gradient_norm(rotations, l1_epsilon),
+            None => self.constrained_gradient_norm(rotations, l1_epsilon),
+        }
     }
 
     /// `||grad||` of the objective on the constrained manifold at `rotations` (standard
@@ -569,10 +583,7 @@ pub fn solve_gravity(
     };
     let mut rotations = rotations;
     fix_gravity_gauge(&mut rotations);
-    let gradient_norm = match problem.priors.weight() {
-        Some(_) => problem.soft_gradient_norm(&rotations, settings.l1_epsilon),
-        None => problem.constrained_gradient_norm(&rotations, settings.l1_epsilon),
-    };
+    let gradient_norm = problem.gradient_norm(&rotations, settings.l1_epsilon);
     let rotations = problem.out_of_standard(&rotations);
     // the reported costs are the file's (with the soft priors' terms), at exactly the returned
     // rotations
@@ -580,11 +591,7 @@ pub fn solve_gravity(
     let chordal_cost = graph.chordal_cost(&rotations) + prior_cost;
     let residuals =
         inlier_threshold_deg(&objective, settings).map(|t| edge_residuals(graph, &rotations, t));
-    let held = if problem.priors.weight().is_some() {
-        "soft priors"
-    } else {
-        "tilt held"
-    };
+    let held = ["tilt held", "soft priors"][usize::from(problem.priors.weight().is_some())];
     Ok(MultipleSolution {
         cost: graph.cost(&rotations) + prior_cost,
         chordal_cost,

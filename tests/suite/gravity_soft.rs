@@ -260,16 +260,7 @@ fn soft_verdict_is_scale_free() {
     let s = scene(40, 3.0, 0.5, 0.0, 9);
     let base = s.run(Some(20.0));
     for c in [1e-4, 1e4] {
-        let edges = s
-            .graph
-            .edges()
-            .iter()
-            .map(|e| Edge {
-                weight: e.weight * c,
-                ..e.clone()
-            })
-            .collect();
-        let graph = MultipleProblem::new(s.graph.num_rotations(), edges).unwrap();
+        let graph = crate::common::scale_weights(&s.graph, c);
         let priors = s.priors.clone().with_weight(20.0 * c).unwrap();
         let p = GravityProblem::new(graph, priors).unwrap();
         let est = average_with_gravity(&p, &AverageSettings::default()).unwrap();

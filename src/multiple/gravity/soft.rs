@@ -73,16 +73,8 @@ impl GravityProblem {
         let Some(w) = self.priors.weight() else {
             return 0.0;
         };
-        let down = self.priors.world_down();
-        rotations
-            .iter()
-            .enumerate()
-            .filter_map(|(i, r)| {
-                self.priors
-                    .direction(i)
-                    .map(|g| (r * down - g).norm_squared())
-            })
-            .map(|d| 2.0 * w * d)
+        self.prior_pairs(rotations)
+            .map(|(down, g)| 2.0 * w * (down - g).norm_squared())
             .sum()
     }
 
