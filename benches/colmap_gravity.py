@@ -3,7 +3,10 @@ mapper's stage, with `use_gravity`) side by side, without and with gravity prior
 scene written by `cargo run --release --example gravity_scene -- FOLDER ...` (or
 examples/data/gravity: graph.json, a priors file, truth.txt).
 
-    python benches/colmap_gravity.py FOLDER [PRIORS_FILE] [ROTAVG_BINARY]
+    python benches/colmap_gravity.py FOLDER [PRIORS_FILE] [ROTAVG_BINARY] [GRAVITY_WEIGHT]
+
+With GRAVITY_WEIGHT rotavg also runs with the priors as soft terms of that weight
+(`--gravity-weight`, paper-notes/gravity.md [G10]).
 
 Needs `pip install pycolmap numpy` (tested with pycolmap 4.2.1). COLMAP gets every edge with
 `num_matches = 100` (uniform weights; a JSON view graph carries no correspondences) and the
@@ -76,10 +79,12 @@ def errors(est, truth):
     return np.degrees(np.arccos(np.clip(cos, -1, 1))), len(keep)
 
 
-def rotavg(binary, folder, priors_name, use_gravity):
+def rotavg(binary, folder, priors_name, use_gravity, weight=None):
     args = [binary, "multiple", str(folder / "graph.json"), "--json"]
     if use_gravity:
         args += ["--gravity", str(folder / priors_name)]
+    if weight is not None:
+        args += ["--gravity-weight", str(weight)]
     start = time.time()
     out = json.loads(subprocess.run(args, capture_output=True, text=True, check=True).stdout)
     seconds = time.time() - start
@@ -107,6 +112,12 @@ def main():
         label = "use_gravity" if use_gravity else "none"
         print(f"| COLMAP rotation averaging | {label} | {np.median(e):.3f} | {e.mean():.3f} | "
               f"{seconds:.3f} | {'ok' if ok else 'failed'} ({k} posed) |")
+    if len(sys.argv) > 4:
+        weight = float(sys.argv[4])
+        verdict, seconds, est = rotavg(binary, folder, priors_name, True, weight)
+        e, _ = errors(est, truth)
+        print(f"| rotavg (whole process) | soft, weight {weight:g} | {np.median(e):.3f} | "
+              f"{e.mean():.3f} | {seconds:.3f} | {verdict} |")
 
 
 if __name__ == "__main__":
