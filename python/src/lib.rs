@@ -467,7 +467,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         (a row of NaN: no prior for that image), or the path of a priors file as
 ///         ``rotavg multiple --gravity`` reads it (JSON, ``KEY gx gy gz`` lines, a COLMAP
 ///         database). Least squares only (``loss`` ``"auto"`` or ``"chordal"``); every image
-///         with a prior: the SO(2) certificate; some: the view graph's bound.
+///         with a prior: the SO(2) certificate; some: the tilted soft surrogate's [G12].
 ///         ``to_dict()["pipeline"]["gravity"]`` has the priors' check.
 ///     world_down: the world's down direction the priors refer to (default ``(0, 0, 1)``,
 ///         the file's, or COLMAP's ``(0, 1, 0)``).

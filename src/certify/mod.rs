@@ -6,7 +6,7 @@
 //! | single | [`certify_single`] | theorems: closed forms, convexity `[S1]`-`[S7]` ([`single`]), branch and bound `[B1]`-`[B6]` ([`branch_and_bound`]) |
 //! | multiple | [`certify_multiple`] | dual certificate, staircase, SDP, conv(SO(3)) dual and SDP `[D3]`-`[D16]`, `[A6]`, `[A11]` ([`multiple`]) |
 //! | conjugate | [`certify_conjugate`] | SDP with verified multipliers `[H8]` ([`conjugate`]), branch and bound `[B1]`-`[B6]` |
-//! | gravity priors | [`certify_gravity`] | SO(2) dual certificate `[G3]`, the view graph's bound `[G7]` ([`gravity`]) |
+//! | gravity priors | [`certify_gravity`] | SO(2) dual certificate `[G3]`, the tilted soft surrogate `[G12]`, the view graph's bound `[G7]`; soft priors: the view graph with a world node `[G10]` ([`gravity`]) |
 //! | simultaneous | [`certify_simultaneous`] | dual certificate at the estimate `[H15]`, SDP `[H14]` ([`simultaneous`]) |
 //!
 //! Each takes the problem, the estimate and a [`CertifySettings`], never changes the estimate,

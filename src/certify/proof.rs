@@ -51,6 +51,10 @@ pub enum Proof {
     /// The gravity problem's constraints dropped `[G7]`: the certified bound of the view graph
     /// alone (every rung of [`crate::certify::certify_multiple`]).
     GravityRelaxed,
+    /// The held priors' tilted soft surrogate `[G12]`: soft priors turned so that the estimate
+    /// is their critical point, certified by the multiple-averaging ladder, less their constant
+    /// on the held problem's feasible set.
+    GravitySurrogate,
     /// Information isotropic to rounding compared with scalar weights `lambda_min(H_e)` `[A13]`:
     /// the isotropic problem's dual certificate plus a proven constant.
     ScalarWeights,
@@ -93,6 +97,7 @@ impl Proof {
             | Proof::ConvDual
             | Proof::SimultaneousDual
             | Proof::GravityDual => 2,
+            Proof::GravitySurrogate => 3,
             Proof::RigFrames | Proof::RigCoupled => 4,
             Proof::GravityRelaxed | Proof::SimultaneousDecoupled | Proof::RigImages => 5,
             Proof::ShiftedCholesky => 2,
@@ -117,6 +122,7 @@ impl Proof {
             | Proof::SimultaneousDual
             | Proof::GravityDual
             | Proof::GravityRelaxed
+            | Proof::GravitySurrogate
             | Proof::SimultaneousDecoupled
             | Proof::RigFrames
             | Proof::RigImages
@@ -148,6 +154,7 @@ impl fmt::Display for Proof {
             Proof::RigCoupled => "the images' view graph with within-frame couplings [H21]",
             Proof::GravityDual => "SO(2) dual certificate at the estimate [G3]",
             Proof::GravityRelaxed => "the view graph without its gravity priors [G7]",
+            Proof::GravitySurrogate => "the priors' tilted soft surrogate [G12]",
             Proof::ScalarWeights => "comparison with scalar weights [A13]",
             Proof::BranchAndBound => "branch and bound [B1]-[B6]",
             Proof::Grounded => "grounded bound [D15]",

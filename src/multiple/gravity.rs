@@ -29,6 +29,8 @@
 
 mod soft;
 
+pub use soft::SURROGATE_STIFFNESS;
+
 use super::chordal::solve_chordal_tilt_fixed;
 use super::problem::MultipleProblem;
 use super::robust::{

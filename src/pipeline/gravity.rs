@@ -58,12 +58,15 @@ pub struct GravityDetails {
     pub world_down: [f64; 3],
     /// The edges' agreement with the priors (`None`: no edge has priors at both ends).
     pub check: Option<GravityCheck>,
+    /// The soft priors' weight (`--gravity-weight`, `[G10]`); absent: held as constraints.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<f64>,
 }
 
-/// Averaging with gravity as a hard constraint, certified, in the shape of
-/// [`crate::pipeline::average_multiple`]: least squares ([`solve_gravity`], then
-/// [`certify_gravity`]: the SO(2) dual certificate for full gravity, the view graph's bound
-/// otherwise) with its outlier diagnosis; under the rule `auto` (`robust_on_outliers`) the
+/// Averaging with gravity priors held as constraints (or soft, `[G10]`), certified, in the
+/// shape of [`crate::pipeline::average_multiple`]: least squares ([`solve_gravity`], then
+/// [`certify_gravity`]: the SO(2) dual certificate for full gravity, the tilted surrogate's
+/// `[G12]` otherwise) with its outlier diagnosis; under the rule `auto` (`robust_on_outliers`) the
 /// robust loss when the least-squares residuals show outliers; a robust loss solved by
 /// reweighted constrained solves, then the chordal L2 problem with the priors held on its inlier
 /// graph refined and certified (`details.inlier_graph`, kind
@@ -155,6 +158,7 @@ impl GravityDetails {
             kind: if priors.is_full() { "full" } else { "mixed" }.into(),
             world_down: priors.world_down().into(),
             check: problem.check_conventions(),
+            weight: priors.weight(),
         }
     }
 
@@ -208,20 +212,19 @@ impl GravityDetails {
 impl fmt::Display for GravityDetails {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let w = self.world_down;
+        let how = match (self.weight, self.kind.as_str()) {
+            (Some(weight), _) => format!("as soft terms of weight {weight} [G10]"),
+            (None, "full") => {
+                "held as constraints (full: the SO(2) certificate [G3] applies)".into()
+            }
+            (None, _) => {
+                "held as constraints (mixed: certified by the tilted surrogate [G12])".into()
+            }
+        };
         write!(
             f,
-            "gravity: {} of {} images with a prior, held as constraints ({}), world down \
-             ({}, {}, {})",
-            self.num_with_prior,
-            self.num_images,
-            if self.kind == "full" {
-                "full: the SO(2) certificate [G3] applies"
-            } else {
-                "mixed: bounded by the view graph alone [G7]"
-            },
-            w[0],
-            w[1],
-            w[2]
+            "gravity: {} of {} images with a prior, {how}, world down ({}, {}, {})",
+            self.num_with_prior, self.num_images, w[0], w[1], w[2]
         )?;
         if let Some(c) = &self.check {
             write!(

@@ -1,10 +1,11 @@
 //! Certificates for chordal L2 averaging with gravity priors (contract section 5, "Rigs and
-//! gravity"; `paper-notes/gravity.md`): two rungs, climbed by the one ladder.
+//! gravity"; `paper-notes/gravity.md`): three rungs, climbed by the one ladder.
 //!
 //! | rung | when | bound |
 //! |---|---|---|
 //! | [`planar`]: the SO(2) dual certificate at the estimate `[G2]`, `[G3]` | every image has a prior | `K + sum lambda_i + n min(mu, 0)`, `mu` proven by the scalar comparison on large graphs (`scalar.rs`, `[G9]`), else (or when it does not certify) by a shifted sparse Cholesky |
-//! | `relaxed.rs`: the priors dropped `[G7]` | the mixed problem; the fallback of full gravity | the view graph's own certified bound |
+//! | `surrogate.rs`: the tilted soft surrogate `[G12]` | the mixed problem; a fallback of full gravity | the soft problem's certified bound (view graph and world node) less its constant on the held problem |
+//! | `relaxed.rs`: the priors dropped `[G7]` | the last fallback | the view graph's own certified bound |
 //!
 //! Soft priors (`[G10]`, [`crate::multiple::gravity::GravityPriors::with_weight`]) are no
 //! constraints: `certify_soft` certifies the view graph with a world node (one edge per prior)
@@ -17,6 +18,7 @@ mod relaxed;
 mod rung;
 mod scalar;
 mod state;
+mod surrogate;
 
 pub use planar::{PlanarBound, PlanarForm, verify_planar};
 
@@ -50,10 +52,11 @@ pub fn gravity_problem_kind(problem: &GravityProblem, inliers: bool) -> Certifie
 pub const GRAVITY_FEASIBILITY_RAD: f64 = 1e-6;
 
 /// Certify `rotations` (never changed) for the chordal L2 problem of `problem`'s view graph
-/// with its gravity priors as hard constraints. Full gravity: the SO(2) dual certificate
-/// `[G3]`, and when it does not certify, the view graph's own bound `[G7]`; mixed: that bound
-/// only (a gap, unless the priors cost nothing). Errors: a count of rotations that differs from
-/// the graph's, an estimate off its priors by more than [`GRAVITY_FEASIBILITY_RAD`].
+/// with its gravity priors as hard constraints, or with soft priors (`[G10]`) plus their
+/// terms. Held priors: full gravity by the SO(2) dual certificate `[G3]`, mixed by the tilted
+/// soft surrogate `[G12]` (a fallback for full gravity too), and the view graph's own bound
+/// `[G7]` last. Errors: a count of rotations that differs from the graph's, an estimate off
+/// its held priors by more than [`GRAVITY_FEASIBILITY_RAD`].
 ///
 /// ```
 /// use rotavg::certify::{certify_gravity, CertifySettings};
@@ -103,6 +106,7 @@ pub fn certify_gravity(
     };
     let rungs: Rungs<'_, GravityState<'_>> = vec![
         Box::new(rung::PlanarRung::default()),
+        Box::new(surrogate::SurrogateRung::new(soft_certificate)),
         Box::new(relaxed::RelaxedRung::new(graph_certificate)),
     ];
     climb(&mut state, rungs)?;
@@ -121,6 +125,16 @@ pub fn certify_gravity(
         details,
         improvement: None,
     })
+}
+
+/// The certificate of `rotations` for the soft problem `problem` ([`certify_soft`]): the
+/// surrogate rung's certifier.
+fn soft_certificate(
+    problem: &GravityProblem,
+    rotations: &[Rotation],
+    settings: &CertifySettings,
+) -> Result<crate::certify::certificate::Certificate> {
+    Ok(certify_soft(problem, rotations, settings)?.certificate)
 }
 
 /// Certify `rotations` (file convention) for the soft problem of `problem`: the augmented

@@ -3,8 +3,8 @@
 //! bound on the view graph's chordal minimum bounds the gravity problem's. The view graph is
 //! solved from the estimate (the unconstrained chordal Newton-LM) and certified by the view
 //! graph's own certification (the entry point hands it in: `certify_multiple`) within the time
-//! left. The only bound of the mixed problem; for full gravity, the fallback of the SO(2)
-//! certificate.
+//! left. The last fallback (the mixed problem is certified by the tilted surrogate `[G12]`,
+//! full gravity by the SO(2) certificate).
 
 use super::state::GravityState;
 use crate::certify::log::Prediction;
@@ -14,8 +14,8 @@ use crate::error::Result;
 use crate::multiple::chordal::solve_chordal;
 use crate::multiple::{MultipleSettings, fix_gauge};
 
-/// The relaxed bound as a rung: run first for the mixed problem, as the fallback for full
-/// gravity.
+/// The relaxed bound as a rung: run first for the mixed problem (beside the surrogate), as
+/// the fallback for full gravity.
 pub(crate) struct RelaxedRung {
     done: bool,
     certify: GraphCertifier,

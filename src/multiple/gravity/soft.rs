@@ -18,6 +18,12 @@ use crate::multiple::solve::{MultipleSettings, MultipleSolution};
 use crate::so3::Rotation;
 use nalgebra::{Matrix3, Vector3};
 
+/// The tilted surrogate's weight over the largest node strength (`[G12]`): stiff enough that
+/// the held problem's second-order condition carries over to the surrogate, small enough that
+/// the world node's rounding margin stays below the tolerance (a factor 10 left relative gaps
+/// of 3e-6 at 10^4 cameras, 2 certified them).
+pub const SURROGATE_STIFFNESS: f64 = 2.0;
+
 impl GravityProblem {
     /// The soft problem as one view graph, standard convention: `graph` (this problem's view
     /// graph or a reweighting of it, `n` nodes) with its information matrices (`w I` for scalar
@@ -65,6 +71,61 @@ impl GravityProblem {
                 name: "gravity".into(),
                 reason: "the priors are hard constraints, not soft terms".into(),
             })
+    }
+
+    /// The held priors' **tilted soft surrogate** at `rotations` (file convention; `[G12]`):
+    /// the same view graph with soft priors of weight `w` whose directions `g_i'` are turned
+    /// so that `rotations` is a critical point of the soft problem (`R_i^T g_i' = h_i` with
+    /// `e_3 x h_i = v_i`, `v_i` the view graph's chordal gradient at image `i` without its
+    /// heading part, over `4 w`), and `C >= sum 2 w ||g_i - g_i'||^2`, rounded up. On every
+    /// point of the held problem (`R_i world_down = g_i`) the surrogate's cost is the view
+    /// graph's plus exactly that sum, so `min held >= min surrogate - C` whatever `g'` is.
+    /// `w = `[`SURROGATE_STIFFNESS`]` max(node strength, |gradient| / 4)`: `|v_i| <= 0.5`.
+    /// Errors: priors that are
+    /// already soft, a count of rotations that differs from the graph's.
+    pub fn tilted_surrogate(&self, rotations: &[Rotation]) -> Result<(GravityProblem, f64)> {
+        if self.priors.weight().is_some() {
+            return Err(crate::Error::InvalidSettings {
+                name: "gravity".into(),
+                reason: "the tilted surrogate is of held priors, these are soft".into(),
+            });
+        }
+        self.problem.check_estimate(rotations)?;
+        let standard = self.to_standard(rotations);
+        let (_, grad) = crate::multiple::chordal_gradient(&self.problem, &standard);
+        let mut strength = vec![0.0f64; standard.len()];
+        for e in self.problem.edges() {
+            strength[e.i] += e.weight;
+            strength[e.j] += e.weight;
+        }
+        let most = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+        let grad_max = most(&grad.iter().map(|g| g.norm()).collect::<Vec<_>>());
+        let w = SURROGATE_STIFFNESS * most(&strength).max(grad_max / 4.0);
+        let e3 = Vector3::z();
+        let dirs = (0..standard.len())
+            .map(|i| {
+                self.priors.direction(i).map(|_| {
+                    let v = (grad[i] - e3 * grad[i].z) / (4.0 * w);
+                    let h = e3 * (1.0 - v.norm_squared()).sqrt() + v.cross(&e3);
+                    (standard[i] * h).into()
+                })
+            })
+            .collect();
+        let priors = super::GravityPriors::new(dirs)?
+            .with_world_down(self.priors.world_down().into())?
+            .with_weight(w)?;
+        let mut sum = 0.0;
+        let mut terms = 0usize;
+        for i in 0..standard.len() {
+            if let (Some(g), Some(t)) = (self.priors.direction(i), priors.direction(i)) {
+                sum += 2.0 * w * (g - t).norm_squared();
+                terms += 1;
+            }
+        }
+        // every term is a rounded product of rounded squares: relative error <= 8u each, and
+        // the sum of `terms` nonnegative terms adds gamma(terms)
+        let upper = sum * (1.0 + crate::linalg::cholesky::gamma(terms + 8));
+        Ok((GravityProblem::new(self.problem.clone(), priors)?, upper))
     }
 
     /// The soft priors' cost `sum 2 w ||R_i world_down - g_i||^2` at `rotations` (file

@@ -1,0 +1,87 @@
+//! The held priors' tilted soft surrogate (`paper-notes/gravity.md` `[G12]`): soft priors
+//! turned so that the estimate is their critical point
+//! ([`crate::multiple::gravity::GravityProblem::tilted_surrogate`]), certified as a soft
+//! problem (the view graph with a world node, by the multiple-averaging ladder; the entry point
+//! hands the certifier in), less the surrogate's constant on the held problem's feasible set.
+//! The certificate of the mixed problem; for full gravity, a fallback of the SO(2) one.
+
+use super::state::GravityState;
+use crate::certify::certificate::Certificate;
+use crate::certify::log::Prediction;
+use crate::certify::proof::Proof;
+use crate::certify::rung::{Found, Plan, Rung};
+use crate::certify::settings::CertifySettings;
+use crate::error::Result;
+use crate::multiple::gravity::GravityProblem;
+use crate::so3::Rotation;
+
+/// Certifies an estimate of a soft gravity problem (`certify_gravity`'s soft path).
+pub(crate) type SoftCertifier =
+    fn(&GravityProblem, &[Rotation], &CertifySettings) -> Result<Certificate>;
+
+/// The surrogate's bound as a rung: run first for the mixed problem, as a fallback for full
+/// gravity.
+pub(crate) struct SurrogateRung {
+    done: bool,
+    certify: SoftCertifier,
+}
+
+impl SurrogateRung {
+    /// The rung, certifying the surrogate with `certify`.
+    pub(crate) fn new(certify: SoftCertifier) -> Self {
+        SurrogateRung {
+            done: false,
+            certify,
+        }
+    }
+}
+
+impl<'a> Rung<GravityState<'a>> for SurrogateRung {
+    fn proof(&self) -> Proof {
+        Proof::GravitySurrogate
+    }
+
+    fn plan(&mut self, cx: &GravityState<'a>) -> Result<Plan> {
+        if self.done {
+            return Ok(Plan::Done);
+        }
+        // the augmented view graph's certificate: a few sparse factorisations of 3(n + 1)
+        let g = cx.problem.problem();
+        let size = (g.num_rotations() + g.num_edges() + cx.problem.priors().num_known()) as f64;
+        let predicted = Prediction::new(2e-6 * size, 2000.0 * size);
+        Ok(if cx.problem.priors().is_full() {
+            Plan::Fallback(predicted)
+        } else {
+            Plan::Run(predicted)
+        })
+    }
+
+    fn attempt(&mut self, cx: &mut GravityState<'a>) -> Result<Found> {
+        self.done = true;
+        let (surrogate, constant) = cx.problem.tilted_surrogate(cx.rotations)?;
+        let mut settings = cx.settings.clone();
+        settings.budget.max_seconds = cx.deadline.left().map(|l| l.max(0.0));
+        let inner = (self.certify)(&surrogate, cx.rotations, &settings)?;
+        let Some(lb) = inner.lower_bound else {
+            return Ok(Found::failed(format!(
+                "the tilted surrogate has no bound: {}",
+                inner.explanation
+            )));
+        };
+        // lb - constant, rounded down (one subtraction)
+        let bound = (lb - constant) - (lb - constant).abs() * f64::EPSILON;
+        let weight = surrogate.priors().weight().unwrap_or(f64::NAN);
+        let note = format!(
+            "the priors' tilted soft surrogate (weight {weight:.3e}): its bound {lb:.9e} ({}, \
+             by {}) less its constant {constant:.3e} on the held problem",
+            inner.verdict, inner.method
+        );
+        let lb = cx.offer(
+            bound,
+            Proof::GravitySurrogate,
+            inner.verified_min_eigenvalue,
+            &note,
+        );
+        Ok(Found::proved(lb, cx.certifies(lb), note))
+    }
+}
