@@ -5,8 +5,8 @@
 //! climb ([`super::verify`]).
 
 use super::multipliers::{
-    FirstOrder, GaugeTerms, TraceBound, certificate_matrix, entry_terms, forming_margin,
-    forming_margins, gauge_terms,
+    FirstOrder, GaugeTerms, TraceBound, certificate_matrix, entry_terms, forming_margins,
+    gauge_terms,
 };
 use super::scalar::ScalarAnalysis;
 use super::verified::VerifiedBound;
@@ -160,6 +160,8 @@ impl<'a> Check<'a> {
             }
             _ => None,
         };
+        // [A3] per node (empty for isotropic data): the largest, and by rows [D6] (3)
+        let forming = forming_margins(problem, lambdas).unwrap_or_default();
         Ok(Check {
             problem,
             lambdas,
@@ -167,9 +169,8 @@ impl<'a> Check<'a> {
             s,
             norm,
             terms: entry_terms(problem),
-            forming: forming_margin(problem, lambdas),
-            forming_sum: forming_margins(problem, lambdas)
-                .map_or(0.0, |m| 3.0 * m.iter().sum::<f64>()),
+            forming: forming.iter().copied().fold(0.0, f64::max),
+            forming_sum: 3.0 * forming.iter().sum::<f64>(),
             gap: settings
                 .tolerance
                 .resolve(problem.min_weight())
