@@ -155,7 +155,13 @@ fn certify_soft(
         .dual
         .proofs
         .retain(|p| !matches!(p, Proof::Grounded | Proof::BlockComparison));
-    let c = certify_multiple(&augmented, &problem.soft_point(rotations), &settings)?;
+    let mut c = certify_multiple(&augmented, &problem.soft_point(rotations), &settings)?;
+    // the augmented graph's edges are the view graph's and the priors' (said so, [G10])
+    let (m, k) = (problem.problem().num_edges(), problem.priors().num_known());
+    c.certificate.explanation = c.certificate.explanation.replace(
+        &format!("of its {} edges", m + k),
+        &format!("of its {m} edges and {k} soft gravity priors (a world node's edges)"),
+    );
     let improvement = c.improvement.map(|mut s| {
         let standard = problem.soft_images(s.rotations);
         s.rotations = problem.out_of_standard(&standard);
