@@ -548,33 +548,13 @@ fn no_false_certificate_on_rigs_of_many_sensors() {
 #[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_with_gravity_priors() {
     use rotavg::certify::certify_gravity;
-    use rotavg::multiple::gravity::{GravityProblem, solve_gravity};
-    use rotavg::multiple::synthetic::SyntheticGravity;
+    use rotavg::multiple::gravity::solve_gravity;
     const GRAPHS: usize = 200;
     let one = |k: usize| -> (usize, usize) {
         let mut rng = StdRng::seed_from_u64(4242 + k as u64);
-        let n = 4 + k % 6;
-        let (graph, truth) = SyntheticGraph {
-            num_rotations: n,
-            num_edges: n * (2 + k % 2),
-            noise_sigma: [0.0, 0.05, 0.2, 0.5][(k / 6) % 4],
-            outlier_fraction: [0.0, 0.2][(k / 24) % 2],
-            seed: k as u64,
-        }
-        .generate();
-        let priors = SyntheticGravity {
-            noise_deg: [0.0, 1.0, 5.0][(k / 48) % 3],
-            missing_fraction: [0.0, 0.3][k % 2],
-            seed: k as u64,
-        }
-        .priors(&truth)
-        .unwrap();
-        let priors = match [Some(0.1), Some(1.0), Some(10.0), Some(1000.0), None][(k / 3) % 5] {
-            Some(w) => priors.with_weight(w).unwrap(),
-            None => priors,
-        };
-        let held = priors.weight().is_none();
-        let p = GravityProblem::new(graph, priors).unwrap();
+        let p = gravity_instance(k);
+        let n = p.problem().num_rotations();
+        let held = p.priors().weight().is_none();
         let cost = |r: &[Rotation]| p.problem().chordal_cost(r) + p.prior_cost(r);
         let solved = solve_gravity(&p, &MultipleSettings::default()).unwrap();
         let mut best = (cost(&solved.rotations), solved.rotations.clone());
@@ -642,4 +622,33 @@ fn no_false_certificate_with_gravity_priors() {
         certificates == 4 * GRAPHS && certified > 100,
         "{certificates} / {certified}"
     );
+}
+
+/// Gravity instance `k` of the campaign: 4-9 nodes, 2-3 edges per node, noise 0-0.5 rad, 0 or
+/// 20 % outliers, priors with 0-5 degrees of noise and 0 or 30 % missing, soft of weight 0.1 to
+/// 1000 or held.
+fn gravity_instance(k: usize) -> rotavg::multiple::gravity::GravityProblem {
+    use rotavg::multiple::gravity::GravityProblem;
+    use rotavg::multiple::synthetic::SyntheticGravity;
+    let n = 4 + k % 6;
+    let (graph, truth) = SyntheticGraph {
+        num_rotations: n,
+        num_edges: n * (2 + k % 2),
+        noise_sigma: [0.0, 0.05, 0.2, 0.5][(k / 6) % 4],
+        outlier_fraction: [0.0, 0.2][(k / 24) % 2],
+        seed: k as u64,
+    }
+    .generate();
+    let priors = SyntheticGravity {
+        noise_deg: [0.0, 1.0, 5.0][(k / 48) % 3],
+        missing_fraction: [0.0, 0.3][k % 2],
+        seed: k as u64,
+    }
+    .priors(&truth)
+    .unwrap();
+    let priors = match [Some(0.1), Some(1.0), Some(10.0), Some(1000.0), None][(k / 3) % 5] {
+        Some(w) => priors.with_weight(w).unwrap(),
+        None => priors,
+    };
+    GravityProblem::new(graph, priors).unwrap()
 }

@@ -419,29 +419,9 @@ fn bad_priors_and_estimates_are_errors() {
 #[test]
 fn robust_gravity_on_outliers() {
     use rotavg::certify::CertifiedProblemKind;
-    let (graph, truth) = SyntheticGraph {
-        num_rotations: 150,
-        num_edges: 1200,
-        noise_sigma: (2f64 / 3f64.sqrt()).to_radians(),
-        outlier_fraction: 0.15,
-        seed: 11,
-    }
-    .generate();
-    let priors = SyntheticGravity {
-        noise_deg: 0.3,
-        missing_fraction: 0.0,
-        seed: 11,
-    }
-    .priors(&truth)
-    .unwrap();
+    let (graph, truth, priors) = crate::common::gravity_outlier_scene();
     let p = GravityProblem::new(graph.clone(), priors).unwrap();
-    let auto = AverageSettings {
-        solve: MultipleSettings {
-            robust_on_outliers: rotavg::io::names::MultipleLoss::Auto.robust_on_outliers(5.0),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let auto = crate::common::auto_loss_settings();
     let est = average_with_gravity(&p, &auto).unwrap();
     assert!(est.details.loss_choice.as_ref().unwrap().is_robust());
     let off = p.max_prior_violation_deg(&est.solution.rotations);

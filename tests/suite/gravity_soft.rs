@@ -12,7 +12,7 @@ use rotavg::certify::{CertifiedProblemKind, CertifySettings, certify_gravity};
 use rotavg::multiple::accuracy::align_and_compare;
 use rotavg::multiple::gravity::{GravityPriors, GravityProblem};
 use rotavg::multiple::synthetic::{SyntheticGraph, SyntheticGravity};
-use rotavg::multiple::{Edge, MultipleProblem, MultipleSettings};
+use rotavg::multiple::{Edge, MultipleProblem};
 use rotavg::pipeline::{AverageSettings, average_multiple, average_with_gravity};
 use rotavg::so3::{exp, perturb_gaussian, random_rotation};
 use rotavg::{Rotation, Verdict};
@@ -283,29 +283,9 @@ fn soft_verdict_is_scale_free() {
 /// certified and named; bad weights are errors; the weight survives serialisation.
 #[test]
 fn robust_soft_priors_and_bad_weights() {
-    let (graph, truth) = SyntheticGraph {
-        num_rotations: 150,
-        num_edges: 1200,
-        noise_sigma: (2f64 / 3f64.sqrt()).to_radians(),
-        outlier_fraction: 0.15,
-        seed: 11,
-    }
-    .generate();
-    let priors = SyntheticGravity {
-        noise_deg: 0.3,
-        missing_fraction: 0.0,
-        seed: 11,
-    }
-    .priors(&truth)
-    .unwrap();
+    let (graph, truth, priors) = crate::common::gravity_outlier_scene();
     let p = GravityProblem::new(graph, priors.clone().with_weight(30.0).unwrap()).unwrap();
-    let auto = AverageSettings {
-        solve: MultipleSettings {
-            robust_on_outliers: rotavg::io::names::MultipleLoss::Auto.robust_on_outliers(5.0),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let auto = crate::common::auto_loss_settings();
     let est = average_with_gravity(&p, &auto).unwrap();
     assert!(est.details.loss_choice.as_ref().unwrap().is_robust());
     let g = est.details.inlier_graph.as_ref().expect("an inlier graph");

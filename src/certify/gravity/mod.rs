@@ -139,7 +139,7 @@ fn soft_certificate(
 
 /// Certify `rotations` (file convention) for the soft problem of `problem`: the augmented
 /// view graph's certification at the estimate, its improvement (if any) brought back to the
-/// images (file convention, gauge: the world node at `I`).
+/// images (file convention, the world node at `I`, the gravity problem's gauge).
 fn certify_soft(
     problem: &GravityProblem,
     rotations: &[Rotation],
@@ -163,8 +163,7 @@ fn certify_soft(
         &format!("of its {m} edges and {k} soft gravity priors (a world node's edges)"),
     );
     let improvement = c.improvement.map(|mut s| {
-        let standard = problem.soft_images(s.rotations);
-        s.rotations = problem.out_of_standard(&standard);
+        s.rotations = problem.soft_estimate(s.rotations);
         s
     });
     Ok(Certification { improvement, ..c })

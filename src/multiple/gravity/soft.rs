@@ -157,6 +157,14 @@ impl GravityProblem {
         point.iter().map(|r| r * turn).collect()
     }
 
+    /// A point of [`Self::soft_augmented`] as an estimate of the problem: its images turned so
+    /// that the world node is at `I`, in the gravity problem's gauge, file convention.
+    pub(crate) fn soft_estimate(&self, point: Vec<Rotation>) -> Vec<Rotation> {
+        let mut standard = self.soft_images(point);
+        super::fix_gravity_gauge(&mut standard);
+        self.out_of_standard(&standard)
+    }
+
     /// The gradient norm of the soft problem (the view graph's objective plus the prior terms)
     /// at `rotations` (standard convention).
     pub(crate) fn soft_gradient_norm(&self, rotations: &[Rotation], l1_epsilon: f64) -> f64 {

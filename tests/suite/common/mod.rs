@@ -233,3 +233,42 @@ pub fn assert_in_so3(rotations: &[Rotation], what: &str) {
         );
     }
 }
+
+/// The outlier scene of the gravity tests: 150 cameras, 1200 edges with 2 degrees of noise and
+/// 15 % random-rotation outliers, priors good to 0.3 degrees for every image (seed 11), with the
+/// truth.
+pub fn gravity_outlier_scene() -> (
+    MultipleProblem,
+    Vec<Rotation>,
+    rotavg::multiple::gravity::GravityPriors,
+) {
+    use rotavg::multiple::synthetic::{SyntheticGraph, SyntheticGravity};
+    let (graph, truth) = SyntheticGraph {
+        num_rotations: 150,
+        num_edges: 1200,
+        noise_sigma: (2f64 / 3f64.sqrt()).to_radians(),
+        outlier_fraction: 0.15,
+        seed: 11,
+    }
+    .generate();
+    let priors = SyntheticGravity {
+        noise_deg: 0.3,
+        missing_fraction: 0.0,
+        seed: 11,
+    }
+    .priors(&truth)
+    .expect("generated priors are valid");
+    (graph, truth, priors)
+}
+
+/// The pipeline's settings under the loss rule `auto` (the command line's default, 5 degrees).
+pub fn auto_loss_settings() -> rotavg::pipeline::AverageSettings<rotavg::multiple::MultipleSettings>
+{
+    rotavg::pipeline::AverageSettings {
+        solve: rotavg::multiple::MultipleSettings {
+            robust_on_outliers: rotavg::io::names::MultipleLoss::Auto.robust_on_outliers(5.0),
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
