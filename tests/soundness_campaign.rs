@@ -593,10 +593,15 @@ fn no_false_certificate_with_gravity_priors() {
             false => (0..n).map(|_| random_rotation(&mut rng)).collect(),
         });
         let mut certified = 0;
-        for r in &points {
-            let c = certify_gravity(&p, r, &CertifySettings::default())
-                .unwrap()
-                .certificate;
+        // the default ladder, and the scalar comparison alone (soft priors: its hub form [G13])
+        let mut alone = CertifySettings::default();
+        alone.dual.proofs = vec![rotavg::certify::Proof::ScalarComparison];
+        let settings = [CertifySettings::default(), alone];
+        for (r, settings) in points
+            .iter()
+            .flat_map(|r| settings.iter().map(move |s| (r, s)))
+        {
+            let c = certify_gravity(&p, r, settings).unwrap().certificate;
             let lb = c.lower_bound.unwrap_or(f64::NEG_INFINITY);
             assert!(
                 lb <= best.0 * (1.0 + 1e-12) + 1e-300,
@@ -613,13 +618,13 @@ fn no_false_certificate_with_gravity_priors() {
                 );
             }
         }
-        (points.len(), certified)
+        (2 * points.len(), certified)
     };
     let totals = in_parallel(GRAPHS, one);
     let (certificates, certified) = totals.iter().fold((0, 0), |a, t| (a.0 + t.0, a.1 + t.1));
     eprintln!("gravity priors: {certificates} certificates, {certified} certified");
     assert!(
-        certificates == 4 * GRAPHS && certified > 100,
+        certificates == 8 * GRAPHS && certified > 200,
         "{certificates} / {certified}"
     );
 }

@@ -310,3 +310,42 @@ fn robust_soft_priors_and_bad_weights() {
     let broken = json.replace("\"weight\":30.0", "\"weight\":-3.0");
     assert!(serde_json::from_str::<GravityProblem>(&broken).is_err());
 }
+
+/// A soft-prior problem large enough that the scalar comparison's hub form (`[G13]`) is
+/// predicted cheaper than the `3n` factorisation: it proves the estimate (its log says so), and
+/// its bound agrees with the shifted Cholesky's on the same multipliers within the tolerance,
+/// both below the estimate's cost.
+#[test]
+fn large_soft_priors_are_certified_by_the_hub_comparison() {
+    use rotavg::certify::Proof;
+    use rotavg::certify::log::Outcome;
+    let s = scene(1500, 3.0, 2.0, 0.25, 11);
+    let p =
+        GravityProblem::new(s.graph.clone(), s.priors.clone().with_weight(2.25).unwrap()).unwrap();
+    let est = average_with_gravity(&p, &AverageSettings::default()).unwrap();
+    let rotations = &est.solution.rotations;
+    let settings = CertifySettings::default();
+    let hub = certify_gravity(&p, rotations, &settings).unwrap();
+    let proved_by_hub = hub.details.ladder.iter().any(|a| {
+        a.rung == Proof::ScalarComparison
+            && a.note.contains("hub")
+            && matches!(a.outcome, Outcome::Proved { .. })
+    });
+    assert!(proved_by_hub, "{:#?}", hub.details.ladder);
+    let mut without = settings.clone();
+    without
+        .dual
+        .proofs
+        .retain(|p| *p != Proof::ScalarComparison);
+    let shifted = certify_gravity(&p, rotations, &without).unwrap();
+    let (a, b) = (hub.certificate, shifted.certificate);
+    assert_eq!(a.verdict, Verdict::Certified, "{a}");
+    assert_eq!(b.verdict, Verdict::Certified, "{b}");
+    let cost = a.upper_bound;
+    let (la, lb) = (a.lower_bound.unwrap(), b.lower_bound.unwrap());
+    assert!(la <= cost && lb <= cost, "{la} {lb} {cost}");
+    assert!(
+        (la - lb).abs() <= a.tolerance.allowed_gap(cost),
+        "{la} against {lb}"
+    );
+}

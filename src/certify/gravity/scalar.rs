@@ -13,7 +13,7 @@
 
 use super::planar::{PlanarBound, PlanarForm};
 use crate::certify::budget::{Budget, Deadline};
-use crate::certify::multiple::scalar::rungs::SECONDS_PER_EDGE;
+use crate::certify::multiple::scalar::SECONDS_PER_EDGE;
 use crate::certify::multiple::scalar::{ScalarAnalysis, scalar_comparison};
 use crate::certify::settings::CertifySettings;
 use crate::error::Result;

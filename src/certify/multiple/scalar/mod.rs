@@ -42,6 +42,11 @@
 //!    every `L'_p - diag(c_p)` gives `y^T (L' - diag(w)) y >= -eps |y|^2` on `w^T y = 0`, with
 //!    the split's defect `eps = sum_p ||c_p - s_p w||^2 / 1^T c_p` paid from `zeta`.
 //!
+//! 7. *(a hub)* An anisotropic problem of one special shape, an isotropic view graph plus one
+//!    node joined to others by edges of information `W diag(1, 1, 0)` (soft gravity priors'
+//!    world node), is proven slice by slice: the first two coordinates on the view graph's
+//!    Laplacian, the third with the hub (`hub.rs`, `paper-notes/gravity.md` `[G13]`).
+//!
 //! When the residuals are too large for step 4 (noisy data, low algebraic connectivity) the
 //! factorisation shows more than one negative pivot and [`scalar_comparison`] returns `None`:
 //! the caller falls back to the factorisation of `S` itself. The bound is never weaker than
@@ -50,6 +55,8 @@
 mod analysis;
 mod charges;
 mod forecast;
+mod hub;
+mod hub_rung;
 mod inertia;
 mod residuals;
 pub(in crate::certify) mod rungs;
@@ -64,11 +71,16 @@ pub use analysis::{
 pub(in crate::certify::multiple) use analysis::{connect, fro, subgraph_edges};
 pub(in crate::certify::multiple) use charges::orthogonality_defect;
 
+use super::check::Check;
+use super::verified::VerifiedBound;
+use crate::certify::log::Prediction;
+use crate::certify::proof::Proof;
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
+use std::time::Instant;
 
 /// The split `beta` of the second-order edge comparison (step 2): each edge keeps
 /// `alpha_e - beta` of its weight and charges `k_e^2 / (2 beta)` to its two nodes. `1/2`
@@ -116,6 +128,11 @@ pub struct ScalarComparison {
     pub residual_bound: f64,
 }
 
+/// The comparison's work besides the factorisations, per edge: the edge charges and the
+/// double-double gauge block of steps 2 and 3 (measured 4.5e-6 s per edge on a 15k-node grid of
+/// 22,216 edges, 2026-11-26, `rotavg multiple`: 0.10 s of which 3e-3 s of factorisation).
+pub const SECONDS_PER_EDGE: f64 = 4.5e-6;
+
 fn one_part() -> usize {
     1
 }
@@ -136,6 +153,48 @@ pub enum ScalarFailure {
     BackwardError,
     /// The estimate's rotations are too far from orthogonal.
     NotOrthogonal,
+}
+
+/// Why a comparison that ran did not prove enough, with the numbers: its proven
+/// `lambda_min(S)` when the cross terms were too large, else its failure (`needed`: the
+/// negative pivots its inertia condition needs, 1 for the scalar comparison, 3 for the block).
+pub(in crate::certify::multiple) fn failure_text(
+    target: f64,
+    outcome: std::result::Result<f64, ScalarFailure>,
+    needed: usize,
+) -> String {
+    match outcome {
+        Ok(mu) => format!(
+            "its cross terms give lambda_min(S) >= {mu:.1e}, below the -{target:.1e} the gap \
+             budget allows"
+        ),
+        Err(ScalarFailure::Inertia { negative_pivots }) => {
+            format!("{negative_pivots} negative pivots (its condition needs exactly {needed})")
+        }
+        Err(ScalarFailure::Numerical) => "a zero or non-finite pivot".into(),
+        Err(ScalarFailure::BackwardError) => {
+            "the factorisation's backward error exceeded its headroom".into()
+        }
+        Err(ScalarFailure::NotOrthogonal) => "the rotations are too far from orthogonal".into(),
+    }
+}
+
+/// The verified bound of a comparison that proved `proof`, logged with its shape `note`.
+pub(super) fn proved_bound(
+    cx: &Check<'_>,
+    proof: ScalarComparison,
+    predicted: Option<Prediction>,
+    since: Instant,
+    note: String,
+) -> VerifiedBound {
+    let mut b = cx.bound_from_mu(proof.verified_min_eigenvalue, Proof::ScalarComparison);
+    b.fp_margin = proof.backward_error;
+    b.factorizations = proof.parts;
+    b.factor_nonzeros = proof.factor_nonzeros;
+    b.scalar_comparison = Some(proof);
+    let proved = cx.proved(&b);
+    cx.log_with_note(Proof::ScalarComparison, predicted, proved, since, note);
+    b
 }
 
 /// Try to prove `lambda_min(S) >= mu` for `S = Q - blkdiag(sym(Lambda))` from the estimate

@@ -21,34 +21,10 @@ pub(super) fn residual_bounds(
     target: f64,
 ) -> (f64, f64) {
     let n = problem.num_rotations();
-    let (qy, qy_err, qy_abs) = laplacian_products(problem, rotations);
-    let u = UNIT_ROUNDOFF;
-    let mut rho1_sq = 0.0f64;
-    let mut sum_r = Matrix3::zeros();
-    let mut err_sum = 0.0f64;
-    let mut abs_sum = 0.0f64;
-    for i in 0..n {
-        let ri = rotations[i].matrix();
-        let lam = 0.5 * (lambdas[i] + lambdas[i].transpose());
-        let sy = qy[i] - lam * ri;
-        let r = ri.transpose() * sy;
-        // entrywise error of sy: the Q Y sum, the symmetrisation (u |Lambda|), the product
-        // Lambda R (gamma_3 3.4 |Lambda|max) and the subtraction (u |sy|)
-        let lam_max = lambdas[i].amax();
-        let e_sy = (qy_err[i] + gamma(deg_n[i] + 2) * qy_abs[i]) * (1.0 + 4.0 * u)
-            + (gamma(4) * 3.4 + 2.0 * u) * lam_max * 3.0
-            + 2.0 * u * sy.amax();
-        // R^T sy: gamma_3 (|R^T| |sy|) <= gamma_3 3.4 |sy|max, plus |R^T| e_sy <= 3.4 e_sy;
-        // Frobenius of a 3x3 error <= 3 x its largest entry bound
-        let e_r = 3.0 * (gamma(4) * 3.4 * sy.amax() + 3.4 * e_sy) * (1.0 + 1e-12);
-        let rn = fro(&r) * (1.0 + 4.0 * u) + e_r;
-        rho1_sq += rn * rn;
-        sum_r += r;
-        err_sum += e_r;
-        abs_sum += fro(&r);
-    }
-    let rho1 = rho1_sq.sqrt() * (1.0 + gamma(n + 4));
-    let rho0_plain = (fro(&sum_r) + err_sum + gamma(n + 4) * abs_sum) * (1.0 + 8.0 * u);
+    let nodes = node_residuals(problem, rotations, lambdas, deg_n, &|_| None);
+    let rho1 = nodes.rho1_sq.sqrt() * (1.0 + gamma(n + 4));
+    let rho0_plain = (fro(&nodes.sum) + nodes.err_sum + gamma(n + 4) * nodes.abs_sum)
+        * (1.0 + 8.0 * UNIT_ROUNDOFF);
     // the plain bound's rounding grows like n u d: above a tiny fraction of the target, evaluate
     // v0^T M v0 in double-double instead (its true size is the rounding of Lambda, ~sqrt(n) u d)
     let rho0 = if rho0_plain * 1e3 > target.max(0.0) * n as f64 {
@@ -57,6 +33,62 @@ pub(super) fn residual_bounds(
         rho0_plain
     };
     (rho1, rho0)
+}
+
+/// The blocks `r'_i = R_i^T (S Y)_i` of step 3, bounded node by node.
+pub(super) struct NodeResiduals {
+    /// `sum_i ||r'_i||_F^2`, each norm rounded up by its error bound.
+    pub rho1_sq: f64,
+    /// `sum_i fl(r'_i)`.
+    pub sum: Matrix3<f64>,
+    /// The sum of the blocks' error bounds (Frobenius).
+    pub err_sum: f64,
+    /// `sum_i ||fl(r'_i)||_F`.
+    pub abs_sum: f64,
+}
+
+/// Step 3's blocks with `(S Y)_i = (Q Y)_i - sym(Lambda_i) R_i + E_i`, where `extra(i)` gives
+/// `fl(E_i)` and a bound on the error of each of its entries (`None`: `E_i = 0`; the hub
+/// comparison's spoke terms, `paper-notes/gravity.md` `[G13]`).
+pub(super) fn node_residuals(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+    deg_n: &[usize],
+    extra: &dyn Fn(usize) -> Option<(Matrix3<f64>, f64)>,
+) -> NodeResiduals {
+    let (qy, qy_err, qy_abs) = laplacian_products(problem, rotations);
+    let u = UNIT_ROUNDOFF;
+    let mut out = NodeResiduals {
+        rho1_sq: 0.0,
+        sum: Matrix3::zeros(),
+        err_sum: 0.0,
+        abs_sum: 0.0,
+    };
+    for i in 0..problem.num_rotations() {
+        let ri = rotations[i].matrix();
+        let lam = 0.5 * (lambdas[i] + lambdas[i].transpose());
+        let (e, e_err) = extra(i).unwrap_or((Matrix3::zeros(), 0.0));
+        let sy = qy[i] - lam * ri + e;
+        let r = ri.transpose() * sy;
+        // entrywise error of sy: the Q Y sum, the symmetrisation (u |Lambda|), the product
+        // Lambda R (gamma_3 3.4 |Lambda|max), the extra term's own and the two additions
+        // (2u |sy| each)
+        let lam_max = lambdas[i].amax();
+        let e_sy = (qy_err[i] + gamma(deg_n[i] + 2) * qy_abs[i]) * (1.0 + 4.0 * u)
+            + (gamma(4) * 3.4 + 2.0 * u) * lam_max * 3.0
+            + e_err
+            + 4.0 * u * (sy.amax() + e.amax());
+        // R^T sy: gamma_3 (|R^T| |sy|) <= gamma_3 3.4 |sy|max, plus |R^T| e_sy <= 3.4 e_sy;
+        // Frobenius of a 3x3 error <= 3 x its largest entry bound
+        let e_r = 3.0 * (gamma(4) * 3.4 * sy.amax() + 3.4 * e_sy) * (1.0 + 1e-12);
+        let rn = fro(&r) * (1.0 + 4.0 * u) + e_r;
+        out.rho1_sq += rn * rn;
+        out.sum += r;
+        out.err_sum += e_r;
+        out.abs_sum += fro(&r);
+    }
+    out
 }
 
 /// `(Q Y)_i` in plain floating point with a running entrywise error bound (Higham Lemma 3.1 and

@@ -7,9 +7,11 @@
 //! order, each logged, each only while what is left of the time budget covers its prediction.
 
 use super::forecast::{FORECAST_FAILURE_SUCCESS, forecast_fails};
+use super::hub::HubGraph;
+use super::hub_rung::{plan_hub, run_hub};
 use super::{
-    MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_MIN_DEGREES, SPLIT_SHAPES, ScalarAnalysis,
-    ScalarFailure, SplitShape, scalar_comparison,
+    MIN_SPLIT_DEGREE, SECONDS_PER_EDGE, SPARSIFIED_EDGES_PER_NODE, SPLIT_MIN_DEGREES, SPLIT_SHAPES,
+    ScalarAnalysis, ScalarFailure, SplitShape, failure_text, proved_bound, scalar_comparison,
 };
 use crate::certify::log::{FREE_SECONDS, Outcome, Prediction, Refusal};
 use crate::certify::multiple::check::{Check, counted_prediction};
@@ -22,11 +24,6 @@ use crate::linalg::{LanczosResult, rayleigh_quotient};
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
 use std::time::Instant;
-
-/// The comparison's work besides the factorisations, per edge: the edge charges and the
-/// double-double gauge block of steps 2 and 3 (measured 4.5e-6 s per edge on a 15k-node grid of
-/// 22,216 edges, 2026-11-26, `rotavg multiple`: 0.10 s of which 3e-3 s of factorisation).
-pub const SECONDS_PER_EDGE: f64 = 4.5e-6;
 
 /// When the whole graph's factor fits but is predicted to take more than this many seconds, the
 /// subgraphs are tried before it, sparsest first, while together they are predicted to take at
@@ -50,6 +47,8 @@ pub(in crate::certify::multiple) struct ScalarFamily {
     /// Where the fallbacks after the first continue.
     fallbacks: Fallbacks,
     planned: Option<std::result::Result<Prediction, Refusal>>,
+    /// The hub shape of an anisotropic problem (`[G13]`), when it has one: its only shape.
+    hub: Option<HubGraph>,
     done: bool,
 }
 
@@ -90,6 +89,10 @@ impl ScalarFamily {
             }));
         };
         if cx.problem.is_anisotropic() {
+            if let Some((hub, predicted)) = plan_hub(cx, rotations)? {
+                self.hub = hub;
+                return Ok(predicted);
+            }
             return Ok(Err(Refusal::NotApplicable {
                 reason: "the scalar comparison needs scalar edge weights; these edges carry 3x3 \
                          information matrices"
@@ -129,6 +132,9 @@ impl ScalarFamily {
             return Ok(None);
         };
         let target = 0.5 * cx.gap / cx.s.nrows().max(1) as f64;
+        if let Some(hub) = self.hub.take() {
+            return Ok(run_hub(cx, &hub, rotations, target));
+        }
         if let (Some(whole), Some(Ok(a))) = (self.whole, &cx.scalar) {
             if let Some(b) = self.subgraphs_first(cx, rotations, whole, target)? {
                 return Ok(Some(b));
@@ -358,21 +364,10 @@ fn run(
             return Ok((None, failed));
         }
     };
-    let mut b = cx.bound_from_mu(proof.verified_min_eigenvalue, Proof::ScalarComparison);
-    b.fp_margin = proof.backward_error;
-    b.factorizations = proof.parts;
-    b.factor_nonzeros = proof.factor_nonzeros;
     if cx.settings.dual.estimate_when_verified {
         cx.notes().estimate = Some(gauge_estimate(cx, rotations));
     }
-    b.scalar_comparison = Some(proof);
-    cx.log_with_note(
-        Proof::ScalarComparison,
-        predicted,
-        cx.proved(&b),
-        since,
-        shape_of(a),
-    );
+    let b = proved_bound(cx, proof, predicted, since, shape_of(a));
     Ok((Some(b), None))
 }
 
@@ -443,30 +438,6 @@ fn splits(
         }
     }
     Ok(candidates)
-}
-
-/// Why a comparison that ran did not prove enough, with the numbers: its proven
-/// `lambda_min(S)` when the cross terms were too large, else its failure (`needed`: the
-/// negative pivots its inertia condition needs, 1 for the scalar comparison, 3 for the block).
-pub(in crate::certify::multiple) fn failure_text(
-    target: f64,
-    outcome: std::result::Result<f64, ScalarFailure>,
-    needed: usize,
-) -> String {
-    match outcome {
-        Ok(mu) => format!(
-            "its cross terms give lambda_min(S) >= {mu:.1e}, below the -{target:.1e} the gap \
-             budget allows"
-        ),
-        Err(ScalarFailure::Inertia { negative_pivots }) => {
-            format!("{negative_pivots} negative pivots (its condition needs exactly {needed})")
-        }
-        Err(ScalarFailure::Numerical) => "a zero or non-finite pivot".into(),
-        Err(ScalarFailure::BackwardError) => {
-            "the factorisation's backward error exceeded its headroom".into()
-        }
-        Err(ScalarFailure::NotOrthogonal) => "the rotations are too far from orthogonal".into(),
-    }
 }
 
 #[cfg(test)]
