@@ -24,6 +24,7 @@
 //! | `gravity_inconsistent` | `--gravity`: the priors disagree with the relative rotations by more than 5 deg in median | |
 //! | `gravity_points_up` | `--gravity`: most priors point up the image (`-y` in OpenCV / COLMAP axes) | |
 //! | `gravity_unmatched` | `--gravity`: entries whose key is no node of the graph (not used) | entries |
+//! | `gravity_scales_unused` | `--gravity` without `--gravity-weight`: relative weights given to held priors (not used) | priors |
 
 use serde::{Deserialize, Serialize};
 use std::fmt;

@@ -631,7 +631,7 @@ fn no_false_certificate_with_gravity_priors() {
 
 /// Gravity instance `k` of the campaign: 4-9 nodes, 2-3 edges per node, noise 0-0.5 rad, 0 or
 /// 20 % outliers, priors with 0-5 degrees of noise and 0 or 30 % missing, soft of weight 0.1 to
-/// 1000 or held.
+/// 1000 (half of them with per-image weights 0.01-100 times it) or held.
 fn gravity_instance(k: usize) -> rotavg::multiple::gravity::GravityProblem {
     use rotavg::multiple::gravity::GravityProblem;
     use rotavg::multiple::synthetic::SyntheticGravity;
@@ -654,6 +654,17 @@ fn gravity_instance(k: usize) -> rotavg::multiple::gravity::GravityProblem {
     let priors = match [Some(0.1), Some(1.0), Some(10.0), Some(1000.0), None][(k / 3) % 5] {
         Some(w) => priors.with_weight(w).unwrap(),
         None => priors,
+    };
+    // every other graph: per-image weights, 0.01 to 100 times the weight
+    let priors = match k % 4 < 2 {
+        true => {
+            let mut rng = StdRng::seed_from_u64(9000 + k as u64);
+            let scales = (0..n)
+                .map(|_| Some(10f64.powf(rng.random_range(-2.0..2.0))))
+                .collect();
+            priors.with_scales(scales).unwrap()
+        }
+        false => priors,
     };
     GravityProblem::new(graph, priors).unwrap()
 }

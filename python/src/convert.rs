@@ -117,13 +117,21 @@ pub fn vector(obj: &Bound<'_, PyAny>, what: &str, len: usize) -> PyResult<Vec<f6
     }
 }
 
-/// Rows of an `(N, 3)` real array-like (gravity vectors; NaN allowed: the caller decides).
-pub fn rows3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
+/// Rows of an `(N, 3)` or `(N, 4)` real array-like (gravity vectors, and their relative
+/// weights; NaN allowed: the caller decides), each with its fourth number (NaN for `(N, 3)`).
+pub fn gravity_rows(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 4]>> {
     let (values, shape) = float_values(obj, what)?;
     match shape.as_slice() {
-        [_, 3] => Ok(values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()),
+        [_, 3] => Ok(values
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2], f64::NAN])
+            .collect()),
+        [_, 4] => Ok(values
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect()),
         _ => Err(Error::new_err(format!(
-            "{what} must have shape (N, 3), got {}",
+            "{what} must have shape (N, 3) or (N, 4), got {}",
             shape_text(&shape)
         ))),
     }

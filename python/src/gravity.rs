@@ -1,9 +1,10 @@
 //! Gravity priors for `average_multiple` / `certify_multiple` (`gravity=`, `world_down=`,
 //! `gravity_weight=`: soft priors of that weight instead of constraints): an
-//! `(n, 3)` array (a row of NaN: no prior for that image) or the path of a priors file, read
-//! as `rotavg multiple --gravity` reads it.
+//! `(n, 3)` array (a row of NaN: no prior for that image), `(n, 4)` with each prior's relative
+//! weight (soft priors weigh `gravity_weight` times it; NaN: 1), or the path of a priors file,
+//! read as `rotavg multiple --gravity` reads it.
 
-use crate::convert::rows3;
+use crate::convert::gravity_rows;
 use pyo3::prelude::*;
 use rotavg::io::detect::{ComponentSelection, LoadedGraph};
 use rotavg::multiple::gravity::{GravityPriors, GravityProblem};
@@ -11,8 +12,8 @@ use rotavg::warning::Warning;
 
 /// The priors as given.
 pub enum GravityInput {
-    /// One row per input node (NaN rows: none).
-    Rows(Vec<[f64; 3]>),
+    /// One row per input node (NaN directions: none), its relative weight fourth (NaN: 1).
+    Rows(Vec<[f64; 4]>),
     /// A file, matched to the nodes by image name or file id.
     Path(String),
 }
@@ -26,7 +27,7 @@ impl GravityInput {
         if let Some(p) = crate::convert::path_of(obj) {
             return Ok(Some(GravityInput::Path(p)));
         }
-        Ok(Some(GravityInput::Rows(rows3(obj, "gravity")?)))
+        Ok(Some(GravityInput::Rows(gravity_rows(obj, "gravity")?)))
     }
 
     /// The gravity problem of `graph` (the nodes `selection` kept), soft of weight `weight`
@@ -41,21 +42,30 @@ impl GravityInput {
         let (priors, warnings) = match self {
             GravityInput::Path(p) => {
                 let read = rotavg::io::gravity::read_gravity(&p, graph, world_down)?;
-                let w = read.unmatched_warning(&p);
-                (read.priors, w.into_iter().collect())
+                let w = read.warnings(&p, weight);
+                (read.priors, w)
             }
             GravityInput::Rows(rows) => {
                 let rows = crate::for_kept(rows, selection, "gravity")?;
                 let dirs = rows
-                    .into_iter()
-                    .map(|g| (!g.iter().any(|x| x.is_nan())).then_some(g))
+                    .iter()
+                    .map(|g| (!g[..3].iter().any(|x| x.is_nan())).then_some([g[0], g[1], g[2]]))
                     .collect();
-                let priors = GravityPriors::new(dirs)?;
+                let scales = rows
+                    .iter()
+                    .map(|g| (!g[3].is_nan()).then_some(g[3]))
+                    .collect();
+                let priors = GravityPriors::new(dirs)?.with_scales(scales)?;
                 let priors = match world_down {
                     Some(w) => priors.with_world_down(w)?,
                     None => priors,
                 };
-                (priors, Vec::new())
+                let read = rotavg::io::gravity::GravityRead {
+                    priors,
+                    unmatched: 0,
+                };
+                let w = read.warnings("gravity", weight);
+                (read.priors, w)
             }
         };
         let priors = priors.soft_if(weight)?;

@@ -464,9 +464,10 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         matrix given as a rotation (``rel``, ``init``) (default 1e-5, the command line's); beyond it, an error.
 ///     gravity: optional gravity priors held as hard constraints, ``R_i world_down = g[i]``
 ///         (``g[i]`` the world's down direction in camera ``i``'s frame): an ``(n, 3)`` array
-///         (a row of NaN: no prior for that image), or the path of a priors file as
-///         ``rotavg multiple --gravity`` reads it (JSON, ``KEY gx gy gz`` lines, a COLMAP
-///         database). Least squares only (``loss`` ``"auto"`` or ``"chordal"``); every image
+///         (a row of NaN: no prior for that image), ``(n, 4)`` with each prior's relative
+///         weight fourth (soft priors weigh ``gravity_weight`` times it; NaN: 1), or the path
+///         of a priors file as ``rotavg multiple --gravity`` reads it (JSON, ``KEY gx gy gz
+///         [relative weight]`` lines, a COLMAP database). Least squares only (``loss`` ``"auto"`` or ``"chordal"``); every image
 ///         with a prior: the SO(2) certificate; some: the tilted soft surrogate's [G12].
 ///         ``to_dict()["pipeline"]["gravity"]`` has the priors' check.
 ///     world_down: the world's down direction the priors refer to (default ``(0, 0, 1)``,

@@ -7,6 +7,9 @@
 //!   keyed by the graph's file id or image name;
 //! - **text**: one `KEY gx gy gz` per line (GLOMAP's gravity file: `KEY` an image name, or
 //!   a file id), `#` comments, whitespace separated;
+//! - in JSON and text, a fourth number after a direction is that prior's **relative weight**
+//!   (soft priors weigh `--gravity-weight` times it; default 1;
+//!   [`GravityPriors::with_scales`]);
 //! - **a COLMAP database** (`*.db`, cargo feature `colmap`): the `gravity` column of its
 //!   `pose_priors` table (COLMAP 4), camera priors keyed by image id. COLMAP's cameras have
 //!   `y` down the image and its global mapper's world has gravity along `+y`, so the world's
@@ -32,19 +35,28 @@ pub struct GravityRead {
 }
 
 impl GravityRead {
-    /// The warning `gravity_unmatched` for the entries of the file `path` that match no node
-    /// (`None` when all match).
-    pub fn unmatched_warning(&self, path: &str) -> Option<crate::warning::Warning> {
-        (self.unmatched > 0).then(|| {
-            crate::warning::Warning::new(
-                "gravity_unmatched",
-                format!(
-                    "{path}: {} gravity entries match no node of the graph (not used)",
-                    self.unmatched
-                ),
-            )
-            .with_count(self.unmatched)
-        })
+    /// The warnings about the file `path` read for priors soft of `weight` (`None`: held):
+    /// `gravity_unmatched` for entries that match no node, `gravity_scales_unused` for relative
+    /// weights given to held priors (which have no weight).
+    pub fn warnings(&self, path: &str, weight: Option<f64>) -> Vec<crate::warning::Warning> {
+        use crate::warning::Warning;
+        let mut out = Vec::new();
+        if self.unmatched > 0 {
+            let text = format!(
+                "{path}: {} gravity entries match no node of the graph (not used)",
+                self.unmatched
+            );
+            out.push(Warning::new("gravity_unmatched", text).with_count(self.unmatched));
+        }
+        let scaled = self.priors.num_scaled();
+        if scaled > 0 && weight.is_none() {
+            let text = format!(
+                "{path}: {scaled} gravity priors have a relative weight (a fourth number), which \
+                 only soft priors use: they are held as constraints here (add --gravity-weight W)"
+            );
+            out.push(Warning::new("gravity_scales_unused", text).with_count(scaled));
+        }
+        out
     }
 }
 
@@ -106,6 +118,8 @@ pub fn read_gravity(
             (d, None, u)
         }
     };
+    let scales = dirs.iter().map(|d| d.and_then(|(_, s)| s)).collect();
+    let dirs = dirs.into_iter().map(|d| d.map(|(g, _)| g)).collect();
     let priors = GravityPriors::new(dirs).map_err(|e| match e {
         Error::Empty { .. } => Error::parse(
             Some(path),
@@ -118,43 +132,59 @@ pub fn read_gravity(
         Some(w) => priors.with_world_down(w)?,
         None => priors,
     };
+    let priors = priors
+        .with_scales(scales)
+        .map_err(|e| Error::parse(Some(path), None, e.to_string()))?;
     Ok(GravityRead { priors, unmatched })
 }
 
-/// A vector of three finite numbers from `parts`, or an error at `line`.
-fn vector(path: &str, line: usize, parts: &[&str]) -> Result<[f64; 3]> {
-    let mut v = [0.0; 3];
-    if parts.len() != 3 {
-        return Err(Error::parse(
-            Some(path),
-            Some(line),
-            format!("expected `KEY gx gy gz`, found {} numbers", parts.len()),
-        ));
-    }
-    for (k, s) in parts.iter().enumerate() {
-        v[k] = s
-            .parse::<f64>()
-            .ok()
-            .filter(|x| x.is_finite())
-            .ok_or_else(|| {
-                Error::parse(
-                    Some(path),
-                    Some(line),
-                    format!("`{s}` is not a finite number"),
-                )
-            })?;
-    }
-    if v.iter().all(|x| *x == 0.0) {
-        return Err(Error::parse(
-            Some(path),
-            Some(line),
-            "a zero vector has no direction",
-        ));
-    }
-    Ok(v)
+/// A direction of three finite numbers from `parts` and, when a fourth follows, its relative
+/// weight (finite, positive), or an error at `line` (`None` for a JSON entry: no lines).
+fn entry(path: &str, line: Option<usize>, parts: &[&str]) -> Result<Prior> {
+    let numbers = parts
+        .iter()
+        .map(|s| {
+            s.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    Error::parse(Some(path), line, format!("`{s}` is not a finite number"))
+                })
+        })
+        .collect::<Result<Vec<f64>>>()?;
+    prior(path, line, &numbers)
 }
 
-type Directions = Vec<Option<[f64; 3]>>;
+/// [`entry`] of parsed numbers.
+fn prior(path: &str, line: Option<usize>, numbers: &[f64]) -> Result<Prior> {
+    let fail = |m: String| Error::parse(Some(path), line, m);
+    let (g, scale) = match numbers {
+        [x, y, z] => ([*x, *y, *z], None),
+        [x, y, z, s] => ([*x, *y, *z], Some(*s)),
+        other => {
+            return Err(fail(format!(
+                "expected `KEY gx gy gz [relative weight]`, found {} numbers",
+                other.len()
+            )));
+        }
+    };
+    if g.iter().all(|x| *x == 0.0) {
+        return Err(fail("a zero vector has no direction".into()));
+    }
+    if let Some(s) = scale
+        && !(s.is_finite() && s > 0.0)
+    {
+        return Err(fail(format!(
+            "relative weight {s}: it must be finite and positive"
+        )));
+    }
+    Ok((g, scale))
+}
+
+/// A prior: its direction and, when given, its relative weight.
+type Prior = ([f64; 3], Option<f64>);
+
+type Directions = Vec<Option<Prior>>;
 
 /// `KEY gx gy gz` lines.
 fn text_priors(path: &str, text: &str, graph: &LoadedGraph) -> Result<(Directions, usize)> {
@@ -163,7 +193,7 @@ fn text_priors(path: &str, text: &str, graph: &LoadedGraph) -> Result<(Direction
     let mut unmatched = 0;
     for (line, l) in content_lines(text) {
         let parts: Vec<&str> = l.split_whitespace().collect();
-        let v = vector(path, line, &parts[1..])?;
+        let v = entry(path, Some(line), &parts[1..])?;
         match keys.node(parts[0]) {
             Some(k) => dirs[k] = Some(v),
             None => unmatched += 1,
@@ -181,8 +211,8 @@ fn json_priors(
     #[derive(serde::Deserialize)]
     #[serde(untagged)]
     enum Entries {
-        List(Vec<Option<[f64; 3]>>),
-        Keyed(HashMap<String, [f64; 3]>),
+        List(Vec<Option<Vec<f64>>>),
+        Keyed(HashMap<String, Vec<f64>>),
     }
     #[derive(serde::Deserialize)]
     #[serde(deny_unknown_fields)]
@@ -194,7 +224,7 @@ fn json_priors(
         Error::parse(
             Some(path),
             Some(e.line()),
-            format!("{e} (expected {{\"gravity\": [[gx, gy, gz] | null, ...], \"world_down\": [x, y, z]}})"),
+            format!("{e} (expected {{\"gravity\": [[gx, gy, gz(, weight)] | null, ...], \"world_down\": [x, y, z]}})"),
         )
     })?;
     let n = graph.problem.num_rotations();
@@ -210,14 +240,20 @@ fn json_priors(
                 ),
             ));
         }
-        Entries::List(list) => (list, file.world_down, 0),
+        Entries::List(list) => {
+            let priors = list
+                .iter()
+                .map(|v| v.as_ref().map(|v| prior(path, None, v)).transpose())
+                .collect::<Result<Directions>>()?;
+            (priors, file.world_down, 0)
+        }
         Entries::Keyed(map) => {
             let keys = Keys::of(graph);
             let mut dirs = vec![None; n];
             let mut unmatched = 0;
             for (key, v) in map {
                 match keys.node(&key) {
-                    Some(k) => dirs[k] = Some(v),
+                    Some(k) => dirs[k] = Some(prior(path, None, &v)?),
                     None => unmatched += 1,
                 }
             }
@@ -238,7 +274,7 @@ fn colmap_priors(
     let mut unmatched = 0;
     for (image_id, g) in rows {
         match keys.by_id.get(&image_id) {
-            Some(&k) => dirs[k] = Some(g),
+            Some(&k) => dirs[k] = Some((g, None)),
             None => unmatched += 1,
         }
     }

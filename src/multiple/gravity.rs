@@ -60,6 +60,10 @@ pub struct GravityPriors {
     /// ([`GravityPriors::with_weight`], `[G10]`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     weight: Option<f64>,
+    /// Per image, its prior's weight relative to `weight` (`None`: 1 for every image;
+    /// [`GravityPriors::with_scales`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    scales: Option<Vec<f64>>,
 }
 
 /// Unvalidated serde form of [`GravityPriors`] (`world_down` optional, default `(0, 0, 1)`).
@@ -70,6 +74,8 @@ struct RawGravityPriors {
     world_down: Option<[f64; 3]>,
     #[serde(default)]
     weight: Option<f64>,
+    #[serde(default)]
+    scales: Option<Vec<f64>>,
 }
 
 impl TryFrom<RawGravityPriors> for GravityPriors {
@@ -80,10 +86,11 @@ impl TryFrom<RawGravityPriors> for GravityPriors {
             Some(w) => p.with_world_down(w)?,
             None => p,
         };
-        match raw.weight {
-            Some(w) => p.with_weight(w),
-            None => Ok(p),
-        }
+        let p = match raw.scales {
+            Some(s) => p.with_scales(s.into_iter().map(Some).collect())?,
+            None => p,
+        };
+        p.soft_if(raw.weight)
     }
 }
 
@@ -136,6 +143,7 @@ impl GravityPriors {
             directions,
             world_down: [0.0, 0.0, 1.0],
             weight: None,
+            scales: None,
         })
     }
 
@@ -176,6 +184,69 @@ impl GravityPriors {
     /// The soft priors' weight (`None`: hard constraints).
     pub fn weight(&self) -> Option<f64> {
         self.weight
+    }
+
+    /// The same priors with per-image **relative weights**: image `i`'s soft prior weighs
+    /// `weight * scales[i]` (`None`: 1), e.g. `(sigma / sigma_i)^2` for a prior of `sigma_i`
+    /// against the typical `sigma`. Held priors ignore them. Errors: a count that differs from
+    /// the images', a scale that is not finite and positive.
+    ///
+    /// ```
+    /// use rotavg::multiple::gravity::GravityPriors;
+    /// let p = GravityPriors::new(vec![Some([0.0, 0.0, 1.0]), Some([0.0, 0.1, 1.0]), None])?
+    ///     .with_scales(vec![Some(4.0), None, None])?
+    ///     .with_weight(2.0)?;
+    /// assert_eq!(p.prior_weight(0), Some(8.0));
+    /// assert_eq!(p.prior_weight(1), Some(2.0));
+    /// assert_eq!(p.prior_weight(2), None);
+    /// assert!(p.clone().with_scales(vec![Some(-1.0), None, None]).is_err());
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn with_scales(mut self, scales: Vec<Option<f64>>) -> Result<Self> {
+        if scales.len() != self.directions.len() {
+            return Err(Error::InvalidSettings {
+                name: "gravity scales".into(),
+                reason: format!(
+                    "{} relative weights for {} images",
+                    scales.len(),
+                    self.directions.len()
+                ),
+            });
+        }
+        let scales = scales
+            .into_iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let s = s.unwrap_or(1.0);
+                crate::validate::check_weight(|| format!("the gravity prior of image {i}"), s)?;
+                Ok(s)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        self.scales = scales.iter().any(|s| *s != 1.0).then_some(scales);
+        Ok(self)
+    }
+
+    /// Image `i`'s weight relative to [`Self::weight`] (1 unless [`Self::with_scales`] said
+    /// otherwise).
+    pub fn scale(&self, i: usize) -> f64 {
+        self.scales
+            .as_ref()
+            .and_then(|s| s.get(i).copied())
+            .unwrap_or(1.0)
+    }
+
+    /// Images whose prior has a relative weight other than 1.
+    pub fn num_scaled(&self) -> usize {
+        (0..self.len())
+            .filter(|&i| self.directions[i].is_some() && self.scale(i) != 1.0)
+            .count()
+    }
+
+    /// The soft prior weight of image `i`, `weight * scale(i)` (`None`: held priors, or no
+    /// prior for `i`).
+    pub fn prior_weight(&self, i: usize) -> Option<f64> {
+        self.direction(i)?;
+        self.weight.map(|w| w * self.scale(i))
     }
 
     /// Number of images (with or without a prior).
@@ -223,6 +294,10 @@ impl GravityPriors {
             .collect();
         let mut out = GravityPriors::new(directions)?.with_world_down(self.world_down)?;
         out.weight = self.weight;
+        out.scales = self
+            .scales
+            .as_ref()
+            .map(|_| nodes.iter().map(|&v| self.scale(v)).collect());
         Ok(out)
     }
 

@@ -61,6 +61,15 @@ pub struct GravityDetails {
     /// The soft priors' weight (`--gravity-weight`, `[G10]`); absent: held as constraints.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub weight: Option<f64>,
+    /// Soft priors with their own relative weight (the priors file's fourth number,
+    /// [`crate::multiple::gravity::GravityPriors::with_scales`]): each weighs `weight` times it; 0 or absent: all
+    /// `weight`.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub scaled: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// Averaging with gravity priors held as constraints (or soft, `[G10]`), certified, in the
@@ -159,6 +168,11 @@ impl GravityDetails {
             world_down: priors.world_down().into(),
             check: problem.check_conventions(),
             weight: priors.weight(),
+            scaled: if priors.weight().is_some() {
+                priors.num_scaled()
+            } else {
+                0
+            },
         }
     }
 

@@ -186,7 +186,12 @@ fn file_forms_and_errors() {
         "{w:?}"
     );
     for (text, words) in [
-        ("0 0 1 0\n1 0 1\n", "bad.txt:2: expected `KEY gx gy gz`"),
+        (
+            "0 0 1 0\n1 0 1\n",
+            "bad.txt:2: expected `KEY gx gy gz [relative weight]`",
+        ),
+        ("0 0 1 0 2\n1 0 1 0 -2\n", "bad.txt:2: relative weight -2"),
+        ("0 0 1 0 1 5\n", "found 5 numbers"),
         ("0 0 1 0\n1 0 nan 1\n", "not a finite number"),
         ("0 0 0 0\n", "zero vector"),
         ("# nothing here\n", "no gravity prior matches"),
@@ -210,18 +215,12 @@ fn file_forms_and_errors() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("not `--loss geodesic`"));
 }
 
-/// `--gravity-weight`: soft priors on the mixed example are certified and named, more accurate
-/// than held ones, `certify` states the same cost and verdict for the estimate written, and a
-/// weight that is not positive, or one without priors, is an error.
-#[test]
-fn soft_priors_from_the_command_line() {
-    let (graph, truth, gravity) = (
-        example("graph.json"),
-        example("truth.txt"),
-        example("gravity.txt"),
-    );
-    let out = temp_file("soft_estimate.json", "");
-    let out = out.display().to_string();
+/// `multiple --gravity PRIORS` on the example, held and soft of weight 16 (the estimate
+/// written to `out`), and `certify` of that estimate: the two runs' JSON, after checking that
+/// `certify` certifies it at the same cost.
+fn held_and_soft(priors: &str, out: &str) -> (serde_json::Value, serde_json::Value) {
+    let (graph, truth) = (example("graph.json"), example("truth.txt"));
+    let out = temp_file(out, "").display().to_string();
     let args = [
         "multiple",
         &graph,
@@ -229,12 +228,38 @@ fn soft_priors_from_the_command_line() {
         &truth,
         "--json",
         "--gravity",
-        &gravity,
+        priors,
     ];
     let held = json_of(&run(&args));
     let soft = run(&[&args[..], &["--gravity-weight", "16", "--output", &out]].concat());
     assert_success(&soft);
     let soft = json_of(&soft);
+    let certify = run(&[
+        "certify",
+        &graph,
+        "--estimate",
+        &out,
+        "--gravity",
+        priors,
+        "--gravity-weight",
+        "16",
+        "--json",
+    ]);
+    assert_success(&certify);
+    let c = json_of(&certify);
+    assert_eq!(c["certificate"]["verdict"], "certified");
+    let (a, b) = (c["cost"].as_f64().unwrap(), soft["cost"].as_f64().unwrap());
+    assert!((a - b).abs() <= 1e-9 * b, "{a} vs {b}");
+    (held, soft)
+}
+
+/// `--gravity-weight`: soft priors on the mixed example are certified and named, more accurate
+/// than held ones, `certify` states the same cost and verdict for the estimate written, and a
+/// weight that is not positive, or one without priors, is an error.
+#[test]
+fn soft_priors_from_the_command_line() {
+    let (graph, gravity) = (example("graph.json"), example("gravity.txt"));
+    let (held, soft) = held_and_soft(&gravity, "soft_estimate.json");
     assert_eq!(
         soft["verdict"]["problem"]["kind"],
         "chordal_l2_gravity_soft"
@@ -247,22 +272,6 @@ fn soft_priors_from_the_command_line() {
         mean(&soft),
         mean(&held)
     );
-    let certify = run(&[
-        "certify",
-        &graph,
-        "--estimate",
-        &out,
-        "--gravity",
-        &gravity,
-        "--gravity-weight",
-        "16",
-        "--json",
-    ]);
-    assert_success(&certify);
-    let c = json_of(&certify);
-    assert_eq!(c["certificate"]["verdict"], "certified");
-    let (a, b) = (c["cost"].as_f64().unwrap(), soft["cost"].as_f64().unwrap());
-    assert!((a - b).abs() <= 1e-9 * b, "{a} vs {b}");
     for bad in [
         &["--gravity-weight", "-1", "--gravity", &gravity][..],
         &["--gravity-weight", "2"],
@@ -272,4 +281,55 @@ fn soft_priors_from_the_command_line() {
         let err = String::from_utf8_lossy(&r.stderr);
         assert!(err.contains("weight") || err.contains("gravity"), "{err}");
     }
+}
+
+/// A fourth number per prior, its relative weight (`GravityPriors::with_scales`): soft priors
+/// use it (`pipeline.gravity.scaled`), `certify` states the same cost, the JSON list form reads
+/// it too, and held priors warn that it is not used.
+#[test]
+fn per_image_weights_from_the_command_line() {
+    let text = std::fs::read_to_string(example("gravity.txt")).unwrap();
+    let mut weighted = String::new();
+    let mut scaled = 0;
+    for (k, l) in text.lines().filter(|l| !l.starts_with('#')).enumerate() {
+        let w = if k % 3 == 0 { 0.25 } else { 1.0 };
+        scaled += usize::from(w != 1.0);
+        weighted += &format!("{l} {w}\n");
+    }
+    let priors = temp_file("weighted.txt", &weighted).display().to_string();
+    let (held, soft) = held_and_soft(&priors, "weighted_estimate.json");
+    assert_eq!(soft["pipeline"]["gravity"]["scaled"], scaled);
+    assert_eq!(soft["certificate"]["verdict"], "certified");
+    // one weight for all costs differently
+    let (_, plain) = held_and_soft(&example("gravity.txt"), "plain_estimate.json");
+    let (a, b) = (
+        plain["cost"].as_f64().unwrap(),
+        soft["cost"].as_f64().unwrap(),
+    );
+    assert!((a - b).abs() > 1e-6 * b, "{a} vs {b}");
+    let w = held["warnings"].as_array().unwrap();
+    assert!(
+        w.iter()
+            .any(|w| w["code"] == "gravity_scales_unused" && w["count"] == scaled),
+        "{w:?}"
+    );
+    let list = temp_file(
+        "list.json",
+        r#"{"gravity": [[0, 1, 0, 3], null, [0, 1, 0]]}"#,
+    );
+    let tiny = temp_file(
+        "tiny.json",
+        r#"{"num_rotations": 3, "edges": [{"i": 0, "j": 1, "rotation": [[1,0,0],[0,1,0],[0,0,1]], "weight": 1}, {"i": 1, "j": 2, "rotation": [[1,0,0],[0,1,0],[0,0,1]], "weight": 1}]}"#,
+    );
+    let r = run(&[
+        "multiple",
+        tiny.to_str().unwrap(),
+        "--gravity",
+        list.to_str().unwrap(),
+        "--gravity-weight",
+        "2",
+        "--json",
+    ]);
+    assert_success(&r);
+    assert_eq!(json_of(&r)["pipeline"]["gravity"]["scaled"], 1);
 }

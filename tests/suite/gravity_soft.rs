@@ -18,8 +18,8 @@ use rotavg::so3::{exp, perturb_gaussian, random_rotation};
 use rotavg::{Rotation, Verdict};
 
 /// The soft problem's cost written out (contract section 1 plus `[G10]`):
-/// `sum w_ij ||R_j - R_ij R_i||_F^2 + sum 2 w ||R_i down - g_i||^2`.
-fn soft_cost(graph: &MultipleProblem, g: &[Vector3<f64>], w: f64, r: &[Matrix3<f64>]) -> f64 {
+/// `sum w_ij ||R_j - R_ij R_i||_F^2 + sum 2 w_i ||R_i down - g_i||^2`.
+fn soft_cost(graph: &MultipleProblem, g: &[Vector3<f64>], w: &[f64], r: &[Matrix3<f64>]) -> f64 {
     let edges: f64 = graph
         .edges()
         .iter()
@@ -28,14 +28,15 @@ fn soft_cost(graph: &MultipleProblem, g: &[Vector3<f64>], w: f64, r: &[Matrix3<f
     let priors: f64 = r
         .iter()
         .zip(g)
-        .map(|(ri, gi)| 2.0 * w * (ri * Vector3::z() - gi).norm_squared())
+        .zip(w)
+        .map(|((ri, gi), wi)| 2.0 * wi * (ri * Vector3::z() - gi).norm_squared())
         .sum();
     edges + priors
 }
 
 /// The smallest cost a multistart pattern search finds (random starts, moves `R_i exp(t e_k)`
 /// along each tangent axis, steps halved to 1e-10): this file's own minimiser.
-fn multistart(graph: &MultipleProblem, g: &[Vector3<f64>], w: f64, starts: usize) -> f64 {
+fn multistart(graph: &MultipleProblem, g: &[Vector3<f64>], w: &[f64], starts: usize) -> f64 {
     let n = g.len();
     let mut rng = StdRng::seed_from_u64(99);
     let mut best = f64::INFINITY;
@@ -95,11 +96,20 @@ fn tiny(n: usize, seed: u64) -> (MultipleProblem, Vec<Vector3<f64>>) {
     (MultipleProblem::new(n, edges).unwrap(), g)
 }
 
-fn soft_problem(graph: MultipleProblem, g: &[Vector3<f64>], w: f64) -> GravityProblem {
-    let priors = GravityPriors::new(g.iter().map(|v| Some((*v).into())).collect())
-        .unwrap()
-        .with_weight(w)
-        .unwrap();
+/// Soft priors of per-image weights `w`: one weight when they are all equal, else weight 1
+/// with `w` as the relative weights.
+fn soft_problem(graph: MultipleProblem, g: &[Vector3<f64>], w: &[f64]) -> GravityProblem {
+    let priors = GravityPriors::new(g.iter().map(|v| Some((*v).into())).collect()).unwrap();
+    let priors = if w.iter().all(|x| *x == w[0]) {
+        priors.with_weight(w[0]).unwrap()
+    } else {
+        let scales = w.iter().map(|x| Some(*x)).collect();
+        priors
+            .with_scales(scales)
+            .unwrap()
+            .with_weight(1.0)
+            .unwrap()
+    };
     GravityProblem::new(graph, priors).unwrap()
 }
 
@@ -116,37 +126,60 @@ fn soft_priors_match_a_multistart_search_on_tiny_graphs() {
     for seed in 0..8 {
         let n = if seed % 2 == 0 { 3 } else { 4 };
         let w = if seed % 4 < 2 { 0.3 } else { 5.0 };
-        let (graph, g) = tiny(n, seed);
-        let fstar = multistart(&graph, &g, w, 12);
-        let p = soft_problem(graph.clone(), &g, w);
-        let est = average_with_gravity(&p, &AverageSettings::default()).unwrap();
-        let own = soft_cost(&graph, &g, w, &matrices(&est.solution.rotations));
-        assert!(
-            (own - est.solution.chordal_cost).abs() <= 1e-9 * own,
-            "seed {seed}: reported {} vs written out {own}",
-            est.solution.chordal_cost
-        );
-        let c = est.certificate.unwrap();
-        let lb = c.lower_bound.unwrap();
-        assert!(
-            lb <= fstar + 1e-9 * fstar,
-            "seed {seed}: bound {lb} above {fstar}"
-        );
-        if c.verdict == Verdict::Certified {
-            certified += 1;
-            assert!(own <= fstar + c.tolerance.allowed_gap(fstar) + 1e-9 * fstar);
-        }
-        assert_eq!(
-            c.certified_problem.unwrap().kind,
-            CertifiedProblemKind::ChordalL2GravitySoft
-        );
-        let mut bad = est.solution.rotations.clone();
-        bad[1] *= Rotation::from_axis_angle(&Vector3::x_axis(), 1.0);
-        let c = certify_gravity(&p, &bad, &CertifySettings::default()).unwrap();
-        assert_ne!(c.certificate.verdict, Verdict::Certified, "seed {seed}");
-        assert!(c.certificate.lower_bound.unwrap_or(f64::NEG_INFINITY) <= fstar * (1.0 + 1e-9));
+        certified += usize::from(matches_multistart(seed, &vec![w; n]));
     }
     assert!(certified >= 6, "{certified} of 8 certified");
+}
+
+/// The same with a weight per image (relative weights, `GravityPriors::with_scales`): 0.1 to
+/// 10, the pipeline's cost is the written-out one with each prior's own weight.
+#[test]
+fn per_image_prior_weights_match_a_multistart_search_on_tiny_graphs() {
+    let mut certified = 0;
+    for seed in 0..6u64 {
+        let n = if seed % 2 == 0 { 3 } else { 4 };
+        let mut rng = StdRng::seed_from_u64(700 + seed);
+        let w: Vec<f64> = (0..n)
+            .map(|_| 10f64.powf(rng.random_range(-1.0..1.0)))
+            .collect();
+        certified += usize::from(matches_multistart(seed, &w));
+    }
+    assert!(certified >= 4, "{certified} of 6 certified");
+}
+
+/// One tiny graph of `seed` with prior weights `w` against the multistart search: whether it
+/// was certified.
+fn matches_multistart(seed: u64, w: &[f64]) -> bool {
+    let (graph, g) = tiny(w.len(), seed);
+    let fstar = multistart(&graph, &g, w, 12);
+    let p = soft_problem(graph.clone(), &g, w);
+    let est = average_with_gravity(&p, &AverageSettings::default()).unwrap();
+    let own = soft_cost(&graph, &g, w, &matrices(&est.solution.rotations));
+    assert!(
+        (own - est.solution.chordal_cost).abs() <= 1e-9 * own,
+        "seed {seed}: reported {} vs written out {own}",
+        est.solution.chordal_cost
+    );
+    let c = est.certificate.unwrap();
+    let lb = c.lower_bound.unwrap();
+    assert!(
+        lb <= fstar + 1e-9 * fstar,
+        "seed {seed}: bound {lb} above {fstar}"
+    );
+    let certified = c.verdict == Verdict::Certified;
+    if certified {
+        assert!(own <= fstar + c.tolerance.allowed_gap(fstar) + 1e-9 * fstar);
+    }
+    assert_eq!(
+        c.certified_problem.unwrap().kind,
+        CertifiedProblemKind::ChordalL2GravitySoft
+    );
+    let mut bad = est.solution.rotations.clone();
+    bad[1] *= Rotation::from_axis_angle(&Vector3::x_axis(), 1.0);
+    let c = certify_gravity(&p, &bad, &CertifySettings::default()).unwrap();
+    assert_ne!(c.certificate.verdict, Verdict::Certified, "seed {seed}");
+    assert!(c.certificate.lower_bound.unwrap_or(f64::NEG_INFINITY) <= fstar * (1.0 + 1e-9));
+    certified
 }
 
 fn scene(n: usize, noise_deg: f64, g_noise_deg: f64, missing: f64, seed: u64) -> Scene {
@@ -348,4 +381,61 @@ fn large_soft_priors_are_certified_by_the_hub_comparison() {
         (la - lb).abs() <= a.tolerance.allowed_gap(cost),
         "{la} against {lb}"
     );
+}
+
+/// Priors of two qualities (half the images 0.3 degrees, half 6): weighting each by its own
+/// noise (`W_i = sigma_e^2 / sigma_i^2`, relative weights) is more accurate than one weight for
+/// all, tuned to either quality, and the result is certified.
+#[test]
+fn per_image_weights_follow_the_priors_noise() {
+    let s = scene(300, 3.0, 0.3, 0.0, 21);
+    let rough = SyntheticGravity {
+        noise_deg: 6.0,
+        missing_fraction: 0.0,
+        seed: 22,
+    }
+    .priors(&s.truth)
+    .unwrap();
+    let n = s.truth.len();
+    let good = |i: usize| i.is_multiple_of(2);
+    let dirs: Vec<Option<[f64; 3]>> = (0..n)
+        .map(|i| {
+            let p = if good(i) { &s.priors } else { &rough };
+            p.direction(i).map(|g| g.into())
+        })
+        .collect();
+    // the edges' noise: 3 degrees RMS over three axes, sqrt(3) degrees per axis
+    let sigma_e = 3.0 / 3f64.sqrt();
+    let weight = |sigma: f64| (sigma_e / sigma).powi(2);
+    let run = |scales: Vec<Option<f64>>, w: f64| {
+        let priors = GravityPriors::new(dirs.clone())
+            .unwrap()
+            .with_scales(scales)
+            .unwrap();
+        let p = GravityProblem::new(s.graph.clone(), priors.with_weight(w).unwrap()).unwrap();
+        let est = average_with_gravity(&p, &AverageSettings::default()).unwrap();
+        assert_eq!(
+            est.certificate.as_ref().unwrap().verdict,
+            Verdict::Certified
+        );
+        s.error(&est.solution.rotations)
+    };
+    let uniform = |w: f64| run(vec![None; n], w);
+    let per_image = run(
+        (0..n)
+            .map(|i| {
+                Some(if good(i) {
+                    1.0
+                } else {
+                    weight(6.0) / weight(0.3)
+                })
+            })
+            .collect(),
+        weight(0.3),
+    );
+    let (tuned_good, tuned_rough) = (uniform(weight(0.3)), uniform(weight(6.0)));
+    eprintln!(
+        "per image {per_image:.3}, one weight (0.3 deg) {tuned_good:.3}, (6 deg) {tuned_rough:.3}"
+    );
+    assert!(per_image < tuned_good && per_image < tuned_rough);
 }

@@ -155,7 +155,8 @@ pub struct GravityArgs {
     /// `g_i`, the world's down direction in
     /// the camera's frame (`R_i world_down = g_i`; docs/guides/gravity.md). JSON `{"gravity":
     /// [g | null, ...]}` in node order (or an object keyed by image name or file id), text lines
-    /// `KEY gx gy gz`, or a COLMAP database's `pose_priors.gravity`.
+    /// `KEY gx gy gz`, or a COLMAP database's `pose_priors.gravity`; a fourth number after `g`
+    /// is that prior's relative weight (soft priors weigh `W` times it).
     #[arg(long, value_name = "FILE")]
     pub gravity: Option<String>,
     /// The world's down direction the priors refer to, `X,Y,Z` (default: the file's; else
@@ -182,9 +183,9 @@ impl GravityArgs {
             return Ok(None);
         };
         let read = rotavg::io::gravity::read_gravity(path, graph, self.world_down)?;
-        let unmatched = read.unmatched_warning(path);
+        let warnings = read.warnings(path, self.gravity_weight);
         let priors = read.priors.soft_if(self.gravity_weight)?;
-        Ok(Some((priors, unmatched.into_iter().collect())))
+        Ok(Some((priors, warnings)))
     }
 }
 

@@ -44,22 +44,26 @@ impl GravityProblem {
         MultipleProblem::new(self.problem.num_rotations() + 1, edges)?.with_information(info)
     }
 
-    /// The world node's edges and their information (`[G10]`).
+    /// The world node's edges and their information (`[G10]`), each of its image's prior
+    /// weight.
     fn prior_edges(&self) -> Result<(Vec<Edge>, Vec<Information>)> {
-        let weight = self.soft_weight()?;
+        self.soft_weight()?;
         let world = self.problem.num_rotations();
-        let h = Information::new(Matrix3::from_diagonal(&Vector3::new(weight, weight, 0.0)))?;
-        let edges: Vec<Edge> = (0..world)
-            .filter_map(|i| {
-                self.frame(i).map(|f| Edge {
-                    i: world,
-                    j: i,
-                    rotation: f,
-                    weight,
-                })
-            })
-            .collect();
-        let info = vec![h; edges.len()];
+        let (mut edges, mut info) = (Vec::new(), Vec::new());
+        for i in 0..world {
+            let (Some(rotation), Some(weight)) = (self.frame(i), self.priors.prior_weight(i))
+            else {
+                continue;
+            };
+            let h = Vector3::new(weight, weight, 0.0);
+            info.push(Information::new(Matrix3::from_diagonal(&h))?);
+            edges.push(Edge {
+                i: world,
+                j: i,
+                rotation,
+                weight,
+            });
+        }
         Ok((edges, info))
     }
 
@@ -128,14 +132,17 @@ impl GravityProblem {
         Ok((GravityProblem::new(self.problem.clone(), priors)?, upper))
     }
 
-    /// The soft priors' cost `sum 2 w ||R_i world_down - g_i||^2` at `rotations` (file
+    /// The soft priors' cost `sum 2 w_i ||R_i world_down - g_i||^2` at `rotations` (file
     /// convention); 0 for hard priors (which an estimate of the problem satisfies).
     pub fn prior_cost(&self, rotations: &[Rotation]) -> f64 {
-        let Some(w) = self.priors.weight() else {
-            return 0.0;
-        };
-        self.prior_pairs(rotations)
-            .map(|(down, g)| 2.0 * w * (down - g).norm_squared())
+        let down = self.priors.world_down();
+        rotations
+            .iter()
+            .enumerate()
+            .filter_map(|(i, r)| {
+                let (g, w) = (self.priors.direction(i)?, self.priors.prior_weight(i)?);
+                Some(2.0 * w * (r * down - g).norm_squared())
+            })
             .sum()
     }
 
