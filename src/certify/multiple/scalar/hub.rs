@@ -1,6 +1,7 @@
 //! The scalar comparison `[D13]` with a **hub** (`paper-notes/gravity.md` `[G13]`): an
 //! isotropic view graph on nodes `0..h` plus one node `h` (soft gravity priors' world node,
-//! `[G10]`, at `R_h = I`) joined to some of them by *spokes*, edges of information
+//! `[G10]`; proven at `R_h = I`, the point turned by `R_h^T` otherwise) joined to some of them
+//! by *spokes*, edges of information
 //! `W diag(1, 1, 0)`, which see only the hub's third coordinate. Their certificate matrix has
 //! two rows of the hub that no edge touches, so the block comparison and the grounded bound
 //! cannot prove it, and the `3n` factor it leaves fills on expander view graphs (10^4 cameras:
@@ -50,18 +51,12 @@ pub(in crate::certify::multiple) struct HubGraph {
     hub_analysis: ScalarAnalysis,
 }
 
-/// The spokes and the isotropic edges of `problem` when it has hub shape at `rotations`: the
-/// last node at exactly `I`, each edge either `H = w I` between other nodes or `(hub, c)` with
-/// `H = W diag(1, 1, 0)`, at most one spoke per node; `None` otherwise.
-fn hub_shape(
-    problem: &MultipleProblem,
-    rotations: &[Rotation],
-) -> Option<(Vec<Edge>, Vec<Option<Spoke>>)> {
+/// The spokes and the isotropic edges of `problem` when it has hub shape: each edge either
+/// `H = w I` between nodes other than the last or `(hub, c)` with `H = W diag(1, 1, 0)` (the
+/// hub the last node), at most one spoke per node; `None` otherwise.
+fn hub_shape(problem: &MultipleProblem) -> Option<(Vec<Edge>, Vec<Option<Spoke>>)> {
     let info = problem.information()?;
     let h = problem.num_rotations().checked_sub(1)?;
-    if rotations.get(h)?.matrix() != &Matrix3::identity() {
-        return None;
-    }
     let (mut graph, mut spokes) = (Vec::new(), vec![None; h]);
     for (e, info) in problem.edges().iter().zip(info) {
         let m = info.matrix();
@@ -99,10 +94,9 @@ impl HubGraph {
     /// hub shape, `Ok(Some(Err(predicted)))` when a factor is predicted above `max_values`.
     pub(in crate::certify::multiple) fn new(
         problem: &MultipleProblem,
-        rotations: &[Rotation],
         max_values: usize,
     ) -> Result<Option<std::result::Result<Self, usize>>> {
-        let Some((graph, spokes)) = hub_shape(problem, rotations) else {
+        let Some((graph, spokes)) = hub_shape(problem) else {
             return Ok(None);
         };
         let Ok(cameras) = MultipleProblem::new(spokes.len(), graph) else {
@@ -142,6 +136,8 @@ impl HubGraph {
         if rotations.len() != h + 1 || lambdas.len() != h + 1 {
             return Err(ScalarFailure::Numerical);
         }
+        let turned = hub_at_identity(rotations);
+        let rotations = turned.as_deref().unwrap_or(rotations);
         let t_max = orthogonality_defect(rotations)?;
         let c = self.comparison(problem, rotations, lambdas, target)?;
         let rho = self.residuals(&rotations[..h], lambdas, &c.deg_n[..h]);
@@ -418,6 +414,21 @@ impl HubBlock {
             dead: (b + coupling * t) * (1.0 + 4.0 * u),
         }
     }
+}
+
+/// The congruence `D` with the hub's block exactly `I` (`None`: it is already): `S` does not
+/// depend on the gauge (`Lambda` is the same at `R_i Q`), and the comparison holds for any `D`
+/// (step 1 charges its orthogonality defect), so a point whose hub is turned (a refinement's)
+/// is proven at `R_c R_h^T` and `I`.
+fn hub_at_identity(rotations: &[Rotation]) -> Option<Vec<Rotation>> {
+    let (hub, cams) = rotations.split_last()?;
+    if hub.matrix() == &Matrix3::identity() {
+        return None;
+    }
+    let back = hub.inverse();
+    let mut turned: Vec<Rotation> = cams.iter().map(|r| r * back).collect();
+    turned.push(Rotation::identity());
+    Some(turned)
 }
 
 /// `|p - e_3|` rounded up, `p = R^T g` (entries of the product err by `gamma_3 1.8`).

@@ -20,12 +20,12 @@ const SHAPE: &str = "view graph and hub (two scalar factors)";
 pub(super) type HubPlan = (Option<HubGraph>, std::result::Result<Prediction, Refusal>);
 
 /// The hub shape of the check's problem and its prediction; `None` when it has none.
-pub(super) fn plan_hub(cx: &Check<'_>, rotations: &[Rotation]) -> Result<Option<HubPlan>> {
+pub(super) fn plan_hub(cx: &Check<'_>) -> Result<Option<HubPlan>> {
     let max_values = cx
         .settings
         .budget
         .max_factor_values(cx.problem.num_rotations());
-    Ok(match HubGraph::new(cx.problem, rotations, max_values)? {
+    Ok(match HubGraph::new(cx.problem, max_values)? {
         None => None,
         Some(Err(predicted)) => Some((
             None,

@@ -89,7 +89,7 @@ impl ScalarFamily {
             }));
         };
         if cx.problem.is_anisotropic() {
-            if let Some((hub, predicted)) = plan_hub(cx, rotations)? {
+            if let Some((hub, predicted)) = plan_hub(cx)? {
                 self.hub = hub;
                 return Ok(predicted);
             }
