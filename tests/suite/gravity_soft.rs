@@ -439,3 +439,38 @@ fn per_image_weights_follow_the_priors_noise() {
     );
     assert!(per_image < tuned_good && per_image < tuned_rough);
 }
+
+/// Another solver's answer (the held estimate) certified for the soft problem: far from
+/// critical, its own multipliers are skipped ("not a critical point", the diagonal test of
+/// `[D15]` with anisotropic blocks), its refinement is proven by the hub comparison, and the
+/// bound lies below the soft optimum's cost and at most at it within the tolerance.
+#[test]
+fn another_solvers_estimate_is_refined_and_bounded() {
+    use rotavg::certify::Proof;
+    use rotavg::certify::log::{Outcome, Point};
+    let s = scene(1500, 3.0, 2.0, 0.0, 13);
+    let held = s.run(None);
+    let p =
+        GravityProblem::new(s.graph.clone(), s.priors.clone().with_weight(2.25).unwrap()).unwrap();
+    let soft = average_with_gravity(&p, &AverageSettings::default()).unwrap();
+    let c = certify_gravity(&p, &held.solution.rotations, &CertifySettings::default()).unwrap();
+    let given_skipped = c.details.ladder.iter().any(|a| {
+        a.point == Point::Given
+            && matches!(&a.outcome, Outcome::Refused(r) if format!("{r:?}").contains("not a critical point"))
+    });
+    let refined_by_hub = c.details.ladder.iter().any(|a| {
+        a.point == Point::Refined && a.rung == Proof::ScalarComparison && a.note.contains("hub")
+    });
+    assert!(given_skipped && refined_by_hub, "{:#?}", c.details.ladder);
+    let lb = c.certificate.lower_bound.unwrap();
+    let best = soft.solution.chordal_cost;
+    assert!(
+        lb <= best * (1.0 + 1e-12),
+        "{lb} above the soft optimum {best}"
+    );
+    assert!(
+        best - lb <= c.certificate.tolerance.allowed_gap(best),
+        "{lb} against {best}"
+    );
+    assert_ne!(c.certificate.verdict, Verdict::Certified);
+}

@@ -13,6 +13,7 @@ use crate::certify::rung::{Found, Plan, Rung};
 use crate::error::{Error, Result};
 use crate::linalg::two_pass_lanczos::smallest_ritz_value;
 use crate::linalg::{Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme};
+use crate::multiple::laplacian::edge_blocks;
 use faer::sparse::{SparseColMat, Triplet};
 use nalgebra::Matrix3;
 use rand::rngs::StdRng;
@@ -169,20 +170,23 @@ pub(super) fn hopeless(
     gap: f64,
 ) -> Option<String> {
     let n = problem.num_rotations();
-    // the diagonal of S is the weighted degree minus Lambda only for isotropic data
-    if n < 2 || rotations.len() != n || problem.is_anisotropic() {
+    if n < 2 || rotations.len() != n {
         return None;
     }
     let mut degree = vec![0.0f64; n];
-    for e in problem.edges() {
+    // the diagonal of Q: the weighted degree (isotropic), the sum of the edges' 2M (`[A2]`)
+    let mut q_diag = vec![nalgebra::Vector3::zeros(); n];
+    for (e, (i, j, qi, qj, _)) in problem.edges().iter().zip(edge_blocks(problem)) {
         degree[e.i] += e.weight;
         degree[e.j] += e.weight;
+        q_diag[i] += qi.diagonal();
+        q_diag[j] += qj.diagonal();
     }
     let g = (0..n).max_by(|&a, &b| degree[a].total_cmp(&degree[b]))?;
     let c_upper = (0..n)
         .filter(|&i| i != g)
         .flat_map(|i| (0..3).map(move |a| (i, a)))
-        .map(|(i, a)| degree[i] - lambdas[i][(a, a)])
+        .map(|(i, a)| q_diag[i][a] - lambdas[i][(a, a)])
         .fold(f64::INFINITY, f64::min);
     let deficit = 3.0 * terms.rho * terms.rho / c_upper;
     (c_upper > 0.0 && c_upper.is_finite() && deficit > gap).then(|| {
