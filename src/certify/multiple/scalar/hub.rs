@@ -1,8 +1,8 @@
 //! The scalar comparison `[D13]` with a **hub** (`paper-notes/gravity.md` `[G13]`): an
 //! isotropic view graph on nodes `0..h` plus one node `h` (soft gravity priors' world node,
 //! `[G10]`; proven at `R_h = I`, the point turned by `R_h^T` otherwise) joined to some of them
-//! by *spokes*, edges of information
-//! `W diag(1, 1, 0)`, which see only the hub's third coordinate. Their certificate matrix has
+//! by *spokes*, edges of information `W diag(1, 1, 0)`, which see only the hub's third
+//! coordinate. Their certificate matrix has
 //! two rows of the hub that no edge touches, so the block comparison and the grounded bound
 //! cannot prove it, and the `3n` factor it leaves fills on expander view graphs (10^4 cameras:
 //! 7.5 s). Here `lambda_min(S)` is proven from two scalar factorisations instead: the view
@@ -17,7 +17,8 @@
 //! Each spoke keeps `W (z - x_c3)^2` and charges `omega |p - e_3|^2 |x_c|^2` (second order in
 //! the prior's residual); the hub's rows 1 and 2 (`x_D`) and `Lambda_h` are charged to `z` and
 //! to `x_D`. Steps 3 to 5 of `[D13]` then run per coordinate slice, the third with the hub's
-//! node, and the cross terms use `rho0 = sqrt(n + 1) rho1`.
+//! node; `v0^T M v0` is the net torque (the cameras' blocks and the hub's third row), zero by
+//! the gauge symmetry up to rounding.
 
 use super::analysis::{ScalarAnalysis, fro};
 use super::charges::{edge_charges, orthogonality_defect};
