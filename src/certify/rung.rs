@@ -138,6 +138,24 @@ pub trait Rung<C: ?Sized> {
     fn attempt(&mut self, cx: &mut C) -> Result<Found>;
 }
 
+/// What a rung that runs once with a certification handed in by its entry point keeps (the
+/// gravity and rig rungs that certify a view graph, a soft problem or two graphs): whether it
+/// ran, and the certifier ([`GraphCertifier`], [`JointCertifier`], ...).
+pub(crate) struct Handed<F> {
+    pub done: bool,
+    pub certify: F,
+}
+
+impl<F> Handed<F> {
+    /// Not run yet, certifying with `certify`.
+    pub(crate) fn new(certify: F) -> Self {
+        Handed {
+            done: false,
+            certify,
+        }
+    }
+}
+
 /// A view graph's certification handed to a rung by its entry point (the rungs sit below the
 /// entry points, `tests/suite/certify_layers.rs`): the certificate of an estimate of `graph`
 /// (in practice [`crate::certify::multiple::graph_certificate`]).

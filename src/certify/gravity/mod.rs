@@ -28,6 +28,7 @@ use crate::certify::certification::{Certification, CertifyDetails};
 use crate::certify::ladder::{Rungs, climb};
 use crate::certify::multiple::{certify_multiple, graph_certificate};
 use crate::certify::proof::{BoundMethod, Proof};
+use crate::certify::rung::Handed;
 use crate::certify::settings::CertifySettings;
 use crate::error::{Error, Result};
 use crate::multiple::MultipleSolution;
@@ -106,8 +107,8 @@ pub fn certify_gravity(
     };
     let rungs: Rungs<'_, GravityState<'_>> = vec![
         Box::new(rung::PlanarRung::default()),
-        Box::new(surrogate::SurrogateRung::new(soft_certificate)),
-        Box::new(relaxed::RelaxedRung::new(graph_certificate)),
+        Box::new(surrogate::SurrogateRung(Handed::new(soft_certificate))),
+        Box::new(relaxed::RelaxedRung(Handed::new(graph_certificate))),
     ];
     climb(&mut state, rungs)?;
     let details = CertifyDetails::from_log(settings.mode, state.log, deadline.elapsed());

@@ -9,27 +9,14 @@
 use super::state::GravityState;
 use crate::certify::log::Prediction;
 use crate::certify::proof::Proof;
-use crate::certify::rung::{Found, GraphCertifier, Plan, Rung};
+use crate::certify::rung::{Found, GraphCertifier, Handed, Plan, Rung};
 use crate::error::Result;
 use crate::multiple::chordal::solve_chordal;
 use crate::multiple::{MultipleSettings, fix_gauge};
 
 /// The relaxed bound as a rung: run first for the mixed problem (beside the surrogate), as
 /// the fallback for full gravity.
-pub(crate) struct RelaxedRung {
-    done: bool,
-    certify: GraphCertifier,
-}
-
-impl RelaxedRung {
-    /// The rung, certifying the view graph with `certify`.
-    pub(crate) fn new(certify: GraphCertifier) -> Self {
-        RelaxedRung {
-            done: false,
-            certify,
-        }
-    }
-}
+pub(crate) struct RelaxedRung(pub(crate) Handed<GraphCertifier>);
 
 impl<'a> Rung<GravityState<'a>> for RelaxedRung {
     fn proof(&self) -> Proof {
@@ -37,7 +24,7 @@ impl<'a> Rung<GravityState<'a>> for RelaxedRung {
     }
 
     fn plan(&mut self, cx: &GravityState<'a>) -> Result<Plan> {
-        if self.done {
+        if self.0.done {
             return Ok(Plan::Done);
         }
         // a local solve and the view graph's certification: a few sparse factorisations
@@ -52,7 +39,7 @@ impl<'a> Rung<GravityState<'a>> for RelaxedRung {
     }
 
     fn attempt(&mut self, cx: &mut GravityState<'a>) -> Result<Found> {
-        self.done = true;
+        self.0.done = true;
         let graph = cx.problem.problem();
         // within the certification's time left (one clock)
         let local = MultipleSettings {
@@ -63,7 +50,7 @@ impl<'a> Rung<GravityState<'a>> for RelaxedRung {
         fix_gauge(&mut free.rotations);
         let mut settings = cx.settings.clone();
         settings.budget.max_seconds = cx.deadline.left().map(|l| l.max(0.0));
-        let inner = (self.certify)(graph, &free.rotations, &settings)?;
+        let inner = (self.0.certify)(graph, &free.rotations, &settings)?;
         let Some(lb) = inner.lower_bound else {
             return Ok(Found::failed(format!(
                 "the view graph alone has no bound: {}",

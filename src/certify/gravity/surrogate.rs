@@ -9,7 +9,7 @@ use super::state::GravityState;
 use crate::certify::certificate::Certificate;
 use crate::certify::log::Prediction;
 use crate::certify::proof::Proof;
-use crate::certify::rung::{Found, Plan, Rung};
+use crate::certify::rung::{Found, Handed, Plan, Rung};
 use crate::certify::settings::CertifySettings;
 use crate::error::Result;
 use crate::multiple::gravity::GravityProblem;
@@ -21,20 +21,7 @@ pub(crate) type SoftCertifier =
 
 /// The surrogate's bound as a rung: run first for the mixed problem, as a fallback for full
 /// gravity.
-pub(crate) struct SurrogateRung {
-    done: bool,
-    certify: SoftCertifier,
-}
-
-impl SurrogateRung {
-    /// The rung, certifying the surrogate with `certify`.
-    pub(crate) fn new(certify: SoftCertifier) -> Self {
-        SurrogateRung {
-            done: false,
-            certify,
-        }
-    }
-}
+pub(crate) struct SurrogateRung(pub(crate) Handed<SoftCertifier>);
 
 impl<'a> Rung<GravityState<'a>> for SurrogateRung {
     fn proof(&self) -> Proof {
@@ -42,7 +29,7 @@ impl<'a> Rung<GravityState<'a>> for SurrogateRung {
     }
 
     fn plan(&mut self, cx: &GravityState<'a>) -> Result<Plan> {
-        if self.done {
+        if self.0.done {
             return Ok(Plan::Done);
         }
         // the augmented view graph's certificate: a few sparse factorisations of 3(n + 1)
@@ -57,11 +44,11 @@ impl<'a> Rung<GravityState<'a>> for SurrogateRung {
     }
 
     fn attempt(&mut self, cx: &mut GravityState<'a>) -> Result<Found> {
-        self.done = true;
+        self.0.done = true;
         let (surrogate, constant) = cx.problem.tilted_surrogate(cx.rotations)?;
         let mut settings = cx.settings.clone();
         settings.budget.max_seconds = cx.deadline.left().map(|l| l.max(0.0));
-        let inner = (self.certify)(&surrogate, cx.rotations, &settings)?;
+        let inner = (self.0.certify)(&surrogate, cx.rotations, &settings)?;
         let Some(lb) = inner.lower_bound else {
             return Ok(Found::failed(format!(
                 "the tilted surrogate has no bound: {}",

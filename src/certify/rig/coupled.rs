@@ -8,7 +8,7 @@ use super::images::components_minimum;
 use super::state::RigState;
 use crate::certify::log::{Prediction, Refusal};
 use crate::certify::proof::Proof;
-use crate::certify::rung::{Found, GraphCertifier, Plan, Rung};
+use crate::certify::rung::{Found, GraphCertifier, Handed, Plan, Rung};
 use crate::certify::settings::CertifyMode;
 use crate::deadline::Deadline;
 use crate::error::Result;
@@ -16,20 +16,7 @@ use crate::rig::{RigProblem, polish_passes};
 use crate::so3::Rotation;
 
 /// The coupled bound as a rung.
-pub(crate) struct CoupledRung {
-    done: bool,
-    certify: GraphCertifier,
-}
-
-impl CoupledRung {
-    /// The rung, certifying each component with `certify`.
-    pub(crate) fn new(certify: GraphCertifier) -> Self {
-        CoupledRung {
-            done: false,
-            certify,
-        }
-    }
-}
+pub(crate) struct CoupledRung(pub(crate) Handed<GraphCertifier>);
 
 impl<'a> Rung<RigState<'a>> for CoupledRung {
     fn proof(&self) -> Proof {
@@ -37,7 +24,7 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
     }
 
     fn plan(&mut self, cx: &RigState<'a>) -> Result<Plan> {
-        if self.done {
+        if self.0.done {
             return Ok(Plan::Done);
         }
         if !joins_sensors(cx.problem) {
@@ -62,7 +49,7 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
     }
 
     fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {
-        self.done = true;
+        self.0.done = true;
         let (frames, sensors, coupled, passes) = match polished(cx)? {
             Ok(found) => found,
             Err(why) => return Ok(Found::failed(why)),
@@ -91,7 +78,7 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
         let x = cx.problem.image_rotations(&frames, &sensors);
         let seconds = cx.left().map(|l| 0.6 * l);
         let (parts, sum) =
-            match components_minimum(self.certify, &coupled.graph, &x, cx, &settings, seconds)? {
+            match components_minimum(self.0.certify, &coupled.graph, &x, cx, &settings, seconds)? {
                 Ok(found) => found,
                 Err(why) => return Ok(Found::failed(why)),
             };

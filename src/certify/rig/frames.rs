@@ -5,24 +5,11 @@
 use super::state::RigState;
 use crate::certify::log::Prediction;
 use crate::certify::proof::Proof;
-use crate::certify::rung::{Found, GraphCertifier, Plan, Rung};
+use crate::certify::rung::{Found, GraphCertifier, Handed, Plan, Rung};
 use crate::error::Result;
 
 /// The frames' bound as a rung: first, when every sensor is held.
-pub(crate) struct FramesRung {
-    done: bool,
-    certify: GraphCertifier,
-}
-
-impl FramesRung {
-    /// The rung, certifying the frames' view graph with `certify`.
-    pub(crate) fn new(certify: GraphCertifier) -> Self {
-        FramesRung {
-            done: false,
-            certify,
-        }
-    }
-}
+pub(crate) struct FramesRung(pub(crate) Handed<GraphCertifier>);
 
 impl<'a> Rung<RigState<'a>> for FramesRung {
     fn proof(&self) -> Proof {
@@ -30,7 +17,7 @@ impl<'a> Rung<RigState<'a>> for FramesRung {
     }
 
     fn plan(&mut self, cx: &RigState<'a>) -> Result<Plan> {
-        if self.done || !cx.problem.all_held() {
+        if self.0.done || !cx.problem.all_held() {
             return Ok(Plan::Done);
         }
         // the view graph's certification: a few sparse factorisations
@@ -39,11 +26,11 @@ impl<'a> Rung<RigState<'a>> for FramesRung {
     }
 
     fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {
-        self.done = true;
+        self.0.done = true;
         let (graph, constant) = cx.problem.frame_graph(cx.sensors)?;
         let mut settings = cx.settings.clone();
         settings.budget.max_seconds = cx.left();
-        let inner = (self.certify)(&graph, cx.frames, &settings)?;
+        let inner = (self.0.certify)(&graph, cx.frames, &settings)?;
         let Some(lb) = inner.lower_bound else {
             return Ok(Found::failed(format!(
                 "the frames' view graph has no bound: {}",

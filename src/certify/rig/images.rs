@@ -6,7 +6,7 @@
 use super::state::RigState;
 use crate::certify::log::Prediction;
 use crate::certify::proof::Proof;
-use crate::certify::rung::{Found, GraphCertifier, Plan, Rung};
+use crate::certify::rung::{Found, GraphCertifier, Handed, Plan, Rung};
 use crate::certify::settings::CertifySettings;
 use crate::error::Result;
 use crate::multiple::chordal::solve_chordal;
@@ -14,20 +14,7 @@ use crate::multiple::{MultipleProblem, MultipleSettings, fix_gauge};
 use crate::so3::Rotation;
 
 /// The images' bound as a rung.
-pub(crate) struct ImagesRung {
-    done: bool,
-    certify: GraphCertifier,
-}
-
-impl ImagesRung {
-    /// The rung, certifying each component with `certify`.
-    pub(crate) fn new(certify: GraphCertifier) -> Self {
-        ImagesRung {
-            done: false,
-            certify,
-        }
-    }
-}
+pub(crate) struct ImagesRung(pub(crate) Handed<GraphCertifier>);
 
 impl<'a> Rung<RigState<'a>> for ImagesRung {
     fn proof(&self) -> Proof {
@@ -35,7 +22,7 @@ impl<'a> Rung<RigState<'a>> for ImagesRung {
     }
 
     fn plan(&mut self, cx: &RigState<'a>) -> Result<Plan> {
-        if self.done {
+        if self.0.done {
             return Ok(Plan::Done);
         }
         // a local solve and a certification of sparse view graphs; a fallback after the coupled
@@ -45,11 +32,11 @@ impl<'a> Rung<RigState<'a>> for ImagesRung {
     }
 
     fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {
-        self.done = true;
+        self.0.done = true;
         let x = cx.problem.image_rotations(cx.frames, cx.sensors);
         let images = cx.problem.image_graph()?;
         let (parts, sum) =
-            match components_minimum(self.certify, &images, &x, cx, cx.settings, cx.left())? {
+            match components_minimum(self.0.certify, &images, &x, cx, cx.settings, cx.left())? {
                 Ok(found) => found,
                 Err(why) => return Ok(Found::failed(why)),
             };

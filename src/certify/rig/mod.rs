@@ -21,7 +21,7 @@ use crate::certify::budget::Deadline;
 use crate::certify::certification::{Certification, CertifyDetails};
 use crate::certify::ladder::{Rungs, climb};
 use crate::certify::proof::BoundMethod;
-use crate::certify::rung::GraphCertifier;
+use crate::certify::rung::{GraphCertifier, Handed};
 use crate::certify::settings::CertifySettings;
 use crate::error::{Error, Result};
 use crate::rig::RigProblem;
@@ -76,12 +76,12 @@ pub fn certify_rig(
         log: Vec::new(),
     };
     let rungs: Rungs<'_, RigState<'_>> = vec![
-        Box::new(frames::FramesRung::new(certify)),
-        Box::new(coupled::CoupledRung::new(certify)),
-        Box::new(two_graphs::TwoGraphsRung::new(
+        Box::new(frames::FramesRung(Handed::new(certify))),
+        Box::new(coupled::CoupledRung(Handed::new(certify))),
+        Box::new(two_graphs::TwoGraphsRung(Handed::new(
             crate::certify::simultaneous::joint_certificate,
-        )),
-        Box::new(images::ImagesRung::new(certify)),
+        ))),
+        Box::new(images::ImagesRung(Handed::new(certify))),
     ];
     climb(&mut state, rungs)?;
     let details = CertifyDetails::from_log(settings.mode, state.log, deadline.elapsed());

@@ -9,27 +9,14 @@
 use super::state::RigState;
 use crate::certify::log::{Prediction, Refusal};
 use crate::certify::proof::Proof;
-use crate::certify::rung::{Found, JointCertifier, Plan, Rung};
+use crate::certify::rung::{Found, Handed, JointCertifier, Plan, Rung};
 use crate::error::Result;
 use crate::multiple::{Edge, MultipleProblem};
 use crate::rig::RigProblem;
 use crate::so3::Rotation;
 
 /// The simultaneous certificates of a two-sensor rig as a rung.
-pub(crate) struct TwoGraphsRung {
-    done: bool,
-    certify: JointCertifier,
-}
-
-impl TwoGraphsRung {
-    /// The rung, certifying the two graphs with `certify`.
-    pub(crate) fn new(certify: JointCertifier) -> Self {
-        TwoGraphsRung {
-            done: false,
-            certify,
-        }
-    }
-}
+pub(crate) struct TwoGraphsRung(pub(crate) Handed<JointCertifier>);
 
 impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
     fn proof(&self) -> Proof {
@@ -37,7 +24,7 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
     }
 
     fn plan(&mut self, cx: &RigState<'a>) -> Result<Plan> {
-        if self.done {
+        if self.0.done {
             return Ok(Plan::Done);
         }
         if let Some(why) = not_two_graphs(cx.problem) {
@@ -52,7 +39,7 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
     }
 
     fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {
-        self.done = true;
+        self.0.done = true;
         // a sensor without edges, or a graph the simultaneous certificate refuses: no bound
         let (right, left) = match two_graphs(cx.problem) {
             Ok(graphs) => graphs,
@@ -63,7 +50,7 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
         let s = b * a.inverse();
         let mut settings = cx.settings.clone();
         settings.budget.max_seconds = cx.left();
-        let c = match (self.certify)(&right, &left, &rotations, &s, &settings) {
+        let c = match (self.0.certify)(&right, &left, &rotations, &s, &settings) {
             Ok(c) => c,
             Err(e) => return Ok(Found::failed(e.to_string())),
         };
