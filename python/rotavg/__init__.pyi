@@ -459,6 +459,9 @@ def average_rig_file(
     max_memory: Optional[int] = None,
     max_seconds: Optional[float] = 600.0,
     rotation_tolerance: float = 1e-5,
+    gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
+    world_down: Optional[Sequence[float]] = None,
+    gravity_weight: Optional[float] = None,
 ) -> Result:
     """A rig of any number of sensors from a JSON rig file or a COLMAP rig configuration."""
 
@@ -471,6 +474,9 @@ def certify_rig_file(
     max_memory: Optional[int] = None,
     max_seconds: Optional[float] = 600.0,
     rotation_tolerance: float = 1e-5,
+    gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
+    world_down: Optional[Sequence[float]] = None,
+    gravity_weight: Optional[float] = None,
 ) -> Result:
     """Certify a rig file's estimate computed elsewhere, without changing it."""
 

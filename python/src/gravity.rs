@@ -2,11 +2,14 @@
 //! `gravity_weight=`: soft priors of that weight instead of constraints): an
 //! `(n, 3)` array (a row of NaN: no prior for that image), `(n, 4)` with each prior's relative
 //! weight (soft priors weigh `gravity_weight` times it; NaN: 1), or the path of a priors file,
-//! read as `rotavg multiple --gravity` reads it.
+//! read as `rotavg multiple --gravity` reads it; for `average_rig_file` / `certify_rig_file`,
+//! one row per image of the rig, or a file keyed by image id or name (`[G14]`).
 
 use crate::convert::gravity_rows;
 use pyo3::prelude::*;
 use rotavg::io::detect::{ComponentSelection, LoadedGraph};
+use rotavg::io::gravity::GravityRead;
+use rotavg::io::rig::LoadedRig;
 use rotavg::multiple::gravity::{GravityPriors, GravityProblem};
 use rotavg::warning::Warning;
 
@@ -39,14 +42,48 @@ impl GravityInput {
         world_down: Option<[f64; 3]>,
         weight: Option<f64>,
     ) -> rotavg::Result<(GravityProblem, Vec<Warning>)> {
-        let (priors, warnings) = match self {
-            GravityInput::Path(p) => {
-                let read = rotavg::io::gravity::read_gravity(&p, graph, world_down)?;
-                let w = read.warnings(&p, weight);
-                (read.priors, w)
-            }
+        let (priors, warnings) = self.priors(
+            |p| rotavg::io::gravity::read_gravity(p, graph, world_down),
+            |rows| crate::for_kept(rows, selection, "gravity"),
+            world_down,
+            weight,
+        )?;
+        Ok((
+            GravityProblem::new(graph.problem.clone(), priors)?,
+            warnings,
+        ))
+    }
+
+    /// `rig` with these priors on its images (rows in image order, or a file keyed by image id
+    /// or name; `[G14]`), the reader's warnings added to the rig's.
+    pub fn apply_to_rig(
+        self,
+        rig: LoadedRig,
+        world_down: Option<[f64; 3]>,
+        weight: Option<f64>,
+    ) -> rotavg::Result<LoadedRig> {
+        let (priors, warnings) = self.priors(
+            |p| rotavg::io::gravity::read_rig_gravity(p, &rig, world_down),
+            Ok,
+            world_down,
+            weight,
+        )?;
+        rig.with_gravity(priors, warnings)
+    }
+
+    /// The priors (read by `read` from a path, or the rows as `kept`), soft of `weight`, and
+    /// the warnings.
+    fn priors(
+        self,
+        read: impl FnOnce(&str) -> rotavg::Result<GravityRead>,
+        kept: impl FnOnce(Vec<[f64; 4]>) -> rotavg::Result<Vec<[f64; 4]>>,
+        world_down: Option<[f64; 3]>,
+        weight: Option<f64>,
+    ) -> rotavg::Result<(GravityPriors, Vec<Warning>)> {
+        match self {
+            GravityInput::Path(p) => read(&p)?.priors_and_warnings(&p, weight),
             GravityInput::Rows(rows) => {
-                let rows = crate::for_kept(rows, selection, "gravity")?;
+                let rows = kept(rows)?;
                 let dirs = rows
                     .iter()
                     .map(|g| (!g[..3].iter().any(|x| x.is_nan())).then_some([g[0], g[1], g[2]]))
@@ -60,18 +97,12 @@ impl GravityInput {
                     Some(w) => priors.with_world_down(w)?,
                     None => priors,
                 };
-                let read = rotavg::io::gravity::GravityRead {
+                let read = GravityRead {
                     priors,
                     unmatched: 0,
                 };
-                let w = read.warnings("gravity", weight);
-                (read.priors, w)
+                read.priors_and_warnings("gravity", weight)
             }
-        };
-        let priors = priors.soft_if(weight)?;
-        Ok((
-            GravityProblem::new(graph.problem.clone(), priors)?,
-            warnings,
-        ))
+        }
     }
 }

@@ -89,6 +89,11 @@ pub fn average_rig(
 ///     certify: ``"auto"``, ``"dual"`` or ``"none"``.
 ///     max_memory, max_seconds: the run's budget, as for ``average_multiple``.
 ///     rotation_tolerance: how far a rotation in a JSON rig file may be from SO(3).
+///     gravity, world_down, gravity_weight: gravity priors on the rig's images (every sensor's
+///         ``sensor_from_rig`` known; ``paper-notes/gravity.md`` [G14]), as ``rotavg rig FILE
+///         --gravity``: an ``(I, 3)`` or ``(I, 4)`` array in image order (NaN rows: none) or
+///         a priors file keyed by image id or name; held, or soft of ``gravity_weight``.
+///         ``to_dict()["gravity"]`` has their checks.
 ///
 /// Returns:
 ///     Result: ``estimate`` is the frames ``(F, 3, 3)`` (``estimate[0] = I``);
@@ -100,7 +105,7 @@ pub fn average_rig(
 ///     rotavg.ParseError / FileError: a file that cannot be read (naming it); rotavg.Error: a
 ///         rig that is not valid (an image out of range, a sensor no edge places).
 #[pyfunction]
-#[pyo3(name = "average_rig_file", signature = (path, *, loss="auto", loss_threshold=5.0, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5))]
+#[pyo3(name = "average_rig_file", signature = (path, *, loss="auto", loss_threshold=5.0, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn average_rig_file(
     py: Python<'_>,
@@ -111,7 +116,11 @@ pub fn average_rig_file(
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
     rotation_tolerance: f64,
+    gravity: Option<&Bound<'_, PyAny>>,
+    world_down: Option<[f64; 3]>,
+    gravity_weight: Option<f64>,
 ) -> PyResult<RunResult> {
+    let gravity = crate::gravity::GravityInput::from_py(gravity)?;
     let mode: CertifyMode = parse_named(certify, "certify")?;
     let certify = certify_settings(mode, max_memory, max_seconds, true, None)?;
     let path = crate::convert::path_of(path)
@@ -123,6 +132,10 @@ pub fn average_rig_file(
             ..Default::default()
         };
         let rig = rotavg::io::rig::load_rig(std::path::Path::new(&path), &options)?;
+        let rig = match gravity {
+            Some(g) => g.apply_to_rig(rig, world_down, gravity_weight)?,
+            None => rig,
+        };
         let max_seconds = certify.budget.max_seconds;
         RigFileReport::average(path, rig, (loss, robust), certify, max_seconds)
     })?;
@@ -138,14 +151,14 @@ pub fn average_rig_file(
 ///         ``rotavg rig FILE --output`` (``write_output``) writes (then leave
 ///         ``sensors_from_rig`` out).
 ///     sensors_from_rig: ``(K, 3, 3)``, every sensor's rotation (with array frames).
-///     certify, max_memory, max_seconds, rotation_tolerance: as for ``average_rig_file``
-///         (``"none"`` means ``"dual"``).
+///     certify, max_memory, max_seconds, rotation_tolerance, gravity, world_down,
+///         gravity_weight: as for ``average_rig_file`` (``"none"`` means ``"dual"``).
 ///
 /// Raises:
 ///     rotavg.Error: counts or ids that do not match the rig, a matrix that is not a rotation,
 ///         ``sensors_from_rig`` missing with arrays or given with a path.
 #[pyfunction]
-#[pyo3(name = "certify_rig_file", signature = (path, frames, sensors_from_rig=None, *, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5))]
+#[pyo3(name = "certify_rig_file", signature = (path, frames, sensors_from_rig=None, *, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn certify_rig_file(
     py: Python<'_>,
@@ -156,7 +169,11 @@ pub fn certify_rig_file(
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
     rotation_tolerance: f64,
+    gravity: Option<&Bound<'_, PyAny>>,
+    world_down: Option<[f64; 3]>,
+    gravity_weight: Option<f64>,
 ) -> PyResult<RunResult> {
+    let gravity = crate::gravity::GravityInput::from_py(gravity)?;
     let mode = match parse_named(certify, "certify")? {
         CertifyMode::None => CertifyMode::Dual,
         m => m,
@@ -205,6 +222,10 @@ pub fn certify_rig_file(
             ..Default::default()
         };
         let rig = rotavg::io::rig::load_rig(std::path::Path::new(&path), &options)?;
+        let rig = match gravity {
+            Some(g) => g.apply_to_rig(rig, world_down, gravity_weight)?,
+            None => rig,
+        };
         let text = match text {
             Some(t) => t,
             None => rotavg::io::text::read_text(&name)?,
@@ -311,20 +332,5 @@ impl RigEstimate {
 /// `loss` and `loss_threshold` of the rig functions: the loss and the Cauchy scale and inlier
 /// threshold.
 fn rig_loss(loss: &str, threshold: f64) -> PyResult<(RigLoss, rotavg::rig::RigRobust)> {
-    let loss = match loss {
-        "auto" => RigLoss::Auto,
-        "chordal" => RigLoss::Chordal,
-        "cauchy" => RigLoss::Cauchy,
-        other => {
-            return Err(crate::errors::argument_error(format!(
-                "loss must be \"auto\", \"chordal\" or \"cauchy\", got {other:?}"
-            )));
-        }
-    };
-    let robust = rotavg::rig::RigRobust {
-        threshold_deg: threshold,
-        inlier_threshold_deg: threshold,
-        ..Default::default()
-    };
-    Ok((loss, robust))
+    RigLoss::named(loss, threshold).map_err(|e| crate::errors::argument_error(e.to_string()))
 }

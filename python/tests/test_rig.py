@@ -137,3 +137,30 @@ def test_outliers_in_two_view_graphs_turn_robust_as_the_command_line(cli, tmp_pa
         rotavg.average_rig(right, left, loss="cauchy", sensor_from_rig=np.eye(3))
     with pytest.raises(Exception, match="loss must be"):
         rotavg.average_rig(right, left, loss="huber")
+
+
+RIG_GRAVITY = REPO / "examples" / "data" / "rig_gravity"
+
+
+def test_gravity_priors_on_a_rig_file_are_the_command_line_s(cli):
+    path, priors = RIG_GRAVITY / "rig.json", RIG_GRAVITY / "gravity.txt"
+    ours = rotavg.average_rig_file(path, gravity=priors, gravity_weight=36.0)
+    theirs = cli("rig", path, "--gravity", priors, "--gravity-weight", "36")
+    assert untimed(ours.to_dict()) == untimed(theirs)
+    d = ours.to_dict()
+    assert ours.verdict == "certified"
+    assert d["verdict"]["problem"]["kind"] == "chordal_l2_rig_gravity_soft"
+    assert d["gravity"]["frames_with_prior"] == 30
+    # the same priors as rows in image order: the same answer
+    rows = np.full((90, 3), np.nan)
+    for line in priors.read_text().splitlines():
+        if line and not line.startswith("#"):
+            k, *g = line.split()
+            rows[int(k)] = [float(x) for x in g]
+    again = rotavg.average_rig_file(path, gravity=rows, gravity_weight=36.0)
+    assert again.cost == pytest.approx(ours.cost, rel=1e-12)
+    checked = rotavg.certify_rig_file(path, ours.estimate, np.array(d["sensors_from_rig"]),
+                                      gravity=rows, gravity_weight=36.0)
+    assert checked.verdict == "certified"
+    with pytest.raises(rotavg.Error, match="one per image"):
+        rotavg.average_rig_file(path, gravity=rows[:10])

@@ -79,6 +79,17 @@ pub enum CertifiedProblemKind {
     /// solve (`paper-notes/conjugate.md` `[H20]`): the edges whose residual at the Cauchy
     /// estimate is within the inlier threshold. The claim is about that problem only.
     ChordalL2RigImagesInliers,
+    /// [`CertifiedProblemKind::ChordalL2RigImagesSensorsHeld`] with gravity priors on its
+    /// images held as constraints (`rotavg rig FILE --gravity`, `paper-notes/gravity.md`
+    /// `[G14]`): the frames' gravity problem plus a constant.
+    ChordalL2RigGravity,
+    /// [`CertifiedProblemKind::ChordalL2RigGravity`] with the priors as soft terms
+    /// (`--gravity-weight`): the cost stated is the edges' plus the priors'.
+    ChordalL2RigGravitySoft,
+    /// [`CertifiedProblemKind::ChordalL2RigGravity`] on the rig's inlier edges (`[H20]`).
+    ChordalL2RigGravityInliers,
+    /// [`CertifiedProblemKind::ChordalL2RigGravitySoft`] on the rig's inlier edges (`[H20]`).
+    ChordalL2RigGravitySoftInliers,
 }
 
 /// The problem a certificate is about, with its size against the whole input's.
@@ -154,6 +165,10 @@ impl fmt::Display for CertifiedProblem {
                 "the rig's chordal L2 problem on its inlier edges ({} of {} edges, {} frames)",
                 self.num_edges, self.total_edges, self.num_nodes
             ),
+            CertifiedProblemKind::ChordalL2RigGravity
+            | CertifiedProblemKind::ChordalL2RigGravitySoft
+            | CertifiedProblemKind::ChordalL2RigGravityInliers
+            | CertifiedProblemKind::ChordalL2RigGravitySoftInliers => self.rig_gravity(f),
             CertifiedProblemKind::ChordalL2RigImagesSensorsHeld => write!(
                 f,
                 "the rig's chordal L2 problem on all {} edges between its images with every \
@@ -161,6 +176,35 @@ impl fmt::Display for CertifiedProblem {
                 self.num_edges, self.num_nodes
             ),
         }
+    }
+}
+
+impl CertifiedProblem {
+    /// The rig with gravity priors' kinds (`[G14]`), held or soft, on all edges or the inliers.
+    fn rig_gravity(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let soft = matches!(
+            self.kind,
+            CertifiedProblemKind::ChordalL2RigGravitySoft
+                | CertifiedProblemKind::ChordalL2RigGravitySoftInliers
+        );
+        let edges = if self.num_edges < self.total_edges {
+            format!(
+                "its inlier edges ({} of {})",
+                self.num_edges, self.total_edges
+            )
+        } else {
+            format!("all {} edges between its images", self.num_edges)
+        };
+        write!(
+            f,
+            "the rig's chordal L2 problem on {edges} with every sensor_from_rig held ({} frames) \
+             {}",
+            self.num_nodes,
+            [
+                "with the gravity priors held",
+                "plus the soft gravity priors"
+            ][usize::from(soft)]
+        )
     }
 }
 

@@ -165,6 +165,14 @@ pub(crate) type GraphCertifier = fn(
     &super::settings::CertifySettings,
 ) -> Result<super::certificate::Certificate>;
 
+/// A gravity problem's certification handed to a rung by its entry point (as
+/// [`GraphCertifier`]; in practice [`crate::certify::gravity::gravity_certificate`]).
+pub(crate) type GravityCertifier = fn(
+    &crate::multiple::gravity::GravityProblem,
+    &[crate::so3::Rotation],
+    &super::settings::CertifySettings,
+) -> Result<super::certificate::Certificate>;
+
 /// The simultaneous problem's certification handed to a rung by its entry point (as
 /// [`GraphCertifier`]): the certificate of a joint estimate `(R, S)` of two view graphs (in
 /// practice [`crate::certify::simultaneous::joint_certificate`]).

@@ -35,6 +35,17 @@ pub struct GravityRead {
 }
 
 impl GravityRead {
+    /// The priors read from `path`, soft of `weight` when given ([`GravityPriors::soft_if`]),
+    /// with [`Self::warnings`].
+    pub fn priors_and_warnings(
+        self,
+        path: &str,
+        weight: Option<f64>,
+    ) -> Result<(GravityPriors, Vec<crate::warning::Warning>)> {
+        let warnings = self.warnings(path, weight);
+        Ok((self.priors.soft_if(weight)?, warnings))
+    }
+
     /// The warnings about the file `path` read for priors soft of `weight` (`None`: held):
     /// `gravity_unmatched` for entries that match no node, `gravity_scales_unused` for relative
     /// weights given to held priors (which have no weight).
@@ -60,27 +71,24 @@ impl GravityRead {
     }
 }
 
-/// Where a node's prior comes from: its index by file id and by name.
+/// Where a node's prior comes from: its index by file id and by name, and the node count.
 struct Keys<'a> {
     by_id: HashMap<u64, usize>,
     by_name: HashMap<&'a str, usize>,
+    n: usize,
 }
 
 impl<'a> Keys<'a> {
-    fn of(graph: &'a LoadedGraph) -> Self {
+    /// The keys of nodes with file ids `ids` and names `names` (one each, or no names).
+    fn new(ids: &[u64], names: &'a [String]) -> Self {
         Keys {
-            by_id: graph
-                .node_ids
-                .iter()
-                .enumerate()
-                .map(|(k, id)| (*id, k))
-                .collect(),
-            by_name: graph
-                .node_names
+            by_id: ids.iter().enumerate().map(|(k, id)| (*id, k)).collect(),
+            by_name: names
                 .iter()
                 .enumerate()
                 .map(|(k, n)| (n.as_str(), k))
                 .collect(),
+            n: ids.len(),
         }
     }
 
@@ -101,20 +109,44 @@ pub fn read_gravity(
     graph: &LoadedGraph,
     world_down: Option<[f64; 3]>,
 ) -> Result<GravityRead> {
+    read_keyed(
+        path,
+        &Keys::new(&graph.node_ids, &graph.node_names),
+        world_down,
+    )
+}
+
+/// [`read_gravity`] for the images of a rig (`rotavg rig FILE --gravity`, `[G14]`): keyed by
+/// image id (COLMAP's `image_id`; the index in a JSON rig) or image name (COLMAP's), one
+/// entry per image in a JSON list.
+pub fn read_rig_gravity(
+    path: &str,
+    rig: &crate::io::rig::LoadedRig,
+    world_down: Option<[f64; 3]>,
+) -> Result<GravityRead> {
+    read_keyed(
+        path,
+        &Keys::new(&rig.image_ids, &rig.image_names),
+        world_down,
+    )
+}
+
+/// The priors of `path` for the nodes `keys` name.
+fn read_keyed(path: &str, keys: &Keys<'_>, world_down: Option<[f64; 3]>) -> Result<GravityRead> {
     let p = std::path::Path::new(path);
     let bytes = std::fs::read(p).map_err(|e| Error::Io {
         path: path.into(),
         message: e.to_string(),
     })?;
     let (dirs, file_down, unmatched) = if bytes.starts_with(b"SQLite format 3\0") {
-        colmap_priors(p, graph)?
+        colmap_priors(p, keys)?
     } else {
         let text = String::from_utf8(bytes)
             .map_err(|_| Error::parse(Some(path), None, "not UTF-8 text (nor a database)"))?;
         if text.trim_start().starts_with('{') {
-            json_priors(path, &text, graph)?
+            json_priors(path, &text, keys)?
         } else {
-            let (d, u) = text_priors(path, &text, graph)?;
+            let (d, u) = text_priors(path, &text, keys)?;
             (d, None, u)
         }
     };
@@ -187,9 +219,8 @@ type Prior = ([f64; 3], Option<f64>);
 type Directions = Vec<Option<Prior>>;
 
 /// `KEY gx gy gz` lines.
-fn text_priors(path: &str, text: &str, graph: &LoadedGraph) -> Result<(Directions, usize)> {
-    let keys = Keys::of(graph);
-    let mut dirs = vec![None; graph.problem.num_rotations()];
+fn text_priors(path: &str, text: &str, keys: &Keys<'_>) -> Result<(Directions, usize)> {
+    let mut dirs = vec![None; keys.n];
     let mut unmatched = 0;
     for (line, l) in content_lines(text) {
         let parts: Vec<&str> = l.split_whitespace().collect();
@@ -206,7 +237,7 @@ fn text_priors(path: &str, text: &str, graph: &LoadedGraph) -> Result<(Direction
 fn json_priors(
     path: &str,
     text: &str,
-    graph: &LoadedGraph,
+    keys: &Keys<'_>,
 ) -> Result<(Directions, Option<[f64; 3]>, usize)> {
     #[derive(serde::Deserialize)]
     #[serde(untagged)]
@@ -227,15 +258,15 @@ fn json_priors(
             format!("{e} (expected {{\"gravity\": [[gx, gy, gz(, weight)] | null, ...], \"world_down\": [x, y, z]}})"),
         )
     })?;
-    let n = graph.problem.num_rotations();
+    let n = keys.n;
     Ok(match file.gravity {
         Entries::List(list) if list.len() != n => {
             return Err(Error::parse(
                 Some(path),
                 None,
                 format!(
-                    "{} gravity entries for a graph of {n} nodes (one per node, null for none; \
-                     or an object keyed by image name or file id)",
+                    "{} gravity entries for {n} nodes or images (one each, null for none; or an \
+                     object keyed by image name or file id)",
                     list.len()
                 ),
             ));
@@ -248,7 +279,6 @@ fn json_priors(
             (priors, file.world_down, 0)
         }
         Entries::Keyed(map) => {
-            let keys = Keys::of(graph);
             let mut dirs = vec![None; n];
             let mut unmatched = 0;
             for (key, v) in map {
@@ -266,11 +296,10 @@ fn json_priors(
 #[cfg(feature = "colmap")]
 fn colmap_priors(
     path: &std::path::Path,
-    graph: &LoadedGraph,
+    keys: &Keys<'_>,
 ) -> Result<(Directions, Option<[f64; 3]>, usize)> {
     let rows = crate::io::colmap::database::gravity_priors(path)?;
-    let keys = Keys::of(graph);
-    let mut dirs = vec![None; graph.problem.num_rotations()];
+    let mut dirs = vec![None; keys.n];
     let mut unmatched = 0;
     for (image_id, g) in rows {
         match keys.by_id.get(&image_id) {
@@ -284,7 +313,7 @@ fn colmap_priors(
 #[cfg(not(feature = "colmap"))]
 fn colmap_priors(
     path: &std::path::Path,
-    _graph: &LoadedGraph,
+    _keys: &Keys<'_>,
 ) -> Result<(Directions, Option<[f64; 3]>, usize)> {
     Err(Error::parse(
         Some(&path.display().to_string()),

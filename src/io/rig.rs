@@ -37,10 +37,27 @@ pub struct LoadedRig {
     pub sensor_ids: Vec<u64>,
     /// The file's id of each image (COLMAP's `image_id`; the index in a JSON file).
     pub image_ids: Vec<u64>,
+    /// Each image's name (COLMAP's; none in a JSON file): keys of gravity priors.
+    #[serde(default)]
+    pub image_names: Vec<String>,
     /// `"json"` or `"colmap"`.
     pub format: String,
     /// The reader's remarks.
     pub warnings: Vec<Warning>,
+}
+
+impl LoadedRig {
+    /// The rig with gravity priors on its images ([`RigProblem::with_gravity`], `[G14]`), the
+    /// reader's `warnings` added to its own.
+    pub fn with_gravity(
+        mut self,
+        priors: crate::multiple::gravity::GravityPriors,
+        warnings: Vec<Warning>,
+    ) -> Result<Self> {
+        self.problem = self.problem.with_gravity(priors)?;
+        self.warnings.extend(warnings);
+        Ok(self)
+    }
 }
 
 #[derive(Deserialize)]
@@ -144,6 +161,7 @@ pub fn read_rig_json(text: &str, file: &str, options: &ReadOptions) -> Result<Lo
         frame_ids: (0..frames as u64).collect(),
         sensor_ids: (0..sensors_n as u64).collect(),
         image_ids: (0..images_n as u64).collect(),
+        image_names: Vec::new(),
         format: "json".into(),
         warnings: Vec::new(),
     })
@@ -237,6 +255,7 @@ fn rig_of_layout(
         frame_ids,
         sensor_ids,
         image_ids: graph.node_ids.clone(),
+        image_names: graph.node_names.clone(),
         format: "colmap".into(),
         warnings: graph.warnings.clone(),
     })

@@ -86,6 +86,34 @@ pub enum RigLoss {
     Auto,
 }
 
+impl RigLoss {
+    /// The loss named `name` (`auto`, `chordal` or `cauchy`) with the Cauchy scale and the
+    /// inlier threshold both `threshold_deg` (`rotavg rig --loss --loss-threshold`, Python's
+    /// `loss=`, `loss_threshold=`). Errors: another name (the thresholds are checked by the
+    /// solve).
+    pub fn named(name: &str, threshold_deg: f64) -> Result<(RigLoss, RigRobust)> {
+        let loss = match name {
+            "auto" => RigLoss::Auto,
+            "chordal" => RigLoss::Chordal,
+            "cauchy" => RigLoss::Cauchy,
+            other => {
+                return Err(crate::Error::InvalidSettings {
+                    name: "loss".into(),
+                    reason: format!(
+                        "loss must be \"auto\", \"chordal\" or \"cauchy\", got {other:?}"
+                    ),
+                });
+            }
+        };
+        let robust = RigRobust {
+            threshold_deg,
+            inlier_threshold_deg: threshold_deg,
+            ..Default::default()
+        };
+        Ok((loss, robust))
+    }
+}
+
 /// What a robust rig solve did: the loss that ran, why, and the inlier problem certified.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RigRobustDetails {
@@ -184,4 +212,102 @@ pub(crate) fn robust_from(
     out.details.solve_seconds = start.elapsed().as_secs_f64() - out.details.certify_seconds;
     out.details.outliers = details.outliers.clone();
     Ok((out, rr.inlier_problem, details))
+}
+
+/// What a rig's gravity priors were (`rotavg rig FILE --gravity`, `paper-notes/gravity.md`
+/// `[G14]`): the images' priors and their check against the edges between images (`[G6]`), and
+/// how they combined on the frames.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RigGravityDetails {
+    /// The images' priors, weight and convention check, as `multiple`'s.
+    pub images: super::gravity::GravityDetails,
+    /// Frames with at least one prior, and in all.
+    pub frames_with_prior: usize,
+    /// Frames in all.
+    pub num_frames: usize,
+    /// Frames with several priors, combined into one (`[G14]`).
+    pub combined_frames: usize,
+    /// The largest angle between a frame's combined direction and one of its images' priors
+    /// brought to the frame by its `sensor_from_rig`, degrees.
+    pub max_disagreement_deg: f64,
+}
+
+/// Above this angle between the priors of one frame (degrees) a warning says so: priors of
+/// 2 degrees disagree by a few degrees; a wrong `sensor_from_rig` or convention by tens.
+pub const RIG_GRAVITY_DISAGREEMENT_DEG: f64 = 10.0;
+
+impl RigGravityDetails {
+    /// The priors of `problem` (`None`: it has none). Errors: those of
+    /// [`RigProblem::frame_gravity`].
+    pub fn of(problem: &RigProblem) -> Result<Option<Self>> {
+        let Some(priors) = problem.gravity() else {
+            return Ok(None);
+        };
+        let held: Vec<_> = problem.held().iter().flatten().copied().collect();
+        let Some(fg) = problem.frame_gravity(&held)? else {
+            return Ok(None);
+        };
+        let images =
+            crate::multiple::gravity::GravityProblem::new(problem.image_graph()?, priors.clone())?;
+        Ok(Some(RigGravityDetails {
+            images: super::gravity::GravityDetails::of(&images),
+            frames_with_prior: fg.problem.priors().num_known(),
+            num_frames: problem.num_frames(),
+            combined_frames: fg.combined,
+            max_disagreement_deg: fg.max_disagreement_deg,
+        }))
+    }
+
+    /// The images' check's warnings, and `gravity_frame_disagreement` when one frame's priors
+    /// disagree by more than [`RIG_GRAVITY_DISAGREEMENT_DEG`].
+    pub fn warnings(&self) -> Vec<crate::warning::Warning> {
+        let mut out = self.images.warnings();
+        if self.max_disagreement_deg > RIG_GRAVITY_DISAGREEMENT_DEG {
+            out.push(crate::warning::Warning::new(
+                "gravity_frame_disagreement",
+                format!(
+                    "the gravity priors of one frame's images, brought to the frame by their \
+                     sensor_from_rig, disagree by up to {:.2} degrees: is a sensor_from_rig \
+                     wrong or inverted (rotavg reads S = sensor_from_rig, X = S F), or are some \
+                     priors in another convention?",
+                    self.max_disagreement_deg
+                ),
+            ));
+        }
+        out
+    }
+}
+
+impl std::fmt::Display for RigGravityDetails {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let g = &self.images;
+        let w = g.world_down;
+        let how = match g.weight {
+            Some(weight) => format!("as soft terms of weight {weight} [G10]"),
+            None => "held as constraints".into(),
+        };
+        write!(
+            f,
+            "gravity: {} of {} images with a prior, {how}, world down ({}, {}, {}); on the \
+             frames [G14]: {} of {} with a prior ({} combining several, up to {:.3} deg apart)",
+            g.num_with_prior,
+            g.num_images,
+            w[0],
+            w[1],
+            w[2],
+            self.frames_with_prior,
+            self.num_frames,
+            self.combined_frames,
+            self.max_disagreement_deg
+        )?;
+        if let Some(c) = &g.check {
+            write!(
+                f,
+                "; R_ij g_i vs g_j over {} edges between images: median {:.3} deg, 90th \
+                 percentile {:.3} deg",
+                c.edges_checked, c.median_deg, c.p90_deg
+            )?;
+        }
+        Ok(())
+    }
 }

@@ -6,7 +6,7 @@ use super::Rows;
 use crate::Result;
 use crate::certify::{CertifiedProblem, CertifiedProblemKind, CertifySettings};
 use crate::io::rig::LoadedRig;
-use crate::pipeline::rig::{RigLoss, RigRobustDetails, average_rig_with_loss};
+use crate::pipeline::rig::{RigGravityDetails, RigLoss, RigRobustDetails, average_rig_with_loss};
 use crate::pipeline::{AverageSettings, Averaged};
 use crate::rig::{RigRobust, RigSettings, RigSolution};
 use crate::so3::{angle, log};
@@ -26,6 +26,8 @@ pub struct RigFileReport {
     /// A robust solve's loss, inliers and diagnosis (`--loss cauchy`, or `auto` on outliers);
     /// then the estimate and its certificate are the inlier problem's.
     pub robust: Option<RigRobustDetails>,
+    /// The gravity priors and their checks (`--gravity`, `[G14]`).
+    pub gravity: Option<RigGravityDetails>,
 }
 
 impl RigFileReport {
@@ -56,6 +58,7 @@ impl RigFileReport {
         let settings = AverageSettings { solve, certify };
         let (result, _, robust) = average_rig_with_loss(&rig.problem, loss, &robust, &settings)?;
         Ok(RigFileReport {
+            gravity: RigGravityDetails::of(&rig.problem)?,
             input,
             rig,
             result,
@@ -89,6 +92,7 @@ impl RigFileReport {
         };
         let result = super::given_result(solution, c);
         Ok(RigFileReport {
+            gravity: RigGravityDetails::of(&rig.problem)?,
             input,
             rig,
             result,
@@ -106,10 +110,15 @@ impl RigFileReport {
         let c = self.result.certificate.as_ref()?;
         let p = &self.rig.problem;
         let (frames, edges) = (p.num_frames(), p.edges().len());
-        let kind = match (&self.robust, p.all_held()) {
-            (Some(_), _) => CertifiedProblemKind::ChordalL2RigImagesInliers,
-            (None, true) => CertifiedProblemKind::ChordalL2RigImagesSensorsHeld,
-            (None, false) => CertifiedProblemKind::ChordalL2RigImages,
+        let soft = p.gravity().map(|g| g.weight().is_some());
+        let kind = match (&self.robust, p.all_held(), soft) {
+            (Some(_), _, Some(true)) => CertifiedProblemKind::ChordalL2RigGravitySoftInliers,
+            (Some(_), _, Some(false)) => CertifiedProblemKind::ChordalL2RigGravityInliers,
+            (None, _, Some(true)) => CertifiedProblemKind::ChordalL2RigGravitySoft,
+            (None, _, Some(false)) => CertifiedProblemKind::ChordalL2RigGravity,
+            (Some(_), _, None) => CertifiedProblemKind::ChordalL2RigImagesInliers,
+            (None, true, None) => CertifiedProblemKind::ChordalL2RigImagesSensorsHeld,
+            (None, false, None) => CertifiedProblemKind::ChordalL2RigImages,
         };
         Some(super::VerdictOf {
             verdict: c.verdict,
@@ -131,7 +140,11 @@ impl RigFileReport {
             Warning::new("outliers_suspected", format!("{}: {w}", self.input))
                 .with_count(w.suspected)
         });
-        self.rig.warnings.iter().cloned().chain(outliers).collect()
+        let gravity = self.gravity.iter().flat_map(RigGravityDetails::warnings);
+        (self.rig.warnings.iter().cloned())
+            .chain(gravity)
+            .chain(outliers)
+            .collect()
     }
 
     /// How many sensors were estimated (not held).
@@ -147,7 +160,8 @@ impl RigFileReport {
 
 impl fmt::Display for RigSolution {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "rig chordal cost {:.9e}; {}", self.cost, self.report)?;
+        // with soft gravity priors, their terms are part of it
+        write!(f, "rig cost {:.9e}; {}", self.cost, self.report)?;
         for (s, r) in self.sensors.iter().enumerate() {
             let axis = log(r).try_normalize(0.0).unwrap_or_default();
             write!(
@@ -177,6 +191,9 @@ impl fmt::Display for RigFileReport {
             p.images().len(),
             p.edges().len()
         )?;
+        if let Some(g) = &self.gravity {
+            write!(f, "\n{g}")?;
+        }
         for w in &self.warnings() {
             write!(f, "\nwarning: {w}")?;
         }
@@ -209,6 +226,8 @@ struct Json<'a> {
     num_images: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
     robust: Option<&'a RigRobustDetails>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gravity: Option<&'a RigGravityDetails>,
     solver: &'a crate::termination::SolverReport,
     certificate: Option<&'a crate::certify::Certificate>,
     verdict: Option<super::VerdictOf>,
@@ -234,6 +253,7 @@ impl Serialize for RigFileReport {
             sensors_held: p.held().iter().map(Option::is_some).collect(),
             num_images: p.images().len(),
             robust: self.robust.as_ref(),
+            gravity: self.gravity.as_ref(),
             solver: &s.report,
             certificate: self.result.certificate.as_ref(),
             verdict: self.verdict_of(),

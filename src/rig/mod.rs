@@ -14,6 +14,7 @@
 //! The two-sensor problem whose sensors each see their own view graph over the same frames
 //! (with its coupled certificates) is [`crate::pipeline::simultaneous`].
 
+mod gravity;
 mod problem;
 mod robust;
 mod solve;
@@ -21,6 +22,7 @@ pub(crate) use solve::polish_passes;
 mod start;
 mod synthetic;
 
+pub use gravity::FrameGravity;
 pub use problem::{Image, RigProblem, Sensor};
 pub use robust::{
     REWEIGHT_PASSES, RigRobust, RobustRig, residual_angles, solve_rig_robust, solve_rig_robust_from,

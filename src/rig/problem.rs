@@ -42,6 +42,9 @@ pub struct RigProblem {
     edges: Vec<Edge>,
     #[serde(skip)]
     held: Vec<Option<Rotation>>,
+    /// Gravity priors on the images (`[G14]`, [`Self::with_gravity`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) gravity: Option<crate::multiple::gravity::GravityPriors>,
 }
 
 /// A rig problem as read (validated into a [`RigProblem`] on deserialisation).
@@ -51,12 +54,18 @@ struct RigData {
     sensors: Vec<Sensor>,
     images: Vec<Image>,
     edges: Vec<Edge>,
+    #[serde(default)]
+    gravity: Option<crate::multiple::gravity::GravityPriors>,
 }
 
 impl TryFrom<RigData> for RigProblem {
     type Error = Error;
     fn try_from(d: RigData) -> Result<Self> {
-        RigProblem::new(d.num_frames, d.sensors, d.images, d.edges)
+        let p = RigProblem::new(d.num_frames, d.sensors, d.images, d.edges)?;
+        match d.gravity {
+            Some(g) => p.with_gravity(g),
+            None => Ok(p),
+        }
     }
 }
 
@@ -101,17 +110,23 @@ impl RigProblem {
             images,
             edges,
             held,
+            gravity: None,
         })
     }
 
-    /// The same rig measured by `edges` instead (validated as by [`Self::new`]).
+    /// The same rig (and gravity priors) measured by `edges` instead (validated as by
+    /// [`Self::new`]).
     pub fn with_edges(&self, edges: Vec<Edge>) -> Result<Self> {
-        RigProblem::new(
+        let p = RigProblem::new(
             self.num_frames,
             self.sensors.clone(),
             self.images.clone(),
             edges,
-        )
+        )?;
+        match &self.gravity {
+            Some(g) => p.with_gravity(g.clone()),
+            None => Ok(p),
+        }
     }
 
     /// Number of frames.
@@ -146,11 +161,16 @@ impl RigProblem {
         self.held.iter().all(Option::is_some)
     }
 
-    /// The smallest weight of any edge (the tolerance's `w_min`).
+    /// The smallest weight of any edge or soft gravity prior (the tolerance's `w_min`).
     pub fn min_weight(&self) -> f64 {
+        let priors = self
+            .gravity
+            .iter()
+            .flat_map(|g| (0..self.images.len()).filter_map(|a| g.prior_weight(a)));
         self.edges
             .iter()
             .map(|e| e.weight)
+            .chain(priors)
             .fold(f64::INFINITY, f64::min)
     }
 
@@ -162,15 +182,18 @@ impl RigProblem {
             .collect()
     }
 
-    /// The chordal cost `J(F, S)`.
+    /// The chordal cost `J(F, S)`, plus the soft gravity priors' terms when it has them
+    /// ([`Self::prior_cost`]).
     pub fn cost(&self, frames: &[Rotation], sensors: &[Rotation]) -> f64 {
         let x = self.image_rotations(frames, sensors);
-        self.edges
+        let edges: f64 = self
+            .edges
             .iter()
             .map(|e| {
                 e.weight * (x[e.j].matrix() - e.rotation.matrix() * x[e.i].matrix()).norm_squared()
             })
-            .sum()
+            .sum();
+        edges + self.prior_cost(frames, sensors)
     }
 
     /// The frames' view graph at fixed sensors `S` (`[H19]`): each edge between images of two

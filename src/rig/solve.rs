@@ -61,7 +61,7 @@ pub struct RigSolution {
     /// Every sensor's `sensor_from_rig` `S_s` (the held ones as held).
     #[serde(with = "crate::so3::serde_rows::rotations")]
     pub sensors: Vec<Rotation>,
-    /// The chordal cost `J(F, S)`.
+    /// The chordal cost `J(F, S)` (with soft gravity priors, plus their terms).
     pub cost: f64,
     /// Passes, why it stopped, wall time.
     pub report: SolverReport,
@@ -270,19 +270,24 @@ fn check_estimated_sensors(p: &RigProblem) -> Result<()> {
 }
 
 /// The frames at fixed sensors: the frames' view graph solved from `frames` (the spectral start
-/// when `None`), gauge `F_0 = I`.
+/// when `None`), gauge `F_0 = I`; with gravity priors, the frames' gravity problem (`[G14]`,
+/// the gravity problem's gauge).
 fn frame_step(
     p: &RigProblem,
     sensors: &[Rotation],
     frames: Option<Vec<Rotation>>,
     max_seconds: Option<f64>,
 ) -> Result<Vec<Rotation>> {
-    let (graph, _) = p.frame_graph(sensors)?;
     let settings = MultipleSettings {
         init: frames.map(Initialisation::Given).unwrap_or_default(),
         max_seconds,
         ..Default::default()
     };
+    // with gravity priors (every sensor held, `[G14]`): the frames' gravity problem
+    if let Some(fg) = p.frame_gravity(sensors)? {
+        return Ok(crate::multiple::gravity::solve_gravity(&fg.problem, &settings)?.rotations);
+    }
+    let (graph, _) = p.frame_graph(sensors)?;
     Ok(solve_multiple(&graph, &settings)?.rotations)
 }
 

@@ -134,3 +134,35 @@ impl RigScene {
         (problem, RigTruth { frames, sensors })
     }
 }
+
+impl RigTruth {
+    /// Gravity priors for `problem`'s images (`[G14]`): each image's true down direction
+    /// `S_s F_f (0, 0, 1)` tilted by Gaussian noise of `sigma` radians per axis (seeded by
+    /// `seed`), and none for every `without`-th image (`a % without == without - 1`; 0: every
+    /// image has one). For [`crate::multiple::gravity::GravityPriors::new`].
+    ///
+    /// ```
+    /// use rotavg::rig::RigScene;
+    /// let (p, truth) = RigScene { frames: 10, sensors: 2, known: true, ..Default::default() }.generate();
+    /// let g = truth.gravity(&p, 0.0, 4, 1);
+    /// assert_eq!(g.iter().filter(|d| d.is_none()).count(), 5);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn gravity(
+        &self,
+        problem: &RigProblem,
+        sigma: f64,
+        without: usize,
+        seed: u64,
+    ) -> Vec<Option<[f64; 3]>> {
+        let mut rng = StdRng::seed_from_u64(seed);
+        (problem.images().iter().enumerate())
+            .map(|(a, im)| {
+                let x = self.sensors[im.sensor] * self.frames[im.frame];
+                let tilt = perturb_gaussian(&Rotation::identity(), sigma, &mut rng);
+                let g = tilt * (x * nalgebra::Vector3::z());
+                (without == 0 || a % without != without - 1).then(|| g.into())
+            })
+            .collect()
+    }
+}

@@ -391,6 +391,39 @@ fn rig_sensors() -> (String, String) {
     (rotavg::io::rig::write_rig_json(&p), format!("{truth}\n"))
 }
 
+/// `rig_gravity/`: a rig of 30 frames and 3 known sensors (`RigScene`, seed 2, 0.05 rad of
+/// noise) in the JSON rig format (`rig.json`), gravity priors of 0.5 degrees on three images in
+/// four (`gravity.txt`: `IMAGE gx gy gz`, the image's index) and the truth (`truth.json`).
+fn rig_gravity() -> (String, String, String) {
+    use rotavg::rig::RigScene;
+    let scene = RigScene {
+        frames: 30,
+        sensors: 3,
+        noise_sigma: 0.05,
+        known: true,
+        seed: 2,
+        ..Default::default()
+    };
+    let (p, truth) = scene.generate();
+    let lines: String = (truth
+        .gravity(&p, 0.5f64.to_radians(), 4, 2)
+        .iter()
+        .enumerate())
+    .filter_map(|(a, d)| d.map(|d| format!("{a} {} {} {}\n", d[0], d[1], d[2])))
+    .collect();
+    let rows = |rs: &[Rotation]| {
+        rs.iter()
+            .map(rotavg::so3::rotation_to_rows)
+            .collect::<Vec<_>>()
+    };
+    let truth = serde_json::json!({"frames": rows(&truth.frames), "sensors_from_rig": rows(&truth.sensors)});
+    (
+        rotavg::io::rig::write_rig_json(&p),
+        format!("# image gx gy gz: the world's down direction in the camera\n{lines}"),
+        format!("{truth}\n"),
+    )
+}
+
 /// Every file of the example data, `(relative path, contents)`, from one seed.
 fn files() -> Vec<(&'static str, String)> {
     let mut rng = StdRng::seed_from_u64(2026);
@@ -399,7 +432,11 @@ fn files() -> Vec<(&'static str, String)> {
     let (gravity_graph, gravity_priors, gravity_all, gravity_truth) = gravity();
     let (rig_right, rig_left, rig_truth) = rig();
     let (rig_sensors, rig_sensors_truth) = rig_sensors();
+    let (rig_gravity, rig_gravity_priors, rig_gravity_truth) = rig_gravity();
     vec![
+        ("rig_gravity/rig.json", rig_gravity),
+        ("rig_gravity/gravity.txt", rig_gravity_priors),
+        ("rig_gravity/truth.json", rig_gravity_truth),
         ("rig_sensors/rig.json", rig_sensors),
         ("rig_sensors/truth.json", rig_sensors_truth),
         ("rig/right.json", rig_right),

@@ -76,6 +76,7 @@ mod properties_so3;
 mod readme_examples;
 mod relax_multiple;
 mod rig_cli;
+mod rig_gravity;
 mod rig_sensors;
 #[cfg(feature = "cli")]
 mod robust_inliers;

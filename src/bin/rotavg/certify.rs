@@ -67,7 +67,9 @@ pub struct Args {
     /// database with a rig configuration, as `rotavg rig FILE` reads it) and the estimate the
     /// file `rotavg rig FILE --output` writes (`"frames"`, `"sensors_from_rig"`); the rig's cost
     /// is certified, the estimate unchanged (`--nearest-rotations`: its nearest rotations).
-    #[arg(long, conflicts_with_all = ["left", "gravity", "hand", "camera"])]
+    /// With `--gravity`: the priors on the rig's images, keyed by image id or name (every
+    /// sensor known; paper-notes/gravity.md [G14]).
+    #[arg(long, conflicts_with_all = ["left", "hand", "camera"])]
     pub rig: bool,
     #[command(flatten)]
     pub plot: PlotArgs,
@@ -204,6 +206,7 @@ fn certify_rig_file(args: &Args) -> Result<Outcome> {
     let options = args.graph.read_options(&args.common);
     let input = args.input.clone().unwrap_or_else(|| "-".into());
     let rig = rotavg::io::rig::load_rig(Path::new(&input), &options)?;
+    let rig = args.gravity.apply_to_rig(rig)?;
     let text = rotavg::io::text::read_text(&args.estimate)?;
     let estimate = rotavg::io::rig::read_rig_estimate(
         &text,

@@ -7,6 +7,7 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use rotavg::certify::{Budget, CertifyMode, CertifySettings, DualSettings};
 use rotavg::io::detect::{GraphFormat, LoadedGraph, ReadOptions, WeightSource};
 use rotavg::io::names::Choice;
+use rotavg::io::rig::LoadedRig;
 use rotavg::io::values::{parse_bytes, parse_seconds, parse_tolerance, parse_vector};
 use rotavg::multiple::gravity::GravityPriors;
 use rotavg::warning::Warning;
@@ -147,7 +148,7 @@ impl InitArgs {
     }
 }
 
-/// `--gravity` (`multiple`, `certify`): gravity priors, held as constraints or (with
+/// `--gravity` (`multiple`, `certify`, `rig FILE`): gravity priors, held as constraints or (with
 /// `--gravity-weight`) as soft terms.
 #[derive(Args, Debug)]
 pub struct GravityArgs {
@@ -183,9 +184,19 @@ impl GravityArgs {
             return Ok(None);
         };
         let read = rotavg::io::gravity::read_gravity(path, graph, self.world_down)?;
-        let warnings = read.warnings(path, self.gravity_weight);
-        let priors = read.priors.soft_if(self.gravity_weight)?;
-        Ok(Some((priors, warnings)))
+        read.priors_and_warnings(path, self.gravity_weight)
+            .map(Some)
+    }
+
+    /// `rig` with the priors of `--gravity` on its images (`rotavg rig FILE`, `certify
+    /// --rig`; `[G14]`).
+    pub fn apply_to_rig(&self, rig: LoadedRig) -> Result<LoadedRig> {
+        let Some(path) = &self.gravity else {
+            return Ok(rig);
+        };
+        let read = rotavg::io::gravity::read_rig_gravity(path, &rig, self.world_down)?;
+        let (priors, warnings) = read.priors_and_warnings(path, self.gravity_weight)?;
+        rig.with_gravity(priors, warnings)
     }
 }
 

@@ -7,7 +7,7 @@
 //! `rotavg::report::RigFileReport`).
 
 use crate::Outcome;
-use crate::common::{Common, GraphArgs};
+use crate::common::{Common, GraphArgs, GravityArgs};
 use rotavg::Result;
 use rotavg::io::detect::load_graph;
 use rotavg::pipeline::rig::RigLoss;
@@ -22,7 +22,8 @@ pub struct Args {
     /// database with a rig configuration (tables rigs, rig_sensors, frames, frame_data).
     pub right: String,
     /// The other sensor's view graph over the same frames (node ids): `L_ij ~ S R_ij S^T`,
-    /// `S` its `sensor_from_rig` rotation.
+    /// `S` its `sensor_from_rig` rotation. (`--gravity` takes a rig file's images.)
+    #[arg(conflicts_with = "gravity")]
     pub left: Option<String>,
     #[command(flatten)]
     pub graph: GraphArgs,
@@ -42,6 +43,10 @@ pub struct Args {
     /// `--sensor-from-rig`: least squares.
     #[arg(long, value_name = "auto|chordal|cauchy", default_value = "auto", value_parser = ["auto", "chordal", "cauchy"])]
     pub loss: String,
+    /// Gravity priors on a rig file's images (every sensor's sensor_from_rig known), keyed by
+    /// image id or name, held or soft as for `multiple` (paper-notes/gravity.md [G14]).
+    #[command(flatten)]
+    pub gravity: GravityArgs,
     /// The Cauchy loss's scale and the inlier threshold, degrees.
     #[arg(long, value_name = "DEG", default_value_t = 5.0)]
     pub loss_threshold: f64,
@@ -86,7 +91,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let graphs = (&right, &left);
     let report = match held {
         Some(_) => RigReport::average(inputs, graphs, held, certify, max_seconds)?,
-        None => RigReport::average_with_loss(inputs, graphs, loss(args), certify, max_seconds)?,
+        None => RigReport::average_with_loss(inputs, graphs, loss(args)?, certify, max_seconds)?,
     };
     if let Some(path) = &args.output {
         report.write_output(path)?;
@@ -106,6 +111,7 @@ fn run_file(args: &Args) -> Result<Outcome> {
     }
     let options = args.graph.read_options(&args.common);
     let rig = rotavg::io::rig::load_rig(Path::new(&args.right), &options)?;
+    let rig = args.gravity.apply_to_rig(rig)?;
     let p = &rig.problem;
     crate::progress::say(format_args!(
         "rig of {} frames, {} sensors, {} images, {} edges: solving and certifying...",
@@ -117,7 +123,7 @@ fn run_file(args: &Args) -> Result<Outcome> {
     let certify = args.graph.settings(&args.common, &Default::default());
     let max_seconds = args.common.solve_seconds();
     let input = args.right.clone();
-    let report = RigFileReport::average(input, rig, loss(args), certify, max_seconds)?;
+    let report = RigFileReport::average(input, rig, loss(args)?, certify, max_seconds)?;
     if let Some(path) = &args.output {
         report.write_output(path)?;
     }
@@ -125,16 +131,6 @@ fn run_file(args: &Args) -> Result<Outcome> {
 }
 
 /// `--loss` and `--loss-threshold` (the Cauchy scale and the inlier threshold).
-fn loss(args: &Args) -> (RigLoss, rotavg::rig::RigRobust) {
-    let loss = match args.loss.as_str() {
-        "chordal" => RigLoss::Chordal,
-        "cauchy" => RigLoss::Cauchy,
-        _ => RigLoss::Auto,
-    };
-    let robust = rotavg::rig::RigRobust {
-        threshold_deg: args.loss_threshold,
-        inlier_threshold_deg: args.loss_threshold,
-        ..Default::default()
-    };
-    (loss, robust)
+fn loss(args: &Args) -> Result<(RigLoss, rotavg::rig::RigRobust)> {
+    RigLoss::named(&args.loss, args.loss_threshold)
 }

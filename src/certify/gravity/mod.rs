@@ -128,6 +128,16 @@ pub fn certify_gravity(
     })
 }
 
+/// The certificate of `rotations` for `problem` ([`certify_gravity`]): the rig's frames rung's
+/// certifier (`[G14]`).
+pub(crate) fn gravity_certificate(
+    problem: &GravityProblem,
+    rotations: &[Rotation],
+    settings: &CertifySettings,
+) -> Result<crate::certify::certificate::Certificate> {
+    Ok(certify_gravity(problem, rotations, settings)?.certificate)
+}
+
 /// The certificate of `rotations` for the soft problem `problem` ([`certify_soft`]): the
 /// surrogate rung's certifier.
 fn soft_certificate(

@@ -1,15 +1,19 @@
 //! A rig with every sensor held (`[H19]`): `J(F, S)` is the frames' view graph's chordal cost
 //! plus the within-frame edges' cost, which `F` does not change; the view graph's certified
-//! bound plus that constant bounds `J*`, less the rounding `rounding.rs` charges.
+//! bound plus that constant bounds `J*`, less the rounding `rounding.rs` charges. With gravity
+//! priors on the images (`[G14]`), the frames' gravity problem instead, plus its constant, less
+//! the combination's rounding.
 
 use super::state::RigState;
+use crate::certify::certificate::Certificate;
 use crate::certify::log::Prediction;
 use crate::certify::proof::Proof;
-use crate::certify::rung::{Found, GraphCertifier, Handed, Plan, Rung};
+use crate::certify::rung::{Found, GraphCertifier, GravityCertifier, Handed, Plan, Rung};
 use crate::error::Result;
+use crate::rig::FrameGravity;
 
 /// The frames' bound as a rung: first, when every sensor is held.
-pub(crate) struct FramesRung(pub(crate) Handed<GraphCertifier>);
+pub(crate) struct FramesRung(pub(crate) Handed<(GraphCertifier, GravityCertifier)>);
 
 impl<'a> Rung<RigState<'a>> for FramesRung {
     fn proof(&self) -> Proof {
@@ -27,24 +31,68 @@ impl<'a> Rung<RigState<'a>> for FramesRung {
 
     fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {
         self.0.done = true;
-        let (graph, constant) = cx.problem.frame_graph(cx.sensors)?;
+        let (graph_certify, gravity_certify) = self.0.certify;
         let mut settings = cx.settings.clone();
         settings.budget.max_seconds = cx.left();
-        let inner = (self.0.certify)(&graph, cx.frames, &settings)?;
-        let Some(lb) = inner.lower_bound else {
-            return Ok(Found::failed(format!(
-                "the frames' view graph has no bound: {}",
-                inner.explanation
-            )));
+        let (inner, constant, charge, edges, what) = match cx.problem.frame_gravity(cx.sensors)? {
+            Some(fg) => {
+                // a point the frames' problem refuses (off its held directions) fails the rung
+                let inner = match gravity_certify(&fg.problem, cx.frames, &settings) {
+                    Ok(c) => c,
+                    Err(e) => {
+                        return Ok(Found::failed(format!("the frames' gravity problem: {e}")));
+                    }
+                };
+                let charge = combination_charge(&fg, cx);
+                let edges = fg.problem.problem().num_edges();
+                (inner, fg.constant, charge, edges, "gravity problem")
+            }
+            None => {
+                let (graph, constant) = cx.problem.frame_graph(cx.sensors)?;
+                let inner = graph_certify(&graph, cx.frames, &settings)?;
+                (inner, constant, 0.0, graph.num_edges(), "view graph")
+            }
         };
-        let bound = super::rounding::rounding_floor(lb + constant, cx.total_weight());
-        let note = format!(
-            "the frames' view graph ({} edges) bounded by {} at {lb:.9e}, plus the within-frame \
-             edges' {constant:.9e}, less rounding [H19]",
-            graph.num_edges(),
-            inner.method
-        );
-        let bound = cx.offer(bound, Proof::RigFrames, &note);
-        Ok(Found::proved(bound, cx.certifies(bound), note))
+        found(cx, &inner, (constant, charge), (edges, what))
     }
+}
+
+/// The rung's bound from the frames' certificate `inner`: its bound plus `constant`, less
+/// `charge` and the rounding (`rounding.rs`).
+fn found(
+    cx: &mut RigState<'_>,
+    inner: &Certificate,
+    (constant, charge): (f64, f64),
+    (edges, what): (usize, &str),
+) -> Result<Found> {
+    let Some(lb) = inner.lower_bound else {
+        return Ok(Found::failed(format!(
+            "the frames' {what} has no bound: {}",
+            inner.explanation
+        )));
+    };
+    let bound = super::rounding::rounding_floor(lb + constant - charge, cx.total_weight());
+    let note = format!(
+        "the frames' {what} ({edges} edges) bounded by {} at {lb:.9e}, plus the within-frame \
+         edges'{} {constant:.9e}, less rounding [{}]",
+        inner.method,
+        if charge > 0.0 {
+            " and the priors' combination"
+        } else {
+            ""
+        },
+        if what == "view graph" { "H19" } else { "G14" }
+    );
+    let bound = cx.offer(bound, Proof::RigFrames, &note);
+    Ok(Found::proved(bound, cx.certifies(bound), note))
+}
+
+/// What `[G14]` charges for the frames' priors as computed: the soft combination's rounding, or
+/// for held directions turned by at most `delta` from the exact ones, the change of the
+/// minimum `6 delta sqrt(W J) + 8 delta^2 W` (`W` the edges' weight, `J` the estimate's cost).
+fn combination_charge(fg: &FrameGravity, cx: &RigState<'_>) -> f64 {
+    let w = cx.total_weight();
+    let delta = fg.held_angle;
+    let held = 6.0 * delta * (w * cx.cost.max(0.0)).sqrt() + 8.0 * delta * delta * w;
+    (fg.soft_charge + held) * (1.0 + 1e-6)
 }

@@ -76,7 +76,10 @@ pub fn certify_rig(
         log: Vec::new(),
     };
     let rungs: Rungs<'_, RigState<'_>> = vec![
-        Box::new(frames::FramesRung(Handed::new(certify))),
+        Box::new(frames::FramesRung(Handed::new((
+            certify,
+            crate::certify::gravity::gravity_certificate,
+        )))),
         Box::new(coupled::CoupledRung(Handed::new(certify))),
         Box::new(two_graphs::TwoGraphsRung(Handed::new(
             crate::certify::simultaneous::joint_certificate,

@@ -1,0 +1,408 @@
+//! Gravity priors on a rig with every sensor held (`paper-notes/gravity.md` `[G14]`, issue 36):
+//! the frames' gravity problem plus its constant equals the rig's cost with the priors, written
+//! out here term by term, at random points; a noise-free rig with exact priors is recovered and
+//! certified; noisy soft priors improve the frames; the bound is below every local minimum
+//! found from perturbed truths; a wrong sensor_from_rig shows in the priors' disagreement;
+//! outliers get the robust inlier problem, still with the priors; bad inputs are refused.
+
+use nalgebra::Vector3;
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+use rotavg::Rotation;
+use rotavg::certify::certify_rig;
+use rotavg::multiple::accuracy::align_and_compare;
+use rotavg::multiple::gravity::GravityPriors;
+use rotavg::pipeline::rig::{RigLoss, average_rig_with_loss};
+use rotavg::pipeline::{AverageSettings, average_rig};
+use rotavg::rig::{RigProblem, RigRobust, RigScene, RigSettings, RigTruth, solve_rig_from};
+use rotavg::so3::{exp, perturb};
+
+const DOWN: Vector3<f64> = Vector3::new(0.0, 0.0, 1.0);
+
+fn rig(frames: usize, sensors: usize, noise: f64, seed: u64) -> (RigProblem, RigTruth) {
+    RigScene {
+        frames,
+        sensors,
+        noise_sigma: noise,
+        known: true,
+        seed,
+        ..Default::default()
+    }
+    .generate()
+}
+
+/// `truth`'s priors ([`RigTruth::gravity`]) as [`GravityPriors`].
+fn priors(p: &RigProblem, truth: &RigTruth, sigma: f64, skip: usize, seed: u64) -> GravityPriors {
+    GravityPriors::new(truth.gravity(p, sigma, skip, seed)).unwrap()
+}
+
+/// The rig's cost with soft priors, term by term from the definitions (edges, then every
+/// image's `2 w ||S F d - g||^2`).
+fn written_out_cost(
+    p: &RigProblem,
+    g: &GravityPriors,
+    frames: &[Rotation],
+    sensors: &[Rotation],
+) -> f64 {
+    let x: Vec<Rotation> = (p.images().iter())
+        .map(|im| sensors[im.sensor] * frames[im.frame])
+        .collect();
+    let edges: f64 = (p.edges().iter())
+        .map(|e| {
+            e.weight * (x[e.j].matrix() - e.rotation.matrix() * x[e.i].matrix()).norm_squared()
+        })
+        .sum();
+    let priors: f64 = (0..x.len())
+        .filter_map(|a| {
+            Some(2.0 * g.prior_weight(a)? * (x[a] * DOWN - g.direction(a)?).norm_squared())
+        })
+        .sum();
+    edges + priors
+}
+
+/// `[G14]`'s identity: at random frames, the frames' gravity problem's cost plus its constant
+/// is the rig's cost with soft priors written out, for priors with relative weights, several
+/// per frame, some frames without.
+#[test]
+fn the_frames_gravity_problem_plus_its_constant_is_the_rigs_cost() {
+    let (p, truth) = rig(25, 4, 0.05, 3);
+    let scales = (0..p.images().len())
+        .map(|a| Some(0.5 + (a % 5) as f64))
+        .collect();
+    let g = priors(&p, &truth, 0.1, 3, 1)
+        .with_scales(scales)
+        .unwrap()
+        .with_weight(7.0)
+        .unwrap();
+    let q = p.clone().with_gravity(g.clone()).unwrap();
+    let fg = q.frame_gravity(&truth.sensors).unwrap().unwrap();
+    assert!(fg.combined > 10, "{}", fg.combined);
+    let mut rng = StdRng::seed_from_u64(5);
+    for k in 0..20 {
+        let frames: Vec<Rotation> = truth
+            .frames
+            .iter()
+            .map(|f| perturb(f, 0.05 * k as f64, &mut rng))
+            .collect();
+        let expected = written_out_cost(&p, &g, &frames, &truth.sensors);
+        let via = fg.problem.problem().chordal_cost(&frames)
+            + fg.problem.prior_cost(&frames)
+            + fg.constant;
+        assert!(
+            (via - expected).abs() <= 1e-11 * expected,
+            "{via} vs {expected}"
+        );
+        let direct = q.cost(&frames, &truth.sensors);
+        assert!(
+            (direct - expected).abs() <= 1e-12 * expected,
+            "{direct} vs {expected}"
+        );
+    }
+}
+
+/// Exact held priors on a noise-free rig: the truth up to a turn about the down direction,
+/// every image's prior held to 1e-9, certified by the frames' gravity problem.
+#[test]
+fn a_noise_free_rig_with_exact_priors_is_recovered_and_certified() {
+    for (frames, sensors, seed) in [(20, 2, 1), (40, 4, 2), (30, 6, 3)] {
+        let (p, truth) = rig(frames, sensors, 0.0, seed);
+        let g = priors(&p, &truth, 0.0, 0, 0);
+        let p = p.with_gravity(g).unwrap();
+        let out = average_rig(&p, &Default::default()).unwrap();
+        let s = &out.solution;
+        let truth_some: Vec<_> = truth.frames.iter().copied().map(Some).collect();
+        let acc = align_and_compare(&s.frames, &truth_some).unwrap();
+        assert!(acc.max_deg < 1e-7, "{}", acc.max_deg);
+        for (a, im) in p.images().iter().enumerate() {
+            let g = p.gravity().unwrap().direction(a).unwrap();
+            assert!((s.sensors[im.sensor] * s.frames[im.frame] * DOWN - g).norm() < 1e-9);
+        }
+        let c = out.certificate.unwrap();
+        assert!(c.is_certified(), "{}", c.explanation);
+        assert!(c.explanation.contains("G14"), "{}", c.explanation);
+    }
+}
+
+/// Noisy soft priors (0.5 degrees against 3 degrees on the edges, `W = (3 / 0.5)^2`) make the
+/// frames more accurate than the rig without them, certified; held ones too.
+#[test]
+fn noisy_priors_make_the_frames_more_accurate() {
+    let (p, truth) = rig(200, 3, 3f64.to_radians(), 7);
+    let g = priors(&p, &truth, 0.5f64.to_radians(), 4, 2);
+    let truth_some: Vec<_> = truth.frames.iter().copied().map(Some).collect();
+    let error = |q: &RigProblem| {
+        let out = average_rig(q, &Default::default()).unwrap();
+        let c = out.certificate.unwrap();
+        assert!(c.is_certified(), "{}", c.explanation);
+        align_and_compare(&out.solution.frames, &truth_some)
+            .unwrap()
+            .mean_deg
+    };
+    let none = error(&p);
+    let held = error(&p.clone().with_gravity(g.clone()).unwrap());
+    let soft = error(
+        &p.clone()
+            .with_gravity(g.with_weight(36.0).unwrap())
+            .unwrap(),
+    );
+    assert!(
+        soft < 0.9 * none && held < none,
+        "none {none}, held {held}, soft {soft}"
+    );
+}
+
+/// The certified bound is below the cost of every local minimum found from perturbed truths
+/// (soft and held priors, noisy rigs), and within the tolerance of the best.
+#[test]
+fn the_bound_is_below_every_local_minimum() {
+    for (weight, seed) in [(Some(4.0), 1u64), (None, 2), (Some(0.3), 3)] {
+        let (p, truth) = rig(15, 3, 0.1, seed);
+        let g = priors(&p, &truth, 0.05, 3, seed).soft_if(weight).unwrap();
+        let p = p.with_gravity(g).unwrap();
+        let out = average_rig(&p, &Default::default()).unwrap();
+        let c = out.certificate.unwrap();
+        let lb = c.lower_bound.unwrap();
+        let mut rng = StdRng::seed_from_u64(seed);
+        let mut best = f64::INFINITY;
+        for k in 0..12 {
+            let start: Vec<Rotation> = truth
+                .frames
+                .iter()
+                .map(|f| perturb(f, 0.3 * k as f64, &mut rng))
+                .collect();
+            let s = solve_rig_from(&p, &start, &truth.sensors, &RigSettings::default()).unwrap();
+            assert!(
+                lb <= s.cost * (1.0 + 1e-12),
+                "bound {lb} above a minimum {}",
+                s.cost
+            );
+            best = best.min(s.cost);
+        }
+        assert!(
+            c.is_certified() && best - lb <= 1e-6 * best,
+            "{lb} {best} {}",
+            c.explanation
+        );
+    }
+}
+
+/// A sensor_from_rig off by 20 degrees shows as the priors of its frames disagreeing by about
+/// that much; with the right one, by the priors' noise only.
+#[test]
+fn a_wrong_sensor_from_rig_shows_in_the_priors_disagreement() {
+    let (p, truth) = rig(30, 2, 0.0, 4);
+    let g = priors(&p, &truth, 0.0, 0, 0);
+    let q = p.clone().with_gravity(g).unwrap();
+    let right = q.frame_gravity(&truth.sensors).unwrap().unwrap();
+    assert!(right.max_disagreement_deg < 1e-6);
+    let mut wrong = truth.sensors.clone();
+    wrong[1] *= exp(&Vector3::new(20f64.to_radians(), 0.0, 0.0));
+    let off = q.frame_gravity(&wrong).unwrap().unwrap();
+    assert!(
+        (5.0..=20.0).contains(&off.max_disagreement_deg),
+        "{}",
+        off.max_disagreement_deg
+    );
+}
+
+/// Outliers: `auto` turns to the Cauchy loss, and the inlier rig it certifies keeps the priors.
+#[test]
+fn outliers_get_the_robust_inlier_problem_with_the_priors() {
+    let (p, truth) = RigScene {
+        frames: 80,
+        sensors: 3,
+        noise_sigma: 0.01,
+        outlier_fraction: 0.15,
+        known: true,
+        seed: 5,
+        ..Default::default()
+    }
+    .generate();
+    let g = priors(&p, &truth, 0.005, 0, 3).with_weight(4.0).unwrap();
+    let p = p.with_gravity(g).unwrap();
+    let (out, inliers, details) = average_rig_with_loss(
+        &p,
+        RigLoss::Auto,
+        &RigRobust::default(),
+        &AverageSettings::default(),
+    )
+    .unwrap();
+    assert!(details.is_some_and(|d| d.robust));
+    assert!(inliers.gravity().is_some() && inliers.edges().len() < p.edges().len());
+    let truth_some: Vec<_> = truth.frames.iter().copied().map(Some).collect();
+    let acc = align_and_compare(&out.solution.frames, &truth_some).unwrap();
+    assert!(acc.mean_deg < 1.0, "{}", acc.mean_deg);
+    let c = out.certificate.unwrap();
+    assert!(c.is_certified(), "{}", c.explanation);
+    // another tool's estimate: certified as given
+    let again = certify_rig(
+        &inliers,
+        &out.solution.frames,
+        &out.solution.sensors,
+        &Default::default(),
+    )
+    .unwrap();
+    assert!(again.certificate.is_certified());
+}
+
+/// Estimated sensors, a wrong count and held priors that cancel are refused with the reason.
+#[test]
+fn bad_gravity_on_a_rig_is_refused() {
+    let (p, truth) = rig(10, 2, 0.0, 1);
+    let g = priors(&p, &truth, 0.0, 0, 0);
+    let (estimated, _) = RigScene {
+        frames: 10,
+        sensors: 2,
+        known: false,
+        ..Default::default()
+    }
+    .generate();
+    let e = estimated.with_gravity(g.clone()).unwrap_err().to_string();
+    assert!(e.contains("sensor_from_rig known"), "{e}");
+    let short = GravityPriors::new(vec![Some([0.0, 0.0, 1.0])]).unwrap();
+    let e = p.clone().with_gravity(short).unwrap_err().to_string();
+    assert!(e.contains("one per image"), "{e}");
+    // frame 0's two images: opposite directions once brought to the frame
+    let mut dirs: Vec<Option<[f64; 3]>> = vec![None; p.images().len()];
+    for (a, im) in p
+        .images()
+        .iter()
+        .enumerate()
+        .filter(|(_, im)| im.frame == 0)
+    {
+        let sign = if im.sensor == 0 { 1.0 } else { -1.0 };
+        dirs[a] = Some((truth.sensors[im.sensor] * (sign * DOWN)).into());
+    }
+    let e = p
+        .clone()
+        .with_gravity(GravityPriors::new(dirs.clone()).unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cancel"), "{e}");
+    // soft, they drop out as the constant 4 w (1 + 1), with frame 1's prior kept
+    let a = p.images().iter().position(|im| im.frame == 1).unwrap();
+    let im = p.images()[a];
+    dirs[a] = Some((truth.sensors[im.sensor] * truth.frames[1] * DOWN).into());
+    let soft = GravityPriors::new(dirs).unwrap().with_weight(1.0).unwrap();
+    let q = p.clone().with_gravity(soft).unwrap();
+    let fg = q.frame_gravity(&truth.sensors).unwrap().unwrap();
+    assert!((fg.constant - 8.0).abs() < 1e-12, "{}", fg.constant);
+    assert_eq!(fg.problem.priors().num_known(), 1);
+}
+
+fn example(name: &str) -> String {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/data/rig_gravity")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// `rotavg rig FILE --gravity` on the committed example: the priors (held and soft) bring the
+/// frames nearer the truth than without, the JSON names the problem and carries the priors'
+/// checks; `certify --rig --gravity` certifies the written estimate for the same problem.
+#[test]
+fn the_command_line_takes_priors_on_a_rig_file() {
+    use crate::common::{assert_success, json_of, run, temp_file};
+    let (rig, gravity) = (example("rig.json"), example("gravity.txt"));
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(example("truth.json")).unwrap()).unwrap();
+    let rotations = |v: &serde_json::Value| -> Vec<Rotation> {
+        (v.as_array().unwrap().iter())
+            .map(|r| {
+                let m: Vec<f64> = (r.as_array().unwrap().iter())
+                    .flat_map(|row| row.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+                    .collect();
+                Rotation::from_matrix_unchecked(nalgebra::Matrix3::from_row_slice(&m))
+            })
+            .collect()
+    };
+    let truth_some: Vec<_> = rotations(&truth["frames"]).into_iter().map(Some).collect();
+    let error = |extra: &[&str]| {
+        let out = run(&[&["rig", &rig, "--json"][..], extra].concat());
+        assert_success(&out);
+        let j = json_of(&out);
+        let acc = align_and_compare(&rotations(&j["estimate"]), &truth_some).unwrap();
+        (acc.mean_deg, j)
+    };
+    let (none, _) = error(&[]);
+    let (held, j) = error(&["--gravity", &gravity]);
+    assert_eq!(j["verdict"]["problem"]["kind"], "chordal_l2_rig_gravity");
+    assert_eq!(j["gravity"]["frames_with_prior"], 30);
+    assert!(j["gravity"]["max_disagreement_deg"].as_f64().unwrap() < 3.0);
+    let (soft, j) = error(&["--gravity", &gravity, "--gravity-weight", "36"]);
+    assert_eq!(j["verdict"]["verdict"], "certified");
+    assert_eq!(
+        j["verdict"]["problem"]["kind"],
+        "chordal_l2_rig_gravity_soft"
+    );
+    assert!(
+        soft < 0.8 * none && held < none,
+        "none {none}, held {held}, soft {soft}"
+    );
+    // the written estimate, certified for the soft problem by `certify --rig`
+    let est = temp_file("rig_gravity_estimate.json", "")
+        .display()
+        .to_string();
+    let out = run(&[
+        "rig",
+        &rig,
+        "--gravity",
+        &gravity,
+        "--gravity-weight",
+        "36",
+        "--output",
+        &est,
+    ]);
+    assert_success(&out);
+    let args = [
+        "certify",
+        &rig,
+        "--rig",
+        "--estimate",
+        &est,
+        "--gravity",
+        &gravity,
+    ];
+    let out = run(&[&args[..], &["--gravity-weight", "36", "--json"]].concat());
+    assert_success(&out);
+    let c = json_of(&out);
+    assert_eq!(c["verdict"]["verdict"], "certified");
+    assert!((c["cost"].as_f64().unwrap() - j["cost"].as_f64().unwrap()).abs() < 1e-9);
+}
+
+/// A wrong `sensor_from_rig` (sensor 1's inverted) is warned about in the text and the JSON;
+/// gravity with two view graphs is refused (it keys a rig file's images).
+#[test]
+fn a_wrong_sensor_from_rig_is_warned_about_and_two_graphs_are_refused() {
+    use crate::common::{assert_success, json_of, run, temp_file};
+    let text = std::fs::read_to_string(example("rig.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let s = v["sensors"][1]["sensor_from_rig"].clone();
+    let transposed: Vec<Vec<f64>> = (0..3)
+        .map(|r| (0..3).map(|c| s[c][r].as_f64().unwrap()).collect())
+        .collect();
+    v["sensors"][1]["sensor_from_rig"] = serde_json::json!(transposed);
+    let wrong = temp_file("rig_gravity_wrong.json", &v.to_string())
+        .display()
+        .to_string();
+    let out = run(&[
+        "rig",
+        &wrong,
+        "--gravity",
+        &example("gravity.txt"),
+        "--json",
+    ]);
+    assert_success(&out);
+    let j = json_of(&out);
+    let codes: Vec<&str> = (j["warnings"].as_array().unwrap().iter())
+        .map(|w| w["code"].as_str().unwrap())
+        .collect();
+    assert!(codes.contains(&"gravity_frame_disagreement"), "{codes:?}");
+    let graph =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/data/rig/right.json");
+    let g = graph.display().to_string();
+    let out = run(&["rig", &g, &g, "--gravity", &example("gravity.txt")]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot be used with '--gravity"));
+}
