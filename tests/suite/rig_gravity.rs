@@ -406,3 +406,21 @@ fn a_wrong_sensor_from_rig_is_warned_about_and_two_graphs_are_refused() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot be used with '--gravity"));
 }
+
+/// With held priors a point off the frames' directions is no point of the problem: refused,
+/// never certified (the images' bound, without priors, is below its cost).
+#[test]
+fn a_point_off_its_held_priors_is_refused() {
+    let (p, truth) = rig(20, 3, 0.05, 6);
+    let g = priors(&p, &truth, 0.01, 0, 6);
+    let p = p.with_gravity(g).unwrap();
+    let s = average_rig(&p, &Default::default()).unwrap().solution;
+    let mut frames = s.frames.clone();
+    frames[3] *= exp(&Vector3::new(0.01, 0.0, 0.0));
+    let e = certify_rig(&p, &frames, &s.sensors, &Default::default()).unwrap_err();
+    assert!(e.to_string().contains("held gravity directions"), "{e}");
+    // a turn about the down axis keeps them
+    frames[3] = s.frames[3] * exp(&Vector3::new(0.0, 0.0, 0.01));
+    let c = certify_rig(&p, &frames, &s.sensors, &Default::default()).unwrap();
+    assert!(!c.certificate.is_certified());
+}

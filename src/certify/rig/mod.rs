@@ -32,8 +32,9 @@ use state::RigState;
 /// every sensor is held, the frames' view graph; always, the images' view graph without the
 /// rig's constraints; each certified by `certify` (the view graph's ladder) within the
 /// budget. The verdict uses the best bound, and is about the estimate with its held sensors at
-/// their held rotations. Errors: estimates of the wrong length, a held sensor farther than 1e-9
-/// rad from its held rotation.
+/// their held rotations. With gravity priors (`[G14]`) the frames' bound is the frames' gravity
+/// problem's. Errors: estimates of the wrong length, a held sensor farther than 1e-9 rad from
+/// its held rotation, frames off their held gravity directions.
 ///
 /// ```
 /// use rotavg::certify::certify_rig;
@@ -62,6 +63,7 @@ pub fn certify_rig(
         .map(|(s, held)| held.unwrap_or(*s))
         .collect();
     let sensors = &sensors[..];
+    check_held_priors(problem, frames, sensors)?;
     let cost = problem.cost(frames, sensors);
     let tolerance = settings.tolerance.resolve(problem.min_weight());
     let mut state = RigState {
@@ -97,6 +99,30 @@ pub fn certify_rig(
         details,
         improvement: None,
     })
+}
+
+/// Held gravity priors (`[G14]`): the frames on their directions (within
+/// [`crate::certify::gravity::GRAVITY_FEASIBILITY_RAD`]), else the estimate is no point of the
+/// problem and no bound may certify it.
+fn check_held_priors(p: &RigProblem, frames: &[Rotation], sensors: &[Rotation]) -> Result<()> {
+    let Some(fg) = p.frame_gravity(sensors)? else {
+        return Ok(());
+    };
+    if fg.problem.priors().weight().is_some() {
+        return Ok(());
+    }
+    let off = fg.problem.max_prior_violation_deg(frames);
+    if off.is_nan() || off.to_radians() > crate::certify::gravity::GRAVITY_FEASIBILITY_RAD {
+        return Err(Error::InvalidSettings {
+            name: "estimate".into(),
+            reason: format!(
+                "the estimate is {off:.3e} degrees off its frames' held gravity directions (each \
+                 frame's priors brought to it by sensor_from_rig, [G14]): it is not a point of \
+                 the problem; certify it without --gravity, or with --gravity-weight"
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// One rotation per frame and per sensor; the held sensors at their held rotations.
