@@ -293,33 +293,42 @@ fn a_rig_file_of_three_sensors_is_calibrated() {
     assert_eq!(written["sensor_ids"], serde_json::json!([0, 1, 2]));
 }
 
-/// COLMAP's rig configuration (`[F17]`), written here with COLMAP 4's schema: camera 1 the
-/// reference, camera 2 known (its `Rigid3d` blob), camera 3 unknown (`NULL`), frames with ids
-/// from 10; noise-free geometries within each camera and across cameras. The planted rig is
-/// recovered and certified; the frames and sensors carry COLMAP's ids. A database without rig
-/// tables, and an image in no frame, are errors that say so.
-#[test]
-fn a_colmap_rig_configuration_is_read_and_certified() {
-    use rotavg::io::colmap::image_pair_to_pair_id;
-    use rotavg::so3::{random_rotation, to_quaternion};
-    let mut rng = <rotavg::rand::rngs::StdRng as rotavg::rand::SeedableRng>::seed_from_u64(5);
-    let frames: Vec<Rotation> = (0..12).map(|_| random_rotation(&mut rng)).collect();
-    let sensors = [
-        Rotation::identity(),
-        random_rotation(&mut rng),
-        random_rotation(&mut rng),
-    ];
-    let blob = |v: &[f64]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
-    let wxyz = |r: &Rotation| {
-        let q = to_quaternion(r);
-        [q.w, q.i, q.j, q.k]
-    };
-    let image = |f: usize, c: usize| (1 + 3 * f + c) as u32;
-    let x = |f: usize, c: usize| sensors[c] * frames[f];
-    let path = temp_dir().join("rig_colmap.db");
-    let write = |with_rigs: bool, orphan: bool| {
-        let _ = std::fs::remove_file(&path);
-        let db = rusqlite::Connection::open(&path).unwrap();
+/// A planted COLMAP rig (`[F17]`): 12 frames, camera 1 the reference, cameras 2 and 3.
+struct ColmapRig {
+    frames: Vec<Rotation>,
+    sensors: [Rotation; 3],
+}
+
+impl ColmapRig {
+    fn new() -> Self {
+        use rotavg::so3::random_rotation;
+        let mut rng = <rotavg::rand::rngs::StdRng as rotavg::rand::SeedableRng>::seed_from_u64(5);
+        let frames: Vec<Rotation> = (0..12).map(|_| random_rotation(&mut rng)).collect();
+        let sensors = [
+            Rotation::identity(),
+            random_rotation(&mut rng),
+            random_rotation(&mut rng),
+        ];
+        ColmapRig { frames, sensors }
+    }
+
+    fn image(f: usize, c: usize) -> u32 {
+        (1 + 3 * f + c) as u32
+    }
+
+    fn x(&self, f: usize, c: usize) -> Rotation {
+        self.sensors[c] * self.frames[f]
+    }
+
+    /// The database at `path` with COLMAP 4's schema: noise-free geometries within each camera
+    /// and across cameras; with `with_rigs` the rig tables (camera 2 known by its `Rigid3d`
+    /// blob, camera 3 known when `third_known`, else `NULL`; frames with ids from 10; with
+    /// `orphan`, image 12 in no frame).
+    fn write(&self, path: &std::path::Path, with_rigs: bool, orphan: bool, third_known: bool) {
+        use rotavg::io::colmap::image_pair_to_pair_id;
+        let image = Self::image;
+        let _ = std::fs::remove_file(path);
+        let db = rusqlite::Connection::open(path).unwrap();
         db.execute_batch(rotavg::io::colmap::scene::SCHEMA).unwrap();
         for c in 1..=3 {
             db.execute(
@@ -351,45 +360,70 @@ fn a_colmap_rig_configuration_is_read_and_certified() {
             } else {
                 ((fb, cb), (fa, ca))
             };
-            let rel = x(b.0, b.1) * x(a.0, a.1).inverse();
+            let rel = self.x(b.0, b.1) * self.x(a.0, a.1).inverse();
             db.execute(
                 "INSERT OR REPLACE INTO two_view_geometries VALUES (?1, 0, 2, NULL, 2, NULL, NULL, NULL, ?2, ?3)",
                 rusqlite::params![image_pair_to_pair_id(image(a.0, a.1), image(b.0, b.1)) as i64, blob(&wxyz(&rel)), blob(&[0.0, 0.0, 1.0])],
             ).unwrap();
         }
-        if with_rigs {
-            db.execute_batch(
-                "CREATE TABLE rigs (rig_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, ref_sensor_id INTEGER NOT NULL, ref_sensor_type INTEGER NOT NULL);
-                 CREATE TABLE rig_sensors (rig_id INTEGER NOT NULL, sensor_id INTEGER NOT NULL, sensor_type INTEGER NOT NULL, sensor_from_rig BLOB);
-                 CREATE TABLE frames (frame_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, rig_id INTEGER NOT NULL);
-                 CREATE TABLE frame_data (frame_id INTEGER NOT NULL, data_id INTEGER NOT NULL, sensor_id INTEGER NOT NULL, sensor_type INTEGER NOT NULL);
-                 INSERT INTO rigs VALUES (1, 1, 0);",
-            ).unwrap();
-            let mut known = wxyz(&sensors[1]).to_vec();
-            known.extend([0.1, 0.0, 0.0]);
-            db.execute(
-                "INSERT INTO rig_sensors VALUES (1, 2, 0, ?1)",
-                [blob(&known)],
-            )
+        if !with_rigs {
+            return;
+        }
+        db.execute_batch(
+            "CREATE TABLE rigs (rig_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, ref_sensor_id INTEGER NOT NULL, ref_sensor_type INTEGER NOT NULL);
+             CREATE TABLE rig_sensors (rig_id INTEGER NOT NULL, sensor_id INTEGER NOT NULL, sensor_type INTEGER NOT NULL, sensor_from_rig BLOB);
+             CREATE TABLE frames (frame_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, rig_id INTEGER NOT NULL);
+             CREATE TABLE frame_data (frame_id INTEGER NOT NULL, data_id INTEGER NOT NULL, sensor_id INTEGER NOT NULL, sensor_type INTEGER NOT NULL);
+             INSERT INTO rigs VALUES (1, 1, 0);",
+        ).unwrap();
+        let rigid = |r: &Rotation| {
+            let mut v = wxyz(r).to_vec();
+            v.extend([0.1, 0.0, 0.0]);
+            blob(&v)
+        };
+        db.execute(
+            "INSERT INTO rig_sensors VALUES (1, 2, 0, ?1)",
+            [rigid(&self.sensors[1])],
+        )
+        .unwrap();
+        let third = third_known.then(|| rigid(&self.sensors[2]));
+        db.execute("INSERT INTO rig_sensors VALUES (1, 3, 0, ?1)", [third])
             .unwrap();
-            db.execute("INSERT INTO rig_sensors VALUES (1, 3, 0, NULL)", [])
+        for f in 0..12 {
+            db.execute("INSERT INTO frames VALUES (?1, 1)", [10 + f])
                 .unwrap();
-            for f in 0..12 {
-                db.execute("INSERT INTO frames VALUES (?1, 1)", [10 + f])
-                    .unwrap();
-                for c in 0..3 {
-                    if orphan && f == 3 && c == 2 {
-                        continue;
-                    }
-                    db.execute(
-                        "INSERT INTO frame_data VALUES (?1, ?2, ?3, 0)",
-                        rusqlite::params![10 + f, image(f, c), c + 1],
-                    )
-                    .unwrap();
+            for c in 0..3 {
+                if orphan && f == 3 && c == 2 {
+                    continue;
                 }
+                db.execute(
+                    "INSERT INTO frame_data VALUES (?1, ?2, ?3, 0)",
+                    rusqlite::params![10 + f, image(f, c), c + 1],
+                )
+                .unwrap();
             }
         }
-    };
+    }
+}
+
+fn blob(v: &[f64]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+fn wxyz(r: &Rotation) -> [f64; 4] {
+    let q = rotavg::so3::to_quaternion(r);
+    [q.w, q.i, q.j, q.k]
+}
+
+/// COLMAP's rig configuration (`[F17]`, [`ColmapRig`]). The planted rig is recovered and
+/// certified; the frames and sensors carry COLMAP's ids. A database without rig tables, and an
+/// image in no frame, are errors that say so.
+#[test]
+fn a_colmap_rig_configuration_is_read_and_certified() {
+    let rig = ColmapRig::new();
+    let (frames, sensors) = (&rig.frames, &rig.sensors);
+    let path = temp_dir().join("rig_colmap.db");
+    let write = |with_rigs: bool, orphan: bool| rig.write(&path, with_rigs, orphan, false);
     write(true, false);
     let out = run(&["rig", path.to_str().unwrap(), "--json"]);
     assert_success(&out);
@@ -668,4 +702,60 @@ fn outliers_in_two_view_graphs_turn_the_default_robust() {
         held.to_str().unwrap(),
     ]);
     assert!(!out.status.success());
+}
+
+/// COLMAP 4's gravity priors on a rig (`pose_priors`, keyed by image id, world down `+y`;
+/// `[F15]`, `[G14]`), every sensor known: planted `g_a = X_a (0, 1, 0)` on all images but
+/// one, read from the database itself. Noise-free: cost 0, certified for the rig with its priors
+/// held, every image's prior satisfied to 1e-9.
+#[test]
+fn colmap_gravity_priors_on_a_colmap_rig() {
+    let rig = ColmapRig::new();
+    let path = temp_dir().join("rig_colmap_gravity.db");
+    rig.write(&path, true, false, true);
+    let db = rusqlite::Connection::open(&path).unwrap();
+    db.execute_batch(
+        "CREATE TABLE pose_priors (pose_prior_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, \
+         corr_data_id INTEGER NOT NULL, corr_sensor_id INTEGER NOT NULL, corr_sensor_type \
+         INTEGER NOT NULL, position BLOB, position_covariance BLOB, gravity BLOB, \
+         coordinate_system INTEGER NOT NULL);",
+    )
+    .unwrap();
+    let down = nalgebra::Vector3::new(0.0, 1.0, 0.0);
+    for f in 0..12 {
+        for c in 0..3 {
+            if (f, c) == (4, 1) {
+                continue;
+            }
+            let g = rig.x(f, c) * down;
+            db.execute(
+                "INSERT INTO pose_priors (corr_data_id, corr_sensor_id, corr_sensor_type, \
+                 gravity, coordinate_system) VALUES (?1, ?2, 0, ?3, -1)",
+                rusqlite::params![ColmapRig::image(f, c), c + 1, blob(&[g.x, g.y, g.z])],
+            )
+            .unwrap();
+        }
+    }
+    drop(db);
+    let p = path.to_str().unwrap();
+    let out = run(&["rig", p, "--gravity", p, "--json"]);
+    assert_success(&out);
+    let v = json_of(&out);
+    assert_eq!(v["verdict"]["verdict"], "certified");
+    assert_eq!(v["verdict"]["problem"]["kind"], "chordal_l2_rig_gravity");
+    assert_eq!(v["gravity"]["images"]["num_with_prior"], 35);
+    assert_eq!(
+        v["gravity"]["images"]["world_down"],
+        serde_json::json!([0.0, 1.0, 0.0])
+    );
+    assert!(v["cost"].as_f64().unwrap() < 1e-18);
+    for f in 0..12 {
+        for c in 0..3 {
+            let x = rotation(&v["sensors_from_rig"][c]) * rotation(&v["estimate"][f]);
+            assert!(
+                (x * down - rig.x(f, c) * down).norm() < 1e-9,
+                "image ({f}, {c})"
+            );
+        }
+    }
 }
