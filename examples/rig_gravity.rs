@@ -4,8 +4,10 @@
 //! planted rig without priors, with them held, and soft (`W = (3 / sigma_g)^2`), with the time
 //! of `rotavg::pipeline::average_rig` and its verdict.
 //!
-//! `cargo run --release --example rig_gravity [frames ...]`. The committed example
-//! `examples/data/rig_gravity/` is made by `tests/suite/example_data.rs`.
+//! `cargo run --release --example rig_gravity [frames ...]`; `-- write DIR FRAMES SENSORS
+//! SEED` writes one rig of the table (priors of 0.5 degrees) as `DIR/rig.json`,
+//! `DIR/gravity.txt` and `DIR/truth.json`, for `rotavg rig` and `benches/colmap_rig.py`. The
+//! committed example `examples/data/rig_gravity/` is made by `tests/suite/example_data.rs`.
 
 use rotavg::multiple::accuracy::align_and_compare;
 use rotavg::multiple::gravity::GravityPriors;
@@ -24,8 +26,44 @@ fn scene(frames: usize, sensors: usize, noise: f64, seed: u64) -> (RigProblem, R
     .generate()
 }
 
+/// `write DIR FRAMES SENSORS SEED`.
+fn write(args: &[String]) -> rotavg::Result<()> {
+    let bad = || rotavg::Error::InvalidSettings {
+        name: "write".into(),
+        reason: "usage: write DIR FRAMES SENSORS SEED".into(),
+    };
+    let [dir, frames, sensors, seed] = args else {
+        return Err(bad());
+    };
+    let number = |s: &String| s.parse::<usize>().map_err(|_| bad());
+    let (frames, sensors, seed) = (number(frames)?, number(sensors)?, number(seed)? as u64);
+    let (p, truth) = scene(frames, sensors, 3f64.to_radians(), seed);
+    let priors = truth.gravity(&p, 0.5f64.to_radians(), 4, 7);
+    let rows = |rs: &[rotavg::Rotation]| {
+        rs.iter()
+            .map(rotavg::so3::rotation_to_rows)
+            .collect::<Vec<_>>()
+    };
+    let truth = serde_json::json!({"frames": rows(&truth.frames), "sensors_from_rig": rows(&truth.sensors)});
+    std::fs::create_dir_all(dir).map_err(|e| rotavg::Error::Io {
+        path: dir.clone(),
+        message: e.to_string(),
+    })?;
+    let out =
+        |name: &str, text: &str| rotavg::io::output::write_text(&format!("{dir}/{name}"), text);
+    out("rig.json", &rotavg::io::rig::write_rig_json(&p))?;
+    out(
+        "gravity.txt",
+        &rotavg::io::gravity::write_gravity_text(&priors),
+    )?;
+    out("truth.json", &format!("{truth}\n"))
+}
+
 fn main() -> rotavg::Result<()> {
     let all: Vec<String> = std::env::args().skip(1).collect();
+    if all.first().is_some_and(|a| a == "write") {
+        return write(&all[1..]);
+    }
     let sizes: Vec<usize> = all.iter().filter_map(|a| a.parse().ok()).collect();
     let sizes = if sizes.is_empty() {
         vec![100, 1000, 10_000]

@@ -131,6 +131,23 @@ pub fn read_rig_gravity(
     )
 }
 
+/// The text form of priors (`KEY gx gy gz` lines, `KEY` the node's or image's index; no line
+/// for `None`), with a comment line saying what they are: what `read_gravity` and
+/// `read_rig_gravity` read back for nodes keyed by index.
+///
+/// ```
+/// use rotavg::io::gravity::write_gravity_text;
+/// let text = write_gravity_text(&[Some([0.0, 0.0, 1.0]), None, Some([0.0, 0.5, 1.0])]);
+/// assert_eq!(text.lines().filter(|l| !l.starts_with('#')).count(), 2);
+/// assert!(text.contains("\n2 0 0.5 1\n"));
+/// ```
+pub fn write_gravity_text(directions: &[Option<[f64; 3]>]) -> String {
+    let lines: String = (directions.iter().enumerate())
+        .filter_map(|(a, d)| d.map(|d| format!("{a} {} {} {}\n", d[0], d[1], d[2])))
+        .collect();
+    format!("# image gx gy gz: the world's down direction in the camera\n{lines}")
+}
+
 /// The priors of `path` for the nodes `keys` name.
 fn read_keyed(path: &str, keys: &Keys<'_>, world_down: Option<[f64; 3]>) -> Result<GravityRead> {
     let p = std::path::Path::new(path);

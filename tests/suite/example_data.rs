@@ -405,12 +405,7 @@ fn rig_gravity() -> (String, String, String) {
         ..Default::default()
     };
     let (p, truth) = scene.generate();
-    let lines: String = (truth
-        .gravity(&p, 0.5f64.to_radians(), 4, 2)
-        .iter()
-        .enumerate())
-    .filter_map(|(a, d)| d.map(|d| format!("{a} {} {} {}\n", d[0], d[1], d[2])))
-    .collect();
+    let priors = truth.gravity(&p, 0.5f64.to_radians(), 4, 2);
     let rows = |rs: &[Rotation]| {
         rs.iter()
             .map(rotavg::so3::rotation_to_rows)
@@ -419,7 +414,7 @@ fn rig_gravity() -> (String, String, String) {
     let truth = serde_json::json!({"frames": rows(&truth.frames), "sensors_from_rig": rows(&truth.sensors)});
     (
         rotavg::io::rig::write_rig_json(&p),
-        format!("# image gx gy gz: the world's down direction in the camera\n{lines}"),
+        rotavg::io::gravity::write_gravity_text(&priors),
         format!("{truth}\n"),
     )
 }
