@@ -39,12 +39,7 @@ fn write(args: &[String]) -> rotavg::Result<()> {
     let (frames, sensors, seed) = (number(frames)?, number(sensors)?, number(seed)? as u64);
     let (p, truth) = scene(frames, sensors, 3f64.to_radians(), seed);
     let priors = truth.gravity(&p, 0.5f64.to_radians(), 4, 7);
-    let rows = |rs: &[rotavg::Rotation]| {
-        rs.iter()
-            .map(rotavg::so3::rotation_to_rows)
-            .collect::<Vec<_>>()
-    };
-    let truth = serde_json::json!({"frames": rows(&truth.frames), "sensors_from_rig": rows(&truth.sensors)});
+    let truth = rotavg::io::rig::write_rig_truth_json(&truth.frames, &truth.sensors);
     std::fs::create_dir_all(dir).map_err(|e| rotavg::Error::Io {
         path: dir.clone(),
         message: e.to_string(),
@@ -56,7 +51,7 @@ fn write(args: &[String]) -> rotavg::Result<()> {
         "gravity.txt",
         &rotavg::io::gravity::write_gravity_text(&priors),
     )?;
-    out("truth.json", &format!("{truth}\n"))
+    out("truth.json", &truth)
 }
 
 fn main() -> rotavg::Result<()> {

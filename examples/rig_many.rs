@@ -29,12 +29,7 @@ fn write(args: &[String]) -> rotavg::Result<()> {
         ..Default::default()
     };
     let (p, truth) = scene.generate();
-    let rows = |rs: &[rotavg::Rotation]| {
-        rs.iter()
-            .map(rotavg::so3::rotation_to_rows)
-            .collect::<Vec<_>>()
-    };
-    let truth = serde_json::json!({"frames": rows(&truth.frames), "sensors_from_rig": rows(&truth.sensors)});
+    let truth = rotavg::io::rig::write_rig_truth_json(&truth.frames, &truth.sensors);
     std::fs::create_dir_all(dir).map_err(|e| rotavg::Error::Io {
         path: dir.clone(),
         message: e.to_string(),
@@ -43,7 +38,7 @@ fn write(args: &[String]) -> rotavg::Result<()> {
         &format!("{dir}/rig.json"),
         &rotavg::io::rig::write_rig_json(&p),
     )?;
-    rotavg::io::output::write_text(&format!("{dir}/truth.json"), &format!("{truth}\n"))
+    rotavg::io::output::write_text(&format!("{dir}/truth.json"), &truth)
 }
 
 fn main() -> rotavg::Result<()> {

@@ -255,6 +255,29 @@ fn in_parallel<T: Send>(count: usize, one: impl Fn(usize) -> T + Sync) -> Vec<T>
     })
 }
 
+/// A rig's certificate `c` at a point of cost `cost` against the best known cost `best` (an
+/// upper bound on the minimum): no bound above it, no certificate for a point worse than it by
+/// more than the tolerance. Whether it certified.
+fn check_rig_certificate(k: usize, c: &rotavg::certify::Certificate, cost: f64, best: f64) -> bool {
+    let lb = c.lower_bound.unwrap_or(f64::NEG_INFINITY);
+    assert!(
+        lb <= best * (1.0 + 1e-12) + 1e-300,
+        "rig {k}: bound {lb} above a cost {best}"
+    );
+    if c.is_certified() {
+        assert!(
+            cost <= best + c.tolerance.allowed_gap(cost),
+            "rig {k}: certified at {cost}, a point of cost {best} is known"
+        );
+    }
+    c.is_certified()
+}
+
+/// Sum the `(certificates, certified)` pairs of a campaign's instances.
+fn tally(totals: &[(usize, usize)]) -> (usize, usize) {
+    totals.iter().fold((0, 0), |a, t| (a.0 + t.0, a.1 + t.1))
+}
+
 #[test]
 #[ignore = "long campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_in_ten_thousand() {
@@ -504,31 +527,15 @@ fn no_false_certificate_on_rigs_of_many_sensors() {
                 .collect(),
             s,
         ));
-        let mut certified = 0;
-        for (frames, sensors) in &points {
-            let c = certify_rig(&p, frames, sensors, &CertifySettings::default())
-                .unwrap()
-                .certificate;
-            let lb = c.lower_bound.unwrap_or(f64::NEG_INFINITY);
-            assert!(
-                lb <= best.cost * (1.0 + 1e-12) + 1e-300,
-                "rig {k}: bound {lb} above a cost {}",
-                best.cost
-            );
-            if c.is_certified() {
-                certified += 1;
-                let cost = p.cost(frames, sensors);
-                assert!(
-                    cost <= best.cost + c.tolerance.allowed_gap(cost),
-                    "rig {k}: certified at {cost}, a point of cost {} is known",
-                    best.cost
-                );
-            }
-        }
+        let certified = (points.iter())
+            .filter(|(frames, sensors)| {
+                let c = certify_rig(&p, frames, sensors, &CertifySettings::default()).unwrap();
+                check_rig_certificate(k, &c.certificate, p.cost(frames, sensors), best.cost)
+            })
+            .count();
         (points.len(), certified)
     };
-    let totals = in_parallel(RIGS, one);
-    let (certificates, certified) = totals.iter().fold((0, 0), |a, t| (a.0 + t.0, a.1 + t.1));
+    let (certificates, certified) = tally(&in_parallel(RIGS, one));
     eprintln!("rigs of many sensors: {certificates} certificates, {certified} certified");
     assert!(
         certificates >= 4 * RIGS * 9 / 10 && certified > 50,
@@ -597,31 +604,16 @@ fn no_false_certificate_on_rigs_with_gravity() {
                     .collect(),
             );
         }
-        let mut certified = 0;
-        for frames in &points {
-            let c = certify_rig(&p, frames, &solved.sensors, &CertifySettings::default())
-                .unwrap()
-                .certificate;
-            let lb = c.lower_bound.unwrap_or(f64::NEG_INFINITY);
-            assert!(
-                lb <= best.cost * (1.0 + 1e-12) + 1e-300,
-                "rig {k}: bound {lb} above a cost {}",
-                best.cost
-            );
-            if c.is_certified() {
-                certified += 1;
-                let cost = p.cost(frames, &solved.sensors);
-                assert!(
-                    cost <= best.cost + c.tolerance.allowed_gap(cost),
-                    "rig {k}: certified at {cost}, a point of cost {} is known",
-                    best.cost
-                );
-            }
-        }
+        let sensors = &solved.sensors;
+        let certified = (points.iter())
+            .filter(|frames| {
+                let c = certify_rig(&p, frames, sensors, &CertifySettings::default()).unwrap();
+                check_rig_certificate(k, &c.certificate, p.cost(frames, sensors), best.cost)
+            })
+            .count();
         (points.len(), certified)
     };
-    let totals = in_parallel(RIGS, one);
-    let (certificates, certified) = totals.iter().fold((0, 0), |a, t| (a.0 + t.0, a.1 + t.1));
+    let (certificates, certified) = tally(&in_parallel(RIGS, one));
     eprintln!("rigs with gravity priors: {certificates} certificates, {certified} certified");
     assert!(
         certificates >= 4 * RIGS * 9 / 10 && certified > 100,

@@ -89,9 +89,9 @@ pub fn average_rig(
 ///     certify: ``"auto"``, ``"dual"`` or ``"none"``.
 ///     max_memory, max_seconds: the run's budget, as for ``average_multiple``.
 ///     rotation_tolerance: how far a rotation in a JSON rig file may be from SO(3).
-///     gravity, world_down, gravity_weight: gravity priors on the rig's images (every sensor's
-///         ``sensor_from_rig`` known; ``paper-notes/gravity.md`` [G14]), as ``rotavg rig FILE
-///         --gravity``: an ``(I, 3)`` or ``(I, 4)`` array in image order (NaN rows: none) or
+///     gravity, world_down, gravity_weight: gravity priors on the rig's images
+///         (``paper-notes/gravity.md`` [G14]; sensors to estimate are calibrated without them
+///         first, ``to_dict()["calibration"]``, then held), as ``rotavg rig FILE --gravity``: an ``(I, 3)`` or ``(I, 4)`` array in image order (NaN rows: none) or
 ///         a priors file keyed by image id or name; held, or soft of ``gravity_weight``.
 ///         ``to_dict()["gravity"]`` has their checks.
 ///

@@ -164,3 +164,21 @@ def test_gravity_priors_on_a_rig_file_are_the_command_line_s(cli):
     assert checked.verdict == "certified"
     with pytest.raises(rotavg.Error, match="one per image"):
         rotavg.average_rig_file(path, gravity=rows[:10])
+
+
+def test_gravity_on_a_rig_with_a_sensor_to_estimate_calibrates_first():
+    path = REPO / "examples" / "data" / "rig_sensors" / "rig.json"
+    rig = json.loads(path.read_text())
+    truth = json.loads((REPO / "examples" / "data" / "rig_sensors" / "truth.json").read_text())
+    frames, sensors = np.array(truth["frames"]), np.array(truth["sensors_from_rig"])
+    g = np.array([sensors[im["sensor"]] @ frames[im["frame"]] @ [0.0, 0.0, 1.0]
+                  for im in rig["images"]])
+    out = rotavg.average_rig_file(path, gravity=g)
+    d = out.to_dict()
+    assert d["calibration"]["estimated"] == [1]
+    assert out.verdict == "certified"
+    assert d["verdict"]["problem"]["kind"] == "chordal_l2_rig_gravity"
+    est = np.asarray(out.estimate)
+    s = np.array(d["sensors_from_rig"])
+    for a, im in enumerate(rig["images"]):
+        assert np.linalg.norm(s[im["sensor"]] @ est[im["frame"]] @ [0, 0, 1] - g[a]) < 0.05

@@ -42,19 +42,38 @@ pub struct LoadedRig {
     pub image_names: Vec<String>,
     /// `"json"` or `"colmap"`.
     pub format: String,
+    /// Gravity priors given to a rig whose sensors are estimated: applied once they are
+    /// (calibrated without the priors, then held; `[G14]`, [`Self::with_gravity`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pending_gravity: Option<crate::multiple::gravity::GravityPriors>,
     /// The reader's remarks.
     pub warnings: Vec<Warning>,
 }
 
 impl LoadedRig {
     /// The rig with gravity priors on its images ([`RigProblem::with_gravity`], `[G14]`), the
-    /// reader's `warnings` added to its own.
+    /// reader's `warnings` added to its own. With sensors to estimate, the priors wait in
+    /// [`Self::pending_gravity`] (checked for their count now) until a calibration holds them.
     pub fn with_gravity(
         mut self,
         priors: crate::multiple::gravity::GravityPriors,
         warnings: Vec<Warning>,
     ) -> Result<Self> {
-        self.problem = self.problem.with_gravity(priors)?;
+        if self.problem.all_held() {
+            self.problem = self.problem.with_gravity(priors)?;
+        } else {
+            let images = self.problem.images().len();
+            if priors.len() != images {
+                return Err(Error::InvalidSettings {
+                    name: "gravity".into(),
+                    reason: format!(
+                        "{} gravity entries for a rig of {images} images (one per image)",
+                        priors.len()
+                    ),
+                });
+            }
+            self.pending_gravity = Some(priors);
+        }
         self.warnings.extend(warnings);
         Ok(self)
     }
@@ -164,6 +183,7 @@ pub fn read_rig_json(text: &str, file: &str, options: &ReadOptions) -> Result<Lo
         image_names: Vec::new(),
         format: "json".into(),
         warnings: Vec::new(),
+        pending_gravity: None,
     })
 }
 
@@ -258,7 +278,16 @@ fn rig_of_layout(
         image_names: graph.node_names.clone(),
         format: "colmap".into(),
         warnings: graph.warnings.clone(),
+        pending_gravity: None,
     })
+}
+
+/// A planted rig as JSON, `{"frames": [F...], "sensors_from_rig": [S...]}` and a newline (the
+/// `truth.json` of generated rigs, as `rotavg rig`'s benchmarks and examples read it).
+pub fn write_rig_truth_json(frames: &[Rotation], sensors: &[Rotation]) -> String {
+    let rows = |rs: &[Rotation]| rs.iter().map(rotation_to_rows).collect::<Vec<_>>();
+    let truth = serde_json::json!({"frames": rows(frames), "sensors_from_rig": rows(sensors)});
+    format!("{truth}\n")
 }
 
 /// The estimate as JSON: `{"frames": [F...], "frame_ids": [...], "sensors_from_rig": [S...],

@@ -144,7 +144,7 @@ pub fn average_rig_with_loss(
     loss: RigLoss,
     robust: &RigRobust,
     settings: &AverageRigSettings,
-) -> Result<(Averaged<RigSolution>, RigProblem, Option<RigRobustDetails>)> {
+) -> Result<RigRun> {
     let start = std::time::Instant::now();
     let skip = super::validate(problem, settings)?;
     let mut outliers = None;
@@ -174,6 +174,59 @@ pub fn average_rig_with_loss(
         .add_solve_seconds(start.elapsed().as_secs_f64() - out.details.total_seconds);
     Ok((out, inliers, Some(details)))
 }
+
+/// The calibration a rig with gravity priors and sensors to estimate runs first (`[G14]`): the
+/// rig without the priors solved and certified as [`average_rig_with_loss`] does, its sensors
+/// then held.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RigCalibration {
+    /// The sensors that were estimated (indices).
+    pub estimated: Vec<usize>,
+    /// Every sensor's `sensor_from_rig` as calibrated (the held ones as held).
+    #[serde(with = "crate::so3::serde_rows::rotations")]
+    pub sensors_from_rig: Vec<crate::so3::Rotation>,
+    /// The calibration's cost (its problem's: the rig's, or its inlier rig's).
+    pub cost: f64,
+    /// Its certificate, about the rig without the priors.
+    pub certificate: Option<crate::certify::Certificate>,
+    /// A robust calibration's loss and inliers.
+    pub robust: Option<RigRobustDetails>,
+}
+
+/// A rig with gravity `priors` whose sensors are (some of them) estimated (`[G14]`): calibrated
+/// without the priors ([`average_rig_with_loss`]), then solved and certified with every sensor
+/// held at the calibration and the priors on its images. Returns the second run (with the
+/// problem it certifies and its robust details) and the calibration. Errors: those of
+/// [`average_rig_with_loss`] and [`RigProblem::with_gravity`].
+pub fn average_rig_calibrated_with_gravity(
+    problem: &RigProblem,
+    priors: crate::multiple::gravity::GravityPriors,
+    (loss, robust): (RigLoss, &RigRobust),
+    settings: &AverageRigSettings,
+) -> Result<(RigRun, RigCalibration)> {
+    let start = std::time::Instant::now();
+    let (first, _, first_robust) = average_rig_with_loss(problem, loss, robust, settings)?;
+    let calibration = RigCalibration {
+        estimated: (0..problem.sensors().len())
+            .filter(|&s| problem.held()[s].is_none())
+            .collect(),
+        sensors_from_rig: first.solution.sensors.clone(),
+        cost: first.solution.cost,
+        certificate: first.certificate,
+        robust: first_robust,
+    };
+    let held = problem
+        .with_sensors_held(&calibration.sensors_from_rig)?
+        .with_gravity(priors)?;
+    let (mut out, certified, robust) =
+        average_rig_with_loss(&held, loss, robust, &settings.remaining(start))?;
+    out.details.add_solve_seconds(first.details.total_seconds);
+    Ok(((out, certified, robust), calibration))
+}
+
+/// What [`average_rig_with_loss`] returns: the result, the problem certified, a robust solve's
+/// details.
+pub type RigRun = (Averaged<RigSolution>, RigProblem, Option<RigRobustDetails>);
 
 /// The robust part of [`average_rig_with_loss`] from the least-squares estimate `ls` of
 /// `problem` (solved by the caller, whose clock the settings' budgets already count: `rotavg

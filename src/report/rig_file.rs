@@ -6,7 +6,10 @@ use super::Rows;
 use crate::Result;
 use crate::certify::{CertifiedProblem, CertifiedProblemKind, CertifySettings};
 use crate::io::rig::LoadedRig;
-use crate::pipeline::rig::{RigGravityDetails, RigLoss, RigRobustDetails, average_rig_with_loss};
+use crate::pipeline::rig::{
+    RigCalibration, RigGravityDetails, RigLoss, RigRobustDetails,
+    average_rig_calibrated_with_gravity, average_rig_with_loss,
+};
 use crate::pipeline::{AverageSettings, Averaged};
 use crate::rig::{RigRobust, RigSettings, RigSolution};
 use crate::so3::{angle, log};
@@ -28,6 +31,9 @@ pub struct RigFileReport {
     pub robust: Option<RigRobustDetails>,
     /// The gravity priors and their checks (`--gravity`, `[G14]`).
     pub gravity: Option<RigGravityDetails>,
+    /// With gravity priors and sensors to estimate: the calibration without the priors whose
+    /// sensors the result holds (`[G14]`; then `rig.problem` is the held rig).
+    pub calibration: Option<RigCalibration>,
 }
 
 impl RigFileReport {
@@ -56,13 +62,30 @@ impl RigFileReport {
             ..Default::default()
         };
         let settings = AverageSettings { solve, certify };
-        let (result, _, robust) = average_rig_with_loss(&rig.problem, loss, &robust, &settings)?;
+        let mut rig = rig;
+        let ((result, certified, robust), calibration) = match rig.pending_gravity.take() {
+            Some(priors) => {
+                let both = (loss, &robust);
+                let (run, c) =
+                    average_rig_calibrated_with_gravity(&rig.problem, priors, both, &settings)?;
+                (run, Some(c))
+            }
+            None => (
+                average_rig_with_loss(&rig.problem, loss, &robust, &settings)?,
+                None,
+            ),
+        };
+        if calibration.is_some() {
+            // the rig certified: every sensor held at the calibration, with the priors
+            rig.problem = certified.with_edges(rig.problem.edges().to_vec())?;
+        }
         Ok(RigFileReport {
             gravity: RigGravityDetails::of(&rig.problem)?,
             input,
             rig,
             result,
             robust,
+            calibration,
         })
     }
 
@@ -75,6 +98,11 @@ impl RigFileReport {
         estimate: crate::io::rig::RigEstimate,
         settings: &CertifySettings,
     ) -> Result<Self> {
+        if let Some(priors) = rig.pending_gravity.take() {
+            // gravity priors with sensors to estimate: the estimate's sensors held ([G14])
+            let held = rig.problem.with_sensors_held(&estimate.sensors)?;
+            rig.problem = held.with_gravity(priors)?;
+        }
         let frames = estimate.frames;
         let c = crate::certify::certify_rig(&rig.problem, &frames, &estimate.sensors, settings)?;
         // the held sensors as held, as certified (the estimate's are within 1e-9 rad of them)
@@ -97,6 +125,7 @@ impl RigFileReport {
             rig,
             result,
             robust: None,
+            calibration: None,
         })
     }
 
@@ -147,8 +176,11 @@ impl RigFileReport {
             .collect()
     }
 
-    /// How many sensors were estimated (not held).
+    /// How many sensors were estimated (not held; with a calibration, by it).
     fn estimated(&self) -> usize {
+        if let Some(c) = &self.calibration {
+            return c.estimated.len();
+        }
         self.rig
             .problem
             .held()
@@ -191,6 +223,21 @@ impl fmt::Display for RigFileReport {
             p.images().len(),
             p.edges().len()
         )?;
+        if let Some(c) = &self.calibration {
+            let verdict = c.certificate.as_ref().map_or("no certificate".into(), |c| {
+                format!(
+                    "{}, relative gap {:.1e}",
+                    c.verdict,
+                    c.relative_gap.unwrap_or(f64::NAN)
+                )
+            });
+            write!(
+                f,
+                "\ncalibration without the gravity priors [G14]: sensors {:?} estimated, cost \
+                 {:.9e}, {verdict}; then held with the priors",
+                c.estimated, c.cost
+            )?;
+        }
         if let Some(g) = &self.gravity {
             write!(f, "\n{g}")?;
         }
@@ -228,6 +275,8 @@ struct Json<'a> {
     robust: Option<&'a RigRobustDetails>,
     #[serde(skip_serializing_if = "Option::is_none")]
     gravity: Option<&'a RigGravityDetails>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    calibration: Option<&'a RigCalibration>,
     solver: &'a crate::termination::SolverReport,
     certificate: Option<&'a crate::certify::Certificate>,
     verdict: Option<super::VerdictOf>,
@@ -254,6 +303,7 @@ impl Serialize for RigFileReport {
             num_images: p.images().len(),
             robust: self.robust.as_ref(),
             gravity: self.gravity.as_ref(),
+            calibration: self.calibration.as_ref(),
             solver: &s.report,
             certificate: self.result.certificate.as_ref(),
             verdict: self.verdict_of(),

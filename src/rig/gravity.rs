@@ -81,8 +81,9 @@ impl RigProblem {
             let unknown = self.held().iter().filter(|h| h.is_none()).count();
             return Err(invalid(format!(
                 "gravity priors on a rig need every sensor's sensor_from_rig known; {unknown} \
-                 sensors are to be estimated (calibrate the rig without priors first, then \
-                 give the sensors as known)"
+                 sensors are to be estimated (calibrate the rig without the priors, then hold \
+                 its sensors: RigProblem::with_sensors_held; `rotavg rig FILE --gravity` and \
+                 average_rig_calibrated_with_gravity do both)"
             )));
         }
         let held: Vec<Rotation> = self.held().iter().flatten().copied().collect();

@@ -129,6 +129,37 @@ impl RigProblem {
         }
     }
 
+    /// The same rig (and gravity priors) with every sensor held at `sensors` (one per sensor;
+    /// the held ones keep their rotations): the rig of a calibration, for gravity priors on a
+    /// rig whose sensors were estimated (`[G14]`). Errors: a count that differs.
+    pub fn with_sensors_held(&self, sensors: &[Rotation]) -> Result<Self> {
+        if sensors.len() != self.sensors.len() {
+            return Err(Error::InvalidSettings {
+                name: "sensors".into(),
+                reason: format!(
+                    "{} sensor rotations for a rig of {} sensors",
+                    sensors.len(),
+                    self.sensors.len()
+                ),
+            });
+        }
+        let known = (self.held.iter().zip(sensors))
+            .map(|(h, s)| Sensor {
+                sensor_from_rig: Some(h.unwrap_or(*s)),
+            })
+            .collect();
+        let p = RigProblem::new(
+            self.num_frames,
+            known,
+            self.images.clone(),
+            self.edges.clone(),
+        )?;
+        match &self.gravity {
+            Some(g) => p.with_gravity(g.clone()),
+            None => Ok(p),
+        }
+    }
+
     /// Number of frames.
     pub fn num_frames(&self) -> usize {
         self.num_frames

@@ -382,13 +382,8 @@ fn rig_sensors() -> (String, String) {
         p.edges().to_vec(),
     )
     .expect("a valid rig");
-    let rows = |rs: &[Rotation]| {
-        rs.iter()
-            .map(rotavg::so3::rotation_to_rows)
-            .collect::<Vec<_>>()
-    };
-    let truth = serde_json::json!({"frames": rows(&truth.frames), "sensors_from_rig": rows(&truth.sensors)});
-    (rotavg::io::rig::write_rig_json(&p), format!("{truth}\n"))
+    let truth = rotavg::io::rig::write_rig_truth_json(&truth.frames, &truth.sensors);
+    (rotavg::io::rig::write_rig_json(&p), truth)
 }
 
 /// `rig_gravity/`: a rig of 30 frames and 3 known sensors (`RigScene`, seed 2, 0.05 rad of
@@ -406,16 +401,11 @@ fn rig_gravity() -> (String, String, String) {
     };
     let (p, truth) = scene.generate();
     let priors = truth.gravity(&p, 0.5f64.to_radians(), 4, 2);
-    let rows = |rs: &[Rotation]| {
-        rs.iter()
-            .map(rotavg::so3::rotation_to_rows)
-            .collect::<Vec<_>>()
-    };
-    let truth = serde_json::json!({"frames": rows(&truth.frames), "sensors_from_rig": rows(&truth.sensors)});
+    let truth = rotavg::io::rig::write_rig_truth_json(&truth.frames, &truth.sensors);
     (
         rotavg::io::rig::write_rig_json(&p),
         rotavg::io::gravity::write_gravity_text(&priors),
-        format!("{truth}\n"),
+        truth,
     )
 }
 

@@ -245,6 +245,94 @@ fn outliers_get_the_robust_inlier_problem_with_the_priors() {
     assert!(again.certificate.is_certified());
 }
 
+/// Sensors to estimate (`[G14]`, in two stages): the rig is calibrated without the priors, its
+/// sensors held, then solved and certified with them. Noise-free with exact priors: the planted
+/// sensors, every prior satisfied, certified; noisy: the frames more accurate than without the
+/// priors, and `certify --rig --gravity` of the written estimate holds its sensors.
+#[test]
+fn sensors_to_estimate_are_calibrated_then_held_with_the_priors() {
+    use crate::common::{json_of, run, temp_file};
+    for (noise, sigma_g) in [(0.0, 0.0), (3f64.to_radians(), 0.5f64.to_radians())] {
+        let (p, truth) = RigScene {
+            frames: 60,
+            sensors: 3,
+            noise_sigma: noise,
+            known: false,
+            seed: 4,
+            ..Default::default()
+        }
+        .generate();
+        let rig = temp_file(
+            "rig_gravity_estimated.json",
+            &rotavg::io::rig::write_rig_json(&p),
+        );
+        let dirs = truth.gravity(&p, sigma_g, 4, 3);
+        let priors = temp_file(
+            "rig_gravity_estimated.txt",
+            &rotavg::io::gravity::write_gravity_text(&dirs),
+        );
+        let (rig, priors) = (rig.display().to_string(), priors.display().to_string());
+        let (j, c) = solve_then_certify(&rig, &priors, "rig_gravity_estimated_out.json");
+        assert_eq!(j["calibration"]["estimated"], serde_json::json!([1, 2]));
+        assert_eq!(
+            j["verdict"]["verdict"], "certified",
+            "{}",
+            j["certificate"]["explanation"]
+        );
+        assert_eq!(
+            j["verdict"]["problem"]["kind"],
+            "chordal_l2_rig_gravity_soft"
+        );
+        assert_eq!(j["num_rotations"], 62);
+        let truth_some: Vec<_> = truth.frames.iter().copied().map(Some).collect();
+        let frames = |j: &serde_json::Value| -> Vec<Rotation> {
+            (j["estimate"].as_array().unwrap().iter())
+                .map(json_rotation)
+                .collect()
+        };
+        let with = align_and_compare(&frames(&j), &truth_some)
+            .unwrap()
+            .mean_deg;
+        if noise == 0.0 {
+            assert!(with < 1e-7, "{with}");
+            assert!(j["cost"].as_f64().unwrap() < 1e-18);
+        } else {
+            let without = json_of(&run(&["rig", &rig, "--json"]));
+            let none = align_and_compare(&frames(&without), &truth_some)
+                .unwrap()
+                .mean_deg;
+            assert!(with < 0.8 * none, "with {with}, without {none}");
+        }
+        assert_eq!(c["verdict"]["verdict"], "certified");
+        let cost = j["cost"].as_f64().unwrap();
+        assert!((c["cost"].as_f64().unwrap() - cost).abs() <= 1e-9 * (1.0 + cost));
+    }
+}
+
+/// `rotavg rig RIG --gravity PRIORS --gravity-weight 36 --output EST --json`, then `rotavg
+/// certify RIG --rig --estimate EST` for the same problem: both JSON reports.
+fn solve_then_certify(
+    rig: &str,
+    priors: &str,
+    est: &str,
+) -> (serde_json::Value, serde_json::Value) {
+    use crate::common::{assert_success, json_of, run, temp_file};
+    let est = temp_file(est, "").display().to_string();
+    let soft = ["--gravity", priors, "--gravity-weight", "36", "--json"];
+    let out = run(&[&["rig", rig, "--output", &est][..], &soft].concat());
+    assert_success(&out);
+    let certified = run(&[&["certify", rig, "--rig", "--estimate", &est][..], &soft].concat());
+    assert_success(&certified);
+    (json_of(&out), json_of(&certified))
+}
+
+fn json_rotation(r: &serde_json::Value) -> Rotation {
+    let m: Vec<f64> = (r.as_array().unwrap().iter())
+        .flat_map(|row| row.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+        .collect();
+    Rotation::from_matrix_unchecked(nalgebra::Matrix3::from_row_slice(&m))
+}
+
 /// Estimated sensors, a wrong count and held priors that cancel are refused with the reason.
 #[test]
 fn bad_gravity_on_a_rig_is_refused() {
@@ -303,19 +391,12 @@ fn example(name: &str) -> String {
 /// checks; `certify --rig --gravity` certifies the written estimate for the same problem.
 #[test]
 fn the_command_line_takes_priors_on_a_rig_file() {
-    use crate::common::{assert_success, json_of, run, temp_file};
+    use crate::common::{assert_success, json_of, run};
     let (rig, gravity) = (example("rig.json"), example("gravity.txt"));
     let truth: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(example("truth.json")).unwrap()).unwrap();
     let rotations = |v: &serde_json::Value| -> Vec<Rotation> {
-        (v.as_array().unwrap().iter())
-            .map(|r| {
-                let m: Vec<f64> = (r.as_array().unwrap().iter())
-                    .flat_map(|row| row.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
-                    .collect();
-                Rotation::from_matrix_unchecked(nalgebra::Matrix3::from_row_slice(&m))
-            })
-            .collect()
+        (v.as_array().unwrap().iter()).map(json_rotation).collect()
     };
     let truth_some: Vec<_> = rotations(&truth["frames"]).into_iter().map(Some).collect();
     let error = |extra: &[&str]| {
@@ -341,32 +422,7 @@ fn the_command_line_takes_priors_on_a_rig_file() {
         "none {none}, held {held}, soft {soft}"
     );
     // the written estimate, certified for the soft problem by `certify --rig`
-    let est = temp_file("rig_gravity_estimate.json", "")
-        .display()
-        .to_string();
-    let out = run(&[
-        "rig",
-        &rig,
-        "--gravity",
-        &gravity,
-        "--gravity-weight",
-        "36",
-        "--output",
-        &est,
-    ]);
-    assert_success(&out);
-    let args = [
-        "certify",
-        &rig,
-        "--rig",
-        "--estimate",
-        &est,
-        "--gravity",
-        &gravity,
-    ];
-    let out = run(&[&args[..], &["--gravity-weight", "36", "--json"]].concat());
-    assert_success(&out);
-    let c = json_of(&out);
+    let (j, c) = solve_then_certify(&rig, &gravity, "rig_gravity_estimate.json");
     assert_eq!(c["verdict"]["verdict"], "certified");
     assert!((c["cost"].as_f64().unwrap() - j["cost"].as_f64().unwrap()).abs() < 1e-9);
 }

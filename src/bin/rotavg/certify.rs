@@ -67,8 +67,8 @@ pub struct Args {
     /// database with a rig configuration, as `rotavg rig FILE` reads it) and the estimate the
     /// file `rotavg rig FILE --output` writes (`"frames"`, `"sensors_from_rig"`); the rig's cost
     /// is certified, the estimate unchanged (`--nearest-rotations`: its nearest rotations).
-    /// With `--gravity`: the priors on the rig's images, keyed by image id or name (every
-    /// sensor known; paper-notes/gravity.md [G14]).
+    /// With `--gravity`: the priors on the rig's images, keyed by image id or name, the
+    /// estimate's sensors held (paper-notes/gravity.md [G14]).
     #[arg(long, conflicts_with_all = ["left", "hand", "camera"])]
     pub rig: bool,
     #[command(flatten)]

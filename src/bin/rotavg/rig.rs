@@ -43,8 +43,9 @@ pub struct Args {
     /// `--sensor-from-rig`: least squares.
     #[arg(long, value_name = "auto|chordal|cauchy", default_value = "auto", value_parser = ["auto", "chordal", "cauchy"])]
     pub loss: String,
-    /// Gravity priors on a rig file's images (every sensor's sensor_from_rig known), keyed by
-    /// image id or name, held or soft as for `multiple` (paper-notes/gravity.md [G14]).
+    /// Gravity priors on a rig file's images, keyed by image id or name, held or soft as for
+    /// `multiple`; sensors to estimate are calibrated without them first, then held
+    /// (paper-notes/gravity.md [G14]).
     #[command(flatten)]
     pub gravity: GravityArgs,
     /// The Cauchy loss's scale and the inlier threshold, degrees.
