@@ -173,7 +173,8 @@ fn read_keyed(path: &str, keys: &Keys<'_>, world_down: Option<[f64; 3]>) -> Resu
         Error::Empty { .. } => Error::parse(
             Some(path),
             None,
-            "no gravity prior matches a node of the graph (keys are image names or file ids)",
+            "no gravity prior matches a node of the graph or an image of the rig (keys are image \
+             names or file ids)",
         ),
         other => other,
     })?;

@@ -480,3 +480,42 @@ fn a_point_off_its_held_priors_is_refused() {
     let c = certify_rig(&p, &frames, &s.sensors, &Default::default()).unwrap();
     assert!(!c.certificate.is_certified());
 }
+
+/// Bad priors files for a rig: the error names the file and the line, or says that no key
+/// matches an image; nothing is solved.
+#[test]
+fn bad_priors_for_a_rig_name_the_file_and_line() {
+    use crate::common::{run, temp_file};
+    let rig = example("rig.json");
+    for (name, text, expected) in [
+        (
+            "rig_gravity_bad1.txt",
+            "999 0 0 1\n",
+            "no gravity prior matches",
+        ),
+        (
+            "rig_gravity_bad2.txt",
+            "0 0 0 1\n1 0 0 nan\n",
+            ":2: `nan` is not a finite number",
+        ),
+        (
+            "rig_gravity_bad3.txt",
+            "1 0 0 0\n",
+            ":1: a zero vector has no direction",
+        ),
+        (
+            "rig_gravity_bad4.json",
+            "{\"gravity\": [[0, 0, 1]]}",
+            "1 gravity entries for 90",
+        ),
+    ] {
+        let path = temp_file(name, text).display().to_string();
+        let out = run(&["rig", &rig, "--gravity", &path, "--json"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && out.stdout.is_empty(), "{name}");
+        assert!(
+            err.contains(&path) && err.contains(expected),
+            "{name}: {err}"
+        );
+    }
+}
