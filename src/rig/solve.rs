@@ -86,10 +86,37 @@ pub fn solve_rig(p: &RigProblem, settings: &RigSettings) -> Result<RigSolution> 
     let left = || remaining(settings.max_seconds, clock);
     check_estimated_sensors(p)?;
     let (sensors, placed) = start_sensors(p, left())?;
-    // from the held sensors' frames when they place every frame (every sensor held: already
-    // the frame step's answer), else the spectral start
+    if p.all_held() {
+        // nothing to alternate: the frames' problem at the held sensors, solved once (a pass
+        // would solve it again: with gravity priors, from its unconstrained start)
+        return held_solution(p, sensors, placed, left(), clock);
+    }
+    // from the held sensors' frames when they place every frame, else the spectral start
     let frames = frame_step(p, &sensors, placed, left())?;
     alternate(p, (frames, sensors), settings, clock)
+}
+
+/// [`solve_rig`] with every sensor held: one solve of the frames' problem from `frames` (the
+/// spectral start when `None`), its iterations and termination reported as the rig's.
+fn held_solution(
+    p: &RigProblem,
+    sensors: Vec<Rotation>,
+    frames: Option<Vec<Rotation>>,
+    max_seconds: Option<f64>,
+    clock: Instant,
+) -> Result<RigSolution> {
+    let solved = frame_solve(p, &sensors, frames, max_seconds)?;
+    Ok(RigSolution {
+        cost: p.cost(&solved.rotations, &sensors),
+        frames: solved.rotations,
+        sensors,
+        report: SolverReport {
+            name: format!("rig frames, every sensor held: {}", solved.report.name),
+            iterations: solved.report.iterations,
+            termination: solved.report.termination,
+            seconds: clock.elapsed().as_secs_f64(),
+        },
+    })
 }
 
 /// [`solve_rig`]'s passes from a given estimate (`frames`, `sensors`: one rotation each, each
@@ -278,6 +305,16 @@ fn frame_step(
     frames: Option<Vec<Rotation>>,
     max_seconds: Option<f64>,
 ) -> Result<Vec<Rotation>> {
+    Ok(frame_solve(p, sensors, frames, max_seconds)?.rotations)
+}
+
+/// [`frame_step`]'s solve, with its report.
+fn frame_solve(
+    p: &RigProblem,
+    sensors: &[Rotation],
+    frames: Option<Vec<Rotation>>,
+    max_seconds: Option<f64>,
+) -> Result<crate::multiple::MultipleSolution> {
     let settings = MultipleSettings {
         init: frames.map(Initialisation::Given).unwrap_or_default(),
         max_seconds,
@@ -285,10 +322,10 @@ fn frame_step(
     };
     // with gravity priors (every sensor held, `[G14]`): the frames' gravity problem
     if let Some(fg) = p.frame_gravity(sensors)? {
-        return Ok(crate::multiple::gravity::solve_gravity(&fg.problem, &settings)?.rotations);
+        return crate::multiple::gravity::solve_gravity(&fg.problem, &settings);
     }
     let (graph, _) = p.frame_graph(sensors)?;
-    Ok(solve_multiple(&graph, &settings)?.rotations)
+    solve_multiple(&graph, &settings)
 }
 
 /// Levenberg-Marquardt iterations of the sensor step at most.
