@@ -15,15 +15,7 @@ use rotavg::pipeline::average_rig;
 use rotavg::rig::{RigProblem, RigScene, RigTruth};
 
 fn scene(frames: usize, sensors: usize, noise: f64, seed: u64) -> (RigProblem, RigTruth) {
-    RigScene {
-        frames,
-        sensors,
-        noise_sigma: noise,
-        known: true,
-        seed,
-        ..Default::default()
-    }
-    .generate()
+    RigScene::sized(frames, sensors, noise, true, seed).generate()
 }
 
 /// `write DIR FRAMES SENSORS SEED`.

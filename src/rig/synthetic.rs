@@ -63,6 +63,26 @@ pub struct RigTruth {
 }
 
 impl RigScene {
+    /// The default scene with `frames` frames, `sensors` sensors, `noise_sigma` radians of
+    /// noise, every `sensor_from_rig` given or not (`known`), and `seed`.
+    ///
+    /// ```
+    /// use rotavg::rig::RigScene;
+    /// let s = RigScene::sized(20, 2, 0.0, true, 7);
+    /// assert_eq!((s.frames, s.sensors, s.known, s.seed), (20, 2, true, 7));
+    /// assert!(s.generate().0.all_held());
+    /// ```
+    pub fn sized(frames: usize, sensors: usize, noise_sigma: f64, known: bool, seed: u64) -> Self {
+        RigScene {
+            frames,
+            sensors,
+            noise_sigma,
+            known,
+            seed,
+            ..Default::default()
+        }
+    }
+
     /// The problem and its planted truth. Panics only on an empty scene (fewer than 2 frames
     /// or no sensor), never on a seed.
     pub fn generate(&self) -> (RigProblem, RigTruth) {

@@ -391,14 +391,7 @@ fn rig_sensors() -> (String, String) {
 /// four (`gravity.txt`: `IMAGE gx gy gz`, the image's index) and the truth (`truth.json`).
 fn rig_gravity() -> (String, String, String) {
     use rotavg::rig::RigScene;
-    let scene = RigScene {
-        frames: 30,
-        sensors: 3,
-        noise_sigma: 0.05,
-        known: true,
-        seed: 2,
-        ..Default::default()
-    };
+    let scene = RigScene::sized(30, 3, 0.05, true, 2);
     let (p, truth) = scene.generate();
     let priors = truth.gravity(&p, 0.5f64.to_radians(), 4, 2);
     let truth = rotavg::io::rig::write_rig_truth_json(&truth.frames, &truth.sensors);

@@ -20,15 +20,7 @@ use rotavg::so3::{exp, perturb};
 const DOWN: Vector3<f64> = Vector3::new(0.0, 0.0, 1.0);
 
 fn rig(frames: usize, sensors: usize, noise: f64, seed: u64) -> (RigProblem, RigTruth) {
-    RigScene {
-        frames,
-        sensors,
-        noise_sigma: noise,
-        known: true,
-        seed,
-        ..Default::default()
-    }
-    .generate()
+    RigScene::sized(frames, sensors, noise, true, seed).generate()
 }
 
 /// `truth`'s priors ([`RigTruth::gravity`]) as [`GravityPriors`].
@@ -253,15 +245,7 @@ fn outliers_get_the_robust_inlier_problem_with_the_priors() {
 fn sensors_to_estimate_are_calibrated_then_held_with_the_priors() {
     use crate::common::{json_of, run, temp_file};
     for (noise, sigma_g) in [(0.0, 0.0), (3f64.to_radians(), 0.5f64.to_radians())] {
-        let (p, truth) = RigScene {
-            frames: 60,
-            sensors: 3,
-            noise_sigma: noise,
-            known: false,
-            seed: 4,
-            ..Default::default()
-        }
-        .generate();
+        let (p, truth) = RigScene::sized(60, 3, noise, false, 4).generate();
         let rig = temp_file(
             "rig_gravity_estimated.json",
             &rotavg::io::rig::write_rig_json(&p),

@@ -14,17 +14,6 @@ use rotavg::rig::{Image, RigProblem, RigScene, RigSettings, Sensor, solve_rig};
 use rotavg::so3::{angle_between, perturb};
 use rotavg::{Rotation, Termination};
 
-fn scene(frames: usize, sensors: usize, noise: f64, known: bool, seed: u64) -> RigScene {
-    RigScene {
-        frames,
-        sensors,
-        noise_sigma: noise,
-        known,
-        seed,
-        ..Default::default()
-    }
-}
-
 /// The planted rig of 2-5 sensors, with and without edges between sensors: recovered to 1e-9
 /// rad and certified (the images' optimum is the rig).
 #[test]
@@ -33,7 +22,7 @@ fn a_noise_free_rig_is_recovered_and_certified() {
         for cross_fraction in [0.0, 0.5] {
             let s = RigScene {
                 cross_fraction,
-                ..scene(40, sensors, 0.0, false, sensors as u64)
+                ..RigScene::sized(40, sensors, 0.0, false, sensors as u64)
             };
             let (p, truth) = s.generate();
             let out = average_rig(&p, &Default::default()).unwrap();
@@ -57,7 +46,7 @@ fn a_noise_free_rig_is_recovered_and_certified() {
 fn the_bound_is_below_every_local_minimum_found_from_perturbed_truths() {
     let mut rng = StdRng::seed_from_u64(11);
     for (sensors, seed) in [(2, 1), (3, 2), (4, 3)] {
-        let (p, truth) = scene(30, sensors, 0.05, false, seed).generate();
+        let (p, truth) = RigScene::sized(30, sensors, 0.05, false, seed).generate();
         let out = average_rig(&p, &Default::default()).unwrap();
         let c = out.certificate.unwrap();
         let lb = c.lower_bound.unwrap();
@@ -100,7 +89,7 @@ fn the_bound_is_below_every_local_minimum_found_from_perturbed_truths() {
 fn noisy_rigs_with_estimated_sensors_are_certified_by_their_couplings() {
     let mut rng = StdRng::seed_from_u64(21);
     for (frames, sensors, seed) in [(60, 2, 1), (60, 3, 2), (40, 4, 3)] {
-        let (p, truth) = scene(frames, sensors, 0.01, false, seed).generate();
+        let (p, truth) = RigScene::sized(frames, sensors, 0.01, false, seed).generate();
         let out = average_rig(&p, &Default::default()).unwrap();
         let c = out.certificate.unwrap();
         assert!(c.is_certified(), "{c:?}");
@@ -141,7 +130,7 @@ fn two_sensor_rigs_without_cross_edges_are_certified_as_two_graphs() {
     for (noise, seed) in [(0.01, 3), (0.05, 4)] {
         let s = RigScene {
             cross_fraction: 0.0,
-            ..scene(40, 2, noise, false, seed)
+            ..RigScene::sized(40, 2, noise, false, seed)
         };
         let (p, truth) = s.generate();
         let out = average_rig(&p, &Default::default()).unwrap();
@@ -226,7 +215,7 @@ fn frames_at(p: &RigProblem, sensors: &[Rotation], start: Vec<Rotation>) -> Vec<
 #[test]
 fn known_sensors_give_the_frame_graph_and_a_certificate() {
     for sensors in [2, 4, 6] {
-        let (p, truth) = scene(60, sensors, 0.03, true, 20 + sensors as u64).generate();
+        let (p, truth) = RigScene::sized(60, sensors, 0.03, true, 20 + sensors as u64).generate();
         let out = average_rig(&p, &Default::default()).unwrap();
         let reference = frames_at(&p, &truth.sensors, truth.frames.clone());
         for (a, b) in out.solution.frames.iter().zip(&reference) {
@@ -320,7 +309,7 @@ fn the_two_sensor_problem_is_reproduced() {
 #[test]
 fn scaled_weights_keep_the_verdict() {
     for known in [false, true] {
-        let (p, _) = scene(30, 3, 0.02, known, 5).generate();
+        let (p, _) = RigScene::sized(30, 3, 0.02, known, 5).generate();
         let base = average_rig(&p, &Default::default()).unwrap();
         let c0 = base.certificate.unwrap();
         for scale in [1e-6, 1e6] {
@@ -417,7 +406,7 @@ fn bad_rigs_are_clear_errors() {
         .to_string();
     assert!(why.contains("sensors to estimate"), "{why}");
     // an estimate whose held sensor is not at its held rotation
-    let (q, truth) = scene(10, 2, 0.0, true, 1).generate();
+    let (q, truth) = RigScene::sized(10, 2, 0.0, true, 1).generate();
     let mut wrong = truth.sensors.clone();
     wrong[1] = Rotation::identity();
     let why = certify_rig(&q, &truth.frames, &wrong, &Default::default())
@@ -431,7 +420,7 @@ fn bad_rigs_are_clear_errors() {
 /// 1e-12, and the returned cost is the problem's cost at them.
 #[test]
 fn estimates_are_rotations_whatever_the_input_defect() {
-    let (p, _) = scene(30, 3, 0.02, false, 9).generate();
+    let (p, _) = RigScene::sized(30, 3, 0.02, false, 9).generate();
     let edges: Vec<Edge> = p
         .edges()
         .iter()
@@ -462,7 +451,7 @@ fn estimates_are_rotations_whatever_the_input_defect() {
 /// No time: the solve ends at its start with `time_limit`, its estimate on SO(3).
 #[test]
 fn the_time_limit_stops_the_alternation() {
-    let (p, _) = scene(200, 4, 0.02, false, 3).generate();
+    let (p, _) = RigScene::sized(200, 4, 0.02, false, 3).generate();
     let settings = RigSettings {
         max_seconds: Some(0.0),
         ..Default::default()
@@ -486,7 +475,7 @@ fn a_rig_whose_images_graph_is_too_large_is_bounded_by_its_sensor_pairs() {
     let mut rng = StdRng::seed_from_u64(31);
     let s = RigScene {
         cross_fraction: 0.3,
-        ..scene(40, 3, 0.05, false, 4)
+        ..RigScene::sized(40, 3, 0.05, false, 4)
     };
     let (p, truth) = s.generate();
     let sol = solve_rig(&p, &RigSettings::default()).unwrap();
