@@ -1,7 +1,8 @@
 //! Progress of long runs, for whoever asks. The library prints nothing: it emits [`Event`]s
 //! (which phase runs, each solver or SDP iteration with its cost and stopping measure) to the
 //! [`Observer`] installed with [`set_observer`], if any; building an event costs nothing when
-//! none is installed. The command line installs one that draws a progress line on a terminal.
+//! none is installed. The command line installs one that draws a progress line on a terminal,
+//! or writes [`ProgressLines`] to a log.
 //!
 //! ```
 //! use rotavg::progress::{set_observer, Event, Observer, Phase};
@@ -24,6 +25,9 @@
 //! # Ok::<(), rotavg::Error>(())
 //! ```
 
+mod lines;
+
+pub use lines::{LINE_DELAY, LINE_INTERVAL, LINE_REPEAT, ProgressLines};
 use std::fmt;
 use std::sync::{Arc, RwLock};
 

@@ -62,6 +62,44 @@ use std::fmt;
 
 pub(crate) use crate::pipeline::nested;
 
+/// The command line's width of text lines (reports, warnings, help).
+pub const TEXT_WIDTH: usize = 100;
+
+/// A report as the command line prints it: its JSON (`json`), or its text broken into lines of
+/// at most [`TEXT_WIDTH`] characters ([`wrap_lines`]), or with `verbose` its alternate form
+/// (`{:#}`: the proof's details, long lines as they are).
+///
+/// ```
+/// use rotavg::{Verdict, report::render};
+/// assert_eq!(render(&Verdict::Certified, true, false)?, "\"certified\"");
+/// assert_eq!(render(&Verdict::Certified, false, false)?, "certified");
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn render<R: Serialize + fmt::Display>(
+    report: &R,
+    json: bool,
+    verbose: bool,
+) -> crate::Result<String> {
+    Ok(if json {
+        serde_json::to_string(report).map_err(|e| crate::Error::Io {
+            path: "<stdout>".into(),
+            message: e.to_string(),
+        })?
+    } else {
+        text(report, verbose)
+    })
+}
+
+/// A report's text: broken into lines of at most [`TEXT_WIDTH`] characters, or with `verbose`
+/// its alternate form (`{:#}`).
+pub fn text(report: &impl fmt::Display, verbose: bool) -> String {
+    if verbose {
+        format!("{report:#}")
+    } else {
+        wrap_lines(&report.to_string(), TEXT_WIDTH)
+    }
+}
+
 /// `text` with every line longer than `width` characters broken after a `; ` or `, ` (or else a
 /// space) before the limit, the continuation indented two spaces more than the line: the
 /// command line's default text output (`--verbose` prints the long lines as they are).

@@ -667,3 +667,44 @@ fn rotation_tolerance_is_an_option_of_view_graph_verbs() {
     let out = run(&["multiple", egs, "--rotation-tolerance", "-1"]);
     assert_eq!(out.status.code(), Some(2), "a usage error");
 }
+
+/// SPEC section 5: progress on stderr unless `--quiet`, or `--json` without a terminal. A
+/// test's stderr is a pipe: plain `rotavg: [t s] ...` lines, here from the start
+/// (`ROTAVG_PROGRESS_AFTER=0`; by default after 2 s); none with `--quiet` or `--json`; the
+/// report's verdict the same.
+#[test]
+fn progress_lines_on_stderr_without_a_terminal() {
+    let input = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/data/sfm_outliers.txt"
+    );
+    let run = |extra: &[&str]| {
+        let out = common::bin()
+            .args(["multiple", input])
+            .args(extra)
+            .env("ROTAVG_PROGRESS_AFTER", "0")
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{out:?}");
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        let lines: Vec<String> = stderr
+            .lines()
+            .filter(|l| l.starts_with("rotavg: ["))
+            .map(str::to_string)
+            .collect();
+        (String::from_utf8(out.stdout).unwrap(), lines)
+    };
+    let (report, lines) = run(&[]);
+    assert!(!lines.is_empty(), "no progress line");
+    assert!(lines[0].contains(" s] "), "{lines:?}");
+    let (_, quiet) = run(&["--quiet"]);
+    assert!(quiet.is_empty(), "{quiet:?}");
+    let (_, json) = run(&["--json"]);
+    assert!(json.is_empty(), "{json:?}");
+    // the lines are stderr's alone: the report is on stdout as without them
+    assert!(
+        report.lines().any(|l| l.starts_with("verdict:")),
+        "{report}"
+    );
+    assert!(!report.contains("rotavg: ["), "{report}");
+}

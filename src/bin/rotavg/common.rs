@@ -296,11 +296,10 @@ impl PlotArgs {
     }
 }
 
-/// The width of the default text output: longer lines are broken (`--verbose` does not).
-pub const TEXT_WIDTH: usize = 100;
+pub use rotavg::report::TEXT_WIDTH;
 
-/// Print a report: `serde_json::to_string(report)` when `json`, else unless `quiet` its text
-/// ([`print_text`]).
+/// Print a report ([`rotavg::report::render`]): its JSON when `json`, else unless `quiet` its
+/// text.
 pub fn print<R: Serialize + Display>(
     report: &R,
     json: bool,
@@ -308,29 +307,10 @@ pub fn print<R: Serialize + Display>(
     verbose: bool,
 ) -> Result<()> {
     crate::progress::finish();
-    if json {
-        let text = serde_json::to_string(report).map_err(|e| rotavg::Error::Io {
-            path: "<stdout>".into(),
-            message: e.to_string(),
-        })?;
-        println!("{text}");
-    } else if !quiet {
-        print_text(report, verbose);
+    if json || !quiet {
+        println!("{}", rotavg::report::render(report, json, verbose)?);
     }
     Ok(())
-}
-
-/// Print a report's text: the short form broken into lines of at most [`TEXT_WIDTH`]
-/// characters, or with `verbose` the alternate form (`{:#}`: the proof's details).
-pub fn print_text(report: &impl Display, verbose: bool) {
-    if verbose {
-        println!("{report:#}");
-    } else {
-        println!(
-            "{}",
-            rotavg::report::wrap_lines(&report.to_string(), TEXT_WIDTH)
-        );
-    }
 }
 
 /// A parser of the named values `values` of a library choice (help lists their names and

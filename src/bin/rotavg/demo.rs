@@ -20,6 +20,6 @@ pub struct Args {
 /// Run the demo. The verdict returned is the worst of the certificates.
 pub fn run(args: &Args) -> rotavg::Result<Outcome> {
     let report = rotavg::report::DemoReport::run(args.seed, args.nodes)?;
-    crate::common::print_text(&report, args.verbose);
+    println!("{}", rotavg::report::text(&report, args.verbose));
     Ok(Some(report.worst_verdict()))
 }

@@ -84,7 +84,7 @@ fn main() -> ExitCode {
         Command::Rig(a) => ("rig", Some(&a.right), Some(&a.common)),
         Command::Info(a) => ("info", Some(&a.input), None),
     };
-    progress::Display::install(common.is_some_and(|c| !c.quiet && !c.json));
+    progress::install(common.map(|c| (c.quiet, c.json)));
     let result = match &cli.command {
         Command::Demo(a) => demo::run(a),
         Command::Single(a) => single::run(a),
