@@ -5,7 +5,7 @@
 use crate::error::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, factorize_symbolic_cholesky};
+use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, Mat, MatMut, Par, Side};
 use nalgebra::Matrix3;
@@ -203,18 +203,14 @@ impl BlockPattern {
         SparseColMatRef::new(self.symbolic.as_ref(), val)
     }
 
-    /// Symbolic Cholesky (once).
+    /// Symbolic Cholesky (once), in the minimum-degree ordering of the blocks
+    /// ([`super::cholesky::symbolic_cholesky_within`]).
     pub(crate) fn symbolic_llt(&self) -> Result<SymbolicFactor> {
-        factorize_symbolic_cholesky(
-            self.symbolic.as_ref(),
-            Side::Lower,
-            Default::default(),
-            Default::default(),
-        )
-        .map(|s| SymbolicFactor(Arc::new(s)))
-        .map_err(|e| Error::Solver {
-            message: format!("symbolic sparse Cholesky failed: {e:?}"),
-        })
+        super::cholesky::symbolic_cholesky_within(self.symbolic.as_ref(), usize::MAX)?
+            .map(|s| SymbolicFactor(Arc::new(s)))
+            .map_err(|predicted| Error::Solver {
+                message: format!("symbolic sparse Cholesky refused at {predicted} values"),
+            })
     }
 
     /// Numeric Cholesky with the given values; `None` if the matrix is not positive definite
