@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 use crate::linalg::two_pass_lanczos::smallest_ritz_value;
 use crate::linalg::{Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme};
 use crate::multiple::laplacian::edge_blocks;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::SparseColMat;
 use nalgebra::Matrix3;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -412,26 +412,35 @@ fn bound(
 /// `s` without the block row and column of node `g` (3 rows and columns).
 fn without_block(s: &SparseColMat<usize, f64>, g: usize) -> Result<SparseColMat<usize, f64>> {
     let n3 = s.nrows();
-    let map = |k: usize| -> Option<usize> {
-        match k {
-            _ if k < 3 * g => Some(k),
-            _ if k < 3 * g + 3 => None,
-            _ => Some(k - 3),
-        }
-    };
+    if s.symbolic().col_nnz().is_some() || n3 < 3 * g + 3 || s.ncols() != n3 {
+        return Err(Error::Solver {
+            message: "the grounded certificate matrix needs a compressed square S".into(),
+        });
+    }
+    let keep = |k: usize| k < 3 * g || k >= 3 * g + 3;
     let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
-    let mut t = Vec::with_capacity(val.len());
-    for col in 0..n3 {
-        let Some(c) = map(col) else { continue };
+    // the columns and rows of S in order, block g left out: sorted rows stay sorted
+    let mut col_ptr = Vec::with_capacity(n3 - 2);
+    let (mut rows, mut vals) = (Vec::with_capacity(val.len()), Vec::with_capacity(val.len()));
+    col_ptr.push(0);
+    for col in (0..n3).filter(|&c| keep(c)) {
         for p in cp[col]..cp[col + 1] {
-            if let Some(r) = map(ri[p]) {
-                t.push(Triplet::new(r, c, val[p]));
+            let r = ri[p];
+            if keep(r) {
+                rows.push(if r < 3 * g { r } else { r - 3 });
+                vals.push(val[p]);
             }
         }
+        col_ptr.push(rows.len());
     }
-    SparseColMat::try_new_from_triplets(n3 - 3, n3 - 3, &t).map_err(|e| Error::Solver {
-        message: format!("could not assemble the grounded certificate matrix: {e:?}"),
-    })
+    let symbolic = faer::sparse::SymbolicSparseColMat::new_unsorted_checked(
+        n3 - 3,
+        n3 - 3,
+        col_ptr,
+        None,
+        rows,
+    );
+    Ok(SparseColMat::new(symbolic, vals))
 }
 
 #[cfg(test)]
