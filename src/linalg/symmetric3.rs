@@ -161,6 +161,14 @@ pub fn eigenvalues(h: &Matrix3<f64>) -> Result<[f64; 3], String> {
              be resolved in double precision"
         ));
     }
+    // a diagonal matrix's eigenvalues are its diagonal entries, exactly (isotropic and
+    // axis-aligned information: `--information full` on 2-D SLAM files, 65M instructions of
+    // exact expansions for 2512 edges)
+    if (0..3).all(|r| (0..3).all(|c| r == c || h[(r, c)] == 0.0)) {
+        let mut d = [h[(0, 0)], h[(1, 1)], h[(2, 2)]];
+        d.sort_by(f64::total_cmp);
+        return Ok(d);
+    }
     // an exact power-of-two scaling to a largest entry in [1, 2)
     let exponent = largest.log2().floor() as i32;
     let scale = 2f64.powi(-exponent);
@@ -202,6 +210,26 @@ mod tests {
     /// the stated relative accuracy (the matrix as rounded has eigenvalues within a few `u`
     /// relative of the planted ones only for the largest; the small ones are checked against
     /// the rounded matrix's own invariants: `lambda_1 lambda_2 lambda_3 = det`).
+    /// Diagonal matrices: their diagonal, sorted, exactly (the fast path); the span refusal
+    /// unchanged for them; the general path agrees to its accuracy on a diagonal matrix with
+    /// one off-diagonal entry below any rounding of it.
+    #[test]
+    fn diagonal_matrices_are_their_diagonal() {
+        let d = Matrix3::from_diagonal(&nalgebra::Vector3::new(3.0, -1.0, 0.0));
+        assert_eq!(eigenvalues(&d).unwrap(), [-1.0, 0.0, 3.0]);
+        let w = Matrix3::identity() * 2.5e7;
+        assert_eq!(eigenvalues(&w).unwrap(), [2.5e7; 3]);
+        let spread = Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, 2f64.powi(-310), 1.0));
+        assert!(eigenvalues(&spread).is_err());
+        let mut near = Matrix3::from_diagonal(&nalgebra::Vector3::new(4.0, 1e-12, 2.0));
+        near[(0, 1)] = 1e-40;
+        near[(1, 0)] = 1e-40;
+        let general = eigenvalues(&near).unwrap();
+        for (g, e) in general.iter().zip([1e-12, 2.0, 4.0]) {
+            assert!((g - e).abs() <= 1e-9 * e, "{general:?}");
+        }
+    }
+
     #[test]
     fn planted_spectra_of_every_spread() {
         let mut rng = StdRng::seed_from_u64(7);
