@@ -10,7 +10,7 @@ use rotavg::certify::certify_rig;
 use rotavg::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings, solve_multiple};
 use rotavg::pipeline::average_rig;
 use rotavg::pipeline::simultaneous::{SyntheticRig, solve_simultaneous};
-use rotavg::rig::{Image, RigProblem, RigScene, RigSettings, Sensor, solve_rig};
+use rotavg::rig::{Image, RigProblem, RigScene, RigSettings, RigTruth, Sensor, solve_rig};
 use rotavg::so3::{angle_between, perturb};
 use rotavg::{Rotation, Termination};
 
@@ -52,24 +52,7 @@ fn the_bound_is_below_every_local_minimum_found_from_perturbed_truths() {
         let lb = c.lower_bound.unwrap();
         let mut best = f64::INFINITY;
         for _ in 0..8 {
-            let frames: Vec<Rotation> = truth
-                .frames
-                .iter()
-                .map(|f| perturb(f, 0.3, &mut rng))
-                .collect();
-            let sensors: Vec<Rotation> = truth
-                .sensors
-                .iter()
-                .enumerate()
-                .map(|(s, r)| {
-                    if s == 0 {
-                        *r
-                    } else {
-                        perturb(r, 0.3, &mut rng)
-                    }
-                })
-                .collect();
-            best = best.min(local_minimum(&p, frames, sensors));
+            best = best.min(minimum_from_perturbed(&p, &truth, 0.3, &mut rng));
         }
         assert!(lb <= best, "bound {lb} above a local minimum {best}");
         assert!(
@@ -96,16 +79,7 @@ fn noisy_rigs_with_estimated_sensors_are_certified_by_their_couplings() {
         assert!(c.explanation.contains("[H21]"), "{}", c.explanation);
         let lb = c.lower_bound.unwrap();
         for _ in 0..2 {
-            let frames: Vec<Rotation> = truth
-                .frames
-                .iter()
-                .map(|f| perturb(f, 0.1, &mut rng))
-                .collect();
-            let mut start = truth.sensors.clone();
-            for s in start.iter_mut().skip(1) {
-                *s = perturb(s, 0.1, &mut rng);
-            }
-            let other = local_minimum(&p, frames, start);
+            let other = minimum_from_perturbed(&p, &truth, 0.1, &mut rng);
             assert!(lb <= other, "bound {lb} above a local minimum {other}");
         }
     }
@@ -147,6 +121,21 @@ fn two_sensor_rigs_without_cross_edges_are_certified_as_two_graphs() {
         let other = local_minimum(&p, frames, sensors);
         assert!(lb <= other, "bound {lb} above a local minimum {other}");
     }
+}
+
+/// The local minimum of [`local_minimum`] from the truth with every frame and every sensor but
+/// the reference turned by up to `angle` radians.
+fn minimum_from_perturbed(p: &RigProblem, truth: &RigTruth, angle: f64, rng: &mut StdRng) -> f64 {
+    let frames: Vec<Rotation> = truth
+        .frames
+        .iter()
+        .map(|f| perturb(f, angle, rng))
+        .collect();
+    let mut sensors = truth.sensors.clone();
+    for s in sensors.iter_mut().skip(1) {
+        *s = perturb(s, angle, rng);
+    }
+    local_minimum(p, frames, sensors)
 }
 
 /// Block-coordinate descent written here from the problem's own costs: frames by `multiple` on
@@ -510,16 +499,7 @@ fn a_rig_whose_images_graph_is_too_large_is_bounded_by_its_sensor_pairs() {
         sol.cost
     );
     for _ in 0..3 {
-        let frames: Vec<Rotation> = truth
-            .frames
-            .iter()
-            .map(|f| perturb(f, 0.2, &mut rng))
-            .collect();
-        let mut start = truth.sensors.clone();
-        for r in start.iter_mut().skip(1) {
-            *r = perturb(r, 0.2, &mut rng);
-        }
-        let other = local_minimum(&p, frames, start);
+        let other = minimum_from_perturbed(&p, &truth, 0.2, &mut rng);
         assert!(lb <= other, "bound {lb} above a local minimum {other}");
     }
 }
