@@ -27,7 +27,7 @@
 
 mod lines;
 
-pub use lines::{LINE_DELAY, LINE_INTERVAL, LINE_REPEAT, ProgressLines};
+pub use lines::{LINE_DELAY, LINE_INTERVAL, LINE_REPEAT, ProgressLines, with_time_left};
 use std::fmt;
 use std::sync::{Arc, RwLock};
 

@@ -37,6 +37,8 @@ pub struct ProgressLines {
 
 struct State {
     message: String,
+    /// When the message was set (a phase's predicted time counts from there).
+    set_at: Instant,
     written: Option<(String, Instant)>,
     stopped: bool,
 }
@@ -54,6 +56,7 @@ impl ProgressLines {
             start: Instant::now(),
             state: Mutex::new(State {
                 message: "read: input".into(),
+                set_at: Instant::now(),
                 written: None,
                 stopped: false,
             }),
@@ -62,8 +65,11 @@ impl ProgressLines {
 
     /// Replace the message.
     pub fn set(&self, message: String) {
-        if let Ok(mut s) = self.state.lock() {
+        if let Ok(mut s) = self.state.lock()
+            && s.message != message
+        {
             s.message = message;
+            s.set_at = Instant::now();
         }
     }
 
@@ -83,7 +89,8 @@ impl ProgressLines {
             };
         if due {
             let t = self.start.elapsed().as_secs_f64();
-            let _ = writeln!(out, "rotavg: [{t:.1} s] {}", s.message);
+            let text = with_time_left(&s.message, s.set_at.elapsed().as_secs_f64());
+            let _ = writeln!(out, "rotavg: [{t:.1} s] {text}");
             s.written = Some((s.message.clone(), Instant::now()));
         }
         due
@@ -119,6 +126,37 @@ impl ProgressLines {
                 std::thread::sleep(Duration::from_millis(200));
             }
         });
+    }
+}
+
+/// A message naming its phase's predicted time, `... (predicted 11.19 s)`, with the time
+/// left after `elapsed` seconds in it: `... (predicted 11.19 s, about 4.0 s left)` (`past its
+/// prediction` beyond it); any other message as it is.
+///
+/// ```
+/// use rotavg::progress::with_time_left;
+/// assert_eq!(with_time_left("certify: grounded (predicted 10.00 s)", 4.0),
+///            "certify: grounded (predicted 10.00 s, about 6.0 s left)");
+/// assert_eq!(with_time_left("certify: grounded (predicted 1.00 s)", 4.0),
+///            "certify: grounded (predicted 1.00 s, past its prediction)");
+/// assert_eq!(with_time_left("solve: iteration 3", 4.0), "solve: iteration 3");
+/// ```
+pub fn with_time_left(message: &str, elapsed: f64) -> String {
+    let predicted = message
+        .strip_suffix(" s)")
+        .and_then(|m| m.rsplit_once("(predicted "))
+        .and_then(|(head, x)| Some((head, x.parse::<f64>().ok()?)));
+    match predicted {
+        Some((head, p)) if p.is_finite() => {
+            let left = p - elapsed;
+            let tail = if left >= 0.0 {
+                format!("about {left:.1} s left")
+            } else {
+                "past its prediction".to_string()
+            };
+            format!("{head}(predicted {p:.2} s, {tail})")
+        }
+        _ => message.to_string(),
     }
 }
 
