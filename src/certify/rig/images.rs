@@ -57,8 +57,8 @@ impl<'a> Rung<RigState<'a>> for ImagesRung {
                     sum,
                     format!(
                         "the images' view graph without the rig's constraints, split by the \
-                         sensor pairs of its edges ({why}): {split}, certified minima summing to \
-                         {sum:.9e} [H19]"
+                         sensor pairs of its edges: {split}, certified minima summing to \
+                         {sum:.9e} [H19]; the whole graph was not bounded ({why})"
                     ),
                 )
             }
