@@ -5,6 +5,8 @@
 //!   `[D6]`, `[D8]` (the only source of proven eigenvalue bounds).
 //! - [`chebyshev`]: the randomized Chebyshev test `[D16]` (a Monte Carlo lower bound on the
 //!   smallest eigenvalue from products only, when no factorisation fits the budget).
+//! - [`dense`]: dense symmetric eigenproblems and Cholesky solves of `nalgebra` matrices through
+//!   faer's blocked kernels (the simultaneous problem's dense certificate `[H15]`).
 //! - `compensated` (crate-internal): double-double sums of products with error bounds `[D15]`.
 //! - `ldlt` (crate-internal): the verified inertia of a sparse `LDL^T` factorisation `[D13]`.
 //! - [`lanczos`](mod@lanczos): the one eigen-estimation engine (block Lanczos with full
@@ -23,6 +25,7 @@ pub(crate) mod block_pattern;
 pub mod chebyshev;
 pub mod cholesky;
 pub(crate) mod compensated;
+pub mod dense;
 pub mod lanczos;
 pub(crate) mod ldlt;
 pub(crate) mod linear_solver;

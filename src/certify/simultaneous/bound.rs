@@ -7,12 +7,14 @@
 //! `Z_R = Q_R - blkdiag(Lambda_R) - sum gamma_ij E_ij` and
 //! `Z_C = Q_C - blkdiag(Lambda_C) + sum gamma_ij E_ij` (the coupling terms cancel because the
 //! traces are equal): the bound holds for the global minimum of `J`. The eigenvalues are
-//! computed densely, independently of any solver.
+//! computed densely (faer's symmetric eigensolver), independently of any solver.
 
+use super::grounded::grounded;
 use crate::certify::multiple::multipliers::data_defect;
 use crate::multiple::MultipleProblem;
 use crate::multiple::laplacian::connection_laplacian_triplets;
 use crate::relax::simultaneous::coupling_pairs;
+use crate::so3::Rotation;
 use nalgebra::{DMatrix, Matrix3};
 use serde::{Deserialize, Serialize};
 
@@ -23,7 +25,7 @@ pub struct SimultaneousBound {
     /// lambda_min(Z_C), 0)) - rounding - the two graphs' data defects` (`[D4]`: measurements
     /// orthogonal only to the validation tolerance).
     pub lower_bound: f64,
-    /// The smaller of `lambda_min(Z_R)` and `lambda_min(Z_C)` from nalgebra's dense symmetric
+    /// The smaller of `lambda_min(Z_R)` and `lambda_min(Z_C)` from faer's dense symmetric
     /// eigenvalue solver.
     pub min_eigenvalue: f64,
     /// Proven lower bound on that smaller `lambda_min` of the exact matrices: each computed
@@ -90,6 +92,19 @@ pub fn verify_simultaneous_bound(
     lambdas: &[Matrix3<f64>],
     couplings: &[f64],
 ) -> Option<SimultaneousBound> {
+    verify_simultaneous_bound_at(right, left, lambdas, couplings, None)
+}
+
+/// [`verify_simultaneous_bound`], and with the point `(R, S)` the multipliers were read at
+/// also the grounded bound of each side (`[H23]`: no `3n` factor on the eigenvalue margin; the
+/// larger of the two is kept, each proven). Isotropic graphs only for the grounded bound.
+pub fn verify_simultaneous_bound_at(
+    right: &MultipleProblem,
+    left: &MultipleProblem,
+    lambdas: &[Matrix3<f64>],
+    couplings: &[f64],
+    point: Option<(&[Rotation], &Rotation)>,
+) -> Option<SimultaneousBound> {
     let n = right.num_rotations();
     let finite = |m: &Matrix3<f64>| m.iter().all(|x| x.is_finite());
     if left.num_rotations() != n
@@ -97,19 +112,41 @@ pub fn verify_simultaneous_bound(
         || couplings.len() != n * (n - 1) / 2
         || !lambdas.iter().all(finite)
         || !couplings.iter().all(|g| g.is_finite())
+        || point.is_some_and(|(r, _)| r.len() != n)
     {
         return None;
     }
     let dim = 3.0 * n as f64;
-    let (mut lam, mut verified, mut slack) = (f64::INFINITY, f64::INFINITY, 0.0);
+    let (mut lam, mut verified, mut floor) = (f64::INFINITY, f64::INFINITY, 0.0);
     // one side at a time (two dense matrices alive, not four); eigenvalues only
-    for (p, side, sign) in [(right, &lambdas[..n], -0.5), (left, &lambdas[n..], 0.5)] {
+    for (p, side, sign, left_side) in [
+        (right, &lambdas[..n], -0.5, false),
+        (left, &lambdas[n..], 0.5, true),
+    ] {
         let (m, mag) = certificate_matrix(p, side, couplings, sign);
-        let l = m.symmetric_eigenvalues().min();
-        let v = l - 10.0 * dim * f64::EPSILON * mag.norm();
+        let values = crate::linalg::dense::symmetric_eigenvalues(&m)?;
+        let l = values.first().copied().unwrap_or(f64::INFINITY);
+        let mut v = l - 10.0 * dim * f64::EPSILON * mag.norm();
+        let mut side_floor = dim * v.min(0.0);
+        let y = point.filter(|_| !p.is_anisotropic()).map(|(r, s)| {
+            r.iter()
+                .map(|r| {
+                    if left_side {
+                        s.matrix() * r.matrix()
+                    } else {
+                        *r.matrix()
+                    }
+                })
+                .collect::<Vec<_>>()
+        });
+        let estimate = values.get(3).copied().unwrap_or(0.0);
+        if let Some(g) = y.and_then(|y| grounded(&m, &mag, p.num_edges() + 4, &y, estimate)) {
+            side_floor = side_floor.max(g.floor);
+            v = v.max(g.min_eigenvalue);
+        }
         lam = lam.min(l);
         verified = verified.min(v);
-        slack += v.min(0.0);
+        floor += side_floor;
     }
     let (mut trace, mut trace_abs) = (0.0, 0.0);
     for l in lambdas {
@@ -119,7 +156,7 @@ pub fn verify_simultaneous_bound(
     // the joint cost is tr(Q_R X_R) + tr(Q_C X_C) minus each graph's data defect
     // sum w (3 - ||R_ij||_F^2) (measurements orthogonal only to the validation tolerance, [D4])
     let defect = data_defect(right) + data_defect(left);
-    let lb = trace + dim * slack - 2.0 * dim * f64::EPSILON * trace_abs - defect;
+    let lb = trace + floor - 2.0 * dim * f64::EPSILON * trace_abs - defect;
     lb.is_finite().then_some(SimultaneousBound {
         lower_bound: lb,
         min_eigenvalue: lam,

@@ -3,7 +3,7 @@
 //! couplings of least norm, then a search over the others (`search.rs`), every
 //! candidate verified by [`super::bound::verify_simultaneous_bound`].
 
-use super::bound::{SimultaneousBound, verify_simultaneous_bound};
+use super::bound::{SimultaneousBound, verify_simultaneous_bound_at};
 use super::multipliers::EstimateMultipliers;
 use super::state::SimState;
 use crate::certify::log::{Prediction, Refusal};
@@ -11,22 +11,25 @@ use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Plan, Rung};
 use crate::certify::settings::CertifyMode;
 use crate::error::Result;
-use crate::relax::multiple::SDP_MULTIPLY_ADD_RATE;
+/// The most nodes of a rig the dense dual certificate `[H15]` is tried on (six dense `3n x 3n`
+/// matrices: 1.7 GB at 2000 nodes; its least-norm certificate took 2.9 s at 1000 nodes and
+/// 12 s at 1500 with faer's eigensolver, measured 2026-12-01, where nalgebra's took 19.6 s at
+/// 1000); larger rigs are bounded by the decoupled bound `[H16]`, and solved by the sparse
+/// alternation `[H17]`.
+pub const DENSE_MAX_NODES: usize = 2000;
 
-/// The most nodes of a rig the dense dual certificate `[H15]` is tried on (its `3n x 3n`
-/// dense eigenproblems and coupling search: 153 s at 1000 nodes, measured); larger rigs are
-/// bounded by the decoupled bound `[H16]`, and solved by the sparse alternation `[H17]`.
-pub const DENSE_MAX_NODES: usize = 500;
+/// Seconds per `(3n)^3` of the least-norm dense certificate (a dense `3n x 3n` Cholesky
+/// factorisation, two dense symmetric eigenvalue problems and the forming of the matrices):
+/// 1.07e-10 at `3n = 3000` and 1.32e-10 at 4500 on this 2-core machine (2026-12-01, idle),
+/// with room for a loaded one.
+pub const DENSE_SECONDS_PER_CUBE: f64 = 2e-10;
 
-/// Time and memory of [`super::multipliers::multipliers_at_estimate`] and of its verification on `n` nodes: a dense
-/// `3n x 3n` Cholesky factorisation and two dense symmetric eigen-decompositions (taken as
-/// `10 (3n)^3` multiply-adds each), and six dense `3n x 3n` matrices alive at once.
+/// Time and memory of [`super::multipliers::multipliers_at_estimate`] and of its verification
+/// on `n` nodes: [`DENSE_SECONDS_PER_CUBE`] `(3n)^3`, and six dense `3n x 3n` matrices alive at
+/// once.
 pub fn predict_multipliers_at_estimate(n: usize) -> Prediction {
     let d = 3.0 * n as f64;
-    Prediction::new(
-        (d * d * d / 3.0 + 2.0 * 10.0 * d * d * d) / SDP_MULTIPLY_ADD_RATE,
-        6.0 * 8.0 * d * d,
-    )
+    Prediction::new(DENSE_SECONDS_PER_CUBE * d * d * d, 6.0 * 8.0 * d * d)
 }
 
 /// The dual certificate at the estimate `[H15]` as the first rung of a simultaneous
@@ -74,9 +77,10 @@ impl<'a> Rung<SimState<'a>> for DualRung {
         self.done = true;
         let n = cx.right.num_rotations();
         let at = EstimateMultipliers::new(cx.right, cx.left, cx.rotations, cx.s);
+        let point = Some((cx.rotations, cx.s));
         let mut bound = at.as_ref().and_then(|at| {
             let g = at.least_norm.clone();
-            verify_simultaneous_bound(cx.right, cx.left, &at.lambdas(&g), &g)
+            verify_simultaneous_bound_at(cx.right, cx.left, &at.lambdas(&g), &g, point)
         });
         let mut note = match bound {
             Some(b) => format!(
@@ -136,7 +140,9 @@ fn search(
             ),
         );
     };
-    let searched = verify_simultaneous_bound(cx.right, cx.left, &found.lambdas, &found.couplings);
+    let point = Some((cx.rotations, cx.s));
+    let searched =
+        verify_simultaneous_bound_at(cx.right, cx.left, &found.lambdas, &found.couplings, point);
     match searched {
         Some(b) if bound.is_none_or(|x| b.lower_bound > x.lower_bound) => (
             Some(b),

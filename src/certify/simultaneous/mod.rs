@@ -9,12 +9,13 @@
 pub mod bound;
 mod decoupled;
 pub mod dual;
+mod grounded;
 pub mod multipliers;
 mod sdp;
 mod search;
 mod state;
 
-pub use bound::{SimultaneousBound, verify_simultaneous_bound};
+pub use bound::{SimultaneousBound, verify_simultaneous_bound, verify_simultaneous_bound_at};
 pub use dual::predict_multipliers_at_estimate;
 pub use multipliers::multipliers_at_estimate;
 

@@ -18,6 +18,7 @@
 //! (docs/benchmarks.md), and when it is not the SDP is the next rung.
 
 use crate::certify::multiple::multipliers::laplacian_times;
+use crate::linalg::dense::DenseCholesky;
 use crate::multiple::MultipleProblem;
 use crate::relax::simultaneous::coupling_pairs;
 use crate::so3::{Rotation, vee};
@@ -55,7 +56,7 @@ pub(crate) struct EstimateMultipliers {
     pub pairs: Vec<(usize, usize)>,
     us: Vec<Vector3<f64>>,
     /// `A A^T` plus multiples of its kernel's projectors, factorised.
-    k: nalgebra::Cholesky<f64, nalgebra::Dyn>,
+    k: DenseCholesky,
     /// The couplings of least norm.
     pub least_norm: Vec<f64>,
 }
@@ -150,7 +151,7 @@ impl EstimateMultipliers {
             .collect();
         let d = 3 * n;
         let k = coupling_gram(&pairs, &us, &rs);
-        let k = k.cholesky()?;
+        let k = DenseCholesky::new(&k)?;
         let y = k.solve(&DVector::from_iterator(
             d,
             rhs.iter().flat_map(|v| v.iter().copied()),

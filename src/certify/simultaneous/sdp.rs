@@ -3,7 +3,7 @@
 //! multipliers verified ([`super::bound`]); a cheaper rounding is the improvement (not
 //! polished: the joint local solver lives in [`crate::pipeline::simultaneous`]).
 
-use super::bound::verify_simultaneous_bound;
+use super::bound::verify_simultaneous_bound_at;
 use super::state::SimState;
 use crate::certify::certification::SdpSummary;
 use crate::certify::log::{Prediction, Refusal};
@@ -41,11 +41,12 @@ impl<'a> Rung<SimState<'a>> for SdpRung {
             }));
         };
         let relaxation = relax_simultaneous(cx.right, cx.left, &sdp)?;
-        let bound = verify_simultaneous_bound(
+        let bound = verify_simultaneous_bound_at(
             cx.right,
             cx.left,
             &relaxation.lambdas,
             &relaxation.couplings,
+            Some((cx.rotations, cx.s)),
         );
         let top = &relaxation.x_top_eigenvalues;
         cx.sdp = Some(SdpSummary {

@@ -11,7 +11,7 @@
 use super::bound::certificate_matrix;
 use super::multipliers::EstimateMultipliers;
 use crate::multiple::MultipleProblem;
-use nalgebra::{Matrix3, SymmetricEigen};
+use nalgebra::{DMatrix, Matrix3};
 use std::time::Instant;
 
 /// Rounds at most (each two dense eigendecompositions with vectors, `3n x 3n`).
@@ -50,11 +50,15 @@ pub(crate) struct SearchOutcome {
     pub cuts: usize,
 }
 
+/// Seconds per `(3n)^3` of a dense symmetric eigendecomposition with vectors (faer: 1.5 s at
+/// `3n = 3000`, 16.6 s at 6000 on this 2-core machine, 2026-12-01; with room).
+const ROUND_SECONDS_PER_CUBE: f64 = 1.2e-10;
+
 /// The time of one round on `n` nodes: two dense symmetric eigendecompositions of `3n x 3n`
-/// with vectors (taken as `20 (3n)^3` multiply-adds each). A round is started only when it fits.
+/// with vectors. A round is started only when it fits.
 fn predicted_round_seconds(n: usize) -> f64 {
     let d = 3.0 * n as f64;
-    2.0 * 20.0 * d * d * d / crate::relax::multiple::SDP_MULTIPLY_ADD_RATE
+    2.0 * ROUND_SECONDS_PER_CUBE * d * d * d
 }
 
 /// Search from the least-norm couplings of `at` until both `lambda_min` are at least `-target`,
@@ -91,8 +95,12 @@ pub(crate) fn search_couplings(
             (left, &lambdas[n..], 0.5, &at.cs),
         ] {
             let (z, _) = certificate_matrix(p, side, &g, sign);
-            let eig = SymmetricEigen::new(z);
-            min = min.min(eig.eigenvalues.min());
+            let Some(eig) = crate::linalg::dense::symmetric_eigen(&z) else {
+                min = f64::NEG_INFINITY;
+                continue;
+            };
+            drop(z);
+            min = min.min(eig.0.first().copied().unwrap_or(f64::INFINITY));
             let side = Side { at, ys, sign };
             side.cuts(&eig, &g, target, max_cuts, &mut cuts);
         }
@@ -128,22 +136,20 @@ impl Side<'_> {
     /// couplings `g`, appended to `cuts` while they hold fewer than `max_cuts`.
     fn cuts(
         &self,
-        eig: &SymmetricEigen<f64, nalgebra::Dyn>,
+        (values, vectors): &(Vec<f64>, DMatrix<f64>),
         g: &[f64],
         target: f64,
         max_cuts: usize,
         cuts: &mut Vec<(Vec<f64>, f64)>,
     ) {
-        let mut order: Vec<usize> = (0..eig.eigenvalues.len())
-            .filter(|&k| eig.eigenvalues[k] < -target)
-            .collect();
-        order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+        let mut order: Vec<usize> = (0..values.len()).filter(|&k| values[k] < -target).collect();
+        order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
         for &k in order.iter().take(CUTS_PER_SIDE) {
             if cuts.len() >= max_cuts {
                 break;
             }
-            let w = eig.eigenvalues[k];
-            let mut d = self.gradient(eig.eigenvectors.column(k));
+            let w = values[k];
+            let mut d = self.gradient(vectors.column(k));
             self.at.project(&mut d);
             let dd: f64 = d.iter().map(|x| x * x).sum();
             if dd > 0.0 && dd.is_finite() {

@@ -481,9 +481,13 @@ fn joint_from(
     Ok(on_so3(p, &rs, &s, report))
 }
 
-/// The most nodes the dense joint Gauss-Newton (and the dense dual certificate) is used for;
-/// larger rigs use the sparse alternation `[H17]` and the decoupled bound `[H16]`.
+/// The most nodes the dense dual certificate `[H15]` is used for; larger rigs are bounded by the
+/// decoupled bound `[H16]`.
 pub use crate::certify::simultaneous::dual::DENSE_MAX_NODES;
+
+/// The most nodes the dense joint Gauss-Newton polishes the sparse alternation `[H17]` on (its
+/// `3n x 3n` normal equations: 23 s at 1000 nodes, against 0.1 s of alternation).
+pub const POLISH_MAX_NODES: usize = 500;
 
 /// Settings of the joint local solver (dense Gauss-Newton, or the sparse alternation).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -493,8 +497,8 @@ pub struct SimultaneousSettings {
     pub max_iterations: usize,
     /// Largest memory the dense solve may need, bytes (default 4 GiB, as
     /// [`crate::certify::Budget`]): its dense normal equations are predicted by
-    /// [`predict_simultaneous_solve_bytes`]; over it (or above [`DENSE_MAX_NODES`] nodes) the
-    /// sparse alternation runs instead.
+    /// [`predict_simultaneous_solve_bytes`]; over it (or above [`POLISH_MAX_NODES`] nodes) the
+    /// sparse alternation runs alone.
     pub max_memory_bytes: u64,
     /// Time limit of the solve, seconds (`None`, the default: no limit; the command line's
     /// `--max-seconds`). The alternation's passes, the view-graph solves and conjugate solves
@@ -597,7 +601,7 @@ impl PipelineProblem for SimultaneousProblem {
     }
     /// The sparse alternation ([`alternating`], `[H17]`: 0.1 s at 300 nodes where the dense
     /// Gauss-Newton takes 4 s), polished by the dense joint Gauss-Newton (20 iterations at
-    /// most) up to [`DENSE_MAX_NODES`] nodes when its normal equations fit
+    /// most) up to [`POLISH_MAX_NODES`] nodes when its normal equations fit
     /// `max_memory_bytes`: the better of the two is returned.
     fn solve(&self, settings: &SimultaneousSettings) -> Result<SimultaneousSolution> {
         let start = Instant::now();
@@ -605,7 +609,7 @@ impl PipelineProblem for SimultaneousProblem {
             alternating::solve_within(self, settings.max_iterations, settings.max_seconds)?;
         let predicted = predict_simultaneous_solve_bytes(self.num_nodes);
         let timed_out = matches!(sparse.report.termination, Termination::TimeLimit { .. });
-        if self.num_nodes > DENSE_MAX_NODES
+        if self.num_nodes > POLISH_MAX_NODES
             || predicted > settings.max_memory_bytes as f64
             || timed_out
         {
