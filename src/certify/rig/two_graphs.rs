@@ -7,9 +7,10 @@
 //! where the within-frame couplings `[H21]` have no edge between sensors to work with.
 
 use super::state::RigState;
-use crate::certify::log::{Prediction, Refusal};
+use crate::certify::log::Refusal;
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Handed, JointCertifier, Plan, Rung};
+use crate::certify::simultaneous::predict_multipliers_at_estimate;
 use crate::error::Result;
 use crate::multiple::{Edge, MultipleProblem};
 use crate::rig::RigProblem;
@@ -30,11 +31,9 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
         if let Some(why) = not_two_graphs(cx.problem) {
             return Ok(Plan::Refuse(Refusal::NotApplicable { reason: why }, None));
         }
-        // the dense dual certificate of [H15] (3n x 3n eigenvalues), refused by it past 500
-        let n = cx.problem.num_frames() as f64;
-        Ok(Plan::Run(Prediction::new(
-            4e-8 * (3.0 * n).powi(3),
-            8.0 * 6.0 * (3.0 * n).powi(2),
+        // the dense dual certificate of [H15] and [H23], refused by it past its DENSE_MAX_NODES
+        Ok(Plan::Run(predict_multipliers_at_estimate(
+            cx.problem.num_frames(),
         )))
     }
 
