@@ -83,9 +83,10 @@ pub fn certify_rig(
             crate::certify::gravity::gravity_certificate,
         )))),
         Box::new(coupled::CoupledRung(Handed::new(certify))),
-        Box::new(two_graphs::TwoGraphsRung(Handed::new(
+        Box::new(two_graphs::TwoGraphsRung(Handed::new((
             crate::certify::simultaneous::joint_certificate,
-        ))),
+            crate::certify::simultaneous::predict_multipliers_at_estimate,
+        )))),
         Box::new(images::ImagesRung(Handed::new(certify))),
     ];
     climb(&mut state, rungs)?;

@@ -7,17 +7,21 @@
 //! where the within-frame couplings `[H21]` have no edge between sensors to work with.
 
 use super::state::RigState;
-use crate::certify::log::Refusal;
+use crate::certify::log::{Prediction, Refusal};
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Handed, JointCertifier, Plan, Rung};
-use crate::certify::simultaneous::predict_multipliers_at_estimate;
 use crate::error::Result;
 use crate::multiple::{Edge, MultipleProblem};
 use crate::rig::RigProblem;
 use crate::so3::Rotation;
 
-/// The simultaneous certificates of a two-sensor rig as a rung.
-pub(crate) struct TwoGraphsRung(pub(crate) Handed<JointCertifier>);
+/// The simultaneous certificates of a two-sensor rig as a rung: the certification and the
+/// prediction of its dense dual certificate on `n` frames, both handed in by the entry point.
+pub(crate) struct TwoGraphsRung(pub(crate) Handed<(JointCertifier, JointPredictor)>);
+
+/// The prediction of the simultaneous problem's dense dual certificate on `n` frames (in
+/// practice [`crate::certify::simultaneous::predict_multipliers_at_estimate`]).
+pub(crate) type JointPredictor = fn(usize) -> Prediction;
 
 impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
     fn proof(&self) -> Proof {
@@ -32,9 +36,7 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
             return Ok(Plan::Refuse(Refusal::NotApplicable { reason: why }, None));
         }
         // the dense dual certificate of [H15] and [H23], refused by it past its DENSE_MAX_NODES
-        Ok(Plan::Run(predict_multipliers_at_estimate(
-            cx.problem.num_frames(),
-        )))
+        Ok(Plan::Run((self.0.certify.1)(cx.problem.num_frames())))
     }
 
     fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {
@@ -49,7 +51,7 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
         let s = b * a.inverse();
         let mut settings = cx.settings.clone();
         settings.budget.max_seconds = cx.left();
-        let c = match (self.0.certify)(&right, &left, &rotations, &s, &settings) {
+        let c = match (self.0.certify.0)(&right, &left, &rotations, &s, &settings) {
             Ok(c) => c,
             Err(e) => return Ok(Found::failed(e.to_string())),
         };
