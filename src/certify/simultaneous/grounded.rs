@@ -73,7 +73,17 @@ fn gauge_terms(m: &DMatrix<f64>, mag: &DMatrix<f64>, form: f64, y: &[Matrix3<f64
     let yy = DMatrix::from_fn(d, 3, |r, c| y[r / 3][(r % 3, c)]);
     let ya = yy.abs();
     let zy = m * &yy;
-    let err = (mag * &ya) * form + (m.abs() * &ya) * gamma(d);
+    // |Z| |Y| without a d x d copy of |Z|
+    let mut z_abs_y = DMatrix::<f64>::zeros(d, 3);
+    for (k, column) in m.column_iter().enumerate() {
+        for c in 0..3 {
+            let yk = ya[(k, c)];
+            for (out, z) in z_abs_y.column_mut(c).iter_mut().zip(column.iter()) {
+                *out += z.abs() * yk;
+            }
+        }
+    }
+    let err = (mag * &ya) * form + z_abs_y * gamma(d);
     let inflate = 1.0 + gamma(3 * d + 4);
     let rho = (zy.norm() + err.norm()) * inflate;
     let gm = yy.transpose() * &zy;
@@ -97,9 +107,12 @@ fn proven_c(
 ) -> Option<f64> {
     let d = m.nrows() - 3;
     let keep = |k: usize| if k < 3 * g { k } else { k + 3 };
+    // ||gamma(terms) mag_{-g}||_F (its own rounding inflated), without a copy of mag_{-g}
     let forming = {
-        let sub = DMatrix::from_fn(d, d, |r, c| mag[(keep(r), keep(c))]);
-        sub.norm() * form
+        let squares: f64 = (0..d)
+            .map(|c| (0..d).map(|r| mag[(keep(r), keep(c))].powi(2)).sum::<f64>())
+            .sum();
+        squares.sqrt() * form * (1.0 + gamma(d * d + 2))
     };
     let diag_max = (0..d)
         .map(|k| m[(keep(k), keep(k))].abs())
