@@ -9,9 +9,9 @@ use crate::error::{Error, Result};
 use crate::linalg::compensated::Accumulator;
 use crate::linalg::{UNIT_ROUNDOFF, gamma};
 use crate::multiple::MultipleProblem;
-use crate::multiple::laplacian::connection_laplacian_triplets;
+use crate::multiple::laplacian::laplacian_plus_diagonal;
 use crate::so3::Rotation;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::SparseColMat;
 use nalgebra::Matrix3;
 
 /// `(Q Y)_i` for every node, edge-wise `[D3]`:
@@ -245,20 +245,8 @@ pub fn certificate_matrix(
     lambdas: &[Matrix3<f64>],
 ) -> Result<SparseColMat<usize, f64>> {
     check_lambdas(problem, lambdas)?;
-    let n3 = 3 * problem.num_rotations();
-    let mut t = connection_laplacian_triplets(problem);
-    t.reserve(9 * lambdas.len());
-    for (i, l) in lambdas.iter().enumerate() {
-        let l = symmetrize(l);
-        for a in 0..3 {
-            for b in 0..3 {
-                t.push(Triplet::new(3 * i + a, 3 * i + b, -l[(a, b)]));
-            }
-        }
-    }
-    SparseColMat::try_new_from_triplets(n3, n3, &t).map_err(|e| Error::Solver {
-        message: format!("could not assemble the certificate matrix: {e:?}"),
-    })
+    let minus: Vec<Matrix3<f64>> = lambdas.iter().map(|l| -symmetrize(l)).collect();
+    Ok(laplacian_plus_diagonal(problem, &minus))
 }
 
 pub(super) fn symmetrize(l: &Matrix3<f64>) -> Matrix3<f64> {
