@@ -8,7 +8,7 @@ use super::multipliers::{
     FirstOrder, GaugeTerms, TraceBound, certificate_matrix, entry_terms, forming_margins,
     gauge_terms,
 };
-use super::scalar::ScalarAnalysis;
+use super::scalar::{SPARSIFIED_EDGES_PER_NODE, ScalarAnalysis};
 use super::verified::VerifiedBound;
 use crate::certify::budget::{Budget, Deadline};
 use crate::certify::log::{Attempt, Outcome, Point, Prediction, Refusal};
@@ -90,9 +90,16 @@ pub(crate) struct Check<'a> {
     /// The certification's clock.
     pub deadline: Deadline,
     /// The whole graph's scalar analysis `[D13]` (the factor, or the ordering's predicted size
-    /// when over the budget), made when the check is created if the scalar comparison is on its
-    /// ladder: the scalar rung runs it, the `3n` rungs predict from it (no `3n` analysis then).
-    pub scalar: Option<std::result::Result<ScalarAnalysis, usize>>,
+    /// when over the budget; `None` inside when the scalar comparison is not on the ladder),
+    /// made when the check is created, or, on dense graphs ([`defers_the_whole`]), when first
+    /// asked ([`Self::scalar`]): the scalar rung runs it, the `3n` rungs predict from it (no
+    /// `3n` analysis then).
+    scalar: std::cell::OnceCell<Option<std::result::Result<ScalarAnalysis, usize>>>,
+    /// On dense graphs, the sparsest subgraph's analysis, made instead of the whole graph's
+    /// (handed to the scalar rung, [`Self::take_deferred`]), and its factor's size (a lower
+    /// estimate of the whole graph's, for the `3n` rungs' budget).
+    deferred: RefCell<Option<ScalarAnalysis>>,
+    deferred_values: Option<usize>,
     /// The `3n` factorisations (of `S` and of `S_{-g}`, one block row and column apart) are
     /// over the budget (found by whichever analysed first): the other is not analysed again.
     three_n_refused: RefCell<Option<Refusal>>,
@@ -150,16 +157,8 @@ impl<'a> Check<'a> {
     ) -> Result<Self> {
         let s = certificate_matrix(problem, lambdas)?;
         let norm = inf_norm(s.as_ref()).max(f64::MIN_POSITIVE);
-        let scalar = match rotations {
-            Some(_)
-                if settings.dual.proofs.contains(&Proof::ScalarComparison)
-                    && !problem.is_anisotropic() =>
-            {
-                let max_values = settings.budget.max_factor_values(problem.num_rotations());
-                Some(ScalarAnalysis::new(problem, max_values)?)
-            }
-            _ => None,
-        };
+        let (scalar, deferred) = scalar_analyses(problem, rotations, settings)?;
+        let deferred_values = deferred.as_ref().map(ScalarAnalysis::factor_len);
         // [A3] per node (empty for isotropic data): the largest, and by rows [D6] (3)
         let forming = forming_margins(problem, lambdas).unwrap_or_default();
         Ok(Check {
@@ -182,6 +181,8 @@ impl<'a> Check<'a> {
             hint: None,
             deadline: scope.deadline,
             scalar,
+            deferred: RefCell::new(deferred),
+            deferred_values,
             three_n_refused: RefCell::new(None),
             first: None,
             gauge: std::cell::OnceCell::new(),
@@ -210,6 +211,25 @@ impl<'a> Check<'a> {
         }
     }
 
+    /// The whole graph's scalar analysis ([`Self::scalar`] field), analysed now if it was
+    /// deferred; `None` when the scalar comparison is not on the ladder.
+    pub fn scalar(&self) -> Result<Option<&std::result::Result<ScalarAnalysis, usize>>> {
+        if self.scalar.get().is_none() {
+            let max_values = self
+                .settings
+                .budget
+                .max_factor_values(self.problem.num_rotations());
+            let whole = ScalarAnalysis::new(self.problem, max_values)?;
+            let _ = self.scalar.set(Some(whole));
+        }
+        Ok(self.scalar.get().and_then(Option::as_ref))
+    }
+
+    /// The sparsest subgraph's analysis made instead of the whole graph's (taken: once).
+    pub fn take_deferred(&self) -> Option<ScalarAnalysis> {
+        self.deferred.borrow_mut().take()
+    }
+
     /// Record that the `3n` factorisations do not fit (`refusal`).
     pub fn note_three_n_refused(&self, refusal: &Refusal) {
         *self.three_n_refused.borrow_mut() = Some(refusal.clone());
@@ -230,7 +250,21 @@ impl<'a> Check<'a> {
         if let Some(r) = &*self.three_n_refused.borrow() {
             return Some(Err(r.clone()));
         }
-        let (v, multiply_adds) = match self.scalar.as_ref()? {
+        if self.scalar.get().is_none()
+            && let Some(v) = self.deferred_values
+        {
+            let blocks = v.saturating_mul(9).saturating_sub(dim);
+            if let Some(Refusal::OverBudget { reason }) =
+                ordering_refusal(self.settings, blocks, dim)
+            {
+                let reason = format!(
+                    "at least 9 x the scalar factor of a subgraph (the whole graph's is larger): \
+                     {reason}"
+                );
+                return Some(Err(Refusal::OverBudget { reason }));
+            }
+        }
+        let (v, multiply_adds) = match self.scalar().ok().flatten()? {
             Ok(a) => (a.factor_len(), Some(a.factor_multiply_adds())),
             Err(predicted) => (*predicted, None),
         };
@@ -481,6 +515,54 @@ pub(crate) fn first_shift(cx: &Check<'_>) -> f64 {
 /// factor (values, scratch included) must fit the memory, `total` values and `multiply_adds`
 /// the time (the model of the scalar comparison: [`Budget::counted_factorisations_fit`]), the
 /// stored `factor_len` the cap; `other_seconds` is the proof's work besides them.
+/// Graphs with at least this many edges per node (and [`DEFER_WHOLE_MIN_EDGES`] edges) have
+/// their whole graph's scalar analysis deferred until the sparsest subgraph has been tried: its
+/// minimum-degree ordering alone is the largest cost of a certificate that the subgraph proves
+/// (a random graph of 10^5 nodes and 10^6 edges: 1.1 s of a 6.8 s certificate, for a factor of
+/// 2.4e9 values that the budget refuses anyway).
+pub const DEFER_WHOLE_EDGES_PER_NODE: f64 = 4.0;
+
+/// See [`DEFER_WHOLE_EDGES_PER_NODE`].
+pub const DEFER_WHOLE_MIN_EDGES: usize = 100_000;
+
+/// Whether the whole graph's scalar analysis waits for the sparsest subgraph
+/// ([`DEFER_WHOLE_EDGES_PER_NODE`]).
+pub fn defers_the_whole(problem: &MultipleProblem) -> bool {
+    let (n, m) = (problem.num_rotations(), problem.num_edges());
+    m >= DEFER_WHOLE_MIN_EDGES && m as f64 >= DEFER_WHOLE_EDGES_PER_NODE * n as f64
+}
+
+/// The whole graph's scalar analysis, when the scalar comparison is on the ladder (`Some`
+/// inside), or, on dense graphs, the sparsest subgraph's in its place (the cell left empty:
+/// the whole graph is analysed when first asked). Which is made first decides only the cost
+/// of the climb, never what is proven.
+type ScalarAnalyses = (
+    std::cell::OnceCell<Option<std::result::Result<ScalarAnalysis, usize>>>,
+    Option<ScalarAnalysis>,
+);
+
+fn scalar_analyses(
+    problem: &MultipleProblem,
+    rotations: Option<&[Rotation]>,
+    settings: &CertifySettings,
+) -> Result<ScalarAnalyses> {
+    let cell = std::cell::OnceCell::new();
+    let on = settings.dual.proofs.contains(&Proof::ScalarComparison) && !problem.is_anisotropic();
+    let Some(rotations) = rotations.filter(|_| on) else {
+        let _ = cell.set(None);
+        return Ok((cell, None));
+    };
+    let max_values = settings.budget.max_factor_values(problem.num_rotations());
+    if settings.dual.scalar_fallbacks && defers_the_whole(problem) {
+        let sparsest = SPARSIFIED_EDGES_PER_NODE[0];
+        if let Ok(sub) = ScalarAnalysis::sparsified(problem, rotations, sparsest, max_values)? {
+            return Ok((cell, Some(sub)));
+        }
+    }
+    let _ = cell.set(Some(ScalarAnalysis::new(problem, max_values)?));
+    Ok((cell, None))
+}
+
 pub(super) fn counted_prediction(
     settings: &CertifySettings,
     largest: usize,

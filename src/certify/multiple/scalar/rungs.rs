@@ -51,6 +51,10 @@ pub(in crate::certify::multiple) struct ScalarFamily {
     planned: Option<std::result::Result<Prediction, Refusal>>,
     /// The hub shape of an anisotropic problem (`[G13]`), when it has one: its only shape.
     hub: Option<HubGraph>,
+    /// The first fallback is the sparsest subgraph, analysed instead of the whole graph (dense
+    /// graphs, [`Check::take_deferred`]): it runs first, and the whole graph is analysed only
+    /// when it does not prove.
+    deferred: bool,
     done: bool,
 }
 
@@ -101,20 +105,18 @@ impl ScalarFamily {
                     .into(),
             }));
         }
-        match &cx.scalar {
-            Some(Ok(a)) => match predict(cx.settings, a) {
-                Ok(mut p) => {
-                    // a failure worth avoiding: forecast it (free predictions are not)
-                    if p.seconds > FREE_SECONDS && forecast_fails(cx.problem, rotations) {
-                        p = p.with_success(FORECAST_FAILURE_SUCCESS);
-                    }
-                    self.whole = Some(p);
-                    return Ok(Ok(p));
-                }
-                Err(refusal) => self.whole_refused = Some(refusal),
-            },
-            Some(Err(predicted)) => self.whole_refused = Some(over_ordering(cx, *predicted)),
-            None => {}
+        if let Some(sub) = cx.take_deferred() {
+            self.fallbacks.subgraph = 1;
+            if let Ok(p) = predict(cx.settings, &sub) {
+                self.first_fallback = Some(sub);
+                self.deferred = true;
+                return Ok(Ok(p));
+            }
+            // denser subgraphs have larger factors
+            self.fallbacks.subgraph = SPARSIFIED_EDGES_PER_NODE.len();
+        }
+        if let Some(p) = self.plan_whole(cx, rotations)? {
+            return Ok(Ok(p));
         }
         self.first_fallback = self.fallbacks.next(cx, rotations, None)?;
         Ok(match &self.first_fallback {
@@ -128,6 +130,48 @@ impl ScalarFamily {
         })
     }
 
+    /// The whole graph's prediction when its factor fits (kept in `whole`), else why not (kept
+    /// in `whole_refused`).
+    fn plan_whole(&mut self, cx: &Check<'_>, rotations: &[Rotation]) -> Result<Option<Prediction>> {
+        match cx.scalar()? {
+            Some(Ok(a)) => match predict(cx.settings, a) {
+                Ok(mut p) => {
+                    // a failure worth avoiding: forecast it (free predictions are not)
+                    if p.seconds > FREE_SECONDS && forecast_fails(cx.problem, rotations) {
+                        p = p.with_success(FORECAST_FAILURE_SUCCESS);
+                    }
+                    self.whole = Some(p);
+                    return Ok(Some(p));
+                }
+                Err(refusal) => self.whole_refused = Some(refusal),
+            },
+            Some(Err(predicted)) => self.whole_refused = Some(over_ordering(cx, *predicted)),
+            None => {}
+        }
+        Ok(None)
+    }
+
+    /// The deferred sparsest subgraph ([`Self::deferred`]): its bound, or, when it does not
+    /// prove, the whole graph's analysis and plan made now (the climb then goes on as if it had
+    /// been analysed first, the failed subgraph skipped).
+    fn deferred_first(
+        &mut self,
+        cx: &Check<'_>,
+        rotations: &[Rotation],
+        target: f64,
+    ) -> Result<Option<VerifiedBound>> {
+        self.deferred = false;
+        if let Some(sub) = self.first_fallback.take() {
+            let (bound, failure) = run(cx, &sub, rotations, target)?;
+            if bound.is_some() {
+                return Ok(bound);
+            }
+            self.fallbacks.pending = failure;
+        }
+        self.plan_whole(cx, rotations)?;
+        Ok(None)
+    }
+
     /// Try the shapes in order, each logged: a verified bound, or `None`.
     fn climb_shapes(&mut self, cx: &Check<'_>) -> Result<Option<VerifiedBound>> {
         let Some(rotations) = cx.rotations else {
@@ -137,7 +181,12 @@ impl ScalarFamily {
         if let Some(hub) = self.hub.take() {
             return Ok(run_hub(cx, &hub, rotations, target));
         }
-        if let (Some(whole), Some(Ok(a))) = (self.whole, &cx.scalar) {
+        if self.deferred
+            && let Some(b) = self.deferred_first(cx, rotations, target)?
+        {
+            return Ok(Some(b));
+        }
+        if let (Some(whole), Some(Ok(a))) = (self.whole, cx.scalar()?) {
             if let Some(b) = self.subgraphs_first(cx, rotations, whole, target)? {
                 return Ok(Some(b));
             }
@@ -242,6 +291,9 @@ struct Fallbacks {
     subgraph: usize,
     /// The splits, computed when the subgraphs are exhausted; `None` until then.
     splits: Option<std::vec::IntoIter<ScalarAnalysis>>,
+    /// The failure of a subgraph tried outside [`Self::next`] (the deferred sparsest one),
+    /// applied by the next call.
+    pending: Option<ScalarFailure>,
 }
 
 impl Fallbacks {
@@ -256,6 +308,7 @@ impl Fallbacks {
         if !cx.settings.dual.scalar_fallbacks {
             return Ok(None);
         }
+        let failure = failure.or(self.pending.take());
         if let Some(ScalarFailure::Inertia { negative_pivots }) = failure
             && self.splits.is_none()
         {
