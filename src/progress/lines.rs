@@ -73,6 +73,22 @@ impl ProgressLines {
         }
     }
 
+    /// The message as a line would show it now: with the time left of a proof's prediction
+    /// ([`with_time_left`]); the terminal's spinner shows it.
+    ///
+    /// ```
+    /// use rotavg::progress::ProgressLines;
+    /// let lines = ProgressLines::new();
+    /// lines.set("certify: grounded (predicted 100.00 s)".into());
+    /// assert!(lines.current().starts_with("certify: grounded (predicted 100.00 s, about 10"));
+    /// ```
+    pub fn current(&self) -> String {
+        self.state.lock().map_or_else(
+            |_| String::new(),
+            |s| with_time_left(&s.message, s.set_at.elapsed().as_secs_f64()),
+        )
+    }
+
     /// Write the message to `out` when due (none written yet; changed and [`LINE_INTERVAL`]
     /// passed; or [`LINE_REPEAT`] passed) and not stopped; whether a line was written.
     pub fn tick(&self, out: &mut dyn Write) -> bool {

@@ -3,8 +3,9 @@
 //! predicted time, SDP with iteration / gap): SPEC section 5, a run longer than ~2 s shows
 //! progress unless `--quiet`, or `--json` without a terminal, asks otherwise.
 //!
-//! - stderr a terminal: a spinner line with the elapsed time, shown once the run has lasted
-//!   a second and cleared when the run ends, so the report is all that remains on the screen;
+//! - stderr a terminal: a spinner line with the elapsed time and the time left of a proof's
+//!   prediction, shown once the run has lasted a second and cleared when the run ends, so the
+//!   report is all that remains on the screen;
 //! - otherwise (a log file, a pipe): the library's [`ProgressLines`], the first after 2 s.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -15,7 +16,7 @@ use std::time::Duration;
 
 /// Where the events go: the spinner (stderr a terminal) or plain lines.
 enum Display {
-    Bar(ProgressBar),
+    Bar(ProgressBar, Arc<ProgressLines>),
     Lines(Arc<ProgressLines>),
 }
 
@@ -27,7 +28,8 @@ pub fn install(options: Option<(bool, bool)>) {
         return;
     }
     let display = Arc::new(if terminal {
-        Display::Bar(spinner())
+        let lines = Arc::new(ProgressLines::new());
+        Display::Bar(spinner(lines.clone()), lines)
     } else {
         let lines = Arc::new(ProgressLines::new());
         lines.spawn(ProgressLines::delay_from_env());
@@ -39,8 +41,9 @@ pub fn install(options: Option<(bool, bool)>) {
     }
 }
 
-/// The spinner, drawn only once the run has lasted a second.
-fn spinner() -> ProgressBar {
+/// The spinner, drawn only once the run has lasted a second, its message `lines`' (never
+/// written as lines: they give the time left of a proof's prediction), refreshed every 200 ms.
+fn spinner(lines: Arc<ProgressLines>) -> ProgressBar {
     let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
     let style = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_msg}")
         .unwrap_or_else(|_| ProgressStyle::default_spinner());
@@ -52,6 +55,10 @@ fn spinner() -> ProgressBar {
         if !shown.is_finished() {
             shown.set_draw_target(ProgressDrawTarget::stderr());
             shown.enable_steady_tick(Duration::from_millis(120));
+        }
+        while !shown.is_finished() {
+            shown.set_message(lines.current());
+            std::thread::sleep(Duration::from_millis(200));
         }
     });
     bar
@@ -66,7 +73,7 @@ pub fn finish() {
     if let Some(d) = CURRENT.lock().ok().and_then(|mut slot| slot.take()) {
         set_observer(None);
         match d.as_ref() {
-            Display::Bar(bar) => bar.finish_and_clear(),
+            Display::Bar(bar, _) => bar.finish_and_clear(),
             Display::Lines(lines) => lines.stop(),
         }
     }
@@ -82,7 +89,10 @@ impl Observer for Display {
 pub fn say(message: std::fmt::Arguments<'_>) {
     if let Ok(slot) = CURRENT.lock() {
         match slot.as_deref() {
-            Some(Display::Bar(bar)) => bar.set_message(message.to_string()),
+            Some(Display::Bar(bar, lines)) => {
+                lines.set(message.to_string());
+                bar.set_message(lines.current());
+            }
             Some(Display::Lines(lines)) => lines.set(message.to_string()),
             None => {}
         }
