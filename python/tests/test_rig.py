@@ -182,3 +182,18 @@ def test_gravity_on_a_rig_with_a_sensor_to_estimate_calibrates_first():
     s = np.array(d["sensors_from_rig"])
     for a, im in enumerate(rig["images"]):
         assert np.linalg.norm(s[im["sensor"]] @ est[im["frame"]] @ [0, 0, 1] - g[a]) < 0.05
+
+
+def test_soft_gravity_refines_the_estimated_sensors():
+    path = REPO / "examples" / "data" / "rig_sensors" / "rig.json"
+    rig = json.loads(path.read_text())
+    truth = json.loads((REPO / "examples" / "data" / "rig_sensors" / "truth.json").read_text())
+    frames, sensors = np.array(truth["frames"]), np.array(truth["sensors_from_rig"])
+    g = np.array([sensors[im["sensor"]] @ frames[im["frame"]] @ [0.0, 0.0, 1.0]
+                  for im in rig["images"]])
+    d = rotavg.average_rig_file(path, gravity=g, gravity_weight=36.0).to_dict()
+    refined = np.array(d["calibration"]["refined_sensors_from_rig"])
+    assert refined.shape == (len(sensors), 3, 3)
+    assert np.allclose(np.array(d["sensors_from_rig"]), refined, atol=1e-9)
+    held = rotavg.average_rig_file(path, gravity=g).to_dict()
+    assert held["calibration"]["refined_sensors_from_rig"] is None

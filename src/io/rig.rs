@@ -43,7 +43,8 @@ pub struct LoadedRig {
     /// `"json"` or `"colmap"`.
     pub format: String,
     /// Gravity priors given to a rig whose sensors are estimated: applied once they are
-    /// (calibrated without the priors, then held; `[G14]`, [`Self::with_gravity`]).
+    /// (calibrated without the priors, refined by soft ones, then held; `[G14]`, `[G15]`,
+    /// [`Self::with_gravity`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pending_gravity: Option<crate::multiple::gravity::GravityPriors>,
     /// The reader's remarks.

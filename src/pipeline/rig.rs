@@ -191,6 +191,12 @@ pub struct RigCalibration {
     pub certificate: Option<crate::certify::Certificate>,
     /// A robust calibration's loss and inliers.
     pub robust: Option<RigRobustDetails>,
+    /// With soft priors (`--gravity-weight`), the sensors refined by them (`[G15]`): every
+    /// sensor's `sensor_from_rig` at the joint estimate of the calibrated problem with its
+    /// priors, the one the second run holds; `None` with held priors (the sensors stay at the
+    /// calibration) or when the refinement failed.
+    #[serde(default, with = "crate::so3::serde_rows::option_rotations")]
+    pub refined_sensors_from_rig: Option<Vec<crate::so3::Rotation>>,
 }
 
 /// A rig with gravity `priors` whose sensors are (some of them) estimated (`[G14]`): calibrated
@@ -205,7 +211,13 @@ pub fn average_rig_calibrated_with_gravity(
     settings: &AverageRigSettings,
 ) -> Result<(RigRun, RigCalibration)> {
     let start = std::time::Instant::now();
-    let (first, _, first_robust) = average_rig_with_loss(problem, loss, robust, settings)?;
+    let (first, calibrated, first_robust) = average_rig_with_loss(problem, loss, robust, settings)?;
+    let refined = refine_sensors(
+        &calibrated,
+        &first.solution,
+        &priors,
+        &settings.remaining(start),
+    );
     let calibration = RigCalibration {
         estimated: (0..problem.sensors().len())
             .filter(|&s| problem.held()[s].is_none())
@@ -214,14 +226,30 @@ pub fn average_rig_calibrated_with_gravity(
         cost: first.solution.cost,
         certificate: first.certificate,
         robust: first_robust,
+        refined_sensors_from_rig: refined.clone(),
     };
-    let held = problem
-        .with_sensors_held(&calibration.sensors_from_rig)?
-        .with_gravity(priors)?;
+    let sensors = refined.as_ref().unwrap_or(&calibration.sensors_from_rig);
+    let held = problem.with_sensors_held(sensors)?.with_gravity(priors)?;
     let (mut out, certified, robust) =
         average_rig_with_loss(&held, loss, robust, &settings.remaining(start))?;
     out.details.add_solve_seconds(first.details.total_seconds);
     Ok(((out, certified, robust), calibration))
+}
+
+/// The sensors refined by soft `priors` (`[G15]`): the calibrated problem (the rig, or its
+/// inlier rig) with the priors, solved jointly from the calibration; `None` with held priors,
+/// or when that solve fails (the calibration is then held, as before).
+fn refine_sensors(
+    calibrated: &RigProblem,
+    calibration: &RigSolution,
+    priors: &crate::multiple::gravity::GravityPriors,
+    settings: &AverageRigSettings,
+) -> Option<Vec<crate::so3::Rotation>> {
+    priors.weight()?;
+    let joint = calibrated.clone().with_gravity(priors.clone()).ok()?;
+    let (frames, sensors) = (&calibration.frames, &calibration.sensors);
+    let solved = crate::rig::solve_rig_from(&joint, frames, sensors, &settings.solve).ok()?;
+    Some(solved.sensors)
 }
 
 /// What [`average_rig_with_loss`] returns: the result, the problem certified, a robust solve's

@@ -231,10 +231,14 @@ impl fmt::Display for RigFileReport {
                     c.relative_gap.unwrap_or(f64::NAN)
                 )
             });
+            let then = match c.refined_sensors_from_rig {
+                Some(_) => "then refined by the soft priors [G15] and held with them",
+                None => "then held with the priors",
+            };
             write!(
                 f,
                 "\ncalibration without the gravity priors [G14]: sensors {:?} estimated, cost \
-                 {:.9e}, {verdict}; then held with the priors",
+                 {:.9e}, {verdict}; {then}",
                 c.estimated, c.cost
             )?;
         }

@@ -1,4 +1,5 @@
-//! Gravity priors on a rig whose every sensor is held (`paper-notes/gravity.md` `[G14]`).
+//! Gravity priors on a rig whose every sensor is held (`paper-notes/gravity.md` `[G14]`), and
+//! soft priors on a rig with sensors to estimate (`[G15]`: they enter the sensor step).
 //!
 //! Image `a` of sensor `s` at frame `f` has `X_a = S_s F_f`, so its prior `X_a d = g_a` (`d`
 //! the world's down direction) is the frame's prior `F_f d = u_a` with `u_a = S_s^T g_a`. A
@@ -47,9 +48,11 @@ pub struct FrameGravity {
 impl RigProblem {
     /// The same rig with gravity priors on its images (`priors` has one entry per image, in
     /// [`Self::images`] order; held, or soft with [`GravityPriors::with_weight`]), solved and
-    /// certified as the frames' gravity problem (`[G14]`). Errors: a count that differs from
-    /// the images', a sensor whose `sensor_from_rig` is estimated (gravity on a rig needs every
-    /// sensor known), held priors of one frame that cancel (no direction to hold).
+    /// certified as the frames' gravity problem (`[G14]`); with soft priors the sensors to
+    /// estimate are estimated with them (`[G15]`). Errors: a count that differs from the
+    /// images', held priors on a rig with a sensor whose `sensor_from_rig` is estimated (held
+    /// gravity on a rig needs every sensor known), held priors of one frame that cancel (no
+    /// direction to hold).
     ///
     /// ```
     /// use rotavg::multiple::gravity::GravityPriors;
@@ -77,18 +80,22 @@ impl RigProblem {
                 self.images().len()
             )));
         }
-        if !self.all_held() {
+        if !self.all_held() && priors.weight().is_none() {
             let unknown = self.held().iter().filter(|h| h.is_none()).count();
             return Err(invalid(format!(
-                "gravity priors on a rig need every sensor's sensor_from_rig known; {unknown} \
-                 sensors are to be estimated (calibrate the rig without the priors, then hold \
-                 its sensors: RigProblem::with_sensors_held; `rotavg rig FILE --gravity` and \
-                 average_rig_calibrated_with_gravity do both)"
+                "held gravity priors on a rig need every sensor's sensor_from_rig known; \
+                 {unknown} sensors are to be estimated (calibrate the rig without the priors, \
+                 then hold its sensors: RigProblem::with_sensors_held; `rotavg rig FILE \
+                 --gravity` and average_rig_calibrated_with_gravity do both; soft priors, \
+                 GravityPriors::with_weight, refine estimated sensors, [G15])"
             )));
         }
-        let held: Vec<Rotation> = self.held().iter().flatten().copied().collect();
+        // the frames' problem at any sensors (the unknown ones at the identity) checks the rest
+        let sensors: Vec<Rotation> = (self.held().iter())
+            .map(|h| h.unwrap_or_else(Rotation::identity))
+            .collect();
         self.gravity = Some(priors);
-        self.frame_gravity(&held)?;
+        self.frame_gravity(&sensors)?;
         Ok(self)
     }
 

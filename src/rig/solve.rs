@@ -402,6 +402,9 @@ type SensorTerm = (usize, usize, f64, Matrix3<f64>, Matrix3<f64>);
 /// `J_e` for rotations `F_a`, `||(S_b A - R S_a) F_a|| = ||S_b F_b - R S_a F_a||`).
 struct SensorTerms {
     edges: Vec<SensorTerm>,
+    /// The soft gravity priors on images of unknown sensors, `c ||S_s b - g||^2`: the sensor,
+    /// `c = 2 w_a`, `b = F_f d` and `g` (`[G15]`).
+    priors: Vec<(usize, f64, Vector3<f64>, Vector3<f64>)>,
     column: Vec<Option<usize>>,
 }
 
@@ -419,17 +422,21 @@ impl SensorTerms {
             .collect();
         SensorTerms {
             edges,
+            priors: sensor_priors(p, frames, column),
             column: column.to_vec(),
         }
     }
 
     fn cost(&self, sensors: &[Rotation]) -> f64 {
-        self.edges
-            .iter()
+        let edges: f64 = (self.edges.iter())
             .map(|(sa, sb, w, r, rel)| {
                 w * (sensors[*sb].matrix() * rel - r * sensors[*sa].matrix()).norm_squared()
             })
-            .sum()
+            .sum();
+        let priors: f64 = (self.priors.iter())
+            .map(|(s, c, b, g)| c * (sensors[*s] * b - g).norm_squared())
+            .sum();
+        edges + priors
     }
 
     /// The Gauss-Newton normal equations `(J^T J, J^T r)` in the unknown sensors' tangent steps:
@@ -462,8 +469,42 @@ impl SensorTerms {
                 }
             }
         }
+        // a prior's residual `S_s b - g` has the derivative `S_s [e_k]x b` in `d_s`
+        for (s, c, b, target) in &self.priors {
+            let Some(col) = self.column[*s] else { continue };
+            let m = sensors[*s].matrix();
+            let residual = m * b - target;
+            let du: [Vector3<f64>; 3] = std::array::from_fn(|k| m * (basis[k] * b));
+            for k in 0..3 {
+                g[col + k] += c * du[k].dot(&residual);
+                for l in 0..3 {
+                    h[(col + k, col + l)] += c * du[k].dot(&du[l]);
+                }
+            }
+        }
         (h, g)
     }
+}
+
+/// The soft gravity priors of the images of unknown sensors at fixed frames (`[G15]`): `(s, 2
+/// w_a, F_f d, g_a)`; none without priors or with held ones (the sensor step of a rig with held
+/// priors has every sensor held, `[G14]`).
+fn sensor_priors(
+    p: &RigProblem,
+    frames: &[Rotation],
+    column: &[Option<usize>],
+) -> Vec<(usize, f64, Vector3<f64>, Vector3<f64>)> {
+    let Some(priors) = p.gravity() else {
+        return Vec::new();
+    };
+    let down = priors.world_down();
+    (p.images().iter().enumerate())
+        .filter(|(_, im)| column[im.sensor].is_some())
+        .filter_map(|(a, im)| {
+            let (g, w) = (priors.direction(a)?, priors.prior_weight(a)?);
+            Some((im.sensor, 2.0 * w, frames[im.frame] * down, g))
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -507,5 +548,65 @@ mod tests {
         }
         assert!(extrapolated > 0);
         assert!(cost <= p.cost(&plain.0, &plain.1) * (1.0 + 1e-12));
+    }
+
+    /// The sensor step's normal equations with soft gravity priors (`[G15]`): `J^T r` is half
+    /// the derivative of the step's cost (edges and priors) along each sensor's tangent
+    /// directions, by central differences; and a pass never raises `J + P`.
+    #[test]
+    fn sensor_terms_with_priors_have_the_cost_s_gradient() {
+        use crate::multiple::gravity::GravityPriors;
+        let scene = RigScene {
+            frames: 20,
+            sensors: 3,
+            noise_sigma: 0.05,
+            seed: 4,
+            ..Default::default()
+        };
+        let (p, truth) = scene.generate();
+        let dirs = truth.gravity(&p, 0.02, 3, 5);
+        let priors = GravityPriors::new(dirs).unwrap().with_weight(7.0).unwrap();
+        let p = p.with_gravity(priors).unwrap();
+        let mut rng = StdRng::seed_from_u64(2);
+        let sensors: Vec<Rotation> = (truth.sensors.iter())
+            .zip(p.held())
+            .map(|(s, h)| h.unwrap_or_else(|| perturb(s, 0.1, &mut rng)))
+            .collect();
+        let frames: Vec<Rotation> = truth
+            .frames
+            .iter()
+            .map(|f| perturb(f, 0.05, &mut rng))
+            .collect();
+        let unknown: Vec<usize> = (0..sensors.len())
+            .filter(|&s| p.held()[s].is_none())
+            .collect();
+        let mut column = vec![None; sensors.len()];
+        for (k, &s) in unknown.iter().enumerate() {
+            column[s] = Some(3 * k);
+        }
+        let terms = SensorTerms::new(&p, &frames, &column);
+        assert!(!terms.priors.is_empty());
+        let (_, g) = terms.normal_equations(&sensors, 3 * unknown.len());
+        let eps = 1e-6;
+        for (k, &s) in unknown.iter().enumerate() {
+            for axis in 0..3 {
+                let mut d = Vector3::zeros();
+                d[axis] = eps;
+                let moved = |sign: f64| {
+                    let mut x = sensors.clone();
+                    x[s] = sensors[s] * exp(&(d * sign));
+                    terms.cost(&x)
+                };
+                let numeric = (moved(1.0) - moved(-1.0)) / (2.0 * eps);
+                let analytic = 2.0 * g[3 * k + axis];
+                assert!(
+                    (numeric - analytic).abs() <= 1e-5 * (1.0 + analytic.abs()),
+                    "sensor {s} axis {axis}: {numeric} vs {analytic}"
+                );
+            }
+        }
+        let before = p.cost(&frames, &sensors);
+        let (f, s) = Passes::default().pass(&p, (frames, sensors), None).unwrap();
+        assert!(p.cost(&f, &s) <= before, "{} > {before}", p.cost(&f, &s));
     }
 }

@@ -61,6 +61,27 @@ pub mod rotations {
     }
 }
 
+/// An optional list of rotations (`null` or a list of row-major nested arrays).
+pub mod option_rotations {
+    use crate::so3::Rotation;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    /// Serialise.
+    pub fn serialize<S: Serializer>(rs: &Option<Vec<Rotation>>, s: S) -> Result<S::Ok, S::Error> {
+        let rows: Option<Vec<[[f64; 3]; 3]>> = rs
+            .as_ref()
+            .map(|rs| rs.iter().map(crate::so3::rotation_to_rows).collect());
+        rows.serialize(s)
+    }
+
+    /// Deserialise and validate.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec<Rotation>>, D::Error> {
+        #[derive(Deserialize)]
+        struct Rows(#[serde(with = "super::rotations")] Vec<Rotation>);
+        Ok(Option::<Rows>::deserialize(d)?.map(|r| r.0))
+    }
+}
+
 /// An optional rotation (`null` or a row-major nested array).
 pub mod optional_rotation {
     use crate::so3::{DEFAULT_ROTATION_TOLERANCE, Rotation, rotation_from_rows, rotation_to_rows};

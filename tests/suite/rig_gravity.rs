@@ -503,3 +503,64 @@ fn bad_priors_for_a_rig_name_the_file_and_line() {
         );
     }
 }
+
+/// Soft priors refine the estimated sensors (`[G15]`): on three generated rigs (300 frames, 4
+/// sensors, 3 degrees on the edges, priors of 0.5 degrees on three images in four, weight 36 =
+/// (3 / 0.5)^2) the refined `sensor_from_rig` rotations are on average closer to the planted
+/// ones than the calibration without the priors (measured 1.9x at 1000 frames), the held rig
+/// at the refined sensors is certified, and noise-free data keep the planted sensors. Held
+/// priors do not refine (`None`).
+#[test]
+fn soft_priors_refine_the_estimated_sensors() {
+    use rotavg::pipeline::rig::average_rig_calibrated_with_gravity;
+    let both = (RigLoss::Chordal, &RigRobust::default());
+    let (mut before, mut after) = (0.0, 0.0);
+    for seed in 1..=3 {
+        let (p, truth) = RigScene::sized(300, 4, 3f64.to_radians(), false, seed).generate();
+        let dirs = truth.gravity(&p, 0.5f64.to_radians(), 4, seed + 6);
+        let soft = GravityPriors::new(dirs.clone()).unwrap().with_weight(36.0);
+        let settings = AverageSettings::default();
+        let ((run, _, _), cal) =
+            average_rig_calibrated_with_gravity(&p, soft.unwrap(), both, &settings).unwrap();
+        let refined = cal
+            .refined_sensors_from_rig
+            .clone()
+            .expect("soft priors refine");
+        for (held, r) in run.solution.sensors.iter().zip(&refined) {
+            assert!(rotavg::so3::angle_between(held, r) < 1e-12);
+        }
+        for &s in &cal.estimated {
+            before += rotavg::so3::angle_between(&cal.sensors_from_rig[s], &truth.sensors[s])
+                .to_degrees();
+            after += rotavg::so3::angle_between(&refined[s], &truth.sensors[s]).to_degrees();
+        }
+        let c = run.certificate.unwrap();
+        assert!(c.is_certified(), "{}", c.explanation);
+        let held = GravityPriors::new(dirs).unwrap();
+        let (_, cal) = average_rig_calibrated_with_gravity(&p, held, both, &settings).unwrap();
+        assert!(cal.refined_sensors_from_rig.is_none());
+    }
+    println!("sensors' summed error: calibrated {before:.4} deg, refined {after:.4} deg");
+    assert!(
+        after < 0.75 * before,
+        "calibrated {before}, refined {after}"
+    );
+    let (p, truth) = RigScene::sized(60, 3, 0.0, false, 4).generate();
+    let exact = GravityPriors::new(truth.gravity(&p, 0.0, 4, 3)).unwrap();
+    let settings = AverageSettings::default();
+    let (_, cal) =
+        average_rig_calibrated_with_gravity(&p, exact.with_weight(36.0).unwrap(), both, &settings)
+            .unwrap();
+    for (s, t) in cal
+        .refined_sensors_from_rig
+        .unwrap()
+        .iter()
+        .zip(&truth.sensors)
+    {
+        assert!(
+            rotavg::so3::angle_between(s, t) < 1e-8,
+            "{}",
+            rotavg::so3::angle_between(s, t)
+        );
+    }
+}
