@@ -166,13 +166,19 @@ def test_gravity_priors_on_a_rig_file_are_the_command_line_s(cli):
         rotavg.average_rig_file(path, gravity=rows[:10])
 
 
-def test_gravity_on_a_rig_with_a_sensor_to_estimate_calibrates_first():
+def _rig_sensors_with_exact_gravity():
+    """The committed rig with a sensor to estimate, and exact priors from its truth."""
     path = REPO / "examples" / "data" / "rig_sensors" / "rig.json"
     rig = json.loads(path.read_text())
     truth = json.loads((REPO / "examples" / "data" / "rig_sensors" / "truth.json").read_text())
     frames, sensors = np.array(truth["frames"]), np.array(truth["sensors_from_rig"])
     g = np.array([sensors[im["sensor"]] @ frames[im["frame"]] @ [0.0, 0.0, 1.0]
                   for im in rig["images"]])
+    return path, rig, sensors, g
+
+
+def test_gravity_on_a_rig_with_a_sensor_to_estimate_calibrates_first():
+    path, rig, sensors, g = _rig_sensors_with_exact_gravity()
     out = rotavg.average_rig_file(path, gravity=g)
     d = out.to_dict()
     assert d["calibration"]["estimated"] == [1]
@@ -185,12 +191,7 @@ def test_gravity_on_a_rig_with_a_sensor_to_estimate_calibrates_first():
 
 
 def test_soft_gravity_refines_the_estimated_sensors():
-    path = REPO / "examples" / "data" / "rig_sensors" / "rig.json"
-    rig = json.loads(path.read_text())
-    truth = json.loads((REPO / "examples" / "data" / "rig_sensors" / "truth.json").read_text())
-    frames, sensors = np.array(truth["frames"]), np.array(truth["sensors_from_rig"])
-    g = np.array([sensors[im["sensor"]] @ frames[im["frame"]] @ [0.0, 0.0, 1.0]
-                  for im in rig["images"]])
+    path, rig, sensors, g = _rig_sensors_with_exact_gravity()
     d = rotavg.average_rig_file(path, gravity=g, gravity_weight=36.0).to_dict()
     refined = np.array(d["calibration"]["refined_sensors_from_rig"])
     assert refined.shape == (len(sensors), 3, 3)
