@@ -197,6 +197,9 @@ pub struct RigCalibration {
     /// calibration) or when the refinement failed.
     #[serde(default, with = "crate::so3::serde_rows::option_rotations")]
     pub refined_sensors_from_rig: Option<Vec<crate::so3::Rotation>>,
+    /// The refinement's solve (passes, why it stopped, seconds), when it ran.
+    #[serde(default)]
+    pub refinement: Option<crate::termination::SolverReport>,
 }
 
 /// A rig with gravity `priors` whose sensors are (some of them) estimated (`[G14]`): calibrated
@@ -226,9 +229,11 @@ pub fn average_rig_calibrated_with_gravity(
         cost: first.solution.cost,
         certificate: first.certificate,
         robust: first_robust,
-        refined_sensors_from_rig: refined.clone(),
+        refined_sensors_from_rig: refined.as_ref().map(|r| r.sensors.clone()),
+        refinement: refined.map(|r| r.report),
     };
-    let sensors = refined.as_ref().unwrap_or(&calibration.sensors_from_rig);
+    let sensors =
+        (calibration.refined_sensors_from_rig.as_ref()).unwrap_or(&calibration.sensors_from_rig);
     let held = problem.with_sensors_held(sensors)?.with_gravity(priors)?;
     let (mut out, certified, robust) =
         average_rig_with_loss(&held, loss, robust, &settings.remaining(start))?;
@@ -236,20 +241,29 @@ pub fn average_rig_calibrated_with_gravity(
     Ok(((out, certified, robust), calibration))
 }
 
-/// The sensors refined by soft `priors` (`[G15]`): the calibrated problem (the rig, or its
-/// inlier rig) with the priors, solved jointly from the calibration; `None` with held priors,
+/// Alternation passes of the refinement by soft priors at most (`[G15]`): on generated rigs
+/// (1000 frames and 4 sensors, 10^4 frames and 6 sensors) the sensors after 4 passes were as
+/// accurate as after convergence (11 passes, 15 s at 10^4 frames and 6 sensors, against 5.4 s):
+/// the passes after them move the sensors by less than their error.
+pub const REFINE_MAX_PASSES: usize = 4;
+
+/// The joint solve that refines the sensors by soft `priors` (`[G15]`): the calibrated problem
+/// (the rig, or its inlier rig) with the priors, from the calibration; `None` with held priors,
 /// or when that solve fails (the calibration is then held, as before).
 fn refine_sensors(
     calibrated: &RigProblem,
     calibration: &RigSolution,
     priors: &crate::multiple::gravity::GravityPriors,
     settings: &AverageRigSettings,
-) -> Option<Vec<crate::so3::Rotation>> {
+) -> Option<RigSolution> {
     priors.weight()?;
     let joint = calibrated.clone().with_gravity(priors.clone()).ok()?;
     let (frames, sensors) = (&calibration.frames, &calibration.sensors);
-    let solved = crate::rig::solve_rig_from(&joint, frames, sensors, &settings.solve).ok()?;
-    Some(solved.sensors)
+    let solve = crate::rig::RigSettings {
+        max_passes: settings.solve.max_passes.min(REFINE_MAX_PASSES),
+        ..settings.solve
+    };
+    crate::rig::solve_rig_from(&joint, frames, sensors, &solve).ok()
 }
 
 /// What [`average_rig_with_loss`] returns: the result, the problem certified, a robust solve's
