@@ -564,3 +564,43 @@ fn soft_priors_refine_the_estimated_sensors() {
         );
     }
 }
+
+/// With outliers the calibration is robust and certifies its inlier rig; the soft priors refine
+/// that inlier rig's sensors (`[G15]`), and the held rig is certified with the priors.
+#[test]
+fn soft_priors_refine_a_robust_calibration() {
+    use rotavg::pipeline::rig::average_rig_calibrated_with_gravity;
+    let (p, truth) = RigScene {
+        frames: 120,
+        sensors: 3,
+        noise_sigma: 0.02,
+        outlier_fraction: 0.1,
+        known: false,
+        seed: 6,
+        ..Default::default()
+    }
+    .generate();
+    let dirs = truth.gravity(&p, 0.005, 4, 2);
+    let soft = GravityPriors::new(dirs).unwrap().with_weight(16.0).unwrap();
+    let both = (RigLoss::Auto, &RigRobust::default());
+    let ((run, _, robust), cal) =
+        average_rig_calibrated_with_gravity(&p, soft, both, &AverageSettings::default()).unwrap();
+    assert!(cal.robust.as_ref().is_some_and(|r| r.robust));
+    assert!(robust.is_some_and(|r| r.robust));
+    let refined = cal
+        .refined_sensors_from_rig
+        .expect("the inlier rig's sensors refined");
+    let error = |s: &[Rotation]| -> f64 {
+        (s.iter().zip(&truth.sensors))
+            .map(|(a, b)| rotavg::so3::angle_between(a, b))
+            .sum()
+    };
+    println!(
+        "sensors' summed error: calibrated {:.3e}, refined {:.3e} rad",
+        error(&cal.sensors_from_rig),
+        error(&refined)
+    );
+    assert!(error(&refined) <= error(&cal.sensors_from_rig) * 1.05);
+    let c = run.certificate.unwrap();
+    assert!(c.is_certified(), "{}", c.explanation);
+}
