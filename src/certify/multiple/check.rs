@@ -511,10 +511,7 @@ impl Climb for Check<'_> {
 pub(crate) fn first_shift(cx: &Check<'_>) -> f64 {
     cx.settings.dual.shift_budget_fraction * cx.gap / cx.s.nrows().max(1) as f64
 }
-/// The budget's verdict on counted factorisations and their predicted time: the `largest`
-/// factor (values, scratch included) must fit the memory, `total` values and `multiply_adds`
-/// the time (the model of the scalar comparison: [`Budget::counted_factorisations_fit`]), the
-/// stored `factor_len` the cap; `other_seconds` is the proof's work besides them.
+
 /// Graphs with at least this many edges per node (and [`DEFER_WHOLE_MIN_EDGES`] edges) have
 /// their whole graph's scalar analysis deferred until the sparsest subgraph has been tried: its
 /// minimum-degree ordering alone is the largest cost of a certificate that the subgraph proves
@@ -532,15 +529,16 @@ pub fn defers_the_whole(problem: &MultipleProblem) -> bool {
     m >= DEFER_WHOLE_MIN_EDGES && m as f64 >= DEFER_WHOLE_EDGES_PER_NODE * n as f64
 }
 
-/// The whole graph's scalar analysis, when the scalar comparison is on the ladder (`Some`
-/// inside), or, on dense graphs, the sparsest subgraph's in its place (the cell left empty:
-/// the whole graph is analysed when first asked). Which is made first decides only the cost
-/// of the climb, never what is proven.
+/// The whole graph's scalar analysis (its cell) and the deferred sparsest subgraph's.
 type ScalarAnalyses = (
     std::cell::OnceCell<Option<std::result::Result<ScalarAnalysis, usize>>>,
     Option<ScalarAnalysis>,
 );
 
+/// The whole graph's scalar analysis, when the scalar comparison is on the ladder (`Some`
+/// inside), or, on dense graphs, the sparsest subgraph's in its place (the cell left empty:
+/// the whole graph is analysed when first asked). Which is made first decides only the cost
+/// of the climb, never what is proven.
 fn scalar_analyses(
     problem: &MultipleProblem,
     rotations: Option<&[Rotation]>,
@@ -563,6 +561,10 @@ fn scalar_analyses(
     Ok((cell, None))
 }
 
+/// The budget's verdict on counted factorisations and their predicted time: the `largest`
+/// factor (values, scratch included) must fit the memory, `total` values and `multiply_adds`
+/// the time (the model of the scalar comparison: [`Budget::counted_factorisations_fit`]), the
+/// stored `factor_len` the cap; `other_seconds` is the proof's work besides them.
 pub(super) fn counted_prediction(
     settings: &CertifySettings,
     largest: usize,
