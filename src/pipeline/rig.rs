@@ -200,6 +200,10 @@ pub struct RigCalibration {
     /// The refinement's solve (passes, why it stopped, seconds), when it ran.
     #[serde(default)]
     pub refinement: Option<crate::termination::SolverReport>,
+    /// Why the refinement by soft priors failed, when it did (the calibration is then held;
+    /// the warning `gravity_refinement_failed`).
+    #[serde(default)]
+    pub refinement_failed: Option<String>,
 }
 
 /// A rig with gravity `priors` whose sensors are (some of them) estimated (`[G14]`): calibrated
@@ -229,8 +233,15 @@ pub fn average_rig_calibrated_with_gravity(
         cost: first.solution.cost,
         certificate: first.certificate,
         robust: first_robust,
-        refined_sensors_from_rig: refined.as_ref().map(|r| r.sensors.clone()),
-        refinement: refined.map(|r| r.report),
+        refined_sensors_from_rig: refined
+            .as_ref()
+            .and_then(|r| r.as_ref().ok())
+            .map(|r| r.sensors.clone()),
+        refinement_failed: refined
+            .as_ref()
+            .and_then(|r| r.as_ref().err())
+            .map(|e| e.to_string()),
+        refinement: refined.and_then(Result::ok).map(|r| r.report),
     };
     let sensors =
         (calibration.refined_sensors_from_rig.as_ref()).unwrap_or(&calibration.sensors_from_rig);
@@ -249,21 +260,23 @@ pub const REFINE_MAX_PASSES: usize = 4;
 
 /// The joint solve that refines the sensors by soft `priors` (`[G15]`): the calibrated problem
 /// (the rig, or its inlier rig) with the priors, from the calibration; `None` with held priors,
-/// or when that solve fails (the calibration is then held, as before).
+/// its error when it fails (the calibration is then held, as before, and the report warns).
 fn refine_sensors(
     calibrated: &RigProblem,
     calibration: &RigSolution,
     priors: &crate::multiple::gravity::GravityPriors,
     settings: &AverageRigSettings,
-) -> Option<RigSolution> {
+) -> Option<Result<RigSolution>> {
     priors.weight()?;
-    let joint = calibrated.clone().with_gravity(priors.clone()).ok()?;
     let (frames, sensors) = (&calibration.frames, &calibration.sensors);
     let solve = crate::rig::RigSettings {
         max_passes: settings.solve.max_passes.min(REFINE_MAX_PASSES),
         ..settings.solve
     };
-    crate::rig::solve_rig_from(&joint, frames, sensors, &solve).ok()
+    Some(
+        (calibrated.clone().with_gravity(priors.clone()))
+            .and_then(|joint| crate::rig::solve_rig_from(&joint, frames, sensors, &solve)),
+    )
 }
 
 /// What [`average_rig_with_loss`] returns: the result, the problem certified, a robust solve's

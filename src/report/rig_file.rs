@@ -170,9 +170,21 @@ impl RigFileReport {
                 .with_count(w.suspected)
         });
         let gravity = self.gravity.iter().flat_map(RigGravityDetails::warnings);
+        let refinement = (self.calibration.as_ref())
+            .and_then(|c| c.refinement_failed.as_ref())
+            .map(|why| {
+                Warning::new(
+                    "gravity_refinement_failed",
+                    format!(
+                        "the soft gravity priors did not refine the sensors ({why}): the \
+                         calibration without them is held [G15]"
+                    ),
+                )
+            });
         (self.rig.warnings.iter().cloned())
             .chain(gravity)
             .chain(outliers)
+            .chain(refinement)
             .collect()
     }
 
