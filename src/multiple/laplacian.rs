@@ -87,8 +87,8 @@ pub fn laplacian_plus_diagonal(
     let n = problem.num_rotations();
     let (offsets, incident) = incident_edges(problem);
     let mut own = vec![Matrix3::zeros(); n];
-    for k in 0..problem.num_edges() {
-        let (e, (qii, _)) = (&problem.edges()[k], edge_block(problem, k));
+    for (k, e) in problem.edges().iter().enumerate() {
+        let qii = edge_diagonal_block(problem, k);
         own[e.i] += qii;
         own[e.j] += qii;
     }
@@ -181,15 +181,19 @@ fn block_column(
 fn edge_block(problem: &MultipleProblem, k: usize) -> (Matrix3<f64>, Matrix3<f64>) {
     let e = &problem.edges()[k];
     let r_t = e.rotation.matrix().transpose();
+    let d = edge_diagonal_block(problem, k);
+    let off = match problem.information() {
+        Some(_) => -(d * r_t),
+        None => -(r_t * e.weight),
+    };
+    (d, off)
+}
+
+/// Edge `k`'s part of `Q_ii` (and of `Q_jj`): `w I`, or `2M` with information `[A2]`.
+fn edge_diagonal_block(problem: &MultipleProblem, k: usize) -> Matrix3<f64> {
     match problem.information() {
-        Some(info) => {
-            let m2 = info[k].twice_chordal_matrix();
-            (m2, -(m2 * r_t))
-        }
-        None => {
-            let d = Matrix3::identity() * e.weight;
-            (d, -(r_t * e.weight))
-        }
+        Some(info) => info[k].twice_chordal_matrix(),
+        None => Matrix3::identity() * problem.edges()[k].weight,
     }
 }
 

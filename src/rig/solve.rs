@@ -510,23 +510,28 @@ fn sensor_priors(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rig::RigScene;
+    use crate::rig::{RigScene, RigTruth};
     use crate::so3::perturb;
     use rand::SeedableRng;
     use rand::rngs::StdRng;
+
+    /// A generated rig of 3 sensors (the first held) with `frames` frames.
+    fn three_sensors(frames: usize, noise_sigma: f64, seed: u64) -> (RigProblem, RigTruth) {
+        RigScene {
+            frames,
+            sensors: 3,
+            noise_sigma,
+            seed,
+            ..Default::default()
+        }
+        .generate()
+    }
 
     /// The passes with the Aitken step never raise `J`, take at least one extrapolation on a
     /// noisy rig, and end no higher than the same number of plain alternations.
     #[test]
     fn aitken_passes_never_raise_the_cost() {
-        let scene = RigScene {
-            frames: 60,
-            sensors: 3,
-            noise_sigma: 0.02,
-            seed: 9,
-            ..Default::default()
-        };
-        let (p, truth) = scene.generate();
+        let (p, truth) = three_sensors(60, 0.02, 9);
         let mut rng = StdRng::seed_from_u64(1);
         let mut sensors: Vec<Rotation> = truth.sensors.clone();
         for s in sensors.iter_mut().skip(1) {
@@ -556,14 +561,7 @@ mod tests {
     #[test]
     fn sensor_terms_with_priors_have_the_cost_s_gradient() {
         use crate::multiple::gravity::GravityPriors;
-        let scene = RigScene {
-            frames: 20,
-            sensors: 3,
-            noise_sigma: 0.05,
-            seed: 4,
-            ..Default::default()
-        };
-        let (p, truth) = scene.generate();
+        let (p, truth) = three_sensors(20, 0.05, 4);
         let dirs = truth.gravity(&p, 0.02, 3, 5);
         let priors = GravityPriors::new(dirs).unwrap().with_weight(7.0).unwrap();
         let p = p.with_gravity(priors).unwrap();
