@@ -253,9 +253,19 @@ fn rotation_information(t: &mut Tokens<'_>) -> Result<(Matrix3<f64>, f64)> {
 
 /// The anisotropic information `H = R_ij^T (scale Omega_rot) R_ij` of an edge `[A7]`
 /// (`scale` 1/2 for g2o's half-angle quaternion error, 2 for TORO's angle units), symmetrised
-/// exactly (a product of the file's numbers, not the file's numbers themselves).
+/// exactly (a product of the file's numbers, not the file's numbers themselves). An isotropic
+/// block `w I` gives `scale w I` exactly: every rotation leaves it unchanged, and the product
+/// would only add rounding (anisotropy `1 + 4e-16` on mrob's sphere), which turned the scalar
+/// weights the file states into anisotropic information (contract section 1: `H = w I` is the
+/// isotropic cost).
 fn edge_information(r_ij: &Rotation, omega: &Matrix3<f64>, scale: f64) -> Matrix3<f64> {
-    let h = r_ij.matrix().transpose() * (omega * scale) * r_ij.matrix();
+    let scaled = omega * scale;
+    if crate::multiple::anisotropic::Information::new(scaled)
+        .is_ok_and(|h| h.scalar_weight().is_some())
+    {
+        return scaled;
+    }
+    let h = r_ij.matrix().transpose() * scaled * r_ij.matrix();
     (h + h.transpose()) * 0.5
 }
 

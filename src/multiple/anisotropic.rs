@@ -164,6 +164,25 @@ impl Information {
         self.h.trace() / 3.0
     }
 
+    /// `Some(w)` when `H` was given exactly as `w I` (symmetric, off-diagonal entries zero,
+    /// diagonal equal) with `w` a valid scalar weight: then the anisotropic costs are exactly the
+    /// isotropic costs with weight `w` (contract section 1), and
+    /// [`crate::multiple::MultipleProblem::with_information`] keeps the weight instead.
+    ///
+    /// ```
+    /// use rotavg::multiple::anisotropic::Information;
+    /// use nalgebra::{Matrix3, Vector3};
+    /// assert_eq!(Information::isotropic(2.5)?.scalar_weight(), Some(2.5));
+    /// let h = Matrix3::from_diagonal(&Vector3::new(2.5, 2.5, 2.5 + 1e-15));
+    /// assert_eq!(Information::new(h)?.scalar_weight(), None);
+    /// assert_eq!(Information::new(Matrix3::zeros())?.scalar_weight(), None);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn scalar_weight(&self) -> Option<f64> {
+        let w = exactly_isotropic(&self.h)?;
+        (self.asymmetry == 0.0 && crate::validate::weight_out_of_range(w).is_none()).then_some(w)
+    }
+
     /// The smallest positive eigenvalue of `H` (the tolerance's weight scale, contract section 3,
     /// `[A9]`, `[A12]`): the smallest **nonzero magnitude** of its eigenvalues, so that an
     /// accepted negative part (within [`PSD_TOLERANCE`]) counts with its size instead of leaving
@@ -236,6 +255,11 @@ pub struct InformationSummary {
     /// Edges whose `M = tr(H)/2 I - H` is indefinite (`[A5]`: where the `O(3)` relaxation may
     /// prefer reflections).
     pub indefinite_chordal_matrices: usize,
+    /// `true` when every `H` was exactly `w I`: the problem is the isotropic one with weights
+    /// `w`, solved and certified as such (contract section 1: `H = w I` gives exactly the
+    /// isotropic cost).
+    #[serde(default)]
+    pub scalar_weights: bool,
 }
 
 impl InformationSummary {
@@ -254,7 +278,19 @@ impl InformationSummary {
                 .iter()
                 .filter(|h| h.chordal_matrix_indefinite())
                 .count(),
+            scalar_weights: false,
         })
+    }
+
+    /// The summary of `edges` matrices that were all exactly `w I` (kept as scalar weights).
+    pub fn isotropic(edges: usize) -> Self {
+        InformationSummary {
+            edges,
+            median_anisotropy: 1.0,
+            max_anisotropy: 1.0,
+            indefinite_chordal_matrices: 0,
+            scalar_weights: true,
+        }
     }
 }
 
@@ -265,6 +301,12 @@ impl std::fmt::Display for InformationSummary {
             "information: 3x3 on {} edges; anisotropy (eigenvalue max / min) median {:.3}, max {:.3}",
             self.edges, self.median_anisotropy, self.max_anisotropy
         )?;
+        if self.scalar_weights {
+            write!(
+                f,
+                "\n  every H is w I: solved and certified with scalar weights w"
+            )?;
+        }
         if self.indefinite_chordal_matrices > 0 {
             write!(
                 f,

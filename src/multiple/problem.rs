@@ -6,7 +6,7 @@
 //! the gauge fix [`fix_gauge`].
 
 use crate::error::{Error, Result};
-use crate::multiple::anisotropic::{Information, chordal_cost_compensated};
+use crate::multiple::anisotropic::{Information, InformationSummary, chordal_cost_compensated};
 use crate::objective::Objective;
 use crate::so3::{Metric, Rotation, angle_between};
 use crate::validate::check_weight;
@@ -113,6 +113,10 @@ pub struct MultipleProblem {
     /// ([`MultipleProblem::with_information`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     information: Option<Vec<Information>>,
+    /// `true` when [`MultipleProblem::with_information`] was given `w I` on every edge and kept
+    /// the weights `w` instead (only the reports use it).
+    #[serde(skip)]
+    isotropic_information: bool,
     #[serde(skip)]
     objective: Objective,
 }
@@ -188,6 +192,7 @@ impl MultipleProblem {
             num_rotations,
             edges,
             information: None,
+            isotropic_information: false,
             objective: Objective::CHORDAL_L2,
         })
     }
@@ -225,6 +230,15 @@ impl MultipleProblem {
                 ),
             });
         }
+        let isotropic: Option<Vec<f64>> =
+            information.iter().map(Information::scalar_weight).collect();
+        if let Some(weights) = isotropic {
+            for (e, w) in self.edges.iter_mut().zip(weights) {
+                e.weight = w;
+            }
+            self.isotropic_information = true;
+            return Ok(self);
+        }
         for (e, h) in self.edges.iter_mut().zip(&information) {
             e.weight = h.mean_weight();
         }
@@ -237,9 +251,22 @@ impl MultipleProblem {
         self.information.as_deref()
     }
 
-    /// `true` when the edges carry information matrices ([`Self::with_information`]).
+    /// `true` when the edges carry information matrices ([`Self::with_information`]; not when
+    /// every one was exactly `w I`: those are scalar weights).
     pub fn is_anisotropic(&self) -> bool {
         self.information.is_some()
+    }
+
+    /// What the reports say about the information matrices given to
+    /// [`Self::with_information`], `None` when none were (scalar weights).
+    pub fn information_summary(&self) -> Option<InformationSummary> {
+        match &self.information {
+            Some(info) => InformationSummary::of(info),
+            None if self.isotropic_information => {
+                Some(InformationSummary::isotropic(self.edges.len()))
+            }
+            None => None,
+        }
     }
 
     /// The objectives with a solver: chordal L2, and the geodesic metric with any loss.
@@ -449,6 +476,7 @@ impl MultipleProblem {
             num_rotations: nodes.len(),
             edges,
             information,
+            isotropic_information: self.isotropic_information,
             objective: self.objective,
         })
     }

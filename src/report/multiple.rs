@@ -161,7 +161,7 @@ impl MultipleReport {
             inlier_accuracy,
             edges_output: None,
             inlier_output: None,
-            information: g.problem.information().and_then(InformationSummary::of),
+            information: g.problem.information_summary(),
         })
     }
 

@@ -755,6 +755,10 @@ fn g2o_full_information_is_four_times_g2os_chi_squared() {
     ];
     let (fa, fb) = (a.problem.chordal_cost(&est), b.problem.chordal_cost(&est));
     assert!((fa - fb).abs() < 1e-9 * fa, "{fa} vs {fb}");
+    // ... exactly, however R_ij rounds: the scalar weights omega / 2 ([A13], exactly w I)
+    assert!(!b.problem.is_anisotropic() && b.problem.information_summary().unwrap().scalar_weights);
+    let weights: Vec<f64> = b.problem.edges().iter().map(|e| e.weight).collect();
+    assert_eq!(weights, [4.0, 3.0]);
 }
 
 /// The command line on the example data: the JSON report has the `information` summary and a

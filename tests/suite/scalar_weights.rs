@@ -40,7 +40,8 @@ fn proof_that_proved(
         .collect()
 }
 
-/// Exactly and nearly isotropic information: the comparison certifies the optimum, its bound
+/// Exactly and nearly isotropic information: the comparison (exactly `w I`: the scalar weights
+/// themselves) certifies the optimum, its bound
 /// is at most the best of 12 random local solves (a feasible cost) and within the tolerance
 /// of the isotropic problem's own certified bound; a perturbed estimate is never certified.
 #[test]
@@ -61,7 +62,13 @@ fn isotropic_information_is_certified_through_scalar_weights() {
             .rotations;
         let c = certify_multiple(&p, &opt, &CertifySettings::default()).unwrap();
         assert!(c.certificate.is_certified(), "{eps}: {}", c.certificate);
-        assert_eq!(proof_that_proved(&c), vec![Proof::ScalarWeights], "{eps}");
+        if eps == 0.0 {
+            // exactly w I: the weights themselves (contract section 1), no rung needed
+            assert!(!p.is_anisotropic() && p.edges() == iso.edges());
+            assert!(p.information_summary().unwrap().scalar_weights);
+        } else {
+            assert_eq!(proof_that_proved(&c), vec![Proof::ScalarWeights], "{eps}");
+        }
         let lb = c.certificate.lower_bound.unwrap();
         let best = best_of_random_starts(&p, 12, &mut rng);
         assert!(
