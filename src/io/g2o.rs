@@ -260,9 +260,7 @@ fn rotation_information(t: &mut Tokens<'_>) -> Result<(Matrix3<f64>, f64)> {
 /// isotropic cost).
 fn edge_information(r_ij: &Rotation, omega: &Matrix3<f64>, scale: f64) -> Matrix3<f64> {
     let scaled = omega * scale;
-    if crate::multiple::anisotropic::Information::new(scaled)
-        .is_ok_and(|h| h.scalar_weight().is_some())
-    {
+    if crate::multiple::anisotropic::exactly_isotropic(&scaled).is_some() {
         return scaled;
     }
     let h = r_ij.matrix().transpose() * scaled * r_ij.matrix();

@@ -389,7 +389,7 @@ pub(crate) fn chordal_cost_compensated(
 }
 
 /// `Some(w)` when `h` is exactly `w I` (its off-diagonal entries zero, its diagonal equal).
-fn exactly_isotropic(h: &Matrix3<f64>) -> Option<f64> {
+pub(crate) fn exactly_isotropic(h: &Matrix3<f64>) -> Option<f64> {
     let w = h[(0, 0)];
     let diagonal = (0..3).all(|r| (0..3).all(|c| r == c || h[(r, c)] == 0.0));
     (diagonal && h[(1, 1)] == w && h[(2, 2)] == w).then_some(w)
