@@ -100,6 +100,9 @@ pub(crate) struct Check<'a> {
     /// estimate of the whole graph's, for the `3n` rungs' budget).
     deferred: RefCell<Option<ScalarAnalysis>>,
     deferred_values: Option<usize>,
+    /// The deferred subgraph's family has not finished: the `3n` rungs wait for it
+    /// ([`Self::three_n_waits`]) rather than analyse the whole graph to predict themselves.
+    deferred_open: std::cell::Cell<bool>,
     /// The `3n` factorisations (of `S` and of `S_{-g}`, one block row and column apart) are
     /// over the budget (found by whichever analysed first): the other is not analysed again.
     three_n_refused: RefCell<Option<Refusal>>,
@@ -181,6 +184,7 @@ impl<'a> Check<'a> {
             hint: None,
             deadline: scope.deadline,
             scalar,
+            deferred_open: std::cell::Cell::new(deferred.is_some()),
             deferred: RefCell::new(deferred),
             deferred_values,
             three_n_refused: RefCell::new(None),
@@ -230,6 +234,21 @@ impl<'a> Check<'a> {
         self.deferred.borrow_mut().take()
     }
 
+    /// Whether the `3n` rungs wait ([`crate::certify::rung::Plan::Wait`]) for the scalar
+    /// family to try the deferred sparsest subgraph and its denser ones: on dense graphs their
+    /// prediction needs the whole graph's scalar analysis (a 10^4-node random graph of 10^5
+    /// edges: 0.17 s of a 1.4 s certificate), which a subgraph's proof makes unnecessary. Their
+    /// factors are at least `9 x` the subgraph's, so they would not run before it.
+    pub fn three_n_waits(&self) -> bool {
+        self.deferred_open.get() && self.scalar.get().is_none()
+    }
+
+    /// The scalar family is done with the deferred subgraph (proved, failed, or refused): the
+    /// `3n` rungs plan again ([`Self::three_n_waits`]).
+    pub fn close_deferred(&self) {
+        self.deferred_open.set(false);
+    }
+
     /// Record that the `3n` factorisations do not fit (`refusal`).
     pub fn note_three_n_refused(&self, refusal: &Refusal) {
         *self.three_n_refused.borrow_mut() = Some(refusal.clone());
@@ -242,7 +261,17 @@ impl<'a> Check<'a> {
     /// is predicted for [`THREE_N_PER_SCALAR_VALUE`]` v` values (supernodal storage), the memory
     /// for the `9 v` (the rung's own analysis then checks the exact factor). `None`
     /// when nothing is known (no scalar analysis): the rung analyses its own matrix.
-    pub fn three_n_predicted(
+    /// [`ThreeN::Wait`] while the deferred subgraph is pending ([`Self::three_n_waits`]).
+    pub fn three_n_predicted(&self, dim: usize, factorisations: f64) -> ThreeN {
+        match self.three_n_prediction(dim, factorisations) {
+            None if self.three_n_waits() => ThreeN::Wait,
+            None => ThreeN::Unknown,
+            Some(p) => ThreeN::Known(p),
+        }
+    }
+
+    /// [`Self::three_n_predicted`]: `None` when waiting or unknown.
+    fn three_n_prediction(
         &self,
         dim: usize,
         factorisations: f64,
@@ -263,6 +292,9 @@ impl<'a> Check<'a> {
                 );
                 return Some(Err(Refusal::OverBudget { reason }));
             }
+        }
+        if self.three_n_waits() {
+            return None;
         }
         let (v, multiply_adds) = match self.scalar().ok().flatten()? {
             Ok(a) => (a.factor_len(), Some(a.factor_multiply_adds())),
@@ -504,6 +536,17 @@ impl Climb for Check<'_> {
     fn record(&mut self, attempt: Attempt) {
         self.log.get_mut().push(attempt);
     }
+}
+
+/// What the `3n` rungs know of their factorisation before their own analysis
+/// ([`Check::three_n_predicted`]).
+pub enum ThreeN {
+    /// Predicted from the whole graph's scalar factor, or refused.
+    Known(std::result::Result<Prediction, Refusal>),
+    /// Wait: the scalar family is trying the deferred subgraph ([`Check::three_n_waits`]).
+    Wait,
+    /// Nothing known: the rung analyses its own matrix.
+    Unknown,
 }
 
 /// The shifts of `[D5]` start at this: a verified `lambda_min >= -delta_0` costs a fraction

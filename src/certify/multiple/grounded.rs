@@ -4,7 +4,7 @@
 //! double-double residuals), `f* >= sum tr(Lambda_i) - (rho^2 / c + h) ||R_g^-1||_F^2`: no `3n`
 //! factor, and no margin at the null space.
 
-use super::check::{Check, Notes, counted_factorisation_prediction, ordering_refusal};
+use super::check::{Check, Notes, ThreeN, counted_factorisation_prediction, ordering_refusal};
 use super::multipliers::GaugeTerms;
 use super::verified::{GroundedBound, VerifiedBound};
 use crate::certify::log::{Prediction, Refusal};
@@ -54,8 +54,9 @@ impl<'a> Rung<Check<'a>> for GroundedProof {
             return Ok(Plan::Run(a.predicted));
         }
         Ok(match self.predict(cx)? {
-            Ok(p) => Plan::Run(p),
-            Err(refusal) => Plan::Refuse(refusal, None),
+            Some(Ok(p)) => Plan::Run(p),
+            Some(Err(refusal)) => Plan::Refuse(refusal, None),
+            None => Plan::Wait,
         })
     }
 
@@ -85,38 +86,43 @@ impl<'a> Rung<Check<'a>> for GroundedProof {
 
 impl GroundedProof {
     /// The ground, the cheap test of criticality, and the analysis of `S_{-g}` (or its
-    /// prediction from the scalar factor).
-    fn predict(&mut self, cx: &Check<'_>) -> Result<std::result::Result<Prediction, Refusal>> {
+    /// prediction from the scalar factor); `None` while the `3n` rungs wait
+    /// ([`Check::three_n_waits`]).
+    fn predict(
+        &mut self,
+        cx: &Check<'_>,
+    ) -> Result<Option<std::result::Result<Prediction, Refusal>>> {
         let Some(rotations) = cx.rotations else {
-            return Ok(Err(not_applicable(
+            return Ok(Some(Err(not_applicable(
                 "the estimate's rotations are not known",
-            )));
+            ))));
         };
         let n = cx.problem.num_rotations();
         let (ground, defect) = ground(cx, rotations);
         if defect.is_nan() || defect >= 0.5 {
-            return Ok(Err(not_applicable(
+            return Ok(Some(Err(not_applicable(
                 "the ground's rotation is far from orthogonal",
-            )));
+            ))));
         }
         let terms = *cx.gauge_terms(rotations);
         if let Some(c_upper) = not_critical(cx, &terms, ground) {
             cx.mark_not_critical();
-            return Ok(Err(not_applicable(&format!(
+            return Ok(Some(Err(not_applicable(&format!(
                 "not a critical point: ||S Y|| <= {:.1e} against lambda_min(S_{{-g}}) <= \
                  {c_upper:.1e} leaves a deficit above the tolerance whatever S_{{-g}} proves",
                 terms.rho
-            ))));
+            )))));
         }
         let free = Prediction::new(0.0, 0.0);
         let (factor, pending, predicted) =
             match (n > 1, cx.three_n_predicted(cx.s.nrows() - 3, 2.0)) {
                 (false, _) => (None, false, free),
-                (true, Some(Ok(p))) => (None, true, p),
-                (true, Some(Err(refusal))) => return Ok(Err(refusal)),
-                (true, None) => match analyse(cx, ground)? {
+                (true, ThreeN::Known(Ok(p))) => (None, true, p),
+                (true, ThreeN::Known(Err(refusal))) => return Ok(Some(Err(refusal))),
+                (true, ThreeN::Wait) => return Ok(None),
+                (true, ThreeN::Unknown) => match analyse(cx, ground)? {
                     Ok((f, p)) => (f, false, p),
-                    Err(refusal) => return Ok(Err(refusal)),
+                    Err(refusal) => return Ok(Some(Err(refusal))),
                 },
             };
         self.analysed = Some(Analysed {
@@ -128,7 +134,7 @@ impl GroundedProof {
             terms,
             predicted,
         });
-        Ok(Ok(predicted))
+        Ok(Some(Ok(predicted)))
     }
 }
 

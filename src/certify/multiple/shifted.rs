@@ -4,7 +4,9 @@
 //! fails, Lanczos estimates `lambda_min(S)` (an estimate only: it picks the shifts, and its
 //! negative eigenvector is the staircase's direction of descent) and shifts above it are tried.
 
-use super::check::{Check, Notes, counted_factorisation_prediction, first_shift, ordering_refusal};
+use super::check::{
+    Check, Notes, ThreeN, counted_factorisation_prediction, first_shift, ordering_refusal,
+};
 use crate::certify::log::{Prediction, Refusal};
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Plan, Rung};
@@ -40,8 +42,9 @@ impl<'a> Rung<Check<'a>> for ShiftedProof {
             return Ok(Plan::Run(p));
         }
         let predicted = match cx.three_n_predicted(cx.s.nrows(), 3.0) {
-            Some(p) => p,
-            None => match analyse(cx)? {
+            ThreeN::Known(p) => p,
+            ThreeN::Wait => return Ok(Plan::Wait),
+            ThreeN::Unknown => match analyse(cx)? {
                 Ok((ch, p)) => {
                     self.analysed = Some(ch);
                     Ok(p)
