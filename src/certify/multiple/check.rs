@@ -219,14 +219,18 @@ impl<'a> Check<'a> {
     /// deferred; `None` when the scalar comparison is not on the ladder.
     pub fn scalar(&self) -> Result<Option<&std::result::Result<ScalarAnalysis, usize>>> {
         if self.scalar.get().is_none() {
-            let max_values = self
-                .settings
-                .budget
-                .max_factor_values(self.problem.num_rotations());
+            let max_values = self.max_factor_values();
             let whole = ScalarAnalysis::new(self.problem, max_values)?;
             let _ = self.scalar.set(Some(whole));
         }
         Ok(self.scalar.get().and_then(Option::as_ref))
+    }
+
+    /// The largest factor (values) the memory budget allows for this problem's size.
+    pub fn max_factor_values(&self) -> usize {
+        self.settings
+            .budget
+            .max_factor_values(self.problem.num_rotations())
     }
 
     /// The sparsest subgraph's analysis made instead of the whole graph's (taken: once).

@@ -21,10 +21,7 @@ pub(super) type HubPlan = (Option<HubGraph>, std::result::Result<Prediction, Ref
 
 /// The hub shape of the check's problem and its prediction; `None` when it has none.
 pub(super) fn plan_hub(cx: &Check<'_>) -> Result<Option<HubPlan>> {
-    let max_values = cx
-        .settings
-        .budget
-        .max_factor_values(cx.problem.num_rotations());
+    let max_values = cx.max_factor_values();
     Ok(match HubGraph::new(cx.problem, max_values)? {
         None => None,
         Some(Err(predicted)) => Some((

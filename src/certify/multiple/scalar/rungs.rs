@@ -339,10 +339,7 @@ impl Fallbacks {
             return Ok(None);
         }
         if self.splits.is_none() {
-            let max_values = cx
-                .settings
-                .budget
-                .max_factor_values(cx.problem.num_rotations());
+            let max_values = cx.max_factor_values();
             let fits = |a: &ScalarAnalysis| predict(cx.settings, a).is_ok();
             self.splits = Some(splits(cx.problem, max_values, &fits)?.into_iter());
         }
@@ -366,10 +363,7 @@ impl Fallbacks {
             let jump = subgraph_after(lowest.saturating_sub(1), negative_pivots, n);
             self.subgraph = jump.min(self.unfit.saturating_sub(1)).max(lowest);
         }
-        let max_values = cx
-            .settings
-            .budget
-            .max_factor_values(cx.problem.num_rotations());
+        let max_values = cx.max_factor_values();
         while self.subgraph < self.unfit {
             let at = self.subgraph;
             let k = SPARSIFIED_EDGES_PER_NODE[at];
