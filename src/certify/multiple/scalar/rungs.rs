@@ -298,9 +298,9 @@ impl ScalarFamily {
 /// by the fourth), while they fit the budget, then, for each minimum degree of
 /// [`SPLIT_MIN_DEGREES`], the first split shape of [`SPLIT_SHAPES`] that fits (dense view graphs,
 /// whose subgraphs drop most of the charges they must carry). A subgraph that fails with `p`
-/// negative pivots skips `floor(log16 p)` of the next subgraphs (measured: each quarter edge per
-/// node removes about 17x of them, 1546 -> 90 -> 5 -> 0 at 0.1 rad), so that a hopeless start
-/// costs one cheap factorisation. "Fits" is the budget's test of each one's own prediction: a
+/// negative pivots jumps to a denser one by `p / n` ([`subgraph_after`]), or, when that one does
+/// not fit, to the densest between that fits, so that a hopeless start costs one cheap
+/// factorisation. "Fits" is the budget's test of each one's own prediction: a
 /// larger budget only allows more shapes. Which shapes run decides only whether the proof
 /// succeeds and what it costs, never what is proven.
 struct Fallbacks {
@@ -415,7 +415,8 @@ pub(in crate::certify::multiple) fn subgraph_after(
         .max(next)
 }
 
-/// Subgraphs to skip after one fails with `negative_pivots` (`floor(log16 p)`; 0 for `p < 16`).
+/// Subgraphs to skip after one fails with `negative_pivots` (`floor(log16 p)`; 0 for `p < 16`):
+/// the block comparison's rule (`[A15]`; the scalar comparison's is [`subgraph_after`]).
 pub(in crate::certify::multiple) fn skipped_subgraphs(negative_pivots: usize) -> usize {
     let mut skip = 0;
     let mut p = negative_pivots;
