@@ -15,9 +15,10 @@ use rotavg::io::input::load_view_graph;
 use rotavg::multiple::{MultipleSettings, solve_multiple};
 use std::time::Instant;
 fn main() -> rotavg::Result<()> {
-    let path = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| "/tmp/g.json".into());
+    let Some(path) = std::env::args().nth(1) else {
+        eprintln!("usage: scalar_sweep VIEW_GRAPH_FILE (any format `rotavg multiple` reads)");
+        std::process::exit(2);
+    };
     let p = load_view_graph(&path, GraphFormat::Auto, &ReadOptions::default())?.problem;
     let t = Instant::now();
     let s = solve_multiple(&p, &MultipleSettings::default())?;

@@ -263,43 +263,50 @@ impl<'a> Check<'a> {
     /// `3 x 3` blocks), or why it does not start: the other one was refused, or even `9 v`
     /// values (the blocks of the scalar factor, a lower estimate) are over the budget. The time
     /// is predicted for [`THREE_N_PER_SCALAR_VALUE`]` v` values (supernodal storage), the memory
-    /// for the `9 v` (the rung's own analysis then checks the exact factor). `None`
-    /// when nothing is known (no scalar analysis): the rung analyses its own matrix.
-    /// [`ThreeN::Wait`] while the deferred subgraph is pending ([`Self::three_n_waits`]).
+    /// for the `9 v` (the rung's own analysis then checks the exact factor);
+    /// [`ThreeN::Wait`] while the deferred subgraph is pending ([`Self::three_n_waits`]);
+    /// [`ThreeN::Unknown`] when there is no scalar analysis (the rung analyses its own matrix).
     pub fn three_n_predicted(&self, dim: usize, factorisations: f64) -> ThreeN {
-        match self.three_n_prediction(dim, factorisations) {
-            None if self.three_n_waits() => ThreeN::Wait,
-            None => ThreeN::Unknown,
+        if let Some(refusal) = self.three_n_refused_early(dim) {
+            return ThreeN::Known(Err(refusal));
+        }
+        if self.three_n_waits() {
+            return ThreeN::Wait;
+        }
+        match self.three_n_from_scalar(dim, factorisations) {
             Some(p) => ThreeN::Known(p),
+            None => ThreeN::Unknown,
         }
     }
 
-    /// [`Self::three_n_predicted`]: `None` when waiting or unknown.
-    fn three_n_prediction(
+    /// The refusal known without the whole graph's analysis: the other `3n` factorisation was
+    /// refused, or nine times the deferred subgraph's factor is already over the budget.
+    fn three_n_refused_early(&self, dim: usize) -> Option<Refusal> {
+        if let Some(r) = &*self.three_n_refused.borrow() {
+            return Some(r.clone());
+        }
+        let v = self
+            .deferred_values
+            .filter(|_| self.scalar.get().is_none())?;
+        let blocks = v.saturating_mul(9).saturating_sub(dim);
+        match ordering_refusal(self.settings, blocks, dim) {
+            Some(Refusal::OverBudget { reason }) => Some(Refusal::OverBudget {
+                reason: format!(
+                    "at least 9 x the scalar factor of a subgraph (the whole graph's is larger): \
+                     {reason}"
+                ),
+            }),
+            _ => None,
+        }
+    }
+
+    /// [`Self::three_n_predicted`] from the whole graph's scalar analysis (made now if it was
+    /// deferred); `None` when the scalar comparison is not on the ladder.
+    fn three_n_from_scalar(
         &self,
         dim: usize,
         factorisations: f64,
     ) -> Option<std::result::Result<Prediction, Refusal>> {
-        if let Some(r) = &*self.three_n_refused.borrow() {
-            return Some(Err(r.clone()));
-        }
-        if self.scalar.get().is_none()
-            && let Some(v) = self.deferred_values
-        {
-            let blocks = v.saturating_mul(9).saturating_sub(dim);
-            if let Some(Refusal::OverBudget { reason }) =
-                ordering_refusal(self.settings, blocks, dim)
-            {
-                let reason = format!(
-                    "at least 9 x the scalar factor of a subgraph (the whole graph's is larger): \
-                     {reason}"
-                );
-                return Some(Err(Refusal::OverBudget { reason }));
-            }
-        }
-        if self.three_n_waits() {
-            return None;
-        }
         let (v, multiply_adds) = match self.scalar().ok().flatten()? {
             Ok(a) => (a.factor_len(), Some(a.factor_multiply_adds())),
             Err(predicted) => (*predicted, None),
