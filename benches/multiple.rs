@@ -1,10 +1,10 @@
 //! Speed of the multiple-rotation-averaging local path (`paper-notes/multiple.md`, "Speed"):
 //! spectral initialisation + chordal L2 Riemannian Newton to relative gradient 1e-8.
 //!
-//! `cargo bench --bench multiple` prints a table (real g2o graphs when /work/shared/data is
-//! present, and a scaling curve 10^3..10^5 nodes with 3 edges per node), then runs criterion
-//! on the small cases. A throwaway g2o loader (EDGE_SE3:QUAT only, weight = SE-Sync's kappa) is
-//! included so this bench does not depend on the crate's readers.
+//! `cargo bench --features bench --bench multiple` prints a table (real g2o graphs when
+//! /work/shared/data is present, and a scaling curve 10^3..10^5 nodes with 3 edges per node),
+//! then runs criterion on the small cases. A throwaway g2o loader (EDGE_SE3:QUAT only, weight =
+//! SE-Sync's kappa) is included so this bench does not depend on the crate's readers.
 
 use criterion::{Criterion, criterion_group};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion};

@@ -1,5 +1,6 @@
 //! Benchmarks of every single-averaging method on 10^3, 10^5 and 10^6 samples (Gaussian noise
-//! of 0.1 rad around a random rotation, seeded). Run with `cargo bench --bench single`.
+//! of 0.1 rad around a random rotation, seeded). Run with
+//! `cargo bench --features bench --bench single`.
 //! Sample counts are reduced for the large sizes to keep the run short.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};

@@ -10,7 +10,7 @@
 //! randomized bound [D16] reported beside the `inconclusive` verdict obeys the same two rules.
 //!
 //! Opt-in (`#[ignore]`): the README's test command stays short; CI runs it separately
-//! (`cargo test --release --workspace --test soundness_campaign -- --ignored`).
+//! (`cargo test --release --test soundness_campaign -- --ignored`).
 //!
 //! The instances are shared out among `available_parallelism()` threads. Instance `k` is
 //! generated from `k` alone and its random starts, perturbations and randomized-bound seeds come
@@ -279,7 +279,7 @@ fn tally(totals: &[(usize, usize)]) -> (usize, usize) {
 }
 
 #[test]
-#[ignore = "long campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
+#[ignore = "long campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_in_ten_thousand() {
     let tallies = in_parallel(INSTANCES, |k| {
         let (p, truth) = instance(k);
@@ -326,7 +326,7 @@ fn no_false_certificate_in_ten_thousand() {
 /// polished. Checked: no bound above it, no certified point worse than it by more than the
 /// tolerance.
 #[test]
-#[ignore = "campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
+#[ignore = "campaign (about 1 minute on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_on_simultaneous_rigs() {
     use rotavg::certify::simultaneous::certify_simultaneous;
     use rotavg::pipeline::simultaneous::{
@@ -460,7 +460,7 @@ fn no_false_certificate_on_simultaneous_rigs() {
 /// random starts (each an upper bound on the minimum, whatever the bounds say). Checked: no
 /// bound above it, no certified point worse than it by more than the tolerance.
 #[test]
-#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
+#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_on_rigs_of_many_sensors() {
     use rotavg::certify::certify_rig;
     use rotavg::rig::{RigProblem, RigScene, RigSettings, solve_rig, solve_rig_from};
@@ -551,7 +551,7 @@ fn no_false_certificate_on_rigs_of_many_sensors() {
 /// lowest of the solve and of 6 solves from random frames. Checked: no bound above it, no
 /// certified point worse than it by more than the tolerance.
 #[test]
-#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
+#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_on_rigs_with_gravity() {
     use rotavg::certify::certify_rig;
     use rotavg::multiple::gravity::GravityPriors;
@@ -630,7 +630,7 @@ fn no_false_certificate_on_rigs_with_gravity() {
 /// The best known cost is the lowest of the solve and of 6 solves from random starts.
 /// Checked: no bound above it, no certified point worse than it by more than the tolerance.
 #[test]
-#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
+#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_with_gravity_priors() {
     use rotavg::certify::certify_gravity;
     use rotavg::multiple::gravity::solve_gravity;
