@@ -10,9 +10,9 @@
 //! randomized bound [D16] reported beside the `inconclusive` verdict obeys the same two rules.
 //!
 //! Opt-in (`#[ignore]`): the README's test command stays short. CI runs its share
-//! (`cargo test --release --test soundness_campaign -- --ignored`): the first quarter of the
-//! view-graph instances and half of the simultaneous rigs, every generator class and noise level
-//! among them (their parameters cycle with periods of at most 60 instances). With
+//! (`cargo test --release --workspace --test soundness_campaign -- --ignored`): the first
+//! quarter of the view-graph instances and half of the simultaneous rigs, every generator class
+//! and noise level among them (their parameters cycle with periods of at most 60 instances). With
 //! `ROTAVG_FULL_CAMPAIGN=1` (`.ci/weekly`) every instance runs: more than 10^4 certificates.
 //! The thresholds on the totals scale with the share.
 //!
@@ -299,7 +299,7 @@ fn tally(totals: &[(usize, usize)]) -> (usize, usize) {
 }
 
 #[test]
-#[ignore = "long campaign (CI's share about 40 s on 2 cores, the whole 2.5 min): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
+#[ignore = "long campaign (CI's share about 40 s on 2 cores, the whole 2.5 min): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_in_ten_thousand() {
     let instances = share(INSTANCES, 4);
     let tallies = in_parallel(instances, |k| {
@@ -348,7 +348,7 @@ fn no_false_certificate_in_ten_thousand() {
 /// polished. Checked: no bound above it, no certified point worse than it by more than the
 /// tolerance.
 #[test]
-#[ignore = "campaign (CI's share about 30 s on 2 cores, the whole 1 min): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
+#[ignore = "campaign (CI's share about 30 s on 2 cores, the whole 1 min): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_on_simultaneous_rigs() {
     use rotavg::certify::simultaneous::certify_simultaneous;
     use rotavg::pipeline::simultaneous::{
@@ -484,7 +484,7 @@ fn no_false_certificate_on_simultaneous_rigs() {
 /// random starts (each an upper bound on the minimum, whatever the bounds say). Checked: no
 /// bound above it, no certified point worse than it by more than the tolerance.
 #[test]
-#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
+#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_on_rigs_of_many_sensors() {
     use rotavg::certify::certify_rig;
     use rotavg::rig::{RigProblem, RigScene, RigSettings, solve_rig, solve_rig_from};
@@ -575,7 +575,7 @@ fn no_false_certificate_on_rigs_of_many_sensors() {
 /// lowest of the solve and of 6 solves from random frames. Checked: no bound above it, no
 /// certified point worse than it by more than the tolerance.
 #[test]
-#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
+#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_on_rigs_with_gravity() {
     use rotavg::certify::certify_rig;
     use rotavg::multiple::gravity::GravityPriors;
@@ -654,7 +654,7 @@ fn no_false_certificate_on_rigs_with_gravity() {
 /// The best known cost is the lowest of the solve and of 6 solves from random starts.
 /// Checked: no bound above it, no certified point worse than it by more than the tolerance.
 #[test]
-#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --test soundness_campaign -- --ignored`"]
+#[ignore = "campaign (seconds on 2 cores): run by .ci/run with `cargo test --release --workspace --test soundness_campaign -- --ignored`"]
 fn no_false_certificate_with_gravity_priors() {
     use rotavg::certify::certify_gravity;
     use rotavg::multiple::gravity::solve_gravity;
