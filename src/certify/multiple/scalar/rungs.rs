@@ -172,19 +172,11 @@ impl ScalarFamily {
         target: f64,
     ) -> Result<Option<VerifiedBound>> {
         self.deferred = false;
-        let mut next = self.first_fallback.take();
-        while let Some(sub) = next {
-            let predicted = predict(cx.settings, &sub).ok();
-            if let Some(refusal) = predicted.as_ref().and_then(|p| cx.time_refusal(p)) {
-                let outcome = Outcome::Refused(refusal);
-                cx.log(Proof::ScalarComparison, predicted, outcome, Instant::now());
-                break;
-            }
-            let (bound, failure) = run(cx, &sub, rotations, target)?;
-            if bound.is_some() {
-                return Ok(bound);
-            }
-            next = self.fallbacks.next_subgraph(cx, rotations, failure)?;
+        let first = self.first_fallback.take();
+        let fallbacks = &mut self.fallbacks;
+        let next = |failure| fallbacks.next_subgraph(cx, rotations, failure);
+        if let Some(b) = in_turn(cx, first, rotations, target, next)? {
+            return Ok(Some(b));
         }
         self.plan_whole(cx, rotations)?;
         Ok(None)
@@ -210,14 +202,7 @@ impl ScalarFamily {
             }
             // the subgraphs spent part of the budget: the whole graph still has to fit what is
             // left (the plan checked it before they ran)
-            if let Some(refusal) = cx.time_refusal(&whole) {
-                let outcome = Outcome::Refused(refusal);
-                cx.log(
-                    Proof::ScalarComparison,
-                    Some(whole),
-                    outcome,
-                    Instant::now(),
-                );
+            if refused_for_time(cx, Some(whole)) {
                 return Ok(None);
             }
             match run(cx, a, rotations, target)? {
@@ -270,26 +255,49 @@ impl ScalarFamily {
         rotations: &[Rotation],
         target: f64,
     ) -> Result<Option<VerifiedBound>> {
-        let mut next = match self.first_fallback.take() {
+        let first = match self.first_fallback.take() {
             Some(a) => Some(a),
             None => self.fallbacks.next(cx, rotations, None)?,
         };
-        while let Some(a) = next {
-            let predicted = predict(cx.settings, &a).ok();
-            if let Some(refusal) = predicted.as_ref().and_then(|p| cx.time_refusal(p)) {
-                let outcome = Outcome::Refused(refusal);
-                cx.log(Proof::ScalarComparison, predicted, outcome, Instant::now());
-                // the later shapes are larger (subgraphs) or as large (splits)
-                return Ok(None);
-            }
-            let (bound, failure) = run(cx, &a, rotations, target)?;
-            if bound.is_some() {
-                return Ok(bound);
-            }
-            next = self.fallbacks.next(cx, rotations, failure)?;
-        }
-        Ok(None)
+        let fallbacks = &mut self.fallbacks;
+        in_turn(cx, first, rotations, target, |failure| {
+            fallbacks.next(cx, rotations, failure)
+        })
     }
+}
+
+/// `first`, then each shape `next` gives after the last one's failure, until one proves (its
+/// bound) or none is left; a shape predicted over what is left of the time budget is logged
+/// refused and ends the turns (the later shapes are larger, subgraphs, or as large, splits).
+fn in_turn(
+    cx: &Check<'_>,
+    first: Option<ScalarAnalysis>,
+    rotations: &[Rotation],
+    target: f64,
+    mut next: impl FnMut(Option<ScalarFailure>) -> Result<Option<ScalarAnalysis>>,
+) -> Result<Option<VerifiedBound>> {
+    let mut shape = first;
+    while let Some(a) = shape {
+        if refused_for_time(cx, predict(cx.settings, &a).ok()) {
+            return Ok(None);
+        }
+        let (bound, failure) = run(cx, &a, rotations, target)?;
+        if bound.is_some() {
+            return Ok(bound);
+        }
+        shape = next(failure)?;
+    }
+    Ok(None)
+}
+
+/// Whether `predicted` is over what is left of the time budget; if so, it is logged refused.
+fn refused_for_time(cx: &Check<'_>, predicted: Option<Prediction>) -> bool {
+    let Some(refusal) = predicted.as_ref().and_then(|p| cx.time_refusal(p)) else {
+        return false;
+    };
+    let outcome = Outcome::Refused(refusal);
+    cx.log(Proof::ScalarComparison, predicted, outcome, Instant::now());
+    true
 }
 
 /// The fallbacks when the whole graph's factor does not fit or does not prove, analysed one at a
