@@ -11,6 +11,11 @@
 //!  "edges": [{"i": a, "j": b, "rotation": R, "weight": w}, ...]}   // between images
 //! ```
 //!
+//! An edge may carry `"information": H` (a symmetric positive semidefinite 3x3 array for the
+//! residual `e` of `X_b X_a^T = R exp([e]x)`, contract section 1) instead of its weight; when one
+//! does, the rig is anisotropic and an edge with a weight `w` has `H = w I`
+//! (`paper-notes/conjugate.md` `[H24]`).
+//!
 //! with `R X_a ~ X_b`, `X_a = S_{s_a} F_{f_a}` (world-to-camera; `S` is `sensor_from_rig`, as
 //! COLMAP's). A sensor without a known `S` is estimated; a rig without any known sensor has its
 //! first sensor held at the identity (COLMAP's reference sensor).
@@ -18,6 +23,7 @@
 use crate::error::{Error, Result};
 use crate::io::detect::ReadOptions;
 use crate::multiple::Edge;
+use crate::multiple::anisotropic::Information;
 use crate::rig::{Image, RigProblem, Sensor};
 use crate::so3::{Rotation, rotation_from_rows, rotation_to_rows};
 use crate::warning::Warning;
@@ -102,7 +108,7 @@ struct SensorFile {
 #[derive(Deserialize)]
 #[serde(
     deny_unknown_fields,
-    expecting = "an edge {\"i\": a, \"j\": b, \"rotation\": R, \"weight\": w} between two images (weight optional)"
+    expecting = "an edge {\"i\": a, \"j\": b, \"rotation\": R, \"weight\": w} between two images (weight optional; or \"information\": H, a 3x3 array, instead of the weight)"
 )]
 struct EdgeFile {
     i: usize,
@@ -110,6 +116,8 @@ struct EdgeFile {
     rotation: Rows,
     #[serde(default)]
     weight: Option<f64>,
+    #[serde(default)]
+    information: Option<Rows>,
 }
 
 /// Read the JSON rig format (module docs) from `text` (of `file`). Errors name the file (and
@@ -158,24 +166,12 @@ pub fn read_rig_json(text: &str, file: &str, options: &ReadOptions) -> Result<Lo
         })
         .collect::<Result<Vec<_>>>()
         .map_err(in_file)?;
-    let mut edges = Vec::with_capacity(rf.edges.len());
-    for (k, e) in rf.edges.iter().enumerate() {
-        let item = format!("edge {k} ({}, {})", e.i, e.j);
-        let rotation =
-            rotation_from_rows(&e.rotation, options.rotation_tolerance, &item).map_err(in_file)?;
-        let weight = e.weight.unwrap_or(1.0);
-        if let Some(why) = crate::io::weight_out_of_range(weight) {
-            return Err(Error::parse(Some(file), None, format!("{item}: {why}")));
-        }
-        edges.push(Edge {
-            i: e.i,
-            j: e.j,
-            rotation,
-            weight,
-        });
-    }
+    let (edges, information) = rig_edges(&rf.edges, file, options)?;
     let (frames, sensors_n, images_n) = (rf.num_frames, rf.sensors.len(), rf.images.len());
-    let problem = RigProblem::new(frames, sensors, rf.images, edges).map_err(in_file)?;
+    let mut problem = RigProblem::new(frames, sensors, rf.images, edges).map_err(in_file)?;
+    if let Some(info) = information {
+        problem = problem.with_information(info).map_err(in_file)?;
+    }
     Ok(LoadedRig {
         problem,
         frame_ids: (0..frames as u64).collect(),
@@ -186,6 +182,46 @@ pub fn read_rig_json(text: &str, file: &str, options: &ReadOptions) -> Result<Lo
         warnings: Vec::new(),
         pending_gravity: None,
     })
+}
+
+/// The JSON rig file's edges, and their information when any edge carries some (an edge with a
+/// weight `w` then has `H = w I`). Errors name the file and the edge.
+fn rig_edges(
+    file_edges: &[EdgeFile],
+    file: &str,
+    options: &ReadOptions,
+) -> Result<(Vec<Edge>, Option<Vec<Information>>)> {
+    let anisotropic = file_edges.iter().any(|e| e.information.is_some());
+    let mut edges = Vec::with_capacity(file_edges.len());
+    let mut information = Vec::with_capacity(if anisotropic { file_edges.len() } else { 0 });
+    for (k, e) in file_edges.iter().enumerate() {
+        let item = format!("edge {k} ({}, {})", e.i, e.j);
+        let bad = |why: String| Error::parse(Some(file), None, format!("{item}: {why}"));
+        let rotation = rotation_from_rows(&e.rotation, options.rotation_tolerance, &item)
+            .map_err(|err| err.in_file(file, None))?;
+        if e.weight.is_some() && e.information.is_some() {
+            return Err(bad("give \"weight\" or \"information\", not both".into()));
+        }
+        let weight = e.weight.unwrap_or(1.0);
+        if let Some(why) = crate::io::weight_out_of_range(weight) {
+            return Err(bad(why));
+        }
+        if anisotropic {
+            let rows = e.information.unwrap_or_else(|| {
+                std::array::from_fn(|r| std::array::from_fn(|c| if r == c { weight } else { 0.0 }))
+            });
+            information.push(
+                Information::try_from(rows).map_err(|why| bad(format!("information {why}")))?,
+            );
+        }
+        edges.push(Edge {
+            i: e.i,
+            j: e.j,
+            rotation,
+            weight,
+        });
+    }
+    Ok((edges, anisotropic.then_some(information)))
 }
 
 /// Read a rig from `path`: a COLMAP database (or a folder holding `database.db`) with a rig
@@ -202,9 +238,10 @@ pub fn load_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> {
 /// The rig of a COLMAP database (`[F17]`): the view graph of its two-view geometries over the
 /// images (as `rotavg multiple` reads it), each image placed at its frame and camera by the
 /// tables `frames` and `frame_data`, the cameras' `sensor_from_rig` from `rigs` (reference
-/// sensors: the identity) and `rig_sensors` (known, or `NULL`: estimated). Errors: no rig
-/// tables, an image of the view graph in no frame, `--information full` (rigs take scalar
-/// weights), any error of the view graph's reader.
+/// sensors: the identity) and `rig_sensors` (known, or `NULL`: estimated); with
+/// `--information full` each pair's information from its correspondences (`[F13]`, `[H24]`).
+/// Errors: no rig tables, an image of the view graph in no frame, any error of the view graph's
+/// reader.
 pub fn read_colmap_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> {
     #[cfg(feature = "colmap")]
     {
@@ -229,12 +266,6 @@ fn rig_of_layout(
     images: &std::collections::BTreeMap<u64, (u64, u64)>,
     known: &std::collections::BTreeMap<u64, Option<Rotation>>,
 ) -> Result<LoadedRig> {
-    if graph.problem.is_anisotropic() {
-        return Err(Error::InvalidSettings {
-            name: "rig".into(),
-            reason: "rigs take scalar weights (no --information full)".into(),
-        });
-    }
     let mut frame_ids: Vec<u64> = Vec::new();
     let mut sensor_ids: Vec<u64> = Vec::new();
     let mut placed = Vec::with_capacity(graph.node_ids.len());
@@ -265,12 +296,16 @@ fn rig_of_layout(
             sensor_from_rig: known.get(c).copied().unwrap_or(Some(Rotation::identity())),
         })
         .collect();
-    let problem = RigProblem::new(
+    let mut problem = RigProblem::new(
         frame_ids.len(),
         sensors,
         rig_images,
         graph.problem.edges().to_vec(),
     )?;
+    // `--information full`: each pair's rotation information from its correspondences (`[F13]`)
+    if let Some(info) = graph.problem.information() {
+        problem = problem.with_information(info.to_vec())?;
+    }
     Ok(LoadedRig {
         problem,
         frame_ids,
@@ -316,6 +351,10 @@ pub fn write_rig_estimate_json(
 /// let (p, _) = RigScene { frames: 5, sensors: 2, ..Default::default() }.generate();
 /// let back = read_rig_json(&write_rig_json(&p), "rig.json", &ReadOptions::default())?;
 /// assert_eq!(back.problem, p);
+/// // with information matrices (`[H24]`)
+/// let (p, _) = RigScene { frames: 5, sensors: 2, anisotropy: 9.0, ..Default::default() }.generate();
+/// let back = read_rig_json(&write_rig_json(&p), "rig.json", &ReadOptions::default())?;
+/// assert_eq!(back.problem.information(), p.information());
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn write_rig_json(problem: &RigProblem) -> String {
@@ -327,11 +366,16 @@ pub fn write_rig_json(problem: &RigProblem) -> String {
             None => serde_json::json!({}),
         })
         .collect();
-    let edges: Vec<serde_json::Value> = problem
-        .edges()
-        .iter()
-        .map(|e| {
-            serde_json::json!({"i": e.i, "j": e.j, "rotation": rotation_to_rows(&e.rotation), "weight": e.weight})
+    let info = problem.information();
+    let edges: Vec<serde_json::Value> = (problem.edges().iter().enumerate())
+        .map(|(k, e)| {
+            let mut v =
+                serde_json::json!({"i": e.i, "j": e.j, "rotation": rotation_to_rows(&e.rotation)});
+            match info {
+                Some(h) => v["information"] = serde_json::json!(<[[f64; 3]; 3]>::from(h[k])),
+                None => v["weight"] = serde_json::json!(e.weight),
+            }
+            v
         })
         .collect();
     let value = serde_json::json!({

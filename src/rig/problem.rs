@@ -2,6 +2,7 @@
 //! take, measured by relative rotations between images.
 
 use crate::error::{Error, Result};
+use crate::multiple::anisotropic::{Information, chordal_cost_compensated, chordal_term};
 use crate::multiple::{Edge, MultipleProblem};
 use crate::so3::{Rotation, nearest_rotation};
 use serde::{Deserialize, Serialize};
@@ -45,6 +46,10 @@ pub struct RigProblem {
     /// Gravity priors on the images (`[G14]`, [`Self::with_gravity`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) gravity: Option<crate::multiple::gravity::GravityPriors>,
+    /// One information matrix per edge, for anisotropic measurements (`[H24]`,
+    /// [`Self::with_information`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    information: Option<Vec<Information>>,
 }
 
 /// A rig problem as read (validated into a [`RigProblem`] on deserialisation).
@@ -56,12 +61,17 @@ struct RigData {
     edges: Vec<Edge>,
     #[serde(default)]
     gravity: Option<crate::multiple::gravity::GravityPriors>,
+    #[serde(default)]
+    information: Option<Vec<Information>>,
 }
 
 impl TryFrom<RigData> for RigProblem {
     type Error = Error;
     fn try_from(d: RigData) -> Result<Self> {
-        let p = RigProblem::new(d.num_frames, d.sensors, d.images, d.edges)?;
+        let mut p = RigProblem::new(d.num_frames, d.sensors, d.images, d.edges)?;
+        if let Some(info) = d.information {
+            p = p.with_information(info)?;
+        }
         match d.gravity {
             Some(g) => p.with_gravity(g),
             None => Ok(p),
@@ -111,11 +121,82 @@ impl RigProblem {
             edges,
             held,
             gravity: None,
+            information: None,
         })
     }
 
-    /// The same rig (and gravity priors) measured by `edges` instead (validated as by
-    /// [`Self::new`]).
+    /// The same rig with anisotropic measurements (`paper-notes/conjugate.md` `[H24]`): one
+    /// information matrix `H` per edge, in edge order, for the residual of contract section 1
+    /// between the edge's images (`X_b X_a^T = R_ab exp([e]x)`). The cost becomes the anisotropic
+    /// chordal cost `sum 4 (tr M - <R_ab M, X_b X_a^T>)`, `M = tr(H)/2 I - H`; each edge's weight
+    /// becomes `tr(H) / 3`, which only starts the solver. Information that is exactly `w I` on
+    /// every edge is scalar weights `w` (as [`MultipleProblem::with_information`]). Errors: a
+    /// count that differs from the edges', gravity priors (not supported with information).
+    ///
+    /// ```
+    /// use rotavg::multiple::anisotropic::Information;
+    /// use rotavg::rig::RigScene;
+    /// use nalgebra::{Matrix3, Vector3};
+    /// let (p, truth) = RigScene { frames: 20, sensors: 2, noise_sigma: 0.0, ..Default::default() }.generate();
+    /// let h = Information::new(Matrix3::from_diagonal(&Vector3::new(1.0, 4.0, 100.0)))?;
+    /// let m = p.edges().len();
+    /// let p = p.with_information(vec![h; m])?;
+    /// assert!(p.is_anisotropic());
+    /// assert!(p.cost(&truth.frames, &truth.sensors).abs() < 1e-9); // noise-free
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn with_information(mut self, information: Vec<Information>) -> Result<Self> {
+        if self.gravity.is_some() {
+            return Err(gravity_with_information());
+        }
+        let graph = MultipleProblem::new(self.images.len(), self.edges.clone())?
+            .with_information(information)?;
+        self.edges = graph.edges().to_vec();
+        self.information = graph.information().map(<[Information]>::to_vec);
+        Ok(self)
+    }
+
+    /// The information matrices, one per edge, when the measurements are anisotropic.
+    pub fn information(&self) -> Option<&[Information]> {
+        self.information.as_deref()
+    }
+
+    /// `true` when the edges carry information matrices ([`Self::with_information`]).
+    pub fn is_anisotropic(&self) -> bool {
+        self.information.is_some()
+    }
+
+    /// The same rig measured by the edges whose `keep` entry is `true`, with their information
+    /// (and the gravity priors). Panics if `keep.len()` differs from the number of edges.
+    /// Errors: those of [`Self::new`] (none kept).
+    pub fn edge_subset(&self, keep: &[bool]) -> Result<Self> {
+        assert_eq!(keep.len(), self.edges.len(), "one flag per edge");
+        let kept = |k: &usize| keep[*k];
+        let edges = (0..self.edges.len())
+            .filter(kept)
+            .map(|k| self.edges[k].clone())
+            .collect();
+        let p = self.scalar().with_edges(edges)?;
+        match &self.information {
+            Some(info) => {
+                p.with_information((0..info.len()).filter(kept).map(|k| info[k]).collect())
+            }
+            None => Ok(p),
+        }
+    }
+
+    /// The same rig with scalar weights: the information dropped, each edge weighing
+    /// `tr(H) / 3` (itself when it has none).
+    pub fn scalar(&self) -> Self {
+        RigProblem {
+            information: None,
+            ..self.clone()
+        }
+    }
+
+    /// The same rig (and gravity priors) measured by `edges` instead, with their scalar
+    /// weights (validated as by [`Self::new`]; the information, if any, is not carried:
+    /// [`Self::edge_subset`] keeps it).
     pub fn with_edges(&self, edges: Vec<Edge>) -> Result<Self> {
         let p = RigProblem::new(
             self.num_frames,
@@ -148,12 +229,13 @@ impl RigProblem {
                 sensor_from_rig: Some(h.unwrap_or(*s)),
             })
             .collect();
-        let p = RigProblem::new(
+        let mut p = RigProblem::new(
             self.num_frames,
             known,
             self.images.clone(),
             self.edges.clone(),
         )?;
+        p.information = self.information.clone();
         match &self.gravity {
             Some(g) => p.with_gravity(g.clone()),
             None => Ok(p),
@@ -192,8 +274,14 @@ impl RigProblem {
         self.held.iter().all(Option::is_some)
     }
 
-    /// The smallest weight of any edge or soft gravity prior (the tolerance's `w_min`).
+    /// The smallest weight of any edge or soft gravity prior (the tolerance's `w_min`); with
+    /// information, the smallest positive eigenvalue of any `H` (contract section 3).
     pub fn min_weight(&self) -> f64 {
+        if let Some(info) = &self.information {
+            return crate::validate::min_weight(
+                info.iter().map(Information::min_positive_eigenvalue),
+            );
+        }
         let priors = self
             .gravity
             .iter()
@@ -217,6 +305,9 @@ impl RigProblem {
     /// ([`Self::prior_cost`]).
     pub fn cost(&self, frames: &[Rotation], sensors: &[Rotation]) -> f64 {
         let x = self.image_rotations(frames, sensors);
+        if let Some(info) = &self.information {
+            return chordal_cost_compensated(&self.edges, info, &x);
+        }
         let edges: f64 = self
             .edges
             .iter()
@@ -229,32 +320,61 @@ impl RigProblem {
 
     /// The frames' view graph at fixed sensors `S` (`[H19]`): each edge between images of two
     /// frames as the frame edge `S_b^T R_ab S_a` (`||S_b F_b - R S_a F_a|| = ||F_b - S_b^T R S_a
-    /// F_a||`), and the cost of the edges within one frame, which `F` does not change. Errors:
-    /// no edge joins two frames.
+    /// F_a||`), with information `S_a^T H S_a` when it has some (`[H24]`), and the cost of the
+    /// edges within one frame, which `F` does not change. Errors: no edge joins two frames.
     pub fn frame_graph(&self, sensors: &[Rotation]) -> Result<(MultipleProblem, f64)> {
-        let (mut edges, mut constant) = (Vec::new(), 0.0);
-        for e in &self.edges {
+        let (mut edges, mut info, mut constant) = (Vec::new(), Vec::new(), 0.0);
+        for (k, e) in self.edges.iter().enumerate() {
             let (a, b) = (self.images[e.i], self.images[e.j]);
             let (sa, sb) = (sensors[a.sensor], sensors[b.sensor]);
+            let h = self.information.as_ref().map(|i| i[k]);
             if a.frame == b.frame {
-                constant +=
-                    e.weight * (sb.matrix() - e.rotation.matrix() * sa.matrix()).norm_squared();
-            } else {
-                edges.push(Edge {
-                    i: a.frame,
-                    j: b.frame,
-                    rotation: sb.inverse() * e.rotation * sa,
-                    weight: e.weight,
-                });
+                constant += match &h {
+                    Some(h) => chordal_term(h, &e.rotation, &sa, &sb),
+                    None => {
+                        e.weight * (sb.matrix() - e.rotation.matrix() * sa.matrix()).norm_squared()
+                    }
+                };
+                continue;
             }
+            if let Some(h) = h {
+                let turned = sa.matrix().transpose() * h.matrix() * sa.matrix();
+                info.push(Information::new((turned + turned.transpose()) * 0.5)?);
+            }
+            edges.push(Edge {
+                i: a.frame,
+                j: b.frame,
+                rotation: sb.inverse() * e.rotation * sa,
+                weight: e.weight,
+            });
         }
-        Ok((MultipleProblem::new(self.num_frames, edges)?, constant))
+        let graph = MultipleProblem::new(self.num_frames, edges)?;
+        let graph = match self.information {
+            Some(_) => graph.with_information(info)?,
+            None => graph,
+        };
+        Ok((graph, constant))
     }
 
     /// The view graph over the images, with the rig's constraints dropped (`[H19]`'s
     /// relaxation): its chordal cost at `X = S F` is `J(F, S)`.
     pub fn image_graph(&self) -> Result<MultipleProblem> {
-        MultipleProblem::new(self.images.len(), self.edges.clone())
+        let graph = MultipleProblem::new(self.images.len(), self.edges.clone())?;
+        match &self.information {
+            Some(info) => graph.with_information(info.clone()),
+            None => Ok(graph),
+        }
+    }
+
+    /// The angles a robust loss and the inlier threshold apply to, per edge, radians: each
+    /// edge's residual angle, or with information its Mahalanobis angle
+    /// `sqrt(e^T H e / (tr(H) / 3))` (`[A10]`), at `(frames, sensors)`.
+    pub fn objective_angles(&self, frames: &[Rotation], sensors: &[Rotation]) -> Vec<f64> {
+        let graph = self.image_graph().ok().filter(|_| self.is_anisotropic());
+        match graph {
+            Some(g) => g.objective_angles(&self.image_rotations(frames, sensors)),
+            None => super::robust::residual_angles(self, frames, sensors),
+        }
     }
 
     /// The images of a rig of `frames` frames in which every one of `sensors` sensors
@@ -263,6 +383,16 @@ impl RigProblem {
         (0..frames)
             .flat_map(|frame| (0..sensors).map(move |sensor| Image { frame, sensor }))
             .collect()
+    }
+}
+
+/// Gravity priors and information matrices together are refused.
+pub(super) fn gravity_with_information() -> Error {
+    Error::InvalidSettings {
+        name: "gravity".into(),
+        reason: "gravity priors on a rig whose edges carry information matrices are not \
+                 supported; give scalar weights (without --information full) to use the priors"
+            .into(),
     }
 }
 

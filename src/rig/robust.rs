@@ -117,7 +117,10 @@ pub fn solve_rig_robust(
 }
 
 /// [`solve_rig_robust`] from its least-squares estimate `least_squares` (a [`solve_rig`] of
-/// `p`, already computed).
+/// `p`, already computed). With information (`[H24]`, as `[A14]` for view graphs) the Cauchy
+/// alternations run on the rig with unit weights and no information, from its own least
+/// squares, the inliers are the edges whose Mahalanobis angle is within the threshold, and the
+/// inlier problem keeps its information.
 pub fn solve_rig_robust_from(
     p: &RigProblem,
     least_squares: RigSolution,
@@ -130,7 +133,53 @@ pub fn solve_rig_robust_from(
         max_seconds: remaining(settings.max_seconds, clock),
         ..*s
     };
-    let mut estimate = least_squares;
+    let (mut estimate, reweights) = if p.is_anisotropic() {
+        let unit = p.scalar().with_edges(
+            (p.edges().iter())
+                .map(|e| Edge {
+                    weight: 1.0,
+                    ..e.clone()
+                })
+                .collect(),
+        )?;
+        let start = solve_rig(&unit, &within(settings))?;
+        reweighted(&unit, start, robust, &within(settings))?
+    } else {
+        reweighted(p, least_squares, robust, &within(settings))?
+    };
+    estimate.cost = p.cost(&estimate.frames, &estimate.sensors);
+    let inliers: Vec<bool> = (p
+        .objective_angles(&estimate.frames, &estimate.sensors)
+        .iter())
+    .map(|t| t.to_degrees() <= robust.inlier_threshold_deg)
+    .collect();
+    let inlier_problem = p.edge_subset(&inliers)?;
+    let inlier_solution = solve_rig_from(
+        &inlier_problem,
+        &estimate.frames,
+        &estimate.sensors,
+        &within(settings),
+    )?;
+    Ok(RobustRig {
+        robust: estimate,
+        reweights,
+        inliers,
+        inlier_problem,
+        inlier_solution,
+    })
+}
+
+/// The Cauchy alternations of [`solve_rig_robust_from`] on `p`'s scalar weights from
+/// `estimate`: each a few passes of [`solve_rig_from`] on the edges reweighted by
+/// `w / (1 + (theta / c)^2)` at the previous estimate, until the robust cost changes by at most
+/// `1e-9` of it. The estimate and the number of reweightings.
+fn reweighted(
+    p: &RigProblem,
+    mut estimate: RigSolution,
+    robust: &RigRobust,
+    settings: &RigSettings,
+) -> Result<(RigSolution, usize)> {
+    let clock = Instant::now();
     let c = robust.threshold_deg.to_radians();
     let (mut reweights, mut last) = (0, f64::INFINITY);
     while reweights < robust.max_reweights {
@@ -161,38 +210,14 @@ pub fn solve_rig_robust_from(
             })
             .collect();
         let q = p.with_edges(edges)?;
-        // a few passes per reweighting: the weights change anyway (the inlier problem below
-        // is solved to convergence)
+        // a few passes per reweighting: the weights change anyway (the inlier problem is
+        // solved to convergence)
         let inner = RigSettings {
             max_passes: REWEIGHT_PASSES.min(settings.max_passes),
-            ..within(settings)
+            max_seconds: remaining(settings.max_seconds, clock),
+            ..*settings
         };
         estimate = solve_rig_from(&q, &estimate.frames, &estimate.sensors, &inner)?;
     }
-    estimate.cost = p.cost(&estimate.frames, &estimate.sensors);
-    let inliers: Vec<bool> = residual_angles(p, &estimate.frames, &estimate.sensors)
-        .iter()
-        .map(|t| t.to_degrees() <= robust.inlier_threshold_deg)
-        .collect();
-    let kept = p
-        .edges()
-        .iter()
-        .zip(&inliers)
-        .filter(|(_, k)| **k)
-        .map(|(e, _)| e.clone())
-        .collect();
-    let inlier_problem = p.with_edges(kept)?;
-    let inlier_solution = solve_rig_from(
-        &inlier_problem,
-        &estimate.frames,
-        &estimate.sensors,
-        &within(settings),
-    )?;
-    Ok(RobustRig {
-        robust: estimate,
-        reweights,
-        inliers,
-        inlier_problem,
-        inlier_solution,
-    })
+    Ok((estimate, reweights))
 }

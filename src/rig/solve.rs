@@ -357,11 +357,13 @@ fn sensor_step(
             break;
         }
         let (h, g) = terms.normal_equations(&sensors, 3 * unknown.len());
+        // a floor for directions an information matrix leaves unweighted (`[H24]`)
+        let floor = 1e-12 * h.diagonal().amax().max(f64::MIN_POSITIVE);
         let mut improved = false;
         while damping < 1e12 {
             let mut a = h.clone();
             for k in 0..a.nrows() {
-                a[(k, k)] += damping * h[(k, k)].max(f64::MIN_POSITIVE);
+                a[(k, k)] += damping * h[(k, k)].max(floor);
             }
             let Some(step) = a.cholesky().map(|c| c.solve(&(-&g))) else {
                 damping *= 10.0;
@@ -393,13 +395,25 @@ fn stepped(sensors: &[Rotation], unknown: &[usize], step: &DVector<f64>) -> Vec<
     out
 }
 
-/// One edge of [`SensorTerms`]: sensors `a` and `b`, weight, `R`, `A = F_b F_a^T`.
-type SensorTerm = (usize, usize, f64, Matrix3<f64>, Matrix3<f64>);
+/// One edge of [`SensorTerms`] with an unknown sensor.
+struct SensorTerm {
+    /// The sensors of its images `a` and `b`.
+    sa: usize,
+    sb: usize,
+    weight: f64,
+    /// `R_ab`.
+    r: Matrix3<f64>,
+    /// `A = F_b F_a^T`, computed once per step.
+    rel: Matrix3<f64>,
+    /// With information (`[H24]`): `H` and `R M`, `M = tr(H)/2 I - H`.
+    info: Option<(Matrix3<f64>, Matrix3<f64>)>,
+}
 
-/// The edges of the sensor step at fixed frames, each with an unknown sensor: its sensors, its
-/// weight, `R` and `A = F_b F_a^T` (computed once per step), and the unknowns' columns. Their
-/// cost `sum w ||S_b A - R S_a||_F^2` is `J` less the edges between held sensors (equal to
-/// `J_e` for rotations `F_a`, `||(S_b A - R S_a) F_a|| = ||S_b F_b - R S_a F_a||`).
+/// The edges of the sensor step at fixed frames, each with an unknown sensor, and the
+/// unknowns' columns. Their cost `sum w ||S_b A - R S_a||_F^2` (with information
+/// `sum 4 (tr M - <R M, S_b A S_a^T>)`) is `J` less the edges between held sensors (equal to
+/// `J_e` for rotations `F_a`: `||(S_b A - R S_a) F_a|| = ||S_b F_b - R S_a F_a||`, and
+/// `S_b A S_a^T = X_b X_a^T`).
 struct SensorTerms {
     edges: Vec<SensorTerm>,
     /// The soft gravity priors on images of unknown sensors, `c ||S_s b - g||^2`: the sensor,
@@ -410,14 +424,20 @@ struct SensorTerms {
 
 impl SensorTerms {
     fn new(p: &RigProblem, frames: &[Rotation], column: &[Option<usize>]) -> Self {
-        let edges = p
-            .edges()
-            .iter()
-            .filter_map(|e| {
+        let info = p.information();
+        let edges = (p.edges().iter().enumerate())
+            .filter_map(|(k, e)| {
                 let (a, b) = (p.images()[e.i], p.images()[e.j]);
                 let touches = column[a.sensor].is_some() || column[b.sensor].is_some();
-                let rel = (frames[b.frame] * frames[a.frame].inverse()).into_inner();
-                touches.then_some((a.sensor, b.sensor, e.weight, *e.rotation.matrix(), rel))
+                let r = *e.rotation.matrix();
+                touches.then(|| SensorTerm {
+                    sa: a.sensor,
+                    sb: b.sensor,
+                    weight: e.weight,
+                    r,
+                    rel: (frames[b.frame] * frames[a.frame].inverse()).into_inner(),
+                    info: info.map(|i| (*i[k].matrix(), r * i[k].chordal_matrix())),
+                })
             })
             .collect();
         SensorTerms {
@@ -429,8 +449,12 @@ impl SensorTerms {
 
     fn cost(&self, sensors: &[Rotation]) -> f64 {
         let edges: f64 = (self.edges.iter())
-            .map(|(sa, sb, w, r, rel)| {
-                w * (sensors[*sb].matrix() * rel - r * sensors[*sa].matrix()).norm_squared()
+            .map(|t| {
+                let (ma, mb) = (sensors[t.sa].matrix(), sensors[t.sb].matrix());
+                match &t.info {
+                    Some((h, rm)) => 2.0 * h.trace() - 4.0 * rm.dot(&(mb * t.rel * ma.transpose())),
+                    None => t.weight * (mb * t.rel - t.r * ma).norm_squared(),
+                }
             })
             .sum();
         let priors: f64 = (self.priors.iter())
@@ -441,31 +465,36 @@ impl SensorTerms {
 
     /// The Gauss-Newton normal equations `(J^T J, J^T r)` in the unknown sensors' tangent steps:
     /// each residual `E = S_b A - R S_a` has derivatives `S_b [e_k]x A` in `d_b` and
-    /// `-R S_a [e_k]x` in `d_a`.
+    /// `-R S_a [e_k]x` in `d_a`. With information, half the exact gradient and half the
+    /// Gauss-Newton Hessian `4 J^T H J` of `2 e^T H e` ([`Self::informed`]).
     fn normal_equations(&self, sensors: &[Rotation], size: usize) -> (DMatrix<f64>, DVector<f64>) {
         let (mut h, mut g) = (DMatrix::zeros(size, size), DVector::zeros(size));
         let basis = [Vector3::x(), Vector3::y(), Vector3::z()].map(|v| hat(&v));
         let mut derivatives = [(0usize, Matrix3::zeros()); 6];
-        for (sa, sb, w, r, rel) in &self.edges {
-            let (ma, mb) = (sensors[*sa].matrix(), sensors[*sb].matrix());
-            let residual = mb * rel - r * ma;
+        for t in &self.edges {
+            if t.info.is_some() {
+                self.informed(t, sensors, &basis, (&mut h, &mut g));
+                continue;
+            }
+            let (ma, mb) = (sensors[t.sa].matrix(), sensors[t.sb].matrix());
+            let residual = mb * t.rel - t.r * ma;
             let mut n = 0;
-            if let Some(c) = self.column[*sb] {
+            if let Some(c) = self.column[t.sb] {
                 for (k, e) in basis.iter().enumerate() {
-                    derivatives[n] = (c + k, mb * e * rel);
+                    derivatives[n] = (c + k, mb * e * t.rel);
                     n += 1;
                 }
             }
-            if let Some(c) = self.column[*sa] {
+            if let Some(c) = self.column[t.sa] {
                 for (k, e) in basis.iter().enumerate() {
-                    derivatives[n] = (c + k, -(r * ma * e));
+                    derivatives[n] = (c + k, -(t.r * ma * e));
                     n += 1;
                 }
             }
             for (u, du) in &derivatives[..n] {
-                g[*u] += w * du.dot(&residual);
+                g[*u] += t.weight * du.dot(&residual);
                 for (v, dv) in &derivatives[..n] {
-                    h[(*u, *v)] += w * du.dot(dv);
+                    h[(*u, *v)] += t.weight * du.dot(dv);
                 }
             }
         }
@@ -483,6 +512,45 @@ impl SensorTerms {
             }
         }
         (h, g)
+    }
+
+    /// One anisotropic term's share of [`Self::normal_equations`] (`[H24]`): with
+    /// `P = S_b A S_a^T = X_b X_a^T` and `E = R^T P`, the term `4 tr M - 4 <R M, P>` has
+    /// derivatives `-4 <R M, S_b [e_k]x A S_a^T>` in `d_b` and `4 <R M, S_b A [e_k]x S_a^T>` in
+    /// `d_a` (half of each added to `g`); `e = log E` moves by `R^T S_b d_b` and `-E S_a d_a`
+    /// to first order, and `2 J^T H J` (half the Gauss-Newton Hessian of `2 e^T H e`) is added to
+    /// `h`.
+    fn informed(
+        &self,
+        t: &SensorTerm,
+        sensors: &[Rotation],
+        basis: &[Matrix3<f64>; 3],
+        (h, g): (&mut DMatrix<f64>, &mut DVector<f64>),
+    ) {
+        let Some((info, rm)) = &t.info else { return };
+        let (ma, mb) = (sensors[t.sa].matrix(), sensors[t.sb].matrix());
+        let e = t.r.transpose() * mb * t.rel * ma.transpose();
+        let mut jac: [(usize, Matrix3<f64>); 2] = [(usize::MAX, Matrix3::zeros()); 2];
+        if let Some(c) = self.column[t.sb] {
+            for (k, b) in basis.iter().enumerate() {
+                g[c + k] -= 2.0 * rm.dot(&(mb * b * t.rel * ma.transpose()));
+            }
+            jac[0] = (c, t.r.transpose() * mb);
+        }
+        if let Some(c) = self.column[t.sa] {
+            for (k, b) in basis.iter().enumerate() {
+                g[c + k] += 2.0 * rm.dot(&(mb * t.rel * b * ma.transpose()));
+            }
+            jac[1] = (c, -(e * ma));
+        }
+        for (u, ju) in jac.iter().filter(|(c, _)| *c != usize::MAX) {
+            for (v, jv) in jac.iter().filter(|(c, _)| *c != usize::MAX) {
+                let block = 2.0 * ju.transpose() * info * jv;
+                for (k, l) in (0..3).flat_map(|k| (0..3).map(move |l| (k, l))) {
+                    h[(u + k, v + l)] += block[(k, l)];
+                }
+            }
+        }
     }
 }
 
@@ -558,6 +626,61 @@ mod tests {
     /// The sensor step's normal equations with soft gravity priors (`[G15]`): `J^T r` is half
     /// the derivative of the step's cost (edges and priors) along each sensor's tangent
     /// directions, by central differences; and a pass never raises `J + P`.
+    /// `[H24]`: with information, the sensor step's `g` is half the gradient of its cost
+    /// (central differences along `S_s exp([t e_k]x)`), and its `h` is positive semidefinite.
+    #[test]
+    fn anisotropic_sensor_terms_have_half_the_cost_s_gradient() {
+        let scene = RigScene {
+            frames: 12,
+            sensors: 3,
+            noise_sigma: 0.05,
+            anisotropy: 9.0,
+            seed: 4,
+            ..Default::default()
+        };
+        let (p, truth) = scene.generate();
+        let column = vec![None, Some(0), Some(3)];
+        let terms = SensorTerms::new(&p, &truth.frames, &column);
+        let mut rng = <rand::rngs::StdRng as rand::SeedableRng>::seed_from_u64(9);
+        let sensors: Vec<Rotation> = (truth.sensors.iter())
+            .map(|s| crate::so3::perturb_gaussian(s, 0.1, &mut rng))
+            .collect();
+        let (h, g) = terms.normal_equations(&sensors, 6);
+        let t = 1e-6;
+        for (s, c) in [(1, 0), (2, 3)] {
+            for k in 0..3 {
+                let mut d = Vector3::zeros();
+                d[k] = t;
+                let moved = |sign: f64| {
+                    let mut x = sensors.clone();
+                    x[s] = sensors[s] * exp(&(sign * d));
+                    terms.cost(&x)
+                };
+                let numeric = (moved(1.0) - moved(-1.0)) / (2.0 * t);
+                let scale = numeric.abs().max(1.0);
+                assert!(
+                    (2.0 * g[c + k] - numeric).abs() < 1e-5 * scale,
+                    "sensor {s} axis {k}: {} against {numeric}",
+                    2.0 * g[c + k]
+                );
+            }
+        }
+        let least = h.clone().symmetric_eigen().eigenvalues.min();
+        assert!(least >= -1e-9 * h.norm(), "h has eigenvalue {least}");
+        // the cost is the rig's less the edges between held sensors: equal differences
+        let moved = {
+            let mut x = sensors.clone();
+            x[1] = sensors[1] * exp(&Vector3::new(0.01, -0.02, 0.03));
+            x
+        };
+        let rig = p.cost(&truth.frames, &moved) - p.cost(&truth.frames, &sensors);
+        let step = terms.cost(&moved) - terms.cost(&sensors);
+        assert!(
+            (rig - step).abs() < 1e-6 * rig.abs().max(1.0),
+            "{rig} against {step}"
+        );
+    }
+
     #[test]
     fn sensor_terms_with_priors_have_the_cost_s_gradient() {
         use crate::multiple::gravity::GravityPriors;

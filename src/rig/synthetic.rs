@@ -2,7 +2,9 @@
 
 use super::problem::{RigProblem, Sensor};
 use crate::multiple::Edge;
+use crate::multiple::anisotropic::Information;
 use crate::so3::{Rotation, perturb_gaussian, random_rotation};
+use nalgebra::{Matrix3, Vector3};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
@@ -14,7 +16,11 @@ use serde::{Deserialize, Serialize};
 /// edge from the reference sensor's image to another sensor's, of the same frame or of a random
 /// one. Measurements are perturbed by Gaussian noise of `noise_sigma` radians; a fraction
 /// `outlier_fraction` replaced by random rotations. With `known`, every sensor's
-/// `sensor_from_rig` is given.
+/// `sensor_from_rig` is given. With `anisotropy` above 1 the edges carry information matrices
+/// (`[H24]`, issue 37's two-view-like class): each edge's residual has standard deviations
+/// `sigma`, `sigma` and `anisotropy exp(z) sigma` (`z` standard normal, at least `sigma`) along
+/// the axes of a random frame, `sigma = noise_sigma` (0.01 rad for the information of a
+/// noise-free scene), and its information is the inverse covariance; outliers keep theirs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct RigScene {
@@ -32,6 +38,9 @@ pub struct RigScene {
     pub outlier_fraction: f64,
     /// Every sensor's `sensor_from_rig` given.
     pub known: bool,
+    /// The weak axis's standard deviation over the others' (median), above 1 for information
+    /// matrices; 1 (default): scalar weights 1.
+    pub anisotropy: f64,
     /// Seed.
     pub seed: u64,
 }
@@ -46,6 +55,7 @@ impl Default for RigScene {
             noise_sigma: 0.01,
             outlier_fraction: 0.0,
             known: false,
+            anisotropy: 1.0,
             seed: 0,
         }
     }
@@ -103,11 +113,22 @@ impl RigScene {
         let k = self.sensors;
         let images = RigProblem::full_images(self.frames, k);
         let mut edges = Vec::new();
+        let mut information = Vec::new();
         let mut add = |rng: &mut StdRng, (fa, sa): (usize, usize), (fb, sb): (usize, usize)| {
             let xa = sensors[sa] * frames[fa];
             let xb = sensors[sb] * frames[fb];
             let exact = xb * xa.inverse();
-            let rotation = if rng.random::<f64>() < self.outlier_fraction {
+            let outlier = rng.random::<f64>() < self.outlier_fraction;
+            let rotation = if self.anisotropy > 1.0 {
+                let (h, noise) = self.anisotropic_noise(rng);
+                information.push(h);
+                // X_b X_a^T = R exp([e]x)
+                if outlier {
+                    random_rotation(rng)
+                } else {
+                    exact * crate::so3::exp(&(-noise))
+                }
+            } else if outlier {
                 random_rotation(rng)
             } else {
                 perturb_gaussian(&exact, self.noise_sigma, rng)
@@ -149,9 +170,33 @@ impl RigScene {
                 sensor_from_rig: self.known.then_some(*s),
             })
             .collect();
-        let problem = RigProblem::new(self.frames, sensor_list, images, edges)
+        let mut problem = RigProblem::new(self.frames, sensor_list, images, edges)
             .expect("a generated rig is valid");
+        if !information.is_empty() {
+            problem = (problem.with_information(information)).expect("generated information");
+        }
         (problem, RigTruth { frames, sensors })
+    }
+
+    /// One edge's information and residual (module docs, `anisotropy`).
+    fn anisotropic_noise(&self, rng: &mut StdRng) -> (Information, Vector3<f64>) {
+        let sigma = if self.noise_sigma > 0.0 {
+            self.noise_sigma
+        } else {
+            0.01
+        };
+        let weak = (self.anisotropy * crate::so3::gaussian(rng).exp()).max(1.0) * sigma;
+        let stds = Vector3::new(sigma, sigma, weak);
+        let u = *random_rotation(rng).matrix();
+        let h = u * Matrix3::from_diagonal(&stds.map(|s| 1.0 / (s * s))) * u.transpose();
+        let h = Information::new(0.5 * (h + h.transpose())).expect("generated information");
+        let z = Vector3::from_fn(|k, _| stds[k] * crate::so3::gaussian(rng));
+        let noise = if self.noise_sigma > 0.0 {
+            u * z
+        } else {
+            Vector3::zeros()
+        };
+        (h, noise)
     }
 }
 

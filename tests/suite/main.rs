@@ -77,6 +77,7 @@ mod readme_examples;
 mod relax_multiple;
 mod rig_cli;
 mod rig_gravity;
+mod rig_information;
 mod rig_sensors;
 #[cfg(feature = "cli")]
 mod robust_inliers;

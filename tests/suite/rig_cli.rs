@@ -448,9 +448,14 @@ fn a_colmap_rig_configuration_is_read_and_certified() {
             "frame {f}"
         );
     }
+    // `--information full` reads each pair's information from its correspondences (`[H24]`):
+    // this database has none
     let out = run(&["rig", path.to_str().unwrap(), "--information", "full"]);
     let err = String::from_utf8_lossy(&out.stderr).to_string();
-    assert!(!out.status.success(), "{err}");
+    assert!(
+        !out.status.success() && err.contains("no inlier matches"),
+        "{err}"
+    );
     write(true, true);
     let out = run(&["rig", path.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr).to_string();

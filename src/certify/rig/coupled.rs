@@ -27,6 +27,16 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
         if self.0.done {
             return Ok(Plan::Done);
         }
+        if cx.problem.is_anisotropic() {
+            return Ok(Plan::Refuse(
+                Refusal::NotApplicable {
+                    reason: "the couplings are derived for scalar weights; a rig with \
+                             information matrices is bounded by its images' view graph [H24]"
+                        .into(),
+                },
+                None,
+            ));
+        }
         if !joins_sensors(cx.problem) {
             return Ok(Plan::Refuse(
                 Refusal::NotApplicable {
@@ -82,7 +92,7 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
                 Ok(found) => found,
                 Err(why) => return Ok(Found::failed(why)),
             };
-        let bound = super::rounding::rounding_floor(sum - coupled.offset, cx.total_weight());
+        let bound = cx.floor(sum - coupled.offset);
         let note = format!(
             "the images' view graph with {} within-frame coupling edges{}: {parts} component(s), \
              certified minima summing to {sum:.9e}, less the couplings' constant {:.9e} [H21]",

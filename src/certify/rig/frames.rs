@@ -71,7 +71,7 @@ fn found(
             inner.explanation
         )));
     };
-    let bound = super::rounding::rounding_floor(lb + constant - charge, cx.total_weight());
+    let bound = cx.floor(lb + constant - charge);
     let note = format!(
         "the frames' {what} ({edges} edges) bounded by {} at {lb:.9e}, plus the within-frame \
          edges'{} {constant:.9e}, less rounding [{}]",

@@ -63,7 +63,13 @@ impl<'a> Rung<RigState<'a>> for ImagesRung {
                 )
             }
         };
-        let bound = super::rounding::rounding_floor(sum, cx.total_weight());
+        // the same data and cost as the rig's: no reformulation to charge with information
+        // (`[H24]`); scalar weights keep `[H19]`'s rounding floor
+        let bound = if cx.problem.is_anisotropic() {
+            sum
+        } else {
+            cx.floor(sum)
+        };
         let bound = cx.offer(bound, Proof::RigImages, &note);
         Ok(Found::proved(bound, cx.certifies(bound), note))
     }
@@ -81,19 +87,18 @@ fn sensor_pairs_minimum(
     settings: &CertifySettings,
 ) -> Result<(f64, String)> {
     let sensor = |a: usize| cx.problem.images()[a].sensor;
-    let mut groups: std::collections::BTreeMap<(usize, usize), Vec<_>> = Default::default();
-    for e in images.edges() {
+    let pair = |e: &crate::multiple::Edge| {
         let (s, t) = (sensor(e.i), sensor(e.j));
-        groups
-            .entry((s.min(t), s.max(t)))
-            .or_default()
-            .push(e.clone());
-    }
+        (s.min(t), s.max(t))
+    };
+    let groups: std::collections::BTreeSet<(usize, usize)> =
+        images.edges().iter().map(pair).collect();
     let (mut sum, mut zero) = (0.0, Vec::new());
     let total = images.num_edges() as f64;
-    for ((s, t), edges) in groups {
-        let share = edges.len() as f64 / total;
-        let graph = MultipleProblem::new(images.num_rotations(), edges)?;
+    for (s, t) in groups {
+        let keep: Vec<bool> = images.edges().iter().map(|e| pair(e) == (s, t)).collect();
+        let graph = images.edge_subset(&keep)?;
+        let share = graph.num_edges() as f64 / total;
         let seconds = cx.left().map(|l| l * share);
         match components_minimum(certify, &graph, x, cx, settings, seconds)? {
             Ok((_, min)) => sum += min,

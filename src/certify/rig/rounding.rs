@@ -18,6 +18,26 @@ pub(crate) fn rounding_floor(lower: f64, total_weight: f64) -> f64 {
     ((1.0 - eps) * (1.0 - eps) * shrunk).max(0.0)
 }
 
+/// The rounding allowance of one anisotropic edge's term in `[H24]`'s reformulations, per unit
+/// of `||H||_F`: the frames' edge `S_b^T R S_a` with information `S_a^T H S_a` changes the term
+/// `4 (tr M - tr(M E))` by at most about `632 u ||H||_F` (`paper-notes/conjugate.md` `[H24]`,
+/// rounding), and the within-frame terms are formed to about `50 u ||H||_F`; `1e-12` is over
+/// seven times both.
+pub(crate) const RIG_INFORMATION_ROUNDING: f64 = 1e-12;
+
+/// A lower bound on `J*` from a proven bound `lower` on the minimum of a reformulation whose
+/// anisotropic terms are each within `RIG_INFORMATION_ROUNDING ||H_e||_F` of the rig's
+/// (`[H24]`): `lower - RIG_INFORMATION_ROUNDING sum ||H_e||_F` (no floor at 0: the trace form
+/// of data orthogonal only to rounding can be slightly negative; not finite when `lower` is
+/// not).
+pub(crate) fn information_floor(
+    lower: f64,
+    info: &[crate::multiple::anisotropic::Information],
+) -> f64 {
+    let charge: f64 = info.iter().map(|h| h.matrix().norm()).sum();
+    lower - RIG_INFORMATION_ROUNDING * charge * (1.0 + 1e-12)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

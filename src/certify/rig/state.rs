@@ -35,10 +35,19 @@ impl RigState<'_> {
         self.cost - lower_bound <= self.allowed_gap
     }
 
-    /// Keep `lower_bound` (capped at the cost, at least 0) when it is the best so far; the
-    /// capped value.
+    /// Keep `lower_bound` (capped at the cost, at least 0 for scalar weights) when it is the
+    /// best so far; the capped value.
     pub fn offer(&mut self, lower_bound: f64, proof: Proof, note: &str) -> f64 {
-        let lb = crate::certify::certificate::nonnegative_bound_at_most(lower_bound, self.cost);
+        let lb = if self.problem.is_anisotropic() {
+            // the trace form of data orthogonal only to rounding can be slightly negative
+            // (`[H24]`): no floor at 0; a bound that is not finite is no bound
+            if !lower_bound.is_finite() {
+                return f64::NEG_INFINITY;
+            }
+            lower_bound.min(self.cost)
+        } else {
+            crate::certify::certificate::nonnegative_bound_at_most(lower_bound, self.cost)
+        };
         if self.best.as_ref().is_none_or(|b| lb > b.lower_bound) {
             self.best = Some(Best {
                 lower_bound: lb,
@@ -52,6 +61,15 @@ impl RigState<'_> {
     /// The certification's time left (`None`: no limit), never negative.
     pub fn left(&self) -> Option<f64> {
         self.deadline.left().map(|l| l.max(0.0))
+    }
+
+    /// A lower bound on `J*` from a proven bound `lower` of one of `[H19]`'s reformulations
+    /// of the rig's cost, less their rounding (`rounding.rs`): scalar weights or information.
+    pub fn floor(&self, lower: f64) -> f64 {
+        match self.problem.information() {
+            Some(info) => super::rounding::information_floor(lower, info),
+            None => super::rounding::rounding_floor(lower, self.total_weight()),
+        }
     }
 
     /// The sum of the edges' weights.

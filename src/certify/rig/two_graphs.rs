@@ -58,7 +58,7 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
         let Some(lb) = c.lower_bound else {
             return Ok(Found::failed(c.explanation));
         };
-        let bound = super::rounding::rounding_floor(lb, cx.total_weight());
+        let bound = cx.floor(lb);
         let note = format!(
             "the two sensors' view graphs as the simultaneous problem [H22]: {}",
             c.explanation.lines().last().unwrap_or("").trim()
@@ -82,6 +82,13 @@ fn not_two_graphs(p: &RigProblem) -> Option<String> {
     }
     if p.held().iter().all(Option::is_some) {
         return Some("both sensors held (the frames' bound is exact)".into());
+    }
+    if p.is_anisotropic() {
+        return Some(
+            "the simultaneous certificate takes scalar weights, and the edges carry \
+             information matrices [H24]"
+                .into(),
+        );
     }
     if p.edges()
         .iter()
