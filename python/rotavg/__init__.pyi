@@ -462,6 +462,7 @@ def average_rig_file(
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
     gravity_weight: Optional[float] = None,
+    information: str = "kappa",
 ) -> Result:
     """A rig of any number of sensors from a JSON rig file or a COLMAP rig configuration."""
 
@@ -477,6 +478,7 @@ def certify_rig_file(
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
     gravity_weight: Optional[float] = None,
+    information: str = "kappa",
 ) -> Result:
     """Certify a rig file's estimate computed elsewhere, without changing it."""
 

@@ -1177,6 +1177,17 @@ fn certify_single_py(
     RunResult::new(py, Report::Certify(report))
 }
 
+/// `information=`: `"kappa"` (false) or `"full"` (true), the command line's `--information`.
+pub(crate) fn full_information(information: &str) -> PyResult<bool> {
+    match information {
+        "kappa" => Ok(false),
+        "full" => Ok(true),
+        other => Err(argument_error(format!(
+            "information must be \"kappa\" or \"full\", got {other:?}"
+        ))),
+    }
+}
+
 /// Read a view graph with the library's readers (the command line's): g2o / TORO, 1DSfM
 /// ``EGs.txt`` or the JSON problem format, detected from the extension and the content.
 ///
@@ -1214,15 +1225,7 @@ fn read_graph(
     rotation_tolerance: f64,
     information: &str,
 ) -> PyResult<Graph> {
-    let full_information = match information {
-        "kappa" => false,
-        "full" => true,
-        other => {
-            return Err(argument_error(format!(
-                "information must be \"kappa\" or \"full\", got {other:?}"
-            )));
-        }
-    };
+    let full_information = full_information(information)?;
     let tolerance = convert::rotation_tolerance(rotation_tolerance)?;
     let format: GraphFormat = parse_named(format, "format")?;
     let weights: WeightSource = parse_named(weights, "weights")?;

@@ -96,6 +96,9 @@ pub fn average_rig(
 ///         --gravity``: an ``(I, 3)`` or ``(I, 4)`` array in image order (NaN rows: none) or
 ///         a priors file keyed by image id or name; held, or soft of ``gravity_weight``.
 ///         ``to_dict()["gravity"]`` has their checks.
+///     information: ``"kappa"`` (default) or ``"full"``, as ``--information``: a COLMAP
+///         database's pairs with their rotation information from their correspondences (an
+///         anisotropic rig, [H24]; a JSON rig file's ``"information"`` is always read).
 ///
 /// Returns:
 ///     Result: ``estimate`` is the frames ``(F, 3, 3)`` (``estimate[0] = I``);
@@ -107,7 +110,7 @@ pub fn average_rig(
 ///     rotavg.ParseError / FileError: a file that cannot be read (naming it); rotavg.Error: a
 ///         rig that is not valid (an image out of range, a sensor no edge places).
 #[pyfunction]
-#[pyo3(name = "average_rig_file", signature = (path, *, loss="auto", loss_threshold=5.0, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None))]
+#[pyo3(name = "average_rig_file", signature = (path, *, loss="auto", loss_threshold=5.0, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None, information="kappa"))]
 #[allow(clippy::too_many_arguments)]
 pub fn average_rig_file(
     py: Python<'_>,
@@ -121,7 +124,9 @@ pub fn average_rig_file(
     gravity: Option<&Bound<'_, PyAny>>,
     world_down: Option<[f64; 3]>,
     gravity_weight: Option<f64>,
+    information: &str,
 ) -> PyResult<RunResult> {
+    let full_information = crate::full_information(information)?;
     let gravity = crate::gravity::GravityInput::from_py(gravity)?;
     let mode: CertifyMode = parse_named(certify, "certify")?;
     let certify = certify_settings(mode, max_memory, max_seconds, true, None)?;
@@ -131,6 +136,7 @@ pub fn average_rig_file(
     let report = detached(py, move || {
         let options = rotavg::io::detect::ReadOptions {
             rotation_tolerance,
+            full_information,
             ..Default::default()
         };
         let rig = rotavg::io::rig::load_rig(std::path::Path::new(&path), &options)?;
@@ -154,13 +160,14 @@ pub fn average_rig_file(
 ///         ``sensors_from_rig`` out).
 ///     sensors_from_rig: ``(K, 3, 3)``, every sensor's rotation (with array frames).
 ///     certify, max_memory, max_seconds, rotation_tolerance, gravity, world_down,
-///         gravity_weight: as for ``average_rig_file`` (``"none"`` means ``"dual"``).
+///         gravity_weight, information: as for ``average_rig_file`` (``"none"`` means
+///         ``"dual"``).
 ///
 /// Raises:
 ///     rotavg.Error: counts or ids that do not match the rig, a matrix that is not a rotation,
 ///         ``sensors_from_rig`` missing with arrays or given with a path.
 #[pyfunction]
-#[pyo3(name = "certify_rig_file", signature = (path, frames, sensors_from_rig=None, *, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None))]
+#[pyo3(name = "certify_rig_file", signature = (path, frames, sensors_from_rig=None, *, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None, information="kappa"))]
 #[allow(clippy::too_many_arguments)]
 pub fn certify_rig_file(
     py: Python<'_>,
@@ -174,7 +181,9 @@ pub fn certify_rig_file(
     gravity: Option<&Bound<'_, PyAny>>,
     world_down: Option<[f64; 3]>,
     gravity_weight: Option<f64>,
+    information: &str,
 ) -> PyResult<RunResult> {
+    let full_information = crate::full_information(information)?;
     let gravity = crate::gravity::GravityInput::from_py(gravity)?;
     let mode = match parse_named(certify, "certify")? {
         CertifyMode::None => CertifyMode::Dual,
@@ -221,6 +230,7 @@ pub fn certify_rig_file(
     let report = detached(py, move || {
         let options = rotavg::io::detect::ReadOptions {
             rotation_tolerance,
+            full_information,
             ..Default::default()
         };
         let rig = rotavg::io::rig::load_rig(std::path::Path::new(&path), &options)?;

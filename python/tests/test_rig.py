@@ -198,3 +198,19 @@ def test_soft_gravity_refines_the_estimated_sensors():
     assert np.allclose(np.array(d["sensors_from_rig"]), refined, atol=1e-9)
     held = rotavg.average_rig_file(path, gravity=g).to_dict()
     assert held["calibration"]["refined_sensors_from_rig"] is None
+
+
+def test_a_rig_file_with_information_is_the_command_line_s(cli):
+    """A JSON rig file whose edges carry ``"information"`` ([H24]): the command line's report,
+    the estimated sensors within 0.3 degrees of the planted ones; ``information`` takes
+    ``"kappa"`` or ``"full"`` only."""
+    path = REPO / "examples" / "data" / "rig_information" / "rig.json"
+    ours = rotavg.average_rig_file(path)
+    theirs = cli("rig", path)
+    assert untimed(ours.to_dict()) == untimed(theirs)
+    truth = json.loads((path.parent / "truth.json").read_text())
+    d = ours.to_dict()
+    for s in range(3):
+        assert angle(np.array(d["sensors_from_rig"][s]), np.array(truth["sensors_from_rig"][s])) < 0.3
+    with pytest.raises(rotavg.Error, match="information"):
+        rotavg.average_rig_file(path, information="bogus")

@@ -64,7 +64,10 @@ pub fn rig_problem(right: &LoadedGraph, left: &LoadedGraph) -> Result<Simultaneo
     if right.problem.is_anisotropic() || left.problem.is_anisotropic() {
         return Err(Error::InvalidSettings {
             name: "rig".into(),
-            reason: "rigs take scalar weights (no --information full)".into(),
+            reason: "two view graphs take scalar weights (no --information full); a rig with \
+                     information matrices is a JSON rig file with \"information\" on its edges \
+                     or a COLMAP rig (`rotavg rig FILE --information full`, [H24])"
+                .into(),
         });
     }
     Ok(SimultaneousProblem {

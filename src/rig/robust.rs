@@ -215,7 +215,6 @@ fn reweighted(
         let inner = RigSettings {
             max_passes: REWEIGHT_PASSES.min(settings.max_passes),
             max_seconds: remaining(settings.max_seconds, clock),
-            ..*settings
         };
         estimate = solve_rig_from(&q, &estimate.frames, &estimate.sensors, &inner)?;
     }

@@ -402,6 +402,22 @@ fn rig_gravity() -> (String, String, String) {
     )
 }
 
+/// `rig_information/`: a rig of 40 frames and 3 sensors with information matrices
+/// (`RigScene::anisotropy` 9, seed 24: each edge's noise 0.01 rad along two axes of a random
+/// frame and about 9 times that along the third, its information the inverse covariance; `[H24]`),
+/// sensor 0 the reference, sensors 1 and 2 estimated, in the JSON rig format with each edge's
+/// `"information"`, and the truth.
+fn rig_information() -> (String, String) {
+    use rotavg::rig::RigScene;
+    let scene = RigScene {
+        anisotropy: 9.0,
+        ..RigScene::sized(40, 3, 0.01, false, 24)
+    };
+    let (p, truth) = scene.generate();
+    let truth = rotavg::io::rig::write_rig_truth_json(&truth.frames, &truth.sensors);
+    (rotavg::io::rig::write_rig_json(&p), truth)
+}
+
 /// Every file of the example data, `(relative path, contents)`, from one seed.
 fn files() -> Vec<(&'static str, String)> {
     let mut rng = StdRng::seed_from_u64(2026);
@@ -411,7 +427,10 @@ fn files() -> Vec<(&'static str, String)> {
     let (rig_right, rig_left, rig_truth) = rig();
     let (rig_sensors, rig_sensors_truth) = rig_sensors();
     let (rig_gravity, rig_gravity_priors, rig_gravity_truth) = rig_gravity();
+    let (rig_information, rig_information_truth) = rig_information();
     vec![
+        ("rig_information/rig.json", rig_information),
+        ("rig_information/truth.json", rig_information_truth),
         ("rig_gravity/rig.json", rig_gravity),
         ("rig_gravity/gravity.txt", rig_gravity_priors),
         ("rig_gravity/truth.json", rig_gravity_truth),
