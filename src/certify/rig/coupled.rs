@@ -27,16 +27,6 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
         if self.0.done {
             return Ok(Plan::Done);
         }
-        if cx.problem.is_anisotropic() {
-            return Ok(Plan::Refuse(
-                Refusal::NotApplicable {
-                    reason: "the couplings are derived for scalar weights; a rig with \
-                             information matrices is bounded by its images' view graph [H24]"
-                        .into(),
-                },
-                None,
-            ));
-        }
         if !joins_sensors(cx.problem) {
             return Ok(Plan::Refuse(
                 Refusal::NotApplicable {
@@ -92,7 +82,13 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
                 Ok(found) => found,
                 Err(why) => return Ok(Found::failed(why)),
             };
-        let bound = cx.floor(sum - coupled.offset);
+        // with information the augmented graph holds the rig's own data and the pseudo-edges
+        // as `c I`, whose trace form's constant is exact (`[H24]`): nothing to charge
+        let bound = if cx.problem.is_anisotropic() {
+            sum - coupled.offset
+        } else {
+            cx.floor(sum - coupled.offset)
+        };
         let note = format!(
             "the images' view graph with {} within-frame coupling edges{}: {parts} component(s), \
              certified minima summing to {sum:.9e}, less the couplings' constant {:.9e} [H21]",

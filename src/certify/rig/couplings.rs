@@ -78,16 +78,38 @@ pub(crate) fn couple(
     let demand = demands(problem, &images, &x, sensors);
     let flows = least_norm_flows(&per_frame, &demand, &pairs);
     let pseudo = pseudo_edges(&per_frame, &flows, sensors);
-    let (offset, charge) = offset(&pseudo, &pairs, sensors);
+    let (offset, charge) = offset(&pseudo, &pairs, sensors, images.is_anisotropic());
     let pseudo_edges = pseudo.len();
-    let mut edges = images.edges().to_vec();
-    edges.extend(pseudo.into_iter().map(|(_, e)| e));
     Ok(Ok(Coupled {
-        graph: MultipleProblem::new(problem.images().len(), edges)?,
+        graph: augmented(&images, pseudo)?,
         pseudo_edges,
         offset,
         charge,
     }))
+}
+
+/// The images' view graph with the pseudo-edges; with information (`[H24]`), each
+/// pseudo-edge's weight `c` as the information `c I`, whose torques are the isotropic ones
+/// (`2M = c I` in `[A2]`'s `(Q Y)`), so the flows are unchanged.
+fn augmented(
+    images: &MultipleProblem,
+    pseudo: Vec<((usize, usize), Edge)>,
+) -> Result<MultipleProblem> {
+    let mut edges = images.edges().to_vec();
+    let mut info = images.information().map(<[_]>::to_vec);
+    for (_, e) in pseudo {
+        if let Some(info) = &mut info {
+            info.push(crate::multiple::anisotropic::Information::isotropic(
+                e.weight,
+            )?);
+        }
+        edges.push(e);
+    }
+    let graph = MultipleProblem::new(images.num_rotations(), edges)?;
+    match info {
+        Some(info) => graph.with_information(info),
+        None => Ok(graph),
+    }
 }
 
 /// Each frame's `(sensor, image)`, sorted by sensor.
@@ -299,17 +321,28 @@ fn pseudo_edges(
     out
 }
 
-/// `L` of [`Coupled::offset`]: `c_P = sum c_k (3 + ||R'_k||_F^2)` rounded up, plus
+/// `L` of [`Coupled::offset`]: `c_P = sum c_k (3 + ||R'_k||_F^2)` (with information, `[H24]`:
+/// `sum 6 c_k`, the trace form's constant of `H = c I`) rounded up, plus
 /// `2 sqrt(3) ||r_st||_F` for each constrained pair (`r_st = sum c_k R'_k` over its
 /// pseudo-edges, `||M||_2 = 1` for `M = S_s S_t^T`), minus `2 tr(r_st S_s S_t^T)` for each held
 /// pair; every sum in double-double with its error bound charged. With the constrained pairs'
 /// part apart.
-fn offset(pseudo: &[((usize, usize), Edge)], pairs: &Pairs, sensors: &[Rotation]) -> (f64, f64) {
+fn offset(
+    pseudo: &[((usize, usize), Edge)],
+    pairs: &Pairs,
+    sensors: &[Rotation],
+    trace_form: bool,
+) -> (f64, f64) {
     let mut constant = Accumulator::default();
     let mut sums = vec![[Accumulator::default(); 9]; pairs.sensors.len()];
     for (key, e) in pseudo {
         let r = e.rotation.matrix();
-        constant.add_product(e.weight, 3.0 + r.norm_squared());
+        let per_weight = if trace_form {
+            6.0
+        } else {
+            3.0 + r.norm_squared()
+        };
+        constant.add_product(e.weight, per_weight);
         for (acc, v) in sums[pairs.id(key.0, key.1)].iter_mut().zip(r.iter()) {
             acc.add_product(e.weight, *v);
         }
