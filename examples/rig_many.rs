@@ -2,7 +2,9 @@
 //! 2-6 sensors and 100 to 10^4 frames, solved and certified by `rotavg::pipeline::average_rig`,
 //! with every sensor estimated and with every sensor known; the error against the planted rig.
 //!
-//! `cargo run --release --example rig_many [frames ...]`; `-- write DIR FRAMES SENSORS OUTLIERS
+//! `cargo run --release --example rig_many [frames ...] [anisotropic]` (`anisotropic`: the
+//! edges carry information matrices, `RigScene::anisotropy` 9, `[H24]`, and a last column gives
+//! the sensors' error of the same data with scalar weights `tr(H)/3`, solve only); `-- write DIR FRAMES SENSORS OUTLIERS
 //! SEED` writes one rig (`RigScene`, 0.01 rad of noise, that fraction of random-rotation
 //! outliers) as `DIR/rig.json` and its truth `DIR/truth.json`, for `rotavg rig` and
 //! `benches/colmap_rig.py`.
@@ -55,10 +57,23 @@ fn main() -> rotavg::Result<()> {
     } else {
         args
     };
+    let anisotropy = if all.iter().any(|a| a == "anisotropic") {
+        9.0
+    } else {
+        1.0
+    };
     println!(
-        "| frames | sensors | images | edges | sensors known | solve s | passes | certify s | verdict | relative gap | frames' median error deg | sensors' max error deg |"
+        "| frames | sensors | images | edges | sensors known | solve s | passes | certify s | verdict | relative gap | frames' median error deg | sensors' max error deg |{}",
+        if anisotropy > 1.0 {
+            " scalar weights: sensors' max error deg |"
+        } else {
+            ""
+        }
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!(
+        "|---|---|---|---|---|---|---|---|---|---|---|---|{}",
+        if anisotropy > 1.0 { "---|" } else { "" }
+    );
     for &frames in &sizes {
         for sensors in [2, 4, 6] {
             for known in [false, true] {
@@ -68,9 +83,15 @@ fn main() -> rotavg::Result<()> {
                     noise_sigma: 0.01,
                     known,
                     seed: 7,
+                    anisotropy,
                     ..Default::default()
                 };
                 let (p, truth) = scene.generate();
+                let max_error = |x: &[rotavg::Rotation]| {
+                    (x.iter().zip(&truth.sensors))
+                        .map(|(a, b)| angle_between(a, b).to_degrees())
+                        .fold(0.0, f64::max)
+                };
                 let out = average_rig(&p, &Default::default())?;
                 let c = out.certificate.as_ref().expect("certified");
                 let s = &out.solution;
@@ -81,14 +102,17 @@ fn main() -> rotavg::Result<()> {
                     .map(|(a, b)| angle_between(a, b).to_degrees())
                     .collect();
                 errs.sort_by(f64::total_cmp);
-                let sens = s
-                    .sensors
-                    .iter()
-                    .zip(&truth.sensors)
-                    .map(|(a, b)| angle_between(a, b).to_degrees())
-                    .fold(0.0, f64::max);
+                let sens = max_error(&s.sensors);
+                let scalar = if anisotropy > 1.0 && !known {
+                    let r = rotavg::rig::solve_rig(&p.scalar(), &Default::default())?;
+                    format!(" {:.4} |", max_error(&r.sensors))
+                } else if anisotropy > 1.0 {
+                    " |".to_string()
+                } else {
+                    String::new()
+                };
                 println!(
-                    "| {frames} | {sensors} | {} | {} | {known} | {:.3} | {} | {:.3} | {} | {:.1e} | {:.3} | {:.4} |",
+                    "| {frames} | {sensors} | {} | {} | {known} | {:.3} | {} | {:.3} | {} | {:.1e} | {:.3} | {:.4} |{scalar}",
                     p.images().len(),
                     p.edges().len(),
                     out.details.solve_seconds,
