@@ -6,6 +6,7 @@ use super::Rows;
 use crate::Result;
 use crate::certify::{CertifiedProblem, CertifiedProblemKind, CertifySettings};
 use crate::io::rig::LoadedRig;
+use crate::multiple::anisotropic::InformationSummary;
 use crate::pipeline::rig::{
     RigCalibration, RigGravityDetails, RigLoss, RigRobustDetails,
     average_rig_calibrated_with_gravity, average_rig_with_loss,
@@ -235,6 +236,9 @@ impl fmt::Display for RigFileReport {
             p.images().len(),
             p.edges().len()
         )?;
+        if let Some(info) = p.information().and_then(InformationSummary::of) {
+            write!(f, "\n{info} [H24]")?;
+        }
         if let Some(c) = &self.calibration {
             let verdict = c.certificate.as_ref().map_or("no certificate".into(), |c| {
                 format!(
@@ -263,9 +267,22 @@ impl fmt::Display for RigFileReport {
         if let Some(r) = &self.robust {
             write!(
                 f,
-                "\nCauchy loss ({} reweighted alternations): {} of {} edges inliers (residual <= \
-                 {} deg); the estimate and certificate are the inlier problem's",
-                r.reweights, r.inlier_edges, r.total_edges, r.inlier_threshold_deg
+                "\nCauchy loss ({} reweighted alternations{}): {} of {} edges inliers ({} <= {} \
+                 deg); the estimate and certificate are the inlier problem's",
+                r.reweights,
+                if p.is_anisotropic() {
+                    " on unit weights"
+                } else {
+                    ""
+                },
+                r.inlier_edges,
+                r.total_edges,
+                if p.is_anisotropic() {
+                    "Mahalanobis angle"
+                } else {
+                    "residual"
+                },
+                r.inlier_threshold_deg
             )?;
         }
         super::result_and_verdict(f, &self.result, self.verdict_of())
@@ -287,6 +304,9 @@ struct Json<'a> {
     sensor_ids: &'a [u64],
     sensors_held: Vec<bool>,
     num_images: usize,
+    /// The information matrices' summary, when the edges carry some (`[H24]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    information: Option<InformationSummary>,
     #[serde(skip_serializing_if = "Option::is_none")]
     robust: Option<&'a RigRobustDetails>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -317,6 +337,7 @@ impl Serialize for RigFileReport {
             sensor_ids: &self.rig.sensor_ids,
             sensors_held: p.held().iter().map(Option::is_some).collect(),
             num_images: p.images().len(),
+            information: p.information().and_then(InformationSummary::of),
             robust: self.robust.as_ref(),
             gravity: self.gravity.as_ref(),
             calibration: self.calibration.as_ref(),

@@ -764,3 +764,41 @@ fn colmap_gravity_priors_on_a_colmap_rig() {
         }
     }
 }
+
+/// `rotavg rig FILE` on the committed rig with information matrices (`[H24]`): certified (by the
+/// within-frame couplings), the estimated sensors within 0.3 degrees of the planted ones; the
+/// text and the JSON both say the edges carry information; two view graphs with
+/// `--information full` are refused with the way round.
+#[test]
+fn a_rig_file_with_information_is_certified_and_says_so() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/data/rig_information");
+    let rig = dir.join("rig.json");
+    let out = run(&["rig", rig.to_str().unwrap(), "--json"]);
+    assert_success(&out);
+    let v = json_of(&out);
+    assert_eq!(v["verdict"]["verdict"], "certified", "{v}");
+    assert_eq!(v["information"]["edges"], 363);
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("truth.json")).unwrap()).unwrap();
+    for s in 0..3 {
+        let (a, b) = (
+            rotation(&v["sensors_from_rig"][s]),
+            rotation(&truth["sensors_from_rig"][s]),
+        );
+        assert!(angle_between(&a, &b).to_degrees() < 0.3, "sensor {s}");
+    }
+    let out = run(&["rig", rig.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(text.contains("information: 3x3 on 363 edges"), "{text}");
+    // two view graphs whose edges carry information
+    let h = "[[1, 0, 0], [0, 2, 0], [0, 0, 30]]";
+    let i = "[[1, 0, 0], [0, 1, 0], [0, 0, 1]]";
+    let graph = format!(
+        r#"{{"num_rotations": 3, "edges": [{{"i": 0, "j": 1, "rotation": {i}, "information": {h}}}, {{"i": 1, "j": 2, "rotation": {i}, "information": {h}}}, {{"i": 2, "j": 0, "rotation": {i}, "information": {h}}}]}}"#
+    );
+    let right = temp_file("rig_information_right.json", &graph);
+    let left = temp_file("rig_information_left.json", &graph);
+    let out = run(&["rig", right.to_str().unwrap(), left.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!out.status.success() && err.contains("rig file"), "{err}");
+}
