@@ -107,13 +107,7 @@ pub fn solve_rig_robust(
     settings: &RigSettings,
 ) -> Result<RobustRig> {
     robust.validate()?;
-    let clock = Instant::now();
-    let least_squares = solve_rig(p, settings)?;
-    let settings = RigSettings {
-        max_seconds: remaining(settings.max_seconds, clock),
-        ..*settings
-    };
-    solve_rig_robust_from(p, least_squares, robust, &settings)
+    robust_stages(p, None, robust, settings)
 }
 
 /// [`solve_rig_robust`] from its least-squares estimate `least_squares` (a [`solve_rig`] of
@@ -128,6 +122,18 @@ pub fn solve_rig_robust_from(
     settings: &RigSettings,
 ) -> Result<RobustRig> {
     robust.validate()?;
+    robust_stages(p, Some(least_squares), robust, settings)
+}
+
+/// [`solve_rig_robust_from`] with `p`'s least squares solved here when not given; with
+/// information it is not used (the alternations start from the unit-weight rig's own least
+/// squares), so [`solve_rig_robust`] does not compute it.
+fn robust_stages(
+    p: &RigProblem,
+    least_squares: Option<RigSolution>,
+    robust: &RigRobust,
+    settings: &RigSettings,
+) -> Result<RobustRig> {
     let clock = Instant::now();
     let within = |s: &RigSettings| RigSettings {
         max_seconds: remaining(settings.max_seconds, clock),
@@ -145,7 +151,11 @@ pub fn solve_rig_robust_from(
         let start = solve_rig(&unit, &within(settings))?;
         reweighted(&unit, start, robust, &within(settings))?
     } else {
-        reweighted(p, least_squares, robust, &within(settings))?
+        let start = match least_squares {
+            Some(ls) => ls,
+            None => solve_rig(p, &within(settings))?,
+        };
+        reweighted(p, start, robust, &within(settings))?
     };
     estimate.cost = p.cost(&estimate.frames, &estimate.sensors);
     let inliers: Vec<bool> = (p
