@@ -6,7 +6,8 @@ use crate::certify::{Certification, CertifyMode, CertifySettings, certify_rig};
 use crate::error::Result;
 use crate::multiple::robust::suspected_outliers;
 use crate::rig::{
-    RigProblem, RigRobust, RigSettings, RigSolution, solve_rig, solve_rig_robust_from,
+    RigProblem, RigRobust, RigSettings, RigSolution, solve_rig, solve_rig_robust,
+    solve_rig_robust_from,
 };
 use crate::termination::SolverReport;
 use serde::{Deserialize, Serialize};
@@ -147,9 +148,9 @@ pub fn average_rig_with_loss(
 ) -> Result<RigRun> {
     let start = std::time::Instant::now();
     let skip = super::validate(problem, settings)?;
-    let mut outliers = None;
-    let ls = solve_rig(problem, &settings.solve)?;
+    let (mut outliers, mut least_squares) = (None, None);
     if loss != RigLoss::Cauchy {
+        let ls = solve_rig(problem, &settings.solve)?;
         let x = problem.image_rotations(&ls.frames, &ls.sensors);
         outliers = suspected_outliers(&problem.image_graph()?, &x).map(|mut w| {
             w.suggestion = if loss == RigLoss::Chordal {
@@ -167,9 +168,11 @@ pub fn average_rig_with_loss(
             out.details.outliers = outliers;
             return Ok((out, problem.clone(), None));
         }
+        least_squares = Some(ls);
     }
     let rest = settings.remaining(start);
-    let (mut out, inliers, details) = robust_from(problem, ls, (loss, outliers), robust, &rest)?;
+    let (mut out, inliers, details) =
+        robust_from(problem, least_squares, (loss, outliers), robust, &rest)?;
     out.details
         .add_solve_seconds(start.elapsed().as_secs_f64() - out.details.total_seconds);
     Ok((out, inliers, Some(details)))
@@ -284,14 +287,15 @@ fn refine_sensors(
 pub type RigRun = (Averaged<RigSolution>, RigProblem, Option<RigRobustDetails>);
 
 /// The robust part of [`average_rig_with_loss`] from the least-squares estimate `ls` of
-/// `problem` (solved by the caller, whose clock the settings' budgets already count: `rotavg
-/// rig RIGHT LEFT` judges its own joint least squares): the Cauchy solve, the inlier problem
+/// `problem` when the caller solved it (whose clock the settings' budgets already count: `rotavg
+/// rig RIGHT LEFT` judges its own joint least squares; `None`: solved here if needed, and never
+/// with information, whose robust stage starts from unit weights, `[H24]`): the Cauchy solve, the inlier problem
 /// certified, and what was done (`requested` loss, the diagnosis `outliers` that chose it). Its
 /// times and budgets start when it is called (`AverageSettings::remaining` gives the budgets
 /// the caller has left; [`crate::pipeline::PipelineDetails::add_solve_seconds`] the times).
 pub(crate) fn robust_from(
     problem: &RigProblem,
-    ls: RigSolution,
+    ls: Option<RigSolution>,
     (requested, outliers): (RigLoss, Option<crate::multiple::robust::OutlierWarning>),
     robust: &RigRobust,
     settings: &AverageRigSettings,
@@ -302,7 +306,10 @@ pub(crate) fn robust_from(
         max_seconds: crate::deadline::remaining(settings.solve.max_seconds, start),
         ..settings.solve
     };
-    let rr = solve_rig_robust_from(problem, ls, robust, &solve)?;
+    let rr = match ls {
+        Some(ls) => solve_rig_robust_from(problem, ls, robust, &solve)?,
+        None => solve_rig_robust(problem, robust, &solve)?,
+    };
     let details = RigRobustDetails {
         requested,
         robust: true,

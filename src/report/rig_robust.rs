@@ -79,8 +79,13 @@ impl RigReport {
             certify: settings.certify,
         }
         .remaining(start);
-        let (mut out, _, details) =
-            robust_from(&rig, ls, (loss, diagnosis.clone()), &robust, &rig_settings)?;
+        let (mut out, _, details) = robust_from(
+            &rig,
+            Some(ls),
+            (loss, diagnosis.clone()),
+            &robust,
+            &rig_settings,
+        )?;
         out.details
             .add_solve_seconds(start.elapsed().as_secs_f64() - out.details.total_seconds);
         let mut report = RigReport::new(inputs, right, left, as_joint(out));
