@@ -101,15 +101,7 @@ impl RigScene {
             "a rig needs 2 frames and a sensor"
         );
         let mut rng = StdRng::seed_from_u64(self.seed);
-        let mut frames: Vec<Rotation> = (0..self.frames)
-            .map(|_| random_rotation(&mut rng))
-            .collect();
-        let f0 = frames[0].inverse();
-        frames.iter_mut().for_each(|f| *f *= f0);
-        let mut sensors: Vec<Rotation> = (0..self.sensors)
-            .map(|_| random_rotation(&mut rng))
-            .collect();
-        sensors[0] = Rotation::identity();
+        let (frames, sensors) = self.planted(&mut rng);
         let k = self.sensors;
         let images = RigProblem::full_images(self.frames, k);
         let mut edges = Vec::new();
@@ -176,6 +168,16 @@ impl RigScene {
             problem = (problem.with_information(information)).expect("generated information");
         }
         (problem, RigTruth { frames, sensors })
+    }
+
+    /// The planted frames (the first the identity) and sensors (sensor 0 the identity).
+    fn planted(&self, rng: &mut StdRng) -> (Vec<Rotation>, Vec<Rotation>) {
+        let mut frames: Vec<Rotation> = (0..self.frames).map(|_| random_rotation(rng)).collect();
+        let f0 = frames[0].inverse();
+        frames.iter_mut().for_each(|f| *f *= f0);
+        let mut sensors: Vec<Rotation> = (0..self.sensors).map(|_| random_rotation(rng)).collect();
+        sensors[0] = Rotation::identity();
+        (frames, sensors)
     }
 
     /// One edge's information and residual (module docs, `anisotropy`).
