@@ -110,38 +110,12 @@ pub struct CertifiedProblem {
 impl fmt::Display for CertifiedProblem {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.kind {
-            CertifiedProblemKind::ChordalL2Inliers => write!(
-                f,
-                "the chordal L2 problem on the inlier graph ({} of {} edges, {} of {} nodes)",
-                self.num_edges, self.total_edges, self.num_nodes, self.total_nodes
-            ),
-            CertifiedProblemKind::ChordalL2 => write!(
-                f,
-                "the chordal L2 problem on all {} edges ({} nodes)",
-                self.num_edges, self.num_nodes
-            ),
-            CertifiedProblemKind::ChordalL2GravityInliers => write!(
-                f,
-                "the chordal L2 problem with the gravity priors held on the inlier graph ({} of \
-                 {} edges, {} of {} nodes)",
-                self.num_edges, self.total_edges, self.num_nodes, self.total_nodes
-            ),
-            CertifiedProblemKind::ChordalL2Gravity => write!(
-                f,
-                "the chordal L2 problem on all {} edges ({} nodes) with the gravity priors held",
-                self.num_edges, self.num_nodes
-            ),
-            CertifiedProblemKind::ChordalL2GravitySoftInliers => write!(
-                f,
-                "the chordal L2 problem plus the soft gravity priors on the inlier graph ({} of \
-                 {} edges, {} of {} nodes)",
-                self.num_edges, self.total_edges, self.num_nodes, self.total_nodes
-            ),
-            CertifiedProblemKind::ChordalL2GravitySoft => write!(
-                f,
-                "the chordal L2 problem on all {} edges ({} nodes) plus the soft gravity priors",
-                self.num_edges, self.num_nodes
-            ),
+            CertifiedProblemKind::ChordalL2Inliers
+            | CertifiedProblemKind::ChordalL2
+            | CertifiedProblemKind::ChordalL2GravityInliers
+            | CertifiedProblemKind::ChordalL2Gravity
+            | CertifiedProblemKind::ChordalL2GravitySoftInliers
+            | CertifiedProblemKind::ChordalL2GravitySoft => self.view_graph(f),
             CertifiedProblemKind::ChordalL2Rig => write!(
                 f,
                 "the rig's joint chordal L2 problem on all {} edges of its two view graphs ({} \
@@ -180,6 +154,37 @@ impl fmt::Display for CertifiedProblem {
 }
 
 impl CertifiedProblem {
+    /// The view graph's kinds: all edges or the inlier graph, without priors, with them held or
+    /// soft (the priors named before the inlier graph, after all edges).
+    fn view_graph(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use CertifiedProblemKind as K;
+        let priors = match self.kind {
+            K::ChordalL2Gravity | K::ChordalL2GravityInliers => " with the gravity priors held",
+            K::ChordalL2GravitySoft | K::ChordalL2GravitySoftInliers => {
+                " plus the soft gravity priors"
+            }
+            _ => "",
+        };
+        let inliers = matches!(
+            self.kind,
+            K::ChordalL2Inliers | K::ChordalL2GravityInliers | K::ChordalL2GravitySoftInliers
+        );
+        let (edges, nodes) = (self.num_edges, self.num_nodes);
+        if inliers {
+            let (total_edges, total_nodes) = (self.total_edges, self.total_nodes);
+            write!(
+                f,
+                "the chordal L2 problem{priors} on the inlier graph ({edges} of {total_edges} \
+                 edges, {nodes} of {total_nodes} nodes)"
+            )
+        } else {
+            write!(
+                f,
+                "the chordal L2 problem on all {edges} edges ({nodes} nodes){priors}"
+            )
+        }
+    }
+
     /// The rig with gravity priors' kinds (`[G14]`), held or soft, on all edges or the inliers.
     fn rig_gravity(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let soft = matches!(

@@ -46,8 +46,6 @@ impl RigFileReport {
         crate::io::output::write_text(path, &text)
     }
 
-    /// Solve and certify the rig read from `input`: the solve within `max_seconds`, the
-    /// certificate under `certify`.
     /// Solve the rig read from `input` with `loss` (`robust`: the Cauchy loss's thresholds) and
     /// certify it: the solve within `max_seconds`, the certificate under `certify`
     /// ([`average_rig_with_loss`]).

@@ -323,6 +323,20 @@ impl RigProblem {
     /// F_a||`), with information `S_a^T H S_a` when it has some (`[H24]`), and the cost of the
     /// edges within one frame, which `F` does not change. Errors: no edge joins two frames.
     pub fn frame_graph(&self, sensors: &[Rotation]) -> Result<(MultipleProblem, f64)> {
+        self.frames_graph(sensors, true)
+    }
+
+    /// [`Self::frame_graph`] for a solve: the turned information's eigenvalues are taken from
+    /// `H` ([`Information::turned_for_solve`]) instead of computed again; never certified.
+    pub(crate) fn frame_graph_for_solve(
+        &self,
+        sensors: &[Rotation],
+    ) -> Result<(MultipleProblem, f64)> {
+        self.frames_graph(sensors, false)
+    }
+
+    /// [`Self::frame_graph`], the turned information validated again when `checked`.
+    fn frames_graph(&self, sensors: &[Rotation], checked: bool) -> Result<(MultipleProblem, f64)> {
         let (mut edges, mut info, mut constant) = (Vec::new(), Vec::new(), 0.0);
         for (k, e) in self.edges.iter().enumerate() {
             let (a, b) = (self.images[e.i], self.images[e.j]);
@@ -338,8 +352,13 @@ impl RigProblem {
                 continue;
             }
             if let Some(h) = h {
-                let turned = sa.matrix().transpose() * h.matrix() * sa.matrix();
-                info.push(Information::new((turned + turned.transpose()) * 0.5)?);
+                info.push(match checked {
+                    true => {
+                        let turned = sa.matrix().transpose() * h.matrix() * sa.matrix();
+                        Information::new((turned + turned.transpose()) * 0.5)?
+                    }
+                    false => h.turned_for_solve(&sa),
+                });
             }
             edges.push(Edge {
                 i: a.frame,

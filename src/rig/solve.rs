@@ -324,7 +324,7 @@ fn frame_solve(
     if let Some(fg) = p.frame_gravity(sensors)? {
         return crate::multiple::gravity::solve_gravity(&fg.problem, &settings);
     }
-    let (graph, _) = p.frame_graph(sensors)?;
+    let (graph, _) = p.frame_graph_for_solve(sensors)?;
     solve_multiple(&graph, &settings)
 }
 
