@@ -405,8 +405,6 @@ struct SensorTerm {
     r: Matrix3<f64>,
     /// `A = F_b F_a^T`, computed once per step.
     rel: Matrix3<f64>,
-    /// With information (`[H24]`): `H` and `R M`, `M = tr(H)/2 I - H`.
-    info: Option<(Matrix3<f64>, Matrix3<f64>)>,
 }
 
 /// The edges of the sensor step at fixed frames, each with an unknown sensor, and the
@@ -416,6 +414,10 @@ struct SensorTerm {
 /// `S_b A S_a^T = X_b X_a^T`).
 struct SensorTerms {
     edges: Vec<SensorTerm>,
+    /// With information (`[H24]`), each edge's `H` and `R M`, `M = tr(H)/2 I - H`; empty
+    /// without (kept apart so that the isotropic terms stay small: the step sweeps them a few
+    /// times per iteration).
+    informed: Vec<(Matrix3<f64>, Matrix3<f64>)>,
     /// The soft gravity priors on images of unknown sensors, `c ||S_s b - g||^2`: the sensor,
     /// `c = 2 w_a`, `b = F_f d` and `g` (`[G15]`).
     priors: Vec<(usize, f64, Vector3<f64>, Vector3<f64>)>,
@@ -424,41 +426,49 @@ struct SensorTerms {
 
 impl SensorTerms {
     fn new(p: &RigProblem, frames: &[Rotation], column: &[Option<usize>]) -> Self {
-        let info = p.information();
-        let edges = (p.edges().iter().enumerate())
-            .filter_map(|(k, e)| {
-                let (a, b) = (p.images()[e.i], p.images()[e.j]);
-                let touches = column[a.sensor].is_some() || column[b.sensor].is_some();
-                let r = *e.rotation.matrix();
-                touches.then(|| SensorTerm {
-                    sa: a.sensor,
-                    sb: b.sensor,
-                    weight: e.weight,
-                    r,
-                    rel: (frames[b.frame] * frames[a.frame].inverse()).into_inner(),
-                    info: info.map(|i| (*i[k].matrix(), r * i[k].chordal_matrix())),
-                })
-            })
-            .collect();
+        let (mut edges, mut informed) = (Vec::new(), Vec::new());
+        for (k, e) in p.edges().iter().enumerate() {
+            let (a, b) = (p.images()[e.i], p.images()[e.j]);
+            if column[a.sensor].is_none() && column[b.sensor].is_none() {
+                continue;
+            }
+            let r = *e.rotation.matrix();
+            edges.push(SensorTerm {
+                sa: a.sensor,
+                sb: b.sensor,
+                weight: e.weight,
+                r,
+                rel: (frames[b.frame] * frames[a.frame].inverse()).into_inner(),
+            });
+            if let Some(info) = p.information() {
+                informed.push((*info[k].matrix(), r * info[k].chordal_matrix()));
+            }
+        }
         SensorTerms {
             edges,
+            informed,
             priors: sensor_priors(p, frames, column),
             column: column.to_vec(),
         }
     }
 
     fn cost(&self, sensors: &[Rotation]) -> f64 {
-        let edges: f64 = (self.edges.iter())
-            .map(|t| {
-                let (ma, mb) = (sensors[t.sa].matrix(), sensors[t.sb].matrix());
-                match &t.info {
-                    Some((h, _)) => {
-                        informed_term(h, &(t.r.transpose() * mb * t.rel * ma.transpose()))
-                    }
-                    None => t.weight * (mb * t.rel - t.r * ma).norm_squared(),
-                }
-            })
-            .sum();
+        let matrices = |t: &SensorTerm| (sensors[t.sa].matrix(), sensors[t.sb].matrix());
+        let edges: f64 = if self.informed.is_empty() {
+            (self.edges.iter())
+                .map(|t| {
+                    let (ma, mb) = matrices(t);
+                    t.weight * (mb * t.rel - t.r * ma).norm_squared()
+                })
+                .sum()
+        } else {
+            (self.edges.iter().zip(&self.informed))
+                .map(|(t, (h, _))| {
+                    let (ma, mb) = matrices(t);
+                    informed_term(h, &(t.r.transpose() * mb * t.rel * ma.transpose()))
+                })
+                .sum()
+        };
         let priors: f64 = (self.priors.iter())
             .map(|(s, c, b, g)| c * (sensors[*s] * b - g).norm_squared())
             .sum();
@@ -473,9 +483,9 @@ impl SensorTerms {
         let (mut h, mut g) = (DMatrix::zeros(size, size), DVector::zeros(size));
         let basis = [Vector3::x(), Vector3::y(), Vector3::z()].map(|v| hat(&v));
         let mut derivatives = [(0usize, Matrix3::zeros()); 6];
-        for t in &self.edges {
-            if t.info.is_some() {
-                self.informed(t, sensors, &basis, (&mut h, &mut g));
+        for (k, t) in self.edges.iter().enumerate() {
+            if let Some(info) = self.informed.get(k) {
+                self.informed(t, info, sensors, &basis, (&mut h, &mut g));
                 continue;
             }
             let (ma, mb) = (sensors[t.sa].matrix(), sensors[t.sb].matrix());
@@ -525,11 +535,11 @@ impl SensorTerms {
     fn informed(
         &self,
         t: &SensorTerm,
+        (info, rm): &(Matrix3<f64>, Matrix3<f64>),
         sensors: &[Rotation],
         basis: &[Matrix3<f64>; 3],
         (h, g): (&mut DMatrix<f64>, &mut DVector<f64>),
     ) {
-        let Some((info, rm)) = &t.info else { return };
         let (ma, mb) = (sensors[t.sa].matrix(), sensors[t.sb].matrix());
         let e = t.r.transpose() * mb * t.rel * ma.transpose();
         let mut jac: [(usize, Matrix3<f64>); 2] = [(usize::MAX, Matrix3::zeros()); 2];
