@@ -5,10 +5,8 @@ use super::{AverageSettings, Averaged, PipelineProblem, PipelineSolution, averag
 use crate::certify::{Certification, CertifyMode, CertifySettings, certify_rig};
 use crate::error::Result;
 use crate::multiple::robust::suspected_outliers;
-use crate::rig::{
-    RigProblem, RigRobust, RigSettings, RigSolution, solve_rig, solve_rig_robust,
-    solve_rig_robust_from,
-};
+use crate::rig::solve_rig_robust_given;
+use crate::rig::{RigProblem, RigRobust, RigSettings, RigSolution, solve_rig};
 use crate::termination::SolverReport;
 use serde::{Deserialize, Serialize};
 
@@ -289,8 +287,8 @@ pub type RigRun = (Averaged<RigSolution>, RigProblem, Option<RigRobustDetails>);
 /// The robust part of [`average_rig_with_loss`] from the least-squares estimate `ls` of
 /// `problem` when the caller solved it (whose clock the settings' budgets already count: `rotavg
 /// rig RIGHT LEFT` judges its own joint least squares; `None`: solved here if needed, and never
-/// with information, whose robust stage starts from unit weights, `[H24]`): the Cauchy solve, the inlier problem
-/// certified, and what was done (`requested` loss, the diagnosis `outliers` that chose it). Its
+/// with information, whose robust stage starts from unit weights, `[H24]`): the Cauchy solve,
+/// the inlier problem certified, and what was done (`requested` loss, the diagnosis `outliers` that chose it). Its
 /// times and budgets start when it is called (`AverageSettings::remaining` gives the budgets
 /// the caller has left; [`crate::pipeline::PipelineDetails::add_solve_seconds`] the times).
 pub(crate) fn robust_from(
@@ -306,10 +304,7 @@ pub(crate) fn robust_from(
         max_seconds: crate::deadline::remaining(settings.solve.max_seconds, start),
         ..settings.solve
     };
-    let rr = match ls {
-        Some(ls) => solve_rig_robust_from(problem, ls, robust, &solve)?,
-        None => solve_rig_robust(problem, robust, &solve)?,
-    };
+    let rr = solve_rig_robust_given(problem, ls, robust, &solve)?;
     let details = RigRobustDetails {
         requested,
         robust: true,

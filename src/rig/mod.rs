@@ -18,6 +18,7 @@ mod gravity;
 mod problem;
 mod robust;
 mod solve;
+pub(crate) use robust::solve_rig_robust_given;
 pub(crate) use solve::polish_passes;
 mod start;
 mod synthetic;

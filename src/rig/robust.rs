@@ -106,8 +106,7 @@ pub fn solve_rig_robust(
     robust: &RigRobust,
     settings: &RigSettings,
 ) -> Result<RobustRig> {
-    robust.validate()?;
-    robust_stages(p, None, robust, settings)
+    solve_rig_robust_given(p, None, robust, settings)
 }
 
 /// [`solve_rig_robust`] from its least-squares estimate `least_squares` (a [`solve_rig`] of
@@ -121,19 +120,19 @@ pub fn solve_rig_robust_from(
     robust: &RigRobust,
     settings: &RigSettings,
 ) -> Result<RobustRig> {
-    robust.validate()?;
-    robust_stages(p, Some(least_squares), robust, settings)
+    solve_rig_robust_given(p, Some(least_squares), robust, settings)
 }
 
 /// [`solve_rig_robust_from`] with `p`'s least squares solved here when not given; with
 /// information it is not used (the alternations start from the unit-weight rig's own least
 /// squares), so [`solve_rig_robust`] does not compute it.
-fn robust_stages(
+pub(crate) fn solve_rig_robust_given(
     p: &RigProblem,
     least_squares: Option<RigSolution>,
     robust: &RigRobust,
     settings: &RigSettings,
 ) -> Result<RobustRig> {
+    robust.validate()?;
     let clock = Instant::now();
     let within = |s: &RigSettings| RigSettings {
         max_seconds: remaining(settings.max_seconds, clock),

@@ -427,6 +427,7 @@ struct SensorTerms {
 impl SensorTerms {
     fn new(p: &RigProblem, frames: &[Rotation], column: &[Option<usize>]) -> Self {
         let (mut edges, mut informed) = (Vec::new(), Vec::new());
+        let information = p.information();
         for (k, e) in p.edges().iter().enumerate() {
             let (a, b) = (p.images()[e.i], p.images()[e.j]);
             if column[a.sensor].is_none() && column[b.sensor].is_none() {
@@ -440,7 +441,7 @@ impl SensorTerms {
                 r,
                 rel: (frames[b.frame] * frames[a.frame].inverse()).into_inner(),
             });
-            if let Some(info) = p.information() {
+            if let Some(info) = information {
                 informed.push((*info[k].matrix(), r * info[k].chordal_matrix()));
             }
         }
