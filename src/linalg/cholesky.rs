@@ -38,7 +38,7 @@
 //! # Ok::<(), rotavg::Error>(())
 //! ```
 
-use super::compensated::two_sum;
+use super::compensated::{two_prod, two_sum};
 use crate::error::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -745,13 +745,19 @@ impl ShiftedCholesky {
             return (higham, l.min_pivot);
         }
         let (cols, rows) = self.factor_lists(values);
-        let Some(abs_rowsum) = self.residual_row_sums(&cols, &rows) else {
+        // Dekker's TwoProduct is exact without overflow (a non-finite sum: Higham's bound
+        // alone) and within 1e-322 per product under underflow (1e-300 per row covers 1e20 of
+        // them)
+        let Some(abs_rowsum) = self
+            .residual_row_sums(&cols, &rows)
+            .filter(|sums| sums.iter().all(|v| v.is_finite()))
+        else {
             return (higham, l.min_pivot);
         };
         let g = gamma(l.k + 2);
-        let by_row = |r: usize| 1.01 * abs_rowsum[r] + 2.0 * g * g * l.rowsum[r];
+        let by_row = |r: usize| 1.01 * abs_rowsum[r] + 1e-300 + 2.0 * g * g * l.rowsum[r];
         let residual_max =
-            1.01 * abs_rowsum.iter().copied().fold(0.0, f64::max) + 2.0 * g * g * llt_norm;
+            1.01 * abs_rowsum.iter().copied().fold(0.0, f64::max) + 1e-300 + 2.0 * g * g * llt_norm;
         let sum = (0..abs_rowsum.len())
             .map(|r| by_row(r).min(g1 * l.rowsum[r]))
             .sum::<f64>();
@@ -842,8 +848,8 @@ impl ShiftedCholesky {
                 // rows within a column are ascending (ensured by factor_lists)
                 let first = col.partition_point(|&(i, _)| i < j);
                 for &(i, lim) in &col[first..] {
-                    let p = -(lim * ljm);
-                    let pe = (-lim).mul_add(ljm, -p); // exact: -lim*ljm = p + pe
+                    // exact: -lim*ljm = p + pe (inline TwoProduct, not the software `fma`)
+                    let (p, pe) = two_prod(-lim, ljm);
                     let (sh, se) = two_sum(hi[i], p);
                     hi[i] = sh;
                     lo[i] += se + pe;
