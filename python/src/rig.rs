@@ -92,8 +92,9 @@ pub fn average_rig(
 ///     gravity, world_down, gravity_weight: gravity priors on the rig's images
 ///         (``paper-notes/gravity.md`` [G14]; sensors to estimate are calibrated without them
 ///         first, ``to_dict()["calibration"]``, refined by soft priors [G15]
-///         (``["calibration"]["refined_sensors_from_rig"]``), then held), as ``rotavg rig FILE
-///         --gravity``: an ``(I, 3)`` or ``(I, 4)`` array in image order (NaN rows: none) or
+///         (``["calibration"]["refined_sensors_from_rig"]``), then held, and the joint problem
+///         with the sensors free certified too, ``["pipeline"]["rig_joint"]``, [G16]), as
+///         ``rotavg rig FILE --gravity``: an ``(I, 3)`` or ``(I, 4)`` array in image order (NaN rows: none) or
 ///         a priors file keyed by image id or name; held, or soft of ``gravity_weight``.
 ///         ``to_dict()["gravity"]`` has their checks.
 ///     information: ``"kappa"`` (default) or ``"full"``, as ``--information``: a COLMAP

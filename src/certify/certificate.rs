@@ -90,6 +90,13 @@ pub enum CertifiedProblemKind {
     ChordalL2RigGravityInliers,
     /// [`CertifiedProblemKind::ChordalL2RigGravitySoft`] on the rig's inlier edges (`[H20]`).
     ChordalL2RigGravitySoftInliers,
+    /// [`CertifiedProblemKind::ChordalL2RigImages`] plus the soft gravity priors on its images:
+    /// the frames and the unknown `sensor_from_rig` rotations free (`paper-notes/gravity.md`
+    /// `[G16]`), the cost stated the edges' plus the priors'.
+    ChordalL2RigImagesGravitySoft,
+    /// [`CertifiedProblemKind::ChordalL2RigImagesGravitySoft`] on the rig's inlier edges
+    /// (`[H20]`).
+    ChordalL2RigImagesGravitySoftInliers,
 }
 
 /// The problem a certificate is about, with its size against the whole input's.
@@ -143,6 +150,16 @@ impl fmt::Display for CertifiedProblem {
             | CertifiedProblemKind::ChordalL2RigGravitySoft
             | CertifiedProblemKind::ChordalL2RigGravityInliers
             | CertifiedProblemKind::ChordalL2RigGravitySoftInliers => self.rig_gravity(f),
+            CertifiedProblemKind::ChordalL2RigImagesGravitySoft
+            | CertifiedProblemKind::ChordalL2RigImagesGravitySoftInliers => {
+                write!(
+                    f,
+                    "the rig's chordal L2 problem on {} plus the soft gravity priors ({} frames \
+                     and the unknown sensor_from_rig rotations)",
+                    self.rig_edges(),
+                    self.num_nodes
+                )
+            }
             CertifiedProblemKind::ChordalL2RigImagesSensorsHeld => write!(
                 f,
                 "the rig's chordal L2 problem on all {} edges between its images with every \
@@ -185,6 +202,18 @@ impl CertifiedProblem {
         }
     }
 
+    /// A rig's edges: all of them, or its inlier edges.
+    fn rig_edges(&self) -> String {
+        if self.num_edges < self.total_edges {
+            format!(
+                "its inlier edges ({} of {})",
+                self.num_edges, self.total_edges
+            )
+        } else {
+            format!("all {} edges between its images", self.num_edges)
+        }
+    }
+
     /// The rig with gravity priors' kinds (`[G14]`), held or soft, on all edges or the inliers.
     fn rig_gravity(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let soft = matches!(
@@ -192,14 +221,7 @@ impl CertifiedProblem {
             CertifiedProblemKind::ChordalL2RigGravitySoft
                 | CertifiedProblemKind::ChordalL2RigGravitySoftInliers
         );
-        let edges = if self.num_edges < self.total_edges {
-            format!(
-                "its inlier edges ({} of {})",
-                self.num_edges, self.total_edges
-            )
-        } else {
-            format!("all {} edges between its images", self.num_edges)
-        };
+        let edges = self.rig_edges();
         write!(
             f,
             "the rig's chordal L2 problem on {edges} with every sensor_from_rig held ({} frames) \

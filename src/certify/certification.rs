@@ -57,6 +57,9 @@ pub enum ImprovementSource {
     /// The rounding of the `conv(SO(3))` SDP's solution, polished by the local solver
     /// (anisotropic multiple averaging).
     ConvSdpRounding,
+    /// The alternation passes that polish a rig's estimate for its coupled bound
+    /// (`paper-notes/conjugate.md` `[H21]`).
+    RigPolish,
 }
 
 /// A solution of lower cost than the certified estimate, found while bounding.

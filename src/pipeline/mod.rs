@@ -147,6 +147,13 @@ pub struct PipelineDetails {
     /// agreement with the view graph. Omitted from JSON when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gravity: Option<GravityDetails>,
+    /// A rig with soft gravity priors whose sensors were estimated and then held: the
+    /// certificate of the **joint** problem at the returned estimate, the sensors free
+    /// (`paper-notes/gravity.md` `[G16]`). When it is `certified` it is also the run's
+    /// certificate (it implies the held rig's) and the verdict names that problem. Omitted from
+    /// JSON when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rig_joint: Option<crate::certify::Certificate>,
 }
 
 /// Write `value` in the form `f` asks for: alternate (`{:#}`, verbose) or not.
@@ -245,6 +252,13 @@ impl PipelineDetails {
     /// and the total times.
     pub(crate) fn add_solve_seconds(&mut self, seconds: f64) {
         self.solve_seconds += seconds.max(0.0);
+        self.total_seconds += seconds.max(0.0);
+    }
+
+    /// Count `seconds` more of certifying (a further certificate of the same estimate) in the
+    /// certify and the total times.
+    pub(crate) fn add_certify_seconds(&mut self, seconds: f64) {
+        self.certify_seconds += seconds.max(0.0);
         self.total_seconds += seconds.max(0.0);
     }
 }

@@ -62,12 +62,7 @@ impl PipelineProblem for RigProblem {
         solution: &RigSolution,
         settings: &CertifySettings,
     ) -> Result<Certification<RigSolution>> {
-        let c = certify_rig(self, &solution.frames, &solution.sensors, settings)?;
-        Ok(Certification {
-            certificate: c.certificate,
-            details: c.details,
-            improvement: None,
-        })
+        certify_rig(self, &solution.frames, &solution.sensors, settings)
     }
 }
 
@@ -209,9 +204,13 @@ pub struct RigCalibration {
 
 /// A rig with gravity `priors` whose sensors are (some of them) estimated (`[G14]`): calibrated
 /// without the priors ([`average_rig_with_loss`]), then solved and certified with every sensor
-/// held at the calibration and the priors on its images. Returns the second run (with the
-/// problem it certifies and its robust details) and the calibration. Errors: those of
-/// [`average_rig_with_loss`] and [`RigProblem::with_gravity`].
+/// held at the calibration and the priors on its images. Soft priors first refine the sensors
+/// (`[G15]`), and, when the calibration was certified, the estimate is then also certified for
+/// the joint problem with the sensors free (`[G16]`,
+/// [`PipelineDetails::rig_joint`](crate::pipeline::PipelineDetails::rig_joint); the run's
+/// certificate when it is certified). Returns the second run (with the problem it certifies and its robust details)
+/// and the calibration. Errors: those of [`average_rig_with_loss`] and
+/// [`RigProblem::with_gravity`].
 pub fn average_rig_calibrated_with_gravity(
     problem: &RigProblem,
     priors: crate::multiple::gravity::GravityPriors,
@@ -250,7 +249,59 @@ pub fn average_rig_calibrated_with_gravity(
     let (mut out, certified, robust) =
         average_rig_with_loss(&held, loss, robust, &settings.remaining(start))?;
     out.details.add_solve_seconds(first.details.total_seconds);
+    // the joint problem adds the priors to the calibrated one: tried where that one's
+    // certificate proved (the couplings of [H21] fit and work on this rig)
+    if calibration
+        .certificate
+        .as_ref()
+        .is_some_and(|c| c.is_certified())
+    {
+        out.details.rig_joint =
+            certify_jointly(problem, &certified, &mut out, &settings.remaining(start))?;
+    }
     Ok(((out, certified, robust), calibration))
+}
+
+/// The joint certificate of `[G16]` at `out`'s estimate: `certified` (the held rig with soft
+/// priors, or its inlier rig) with `problem`'s sensors estimated again; it becomes `out`'s
+/// certificate when it is certified. `None` with held priors or when `out` has no certificate.
+fn certify_jointly(
+    problem: &RigProblem,
+    certified: &RigProblem,
+    out: &mut Averaged<RigSolution>,
+    settings: &AverageRigSettings,
+) -> Result<Option<crate::certify::Certificate>> {
+    let Some(priors) = certified.gravity().filter(|g| g.weight().is_some()) else {
+        return Ok(None);
+    };
+    if out.certificate.is_none() {
+        return Ok(None);
+    }
+    let joint = RigProblem::new(
+        problem.num_frames(),
+        problem.sensors().to_vec(),
+        problem.images().to_vec(),
+        certified.edges().to_vec(),
+    )?
+    .with_gravity(priors.clone())?;
+    let s = &out.solution;
+    let c = crate::certify::certify_rig(&joint, &s.frames, &s.sensors, &settings.certify)?;
+    out.details.add_certify_seconds(c.details.seconds);
+    let mut certificate = c.certificate;
+    if let Some(better) = c.improvement {
+        // the coupled bound's polish reached a lower joint cost, which the bound covers: the
+        // estimate when that certifies it
+        let improved = certificate.with_upper_bound(better.cost);
+        if improved.is_certified() {
+            out.details.improved_by = c.details.improvement.map(|i| i.source);
+            out.solution = out.solution.clone().adopt(better);
+            certificate = improved;
+        }
+    }
+    if certificate.is_certified() {
+        out.certificate = Some(certificate.clone());
+    }
+    Ok(Some(certificate))
 }
 
 /// Alternation passes of the refinement by soft priors at most (`[G15]`): on generated rigs

@@ -97,13 +97,29 @@ impl RigFileReport {
         estimate: crate::io::rig::RigEstimate,
         settings: &CertifySettings,
     ) -> Result<Self> {
+        let (mut joint, start) = (None, std::time::Instant::now());
         if let Some(priors) = rig.pending_gravity.take() {
-            // gravity priors with sensors to estimate: the estimate's sensors held ([G14])
+            // soft priors with sensors to estimate: the joint problem first ([G16]); when it
+            // does not certify, and for held priors, the estimate's sensors held ([G14])
+            if priors.weight().is_some() {
+                let p = rig.problem.clone().with_gravity(priors.clone())?;
+                let c =
+                    crate::certify::certify_rig(&p, &estimate.frames, &estimate.sensors, settings)?;
+                joint = Some(c);
+            }
             let held = rig.problem.with_sensors_held(&estimate.sensors)?;
             rig.problem = held.with_gravity(priors)?;
         }
         let frames = estimate.frames;
-        let c = crate::certify::certify_rig(&rig.problem, &frames, &estimate.sensors, settings)?;
+        let c = match joint.as_ref().filter(|j| j.certificate.is_certified()) {
+            Some(j) => j.clone(),
+            None => {
+                // one budget for both certifications
+                let mut left = settings.clone();
+                left.budget = settings.budget.after(start);
+                crate::certify::certify_rig(&rig.problem, &frames, &estimate.sensors, &left)?
+            }
+        };
         // the held sensors as held, as certified (the estimate's are within 1e-9 rad of them)
         let sensors: Vec<_> = (estimate.sensors.iter().zip(rig.problem.held()))
             .map(|(s, held)| held.unwrap_or(*s))
@@ -117,7 +133,8 @@ impl RigFileReport {
             sensors,
             report: super::given_report(),
         };
-        let result = super::given_result(solution, c);
+        let mut result = super::given_result(solution, c);
+        result.details.rig_joint = joint.map(|j| j.certificate);
         Ok(RigFileReport {
             gravity: RigGravityDetails::of(&rig.problem)?,
             input,
@@ -139,7 +156,13 @@ impl RigFileReport {
         let p = &self.rig.problem;
         let (frames, edges) = (p.num_frames(), p.edges().len());
         let soft = p.gravity().map(|g| g.weight().is_some());
+        let joint = (self.result.details.rig_joint.as_ref())
+            .is_some_and(crate::certify::Certificate::is_certified);
         let kind = match (&self.robust, p.all_held(), soft) {
+            (Some(_), _, Some(true)) if joint => {
+                CertifiedProblemKind::ChordalL2RigImagesGravitySoftInliers
+            }
+            (None, _, Some(true)) if joint => CertifiedProblemKind::ChordalL2RigImagesGravitySoft,
             (Some(_), _, Some(true)) => CertifiedProblemKind::ChordalL2RigGravitySoftInliers,
             (Some(_), _, Some(false)) => CertifiedProblemKind::ChordalL2RigGravityInliers,
             (None, _, Some(true)) => CertifiedProblemKind::ChordalL2RigGravitySoft,
@@ -254,6 +277,19 @@ impl fmt::Display for RigFileReport {
                 "\ncalibration without the gravity priors [G14]: sensors {:?} estimated, cost \
                  {:.9e}, {verdict}; {then}",
                 c.estimated, c.cost
+            )?;
+        }
+        if let Some(j) = &self.result.details.rig_joint {
+            write!(
+                f,
+                "\njoint problem with the sensors free and the soft priors [G16]: {}, relative \
+                 gap {:.1e}{}",
+                j.verdict,
+                j.relative_gap.unwrap_or(f64::NAN),
+                match j.is_certified() {
+                    true => " (the certificate below)",
+                    false => "; the certificate below is the held rig's",
+                }
             )?;
         }
         if let Some(g) = &self.gravity {

@@ -22,6 +22,7 @@ pub(crate) use robust::solve_rig_robust_given;
 pub(crate) use solve::polish_passes;
 mod start;
 mod synthetic;
+mod world;
 
 pub use gravity::FrameGravity;
 pub use problem::{Image, RigProblem, Sensor};
@@ -33,3 +34,4 @@ pub use solve::{
     solve_rig_from,
 };
 pub use synthetic::{RigScene, RigTruth};
+pub use world::WorldRig;

@@ -50,10 +50,15 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
 
     fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {
         self.0.done = true;
+        let clock = std::time::Instant::now();
         let (frames, sensors, coupled, passes) = match polished(cx)? {
             Ok(found) => found,
             Err(why) => return Ok(Found::failed(why)),
         };
+        if passes > 0 {
+            let report = polish_report(passes, coupled.charge, cx.allowed_gap, clock);
+            cx.improve(frames.clone(), sensors.clone(), report);
+        }
         // the augmented cost is about `cost + offset`: its tolerance made a quarter of the rig's
         let mut settings = cx.settings.clone();
         // the couplings are chosen for the estimate's own multipliers: the dual certificate at
@@ -212,6 +217,37 @@ fn polished(
                 Err(e) => return Ok(Err(format!("the polish failed: {e}"))),
             };
         passes += POLISH_ROUND;
+    }
+}
+
+/// The polish as a solve's report: converged when the couplings' charge came below a quarter
+/// of the allowed gap, else stopped at its pass limit or time.
+fn polish_report(
+    passes: usize,
+    charge: f64,
+    allowed_gap: f64,
+    clock: std::time::Instant,
+) -> crate::termination::SolverReport {
+    use crate::termination::Termination;
+    let (value, threshold) = (charge, 0.25 * allowed_gap);
+    let termination = if value <= threshold {
+        Termination::Converged {
+            measure: "the couplings' charge for the sensors' gradient [H21]".into(),
+            value,
+            threshold,
+        }
+    } else {
+        Termination::IterationLimit {
+            iterations: passes,
+            value,
+            threshold,
+        }
+    };
+    crate::termination::SolverReport {
+        name: "rig-alternating polish of the coupled bound [H21]".into(),
+        iterations: passes,
+        termination,
+        seconds: clock.elapsed().as_secs_f64(),
     }
 }
 

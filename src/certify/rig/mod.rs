@@ -16,15 +16,18 @@ mod images;
 mod rounding;
 mod state;
 mod two_graphs;
+mod world;
 
 use crate::certify::budget::Deadline;
-use crate::certify::certification::{Certification, CertifyDetails};
+use crate::certify::certification::{
+    Certification, CertifyDetails, Improvement, ImprovementSource,
+};
 use crate::certify::ladder::{Rungs, climb};
 use crate::certify::proof::BoundMethod;
 use crate::certify::rung::{GraphCertifier, Handed};
 use crate::certify::settings::CertifySettings;
 use crate::error::{Error, Result};
-use crate::rig::RigProblem;
+use crate::rig::{RigProblem, RigSolution};
 use crate::so3::Rotation;
 use state::RigState;
 
@@ -32,7 +35,8 @@ use state::RigState;
 /// every sensor is held, the frames' view graph; always, the images' view graph without the
 /// rig's constraints; each certified by `certify` (the view graph's ladder) within the
 /// budget. The verdict uses the best bound, and is about the estimate with its held sensors at
-/// their held rotations. With gravity priors (`[G14]`) the frames' bound is the frames' gravity
+/// their held rotations; a point of lower cost met on the way (the coupled bound's polish,
+/// `[H21]`) is the certification's `improvement`, which the bound covers as well. With gravity priors (`[G14]`) the frames' bound is the frames' gravity
 /// problem's. Errors: estimates of the wrong length, a held sensor farther than 1e-9 rad from
 /// its held rotation, frames off their held gravity directions.
 ///
@@ -50,7 +54,12 @@ pub fn certify_rig(
     frames: &[Rotation],
     sensors: &[Rotation],
     settings: &CertifySettings,
-) -> Result<Certification<()>> {
+) -> Result<Certification<RigSolution>> {
+    if let Some(world) = problem.soft_priors_as_world_frame()? {
+        check_estimate(problem, frames, sensors)?;
+        let posed = (problem, &world);
+        return world::certify_through_world(posed, frames, sensors, settings, certify_rig);
+    }
     let certify: GraphCertifier = crate::certify::multiple::graph_certificate;
     let deadline = Deadline::start(&settings.budget);
     settings.validate()?;
@@ -76,6 +85,7 @@ pub fn certify_rig(
         allowed_gap: tolerance.allowed_gap(cost),
         best: None,
         log: Vec::new(),
+        improvement: None,
     };
     let rungs: Rungs<'_, RigState<'_>> = vec![
         Box::new(frames::FramesRung(Handed::new((
@@ -90,15 +100,19 @@ pub fn certify_rig(
         Box::new(images::ImagesRung(Handed::new(certify))),
     ];
     climb(&mut state, rungs)?;
-    let details = CertifyDetails::from_log(settings.mode, state.log, deadline.elapsed());
+    let mut details = CertifyDetails::from_log(settings.mode, state.log, deadline.elapsed());
     let best = state
         .best
         .map(|b| (b.lower_bound, b.proof.method(), None, b.note));
     let certificate = details.certificate_of(cost, best, BoundMethod::Dual, tolerance);
+    details.improvement = state.improvement.as_ref().map(|s| Improvement {
+        source: ImprovementSource::RigPolish,
+        cost: s.cost,
+    });
     Ok(Certification {
         certificate,
         details,
-        improvement: None,
+        improvement: state.improvement,
     })
 }
 

@@ -7,6 +7,7 @@ use crate::certify::rung::climb_by_best_bound;
 use crate::certify::settings::CertifySettings;
 use crate::rig::RigProblem;
 use crate::so3::Rotation;
+use crate::termination::SolverReport;
 
 /// The best verified bound so far.
 pub(crate) struct Best {
@@ -27,6 +28,9 @@ pub(crate) struct RigState<'a> {
     pub allowed_gap: f64,
     pub best: Option<Best>,
     pub log: Vec<Attempt>,
+    /// A point of lower cost than the estimate found while bounding (the coupled bound's
+    /// polish, `[H21]`), when one was.
+    pub improvement: Option<crate::rig::RigSolution>,
 }
 
 impl RigState<'_> {
@@ -56,6 +60,21 @@ impl RigState<'_> {
             });
         }
         lb
+    }
+
+    /// Keep `(frames, sensors)`, reached by `report`, when its cost is below the estimate's
+    /// and any earlier improvement's.
+    pub fn improve(&mut self, frames: Vec<Rotation>, sensors: Vec<Rotation>, report: SolverReport) {
+        let cost = self.problem.cost(&frames, &sensors);
+        let best = self.improvement.as_ref().map_or(self.cost, |s| s.cost);
+        if cost < best {
+            self.improvement = Some(crate::rig::RigSolution {
+                frames,
+                sensors,
+                cost,
+                report,
+            });
+        }
     }
 
     /// The certification's time left (`None`: no limit), never negative.
