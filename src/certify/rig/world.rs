@@ -5,6 +5,7 @@
 
 use crate::certify::certificate::Certificate;
 use crate::certify::certification::Certification;
+use crate::certify::proof::Proof;
 use crate::certify::settings::CertifySettings;
 use crate::error::Result;
 use crate::rig::{RigProblem, RigSolution, WorldRig};
@@ -32,7 +33,17 @@ pub(super) fn certify_through_world(
         .map(|(s, held)| held.unwrap_or(*s))
         .collect();
     let (world_frames, world_sensors) = world.point(frames, &sensors);
-    let inner = certify(&world.problem, &world_frames, &world_sensors, settings)?;
+    // the world's turns about e_3 are two null directions of every certificate matrix of the
+    // world rig beyond the gauge's three: the grounded bound and the block comparison cannot
+    // prove there (`[G10]` item 4), so they are not tried
+    let mut inner_settings = settings.clone();
+    (inner_settings.dual.proofs).retain(|p| !matches!(p, Proof::Grounded | Proof::BlockComparison));
+    let inner = certify(
+        &world.problem,
+        &world_frames,
+        &world_sensors,
+        &inner_settings,
+    )?;
     let cost = problem.cost(frames, &sensors);
     let tolerance = settings.tolerance.resolve(problem.min_weight());
     let c = &inner.certificate;
