@@ -578,7 +578,9 @@ fn soft_priors_refine_the_estimated_sensors() {
 }
 
 /// With outliers the calibration is robust and certifies its inlier rig; the soft priors refine
-/// that inlier rig's sensors (`[G15]`), and the held rig is certified with the priors.
+/// that inlier rig's sensors (`[G15]`), the held rig is certified with the priors, and so is the
+/// inlier rig's joint problem with the sensors free (`[G16]`), which becomes the run's
+/// certificate.
 #[test]
 fn soft_priors_refine_a_robust_calibration() {
     use rotavg::pipeline::rig::average_rig_calibrated_with_gravity;
@@ -615,6 +617,15 @@ fn soft_priors_refine_a_robust_calibration() {
     assert!(error(&refined) <= error(&cal.sensors_from_rig) * 1.05);
     let c = run.certificate.unwrap();
     assert!(c.is_certified(), "{}", c.explanation);
+    // the inlier rig's joint problem with the priors, the sensors free ([G16]), is certified
+    // and is the run's certificate
+    let joint = run
+        .details
+        .rig_joint
+        .expect("a certified calibration: the joint is tried");
+    assert!(joint.is_certified(), "{}", joint.explanation);
+    assert!(c.explanation.contains("world rig"), "{}", c.explanation);
+    assert_eq!(c.lower_bound, joint.lower_bound);
 }
 
 /// The rig's cost with its own soft priors, term by term ([`written_out_cost`]).
