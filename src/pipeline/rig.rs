@@ -208,8 +208,8 @@ pub struct RigCalibration {
 /// (`[G15]`), and, when the calibration was certified, the estimate is then also certified for
 /// the joint problem with the sensors free (`[G16]`,
 /// [`PipelineDetails::rig_joint`](crate::pipeline::PipelineDetails::rig_joint); the run's
-/// certificate when it is certified). Returns the second run (with the problem it certifies and its robust details)
-/// and the calibration. Errors: those of [`average_rig_with_loss`] and
+/// certificate when it is certified). Returns the second run (with the problem it certifies
+/// and its robust details) and the calibration. Errors: those of [`average_rig_with_loss`] and
 /// [`RigProblem::with_gravity`].
 pub fn average_rig_calibrated_with_gravity(
     problem: &RigProblem,
@@ -277,13 +277,7 @@ fn certify_jointly(
     if out.certificate.is_none() {
         return Ok(None);
     }
-    let joint = RigProblem::new(
-        problem.num_frames(),
-        problem.sensors().to_vec(),
-        problem.images().to_vec(),
-        certified.edges().to_vec(),
-    )?
-    .with_gravity(priors.clone())?;
+    let joint = (problem.with_edges(certified.edges().to_vec())?).with_gravity(priors.clone())?;
     let s = &out.solution;
     let c = crate::certify::certify_rig(&joint, &s.frames, &s.sensors, &settings.certify)?;
     out.details.add_certify_seconds(c.details.seconds);
@@ -339,8 +333,8 @@ pub type RigRun = (Averaged<RigSolution>, RigProblem, Option<RigRobustDetails>);
 /// `problem` when the caller solved it (whose clock the settings' budgets already count: `rotavg
 /// rig RIGHT LEFT` judges its own joint least squares; `None`: solved here if needed, and never
 /// with information, whose robust stage starts from unit weights, `[H24]`): the Cauchy solve,
-/// the inlier problem certified, and what was done (`requested` loss, the diagnosis `outliers` that chose it). Its
-/// times and budgets start when it is called (`AverageSettings::remaining` gives the budgets
+/// the inlier problem certified, and what was done (`requested` loss, the diagnosis
+/// `outliers` that chose it). Its times and budgets start when it is called (`AverageSettings::remaining` gives the budgets
 /// the caller has left; [`crate::pipeline::PipelineDetails::add_solve_seconds`] the times).
 pub(crate) fn robust_from(
     problem: &RigProblem,

@@ -121,9 +121,7 @@ impl RigFileReport {
             }
         };
         // the held sensors as held, as certified (the estimate's are within 1e-9 rad of them)
-        let sensors: Vec<_> = (estimate.sensors.iter().zip(rig.problem.held()))
-            .map(|(s, held)| held.unwrap_or(*s))
-            .collect();
+        let sensors = rig.problem.at_held(&estimate.sensors);
         if let Some(p) = &estimate.projection {
             rig.warnings.push(p.warning());
         }

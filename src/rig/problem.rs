@@ -268,6 +268,15 @@ impl RigProblem {
         &self.held
     }
 
+    /// `sensors` (one per sensor) with the held ones at their held rotations: an estimate as the
+    /// problem poses it (its held sensors within rounding of them); as long as the shorter of
+    /// `sensors` and the problem's sensors.
+    pub fn at_held(&self, sensors: &[Rotation]) -> Vec<Rotation> {
+        (sensors.iter().zip(&self.held))
+            .map(|(s, held)| held.unwrap_or(*s))
+            .collect()
+    }
+
     /// Every sensor is held: the frames alone are unknown, and the problem is one view graph
     /// over them ([`Self::frame_graph`], `[H19]`).
     pub fn all_held(&self) -> bool {

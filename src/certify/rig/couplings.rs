@@ -392,11 +392,7 @@ mod tests {
         let (p, _) = scene.generate();
         let s = solve_rig(&p, &RigSettings::default()).unwrap();
         let (frames, sensors) = polish_passes(&p, (s.frames, s.sensors), 30, None).unwrap();
-        let sensors = sensors
-            .iter()
-            .zip(p.held())
-            .map(|(s, h)| h.unwrap_or(*s))
-            .collect();
+        let sensors = p.at_held(&sensors);
         (p, frames, sensors)
     }
 

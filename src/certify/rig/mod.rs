@@ -36,8 +36,9 @@ use state::RigState;
 /// rig's constraints; each certified by `certify` (the view graph's ladder) within the
 /// budget. The verdict uses the best bound, and is about the estimate with its held sensors at
 /// their held rotations; a point of lower cost met on the way (the coupled bound's polish,
-/// `[H21]`) is the certification's `improvement`, which the bound covers as well. With gravity priors (`[G14]`) the frames' bound is the frames' gravity
-/// problem's. Errors: estimates of the wrong length, a held sensor farther than 1e-9 rad from
+/// `[H21]`) is the certification's `improvement`, which the bound covers as well. With gravity
+/// priors (`[G14]`) the frames' bound is the frames' gravity problem's; soft priors on a rig
+/// with a sensor to estimate are certified jointly through the world rig (`[G16]`). Errors: estimates of the wrong length, a held sensor farther than 1e-9 rad from
 /// its held rotation, frames off their held gravity directions.
 ///
 /// ```
@@ -66,12 +67,7 @@ pub fn certify_rig(
     check_estimate(problem, frames, sensors)?;
     // the held sensors at their held rotations (the estimate's are within 1e-9 rad of them):
     // the bounds and the cost are of the problem as posed
-    let sensors: Vec<Rotation> = sensors
-        .iter()
-        .zip(problem.held())
-        .map(|(s, held)| held.unwrap_or(*s))
-        .collect();
-    let sensors = &sensors[..];
+    let sensors = &problem.at_held(sensors)[..];
     check_held_priors(problem, frames, sensors)?;
     let cost = problem.cost(frames, sensors);
     let tolerance = settings.tolerance.resolve(problem.min_weight());

@@ -29,9 +29,7 @@ pub(super) fn certify_through_world(
     settings: &CertifySettings,
     certify: RigCertifier,
 ) -> Result<Certification<RigSolution>> {
-    let sensors: Vec<Rotation> = (sensors.iter().zip(problem.held()))
-        .map(|(s, held)| held.unwrap_or(*s))
-        .collect();
+    let sensors = problem.at_held(sensors);
     let (world_frames, world_sensors) = world.point(frames, &sensors);
     // the world's turns about e_3 are two null directions of every certificate matrix of the
     // world rig beyond the gauge's three: the grounded bound and the block comparison cannot
