@@ -44,6 +44,7 @@ pub mod settings;
 pub mod simultaneous;
 pub mod single;
 pub mod spectrum;
+pub(crate) mod tally;
 pub mod tolerance;
 
 pub use branch_and_bound::{BranchAndBoundStats, BranchAndBoundStop};

@@ -183,28 +183,3 @@ pub(crate) type JointCertifier = fn(
     &crate::so3::Rotation,
     &super::settings::CertifySettings,
 ) -> Result<super::certificate::Certificate>;
-
-/// [`Climb`] for a certification state with the fields `deadline`, `settings`, `best` (with
-/// its `lower_bound`) and `log`, and a method `certifies(lower_bound)`: the gravity and the
-/// simultaneous problems' states.
-macro_rules! climb_by_best_bound {
-    ($state:ident) => {
-        impl $crate::certify::rung::Climb for $state<'_> {
-            fn deadline(&self) -> &$crate::certify::budget::Deadline {
-                &self.deadline
-            }
-            fn budget(&self) -> &$crate::certify::budget::Budget {
-                &self.settings.budget
-            }
-            fn enough(&self) -> bool {
-                self.best
-                    .as_ref()
-                    .is_some_and(|b| self.certifies(b.lower_bound))
-            }
-            fn record(&mut self, attempt: $crate::certify::log::Attempt) {
-                self.log.push(attempt);
-            }
-        }
-    };
-}
-pub(crate) use climb_by_best_bound;

@@ -22,6 +22,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("certify::rung", 4),
     ("certify::ladder", 5),
     ("certify::one_rotation", 6),
+    ("certify::tally", 6),
     // the entry points: each problem folder's mod.rs
     ("certify::single", 8),
     ("certify::multiple", 8),

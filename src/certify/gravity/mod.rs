@@ -24,12 +24,13 @@ pub use planar::{PlanarBound, PlanarForm, verify_planar};
 
 use crate::certify::budget::Deadline;
 use crate::certify::certificate::CertifiedProblemKind;
-use crate::certify::certification::{Certification, CertifyDetails};
+use crate::certify::certification::Certification;
 use crate::certify::ladder::{Rungs, climb};
 use crate::certify::multiple::{certify_multiple, graph_certificate};
 use crate::certify::proof::{BoundMethod, Proof};
 use crate::certify::rung::Handed;
 use crate::certify::settings::CertifySettings;
+use crate::certify::tally::Tally;
 use crate::error::{Error, Result};
 use crate::multiple::MultipleSolution;
 use crate::multiple::gravity::GravityProblem;
@@ -93,16 +94,10 @@ pub fn certify_gravity(
         });
     }
     let cost = graph.chordal_cost(rotations);
-    let tolerance = settings.tolerance.resolve(graph.min_weight());
     let mut state = GravityState {
         problem,
         rotations,
-        settings,
-        deadline,
-        cost,
-        allowed_gap: tolerance.allowed_gap(cost),
-        best: None,
-        log: Vec::new(),
+        tally: Tally::new(settings, deadline, cost, graph.min_weight()),
         relaxed_method: None,
     };
     let rungs: Rungs<'_, GravityState<'_>> = vec![
@@ -111,16 +106,11 @@ pub fn certify_gravity(
         Box::new(relaxed::RelaxedRung(Handed::new(graph_certificate))),
     ];
     climb(&mut state, rungs)?;
-    let details = CertifyDetails::from_log(settings.mode, state.log, deadline.elapsed());
     let relaxed = state.relaxed_method.unwrap_or(BoundMethod::Dual);
-    let best = state.best.map(|b| {
-        let method = match b.proof {
-            Proof::GravityRelaxed => relaxed,
-            p => p.method(),
-        };
-        (b.lower_bound, method, b.verified_min_eigenvalue, b.note)
+    let (certificate, details) = state.tally.finish(BoundMethod::Dual, |proof| match proof {
+        Proof::GravityRelaxed => relaxed,
+        p => p.method(),
     });
-    let certificate = details.certificate_of(cost, best, BoundMethod::Dual, tolerance);
     Ok(Certification {
         certificate,
         details,

@@ -7,7 +7,6 @@
 //! full gravity by the SO(2) certificate).
 
 use super::state::GravityState;
-use crate::certify::log::Prediction;
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, GraphCertifier, Handed, Plan, Rung};
 use crate::error::Result;
@@ -27,15 +26,8 @@ impl<'a> Rung<GravityState<'a>> for RelaxedRung {
         if self.0.done {
             return Ok(Plan::Done);
         }
-        // a local solve and the view graph's certification: a few sparse factorisations
-        let g = cx.problem.problem();
-        let size = (g.num_rotations() + g.num_edges()) as f64;
-        let predicted = Prediction::new(2e-6 * size, 2000.0 * size);
-        Ok(if cx.problem.priors().is_full() {
-            Plan::Fallback(predicted)
-        } else {
-            Plan::Run(predicted)
-        })
+        // a local solve and the view graph's certification
+        Ok(cx.mixed_first(0))
     }
 
     fn attempt(&mut self, cx: &mut GravityState<'a>) -> Result<Found> {
@@ -43,13 +35,13 @@ impl<'a> Rung<GravityState<'a>> for RelaxedRung {
         let graph = cx.problem.problem();
         // within the certification's time left (one clock)
         let local = MultipleSettings {
-            max_seconds: cx.deadline.left().map(|l| l.max(0.0)),
+            max_seconds: cx.tally.left(),
             ..Default::default()
         };
         let mut free = solve_chordal(graph, cx.rotations.to_vec(), &local, None)?;
         fix_gauge(&mut free.rotations);
-        let mut settings = cx.settings.clone();
-        settings.budget.max_seconds = cx.deadline.left().map(|l| l.max(0.0));
+        let mut settings = cx.tally.settings.clone();
+        settings.budget.max_seconds = cx.tally.left();
         let inner = (self.0.certify)(graph, &free.rotations, &settings)?;
         let Some(lb) = inner.lower_bound else {
             return Ok(Found::failed(format!(
@@ -68,6 +60,6 @@ impl<'a> Rung<GravityState<'a>> for RelaxedRung {
             &note,
         );
         cx.relaxed_method = Some(inner.method);
-        Ok(Found::proved(lb, cx.certifies(lb), note))
+        Ok(Found::proved(lb, cx.tally.certifies(lb), note))
     }
 }

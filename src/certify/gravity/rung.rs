@@ -36,11 +36,14 @@ impl<'a> Rung<GravityState<'a>> for PlanarRung {
                 None,
             ));
         }
-        if !matches!(cx.settings.mode, CertifyMode::Auto | CertifyMode::Dual) {
+        if !matches!(
+            cx.tally.settings.mode,
+            CertifyMode::Auto | CertifyMode::Dual
+        ) {
             let reason = format!(
                 "the gravity problem is certified by its SO(2) dual certificate (modes auto \
                  and dual), not {}",
-                cx.settings.mode.name()
+                cx.tally.settings.mode.name()
             );
             return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
         }
@@ -59,8 +62,8 @@ impl<'a> Rung<GravityState<'a>> for PlanarRung {
         let x = PlanarForm::phases(cx.problem, &standard);
         // on large graphs the scalar comparison [G9] first: one n x n factor
         let graph_defect = data_defect(cx.problem.problem());
-        let gaps = (cx.allowed_gap, graph_defect);
-        let first = verify_planar_scalar(&form, &x, gaps, cx.settings, &cx.deadline)?;
+        let gaps = (cx.tally.allowed_gap, graph_defect);
+        let first = verify_planar_scalar(&form, &x, gaps, cx.tally.settings, &cx.tally.deadline)?;
         let mut tried = String::new();
         match first {
             Some(Ok(b)) => {
@@ -71,7 +74,7 @@ impl<'a> Rung<GravityState<'a>> for PlanarRung {
                 );
                 let mu = Some(b.verified_min_eigenvalue);
                 let lb = cx.offer(b.lower_bound, Proof::GravityDual, mu, &note);
-                if cx.certifies(lb) {
+                if cx.tally.certifies(lb) {
                     return Ok(Found::proved(lb, true, note));
                 }
                 tried = format!("{note}, not enough; ");
@@ -83,9 +86,9 @@ impl<'a> Rung<GravityState<'a>> for PlanarRung {
             cx.problem,
             &form,
             &x,
-            cx.allowed_gap,
-            &cx.settings.budget,
-            &cx.deadline,
+            cx.tally.allowed_gap,
+            &cx.tally.settings.budget,
+            &cx.tally.deadline,
         )?;
         Ok(match found {
             Ok(b) => {
@@ -99,7 +102,7 @@ impl<'a> Rung<GravityState<'a>> for PlanarRung {
                     Some(b.verified_min_eigenvalue),
                     &note,
                 );
-                Found::proved(lb, cx.certifies(lb), note)
+                Found::proved(lb, cx.tally.certifies(lb), note)
             }
             Err(reason) => Found::failed(format!("{tried}{reason}")),
         })

@@ -7,7 +7,6 @@
 
 use super::state::GravityState;
 use crate::certify::certificate::Certificate;
-use crate::certify::log::Prediction;
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Handed, Plan, Rung};
 use crate::certify::settings::CertifySettings;
@@ -32,22 +31,15 @@ impl<'a> Rung<GravityState<'a>> for SurrogateRung {
         if self.0.done {
             return Ok(Plan::Done);
         }
-        // the augmented view graph's certificate: a few sparse factorisations of 3(n + 1)
-        let g = cx.problem.problem();
-        let size = (g.num_rotations() + g.num_edges() + cx.problem.priors().num_known()) as f64;
-        let predicted = Prediction::new(2e-6 * size, 2000.0 * size);
-        Ok(if cx.problem.priors().is_full() {
-            Plan::Fallback(predicted)
-        } else {
-            Plan::Run(predicted)
-        })
+        // the augmented view graph's certificate (3(n + 1), one more node)
+        Ok(cx.mixed_first(cx.problem.priors().num_known()))
     }
 
     fn attempt(&mut self, cx: &mut GravityState<'a>) -> Result<Found> {
         self.0.done = true;
         let (surrogate, constant) = cx.problem.tilted_surrogate(cx.rotations)?;
-        let mut settings = cx.settings.clone();
-        settings.budget.max_seconds = cx.deadline.left().map(|l| l.max(0.0));
+        let mut settings = cx.tally.settings.clone();
+        settings.budget.max_seconds = cx.tally.left();
         let inner = (self.0.certify)(&surrogate, cx.rotations, &settings)?;
         let Some(lb) = inner.lower_bound else {
             return Ok(Found::failed(format!(
@@ -69,6 +61,6 @@ impl<'a> Rung<GravityState<'a>> for SurrogateRung {
             inner.verified_min_eigenvalue,
             &note,
         );
-        Ok(Found::proved(lb, cx.certifies(lb), note))
+        Ok(Found::proved(lb, cx.tally.certifies(lb), note))
     }
 }

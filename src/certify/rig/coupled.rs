@@ -56,11 +56,11 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
             Err(why) => return Ok(Found::failed(why)),
         };
         if passes > 0 {
-            let report = polish_report(passes, coupled.charge, cx.allowed_gap, clock);
+            let report = polish_report(passes, coupled.charge, cx.tally.allowed_gap, clock);
             cx.improve(frames.clone(), sensors.clone(), report);
         }
         // the augmented cost is about `cost + offset`: its tolerance made a quarter of the rig's
-        let mut settings = cx.settings.clone();
+        let mut settings = cx.tally.settings.clone();
         // the couplings are chosen for the estimate's own multipliers: the dual certificate at
         // it is the proof that can use them (no SDP or staircase of the augmented graph); its
         // pseudo-edges are far from consistent (rotations by pi/2 and pi), so the scalar
@@ -75,13 +75,13 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
             .min(COUPLED_MAX_FACTOR_VALUES);
         // a labelled estimate is no bound of the rig's: not run
         settings.dual.randomized.enabled = false;
-        let augmented = cx.cost + coupled.offset.max(0.0);
+        let augmented = cx.tally.cost + coupled.offset.max(0.0);
         if augmented > 0.0 {
-            let relative = 0.25 * cx.allowed_gap / augmented;
+            let relative = 0.25 * cx.tally.allowed_gap / augmented;
             settings.tolerance.relative = settings.tolerance.relative.min(relative);
         }
         let x = cx.problem.image_rotations(&frames, &sensors);
-        let seconds = cx.left().map(|l| 0.6 * l);
+        let seconds = cx.tally.left().map(|l| 0.6 * l);
         let (parts, sum) =
             match components_minimum(self.0.certify, &coupled.graph, &x, cx, &settings, seconds)? {
                 Ok(found) => found,
@@ -105,7 +105,7 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
             coupled.offset
         );
         let bound = cx.offer(bound, Proof::RigCoupled, &note);
-        Ok(Found::proved(bound, cx.certifies(bound), note))
+        Ok(Found::proved(bound, cx.tally.certifies(bound), note))
     }
 }
 
@@ -194,9 +194,9 @@ fn polished(
     cx: &RigState<'_>,
 ) -> Result<std::result::Result<(Vec<Rotation>, Vec<Rotation>, Coupled, usize), String>> {
     let (mut frames, mut sensors) = (cx.frames.to_vec(), cx.sensors.to_vec());
-    let deadline = Deadline::after(cx.left().map(|l| l / 3.0));
+    let deadline = Deadline::after(cx.tally.left().map(|l| l / 3.0));
     let mut passes = 0;
-    let max_bytes = cx.settings.budget.max_memory_bytes;
+    let max_bytes = cx.tally.settings.budget.max_memory_bytes;
     loop {
         // an estimate the couplings or the passes cannot take fails the rung, not the certificate
         let coupled = match couple(cx.problem, &frames, &sensors, max_bytes) {
@@ -204,7 +204,7 @@ fn polished(
             Ok(Err(why)) => return Ok(Err(why)),
             Err(e) => return Ok(Err(e.to_string())),
         };
-        let done = coupled.charge <= 0.25 * cx.allowed_gap
+        let done = coupled.charge <= 0.25 * cx.tally.allowed_gap
             || passes >= POLISH_MAX
             || deadline.is_some_and(|d| d.passed());
         if done {

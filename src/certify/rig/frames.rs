@@ -32,8 +32,8 @@ impl<'a> Rung<RigState<'a>> for FramesRung {
     fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {
         self.0.done = true;
         let (graph_certify, gravity_certify) = self.0.certify;
-        let mut settings = cx.settings.clone();
-        settings.budget.max_seconds = cx.left();
+        let mut settings = cx.tally.settings.clone();
+        settings.budget.max_seconds = cx.tally.left();
         let (inner, constant, charge, edges, what) = match cx.problem.frame_gravity(cx.sensors)? {
             Some(fg) => {
                 // a point the frames' problem refuses (off its held directions) fails the rung
@@ -84,7 +84,7 @@ fn found(
         if what == "view graph" { "H19" } else { "G14" }
     );
     let bound = cx.offer(bound, Proof::RigFrames, &note);
-    Ok(Found::proved(bound, cx.certifies(bound), note))
+    Ok(Found::proved(bound, cx.tally.certifies(bound), note))
 }
 
 /// What `[G14]` charges for the frames' priors as computed: the soft combination's rounding, or
@@ -93,6 +93,6 @@ fn found(
 fn combination_charge(fg: &FrameGravity, cx: &RigState<'_>) -> f64 {
     let w = cx.total_weight();
     let delta = fg.held_angle;
-    let held = 6.0 * delta * (w * cx.cost.max(0.0)).sqrt() + 8.0 * delta * delta * w;
+    let held = 6.0 * delta * (w * cx.tally.cost.max(0.0)).sqrt() + 8.0 * delta * delta * w;
     (fg.soft_charge + held) * (1.0 + 1e-6)
 }

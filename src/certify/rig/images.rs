@@ -39,9 +39,10 @@ impl<'a> Rung<RigState<'a>> for ImagesRung {
         let x = cx.problem.image_rotations(cx.frames, cx.sensors);
         let images = cx.problem.image_graph()?;
         // a labelled estimate is no bound of the rig's: not run
-        let mut settings = cx.settings.clone();
+        let mut settings = cx.tally.settings.clone();
         settings.dual.randomized.enabled = false;
-        let whole = components_minimum(self.0.certify, &images, &x, cx, &settings, cx.left())?;
+        let whole =
+            components_minimum(self.0.certify, &images, &x, cx, &settings, cx.tally.left())?;
         let (sum, note) = match whole {
             Ok((parts, sum)) => (
                 sum,
@@ -71,7 +72,7 @@ impl<'a> Rung<RigState<'a>> for ImagesRung {
             cx.floor(sum)
         };
         let bound = cx.offer(bound, Proof::RigImages, &note);
-        Ok(Found::proved(bound, cx.certifies(bound), note))
+        Ok(Found::proved(bound, cx.tally.certifies(bound), note))
     }
 }
 
@@ -99,7 +100,7 @@ fn sensor_pairs_minimum(
         let keep: Vec<bool> = images.edges().iter().map(|e| pair(e) == (s, t)).collect();
         let graph = images.edge_subset(&keep)?;
         let share = graph.num_edges() as f64 / total;
-        let seconds = cx.left().map(|l| l * share);
+        let seconds = cx.tally.left().map(|l| l * share);
         match components_minimum(certify, &graph, x, cx, settings, seconds)? {
             Ok((_, min)) => sum += min,
             Err(_) => zero.push(format!("{s}-{t}")),
@@ -145,7 +146,7 @@ pub(super) fn components_minimum(
         let mut free = solve_chordal(&part, start, &local, None)?;
         fix_gauge(&mut free.rotations);
         let mut settings = settings.clone();
-        settings.budget.max_seconds = cx.left().map(|l| seconds.map_or(l, |s| l.min(s)));
+        settings.budget.max_seconds = cx.tally.left().map(|l| seconds.map_or(l, |s| l.min(s)));
         let c = certify(&part, &free.rotations, &settings)?;
         match c.lower_bound {
             Some(lb) => sum += lb,

@@ -19,13 +19,12 @@ mod two_graphs;
 mod world;
 
 use crate::certify::budget::Deadline;
-use crate::certify::certification::{
-    Certification, CertifyDetails, Improvement, ImprovementSource,
-};
+use crate::certify::certification::{Certification, Improvement, ImprovementSource};
 use crate::certify::ladder::{Rungs, climb};
-use crate::certify::proof::BoundMethod;
+use crate::certify::proof::{BoundMethod, Proof};
 use crate::certify::rung::{GraphCertifier, Handed};
 use crate::certify::settings::CertifySettings;
+use crate::certify::tally::Tally;
 use crate::error::{Error, Result};
 use crate::rig::{RigProblem, RigSolution};
 use crate::so3::Rotation;
@@ -70,17 +69,11 @@ pub fn certify_rig(
     let sensors = &problem.at_held(sensors)[..];
     check_held_priors(problem, frames, sensors)?;
     let cost = problem.cost(frames, sensors);
-    let tolerance = settings.tolerance.resolve(problem.min_weight());
     let mut state = RigState {
         problem,
         frames,
         sensors,
-        settings,
-        deadline,
-        cost,
-        allowed_gap: tolerance.allowed_gap(cost),
-        best: None,
-        log: Vec::new(),
+        tally: Tally::new(settings, deadline, cost, problem.min_weight()),
         improvement: None,
     };
     let rungs: Rungs<'_, RigState<'_>> = vec![
@@ -96,11 +89,7 @@ pub fn certify_rig(
         Box::new(images::ImagesRung(Handed::new(certify))),
     ];
     climb(&mut state, rungs)?;
-    let mut details = CertifyDetails::from_log(settings.mode, state.log, deadline.elapsed());
-    let best = state
-        .best
-        .map(|b| (b.lower_bound, b.proof.method(), None, b.note));
-    let certificate = details.certificate_of(cost, best, BoundMethod::Dual, tolerance);
+    let (certificate, mut details) = state.tally.finish(BoundMethod::Dual, Proof::method);
     details.improvement = state.improvement.as_ref().map(|s| Improvement {
         source: ImprovementSource::RigPolish,
         cost: s.cost,

@@ -1,72 +1,48 @@
 //! The state of one rig certification: the estimate, its cost, the best bound, the one log.
 
-use crate::certify::budget::Deadline;
-use crate::certify::log::Attempt;
 use crate::certify::proof::Proof;
-use crate::certify::rung::climb_by_best_bound;
-use crate::certify::settings::CertifySettings;
+use crate::certify::tally::{Tally, climb_by_tally};
 use crate::rig::RigProblem;
 use crate::so3::Rotation;
 use crate::termination::SolverReport;
-
-/// The best verified bound so far.
-pub(crate) struct Best {
-    pub lower_bound: f64,
-    pub proof: Proof,
-    pub note: String,
-}
 
 /// One certification's state.
 pub(crate) struct RigState<'a> {
     pub problem: &'a RigProblem,
     pub frames: &'a [Rotation],
     pub sensors: &'a [Rotation],
-    pub settings: &'a CertifySettings,
-    pub deadline: Deadline,
-    /// The estimate's cost and the gap the verdict allows there.
-    pub cost: f64,
-    pub allowed_gap: f64,
-    pub best: Option<Best>,
-    pub log: Vec<Attempt>,
+    pub tally: Tally<'a>,
     /// A point of lower cost than the estimate found while bounding (the coupled bound's
     /// polish, `[H21]`), when one was.
     pub improvement: Option<crate::rig::RigSolution>,
 }
 
 impl RigState<'_> {
-    /// `lower_bound` certifies the estimate.
-    pub fn certifies(&self, lower_bound: f64) -> bool {
-        self.cost - lower_bound <= self.allowed_gap
-    }
-
     /// Keep `lower_bound` (capped at the cost, at least 0 for scalar weights) when it is the
     /// best so far; the capped value.
     pub fn offer(&mut self, lower_bound: f64, proof: Proof, note: &str) -> f64 {
+        let cost = self.tally.cost;
         let lb = if self.problem.is_anisotropic() {
             // the trace form of data orthogonal only to rounding can be slightly negative
             // (`[H24]`): no floor at 0; a bound that is not finite is no bound
             if !lower_bound.is_finite() {
                 return f64::NEG_INFINITY;
             }
-            lower_bound.min(self.cost)
+            lower_bound.min(cost)
         } else {
-            crate::certify::certificate::nonnegative_bound_at_most(lower_bound, self.cost)
+            crate::certify::certificate::nonnegative_bound_at_most(lower_bound, cost)
         };
-        if self.best.as_ref().is_none_or(|b| lb > b.lower_bound) {
-            self.best = Some(Best {
-                lower_bound: lb,
-                proof,
-                note: note.to_string(),
-            });
-        }
-        lb
+        self.tally.keep(lb, proof, None, note)
     }
 
     /// Keep `(frames, sensors)`, reached by `report`, when its cost is below the estimate's
     /// and any earlier improvement's.
     pub fn improve(&mut self, frames: Vec<Rotation>, sensors: Vec<Rotation>, report: SolverReport) {
         let cost = self.problem.cost(&frames, &sensors);
-        let best = self.improvement.as_ref().map_or(self.cost, |s| s.cost);
+        let best = self
+            .improvement
+            .as_ref()
+            .map_or(self.tally.cost, |s| s.cost);
         if cost < best {
             self.improvement = Some(crate::rig::RigSolution {
                 frames,
@@ -75,11 +51,6 @@ impl RigState<'_> {
                 report,
             });
         }
-    }
-
-    /// The certification's time left (`None`: no limit), never negative.
-    pub fn left(&self) -> Option<f64> {
-        self.deadline.left().map(|l| l.max(0.0))
     }
 
     /// A lower bound on `J*` from a proven bound `lower` of one of `[H19]`'s reformulations
@@ -97,4 +68,4 @@ impl RigState<'_> {
     }
 }
 
-climb_by_best_bound!(RigState);
+climb_by_tally!(RigState);

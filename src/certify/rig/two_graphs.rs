@@ -49,8 +49,8 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
         let (a, b) = (cx.sensors[0], cx.sensors[1]);
         let rotations: Vec<Rotation> = cx.frames.iter().map(|f| a * f).collect();
         let s = b * a.inverse();
-        let mut settings = cx.settings.clone();
-        settings.budget.max_seconds = cx.left();
+        let mut settings = cx.tally.settings.clone();
+        settings.budget.max_seconds = cx.tally.left();
         let c = match (self.0.certify.0)(&right, &left, &rotations, &s, &settings) {
             Ok(c) => c,
             Err(e) => return Ok(Found::failed(e.to_string())),
@@ -70,7 +70,7 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
             _ => Proof::SimultaneousDual,
         };
         let bound = cx.offer(bound, proof, &note);
-        Ok(Found::proved(bound, cx.certifies(bound), note))
+        Ok(Found::proved(bound, cx.tally.certifies(bound), note))
     }
 }
 

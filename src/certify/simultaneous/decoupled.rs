@@ -44,7 +44,7 @@ impl DecoupledRung {
         seconds: Option<f64>,
     ) -> Result<std::result::Result<f64, String>> {
         let local = solve_chordal(graph, start, &MultipleSettings::default(), None)?;
-        let mut settings = cx.settings.clone();
+        let mut settings = cx.tally.settings.clone();
         settings.budget.max_seconds = seconds;
         let c = (self.certify)(graph, &local.rotations, &settings)?;
         Ok(c.lower_bound.ok_or(c.explanation))
@@ -57,7 +57,7 @@ impl<'a> Rung<SimState<'a>> for DecoupledRung {
     }
 
     fn plan(&mut self, cx: &SimState<'a>) -> Result<Plan> {
-        if self.done || cx.settings.mode == CertifyMode::Sdp {
+        if self.done || cx.tally.settings.mode == CertifyMode::Sdp {
             return Ok(Plan::Done);
         }
         // two local solves and two certifications of sparse view graphs
@@ -67,10 +67,10 @@ impl<'a> Rung<SimState<'a>> for DecoupledRung {
 
     fn attempt(&mut self, cx: &mut SimState<'a>) -> Result<Found> {
         self.done = true;
-        let half = cx.deadline.left().map(|l| 0.5 * l.max(0.0));
+        let half = cx.tally.deadline.left().map(|l| 0.5 * l.max(0.0));
         let right = self.graph_bound(cx.right, cx.rotations.to_vec(), cx, half)?;
         let left_start = cx.rotations.iter().map(|r| cx.s * r).collect();
-        let rest = cx.deadline.left().map(|l| l.max(0.0));
+        let rest = cx.tally.left();
         let left = self.graph_bound(cx.left, left_start, cx, rest)?;
         let (lr, ll) = match (right, left) {
             (Ok(a), Ok(b)) => (a, b),
@@ -82,6 +82,6 @@ impl<'a> Rung<SimState<'a>> for DecoupledRung {
             "the two graphs' certified minima, decoupled [H16]: {lr:.9e} (right) + {ll:.9e} (left)"
         );
         let lb = cx.offer(lr + ll, Proof::SimultaneousDecoupled, f64::NAN, &note);
-        Ok(Found::proved(lb, cx.certifies(lb), note))
+        Ok(Found::proved(lb, cx.tally.certifies(lb), note))
     }
 }

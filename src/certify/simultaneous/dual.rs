@@ -48,7 +48,7 @@ impl<'a> Rung<SimState<'a>> for DualRung {
     }
 
     fn plan(&mut self, cx: &SimState<'a>) -> Result<Plan> {
-        let mode = cx.settings.mode;
+        let mode = cx.tally.settings.mode;
         if self.done || mode == CertifyMode::Sdp {
             return Ok(Plan::Done);
         }
@@ -90,7 +90,7 @@ impl<'a> Rung<SimState<'a>> for DualRung {
             None => "multipliers at the estimate not finite (singular coupling system)".into(),
         };
         if let Some(at) = &at
-            && !bound.is_some_and(|b| cx.certifies(b.lower_bound))
+            && !bound.is_some_and(|b| cx.tally.certifies(b.lower_bound))
         {
             let predicted = predict_multipliers_at_estimate(n);
             let (searched, words) = search(cx, at, &predicted, bound);
@@ -109,7 +109,7 @@ impl<'a> Rung<SimState<'a>> for DualRung {
                     b.verified_min_eigenvalue,
                     &note,
                 );
-                Found::proved(lb, cx.certifies(lb), note)
+                Found::proved(lb, cx.tally.certifies(lb), note)
             }
             None => Found::failed(note),
         })
@@ -126,9 +126,9 @@ fn search(
     bound: Option<SimultaneousBound>,
 ) -> (Option<SimultaneousBound>, Option<String>) {
     let n = cx.right.num_rotations();
-    let target = 0.25 * cx.allowed_gap / (3 * n) as f64;
-    let seconds = cx.deadline.left().map(|l| 0.5 * l.max(0.0));
-    let cut_bytes = (cx.settings.budget.max_memory_bytes as f64 - predicted.bytes).max(0.0);
+    let target = 0.25 * cx.tally.allowed_gap / (3 * n) as f64;
+    let seconds = cx.tally.deadline.left().map(|l| 0.5 * l.max(0.0));
+    let cut_bytes = (cx.tally.settings.budget.max_memory_bytes as f64 - predicted.bytes).max(0.0);
     let Some(found) =
         super::search::search_couplings(cx.right, cx.left, at, target, seconds, cut_bytes)
     else {

@@ -20,12 +20,11 @@ pub use dual::predict_multipliers_at_estimate;
 pub use multipliers::multipliers_at_estimate;
 
 use crate::certify::budget::Deadline;
-use crate::certify::certification::{
-    Certification, CertifyDetails, Improvement, ImprovementSource,
-};
+use crate::certify::certification::{Certification, Improvement, ImprovementSource};
 use crate::certify::ladder::{Rungs, climb};
-use crate::certify::proof::BoundMethod;
+use crate::certify::proof::{BoundMethod, Proof};
 use crate::certify::settings::CertifySettings;
+use crate::certify::tally::Tally;
 use crate::error::{Error, Result};
 use crate::multiple::MultipleProblem;
 use crate::relax::simultaneous::{JointRotations, joint_cost};
@@ -62,22 +61,15 @@ pub fn certify_simultaneous(
         });
     }
     let cost = joint_cost(right, left, rotations, s);
-    let tolerance = settings
-        .tolerance
-        .resolve(right.min_weight().min(left.min_weight()));
+    let min_weight = right.min_weight().min(left.min_weight());
     let mut state = SimState {
         right,
         left,
         rotations,
         s,
-        settings,
-        deadline,
-        cost,
-        allowed_gap: tolerance.allowed_gap(cost),
-        best: None,
+        tally: Tally::new(settings, deadline, cost, min_weight),
         improvement: None,
         sdp: None,
-        log: Vec::new(),
     };
     let rungs: Rungs<'_, SimState<'_>> = vec![
         Box::new(dual::DualRung::default()),
@@ -87,18 +79,12 @@ pub fn certify_simultaneous(
         )),
     ];
     climb(&mut state, rungs)?;
-    let seconds = deadline.elapsed();
-    let mut details = CertifyDetails::from_log(settings.mode, state.log, seconds);
+    let (certificate, mut details) = state.tally.finish(BoundMethod::Sdp, Proof::method);
     details.sdp = state.sdp;
     details.improvement = state.improvement.as_ref().map(|r| Improvement {
         source: ImprovementSource::SdpRounding,
         cost: r.cost,
     });
-    let best = state.best.map(|b| {
-        let mu = Some(b.verified_min_eigenvalue);
-        (b.lower_bound, b.proof.method(), mu, b.note)
-    });
-    let certificate = details.certificate_of(cost, best, BoundMethod::Sdp, tolerance);
     Ok(Certification {
         certificate,
         details,

@@ -25,7 +25,7 @@ impl<'a> Rung<SimState<'a>> for SdpRung {
     }
 
     fn plan(&mut self, cx: &SimState<'a>) -> Result<Plan> {
-        if self.done || !matches!(cx.settings.mode, CertifyMode::Auto | CertifyMode::Sdp) {
+        if self.done || !matches!(cx.tally.settings.mode, CertifyMode::Auto | CertifyMode::Sdp) {
             return Ok(Plan::Done);
         }
         let p = predict_relax_simultaneous(cx.right.num_rotations());
@@ -35,7 +35,7 @@ impl<'a> Rung<SimState<'a>> for SdpRung {
     fn attempt(&mut self, cx: &mut SimState<'a>) -> Result<Found> {
         self.done = true;
         let n = cx.right.num_rotations();
-        let Some(sdp) = cx.settings.sdp_until(&cx.deadline, 0.0) else {
+        let Some(sdp) = cx.tally.settings.sdp_until(&cx.tally.deadline, 0.0) else {
             return Ok(Found::refused(Refusal::OverBudget {
                 reason: "the time budget is spent".into(),
             }));
@@ -60,7 +60,7 @@ impl<'a> Rung<SimState<'a>> for SdpRung {
             rounded_cost: Some(relaxation.rounded.cost),
             polished_cost: None,
         });
-        if relaxation.rounded.cost < cx.cost {
+        if relaxation.rounded.cost < cx.tally.cost {
             cx.improvement = Some(relaxation.rounded.clone());
         }
         Ok(match bound {
@@ -74,7 +74,7 @@ impl<'a> Rung<SimState<'a>> for SdpRung {
                     b.verified_min_eigenvalue
                 );
                 let lb = cx.offer(b.lower_bound, Proof::Sdp, b.verified_min_eigenvalue, &note);
-                Found::proved(lb, cx.certifies(lb), note)
+                Found::proved(lb, cx.tally.certifies(lb), note)
             }
             None => Found::failed(format!(
                 "SDP ({:?}): multipliers not finite",

@@ -121,6 +121,14 @@ pub(crate) fn rounding_margin(n: usize, cost: f64, total_weight: f64) -> f64 {
         + 16.0 * eps * (total_weight + (total_weight * cost.abs()).sqrt())
 }
 
+/// A convex cost's bound from its value `cost` at a point, over a set within reach of it
+/// (`[S4]`, `[S7]`): `cost - |g| L - 2 slack` less the rounding margin, `step = |g| L` (the
+/// subgradient's norm, its rounding included, times the set's reach), `slack` the coincident
+/// samples' (whose subgradient is any vector of the unit ball).
+fn first_order_bound(problem: &SingleProblem, cost: f64, step: f64, slack: f64) -> f64 {
+    cost - step - 2.0 * slack - rounding_margin(problem.len(), cost, problem.total_weight())
+}
+
 /// `[S1]`: `min_R sum w_i ||R_i - R||^2 = sum w_i ||R_i||_F^2 + 3W - 2 (s1 + s2 + sign(det M) s3)`
 /// (`= 6W - ...` for exactly orthogonal samples; the samples are orthogonal only within the
 /// validation tolerance, so `sum w_i ||R_i||_F^2` is evaluated, in double-double, not assumed).
@@ -260,10 +268,7 @@ fn geodesic_ball_bound(
     };
     let e = eval_geodesic(problem, estimate, norm);
     let g = e.gradient_norm(norm) + 16.0 * f64::EPSILON * total * (1.0 + radius);
-    let lb = e.cost
-        - g * radius
-        - 2.0 * e.coincident_slack
-        - rounding_margin(problem.len(), e.cost, total);
+    let lb = first_order_bound(problem, e.cost, g * radius, e.coincident_slack);
     (
         Some(lb),
         format!(
@@ -306,10 +311,7 @@ fn chordal_l1_bound(problem: &SingleProblem, deadline: Option<Deadline>) -> (Opt
     );
     let g = med.gradient_norm + 16.0 * f64::EPSILON * total;
     let radius = 3f64.sqrt() + med.point.norm();
-    let lb = med.cost
-        - g * radius
-        - 2.0 * med.coincident_slack
-        - rounding_margin(problem.len(), med.cost, total);
+    let lb = first_order_bound(problem, med.cost, g * radius, med.coincident_slack);
     (
         Some(lb),
         format!(
