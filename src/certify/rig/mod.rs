@@ -2,9 +2,9 @@
 //! rungs, each a sum of view-graph certifications (handed in by the entry point:
 //! `certify_multiple`), so they reach any size the view-graph ladder does:
 //!
-//! * [`Proof::RigFrames`](crate::certify::Proof::RigFrames) (every sensor held): `J(F, S)` is the frames' view graph's cost plus
+//! * [`Proof::RigFrames`] (every sensor held): `J(F, S)` is the frames' view graph's cost plus
 //!   the within-frame edges' constant, exactly up to rounding that `rounding.rs` charges.
-//! * [`Proof::RigImages`](crate::certify::Proof::RigImages): every rig point is a point of the images' view graph without the
+//! * [`Proof::RigImages`]: every rig point is a point of the images' view graph without the
 //!   rig's constraints (`X_a = S_{s_a} F_{f_a}` is a tuple of rotations), so the sum of its
 //!   components' certified minima bounds `J*`. Tight when the images' optimum is a rig
 //!   (noise-free data); a gap otherwise (the constraints' cost).
