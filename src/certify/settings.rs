@@ -149,7 +149,9 @@ pub struct DualSettings {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct RandomizedSettings {
-    /// Run the test when no deterministic proof fits the budget (default `true`).
+    /// Run the test when no deterministic proof fits the budget (default `true`); `false`
+    /// also skips the Lanczos estimate of `lambda_min(S)` on the gauge's complement `[D7]` it
+    /// starts from (a labelled estimate beside an `inconclusive` verdict, never a bound).
     pub enabled: bool,
     /// The probability, over the test's own random vectors, that a passing test is wrong
     /// (default `1e-12`). In `(0, 0.5]`.

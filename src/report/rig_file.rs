@@ -241,6 +241,17 @@ impl fmt::Display for RigSolution {
     }
 }
 
+/// `certified, gap 1.234e-8 (relative 5.6e-11)`: the absolute gap beside the relative one, which
+/// is not telling at a cost near 0 (noise-free data).
+fn verdict_and_gap(c: &crate::certify::Certificate) -> String {
+    format!(
+        "{}, gap {:.3e} (relative {:.1e})",
+        c.verdict,
+        c.gap.unwrap_or(f64::NAN),
+        c.relative_gap.unwrap_or(f64::NAN)
+    )
+}
+
 impl fmt::Display for RigFileReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let p = &self.rig.problem;
@@ -259,13 +270,10 @@ impl fmt::Display for RigFileReport {
             write!(f, "\n{info} [H24]")?;
         }
         if let Some(c) = &self.calibration {
-            let verdict = c.certificate.as_ref().map_or("no certificate".into(), |c| {
-                format!(
-                    "{}, relative gap {:.1e}",
-                    c.verdict,
-                    c.relative_gap.unwrap_or(f64::NAN)
-                )
-            });
+            let verdict = c
+                .certificate
+                .as_ref()
+                .map_or("no certificate".into(), verdict_and_gap);
             let then = match c.refined_sensors_from_rig {
                 Some(_) => "then refined by the soft priors [G15] and held with them",
                 None => "then held with the priors",
@@ -280,10 +288,8 @@ impl fmt::Display for RigFileReport {
         if let Some(j) = &self.result.details.rig_joint {
             write!(
                 f,
-                "\njoint problem with the sensors free and the soft priors [G16]: {}, relative \
-                 gap {:.1e}{}",
-                j.verdict,
-                j.relative_gap.unwrap_or(f64::NAN),
+                "\njoint problem with the sensors free and the soft priors [G16]: {}{}",
+                verdict_and_gap(j),
                 match j.is_certified() {
                     true => " (the certificate below)",
                     false => "; the certificate below is the held rig's",

@@ -229,7 +229,8 @@ pub struct GraphArgs {
     /// per run, printed with the result.
     #[arg(long, value_name = "N")]
     pub randomized_seed: Option<u64>,
-    /// Do not run the randomized Chebyshev test [D16].
+    /// Do not run the randomized Chebyshev test [D16] (nor the Lanczos estimate it starts
+    /// from).
     #[arg(long, conflicts_with = "randomized_seed")]
     pub no_randomized: bool,
 }
