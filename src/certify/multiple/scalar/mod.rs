@@ -147,12 +147,31 @@ pub enum ScalarFailure {
         /// Negative pivots counted.
         negative_pivots: usize,
     },
+    /// `nodes` nodes, pairwise not adjacent, whose diagonal entries of `L - diag(delta) - h I`
+    /// are below `-h`: at least that many negative eigenvalues within any accepted backward
+    /// error, so the factorisation was not run (a forecast of the inertia failure).
+    NegativeDiagonal {
+        /// Such nodes found (a greedy choice: a lower bound on the negative eigenvalues).
+        nodes: usize,
+    },
     /// A zero or non-finite pivot, or a non-finite bound.
     Numerical,
     /// The factorisation's backward error exceeded the headroom `h`.
     BackwardError,
     /// The estimate's rotations are too far from orthogonal.
     NotOrthogonal,
+}
+
+impl ScalarFailure {
+    /// The negative eigenvalues an inertia failure showed (counted pivots, or at least the
+    /// nodes of [`ScalarFailure::NegativeDiagonal`]); `None` for the other failures.
+    pub fn negative_count(&self) -> Option<usize> {
+        match self {
+            ScalarFailure::Inertia { negative_pivots } => Some(*negative_pivots),
+            ScalarFailure::NegativeDiagonal { nodes } => Some(*nodes),
+            _ => None,
+        }
+    }
 }
 
 /// Why a comparison that ran did not prove enough, with the numbers: its proven
@@ -171,6 +190,10 @@ pub(in crate::certify::multiple) fn failure_text(
         Err(ScalarFailure::Inertia { negative_pivots }) => {
             format!("{negative_pivots} negative pivots (its condition needs exactly {needed})")
         }
+        Err(ScalarFailure::NegativeDiagonal { nodes }) => format!(
+            "at least {nodes} negative eigenvalues, one per node of negative diagonal with no \
+             edge between them (its condition needs exactly {needed}; not factorised)"
+        ),
         Err(ScalarFailure::Numerical) => "a zero or non-finite pivot".into(),
         Err(ScalarFailure::BackwardError) => {
             "the factorisation's backward error exceeded its headroom".into()

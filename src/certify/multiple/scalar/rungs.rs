@@ -208,7 +208,7 @@ impl ScalarFamily {
             match run(cx, a, rotations, target)? {
                 (Some(b), _) => return Ok(Some(b)),
                 // a subgraph's or a split's condition is harder than the whole graph's
-                (None, Some(ScalarFailure::Inertia { .. })) => return Ok(None),
+                (None, Some(f)) if f.negative_count().is_some() => return Ok(None),
                 (None, _) => {}
             }
         } else if let Some(refusal) = self.whole_refused.take() {
@@ -366,7 +366,7 @@ impl Fallbacks {
             return Ok(None);
         }
         let lowest = self.subgraph;
-        if let Some(ScalarFailure::Inertia { negative_pivots }) = failure {
+        if let Some(negative_pivots) = failure.and_then(|f| f.negative_count()) {
             let n = cx.problem.num_rotations();
             let jump = subgraph_after(lowest.saturating_sub(1), negative_pivots, n);
             self.subgraph = jump.min(self.unfit.saturating_sub(1)).max(lowest);
