@@ -32,11 +32,12 @@ mod soft;
 pub use soft::SURROGATE_STIFFNESS;
 
 use super::chordal::solve_chordal_tilt_fixed;
+use super::init::initialise;
 use super::problem::MultipleProblem;
 use super::robust::{
     edge_residuals, inlier_threshold_deg, objective_cost_gradient, relative_weight,
 };
-use super::solve::{MultipleSettings, MultipleSolution, solve_multiple};
+use super::solve::{Initialisation, MultipleSettings, MultipleSolution, solve_multiple};
 use crate::error::{Error, Result};
 use crate::objective::Loss;
 use crate::so3::Rotation;
@@ -648,8 +649,8 @@ pub fn solve_gravity(
     }
     graph.require_connected()?;
     let start = std::time::Instant::now();
-    let free = solve_multiple(graph, settings)?;
-    let init = problem.aligned_and_projected(&problem.to_standard(&free.rotations));
+    let free = start_point(problem, settings)?;
+    let init = free.rotations;
     // one clock for MultipleSettings::max_seconds: the constrained solve gets what is left
     let left = settings.remaining(start);
     let (rotations, iterations, termination) = if objective.is_chordal_l2() {
@@ -681,13 +682,43 @@ pub fn solve_gravity(
             } else {
                 format!("irls-{} (gravity: {held})", objective.loss.name())
             },
-            iterations: free.report.iterations + iterations,
+            iterations: free.iterations + iterations,
             termination,
             seconds: start.elapsed().as_secs_f64(),
         },
         init_cost: free.cost,
         residuals,
         linear_algebra: None,
+    })
+}
+
+/// Where [`solve_gravity`]'s constrained or soft solve starts (standard convention), with the
+/// iterations and the cost of getting there.
+struct Start {
+    rotations: Vec<Rotation>,
+    iterations: usize,
+    cost: f64,
+}
+
+/// [`solve_gravity`]'s start: the unconstrained solve aligned to the priors and projected onto
+/// them; with soft priors and a given estimate (a warm start, as the rig's alternation passes
+/// give, `[G15]`), that estimate itself: the free solve and the projection would carry it out
+/// of the soft problem's minimum and the soft solve back (1.4 s per pass at 10^4 frames).
+fn start_point(problem: &GravityProblem, settings: &MultipleSettings) -> Result<Start> {
+    let graph = &problem.problem;
+    if let (Initialisation::Given(_), Some(_)) = (&settings.init, problem.priors.weight()) {
+        let rotations = initialise(graph, &settings.init)?;
+        return Ok(Start {
+            cost: graph.cost(&rotations) + problem.prior_cost(&rotations),
+            rotations: problem.to_standard(&rotations),
+            iterations: 0,
+        });
+    }
+    let free = solve_multiple(graph, settings)?;
+    Ok(Start {
+        rotations: problem.aligned_and_projected(&problem.to_standard(&free.rotations)),
+        iterations: free.report.iterations,
+        cost: free.cost,
     })
 }
 
