@@ -341,8 +341,9 @@ pub type RigRun = (Averaged<RigSolution>, RigProblem, Option<RigRobustDetails>);
 /// rig RIGHT LEFT` judges its own joint least squares; `None`: solved here if needed, and never
 /// with information, whose robust stage starts from unit weights, `[H24]`): the Cauchy solve,
 /// the inlier problem certified, and what was done (`requested` loss, the diagnosis
-/// `outliers` that chose it). Its times and budgets start when it is called (`AverageSettings::remaining` gives the budgets
-/// the caller has left; [`crate::pipeline::PipelineDetails::add_solve_seconds`] the times).
+/// `outliers` that chose it). Its times and budgets start when it is called
+/// (`AverageSettings::remaining` gives the budgets the caller has left;
+/// [`crate::pipeline::PipelineDetails::add_solve_seconds`] the times).
 pub(crate) fn robust_from(
     problem: &RigProblem,
     ls: Option<RigSolution>,

@@ -37,8 +37,9 @@ use state::RigState;
 /// their held rotations; a point of lower cost met on the way (the coupled bound's polish,
 /// `[H21]`) is the certification's `improvement`, which the bound covers as well. With gravity
 /// priors (`[G14]`) the frames' bound is the frames' gravity problem's; soft priors on a rig
-/// with a sensor to estimate are certified jointly through the world rig (`[G16]`). Errors: estimates of the wrong length, a held sensor farther than 1e-9 rad from
-/// its held rotation, frames off their held gravity directions.
+/// with a sensor to estimate are certified jointly through the world rig (`[G16]`). Errors:
+/// estimates of the wrong length, a held sensor farther than 1e-9 rad from its held rotation,
+/// frames off their held gravity directions.
 ///
 /// ```
 /// use rotavg::certify::certify_rig;
