@@ -244,12 +244,12 @@ impl fmt::Display for RigSolution {
 /// `certified, gap 1.234e-8 (relative 5.6e-11)`: the absolute gap beside the relative one, which
 /// is not telling at a cost near 0 (noise-free data).
 fn verdict_and_gap(c: &crate::certify::Certificate) -> String {
-    format!(
-        "{}, gap {:.3e} (relative {:.1e})",
-        c.verdict,
-        c.gap.unwrap_or(f64::NAN),
-        c.relative_gap.unwrap_or(f64::NAN)
-    )
+    match (c.gap, c.relative_gap) {
+        (Some(gap), Some(relative)) => {
+            format!("{}, gap {gap:.3e} (relative {relative:.1e})", c.verdict)
+        }
+        _ => format!("{} ({})", c.verdict, c.explanation),
+    }
 }
 
 impl fmt::Display for RigFileReport {

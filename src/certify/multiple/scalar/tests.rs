@@ -200,6 +200,80 @@ fn scalar_comparison_is_sound_against_dense_eigenvalues() {
     );
 }
 
+/// `p` with parallel edges added at the point `at`: for every third node `a`, the three
+/// pseudo-edges of a rig's within-frame coupling `[H21]` to `a + 1` (their sum a skew block of
+/// norm `c`, rotations by `pi / 2` and `pi` at `at`), and a reversed copy of every fourth
+/// edge with its rotation turned by 0.05 rad.
+fn with_parallel_edges(p: &MultipleProblem, at: &[Rotation], seed: u64) -> MultipleProblem {
+    use crate::multiple::Edge;
+    let n = p.num_rotations();
+    let mut edges = p.edges().to_vec();
+    let turn = |v: Vector3<f64>| crate::so3::exp(&v);
+    for a in (0..n - 1).step_by(3) {
+        let b = a + 1;
+        let c = 0.05 + 0.5 * (((a as u64 * 7919 + seed) % 100) as f64 / 100.0);
+        let axis = Vector3::new(1.0, (a % 5) as f64 - 2.0, 0.5).normalize();
+        let other = axis.cross(&Vector3::z()).normalize();
+        let third = axis.cross(&other);
+        let h = std::f64::consts::FRAC_PI_2;
+        let pi = std::f64::consts::PI;
+        for (v, w) in [(axis * h, c), (other * pi, c / 2.0), (third * pi, c / 2.0)] {
+            // P = R_a^T R'^T R_b = N  <=>  R' = R_b N^T R_a^T
+            let rotation = at[b] * turn(v).transpose() * at[a].transpose();
+            edges.push(Edge {
+                i: a,
+                j: b,
+                rotation,
+                weight: w,
+            });
+        }
+    }
+    for e in p.edges().iter().step_by(4) {
+        let rotation = turn(Vector3::new(0.05, -0.02, 0.01)) * e.rotation.transpose();
+        edges.push(Edge {
+            i: e.j,
+            j: e.i,
+            rotation,
+            weight: 0.5 * e.weight,
+        });
+    }
+    MultipleProblem::new(n, edges).unwrap()
+}
+
+/// Parallel edges are compared as one ([`super::charges`], `[D13]` step 2's identity is linear
+/// in `P`): with a rig's pseudo-edges (whose sum is a skew block, far from any rotation) and
+/// reversed duplicates, every proven `mu` is at most the dense `lambda_min(S)`, at the augmented
+/// graph's local solution, at the original's, and at the other points of the soundness test.
+#[test]
+fn merged_parallel_edges_are_sound_against_dense_eigenvalues() {
+    let mut tally = Tally::default();
+    for seed in 0..60u64 {
+        let (base, gt) = comparison_instance(seed);
+        let at = solve_multiple(&base, &MultipleSettings::default()).unwrap();
+        let p = with_parallel_edges(&base, &at.rotations, seed);
+        tally.instances += 1;
+        let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+        let analyses = comparison_analyses(&p, &sol.rotations);
+        let mut points = comparison_points(&p, &sol.rotations, &gt);
+        let own = multipliers(&p, &at.rotations).unwrap();
+        points.push((at.rotations.clone(), own));
+        for (rs, l) in points {
+            check_comparisons(&mut tally, &p, &analyses, (&rs, &l), seed);
+        }
+    }
+    println!(
+        "merged parallel edges: {} instances, {} proofs ({} on subgraphs, {} split), {} not \
+         proven; tightest mu / lambda_min = {:.3}",
+        tally.instances, tally.proven, tally.sparsified, tally.split, tally.failed, tally.tightest
+    );
+    assert!(
+        tally.proven > 300,
+        "the merged form must prove at low noise"
+    );
+    assert!(tally.failed > 50, "and fail at high noise");
+    assert!(tally.tightest > 0.0, "some proofs at indefinite S");
+}
+
 /// The split's parts: every edge held by some part; every part connected; every node keeps
 /// its minimum degree of edges in every part (all of its edges when it has fewer); and on a
 /// dense random graph, few edges shared and the parts' sizes balanced. Checked with the
