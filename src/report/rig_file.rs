@@ -35,6 +35,9 @@ pub struct RigFileReport {
     /// With gravity priors and sensors to estimate: the calibration without the priors whose
     /// sensors the result holds (`[G14]`; then `rig.problem` is the held rig).
     pub calibration: Option<RigCalibration>,
+    /// The sensors the file leaves to estimate, as read (with gravity priors `rig.problem`
+    /// then holds them: at the calibration, or at the estimate `certify` was given).
+    pub estimated_sensors: Vec<usize>,
 }
 
 impl RigFileReport {
@@ -62,6 +65,7 @@ impl RigFileReport {
         };
         let settings = AverageSettings { solve, certify };
         let mut rig = rig;
+        let estimated_sensors = estimated_sensors(&rig.problem);
         let ((result, certified, robust), calibration) = match rig.pending_gravity.take() {
             Some(priors) => {
                 let both = (loss, &robust);
@@ -85,6 +89,7 @@ impl RigFileReport {
             result,
             robust,
             calibration,
+            estimated_sensors,
         })
     }
 
@@ -98,6 +103,7 @@ impl RigFileReport {
         settings: &CertifySettings,
     ) -> Result<Self> {
         let (mut joint, start) = (None, std::time::Instant::now());
+        let estimated_sensors = estimated_sensors(&rig.problem);
         if let Some(priors) = rig.pending_gravity.take() {
             // soft priors with sensors to estimate: the joint problem first ([G16]); when it
             // does not certify, and for held priors, the estimate's sensors held ([G14])
@@ -140,6 +146,7 @@ impl RigFileReport {
             result,
             robust: None,
             calibration: None,
+            estimated_sensors,
         })
     }
 
@@ -210,15 +217,7 @@ impl RigFileReport {
 
     /// How many sensors were estimated (not held; with a calibration, by it).
     fn estimated(&self) -> usize {
-        if let Some(c) = &self.calibration {
-            return c.estimated.len();
-        }
-        self.rig
-            .problem
-            .held()
-            .iter()
-            .filter(|h| h.is_none())
-            .count()
+        self.estimated_sensors.len()
     }
 }
 
@@ -243,6 +242,14 @@ impl fmt::Display for RigSolution {
 
 /// `certified, gap 1.234e-8 (relative 5.6e-11)`: the absolute gap beside the relative one, which
 /// is not telling at a cost near 0 (noise-free data).
+/// The sensors `problem` leaves to estimate.
+fn estimated_sensors(problem: &crate::rig::RigProblem) -> Vec<usize> {
+    (problem.held().iter().enumerate())
+        .filter(|(_, h)| h.is_none())
+        .map(|(s, _)| s)
+        .collect()
+}
+
 fn verdict_and_gap(c: &crate::certify::Certificate) -> String {
     match (c.gap, c.relative_gap) {
         (Some(gap), Some(relative)) => {

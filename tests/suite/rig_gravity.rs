@@ -276,6 +276,9 @@ fn sensors_to_estimate_are_calibrated_then_held_with_the_priors() {
         assert_eq!(j["pipeline"]["rig_joint"]["verdict"], joint);
         assert_eq!(j["verdict"]["problem"]["kind"], kind);
         assert_eq!(j["num_rotations"], 62);
+        // certify holds the sensors at the estimate for the held certificate, and still
+        // counts the ones the file leaves to estimate (it said "0 estimated" until 2026-12-02)
+        assert_eq!(c["num_rotations"], 62);
         let truth_some: Vec<_> = truth.frames.iter().copied().map(Some).collect();
         let frames = |j: &serde_json::Value| -> Vec<Rotation> {
             (j["estimate"].as_array().unwrap().iter())

@@ -140,6 +140,7 @@ fn one_part() -> usize {
 /// Why a scalar comparison did not prove anything (the caller falls back to the `3n` factor).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "reason")]
+#[non_exhaustive]
 pub enum ScalarFailure {
     /// `L - diag(delta)` has more than one negative pivot: the residuals are too large relative
     /// to the graph's connectivity for this sufficient condition.
