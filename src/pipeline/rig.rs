@@ -287,7 +287,7 @@ fn certify_jointly(
     let joint = (problem.with_edges(certified.edges().to_vec())?).with_gravity(priors.clone())?;
     let s = &out.solution;
     // only a certificate serves here: no images' bound (`[H19]` item 2) whose gap the run drops
-    let c = crate::certify::rig::certify_rig_to_certify(
+    let c = crate::certify::rig::certify_rig_without_images_bound(
         &joint,
         &s.frames,
         &s.sensors,

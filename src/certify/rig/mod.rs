@@ -63,7 +63,7 @@ pub fn certify_rig(
 /// certificate serves: the joint problem of `[G16]`, whose gap is not the run's (the held rig's
 /// certificate is). At 10^4 frames and 2 sensors that bound took 10-15 s of a 20 s attempt
 /// for a 16 % gap (2026-12-02).
-pub(crate) fn certify_rig_to_certify(
+pub(crate) fn certify_rig_without_images_bound(
     problem: &RigProblem,
     frames: &[Rotation],
     sensors: &[Rotation],
@@ -84,7 +84,7 @@ fn certify_rig_with(
         let inner: world::RigCertifier = if images_bound {
             certify_rig
         } else {
-            certify_rig_to_certify
+            certify_rig_without_images_bound
         };
         return world::certify_through_world(posed, frames, sensors, settings, inner);
     }

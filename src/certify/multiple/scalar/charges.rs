@@ -100,9 +100,19 @@ fn matrix_bound(pm: &Matrix3<f64>, err: f64, dropped: bool, merged: bool) -> (f6
         // the third form leaves more on the diagonal than the first order (a rig's
         // within-frame couplings `[H21]`, three pseudo-edges summing to a skew block: kept
         // lambda = 0 and charge 1/2 against 1 and about 3.6)
-        (lambda * (1.0 - 4.0 * u), k_e, false)
+        (round_down(lambda, 4.0 * u), k_e, false)
     } else {
         (1.0, c1, false)
+    }
+}
+
+/// `x` moved towards `-inf` by the relative error `r` (kept weights may be negative: the third
+/// form's `lambda`).
+fn round_down(x: f64, r: f64) -> f64 {
+    if x >= 0.0 {
+        x * (1.0 - r)
+    } else {
+        x * (1.0 + r)
     }
 }
 
@@ -169,7 +179,7 @@ fn merged_bound(
     // gamma(k + 1) 3.3 W per entry, the division and the weights' sum by gamma(k + 1) more
     let err = PRODUCT_ERROR + 10.0 * 3.3 * g;
     let (coeff, charge, _) = matrix_bound(&(sum / total), err, dropped, true);
-    (total * coeff * (1.0 - g), total * charge * (1.0 + g))
+    (round_down(total * coeff, g), total * charge * (1.0 + g))
 }
 
 /// Step 2 for every edge (`copies[k] == 0`: edge `k` is dropped from `L'`; parallel edges as one,
@@ -205,7 +215,7 @@ pub(super) fn edge_charges(
             (e.weight * coeff, e.weight * charge)
         });
         // rounded towards -inf: a smaller weight only weakens the comparison
-        reduced.push(kept * (1.0 - 4.0 * u));
+        reduced.push(round_down(kept, 4.0 * u));
         let dk = charge * (1.0 + 8.0 * u);
         let sym = 0.5 * (pm + pm.transpose());
         for v in [e.i, e.j] {
