@@ -117,8 +117,8 @@ struct Inputs {
 impl Inputs {
     /// Write the inputs into a directory of their own (`tag` names the test using it).
     fn write(tag: &str) -> Inputs {
-        let dir =
-            std::env::temp_dir().join(format!("rotavg-cli-contract-{tag}-{}", std::process::id()));
+        let dir = crate::common::scratch_root()
+            .join(format!("rotavg-cli-contract-{tag}-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temporary directory");
         let put = |name: &str, text: String| {
             std::fs::write(dir.join(name), text).expect("write an input");

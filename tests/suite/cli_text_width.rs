@@ -68,7 +68,7 @@ fn runs(estimate: &str) -> Vec<Vec<String>> {
 
 #[test]
 fn default_lines_are_short_and_verbose_shows_the_proof() {
-    let dir = std::env::temp_dir().join(format!("rotavg-width-{}", std::process::id()));
+    let dir = crate::common::scratch_root().join(format!("rotavg-width-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let estimate = dir.join("slam.json");
     let estimate = estimate.to_str().unwrap();

@@ -105,7 +105,7 @@ fn shell_commands_of_the_docs_run() {
         if commands.is_empty() {
             continue;
         }
-        let folder = std::env::temp_dir().join(format!(
+        let folder = crate::common::scratch_root().join(format!(
             "rotavg-docs-{}-{}",
             std::process::id(),
             name.replace('/', "_")

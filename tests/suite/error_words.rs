@@ -106,7 +106,8 @@ fn rotavg(args: &[&str]) -> (Option<i32>, String) {
 
 #[test]
 fn wrong_json_shapes_on_the_command_line() {
-    let dir = std::env::temp_dir().join(format!("rotavg-error-words-{}", std::process::id()));
+    let dir =
+        crate::common::scratch_root().join(format!("rotavg-error-words-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("wrong.json");
     let path = file.to_str().unwrap();

@@ -541,7 +541,8 @@ fn colmap_scene_is_reproducible_and_reads() {
     if std::env::var_os("ROTAVG_BLESS").is_some() {
         scene.write(&folder).expect("write the example data");
     }
-    let fresh = std::env::temp_dir().join(format!("rotavg-example-scene-{}", std::process::id()));
+    let fresh =
+        crate::common::scratch_root().join(format!("rotavg-example-scene-{}", std::process::id()));
     scene.write(&fresh).expect("write the scene");
     for name in [
         "pairs.json",

@@ -679,7 +679,8 @@ fn fuzz_readers_never_panic() {
 fn oversized_and_binary_inputs_are_refused_early() {
     use rotavg::io::detect::{GraphFormat, ReadOptions, load_graph};
     use rotavg::io::text::{MAX_INPUT_BYTES, read_text};
-    let dir = std::env::temp_dir().join(format!("rotavg-io-limits-{}", std::process::id()));
+    let dir =
+        crate::common::scratch_root().join(format!("rotavg-io-limits-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let big = dir.join("big.g2o");
     let f = std::fs::File::create(&big).unwrap();

@@ -144,7 +144,7 @@ fn svg_is_well_formed_with_one_bar_per_bin() {
 fn dir() -> PathBuf {
     use std::sync::atomic::{AtomicUsize, Ordering};
     static NEXT: AtomicUsize = AtomicUsize::new(0);
-    let d = std::env::temp_dir().join(format!(
+    let d = crate::common::scratch_root().join(format!(
         "rotavg-plot-{}-{}",
         std::process::id(),
         NEXT.fetch_add(1, Ordering::SeqCst)

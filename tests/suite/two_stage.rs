@@ -163,7 +163,8 @@ fn auto_judges_a_slow_least_squares_solve_early() {
     use rotavg::io::detect::ReadOptions;
     use rotavg::pipeline::loss_choice::JUDGE_AFTER_ITERATIONS;
     use rotavg::pipeline::{AverageSettings, average_multiple};
-    let dir = std::env::temp_dir().join(format!("rotavg-two-stage-{}", std::process::id()));
+    let dir =
+        crate::common::scratch_root().join(format!("rotavg-two-stage-{}", std::process::id()));
     let scene = SfmScene {
         cameras: 100,
         seed: 1,

@@ -71,9 +71,16 @@ pub fn temp_dir() -> PathBuf {
         .file_stem()
         .and_then(|s| s.to_str())
         .expect("a test file name");
-    let d = std::env::temp_dir().join(format!("rotavg-{stem}-{}", std::process::id()));
+    let d = scratch_root().join(format!("rotavg-{stem}-{}", std::process::id()));
     std::fs::create_dir_all(&d).expect("create temporary directory");
     d
+}
+
+/// Where the tests write their files: cargo's scratch folder for integration tests
+/// (`target/tmp`, removed by `cargo clean`), not the system's temporary folder, which the runs
+/// filled with a folder per test file and process until 2026-12-02.
+pub fn scratch_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
 }
 
 /// Writes `text` to the file `name` of [`temp_dir`] (the calling file's) and returns its path.
