@@ -228,9 +228,7 @@ pub fn average_rig_calibrated_with_gravity(
     );
     let refine_seconds = refining.elapsed().as_secs_f64();
     let calibration = RigCalibration {
-        estimated: (0..problem.sensors().len())
-            .filter(|&s| problem.held()[s].is_none())
-            .collect(),
+        estimated: problem.estimated_sensors(),
         sensors_from_rig: first.solution.sensors.clone(),
         cost: first.solution.cost,
         certificate: first.certificate,

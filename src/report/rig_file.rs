@@ -65,7 +65,7 @@ impl RigFileReport {
         };
         let settings = AverageSettings { solve, certify };
         let mut rig = rig;
-        let estimated_sensors = estimated_sensors(&rig.problem);
+        let estimated_sensors = rig.problem.estimated_sensors();
         let ((result, certified, robust), calibration) = match rig.pending_gravity.take() {
             Some(priors) => {
                 let both = (loss, &robust);
@@ -103,7 +103,7 @@ impl RigFileReport {
         settings: &CertifySettings,
     ) -> Result<Self> {
         let (mut joint, start) = (None, std::time::Instant::now());
-        let estimated_sensors = estimated_sensors(&rig.problem);
+        let estimated_sensors = rig.problem.estimated_sensors();
         if let Some(priors) = rig.pending_gravity.take() {
             // soft priors with sensors to estimate: the joint problem first ([G16]); when it
             // does not certify, and for held priors, the estimate's sensors held ([G14])
@@ -242,14 +242,6 @@ impl fmt::Display for RigSolution {
 
 /// `certified, gap 1.234e-8 (relative 5.6e-11)`: the absolute gap beside the relative one, which
 /// is not telling at a cost near 0 (noise-free data).
-/// The sensors `problem` leaves to estimate.
-fn estimated_sensors(problem: &crate::rig::RigProblem) -> Vec<usize> {
-    (problem.held().iter().enumerate())
-        .filter(|(_, h)| h.is_none())
-        .map(|(s, _)| s)
-        .collect()
-}
-
 fn verdict_and_gap(c: &crate::certify::Certificate) -> String {
     match (c.gap, c.relative_gap) {
         (Some(gap), Some(relative)) => {

@@ -268,6 +268,13 @@ impl RigProblem {
         &self.held
     }
 
+    /// The sensors to estimate (not [`RigProblem::held`]), by increasing index.
+    pub fn estimated_sensors(&self) -> Vec<usize> {
+        (0..self.held.len())
+            .filter(|&s| self.held[s].is_none())
+            .collect()
+    }
+
     /// `sensors` (one per sensor) with the held ones at their held rotations: an estimate as the
     /// problem poses it (its held sensors within rounding of them); as long as the shorter of
     /// `sensors` and the problem's sensors.

@@ -340,9 +340,7 @@ fn sensor_step(
     mut sensors: Vec<Rotation>,
     deadline: Option<Deadline>,
 ) -> Vec<Rotation> {
-    let unknown: Vec<usize> = (0..sensors.len())
-        .filter(|&s| p.held()[s].is_none())
-        .collect();
+    let unknown = p.estimated_sensors();
     if unknown.is_empty() {
         return sensors;
     }
@@ -728,9 +726,7 @@ mod tests {
             .iter()
             .map(|f| perturb(f, 0.05, &mut rng))
             .collect();
-        let unknown: Vec<usize> = (0..sensors.len())
-            .filter(|&s| p.held()[s].is_none())
-            .collect();
+        let unknown = p.estimated_sensors();
         let mut column = vec![None; sensors.len()];
         for (k, &s) in unknown.iter().enumerate() {
             column[s] = Some(3 * k);
