@@ -110,11 +110,14 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
 }
 
 /// The refusal of the rung when the augmented graph (the images' view graph and every pair of
-/// images of a frame) is connected and the ordering predicts its scalar factor above
-/// [`COUPLED_MAX_FACTOR_VALUES`]: then no check of it fits (the scalar comparison's factor is
-/// that one, the `3n` ones are at least 9 times it), and the polish before it would be spent
-/// for nothing (10^4 frames and 4-6 sensors: 4.5-6 s before the failure, 2026-11-30). A graph
-/// of several components is left to its components' own checks.
+/// images of a frame) is connected and the ordering predicts the scalar comparison's factor
+/// above [`COUPLED_MAX_FACTOR_VALUES`]: then no check of it fits (the `3n` ones are at least 9
+/// times it), and the polish before it would be spent for nothing (10^4 frames and 4-6
+/// sensors: 4.5-6 s before the failure, 2026-11-30). For rigs of at most
+/// [`SCALAR_PROVES_UP_TO_ESTIMATED`] estimated sensors that factor is the images' own graph's:
+/// the pairs that hold only pseudo-edges keep no weight and leave its pattern (`[D13]`,
+/// weightless parallel groups; 10^4 frames and 2 sensors: 6.8e7 values against 8.2e7 with
+/// them). A graph of several components is left to its components' own checks.
 fn fill_refusal(problem: &RigProblem) -> Result<Option<Refusal>> {
     let images = problem.images();
     let n = images.len();
@@ -143,9 +146,16 @@ fn fill_refusal(problem: &RigProblem) -> Result<Option<Refusal>> {
     if n == 0 || joined + 1 < n {
         return Ok(None);
     }
-    let mut triplets = Vec::with_capacity(2 * pairs.len() + n);
+    // the pairs that hold only pseudo-edges keep no weight: the scalar comparison leaves them
+    // out of its pattern (`[D13]`, weightless parallel groups), which is the images' own graph;
+    // with more estimated sensors it fails there, and the `3n` factors need every pair
+    let own = match problem.estimated_sensors().len() {
+        0..=SCALAR_PROVES_UP_TO_ESTIMATED => &pairs[..problem.edges().len()],
+        _ => &pairs[..],
+    };
+    let mut triplets = Vec::with_capacity(2 * own.len() + n);
     triplets.extend((0..n).map(|a| faer::sparse::Triplet::new(a, a, 1.0)));
-    for &(a, b) in &pairs {
+    for &(a, b) in own {
         triplets.push(faer::sparse::Triplet::new(a, b, 1.0));
         triplets.push(faer::sparse::Triplet::new(b, a, 1.0));
     }
@@ -175,11 +185,20 @@ fn joins_sensors(problem: &RigProblem) -> bool {
 }
 
 /// The largest factor the augmented graph's checks may form (1.2 GB). Measured on generated
-/// rigs (`rig_many`): the factors that certified held 8.2e7 (10^4 frames, 2 sensors, `[D13]`)
-/// and 9.1e7 values (1000 frames, 6 sensors, `[D15]`); at 10^4 frames and 4 sensors `[D13]`'s
-/// 4e8 values took 25 s to fail (4 negative pivots): the couplings' pseudo-edges make its
-/// condition fail where the fill is large, so larger factors are not tried.
+/// rigs (`rig_many`): the factors that certified held 6.8e7 (10^4 frames, 2 sensors, `[D13]`
+/// without the weightless pairs) and 9.1e7 values (1000 frames, 6 sensors, `[D15]`); at 10^4
+/// frames and 4 sensors `[D13]`'s whole graph took 25 s to fail with 4e8 values (4 negative
+/// pivots, 2026-11-30), and 21 s with 1.2e8 without the weightless pairs (3 negative pivots,
+/// 2026-12-02; predicted at 2.0e8 by the ordering, so refused here): larger factors are not
+/// tried.
 const COUPLED_MAX_FACTOR_VALUES: usize = 150_000_000;
+
+/// The most estimated sensors with which the scalar comparison of the augmented graph was seen
+/// to prove at scale (10^4 frames, 1 estimated sensor, `rge10000_2`); with 3 (10^4 frames, 4
+/// sensors) and 5 (1000 frames, 6 sensors) it fails with 3 and 5 negative pivots
+/// (2026-12-02), and only the `3n` factors, of the pattern with every pair of a frame's
+/// images, prove: [`fill_refusal`] predicts that pattern's factor for such rigs.
+const SCALAR_PROVES_UP_TO_ESTIMATED: usize = 2;
 
 /// Alternation passes added per round of [`polished`], and the most in all.
 const POLISH_ROUND: usize = 5;

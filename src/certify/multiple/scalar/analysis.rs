@@ -93,6 +93,19 @@ impl ScalarAnalysis {
         Self::analyse(problem, 1, |_| 1, max_values)
     }
 
+    /// The whole graph without the edges `left_out` marks (a subgraph that keeps every other
+    /// edge: [`ScalarAnalysis::dropped_edges`] counts them), refused like
+    /// [`ScalarAnalysis::new`]. For edges that would keep no weight in the comparison (parallel
+    /// edges whose mean is a skew block): leaving them out of the pattern charges them as
+    /// dropped edges, which costs nothing more, and saves their fill.
+    pub(super) fn without(
+        problem: &MultipleProblem,
+        left_out: &[bool],
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
+        Self::analyse(problem, 1, |k| u64::from(!left_out[k]), max_values)
+    }
+
     /// The split's shape (`None` for the whole graph or a subgraph).
     pub fn shape(&self) -> Option<SplitShape> {
         self.shape

@@ -6,6 +6,7 @@
 //! factorisation when it fits, else its first fallback's); its attempt climbs its own shapes in
 //! order, each logged, each only while what is left of the time budget covers its prediction.
 
+use super::charges::weightless_groups;
 use super::forecast::{FORECAST_FAILURE_SUCCESS, forecast_fails};
 use super::hub::HubGraph;
 use super::hub_rung::{plan_hub, run_hub};
@@ -43,6 +44,10 @@ pub(in crate::certify::multiple) struct ScalarFamily {
     whole: Option<Prediction>,
     /// Why the whole graph's factor does not fit, when it does not.
     whole_refused: Option<Refusal>,
+    /// The whole graph without its parallel groups that keep no weight at the estimate
+    /// ([`weightless_groups`]: a rig's pseudo-edges `[H21]`), analysed in place of the check's
+    /// whole graph (which the `3n` rungs' predictions keep) when there are such groups.
+    pruned: Option<std::result::Result<ScalarAnalysis, usize>>,
     /// The first fallback (the sparsest subgraph, else the first split that fits), analysed by
     /// the plan: its prediction is the family's when the whole graph does not fit.
     first_fallback: Option<ScalarAnalysis>,
@@ -139,7 +144,13 @@ impl ScalarFamily {
     /// The whole graph's prediction when its factor fits (kept in `whole`), else why not (kept
     /// in `whole_refused`).
     fn plan_whole(&mut self, cx: &Check<'_>, rotations: &[Rotation]) -> Result<Option<Prediction>> {
-        match cx.scalar()? {
+        if self.pruned.is_none()
+            && let Some(left_out) = weightless_groups(cx.problem, rotations)
+        {
+            let max_values = cx.max_factor_values();
+            self.pruned = Some(ScalarAnalysis::without(cx.problem, &left_out, max_values)?);
+        }
+        match whole_of(&self.pruned, cx)? {
             Some(Ok(a)) => match predict(cx.settings, a) {
                 Ok(mut p) => {
                     // a failure worth avoiding: forecast it (free predictions are not)
@@ -151,7 +162,7 @@ impl ScalarFamily {
                 }
                 Err(refusal) => self.whole_refused = Some(refusal),
             },
-            Some(Err(predicted)) => self.whole_refused = Some(over_ordering(cx, *predicted)),
+            Some(Err(predicted)) => self.whole_refused = Some(over_ordering(cx, predicted)),
             None => {}
         }
         Ok(None)
@@ -196,7 +207,8 @@ impl ScalarFamily {
         {
             return Ok(Some(b));
         }
-        if let (Some(whole), Some(Ok(a))) = (self.whole, cx.scalar()?) {
+        let pruned = self.pruned.take();
+        if let (Some(whole), Some(Ok(a))) = (self.whole, whole_of(&pruned, cx)?) {
             if let Some(b) = self.subgraphs_first(cx, rotations, whole, target)? {
                 return Ok(Some(b));
             }
@@ -264,6 +276,18 @@ impl ScalarFamily {
             fallbacks.next(cx, rotations, failure)
         })
     }
+}
+
+/// The whole graph's analysis for the family: `pruned` when there is one, else the check's.
+fn whole_of<'c>(
+    pruned: &'c Option<std::result::Result<ScalarAnalysis, usize>>,
+    cx: &'c Check<'_>,
+) -> Result<Option<std::result::Result<&'c ScalarAnalysis, usize>>> {
+    let whole = match pruned {
+        Some(p) => Some(p),
+        None => cx.scalar()?,
+    };
+    Ok(whole.map(|w| w.as_ref().map_err(|&predicted| predicted)))
 }
 
 /// `first`, then each shape `next` gives after the last one's failure, until one proves (its
@@ -439,6 +463,9 @@ pub(in crate::certify::multiple) fn skipped_subgraphs(negative_pivots: usize) ->
 fn shape_of(a: &ScalarAnalysis) -> String {
     match (a.dropped_edges(), a.shape()) {
         (0, None) => "whole graph".into(),
+        (d, None) if a.edges_per_node() == 0.0 => {
+            format!("whole graph without {d} weightless parallel edges")
+        }
         (_, None) => format!("subgraph of {} edges per node", a.edges_per_node()),
         (_, Some(s)) => format!(
             "split into {} parts ({} per edge, degree >= {})",

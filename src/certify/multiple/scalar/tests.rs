@@ -210,23 +210,9 @@ fn with_parallel_edges(p: &MultipleProblem, at: &[Rotation], seed: u64) -> Multi
     let mut edges = p.edges().to_vec();
     let turn = |v: Vector3<f64>| crate::so3::exp(&v);
     for a in (0..n - 1).step_by(3) {
-        let b = a + 1;
         let c = 0.05 + 0.5 * (((a as u64 * 7919 + seed) % 100) as f64 / 100.0);
-        let axis = Vector3::new(1.0, (a % 5) as f64 - 2.0, 0.5).normalize();
-        let other = axis.cross(&Vector3::z()).normalize();
-        let third = axis.cross(&other);
-        let h = std::f64::consts::FRAC_PI_2;
-        let pi = std::f64::consts::PI;
-        for (v, w) in [(axis * h, c), (other * pi, c / 2.0), (third * pi, c / 2.0)] {
-            // P = R_a^T R'^T R_b = N  <=>  R' = R_b N^T R_a^T
-            let rotation = at[b] * turn(v).transpose() * at[a].transpose();
-            edges.push(Edge {
-                i: a,
-                j: b,
-                rotation,
-                weight: w,
-            });
-        }
+        let axis = Vector3::new(1.0, (a % 5) as f64 - 2.0, 0.5);
+        push_pseudo_triple(&mut edges, at, (a, a + 1), axis, c);
     }
     for e in p.edges().iter().step_by(4) {
         let rotation = turn(Vector3::new(0.05, -0.02, 0.01)) * e.rotation.transpose();
@@ -238,6 +224,50 @@ fn with_parallel_edges(p: &MultipleProblem, at: &[Rotation], seed: u64) -> Multi
         });
     }
     MultipleProblem::new(n, edges).unwrap()
+}
+
+/// A rig's three pseudo-edges `[H21]` from `a` to `b` whose weighted mean at `at` is the skew
+/// block `c hat(axis) / (2 c)` (`P = R_a^T R'^T R_b` = a rotation by `pi/2` about `axis`, weight
+/// `c`, and by `pi` about two orthogonal axes, `c / 2` each): the torque `+u` at `a` and `-u` at
+/// `b` in their own frames.
+fn push_pseudo_triple(
+    edges: &mut Vec<crate::multiple::Edge>,
+    at: &[Rotation],
+    (a, b): (usize, usize),
+    axis: Vector3<f64>,
+    c: f64,
+) {
+    let turn = |v: Vector3<f64>| crate::so3::exp(&v);
+    let axis = axis.normalize();
+    let other = axis.cross(&Vector3::z()).normalize();
+    let third = axis.cross(&other);
+    let h = std::f64::consts::FRAC_PI_2;
+    let pi = std::f64::consts::PI;
+    for (v, w) in [(axis * h, c), (other * pi, c / 2.0), (third * pi, c / 2.0)] {
+        // P = R_a^T R'^T R_b = N  <=>  R' = R_b N^T R_a^T
+        let rotation = at[b] * turn(v).transpose() * at[a].transpose();
+        edges.push(crate::multiple::Edge {
+            i: a,
+            j: b,
+            rotation,
+            weight: w,
+        });
+    }
+}
+
+/// `p` with pseudo-edge triples around the triangles `(a, a + 1, a + 2)`, `a = 0, 3, ...`, the
+/// same axis on the three pairs of a triangle: their torques cancel at every node, so a
+/// critical point `at` of `p` stays critical, and the triples keep no weight there.
+fn with_pseudo_cycles(p: &MultipleProblem, at: &[Rotation], seed: u64) -> MultipleProblem {
+    let mut edges = p.edges().to_vec();
+    for a in (0..p.num_rotations().saturating_sub(2)).step_by(3) {
+        let c = 0.02 + 0.3 * (((a as u64 * 7919 + seed) % 100) as f64 / 100.0);
+        let axis = Vector3::new(1.0, (a % 5) as f64 - 2.0, 0.5);
+        for pair in [(a, a + 1), (a + 1, a + 2), (a + 2, a)] {
+            push_pseudo_triple(&mut edges, at, pair, axis, c);
+        }
+    }
+    MultipleProblem::new(p.num_rotations(), edges).unwrap()
 }
 
 /// Parallel edges are compared as one ([`super::charges`], `[D13]` step 2's identity is linear
@@ -272,6 +302,65 @@ fn merged_parallel_edges_are_sound_against_dense_eigenvalues() {
     );
     assert!(tally.failed > 50, "and fail at high noise");
     assert!(tally.tightest > 0.0, "some proofs at indefinite S");
+}
+
+/// The weightless groups ([`super::charges::weightless_groups`]) at the point the pseudo-edges
+/// were built for are exactly the pairs that hold only pseudo-edges (never a reversed duplicate
+/// or a real edge's pair); the whole graph without them ([`ScalarAnalysis::without`]) has the
+/// smaller factor, reaches the whole graph's verdict at every target (its `mu` within 1e-6
+/// relative) and is sound against the dense eigenvalues.
+#[test]
+fn weightless_groups_leave_the_pattern_at_no_cost() {
+    let mut tally = Tally::default();
+    let (mut same, mut left) = (0usize, 0usize);
+    for seed in 0..30u64 {
+        let (base, _) = comparison_instance(seed);
+        let at = solve_multiple(&base, &MultipleSettings::default()).unwrap();
+        let p = with_pseudo_cycles(&base, &at.rotations, seed);
+        let left_out = super::charges::weightless_groups(&p, &at.rotations)
+            .unwrap_or_else(|| vec![false; p.num_edges()]);
+        let real_pairs: std::collections::HashSet<(usize, usize)> = base
+            .edges()
+            .iter()
+            .map(|e| (e.i.min(e.j), e.i.max(e.j)))
+            .collect();
+        for (k, e) in p.edges().iter().enumerate() {
+            let pair = (e.i.min(e.j), e.i.max(e.j));
+            let pseudo_only = k >= base.num_edges() && !real_pairs.contains(&pair);
+            assert_eq!(left_out[k], pseudo_only, "seed {seed} edge {k}");
+            left += usize::from(left_out[k]);
+        }
+        let whole = ScalarAnalysis::new(&p, usize::MAX).unwrap().unwrap();
+        let pruned = ScalarAnalysis::without(&p, &left_out, usize::MAX)
+            .unwrap()
+            .unwrap();
+        assert!(pruned.factor_len() <= whole.factor_len());
+        let l = multipliers(&p, &at.rotations).unwrap();
+        for target in (0..12).map(|k| 10f64.powi(-k)) {
+            let a = scalar_comparison(&p, &whole, &at.rotations, &l, target).unwrap();
+            let b = scalar_comparison(&p, &pruned, &at.rotations, &l, target).unwrap();
+            match (a, b) {
+                (Ok(a), Ok(b)) => {
+                    let (ma, mb) = (a.verified_min_eigenvalue, b.verified_min_eigenvalue);
+                    assert!((ma - mb).abs() <= 1e-6 * ma.abs().max(1e-12), "{ma} {mb}");
+                    same += 1;
+                }
+                (Err(_), Err(_)) => same += 1,
+                (a, b) => panic!("seed {seed} target {target}: whole {a:?}, pruned {b:?}"),
+            }
+        }
+        check_comparisons(&mut tally, &p, &[pruned], (&at.rotations, &l), seed);
+    }
+    println!(
+        "{left} edges left out, {} proofs, {} failures",
+        tally.proven, tally.failed
+    );
+    assert!(
+        left > 100 && tally.proven > 100,
+        "{left} edges left out, {} proofs",
+        tally.proven
+    );
+    assert_eq!(same, 30 * 12);
 }
 
 /// The split's parts: every edge held by some part; every part connected; every node keeps
