@@ -693,7 +693,8 @@ pub fn solve_gravity(
 }
 
 /// Where [`solve_gravity`]'s constrained or soft solve starts (standard convention), with the
-/// iterations and the cost of getting there.
+/// iterations of getting there and its cost as the solution reports one (the file's, with the
+/// priors' terms).
 struct Start {
     rotations: Vec<Rotation>,
     iterations: usize,
@@ -715,10 +716,13 @@ fn start_point(problem: &GravityProblem, settings: &MultipleSettings) -> Result<
         });
     }
     let free = solve_multiple(graph, settings)?;
+    let rotations = problem.aligned_and_projected(&problem.to_standard(&free.rotations));
+    // the start's cost as the solution's is reported: the file's, with the priors' terms
+    let file = problem.out_of_standard(&rotations);
     Ok(Start {
-        rotations: problem.aligned_and_projected(&problem.to_standard(&free.rotations)),
+        cost: graph.cost(&file) + problem.prior_cost(&file),
+        rotations,
         iterations: free.report.iterations,
-        cost: free.cost,
     })
 }
 
