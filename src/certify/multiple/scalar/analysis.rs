@@ -2,6 +2,7 @@
 //! the whole graph, of a subgraph, or of the parts of a split, with each pattern's symbolic
 //! `LDL^T` analysis (its exact factor size and multiply-adds, for the budget).
 
+use super::{DENSE_EDGES_PER_NODE, DENSE_SUBGRAPH_BETA, SECOND_ORDER_BETA};
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::symbolic_cholesky_within;
 use crate::multiple::MultipleProblem;
@@ -28,6 +29,9 @@ pub struct ScalarAnalysis {
     /// split.
     shape: Option<SplitShape>,
     edges_per_node: f64,
+    /// The second-order split `beta` of its comparison (step 2; [`SECOND_ORDER_BETA`], or
+    /// [`DENSE_SUBGRAPH_BETA`] for a subgraph of a dense graph).
+    pub(super) beta: f64,
 }
 
 /// One factorised scalar matrix of a [`ScalarAnalysis`].
@@ -111,6 +115,14 @@ impl ScalarAnalysis {
         self.shape
     }
 
+    /// The second-order split `beta` of the comparison on this analysis (`[D13]` step 2: each
+    /// edge compared to second order keeps `alpha_e - beta` of its weight and charges
+    /// `k_e^2 / (2 beta)`): `1/2`, or 0.15 for the subgraphs of graphs of at least
+    /// [`DENSE_EDGES_PER_NODE`] edges per node ([`ScalarAnalysis::sparsified`]).
+    pub fn second_order_beta(&self) -> f64 {
+        self.beta
+    }
+
     /// The edges each node keeps in a subgraph ([`ScalarAnalysis::sparsified`]; 0 otherwise).
     pub fn edges_per_node(&self) -> f64 {
         self.edges_per_node
@@ -125,7 +137,10 @@ impl ScalarAnalysis {
     /// be one more zero eigenvalue of its Laplacian, i.e. one more negative pivot, and the
     /// proof would fail (a 10^5-node random graph at 0.02 rad: one such edge turned 2 negative
     /// pivots into a proof). Which edges are kept only decides whether the proof succeeds and
-    /// how large its factor is, never what it proves. Refused like [`ScalarAnalysis::new`].
+    /// how large its factor is, never what it proves. On graphs of at least
+    /// [`DENSE_EDGES_PER_NODE`] edges per node the comparison splits the second-order edges with
+    /// `beta = 0.15` ([`ScalarAnalysis::second_order_beta`]; valid for any `beta > 0`), which
+    /// keeps more of their weight. Refused like [`ScalarAnalysis::new`].
     pub fn sparsified(
         problem: &MultipleProblem,
         rotations: &[Rotation],
@@ -147,8 +162,14 @@ impl ScalarAnalysis {
         }
         let keep = subgraph_edges(problem, rotations, edges_per_node);
         let analysed = Self::analyse(problem, 1, |k| u64::from(keep[k]), max_values)?;
+        let dense = problem.num_edges() as f64 >= DENSE_EDGES_PER_NODE * n as f64;
         Ok(analysed.map(|a| ScalarAnalysis {
             edges_per_node,
+            beta: if dense {
+                DENSE_SUBGRAPH_BETA
+            } else {
+                SECOND_ORDER_BETA
+            },
             ..a
         }))
     }
@@ -229,6 +250,7 @@ impl ScalarAnalysis {
             copies,
             shape: None,
             edges_per_node: 0.0,
+            beta: SECOND_ORDER_BETA,
         }))
     }
 

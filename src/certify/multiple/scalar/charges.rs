@@ -67,7 +67,12 @@ fn edge_product(e: &Edge, rotations: &[Rotation]) -> Matrix3<f64> {
 /// k (|x_a|^2 + |x_b|^2)` for any `lambda <= lambda_min(A)` (of either sign) and `k >= ||K||_2`
 /// (`2 |x_a^T K x_b| <= k (|x_a|^2 + |x_b|^2)`), or dropped, nothing kept and the charge
 /// `k + 2 max(0, -lambda)` (`|d|^2 <= 2 (|x_a|^2 + |x_b|^2)`).
-fn matrix_bound(pm: &Matrix3<f64>, err: f64, dropped: bool, merged: bool) -> (f64, f64, bool) {
+fn matrix_bound(
+    pm: &Matrix3<f64>,
+    err: f64,
+    (dropped, merged): (bool, bool),
+    beta: f64,
+) -> (f64, f64, bool) {
     let u = UNIT_ROUNDOFF;
     let sym = 0.5 * (pm + pm.transpose());
     // the axial vector of the skew part: ||K||_2 = |k| for a 3 x 3 skew matrix
@@ -78,7 +83,6 @@ fn matrix_bound(pm: &Matrix3<f64>, err: f64, dropped: bool, merged: bool) -> (f6
     let c1 = (sym_defect + fro(&(pm - Matrix3::identity()))) * (1.0 + 4.0 * u) + 2.0 * err;
     // the third form's lambda (merged edges only: one more 3 x 3 eigenvalue bound)
     let lowest = || verified_min_eigenvalue3(&sym).map_or(alpha, |l| l.max(alpha)) - err;
-    let beta = SECOND_ORDER_BETA;
     if dropped {
         let mut charge = if alpha > 0.0 {
             c1.min(k_e * k_e / (2.0 * alpha) * (1.0 + 8.0 * u))
@@ -164,6 +168,7 @@ fn merged_bound(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     dropped: bool,
+    beta: f64,
 ) -> (f64, f64) {
     let edges = problem.edges();
     let first = &edges[group[0]];
@@ -178,7 +183,7 @@ fn merged_bound(
     // each fl(P_e) within PRODUCT_ERROR; the weighted sum of entries <= 3.3 errs by
     // gamma(k + 1) 3.3 W per entry, the division and the weights' sum by gamma(k + 1) more
     let err = PRODUCT_ERROR + 10.0 * 3.3 * g;
-    let (coeff, charge, _) = matrix_bound(&(sum / total), err, dropped, true);
+    let (coeff, charge, _) = matrix_bound(&(sum / total), err, (dropped, true), beta);
     (round_down(total * coeff, g), total * charge * (1.0 + g))
 }
 
@@ -194,7 +199,7 @@ pub(super) fn weightless_groups(
     let mut weightless = vec![false; problem.num_edges()];
     let mut any = false;
     for group in parallel_groups(problem, &vec![1; problem.num_edges()]) {
-        let (kept, charge) = merged_bound(&group, problem, rotations, false);
+        let (kept, charge) = merged_bound(&group, problem, rotations, false, SECOND_ORDER_BETA);
         if kept <= 0.0 && -kept <= 1e-9 * charge {
             group.iter().for_each(|&k| weightless[k] = true);
             any = true;
@@ -211,12 +216,13 @@ pub(super) fn edge_charges(
     rotations: &[Rotation],
     lambdas: &[Matrix3<f64>],
     copies: &[u32],
+    beta: f64,
 ) -> std::result::Result<EdgeCharges, ScalarFailure> {
     let u = UNIT_ROUNDOFF;
     let n = problem.num_rotations();
     let mut merged: Vec<Option<(f64, f64)>> = vec![None; problem.num_edges()];
     for group in parallel_groups(problem, copies) {
-        let bound = merged_bound(&group, problem, rotations, copies[group[0]] == 0);
+        let bound = merged_bound(&group, problem, rotations, copies[group[0]] == 0, beta);
         merged[group[0]] = Some(bound);
         group[1..]
             .iter()
@@ -231,7 +237,8 @@ pub(super) fn edge_charges(
     for (k, e) in problem.edges().iter().enumerate() {
         let pm = edge_product(e, rotations);
         let (kept, charge) = merged[k].unwrap_or_else(|| {
-            let (coeff, charge, second) = matrix_bound(&pm, PRODUCT_ERROR, copies[k] == 0, false);
+            let (coeff, charge, second) =
+                matrix_bound(&pm, PRODUCT_ERROR, (copies[k] == 0, false), beta);
             second_order_edges += usize::from(second);
             (e.weight * coeff, e.weight * charge)
         });
@@ -321,8 +328,8 @@ mod tests {
         (n(axis, h) * 2.0 + n(other, pi) + n(third, pi)) / 4.0
     }
 
-    /// Every form of [`matrix_bound`] (second order, first order, the merged edges' third form,
-    /// dropped) is a lower bound of the edge's six-dimensional form (checked by a dense
+    /// Every form of [`matrix_bound`] (second order at `beta` 1/2, 0.15 and 0.02, first order,
+    /// the merged edges' third form, dropped) is a lower bound of the edge's six-dimensional form (checked by a dense
     /// eigensolver, independent of the bound's derivation), on rotations by 0 to pi, pseudo-edge
     /// means and their mixtures with a rotation; and the third form is tight on the skew block
     /// of the pseudo-edges (a charge halved would not hold there).
@@ -340,18 +347,22 @@ mod tests {
             let pseudo = pseudo_mean(axis);
             let mix = (k % 10) as f64 / 10.0;
             for pm in [rotation, pseudo, pseudo * (1.0 - mix) + rotation * mix] {
-                for (dropped, merged) in
+                for ((dropped, merged), beta) in
                     [(false, false), (false, true), (true, false), (true, true)]
+                        .into_iter()
+                        .flat_map(|f| [0.5, 0.15, 0.02].map(|b| (f, b)))
                 {
-                    let (kept, charge, _) = matrix_bound(&pm, PRODUCT_ERROR, dropped, merged);
+                    let (kept, charge, _) =
+                        matrix_bound(&pm, PRODUCT_ERROR, (dropped, merged), beta);
                     let s = slack(&pm, kept, charge);
                     assert!(
                         s >= -1e-12,
-                        "{pm} dropped {dropped} merged {merged}: slack {s}"
+                        "{pm} dropped {dropped} merged {merged} beta {beta}: slack {s}"
                     );
                 }
             }
-            let (kept, charge, _) = matrix_bound(&pseudo, PRODUCT_ERROR, false, true);
+            let (kept, charge, _) =
+                matrix_bound(&pseudo, PRODUCT_ERROR, (false, true), SECOND_ORDER_BETA);
             assert!(
                 kept.abs() < 1e-12 && (charge - 0.5).abs() < 1e-12,
                 "{kept} {charge}"
@@ -415,7 +426,7 @@ mod tests {
                 }
             }
             for dropped in [false, true] {
-                let (kept, charge) = merged_bound(&[0, 1, 2], &p, &at, dropped);
+                let (kept, charge) = merged_bound(&[0, 1, 2], &p, &at, dropped, 0.5);
                 let id = Matrix3::identity();
                 let mut b = Matrix6::zeros();
                 b.fixed_view_mut::<3, 3>(0, 0)

@@ -185,7 +185,14 @@ impl HubGraph {
         let h = self.spokes.len();
         let cams = &rotations[..h];
         let (shifted, spoke_charges) = self.spoke_terms(cams, &lambdas[..h]);
-        let c = edge_charges(&self.cameras, cams, &shifted, &self.camera_analysis.copies)?;
+        let analysis = &self.camera_analysis;
+        let c = edge_charges(
+            &self.cameras,
+            cams,
+            &shifted,
+            &analysis.copies,
+            analysis.beta,
+        )?;
         let mut delta = c.delta;
         for (d, s) in delta.iter_mut().zip(&spoke_charges) {
             *d = (*d + s) * (1.0 + 4.0 * UNIT_ROUNDOFF);

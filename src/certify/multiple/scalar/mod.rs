@@ -88,6 +88,21 @@ use std::time::Instant;
 /// (`paper-notes/certificates.md` [D13]).
 const SECOND_ORDER_BETA: f64 = 0.5;
 
+/// The split `beta` of the subgraphs of dense graphs (at least [`DENSE_EDGES_PER_NODE`] edges
+/// per node, [`ScalarAnalysis::sparsified`]): any `beta > 0` holds edge by edge, and on a
+/// subgraph of a well-connected graph the kept weight `alpha_e - beta` is what is short, not
+/// the charges `k_e^2 / (2 beta)`. Sweeps of `examples/scalar_sweep.rs` at the least-squares
+/// solution (2026-12-02, `paper-notes/certificates.md` `[D13]`): random graphs of 10 edges per
+/// node at 0.1 rad proven from 3 edges per node instead of 3.5 (10^4 and 3x10^4 nodes: 5.4e7
+/// factor values instead of 8.1e7); 5 edges per node: 2 negative pivots at 2.5 instead of 26;
+/// 3 edges per node and SLAM grids are worse with it (their subgraphs keep `1/2`).
+const DENSE_SUBGRAPH_BETA: f64 = 0.15;
+
+/// Graphs with at least this many edges per node are dense for the scalar comparison: the
+/// subgraphs of [`ScalarAnalysis::sparsified`] split their second-order edges with
+/// `beta = 0.15` instead of `1/2` ([`ScalarAnalysis::second_order_beta`]).
+pub const DENSE_EDGES_PER_NODE: f64 = 4.0;
+
 /// Largest `||R_i^T R_i - I||_F` accepted (the rotations are validated far tighter than this).
 const MAX_ORTHOGONALITY_DEFECT: f64 = 1e-3;
 
@@ -258,7 +273,7 @@ fn compare(
     target: f64,
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     let t_max = charges::orthogonality_defect(rotations)?;
-    let c = charges::edge_charges(problem, rotations, lambdas, &analysis.copies)?;
+    let c = charges::edge_charges(problem, rotations, lambdas, &analysis.copies, analysis.beta)?;
     let (rho1, rho0) = residuals::residual_bounds(problem, rotations, lambdas, &c.deg_n, target);
     let pencil = split::pencil_weights(
         analysis, problem, &c.reduced, &c.delta, rho1, c.d_max, target,

@@ -466,7 +466,11 @@ fn shape_of(a: &ScalarAnalysis) -> String {
         (d, None) if a.edges_per_node() == 0.0 => {
             format!("whole graph without {d} weightless parallel edges")
         }
-        (_, None) => format!("subgraph of {} edges per node", a.edges_per_node()),
+        (_, None) => format!(
+            "subgraph of {} edges per node (beta {})",
+            a.edges_per_node(),
+            a.second_order_beta()
+        ),
         (_, Some(s)) => format!(
             "split into {} parts ({} per edge, degree >= {})",
             s.parts, s.copies, s.min_degree

@@ -270,6 +270,45 @@ fn with_pseudo_cycles(p: &MultipleProblem, at: &[Rotation], seed: u64) -> Multip
     MultipleProblem::new(p.num_rotations(), edges).unwrap()
 }
 
+/// The subgraphs of dense graphs (5 edges per node) split the second-order edges with
+/// `beta = 0.15`: every proven `mu` is at most the dense `lambda_min(S)`, over noise levels from
+/// 0 to 0.3 rad, at local minima and non-critical points (the independent check of that split).
+#[test]
+fn dense_subgraphs_with_their_beta_are_sound_against_dense_eigenvalues() {
+    let mut tally = Tally::default();
+    for seed in 0..60u64 {
+        let n = 11 + (seed as usize % 12);
+        let (p, gt) = SyntheticGraph {
+            num_rotations: n,
+            num_edges: 5 * n,
+            noise_sigma: [0.0, 0.01, 0.05, 0.1, 0.2, 0.3][seed as usize % 6],
+            seed,
+            ..Default::default()
+        }
+        .generate();
+        tally.instances += 1;
+        let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+        let analyses: Vec<ScalarAnalysis> = [1.5, 2.0, 3.0]
+            .iter()
+            .map(|&k| {
+                ScalarAnalysis::sparsified(&p, &sol.rotations, k, usize::MAX)
+                    .unwrap()
+                    .unwrap()
+            })
+            .collect();
+        assert!(analyses.iter().all(|a| a.second_order_beta() == 0.15));
+        for (rs, l) in comparison_points(&p, &sol.rotations, &gt) {
+            check_comparisons(&mut tally, &p, &analyses, (&rs, &l), seed);
+        }
+    }
+    println!(
+        "dense subgraphs: {} proofs, {} not proven; tightest mu / lambda_min = {:.3}",
+        tally.proven, tally.failed, tally.tightest
+    );
+    assert!(tally.proven > 500 && tally.failed > 100);
+    assert!(tally.tightest > 0.0, "some proofs at indefinite S");
+}
+
 /// Parallel edges are compared as one ([`super::charges`], `[D13]` step 2's identity is linear
 /// in `P`): with a rig's pseudo-edges (whose sum is a skew block, far from any rotation) and
 /// reversed duplicates, every proven `mu` is at most the dense `lambda_min(S)`, at the augmented
