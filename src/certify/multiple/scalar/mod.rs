@@ -14,7 +14,8 @@
 //!    `d = x_b - x_a`, `m = (x_a + x_b) / 2`: the edge's part of `x^T M x` is
 //!    `w (d^T A_e d - 2 m^T K_e d)`, and `2 |m^T K d| <= beta |d|^2 + (||K||^2 / beta) |m|^2`.
 //!    So `M >= (L' - diag(delta)) (x) I_3`, with `L'` the Laplacian of the kept weights
-//!    `w (lambda_min(A_e) - beta)` (`beta = 1/2`) and `delta_i` the charges
+//!    `w (lambda_min(A_e) - beta)` (`beta = 1/2`; 0.15 on the subgraphs of dense graphs, step 6)
+//!    and `delta_i` the charges
 //!    `sum_e w ||K_e||^2 / (2 beta)` plus `||G_i||`, `G_i = M_ii - sum_e w A_e`. A residual of
 //!    angle `theta` costs `sin^2 theta`: **second order**, exact on a cycle with equal residuals.
 //!    Edges whose residual is too large for it (outliers) use the first-order bound instead:
