@@ -3,13 +3,14 @@
 //! per subgraph.
 //!
 //! ```text
-//! cargo run --release --example block_sweep -- CAMERAS EDGES EDGES_PER_NODE...
+//! cargo run --release --example block_sweep -- CAMERAS EDGES SHAPE...
 //! ```
 //!
-//! e.g. `-- 10000 100000 3 4` (`paper-notes/anisotropic.md` `[A15]`); with `outliers`, 10 % of
+//! A shape is `K` (edges per node) or `K:T` (topped up to the ratio `T`; default: the ladder's
+//! `BLOCK_SHAPES`), e.g. `-- 10000 100000 3 4 2:14` (`paper-notes/anisotropic.md` `[A15]`); with `outliers`, 10 % of
 //! the pairs are wrong and the sweep runs on the edges within 5 degrees of the truth, or, with
 //! `outliers robust` too, on the inliers of the Cauchy solve (the pipeline's inlier graph).
-use rotavg::certify::multiple::block::{BlockAnalysis, block_comparison};
+use rotavg::certify::multiple::block::{BlockAnalysis, BlockShape, block_comparison};
 use rotavg::certify::multiple::multipliers;
 use rotavg::multiple::synthetic::SyntheticAnisotropic;
 use rotavg::multiple::{MultipleSettings, solve_multiple};
@@ -19,9 +20,20 @@ fn main() -> rotavg::Result<()> {
     let number =
         |k: usize, default: f64| args.get(k).and_then(|a| a.parse().ok()).unwrap_or(default);
     let (n, m) = (number(0, 1000.0) as usize, number(1, 4000.0) as usize);
-    let mut ks: Vec<f64> = args.iter().skip(2).filter_map(|a| a.parse().ok()).collect();
-    if ks.is_empty() {
-        ks = vec![4.0, 5.0];
+    // `K` (edges per node) or `K:T` (topped up to the ratio `T`)
+    let mut shapes: Vec<BlockShape> = args
+        .iter()
+        .skip(2)
+        .filter_map(|a| {
+            let (k, t) = a.split_once(':').unwrap_or((a, "0"));
+            Some(BlockShape {
+                edges_per_node: k.parse().ok()?,
+                top_up: t.parse().ok()?,
+            })
+        })
+        .collect();
+    if shapes.is_empty() {
+        shapes = rotavg::certify::multiple::block::rungs::BLOCK_SHAPES.to_vec();
     }
     let outliers = args.iter().any(|a| a == "outliers");
     let (p, truth) =
@@ -63,14 +75,14 @@ fn main() -> rotavg::Result<()> {
     let s = solve_multiple(&p, &MultipleSettings::default())?;
     let lambdas = multipliers(&p, &s.rotations)?;
     let target = 0.5 * 1e-6 * s.cost / (3 * n) as f64;
-    for k in ks {
+    for shape in shapes {
         let t = Instant::now();
-        let Ok(a) = BlockAnalysis::new(&p, &s.rotations, Some(k), usize::MAX)? else {
+        let Ok(a) = BlockAnalysis::new(&p, &s.rotations, Some(shape), usize::MAX)? else {
             continue;
         };
         let r = block_comparison(&p, &a, &s.rotations, &lambdas, target)?;
         println!(
-            "k {k}: factor {:.2e} {:.2} s -> {:?}",
+            "{shape}: factor {:.2e} {:.2} s -> {:?}",
             a.factor_len() as f64,
             t.elapsed().as_secs_f64(),
             r.map(|b| b.verified_min_eigenvalue)

@@ -12,7 +12,8 @@
 //! outliers random rotations with their information kept (confident wrong pairs), seed 1. The solve rows
 //! are `solve_multiple` alone (seconds, IRLS iterations, median error after the optimal
 //! alignment); "auto" is `average_multiple` with the command line's default rule and
-//! `--certify auto` (total seconds, its choice and verdict), run up to `CERTIFY_UP_TO` nodes
+//! `--certify auto` (total seconds, of which the solves' and the certificate's, its choice and
+//! verdict), run up to `CERTIFY_UP_TO` nodes
 //! (default 3000). Rows up to `MAX_NODES` (default 10000). Prints a Markdown table.
 use rotavg::Metric;
 use rotavg::multiple::accuracy::align_and_compare;
@@ -90,9 +91,11 @@ fn auto_row(p: &MultipleProblem, truth: &[Option<Rotation>]) -> Result<()> {
         _ => "none".into(),
     };
     println!(
-        "| {} | {} | auto (chose {chosen}), certify auto | {seconds:.3} | {} | {error:.3} | {verdict} |",
+        "| {} | {} | auto (chose {chosen}), certify auto | {seconds:.3} (solve {:.3}, certify {:.3}) | {} | {error:.3} | {verdict} |",
         p.num_rotations(),
         p.num_edges(),
+        r.details.solve_seconds,
+        r.details.certify_seconds,
         r.solution.report.iterations
     );
     Ok(())

@@ -65,16 +65,30 @@ fn edge_parts(
     (s, k, eta)
 }
 
-/// The edge's symmetric part `S_e` at the estimate (its strength in the comparison; for the
-/// choice of a subgraph).
-pub(super) fn edge_strength(
+/// The edge's symmetric part `S_e` at the estimate (its strength in the comparison) and an
+/// estimate of the charge `Z_e` it leaves when dropped (`K B^{-1} K^T`, `B` = `S_e` floored at
+/// [`EIGENVALUE_FLOOR`] of its largest eigenvalue, as at a node that covers it; a kept edge
+/// leaves `Z_e / BETA` and keeps `(1 - BETA) S_e`, [`KEPT_SHARE`]): for the choice of a
+/// subgraph only.
+pub(super) fn edge_strength_and_charge(
     h: &Information,
     r_ij: &Rotation,
     r_i: &Rotation,
     r_j: &Rotation,
-) -> Matrix3<f64> {
-    edge_parts(h, r_ij, r_i, r_j).0
+) -> (Matrix3<f64>, Matrix3<f64>) {
+    let (s, k, _) = edge_parts(h, r_ij, r_i, r_j);
+    // covered: the floor alone (the kept strength per edge is large at most nodes)
+    let unbounded = Matrix3::identity() * 1e300;
+    let z = match floored_inverse(&s, [&unbounded, &unbounded]) {
+        Some((b_inv, _)) => symmetrize(&(k * b_inv * k.transpose())),
+        None => Matrix3::identity() * (s.norm() + k.norm()),
+    };
+    (s, z)
 }
+
+/// The share of `S_e` a kept edge keeps, and the factor on its dropped charge (estimates: the
+/// floors of [`floored_inverse`] aside).
+pub(super) const KEPT_SHARE: (f64, f64) = (1.0 - BETA, 1.0 / BETA);
 
 /// One edge's `(W, Delta_e)` (`Delta_e = Z / 2 + c I`, the charge at each endpoint), from the
 /// same steps as [`edge_blocks`] with the edge its endpoints' only one.

@@ -45,6 +45,7 @@ use crate::so3::Rotation;
 use faer::sparse::linalg::cholesky::SymbolicCholesky;
 use nalgebra::Matrix3;
 pub use outcome::{BlockComparison, BlockFailure};
+pub use subgraph::{BlockShape, TOP_UP_MAX_EDGES};
 
 /// The factorised structure of a block comparison: the block Laplacian pattern of a subgraph
 /// (or of the whole graph) and its symbolic `LDL^T` analysis.
@@ -54,30 +55,31 @@ pub struct BlockAnalysis {
     symbolic: SymbolicCholesky<usize>,
     /// Per kept edge, its slot in the pattern (`usize::MAX` for a dropped edge).
     slots: Vec<usize>,
-    edges_per_node: Option<f64>,
+    shape: Option<BlockShape>,
     num_rotations: usize,
 }
 
 impl BlockAnalysis {
-    /// The subgraph of `edges_per_node` kept edges per node at `rotations` (the scalar
-    /// comparison's choice, `[D13]`), or the whole graph for `None`; refused before the symbolic
-    /// analysis when its factor is predicted above `max_values` values: `Ok(Err(predicted))`.
+    /// The subgraph of `shape` at `rotations` (chosen by strength with information matrices,
+    /// else the scalar comparison's choice `[D13]` of `shape.edges_per_node` edges per node), or
+    /// the whole graph for `None`; refused before the symbolic analysis when its factor is
+    /// predicted above `max_values` values: `Ok(Err(predicted))`.
     pub fn new(
         problem: &MultipleProblem,
         rotations: &[Rotation],
-        edges_per_node: Option<f64>,
+        shape: Option<BlockShape>,
         max_values: usize,
     ) -> Result<std::result::Result<Self, usize>> {
         problem.check_estimate(rotations)?;
-        let keep = match edges_per_node {
-            Some(k) if k.is_finite() && k >= 0.0 => match problem.information() {
-                Some(info) => subgraph::strong_subgraph_edges(problem, info, rotations, k),
-                None => subgraph_edges(problem, rotations, k),
+        let keep = match shape {
+            Some(s) if valid(s.edges_per_node) && valid(s.top_up) => match problem.information() {
+                Some(info) => subgraph::strong_subgraph_edges(problem, info, rotations, s),
+                None => subgraph_edges(problem, rotations, s.edges_per_node),
             },
-            Some(k) => {
+            Some(s) => {
                 return Err(Error::InvalidSettings {
-                    name: "edges_per_node".into(),
-                    reason: format!("must be a number >= 0, got {k}"),
+                    name: "shape".into(),
+                    reason: format!("edges per node and top-up must be numbers >= 0, got {s:?}"),
                 });
             }
             None => vec![true; problem.num_edges()],
@@ -113,7 +115,7 @@ impl BlockAnalysis {
             pattern,
             symbolic,
             slots,
-            edges_per_node,
+            shape,
             num_rotations: n,
         }))
     }
@@ -148,10 +150,15 @@ impl BlockAnalysis {
         self.keep.iter().filter(|k| !**k).count()
     }
 
-    /// The edges each node keeps (`None`: the whole graph).
-    pub fn edges_per_node(&self) -> Option<f64> {
-        self.edges_per_node
+    /// The subgraph's shape (`None`: the whole graph).
+    pub fn shape(&self) -> Option<BlockShape> {
+        self.shape
     }
+}
+
+/// A finite number `>= 0`.
+fn valid(x: f64) -> bool {
+    x.is_finite() && x >= 0.0
 }
 
 /// Try to prove `lambda_min(S) >= mu` for `S = Q - blkdiag(sym(Lambda))` of the anisotropic

@@ -1,10 +1,10 @@
 //! The block comparison `[A15]` as one rung of the verification ladder: block Laplacians of
-//! subgraphs chosen by strength ([`BLOCK_EDGES_PER_NODE`] edges per node, sparsest first), one
+//! subgraphs chosen by strength and topped up where weak ([`BLOCK_SHAPES`], sparsest first), one
 //! per attempt, each planned with its own prediction; the first that proves ends the rung.
 //! Anisotropic problems only (the scalar comparison `[D13]` is the isotropic form).
 
 use super::outcome::BlockFailure;
-use super::{BlockAnalysis, block_comparison};
+use super::{BlockAnalysis, BlockShape, block_comparison};
 use crate::certify::log::{Outcome, Prediction, Refusal};
 use crate::certify::multiple::check::{Check, counted_prediction};
 use crate::certify::multiple::scalar::ScalarAnalysis;
@@ -18,13 +18,33 @@ use crate::error::Result;
 use crate::so3::Rotation;
 use std::time::Instant;
 
-/// The subgraphs tried, sparsest first: each node keeps this many of its edges, chosen by
-/// strength. Measured on the realistic two-view generator (10^4 cameras, 10^5 edges,
-/// 2026-11-30, `cargo run --release --example block_sweep -- 10000 100000 2 3 4`): 2 and 3 edges
-/// per node leave 963 and 35 negative pivots (1.7 s and 5.5 s), 4 proves (1.9e8 factor values,
-/// 9.2 s), where `S`'s own factor has 3.9e8 values (the grounded bound: 24 s). Sparser
-/// subgraphs never proved on this class, so the climb starts at 4.
-pub const BLOCK_EDGES_PER_NODE: [f64; 4] = [4.0, 5.0, 6.0, 8.0];
+/// The subgraphs tried, sparsest first: each node keeps `edges_per_node` of its edges, chosen
+/// by strength, and the nodes weak against their charges more, up to the ratio `top_up`
+/// ([`BlockShape`]). Measured on the realistic two-view generator (10^4 cameras, 10^5 edges,
+/// 2026-12-02, `block_sweep -- 10000 100000 K [outliers robust]` with the top-up): without
+/// it, 3 and 4 edges per node leave 35 and 0 negative pivots (1.26e8 and 1.93e8 factor
+/// values), and the robust solve's inlier graph needs 4.5 (2.25e8; 4 leave 4 pivots); 2 edges
+/// per node topped up to 14 prove both (1.37e8 and 1.29e8 values; to 12: 1.21e8 and 5 pivots
+/// on the inlier graph). A sparser view graph (3000 cameras, 12,000 edges) needs 3 topped up
+/// to 16 (2 to 16: 19 pivots).
+pub const BLOCK_SHAPES: [BlockShape; 4] = [
+    BlockShape {
+        edges_per_node: 2.0,
+        top_up: 14.0,
+    },
+    BlockShape {
+        edges_per_node: 3.0,
+        top_up: 16.0,
+    },
+    BlockShape {
+        edges_per_node: 4.0,
+        top_up: 24.0,
+    },
+    BlockShape {
+        edges_per_node: 6.0,
+        top_up: 32.0,
+    },
+];
 
 /// The comparison's work besides the factorisation, per edge (the `6 x 6` checks, the
 /// double-double gauge terms and the choice of the subgraph): measured 2.3e-5 s on the
@@ -36,7 +56,7 @@ pub const SECONDS_PER_EDGE: f64 = 2.3e-5;
 /// failures make it unlikely to prove.
 #[derive(Default)]
 pub(in crate::certify::multiple) struct BlockFamily {
-    /// The next entry of [`BLOCK_EDGES_PER_NODE`] to analyse.
+    /// The next entry of [`BLOCK_SHAPES`] to analyse.
     next: usize,
     /// The subgraph the next attempt runs, analysed by the plan.
     pending: Option<BlockAnalysis>,
@@ -161,13 +181,13 @@ impl BlockFamily {
             .settings
             .budget
             .max_factor_values(3 * cx.problem.num_rotations());
-        while self.next < BLOCK_EDGES_PER_NODE.len() {
-            let k = BLOCK_EDGES_PER_NODE[self.next];
+        while self.next < BLOCK_SHAPES.len() {
+            let shape = BLOCK_SHAPES[self.next];
             self.next += 1;
-            match BlockAnalysis::new(cx.problem, rotations, Some(k), max_values)? {
+            match BlockAnalysis::new(cx.problem, rotations, Some(shape), max_values)? {
                 Ok(a) if predict(cx.settings, &a).is_ok() => return Ok(Some(a)),
                 // denser subgraphs have larger factors
-                _ => self.next = BLOCK_EDGES_PER_NODE.len(),
+                _ => self.next = BLOCK_SHAPES.len(),
             }
         }
         Ok(None)
@@ -256,8 +276,8 @@ fn run(
 
 /// The subgraph in words.
 fn shape_of(a: &BlockAnalysis) -> String {
-    match a.edges_per_node() {
-        Some(k) => format!("subgraph of {k} edges per node"),
+    match a.shape() {
+        Some(shape) => shape.to_string(),
         None => "whole graph".into(),
     }
 }
