@@ -2,9 +2,10 @@
 //! 2-6 sensors and 100 to 10^4 frames, solved and certified by `rotavg::pipeline::average_rig`,
 //! with every sensor estimated and with every sensor known; the error against the planted rig.
 //!
-//! `cargo run --release --example rig_many [frames ...] [anisotropic]` (`anisotropic`: the
+//! `cargo run --release --example rig_many [frames ...] [anisotropic] [known]` (`anisotropic`: the
 //! edges carry information matrices, `RigScene::anisotropy` 9, `[H24]`, and a last column gives
-//! the sensors' error of the same data with scalar weights `tr(H)/3`, solve only); `-- write DIR FRAMES SENSORS OUTLIERS
+//! the sensors' error of the same data with scalar weights `tr(H)/3`, solve only; `known`: only
+//! the rows with every sensor known); `-- write DIR FRAMES SENSORS OUTLIERS
 //! SEED` writes one rig (`RigScene`, 0.01 rad of noise, that fraction of random-rotation
 //! outliers) as `DIR/rig.json` and its truth `DIR/truth.json`, for `rotavg rig` and
 //! `benches/colmap_rig.py`.
@@ -57,6 +58,7 @@ fn main() -> rotavg::Result<()> {
     } else {
         args
     };
+    let known_only = all.iter().any(|a| a == "known");
     let anisotropy = if all.iter().any(|a| a == "anisotropic") {
         9.0
     } else {
@@ -77,6 +79,9 @@ fn main() -> rotavg::Result<()> {
     for &frames in &sizes {
         for sensors in [2, 4, 6] {
             for known in [false, true] {
+                if known_only && !known {
+                    continue;
+                }
                 let scene = RigScene {
                     frames,
                     sensors,
