@@ -60,8 +60,9 @@ pub struct BlockAnalysis {
 }
 
 impl BlockAnalysis {
-    /// The subgraph of `shape` at `rotations` (chosen by strength with information matrices,
-    /// else the scalar comparison's choice `[D13]` of `shape.edges_per_node` edges per node), or
+    /// The subgraph of `shape` at `rotations` (chosen by strength and topped up with information
+    /// matrices, else the scalar comparison's choice `[D13]` of `shape.edges_per_node` edges per
+    /// node, where `shape.top_up` has nothing to estimate and is not used), or
     /// the whole graph for `None`; refused before the symbolic analysis when its factor is
     /// predicted above `max_values` values: `Ok(Err(predicted))`.
     pub fn new(

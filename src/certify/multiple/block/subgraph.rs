@@ -163,16 +163,39 @@ fn top_up(problem: &MultipleProblem, parts: &[Parts], keep: &mut [bool], tau: f6
 }
 
 /// `lambda_min(D^{-1/2} A D^{-1/2})` (`D`'s eigenvalues floored at `1e-12` of its largest; an
-/// estimate: only a choice).
+/// estimate: only a choice); `+inf` when `D` has no positive eigenvalue (no charge: exact data)
+/// or the quotient is not finite, so such a node is never weak and never a candidate's best.
 fn ratio(a: &Matrix3<f64>, d: &Matrix3<f64>) -> f64 {
     let eig = SymmetricEigen::new(*d);
-    let floor = (1e-12 * eig.eigenvalues.max()).max(f64::MIN_POSITIVE);
-    let inv_sqrt = eig.eigenvalues.map(|x| 1.0 / x.max(floor).sqrt());
+    let top = eig.eigenvalues.max();
+    if top.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return f64::INFINITY;
+    }
+    let inv_sqrt = eig.eigenvalues.map(|x| 1.0 / x.max(1e-12 * top).sqrt());
     let m = eig.eigenvectors * Matrix3::from_diagonal(&inv_sqrt) * eig.eigenvectors.transpose();
-    smallest(&(m * a * m))
+    let t = smallest(&(m * a * m));
+    if t.is_nan() { f64::INFINITY } else { t }
 }
 
 /// The smallest eigenvalue (an estimate: only a choice).
 fn smallest(m: &Matrix3<f64>) -> f64 {
     m.symmetric_eigenvalues().min()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    /// Exact data leave no charge: the ratio is `+inf` (not NaN, which would sort and compare
+    /// arbitrarily), and it is the generalized eigenvalue where the charge is positive definite.
+    #[test]
+    fn the_ratio_is_infinite_without_charge_and_exact_with_one() {
+        let a = Matrix3::from_diagonal(&Vector3::new(1e5, 2e5, 3e5));
+        assert_eq!(ratio(&a, &Matrix3::zeros()), f64::INFINITY);
+        assert_eq!(ratio(&a, &(-Matrix3::identity())), f64::INFINITY);
+        let d = Matrix3::from_diagonal(&Vector3::new(1e3, 1e5, 1e4));
+        // D^{-1/2} A D^{-1/2} = diag(100, 2, 30)
+        assert!((ratio(&a, &d) - 2.0).abs() < 1e-12);
+    }
 }
