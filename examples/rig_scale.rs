@@ -8,11 +8,12 @@
 //! certified by the multiple-averaging ladder).
 //!
 //! ```text
-//! cargo run --release --example rig_scale -- [NOISE_RAD] [SEED]
+//! cargo run --release --example rig_scale -- [NOISE_RAD] [SEED] [FRAMES...]
 //! ```
 //!
 //! Defaults: 0.02 rad of noise per tangent component on every edge of both graphs, 4 edges per
-//! frame (the same pairs on both graphs), seed 1. Prints a Markdown table.
+//! frame (the same pairs on both graphs), seed 1, 100, 1000 and 10^4 frames. Prints a Markdown
+//! table.
 use rotavg::Rotation;
 use rotavg::multiple::accuracy::align_and_compare;
 use rotavg::multiple::synthetic::SyntheticGraph;
@@ -31,7 +32,11 @@ fn main() -> rotavg::Result<()> {
         "| frames | solver | passes | frames' mean error (deg) | S error (deg) | solve (s) | certify (s) | verdict | relative gap | bound |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
-    for n in [100, 1000, 10_000] {
+    let mut sizes: Vec<usize> = args.iter().skip(3).filter_map(|s| s.parse().ok()).collect();
+    if sizes.is_empty() {
+        sizes = vec![100, 1000, 10_000];
+    }
+    for n in sizes {
         let graph = SyntheticGraph {
             num_rotations: n,
             num_edges: 4 * n,
