@@ -21,7 +21,9 @@ pub const DENSE_MAX_NODES: usize = 2000;
 /// Seconds per `(3n)^3` of the least-norm dense certificate (a dense `3n x 3n` Cholesky
 /// factorisation, two dense symmetric eigenvalue problems and the forming of the matrices):
 /// 1.07e-10 at `3n = 3000` and 1.32e-10 at 4500 on this 2-core machine (2026-12-01, idle),
-/// with room for a loaded one.
+/// with room for a loaded one. Since 2026-12-02 the eigenvalue problems run only where the
+/// grounded bound `[H23]` fails or could be beaten (1.2e-10 at `3n = 3000` and 7.7e-11 at
+/// 6000 on a loaded day, `rig_scale`); the prediction keeps them, for the rigs where they run.
 pub const DENSE_SECONDS_PER_CUBE: f64 = 2e-10;
 
 /// Time and memory of [`super::multipliers::multipliers_at_estimate`] and of its verification
