@@ -11,7 +11,7 @@
 //! each side's grounded bound `[H23]` comes first and the eigenvalues only when they could
 //! improve on it.
 
-use super::grounded::{gauge_rayleigh, grounded};
+use super::grounded::grounded;
 use crate::certify::multiple::multipliers::data_defect;
 use crate::multiple::MultipleProblem;
 use crate::multiple::laplacian::connection_laplacian_triplets;
@@ -110,21 +110,21 @@ pub(super) fn side_bound(
 ) -> Option<SideBound> {
     let dim = m.nrows() as f64;
     let margin = 10.0 * dim * f64::EPSILON * mag.norm();
-    let first = y.and_then(|y| Some((grounded(m, mag, terms, y)?, gauge_rayleigh(m, y))));
-    if let Some((g, q)) = &first
-        && g.floor >= dim * (q - margin).min(0.0)
+    let first = y.and_then(|y| grounded(m, mag, terms, y));
+    if let Some(g) = &first
+        && g.floor >= dim * (g.rayleigh - margin).min(0.0)
     {
         return Some(SideBound {
             floor: g.floor,
             verified: g.min_eigenvalue,
-            estimate: *q,
+            estimate: g.rayleigh,
         });
     }
     let values = crate::linalg::dense::symmetric_eigenvalues(m)?;
     let l = values.first().copied().unwrap_or(f64::INFINITY);
     let mut verified = l - margin;
     let mut floor = dim * verified.min(0.0);
-    if let Some((g, _)) = first {
+    if let Some(g) = first {
         floor = floor.max(g.floor);
         verified = verified.max(g.min_eigenvalue);
     }

@@ -24,6 +24,11 @@ use nalgebra::{DMatrix, DVector, Matrix3};
 pub(super) struct Grounded {
     pub floor: f64,
     pub min_eigenvalue: f64,
+    /// The smallest Rayleigh quotient `y^T Z y / y^T y` over the point's three columns (from
+    /// the same product `Z Y`): an upper bound on `lambda_min(Z)` in exact arithmetic, so the
+    /// eigenvalue bound of `[H14]` can be no better than `3n min(this - its margin, 0)`. An
+    /// estimate, for choosing; never a bound.
+    pub rayleigh: f64,
 }
 
 /// The grounded bound of `Z` (`m`, formed with entrywise magnitudes `mag` and at most `terms`
@@ -47,13 +52,14 @@ pub(super) fn grounded(
     }
     let estimate = grounded_estimate(m, g).filter(|e| *e > 0.0)?;
     let form = gamma(terms);
-    let (rho, h) = gauge_terms(m, mag, form, y);
+    let (rho, h, rayleigh) = gauge_terms(m, mag, form, y);
     let c = proven_c(m, mag, form, g, estimate)?;
     let deficit = (rho * rho / c + h) * (1.0 + 16.0 * U);
     let inverse = 1.0 / (1.0 - d_g) * (1.0 + 4.0 * U);
     Some(Grounded {
         floor: -deficit * 3.0 * inverse,
         min_eigenvalue: -deficit * inverse,
+        rayleigh,
     })
 }
 
@@ -87,18 +93,6 @@ fn grounded_estimate(m: &DMatrix<f64>, g: usize) -> Option<f64> {
     e.values.first().copied().filter(|v| v.is_finite())
 }
 
-/// The smallest Rayleigh quotient `y^T Z y / y^T y` over the point's three columns: an upper
-/// bound on `lambda_min(Z)` (in exact arithmetic), so the eigenvalue bound of `[H14]` can be
-/// no better than `3n min(this - its margin, 0)`.
-pub(super) fn gauge_rayleigh(m: &DMatrix<f64>, y: &[Matrix3<f64>]) -> f64 {
-    let d = m.nrows();
-    let yy = DMatrix::from_fn(d, 3, |r, c| y[r / 3][(r % 3, c)]);
-    let zy = m * &yy;
-    (0..3)
-        .map(|c| yy.column(c).dot(&zy.column(c)) / yy.column(c).norm_squared())
-        .fold(f64::INFINITY, f64::min)
-}
-
 /// The ground: the node of the largest diagonal magnitude (weighted degree).
 fn ground(mag: &DMatrix<f64>, n: usize) -> usize {
     let weight = |i: usize| (0..3).map(|a| mag[(3 * i + a, 3 * i + a)]).sum::<f64>();
@@ -110,8 +104,13 @@ fn ground(mag: &DMatrix<f64>, n: usize) -> usize {
 /// `rho >= ||Z Y||_2` and `h >= 0` with `Y^T Z Y >= -h I`, for the exact `Z`: the computed
 /// products plus their error bounds (forming of `Z`: `form mag |Y|`; the product:
 /// `gamma(3n) |Z| |Y|`; `Y^T (Z Y)`: `|Y|^T E + gamma(3n) |Y|^T |fl(Z Y)|`), and `16 u ||G||_F`
-/// for the 3 x 3 eigenvalue.
-fn gauge_terms(m: &DMatrix<f64>, mag: &DMatrix<f64>, form: f64, y: &[Matrix3<f64>]) -> (f64, f64) {
+/// for the 3 x 3 eigenvalue; and the smallest Rayleigh quotient of `Y`'s columns (an estimate).
+fn gauge_terms(
+    m: &DMatrix<f64>,
+    mag: &DMatrix<f64>,
+    form: f64,
+    y: &[Matrix3<f64>],
+) -> (f64, f64, f64) {
     let d = m.nrows();
     let yy = DMatrix::from_fn(d, 3, |r, c| y[r / 3][(r % 3, c)]);
     let ya = yy.abs();
@@ -130,12 +129,15 @@ fn gauge_terms(m: &DMatrix<f64>, mag: &DMatrix<f64>, form: f64, y: &[Matrix3<f64
     let inflate = 1.0 + gamma(3 * d + 4);
     let rho = (zy.norm() + err.norm()) * inflate;
     let gm = yy.transpose() * &zy;
+    let rayleigh = (0..3)
+        .map(|c| gm[(c, c)] / yy.column(c).norm_squared())
+        .fold(f64::INFINITY, f64::min);
     let gm = Matrix3::from_fn(|r, c| 0.5 * (gm[(r, c)] + gm[(c, r)]));
     let e_g =
         ((ya.transpose() * &err).norm() + (ya.transpose() * zy.abs()).norm() * gamma(d)) * inflate;
     let lmin = gm.symmetric_eigenvalues().min();
     let h = (-lmin).max(0.0) + e_g + 16.0 * U * gm.norm();
-    (rho, h * (1.0 + 4.0 * U))
+    (rho, h * (1.0 + 4.0 * U), rayleigh)
 }
 
 /// A proven `c > 0` with `Z_{-g} >= c I`: the dense Cholesky factorisation of
@@ -242,7 +244,7 @@ mod tests {
         }
         let yy = DMatrix::from_fn(3 * n, 3, |r, c| y[r / 3][(r % 3, c)]);
         let zy = m * &yy;
-        let (rho, h) = gauge_terms(m, mag, gamma(terms), y);
+        let (rho, h, _) = gauge_terms(m, mag, gamma(terms), y);
         assert!(
             rho >= zy.norm() / 1.0000001,
             "rho {rho} below ||Z Y|| {}",
@@ -388,7 +390,8 @@ mod tests {
             );
             assert!(b.verified <= lmin && b.estimate >= lmin - 1e-12);
             floor_below_points(b.floor, side, 3, rng);
-            if angle == 0.0 && b.estimate == gauge_rayleigh(&side.m, &side.y) {
+            let rayleigh = grounded(&side.m, &side.mag, side.terms, &side.y).map(|g| g.rayleigh);
+            if angle == 0.0 && Some(b.estimate) == rayleigh {
                 skipped += 1;
             }
         });
