@@ -34,6 +34,9 @@ pub enum Proof {
     ConvDual,
     /// The dual certificate of the simultaneous problem at the estimate `[H15]`.
     SimultaneousDual,
+    /// The same certificate with its least-norm couplings in low-rank form and each side's
+    /// grounded bound from a sparse bordered factorisation `[H25]` (no dense matrix).
+    SimultaneousLowRank,
     /// The decoupled bound of the simultaneous problem `[H16]`: the two view graphs' certified
     /// minima, summed.
     SimultaneousDecoupled,
@@ -96,6 +99,7 @@ impl Proof {
             Proof::DualCertificate
             | Proof::ConvDual
             | Proof::SimultaneousDual
+            | Proof::SimultaneousLowRank
             | Proof::GravityDual => 2,
             Proof::GravitySurrogate => 3,
             Proof::RigFrames | Proof::RigCoupled => 4,
@@ -120,6 +124,7 @@ impl Proof {
             Proof::DualCertificate
             | Proof::ConvDual
             | Proof::SimultaneousDual
+            | Proof::SimultaneousLowRank
             | Proof::GravityDual
             | Proof::GravityRelaxed
             | Proof::GravitySurrogate
@@ -148,6 +153,9 @@ impl fmt::Display for Proof {
             Proof::ConvSdp => "conv(SO(3)) SDP relaxation [A6] (Clarabel)",
             Proof::ConvDual => "conv(SO(3)) dual certificate at the estimate [A11]",
             Proof::SimultaneousDual => "trace-coupled dual certificate at the estimate [H15]",
+            Proof::SimultaneousLowRank => {
+                "trace-coupled dual certificate at the estimate, low-rank couplings, sparse [H25]"
+            }
             Proof::SimultaneousDecoupled => "the two view graphs' bounds, decoupled [H16]",
             Proof::RigFrames => "the frames' view graph, every sensor held [H19]",
             Proof::RigImages => "the images' view graph, the rig's constraints dropped [H19]",

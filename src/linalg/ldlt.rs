@@ -35,6 +35,30 @@ pub(crate) fn ldlt_inertia(
     symbolic: &SymbolicCholesky<usize>,
     a: SparseColMatRef<'_, usize, f64>,
 ) -> Result<Inertia, LdltFailure> {
+    let rows = ldlt_inertia_by_row(symbolic, a)?;
+    let backward_error = rows.backward.iter().copied().fold(0.0, f64::max);
+    Ok(Inertia {
+        negative: rows.negative,
+        backward_error,
+    })
+}
+
+/// The inertia of a factorised matrix with its backward error row by row: with `Delta` the
+/// difference between `P^T L D L^T P` and the floating-point `A`, `x^T Delta x <= sum_i
+/// backward[i] x_i^2` for every `x` (`|Delta| <= N` entrywise with `N` symmetric, and
+/// `2 |x_i| |x_j| <= x_i^2 + x_j^2`: the row sums of `N`), rows in `A`'s own order.
+pub(crate) struct RowInertia {
+    /// Number of negative pivots of `D`.
+    pub negative: usize,
+    /// `2 gamma(k + 4)` times the row sums of `P^T |L| |D| |L^T| P`, in `A`'s order.
+    pub backward: Vec<f64>,
+}
+
+/// [`ldlt_inertia`] with the backward error of every row ([`RowInertia`]).
+pub(crate) fn ldlt_inertia_by_row(
+    symbolic: &SymbolicCholesky<usize>,
+    a: SparseColMatRef<'_, usize, f64>,
+) -> Result<RowInertia, LdltFailure> {
     let n = a.nrows();
     let mut values = vec![0.0f64; symbolic.len_val()];
     let par = super::factor_parallelism(symbolic.len_val());
@@ -81,13 +105,67 @@ pub(crate) fn ldlt_inertia(
         }
     });
     let k = rowcount.iter().copied().max().unwrap_or(1);
-    let ldl_norm = rowsum.into_iter().fold(0.0, f64::max);
-    let backward_error = 2.0 * gamma(k + 4) * ldl_norm;
-    if !backward_error.is_finite() {
+    let scale = 2.0 * gamma(k + 4);
+    // row r of the factor is row perm_fwd[r] of `a` (P A P^T, faer's forward permutation)
+    let mut backward = vec![0.0f64; n];
+    match symbolic.perm() {
+        Some(perm) => {
+            let (fwd, _) = perm.arrays();
+            for (r, s) in rowsum.iter().enumerate() {
+                backward[fwd[r]] = scale * s;
+            }
+        }
+        None => backward
+            .iter_mut()
+            .zip(&rowsum)
+            .for_each(|(b, s)| *b = scale * s),
+    }
+    if !backward.iter().all(|b| b.is_finite()) {
         return Err(LdltFailure::Numerical);
     }
-    Ok(Inertia {
-        negative,
-        backward_error,
-    })
+    Ok(RowInertia { negative, backward })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::cholesky::symbolic_cholesky_within;
+    use faer::sparse::{SparseColMat, Triplet};
+
+    /// An arrow matrix (node 0 joined to every other) is ordered with its hub last, so the
+    /// factor's rows are permuted; the row bounds must come back in the matrix's own order.
+    /// In exact arithmetic a leaf's row sum of `|L| |D| |L^T|` is `a_ii + 1/2` and the hub's
+    /// `1 + (n - 1) / 2` (its pivot `1 - sum 1 / (4 a_ii)` plus `1/2 + 1 / (4 a_ii)` per leaf):
+    /// every ratio to those must be the same scale.
+    #[test]
+    fn row_bounds_come_back_in_the_matrix_order() {
+        let n = 12;
+        let mut t = vec![Triplet::new(0, 0, 1.0)];
+        for i in 1..n {
+            t.push(Triplet::new(i, i, 4.0 + i as f64));
+            t.push(Triplet::new(i, 0, 0.5));
+            t.push(Triplet::new(0, i, 0.5));
+        }
+        let a = SparseColMat::try_new_from_triplets(n, n, &t).unwrap();
+        let sym = symbolic_cholesky_within(a.symbolic(), usize::MAX)
+            .unwrap()
+            .unwrap();
+        let fwd = sym.perm().map(|p| p.arrays().0.to_vec()).unwrap();
+        assert_ne!(fwd[0], 0, "the hub is not ordered first");
+        let rows = ldlt_inertia_by_row(&sym, a.as_ref()).unwrap();
+        assert_eq!(rows.negative, 0);
+        let exact: Vec<f64> = (0..n)
+            .map(|i| {
+                if i == 0 {
+                    1.0 + 0.5 * (n - 1) as f64
+                } else {
+                    4.5 + i as f64
+                }
+            })
+            .collect();
+        let scale = rows.backward[0] / exact[0];
+        for (b, e) in rows.backward.iter().zip(&exact) {
+            assert!((b / e / scale - 1.0).abs() < 1e-12, "{:?}", rows.backward);
+        }
+    }
 }

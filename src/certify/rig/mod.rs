@@ -112,7 +112,7 @@ fn certify_rig_with(
         Box::new(coupled::CoupledRung(Handed::new(certify))),
         Box::new(two_graphs::TwoGraphsRung(Handed::new((
             crate::certify::simultaneous::joint_certificate,
-            crate::certify::simultaneous::predict_multipliers_at_estimate,
+            crate::certify::simultaneous::predict_simultaneous,
         )))),
     ];
     if images_bound {

@@ -20,8 +20,9 @@ use crate::so3::Rotation;
 pub(crate) struct TwoGraphsRung(pub(crate) Handed<(JointCertifier, JointPredictor)>);
 
 /// The prediction of the simultaneous problem's dense dual certificate on `n` frames (in
-/// practice [`crate::certify::simultaneous::predict_multipliers_at_estimate`]).
-pub(crate) type JointPredictor = fn(usize) -> Prediction;
+/// practice [`crate::certify::simultaneous::predict_simultaneous`]) on `n` frames and graphs of
+/// at most `edges` edges.
+pub(crate) type JointPredictor = fn(usize, usize) -> Prediction;
 
 impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
     fn proof(&self) -> Proof {
@@ -35,8 +36,13 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
         if let Some(why) = not_two_graphs(cx.problem) {
             return Ok(Plan::Refuse(Refusal::NotApplicable { reason: why }, None));
         }
-        // the dense dual certificate of [H15] and [H23], refused by it past its DENSE_MAX_NODES
-        Ok(Plan::Run((self.0.certify.1)(cx.problem.num_frames())))
+        // the dense dual certificate of [H15] and [H23] up to its DENSE_MAX_NODES, or the
+        // low-rank one [H25] (the edges of both sensors: at least the larger graph's)
+        let edges = cx.problem.edges().len();
+        Ok(Plan::Run((self.0.certify.1)(
+            cx.problem.num_frames(),
+            edges,
+        )))
     }
 
     fn attempt(&mut self, cx: &mut RigState<'a>) -> Result<Found> {

@@ -182,7 +182,6 @@ pub fn verify_simultaneous_bound_at(
     {
         return None;
     }
-    let dim = 3.0 * n as f64;
     let (mut lam, mut verified, mut floor) = (f64::INFINITY, f64::INFINITY, 0.0);
     // one side at a time (two dense matrices alive, not four); eigenvalues only
     for (p, side, sign, left_side) in [
@@ -198,6 +197,22 @@ pub fn verify_simultaneous_bound_at(
         verified = verified.min(one.verified);
         floor += one.floor;
     }
+    joint_bound(right, left, lambdas, floor, lam, verified)
+}
+
+/// The bound from both sides' floors (`floor`, their sum) and the multipliers' traces:
+/// `sum_a tr(Lambda_a) + floor`, less the trace sum's rounding and the two graphs' data defects
+/// (`[D4]`: measurements orthogonal only to the validation tolerance); `lam` and `verified`
+/// the smaller side's estimate and proven `lambda_min`.
+pub(super) fn joint_bound(
+    right: &MultipleProblem,
+    left: &MultipleProblem,
+    lambdas: &[Matrix3<f64>],
+    floor: f64,
+    lam: f64,
+    verified: f64,
+) -> Option<SimultaneousBound> {
+    let dim = 3.0 * right.num_rotations() as f64;
     let (mut trace, mut trace_abs) = (0.0, 0.0);
     for l in lambdas {
         trace += l.trace();

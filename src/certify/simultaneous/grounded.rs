@@ -19,6 +19,10 @@ use crate::linalg::gamma;
 use crate::linalg::{Extreme, LanczosSettings, lanczos};
 use nalgebra::{DMatrix, DVector, Matrix3};
 
+/// The shifts `c'` tried, as fractions of a Lanczos estimate of `lambda_min(Z_{-g})`: the first
+/// that a factorisation proves is kept.
+pub(super) const SHIFT_FRACTIONS: [f64; 4] = [0.9, 0.5, 0.05, 0.005];
+
 /// The proven lower bound on `min tr(Z X)` over `X >= 0` with `X_ii = I` and the proven lower
 /// bound on `lambda_min(Z)` it implies (`-(rho^2 / c + h) / sigma_min(Y_g)^2`).
 pub(super) struct Grounded {
@@ -46,7 +50,7 @@ pub(super) fn grounded(
         return None;
     }
     let g = ground(mag, n);
-    let d_g = ((y[g].transpose() * y[g] - Matrix3::identity()).norm() * (1.0 + 8.0 * U)) + 8.0 * U;
+    let d_g = ground_defect(&y[g]);
     if d_g >= 0.5 {
         return None;
     }
@@ -54,13 +58,26 @@ pub(super) fn grounded(
     let form = gamma(terms);
     let (rho, h, rayleigh) = gauge_terms(m, mag, form, y);
     let c = proven_c(m, mag, form, g, estimate)?;
+    Some(grounded_floor(rho, h, c, d_g, rayleigh))
+}
+
+/// `d_g >= ||Y_g^T Y_g - I||_F` for the ground's block (rounded up); the bound needs it below
+/// one half.
+pub(super) fn ground_defect(y_g: &Matrix3<f64>) -> f64 {
+    ((y_g.transpose() * y_g - Matrix3::identity()).norm() * (1.0 + 8.0 * U)) + 8.0 * U
+}
+
+/// The grounded floor from its proven ingredients: `rho >= ||Z Y||_2`, `Y^T Z Y >= -h I`,
+/// `Z_{-g} >= c I` (`c > 0`) and the ground's defect `d_g < 1`: `tr(Z X) >= -3 (rho^2 / c + h)
+/// / (1 - d_g)` and `lambda_min(Z) >= -(rho^2 / c + h) / (1 - d_g)`.
+pub(super) fn grounded_floor(rho: f64, h: f64, c: f64, d_g: f64, rayleigh: f64) -> Grounded {
     let deficit = (rho * rho / c + h) * (1.0 + 16.0 * U);
     let inverse = 1.0 / (1.0 - d_g) * (1.0 + 4.0 * U);
-    Some(Grounded {
+    Grounded {
         floor: -deficit * 3.0 * inverse,
         min_eigenvalue: -deficit * inverse,
         rayleigh,
-    })
+    }
 }
 
 /// An estimate of `lambda_min(Z_{-g})` (`Z` without the ground's block): the smallest Ritz
@@ -72,6 +89,21 @@ pub(super) fn grounded(
 /// shifts are proven by the factorisation.
 fn grounded_estimate(m: &DMatrix<f64>, g: usize) -> Option<f64> {
     let d = m.nrows();
+    let op = |x: &[f64], out: &mut [f64]| {
+        let z = m * DVector::from_column_slice(x);
+        out.copy_from_slice(z.as_slice());
+    };
+    lanczos_without_ground(d, g, m.norm() / (d as f64).sqrt(), op)
+}
+
+/// The smallest Ritz value of at most 60 Lanczos steps (tolerance 1e-6 of `scale`) on the
+/// operator `op` of dimension `d` deflated by the ground `g`'s three coordinates.
+pub(super) fn lanczos_without_ground(
+    d: usize,
+    g: usize,
+    scale: f64,
+    op: impl FnMut(&[f64], &mut [f64]),
+) -> Option<f64> {
     let ground: Vec<Vec<f64>> = (0..3)
         .map(|k| {
             (0..d)
@@ -79,15 +111,10 @@ fn grounded_estimate(m: &DMatrix<f64>, g: usize) -> Option<f64> {
                 .collect()
         })
         .collect();
-    let scale = m.norm() / (d as f64).sqrt();
     let settings = LanczosSettings {
         max_iterations: 60,
         tolerance: 1e-6,
         ..Default::default()
-    };
-    let op = |x: &[f64], out: &mut [f64]| {
-        let z = m * DVector::from_column_slice(x);
-        out.copy_from_slice(z.as_slice());
     };
     let e = lanczos(d, op, Extreme::Smallest, 1, scale, &settings, &ground, None);
     e.values.first().copied().filter(|v| v.is_finite())
@@ -126,15 +153,29 @@ fn gauge_terms(
         }
     }
     let err = (mag * &ya) * form + z_abs_y * gamma(d);
+    gauge_from_product(&yy, &zy, &err)
+}
+
+/// `(rho, h, rayleigh)` of [`gauge_terms`] from the computed `Z Y` (`zy`, `d x 3`) and an
+/// entrywise bound `err` on its error against the exact `Z` times `Y` (`yy`): `rho` the
+/// Frobenius norms summed, `h` from the `3 x 3` matrix `Y^T (Z Y)` (its product's error
+/// `|Y|^T err + gamma(d) |Y|^T |fl(Z Y)|`, and `16 u ||G||_F` for its eigenvalue).
+pub(super) fn gauge_from_product(
+    yy: &DMatrix<f64>,
+    zy: &DMatrix<f64>,
+    err: &DMatrix<f64>,
+) -> (f64, f64, f64) {
+    let d = yy.nrows();
+    let ya = yy.abs();
     let inflate = 1.0 + gamma(3 * d + 4);
     let rho = (zy.norm() + err.norm()) * inflate;
-    let gm = yy.transpose() * &zy;
+    let gm = yy.transpose() * zy;
     let rayleigh = (0..3)
         .map(|c| gm[(c, c)] / yy.column(c).norm_squared())
         .fold(f64::INFINITY, f64::min);
     let gm = Matrix3::from_fn(|r, c| 0.5 * (gm[(r, c)] + gm[(c, r)]));
     let e_g =
-        ((ya.transpose() * &err).norm() + (ya.transpose() * zy.abs()).norm() * gamma(d)) * inflate;
+        ((ya.transpose() * err).norm() + (ya.transpose() * zy.abs()).norm() * gamma(d)) * inflate;
     let lmin = gm.symmetric_eigenvalues().min();
     let h = (-lmin).max(0.0) + e_g + 16.0 * U * gm.norm();
     (rho, h * (1.0 + 4.0 * U), rayleigh)
@@ -163,7 +204,7 @@ fn proven_c(
     let diag_max = (0..d)
         .map(|k| m[(keep(k), keep(k))].abs())
         .fold(0.0, f64::max);
-    for fraction in [0.9, 0.5, 0.05, 0.005] {
+    for fraction in SHIFT_FRACTIONS {
         let shift = fraction * estimate;
         let a = DMatrix::from_fn(d, d, |r, c| {
             let v = m[(keep(r), keep(c))];
@@ -183,7 +224,7 @@ fn proven_c(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::bound::{certificate_matrix, side_bound};
     use super::super::multipliers::EstimateMultipliers;
     use super::*;
@@ -195,9 +236,19 @@ mod tests {
     /// A 12-node rig: a random view graph and its conjugate by a random `S` (`noise` rad on the
     /// second), with the planted rotations and `S` (optimal when `noise` is 0).
     fn rig(seed: u64, noise: f64) -> (MultipleProblem, MultipleProblem, Vec<Rotation>, Rotation) {
+        rig_of(12, 30, seed, noise)
+    }
+
+    /// [`rig`] with `n` nodes and `edges` edges (noise on both graphs).
+    pub(in crate::certify::simultaneous) fn rig_of(
+        n: usize,
+        edges: usize,
+        seed: u64,
+        noise: f64,
+    ) -> (MultipleProblem, MultipleProblem, Vec<Rotation>, Rotation) {
         let graph = SyntheticGraph {
-            num_rotations: 12,
-            num_edges: 30,
+            num_rotations: n,
+            num_edges: edges,
             noise_sigma: noise,
             seed,
             ..Default::default()
@@ -216,7 +267,7 @@ mod tests {
                 }
             })
             .collect();
-        let left = MultipleProblem::new(12, edges).unwrap();
+        let left = MultipleProblem::new(n, edges).unwrap();
         (right, left, truth, s)
     }
 

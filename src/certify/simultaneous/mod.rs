@@ -1,18 +1,22 @@
 //! Certificates of the simultaneous problem (`paper-notes/conjugate.md` `[H14]`, `[H15]`): the
-//! hand-eye rotation `S` and the absolutes `R_i` of two view graphs, jointly. Two rungs: the
-//! dual certificate at the estimate ([`dual`], `[H15]`), then the SDP of
-//! [`crate::relax::simultaneous`] (`[H14]`, `sdp.rs`), each predicted from its size and refused
-//! over the budget; their multipliers are verified by an independent dense eigenvalue
-//! computation ([`bound`]). When neither proves enough (or fits), the decoupled bound
+//! hand-eye rotation `S` and the absolutes `R_i` of two view graphs, jointly. Three rungs: the
+//! dual certificate at the estimate in low-rank form (`low_rank.rs`, `sparse_side.rs`,
+//! `low_rank_rung.rs`, `[H25]`: no dense matrix) and densely with a search over its couplings
+//! ([`dual`], `[H15]`), then the SDP of [`crate::relax::simultaneous`] (`[H14]`, `sdp.rs`), each
+//! predicted from its size and refused over the budget; their multipliers are verified
+//! independently of how they were found ([`bound`], `sparse_side.rs`). When neither proves enough (or fits), the decoupled bound
 //! (`decoupled.rs`, `[H16]`): the two graphs' own certified minima, summed, at any size.
 
 pub mod bound;
 mod decoupled;
 pub mod dual;
 mod grounded;
+mod low_rank;
+mod low_rank_rung;
 pub mod multipliers;
 mod sdp;
 mod search;
+mod sparse_side;
 mod state;
 
 pub use bound::{SimultaneousBound, verify_simultaneous_bound, verify_simultaneous_bound_at};
@@ -32,9 +36,11 @@ use crate::so3::Rotation;
 use state::SimState;
 
 /// Certify a joint estimate `(R, S)` of the simultaneous problem (right graph `right`, left
-/// graph `left`, the same `n` nodes). Two rungs, each predicted and refused over the budget:
-/// the dual certificate at the estimate `[H15]` (modes `auto` and `dual`; cheap, dense
-/// `3n x 3n`), then, when it is not sufficient, the SDP `[H14]` (modes `auto` and `sdp`); any
+/// graph `left`, the same `n` nodes). Its rungs, each predicted and refused over the budget:
+/// the dual certificate at the estimate `[H15]` (modes `auto` and `dual`; with low-rank
+/// couplings and sparse factorisations `[H25]`, or dense `3n x 3n` with a search over the
+/// couplings, the cheaper first), then, when it is not sufficient, the SDP `[H14]` (modes `auto`
+/// and `sdp`), and the decoupled bound `[H16]`; any
 /// other mode is refused as not applicable and the verdict is `inconclusive`. The verdict uses
 /// the best verified bound. The estimate is never changed; a cheaper rounding of the SDP is
 /// returned as the improvement (not polished: the joint local solver lives in
@@ -72,6 +78,7 @@ pub fn certify_simultaneous(
         sdp: None,
     };
     let rungs: Rungs<'_, SimState<'_>> = vec![
+        Box::new(low_rank_rung::LowRankRung::default()),
         Box::new(dual::DualRung::default()),
         Box::new(sdp::SdpRung::default()),
         Box::new(decoupled::DecoupledRung::new(
@@ -90,6 +97,22 @@ pub fn certify_simultaneous(
         details,
         improvement: state.improvement,
     })
+}
+
+/// The predicted cost of [`certify_simultaneous`]'s first proof on `n` nodes with view graphs
+/// of at most `edges` edges each: the cheaper of the dense dual certificate (up to
+/// [`dual::DENSE_MAX_NODES`]) and the low-rank one `[H25]` (isotropic graphs).
+pub fn predict_simultaneous(n: usize, edges: usize) -> crate::certify::budget::Prediction {
+    let sparse = low_rank_rung::predict(n, edges);
+    if n > dual::DENSE_MAX_NODES {
+        return sparse;
+    }
+    let dense = predict_multipliers_at_estimate(n);
+    if dense.seconds < sparse.seconds {
+        dense
+    } else {
+        sparse
+    }
 }
 
 /// The certificate of [`certify_simultaneous`] alone (the rungs of other problems take it as a

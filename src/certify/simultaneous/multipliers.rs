@@ -123,8 +123,18 @@ fn coupling_gram(
     k
 }
 
-impl EstimateMultipliers {
-    /// `None` when the point does not fit the graphs or the coupling system is singular.
+/// What complementary slackness reads off a point `(R, S)`: `R_i`, `C_i = S R_i`, `G = Q Y` of
+/// both sides (double-double, `[D3]`) and the coupling system's right side ([`coupling_rhs`]).
+pub(super) struct PointTerms {
+    pub rs: Vec<Matrix3<f64>>,
+    pub cs: Vec<Matrix3<f64>>,
+    pub gr: Vec<Matrix3<f64>>,
+    pub gc: Vec<Matrix3<f64>>,
+    pub rhs: Vec<Vector3<f64>>,
+}
+
+impl PointTerms {
+    /// `None` when the point does not fit the graphs (or has fewer than two nodes).
     pub fn new(
         right: &MultipleProblem,
         left: &MultipleProblem,
@@ -136,7 +146,6 @@ impl EstimateMultipliers {
             return None;
         }
         let c_rotations: Vec<Rotation> = rotations.iter().map(|r| s * r).collect();
-        // G = Q Y by blocks, in double-double [D3]
         let (gr, gc) = (
             laplacian_times(right, rotations),
             laplacian_times(left, &c_rotations),
@@ -144,6 +153,32 @@ impl EstimateMultipliers {
         let rs: Vec<Matrix3<f64>> = rotations.iter().map(|r| *r.matrix()).collect();
         let cs: Vec<Matrix3<f64>> = c_rotations.iter().map(|r| *r.matrix()).collect();
         let rhs = coupling_rhs(&gr, &gc, &rs, &cs, s.matrix());
+        Some(PointTerms {
+            rs,
+            cs,
+            gr,
+            gc,
+            rhs,
+        })
+    }
+}
+
+impl EstimateMultipliers {
+    /// `None` when the point does not fit the graphs or the coupling system is singular.
+    pub fn new(
+        right: &MultipleProblem,
+        left: &MultipleProblem,
+        rotations: &[Rotation],
+        s: &Rotation,
+    ) -> Option<Self> {
+        let n = rotations.len();
+        let PointTerms {
+            rs,
+            cs,
+            gr,
+            gc,
+            rhs,
+        } = PointTerms::new(right, left, rotations, s)?;
         let pairs: Vec<(usize, usize)> = coupling_pairs(n).collect();
         let us: Vec<Vector3<f64>> = pairs
             .iter()
