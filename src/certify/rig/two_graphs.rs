@@ -37,8 +37,15 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
             return Ok(Plan::Refuse(Refusal::NotApplicable { reason: why }, None));
         }
         // the dense dual certificate of [H15] and [H23] up to its DENSE_MAX_NODES, or the
-        // low-rank one [H25] (the edges of both sensors: at least the larger graph's)
-        let edges = cx.problem.edges().len();
+        // low-rank one [H25], predicted from the larger sensor's graph
+        let images = cx.problem.images();
+        let mut per_sensor = [0usize; 2];
+        for e in cx.problem.edges() {
+            if let Some(count) = images.get(e.i).and_then(|a| per_sensor.get_mut(a.sensor)) {
+                *count += 1;
+            }
+        }
+        let edges = per_sensor[0].max(per_sensor[1]);
         Ok(Plan::Run((self.0.certify.1)(
             cx.problem.num_frames(),
             edges,
