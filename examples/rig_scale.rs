@@ -2,8 +2,8 @@
 //! each with its own view graph over the same frames; `paper-notes/conjugate.md` `[H12]`,
 //! `[H16]`, `[H17]`) on synthetic rigs of 100 to 10^4 frames: the joint solve (dense
 //! Gauss-Newton up to 500 frames, the sparse alternation beyond), its accuracy against the
-//! planted frames and `sensor_from_rig`, the certificate (the dense dual certificate `[H15]`
-//! where it fits, else the decoupled bound `[H16]`) and the times; and, on the row below each,
+//! planted frames and `sensor_from_rig`, the certificate (the dual certificate at the estimate
+//! `[H15]`, dense or in low-rank form `[H25]`, else the decoupled bound `[H16]`) and the times; and, on the row below each,
 //! the frames averaged with the planted `sensor_from_rig` held (`[H18]`: one view graph,
 //! certified by the multiple-averaging ladder).
 //!
