@@ -81,8 +81,22 @@ impl<'a> Rung<SimState<'a>> for LowRankRung {
             (cx.left, &lambdas[n..], 1.0, &low.point.cs),
         ];
         let (mut floor, mut lam, mut verified) = (0.0, f64::INFINITY, f64::INFINITY);
+        let started = std::time::Instant::now();
         for (p, side_lambdas, sign, y) in sides {
-            match sparse_side_floor(p, side_lambdas, &low, sign, y, max_values) {
+            // the left side only while the time left exceeds what the right one took
+            if sign > 0.0
+                && cx
+                    .tally
+                    .deadline
+                    .left()
+                    .is_some_and(|l| l < started.elapsed().as_secs_f64())
+            {
+                return Ok(Found::failed(
+                    "the right side was proven, no time left for the left side",
+                ));
+            }
+            let left = || cx.tally.deadline.left();
+            match sparse_side_floor(p, side_lambdas, &low, (sign, y), max_values, &left) {
                 Ok(g) => {
                     floor += g.floor;
                     lam = lam.min(g.rayleigh);

@@ -145,14 +145,16 @@ fn norm_squared_bound(rows: &[Vec9]) -> f64 {
 }
 
 /// The grounded bound of one side (`sign` -1: `Z_R`, +1: `Z_C`) at the point `y`, with a
-/// factor of at most `max_values` stored values; `Err` says why none was proven.
+/// factor of at most `max_values` stored values, each factorisation started only while
+/// `left()` (the seconds left, `None` without a limit) exceeds the last one's time; `Err` says
+/// why none was proven.
 pub(super) fn sparse_side_floor(
     p: &MultipleProblem,
     lambdas: &[Matrix3<f64>],
     low: &LowRankCouplings,
-    sign: f64,
-    y: &[Matrix3<f64>],
+    (sign, y): (f64, &[Matrix3<f64>]),
     max_values: usize,
+    left: &dyn Fn() -> Option<f64>,
 ) -> Result<Grounded, String> {
     let n = p.num_rotations();
     if n < 2 || y.len() != n || lambdas.len() != n || p.is_anisotropic() {
@@ -170,7 +172,7 @@ pub(super) fn sparse_side_floor(
     let estimate = estimate(&side, low, sign, g)
         .filter(|e| *e > 0.0)
         .ok_or("no positive estimate of lambda_min(Z_{-g})")?;
-    let c = proven_c(&side, low, sign, g, estimate, max_values)?;
+    let c = proven_c(&side, low, (sign, g), estimate, max_values, left)?;
     Ok(grounded_floor(rho, h, c, d_g, rayleigh))
 }
 
@@ -222,14 +224,15 @@ fn gauge(
 }
 
 /// A proven `c > 0` with `Z_{-g} >= c I` from the bordered `LDL^T` (module documentation),
-/// for `c'` the fractions [`SHIFT_FRACTIONS`] of `estimate`, the first that proves.
+/// for `c'` the fractions [`SHIFT_FRACTIONS`] of `estimate`, the first that proves; a further
+/// shift only while the time left exceeds the last factorisation's.
 fn proven_c(
     side: &SparseSide,
     low: &LowRankCouplings,
-    sign: f64,
-    g: usize,
+    (sign, g): (f64, usize),
     estimate: f64,
     max_values: usize,
+    left: &dyn Fn() -> Option<f64>,
 ) -> Result<f64, String> {
     let symbolic = match side.pattern.symbolic_within(max_values) {
         Ok(Ok(s)) => s,
@@ -240,61 +243,113 @@ fn proven_c(
         }
         Err(e) => return Err(e.to_string()),
     };
+    let border = Border::new(side, low, sign, g)?;
     let mut last = String::from("no shift tried");
     for fraction in SHIFT_FRACTIONS {
-        match prove_shift(side, low, sign, g, fraction * estimate, &symbolic) {
+        let started = std::time::Instant::now();
+        match prove_shift(side, &border, g, fraction * estimate, &symbolic) {
             Ok(c) => return Ok(c),
             Err(why) => last = why,
         }
+        if left().is_some_and(|l| l < started.elapsed().as_secs_f64()) {
+            return Err(format!("{last}; no time left for a smaller shift"));
+        }
     }
     Err(last)
+}
+
+/// What every shift of one side shares: the border's halves and scale `t` (`mu = t^2`), the
+/// bounds `||P_1||^2`, `||P_2||^2`, the largest diagonal entry of `A` and the forming error of
+/// `A_{-g}` (`gamma(terms)` times its largest row sum of magnitudes).
+struct Border<'a> {
+    halves: (&'a [Vec9], &'a [Vec9]),
+    t: f64,
+    mu: f64,
+    norms: (f64, f64),
+    diag_max: f64,
+    forming: f64,
+}
+
+impl<'a> Border<'a> {
+    /// `Err` when a border value `t / 4 P(i, k)` or `mu` would leave the normal range (then
+    /// not exact).
+    fn new(
+        side: &SparseSide,
+        low: &'a LowRankCouplings,
+        sign: f64,
+        g: usize,
+    ) -> Result<Self, String> {
+        let d = 3 * side.n;
+        let halves = halves(low, sign);
+        let diag_max = side
+            .pattern
+            .diagonal(&side.a)
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        // t^2 about the diagonal's scale, t a power of two (t / 4 too: the border exact)
+        let t = 2f64.powi((diag_max.max(f64::MIN_POSITIVE).log2() / 2.0).round() as i32);
+        let mu = t * t;
+        let normal = |x: f64| x == 0.0 || (x.abs() >= f64::MIN_POSITIVE && x.is_finite());
+        let values = halves.0.iter().chain(halves.1).flat_map(|r| r.iter());
+        if !normal(mu) || mu == 0.0 || !values.map(|r| t / 4.0 * r).all(normal) {
+            return Err("the border's values leave the normal range".into());
+        }
+        let mag_rows = side.a_times(&side.mag, &vec![1.0; d]);
+        let forming = (0..d)
+            .filter(|r| r / 3 != g)
+            .map(|r| mag_rows[r])
+            .fold(0.0, f64::max)
+            * gamma(side.terms)
+            * (1.0 + gamma(3 * side.terms + 3));
+        let norms = (norm_squared_bound(halves.0), norm_squared_bound(halves.1));
+        Ok(Border {
+            halves,
+            t,
+            mu,
+            norms,
+            diag_max,
+            forming,
+        })
+    }
+
+    /// The values of `K` at `shift`: `A - shift I` on the nodes, the border, the ground pinned.
+    fn bordered(&self, side: &SparseSide, g: usize, shift: f64) -> Vec<f64> {
+        let (n, p) = (side.n, &side.pattern);
+        let mut k = side.a.clone();
+        for i in 0..n {
+            p.add(&mut k, i, i, 0, &(-Matrix3::identity() * shift));
+        }
+        for (half, (rows, diagonal)) in [(self.halves.0, self.mu), (self.halves.1, -self.mu)]
+            .into_iter()
+            .enumerate()
+        {
+            for c in 0..HALF {
+                let b = n + half * HALF + c;
+                p.add(&mut k, b, b, 0, &(Matrix3::identity() * diagonal));
+                for (i, r) in rows.iter().enumerate() {
+                    let m = Matrix3::identity() * (self.t / 4.0 * r[c]);
+                    p.add(&mut k, b, i, p.slot(b, i), &m);
+                }
+            }
+        }
+        let mut pinned = vec![false; 3 * n + 6 * HALF];
+        pinned[3 * g..3 * g + 3].fill(true);
+        p.pin(&mut k, &pinned);
+        k
+    }
 }
 
 /// `Z_{-g} >= c I` proven from the bordered `LDL^T` at the shift `c' = shift`: `c = c'` less
 /// the backward errors (module documentation), or why not.
 fn prove_shift(
     side: &SparseSide,
-    low: &LowRankCouplings,
-    sign: f64,
+    border: &Border<'_>,
     g: usize,
     shift: f64,
     symbolic: &SymbolicCholesky<usize>,
 ) -> Result<f64, String> {
-    let (n, d) = (side.n, 3 * side.n);
-    let (v1, v2) = halves(low, sign);
-    let diag_max = side
-        .pattern
-        .diagonal(&side.a)
-        .iter()
-        .fold(0.0f64, |m, v| m.max(v.abs()));
-    // t^2 about the diagonal's scale, t a power of two (t / 4 too: the border exact)
-    let t = 2f64.powi((diag_max.max(f64::MIN_POSITIVE).log2() / 2.0).round() as i32);
-    let mu = t * t;
-    let mut k = side.a.clone();
-    for i in 0..n {
-        side.pattern
-            .add(&mut k, i, i, 0, &(-Matrix3::identity() * shift));
-    }
-    for (half, (rows, diagonal)) in [(v1, mu), (v2, -mu)].into_iter().enumerate() {
-        for c in 0..HALF {
-            let b = n + half * HALF + c;
-            side.pattern
-                .add(&mut k, b, b, 0, &(Matrix3::identity() * diagonal));
-            for (i, r) in rows.iter().enumerate() {
-                let slot = side.pattern.slot(b, i);
-                side.pattern.add(
-                    &mut k,
-                    b,
-                    i,
-                    slot,
-                    &(Matrix3::identity() * (t / 4.0 * r[c])),
-                );
-            }
-        }
-    }
-    let mut pinned = vec![false; d + 6 * HALF];
-    pinned[3 * g..3 * g + 3].fill(true);
-    side.pattern.pin(&mut k, &pinned);
+    let d = 3 * side.n;
+    let k = border.bordered(side, g, shift);
     let inertia = ldlt_inertia_by_row(symbolic, side.pattern.matrix(&k))
         .map_err(|_| "a zero or non-finite pivot".to_string())?;
     drop(k);
@@ -304,31 +359,24 @@ fn prove_shift(
             inertia.negative
         ));
     }
-    // the forming error of A_{-g}: gamma(terms) times its largest row sum of magnitudes
-    let mag_rows = side.a_times(&side.mag, &vec![1.0; d]);
-    let forming = (0..d)
-        .filter(|r| r / 3 != g)
-        .map(|r| mag_rows[r])
-        .fold(0.0, f64::max)
-        * gamma(side.terms)
-        * (1.0 + gamma(3 * side.terms + 3));
     let delta_1 = inertia.backward[..d].iter().copied().fold(0.0, f64::max)
-        + forming
-        + U * (diag_max + shift);
+        + border.forming
+        + U * (border.diag_max + shift);
     let delta_2 = inertia.backward[d..].iter().copied().fold(0.0, f64::max);
+    let mu = border.mu;
     if delta_2.is_nan() || delta_2 >= 0.5 * mu {
         return Err(format!(
             "the border's backward error {delta_2:.2e} against t^2 = {mu:.2e}"
         ));
     }
-    let (n1, n2) = (norm_squared_bound(v1), norm_squared_bound(v2));
-    let border = delta_2 * (n1 / (16.0 * (mu + delta_2)) + n2 / (16.0 * (mu - delta_2)));
-    let c = (shift - delta_1 - border * (1.0 + 8.0 * U)) * (1.0 - 8.0 * U);
+    let (n1, n2) = border.norms;
+    let charge = delta_2 * (n1 / (16.0 * (mu + delta_2)) + n2 / (16.0 * (mu - delta_2)));
+    let c = (shift - delta_1 - charge * (1.0 + 8.0 * U)) * (1.0 - 8.0 * U);
     if c > 0.0 {
         Ok(c)
     } else {
         Err(format!(
-            "shift {shift:.3e} not proven: backward errors {delta_1:.2e} (rows) and {border:.2e} (border)"
+            "shift {shift:.3e} not proven: backward errors {delta_1:.2e} (rows) and {charge:.2e} (border)"
         ))
     }
 }
@@ -398,7 +446,7 @@ mod tests {
                 let zg = z.select_rows(&keep).select_columns(&keep);
                 let lg = zg.symmetric_eigenvalues().min();
                 if let Some(e) = estimate(&side, &low, sign, g).filter(|e| *e > 0.0)
-                    && let Ok(c) = proven_c(&side, &low, sign, g, e, usize::MAX)
+                    && let Ok(c) = proven_c(&side, &low, (sign, g), e, usize::MAX, &|| None)
                 {
                     assert!(c <= lg, "c {c:e} above lambda_min(Z_-g) {lg:e}");
                 }
@@ -406,16 +454,24 @@ mod tests {
                 // just above it
                 if lg > 0.0 {
                     let sym = side.pattern.symbolic_within(usize::MAX).unwrap().unwrap();
-                    let below = prove_shift(&side, &low, sign, g, 0.98 * lg, &sym);
+                    let border = Border::new(&side, &low, sign, g).unwrap();
+                    let below = prove_shift(&side, &border, g, 0.98 * lg, &sym);
                     assert!(
                         below.as_ref().is_ok_and(|c| *c <= lg),
                         "{below:?} at 0.98 lambda_min {lg:e}"
                     );
-                    let above = prove_shift(&side, &low, sign, g, 1.02 * lg, &sym);
+                    let above = prove_shift(&side, &border, g, 1.02 * lg, &sym);
                     assert!(above.is_err(), "{above:?} at 1.02 lambda_min {lg:e}");
+                    // an estimate 2.2 times too large: the third shift proves, unless no time
+                    // is left after the first
+                    let e = 2.2 * lg / 0.9;
+                    let later = proven_c(&side, &low, (sign, g), e, usize::MAX, &|| None);
+                    assert!(later.as_ref().is_ok_and(|c| *c <= lg), "{later:?}");
+                    let stopped = proven_c(&side, &low, (sign, g), e, usize::MAX, &|| Some(0.0));
+                    assert!(stopped.is_err_and(|w| w.contains("no time left")));
                 }
                 let lmin = z.symmetric_eigenvalues().min();
-                let Ok(b) = sparse_side_floor(p, ls, &low, sign, y, usize::MAX) else {
+                let Ok(b) = sparse_side_floor(p, ls, &low, (sign, y), usize::MAX, &|| None) else {
                     assert!(
                         noise > 0.0 || off > 0.0,
                         "no bound at the optimum (seed {seed})"
