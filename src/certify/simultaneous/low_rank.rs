@@ -76,7 +76,7 @@ fn gram(a: &[Vec9], b: &[Vec9]) -> Mat9 {
         .fold(Mat9::zeros(), |acc, (x, y)| acc + x * y.transpose())
 }
 
-/// `A A^T y` (blocks of 3) and the `q_i = B_i^T y_i` it passed through.
+/// `A A^T y` (blocks of 3), through `q_i = B_i^T y_i` and `G_PQ`.
 fn coupling_gram_times(
     rs: &[Matrix3<f64>],
     ps: &[Vec9],
