@@ -78,7 +78,7 @@ impl<'a> Rung<SimState<'a>> for DualRung {
     fn attempt(&mut self, cx: &mut SimState<'a>) -> Result<Found> {
         self.done = true;
         let n = cx.right.num_rotations();
-        let at = EstimateMultipliers::new(cx.right, cx.left, cx.rotations, cx.s);
+        let at = cx.point_terms().and_then(EstimateMultipliers::new);
         let point = Some((cx.rotations, cx.s));
         let mut bound = at.as_ref().and_then(|at| {
             let g = at.least_norm.clone();

@@ -226,7 +226,7 @@ fn proven_c(
 #[cfg(test)]
 pub(super) mod tests {
     use super::super::bound::{certificate_matrix, side_bound};
-    use super::super::multipliers::EstimateMultipliers;
+    use super::super::multipliers::{EstimateMultipliers, PointTerms};
     use super::*;
     use crate::multiple::synthetic::SyntheticGraph;
     use crate::multiple::{Edge, MultipleProblem};
@@ -331,7 +331,8 @@ pub(super) mod tests {
                     .map(|r| perturb_gaussian(r, angle, rng))
                     .collect();
                 let s = perturb_gaussian(&s_true, angle, rng);
-                let Some(at) = EstimateMultipliers::new(&right, &left, &rs, &s) else {
+                let at = PointTerms::new(&right, &left, &rs, &s).and_then(EstimateMultipliers::new);
+                let Some(at) = at else {
                     continue;
                 };
                 let g = at.least_norm.clone();

@@ -15,8 +15,6 @@
 
 use super::multipliers::PointTerms;
 use crate::linalg::gamma;
-use crate::multiple::MultipleProblem;
-use crate::so3::Rotation;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use std::ops::AddAssign;
 
@@ -201,15 +199,8 @@ fn solve_coupling_system(
 }
 
 impl LowRankCouplings {
-    /// The least-norm couplings at `(rotations, s)`; `None` when the point does not fit the
-    /// graphs or a value is not finite.
-    pub fn new(
-        right: &MultipleProblem,
-        left: &MultipleProblem,
-        rotations: &[Rotation],
-        s: &Rotation,
-    ) -> Option<Self> {
-        let point = PointTerms::new(right, left, rotations, s)?;
+    /// The least-norm couplings at `point`; `None` when a value is not finite.
+    pub fn new(point: PointTerms) -> Option<Self> {
         let rs = &point.rs;
         let ps: Vec<Vec9> = rs.iter().map(vec9).collect();
         let (y, iterations, residual) = solve_coupling_system(rs, &ps, &point.rhs);
@@ -303,6 +294,7 @@ mod tests {
     use super::*;
     use crate::certify::simultaneous::grounded::tests::rig_of;
     use crate::certify::simultaneous::multipliers::EstimateMultipliers;
+    use crate::so3::Rotation;
     use crate::so3::perturb_gaussian;
     use rand::SeedableRng;
 
@@ -319,8 +311,9 @@ mod tests {
                 .iter()
                 .map(|r| perturb_gaussian(r, off, &mut rng))
                 .collect();
-            let dense = EstimateMultipliers::new(&right, &left, &r, &s).unwrap();
-            let low = LowRankCouplings::new(&right, &left, &r, &s).unwrap();
+            let at = || PointTerms::new(&right, &left, &r, &s).unwrap();
+            let dense = EstimateMultipliers::new(at()).unwrap();
+            let low = LowRankCouplings::new(at()).unwrap();
             assert!(low.residual < 1e-10, "CG residual {}", low.residual);
             let scale = dense.least_norm.iter().fold(0.0f64, |m, g| m.max(g.abs()));
             for (k, &(i, j)) in dense.pairs.iter().enumerate() {

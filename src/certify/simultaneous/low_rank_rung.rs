@@ -68,7 +68,7 @@ impl<'a> Rung<SimState<'a>> for LowRankRung {
 
     fn attempt(&mut self, cx: &mut SimState<'a>) -> Result<Found> {
         self.done = true;
-        let Some(low) = LowRankCouplings::new(cx.right, cx.left, cx.rotations, cx.s) else {
+        let Some(low) = cx.point_terms().and_then(LowRankCouplings::new) else {
             return Ok(Found::failed("the low-rank couplings are not finite"));
         };
         let lambdas = low.lambdas();

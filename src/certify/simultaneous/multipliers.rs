@@ -33,7 +33,7 @@ pub fn multipliers_at_estimate(
     rotations: &[Rotation],
     s: &Rotation,
 ) -> Option<(Vec<Matrix3<f64>>, Vec<f64>)> {
-    let at = EstimateMultipliers::new(right, left, rotations, s)?;
+    let at = EstimateMultipliers::new(PointTerms::new(right, left, rotations, s)?)?;
     let couplings = at.least_norm.clone();
     let lambdas = at.lambdas(&couplings);
     let finite = lambdas.iter().all(|l| l.iter().all(|x| x.is_finite()))
@@ -125,7 +125,7 @@ fn coupling_gram(
 
 /// What complementary slackness reads off a point `(R, S)`: `R_i`, `C_i = S R_i`, `G = Q Y` of
 /// both sides (double-double, `[D3]`) and the coupling system's right side ([`coupling_rhs`]).
-pub(super) struct PointTerms {
+pub(crate) struct PointTerms {
     pub rs: Vec<Matrix3<f64>>,
     pub cs: Vec<Matrix3<f64>>,
     pub gr: Vec<Matrix3<f64>>,
@@ -164,21 +164,16 @@ impl PointTerms {
 }
 
 impl EstimateMultipliers {
-    /// `None` when the point does not fit the graphs or the coupling system is singular.
-    pub fn new(
-        right: &MultipleProblem,
-        left: &MultipleProblem,
-        rotations: &[Rotation],
-        s: &Rotation,
-    ) -> Option<Self> {
-        let n = rotations.len();
+    /// The multipliers at `point`; `None` when the coupling system is singular.
+    pub fn new(point: PointTerms) -> Option<Self> {
         let PointTerms {
             rs,
             cs,
             gr,
             gc,
             rhs,
-        } = PointTerms::new(right, left, rotations, s)?;
+        } = point;
+        let n = rs.len();
         let pairs: Vec<(usize, usize)> = coupling_pairs(n).collect();
         let us: Vec<Vector3<f64>> = pairs
             .iter()

@@ -199,6 +199,7 @@ fn project_onto_cuts(g: &mut [f64], cuts: &[(Vec<f64>, f64)]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::certify::simultaneous::multipliers::PointTerms;
 
     /// The stall rule: a trajectory that halves within the window goes on, one that oscillates
     /// stops (trajectories from the simultaneous table's trace).
@@ -236,7 +237,8 @@ mod tests {
         let (right, truth) = graph(9).generate();
         let (left, _) = graph(10).generate();
         let s = crate::so3::exp(&nalgebra::Vector3::new(0.3, -0.2, 0.5));
-        let at = EstimateMultipliers::new(&right, &left, &truth, &s).unwrap();
+        let at =
+            EstimateMultipliers::new(PointTerms::new(&right, &left, &truth, &s).unwrap()).unwrap();
         let n = 6;
         let g0 = at.least_norm.clone();
         let mut dir: Vec<f64> = (0..g0.len())

@@ -385,6 +385,7 @@ fn prove_shift(
 mod tests {
     use super::*;
     use crate::certify::simultaneous::grounded::tests::rig_of;
+    use crate::certify::simultaneous::multipliers::PointTerms;
     use crate::multiple::laplacian::connection_laplacian_triplets;
     use crate::so3::{Rotation, perturb_gaussian, random_rotation};
     use rand::SeedableRng;
@@ -431,7 +432,8 @@ mod tests {
                 .map(|r| perturb_gaussian(r, off, &mut rng))
                 .collect();
             let solved_s = s;
-            let low = LowRankCouplings::new(&right, &left, &r, &solved_s).unwrap();
+            let low = LowRankCouplings::new(PointTerms::new(&right, &left, &r, &solved_s).unwrap())
+                .unwrap();
             let lambdas = low.lambdas();
             let n = r.len();
             for (p, ls, sign, y) in [

@@ -4,6 +4,7 @@
 use crate::certify::certificate::nonnegative_bound_at_most;
 use crate::certify::certification::SdpSummary;
 use crate::certify::proof::Proof;
+use crate::certify::simultaneous::multipliers::PointTerms;
 use crate::certify::tally::{Tally, climb_by_tally};
 use crate::multiple::MultipleProblem;
 use crate::relax::simultaneous::JointRotations;
@@ -21,6 +22,12 @@ pub(crate) struct SimState<'a> {
 }
 
 impl SimState<'_> {
+    /// What complementary slackness reads off the estimate; `None` when it does not fit the
+    /// graphs.
+    pub fn point_terms(&self) -> Option<PointTerms> {
+        PointTerms::new(self.right, self.left, self.rotations, self.s)
+    }
+
     /// Keep `lower_bound` (capped: at least 0, at most the cost, the joint cost being a sum of
     /// nonnegative terms) when it is the best so far; the capped value.
     pub fn offer(&mut self, lower_bound: f64, proof: Proof, mu: f64, note: &str) -> f64 {

@@ -59,13 +59,10 @@ fn theory_bound(
     deadline: Option<Deadline>,
 ) -> (Option<f64>, String) {
     let objective = problem.objective();
+    let inexact = |r: &Rotation| so3::rotation_defect(r.matrix()).0 > EXACT_SAMPLE_DEFECT;
     if objective != Objective::new(Metric::Chordal, Loss::L2)
-        && problem
-            .rotations()
-            .iter()
-            .any(|r| so3::rotation_defect(r.matrix()).0 > EXACT_SAMPLE_DEFECT)
+        && problem.rotations().iter().any(inexact)
     {
-        let inexact = |r: &Rotation| so3::rotation_defect(r.matrix()).0 > EXACT_SAMPLE_DEFECT;
         let (samples, slack) = projected_samples(problem, inexact);
         let exact = SingleProblem::new(
             samples
