@@ -245,7 +245,8 @@ impl Factor<'_> {
                 let rhs: Vec<Vec<f64>> = (0..b.ncols())
                     .map(|col| (0..b.nrows()).map(|r| b[(r, col)]).collect())
                     .collect();
-                let (x, iterations) = pcg(pattern, val, &apply, &rhs, rel_tol, max_iter)?;
+                let times = |x: &[f64], y: &mut [f64]| pattern.sym_mul_flat(val, x, y);
+                let (x, iterations) = pcg(&times, &apply, &rhs, rel_tol, max_iter)?;
                 for (col, xc) in x.into_iter().enumerate() {
                     for (r, v) in xc.into_iter().enumerate() {
                         b[(r, col)] = v;

@@ -1,6 +1,9 @@
-//! Preconditioned conjugate gradients on a [`BlockPattern`] matrix `[M6]`, `[M6b]`.
+//! Preconditioned conjugate gradients `[M6]`, `[M6b]` for any symmetric positive definite
+//! operator: a [`super::block_pattern::BlockPattern`] matrix's product, or a matrix-free one
+//! (the simultaneous certificate's coupling system, `[H25]`).
 
-use super::block_pattern::BlockPattern;
+/// `apply(x, y)` sets `y = A x` (the operator; `y` is overwritten).
+pub(crate) type ApplyOperator<'a> = &'a dyn Fn(&[f64], &mut [f64]);
 
 /// `apply(r, z)` sets `z[k] = M^{-1} r[k]` for every column `k` given (a preconditioner).
 pub(crate) type ApplyPreconditioner<'a> = &'a dyn Fn(&[&[f64]], &mut [&mut [f64]]);
@@ -12,8 +15,7 @@ pub(crate) type ApplyPreconditioner<'a> = &'a dyn Fn(&[&[f64]], &mut [&mut [f64]
 /// iterations. Returns the solutions and the iterations run; `None` on non-positive curvature
 /// (the matrix is not positive definite).
 pub(crate) fn pcg(
-    pattern: &BlockPattern,
-    val: &[f64],
+    apply_a: ApplyOperator<'_>,
     apply_m: ApplyPreconditioner<'_>,
     b: &[Vec<f64>],
     rel_tol: f64,
@@ -48,7 +50,7 @@ pub(crate) fn pcg(
         }
         iterations += 1;
         for &c in &active {
-            pattern.sym_mul_flat(val, &p[c], &mut ap);
+            apply_a(&p[c], &mut ap);
             let pap = dot(&p[c], &ap);
             if pap <= 0.0 || !pap.is_finite() {
                 return None;

@@ -15,6 +15,7 @@
 
 use super::multipliers::PointTerms;
 use crate::linalg::gamma;
+use crate::linalg::pcg::pcg;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use std::ops::AddAssign;
 
@@ -153,49 +154,56 @@ fn solve_coupling_system(
                 .unwrap_or_else(Matrix3::identity)
         })
         .collect();
-    let mut y = vec![Vector3::zeros(); n];
+    let zeros = vec![Vector3::zeros(); n];
     let Some(kernel) = KernelProjector::new(rs) else {
-        return (y, 0, f64::INFINITY);
+        return (zeros, 0, f64::INFINITY);
     };
-    let mut r = rhs.to_vec();
-    kernel.project(&mut r);
-    let norm_rhs = dot(&r, &r).sqrt();
+    let mut b = rhs.to_vec();
+    kernel.project(&mut b);
+    let norm_rhs = dot(&b, &b).sqrt();
     if norm_rhs == 0.0 || !norm_rhs.is_finite() {
-        return (y, 0, 0.0);
+        return (zeros, 0, 0.0);
     }
-    let precondition = |r: &[Vector3<f64>]| {
-        let mut z: Vec<Vector3<f64>> = precond.iter().zip(r).map(|(m, v)| m * v).collect();
-        kernel.project(&mut z);
-        z
+    let times = |x: &[f64], out: &mut [f64]| {
+        out.copy_from_slice(&flat(&coupling_gram_times(rs, ps, &gpp, &blocks(x))));
     };
-    let mut z = precondition(&r);
-    let mut d = z.clone();
-    let mut rz = dot(&r, &z);
-    let mut residual = 1.0;
-    for it in 0..CG_MAX_ITERATIONS {
-        let ad = coupling_gram_times(rs, ps, &gpp, &d);
-        let dad = dot(&d, &ad);
-        if dad.is_nan() || dad <= 0.0 {
-            return (y, it, residual);
+    let precondition = |r: &[&[f64]], z: &mut [&mut [f64]]| {
+        for (r, z) in r.iter().zip(z.iter_mut()) {
+            let mut v: Vec<Vector3<f64>> =
+                precond.iter().zip(blocks(r)).map(|(m, v)| m * v).collect();
+            kernel.project(&mut v);
+            z.copy_from_slice(&flat(&v));
         }
-        let alpha = rz / dad;
-        for k in 0..n {
-            y[k] += d[k] * alpha;
-            r[k] -= ad[k] * alpha;
-        }
-        residual = dot(&r, &r).sqrt() / norm_rhs;
-        if residual <= CG_TOLERANCE {
-            return (y, it + 1, residual);
-        }
-        z = precondition(&r);
-        let rz_next = dot(&r, &z);
-        let beta = rz_next / rz;
-        rz = rz_next;
-        for k in 0..n {
-            d[k] = z[k] + d[k] * beta;
-        }
+    };
+    let solved = pcg(
+        &times,
+        &precondition,
+        &[flat(&b)],
+        CG_TOLERANCE,
+        CG_MAX_ITERATIONS,
+    );
+    // non-positive curvature (rounding on a nearly singular system): no couplings, a weaker
+    // bound, still verified
+    let Some((x, iterations)) = solved else {
+        return (zeros, CG_MAX_ITERATIONS, 1.0);
+    };
+    let y = blocks(&x[0]);
+    let mut r = coupling_gram_times(rs, ps, &gpp, &y);
+    for (r, b) in r.iter_mut().zip(&b) {
+        *r = b - *r;
     }
-    (y, CG_MAX_ITERATIONS, residual)
+    kernel.project(&mut r);
+    (y, iterations, dot(&r, &r).sqrt() / norm_rhs)
+}
+
+/// `3`-vectors stacked into one slice's values.
+fn flat(v: &[Vector3<f64>]) -> Vec<f64> {
+    v.iter().flat_map(|x| x.iter().copied()).collect()
+}
+
+/// A slice of `3k` values as `k` `3`-vectors.
+fn blocks(x: &[f64]) -> Vec<Vector3<f64>> {
+    x.chunks_exact(3).map(Vector3::from_column_slice).collect()
 }
 
 impl LowRankCouplings {
