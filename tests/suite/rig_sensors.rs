@@ -95,6 +95,32 @@ fn noisy_rigs_with_estimated_sensors_are_certified_by_their_couplings() {
     assert!(out.certificate.unwrap().is_certified());
 }
 
+/// Rigs of 4 and 6 sensors whose augmented graph's factor is over the cap (here a small
+/// `max_factor_nonzeros`; at 10^4 frames the default's) are certified by the grouped scalar
+/// comparison (`[D13]`, groups: each sensor's images factorised apart, one negative pivot
+/// each); the bound below the planted rig's cost and the test's own local minima.
+#[test]
+fn many_sensor_rigs_over_the_cap_are_certified_by_the_grouped_comparison() {
+    let mut rng = StdRng::seed_from_u64(29);
+    for (frames, sensors, seed) in [(300, 4, 5), (200, 6, 7)] {
+        let (p, truth) = RigScene::sized(frames, sensors, 0.01, false, seed).generate();
+        let mut settings = rotavg::pipeline::AverageSettings::<RigSettings>::default();
+        settings.certify.dual.max_factor_nonzeros = CAP;
+        let out = average_rig(&p, &settings).unwrap();
+        let c = out.certificate.unwrap();
+        assert!(c.is_certified(), "{c:?}");
+        assert!(c.explanation.contains("grouped"), "{}", c.explanation);
+        let lb = c.lower_bound.unwrap();
+        assert!(lb <= p.cost(&truth.frames, &truth.sensors));
+        let other = minimum_from_perturbed(&p, &truth, 0.1, &mut rng);
+        assert!(lb <= other, "bound {lb} above a local minimum {other}");
+    }
+}
+
+/// The factor cap of the grouped test: above the sensors' own graphs' factors, below the
+/// augmented graph's (every pair of a frame's images).
+const CAP: usize = 60_000;
+
 /// Two-sensor rigs with no edge between the sensors (the simultaneous problem's shape, where the
 /// couplings of `[H21]` do not certify) are certified by the simultaneous certificates `[H22]`
 /// (40 frames, and 1000 with the grounded bound `[H23]`); the bound below the planted rig's cost

@@ -7,6 +7,7 @@ use super::couplings::{Coupled, couple};
 use super::images::components_minimum;
 use super::state::RigState;
 use crate::certify::log::{Prediction, Refusal};
+use crate::certify::multiple::scalar::grouped_dual_bound;
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, GraphCertifier, Handed, Plan, Rung};
 use crate::certify::settings::CertifyMode;
@@ -15,8 +16,9 @@ use crate::error::Result;
 use crate::rig::{RigProblem, polish_passes};
 use crate::so3::Rotation;
 
-/// The coupled bound as a rung.
-pub(crate) struct CoupledRung(pub(crate) Handed<GraphCertifier>);
+/// The coupled bound as a rung; `grouped` when planned for the grouped comparison (the
+/// augmented graph's checks over their cap, [`fill_refusal`]).
+pub(crate) struct CoupledRung(pub(crate) Handed<GraphCertifier>, pub(crate) bool);
 
 impl<'a> Rung<RigState<'a>> for CoupledRung {
     fn proof(&self) -> Proof {
@@ -39,12 +41,23 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
                 None,
             ));
         }
-        if let Some(refusal) = fill_refusal(cx.problem)? {
-            return Ok(Plan::Refuse(refusal, None));
-        }
         // the images' view graph with up to three pseudo-edges per pair of images of a frame
         let images = cx.problem.images().len() as f64;
         let size = 4.0 * images + cx.problem.edges().len() as f64;
+        let cap = cx
+            .tally
+            .settings
+            .dual
+            .max_factor_nonzeros
+            .min(COUPLED_MAX_FACTOR_VALUES);
+        if let Some(refusal) = fill_refusal(cx.problem, cap)? {
+            if cx.problem.is_anisotropic() {
+                return Ok(Plan::Refuse(refusal, None));
+            }
+            // the sensors' own graphs factorised apart, one pencil each ([D13], groups)
+            self.1 = true;
+            return Ok(Plan::Run(Prediction::new(3e-5 * size, 3000.0 * size)));
+        }
         Ok(Plan::Run(Prediction::new(6e-6 * size, 6000.0 * size)))
     }
 
@@ -81,32 +94,108 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
             settings.tolerance.relative = settings.tolerance.relative.min(relative);
         }
         let x = cx.problem.image_rotations(&frames, &sensors);
-        let seconds = cx.tally.left().map(|l| 0.6 * l);
-        let (parts, sum) =
-            match components_minimum(self.0.certify, &coupled.graph, &x, cx, &settings, seconds)? {
-                Ok(found) => found,
-                Err(why) => return Ok(Found::failed(why)),
-            };
-        // with information the augmented graph holds the rig's own data and the pseudo-edges
-        // as `c I`, whose trace form's constant is exact (`[H24]`): nothing to charge
-        let bound = if cx.problem.is_anisotropic() {
-            sum - coupled.offset
-        } else {
-            cx.floor(sum - coupled.offset)
+        let (parts, sum, grouped) = match self.augmented_minimum(cx, &coupled, &x, &settings)? {
+            Ok(found) => found,
+            Err(why) => return Ok(Found::failed(why)),
         };
+        let bound = rig_bound(cx, sum, coupled.offset);
         let note = format!(
             "the images' view graph with {} within-frame coupling edges{}: {parts} component(s), \
-             certified minima summing to {sum:.9e}, less the couplings' constant {:.9e} [H21]",
+             certified minima summing to {sum:.9e}{}, less the couplings' constant {:.9e} [H21]",
             coupled.pseudo_edges,
             match passes {
                 0 => String::new(),
                 n => format!(" (at the estimate polished by {n} alternation passes)"),
+            },
+            if grouped {
+                " (by the grouped scalar comparison [D13]: each sensor's images factorised apart)"
+            } else {
+                ""
             },
             coupled.offset
         );
         let bound = cx.offer(bound, Proof::RigCoupled, &note);
         Ok(Found::proved(bound, cx.tally.certifies(bound), note))
     }
+}
+
+impl CoupledRung {
+    /// A bound on the augmented graph's minimum: `(components, bound, by the grouped
+    /// comparison)`. The grouped comparison first on isotropic rigs of more than
+    /// [`SCALAR_PROVES_UP_TO_ESTIMATED`] estimated sensors (where the whole graph's scalar
+    /// comparison fails with one negative pivot per estimated sensor), alone when the whole
+    /// graph's checks are over their cap; otherwise, or when it does not certify, the view
+    /// graph's ladder on each component (the larger bound kept).
+    fn augmented_minimum(
+        &self,
+        cx: &RigState<'_>,
+        coupled: &Coupled,
+        x: &[Rotation],
+        settings: &crate::certify::settings::CertifySettings,
+    ) -> Result<std::result::Result<(usize, f64, bool), String>> {
+        let augmented = cx.tally.cost + coupled.offset.max(0.0);
+        let grouped_first = !cx.problem.is_anisotropic()
+            && (self.1 || cx.problem.estimated_sensors().len() > SCALAR_PROVES_UP_TO_ESTIMATED);
+        let mut first = Err(String::new());
+        if grouped_first {
+            first = grouped_minimum(cx, &coupled.graph, x, augmented)?;
+            let certifies =
+                |&(_, sum): &(usize, f64)| cx.tally.certifies(rig_bound(cx, sum, coupled.offset));
+            if self.1 || first.as_ref().is_ok_and(certifies) {
+                return Ok(first.map(|(parts, sum)| (parts, sum, true)));
+            }
+        }
+        let seconds = cx.tally.left().map(|l| 0.6 * l);
+        let whole = components_minimum(self.0.certify, &coupled.graph, x, cx, settings, seconds)?;
+        Ok(match (first, whole) {
+            (Ok((p, g)), Ok((_, w))) if g > w => Ok((p, g, true)),
+            (_, Ok((q, w))) => Ok((q, w, false)),
+            (Ok((p, g)), Err(_)) => Ok((p, g, true)),
+            (Err(a), Err(b)) if a.is_empty() => Err(b),
+            (Err(a), Err(b)) => Err(format!("{a}; {b}")),
+        })
+    }
+}
+
+/// The rig's bound from the augmented graph's `sum` less the couplings' constant `offset`: with
+/// information the augmented graph holds the rig's own data and the pseudo-edges as `c I`,
+/// whose trace form's constant is exact (`[H24]`): nothing to charge; otherwise `[H19]`'s
+/// rounding floor.
+fn rig_bound(cx: &RigState<'_>, sum: f64, offset: f64) -> f64 {
+    if cx.problem.is_anisotropic() {
+        sum - offset
+    } else {
+        cx.floor(sum - offset)
+    }
+}
+
+/// The augmented graph's minimum bounded by the grouped scalar comparison (`[D13]`, groups:
+/// one group per sensor, each sensor's images factorised apart) at the estimate's own
+/// multipliers: `(1, bound)`, or why it did not prove. Its target is the share of the gap
+/// that the whole graph's comparison would get (a quarter of the rig's allowed gap over
+/// `6n`).
+fn grouped_minimum(
+    cx: &RigState<'_>,
+    graph: &crate::multiple::MultipleProblem,
+    x: &[Rotation],
+    augmented: f64,
+) -> Result<std::result::Result<(usize, f64), String>> {
+    let group: Vec<usize> = cx.problem.images().iter().map(|im| im.sensor).collect();
+    let n = x.len().max(1) as f64;
+    let target = 0.25 * cx.tally.allowed_gap.min(augmented.abs()) / (6.0 * n);
+    let memory =
+        usize::try_from(cx.tally.settings.budget.max_memory_bytes / 16).unwrap_or(usize::MAX);
+    let max_values = cx
+        .tally
+        .settings
+        .dual
+        .max_factor_nonzeros
+        .min(COUPLED_MAX_FACTOR_VALUES)
+        .min(memory);
+    let found = grouped_dual_bound(graph, x, &group, target, max_values)?;
+    Ok(found.map(|(bound, _)| (1, bound)).map_err(|why| {
+        format!("the grouped scalar comparison [D13] of the augmented graph: {why}")
+    }))
 }
 
 /// The refusal of the rung when the augmented graph (the images' view graph and every pair of
@@ -118,7 +207,7 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
 /// the pairs that hold only pseudo-edges keep no weight and leave its pattern (`[D13]`,
 /// weightless parallel groups; 10^4 frames and 2 sensors: 6.8e7 values against 8.2e7 with
 /// them). A graph of several components is left to its components' own checks.
-fn fill_refusal(problem: &RigProblem) -> Result<Option<Refusal>> {
+fn fill_refusal(problem: &RigProblem, cap: usize) -> Result<Option<Refusal>> {
     let images = problem.images();
     let n = images.len();
     let mut per_frame: Vec<Vec<usize>> = vec![Vec::new(); problem.num_frames()];
@@ -163,14 +252,11 @@ fn fill_refusal(problem: &RigProblem) -> Result<Option<Refusal>> {
         .map_err(|e| crate::error::Error::Solver {
             message: format!("could not assemble the augmented graph's pattern: {e:?}"),
         })?;
-    let within = crate::linalg::cholesky::symbolic_cholesky_within(
-        pattern.symbolic(),
-        COUPLED_MAX_FACTOR_VALUES,
-    )?;
+    let within = crate::linalg::cholesky::symbolic_cholesky_within(pattern.symbolic(), cap)?;
     Ok(within.err().map(|predicted| Refusal::OverBudget {
         reason: format!(
             "the augmented graph's scalar factor is predicted at {predicted:.1e} values, above \
-             the {COUPLED_MAX_FACTOR_VALUES:.1e} its checks may form [H21]"
+             the {cap:.1e} its checks may form [H21]"
         ),
     }))
 }
@@ -285,7 +371,10 @@ mod tests {
             ..Default::default()
         };
         let (p, _) = big.generate();
-        let refusal = fill_refusal(&p).expect("pattern").expect("over the cap");
+        let cap = super::COUPLED_MAX_FACTOR_VALUES;
+        let refusal = fill_refusal(&p, cap)
+            .expect("pattern")
+            .expect("over the cap");
         assert!(
             format!("{refusal:?}").contains("predicted at"),
             "{refusal:?}"
@@ -297,7 +386,7 @@ mod tests {
                 ..Default::default()
             };
             let (p, _) = small.generate();
-            assert!(fill_refusal(&p).expect("pattern").is_none());
+            assert!(fill_refusal(&p, cap).expect("pattern").is_none());
         }
     }
 }

@@ -32,6 +32,10 @@ pub struct ScalarAnalysis {
     /// The second-order split `beta` of its comparison (step 2; [`SECOND_ORDER_BETA`], or
     /// [`DENSE_SUBGRAPH_BETA`] for a subgraph of a dense graph).
     pub(super) beta: f64,
+    /// Per node, the connected component of the factorised pattern it is in, for a grouped
+    /// comparison ([`ScalarAnalysis::grouped`]; empty otherwise: one component, the whole
+    /// graph's or a connected subgraph's).
+    pub(super) components: Vec<usize>,
 }
 
 /// One factorised scalar matrix of a [`ScalarAnalysis`].
@@ -108,6 +112,48 @@ impl ScalarAnalysis {
         max_values: usize,
     ) -> Result<std::result::Result<Self, usize>> {
         Self::analyse(problem, 1, |k| u64::from(!left_out[k]), max_values)
+    }
+
+    /// The subgraph of the edges within groups of nodes (`group[i]`: node `i`'s), for the
+    /// grouped comparison (`[D13]`, "Groups"): its components are proven one negative pivot
+    /// each. Refused like [`ScalarAnalysis::new`].
+    pub(super) fn grouped(
+        problem: &MultipleProblem,
+        group: &[usize],
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
+        let left_out: Vec<bool> = problem
+            .edges()
+            .iter()
+            .map(|e| group[e.i] != group[e.j])
+            .collect();
+        let analysed = Self::without(problem, &left_out, max_values)?;
+        Ok(analysed.map(|a| {
+            let mut union = crate::multiple::union_find::UnionFind::new(group.len());
+            for (e, out) in problem.edges().iter().zip(&left_out) {
+                if !out {
+                    union.union(e.i, e.j);
+                }
+            }
+            let mut id = vec![usize::MAX; group.len()];
+            let mut next = 0;
+            let components = (0..group.len())
+                .map(|i| {
+                    let root = union.find(i);
+                    if id[root] == usize::MAX {
+                        id[root] = next;
+                        next += 1;
+                    }
+                    id[root]
+                })
+                .collect();
+            ScalarAnalysis { components, ..a }
+        }))
+    }
+
+    /// The negative pivots its factorisation must show: one per component of the pattern.
+    pub(super) fn expected_negative_pivots(&self) -> usize {
+        self.components.iter().max().map_or(1, |m| m + 1)
     }
 
     /// The split's shape (`None` for the whole graph or a subgraph).
@@ -251,6 +297,7 @@ impl ScalarAnalysis {
             shape: None,
             edges_per_node: 0.0,
             beta: SECOND_ORDER_BETA,
+            components: Vec::new(),
         }))
     }
 

@@ -48,7 +48,7 @@ pub(super) struct EdgeCharges {
 }
 
 /// `fl(P_e) = fl(R_i^T R_ij^T R_j)`, within [`PRODUCT_ERROR`] of the exact product.
-fn edge_product(e: &Edge, rotations: &[Rotation]) -> Matrix3<f64> {
+pub(super) fn edge_product(e: &Edge, rotations: &[Rotation]) -> Matrix3<f64> {
     let (ri, rj, rij) = (
         rotations[e.i].matrix(),
         rotations[e.j].matrix(),

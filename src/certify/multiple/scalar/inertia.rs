@@ -33,8 +33,15 @@ pub(super) fn prove_inertia(
         let mut h = 1e-6 * d_max.max(f64::MIN_POSITIVE) / num_parts as f64;
         let mut retried = false;
         let bound = loop {
-            let bound =
-                factor_inertia(part, problem, &analysis.copies, reduced, &charges, h, deg_n)?;
+            let expected = analysis.expected_negative_pivots();
+            let bound = factor_inertia(
+                part,
+                problem,
+                (&analysis.copies, reduced),
+                &charges,
+                (h, expected),
+                deg_n,
+            )?;
             if bound <= h {
                 break bound;
             }
@@ -52,15 +59,14 @@ pub(super) fn prove_inertia(
 
 /// `LDL^T` of `A = L'_p - diag(delta) - h I` without pivoting (AMD order), `L'_p` the Laplacian
 /// of `part`'s edges with the weights `reduced / copies` (any sign). Returns a rigorous bound on
-/// `||A_exact - P^T L D L^T P||_2` when exactly one pivot is negative and none is zero; a
-/// failure otherwise.
+/// `||A_exact - P^T L D L^T P||_2` when exactly `expected` pivots are negative (one, or one per
+/// component of a grouped comparison's pattern) and none is zero; a failure otherwise.
 pub(super) fn factor_inertia(
     part: &ScalarPart,
     problem: &MultipleProblem,
-    copies: &[u32],
-    reduced: &[f64],
+    (copies, reduced): (&[u32], &[f64]),
     delta: &[f64],
-    h: f64,
+    (h, expected): (f64, usize),
     deg_n: &[usize],
 ) -> std::result::Result<f64, ScalarFailure> {
     let n = delta.len();
@@ -88,14 +94,14 @@ pub(super) fn factor_inertia(
         }
     }
     let nodes = independent_negative_diagonal(a.as_ref(), &part.diag_pos, h);
-    if nodes >= 2 {
+    if nodes > expected {
         return Err(ScalarFailure::NegativeDiagonal { nodes });
     }
     let inertia = ldlt_inertia(&part.symbolic, a.as_ref()).map_err(|f| match f {
         LdltFailure::Numerical => ScalarFailure::Numerical,
     })?;
     let negative = inertia.negative;
-    if negative != 1 {
+    if negative != expected {
         return Err(ScalarFailure::Inertia {
             negative_pivots: negative,
         });

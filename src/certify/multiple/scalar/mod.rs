@@ -56,6 +56,7 @@
 mod analysis;
 mod charges;
 mod forecast;
+mod groups;
 mod hub;
 mod hub_rung;
 mod inertia;
@@ -71,6 +72,7 @@ pub use analysis::{
 };
 pub(in crate::certify::multiple) use analysis::{connect, fro, subgraph_edges};
 pub(in crate::certify::multiple) use charges::orthogonality_defect;
+pub(crate) use groups::grouped_dual_bound;
 
 use super::check::Check;
 use super::verified::VerifiedBound;
@@ -292,24 +294,53 @@ fn compare(
         f64::NEG_INFINITY
     };
     let mu_m = plain.max(absorbed) * (1.0 + 1e-10);
-    // Ostrowski: lambda_min(S) >= lambda_min(M) / sigma_min(D)^2, sigma_min(D)^2 >= 1 - t_max
-    let mu = mu_m / (1.0 - t_max) * (1.0 + 1e-10);
-    if !mu.is_finite() {
-        return Err(ScalarFailure::Numerical);
-    }
-    Ok(ScalarComparison {
-        verified_min_eigenvalue: mu.min(0.0),
-        max_delta: c.delta.iter().copied().fold(0.0, f64::max),
-        second_order_edges: c.second_order_edges,
-        dropped_edges: analysis.dropped_edges(),
-        parts: analysis.parts(),
-        shared_edges: analysis.shared_edges(),
-        split_defect: pencil.defect,
-        zeta: pencil.zeta,
-        headroom,
-        backward_error,
-        factor_nonzeros: analysis.factor_len(),
+    let proven = Proven {
+        mu_m,
+        t_max,
+        inertia: (headroom, backward_error),
         kappa,
-        residual_bound: rho1,
-    })
+        residual: rho1,
+    };
+    proven.outcome(&c, analysis, &pencil)
+}
+
+/// What steps 1-5 proved: `lambda_min(M) >= mu_m`, the rotations' orthogonality defect
+/// `t_max`, step 5's `(headroom, backward error)`, step 4's `kappa` and residual bound.
+struct Proven {
+    mu_m: f64,
+    t_max: f64,
+    inertia: (f64, f64),
+    kappa: f64,
+    residual: f64,
+}
+
+impl Proven {
+    /// The comparison's outcome: `mu` for `S` by Ostrowski (`lambda_min(S) >= lambda_min(M) /
+    /// sigma_min(D)^2`, `sigma_min(D)^2 >= 1 - t_max`), with its numbers.
+    fn outcome(
+        &self,
+        c: &charges::EdgeCharges,
+        analysis: &ScalarAnalysis,
+        pencil: &split::PencilWeights,
+    ) -> std::result::Result<ScalarComparison, ScalarFailure> {
+        let mu = self.mu_m / (1.0 - self.t_max) * (1.0 + 1e-10);
+        if !mu.is_finite() {
+            return Err(ScalarFailure::Numerical);
+        }
+        Ok(ScalarComparison {
+            verified_min_eigenvalue: mu.min(0.0),
+            max_delta: c.delta.iter().copied().fold(0.0, f64::max),
+            second_order_edges: c.second_order_edges,
+            dropped_edges: analysis.dropped_edges(),
+            parts: analysis.parts(),
+            shared_edges: analysis.shared_edges(),
+            split_defect: pencil.defect,
+            zeta: pencil.zeta,
+            headroom: self.inertia.0,
+            backward_error: self.inertia.1,
+            factor_nonzeros: analysis.factor_len(),
+            kappa: self.kappa,
+            residual_bound: self.residual,
+        })
+    }
 }
