@@ -246,7 +246,7 @@ impl Factor<'_> {
                     .map(|col| (0..b.nrows()).map(|r| b[(r, col)]).collect())
                     .collect();
                 let times = |x: &[f64], y: &mut [f64]| pattern.sym_mul_flat(val, x, y);
-                let (x, iterations) = pcg(&times, &apply, &rhs, rel_tol, max_iter)?;
+                let (x, iterations) = pcg(&times, &apply, &rhs, rel_tol, (max_iter, None))?;
                 for (col, xc) in x.into_iter().enumerate() {
                     for (r, v) in xc.into_iter().enumerate() {
                         b[(r, col)] = v;

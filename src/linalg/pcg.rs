@@ -12,14 +12,14 @@ pub(crate) type ApplyPreconditioner<'a> = &'a dyn Fn(&[&[f64]], &mut [&mut [f64]
 /// the same matrix), run in lockstep so that the preconditioner is applied to all active
 /// columns at once: `apply_m(r, z)` sets `z[k] = M^{-1} r[k]` for every column `k` given.
 /// A column stops when its residual is at most `rel_tol ||b_k||`, or after `max_iter`
-/// iterations. Returns the solutions and the iterations run; `None` on non-positive curvature
+/// iterations, or every column when `stop_at` has passed (checked once per iteration). Returns the solutions and the iterations run; `None` on non-positive curvature
 /// (the matrix is not positive definite).
 pub(crate) fn pcg(
     apply_a: ApplyOperator<'_>,
     apply_m: ApplyPreconditioner<'_>,
     b: &[Vec<f64>],
     rel_tol: f64,
-    max_iter: usize,
+    (max_iter, stop_at): (usize, Option<std::time::Instant>),
 ) -> Option<(Vec<Vec<f64>>, usize)> {
     let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
     let k = b.len();
@@ -45,7 +45,7 @@ pub(crate) fn pcg(
     let mut ap = vec![0.0; dim];
     let mut iterations = 0;
     for _ in 0..max_iter {
-        if active.is_empty() {
+        if active.is_empty() || stop_at.is_some_and(|t| std::time::Instant::now() >= t) {
             break;
         }
         iterations += 1;

@@ -192,7 +192,7 @@ fn grouped_minimum(
         .max_factor_nonzeros
         .min(COUPLED_MAX_FACTOR_VALUES)
         .min(memory);
-    let found = grouped_dual_bound(graph, x, &group, target, max_values)?;
+    let found = grouped_dual_bound(graph, x, &group, target, (max_values, cx.tally.left()))?;
     Ok(found.map(|(bound, _)| (1, bound)).map_err(|why| {
         format!("the grouped scalar comparison [D13] of the augmented graph: {why}")
     }))

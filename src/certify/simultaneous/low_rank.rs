@@ -180,7 +180,7 @@ fn solve_coupling_system(
         &precondition,
         &[flat(&b)],
         CG_TOLERANCE,
-        CG_MAX_ITERATIONS,
+        (CG_MAX_ITERATIONS, None),
     );
     // non-positive curvature (rounding on a nearly singular system): no couplings, a weaker
     // bound, still verified

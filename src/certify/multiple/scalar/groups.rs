@@ -16,6 +16,7 @@ use super::charges::{PRODUCT_ERROR, edge_charges, edge_product, orthogonality_de
 use super::inertia::prove_inertia;
 use super::split::PencilWeights;
 use super::{Proven, ScalarComparison, ScalarFailure};
+use crate::certify::Budget;
 use crate::certify::multiple::multipliers::TraceBound;
 use crate::error::{Error, Result};
 use crate::linalg::UNIT_ROUNDOFF as U;
@@ -35,15 +36,18 @@ const CG_MAX_ITERATIONS: usize = 600;
 
 /// Try to prove `lambda_min(S) >= mu` by the grouped comparison (`group[i]`: node `i`'s group):
 /// as [`super::scalar_comparison`], with the factorisation of the groups' own edges only.
-/// `Ok(Err(why))` when it does not prove (or its factor is predicted above `max_values`).
+/// `Ok(Err(why))` when it does not prove, or when its factor is predicted above `max_values`
+/// or, by its counted multiply-adds, past `seconds` (the time left); the conjugate gradients
+/// stop at that time, which weakens the bound, never its proof.
 pub(crate) fn grouped_comparison(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     lambdas: &[Matrix3<f64>],
     group: &[usize],
     target: f64,
-    max_values: usize,
+    (max_values, seconds): (usize, Option<f64>),
 ) -> Result<std::result::Result<ScalarComparison, String>> {
+    let clock = std::time::Instant::now();
     let n = problem.num_rotations();
     if rotations.len() != n || lambdas.len() != n || group.len() != n || problem.is_anisotropic() {
         return Err(Error::InvalidSettings {
@@ -62,8 +66,20 @@ pub(crate) fn grouped_comparison(
             )));
         }
     };
+    let values = analysis.factor_len();
+    let time = Budget {
+        max_memory_bytes: u64::MAX,
+        max_seconds: seconds,
+    };
+    if let Err(why) =
+        time.counted_factorisations_fit(values, analysis.factor_multiply_adds(), values)
+    {
+        return Ok(Err(why));
+    }
+    let stop_at =
+        seconds.and_then(|s| clock.checked_add(std::time::Duration::try_from_secs_f64(s).ok()?));
     Ok(
-        compare_grouped(problem, &analysis, rotations, lambdas, target)
+        compare_grouped(problem, &analysis, rotations, lambdas, (target, stop_at))
             .map_err(|f| super::failure_text(target, Err(f), analysis.expected_negative_pivots())),
     )
 }
@@ -76,10 +92,10 @@ pub(crate) fn grouped_dual_bound(
     rotations: &[Rotation],
     group: &[usize],
     target: f64,
-    max_values: usize,
+    limits: (usize, Option<f64>),
 ) -> Result<std::result::Result<(f64, ScalarComparison), String>> {
     let lambdas = crate::certify::multiple::multipliers::multipliers(problem, rotations)?;
-    let proof = match grouped_comparison(problem, rotations, &lambdas, group, target, max_values)? {
+    let proof = match grouped_comparison(problem, rotations, &lambdas, group, target, limits)? {
         Ok(p) => p,
         Err(why) => return Ok(Err(why)),
     };
@@ -93,7 +109,7 @@ fn compare_grouped(
     analysis: &ScalarAnalysis,
     rotations: &[Rotation],
     lambdas: &[Matrix3<f64>],
-    target: f64,
+    (target, stop_at): (f64, Option<std::time::Instant>),
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     let t_max = orthogonality_defect(rotations)?;
     let c = edge_charges(problem, rotations, lambdas, &analysis.copies, analysis.beta)?;
@@ -116,7 +132,7 @@ fn compare_grouped(
     let groups = Groups::new(&analysis.components, &pencil.weights);
     let m = BlockOperator::new(problem, rotations, lambdas, &c.deg_n);
     let needed = (0.25 * target * zeta_free).sqrt() / groups.kappa;
-    let coarse = coarse_terms(&m, &groups, needed).ok_or(ScalarFailure::Numerical)?;
+    let coarse = coarse_terms(&m, &groups, (needed, stop_at)).ok_or(ScalarFailure::Numerical)?;
     let mu_m = (coarse.lambda - coarse.rho * coarse.rho / zeta_free).min(0.0)
         * groups.kappa
         * groups.kappa
@@ -315,7 +331,11 @@ struct Coarse {
 /// `V' = E + Pi X` with `X` from conjugate gradients on `Pi M Pi X = -Pi M E` (block-Jacobi,
 /// projected) to a residual of about `needed`; then `rho` and `lambda` bounded for the exact
 /// `V'` of the computed `X` (any `X` is valid: only the bound's size depends on it).
-fn coarse_terms(m: &BlockOperator, groups: &Groups<'_>, needed: f64) -> Option<Coarse> {
+fn coarse_terms(
+    m: &BlockOperator,
+    groups: &Groups<'_>,
+    (needed, stop_at): (f64, Option<std::time::Instant>),
+) -> Option<Coarse> {
     let dim = 3 * groups.of.len();
     let cols = 3 * groups.count;
     let coarse: Vec<Vec<f64>> = (0..cols)
@@ -370,7 +390,13 @@ fn coarse_terms(m: &BlockOperator, groups: &Groups<'_>, needed: f64) -> Option<C
     } else {
         1e-2
     };
-    let (x, _) = pcg(&operator, &precondition, &rhs, rel, CG_MAX_ITERATIONS)?;
+    let (x, _) = pcg(
+        &operator,
+        &precondition,
+        &rhs,
+        rel,
+        (CG_MAX_ITERATIONS, stop_at),
+    )?;
     let z: Vec<Vec<f64>> = coarse
         .iter()
         .zip(x)
@@ -545,7 +571,8 @@ mod tests {
                 let lambdas = multipliers(&p, at).unwrap();
                 let exact = dense_lambda_min(&p, &lambdas);
                 let target = 1e-6 * p.cost(at).max(1e-12) / p.num_rotations() as f64;
-                let r = grouped_comparison(&p, at, &lambdas, &group, target, usize::MAX).unwrap();
+                let r = grouped_comparison(&p, at, &lambdas, &group, target, (usize::MAX, None))
+                    .unwrap();
                 if let Ok(proof) = r {
                     proofs += 1;
                     let mu = proof.verified_min_eigenvalue;
@@ -565,5 +592,20 @@ mod tests {
         }
         assert!(proofs >= 16, "{proofs} proofs");
         assert!(tight >= 8, "{tight} proofs within the target at low noise");
+    }
+
+    /// No time left: the factorisation is refused by its prediction, with the reason.
+    #[test]
+    fn the_grouped_comparison_keeps_to_the_time_left() {
+        let (p, group) = grouped_graph(3, 12, 0.5, 0.01, 1);
+        let solved = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+        let lambdas = multipliers(&p, &solved.rotations).unwrap();
+        let at = &solved.rotations;
+        let why = grouped_comparison(&p, at, &lambdas, &group, 1e-9, (usize::MAX, Some(0.0)))
+            .unwrap()
+            .unwrap_err();
+        assert!(why.contains("time budget"), "{why}");
+        let proof = grouped_comparison(&p, at, &lambdas, &group, 1e-9, (usize::MAX, Some(60.0)));
+        assert!(proof.unwrap().is_ok());
     }
 }
