@@ -16,7 +16,7 @@ use super::charges::{PRODUCT_ERROR, edge_charges, edge_product, orthogonality_de
 use super::inertia::prove_inertia;
 use super::split::PencilWeights;
 use super::{Proven, ScalarComparison, ScalarFailure};
-use crate::certify::Budget;
+use crate::certify::budget::Budget;
 use crate::certify::multiple::multipliers::TraceBound;
 use crate::error::{Error, Result};
 use crate::linalg::UNIT_ROUNDOFF as U;
