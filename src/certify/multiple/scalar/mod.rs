@@ -54,6 +54,7 @@
 //! what it proves, and it is never used when it cannot be completed.
 
 mod analysis;
+mod bordered;
 mod charges;
 mod forecast;
 mod groups;
@@ -71,6 +72,7 @@ pub use analysis::{
     SplitShape,
 };
 pub(in crate::certify::multiple) use analysis::{connect, fro, subgraph_edges};
+pub(crate) use bordered::{LowRank, bordered_comparison};
 pub(in crate::certify::multiple) use charges::orthogonality_defect;
 pub(crate) use groups::grouped_dual_bound;
 
