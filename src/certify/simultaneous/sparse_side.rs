@@ -447,6 +447,28 @@ mod tests {
     use crate::so3::{Rotation, perturb_gaussian, random_rotation};
     use rand::SeedableRng;
 
+    /// A side of the test: its graph, multipliers, sign and point rotations.
+    type TestSide<'a> = (
+        &'a MultipleProblem,
+        &'a [Matrix3<f64>],
+        f64,
+        &'a [Matrix3<f64>],
+    );
+
+    /// The two sides of the couplings `low` (right: `-1`, left: `+1`).
+    fn sides<'a>(
+        right: &'a MultipleProblem,
+        left: &'a MultipleProblem,
+        lambdas: &'a [Matrix3<f64>],
+        low: &'a LowRankCouplings,
+    ) -> [TestSide<'a>; 2] {
+        let n = right.num_rotations();
+        [
+            (right, &lambdas[..n], -1.0, &low.point.rs),
+            (left, &lambdas[n..], 1.0, &low.point.cs),
+        ]
+    }
+
     /// `Z` of one side formed densely with nalgebra from the data and the low-rank couplings
     /// (`Gamma_ij` entry by entry, the diagonal included).
     fn dense_z(
@@ -502,10 +524,7 @@ mod tests {
                 };
                 let lambdas = low.lambdas();
                 let n = r.len();
-                for (p, ls, sign, y) in [
-                    (&right, &lambdas[..n], -1.0, &low.point.rs),
-                    (&left, &lambdas[n..], 1.0, &low.point.cs),
-                ] {
+                for (p, ls, sign, y) in sides(&right, &left, &lambdas, &low) {
                     let z = dense_z(p, ls, &low, sign);
                     let lmin = z.symmetric_eigenvalues().min();
                     let target = 1e-9 * z.norm();
@@ -569,10 +588,7 @@ mod tests {
                 .unwrap();
             let lambdas = low.lambdas();
             let n = r.len();
-            for (p, ls, sign, y) in [
-                (&right, &lambdas[..n], -1.0, &low.point.rs),
-                (&left, &lambdas[n..], 1.0, &low.point.cs),
-            ] {
+            for (p, ls, sign, y) in sides(&right, &left, &lambdas, &low) {
                 let z = dense_z(p, ls, &low, sign);
                 let scale = z.norm();
                 let side = SparseSide::new(p, ls);
