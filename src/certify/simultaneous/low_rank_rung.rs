@@ -19,9 +19,11 @@ use crate::multiple::MultipleProblem;
 use nalgebra::Matrix3;
 
 /// The time and memory predicted for view graphs of `edges` edges each (the larger): a power
-/// law through the measurements of `[H25]` on random view graphs of 4 edges per frame, whose
-/// factors fill the most (1000, 5000 and 10^4 frames: 0.38, 9.0 and 69 s of certificate,
-/// factors of 2.3e6, 4.9e7 and 1.9e8 values); sparser graphs (sequences) take far less. Only
+/// law through the measurements of each side's scalar comparison `[H26]` on random view graphs
+/// of 4 edges per frame, whose factors fill the most (1000, 5000 and 10^4 frames: 0.10, 1.5 and
+/// 6.6 s of certificate, 2026-12-03; 1.5 times that), where `[H25]`'s `3n` factors alone took
+/// 0.38, 9.0 and 69 s (its fallback, started only while time is left); sparser graphs
+/// (sequences) take far less. Only
 /// for ordering the rungs and the time budget: the memory is bounded by the factor's own
 /// refusal (`max_values`); the memory at least the factor's border (`18 x 3` dense columns of
 /// `3n`) and the pattern of `A`, twice.
@@ -29,7 +31,7 @@ pub(super) fn predict(n: usize, edges: usize) -> Prediction {
     let scale = edges as f64 / 4000.0;
     let least = 16.0 * (162.0 * n as f64 + 9.0 * (n + 2 * edges) as f64);
     Prediction::new(
-        0.5 * scale.powf(2.2),
+        0.15 * scale.powf(1.8),
         (8.0 * 2.5e6 * scale.powi(2)).max(least),
     )
 }
