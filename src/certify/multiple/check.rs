@@ -8,7 +8,7 @@ use super::multipliers::{
     FirstOrder, GaugeTerms, TraceBound, certificate_matrix, entry_terms, forming_margins,
     gauge_terms,
 };
-use super::scalar::{SPARSIFIED_EDGES_PER_NODE, ScalarAnalysis};
+use super::scalar::{SPARSIFIED_EDGES_PER_NODE, ScalarAnalysis, subgraph};
 use super::verified::VerifiedBound;
 use crate::certify::budget::{Budget, Deadline};
 use crate::certify::log::{Attempt, Outcome, Point, Prediction, Refusal};
@@ -607,7 +607,7 @@ fn scalar_analyses(
     let max_values = settings.budget.max_factor_values(problem.num_rotations());
     if settings.dual.scalar_fallbacks && defers_the_whole(problem) {
         let sparsest = SPARSIFIED_EDGES_PER_NODE[0];
-        if let Ok(sub) = ScalarAnalysis::sparsified(problem, rotations, sparsest, max_values)? {
+        if let Ok(sub) = subgraph(problem, rotations, sparsest, max_values)? {
             return Ok((cell, Some(sub)));
         }
     }

@@ -55,6 +55,54 @@ pub(super) struct ScalarPart {
 /// ([`ScalarAnalysis::sparsified`]).
 pub const SPARSIFIED_EDGES_PER_NODE: [f64; 7] = [2.0, 2.25, 2.5, 2.75, 3.0, 3.5, 4.0];
 
+/// The subgraphs of graphs split into regions ([`subgraph_groups`] above 1): those of
+/// [`SPARSIFIED_EDGES_PER_NODE`] and two denser ones, whose factors in regions still fill like
+/// smaller graphs (10^5 nodes of 10 edges per node at 0.1 rad in 8 regions: 4 edges per node
+/// fail with 13 negative pivots where 8 are needed, 2026-12-03).
+pub const GROUPED_EDGES_PER_NODE: [f64; 9] = [2.0, 2.25, 2.5, 2.75, 3.0, 3.5, 4.0, 5.0, 6.0];
+
+/// The subgraphs the scalar comparison's climb tries on `problem`, sparsest first:
+/// [`GROUPED_EDGES_PER_NODE`] when its subgraphs are split into regions, else
+/// [`SPARSIFIED_EDGES_PER_NODE`].
+pub fn subgraph_ladder(problem: &MultipleProblem) -> &'static [f64] {
+    if subgraph_groups(problem) > 1 {
+        &GROUPED_EDGES_PER_NODE
+    } else {
+        &SPARSIFIED_EDGES_PER_NODE
+    }
+}
+
+/// The nodes per region of a large graph's subgraphs ([`subgraph_groups`]).
+pub const SUBGRAPH_GROUP_NODES: usize = 7500;
+
+/// The most regions of a subgraph ([`subgraph_groups`]): each adds three columns to the
+/// coarse correction's conjugate gradients, whose cost grows with them while the factors'
+/// shrinks.
+pub const SUBGRAPH_MAX_GROUPS: usize = 8;
+
+/// The regions the subgraphs of a view graph are split into ([`ScalarAnalysis::grouped_subgraph`]):
+/// one per [`SUBGRAPH_GROUP_NODES`] nodes, at most [`SUBGRAPH_MAX_GROUPS`]; 1 (no split) below
+/// `2 x` that. Measured at the least-squares solutions of random graphs
+/// (`gen_graph.py expander`, 2026-12-03): 3x10^4 nodes of 10 edges per node at 0.1 rad, 3
+/// edges per node proved in 6.8 s whole and 3.5 s in 2 regions; 4 edges per node in 4
+/// regions 1.9 s; 10^5 nodes of 3 edges per node at 0.02 rad, 2 edges per node: the factor
+/// 1.15e8 values (11.8 s) whole, 2.1e7 (0.9 s) in 4 regions.
+pub fn subgraph_groups(problem: &MultipleProblem) -> usize {
+    (problem.num_rotations() / SUBGRAPH_GROUP_NODES).clamp(1, SUBGRAPH_MAX_GROUPS)
+}
+
+/// The subgraph of `edges_per_node` in the regions of [`subgraph_groups`]: what the scalar
+/// comparison's climb tries ([`ScalarAnalysis::grouped_subgraph`]).
+pub fn subgraph(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    edges_per_node: f64,
+    max_values: usize,
+) -> Result<std::result::Result<ScalarAnalysis, usize>> {
+    let groups = subgraph_groups(problem);
+    ScalarAnalysis::grouped_subgraph(problem, rotations, edges_per_node, groups, max_values)
+}
+
 /// The shape of a split comparison ([`ScalarAnalysis::split`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct SplitShape {
@@ -128,27 +176,63 @@ impl ScalarAnalysis {
             .map(|e| group[e.i] != group[e.j])
             .collect();
         let analysed = Self::without(problem, &left_out, max_values)?;
-        Ok(analysed.map(|a| {
-            let mut union = crate::multiple::union_find::UnionFind::new(group.len());
-            for (e, out) in problem.edges().iter().zip(&left_out) {
-                if !out {
-                    union.union(e.i, e.j);
-                }
-            }
-            let mut id = vec![usize::MAX; group.len()];
-            let mut next = 0;
-            let components = (0..group.len())
-                .map(|i| {
-                    let root = union.find(i);
-                    if id[root] == usize::MAX {
-                        id[root] = next;
-                        next += 1;
-                    }
-                    id[root]
-                })
-                .collect();
-            ScalarAnalysis { components, ..a }
+        Ok(analysed.map(|a| ScalarAnalysis {
+            components: components(problem, &left_out),
+            ..a
         }))
+    }
+
+    /// The analysis of a **grouped subgraph** (`[D13]`, "Grouped subgraphs"): the nodes in
+    /// `groups` connected regions (`scalar/partition.rs`), and in each region the
+    /// subgraph of [`ScalarAnalysis::sparsified`] of its own edges; the edges between regions
+    /// are dropped (charged), and the grouped comparison proves each region's pencil apart,
+    /// the regions' coarse directions by a correction (`groups.rs`). Its factor fills like a
+    /// graph `groups` times smaller (3x10^4-node random graph of 10 edges per node at 0.1 rad,
+    /// 3 edges per node: 5.4e7 values whole, 1.4e7 in 4 groups). `groups = 1` is the subgraph.
+    /// Refused like [`ScalarAnalysis::new`].
+    pub fn grouped_subgraph(
+        problem: &MultipleProblem,
+        rotations: &[Rotation],
+        edges_per_node: f64,
+        groups: usize,
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
+        if groups <= 1 {
+            return Self::sparsified(problem, rotations, edges_per_node, max_values);
+        }
+        if rotations.len() != problem.num_rotations()
+            || edges_per_node.is_nan()
+            || edges_per_node < 0.0
+        {
+            return Err(Error::InvalidSettings {
+                name: "grouped subgraph".into(),
+                reason: "needs one rotation per node and edges_per_node >= 0".into(),
+            });
+        }
+        let group = super::partition::partition(problem, groups);
+        let edges = problem.edges();
+        let within = |k: usize| group[edges[k].i] == group[edges[k].j];
+        let keep = subgraph_edges_within(problem, rotations, edges_per_node, &within);
+        let left_out: Vec<bool> = keep.iter().map(|k| !k).collect();
+        let analysed = Self::without(problem, &left_out, max_values)?;
+        let dense =
+            problem.num_edges() as f64 >= DENSE_EDGES_PER_NODE * problem.num_rotations() as f64;
+        Ok(analysed.map(|a| ScalarAnalysis {
+            components: components(problem, &left_out),
+            edges_per_node,
+            beta: if dense {
+                DENSE_SUBGRAPH_BETA
+            } else {
+                SECOND_ORDER_BETA
+            },
+            ..a
+        }))
+    }
+
+    /// The regions of a grouped analysis (0 for any other): the number of components its
+    /// comparison proves apart.
+    pub fn groups(&self) -> usize {
+        self.components.iter().max().map_or(0, |m| m + 1)
     }
 
     /// The negative pivots its factorisation must show: one per component of the pattern.
@@ -606,6 +690,29 @@ fn outside_largest_components(
     outside
 }
 
+/// The components of the edges not `left_out`, numbered from 0 in the order of their first node.
+fn components(problem: &MultipleProblem, left_out: &[bool]) -> Vec<usize> {
+    let n = problem.num_rotations();
+    let mut union = UnionFind::new(n);
+    for (e, out) in problem.edges().iter().zip(left_out) {
+        if !out {
+            union.union(e.i, e.j);
+        }
+    }
+    let mut id = vec![usize::MAX; n];
+    let mut next = 0;
+    (0..n)
+        .map(|i| {
+            let root = union.find(i);
+            if id[root] == usize::MAX {
+                id[root] = next;
+                next += 1;
+            }
+            id[root]
+        })
+        .collect()
+}
+
 /// Frobenius norm.
 pub(in crate::certify::multiple) fn fro(m: &Matrix3<f64>) -> f64 {
     m.iter().map(|v| v * v).sum::<f64>().sqrt()
@@ -620,6 +727,17 @@ pub(in crate::certify::multiple) fn subgraph_edges(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     edges_per_node: f64,
+) -> Vec<bool> {
+    subgraph_edges_within(problem, rotations, edges_per_node, &|_| true)
+}
+
+/// [`subgraph_edges`] among the edges `k` with `within(k)` only (the others never kept, nor
+/// used to join components).
+fn subgraph_edges_within(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    edges_per_node: f64,
+    within: &dyn Fn(usize) -> bool,
 ) -> Vec<bool> {
     let n = problem.num_rotations();
     let residual: Vec<f64> = problem
@@ -638,7 +756,13 @@ pub(in crate::certify::multiple) fn subgraph_edges(
     let mut incident = Vec::new();
     for v in 0..n {
         incident.clear();
-        incident.extend(adjacency.neighbours(v).iter().map(|&(_, k)| k));
+        incident.extend(
+            adjacency
+                .neighbours(v)
+                .iter()
+                .map(|&(_, k)| k)
+                .filter(|&k| within(k)),
+        );
         incident.sort_by(|&a, &b| residual[a].total_cmp(&residual[b]).then(a.cmp(&b)));
         // a fixed pseudo-random subset of the nodes (Knuth's multiplicative hash)
         let extra = ((v as u64).wrapping_mul(2_654_435_761) % 1000) as f64 / 1000.0 < fraction;
@@ -646,7 +770,7 @@ pub(in crate::certify::multiple) fn subgraph_edges(
             keep[k] = true;
         }
     }
-    connect(problem, &residual, &mut keep);
+    connect_within(problem, &residual, &mut keep, within);
     keep
 }
 
@@ -657,11 +781,21 @@ pub(in crate::certify::multiple) fn connect(
     residual: &[f64],
     keep: &mut [bool],
 ) {
+    connect_within(problem, residual, keep, &|_| true);
+}
+
+/// [`connect`] with the dropped edges `k` with `within(k)` only.
+fn connect_within(
+    problem: &MultipleProblem,
+    residual: &[f64],
+    keep: &mut [bool],
+    within: &dyn Fn(usize) -> bool,
+) {
     let mut components = UnionFind::new(problem.num_rotations());
     for (e, _) in problem.edges().iter().zip(keep.iter()).filter(|(_, k)| **k) {
         components.union(e.i, e.j);
     }
-    let mut dropped: Vec<usize> = (0..keep.len()).filter(|&k| !keep[k]).collect();
+    let mut dropped: Vec<usize> = (0..keep.len()).filter(|&k| !keep[k] && within(k)).collect();
     dropped.sort_by(|&a, &b| residual[a].total_cmp(&residual[b]).then(a.cmp(&b)));
     for k in dropped {
         let e = &problem.edges()[k];

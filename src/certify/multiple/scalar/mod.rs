@@ -61,6 +61,7 @@ mod groups;
 mod hub;
 mod hub_rung;
 mod inertia;
+mod partition;
 mod residuals;
 pub(in crate::certify) mod rungs;
 mod split;
@@ -68,8 +69,9 @@ mod split;
 mod tests;
 
 pub use analysis::{
-    MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_MIN_DEGREES, SPLIT_SHAPES, ScalarAnalysis,
-    SplitShape,
+    GROUPED_EDGES_PER_NODE, MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_MIN_DEGREES,
+    SPLIT_SHAPES, SUBGRAPH_GROUP_NODES, SUBGRAPH_MAX_GROUPS, ScalarAnalysis, SplitShape, subgraph,
+    subgraph_groups, subgraph_ladder,
 };
 pub(in crate::certify::multiple) use analysis::{connect, fro, subgraph_edges};
 pub(crate) use bordered::{LowRank, bordered_comparison};
@@ -252,6 +254,18 @@ pub fn scalar_comparison(
     lambdas: &[Matrix3<f64>],
     target: f64,
 ) -> Result<std::result::Result<ScalarComparison, ScalarFailure>> {
+    scalar_comparison_until(problem, analysis, rotations, lambdas, (target, None))
+}
+
+/// [`scalar_comparison`], whose grouped analyses' conjugate gradients stop at `stop_at` (a
+/// weaker bound, never a wrong one).
+pub(in crate::certify::multiple) fn scalar_comparison_until(
+    problem: &MultipleProblem,
+    analysis: &ScalarAnalysis,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+    (target, stop_at): (f64, Option<Instant>),
+) -> Result<std::result::Result<ScalarComparison, ScalarFailure>> {
     let n = problem.num_rotations();
     if rotations.len() != n || lambdas.len() != n {
         return Err(Error::InvalidSettings {
@@ -266,7 +280,13 @@ pub fn scalar_comparison(
             reason: "the scalar analysis was made for a different view graph".into(),
         });
     }
-    Ok(compare(problem, analysis, rotations, lambdas, target))
+    Ok(compare(
+        problem,
+        analysis,
+        rotations,
+        lambdas,
+        (target, stop_at),
+    ))
 }
 
 /// Steps 1 to 5 of [`scalar_comparison`] on consistent inputs.
@@ -275,8 +295,11 @@ fn compare(
     analysis: &ScalarAnalysis,
     rotations: &[Rotation],
     lambdas: &[Matrix3<f64>],
-    target: f64,
+    (target, stop_at): (f64, Option<Instant>),
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
+    if analysis.groups() > 0 {
+        return groups::compare_grouped(problem, analysis, rotations, lambdas, stop_at);
+    }
     let t_max = charges::orthogonality_defect(rotations)?;
     let c = charges::edge_charges(problem, rotations, lambdas, &analysis.copies, analysis.beta)?;
     let (rho1, rho0) = residuals::residual_bounds(problem, rotations, lambdas, &c.deg_n, target);
