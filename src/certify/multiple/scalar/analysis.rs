@@ -215,16 +215,10 @@ impl ScalarAnalysis {
         let keep = subgraph_edges_within(problem, rotations, edges_per_node, &within);
         let left_out: Vec<bool> = keep.iter().map(|k| !k).collect();
         let analysed = Self::without(problem, &left_out, max_values)?;
-        let dense =
-            problem.num_edges() as f64 >= DENSE_EDGES_PER_NODE * problem.num_rotations() as f64;
         Ok(analysed.map(|a| ScalarAnalysis {
             components: components(problem, &left_out),
             edges_per_node,
-            beta: if dense {
-                DENSE_SUBGRAPH_BETA
-            } else {
-                SECOND_ORDER_BETA
-            },
+            beta: subgraph_beta(problem),
             ..a
         }))
     }
@@ -292,14 +286,9 @@ impl ScalarAnalysis {
         }
         let keep = subgraph_edges(problem, rotations, edges_per_node);
         let analysed = Self::analyse(problem, 1, |k| u64::from(keep[k]), max_values)?;
-        let dense = problem.num_edges() as f64 >= DENSE_EDGES_PER_NODE * n as f64;
         Ok(analysed.map(|a| ScalarAnalysis {
             edges_per_node,
-            beta: if dense {
-                DENSE_SUBGRAPH_BETA
-            } else {
-                SECOND_ORDER_BETA
-            },
+            beta: subgraph_beta(problem),
             ..a
         }))
     }
@@ -688,6 +677,21 @@ fn outside_largest_components(
         }
     }
     outside
+}
+
+/// Whether `problem` has at least [`DENSE_EDGES_PER_NODE`] edges per node.
+pub(super) fn is_dense(problem: &MultipleProblem) -> bool {
+    problem.num_edges() as f64 >= DENSE_EDGES_PER_NODE * problem.num_rotations() as f64
+}
+
+/// The second-order split `beta` of `problem`'s subgraphs: [`DENSE_SUBGRAPH_BETA`] on dense
+/// graphs ([`is_dense`]), else [`SECOND_ORDER_BETA`].
+fn subgraph_beta(problem: &MultipleProblem) -> f64 {
+    if is_dense(problem) {
+        DENSE_SUBGRAPH_BETA
+    } else {
+        SECOND_ORDER_BETA
+    }
 }
 
 /// The components of the edges not `left_out`, numbered from 0 in the order of their first node.
