@@ -434,6 +434,16 @@ impl ScalarAnalysis {
         self.factor_lens().max().unwrap_or(0)
     }
 
+    /// The values the grouped comparison's coarse correction holds besides the factor (0 for
+    /// other analyses): `3` columns of length `3n` per region in its conjugate gradients' seven
+    /// vectors (right-hand side, iterate, residual, preconditioned residual, direction,
+    /// product, the coarse columns).
+    pub fn coarse_values(&self) -> usize {
+        (3 * self.groups())
+            .saturating_mul(3 * self.components.len())
+            .saturating_mul(7)
+    }
+
     /// Multiply-adds of all the factorisations ([`crate::linalg::cholesky::factor_multiply_adds`]),
     /// for the time model.
     pub fn factor_multiply_adds(&self) -> f64 {

@@ -555,7 +555,11 @@ fn predict(
     a: &ScalarAnalysis,
 ) -> std::result::Result<Prediction, Refusal> {
     let scratch = a.scratch_bytes().div_ceil(8);
-    let largest = a.factor_len().saturating_add(scratch);
+    // the coarse correction's vectors are held beside the (freed) factor: the larger counts
+    let largest = a
+        .factor_len()
+        .saturating_add(scratch)
+        .max(a.coarse_values());
     let total: usize = a.factor_lens().map(|v| v.saturating_add(scratch)).sum();
     let columns = 3 * a.groups();
     let other = (SECONDS_PER_EDGE + GROUPED_SECONDS_PER_EDGE_COLUMN * columns as f64)
