@@ -19,6 +19,7 @@
 
 pub mod block;
 mod check;
+mod coarse;
 pub mod conv;
 pub mod conv_dual;
 pub mod diagnosis;

@@ -17,28 +17,16 @@ use super::inertia::prove_inertia;
 use super::split::PencilWeights;
 use super::{Proven, ScalarComparison, ScalarFailure};
 use crate::certify::budget::Budget;
+use crate::certify::multiple::coarse::{
+    BlockOperator, COARSE_RELATIVE_RESIDUAL, CoarseSpace, ZETA_FRACTION, coarse_terms,
+};
 use crate::certify::multiple::multipliers::TraceBound;
 use crate::error::{Error, Result};
 use crate::linalg::UNIT_ROUNDOFF as U;
 use crate::linalg::cholesky::gamma;
-use crate::linalg::pcg::pcg;
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
-use nalgebra::{DMatrix, Matrix3};
-
-/// `zeta`, the uniform weight added to the charges, as a fraction of the largest weighted
-/// degree: small against the charges (the pencils), large enough that the coarse correction's
-/// residual `rho` need not be driven below rounding.
-const ZETA_FRACTION: f64 = 1e-7;
-
-/// The relative residual the coarse correction's conjugate gradients aim at: its residual
-/// `R` enters as `R^T R / zeta` against the coarse Gram matrix, whose non-gauge eigenvalues
-/// are the flux between groups (large), and the gauge directions need none (`[D13]`,
-/// "Groups").
-const COARSE_RELATIVE_RESIDUAL: f64 = 1e-4;
-
-/// The most conjugate-gradient iterations of the coarse correction.
-const CG_MAX_ITERATIONS: usize = 600;
+use nalgebra::Matrix3;
 
 /// Try to prove `lambda_min(S) >= mu` by the grouped comparison (`group[i]`: node `i`'s group):
 /// as [`super::scalar_comparison`], with the factorisation of the groups' own edges only.
@@ -150,10 +138,10 @@ fn compare_grouped_to(
     };
     let inertia = prove_inertia(analysis, problem, &c.reduced, &pencil, &c.deg_n, c.d_max)?;
     let groups = Groups::new(&analysis.components, &pencil.weights);
-    let m = BlockOperator::new(problem, rotations, lambdas, &c.deg_n);
+    let m = scalar_operator(problem, rotations, lambdas, &c.deg_n);
     let coarse =
         coarse_terms(&m, &groups, (zeta_free, rel, stop_at)).ok_or(ScalarFailure::Numerical)?;
-    let mu_m = coarse.lambda.min(0.0) * groups.kappa * groups.kappa * (1.0 + 1e-10);
+    let mu_m = coarse.mu(groups.kappa);
     let proven = Proven {
         mu_m,
         t_max,
@@ -203,9 +191,19 @@ impl<'a> Groups<'a> {
             largest,
         }
     }
+}
+
+impl CoarseSpace for Groups<'_> {
+    fn group_of(&self) -> &[usize] {
+        self.of
+    }
+
+    fn count(&self) -> usize {
+        self.count
+    }
 
     /// `z <- Pi z` in floating point (every coordinate slice less its `w`-projection in every
-    /// component); the result is within `2 gamma(largest + 3) ||z|| + u ||Pi z||` of the exact.
+    /// component, the orthogonal projector onto `U`).
     fn project(&self, z: &mut [f64]) {
         let mut dots = vec![[0.0f64; 3]; self.count];
         for (i, &g) in self.of.iter().enumerate() {
@@ -218,6 +216,12 @@ impl<'a> Groups<'a> {
                 z[3 * i + j] -= dots[g][j] / self.sq[g] * self.weights[i];
             }
         }
+    }
+
+    /// `fl(Pi y)` is within `2 gamma(largest + 3) ||y|| + u ||Pi y||` of the exact.
+    fn projection_error(&self, y: &[f64], p: &[f64]) -> f64 {
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt() * (1.0 + gamma(v.len()));
+        2.0 * gamma(self.largest + 3) * norm(y) + U * norm(p)
     }
 
     /// A bound on `||(I - Pi) x||_F` for the columns `x = z - E` (`E` the coarse directions):
@@ -246,322 +250,40 @@ impl<'a> Groups<'a> {
     }
 }
 
-/// `M = D^T S D` as `3 x 3` blocks (`M_ii = R_i^T (d_i I - sym Lambda_i) R_i`, `-w P_e` on the
-/// edges) with bounds on its forming error and on `|| |M| ||_2`.
-struct BlockOperator {
-    diag: Vec<Matrix3<f64>>,
-    edges: Vec<(usize, usize, Matrix3<f64>)>,
-    /// `||fl(M) - M||_2`.
-    form: f64,
-    /// The largest absolute row sum of `fl(M)` (`>= || |fl(M)| ||_2`).
-    row_abs: f64,
-    /// Terms of the longest row of a product.
-    terms: usize,
-}
-
-impl BlockOperator {
-    fn new(
-        problem: &MultipleProblem,
-        rotations: &[Rotation],
-        lambdas: &[Matrix3<f64>],
-        deg_n: &[usize],
-    ) -> Self {
-        let n = rotations.len();
-        let mut degree = vec![0.0f64; n];
-        let mut form_rows = vec![0.0f64; n];
-        let mut row_abs = vec![[0.0f64; 3]; n];
-        let mut edges = Vec::with_capacity(problem.num_edges());
-        for e in problem.edges() {
-            let block = -e.weight * edge_product(e, rotations);
-            // fl(P_e) within PRODUCT_ERROR (Frobenius), one more rounding for the weight
-            let err = e.weight * (PRODUCT_ERROR + 2.0 * U * 3.5);
-            for (v, b) in [(e.i, block), (e.j, block.transpose())] {
-                degree[v] += e.weight;
-                form_rows[v] += err;
-                for (r, sum) in row_abs[v].iter_mut().enumerate() {
-                    *sum += b.row(r).abs().sum();
-                }
-            }
-            edges.push((e.i, e.j, block));
+/// `M = D^T S D` of a problem with scalar weights as `3 x 3` blocks (`M_ii = R_i^T (d_i I - sym
+/// Lambda_i) R_i`, `-w P_e` on the edges), with its forming errors.
+fn scalar_operator(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+    deg_n: &[usize],
+) -> BlockOperator {
+    let n = rotations.len();
+    let mut degree = vec![0.0f64; n];
+    let mut form_rows = vec![0.0f64; n];
+    let mut edges = Vec::with_capacity(problem.num_edges());
+    for e in problem.edges() {
+        let block = -e.weight * edge_product(e, rotations);
+        // fl(P_e) within PRODUCT_ERROR (Frobenius), one more rounding for the weight
+        let err = e.weight * (PRODUCT_ERROR + 2.0 * U * 3.5);
+        for v in [e.i, e.j] {
+            degree[v] += e.weight;
+            form_rows[v] += err;
         }
-        let mut diag = Vec::with_capacity(n);
-        for i in 0..n {
-            let r = rotations[i].matrix();
-            let l = lambdas[i];
-            let inner = Matrix3::identity() * degree[i] - 0.5 * (l + l.transpose());
-            let block = r.transpose() * inner * r;
-            // two 3 x 3 products of entries <= 1.001 with inner's, the degree's sum of deg terms
-            let mag = 3.0 * (degree[i] + l.abs().sum());
-            form_rows[i] += gamma(deg_n[i] + 12) * 4.0 * mag;
-            for (rw, sum) in row_abs[i].iter_mut().enumerate() {
-                *sum += block.row(rw).abs().sum();
-            }
-            diag.push(block);
-        }
-        let terms = deg_n.iter().copied().max().unwrap_or(0) + 1;
-        BlockOperator {
-            diag,
-            edges,
-            form: 2.0 * form_rows.iter().copied().fold(0.0, f64::max),
-            // each row sum of at most 3 terms + 2 rounded additions
-            row_abs: row_abs.iter().flatten().copied().fold(0.0, f64::max)
-                * (1.0 + gamma(3 * terms + 2)),
-            terms: 3 * terms + 2,
-        }
+        edges.push((e.i, e.j, block));
     }
-
-    /// `y = fl(M x)`.
-    fn times(&self, x: &[f64], y: &mut [f64]) {
-        let block =
-            |v: &[f64], i: usize| nalgebra::Vector3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
-        for (i, d) in self.diag.iter().enumerate() {
-            let r = d * block(x, i);
-            y[3 * i..3 * i + 3].copy_from_slice(r.as_slice());
-        }
-        for (i, j, b) in &self.edges {
-            let (xi, xj) = (block(x, *i), block(x, *j));
-            let (ri, rj) = (b * xj, b.transpose() * xi);
-            for a in 0..3 {
-                y[3 * i + a] += ri[a];
-                y[3 * j + a] += rj[a];
-            }
-        }
+    let mut diag = Vec::with_capacity(n);
+    for i in 0..n {
+        let r = rotations[i].matrix();
+        let l = lambdas[i];
+        let inner = Matrix3::identity() * degree[i] - 0.5 * (l + l.transpose());
+        // two 3 x 3 products of entries <= 1.001 with inner's, the degree's sum of deg terms
+        let mag = 3.0 * (degree[i] + l.abs().sum());
+        form_rows[i] += gamma(deg_n[i] + 12) * 4.0 * mag;
+        diag.push(r.transpose() * inner * r);
     }
-
-    /// A bound on `||fl(M x) - M x||_2` per unit of `||x||_2`.
-    fn product_error(&self) -> f64 {
-        (self.form + gamma(self.terms) * self.row_abs) * (1.0 + 1e-10)
-    }
-
-    /// A bound on `||M||_2`.
-    fn norm(&self) -> f64 {
-        (self.row_abs + self.form) * (1.0 + 1e-10)
-    }
-}
-
-/// The coarse directions' bounds: `rho >= ||Pi M V'||_2` (reported) and
-/// `lambda <= lambda_min(V'^T M V' - (Pi M V')^T (Pi M V') / zeta)`.
-struct Coarse {
-    rho: f64,
-    lambda: f64,
-}
-
-/// `V' = E + Pi X` with `X` from conjugate gradients on `Pi M Pi X = -Pi M E` (block-Jacobi,
-/// projected) to the relative residual `rel`, for every group but the last and for the gauge
-/// directions `v0 = sum_g E_g`, the last group's `X` the gauge's less the others' sum (so the
-/// gauge directions of `V'` carry their own correction, whose residual is relative to `Pi M
-/// v0`, small at a critical point, and not the other columns' residuals); then `lambda`
-/// bounded for the exact `V'` of the computed `X` (any `X` is valid: only the bound's size
-/// depends on it).
-fn coarse_terms(
-    m: &BlockOperator,
-    groups: &Groups<'_>,
-    (zeta, rel, stop_at): (f64, f64, Option<std::time::Instant>),
-) -> Option<Coarse> {
-    let dim = 3 * groups.of.len();
-    let cols = 3 * groups.count;
-    let coarse: Vec<Vec<f64>> = (0..cols)
-        .map(|c| {
-            let mut e = vec![0.0; dim];
-            for (i, &g) in groups.of.iter().enumerate() {
-                if 3 * g + c % 3 == c {
-                    e[3 * i + c % 3] = 1.0;
-                }
-            }
-            e
-        })
-        .collect();
-    // the columns of every group but the last, then the gauge directions `v0_j`
-    let gauge: Vec<Vec<f64>> = (0..3)
-        .map(|j| (0..dim).map(|r| f64::from(u8::from(r % 3 == j))).collect())
-        .collect();
-    let mut rhs: Vec<Vec<f64>> = Vec::with_capacity(cols);
-    for e in coarse[..cols - 3].iter().chain(&gauge) {
-        let mut y = vec![0.0; dim];
-        m.times(e, &mut y);
-        groups.project(&mut y);
-        y.iter_mut().for_each(|v| *v = -*v);
-        rhs.push(y);
-    }
-    let inverses: Vec<Matrix3<f64>> = m
-        .diag
-        .iter()
-        .map(|d| {
-            d.cholesky()
-                .map(|c| c.inverse())
-                .unwrap_or_else(Matrix3::identity)
-        })
-        .collect();
-    let operator = |x: &[f64], y: &mut [f64]| {
-        let mut p = x.to_vec();
-        groups.project(&mut p);
-        m.times(&p, y);
-        groups.project(y);
-    };
-    let precondition = |r: &[&[f64]], z: &mut [&mut [f64]]| {
-        for (r, z) in r.iter().zip(z.iter_mut()) {
-            for (i, inv) in inverses.iter().enumerate() {
-                let v = inv * nalgebra::Vector3::new(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
-                z[3 * i..3 * i + 3].copy_from_slice(v.as_slice());
-            }
-            groups.project(z);
-        }
-    };
-    let mut x = pcg(
-        &operator,
-        &precondition,
-        &rhs,
-        rel,
-        (CG_MAX_ITERATIONS, stop_at),
-    )?
-    .0;
-    // the last group's: the gauge directions' correction less the other groups'
-    for j in 0..3 {
-        let mut last = x[cols - 3 + j].clone();
-        for xc in x[..cols - 3].iter().skip(j).step_by(3) {
-            last.iter_mut().zip(xc).for_each(|(l, v)| *l -= v);
-        }
-        x[cols - 3 + j] = last;
-    }
-    let z: Vec<Vec<f64>> = coarse
-        .iter()
-        .zip(x)
-        .map(|(e, mut xc)| {
-            groups.project(&mut xc);
-            e.iter().zip(&xc).map(|(a, b)| a + b).collect()
-        })
-        .collect();
-    bound_coarse(m, groups, &z, zeta)
-}
-
-/// `lambda` for the computed columns `z` (`z - E` not exactly in `U`: `V' = E + Pi (z - E)`
-/// differs from `z` by `dz = (I - Pi)(z - E)`, of norm at most `delta`). With `R = Pi M V' =
-/// fl(Pi fl(M z)) + dR`, `||dR|| <= eps` (the product's and the projection's rounding, and
-/// `||M|| delta`): `R^T R <= 2 R'^T R' + 2 eps^2 I`, and `V'^T M V' = z^T M z -
-/// 2 sym(z^T M dz) + dz^T M dz`; the Gram matrices by pairwise sums with their errors.
-fn bound_coarse(
-    m: &BlockOperator,
-    groups: &Groups<'_>,
-    z: &[Vec<f64>],
-    zeta: f64,
-) -> Option<Coarse> {
-    let dim = 3 * groups.of.len();
-    let cols = z.len();
-    let delta = groups.off_space(z);
-    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt() * (1.0 + gamma(dim));
-    let (mut ys, mut ps) = (Vec::with_capacity(cols), Vec::with_capacity(cols));
-    let (mut eps_sq, mut y_sq, mut r_sq) = (0.0f64, 0.0f64, 0.0f64);
-    let g_proj = gamma(groups.largest + 3);
-    let mut y_errs = Vec::with_capacity(cols);
-    for zc in z {
-        let mut y = vec![0.0; dim];
-        m.times(zc, &mut y);
-        let err = m.product_error() * norm(zc);
-        let ny = norm(&y);
-        let mut p = y.clone();
-        groups.project(&mut p);
-        let np = norm(&p);
-        let e = err + 2.0 * g_proj * ny + U * np;
-        eps_sq += e * e;
-        y_sq += ny * ny;
-        r_sq += np * np;
-        y_errs.push(err);
-        ys.push(y);
-        ps.push(p);
-    }
-    let m_norm = m.norm();
-    let eps = (eps_sq.sqrt() + m_norm * delta) * (1.0 + 1e-10);
-    let r_norm = r_sq.sqrt();
-    let rho = (r_norm + eps) * (1.0 + 1e-10);
-    // pairwise sums: the error grows with the depth of the tree, not with `3n` (whose
-    // `gamma(3n)` alone failed 10^5-node graphs in 8 regions)
-    let g_dot = gamma(pairwise_depth(dim) + 2);
-    let mut g = DMatrix::zeros(cols, cols);
-    let mut r = DMatrix::zeros(cols, cols);
-    let (mut g_err_sq, mut r_err_sq) = (0.0f64, 0.0f64);
-    for a in 0..cols {
-        for b in 0..cols {
-            let (s, mag) = pairwise_dot(&z[a], &ys[b]);
-            g[(a, b)] = s;
-            let e = norm(&z[a]) * y_errs[b] + g_dot * mag * (1.0 + g_dot);
-            g_err_sq += e * e;
-            let (s, mag) = pairwise_dot(&ps[a], &ps[b]);
-            r[(a, b)] = s;
-            let e = g_dot * mag * (1.0 + g_dot);
-            r_err_sq += e * e;
-        }
-    }
-    // R^T R <= 2 R'^T R' + 2 eps^2 I: the doubled R'^T R' is small against the flux's
-    // eigenvalues of G, and nearly zero on the gauge directions, where G is too
-    let h = (&g + g.transpose()) * 0.5 - (&r + r.transpose()) * (1.0 / zeta);
-    let h_err = g_err_sq.sqrt()
-        + 2.0 * r_err_sq.sqrt() / zeta
-        + 2.0 * eps * eps / zeta
-        + 4.0 * U * (g.norm() + 2.0 * r.norm() / zeta);
-    let lambda_h = verified_min_eigenvalue(&h)? - h_err;
-    // the columns' own error: V'^T M V' against z^T M z
-    let lambda = (lambda_h - 2.0 * (y_sq.sqrt() + eps_sq.sqrt()) * delta - m_norm * delta * delta)
-        * (1.0 + 1e-10)
-        - f64::MIN_POSITIVE;
-    (rho.is_finite() && lambda.is_finite()).then_some(Coarse { rho, lambda })
-}
-
-/// The length of the plain sums at the leaves of [`pairwise_dot`].
-const PAIRWISE_LEAF: usize = 8;
-
-/// `(fl(x . y), fl(sum |x_i y_i|))` by pairwise summation (Higham, *Accuracy and Stability of
-/// Numerical Algorithms*, 2002, section 4.2): each product passes through at most
-/// [`pairwise_depth`] additions, so `|fl(x . y) - x . y| <= gamma(depth + 1) sum |x_i y_i|`,
-/// and the computed magnitude is within the same factor of the exact one.
-fn pairwise_dot(x: &[f64], y: &[f64]) -> (f64, f64) {
-    if x.len() <= PAIRWISE_LEAF {
-        let (mut s, mut mag) = (0.0f64, 0.0f64);
-        for (a, b) in x.iter().zip(y) {
-            s += a * b;
-            mag += (a * b).abs();
-        }
-        return (s, mag);
-    }
-    let half = x.len() / 2;
-    let (a, b) = pairwise_dot(&x[..half], &y[..half]);
-    let (c, d) = pairwise_dot(&x[half..], &y[half..]);
-    (a + c, b + d)
-}
-
-/// The most additions a term of a sum of `len` passes through in [`pairwise_dot`]: those of
-/// its leaf and one per level above it.
-fn pairwise_depth(len: usize) -> usize {
-    let (mut depth, mut at) = (PAIRWISE_LEAF, len);
-    while at > PAIRWISE_LEAF {
-        at = at.div_ceil(2);
-        depth += 1;
-    }
-    depth
-}
-
-/// A proven lower bound on `lambda_min(a)` of a small symmetric matrix: the dense eigenvalues'
-/// estimate less a margin, proven by a Cholesky factorisation of `fl(a - tau I)` (Higham, Thm
-/// 10.3: the computed factor is exact for `fl(a - tau I) + E`, `|E| <= gamma(d + 1) |L| |L^T|`;
-/// the shift's rounding, at most `u |a_ii - tau|` per diagonal entry, charged too).
-fn verified_min_eigenvalue(a: &DMatrix<f64>) -> Option<f64> {
-    let d = a.nrows();
-    let estimate = crate::linalg::dense::symmetric_eigenvalues(a)?
-        .first()
-        .copied()?;
-    let scale = a.norm().max(f64::MIN_POSITIVE);
-    for margin in [1e-12, 1e-9, 1e-6] {
-        let tau = estimate - margin * scale;
-        let shifted = a - DMatrix::identity(d, d) * tau;
-        if let Some(c) = crate::linalg::dense::DenseCholesky::new(&shifted) {
-            let diagonal = (0..d).map(|i| (a[(i, i)] - tau).abs()).fold(0.0, f64::max);
-            let proven =
-                tau - (gamma(d + 1) * c.factor_norm_squared() + 2.0 * U * diagonal) * (1.0 + 1e-10);
-            if proven.is_finite() {
-                return Some(proven);
-            }
-        }
-    }
-    None
+    let max_degree = deg_n.iter().copied().max().unwrap_or(0);
+    BlockOperator::new(diag, edges, &form_rows, max_degree)
 }
 
 #[cfg(test)]

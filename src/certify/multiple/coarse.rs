@@ -1,0 +1,355 @@
+//! The coarse correction of the grouped comparisons (`paper-notes/certificates.md` `[D13]`,
+//! "Groups", and `paper-notes/anisotropic.md` `[A15]`, "Regions"): when every group's pencil
+//! is proven, `x1^T M x1 >= zeta |x1|^2` on the space `U` of the vectors whose weighted sums
+//! vanish in every group, and the rest of `x` is `3k` coarse directions `E a` (`E = [1_g (x)
+//! I_3]_g`). With any `X` and `V' = E + P X` (`P` a projector onto `U`), and any `R` with
+//! `y^T M V' = y^T R` for every `y` in `U`,
+//! `x^T M x >= a^T (V'^T M V' - R^T R / zeta) a >= min(0, lambda) kappa^2 |x|^2`.
+//! The scalar comparison's groups (one weight per node) and the block comparison's (a `3 x 3`
+//! weight per node) are the two [`CoarseSpace`]s; the operator, the correction by conjugate
+//! gradients and the rigorous bound are shared here.
+
+use crate::linalg::UNIT_ROUNDOFF as U;
+use crate::linalg::cholesky::gamma;
+use crate::linalg::pcg::pcg;
+use nalgebra::{DMatrix, Matrix3};
+
+/// `zeta`, the uniform weight added to the charges of a grouped comparison, as a fraction of
+/// the largest weighted degree: small against the charges (the pencils), large enough that
+/// the coarse correction's residual need not be driven below rounding.
+pub(in crate::certify::multiple) const ZETA_FRACTION: f64 = 1e-7;
+
+/// The relative residual the coarse correction's conjugate gradients aim at: its residual
+/// `R` enters as `R^T R / zeta` against the coarse Gram matrix, whose non-gauge eigenvalues
+/// are the flux between groups (large), and the gauge directions need none (`[D13]`,
+/// "Groups").
+pub(in crate::certify::multiple) const COARSE_RELATIVE_RESIDUAL: f64 = 1e-4;
+
+/// The most conjugate-gradient iterations of the coarse correction.
+const CG_MAX_ITERATIONS: usize = 600;
+
+/// The groups of a grouped comparison and their weights: the space `U` (every group's
+/// weighted sum `sum_{i in g} W_i x_i` zero), a projector onto it and the residual's form.
+pub(in crate::certify::multiple) trait CoarseSpace {
+    /// Each node's group, `0..count`.
+    fn group_of(&self) -> &[usize];
+    /// The number of groups.
+    fn count(&self) -> usize;
+    /// `z <- fl(z - W c)`, `(W c)_i = W_i c_g` for some coefficients `c_g` per group (those of
+    /// the orthogonal projection onto `U`, approximately): every such `z - W c` has the same
+    /// product with every vector of `U`, so any `c` gives a valid residual.
+    fn project(&self, z: &mut [f64]);
+    /// A bound on `||p - (y - W c)||_2` for `p = fl(project(y))` and the `c` it used.
+    fn projection_error(&self, y: &[f64], p: &[f64]) -> f64;
+    /// A bound on `||(I - P)(z - E)||_F` over the columns `z` (`P` the space's projector onto
+    /// `U`, `E` the coarse directions): how far the computed `z` is from the `V'` it stands for.
+    fn off_space(&self, z: &[Vec<f64>]) -> f64;
+}
+
+/// `M = D^T S D` as `3 x 3` blocks with bounds on its forming error and on `|| |M| ||_2`.
+pub(in crate::certify::multiple) struct BlockOperator {
+    diag: Vec<Matrix3<f64>>,
+    edges: Vec<(usize, usize, Matrix3<f64>)>,
+    /// `||fl(M) - M||_2`.
+    form: f64,
+    /// The largest absolute row sum of `fl(M)` (`>= || |fl(M)| ||_2`).
+    row_abs: f64,
+    /// Terms of the longest row of a product.
+    terms: usize,
+}
+
+impl BlockOperator {
+    /// `M` from its blocks: `diag[i] = fl(M_ii)`, `edges` the `(i, j, fl(M_ij))` of `i < j` or
+    /// any order (each stands for `M_ij` and its transpose `M_ji`), `form_rows[i]` at least the
+    /// sum over block row `i` of `||fl(M_ij) - M_ij||_2`, `max_degree` the most edges at a node.
+    pub(in crate::certify::multiple) fn new(
+        diag: Vec<Matrix3<f64>>,
+        edges: Vec<(usize, usize, Matrix3<f64>)>,
+        form_rows: &[f64],
+        max_degree: usize,
+    ) -> Self {
+        let mut row_abs = vec![[0.0f64; 3]; diag.len()];
+        let mut add = |v: usize, b: &Matrix3<f64>| {
+            for (r, sum) in row_abs[v].iter_mut().enumerate() {
+                *sum += b.row(r).abs().sum();
+            }
+        };
+        for (i, j, b) in &edges {
+            add(*i, b);
+            add(*j, &b.transpose());
+        }
+        for (i, b) in diag.iter().enumerate() {
+            add(i, b);
+        }
+        let terms = max_degree + 1;
+        BlockOperator {
+            diag,
+            edges,
+            // symmetric: ||A||_2 <= the largest block row sum of its blocks' norms (twice that)
+            form: 2.0 * form_rows.iter().copied().fold(0.0, f64::max),
+            // each row sum of at most 3 terms + 2 rounded additions
+            row_abs: row_abs.iter().flatten().copied().fold(0.0, f64::max)
+                * (1.0 + gamma(3 * terms + 2)),
+            terms: 3 * terms + 2,
+        }
+    }
+
+    /// `y = fl(M x)`.
+    pub(in crate::certify::multiple) fn times(&self, x: &[f64], y: &mut [f64]) {
+        let block =
+            |v: &[f64], i: usize| nalgebra::Vector3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+        for (i, d) in self.diag.iter().enumerate() {
+            let r = d * block(x, i);
+            y[3 * i..3 * i + 3].copy_from_slice(r.as_slice());
+        }
+        for (i, j, b) in &self.edges {
+            let (xi, xj) = (block(x, *i), block(x, *j));
+            let (ri, rj) = (b * xj, b.transpose() * xi);
+            for a in 0..3 {
+                y[3 * i + a] += ri[a];
+                y[3 * j + a] += rj[a];
+            }
+        }
+    }
+
+    /// A bound on `||fl(M x) - M x||_2` per unit of `||x||_2`.
+    fn product_error(&self) -> f64 {
+        (self.form + gamma(self.terms) * self.row_abs) * (1.0 + 1e-10)
+    }
+
+    /// A bound on `||M||_2`.
+    fn norm(&self) -> f64 {
+        (self.row_abs + self.form) * (1.0 + 1e-10)
+    }
+}
+
+/// The coarse directions' bounds: `rho >= ||Pi M V'||_2` (reported) and
+/// `lambda <= lambda_min(V'^T M V' - (Pi M V')^T (Pi M V') / zeta)`.
+pub(in crate::certify::multiple) struct Coarse {
+    pub rho: f64,
+    pub lambda: f64,
+}
+
+impl Coarse {
+    /// The proven `mu_M <= lambda_min(M)`: `min(0, lambda) kappa^2` (`|a|^2 <= kappa^2 |x|^2`).
+    pub(in crate::certify::multiple) fn mu(&self, kappa: f64) -> f64 {
+        self.lambda.min(0.0) * kappa * kappa * (1.0 + 1e-10)
+    }
+}
+
+/// `V' = E + Pi X` with `X` from conjugate gradients on `Pi M Pi X = -Pi M E` (block-Jacobi,
+/// projected) to the relative residual `rel`, for every group but the last and for the gauge
+/// directions `v0 = sum_g E_g`, the last group's `X` the gauge's less the others' sum (so the
+/// gauge directions of `V'` carry their own correction, whose residual is relative to `Pi M
+/// v0`, small at a critical point, and not the other columns' residuals); then `lambda`
+/// bounded for the exact `V'` of the computed `X` (any `X` is valid: only the bound's size
+/// depends on it).
+pub(in crate::certify::multiple) fn coarse_terms(
+    m: &BlockOperator,
+    groups: &impl CoarseSpace,
+    (zeta, rel, stop_at): (f64, f64, Option<std::time::Instant>),
+) -> Option<Coarse> {
+    let dim = 3 * groups.group_of().len();
+    let cols = 3 * groups.count();
+    let coarse: Vec<Vec<f64>> = (0..cols)
+        .map(|c| {
+            let mut e = vec![0.0; dim];
+            for (i, &g) in groups.group_of().iter().enumerate() {
+                if 3 * g + c % 3 == c {
+                    e[3 * i + c % 3] = 1.0;
+                }
+            }
+            e
+        })
+        .collect();
+    // the columns of every group but the last, then the gauge directions `v0_j`
+    let gauge: Vec<Vec<f64>> = (0..3)
+        .map(|j| (0..dim).map(|r| f64::from(u8::from(r % 3 == j))).collect())
+        .collect();
+    let mut rhs: Vec<Vec<f64>> = Vec::with_capacity(cols);
+    for e in coarse[..cols - 3].iter().chain(&gauge) {
+        let mut y = vec![0.0; dim];
+        m.times(e, &mut y);
+        groups.project(&mut y);
+        y.iter_mut().for_each(|v| *v = -*v);
+        rhs.push(y);
+    }
+    let inverses: Vec<Matrix3<f64>> = m
+        .diag
+        .iter()
+        .map(|d| {
+            d.cholesky()
+                .map(|c| c.inverse())
+                .unwrap_or_else(Matrix3::identity)
+        })
+        .collect();
+    let operator = |x: &[f64], y: &mut [f64]| {
+        let mut p = x.to_vec();
+        groups.project(&mut p);
+        m.times(&p, y);
+        groups.project(y);
+    };
+    let precondition = |r: &[&[f64]], z: &mut [&mut [f64]]| {
+        for (r, z) in r.iter().zip(z.iter_mut()) {
+            for (i, inv) in inverses.iter().enumerate() {
+                let v = inv * nalgebra::Vector3::new(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
+                z[3 * i..3 * i + 3].copy_from_slice(v.as_slice());
+            }
+            groups.project(z);
+        }
+    };
+    let mut x = pcg(
+        &operator,
+        &precondition,
+        &rhs,
+        rel,
+        (CG_MAX_ITERATIONS, stop_at),
+    )?
+    .0;
+    // the last group's: the gauge directions' correction less the other groups'
+    for j in 0..3 {
+        let mut last = x[cols - 3 + j].clone();
+        for xc in x[..cols - 3].iter().skip(j).step_by(3) {
+            last.iter_mut().zip(xc).for_each(|(l, v)| *l -= v);
+        }
+        x[cols - 3 + j] = last;
+    }
+    let z: Vec<Vec<f64>> = coarse
+        .iter()
+        .zip(x)
+        .map(|(e, mut xc)| {
+            groups.project(&mut xc);
+            e.iter().zip(&xc).map(|(a, b)| a + b).collect()
+        })
+        .collect();
+    bound_coarse(m, groups, &z, zeta)
+}
+
+/// `lambda` for the computed columns `z` (`z - E` not exactly in `U`: `V' = E + Pi (z - E)`
+/// differs from `z` by `dz = (I - Pi)(z - E)`, of norm at most `delta`). With `R = Pi M V' =
+/// fl(Pi fl(M z)) + dR`, `||dR|| <= eps` (the product's and the projection's rounding, and
+/// `||M|| delta`): `R^T R <= 2 R'^T R' + 2 eps^2 I`, and `V'^T M V' = z^T M z -
+/// 2 sym(z^T M dz) + dz^T M dz`; the Gram matrices by pairwise sums with their errors.
+fn bound_coarse(
+    m: &BlockOperator,
+    groups: &impl CoarseSpace,
+    z: &[Vec<f64>],
+    zeta: f64,
+) -> Option<Coarse> {
+    let dim = 3 * groups.group_of().len();
+    let cols = z.len();
+    let delta = groups.off_space(z);
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt() * (1.0 + gamma(dim));
+    let (mut ys, mut ps) = (Vec::with_capacity(cols), Vec::with_capacity(cols));
+    let (mut eps_sq, mut y_sq, mut r_sq) = (0.0f64, 0.0f64, 0.0f64);
+    let mut y_errs = Vec::with_capacity(cols);
+    for zc in z {
+        let mut y = vec![0.0; dim];
+        m.times(zc, &mut y);
+        let err = m.product_error() * norm(zc);
+        let ny = norm(&y);
+        let mut p = y.clone();
+        groups.project(&mut p);
+        let np = norm(&p);
+        let e = err + groups.projection_error(&y, &p);
+        eps_sq += e * e;
+        y_sq += ny * ny;
+        r_sq += np * np;
+        y_errs.push(err);
+        ys.push(y);
+        ps.push(p);
+    }
+    let m_norm = m.norm();
+    let eps = (eps_sq.sqrt() + m_norm * delta) * (1.0 + 1e-10);
+    let r_norm = r_sq.sqrt();
+    let rho = (r_norm + eps) * (1.0 + 1e-10);
+    // pairwise sums: the error grows with the depth of the tree, not with `3n` (whose
+    // `gamma(3n)` alone failed 10^5-node graphs in 8 regions)
+    let g_dot = gamma(pairwise_depth(dim) + 2);
+    let mut g = DMatrix::zeros(cols, cols);
+    let mut r = DMatrix::zeros(cols, cols);
+    let (mut g_err_sq, mut r_err_sq) = (0.0f64, 0.0f64);
+    for a in 0..cols {
+        for b in 0..cols {
+            let (s, mag) = pairwise_dot(&z[a], &ys[b]);
+            g[(a, b)] = s;
+            let e = norm(&z[a]) * y_errs[b] + g_dot * mag * (1.0 + g_dot);
+            g_err_sq += e * e;
+            let (s, mag) = pairwise_dot(&ps[a], &ps[b]);
+            r[(a, b)] = s;
+            let e = g_dot * mag * (1.0 + g_dot);
+            r_err_sq += e * e;
+        }
+    }
+    // R^T R <= 2 R'^T R' + 2 eps^2 I: the doubled R'^T R' is small against the flux's
+    // eigenvalues of G, and nearly zero on the gauge directions, where G is too
+    let h = (&g + g.transpose()) * 0.5 - (&r + r.transpose()) * (1.0 / zeta);
+    let h_err = g_err_sq.sqrt()
+        + 2.0 * r_err_sq.sqrt() / zeta
+        + 2.0 * eps * eps / zeta
+        + 4.0 * U * (g.norm() + 2.0 * r.norm() / zeta);
+    let lambda_h = verified_min_eigenvalue(&h)? - h_err;
+    // the columns' own error: V'^T M V' against z^T M z
+    let lambda = (lambda_h - 2.0 * (y_sq.sqrt() + eps_sq.sqrt()) * delta - m_norm * delta * delta)
+        * (1.0 + 1e-10)
+        - f64::MIN_POSITIVE;
+    (rho.is_finite() && lambda.is_finite()).then_some(Coarse { rho, lambda })
+}
+
+/// The length of the plain sums at the leaves of [`pairwise_dot`].
+const PAIRWISE_LEAF: usize = 8;
+
+/// `(fl(x . y), fl(sum |x_i y_i|))` by pairwise summation (Higham, *Accuracy and Stability of
+/// Numerical Algorithms*, 2002, section 4.2): each product passes through at most
+/// [`pairwise_depth`] additions, so `|fl(x . y) - x . y| <= gamma(depth + 1) sum |x_i y_i|`,
+/// and the computed magnitude is within the same factor of the exact one.
+fn pairwise_dot(x: &[f64], y: &[f64]) -> (f64, f64) {
+    if x.len() <= PAIRWISE_LEAF {
+        let (mut s, mut mag) = (0.0f64, 0.0f64);
+        for (a, b) in x.iter().zip(y) {
+            s += a * b;
+            mag += (a * b).abs();
+        }
+        return (s, mag);
+    }
+    let half = x.len() / 2;
+    let (a, b) = pairwise_dot(&x[..half], &y[..half]);
+    let (c, d) = pairwise_dot(&x[half..], &y[half..]);
+    (a + c, b + d)
+}
+
+/// The most additions a term of a sum of `len` passes through in [`pairwise_dot`]: those of
+/// its leaf and one per level above it.
+fn pairwise_depth(len: usize) -> usize {
+    let (mut depth, mut at) = (PAIRWISE_LEAF, len);
+    while at > PAIRWISE_LEAF {
+        at = at.div_ceil(2);
+        depth += 1;
+    }
+    depth
+}
+
+/// A proven lower bound on `lambda_min(a)` of a small symmetric matrix: the dense eigenvalues'
+/// estimate less a margin, proven by a Cholesky factorisation of `fl(a - tau I)` (Higham, Thm
+/// 10.3: the computed factor is exact for `fl(a - tau I) + E`, `|E| <= gamma(d + 1) |L| |L^T|`;
+/// the shift's rounding, at most `u |a_ii - tau|` per diagonal entry, charged too).
+fn verified_min_eigenvalue(a: &DMatrix<f64>) -> Option<f64> {
+    let d = a.nrows();
+    let estimate = crate::linalg::dense::symmetric_eigenvalues(a)?
+        .first()
+        .copied()?;
+    let scale = a.norm().max(f64::MIN_POSITIVE);
+    for margin in [1e-12, 1e-9, 1e-6] {
+        let tau = estimate - margin * scale;
+        let shifted = a - DMatrix::identity(d, d) * tau;
+        if let Some(c) = crate::linalg::dense::DenseCholesky::new(&shifted) {
+            let diagonal = (0..d).map(|i| (a[(i, i)] - tau).abs()).fold(0.0, f64::max);
+            let proven =
+                tau - (gamma(d + 1) * c.factor_norm_squared() + 2.0 * U * diagonal) * (1.0 + 1e-10);
+            if proven.is_finite() {
+                return Some(proven);
+            }
+        }
+    }
+    None
+}
