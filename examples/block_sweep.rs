@@ -9,7 +9,8 @@
 //! A shape is `K` (edges per node) or `K:T` (topped up to the ratio `T`; default: the ladder's
 //! `BLOCK_SHAPES`), e.g. `-- 10000 100000 3 4 2:14` (`paper-notes/anisotropic.md` `[A15]`); with `outliers`, 10 % of
 //! the pairs are wrong and the sweep runs on the edges within 5 degrees of the truth, or, with
-//! `outliers robust` too, on the inliers of the Cauchy solve (the pipeline's inlier graph).
+//! `outliers robust` too, on the inliers of the Cauchy solve (the pipeline's inlier graph);
+//! `regions=K` splits each subgraph into `K` regions (`[A15]`, "Regions"; default 1).
 use rotavg::certify::multiple::block::{BlockAnalysis, BlockShape, block_comparison};
 use rotavg::certify::multiple::multipliers;
 use rotavg::multiple::synthetic::SyntheticAnisotropic;
@@ -24,6 +25,7 @@ fn main() -> rotavg::Result<()> {
     let mut shapes: Vec<BlockShape> = args
         .iter()
         .skip(2)
+        .filter(|a| !a.contains('='))
         .filter_map(|a| {
             let (k, t) = a.split_once(':').unwrap_or((a, "0"));
             Some(BlockShape {
@@ -36,6 +38,10 @@ fn main() -> rotavg::Result<()> {
         shapes = rotavg::certify::multiple::block::rungs::BLOCK_SHAPES.to_vec();
     }
     let outliers = args.iter().any(|a| a == "outliers");
+    let regions: usize = args
+        .iter()
+        .find_map(|a| a.strip_prefix("regions=")?.parse().ok())
+        .unwrap_or(1);
     let (p, truth) =
         SyntheticAnisotropic::two_view_like(n, m, if outliers { 0.1 } else { 0.0 }).generate();
     // with outliers: the graph of the edges within 5 degrees of the truth (the inlier graph a
@@ -77,12 +83,15 @@ fn main() -> rotavg::Result<()> {
     let target = 0.5 * 1e-6 * s.cost / (3 * n) as f64;
     for shape in shapes {
         let t = Instant::now();
-        let Ok(a) = BlockAnalysis::new(&p, &s.rotations, Some(shape), usize::MAX)? else {
+        let Ok(a) = BlockAnalysis::grouped(&p, &s.rotations, Some(shape), regions, usize::MAX)?
+        else {
             continue;
         };
+        let analysed = t.elapsed().as_secs_f64();
         let r = block_comparison(&p, &a, &s.rotations, &lambdas, target)?;
         println!(
-            "{shape}: factor {:.2e} {:.2} s -> {:?}",
+            "{shape}, {} regions: factor {:.2e}, analysis {analysed:.2} s, total {:.2} s -> {:?}",
+            a.groups(),
             a.factor_len() as f64,
             t.elapsed().as_secs_f64(),
             r.map(|b| b.verified_min_eigenvalue)

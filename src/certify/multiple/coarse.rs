@@ -41,6 +41,10 @@ pub(in crate::certify::multiple) trait CoarseSpace {
     fn project(&self, z: &mut [f64]);
     /// A bound on `||p - (y - W c)||_2` for `p = fl(project(y))` and the `c` it used.
     fn projection_error(&self, y: &[f64], p: &[f64]) -> f64;
+    /// `kappa`, with `|a|^2 <= kappa^2 |x|^2` for the weighted means `a` of every group.
+    fn kappa(&self) -> f64;
+    /// `kappa_k` of the last group alone: `|a_k| <= kappa_k |x|`.
+    fn kappa_last(&self) -> f64;
     /// A bound on `||(I - P)(z - E)||_F` over the columns `z` (`P` the space's projector onto
     /// `U`, `E` the coarse directions): how far the computed `z` is from the `V'` it stands for.
     fn off_space(&self, z: &[Vec<f64>]) -> f64;
@@ -113,7 +117,7 @@ impl BlockOperator {
     }
 
     /// A bound on `||fl(M x) - M x||_2` per unit of `||x||_2`.
-    fn product_error(&self) -> f64 {
+    pub(in crate::certify::multiple) fn product_error(&self) -> f64 {
         (self.form + gamma(self.terms) * self.row_abs) * (1.0 + 1e-10)
     }
 
@@ -128,12 +132,16 @@ impl BlockOperator {
 pub(in crate::certify::multiple) struct Coarse {
     pub rho: f64,
     pub lambda: f64,
+    /// `|b|^2 <= scale |a|^2` for the coefficients `b` the bound `x^T M x >= min(0, lambda)
+    /// |b|^2` is in.
+    pub scale: f64,
 }
 
 impl Coarse {
-    /// The proven `mu_M <= lambda_min(M)`: `min(0, lambda) kappa^2` (`|a|^2 <= kappa^2 |x|^2`).
+    /// The proven `mu_M <= lambda_min(M)`: `min(0, lambda) scale kappa^2` (`|a|^2 <= kappa^2
+    /// |x|^2`).
     pub(in crate::certify::multiple) fn mu(&self, kappa: f64) -> f64 {
-        self.lambda.min(0.0) * kappa * kappa * (1.0 + 1e-10)
+        self.lambda.min(0.0) * self.scale * kappa * kappa * (1.0 + 1e-10)
     }
 }
 
@@ -151,7 +159,89 @@ pub(in crate::certify::multiple) fn coarse_terms(
 ) -> Option<Coarse> {
     let dim = 3 * groups.group_of().len();
     let cols = 3 * groups.count();
-    let coarse: Vec<Vec<f64>> = (0..cols)
+    let coarse = coarse_columns(groups, cols);
+    // the columns of every group but the last, then the gauge directions `v0_j`
+    let gauge: Vec<Vec<f64>> = (0..3)
+        .map(|j| (0..dim).map(|r| f64::from(u8::from(r % 3 == j))).collect())
+        .collect();
+    let targets: Vec<&Vec<f64>> = coarse[..cols - 3].iter().chain(&gauge).collect();
+    let mut x = corrections(m, groups, &targets, (rel, stop_at))?;
+    // the last group's: the gauge directions' correction less the other groups'
+    for j in 0..3 {
+        let mut last = x[cols - 3 + j].clone();
+        for xc in x[..cols - 3].iter().skip(j).step_by(3) {
+            last.iter_mut().zip(xc).for_each(|(l, v)| *l -= v);
+        }
+        x[cols - 3 + j] = last;
+    }
+    let z = corrected(groups, &coarse, x);
+    let (lambda, rho, _) = bound_coarse(m, groups, &z, zeta)?;
+    Some(Coarse {
+        rho,
+        lambda,
+        scale: 1.0,
+    })
+}
+
+/// The gauge directions' own bounds, from the data in double-double (`[D15]`):
+/// `rho1 >= ||M v0||_F` and `v0^T M v0 >= -rho0 I`.
+#[derive(Debug, Clone, Copy)]
+pub(in crate::certify::multiple) struct GaugeBounds {
+    pub rho0: f64,
+    pub rho1: f64,
+}
+
+/// The coarse bound with the gauge directions bounded apart (`[A15]`, "Regions"): in the basis
+/// `b = (a_1 - a_k, ..., a_{k-1} - a_k, a_k)` of the coarse coefficients (`|b|^2 <= (2k - 1)
+/// |a|^2`) the coarse directions are the first `k - 1` groups' `E_g` (corrected as in
+/// [`coarse_terms`], their `G_f - 2 R_f^T R_f / zeta` bounded by `lambda_f`) and `v0`, for
+/// which `R_v = M v0` (valid: `y^T M v0 = y^T R_v`), so `||R_v|| <= rho1`, `v0^T M v0 >=
+/// -rho0`, and the cross block `B = V_f'^T M v0` has `||B|| <= ||V_f'||_F rho1`. With
+/// `R^T R <= 2 blkdiag(R_f^T R_f, R_v^T R_v)` and `2 b_f^T B b_v >= -||B||^2 |b_f|^2 / t -
+/// t |b_v|^2`: `lambda = min(lambda_f - ||B||^2 / t, -rho0 - 2 rho1^2 / zeta - t)`, `t =
+/// 2 ||B||^2 / lambda_f` when `lambda_f > 0`. Where the estimate's stationarity is far below
+/// rounding of `M`'s products (anisotropic information, weights of `1e5`), the gauge entries
+/// of a computed `V'^T M V'` would carry errors of `|M| |v0|^2 u`; these need none.
+pub(in crate::certify::multiple) fn coarse_terms_gauged(
+    m: &BlockOperator,
+    groups: &impl CoarseSpace,
+    gauge: GaugeBounds,
+    (zeta, rel, stop_at): (f64, f64, Option<std::time::Instant>),
+) -> Option<Coarse> {
+    let cols = 3 * groups.count() - 3;
+    let coarse = coarse_columns(groups, cols);
+    let targets: Vec<&Vec<f64>> = coarse.iter().collect();
+    let (lambda_f, rho_f, z_norm) = if cols == 0 {
+        (f64::INFINITY, 0.0, 0.0)
+    } else {
+        let x = corrections(m, groups, &targets, (rel, stop_at))?;
+        let z = corrected(groups, &coarse, x);
+        let z_norm = z.iter().flatten().map(|v| v * v).sum::<f64>().sqrt()
+            * (1.0 + gamma(3 * z.len() * groups.group_of().len()));
+        // R_f^T R_f against zeta / 2: the factor 2 of the split of R^T R
+        let (lambda_f, rho_f, delta) = bound_coarse(m, groups, &z, 0.5 * zeta)?;
+        (lambda_f, rho_f, z_norm + delta)
+    };
+    let b = z_norm * gauge.rho1 * (1.0 + 4.0 * U);
+    let gauge_part = -gauge.rho0 - 2.0 * gauge.rho1 * gauge.rho1 / zeta;
+    let rho = rho_f.max(gauge.rho1);
+    // the flux part nonnegative: only b_v = a_k is left, |a_k| <= kappa_k |x|
+    let (lambda, scale) = if lambda_f > 0.0 {
+        let t = 2.0 * b * b / lambda_f;
+        let (kappa, last) = (groups.kappa(), groups.kappa_last());
+        (gauge_part - t, (last / kappa).powi(2) * (1.0 + 1e-10))
+    } else {
+        let lambda = (lambda_f - b).min(gauge_part - b);
+        (lambda, (2 * groups.count() - 1) as f64)
+    };
+    let lambda = lambda * (1.0 + 1e-10);
+    (lambda.is_finite() && scale.is_finite()).then_some(Coarse { rho, lambda, scale })
+}
+
+/// The first `cols` coarse directions `E_c` (column `c`: coordinate `c % 3` on group `c / 3`).
+fn coarse_columns(groups: &impl CoarseSpace, cols: usize) -> Vec<Vec<f64>> {
+    let dim = 3 * groups.group_of().len();
+    (0..cols)
         .map(|c| {
             let mut e = vec![0.0; dim];
             for (i, &g) in groups.group_of().iter().enumerate() {
@@ -161,13 +251,20 @@ pub(in crate::certify::multiple) fn coarse_terms(
             }
             e
         })
-        .collect();
-    // the columns of every group but the last, then the gauge directions `v0_j`
-    let gauge: Vec<Vec<f64>> = (0..3)
-        .map(|j| (0..dim).map(|r| f64::from(u8::from(r % 3 == j))).collect())
-        .collect();
-    let mut rhs: Vec<Vec<f64>> = Vec::with_capacity(cols);
-    for e in coarse[..cols - 3].iter().chain(&gauge) {
+        .collect()
+}
+
+/// `X` from conjugate gradients on `Pi M Pi X = -Pi M T` for the columns `T` (block-Jacobi,
+/// projected) to the relative residual `rel`, stopping at `stop_at`.
+fn corrections(
+    m: &BlockOperator,
+    groups: &impl CoarseSpace,
+    targets: &[&Vec<f64>],
+    (rel, stop_at): (f64, Option<std::time::Instant>),
+) -> Option<Vec<Vec<f64>>> {
+    let dim = 3 * groups.group_of().len();
+    let mut rhs: Vec<Vec<f64>> = Vec::with_capacity(targets.len());
+    for e in targets {
         let mut y = vec![0.0; dim];
         m.times(e, &mut y);
         groups.project(&mut y);
@@ -198,34 +295,31 @@ pub(in crate::certify::multiple) fn coarse_terms(
             groups.project(z);
         }
     };
-    let mut x = pcg(
-        &operator,
-        &precondition,
-        &rhs,
-        rel,
-        (CG_MAX_ITERATIONS, stop_at),
-    )?
-    .0;
-    // the last group's: the gauge directions' correction less the other groups'
-    for j in 0..3 {
-        let mut last = x[cols - 3 + j].clone();
-        for xc in x[..cols - 3].iter().skip(j).step_by(3) {
-            last.iter_mut().zip(xc).for_each(|(l, v)| *l -= v);
-        }
-        x[cols - 3 + j] = last;
-    }
-    let z: Vec<Vec<f64>> = coarse
+    Some(
+        pcg(
+            &operator,
+            &precondition,
+            &rhs,
+            rel,
+            (CG_MAX_ITERATIONS, stop_at),
+        )?
+        .0,
+    )
+}
+
+/// The columns `z = E + fl(project(X))`.
+fn corrected(groups: &impl CoarseSpace, coarse: &[Vec<f64>], x: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+    coarse
         .iter()
         .zip(x)
         .map(|(e, mut xc)| {
             groups.project(&mut xc);
             e.iter().zip(&xc).map(|(a, b)| a + b).collect()
         })
-        .collect();
-    bound_coarse(m, groups, &z, zeta)
+        .collect()
 }
 
-/// `lambda` for the computed columns `z` (`z - E` not exactly in `U`: `V' = E + Pi (z - E)`
+/// `(lambda, rho, delta)` for the computed columns `z` (`z - E` not exactly in `U`: `V' = E + Pi (z - E)`
 /// differs from `z` by `dz = (I - Pi)(z - E)`, of norm at most `delta`). With `R = Pi M V' =
 /// fl(Pi fl(M z)) + dR`, `||dR|| <= eps` (the product's and the projection's rounding, and
 /// `||M|| delta`): `R^T R <= 2 R'^T R' + 2 eps^2 I`, and `V'^T M V' = z^T M z -
@@ -235,7 +329,7 @@ fn bound_coarse(
     groups: &impl CoarseSpace,
     z: &[Vec<f64>],
     zeta: f64,
-) -> Option<Coarse> {
+) -> Option<(f64, f64, f64)> {
     let dim = 3 * groups.group_of().len();
     let cols = z.len();
     let delta = groups.off_space(z);
@@ -293,7 +387,7 @@ fn bound_coarse(
     let lambda = (lambda_h - 2.0 * (y_sq.sqrt() + eps_sq.sqrt()) * delta - m_norm * delta * delta)
         * (1.0 + 1e-10)
         - f64::MIN_POSITIVE;
-    (rho.is_finite() && lambda.is_finite()).then_some(Coarse { rho, lambda })
+    (rho.is_finite() && lambda.is_finite()).then_some((lambda, rho, delta))
 }
 
 /// The length of the plain sums at the leaves of [`pairwise_dot`].

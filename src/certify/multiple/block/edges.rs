@@ -56,13 +56,42 @@ fn edge_parts(
     r_i: &Rotation,
     r_j: &Rotation,
 ) -> (Matrix3<f64>, Matrix3<f64>, f64) {
-    let f = h.twice_chordal_matrix();
-    let e = r_i.matrix().transpose() * (f * (r_ij.matrix().transpose() * r_j.matrix()));
+    let (e, eta) = edge_matrix(h, r_ij, r_i, r_j);
     let s = symmetrize(&e);
     let k = 0.5 * (e - e.transpose());
+    (s, k, eta)
+}
+
+/// `fl(E_e)`, `E_e = R_i^T F R_ij^T R_j` (`M_ij = -E_e`), and `eta_e`, at least its error in
+/// the 2-norm (and the error of its symmetric and skew parts, [`EDGE_ERROR_PER_TRACE`]).
+pub(super) fn edge_matrix(
+    h: &Information,
+    r_ij: &Rotation,
+    r_i: &Rotation,
+    r_j: &Rotation,
+) -> (Matrix3<f64>, f64) {
+    let f = h.twice_chordal_matrix();
+    let e = r_i.matrix().transpose() * (f * (r_ij.matrix().transpose() * r_j.matrix()));
     let trace = h.matrix().trace().abs() * (1.0 + gamma(3));
     let eta = EDGE_ERROR_PER_TRACE * gamma(3) * trace * (1.0 + 4.0 * UNIT_ROUNDOFF);
-    (s, k, eta)
+    (e, eta)
+}
+
+/// `fl(M_ii)`, `M_ii = R_i^T (sum_e F_e - sym(Lambda_i)) R_i` over the edges `F_e` at node
+/// `i` (`traces`: their `sum_e tr(H_e)`, `degree` their number), and a bound on its error in
+/// the 2-norm: three times [`NodeSums::rest_of_block`]'s entrywise bound of the products.
+pub(super) fn diagonal_block(
+    rotation: &Rotation,
+    lambda: &Matrix3<f64>,
+    f_sum: &Matrix3<f64>,
+    (traces, degree): (f64, usize),
+) -> (Matrix3<f64>, f64) {
+    let r = rotation.matrix();
+    let lam = symmetrize(lambda);
+    let block = r.transpose() * (f_sum - lam) * r;
+    let scale = 1.01 * traces + lam.amax();
+    let entry = 18.4 * gamma(degree + 12) * scale + gamma(2) * lambda.amax();
+    (block, 3.0 * entry * (1.0 + 4.0 * UNIT_ROUNDOFF))
 }
 
 /// The edge's symmetric part `S_e` at the estimate (its strength in the comparison) and an

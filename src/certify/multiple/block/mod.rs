@@ -27,14 +27,16 @@
 //!    the headroom `h` above its rigorous backward error plus the forming error (Weyl).
 
 mod edges;
+mod groups;
 mod outcome;
 pub mod rungs;
 mod subgraph;
 #[cfg(test)]
 mod tests;
 
-use super::multipliers::gauge_terms;
-use super::scalar::{fro, orthogonality_defect, subgraph_edges};
+use super::coarse::COARSE_RELATIVE_RESIDUAL;
+use super::multipliers::{GaugeTerms, gauge_terms};
+use super::scalar::{components, fro, orthogonality_defect, partition, subgraph_edges_within};
 use crate::error::{Error, Result};
 use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::cholesky::{UNIT_ROUNDOFF, gamma};
@@ -45,6 +47,7 @@ use crate::so3::Rotation;
 use faer::sparse::linalg::cholesky::SymbolicCholesky;
 use nalgebra::Matrix3;
 pub use outcome::{BlockComparison, BlockFailure};
+pub use rungs::{BLOCK_GROUP_NODES, block_groups};
 pub use subgraph::{BlockShape, TOP_UP_MAX_EDGES};
 
 /// The factorised structure of a block comparison: the block Laplacian pattern of a subgraph
@@ -57,6 +60,11 @@ pub struct BlockAnalysis {
     slots: Vec<usize>,
     shape: Option<BlockShape>,
     num_rotations: usize,
+    /// Each node's component of the kept edges when the subgraph is split into regions
+    /// (`[A15]`, "Regions"; empty otherwise).
+    components: Vec<usize>,
+    /// The regions asked for (0 without).
+    regions: usize,
 }
 
 impl BlockAnalysis {
@@ -71,19 +79,51 @@ impl BlockAnalysis {
         shape: Option<BlockShape>,
         max_values: usize,
     ) -> Result<std::result::Result<Self, usize>> {
+        Self::grouped(problem, rotations, shape, 1, max_values)
+    }
+
+    /// The subgraph of `shape` in `groups` connected regions (`[A15]`, "Regions";
+    /// `scalar/partition.rs`): each region's own edges chosen as in [`BlockAnalysis::new`],
+    /// the edges between regions dropped (charged), every region's pencil proven apart and
+    /// the regions' coarse directions bounded by the shared coarse correction. Its factor
+    /// fills like a graph `groups` times smaller. `groups <= 1`, or a whole graph (`shape`
+    /// `None`): [`BlockAnalysis::new`]. Refused like it.
+    pub fn grouped(
+        problem: &MultipleProblem,
+        rotations: &[Rotation],
+        shape: Option<BlockShape>,
+        groups: usize,
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
         problem.check_estimate(rotations)?;
-        let keep = match shape {
-            Some(s) if valid(s.edges_per_node) && valid(s.top_up) => match problem.information() {
-                Some(info) => subgraph::strong_subgraph_edges(problem, info, rotations, s),
-                None => subgraph_edges(problem, rotations, s.edges_per_node),
-            },
-            Some(s) => {
+        let (region, keep) = match (shape, problem.information()) {
+            (Some(s), _) if !(valid(s.edges_per_node) && valid(s.top_up)) => {
                 return Err(Error::InvalidSettings {
                     name: "shape".into(),
                     reason: format!("edges per node and top-up must be numbers >= 0, got {s:?}"),
                 });
             }
-            None => vec![true; problem.num_edges()],
+            (Some(s), Some(info)) if groups > 1 => {
+                let (region, keep) =
+                    subgraph::strong_regions(problem, info, rotations, (s, groups));
+                (Some(region), keep)
+            }
+            (Some(s), Some(info)) => (
+                None,
+                subgraph::strong_subgraph_edges(problem, info, rotations, s),
+            ),
+            (Some(s), None) if groups > 1 => {
+                let region = partition(problem, groups);
+                let edges = problem.edges();
+                let within = |k: usize| region[edges[k].i] == region[edges[k].j];
+                let keep = subgraph_edges_within(problem, rotations, s.edges_per_node, &within);
+                (Some(region), keep)
+            }
+            (Some(s), None) => (
+                None,
+                subgraph_edges_within(problem, rotations, s.edges_per_node, &|_| true),
+            ),
+            (None, _) => (None, vec![true; problem.num_edges()]),
         };
         let n = problem.num_rotations();
         let kept = || {
@@ -111,6 +151,13 @@ impl BlockAnalysis {
                 }
             })
             .collect();
+        let components = match region {
+            Some(_) => {
+                let left_out: Vec<bool> = keep.iter().map(|k| !k).collect();
+                largest_last(components(problem, &left_out))
+            }
+            None => Vec::new(),
+        };
         Ok(Ok(BlockAnalysis {
             keep,
             pattern,
@@ -118,7 +165,33 @@ impl BlockAnalysis {
             slots,
             shape,
             num_rotations: n,
+            regions: if region.is_some() { groups } else { 0 },
+            components,
         }))
+    }
+
+    /// The components its comparison proves apart: the regions of [`BlockAnalysis::grouped`]
+    /// (at least one each), 0 for any other analysis.
+    pub fn groups(&self) -> usize {
+        self.components.iter().max().map_or(0, |m| m + 1)
+    }
+
+    /// The regions it was split into (0 without; each holds at least one component).
+    pub fn regions(&self) -> usize {
+        self.regions
+    }
+
+    /// Values of the coarse correction's vectors (0 without regions): `3` columns of length
+    /// `3n` per region in its conjugate gradients' seven vectors.
+    pub fn coarse_values(&self) -> usize {
+        (3 * self.groups())
+            .saturating_mul(3 * self.num_rotations)
+            .saturating_mul(7)
+    }
+
+    /// The negative pivots its factorisation must show: three per component.
+    pub(super) fn expected_negative_pivots(&self) -> usize {
+        3 * self.groups().max(1)
     }
 
     /// Stored values of the factor.
@@ -157,6 +230,26 @@ impl BlockAnalysis {
     }
 }
 
+/// The components renumbered so that the largest is the last (its `kappa` is the one the
+/// coarse bound's gauge directions take, `[A15]` "Regions").
+fn largest_last(mut of: Vec<usize>) -> Vec<usize> {
+    let count = of.iter().max().map_or(0, |m| m + 1);
+    let mut size = vec![0usize; count];
+    of.iter().for_each(|&g| size[g] += 1);
+    let Some(largest) = (0..count).max_by_key(|&g| (size[g], std::cmp::Reverse(g))) else {
+        return of;
+    };
+    let last = count - 1;
+    for g in of.iter_mut() {
+        if *g == largest {
+            *g = last;
+        } else if *g == last {
+            *g = largest;
+        }
+    }
+    of
+}
+
 /// A finite number `>= 0`.
 fn valid(x: f64) -> bool {
     x.is_finite() && x >= 0.0
@@ -172,6 +265,40 @@ pub fn block_comparison(
     rotations: &[Rotation],
     lambdas: &[Matrix3<f64>],
     target: f64,
+) -> Result<std::result::Result<BlockComparison, BlockFailure>> {
+    block_comparison_until(problem, analysis, rotations, lambdas, (target, None))
+}
+
+/// [`block_comparison`] whose coarse correction (an analysis in regions,
+/// [`BlockAnalysis::grouped`]) stops its conjugate gradients at `stop_at`: a weaker bound,
+/// still proven.
+pub fn block_comparison_until(
+    problem: &MultipleProblem,
+    analysis: &BlockAnalysis,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+    (target, stop_at): (f64, Option<std::time::Instant>),
+) -> Result<std::result::Result<BlockComparison, BlockFailure>> {
+    let n = problem.num_rotations();
+    if rotations.len() != n || lambdas.len() != n || analysis.num_rotations != n {
+        return Err(Error::InvalidSettings {
+            name: "rotations".into(),
+            reason: "block comparison needs one rotation and one multiplier per node".into(),
+        });
+    }
+    let gauge = gauge_terms(problem, rotations, lambdas);
+    let points = (rotations, lambdas);
+    block_comparison_with(problem, analysis, points, (target, stop_at), &gauge)
+}
+
+/// [`block_comparison_until`] with the gauge terms `[D15]` of `S` at these rotations and
+/// multipliers already made (the ladder's check keeps them).
+pub(in crate::certify::multiple) fn block_comparison_with(
+    problem: &MultipleProblem,
+    analysis: &BlockAnalysis,
+    (rotations, lambdas): (&[Rotation], &[Matrix3<f64>]),
+    (target, stop_at): (f64, Option<std::time::Instant>),
+    gauge: &GaugeTerms,
 ) -> Result<std::result::Result<BlockComparison, BlockFailure>> {
     let n = problem.num_rotations();
     let Some(information) = problem.information() else {
@@ -192,30 +319,41 @@ pub fn block_comparison(
             reason: "the block analysis was made for a different view graph".into(),
         });
     }
+    let points = (rotations, lambdas);
+    if analysis.groups() > 0 {
+        let coarse = (COARSE_RELATIVE_RESIDUAL, stop_at);
+        return Ok(groups::compare_grouped(
+            (problem, information),
+            analysis,
+            points,
+            coarse,
+            gauge,
+        ));
+    }
     Ok(compare(
-        problem,
-        information,
+        (problem, information),
         analysis,
-        rotations,
-        lambdas,
+        points,
         target,
+        gauge,
     ))
 }
 
 /// Steps 1 to 5 on consistent inputs.
 fn compare(
-    problem: &MultipleProblem,
-    information: &[crate::multiple::anisotropic::Information],
+    (problem, information): (
+        &MultipleProblem,
+        &[crate::multiple::anisotropic::Information],
+    ),
     analysis: &BlockAnalysis,
-    rotations: &[Rotation],
-    lambdas: &[Matrix3<f64>],
+    (rotations, lambdas): (&[Rotation], &[Matrix3<f64>]),
     target: f64,
+    gauge: &GaugeTerms,
 ) -> std::result::Result<BlockComparison, BlockFailure> {
     let u = UNIT_ROUNDOFF;
     let t_max = orthogonality_defect(rotations).map_err(|_| BlockFailure::NotOrthogonal)?;
     let c = edges::edge_blocks(problem, information, rotations, lambdas, &analysis.keep)?;
     // step 3: ||M v0|| <= ||D|| ||S Y||_F, -lambda_min(Y^T S Y) <= h
-    let gauge = gauge_terms(problem, rotations, lambdas);
     let rho1 = gauge.rho * (1.0 + t_max) * (1.0 + 4.0 * u);
     let rho0 = gauge.h;
     // step 4: zeta makes the absorbed cross terms at most target / 4 (kappa at a tiny zeta
@@ -227,13 +365,7 @@ fn compare(
     } else {
         tiny
     };
-    let weights: Vec<Matrix3<f64>> = c
-        .delta
-        .iter()
-        .map(|d| d + Matrix3::identity() * zeta)
-        .collect();
-    let w_max = weights.iter().map(|w| w.amax()).fold(0.0, f64::max);
-    let zeta_free = (zeta - 2.0 * u * w_max) * (1.0 - 4.0 * u);
+    let (weights, zeta_free) = pencil_weights(&c.delta, zeta);
     let (headroom, backward_error) = prove_inertia(analysis, problem, &c, &weights)?;
     let kappa = block_kappa(&c.delta, zeta).ok_or(BlockFailure::Numerical)?;
     let nf = problem.num_rotations() as f64;
@@ -244,21 +376,65 @@ fn compare(
         f64::NEG_INFINITY
     };
     let mu_m = plain.max(absorbed) * (1.0 + 1e-10);
-    let mu = mu_m / (1.0 - t_max) * (1.0 + 1e-10);
-    if !mu.is_finite() {
-        return Err(BlockFailure::Numerical);
-    }
-    Ok(BlockComparison {
-        verified_min_eigenvalue: mu.min(0.0),
-        max_delta: c.delta.iter().map(|d| d.norm()).fold(0.0, f64::max),
-        dropped_edges: analysis.dropped_edges(),
+    let proven = Proven {
+        mu_m,
+        t_max,
         zeta,
-        headroom,
-        backward_error,
-        factor_nonzeros: analysis.factor_len(),
+        inertia: (headroom, backward_error),
         kappa,
         residual_bound: rho1,
-    })
+    };
+    proven.outcome(&c, analysis)
+}
+
+/// The pencil's weights `W_i = fl(Delta_i + zeta I)` and `zeta'`, the part of `zeta` left in
+/// them after their rounding (`fl(Delta_i + zeta I) >= Delta_i + zeta I - u |W_i|`, twice that
+/// for safety).
+fn pencil_weights(delta: &[Matrix3<f64>], zeta: f64) -> (Vec<Matrix3<f64>>, f64) {
+    let u = UNIT_ROUNDOFF;
+    let weights: Vec<Matrix3<f64>> = delta
+        .iter()
+        .map(|d| d + Matrix3::identity() * zeta)
+        .collect();
+    let w_max = weights.iter().map(|w| w.amax()).fold(0.0, f64::max);
+    (weights, (zeta - 2.0 * u * w_max) * (1.0 - 4.0 * u))
+}
+
+/// What steps 2-5 proved: `mu_M <= lambda_min(M)` and the quantities the report carries.
+struct Proven {
+    mu_m: f64,
+    t_max: f64,
+    zeta: f64,
+    /// The headroom and the backward error of the inertia's factorisation.
+    inertia: (f64, f64),
+    kappa: f64,
+    residual_bound: f64,
+}
+
+impl Proven {
+    /// Step 1 (Ostrowski): `lambda_min(S) >= mu_M / (1 - t_max)`, and the report.
+    fn outcome(
+        self,
+        c: &edges::EdgeBlocks,
+        analysis: &BlockAnalysis,
+    ) -> std::result::Result<BlockComparison, BlockFailure> {
+        let mu = self.mu_m / (1.0 - self.t_max) * (1.0 + 1e-10);
+        if !mu.is_finite() {
+            return Err(BlockFailure::Numerical);
+        }
+        Ok(BlockComparison {
+            verified_min_eigenvalue: mu.min(0.0),
+            max_delta: c.delta.iter().map(|d| d.norm()).fold(0.0, f64::max),
+            dropped_edges: analysis.dropped_edges(),
+            zeta: self.zeta,
+            headroom: self.inertia.0,
+            backward_error: self.inertia.1,
+            factor_nonzeros: analysis.factor_len(),
+            kappa: self.kappa,
+            residual_bound: self.residual_bound,
+            regions: analysis.groups(),
+        })
+    }
 }
 
 /// `kappa >= ||sum_i W_i x_i|| / (lambda_min(sum_i W_i) |x|)` for the weights
@@ -336,7 +512,7 @@ fn factor_inertia(
     }
     let inertia = ldlt_inertia(&analysis.symbolic, pattern.matrix(&val))
         .map_err(|_| BlockFailure::Numerical)?;
-    if inertia.negative != 3 {
+    if inertia.negative != analysis.expected_negative_pivots() {
         return Err(BlockFailure::Inertia {
             negative_pivots: inertia.negative,
         });

@@ -21,8 +21,12 @@ pub struct BlockComparison {
     pub factor_nonzeros: usize,
     /// `kappa = ||w||_2 / sum(w)` (step 4).
     pub kappa: f64,
-    /// Upper bound on `||M v0||_F` (the stationarity part, step 3).
+    /// Upper bound on `||M v0||_F` (the stationarity part, step 3), or for a subgraph in
+    /// regions on the coarse correction's residual `||R||_2`.
     pub residual_bound: f64,
+    /// The regions whose pencils were proven apart (`[A15]`, "Regions"; 0: one pencil, step 4).
+    #[serde(default)]
+    pub regions: usize,
 }
 
 /// Why a block comparison did not prove anything: the scalar comparison's reasons (its

@@ -4,7 +4,7 @@
 //! Anisotropic problems only (the scalar comparison `[D13]` is the isotropic form).
 
 use super::outcome::BlockFailure;
-use super::{BlockAnalysis, BlockShape, block_comparison};
+use super::{BlockAnalysis, BlockShape, block_comparison_with};
 use crate::certify::log::{Outcome, Prediction, Refusal};
 use crate::certify::multiple::check::{Check, counted_prediction};
 use crate::certify::multiple::scalar::ScalarAnalysis;
@@ -46,6 +46,55 @@ pub const BLOCK_SHAPES: [BlockShape; 4] = [
     },
 ];
 
+/// The nodes per region of a large graph's block subgraphs ([`block_groups`]).
+pub const BLOCK_GROUP_NODES: usize = 5000;
+
+/// The most regions of a block subgraph. Measured on the realistic two-view class (random view
+/// graphs of 10 edges per node, 2026-12-03, `block_sweep -- 10000 100000 2:14 regions=K`):
+/// 2 regions prove the least-squares solution and the robust solve's inlier graph (7.3-7.8e7
+/// factor values, 5.0-5.4 s, against 1.29-1.37e8 and 10.2-11.2 s whole), 3 regions leave 3
+/// and 16 negative pivots too many, 4 regions 38 and 115; at 2x10^4 cameras 2 regions prove
+/// (3.1e8 values, 35 s) and 4 leave 108 too many. A random graph has no small separators, so
+/// more regions drop more of each node's strong edges.
+pub const BLOCK_MAX_GROUPS: usize = 2;
+
+/// The regions the block comparison's subgraphs of `problem` are split into first
+/// ([`BlockAnalysis::grouped`]): one per [`BLOCK_GROUP_NODES`] nodes, at most
+/// [`BLOCK_MAX_GROUPS`]; 1 (no split) below twice that.
+pub fn block_groups(problem: &crate::multiple::MultipleProblem) -> usize {
+    (problem.num_rotations() / BLOCK_GROUP_NODES).clamp(1, BLOCK_MAX_GROUPS)
+}
+
+/// The coarse correction's work per edge and column (its conjugate gradients: products with
+/// `M` and projections), as the scalar comparison's.
+const SECONDS_PER_EDGE_COLUMN: f64 = 4e-7;
+
+/// The `index`-th subgraph the rung tries on `problem` and its regions: the shapes of
+/// [`BLOCK_SHAPES`] in regions where [`block_groups`] splits the graph, then the same shapes
+/// whole; `None` past the last.
+fn attempt(
+    problem: &crate::multiple::MultipleProblem,
+    index: usize,
+) -> Option<(BlockShape, usize)> {
+    let groups = block_groups(problem);
+    let shapes = BLOCK_SHAPES.len();
+    match (groups > 1, index) {
+        (true, i) if i < shapes => Some((BLOCK_SHAPES[i], groups)),
+        (true, i) => BLOCK_SHAPES.get(i - shapes).map(|&s| (s, 1)),
+        (false, i) => BLOCK_SHAPES.get(i).map(|&s| (s, 1)),
+    }
+}
+
+/// The index after the family (in regions, or whole) that `index` belongs to.
+fn family_end(problem: &crate::multiple::MultipleProblem, index: usize) -> usize {
+    let shapes = BLOCK_SHAPES.len();
+    if block_groups(problem) > 1 && index < shapes {
+        shapes
+    } else {
+        usize::MAX
+    }
+}
+
 /// The comparison's work besides the factorisation, per edge (the `6 x 6` checks, the
 /// double-double gauge terms and the choice of the subgraph): measured 2.3e-5 s on the
 /// 10^4-camera case above (0.23 s of choice and analysis, 0.4 s of edge checks for 10^5 edges).
@@ -56,7 +105,7 @@ pub const SECONDS_PER_EDGE: f64 = 2.3e-5;
 /// failures make it unlikely to prove.
 #[derive(Default)]
 pub(in crate::certify::multiple) struct BlockFamily {
-    /// The next entry of [`BLOCK_SHAPES`] to analyse.
+    /// The next [`attempt`] to analyse.
     next: usize,
     /// The subgraph the next attempt runs, analysed by the plan.
     pending: Option<BlockAnalysis>,
@@ -108,7 +157,8 @@ impl<'a> Rung<Check<'a>> for BlockFamily {
                 Err(failure) => {
                     match failure {
                         Some(BlockFailure::Inertia { negative_pivots }) => {
-                            self.next += skipped_subgraphs(negative_pivots);
+                            let end = family_end(cx.problem, self.next.saturating_sub(1));
+                            self.next = (self.next + skipped_subgraphs(negative_pivots)).min(end);
                             self.failures.push(negative_pivots);
                         }
                         // not a question of the subgraph: the denser ones fail alike
@@ -181,13 +231,13 @@ impl BlockFamily {
             .settings
             .budget
             .max_factor_values(3 * cx.problem.num_rotations());
-        while self.next < BLOCK_SHAPES.len() {
-            let shape = BLOCK_SHAPES[self.next];
+        while let Some((shape, groups)) = attempt(cx.problem, self.next) {
+            let end = family_end(cx.problem, self.next);
             self.next += 1;
-            match BlockAnalysis::new(cx.problem, rotations, Some(shape), max_values)? {
+            match BlockAnalysis::grouped(cx.problem, rotations, Some(shape), groups, max_values)? {
                 Ok(a) if predict(cx.settings, &a).is_ok() => return Ok(Some(a)),
                 // denser subgraphs have larger factors
-                _ => self.next = BLOCK_SHAPES.len(),
+                _ => self.next = end,
             }
         }
         Ok(None)
@@ -224,10 +274,13 @@ fn predict(
     a: &BlockAnalysis,
 ) -> std::result::Result<Prediction, Refusal> {
     let values = a.factor_len().saturating_add(a.scratch_bytes().div_ceil(8));
-    let other = SECONDS_PER_EDGE * a.num_edges() as f64;
+    let largest = values.max(a.coarse_values());
+    let columns = 3 * a.groups();
+    let other =
+        (SECONDS_PER_EDGE + SECONDS_PER_EDGE_COLUMN * columns as f64) * a.num_edges() as f64;
     counted_prediction(
         settings,
-        values,
+        largest,
         values,
         a.factor_multiply_adds(),
         a.factor_len(),
@@ -246,13 +299,20 @@ fn run(
 ) -> Result<std::result::Result<VerifiedBound, Option<BlockFailure>>> {
     let since = Instant::now();
     cx.notes().factorizations += 1;
-    let outcome = block_comparison(cx.problem, a, rotations, cx.lambdas, target)?;
+    let until = (target, cx.deadline.instant());
+    let gauge = cx.gauge_terms(rotations);
+    let points = (rotations, cx.lambdas);
+    let outcome = block_comparison_with(cx.problem, a, points, until, gauge)?;
     let proof = match outcome {
         Ok(p) if p.verified_min_eigenvalue >= -target => p,
         other => {
             let failed = other.as_ref().err().cloned();
             let mu = other.map(|p| p.verified_min_eigenvalue);
-            let reason = format!("{}: {}", shape_of(a), failure_text(target, mu, 3));
+            let reason = format!(
+                "{}: {}",
+                shape_of(a),
+                failure_text(target, mu, a.expected_negative_pivots())
+            );
             let outcome = Outcome::Failed { reason };
             cx.log(Proof::BlockComparison, predicted, outcome, since);
             return Ok(Err(failed));
@@ -276,8 +336,10 @@ fn run(
 
 /// The subgraph in words.
 fn shape_of(a: &BlockAnalysis) -> String {
-    match a.shape() {
-        Some(shape) => shape.to_string(),
-        None => "whole graph".into(),
+    match (a.shape(), a.regions(), a.groups()) {
+        (Some(shape), 0, _) => shape.to_string(),
+        (Some(shape), r, k) if r == k => format!("{shape} in {r} regions"),
+        (Some(shape), r, k) => format!("{shape} in {r} regions ({k} components)"),
+        (None, _, _) => "whole graph".into(),
     }
 }

@@ -705,7 +705,10 @@ fn subgraph_beta(problem: &MultipleProblem) -> f64 {
 }
 
 /// The components of the edges not `left_out`, numbered from 0 in the order of their first node.
-fn components(problem: &MultipleProblem, left_out: &[bool]) -> Vec<usize> {
+pub(in crate::certify::multiple) fn components(
+    problem: &MultipleProblem,
+    left_out: &[bool],
+) -> Vec<usize> {
     let n = problem.num_rotations();
     let mut union = UnionFind::new(n);
     for (e, out) in problem.edges().iter().zip(left_out) {
@@ -737,7 +740,7 @@ pub(in crate::certify::multiple) fn fro(m: &Matrix3<f64>) -> f64 {
 /// the nodes keeps one more) incident edges of smallest residual `||R_a^T R_ab^T R_b - I||_F`,
 /// an edge is kept when either endpoint keeps it, and the components are joined by the dropped
 /// edges of smallest residual between them. `rotations` has one rotation per node.
-pub(in crate::certify::multiple) fn subgraph_edges(
+pub(super) fn subgraph_edges(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     edges_per_node: f64,
@@ -747,7 +750,7 @@ pub(in crate::certify::multiple) fn subgraph_edges(
 
 /// [`subgraph_edges`] among the edges `k` with `within(k)` only (the others never kept, nor
 /// used to join components).
-fn subgraph_edges_within(
+pub(in crate::certify::multiple) fn subgraph_edges_within(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     edges_per_node: f64,
@@ -788,18 +791,10 @@ fn subgraph_edges_within(
     keep
 }
 
-/// Join the components of the kept edges with the dropped edges of smallest `residual` between
-/// them (Kruskal's rule on the components), so that a connected graph's subgraph is connected.
-pub(in crate::certify::multiple) fn connect(
-    problem: &MultipleProblem,
-    residual: &[f64],
-    keep: &mut [bool],
-) {
-    connect_within(problem, residual, keep, &|_| true);
-}
-
-/// [`connect`] with the dropped edges `k` with `within(k)` only.
-fn connect_within(
+/// Join the components of the kept edges with the dropped edges `k` with `within(k)` of
+/// smallest `residual` between them (Kruskal's rule on the components), so that a connected
+/// graph's (or region's) subgraph is connected.
+pub(in crate::certify::multiple) fn connect_within(
     problem: &MultipleProblem,
     residual: &[f64],
     keep: &mut [bool],

@@ -202,6 +202,15 @@ impl CoarseSpace for Groups<'_> {
         self.count
     }
 
+    fn kappa(&self) -> f64 {
+        self.kappa
+    }
+
+    /// The largest group's bound (valid for the last).
+    fn kappa_last(&self) -> f64 {
+        self.kappa
+    }
+
     /// `z <- Pi z` in floating point (every coordinate slice less its `w`-projection in every
     /// component, the orthogonal projector onto `U`).
     fn project(&self, z: &mut [f64]) {

@@ -23,7 +23,18 @@ const BALANCE: f64 = 0.05;
 /// moved to the neighbouring group it has most edges into (a group must be connected: each
 /// further component of its subgraph is one more negative pivot the proof expects, and a
 /// small one makes the coarse bound weak). `k` is clamped to `1..=n`.
-pub(super) fn partition(problem: &MultipleProblem, k: usize) -> Vec<usize> {
+pub(in crate::certify::multiple) fn partition(problem: &MultipleProblem, k: usize) -> Vec<usize> {
+    partition_weighted(problem, k, &|_| 1.0)
+}
+
+/// [`partition`] whose refinement counts each edge `e` as `weight(e)` (`>= 0`) instead of 1:
+/// a node goes to the group holding most of its edges' weight (the block comparison's
+/// regions weigh edges by their strength, so that a node keeps its strong edges).
+pub(in crate::certify::multiple) fn partition_weighted(
+    problem: &MultipleProblem,
+    k: usize,
+    weight: &dyn Fn(usize) -> f64,
+) -> Vec<usize> {
     let n = problem.num_rotations();
     let k = k.clamp(1, n.max(1));
     if k == 1 {
@@ -32,7 +43,7 @@ pub(super) fn partition(problem: &MultipleProblem, k: usize) -> Vec<usize> {
     let mut group = grow(problem, k);
     let mut sizes = vec![0usize; k];
     group.iter().for_each(|&g| sizes[g] += 1);
-    refine(problem, &mut group, &mut sizes);
+    refine(problem, &mut group, &mut sizes, weight);
     for _ in 0..3 {
         if !reattach(problem, &mut group, k) {
             break;
@@ -100,8 +111,13 @@ fn breadth_first_order(problem: &MultipleProblem) -> Vec<usize> {
 }
 
 /// [`REFINE_PASSES`] passes moving each node to the group holding strictly more of its
-/// neighbours than its own, while both groups stay within [`BALANCE`] of `n / k`.
-fn refine(problem: &MultipleProblem, group: &mut [usize], sizes: &mut [usize]) {
+/// neighbours (by `weight`) than its own, while both groups stay within [`BALANCE`] of `n / k`.
+fn refine(
+    problem: &MultipleProblem,
+    group: &mut [usize],
+    sizes: &mut [usize],
+    weight: &dyn Fn(usize) -> f64,
+) {
     let k = sizes.len();
     let adjacency = problem.adjacency();
     let even = group.len() as f64 / k as f64;
@@ -109,16 +125,22 @@ fn refine(problem: &MultipleProblem, group: &mut [usize], sizes: &mut [usize]) {
         (even * (1.0 + BALANCE)).ceil(),
         (even * (1.0 - BALANCE)).floor(),
     );
-    let mut count = vec![0usize; k];
+    let mut count = vec![0.0f64; k];
     for _ in 0..REFINE_PASSES {
         let mut moved = 0;
         for v in 0..group.len() {
-            count.iter_mut().for_each(|c| *c = 0);
-            for &(w, _) in adjacency.neighbours(v) {
-                count[group[w]] += 1;
+            count.iter_mut().for_each(|c| *c = 0.0);
+            for &(w, e) in adjacency.neighbours(v) {
+                count[group[w]] += weight(e);
             }
             let own = group[v];
-            let best = (0..k).max_by_key(|&g| (count[g], g == own)).unwrap_or(own);
+            let best = (0..k)
+                .max_by(|&a, &b| {
+                    count[a]
+                        .total_cmp(&count[b])
+                        .then((a == own).cmp(&(b == own)))
+                })
+                .unwrap_or(own);
             let fits = (sizes[best] + 1) as f64 <= most && (sizes[own] - 1) as f64 >= least;
             if best != own && count[best] > count[own] && fits {
                 sizes[own] -= 1;
