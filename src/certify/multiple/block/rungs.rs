@@ -58,11 +58,23 @@ pub const BLOCK_GROUP_NODES: usize = 5000;
 /// more regions drop more of each node's strong edges.
 pub const BLOCK_MAX_GROUPS: usize = 2;
 
+/// The fewest edges per node of a graph whose block subgraphs are split into regions. Measured
+/// on the realistic two-view class at 10^4 cameras (2026-12-03, `block_sweep -- 10000 M 2:14
+/// [regions=2]`): with 10 edges per node 2 regions prove as the whole subgraph does; with 8
+/// they leave 7 negative pivots too many (whole: 1), with 6 86 (whole: 5), with 4 about 750
+/// (whole: 152). A sparse graph's node keeps few edges within its region.
+pub const BLOCK_REGION_MIN_EDGES_PER_NODE: usize = 10;
+
 /// The regions the block comparison's subgraphs of `problem` are split into first
 /// ([`BlockAnalysis::grouped`]): one per [`BLOCK_GROUP_NODES`] nodes, at most
-/// [`BLOCK_MAX_GROUPS`]; 1 (no split) below twice that.
+/// [`BLOCK_MAX_GROUPS`]; 1 (no split) below twice that or below
+/// [`BLOCK_REGION_MIN_EDGES_PER_NODE`].
 pub fn block_groups(problem: &crate::multiple::MultipleProblem) -> usize {
-    (problem.num_rotations() / BLOCK_GROUP_NODES).clamp(1, BLOCK_MAX_GROUPS)
+    let n = problem.num_rotations();
+    if problem.num_edges() < BLOCK_REGION_MIN_EDGES_PER_NODE.saturating_mul(n) {
+        return 1;
+    }
+    (n / BLOCK_GROUP_NODES).clamp(1, BLOCK_MAX_GROUPS)
 }
 
 /// The coarse correction's work per edge and column (its conjugate gradients: products with
