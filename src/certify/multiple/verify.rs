@@ -117,7 +117,13 @@ pub(crate) fn verify_own(
 fn climb_checks(mut cx: Check<'_>) -> Result<VerifiedBound> {
     let settings = cx.settings;
     let mut rungs: Rungs<'_, Check<'_>> = Vec::new();
-    for proof in &settings.dual.proofs {
+    // the block comparison is planned first: the `3n` rungs may wait for it
+    // (`Check::three_n_waits`; it is done at once on isotropic problems); the order decides
+    // only exact ties of time and strength
+    let block_first = |p: &&Proof| matches!(p, Proof::BlockComparison);
+    let (block, others): (Vec<&Proof>, Vec<&Proof>) =
+        settings.dual.proofs.iter().partition(block_first);
+    for proof in block.into_iter().chain(others) {
         match proof {
             Proof::Grounded => rungs.push(Box::new(GroundedProof::default())),
             Proof::ShiftedCholesky => rungs.push(Box::new(ShiftedProof::default())),

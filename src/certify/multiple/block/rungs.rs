@@ -60,18 +60,18 @@ pub const BLOCK_MAX_GROUPS: usize = 2;
 
 /// The fewest edges per node of a graph whose block subgraphs are split into regions. Measured
 /// on the realistic two-view class at 10^4 cameras (2026-12-03, `block_sweep -- 10000 M 2:14
-/// [regions=2]`): with 10 edges per node 2 regions prove as the whole subgraph does; with 8
-/// they leave 7 negative pivots too many (whole: 1), with 6 86 (whole: 5), with 4 about 750
-/// (whole: 152). A sparse graph's node keeps few edges within its region.
-pub const BLOCK_REGION_MIN_EDGES_PER_NODE: usize = 10;
-
+/// [regions=2]`): with 10 edges per node 2 regions prove as the whole subgraph does, and so on
+/// the robust solve's inlier graph of 8.99 edges per node; with 8 they leave 7 negative pivots
+/// too many (whole: 1), with 6 86 (whole: 5), with 4 about 750 (whole: 152). A sparse graph's
+/// node keeps few edges within its region.
+pub const BLOCK_REGION_MIN_EDGES_PER_NODE: f64 = 8.5;
 /// The regions the block comparison's subgraphs of `problem` are split into first
 /// ([`BlockAnalysis::grouped`]): one per [`BLOCK_GROUP_NODES`] nodes, at most
 /// [`BLOCK_MAX_GROUPS`]; 1 (no split) below twice that or below
 /// [`BLOCK_REGION_MIN_EDGES_PER_NODE`].
 pub fn block_groups(problem: &crate::multiple::MultipleProblem) -> usize {
     let n = problem.num_rotations();
-    if problem.num_edges() < BLOCK_REGION_MIN_EDGES_PER_NODE.saturating_mul(n) {
+    if (problem.num_edges() as f64) < BLOCK_REGION_MIN_EDGES_PER_NODE * n as f64 {
         return 1;
     }
     (n / BLOCK_GROUP_NODES).clamp(1, BLOCK_MAX_GROUPS)
@@ -126,6 +126,8 @@ pub(in crate::certify::multiple) struct BlockFamily {
     /// The last plan (refusals are kept: a refused rung is dropped).
     planned: Option<std::result::Result<Prediction, Refusal>>,
     done: bool,
+    /// An attempt was made (the `3n` rungs wait only for the first, [`Check::block_runs_first`]).
+    attempted: bool,
 }
 
 impl<'a> Rung<Check<'a>> for BlockFamily {
@@ -142,16 +144,21 @@ impl<'a> Rung<Check<'a>> for BlockFamily {
         if self.planned.is_none() {
             self.planned = Some(self.predict(cx)?);
         }
-        Ok(match self.planned.clone() {
+        let plan = match self.planned.clone() {
             // no denser subgraph fits after a failure: the rung is done (its refusal was not
             // the reason it did not prove)
             Some(Err(_)) if !self.failures.is_empty() => Plan::Done,
             planned => cx.plan_from(planned),
-        })
+        };
+        if matches!(plan, Plan::Run(_)) && !self.attempted {
+            cx.block_runs_first();
+        }
+        Ok(plan)
     }
 
     fn attempt(&mut self, cx: &mut Check<'a>) -> Result<Found> {
         self.planned = None;
+        self.attempted = true;
         let (Some(a), Some(rotations)) = (self.pending.take(), cx.rotations) else {
             self.done = true;
             return Ok(Found::logged(Outcome::Failed {
