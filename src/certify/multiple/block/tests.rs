@@ -381,3 +381,34 @@ fn proofs_in_regions_are_below_the_smallest_eigenvalue_of_s() {
          {lowered_proofs} lowered"
     );
 }
+
+/// The regions' policy ([`super::block_groups`]): 2 regions from `2 x BLOCK_GROUP_NODES` nodes
+/// and [`super::rungs::BLOCK_REGION_MIN_EDGES_PER_NODE`] edges per node, never more than
+/// `BLOCK_MAX_GROUPS`, none on sparser or smaller graphs.
+#[test]
+fn only_large_dense_graphs_are_split_into_regions() {
+    use super::rungs::{BLOCK_GROUP_NODES, BLOCK_MAX_GROUPS, BLOCK_REGION_MIN_EDGES_PER_NODE};
+    // a ring and chords `i -> i + s` (distinct pairs): `m` edges on `n` nodes
+    let graph = |n: usize, m: usize| {
+        let edges = (0..m)
+            .map(|k| {
+                let (i, s) = (k % n, 1 + k / n);
+                crate::multiple::Edge {
+                    i,
+                    j: (i + s) % n,
+                    rotation: Rotation::identity(),
+                    weight: 1.0,
+                }
+            })
+            .collect();
+        MultipleProblem::new(n, edges).expect("a valid graph")
+    };
+    let n = 2 * BLOCK_GROUP_NODES;
+    let dense = (BLOCK_REGION_MIN_EDGES_PER_NODE * n as f64).ceil() as usize;
+    assert_eq!(super::block_groups(&graph(n, dense)), 2);
+    assert_eq!(super::block_groups(&graph(n, dense - 1)), 1);
+    assert_eq!(super::block_groups(&graph(n - 1, dense)), 1);
+    let large = 10 * BLOCK_GROUP_NODES;
+    let m = (BLOCK_REGION_MIN_EDGES_PER_NODE * large as f64).ceil() as usize;
+    assert_eq!(super::block_groups(&graph(large, m)), BLOCK_MAX_GROUPS);
+}
