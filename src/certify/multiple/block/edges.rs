@@ -405,11 +405,9 @@ impl NodeSums {
     /// of the magnitudes.
     fn rest_of_block(&self, rotation: &Rotation, lambda: &Matrix3<f64>) -> f64 {
         let u = UNIT_ROUNDOFF;
-        let r = rotation.matrix();
-        let lam = symmetrize(lambda);
-        let rxr = r.transpose() * (self.f_sum - lam) * r;
+        let (rxr, _) = diagonal_block(rotation, lambda, &self.f_sum, (self.trace, self.degree));
         let gm = rxr - self.s_sum;
-        let scale = 1.01 * self.trace + lam.amax();
+        let scale = 1.01 * self.trace + symmetrize(lambda).amax();
         let entry = 18.4 * gamma(self.degree + 12) * scale
             + gamma(self.degree + 2) * (self.s_abs + 9.2 * scale);
         (fro(&gm) * (1.0 + 4.0 * u) + 3.0 * entry) * (1.0 + 4.0 * u)

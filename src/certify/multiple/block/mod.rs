@@ -36,7 +36,7 @@ mod tests;
 
 use super::coarse::COARSE_RELATIVE_RESIDUAL;
 use super::multipliers::{GaugeTerms, gauge_terms};
-use super::scalar::{components, fro, orthogonality_defect, partition, subgraph_edges_within};
+use super::scalar::{components, fro, orthogonality_defect, subgraph_edges};
 use crate::error::{Error, Result};
 use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::cholesky::{UNIT_ROUNDOFF, gamma};
@@ -86,8 +86,9 @@ impl BlockAnalysis {
     /// `scalar/partition.rs`): each region's own edges chosen as in [`BlockAnalysis::new`],
     /// the edges between regions dropped (charged), every region's pencil proven apart and
     /// the regions' coarse directions bounded by the shared coarse correction. Its factor
-    /// fills like a graph `groups` times smaller. `groups <= 1`, or a whole graph (`shape`
-    /// `None`): [`BlockAnalysis::new`]. Refused like it.
+    /// fills like a graph `groups` times smaller. `groups <= 1`, a whole graph (`shape`
+    /// `None`) or a problem without information matrices: [`BlockAnalysis::new`]. Refused like
+    /// it.
     pub fn grouped(
         problem: &MultipleProblem,
         rotations: &[Rotation],
@@ -112,17 +113,8 @@ impl BlockAnalysis {
                 None,
                 subgraph::strong_subgraph_edges(problem, info, rotations, s),
             ),
-            (Some(s), None) if groups > 1 => {
-                let region = partition(problem, groups);
-                let edges = problem.edges();
-                let within = |k: usize| region[edges[k].i] == region[edges[k].j];
-                let keep = subgraph_edges_within(problem, rotations, s.edges_per_node, &within);
-                (Some(region), keep)
-            }
-            (Some(s), None) => (
-                None,
-                subgraph_edges_within(problem, rotations, s.edges_per_node, &|_| true),
-            ),
+            // without information matrices (which the comparison itself refuses): no regions
+            (Some(s), None) => (None, subgraph_edges(problem, rotations, s.edges_per_node)),
             (None, _) => (None, vec![true; problem.num_edges()]),
         };
         let n = problem.num_rotations();
@@ -279,13 +271,7 @@ pub fn block_comparison_until(
     lambdas: &[Matrix3<f64>],
     (target, stop_at): (f64, Option<std::time::Instant>),
 ) -> Result<std::result::Result<BlockComparison, BlockFailure>> {
-    let n = problem.num_rotations();
-    if rotations.len() != n || lambdas.len() != n || analysis.num_rotations != n {
-        return Err(Error::InvalidSettings {
-            name: "rotations".into(),
-            reason: "block comparison needs one rotation and one multiplier per node".into(),
-        });
-    }
+    check_points(problem, analysis, rotations, lambdas)?;
     let gauge = gauge_terms(problem, rotations, lambdas);
     let points = (rotations, lambdas);
     block_comparison_with(problem, analysis, points, (target, stop_at), &gauge)
@@ -300,25 +286,13 @@ pub(in crate::certify::multiple) fn block_comparison_with(
     (target, stop_at): (f64, Option<std::time::Instant>),
     gauge: &GaugeTerms,
 ) -> Result<std::result::Result<BlockComparison, BlockFailure>> {
-    let n = problem.num_rotations();
     let Some(information) = problem.information() else {
         return Err(Error::InvalidSettings {
             name: "problem".into(),
             reason: "the block comparison is for edges with information matrices".into(),
         });
     };
-    if rotations.len() != n || lambdas.len() != n || analysis.num_rotations != n {
-        return Err(Error::InvalidSettings {
-            name: "rotations".into(),
-            reason: "block comparison needs one rotation and one multiplier per node".into(),
-        });
-    }
-    if analysis.keep.len() != problem.num_edges() {
-        return Err(Error::InvalidSettings {
-            name: "analysis".into(),
-            reason: "the block analysis was made for a different view graph".into(),
-        });
-    }
+    check_points(problem, analysis, rotations, lambdas)?;
     let points = (rotations, lambdas);
     if analysis.groups() > 0 {
         let coarse = (COARSE_RELATIVE_RESIDUAL, stop_at);
@@ -337,6 +311,29 @@ pub(in crate::certify::multiple) fn block_comparison_with(
         target,
         gauge,
     ))
+}
+
+/// One rotation and one multiplier per node, and an analysis of this view graph.
+fn check_points(
+    problem: &MultipleProblem,
+    analysis: &BlockAnalysis,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+) -> Result<()> {
+    let n = problem.num_rotations();
+    if rotations.len() != n || lambdas.len() != n || analysis.num_rotations != n {
+        return Err(Error::InvalidSettings {
+            name: "rotations".into(),
+            reason: "block comparison needs one rotation and one multiplier per node".into(),
+        });
+    }
+    if analysis.keep.len() != problem.num_edges() {
+        return Err(Error::InvalidSettings {
+            name: "analysis".into(),
+            reason: "the block analysis was made for a different view graph".into(),
+        });
+    }
+    Ok(())
 }
 
 /// Steps 1 to 5 on consistent inputs.

@@ -740,7 +740,7 @@ pub(in crate::certify::multiple) fn fro(m: &Matrix3<f64>) -> f64 {
 /// the nodes keeps one more) incident edges of smallest residual `||R_a^T R_ab^T R_b - I||_F`,
 /// an edge is kept when either endpoint keeps it, and the components are joined by the dropped
 /// edges of smallest residual between them. `rotations` has one rotation per node.
-pub(super) fn subgraph_edges(
+pub(in crate::certify::multiple) fn subgraph_edges(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     edges_per_node: f64,
@@ -750,7 +750,7 @@ pub(super) fn subgraph_edges(
 
 /// [`subgraph_edges`] among the edges `k` with `within(k)` only (the others never kept, nor
 /// used to join components).
-pub(in crate::certify::multiple) fn subgraph_edges_within(
+fn subgraph_edges_within(
     problem: &MultipleProblem,
     rotations: &[Rotation],
     edges_per_node: f64,

@@ -73,13 +73,11 @@ pub use analysis::{
     SPLIT_SHAPES, SUBGRAPH_GROUP_NODES, SUBGRAPH_MAX_GROUPS, ScalarAnalysis, SplitShape, subgraph,
     subgraph_groups, subgraph_ladder,
 };
-pub(in crate::certify::multiple) use analysis::{
-    components, connect_within, fro, subgraph_edges_within,
-};
+pub(in crate::certify::multiple) use analysis::{components, connect_within, fro, subgraph_edges};
 pub(crate) use bordered::{LowRank, bordered_comparison};
 pub(in crate::certify::multiple) use charges::orthogonality_defect;
 pub(crate) use groups::grouped_dual_bound;
-pub(in crate::certify::multiple) use partition::{partition, partition_weighted};
+pub(in crate::certify::multiple) use partition::partition_weighted;
 
 use super::check::Check;
 use super::verified::VerifiedBound;

@@ -23,7 +23,7 @@ const BALANCE: f64 = 0.05;
 /// moved to the neighbouring group it has most edges into (a group must be connected: each
 /// further component of its subgraph is one more negative pivot the proof expects, and a
 /// small one makes the coarse bound weak). `k` is clamped to `1..=n`.
-pub(in crate::certify::multiple) fn partition(problem: &MultipleProblem, k: usize) -> Vec<usize> {
+pub(super) fn partition(problem: &MultipleProblem, k: usize) -> Vec<usize> {
     partition_weighted(problem, k, &|_| 1.0)
 }
 
