@@ -191,11 +191,13 @@ impl BlockPattern {
     /// ordering predicts more than `max_values` stored values
     /// ([`super::cholesky::symbolic_cholesky_within`]; the lower triangle is the pattern of
     /// `A + A^T` the ordering reads).
+    /// With it, the ordering's count of the factor's values
+    /// ([`super::cholesky::symbolic_cholesky_counted_within`]).
     pub(crate) fn symbolic_within(
         &self,
         max_values: usize,
-    ) -> Result<std::result::Result<SymbolicCholesky<usize>, usize>> {
-        super::cholesky::symbolic_cholesky_within(self.symbolic.as_ref(), max_values)
+    ) -> Result<std::result::Result<(SymbolicCholesky<usize>, usize), usize>> {
+        super::cholesky::symbolic_cholesky_counted_within(self.symbolic.as_ref(), max_values)
     }
 
     /// The matrix with this pattern and the values `val` (lower triangle).

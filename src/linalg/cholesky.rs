@@ -337,6 +337,16 @@ pub fn symbolic_cholesky_within(
     pattern: SymbolicSparseColMatRef<'_, usize>,
     max_values: usize,
 ) -> Result<std::result::Result<SymbolicCholesky<usize>, usize>> {
+    Ok(symbolic_cholesky_counted_within(pattern, max_values)?.map(|(s, _)| s))
+}
+
+/// [`symbolic_cholesky_within`] with the ordering's own count of the factor's values (below
+/// the diagonal and on it; no relaxed supernodes' explicit zeros), the currency in which
+/// factors of different graphs compare.
+pub(crate) fn symbolic_cholesky_counted_within(
+    pattern: SymbolicSparseColMatRef<'_, usize>,
+    max_values: usize,
+) -> Result<std::result::Result<(SymbolicCholesky<usize>, usize), usize>> {
     let n = pattern.nrows();
     let failed = |what: &str, e: faer::sparse::FaerError| Error::Solver {
         message: format!("{what} failed: {e:?}"),
@@ -369,7 +379,7 @@ pub fn symbolic_cholesky_within(
         SymmetricOrdering::Custom(ordering),
         CholeskySymbolicParams::default(),
     )
-    .map(Ok)
+    .map(|s| Ok((s, predicted)))
     .map_err(|e| failed("symbolic Cholesky analysis", e))
 }
 

@@ -145,3 +145,31 @@ fn regions_certify_a_ten_thousand_camera_graph() {
     assert!(lb <= planted * (1.0 + 1e-9), "bound {lb} above {planted}");
     assert_off_is_not_certified(&p, &s.rotations, &mut StdRng::seed_from_u64(12));
 }
+
+/// A subgraph whose factor is more than half the whole graph's is not tried while the grounded
+/// bound, which factorises the whole graph, is on the ladder (`BLOCK_WHOLE_FRACTION`): on a
+/// graph of 4 edges per node the sparsest subgraph (about a third of the whole graph's factor)
+/// is tried and fails, the denser ones that prove it with the block comparison alone (the first
+/// test) are most of the graph and are left to the grounded bound, which certifies.
+#[test]
+fn subgraphs_nearly_as_large_as_the_graph_are_left_to_the_grounded_bound() {
+    let (p, _) = SyntheticAnisotropic::two_view_like(1000, 4000, 0.0).generate();
+    let s = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    let mut settings = CertifySettings::with_mode(CertifyMode::Dual);
+    settings.dual.block_comparison_above = 0;
+    let c = certify_multiple(&p, &s.rotations, &settings).unwrap();
+    assert!(c.certificate.is_certified(), "{}", c.certificate);
+    let ladder = &c.details.ladder;
+    let block: Vec<_> = ladder
+        .iter()
+        .filter(|a| a.rung == Proof::BlockComparison)
+        .collect();
+    assert!(
+        block.len() == 1 && matches!(block[0].outcome, Outcome::Failed { .. }),
+        "{ladder:?}"
+    );
+    let grounded = ladder
+        .iter()
+        .any(|a| a.rung == Proof::Grounded && matches!(a.outcome, Outcome::Proved { .. }));
+    assert!(grounded, "{ladder:?}");
+}

@@ -292,7 +292,7 @@ fn proven_c(
     left: &dyn Fn() -> Option<f64>,
 ) -> Result<f64, String> {
     let symbolic = match side.pattern.symbolic_within(max_values) {
-        Ok(Ok(s)) => s,
+        Ok(Ok((s, _))) => s,
         Ok(Err(predicted)) => {
             return Err(format!(
                 "its bordered factor ({predicted} values predicted) passes the budget's {max_values}"
@@ -604,7 +604,7 @@ mod tests {
                 // the inertia decides at the shift: proven just below lambda_min(Z_-g), refused
                 // just above it
                 if lg > 0.0 {
-                    let sym = side.pattern.symbolic_within(usize::MAX).unwrap().unwrap();
+                    let (sym, _) = side.pattern.symbolic_within(usize::MAX).unwrap().unwrap();
                     let border = Border::new(&side, &low, sign, g).unwrap();
                     let below = prove_shift(&side, &border, g, 0.98 * lg, &sym);
                     assert!(

@@ -56,6 +56,8 @@ pub struct BlockAnalysis {
     keep: Vec<bool>,
     pattern: BlockPattern,
     symbolic: SymbolicCholesky<usize>,
+    /// The ordering's count of the factor's values ([`BlockAnalysis::counted_values`]).
+    counted_values: usize,
     /// Per kept edge, its slot in the pattern (`usize::MAX` for a dropped edge).
     slots: Vec<usize>,
     shape: Option<BlockShape>,
@@ -127,7 +129,7 @@ impl BlockAnalysis {
                 .map(|(e, _)| (e.i, e.j))
         };
         let pattern = BlockPattern::new(n, 3, kept());
-        let symbolic = match pattern.symbolic_within(max_values)? {
+        let (symbolic, counted_values) = match pattern.symbolic_within(max_values)? {
             Ok(s) => s,
             Err(predicted) => return Ok(Err(predicted)),
         };
@@ -154,6 +156,7 @@ impl BlockAnalysis {
             keep,
             pattern,
             symbolic,
+            counted_values,
             slots,
             shape,
             num_rotations: n,
@@ -189,6 +192,13 @@ impl BlockAnalysis {
     /// Stored values of the factor.
     pub fn factor_len(&self) -> usize {
         self.symbolic.len_val()
+    }
+
+    /// The minimum-degree ordering's count of the factor's values (without the explicit zeros
+    /// of relaxed supernodes that [`Self::factor_len`] stores): the count in which it compares
+    /// with the whole graph's.
+    pub fn counted_values(&self) -> usize {
+        self.counted_values
     }
 
     /// The counted multiply-adds of its numeric factorisation.

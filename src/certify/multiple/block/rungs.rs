@@ -65,6 +65,17 @@ pub const BLOCK_MAX_GROUPS: usize = 2;
 /// too many (whole: 1), with 6 86 (whole: 5), with 4 about 750 (whole: 152). A sparse graph's
 /// node keeps few edges within its region.
 pub const BLOCK_REGION_MIN_EDGES_PER_NODE: f64 = 8.5;
+
+/// The largest fraction of the whole graph's `3n` factor a subgraph's factor may have to be
+/// tried (both as their minimum-degree orderings count them: the whole graph's from its scalar
+/// ordering, in `3 x 3` blocks). The comparison proves less
+/// than a factorisation of `S` itself, so a subgraph nearly as large as the graph only costs
+/// time before the grounded bound. Measured on the realistic two-view class at 10^4 cameras
+/// and 4 edges per node (2026-12-03, `anisotropic_ladder -- 10000 40000`): the subgraphs of 2
+/// edges per node topped up to 14 (predicted 5.7 s), 4 to 24 (14.2 s) and 6 to 32 (15.1 s)
+/// failed with 155, 4 and 4 negative pivots in 5.8, 19.7 and 15.1 s before the grounded bound
+/// proved in 14.5 s (one factorisation of about 1.8e8 values).
+pub const BLOCK_WHOLE_FRACTION: f64 = 0.5;
 /// The regions the block comparison's subgraphs of `problem` are split into first
 /// ([`BlockAnalysis::grouped`]): one per [`BLOCK_GROUP_NODES`] nodes, at most
 /// [`BLOCK_MAX_GROUPS`]; 1 (no split) below twice that or below
@@ -128,6 +139,9 @@ pub(in crate::certify::multiple) struct BlockFamily {
     done: bool,
     /// An attempt was made (the `3n` rungs wait only for the first, [`Check::block_runs_first`]).
     attempted: bool,
+    /// The whole graph's `3n` factor, predicted (values; [`whole_factor`]); infinite when the
+    /// grounded bound is off the ladder ([`BLOCK_WHOLE_FRACTION`] does not apply).
+    whole_values: Option<f64>,
 }
 
 impl<'a> Rung<Check<'a>> for BlockFamily {
@@ -201,10 +215,15 @@ impl BlockFamily {
                 reason: "the estimate's rotations are not known".into(),
             }));
         };
-        if self.next == 0
-            && let Some(refusal) = factors_directly(cx)?
-        {
-            return Ok(Err(refusal));
+        if self.next == 0 && self.whole_values.is_none() {
+            match whole_factor(cx)? {
+                // the fraction's reason is the grounded bound (off the ladder: no limit)
+                Ok(values) if cx.settings.dual.proofs.contains(&Proof::Grounded) => {
+                    self.whole_values = Some(values)
+                }
+                Ok(_) => self.whole_values = Some(f64::INFINITY),
+                Err(refusal) => return Ok(Err(refusal)),
+            }
         }
         // the choice of a subgraph and its analysis are work before any prediction: refused
         // when even the per-edge work would pass the time left
@@ -220,10 +239,32 @@ impl BlockFamily {
         }
         self.pending = self.next_analysis(cx, rotations)?;
         Ok(match &self.pending {
-            Some(a) => predict(cx.settings, a).map(|p| p.with_success(self.chance())),
+            Some(a) => match self.near_whole(a) {
+                Some(refusal) => {
+                    self.pending = None;
+                    Err(refusal)
+                }
+                None => predict(cx.settings, a).map(|p| p.with_success(self.chance())),
+            },
             None => Err(Refusal::OverBudget {
                 reason: "no subgraph's block factor fits the budget".into(),
             }),
+        })
+    }
+
+    /// The refusal of a subgraph whose factor is more than [`BLOCK_WHOLE_FRACTION`] of the
+    /// whole graph's: the grounded bound factorises `S` itself in about the same time and
+    /// proves where the comparison's sufficient condition may not (denser subgraphs are larger
+    /// still).
+    fn near_whole(&self, a: &BlockAnalysis) -> Option<Refusal> {
+        let whole = self.whole_values?;
+        let values = a.counted_values() as f64;
+        (values > BLOCK_WHOLE_FRACTION * whole).then(|| Refusal::NotApplicable {
+            reason: format!(
+                "{}: its factor ({values:.1e} values) is more than {BLOCK_WHOLE_FRACTION} of the \
+                 whole graph's (about {whole:.1e}), which the grounded bound factorises",
+                shape_of(a)
+            ),
         })
     }
 
@@ -263,12 +304,13 @@ impl BlockFamily {
     }
 }
 
-/// The refusal of the rung when the whole graph's `3n` factor is at most
+/// The whole graph's `3n` factor, predicted as 9 times its scalar factor (the same
+/// elimination in `3 x 3` blocks, whose ordering costs a ninth; the minimum-degree count, no
+/// symbolic analysis); or the refusal of the rung when it is at most
 /// `DualSettings::block_comparison_above` values: certainly so when even a dense lower
 /// triangle of `n` blocks is (no ordering needed: graphs of up to about 3300 nodes at the
-/// default, the shared SLAM files among them), else when 9 times its scalar factor is (the
-/// same elimination in `3 x 3` blocks, whose ordering costs a ninth).
-fn factors_directly(cx: &Check<'_>) -> Result<Option<Refusal>> {
+/// default, the shared SLAM files among them).
+fn whole_factor(cx: &Check<'_>) -> Result<std::result::Result<f64, Refusal>> {
     let above = cx.settings.dual.block_comparison_above;
     let n = cx.problem.num_rotations() as f64;
     let values = if 4.5 * n * (n + 1.0) <= above as f64 {
@@ -276,10 +318,12 @@ fn factors_directly(cx: &Check<'_>) -> Result<Option<Refusal>> {
     } else {
         match ScalarAnalysis::new(cx.problem, above / 9)? {
             Ok(a) => 9.0 * a.factor_len() as f64,
-            Err(_) => return Ok(None),
+            // the count of the quotient's ordering: 9 values per block below the diagonal, 6
+            // per diagonal block
+            Err(predicted) => return Ok(Ok(9.0 * predicted as f64 - 3.0 * n)),
         }
     };
-    Ok(Some(Refusal::NotApplicable {
+    Ok(Err(Refusal::NotApplicable {
         reason: format!(
             "the whole graph's 3n factor (at most about {values:.1e} values) is small enough to \
              factorise directly"
