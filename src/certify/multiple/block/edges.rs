@@ -137,7 +137,11 @@ pub(super) fn edge_parts_for_tests(
 /// One edge's comparison, second order ([`second_order_bound`]) where its `S_e` has a positive
 /// eigenvalue and the check succeeds, else first order: nothing kept and the charge
 /// `-lambda_min(K6)` of its whole form `K6 = [[S, -E], [-E^T, S]]` (an outlier far from its
-/// estimate, at a random point).
+/// estimate, at a random point). A dropped edge keeps nothing either way and takes the first
+/// order charge also when it is below the second's largest (both are proven; the second order
+/// charge `K B^-1 K^T` of an edge far from consistent, whose `S_e` is nearly singular, is about
+/// `1 / floor` times its first order one: a rig's within-frame couplings, rotations by `pi / 2`
+/// and `pi`).
 fn edge_bound(
     s: &Matrix3<f64>,
     k: &Matrix3<f64>,
@@ -145,7 +149,18 @@ fn edge_bound(
     dropped: bool,
     cover: [&Matrix3<f64>; 2],
 ) -> Option<EdgeBound> {
-    second_order_bound(s, k, eta, dropped, cover).or_else(|| first_order_bound(s, k, eta))
+    let second = second_order_bound(s, k, eta, dropped, cover);
+    match second {
+        Some(b) if dropped => {
+            let largest = b.half_charge.symmetric_eigenvalues().max() + b.iso;
+            match first_order_bound(s, k, eta) {
+                Some(f) if f.iso < largest => Some(f),
+                _ => Some(b),
+            }
+        }
+        Some(b) => Some(b),
+        None => first_order_bound(s, k, eta),
+    }
 }
 
 /// `q_e = [x_a; x_b]^T [[S, -E], [-E^T, S]] [x_a; x_b] >= l (|x_a|^2 + |x_b|^2)`, `E = S + K`.

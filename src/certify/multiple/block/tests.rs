@@ -121,6 +121,42 @@ fn the_edge_comparison_holds_for_random_vectors() {
     assert!(checked > 10_000, "{checked}");
 }
 
+/// A dropped edge far from consistent (isotropic information `c I`, its residual a rotation by
+/// `pi / 2` or `pi`, as a rig's within-frame couplings) is charged about `c`, its first order
+/// charge, not the second order one of its nearly singular `S_e` (`1 / floor` = 1000 times
+/// larger in the other directions), and the edge inequality holds for random vectors.
+#[test]
+fn a_dropped_edge_far_from_consistent_takes_the_smaller_charge() {
+    use crate::multiple::anisotropic::Information;
+    let mut rng = StdRng::seed_from_u64(8);
+    let c = 7.0;
+    let h = Information::new(Matrix3::identity() * c).expect("isotropic information");
+    let identity = Rotation::identity();
+    for angle in [std::f64::consts::FRAC_PI_2, std::f64::consts::PI, 2.0] {
+        let axis = Vector3::new(0.3, -0.5, 0.8).normalize();
+        let r_ij = crate::so3::exp(&(axis * angle));
+        let (kept, delta) =
+            edge_parts_for_tests(&h, &r_ij, &identity, &identity, true).expect("a bound");
+        assert_eq!(kept, Matrix3::zeros());
+        let largest = delta.symmetric_eigenvalues().max();
+        assert!(
+            largest <= 3.0 * c,
+            "angle {angle}: charge {largest} against c = {c}"
+        );
+        let exact = h.twice_chordal_matrix() * r_ij.matrix().transpose();
+        for _ in 0..200 {
+            let xi = Vector3::from_fn(|_, _| rng.random::<f64>() - 0.5);
+            let xj = Vector3::from_fn(|_, _| rng.random::<f64>() - 0.5);
+            let q = (xi.transpose() * symmetric(&exact) * xi)[(0, 0)]
+                + (xj.transpose() * symmetric(&exact) * xj)[(0, 0)]
+                - 2.0 * (xi.transpose() * exact * xj)[(0, 0)];
+            let lower =
+                -(xi.transpose() * delta * xi)[(0, 0)] - (xj.transpose() * delta * xj)[(0, 0)];
+            assert!(q >= lower - 1e-12 * c, "{q} < {lower}");
+        }
+    }
+}
+
 fn symmetric(m: &Matrix3<f64>) -> Matrix3<f64> {
     0.5 * (m + m.transpose())
 }
