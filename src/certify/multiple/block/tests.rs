@@ -103,15 +103,7 @@ fn the_edge_comparison_holds_for_random_vectors() {
                 };
                 let scale = exact.norm().max(1e-300);
                 for _ in 0..40 {
-                    let xi = Vector3::from_fn(|_, _| rng.random::<f64>() - 0.5);
-                    let xj = Vector3::from_fn(|_, _| rng.random::<f64>() - 0.5);
-                    let q = (xi.transpose() * symmetric(&exact) * xi)[(0, 0)]
-                        + (xj.transpose() * symmetric(&exact) * xj)[(0, 0)]
-                        - 2.0 * (xi.transpose() * exact * xj)[(0, 0)];
-                    let d = xj - xi;
-                    let lower = (d.transpose() * kept * d)[(0, 0)]
-                        - (xi.transpose() * delta * xi)[(0, 0)]
-                        - (xj.transpose() * delta * xj)[(0, 0)];
+                    let (q, lower) = edge_form_and_bound(&exact, (&kept, &delta), &mut rng);
                     assert!(q >= lower - 1e-12 * scale, "{q} < {lower} (edge {e:?})");
                     checked += 1;
                 }
@@ -145,16 +137,29 @@ fn a_dropped_edge_far_from_consistent_takes_the_smaller_charge() {
         );
         let exact = h.twice_chordal_matrix() * r_ij.matrix().transpose();
         for _ in 0..200 {
-            let xi = Vector3::from_fn(|_, _| rng.random::<f64>() - 0.5);
-            let xj = Vector3::from_fn(|_, _| rng.random::<f64>() - 0.5);
-            let q = (xi.transpose() * symmetric(&exact) * xi)[(0, 0)]
-                + (xj.transpose() * symmetric(&exact) * xj)[(0, 0)]
-                - 2.0 * (xi.transpose() * exact * xj)[(0, 0)];
-            let lower =
-                -(xi.transpose() * delta * xi)[(0, 0)] - (xj.transpose() * delta * xj)[(0, 0)];
+            let (q, lower) = edge_form_and_bound(&exact, (&kept, &delta), &mut rng);
             assert!(q >= lower - 1e-12 * c, "{q} < {lower}");
         }
     }
+}
+
+/// At random `x_i`, `x_j`: the edge's form `q_e` from `exact = E_e` (evaluated in another
+/// order than the code's) and its lower bound `d^T W d - x_i^T Delta x_i - x_j^T Delta x_j`.
+fn edge_form_and_bound(
+    exact: &Matrix3<f64>,
+    (kept, delta): (&Matrix3<f64>, &Matrix3<f64>),
+    rng: &mut StdRng,
+) -> (f64, f64) {
+    let xi = Vector3::from_fn(|_, _| rng.random::<f64>() - 0.5);
+    let xj = Vector3::from_fn(|_, _| rng.random::<f64>() - 0.5);
+    let q = (xi.transpose() * symmetric(exact) * xi)[(0, 0)]
+        + (xj.transpose() * symmetric(exact) * xj)[(0, 0)]
+        - 2.0 * (xi.transpose() * exact * xj)[(0, 0)];
+    let d = xj - xi;
+    let lower = (d.transpose() * kept * d)[(0, 0)]
+        - (xi.transpose() * delta * xi)[(0, 0)]
+        - (xj.transpose() * delta * xj)[(0, 0)];
+    (q, lower)
 }
 
 fn symmetric(m: &Matrix3<f64>) -> Matrix3<f64> {
