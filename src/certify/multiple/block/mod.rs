@@ -36,7 +36,7 @@ mod tests;
 
 use super::coarse::COARSE_RELATIVE_RESIDUAL;
 use super::multipliers::{GaugeTerms, gauge_terms};
-use super::scalar::{components, fro, orthogonality_defect, subgraph_edges};
+use super::scalar::{components, fro, orthogonality_defect, ostrowski, subgraph_edges};
 use crate::error::{Error, Result};
 use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::cholesky::{UNIT_ROUNDOFF, gamma};
@@ -425,12 +425,9 @@ impl Proven {
         c: &edges::EdgeBlocks,
         analysis: &BlockAnalysis,
     ) -> std::result::Result<BlockComparison, BlockFailure> {
-        let mu = self.mu_m / (1.0 - self.t_max) * (1.0 + 1e-10);
-        if !mu.is_finite() {
-            return Err(BlockFailure::Numerical);
-        }
+        let mu = ostrowski(self.mu_m, self.t_max).ok_or(BlockFailure::Numerical)?;
         Ok(BlockComparison {
-            verified_min_eigenvalue: mu.min(0.0),
+            verified_min_eigenvalue: mu,
             max_delta: c.delta.iter().map(|d| d.norm()).fold(0.0, f64::max),
             dropped_edges: analysis.dropped_edges(),
             zeta: self.zeta,

@@ -162,6 +162,18 @@ fn edge_form_and_bound(
     (q, lower)
 }
 
+/// `M = D^T S D` (`D = blkdiag(R_i)`) with `S` formed by `certificate_matrix`, not by the
+/// comparison's code, as a dense matrix.
+fn d_transpose_s_d(p: &MultipleProblem, y: &[Rotation], lambdas: &[Matrix3<f64>]) -> DMatrix<f64> {
+    let s = dense(&certificate_matrix(p, lambdas).expect("S"));
+    let n = y.len();
+    let mut d = DMatrix::zeros(3 * n, 3 * n);
+    for (i, r) in y.iter().enumerate() {
+        d.view_mut((3 * i, 3 * i), (3, 3)).copy_from(r.matrix());
+    }
+    d.transpose() * &s * &d
+}
+
 fn symmetric(m: &Matrix3<f64>) -> Matrix3<f64> {
     0.5 * (m + m.transpose())
 }
@@ -180,13 +192,11 @@ fn m_dominates_the_block_laplacian_less_the_charges() {
             let lambdas = multipliers(&p, &y).expect("multipliers");
             let keep: Vec<bool> = (0..p.num_edges()).map(|e| e % 3 != 1).collect();
             let blocks = edge_blocks(&p, info, &y, &lambdas, &keep).expect("finite");
-            let s = dense(&certificate_matrix(&p, &lambdas).expect("S"));
-            let mut d = DMatrix::zeros(3 * n, 3 * n);
+            let m = d_transpose_s_d(&p, &y, &lambdas);
             let mut c = DMatrix::zeros(3 * n, 3 * n);
-            for (i, r) in y.iter().enumerate() {
-                d.view_mut((3 * i, 3 * i), (3, 3)).copy_from(r.matrix());
+            for (i, delta) in blocks.delta.iter().enumerate() {
                 let mut block = c.view_mut((3 * i, 3 * i), (3, 3));
-                block -= blocks.delta[i];
+                block -= delta;
             }
             for (e, w) in p.edges().iter().zip(&blocks.kept) {
                 for (a, b, sign) in [
@@ -199,7 +209,6 @@ fn m_dominates_the_block_laplacian_less_the_charges() {
                     block += w * sign;
                 }
             }
-            let m = d.transpose() * &s * &d;
             let gap = lambda_min(&(&m - &c));
             assert!(
                 gap >= -1e-10 * m.norm(),
@@ -320,12 +329,7 @@ fn the_anisotropic_operator_is_d_transpose_s_d() {
         let n = p.num_rotations();
         for y in points(&rotations, &mut rng) {
             let lambdas = multipliers(&p, &y).expect("multipliers");
-            let s = dense(&certificate_matrix(&p, &lambdas).expect("S"));
-            let mut d = DMatrix::zeros(3 * n, 3 * n);
-            for (i, r) in y.iter().enumerate() {
-                d.view_mut((3 * i, 3 * i), (3, 3)).copy_from(r.matrix());
-            }
-            let m = d.transpose() * &s * &d;
+            let m = d_transpose_s_d(&p, &y, &lambdas);
             let op = anisotropic_operator(&p, info, &y, &lambdas);
             for _ in 0..5 {
                 let x: Vec<f64> = (0..3 * n).map(|_| rng.random::<f64>() - 0.5).collect();

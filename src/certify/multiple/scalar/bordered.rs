@@ -84,12 +84,7 @@ pub(crate) fn bordered_comparison(
     let kappa = kappa(zeta);
     let mu_m = -(h_gauge + rho1 * rho1 / zeta_free) * kappa * kappa * (1.0 + 1e-10);
     // Ostrowski: lambda_min(Z) >= lambda_min(D^T Z D) / sigma_min(D)^2
-    let mu = mu_m / (1.0 - t_max) * (1.0 + 1e-10);
-    if mu.is_finite() {
-        Ok(mu.min(0.0))
-    } else {
-        Err("the bound is not finite".into())
-    }
+    super::charges::ostrowski(mu_m, t_max).ok_or_else(|| "the bound is not finite".into())
 }
 
 /// `W = fl(D^T V)` with `||W||_2^2` bounded and the error `eps >= ||D^T V V^T D - W W^T||_2`

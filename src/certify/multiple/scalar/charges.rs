@@ -15,6 +15,15 @@ use nalgebra::Matrix3;
 /// 6e-14 in Frobenius; 2e-13 also covers forming the symmetric and skew parts.
 pub(super) const PRODUCT_ERROR: f64 = 2e-13;
 
+/// Step 1 (Ostrowski): `lambda_min(S) >= mu_M / sigma_min(D)^2` for a non-positive `mu_M`
+/// proven for `M = D^T S D`, with `sigma_min(D)^2 >= 1 - t_max` ([`orthogonality_defect`]),
+/// rounded down and capped at 0; `None` when not finite. The one form of this step for every
+/// comparison (scalar, hub, bordered, block).
+pub(in crate::certify::multiple) fn ostrowski(mu_m: f64, t_max: f64) -> Option<f64> {
+    let mu = mu_m / (1.0 - t_max) * (1.0 + 1e-10);
+    mu.is_finite().then(|| mu.min(0.0))
+}
+
 /// Step 1: `t_max >= max_i ||R_i^T R_i - I||_F` (entries of `R^T R` are inner products of 3
 /// terms bounded by ~1: error <= `gamma_3 3 + u` per entry; 1e-14 covers 3x that).
 pub(in crate::certify::multiple) fn orthogonality_defect(

@@ -150,13 +150,9 @@ impl HubGraph {
         };
         let pencils = self.pencils(problem, &c, zeta)?;
         let mu_m = cross_terms(h + 1, pencils.kappa, pencils.zeta_free, &rho, c.dead);
-        // Ostrowski: lambda_min(S) >= lambda_min(M) / sigma_min(D)^2, sigma_min(D)^2 >= 1 - t_max
-        let mu = mu_m / (1.0 - t_max) * (1.0 + 1e-10);
-        if !mu.is_finite() {
-            return Err(ScalarFailure::Numerical);
-        }
+        let mu = super::charges::ostrowski(mu_m, t_max).ok_or(ScalarFailure::Numerical)?;
         Ok(ScalarComparison {
-            verified_min_eigenvalue: mu.min(0.0),
+            verified_min_eigenvalue: mu,
             max_delta: c.with_hub.iter().copied().fold(0.0, f64::max),
             second_order_edges: c.second_order_edges,
             dropped_edges: 0,

@@ -75,7 +75,7 @@ pub use analysis::{
 };
 pub(in crate::certify::multiple) use analysis::{components, connect_within, fro, subgraph_edges};
 pub(crate) use bordered::{LowRank, bordered_comparison};
-pub(in crate::certify::multiple) use charges::orthogonality_defect;
+pub(in crate::certify::multiple) use charges::{orthogonality_defect, ostrowski};
 pub(crate) use groups::grouped_dual_bound;
 pub(in crate::certify::multiple) use partition::partition_weighted;
 
@@ -349,12 +349,9 @@ impl Proven {
         analysis: &ScalarAnalysis,
         pencil: &split::PencilWeights,
     ) -> std::result::Result<ScalarComparison, ScalarFailure> {
-        let mu = self.mu_m / (1.0 - self.t_max) * (1.0 + 1e-10);
-        if !mu.is_finite() {
-            return Err(ScalarFailure::Numerical);
-        }
+        let mu = charges::ostrowski(self.mu_m, self.t_max).ok_or(ScalarFailure::Numerical)?;
         Ok(ScalarComparison {
-            verified_min_eigenvalue: mu.min(0.0),
+            verified_min_eigenvalue: mu,
             max_delta: c.delta.iter().copied().fold(0.0, f64::max),
             second_order_edges: c.second_order_edges,
             dropped_edges: analysis.dropped_edges(),
