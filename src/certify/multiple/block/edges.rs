@@ -5,7 +5,7 @@
 
 use super::outcome::BlockFailure;
 use crate::certify::multiple::multipliers::symmetrize;
-use crate::certify::multiple::scalar::fro;
+use crate::certify::multiple::scalar::{fro, parallel_groups};
 use crate::linalg::cholesky::{UNIT_ROUNDOFF, gamma};
 use crate::linalg::small_symmetric::verified_min_eigenvalue;
 use crate::multiple::MultipleProblem;
@@ -94,25 +94,65 @@ pub(super) fn diagonal_block(
     (block, 3.0 * entry * (1.0 + 4.0 * UNIT_ROUNDOFF))
 }
 
-/// The edge's symmetric part `S_e` at the estimate (its strength in the comparison) and an
-/// estimate of the charge `Z_e` it leaves when dropped (`K B^{-1} K^T`, `B` = `S_e` floored at
+/// An edge's (or a merged group's) parts: `S_e`, `K_e` and `eta_e`.
+pub(super) type Parts = (Matrix3<f64>, Matrix3<f64>, f64);
+
+/// Every edge's parts at `rotations`, each group of parallel edges as one (`[D13]`'s groups,
+/// `scalar::parallel_groups`, ordered by `order`: the edge of the largest `order` first): the
+/// group's first edge carries the sum of their `E_e` (each in its direction; a reversed edge's
+/// `E_e` transposed), the others `None`. Only the block `M_ij` enters step 1's identity, and
+/// it is the sum of the group's: a rig's within-frame couplings `[H21]`, three pseudo-edges
+/// whose sum is a skew block, are charged `|u|` as one where apart each is far from
+/// consistent. `eta` of a group: the sum of its edges' and the summation's error
+/// (`gamma(k)` of the magnitudes).
+pub(super) fn merged_parts(
+    problem: &MultipleProblem,
+    information: &[Information],
+    rotations: &[Rotation],
+    order: &[u32],
+) -> Vec<Option<Parts>> {
+    let edges = problem.edges();
+    let mut parts: Vec<Option<Parts>> = edges
+        .iter()
+        .zip(information)
+        .map(|(e, h)| Some(edge_parts(h, &e.rotation, &rotations[e.i], &rotations[e.j])))
+        .collect();
+    for group in parallel_groups(problem, order) {
+        let first = &edges[group[0]];
+        let (mut s, mut k, mut eta, mut magnitude) = (Matrix3::zeros(), Matrix3::zeros(), 0.0, 0.0);
+        for &g in &group {
+            let Some((sg, kg, eg)) = parts[g].take() else {
+                continue;
+            };
+            s += sg;
+            k += if edges[g].i == first.i { kg } else { -kg };
+            eta += eg;
+            magnitude += fro(&sg) + fro(&kg);
+        }
+        let g = gamma(group.len() + 1);
+        let eta = (eta + g * magnitude) * (1.0 + g);
+        parts[group[0]] = Some((s, k, eta));
+    }
+    parts
+}
+
+/// The edge's symmetric part `S_e` (its strength in the comparison) and an estimate of the
+/// charge `Z_e` it leaves when dropped (`K B^-1 K^T`, `B` = `S_e` floored at
 /// [`EIGENVALUE_FLOOR`] of its largest eigenvalue, as at a node that covers it; a kept edge
-/// leaves `Z_e / BETA` and keeps `(1 - BETA) S_e`, [`KEPT_SHARE`]): for the choice of a
-/// subgraph only.
-pub(super) fn edge_strength_and_charge(
-    h: &Information,
-    r_ij: &Rotation,
-    r_i: &Rotation,
-    r_j: &Rotation,
-) -> (Matrix3<f64>, Matrix3<f64>) {
-    let (s, k, _) = edge_parts(h, r_ij, r_i, r_j);
+/// leaves `Z_e / BETA` and keeps `(1 - BETA) S_e`, [`KEPT_SHARE`]), from its `parts`
+/// ([`merged_parts`]; zero for a merged group's other edges): for the choice of a subgraph
+/// only.
+pub(super) fn strength_and_charge(parts: Option<&Parts>) -> (Matrix3<f64>, Matrix3<f64>) {
+    let Some((s, k, _)) = parts else {
+        return (Matrix3::zeros(), Matrix3::zeros());
+    };
     // covered: the floor alone (the kept strength per edge is large at most nodes)
     let unbounded = Matrix3::identity() * 1e300;
-    let z = match floored_inverse(&s, [&unbounded, &unbounded]) {
+    let z = match floored_inverse(s, [&unbounded, &unbounded]) {
         Some((b_inv, _)) => symmetrize(&(k * b_inv * k.transpose())),
         None => Matrix3::identity() * (s.norm() + k.norm()),
     };
-    (s, z)
+    (*s, z)
 }
 
 /// The share of `S_e` a kept edge keeps, and the factor on its dropped charge (estimates: the
@@ -137,11 +177,12 @@ pub(super) fn edge_parts_for_tests(
 /// One edge's comparison, second order ([`second_order_bound`]) where its `S_e` has a positive
 /// eigenvalue and the check succeeds, else first order: nothing kept and the charge
 /// `-lambda_min(K6)` of its whole form `K6 = [[S, -E], [-E^T, S]]` (an outlier far from its
-/// estimate, at a random point). A dropped edge keeps nothing either way and takes the first
-/// order charge also when it is below the second's largest (both are proven; the second order
+/// estimate, at a random point). The first order is also taken when its charge is below the
+/// second's largest and the second keeps no more than it (both are proven): the second order
 /// charge `K B^-1 K^T` of an edge far from consistent, whose `S_e` is nearly singular, is about
-/// `1 / floor` times its first order one: a rig's within-frame couplings, rotations by `pi / 2`
-/// and `pi`).
+/// `1 / floor` times its first order one (a rig's within-frame couplings, rotations by
+/// `pi / 2` and `pi`), and without bound as `S_e` vanishes (the three as one, [`merged_parts`]:
+/// `S_e = 0` up to rounding).
 fn edge_bound(
     s: &Matrix3<f64>,
     k: &Matrix3<f64>,
@@ -149,17 +190,14 @@ fn edge_bound(
     dropped: bool,
     cover: [&Matrix3<f64>; 2],
 ) -> Option<EdgeBound> {
-    let second = second_order_bound(s, k, eta, dropped, cover);
-    match second {
-        Some(b) if dropped => {
-            let largest = b.half_charge.symmetric_eigenvalues().max() + b.iso;
-            match first_order_bound(s, k, eta) {
-                Some(f) if f.iso < largest => Some(f),
-                _ => Some(b),
-            }
-        }
-        Some(b) => Some(b),
-        None => first_order_bound(s, k, eta),
+    let Some(b) = second_order_bound(s, k, eta, dropped, cover) else {
+        return first_order_bound(s, k, eta);
+    };
+    let largest = b.half_charge.symmetric_eigenvalues().max() + b.iso;
+    let keeps = b.kept.symmetric_eigenvalues().max().max(0.0);
+    match first_order_bound(s, k, eta) {
+        Some(f) if f.iso < largest && keeps <= f.iso => Some(f),
+        _ => Some(b),
     }
 }
 
@@ -282,8 +320,9 @@ fn floored_inverse(
     Some((symmetrize(&b_inv), symmetrize(&b)))
 }
 
-/// Step 2 for every edge (`keep[k]`: edge `k` is in `C`), then the diagonal blocks' rest
-/// `G_i = M_ii - sum_e S_e` added to the charges.
+/// Step 2 for every edge (`keep[k]`: edge `k` is in `C`; parallel edges as one,
+/// [`merged_parts`], the group's first kept edge carrying its `W`), then the diagonal blocks'
+/// rest `G_i = M_ii - sum_e S_e` added to the charges.
 pub(super) fn edge_blocks(
     problem: &MultipleProblem,
     information: &[Information],
@@ -292,26 +331,35 @@ pub(super) fn edge_blocks(
     keep: &[bool],
 ) -> std::result::Result<EdgeBlocks, BlockFailure> {
     let n = problem.num_rotations();
-    let parts: Vec<_> = problem
-        .edges()
-        .iter()
-        .zip(information)
-        .map(|(e, h)| edge_parts(h, &e.rotation, &rotations[e.i], &rotations[e.j]))
-        .collect();
+    let order: Vec<u32> = keep.iter().map(|&k| u32::from(k)).collect();
+    let parts = merged_parts(problem, information, rotations, &order);
     let strength = kept_strength(problem, &parts, keep);
     let mut node = vec![NodeSums::default(); n];
     let mut kept = Vec::with_capacity(problem.num_edges());
-    for (((e, h), &keep), (s, k, eta)) in problem
+    let nothing = EdgeBound {
+        kept: Matrix3::zeros(),
+        half_charge: Matrix3::zeros(),
+        iso: 0.0,
+    };
+    for (((e, h), &keep), parts) in problem
         .edges()
         .iter()
         .zip(information)
         .zip(keep)
         .zip(&parts)
     {
-        let cover = [&strength[e.i], &strength[e.j]];
-        let b = edge_bound(s, k, *eta, !keep, cover).ok_or(BlockFailure::Numerical)?;
         let f = h.twice_chordal_matrix();
         let trace = h.matrix().trace().abs();
+        // a merged group's other edges: their `F_e` in `M_ii`, their `E_e` in the first's
+        let Some((s, k, eta)) = parts else {
+            for v in [e.i, e.j] {
+                node[v].add(&nothing, &f, trace, &Matrix3::zeros());
+            }
+            kept.push(Matrix3::zeros());
+            continue;
+        };
+        let cover = [&strength[e.i], &strength[e.j]];
+        let b = edge_bound(s, k, *eta, !keep, cover).ok_or(BlockFailure::Numerical)?;
         for v in [e.i, e.j] {
             node[v].add(&b, &f, trace, s);
         }
@@ -336,22 +384,24 @@ pub(super) fn edge_blocks(
     })
 }
 
-/// Each node's kept strength per kept edge, `sum_e S_e / deg` over its edges in `C`.
+/// Each node's kept strength per kept edge, `sum_e S_e / deg` over its edges in `C` (a merged
+/// group as one edge).
 fn kept_strength(
     problem: &MultipleProblem,
-    parts: &[(Matrix3<f64>, Matrix3<f64>, f64)],
+    parts: &[Option<Parts>],
     keep: &[bool],
 ) -> Vec<Matrix3<f64>> {
     let n = problem.num_rotations();
     let mut sum = vec![Matrix3::zeros(); n];
     let mut count = vec![0usize; n];
-    for ((e, (s, _, _)), _) in problem
+    for ((e, part), _) in problem
         .edges()
         .iter()
         .zip(parts)
         .zip(keep)
         .filter(|(_, k)| **k)
     {
+        let Some((s, _, _)) = part else { continue };
         for v in [e.i, e.j] {
             sum[v] += s;
             count[v] += 1;

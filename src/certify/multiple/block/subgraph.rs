@@ -6,7 +6,7 @@
 //! edges that connect the result. Only a choice: it decides whether the proof succeeds and how
 //! large its factor is, never what it proves.
 
-use super::edges::{KEPT_SHARE, edge_strength_and_charge};
+use super::edges::{KEPT_SHARE, merged_parts, strength_and_charge};
 use crate::certify::multiple::scalar::{connect_within, partition_weighted};
 use crate::multiple::MultipleProblem;
 use crate::multiple::anisotropic::Information;
@@ -159,17 +159,17 @@ fn rehome(problem: &MultipleProblem, parts: &[Parts], keep: &[bool], region: &mu
     moved > 0
 }
 
-/// Every edge's strength and charge estimate ([`edge_strength_and_charge`]).
+/// Every edge's strength and charge estimate ([`strength_and_charge`]), each group of parallel
+/// edges as one on its first edge ([`merged_parts`]; the others none).
 fn edge_parts(
     problem: &MultipleProblem,
     information: &[Information],
     rotations: &[Rotation],
 ) -> Vec<Parts> {
-    problem
-        .edges()
+    let order = vec![1; problem.num_edges()];
+    merged_parts(problem, information, rotations, &order)
         .iter()
-        .zip(information)
-        .map(|(e, h)| edge_strength_and_charge(h, &e.rotation, &rotations[e.i], &rotations[e.j]))
+        .map(|p| strength_and_charge(p.as_ref()))
         .collect()
 }
 

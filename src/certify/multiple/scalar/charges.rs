@@ -135,7 +135,10 @@ fn round_down(x: f64, r: f64) -> f64 {
 /// a subgraph: `copies <= 1`) every group is merged (the pair's entry is in the pattern when
 /// one of its edges is kept); in a split only groups whose edges are held equally often.
 /// Linear: the edges are bucketed by their smaller endpoint, each bucket sorted.
-fn parallel_groups(problem: &MultipleProblem, copies: &[u32]) -> Vec<Vec<usize>> {
+pub(in crate::certify::multiple) fn parallel_groups(
+    problem: &MultipleProblem,
+    copies: &[u32],
+) -> Vec<Vec<usize>> {
     let edges = problem.edges();
     let (low, high) = (
         |k: usize| edges[k].i.min(edges[k].j),

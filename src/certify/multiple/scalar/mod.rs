@@ -66,7 +66,7 @@ mod residuals;
 pub(in crate::certify) mod rungs;
 mod split;
 #[cfg(test)]
-mod tests;
+pub(in crate::certify::multiple) mod tests;
 
 pub use analysis::{
     GROUPED_EDGES_PER_NODE, MIN_SPLIT_DEGREE, SPARSIFIED_EDGES_PER_NODE, SPLIT_MIN_DEGREES,
@@ -75,7 +75,7 @@ pub use analysis::{
 };
 pub(in crate::certify::multiple) use analysis::{components, connect_within, fro, subgraph_edges};
 pub(crate) use bordered::{LowRank, bordered_comparison};
-pub(in crate::certify::multiple) use charges::{orthogonality_defect, ostrowski};
+pub(in crate::certify::multiple) use charges::{orthogonality_defect, ostrowski, parallel_groups};
 pub(crate) use groups::grouped_dual_bound;
 pub(in crate::certify::multiple) use partition::partition_weighted;
 

@@ -230,7 +230,7 @@ fn with_parallel_edges(p: &MultipleProblem, at: &[Rotation], seed: u64) -> Multi
 /// block `c hat(axis) / (2 c)` (`P = R_a^T R'^T R_b` = a rotation by `pi/2` about `axis`, weight
 /// `c`, and by `pi` about two orthogonal axes, `c / 2` each): the torque `+u` at `a` and `-u` at
 /// `b` in their own frames.
-pub(super) fn push_pseudo_triple(
+pub(in crate::certify::multiple) fn push_pseudo_triple(
     edges: &mut Vec<crate::multiple::Edge>,
     at: &[Rotation],
     (a, b): (usize, usize),
