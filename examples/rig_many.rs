@@ -2,7 +2,8 @@
 //! 2-6 sensors and 100 to 10^4 frames, solved and certified by `rotavg::pipeline::average_rig`,
 //! with every sensor estimated and with every sensor known; the error against the planted rig.
 //!
-//! `cargo run --release --example rig_many [frames ...] [anisotropic] [known]` (`anisotropic`: the
+//! `cargo run --release --example rig_many [frames ...] [anisotropic] [known | estimated]
+//! [sensors=2,4,6] [verbose]` (`verbose`: the certificate's ladder on stderr) (`anisotropic`: the
 //! edges carry information matrices, `RigScene::anisotropy` 9, `[H24]`, and a last column gives
 //! the sensors' error of the same data with scalar weights `tr(H)/3`, solve only; `known`: only
 //! the rows with every sensor known); `-- write DIR FRAMES SENSORS OUTLIERS
@@ -59,6 +60,12 @@ fn main() -> rotavg::Result<()> {
         args
     };
     let known_only = all.iter().any(|a| a == "known");
+    let estimated_only = all.iter().any(|a| a == "estimated");
+    let verbose = all.iter().any(|a| a == "verbose");
+    let sensor_counts: Vec<usize> = match all.iter().find_map(|a| a.strip_prefix("sensors=")) {
+        Some(k) => k.split(',').filter_map(|k| k.parse().ok()).collect(),
+        None => vec![2, 4, 6],
+    };
     let anisotropy = if all.iter().any(|a| a == "anisotropic") {
         9.0
     } else {
@@ -77,9 +84,9 @@ fn main() -> rotavg::Result<()> {
         if anisotropy > 1.0 { "---|" } else { "" }
     );
     for &frames in &sizes {
-        for sensors in [2, 4, 6] {
+        for &sensors in &sensor_counts {
             for known in [false, true] {
-                if known_only && !known {
+                if (known_only && !known) || (estimated_only && known) {
                     continue;
                 }
                 let scene = RigScene {
@@ -99,6 +106,12 @@ fn main() -> rotavg::Result<()> {
                 };
                 let out = average_rig(&p, &Default::default())?;
                 let c = out.certificate.as_ref().expect("certified");
+                if verbose {
+                    for a in out.details.certify.iter().flat_map(|d| &d.ladder) {
+                        eprintln!("  {} {:.3} s {} {:?}", a.rung, a.seconds, a.note, a.outcome);
+                    }
+                    eprintln!("  {}", c.explanation);
+                }
                 let s = &out.solution;
                 let mut errs: Vec<f64> = s
                     .frames

@@ -119,6 +119,22 @@ impl BlockAnalysis {
             (Some(s), None) => (None, subgraph_edges(problem, rotations, s.edges_per_node)),
             (None, _) => (None, vec![true; problem.num_edges()]),
         };
+        Self::from_kept(
+            problem,
+            keep,
+            (shape, region.is_some().then_some(groups)),
+            max_values,
+        )
+    }
+
+    /// The analysis of the kept edges `keep` (`regions`: the regions asked for, whose kept
+    /// edges' components are proven apart; `None`: one pencil).
+    fn from_kept(
+        problem: &MultipleProblem,
+        keep: Vec<bool>,
+        (shape, regions): (Option<BlockShape>, Option<usize>),
+        max_values: usize,
+    ) -> Result<std::result::Result<Self, usize>> {
         let n = problem.num_rotations();
         let kept = || {
             problem
@@ -145,7 +161,7 @@ impl BlockAnalysis {
                 }
             })
             .collect();
-        let components = match region {
+        let components = match regions {
             Some(_) => {
                 let left_out: Vec<bool> = keep.iter().map(|k| !k).collect();
                 largest_last(components(problem, &left_out))
@@ -160,7 +176,7 @@ impl BlockAnalysis {
             slots,
             shape,
             num_rotations: n,
-            regions: if region.is_some() { groups } else { 0 },
+            regions: regions.unwrap_or(0),
             components,
         }))
     }
