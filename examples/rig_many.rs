@@ -3,7 +3,8 @@
 //! with every sensor estimated and with every sensor known; the error against the planted rig.
 //!
 //! `cargo run --release --example rig_many [frames ...] [anisotropic] [known | estimated]
-//! [sensors=2,4,6] [verbose]` (`verbose`: the certificate's ladder on stderr) (`anisotropic`: the
+//! [sensors=2,4,6] [memory=GiB] [verbose]` (`memory`: the certificate's memory budget, default
+//! 4; `verbose`: the certificate's ladder on stderr) (`anisotropic`: the
 //! edges carry information matrices, `RigScene::anisotropy` 9, `[H24]`, and a last column gives
 //! the sensors' error of the same data with scalar weights `tr(H)/3`, solve only; `known`: only
 //! the rows with every sensor known); `-- write DIR FRAMES SENSORS OUTLIERS
@@ -62,6 +63,9 @@ fn main() -> rotavg::Result<()> {
     let known_only = all.iter().any(|a| a == "known");
     let estimated_only = all.iter().any(|a| a == "estimated");
     let verbose = all.iter().any(|a| a == "verbose");
+    let memory_gib: Option<u64> = all
+        .iter()
+        .find_map(|a| a.strip_prefix("memory=").and_then(|m| m.parse().ok()));
     let sensor_counts: Vec<usize> = match all.iter().find_map(|a| a.strip_prefix("sensors=")) {
         Some(k) => k.split(',').filter_map(|k| k.parse().ok()).collect(),
         None => vec![2, 4, 6],
@@ -104,7 +108,11 @@ fn main() -> rotavg::Result<()> {
                         .map(|(a, b)| angle_between(a, b).to_degrees())
                         .fold(0.0, f64::max)
                 };
-                let out = average_rig(&p, &Default::default())?;
+                let mut settings = rotavg::pipeline::rig::AverageRigSettings::default();
+                if let Some(gib) = memory_gib {
+                    settings.certify.budget.max_memory_bytes = gib << 30;
+                }
+                let out = average_rig(&p, &settings)?;
                 let c = out.certificate.as_ref().expect("certified");
                 if verbose {
                     for a in out.details.certify.iter().flat_map(|d| &d.ladder) {

@@ -44,12 +44,7 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
         // the images' view graph with up to three pseudo-edges per pair of images of a frame
         let images = cx.problem.images().len() as f64;
         let size = 4.0 * images + cx.problem.edges().len() as f64;
-        let cap = cx
-            .tally
-            .settings
-            .dual
-            .max_factor_nonzeros
-            .min(COUPLED_MAX_FACTOR_VALUES);
+        let cap = fill_cap(cx);
         if let Some(refusal) = fill_refusal(cx.problem, cap)? {
             if cx.problem.is_anisotropic() {
                 return Ok(Plan::Refuse(refusal, None));
@@ -82,10 +77,7 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
             settings.mode = CertifyMode::Dual;
         }
         settings.dual.scalar_fallbacks = false;
-        settings.dual.max_factor_nonzeros = settings
-            .dual
-            .max_factor_nonzeros
-            .min(COUPLED_MAX_FACTOR_VALUES);
+        settings.dual.max_factor_nonzeros = coupled_cap(cx);
         // a labelled estimate is no bound of the rig's: not run
         settings.dual.randomized.enabled = false;
         let augmented = cx.tally.cost + coupled.offset.max(0.0);
@@ -198,11 +190,43 @@ fn grouped_minimum(
     }))
 }
 
+/// The largest factor the augmented graph's checks may form: [`COUPLED_MAX_FACTOR_VALUES`]
+/// for scalar weights; with information matrices the ladder's own budget checks decide (its
+/// `3n x 3n` factors: the grounded bound `[D15]` proves these rigs where the block comparison
+/// fails; measured on a rig of 10^4 frames and 2 sensors, 1 estimated, `rig_many`: certified in
+/// 95 s and 5.9 GB with a 12 GiB budget, a factor of 7.4e8 values, where the 1.5e8 cap left a
+/// 25 % gap).
+fn coupled_cap(cx: &RigState<'_>) -> usize {
+    let cap = cx.tally.settings.dual.max_factor_nonzeros;
+    if cx.problem.is_anisotropic() {
+        cap
+    } else {
+        cap.min(COUPLED_MAX_FACTOR_VALUES)
+    }
+}
+
+/// The cap of [`fill_refusal`]: [`coupled_cap`], and with information matrices the factor the
+/// memory budget holds (`3n x 3n`; its time is left to the ladder's predictions, which count
+/// the factorisation's multiply-adds).
+fn fill_cap(cx: &RigState<'_>) -> usize {
+    let cap = coupled_cap(cx);
+    if !cx.problem.is_anisotropic() {
+        return cap;
+    }
+    let memory = crate::certify::budget::Budget {
+        max_seconds: None,
+        ..cx.tally.settings.budget
+    };
+    cap.min(memory.max_factor_values(3 * cx.problem.images().len()))
+}
+
 /// The refusal of the rung when the augmented graph (the images' view graph and every pair of
 /// images of a frame) is connected and the ordering predicts the scalar comparison's factor
-/// above [`COUPLED_MAX_FACTOR_VALUES`]: then no check of it fits (the `3n` ones are at least 9
+/// above `cap` ([`fill_cap`]): then no check of it fits (the `3n` ones are at least 9
 /// times it), and the polish before it would be spent for nothing (10^4 frames and 4-6
-/// sensors: 4.5-6 s before the failure, 2026-11-30). For rigs of at most
+/// sensors: 4.5-6 s before the failure, 2026-11-30). With information matrices the checks
+/// factorise `S` (`3n x 3n`), predicted as 9 times the scalar factor of the pattern with every
+/// pair (the refusal names the memory budget: a larger one proves such rigs). For rigs of at most
 /// [`SCALAR_PROVES_UP_TO_ESTIMATED`] estimated sensors that factor is the images' own graph's:
 /// the pairs that hold only pseudo-edges keep no weight and leave its pattern (`[D13]`,
 /// weightless parallel groups; 10^4 frames and 2 sensors: 6.8e7 values against 8.2e7 with
@@ -238,9 +262,12 @@ fn fill_refusal(problem: &RigProblem, cap: usize) -> Result<Option<Refusal>> {
     // the pairs that hold only pseudo-edges keep no weight: the scalar comparison leaves them
     // out of its pattern (`[D13]`, weightless parallel groups), which is the images' own graph;
     // with more estimated sensors it fails there, and the `3n` factors need every pair
-    let own = match problem.estimated_sensors().len() {
-        0..=SCALAR_PROVES_UP_TO_ESTIMATED => &pairs[..problem.edges().len()],
-        _ => &pairs[..],
+    // with information matrices the checks factorise `S` itself (`3n x 3n`: nine values per
+    // scalar one), every pair of a frame's images included
+    let (own, per_value) = match problem.estimated_sensors().len() {
+        _ if problem.is_anisotropic() => (&pairs[..], 9),
+        0..=SCALAR_PROVES_UP_TO_ESTIMATED => (&pairs[..problem.edges().len()], 1),
+        _ => (&pairs[..], 1),
     };
     let mut triplets = Vec::with_capacity(2 * own.len() + n);
     triplets.extend((0..n).map(|a| faer::sparse::Triplet::new(a, a, 1.0)));
@@ -252,12 +279,20 @@ fn fill_refusal(problem: &RigProblem, cap: usize) -> Result<Option<Refusal>> {
         .map_err(|e| crate::error::Error::Solver {
             message: format!("could not assemble the augmented graph's pattern: {e:?}"),
         })?;
-    let within = crate::linalg::cholesky::symbolic_cholesky_within(pattern.symbolic(), cap)?;
+    let within =
+        crate::linalg::cholesky::symbolic_cholesky_within(pattern.symbolic(), cap / per_value)?;
     Ok(within.err().map(|predicted| Refusal::OverBudget {
-        reason: format!(
-            "the augmented graph's scalar factor is predicted at {predicted:.1e} values, above \
-             the {cap:.1e} its checks may form [H21]"
-        ),
+        reason: match per_value {
+            1 => format!(
+                "the augmented graph's scalar factor is predicted at {predicted:.1e} values, \
+                 above the {cap:.1e} its checks may form [H21]"
+            ),
+            _ => format!(
+                "the augmented graph's 3n factor is predicted at about {:.1e} values, above the \
+                 {cap:.1e} the memory budget allows (--max-memory) [H21]",
+                per_value as f64 * predicted as f64
+            ),
+        },
     }))
 }
 
@@ -388,5 +423,41 @@ mod tests {
             let (p, _) = small.generate();
             assert!(fill_refusal(&p, cap).expect("pattern").is_none());
         }
+    }
+
+    /// With information matrices the refusal predicts the `3n` factor (nine values per scalar
+    /// one, every pair of a frame's images in the pattern) against the memory budget's cap:
+    /// refused between the scalar count and nine times it, where the same rig with scalar
+    /// weights is not, and never without a cap.
+    #[test]
+    fn an_anisotropic_rig_is_refused_by_its_3n_factor_and_names_the_memory_budget() {
+        let scene = |anisotropy| RigScene {
+            frames: 300,
+            sensors: 2,
+            anisotropy,
+            ..Default::default()
+        };
+        let (iso, _) = scene(1.0).generate();
+        let (aniso, _) = scene(9.0).generate();
+        assert!(aniso.is_anisotropic() && !iso.is_anisotropic());
+        assert!(fill_refusal(&aniso, usize::MAX).expect("pattern").is_none());
+        // the smallest cap the scalar-weights rig's pattern fits (by bisection on the refusal)
+        let (mut low, mut high) = (1usize, 1usize << 40);
+        while high - low > 1 {
+            let mid = low + (high - low) / 2;
+            match fill_refusal(&iso, mid).expect("pattern") {
+                Some(_) => low = mid,
+                None => high = mid,
+            }
+        }
+        // the anisotropic pattern holds every pair: at least the images' own graph's
+        let refusal = fill_refusal(&aniso, 4 * high)
+            .expect("pattern")
+            .expect("a 3n factor over four times the scalar one");
+        assert!(
+            format!("{refusal:?}").contains("--max-memory"),
+            "{refusal:?}"
+        );
+        assert!(fill_refusal(&iso, 4 * high).expect("pattern").is_none());
     }
 }
