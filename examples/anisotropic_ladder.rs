@@ -2,11 +2,12 @@
 //! verification ladder: which proofs ran, what they predicted and how long they took.
 //!
 //! ```text
-//! cargo run --release --example anisotropic_ladder -- [CAMERAS] [EDGES] [without-block]
+//! cargo run --release --example anisotropic_ladder -- [CAMERAS] [EDGES] [without-block | block-always]
 //! ```
 //!
 //! Defaults: 1000 cameras, 4000 edges. `without-block` leaves the block comparison `[A15]` off
-//! the ladder (the A/B of `paper-notes/anisotropic.md` `[A15]`).
+//! the ladder (the A/B of `paper-notes/anisotropic.md` `[A15]`); `block-always` puts it on at
+//! any size (`DualSettings::block_comparison_above` 0).
 use rotavg::certify::{CertifySettings, Proof, certify_multiple};
 use rotavg::multiple::synthetic::SyntheticAnisotropic;
 use rotavg::multiple::{MultipleSettings, solve_multiple};
@@ -29,6 +30,9 @@ fn main() -> rotavg::Result<()> {
             .dual
             .proofs
             .retain(|p| *p != Proof::BlockComparison);
+    }
+    if args.iter().any(|a| a == "block-always") {
+        settings.dual.block_comparison_above = 0;
     }
     let t = Instant::now();
     let c = certify_multiple(&p, &s.rotations, &settings)?;

@@ -76,6 +76,24 @@ pub const BLOCK_REGION_MIN_EDGES_PER_NODE: f64 = 8.5;
 /// failed with 155, 4 and 4 negative pivots in 5.8, 19.7 and 15.1 s before the grounded bound
 /// proved in 14.5 s (one factorisation of about 1.8e8 values).
 pub const BLOCK_WHOLE_FRACTION: f64 = 0.5;
+/// Fewer edges per node than this make a graph sparse for the block comparison ([`sparse`]).
+/// Measured on the realistic two-view class: at 4 edges per node its subgraphs failed at
+/// 10^4 cameras (155 negative pivots at 2 edges per node topped up to 14, 4 at 4 to 24 and 6
+/// to 32; `anisotropic_ladder -- 10000 40000`, 2026-12-03) and at 1000 (the suite's
+/// `block_comparison` test), on the rig of 10^4 frames with about 3 edges per image (1243 in
+/// the sensors' regions), and the grounded bound `[D15]` proved; at 9-10 edges per node they
+/// prove (10^4 cameras: 4.2 s against a grounded bound predicted past 20 s).
+pub const BLOCK_SPARSE_EDGES_PER_NODE: f64 = 5.0;
+
+/// The chance a sparse graph's first subgraph is given ([`BlockFamily`]): the ladder then runs
+/// the grounded bound first when it is predicted below `1 / SPARSE_CHANCE` times the subgraph.
+const SPARSE_CHANCE: f64 = 0.25;
+
+/// Fewer than [`BLOCK_SPARSE_EDGES_PER_NODE`] edges per node.
+fn sparse(problem: &crate::multiple::MultipleProblem) -> bool {
+    (problem.num_edges() as f64) < BLOCK_SPARSE_EDGES_PER_NODE * problem.num_rotations() as f64
+}
+
 /// The regions the block comparison's subgraphs of `problem` are split into first
 /// ([`BlockAnalysis::grouped`]): one per [`BLOCK_GROUP_NODES`] nodes, at most
 /// [`BLOCK_MAX_GROUPS`]; 1 (no split) below twice that or below
@@ -164,7 +182,8 @@ impl<'a> Rung<Check<'a>> for BlockFamily {
             Some(Err(_)) if !self.failures.is_empty() => Plan::Done,
             planned => cx.plan_from(planned),
         };
-        if matches!(plan, Plan::Run(_)) && !self.attempted {
+        // on sparse graphs the `3n` rungs plan beside it (their order decides)
+        if matches!(plan, Plan::Run(_)) && !self.attempted && !sparse(cx.problem) {
             cx.block_runs_first();
         }
         Ok(plan)
@@ -244,7 +263,7 @@ impl BlockFamily {
                     self.pending = None;
                     Err(refusal)
                 }
-                None => predict(cx.settings, a).map(|p| p.with_success(self.chance())),
+                None => predict(cx.settings, a).map(|p| p.with_success(self.chance(cx.problem))),
             },
             None => Err(Refusal::OverBudget {
                 reason: "no subgraph's block factor fits the budget".into(),
@@ -268,15 +287,17 @@ impl BlockFamily {
         })
     }
 
-    /// The chance that the next subgraph proves, from the failures so far: 1 before any; after
-    /// a near miss (at most 16 negative pivots: the next subgraph is not skipped) 1/2, and 1/10
-    /// when the last two near misses had the same count (a node the comparison cannot cover,
-    /// not the subgraph's connectivity: measured on a 3000-camera graph, 4 negative pivots at
-    /// 5, 6 and 8 edges per node).
-    fn chance(&self) -> f64 {
+    /// The chance that the next subgraph proves, from the failures so far: before any,
+    /// [`SPARSE_CHANCE`] on a sparse graph ([`sparse`]) and 1 otherwise; after a near miss (at
+    /// most 16 negative pivots: the next subgraph is not skipped) 1/2, and 1/10 when the last
+    /// two near misses had the same count (a node the comparison cannot cover, not the
+    /// subgraph's connectivity: measured on a 3000-camera graph, 4 negative pivots at 5, 6 and 8
+    /// edges per node).
+    fn chance(&self, problem: &crate::multiple::MultipleProblem) -> f64 {
         match self.failures.as_slice() {
             [.., a, b] if a == b && *b <= 16 => 0.1,
             [.., b] if *b <= 16 => 0.5,
+            [] if sparse(problem) => SPARSE_CHANCE,
             _ => 1.0,
         }
     }
