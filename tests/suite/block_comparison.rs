@@ -153,13 +153,7 @@ fn regions_certify_a_ten_thousand_camera_graph() {
 /// is planned and logged as not needed: checked), and the grounded bound certifies.
 #[test]
 fn subgraphs_nearly_as_large_as_the_graph_are_left_to_the_grounded_bound() {
-    let (p, _) = SyntheticAnisotropic::two_view_like(1000, 6000, 0.0).generate();
-    let s = solve_multiple(&p, &MultipleSettings::default()).unwrap();
-    let mut settings = CertifySettings::with_mode(CertifyMode::Dual);
-    settings.dual.block_comparison_above = 0;
-    let c = certify_multiple(&p, &s.rotations, &settings).unwrap();
-    assert!(c.certificate.is_certified(), "{}", c.certificate);
-    let ladder = &c.details.ladder;
+    let ladder = grounded_ladder(1000, 6000);
     let block: Vec<_> = ladder
         .iter()
         .filter(|a| a.rung == Proof::BlockComparison)
@@ -168,10 +162,6 @@ fn subgraphs_nearly_as_large_as_the_graph_are_left_to_the_grounded_bound() {
         block.len() == 1 && matches!(block[0].outcome, Outcome::Failed { .. }),
         "{ladder:?}"
     );
-    let grounded = ladder
-        .iter()
-        .any(|a| a.rung == Proof::Grounded && matches!(a.outcome, Outcome::Proved { .. }));
-    assert!(grounded, "{ladder:?}");
 }
 
 /// On a sparse graph (4 edges per node: fewer than `BLOCK_SPARSE_EDGES_PER_NODE`) the block
@@ -181,20 +171,28 @@ fn subgraphs_nearly_as_large_as_the_graph_are_left_to_the_grounded_bound() {
 /// certifies, and no subgraph is factorised (without the rule: one fails first, checked).
 #[test]
 fn sparse_graphs_go_to_the_grounded_bound_first() {
-    let (p, _) = SyntheticAnisotropic::two_view_like(1000, 4000, 0.0).generate();
-    let s = solve_multiple(&p, &MultipleSettings::default()).unwrap();
-    let mut settings = CertifySettings::with_mode(CertifyMode::Dual);
-    settings.dual.block_comparison_above = 0;
-    let c = certify_multiple(&p, &s.rotations, &settings).unwrap();
-    assert!(c.certificate.is_certified(), "{}", c.certificate);
-    let ladder = &c.details.ladder;
+    let ladder = grounded_ladder(1000, 4000);
     let attempted = ladder.iter().any(|a| {
         a.rung == Proof::BlockComparison
             && matches!(a.outcome, Outcome::Failed { .. } | Outcome::Proved { .. })
     });
     assert!(!attempted, "{ladder:?}");
+}
+
+/// The ladder of the least-squares solution of a realistic two-view graph of `n` cameras and
+/// `m` edges with the block comparison on at any size (`block_comparison_above` 0), asserted
+/// certified by the grounded bound.
+fn grounded_ladder(n: usize, m: usize) -> Vec<rotavg::certify::Attempt> {
+    let (p, _) = SyntheticAnisotropic::two_view_like(n, m, 0.0).generate();
+    let s = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    let mut settings = CertifySettings::with_mode(CertifyMode::Dual);
+    settings.dual.block_comparison_above = 0;
+    let c = certify_multiple(&p, &s.rotations, &settings).unwrap();
+    assert!(c.certificate.is_certified(), "{}", c.certificate);
+    let ladder = c.details.ladder;
     let grounded = ladder
         .iter()
         .any(|a| a.rung == Proof::Grounded && matches!(a.outcome, Outcome::Proved { .. }));
     assert!(grounded, "{ladder:?}");
+    ladder
 }

@@ -76,7 +76,8 @@ pub const BLOCK_REGION_MIN_EDGES_PER_NODE: f64 = 8.5;
 /// failed with 155, 4 and 4 negative pivots in 5.8, 19.7 and 15.1 s before the grounded bound
 /// proved in 14.5 s (one factorisation of about 1.8e8 values).
 pub const BLOCK_WHOLE_FRACTION: f64 = 0.5;
-/// Fewer edges per node than this make a graph sparse for the block comparison ([`sparse`]).
+/// Fewer edges per node than this make a graph sparse for the block comparison: its first
+/// subgraph's chance is then 1/4 and the `3n` rungs do not wait for it.
 /// Measured on the realistic two-view class: at 4 edges per node its subgraphs failed at
 /// 10^4 cameras (155 negative pivots at 2 edges per node topped up to 14, 4 at 4 to 24 and 6
 /// to 32; `anisotropic_ladder -- 10000 40000`, 2026-12-03) and at 1000 (the suite's
