@@ -289,7 +289,7 @@ fn fill_refusal(problem: &RigProblem, cap: usize) -> Result<Option<Refusal>> {
             ),
             _ => format!(
                 "the augmented graph's 3n factor is predicted at about {:.1e} values, above the \
-                 {cap:.1e} the memory budget allows (--max-memory) [H21]",
+                 {cap:.1e} its checks may form within the memory budget (--max-memory) [H21]",
                 per_value as f64 * predicted as f64
             ),
         },

@@ -195,6 +195,10 @@ fn edge_bound(
     };
     let largest = b.half_charge.symmetric_eigenvalues().max() + b.iso;
     let keeps = b.kept.symmetric_eigenvalues().max().max(0.0);
+    // a kept edge keeping at least its charge (most, at a good estimate): no `6 x 6` check
+    if keeps >= largest {
+        return Some(b);
+    }
     match first_order_bound(s, k, eta) {
         Some(f) if f.iso < largest && keeps <= f.iso => Some(f),
         _ => Some(b),
