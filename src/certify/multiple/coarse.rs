@@ -121,6 +121,26 @@ impl BlockOperator {
         (self.form + gamma(self.terms) * self.row_abs) * (1.0 + 1e-10)
     }
 
+    /// The stored diagonal blocks `fl(M_ii)`.
+    pub(in crate::certify::multiple) fn diagonal(&self) -> &[Matrix3<f64>] {
+        &self.diag
+    }
+
+    /// The stored off-diagonal blocks `(i, j, fl(M_ij))`, each standing for its transpose too.
+    pub(in crate::certify::multiple) fn blocks(&self) -> &[(usize, usize, Matrix3<f64>)] {
+        &self.edges
+    }
+
+    /// `||M_stored - M||_2`: the blocks' forming error.
+    pub(in crate::certify::multiple) fn form_error(&self) -> f64 {
+        self.form
+    }
+
+    /// The largest absolute row sum of the stored `M` (`>= || |M| ||_2`).
+    pub(in crate::certify::multiple) fn row_abs(&self) -> f64 {
+        self.row_abs
+    }
+
     /// A bound on `||M||_2`.
     fn norm(&self) -> f64 {
         (self.row_abs + self.form) * (1.0 + 1e-10)

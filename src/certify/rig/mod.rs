@@ -131,6 +131,25 @@ fn certify_rig_with(
     })
 }
 
+/// The augmented graph of `[H21]` of a generated rig at its solution polished by 20
+/// alternation passes, its image rotations and each image's sensor (for the certificates'
+/// tests).
+#[cfg(test)]
+pub(crate) fn coupled_graph_for_tests(
+    scene: &crate::rig::RigScene,
+) -> (crate::multiple::MultipleProblem, Vec<Rotation>, Vec<usize>) {
+    let (problem, _) = scene.generate();
+    let s = crate::rig::solve_rig(&problem, &Default::default()).expect("solves");
+    let polished = crate::rig::polish_passes(&problem, (s.frames, s.sensors), 20, None);
+    let (frames, sensors) = polished.expect("polishes");
+    let coupled = couplings::couple(&problem, &frames, &sensors, u64::MAX)
+        .expect("couples")
+        .expect("couplings");
+    let x = problem.image_rotations(&frames, &sensors);
+    let sensor = problem.images().iter().map(|im| im.sensor).collect();
+    (coupled.graph, x, sensor)
+}
+
 /// Held gravity priors (`[G14]`): the frames on their directions (within
 /// [`crate::certify::gravity::GRAVITY_FEASIBILITY_RAD`]), else the estimate is no point of the
 /// problem and no bound may certify it.

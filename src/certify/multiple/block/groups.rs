@@ -104,7 +104,7 @@ pub(super) fn anisotropic_operator(
 /// The components and their `3 x 3` weights: `U = {x : sum_{i in g} W_i x_i = 0 for all g}`,
 /// its projector `P x = x - E a(x)` (`a_g` the weighted mean `(sum W_i)^{-1} sum W_i x_i`,
 /// exact in the proof) and `kappa`.
-struct BlockGroups<'a> {
+pub(super) struct BlockGroups<'a> {
     of: &'a [usize],
     weights: &'a [Matrix3<f64>],
     count: usize,
@@ -122,7 +122,7 @@ struct BlockGroups<'a> {
 }
 
 impl<'a> BlockGroups<'a> {
-    fn new(of: &'a [usize], weights: &'a [Matrix3<f64>]) -> Option<Self> {
+    pub(super) fn new(of: &'a [usize], weights: &'a [Matrix3<f64>]) -> Option<Self> {
         let count = of.iter().max().map_or(1, |m| m + 1);
         let mut sum = vec![Matrix3::zeros(); count];
         let mut sq = vec![Matrix3::zeros(); count];

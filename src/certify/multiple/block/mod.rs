@@ -29,6 +29,7 @@
 mod edges;
 mod groups;
 mod outcome;
+mod regional;
 pub mod rungs;
 mod subgraph;
 #[cfg(test)]
@@ -47,6 +48,9 @@ use crate::so3::Rotation;
 use faer::sparse::linalg::cholesky::SymbolicCholesky;
 use nalgebra::Matrix3;
 pub use outcome::{BlockComparison, BlockFailure};
+#[cfg(test)]
+pub(crate) use regional::regional_bound;
+pub(crate) use regional::regional_dual_bound;
 pub use rungs::{BLOCK_GROUP_NODES, block_groups};
 pub use subgraph::{BlockShape, TOP_UP_MAX_EDGES};
 
@@ -250,7 +254,7 @@ impl BlockAnalysis {
 
 /// The components renumbered so that the largest is the last (its `kappa` is the one the
 /// coarse bound's gauge directions take, `[A15]` "Regions").
-fn largest_last(mut of: Vec<usize>) -> Vec<usize> {
+pub(super) fn largest_last(mut of: Vec<usize>) -> Vec<usize> {
     let count = of.iter().max().map_or(0, |m| m + 1);
     let mut size = vec![0usize; count];
     of.iter().for_each(|&g| size[g] += 1);
