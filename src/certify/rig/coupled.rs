@@ -225,7 +225,7 @@ fn regional_minimum(
         max_seconds: None,
         ..cx.tally.settings.budget
     };
-    let max_values = fill_cap(cx).min(memory.max_factor_values(3 * largest + 3));
+    let max_values = coupled_cap(cx).min(memory.max_factor_values(3 * largest + 3));
     let found = regional_dual_bound(graph, x, &region, (max_values, cx.tally.left()))?;
     Ok(found
         .map(|(bound, _)| (1, bound))

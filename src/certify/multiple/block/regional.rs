@@ -102,9 +102,9 @@ pub(crate) fn regional_bound(
         rho0: terms.h,
         rho1: terms.rho * (1.0 + t_max) * (1.0 + 4.0 * U),
     };
-    let rel = (COARSE_RELATIVE_RESIDUAL, stop_at);
     let zeta_free = zeta * (1.0 - 4.0 * U);
-    let Some(coarse) = coarse_terms_gauged(&m, &space, gauge, (zeta_free, rel.0, rel.1)) else {
+    let coarse = (zeta_free, COARSE_RELATIVE_RESIDUAL, stop_at);
+    let Some(coarse) = coarse_terms_gauged(&m, &space, gauge, coarse) else {
         return Ok(Err(why(BlockFailure::Numerical)));
     };
     let Some(mu) = ostrowski(coarse.mu(space.kappa()), t_max) else {
@@ -176,7 +176,7 @@ pub(super) fn cross_charges(m: &BlockOperator, of: &[usize]) -> Option<Vec<Matri
     }
     let mut pairs: Vec<Pair> = pairs.into_iter().collect();
     pairs.sort_unstable_by_key(|(key, _)| *key);
-    let splits = balanced_splits(diag, &pairs)?;
+    let splits = balanced_splits(diag, &pairs);
     let ChargeSums {
         sum,
         magnitude,
@@ -227,16 +227,31 @@ fn charge_sums(n: usize, pairs: &[Pair], splits: &[f64]) -> Option<ChargeSums> {
 /// charge is its own support at both ends), else moved, over [`SPLIT_PASSES`] passes, toward
 /// equal shares `t |B^T|`, `|B| / t` of what each endpoint has left without the pair
 /// (within [`SPLIT_RANGE`]). Only a choice: the charges are verified as split.
-fn balanced_splits(diag: &[Matrix3<f64>], pairs: &[Pair]) -> Option<Vec<f64>> {
+fn balanced_splits(diag: &[Matrix3<f64>], pairs: &[Pair]) -> Vec<f64> {
+    // each pair's polar pair once; the passes' sums unverified (a choice only)
+    let polar: Vec<(Matrix3<f64>, Matrix3<f64>)> = pairs
+        .iter()
+        .map(|(_, (b, _, _))| {
+            (
+                psd_sqrt(&(b * b.transpose())),
+                psd_sqrt(&(b.transpose() * b)),
+            )
+        })
+        .collect();
     let mut splits = vec![1.0f64; pairs.len()];
     for _ in 0..SPLIT_PASSES {
-        let sum = charge_sums(diag.len(), pairs, &splits)?.sum;
-        for (((a, b), (block, _, _)), t) in pairs.iter().zip(splits.iter_mut()) {
+        let mut sum = vec![Matrix3::zeros(); diag.len()];
+        for (((a, b), _), ((p, q), t)) in pairs.iter().zip(polar.iter().zip(&splits)) {
+            sum[*a] += p * *t;
+            sum[*b] += q / *t;
+        }
+        for (((a, b), (block, _, _)), ((p, q), t)) in
+            pairs.iter().zip(polar.iter().zip(splits.iter_mut()))
+        {
             if fro(&(block + block.transpose())) >= fro(&(block - block.transpose())) {
                 continue;
             }
-            let p = psd_sqrt(&(block * block.transpose())) * *t;
-            let q = psd_sqrt(&(block.transpose() * block)) / *t;
+            let (p, q) = (p * *t, q / *t);
             let load_a = relative_load(&(diag[*a] - sum[*a] + p), &p);
             let load_b = relative_load(&(diag[*b] - sum[*b] + q), &q);
             let next = *t * (load_b / load_a).sqrt();
@@ -245,7 +260,7 @@ fn balanced_splits(diag: &[Matrix3<f64>], pairs: &[Pair]) -> Option<Vec<f64>> {
             }
         }
     }
-    Some(splits)
+    splits
 }
 
 /// `lambda_max(D^{-1/2} C D^{-1/2})` for a node's diagonal block `D` (its eigenvalues floored
