@@ -59,7 +59,97 @@ pub(crate) fn ldlt_inertia_by_row(
     symbolic: &SymbolicCholesky<usize>,
     a: SparseColMatRef<'_, usize, f64>,
 ) -> Result<RowInertia, LdltFailure> {
+    let values = ldlt_values(symbolic, a)?;
+    row_inertia(symbolic, &values, a.nrows())
+}
+
+/// [`ldlt_inertia`], and when the negative pivots are not `expected` but at most `most`, the columns `L e_k`
+/// of the factor at the negative pivots `k`, in `A`'s order (sparse: `(row, value)`): `y^T
+/// P^T L D L^T P y >= 0` for every `y` orthogonal to all of them (`u = L^T P y` is zero at
+/// every negative pivot). Only a choice of directions for a later, verified factorisation.
+pub(crate) fn ldlt_negative_columns(
+    symbolic: &SymbolicCholesky<usize>,
+    a: SparseColMatRef<'_, usize, f64>,
+    expected: usize,
+    most: usize,
+) -> Result<(Inertia, NegativePivots), LdltFailure> {
     let n = a.nrows();
+    let values = ldlt_values(symbolic, a)?;
+    let rows = row_inertia(symbolic, &values, n)?;
+    let inertia = Inertia {
+        negative: rows.negative,
+        backward_error: rows.backward.iter().copied().fold(0.0, f64::max),
+    };
+    if rows.negative == expected || rows.negative > most {
+        return Ok((inertia, NegativePivots::default()));
+    }
+    let fwd: Vec<usize> = match symbolic.perm() {
+        Some(perm) => perm.arrays().0.to_vec(),
+        None => (0..n).collect(),
+    };
+    let mut at = vec![usize::MAX; n];
+    let mut columns: Vec<NegativeColumn> = Vec::new();
+    for_each_factor_entry(symbolic, &values, &mut |r, c, v| {
+        if r == c && v < 0.0 {
+            at[c] = columns.len();
+            columns.push(NegativeColumn {
+                pivot: v,
+                entries: vec![(fwd[c], 1.0)],
+            });
+        }
+    });
+    let last = n.saturating_sub(TRAILING);
+    let mut trailing = Trailing {
+        rows: fwd[last..].to_vec(),
+        pivots: vec![0.0; n - last],
+        lower: vec![vec![0.0; n - last]; n - last],
+    };
+    for_each_factor_entry(symbolic, &values, &mut |r, c, v| {
+        if r != c && at[c] != usize::MAX {
+            columns[at[c]].entries.push((fwd[r], v));
+        }
+        if c >= last {
+            if r == c {
+                trailing.pivots[c - last] = v;
+            } else {
+                trailing.lower[r - last][c - last] = v;
+            }
+        }
+    });
+    Ok((inertia, NegativePivots { columns, trailing }))
+}
+
+/// A negative pivot `d_k` of an `LDL^T` and its column `P^T L e_k` (the stored values exactly,
+/// `(row, value)` in the matrix's own order, the unit diagonal first).
+pub(crate) struct NegativeColumn {
+    pub pivot: f64,
+    pub entries: Vec<(usize, f64)>,
+}
+
+/// The positions last in the elimination order that [`NegativePivots::trailing`] reports.
+pub(crate) const TRAILING: usize = 3;
+
+/// The factor's columns at its negative pivots and its last [`TRAILING`] positions.
+#[derive(Default)]
+pub(crate) struct NegativePivots {
+    pub columns: Vec<NegativeColumn>,
+    pub trailing: Trailing,
+}
+
+/// The last positions of the elimination: their rows in the matrix's order, their pivots and
+/// the strictly lower entries of `L` among them (`lower[i][j]`, `i > j`; by position).
+#[derive(Default)]
+pub(crate) struct Trailing {
+    pub rows: Vec<usize>,
+    pub pivots: Vec<f64>,
+    pub lower: Vec<Vec<f64>>,
+}
+
+/// The factor values of `LDL^T` (no pivoting, no regularisation), all finite.
+fn ldlt_values(
+    symbolic: &SymbolicCholesky<usize>,
+    a: SparseColMatRef<'_, usize, f64>,
+) -> Result<Vec<f64>, LdltFailure> {
     let mut values = vec![0.0f64; symbolic.len_val()];
     let par = super::factor_parallelism(symbolic.len_val());
     let req = symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
@@ -80,8 +170,17 @@ pub(crate) fn ldlt_inertia_by_row(
     if !values.iter().all(|v| v.is_finite()) {
         return Err(LdltFailure::Numerical);
     }
+    Ok(values)
+}
+
+/// The inertia and row-wise backward error of the factor `values` of an `n x n` matrix.
+fn row_inertia(
+    symbolic: &SymbolicCholesky<usize>,
+    values: &[f64],
+    n: usize,
+) -> Result<RowInertia, LdltFailure> {
     // visit (row, col, value) of the factor: diagonal entries are D, strictly lower ones L
-    let visit = |f: &mut dyn FnMut(usize, usize, f64)| for_each_factor_entry(symbolic, &values, f);
+    let visit = |f: &mut dyn FnMut(usize, usize, f64)| for_each_factor_entry(symbolic, values, f);
     let mut d = vec![0.0f64; n];
     let mut colsum = vec![1.0f64; n]; // the unit diagonal of L
     let mut rowcount = vec![1usize; n];
@@ -137,6 +236,75 @@ mod tests {
     /// In exact arithmetic a leaf's row sum of `|L| |D| |L^T|` is `a_ii + 1/2` and the hub's
     /// `1 + (n - 1) / 2` (its pivot `1 - sum 1 / (4 a_ii)` plus `1/2 + 1 / (4 a_ii)` per leaf):
     /// every ratio to those must be the same scale.
+    /// Off the factor's columns at its negative pivots the matrix is positive semidefinite:
+    /// dense eigenvalues of `Q^T A Q` (`Q` an orthonormal basis of their complement), on a
+    /// simplicial factor and a supernodal one (the last case).
+    #[test]
+    fn the_negative_columns_deflate_every_negative_eigenvalue() {
+        use nalgebra::DMatrix;
+        for (n, density, seed) in [(30usize, 0.2f64, 1u64), (120, 0.5, 2), (300, 20.0, 3)] {
+            let mut state = seed;
+            let mut next = || {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((state >> 11) as f64) / ((1u64 << 53) as f64)
+            };
+            let mut dense = DMatrix::<f64>::zeros(n, n);
+            for i in 0..n {
+                dense[(i, i)] = 4.0 * next() - 0.5;
+                for j in 0..i {
+                    if next() < density * 4.0 / n as f64 {
+                        let v = next() - 0.5;
+                        dense[(i, j)] = v;
+                        dense[(j, i)] = v;
+                    }
+                }
+            }
+            let mut t = Vec::new();
+            for i in 0..n {
+                for j in 0..n {
+                    if dense[(i, j)] != 0.0 {
+                        t.push(Triplet::new(i, j, dense[(i, j)]));
+                    }
+                }
+            }
+            let a = SparseColMat::try_new_from_triplets(n, n, &t).unwrap();
+            let sym = symbolic_cholesky_within(a.symbolic(), usize::MAX)
+                .unwrap()
+                .unwrap();
+            let (rows, found) = ldlt_negative_columns(&sym, a.as_ref(), usize::MAX, n).unwrap();
+            let cols = found.columns;
+            let eig = dense.clone().symmetric_eigen().eigenvalues;
+            let negative = eig.iter().filter(|v| **v < 0.0).count();
+            assert_eq!(rows.negative, negative);
+            assert_eq!(cols.len(), negative);
+            let mut c = DMatrix::<f64>::zeros(n, negative.max(1));
+            for (k, col) in cols.iter().enumerate() {
+                assert!(col.pivot < 0.0);
+                for &(r, v) in &col.entries {
+                    c[(r, k)] = v;
+                }
+            }
+            // complement of span(C) by the SVD
+            let svd = c.clone().svd(true, false);
+            let u = svd.u.unwrap();
+            let full = DMatrix::<f64>::identity(n, n) - &u * u.transpose();
+            let e = full.clone().symmetric_eigen();
+            let q: Vec<_> = (0..n)
+                .filter(|&i| e.eigenvalues[i] > 0.5)
+                .map(|i| e.eigenvectors.column(i).into_owned())
+                .collect();
+            let q = DMatrix::from_columns(&q);
+            let restricted = q.transpose() * &dense * &q;
+            let low = restricted.symmetric_eigen().eigenvalues.min();
+            assert!(
+                low > -1e-10,
+                "n {n}: {negative} negatives, restricted min {low}"
+            );
+        }
+    }
+
     #[test]
     fn row_bounds_come_back_in_the_matrix_order() {
         let n = 12;

@@ -48,6 +48,12 @@ pub(in crate::certify::multiple) trait CoarseSpace {
     /// A bound on `||(I - P)(z - E)||_F` over the columns `z` (`P` the space's projector onto
     /// `U`, `E` the coarse directions): how far the computed `z` is from the `V'` it stands for.
     fn off_space(&self, z: &[Vec<f64>]) -> f64;
+    /// Coarse directions besides the groups' constant ones (`[A16]`, "Deflation"), after them
+    /// in [`coarse_terms_gauged`]'s columns: a space with any must bound their coefficients in
+    /// `kappa` too and know them in `off_space`.
+    fn extra_columns(&self) -> Vec<Vec<f64>> {
+        Vec::new()
+    }
 }
 
 /// `M = D^T S D` as `3 x 3` blocks with bounds on its forming error and on `|| |M| ||_2`.
@@ -177,6 +183,10 @@ pub(in crate::certify::multiple) fn coarse_terms(
     groups: &impl CoarseSpace,
     (zeta, rel, stop_at): (f64, f64, Option<std::time::Instant>),
 ) -> Option<Coarse> {
+    if !groups.extra_columns().is_empty() {
+        // their coefficients are not in this bound's basis: only the gauged one takes them
+        return None;
+    }
     let dim = 3 * groups.group_of().len();
     let cols = 3 * groups.count();
     let coarse = coarse_columns(groups, cols);
@@ -212,8 +222,10 @@ pub(in crate::certify::multiple) struct GaugeBounds {
 }
 
 /// The coarse bound with the gauge directions bounded apart (`[A15]`, "Regions"): in the basis
-/// `b = (a_1 - a_k, ..., a_{k-1} - a_k, a_k)` of the coarse coefficients (`|b|^2 <= (2k - 1)
-/// |a|^2`) the coarse directions are the first `k - 1` groups' `E_g` (corrected as in
+/// `b = (a_1 - a_k, ..., a_{k-1} - a_k, a_W, a_k)` of the coarse coefficients
+/// (`|b|^2 <= (2k - 1) |a|^2`; `a_W` those of the space's extra columns, none but in deflated
+/// regions) the
+/// coarse directions are the first `k - 1` groups' `E_g` and the extra columns (corrected as in
 /// [`coarse_terms`], their `G_f - 2 R_f^T R_f / zeta` bounded by `lambda_f`) and `v0`, for
 /// which `R_v = M v0` (valid: `y^T M v0 = y^T R_v`), so `||R_v|| <= rho1`, `v0^T M v0 >=
 /// -rho0`, and the cross block `B = V_f'^T M v0` has `||B|| <= ||V_f'||_F rho1`. With
@@ -228,10 +240,10 @@ pub(in crate::certify::multiple) fn coarse_terms_gauged(
     gauge: GaugeBounds,
     (zeta, rel, stop_at): (f64, f64, Option<std::time::Instant>),
 ) -> Option<Coarse> {
-    let cols = 3 * groups.count() - 3;
-    let coarse = coarse_columns(groups, cols);
+    let mut coarse = coarse_columns(groups, 3 * groups.count() - 3);
+    coarse.extend(groups.extra_columns());
     let targets: Vec<&Vec<f64>> = coarse.iter().collect();
-    let (lambda_f, rho_f, z_norm) = if cols == 0 {
+    let (lambda_f, rho_f, z_norm) = if coarse.is_empty() {
         (f64::INFINITY, 0.0, 0.0)
     } else {
         let x = corrections(m, groups, &targets, (rel, stop_at))?;
@@ -447,7 +459,7 @@ fn pairwise_depth(len: usize) -> usize {
 /// estimate less a margin, proven by a Cholesky factorisation of `fl(a - tau I)` (Higham, Thm
 /// 10.3: the computed factor is exact for `fl(a - tau I) + E`, `|E| <= gamma(d + 1) |L| |L^T|`;
 /// the shift's rounding, at most `u |a_ii - tau|` per diagonal entry, charged too).
-fn verified_min_eigenvalue(a: &DMatrix<f64>) -> Option<f64> {
+pub(in crate::certify::multiple) fn verified_min_eigenvalue(a: &DMatrix<f64>) -> Option<f64> {
     let d = a.nrows();
     let estimate = crate::linalg::dense::symmetric_eigenvalues(a)?
         .first()

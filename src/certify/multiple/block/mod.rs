@@ -26,6 +26,7 @@
 //! 5. "At most three" is the inertia of an `LDL^T` of `C - diag(w) - h I` (Sylvester), with
 //!    the headroom `h` above its rigorous backward error plus the forming error (Weyl).
 
+mod deflated;
 mod edges;
 mod groups;
 mod outcome;
@@ -457,6 +458,7 @@ impl Proven {
             kappa: self.kappa,
             residual_bound: self.residual_bound,
             regions: analysis.groups(),
+            deflated: 0,
         })
     }
 }

@@ -27,6 +27,10 @@ pub struct BlockComparison {
     /// The regions whose pencils were proven apart (`[A15]`, "Regions"; 0: one pencil, step 4).
     #[serde(default)]
     pub regions: usize,
+    /// Directions deflated from the regions' factorisations and bounded with the coarse ones
+    /// (`[A16]`, "Deflation"; padding included).
+    #[serde(default)]
+    pub deflated: usize,
 }
 
 /// Why a block comparison did not prove anything: the scalar comparison's reasons (its

@@ -7,8 +7,10 @@
 //! block comparison `[A15]` fails (sparse graphs), with factors of the regions' size: a rig's
 //! images split by sensor, whose whole `3n` factor is over the memory budget.
 
-use super::groups::{BlockGroups, anisotropic_operator};
+use super::deflated::{Column, RegionSpace};
+use super::groups::anisotropic_operator;
 use super::{BlockComparison, BlockFailure};
+use crate::certify::multiple::coarse::verified_min_eigenvalue as verified_min_eigenvalue_dense;
 use crate::certify::multiple::coarse::{
     BlockOperator, COARSE_RELATIVE_RESIDUAL, CoarseSpace, GaugeBounds, ZETA_FRACTION,
     coarse_terms_gauged,
@@ -19,11 +21,11 @@ use crate::error::{Error, Result};
 use crate::linalg::UNIT_ROUNDOFF as U;
 use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::cholesky::gamma;
-use crate::linalg::ldlt::ldlt_inertia;
+use crate::linalg::ldlt::{NegativeColumn, NegativePivots, Trailing, ldlt_negative_columns};
 use crate::linalg::small_symmetric::verified_min_eigenvalue;
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
-use nalgebra::{Matrix3, Matrix6, SymmetricEigen};
+use nalgebra::{DMatrix, Matrix3, Matrix6, SymmetricEigen};
 use std::collections::HashMap;
 use std::time::Instant;
 
@@ -93,8 +95,12 @@ pub(crate) fn regional_bound(
             Err(f) => return Ok(Err(format!("region {g}: {}", why(f)))),
         }
     }
-    let weights = vec![Matrix3::identity(); n];
-    let Some(space) = BlockGroups::new(&of, &weights) else {
+    let deflated: Vec<Vec<Column>> = proofs
+        .iter_mut()
+        .map(|p| std::mem::take(&mut p.deflated))
+        .collect();
+    let deflated_count = deflated.iter().map(Vec::len).sum();
+    let Some(space) = RegionSpace::new(&of, deflated) else {
         return Ok(Err(why(BlockFailure::Numerical)));
     };
     let terms = gauge_terms(problem, rotations, lambdas);
@@ -126,6 +132,7 @@ pub(crate) fn regional_bound(
         kappa: space.kappa(),
         residual_bound: coarse.rho,
         regions: count,
+        deflated: deflated_count,
     }))
 }
 
@@ -315,114 +322,472 @@ fn psd_sqrt(a: &Matrix3<f64>) -> Matrix3<f64> {
     0.5 * (s + s.transpose())
 }
 
-/// What one region's factorisation proved.
+/// What one region's factorisation proved, and the directions it deflated (sparse, in the
+/// whole vector's numbering, each of norm about `|r|^{1/2}`; none in most regions).
 struct RegionProof {
     headroom: f64,
     backward_error: f64,
     factor_values: usize,
+    deflated: Vec<Column>,
 }
 
+/// The most negative pivots a region's first factorisation may show and still be deflated
+/// (`[A16]`, "Deflation"): its factor's columns at them, up to four blocks of border.
+const DEFLATION_MOST: usize = 12;
+
+/// The deflated directions' border strength `|w|^2 / h` against the operator's largest row
+/// sum: their penalty must dominate the negative curvature they take away (at `|w|^2 = |r|`,
+/// as strong as the constant directions', one extra negative pivot of `-3.6e4` stayed on a
+/// `3000 x 6` rig where `lambda_max` is `4.4e5`).
+const DEFLATION_STRENGTH: f64 = 1e2;
+
 /// Region `g`'s block `A = fl(M)_gg - blkdiag(P) - shift I` is positive semidefinite on the
-/// vectors whose sum over the region vanishes: its bordered matrix `K = [[A, E], [E^T, 0]]`
-/// (`E = 1 (x) I_3`) less `h I` shows exactly three negative pivots, `h` above the `LDL^T`'s
-/// backward error and the forming error, so `K >= LDL^T` has at most three negative
-/// eigenvalues, and a bordered matrix has as many as `A` has on `E^perp` plus three (Gould).
-/// `Ok(Err(why))`: its factor is over `max_values`, or its predicted time past `stop_at`.
+/// vectors orthogonal to its border `F = [E, W]` (`E = 1 (x) I_3`, `W` the deflated directions,
+/// none at first): the bordered matrix `K = [[A, F], [F^T, 0]]` less `h I` shows exactly as
+/// many negative pivots as `F` has columns, `h` above the `LDL^T`'s backward error and the
+/// forming error, so `K >= LDL^T` has at most that many negative eigenvalues, and a bordered
+/// matrix has as many as `A` has on `F^perp` plus the rank of `F` (Gould; `F`'s rank proven in
+/// [`RegionSpace::new`]). When the first factorisation shows at most [`DEFLATION_MOST`]
+/// negative pivots, its factor's columns at them (where `LDL^T` is positive semidefinite off
+/// them) become `W` and the region is factorised again. `Ok(Err(why))`: its factor is over
+/// `max_values`, or its predicted time past `stop_at`.
 fn prove_region(
     m: &BlockOperator,
     (of, g): (&[usize], usize),
     charges: &[Matrix3<f64>],
     shift: f64,
-    (max_values, stop_at): (usize, Option<Instant>),
+    limits: (usize, Option<Instant>),
 ) -> std::result::Result<std::result::Result<RegionProof, String>, BlockFailure> {
-    let nodes: Vec<usize> = (0..of.len()).filter(|&i| of[i] == g).collect();
-    let mut local = vec![usize::MAX; of.len()];
-    nodes.iter().enumerate().for_each(|(a, &i)| local[i] = a);
-    let hub = nodes.len();
-    let own: Vec<(usize, usize, Matrix3<f64>)> = m
-        .blocks()
-        .iter()
-        .filter(|(i, j, _)| of[*i] == g && of[*j] == g)
-        .map(|(i, j, b)| (local[*i], local[*j], *b))
-        .collect();
-    let pairs = own
-        .iter()
-        .map(|(a, b, _)| (*a, *b))
-        .chain((0..hub).map(|a| (hub, a)));
-    let pattern = BlockPattern::new(hub + 1, 3, pairs);
-    let (symbolic, _) = match pattern.symbolic_within(max_values) {
-        Ok(Ok(s)) => s,
-        Ok(Err(predicted)) => {
-            return Ok(Err(format!(
-                "region {g}'s factor is predicted at {predicted:.1e} values, above the \
-                 {max_values:.1e} the budget allows"
-            )));
+    let (mut region, nodes) = Region::new(m, (of, g), charges);
+    let h0 = 1e-6 * m.row_abs().max(f64::MIN_POSITIVE);
+    // a proof's deflated directions in the whole vector's numbering
+    let global = |mut proof: RegionProof| {
+        for c in proof.deflated.iter_mut() {
+            c.iter_mut()
+                .for_each(|(a, _)| *a = 3 * nodes[*a / 3] + *a % 3);
         }
-        Err(_) => return Err(BlockFailure::Numerical),
+        proof
     };
-    let time = crate::certify::budget::Budget {
-        max_memory_bytes: u64::MAX,
-        max_seconds: stop_at.map(|t| t.saturating_duration_since(Instant::now()).as_secs_f64()),
+    let directions = match region.prove(g, shift, h0, limits)? {
+        Ok(Attempt::Proven(proof)) => return Ok(Ok(global(proof))),
+        Ok(Attempt::Negative { directions, .. }) if !directions.is_empty() => directions,
+        Ok(Attempt::Negative { pivots, .. }) => {
+            return Err(BlockFailure::Inertia {
+                negative_pivots: pivots,
+            });
+        }
+        Err(over) => return Ok(Err(over)),
     };
-    let (values, work) = (
-        symbolic.len_val(),
-        crate::linalg::cholesky::factor_multiply_adds(&symbolic),
-    );
-    if let Err(why) = time.counted_factorisations_fit(values, work, values) {
-        return Ok(Err(format!("region {g}: {why}")));
+    region.border = deflation_border(directions, nodes.len());
+    match region.prove(g, shift, h0, limits)? {
+        Ok(Attempt::Proven(mut proof)) => {
+            proof.deflated = std::mem::take(&mut region.border);
+            Ok(Ok(global(proof)))
+        }
+        Ok(Attempt::Negative { pivots, .. }) => Err(BlockFailure::Inertia {
+            negative_pivots: pivots,
+        }),
+        Err(over) => Ok(Err(over)),
     }
-    let row = |b: &Matrix3<f64>| (0..3).map(|r| b.row(r).abs().sum()).fold(0.0, f64::max);
-    let region = Region {
-        pattern: &pattern,
-        own: &own,
-        diag: nodes
-            .iter()
-            .map(|&i| {
-                (
-                    m.diagonal()[i] - charges[i],
-                    row(&m.diagonal()[i]) + row(&charges[i]),
-                )
+}
+
+/// The deflated directions (local coordinates) orthonormalised (modified Gram-Schmidt, those
+/// nearly dependent dropped), scaled to norm `n^{1/2}` (`n` the region's nodes, the constant
+/// directions' own), and padded to a multiple of three with coordinate vectors of nodes
+/// outside their support: only a choice, the factorisation and [`RegionSpace::new`] verify.
+fn deflation_border(directions: Vec<Vec<f64>>, n: usize) -> Vec<Column> {
+    let mut kept: Vec<Vec<f64>> = Vec::new();
+    for mut d in directions {
+        let before = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+        for q in &kept {
+            let dot: f64 = d.iter().zip(q).map(|(a, b)| a * b).sum();
+            d.iter_mut().zip(q).for_each(|(a, b)| *a -= dot * b);
+        }
+        let after = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if after > 1e-3 * before && after > 0.0 {
+            d.iter_mut().for_each(|v| *v /= after);
+            kept.push(d);
+        }
+    }
+    let used: Vec<bool> = (0..n)
+        .map(|a| {
+            kept.iter()
+                .any(|d| d[3 * a..3 * a + 3].iter().any(|v| *v != 0.0))
+        })
+        .collect();
+    let mut free = (0..n).filter(|&a| !used[a]);
+    let mut columns: Vec<Column> = kept
+        .iter()
+        .map(|d| {
+            d.iter()
+                .enumerate()
+                // no entry near underflow: its scaled copy in the border must be exact
+                .filter(|(_, v)| v.abs() > 1e-150)
+                .map(|(i, v)| (i, v * (n as f64).sqrt()))
+                .collect()
+        })
+        .collect();
+    while !columns.len().is_multiple_of(3) {
+        let Some(a) = free.next() else {
+            columns.truncate(columns.len() - columns.len() % 3);
+            break;
+        };
+        columns.push(vec![(3 * a + columns.len() % 3, (n as f64).sqrt())]);
+    }
+    columns
+}
+
+/// A factorisation of a region's bordered matrix `K - h I`: its negative pivots, its backward
+/// error plus twice the forming error, and (see [`Region::factor`]) its columns at them.
+struct Factored {
+    negative: usize,
+    bound: f64,
+    pivots: NegativePivots,
+}
+
+/// The deflation without a second factorisation (`[A16]`, "Deflation", (D1)): with `p`
+/// negative pivots more than the three of the constant border, and the border's three rows
+/// last in the elimination (pivots `D_h`, unit lower block `L_h`), `p` of the factor's columns
+/// at negative pivots `k` become the vectors `P^T L (e_k - z_k)` (`z_k` on the border's
+/// positions, about `L_h^{-1} c_k` for the column's border part `c_k`): their region parts are
+/// the columns' own, `w_k`, their border parts `r_k = c_k - L_h z_k` (rounding-small), and
+/// `Y^T D^{-1} Y = D_J^{-1} + Z^T D_h^{-1} Z` exactly for `Y = [e_k - z_k]`. With `H = ||R||_F^2
+/// / (h - b)` (`b` the factorisation's bound), `Q = |D_J|^{-1} - Z^T D_h^{-1} Z - H I` positive
+/// definite (proven with its rounding) makes `A - s >= 0` on `[E, W]^perp`
+/// ([`RegionSpace::new`] proves `[E, W]` of full rank). The columns with the least `|d_k|
+/// z_k^T |D_h|^{-1} z_k` are tried; `W` is scaled by a power of two to about `n^{1/2}`
+/// (exactly the same span).
+fn schur_deflation(f: &Factored, h: f64, n: usize) -> Option<Vec<Column>> {
+    let t = &f.pivots.trailing;
+    // the border's rows last: the trailing positions are exactly rows 3n..3n+3
+    let last = t.rows.len() == 3 && t.rows.iter().all(|&r| r >= 3 * n && r < 3 * n + 3);
+    [last.then_some(t), None]
+        .into_iter()
+        .find_map(|t| deflation_with(f, h, n, t))
+}
+
+/// [`schur_deflation`] with `z_k = L_h^{-1} c_k` (`trailing` given) or `z_k = 0` (`None`:
+/// the columns themselves, whose border parts `C` then need `||C||_F^2 max |d_k| < h - b`).
+fn deflation_with(f: &Factored, h: f64, n: usize, t: Option<&Trailing>) -> Option<Vec<Column>> {
+    let p = f.negative.checked_sub(3).filter(|&p| p > 0)?;
+    let slack = h - f.bound;
+    if slack <= 0.0 {
+        return None;
+    }
+    let none = Trailing {
+        rows: (3 * n..3 * n + 3).collect(),
+        pivots: vec![f64::INFINITY; 3],
+        lower: vec![vec![0.0; 3]; 3],
+    };
+    let (t, eliminate) = match t {
+        Some(t) => (t, true),
+        None => (&none, false),
+    };
+    let mut chosen: Vec<Candidate> = f
+        .pivots
+        .columns
+        .iter()
+        .filter_map(|c| Candidate::new(c, t, (3 * n, eliminate), slack))
+        .collect();
+    if chosen.len() < p {
+        return None;
+    }
+    chosen.sort_by(|a, b| a.weight.total_cmp(&b.weight));
+    chosen.truncate(p);
+    // ||R||_F^2, R = C - L_h Z with its rounding (sums of at most 3 products)
+    let mut r_sq = 0.0f64;
+    for c in &chosen {
+        for i in 0..3 {
+            let (mut v, mut mag) = (c.border[i] - c.z[i], c.border[i].abs() + c.z[i].abs());
+            for j in 0..i {
+                v -= t.lower[i][j] * c.z[j];
+                mag += (t.lower[i][j] * c.z[j]).abs();
+            }
+            r_sq += (v.abs() + gamma(4) * mag).powi(2);
+        }
+    }
+    let big_h = r_sq * (1.0 + 8.0 * U) / (slack * (1.0 - 4.0 * U));
+    // Q = |D_J|^{-1} - Z^T D_h^{-1} Z - H I, each entry with its rounding
+    let mut q = DMatrix::zeros(p, p);
+    let mut err_sq = 0.0f64;
+    for (a, ca) in chosen.iter().enumerate() {
+        for (b, cb) in chosen.iter().enumerate() {
+            let terms = (0..3).map(|i| ca.z[i] * cb.z[i] / t.pivots[i]);
+            let (sum, mag) = terms.fold((0.0, 0.0), |(s, m), v| (s + v, m + v.abs()));
+            let own = if a == b {
+                1.0 / ca.pivot.abs() - big_h
+            } else {
+                0.0
+            };
+            q[(a, b)] = own - sum;
+            let e = gamma(8) * (mag + own.abs() + 2.0 * big_h);
+            err_sq += e * e;
+        }
+    }
+    let low = verified_min_eigenvalue_dense(&q)? - err_sq.sqrt() * (1.0 + 1e-10);
+    if low.is_nan() || low <= 0.0 {
+        return None;
+    }
+    Some(
+        chosen
+            .into_iter()
+            .map(|c| {
+                let norm = c.region.iter().map(|(_, v)| v * v).sum::<f64>().sqrt();
+                // upward only: no entry may round by underflowing
+                let scale = ((n as f64).sqrt() / norm).log2().round().exp2().max(1.0);
+                c.region.into_iter().map(|(r, v)| (r, v * scale)).collect()
             })
             .collect(),
-    };
-    let mut h = 1e-6 * m.row_abs().max(f64::MIN_POSITIVE);
-    for _ in 0..2 {
-        let bound = region.inertia(&symbolic, shift, h)?;
-        if bound <= h {
-            return Ok(Ok(RegionProof {
+    )
+}
+
+/// A factor column at a negative pivot `d_k` off the border: its border part `c` (by trailing
+/// position), `z = L_h^{-1} c` or zero (computed: only a choice), its region part, and the
+/// weight `|d_k| (sum_i z_i^2 / |d_h,i| + |c - L_h z|^2 / (h - b))` it is chosen by.
+struct Candidate {
+    pivot: f64,
+    border: [f64; 3],
+    z: [f64; 3],
+    region: Column,
+    weight: f64,
+}
+
+impl Candidate {
+    fn new(
+        c: &NegativeColumn,
+        t: &Trailing,
+        (hub, eliminate): (usize, bool),
+        slack: f64,
+    ) -> Option<Self> {
+        if c.entries.first().is_none_or(|(r, _)| *r >= hub) {
+            return None; // a pivot of the border itself
+        }
+        let mut border = [0.0; 3];
+        let mut region = Column::new();
+        for &(r, v) in &c.entries {
+            match t.rows.iter().position(|&x| x == r) {
+                Some(i) => border[i] = v,
+                None => region.push((r, v)),
+            }
+        }
+        let mut z = [0.0; 3];
+        if eliminate {
+            z = border;
+            for i in 0..3 {
+                for j in 0..i {
+                    z[i] -= t.lower[i][j] * z[j];
+                }
+            }
+        }
+        let left: f64 = if eliminate {
+            0.0
+        } else {
+            border.iter().map(|v| v * v).sum()
+        };
+        let weight = c.pivot.abs()
+            * ((0..3).map(|i| z[i] * z[i] / t.pivots[i].abs()).sum::<f64>() + left / slack);
+        (!region.is_empty() && weight.is_finite()).then_some(Candidate {
+            pivot: c.pivot,
+            border,
+            z,
+            region,
+            weight,
+        })
+    }
+}
+
+/// One factorisation of a region's bordered matrix: proven, or its negative pivots (with the
+/// region parts of the factor's columns at them when there are at most [`DEFLATION_MOST`]).
+enum Attempt {
+    Proven(RegionProof),
+    Negative {
+        pivots: usize,
+        directions: Vec<Vec<f64>>,
+    },
+}
+
+/// A region's bordered matrix: its own blocks in local numbering, its diagonal blocks
+/// `fl(M_ii - P_i)` less the charges with the magnitudes they were formed from (`|M_ii| +
+/// |P_i|`, largest row sums), and its deflated border columns `W` (local coordinates, a
+/// multiple of three), scaled in the matrix to `|w|^2 = strength h`.
+struct Region {
+    own: Vec<(usize, usize, Matrix3<f64>)>,
+    diag: Vec<(Matrix3<f64>, f64)>,
+    border: Vec<Column>,
+    strength: f64,
+}
+
+impl Region {
+    /// Region `g`'s bordered matrix without deflated columns, and its nodes (local numbering
+    /// is their order).
+    fn new(
+        m: &BlockOperator,
+        (of, g): (&[usize], usize),
+        charges: &[Matrix3<f64>],
+    ) -> (Self, Vec<usize>) {
+        let nodes: Vec<usize> = (0..of.len()).filter(|&i| of[i] == g).collect();
+        let mut local = vec![usize::MAX; of.len()];
+        nodes.iter().enumerate().for_each(|(a, &i)| local[i] = a);
+        let row = |b: &Matrix3<f64>| (0..3).map(|r| b.row(r).abs().sum()).fold(0.0, f64::max);
+        let region = Region {
+            own: m
+                .blocks()
+                .iter()
+                .filter(|(i, j, _)| of[*i] == g && of[*j] == g)
+                .map(|(i, j, b)| (local[*i], local[*j], *b))
+                .collect(),
+            diag: nodes
+                .iter()
+                .map(|&i| {
+                    let (d, c) = (m.diagonal()[i], charges[i]);
+                    (d - c, row(&d) + row(&c))
+                })
+                .collect(),
+            border: Vec::new(),
+            strength: DEFLATION_STRENGTH * m.row_abs(),
+        };
+        (region, nodes)
+    }
+
+    /// The pattern: the region's nodes, the constant directions' border node, then one border
+    /// node per three deflated columns.
+    fn pattern(&self) -> BlockPattern {
+        let hub = self.diag.len();
+        let support: Vec<usize> = self.support();
+        let own = self.own.iter().map(|(a, b, _)| (*a, *b));
+        let constant = (0..hub).map(|a| (hub, a));
+        let deflated =
+            (0..self.border.len() / 3).flat_map(|k| support.iter().map(move |&a| (hub + 1 + k, a)));
+        BlockPattern::new(
+            hub + 1 + self.border.len() / 3,
+            3,
+            own.chain(constant).chain(deflated),
+        )
+    }
+
+    /// The nodes where a deflated column is nonzero.
+    fn support(&self) -> Vec<usize> {
+        let mut s: Vec<usize> = self.border.iter().flatten().map(|(i, _)| i / 3).collect();
+        s.sort_unstable();
+        s.dedup();
+        s
+    }
+
+    /// Its symbolic analysis within `max_values` and the time left, then `LDL^T` at `h0` and,
+    /// when the backward error is above it, once more at 4 times the error.
+    fn prove(
+        &self,
+        g: usize,
+        shift: f64,
+        h0: f64,
+        (max_values, stop_at): (usize, Option<Instant>),
+    ) -> std::result::Result<std::result::Result<Attempt, String>, BlockFailure> {
+        let pattern = self.pattern();
+        let (symbolic, _) = match pattern.symbolic_within(max_values) {
+            Ok(Ok(s)) => s,
+            Ok(Err(predicted)) => {
+                return Ok(Err(format!(
+                    "region {g}'s factor is predicted at {predicted:.1e} values, above the \
+                     {max_values:.1e} the budget allows"
+                )));
+            }
+            Err(_) => return Err(BlockFailure::Numerical),
+        };
+        let time = crate::certify::budget::Budget {
+            max_memory_bytes: u64::MAX,
+            max_seconds: stop_at.map(|t| t.saturating_duration_since(Instant::now()).as_secs_f64()),
+        };
+        let (values, work) = (
+            symbolic.len_val(),
+            crate::linalg::cholesky::factor_multiply_adds(&symbolic),
+        );
+        if let Err(why) = time.counted_factorisations_fit(values, work, values) {
+            return Ok(Err(format!("region {g}: {why}")));
+        }
+        let mut h = h0;
+        for _ in 0..2 {
+            let f = self.factor(&pattern, &symbolic, shift, h)?;
+            if f.bound > h {
+                h = 4.0 * f.bound;
+                continue;
+            }
+            let proof = |deflated| RegionProof {
                 headroom: h,
-                backward_error: bound,
+                backward_error: f.bound,
                 factor_values: symbolic.len_val(),
+                deflated,
+            };
+            if f.negative == 3 + self.border.len() {
+                return Ok(Ok(Attempt::Proven(proof(Vec::new()))));
+            }
+            if self.border.is_empty()
+                && let Some(w) = schur_deflation(&f, h, self.diag.len())
+            {
+                return Ok(Ok(Attempt::Proven(proof(w))));
+            }
+            let hub = 3 * self.diag.len();
+            let directions = f
+                .pivots
+                .columns
+                .iter()
+                .map(|c| {
+                    let mut d = vec![0.0; hub];
+                    c.entries
+                        .iter()
+                        .filter(|(r, _)| *r < hub)
+                        .for_each(|&(r, v)| d[r] = v);
+                    d
+                })
+                .filter(|d| d.iter().any(|v| *v != 0.0))
+                .collect();
+            return Ok(Ok(Attempt::Negative {
+                pivots: f.negative,
+                directions,
             }));
         }
-        h = 4.0 * bound;
+        Err(BlockFailure::BackwardError)
     }
-    Err(BlockFailure::BackwardError)
-}
 
-/// A region's bordered matrix: its pattern (the region's nodes, then the border's), its own
-/// blocks in local numbering and its diagonal blocks `fl(M_ii - P_i)` less the charges, with
-/// the magnitudes they were formed from (`|M_ii| + |P_i|`, largest row sums).
-struct Region<'a> {
-    pattern: &'a BlockPattern,
-    own: &'a [(usize, usize, Matrix3<f64>)],
-    diag: Vec<(Matrix3<f64>, f64)>,
-}
-
-impl Region<'_> {
-    /// The `LDL^T` of `K - h I` (the diagonal less `shift + h`): the backward error plus twice
-    /// the forming error when exactly three pivots are negative.
-    fn inertia(
+    /// The `LDL^T` of `K - h I` (the diagonal less `shift + h`): its negative pivots, its
+    /// backward error plus twice the forming error, and on a first factorisation (no deflated
+    /// border) showing more than three but at most [`DEFLATION_MOST`] negative pivots, the
+    /// factor's columns at them.
+    fn factor(
         &self,
+        p: &BlockPattern,
         symbolic: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
         shift: f64,
         h: f64,
-    ) -> std::result::Result<f64, BlockFailure> {
-        let p = self.pattern;
+    ) -> std::result::Result<Factored, BlockFailure> {
+        let (val, magnitude, terms) = self.values(p, shift, h);
+        let most = if self.border.is_empty() {
+            DEFLATION_MOST
+        } else {
+            0
+        };
+        let expected = 3 + self.border.len();
+        let (inertia, pivots) = ldlt_negative_columns(symbolic, p.matrix(&val), expected, most)
+            .map_err(|_| BlockFailure::Numerical)?;
+        let most = terms.iter().copied().max().unwrap_or(2);
+        let forming = gamma(most + 4) * magnitude.iter().copied().fold(0.0, f64::max);
+        let bound = inertia.backward_error + 2.0 * forming;
+        if !bound.is_finite() {
+            return Err(BlockFailure::Numerical);
+        }
+        Ok(Factored {
+            negative: inertia.negative,
+            bound,
+            pivots,
+        })
+    }
+
+    /// The values of `K - h I` with each block row's magnitudes and terms.
+    fn values(&self, p: &BlockPattern, shift: f64, h: f64) -> (Vec<f64>, Vec<f64>, Vec<usize>) {
         let hub = self.diag.len();
+        let blocks = hub + 1 + self.border.len() / 3;
         let mut val = vec![0.0f64; p.nnz()];
-        let mut magnitude = vec![0.0f64; hub + 1];
-        let mut terms = vec![2usize; hub + 1];
+        let mut magnitude = vec![0.0f64; blocks];
+        let mut terms = vec![2usize; blocks];
         let row = |b: &Matrix3<f64>| (0..3).map(|r| b.row(r).abs().sum()).fold(0.0, f64::max);
         for (a, (d, formed_from)) in self.diag.iter().enumerate() {
             let block = d - Matrix3::identity() * (shift + h);
@@ -432,28 +797,90 @@ impl Region<'_> {
             magnitude[a] += 1.0;
             magnitude[hub] += 1.0;
         }
-        p.add(&mut val, hub, hub, 0, &(-Matrix3::identity() * h));
-        magnitude[hub] += h;
-        for (a, b, block) in self.own {
+        for (k, mag) in magnitude.iter_mut().enumerate().skip(hub) {
+            p.add(&mut val, k, k, 0, &(-Matrix3::identity() * h));
+            *mag += h;
+        }
+        for (a, b, block) in &self.own {
             p.add(&mut val, *a, *b, p.slot(*a, *b), block);
             for v in [*a, *b] {
                 magnitude[v] += row(block).max(row(&block.transpose()));
                 terms[v] += 1;
             }
         }
-        let inertia =
-            ldlt_inertia(symbolic, p.matrix(&val)).map_err(|_| BlockFailure::Numerical)?;
-        if inertia.negative != 3 {
-            return Err(BlockFailure::Inertia {
-                negative_pivots: inertia.negative,
-            });
+        // the deflated columns scaled to about |w|^2 = strength h (their norm is n^{1/2}) by a
+        // power of two, so the stored border is exactly `W` scaled: its `F^perp` is
+        // [`RegionSpace`]'s
+        let scale = (self.strength * h / hub as f64)
+            .sqrt()
+            .log2()
+            .round()
+            .exp2();
+        let mut entries: Vec<Matrix3<f64>> = Vec::new();
+        for k in 0..self.border.len() / 3 {
+            entries.clear();
+            entries.resize(hub, Matrix3::zeros());
+            for c in 0..3 {
+                for &(i, w) in &self.border[3 * k + c] {
+                    entries[i / 3][(c, i % 3)] = w * scale;
+                }
+            }
+            for a in self.support() {
+                let r = hub + 1 + k;
+                p.add(&mut val, r, a, p.slot(r, a), &entries[a]);
+                magnitude[a] += row(&entries[a].transpose());
+                magnitude[r] += row(&entries[a]);
+            }
         }
-        let most = terms.iter().copied().max().unwrap_or(2);
-        let forming = gamma(most + 4) * magnitude.iter().copied().fold(0.0, f64::max);
-        let bound = inertia.backward_error + 2.0 * forming;
-        bound
-            .is_finite()
-            .then_some(bound)
-            .ok_or(BlockFailure::Numerical)
+        (val, magnitude, terms)
     }
+}
+
+/// Test-only: per region, the dense block `fl(M)_gg - blkdiag(P) - shift I` (local numbering)
+/// and the directions each form of the Schur deflation takes from its first factorisation
+/// (`z_k = L_h^{-1} c_k`, then `z_k = 0`; empty when it proved without or that form fails).
+#[cfg(test)]
+pub(super) fn schur_deflations(
+    problem: &MultipleProblem,
+    (rotations, lambdas): (&[Rotation], &[Matrix3<f64>]),
+    region: &[usize],
+) -> Vec<(nalgebra::DMatrix<f64>, [Vec<Column>; 2])> {
+    let information = problem.information().expect("information");
+    let m = anisotropic_operator(problem, information, rotations, lambdas);
+    let of = largest_last(region);
+    let charges = cross_charges(&m, &of).expect("charges");
+    let shift = (ZETA_FRACTION * m.row_abs() + m.form_error()) * (1.0 + 4.0 * U);
+    let h0 = 1e-6 * m.row_abs();
+    let count = of.iter().max().map_or(0, |g| g + 1);
+    (0..count)
+        .map(|g| {
+            let (r, nodes) = Region::new(&m, (&of, g), &charges);
+            let n = nodes.len();
+            let mut a = nalgebra::DMatrix::zeros(3 * n, 3 * n);
+            for (i, (d, _)) in r.diag.iter().enumerate() {
+                let d = d - Matrix3::identity() * shift;
+                a.fixed_view_mut::<3, 3>(3 * i, 3 * i).copy_from(&d);
+            }
+            for (i, j, b) in &r.own {
+                let at = a.fixed_view::<3, 3>(3 * i, 3 * j) + b;
+                a.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(&at);
+                let at = a.fixed_view::<3, 3>(3 * j, 3 * i) + b.transpose();
+                a.fixed_view_mut::<3, 3>(3 * j, 3 * i).copy_from(&at);
+            }
+            let pattern = r.pattern();
+            let (symbolic, _) = pattern.symbolic_within(usize::MAX).unwrap().unwrap();
+            let f = r.factor(&pattern, &symbolic, shift, h0).expect("factor");
+            let t = &f.pivots.trailing;
+            let last = t.rows.len() == 3 && t.rows.iter().all(|&x| x >= 3 * n && x < 3 * n + 3);
+            let mut found = [Vec::new(), Vec::new()];
+            if f.bound <= h0 && f.negative > 3 {
+                found[0] = last
+                    .then(|| deflation_with(&f, h0, n, Some(t)))
+                    .flatten()
+                    .unwrap_or_default();
+                found[1] = deflation_with(&f, h0, n, None).unwrap_or_default();
+            }
+            (a, found)
+        })
+        .collect()
 }

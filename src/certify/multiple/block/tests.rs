@@ -658,6 +658,7 @@ fn bfs_regions(p: &MultipleProblem, k: usize) -> Vec<usize> {
 fn regional_bounds_are_below_the_smallest_eigenvalue_of_s() {
     let mut rng = StdRng::seed_from_u64(19);
     let (mut proofs, mut within_target, mut lowered_proofs, mut attempts) = (0, 0, 0, 0);
+    let (mut deflated, mut deflated_indefinite) = (0, 0);
     for k in 0..10 {
         let (p, rotations) = region_instance(k);
         let n = p.num_rotations();
@@ -687,6 +688,10 @@ fn regional_bounds_are_below_the_smallest_eigenvalue_of_s() {
                         "instance {k}, point {t}: {mu:e} > {exact:e}"
                     );
                     proofs += 1;
+                    if proof.deflated > 0 {
+                        deflated += 1;
+                        deflated_indefinite += usize::from(exact < -1e-9 * scale);
+                    }
                     if lowered {
                         assert!(
                             mu <= exact + 0.1 * LOWERED * scale,
@@ -703,11 +708,16 @@ fn regional_bounds_are_below_the_smallest_eigenvalue_of_s() {
         }
     }
     println!(
-        "{proofs} proofs of {attempts}, {within_target} at solutions within the target, {lowered_proofs} lowered"
+        "{proofs} proofs of {attempts}, {within_target} at solutions within the target, \
+         {lowered_proofs} lowered, {deflated} deflated ({deflated_indefinite} of an indefinite S)"
     );
     assert!(
         proofs >= 30 && within_target >= 5 && lowered_proofs >= 5,
         "{proofs} proofs of {attempts}, {within_target} within the target, {lowered_proofs} lowered"
+    );
+    assert!(
+        deflated >= 20 && deflated_indefinite >= 10,
+        "{deflated} deflated proofs, {deflated_indefinite} of an indefinite S"
     );
 }
 
@@ -750,4 +760,68 @@ fn the_cross_charges_dominate_the_blocks_between_regions() {
         }
     }
     assert!(checked >= 20, "{checked} cases with blocks between regions");
+}
+
+/// The Schur deflation (`[A16]`, "Deflation"): where a region's first factorisation shows a
+/// few negative pivots too many and the columns of its factor at them are taken without a
+/// second factorisation, the region's block less its charges and shift is positive
+/// semidefinite on the complement of its constant directions and those columns: dense
+/// eigenvalues of `Q^T A Q` (`Q` an orthonormal basis of `[E, W]^perp`), at perturbed points
+/// and raised multipliers where `S` is indefinite, for each form of the deflation (`z_k =
+/// L_h^{-1} c_k` and `z_k = 0`). Fails when the condition on the columns' border parts is
+/// dropped (either order of the columns), and when `Z^T D_h^{-1} Z` enters `Q` with the wrong
+/// sign (checked).
+#[test]
+fn a_schur_deflated_region_is_positive_semidefinite_off_its_border() {
+    let mut rng = StdRng::seed_from_u64(23);
+    let (mut deflated, mut checked) = ([0; 2], 0);
+    for k in 0..10 {
+        let (p, rotations) = region_instance(k);
+        for y in points(&rotations, &mut rng) {
+            let (cases, scale) = multiplier_cases(&p, &y, &mut rng);
+            for (lambdas, _) in &cases {
+                for regions in 1..=3 {
+                    let region = bfs_regions(&p, regions);
+                    let found = super::regional::schur_deflations(&p, (&y, lambdas), &region);
+                    for (form, (a, w)) in found.iter().flat_map(|(a, forms)| {
+                        forms.iter().enumerate().map(move |(i, w)| (i, (a, w)))
+                    }) {
+                        checked += 1;
+                        if w.is_empty() {
+                            continue;
+                        }
+                        deflated[form] += 1;
+                        let n = a.nrows() / 3;
+                        let mut f = DMatrix::<f64>::zeros(3 * n, 3 + w.len());
+                        for i in 0..n {
+                            for c in 0..3 {
+                                f[(3 * i + c, c)] = 1.0;
+                            }
+                        }
+                        for (k, col) in w.iter().enumerate() {
+                            col.iter().for_each(|&(r, v)| f[(r, 3 + k)] = v);
+                        }
+                        let u = f.svd(true, false).u.expect("u");
+                        let off = DMatrix::<f64>::identity(3 * n, 3 * n) - &u * u.transpose();
+                        let e = off.symmetric_eigen();
+                        let q: Vec<_> = (0..3 * n)
+                            .filter(|&i| e.eigenvalues[i] > 0.5)
+                            .map(|i| e.eigenvectors.column(i).into_owned())
+                            .collect();
+                        let q = DMatrix::from_columns(&q);
+                        let low = lambda_min(&(q.transpose() * a * &q));
+                        assert!(
+                            low >= -1e-9 * scale,
+                            "instance {k}, {regions} regions: {low:e} on [E, W]^perp"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    println!("{deflated:?} Schur deflations (z = L_h^{{-1}} c, z = 0) of {checked} attempts");
+    assert!(
+        deflated[0] >= 5 && deflated[1] >= 10,
+        "{deflated:?} Schur deflations of {checked} attempts"
+    );
 }
