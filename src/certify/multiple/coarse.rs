@@ -28,13 +28,28 @@ pub(in crate::certify::multiple) const COARSE_RELATIVE_RESIDUAL: f64 = 1e-4;
 /// The most conjugate-gradient iterations of the coarse correction.
 const CG_MAX_ITERATIONS: usize = 600;
 
+/// What every coarse space states about its groups: each node's group (`0..count`), their
+/// number, and the bounds on the coarse coefficients (see [`CoarseSpace::kappa`]).
+pub(in crate::certify::multiple) struct Layout<'a> {
+    pub of: &'a [usize],
+    pub count: usize,
+    pub kappa: f64,
+    pub kappa_last: f64,
+}
+
 /// The groups of a grouped comparison and their weights: the space `U` (every group's
 /// weighted sum `sum_{i in g} W_i x_i` zero), a projector onto it and the residual's form.
 pub(in crate::certify::multiple) trait CoarseSpace {
+    /// The groups and their coefficients' bounds.
+    fn layout(&self) -> &Layout<'_>;
     /// Each node's group, `0..count`.
-    fn group_of(&self) -> &[usize];
+    fn group_of(&self) -> &[usize] {
+        self.layout().of
+    }
     /// The number of groups.
-    fn count(&self) -> usize;
+    fn count(&self) -> usize {
+        self.layout().count
+    }
     /// `z <- fl(z - W c)`, `(W c)_i = W_i c_g` for some coefficients `c_g` per group (those of
     /// the orthogonal projection onto `U`, approximately): every such `z - W c` has the same
     /// product with every vector of `U`, so any `c` gives a valid residual.
@@ -42,9 +57,13 @@ pub(in crate::certify::multiple) trait CoarseSpace {
     /// A bound on `||p - (y - W c)||_2` for `p = fl(project(y))` and the `c` it used.
     fn projection_error(&self, y: &[f64], p: &[f64]) -> f64;
     /// `kappa`, with `|a|^2 <= kappa^2 |x|^2` for the weighted means `a` of every group.
-    fn kappa(&self) -> f64;
+    fn kappa(&self) -> f64 {
+        self.layout().kappa
+    }
     /// `kappa_k` of the last group alone: `|a_k| <= kappa_k |x|`.
-    fn kappa_last(&self) -> f64;
+    fn kappa_last(&self) -> f64 {
+        self.layout().kappa_last
+    }
     /// A bound on `||(I - P)(z - E)||_F` over the columns `z` (`P` the space's projector onto
     /// `U`, `E` the coarse directions): how far the computed `z` is from the `V'` it stands for.
     fn off_space(&self, z: &[Vec<f64>]) -> f64;

@@ -5,7 +5,7 @@
 //! |x_r| / lambda_min(G_r)^{1/2}` for the coefficients `a_r = G_r^{-1} F_r^T x_r` of any `x`
 //! (`F_r G_r^{-1} F_r^T` is a projector), with `lambda_min(G_r)` proven.
 
-use crate::certify::multiple::coarse::{CoarseSpace, verified_min_eigenvalue};
+use crate::certify::multiple::coarse::{CoarseSpace, Layout, verified_min_eigenvalue};
 use crate::linalg::UNIT_ROUNDOFF as U;
 use crate::linalg::cholesky::gamma;
 use nalgebra::{DMatrix, DVector};
@@ -15,8 +15,8 @@ pub(super) type Column = Vec<(usize, f64)>;
 
 /// The regions and their columns (see the module's note).
 pub(super) struct RegionSpace<'a> {
-    of: &'a [usize],
-    count: usize,
+    /// The regions; `kappa = max_r lambda_min(G_r)^{-1/2}`, `kappa_last` the last region's.
+    layout: Layout<'a>,
     size: Vec<usize>,
     /// Per region, its deflated directions.
     extra: Vec<Vec<Column>>,
@@ -24,8 +24,6 @@ pub(super) struct RegionSpace<'a> {
     inverse: Vec<DMatrix<f64>>,
     /// Per region, a proven lower bound on `lambda_min(G_r)` (positive).
     gram_low: Vec<f64>,
-    kappa: f64,
-    kappa_last: f64,
 }
 
 impl<'a> RegionSpace<'a> {
@@ -51,14 +49,16 @@ impl<'a> RegionSpace<'a> {
         let kappa = gram_low.iter().map(|&l| kappa_of(l)).fold(0.0, f64::max);
         let kappa_last = kappa_of(*gram_low.last()?);
         Some(RegionSpace {
-            of,
-            count,
+            layout: Layout {
+                of,
+                count,
+                kappa,
+                kappa_last,
+            },
             size,
             extra,
             inverse,
             gram_low,
-            kappa,
-            kappa_last,
         })
     }
 
@@ -75,7 +75,7 @@ impl<'a> RegionSpace<'a> {
                 )
             })
             .collect();
-        for (i, &g) in self.of.iter().enumerate() {
+        for (i, &g) in self.layout.of.iter().enumerate() {
             for a in 0..3 {
                 out[g].0[a] += z[3 * i + a];
                 out[g].1[a] += z[3 * i + a].abs();
@@ -104,10 +104,10 @@ impl<'a> RegionSpace<'a> {
     /// The target of coarse column `col`: `E` of region `col / 3` (`col < 3 (k - 1)`), then
     /// the regions' deflated directions in order.
     fn target(&self, col: usize) -> Vec<f64> {
-        let mut t = vec![0.0; 3 * self.of.len()];
-        let flux = 3 * (self.count - 1);
+        let mut t = vec![0.0; 3 * self.layout.of.len()];
+        let flux = 3 * (self.layout.count - 1);
         if col < flux {
-            for (i, &g) in self.of.iter().enumerate() {
+            for (i, &g) in self.layout.of.iter().enumerate() {
                 if g == col / 3 {
                     t[3 * i + col % 3] = 1.0;
                 }
@@ -156,31 +156,19 @@ fn gram(n: usize, cols: &[Column]) -> (DMatrix<f64>, f64) {
 }
 
 impl CoarseSpace for RegionSpace<'_> {
-    fn group_of(&self) -> &[usize] {
-        self.of
-    }
-
-    fn count(&self) -> usize {
-        self.count
-    }
-
-    fn kappa(&self) -> f64 {
-        self.kappa
-    }
-
-    fn kappa_last(&self) -> f64 {
-        self.kappa_last
+    fn layout(&self) -> &Layout<'_> {
+        &self.layout
     }
 
     fn extra_columns(&self) -> Vec<Vec<f64>> {
-        let flux = 3 * (self.count - 1);
+        let flux = 3 * (self.layout.count - 1);
         let total: usize = self.extra.iter().map(Vec::len).sum();
         (flux..flux + total).map(|c| self.target(c)).collect()
     }
 
     fn project(&self, z: &mut [f64]) {
         let c = self.coefficients(z);
-        for (i, &g) in self.of.iter().enumerate() {
+        for (i, &g) in self.layout.of.iter().enumerate() {
             for a in 0..3 {
                 z[3 * i + a] -= c[g][a];
             }
@@ -200,7 +188,7 @@ impl CoarseSpace for RegionSpace<'_> {
         let c = self.coefficients(y);
         let q = self.extra.iter().map(Vec::len).max().unwrap_or(0);
         let y_norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let mean: f64 = (0..self.count)
+        let mean: f64 = (0..self.layout.count)
             .map(|g| self.size[g] as f64 * c[g].rows(0, 3).norm_squared())
             .sum::<f64>()
             .sqrt();
@@ -234,6 +222,6 @@ impl CoarseSpace for RegionSpace<'_> {
                 total += norm * norm / self.gram_low[g];
             }
         }
-        total.sqrt() * (1.0 + gamma(2 * self.count + 8))
+        total.sqrt() * (1.0 + gamma(2 * self.layout.count + 8))
     }
 }

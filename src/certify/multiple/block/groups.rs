@@ -9,7 +9,7 @@
 use super::edges::{self, diagonal_block, edge_matrix};
 use super::{BlockAnalysis, BlockComparison, BlockFailure, Proven};
 use crate::certify::multiple::coarse::{
-    BlockOperator, CoarseSpace, GaugeBounds, ZETA_FRACTION, coarse_terms_gauged,
+    BlockOperator, CoarseSpace, GaugeBounds, Layout, ZETA_FRACTION, coarse_terms_gauged,
 };
 use crate::certify::multiple::multipliers::GaugeTerms;
 use crate::certify::multiple::scalar::{fro, orthogonality_defect};
@@ -50,11 +50,11 @@ pub(super) fn compare_grouped(
     let coarse = coarse_terms_gauged(&m, &space, gauge, (zeta_free, rel, stop_at))
         .ok_or(BlockFailure::Numerical)?;
     let proven = Proven {
-        mu_m: coarse.mu(space.kappa),
+        mu_m: coarse.mu(space.kappa()),
         t_max,
         zeta,
         inertia: (headroom, backward_error),
-        kappa: space.kappa,
+        kappa: space.kappa(),
         residual_bound: coarse.rho,
     };
     proven.outcome(&c, analysis)
@@ -105,9 +105,10 @@ pub(super) fn anisotropic_operator(
 /// its projector `P x = x - E a(x)` (`a_g` the weighted mean `(sum W_i)^{-1} sum W_i x_i`,
 /// exact in the proof) and `kappa`.
 pub(super) struct BlockGroups<'a> {
-    of: &'a [usize],
+    /// The groups; `kappa = max_g sqrt(sum ||W_i||_F^2) / lambda_min(sum W_i)` rounded up
+    /// (`|a|^2 <= kappa^2 |x|^2`), `kappa_last` the last group's own.
+    layout: Layout<'a>,
     weights: &'a [Matrix3<f64>],
-    count: usize,
     /// Per component, `(sum W_i^2)^{-1}` (computed: the coefficients of an approximately
     /// orthogonal projection, any of which is valid).
     inverse_sq: Vec<Matrix3<f64>>,
@@ -115,10 +116,6 @@ pub(super) struct BlockGroups<'a> {
     sum_low: Vec<f64>,
     /// Per component, its nodes.
     size: Vec<usize>,
-    /// `max_g sqrt(sum ||W_i||_F^2) / lambda_min(sum W_i)`, rounded up: `|a|^2 <= kappa^2 |x|^2`.
-    kappa: f64,
-    /// The last group's own: `|a_k| <= kappa_last |x_k|`.
-    kappa_last: f64,
 }
 
 impl<'a> BlockGroups<'a> {
@@ -153,23 +150,25 @@ impl<'a> BlockGroups<'a> {
             .map(|s| s.try_inverse().unwrap_or_else(Matrix3::zeros))
             .collect();
         Some(BlockGroups {
-            of,
+            layout: Layout {
+                of,
+                count,
+                kappa: kappa * (1.0 + 8.0 * U),
+                kappa_last: kappa_last * (1.0 + 8.0 * U),
+            },
             weights,
-            count,
             inverse_sq,
             sum_low,
             size,
-            kappa: kappa * (1.0 + 8.0 * U),
-            kappa_last: kappa_last * (1.0 + 8.0 * U),
         })
     }
 
     /// Per component, `fl(sum W_i z_i)` and `sum ||W_i||_F |z_i|` (its error is at most
     /// `gamma(|g| + 3)` of the latter).
     fn weighted_sums(&self, z: &[f64]) -> (Vec<Vector3<f64>>, Vec<f64>) {
-        let mut sums = vec![Vector3::zeros(); self.count];
-        let mut mags = vec![0.0f64; self.count];
-        for (i, (&g, w)) in self.of.iter().zip(self.weights).enumerate() {
+        let mut sums = vec![Vector3::zeros(); self.layout.count];
+        let mut mags = vec![0.0f64; self.layout.count];
+        for (i, (&g, w)) in self.layout.of.iter().zip(self.weights).enumerate() {
             let x = node(z, i);
             sums[g] += w * x;
             mags[g] += fro(w) * x.norm();
@@ -194,25 +193,13 @@ fn node(v: &[f64], i: usize) -> Vector3<f64> {
 }
 
 impl CoarseSpace for BlockGroups<'_> {
-    fn group_of(&self) -> &[usize] {
-        self.of
-    }
-
-    fn count(&self) -> usize {
-        self.count
-    }
-
-    fn kappa(&self) -> f64 {
-        self.kappa
-    }
-
-    fn kappa_last(&self) -> f64 {
-        self.kappa_last
+    fn layout(&self) -> &Layout<'_> {
+        &self.layout
     }
 
     fn project(&self, z: &mut [f64]) {
         let c = self.coefficients(z);
-        for (i, (&g, w)) in self.of.iter().zip(self.weights).enumerate() {
+        for (i, (&g, w)) in self.layout.of.iter().zip(self.weights).enumerate() {
             let d = w * c[g];
             for a in 0..3 {
                 z[3 * i + a] -= d[a];
@@ -225,6 +212,7 @@ impl CoarseSpace for BlockGroups<'_> {
     fn projection_error(&self, y: &[f64], p: &[f64]) -> f64 {
         let c = self.coefficients(y);
         let products: f64 = self
+            .layout
             .of
             .iter()
             .zip(self.weights)
@@ -246,16 +234,16 @@ impl CoarseSpace for BlockGroups<'_> {
             let x: Vec<f64> = zc
                 .iter()
                 .enumerate()
-                .map(|(r, v)| v - f64::from(u8::from(col == 3 * self.of[r / 3] + r % 3)))
+                .map(|(r, v)| v - f64::from(u8::from(col == 3 * self.layout.of[r / 3] + r % 3)))
                 .collect();
             let (sums, mags) = self.weighted_sums(&x);
-            for g in 0..self.count {
+            for g in 0..self.layout.count {
                 let e = gamma(self.size[g] + 3);
                 let b = sums[g].norm() * (1.0 + gamma(3)) + e * mags[g] * (1.0 + e);
                 let a = b / self.sum_low[g];
                 total += self.size[g] as f64 * a * a;
             }
         }
-        total.sqrt() * (1.0 + gamma(2 * self.count + 8))
+        total.sqrt() * (1.0 + gamma(2 * self.layout.count + 8))
     }
 }

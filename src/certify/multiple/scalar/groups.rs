@@ -18,7 +18,7 @@ use super::split::PencilWeights;
 use super::{Proven, ScalarComparison, ScalarFailure};
 use crate::certify::budget::Budget;
 use crate::certify::multiple::coarse::{
-    BlockOperator, COARSE_RELATIVE_RESIDUAL, CoarseSpace, ZETA_FRACTION, coarse_terms,
+    BlockOperator, COARSE_RELATIVE_RESIDUAL, CoarseSpace, Layout, ZETA_FRACTION, coarse_terms,
 };
 use crate::certify::multiple::multipliers::TraceBound;
 use crate::error::{Error, Result};
@@ -141,12 +141,12 @@ fn compare_grouped_to(
     let m = scalar_operator(problem, rotations, lambdas, &c.deg_n);
     let coarse =
         coarse_terms(&m, &groups, (zeta_free, rel, stop_at)).ok_or(ScalarFailure::Numerical)?;
-    let mu_m = coarse.mu(groups.kappa);
+    let mu_m = coarse.mu(groups.kappa());
     let proven = Proven {
         mu_m,
         t_max,
         inertia,
-        kappa: groups.kappa,
+        kappa: groups.kappa(),
         residual: coarse.rho,
     };
     proven.outcome(&c, analysis, &pencil)
@@ -154,13 +154,12 @@ fn compare_grouped_to(
 
 /// The components and the weights of the pencils: the projector `Pi` onto `U` and `kappa`.
 struct Groups<'a> {
-    of: &'a [usize],
+    /// The components; `kappa = max_g ||w_g||_2 / sum_g w` rounded up (`|a|^2 <= kappa^2
+    /// |x|^2`), the last group's the same.
+    layout: Layout<'a>,
     weights: &'a [f64],
     /// Per component, `sum w_i^2` and `sum w_i`.
     sq: Vec<f64>,
-    count: usize,
-    /// `max_g ||w_g||_2 / sum_g w`, rounded up: `|a|^2 <= kappa^2 |x|^2`.
-    kappa: f64,
     /// The most nodes in a component.
     largest: usize,
 }
@@ -183,44 +182,34 @@ impl<'a> Groups<'a> {
             .fold(0.0, f64::max)
             * (1.0 + 4.0 * U);
         Groups {
-            of,
+            layout: Layout {
+                of,
+                count,
+                kappa,
+                kappa_last: kappa,
+            },
             weights,
             sq,
-            count,
-            kappa,
             largest,
         }
     }
 }
 
 impl CoarseSpace for Groups<'_> {
-    fn group_of(&self) -> &[usize] {
-        self.of
-    }
-
-    fn count(&self) -> usize {
-        self.count
-    }
-
-    fn kappa(&self) -> f64 {
-        self.kappa
-    }
-
-    /// The largest group's bound (valid for the last).
-    fn kappa_last(&self) -> f64 {
-        self.kappa
+    fn layout(&self) -> &Layout<'_> {
+        &self.layout
     }
 
     /// `z <- Pi z` in floating point (every coordinate slice less its `w`-projection in every
     /// component, the orthogonal projector onto `U`).
     fn project(&self, z: &mut [f64]) {
-        let mut dots = vec![[0.0f64; 3]; self.count];
-        for (i, &g) in self.of.iter().enumerate() {
+        let mut dots = vec![[0.0f64; 3]; self.layout.count];
+        for (i, &g) in self.layout.of.iter().enumerate() {
             for (j, d) in dots[g].iter_mut().enumerate() {
                 *d += self.weights[i] * z[3 * i + j];
             }
         }
-        for (i, &g) in self.of.iter().enumerate() {
+        for (i, &g) in self.layout.of.iter().enumerate() {
             for j in 0..3 {
                 z[3 * i + j] -= dots[g][j] / self.sq[g] * self.weights[i];
             }
@@ -239,16 +228,16 @@ impl CoarseSpace for Groups<'_> {
         let g = gamma(self.largest + 3);
         let mut total = 0.0f64;
         for (col, zc) in z.iter().enumerate() {
-            let mut dots = vec![[0.0f64; 3]; self.count];
-            let mut mags = vec![[0.0f64; 3]; self.count];
-            for (i, &grp) in self.of.iter().enumerate() {
+            let mut dots = vec![[0.0f64; 3]; self.layout.count];
+            let mut mags = vec![[0.0f64; 3]; self.layout.count];
+            for (i, &grp) in self.layout.of.iter().enumerate() {
                 for j in 0..3 {
                     let x = zc[3 * i + j] - f64::from(u8::from(col == 3 * grp + j));
                     dots[grp][j] += self.weights[i] * x;
                     mags[grp][j] += (self.weights[i] * x).abs();
                 }
             }
-            for grp in 0..self.count {
+            for grp in 0..self.layout.count {
                 for j in 0..3 {
                     let d = dots[grp][j].abs() + g * mags[grp][j];
                     total += d * d / (self.sq[grp] * (1.0 - g));
