@@ -816,6 +816,20 @@ impl Region {
             .log2()
             .round()
             .exp2();
+        // exact only if no scaled entry leaves the normal range: else unscaled (still exact)
+        let (low, high) = self
+            .border
+            .iter()
+            .flatten()
+            .fold((f64::INFINITY, 0.0f64), |(l, m), (_, w)| {
+                (l.min(w.abs()), m.max(w.abs()))
+            });
+        let scale = if scale.is_normal() && (low * scale).is_normal() && (high * scale).is_finite()
+        {
+            scale
+        } else {
+            1.0
+        };
         let mut entries: Vec<Matrix3<f64>> = Vec::new();
         for k in 0..self.border.len() / 3 {
             entries.clear();
