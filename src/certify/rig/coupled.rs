@@ -17,9 +17,9 @@ use crate::error::Result;
 use crate::rig::{RigProblem, polish_passes};
 use crate::so3::Rotation;
 
-/// The coupled bound as a rung; `grouped` when planned for the grouped comparison (the
-/// augmented graph's checks over their cap, [`fill_refusal`]).
-pub(crate) struct CoupledRung(pub(crate) Handed<GraphCertifier>, pub(crate) bool);
+/// The coupled bound as a rung; with the reason when planned for the bounds by sensor alone
+/// (the augmented graph's checks over their cap, [`fill_refusal`]).
+pub(crate) struct CoupledRung(pub(crate) Handed<GraphCertifier>, pub(crate) Option<String>);
 
 impl<'a> Rung<RigState<'a>> for CoupledRung {
     fn proof(&self) -> Proof {
@@ -46,11 +46,11 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
         let images = cx.problem.images().len() as f64;
         let size = 4.0 * images + cx.problem.edges().len() as f64;
         let cap = fill_cap(cx);
-        if fill_refusal(cx.problem, cap)?.is_some() {
+        if let Some(reason) = fill_refusal(cx.problem, cap)? {
             // the sensors' own graphs factorised apart: one pencil each ([D13], groups), or
             // with information matrices the regional bound [A16] with its deflation (10^4
             // frames and 2 sensors: about 2e-4 s per unit of size, 2026-12-03)
-            self.1 = true;
+            self.1 = Some(reason);
             let seconds = if cx.problem.is_anisotropic() {
                 2e-4
             } else {
@@ -140,7 +140,7 @@ impl CoupledRung {
         let augmented = cx.tally.cost + coupled.offset.max(0.0);
         let anisotropic = cx.problem.is_anisotropic();
         let grouped_first = anisotropic
-            || self.1
+            || self.1.is_some()
             || cx.problem.estimated_sensors().len() > SCALAR_PROVES_UP_TO_ESTIMATED;
         let mut first = Err(String::new());
         if grouped_first {
@@ -151,7 +151,12 @@ impl CoupledRung {
             };
             let certifies =
                 |&(_, sum): &(usize, f64)| cx.tally.certifies(rig_bound(cx, sum, coupled.offset));
-            if self.1 || first.as_ref().is_ok_and(certifies) {
+            if let Some(over) = &self.1 {
+                return Ok(first
+                    .map(|(parts, sum)| (parts, sum, true))
+                    .map_err(|why| format!("{why}; the whole graph is not checked: {over}")));
+            }
+            if first.as_ref().is_ok_and(certifies) {
                 return Ok(first.map(|(parts, sum)| (parts, sum, true)));
             }
         }
@@ -274,7 +279,7 @@ fn fill_cap(cx: &RigState<'_>) -> usize {
 /// the pairs that hold only pseudo-edges keep no weight and leave its pattern (`[D13]`,
 /// weightless parallel groups; 10^4 frames and 2 sensors: 6.8e7 values against 8.2e7 with
 /// them). A graph of several components is left to its components' own checks.
-fn fill_refusal(problem: &RigProblem, cap: usize) -> Result<Option<Refusal>> {
+fn fill_refusal(problem: &RigProblem, cap: usize) -> Result<Option<String>> {
     let images = problem.images();
     let n = images.len();
     let mut per_frame: Vec<Vec<usize>> = vec![Vec::new(); problem.num_frames()];
@@ -324,18 +329,16 @@ fn fill_refusal(problem: &RigProblem, cap: usize) -> Result<Option<Refusal>> {
         })?;
     let within =
         crate::linalg::cholesky::symbolic_cholesky_within(pattern.symbolic(), cap / per_value)?;
-    Ok(within.err().map(|predicted| Refusal::OverBudget {
-        reason: match per_value {
-            1 => format!(
-                "the augmented graph's scalar factor is predicted at {predicted:.1e} values, \
+    Ok(within.err().map(|predicted| match per_value {
+        1 => format!(
+            "the augmented graph's scalar factor is predicted at {predicted:.1e} values, \
                  above the {cap:.1e} its checks may form [H21]"
-            ),
-            _ => format!(
-                "the augmented graph's 3n factor is predicted at about {:.1e} values, above the \
+        ),
+        _ => format!(
+            "the augmented graph's 3n factor is predicted at about {:.1e} values, above the \
                  {cap:.1e} its checks may form within the memory budget (--max-memory) [H21]",
-                per_value as f64 * predicted as f64
-            ),
-        },
+            per_value as f64 * predicted as f64
+        ),
     }))
 }
 

@@ -109,7 +109,7 @@ fn certify_rig_with(
             certify,
             crate::certify::gravity::gravity_certificate,
         )))),
-        Box::new(coupled::CoupledRung(Handed::new(certify), false)),
+        Box::new(coupled::CoupledRung(Handed::new(certify), None)),
         Box::new(two_graphs::TwoGraphsRung(Handed::new((
             crate::certify::simultaneous::joint_certificate,
             crate::certify::simultaneous::predict_simultaneous,

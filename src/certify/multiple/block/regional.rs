@@ -80,7 +80,7 @@ pub(crate) fn regional_bound(
         return Ok(Err(why(BlockFailure::Numerical)));
     };
     let zeta = ZETA_FRACTION * m.row_abs();
-    let shift = (zeta + m.form_error()) * (1.0 + 4.0 * U);
+    let shift = region_shift(&m);
     let count = of.iter().max().map_or(0, |g| g + 1);
     let mut proofs = Vec::with_capacity(count);
     for g in 0..count {
@@ -322,6 +322,17 @@ fn psd_sqrt(a: &Matrix3<f64>) -> Matrix3<f64> {
     0.5 * (s + s.transpose())
 }
 
+/// The shift every region's block is proven above: the margin `zeta` ([`ZETA_FRACTION`] of
+/// the largest row sum) and the operator's forming error.
+fn region_shift(m: &BlockOperator) -> f64 {
+    (ZETA_FRACTION * m.row_abs() + m.form_error()) * (1.0 + 4.0 * U)
+}
+
+/// The headroom `h` of a region's first factorisation: `1e-6` of the largest row sum.
+fn first_headroom(m: &BlockOperator) -> f64 {
+    1e-6 * m.row_abs().max(f64::MIN_POSITIVE)
+}
+
 /// What one region's factorisation proved, and the directions it deflated (sparse, in the
 /// whole vector's numbering, each of norm about `|r|^{1/2}`; none in most regions).
 struct RegionProof {
@@ -359,7 +370,7 @@ fn prove_region(
     limits: (usize, Option<Instant>),
 ) -> std::result::Result<std::result::Result<RegionProof, String>, BlockFailure> {
     let (mut region, nodes) = Region::new(m, (of, g), charges);
-    let h0 = 1e-6 * m.row_abs().max(f64::MIN_POSITIVE);
+    let h0 = first_headroom(m);
     // a proof's deflated directions in the whole vector's numbering
     let global = |mut proof: RegionProof| {
         for c in proof.deflated.iter_mut() {
@@ -863,8 +874,7 @@ pub(super) fn schur_deflations(
     let m = anisotropic_operator(problem, information, rotations, lambdas);
     let of = largest_last(region);
     let charges = cross_charges(&m, &of).expect("charges");
-    let shift = (ZETA_FRACTION * m.row_abs() + m.form_error()) * (1.0 + 4.0 * U);
-    let h0 = 1e-6 * m.row_abs();
+    let (shift, h0) = (region_shift(&m), first_headroom(&m));
     let count = of.iter().max().map_or(0, |g| g + 1);
     (0..count)
         .map(|g| {
