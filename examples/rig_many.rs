@@ -4,7 +4,7 @@
 //!
 //! `cargo run --release --example rig_many [frames ...] [anisotropic] [known | estimated]
 //! [sensors=2,4,6] [memory=GiB] [verbose]` (`memory`: the certificate's memory budget, default
-//! 4; `verbose`: the certificate's ladder on stderr) (`anisotropic`: the
+//! 4; `verbose`: the certificate's ladder and the progress lines on stderr) (`anisotropic`: the
 //! edges carry information matrices, `RigScene::anisotropy` 9, `[H24]`, and a last column gives
 //! the sensors' error of the same data with scalar weights `tr(H)/3`, solve only; `known`: only
 //! the rows with every sensor known); `-- write DIR FRAMES SENSORS OUTLIERS
@@ -63,6 +63,12 @@ fn main() -> rotavg::Result<()> {
     let known_only = all.iter().any(|a| a == "known");
     let estimated_only = all.iter().any(|a| a == "estimated");
     let verbose = all.iter().any(|a| a == "verbose");
+    if verbose {
+        // the progress lines the command line writes, on stderr
+        let lines = std::sync::Arc::new(rotavg::progress::ProgressLines::new());
+        rotavg::progress::set_observer(Some(lines.clone()));
+        lines.spawn(rotavg::progress::ProgressLines::delay_from_env());
+    }
     let memory_gib: Option<u64> = all
         .iter()
         .find_map(|a| a.strip_prefix("memory=").and_then(|m| m.parse().ok()));

@@ -470,11 +470,51 @@ struct Factored {
 /// (exactly the same span).
 fn schur_deflation(f: &Factored, h: f64, n: usize) -> Option<Vec<Column>> {
     let t = &f.pivots.trailing;
-    // the border's rows last: the trailing positions are exactly rows 3n..3n+3
-    let last = t.rows.len() == 3 && t.rows.iter().all(|&r| r >= 3 * n && r < 3 * n + 3);
-    [last.then_some(t), None]
+    [border_last(t, n).then_some(t), None]
         .into_iter()
         .find_map(|t| deflation_with(f, h, n, t))
+}
+
+/// Whether the border's three rows are the last in the elimination: the trailing positions are
+/// exactly rows `3n..3n+3`.
+fn border_last(t: &Trailing, n: usize) -> bool {
+    t.rows.len() == 3 && t.rows.iter().all(|&r| r >= 3 * n && r < 3 * n + 3)
+}
+
+/// The deflation of the leading block (`[A16]`, "Deflation", (D0)): with the border's rows last
+/// in the elimination, the factor's leading block is the region's own, `L_r D_r L_r^T = A -
+/// h I + Delta` (`x^T Delta x <= b |x|^2`, `b <= h` the factorisation's bound), so `A >= 0` on the
+/// vectors orthogonal to the region parts of the factor's columns at **every** negative pivot
+/// of a region row (the negative terms of `sum_j d_j (l_j^T y)^2` vanish there): no condition,
+/// no second factorisation; `W` holds `p + 3` columns where (D1) needs `p`. `None` when the
+/// border is not last or a negative pivot's column is missing.
+fn leading_deflation(f: &Factored, h: f64, n: usize) -> Option<Vec<Column>> {
+    let columns = &f.pivots.columns;
+    if !border_last(&f.pivots.trailing, n) || f.bound > h || columns.len() != f.negative {
+        return None;
+    }
+    let region = |c: &NegativeColumn| -> Column {
+        c.entries
+            .iter()
+            .filter(|(r, _)| *r < 3 * n)
+            .copied()
+            .collect()
+    };
+    Some(
+        columns
+            .iter()
+            .filter(|c| c.entries.first().is_some_and(|(r, _)| *r < 3 * n))
+            .map(|c| scaled_to_constant(region(c), n))
+            .collect(),
+    )
+}
+
+/// A deflated direction scaled by a power of two (upward only: no entry may round by
+/// underflowing) to about the constant directions' norm `n^{1/2}`: exactly the same span.
+fn scaled_to_constant(column: Column, n: usize) -> Column {
+    let norm = column.iter().map(|(_, v)| v * v).sum::<f64>().sqrt();
+    let scale = ((n as f64).sqrt() / norm).log2().round().exp2().max(1.0);
+    column.into_iter().map(|(r, v)| (r, v * scale)).collect()
 }
 
 /// [`schur_deflation`] with `z_k = L_h^{-1} c_k` (`trailing` given) or `z_k = 0` (`None`:
@@ -542,12 +582,7 @@ fn deflation_with(f: &Factored, h: f64, n: usize, t: Option<&Trailing>) -> Optio
     Some(
         chosen
             .into_iter()
-            .map(|c| {
-                let norm = c.region.iter().map(|(_, v)| v * v).sum::<f64>().sqrt();
-                // upward only: no entry may round by underflowing
-                let scale = ((n as f64).sqrt() / norm).log2().round().exp2().max(1.0);
-                c.region.into_iter().map(|(r, v)| (r, v * scale)).collect()
-            })
+            .map(|c| scaled_to_constant(c.region, n))
             .collect(),
     )
 }
@@ -704,6 +739,17 @@ impl Region {
             }
             Err(_) => return Err(BlockFailure::Numerical),
         };
+        crate::progress::phase(crate::progress::Phase::Certify, || {
+            format!(
+                "regional bound: region {g} ({} nodes{}), a factor of {:.1e} values",
+                self.diag.len(),
+                match self.border.len() {
+                    0 => String::new(),
+                    k => format!(", {k} deflated directions"),
+                },
+                symbolic.len_val() as f64
+            )
+        });
         let time = crate::certify::budget::Budget {
             max_memory_bytes: u64::MAX,
             max_seconds: stop_at.map(|t| t.saturating_duration_since(Instant::now()).as_secs_f64()),
@@ -733,6 +779,7 @@ impl Region {
             }
             if self.border.is_empty()
                 && let Some(w) = schur_deflation(&f, h, self.diag.len())
+                    .or_else(|| leading_deflation(&f, h, self.diag.len()))
             {
                 return Ok(Ok(Attempt::Proven(proof(w))));
             }
@@ -862,14 +909,15 @@ impl Region {
 }
 
 /// Test-only: per region, the dense block `fl(M)_gg - blkdiag(P) - shift I` (local numbering)
-/// and the directions each form of the Schur deflation takes from its first factorisation
-/// (`z_k = L_h^{-1} c_k`, then `z_k = 0`; empty when it proved without or that form fails).
+/// and the directions each form of the deflation without a second factorisation takes from its
+/// first factorisation (the Schur form (D1) with `z_k = L_h^{-1} c_k`, then with `z_k = 0`, then
+/// the leading block's (D0); empty when it proved without or that form fails).
 #[cfg(test)]
 pub(super) fn schur_deflations(
     problem: &MultipleProblem,
     (rotations, lambdas): (&[Rotation], &[Matrix3<f64>]),
     region: &[usize],
-) -> Vec<(nalgebra::DMatrix<f64>, [Vec<Column>; 2])> {
+) -> Vec<(nalgebra::DMatrix<f64>, [Vec<Column>; 3])> {
     let information = problem.information().expect("information");
     let m = anisotropic_operator(problem, information, rotations, lambdas);
     let of = largest_last(region);
@@ -895,14 +943,14 @@ pub(super) fn schur_deflations(
             let (symbolic, _) = pattern.symbolic_within(usize::MAX).unwrap().unwrap();
             let f = r.factor(&pattern, &symbolic, shift, h0).expect("factor");
             let t = &f.pivots.trailing;
-            let last = t.rows.len() == 3 && t.rows.iter().all(|&x| x >= 3 * n && x < 3 * n + 3);
-            let mut found = [Vec::new(), Vec::new()];
+            let mut found = [Vec::new(), Vec::new(), Vec::new()];
             if f.bound <= h0 && f.negative > 3 {
-                found[0] = last
+                found[0] = border_last(t, n)
                     .then(|| deflation_with(&f, h0, n, Some(t)))
                     .flatten()
                     .unwrap_or_default();
                 found[1] = deflation_with(&f, h0, n, None).unwrap_or_default();
+                found[2] = leading_deflation(&f, h0, n).unwrap_or_default();
             }
             (a, found)
         })

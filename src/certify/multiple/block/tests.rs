@@ -762,19 +762,20 @@ fn the_cross_charges_dominate_the_blocks_between_regions() {
     assert!(checked >= 20, "{checked} cases with blocks between regions");
 }
 
-/// The Schur deflation (`[A16]`, "Deflation"): where a region's first factorisation shows a
-/// few negative pivots too many and the columns of its factor at them are taken without a
-/// second factorisation, the region's block less its charges and shift is positive
-/// semidefinite on the complement of its constant directions and those columns: dense
-/// eigenvalues of `Q^T A Q` (`Q` an orthonormal basis of `[E, W]^perp`), at perturbed points
-/// and raised multipliers where `S` is indefinite, for each form of the deflation (`z_k =
-/// L_h^{-1} c_k` and `z_k = 0`). Fails when the condition on the columns' border parts is
-/// dropped (either order of the columns), and when `Z^T D_h^{-1} Z` enters `Q` with the wrong
-/// sign (checked).
+/// The deflations without a second factorisation (`[A16]`, "Deflation"): where a region's
+/// first factorisation shows a few negative pivots too many and the columns of its factor at
+/// them are taken, the region's block less its charges and shift is positive semidefinite on
+/// the complement of its constant directions and those columns ((D1), each form: `z_k =
+/// L_h^{-1} c_k` and `z_k = 0`) or of the leading block's columns alone ((D0)): dense
+/// eigenvalues of `Q^T A Q` (`Q` an orthonormal basis of that complement), at perturbed points
+/// and raised multipliers where `S` is indefinite. Fails when the condition on the columns'
+/// border parts is dropped (either order of the columns), when `Z^T D_h^{-1} Z` enters `Q` with
+/// the wrong sign, and when (D0) leaves out one negative pivot's column or takes a factor
+/// whose border is not last (checked).
 #[test]
-fn a_schur_deflated_region_is_positive_semidefinite_off_its_border() {
+fn a_deflated_region_is_positive_semidefinite_off_its_border() {
     let mut rng = StdRng::seed_from_u64(23);
-    let (mut deflated, mut checked) = ([0; 2], 0);
+    let (mut deflated, mut checked) = ([0; 3], 0);
     for k in 0..10 {
         let (p, rotations) = region_instance(k);
         for y in points(&rotations, &mut rng) {
@@ -791,15 +792,16 @@ fn a_schur_deflated_region_is_positive_semidefinite_off_its_border() {
                             continue;
                         }
                         deflated[form] += 1;
-                        let n = a.nrows() / 3;
-                        let mut f = DMatrix::<f64>::zeros(3 * n, 3 + w.len());
+                        // (D1) on [E, W]^perp; (D0) on W^perp alone, its claim
+                        let (n, e) = (a.nrows() / 3, if form == 2 { 0 } else { 3 });
+                        let mut f = DMatrix::<f64>::zeros(3 * n, e + w.len());
                         for i in 0..n {
-                            for c in 0..3 {
+                            for c in 0..e {
                                 f[(3 * i + c, c)] = 1.0;
                             }
                         }
                         for (k, col) in w.iter().enumerate() {
-                            col.iter().for_each(|&(r, v)| f[(r, 3 + k)] = v);
+                            col.iter().for_each(|&(r, v)| f[(r, e + k)] = v);
                         }
                         let u = f.svd(true, false).u.expect("u");
                         let off = DMatrix::<f64>::identity(3 * n, 3 * n) - &u * u.transpose();
@@ -812,16 +814,19 @@ fn a_schur_deflated_region_is_positive_semidefinite_off_its_border() {
                         let low = lambda_min(&(q.transpose() * a * &q));
                         assert!(
                             low >= -1e-9 * scale,
-                            "instance {k}, {regions} regions: {low:e} on [E, W]^perp"
+                            "instance {k}, {regions} regions, form {form}: {low:e} off the border"
                         );
                     }
                 }
             }
         }
     }
-    println!("{deflated:?} Schur deflations (z = L_h^{{-1}} c, z = 0) of {checked} attempts");
+    println!(
+        "{deflated:?} deflations (Schur z = L_h^{{-1}} c, Schur z = 0, leading block) of \
+         {checked} attempts"
+    );
     assert!(
-        deflated[0] >= 5 && deflated[1] >= 10,
-        "{deflated:?} Schur deflations of {checked} attempts"
+        deflated[0] >= 5 && deflated[1] >= 10 && deflated[2] >= 10,
+        "{deflated:?} deflations of {checked} attempts"
     );
 }
