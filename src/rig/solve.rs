@@ -340,7 +340,8 @@ const SENSOR_COST_ROUNDING: f64 = 1e-12;
 /// The unknown sensors at fixed frames: Levenberg-Marquardt on `J` over `S_s exp([d_s]x)` from
 /// `sensors`, each step accepted only when it does not increase `J` (or raises it by at most
 /// [`SENSOR_COST_ROUNDING`] and halves the gradient); stops when a step changes `J` by less
-/// than 1e-15 of it, after [`SENSOR_MAX_ITERATIONS`], or at `deadline`.
+/// than 1e-15 of it or within that rounding does not halve the gradient, after
+/// [`SENSOR_MAX_ITERATIONS`], or at `deadline`.
 fn sensor_step(
     p: &RigProblem,
     frames: &[Rotation],
@@ -386,14 +387,15 @@ fn sensor_step(
                 break;
             }
             // near the minimum the decrease is below the sum's rounding: a step within it
-            // that halves the gradient is taken
+            // that halves the gradient is taken, and one that does not ends the step (a
+            // smaller one would not do better)
             if next <= cost * (1.0 + SENSOR_COST_ROUNDING) {
                 let at = terms.normal_equations(&trial, size);
                 if at.1.norm() <= 0.5 * g.norm() {
                     (sensors, cost, damping, improved) = (trial, next, damping * 0.1, true);
                     equations = at;
-                    break;
                 }
+                break;
             }
             damping *= 10.0;
         }
