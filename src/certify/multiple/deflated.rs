@@ -1,4 +1,5 @@
-//! The coarse space of the regional bound (`[A16]`, "Deflation"): per region `r` the columns
+//! The coarse space of a deflated comparison (the regional bound `[A16]`, "Deflation", and the
+//! grouped scalar comparison `[D13]`, "Deflated components"): per region `r` the columns
 //! `F_r = [E_r, W_r]`, its three constant directions `E_r = 1 (x) I_3` and the directions
 //! `W_r` its factorisation deflated (sparse, none in most regions). `U = {x : F_r^T x_r = 0
 //! for every r}`, its projector `x - F G^{-1} F^T x` (`G_r = F_r^T F_r`), and `|a_r| <=
@@ -11,10 +12,10 @@ use crate::linalg::cholesky::gamma;
 use nalgebra::{DMatrix, DVector};
 
 /// A sparse column: `(coordinate, value)` in the whole vector's numbering.
-pub(super) type Column = Vec<(usize, f64)>;
+pub(in crate::certify::multiple) type Column = Vec<(usize, f64)>;
 
 /// The regions and their columns (see the module's note).
-pub(super) struct RegionSpace<'a> {
+pub(in crate::certify::multiple) struct RegionSpace<'a> {
     /// The regions; `kappa = max_r lambda_min(G_r)^{-1/2}`, `kappa_last` the last region's.
     layout: Layout<'a>,
     size: Vec<usize>,
@@ -28,7 +29,10 @@ pub(super) struct RegionSpace<'a> {
 
 impl<'a> RegionSpace<'a> {
     /// `None` when a region's columns are not proven independent.
-    pub(super) fn new(of: &'a [usize], extra: Vec<Vec<Column>>) -> Option<Self> {
+    pub(in crate::certify::multiple) fn new(
+        of: &'a [usize],
+        extra: Vec<Vec<Column>>,
+    ) -> Option<Self> {
         let count = of.iter().max().map_or(1, |m| m + 1);
         let mut size = vec![0usize; count];
         of.iter().for_each(|&g| size[g] += 1);
@@ -224,4 +228,12 @@ impl CoarseSpace for RegionSpace<'_> {
         }
         total.sqrt() * (1.0 + gamma(2 * self.layout.count + 8))
     }
+}
+
+/// A deflated direction scaled by a power of two (upward only: no entry may round by
+/// underflowing) to about the constant directions' norm `n^{1/2}`: exactly the same span.
+pub(in crate::certify::multiple) fn scaled_to_constant(column: Column, n: usize) -> Column {
+    let norm = column.iter().map(|(_, v)| v * v).sum::<f64>().sqrt();
+    let scale = ((n as f64).sqrt() / norm).log2().round().exp2().max(1.0);
+    column.into_iter().map(|(r, v)| (r, v * scale)).collect()
 }

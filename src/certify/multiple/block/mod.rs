@@ -26,7 +26,6 @@
 //! 5. "At most three" is the inertia of an `LDL^T` of `C - diag(w) - h I` (Sylvester), with
 //!    the headroom `h` above its rigorous backward error plus the forming error (Weyl).
 
-mod deflated;
 mod edges;
 mod groups;
 mod outcome;

@@ -7,7 +7,6 @@
 //! block comparison `[A15]` fails (sparse graphs), with factors of the regions' size: a rig's
 //! images split by sensor, whose whole `3n` factor is over the memory budget.
 
-use super::deflated::{Column, RegionSpace};
 use super::groups::anisotropic_operator;
 use super::{BlockComparison, BlockFailure};
 use crate::certify::multiple::coarse::verified_min_eigenvalue as verified_min_eigenvalue_dense;
@@ -15,6 +14,7 @@ use crate::certify::multiple::coarse::{
     BlockOperator, COARSE_RELATIVE_RESIDUAL, CoarseSpace, GaugeBounds, ZETA_FRACTION,
     coarse_terms_gauged,
 };
+use crate::certify::multiple::deflated::{Column, RegionSpace, scaled_to_constant};
 use crate::certify::multiple::multipliers::{TraceBound, gauge_terms, multipliers};
 use crate::certify::multiple::scalar::{failure_text, fro, orthogonality_defect, ostrowski};
 use crate::error::{Error, Result};
@@ -507,14 +507,6 @@ fn leading_deflation(f: &Factored, h: f64, n: usize) -> Option<Vec<Column>> {
             .map(|c| scaled_to_constant(region(c), n))
             .collect(),
     )
-}
-
-/// A deflated direction scaled by a power of two (upward only: no entry may round by
-/// underflowing) to about the constant directions' norm `n^{1/2}`: exactly the same span.
-fn scaled_to_constant(column: Column, n: usize) -> Column {
-    let norm = column.iter().map(|(_, v)| v * v).sum::<f64>().sqrt();
-    let scale = ((n as f64).sqrt() / norm).log2().round().exp2().max(1.0);
-    column.into_iter().map(|(r, v)| (r, v * scale)).collect()
 }
 
 /// [`schur_deflation`] with `z_k = L_h^{-1} c_k` (`trailing` given) or `z_k = 0` (`None`:

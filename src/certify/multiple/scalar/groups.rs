@@ -12,18 +12,23 @@
 //! directions are charged by the comparison though `M` is positive on them).
 
 use super::analysis::ScalarAnalysis;
-use super::charges::{PRODUCT_ERROR, edge_charges, edge_product, orthogonality_defect};
-use super::inertia::prove_inertia;
+use super::charges::{
+    EdgeCharges, PRODUCT_ERROR, edge_charges, edge_product, orthogonality_defect,
+};
+use super::inertia::prove_inertia_deflating;
 use super::split::PencilWeights;
 use super::{Proven, ScalarComparison, ScalarFailure};
 use crate::certify::budget::Budget;
 use crate::certify::multiple::coarse::{
-    BlockOperator, COARSE_RELATIVE_RESIDUAL, CoarseSpace, Layout, ZETA_FRACTION, coarse_terms,
+    BlockOperator, COARSE_RELATIVE_RESIDUAL, CoarseSpace, GaugeBounds, Layout, ZETA_FRACTION,
+    coarse_terms, coarse_terms_gauged,
 };
-use crate::certify::multiple::multipliers::TraceBound;
+use crate::certify::multiple::deflated::{Column, RegionSpace, scaled_to_constant};
+use crate::certify::multiple::multipliers::{TraceBound, gauge_terms};
 use crate::error::{Error, Result};
 use crate::linalg::UNIT_ROUNDOFF as U;
 use crate::linalg::cholesky::gamma;
+use crate::linalg::ldlt::NegativeColumn;
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
 use nalgebra::Matrix3;
@@ -121,6 +126,41 @@ fn compare_grouped_to(
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     let t_max = orthogonality_defect(rotations)?;
     let c = edge_charges(problem, rotations, lambdas, &analysis.copies, analysis.beta)?;
+    let pencil = grouped_pencil(&c)?;
+    let zeta_free = pencil.zeta_free;
+    let most = analysis.expected_negative_pivots() + DEFLATION_EXTRA;
+    let (headroom, backward, deflated) = prove_inertia_deflating(
+        analysis,
+        problem,
+        (&c.reduced, &pencil),
+        (&c.deg_n, c.d_max),
+        most,
+    )?;
+    let m = scalar_operator(problem, rotations, lambdas, &c.deg_n);
+    let coarse = (zeta_free, rel, stop_at);
+    let negative = deflated.len();
+    let (mu_m, kappa, residual) = if deflated.is_empty() {
+        let groups = Groups::new(&analysis.components, &pencil.weights);
+        let coarse = coarse_terms(&m, &groups, coarse).ok_or(ScalarFailure::Numerical)?;
+        (coarse.mu(groups.kappa()), groups.kappa(), coarse.rho)
+    } else {
+        let at = (rotations, lambdas, t_max);
+        deflated_bound(problem, at, &m, (&analysis.components, deflated), coarse)?
+    };
+    let proven = Proven {
+        mu_m,
+        t_max,
+        inertia: (headroom, backward),
+        kappa,
+        residual,
+        deflated: negative,
+    };
+    proven.outcome(&c, analysis, &pencil)
+}
+
+/// The pencils' weights `w = delta + zeta`, `zeta` a fixed fraction of the largest diagonal,
+/// and what is left of `zeta` after their rounding.
+fn grouped_pencil(c: &EdgeCharges) -> std::result::Result<PencilWeights, ScalarFailure> {
     let zeta = ZETA_FRACTION * c.d_max;
     let weights: Vec<f64> = c.delta.iter().map(|d| d + zeta).collect();
     let w_max = weights.iter().copied().fold(0.0, f64::max);
@@ -129,27 +169,66 @@ fn compare_grouped_to(
     if zeta_free <= 0.0 || !zeta_free.is_finite() {
         return Err(ScalarFailure::Numerical);
     }
-    let pencil = PencilWeights {
+    Ok(PencilWeights {
         weights,
         shares: Vec::new(),
         zeta,
         defect: 0.0,
         zeta_free,
+    })
+}
+
+/// The coarse bound `(mu_m, kappa, residual)` of deflated components (`[D13]`, "Deflated
+/// components"): [`deflated_space`] with the gauge directions bounded apart
+/// ([`coarse_terms_gauged`]). Away from a critical point the gauge's residual makes it vacuous:
+/// below Gershgorin's `-max row sum` it is reported as the inertia's failure.
+fn deflated_bound(
+    problem: &MultipleProblem,
+    (rotations, lambdas, t_max): (&[Rotation], &[Matrix3<f64>], f64),
+    m: &BlockOperator,
+    (of, columns): (&[usize], Vec<NegativeColumn>),
+    coarse: (f64, f64, Option<std::time::Instant>),
+) -> std::result::Result<(f64, f64, f64), ScalarFailure> {
+    let negative = columns.len();
+    let space = deflated_space(of, columns).ok_or(ScalarFailure::Numerical)?;
+    let terms = gauge_terms(problem, rotations, lambdas);
+    let gauge = GaugeBounds {
+        rho0: terms.h,
+        rho1: terms.rho * (1.0 + t_max) * (1.0 + 4.0 * U),
     };
-    let inertia = prove_inertia(analysis, problem, &c.reduced, &pencil, &c.deg_n, c.d_max)?;
-    let groups = Groups::new(&analysis.components, &pencil.weights);
-    let m = scalar_operator(problem, rotations, lambdas, &c.deg_n);
-    let coarse =
-        coarse_terms(&m, &groups, (zeta_free, rel, stop_at)).ok_or(ScalarFailure::Numerical)?;
-    let mu_m = coarse.mu(groups.kappa());
-    let proven = Proven {
-        mu_m,
-        t_max,
-        inertia,
-        kappa: groups.kappa(),
-        residual: coarse.rho,
-    };
-    proven.outcome(&c, analysis, &pencil)
+    let bound = coarse_terms_gauged(m, &space, gauge, coarse).ok_or(ScalarFailure::Numerical)?;
+    let mu = bound.mu(space.kappa());
+    if mu < -m.row_abs() {
+        return Err(ScalarFailure::Inertia {
+            negative_pivots: negative,
+        });
+    }
+    Ok((mu, space.kappa(), bound.rho))
+}
+
+/// The most negative pivots beyond one per component that the deflation takes (the factor's
+/// columns at all of them, three coarse columns each).
+const DEFLATION_EXTRA: usize = 12;
+
+/// The deflated components' coarse space (`[D13]`, "Deflated components"): per component its
+/// constant directions and, for each of the factor's columns `l_k` at a negative pivot in it,
+/// `l_k (x) e_c` for the three coordinates (each scaled by a power of two to about the
+/// constant directions' norm). `U = {x : F_g^T x_g = 0}` lies in the set where every
+/// coordinate slice is orthogonal to every `l_k`, where the factorised pencil is positive
+/// semidefinite; `None` when the columns are not proven independent.
+fn deflated_space(of: &[usize], columns: Vec<NegativeColumn>) -> Option<RegionSpace<'_>> {
+    let count = of.iter().max().map_or(1, |m| m + 1);
+    let mut size = vec![0usize; count];
+    of.iter().for_each(|&g| size[g] += 1);
+    let mut extra: Vec<Vec<Column>> = vec![Vec::new(); count];
+    for column in columns {
+        let g = of[column.entries.first()?.0];
+        let scalar = scaled_to_constant(column.entries, size[g]);
+        for c in 0..3 {
+            extra[g].push(scalar.iter().map(|&(i, v)| (3 * i + c, v)).collect());
+        }
+    }
+    RegionSpace::new(of, extra)
 }
 
 /// The components and the weights of the pencils: the projector `Pi` onto `U` and `kappa`.
@@ -387,6 +466,167 @@ mod tests {
         }
         assert!(proofs >= 16, "{proofs} proofs");
         assert!(tight >= 8, "{tight} proofs within the target at low noise");
+    }
+
+    /// Deflated components (`[D13]`, "Deflated components"): where a component's pencil shows
+    /// more negative pivots than one, the factor's columns at all of them join the coarse
+    /// space; every such proof at most the dense `lambda_min(S)`, at solutions of noisy grouped
+    /// graphs and at points turned by 0.02 rad, and some within the target at solutions. Fails
+    /// when one column is left out (checked).
+    #[test]
+    fn deflated_components_are_below_the_dense_spectrum() {
+        let (mut deflated, mut tight, mut attempts) = (0, 0, 0);
+        for seed in 0..48u64 {
+            let groups = 2 + (seed % 3) as usize;
+            let sigma = [0.15, 0.25, 0.35][(seed / 3 % 3) as usize];
+            let (p, group) = grouped_graph(groups, 10, 0.5, sigma, seed);
+            let solved = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+            let mut rng = rand::rngs::StdRng::seed_from_u64(seed + 300);
+            let turned: Vec<Rotation> = (solved.rotations.iter())
+                .map(|r| perturb_gaussian(r, 0.02, &mut rng))
+                .collect();
+            for (at, critical) in [(&solved.rotations, true), (&turned, false)] {
+                attempts += 1;
+                let lambdas = multipliers(&p, at).unwrap();
+                let target = 1e-6 * p.cost(at).max(1e-12) / p.num_rotations() as f64;
+                let r = grouped_comparison(&p, at, &lambdas, &group, target, (usize::MAX, None))
+                    .unwrap();
+                let Ok(proof) = r else { continue };
+                if proof.deflated == 0 {
+                    continue;
+                }
+                deflated += 1;
+                let (mu, exact) = (
+                    proof.verified_min_eigenvalue,
+                    dense_lambda_min(&p, &lambdas),
+                );
+                assert!(
+                    mu <= exact + 1e-12 * (1.0 + exact.abs()),
+                    "seed {seed}: deflated proof {mu:e} above the dense {exact:e}"
+                );
+                tight += usize::from(critical && mu >= -target);
+            }
+        }
+        println!("{deflated} deflated proofs of {attempts} attempts, {tight} within the target");
+        assert!(
+            deflated >= 6 && tight >= 3,
+            "{deflated} deflated, {tight} within the target"
+        );
+    }
+
+    /// The deflated components' space itself: `M = D^T S D` (dense) is positive semidefinite on
+    /// the vectors orthogonal to every component's constant directions and the space's deflated
+    /// columns, at the solutions of noisy grouped graphs and at points turned by 0.02 and 0.1
+    /// rad (where `S` is indefinite) where the pencils show more negative pivots than
+    /// components, and its extra columns span exactly the factor's columns times each axis.
+    /// Fails when one of the factor's columns is left out of the space (checked), which the
+    /// whole bound's test above does not catch (the coarse correction masks it), nor `M` here
+    /// (the comparison is loose).
+    #[test]
+    fn deflated_spaces_leave_m_positive_off_their_columns() {
+        let mut checked = 0;
+        for seed in 0..48u64 {
+            let groups = 2 + (seed % 3) as usize;
+            let sigma = [0.15, 0.25, 0.35][(seed / 3 % 3) as usize];
+            let (p, group) = grouped_graph(groups, 10, 0.5, sigma, seed);
+            let solved = solve_multiple(&p, &MultipleSettings::default())
+                .unwrap()
+                .rotations;
+            let mut rng = rand::rngs::StdRng::seed_from_u64(seed + 500);
+            let turn = [0.0, 0.02, 0.1][(seed / 9 % 3) as usize];
+            let at: Vec<Rotation> = (solved.iter())
+                .map(|r| perturb_gaussian(r, turn, &mut rng))
+                .collect();
+            let lambdas = multipliers(&p, &at).unwrap();
+            let analysis = ScalarAnalysis::grouped(&p, &group, usize::MAX)
+                .unwrap()
+                .unwrap();
+            let c = edge_charges(&p, &at, &lambdas, &analysis.copies, analysis.beta).unwrap();
+            let pencil = grouped_pencil(&c).unwrap();
+            let most = analysis.expected_negative_pivots() + DEFLATION_EXTRA;
+            let found = prove_inertia_deflating(
+                &analysis,
+                &p,
+                (&c.reduced, &pencil),
+                (&c.deg_n, c.d_max),
+                most,
+            );
+            let Ok((_, _, columns)) = found else { continue };
+            if columns.is_empty() {
+                continue;
+            }
+            checked += 1;
+            let n = p.num_rotations();
+            let lifted: Vec<nalgebra::DVector<f64>> = (columns.iter())
+                .flat_map(|l| {
+                    (0..3).map(move |k| {
+                        let mut v = nalgebra::DVector::zeros(3 * n);
+                        l.entries.iter().for_each(|&(i, x)| v[3 * i + k] = x);
+                        v
+                    })
+                })
+                .collect();
+            let space = deflated_space(&analysis.components, columns).unwrap();
+            // the space's extra columns span exactly the factor's columns times each axis
+            let extra = nalgebra::DMatrix::from_columns(
+                &(space.extra_columns().into_iter())
+                    .map(nalgebra::DVector::from_vec)
+                    .collect::<Vec<_>>(),
+            );
+            assert_eq!(
+                extra.ncols(),
+                lifted.len(),
+                "seed {seed}: a column left out"
+            );
+            let basis = extra.svd(true, false).u.unwrap();
+            for v in &lifted {
+                let off = v - &basis * (basis.transpose() * v);
+                assert!(
+                    off.norm() <= 1e-9 * v.norm(),
+                    "seed {seed}: a column not in the space"
+                );
+            }
+            let mut f: Vec<nalgebra::DVector<f64>> = space
+                .extra_columns()
+                .into_iter()
+                .map(nalgebra::DVector::from_vec)
+                .collect();
+            for g in 0..analysis.expected_negative_pivots() {
+                for k in 0..3 {
+                    let mut e = nalgebra::DVector::zeros(3 * n);
+                    (0..n)
+                        .filter(|&i| analysis.components[i] == g)
+                        .for_each(|i| e[3 * i + k] = 1.0);
+                    f.push(e);
+                }
+            }
+            let f = nalgebra::DMatrix::from_columns(&f);
+            let s = crate::linalg::cholesky::to_dense(
+                certificate_matrix(&p, &lambdas).unwrap().as_ref(),
+            );
+            let mut d = nalgebra::DMatrix::zeros(3 * n, 3 * n);
+            for (i, r) in at.iter().enumerate() {
+                d.fixed_view_mut::<3, 3>(3 * i, 3 * i).copy_from(r.matrix());
+            }
+            let m = d.transpose() * s * &d;
+            let u = f.svd(true, false).u.unwrap();
+            let off = nalgebra::DMatrix::<f64>::identity(3 * n, 3 * n) - &u * u.transpose();
+            let e = off.symmetric_eigen();
+            let q: Vec<_> = (0..3 * n)
+                .filter(|&i| e.eigenvalues[i] > 0.5)
+                .map(|i| e.eigenvectors.column(i).into_owned())
+                .collect();
+            let q = nalgebra::DMatrix::from_columns(&q);
+            let low = SymmetricEigen::new(q.transpose() * m * &q)
+                .eigenvalues
+                .min();
+            assert!(
+                low >= -1e-9 * c.d_max,
+                "seed {seed}: {low:e} off the deflated space"
+            );
+        }
+        println!("{checked} deflated spaces");
+        assert!(checked >= 6, "{checked} deflated spaces");
     }
 
     /// The soundness sweep: 60 grouped graphs (2-5 groups of 5-14 nodes, edges between groups

@@ -165,6 +165,7 @@ impl HubGraph {
             factor_nonzeros: self.camera_analysis.factor_len() + self.hub_analysis.factor_len(),
             kappa: pencils.kappa,
             residual_bound: rho.live.hypot(rho.dead),
+            deflated: 0,
         })
     }
 

@@ -7,7 +7,7 @@ use super::ScalarFailure;
 use super::analysis::{ScalarAnalysis, ScalarPart};
 use super::split::{PencilWeights, part_charges};
 use crate::linalg::cholesky::gamma;
-use crate::linalg::ldlt::{LdltFailure, ldlt_inertia};
+use crate::linalg::ldlt::{LdltFailure, NegativeColumn, ldlt_inertia, ldlt_negative_columns};
 use crate::multiple::MultipleProblem;
 
 /// Step 5 for every part (one part, with the charges `w`, for the whole graph or a subgraph):
@@ -22,9 +22,27 @@ pub(super) fn prove_inertia(
     deg_n: &[usize],
     d_max: f64,
 ) -> std::result::Result<(f64, f64), ScalarFailure> {
+    let (headroom, backward, _) =
+        prove_inertia_deflating(analysis, problem, (reduced, pencil), (deg_n, d_max), 0)?;
+    Ok((headroom, backward))
+}
+
+/// [`prove_inertia`], and with one part showing more negative pivots than expected but at most
+/// `most`, the factor's columns at every negative pivot (the leading-block deflation (D0) of
+/// `[A16]` without a border: `L D L^T = A + Delta` is positive semidefinite off them, so `A >=
+/// (h - b) I` there; `paper-notes/certificates.md` `[D13]`, "Deflated components").
+pub(super) fn prove_inertia_deflating(
+    analysis: &ScalarAnalysis,
+    problem: &MultipleProblem,
+    (reduced, pencil): (&[f64], &PencilWeights),
+    (deg_n, d_max): (&[usize], f64),
+    most: usize,
+) -> std::result::Result<(f64, f64, Vec<NegativeColumn>), ScalarFailure> {
     let num_parts = analysis.parts.len().max(1);
+    let most = if num_parts == 1 { most } else { 0 };
     let mut headroom = 0.0f64;
     let mut backward = 0.0f64;
+    let mut deflated = Vec::new();
     for (p, part) in analysis.parts.iter().enumerate() {
         let charges = match pencil.shares.get(p) {
             Some(f) => part_charges(&pencil.weights, f, num_parts),
@@ -34,15 +52,16 @@ pub(super) fn prove_inertia(
         let mut retried = false;
         let bound = loop {
             let expected = analysis.expected_negative_pivots();
-            let bound = factor_inertia(
+            let (bound, columns) = factor_inertia(
                 part,
                 problem,
                 (&analysis.copies, reduced),
                 &charges,
-                (h, expected),
+                (h, expected, most),
                 deg_n,
             )?;
             if bound <= h {
+                deflated = columns;
                 break bound;
             }
             if retried {
@@ -54,21 +73,22 @@ pub(super) fn prove_inertia(
         headroom = headroom.max(h);
         backward = backward.max(bound);
     }
-    Ok((headroom, backward))
+    Ok((headroom, backward, deflated))
 }
 
 /// `LDL^T` of `A = L'_p - diag(delta) - h I` without pivoting (AMD order), `L'_p` the Laplacian
 /// of `part`'s edges with the weights `reduced / copies` (any sign). Returns a rigorous bound on
 /// `||A_exact - P^T L D L^T P||_2` when exactly `expected` pivots are negative (one, or one per
-/// component of a grouped comparison's pattern) and none is zero; a failure otherwise.
+/// component of a grouped comparison's pattern) and none is zero, or when more but at most
+/// `most` are, with the factor's columns at all of them; a failure otherwise.
 pub(super) fn factor_inertia(
     part: &ScalarPart,
     problem: &MultipleProblem,
     (copies, reduced): (&[u32], &[f64]),
     delta: &[f64],
-    (h, expected): (f64, usize),
+    (h, expected, most): (f64, usize, usize),
     deg_n: &[usize],
-) -> std::result::Result<f64, ScalarFailure> {
+) -> std::result::Result<(f64, Vec<NegativeColumn>), ScalarFailure> {
     let n = delta.len();
     let mut a = part.pattern.clone();
     // row sums of the magnitudes of the terms that form each entry (the forming error)
@@ -94,14 +114,25 @@ pub(super) fn factor_inertia(
         }
     }
     let nodes = independent_negative_diagonal(a.as_ref(), &part.diag_pos, h);
-    if nodes > expected {
+    if nodes > expected.max(most) {
         return Err(ScalarFailure::NegativeDiagonal { nodes });
     }
-    let inertia = ldlt_inertia(&part.symbolic, a.as_ref()).map_err(|f| match f {
+    let numerical = |f| match f {
         LdltFailure::Numerical => ScalarFailure::Numerical,
-    })?;
+    };
+    let (inertia, columns) = if most > expected {
+        let (inertia, pivots) =
+            ldlt_negative_columns(&part.symbolic, a.as_ref(), expected, most).map_err(numerical)?;
+        (inertia, pivots.columns)
+    } else {
+        (
+            ldlt_inertia(&part.symbolic, a.as_ref()).map_err(numerical)?,
+            Vec::new(),
+        )
+    };
     let negative = inertia.negative;
-    if negative != expected {
+    // more negative pivots deflate only with every one's column
+    if negative != expected && columns.len() != negative {
         return Err(ScalarFailure::Inertia {
             negative_pivots: negative,
         });
@@ -116,7 +147,7 @@ pub(super) fn factor_inertia(
     if !bound.is_finite() {
         return Err(ScalarFailure::Numerical);
     }
-    Ok(bound)
+    Ok((bound, columns))
 }
 
 /// The size of a set of nodes, pairwise not adjacent, whose diagonal entries of `a` (a

@@ -149,6 +149,10 @@ pub struct ScalarComparison {
     pub kappa: f64,
     /// Upper bound on `||r'||_F` (the stationarity part, step 3).
     pub residual_bound: f64,
+    /// Negative pivots of the grouped comparison's factor whose columns were deflated
+    /// (`[D13]`, "Deflated components"; 0 when every component proved its own pencil).
+    #[serde(default)]
+    pub deflated: usize,
 }
 
 /// The comparison's work besides the factorisations, per edge: the edge charges and the
@@ -326,6 +330,7 @@ fn compare(
         inertia: (headroom, backward_error),
         kappa,
         residual: rho1,
+        deflated: 0,
     };
     proven.outcome(&c, analysis, &pencil)
 }
@@ -338,6 +343,8 @@ struct Proven {
     inertia: (f64, f64),
     kappa: f64,
     residual: f64,
+    /// Negative pivots deflated (the grouped comparison's; 0 otherwise).
+    deflated: usize,
 }
 
 impl Proven {
@@ -364,6 +371,7 @@ impl Proven {
             factor_nonzeros: analysis.factor_len(),
             kappa: self.kappa,
             residual_bound: self.residual,
+            deflated: self.deflated,
         })
     }
 }
