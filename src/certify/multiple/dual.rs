@@ -203,6 +203,13 @@ fn scalar_text(bound: &VerifiedBound) -> String {
         }
         _ => String::new(),
     };
+    let edges = match comparison {
+        Some(c) if c.deflated > 0 => format!(
+            "{edges}; the factor's columns at its {} negative pivots deflated",
+            c.deflated
+        ),
+        _ => edges,
+    };
     format!(
         "lambda_min(S) >= {:.3e} verified by the scalar comparison [D13] ({factors}{edges}; \
          backward error {:.1e})",
