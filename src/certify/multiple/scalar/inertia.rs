@@ -131,8 +131,8 @@ pub(super) fn factor_inertia(
         )
     };
     let negative = inertia.negative;
-    // more negative pivots deflate only with every one's column
-    if negative != expected && columns.len() != negative {
+    // another count deflates only when asked to, and with every negative pivot's column
+    if negative != expected && (most <= expected || columns.len() != negative) {
         return Err(ScalarFailure::Inertia {
             negative_pivots: negative,
         });
