@@ -9,6 +9,7 @@
 //! weight per node) are the two [`CoarseSpace`]s; the operator, the correction by conjugate
 //! gradients and the rigorous bound are shared here.
 
+use crate::certify::multiple::multipliers::GaugeTerms;
 use crate::linalg::UNIT_ROUNDOFF as U;
 use crate::linalg::cholesky::gamma;
 use crate::linalg::pcg::pcg;
@@ -238,6 +239,17 @@ pub(in crate::certify::multiple) fn coarse_terms(
 pub(in crate::certify::multiple) struct GaugeBounds {
     pub rho0: f64,
     pub rho1: f64,
+}
+
+impl GaugeBounds {
+    /// From the estimate's `S Y` terms ([`GaugeTerms`]) and the rotations' orthogonality defect
+    /// `t_max`: `rho0 = h`, and `||M v0|| = ||D^T S Y|| <= ||D|| ||S Y|| <= (1 + t_max) rho`.
+    pub(in crate::certify::multiple) fn of(terms: &GaugeTerms, t_max: f64) -> Self {
+        GaugeBounds {
+            rho0: terms.h,
+            rho1: terms.rho * (1.0 + t_max) * (1.0 + 4.0 * U),
+        }
+    }
 }
 
 /// The coarse bound with the gauge directions bounded apart (`[A15]`, "Regions"): in the basis

@@ -42,11 +42,7 @@ pub(super) fn compare_grouped(
     let (headroom, backward_error) = super::prove_inertia(analysis, problem, &c, &weights)?;
     let space = BlockGroups::new(&analysis.components, &weights).ok_or(BlockFailure::Numerical)?;
     let m = anisotropic_operator(problem, information, rotations, lambdas);
-    let gauge = GaugeBounds {
-        rho0: terms.h,
-        // ||M v0|| = ||D^T S Y|| <= ||D|| ||S Y||
-        rho1: terms.rho * (1.0 + t_max) * (1.0 + 4.0 * U),
-    };
+    let gauge = GaugeBounds::of(terms, t_max);
     let coarse = coarse_terms_gauged(&m, &space, gauge, (zeta_free, rel, stop_at))
         .ok_or(BlockFailure::Numerical)?;
     let proven = Proven {

@@ -104,10 +104,7 @@ pub(crate) fn regional_bound(
         return Ok(Err(why(BlockFailure::Numerical)));
     };
     let terms = gauge_terms(problem, rotations, lambdas);
-    let gauge = GaugeBounds {
-        rho0: terms.h,
-        rho1: terms.rho * (1.0 + t_max) * (1.0 + 4.0 * U),
-    };
+    let gauge = GaugeBounds::of(&terms, t_max);
     let zeta_free = zeta * (1.0 - 4.0 * U);
     let coarse = (zeta_free, COARSE_RELATIVE_RESIDUAL, stop_at);
     let Some(coarse) = coarse_terms_gauged(&m, &space, gauge, coarse) else {

@@ -192,10 +192,7 @@ fn deflated_bound(
     let negative = columns.len();
     let space = deflated_space(of, columns).ok_or(ScalarFailure::Numerical)?;
     let terms = gauge_terms(problem, rotations, lambdas);
-    let gauge = GaugeBounds {
-        rho0: terms.h,
-        rho1: terms.rho * (1.0 + t_max) * (1.0 + 4.0 * U),
-    };
+    let gauge = GaugeBounds::of(&terms, t_max);
     let bound = coarse_terms_gauged(m, &space, gauge, coarse).ok_or(ScalarFailure::Numerical)?;
     let mu = bound.mu(space.kappa());
     if mu < -m.row_abs() {
