@@ -700,6 +700,21 @@ impl Region {
         )
     }
 
+    /// The progress line of region `g`'s factorisation (`values` its factor's).
+    fn announce(&self, g: usize, values: usize) {
+        crate::progress::phase(crate::progress::Phase::Certify, || {
+            let deflated = match self.border.len() {
+                0 => String::new(),
+                k => format!(", {k} deflated directions"),
+            };
+            format!(
+                "regional bound: region {g} ({} nodes{deflated}), a factor of {:.1e} values",
+                self.diag.len(),
+                values as f64
+            )
+        });
+    }
+
     /// The nodes where a deflated column is nonzero.
     fn support(&self) -> Vec<usize> {
         let mut s: Vec<usize> = self.border.iter().flatten().map(|(i, _)| i / 3).collect();
@@ -728,17 +743,7 @@ impl Region {
             }
             Err(_) => return Err(BlockFailure::Numerical),
         };
-        crate::progress::phase(crate::progress::Phase::Certify, || {
-            format!(
-                "regional bound: region {g} ({} nodes{}), a factor of {:.1e} values",
-                self.diag.len(),
-                match self.border.len() {
-                    0 => String::new(),
-                    k => format!(", {k} deflated directions"),
-                },
-                symbolic.len_val() as f64
-            )
-        });
+        self.announce(g, symbolic.len_val());
         let time = crate::certify::budget::Budget {
             max_memory_bytes: u64::MAX,
             max_seconds: stop_at.map(|t| t.saturating_duration_since(Instant::now()).as_secs_f64()),

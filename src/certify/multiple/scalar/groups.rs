@@ -511,6 +511,41 @@ mod tests {
         );
     }
 
+    /// The local solution of `p`, each rotation turned by `angle` (random axes, `seed`).
+    fn turned_solution(p: &MultipleProblem, angle: f64, seed: u64) -> Vec<Rotation> {
+        let solved = solve_multiple(p, &MultipleSettings::default()).unwrap();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        (solved.rotations.iter())
+            .map(|r| perturb_gaussian(r, angle, &mut rng))
+            .collect()
+    }
+
+    /// `lambda_min` of `M = D^T S D` (dense) on the complement of the columns of `f`.
+    fn min_off_columns(
+        p: &MultipleProblem,
+        (at, lambdas): (&[Rotation], &[Matrix3<f64>]),
+        f: &nalgebra::DMatrix<f64>,
+    ) -> f64 {
+        let n = p.num_rotations();
+        let s = crate::linalg::cholesky::to_dense(certificate_matrix(p, lambdas).unwrap().as_ref());
+        let mut d = nalgebra::DMatrix::zeros(3 * n, 3 * n);
+        for (i, r) in at.iter().enumerate() {
+            d.fixed_view_mut::<3, 3>(3 * i, 3 * i).copy_from(r.matrix());
+        }
+        let m = d.transpose() * s * &d;
+        let u = f.clone().svd(true, false).u.unwrap();
+        let off = nalgebra::DMatrix::<f64>::identity(3 * n, 3 * n) - &u * u.transpose();
+        let e = off.symmetric_eigen();
+        let q: Vec<_> = (0..3 * n)
+            .filter(|&i| e.eigenvalues[i] > 0.5)
+            .map(|i| e.eigenvectors.column(i).into_owned())
+            .collect();
+        let q = nalgebra::DMatrix::from_columns(&q);
+        SymmetricEigen::new(q.transpose() * m * &q)
+            .eigenvalues
+            .min()
+    }
+
     /// The deflated components' space itself: `M = D^T S D` (dense) is positive semidefinite on
     /// the vectors orthogonal to every component's constant directions and the space's deflated
     /// columns, at the solutions of noisy grouped graphs and at points turned by 0.02 and 0.1
@@ -526,14 +561,8 @@ mod tests {
             let groups = 2 + (seed % 3) as usize;
             let sigma = [0.15, 0.25, 0.35][(seed / 3 % 3) as usize];
             let (p, group) = grouped_graph(groups, 10, 0.5, sigma, seed);
-            let solved = solve_multiple(&p, &MultipleSettings::default())
-                .unwrap()
-                .rotations;
-            let mut rng = rand::rngs::StdRng::seed_from_u64(seed + 500);
             let turn = [0.0, 0.02, 0.1][(seed / 9 % 3) as usize];
-            let at: Vec<Rotation> = (solved.iter())
-                .map(|r| perturb_gaussian(r, turn, &mut rng))
-                .collect();
+            let at = turned_solution(&p, turn, seed + 500);
             let lambdas = multipliers(&p, &at).unwrap();
             let analysis = ScalarAnalysis::grouped(&p, &group, usize::MAX)
                 .unwrap()
@@ -598,25 +627,7 @@ mod tests {
                 }
             }
             let f = nalgebra::DMatrix::from_columns(&f);
-            let s = crate::linalg::cholesky::to_dense(
-                certificate_matrix(&p, &lambdas).unwrap().as_ref(),
-            );
-            let mut d = nalgebra::DMatrix::zeros(3 * n, 3 * n);
-            for (i, r) in at.iter().enumerate() {
-                d.fixed_view_mut::<3, 3>(3 * i, 3 * i).copy_from(r.matrix());
-            }
-            let m = d.transpose() * s * &d;
-            let u = f.svd(true, false).u.unwrap();
-            let off = nalgebra::DMatrix::<f64>::identity(3 * n, 3 * n) - &u * u.transpose();
-            let e = off.symmetric_eigen();
-            let q: Vec<_> = (0..3 * n)
-                .filter(|&i| e.eigenvalues[i] > 0.5)
-                .map(|i| e.eigenvectors.column(i).into_owned())
-                .collect();
-            let q = nalgebra::DMatrix::from_columns(&q);
-            let low = SymmetricEigen::new(q.transpose() * m * &q)
-                .eigenvalues
-                .min();
+            let low = min_off_columns(&p, (&at, &lambdas), &f);
             assert!(
                 low >= -1e-9 * c.d_max,
                 "seed {seed}: {low:e} off the deflated space"
