@@ -111,6 +111,11 @@ impl BlockPattern {
         &self.col_ptr
     }
 
+    /// The same pattern as `other` (block size and every block column's neighbours).
+    pub(crate) fn same_as(&self, other: &BlockPattern) -> bool {
+        self.bs == other.bs && self.nbrs == other.nbrs
+    }
+
     /// Stored values.
     pub(crate) fn nnz(&self) -> usize {
         *self.col_ptr.last().unwrap_or(&0)

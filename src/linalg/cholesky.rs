@@ -482,6 +482,17 @@ fn supernode_shapes(
     (0..s.n_supernodes()).map(move |j| (end[j] - begin[j], rows[j + 1] - rows[j]))
 }
 
+/// Bytes of numeric scratch an `LDL^T` factorisation with this symbolic structure allocates
+/// besides the factor (at the parallelism its size gets, [`super::factor_parallelism`]).
+pub(crate) fn ldlt_scratch_bytes(symbolic: &SymbolicCholesky<usize>) -> usize {
+    symbolic
+        .factorize_numeric_ldlt_scratch::<f64>(
+            super::factor_parallelism(symbolic.len_val()),
+            Default::default(),
+        )
+        .size_bytes()
+}
+
 /// The multiply-adds of a numeric factorisation with this symbolic structure: per supernode of
 /// `k` columns and `r` rows below its diagonal block, `k^3 / 6` (its dense `LDL^T`),
 /// `r k^2 / 2` (the triangular solve below it) and `r^2 k / 2` (its update of the rest); per

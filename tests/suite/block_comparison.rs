@@ -116,7 +116,7 @@ fn the_block_comparison_is_refused_when_its_work_passes_the_time_left() {
     );
 }
 
-/// From 10^4 cameras the block rung tries its subgraph in 2 regions (`[A15]`, "Regions") first:
+/// From 10^4 cameras the block rung tries its subgraph in 3 regions (`[A15]`, "Regions") first:
 /// the realistic class of 10^5 edges is certified by it with the default settings, its bound
 /// below the cost at the planted truth's local solution (any feasible point's cost bounds the
 /// optimum from above), and an estimate 1e-3 rad off is not certified.
@@ -129,7 +129,7 @@ fn regions_certify_a_ten_thousand_camera_graph() {
     let in_regions = c.details.ladder.iter().any(|a| {
         a.rung == Proof::BlockComparison
             && matches!(a.outcome, Outcome::Proved { .. })
-            && a.note.contains("in 2 regions")
+            && a.note.contains("in 3 regions")
     });
     assert!(in_regions, "{:?}", c.details.ladder);
     let planted = solve_multiple(

@@ -7,7 +7,8 @@ use super::outcome::BlockFailure;
 use crate::certify::multiple::multipliers::symmetrize;
 use crate::certify::multiple::scalar::{fro, parallel_groups};
 use crate::linalg::cholesky::{UNIT_ROUNDOFF, gamma};
-use crate::linalg::small_symmetric::verified_min_eigenvalue;
+use crate::linalg::small_symmetric::verified_negative_part;
+use crate::linalg::symmetric3::eigenvalues_estimate;
 use crate::multiple::MultipleProblem;
 use crate::multiple::anisotropic::Information;
 use crate::so3::Rotation;
@@ -193,8 +194,8 @@ fn edge_bound(
     let Some(b) = second_order_bound(s, k, eta, dropped, cover) else {
         return first_order_bound(s, k, eta);
     };
-    let largest = b.half_charge.symmetric_eigenvalues().max() + b.iso;
-    let keeps = b.kept.symmetric_eigenvalues().max().max(0.0);
+    let largest = eigenvalues_estimate(&b.half_charge)[2] + b.iso;
+    let keeps = eigenvalues_estimate(&b.kept)[2].max(0.0);
     // a kept edge keeping at least its charge (most, at a good estimate): no `6 x 6` check
     if keeps >= largest {
         return Some(b);
@@ -211,7 +212,7 @@ fn first_order_bound(s: &Matrix3<f64>, k: &Matrix3<f64>, eta: f64) -> Option<Edg
     let e = s + k;
     let k6 = two_by_two(s, &-e, s);
     // fl(S + K) errs by u |E|
-    let l = verified_min_eigenvalue(&k6)? - 2.0 * u * fro(&e);
+    let l = verified_negative_part(&k6)? - 2.0 * u * fro(&e);
     let iso = ((-l).max(0.0) + eta) * (1.0 + 8.0 * u);
     iso.is_finite().then_some(EdgeBound {
         kept: Matrix3::zeros(),
@@ -244,7 +245,7 @@ fn second_order_bound(
     let sw = s - w;
     let t = two_by_two(&z, &-k, &sw);
     // fl(S - W) errs by u |S - W|
-    let l = verified_min_eigenvalue(&t)? - 2.0 * u * fro(&sw);
+    let l = verified_negative_part(&t)? - 2.0 * u * fro(&sw);
     let patch = (-l).max(0.0) * (1.0 + 4.0 * u);
     // Z' / 2 = fl(Z / 2) (exact) + patch / 2 I; d^T (-patch I) d >= -2 patch (|x_a|^2 + |x_b|^2)
     let dropped_charge = if dropped { 2.0 * patch } else { 0.0 };

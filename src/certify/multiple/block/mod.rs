@@ -28,6 +28,7 @@
 
 mod edges;
 mod groups;
+mod operator;
 mod outcome;
 mod regional;
 pub mod rungs;
@@ -35,7 +36,6 @@ mod subgraph;
 #[cfg(test)]
 mod tests;
 
-use super::coarse::COARSE_RELATIVE_RESIDUAL;
 use super::multipliers::{GaugeTerms, gauge_terms};
 use super::scalar::{components, fro, orthogonality_defect, ostrowski, subgraph_edges};
 use crate::error::{Error, Result};
@@ -48,6 +48,7 @@ use crate::so3::Rotation;
 use faer::sparse::linalg::cholesky::SymbolicCholesky;
 use nalgebra::Matrix3;
 pub use outcome::{BlockComparison, BlockFailure};
+use regional::RegionAnalysis;
 #[cfg(test)]
 pub(crate) use regional::regional_bound;
 pub(crate) use regional::regional_dual_bound;
@@ -58,12 +59,9 @@ pub use subgraph::{BlockShape, TOP_UP_MAX_EDGES};
 /// (or of the whole graph) and its symbolic `LDL^T` analysis.
 pub struct BlockAnalysis {
     keep: Vec<bool>,
-    pattern: BlockPattern,
-    symbolic: SymbolicCholesky<usize>,
+    structure: Structure,
     /// The ordering's count of the factor's values ([`BlockAnalysis::counted_values`]).
     counted_values: usize,
-    /// Per kept edge, its slot in the pattern (`usize::MAX` for a dropped edge).
-    slots: Vec<usize>,
     shape: Option<BlockShape>,
     num_rotations: usize,
     /// Each node's component of the kept edges when the subgraph is split into regions
@@ -71,6 +69,18 @@ pub struct BlockAnalysis {
     components: Vec<usize>,
     /// The regions asked for (0 without).
     regions: usize,
+}
+
+/// What a block comparison factorises: one block Laplacian (its pencil, step 5), or each
+/// region's bordered block (`[A15]`, "Regions, bordered"), one after another.
+enum Structure {
+    Whole {
+        pattern: BlockPattern,
+        symbolic: Box<SymbolicCholesky<usize>>,
+        /// Per kept edge, its slot in the pattern (`usize::MAX` for a dropped edge).
+        slots: Vec<usize>,
+    },
+    Regions(Vec<RegionAnalysis>),
 }
 
 impl BlockAnalysis {
@@ -148,36 +158,48 @@ impl BlockAnalysis {
                 .filter(|(_, k)| **k)
                 .map(|(e, _)| (e.i, e.j))
         };
-        let pattern = BlockPattern::new(n, 3, kept());
-        let (symbolic, counted_values) = match pattern.symbolic_within(max_values)? {
-            Ok(s) => s,
-            Err(predicted) => return Ok(Err(predicted)),
-        };
-        let slots = problem
-            .edges()
-            .iter()
-            .zip(&keep)
-            .map(|(e, &k)| {
-                if k {
-                    pattern.slot(e.i, e.j)
-                } else {
-                    usize::MAX
-                }
-            })
-            .collect();
-        let components = match regions {
+        let (structure, counted_values, components) = match regions {
             Some(_) => {
                 let left_out: Vec<bool> = keep.iter().map(|k| !k).collect();
-                largest_last(components(problem, &left_out))
+                let of = largest_last(components(problem, &left_out));
+                match RegionAnalysis::of_regions(&of, kept(), max_values)? {
+                    Ok(r) => {
+                        let counted = r.iter().map(RegionAnalysis::counted).sum();
+                        (Structure::Regions(r), counted, of)
+                    }
+                    Err(predicted) => return Ok(Err(predicted)),
+                }
             }
-            None => Vec::new(),
+            None => {
+                let pattern = BlockPattern::new(n, 3, kept());
+                let (symbolic, counted) = match pattern.symbolic_within(max_values)? {
+                    Ok(s) => s,
+                    Err(predicted) => return Ok(Err(predicted)),
+                };
+                let slots = problem
+                    .edges()
+                    .iter()
+                    .zip(&keep)
+                    .map(|(e, &k)| {
+                        if k {
+                            pattern.slot(e.i, e.j)
+                        } else {
+                            usize::MAX
+                        }
+                    })
+                    .collect();
+                let whole = Structure::Whole {
+                    pattern,
+                    symbolic: Box::new(symbolic),
+                    slots,
+                };
+                (whole, counted, Vec::new())
+            }
         };
         Ok(Ok(BlockAnalysis {
             keep,
-            pattern,
-            symbolic,
+            structure,
             counted_values,
-            slots,
             shape,
             num_rotations: n,
             regions: regions.unwrap_or(0),
@@ -204,26 +226,31 @@ impl BlockAnalysis {
             .saturating_mul(7)
     }
 
-    /// The negative pivots its factorisation must show: three per component.
+    /// The negative pivots its factorisation must show: three (the pencil's, or each region's
+    /// bordered block's besides its deflated directions).
     pub(super) fn expected_negative_pivots(&self) -> usize {
-        3 * self.groups().max(1)
+        3
     }
 
-    /// Stored values of the factor.
+    /// Stored values of the factor (in regions: of the largest region's, each factorised
+    /// apart).
     pub fn factor_len(&self) -> usize {
-        self.symbolic.len_val()
+        self.factorisations()
+            .map(|(values, _, _)| values)
+            .max()
+            .unwrap_or(0)
     }
 
     /// The minimum-degree ordering's count of the factor's values (without the explicit zeros
-    /// of relaxed supernodes that [`Self::factor_len`] stores): the count in which it compares
-    /// with the whole graph's.
+    /// of relaxed supernodes that [`Self::factor_len`] stores; in regions, their sum): the
+    /// count in which it compares with the whole graph's.
     pub fn counted_values(&self) -> usize {
         self.counted_values
     }
 
-    /// The counted multiply-adds of its numeric factorisation.
+    /// The counted multiply-adds of its numeric factorisations.
     pub fn factor_multiply_adds(&self) -> f64 {
-        crate::linalg::cholesky::factor_multiply_adds(&self.symbolic)
+        self.factorisations().map(|(_, _, work)| work).sum()
     }
 
     /// Edges of the graph it was made for.
@@ -231,14 +258,23 @@ impl BlockAnalysis {
         self.keep.len()
     }
 
-    /// Bytes of numeric scratch the `LDL^T` factorisation allocates besides the factor.
+    /// Bytes of numeric scratch the largest `LDL^T` factorisation allocates besides the factor.
     pub fn scratch_bytes(&self) -> usize {
-        self.symbolic
-            .factorize_numeric_ldlt_scratch::<f64>(
-                crate::linalg::factor_parallelism(self.symbolic.len_val()),
-                Default::default(),
-            )
-            .size_bytes()
+        self.factorisations().map(|(_, b, _)| b).max().unwrap_or(0)
+    }
+
+    /// Per factorisation: its stored values, scratch bytes and multiply-adds.
+    pub(super) fn factorisations(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        use crate::linalg::cholesky::{factor_multiply_adds, ldlt_scratch_bytes};
+        let (whole, regions) = match &self.structure {
+            Structure::Whole { symbolic, .. } => (Some(symbolic), &[][..]),
+            Structure::Regions(r) => (None, r.as_slice()),
+        };
+        let whole = whole.map(|s| (s.len_val(), ldlt_scratch_bytes(s), factor_multiply_adds(s)));
+        let regions = regions
+            .iter()
+            .map(|r| (r.len_val(), r.scratch_bytes(), r.multiply_adds()));
+        whole.into_iter().chain(regions)
     }
 
     /// Edges left out of the block Laplacian.
@@ -325,12 +361,11 @@ pub(in crate::certify::multiple) fn block_comparison_with(
     check_points(problem, analysis, rotations, lambdas)?;
     let points = (rotations, lambdas);
     if analysis.groups() > 0 {
-        let coarse = (COARSE_RELATIVE_RESIDUAL, stop_at);
-        return Ok(groups::compare_grouped(
+        return Ok(groups::compare_bordered(
             (problem, information),
             analysis,
             points,
-            coarse,
+            stop_at,
             gauge,
         ));
     }
@@ -515,11 +550,18 @@ fn factor_inertia(
     weights: &[Matrix3<f64>],
     h: f64,
 ) -> std::result::Result<f64, BlockFailure> {
-    let pattern = &analysis.pattern;
+    let Structure::Whole {
+        pattern,
+        symbolic,
+        slots,
+    } = &analysis.structure
+    else {
+        return Err(BlockFailure::Numerical); // an analysis in regions has no one pencil
+    };
     let mut val = vec![0.0f64; pattern.nnz()];
     // row sums of the magnitudes of the terms that form each block row (the forming error)
     let mut magnitude = vec![0.0f64; weights.len()];
-    for ((e, w), &slot) in problem.edges().iter().zip(&c.kept).zip(&analysis.slots) {
+    for ((e, w), &slot) in problem.edges().iter().zip(&c.kept).zip(slots) {
         if slot == usize::MAX {
             continue;
         }
@@ -535,8 +577,8 @@ fn factor_inertia(
         pattern.add(&mut val, i, i, 0, &shift);
         magnitude[i] += (0..3).map(|r| w.row(r).abs().sum()).fold(0.0, f64::max) + h;
     }
-    let inertia = ldlt_inertia(&analysis.symbolic, pattern.matrix(&val))
-        .map_err(|_| BlockFailure::Numerical)?;
+    let inertia =
+        ldlt_inertia(symbolic, pattern.matrix(&val)).map_err(|_| BlockFailure::Numerical)?;
     if inertia.negative != analysis.expected_negative_pivots() {
         return Err(BlockFailure::Inertia {
             negative_pivots: inertia.negative,

@@ -7,7 +7,7 @@
 //! block comparison `[A15]` fails (sparse graphs), with factors of the regions' size: a rig's
 //! images split by sensor, whose whole `3n` factor is over the memory budget.
 
-use super::groups::anisotropic_operator;
+use super::operator::anisotropic_operator;
 use super::{BlockComparison, BlockFailure};
 use crate::certify::multiple::coarse::verified_min_eigenvalue as verified_min_eigenvalue_dense;
 use crate::certify::multiple::coarse::{
@@ -22,7 +22,7 @@ use crate::linalg::UNIT_ROUNDOFF as U;
 use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::cholesky::gamma;
 use crate::linalg::ldlt::{NegativeColumn, NegativePivots, Trailing, ldlt_negative_columns};
-use crate::linalg::small_symmetric::verified_min_eigenvalue;
+use crate::linalg::small_symmetric::verified_negative_part;
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
 use nalgebra::{DMatrix, Matrix3, Matrix6, SymmetricEigen};
@@ -76,23 +76,56 @@ pub(crate) fn regional_bound(
     };
     let m = anisotropic_operator(problem, information, rotations, lambdas);
     let of = largest_last(region);
-    let Some(charges) = cross_charges(&m, &of) else {
-        return Ok(Err(why(BlockFailure::Numerical)));
-    };
-    let zeta = ZETA_FRACTION * m.row_abs();
-    let shift = region_shift(&m);
+    let gauge = GaugeBounds::of(&gauge_terms(problem, rotations, lambdas), t_max);
+    let found = bordered_regions((&m, &m), (&of, None), (gauge, t_max), (max_values, stop_at));
+    Ok(found
+        .map(|mut proof| {
+            proof.dropped_edges = problem
+                .edges()
+                .iter()
+                .filter(|e| of[e.i] != of[e.j])
+                .count();
+            proof
+        })
+        .map_err(|(why, _)| why))
+}
+
+/// The regions' proofs and the coarse bound: each region `g`'s block of `blocks` less the
+/// charges of `blocks`' blocks between regions is proven positive semidefinite with the margin
+/// `zeta` on the complement of its constant (and deflated) directions, and the coarse bound
+/// of `m` on the regions' space gives `lambda_min(S)` (step 1 with `t_max`). Sound when `x^T M
+/// x >= x^T B x` for every `x` (`B` the exact matrix `blocks` stores, up to its forming
+/// error): `blocks = m` (`[A16]`), or the block comparison's `C - blkdiag(Delta)` (`[A15]`,
+/// "Regions, bordered"), whose regions have no blocks between them. `dropped_edges` is left 0
+/// for the caller. `Err` says why not, with the failure it counts as.
+pub(super) fn bordered_regions(
+    (m, blocks): (&BlockOperator, &BlockOperator),
+    (of, prepared): (&[usize], Option<&[RegionAnalysis]>),
+    (gauge, t_max): (GaugeBounds, f64),
+    (max_values, stop_at): (usize, Option<Instant>),
+) -> std::result::Result<BlockComparison, (String, BlockFailure)> {
+    let why = |f: BlockFailure| (failure_text(0.0, Err(f.clone()), 3), f);
+    let charges = cross_charges(blocks, of).ok_or_else(|| why(BlockFailure::Numerical))?;
+    let zeta = ZETA_FRACTION * blocks.row_abs();
+    let shift = region_shift(blocks);
     let count = of.iter().max().map_or(0, |g| g + 1);
     let mut proofs = Vec::with_capacity(count);
     for g in 0..count {
+        let out_of_time = |why: String| (why, BlockFailure::OutOfTime);
         if stop_at.is_some_and(|t| Instant::now() >= t) {
-            return Ok(Err(
-                "its time ran out between the regions' factorisations".into()
+            return Err(out_of_time(
+                "its time ran out between the regions' factorisations".into(),
             ));
         }
-        match prove_region(&m, (&of, g), &charges, shift, (max_values, stop_at)) {
+        let analysed = prepared.and_then(|p| p.get(g));
+        let limits = ((max_values, stop_at), analysed);
+        match prove_region(blocks, (of, g), &charges, shift, limits) {
             Ok(Ok(p)) => proofs.push(p),
-            Ok(Err(over)) => return Ok(Err(over)),
-            Err(f) => return Ok(Err(format!("region {g}: {}", why(f)))),
+            Ok(Err(over)) => return Err(out_of_time(over)),
+            Err(f) => {
+                let (text, f) = why(f);
+                return Err((format!("region {g}: {text}"), f));
+            }
         }
     }
     let deflated: Vec<Vec<Column>> = proofs
@@ -100,28 +133,18 @@ pub(crate) fn regional_bound(
         .map(|p| std::mem::take(&mut p.deflated))
         .collect();
     let deflated_count = deflated.iter().map(Vec::len).sum();
-    let Some(space) = RegionSpace::new(&of, deflated) else {
-        return Ok(Err(why(BlockFailure::Numerical)));
-    };
-    let terms = gauge_terms(problem, rotations, lambdas);
-    let gauge = GaugeBounds::of(&terms, t_max);
+    let space = RegionSpace::new(of, deflated).ok_or_else(|| why(BlockFailure::Numerical))?;
     let zeta_free = zeta * (1.0 - 4.0 * U);
     let coarse = (zeta_free, COARSE_RELATIVE_RESIDUAL, stop_at);
-    let Some(coarse) = coarse_terms_gauged(&m, &space, gauge, coarse) else {
-        return Ok(Err(why(BlockFailure::Numerical)));
-    };
-    let Some(mu) = ostrowski(coarse.mu(space.kappa()), t_max) else {
-        return Ok(Err(why(BlockFailure::Numerical)));
-    };
+    let coarse = coarse_terms_gauged(m, &space, gauge, coarse)
+        .ok_or_else(|| why(BlockFailure::Numerical))?;
+    let mu =
+        ostrowski(coarse.mu(space.kappa()), t_max).ok_or_else(|| why(BlockFailure::Numerical))?;
     let largest = |f: fn(&RegionProof) -> f64| proofs.iter().map(f).fold(0.0, f64::max);
-    Ok(Ok(BlockComparison {
+    Ok(BlockComparison {
         verified_min_eigenvalue: mu,
         max_delta: charges.iter().map(|c| c.norm()).fold(0.0, f64::max),
-        dropped_edges: problem
-            .edges()
-            .iter()
-            .filter(|e| of[e.i] != of[e.j])
-            .count(),
+        dropped_edges: 0,
         zeta,
         headroom: largest(|p| p.headroom),
         backward_error: largest(|p| p.backward_error),
@@ -130,7 +153,7 @@ pub(crate) fn regional_bound(
         residual_bound: coarse.rho,
         regions: count,
         deflated: deflated_count,
-    }))
+    })
 }
 
 /// The regions renumbered `0..k` in order of first appearance, the largest last (its `kappa`
@@ -305,7 +328,7 @@ fn pair_charge(b: &Matrix3<f64>, t: f64, err: f64) -> Option<(Matrix3<f64>, Matr
         (false, true) => b[(col, r - 3)],
         (false, false) => q[(r - 3, col - 3)],
     });
-    let l = verified_min_eigenvalue(&six)?;
+    let l = verified_negative_part(&six)?;
     let c = ((-l).max(0.0) + err) * (1.0 + 8.0 * U);
     c.is_finite().then_some((p, q, c))
 }
@@ -340,8 +363,10 @@ struct RegionProof {
 }
 
 /// The most negative pivots a region's first factorisation may show and still be deflated
-/// (`[A16]`, "Deflation"): its factor's columns at them, up to four blocks of border.
-const DEFLATION_MOST: usize = 12;
+/// (`[A16]`, "Deflation"): its factor's columns at them, up to eight blocks of border. 12
+/// until 2026-12-04; the block comparison's three regions of the robust solve's inlier graph
+/// at 10^4 cameras showed 14 in one region and prove with them (`[A15]`, "Regions").
+const DEFLATION_MOST: usize = 24;
 
 /// The deflated directions' border strength `|w|^2 / h` against the operator's largest row
 /// sum: their penalty must dominate the negative curvature they take away (at `|w|^2 = |r|`,
@@ -364,7 +389,7 @@ fn prove_region(
     (of, g): (&[usize], usize),
     charges: &[Matrix3<f64>],
     shift: f64,
-    limits: (usize, Option<Instant>),
+    (limits, prepared): ((usize, Option<Instant>), Option<&RegionAnalysis>),
 ) -> std::result::Result<std::result::Result<RegionProof, String>, BlockFailure> {
     let (mut region, nodes) = Region::new(m, (of, g), charges);
     let h0 = first_headroom(m);
@@ -376,7 +401,7 @@ fn prove_region(
         }
         proof
     };
-    let directions = match region.prove(g, shift, h0, limits)? {
+    let directions = match region.prove(g, (shift, h0), limits, prepared)? {
         Ok(Attempt::Proven(proof)) => return Ok(Ok(global(proof))),
         Ok(Attempt::Negative { directions, .. }) if !directions.is_empty() => directions,
         Ok(Attempt::Negative { pivots, .. }) => {
@@ -387,7 +412,7 @@ fn prove_region(
         Err(over) => return Ok(Err(over)),
     };
     region.border = deflation_border(directions, nodes.len());
-    match region.prove(g, shift, h0, limits)? {
+    match region.prove(g, (shift, h0), limits, None)? {
         Ok(Attempt::Proven(mut proof)) => {
             proof.deflated = std::mem::take(&mut region.border);
             Ok(Ok(global(proof)))
@@ -631,6 +656,89 @@ impl Candidate {
     }
 }
 
+/// A region's bordered pattern without deflated columns (its own blocks and its constant
+/// directions' border node last) and its symbolic analysis, made before its values: the block
+/// comparison's analysis in regions predicts from them and the region's first factorisation
+/// reuses them ([`Region::prove`] checks that the pattern is the same).
+pub(super) struct RegionAnalysis {
+    pattern: BlockPattern,
+    symbolic: faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
+    counted: usize,
+}
+
+impl RegionAnalysis {
+    /// Per region of `of` (numbered `0..k`), the analysis of its bordered pattern with the
+    /// node pairs `pairs` of its own (pairs between regions are left out), each within
+    /// `max_values`; `Ok(Err(predicted))` for the first that is not.
+    pub(super) fn of_regions(
+        of: &[usize],
+        pairs: impl Iterator<Item = (usize, usize)>,
+        max_values: usize,
+    ) -> Result<std::result::Result<Vec<Self>, usize>> {
+        let count = of.iter().max().map_or(0, |g| g + 1);
+        let (mut local, mut size) = (vec![0usize; of.len()], vec![0usize; count]);
+        for (i, &g) in of.iter().enumerate() {
+            local[i] = size[g];
+            size[g] += 1;
+        }
+        let mut own: Vec<Vec<(usize, usize)>> = vec![Vec::new(); count];
+        for (i, j) in pairs.filter(|(i, j)| of[*i] == of[*j]) {
+            own[of[i]].push((local[i], local[j]));
+        }
+        let mut out = Vec::with_capacity(count);
+        for (g, pairs) in own.into_iter().enumerate() {
+            let pattern = bordered_pattern(size[g], pairs.into_iter(), 0, &[]);
+            match pattern.symbolic_within(max_values)? {
+                Ok((symbolic, counted)) => out.push(RegionAnalysis {
+                    pattern,
+                    symbolic,
+                    counted,
+                }),
+                Err(predicted) => return Ok(Err(predicted)),
+            }
+        }
+        Ok(Ok(out))
+    }
+
+    /// Stored values of its factor.
+    pub(super) fn len_val(&self) -> usize {
+        self.symbolic.len_val()
+    }
+
+    /// The ordering's count of its factor's values.
+    pub(super) fn counted(&self) -> usize {
+        self.counted
+    }
+
+    /// The counted multiply-adds of its numeric factorisation.
+    pub(super) fn multiply_adds(&self) -> f64 {
+        crate::linalg::cholesky::factor_multiply_adds(&self.symbolic)
+    }
+
+    /// Bytes of numeric scratch its `LDL^T` factorisation allocates besides the factor.
+    pub(super) fn scratch_bytes(&self) -> usize {
+        crate::linalg::cholesky::ldlt_scratch_bytes(&self.symbolic)
+    }
+}
+
+/// A region's bordered pattern: its `hub` nodes with the pairs `own` (local numbering), the
+/// constant directions' border node `hub`, then `border_blocks` nodes of deflated columns,
+/// each joined to the nodes of `support`.
+fn bordered_pattern(
+    hub: usize,
+    own: impl Iterator<Item = (usize, usize)>,
+    border_blocks: usize,
+    support: &[usize],
+) -> BlockPattern {
+    let constant = (0..hub).map(|a| (hub, a));
+    let deflated = (0..border_blocks).flat_map(|k| support.iter().map(move |&a| (hub + 1 + k, a)));
+    BlockPattern::new(
+        hub + 1 + border_blocks,
+        3,
+        own.chain(constant).chain(deflated),
+    )
+}
+
 /// One factorisation of a region's bordered matrix: proven, or its negative pivots (with the
 /// region parts of the factor's columns at them when there are at most [`DEFLATION_MOST`]).
 enum Attempt {
@@ -687,17 +795,8 @@ impl Region {
     /// The pattern: the region's nodes, the constant directions' border node, then one border
     /// node per three deflated columns.
     fn pattern(&self) -> BlockPattern {
-        let hub = self.diag.len();
-        let support: Vec<usize> = self.support();
         let own = self.own.iter().map(|(a, b, _)| (*a, *b));
-        let constant = (0..hub).map(|a| (hub, a));
-        let deflated =
-            (0..self.border.len() / 3).flat_map(|k| support.iter().map(move |&a| (hub + 1 + k, a)));
-        BlockPattern::new(
-            hub + 1 + self.border.len() / 3,
-            3,
-            own.chain(constant).chain(deflated),
-        )
+        bordered_pattern(self.diag.len(), own, self.border.len() / 3, &self.support())
     }
 
     /// The progress line of region `g`'s factorisation (`values` its factor's).
@@ -723,25 +822,32 @@ impl Region {
         s
     }
 
-    /// Its symbolic analysis within `max_values` and the time left, then `LDL^T` at `h0` and,
-    /// when the backward error is above it, once more at 4 times the error.
+    /// Its symbolic analysis (`prepared`'s when made for the same pattern, else its own within
+    /// `max_values`) and the time left, then [`Region::factorise`].
     fn prove(
         &self,
         g: usize,
-        shift: f64,
-        h0: f64,
+        (shift, h0): (f64, f64),
         (max_values, stop_at): (usize, Option<Instant>),
+        prepared: Option<&RegionAnalysis>,
     ) -> std::result::Result<std::result::Result<Attempt, String>, BlockFailure> {
         let pattern = self.pattern();
-        let (symbolic, _) = match pattern.symbolic_within(max_values) {
-            Ok(Ok(s)) => s,
-            Ok(Err(predicted)) => {
-                return Ok(Err(format!(
-                    "region {g}'s factor is predicted at {predicted:.1e} values, above the \
-                     {max_values:.1e} the budget allows"
-                )));
-            }
-            Err(_) => return Err(BlockFailure::Numerical),
+        let own;
+        let symbolic = match prepared.filter(|p| p.pattern.same_as(&pattern)) {
+            Some(p) => &p.symbolic,
+            None => match pattern.symbolic_within(max_values) {
+                Ok(Ok((s, _))) => {
+                    own = s;
+                    &own
+                }
+                Ok(Err(predicted)) => {
+                    return Ok(Err(format!(
+                        "region {g}'s factor is predicted at {predicted:.1e} values, above the \
+                         {max_values:.1e} the budget allows"
+                    )));
+                }
+                Err(_) => return Err(BlockFailure::Numerical),
+            },
         };
         self.announce(g, symbolic.len_val());
         let time = crate::certify::budget::Budget {
@@ -750,14 +856,27 @@ impl Region {
         };
         let (values, work) = (
             symbolic.len_val(),
-            crate::linalg::cholesky::factor_multiply_adds(&symbolic),
+            crate::linalg::cholesky::factor_multiply_adds(symbolic),
         );
         if let Err(why) = time.counted_factorisations_fit(values, work, values) {
             return Ok(Err(format!("region {g}: {why}")));
         }
+        self.factorise(&pattern, symbolic, shift, h0).map(Ok)
+    }
+
+    /// `LDL^T` at `h0` and, when the backward error is above it, once more at 4 times the
+    /// error: proven, or its negative pivots and the region parts of the factor's columns at
+    /// them (unless a deflation without a second factorisation proves).
+    fn factorise(
+        &self,
+        pattern: &BlockPattern,
+        symbolic: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
+        shift: f64,
+        h0: f64,
+    ) -> std::result::Result<Attempt, BlockFailure> {
         let mut h = h0;
         for _ in 0..2 {
-            let f = self.factor(&pattern, &symbolic, shift, h)?;
+            let f = self.factor(pattern, symbolic, shift, h)?;
             if f.bound > h {
                 h = 4.0 * f.bound;
                 continue;
@@ -769,13 +888,13 @@ impl Region {
                 deflated,
             };
             if f.negative == 3 + self.border.len() {
-                return Ok(Ok(Attempt::Proven(proof(Vec::new()))));
+                return Ok(Attempt::Proven(proof(Vec::new())));
             }
             if self.border.is_empty()
                 && let Some(w) = schur_deflation(&f, h, self.diag.len())
                     .or_else(|| leading_deflation(&f, h, self.diag.len()))
             {
-                return Ok(Ok(Attempt::Proven(proof(w))));
+                return Ok(Attempt::Proven(proof(w)));
             }
             let hub = 3 * self.diag.len();
             let directions = f
@@ -792,10 +911,10 @@ impl Region {
                 })
                 .filter(|d| d.iter().any(|v| *v != 0.0))
                 .collect();
-            return Ok(Ok(Attempt::Negative {
+            return Ok(Attempt::Negative {
                 pivots: f.negative,
                 directions,
-            }));
+            });
         }
         Err(BlockFailure::BackwardError)
     }

@@ -47,16 +47,20 @@ pub const BLOCK_SHAPES: [BlockShape; 4] = [
 ];
 
 /// The nodes per region of a large graph's block subgraphs ([`block_groups`]).
-pub const BLOCK_GROUP_NODES: usize = 5000;
+pub const BLOCK_GROUP_NODES: usize = 1000;
 
 /// The most regions of a block subgraph. Measured on the realistic two-view class (random view
-/// graphs of 10 edges per node, 2026-12-03, `block_sweep -- 10000 100000 2:14 regions=K`):
-/// 2 regions prove the least-squares solution and the robust solve's inlier graph (7.3-7.8e7
-/// factor values, 5.0-5.4 s, against 1.29-1.37e8 and 10.2-11.2 s whole), 3 regions leave 3
-/// and 16 negative pivots too many, 4 regions 38 and 115; at 2x10^4 cameras 2 regions prove
-/// (3.1e8 values, 35 s) and 4 leave 108 too many. A random graph has no small separators, so
-/// more regions drop more of each node's strong edges.
-pub const BLOCK_MAX_GROUPS: usize = 2;
+/// graphs of 10 edges per node, 2026-12-04, `block_sweep -- N 10N 2:14 regions=K`, each
+/// region's block bordered and deflated, `[A15]` "Regions"): at 10^4 cameras 3 regions prove
+/// the least-squares solution in 3.7-4.3 s (5.2e7 factor values; 2 regions 4.7 s, 7.8e7; the
+/// pencil form of 2026-12-03 with 2 regions 5.8 s) and the robust solve's inlier graph in
+/// 3.9-4.3 s (2 regions, pencil: 4.4 s), 4 regions need 31 deflated directions in one region
+/// (7.2 s with them) and 5 more; at 2x10^4 cameras 3 regions prove in 21 s (2.05e8 values;
+/// the pencil's 2 regions took 35 s) and 4 leave 41 negative pivots in one region; at 5000
+/// cameras 3 regions 1.2 s against 2.1 s whole, at 3000 0.51 s against 0.80 s, at 2000 2
+/// regions 0.33 s against 0.41 s. A random graph has no small separators, so more regions drop
+/// more of each node's strong edges.
+pub const BLOCK_MAX_GROUPS: usize = 3;
 
 /// The fewest edges per node of a graph whose block subgraphs are split into regions. Measured
 /// on the realistic two-view class at 10^4 cameras (2026-12-03, `block_sweep -- 10000 M 2:14
@@ -358,8 +362,13 @@ fn predict(
     settings: &CertifySettings,
     a: &BlockAnalysis,
 ) -> std::result::Result<Prediction, Refusal> {
-    let values = a.factor_len().saturating_add(a.scratch_bytes().div_ceil(8));
-    let largest = values.max(a.coarse_values());
+    // in regions the factorisations run one after another: the largest is the memory's
+    let (mut values, mut largest) = (0usize, a.coarse_values());
+    for (len, scratch, _) in a.factorisations() {
+        let one = len.saturating_add(scratch.div_ceil(8));
+        values = values.saturating_add(one);
+        largest = largest.max(one);
+    }
     let columns = 3 * a.groups();
     let other =
         (SECONDS_PER_EDGE + SECONDS_PER_EDGE_COLUMN * columns as f64) * a.num_edges() as f64;

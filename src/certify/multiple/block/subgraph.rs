@@ -8,6 +8,7 @@
 
 use super::edges::{KEPT_SHARE, merged_parts, strength_and_charge};
 use crate::certify::multiple::scalar::{connect_within, partition_weighted};
+use crate::linalg::symmetric3::eigenvalues_estimate;
 use crate::multiple::MultipleProblem;
 use crate::multiple::anisotropic::Information;
 use crate::so3::Rotation;
@@ -288,6 +289,17 @@ fn weights_and_charges(
 /// estimate: only a choice); `+inf` when `D` has no positive eigenvalue (no charge: exact data)
 /// or the quotient is not finite, so such a node is never weak and never a candidate's best.
 fn ratio(a: &Matrix3<f64>, d: &Matrix3<f64>) -> f64 {
+    // D comfortably positive definite (most nodes): `L^{-1} A L^{-T}` with `D = L L^T`, whose
+    // eigenvalues are the same
+    let top = eigenvalues_estimate(d)[2];
+    if let Some(l) = d.cholesky().filter(|c| {
+        let diag = c.l_dirty().diagonal();
+        diag.min() > 0.0 && diag.min() * diag.min() > 1e-6 * top
+    }) && let Some(inv) = l.l().try_inverse()
+    {
+        let t = smallest(&(inv * a * inv.transpose()));
+        return if t.is_nan() { f64::INFINITY } else { t };
+    }
     let eig = SymmetricEigen::new(*d);
     let top = eig.eigenvalues.max();
     if top.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
@@ -301,7 +313,7 @@ fn ratio(a: &Matrix3<f64>, d: &Matrix3<f64>) -> f64 {
 
 /// The smallest eigenvalue (an estimate: only a choice).
 fn smallest(m: &Matrix3<f64>) -> f64 {
-    m.symmetric_eigenvalues().min()
+    eigenvalues_estimate(m)[0]
 }
 
 #[cfg(test)]

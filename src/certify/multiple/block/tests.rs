@@ -3,7 +3,7 @@
 //! proven `mu` against the dense smallest eigenvalue of `S`.
 
 use super::edges::{edge_blocks, edge_parts_for_tests};
-use super::groups::anisotropic_operator;
+use super::operator::anisotropic_operator;
 use super::rungs::BLOCK_SHAPES;
 use super::{BlockAnalysis, BlockFailure, BlockShape, block_comparison};
 use crate::certify::multiple::multipliers::{certificate_matrix, multipliers};
@@ -367,6 +367,40 @@ fn the_anisotropic_operator_is_d_transpose_s_d() {
                     op.product_error() * x_norm
                 );
                 assert!(err <= 1e-10 * m.norm() * x_norm, "instance {k}: {err:e}");
+            }
+        }
+    }
+}
+
+/// The operator the regions' factorisations read in the comparison in regions (`[A15]`,
+/// "Regions") is step 2's `C - blkdiag(Delta)` of the kept edges (dense, from the same blocks),
+/// within its stated product error: so the bordered proofs are of the matrix `M` dominates.
+#[test]
+fn the_comparison_operator_is_the_laplacian_less_the_charges() {
+    let mut rng = StdRng::seed_from_u64(12);
+    for k in 0..6 {
+        let (p, rotations) = region_instance(k);
+        let info = p.information().expect("anisotropic");
+        let n = p.num_rotations();
+        for y in points(&rotations, &mut rng) {
+            let lambdas = multipliers(&p, &y).expect("multipliers");
+            let keep: Vec<bool> = (0..p.num_edges()).map(|e| e % 3 != 1).collect();
+            let blocks = edge_blocks(&p, info, &y, &lambdas, &keep).expect("finite");
+            let c = laplacian_less_charges(&p, &blocks);
+            let op = super::operator::comparison_operator(&p, &keep, &blocks);
+            for _ in 0..5 {
+                let x: Vec<f64> = (0..3 * n).map(|_| rng.random::<f64>() - 0.5).collect();
+                let mut got = vec![0.0; 3 * n];
+                op.times(&x, &mut got);
+                let want = &c * nalgebra::DVector::from_column_slice(&x);
+                let err = (nalgebra::DVector::from_column_slice(&got) - &want).norm();
+                let x_norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+                let slack = 1e-12 * c.norm() * x_norm;
+                assert!(
+                    err <= op.product_error() * x_norm + slack,
+                    "instance {k}: {err:e} > {:e}",
+                    op.product_error() * x_norm
+                );
             }
         }
     }

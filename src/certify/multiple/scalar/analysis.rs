@@ -462,14 +462,7 @@ impl ScalarAnalysis {
     pub fn scratch_bytes(&self) -> usize {
         self.parts
             .iter()
-            .map(|p| {
-                p.symbolic
-                    .factorize_numeric_ldlt_scratch::<f64>(
-                        crate::linalg::factor_parallelism(p.symbolic.len_val()),
-                        Default::default(),
-                    )
-                    .size_bytes()
-            })
+            .map(|p| crate::linalg::cholesky::ldlt_scratch_bytes(&p.symbolic))
             .max()
             .unwrap_or(0)
     }

@@ -188,6 +188,8 @@ pub enum ScalarFailure {
     BackwardError,
     /// The estimate's rotations are too far from orthogonal.
     NotOrthogonal,
+    /// Its time ran out before or between its factorisations (a comparison in regions).
+    OutOfTime,
 }
 
 impl ScalarFailure {
@@ -227,6 +229,7 @@ pub(in crate::certify::multiple) fn failure_text(
             "the factorisation's backward error exceeded its headroom".into()
         }
         Err(ScalarFailure::NotOrthogonal) => "the rotations are too far from orthogonal".into(),
+        Err(ScalarFailure::OutOfTime) => "its time ran out before its factorisations".into(),
     }
 }
 
