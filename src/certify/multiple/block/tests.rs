@@ -347,28 +347,42 @@ fn the_anisotropic_operator_is_d_transpose_s_d() {
     for k in 0..6 {
         let (p, rotations) = region_instance(k);
         let info = p.information().expect("anisotropic");
-        let n = p.num_rotations();
         for y in points(&rotations, &mut rng) {
             let lambdas = multipliers(&p, &y).expect("multipliers");
             let m = d_transpose_s_d(&p, &y, &lambdas);
             let op = anisotropic_operator(&p, info, &y, &lambdas);
-            for _ in 0..5 {
-                let x: Vec<f64> = (0..3 * n).map(|_| rng.random::<f64>() - 0.5).collect();
-                let mut got = vec![0.0; 3 * n];
-                op.times(&x, &mut got);
-                let want = &m * nalgebra::DVector::from_column_slice(&x);
-                let err = (nalgebra::DVector::from_column_slice(&got) - &want).norm();
-                let x_norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
-                // the dense product's own rounding besides the operator's bound
-                let slack = 1e-12 * m.norm() * x_norm;
-                assert!(
-                    err <= op.product_error() * x_norm + slack,
-                    "instance {k}: {err:e} > {:e}",
-                    op.product_error() * x_norm
-                );
-                assert!(err <= 1e-10 * m.norm() * x_norm, "instance {k}: {err:e}");
-            }
+            operator_products_match(&op, &m, &mut rng, k);
         }
+    }
+}
+
+/// Five products of `op` with random vectors against the dense `dense`: within the operator's
+/// stated product error (and `1e-10` of `dense`'s norm), besides the dense product's own
+/// rounding.
+fn operator_products_match(
+    op: &crate::certify::multiple::coarse::BlockOperator,
+    dense: &DMatrix<f64>,
+    rng: &mut StdRng,
+    instance: u64,
+) {
+    let dim = dense.nrows();
+    for _ in 0..5 {
+        let x: Vec<f64> = (0..dim).map(|_| rng.random::<f64>() - 0.5).collect();
+        let mut got = vec![0.0; dim];
+        op.times(&x, &mut got);
+        let want = dense * nalgebra::DVector::from_column_slice(&x);
+        let err = (nalgebra::DVector::from_column_slice(&got) - &want).norm();
+        let x_norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let slack = 1e-12 * dense.norm() * x_norm;
+        assert!(
+            err <= op.product_error() * x_norm + slack,
+            "instance {instance}: {err:e} > {:e}",
+            op.product_error() * x_norm
+        );
+        assert!(
+            err <= 1e-10 * dense.norm() * x_norm,
+            "instance {instance}: {err:e}"
+        );
     }
 }
 
@@ -381,27 +395,13 @@ fn the_comparison_operator_is_the_laplacian_less_the_charges() {
     for k in 0..6 {
         let (p, rotations) = region_instance(k);
         let info = p.information().expect("anisotropic");
-        let n = p.num_rotations();
         for y in points(&rotations, &mut rng) {
             let lambdas = multipliers(&p, &y).expect("multipliers");
             let keep: Vec<bool> = (0..p.num_edges()).map(|e| e % 3 != 1).collect();
             let blocks = edge_blocks(&p, info, &y, &lambdas, &keep).expect("finite");
             let c = laplacian_less_charges(&p, &blocks);
             let op = super::operator::comparison_operator(&p, &keep, &blocks);
-            for _ in 0..5 {
-                let x: Vec<f64> = (0..3 * n).map(|_| rng.random::<f64>() - 0.5).collect();
-                let mut got = vec![0.0; 3 * n];
-                op.times(&x, &mut got);
-                let want = &c * nalgebra::DVector::from_column_slice(&x);
-                let err = (nalgebra::DVector::from_column_slice(&got) - &want).norm();
-                let x_norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
-                let slack = 1e-12 * c.norm() * x_norm;
-                assert!(
-                    err <= op.product_error() * x_norm + slack,
-                    "instance {k}: {err:e} > {:e}",
-                    op.product_error() * x_norm
-                );
-            }
+            operator_products_match(&op, &c, &mut rng, k);
         }
     }
 }
