@@ -89,7 +89,7 @@ pub(crate) fn ldlt_negative_columns(
     };
     let mut at = vec![usize::MAX; n];
     let mut columns: Vec<NegativeColumn> = Vec::new();
-    for_each_factor_entry(symbolic, &values, &mut |r, c, v| {
+    for_each_factor_entry(symbolic, &values, |r, c, v| {
         if r == c && v < 0.0 {
             at[c] = columns.len();
             columns.push(NegativeColumn {
@@ -104,7 +104,7 @@ pub(crate) fn ldlt_negative_columns(
         pivots: vec![0.0; n - last],
         lower: vec![vec![0.0; n - last]; n - last],
     };
-    for_each_factor_entry(symbolic, &values, &mut |r, c, v| {
+    for_each_factor_entry(symbolic, &values, |r, c, v| {
         if r != c && at[c] != usize::MAX {
             columns[at[c]].entries.push((fwd[r], v));
         }
@@ -180,11 +180,10 @@ fn row_inertia(
     n: usize,
 ) -> Result<RowInertia, LdltFailure> {
     // visit (row, col, value) of the factor: diagonal entries are D, strictly lower ones L
-    let visit = |f: &mut dyn FnMut(usize, usize, f64)| for_each_factor_entry(symbolic, values, f);
     let mut d = vec![0.0f64; n];
     let mut colsum = vec![1.0f64; n]; // the unit diagonal of L
     let mut rowcount = vec![1usize; n];
-    visit(&mut |r, c, v| {
+    for_each_factor_entry(symbolic, values, |r, c, v| {
         if r == c {
             d[c] = v;
         } else {
@@ -198,7 +197,7 @@ fn row_inertia(
     let negative = d.iter().filter(|&&v| v < 0.0).count();
     // row sums of |L| |D| |L|^T: sum_m |L_im| |d_m| colsum_m (including the unit diagonal)
     let mut rowsum: Vec<f64> = (0..n).map(|i| d[i].abs() * colsum[i]).collect();
-    visit(&mut |r, c, v| {
+    for_each_factor_entry(symbolic, values, |r, c, v| {
         if r != c {
             rowsum[r] += v.abs() * d[c].abs() * colsum[c];
         }
