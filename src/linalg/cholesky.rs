@@ -112,14 +112,6 @@ pub fn sparse_matvec(a: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64
 /// Stored values above which [`symmetric_matvec`] splits its rows over the available threads.
 const PARALLEL_MATVEC_THRESHOLD: usize = 1_000_000;
 
-/// `std::thread::available_parallelism()`, asked once per process: it reads cgroup files on
-/// every call, and [`symmetric_matvec`] runs millions of times (the soundness campaign spent
-/// half its time in the kernel on it: 258 s on 2 threads before, 58 s after).
-fn hardware_threads() -> usize {
-    static THREADS: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    *THREADS.get_or_init(|| std::thread::available_parallelism().map_or(1, |t| t.get()))
-}
-
 /// `y = A x` for a **symmetric** sparse matrix with both triangles stored: column `c` is row
 /// `c`, so each `y_c` is gathered from one column (no scattered writes) and the rows are split
 /// over the available threads above 10^6 stored values. Each `y_c` sums the same products as
@@ -152,22 +144,8 @@ pub fn symmetric_matvec(a: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [
         }
     };
     let n = a.ncols().min(y.len());
-    if val.len() < PARALLEL_MATVEC_THRESHOLD {
-        rows(0, &mut y[..n]);
-        return;
-    }
-    let threads = hardware_threads();
-    if threads < 2 || n < 2 * threads {
-        rows(0, &mut y[..n]);
-        return;
-    }
-    let chunk = n.div_ceil(threads);
-    std::thread::scope(|scope| {
-        for (t, out) in y[..n].chunks_mut(chunk).enumerate() {
-            let rows = &rows;
-            scope.spawn(move || rows(t * chunk, out));
-        }
-    });
+    let parallel = val.len() >= PARALLEL_MATVEC_THRESHOLD;
+    super::threads::in_chunks(&mut y[..n], parallel, rows);
 }
 
 /// Rayleigh quotient `rho = v^T A v` of a unit vector `v` and its residual `||A v - rho v||`
@@ -185,60 +163,92 @@ pub fn rayleigh_quotient(a: SparseColMatRef<'_, usize, f64>, v: &[f64]) -> (f64,
     (rq, residual)
 }
 
-/// Calls `f(row, col, value)` for every stored entry of a sparse Cholesky-type factor (lower
-/// triangle, diagonal included) computed with `symbolic`, in either layout. The `LL^T` and
+/// One column of a sparse Cholesky-type factor as stored: rows `first..` for the `leading`
+/// values (a supernode's own rows, the diagonal first), then the rows `rows` for the `below`
+/// values.
+pub(crate) struct FactorColumn<'a> {
+    /// The column.
+    pub col: usize,
+    first: usize,
+    leading: &'a [f64],
+    rows: &'a [usize],
+    below: &'a [f64],
+}
+
+impl FactorColumn<'_> {
+    /// `(row, value)` of every stored entry, the diagonal among them.
+    #[inline]
+    pub(crate) fn entries(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        (self.first..)
+            .zip(self.leading.iter().copied())
+            .chain(self.rows.iter().copied().zip(self.below.iter().copied()))
+    }
+}
+
+/// Calls `f` with every column of a sparse Cholesky-type factor (lower triangle, diagonal
+/// included) computed with `symbolic`, in either layout, columns ascending. The `LL^T` and
 /// `LDL^T` factors share faer's storage layout (for `LDL^T` the diagonal holds `D`, and `L` has
-/// an implicit unit diagonal), so this serves both.
+/// an implicit unit diagonal), so this serves both. A supernode's values are stored by columns:
+/// each column is two slices (no bounds check per entry; 2e7 entries per pass in a region's
+/// factor at 10^4 cameras), and a visitor may read a column twice while it is in cache.
+pub(crate) fn for_each_factor_column(
+    symbolic: &SymbolicCholesky<usize>,
+    values: &[f64],
+    mut f: impl FnMut(&FactorColumn<'_>),
+) {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(sym) => {
+            let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+            for c in 0..symbolic.nrows() {
+                let range = cp[c]..cp[c + 1];
+                f(&FactorColumn {
+                    col: c,
+                    first: 0,
+                    leading: &[],
+                    rows: &ri[range.clone()],
+                    below: &values[range],
+                });
+            }
+        }
+        SymbolicCholeskyRaw::Supernodal(sym) => {
+            let llt = SupernodalLltRef::<usize, f64>::new(sym, values);
+            let mut copy = Vec::new();
+            for s in 0..sym.n_supernodes() {
+                let node = llt.supernode(s);
+                let (start, pattern, m) = (node.start(), node.pattern(), node.val());
+                let ncols = m.ncols();
+                for jc in 0..ncols {
+                    let col: &[f64] = match m.col(jc).try_as_col_major() {
+                        Some(col) => col.as_slice(),
+                        None => {
+                            copy.clear();
+                            copy.extend(m.col(jc).iter().copied());
+                            &copy
+                        }
+                    };
+                    f(&FactorColumn {
+                        col: start + jc,
+                        first: start + jc,
+                        leading: &col[jc..ncols],
+                        rows: pattern,
+                        below: &col[ncols..],
+                    });
+                }
+            }
+        }
+    }
+}
+
+/// Calls `f(row, col, value)` for every stored entry of a sparse Cholesky-type factor
+/// ([`for_each_factor_column`]'s columns, entry by entry).
 pub(crate) fn for_each_factor_entry(
     symbolic: &SymbolicCholesky<usize>,
     values: &[f64],
     mut f: impl FnMut(usize, usize, f64),
 ) {
-    let n = symbolic.nrows();
-    match symbolic.raw() {
-        SymbolicCholeskyRaw::Simplicial(sym) => {
-            let cp = sym.col_ptr();
-            let ri = sym.row_idx();
-            for c in 0..n {
-                for k in cp[c]..cp[c + 1] {
-                    f(ri[k], c, values[k]);
-                }
-            }
-        }
-        SymbolicCholeskyRaw::Supernodal(sym) => {
-            let llt = SupernodalLltRef::<usize, f64>::new(sym, values);
-            for s in 0..sym.n_supernodes() {
-                let node = llt.supernode(s);
-                let start = node.start();
-                let pattern = node.pattern();
-                let m = node.val();
-                let ncols = m.ncols();
-                for jc in 0..ncols {
-                    // a supernode's values are stored by columns (the slice: no bounds check
-                    // per entry; 2e7 entries per pass in a region's factor at 10^4 cameras)
-                    match m.col(jc).try_as_col_major() {
-                        Some(col) => {
-                            let col = col.as_slice();
-                            for (ir, &v) in col.iter().enumerate().take(ncols).skip(jc) {
-                                f(start + ir, start + jc, v);
-                            }
-                            for (&row, &v) in pattern.iter().zip(&col[ncols..]) {
-                                f(row, start + jc, v);
-                            }
-                        }
-                        None => {
-                            for ir in jc..ncols {
-                                f(start + ir, start + jc, m[(ir, jc)]);
-                            }
-                            for (p, &row) in pattern.iter().enumerate() {
-                                f(row, start + jc, m[(ncols + p, jc)]);
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
+    for_each_factor_column(symbolic, values, |column| {
+        column.entries().for_each(|(r, v)| f(r, column.col, v));
+    });
 }
 
 /// Maximum absolute row sum `||A||_inf` (for a symmetric matrix an upper bound on `||A||_2`).
@@ -811,16 +821,20 @@ impl ShiftedCholesky {
         let mut colsum = vec![0.0f64; n];
         let mut rowcount = vec![0usize; n];
         let mut min_pivot = f64::INFINITY;
-        for_each_factor_entry(&self.symbolic, values, |r, c, v| {
-            colsum[c] += v.abs();
-            rowcount[r] += 1;
-            if r == c {
-                min_pivot = min_pivot.min(v * v);
-            }
-        });
         let mut rowsum = vec![0.0f64; n];
-        for_each_factor_entry(&self.symbolic, values, |r, c, v| {
-            rowsum[r] += v.abs() * colsum[c];
+        // one pass: a column's sum is complete before its entries are added to their rows
+        for_each_factor_column(&self.symbolic, values, |column| {
+            let c = column.col;
+            column.entries().for_each(|(r, v)| {
+                colsum[c] += v.abs();
+                rowcount[r] += 1;
+                if r == c {
+                    min_pivot = min_pivot.min(v * v);
+                }
+            });
+            column
+                .entries()
+                .for_each(|(r, v)| rowsum[r] += v.abs() * colsum[c]);
         });
         FactorNorms {
             k: rowcount.iter().copied().max().unwrap_or(0),

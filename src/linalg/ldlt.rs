@@ -4,7 +4,7 @@
 //! signs are the eigenvalues' signs of `P^T L D L^T P`, which is within the backward error of
 //! the floating-point matrix.
 
-use super::cholesky::{for_each_factor_entry, gamma};
+use super::cholesky::{for_each_factor_column, gamma};
 use faer::Side;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
@@ -52,6 +52,8 @@ pub(crate) struct RowInertia {
     pub negative: usize,
     /// `2 gamma(k + 4)` times the row sums of `P^T |L| |D| |L^T| P`, in `A`'s order.
     pub backward: Vec<f64>,
+    /// The pivots `D`, by elimination position.
+    pub pivots: Vec<f64>,
 }
 
 /// [`ldlt_inertia`] with the backward error of every row ([`RowInertia`]).
@@ -59,8 +61,18 @@ pub(crate) fn ldlt_inertia_by_row(
     symbolic: &SymbolicCholesky<usize>,
     a: SparseColMatRef<'_, usize, f64>,
 ) -> Result<RowInertia, LdltFailure> {
-    let values = ldlt_values(symbolic, a)?;
-    row_inertia(symbolic, &values, a.nrows())
+    let mut storage = FactorStorage::default();
+    let values = ldlt_values(symbolic, a, &mut storage)?;
+    row_inertia(symbolic, values, a.nrows())
+}
+
+/// The storage of a factor's values, kept across the factorisations of a sequence (a region's
+/// and the next region's): a fresh allocation of a large factor is mapped by the kernel page by
+/// page as the factorisation first writes it (at 10^4 cameras, 5e7 bytes per region and about
+/// a tenth of the certificate's time in page faults).
+#[derive(Default)]
+pub(crate) struct FactorStorage {
+    values: Vec<f64>,
 }
 
 /// [`ldlt_inertia`], and when the negative pivots are not `expected` but at most `most`, the columns `L e_k`
@@ -70,12 +82,12 @@ pub(crate) fn ldlt_inertia_by_row(
 pub(crate) fn ldlt_negative_columns(
     symbolic: &SymbolicCholesky<usize>,
     a: SparseColMatRef<'_, usize, f64>,
-    expected: usize,
-    most: usize,
+    (expected, most): (usize, usize),
+    storage: &mut FactorStorage,
 ) -> Result<(Inertia, NegativePivots), LdltFailure> {
     let n = a.nrows();
-    let values = ldlt_values(symbolic, a)?;
-    let rows = row_inertia(symbolic, &values, n)?;
+    let values = ldlt_values(symbolic, a, storage)?;
+    let rows = row_inertia(symbolic, values, n)?;
     let inertia = Inertia {
         negative: rows.negative,
         backward_error: rows.backward.iter().copied().fold(0.0, f64::max),
@@ -89,32 +101,39 @@ pub(crate) fn ldlt_negative_columns(
     };
     let mut at = vec![usize::MAX; n];
     let mut columns: Vec<NegativeColumn> = Vec::new();
-    for_each_factor_entry(symbolic, &values, |r, c, v| {
-        if r == c && v < 0.0 {
+    for (c, &v) in rows.pivots.iter().enumerate() {
+        if v < 0.0 {
             at[c] = columns.len();
             columns.push(NegativeColumn {
                 pivot: v,
                 entries: vec![(fwd[c], 1.0)],
             });
         }
-    });
+    }
     let last = n.saturating_sub(TRAILING);
     let mut trailing = Trailing {
         rows: fwd[last..].to_vec(),
         pivots: vec![0.0; n - last],
         lower: vec![vec![0.0; n - last]; n - last],
     };
-    for_each_factor_entry(symbolic, &values, |r, c, v| {
-        if r != c && at[c] != usize::MAX {
-            columns[at[c]].entries.push((fwd[r], v));
+    // only the columns at negative pivots and the trailing ones are read
+    for_each_factor_column(symbolic, values, |column| {
+        let c = column.col;
+        if at[c] == usize::MAX && c < last {
+            return;
         }
-        if c >= last {
-            if r == c {
-                trailing.pivots[c - last] = v;
-            } else {
-                trailing.lower[r - last][c - last] = v;
+        column.entries().for_each(|(r, v)| {
+            if r != c && at[c] != usize::MAX {
+                columns[at[c]].entries.push((fwd[r], v));
             }
-        }
+            if c >= last {
+                if r == c {
+                    trailing.pivots[c - last] = v;
+                } else {
+                    trailing.lower[r - last][c - last] = v;
+                }
+            }
+        });
     });
     Ok((inertia, NegativePivots { columns, trailing }))
 }
@@ -145,12 +164,15 @@ pub(crate) struct Trailing {
     pub lower: Vec<Vec<f64>>,
 }
 
-/// The factor values of `LDL^T` (no pivoting, no regularisation), all finite.
-fn ldlt_values(
+/// The factor values of `LDL^T` (no pivoting, no regularisation), all finite, in `storage`.
+fn ldlt_values<'s>(
     symbolic: &SymbolicCholesky<usize>,
     a: SparseColMatRef<'_, usize, f64>,
-) -> Result<Vec<f64>, LdltFailure> {
-    let mut values = vec![0.0f64; symbolic.len_val()];
+    storage: &'s mut FactorStorage,
+) -> Result<&'s [f64], LdltFailure> {
+    let values = &mut storage.values;
+    values.clear();
+    values.resize(symbolic.len_val(), 0.0);
     let par = super::factor_parallelism(symbolic.len_val());
     let req = symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
     let mut mem = MemBuffer::try_new(req).map_err(|_| LdltFailure::Numerical)?;
@@ -158,7 +180,7 @@ fn ldlt_values(
     // only alters pivots when both are > 0 (faer 0.24, ldlt/factor.rs); a zero pivot is an error.
     symbolic
         .factorize_numeric_ldlt::<f64>(
-            &mut values,
+            values,
             a,
             Side::Lower,
             LdltRegularization::default(),
@@ -170,7 +192,7 @@ fn ldlt_values(
     if !values.iter().all(|v| v.is_finite()) {
         return Err(LdltFailure::Numerical);
     }
-    Ok(values)
+    Ok(&storage.values)
 }
 
 /// The inertia and row-wise backward error of the factor `values` of an `n x n` matrix.
@@ -183,25 +205,32 @@ fn row_inertia(
     let mut d = vec![0.0f64; n];
     let mut colsum = vec![1.0f64; n]; // the unit diagonal of L
     let mut rowcount = vec![1usize; n];
-    for_each_factor_entry(symbolic, values, |r, c, v| {
-        if r == c {
-            d[c] = v;
-        } else {
-            colsum[c] += v.abs();
-            rowcount[r] += 1;
-        }
+    // row sums of |L| |D| |L|^T: sum_m |L_im| |d_m| colsum_m (the unit diagonal's term last),
+    // in one pass: a column's sum is complete before its entries are added to their rows
+    let mut rowsum = vec![0.0f64; n];
+    for_each_factor_column(symbolic, values, |column| {
+        let c = column.col;
+        column.entries().for_each(|(r, v)| {
+            if r == c {
+                d[c] = v;
+            } else {
+                colsum[c] += v.abs();
+                rowcount[r] += 1;
+            }
+        });
+        column.entries().for_each(|(r, v)| {
+            if r != c {
+                rowsum[r] += v.abs() * d[c].abs() * colsum[c];
+            }
+        });
     });
     if d.iter().any(|&v| v == 0.0 || !v.is_finite()) {
         return Err(LdltFailure::Numerical);
     }
     let negative = d.iter().filter(|&&v| v < 0.0).count();
-    // row sums of |L| |D| |L|^T: sum_m |L_im| |d_m| colsum_m (including the unit diagonal)
-    let mut rowsum: Vec<f64> = (0..n).map(|i| d[i].abs() * colsum[i]).collect();
-    for_each_factor_entry(symbolic, values, |r, c, v| {
-        if r != c {
-            rowsum[r] += v.abs() * d[c].abs() * colsum[c];
-        }
-    });
+    for (i, s) in rowsum.iter_mut().enumerate() {
+        *s += d[i].abs() * colsum[i];
+    }
     let k = rowcount.iter().copied().max().unwrap_or(1);
     let scale = 2.0 * gamma(k + 4);
     // row r of the factor is row perm_fwd[r] of `a` (P A P^T, faer's forward permutation)
@@ -221,7 +250,11 @@ fn row_inertia(
     if !backward.iter().all(|b| b.is_finite()) {
         return Err(LdltFailure::Numerical);
     }
-    Ok(RowInertia { negative, backward })
+    Ok(RowInertia {
+        negative,
+        backward,
+        pivots: d,
+    })
 }
 
 #[cfg(test)]
@@ -272,7 +305,13 @@ mod tests {
             let sym = symbolic_cholesky_within(a.symbolic(), usize::MAX)
                 .unwrap()
                 .unwrap();
-            let (rows, found) = ldlt_negative_columns(&sym, a.as_ref(), usize::MAX, n).unwrap();
+            let (rows, found) = ldlt_negative_columns(
+                &sym,
+                a.as_ref(),
+                (usize::MAX, n),
+                &mut FactorStorage::default(),
+            )
+            .unwrap();
             let cols = found.columns;
             let eig = dense.clone().symmetric_eigen().eigenvalues;
             let negative = eig.iter().filter(|v| **v < 0.0).count();

@@ -32,6 +32,7 @@ pub(crate) mod linear_solver;
 pub(crate) mod pcg;
 pub(crate) mod small_symmetric;
 pub mod symmetric3;
+pub(crate) mod threads;
 pub mod two_pass_lanczos;
 
 /// Factor size (stored values) above which a numeric sparse factorisation runs in parallel.

@@ -40,7 +40,7 @@ pub(in crate::certify::multiple) struct Layout<'a> {
 
 /// The groups of a grouped comparison and their weights: the space `U` (every group's
 /// weighted sum `sum_{i in g} W_i x_i` zero), a projector onto it and the residual's form.
-pub(in crate::certify::multiple) trait CoarseSpace {
+pub(in crate::certify::multiple) trait CoarseSpace: Sync {
     /// The groups and their coefficients' bounds.
     fn layout(&self) -> &Layout<'_>;
     /// Each node's group, `0..count`.

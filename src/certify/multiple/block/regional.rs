@@ -21,7 +21,9 @@ use crate::error::{Error, Result};
 use crate::linalg::UNIT_ROUNDOFF as U;
 use crate::linalg::block_pattern::BlockPattern;
 use crate::linalg::cholesky::gamma;
-use crate::linalg::ldlt::{NegativeColumn, NegativePivots, Trailing, ldlt_negative_columns};
+use crate::linalg::ldlt::{
+    FactorStorage, NegativeColumn, NegativePivots, Trailing, ldlt_negative_columns,
+};
 use crate::linalg::small_symmetric::verified_negative_part;
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
@@ -110,6 +112,7 @@ pub(super) fn bordered_regions(
     let shift = region_shift(blocks);
     let count = of.iter().max().map_or(0, |g| g + 1);
     let mut proofs = Vec::with_capacity(count);
+    let mut storage = FactorStorage::default();
     for g in 0..count {
         let out_of_time = |why: String| (why, BlockFailure::OutOfTime);
         if stop_at.is_some_and(|t| Instant::now() >= t) {
@@ -119,7 +122,7 @@ pub(super) fn bordered_regions(
         }
         let analysed = prepared.and_then(|p| p.get(g));
         let limits = ((max_values, stop_at), analysed);
-        match prove_region(blocks, (of, g), &charges, shift, limits) {
+        match prove_region(blocks, (of, g), &charges, shift, limits, &mut storage) {
             Ok(Ok(p)) => proofs.push(p),
             Ok(Err(over)) => return Err(out_of_time(over)),
             Err(f) => {
@@ -390,6 +393,7 @@ fn prove_region(
     charges: &[Matrix3<f64>],
     shift: f64,
     (limits, prepared): ((usize, Option<Instant>), Option<&RegionAnalysis>),
+    storage: &mut FactorStorage,
 ) -> std::result::Result<std::result::Result<RegionProof, String>, BlockFailure> {
     let (mut region, nodes) = Region::new(m, (of, g), charges);
     let h0 = first_headroom(m);
@@ -401,7 +405,7 @@ fn prove_region(
         }
         proof
     };
-    let directions = match region.prove(g, (shift, h0), limits, prepared)? {
+    let directions = match region.prove(g, (shift, h0), (limits, prepared), storage)? {
         Ok(Attempt::Proven(proof)) => return Ok(Ok(global(proof))),
         Ok(Attempt::Negative { directions, .. }) if !directions.is_empty() => directions,
         Ok(Attempt::Negative { pivots, .. }) => {
@@ -412,7 +416,7 @@ fn prove_region(
         Err(over) => return Ok(Err(over)),
     };
     region.border = deflation_border(directions, nodes.len());
-    match region.prove(g, (shift, h0), limits, None)? {
+    match region.prove(g, (shift, h0), (limits, None), storage)? {
         Ok(Attempt::Proven(mut proof)) => {
             proof.deflated = std::mem::take(&mut region.border);
             Ok(Ok(global(proof)))
@@ -685,15 +689,25 @@ impl RegionAnalysis {
         for (i, j) in pairs.filter(|(i, j)| of[*i] == of[*j]) {
             own[of[i]].push((local[i], local[j]));
         }
+        // the regions' orderings are independent: on the machine's threads (0.05 s of 0.11 s
+        // at 10^4 cameras in 3 regions)
+        let analyses = crate::linalg::threads::in_chunks(&mut own, count > 1, |first, part| {
+            let analyse = |(k, pairs): (usize, &mut Vec<(usize, usize)>)| {
+                let pattern = bordered_pattern(size[first + k], pairs.drain(..), 0, &[]);
+                Ok(pattern
+                    .symbolic_within(max_values)?
+                    .map(|(symbolic, counted)| RegionAnalysis {
+                        pattern,
+                        symbolic,
+                        counted,
+                    }))
+            };
+            part.iter_mut().enumerate().map(analyse).collect::<Vec<_>>()
+        });
         let mut out = Vec::with_capacity(count);
-        for (g, pairs) in own.into_iter().enumerate() {
-            let pattern = bordered_pattern(size[g], pairs.into_iter(), 0, &[]);
-            match pattern.symbolic_within(max_values)? {
-                Ok((symbolic, counted)) => out.push(RegionAnalysis {
-                    pattern,
-                    symbolic,
-                    counted,
-                }),
+        for analysis in analyses.into_iter().flatten() {
+            match analysis? {
+                Ok(region) => out.push(region),
                 Err(predicted) => return Ok(Err(predicted)),
             }
         }
@@ -828,8 +842,8 @@ impl Region {
         &self,
         g: usize,
         (shift, h0): (f64, f64),
-        (max_values, stop_at): (usize, Option<Instant>),
-        prepared: Option<&RegionAnalysis>,
+        ((max_values, stop_at), prepared): ((usize, Option<Instant>), Option<&RegionAnalysis>),
+        storage: &mut FactorStorage,
     ) -> std::result::Result<std::result::Result<Attempt, String>, BlockFailure> {
         let pattern = self.pattern();
         let own;
@@ -861,7 +875,8 @@ impl Region {
         if let Err(why) = time.counted_factorisations_fit(values, work, values) {
             return Ok(Err(format!("region {g}: {why}")));
         }
-        self.factorise(&pattern, symbolic, shift, h0).map(Ok)
+        self.factorise((&pattern, symbolic), (shift, h0), storage)
+            .map(Ok)
     }
 
     /// `LDL^T` at `h0` and, when the backward error is above it, once more at 4 times the
@@ -869,14 +884,16 @@ impl Region {
     /// them (unless a deflation without a second factorisation proves).
     fn factorise(
         &self,
-        pattern: &BlockPattern,
-        symbolic: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
-        shift: f64,
-        h0: f64,
+        (pattern, symbolic): (
+            &BlockPattern,
+            &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
+        ),
+        (shift, h0): (f64, f64),
+        storage: &mut FactorStorage,
     ) -> std::result::Result<Attempt, BlockFailure> {
         let mut h = h0;
         for _ in 0..2 {
-            let f = self.factor(pattern, symbolic, shift, h)?;
+            let f = self.factor((pattern, symbolic), (shift, h), storage)?;
             if f.bound > h {
                 h = 4.0 * f.bound;
                 continue;
@@ -925,10 +942,12 @@ impl Region {
     /// factor's columns at them.
     fn factor(
         &self,
-        p: &BlockPattern,
-        symbolic: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
-        shift: f64,
-        h: f64,
+        (p, symbolic): (
+            &BlockPattern,
+            &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
+        ),
+        (shift, h): (f64, f64),
+        storage: &mut FactorStorage,
     ) -> std::result::Result<Factored, BlockFailure> {
         let (val, magnitude, terms) = self.values(p, shift, h);
         let most = if self.border.is_empty() {
@@ -937,8 +956,9 @@ impl Region {
             0
         };
         let expected = 3 + self.border.len();
-        let (inertia, pivots) = ldlt_negative_columns(symbolic, p.matrix(&val), expected, most)
-            .map_err(|_| BlockFailure::Numerical)?;
+        let (inertia, pivots) =
+            ldlt_negative_columns(symbolic, p.matrix(&val), (expected, most), storage)
+                .map_err(|_| BlockFailure::Numerical)?;
         let most = terms.iter().copied().max().unwrap_or(2);
         let forming = gamma(most + 4) * magnitude.iter().copied().fold(0.0, f64::max);
         let bound = inertia.backward_error + 2.0 * forming;
@@ -1054,7 +1074,13 @@ pub(super) fn schur_deflations(
             }
             let pattern = r.pattern();
             let (symbolic, _) = pattern.symbolic_within(usize::MAX).unwrap().unwrap();
-            let f = r.factor(&pattern, &symbolic, shift, h0).expect("factor");
+            let f = r
+                .factor(
+                    (&pattern, &symbolic),
+                    (shift, h0),
+                    &mut FactorStorage::default(),
+                )
+                .expect("factor");
             let t = &f.pivots.trailing;
             let mut found = [Vec::new(), Vec::new(), Vec::new()];
             if f.bound <= h0 && f.negative > 3 {

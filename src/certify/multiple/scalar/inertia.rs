@@ -7,7 +7,9 @@ use super::ScalarFailure;
 use super::analysis::{ScalarAnalysis, ScalarPart};
 use super::split::{PencilWeights, part_charges};
 use crate::linalg::cholesky::gamma;
-use crate::linalg::ldlt::{LdltFailure, NegativeColumn, ldlt_inertia, ldlt_negative_columns};
+use crate::linalg::ldlt::{
+    FactorStorage, LdltFailure, NegativeColumn, ldlt_inertia, ldlt_negative_columns,
+};
 use crate::multiple::MultipleProblem;
 
 /// Step 5 for every part (one part, with the charges `w`, for the whole graph or a subgraph):
@@ -121,8 +123,13 @@ pub(super) fn factor_inertia(
         LdltFailure::Numerical => ScalarFailure::Numerical,
     };
     let (inertia, columns) = if most > expected {
-        let (inertia, pivots) =
-            ldlt_negative_columns(&part.symbolic, a.as_ref(), expected, most).map_err(numerical)?;
+        let (inertia, pivots) = ldlt_negative_columns(
+            &part.symbolic,
+            a.as_ref(),
+            (expected, most),
+            &mut FactorStorage::default(),
+        )
+        .map_err(numerical)?;
         (inertia, pivots.columns)
     } else {
         (

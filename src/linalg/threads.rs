@@ -1,0 +1,68 @@
+//! The machine's threads, asked once, and the one way the crate splits independent work over
+//! them: consecutive chunks of a slice on scoped threads, each chunk's result computed exactly
+//! as it would be alone (no reduction across chunks), so a result does not depend on the
+//! number of threads.
+
+/// `std::thread::available_parallelism()`, asked once per process: it reads cgroup files on
+/// every call, and [`super::symmetric_matvec`] runs millions of times (the soundness campaign
+/// spent half its time in the kernel on it: 258 s on 2 threads before, 58 s after).
+pub(crate) fn hardware_threads() -> usize {
+    static THREADS: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *THREADS.get_or_init(|| std::thread::available_parallelism().map_or(1, |t| t.get()))
+}
+
+/// `f(first, chunk)` for consecutive chunks of `items` (`first`: the chunk's offset in
+/// `items`), on one scoped thread per chunk when `parallel` and the machine has more than one
+/// thread (at most one chunk per thread, none empty), else once on the whole slice; the
+/// results in chunk order.
+pub(crate) fn in_chunks<T: Send, R: Send>(
+    items: &mut [T],
+    parallel: bool,
+    f: impl Fn(usize, &mut [T]) -> R + Sync,
+) -> Vec<R> {
+    let threads = hardware_threads().min(items.len());
+    if !parallel || threads < 2 {
+        return vec![f(0, items)];
+    }
+    let chunk = items.len().div_ceil(threads);
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = items
+            .chunks_mut(chunk)
+            .enumerate()
+            .map(|(t, part)| {
+                let f = &f;
+                scope.spawn(move || f(t * chunk, part))
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| match h.join() {
+                Ok(r) => r,
+                Err(panic) => std::panic::resume_unwind(panic),
+            })
+            .collect()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chunks_cover_the_slice_once_in_order() {
+        for len in [0usize, 1, 2, 3, 7, 100] {
+            for parallel in [false, true] {
+                let mut y = vec![0usize; len];
+                let firsts = in_chunks(&mut y, parallel, |first, out| {
+                    for (k, v) in out.iter_mut().enumerate() {
+                        *v += first + k + 1;
+                    }
+                    first
+                });
+                assert_eq!(y, (1..=len).collect::<Vec<_>>());
+                assert!(firsts.windows(2).all(|w| w[0] < w[1]));
+                assert_eq!(firsts[0], 0);
+            }
+        }
+    }
+}
