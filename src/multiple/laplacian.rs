@@ -86,18 +86,13 @@ pub fn laplacian_plus_diagonal(
 ) -> SparseColMat<usize, f64> {
     let n = problem.num_rotations();
     let (offsets, incident) = incident_edges(problem);
-    let mut own = vec![Matrix3::zeros(); n];
-    for (k, e) in problem.edges().iter().enumerate() {
-        let qii = edge_diagonal_block(problem, k);
-        own[e.i] += qii;
-        own[e.j] += qii;
-    }
+    let own = diagonal_blocks(problem, diagonal);
     let mut col_ptr = Vec::with_capacity(3 * n + 1);
     let (mut row_idx, mut values) = (Vec::new(), Vec::new());
     col_ptr.push(0usize);
     let mut column: Vec<(usize, Matrix3<f64>)> = Vec::new();
     for i in 0..n {
-        let d = diagonal.get(i).map_or(own[i], |d| own[i] + d);
+        let d = own[i];
         block_column(
             problem,
             i,
@@ -117,6 +112,23 @@ pub fn laplacian_plus_diagonal(
     let symbolic =
         faer::sparse::SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, row_idx);
     SparseColMat::new(symbolic, values)
+}
+
+/// The diagonal blocks of [`laplacian_plus_diagonal`]`(problem, diagonal)`, as it stores them.
+pub(crate) fn diagonal_blocks(
+    problem: &MultipleProblem,
+    diagonal: &[Matrix3<f64>],
+) -> Vec<Matrix3<f64>> {
+    let mut own = vec![Matrix3::zeros(); problem.num_rotations()];
+    for (k, e) in problem.edges().iter().enumerate() {
+        let qii = edge_diagonal_block(problem, k);
+        own[e.i] += qii;
+        own[e.j] += qii;
+    }
+    for (o, d) in own.iter_mut().zip(diagonal) {
+        *o += d;
+    }
+    own
 }
 
 /// Each node's incident edges as `(other end, edge)`, sorted, in compressed rows.

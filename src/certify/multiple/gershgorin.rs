@@ -20,8 +20,8 @@ pub(super) struct GershgorinCheck {
 impl GershgorinCheck {
     /// Gershgorin's bound on `lambda_min(S)` with the forming errors `[D6]`(b), `[A3]`.
     fn bound(cx: &Check<'_>) -> VerifiedBound {
-        let mu = gershgorin_lower_bound(cx.s.as_ref())
-            - 2.0 * gamma(cx.terms + 1) * cx.norm
+        let mu = gershgorin_lower_bound(cx.s().as_ref())
+            - 2.0 * gamma(cx.terms + 1) * cx.norm()
             - cx.forming;
         cx.bound_from_mu(mu, Proof::Gershgorin)
     }

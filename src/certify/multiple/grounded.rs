@@ -114,17 +114,16 @@ impl GroundedProof {
             )))));
         }
         let free = Prediction::new(0.0, 0.0);
-        let (factor, pending, predicted) =
-            match (n > 1, cx.three_n_predicted(cx.s.nrows() - 3, 1.0)) {
-                (false, _) => (None, false, free),
-                (true, ThreeN::Known(Ok(p))) => (None, true, p),
-                (true, ThreeN::Known(Err(refusal))) => return Ok(Some(Err(refusal))),
-                (true, ThreeN::Wait) => return Ok(None),
-                (true, ThreeN::Unknown) => match analyse(cx, ground)? {
-                    Ok((f, p)) => (f, false, p),
-                    Err(refusal) => return Ok(Some(Err(refusal))),
-                },
-            };
+        let (factor, pending, predicted) = match (n > 1, cx.three_n_predicted(cx.dim() - 3, 1.0)) {
+            (false, _) => (None, false, free),
+            (true, ThreeN::Known(Ok(p))) => (None, true, p),
+            (true, ThreeN::Known(Err(refusal))) => return Ok(Some(Err(refusal))),
+            (true, ThreeN::Wait) => return Ok(None),
+            (true, ThreeN::Unknown) => match analyse(cx, ground)? {
+                Ok((f, p)) => (f, false, p),
+                Err(refusal) => return Ok(Some(Err(refusal))),
+            },
+        };
         self.analysed = Some(Analysed {
             ground,
             rinv2: 3.0 / (1.0 - defect) * (1.0 + 4.0 * UNIT_ROUNDOFF),
@@ -213,14 +212,12 @@ pub(super) fn hopeless(
 /// does not run; a perturbed sphere2500 optimum spent 22 ms failing here before the shifted
 /// Cholesky proved in 18 ms.)
 fn not_critical(cx: &Check<'_>, terms: &GaugeTerms, ground: usize) -> Option<f64> {
-    let (cp, ri, val) = (cx.s.col_ptr(), cx.s.row_idx(), cx.s.val());
-    let diag = (0..cx.s.ncols())
-        .filter(|&col| col / 3 != ground)
-        .filter_map(|col| {
-            (cp[col]..cp[col + 1])
-                .find(|&p| ri[p] == col)
-                .map(|p| val[p])
-        })
+    let diag = cx
+        .diagonal_blocks()
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != ground)
+        .flat_map(|(_, b)| (0..3).map(move |a| b[(a, a)]))
         .fold(f64::INFINITY, f64::min);
     let needed = 3.0 * terms.rho * terms.rho / cx.gap;
     if !(diag.is_finite() && diag > 0.0) {
@@ -243,7 +240,7 @@ const RITZ_TEST_STEPS: usize = 30;
 /// space stays in the vectors that vanish there, where `S` acts as `S_{-g}`), plus
 /// `1e-10 ||S||_inf` for rounding ([`smallest_ritz_value`]). 2.7 ms on sphere2500.
 fn ritz_upper(cx: &Check<'_>, ground: usize) -> Option<f64> {
-    let n3 = cx.s.nrows();
+    let n3 = cx.dim();
     if n3 <= 6 {
         return None;
     }
@@ -252,14 +249,14 @@ fn ritz_upper(cx: &Check<'_>, ground: usize) -> Option<f64> {
     let mut rng = StdRng::seed_from_u64(cx.settings.dual.lanczos.seed);
     let mut start: Vec<f64> = (0..n3).map(|_| rng.random::<f64>() - 0.5).collect();
     start[block.clone()].fill(0.0);
-    let s = cx.s.as_ref();
+    let s = cx.s().as_ref();
     let op = |x: &[f64], y: &mut [f64]| {
         crate::linalg::cholesky::sparse_matvec(s, x, y);
         y[block.clone()].fill(0.0);
     };
     cx.notes().lanczos_iterations += RITZ_TEST_STEPS;
-    smallest_ritz_value(op, RITZ_TEST_STEPS.min(n3 - 3), cx.norm, &start)
-        .map(|v| v + 1e-10 * cx.norm)
+    smallest_ritz_value(op, RITZ_TEST_STEPS.min(n3 - 3), cx.norm(), &start)
+        .map(|v| v + 1e-10 * cx.norm())
 }
 
 /// The symbolic analysis of `S_{-g}` within the budget, and its prediction: one factorisation,
@@ -270,13 +267,13 @@ fn analyse(
     cx: &Check<'_>,
     ground: usize,
 ) -> Result<std::result::Result<(Option<ShiftedCholesky>, Prediction), Refusal>> {
-    let dim = cx.s.nrows() - 3;
+    let dim = cx.dim() - 3;
     let cap = cx
         .settings
         .budget
         .max_factor_values(dim)
         .min(cx.settings.dual.max_factor_nonzeros);
-    let ch = match ShiftedCholesky::new_within(without_block(&cx.s, ground)?, cx.terms, cap)? {
+    let ch = match ShiftedCholesky::new_within(without_block(cx.s(), ground)?, cx.terms, cap)? {
         Ok(ch) => ch,
         Err(predicted) => {
             let refusal = ordering_refusal(cx.settings, predicted, dim)
@@ -313,7 +310,7 @@ fn prove_c(
     rho: f64,
     notes: &mut Notes,
 ) -> std::result::Result<(f64, f64), String> {
-    let first = (30.0 * rho * rho / cx.gap.max(f64::MIN_POSITIVE)).max(1e-9 * cx.norm);
+    let first = (30.0 * rho * rho / cx.gap.max(f64::MIN_POSITIVE)).max(1e-9 * cx.norm());
     let mut shifts = vec![first];
     let mut estimated = false;
     let mut longest = 0.0f64;

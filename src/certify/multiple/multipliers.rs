@@ -278,8 +278,29 @@ pub fn certificate_matrix(
     lambdas: &[Matrix3<f64>],
 ) -> Result<SparseColMat<usize, f64>> {
     check_lambdas(problem, lambdas)?;
-    let minus: Vec<Matrix3<f64>> = lambdas.iter().map(|l| -symmetrize(l)).collect();
-    Ok(laplacian_plus_diagonal(problem, &minus))
+    Ok(checked_certificate_matrix(problem, lambdas))
+}
+
+/// [`certificate_matrix`] of multipliers [`check_lambdas`] accepted.
+pub(super) fn checked_certificate_matrix(
+    problem: &MultipleProblem,
+    lambdas: &[Matrix3<f64>],
+) -> SparseColMat<usize, f64> {
+    laplacian_plus_diagonal(problem, &minus_symmetric(lambdas))
+}
+
+/// The diagonal blocks of [`checked_certificate_matrix`] as it stores them (without forming
+/// `S`).
+pub(super) fn certificate_diagonal_blocks(
+    problem: &MultipleProblem,
+    lambdas: &[Matrix3<f64>],
+) -> Vec<Matrix3<f64>> {
+    crate::multiple::laplacian::diagonal_blocks(problem, &minus_symmetric(lambdas))
+}
+
+/// `-sym(Lambda_i)` for every node.
+fn minus_symmetric(lambdas: &[Matrix3<f64>]) -> Vec<Matrix3<f64>> {
+    lambdas.iter().map(|l| -symmetrize(l)).collect()
 }
 
 pub(super) fn symmetrize(l: &Matrix3<f64>) -> Matrix3<f64> {

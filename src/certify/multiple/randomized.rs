@@ -108,17 +108,17 @@ pub(super) fn over_budget_estimates(
     cx: &Check<'_>,
     rotations: &[Rotation],
 ) -> (ComplementEstimate, Option<RandomizedBound>) {
-    let n3 = cx.s.nrows();
+    let n3 = cx.dim();
     let mut lz = cx.settings.dual.lanczos;
     let affordable = (1e9 / n3.max(1) as f64).sqrt() as usize;
     lz.max_iterations = lz.max_iterations.min(n3.max(1)).min(affordable.max(20));
-    let c = complement_smallest(cx.s.as_ref(), rotations, cx.norm, &lz);
+    let c = complement_smallest(cx.s().as_ref(), rotations, cx.norm(), &lz);
     let randomized = randomized_bound(
         cx.problem,
         rotations,
         cx.lambdas,
-        cx.s.as_ref(),
-        cx.norm,
+        cx.s().as_ref(),
+        cx.norm(),
         cx.terms,
         &c,
         &cx.settings.dual.randomized,

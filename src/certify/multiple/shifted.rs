@@ -41,7 +41,7 @@ impl<'a> Rung<Check<'a>> for ShiftedProof {
             }
             return Ok(Plan::Run(p));
         }
-        let predicted = match cx.three_n_predicted(cx.s.nrows(), 3.0) {
+        let predicted = match cx.three_n_predicted(cx.dim(), 3.0) {
             ThreeN::Known(p) => p,
             ThreeN::Wait => return Ok(Plan::Wait),
             ThreeN::Unknown => match analyse(cx)? {
@@ -107,7 +107,7 @@ fn verify_shifted(
     let delta0 = first_shift(cx);
     // a floating-point margin below this costs at most 5 % of the gap budget: the tighter,
     // more expensive residual margin [D6] (2) is not needed then
-    let margin_target = 0.05 * cx.gap / cx.s.nrows().max(1) as f64;
+    let margin_target = 0.05 * cx.gap / cx.dim().max(1) as f64;
     let mut best = None;
     let mut notes = cx.notes();
     // an estimate handed in that is clearly below -delta0: that shift would only fail
@@ -122,9 +122,9 @@ fn verify_shifted(
     if let Some(f) = first.flatten() {
         best = Some(Verified::of(&f));
         if cx.settings.dual.estimate_when_verified {
-            let mut r = shift_invert(&f, cx.s.nrows(), None, &lanczos(cx, 40));
+            let mut r = shift_invert(&f, cx.dim(), None, &lanczos(cx, 40));
             notes.lanczos_iterations += r.iterations;
-            (r.value, r.residual) = rayleigh_quotient(cx.s.as_ref(), &r.vector);
+            (r.value, r.residual) = rayleigh_quotient(cx.s().as_ref(), &r.vector);
             notes.estimate = Some(r);
         }
     } else if !notes.not_critical {
@@ -135,7 +135,7 @@ fn verify_shifted(
         let margin = v.margin + cx.forming;
         let mut b = cx.bound_from_mu(-v.shift - margin, Proof::ShiftedCholesky);
         // [D6] (3): the margins by rows, S >= -shift I - D with tr(D) <= margin_sum + forming_sum
-        let n3 = cx.s.nrows() as f64;
+        let n3 = cx.dim() as f64;
         let by_rows = n3 * v.shift + v.margin_sum + cx.forming_sum;
         b.lower_bound = b.lower_bound.max(cx.trace_bound().with_deficit(by_rows));
         b.shift = Some(v.shift);
@@ -157,13 +157,13 @@ fn verify_shifted(
 /// The symbolic analysis of `S` within the budget, and its prediction (the first shift, and when
 /// it fails an estimate and a few more). Its refusal is noted for the grounded rung.
 fn analyse(cx: &Check<'_>) -> Result<std::result::Result<(ShiftedCholesky, Prediction), Refusal>> {
-    let dim = cx.s.nrows();
+    let dim = cx.dim();
     let cap = cx
         .settings
         .budget
         .max_factor_values(dim)
         .min(cx.settings.dual.max_factor_nonzeros);
-    let ch = match ShiftedCholesky::new_within(cx.s.clone(), cx.terms, cap)? {
+    let ch = match ShiftedCholesky::new_within(cx.s().clone(), cx.terms, cap)? {
         Ok(ch) => ch,
         Err(predicted) => {
             let refusal = ordering_refusal(cx.settings, predicted, dim).unwrap_or_else(|| {
@@ -194,7 +194,7 @@ fn analyse(cx: &Check<'_>) -> Result<std::result::Result<(ShiftedCholesky, Predi
 /// The Lanczos settings of the estimates, at most `iterations` (and the dimension).
 fn lanczos(cx: &Check<'_>, iterations: usize) -> LanczosSettings {
     let mut lz = cx.settings.dual.lanczos;
-    lz.max_iterations = lz.max_iterations.min(iterations).min(cx.s.nrows().max(1));
+    lz.max_iterations = lz.max_iterations.min(iterations).min(cx.dim().max(1));
     lz
 }
 
@@ -237,7 +237,7 @@ fn first_estimate(
     let r = match &cx.hint {
         Some(h) => h.low.clone(),
         None => {
-            let r = smallest_eigenpair(cx.s.as_ref(), cx.norm, lz);
+            let r = smallest_eigenpair(cx.s().as_ref(), cx.norm(), lz);
             notes.lanczos_iterations += r.iterations;
             r
         }
@@ -278,8 +278,8 @@ fn search(
         max: cx.settings.dual.max_factorizations,
     };
     let base = (-r.value).max(0.0);
-    let step0 = delta0.max(r.residual).max(1e-12 * cx.norm);
-    let gersh_shift = (-crate::linalg::gershgorin_lower_bound(cx.s.as_ref())).max(0.0);
+    let step0 = delta0.max(r.residual).max(1e-12 * cx.norm());
+    let gersh_shift = (-crate::linalg::gershgorin_lower_bound(cx.s().as_ref())).max(0.0);
     let mut best = None;
     let mut j = 0i32;
     while tries.next() {
@@ -299,9 +299,9 @@ fn search(
             // refining (two more factorisations, a shift-invert run) changes it by the residual
             break;
         }
-        let mut r2 = shift_invert(&f, cx.s.nrows(), Some(&r.vector), &lz);
+        let mut r2 = shift_invert(&f, cx.dim(), Some(&r.vector), &lz);
         notes.lanczos_iterations += r2.iterations;
-        (r2.value, r2.residual) = rayleigh_quotient(cx.s.as_ref(), &r2.vector);
+        (r2.value, r2.residual) = rayleigh_quotient(cx.s().as_ref(), &r2.vector);
         if r2.value < r.value || r2.residual < r.residual {
             r = r2;
         }

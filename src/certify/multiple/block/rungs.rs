@@ -204,7 +204,7 @@ impl<'a> Rung<Check<'a>> for BlockFamily {
             }));
         };
         let predicted = predict(cx.settings, &a).ok();
-        let target = 0.5 * cx.gap / cx.s.nrows().max(1) as f64;
+        let target = 0.5 * cx.gap / cx.dim().max(1) as f64;
         Ok(Found::logged(
             match run(cx, &a, rotations, target, predicted)? {
                 Ok(b) => {

@@ -205,7 +205,7 @@ impl ScalarFamily {
         let Some(rotations) = cx.rotations else {
             return Ok(None);
         };
-        let target = 0.5 * cx.gap / cx.s.nrows().max(1) as f64;
+        let target = 0.5 * cx.gap / cx.dim().max(1) as f64;
         if let Some(hub) = self.hub.take() {
             return Ok(run_hub(cx, &hub, rotations, target));
         }
@@ -629,7 +629,7 @@ fn gauge_estimate(cx: &Check<'_>, rotations: &[Rotation]) -> LanczosResult {
             continue;
         }
         v.iter_mut().for_each(|x| *x /= nv);
-        let (rq, res) = rayleigh_quotient(cx.s.as_ref(), &v);
+        let (rq, res) = rayleigh_quotient(cx.s().as_ref(), &v);
         if rq < best.value {
             best = LanczosResult {
                 value: rq,
