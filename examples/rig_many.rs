@@ -3,7 +3,8 @@
 //! with every sensor estimated and with every sensor known; the error against the planted rig.
 //!
 //! `cargo run --release --example rig_many [frames ...] [anisotropic] [known | estimated]
-//! [sensors=2,4,6] [memory=GiB] [verbose]` (`memory`: the certificate's memory budget, default
+//! [sensors=2,4,6] [span=W] [memory=GiB] [verbose]` (`span`: each sensor's extra pairs within
+//! `W` frames, `RigScene::extra_edge_span`; default any two frames) (`memory`: the certificate's memory budget, default
 //! 4; `verbose`: the certificate's ladder and the progress lines on stderr) (`anisotropic`: the
 //! edges carry information matrices, `RigScene::anisotropy` 9, `[H24]`, and a last column gives
 //! the sensors' error of the same data with scalar weights `tr(H)/3`, solve only; `known`: only
@@ -69,6 +70,10 @@ fn main() -> rotavg::Result<()> {
         rotavg::progress::set_observer(Some(lines.clone()));
         lines.spawn(rotavg::progress::ProgressLines::delay_from_env());
     }
+    let span: usize = all
+        .iter()
+        .find_map(|a| a.strip_prefix("span=").and_then(|m| m.parse().ok()))
+        .unwrap_or(0);
     let memory_gib: Option<u64> = all
         .iter()
         .find_map(|a| a.strip_prefix("memory=").and_then(|m| m.parse().ok()));
@@ -106,6 +111,7 @@ fn main() -> rotavg::Result<()> {
                     known,
                     seed: 7,
                     anisotropy,
+                    extra_edge_span: span,
                     ..Default::default()
                 };
                 let (p, truth) = scene.generate();

@@ -495,6 +495,7 @@ fn no_false_certificate_on_rigs_of_many_sensors() {
             frames: 4 + k % 6,
             sensors: 2 + k % 3,
             extra_edges_per_frame: 1 + k % 2,
+            extra_edge_span: 0,
             cross_fraction: [0.0, 0.5][(k / 3) % 2],
             noise_sigma: [0.0, 0.02, 0.1, 0.3][(k / 6) % 4],
             outlier_fraction: [0.0, 0.2][(k / 24) % 2],

@@ -12,7 +12,8 @@ use serde::{Deserialize, Serialize};
 /// A generated rig: `frames` frames with random rotations, `sensors` sensors (sensor 0 the
 /// reference, `S_0 = I`; the others random), every sensor photographing every frame. Each
 /// sensor's images are joined along the frame sequence (`f`, `f + 1`) and by
-/// `extra_edges_per_frame` random frame pairs; a fraction `cross_fraction` of frames adds an
+/// `extra_edges_per_frame` random frame pairs (within `extra_edge_span` frames of each other, or
+/// any two frames when it is 0); a fraction `cross_fraction` of frames adds an
 /// edge from the reference sensor's image to another sensor's, of the same frame or of a random
 /// one. Measurements are perturbed by Gaussian noise of `noise_sigma` radians; a fraction
 /// `outlier_fraction` replaced by random rotations. With `known`, every sensor's
@@ -30,6 +31,11 @@ pub struct RigScene {
     pub sensors: usize,
     /// Random same-sensor edges per frame, besides the sequence's.
     pub extra_edges_per_frame: usize,
+    /// The largest frame distance of those edges; 0 (default): any two frames (a view graph
+    /// without locality, the hardest for the certificate's factorisations). A capture along a
+    /// path sees its neighbours: e.g. 10, with the cross-sensor edges to random frames as its
+    /// revisits.
+    pub extra_edge_span: usize,
     /// Fraction of frames with an edge between two sensors.
     pub cross_fraction: f64,
     /// Gaussian noise, radians.
@@ -51,6 +57,7 @@ impl Default for RigScene {
             frames: 100,
             sensors: 3,
             extra_edges_per_frame: 2,
+            extra_edge_span: 0,
             cross_fraction: 0.3,
             noise_sigma: 0.01,
             outlier_fraction: 0.0,
@@ -138,7 +145,7 @@ impl RigScene {
                     add(&mut rng, (f, s), (f + 1, s));
                 }
                 for _ in 0..self.extra_edges_per_frame {
-                    let g = rng.random_range(0..self.frames);
+                    let g = self.partner(f, &mut rng);
                     if g != f {
                         add(&mut rng, (f, s), (g, s));
                     }
@@ -168,6 +175,14 @@ impl RigScene {
             problem = (problem.with_information(information)).expect("generated information");
         }
         (problem, RigTruth { frames, sensors })
+    }
+
+    /// A random frame for an extra edge from frame `f` ([`RigScene::extra_edge_span`]).
+    fn partner(&self, f: usize, rng: &mut StdRng) -> usize {
+        match self.extra_edge_span {
+            0 => rng.random_range(0..self.frames),
+            span => rng.random_range(f.saturating_sub(span)..=(f + span).min(self.frames - 1)),
+        }
     }
 
     /// The planted frames (the first the identity) and sensors (sensor 0 the identity).

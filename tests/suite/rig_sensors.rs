@@ -534,3 +534,43 @@ fn a_rig_whose_images_graph_is_too_large_is_bounded_by_its_sensor_pairs() {
         assert!(lb <= other, "bound {lb} above a local minimum {other}");
     }
 }
+
+/// `RigScene::extra_edge_span`: every same-sensor edge joins frames at most the span apart
+/// (the sequence's at distance 1), and without a span some are farther (the default, any two
+/// frames); the planted rig is still recovered and certified.
+#[test]
+fn a_rig_with_local_pairs_keeps_its_pairs_within_the_span() {
+    let distances = |span: usize| {
+        let s = RigScene {
+            extra_edge_span: span,
+            ..RigScene::sized(200, 3, 0.0, false, 5)
+        };
+        let (p, truth) = s.generate();
+        let images = p.images();
+        let far = p
+            .edges()
+            .iter()
+            .filter(|e| images[e.i].sensor == images[e.j].sensor)
+            .map(|e| images[e.i].frame.abs_diff(images[e.j].frame))
+            .max()
+            .unwrap();
+        (far, p, truth)
+    };
+    let (far, _, _) = distances(0);
+    assert!(far > 50, "any two frames: farthest pair {far}");
+    let (far, p, truth) = distances(10);
+    assert!(
+        (1..=10).contains(&far),
+        "within 10 frames: farthest pair {far}"
+    );
+    let out = average_rig(&p, &Default::default()).unwrap();
+    let worst = out
+        .solution
+        .sensors
+        .iter()
+        .zip(&truth.sensors)
+        .map(|(a, b)| angle_between(a, b))
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-8, "sensors off by {worst}");
+    assert!(out.certificate.unwrap().is_certified());
+}
