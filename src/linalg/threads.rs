@@ -3,12 +3,27 @@
 //! as it would be alone (no reduction across chunks), so a result does not depend on the
 //! number of threads.
 
-/// `std::thread::available_parallelism()`, asked once per process: it reads cgroup files on
+/// The threads to use: `RAYON_NUM_THREADS` when it is a positive number (the variable that
+/// also sizes the pool of faer's parallel factorisations, so one setting bounds both), else
+/// `std::thread::available_parallelism()`; asked once per process: it reads cgroup files on
 /// every call, and [`super::symmetric_matvec`] runs millions of times (the soundness campaign
 /// spent half its time in the kernel on it: 258 s on 2 threads before, 58 s after).
 pub(crate) fn hardware_threads() -> usize {
     static THREADS: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    *THREADS.get_or_init(|| std::thread::available_parallelism().map_or(1, |t| t.get()))
+    *THREADS.get_or_init(|| {
+        threads_from(
+            std::env::var("RAYON_NUM_THREADS").ok().as_deref(),
+            std::thread::available_parallelism().map_or(1, |t| t.get()),
+        )
+    })
+}
+
+/// `setting` (the value of `RAYON_NUM_THREADS`) when it is a positive number, else `available`.
+fn threads_from(setting: Option<&str>, available: usize) -> usize {
+    setting
+        .and_then(|v| v.trim().parse::<usize>().ok())
+        .filter(|&t| t > 0)
+        .unwrap_or(available)
 }
 
 /// `f(first, chunk)` for consecutive chunks of `items` (`first`: the chunk's offset in
@@ -47,6 +62,15 @@ pub(crate) fn in_chunks<T: Send, R: Send>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_positive_setting_decides_the_threads() {
+        assert_eq!(threads_from(Some("1"), 8), 1);
+        assert_eq!(threads_from(Some(" 3 "), 2), 3);
+        for unusable in [None, Some("0"), Some(""), Some("many"), Some("-2")] {
+            assert_eq!(threads_from(unusable, 2), 2, "{unusable:?}");
+        }
+    }
 
     #[test]
     fn chunks_cover_the_slice_once_in_order() {
