@@ -131,6 +131,8 @@ pub(super) fn bordered_regions(
             }
         }
     }
+    // the largest region's factor values, not held through the coarse correction
+    drop(storage);
     let deflated: Vec<Vec<Column>> = proofs
         .iter_mut()
         .map(|p| std::mem::take(&mut p.deflated))
