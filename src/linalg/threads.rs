@@ -26,6 +26,11 @@ fn threads_from(setting: Option<&str>, available: usize) -> usize {
         .unwrap_or(available)
 }
 
+/// Edges from which a pass doing about a microsecond of work per edge (the double-double
+/// `Q Y`: 2.3 us per anisotropic edge; the step-2 edge bounds: 1.4 us) splits over the threads:
+/// 20 ms or more of work against about 0.1 ms to start and join them.
+pub(crate) const PARALLEL_EDGES: usize = 20_000;
+
 /// `f(first, chunk)` for consecutive chunks of `items` (`first`: the chunk's offset in
 /// `items`), on one scoped thread per chunk when `parallel` and the machine has more than one
 /// thread (at most one chunk per thread, none empty), else once on the whole slice; the

@@ -34,7 +34,7 @@ pub(super) fn laplacian_times_compensated(
     let mut acc = vec![[[Accumulator::default(); 3]; 3]; problem.num_rotations()];
     let adjacency = problem.adjacency();
     let (edges, info) = (problem.edges(), problem.information());
-    let parallel = edges.len() >= PARALLEL_EDGES;
+    let parallel = edges.len() >= crate::linalg::threads::PARALLEL_EDGES;
     crate::linalg::threads::in_chunks(&mut acc, parallel, |first, nodes| {
         for (k, node) in nodes.iter_mut().enumerate() {
             let v = first + k;
@@ -53,10 +53,6 @@ pub(super) fn laplacian_times_compensated(
     });
     acc
 }
-
-/// Edges from which [`laplacian_times_compensated`] splits its nodes over the machine's threads
-/// (the double-double terms: 0.23 s at 10^5 anisotropic edges on one thread).
-const PARALLEL_EDGES: usize = 20_000;
 
 /// One scalar edge's part of `(Q Y)_v` at its end `v`: `w (R_i - R_ij^T R_j)` at `i`,
 /// `w (R_j - R_ij R_i)` at `j` `[D3]`.

@@ -386,7 +386,8 @@ pub(super) fn edge_blocks(
 }
 
 /// Every edge's [`edge_bound`] (`None` for a merged group's other edges), in the edges' order:
-/// independent per edge, so split over the machine's threads from [`PARALLEL_EDGES`] edges.
+/// independent per edge, so split over the machine's threads
+/// ([`crate::linalg::threads::PARALLEL_EDGES`]).
 fn edge_bounds(
     problem: &MultipleProblem,
     parts: &[Option<Parts>],
@@ -396,7 +397,7 @@ fn edge_bounds(
     let edges = problem.edges();
     let mut bounds: Vec<Option<EdgeBound>> = Vec::new();
     bounds.resize_with(edges.len(), || None);
-    let parallel = edges.len() >= PARALLEL_EDGES;
+    let parallel = edges.len() >= crate::linalg::threads::PARALLEL_EDGES;
     let done = crate::linalg::threads::in_chunks(&mut bounds, parallel, |first, out| {
         for (k, slot) in out.iter_mut().enumerate() {
             let (e, index) = (&edges[first + k], first + k);
@@ -412,10 +413,6 @@ fn edge_bounds(
         Err(()) => Err(BlockFailure::Numerical),
     }
 }
-
-/// Edges from which [`edge_bounds`] runs on the machine's threads (1.4 us per edge: 0.14 s at
-/// 10^5 edges on one thread).
-const PARALLEL_EDGES: usize = 20_000;
 
 /// Each node's kept strength per kept edge, `sum_e S_e / deg` over its edges in `C` (a merged
 /// group as one edge).
