@@ -7,9 +7,7 @@ use super::ScalarFailure;
 use super::analysis::{ScalarAnalysis, ScalarPart};
 use super::split::{PencilWeights, part_charges};
 use crate::linalg::cholesky::gamma;
-use crate::linalg::ldlt::{
-    FactorStorage, LdltFailure, NegativeColumn, ldlt_inertia, ldlt_negative_columns,
-};
+use crate::linalg::ldlt::{FactorStorage, LdltFailure, NegativeColumn, ldlt_negative_columns};
 use crate::multiple::MultipleProblem;
 
 /// Step 5 for every part (one part, with the charges `w`, for the whole graph or a subgraph):
@@ -45,6 +43,8 @@ pub(super) fn prove_inertia_deflating(
     let mut headroom = 0.0f64;
     let mut backward = 0.0f64;
     let mut deflated = Vec::new();
+    // one factor storage for every part's factorisations (`ldlt::FactorStorage`)
+    let mut storage = FactorStorage::default();
     for (p, part) in analysis.parts.iter().enumerate() {
         let charges = match pencil.shares.get(p) {
             Some(f) => part_charges(&pencil.weights, f, num_parts),
@@ -61,6 +61,7 @@ pub(super) fn prove_inertia_deflating(
                 &charges,
                 (h, expected, most),
                 deg_n,
+                &mut storage,
             )?;
             if bound <= h {
                 deflated = columns;
@@ -90,6 +91,7 @@ pub(super) fn factor_inertia(
     delta: &[f64],
     (h, expected, most): (f64, usize, usize),
     deg_n: &[usize],
+    storage: &mut FactorStorage,
 ) -> std::result::Result<(f64, Vec<NegativeColumn>), ScalarFailure> {
     let n = delta.len();
     let mut a = part.pattern.clone();
@@ -122,21 +124,11 @@ pub(super) fn factor_inertia(
     let numerical = |f| match f {
         LdltFailure::Numerical => ScalarFailure::Numerical,
     };
-    let (inertia, columns) = if most > expected {
-        let (inertia, pivots) = ldlt_negative_columns(
-            &part.symbolic,
-            a.as_ref(),
-            (expected, most),
-            &mut FactorStorage::default(),
-        )
-        .map_err(numerical)?;
-        (inertia, pivots.columns)
-    } else {
-        (
-            ldlt_inertia(&part.symbolic, a.as_ref()).map_err(numerical)?,
-            Vec::new(),
-        )
-    };
+    // columns only when more than `expected` but at most `most` pivots are negative
+    let (inertia, pivots) =
+        ldlt_negative_columns(&part.symbolic, a.as_ref(), (expected, most), storage)
+            .map_err(numerical)?;
+    let columns = pivots.columns;
     let negative = inertia.negative;
     // another count deflates only when asked to, and with every negative pivot's column
     if negative != expected && (most <= expected || columns.len() != negative) {
