@@ -96,7 +96,26 @@ pub(crate) fn solve_conic(
     merge: &str,
 ) -> Result<ConicSolution> {
     let nv = q.len();
-    let p = CscMatrix::zeros((nv, nv));
+    solve_quadratic_conic(
+        (&CscMatrix::zeros((nv, nv)), q),
+        a,
+        b,
+        cones,
+        settings,
+        merge,
+    )
+}
+
+/// Solve `min x^T P x / 2 + q^T x  s.t.  b - A x in K` (`P` positive semidefinite, its upper
+/// triangle) with Clarabel, as [`solve_conic`].
+pub(crate) fn solve_quadratic_conic(
+    (p, q): (&CscMatrix<f64>, &[f64]),
+    a: CscMatrix<f64>,
+    b: &[f64],
+    cones: &[Cone],
+    settings: &SdpSettings,
+    merge: &str,
+) -> Result<ConicSolution> {
     let cones: Vec<SupportedConeT<f64>> = cones
         .iter()
         .map(|c| match *c {
@@ -107,10 +126,10 @@ pub(crate) fn solve_conic(
     // Clarabel's SDP cone calls dgemm_, dsyevr_, ... from rotavg-lapack: taking their addresses
     // here makes every linker load them whenever this solver is linked (see src/lib.rs).
     std::hint::black_box(rotavg_lapack::link_routines());
-    let mut solver = DefaultSolver::new(&p, q, &a, b, &cones, clarabel_settings(settings, merge))
+    let mut solver = DefaultSolver::new(p, q, &a, b, &cones, clarabel_settings(settings, merge))
         .map_err(|e| Error::Solver {
-        message: format!("Clarabel setup: {e}"),
-    })?;
+            message: format!("Clarabel setup: {e}"),
+        })?;
     // per-iteration progress (the callback never terminates the solve)
     solver.set_termination_callback(|info: &DefaultInfo<f64>| {
         crate::progress::emit(|| crate::progress::Event::Iteration {

@@ -17,7 +17,7 @@
 //! recomputed from the returned multipliers with an independent eigenvalue computation in
 //! [`crate::certify`] (contract section 3).
 
-mod clarabel;
+pub(crate) mod clarabel;
 pub mod conjugate;
 pub mod conv_so3;
 pub mod lifted;

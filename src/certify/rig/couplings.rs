@@ -20,6 +20,29 @@ pub(crate) const MAX_SENSORS_PER_FRAME: usize = 16;
 /// Most pairs of sensors photographing a frame together (a dense `P x P` eigen-decomposition).
 pub(crate) const MAX_COUPLED_PAIRS: usize = 500;
 
+/// One frame's pair of images' coupling in rig coordinates: the pseudo-edges' weighted sum
+/// `sum c N = hat(u) + k` (`[H21]`): the flow `u` (its torques) and a symmetric part `k`
+/// (zero for the least-norm couplings; the search of `[H21]` "The search" moves it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PairSum {
+    pub u: Vector3<f64>,
+    pub k: Matrix3<f64>,
+}
+
+impl PairSum {
+    /// The sum `hat(u) + k` as a matrix.
+    pub fn matrix(&self) -> Matrix3<f64> {
+        hat(&self.u) + self.k
+    }
+}
+
+/// Where the couplings go: each frame's `(sensor, image)` and the pairs of sensors.
+#[derive(Clone)]
+pub(crate) struct Layout {
+    pub per_frame: Vec<Vec<(usize, usize)>>,
+    pairs: Pairs,
+}
+
 /// The images' view graph with the couplings, and what they add on a rig point.
 pub(crate) struct Coupled {
     /// The images' edges, then the pseudo-edges.
@@ -31,6 +54,9 @@ pub(crate) struct Coupled {
     /// The part of `offset` charged for the constrained pairs' sums `r_st` (nonzero where the
     /// estimate is not exactly critical in its sensors): `2 sqrt(3) sum ||r_st||_F`.
     pub charge: f64,
+    /// Where they go, and each frame's pairs' sums (in the order of [`local_pairs`]).
+    pub layout: Layout,
+    pub sums: Vec<Vec<PairSum>>,
 }
 
 /// Bytes an edge of the augmented graph is charged (the edge, 96 bytes, in the graph, its
@@ -76,16 +102,38 @@ pub(crate) fn couple(
     let x = problem.image_rotations(frames, sensors);
     let images = problem.image_graph()?;
     let demand = demands(problem, &images, &x, sensors);
-    let flows = least_norm_flows(&per_frame, &demand, &pairs);
-    let pseudo = pseudo_edges(&per_frame, &flows, sensors);
-    let (offset, charge) = offset(&pseudo, &pairs, sensors, images.is_anisotropic());
-    let pseudo_edges = pseudo.len();
-    Ok(Ok(Coupled {
-        graph: augmented(&images, pseudo)?,
-        pseudo_edges,
+    let sums = least_norm_flows(&per_frame, &demand, &pairs)
+        .into_iter()
+        .map(|f| {
+            f.into_iter()
+                .map(|u| PairSum {
+                    u,
+                    k: Matrix3::zeros(),
+                })
+                .collect()
+        })
+        .collect();
+    let layout = Layout { per_frame, pairs };
+    Ok(Ok(coupled(&images, layout, sums, sensors)?))
+}
+
+/// The images' view graph `images` with the pseudo-edges of `sums`, and their constant.
+pub(crate) fn coupled(
+    images: &MultipleProblem,
+    layout: Layout,
+    sums: Vec<Vec<PairSum>>,
+    sensors: &[Rotation],
+) -> Result<Coupled> {
+    let pseudo = pseudo_edges(&layout.per_frame, &sums, sensors);
+    let (offset, charge) = offset(&pseudo, &layout.pairs, sensors, images.is_anisotropic());
+    Ok(Coupled {
+        pseudo_edges: pseudo.len(),
+        graph: augmented(images, pseudo)?,
         offset,
         charge,
-    }))
+        layout,
+        sums,
+    })
 }
 
 /// The images' view graph with the pseudo-edges; with information (`[H24]`), each
@@ -126,6 +174,7 @@ fn frame_images(problem: &RigProblem) -> Vec<Vec<(usize, usize)>> {
 
 /// The pairs `(s, t)`, `s < t`, of sensors photographing a frame together, numbered; a pair
 /// is *constrained* (its pseudo-edges' rotations must sum to zero) unless both are held.
+#[derive(Clone)]
 struct Pairs {
     ids: HashMap<(usize, usize), usize>,
     constrained: Vec<bool>,
@@ -160,7 +209,7 @@ impl Pairs {
 }
 
 /// The pairs `(i, j)`, `i < j`, of `k` local indices.
-fn local_pairs(k: usize) -> Vec<(usize, usize)> {
+pub(crate) fn local_pairs(k: usize) -> Vec<(usize, usize)> {
     (0..k)
         .flat_map(|i| (i + 1..k).map(move |j| (i, j)))
         .collect()
@@ -271,19 +320,28 @@ fn pseudo_inverse(m: DMatrix<f64>) -> DMatrix<f64> {
     &eig.eigenvectors * DMatrix::from_diagonal(&inv) * eig.eigenvectors.transpose()
 }
 
-/// Positive weights `c_k` and rotations `N_k` with `sum c_k N_k = hat(u)`: `|u| N(u/|u|, pi/2) +
-/// |u|/2 (N(b, pi) + N(c, pi))` for an orthonormal frame `(u/|u|, b, c)` (`[H21]`).
-fn skew_as_rotations(u: &Vector3<f64>) -> [(f64, Matrix3<f64>); 3] {
-    let n = u.norm();
-    let a = u / n;
+/// The half-turn `2 v v^T - I` about the unit axis `v`.
+fn half_turn(v: &Vector3<f64>) -> Matrix3<f64> {
+    2.0 * v * v.transpose() - Matrix3::identity()
+}
+
+/// Unit `b`, `c` completing the unit `a` to a right-handed orthonormal frame `(a, b, c)`.
+fn completing(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
     let helper = if a.x.abs() < 0.6 {
         Vector3::x()
     } else {
         Vector3::y()
     };
     let b = a.cross(&helper).normalize();
-    let c = a.cross(&b);
-    let half_turn = |v: &Vector3<f64>| 2.0 * v * v.transpose() - Matrix3::identity();
+    (b, a.cross(&b))
+}
+
+/// Positive weights `c_k` and rotations `N_k` with `sum c_k N_k = hat(u)`: `|u| N(u/|u|, pi/2) +
+/// |u|/2 (N(b, pi) + N(c, pi))` for an orthonormal frame `(u/|u|, b, c)` (`[H21]`).
+fn skew_as_rotations(u: &Vector3<f64>) -> [(f64, Matrix3<f64>); 3] {
+    let n = u.norm();
+    let a = u / n;
+    let (b, c) = completing(&a);
     [
         (n, hat(&a) + a * a.transpose()),
         (0.5 * n, half_turn(&b)),
@@ -291,22 +349,54 @@ fn skew_as_rotations(u: &Vector3<f64>) -> [(f64, Matrix3<f64>); 3] {
     ]
 }
 
-/// The pseudo-edges of the flows, each with its pair's number: from image `(f, s)` to image
+/// Positive weights `c_k` and rotations `N_k` with `sum c_k N_k = k` for a symmetric `k =
+/// sum l v v^T` (its eigenvalues `l`, unit eigenvectors `v`): `l v v^T = l/2 (H(v) + I)` for
+/// positive `l` and `-|l| v v^T = |l|/2 (H(b) + H(c))` for negative `l` (`H` the half-turn about a unit
+/// axis, `(v, b, c)` orthonormal: `H(v) + H(b) + H(c) = -I`). Eigenvalues below `1e-14` of the
+/// largest are left out (any pseudo-edges give a sound bound; the sums' rounding is charged).
+fn symmetric_as_rotations(k: &Matrix3<f64>) -> Vec<(f64, Matrix3<f64>)> {
+    let eig = (0.5 * (k + k.transpose())).symmetric_eigen();
+    let top = eig.eigenvalues.amax();
+    let mut out = Vec::new();
+    for (l, v) in eig.eigenvalues.iter().zip(eig.eigenvectors.column_iter()) {
+        let v: Vector3<f64> = v.normalize();
+        if !(l.abs() > 1e-14 * top && l.abs() <= 1e100) {
+            continue;
+        }
+        if *l > 0.0 {
+            out.push((0.5 * l, half_turn(&v)));
+            out.push((0.5 * l, Matrix3::identity()));
+        } else {
+            let (b, c) = completing(&v);
+            out.push((-0.5 * l, half_turn(&b)));
+            out.push((-0.5 * l, half_turn(&c)));
+        }
+    }
+    out
+}
+
+/// The pseudo-edges of the sums, each with its pair's number: from image `(f, s)` to image
 /// `(f, t)`, rotation `S_t N_k S_s^T`, weight `c_k` (those outside `[1e-100, 1e100]` dropped:
 /// any pseudo-edges give a sound bound).
 fn pseudo_edges(
     per_frame: &[Vec<(usize, usize)>],
-    flows: &[Vec<Vector3<f64>>],
+    sums: &[Vec<PairSum>],
     sensors: &[Rotation],
 ) -> Vec<((usize, usize), Edge)> {
     let mut out = Vec::new();
-    for (f, u) in per_frame.iter().zip(flows) {
-        for ((i, j), ue) in local_pairs(f.len()).into_iter().zip(u) {
+    for (f, u) in per_frame.iter().zip(sums) {
+        for ((i, j), sum) in local_pairs(f.len()).into_iter().zip(u) {
             let ((s, a), (t, b)) = (f[i], f[j]);
-            if !(ue.norm() >= 2e-100 && ue.norm() <= 1e100) {
-                continue;
-            }
-            for (w, n) in skew_as_rotations(ue) {
+            let ue = &sum.u;
+            let skew = (ue.norm() >= 2e-100 && ue.norm() <= 1e100)
+                .then(|| skew_as_rotations(ue))
+                .into_iter()
+                .flatten();
+            let symmetric = (sum.k != Matrix3::zeros())
+                .then(|| symmetric_as_rotations(&sum.k))
+                .into_iter()
+                .flatten();
+            for (w, n) in skew.chain(symmetric) {
                 let r = sensors[t].matrix() * n * sensors[s].matrix().transpose();
                 let edge = Edge {
                     i: a,
@@ -375,8 +465,8 @@ mod tests {
     use crate::certify::multiple::multipliers::stationarity_residual;
     use crate::rig::{RigScene, RigSettings, polish_passes, solve_rig};
     use crate::so3::random_rotation;
-    use rand::SeedableRng;
     use rand::rngs::StdRng;
+    use rand::{Rng, SeedableRng};
 
     /// A solved noisy rig (every sensor estimated, or some known), polished, with its held
     /// sensors at their held rotations.
@@ -452,15 +542,67 @@ mod tests {
         assert!(c.charge >= 0.0 && c.charge < 1e-6 * p.cost(&frames, &sensors));
     }
 
+    /// A symmetric matrix of any signature as a positive combination of rotations.
+    #[test]
+    fn a_symmetric_matrix_is_a_positive_combination_of_rotations() {
+        let mut rng = StdRng::seed_from_u64(3);
+        for scale in [1e-6, 1.0, 1e6] {
+            for _ in 0..50 {
+                let a = Matrix3::from_fn(|_, _| rng.random::<f64>() - 0.5) * scale;
+                let k = a + a.transpose();
+                let parts = symmetric_as_rotations(&k);
+                let sum: Matrix3<f64> = parts.iter().map(|(c, n)| *c * n).sum();
+                assert!((sum - k).norm() <= 1e-13 * k.norm(), "{sum} {k}");
+                for (c, n) in &parts {
+                    assert!(*c > 0.0);
+                    assert!((n.transpose() * n - Matrix3::identity()).norm() < 1e-14);
+                    assert!((n.determinant() - 1.0).abs() < 1e-14);
+                }
+            }
+        }
+    }
+
+    /// The least-norm sums of `c` with random symmetric parts of zero sum over the frames on
+    /// every pair (what the search moves, `[H21]` "The search"), coupled again.
+    fn with_symmetric_parts(
+        p: &RigProblem,
+        c: &Coupled,
+        sensors: &[Rotation],
+        rng: &mut StdRng,
+    ) -> Coupled {
+        let mut sums = c.sums.clone();
+        let pairs = sums.first().map_or(0, Vec::len);
+        for q in 0..pairs {
+            let mut mean = Matrix3::zeros();
+            for f in sums.iter_mut() {
+                let a = Matrix3::from_fn(|_, _| rng.random::<f64>() - 0.5) * 10.0;
+                f[q].k = a + a.transpose();
+                mean += f[q].k;
+            }
+            let frames = sums.len() as f64;
+            sums.iter_mut().for_each(|f| f[q].k -= mean / frames);
+        }
+        coupled(&p.image_graph().unwrap(), c.layout.clone(), sums, sensors).unwrap()
+    }
+
     /// On every rig point the images' view graph with the couplings costs the rig's cost plus at
     /// most `offset` (less at most the charge): checked on random rig points from the two
-    /// costs' own evaluations; on points that are no rig the difference is not constant.
+    /// costs' own evaluations, for the least-norm couplings and with random symmetric parts of
+    /// zero sum over the frames (the search's moves); on points that are no rig the difference
+    /// is not constant.
     #[test]
     fn on_rig_points_the_couplings_add_a_constant() {
         let mut rng = StdRng::seed_from_u64(5);
-        for known in [false, true] {
+        for (known, symmetric) in [(false, false), (true, false), (false, true), (true, true)] {
             let (p, frames, sensors) = solved(known, 2);
-            let c = couple(&p, &frames, &sensors, u64::MAX).unwrap().unwrap();
+            let mut c = couple(&p, &frames, &sensors, u64::MAX).unwrap().unwrap();
+            if symmetric {
+                let before = c.pseudo_edges;
+                c = with_symmetric_parts(&p, &c, &sensors, &mut rng);
+                assert!(c.pseudo_edges > before, "{} {before}", c.pseudo_edges);
+                // zero sum over the frames: nothing charged beyond the sensors' gradient's
+                assert!(c.charge < 1e-6 * p.cost(&frames, &sensors), "{}", c.charge);
+            }
             assert!(c.pseudo_edges > 0);
             let mut differences = Vec::new();
             for _ in 0..20 {

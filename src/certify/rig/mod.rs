@@ -14,6 +14,7 @@ mod couplings;
 mod frames;
 mod images;
 mod rounding;
+mod search;
 mod state;
 mod two_graphs;
 mod world;

@@ -1,0 +1,496 @@
+//! A search over a small rig's within-frame couplings (`paper-notes/conjugate.md` `[H21]`, "The
+//! search"): where the least-norm couplings leave the augmented graph's `S` indefinite, a
+//! proximal spectral bundle (Helmberg and Rendl) moves each frame's pairs' sums by circulations
+//! of their flows and by symmetric parts, both summing to zero over the frames, towards the
+//! largest `lambda_min(S)`. Only a choice: whatever it returns is handed to the augmented graph's
+//! ladder, which proves its bound or does not ([`super::couplings`]: any pseudo-edges give a
+//! sound bound).
+
+use super::couplings::{Coupled, PairSum, local_pairs};
+use crate::certify::multiple::multipliers::{certificate_matrix, multipliers};
+use crate::deadline::Deadline;
+use crate::error::Result;
+use crate::linalg::cholesky::to_dense;
+use crate::linalg::dense::symmetric_eigen;
+use crate::relax::clarabel::{Cone, csc, solve_quadratic_conic};
+use crate::relax::settings::SdpSettings;
+use crate::relax::svec::{svec_index, svec_len, svec_weight};
+use crate::so3::{Rotation, vee};
+use nalgebra::{DMatrix, Matrix3, Vector3};
+
+/// Most images a rig's search takes: a dense `3N x 3N` eigen-decomposition and a Clarabel model
+/// per round (30 frames and 6 sensors, `3N = 540`: 17.9 s for four rigs' solves and
+/// certificates, `docs/benchmarks.md` "Small rigs along a path").
+pub(crate) const SEARCH_MAX_IMAGES: usize = 300;
+
+/// Most rounds of the bundle (the 30-frame, 4-sensor rigs of `[H21]` "The search" that it
+/// certifies: `S` positive definite after 3-5 rounds, 0.3-0.6 s of certify each).
+const SEARCH_ROUNDS: usize = 60;
+
+/// Bottom eigenvectors kept in the bundle, and the candidate's added each round.
+const BUNDLE: usize = 8;
+const CANDIDATE: usize = 3;
+
+/// The search stops once `lambda_min(S)` is this fraction of its start's magnitude above zero:
+/// the margin the augmented graph's own proof then works with.
+const MARGIN: f64 = 0.05;
+
+/// The search stops when [`STALL_ROUNDS`] rounds gained less than this fraction of the start's
+/// `|lambda_min|` (30 frames, 4 sensors, seed 11 of `[H21]` "The search": it crawls from -9.7
+/// to -2.8 over 60 rounds, where the within-frame couplings likely cannot certify).
+const STALL: f64 = 1e-2;
+const STALL_ROUNDS: usize = 10;
+
+/// What the search found: the sums, and `lambda_min(S)` (gauge apart) before and after.
+pub(crate) struct Searched {
+    pub sums: Vec<Vec<PairSum>>,
+    pub start: f64,
+    pub reached: f64,
+    pub rounds: usize,
+}
+
+/// The search from `coupled` (the least-norm couplings at the image rotations `x`), or `None`
+/// when it does not apply (more than [`SEARCH_MAX_IMAGES`] images, frames photographed by
+/// different sensors, `S` already positive semidefinite) or finds no positive `lambda_min`.
+pub(crate) fn search(
+    coupled: &Coupled,
+    x: &[Rotation],
+    sensors: &[Rotation],
+    deadline: Option<Deadline>,
+) -> Result<Option<Searched>> {
+    let per_frame = &coupled.layout.per_frame;
+    let Some(k) = uniform(per_frame) else {
+        return Ok(None);
+    };
+    if x.len() > SEARCH_MAX_IMAGES {
+        return Ok(None);
+    }
+    let lambdas = multipliers(&coupled.graph, x)?;
+    let s = to_dense(certificate_matrix(&coupled.graph, &lambdas)?.as_ref());
+    let space = Space {
+        per_frame,
+        sensors,
+        k,
+        s0: gauged(0.5 * (&s + s.transpose()), x),
+    };
+    let Some(start) = space.eigen(&space.zero()) else {
+        return Ok(None);
+    };
+    let lambda0 = start.0[0];
+    if lambda0 >= 0.0 {
+        return Ok(None);
+    }
+    Ok(space
+        .bundle(start, deadline)
+        .map(|(delta, reached, rounds)| {
+            let sums = (coupled.sums.iter().zip(&delta))
+                .map(|(f, d)| {
+                    f.iter()
+                        .zip(d)
+                        .map(|(a, b)| PairSum {
+                            u: a.u + b.u,
+                            k: a.k + b.k,
+                        })
+                        .collect()
+                })
+                .collect();
+            Searched {
+                sums,
+                start: lambda0,
+                reached,
+                rounds,
+            }
+        }))
+}
+
+/// The sensors every frame is photographed by, when they are the same for every frame (their
+/// number `k >= 2`).
+fn uniform(per_frame: &[Vec<(usize, usize)>]) -> Option<usize> {
+    let first: Vec<usize> = per_frame.first()?.iter().map(|p| p.0).collect();
+    let same = per_frame
+        .iter()
+        .all(|f| f.len() == first.len() && f.iter().zip(&first).all(|(p, s)| p.0 == *s));
+    (same && first.len() >= 2).then_some(first.len())
+}
+
+/// `s + sigma X X^T / N` (`X` the stacked `x_a`, `S X = 0` up to the estimate's residual, kept
+/// by every move; `sigma = ||s||_F >= lambda_max(s)`): the gauge's three directions, of eigenvalue
+/// `sigma`, moved to the top of the spectrum.
+fn gauged(mut s: DMatrix<f64>, x: &[Rotation]) -> DMatrix<f64> {
+    let per_image = s.norm() / x.len() as f64;
+    for (a, xa) in x.iter().enumerate() {
+        for (b, xb) in x.iter().enumerate() {
+            let block = per_image * xa.matrix() * xb.matrix().transpose();
+            let mut view = s.fixed_view_mut::<3, 3>(3 * a, 3 * b);
+            view += block;
+        }
+    }
+    s
+}
+
+/// The search's space: moves of each frame's pairs' sums (`u` a circulation of the frame's
+/// flows, `k` symmetric), both summing to zero over the frames for every pair.
+struct Space<'a> {
+    per_frame: &'a [Vec<(usize, usize)>],
+    sensors: &'a [Rotation],
+    k: usize,
+    s0: DMatrix<f64>,
+}
+
+type Moves = Vec<Vec<PairSum>>;
+
+/// The variables of one pair's move: `u` (3), then `k`'s upper triangle (6).
+const PAIR_VARIABLES: usize = 9;
+const UPPER: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+
+impl Space<'_> {
+    fn zero(&self) -> Moves {
+        let pairs = self.k * (self.k - 1) / 2;
+        let zero = PairSum {
+            u: Vector3::zeros(),
+            k: Matrix3::zeros(),
+        };
+        vec![vec![zero; pairs]; self.per_frame.len()]
+    }
+
+    /// `(f, s, a, t, b)` of every frame's local pairs, in the order of the moves.
+    fn pairs(&self) -> impl Iterator<Item = (usize, usize, (usize, usize), (usize, usize))> + '_ {
+        self.per_frame.iter().enumerate().flat_map(|(f, images)| {
+            local_pairs(images.len())
+                .into_iter()
+                .enumerate()
+                .map(move |(p, (i, j))| (f, p, images[i], images[j]))
+        })
+    }
+
+    /// The eigenvalues (ascending) and eigenvectors of [`Self::matrix`].
+    fn eigen(&self, moves: &Moves) -> Option<(Vec<f64>, DMatrix<f64>)> {
+        symmetric_eigen(&self.matrix(moves))
+    }
+
+    /// The gradient of `tr(W S)` in each pair's sum `T` for `W = sym(v w^T)`: `S_s^T W_aa S_s +
+    /// S_t^T W_bb S_t - 2 S_t^T W_ba S_s`, as the variables of the moves, projected on the
+    /// search's space.
+    fn gradient(
+        &self,
+        v: nalgebra::DVectorView<'_, f64>,
+        w: nalgebra::DVectorView<'_, f64>,
+    ) -> Vec<f64> {
+        let mut g = self.zero();
+        let part = |x: nalgebra::DVectorView<'_, f64>, r: usize| -> Vector3<f64> {
+            x.fixed_rows::<3>(3 * r).into()
+        };
+        for (f, p, (ss, a), (st, b)) in self.pairs() {
+            let (rs, rt) = (self.sensors[ss].matrix(), self.sensors[st].matrix());
+            let block = |r: usize, c: usize| -> Matrix3<f64> {
+                0.5 * (part(v, r) * part(w, c).transpose() + part(w, r) * part(v, c).transpose())
+            };
+            let d = rs.transpose() * block(a, a) * rs + rt.transpose() * block(b, b) * rt
+                - 2.0 * rt.transpose() * block(b, a) * rs;
+            // <d, hat(u) + k>: u's part vee(d - d^T), k's the symmetric part (both triangles)
+            g[f][p] = PairSum {
+                u: vee(&(d - d.transpose())),
+                k: d + d.transpose() - Matrix3::from_diagonal(&d.diagonal()),
+            };
+        }
+        self.project(&mut g);
+        flatten(&g)
+    }
+
+    /// The orthogonal projection on the search's space: each frame's flows on the circulations
+    /// of its complete graph of `k` sensors (`u - B B^T u / k`), then every pair's mean over the
+    /// frames removed (`u` and `k`). In the variables' Euclidean inner product.
+    fn project(&self, moves: &mut Moves) {
+        let k = self.k;
+        let local = local_pairs(k);
+        for frame in moves.iter_mut() {
+            let mut divergence = vec![Vector3::zeros(); k];
+            for ((i, j), m) in local.iter().zip(frame.iter()) {
+                divergence[*i] += m.u;
+                divergence[*j] -= m.u;
+            }
+            for ((i, j), m) in local.iter().zip(frame.iter_mut()) {
+                m.u -= (divergence[*i] - divergence[*j]) / k as f64;
+            }
+        }
+        let frames = moves.len().max(1) as f64;
+        for p in 0..local.len() {
+            let (mut u, mut kk) = (Vector3::zeros(), Matrix3::zeros());
+            for frame in moves.iter() {
+                u += frame[p].u;
+                kk += frame[p].k;
+            }
+            for frame in moves.iter_mut() {
+                frame[p].u -= u / frames;
+                frame[p].k -= kk / frames;
+            }
+        }
+    }
+
+    /// The moves of the variables `y` (projected on the space).
+    fn moves(&self, y: &[f64]) -> Moves {
+        let mut m = self.zero();
+        for (frame, chunk) in m
+            .iter_mut()
+            .flat_map(|f| f.iter_mut())
+            .zip(y.chunks(PAIR_VARIABLES))
+        {
+            frame.u = Vector3::new(chunk[0], chunk[1], chunk[2]);
+            let mut k = Matrix3::zeros();
+            for (&(r, c), v) in UPPER.iter().zip(&chunk[3..]) {
+                k[(r, c)] = *v;
+                k[(c, r)] = *v;
+            }
+            frame.k = k;
+        }
+        self.project(&mut m);
+        m
+    }
+
+    /// The proximal bundle: each round maximises `t - rho |y|^2 / 2` with `V^T S(T + y) V >= t I`
+    /// (`V` the bundle), moves when the true `lambda_min` gains a tenth of the model's
+    /// prediction (`rho` halved), else only enriches the bundle (`rho` doubled). Stops at
+    /// [`MARGIN`], [`SEARCH_ROUNDS`], a stall ([`STALL`]) or the deadline: the moves,
+    /// `lambda_min` and rounds when it became positive.
+    fn bundle(
+        &self,
+        start: (Vec<f64>, DMatrix<f64>),
+        deadline: Option<Deadline>,
+    ) -> Option<(Moves, f64, usize)> {
+        let lambda0 = start.0[0];
+        let (mut at, mut lambda, mut vectors) = (self.zero(), lambda0, start.1);
+        let mut bundle = columns(&vectors, BUNDLE, None);
+        let mut rho = 1.0 / lambda0.abs();
+        let (mut rounds, mut history) = (0, vec![lambda0]);
+        for round in 1..=SEARCH_ROUNDS {
+            if deadline.is_some_and(|d| d.passed()) {
+                break;
+            }
+            rounds = round;
+            let (y, predicted) = self.model_step(&bundle, &at, rho)?;
+            let step = self.moves(&y);
+            let candidate: Moves = (at.iter().zip(&step))
+                .map(|(a, s)| {
+                    (a.iter().zip(s))
+                        .map(|(a, s)| PairSum {
+                            u: a.u + s.u,
+                            k: a.k + s.k,
+                        })
+                        .collect()
+                })
+                .collect();
+            let (values, new_vectors) = self.eigen(&candidate)?;
+            let serious = values[0] - lambda >= 0.1 * (predicted - lambda);
+            bundle = columns(&vectors, BUNDLE, Some((&new_vectors, CANDIDATE)));
+            if serious {
+                (at, lambda, vectors) = (candidate, values[0], new_vectors);
+                bundle = columns(&vectors, BUNDLE, None);
+                rho *= 0.5;
+            } else {
+                rho *= 2.0;
+            }
+            if lambda >= MARGIN * lambda0.abs() {
+                return Some((at, lambda, round));
+            }
+            history.push(lambda);
+            if round > STALL_ROUNDS
+                && lambda - history[round - STALL_ROUNDS] < STALL * lambda0.abs()
+            {
+                break;
+            }
+        }
+        (lambda > 0.0).then_some((at, lambda, rounds))
+    }
+
+    /// One round's model: `max t - rho |y|^2 / 2` s.t. `V^T (S(T) + D(y)) V - t I` positive
+    /// semidefinite, by Clarabel (variables `y` then `t`): `(y, t)`.
+    fn model_step(&self, v: &DMatrix<f64>, at: &Moves, rho: f64) -> Option<(Vec<f64>, f64)> {
+        let r = v.ncols();
+        let ny = self.per_frame.len() * self.k * (self.k - 1) / 2 * PAIR_VARIABLES;
+        let len = svec_len(r);
+        let s_at = self.matrix(at);
+        let c = v.transpose() * s_at * v;
+        let mut triplets = Vec::new();
+        let mut b = vec![0.0; len];
+        for j in 0..r {
+            for i in 0..=j {
+                let row = svec_index(i, j);
+                let weight = svec_weight(i, j);
+                b[row] = weight * 0.5 * (c[(i, j)] + c[(j, i)]);
+                let gradient = self.gradient(v.column(i).as_view(), v.column(j).as_view());
+                for (col, g) in gradient.into_iter().enumerate() {
+                    if g != 0.0 {
+                        triplets.push((row, col, -weight * g));
+                    }
+                }
+                if i == j {
+                    triplets.push((row, ny, 1.0));
+                }
+            }
+        }
+        let p = csc(ny + 1, ny + 1, (0..ny).map(|k| (k, k, rho)).collect());
+        let mut q = vec![0.0; ny + 1];
+        q[ny] = -1.0;
+        let settings = SdpSettings {
+            chordal_decomposition: false,
+            ..SdpSettings::default()
+        };
+        let solution = solve_quadratic_conic(
+            (&p, &q),
+            csc(len, ny + 1, triplets),
+            &b,
+            &[Cone::Psd(r)],
+            &settings,
+            "none",
+        )
+        .ok()?;
+        solution.status.converged().then(|| {
+            let t = solution.x[ny];
+            (solution.x[..ny].to_vec(), t)
+        })
+    }
+
+    /// `S` with the moves' pseudo-edges: for a pair's sum `T` (`sum c N`), `S_s sym(T) S_s^T`
+    /// and `S_t sym(T) S_t^T` on the diagonal blocks of `a = (f, s)`, `b = (f, t)`, `-S_t T
+    /// S_s^T` in block `(b, a)` (the pseudo-edges' Laplacian less the multipliers they add).
+    fn matrix(&self, moves: &Moves) -> DMatrix<f64> {
+        let mut s = self.s0.clone();
+        for (f, p, (ss, a), (st, b)) in self.pairs() {
+            let t = moves[f][p].matrix();
+            let (rs, rt) = (self.sensors[ss].matrix(), self.sensors[st].matrix());
+            let sym = 0.5 * (t + t.transpose());
+            let off = -(rt * t * rs.transpose());
+            for (r, c, m) in [
+                (a, a, rs * sym * rs.transpose()),
+                (b, b, rt * sym * rt.transpose()),
+                (b, a, off),
+                (a, b, off.transpose()),
+            ] {
+                let mut view = s.fixed_view_mut::<3, 3>(3 * r, 3 * c);
+                view += m;
+            }
+        }
+        s
+    }
+}
+
+/// The moves as the variables (`u`, then `k`'s upper triangle), pair by pair.
+fn flatten(moves: &Moves) -> Vec<f64> {
+    let mut y =
+        Vec::with_capacity(moves.len() * moves.first().map_or(0, Vec::len) * PAIR_VARIABLES);
+    for m in moves.iter().flatten() {
+        y.extend(m.u.iter());
+        y.extend(UPPER.iter().map(|&(r, c)| m.k[(r, c)]));
+    }
+    y
+}
+
+/// An orthonormal basis of the first `first` columns of `a` and, with `more`, the first columns
+/// of another matrix (a thin QR; nearly dependent columns are kept: the model only needs a
+/// spanning set of orthonormal columns, which Householder's `Q` is).
+fn columns(a: &DMatrix<f64>, first: usize, more: Option<(&DMatrix<f64>, usize)>) -> DMatrix<f64> {
+    let first = first.min(a.ncols());
+    let extra = more.map_or(0, |(m, k)| k.min(m.ncols()));
+    let mut stacked = DMatrix::zeros(a.nrows(), first + extra);
+    stacked
+        .columns_mut(0, first)
+        .copy_from(&a.columns(0, first));
+    if let Some((m, _)) = more {
+        stacked
+            .columns_mut(first, extra)
+            .copy_from(&m.columns(0, extra));
+    }
+    stacked.qr().q()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::search;
+    use crate::certify::multiple::multipliers::{
+        certificate_matrix, multipliers, stationarity_residual,
+    };
+    use crate::certify::rig::couplings::{couple, coupled};
+    use crate::multiple::MultipleProblem;
+    use crate::rig::{RigScene, RigSettings, polish_passes, solve_rig};
+    use crate::so3::Rotation;
+
+    /// `lambda_min` of the augmented graph's `S` off the gauge, from its own multipliers and
+    /// `certificate_matrix` (not from the search's formula), the gauge's directions lifted by
+    /// `10^3 ||S||_F`.
+    fn dense_min(graph: &MultipleProblem, x: &[Rotation]) -> f64 {
+        let lambdas = multipliers(graph, x).unwrap();
+        let mut s = crate::linalg::cholesky::to_dense(
+            certificate_matrix(graph, &lambdas).unwrap().as_ref(),
+        );
+        let lift = 1e3 * s.norm() / x.len() as f64;
+        for (a, xa) in x.iter().enumerate() {
+            for (b, xb) in x.iter().enumerate() {
+                let mut view = s.fixed_view_mut::<3, 3>(3 * a, 3 * b);
+                view += lift * xa.matrix() * xb.matrix().transpose();
+            }
+        }
+        crate::linalg::dense::symmetric_eigenvalues(&(0.5 * (&s + s.transpose()))).unwrap()[0]
+    }
+
+    /// A 30-frame rig of 4 estimated sensors with each sensor's pairs within 10 frames (`[H21]`
+    /// "The search"), with information matrices and with scalar weights: the least-norm couplings leave `S` indefinite; the search's sums make it
+    /// positive definite (checked on the augmented graph rebuilt from them, with its own
+    /// multipliers), keep the estimate critical and sum to zero over the frames (no charge).
+    #[test]
+    fn the_search_makes_s_positive_definite_where_the_least_norm_couplings_do_not() {
+        for scalar in [false, true] {
+            let scene = RigScene {
+                frames: 30,
+                sensors: 4,
+                noise_sigma: 0.01,
+                anisotropy: 9.0,
+                extra_edge_span: 10,
+                seed: 1,
+                ..Default::default()
+            };
+            let (p, _) = scene.generate();
+            // with scalar weights `tr(H) / 3`: the isotropic rung's graph
+            let p = if scalar { p.scalar() } else { p };
+            let s = solve_rig(&p, &RigSettings::default()).unwrap();
+            let (frames, sensors) = polish_passes(&p, (s.frames, s.sensors), 10, None).unwrap();
+            let c = couple(&p, &frames, &sensors, u64::MAX).unwrap().unwrap();
+            let x = p.image_rotations(&frames, &sensors);
+            let before = dense_min(&c.graph, &x);
+            assert!(before < 0.0, "{before}");
+            let found = search(&c, &x, &sensors, None)
+                .unwrap()
+                .expect("a positive lambda_min");
+            assert!(
+                (found.start - before).abs() <= 1e-6 * before.abs(),
+                "{} {before}",
+                found.start
+            );
+            let again = coupled(
+                &p.image_graph().unwrap(),
+                c.layout.clone(),
+                found.sums,
+                &sensors,
+            )
+            .unwrap();
+            let after = dense_min(&again.graph, &x);
+            assert!(after > 0.0, "{before} -> {after}");
+            assert!(
+                (after - found.reached).abs() <= 1e-6 * before.abs(),
+                "{after} {}",
+                found.reached
+            );
+            let critical = stationarity_residual(&again.graph, &x).unwrap();
+            let least_norm = stationarity_residual(&c.graph, &x).unwrap();
+            assert!(
+                critical <= 10.0 * least_norm + 1e-9 * again.offset,
+                "{critical} {least_norm}"
+            );
+            assert!(
+                again.charge <= 10.0 * c.charge + 1e-9 * again.offset,
+                "{} {}",
+                again.charge,
+                c.charge
+            );
+        }
+    }
+}
