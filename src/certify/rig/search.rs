@@ -23,8 +23,8 @@ use nalgebra::{DMatrix, Matrix3, Vector3};
 /// certificates, `docs/benchmarks.md` "Small rigs along a path").
 pub(crate) const SEARCH_MAX_IMAGES: usize = 300;
 
-/// Most rounds of the bundle (the 30-frame, 4-sensor rigs of `[H21]` "The search" that it
-/// certifies: `S` positive definite after 3-5 rounds, 0.3-0.6 s of certify each).
+/// Most rounds of the bundle (the rigs of `docs/benchmarks.md` "Small rigs along a path" that
+/// it certifies: `S` positive definite after 3-42 rounds, 0.1-3.3 s of certify each).
 const SEARCH_ROUNDS: usize = 60;
 
 /// Bottom eigenvectors kept in the bundle, and the candidate's added each round.
