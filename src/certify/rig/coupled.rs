@@ -150,7 +150,8 @@ impl CoupledRung {
             return Ok((coupled, first, String::new()));
         }
         let deadline = Deadline::after(cx.tally.left().map(|l| l / 3.0));
-        let Some(found) = search(&coupled, x, sensors, deadline)? else {
+        let max_bytes = cx.tally.settings.budget.max_memory_bytes;
+        let Some(found) = search(&coupled, (x, sensors), deadline, max_bytes)? else {
             return Ok((coupled, first, String::new()));
         };
         let images = cx.problem.image_graph()?;

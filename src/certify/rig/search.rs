@@ -49,20 +49,27 @@ pub(crate) struct Searched {
     pub rounds: usize,
 }
 
+/// Dense `3N x 3N` matrices the search holds at once (`S` at the start, at the point and at the
+/// candidate, the two eigenvector matrices and the one being formed), charged against the
+/// memory budget.
+const DENSE_COPIES: u64 = 6;
+
 /// The search from `coupled` (the least-norm couplings at the image rotations `x`), or `None`
-/// when it does not apply (more than [`SEARCH_MAX_IMAGES`] images, frames photographed by
-/// different sensors, `S` already positive semidefinite) or finds no positive `lambda_min`.
+/// when it does not apply (more than [`SEARCH_MAX_IMAGES`] images, or dense matrices over half
+/// of `max_bytes`, frames photographed by different sensors, `S` already positive
+/// semidefinite) or finds no positive `lambda_min`.
 pub(crate) fn search(
     coupled: &Coupled,
-    x: &[Rotation],
-    sensors: &[Rotation],
+    (x, sensors): (&[Rotation], &[Rotation]),
     deadline: Option<Deadline>,
+    max_bytes: u64,
 ) -> Result<Option<Searched>> {
     let per_frame = &coupled.layout.per_frame;
     let Some(k) = uniform(per_frame) else {
         return Ok(None);
     };
-    if x.len() > SEARCH_MAX_IMAGES {
+    let dense = DENSE_COPIES * 8 * (3 * x.len() as u64).pow(2);
+    if x.len() > SEARCH_MAX_IMAGES || dense > max_bytes / 2 {
         return Ok(None);
     }
     let lambdas = multipliers(&coupled.graph, x)?;
@@ -73,7 +80,7 @@ pub(crate) fn search(
         k,
         s0: gauged(0.5 * (&s + s.transpose()), x),
     };
-    let Some(start) = space.eigen(&space.zero()) else {
+    let Some(start) = symmetric_eigen(&space.s0) else {
         return Ok(None);
     };
     let lambda0 = start.0[0];
@@ -82,24 +89,11 @@ pub(crate) fn search(
     }
     Ok(space
         .bundle(start, deadline)
-        .map(|(delta, reached, rounds)| {
-            let sums = (coupled.sums.iter().zip(&delta))
-                .map(|(f, d)| {
-                    f.iter()
-                        .zip(d)
-                        .map(|(a, b)| PairSum {
-                            u: a.u + b.u,
-                            k: a.k + b.k,
-                        })
-                        .collect()
-                })
-                .collect();
-            Searched {
-                sums,
-                start: lambda0,
-                reached,
-                rounds,
-            }
+        .map(|(delta, reached, rounds)| Searched {
+            sums: added(&coupled.sums, &delta),
+            start: lambda0,
+            reached,
+            rounds,
         }))
 }
 
@@ -161,11 +155,6 @@ impl Space<'_> {
                 .enumerate()
                 .map(move |(p, (i, j))| (f, p, images[i], images[j]))
         })
-    }
-
-    /// The eigenvalues (ascending) and eigenvectors of [`Self::matrix`].
-    fn eigen(&self, moves: &Moves) -> Option<(Vec<f64>, DMatrix<f64>)> {
-        symmetric_eigen(&self.matrix(moves))
     }
 
     /// The gradient of `tr(W S)` in each pair's sum `T` for `W = sym(v w^T)`: `S_s^T W_aa S_s +
@@ -259,6 +248,7 @@ impl Space<'_> {
     ) -> Option<(Moves, f64, usize)> {
         let lambda0 = start.0[0];
         let (mut at, mut lambda, mut vectors) = (self.zero(), lambda0, start.1);
+        let mut s_at = self.s0.clone();
         let mut bundle = columns(&vectors, BUNDLE, None);
         let mut rho = 1.0 / lambda0.abs();
         let (mut rounds, mut history) = (0, vec![lambda0]);
@@ -267,28 +257,25 @@ impl Space<'_> {
                 break;
             }
             rounds = round;
-            let (y, predicted) = self.model_step(&bundle, &at, rho)?;
-            let step = self.moves(&y);
-            let candidate: Moves = (at.iter().zip(&step))
-                .map(|(a, s)| {
-                    (a.iter().zip(s))
-                        .map(|(a, s)| PairSum {
-                            u: a.u + s.u,
-                            k: a.k + s.k,
-                        })
-                        .collect()
-                })
-                .collect();
-            let (values, new_vectors) = self.eigen(&candidate)?;
+            let (y, predicted) = self.model_step(&bundle, &s_at, rho, deadline)?;
+            let candidate = added(&at, &self.moves(&y));
+            let s_candidate = self.matrix(&candidate);
+            let (values, new_vectors) = symmetric_eigen(&s_candidate)?;
             let serious = values[0] - lambda >= 0.1 * (predicted - lambda);
             bundle = columns(&vectors, BUNDLE, Some((&new_vectors, CANDIDATE)));
             if serious {
-                (at, lambda, vectors) = (candidate, values[0], new_vectors);
+                (at, lambda, vectors, s_at) = (candidate, values[0], new_vectors, s_candidate);
                 bundle = columns(&vectors, BUNDLE, None);
                 rho *= 0.5;
             } else {
                 rho *= 2.0;
             }
+            crate::progress::emit(|| crate::progress::Event::Phase {
+                phase: crate::progress::Phase::Certify,
+                detail: format!(
+                    "the couplings' search [H21]: round {round}, lambda_min(S) {lambda:.3e}"
+                ),
+            });
             if lambda >= MARGIN * lambda0.abs() {
                 return Some((at, lambda, round));
             }
@@ -303,12 +290,18 @@ impl Space<'_> {
     }
 
     /// One round's model: `max t - rho |y|^2 / 2` s.t. `V^T (S(T) + D(y)) V - t I` positive
-    /// semidefinite, by Clarabel (variables `y` then `t`): `(y, t)`.
-    fn model_step(&self, v: &DMatrix<f64>, at: &Moves, rho: f64) -> Option<(Vec<f64>, f64)> {
+    /// semidefinite (`s_at = S(T)`), by Clarabel within the deadline (variables `y` then `t`):
+    /// `(y, t)`.
+    fn model_step(
+        &self,
+        v: &DMatrix<f64>,
+        s_at: &DMatrix<f64>,
+        rho: f64,
+        deadline: Option<Deadline>,
+    ) -> Option<(Vec<f64>, f64)> {
         let r = v.ncols();
         let ny = self.per_frame.len() * self.k * (self.k - 1) / 2 * PAIR_VARIABLES;
         let len = svec_len(r);
-        let s_at = self.matrix(at);
         let c = v.transpose() * s_at * v;
         let mut triplets = Vec::new();
         let mut b = vec![0.0; len];
@@ -333,6 +326,7 @@ impl Space<'_> {
         q[ny] = -1.0;
         let settings = SdpSettings {
             chordal_decomposition: false,
+            time_limit_seconds: deadline.and_then(|d| d.left()).map(|l| l.max(0.0)),
             ..SdpSettings::default()
         };
         let solution = solve_quadratic_conic(
@@ -372,6 +366,20 @@ impl Space<'_> {
         }
         s
     }
+}
+
+/// The sums `a + b`, pair by pair.
+fn added(a: &Moves, b: &Moves) -> Moves {
+    (a.iter().zip(b))
+        .map(|(a, b)| {
+            (a.iter().zip(b))
+                .map(|(a, b)| PairSum {
+                    u: a.u + b.u,
+                    k: a.k + b.k,
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// The moves as the variables (`u`, then `k`'s upper triangle), pair by pair.
@@ -457,7 +465,7 @@ mod tests {
             let x = p.image_rotations(&frames, &sensors);
             let before = dense_min(&c.graph, &x);
             assert!(before < 0.0, "{before}");
-            let found = search(&c, &x, &sensors, None)
+            let found = search(&c, (&x, &sensors), None, u64::MAX)
                 .unwrap()
                 .expect("a positive lambda_min");
             assert!(
