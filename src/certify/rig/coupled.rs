@@ -5,7 +5,7 @@
 
 use super::couplings::{self, Coupled, couple};
 use super::images::components_minimum;
-use super::search::search;
+use super::search::{Limits, search};
 use super::state::RigState;
 use crate::certify::log::{Prediction, Refusal};
 use crate::certify::multiple::block::regional_dual_bound;
@@ -149,9 +149,12 @@ impl CoupledRung {
         if cx.tally.certifies(bound(&first, coupled.offset)) {
             return Ok((coupled, first, String::new()));
         }
-        let deadline = Deadline::after(cx.tally.left().map(|l| l / 3.0));
-        let max_bytes = cx.tally.settings.budget.max_memory_bytes;
-        let Some(found) = search(&coupled, (x, sensors), deadline, max_bytes)? else {
+        let limits = Limits {
+            deadline: Deadline::after(cx.tally.left().map(|l| l / 3.0)),
+            max_bytes: cx.tally.settings.budget.max_memory_bytes,
+            gap: cx.tally.allowed_gap,
+        };
+        let Some(found) = search(&coupled, (x, sensors), limits)? else {
             return Ok((coupled, first, String::new()));
         };
         let images = cx.problem.image_graph()?;

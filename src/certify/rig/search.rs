@@ -7,7 +7,7 @@
 //! sound bound).
 
 use super::couplings::{Coupled, PairSum, local_pairs};
-use crate::certify::multiple::multipliers::{certificate_matrix, multipliers};
+use crate::certify::multiple::multipliers::{FirstOrder, certificate_matrix};
 use crate::deadline::Deadline;
 use crate::error::Result;
 use crate::linalg::cholesky::to_dense;
@@ -41,6 +41,23 @@ const MARGIN: f64 = 0.05;
 const STALL: f64 = 1e-2;
 const STALL_ROUNDS: usize = 10;
 
+/// The search also stops when [`OPTIMISM`] times its rate over the last [`RATE_ROUNDS`] rounds,
+/// kept up for every round left, would not bring `lambda_min` to zero (`[H21]` "When the
+/// search stops": the rig soundness campaign's small rigs that it cannot certify plateau after
+/// 3-5 serious steps, far below zero; those it certifies gain 10-60 % of `|lambda_min|` per
+/// serious step, after slower steps too, so a geometric extrapolation of the gains would stop
+/// some of them).
+const OPTIMISM: f64 = 2.0;
+const RATE_ROUNDS: usize = 3;
+
+/// What the search is given: the time, the memory and the rig's allowed gap.
+#[derive(Clone, Copy)]
+pub(crate) struct Limits {
+    pub deadline: Option<Deadline>,
+    pub max_bytes: u64,
+    pub gap: f64,
+}
+
 /// What the search found: the sums, and `lambda_min(S)` (gauge apart) before and after.
 pub(crate) struct Searched {
     pub sums: Vec<Vec<PairSum>>,
@@ -57,23 +74,27 @@ const DENSE_COPIES: u64 = 6;
 /// The search from `coupled` (the least-norm couplings at the image rotations `x`), or `None`
 /// when it does not apply (more than [`SEARCH_MAX_IMAGES`] images, or dense matrices over half
 /// of `max_bytes`, frames photographed by different sensors, `S` already positive
-/// semidefinite) or finds no positive `lambda_min`.
+/// semidefinite, an estimate too far from critical for any couplings: [`hopeless`]) or finds
+/// no positive `lambda_min`.
 pub(crate) fn search(
     coupled: &Coupled,
     (x, sensors): (&[Rotation], &[Rotation]),
-    deadline: Option<Deadline>,
-    max_bytes: u64,
+    limits: Limits,
 ) -> Result<Option<Searched>> {
     let per_frame = &coupled.layout.per_frame;
     let Some(k) = uniform(per_frame) else {
         return Ok(None);
     };
     let dense = DENSE_COPIES * 8 * (3 * x.len() as u64).pow(2);
-    if x.len() > SEARCH_MAX_IMAGES || dense > max_bytes / 2 {
+    if x.len() > SEARCH_MAX_IMAGES || dense > limits.max_bytes / 2 {
         return Ok(None);
     }
-    let lambdas = multipliers(&coupled.graph, x)?;
-    let s = to_dense(certificate_matrix(&coupled.graph, &lambdas)?.as_ref());
+    let first = FirstOrder::at(&coupled.graph, x)?;
+    let s = to_dense(certificate_matrix(&coupled.graph, &first.lambdas)?.as_ref());
+    if let Some(why) = hopeless(first.stationarity, s.trace(), x.len(), limits.gap) {
+        stopped(&why);
+        return Ok(None);
+    }
     let space = Space {
         per_frame,
         sensors,
@@ -88,13 +109,55 @@ pub(crate) fn search(
         return Ok(None);
     }
     Ok(space
-        .bundle(start, deadline)
+        .bundle(start, limits.deadline)
         .map(|(delta, reached, rounds)| Searched {
             sums: added(&coupled.sums, &delta),
             start: lambda0,
             reached,
             rounds,
         }))
+}
+
+/// `Some(why)` when no couplings can certify the estimate: the moves keep `S Y` (its norm the
+/// stationarity residual `rho`, `[D3]`) and `tr(S)` (their symmetric parts sum to zero over
+/// the frames, circulations are traceless), and a bound within `gap` needs `lambda_min` of `S`
+/// without a node at least `3 rho^2 / gap` (`[D15]`'s deficit, `multiple::grounded`), which
+/// no `S` with diagonal blocks near positive semidefinite reaches above its mean eigenvalue
+/// `tr(S) / (3 N - 3)` (`[H21]` "When the search stops"). A diagnosis: it decides what runs.
+fn hopeless(rho: f64, trace: f64, images: usize, gap: f64) -> Option<String> {
+    let mean = trace / (3.0 * images.saturating_sub(1).max(1) as f64);
+    let needed = 3.0 * rho * rho / gap;
+    (gap > 0.0 && mean.is_finite() && needed > mean).then(|| {
+        format!(
+            "not a critical point: the stationarity residual {rho:.1e} needs lambda_min(S              without a node) >= {needed:.1e}, above tr(S) / (3N - 3) = {mean:.1e}"
+        )
+    })
+}
+
+/// A progress line for why the search stopped without certifying.
+fn stopped(why: &str) {
+    crate::progress::emit(|| crate::progress::Event::Phase {
+        phase: crate::progress::Phase::Certify,
+        detail: format!("the couplings' search [H21] stopped: {why}"),
+    });
+}
+
+/// `Some(why)` when `history` (`lambda_min` after each round, the start first) gains too slowly
+/// for the rounds left to bring it to zero at [`OPTIMISM`] times its recent rate.
+fn too_slow(history: &[f64]) -> Option<String> {
+    let round = history.len() - 1;
+    if round <= RATE_ROUNDS {
+        return None;
+    }
+    let now = history[round];
+    let rate = (now - history[round - RATE_ROUNDS]) / RATE_ROUNDS as f64;
+    let left = SEARCH_ROUNDS.saturating_sub(round) as f64;
+    (now + OPTIMISM * rate * left < 0.0).then(|| {
+        format!(
+            "at its rate of the last {RATE_ROUNDS} rounds ({rate:.1e} per round) lambda_min(S) \
+             {now:.2e} would stay below zero for the {left} rounds left"
+        )
+    })
 }
 
 /// The sensors every frame is photographed by, when they are the same for every frame (their
@@ -239,7 +302,8 @@ impl Space<'_> {
     /// The proximal bundle: each round maximises `t - rho |y|^2 / 2` with `V^T S(T + y) V >= t I`
     /// (`V` the bundle), moves when the true `lambda_min` gains a tenth of the model's
     /// prediction (`rho` halved), else only enriches the bundle (`rho` doubled). Stops at
-    /// [`MARGIN`], [`SEARCH_ROUNDS`], a stall ([`STALL`]) or the deadline: the moves,
+    /// [`MARGIN`], [`SEARCH_ROUNDS`], a stall ([`STALL`]), a rate too slow for the rounds left
+    /// ([`too_slow`]) or the deadline: the moves,
     /// `lambda_min` and rounds when it became positive.
     fn bundle(
         &self,
@@ -283,6 +347,13 @@ impl Space<'_> {
             if round > STALL_ROUNDS
                 && lambda - history[round - STALL_ROUNDS] < STALL * lambda0.abs()
             {
+                stopped(&format!(
+                    "{STALL_ROUNDS} rounds gained less than {STALL} of |lambda_min|"
+                ));
+                break;
+            }
+            if let Some(why) = too_slow(&history) {
+                stopped(&why);
                 break;
             }
         }
@@ -422,6 +493,37 @@ mod tests {
     use crate::rig::{RigScene, RigSettings, polish_passes, solve_rig};
     use crate::so3::Rotation;
 
+    /// The stopping rules on trajectories of the rig soundness campaign (`[H21]` "When the
+    /// search stops"): a plateau far below zero stops at its fifth round, not its fifteenth; a
+    /// search that slows down and then accelerates to a positive `lambda_min` (rounds with null
+    /// steps repeat a value) is never stopped on its way.
+    #[test]
+    fn the_search_stops_on_a_plateau_and_not_on_a_slow_start() {
+        let plateau = [-4.52, -3.62, -3.29, -3.24, -3.22, -3.22, -3.20];
+        let stop = (1..=plateau.len()).find(|&i| super::too_slow(&plateau[..i]).is_some());
+        assert_eq!(stop, Some(6), "stops after round 5");
+        let certified = [
+            -0.166, -0.123, -0.096, -0.096, -0.086, -0.086, -0.071, -0.071, -0.050, -0.021, -0.021,
+            0.008,
+        ];
+        for i in 1..=certified.len() {
+            assert_eq!(super::too_slow(&certified[..i]), None, "{i}");
+        }
+    }
+
+    /// The criticality diagnosis: a critical point always searches; a residual whose deficit
+    /// `3 rho^2 / gap` exceeds the mean eigenvalue does not; the boundary is the mean itself.
+    #[test]
+    fn a_point_far_from_critical_is_not_searched() {
+        // 10 images: mean eigenvalue tr / 27
+        assert_eq!(super::hopeless(0.0, 27.0, 10, 1e-6), None);
+        assert!(super::hopeless(1e-2, 27.0, 10, 1e-6).is_some());
+        // 3 rho^2 / gap = 0.3 against a mean of 1
+        assert_eq!(super::hopeless(1e-4, 27.0, 10, 1e-7), None);
+        assert!(super::hopeless(1e-4, 27.0, 10, 2e-8).is_some());
+        assert_eq!(super::hopeless(1.0, 27.0, 10, 0.0), None);
+    }
+
     /// `lambda_min` of the augmented graph's `S` off the gauge, from its own multipliers and
     /// `certificate_matrix` (not from the search's formula), the gauge's directions lifted by
     /// `10^3 ||S||_F`.
@@ -465,7 +567,12 @@ mod tests {
             let x = p.image_rotations(&frames, &sensors);
             let before = dense_min(&c.graph, &x);
             assert!(before < 0.0, "{before}");
-            let found = search(&c, (&x, &sensors), None, u64::MAX)
+            let limits = super::Limits {
+                deadline: None,
+                max_bytes: u64::MAX,
+                gap: 1e-6 * p.cost(&frames, &sensors),
+            };
+            let found = search(&c, (&x, &sensors), limits)
                 .unwrap()
                 .expect("a positive lambda_min");
             assert!(
