@@ -159,7 +159,7 @@ impl CoupledRung {
         };
         let images = cx.problem.image_graph()?;
         let layout = coupled.layout.clone();
-        let again = couplings::coupled(&images, layout, found.sums, sensors)?;
+        let again = couplings::coupled(&images, layout, (found.sums, found.traces), sensors)?;
         let second = self.augmented_minimum(cx, &again, x, settings)?;
         if bound(&second, again.offset) < bound(&first, coupled.offset) {
             return Ok((coupled, first, String::new()));

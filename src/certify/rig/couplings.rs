@@ -5,6 +5,7 @@
 //! the images' view graph with them; the bound is the certified minimum of that graph less the
 //! constant (and the charge for the sums' rounding), whatever the flows are.
 
+use super::traces::Traces;
 use crate::error::Result;
 use crate::linalg::compensated::Accumulator;
 use crate::multiple::{Edge, MultipleProblem};
@@ -114,18 +115,36 @@ pub(crate) fn couple(
         })
         .collect();
     let layout = Layout { per_frame, pairs };
-    Ok(Ok(coupled(&images, layout, sums, sensors)?))
+    Ok(Ok(coupled(
+        &images,
+        layout,
+        (sums, Traces::none()),
+        sensors,
+    )?))
 }
 
-/// The images' view graph `images` with the pseudo-edges of `sums`, and their constant.
+/// The images' view graph `images` with the pseudo-edges of `sums` and of the trace couplings
+/// `traces` (`[H21]` "Trace couplings"), and their constant.
 pub(crate) fn coupled(
     images: &MultipleProblem,
     layout: Layout,
-    sums: Vec<Vec<PairSum>>,
+    (sums, traces): (Vec<Vec<PairSum>>, Traces),
     sensors: &[Rotation],
 ) -> Result<Coupled> {
-    let pseudo = pseudo_edges(&layout.per_frame, &sums, sensors);
-    let (offset, charge) = offset(&pseudo, &layout.pairs, sensors, images.is_anisotropic());
+    let mut pseudo = pseudo_edges(&layout.per_frame, &sums, sensors);
+    let (mut offset, mut charge) = offset(&pseudo, &layout.pairs, sensors, images.is_anisotropic());
+    let between = traces.pseudo_edges(&layout.per_frame);
+    if !between.is_empty() {
+        // each of constant `6 c` (`3 + ||N||_F^2`, and the trace form's, `[H24]`), exact rotations
+        let mut constant = Accumulator::default();
+        between
+            .iter()
+            .for_each(|e| constant.add_product(e.weight, 6.0));
+        let traced = traces.charge();
+        offset += (constant.value() + constant.bound()) * (1.0 + 1e-13) + traced;
+        charge += traced;
+        pseudo.extend(between.into_iter().map(|e| ((0, 0), e)));
+    }
     Ok(Coupled {
         pseudo_edges: pseudo.len(),
         graph: augmented(images, pseudo)?,
@@ -563,7 +582,8 @@ mod tests {
     }
 
     /// The least-norm sums of `c` with random symmetric parts of zero sum over the frames on
-    /// every pair (what the search moves, `[H21]` "The search"), coupled again.
+    /// every pair and random trace couplings of zero sum over the sensors between every two
+    /// frames of the same sensors (what the search moves, `[H21]` "The search"), coupled again.
     fn with_symmetric_parts(
         p: &RigProblem,
         c: &Coupled,
@@ -582,7 +602,27 @@ mod tests {
             let frames = sums.len() as f64;
             sums.iter_mut().for_each(|f| f[q].k -= mean / frames);
         }
-        coupled(&p.image_graph().unwrap(), c.layout.clone(), sums, sensors).unwrap()
+        // trace couplings (`[H21]` "Trace couplings") between frames of the same sensors
+        let per_frame = &c.layout.per_frame;
+        let same = |f: usize, g: usize| {
+            let sensors = |f: usize| per_frame[f].iter().map(|p| p.0).collect::<Vec<_>>();
+            sensors(f) == sensors(g)
+        };
+        let mut traces = Traces::none();
+        for f in 0..per_frame.len() {
+            for g in (f + 1..per_frame.len()).filter(|&g| same(f, g)) {
+                let mut mu: Vec<f64> = (0..per_frame[f].len())
+                    .map(|_| 10.0 * (rng.random::<f64>() - 0.5))
+                    .collect();
+                let mean = mu.iter().sum::<f64>() / mu.len() as f64;
+                mu.iter_mut().for_each(|m| *m -= mean);
+                traces.pairs.push((f, g));
+                traces.mu.push(mu);
+            }
+        }
+        assert!(!traces.pairs.is_empty());
+        let images = p.image_graph().unwrap();
+        coupled(&images, c.layout.clone(), (sums, traces), sensors).unwrap()
     }
 
     /// On every rig point the images' view graph with the couplings costs the rig's cost plus at

@@ -16,6 +16,7 @@ mod images;
 mod rounding;
 mod search;
 mod state;
+mod traces;
 mod two_graphs;
 mod world;
 

@@ -7,6 +7,7 @@
 //! sound bound).
 
 use super::couplings::{Coupled, PairSum, local_pairs};
+use super::traces::Traces;
 use crate::certify::multiple::multipliers::{FirstOrder, certificate_matrix};
 use crate::deadline::Deadline;
 use crate::error::Result;
@@ -58,9 +59,11 @@ pub(crate) struct Limits {
     pub gap: f64,
 }
 
-/// What the search found: the sums, and `lambda_min(S)` (gauge apart) before and after.
+/// What the search found: the sums, the trace couplings, and `lambda_min(S)` (gauge apart)
+/// before and after.
 pub(crate) struct Searched {
     pub sums: Vec<Vec<PairSum>>,
+    pub traces: Traces,
     pub start: f64,
     pub reached: f64,
     pub rounds: usize,
@@ -95,12 +98,12 @@ pub(crate) fn search(
         stopped(&why);
         return Ok(None);
     }
-    let space = Space {
-        per_frame,
-        sensors,
+    let space = Space::new(
+        coupled,
+        (x, sensors),
         k,
-        s0: gauged(0.5 * (&s + s.transpose()), x),
-    };
+        gauged(0.5 * (&s + s.transpose()), x),
+    );
     let Some(start) = symmetric_eigen(&space.s0) else {
         return Ok(None);
     };
@@ -111,7 +114,8 @@ pub(crate) fn search(
     Ok(space
         .bundle(start, limits.deadline)
         .map(|(delta, reached, rounds)| Searched {
-            sums: added(&coupled.sums, &delta),
+            sums: added_sums(&coupled.sums, &space.with_flows(&delta).sums),
+            traces: delta.traces,
             start: lambda0,
             reached,
             rounds,
@@ -186,28 +190,85 @@ fn gauged(mut s: DMatrix<f64>, x: &[Rotation]) -> DMatrix<f64> {
 }
 
 /// The search's space: moves of each frame's pairs' sums (`u` a circulation of the frame's
-/// flows, `k` symmetric), both summing to zero over the frames for every pair.
+/// flows, `k` symmetric), both summing to zero over the frames for every pair, and trace
+/// couplings between frames (`[H21]` "Trace couplings"; zero sum over the sensors), whose
+/// torques flows within each frame balance.
 struct Space<'a> {
     per_frame: &'a [Vec<(usize, usize)>],
     sensors: &'a [Rotation],
     k: usize,
+    x: &'a [Rotation],
+    traces: Traces,
+    tau: Vec<Vector3<f64>>,
     s0: DMatrix<f64>,
 }
 
-type Moves = Vec<Vec<PairSum>>;
+/// A point of the search's space: the pairs' sums' circulations and symmetric parts, and the
+/// trace couplings (their balancing flows not included).
+#[derive(Clone)]
+struct Moves {
+    sums: Vec<Vec<PairSum>>,
+    traces: Traces,
+}
 
 /// The variables of one pair's move: `u` (3), then `k`'s upper triangle (6).
 const PAIR_VARIABLES: usize = 9;
 const UPPER: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
-impl Space<'_> {
+impl<'a> Space<'a> {
+    /// The space at `coupled` (`k` sensors in every frame), `s0` its gauged `S`: trace
+    /// couplings between the frames an edge within one sensor joins.
+    fn new(
+        coupled: &'a Coupled,
+        (x, sensors): (&'a [Rotation], &'a [Rotation]),
+        k: usize,
+        s0: DMatrix<f64>,
+    ) -> Self {
+        let per_frame = &coupled.layout.per_frame;
+        let mut image = vec![(0, 0); x.len()];
+        for (f, images) in per_frame.iter().enumerate() {
+            for (i, &(_, a)) in images.iter().enumerate() {
+                image[a] = (f, i);
+            }
+        }
+        let edges = coupled.graph.edges().iter().map(|e| (e.i, e.j));
+        let traces = Traces::between(edges, &image, k);
+        Space {
+            per_frame,
+            sensors,
+            k,
+            x,
+            tau: traces.torques(per_frame, x, sensors),
+            traces,
+            s0,
+        }
+    }
+
     fn zero(&self) -> Moves {
         let pairs = self.k * (self.k - 1) / 2;
         let zero = PairSum {
             u: Vector3::zeros(),
             k: Matrix3::zeros(),
         };
-        vec![vec![zero; pairs]; self.per_frame.len()]
+        Moves {
+            sums: vec![vec![zero; pairs]; self.per_frame.len()],
+            traces: self.traces.clone(),
+        }
+    }
+
+    /// `moves` with the trace couplings' balancing flows added to the sums: in each frame the
+    /// least-norm flow `(d_i - d_j) / k` of the couplings' demands `d` (they sum to zero over
+    /// the frames: a pair's torques at its two frames are opposite).
+    fn with_flows(&self, moves: &Moves) -> Moves {
+        let demands = moves.traces.demands(self.per_frame.len(), &self.tau);
+        let mut out = moves.clone();
+        let local = local_pairs(self.k);
+        for (frame, d) in out.sums.iter_mut().zip(&demands) {
+            for (m, &(i, j)) in frame.iter_mut().zip(&local) {
+                m.u += (d[i] - d[j]) / self.k as f64;
+            }
+        }
+        out
     }
 
     /// `(f, s, a, t, b)` of every frame's local pairs, in the order of the moves.
@@ -232,27 +293,57 @@ impl Space<'_> {
         let part = |x: nalgebra::DVectorView<'_, f64>, r: usize| -> Vector3<f64> {
             x.fixed_rows::<3>(3 * r).into()
         };
+        let block = |r: usize, c: usize| -> Matrix3<f64> {
+            0.5 * (part(v, r) * part(w, c).transpose() + part(w, r) * part(v, c).transpose())
+        };
         for (f, p, (ss, a), (st, b)) in self.pairs() {
             let (rs, rt) = (self.sensors[ss].matrix(), self.sensors[st].matrix());
-            let block = |r: usize, c: usize| -> Matrix3<f64> {
-                0.5 * (part(v, r) * part(w, c).transpose() + part(w, r) * part(v, c).transpose())
-            };
             let d = rs.transpose() * block(a, a) * rs + rt.transpose() * block(b, b) * rt
                 - 2.0 * rt.transpose() * block(b, a) * rs;
             // <d, hat(u) + k>: u's part vee(d - d^T), k's the symmetric part (both triangles)
-            g[f][p] = PairSum {
+            g.sums[f][p] = PairSum {
                 u: vee(&(d - d.transpose())),
                 k: d + d.transpose() - Matrix3::from_diagonal(&d.diagonal()),
             };
         }
+        g.traces.mu = self.traces.gradient(self.per_frame, self.x, block);
+        self.through_flows(&mut g);
         self.project(&mut g);
         flatten(&g)
+    }
+
+    /// Adds to the trace couplings' gradient in `g` their balancing flows' part: the adjoint of
+    /// [`Self::with_flows`] applied to the flows' gradient `g.sums[..].u` (before projection).
+    fn through_flows(&self, g: &mut Moves) {
+        let k = self.k as f64;
+        let local = local_pairs(self.k);
+        // the gradient in each frame's demand of local sensor i: sum over its pairs of +-g_u / k
+        let adjoint: Vec<Vec<Vector3<f64>>> = g
+            .sums
+            .iter()
+            .map(|frame| {
+                let mut d = vec![Vector3::zeros(); self.k];
+                for (m, &(i, j)) in frame.iter().zip(&local) {
+                    d[i] += m.u / k;
+                    d[j] -= m.u / k;
+                }
+                d
+            })
+            .collect();
+        let traces = &mut g.traces;
+        for ((&(f, h), mu), t) in traces.pairs.iter().zip(&mut traces.mu).zip(&self.tau) {
+            for (i, m) in mu.iter_mut().enumerate() {
+                *m += t.dot(&(adjoint[h][i] - adjoint[f][i]));
+            }
+        }
     }
 
     /// The orthogonal projection on the search's space: each frame's flows on the circulations
     /// of its complete graph of `k` sensors (`u - B B^T u / k`), then every pair's mean over the
     /// frames removed (`u` and `k`). In the variables' Euclidean inner product.
     fn project(&self, moves: &mut Moves) {
+        moves.traces.project();
+        let moves = &mut moves.sums;
         let k = self.k;
         let local = local_pairs(k);
         for frame in moves.iter_mut() {
@@ -282,7 +373,13 @@ impl Space<'_> {
     /// The moves of the variables `y` (projected on the space).
     fn moves(&self, y: &[f64]) -> Moves {
         let mut m = self.zero();
+        let pairs = m.sums.iter().map(Vec::len).sum::<usize>();
+        let (y, mu) = y.split_at(pairs * PAIR_VARIABLES);
+        for (to, from) in m.traces.mu.iter_mut().zip(mu.chunks(self.k)) {
+            to.copy_from_slice(from);
+        }
         for (frame, chunk) in m
+            .sums
             .iter_mut()
             .flat_map(|f| f.iter_mut())
             .zip(y.chunks(PAIR_VARIABLES))
@@ -315,7 +412,7 @@ impl Space<'_> {
         let mut s_at = self.s0.clone();
         let mut bundle = columns(&vectors, BUNDLE, None);
         let mut rho = 1.0 / lambda0.abs();
-        let (mut rounds, mut history) = (0, vec![lambda0]);
+        let (mut rounds, mut history, mut nulls) = (0, vec![lambda0], 0);
         for round in 1..=SEARCH_ROUNDS {
             if deadline.is_some_and(|d| d.passed()) {
                 break;
@@ -352,7 +449,9 @@ impl Space<'_> {
                 ));
                 break;
             }
-            if let Some(why) = too_slow(&history) {
+            nulls += usize::from(!serious);
+            // while every step is serious the proximal weight halves each round: a ramp
+            if let Some(why) = too_slow(&history).filter(|_| nulls > 0) {
                 stopped(&why);
                 break;
             }
@@ -371,7 +470,8 @@ impl Space<'_> {
         deadline: Option<Deadline>,
     ) -> Option<(Vec<f64>, f64)> {
         let r = v.ncols();
-        let ny = self.per_frame.len() * self.k * (self.k - 1) / 2 * PAIR_VARIABLES;
+        let ny = self.per_frame.len() * self.k * (self.k - 1) / 2 * PAIR_VARIABLES
+            + self.traces.pairs.len() * self.k;
         let len = svec_len(r);
         let c = v.transpose() * s_at * v;
         let mut triplets = Vec::new();
@@ -420,6 +520,8 @@ impl Space<'_> {
     /// S_s^T` in block `(b, a)` (the pseudo-edges' Laplacian less the multipliers they add).
     fn matrix(&self, moves: &Moves) -> DMatrix<f64> {
         let mut s = self.s0.clone();
+        moves.traces.add_to(&mut s, self.per_frame, self.x);
+        let moves = self.with_flows(moves).sums;
         for (f, p, (ss, a), (st, b)) in self.pairs() {
             let t = moves[f][p].matrix();
             let (rs, rt) = (self.sensors[ss].matrix(), self.sensors[st].matrix());
@@ -439,8 +541,16 @@ impl Space<'_> {
     }
 }
 
-/// The sums `a + b`, pair by pair.
+/// The moves `a + b`.
 fn added(a: &Moves, b: &Moves) -> Moves {
+    Moves {
+        sums: added_sums(&a.sums, &b.sums),
+        traces: a.traces.added(&b.traces),
+    }
+}
+
+/// The sums `a + b`, pair by pair.
+fn added_sums(a: &[Vec<PairSum>], b: &[Vec<PairSum>]) -> Vec<Vec<PairSum>> {
     (a.iter().zip(b))
         .map(|(a, b)| {
             (a.iter().zip(b))
@@ -453,14 +563,15 @@ fn added(a: &Moves, b: &Moves) -> Moves {
         .collect()
 }
 
-/// The moves as the variables (`u`, then `k`'s upper triangle), pair by pair.
+/// The moves as the variables (`u`, then `k`'s upper triangle, pair by pair; then the trace
+/// couplings' scalars).
 fn flatten(moves: &Moves) -> Vec<f64> {
-    let mut y =
-        Vec::with_capacity(moves.len() * moves.first().map_or(0, Vec::len) * PAIR_VARIABLES);
-    for m in moves.iter().flatten() {
+    let mut y = Vec::new();
+    for m in moves.sums.iter().flatten() {
         y.extend(m.u.iter());
         y.extend(UPPER.iter().map(|&(r, c)| m.k[(r, c)]));
     }
+    y.extend(moves.traces.mu.iter().flatten());
     y
 }
 
@@ -492,6 +603,49 @@ mod tests {
     use crate::multiple::MultipleProblem;
     use crate::rig::{RigScene, RigSettings, polish_passes, solve_rig};
     use crate::so3::Rotation;
+
+    /// The model's gradient is the derivative of `tr(W S)`: for random moves `y` (projected),
+    /// `<gradient, y>` equals `tr(W (S(y) - S(0)))` from [`super::Space::matrix`] (`S` is affine
+    /// in the moves), through the trace couplings' balancing flows too.
+    #[test]
+    fn the_models_gradient_is_the_derivative_of_s() {
+        use rand::{Rng, SeedableRng, rngs::StdRng};
+        let scene = RigScene {
+            frames: 12,
+            sensors: 3,
+            noise_sigma: 0.01,
+            extra_edge_span: 10,
+            seed: 2,
+            ..Default::default()
+        };
+        let (p, _) = scene.generate();
+        let s = solve_rig(&p, &RigSettings::default()).unwrap();
+        let c = couple(&p, &s.frames, &s.sensors, u64::MAX)
+            .unwrap()
+            .unwrap();
+        let x = p.image_rotations(&s.frames, &s.sensors);
+        let n = 3 * x.len();
+        let space = super::Space::new(&c, (&x, &s.sensors), 3, nalgebra::DMatrix::zeros(n, n));
+        assert!(!space.traces.pairs.is_empty());
+        let mut rng = StdRng::seed_from_u64(4);
+        let v = nalgebra::DVector::from_fn(n, |_, _| rng.random::<f64>() - 0.5);
+        let w = nalgebra::DVector::from_fn(n, |_, _| rng.random::<f64>() - 0.5);
+        let sym = 0.5 * (&v * w.transpose() + &w * v.transpose());
+        let gradient = space.gradient(v.as_view(), w.as_view());
+        for _ in 0..5 {
+            let y: Vec<f64> = (0..gradient.len())
+                .map(|_| rng.random::<f64>() - 0.5)
+                .collect();
+            let moves = space.moves(&y);
+            let flat = super::flatten(&moves);
+            let predicted: f64 = gradient.iter().zip(&flat).map(|(g, y)| g * y).sum();
+            let actual = sym.component_mul(&space.matrix(&moves)).sum();
+            assert!(
+                (predicted - actual).abs() <= 1e-9 * actual.abs().max(1.0),
+                "{predicted} {actual}"
+            );
+        }
+    }
 
     /// The stopping rules on trajectories of the rig soundness campaign (`[H21]` "When the
     /// search stops"): a plateau far below zero stops at its fifth round, not its fifteenth; a
@@ -580,10 +734,12 @@ mod tests {
                 "{} {before}",
                 found.start
             );
+            // the trace couplings moved (`[H21]` "Trace couplings")
+            assert!(found.traces.mu.iter().flatten().any(|m| m.abs() > 0.0));
             let again = coupled(
                 &p.image_graph().unwrap(),
                 c.layout.clone(),
-                found.sums,
+                (found.sums, found.traces),
                 &sensors,
             )
             .unwrap();
