@@ -143,6 +143,7 @@ pub(crate) fn coupled(
         let traced = traces.charge();
         offset += (constant.value() + constant.bound()) * (1.0 + 1e-13) + traced;
         charge += traced;
+        // (the sensor pair's key only serves `offset`, already taken)
         pseudo.extend(between.into_iter().map(|e| ((0, 0), e)));
     }
     Ok(Coupled {
