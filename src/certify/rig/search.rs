@@ -17,7 +17,7 @@ use crate::relax::clarabel::{Cone, csc, solve_quadratic_conic};
 use crate::relax::settings::SdpSettings;
 use crate::relax::svec::{svec_index, svec_len, svec_weight};
 use crate::so3::{Rotation, vee};
-use nalgebra::{DMatrix, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// Most images a rig's search takes: a dense `3N x 3N` eigen-decomposition and a Clarabel model
 /// per round (30 frames and 6 sensors, `3N = 540`: 17.9 s for four rigs' solves and
@@ -459,9 +459,11 @@ impl<'a> Space<'a> {
         (lambda > 0.0).then_some((at, lambda, rounds))
     }
 
-    /// One round's model: `max t - rho |y|^2 / 2` s.t. `V^T (S(T) + D(y)) V - t I` positive
-    /// semidefinite (`s_at = S(T)`), by Clarabel within the deadline (variables `y` then `t`):
-    /// `(y, t)`.
+    /// One round's model: `max t - rho |y|^2 / 2` s.t. `C + A(y) - t I` positive semidefinite
+    /// (`C = V^T S(T) V`, `s_at = S(T)`, `A(y) = V^T D(y) V`), solved through its dual in the
+    /// bundle's own dimension (`[H21]` "The model's dual"): `min <W, C> + |A*(W)|^2 / (2 rho)`
+    /// over `W >= 0`, `tr W = 1` (`r (r + 1) / 2` variables, by Clarabel within the deadline),
+    /// then `y = A*(W) / rho` and `t = lambda_min(C + A(y))`: `(y, t)`.
     fn model_step(
         &self,
         v: &DMatrix<f64>,
@@ -470,31 +472,35 @@ impl<'a> Space<'a> {
         deadline: Option<Deadline>,
     ) -> Option<(Vec<f64>, f64)> {
         let r = v.ncols();
-        let ny = self.per_frame.len() * self.k * (self.k - 1) / 2 * PAIR_VARIABLES
-            + self.traces.pairs.len() * self.k;
         let len = svec_len(r);
         let c = v.transpose() * s_at * v;
-        let mut triplets = Vec::new();
-        let mut b = vec![0.0; len];
-        for j in 0..r {
-            for i in 0..=j {
-                let row = svec_index(i, j);
-                let weight = svec_weight(i, j);
-                b[row] = weight * 0.5 * (c[(i, j)] + c[(j, i)]);
-                let gradient = self.gradient(v.column(i).as_view(), v.column(j).as_view());
-                for (col, g) in gradient.into_iter().enumerate() {
-                    if g != 0.0 {
-                        triplets.push((row, col, -weight * g));
-                    }
-                }
-                if i == j {
-                    triplets.push((row, ny, 1.0));
-                }
-            }
-        }
-        let p = csc(ny + 1, ny + 1, (0..ny).map(|k| (k, k, rho)).collect());
-        let mut q = vec![0.0; ny + 1];
-        q[ny] = -1.0;
+        // `svec(A(y)) = G y`: row `svec_index(i, j)` the weighted derivative of entry `(i, j)`
+        let gradients: Vec<Vec<f64>> = (0..len)
+            .map(|row| {
+                let (i, j) = svec_entry(row);
+                self.gradient(v.column(i).as_view(), v.column(j).as_view())
+            })
+            .collect();
+        let ny = gradients.first().map_or(0, Vec::len);
+        let g = DMatrix::from_fn(len, ny, |row, k| {
+            let (i, j) = svec_entry(row);
+            svec_weight(i, j) * gradients[row][k]
+        });
+        let m = (&g * g.transpose()) / rho;
+        let upper = (0..len).flat_map(|b| (0..=b).map(move |a| (a, b)));
+        let p = csc(len, len, upper.map(|(a, b)| (a, b, m[(a, b)])).collect());
+        let q: Vec<f64> = (0..len)
+            .map(|row| {
+                let (i, j) = svec_entry(row);
+                svec_weight(i, j) * 0.5 * (c[(i, j)] + c[(j, i)])
+            })
+            .collect();
+        // `1 - tr W = 0`, then `0 - (-w)` in the PSD cone
+        let mut triplets: Vec<(usize, usize, f64)> =
+            (0..r).map(|i| (0, svec_index(i, i), 1.0)).collect();
+        triplets.extend((0..len).map(|row| (1 + row, row, -1.0)));
+        let mut b = vec![0.0; 1 + len];
+        b[0] = 1.0;
         let settings = SdpSettings {
             chordal_decomposition: false,
             time_limit_seconds: deadline.and_then(|d| d.left()).map(|l| l.max(0.0)),
@@ -502,17 +508,26 @@ impl<'a> Space<'a> {
         };
         let solution = solve_quadratic_conic(
             (&p, &q),
-            csc(len, ny + 1, triplets),
+            csc(1 + len, len, triplets),
             &b,
-            &[Cone::Psd(r)],
+            &[Cone::Zero(1), Cone::Psd(r)],
             &settings,
             "none",
         )
         .ok()?;
-        solution.status.converged().then(|| {
-            let t = solution.x[ny];
-            (solution.x[..ny].to_vec(), t)
-        })
+        if !solution.status.converged() {
+            return None;
+        }
+        let y: Vec<f64> = (g.transpose() * DVector::from_column_slice(&solution.x) / rho)
+            .iter()
+            .copied()
+            .collect();
+        let ay = &g * DVector::from_column_slice(&y);
+        let model = DMatrix::from_fn(r, r, |i, j| {
+            0.5 * (c[(i, j)] + c[(j, i)]) + ay[svec_index(i, j)] / svec_weight(i, j)
+        });
+        let t = crate::linalg::dense::symmetric_eigenvalues(&model)?[0];
+        Some((y, t))
     }
 
     /// `S` with the moves' pseudo-edges: for a pair's sum `T` (`sum c N`), `S_s sym(T) S_s^T`
@@ -547,6 +562,15 @@ fn added(a: &Moves, b: &Moves) -> Moves {
         sums: added_sums(&a.sums, &b.sums),
         traces: a.traces.added(&b.traces),
     }
+}
+
+/// `(i, j)`, `i <= j`, of `svec` row `row` (the inverse of [`svec_index`]).
+fn svec_entry(row: usize) -> (usize, usize) {
+    let mut j = 0;
+    while (j + 1) * (j + 2) / 2 <= row {
+        j += 1;
+    }
+    (row - j * (j + 1) / 2, j)
 }
 
 /// The sums `a + b`, pair by pair.
@@ -643,6 +667,59 @@ mod tests {
             assert!(
                 (predicted - actual).abs() <= 1e-9 * actual.abs().max(1.0),
                 "{predicted} {actual}"
+            );
+        }
+    }
+
+    /// The model step through its dual is the primal's maximiser: `t - rho |y|^2 / 2` with `t =
+    /// lambda_min(V^T S(y) V)` from [`super::Space::matrix`] (not from the dual) at the step's `y`
+    /// is at least its value at nearby points of the space and at `y = 0`, and `t` is that
+    /// `lambda_min`.
+    #[test]
+    fn the_models_dual_gives_the_primal_maximiser() {
+        use rand::{Rng, SeedableRng, rngs::StdRng};
+        let scene = RigScene {
+            frames: 12,
+            sensors: 3,
+            noise_sigma: 0.01,
+            extra_edge_span: 10,
+            seed: 2,
+            ..Default::default()
+        };
+        let (p, _) = scene.generate();
+        let s = solve_rig(&p, &RigSettings::default()).unwrap();
+        let c = couple(&p, &s.frames, &s.sensors, u64::MAX)
+            .unwrap()
+            .unwrap();
+        let x = p.image_rotations(&s.frames, &s.sensors);
+        let n = 3 * x.len();
+        let mut rng = StdRng::seed_from_u64(6);
+        let s0 = nalgebra::DMatrix::from_fn(n, n, |_, _| rng.random::<f64>() - 0.5);
+        let space = super::Space::new(&c, (&x, &s.sensors), 3, &s0 + s0.transpose());
+        let v = nalgebra::DMatrix::from_fn(n, 8, |_, _| rng.random::<f64>() - 0.5)
+            .qr()
+            .q();
+        let rho = 0.3;
+        let value = |y: &[f64]| {
+            let m = v.transpose() * space.matrix(&space.moves(y)) * &v;
+            let t = crate::linalg::dense::symmetric_eigenvalues(&m).unwrap()[0];
+            (t, t - 0.5 * rho * y.iter().map(|a| a * a).sum::<f64>())
+        };
+        let (y, t) = space.model_step(&v, &space.s0, rho, None).unwrap();
+        let (t_y, at) = value(&y);
+        assert!((t - t_y).abs() <= 1e-6 * t.abs().max(1.0), "{t} {t_y}");
+        let zero = vec![0.0; y.len()];
+        assert!(at > value(&zero).1 + 1e-3, "{at}");
+        let norm = y.iter().map(|a| a * a).sum::<f64>().sqrt();
+        for _ in 0..20 {
+            let d: Vec<f64> = (0..y.len()).map(|_| rng.random::<f64>() - 0.5).collect();
+            let d = super::flatten(&space.moves(&d));
+            let scale = 0.05 * norm / d.iter().map(|a| a * a).sum::<f64>().sqrt();
+            let near: Vec<f64> = y.iter().zip(&d).map(|(a, b)| a + scale * b).collect();
+            assert!(
+                value(&near).1 <= at + 1e-6 * at.abs().max(1.0),
+                "{} > {at}",
+                value(&near).1
             );
         }
     }
