@@ -628,12 +628,13 @@ mod tests {
     use crate::rig::{RigScene, RigSettings, polish_passes, solve_rig};
     use crate::so3::Rotation;
 
-    /// The model's gradient is the derivative of `tr(W S)`: for random moves `y` (projected),
-    /// `<gradient, y>` equals `tr(W (S(y) - S(0)))` from [`super::Space::matrix`] (`S` is affine
-    /// in the moves), through the trace couplings' balancing flows too.
-    #[test]
-    fn the_models_gradient_is_the_derivative_of_s() {
-        use rand::{Rng, SeedableRng, rngs::StdRng};
+    /// A 12-frame rig of 3 estimated sensors along a path, solved: its least-norm couplings,
+    /// image rotations and sensors.
+    fn short_rig() -> (
+        crate::certify::rig::couplings::Coupled,
+        Vec<Rotation>,
+        Vec<Rotation>,
+    ) {
         let scene = RigScene {
             frames: 12,
             sensors: 3,
@@ -647,9 +648,18 @@ mod tests {
         let c = couple(&p, &s.frames, &s.sensors, u64::MAX)
             .unwrap()
             .unwrap();
-        let x = p.image_rotations(&s.frames, &s.sensors);
+        (c, p.image_rotations(&s.frames, &s.sensors), s.sensors)
+    }
+
+    /// The model's gradient is the derivative of `tr(W S)`: for random moves `y` (projected),
+    /// `<gradient, y>` equals `tr(W (S(y) - S(0)))` from [`super::Space::matrix`] (`S` is affine
+    /// in the moves), through the trace couplings' balancing flows too.
+    #[test]
+    fn the_models_gradient_is_the_derivative_of_s() {
+        use rand::{Rng, SeedableRng, rngs::StdRng};
+        let (c, x, sensors) = short_rig();
         let n = 3 * x.len();
-        let space = super::Space::new(&c, (&x, &s.sensors), 3, nalgebra::DMatrix::zeros(n, n));
+        let space = super::Space::new(&c, (&x, &sensors), 3, nalgebra::DMatrix::zeros(n, n));
         assert!(!space.traces.pairs.is_empty());
         let mut rng = StdRng::seed_from_u64(4);
         let v = nalgebra::DVector::from_fn(n, |_, _| rng.random::<f64>() - 0.5);
@@ -678,24 +688,11 @@ mod tests {
     #[test]
     fn the_models_dual_gives_the_primal_maximiser() {
         use rand::{Rng, SeedableRng, rngs::StdRng};
-        let scene = RigScene {
-            frames: 12,
-            sensors: 3,
-            noise_sigma: 0.01,
-            extra_edge_span: 10,
-            seed: 2,
-            ..Default::default()
-        };
-        let (p, _) = scene.generate();
-        let s = solve_rig(&p, &RigSettings::default()).unwrap();
-        let c = couple(&p, &s.frames, &s.sensors, u64::MAX)
-            .unwrap()
-            .unwrap();
-        let x = p.image_rotations(&s.frames, &s.sensors);
+        let (c, x, sensors) = short_rig();
         let n = 3 * x.len();
         let mut rng = StdRng::seed_from_u64(6);
         let s0 = nalgebra::DMatrix::from_fn(n, n, |_, _| rng.random::<f64>() - 0.5);
-        let space = super::Space::new(&c, (&x, &s.sensors), 3, &s0 + s0.transpose());
+        let space = super::Space::new(&c, (&x, &sensors), 3, &s0 + s0.transpose());
         let v = nalgebra::DMatrix::from_fn(n, 8, |_, _| rng.random::<f64>() - 0.5)
             .qr()
             .q();
