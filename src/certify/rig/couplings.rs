@@ -131,7 +131,7 @@ pub(crate) fn coupled(
     (sums, traces): (Vec<Vec<PairSum>>, Traces),
     sensors: &[Rotation],
 ) -> Result<Coupled> {
-    let mut pseudo = pseudo_edges(&layout.per_frame, &sums, sensors);
+    let pseudo = pseudo_edges(&layout.per_frame, &sums, sensors);
     let (mut offset, mut charge) = offset(&pseudo, &layout.pairs, sensors, images.is_anisotropic());
     let between = traces.pseudo_edges(&layout.per_frame);
     if !between.is_empty() {
@@ -143,12 +143,11 @@ pub(crate) fn coupled(
         let traced = traces.charge();
         offset += (constant.value() + constant.bound()) * (1.0 + 1e-13) + traced;
         charge += traced;
-        // (the sensor pair's key only serves `offset`, already taken)
-        pseudo.extend(between.into_iter().map(|e| ((0, 0), e)));
     }
+    let edges: Vec<Edge> = pseudo.into_iter().map(|(_, e)| e).chain(between).collect();
     Ok(Coupled {
-        pseudo_edges: pseudo.len(),
-        graph: augmented(images, pseudo)?,
+        pseudo_edges: edges.len(),
+        graph: augmented(images, edges)?,
         offset,
         charge,
         layout,
@@ -159,13 +158,10 @@ pub(crate) fn coupled(
 /// The images' view graph with the pseudo-edges; with information (`[H24]`), each
 /// pseudo-edge's weight `c` as the information `c I`, whose torques are the isotropic ones
 /// (`2M = c I` in `[A2]`'s `(Q Y)`), so the flows are unchanged.
-fn augmented(
-    images: &MultipleProblem,
-    pseudo: Vec<((usize, usize), Edge)>,
-) -> Result<MultipleProblem> {
+fn augmented(images: &MultipleProblem, pseudo: Vec<Edge>) -> Result<MultipleProblem> {
     let mut edges = images.edges().to_vec();
     let mut info = images.information().map(<[_]>::to_vec);
-    for (_, e) in pseudo {
+    for e in pseudo {
         if let Some(info) = &mut info {
             info.push(crate::multiple::anisotropic::Information::isotropic(
                 e.weight,

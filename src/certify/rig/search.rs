@@ -475,17 +475,16 @@ impl<'a> Space<'a> {
         let len = svec_len(r);
         let c = v.transpose() * s_at * v;
         // `svec(A(y)) = G y`: row `svec_index(i, j)` the weighted derivative of entry `(i, j)`
-        let gradients: Vec<Vec<f64>> = (0..len)
-            .map(|row| {
-                let (i, j) = svec_entry(row);
-                self.gradient(v.column(i).as_view(), v.column(j).as_view())
-            })
-            .collect();
-        let ny = gradients.first().map_or(0, Vec::len);
-        let g = DMatrix::from_fn(len, ny, |row, k| {
+        let ny = self.per_frame.len() * self.k * (self.k - 1) / 2 * PAIR_VARIABLES
+            + self.traces.pairs.len() * self.k;
+        let mut g = DMatrix::zeros(len, ny);
+        for row in 0..len {
             let (i, j) = svec_entry(row);
-            svec_weight(i, j) * gradients[row][k]
-        });
+            let gradient = self.gradient(v.column(i).as_view(), v.column(j).as_view());
+            for (k, d) in gradient.into_iter().enumerate() {
+                g[(row, k)] = svec_weight(i, j) * d;
+            }
+        }
         let m = (&g * g.transpose()) / rho;
         let upper = (0..len).flat_map(|b| (0..=b).map(move |a| (a, b)));
         let p = csc(len, len, upper.map(|(a, b)| (a, b, m[(a, b)])).collect());
