@@ -164,6 +164,51 @@ pub(crate) struct Trailing {
     pub lower: Vec<Vec<f64>>,
 }
 
+/// An `LDL^T` factor (no pivoting, no regularisation) kept for solves: shift-invert
+/// *estimates* of a symmetric indefinite matrix's eigenvectors (`certify::rig`'s windows). No
+/// bound is claimed from it.
+pub(crate) struct LdltSolver {
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+}
+
+impl LdltSolver {
+    /// The factor of `a` (both triangles stored), or `None` when its analysis predicts more
+    /// than `max_values` values or a pivot is zero or not finite.
+    pub fn new(
+        a: SparseColMatRef<'_, usize, f64>,
+        max_values: usize,
+    ) -> crate::Result<Option<Self>> {
+        let Ok(symbolic) = super::cholesky::symbolic_cholesky_within(a.symbolic(), max_values)?
+        else {
+            return Ok(None);
+        };
+        let mut storage = FactorStorage::default();
+        if ldlt_values(&symbolic, a, &mut storage).is_err() {
+            return Ok(None);
+        }
+        Ok(Some(LdltSolver {
+            symbolic,
+            values: storage.values,
+        }))
+    }
+
+    /// `x <- a^-1 x`.
+    pub fn solve_in_place(&self, x: &mut [f64]) {
+        let n = x.len();
+        let par = faer::Par::Seq;
+        let req = self.symbolic.solve_in_place_scratch::<f64>(1, par);
+        let mut mem = MemBuffer::new(req);
+        faer::sparse::linalg::cholesky::LdltRef::<usize, f64>::new(&self.symbolic, &self.values)
+            .solve_in_place_with_conj(
+                faer::Conj::No,
+                faer::MatMut::from_column_major_slice_mut(x, n, 1),
+                par,
+                MemStack::new(&mut mem),
+            );
+    }
+}
+
 /// The factor values of `LDL^T` (no pivoting, no regularisation), all finite, in `storage`.
 fn ldlt_values<'s>(
     symbolic: &SymbolicCholesky<usize>,

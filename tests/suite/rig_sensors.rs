@@ -95,17 +95,25 @@ fn noisy_rigs_with_estimated_sensors_are_certified_by_their_couplings() {
     assert!(out.certificate.unwrap().is_certified());
 }
 
-/// Small rigs captured along a path (each sensor's pairs within 10 frames), where the least-norm
+/// Rigs captured along a path (each sensor's pairs within 10 frames), where the least-norm
 /// couplings leave the augmented graph's `S` indefinite, are certified by the couplings' search
-/// (`[H21]` "The search"), with information matrices and with scalar weights; the bound below
-/// the planted rig's cost and the test's own local minima from perturbed truths.
+/// (`[H21]` "The search"), with information matrices and with scalar weights, and over the
+/// dense search's size (60 frames, 6 sensors: 360 images) by its sparse form (`[H21]` "Large
+/// rigs"); the bound below the planted rig's cost and the test's own local minima from
+/// perturbed truths.
 #[test]
-fn small_rigs_along_a_path_are_certified_by_the_searched_couplings() {
+fn rigs_along_a_path_are_certified_by_the_searched_couplings() {
     let mut rng = StdRng::seed_from_u64(31);
-    for (seed, scalar) in [(1, false), (4, false), (1, true)] {
+    let rigs = [
+        (30, 4, 1, false),
+        (30, 4, 4, false),
+        (30, 4, 1, true),
+        (60, 6, 2, false),
+    ];
+    for (frames, sensors, seed, scalar) in rigs {
         let scene = RigScene {
-            frames: 30,
-            sensors: 4,
+            frames,
+            sensors,
             noise_sigma: 0.01,
             anisotropy: 9.0,
             extra_edge_span: 10,
@@ -118,6 +126,8 @@ fn small_rigs_along_a_path_are_certified_by_the_searched_couplings() {
         let c = out.certificate.unwrap();
         assert!(c.is_certified(), "{c:?}");
         assert!(c.explanation.contains("searched"), "{}", c.explanation);
+        let wide = c.explanation.contains("without image 0");
+        assert_eq!(wide, frames * sensors > 300, "{}", c.explanation);
         let lb = c.lower_bound.unwrap();
         assert!(lb <= p.cost(&truth.frames, &truth.sensors));
         // the test's own descent with scalar weights; with information matrices (where its

@@ -436,7 +436,10 @@ fn bound(
 }
 
 /// `s` without the block row and column of node `g` (3 rows and columns).
-fn without_block(s: &SparseColMat<usize, f64>, g: usize) -> Result<SparseColMat<usize, f64>> {
+pub(crate) fn without_block(
+    s: &SparseColMat<usize, f64>,
+    g: usize,
+) -> Result<SparseColMat<usize, f64>> {
     let n3 = s.nrows();
     if s.symbolic().col_nnz().is_some() || n3 < 3 * g + 3 || s.ncols() != n3 {
         return Err(Error::Solver {

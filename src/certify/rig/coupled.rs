@@ -154,7 +154,7 @@ impl CoupledRung {
             max_bytes: cx.tally.settings.budget.max_memory_bytes,
             gap: cx.tally.allowed_gap,
         };
-        let Some(found) = search(&coupled, (x, sensors), limits)? else {
+        let Some(found) = search(&coupled, cx.problem, (x, sensors), limits)? else {
             return Ok((coupled, first, String::new()));
         };
         let images = cx.problem.image_graph()?;
@@ -164,8 +164,13 @@ impl CoupledRung {
         if bound(&second, again.offset) < bound(&first, coupled.offset) {
             return Ok((coupled, first, String::new()));
         }
+        let what = if found.grounded {
+            "lambda_min(S without image 0), Lanczos estimates"
+        } else {
+            "lambda_min(S)"
+        };
         let note = format!(
-            " (their sums searched in {} rounds: lambda_min(S) {:.3e} -> {:.3e})",
+            " (their sums searched in {} rounds: {what} {:.3e} -> {:.3e})",
             found.rounds, found.start, found.reached
         );
         Ok((again, second, note))

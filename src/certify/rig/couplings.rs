@@ -62,7 +62,7 @@ pub(crate) struct Coupled {
 
 /// Bytes an edge of the augmented graph is charged (the edge, 96 bytes, in the graph, its
 /// component's copy and the local solve's and the checks' per-edge arrays).
-const BYTES_PER_EDGE: u64 = 400;
+pub(super) const BYTES_PER_EDGE: u64 = 400;
 
 /// The couplings at the estimate (`frames`, `sensors`, held sensors at their held rotations),
 /// or why there are none (among the reasons: the augmented graph's edges would take more than

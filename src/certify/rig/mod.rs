@@ -9,6 +9,7 @@
 //!   components' certified minima bounds `J*`. Tight when the images' optimum is a rig
 //!   (noise-free data); a gap otherwise (the constraints' cost).
 
+mod bundle;
 mod coupled;
 mod couplings;
 mod frames;
@@ -18,6 +19,7 @@ mod search;
 mod state;
 mod traces;
 mod two_graphs;
+mod wide;
 mod world;
 
 use crate::certify::budget::Deadline;

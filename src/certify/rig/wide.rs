@@ -1,0 +1,185 @@
+//! The couplings' search on rigs too large for dense matrices (`paper-notes/conjugate.md`
+//! `[H21]`, "Large rigs"): the same bundle ([`super::search`]), with `S` sparse, rebuilt at each
+//! point from the augmented graph of its couplings (what the ladder will judge), and its bottom
+//! eigenpairs estimated by shift-invert Lanczos on an `LDL^T` of `S` grounded at image 0 (its
+//! rows and columns dropped: `S Y = 0` with `Y_0` invertible, so the rest keeps every negative
+//! direction of `S` but at most three, and no gauge). Negative eigenvalues are the smallest of
+//! the inverse, the smallest positive ones its largest: two block Lanczos runs of a few dozen
+//! solves. Estimates only, like the search itself: the ladder proves whatever the couplings give.
+
+use super::bundle::{Moves, Space, Spectrum, added_sums};
+use super::couplings::{self, BYTES_PER_EDGE, Coupled};
+use crate::certify::multiple::grounded::without_block;
+use crate::certify::multiple::multipliers::{FirstOrder, certificate_matrix};
+use crate::linalg::cholesky::symmetric_matvec;
+use crate::linalg::ldlt::LdltSolver;
+use crate::linalg::{Extreme, LanczosSettings, lanczos};
+use crate::multiple::MultipleProblem;
+use crate::so3::Rotation;
+use faer::sparse::SparseColMat;
+use nalgebra::DMatrix;
+
+/// Eigenpairs estimated at each end of the grounded inverse's spectrum.
+const EACH_END: usize = 6;
+
+/// The large rig's search: the least-norm couplings, the images' view graph, the rotations and
+/// the factor's budget in values.
+pub(super) struct Wide<'a> {
+    coupled: &'a Coupled,
+    images: &'a MultipleProblem,
+    x: &'a [Rotation],
+    sensors: &'a [Rotation],
+    max_values: usize,
+}
+
+impl<'a> Wide<'a> {
+    /// The search of `coupled`'s rig (the space's `variables`, and the most pseudo-edges its
+    /// points make), `None` when the model's gradient matrix (`svec` rows by the variables) or
+    /// the augmented graph rebuilt at a point would take more than a quarter of `max_bytes`
+    /// (the factor is held within another quarter).
+    pub fn new(
+        coupled: &'a Coupled,
+        images: &'a MultipleProblem,
+        (x, sensors): (&'a [Rotation], &'a [Rotation]),
+        (variables, pseudo_edges): (usize, usize),
+        max_bytes: u64,
+    ) -> Option<Self> {
+        let (kept, added) = <Self as Spectrum>::WIDTHS;
+        let r = kept + added;
+        let gradient = 8 * (r * (r + 1) / 2 * variables) as u64;
+        let graph = (images.edges().len() + pseudo_edges) as u64 * BYTES_PER_EDGE;
+        (gradient <= max_bytes / 4 && graph <= max_bytes / 4).then_some(Wide {
+            coupled,
+            images,
+            x,
+            sensors,
+            max_values: (max_bytes / 4 / 8) as usize,
+        })
+    }
+
+    /// `S` of the augmented graph with the couplings `moves` added to the least-norm ones.
+    fn matrix(&self, space: &Space<'_>, moves: &Moves) -> Option<SparseColMat<usize, f64>> {
+        let sums = added_sums(&self.coupled.sums, &space.with_flows(moves).sums);
+        let layout = self.coupled.layout.clone();
+        let again = couplings::coupled(
+            self.images,
+            layout,
+            (sums, moves.traces.clone()),
+            self.sensors,
+        )
+        .ok()?;
+        let first = FirstOrder::at(&again.graph, self.x).ok()?;
+        certificate_matrix(&again.graph, &first.lambdas).ok()
+    }
+}
+
+impl Spectrum for Wide<'_> {
+    type At = SparseColMat<usize, f64>;
+    const WIDTHS: (usize, usize) = (8, 3);
+    const FIRST_RHO: f64 = 0.125;
+
+    fn at(&self, space: &Space<'_>, moves: &Moves) -> Option<(Vec<f64>, DMatrix<f64>, Self::At)> {
+        let s = self.matrix(space, moves)?;
+        let (values, vectors) = bottom(&s, self.max_values)?;
+        Some((values, vectors, s))
+    }
+
+    fn restricted(&self, s: &Self::At, v: &DMatrix<f64>) -> DMatrix<f64> {
+        let mut sv = DMatrix::zeros(v.nrows(), v.ncols());
+        for (column, mut out) in v.column_iter().zip(sv.column_iter_mut()) {
+            symmetric_matvec(s.as_ref(), column.as_slice(), out.as_mut_slice());
+        }
+        let c = v.transpose() * sv;
+        0.5 * (&c + c.transpose())
+    }
+}
+
+/// Estimates of `s`'s bottom eigenvalues (ascending) and unit eigenvectors (the columns, zero
+/// at image 0): the negative ones and the smallest positive ones of the grounded `s`; `None`
+/// when its factor is over `max_values` or a pivot vanishes.
+fn bottom(s: &SparseColMat<usize, f64>, max_values: usize) -> Option<(Vec<f64>, DMatrix<f64>)> {
+    let grounded = without_block(s, 0).ok()?;
+    let factor = LdltSolver::new(grounded.as_ref(), max_values).ok()??;
+    let n = grounded.nrows();
+    let settings = LanczosSettings {
+        max_iterations: 45,
+        tolerance: 1e-4,
+        block_size: 3,
+        ..LanczosSettings::default()
+    };
+    let mut pairs: Vec<(f64, Vec<f64>)> = Vec::new();
+    for (end, keep) in [(Extreme::Smallest, -1.0), (Extreme::Largest, 1.0)] {
+        let inverse = |a: &[f64], b: &mut [f64]| {
+            b.copy_from_slice(a);
+            factor.solve_in_place(b);
+        };
+        let e = lanczos(n, inverse, end, EACH_END, 0.0, &settings, &[], None);
+        for (theta, v) in e.values.into_iter().zip(e.vectors) {
+            if theta * keep > 0.0 {
+                pairs.push((1.0 / theta, v));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    pairs.dedup_by(|a, b| (a.0 - b.0).abs() <= 1e-12 * b.0.abs());
+    if pairs.is_empty() {
+        return None;
+    }
+    let vectors = DMatrix::from_fn(n + 3, pairs.len(), |r, c| {
+        if r < 3 { 0.0 } else { pairs[c].1[r - 3] }
+    });
+    Some((pairs.iter().map(|p| p.0).collect(), vectors))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::bottom;
+    use crate::certify::multiple::grounded::without_block;
+    use crate::certify::multiple::multipliers::{FirstOrder, certificate_matrix};
+    use crate::certify::rig::couplings::couple;
+    use crate::linalg::cholesky::to_dense;
+    use crate::rig::{RigScene, RigSettings, polish_passes, solve_rig};
+
+    /// [`bottom`]'s estimates against the dense spectrum of `S` grounded at image 0, on a rig
+    /// of 60 frames and 6 sensors at its least-norm couplings (`S` indefinite there): each
+    /// value within `1e-7 ||S||` of a dense eigenvalue, its vector a unit vector zero at image
+    /// 0 whose residual is below `1e-4 ||S||`, and every dense negative eigenvalue found.
+    #[test]
+    fn the_bottom_estimates_are_the_grounded_spectrum() {
+        let scene = RigScene {
+            frames: 60,
+            sensors: 6,
+            noise_sigma: 0.01,
+            anisotropy: 9.0,
+            extra_edge_span: 10,
+            seed: 2,
+            ..Default::default()
+        };
+        let (p, _) = scene.generate();
+        let s = solve_rig(&p, &RigSettings::default()).unwrap();
+        let (frames, sensors) = polish_passes(&p, (s.frames, s.sensors), 10, None).unwrap();
+        let c = couple(&p, &frames, &sensors, u64::MAX).unwrap().unwrap();
+        let x = p.image_rotations(&frames, &sensors);
+        let first = FirstOrder::at(&c.graph, &x).unwrap();
+        let s = certificate_matrix(&c.graph, &first.lambdas).unwrap();
+        let (values, vectors) = bottom(&s, usize::MAX).unwrap();
+        let dense = to_dense(without_block(&s, 0).unwrap().as_ref());
+        let exact = crate::linalg::dense::symmetric_eigenvalues(&dense).unwrap();
+        let norm = dense.norm();
+        let negative = exact.iter().filter(|&&l| l < 0.0).count();
+        assert!(negative >= 1, "{:?}", &exact[..4]);
+        assert!(values.windows(2).all(|w| w[0] <= w[1]));
+        assert_eq!(values.iter().filter(|&&l| l < 0.0).count(), negative);
+        for (value, v) in values.iter().zip(vectors.column_iter()) {
+            let nearest = exact
+                .iter()
+                .map(|e| (e - value).abs())
+                .fold(f64::MAX, f64::min);
+            assert!(nearest <= 1e-7 * norm, "{value} {nearest}");
+            assert!((v.norm() - 1.0).abs() <= 1e-9 && v.rows(0, 3).norm() == 0.0);
+            let tail = v.rows(3, v.nrows() - 3).clone_owned();
+            let residual = (&dense * &tail - *value * &tail).norm();
+            assert!(residual <= 1e-4 * norm, "{value} {residual}");
+        }
+    }
+}
