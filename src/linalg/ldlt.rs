@@ -165,8 +165,8 @@ pub(crate) struct Trailing {
 }
 
 /// An `LDL^T` factor (no pivoting, no regularisation) kept for solves: shift-invert
-/// *estimates* of a symmetric indefinite matrix's eigenvectors (`certify::rig`'s windows). No
-/// bound is claimed from it.
+/// *estimates* of a symmetric indefinite matrix's eigenvectors (the large rigs' couplings
+/// search, `certify::rig::wide`). No bound is claimed from it.
 pub(crate) struct LdltSolver {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,

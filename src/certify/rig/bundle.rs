@@ -41,6 +41,10 @@ const STALL_ROUNDS: usize = 10;
 const OPTIMISM: f64 = 2.0;
 const RATE_ROUNDS: usize = 3;
 
+/// `S`'s bottom eigenvalues (ascending) and eigenvectors (the columns) at a point, and what
+/// `V^T S V` is formed from there.
+pub(super) type Eigen<A> = (Vec<f64>, DMatrix<f64>, A);
+
 /// Where the bundle gets the bottom eigenpairs of `S` at a point of the space, and `V^T S V`:
 /// the dense `S` of a small rig ([`Dense`]) or a large rig's sparse one ([`Wide`]).
 pub(super) trait Spectrum {
@@ -52,7 +56,7 @@ pub(super) trait Spectrum {
     const FIRST_RHO: f64;
     /// The bottom eigenvalues of `S` at `moves` (ascending, estimates for [`Wide`]), their
     /// eigenvectors (the columns) and `S`; `None` when they cannot be had.
-    fn at(&self, space: &Space<'_>, moves: &Moves) -> Option<(Vec<f64>, DMatrix<f64>, Self::At)>;
+    fn at(&self, space: &Space<'_>, moves: &Moves) -> Option<Eigen<Self::At>>;
     /// `V^T S V`.
     fn restricted(&self, at: &Self::At, v: &DMatrix<f64>) -> DMatrix<f64>;
 }
@@ -65,7 +69,7 @@ impl Spectrum for Dense {
     const WIDTHS: (usize, usize) = (BUNDLE, CANDIDATE);
     const FIRST_RHO: f64 = 1.0;
 
-    fn at(&self, space: &Space<'_>, moves: &Moves) -> Option<(Vec<f64>, DMatrix<f64>, Self::At)> {
+    fn at(&self, space: &Space<'_>, moves: &Moves) -> Option<Eigen<Self::At>> {
         let s = space.matrix(&self.0, moves);
         let (values, vectors) = symmetric_eigen(&s)?;
         Some((values, vectors, s))
@@ -173,7 +177,7 @@ impl<'a> Space<'a> {
             + self.traces.pairs.len() * self.k
     }
 
-    fn zero(&self) -> Moves {
+    pub(super) fn zero(&self) -> Moves {
         let pairs = self.k * (self.k - 1) / 2;
         let zero = PairSum {
             u: Vector3::zeros(),
@@ -334,11 +338,11 @@ impl<'a> Space<'a> {
     pub(super) fn bundle<O: Spectrum>(
         &self,
         oracle: &O,
+        start: Eigen<O::At>,
         deadline: Option<Deadline>,
     ) -> Option<Run> {
         let (kept, added_columns) = O::WIDTHS;
-        let (mut at, (values, mut vectors, mut s_at)) =
-            (self.zero(), oracle.at(self, &self.zero())?);
+        let (mut at, (values, mut vectors, mut s_at)) = (self.zero(), start);
         let (lambda0, mut lambda) = (values[0], values[0]);
         if lambda0 >= 0.0 {
             return None;

@@ -6,7 +6,7 @@
 //! choice: whatever it returns is handed to the augmented graph's ladder, which proves its bound
 //! or does not ([`super::couplings`]: any pseudo-edges give a sound bound).
 
-use super::bundle::{Dense, Space, added_sums, stopped};
+use super::bundle::{Dense, Space, Spectrum, added_sums, stopped};
 use super::couplings::{Coupled, PairSum};
 use super::traces::Traces;
 use super::wide::Wide;
@@ -83,8 +83,11 @@ pub(crate) fn search(
         }
         let s = to_dense(s.as_ref());
         let dense = Dense(gauged(0.5 * (&s + s.transpose()), x));
+        let Some(start) = dense.at(&space, &space.zero()) else {
+            return Ok(None);
+        };
         space
-            .bundle(&dense, limits.deadline)
+            .bundle(&dense, start, limits.deadline)
             .map(|run| (run, false))
     } else {
         let images = problem.image_graph()?;
@@ -95,10 +98,13 @@ pub(crate) fn search(
             (space.variables(), space.pseudo_edges_at_most()),
             limits.max_bytes,
         );
-        let Some(wide) = wide else {
+        // the least-norm couplings' `S`, built above, is the search's start
+        let Some((wide, start)) = wide.and_then(|w| w.start(s).map(|start| (w, start))) else {
             return Ok(None);
         };
-        space.bundle(&wide, limits.deadline).map(|run| (run, true))
+        space
+            .bundle(&wide, start, limits.deadline)
+            .map(|run| (run, true))
     };
     Ok(run.map(|(found, grounded)| Searched {
         sums: added_sums(&coupled.sums, &space.with_flows(&found.moves).sums),

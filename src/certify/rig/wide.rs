@@ -1,5 +1,5 @@
 //! The couplings' search on rigs too large for dense matrices (`paper-notes/conjugate.md`
-//! `[H21]`, "Large rigs"): the same bundle ([`super::search`]), with `S` sparse, rebuilt at each
+//! `[H21]`, "Large rigs"): the same bundle ([`super::bundle`]), with `S` sparse, rebuilt at each
 //! point from the augmented graph of its couplings (what the ladder will judge), and its bottom
 //! eigenpairs estimated by shift-invert Lanczos on an `LDL^T` of `S` grounded at image 0 (its
 //! rows and columns dropped: `S Y = 0` with `Y_0` invertible, so the rest keeps every negative
@@ -7,7 +7,7 @@
 //! the inverse, the smallest positive ones its largest: two block Lanczos runs of a few dozen
 //! solves. Estimates only, like the search itself: the ladder proves whatever the couplings give.
 
-use super::bundle::{Moves, Space, Spectrum, added_sums};
+use super::bundle::{Eigen, Moves, Space, Spectrum, added_sums};
 use super::couplings::{self, BYTES_PER_EDGE, Coupled};
 use crate::certify::multiple::grounded::without_block;
 use crate::certify::multiple::multipliers::{FirstOrder, certificate_matrix};
@@ -21,6 +21,9 @@ use nalgebra::DMatrix;
 
 /// Eigenpairs estimated at each end of the grounded inverse's spectrum.
 const EACH_END: usize = 6;
+
+/// The Krylov subspace of each end's Lanczos run (one solve per vector).
+const LANCZOS_VECTORS: usize = 45;
 
 /// The large rig's search: the least-norm couplings, the images' view graph, the rotations and
 /// the factor's budget in values.
@@ -47,7 +50,9 @@ impl<'a> Wide<'a> {
         let (kept, added) = <Self as Spectrum>::WIDTHS;
         let r = kept + added;
         let gradient = 8 * (r * (r + 1) / 2 * variables) as u64;
-        let graph = (images.edges().len() + pseudo_edges) as u64 * BYTES_PER_EDGE;
+        // the rebuilt graph, and a Lanczos basis of `LANCZOS_VECTORS` vectors of `3N` values
+        let graph = (images.edges().len() + pseudo_edges) as u64 * BYTES_PER_EDGE
+            + 8 * (LANCZOS_VECTORS * 3 * x.len()) as u64;
         (gradient <= max_bytes / 4 && graph <= max_bytes / 4).then_some(Wide {
             coupled,
             images,
@@ -55,6 +60,12 @@ impl<'a> Wide<'a> {
             sensors,
             max_values: (max_bytes / 4 / 8) as usize,
         })
+    }
+
+    /// The search's start: `s`, the least-norm couplings' `S`, with its bottom eigenpairs.
+    pub fn start(&self, s: SparseColMat<usize, f64>) -> Option<Eigen<SparseColMat<usize, f64>>> {
+        let (values, vectors) = bottom(&s, self.max_values)?;
+        Some((values, vectors, s))
     }
 
     /// `S` of the augmented graph with the couplings `moves` added to the least-norm ones.
@@ -78,7 +89,7 @@ impl Spectrum for Wide<'_> {
     const WIDTHS: (usize, usize) = (8, 3);
     const FIRST_RHO: f64 = 0.125;
 
-    fn at(&self, space: &Space<'_>, moves: &Moves) -> Option<(Vec<f64>, DMatrix<f64>, Self::At)> {
+    fn at(&self, space: &Space<'_>, moves: &Moves) -> Option<Eigen<Self::At>> {
         let s = self.matrix(space, moves)?;
         let (values, vectors) = bottom(&s, self.max_values)?;
         Some((values, vectors, s))
@@ -102,7 +113,7 @@ fn bottom(s: &SparseColMat<usize, f64>, max_values: usize) -> Option<(Vec<f64>, 
     let factor = LdltSolver::new(grounded.as_ref(), max_values).ok()??;
     let n = grounded.nrows();
     let settings = LanczosSettings {
-        max_iterations: 45,
+        max_iterations: LANCZOS_VECTORS,
         tolerance: 1e-4,
         block_size: 3,
         ..LanczosSettings::default()
@@ -120,8 +131,8 @@ fn bottom(s: &SparseColMat<usize, f64>, max_values: usize) -> Option<(Vec<f64>, 
             }
         }
     }
+    // the two ends keep values of opposite signs: no pair twice
     pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    pairs.dedup_by(|a, b| (a.0 - b.0).abs() <= 1e-12 * b.0.abs());
     if pairs.is_empty() {
         return None;
     }
