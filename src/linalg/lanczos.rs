@@ -211,6 +211,31 @@ pub fn lanczos(
     deflate: &[Vec<f64>],
     start: Option<&[f64]>,
 ) -> EigenEstimate {
+    let each = |block: &[Vec<f64>]| -> Vec<Vec<f64>> {
+        let image = |v: &Vec<f64>| {
+            let mut w = vec![0.0; v.len()];
+            op(v, &mut w);
+            w
+        };
+        block.iter().map(image).collect()
+    };
+    lanczos_blocks(dim, each, which, count, scale, settings, deflate, start)
+}
+
+/// [`lanczos`] with the operator applied to a block at once, `op(vs)` the images `A v` of the
+/// vectors `vs` (at most `settings.block_size` of them): one pass over a factor for a block of
+/// solves (shift-invert, the large rigs' search: three right-hand sides per pass).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn lanczos_blocks(
+    dim: usize,
+    mut op: impl FnMut(&[Vec<f64>]) -> Vec<Vec<f64>>,
+    which: Extreme,
+    count: usize,
+    scale: f64,
+    settings: &LanczosSettings,
+    deflate: &[Vec<f64>],
+    start: Option<&[f64]>,
+) -> EigenEstimate {
     let space = dim.saturating_sub(deflate.len());
     let k = count.min(space);
     if k == 0 {
@@ -364,14 +389,14 @@ impl Krylov {
 
     /// Add the pending block (orthonormalised against `deflate` and the basis; a vector that
     /// does not survive is dropped) while the basis holds fewer than `max_m` vectors, and
-    /// apply the operator: the images `A v` of the vectors added.
+    /// apply the operator to the vectors added, at once: their images `A v`.
     fn extend(
         &mut self,
-        op: &mut impl FnMut(&[f64], &mut [f64]),
+        op: &mut impl FnMut(&[Vec<f64>]) -> Vec<Vec<f64>>,
         deflate: &[Vec<f64>],
         max_m: usize,
     ) -> Vec<Vec<f64>> {
-        let mut images: Vec<Vec<f64>> = Vec::new();
+        let first = self.basis.len();
         for mut v in std::mem::take(&mut self.pending) {
             if self.basis.len() >= max_m {
                 break;
@@ -381,12 +406,15 @@ impl Krylov {
                 continue;
             }
             v.iter_mut().for_each(|x| *x /= after);
-            let mut w = vec![0.0; self.dim];
-            op(&v, &mut w);
             self.basis.push(v);
-            self.h
-                .push(self.basis.iter().map(|vi| dot(vi, &w)).collect());
-            images.push(w);
+        }
+        if self.basis.len() == first {
+            return Vec::new();
+        }
+        let images = op(&self.basis[first..]);
+        for (p, w) in (first..).zip(&images) {
+            let row = self.basis[..=p].iter().map(|vi| dot(vi, w)).collect();
+            self.h.push(row);
         }
         images
     }

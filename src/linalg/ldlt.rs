@@ -193,19 +193,24 @@ impl LdltSolver {
         }))
     }
 
-    /// `x <- a^-1 x`.
-    pub fn solve_in_place(&self, x: &mut [f64]) {
-        let n = x.len();
+    /// The number of negative pivots of `D`: by Sylvester's law the negative eigenvalues of the
+    /// factorised matrix (no bound on its backward error: an estimate, as the solves are).
+    pub fn negative_pivots(&self) -> usize {
+        let mut negative = 0;
+        for_each_factor_column(&self.symbolic, &self.values, |column| {
+            let c = column.col;
+            negative += column.entries().filter(|&(r, v)| r == c && v < 0.0).count();
+        });
+        negative
+    }
+
+    /// `b <- a^-1 b` for every column of `b` (one pass over the factor for all of them).
+    pub fn solve_columns(&self, b: faer::MatMut<'_, f64>) {
         let par = faer::Par::Seq;
-        let req = self.symbolic.solve_in_place_scratch::<f64>(1, par);
+        let req = self.symbolic.solve_in_place_scratch::<f64>(b.ncols(), par);
         let mut mem = MemBuffer::new(req);
         faer::sparse::linalg::cholesky::LdltRef::<usize, f64>::new(&self.symbolic, &self.values)
-            .solve_in_place_with_conj(
-                faer::Conj::No,
-                faer::MatMut::from_column_major_slice_mut(x, n, 1),
-                par,
-                MemStack::new(&mut mem),
-            );
+            .solve_in_place_with_conj(faer::Conj::No, b, par, MemStack::new(&mut mem));
     }
 }
 

@@ -9,6 +9,7 @@ use crate::error::{Error, Result};
 use crate::linalg::compensated::Accumulator;
 use crate::linalg::{UNIT_ROUNDOFF, gamma};
 use crate::multiple::MultipleProblem;
+use crate::multiple::anisotropic::exactly_isotropic;
 use crate::multiple::laplacian::laplacian_plus_diagonal;
 use crate::so3::Rotation;
 use faer::sparse::SparseColMat;
@@ -42,11 +43,13 @@ pub(super) fn laplacian_times_compensated(
             // pass would
             for &(_, index) in adjacency.neighbours(v) {
                 let e = &edges[index];
-                match info {
-                    Some(info) => {
-                        anisotropic_end_times(node, e, info[index].matrix(), rotations, v)
-                    }
-                    None => scalar_end_times(node, e, rotations, v),
+                // `H = w I` exactly (a rig's couplings, `[H24]`) is the scalar edge of weight
+                // `w`: `2M = w I`, the same terms, a sixth of the products
+                let h = info.map(|info| info[index].matrix());
+                match h.map(|h| (exactly_isotropic(h), h)) {
+                    Some((None, h)) => anisotropic_end_times(node, e, h, rotations, v),
+                    Some((Some(w), _)) => scalar_end_times(node, e, w, rotations, v),
+                    None => scalar_end_times(node, e, e.weight, rotations, v),
                 }
             }
         }
@@ -59,10 +62,11 @@ pub(super) fn laplacian_times_compensated(
 fn scalar_end_times(
     node: &mut [[Accumulator; 3]; 3],
     e: &crate::multiple::Edge,
+    w: f64,
     rotations: &[Rotation],
     v: usize,
 ) {
-    let (w, r) = (e.weight, e.rotation.matrix());
+    let r = e.rotation.matrix();
     let (ri, rj) = (rotations[e.i].matrix(), rotations[e.j].matrix());
     for a in 0..3 {
         for b in 0..3 {
@@ -518,4 +522,70 @@ pub(crate) fn data_defect(problem: &MultipleProblem) -> f64 {
         }
     }
     (acc.value() + acc.bound()) * (1.0 + 4.0 * UNIT_ROUNDOFF)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::laplacian_times;
+    use crate::multiple::anisotropic::Information;
+    use crate::multiple::{Edge, MultipleProblem};
+    use crate::so3::{Rotation, exp, random_rotation};
+    use nalgebra::{Matrix3, Vector3};
+    use rand::{Rng, SeedableRng, rngs::StdRng};
+
+    /// `(Q Y)_i` of a graph whose edges mix `H = w I` (taken by the scalar terms) and general
+    /// information matrices, against `[A2]`'s formula in plain floating point for every edge
+    /// (`2M = tr(H) I - 2H`: node `i` gets `2M R_i - 2M R_ij^T R_j`, node `j` gets
+    /// `2M R_j - R_ij 2M R_i`), weights from 1e-3 to 1e5.
+    #[test]
+    fn isotropic_information_takes_the_scalar_terms_of_the_same_value() {
+        let mut rng = StdRng::seed_from_u64(7);
+        let n = 6;
+        let x: Vec<Rotation> = (0..n).map(|_| random_rotation(&mut rng)).collect();
+        let (mut edges, mut info) = (Vec::new(), Vec::new());
+        for k in 0..14 {
+            let (i, j) = (k % n, (k * 5 + 1) % n);
+            if i == j {
+                continue;
+            }
+            let noise = exp(&Vector3::new(0.1, -0.2, 0.05 * k as f64));
+            let rotation = noise * x[j] * x[i].inverse();
+            let w = 10f64.powi(k as i32 % 9 - 3);
+            let h = if k % 2 == 0 {
+                Matrix3::identity() * w
+            } else {
+                let a = Matrix3::from_fn(|_, _| rng.random::<f64>() - 0.5);
+                a * a.transpose() * w + Matrix3::identity() * 1e-3 * w
+            };
+            edges.push(Edge {
+                i,
+                j,
+                rotation,
+                weight: 1.0,
+            });
+            info.push(Information::new(h).unwrap());
+        }
+        let p = MultipleProblem::new(n, edges).unwrap();
+        let p = p.with_information(info.clone()).unwrap();
+        assert!(p.is_anisotropic());
+        let mut expected = vec![Matrix3::<f64>::zeros(); n];
+        let mut scale = vec![0.0f64; n];
+        for (e, h) in p.edges().iter().zip(&info) {
+            let m2 = Matrix3::identity() * h.matrix().trace() - h.matrix() * 2.0;
+            let (r, ri, rj) = (e.rotation.matrix(), x[e.i].matrix(), x[e.j].matrix());
+            expected[e.i] += m2 * ri - m2 * r.transpose() * rj;
+            expected[e.j] += m2 * rj - r * m2 * ri;
+            scale[e.i] += h.matrix().trace();
+            scale[e.j] += h.matrix().trace();
+        }
+        let got = laplacian_times(&p, &x);
+        for v in 0..n {
+            let error = (got[v] - expected[v]).amax();
+            assert!(
+                error <= 1e-13 * scale[v],
+                "node {v}: {error:e} of {:e}",
+                scale[v]
+            );
+        }
+    }
 }
