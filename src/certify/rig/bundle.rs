@@ -357,6 +357,10 @@ impl<'a> Space<'a> {
             rounds = round;
             let c = oracle.restricted(&s_at, &bundle);
             let (y, predicted) = self.model_step(&bundle, &c, rho, deadline)?;
+            // the point's spectrum is the round's other half (a factorisation and its solves)
+            if deadline.is_some_and(|d| d.passed()) {
+                break;
+            }
             let candidate = added(&at, &self.moves(&y));
             let (values, new_vectors, s_candidate) = oracle.at(self, &candidate)?;
             let serious = values[0] - lambda >= 0.1 * (predicted - lambda);

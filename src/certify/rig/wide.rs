@@ -38,9 +38,10 @@ pub(super) struct Wide<'a> {
 
 impl<'a> Wide<'a> {
     /// The search of `coupled`'s rig (the space's `variables`, and the most pseudo-edges its
-    /// points make), `None` when the model's gradient matrix (`svec` rows by the variables) or
-    /// the augmented graph rebuilt at a point would take more than a quarter of `max_bytes`
-    /// (the factor is held within another quarter).
+    /// points make), `None` when the model's gradient matrix (`svec` rows by the variables), or
+    /// the augmented graph rebuilt at a point with `S` at the point and at the candidate and a
+    /// Lanczos basis, would take more than a quarter of `max_bytes` (the factor is held within
+    /// another quarter).
     pub fn new(
         coupled: &'a Coupled,
         images: &'a MultipleProblem,
@@ -51,8 +52,13 @@ impl<'a> Wide<'a> {
         let (kept, added) = <Self as Spectrum>::WIDTHS;
         let r = kept + added;
         let gradient = 8 * (r * (r + 1) / 2 * variables) as u64;
-        // the rebuilt graph, and a Lanczos basis of `LANCZOS_VECTORS` vectors of `3N` values
-        let graph = (images.edges().len() + pseudo_edges) as u64 * BYTES_PER_EDGE
+        // the rebuilt graph; two sparse `S` (both triangles: two blocks per edge and one per
+        // image, 9 values and 9 row indices each); a Lanczos basis of `LANCZOS_VECTORS`
+        // vectors of `3N` values
+        let edges = (images.edges().len() + pseudo_edges) as u64;
+        let blocks = 2 * edges + x.len() as u64;
+        let graph = edges * BYTES_PER_EDGE
+            + 2 * blocks * 9 * 16
             + 8 * (LANCZOS_VECTORS * 3 * x.len()) as u64;
         (gradient <= max_bytes / 4 && graph <= max_bytes / 4).then_some(Wide {
             coupled,
