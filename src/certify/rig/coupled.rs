@@ -163,13 +163,13 @@ impl CoupledRung {
             max_bytes: cx.tally.settings.budget.max_memory_bytes,
             gap: cx.tally.allowed_gap,
         };
-        let Some(found) = search(&coupled, cx.problem, (x, sensors), limits)? else {
+        let images = cx.problem.image_graph()?;
+        let Some(found) = search(&coupled, &images, (x, sensors), limits)? else {
             if wide {
                 first = self.least_norm(cx, &coupled, x, settings, false)?;
             }
             return Ok((coupled, first, String::new()));
         };
-        let images = cx.problem.image_graph()?;
         let layout = coupled.layout.clone();
         let again = couplings::coupled(&images, layout, (found.sums, found.traces), sensors)?;
         let second = self.augmented_minimum(cx, &again, x, settings)?;

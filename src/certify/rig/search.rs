@@ -14,7 +14,7 @@ use crate::certify::multiple::multipliers::{FirstOrder, certificate_matrix};
 use crate::deadline::Deadline;
 use crate::error::Result;
 use crate::linalg::cholesky::to_dense;
-use crate::rig::RigProblem;
+use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
 use nalgebra::DMatrix;
 
@@ -54,14 +54,14 @@ fn dense_bytes(images: usize) -> u64 {
     DENSE_COPIES * 8 * (3 * images as u64).pow(2)
 }
 
-/// The search from `coupled` (the least-norm couplings at the image rotations `x`), or `None`
-/// when it does not apply (more than [`SEARCH_MAX_IMAGES`] images, or dense matrices over half
-/// of `max_bytes`, frames photographed by different sensors, `S` already positive
-/// semidefinite, an estimate too far from critical for any couplings: [`hopeless`]) or finds
-/// no positive `lambda_min`.
+/// The search from `coupled` (the least-norm couplings at the image rotations `x` of the
+/// rig's view graph `images`), or `None` when it does not apply (the dense or the sparse
+/// search's matrices over their share of `max_bytes`, frames photographed by different
+/// sensors, `S` already positive semidefinite, an estimate too far from critical for any
+/// couplings: [`hopeless`]) or finds no positive `lambda_min`.
 pub(crate) fn search(
     coupled: &Coupled,
-    problem: &RigProblem,
+    images: &MultipleProblem,
     (x, sensors): (&[Rotation], &[Rotation]),
     limits: Limits,
 ) -> Result<Option<Searched>> {
@@ -90,16 +90,15 @@ pub(crate) fn search(
             .bundle(&dense, start, limits.deadline)
             .map(|run| (run, false))
     } else {
-        let images = problem.image_graph()?;
         let wide = Wide::new(
             coupled,
-            &images,
+            images,
             (x, sensors),
             (space.variables(), space.pseudo_edges_at_most()),
             limits.max_bytes,
         );
         // the least-norm couplings' `S`, built above, is the search's start
-        let Some((wide, start)) = wide.and_then(|w| w.start(s).map(|start| (w, start))) else {
+        let Some((wide, start)) = wide.and_then(|w| w.spectrum(s).map(|start| (w, start))) else {
             return Ok(None);
         };
         space
@@ -258,7 +257,8 @@ mod tests {
                 max_bytes: u64::MAX,
                 gap: 1e-6 * p.cost(&frames, &sensors),
             };
-            let found = search(&c, &p, (&x, &sensors), limits)
+            let images = p.image_graph().unwrap();
+            let found = search(&c, &images, (&x, &sensors), limits)
                 .unwrap()
                 .expect("a positive lambda_min");
             assert!(

@@ -69,8 +69,8 @@ impl<'a> Wide<'a> {
         })
     }
 
-    /// The search's start: `s`, the least-norm couplings' `S`, with its bottom eigenpairs.
-    pub fn start(&self, s: SparseColMat<usize, f64>) -> Option<Eigen<SparseColMat<usize, f64>>> {
+    /// `s` with its bottom eigenpairs (the search's start: the least-norm couplings' `S`).
+    pub fn spectrum(&self, s: SparseColMat<usize, f64>) -> Option<Eigen<SparseColMat<usize, f64>>> {
         let (values, vectors) = bottom(&s, self.max_values)?;
         Some((values, vectors, s))
     }
@@ -97,9 +97,7 @@ impl Spectrum for Wide<'_> {
     const FIRST_RHO: f64 = 0.125;
 
     fn at(&self, space: &Space<'_>, moves: &Moves) -> Option<Eigen<Self::At>> {
-        let s = self.matrix(space, moves)?;
-        let (values, vectors) = bottom(&s, self.max_values)?;
-        Some((values, vectors, s))
+        self.spectrum(self.matrix(space, moves)?)
     }
 
     fn restricted(&self, s: &Self::At, v: &DMatrix<f64>) -> DMatrix<f64> {
