@@ -171,6 +171,12 @@ impl<'a> Space<'a> {
         self.per_frame.len() * self.k * (self.k - 1) / 2 * 9 + self.traces.pairs.len() * self.k * 3
     }
 
+    /// The most image pairs those pseudo-edges join: each frame's pairs of sensors, and each
+    /// trace coupling's pair of one sensor's images.
+    pub(super) fn pseudo_pairs_at_most(&self) -> usize {
+        self.per_frame.len() * self.k * (self.k - 1) / 2 + self.traces.pairs.len() * self.k
+    }
+
     /// The number of the space's variables.
     pub(super) fn variables(&self) -> usize {
         self.per_frame.len() * self.k * (self.k - 1) / 2 * PAIR_VARIABLES

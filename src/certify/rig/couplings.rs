@@ -159,8 +159,15 @@ pub(crate) fn coupled(
 /// pseudo-edge's weight `c` as the information `c I`, whose torques are the isotropic ones
 /// (`2M = c I` in `[A2]`'s `(Q Y)`), so the flows are unchanged.
 fn augmented(images: &MultipleProblem, pseudo: Vec<Edge>) -> Result<MultipleProblem> {
-    let mut edges = images.edges().to_vec();
-    let mut info = images.information().map(<[_]>::to_vec);
+    // sized once: the pseudo-edges are most of a large rig's augmented graph
+    let total = images.edges().len() + pseudo.len();
+    let mut edges = Vec::with_capacity(total);
+    edges.extend_from_slice(images.edges());
+    let mut info = images.information().map(|given| {
+        let mut all = Vec::with_capacity(total);
+        all.extend_from_slice(given);
+        all
+    });
     for e in pseudo {
         if let Some(info) = &mut info {
             info.push(crate::multiple::anisotropic::Information::isotropic(

@@ -90,13 +90,7 @@ pub(crate) fn search(
             .bundle(&dense, start, limits.deadline)
             .map(|run| (run, false))
     } else {
-        let wide = Wide::new(
-            coupled,
-            images,
-            (x, sensors),
-            (space.variables(), space.pseudo_edges_at_most()),
-            limits.max_bytes,
-        );
+        let wide = Wide::new(coupled, images, (x, sensors), &space, limits.max_bytes);
         // the least-norm couplings' `S`, built above, is the search's start
         let Some((wide, start)) = wide.and_then(|w| w.spectrum(s).map(|start| (w, start))) else {
             return Ok(None);
@@ -278,6 +272,17 @@ mod tests {
             .unwrap();
             let after = dense_min(&again.graph, &x);
             assert!(after > 0.0, "{before} -> {after}");
+            // the sizes the large search charges (`Wide::new`) bound the point's graph: its
+            // pseudo-edges and the image pairs they join beyond the view graph's
+            let edges = c.graph.edges().iter().map(|e| (e.i, e.j));
+            let space =
+                super::Space::new(&c.layout.per_frame, edges, (&x, &sensors), sensors.len());
+            assert!(again.pseudo_edges <= space.pseudo_edges_at_most());
+            let pairs = |g: &MultipleProblem| {
+                let all = g.edges().iter().map(|e| (e.i.min(e.j), e.i.max(e.j)));
+                all.collect::<std::collections::BTreeSet<_>>().len()
+            };
+            assert!(pairs(&again.graph) <= images.edges().len() + space.pseudo_pairs_at_most());
             assert_eq!(found.grounded, x.len() > super::SEARCH_MAX_IMAGES);
             assert!(
                 found.grounded || (after - found.reached).abs() <= 1e-6 * before.abs(),
