@@ -57,7 +57,7 @@ pub enum ImprovementSource {
     /// The rounding of the `conv(SO(3))` SDP's solution, polished by the local solver
     /// (anisotropic multiple averaging).
     ConvSdpRounding,
-    /// The alternation passes that polish a rig's estimate for its coupled bound
+    /// The rig solver's steps that polish a rig's estimate for its coupled bound
     /// (`paper-notes/conjugate.md` `[H21]`).
     RigPolish,
 }

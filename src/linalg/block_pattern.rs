@@ -21,6 +21,11 @@ impl SymbolicFactor {
     pub(crate) fn len_val(&self) -> usize {
         self.0.len_val()
     }
+
+    /// Multiply-adds of a numeric factorisation ([`super::cholesky::factor_multiply_adds`]).
+    pub(crate) fn multiply_adds(&self) -> f64 {
+        super::cholesky::factor_multiply_adds(&self.0)
+    }
 }
 
 /// A numeric sparse Cholesky factor `P A P^T = L L^T`.
@@ -218,6 +223,15 @@ impl BlockPattern {
             .map_err(|predicted| Error::Solver {
                 message: format!("symbolic sparse Cholesky refused at {predicted} values"),
             })
+    }
+
+    /// [`Self::symbolic_llt`], `None` when the ordering predicts more than `max_values` stored
+    /// values (refused before the column counts, [`Self::symbolic_within`]).
+    pub(crate) fn symbolic_llt_within(&self, max_values: usize) -> Result<Option<SymbolicFactor>> {
+        Ok(self
+            .symbolic_within(max_values)?
+            .ok()
+            .map(|(s, _)| SymbolicFactor(Arc::new(s))))
     }
 
     /// Numeric Cholesky with the given values; `None` if the matrix is not positive definite

@@ -5,8 +5,10 @@
 //!
 //! * [`RigProblem`]: the validated problem, its chordal cost `J(F, S)`, the frames' view graph
 //!   at fixed sensors and the images' view graph.
-//! * [`solve_rig`]: the local solver (frames by the sparse chordal Newton-LM, sensors by a
-//!   small dense Levenberg-Marquardt, alternated).
+//! * [`solve_rig`]: the local solver (from its start, joint Gauss-Newton steps in the frames
+//!   and sensors, the sensors eliminated by their Schur complement; with gravity priors, or
+//!   where those stall, frames by the sparse chordal Newton-LM and sensors by a small dense
+//!   Levenberg-Marquardt, alternated).
 //! * The certificate is [`crate::certify::certify_rig`], the pipeline
 //!   [`crate::pipeline::average_rig`].
 //! * [`RigScene`]: seeded rigs with planted frames and sensors.
@@ -15,6 +17,7 @@
 //! (with its coupled certificates) is [`crate::pipeline::simultaneous`].
 
 mod gravity;
+mod joint;
 mod problem;
 mod robust;
 mod solve;
@@ -25,6 +28,7 @@ mod synthetic;
 mod world;
 
 pub use gravity::FrameGravity;
+pub use joint::{JOINT_DIRECT_VALUES, JOINT_MAX_STEPS, JOINT_TOLERANCE};
 pub use problem::{Image, RigProblem, Sensor};
 pub use robust::{
     REWEIGHT_PASSES, RigRobust, RobustRig, residual_angles, solve_rig_robust, solve_rig_robust_from,

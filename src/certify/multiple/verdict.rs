@@ -118,7 +118,7 @@ fn improvement_text(cx: &State<'_>, b: &Best, tolerance: &GapTolerance) -> Strin
             ImprovementSource::ConvSdpRounding => {
                 "the conv(SO(3)) SDP rounding polished by the local solver"
             }
-            ImprovementSource::RigPolish => "the rig's alternation passes",
+            ImprovementSource::RigPolish => "the rig solver's polish",
         },
         if certified {
             ", which the bound below certifies globally optimal"

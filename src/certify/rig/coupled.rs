@@ -111,7 +111,7 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
             coupled.pseudo_edges,
             match passes {
                 0 => String::new(),
-                n => format!(" (at the estimate polished by {n} alternation passes)"),
+                n => format!(" (at the estimate polished by {n} steps of the rig's solver)"),
             },
             match (grouped, cx.problem.is_anisotropic()) {
                 (false, _) => "",
@@ -454,14 +454,16 @@ const COUPLED_MAX_FACTOR_VALUES: usize = 150_000_000;
 /// images, prove: [`fill_refusal`] predicts that pattern's factor for such rigs.
 const SCALAR_PROVES_UP_TO_ESTIMATED: usize = 2;
 
-/// Alternation passes added per round of [`polished`], and the most in all.
+/// Steps of the rig's solver (joint Gauss-Newton steps, or alternation passes where those do not
+/// apply) per round of [`polished`] at most, and the most in all.
 const POLISH_ROUND: usize = 5;
 const POLISH_MAX: usize = 200;
 
 /// The couplings at the estimate, or, while their charge for the sensors' gradient (linear in it,
-/// `[H21]`) is above a quarter of the allowed gap, at the estimate polished by alternation
-/// passes (at most [`POLISH_MAX`], within a third of the time left): the bound holds for the
-/// global minimum from any point. The point, its couplings and the passes run.
+/// `[H21]`) is above a quarter of the allowed gap, at the estimate polished by the rig's solver
+/// ([`polish_passes`]: at most [`POLISH_MAX`] steps, within a third of the time left, until a
+/// round takes none): the bound holds for the global minimum from any point. The point, its
+/// couplings and the steps taken.
 #[allow(clippy::type_complexity)]
 fn polished(
     cx: &RigState<'_>,
@@ -484,12 +486,17 @@ fn polished(
             return Ok(Ok((frames, sensors, coupled, passes)));
         }
         let seconds = deadline.map(|d| d.left().unwrap_or(0.0));
-        (frames, sensors) =
-            match polish_passes(cx.problem, (frames, sensors), POLISH_ROUND, seconds) {
-                Ok(polished) => polished,
-                Err(e) => return Ok(Err(format!("the polish failed: {e}"))),
-            };
-        passes += POLISH_ROUND;
+        let start = (frames.clone(), sensors.clone());
+        let (f, s, taken) = match polish_passes(cx.problem, start, POLISH_ROUND, seconds) {
+            Ok(polished) => polished,
+            Err(e) => return Ok(Err(format!("the polish failed: {e}"))),
+        };
+        // stationary to the cost's rounding already: these couplings are the polish's best
+        if taken == 0 {
+            return Ok(Ok((frames, sensors, coupled, passes)));
+        }
+        (frames, sensors) = (f, s);
+        passes += taken;
     }
 }
 
@@ -517,7 +524,9 @@ fn polish_report(
         }
     };
     crate::termination::SolverReport {
-        name: "rig-alternating polish of the coupled bound [H21]".into(),
+        name: "rig polish of the coupled bound [H21] (joint Gauss-Newton steps; alternation \
+               passes where they do not apply)"
+            .into(),
         iterations: passes,
         termination,
         seconds: clock.elapsed().as_secs_f64(),

@@ -145,7 +145,7 @@ pub(crate) fn coupled_graph_for_tests(
     let (problem, _) = scene.generate();
     let s = crate::rig::solve_rig(&problem, &Default::default()).expect("solves");
     let polished = crate::rig::polish_passes(&problem, (s.frames, s.sensors), 20, None);
-    let (frames, sensors) = polished.expect("polishes");
+    let (frames, sensors, _) = polished.expect("polishes");
     let coupled = couplings::couple(&problem, &frames, &sensors, u64::MAX)
         .expect("couples")
         .expect("couplings");
