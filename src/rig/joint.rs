@@ -458,17 +458,18 @@ mod tests {
         (p, truth.frames, truth.sensors)
     }
 
-    /// `J` with variable `v` (frames `1..n` then the unknown sensors, 3 each) turned by `t`.
-    fn turned(p: &RigProblem, (f, s): (&[Rotation], &[Rotation]), v: usize, t: f64) -> f64 {
+    /// `J` with each variable `v` of `moves` (frames `1..n` then the unknown sensors, 3 each)
+    /// turned by its `t`.
+    fn turned(p: &RigProblem, (f, s): (&[Rotation], &[Rotation]), moves: &[(usize, f64)]) -> f64 {
         let (mut f, mut s) = (f.to_vec(), s.to_vec());
-        let mut d = Vector3::zeros();
-        d[v % 3] = t;
-        let frames = 3 * (f.len() - 1);
-        if v < frames {
-            f[v / 3 + 1] *= exp(&d);
-        } else {
-            let u = p.estimated_sensors()[(v - frames) / 3];
-            s[u] *= exp(&d);
+        for &(v, t) in moves {
+            let mut d = Vector3::zeros();
+            d[v % 3] = t;
+            let frames = 3 * (f.len() - 1);
+            match v < frames {
+                true => f[v / 3 + 1] *= exp(&d),
+                false => s[p.estimated_sensors()[(v - frames) / 3]] *= exp(&d),
+            }
         }
         p.cost(&f, &s)
     }
@@ -504,7 +505,7 @@ mod tests {
             let (g, _) = dense(&joint, &joint.system(&f, &s));
             let t = 1e-6;
             let fd = DVector::from_fn(g.len(), |v, _| {
-                (turned(&p, (&f, &s), v, t) - turned(&p, (&f, &s), v, -t)) / (2.0 * t)
+                (turned(&p, (&f, &s), &[(v, t)]) - turned(&p, (&f, &s), &[(v, -t)])) / (2.0 * t)
             });
             assert!(
                 (2.0 * &g - &fd).norm() <= 1e-6 * fd.norm(),
@@ -522,19 +523,7 @@ mod tests {
             let joint = Joint::new(&p, &s).unwrap().unwrap();
             let (_, h) = dense(&joint, &joint.system(&f, &s));
             let t = 1e-4;
-            let at = |v: usize, a: f64, w: usize, b: f64| {
-                let (mut f, mut s) = (f.clone(), s.clone());
-                for (v, t) in [(v, a), (w, b)] {
-                    let mut d = Vector3::zeros();
-                    d[v % 3] = t;
-                    let frames = 3 * (f.len() - 1);
-                    match v < frames {
-                        true => f[v / 3 + 1] *= exp(&d),
-                        false => s[p.estimated_sensors()[(v - frames) / 3]] *= exp(&d),
-                    }
-                }
-                p.cost(&f, &s)
-            };
+            let at = |v: usize, a: f64, w: usize, b: f64| turned(&p, (&f, &s), &[(v, a), (w, b)]);
             let fd = DMatrix::from_fn(h.nrows(), h.ncols(), |v, w| {
                 (at(v, t, w, t) - at(v, t, w, -t) - at(v, -t, w, t) + at(v, -t, w, -t))
                     / (4.0 * t * t)
