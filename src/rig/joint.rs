@@ -115,8 +115,13 @@ struct System {
 impl<'a> Joint<'a> {
     /// The steps of `problem` (the frames' block's pattern from its frames' view graph at
     /// `sensors`), `None` with gravity priors, no sensor to estimate, a single frame, or a
-    /// frames' factor over [`JOINT_DIRECT_VALUES`] or [`JOINT_MULTIPLY_ADDS`].
-    pub fn new(problem: &'a RigProblem, sensors: &[Rotation]) -> Result<Option<Self>> {
+    /// frames' factor over `max_values` (a caller's memory budget), [`JOINT_DIRECT_VALUES`] or
+    /// [`JOINT_MULTIPLY_ADDS`].
+    pub fn new(
+        problem: &'a RigProblem,
+        sensors: &[Rotation],
+        max_values: usize,
+    ) -> Result<Option<Self>> {
         let unknown = problem.estimated_sensors();
         if problem.gravity().is_some() || unknown.is_empty() || problem.num_frames() < 2 {
             return Ok(None);
@@ -124,7 +129,8 @@ impl<'a> Joint<'a> {
         let (graph, _) = problem.frame_graph_for_solve(sensors)?;
         let pattern = grounded_pattern(&graph, 3);
         // `3K + 1` right-hand sides per step: a factor pays for itself where it fits
-        let Some(symbolic) = pattern.symbolic_llt_within(JOINT_DIRECT_VALUES)? else {
+        let Some(symbolic) = pattern.symbolic_llt_within(max_values.min(JOINT_DIRECT_VALUES))?
+        else {
             return Ok(None);
         };
         if symbolic.multiply_adds() > JOINT_MULTIPLY_ADDS {
@@ -501,7 +507,7 @@ mod tests {
     fn the_gradient_is_half_the_cost_s_derivative() {
         for anisotropy in [1.0, 9.0] {
             let (p, f, s) = small(0.1, anisotropy);
-            let joint = Joint::new(&p, &s).unwrap().unwrap();
+            let joint = Joint::new(&p, &s, usize::MAX).unwrap().unwrap();
             let (g, _) = dense(&joint, &joint.system(&f, &s));
             let t = 1e-6;
             let fd = DVector::from_fn(g.len(), |v, _| {
@@ -520,7 +526,7 @@ mod tests {
     fn the_hessian_is_half_the_cost_s_at_a_noise_free_rig() {
         for anisotropy in [1.0, 9.0] {
             let (p, f, s) = small(0.0, anisotropy);
-            let joint = Joint::new(&p, &s).unwrap().unwrap();
+            let joint = Joint::new(&p, &s, usize::MAX).unwrap().unwrap();
             let (_, h) = dense(&joint, &joint.system(&f, &s));
             let t = 1e-4;
             let at = |v: usize, a: f64, w: usize, b: f64| turned(&p, (&f, &s), &[(v, a), (w, b)]);

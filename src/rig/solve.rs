@@ -7,7 +7,7 @@
 //! `K` of them), solved by Levenberg-Marquardt on dense `3K x 3K` normal equations. Neither step
 //! increases `J`.
 
-use super::joint::{JOINT_MAX_STEPS, Joint};
+use super::joint::{JOINT_DIRECT_VALUES, JOINT_MAX_STEPS, Joint};
 use super::problem::RigProblem;
 use super::start::start_sensors;
 use crate::deadline::{Deadline, limit_reached, remaining};
@@ -175,7 +175,7 @@ fn alternate(
     let left = || remaining(settings.max_seconds, clock);
     let deadline = Deadline::after(left());
     let (mut passes, mut name) = (0, ALTERNATING);
-    if let Some(joint) = Joint::new(p, &sensors)? {
+    if let Some(joint) = Joint::new(p, &sensors, JOINT_DIRECT_VALUES)? {
         let steps = settings.max_passes.min(JOINT_MAX_STEPS);
         let (f, s, taken, stop) = joint.run((frames, sensors), (steps, false), deadline);
         (frames, sensors, passes) = (f, s, taken);
@@ -251,18 +251,20 @@ fn rig_solution(
 /// alternation's stopping rule leaves (`paper-notes/conjugate.md` `[H21]`): joint Gauss-Newton
 /// steps ([`Joint`], at most `passes`) to their convergence; where they do not apply (gravity
 /// priors) or stall, `passes` alternation passes ([`Passes`]) with no convergence test. Stops
-/// early at `max_seconds`. The point and the steps and passes taken (none: it was stationary
-/// to the cost's rounding already).
+/// early at `max_seconds`; the joint steps' factor is held within a quarter of `max_bytes`.
+/// The point and the steps and passes taken (none: it was stationary to the cost's rounding
+/// already).
 pub(crate) fn polish_passes(
     p: &RigProblem,
     (mut frames, mut sensors): (Vec<Rotation>, Vec<Rotation>),
     passes: usize,
-    max_seconds: Option<f64>,
+    (max_seconds, max_bytes): (Option<f64>, u64),
 ) -> Result<(Vec<Rotation>, Vec<Rotation>, usize)> {
     let clock = Instant::now();
     let left = || remaining(max_seconds, clock);
     let mut taken = 0;
-    if let Some(joint) = Joint::new(p, &sensors)? {
+    let max_values = usize::try_from(max_bytes / 4 / 8).unwrap_or(usize::MAX);
+    if let Some(joint) = Joint::new(p, &sensors, max_values)? {
         let limits = (passes, true);
         let (f, s, steps, stop) = joint.run((frames, sensors), limits, Deadline::after(left()));
         (frames, sensors, taken) = (f, s, steps);

@@ -487,10 +487,11 @@ fn polished(
         }
         let seconds = deadline.map(|d| d.left().unwrap_or(0.0));
         let start = (frames.clone(), sensors.clone());
-        let (f, s, taken) = match polish_passes(cx.problem, start, POLISH_ROUND, seconds) {
-            Ok(polished) => polished,
-            Err(e) => return Ok(Err(format!("the polish failed: {e}"))),
-        };
+        let (f, s, taken) =
+            match polish_passes(cx.problem, start, POLISH_ROUND, (seconds, max_bytes)) {
+                Ok(polished) => polished,
+                Err(e) => return Ok(Err(format!("the polish failed: {e}"))),
+            };
         // stationary to the cost's rounding already: these couplings are the polish's best
         if taken == 0 {
             return Ok(Ok((frames, sensors, coupled, passes)));

@@ -504,7 +504,8 @@ mod tests {
         };
         let (p, _) = scene.generate();
         let s = solve_rig(&p, &RigSettings::default()).unwrap();
-        let (frames, sensors, _) = polish_passes(&p, (s.frames, s.sensors), 30, None).unwrap();
+        let (frames, sensors, _) =
+            polish_passes(&p, (s.frames, s.sensors), 30, (None, u64::MAX)).unwrap();
         let sensors = p.at_held(&sensors);
         (p, frames, sensors)
     }

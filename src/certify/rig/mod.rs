@@ -144,7 +144,7 @@ pub(crate) fn coupled_graph_for_tests(
 ) -> (crate::multiple::MultipleProblem, Vec<Rotation>, Vec<usize>) {
     let (problem, _) = scene.generate();
     let s = crate::rig::solve_rig(&problem, &Default::default()).expect("solves");
-    let polished = crate::rig::polish_passes(&problem, (s.frames, s.sensors), 20, None);
+    let polished = crate::rig::polish_passes(&problem, (s.frames, s.sensors), 20, (None, u64::MAX));
     let (frames, sensors, _) = polished.expect("polishes");
     let coupled = couplings::couple(&problem, &frames, &sensors, u64::MAX)
         .expect("couples")

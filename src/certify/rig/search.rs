@@ -241,7 +241,8 @@ mod tests {
             // with scalar weights `tr(H) / 3`: the isotropic rung's graph
             let p = if scalar { p.scalar() } else { p };
             let s = solve_rig(&p, &RigSettings::default()).unwrap();
-            let (frames, sensors, _) = polish_passes(&p, (s.frames, s.sensors), 10, None).unwrap();
+            let (frames, sensors, _) =
+                polish_passes(&p, (s.frames, s.sensors), 10, (None, u64::MAX)).unwrap();
             let c = couple(&p, &frames, &sensors, u64::MAX).unwrap().unwrap();
             let x = p.image_rotations(&frames, &sensors);
             let before = dense_min(&c.graph, &x);

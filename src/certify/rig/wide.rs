@@ -231,7 +231,8 @@ mod tests {
         };
         let (p, _) = scene.generate();
         let s = solve_rig(&p, &RigSettings::default()).unwrap();
-        let (frames, sensors, _) = polish_passes(&p, (s.frames, s.sensors), 10, None).unwrap();
+        let (frames, sensors, _) =
+            polish_passes(&p, (s.frames, s.sensors), 10, (None, u64::MAX)).unwrap();
         let c = couple(&p, &frames, &sensors, u64::MAX).unwrap().unwrap();
         let x = p.image_rotations(&frames, &sensors);
         let first = FirstOrder::at(&c.graph, &x).unwrap();
