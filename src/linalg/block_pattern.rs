@@ -35,6 +35,11 @@ pub(crate) struct SparseLlt {
 }
 
 impl SparseLlt {
+    /// Stored values of the factor.
+    pub(crate) fn len_val(&self) -> usize {
+        self.values.len()
+    }
+
     /// Solve `A X = B` in place. The triangular solves run sequentially: with a few
     /// right-hand sides, rayon's synchronisation costs more than it saves (the preconditioner
     /// of a 10^6-node grid sweep, 3 right-hand sides: 1.2-3 s per solve with faer's default
@@ -189,6 +194,25 @@ impl BlockPattern {
     pub(crate) fn diagonal(&self, val: &[f64]) -> Vec<f64> {
         (0..self.col_ptr.len() - 1)
             .map(|c| val[self.col_ptr[c]])
+            .collect()
+    }
+
+    /// The diagonal `bs x bs` blocks, each in the top-left of a 3x3 matrix (identity beyond `bs`).
+    pub(crate) fn diagonal_blocks(&self, val: &[f64]) -> Vec<Matrix3<f64>> {
+        let bs = self.bs;
+        let blocks = (self.col_ptr.len() - 1) / bs;
+        (0..blocks)
+            .map(|q| {
+                let mut m = Matrix3::identity();
+                for b in 0..bs {
+                    let c = self.col_ptr[bs * q + b];
+                    for a in b..bs {
+                        m[(a, b)] = val[c + a - b];
+                        m[(b, a)] = val[c + a - b];
+                    }
+                }
+                m
+            })
             .collect()
     }
 

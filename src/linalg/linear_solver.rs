@@ -95,9 +95,14 @@ impl ScalarLaplacian {
         )
     }
 
+    /// Stored values of the factor of `K`.
+    pub(crate) fn factor_len(&self) -> usize {
+        self.llt.len_val()
+    }
+
     /// `z[k] = M^{-1} r[k]` for node-major vectors (`3 q + a`), all columns in one sparse
     /// triangular solve pair.
-    fn apply(&self, r: &[&[f64]], z: &mut [&mut [f64]]) {
+    pub(crate) fn apply(&self, r: &[&[f64]], z: &mut [&mut [f64]]) {
         let n = self.nblocks;
         let frame = |q: usize| self.frames.as_ref().map(|f| f[q]);
         // column 3 k + a of `b` holds component a of F^T r[k]
@@ -187,22 +192,9 @@ impl LinearSolver {
             LinearSolver::Direct(sym) => return pattern.llt(sym, val).map(Factor::Direct),
             LinearSolver::Laplacian(l) => Preconditioner::Laplacian(l),
             LinearSolver::Jacobi => {
-                let bs = pattern.block_size();
-                let col_ptr = pattern.col_ptr();
-                let nb = (col_ptr.len() - 1) / bs;
-                let mut inv = Vec::with_capacity(nb);
-                for q in 0..nb {
-                    let mut m = Matrix3::identity();
-                    for b in 0..bs {
-                        let c = col_ptr[bs * q + b];
-                        for a in b..bs {
-                            m[(a, b)] = val[c + a - b];
-                            m[(b, a)] = val[c + a - b];
-                        }
-                    }
-                    inv.push(m.cholesky()?.inverse());
-                }
-                Preconditioner::Jacobi(inv)
+                let blocks = pattern.diagonal_blocks(val).into_iter();
+                let inv = blocks.map(|m| Some(m.cholesky()?.inverse()));
+                Preconditioner::Jacobi(inv.collect::<Option<_>>()?)
             }
         };
         Some(Factor::Pcg {

@@ -6,7 +6,8 @@
 //! * [`RigProblem`]: the validated problem, its chordal cost `J(F, S)`, the frames' view graph
 //!   at fixed sensors and the images' view graph.
 //! * [`solve_rig`]: the local solver (from its start, joint Gauss-Newton steps in the frames
-//!   and sensors, the sensors eliminated by their Schur complement; with gravity priors, or
+//!   and sensors, by preconditioned conjugate gradients or the frames' sparse Cholesky; with
+//!   gravity priors, or
 //!   where those stall, frames by the sparse chordal Newton-LM and sensors by a small dense
 //!   Levenberg-Marquardt, alternated).
 //! * The certificate is [`crate::certify::certify_rig`], the pipeline
@@ -28,7 +29,7 @@ mod synthetic;
 mod world;
 
 pub use gravity::FrameGravity;
-pub use joint::{JOINT_DIRECT_VALUES, JOINT_MAX_STEPS, JOINT_TOLERANCE};
+pub use joint::{JOINT_CG_ITERATIONS, JOINT_DIRECT_VALUES, JOINT_MAX_STEPS, JOINT_TOLERANCE};
 pub use problem::{Image, RigProblem, Sensor};
 pub use robust::{
     REWEIGHT_PASSES, RigRobust, RobustRig, residual_angles, solve_rig_robust, solve_rig_robust_from,

@@ -95,7 +95,9 @@ pub fn solve_rig(p: &RigProblem, settings: &RigSettings) -> Result<RigSolution> 
         // would solve it again: with gravity priors, from its unconstrained start)
         return held_solution(p, sensors, placed, left(), clock);
     }
-    // from the held sensors' frames when they place every frame, else the spectral start
+    // from the held sensors' frames when they place every frame, else the spectral start (the
+    // joint steps too: from the held sensors' frames alone, a rig of 10^4 frames along a path
+    // of 3-frame pairs ended in a local minimum 2 % above this start's)
     let frames = frame_step(p, &sensors, placed, left())?;
     alternate(p, (frames, sensors), settings, clock)
 }
@@ -222,7 +224,8 @@ fn alternate(
 }
 
 /// The solver's name in its report: joint steps alone, or alternation passes.
-const JOINT: &str = "rig: joint Gauss-Newton (sparse frames, Schur complement on the sensors)";
+const JOINT: &str =
+    "rig: joint Gauss-Newton (frames and sensors; conjugate gradients, or the frames' factor)";
 const ALTERNATING: &str = "rig-alternating (sparse frames, dense sensors)";
 
 /// The solution at `(frames, sensors)` (the sensors projected on `SO(3)`), after `iterations`
