@@ -318,7 +318,7 @@ impl<'a> Joint<'a> {
 
     /// Whether [`Joint::new`] gives steps for `problem`: no gravity priors, a sensor to
     /// estimate, two frames or more.
-    fn applies(problem: &RigProblem) -> bool {
+    pub(super) fn applies(problem: &RigProblem) -> bool {
         let unknown = problem.estimated_sensors();
         problem.gravity().is_none() && !unknown.is_empty() && problem.num_frames() >= 2
     }
