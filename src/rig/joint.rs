@@ -175,9 +175,14 @@ fn cg_budget(
 /// frames' block of the (half) Gauss-Newton Hessian is `sum 2 X_a^T H X_a (e_f - e_g)(e_f -
 /// e_g)^T`, which scalar weights make exactly `K ⊗ I_3` and information matrices approximate by
 /// their trace. The same factor serves every step. `None` where the multiple solver would not
-/// use it ([`choose_solver`]: expander-like graphs, whose factor fills; block-Jacobi there) or
-/// where `K` is not numerically positive definite.
-fn frames_laplacian(graph: &MultipleProblem, terms: &[Term]) -> Result<Option<ScalarLaplacian>> {
+/// use it ([`choose_solver`]: expander-like graphs, whose factor fills; block-Jacobi there),
+/// where its factor has more than `max_values` values (the caller's memory), or where `K` is
+/// not numerically positive definite.
+fn frames_laplacian(
+    graph: &MultipleProblem,
+    terms: &[Term],
+    max_values: usize,
+) -> Result<Option<ScalarLaplacian>> {
     if choose_solver(graph)?.kind == SolverKind::Jacobi {
         return Ok(None);
     }
@@ -192,7 +197,12 @@ fn frames_laplacian(graph: &MultipleProblem, terms: &[Term]) -> Result<Option<Sc
             )
         })
         .collect();
-    ScalarLaplacian::new(graph.num_rotations() - 1, &edges, 0.0, None, None)
+    let nodes = graph.num_rotations() - 1;
+    let pattern = ScalarLaplacian::pattern(nodes, &edges);
+    let Some(symbolic) = pattern.symbolic_llt_within(max_values)? else {
+        return Ok(None);
+    };
+    ScalarLaplacian::new(nodes, &edges, 0.0, None, Some(symbolic))
 }
 
 /// Each edge's [`Term`], its frames' slot in `pattern`.
@@ -278,9 +288,10 @@ struct System {
 
 impl<'a> Joint<'a> {
     /// The steps of `problem` (the frames' block's pattern from its frames' view graph at
-    /// `sensors`; the frames' factor to fall back to only within `max_values`, a caller's
-    /// memory budget, [`JOINT_DIRECT_VALUES`] and [`JOINT_MULTIPLY_ADDS`]), `None` with gravity
-    /// priors, no sensor to estimate, or a single frame.
+    /// `sensors`; the frames' factor to fall back to, and the frames' Laplacian
+    /// preconditioner, only within `max_values`, a caller's memory budget, and
+    /// [`JOINT_DIRECT_VALUES`]; the factor also within [`JOINT_MULTIPLY_ADDS`]), `None` with
+    /// gravity priors, no sensor to estimate, or a single frame.
     pub fn new(
         problem: &'a RigProblem,
         sensors: &[Rotation],
@@ -295,7 +306,7 @@ impl<'a> Joint<'a> {
         let terms = terms(problem, &pattern);
         let symbolic = pattern.symbolic_llt_within(max_values.min(JOINT_DIRECT_VALUES))?;
         let symbolic = symbolic.filter(|f| f.multiply_adds() <= JOINT_MULTIPLY_ADDS);
-        let laplacian = frames_laplacian(&graph, &terms)?;
+        let laplacian = frames_laplacian(&graph, &terms, max_values.min(JOINT_DIRECT_VALUES))?;
         let solvers = (symbolic.as_ref(), laplacian.as_ref());
         let cg_budget = cg_budget(&pattern, solvers, unknown.len());
         let mut column = vec![None; problem.held().len()];

@@ -258,7 +258,8 @@ fn rig_solution(
 /// alternation's stopping rule leaves (`paper-notes/conjugate.md` `[H21]`): joint Gauss-Newton
 /// steps ([`Joint`], at most `passes`) to their convergence; where they do not apply (gravity
 /// priors) or stall, `passes` alternation passes ([`Passes`]) with no convergence test. Stops
-/// early at `max_seconds`; the joint steps' factor is held within a quarter of `max_bytes`.
+/// early at `max_seconds`; the joint steps' factor and preconditioner are held within a quarter
+/// of `max_bytes`.
 /// The point and the steps and passes taken (none: it was stationary to the cost's rounding
 /// already).
 pub(crate) fn polish_passes(
