@@ -476,9 +476,10 @@ impl<'a> Joint<'a> {
     }
 
     /// The damped step `(dx, dy)` and its predicted decrease (of `J`'s model
-    /// `J + 2 g^T d + d^T h d`), or `None` when a damped block is not positive definite: by the
-    /// frames' factor ([`Self::direct_step`]) or, where it fills, by conjugate gradients to the
-    /// relative residual `eta` ([`Self::iterative_step`]).
+    /// `J + 2 g^T d + d^T h d`), or `None` when the damped system is not positive definite: by
+    /// conjugate gradients to the relative residual `eta` ([`Self::iterative_step`]) or, once
+    /// they have run past `cg_budget` where there is a frames' factor, by that factor
+    /// ([`Self::direct_step`]).
     fn step(
         &self,
         s: &System,
