@@ -127,6 +127,13 @@ impl ScalarLaplacian {
     }
 }
 
+/// The inverses of the diagonal blocks of the matrix with `pattern` and values `val` (the
+/// block-Jacobi preconditioner); `None` if a block is not positive definite.
+pub(crate) fn jacobi_inverses(pattern: &BlockPattern, val: &[f64]) -> Option<Vec<Matrix3<f64>>> {
+    let blocks = pattern.diagonal_blocks(val).into_iter();
+    blocks.map(|m| Some(m.cholesky()?.inverse())).collect()
+}
+
 /// Linear solver for a symmetric block-sparse matrix with the pattern of a [`BlockPattern`].
 pub(crate) enum LinearSolver {
     /// Sparse Cholesky; symbolic factorisation done once.
@@ -191,11 +198,7 @@ impl LinearSolver {
         let precond = match self {
             LinearSolver::Direct(sym) => return pattern.llt(sym, val).map(Factor::Direct),
             LinearSolver::Laplacian(l) => Preconditioner::Laplacian(l),
-            LinearSolver::Jacobi => {
-                let blocks = pattern.diagonal_blocks(val).into_iter();
-                let inv = blocks.map(|m| Some(m.cholesky()?.inverse()));
-                Preconditioner::Jacobi(inv.collect::<Option<_>>()?)
-            }
+            LinearSolver::Jacobi => Preconditioner::Jacobi(jacobi_inverses(pattern, val)?),
         };
         Some(Factor::Pcg {
             pattern,

@@ -20,7 +20,7 @@ use super::problem::RigProblem;
 use crate::deadline::{Deadline, limit_reached};
 use crate::error::Result;
 use crate::linalg::block_pattern::{BlockPattern, SymbolicFactor};
-use crate::linalg::linear_solver::{LinearSolver, ScalarLaplacian, SolverKind};
+use crate::linalg::linear_solver::{LinearSolver, ScalarLaplacian, SolverKind, jacobi_inverses};
 use crate::multiple::MultipleProblem;
 use crate::multiple::chordal::{choose_solver, grounded_pattern};
 use crate::so3::{Rotation, exp, nearest_rotation};
@@ -248,14 +248,14 @@ struct Damped {
 
 impl Damped {
     /// `y = (h + D) x`, the damped system's product (frames then sensors; `coupling`: the
-    /// frames-sensors block by columns).
-    fn times(&self, pattern: &BlockPattern, coupling: &[Vec<f64>], x: &[f64], y: &mut [f64]) {
-        let rows = y.len() - coupling.len();
+    /// frames-sensors block).
+    fn times(&self, pattern: &BlockPattern, coupling: &Mat<f64>, x: &[f64], y: &mut [f64]) {
+        let rows = coupling.nrows();
         let (xf, xs) = x.split_at(rows);
         let (yf, ys) = y.split_at_mut(rows);
         pattern.sym_mul_flat(&self.frames, xf, yf);
-        for (u, column) in coupling.iter().enumerate() {
-            let xu = xs[u];
+        for u in 0..coupling.ncols() {
+            let (column, xu) = (coupling.col_as_slice(u), xs[u]);
             for (y, c) in yf.iter_mut().zip(column) {
                 *y += c * xu;
             }
@@ -574,21 +574,15 @@ impl<'a> Joint<'a> {
         d: &Damped,
         (eta, stop_at): (f64, Option<Instant>),
     ) -> Option<(Step, bool)> {
-        let (rows, k) = (s.frames_g.len(), s.sensors_g.len());
+        let rows = s.frames_g.len();
         // block-Jacobi on the frames where there is no Laplacian preconditioner
-        let jacobi = match self.laplacian {
+        let blocks = match self.laplacian {
             Some(_) => Vec::new(),
-            None => self.pattern.diagonal_blocks(&d.frames),
+            None => jacobi_inverses(&self.pattern, &d.frames)?,
         };
-        let blocks: Vec<Matrix3<f64>> = (jacobi.into_iter())
-            .map(|m| Some(m.cholesky()?.inverse()))
-            .collect::<Option<_>>()?;
         let sensors_inverse = d.sensors.clone().cholesky()?.inverse();
-        let coupling: Vec<Vec<f64>> = (0..k)
-            .map(|u| (0..rows).map(|r| s.coupling[(r, u)]).collect())
-            .collect();
         let pattern = &self.pattern;
-        let times = |x: &[f64], y: &mut [f64]| d.times(pattern, &coupling, x, y);
+        let times = |x: &[f64], y: &mut [f64]| d.times(pattern, &s.coupling, x, y);
         let laplacian = self.laplacian.as_ref();
         let apply = |r: &[&[f64]], z: &mut [&mut [f64]]| {
             if let Some(l) = laplacian {

@@ -98,11 +98,8 @@ pub fn solve_rig(p: &RigProblem, settings: &RigSettings) -> Result<RigSolution> 
     // from the held sensors' frames when they place every frame, else the spectral start (the
     // joint steps too: from the held sensors' frames alone, a rig of 10^4 frames along a path
     // of 3-frame pairs ended in a local minimum 2 % above this start's)
-    let frames = match Joint::applies(p) {
-        // the joint steps finish what a rough frame step leaves
-        true => frame_solve(p, &sensors, placed, (left(), true))?.rotations,
-        false => frame_step(p, &sensors, placed, left())?,
-    };
+    // rough where the joint steps follow: they finish what it leaves
+    let frames = frame_solve(p, &sensors, placed, (left(), Joint::applies(p)))?.rotations;
     alternate(p, (frames, sensors), settings, clock)
 }
 
