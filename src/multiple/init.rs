@@ -44,7 +44,9 @@ pub fn initialise(problem: &MultipleProblem, init: &Initialisation) -> Result<Ve
 /// (the variance of a measurement up to a common factor), from a central node `c` (the middle
 /// of a long shortest path found by two breadth-first sweeps); rotations are propagated from
 /// `R_c = I` along the tree by `R_j = R_ij R_i` (edges used in either direction), then the
-/// gauge is fixed by `R_0 = I`. Every node's rotation is the product of the measurements on
+/// gauge is fixed by `R_0 = I` (with information, `w_ij` is
+/// [`crate::multiple::anisotropic::Information::start_weight`], the inverse of the mean
+/// variance, `[A17]`). Every node's rotation is the product of the measurements on
 /// its tree path, so the tree that minimises each path's summed variance from a central root
 /// minimises the drift of the start (a 10^6-node grid sweep: paths of about 10^3 edges, where
 /// the sweep's own odometry chain has 10^6). Each product is replaced by its nearest rotation
@@ -62,6 +64,8 @@ pub fn initialise(problem: &MultipleProblem, init: &Initialisation) -> Result<Ve
 /// assert!(r.iter().zip(&truth).all(|(a, b)| angle_between(a, b) < 1e-12));
 /// ```
 pub fn spanning_tree(problem: &MultipleProblem) -> Vec<Rotation> {
+    let start = problem.start_graph();
+    let problem = start.as_ref();
     let n = problem.num_rotations();
     if n == 0 {
         return Vec::new();
@@ -154,7 +158,9 @@ pub const SPECTRAL_INNER_TOLERANCE: f64 = 1e-5;
 pub const SPECTRAL_MAX_ITERATIONS: usize = 50;
 
 /// Spectral initialisation `[M5]`: an orthonormal basis `Y` (3n x 3) of the bottom-3 invariant
-/// subspace of the connection Laplacian `Q`, by block inverse iteration with a sparse
+/// subspace of the connection Laplacian `Q` (of the scalar weights; with information, each
+/// edge's [`crate::multiple::anisotropic::Information::start_weight`], `[A17]`), by block
+/// inverse iteration with a sparse
 /// Cholesky factorisation of `Q + sigma I` (`sigma = 1e-6` x mean weighted degree; factorised
 /// once), started from the spanning-tree estimate; stopped when the residual
 /// [`SPECTRAL_TOLERANCE`] x mean degree or after [`SPECTRAL_MAX_ITERATIONS`].
@@ -192,6 +198,9 @@ pub(crate) fn spectral_within(
     kind: Option<SolverKind>,
     deadline: Option<Deadline>,
 ) -> Result<Vec<Rotation>> {
+    // with information, the scalar weights of [A17]
+    let start = problem.start_graph();
+    let problem = start.as_ref();
     let n = problem.num_rotations();
     let tree = spanning_tree(problem);
     if n < 2 {

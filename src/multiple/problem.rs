@@ -246,6 +246,27 @@ impl MultipleProblem {
         Ok(self)
     }
 
+    /// The graph a start is computed on (`[A17]`): with information, the same edges with scalar
+    /// weights [`Information::start_weight`] and no information; else the problem itself.
+    pub(crate) fn start_graph(&self) -> std::borrow::Cow<'_, MultipleProblem> {
+        let Some(info) = &self.information else {
+            return std::borrow::Cow::Borrowed(self);
+        };
+        let edges = (self.edges.iter().zip(info))
+            .map(|(e, h)| Edge {
+                weight: h.start_weight(),
+                ..*e
+            })
+            .collect();
+        std::borrow::Cow::Owned(MultipleProblem {
+            num_rotations: self.num_rotations,
+            edges,
+            information: None,
+            isotropic_information: false,
+            objective: self.objective,
+        })
+    }
+
     /// The information matrices, one per edge, when the measurements are anisotropic.
     pub fn information(&self) -> Option<&[Information]> {
         self.information.as_deref()

@@ -89,30 +89,29 @@ pub fn solve_rig(p: &RigProblem, settings: &RigSettings) -> Result<RigSolution> 
     let clock = Instant::now();
     let left = || remaining(settings.max_seconds, clock);
     check_estimated_sensors(p)?;
-    let (sensors, placed) = start_sensors(p, left())?;
+    let sensors = start_sensors(p, left())?;
     if p.all_held() {
         // nothing to alternate: the frames' problem at the held sensors, solved once (a pass
         // would solve it again: with gravity priors, from its unconstrained start)
-        return held_solution(p, sensors, placed, left(), clock);
+        return held_solution(p, sensors, left(), clock);
     }
-    // from the held sensors' frames when they place every frame, else the spectral start (the
-    // joint steps too: from the held sensors' frames alone, a rig of 10^4 frames along a path
-    // of 3-frame pairs ended in a local minimum 2 % above this start's)
-    // rough where the joint steps follow: they finish what it leaves
-    let frames = frame_solve(p, &sensors, placed, (left(), Joint::applies(p)))?.rotations;
+    // the frames from the spectral start of every edge at the start's sensors ([A17] with
+    // information): from the held sensors' frames, a 10^4-frame path rig of 3-frame pairs
+    // with information ended with J 3.8x its minimum and frames flipped (the joint steps from
+    // those frames alone, higher still); rough where the joint steps follow: they finish it
+    let frames = frame_solve(p, &sensors, None, (left(), Joint::applies(p)))?.rotations;
     alternate(p, (frames, sensors), settings, clock)
 }
 
-/// [`solve_rig`] with every sensor held: one solve of the frames' problem from `frames` (the
-/// spectral start when `None`), its iterations and termination reported as the rig's.
+/// [`solve_rig`] with every sensor held: one solve of the frames' problem from its spectral
+/// start, its iterations and termination reported as the rig's.
 fn held_solution(
     p: &RigProblem,
     sensors: Vec<Rotation>,
-    frames: Option<Vec<Rotation>>,
     max_seconds: Option<f64>,
     clock: Instant,
 ) -> Result<RigSolution> {
-    let solved = frame_solve(p, &sensors, frames, (max_seconds, false))?;
+    let solved = frame_solve(p, &sensors, None, (max_seconds, false))?;
     Ok(RigSolution {
         cost: p.cost(&solved.rotations, &sensors),
         frames: solved.rotations,

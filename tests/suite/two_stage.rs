@@ -155,7 +155,8 @@ fn scaling_all_information_leaves_the_two_stage_estimate() {
 /// outliers (`[D17]`): confident wrong pairs make least squares slow, and its estimate is then
 /// discarded for the robust one. The robust run is the same as without the early judgement.
 /// The graph: a generated 100-image scene with correspondences (`[F16]`) read with
-/// `--information full` (least squares: 35 Newton iterations when written).
+/// `--information full` (least squares: 52 Newton iterations, seed 2; seed 1 took 35 when
+/// written).
 #[test]
 fn auto_judges_a_slow_least_squares_solve_early() {
     use rotavg::io::colmap::read_colmap_database;
@@ -165,9 +166,11 @@ fn auto_judges_a_slow_least_squares_solve_early() {
     use rotavg::pipeline::{AverageSettings, average_multiple};
     let dir =
         crate::common::scratch_root().join(format!("rotavg-two-stage-{}", std::process::id()));
+    // the cost at 30 iterations 8.6 % above the converged one (seed 1 took 31 with the starts
+    // of [A17], converged in cost by 30)
     let scene = SfmScene {
         cameras: 100,
-        seed: 1,
+        seed: 2,
         ..SfmScene::default()
     };
     scene.generate().unwrap().write(&dir).unwrap();
