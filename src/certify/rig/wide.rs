@@ -270,8 +270,8 @@ mod tests {
     /// More negative eigenvalues than [`super::EACH_END`]: [`bottom`] still returns the most
     /// negative (the search raises `lambda_min`; the inverse's negative end holds the values
     /// nearest zero first). A tridiagonal `S` of 3 + 300 rows whose grounded part has 12
-    /// negative eigenvalues, the dense spectrum the reference; with the count capped at 6 its
-    /// smallest estimate was above the dense `lambda_min` (checked).
+    /// negative eigenvalues, the dense spectrum the reference; with the count capped at 6 it
+    /// found 6 of the 12, those nearest zero (checked).
     #[test]
     fn the_bottom_estimates_reach_the_most_negative_of_many() {
         use faer::sparse::{SparseColMat, Triplet};
