@@ -19,6 +19,8 @@
 //! [`super::verify`] on the surrogate and by the verified offsets, never by the search.
 
 use super::check::Scope;
+use super::conv_offset::edge_offset;
+pub use super::conv_offset::special_support;
 use super::multipliers::{certificate_matrix, multipliers};
 use super::state::{Best, State};
 use super::verified::VerifiedBound;
@@ -33,7 +35,7 @@ pub use crate::certify::settings::ConvDualSettings;
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::{ShiftedCholesky, sparse_matvec};
 use crate::linalg::compensated::Accumulator;
-use crate::linalg::{Extreme, LanczosSettings, UNIT_ROUNDOFF, gamma, lanczos};
+use crate::linalg::{Extreme, LanczosSettings, UNIT_ROUNDOFF, lanczos};
 use crate::multiple::anisotropic::Information;
 use crate::multiple::{Edge, MultipleProblem};
 use crate::so3::{DEFAULT_ROTATION_TOLERANCE, Rotation, rotation_from_matrix};
@@ -686,12 +688,9 @@ impl Round<'_> {
             let (data, h2) = if p.iter().all(|x| *x == 0.0) {
                 (*e.rotation.matrix(), *h.matrix())
             } else {
-                let (u, t) = polar(&(f.k - p));
-                let m = t * 0.25;
-                let h2 = Matrix3::identity() * m.trace() - m;
-                let data = f.x * u;
-                total -= offset_of(e.rotation.matrix(), h.matrix(), &data, &h2);
-                (data, (h2 + h2.transpose()) * 0.5)
+                let (data, h2) = surrogate_edge(f, p);
+                total -= edge_offset(e.rotation.matrix(), h.matrix(), &data, &h2, &f.x);
+                (data, h2)
             };
             let m2 = Matrix3::identity() * (0.5 * h2.trace()) - h2;
             total += 4.0 * (m2.trace() - (data * m2).dot(&gram));
@@ -811,47 +810,25 @@ impl Round<'_> {
     }
 }
 
-/// A verified upper bound on `h(D) = max over SO(3) of <D, R> = s_1 + s_2 + sign(det D) s_3`
-/// (the special orthogonal Procrustes problem), for `D` as computed: the singular values'
-/// backward error `64 u ||D||_F` each, and `+s_3` when the sign of the determinant is not
-/// certain.
-///
-/// ```
-/// use rotavg::certify::multiple::conv_dual::special_support;
-/// use nalgebra::{Matrix3, Vector3};
-/// // h(I) = 3; a reflection's best rotation reaches only 1
-/// assert!((special_support(&Matrix3::identity()) - 3.0).abs() < 1e-12);
-/// let f = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
-/// assert!((special_support(&f) - 1.0).abs() < 1e-12);
-/// assert!(special_support(&f) >= 1.0);
-/// ```
-pub fn special_support(d: &Matrix3<f64>) -> f64 {
-    let mut s: Vec<f64> = d
-        .svd(false, false)
-        .singular_values
-        .iter()
-        .copied()
-        .collect();
-    s.sort_by(|a, b| b.total_cmp(a));
-    let norm = d.norm();
-    let svd_error = 64.0 * UNIT_ROUNDOFF * norm;
-    // the cofactor determinant's error bound: 6 triple products, 2 roundings each, 5 sums
-    let perm = |m: &Matrix3<f64>| {
-        let a = m.abs();
-        a[(0, 0)] * (a[(1, 1)] * a[(2, 2)] + a[(1, 2)] * a[(2, 1)])
-            + a[(0, 1)] * (a[(1, 0)] * a[(2, 2)] + a[(1, 2)] * a[(2, 0)])
-            + a[(0, 2)] * (a[(1, 0)] * a[(2, 1)] + a[(1, 1)] * a[(2, 0)])
-    };
-    let det = d.determinant();
-    let negative = det < -gamma(8) * perm(d) && s[2] > 2.0 * svd_error;
-    let third = if negative { -s[2] } else { s[2] };
-    round_up(s[0] + s[1] + third + 3.0 * svd_error)
-}
+/// How far inside the cone `C` the stored surrogate's multipliers are moved: `P_e + (m / 2)
+/// ||P_e||_F I` with `m = 1e-10`, so every pairwise sum of `P_e`'s eigenvalues is at least
+/// `m ||P_e||_F`. On `C`'s boundary (the reflection price `beta (I - 2 u u^T)` lies there) the
+/// rounding of the stored `R'_e`, `H'_e` (about `1e-15 ||P_e||`) turns into a loss of the same
+/// size in each offset (`h(Q) - tr Q` grows linearly off the boundary); inside by `m` it is
+/// second order, `2 |q|^2 / mu` ([`framed_offset`]). The shift lowers `S'` by at most
+/// `m ||P_e|| / 4` per edge and, `P_e` staying in `C`, costs nothing at the estimate
+/// (`[A11]` Statement 2).
+pub const CONE_MARGIN: f64 = 1e-10;
 
-/// `x` raised by the rounding of a sum of up to four terms, whatever its sign (multiplying by
-/// `1 + 4u` would lower a negative `x`).
-fn round_up(x: f64) -> f64 {
-    x + 4.0 * UNIT_ROUNDOFF * x.abs()
+/// The surrogate's data of one edge for multipliers `p` (`[A11]`, "The surrogate as stored"),
+/// `p` first moved inside `C` by [`CONE_MARGIN`]: `(X_e U, tr(M') I - M')` from the polar
+/// decomposition `K_e - P_e = U T`, `M' = T / 4` (the rotation before its validation).
+fn surrogate_edge(f: &Frame, p: &Matrix3<f64>) -> (Matrix3<f64>, Matrix3<f64>) {
+    let p = p + Matrix3::identity() * (0.5 * CONE_MARGIN * p.norm());
+    let (u, t) = polar(&(f.k - p));
+    let m = t * 0.25;
+    let h2 = Matrix3::identity() * m.trace() - m;
+    (f.x * u, (h2 + h2.transpose()) * 0.5)
 }
 
 /// The polar decomposition `J = U T` with `U` a rotation and `T` symmetric (indefinite when
@@ -912,11 +889,8 @@ pub fn surrogate(
             keep(&mut edges, &mut infos);
             continue;
         }
-        let (u, t) = polar(&(f.k - p));
-        let m = t * 0.25;
-        let hp = Matrix3::identity() * m.trace() - m;
-        let hp = (hp + hp.transpose()) * 0.5;
-        let rotation = rotation_from_matrix(&(f.x * u), DEFAULT_ROTATION_TOLERANCE, "surrogate");
+        let (data, hp) = surrogate_edge(f, p);
+        let rotation = rotation_from_matrix(&data, DEFAULT_ROTATION_TOLERANCE, "surrogate");
         let (Ok(rotation), Ok(hp)) = (rotation, Information::new(hp)) else {
             keep(&mut edges, &mut infos);
             continue;
@@ -927,7 +901,13 @@ pub fn surrogate(
             rotation,
             weight: e.weight,
         };
-        let delta = edge_offset(e, h, &edge, &hp);
+        let delta = edge_offset(
+            e.rotation.matrix(),
+            h.matrix(),
+            edge.rotation.matrix(),
+            hp.matrix(),
+            &f.x,
+        );
         offset.add_product(1.0, delta);
         magnitude += delta.abs();
         edges.push(edge);
@@ -939,30 +919,6 @@ pub fn surrogate(
         problem,
         offset: sum + 4.0 * UNIT_ROUNDOFF * magnitude,
     })
-}
-
-/// A verified upper bound on `max over SO(3) of (f'_e - f_e) = 2 tr H' - 2 tr H + h(N - N')`
-/// for the data as given: `N`, `N'` formed in floating point (`gamma(8)` of their magnitude,
-/// each), `h` Lipschitz in the nuclear norm (`sqrt(3)` times the Frobenius norm).
-fn edge_offset(e: &Edge, h: &Information, e2: &Edge, h2: &Information) -> f64 {
-    offset_of(
-        e.rotation.matrix(),
-        h.matrix(),
-        e2.rotation.matrix(),
-        h2.matrix(),
-    )
-}
-
-/// [`edge_offset`] of the data `(r, h)` and `(r2, h2)` as matrices.
-fn offset_of(r: &Matrix3<f64>, h: &Matrix3<f64>, r2: &Matrix3<f64>, h2: &Matrix3<f64>) -> f64 {
-    let a = Matrix3::identity() * (2.0 * h.trace()) - h * 4.0;
-    let a2 = Matrix3::identity() * (2.0 * h2.trace()) - h2 * 4.0;
-    let d = r * a - r2 * a2;
-    let magnitude = r.abs().norm() * a.abs().norm() + r2.abs().norm() * a2.abs().norm();
-    let traces = 2.0 * h2.trace() - 2.0 * h.trace();
-    let trace_error = gamma(4) * 2.0 * (h.abs().trace() + h2.abs().trace());
-    let forming = 3f64.sqrt() * (gamma(8) * magnitude + UNIT_ROUNDOFF * d.norm());
-    round_up(traces + special_support(&d) + trace_error + forming)
 }
 
 /// The verified bound of the `conv(SO(3))` dual certificate at an estimate.
@@ -1137,20 +1093,5 @@ impl<'a> Rung<State<'a>> for ConvDualRung {
             cx.certifies(b.lower_bound),
             note,
         ))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::round_up;
-
-    /// The upward rounding raises sums of either sign (a factor `1 + 4u` would lower a negative
-    /// offset, loosening the bound).
-    #[test]
-    fn round_up_raises_negative_sums_too() {
-        for x in [-3.0, -1e-300, 0.0, 1e-300, 2.5, -1e10] {
-            assert!(round_up(x) >= x);
-        }
-        assert!(round_up(-1.0) > -1.0);
     }
 }

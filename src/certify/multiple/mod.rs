@@ -22,6 +22,7 @@ mod check;
 mod coarse;
 pub mod conv;
 pub mod conv_dual;
+mod conv_offset;
 mod deflated;
 pub mod diagnosis;
 pub mod dual;
