@@ -2,7 +2,7 @@
 # A/B of two rotavg binaries on view-graph files, interleaved (A, B, A, B per file, K rounds):
 # one line per run with the solve and certify seconds (`solver.seconds`,
 # `pipeline.certify_seconds`), the verdict, the wall clock and peak RSS of the process, and the
-# scalar comparison's proving shape. Used for the grouped subgraphs (docs/benchmarks.md,
+# scalar comparison's proving shape, with the relative gap. Used for the grouped subgraphs (docs/benchmarks.md,
 # "Grouped subgraphs in regions"):
 #
 #   python3 benches/gen_graph.py expander 30000 20 0.1 30000 /tmp/ex30k.json
@@ -29,10 +29,14 @@ f, lab, k, out, err = sys.argv[1:]
 d = json.load(open(out))
 wall, rss = open(err).read().split()[-2:]
 p = d["pipeline"]
-proved = [a.get("note", "") for a in p["certify"].get("ladder", [])
+# the certificate of the problem the verdict names (the robust default's: its inlier graph's)
+cert = d.get("certificate") or ((d.get("robust") or {}).get("inlier_graph") or {}).get("certificate") or {}
+proved = [a.get("note", "") for a in (p.get("certify") or {}).get("ladder", [])
           if a["outcome"].get("outcome") == "proved" and a["rung"]["proof"] == "scalar_comparison"]
 print(f.split("/")[-1], lab, k, "solve %.3f certify %.3f" % (d["solver"]["seconds"], p["certify_seconds"]),
-      d.get("certificate", {}).get("verdict", "?"), "wall", wall, "rss_MB", int(rss) // 1024, "|",
+      (d.get("verdict") or {}).get("verdict", "?"),
+      "rel_gap %.2e" % cert.get("relative_gap", float("nan")),
+      "wall", wall, "rss_MB", int(rss) // 1024, "|",
       (proved[0] if proved else "-")[:90], flush=True)
 PY
     done
