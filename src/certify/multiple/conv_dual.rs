@@ -815,7 +815,7 @@ impl Round<'_> {
 /// `m ||P_e||_F`. On `C`'s boundary (the reflection price `beta (I - 2 u u^T)` lies there) the
 /// rounding of the stored `R'_e`, `H'_e` (about `1e-15 ||P_e||`) turns into a loss of the same
 /// size in each offset (`h(Q) - tr Q` grows linearly off the boundary); inside by `m` it is
-/// second order, `2 |q|^2 / mu` ([`framed_offset`]). The shift lowers `S'` by at most
+/// second order, `2 |q|^2 / mu` (the framed bound of `[A11]` Statement 3). The shift lowers `S'` by at most
 /// `m ||P_e|| / 4` per edge and, `P_e` staying in `C`, costs nothing at the estimate
 /// (`[A11]` Statement 2).
 pub const CONE_MARGIN: f64 = 1e-10;
