@@ -32,13 +32,7 @@ use nalgebra::{Matrix3, Vector3};
 /// assert!(special_support(&f) >= 1.0);
 /// ```
 pub fn special_support(d: &Matrix3<f64>) -> f64 {
-    let mut s: Vec<f64> = d
-        .svd(false, false)
-        .singular_values
-        .iter()
-        .copied()
-        .collect();
-    s.sort_by(|a, b| b.total_cmp(a));
+    let s = descending_singular_values(d);
     let norm = d.norm();
     let svd_error = 64.0 * UNIT_ROUNDOFF * norm;
     // the cofactor determinant's error bound: 6 triple products, 2 roundings each, 5 sums
@@ -52,6 +46,25 @@ pub fn special_support(d: &Matrix3<f64>) -> f64 {
     let negative = det < -gamma(8) * perm(d) && s[2] > 2.0 * svd_error;
     let third = if negative { -s[2] } else { s[2] };
     round_up(s[0] + s[1] + third + 3.0 * svd_error)
+}
+
+/// The singular values of `d`, largest first (as computed).
+fn descending_singular_values(d: &Matrix3<f64>) -> [f64; 3] {
+    let mut s: [f64; 3] = d.svd(false, false).singular_values.into();
+    s.sort_by(|a, b| b.total_cmp(a));
+    s
+}
+
+/// `D = N - N'` in floating point: `r (2 tr(h) I - 4 h) - r2 (2 tr(h2) I - 4 h2)`.
+fn rounded_difference(
+    r: &Matrix3<f64>,
+    h: &Matrix3<f64>,
+    r2: &Matrix3<f64>,
+    h2: &Matrix3<f64>,
+) -> Matrix3<f64> {
+    let a = Matrix3::identity() * (2.0 * h.trace()) - h * 4.0;
+    let a2 = Matrix3::identity() * (2.0 * h2.trace()) - h2 * 4.0;
+    r * a - r2 * a2
 }
 
 /// `x` raised by the rounding of a sum of up to four terms, whatever its sign (multiplying by
@@ -89,7 +102,7 @@ pub(crate) fn svd_offset(
 ) -> f64 {
     let a = Matrix3::identity() * (2.0 * h.trace()) - h * 4.0;
     let a2 = Matrix3::identity() * (2.0 * h2.trace()) - h2 * 4.0;
-    let d = r * a - r2 * a2;
+    let d = rounded_difference(r, h, r2, h2);
     let magnitude = r.abs().norm() * a.abs().norm() + r2.abs().norm() * a2.abs().norm();
     let traces = 2.0 * h2.trace() - 2.0 * h.trace();
     let trace_error = gamma(4) * 2.0 * (h.abs().trace() + h2.abs().trace());
@@ -177,7 +190,7 @@ fn difference(
 /// polar decomposition, `Z = x - x (x^T x - I) / 2`, the correction in double), and a
 /// verified bound `eps >= ||Z^T Z - I||_F`: the rotation `Z_p` of `Z`'s polar decomposition
 /// then satisfies `||Z_p - Z||_2 <= eps` (`|sigma - 1| <= |sigma^2 - 1|`). `None` unless
-/// `det x > 0.5` and `eps < 0.5` (then `Z_p` is in SO(3)).
+/// `det x > 0.5`, `||x^T x - I||_F <= 1e-6` and `eps < 0.5` (then `Z_p` is in SO(3)).
 fn frame_rotation(x: &Matrix3<f64>) -> Option<(Matrix3<f64>, Matrix3<f64>, f64)> {
     if !x.iter().all(|v| v.is_finite()) || x.determinant() <= 0.5 {
         return None;
@@ -200,6 +213,11 @@ fn frame_rotation(x: &Matrix3<f64>) -> Option<(Matrix3<f64>, Matrix3<f64>, f64)>
     };
     let g = gram(x, &Matrix3::zeros());
     let defect = Matrix3::from_fn(|i, j| g[3 * i + j].value());
+    // the accumulators take the products with `lo` as low parts (`|lo|` about `u |x|`): a frame
+    // further from orthogonal is refused, not corrected
+    if !(defect.norm() <= 1e-6) {
+        return None;
+    }
     let lo = -(x * defect) * 0.5;
     let f = gram(x, &lo);
     let eps = f
@@ -270,7 +288,10 @@ pub(crate) fn framed_offset(
 
 #[cfg(test)]
 mod tests {
-    use super::{edge_offset, framed_offset, round_up, svd_offset};
+    use super::{
+        descending_singular_values, edge_offset, framed_offset, round_up, rounded_difference,
+        svd_offset,
+    };
     use nalgebra::{Matrix3, Rotation3, Vector3};
 
     /// The upward rounding raises sums of either sign (a factor `1 + 4u` would lower a negative
@@ -310,16 +331,8 @@ mod tests {
     /// `2 tr H' - 2 tr H + h(D)` by the singular values of `D` in double precision (an
     /// independent reference, accurate to about `1e-15 ||D||`).
     fn reference(r: &Matrix3<f64>, h: &Matrix3<f64>, r2: &Matrix3<f64>, h2: &Matrix3<f64>) -> f64 {
-        let a = Matrix3::identity() * (2.0 * h.trace()) - h * 4.0;
-        let a2 = Matrix3::identity() * (2.0 * h2.trace()) - h2 * 4.0;
-        let d = r * a - r2 * a2;
-        let mut s: Vec<f64> = d
-            .svd(false, false)
-            .singular_values
-            .iter()
-            .copied()
-            .collect();
-        s.sort_by(|a, b| b.total_cmp(a));
+        let d = rounded_difference(r, h, r2, h2);
+        let s = descending_singular_values(&d);
         let third = if d.determinant() < 0.0 { -s[2] } else { s[2] };
         2.0 * h2.trace() - 2.0 * h.trace() + s[0] + s[1] + third
     }
@@ -440,6 +453,8 @@ mod tests {
         let reflection = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
         assert!(framed_offset(&r, &h, &r, &h, &reflection).is_none());
         assert!(framed_offset(&r, &h, &r, &h, &(r * 1.5)).is_none());
+        assert!(framed_offset(&r, &h, &r, &h, &(r * (1.0 + 1e-5))).is_none());
+        assert!(framed_offset(&r, &h, &r, &h, &(r * (1.0 + 1e-9))).is_some());
         assert!(framed_offset(&r, &h, &r, &h, &(r * f64::NAN)).is_none());
         assert_eq!(
             edge_offset(&r, &h, &r, &h, &reflection),
