@@ -215,7 +215,7 @@ fn frame_rotation(x: &Matrix3<f64>) -> Option<(Matrix3<f64>, Matrix3<f64>, f64)>
     let defect = Matrix3::from_fn(|i, j| g[3 * i + j].value());
     // the accumulators take the products with `lo` as low parts (`|lo|` about `u |x|`): a frame
     // further from orthogonal is refused, not corrected
-    if !(defect.norm() <= 1e-6) {
+    if defect.norm().is_nan() || defect.norm() > 1e-6 {
         return None;
     }
     let lo = -(x * defect) * 0.5;
