@@ -175,7 +175,18 @@ impl<'a> State<'a> {
         source: ImprovementSource,
         label: Point,
     ) -> bool {
-        if candidate.chordal_cost > self.current.cost {
+        self.adopt_within(candidate, source, label, 0.0)
+    }
+
+    /// [`Self::adopt`] for a candidate whose cost may exceed the current one by `slack`.
+    pub fn adopt_within(
+        &mut self,
+        candidate: MultipleSolution,
+        source: ImprovementSource,
+        label: Point,
+        slack: f64,
+    ) -> bool {
+        if candidate.chordal_cost > self.current.cost + slack {
             return false;
         }
         self.current = Current {
@@ -225,7 +236,12 @@ impl<'a> State<'a> {
                 | DualDiagnosis::PrecisionLimited { .. }
                 | DualDiagnosis::OverBudget { .. }
         );
-        let hopeless = matches!(first, DualDiagnosis::Indefinite { min_eigenvalue }
+        // where the O(3) relaxation prefers reflections its `S` is indefinite at the minimum
+        // too: that says nothing of a saddle, and the conv(SO(3)) certificate needs the
+        // estimate critical (strongly anisotropic SLAM information: a local solve converged
+        // with a residual of 0.96 against information of 1e9, `[A11]` "Two resolutions")
+        let hopeless = !self.reflective
+            && matches!(first, DualDiagnosis::Indefinite { min_eigenvalue }
             if -min_eigenvalue >= REFINE_INDEFINITE_RATIO
                 * self.given_stationarity_residual.unwrap_or(f64::INFINITY));
         !self.refined && !settled && !hopeless && self.current.label == Point::Given
