@@ -239,7 +239,8 @@ impl<'a> State<'a> {
         // where the O(3) relaxation prefers reflections its `S` is indefinite at the minimum
         // too: that says nothing of a saddle, and the conv(SO(3)) certificate needs the
         // estimate critical (strongly anisotropic SLAM information: a local solve converged
-        // with a residual of 0.96 against information of 1e9, `[A11]` "Two resolutions")
+        // with a residual of 0.96 against information of 1e9; `paper-notes/certificates.md`
+        // "Refinement on reflective data")
         let hopeless = !self.reflective
             && matches!(first, DualDiagnosis::Indefinite { min_eigenvalue }
             if -min_eigenvalue >= REFINE_INDEFINITE_RATIO
