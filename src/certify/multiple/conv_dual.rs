@@ -1070,8 +1070,9 @@ pub(crate) fn conv_dual_within(
         &settings.budget,
     )?;
     let stopped_clean = matches!(coarse.stop, ConvSearchStop::NoNegativeRitzValue { .. });
-    let first = verified_surrogate(problem, rotations, settings, point, clock, coarse)?;
     let cost = problem.chordal_cost(rotations).abs();
+    let at = (rotations, cost);
+    let first = verified_surrogate(problem, at, settings, (point, clock), coarse)?;
     let gap = settings
         .tolerance
         .resolve(problem.min_weight())
@@ -1089,7 +1090,7 @@ pub(crate) fn conv_dual_within(
         within,
         &first.search.penalties,
     )?;
-    let second = verified_surrogate(problem, rotations, settings, point, clock, fine)?;
+    let second = verified_surrogate(problem, at, settings, (point, clock), fine)?;
     Ok(if second.lower_bound > first.lower_bound {
         second
     } else {
@@ -1097,19 +1098,17 @@ pub(crate) fn conv_dual_within(
     })
 }
 
-/// The surrogate of `search`'s multipliers, its bound verified by the `O(3)` ladder, minus its
-/// verified offsets.
+/// The surrogate of `search`'s multipliers at `rotations` (whose cost is `cost`, in absolute
+/// value), its bound verified by the `O(3)` ladder, minus its verified offsets.
 fn verified_surrogate(
     problem: &MultipleProblem,
-    rotations: &[Rotation],
+    (rotations, cost): (&[Rotation], f64),
     settings: &crate::certify::settings::CertifySettings,
-    point: crate::certify::log::Point,
-    clock: Deadline,
+    (point, clock): (crate::certify::log::Point, Deadline),
     search: ConvSearch,
 ) -> Result<ConvDualBound> {
     let sur = surrogate(problem, rotations, &search.penalties)?;
     let lambdas = multipliers(&sur.problem, rotations)?;
-    let cost = problem.chordal_cost(rotations);
     let scope = Scope {
         point,
         within: Proof::ConvDual,
@@ -1120,7 +1119,7 @@ fn verified_surrogate(
         &sur.problem,
         &lambdas,
         Some(rotations),
-        cost.abs(),
+        cost,
         settings,
         scope,
         None,
