@@ -74,6 +74,28 @@ impl DenseCholesky {
     }
 }
 
+/// An orthonormal basis of the first `first` columns of `a` and, with `more`, the first columns
+/// of another matrix (a thin QR; nearly dependent columns are kept: the model only needs a
+/// spanning set of orthonormal columns, which Householder's `Q` is).
+pub(crate) fn orthonormal_columns(
+    a: &DMatrix<f64>,
+    first: usize,
+    more: Option<(&DMatrix<f64>, usize)>,
+) -> DMatrix<f64> {
+    let first = first.min(a.ncols());
+    let extra = more.map_or(0, |(m, k)| k.min(m.ncols()));
+    let mut stacked = DMatrix::zeros(a.nrows(), first + extra);
+    stacked
+        .columns_mut(0, first)
+        .copy_from(&a.columns(0, first));
+    if let Some((m, _)) = more {
+        stacked
+            .columns_mut(first, extra)
+            .copy_from(&m.columns(0, extra));
+    }
+    stacked.qr().q()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -22,6 +22,15 @@ pub fn svec_index(i: usize, j: usize) -> usize {
     j * (j + 1) / 2 + i
 }
 
+/// `(i, j)`, `i <= j`, of `svec` row `row` (the inverse of [`svec_index`]).
+pub(crate) fn svec_entry(row: usize) -> (usize, usize) {
+    let mut j = 0;
+    while (j + 1) * (j + 2) / 2 <= row {
+        j += 1;
+    }
+    (row - j * (j + 1) / 2, j)
+}
+
 /// Weight of entry `(i, j)` in `svec`: `1` on the diagonal, `sqrt(2)` off it.
 pub fn svec_weight(i: usize, j: usize) -> f64 {
     if i == j {

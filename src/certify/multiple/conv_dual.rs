@@ -19,6 +19,7 @@
 //! [`super::verify`] on the surrogate and by the verified offsets, never by the search.
 
 use super::check::Scope;
+use super::conv_frames::{Frame, Inverse, anisotropic, frames};
 use super::conv_offset::edge_offset;
 pub use super::conv_offset::special_support;
 use super::multipliers::{certificate_matrix, multipliers};
@@ -27,13 +28,13 @@ use super::verified::VerifiedBound;
 use crate::certify::budget::Deadline;
 use crate::certify::budget::{Budget, PREDICTED_FLOP_RATE};
 use crate::certify::log::Point;
-use crate::certify::log::Prediction;
+use crate::certify::log::{Prediction, Refusal};
 use crate::certify::proof::{BoundMethod, Proof};
 use crate::certify::rung::{Found, Plan, Rung};
 use crate::certify::settings::CertifyMode;
 pub use crate::certify::settings::ConvDualSettings;
 use crate::error::{Error, Result};
-use crate::linalg::cholesky::{ShiftedCholesky, sparse_matvec};
+use crate::linalg::cholesky::sparse_matvec;
 use crate::linalg::compensated::Accumulator;
 use crate::linalg::{Extreme, LanczosSettings, UNIT_ROUNDOFF, lanczos};
 use crate::multiple::anisotropic::Information;
@@ -125,38 +126,6 @@ pub struct Surrogate {
     pub problem: MultipleProblem,
     /// A verified upper bound on `sum_e max over SO(3) of (f'_e - f_e)`.
     pub offset: f64,
-}
-
-/// The estimate's relative rotation `X_e = R_j R_i^T` and the edge's linear coefficient in its
-/// frame, `K_e = X_e^T N_e`.
-struct Frame {
-    x: Matrix3<f64>,
-    k: Matrix3<f64>,
-}
-
-fn edge_coefficient(edge: &Edge, h: &Matrix3<f64>) -> Matrix3<f64> {
-    edge.rotation.matrix() * (Matrix3::identity() * (2.0 * h.trace()) - h * 4.0)
-}
-
-fn frames(problem: &MultipleProblem, rotations: &[Rotation]) -> Result<Vec<Frame>> {
-    let info = anisotropic(problem)?;
-    Ok(problem
-        .edges()
-        .iter()
-        .zip(info)
-        .map(|(e, h)| {
-            let x = rotations[e.j].matrix() * rotations[e.i].matrix().transpose();
-            let k = x.transpose() * edge_coefficient(e, h.matrix());
-            Frame { x, k }
-        })
-        .collect())
-}
-
-fn anisotropic(problem: &MultipleProblem) -> Result<&[Information]> {
-    problem.information().ok_or_else(|| Error::InvalidSettings {
-        name: "dual.conv".into(),
-        reason: "the conv(SO(3)) dual certificate needs information matrices".into(),
-    })
 }
 
 /// The eigenvalues of a symmetric 3x3 matrix in ascending order, with their vectors.
@@ -300,85 +269,6 @@ pub fn predict_search(problem: &MultipleProblem, settings: &ConvDualSettings) ->
             // the multipliers, the frames' data, and the kept round's copy of the multipliers
             + 3.0 * 72.0 * m,
     )
-}
-
-/// Positions of an edge's 36 entries of `S` in its stored values: the blocks `(i, i)`,
-/// `(j, j)`, `(i, j)`, `(j, i)`, each row-major.
-type EdgePositions = [usize; 36];
-
-/// Shift-invert rounds: the analysis of `S'`'s pattern, `S`'s values and where each edge adds.
-struct Inverse {
-    cholesky: ShiftedCholesky,
-    base: Vec<f64>,
-    positions: Vec<EdgePositions>,
-    shift: f64,
-}
-
-impl Inverse {
-    /// `None` when a block entry is not stored or the factor is too large.
-    fn new(
-        s: &SparseColMat<usize, f64>,
-        edges: &[Edge],
-        max_values: usize,
-    ) -> Result<Option<Inverse>> {
-        let cp = s.symbolic().col_ptr();
-        let ri = s.symbolic().row_idx();
-        let find = |row: usize, col: usize| -> Option<usize> {
-            let range = cp[col]..cp[col + 1];
-            ri[range.clone()]
-                .binary_search(&row)
-                .ok()
-                .map(|k| range.start + k)
-        };
-        let mut positions = Vec::with_capacity(edges.len());
-        for e in edges {
-            let mut p = [0usize; 36];
-            let blocks = [(e.i, e.i), (e.j, e.j), (e.i, e.j), (e.j, e.i)];
-            for (b, &(r, c)) in blocks.iter().enumerate() {
-                for a in 0..3 {
-                    for d in 0..3 {
-                        match find(3 * r + a, 3 * c + d) {
-                            Some(k) => p[9 * b + 3 * a + d] = k,
-                            None => return Ok(None),
-                        }
-                    }
-                }
-            }
-            positions.push(p);
-        }
-        let base = s.val().to_vec();
-        // the forming bound is not used: these factorisations only estimate eigenvectors
-        Ok(ShiftedCholesky::new_within(s.clone(), 1, max_values)?
-            .ok()
-            .map(|cholesky| Inverse {
-                cholesky,
-                base,
-                positions,
-                shift: 0.0,
-            }))
-    }
-
-    /// Overwrite the analysed values with those of `S'(P)`.
-    fn assemble(&mut self, frames: &[Frame], penalties: &[Matrix3<f64>]) {
-        let values = self.cholesky.values_mut();
-        values.copy_from_slice(&self.base);
-        for ((pos, f), p) in self.positions.iter().zip(frames).zip(penalties) {
-            let x = &f.x;
-            let blocks = [
-                -p * 0.5,
-                -(x * p * x.transpose()) * 0.5,
-                p * x.transpose() * 0.5,
-                x * p * 0.5,
-            ];
-            for (b, block) in blocks.iter().enumerate() {
-                for a in 0..3 {
-                    for d in 0..3 {
-                        values[pos[9 * b + 3 * a + d]] += block[(a, d)];
-                    }
-                }
-            }
-        }
-    }
 }
 
 /// The Ritz pairs of one round: `(lambda, vector)` estimates of the smallest eigenpairs of
@@ -550,7 +440,7 @@ fn estimate_null_space(rotations: &[Rotation]) -> Vec<Vec<f64>> {
 /// The shift-invert factor's size limit: within what the budget leaves beside the search's own
 /// memory and the two copies of `S` it keeps (values and row indices: 16 bytes per stored
 /// entry each), and at most [`ConvDualSettings::shift_invert_max_factor`].
-fn shift_invert_max_values(
+pub(super) fn shift_invert_max_values(
     problem: &MultipleProblem,
     settings: &ConvDualSettings,
     s: &SparseColMat<usize, f64>,
@@ -1018,6 +908,19 @@ pub struct ConvDualBound {
     pub offset: f64,
     /// The search that chose the multipliers.
     pub search: ConvSearch,
+    /// The nodes' multipliers' shifts, where they gave the bound (`[A11]` "Node shifts").
+    pub node_shifts: Option<NodeShifts>,
+}
+
+/// The spectral bundle over the edges' multipliers and shifts of the nodes' ones that ran
+/// where the search did not certify (`[A11]` "Node shifts"; estimates, the bound verified).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NodeShifts {
+    /// Rounds of the bundle.
+    pub rounds: usize,
+    /// Its estimate of the bound's gain over the search's multipliers
+    /// (`sum tr(D_i) + 3n lambda_min`, from Ritz values, at the end less at the start).
+    pub estimated_gain: f64,
 }
 
 /// The `conv(SO(3))` dual certificate's bound at `rotations` `[A11]`: the multipliers of
@@ -1077,24 +980,43 @@ pub(crate) fn conv_dual_within(
         .tolerance
         .resolve(problem.min_weight())
         .allowed_gap(cost);
-    let past = deadline.is_some_and(|d| Instant::now() >= d);
-    // the coarse search saw no negative Ritz value, yet its surrogate does not certify: the
-    // eigenvalues that decide are below its resolution
-    if first.lower_bound >= cost - gap || !stopped_clean || past {
+    let past = || deadline.is_some_and(|d| Instant::now() >= d);
+    if first.lower_bound >= cost - gap || past() {
         return Ok(first);
     }
-    let fine = refine_penalties(
-        problem,
-        rotations,
-        &settings.dual.conv,
-        within,
-        &first.search.penalties,
-    )?;
-    let second = verified_surrogate(problem, at, settings, (point, clock), fine)?;
-    Ok(if second.lower_bound > first.lower_bound {
-        second
+    // the coarse search saw no negative Ritz value, yet its surrogate does not certify: the
+    // eigenvalues that decide are below its resolution
+    let best = if stopped_clean {
+        let fine = refine_penalties(
+            problem,
+            rotations,
+            &settings.dual.conv,
+            within,
+            &first.search.penalties,
+        )?;
+        let second = verified_surrogate(problem, at, settings, (point, clock), fine)?;
+        if second.lower_bound > first.lower_bound {
+            second
+        } else {
+            first
+        }
     } else {
         first
+    };
+    if best.lower_bound >= cost - gap || past() {
+        return Ok(best);
+    }
+    // still not certified: the nodes' multipliers join the search (`[A11]` "Node shifts")
+    let shifted = with_node_shifts(
+        problem,
+        rotations,
+        settings,
+        (point, clock),
+        (&best, deadline),
+    )?;
+    Ok(match shifted {
+        Some(b) if b.lower_bound > best.lower_bound => b,
+        _ => best,
     })
 }
 
@@ -1132,7 +1054,86 @@ fn verified_surrogate(
         surrogate: bound,
         offset: sur.offset,
         search,
+        node_shifts: None,
     })
+}
+
+/// The bound of `search`'s multipliers with the nodes' `shifts` (`[A11]` "Node shifts"): the
+/// surrogate of the search's multipliers, its bound verified from the surrogate's multipliers
+/// at `rotations` plus the shifts (no estimate's null space: the shifts move it), minus the
+/// verified offsets.
+fn verified_shifted(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    settings: &crate::certify::settings::CertifySettings,
+    (point, clock): (crate::certify::log::Point, Deadline),
+    (search, shifts): (ConvSearch, super::conv_shifts::Shifts),
+) -> Result<ConvDualBound> {
+    let sur = surrogate(problem, rotations, &search.penalties)?;
+    let lambdas: Vec<Matrix3<f64>> = multipliers(&sur.problem, rotations)?
+        .iter()
+        .zip(&shifts.shifts)
+        .map(|(l, d)| l + d)
+        .collect();
+    let scope = Scope {
+        point,
+        within: Proof::ConvDual,
+        deadline: clock,
+        refinement_follows: None,
+    };
+    let bound = super::verify::multipliers_bound(&sur.problem, &lambdas, settings, scope, None)?;
+    let difference = bound.lower_bound - sur.offset;
+    let lower_bound =
+        difference - 2.0 * UNIT_ROUNDOFF * (bound.lower_bound.abs() + sur.offset.abs());
+    Ok(ConvDualBound {
+        lower_bound,
+        surrogate: bound,
+        offset: sur.offset,
+        search,
+        node_shifts: Some(NodeShifts {
+            rounds: shifts.rounds,
+            estimated_gain: shifts.value - shifts.start,
+        }),
+    })
+}
+
+/// The bundle of `[A11]` "Node shifts" from the multipliers of `best`'s search, at most until
+/// `deadline`: its verified bound, `None` when it could not run (no shift-invert factor within
+/// the budget) or gained nothing.
+fn with_node_shifts(
+    problem: &MultipleProblem,
+    rotations: &[Rotation],
+    settings: &crate::certify::settings::CertifySettings,
+    (point, clock): (crate::certify::log::Point, Deadline),
+    (best, deadline): (&ConvDualBound, Option<Instant>),
+) -> Result<Option<ConvDualBound>> {
+    let conv = &settings.dual.conv;
+    let frames = frames(problem, rotations)?;
+    let s = certificate_matrix(problem, &multipliers(problem, rotations)?)?;
+    let max_values = shift_invert_max_values(problem, conv, &s, &settings.budget);
+    let Some(inverse) = Inverse::new(&s, problem.edges(), max_values)? else {
+        return Ok(None);
+    };
+    let floor = FINE.floor * crate::linalg::cholesky::inf_norm(s.as_ref());
+    let start = &best.search.penalties;
+    let Some(shifts) = super::conv_shifts::shift_nodes(
+        inverse,
+        (&frames, problem.edges()),
+        start,
+        floor,
+        deadline,
+    ) else {
+        return Ok(None);
+    };
+    let search = best.search.clone();
+    verified_shifted(
+        problem,
+        rotations,
+        settings,
+        (point, clock),
+        (search, shifts),
+    )
+    .map(Some)
 }
 
 /// The `conv(SO(3))` dual certificate `[A11]` as a rung of a certification: at every point
@@ -1143,7 +1144,28 @@ fn verified_surrogate(
 /// `dual.conv.time_fraction` of the time left; the surrogate's bound is verified by the `O(3)`
 /// checks, logged within it.
 #[derive(Default)]
-pub(crate) struct ConvDualRung;
+pub(crate) struct ConvDualRung {
+    /// The points its search ran at, with their rotations.
+    searched: Vec<(Point, Vec<Rotation>)>,
+    /// The points it did not run at: within [`SAME_POINT`] of a searched one.
+    skipped: Vec<Point>,
+}
+
+/// Two estimates are the same point for the search when every edge's relative rotation
+/// `R_j R_i^T` differs by at most this much (Frobenius): a refinement's or a polished
+/// rounding's few last digits, where the search would repeat itself (three searches of 4-7 s
+/// each with the same bound on the 200-node graphs of `[A11]` "Node shifts"). The bound of any
+/// point bounds the global minimum; skipping only saves the time.
+pub const SAME_POINT: f64 = 1e-6;
+
+/// `a` and `b` are the same point ([`SAME_POINT`]) on `problem`'s edges.
+fn same_point(problem: &MultipleProblem, a: &[Rotation], b: &[Rotation]) -> bool {
+    problem.edges().iter().all(|e| {
+        let x = a[e.j].matrix() * a[e.i].matrix().transpose();
+        let y = b[e.j].matrix() * b[e.i].matrix().transpose();
+        (x - y).norm() <= SAME_POINT
+    })
+}
 
 impl<'a> Rung<State<'a>> for ConvDualRung {
     fn proof(&self) -> Proof {
@@ -1158,8 +1180,20 @@ impl<'a> Rung<State<'a>> for ConvDualRung {
         {
             return Ok(Plan::Done);
         }
-        if cx.conv_dual_at.contains(&cx.current.label) {
+        let label = cx.current.label;
+        if cx.conv_dual_at.contains(&label) || self.skipped.contains(&label) {
             return Ok(Plan::Wait);
+        }
+        let here = &cx.current.rotations;
+        if let Some((at, _)) = (self.searched.iter()).find(|(_, r)| same_point(cx.problem, r, here))
+        {
+            self.skipped.push(label);
+            return Ok(Plan::Skip(Refusal::NotApplicable {
+                reason: format!(
+                    "its search ran at {at}, the same point to {SAME_POINT:.0e} in every edge's \
+                     relative rotation"
+                ),
+            }));
         }
         Ok(Plan::Run(predict_search(cx.problem, conv)))
     }
@@ -1167,6 +1201,7 @@ impl<'a> Rung<State<'a>> for ConvDualRung {
     fn attempt(&mut self, cx: &mut State<'a>) -> Result<Found> {
         let label = cx.current.label;
         cx.conv_dual_at.push(label);
+        self.searched.push((label, cx.current.rotations.clone()));
         crate::progress::phase(crate::progress::Phase::Certify, || {
             format!(
                 "conv(SO(3)) dual certificate at {label} ({} nodes)",
@@ -1190,7 +1225,7 @@ impl<'a> Rung<State<'a>> for ConvDualRung {
         let note = format!(
             "bound from the conv(SO(3)) multipliers recovered at {label} [A11] ({} rounds of their \
              search{}, those of round {} kept, {} cuts, stopped: {}): the O(3) certificate of the \
-             penalised surrogate, lambda_min(S') >= {:.3e}, minus its verified offsets {:.6e}",
+             penalised surrogate{}, lambda_min(S') >= {:.3e}, minus its verified offsets {:.6e}",
             b.search.rounds,
             if b.search.refined {
                 " refined at the fine resolution"
@@ -1200,6 +1235,11 @@ impl<'a> Rung<State<'a>> for ConvDualRung {
             b.search.kept_round,
             b.search.cuts,
             b.search.stop,
+            b.node_shifts.map_or(String::new(), |s| format!(
+                " with its nodes' multipliers shifted ({} rounds of a spectral bundle, [A11] \
+                 \"Node shifts\")",
+                s.rounds
+            )),
             b.surrogate.verified_min_eigenvalue,
             b.offset
         );

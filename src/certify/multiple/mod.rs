@@ -22,7 +22,9 @@ mod check;
 mod coarse;
 pub mod conv;
 pub mod conv_dual;
+mod conv_frames;
 mod conv_offset;
+mod conv_shifts;
 mod deflated;
 pub mod diagnosis;
 pub mod dual;
@@ -135,7 +137,7 @@ pub fn certify_multiple(
 fn rungs<'a>(mode: CertifyMode) -> Rungs<'a, State<'a>> {
     let mut rungs: Rungs<'a, State<'a>> = vec![
         Box::new(dual::DualRung),
-        Box::new(conv_dual::ConvDualRung),
+        Box::new(conv_dual::ConvDualRung::default()),
         Box::new(scalar_weights::ScalarWeightsRung::default()),
     ];
     if matches!(

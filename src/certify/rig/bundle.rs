@@ -7,10 +7,10 @@
 use super::couplings::{PairSum, local_pairs};
 use super::traces::Traces;
 use crate::deadline::Deadline;
-use crate::linalg::dense::symmetric_eigen;
+use crate::linalg::dense::{orthonormal_columns as columns, symmetric_eigen};
 use crate::relax::clarabel::{Cone, csc, solve_quadratic_conic};
 use crate::relax::settings::SdpSettings;
-use crate::relax::svec::{svec_index, svec_len, svec_weight};
+use crate::relax::svec::{svec_entry, svec_index, svec_len, svec_weight};
 use crate::so3::{Rotation, vee};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
@@ -537,15 +537,6 @@ fn added(a: &Moves, b: &Moves) -> Moves {
     }
 }
 
-/// `(i, j)`, `i <= j`, of `svec` row `row` (the inverse of [`svec_index`]).
-fn svec_entry(row: usize) -> (usize, usize) {
-    let mut j = 0;
-    while (j + 1) * (j + 2) / 2 <= row {
-        j += 1;
-    }
-    (row - j * (j + 1) / 2, j)
-}
-
 /// The sums `a + b`, pair by pair.
 pub(super) fn added_sums(a: &[Vec<PairSum>], b: &[Vec<PairSum>]) -> Vec<Vec<PairSum>> {
     (a.iter().zip(b))
@@ -570,24 +561,6 @@ fn flatten(moves: &Moves) -> Vec<f64> {
     }
     y.extend(moves.traces.mu.iter().flatten());
     y
-}
-
-/// An orthonormal basis of the first `first` columns of `a` and, with `more`, the first columns
-/// of another matrix (a thin QR; nearly dependent columns are kept: the model only needs a
-/// spanning set of orthonormal columns, which Householder's `Q` is).
-fn columns(a: &DMatrix<f64>, first: usize, more: Option<(&DMatrix<f64>, usize)>) -> DMatrix<f64> {
-    let first = first.min(a.ncols());
-    let extra = more.map_or(0, |(m, k)| k.min(m.ncols()));
-    let mut stacked = DMatrix::zeros(a.nrows(), first + extra);
-    stacked
-        .columns_mut(0, first)
-        .copy_from(&a.columns(0, first));
-    if let Some((m, _)) = more {
-        stacked
-            .columns_mut(first, extra)
-            .copy_from(&m.columns(0, extra));
-    }
-    stacked.qr().q()
 }
 
 #[cfg(test)]
