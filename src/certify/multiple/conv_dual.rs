@@ -1098,8 +1098,8 @@ fn verified_shifted(
 }
 
 /// The bundle of `[A11]` "Node shifts" from the multipliers of `best`'s search, at most until
-/// `deadline`: its verified bound, `None` when it could not run (no shift-invert factor within
-/// the budget) or gained nothing.
+/// `deadline`: its verified bound, `None` when it could not run (its own memory over half the
+/// budget, or no shift-invert factor within the rest) or gained nothing.
 fn with_node_shifts(
     problem: &MultipleProblem,
     rotations: &[Rotation],
@@ -1110,7 +1110,16 @@ fn with_node_shifts(
     let conv = &settings.dual.conv;
     let frames = frames(problem, rotations)?;
     let s = certificate_matrix(problem, &multipliers(problem, rotations)?)?;
-    let max_values = shift_invert_max_values(problem, conv, &s, &settings.budget);
+    // the bundle's own memory within half the budget, its factor within what is left
+    let own = super::conv_shifts::predicted_bytes(problem.num_rotations(), s.val().len());
+    if own > settings.budget.max_memory_bytes / 2 {
+        return Ok(None);
+    }
+    let budget = Budget {
+        max_memory_bytes: settings.budget.max_memory_bytes - own,
+        ..settings.budget
+    };
+    let max_values = shift_invert_max_values(problem, conv, &s, &budget);
     let Some(inverse) = Inverse::new(&s, problem.edges(), max_values)? else {
         return Ok(None);
     };

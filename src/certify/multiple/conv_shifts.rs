@@ -42,6 +42,17 @@ const STALL_ROUNDS: usize = 8;
 /// a small proximal weight; each failure doubles it).
 const FAILURES: usize = 3;
 
+/// The bundle's own memory at its largest on `n` nodes, bytes: the model's derivative matrix
+/// and its metric-scaled copy (`6n` rows by the bundle's `svec` entries, 8 bytes each), the
+/// bundle's and the candidate's vectors and a Lanczos basis of 60 vectors (`3n` values each),
+/// the shifts and the analysed values' copy (`S'` itself is the caller's).
+pub(super) fn predicted_bytes(n: usize, stored: usize) -> u64 {
+    let width = KEPT + ADDED;
+    let model = 2 * 6 * n * svec_len(width);
+    let vectors = (3 * width + 60) * 3 * n;
+    (8 * (model + vectors + 9 * n + stored)) as u64
+}
+
 /// A symmetric `3 x 3` matrix's variables: the diagonal, then the upper triangle.
 const UPPER: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
