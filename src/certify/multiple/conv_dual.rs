@@ -1046,16 +1046,25 @@ fn verified_surrogate(
         scope,
         None,
     )?;
-    let difference = bound.lower_bound - sur.offset;
-    let lower_bound =
-        difference - 2.0 * UNIT_ROUNDOFF * (bound.lower_bound.abs() + sur.offset.abs());
-    Ok(ConvDualBound {
-        lower_bound,
+    Ok(less_offsets(bound, sur.offset, search, None))
+}
+
+/// The surrogate's verified `bound` less its verified `offset` (the subtraction's rounding
+/// charged), with the search and the node shifts that chose the multipliers.
+fn less_offsets(
+    bound: VerifiedBound,
+    offset: f64,
+    search: ConvSearch,
+    node_shifts: Option<NodeShifts>,
+) -> ConvDualBound {
+    let difference = bound.lower_bound - offset;
+    ConvDualBound {
+        lower_bound: difference - 2.0 * UNIT_ROUNDOFF * (bound.lower_bound.abs() + offset.abs()),
         surrogate: bound,
-        offset: sur.offset,
+        offset,
         search,
-        node_shifts: None,
-    })
+        node_shifts,
+    }
 }
 
 /// The bound of `search`'s multipliers with the nodes' `shifts` (`[A11]` "Node shifts"): the
@@ -1082,19 +1091,11 @@ fn verified_shifted(
         refinement_follows: None,
     };
     let bound = super::verify::multipliers_bound(&sur.problem, &lambdas, settings, scope, None)?;
-    let difference = bound.lower_bound - sur.offset;
-    let lower_bound =
-        difference - 2.0 * UNIT_ROUNDOFF * (bound.lower_bound.abs() + sur.offset.abs());
-    Ok(ConvDualBound {
-        lower_bound,
-        surrogate: bound,
-        offset: sur.offset,
-        search,
-        node_shifts: Some(NodeShifts {
-            rounds: shifts.rounds,
-            estimated_gain: shifts.value - shifts.start,
-        }),
-    })
+    let node_shifts = NodeShifts {
+        rounds: shifts.rounds,
+        estimated_gain: shifts.value - shifts.start,
+    };
+    Ok(less_offsets(bound, sur.offset, search, Some(node_shifts)))
 }
 
 /// The bundle of `[A11]` "Node shifts" from the multipliers of `best`'s search, at most until

@@ -300,8 +300,6 @@ fn model_step(
     let g = |row: usize| if row % 6 < 3 { 1.0 } else { 0.0 };
     let scaled = DMatrix::from_fn(gt.nrows(), len, |row, col| gt[(row, col)] * metric(row));
     let gram = gt.tr_mul(&scaled) / rho;
-    let upper = (0..len).flat_map(|b| (0..=b).map(move |a| (a, b)));
-    let p = csc(len, len, upper.map(|(a, b)| (a, b, gram[(a, b)])).collect());
     let q: Vec<f64> = (0..len)
         .map(|col| {
             let (i, j) = svec_entry(col);
@@ -309,12 +307,28 @@ fn model_step(
             svec_weight(i, j) * c[(i, j)] + linear / rho
         })
         .collect();
-    // `3n - tr W = 0`, then `0 - (-w)` in the PSD cone
+    // solved for `W / 3n` (unit trace) with the objective over its largest coefficient:
+    // Clarabel's `NumericalFailure` otherwise at small `rho` on graphs of 8-12 nodes
+    let trace = 3.0 * n as f64;
+    let largest = (gram.amax() * trace * trace)
+        .max(q.iter().fold(0.0_f64, |m, x| m.max(x.abs())) * trace)
+        .max(f64::MIN_POSITIVE);
+    let (quadratic, linear) = (trace * trace / largest, trace / largest);
+    let upper = (0..len).flat_map(|b| (0..=b).map(move |a| (a, b)));
+    let p = csc(
+        len,
+        len,
+        upper
+            .map(|(a, b)| (a, b, quadratic * gram[(a, b)]))
+            .collect(),
+    );
+    let q: Vec<f64> = q.iter().map(|x| linear * x).collect();
+    // `1 - tr W = 0`, then `0 - (-w)` in the PSD cone
     let mut triplets: Vec<(usize, usize, f64)> =
         (0..r).map(|i| (0, svec_index(i, i), 1.0)).collect();
     triplets.extend((0..len).map(|row| (1 + row, row, -1.0)));
     let mut b = vec![0.0; 1 + len];
-    b[0] = 3.0 * n as f64;
+    b[0] = 1.0;
     let settings = SdpSettings {
         chordal_decomposition: false,
         time_limit_seconds: deadline
@@ -327,7 +341,7 @@ fn model_step(
     if !solution.status.converged() {
         return None;
     }
-    let w = DVector::from_column_slice(&solution.x);
+    let w = DVector::from_column_slice(&solution.x) * trace;
     let y: Vec<f64> = (&gt * w)
         .iter()
         .enumerate()
