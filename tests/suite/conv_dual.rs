@@ -633,3 +633,28 @@ fn ratio_20_graph() -> (rotavg::multiple::MultipleProblem, Vec<Rotation>) {
     }
     .generate()
 }
+
+/// The search runs once at one point: on the 200-node graph at ratio 20 the refined estimate and
+/// the staircase's polished rounding are the given estimate to `1e-6` in every edge's relative
+/// rotation, and the `conv(SO(3))` rung says so instead of searching again (three searches of
+/// about 5 s each gave the same bound before, 2026-12-05).
+#[test]
+fn the_search_runs_once_at_one_point() {
+    let (p, _) = ratio_20_graph();
+    let sol = solve_multiple(&p, &MultipleSettings::default()).unwrap();
+    let c = certify_multiple(&p, &sol.rotations, &CertifySettings::default()).unwrap();
+    let conv: Vec<_> = (c.details.ladder.iter())
+        .filter(|a| a.rung == Proof::ConvDual)
+        .collect();
+    let searched = (conv.iter())
+        .filter(|a| matches!(a.outcome, Outcome::Proved { .. }))
+        .count();
+    let same = (conv.iter())
+        .filter(|a| {
+            matches!(&a.outcome, Outcome::Refused(Refusal::NotApplicable { reason })
+                if reason.contains("the same point"))
+        })
+        .count();
+    assert_eq!(searched, 1, "{conv:?}");
+    assert!(same >= 1, "{conv:?}");
+}
