@@ -248,9 +248,12 @@ pub(super) fn shift_nodes(
             break;
         };
         let value = objective(&d, values[0]);
-        let predicted = center.value + predicted;
+        // the model's `F` at `D + d`: `C` holds the center's `T`, so `t` is the whole
+        // `lambda_min` there, and the center's traces are added
+        let predicted = center.d.iter().map(Matrix3::trace).sum::<f64>() + predicted;
         bundle = orthonormal_columns(&center.vectors, KEPT, Some((&vectors, ADDED)));
-        if value - center.value >= 0.1 * (predicted - center.value) {
+        let serious = value - center.value >= 0.1 * (predicted - center.value);
+        if serious {
             center = Center { d, vectors, value };
             bundle = orthonormal_columns(&center.vectors, KEPT, None);
             rho *= 0.5;
