@@ -23,9 +23,9 @@ use crate::relax::svec::{svec_entry, svec_index, svec_len, svec_weight};
 use nalgebra::{DMatrix, DVector, Matrix3};
 use std::time::Instant;
 
-/// Most rounds of the bundle (the graphs of two weak axes at ratio 20 whose search stalls,
-/// 200 nodes: it stops at its stall rule after 26-47 rounds, `docs/benchmarks.md` "Node
-/// shifts").
+/// Most rounds of the bundle (the graphs of two weak axes at ratio 20 whose search stalls, 200
+/// and 300 nodes: it stops at its stall rule after 38-59 rounds or here, 0.05-0.1 s a round,
+/// `docs/benchmarks.md` "Two weak axes at ratio 20: node shifts").
 const ROUNDS: usize = 100;
 
 /// Bottom eigenvectors kept in the bundle, and the candidate's added each round (20 and 6
