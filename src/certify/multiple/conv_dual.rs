@@ -733,54 +733,19 @@ impl Round<'_> {
         penalties: &[Matrix3<f64>],
         deadline: Option<Instant>,
     ) -> Ritz {
-        let (frames, null, scale, settings) = (self.frames, self.null, self.scale, self.settings);
-        inv.assemble(frames, penalties);
-        // the smallest shift that factors (from a quarter of the last one) separates the negative
-        // eigenvalues best: a large one clusters every 1 / (lambda + sigma) near 1 / sigma
-        let mut shift = (inv.shift / 4.0).max(self.resolution.floor * scale);
-        let dim = null.first().map_or(0, |v| v.len());
-        for _ in 0..12 {
-            if deadline.is_some_and(|d| Instant::now() >= d) {
-                break;
-            }
-            let Some(factor) = inv.cholesky.factor(shift, f64::INFINITY) else {
-                shift *= 4.0;
-                continue;
-            };
-            let op = |x: &[f64], y: &mut [f64]| {
-                y.copy_from_slice(x);
-                factor.solve_in_place(y);
-            };
-            let est = lanczos(
-                dim,
-                op,
-                Extreme::Largest,
-                12,
-                1.0 / shift,
-                &LanczosSettings {
-                    max_iterations: settings.lanczos_iterations.min(60),
-                    ..lanczos_settings(settings)
-                },
-                null,
-                None,
-            );
-            let pairs: Vec<(f64, Vec<f64>)> = est
-                .values
-                .iter()
-                .zip(est.vectors)
-                .filter(|(theta, _)| **theta > 0.0)
-                .map(|(theta, v)| (1.0 / theta - shift, v))
-                .collect();
-            inv.shift = shift;
-            return Ritz {
-                pairs,
-                converged: est.stop.converged(),
-            };
-        }
-        // not factorisable with any shift tried, or past the deadline: no estimate
-        Ritz {
-            pairs: Vec::new(),
-            converged: false,
+        let settings = LanczosSettings {
+            max_iterations: self.settings.lanczos_iterations.min(60),
+            ..lanczos_settings(self.settings)
+        };
+        inv.assemble(self.frames, penalties);
+        let floor = self.resolution.floor * self.scale;
+        match inv.smallest((12, floor), (&settings, self.null), (12, deadline)) {
+            Some((pairs, converged)) => Ritz { pairs, converged },
+            // not factorisable with any shift tried, or past the deadline: no estimate
+            None => Ritz {
+                pairs: Vec::new(),
+                converged: false,
+            },
         }
     }
 }

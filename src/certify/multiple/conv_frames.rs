@@ -6,11 +6,13 @@
 
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::ShiftedCholesky;
+use crate::linalg::{Extreme, LanczosSettings, lanczos};
 use crate::multiple::anisotropic::Information;
 use crate::multiple::{Edge, MultipleProblem};
 use crate::so3::Rotation;
 use faer::sparse::SparseColMat;
 use nalgebra::Matrix3;
+use std::time::Instant;
 
 /// The estimate's relative rotation `X_e = R_j R_i^T` and the edge's linear coefficient in its
 /// frame, `K_e = X_e^T N_e`.
@@ -53,7 +55,7 @@ pub(super) struct Inverse {
     pub(super) cholesky: ShiftedCholesky,
     base: Vec<f64>,
     pub(super) positions: Vec<EdgePositions>,
-    pub(super) shift: f64,
+    shift: f64,
 }
 
 impl Inverse {
@@ -120,5 +122,58 @@ impl Inverse {
                 }
             }
         }
+    }
+}
+
+/// Ritz pairs `(lambda, vector)` of the assembled matrix's smallest eigenvalues (ascending), and
+/// whether Lanczos converged.
+pub(super) type Smallest = (Vec<(f64, Vec<f64>)>, bool);
+
+impl Inverse {
+    /// The `count` smallest eigenpairs of the assembled matrix (estimates): the largest
+    /// eigenvalues `theta` of `(T + sigma I)^-1` by Lanczos (`settings`, deflated by `null`),
+    /// `lambda = 1 / theta - sigma`. The smallest shift that factors separates the negative
+    /// eigenvalues best (a large one clusters every `1 / (lambda + sigma)` near `1 / sigma`):
+    /// `sigma` from a quarter of the last one's, at least `floor`, raised fourfold until it
+    /// factors, at most `attempts` times and never past `deadline`; `None` when none did.
+    pub(super) fn smallest(
+        &mut self,
+        (count, floor): (usize, f64),
+        (settings, null): (&LanczosSettings, &[Vec<f64>]),
+        (attempts, deadline): (usize, Option<Instant>),
+    ) -> Option<Smallest> {
+        let dim = self.cholesky.dim();
+        let mut shift = (self.shift / 4.0).max(floor);
+        for _ in 0..attempts {
+            if deadline.is_some_and(|d| Instant::now() >= d) {
+                return None;
+            }
+            let Some(factor) = self.cholesky.factor(shift, f64::INFINITY) else {
+                shift *= 4.0;
+                continue;
+            };
+            let op = |x: &[f64], y: &mut [f64]| {
+                y.copy_from_slice(x);
+                factor.solve_in_place(y);
+            };
+            let est = lanczos(
+                dim,
+                op,
+                Extreme::Largest,
+                count,
+                1.0 / shift,
+                settings,
+                null,
+                None,
+            );
+            let mut pairs: Vec<(f64, Vec<f64>)> = (est.values.iter().zip(est.vectors))
+                .filter(|(theta, _)| **theta > 0.0)
+                .map(|(theta, v)| (1.0 / theta - shift, v))
+                .collect();
+            pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            self.shift = shift;
+            return Some((pairs, est.stop.converged()));
+        }
+        None
     }
 }

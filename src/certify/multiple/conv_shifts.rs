@@ -13,9 +13,9 @@
 //! offsets.
 
 use super::conv_frames::{Frame, Inverse};
+use crate::linalg::LanczosSettings;
 use crate::linalg::cholesky::sparse_matvec;
 use crate::linalg::dense::{orthonormal_columns, symmetric_eigenvalues};
-use crate::linalg::{Extreme, LanczosSettings, lanczos};
 use crate::multiple::Edge;
 use crate::relax::clarabel::{Cone, csc, solve_quadratic_conic};
 use crate::relax::settings::SdpSettings;
@@ -83,7 +83,6 @@ struct Spectrum {
     inverse: Inverse,
     base: Vec<f64>,
     nodes: Vec<[usize; 9]>,
-    shift: f64,
     floor: f64,
 }
 
@@ -110,7 +109,6 @@ impl Spectrum {
             inverse,
             base,
             nodes,
-            shift: floor,
             floor,
         }
     }
@@ -126,53 +124,24 @@ impl Spectrum {
         }
     }
 
-    /// The assembled matrix's bottom `KEPT` eigenpairs (estimates, ascending): the largest
-    /// eigenvalues of `(T + sigma I)^-1`, `sigma` from a quarter of the last one's, raised
-    /// fourfold until it factors.
+    /// The assembled matrix's bottom `KEPT` eigenpairs (estimates, ascending; shifts from
+    /// `floor`, at most 40 of them, see [`Inverse::smallest`]) and its eigenvectors as columns.
     fn bottom(&mut self, deadline: Option<Instant>) -> Option<(Vec<f64>, DMatrix<f64>)> {
-        let dim = self.inverse.cholesky.dim();
-        let mut shift = (self.shift / 4.0).max(self.floor);
-        for _ in 0..40 {
-            if deadline.is_some_and(|d| Instant::now() >= d) {
-                return None;
-            }
-            let Some(factor) = self.inverse.cholesky.factor(shift, f64::INFINITY) else {
-                shift *= 4.0;
-                continue;
-            };
-            let op = |x: &[f64], y: &mut [f64]| {
-                y.copy_from_slice(x);
-                factor.solve_in_place(y);
-            };
-            let settings = LanczosSettings {
-                max_iterations: 60,
-                tolerance: 1e-6,
-                block_size: 3,
-                ..LanczosSettings::default()
-            };
-            let est = lanczos(
-                dim,
-                op,
-                Extreme::Largest,
-                KEPT,
-                1.0 / shift,
-                &settings,
-                &[],
-                None,
-            );
-            let mut pairs: Vec<(f64, Vec<f64>)> = (est.values.iter().zip(est.vectors))
-                .filter(|(theta, _)| **theta > 0.0)
-                .map(|(theta, v)| (1.0 / theta - shift, v))
-                .collect();
-            self.shift = shift;
-            pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-            if pairs.is_empty() {
-                return None;
-            }
-            let vectors = DMatrix::from_fn(dim, pairs.len(), |r, c| pairs[c].1[r]);
-            return Some((pairs.iter().map(|p| p.0).collect(), vectors));
+        let settings = LanczosSettings {
+            max_iterations: 60,
+            tolerance: 1e-6,
+            block_size: 3,
+            ..LanczosSettings::default()
+        };
+        let (pairs, _) =
+            self.inverse
+                .smallest((KEPT, self.floor), (&settings, &[]), (40, deadline))?;
+        if pairs.is_empty() {
+            return None;
         }
-        None
+        let dim = self.inverse.cholesky.dim();
+        let vectors = DMatrix::from_fn(dim, pairs.len(), |r, c| pairs[c].1[r]);
+        Some((pairs.iter().map(|p| p.0).collect(), vectors))
     }
 
     /// `V^T T V` of the assembled `T`.
