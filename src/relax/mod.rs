@@ -9,6 +9,8 @@
 //!   (small graphs; what the `O(3)` relaxation misses with anisotropic costs, `[A6]`).
 //! - [`lifted`]: the rank-`p` Burer-Monteiro factorisation of the multiple-averaging SDP,
 //!   solved by a Riemannian trust-region method (the staircase `[D11]`).
+//! - `spectral_bundle`: the model step of the proximal spectral bundles (the `conv(SO(3))`
+//!   dual's node shifts `[A11]`, the rigs' couplings `[H21]`).
 //! - [`svec`]: the vectorisation of symmetric matrices used by Clarabel's PSD cone `[P1]`.
 //! - [`settings`]: one [`SdpSettings`] and one [`SdpStatus`] for both.
 //!
@@ -24,6 +26,7 @@ pub mod lifted;
 pub mod multiple;
 pub mod settings;
 pub mod simultaneous;
+pub(crate) mod spectral_bundle;
 pub mod svec;
 
 pub use conjugate::{ConjugateRelaxation, relax_conjugate};

@@ -15,28 +15,23 @@
 use super::conv_frames::{Frame, Inverse};
 use crate::linalg::LanczosSettings;
 use crate::linalg::cholesky::sparse_matvec;
-use crate::linalg::dense::{orthonormal_columns, symmetric_eigenvalues};
+use crate::linalg::dense::orthonormal_columns;
 use crate::multiple::Edge;
-use crate::relax::clarabel::{Cone, csc, solve_quadratic_conic};
-use crate::relax::settings::SdpSettings;
-use crate::relax::svec::{svec_entry, svec_index, svec_len, svec_weight};
-use nalgebra::{DMatrix, DVector, Matrix3};
+use crate::relax::spectral_bundle::{Model, Rules, Step};
+use crate::relax::svec::{svec_entry, svec_len, svec_weight};
+use nalgebra::{DMatrix, Matrix3};
 use std::time::Instant;
 
-/// Most rounds of the bundle (the graphs of two weak axes at ratio 20 whose search stalls, 200
-/// and 300 nodes: it stops at its stall rule after 38-59 rounds or here, 0.05-0.1 s a round,
-/// `docs/benchmarks.md` "Two weak axes at ratio 20: node shifts").
-const ROUNDS: usize = 100;
-
-/// Bottom eigenvectors kept in the bundle, and the candidate's added each round (20 and 6
-/// gained less in more time on those graphs).
-const KEPT: usize = 12;
-const ADDED: usize = 4;
-
-/// The bundle stops when [`STALL_ROUNDS`] rounds raised `F` by less than this fraction of
-/// `|F|`.
-const STALL: f64 = 1e-3;
-const STALL_ROUNDS: usize = 8;
+/// The bundle's rules: 100 rounds at most (the graphs of two weak axes at ratio 20 whose
+/// search stalls, 200 and 300 nodes: it stops at its stall rule after 38-59 rounds or at 100,
+/// 0.05-0.1 s a round, `docs/benchmarks.md` "Two weak axes at ratio 20: node shifts"); 12
+/// bottom eigenvectors kept and 4 of the candidate's added (20 and 6 gained less in more time
+/// on those graphs); stopped when 8 rounds raised `F` by less than `1e-3 |F|`.
+const RULES: Rules = Rules {
+    rounds: 100,
+    widths: (12, 4),
+    stall: (1e-3, 8),
+};
 
 /// Failed model steps in a row after which the bundle stops (Clarabel's `NumericalFailure` at
 /// a small proximal weight; each failure doubles it).
@@ -47,7 +42,7 @@ const FAILURES: usize = 3;
 /// bundle's and the candidate's vectors and a Lanczos basis of 60 vectors (`3n` values each),
 /// the shifts and the analysed values' copy (`S'` itself is the caller's).
 pub(super) fn predicted_bytes(n: usize, stored: usize) -> u64 {
-    let width = KEPT + ADDED;
+    let width = RULES.widths.0 + RULES.widths.1;
     let model = 2 * 6 * n * svec_len(width);
     let vectors = (3 * width + 60) * 3 * n;
     (8 * (model + vectors + 9 * n + stored)) as u64
@@ -124,7 +119,7 @@ impl Spectrum {
         }
     }
 
-    /// The assembled matrix's bottom `KEPT` eigenpairs (estimates, ascending; shifts from
+    /// The assembled matrix's bottom `RULES.widths.0` eigenpairs (estimates, ascending; shifts from
     /// `floor`, at most 40 of them, see [`Inverse::smallest`]) and its eigenvectors as columns.
     fn bottom(&mut self, deadline: Option<Instant>) -> Option<(Vec<f64>, DMatrix<f64>)> {
         let settings = LanczosSettings {
@@ -133,9 +128,11 @@ impl Spectrum {
             block_size: 3,
             ..LanczosSettings::default()
         };
-        let (pairs, _) =
-            self.inverse
-                .smallest((KEPT, self.floor), (&settings, &[]), (40, deadline))?;
+        let (pairs, _) = self.inverse.smallest(
+            (RULES.widths.0, self.floor),
+            (&settings, &[]),
+            (40, deadline),
+        )?;
         if pairs.is_empty() {
             return None;
         }
@@ -193,9 +190,9 @@ pub(super) fn shift_nodes(
         value: first,
     };
     let mut rho = 1.0 / values[0].abs().max(f64::MIN_POSITIVE);
-    let mut bundle = orthonormal_columns(&center.vectors, KEPT, None);
+    let mut bundle = orthonormal_columns(&center.vectors, RULES.widths.0, None);
     let (mut rounds, mut history, mut failures) = (0, vec![first], 0);
-    for round in 1..=ROUNDS {
+    for round in 1..=RULES.rounds {
         if deadline.is_some_and(|d| Instant::now() >= d) {
             break;
         }
@@ -220,11 +217,15 @@ pub(super) fn shift_nodes(
         // the model's `F` at `D + d`: `C` holds the center's `T`, so `t` is the whole
         // `lambda_min` there, and the center's traces are added
         let predicted = center.d.iter().map(Matrix3::trace).sum::<f64>() + predicted;
-        bundle = orthonormal_columns(&center.vectors, KEPT, Some((&vectors, ADDED)));
+        bundle = orthonormal_columns(
+            &center.vectors,
+            RULES.widths.0,
+            Some((&vectors, RULES.widths.1)),
+        );
         let serious = value - center.value >= 0.1 * (predicted - center.value);
         if serious {
             center = Center { d, vectors, value };
-            bundle = orthonormal_columns(&center.vectors, KEPT, None);
+            bundle = orthonormal_columns(&center.vectors, RULES.widths.0, None);
             rho *= 0.5;
         } else {
             rho *= 2.0;
@@ -237,10 +238,7 @@ pub(super) fn shift_nodes(
             ),
         });
         history.push(center.value);
-        let done = history.len() - 1;
-        if done > STALL_ROUNDS
-            && center.value - history[done - STALL_ROUNDS] < STALL * center.value.abs()
-        {
+        if RULES.stalled(&history, center.value.abs()) {
             break;
         }
     }
@@ -254,76 +252,33 @@ pub(super) fn shift_nodes(
 
 /// One round's model `max sum tr(d_i) + 3n t - rho |d|^2 / 2` (Frobenius norm) with `C - V^T
 /// blkdiag(d) V - t I` positive semidefinite (`C = V^T T V` at the center, `V` the bundle),
-/// solved through its dual in the bundle's dimension: `min <W, C> + |g + A*(W)|^2 / (2 rho)`
-/// over `W >= 0`, `tr W = 3n` (`A(d) = -V^T blkdiag(d) V`, `g` the gradient of `sum tr(d_i)`,
-/// norms in the variables' metric), by Clarabel within the deadline; then `d = (g + A*(W)) /
-/// rho` and `t = lambda_min(C + A(d))`: the shifts and the model's gain `sum tr(d_i) + 3n t`.
+/// solved through its dual in the bundle's dimension ([`Model::step`], `tr W = 3n`, `A(d) =
+/// -V^T blkdiag(d) V`, `g` the gradient of `sum tr(d_i)`, norms in the variables' metric)
+/// within the deadline: the shifts and the model's gain `sum tr(d_i) + 3n t`.
 fn model_step(
     v: &DMatrix<f64>,
     c: &DMatrix<f64>,
     rho: f64,
     deadline: Option<Instant>,
 ) -> Option<(Vec<Matrix3<f64>>, f64)> {
-    let (n, r) = (v.nrows() / 3, v.ncols());
-    let len = svec_len(r);
+    let n = v.nrows() / 3;
     let gt = derivatives(v);
     // the metric's inverse (off-diagonal variables count twice) and `g`
-    let metric = |row: usize| if row % 6 < 3 { 1.0 } else { 0.5 };
-    let g = |row: usize| if row % 6 < 3 { 1.0 } else { 0.0 };
-    let scaled = DMatrix::from_fn(gt.nrows(), len, |row, col| gt[(row, col)] * metric(row));
-    let gram = gt.tr_mul(&scaled) / rho;
-    let q: Vec<f64> = (0..len)
-        .map(|col| {
-            let (i, j) = svec_entry(col);
-            let linear: f64 = (0..gt.nrows()).map(|row| g(row) * scaled[(row, col)]).sum();
-            svec_weight(i, j) * c[(i, j)] + linear / rho
-        })
+    let metric: Vec<f64> = (0..6 * n)
+        .map(|row| if row % 6 < 3 { 1.0 } else { 0.5 })
         .collect();
-    // solved for `W / 3n` (unit trace) with the objective over its largest coefficient:
-    // Clarabel's `NumericalFailure` otherwise at small `rho` on graphs of 8-12 nodes
-    let trace = 3.0 * n as f64;
-    let largest = (gram.amax() * trace * trace)
-        .max(q.iter().fold(0.0_f64, |m, x| m.max(x.abs())) * trace)
-        .max(f64::MIN_POSITIVE);
-    let (quadratic, linear) = (trace * trace / largest, trace / largest);
-    let upper = (0..len).flat_map(|b| (0..=b).map(move |a| (a, b)));
-    let p = csc(
-        len,
-        len,
-        upper
-            .map(|(a, b)| (a, b, quadratic * gram[(a, b)]))
-            .collect(),
-    );
-    let q: Vec<f64> = q.iter().map(|x| linear * x).collect();
-    // `1 - tr W = 0`, then `0 - (-w)` in the PSD cone
-    let mut triplets: Vec<(usize, usize, f64)> =
-        (0..r).map(|i| (0, svec_index(i, i), 1.0)).collect();
-    triplets.extend((0..len).map(|row| (1 + row, row, -1.0)));
-    let mut b = vec![0.0; 1 + len];
-    b[0] = 1.0;
-    let settings = SdpSettings {
-        chordal_decomposition: false,
-        time_limit_seconds: deadline
-            .map(|d| d.saturating_duration_since(Instant::now()).as_secs_f64()),
-        ..SdpSettings::default()
+    let g: Vec<f64> = (0..6 * n)
+        .map(|row| if row % 6 < 3 { 1.0 } else { 0.0 })
+        .collect();
+    let model = Model {
+        derivatives: &gt,
+        restricted: c,
+        linear: Some(&g),
+        metric: Some(&metric),
+        weight: 3.0 * n as f64,
     };
-    let cones = [Cone::Zero(1), Cone::Psd(r)];
-    let a = csc(1 + len, len, triplets);
-    let solution = solve_quadratic_conic((&p, &q), a, &b, &cones, &settings, "none").ok()?;
-    if !solution.status.converged() {
-        return None;
-    }
-    let w = DVector::from_column_slice(&solution.x) * trace;
-    let y: Vec<f64> = (&gt * w)
-        .iter()
-        .enumerate()
-        .map(|(row, x)| (g(row) + x) * metric(row) / rho)
-        .collect();
-    let ay = gt.tr_mul(&DVector::from_column_slice(&y));
-    let model = DMatrix::from_fn(r, r, |i, j| {
-        c[(i, j)] + ay[svec_index(i, j)] / svec_weight(i, j)
-    });
-    let t = symmetric_eigenvalues(&model)?[0];
+    let seconds = deadline.map(|d| d.saturating_duration_since(Instant::now()).as_secs_f64());
+    let Step { y, t } = model.step(rho, seconds)?;
     let d: Vec<_> = y.chunks(6).map(symmetric).collect();
     let gain = d.iter().map(Matrix3::trace).sum::<f64>() + 3.0 * n as f64 * t;
     Some((d, gain))

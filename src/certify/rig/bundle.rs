@@ -8,29 +8,26 @@ use super::couplings::{PairSum, local_pairs};
 use super::traces::Traces;
 use crate::deadline::Deadline;
 use crate::linalg::dense::{orthonormal_columns as columns, symmetric_eigen};
-use crate::relax::clarabel::{Cone, csc, solve_quadratic_conic};
-use crate::relax::settings::SdpSettings;
-use crate::relax::svec::{svec_entry, svec_index, svec_len, svec_weight};
+use crate::relax::spectral_bundle::{Model, Rules, Step};
+use crate::relax::svec::{svec_entry, svec_len, svec_weight};
 use crate::so3::{Rotation, vee};
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, Matrix3, Vector3};
 
-/// Most rounds of the bundle (the rigs of `docs/benchmarks.md` "Small rigs along a path" that
-/// it certifies: `S` positive definite after 3-42 rounds, 0.1-3.3 s of certify each).
-const SEARCH_ROUNDS: usize = 60;
-
-/// Bottom eigenvectors kept in the bundle, and the candidate's added each round.
-const BUNDLE: usize = 8;
-const CANDIDATE: usize = 3;
+/// The bundle's rules: 60 rounds at most (the rigs of `docs/benchmarks.md` "Small rigs along a
+/// path" that it certifies: `S` positive definite after 3-42 rounds, 0.1-3.3 s of certify
+/// each); 8 bottom eigenvectors kept and 3 of the candidate's added; stopped when 10 rounds
+/// gained less than `1e-2` of the start's `|lambda_min|` (30 frames, 4 sensors, seed 11 of
+/// `[H21]` "The search": it crawls from -9.7 to -2.8 over 60 rounds, where the within-frame
+/// couplings likely cannot certify).
+pub(super) const RULES: Rules = Rules {
+    rounds: 60,
+    widths: (8, 3),
+    stall: (1e-2, 10),
+};
 
 /// The search stops once `lambda_min(S)` is this fraction of its start's magnitude above zero:
 /// the margin the augmented graph's own proof then works with.
 const MARGIN: f64 = 0.05;
-
-/// The search stops when [`STALL_ROUNDS`] rounds gained less than this fraction of the start's
-/// `|lambda_min|` (30 frames, 4 sensors, seed 11 of `[H21]` "The search": it crawls from -9.7
-/// to -2.8 over 60 rounds, where the within-frame couplings likely cannot certify).
-const STALL: f64 = 1e-2;
-const STALL_ROUNDS: usize = 10;
 
 /// The search also stops when [`OPTIMISM`] times its rate over the last [`RATE_ROUNDS`] rounds,
 /// kept up for every round left, would not bring `lambda_min` to zero (`[H21]` "When the
@@ -50,8 +47,6 @@ pub(super) type Eigen<A> = (Vec<f64>, DMatrix<f64>, A);
 pub(super) trait Spectrum {
     /// What `V^T S V` is formed from at a point.
     type At;
-    /// Bundle columns kept, and the candidate's added each round.
-    const WIDTHS: (usize, usize);
     /// The first round's proximal weight times `|lambda_min|` at the start.
     const FIRST_RHO: f64;
     /// The bottom eigenvalues of `S` at `moves` (ascending, estimates for [`Wide`]), their
@@ -66,7 +61,6 @@ pub(super) struct Dense(pub DMatrix<f64>);
 
 impl Spectrum for Dense {
     type At = DMatrix<f64>;
-    const WIDTHS: (usize, usize) = (BUNDLE, CANDIDATE);
     const FIRST_RHO: f64 = 1.0;
 
     fn at(&self, space: &Space<'_>, moves: &Moves) -> Option<Eigen<Self::At>> {
@@ -97,7 +91,7 @@ fn too_slow(history: &[f64]) -> Option<String> {
     }
     let now = history[round];
     let rate = (now - history[round - RATE_ROUNDS]) / RATE_ROUNDS as f64;
-    let left = SEARCH_ROUNDS.saturating_sub(round) as f64;
+    let left = RULES.rounds.saturating_sub(round) as f64;
     (now + OPTIMISM * rate * left < 0.0).then(|| {
         format!(
             "at its rate of the last {RATE_ROUNDS} rounds ({rate:.1e} per round) lambda_min(S) \
@@ -338,7 +332,7 @@ impl<'a> Space<'a> {
     /// The proximal bundle: each round maximises `t - rho |y|^2 / 2` with `V^T S(T + y) V >= t I`
     /// (`V` the bundle), moves when the true `lambda_min` gains a tenth of the model's
     /// prediction (`rho` halved), else only enriches the bundle (`rho` doubled). Stops at
-    /// [`MARGIN`], [`SEARCH_ROUNDS`], a stall ([`STALL`]), a rate too slow for the rounds left
+    /// [`MARGIN`], [`RULES`]' rounds, a stall, a rate too slow for the rounds left
     /// ([`too_slow`]) or the deadline: the moves,
     /// `lambda_min` and rounds when it became positive.
     pub(super) fn bundle<O: Spectrum>(
@@ -347,7 +341,7 @@ impl<'a> Space<'a> {
         start: Eigen<O::At>,
         deadline: Option<Deadline>,
     ) -> Option<Run> {
-        let (kept, added_columns) = O::WIDTHS;
+        let (kept, added_columns) = RULES.widths;
         let (mut at, (values, mut vectors, mut s_at)) = (self.zero(), start);
         let (lambda0, mut lambda) = (values[0], values[0]);
         if lambda0 >= 0.0 {
@@ -356,7 +350,7 @@ impl<'a> Space<'a> {
         let mut bundle = columns(&vectors, kept, None);
         let mut rho = O::FIRST_RHO / lambda0.abs();
         let (mut rounds, mut history, mut nulls) = (0, vec![lambda0], 0);
-        for round in 1..=SEARCH_ROUNDS {
+        for round in 1..=RULES.rounds {
             if deadline.is_some_and(|d| d.passed()) {
                 break;
             }
@@ -393,11 +387,10 @@ impl<'a> Space<'a> {
                 });
             }
             history.push(lambda);
-            if round > STALL_ROUNDS
-                && lambda - history[round - STALL_ROUNDS] < STALL * lambda0.abs()
-            {
+            if RULES.stalled(&history, lambda0.abs()) {
+                let (fraction, rounds) = RULES.stall;
                 stopped(&format!(
-                    "{STALL_ROUNDS} rounds gained less than {STALL} of |lambda_min|"
+                    "{rounds} rounds gained less than {fraction} of |lambda_min|"
                 ));
                 break;
             }
@@ -418,9 +411,8 @@ impl<'a> Space<'a> {
 
     /// One round's model: `max t - rho |y|^2 / 2` s.t. `C + A(y) - t I` positive semidefinite
     /// (`C = V^T S(T) V`, `s_at = S(T)`, `A(y) = V^T D(y) V`), solved through its dual in the
-    /// bundle's own dimension (`[H21]` "The model's dual"): `min <W, C> + |A*(W)|^2 / (2 rho)`
-    /// over `W >= 0`, `tr W = 1` (`r (r + 1) / 2` variables, by Clarabel within the deadline),
-    /// then `y = A*(W) / rho` and `t = lambda_min(C + A(y))`: `(y, t)`.
+    /// bundle's own dimension (`[H21]` "The model's dual", [`Model::step`] with `tr W = 1`)
+    /// within the deadline: `(y, t)`.
     fn model_step(
         &self,
         v: &DMatrix<f64>,
@@ -428,12 +420,10 @@ impl<'a> Space<'a> {
         rho: f64,
         deadline: Option<Deadline>,
     ) -> Option<(Vec<f64>, f64)> {
-        let r = v.ncols();
-        let len = svec_len(r);
+        let len = svec_len(v.ncols());
         // `svec(A(y)) = G y`: row `svec_index(i, j)` the weighted derivative of entry `(i, j)`,
         // held as `G^T` (each derivative a contiguous column)
-        let ny = self.variables();
-        let mut gt = DMatrix::zeros(ny, len);
+        let mut gt = DMatrix::zeros(self.variables(), len);
         for (row, mut column) in gt.column_iter_mut().enumerate() {
             let (i, j) = svec_entry(row);
             let gradient = self.gradient(v.column(i).as_view(), v.column(j).as_view());
@@ -442,47 +432,14 @@ impl<'a> Space<'a> {
                 *out = weight * d;
             }
         }
-        let m = gram(&gt, 1.0 / rho);
-        let upper = (0..len).flat_map(|b| (0..=b).map(move |a| (a, b)));
-        let p = csc(len, len, upper.map(|(a, b)| (a, b, m[(a, b)])).collect());
-        let q: Vec<f64> = (0..len)
-            .map(|row| {
-                let (i, j) = svec_entry(row);
-                svec_weight(i, j) * 0.5 * (c[(i, j)] + c[(j, i)])
-            })
-            .collect();
-        // `1 - tr W = 0`, then `0 - (-w)` in the PSD cone
-        let mut triplets: Vec<(usize, usize, f64)> =
-            (0..r).map(|i| (0, svec_index(i, i), 1.0)).collect();
-        triplets.extend((0..len).map(|row| (1 + row, row, -1.0)));
-        let mut b = vec![0.0; 1 + len];
-        b[0] = 1.0;
-        let settings = SdpSettings {
-            chordal_decomposition: false,
-            time_limit_seconds: deadline.and_then(|d| d.left()).map(|l| l.max(0.0)),
-            ..SdpSettings::default()
+        let model = Model {
+            derivatives: &gt,
+            restricted: c,
+            linear: None,
+            metric: None,
+            weight: 1.0,
         };
-        let solution = solve_quadratic_conic(
-            (&p, &q),
-            csc(1 + len, len, triplets),
-            &b,
-            &[Cone::Zero(1), Cone::Psd(r)],
-            &settings,
-            "none",
-        )
-        .ok()?;
-        if !solution.status.converged() {
-            return None;
-        }
-        let y: Vec<f64> = (&gt * DVector::from_column_slice(&solution.x) / rho)
-            .iter()
-            .copied()
-            .collect();
-        let ay = gt.tr_mul(&DVector::from_column_slice(&y));
-        let model = DMatrix::from_fn(r, r, |i, j| {
-            0.5 * (c[(i, j)] + c[(j, i)]) + ay[svec_index(i, j)] / svec_weight(i, j)
-        });
-        let t = crate::linalg::dense::symmetric_eigenvalues(&model)?[0];
+        let Step { y, t } = model.step(rho, deadline.and_then(|d| d.left()))?;
         Some((y, t))
     }
 
@@ -512,24 +469,6 @@ impl<'a> Space<'a> {
     }
 }
 
-/// `alpha G^T G` for `gt` = `G^T`, by a blocked product over its transposed view (no copy of
-/// `G`, 0.7 GB at 10^4 frames and 6 sensors).
-fn gram(gt: &DMatrix<f64>, alpha: f64) -> DMatrix<f64> {
-    let (rows, cols) = gt.shape();
-    let g = faer::MatRef::from_column_major_slice(gt.as_slice(), rows, cols);
-    let mut m = faer::Mat::<f64>::zeros(cols, cols);
-    faer::linalg::matmul::matmul(
-        m.as_mut(),
-        faer::Accum::Replace,
-        g.transpose(),
-        g,
-        alpha,
-        faer::Par::Seq,
-    );
-    DMatrix::from_fn(cols, cols, |r, c| m[(r, c)])
-}
-
-/// The moves `a + b`.
 fn added(a: &Moves, b: &Moves) -> Moves {
     Moves {
         sums: added_sums(&a.sums, &b.sums),

@@ -96,7 +96,6 @@ impl<'a> Wide<'a> {
 
 impl Spectrum for Wide<'_> {
     type At = SparseColMat<usize, f64>;
-    const WIDTHS: (usize, usize) = (8, 3);
     const FIRST_RHO: f64 = 0.125;
 
     fn at(&self, space: &Space<'_>, moves: &Moves) -> Option<Eigen<Self::At>> {
@@ -129,7 +128,7 @@ struct SearchSizes {
 /// image pair (both triangles: two blocks per joined pair and one per image, 9 values and 9
 /// row indices each); a Lanczos basis of `LANCZOS_VECTORS` vectors of `3N` values.
 fn search_bytes(z: &SearchSizes) -> u64 {
-    let (kept, added) = <Wide<'_> as Spectrum>::WIDTHS;
+    let (kept, added) = super::bundle::RULES.widths;
     let r = (kept + added) as u64;
     let gradient = 8 * r * (r + 1) / 2 * z.variables as u64;
     let graph = (z.edges + z.pseudo_edges) as u64 * BYTES_PER_EDGE;
