@@ -426,16 +426,39 @@ fn bound_coarse(
     let mut g = DMatrix::zeros(cols, cols);
     let mut r = DMatrix::zeros(cols, cols);
     let (mut g_err_sq, mut r_err_sq) = (0.0f64, 0.0f64);
-    for a in 0..cols {
-        for b in 0..cols {
-            let (s, mag) = pairwise_dot(&z[a], &ys[b]);
+    // row `a` of `G` and the upper part of `R`'s (symmetric: the same sums either way), rows
+    // on both threads in an order that shares the upper part's work evenly
+    let mut order: Vec<usize> = (0..cols)
+        .map(|t| if t % 2 == 0 { t / 2 } else { cols - 1 - t / 2 })
+        .collect();
+    let row = |a: usize| {
+        let g_row: Vec<(f64, f64)> = (0..cols)
+            .map(|b| {
+                let (s, mag) = pairwise_dot(&z[a], &ys[b]);
+                (s, norm(&z[a]) * y_errs[b] + g_dot * mag * (1.0 + g_dot))
+            })
+            .collect();
+        let r_row: Vec<(f64, f64)> = (a..cols)
+            .map(|b| {
+                let (s, mag) = pairwise_dot(&ps[a], &ps[b]);
+                (s, g_dot * mag * (1.0 + g_dot))
+            })
+            .collect();
+        (a, g_row, r_row)
+    };
+    let parallel = dim * cols >= crate::linalg::threads::PARALLEL_EDGES;
+    let rows = crate::linalg::threads::in_chunks(&mut order, parallel, |_, part| {
+        part.iter().map(|&a| row(a)).collect::<Vec<_>>()
+    });
+    for (a, g_row, r_row) in rows.into_iter().flatten() {
+        for (b, (s, e)) in g_row.into_iter().enumerate() {
             g[(a, b)] = s;
-            let e = norm(&z[a]) * y_errs[b] + g_dot * mag * (1.0 + g_dot);
             g_err_sq += e * e;
-            let (s, mag) = pairwise_dot(&ps[a], &ps[b]);
+        }
+        for (b, (s, e)) in (a..cols).zip(r_row) {
             r[(a, b)] = s;
-            let e = g_dot * mag * (1.0 + g_dot);
-            r_err_sq += e * e;
+            r[(b, a)] = s;
+            r_err_sq += if a == b { e * e } else { 2.0 * e * e };
         }
     }
     // R^T R <= 2 R'^T R' + 2 eps^2 I: the doubled R'^T R' is small against the flux's
