@@ -422,6 +422,34 @@ fn bound_coarse(
     let rho = (r_norm + eps) * (1.0 + 1e-10);
     // pairwise sums: the error grows with the depth of the tree, not with `3n` (whose
     // `gamma(3n)` alone failed 10^5-node graphs in 8 regions)
+    let (g, r, g_err_sq, r_err_sq) = gram_matrices((z, &ys, &ps), &y_errs, norm);
+    // R^T R <= 2 R'^T R' + 2 eps^2 I: the doubled R'^T R' is small against the flux's
+    // eigenvalues of G, and nearly zero on the gauge directions, where G is too
+    let h = (&g + g.transpose()) * 0.5 - (&r + r.transpose()) * (1.0 / zeta);
+    let h_err = g_err_sq.sqrt()
+        + 2.0 * r_err_sq.sqrt() / zeta
+        + 2.0 * eps * eps / zeta
+        + 4.0 * U * (g.norm() + 2.0 * r.norm() / zeta);
+    let lambda_h = verified_min_eigenvalue(&h)? - h_err;
+    // the columns' own error: V'^T M V' against z^T M z
+    let lambda = (lambda_h - 2.0 * (y_sq.sqrt() + eps_sq.sqrt()) * delta - m_norm * delta * delta)
+        * (1.0 + 1e-10)
+        - f64::MIN_POSITIVE;
+    (rho.is_finite() && lambda.is_finite()).then_some((lambda, rho, delta))
+}
+
+/// Columns of `3n` values.
+type Columns<'a> = &'a [Vec<f64>];
+
+/// `G = z^T Y` and `R = P^T P` (`Y` the columns' products `M z`, `P` their projections) by
+/// pairwise sums, with the sums of their entries' squared error bounds (`y_errs` the products'
+/// own errors, `norm` a norm bounded above).
+fn gram_matrices(
+    (z, ys, ps): (Columns<'_>, Columns<'_>, Columns<'_>),
+    y_errs: &[f64],
+    norm: impl Fn(&[f64]) -> f64 + Sync,
+) -> (DMatrix<f64>, DMatrix<f64>, f64, f64) {
+    let (dim, cols) = (z.first().map_or(0, Vec::len), z.len());
     let g_dot = gamma(pairwise_depth(dim) + 2);
     let mut g = DMatrix::zeros(cols, cols);
     let mut r = DMatrix::zeros(cols, cols);
@@ -461,19 +489,7 @@ fn bound_coarse(
             r_err_sq += if a == b { e * e } else { 2.0 * e * e };
         }
     }
-    // R^T R <= 2 R'^T R' + 2 eps^2 I: the doubled R'^T R' is small against the flux's
-    // eigenvalues of G, and nearly zero on the gauge directions, where G is too
-    let h = (&g + g.transpose()) * 0.5 - (&r + r.transpose()) * (1.0 / zeta);
-    let h_err = g_err_sq.sqrt()
-        + 2.0 * r_err_sq.sqrt() / zeta
-        + 2.0 * eps * eps / zeta
-        + 4.0 * U * (g.norm() + 2.0 * r.norm() / zeta);
-    let lambda_h = verified_min_eigenvalue(&h)? - h_err;
-    // the columns' own error: V'^T M V' against z^T M z
-    let lambda = (lambda_h - 2.0 * (y_sq.sqrt() + eps_sq.sqrt()) * delta - m_norm * delta * delta)
-        * (1.0 + 1e-10)
-        - f64::MIN_POSITIVE;
-    (rho.is_finite() && lambda.is_finite()).then_some((lambda, rho, delta))
+    (g, r, g_err_sq, r_err_sq)
 }
 
 /// The length of the plain sums at the leaves of [`pairwise_dot`].
