@@ -177,3 +177,26 @@ fn gram(gt: &DMatrix<f64>, alpha: f64) -> DMatrix<f64> {
     );
     DMatrix::from_fn(cols, cols, |r, c| m[(r, c)])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Rules;
+
+    /// A stall is `stall.1` rounds that gained less than `stall.0` of the scale, counted from
+    /// the start: never before that many rounds, not while the objective still climbs.
+    #[test]
+    fn a_stall_is_too_little_gain_over_the_last_rounds() {
+        let rules = Rules {
+            rounds: 50,
+            widths: (8, 3),
+            stall: (1e-2, 3),
+        };
+        // the start, then rounds: flat from the start, but only three rounds done
+        assert!(!rules.stalled(&[1.0, 1.0, 1.0, 1.0], 1.0));
+        assert!(rules.stalled(&[1.0, 1.0, 1.0, 1.0, 1.0], 1.0));
+        // a gain of 2e-2 over the last three rounds on a scale of 1: not stalled; of 1 on 1e3: stalled
+        assert!(!rules.stalled(&[0.0, 0.5, 0.98, 0.99, 1.0], 1.0));
+        assert!(rules.stalled(&[0.0, 0.5, 0.98, 0.99, 1.0], 1e3));
+        assert!(!rules.stalled(&[], 1.0));
+    }
+}
