@@ -35,7 +35,7 @@ proved = [a.get("note", "") for a in (p.get("certify") or {}).get("ladder", [])
           if a["outcome"].get("outcome") == "proved" and a["rung"]["proof"] == "scalar_comparison"]
 print(f.split("/")[-1], lab, k, "solve %.3f certify %.3f" % (d["solver"]["seconds"], p["certify_seconds"]),
       (d.get("verdict") or {}).get("verdict", "?"),
-      "rel_gap %.2e" % cert.get("relative_gap", float("nan")),
+      "rel_gap %.2e" % (cert.get("relative_gap") if cert.get("relative_gap") is not None else float("nan")),
       "wall", wall, "rss_MB", int(rss) // 1024, "|",
       (proved[0] if proved else "-")[:90], flush=True)
 PY
