@@ -45,6 +45,15 @@ impl Rules {
     }
 }
 
+/// The proximal bundle's step test (Helmberg and Rendl): serious when the objective `gained`
+/// at least a tenth of the model's `predicted` gain, and then the proximal weight `rho` is
+/// halved (the model is trusted farther), else doubled (a null step only enriches the bundle).
+pub(crate) fn serious_step(gained: f64, predicted: f64, rho: &mut f64) -> bool {
+    let serious = gained >= 0.1 * predicted;
+    *rho *= if serious { 0.5 } else { 2.0 };
+    serious
+}
+
 /// One round's model: the derivatives and the center's restricted matrix, the objective's
 /// linear part and metric.
 pub(crate) struct Model<'a> {
@@ -198,5 +207,18 @@ mod tests {
         assert!(!rules.stalled(&[0.0, 0.5, 0.98, 0.99, 1.0], 1.0));
         assert!(rules.stalled(&[0.0, 0.5, 0.98, 0.99, 1.0], 1e3));
         assert!(!rules.stalled(&[], 1.0));
+    }
+
+    /// A step is serious from a tenth of its predicted gain on (the weight halved), null
+    /// below it (doubled).
+    #[test]
+    fn a_serious_step_gains_a_tenth_of_its_prediction() {
+        let mut rho = 1.0;
+        assert!(super::serious_step(0.1, 1.0, &mut rho));
+        assert_eq!(rho, 0.5);
+        assert!(!super::serious_step(0.099, 1.0, &mut rho));
+        assert_eq!(rho, 1.0);
+        assert!(!super::serious_step(-1.0, 1.0, &mut rho));
+        assert_eq!(rho, 2.0);
     }
 }

@@ -17,7 +17,7 @@ use crate::linalg::LanczosSettings;
 use crate::linalg::cholesky::sparse_matvec;
 use crate::linalg::dense::orthonormal_columns;
 use crate::multiple::Edge;
-use crate::relax::spectral_bundle::{Model, Rules, Step};
+use crate::relax::spectral_bundle::{Model, Rules, Step, serious_step};
 use crate::relax::svec::{svec_entry, svec_len, svec_weight};
 use nalgebra::{DMatrix, Matrix3};
 use std::time::Instant;
@@ -222,13 +222,9 @@ pub(super) fn shift_nodes(
             RULES.widths.0,
             Some((&vectors, RULES.widths.1)),
         );
-        let serious = value - center.value >= 0.1 * (predicted - center.value);
-        if serious {
+        if serious_step(value - center.value, predicted - center.value, &mut rho) {
             center = Center { d, vectors, value };
             bundle = orthonormal_columns(&center.vectors, RULES.widths.0, None);
-            rho *= 0.5;
-        } else {
-            rho *= 2.0;
         }
         crate::progress::emit(|| crate::progress::Event::Phase {
             phase: crate::progress::Phase::Certify,

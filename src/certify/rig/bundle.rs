@@ -8,7 +8,7 @@ use super::couplings::{PairSum, local_pairs};
 use super::traces::Traces;
 use crate::deadline::Deadline;
 use crate::linalg::dense::{orthonormal_columns as columns, symmetric_eigen};
-use crate::relax::spectral_bundle::{Model, Rules, Step};
+use crate::relax::spectral_bundle::{Model, Rules, Step, serious_step};
 use crate::relax::svec::{svec_entry, svec_len, svec_weight};
 use crate::so3::{Rotation, vee};
 use nalgebra::{DMatrix, Matrix3, Vector3};
@@ -363,14 +363,11 @@ impl<'a> Space<'a> {
             }
             let candidate = added(&at, &self.moves(&y));
             let (values, new_vectors, s_candidate) = oracle.at(self, &candidate)?;
-            let serious = values[0] - lambda >= 0.1 * (predicted - lambda);
+            let serious = serious_step(values[0] - lambda, predicted - lambda, &mut rho);
             bundle = columns(&vectors, kept, Some((&new_vectors, added_columns)));
             if serious {
                 (at, lambda, vectors, s_at) = (candidate, values[0], new_vectors, s_candidate);
                 bundle = columns(&vectors, kept, None);
-                rho *= 0.5;
-            } else {
-                rho *= 2.0;
             }
             crate::progress::emit(|| crate::progress::Event::Phase {
                 phase: crate::progress::Phase::Certify,
