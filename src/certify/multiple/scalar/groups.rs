@@ -78,7 +78,7 @@ pub(crate) fn grouped_comparison(
     let stop_at =
         seconds.and_then(|s| clock.checked_add(std::time::Duration::try_from_secs_f64(s).ok()?));
     Ok(
-        compare_grouped(problem, &analysis, rotations, lambdas, (false, stop_at))
+        compare_grouped(problem, &analysis, rotations, lambdas, stop_at)
             .map_err(|f| super::failure_text(target, Err(f), analysis.expected_negative_pivots())),
     )
 }
@@ -103,31 +103,42 @@ pub(crate) fn grouped_dual_bound(
 }
 
 /// Steps 1 to 5 of the grouped comparison (its `zeta` and the coarse correction's residual
-/// are fixed fractions: no target enters), the conjugate gradients stopping at `stop_at`; with
-/// `one_region` every node in one component (`[D13]`, "Deflated components", "One region"):
-/// the whole graph's (or a subgraph's) analysis compared with the grouped pencil's `zeta` (a
-/// fixed fraction of the largest diagonal, not the target's) and its deflation of up to
-/// [`DEFLATION_EXTRA`] negative pivots beyond the gauge's one, a second factorisation of the
-/// plain comparison's pattern.
+/// are fixed fractions: no target enters), the conjugate gradients stopping at `stop_at`.
 pub(super) fn compare_grouped(
     problem: &MultipleProblem,
     analysis: &ScalarAnalysis,
     rotations: &[Rotation],
     lambdas: &[Matrix3<f64>],
-    (one_region, stop_at): (bool, Option<std::time::Instant>),
+    stop_at: Option<std::time::Instant>,
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     let coarse = (COARSE_RELATIVE_RESIDUAL, stop_at);
-    if one_region {
-        let one = vec![0; problem.num_rotations()];
-        return compare_in(problem, (analysis, &one), rotations, lambdas, coarse);
-    }
     compare_grouped_to(problem, analysis, rotations, lambdas, coarse)
 }
 
-/// Whether a plain comparison that failed with `negative_pivots` is close enough for
-/// [`compare_grouped`] as one region.
-pub(super) fn one_region_may_prove(negative_pivots: usize) -> bool {
-    (2..=1 + DEFLATION_EXTRA).contains(&negative_pivots)
+/// A one-region comparison's (`[D13]`, "Deflated components", "One region") least `zeta` (the
+/// grouped pencil's, a fixed fraction of the largest diagonal) and the most negative pivots its
+/// factor may show: up to [`DEFLATION_EXTRA`] beyond the gauge's one.
+pub(super) fn one_region_pencil(analysis: &ScalarAnalysis, d_max: f64) -> (f64, usize) {
+    let most = analysis.expected_negative_pivots() + DEFLATION_EXTRA;
+    (ZETA_FRACTION * d_max, most)
+}
+
+/// The deflated bound `(mu_m, kappa, residual)` of a plain comparison's factor whose `columns`
+/// are at its negative pivots, every node in one component (`[D13]`, "One region"): the
+/// statement of "Deflated components" with `k = 1`, `U` the complement of the constant
+/// directions and the columns, the gauge directions bounded apart.
+pub(super) fn one_region_bound(
+    problem: &MultipleProblem,
+    (rotations, lambdas, t_max): (&[Rotation], &[Matrix3<f64>], f64),
+    c: &EdgeCharges,
+    columns: Vec<NegativeColumn>,
+    (zeta_free, stop_at): (f64, Option<std::time::Instant>),
+) -> std::result::Result<(f64, f64, f64), ScalarFailure> {
+    let m = scalar_operator(problem, rotations, lambdas, &c.deg_n);
+    let one = vec![0; problem.num_rotations()];
+    let at = (rotations, lambdas, t_max);
+    let coarse = (zeta_free, COARSE_RELATIVE_RESIDUAL, stop_at);
+    deflated_bound(problem, at, &m, (&one, columns), coarse)
 }
 
 /// [`compare_grouped`] with the coarse correction's relative residual `rel` (any: a looser one
@@ -139,19 +150,8 @@ fn compare_grouped_to(
     lambdas: &[Matrix3<f64>],
     coarse: (f64, Option<std::time::Instant>),
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
-    let components = &analysis.components;
-    compare_in(problem, (analysis, components), rotations, lambdas, coarse)
-}
-
-/// [`compare_grouped_to`] with the components `of` (each node's; the analysis's own, or one
-/// for all).
-fn compare_in(
-    problem: &MultipleProblem,
-    (analysis, of): (&ScalarAnalysis, &[usize]),
-    rotations: &[Rotation],
-    lambdas: &[Matrix3<f64>],
-    (rel, stop_at): (f64, Option<std::time::Instant>),
-) -> std::result::Result<ScalarComparison, ScalarFailure> {
+    let of = &analysis.components;
+    let (rel, stop_at) = coarse;
     let t_max = orthogonality_defect(rotations)?;
     let c = edge_charges(problem, rotations, lambdas, &analysis.copies, analysis.beta)?;
     let pencil = grouped_pencil(&c)?;
@@ -233,7 +233,7 @@ fn deflated_bound(
 
 /// The most negative pivots beyond one per component that the deflation takes (the factor's
 /// columns at all of them, three coarse columns each).
-const DEFLATION_EXTRA: usize = 12;
+pub(super) const DEFLATION_EXTRA: usize = 12;
 
 /// The deflated components' coarse space (`[D13]`, "Deflated components"): per component its
 /// constant directions and, for each of the factor's columns `l_k` at a negative pivot in it,
@@ -493,10 +493,11 @@ mod tests {
         assert!(tight >= 8, "{tight} proofs within the target at low noise");
     }
 
-    /// One region (`[D13]`, "One region"): the whole graph's analysis compared with the grouped
-    /// pencil and its deflation, at solutions and points turned by 0.02 rad of noisy random
-    /// graphs of about 3 edges per node: never above the dense spectrum, and it proves where
-    /// the factor shows extra negative pivots (fails without the deflation: `deflated > 0`).
+    /// One region (`[D13]`, "One region"): the whole graph's plain comparison with the grouped
+    /// pencil's `zeta` and its deflation, at solutions and points turned by 0.02 rad of noisy
+    /// random graphs of about 3 edges per node (any target: every bound kept): never above
+    /// the dense spectrum, and it proves where the factor shows extra negative pivots (fails
+    /// without the deflation: `deflated > 0`).
     #[test]
     fn one_region_is_below_the_dense_spectrum() {
         let (mut deflated, mut attempts) = (0, 0);
@@ -512,7 +513,10 @@ mod tests {
             for at in [&solved.rotations, &turned] {
                 attempts += 1;
                 let lambdas = multipliers(&p, at).unwrap();
-                let Ok(proof) = compare_grouped(&p, &analysis, at, &lambdas, (true, None)) else {
+                let plain = (f64::INFINITY, None);
+                let Ok(proof) =
+                    super::super::compare_plain(&p, &analysis, at, &lambdas, plain, true)
+                else {
                     continue;
                 };
                 deflated += usize::from(proof.deflated > 0);

@@ -306,32 +306,72 @@ fn compare(
     (target, stop_at): (f64, Option<Instant>),
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     if analysis.groups() > 0 {
-        return groups::compare_grouped(problem, analysis, rotations, lambdas, (false, stop_at));
+        return groups::compare_grouped(problem, analysis, rotations, lambdas, stop_at);
     }
+    let deflating = one_region_applies(problem, analysis);
+    compare_plain(
+        problem,
+        analysis,
+        rotations,
+        lambdas,
+        (target, stop_at),
+        deflating,
+    )
+}
+
+/// Steps 1 to 5 of the plain (ungrouped) comparison; `deflating` as one region (`[D13]`, "One
+/// region"): the pencil's `zeta` at least the grouped one's, and a factor with up to
+/// [`groups::DEFLATION_EXTRA`] negative pivots beyond the gauge's one proven by deflating the
+/// factor's columns at them, kept only when that reaches `-target`.
+pub(super) fn compare_plain(
+    problem: &MultipleProblem,
+    analysis: &ScalarAnalysis,
+    rotations: &[Rotation],
+    lambdas: &[Matrix3<f64>],
+    (target, stop_at): (f64, Option<Instant>),
+    deflating: bool,
+) -> std::result::Result<ScalarComparison, ScalarFailure> {
     let t_max = charges::orthogonality_defect(rotations)?;
     let c = charges::edge_charges(problem, rotations, lambdas, &analysis.copies, analysis.beta)?;
     let (rho1, rho0) = residuals::residual_bounds(problem, rotations, lambdas, &c.deg_n, target);
+    let (floor, most) = match deflating {
+        true => groups::one_region_pencil(analysis, c.d_max),
+        false => (0.0, 0),
+    };
     let pencil = split::pencil_weights(
-        analysis, problem, &c.reduced, &c.delta, rho1, c.d_max, target,
+        analysis,
+        problem,
+        (&c.reduced, &c.delta),
+        (rho1, c.d_max, floor),
+        target,
     )
     .ok_or(ScalarFailure::Numerical)?;
-    let started = Instant::now();
-    let inertia = inertia::prove_inertia(analysis, problem, &c.reduced, &pencil, &c.deg_n, c.d_max);
-    // the retry factorises the same pattern again: only when that fits before `stop_at`
-    let fits = stop_at.is_none_or(|t| Instant::now() + started.elapsed() < t);
-    let (headroom, backward_error) = match inertia {
-        Err(ScalarFailure::Inertia { negative_pivots })
-            if fits && one_region_applies(problem, analysis, negative_pivots) =>
-        {
-            // kept only when it proves what the plain comparison would: `-target` or above
-            let failed = ScalarFailure::Inertia { negative_pivots };
-            return groups::compare_grouped(problem, analysis, rotations, lambdas, (true, stop_at))
-                .ok()
-                .filter(|c| c.verified_min_eigenvalue >= -target)
-                .ok_or(failed);
-        }
-        other => other?,
-    };
+    let (headroom, backward_error, columns) = inertia::prove_inertia_deflating(
+        analysis,
+        problem,
+        (&c.reduced, &pencil),
+        (&c.deg_n, c.d_max),
+        most,
+    )?;
+    let inertia = (headroom, backward_error);
+    if !columns.is_empty() {
+        let negative_pivots = columns.len();
+        let at = (rotations, lambdas, t_max);
+        let (mu_m, kappa, residual) =
+            groups::one_region_bound(problem, at, &c, columns, (pencil.zeta_free, stop_at))?;
+        let proven = Proven {
+            mu_m,
+            t_max,
+            inertia,
+            kappa,
+            residual,
+            deflated: negative_pivots,
+        };
+        // kept only when it proves what the plain comparison would: `-target` or above
+        return (proven.outcome(&c, analysis, &pencil).ok())
+            .filter(|c| c.verified_min_eigenvalue >= -target)
+            .ok_or(ScalarFailure::Inertia { negative_pivots });
+    }
     // the cross terms (both bounds hold; the better is used); x1^T M x1 >= (zeta - eps) |x1|^2
     let kappa = split::kappa(&c.delta, pencil.zeta);
     let nf = problem.num_rotations() as f64;
@@ -345,7 +385,7 @@ fn compare(
     let proven = Proven {
         mu_m,
         t_max,
-        inertia: (headroom, backward_error),
+        inertia,
         kappa,
         residual: rho1,
         deflated: 0,
@@ -353,19 +393,13 @@ fn compare(
     proven.outcome(&c, analysis, &pencil)
 }
 
-/// Whether a plain comparison that failed with `negative_pivots` is compared again as one
-/// region (`[D13]` "One region"): a subgraph's (one part) of a graph large enough for regions
-/// (the sparse graphs of 10^5 nodes whose regions fail by hundreds of pivots and whose whole
-/// subgraph by one or a few), a few pivots short.
-fn one_region_applies(
-    problem: &MultipleProblem,
-    analysis: &ScalarAnalysis,
-    negative_pivots: usize,
-) -> bool {
+/// Whether a plain comparison is one region (`[D13]` "One region"): a subgraph's (one part) of
+/// a graph large enough for regions (the sparse graphs of 10^5 nodes whose regions fail by
+/// hundreds of pivots and whose whole subgraph by one or a few).
+fn one_region_applies(problem: &MultipleProblem, analysis: &ScalarAnalysis) -> bool {
     analysis.parts() == 1
         && analysis.edges_per_node() > 0.0
         && analysis::subgraph_groups(problem) > 1
-        && groups::one_region_may_prove(negative_pivots)
 }
 
 /// What steps 1-5 proved: `lambda_min(M) >= mu_m`, the rotations' orthogonality defect

@@ -36,15 +36,15 @@ pub(super) fn kappa(delta: &[f64], zeta: f64) -> f64 {
 /// The weights of step 4 for the comparison's `target`: a uniform `zeta > 0` buys the positive
 /// term `zeta |x1|^2`, which absorbs the cross terms (`x^T M x >= -(rho0 + rho1^2 / zeta)
 /// kappa^2 |x|^2`); `zeta` makes that at most `target / 4` (with `kappa` at `zeta = 0`), plus
-/// twice a split's defect, which grows with `zeta` (checked again at the final `zeta`).
-/// `None` when a split leaves nothing free (or a value is not finite).
+/// twice a split's defect, which grows with `zeta` (checked again at the final `zeta`), and at
+/// least `floor` (a one-region comparison's, `[D13]` "One region": its deflated bound needs a
+/// `zeta` of its own size, any `zeta >= 0` keeps the proof). `None` when a split leaves
+/// nothing free (or a value is not finite).
 pub(super) fn pencil_weights(
     analysis: &ScalarAnalysis,
     problem: &MultipleProblem,
-    reduced: &[f64],
-    delta: &[f64],
-    rho1: f64,
-    d_max: f64,
+    (reduced, delta): (&[f64], &[f64]),
+    (rho1, d_max, floor): (f64, f64, f64),
     target: f64,
 ) -> Option<PencilWeights> {
     let u = UNIT_ROUNDOFF;
@@ -53,7 +53,8 @@ pub(super) fn pencil_weights(
         (4.0 * rho1 * rho1 * k0 * k0 / target).max(1e-12 * d_max)
     } else {
         0.0
-    };
+    }
+    .max(floor);
     let shares = part_shares(analysis, problem, reduced, delta.len());
     let defect_of = |zeta: f64| -> f64 {
         let w: Vec<f64> = delta.iter().map(|d| d + zeta).collect();
