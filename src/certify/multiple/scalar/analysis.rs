@@ -77,8 +77,12 @@ pub const SUBGRAPH_GROUP_NODES: usize = 7500;
 
 /// The most regions of a subgraph ([`subgraph_groups`]): each adds three columns to the
 /// coarse correction's conjugate gradients, whose cost grows with them while the factors'
-/// shrinks.
-pub const SUBGRAPH_MAX_GROUPS: usize = 8;
+/// shrinks, and on expanders each cuts more edges (charged). 8 until the deflated components
+/// proved a few extra negative pivots (2026-12-05, one run each of `rotavg multiple` on
+/// `gen_graph.py expander 100000 20 0.1 100000`: certify 18.0 s in 8 regions, 16.1 s in 7,
+/// 13.6-14.4 s in 6, 13.1 s in 5 (1.77 GB), 13.4 s in 4 (2.12 GB); 13 regions `inconclusive`
+/// after 113 s: 50 negative pivots at 6 edges per node).
+pub const SUBGRAPH_MAX_GROUPS: usize = 6;
 
 /// The regions the subgraphs of a view graph are split into ([`ScalarAnalysis::grouped_subgraph`]):
 /// one per [`SUBGRAPH_GROUP_NODES`] nodes, at most [`SUBGRAPH_MAX_GROUPS`]; 1 (no split) below
