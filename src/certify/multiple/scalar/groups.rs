@@ -15,7 +15,7 @@ use super::analysis::ScalarAnalysis;
 use super::charges::{
     EdgeCharges, PRODUCT_ERROR, edge_charges, edge_product, orthogonality_defect,
 };
-use super::inertia::prove_inertia_deflating;
+use super::inertia::prove_charged;
 use super::split::PencilWeights;
 use super::{Proven, ScalarComparison, ScalarFailure};
 use crate::certify::budget::Budget;
@@ -157,13 +157,7 @@ fn compare_grouped_to(
     let pencil = grouped_pencil(&c)?;
     let zeta_free = pencil.zeta_free;
     let most = analysis.expected_negative_pivots() + DEFLATION_EXTRA;
-    let (headroom, backward, deflated) = prove_inertia_deflating(
-        analysis,
-        problem,
-        (&c.reduced, &pencil),
-        (&c.deg_n, c.d_max),
-        most,
-    )?;
+    let (headroom, backward, deflated) = prove_charged(analysis, problem, &c, &pencil, most)?;
     let m = scalar_operator(problem, rotations, lambdas, &c.deg_n);
     let coarse = (zeta_free, rel, stop_at);
     let negative = deflated.len();
@@ -639,13 +633,7 @@ mod tests {
             let c = edge_charges(&p, &at, &lambdas, &analysis.copies, analysis.beta).unwrap();
             let pencil = grouped_pencil(&c).unwrap();
             let most = analysis.expected_negative_pivots() + DEFLATION_EXTRA;
-            let found = prove_inertia_deflating(
-                &analysis,
-                &p,
-                (&c.reduced, &pencil),
-                (&c.deg_n, c.d_max),
-                most,
-            );
+            let found = prove_charged(&analysis, &p, &c, &pencil, most);
             let Ok((_, _, columns)) = found else { continue };
             if columns.is_empty() {
                 continue;

@@ -5,6 +5,7 @@
 
 use super::ScalarFailure;
 use super::analysis::{ScalarAnalysis, ScalarPart};
+use super::charges::EdgeCharges;
 use super::split::{PencilWeights, part_charges};
 use crate::linalg::cholesky::gamma;
 use crate::linalg::ldlt::{FactorStorage, LdltFailure, NegativeColumn, ldlt_negative_columns};
@@ -25,6 +26,19 @@ pub(super) fn prove_inertia(
     let (headroom, backward, _) =
         prove_inertia_deflating(analysis, problem, (reduced, pencil), (deg_n, d_max), 0)?;
     Ok((headroom, backward))
+}
+
+/// [`prove_inertia_deflating`] with the charges `c` (their reduced weights, degrees and largest
+/// diagonal).
+pub(super) fn prove_charged(
+    analysis: &ScalarAnalysis,
+    problem: &MultipleProblem,
+    c: &EdgeCharges,
+    pencil: &PencilWeights,
+    most: usize,
+) -> std::result::Result<(f64, f64, Vec<NegativeColumn>), ScalarFailure> {
+    let reduced = (c.reduced.as_slice(), pencil);
+    prove_inertia_deflating(analysis, problem, reduced, (&c.deg_n, c.d_max), most)
 }
 
 /// [`prove_inertia`], and with one part showing more negative pivots than expected but at most

@@ -346,13 +346,8 @@ pub(super) fn compare_plain(
         target,
     )
     .ok_or(ScalarFailure::Numerical)?;
-    let (headroom, backward_error, columns) = inertia::prove_inertia_deflating(
-        analysis,
-        problem,
-        (&c.reduced, &pencil),
-        (&c.deg_n, c.d_max),
-        most,
-    )?;
+    let (headroom, backward_error, columns) =
+        inertia::prove_charged(analysis, problem, &c, &pencil, most)?;
     let inertia = (headroom, backward_error);
     if !columns.is_empty() {
         let negative_pivots = columns.len();
