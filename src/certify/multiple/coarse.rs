@@ -400,15 +400,23 @@ fn bound_coarse(
     let (mut ys, mut ps) = (Vec::with_capacity(cols), Vec::with_capacity(cols));
     let (mut eps_sq, mut y_sq, mut r_sq) = (0.0f64, 0.0f64, 0.0f64);
     let mut y_errs = Vec::with_capacity(cols);
-    for zc in z {
+    // the columns' products on both threads, summed in column order (the same numbers)
+    let product = |zc: &Vec<f64>| {
         let mut y = vec![0.0; dim];
         m.times(zc, &mut y);
         let err = m.product_error() * norm(zc);
-        let ny = norm(&y);
         let mut p = y.clone();
         groups.project(&mut p);
-        let np = norm(&p);
         let e = err + groups.projection_error(&y, &p);
+        (y, p, err, e)
+    };
+    let mut columns: Vec<&Vec<f64>> = z.iter().collect();
+    let parallel = dim * cols >= crate::linalg::threads::PARALLEL_EDGES;
+    let products = crate::linalg::threads::in_chunks(&mut columns, parallel, |_, part| {
+        part.iter().map(|zc| product(zc)).collect::<Vec<_>>()
+    });
+    for (y, p, err, e) in products.into_iter().flatten() {
+        let (ny, np) = (norm(&y), norm(&p));
         eps_sq += e * e;
         y_sq += ny * ny;
         r_sq += np * np;
