@@ -134,6 +134,10 @@ pub(super) fn one_region_bound(
     columns: Vec<NegativeColumn>,
     (zeta_free, stop_at): (f64, Option<std::time::Instant>),
 ) -> std::result::Result<(f64, f64, f64), ScalarFailure> {
+    // the plain pencil keeps a nonpositive `zeta_free` for one part; its cross terms divide by it
+    if !(zeta_free > 0.0 && zeta_free.is_finite()) {
+        return Err(ScalarFailure::Numerical);
+    }
     let m = scalar_operator(problem, rotations, lambdas, &c.deg_n);
     let one = vec![0; problem.num_rotations()];
     let at = (rotations, lambdas, t_max);
@@ -148,10 +152,9 @@ fn compare_grouped_to(
     analysis: &ScalarAnalysis,
     rotations: &[Rotation],
     lambdas: &[Matrix3<f64>],
-    coarse: (f64, Option<std::time::Instant>),
+    (rel, stop_at): (f64, Option<std::time::Instant>),
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     let of = &analysis.components;
-    let (rel, stop_at) = coarse;
     let t_max = orthogonality_defect(rotations)?;
     let c = edge_charges(problem, rotations, lambdas, &analysis.copies, analysis.beta)?;
     let pencil = grouped_pencil(&c)?;
