@@ -439,6 +439,14 @@ mod tests {
         (p, group)
     }
 
+    /// A proven `mu` at most the dense `lambda_min(S)` `exact` (to `1e-12` relative).
+    fn assert_at_most_dense(mu: f64, exact: f64, context: &str) {
+        assert!(
+            mu <= exact + 1e-12 * (1.0 + exact.abs()),
+            "{context}: proven {mu:e} above the dense {exact:e}"
+        );
+    }
+
     fn dense_lambda_min(p: &MultipleProblem, lambdas: &[Matrix3<f64>]) -> f64 {
         let s = certificate_matrix(p, lambdas).unwrap();
         SymmetricEigen::new(crate::linalg::cholesky::to_dense(s.as_ref()))
@@ -472,10 +480,7 @@ mod tests {
                 if let Ok(proof) = r {
                     proofs += 1;
                     let mu = proof.verified_min_eigenvalue;
-                    assert!(
-                        mu <= exact + 1e-12 * (1.0 + exact.abs()),
-                        "seed {seed}: proven {mu:e} above the dense {exact:e}"
-                    );
+                    assert_at_most_dense(mu, exact, &format!("seed {seed}"));
                     if critical && sigma <= 0.05 && mu >= -target {
                         tight += 1;
                     }
@@ -521,10 +526,7 @@ mod tests {
                     proof.verified_min_eigenvalue,
                     dense_lambda_min(&p, &lambdas),
                 );
-                assert!(
-                    mu <= exact + 1e-12 * (1.0 + exact.abs()),
-                    "seed {seed}: one region's proof {mu:e} above the dense {exact:e}"
-                );
+                assert_at_most_dense(mu, exact, &format!("seed {seed}, one region"));
             }
         }
         println!("{deflated} deflated one-region proofs of {attempts} attempts");
@@ -563,10 +565,7 @@ mod tests {
                     proof.verified_min_eigenvalue,
                     dense_lambda_min(&p, &lambdas),
                 );
-                assert!(
-                    mu <= exact + 1e-12 * (1.0 + exact.abs()),
-                    "seed {seed}: deflated proof {mu:e} above the dense {exact:e}"
-                );
+                assert_at_most_dense(mu, exact, &format!("seed {seed}, deflated"));
                 tight += usize::from(critical && mu >= -target);
             }
         }
@@ -825,10 +824,7 @@ mod tests {
                     proofs += 1;
                     with_pseudo += usize::from(seed % 2 == 1);
                     let mu = proof.verified_min_eigenvalue;
-                    assert!(
-                        mu <= exact + 1e-12 * (1.0 + exact.abs()),
-                        "seed {seed}: proven {mu:e} above the dense {exact:e}"
-                    );
+                    assert_at_most_dense(mu, exact, &format!("seed {seed}"));
                 }
             }
         }
@@ -884,10 +880,7 @@ mod tests {
                     };
                     proofs += 1;
                     let mu = proof.verified_min_eigenvalue;
-                    assert!(
-                        mu <= exact + 1e-12 * (1.0 + exact.abs()),
-                        "seed {seed}, {k} edges per node: proven {mu:e} above the dense {exact:e}"
-                    );
+                    assert_at_most_dense(mu, exact, &format!("seed {seed}, {k} edges per node"));
                     tight += usize::from(*critical && mu >= -target);
                 }
             }
@@ -927,10 +920,7 @@ mod tests {
                     };
                     proofs += 1;
                     let mu = proof.verified_min_eigenvalue;
-                    assert!(
-                        mu <= exact + 1e-12 * (1.0 + exact.abs()),
-                        "seed {seed}, rel {rel}: proven {mu:e} above the dense {exact:e}"
-                    );
+                    assert_at_most_dense(mu, exact, &format!("seed {seed}, rel {rel}"));
                 }
             }
         }
