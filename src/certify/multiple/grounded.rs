@@ -408,6 +408,7 @@ fn bound(
         h,
         sym,
         y_norm,
+        ..
     } = a.terms;
     let per_unit = rho * rho / c + h;
     let deficit = per_unit * a.rinv2 * (1.0 + 8.0 * u);

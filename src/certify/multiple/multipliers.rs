@@ -362,6 +362,10 @@ pub(super) fn gauge_column(rotations: &[Rotation], a: usize) -> Vec<f64> {
         .collect()
 }
 
+/// The gauge terms of an estimate, made on request: a check's (made once per estimate, from
+/// its first-order quantities when it has them), or [`gauge_terms`] of the data.
+pub(crate) type GaugeSource<'a> = &'a dyn Fn() -> GaugeTerms;
+
 /// The gauge directions' terms of `[D15]` and `[D16]`, for the exact `S` of the data.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct GaugeTerms {
@@ -373,6 +377,10 @@ pub(crate) struct GaugeTerms {
     pub sym: Matrix3<f64>,
     /// `||Y||_F` as computed.
     pub y_norm: f64,
+    /// Per gauge direction `v_k = Y e_k`, its Rayleigh quotient `v_k^T S v_k / |v_k|^2` and
+    /// the residual `|S v_k - q v_k| / |v_k|` as computed (an estimate, never a bound: the
+    /// near-null vectors of `S` at a critical point; infinite for a zero column).
+    pub rayleigh: [(f64, f64); 3],
 }
 
 /// `rho >= ||S Y||_2` and `h >= -lambda_min(Y^T S Y)`: `S Y` evaluated from the data in
@@ -420,7 +428,27 @@ fn gauge_terms_from(
         h,
         sym,
         y_norm,
+        rayleigh: std::array::from_fn(|k| gauge_rayleigh(rotations, &sy, gm[(k, k)], k)),
     }
+}
+
+/// The Rayleigh quotient and residual of the gauge direction `v = Y e_k` from `S Y` (`sy`) and
+/// `v^T S v` (`vsv`): `S v = (S Y) e_k`, no product with `S`.
+fn gauge_rayleigh(rotations: &[Rotation], sy: &[Matrix3<f64>], vsv: f64, k: usize) -> (f64, f64) {
+    let norm2: f64 = rotations
+        .iter()
+        .map(|r| r.matrix().column(k).norm_squared())
+        .sum();
+    let q = vsv / norm2;
+    if !(norm2 > 0.0 && q.is_finite()) {
+        return (f64::INFINITY, f64::INFINITY);
+    }
+    let residual2: f64 = rotations
+        .iter()
+        .zip(sy)
+        .map(|(r, s)| (s.column(k) - r.matrix().column(k) * q).norm_squared())
+        .sum();
+    (q, (residual2 / norm2).sqrt())
 }
 
 /// `(S Y)_i = (Q Y)_i - sym(Lambda_i) R_i` for every node, evaluated from the data in
@@ -586,6 +614,46 @@ mod tests {
                 "node {v}: {error:e} of {:e}",
                 scale[v]
             );
+        }
+    }
+
+    /// The gauge terms' Rayleigh quotients and residuals (from `S Y`, no product with `S`)
+    /// against the formed `S`'s own (`rayleigh_quotient` of the normalised gauge column), on
+    /// noisy graphs at random estimates and at a critical one, where both are near zero.
+    #[test]
+    fn the_gauge_rayleigh_quotients_are_those_of_the_formed_matrix() {
+        use crate::multiple::synthetic::SyntheticGraph;
+        let mut rng = StdRng::seed_from_u64(3);
+        for seed in 0..6u64 {
+            let (p, truth) = SyntheticGraph {
+                num_rotations: 15,
+                num_edges: 40,
+                noise_sigma: 0.2,
+                seed,
+                ..Default::default()
+            }
+            .generate();
+            let solved = crate::multiple::solve_multiple(&p, &Default::default()).unwrap();
+            let random: Vec<Rotation> = (0..15).map(|_| random_rotation(&mut rng)).collect();
+            for x in [&truth, &solved.rotations, &random] {
+                let first = super::FirstOrder::at(&p, x).unwrap();
+                let s = super::certificate_matrix(&p, &first.lambdas).unwrap();
+                let scale = first.lambdas.iter().map(|l| l.norm()).fold(1.0, f64::max);
+                for (k, &(q, residual)) in first.gauge_terms(x).rayleigh.iter().enumerate() {
+                    let mut v = super::gauge_column(x, k);
+                    let nv = v.iter().map(|a| a * a).sum::<f64>().sqrt();
+                    v.iter_mut().for_each(|a| *a /= nv);
+                    let (q0, r0) = crate::linalg::rayleigh_quotient(s.as_ref(), &v);
+                    assert!(
+                        (q - q0).abs() <= 1e-12 * scale,
+                        "seed {seed} k {k}: {q} {q0}"
+                    );
+                    assert!(
+                        (residual - r0).abs() <= 1e-12 * scale,
+                        "seed {seed} k {k}: {residual} {r0}"
+                    );
+                }
+            }
         }
     }
 }

@@ -24,7 +24,7 @@ use crate::certify::multiple::coarse::{
     coarse_terms, coarse_terms_gauged,
 };
 use crate::certify::multiple::deflated::{Column, RegionSpace, scaled_to_constant};
-use crate::certify::multiple::multipliers::{TraceBound, gauge_terms};
+use crate::certify::multiple::multipliers::{GaugeSource, TraceBound, gauge_terms};
 use crate::error::{Error, Result};
 use crate::linalg::UNIT_ROUNDOFF as U;
 use crate::linalg::cholesky::gamma;
@@ -77,10 +77,14 @@ pub(crate) fn grouped_comparison(
     }
     let stop_at =
         seconds.and_then(|s| clock.checked_add(std::time::Duration::try_from_secs_f64(s).ok()?));
-    Ok(
-        compare_grouped(problem, &analysis, rotations, lambdas, stop_at)
-            .map_err(|f| super::failure_text(target, Err(f), analysis.expected_negative_pivots())),
+    Ok(compare_grouped(
+        problem,
+        &analysis,
+        (rotations, lambdas),
+        &|| gauge_terms(problem, rotations, lambdas),
+        stop_at,
     )
+    .map_err(|f| super::failure_text(target, Err(f), analysis.expected_negative_pivots())))
 }
 
 /// The dual bound `[D4]` of the estimate's own multipliers proven by the grouped comparison
@@ -107,12 +111,12 @@ pub(crate) fn grouped_dual_bound(
 pub(super) fn compare_grouped(
     problem: &MultipleProblem,
     analysis: &ScalarAnalysis,
-    rotations: &[Rotation],
-    lambdas: &[Matrix3<f64>],
+    (rotations, lambdas): (&[Rotation], &[Matrix3<f64>]),
+    gauge: GaugeSource<'_>,
     stop_at: Option<std::time::Instant>,
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     let coarse = (COARSE_RELATIVE_RESIDUAL, stop_at);
-    compare_grouped_to(problem, analysis, rotations, lambdas, coarse)
+    compare_grouped_to(problem, analysis, (rotations, lambdas), gauge, coarse)
 }
 
 /// A one-region comparison's (`[D13]`, "Deflated components", "One region") least `zeta` (the
@@ -126,10 +130,10 @@ pub(super) fn one_region_pencil(analysis: &ScalarAnalysis, d_max: f64) -> (f64, 
 /// The deflated bound `(mu_m, kappa, residual)` of a plain comparison's factor whose `columns`
 /// are at its negative pivots, every node in one component (`[D13]`, "One region"): the
 /// statement of "Deflated components" with `k = 1`, `U` the complement of the constant
-/// directions and the columns, the gauge directions bounded apart.
+/// directions and the columns, the gauge directions bounded apart (`gauge`, at `rotations`).
 pub(super) fn one_region_bound(
     problem: &MultipleProblem,
-    (rotations, lambdas, t_max): (&[Rotation], &[Matrix3<f64>], f64),
+    (rotations, lambdas, gauge): (&[Rotation], &[Matrix3<f64>], GaugeBounds),
     c: &EdgeCharges,
     columns: Vec<NegativeColumn>,
     (zeta_free, stop_at): (f64, Option<std::time::Instant>),
@@ -140,9 +144,8 @@ pub(super) fn one_region_bound(
     }
     let m = scalar_operator(problem, rotations, lambdas, &c.deg_n);
     let one = vec![0; problem.num_rotations()];
-    let at = (rotations, lambdas, t_max);
     let coarse = (zeta_free, COARSE_RELATIVE_RESIDUAL, stop_at);
-    deflated_bound(problem, at, &m, (&one, columns), coarse)
+    deflated_bound(&m, (&one, columns), gauge, coarse)
 }
 
 /// [`compare_grouped`] with the coarse correction's relative residual `rel` (any: a looser one
@@ -150,8 +153,8 @@ pub(super) fn one_region_bound(
 fn compare_grouped_to(
     problem: &MultipleProblem,
     analysis: &ScalarAnalysis,
-    rotations: &[Rotation],
-    lambdas: &[Matrix3<f64>],
+    (rotations, lambdas): (&[Rotation], &[Matrix3<f64>]),
+    gauge: GaugeSource<'_>,
     (rel, stop_at): (f64, Option<std::time::Instant>),
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     let of = &analysis.components;
@@ -169,8 +172,8 @@ fn compare_grouped_to(
         let coarse = coarse_terms(&m, &groups, coarse).ok_or(ScalarFailure::Numerical)?;
         (coarse.mu(groups.kappa()), groups.kappa(), coarse.rho)
     } else {
-        let at = (rotations, lambdas, t_max);
-        deflated_bound(problem, at, &m, (of, deflated), coarse)?
+        let gauge = GaugeBounds::of(&gauge(), t_max);
+        deflated_bound(&m, (of, deflated), gauge, coarse)?
     };
     let proven = Proven {
         mu_m,
@@ -205,19 +208,17 @@ fn grouped_pencil(c: &EdgeCharges) -> std::result::Result<PencilWeights, ScalarF
 
 /// The coarse bound `(mu_m, kappa, residual)` of deflated components (`[D13]`, "Deflated
 /// components"): [`deflated_space`] with the gauge directions bounded apart
-/// ([`coarse_terms_gauged`]). Away from a critical point the gauge's residual makes it vacuous:
-/// below Gershgorin's `-max row sum` it is reported as the inertia's failure.
+/// ([`coarse_terms_gauged`], by the estimate's `gauge` bounds). Away from a critical point the
+/// gauge's residual makes it vacuous: below Gershgorin's `-max row sum` it is reported as the
+/// inertia's failure.
 fn deflated_bound(
-    problem: &MultipleProblem,
-    (rotations, lambdas, t_max): (&[Rotation], &[Matrix3<f64>], f64),
     m: &BlockOperator,
     (of, columns): (&[usize], Vec<NegativeColumn>),
+    gauge: GaugeBounds,
     coarse: (f64, f64, Option<std::time::Instant>),
 ) -> std::result::Result<(f64, f64, f64), ScalarFailure> {
     let negative = columns.len();
     let space = deflated_space(of, columns).ok_or(ScalarFailure::Numerical)?;
-    let terms = gauge_terms(problem, rotations, lambdas);
-    let gauge = GaugeBounds::of(&terms, t_max);
     let bound = coarse_terms_gauged(m, &space, gauge, coarse).ok_or(ScalarFailure::Numerical)?;
     let mu = bound.mu(space.kappa());
     if mu < -m.row_abs() {
@@ -516,8 +517,10 @@ mod tests {
                 attempts += 1;
                 let lambdas = multipliers(&p, at).unwrap();
                 let plain = (f64::INFINITY, None);
+                let gauge = || gauge_terms(&p, at, &lambdas);
+                let estimate = (at.as_slice(), lambdas.as_slice());
                 let Ok(proof) =
-                    super::super::compare_plain(&p, &analysis, at, &lambdas, plain, true)
+                    super::super::compare_plain(&p, &analysis, estimate, plain, Some(&gauge))
                 else {
                     continue;
                 };
@@ -915,7 +918,10 @@ mod tests {
                     .unwrap()
                     .unwrap();
                 for rel in [0.9, 1e-4] {
-                    let Ok(proof) = compare_grouped_to(&p, &a, at, &lambdas, (rel, None)) else {
+                    let gauge = || gauge_terms(&p, at, &lambdas);
+                    let estimate = (at.as_slice(), lambdas.as_slice());
+                    let Ok(proof) = compare_grouped_to(&p, &a, estimate, &gauge, (rel, None))
+                    else {
                         continue;
                     };
                     proofs += 1;

@@ -80,6 +80,8 @@ pub(crate) use groups::grouped_dual_bound;
 pub(in crate::certify::multiple) use partition::partition_weighted;
 
 use super::check::Check;
+use super::coarse::GaugeBounds;
+use super::multipliers::GaugeSource;
 use super::verified::VerifiedBound;
 use crate::certify::log::Prediction;
 use crate::certify::proof::Proof;
@@ -262,7 +264,14 @@ pub fn scalar_comparison(
     lambdas: &[Matrix3<f64>],
     target: f64,
 ) -> Result<std::result::Result<ScalarComparison, ScalarFailure>> {
-    scalar_comparison_until(problem, analysis, rotations, lambdas, (target, None))
+    let gauge = || crate::certify::multiple::multipliers::gauge_terms(problem, rotations, lambdas);
+    scalar_comparison_until(
+        problem,
+        analysis,
+        (rotations, lambdas),
+        &gauge,
+        (target, None),
+    )
 }
 
 /// [`scalar_comparison`], whose grouped analyses' conjugate gradients stop at `stop_at` (a
@@ -270,8 +279,8 @@ pub fn scalar_comparison(
 pub(in crate::certify::multiple) fn scalar_comparison_until(
     problem: &MultipleProblem,
     analysis: &ScalarAnalysis,
-    rotations: &[Rotation],
-    lambdas: &[Matrix3<f64>],
+    (rotations, lambdas): (&[Rotation], &[Matrix3<f64>]),
+    gauge: GaugeSource<'_>,
     (target, stop_at): (f64, Option<Instant>),
 ) -> Result<std::result::Result<ScalarComparison, ScalarFailure>> {
     let n = problem.num_rotations();
@@ -291,52 +300,46 @@ pub(in crate::certify::multiple) fn scalar_comparison_until(
     Ok(compare(
         problem,
         analysis,
-        rotations,
-        lambdas,
+        (rotations, lambdas),
+        gauge,
         (target, stop_at),
     ))
 }
 
-/// Steps 1 to 5 of [`scalar_comparison`] on consistent inputs.
+/// Steps 1 to 5 of [`scalar_comparison`] on consistent inputs (`gauge`: the estimate's gauge
+/// terms, made only by the deflated bounds).
 fn compare(
     problem: &MultipleProblem,
     analysis: &ScalarAnalysis,
-    rotations: &[Rotation],
-    lambdas: &[Matrix3<f64>],
+    estimate: (&[Rotation], &[Matrix3<f64>]),
+    gauge: GaugeSource<'_>,
     (target, stop_at): (f64, Option<Instant>),
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     if analysis.groups() > 0 {
-        return groups::compare_grouped(problem, analysis, rotations, lambdas, stop_at);
+        return groups::compare_grouped(problem, analysis, estimate, gauge, stop_at);
     }
-    let deflating = one_region_applies(problem, analysis);
-    compare_plain(
-        problem,
-        analysis,
-        rotations,
-        lambdas,
-        (target, stop_at),
-        deflating,
-    )
+    let deflating = one_region_applies(problem, analysis).then_some(gauge);
+    compare_plain(problem, analysis, estimate, (target, stop_at), deflating)
 }
 
-/// Steps 1 to 5 of the plain (ungrouped) comparison; `deflating` as one region (`[D13]`, "One
-/// region"): the pencil's `zeta` at least the grouped one's, and a factor with up to
-/// [`groups::DEFLATION_EXTRA`] negative pivots beyond the gauge's one proven by deflating the
-/// factor's columns at them, kept only when that reaches `-target`.
+/// Steps 1 to 5 of the plain (ungrouped) comparison; with the estimate's gauge terms
+/// (`deflating`) as one region (`[D13]`, "One region"): the pencil's `zeta` at least the
+/// grouped one's, and a factor with up to [`groups::DEFLATION_EXTRA`] negative pivots beyond
+/// the gauge's one proven by deflating the factor's columns at them, kept only when that
+/// reaches `-target`.
 pub(super) fn compare_plain(
     problem: &MultipleProblem,
     analysis: &ScalarAnalysis,
-    rotations: &[Rotation],
-    lambdas: &[Matrix3<f64>],
+    (rotations, lambdas): (&[Rotation], &[Matrix3<f64>]),
     (target, stop_at): (f64, Option<Instant>),
-    deflating: bool,
+    deflating: Option<GaugeSource<'_>>,
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     let t_max = charges::orthogonality_defect(rotations)?;
     let c = charges::edge_charges(problem, rotations, lambdas, &analysis.copies, analysis.beta)?;
     let (rho1, rho0) = residuals::residual_bounds(problem, rotations, lambdas, &c.deg_n, target);
     let (floor, most) = match deflating {
-        true => groups::one_region_pencil(analysis, c.d_max),
-        false => (0.0, 0),
+        Some(_) => groups::one_region_pencil(analysis, c.d_max),
+        None => (0.0, 0),
     };
     let pencil = split::pencil_weights(
         analysis,
@@ -350,8 +353,10 @@ pub(super) fn compare_plain(
         inertia::prove_charged(analysis, problem, &c, &pencil, most)?;
     let inertia = (headroom, backward_error);
     if !columns.is_empty() {
+        // columns come only from a deflating factorisation (`most` above the gauge's one)
+        let gauge = deflating.ok_or(ScalarFailure::Numerical)?;
         let negative_pivots = columns.len();
-        let at = (rotations, lambdas, t_max);
+        let at = (rotations, lambdas, GaugeBounds::of(&gauge(), t_max));
         let (mu_m, kappa, residual) =
             groups::one_region_bound(problem, at, &c, columns, (pencil.zeta_free, stop_at))?;
         let proven = Proven {

@@ -22,7 +22,7 @@ use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Plan, Rung};
 use crate::certify::settings::CertifySettings;
 use crate::error::Result;
-use crate::linalg::{LanczosResult, rayleigh_quotient};
+use crate::linalg::LanczosResult;
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
 use std::time::Instant;
@@ -587,7 +587,9 @@ fn run(
     let predicted = predict(cx.settings, a).ok();
     cx.notes().factorizations += a.parts();
     let stop_at = cx.deadline.instant();
-    let outcome = scalar_comparison_until(cx.problem, a, rotations, cx.lambdas, (target, stop_at))?;
+    let gauge = || *cx.gauge_terms(rotations);
+    let estimate = (rotations, cx.lambdas);
+    let outcome = scalar_comparison_until(cx.problem, a, estimate, &gauge, (target, stop_at))?;
     let proof = match outcome {
         Ok(p) if p.verified_min_eigenvalue >= -target => p,
         other => {
@@ -613,34 +615,27 @@ fn run(
 
 /// An estimate of `lambda_min(S)` (never a bound): the smallest Rayleigh quotient of the gauge
 /// directions, the near-null vectors at a critical point (better there than a short Lanczos
-/// run in the cluster at 0, and `O(nnz)`).
+/// run in the cluster at 0), from the estimate's gauge terms: `S Y` in double-double, already
+/// made by the first-order conditions, so `S` itself is not formed.
 fn gauge_estimate(cx: &Check<'_>, rotations: &[Rotation]) -> LanczosResult {
-    let mut best = LanczosResult {
-        value: f64::INFINITY,
-        vector: Vec::new(),
-        residual: f64::INFINITY,
+    let rayleigh = cx.gauge_terms(rotations).rayleigh;
+    let k = (0..3)
+        .min_by(|&a, &b| rayleigh[a].0.total_cmp(&rayleigh[b].0))
+        .unwrap_or(0);
+    let (value, residual) = rayleigh[k];
+    let mut vector = Vec::new();
+    if value.is_finite() {
+        vector = crate::certify::multiple::multipliers::gauge_column(rotations, k);
+        let nv = vector.iter().map(|x| x * x).sum::<f64>().sqrt();
+        vector.iter_mut().for_each(|x| *x /= nv);
+    }
+    LanczosResult {
+        value,
+        vector,
+        residual,
         iterations: 0,
         stop: crate::linalg::LanczosStop::InvariantSubspace { dimension: 3 },
-    };
-    for k in 0..3 {
-        let mut v = crate::certify::multiple::multipliers::gauge_column(rotations, k);
-        let nv = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if nv == 0.0 || !nv.is_finite() {
-            continue;
-        }
-        v.iter_mut().for_each(|x| *x /= nv);
-        let (rq, res) = rayleigh_quotient(cx.s().as_ref(), &v);
-        if rq < best.value {
-            best = LanczosResult {
-                value: rq,
-                vector: v,
-                residual: res,
-                iterations: 0,
-                stop: best.stop,
-            };
-        }
     }
-    best
 }
 
 /// For each minimum degree, the first split shape that fits (a larger minimum degree only adds
