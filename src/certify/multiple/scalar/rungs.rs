@@ -43,6 +43,21 @@ pub const SUBGRAPHS_BEFORE_THE_WHOLE_ABOVE_SECONDS: f64 = 0.1;
 /// See [`SUBGRAPHS_BEFORE_THE_WHOLE_ABOVE_SECONDS`].
 pub const SUBGRAPHS_BEFORE_THE_WHOLE_FRACTION: f64 = 0.5;
 
+/// The share of the nodes, as negative pivots of the sparsest subgraph in regions, from which
+/// the whole graph's sparsest subgraph (the same edges per node, without the regions' cut
+/// edges charged) is taken to fail with [`WHOLE_SHARE_OF_REGIONAL_PIVOTS`] of them, and the
+/// whole graph's subgraphs jump as after that failure ([`subgraph_after`]): on random graphs
+/// of 3 edges per node (`gen_graph.py expander N 6 SIGMA`, 2026-12-05) the regions' 2 edges
+/// per node failed with 3.5 % (3x10^4 nodes, 0.1 rad) and 4.4 % (10^5, 0.1 rad) of the nodes,
+/// and the whole graph's 2 then failed too (with 1.7 %: 0.38 s and 7.1 s lost), while at 1.1 %
+/// (10^5, 0.07 rad), 0.5 % (3x10^4, 0.07 rad) and 0.04 % (10^5, 0.05 rad) it proved. It
+/// decides only the cost, never what is proven.
+const SKIP_THE_WHOLE_SPARSEST_FROM: f64 = 0.03;
+
+/// The whole graph's negative pivots at its sparsest subgraph as a share of the regions'
+/// (measured 0.49 and 0.39 on the two graphs of [`SKIP_THE_WHOLE_SPARSEST_FROM`]).
+const WHOLE_SHARE_OF_REGIONAL_PIVOTS: f64 = 0.4;
+
 /// The scalar comparison's shapes: the whole graph (its analysis is the check's,
 /// [`Check::scalar`]), then the fallbacks (analysed when reached).
 #[derive(Default)]
@@ -405,6 +420,10 @@ impl Fallbacks {
         let mut failure = failure;
         loop {
             let (list, groups) = self.ladder(cx.problem);
+            // the regions' sparsest subgraph's failure, when it was their only one
+            let sparsest = (groups > 1 && list.len() == 1)
+                .then(|| failure.as_ref().and_then(ScalarFailure::negative_count))
+                .flatten();
             if let Some(a) = self.next_in(cx, rotations, (list, groups), failure.take())? {
                 return Ok(Some(a));
             }
@@ -412,6 +431,8 @@ impl Fallbacks {
                 return Ok(None);
             }
             (self.plain, self.subgraph, self.unfit) = (true, 0, usize::MAX);
+            let n = cx.problem.num_rotations();
+            failure = sparsest.and_then(|p| whole_sparsest_failure(p, n));
         }
     }
 
@@ -496,6 +517,16 @@ pub(in crate::certify::multiple) fn subgraph_after(
         .find(|&k| list[k] >= wanted)
         .unwrap_or(last)
         .max(next)
+}
+
+/// The whole graph's sparsest subgraph taken to fail after the regions' failed with
+/// `regional_pivots` negative pivots on a graph of `n` nodes (see
+/// [`SKIP_THE_WHOLE_SPARSEST_FROM`]), `None` when it is still tried.
+fn whole_sparsest_failure(regional_pivots: usize, n: usize) -> Option<ScalarFailure> {
+    let p = regional_pivots as f64;
+    (p >= SKIP_THE_WHOLE_SPARSEST_FROM * n as f64).then_some(ScalarFailure::Inertia {
+        negative_pivots: (p * WHOLE_SHARE_OF_REGIONAL_PIVOTS) as usize,
+    })
 }
 
 /// Subgraphs to skip after one fails with `negative_pivots` (`floor(log16 p)`; 0 for `p < 16`):
@@ -708,5 +739,24 @@ mod tests {
         assert_eq!(after(0, 9000), 6, "past the list: the last");
         assert_eq!(after(5, 162), 6, "from 3.5: 4");
         assert_eq!(after(6, 430), 7, "after the last: none left");
+    }
+
+    /// The regions' failures measured on graphs of 3 edges per node (`SKIP_THE_WHOLE_SPARSEST_FROM`):
+    /// the whole graph's sparsest is skipped where it failed, and the jump is the one its own
+    /// failure gave (2.75 of the fit's list, as after its 511 and 1729 negative pivots); tried
+    /// where it proved.
+    #[test]
+    fn the_whole_sparsest_is_skipped_where_the_regions_failed_widely() {
+        let jump = |regional, n| {
+            super::whole_sparsest_failure(regional, n)
+                .and_then(|f| f.negative_count())
+                .map(|p| subgraph_after(0, p, n))
+        };
+        assert_eq!(jump(1038, 30_000), Some(subgraph_after(0, 511, 30_000)));
+        assert_eq!(jump(4405, 100_000), Some(subgraph_after(0, 1729, 100_000)));
+        assert_eq!(jump(4405, 100_000), Some(3), "2.75");
+        for (regional, n) in [(1087, 100_000), (147, 30_000), (42, 100_000)] {
+            assert_eq!(jump(regional, n), None, "{regional} of {n}: proved");
+        }
     }
 }
