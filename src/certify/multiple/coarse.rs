@@ -453,7 +453,9 @@ type Columns<'a> = &'a [Vec<f64>];
 /// the sums of their entries' squared error bounds (`y_errs` the products' own errors, `norm` a
 /// norm bounded above): by blocks of [`GRAM_BLOCK`] rows, each block's Gram matrices a matrix
 /// product (its entries sums of `GRAM_BLOCK` terms in any order), the blocks' summed
-/// pairwise, so each product passes through at most [`gram_depth`] additions and
+/// pairwise within each thread's run of blocks and the runs' sums pairwise again (each a tree
+/// no deeper than the blocks' count's), so each product passes through at most
+/// [`gram_depth`] additions and
 /// `|fl(x . y) - x . y| <= gamma(depth) sum |x_i y_i|` (Higham 2002, section 3.1 and 4.2),
 /// with `sum |x_i y_i|` the same products' magnitudes, computed the same way.
 fn gram_matrices(
@@ -466,11 +468,12 @@ fn gram_matrices(
     let mut blocks: Vec<usize> = (0..dim.div_ceil(GRAM_BLOCK)).collect();
     let parallel = dim * cols >= crate::linalg::threads::PARALLEL_EDGES;
     let parts = crate::linalg::threads::in_chunks(&mut blocks, parallel, |_, part| {
-        part.iter()
-            .map(|&b| block_grams((z, ys, ps), b * GRAM_BLOCK..dim.min((b + 1) * GRAM_BLOCK)))
-            .collect::<Vec<_>>()
+        sum_pairwise(part, &|b| {
+            block_grams((z, ys, ps), b * GRAM_BLOCK..dim.min((b + 1) * GRAM_BLOCK))
+        })
     });
-    let [g, g_mag, r, r_mag] = sum_pairwise(&parts.into_iter().flatten().collect::<Vec<_>>())
+    let parts: Vec<[DMatrix<f64>; 4]> = parts.into_iter().flatten().collect();
+    let [g, g_mag, r, r_mag] = sum_pairwise(&parts, &|p| p.clone())
         .unwrap_or_else(|| std::array::from_fn(|_| DMatrix::zeros(cols, cols)));
     let norms: Vec<f64> = z.iter().map(|c| norm(c)).collect();
     let (mut g_err_sq, mut r_err_sq) = (0.0f64, 0.0f64);
@@ -513,28 +516,33 @@ fn block_grams(
     ]
 }
 
-/// The blocks' matrices summed pairwise (halves first), `None` for none.
-fn sum_pairwise(parts: &[[DMatrix<f64>; 4]]) -> Option<[DMatrix<f64>; 4]> {
-    match parts {
+/// The matrices `make(item)` of `items` summed pairwise (halves first; made as the tree is
+/// walked, so at most one per level is held), `None` for none.
+fn sum_pairwise<T>(
+    items: &[T],
+    make: &dyn Fn(&T) -> [DMatrix<f64>; 4],
+) -> Option<[DMatrix<f64>; 4]> {
+    match items {
         [] => None,
-        [one] => Some(one.clone()),
+        [one] => Some(make(one)),
         _ => {
-            let (a, b) = parts.split_at(parts.len() / 2);
-            let (a, b) = (sum_pairwise(a)?, sum_pairwise(b)?);
+            let (a, b) = items.split_at(items.len() / 2);
+            let (a, b) = (sum_pairwise(a, make)?, sum_pairwise(b, make)?);
             Some(std::array::from_fn(|k| &a[k] + &b[k]))
         }
     }
 }
 
 /// The most additions a product of [`gram_matrices`] over `len` rows passes through: those of
-/// its block's sum and one per level of the blocks' pairwise sums.
+/// its block's sum, then at most `ceil(log2 B)` levels of a thread's pairwise sum over its `c
+/// <= B` blocks and as many of the threads' (`B` the blocks).
 fn gram_depth(len: usize) -> usize {
-    let (mut depth, mut at) = (GRAM_BLOCK, len.div_ceil(GRAM_BLOCK));
+    let (mut levels, mut at) = (0, len.div_ceil(GRAM_BLOCK));
     while at > 1 {
         at = at.div_ceil(2);
-        depth += 1;
+        levels += 1;
     }
-    depth
+    GRAM_BLOCK + 2 * levels
 }
 
 /// A proven lower bound on `lambda_min(a)` of a small symmetric matrix: the dense eigenvalues'
@@ -570,12 +578,20 @@ mod tests {
     use rand::{Rng, SeedableRng};
 
     /// The blocked Gram matrices against the exact sums (compensated, each entry rounded once):
-    /// within their stated error bounds, for lengths below, at and past a block, magnitudes
-    /// from 1e-3 to 1e3 and both signs; `R` symmetric.
+    /// within their stated error bounds, for lengths below, at and past a block (and of 40
+    /// blocks, summed on the machine's threads), magnitudes from 1e-3 to 1e3 and both signs;
+    /// `R` symmetric.
     #[test]
     fn blocked_gram_matrices_are_within_their_bounds() {
         let mut rng = rand::rngs::StdRng::seed_from_u64(5);
-        for dim in [1, 7, GRAM_BLOCK, GRAM_BLOCK + 1, 5 * GRAM_BLOCK + 13] {
+        for dim in [
+            1,
+            7,
+            GRAM_BLOCK,
+            GRAM_BLOCK + 1,
+            5 * GRAM_BLOCK + 13,
+            40 * GRAM_BLOCK + 5,
+        ] {
             let cols = 6;
             let mut column = || -> Vec<f64> {
                 (0..dim)
