@@ -500,14 +500,9 @@ fn block_grams(
     (z, ys, ps): (Columns<'_>, Columns<'_>, Columns<'_>),
     rows: std::ops::Range<usize>,
 ) -> [DMatrix<f64>; 4] {
-    let take = |c: Columns<'_>, abs: bool| {
-        DMatrix::from_fn(rows.len(), c.len(), |i, k| {
-            let v = c[k][rows.start + i];
-            if abs { v.abs() } else { v }
-        })
-    };
-    let (zb, yb, pb) = (take(z, false), take(ys, false), take(ps, false));
-    let (za, ya, pa) = (take(z, true), take(ys, true), take(ps, true));
+    let take = |c: Columns<'_>| DMatrix::from_fn(rows.len(), c.len(), |i, k| c[k][rows.start + i]);
+    let (zb, yb, pb) = (take(z), take(ys), take(ps));
+    let (za, ya, pa) = (zb.abs(), yb.abs(), pb.abs());
     [
         zb.tr_mul(&yb),
         za.tr_mul(&ya),
