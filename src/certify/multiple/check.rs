@@ -8,7 +8,7 @@ use super::multipliers::{
     FirstOrder, GaugeTerms, TraceBound, certificate_diagonal_blocks, check_lambdas,
     checked_certificate_matrix, entry_terms, forming_margins, gauge_terms,
 };
-use super::scalar::{SPARSIFIED_EDGES_PER_NODE, ScalarAnalysis, subgraph};
+use super::scalar::{SPARSIFIED_EDGES_PER_NODE, ScalarAnalysis, subgraph_regions};
 use super::verified::VerifiedBound;
 use crate::certify::budget::{Budget, Deadline};
 use crate::certify::log::{Attempt, Outcome, Point, Prediction, Refusal};
@@ -100,6 +100,8 @@ pub(crate) struct Check<'a> {
     /// estimate of the whole graph's, for the `3n` rungs' budget).
     deferred: RefCell<Option<ScalarAnalysis>>,
     deferred_values: Option<usize>,
+    /// The regions the subgraphs are grouped in ([`subgraph_regions`]), made once.
+    regions: std::cell::OnceCell<Option<Vec<usize>>>,
     /// The deferred subgraph's family has not finished: the `3n` rungs wait for it
     /// ([`Self::three_n_waits`]) rather than analyse the whole graph to predict themselves.
     deferred_open: std::cell::Cell<bool>,
@@ -162,7 +164,8 @@ impl<'a> Check<'a> {
         scope: Scope,
     ) -> Result<Self> {
         check_lambdas(problem, lambdas)?;
-        let (scalar, deferred) = scalar_analyses(problem, rotations, settings)?;
+        let regions = std::cell::OnceCell::new();
+        let (scalar, deferred) = scalar_analyses(problem, rotations, settings, &regions)?;
         let deferred_values = deferred.as_ref().map(ScalarAnalysis::factor_len);
         // [A3] per node (empty for isotropic data): the largest, and by rows [D6] (3)
         let forming = forming_margins(problem, lambdas).unwrap_or_default();
@@ -189,6 +192,7 @@ impl<'a> Check<'a> {
             block_first: std::cell::Cell::new(None),
             deferred: RefCell::new(deferred),
             deferred_values,
+            regions,
             three_n_refused: RefCell::new(None),
             first: None,
             gauge: std::cell::OnceCell::new(),
@@ -261,6 +265,15 @@ impl<'a> Check<'a> {
         self.settings
             .budget
             .max_factor_values(self.problem.num_rotations())
+    }
+
+    /// The regions of the subgraphs (`scalar::subgraph_regions`; `None`: no split), made on
+    /// the first request.
+    pub fn subgraph_regions(&self) -> Option<&[usize]> {
+        let problem = self.problem;
+        self.regions
+            .get_or_init(|| subgraph_regions(problem))
+            .as_deref()
     }
 
     /// The sparsest subgraph's analysis made instead of the whole graph's (taken: once).
@@ -638,6 +651,7 @@ fn scalar_analyses(
     problem: &MultipleProblem,
     rotations: Option<&[Rotation]>,
     settings: &CertifySettings,
+    regions: &std::cell::OnceCell<Option<Vec<usize>>>,
 ) -> Result<ScalarAnalyses> {
     let cell = std::cell::OnceCell::new();
     let on = settings.dual.proofs.contains(&Proof::ScalarComparison) && !problem.is_anisotropic();
@@ -648,7 +662,10 @@ fn scalar_analyses(
     let max_values = settings.budget.max_factor_values(problem.num_rotations());
     if settings.dual.scalar_fallbacks && defers_the_whole(problem) {
         let sparsest = SPARSIFIED_EDGES_PER_NODE[0];
-        if let Ok(sub) = subgraph(problem, rotations, sparsest, max_values)? {
+        let group = regions.get_or_init(|| subgraph_regions(problem)).as_deref();
+        if let Ok(sub) =
+            ScalarAnalysis::in_regions(problem, rotations, sparsest, group, max_values)?
+        {
             return Ok((cell, Some(sub)));
         }
     }

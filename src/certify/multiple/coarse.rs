@@ -12,7 +12,7 @@
 use crate::certify::multiple::multipliers::GaugeTerms;
 use crate::linalg::UNIT_ROUNDOFF as U;
 use crate::linalg::cholesky::gamma;
-use crate::linalg::pcg::pcg;
+use crate::linalg::pcg::pcg_from;
 use nalgebra::{DMatrix, Matrix3};
 
 /// `zeta`, the uniform weight added to the charges of a grouped comparison, as a fraction of
@@ -25,6 +25,14 @@ pub(in crate::certify::multiple) const ZETA_FRACTION: f64 = 1e-7;
 /// are the flux between groups (large), and the gauge directions need none (`[D13]`,
 /// "Groups").
 pub(in crate::certify::multiple) const COARSE_RELATIVE_RESIDUAL: f64 = 1e-4;
+
+/// A coarse column's conjugate gradients stop once its residual's `|r|^2` is at most this
+/// share of `zeta` times its Gram entry (`solved_bound`, in the deflated components' bound
+/// [`coarse_terms_gauged`]): the residual enters as `R^T R /
+/// zeta` against the Gram matrix, and a column's own share of it is then small. At 10^5 nodes
+/// in 6 regions (`[D13]`) the shares were about 0.3 after 5 iterations and 1e-3 after 7 (the
+/// relative residual 1e-4), the Gram matrix's least eigenvalue kept at 29 % and 99.8 %.
+pub(in crate::certify::multiple) const COARSE_GRAM_SHARE: f64 = 0.1;
 
 /// The most conjugate-gradient iterations of the coarse correction.
 const CG_MAX_ITERATIONS: usize = 600;
@@ -197,7 +205,8 @@ impl Coarse {
 /// gauge directions of `V'` carry their own correction, whose residual is relative to `Pi M
 /// v0`, small at a critical point, and not the other columns' residuals); then `lambda`
 /// bounded for the exact `V'` of the computed `X` (any `X` is valid: only the bound's size
-/// depends on it).
+/// depends on it). No column stops early (`solved_bound`): the gauge directions' Gram
+/// eigenvalue, near zero, leaves no scale to stop against.
 pub(in crate::certify::multiple) fn coarse_terms(
     m: &BlockOperator,
     groups: &impl CoarseSpace,
@@ -215,17 +224,21 @@ pub(in crate::certify::multiple) fn coarse_terms(
         .map(|j| (0..dim).map(|r| f64::from(u8::from(r % 3 == j))).collect())
         .collect();
     let targets: Vec<&Vec<f64>> = coarse[..cols - 3].iter().chain(&gauge).collect();
-    let mut x = corrections(m, groups, &targets, (rel, stop_at))?;
     // the last group's: the gauge directions' correction less the other groups'
-    for j in 0..3 {
-        let mut last = x[cols - 3 + j].clone();
-        for xc in x[..cols - 3].iter().skip(j).step_by(3) {
-            last.iter_mut().zip(xc).for_each(|(l, v)| *l -= v);
+    let assemble = |x: &[Vec<f64>]| {
+        let mut x = x.to_vec();
+        for j in 0..3 {
+            let mut last = x[cols - 3 + j].clone();
+            for xc in x[..cols - 3].iter().skip(j).step_by(3) {
+                last.iter_mut().zip(xc).for_each(|(l, v)| *l -= v);
+            }
+            x[cols - 3 + j] = last;
         }
-        x[cols - 3 + j] = last;
-    }
-    let z = corrected(groups, &coarse, x);
-    let (lambda, rho, _) = bound_coarse(m, groups, &z, zeta)?;
+        x
+    };
+    let columns = (coarse.as_slice(), targets.as_slice());
+    let stop = (zeta, rel, stop_at);
+    let (_, (lambda, rho, _)) = solved_bound(m, groups, columns, &assemble, stop, None)?;
     Some(Coarse {
         rho,
         lambda,
@@ -264,12 +277,24 @@ impl GaugeBounds {
 /// t |b_v|^2`: `lambda = min(lambda_f - ||B||^2 / t, -rho0 - 2 rho1^2 / zeta - t)`, `t =
 /// 2 ||B||^2 / lambda_f` when `lambda_f > 0`. Where the estimate's stationarity is far below
 /// rounding of `M`'s products (anisotropic information, weights of `1e5`), the gauge entries
-/// of a computed `V'^T M V'` would carry errors of `|M| |v0|^2 u`; these need none.
+/// of a computed `V'^T M V'` would carry errors of `|M| |v0|^2 u`; these need none. The
+/// conjugate gradients stop a column early at [`COARSE_GRAM_SHARE`] (`solved_bound`).
 pub(in crate::certify::multiple) fn coarse_terms_gauged(
     m: &BlockOperator,
     groups: &impl CoarseSpace,
     gauge: GaugeBounds,
+    stop: (f64, f64, Option<std::time::Instant>),
+) -> Option<Coarse> {
+    coarse_terms_gauged_sharing(m, groups, gauge, stop, Some(COARSE_GRAM_SHARE))
+}
+
+/// [`coarse_terms_gauged`] with the conjugate gradients' early stop at `share` (`None`: none).
+pub(in crate::certify::multiple) fn coarse_terms_gauged_sharing(
+    m: &BlockOperator,
+    groups: &impl CoarseSpace,
+    gauge: GaugeBounds,
     (zeta, rel, stop_at): (f64, f64, Option<std::time::Instant>),
+    share: Option<f64>,
 ) -> Option<Coarse> {
     let mut coarse = coarse_columns(groups, 3 * groups.count() - 3);
     coarse.extend(groups.extra_columns());
@@ -277,12 +302,13 @@ pub(in crate::certify::multiple) fn coarse_terms_gauged(
     let (lambda_f, rho_f, z_norm) = if coarse.is_empty() {
         (f64::INFINITY, 0.0, 0.0)
     } else {
-        let x = corrections(m, groups, &targets, (rel, stop_at))?;
-        let z = corrected(groups, &coarse, x);
+        let columns = (coarse.as_slice(), targets.as_slice());
+        // R_f^T R_f against zeta / 2: the factor 2 of the split of R^T R
+        let split = (0.5 * zeta, rel, stop_at);
+        let (z, (lambda_f, rho_f, delta)) =
+            solved_bound(m, groups, columns, &|x| x.to_vec(), split, share)?;
         let z_norm = z.iter().flatten().map(|v| v * v).sum::<f64>().sqrt()
             * (1.0 + gamma(3 * z.len() * groups.group_of().len()));
-        // R_f^T R_f against zeta / 2: the factor 2 of the split of R^T R
-        let (lambda_f, rho_f, delta) = bound_coarse(m, groups, &z, 0.5 * zeta)?;
         (lambda_f, rho_f, z_norm + delta)
     };
     let b = z_norm * gauge.rho1 * (1.0 + 4.0 * U);
@@ -317,19 +343,61 @@ fn coarse_columns(groups: &impl CoarseSpace, cols: usize) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// The coarse columns' corrections `X` from their targets' (`solved_bound`).
+type Assemble<'a> = &'a dyn Fn(&[Vec<f64>]) -> Vec<Vec<f64>>;
+
+/// `(lambda, rho, delta)` of [`bound_coarse`].
+type CoarseBound = (f64, f64, f64);
+
+/// The columns `z = E + Pi X` of the coarse directions `coarse` and their bound
+/// ([`bound_coarse`] against `zeta`): `X = assemble(X_T)` from the corrections `X_T` of the
+/// `targets` ([`corrections`]). With a `share` ([`COARSE_GRAM_SHARE`]) the conjugate
+/// gradients stop a column once its residual is small against its own Gram entry; where the
+/// residual's term then takes more than half of the Gram matrix's least eigenvalue
+/// ([`bound_coarse`]) they go on from there to the relative residual `rel` alone and bound
+/// again (any `X` gives a valid bound: the stop decides only its size).
+fn solved_bound(
+    m: &BlockOperator,
+    groups: &impl CoarseSpace,
+    (coarse, targets): (&[Vec<f64>], &[&Vec<f64>]),
+    assemble: Assemble<'_>,
+    (zeta, rel, stop_at): (f64, f64, Option<std::time::Instant>),
+    share: Option<f64>,
+) -> Option<(Vec<Vec<f64>>, CoarseBound)> {
+    let gram_stop = share.map(|s| s * zeta);
+    let (x, early) = corrections(m, groups, targets, None, (gram_stop, rel, stop_at))?;
+    let z = corrected(groups, coarse, assemble(&x));
+    let (bound, spoiled) = bound_coarse(m, groups, &z, zeta)?;
+    if !early || !spoiled {
+        return Some((z, bound));
+    }
+    drop(z);
+    let (x, _) = corrections(m, groups, targets, Some(&x), (None, rel, stop_at))?;
+    let z = corrected(groups, coarse, assemble(&x));
+    let (bound, _) = bound_coarse(m, groups, &z, zeta)?;
+    Some((z, bound))
+}
+
 /// `X` from conjugate gradients on `Pi M Pi X = -Pi M T` for the columns `T` (block-Jacobi,
-/// projected) to the relative residual `rel`, stopping at `stop_at`.
+/// projected), from `from` (zero when `None`), to the relative residual `rel`, stopping at
+/// `stop_at`; with `gram_stop = share zeta`, a column stops as soon as `|r|^2 <= share zeta
+/// G_tt` too, `G_tt = (t + Pi x)^T M (t + Pi x) = t^T M t - b^T x - x^T r` (`b = -Pi M t`, `r = b -
+/// Pi M Pi x`) its Gram entry. Also whether any column stopped so (before `rel`).
 fn corrections(
     m: &BlockOperator,
     groups: &impl CoarseSpace,
     targets: &[&Vec<f64>],
-    (rel, stop_at): (f64, Option<std::time::Instant>),
-) -> Option<Vec<Vec<f64>>> {
+    from: Option<&[Vec<f64>]>,
+    (gram_stop, rel, stop_at): (Option<f64>, f64, Option<std::time::Instant>),
+) -> Option<(Vec<Vec<f64>>, bool)> {
     let dim = 3 * groups.group_of().len();
+    let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
     let mut rhs: Vec<Vec<f64>> = Vec::with_capacity(targets.len());
+    let mut own = Vec::with_capacity(targets.len());
     for e in targets {
         let mut y = vec![0.0; dim];
         m.times(e, &mut y);
+        own.push(dot(e, &y));
         groups.project(&mut y);
         y.iter_mut().for_each(|v| *v = -*v);
         rhs.push(y);
@@ -358,16 +426,26 @@ fn corrections(
             groups.project(z);
         }
     };
-    Some(
-        pcg(
-            &operator,
-            &precondition,
-            &rhs,
-            rel,
-            (CG_MAX_ITERATIONS, stop_at),
-        )?
-        .0,
-    )
+    let early = std::sync::atomic::AtomicBool::new(false);
+    let enough = |c: usize, x: &[f64], r: &[f64]| {
+        let Some(share_zeta) = gram_stop else {
+            return false;
+        };
+        let gram = own[c] - dot(&rhs[c], x) - dot(x, r);
+        let small = dot(r, r) <= share_zeta * gram;
+        if small {
+            early.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+        small
+    };
+    let limits = (CG_MAX_ITERATIONS, stop_at);
+    let (x, _) = pcg_from(
+        (&operator, &precondition),
+        (&rhs, from),
+        (rel, &enough),
+        limits,
+    )?;
+    Some((x, early.into_inner()))
 }
 
 /// The columns `z = E + fl(project(X))`.
@@ -382,7 +460,9 @@ fn corrected(groups: &impl CoarseSpace, coarse: &[Vec<f64>], x: Vec<Vec<f64>>) -
         .collect()
 }
 
-/// `(lambda, rho, delta)` for the computed columns `z` (`z - E` not exactly in `U`: `V' = E + Pi (z - E)`
+/// `(lambda, rho, delta)` for the computed columns `z`, and whether the residual's term took
+/// more than half of the Gram matrix's least eigenvalue `g` (`lambda_min(H) < g - |g| / 2`, both
+/// estimated in floating point: a choice, no bound) (`z - E` not exactly in `U`: `V' = E + Pi (z - E)`
 /// differs from `z` by `dz = (I - Pi)(z - E)`, of norm at most `delta`). With `R = Pi M V' =
 /// fl(Pi fl(M z)) + dR`, `||dR|| <= eps` (the product's and the projection's rounding, and
 /// `||M|| delta`): `R^T R <= 2 R'^T R' + 2 eps^2 I`, and `V'^T M V' = z^T M z -
@@ -392,7 +472,7 @@ fn bound_coarse(
     groups: &impl CoarseSpace,
     z: &[Vec<f64>],
     zeta: f64,
-) -> Option<(f64, f64, f64)> {
+) -> Option<(CoarseBound, bool)> {
     let dim = 3 * groups.group_of().len();
     let cols = z.len();
     let delta = groups.off_space(z);
@@ -438,12 +518,15 @@ fn bound_coarse(
         + 2.0 * r_err_sq.sqrt() / zeta
         + 2.0 * eps * eps / zeta
         + 4.0 * U * (g.norm() + 2.0 * r.norm() / zeta);
+    let least = |a: DMatrix<f64>| a.symmetric_eigenvalues().min();
+    let g_least = least((&g + g.transpose()) * 0.5);
+    let spoiled = least(h.clone()) < g_least - 0.5 * g_least.abs();
     let lambda_h = verified_min_eigenvalue(&h)? - h_err;
     // the columns' own error: V'^T M V' against z^T M z
     let lambda = (lambda_h - 2.0 * (y_sq.sqrt() + eps_sq.sqrt()) * delta - m_norm * delta * delta)
         * (1.0 + 1e-10)
         - f64::MIN_POSITIVE;
-    (rho.is_finite() && lambda.is_finite()).then_some((lambda, rho, delta))
+    (rho.is_finite() && lambda.is_finite()).then_some(((lambda, rho, delta), spoiled))
 }
 
 /// Columns of `3n` values.

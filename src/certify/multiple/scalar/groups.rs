@@ -23,6 +23,8 @@ use crate::certify::multiple::coarse::{
     BlockOperator, COARSE_RELATIVE_RESIDUAL, CoarseSpace, GaugeBounds, Layout, ZETA_FRACTION,
     coarse_terms, coarse_terms_gauged,
 };
+#[cfg(test)]
+use crate::certify::multiple::coarse::{COARSE_GRAM_SHARE, coarse_terms_gauged_sharing};
 use crate::certify::multiple::deflated::{Column, RegionSpace, scaled_to_constant};
 use crate::certify::multiple::multipliers::{GaugeSource, TraceBound, gauge_terms};
 use crate::error::{Error, Result};
@@ -931,6 +933,40 @@ mod tests {
             }
         }
         assert!(proofs >= 24, "{proofs} proofs");
+    }
+
+    /// The coarse correction's early stop (`coarse.rs`, `solved_bound`) is resumed where it
+    /// spoils the bound: with every column stopped at its start (a share no residual
+    /// exceeds), `R^T R / zeta` would leave `lambda_f` far below zero and the bound with it
+    /// (checked); resumed, the gauged bound is that of the conjugate gradients run to the
+    /// relative residual without the stop, to 1e-3, and so at the default share.
+    #[test]
+    fn an_early_coarse_stop_that_spoils_the_bound_is_resumed() {
+        for seed in 0..6u64 {
+            let (p, group) = grouped_graph(2 + (seed % 3) as usize, 12, 0.5, 0.01, seed);
+            let at = solve_multiple(&p, &MultipleSettings::default())
+                .unwrap()
+                .rotations;
+            let lambdas = multipliers(&p, &at).unwrap();
+            let a = ScalarAnalysis::grouped(&p, &group, usize::MAX)
+                .unwrap()
+                .unwrap();
+            let c = edge_charges(&p, &at, &lambdas, &a.copies, a.beta).unwrap();
+            let pencil = grouped_pencil(&c).unwrap();
+            let m = scalar_operator(&p, &at, &lambdas, &c.deg_n);
+            let groups = Groups::new(&a.components, &pencil.weights);
+            let t_max = orthogonality_defect(&at).unwrap();
+            let gauge = GaugeBounds::of(&gauge_terms(&p, &at, &lambdas), t_max);
+            let stop = (pencil.zeta_free, COARSE_RELATIVE_RESIDUAL, None);
+            let bound = |share| coarse_terms_gauged_sharing(&m, &groups, gauge, stop, share);
+            let strict = bound(None).unwrap();
+            for share in [f64::MAX, COARSE_GRAM_SHARE] {
+                let early = bound(Some(share)).unwrap();
+                let off = (early.lambda - strict.lambda).abs();
+                let limit = 1e-3 * strict.lambda.abs();
+                assert!(off <= limit, "seed {seed}, share {share:e}: {off:e}");
+            }
+        }
     }
 
     /// No time left: the factorisation is refused by its prediction, with the reason.

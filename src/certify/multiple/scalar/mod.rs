@@ -73,7 +73,9 @@ pub use analysis::{
     SPLIT_SHAPES, SUBGRAPH_GROUP_NODES, SUBGRAPH_MAX_GROUPS, ScalarAnalysis, SplitShape, subgraph,
     subgraph_groups, subgraph_ladder,
 };
-pub(in crate::certify::multiple) use analysis::{components, connect_within, fro, subgraph_edges};
+pub(in crate::certify::multiple) use analysis::{
+    components, connect_within, fro, subgraph_edges, subgraph_regions,
+};
 pub(crate) use bordered::{LowRank, bordered_comparison};
 pub(in crate::certify::multiple) use charges::{orthogonality_defect, ostrowski, parallel_groups};
 pub(crate) use groups::grouped_dual_bound;

@@ -470,7 +470,8 @@ impl Fallbacks {
         while self.subgraph < self.unfit {
             let at = self.subgraph;
             let k = list[at];
-            match ScalarAnalysis::grouped_subgraph(cx.problem, rotations, k, groups, max_values)? {
+            let group = cx.subgraph_regions().filter(|_| groups > 1);
+            match ScalarAnalysis::in_regions(cx.problem, rotations, k, group, max_values)? {
                 Ok(a) if predict(cx.settings, &a).is_ok() => {
                     self.subgraph = at + 1;
                     return Ok(Some(a));
