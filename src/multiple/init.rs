@@ -72,7 +72,7 @@ pub fn spanning_tree(problem: &MultipleProblem) -> Vec<Rotation> {
     }
     let edges = problem.edges();
     let adjacency = problem.adjacency();
-    let centre = central_node(&adjacency);
+    let centre = central_node(adjacency);
     // Dijkstra from the centre with lengths 1 / w (ties by node index: deterministic)
     let mut dist = vec![f64::INFINITY; n];
     let mut via: Vec<Option<usize>> = vec![None; n];

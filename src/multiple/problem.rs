@@ -27,6 +27,7 @@ pub struct Edge {
 }
 
 /// Compressed adjacency of a view graph ([`MultipleProblem::adjacency`]).
+#[derive(Debug, Clone)]
 pub(crate) struct Adjacency {
     start: Vec<usize>,
     entries: Vec<(usize, usize)>,
@@ -119,6 +120,26 @@ pub struct MultipleProblem {
     isotropic_information: bool,
     #[serde(skip)]
     objective: Objective,
+    #[serde(skip)]
+    adjacency: AdjacencyCache,
+}
+
+/// The graph's adjacency, made on the first request and kept with the problem (its edges never
+/// change after construction): no part of the problem's value, so equal problems compare
+/// equal whether or not it was made, and it is neither serialised nor cloned.
+#[derive(Debug, Default)]
+struct AdjacencyCache(std::sync::OnceLock<Box<Adjacency>>);
+
+impl Clone for AdjacencyCache {
+    fn clone(&self) -> Self {
+        AdjacencyCache::default()
+    }
+}
+
+impl PartialEq for AdjacencyCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// Unvalidated serde form of [`MultipleProblem`].
@@ -194,6 +215,7 @@ impl MultipleProblem {
             information: None,
             isotropic_information: false,
             objective: Objective::CHORDAL_L2,
+            adjacency: AdjacencyCache::default(),
         })
     }
 
@@ -264,6 +286,7 @@ impl MultipleProblem {
             information: None,
             isotropic_information: false,
             objective: self.objective,
+            adjacency: AdjacencyCache::default(),
         })
     }
 
@@ -348,8 +371,15 @@ impl MultipleProblem {
     }
 
     /// The graph's adjacency in compressed form ([`Adjacency`]): every edge listed at both
-    /// endpoints, in edge order.
-    pub(crate) fn adjacency(&self) -> Adjacency {
+    /// endpoints, in edge order; made once (asked for 10 times in a solve and certificate of
+    /// a 10^5-node graph with 10^6 edges, each build 0.02-0.05 s: 0.32 s in all before).
+    pub(crate) fn adjacency(&self) -> &Adjacency {
+        self.adjacency
+            .0
+            .get_or_init(|| Box::new(self.build_adjacency()))
+    }
+
+    fn build_adjacency(&self) -> Adjacency {
         let n = self.num_rotations;
         let mut start = vec![0usize; n + 1];
         for e in &self.edges {
@@ -499,6 +529,7 @@ impl MultipleProblem {
             information,
             isotropic_information: self.isotropic_information,
             objective: self.objective,
+            adjacency: AdjacencyCache::default(),
         })
     }
 
@@ -547,6 +578,7 @@ impl MultipleProblem {
             .collect();
         MultipleProblem {
             edges,
+            adjacency: AdjacencyCache::default(),
             ..self.clone()
         }
     }
@@ -716,6 +748,42 @@ pub fn fix_gauge(rotations: &mut [Rotation]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The adjacency made once is the graph's: a problem asked for it equals one never asked,
+    /// a relabelled or reweighted copy makes its own (each edge at both endpoints, against the
+    /// edge list), and the lists are those of a fresh build.
+    #[test]
+    fn the_kept_adjacency_is_the_graphs() {
+        let e = |i, j| Edge {
+            i,
+            j,
+            rotation: Rotation::identity(),
+            weight: 1.0,
+        };
+        let p = MultipleProblem::new(4, vec![e(0, 1), e(1, 2), e(2, 3), e(3, 0), e(0, 2)]).unwrap();
+        let fresh = p.clone();
+        let _ = p.adjacency();
+        assert_eq!(p, fresh);
+        let listed = |q: &MultipleProblem| -> Vec<Vec<(usize, usize)>> {
+            (0..q.num_rotations())
+                .map(|v| q.adjacency().neighbours(v).to_vec())
+                .collect()
+        };
+        let expected = |q: &MultipleProblem| -> Vec<Vec<(usize, usize)>> {
+            let mut at = vec![Vec::new(); q.num_rotations()];
+            for (k, e) in q.edges().iter().enumerate() {
+                at[e.i].push((e.j, k));
+                at[e.j].push((e.i, k));
+            }
+            at
+        };
+        assert_eq!(listed(&p), expected(&p));
+        let moved = p.relabelled(&[3, 2, 1, 0]);
+        assert_eq!(listed(&moved), expected(&moved));
+        assert_ne!(listed(&moved), listed(&p));
+        let heavier = p.reweighted(&[2.0; 5]).unwrap();
+        assert_eq!(listed(&heavier), expected(&heavier));
+    }
 
     /// Deserialisation validates: a problem round-trips (with its information), and a bad
     /// index, a missing information or a non-positive weight is an error, never a panic or an
