@@ -96,12 +96,33 @@ impl<'a> RegionSpace<'a> {
         out
     }
 
+    /// Per region, `fl(F_r^T z)` alone ([`Self::products`] without the magnitudes: the
+    /// projection's hot path, twice per product of the coarse correction's iterations).
+    fn sums(&self, z: &[f64]) -> Vec<DVector<f64>> {
+        let mut out: Vec<DVector<f64>> = self
+            .extra
+            .iter()
+            .map(|cols| DVector::zeros(3 + cols.len()))
+            .collect();
+        for (i, &g) in self.layout.of.iter().enumerate() {
+            for a in 0..3 {
+                out[g][a] += z[3 * i + a];
+            }
+        }
+        for (g, cols) in self.extra.iter().enumerate() {
+            for (k, col) in cols.iter().enumerate() {
+                out[g][3 + k] += col.iter().map(|&(idx, w)| w * z[idx]).sum::<f64>();
+            }
+        }
+        out
+    }
+
     /// The coefficients `c_r = G_r^{-1} F_r^T y` that [`CoarseSpace::project`] subtracts.
     fn coefficients(&self, y: &[f64]) -> Vec<DVector<f64>> {
-        self.products(y)
+        self.sums(y)
             .into_iter()
             .zip(&self.inverse)
-            .map(|((v, _), inv)| inv * v)
+            .map(|(v, inv)| inv * v)
             .collect()
     }
 
