@@ -355,7 +355,9 @@ type CoarseBound = (f64, f64, f64);
 /// gradients stop a column once its residual is small against its own Gram entry; where the
 /// residual's term then takes more than half of the Gram matrix's least eigenvalue
 /// ([`bound_coarse`]) they go on from there to the relative residual `rel` alone and bound
-/// again (any `X` gives a valid bound: the stop decides only its size).
+/// again (any `X` gives a valid bound: the stop decides only its size), unless `stop_at` has
+/// passed. The resumed solve forms its right-hand sides again (one product per column) and
+/// holds the stopped `X` beside its own vectors (one more set of columns at its peak).
 fn solved_bound(
     m: &BlockOperator,
     groups: &impl CoarseSpace,
@@ -368,7 +370,9 @@ fn solved_bound(
     let (x, early) = corrections(m, groups, targets, None, (gram_stop, rel, stop_at))?;
     let z = corrected(groups, coarse, assemble(&x));
     let (bound, spoiled) = bound_coarse(m, groups, &z, zeta)?;
-    if !early || !spoiled {
+    // past `stop_at` the resumed iterations would run none, only their products and a bound
+    let late = stop_at.is_some_and(|t| std::time::Instant::now() >= t);
+    if !early || !spoiled || late {
         return Some((z, bound));
     }
     drop(z);
