@@ -9,15 +9,17 @@
 //! weight per node) are the two [`CoarseSpace`]s; the operator, the correction by conjugate
 //! gradients and the rigorous bound are shared here.
 
+use crate::certify::multiple::block_operator::BlockOperator;
 use crate::certify::multiple::multipliers::GaugeTerms;
 use crate::linalg::UNIT_ROUNDOFF as U;
 use crate::linalg::cholesky::gamma;
 use crate::linalg::pcg::pcg_from;
 use nalgebra::{DMatrix, Matrix3};
 
-/// `zeta`, the uniform weight added to the charges of a grouped comparison, as a fraction of
-/// the largest weighted degree: small against the charges (the pencils), large enough that
-/// the coarse correction's residual need not be driven below rounding.
+/// `zeta` of the block comparison's regions (`[A15]`, "Regions"), the margin each region's
+/// block is proven above, as a fraction of the largest row sum: small against the regions'
+/// headroom, large enough that the coarse correction's residual need not be driven below
+/// rounding. (The scalar pencils take their own, `scalar::groups::PENCIL_ZETA_FRACTION`.)
 pub(in crate::certify::multiple) const ZETA_FRACTION: f64 = 1e-7;
 
 /// The relative residual the coarse correction's conjugate gradients aim at: its residual
@@ -81,103 +83,6 @@ pub(in crate::certify::multiple) trait CoarseSpace: Sync {
     /// `kappa` too and know them in `off_space`.
     fn extra_columns(&self) -> Vec<Vec<f64>> {
         Vec::new()
-    }
-}
-
-/// `M = D^T S D` as `3 x 3` blocks with bounds on its forming error and on `|| |M| ||_2`.
-pub(in crate::certify::multiple) struct BlockOperator {
-    diag: Vec<Matrix3<f64>>,
-    edges: Vec<(usize, usize, Matrix3<f64>)>,
-    /// `||fl(M) - M||_2`.
-    form: f64,
-    /// The largest absolute row sum of `fl(M)` (`>= || |fl(M)| ||_2`).
-    row_abs: f64,
-    /// Terms of the longest row of a product.
-    terms: usize,
-}
-
-impl BlockOperator {
-    /// `M` from its blocks: `diag[i] = fl(M_ii)`, `edges` the `(i, j, fl(M_ij))` of `i < j` or
-    /// any order (each stands for `M_ij` and its transpose `M_ji`), `form_rows[i]` at least the
-    /// sum over block row `i` of `||fl(M_ij) - M_ij||_2`, `max_degree` the most edges at a node.
-    pub(in crate::certify::multiple) fn new(
-        diag: Vec<Matrix3<f64>>,
-        edges: Vec<(usize, usize, Matrix3<f64>)>,
-        form_rows: &[f64],
-        max_degree: usize,
-    ) -> Self {
-        let mut row_abs = vec![[0.0f64; 3]; diag.len()];
-        let mut add = |v: usize, b: &Matrix3<f64>| {
-            for (r, sum) in row_abs[v].iter_mut().enumerate() {
-                *sum += b.row(r).abs().sum();
-            }
-        };
-        for (i, j, b) in &edges {
-            add(*i, b);
-            add(*j, &b.transpose());
-        }
-        for (i, b) in diag.iter().enumerate() {
-            add(i, b);
-        }
-        let terms = max_degree + 1;
-        BlockOperator {
-            diag,
-            edges,
-            // symmetric: ||A||_2 <= the largest block row sum of its blocks' norms (twice that)
-            form: 2.0 * form_rows.iter().copied().fold(0.0, f64::max),
-            // each row sum of at most 3 terms + 2 rounded additions
-            row_abs: row_abs.iter().flatten().copied().fold(0.0, f64::max)
-                * (1.0 + gamma(3 * terms + 2)),
-            terms: 3 * terms + 2,
-        }
-    }
-
-    /// `y = fl(M x)`.
-    pub(in crate::certify::multiple) fn times(&self, x: &[f64], y: &mut [f64]) {
-        let block =
-            |v: &[f64], i: usize| nalgebra::Vector3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
-        for (i, d) in self.diag.iter().enumerate() {
-            let r = d * block(x, i);
-            y[3 * i..3 * i + 3].copy_from_slice(r.as_slice());
-        }
-        for (i, j, b) in &self.edges {
-            let (xi, xj) = (block(x, *i), block(x, *j));
-            let (ri, rj) = (b * xj, b.transpose() * xi);
-            for a in 0..3 {
-                y[3 * i + a] += ri[a];
-                y[3 * j + a] += rj[a];
-            }
-        }
-    }
-
-    /// A bound on `||fl(M x) - M x||_2` per unit of `||x||_2`.
-    pub(in crate::certify::multiple) fn product_error(&self) -> f64 {
-        (self.form + gamma(self.terms) * self.row_abs) * (1.0 + 1e-10)
-    }
-
-    /// The stored diagonal blocks `fl(M_ii)`.
-    pub(in crate::certify::multiple) fn diagonal(&self) -> &[Matrix3<f64>] {
-        &self.diag
-    }
-
-    /// The stored off-diagonal blocks `(i, j, fl(M_ij))`, each standing for its transpose too.
-    pub(in crate::certify::multiple) fn blocks(&self) -> &[(usize, usize, Matrix3<f64>)] {
-        &self.edges
-    }
-
-    /// `||M_stored - M||_2`: the blocks' forming error.
-    pub(in crate::certify::multiple) fn form_error(&self) -> f64 {
-        self.form
-    }
-
-    /// The largest absolute row sum of the stored `M` (`>= || |M| ||_2`).
-    pub(in crate::certify::multiple) fn row_abs(&self) -> f64 {
-        self.row_abs
-    }
-
-    /// A bound on `||M||_2`.
-    fn norm(&self) -> f64 {
-        (self.row_abs + self.form) * (1.0 + 1e-10)
     }
 }
 
@@ -396,18 +301,23 @@ fn corrections(
 ) -> Option<(Vec<Vec<f64>>, bool)> {
     let dim = 3 * groups.group_of().len();
     let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
-    let mut rhs: Vec<Vec<f64>> = Vec::with_capacity(targets.len());
-    let mut own = Vec::with_capacity(targets.len());
-    for e in targets {
-        let mut y = vec![0.0; dim];
-        m.times(e, &mut y);
-        own.push(dot(e, &y));
-        groups.project(&mut y);
-        y.iter_mut().for_each(|v| *v = -*v);
-        rhs.push(y);
-    }
+    // the right-hand sides `-Pi M t` and `t^T M t`, the columns on both threads
+    let mut columns: Vec<&Vec<f64>> = targets.to_vec();
+    let parallel = dim * columns.len() >= crate::linalg::threads::PARALLEL_EDGES;
+    let parts = crate::linalg::threads::in_chunks(&mut columns, parallel, |_, part| {
+        let each = |e: &&Vec<f64>| {
+            let mut y = vec![0.0; dim];
+            m.times(e, &mut y);
+            let own = dot(e, &y);
+            groups.project(&mut y);
+            y.iter_mut().for_each(|v| *v = -*v);
+            (y, own)
+        };
+        part.iter().map(each).collect::<Vec<_>>()
+    });
+    let (rhs, own): (Vec<Vec<f64>>, Vec<f64>) = parts.into_iter().flatten().unzip();
     let inverses: Vec<Matrix3<f64>> = m
-        .diag
+        .diagonal()
         .iter()
         .map(|d| {
             d.cholesky()

@@ -18,6 +18,7 @@
 //! - [`staircase`]: the Riemannian staircase (rank-lifted Burer-Monteiro descent).
 
 pub mod block;
+mod block_operator;
 mod check;
 mod coarse;
 pub mod conv;

@@ -3,7 +3,7 @@
 //! step 1, `[A16]`) and the block comparison's `C - blkdiag(Delta)` (`[A15]` step 2).
 
 use super::edges::{self, diagonal_block, edge_matrix};
-use crate::certify::multiple::coarse::BlockOperator;
+use crate::certify::multiple::block_operator::BlockOperator;
 use crate::certify::multiple::scalar::fro;
 use crate::linalg::cholesky::gamma;
 use crate::multiple::MultipleProblem;

@@ -9,10 +9,10 @@
 
 use super::operator::anisotropic_operator;
 use super::{BlockComparison, BlockFailure};
+use crate::certify::multiple::block_operator::BlockOperator;
 use crate::certify::multiple::coarse::verified_min_eigenvalue as verified_min_eigenvalue_dense;
 use crate::certify::multiple::coarse::{
-    BlockOperator, COARSE_RELATIVE_RESIDUAL, CoarseSpace, GaugeBounds, ZETA_FRACTION,
-    coarse_terms_gauged,
+    COARSE_RELATIVE_RESIDUAL, CoarseSpace, GaugeBounds, ZETA_FRACTION, coarse_terms_gauged,
 };
 use crate::certify::multiple::deflated::{Column, RegionSpace, scaled_to_constant};
 use crate::certify::multiple::multipliers::{TraceBound, gauge_terms, multipliers};

@@ -367,7 +367,7 @@ fn the_anisotropic_operator_is_d_transpose_s_d() {
 /// stated product error (and `1e-10` of `dense`'s norm), besides the dense product's own
 /// rounding.
 fn operator_products_match(
-    op: &crate::certify::multiple::coarse::BlockOperator,
+    op: &crate::certify::multiple::block_operator::BlockOperator,
     dense: &DMatrix<f64>,
     rng: &mut StdRng,
     instance: u64,
