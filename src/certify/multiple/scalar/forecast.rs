@@ -11,6 +11,7 @@
 //! (Courant-Fischer) and the comparison fails. The model is the comparison's (first-order
 //! charges for outliers aside): a forecast that orders the ladder, never part of a proof.
 
+use super::ScalarFailure;
 use crate::multiple::MultipleProblem;
 use crate::so3::Rotation;
 
@@ -51,4 +52,51 @@ pub(crate) fn forecast_fails(problem: &MultipleProblem, rotations: &[Rotation]) 
         c += kept * (xi - xj) * (xi - xj) - charge * (xi * xi + xj * xj);
     }
     a < 0.0 && c < 0.0 && a * c > b * b
+}
+
+/// The mean charge ratio (see [`sparsest_regions_forecast`]) above which the sparsest subgraph
+/// in regions is forecast to fail. Measured (2026-12-05/06, `gen_graph.py expander` graphs of
+/// 3x10^4 to 10^5 nodes, 3 and 10 edges per node, 0.02 to 0.1 rad; `docs/benchmarks.md` "A
+/// forecast for the sparsest regions"): every such subgraph that proved had a mean of 0.0066 or
+/// less, every one from 0.0169 failed.
+pub(super) const SPARSEST_FAILING_RATIO: f64 = 0.03;
+
+/// Negative pivots per node forecast per unit of the mean charge ratio: measured 0.53-0.63
+/// where the mean was 0.066 or more (0.15-0.33 below, where the rule does not apply); taken
+/// high, since a count too low jumps to a subgraph that fails again and one too high to a
+/// denser one that proves.
+const PIVOTS_PER_RATIO: f64 = 0.6;
+
+/// The failure forecast for the sparsest subgraph in regions from its charges, before its
+/// factorisation: `reduced` each edge's kept weight (0 for a dropped one) and `delta` each
+/// node's charge (`EdgeCharges`). With `kept_i` the positive kept weight at node `i`, the mean of
+/// `delta_i / kept_i` over the nodes with some is compared with [`SPARSEST_FAILING_RATIO`]; the
+/// forecast count is [`PIVOTS_PER_RATIO`] times the mean, per node. `None` below it. A forecast
+/// orders the ladder, never part of a proof.
+pub(super) fn sparsest_regions_forecast(
+    problem: &MultipleProblem,
+    reduced: &[f64],
+    delta: &[f64],
+) -> Option<ScalarFailure> {
+    let n = problem.num_rotations();
+    let mut kept = vec![0.0f64; n];
+    for (e, &w) in problem
+        .edges()
+        .iter()
+        .zip(reduced)
+        .filter(|(_, w)| **w > 0.0)
+    {
+        kept[e.i] += w;
+        kept[e.j] += w;
+    }
+    let (sum, nodes) = kept
+        .iter()
+        .zip(delta)
+        .filter(|(k, _)| **k > 0.0)
+        .fold((0.0, 0usize), |(s, c), (k, d)| (s + d / k, c + 1));
+    let mean_ratio = sum / nodes.max(1) as f64;
+    (mean_ratio > SPARSEST_FAILING_RATIO).then(|| ScalarFailure::Forecast {
+        negative_pivots: (PIVOTS_PER_RATIO * mean_ratio * n as f64).ceil() as usize,
+        mean_ratio,
+    })
 }

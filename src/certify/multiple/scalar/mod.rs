@@ -194,15 +194,29 @@ pub enum ScalarFailure {
     NotOrthogonal,
     /// Its time ran out before or between its factorisations (a comparison in regions).
     OutOfTime,
+    /// The sparsest subgraph in regions, forecast by its charges to fail with about
+    /// `negative_pivots` negative pivots (`mean_ratio`, the mean over nodes of each node's
+    /// charge over its kept weight, far above where such subgraphs prove), so the
+    /// factorisation was not run (`[D13]`, "A forecast for the sparsest regions").
+    Forecast {
+        /// Negative pivots forecast (what a denser subgraph is chosen by).
+        negative_pivots: usize,
+        /// The mean charge ratio the forecast comes from.
+        mean_ratio: f64,
+    },
 }
 
 impl ScalarFailure {
     /// The negative eigenvalues an inertia failure showed (counted pivots, or at least the
-    /// nodes of [`ScalarFailure::NegativeDiagonal`]); `None` for the other failures.
+    /// nodes of [`ScalarFailure::NegativeDiagonal`], or those of a
+    /// [`ScalarFailure::Forecast`]); `None` for the other failures.
     pub fn negative_count(&self) -> Option<usize> {
         match self {
             ScalarFailure::Inertia { negative_pivots } => Some(*negative_pivots),
             ScalarFailure::NegativeDiagonal { nodes } => Some(*nodes),
+            ScalarFailure::Forecast {
+                negative_pivots, ..
+            } => Some(*negative_pivots),
             _ => None,
         }
     }
@@ -234,6 +248,13 @@ pub(in crate::certify::multiple) fn failure_text(
         }
         Err(ScalarFailure::NotOrthogonal) => "the rotations are too far from orthogonal".into(),
         Err(ScalarFailure::OutOfTime) => "its time ran out before its factorisations".into(),
+        Err(ScalarFailure::Forecast {
+            negative_pivots,
+            mean_ratio,
+        }) => format!(
+            "forecast to fail with about {negative_pivots} negative pivots (its condition needs \
+             exactly {needed}; mean charge ratio {mean_ratio:.3}; not factorised)"
+        ),
     }
 }
 
