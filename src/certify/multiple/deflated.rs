@@ -69,36 +69,19 @@ impl<'a> RegionSpace<'a> {
     /// Per region, `fl(F_r^T z)` and `|F_r|^T |z|` (its error is at most `gamma(|r| + 2)` of
     /// the latter's entries: sums of at most `|r|` products).
     fn products(&self, z: &[f64]) -> Vec<(DVector<f64>, DVector<f64>)> {
-        let mut out: Vec<(DVector<f64>, DVector<f64>)> = self
-            .extra
-            .iter()
-            .map(|cols| {
-                (
-                    DVector::zeros(3 + cols.len()),
-                    DVector::zeros(3 + cols.len()),
-                )
-            })
-            .collect();
-        for (i, &g) in self.layout.of.iter().enumerate() {
-            for a in 0..3 {
-                out[g].0[a] += z[3 * i + a];
-                out[g].1[a] += z[3 * i + a].abs();
-            }
-        }
-        for (g, cols) in self.extra.iter().enumerate() {
-            for (k, col) in cols.iter().enumerate() {
-                for &(idx, w) in col {
-                    out[g].0[3 + k] += w * z[idx];
-                    out[g].1[3 + k] += (w * z[idx]).abs();
-                }
-            }
-        }
-        out
+        let magnitudes = self.accumulate(z, |w, v| (w * v).abs());
+        self.sums(z).into_iter().zip(magnitudes).collect()
     }
 
-    /// Per region, `fl(F_r^T z)` alone ([`Self::products`] without the magnitudes: the
-    /// projection's hot path, twice per product of the coarse correction's iterations).
+    /// Per region, `fl(F_r^T z)` alone (the projection's hot path, twice per product of the
+    /// coarse correction's iterations).
     fn sums(&self, z: &[f64]) -> Vec<DVector<f64>> {
+        self.accumulate(z, |w, v| w * v)
+    }
+
+    /// Per region, the sums of `term(w, z_i)` over `F_r`'s entries `w` (`1` for the constant
+    /// directions), each column's terms summed from zero in the entries' order.
+    fn accumulate(&self, z: &[f64], term: impl Fn(f64, f64) -> f64) -> Vec<DVector<f64>> {
         let mut out: Vec<DVector<f64>> = self
             .extra
             .iter()
@@ -106,12 +89,12 @@ impl<'a> RegionSpace<'a> {
             .collect();
         for (i, &g) in self.layout.of.iter().enumerate() {
             for a in 0..3 {
-                out[g][a] += z[3 * i + a];
+                out[g][a] += term(1.0, z[3 * i + a]);
             }
         }
         for (g, cols) in self.extra.iter().enumerate() {
             for (k, col) in cols.iter().enumerate() {
-                out[g][3 + k] += col.iter().map(|&(idx, w)| w * z[idx]).sum::<f64>();
+                out[g][3 + k] += col.iter().map(|&(idx, w)| term(w, z[idx])).sum::<f64>();
             }
         }
         out

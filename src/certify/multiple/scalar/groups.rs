@@ -11,7 +11,7 @@
 //! graph's comparison fails with one negative pivot per estimated sensor (its constant
 //! directions are charged by the comparison though `M` is positive on them).
 
-use super::analysis::{SPARSIFIED_EDGES_PER_NODE, ScalarAnalysis};
+use super::analysis::ScalarAnalysis;
 use super::charges::{
     EdgeCharges, PRODUCT_ERROR, edge_charges, edge_product, orthogonality_defect,
 };
@@ -85,7 +85,7 @@ pub(crate) fn grouped_comparison(
         &analysis,
         (rotations, lambdas),
         &|| gauge_terms(problem, rotations, lambdas),
-        stop_at,
+        (stop_at, false),
     )
     .map_err(|f| super::failure_text(target, Err(f), analysis.expected_negative_pivots())))
 }
@@ -110,16 +110,25 @@ pub(crate) fn grouped_dual_bound(
 }
 
 /// Steps 1 to 5 of the grouped comparison (its `zeta` and the coarse correction's residual
-/// are fixed fractions: no target enters), the conjugate gradients stopping at `stop_at`.
+/// are fixed fractions: no target enters), the conjugate gradients stopping at `stop_at`;
+/// with `forecast`, not factorised where the charges forecast its failure
+/// ([`sparsest_regions_forecast`]).
 pub(super) fn compare_grouped(
     problem: &MultipleProblem,
     analysis: &ScalarAnalysis,
     (rotations, lambdas): (&[Rotation], &[Matrix3<f64>]),
     gauge: GaugeSource<'_>,
-    stop_at: Option<std::time::Instant>,
+    (stop_at, forecast): (Option<std::time::Instant>, bool),
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     let coarse = (COARSE_RELATIVE_RESIDUAL, stop_at);
-    compare_grouped_to(problem, analysis, (rotations, lambdas), gauge, coarse)
+    compare_grouped_to(
+        problem,
+        analysis,
+        (rotations, lambdas),
+        gauge,
+        coarse,
+        forecast,
+    )
 }
 
 /// The scalar pencils' `zeta` (added to every charge) as a fraction of the largest weighted
@@ -171,14 +180,13 @@ fn compare_grouped_to(
     (rotations, lambdas): (&[Rotation], &[Matrix3<f64>]),
     gauge: GaugeSource<'_>,
     (rel, stop_at): (f64, Option<std::time::Instant>),
+    forecast: bool,
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     let of = &analysis.components;
     let t_max = orthogonality_defect(rotations)?;
     let c = edge_charges(problem, rotations, lambdas, &analysis.copies, analysis.beta)?;
-    if analysis.edges_per_node() == SPARSIFIED_EDGES_PER_NODE[0]
-        && let Some(forecast) = sparsest_regions_forecast(problem, &c.reduced, &c.delta)
-    {
-        return Err(forecast);
+    if forecast && let Some(f) = sparsest_regions_forecast(problem, &c.reduced, &c.delta) {
+        return Err(f);
     }
     let pencil = grouped_pencil(&c)?;
     let zeta_free = pencil.zeta_free;
@@ -999,7 +1007,8 @@ mod tests {
                 for rel in [0.9, 1e-4] {
                     let gauge = || gauge_terms(&p, at, &lambdas);
                     let estimate = (at.as_slice(), lambdas.as_slice());
-                    let Ok(proof) = compare_grouped_to(&p, &a, estimate, &gauge, (rel, None))
+                    let Ok(proof) =
+                        compare_grouped_to(&p, &a, estimate, &gauge, (rel, None), false)
                     else {
                         continue;
                     };

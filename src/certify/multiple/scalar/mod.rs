@@ -294,17 +294,21 @@ pub fn scalar_comparison(
         (rotations, lambdas),
         &gauge,
         (target, None),
+        false,
     )
 }
 
 /// [`scalar_comparison`], whose grouped analyses' conjugate gradients stop at `stop_at` (a
-/// weaker bound, never a wrong one).
+/// weaker bound, never a wrong one); with `forecast` (the climb's choice for the sparsest
+/// subgraph in regions) a grouped comparison whose charges forecast its failure is not
+/// factorised ([`ScalarFailure::Forecast`]; `forecast.rs`, `sparsest_regions_forecast`).
 pub(in crate::certify::multiple) fn scalar_comparison_until(
     problem: &MultipleProblem,
     analysis: &ScalarAnalysis,
     (rotations, lambdas): (&[Rotation], &[Matrix3<f64>]),
     gauge: GaugeSource<'_>,
     (target, stop_at): (f64, Option<Instant>),
+    forecast: bool,
 ) -> Result<std::result::Result<ScalarComparison, ScalarFailure>> {
     let n = problem.num_rotations();
     if rotations.len() != n || lambdas.len() != n {
@@ -326,6 +330,7 @@ pub(in crate::certify::multiple) fn scalar_comparison_until(
         (rotations, lambdas),
         gauge,
         (target, stop_at),
+        forecast,
     ))
 }
 
@@ -337,9 +342,10 @@ fn compare(
     estimate: (&[Rotation], &[Matrix3<f64>]),
     gauge: GaugeSource<'_>,
     (target, stop_at): (f64, Option<Instant>),
+    forecast: bool,
 ) -> std::result::Result<ScalarComparison, ScalarFailure> {
     if analysis.groups() > 0 {
-        return groups::compare_grouped(problem, analysis, estimate, gauge, stop_at);
+        return groups::compare_grouped(problem, analysis, estimate, gauge, (stop_at, forecast));
     }
     let deflating = one_region_applies(problem, analysis).then_some(gauge);
     compare_plain(problem, analysis, estimate, (target, stop_at), deflating)
