@@ -7,6 +7,7 @@ use crate::{certify_settings, detached, parse_named};
 use pyo3::prelude::*;
 use rotavg::certify::CertifyMode;
 use rotavg::pipeline::rig::RigLoss;
+use rotavg::report::rig_two_graphs::{certify_two_graphs, needs_rig_form, two_graph_rig};
 use rotavg::report::{RigFileReport, RigReport};
 
 /// A two-sensor rig: the frames and the second sensor's ``sensor_from_rig`` rotation ``S``,
@@ -32,9 +33,14 @@ use rotavg::report::{RigFileReport, RigReport};
 ///     Result: ``estimate`` is the frames ``(n, 3, 3)`` (gauge ``estimate[0] = I``);
 ///     ``to_dict()["sensor_from_rig"]`` is ``S``; ``to_dict()`` equals ``rotavg rig ... --json``.
 ///
+/// Graphs whose edges carry information matrices (``read_graph(..., information="full")``, or
+/// JSON ``"information"``) are the rig of two sensors they describe, solved and reported as
+/// ``average_rig_file`` reports a rig file (``to_dict()["sensors_from_rig"][1]`` is ``S``;
+/// ``paper-notes/conjugate.md`` [H22] "Information").
+///
 /// Raises:
-///     rotavg.Error: graphs over different node ids, anisotropic information, a
-///         ``sensor_from_rig`` that is not a rotation.
+///     rotavg.Error: graphs over different node ids, a ``sensor_from_rig`` that is not a
+///         rotation.
 #[pyfunction]
 #[pyo3(name = "average_rig", signature = (right, left, *, sensor_from_rig=None, loss="auto", loss_threshold=5.0, certify="auto", max_memory=None, max_seconds=600.0))]
 #[allow(clippy::too_many_arguments)]
@@ -61,19 +67,23 @@ pub fn average_rig(
     let report = detached(py, move || {
         let held = held.map(one_rotation).transpose()?;
         let max_seconds = certify.budget.max_seconds;
-        match held {
-            Some(_) if loss == RigLoss::Cauchy => Err(rotavg::Error::InvalidSettings {
-                name: "loss".into(),
-                reason: "a rig with its sensor_from_rig held is solved by least squares".into(),
-            }),
-            Some(_) => RigReport::average(names, (&r, &l), held, certify, max_seconds),
-            None => {
-                let graphs = (&r, &l);
-                RigReport::average_with_loss(names, graphs, (loss, robust), certify, max_seconds)
-            }
+        let loss = loss.with_sensor_held(held.is_some())?;
+        if needs_rig_form(&r, &l) {
+            let rig = two_graph_rig(&r, &l, held)?;
+            let input = names.join(" and ");
+            let both = (loss, robust);
+            let report = RigFileReport::average(input, rig, both, certify, max_seconds)?;
+            return Ok(Report::RigFile(report));
         }
+        let graphs = (&r, &l);
+        Ok(Report::Rig(match held {
+            Some(_) => RigReport::average(names, graphs, held, certify, max_seconds)?,
+            None => {
+                RigReport::average_with_loss(names, graphs, (loss, robust), certify, max_seconds)?
+            }
+        }))
     })?;
-    RunResult::new(py, Report::Rig(report))
+    RunResult::new(py, report)
 }
 
 /// A rig of any number of sensors read from a file, solved and certified, exactly as ``rotavg
@@ -293,9 +303,16 @@ pub fn certify_rig(
     let names = [right.name.clone(), left.name.clone()];
     let report = detached(py, move || {
         let (frames, s) = estimate.load(&r)?;
-        RigReport::certify(names, &r, &l, frames, s, &settings)
+        if needs_rig_form(&r, &l) {
+            let input = names.join(" and ");
+            let report = certify_two_graphs(input, (&r, &l), frames, s, &settings)?;
+            return Ok(Report::RigFile(report));
+        }
+        Ok(Report::Rig(RigReport::certify(
+            names, &r, &l, frames, s, &settings,
+        )?))
     })?;
-    RunResult::new(py, Report::Rig(report))
+    RunResult::new(py, report)
 }
 
 /// A rig estimate: arrays, or a file as `rotavg rig --output` writes it.

@@ -219,3 +219,65 @@ def test_a_rig_file_with_information_is_the_command_line_s(cli):
         assert angle(np.array(d["sensors_from_rig"][s]), np.array(truth["sensors_from_rig"][s])) < 0.3
     with pytest.raises(rotavg.Error, match="information"):
         rotavg.average_rig_file(path, information="bogus")
+
+
+def _information_pair(tmp_path, n=20, sigma=0.01, spread=0.1, seed=5):
+    """Two JSON view graphs over the same frames whose edges carry information matrices, a
+    ring with chords each, noise drawn from each edge's own information (contract section 1:
+    ``X_j X_i^T = R_ij exp([e]x)``); the files and the planted ``S``."""
+    rng = np.random.default_rng(seed)
+
+    def rotation(v):
+        t = np.linalg.norm(v)
+        if t < 1e-15:
+            return np.eye(3)
+        k = v / t
+        kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        return np.eye(3) + np.sin(t) * kx + (1 - np.cos(t)) * kx @ kx
+
+    def random_rotation():
+        q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+        q = q @ np.diag(np.sign(np.diag(r)))
+        return q if np.linalg.det(q) > 0 else -q
+
+    frames = [random_rotation() for _ in range(n)]
+    s = random_rotation()
+
+    def graph(x):
+        pairs = [(i, (i + 1) % n) for i in range(n)]
+        while len(pairs) < 3 * n:
+            i, j = (int(v) for v in rng.integers(0, n, 2))
+            if i != j and (i, j) not in pairs and (j, i) not in pairs:
+                pairs.append((i, j))
+        edges = []
+        for i, j in pairs:
+            sd = sigma * np.exp(spread * rng.normal(size=3))
+            q = random_rotation()
+            h = q @ np.diag(1 / sd**2) @ q.T
+            e = q @ (sd * rng.normal(size=3))
+            r = x[j] @ x[i].T @ rotation(-e)
+            edges.append({"i": i, "j": j, "rotation": r.tolist(), "information": ((h + h.T) / 2).tolist()})
+        return {"num_rotations": n, "edges": edges}
+
+    right, left = tmp_path / "right.json", tmp_path / "left.json"
+    right.write_text(json.dumps(graph(frames)))
+    left.write_text(json.dumps(graph([s @ f for f in frames])))
+    return right, left, s
+
+
+def test_two_graphs_with_information_are_a_rig_of_two_sensors(cli, tmp_path):
+    """Graphs whose edges carry information ([H22] "Information"): ``average_rig`` is ``rotavg
+    rig RIGHT LEFT``, reported as a rig of two sensors, ``S`` near the planted one and
+    certified (mild anisotropy); ``certify_rig`` proves the estimate again, unchanged."""
+    right_path, left_path, s = _information_pair(tmp_path)
+    right, left = rotavg.read_graph(right_path), rotavg.read_graph(left_path)
+    ours = rotavg.average_rig(right, left)
+    theirs = cli("rig", right_path, left_path)
+    assert untimed(ours.to_dict()) == untimed(theirs)
+    d = ours.to_dict()
+    assert ours.verdict == "certified" and d["information"]["edges"] == 120
+    got = np.array(d["sensors_from_rig"][1])
+    assert angle(got, s) < 0.5
+    checked = rotavg.certify_rig(right, left, ours.estimate, got)
+    assert checked.verdict == "certified"
+    assert checked.cost == pytest.approx(ours.cost, rel=1e-9)

@@ -32,6 +32,11 @@ use std::path::Path;
 
 type Rows = [[f64; 3]; 3];
 
+/// [`LoadedRig::format`] of two view graphs read as the rig of two sensors they describe
+/// (`crate::report::rig_two_graphs`): its estimate is written as theirs
+/// ([`crate::io::json::write_rig_json`]).
+pub const TWO_GRAPHS_FORMAT: &str = "two view graphs";
+
 /// A rig read from a file, with the file's ids.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LoadedRig {
@@ -46,7 +51,7 @@ pub struct LoadedRig {
     /// Each image's name (COLMAP's; none in a JSON file): keys of gravity priors.
     #[serde(default)]
     pub image_names: Vec<String>,
-    /// `"json"` or `"colmap"`.
+    /// `"json"`, `"colmap"` or [`TWO_GRAPHS_FORMAT`].
     pub format: String,
     /// Gravity priors given to a rig whose sensors are estimated: applied once they are
     /// (calibrated without the priors, refined by soft ones, then held; `[G14]`, `[G15]`,

@@ -106,6 +106,21 @@ impl RigLoss {
         };
         Ok((loss, robust))
     }
+
+    /// This loss for a two-sensor rig whose other `sensor_from_rig` is `held` (`rotavg rig
+    /// --sensor-from-rig`, Python's `sensor_from_rig=`): the frames are then averaged on one
+    /// view graph by least squares, so `cauchy` (which estimates the sensor) is an error.
+    pub fn with_sensor_held(self, held: bool) -> Result<Self> {
+        if held && self == RigLoss::Cauchy {
+            return Err(crate::Error::InvalidSettings {
+                name: "loss".into(),
+                reason: "a rig with its sensor_from_rig held is solved by least squares (on \
+                         one view graph); `--loss cauchy` estimates the sensor"
+                    .into(),
+            });
+        }
+        Ok(self)
+    }
 }
 
 /// What a robust rig solve did: the loss that ran, why, and the inlier problem certified.

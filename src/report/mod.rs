@@ -41,6 +41,7 @@ pub mod multiple;
 pub mod rig;
 pub mod rig_file;
 mod rig_robust;
+pub mod rig_two_graphs;
 pub mod single;
 
 pub use crate::io::input::ProblemKind;

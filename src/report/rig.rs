@@ -41,32 +41,17 @@ pub struct RigReport {
 /// The simultaneous problem of two view graphs read from files: the right graph is the
 /// reference sensor's (its rotations are the frames'), the left one the other sensor's,
 /// `L_ij ~ S R_ij S^T` with `S` its `sensor_from_rig`. Frames are paired by file id; the two
-/// graphs must have the same ids. Errors: different ids, anisotropic information (rigs take
-/// scalar weights).
+/// graphs must have the same ids. Errors: different ids, anisotropic information (the
+/// simultaneous problem takes scalar weights; such graphs are
+/// [`super::rig_two_graphs::two_graph_rig`]'s).
 pub fn rig_problem(right: &LoadedGraph, left: &LoadedGraph) -> Result<SimultaneousProblem> {
-    if right.node_ids != left.node_ids {
-        let only = |a: &LoadedGraph, b: &LoadedGraph| {
-            a.node_ids
-                .iter()
-                .filter(|id| b.node_ids.binary_search(id).is_err())
-                .count()
-        };
+    super::rig_two_graphs::same_frames(right, left)?;
+    if super::rig_two_graphs::needs_rig_form(right, left) {
         return Err(Error::InvalidSettings {
             name: "rig".into(),
-            reason: format!(
-                "the two view graphs must have the same frames (node ids): {} only in the \
-                 first, {} only in the second",
-                only(right, left),
-                only(left, right)
-            ),
-        });
-    }
-    if right.problem.is_anisotropic() || left.problem.is_anisotropic() {
-        return Err(Error::InvalidSettings {
-            name: "rig".into(),
-            reason: "two view graphs take scalar weights (no --information full); a rig with \
-                     information matrices is a JSON rig file with \"information\" on its edges \
-                     or a COLMAP rig (`rotavg rig FILE --information full`, [H24])"
+            reason: "the simultaneous problem takes scalar weights; two view graphs with \
+                     information matrices are the rig of two sensors they describe \
+                     (`report::rig_two_graphs::two_graph_rig`, [H24])"
                 .into(),
         });
     }

@@ -42,10 +42,20 @@ pub struct RigFileReport {
 
 impl RigFileReport {
     /// Write the estimate to `path` (`rotavg rig FILE --output`): JSON `{"frames": [...],
-    /// "frame_ids": [...], "sensors_from_rig": [...], "sensor_ids": [...]}`.
+    /// "frame_ids": [...], "sensors_from_rig": [...], "sensor_ids": [...]}`; of two view graphs
+    /// ([`crate::io::rig::TWO_GRAPHS_FORMAT`]) as [`super::RigReport::write_output`] writes
+    /// theirs, `{"rotations": [...], "node_ids": [...], "sensor_from_rig": S}`.
     pub fn write_output(&self, path: &str) -> crate::Result<()> {
         let s = &self.result.solution;
-        let text = crate::io::rig::write_rig_estimate_json(&s.frames, &s.sensors, &self.rig);
+        let text = match (
+            self.rig.format == crate::io::rig::TWO_GRAPHS_FORMAT,
+            &s.sensors[..],
+        ) {
+            (true, [_, other]) => {
+                crate::io::json::write_rig_json(&s.frames, &self.rig.frame_ids, other)
+            }
+            _ => crate::io::rig::write_rig_estimate_json(&s.frames, &s.sensors, &self.rig),
+        };
         crate::io::output::write_text(path, &text)
     }
 

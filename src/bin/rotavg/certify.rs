@@ -17,6 +17,7 @@ use rotavg::io::input::{
 use rotavg::io::names::{Choice, MultipleLoss};
 use rotavg::io::nearest;
 use rotavg::report::CertifyReport;
+use rotavg::report::rig_two_graphs::{certify_two_graphs, needs_rig_form};
 use std::path::Path;
 
 /// Arguments of `rotavg certify`.
@@ -190,6 +191,11 @@ fn certify_rig(args: &Args, left_path: &str) -> Result<Outcome> {
         .into_rotations()?;
     let s = rotavg::io::json::read_sensor_from_rig(&args.estimate, &options)?;
     let settings = args.graph.certify_settings(&args.common, &args.plot);
+    if needs_rig_form(&right, &left) {
+        let input = format!("{right_path} and {left_path}");
+        let report = certify_two_graphs(input, (&right, &left), rotations, s, &settings)?;
+        return args.common.finish(&report, report.verdict());
+    }
     let report = rotavg::report::RigReport::certify(
         [right_path, left_path.to_string()],
         &right,

@@ -11,6 +11,7 @@ use crate::common::{Common, GraphArgs, GravityArgs};
 use rotavg::Result;
 use rotavg::io::detect::load_graph;
 use rotavg::pipeline::rig::RigLoss;
+use rotavg::report::rig_two_graphs::{needs_rig_form, two_graph_rig};
 use rotavg::report::{RigFileReport, RigReport};
 use std::path::Path;
 
@@ -22,7 +23,8 @@ pub struct Args {
     /// database with a rig configuration (tables rigs, rig_sensors, frames, frame_data).
     pub right: String,
     /// The other sensor's view graph over the same frames (node ids): `L_ij ~ S R_ij S^T`,
-    /// `S` its `sensor_from_rig` rotation. (`--gravity` takes a rig file's images.)
+    /// `S` its `sensor_from_rig` rotation. Graphs with information matrices are the rig of two
+    /// sensors they describe, reported as a rig file. (`--gravity` takes a rig file's images.)
     #[arg(conflicts_with = "gravity")]
     pub left: Option<String>,
     #[command(flatten)]
@@ -35,7 +37,8 @@ pub struct Args {
     /// Hold the other sensor's `sensor_from_rig` at the rotation `"sensor_from_rig"` of FILE
     /// (a JSON object, as `--output` writes): only the frames are estimated, on one view graph,
     /// and certified by the multiple-averaging ladder (paper-notes/conjugate.md [H18]).
-    #[arg(long, value_name = "FILE")]
+    /// (Two view graphs only: a rig file gives each sensor's known `sensor_from_rig` itself.)
+    #[arg(long, value_name = "FILE", requires = "left")]
     pub sensor_from_rig: Option<String>,
     /// The loss: `auto` (least squares, and the Cauchy loss instead when the residuals look like
     /// outliers), `chordal` (least squares on every edge) or `cauchy` (then the inlier edges'
@@ -60,32 +63,26 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let Some(left) = &args.left else {
         return run_file(args);
     };
-    if args.loss == "cauchy" && args.sensor_from_rig.is_some() {
-        return Err(rotavg::Error::InvalidSettings {
-            name: "--loss".into(),
-            reason: "a rig with its sensor_from_rig held is solved by least squares (on one \
-                     view graph); `--loss cauchy` estimates the sensor"
-                .into(),
-        });
-    }
+    loss(args)?
+        .0
+        .with_sensor_held(args.sensor_from_rig.is_some())?;
+    let input = format!("{} and {left}", args.right);
     let options = args.graph.read_options(&args.common);
     let right = load_graph(Path::new(&args.right), args.graph.format, &options)?;
     let left = load_graph(Path::new(left), args.graph.format, &options)?;
     let certify = args.graph.settings(&args.common, &Default::default());
-    let held = match &args.sensor_from_rig {
-        Some(file) => Some(rotavg::io::json::read_sensor_from_rig(file, &options)?),
-        None => None,
-    };
+    let held = (args.sensor_from_rig.as_ref())
+        .map(|file| rotavg::io::json::read_sensor_from_rig(file, &options))
+        .transpose()?;
+    if needs_rig_form(&right, &left) {
+        return run_rig(args, input, two_graph_rig(&right, &left, held)?);
+    }
     crate::progress::say(format_args!(
         "rig of {} frames, {} + {} edges{}: solving and certifying...",
         right.problem.num_rotations(),
         right.problem.num_edges(),
         left.problem.num_edges(),
-        if held.is_some() {
-            ", sensor_from_rig held"
-        } else {
-            ""
-        }
+        held.map_or("", |_| ", sensor_from_rig held")
     ));
     let inputs = [args.right.clone(), args.left.clone().unwrap_or_default()];
     let max_seconds = args.common.solve_seconds();
@@ -102,17 +99,13 @@ pub fn run(args: &Args) -> Result<Outcome> {
 
 /// `rotavg rig FILE`: a rig of any number of sensors read from a rig file.
 fn run_file(args: &Args) -> Result<Outcome> {
-    if args.sensor_from_rig.is_some() {
-        return Err(rotavg::Error::InvalidSettings {
-            name: "--sensor-from-rig".into(),
-            reason: "applies to two view graphs (rotavg rig RIGHT LEFT); a rig file gives each \
-                     sensor's known sensor_from_rig itself"
-                .into(),
-        });
-    }
     let options = args.graph.read_options(&args.common);
     let rig = rotavg::io::rig::load_rig(Path::new(&args.right), &options)?;
-    let rig = args.gravity.apply_to_rig(rig)?;
+    run_rig(args, args.right.clone(), args.gravity.apply_to_rig(rig)?)
+}
+
+/// Solve, certify and report the rig read from `input` (a rig file, or two view graphs).
+fn run_rig(args: &Args, input: String, rig: rotavg::io::rig::LoadedRig) -> Result<Outcome> {
     let p = &rig.problem;
     crate::progress::say(format_args!(
         "rig of {} frames, {} sensors, {} images, {} edges: solving and certifying...",
@@ -123,7 +116,6 @@ fn run_file(args: &Args) -> Result<Outcome> {
     ));
     let certify = args.graph.settings(&args.common, &Default::default());
     let max_seconds = args.common.solve_seconds();
-    let input = args.right.clone();
     let report = RigFileReport::average(input, rig, loss(args)?, certify, max_seconds)?;
     if let Some(path) = &args.output {
         report.write_output(path)?;

@@ -4,7 +4,8 @@
 //! the frames, `f_R(R) + f_L(S R)`, and its minimum over rigs is at least the simultaneous
 //! problem's (where `S` is free even when `S_a` is held); so the simultaneous certificates
 //! (`[H14]`-`[H16]`: the trace-coupled dual at the estimate and its search, the SDP) bound it,
-//! where the within-frame couplings `[H21]` have no edge between sensors to work with.
+//! where the within-frame couplings `[H21]` have no edge between sensors to work with. Edges
+//! with information matrices (`[H24]`) keep them in both graphs.
 
 use super::state::RigState;
 use crate::certify::log::{Prediction, Refusal};
@@ -96,13 +97,6 @@ fn not_two_graphs(p: &RigProblem) -> Option<String> {
     if p.held().iter().all(Option::is_some) {
         return Some("both sensors held (the frames' bound is exact)".into());
     }
-    if p.is_anisotropic() {
-        return Some(
-            "the simultaneous certificate takes scalar weights, and the edges carry \
-             information matrices [H24]"
-                .into(),
-        );
-    }
     if p.edges()
         .iter()
         .any(|e| images[e.i].sensor != images[e.j].sensor)
@@ -112,21 +106,70 @@ fn not_two_graphs(p: &RigProblem) -> Option<String> {
     None
 }
 
-/// The two sensors' view graphs over the frames (sensor 0's: the right graph).
+/// The two sensors' view graphs over the frames (sensor 0's: the right graph), each edge with
+/// its information matrix when the rig's carry them (`[H24]`: the simultaneous relaxation and
+/// its dual bound hold for any connection Laplacians `Q`, `[H22]` "Information").
 fn two_graphs(p: &RigProblem) -> Result<(MultipleProblem, MultipleProblem)> {
     let images = p.images();
     let mut graphs = [Vec::new(), Vec::new()];
-    for e in p.edges() {
-        graphs[images[e.i].sensor].push(Edge {
+    let mut information = [Vec::new(), Vec::new()];
+    for (k, e) in p.edges().iter().enumerate() {
+        let sensor = images[e.i].sensor;
+        graphs[sensor].push(Edge {
             i: images[e.i].frame,
             j: images[e.j].frame,
             ..e.clone()
         });
+        if let Some(h) = p.information() {
+            information[sensor].push(h[k]);
+        }
     }
-    let [right, left] = graphs;
     let n = p.num_frames();
-    Ok((
-        MultipleProblem::new(n, right)?,
-        MultipleProblem::new(n, left)?,
-    ))
+    let [right, left] = graphs;
+    let graph = |edges, info: Vec<_>| {
+        let g = MultipleProblem::new(n, edges)?;
+        match p.is_anisotropic() {
+            true => g.with_information(info),
+            false => Ok(g),
+        }
+    };
+    let [right_info, left_info] = information;
+    Ok((graph(right, right_info)?, graph(left, left_info)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::two_graphs;
+    use crate::rig::RigScene;
+
+    /// A two-sensor rig with information and no edge between its sensors: its two graphs carry
+    /// the information, and their joint cost at `(S_a F, S_b F)` is the rig's cost at `(F, S)`
+    /// (the rig's own `cost`), at the truth and at a point turned from it; with scalar
+    /// weights too.
+    #[test]
+    fn the_two_graphs_carry_the_rig_s_cost() {
+        for anisotropy in [1.0, 3.0] {
+            let scene = RigScene {
+                cross_fraction: 0.0,
+                anisotropy,
+                ..RigScene::sized(12, 2, 0.02, false, 3)
+            };
+            let (p, truth) = scene.generate();
+            assert_eq!(p.is_anisotropic(), anisotropy > 1.0);
+            let (right, left) = two_graphs(&p).unwrap();
+            assert_eq!(right.is_anisotropic(), p.is_anisotropic());
+            assert_eq!(left.is_anisotropic(), p.is_anisotropic());
+            let turned: Vec<_> = (truth.frames.iter())
+                .map(|f| crate::so3::exp(&nalgebra::Vector3::new(0.1, -0.2, 0.05)) * f)
+                .collect();
+            for frames in [&truth.frames, &turned] {
+                let (a, b) = (truth.sensors[0], truth.sensors[1]);
+                let r: Vec<_> = frames.iter().map(|f| a * f).collect();
+                let l: Vec<_> = frames.iter().map(|f| b * f).collect();
+                let joint = right.chordal_cost(&r) + left.chordal_cost(&l);
+                let rig = p.cost(frames, &truth.sensors);
+                assert!((joint - rig).abs() <= 1e-9 * rig, "{joint} against {rig}");
+            }
+        }
+    }
 }
