@@ -13,6 +13,7 @@
 
 use super::grounded::grounded;
 use crate::certify::multiple::multipliers::data_defect;
+use crate::linalg::gamma;
 use crate::multiple::MultipleProblem;
 use crate::multiple::laplacian::connection_laplacian_triplets;
 use crate::relax::simultaneous::coupling_pairs;
@@ -35,7 +36,8 @@ pub struct SimultaneousBound {
     /// Proven lower bound on that smaller `lambda_min` of the exact matrices: each computed
     /// value minus `10 (3n) eps ||(|Q| + |blkdiag Lambda| + sum |gamma_ij E_ij|)||_F`, which
     /// covers the rounding of forming `Z` (at most three terms per entry) and the eigen
-    /// solver's backward error.
+    /// solver's backward error; for graphs with information also the rounding inside their
+    /// edges' entries (`information_error`).
     pub verified_min_eigenvalue: f64,
 }
 
@@ -70,7 +72,51 @@ pub(crate) fn certificate_matrix(
             add(3 * j + d, 3 * i + d, sign * g);
         }
     }
+    if p.is_anisotropic() {
+        // the rounding inside the edges' entries, as `gamma(side_terms)` of these: the grounded
+        // bound reads `gamma(terms) mag` as each entry's forming error ([H22] "Information")
+        let scale = gamma(8) / gamma(side_terms(p)) * (1.0 + 1e-10);
+        for (i, j, b, o) in information_magnitudes(p) {
+            for (r, c) in (0..3).flat_map(|r| (0..3).map(move |c| (r, c))) {
+                mag[(3 * i + r, 3 * i + c)] += scale * b[(r, c)];
+                mag[(3 * j + r, 3 * j + c)] += scale * b[(r, c)];
+                mag[(3 * i + r, 3 * j + c)] += scale * o[(r, c)];
+                mag[(3 * j + r, 3 * i + c)] += scale * o[(c, r)];
+            }
+        }
+    }
     (m, mag)
+}
+
+/// The terms of an entry of one side's `Z` that `mag` bounds the sum of (the edges, the
+/// multiplier, the coupling and the gauge's): the grounded bound's `gamma(terms)`.
+pub(super) fn side_terms(p: &MultipleProblem) -> usize {
+    p.num_edges() + 4
+}
+
+/// Each anisotropic edge's magnitude blocks `(i, j, B, O)` (`[H22]` "Information"): `2M =
+/// tr(H) I - 2H` and `-2M R^T` are computed within `gamma(8)` of `B = |tr H| I + 2|H|` and `O =
+/// B |R|^T` entrywise (a value can be far below them where its terms cancel).
+fn information_magnitudes(
+    p: &MultipleProblem,
+) -> impl Iterator<Item = (usize, usize, Matrix3<f64>, Matrix3<f64>)> + '_ {
+    let info = p.information().unwrap_or_default();
+    (p.edges().iter().zip(info)).map(|(e, h)| {
+        let b = Matrix3::identity() * h.matrix().trace().abs() + h.matrix().abs() * 2.0;
+        let o = b * e.rotation.matrix().transpose().abs();
+        (e.i, e.j, b, o)
+    })
+}
+
+/// A bound on the rounding inside the anisotropic edges' entries beyond what `[H14]`'s margin
+/// covers: `||E||_2 <= ||E||_F <= gamma(8) sum_e 2 (||B_e||_F + ||O_e||_F)`
+/// ([`information_magnitudes`]; the triangle inequality over the edges). Zero for scalar
+/// weights.
+fn information_error(p: &MultipleProblem) -> f64 {
+    let sum: f64 = information_magnitudes(p)
+        .map(|(_, _, b, o)| 2.0 * (b.norm() + o.norm()))
+        .sum();
+    gamma(8) * sum * (1.0 + 1e-10)
 }
 
 /// One side's proven part of the bound: `floor <= min tr(Z X)` over the relaxation's `X`,
@@ -163,7 +209,8 @@ pub fn verify_simultaneous_bound(
 
 /// [`verify_simultaneous_bound`], and with the point `(R, S)` the multipliers were read at
 /// also the grounded bound of each side (`[H23]`: no `3n` factor on the eigenvalue margin; the
-/// larger of the two is kept, each proven). Isotropic graphs only for the grounded bound.
+/// larger of the two is kept, each proven). With information, `mag` holds the rounding inside the
+/// edges' entries too (`certificate_matrix`, `[H22]` "Information").
 pub fn verify_simultaneous_bound_at(
     right: &MultipleProblem,
     left: &MultipleProblem,
@@ -189,10 +236,14 @@ pub fn verify_simultaneous_bound_at(
         (left, &lambdas[n..], 0.5, true),
     ] {
         let (m, mag) = certificate_matrix(p, side, couplings, sign);
-        let y = point
-            .filter(|_| !p.is_anisotropic())
-            .map(|(r, s)| side_point(r, s, left_side));
-        let one = side_bound(&m, &mag, p.num_edges() + 4, y.as_deref())?;
+        let y = point.map(|(r, s)| side_point(r, s, left_side));
+        let one = side_bound(&m, &mag, side_terms(p), y.as_deref())?;
+        let extra = information_error(p);
+        let one = SideBound {
+            floor: one.floor - m.nrows() as f64 * extra,
+            verified: one.verified - extra,
+            estimate: one.estimate,
+        };
         lam = lam.min(one.estimate);
         verified = verified.min(one.verified);
         floor += one.floor;
