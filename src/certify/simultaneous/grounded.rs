@@ -421,32 +421,8 @@ pub(super) mod tests {
     #[test]
     fn the_grounded_bound_is_below_the_dense_spectrum() {
         let mut rng = rand::rngs::StdRng::seed_from_u64(5);
-        let (mut tight, mut tried) = (0, 0);
         let rigs = (0..6).flat_map(|k| [(k, 0.0), (k, 0.05)]);
-        for_each_side(
-            rigs,
-            &[0.0, 0.02, 0.1, 0.3],
-            &mut rng,
-            |noise, angle, side, rng| {
-                let lmin = side.m.clone().symmetric_eigenvalues().min();
-                let Some(b) = grounded(&side.m, &side.mag, side.terms, &side.y) else {
-                    return;
-                };
-                tried += 1;
-                ingredients_hold(&side.m, &side.mag, side.terms, &side.y);
-                assert!(
-                    b.min_eigenvalue <= lmin,
-                    "angle {angle}: proven {} above lambda_min {lmin}",
-                    b.min_eigenvalue
-                );
-                floor_below_points(b.floor, side, 5, rng);
-                // the eigenvalue bound of [H14] it is kept beside
-                let verified = lmin - 10.0 * 36.0 * f64::EPSILON * side.mag.norm();
-                if noise == 0.0 && angle == 0.0 && b.floor > 36.0 * verified.min(0.0) {
-                    tight += 1;
-                }
-            },
-        );
+        let (tried, tight) = grounded_checks(rigs, &[0.0, 0.02, 0.1, 0.3], 0.0, &mut rng);
         assert!(tried >= 30, "only {tried} grounded bounds");
         assert!(
             tight >= 10,
@@ -464,36 +440,47 @@ pub(super) mod tests {
         let (mut tight, mut tried) = (0, 0);
         for spread in [0.3, 1.0] {
             let rigs = (0..4).flat_map(|k| [(k, 0.0), (k, 0.05)]);
-            for_each_side_with(
-                rigs,
-                &[0.0, 0.02, 0.3],
-                spread,
-                &mut rng,
-                |noise, angle, side, rng| {
-                    let lmin = side.m.clone().symmetric_eigenvalues().min();
-                    let Some(b) = grounded(&side.m, &side.mag, side.terms, &side.y) else {
-                        return;
-                    };
-                    tried += 1;
-                    ingredients_hold(&side.m, &side.mag, side.terms, &side.y);
-                    assert!(
-                        b.min_eigenvalue <= lmin,
-                        "{spread}, {angle}: {} > {lmin}",
-                        b.min_eigenvalue
-                    );
-                    floor_below_points(b.floor, side, 5, rng);
-                    let verified = lmin - 10.0 * 36.0 * f64::EPSILON * side.mag.norm();
-                    if noise == 0.0 && angle == 0.0 && b.floor > 36.0 * verified.min(0.0) {
-                        tight += 1;
-                    }
-                },
-            );
+            let (a, b) = grounded_checks(rigs, &[0.0, 0.02, 0.3], spread, &mut rng);
+            (tried, tight) = (tried + a, tight + b);
         }
         assert!(tried >= 20, "only {tried} grounded bounds");
         assert!(
             tight >= 4,
             "the grounded floor beat the eigenvalue bound only {tight} times"
         );
+    }
+
+    /// The grounded bound of every side of `rigs` (information of `spread`) at the angles:
+    /// its ingredients hold, its `lambda_min` is at most the dense one, its floor at most
+    /// `tr(Z X)` at the point and at random rotations. Returns how many were tried and at how
+    /// many optima the floor beat `[H14]`'s eigenvalue bound with its margin.
+    fn grounded_checks(
+        rigs: impl Iterator<Item = (u64, f64)>,
+        angles: &[f64],
+        spread: f64,
+        rng: &mut rand::rngs::StdRng,
+    ) -> (usize, usize) {
+        let (mut tight, mut tried) = (0, 0);
+        for_each_side_with(rigs, angles, spread, rng, |noise, angle, side, rng| {
+            let lmin = side.m.clone().symmetric_eigenvalues().min();
+            let Some(b) = grounded(&side.m, &side.mag, side.terms, &side.y) else {
+                return;
+            };
+            tried += 1;
+            ingredients_hold(&side.m, &side.mag, side.terms, &side.y);
+            assert!(
+                b.min_eigenvalue <= lmin,
+                "{spread}, {angle}: proven {} above lambda_min {lmin}",
+                b.min_eigenvalue
+            );
+            floor_below_points(b.floor, side, 5, rng);
+            // the eigenvalue bound of [H14] it is kept beside
+            let verified = lmin - 10.0 * 36.0 * f64::EPSILON * side.mag.norm();
+            if noise == 0.0 && angle == 0.0 && b.floor > 36.0 * verified.min(0.0) {
+                tight += 1;
+            }
+        });
+        (tried, tight)
     }
 
     /// The side's bound never loses to the eigenvalue bound it may skip: at the optimum of
