@@ -40,6 +40,26 @@ fn stalled(history: &[f64]) -> bool {
     best(recent).abs() > 0.5 * best(before).abs()
 }
 
+/// Rounds within which a search of expensive rounds ([`EXPENSIVE_ROUND_SECONDS`]) must halve
+/// its first round's most negative eigenvalue, or stop ([`stalled_early`]).
+const EARLY_WINDOW: usize = 4;
+
+/// A round predicted at least this long (two `3n x 3n` eigendecompositions: from about 700
+/// frames) makes [`STALL_WINDOW`] cost minutes.
+const EXPENSIVE_ROUND_SECONDS: f64 = 1.0;
+
+/// The search has not halved its first round's most negative eigenvalue within
+/// [`EARLY_WINDOW`] rounds: every search that certified did within 2-3 (the measurement of
+/// [`stalled`]); a two-graph rig of 1000 frames with strongly anisotropic information (`[H22]`
+/// "Information") spent 115 s in the 10-round window without gaining (2026-12-06).
+fn stalled_early(history: &[f64]) -> bool {
+    let Some((&first, rest)) = history.split_first() else {
+        return false;
+    };
+    let best = rest.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    rest.len() >= EARLY_WINDOW && first < 0.0 && best.abs() > 0.5 * first.abs()
+}
+
 /// What the search ended with (for the verification) and how long it ran (for the note).
 pub(crate) struct SearchOutcome {
     /// The multipliers and couplings it ended with.
@@ -109,6 +129,7 @@ pub(crate) fn search_couplings(
             || rounds >= MAX_SEARCH_ROUNDS
             || cuts.len() == before
             || stalled(&history)
+            || (round_seconds >= EXPENSIVE_ROUND_SECONDS && stalled_early(&history))
             || !fits();
         if done {
             return Some(SearchOutcome {
@@ -219,6 +240,19 @@ mod tests {
         let slow: Vec<f64> = (0..12).map(|k| -3.0 * 0.7f64.powi(k)).collect();
         assert!(!stalled(&slow));
     }
+    /// The early stall of expensive searches: a trajectory that halves its first value
+    /// within [`EARLY_WINDOW`] rounds goes on, one that does not stops, and nothing stops
+    /// before the window is full.
+    #[test]
+    fn early_stall_rule() {
+        let halving = [-1.0, -0.7, -0.45, -0.2, -0.1];
+        assert!(!stalled_early(&halving));
+        let flat = [-1.0, -0.9, -0.8, -0.7, -0.6];
+        assert!(stalled_early(&flat));
+        assert!(!stalled_early(&flat[..EARLY_WINDOW]));
+        assert!(!stalled_early(&[]));
+    }
+
     use crate::multiple::synthetic::SyntheticGraph;
 
     /// The cut's gradient is the derivative of `v^T Z(gamma) v` along a projected direction
