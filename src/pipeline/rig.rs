@@ -109,13 +109,17 @@ impl RigLoss {
 
     /// This loss for a two-sensor rig whose other `sensor_from_rig` is `held` (`rotavg rig
     /// --sensor-from-rig`, Python's `sensor_from_rig=`): the frames are then averaged on one
-    /// view graph by least squares, so `cauchy` (which estimates the sensor) is an error.
+    /// view graph by least squares (`auto` is `chordal`), so `cauchy` (which estimates the
+    /// sensor) is an error.
     pub fn with_sensor_held(self, held: bool) -> Result<Self> {
+        if held && self == RigLoss::Auto {
+            return Ok(RigLoss::Chordal);
+        }
         if held && self == RigLoss::Cauchy {
             return Err(crate::Error::InvalidSettings {
                 name: "loss".into(),
                 reason: "a rig with its sensor_from_rig held is solved by least squares (on \
-                         one view graph); `--loss cauchy` estimates the sensor"
+                         one view graph); the Cauchy loss estimates the sensor"
                     .into(),
             });
         }

@@ -856,9 +856,9 @@ fn information_pair(
 /// LEFT` solves them as the rig of two sensors they describe, `S` near the planted one; with
 /// mild anisotropy (every `M = tr(H)/2 I - H` near positive semidefinite) the simultaneous
 /// dual certificate proves the estimate (its cost the test's own sum over both files' edges),
-/// the estimate written in the two graphs' format and
-/// certified again unchanged by `rotavg certify --left`; with strong anisotropy a gap, its
-/// bound below the planted truth's cost (the test's own sum over the edges, from the files).
+/// written in the two graphs' format, certified again unchanged by `rotavg certify --left`
+/// and, `S` held at it, the frames alone; with strong anisotropy a gap, its bound below the
+/// planted truth's cost (the test's own sum over the edges, from the files).
 #[test]
 fn two_view_graphs_with_information_are_a_rig_of_two_sensors() {
     let dir = temp_dir();
@@ -905,6 +905,21 @@ fn two_view_graphs_with_information_are_a_rig_of_two_sensors() {
     assert_eq!(c["verdict"]["verdict"], "certified", "{c}");
     let (a, b) = (c["cost"].as_f64().unwrap(), v["cost"].as_f64().unwrap());
     assert!((a - b).abs() <= 1e-9 * b, "{a} against {b}");
+    // `S` held: both sensors known, least squares (the loss `auto` is `chordal` then)
+    let out = run(&[
+        "rig",
+        r,
+        l,
+        "--sensor-from-rig",
+        est.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_success(&out);
+    let h = json_of(&out);
+    assert_eq!(h["verdict"]["verdict"], "certified", "{h}");
+    let kind = &h["verdict"]["problem"]["kind"];
+    assert_eq!(kind, "chordal_l2_rig_images_sensors_held", "{h}");
+    assert!(angle_between(&rotation(&h["sensors_from_rig"][1]), &got) < 1e-9);
     // strong anisotropy: the relaxation is loose; the bound is below the truth's cost
     let (right, left, frames, s) = information_pair("info_pair_strong", (12, 0.01, 0.8), 8);
     let (r, l) = (right.to_str().unwrap(), left.to_str().unwrap());

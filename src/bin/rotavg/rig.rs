@@ -63,9 +63,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let Some(left) = &args.left else {
         return run_file(args);
     };
-    loss(args)?
-        .0
-        .with_sensor_held(args.sensor_from_rig.is_some())?;
+    let rig_loss = loss(args)?;
     let input = format!("{} and {left}", args.right);
     let options = args.graph.read_options(&args.common);
     let right = load_graph(Path::new(&args.right), args.graph.format, &options)?;
@@ -89,7 +87,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let graphs = (&right, &left);
     let report = match held {
         Some(_) => RigReport::average(inputs, graphs, held, certify, max_seconds)?,
-        None => RigReport::average_with_loss(inputs, graphs, loss(args)?, certify, max_seconds)?,
+        None => RigReport::average_with_loss(inputs, graphs, rig_loss, certify, max_seconds)?,
     };
     if let Some(path) = &args.output {
         report.write_output(path)?;
@@ -123,7 +121,12 @@ fn run_rig(args: &Args, input: String, rig: rotavg::io::rig::LoadedRig) -> Resul
     args.common.finish(&report, report.verdict())
 }
 
-/// `--loss` and `--loss-threshold` (the Cauchy scale and the inlier threshold).
+/// `--loss` and `--loss-threshold` (the Cauchy scale and the inlier threshold), least squares
+/// with `--sensor-from-rig` ([`RigLoss::with_sensor_held`]).
 fn loss(args: &Args) -> Result<(RigLoss, rotavg::rig::RigRobust)> {
-    RigLoss::named(&args.loss, args.loss_threshold)
+    let (loss, robust) = RigLoss::named(&args.loss, args.loss_threshold)?;
+    Ok((
+        loss.with_sensor_held(args.sensor_from_rig.is_some())?,
+        robust,
+    ))
 }

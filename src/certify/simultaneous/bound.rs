@@ -151,11 +151,13 @@ fn side_point(r: &[Rotation], s: &Rotation, left_side: bool) -> Vec<Matrix3<f64>
 pub(super) fn side_bound(
     m: &DMatrix<f64>,
     mag: &DMatrix<f64>,
-    terms: usize,
+    (terms, extra): (usize, f64),
     y: Option<&[Matrix3<f64>]>,
 ) -> Option<SideBound> {
     let dim = m.nrows() as f64;
-    let margin = 10.0 * dim * f64::EPSILON * mag.norm();
+    // `extra`: rounding inside the entries that `mag` does not bound for the eigenvalues
+    // (`information_error`); the grounded bound's `mag` carries it itself
+    let margin = 10.0 * dim * f64::EPSILON * mag.norm() + extra;
     let first = y.and_then(|y| grounded(m, mag, terms, y));
     if let Some(g) = &first
         && g.floor >= dim * (g.rayleigh - margin).min(0.0)
@@ -237,13 +239,12 @@ pub fn verify_simultaneous_bound_at(
     ] {
         let (m, mag) = certificate_matrix(p, side, couplings, sign);
         let y = point.map(|(r, s)| side_point(r, s, left_side));
-        let one = side_bound(&m, &mag, side_terms(p), y.as_deref())?;
-        let extra = information_error(p);
-        let one = SideBound {
-            floor: one.floor - m.nrows() as f64 * extra,
-            verified: one.verified - extra,
-            estimate: one.estimate,
-        };
+        let one = side_bound(
+            &m,
+            &mag,
+            (side_terms(p), information_error(p)),
+            y.as_deref(),
+        )?;
         lam = lam.min(one.estimate);
         verified = verified.min(one.verified);
         floor += one.floor;

@@ -497,7 +497,8 @@ pub(super) mod tests {
         let mut skipped = 0;
         let rigs = (0..4).flat_map(|k| [(k, 0.0), (k, 0.05)]);
         for_each_side(rigs, &[0.0, 0.02, 0.1], &mut rng, |_, angle, side, rng| {
-            let b = side_bound(&side.m, &side.mag, side.terms, Some(&side.y)).expect("finite");
+            let b =
+                side_bound(&side.m, &side.mag, (side.terms, 0.0), Some(&side.y)).expect("finite");
             let lmin = side.m.clone().symmetric_eigenvalues().min();
             let margin = 10.0 * 36.0 * f64::EPSILON * side.mag.norm();
             // (up to the two eigensolvers' rounding where the side computed its own)
