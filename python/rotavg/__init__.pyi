@@ -447,6 +447,9 @@ def average_rig(
     certify: str = "auto",
     max_memory: Optional[int] = None,
     max_seconds: Optional[float] = 600.0,
+    gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
+    world_down: Optional[Sequence[float]] = None,
+    gravity_weight: Optional[float] = None,
 ) -> Result:
     """A two-sensor rig's frames and sensor_from_rig, jointly from two view graphs, certified."""
 
@@ -491,6 +494,9 @@ def certify_rig(
     certify: str = "auto",
     max_memory: Optional[int] = None,
     max_seconds: Optional[float] = 600.0,
+    gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
+    world_down: Optional[Sequence[float]] = None,
+    gravity_weight: Optional[float] = None,
 ) -> Result:
     """Certify a rig estimate computed elsewhere, without changing it."""
 

@@ -3,7 +3,8 @@
 //! `(n, 3)` array (a row of NaN: no prior for that image), `(n, 4)` with each prior's relative
 //! weight (soft priors weigh `gravity_weight` times it; NaN: 1), or the path of a priors file,
 //! read as `rotavg multiple --gravity` reads it; for `average_rig_file` / `certify_rig_file`,
-//! one row per image of the rig, or a file keyed by image id or name (`[G14]`).
+//! one row per image of the rig, or a file keyed by image id or name (`[G14]`); for
+//! `average_rig` / `certify_rig`, one row per node of the reference graph (its frames).
 
 use crate::convert::gravity_rows;
 use pyo3::prelude::*;
@@ -42,16 +43,29 @@ impl GravityInput {
         world_down: Option<[f64; 3]>,
         weight: Option<f64>,
     ) -> rotavg::Result<(GravityProblem, Vec<Warning>)> {
-        let (priors, warnings) = self.priors(
-            |p| rotavg::io::gravity::read_gravity(p, graph, world_down),
-            |rows| crate::for_kept(rows, selection, "gravity"),
-            world_down,
-            weight,
-        )?;
+        let (priors, warnings) = self.node_priors((graph, selection), world_down, weight)?;
         Ok((
             GravityProblem::new(graph.problem.clone(), priors)?,
             warnings,
         ))
+    }
+
+    /// These priors on the nodes of `right` (the nodes `selection` kept), with the reader's
+    /// warnings: rows in node order, or a file keyed as `read_gravity` keys the nodes. Also the
+    /// frames' priors of two view graphs, `right` the reference graph (`[G14]` "Two view
+    /// graphs"; `rig_two_graphs::two_graph_rig`).
+    pub fn node_priors(
+        self,
+        (right, selection): (&LoadedGraph, &ComponentSelection),
+        world_down: Option<[f64; 3]>,
+        weight: Option<f64>,
+    ) -> rotavg::Result<(GravityPriors, Vec<Warning>)> {
+        self.priors(
+            |p| rotavg::io::gravity::read_gravity(p, right, world_down),
+            |rows| crate::for_kept(rows, selection, "gravity"),
+            world_down,
+            weight,
+        )
     }
 
     /// `rig` with these priors on its images (rows in image order, or a file keyed by image id

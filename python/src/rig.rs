@@ -2,6 +2,7 @@
 //! `rotavg rig RIGHT LEFT`, `rotavg certify --left` and `rotavg rig FILE`.
 
 use crate::convert::{matrices, matrix};
+use crate::gravity::GravityInput;
 use crate::types::{Graph, Report, RunResult};
 use crate::{certify_settings, detached, parse_named};
 use pyo3::prelude::*;
@@ -28,13 +29,21 @@ use rotavg::report::{RigFileReport, RigReport};
 ///     certify: ``"auto"``, ``"dual"``, ``"sdp"`` or ``"none"``.
 ///     max_memory, max_seconds: the run's budget, as for ``average_multiple`` (one clock for
 ///         the joint solve and the certificate).
+///     gravity, world_down, gravity_weight: gravity priors on the frames, as ``rotavg rig RIGHT
+///         LEFT --gravity``: an ``(n, 3)`` or ``(n, 4)`` array in ``right``'s node order (NaN
+///         rows: none) or a priors file keyed as ``average_multiple`` keys ``right``'s nodes;
+///         held, or soft of ``gravity_weight`` (``paper-notes/gravity.md`` [G14] "Two view
+///         graphs": the rig of two sensors, reported as ``average_rig_file`` reports a rig with
+///         priors; scalar weights only).
 ///
 /// Returns:
-///     Result: ``estimate`` is the frames ``(n, 3, 3)`` (gauge ``estimate[0] = I``);
+///     Result: ``estimate`` is the frames ``(n, 3, 3)`` (gauge ``estimate[0] = I``; with held
+///         priors, the frame nearest ``I`` that keeps its prior);
 ///     ``to_dict()["sensor_from_rig"]`` is ``S``; ``to_dict()`` equals ``rotavg rig ... --json``.
 ///
 /// Graphs whose edges carry information matrices (``read_graph(..., information="full")``, or
-/// JSON ``"information"``) are the rig of two sensors they describe, solved and reported as
+/// JSON ``"information"``), and any two graphs with ``gravity``, are the rig of two sensors they
+/// describe, solved and reported as
 /// ``average_rig_file`` reports a rig file (``to_dict()["sensors_from_rig"][1]`` is ``S``;
 /// ``paper-notes/conjugate.md`` [H22] "Information").
 ///
@@ -42,7 +51,7 @@ use rotavg::report::{RigFileReport, RigReport};
 ///     rotavg.Error: graphs over different node ids, a ``sensor_from_rig`` that is not a
 ///         rotation.
 #[pyfunction]
-#[pyo3(name = "average_rig", signature = (right, left, *, sensor_from_rig=None, loss="auto", loss_threshold=5.0, certify="auto", max_memory=None, max_seconds=600.0))]
+#[pyo3(name = "average_rig", signature = (right, left, *, sensor_from_rig=None, loss="auto", loss_threshold=5.0, certify="auto", max_memory=None, max_seconds=600.0, gravity=None, world_down=None, gravity_weight=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn average_rig(
     py: Python<'_>,
@@ -54,7 +63,11 @@ pub fn average_rig(
     certify: &str,
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
+    gravity: Option<&Bound<'_, PyAny>>,
+    world_down: Option<[f64; 3]>,
+    gravity_weight: Option<f64>,
 ) -> PyResult<RunResult> {
+    let gravity = GravityInput::from_py(gravity)?;
     let (loss, robust) = rig_loss(loss, loss_threshold)?;
     let mode: CertifyMode = parse_named(certify, "certify")?;
     let certify = certify_settings(mode, max_memory, max_seconds, true, None)?;
@@ -63,13 +76,16 @@ pub fn average_rig(
         None => None,
     };
     let (r, l) = (right.loaded.clone(), left.loaded.clone());
+    let selection = right.selection.clone();
     let names = [right.name.clone(), left.name.clone()];
     let report = detached(py, move || {
         let held = held.map(one_rotation).transpose()?;
         let max_seconds = certify.budget.max_seconds;
         let loss = loss.with_sensor_held(held.is_some())?;
-        if needs_rig_form(&r, &l) {
-            let rig = two_graph_rig(&r, &l, held)?;
+        if needs_rig_form(&r, &l) || gravity.is_some() {
+            let priors =
+                |g: GravityInput| g.node_priors((&r, &selection), world_down, gravity_weight);
+            let rig = two_graph_rig(&r, &l, held, gravity.map(priors).transpose()?)?;
             let input = names.join(" and ");
             let both = (loss, robust);
             let report = RigFileReport::average(input, rig, both, certify, max_seconds)?;
@@ -138,7 +154,7 @@ pub fn average_rig_file(
     information: &str,
 ) -> PyResult<RunResult> {
     let full_information = crate::full_information(information)?;
-    let gravity = crate::gravity::GravityInput::from_py(gravity)?;
+    let gravity = GravityInput::from_py(gravity)?;
     let mode: CertifyMode = parse_named(certify, "certify")?;
     let certify = certify_settings(mode, max_memory, max_seconds, true, None)?;
     let path = crate::convert::path_of(path)
@@ -195,7 +211,7 @@ pub fn certify_rig_file(
     information: &str,
 ) -> PyResult<RunResult> {
     let full_information = crate::full_information(information)?;
-    let gravity = crate::gravity::GravityInput::from_py(gravity)?;
+    let gravity = GravityInput::from_py(gravity)?;
     let mode = match parse_named(certify, "certify")? {
         CertifyMode::None => CertifyMode::Dual,
         m => m,
@@ -276,12 +292,14 @@ fn one_rotation(s: crate::convert::Matrices) -> rotavg::Result<rotavg::Rotation>
 ///         ``"sensor_from_rig"`` read from it (then leave ``sensor_from_rig`` out).
 ///     sensor_from_rig: ``(3, 3)`` rotation ``S`` (with array frames).
 ///     certify, max_memory, max_seconds: as for ``average_rig`` (``"none"`` means ``"dual"``).
+///     gravity, world_down, gravity_weight: priors on the frames, as for ``average_rig``
+///         (the estimate's ``S`` held; ``paper-notes/gravity.md`` [G14]).
 ///
 /// Raises:
 ///     rotavg.Error: ``sensor_from_rig`` missing with arrays, or given with a path;
 ///         rotavg.ParseError / FileError: a file that cannot be read (naming it).
 #[pyfunction]
-#[pyo3(name = "certify_rig", signature = (right, left, frames, sensor_from_rig=None, *, certify="auto", max_memory=None, max_seconds=600.0))]
+#[pyo3(name = "certify_rig", signature = (right, left, frames, sensor_from_rig=None, *, certify="auto", max_memory=None, max_seconds=600.0, gravity=None, world_down=None, gravity_weight=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn certify_rig(
     py: Python<'_>,
@@ -292,7 +310,11 @@ pub fn certify_rig(
     certify: &str,
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
+    gravity: Option<&Bound<'_, PyAny>>,
+    world_down: Option<[f64; 3]>,
+    gravity_weight: Option<f64>,
 ) -> PyResult<RunResult> {
+    let gravity = GravityInput::from_py(gravity)?;
     let mode = match parse_named(certify, "certify")? {
         CertifyMode::None => CertifyMode::Dual,
         m => m,
@@ -300,12 +322,16 @@ pub fn certify_rig(
     let settings = certify_settings(mode, max_memory, max_seconds, true, None)?;
     let estimate = RigEstimate::of(frames, sensor_from_rig.filter(|s| !s.is_none()))?;
     let (r, l) = (right.loaded.clone(), left.loaded.clone());
+    let selection = right.selection.clone();
     let names = [right.name.clone(), left.name.clone()];
     let report = detached(py, move || {
         let (frames, s) = estimate.load(&r)?;
-        if needs_rig_form(&r, &l) {
+        if needs_rig_form(&r, &l) || gravity.is_some() {
             let input = names.join(" and ");
-            let report = certify_two_graphs(input, (&r, &l), frames, s, &settings)?;
+            let priors =
+                |g: GravityInput| g.node_priors((&r, &selection), world_down, gravity_weight);
+            let rig = two_graph_rig(&r, &l, None, gravity.map(priors).transpose()?)?;
+            let report = certify_two_graphs(input, rig, frames, s, &settings)?;
             return Ok(Report::RigFile(report));
         }
         Ok(Report::Rig(RigReport::certify(

@@ -115,9 +115,10 @@ impl RigFileReport {
         let (mut joint, start) = (None, std::time::Instant::now());
         let estimated_sensors = rig.problem.estimated_sensors();
         if let Some(priors) = rig.pending_gravity.take() {
-            // soft priors with sensors to estimate: the joint problem first ([G16]); when it
-            // does not certify, and for held priors, the estimate's sensors held ([G14])
-            if priors.weight().is_some() {
+            // soft priors with sensors to estimate: the joint problem first ([G16]; not on the
+            // two-graph shape, where its couplings cannot prove it); when it does not certify,
+            // and for held priors, the estimate's sensors held ([G14])
+            if priors.weight().is_some() && !crate::certify::rig::is_two_graphs(&rig.problem) {
                 let p = rig.problem.clone().with_gravity(priors.clone())?;
                 let c =
                     crate::certify::certify_rig(&p, &estimate.frames, &estimate.sensors, settings)?;

@@ -8,6 +8,7 @@ use crate::io::detect::LoadedGraph;
 use crate::io::rig::{LoadedRig, TWO_GRAPHS_FORMAT};
 use crate::multiple::Edge;
 use crate::multiple::anisotropic::Information;
+use crate::multiple::gravity::GravityPriors;
 use crate::rig::{Image, RigProblem, Sensor};
 use crate::so3::Rotation;
 use crate::{Error, Result};
@@ -45,12 +46,17 @@ pub(super) fn same_frames(right: &LoadedGraph, left: &LoadedGraph) -> Result<()>
 /// identity: the frames are its rotations) and sensor 1 `left`'s (images `n..2n`), its
 /// `sensor_from_rig` `S` estimated, or held at `held`; each graph's edges join its own
 /// sensor's images with their information (a scalar graph's weight `w` as `w I`, the same
-/// cost). Image `f` and `n + f` have ids `f` and `n + f`. Errors: different node ids, and
-/// what [`RigProblem::new`] refuses.
+/// cost, when the other graph carries information; two scalar graphs keep their weights).
+/// Image `f` and `n + f` have ids `f` and `n + f`. `gravity`: priors on the frames, one entry
+/// per node of `right` (`rotavg rig RIGHT LEFT --gravity`, keyed as `multiple` keys `RIGHT`'s
+/// nodes), and the reader's warnings: the priors of the reference sensor's images
+/// (`paper-notes/gravity.md` `[G14]`, "Two view graphs"). Errors: different node ids, what
+/// [`RigProblem::new`] refuses, priors not one per frame or with information matrices.
 pub fn two_graph_rig(
     right: &LoadedGraph,
     left: &LoadedGraph,
     held: Option<Rotation>,
+    gravity: Option<(GravityPriors, Vec<crate::warning::Warning>)>,
 ) -> Result<LoadedRig> {
     same_frames(right, left)?;
     let n = right.problem.num_rotations();
@@ -82,9 +88,13 @@ pub fn two_graph_rig(
             });
         }
     }
-    let problem = RigProblem::new(n, sensors, images, edges)?.with_information(information)?;
+    let problem = RigProblem::new(n, sensors, images, edges)?;
+    let problem = match needs_rig_form(right, left) {
+        true => problem.with_information(information)?,
+        false => problem,
+    };
     let warnings = [super::input_warnings(right), super::input_warnings(left)].concat();
-    Ok(LoadedRig {
+    let rig = LoadedRig {
         problem,
         frame_ids: right.node_ids.clone(),
         sensor_ids: vec![0, 1],
@@ -93,21 +103,48 @@ pub fn two_graph_rig(
         format: TWO_GRAPHS_FORMAT.into(),
         pending_gravity: None,
         warnings,
-    })
+    };
+    with_frame_gravity(rig, gravity)
+}
+
+/// `rig` ([`two_graph_rig`]'s) with `priors` on its frames and the reader's `warnings`; `rig`
+/// itself without them. By `[G14]` Claim 1 with `S_0 = I`, a frame's prior is its reference
+/// image's; the other sensor's images have none. Errors: not one entry per frame, and what
+/// [`LoadedRig::with_gravity`] refuses (information matrices).
+fn with_frame_gravity(
+    rig: LoadedRig,
+    gravity: Option<(GravityPriors, Vec<crate::warning::Warning>)>,
+) -> Result<LoadedRig> {
+    let Some((priors, warnings)) = gravity else {
+        return Ok(rig);
+    };
+    let frames = rig.problem.num_frames();
+    if priors.len() != frames {
+        return Err(Error::InvalidSettings {
+            name: "gravity".into(),
+            reason: format!(
+                "{} gravity entries for two view graphs of {frames} frames (one per node of the \
+                 reference graph)",
+                priors.len()
+            ),
+        });
+    }
+    // the reference sensor's images are `0..frames`; the other's `frames..2 frames` get none
+    let images: Vec<usize> = (0..rig.problem.images().len()).collect();
+    rig.with_gravity(priors.restricted(&images)?, warnings)
 }
 
 /// Certify an estimate of two view graphs' rig computed elsewhere (`rotations` of the frames,
 /// `s` the other sensor's `sensor_from_rig`), never changed, as the rig of two sensors they
-/// describe ([`two_graph_rig`]): `rotavg certify RIGHT --left LEFT --estimate FILE` when either
-/// graph carries information. `input` names the two files.
+/// describe (`rig`, from [`two_graph_rig`] without a held sensor, perhaps with gravity priors): `rotavg certify RIGHT --left LEFT --estimate FILE` when either
+/// graph carries information or gravity priors are given. `input` names the two files.
 pub fn certify_two_graphs(
     input: String,
-    (right, left): (&LoadedGraph, &LoadedGraph),
+    rig: LoadedRig,
     rotations: Vec<Rotation>,
     s: Rotation,
     settings: &crate::certify::CertifySettings,
 ) -> Result<super::RigFileReport> {
-    let rig = two_graph_rig(right, left, None)?;
     let estimate = crate::io::rig::RigEstimate {
         frames: rotations,
         sensors: vec![Rotation::identity(), s],

@@ -17,7 +17,7 @@ use rotavg::io::input::{
 use rotavg::io::names::{Choice, MultipleLoss};
 use rotavg::io::nearest;
 use rotavg::report::CertifyReport;
-use rotavg::report::rig_two_graphs::{certify_two_graphs, needs_rig_form};
+use rotavg::report::rig_two_graphs::{certify_two_graphs, needs_rig_form, two_graph_rig};
 use std::path::Path;
 
 /// Arguments of `rotavg certify`.
@@ -62,7 +62,9 @@ pub struct Args {
     /// A two-sensor rig: INPUT is the reference sensor's view graph and FILE the other
     /// sensor's; the estimate (as `rotavg rig --output` writes it) holds the frames and
     /// `"sensor_from_rig": S`. The joint cost is certified, the estimate unchanged.
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["gravity", "hand", "camera"])]
+    /// With `--gravity`: the priors on the frames, keyed by the reference graph's nodes, the
+    /// estimate's `S` held (paper-notes/gravity.md [G14]).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["hand", "camera"])]
     pub left: Option<String>,
     /// A rig of any number of sensors: INPUT is a rig file (the JSON rig format or a COLMAP
     /// database with a rig configuration, as `rotavg rig FILE` reads it) and the estimate the
@@ -191,9 +193,10 @@ fn certify_rig(args: &Args, left_path: &str) -> Result<Outcome> {
         .into_rotations()?;
     let s = rotavg::io::json::read_sensor_from_rig(&args.estimate, &options)?;
     let settings = args.graph.certify_settings(&args.common, &args.plot);
-    if needs_rig_form(&right, &left) {
+    if needs_rig_form(&right, &left) || args.gravity.gravity.is_some() {
         let input = format!("{right_path} and {left_path}");
-        let report = certify_two_graphs(input, (&right, &left), rotations, s, &settings)?;
+        let rig = two_graph_rig(&right, &left, None, args.gravity.read(&right)?)?;
+        let report = certify_two_graphs(input, rig, rotations, s, &settings)?;
         return args.common.finish(&report, report.verdict());
     }
     let report = rotavg::report::RigReport::certify(

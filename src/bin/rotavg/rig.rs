@@ -24,8 +24,7 @@ pub struct Args {
     pub right: String,
     /// The other sensor's view graph over the same frames (node ids): `L_ij ~ S R_ij S^T`,
     /// `S` its `sensor_from_rig` rotation. Graphs with information matrices are the rig of two
-    /// sensors they describe, reported as a rig file. (`--gravity` takes a rig file's images.)
-    #[arg(conflicts_with = "gravity")]
+    /// sensors they describe, reported as a rig file; so are two graphs with `--gravity`.
     pub left: Option<String>,
     #[command(flatten)]
     pub graph: GraphArgs,
@@ -46,9 +45,10 @@ pub struct Args {
     /// `--sensor-from-rig`: least squares.
     #[arg(long, value_name = "auto|chordal|cauchy", default_value = "auto", value_parser = ["auto", "chordal", "cauchy"])]
     pub loss: String,
-    /// Gravity priors on a rig file's images, keyed by image id or name, held or soft as for
-    /// `multiple`; sensors to estimate are calibrated without them first, then held
-    /// (paper-notes/gravity.md [G14]).
+    /// Gravity priors on a rig file's images, keyed by image id or name, or on two view
+    /// graphs' frames, keyed as `multiple` keys the reference graph's nodes; held or soft as
+    /// for `multiple`; sensors to estimate are calibrated without them first, then held
+    /// (paper-notes/gravity.md [G14]; scalar weights only).
     #[command(flatten)]
     pub gravity: GravityArgs,
     /// The Cauchy loss's scale and the inlier threshold, degrees.
@@ -72,8 +72,9 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let held = (args.sensor_from_rig.as_ref())
         .map(|file| rotavg::io::json::read_sensor_from_rig(file, &options))
         .transpose()?;
-    if needs_rig_form(&right, &left) {
-        return run_rig(args, input, two_graph_rig(&right, &left, held)?);
+    if needs_rig_form(&right, &left) || args.gravity.gravity.is_some() {
+        let rig = two_graph_rig(&right, &left, held, args.gravity.read(&right)?)?;
+        return run_rig(args, input, rig);
     }
     crate::progress::say(format_args!(
         "rig of {} frames, {} + {} edges{}: solving and certifying...",

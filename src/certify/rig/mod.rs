@@ -76,6 +76,13 @@ pub(crate) fn certify_rig_without_images_bound(
     certify_rig_with(problem, (frames, sensors), settings, false)
 }
 
+/// Whether `problem` has the simultaneous problem's shape (`[H22]`: two sensors, one or both
+/// estimated, no edge between them), where the within-frame couplings `[H21]` have no edge
+/// between sensors to work with.
+pub(crate) fn is_two_graphs(problem: &RigProblem) -> bool {
+    two_graphs::not_two_graphs(problem).is_none()
+}
+
 fn certify_rig_with(
     problem: &RigProblem,
     (frames, sensors): (&[Rotation], &[Rotation]),

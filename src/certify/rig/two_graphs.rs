@@ -89,7 +89,7 @@ impl<'a> Rung<RigState<'a>> for TwoGraphsRung {
 }
 
 /// Why the rig is not the simultaneous problem's shape, or `None` when it is.
-fn not_two_graphs(p: &RigProblem) -> Option<String> {
+pub(crate) fn not_two_graphs(p: &RigProblem) -> Option<String> {
     let images = p.images();
     if p.sensors().len() != 2 {
         return Some(format!("{} sensors, not 2", p.sensors().len()));
