@@ -40,6 +40,10 @@ pub enum Proof {
     /// The decoupled bound of the simultaneous problem `[H16]`: the two view graphs' certified
     /// minima, summed.
     SimultaneousDecoupled,
+    /// The simultaneous problem's `conv(SO(3))` surrogate `[H27]`: each anisotropic side's
+    /// edges penalised against reflections at the estimate (`[A11]`), the trace-coupled dual
+    /// certificate of the surrogate pair less the verified offsets.
+    SimultaneousConv,
     /// A rig with every sensor held `[H19]`: the frames' view graph's certified bound (every
     /// rung of [`crate::certify::certify_multiple`]) plus its within-frame edges' cost.
     RigFrames,
@@ -100,6 +104,7 @@ impl Proof {
             | Proof::ConvDual
             | Proof::SimultaneousDual
             | Proof::SimultaneousLowRank
+            | Proof::SimultaneousConv
             | Proof::GravityDual => 2,
             Proof::GravitySurrogate => 3,
             Proof::RigFrames | Proof::RigCoupled => 4,
@@ -125,6 +130,7 @@ impl Proof {
             | Proof::ConvDual
             | Proof::SimultaneousDual
             | Proof::SimultaneousLowRank
+            | Proof::SimultaneousConv
             | Proof::GravityDual
             | Proof::GravityRelaxed
             | Proof::GravitySurrogate
@@ -157,6 +163,9 @@ impl fmt::Display for Proof {
                 "trace-coupled dual certificate at the estimate, low-rank couplings, sparse [H25]"
             }
             Proof::SimultaneousDecoupled => "the two view graphs' bounds, decoupled [H16]",
+            Proof::SimultaneousConv => {
+                "trace-coupled dual certificate of the conv(SO(3)) surrogate [H27]"
+            }
             Proof::RigFrames => "the frames' view graph, every sensor held [H19]",
             Proof::RigImages => "the images' view graph, the rig's constraints dropped [H19]",
             Proof::RigCoupled => "the images' view graph with within-frame couplings [H21]",

@@ -18,7 +18,7 @@ mod rounding;
 mod search;
 mod state;
 mod traces;
-mod two_graphs;
+pub(crate) mod two_graphs;
 mod wide;
 mod world;
 

@@ -109,7 +109,7 @@ pub(crate) fn not_two_graphs(p: &RigProblem) -> Option<String> {
 /// The two sensors' view graphs over the frames (sensor 0's: the right graph), each edge with
 /// its information matrix when the rig's carry them (`[H24]`: the simultaneous relaxation and
 /// its dual bound hold for any connection Laplacians `Q`, `[H22]` "Information").
-fn two_graphs(p: &RigProblem) -> Result<(MultipleProblem, MultipleProblem)> {
+pub(crate) fn two_graphs(p: &RigProblem) -> Result<(MultipleProblem, MultipleProblem)> {
     let images = p.images();
     let mut graphs = [Vec::new(), Vec::new()];
     let mut information = [Vec::new(), Vec::new()];

@@ -62,6 +62,12 @@ impl<'a> Rung<SimState<'a>> for DualRung {
             );
             return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
         }
+        if cx.conv_ran {
+            let reason = "the conv(SO(3)) surrogate's dual certificate ran [H27] (the same \
+                          certificate, of a tighter problem)"
+                .into();
+            return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
+        }
         let n = cx.right.num_rotations();
         if n > DENSE_MAX_NODES {
             let reason = format!(

@@ -8,6 +8,7 @@
 //! (`decoupled.rs`, `[H16]`): the two graphs' own certified minima, summed, at any size.
 
 pub mod bound;
+mod conv;
 mod decoupled;
 pub mod dual;
 mod grounded;
@@ -27,6 +28,7 @@ use crate::certify::budget::Deadline;
 use crate::certify::certification::{Certification, Improvement, ImprovementSource};
 use crate::certify::ladder::{Rungs, climb};
 use crate::certify::proof::{BoundMethod, Proof};
+use crate::certify::rung::Handed;
 use crate::certify::settings::CertifySettings;
 use crate::certify::tally::Tally;
 use crate::error::{Error, Result};
@@ -52,6 +54,29 @@ pub fn certify_simultaneous(
     s: &Rotation,
     settings: &CertifySettings,
 ) -> Result<Certification<JointRotations>> {
+    certify_with(right, left, (rotations, s), settings, true)
+}
+
+/// [`certify_simultaneous`]'s certificate with the dual certificate at the estimate alone (its
+/// low-rank and dense rungs): the surrogate pair's inside the `conv(SO(3))` rung (`[H27]`).
+pub(crate) fn dual_only_certificate(
+    right: &MultipleProblem,
+    left: &MultipleProblem,
+    rotations: &[Rotation],
+    s: &Rotation,
+    settings: &CertifySettings,
+) -> Result<crate::certify::certificate::Certificate> {
+    Ok(certify_with(right, left, (rotations, s), settings, false)?.certificate)
+}
+
+/// The certification of `(rotations, s)`: every rung (`all`), or the dual certificate's.
+fn certify_with(
+    right: &MultipleProblem,
+    left: &MultipleProblem,
+    (rotations, s): (&[Rotation], &Rotation),
+    settings: &CertifySettings,
+    all: bool,
+) -> Result<Certification<JointRotations>> {
     let deadline = Deadline::start(&settings.budget);
     settings.validate()?;
     let n = right.num_rotations();
@@ -76,15 +101,22 @@ pub fn certify_simultaneous(
         tally: Tally::new(settings, deadline, cost, min_weight),
         improvement: None,
         sdp: None,
+        conv_ran: false,
     };
-    let rungs: Rungs<'_, SimState<'_>> = vec![
-        Box::new(low_rank_rung::LowRankRung::default()),
-        Box::new(dual::DualRung::default()),
-        Box::new(sdp::SdpRung::default()),
-        Box::new(decoupled::DecoupledRung::new(
+    let mut rungs: Rungs<'_, SimState<'_>> = vec![Box::new(low_rank_rung::LowRankRung::default())];
+    if all {
+        rungs.push(Box::new(conv::ConvRung(Handed::new((
+            dual_only_certificate,
+            predict_simultaneous,
+        )))));
+    }
+    rungs.push(Box::new(dual::DualRung::default()));
+    if all {
+        rungs.push(Box::new(sdp::SdpRung::default()));
+        rungs.push(Box::new(decoupled::DecoupledRung::new(
             crate::certify::multiple::graph_certificate,
-        )),
-    ];
+        )));
+    }
     climb(&mut state, rungs)?;
     let (certificate, mut details) = state.tally.finish(BoundMethod::Sdp, Proof::method);
     details.sdp = state.sdp;

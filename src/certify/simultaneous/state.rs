@@ -19,6 +19,9 @@ pub(crate) struct SimState<'a> {
     pub tally: Tally<'a>,
     pub improvement: Option<JointRotations>,
     pub sdp: Option<SdpSummary>,
+    /// The `conv(SO(3))` surrogate's certificate ran (`[H27]`): the dual certificate of the
+    /// problem itself is then not tried.
+    pub conv_ran: bool,
 }
 
 impl SimState<'_> {
