@@ -7,9 +7,10 @@
 //! `C_i = S R_i`), so `[A11]` Statement 1 bounds it edge by edge; the bound holds whatever the
 //! multipliers and the surrogate's certificate prove.
 
+use super::dual::DENSE_MAX_NODES;
 use super::state::SimState;
 use crate::certify::certificate::Certificate;
-use crate::certify::log::Prediction;
+use crate::certify::log::{Prediction, Refusal};
 use crate::certify::multiple::conv_dual::{predict_search, search_penalties, surrogate};
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Handed, JointCertifier, Plan, Rung};
@@ -48,6 +49,15 @@ impl<'a> Rung<SimState<'a>> for ConvRung {
         if self.0.done || scalar || !matches!(mode, CertifyMode::Auto | CertifyMode::Dual) {
             return Ok(Plan::Done);
         }
+        let n = cx.right.num_rotations();
+        if n > DENSE_MAX_NODES {
+            // the low-rank certificate takes scalar weights only: the surrogate pair's is dense
+            let reason = format!(
+                "{n} frames: the surrogate pair's dual certificate is the dense one, for at most \
+                 {DENSE_MAX_NODES}"
+            );
+            return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
+        }
         // two searches, then the dual certificate of the surrogate pair
         let conv = &cx.tally.settings.dual.conv;
         let (r, l) = (
@@ -55,7 +65,7 @@ impl<'a> Rung<SimState<'a>> for ConvRung {
             predict_search(cx.left, conv),
         );
         let edges = cx.right.num_edges().max(cx.left.num_edges());
-        let dual = (self.0.certify.1)(cx.right.num_rotations(), edges);
+        let dual = (self.0.certify.1)(n, edges);
         Ok(Plan::Run(Prediction::new(
             r.seconds + l.seconds + dual.seconds,
             r.bytes.max(l.bytes).max(dual.bytes),
