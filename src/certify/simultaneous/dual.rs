@@ -63,8 +63,8 @@ impl<'a> Rung<SimState<'a>> for DualRung {
             return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
         }
         if cx.conv_ran {
-            let reason = "the conv(SO(3)) surrogate's dual certificate ran [H27] (the same \
-                          certificate, of a tighter problem)"
+            let reason = "the conv(SO(3)) surrogate's dual certificate ran [H27] (its bound is \
+                          kept; on every pair measured it was the higher one)"
                 .into();
             return Ok(Plan::Refuse(Refusal::NotApplicable { reason }, None));
         }
