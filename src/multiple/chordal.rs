@@ -232,7 +232,12 @@ pub(crate) fn linear_solver(
 
 fn max_bfs_level_width(problem: &MultipleProblem) -> usize {
     let adjacency = problem.adjacency();
-    let mut seen = vec![false; problem.num_rotations()];
+    let n = problem.num_rotations();
+    // a hub (a node joined to more than a quarter of the graph, as the world node of soft
+    // gravity priors [G10]) is left out: eliminated last it adds one block row to the factor,
+    // not fill among the others; through it every node would be two levels from node 0
+    let hub = |v: usize| adjacency.neighbours(v).len() * 4 > n;
+    let mut seen = vec![false; n];
     let mut level = vec![0usize];
     seen[0] = true;
     let mut widest = 1;
@@ -240,7 +245,7 @@ fn max_bfs_level_width(problem: &MultipleProblem) -> usize {
         let mut next = Vec::new();
         for &u in &level {
             for &(v, _) in adjacency.neighbours(u) {
-                if !seen[v] {
+                if !seen[v] && !hub(v) {
                     seen[v] = true;
                     next.push(v);
                 }
@@ -757,6 +762,30 @@ mod tests {
         }
         .generate();
         agree(&p);
+    }
+
+    /// A hub (a node joined to every other, as the world node of soft gravity priors [G10])
+    /// does not make a chain look like an expander to the BFS pre-filter [M6]: the chain with
+    /// a hub keeps the chain's solver (block-Jacobi PCG before the hub was left out).
+    #[test]
+    fn a_hub_keeps_the_chains_solver() {
+        let (chain, _) = SyntheticChain {
+            num_rotations: 3000,
+            ..Default::default()
+        }
+        .generate();
+        let n = chain.num_rotations();
+        let mut edges = chain.edges().to_vec();
+        edges.extend((0..n).map(|i| crate::multiple::Edge {
+            i,
+            j: n,
+            rotation: Rotation::identity(),
+            weight: 1.0,
+        }));
+        let hub = MultipleProblem::new(n + 1, edges).unwrap();
+        let kind = |p: &MultipleProblem| choose_solver(p).unwrap().kind;
+        assert_eq!(kind(&hub), kind(&chain));
+        assert_ne!(kind(&hub), SolverKind::Jacobi);
     }
 
     #[test]

@@ -28,6 +28,7 @@
 //! ```
 
 mod soft;
+mod two_stage;
 
 pub use soft::SURROGATE_STIFFNESS;
 
@@ -657,7 +658,7 @@ pub fn solve_gravity(
         let s = solve_step(problem, graph, init, &left)?;
         (s.rotations, s.report.iterations, s.report.termination)
     } else {
-        reweighted(problem, init, &left)?
+        reweighted(problem, init, &free.aside, &left)?
     };
     let mut rotations = rotations;
     fix_gravity_gauge(&mut rotations);
@@ -699,30 +700,45 @@ struct Start {
     rotations: Vec<Rotation>,
     iterations: usize,
     cost: f64,
+    /// The edges the reweighted solve of a robust loss sets aside (the first stage's,
+    /// [`two_stage`]; none outside it).
+    aside: Vec<bool>,
 }
 
 /// [`solve_gravity`]'s start: the unconstrained solve aligned to the priors and projected onto
-/// them; with soft priors and a given estimate (a warm start, as the rig's alternation passes
+/// them; for a robust loss on a graph with information, the first stage of [`two_stage`] (its
+/// estimate satisfies the priors); with soft priors and a given estimate (a warm start, as the rig's alternation passes
 /// give, `[G15]`), that estimate itself: the free solve and the projection would carry it out
 /// of the soft problem's minimum and the soft solve back (1.4 s per pass at 10^4 frames).
 fn start_point(problem: &GravityProblem, settings: &MultipleSettings) -> Result<Start> {
     let graph = &problem.problem;
+    let none_aside = || vec![false; graph.num_edges()];
+    // the start's cost as the solution's is reported: the file's, with the priors' terms
+    let cost = |file: &[Rotation]| graph.cost(file) + problem.prior_cost(file);
     if let (Initialisation::Given(_), Some(_)) = (&settings.init, problem.priors.weight()) {
         let rotations = initialise(graph, &settings.init)?;
         return Ok(Start {
-            cost: graph.cost(&rotations) + problem.prior_cost(&rotations),
+            cost: cost(&rotations),
             rotations: problem.to_standard(&rotations),
             iterations: 0,
+            aside: none_aside(),
+        });
+    }
+    if let Some(first) = two_stage::first_stage(problem, settings)? {
+        return Ok(Start {
+            cost: cost(&first.rotations),
+            rotations: problem.to_standard(&first.rotations),
+            iterations: first.iterations,
+            aside: first.aside,
         });
     }
     let free = solve_multiple(graph, settings)?;
     let rotations = problem.aligned_and_projected(&problem.to_standard(&free.rotations));
-    // the start's cost as the solution's is reported: the file's, with the priors' terms
-    let file = problem.out_of_standard(&rotations);
     Ok(Start {
-        cost: graph.cost(&file) + problem.prior_cost(&file),
+        cost: cost(&problem.out_of_standard(&rotations)),
         rotations,
         iterations: free.report.iterations,
+        aside: none_aside(),
     })
 }
 
@@ -764,29 +780,37 @@ fn solve_constrained(
     Ok(sol)
 }
 
+/// The relative IRLS weight of an edge [`reweighted`] sets aside, and the floor of every other
+/// (a weight, not a removal: the graph stays the priors' graph).
+const ASIDE_WEIGHT: f64 = 1e-12;
+
 /// The largest change of the IRLS weights between two passes below which the reweighted
 /// solve of a robust loss with gravity priors (`[G8]`) stops.
 pub const IRLS_WEIGHT_TOLERANCE: f64 = 1e-6;
 
 /// Robust averaging with the priors held (`[G8]`): passes of the constrained chordal solve on
 /// the view graph with each edge's weight (information) multiplied by its relative IRLS weight
-/// at the current estimate ([`relative_weight`] of the residual or Mahalanobis angle), until
+/// at the current estimate ([`relative_weight`] of the residual or Mahalanobis angle; on graphs
+/// with information, the edges `aside` (set aside by the first stage, [`two_stage`]) keep the
+/// floor weight), until
 /// no weight changes by more than [`IRLS_WEIGHT_TOLERANCE`] (at most a tenth of
 /// `settings.max_iterations` passes, each a whole solve; within `settings.max_seconds`).
 /// Returns the rotations (standard convention), the passes and why it stopped.
 fn reweighted(
     problem: &GravityProblem,
     init: Vec<Rotation>,
+    aside: &[bool],
     settings: &MultipleSettings,
 ) -> Result<(Vec<Rotation>, usize, Termination)> {
     let graph = &problem.problem;
     let objective = graph.objective();
     let threshold = inlier_threshold_deg(&objective, settings).unwrap_or(5.0);
     let weights_at = |r: &[Rotation]| -> Vec<f64> {
-        graph
-            .objective_angles(r)
-            .iter()
-            .map(|t| relative_weight(&objective, *t, threshold).max(1e-12))
+        (graph.objective_angles(r).iter().zip(aside))
+            .map(|(t, &out)| match out {
+                true => ASIDE_WEIGHT,
+                false => relative_weight(&objective, *t, threshold).max(ASIDE_WEIGHT),
+            })
             .collect()
     };
     let mut rotations = init;

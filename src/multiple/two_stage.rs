@@ -59,7 +59,7 @@ pub(crate) fn solve_two_stage(
 }
 
 /// The same edges with weight 1 and no information, under the same objective.
-fn unit_weights(problem: &MultipleProblem) -> Result<MultipleProblem> {
+pub(crate) fn unit_weights(problem: &MultipleProblem) -> Result<MultipleProblem> {
     let edges = problem
         .edges()
         .iter()
