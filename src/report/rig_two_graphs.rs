@@ -51,7 +51,7 @@ pub(super) fn same_frames(right: &LoadedGraph, left: &LoadedGraph) -> Result<()>
 /// per node of `right` (`rotavg rig RIGHT LEFT --gravity`, keyed as `multiple` keys `RIGHT`'s
 /// nodes), and the reader's warnings: the priors of the reference sensor's images
 /// (`paper-notes/gravity.md` `[G14]`, "Two view graphs"). Errors: different node ids, what
-/// [`RigProblem::new`] refuses, priors not one per frame or with information matrices.
+/// [`RigProblem::new`] refuses, priors not one per frame.
 pub fn two_graph_rig(
     right: &LoadedGraph,
     left: &LoadedGraph,
@@ -110,7 +110,7 @@ pub fn two_graph_rig(
 /// `rig` ([`two_graph_rig`]'s) with `priors` on its frames and the reader's `warnings`; `rig`
 /// itself without them. By `[G14]` Claim 1 with `S_0 = I`, a frame's prior is its reference
 /// image's; the other sensor's images have none. Errors: not one entry per frame, and what
-/// [`LoadedRig::with_gravity`] refuses (information matrices).
+/// [`LoadedRig::with_gravity`] refuses.
 fn with_frame_gravity(
     rig: LoadedRig,
     gravity: Option<(GravityPriors, Vec<crate::warning::Warning>)>,

@@ -73,9 +73,6 @@ impl RigProblem {
             name: "gravity".into(),
             reason,
         };
-        if self.is_anisotropic() {
-            return Err(super::problem::gravity_with_information());
-        }
         if priors.len() != self.images().len() {
             return Err(invalid(format!(
                 "{} gravity entries for a rig of {} images (one per image)",

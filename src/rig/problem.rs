@@ -146,9 +146,6 @@ impl RigProblem {
     /// # Ok::<(), rotavg::Error>(())
     /// ```
     pub fn with_information(mut self, information: Vec<Information>) -> Result<Self> {
-        if self.gravity.is_some() {
-            return Err(gravity_with_information());
-        }
         let graph = MultipleProblem::new(self.images.len(), self.edges.clone())?
             .with_information(information)?;
         self.edges = graph.edges().to_vec();
@@ -418,16 +415,6 @@ impl RigProblem {
         (0..frames)
             .flat_map(|frame| (0..sensors).map(move |sensor| Image { frame, sensor }))
             .collect()
-    }
-}
-
-/// Gravity priors and information matrices together are refused.
-pub(super) fn gravity_with_information() -> Error {
-    Error::InvalidSettings {
-        name: "gravity".into(),
-        reason: "gravity priors on a rig whose edges carry information matrices are not \
-                 supported; give scalar weights (without --information full) to use the priors"
-            .into(),
     }
 }
 
