@@ -315,3 +315,26 @@ def test_two_graphs_with_information_are_a_rig_of_two_sensors(cli, tmp_path):
     checked = rotavg.certify_rig(right, left, ours.estimate, got)
     assert checked.verdict == "certified"
     assert checked.cost == pytest.approx(ours.cost, rel=1e-9)
+
+
+def test_gravity_priors_on_a_rig_with_information():
+    """A rig file whose edges carry information takes gravity priors (refused until
+    2026-12-06): exact priors from the committed truth on every image, held (the sensors to
+    estimate calibrated first: each frame holds its images' combined prior, met to the
+    calibration's error) and soft; certified."""
+    folder = REPO / "examples" / "data" / "rig_information"
+    path = folder / "rig.json"
+    rig = json.loads(path.read_text())
+    truth = json.loads((folder / "truth.json").read_text())
+    frames, sensors = np.array(truth["frames"]), np.array(truth["sensors_from_rig"])
+    g = np.array([sensors[im["sensor"]] @ frames[im["frame"]] @ [0, 0, 1.0]
+                  for im in rig["images"]])
+    held = rotavg.average_rig_file(path, gravity=g)
+    d = held.to_dict()
+    assert held.verdict == "certified", d["certificate"]
+    assert d["verdict"]["problem"]["kind"] == "chordal_l2_rig_gravity"
+    est, s = np.asarray(held.estimate), np.array(d["sensors_from_rig"])
+    for a, im in enumerate(rig["images"]):
+        assert np.linalg.norm(s[im["sensor"]] @ est[im["frame"]] @ [0, 0, 1] - g[a]) < 0.01
+    soft = rotavg.average_rig_file(path, gravity=g, gravity_weight=1000.0)
+    assert soft.verdict == "certified"
