@@ -23,6 +23,7 @@
 //! | `gravity_convention` | `--gravity`: the priors fit the relative rotations far better in another axis convention (named) | |
 //! | `gravity_inconsistent` | `--gravity`: the priors disagree with the relative rotations by more than 5 deg in median | |
 //! | `gravity_points_up` | `--gravity`: most priors point up the image (`-y` in OpenCV / COLMAP axes) | |
+//! | `gravity_imprecise` | `--gravity` held on a graph with information: the priors disagree with the edges by more than 3 of their standard deviations in median | |
 //! | `gravity_unmatched` | `--gravity`: entries whose key is no node of the graph (not used) | entries |
 //! | `gravity_scales_unused` | `--gravity` without `--gravity-weight`: relative weights given to held priors (not used) | priors |
 

@@ -385,6 +385,13 @@ pub struct GravityCheck {
     /// Fraction of images whose `g_i` points up the image (`-y` in OpenCV / COLMAP camera
     /// axes, x right, y down, z forward): above one half, the vectors are probably up vectors.
     pub pointing_up_fraction: f64,
+    /// On a graph with information matrices, the median over the edges with both priors of
+    /// the smallest Mahalanobis norm `sqrt(e^T H e)` of a residual `e` that turns `g_i` onto
+    /// `R_ij^T g_j` (the priors' disagreement in units of the edge's standard deviation, the
+    /// heading left free): about 1.2 (`chi` with 2 degrees of freedom) for exact priors, far
+    /// above where the priors are much less precise than the edges (`[G6]`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub information_sigma: Option<f64>,
 }
 
 /// The axis conventions [`GravityProblem::check_conventions`] tries, with what each means.
@@ -574,8 +581,40 @@ impl GravityProblem {
             p90_deg: p90,
             better_convention: better,
             pointing_up_fraction: up as f64 / self.priors.num_known() as f64,
+            information_sigma: information_disagreement(&self.problem, &given),
         })
     }
+}
+
+/// [`GravityCheck::information_sigma`]: per edge with both priors and information `H`, with
+/// `d` the turn taking `g_i` onto `R_ij^T g_j` (axis `g_i x R_ij^T g_j`, camera `i`'s frame, as
+/// the residual of `R_j R_i^T = R_ij exp([e]x)`) and `a = g_i` (the heading, not observed):
+/// `min_t (d + t a)^T H (d + t a) = d^T H d - (a^T H d)^2 / a^T H a`; the median of its root.
+fn information_disagreement(
+    problem: &MultipleProblem,
+    dirs: &[Option<Vector3<f64>>],
+) -> Option<f64> {
+    let info = problem.information()?;
+    let mut sigmas: Vec<f64> = (problem.edges().iter().zip(info))
+        .filter_map(|(e, h)| {
+            let (a, gj) = (dirs[e.i]?, e.rotation.inverse() * dirs[e.j]?);
+            let axis = a.cross(&gj);
+            let d = match axis.norm() {
+                0.0 => Vector3::zeros(),
+                n => axis * (angle_between(&a, &gj) / n),
+            };
+            let h = h.matrix();
+            let (hd, aha) = (h * d, a.dot(&(h * a)));
+            let yaw = if aha > 0.0 {
+                a.dot(&hd).powi(2) / aha
+            } else {
+                0.0
+            };
+            Some((d.dot(&hd) - yaw).max(0.0).sqrt())
+        })
+        .collect();
+    sigmas.sort_by(f64::total_cmp);
+    sigmas.get(sigmas.len() / 2).copied()
 }
 
 /// The angle between two vectors, accurate near 0 (`atan2(|a x b|, a . b)`; `acos` of the
@@ -707,9 +746,10 @@ struct Start {
 
 /// [`solve_gravity`]'s start: the unconstrained solve aligned to the priors and projected onto
 /// them; for a robust loss on a graph with information, the first stage of [`two_stage`] (its
-/// estimate satisfies the priors); with soft priors and a given estimate (a warm start, as the rig's alternation passes
-/// give, `[G15]`), that estimate itself: the free solve and the projection would carry it out
-/// of the soft problem's minimum and the soft solve back (1.4 s per pass at 10^4 frames).
+/// estimate satisfies the priors); with soft priors and a given estimate (a warm start, as the
+/// rig's alternation passes give, `[G15]`), that estimate itself: the free solve and the
+/// projection would carry it out of the soft problem's minimum and the soft solve back (1.4 s
+/// per pass at 10^4 frames).
 fn start_point(problem: &GravityProblem, settings: &MultipleSettings) -> Result<Start> {
     let graph = &problem.problem;
     let none_aside = || vec![false; graph.num_edges()];
@@ -792,9 +832,8 @@ pub const IRLS_WEIGHT_TOLERANCE: f64 = 1e-6;
 /// the view graph with each edge's weight (information) multiplied by its relative IRLS weight
 /// at the current estimate ([`relative_weight`] of the residual or Mahalanobis angle; on graphs
 /// with information, the edges `aside` (set aside by the first stage, [`two_stage`]) keep the
-/// floor weight), until
-/// no weight changes by more than [`IRLS_WEIGHT_TOLERANCE`] (at most a tenth of
-/// `settings.max_iterations` passes, each a whole solve; within `settings.max_seconds`).
+/// floor weight), until no weight changes by more than [`IRLS_WEIGHT_TOLERANCE`] (at most a
+/// tenth of `settings.max_iterations` passes, each a whole solve; within `settings.max_seconds`).
 /// Returns the rotations (standard convention), the passes and why it stopped.
 fn reweighted(
     problem: &GravityProblem,

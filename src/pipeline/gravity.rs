@@ -157,6 +157,11 @@ impl ViewGraphProblem for GravityProblem {
     }
 }
 
+/// The median disagreement of held priors with the edges' information, in standard deviations
+/// ([`crate::multiple::gravity::GravityCheck::information_sigma`]), above which
+/// `gravity_imprecise` warns: exact priors give about 1.2 (`chi` with 2 degrees of freedom).
+pub const IMPRECISE_SIGMA: f64 = 3.0;
+
 impl GravityDetails {
     /// The priors of `problem` and their check (`[G6]`).
     pub fn of(problem: &GravityProblem) -> Self {
@@ -179,12 +184,27 @@ impl GravityDetails {
     /// What the priors' check says that a user must hear (`[G6]`): a convention that fits far
     /// better (`gravity_convention`), priors that disagree with the relative rotations by more
     /// than 5 degrees in median (`gravity_inconsistent`), most priors pointing up the image
-    /// (`gravity_points_up`).
+    /// (`gravity_points_up`), held priors far less precise than the edges' information
+    /// (`gravity_imprecise`).
     pub fn warnings(&self) -> Vec<Warning> {
         let Some(c) = &self.check else {
             return Vec::new();
         };
         let mut out = Vec::new();
+        if let (Some(sigma), None) = (c.information_sigma, self.weight)
+            && sigma > IMPRECISE_SIGMA
+        {
+            out.push(Warning::new(
+                "gravity_imprecise",
+                format!(
+                    "held gravity priors disagree with the relative rotations by a median \
+                     {sigma:.1} standard deviations of the edges' information (about 1.2 for \
+                     exact priors): held, they pull the estimate against far more confident \
+                     edges; give their weight with --gravity-weight (soft priors) unless they \
+                     are exact"
+                ),
+            ));
+        }
         let disagree = format!(
             "the gravity priors disagree with the relative rotations: R_ij g_i and g_j are a \
              median {:.2} degrees apart (90th percentile {:.2}) over {} edges",

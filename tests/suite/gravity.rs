@@ -11,7 +11,7 @@ use rotavg::multiple::accuracy::align_and_compare;
 use rotavg::multiple::gravity::{GravityPriors, GravityProblem, solve_gravity};
 use rotavg::multiple::synthetic::{SyntheticGraph, SyntheticGravity};
 use rotavg::multiple::{Edge, MultipleProblem, MultipleSettings, solve_multiple};
-use rotavg::pipeline::{AverageSettings, average_with_gravity};
+use rotavg::pipeline::{AverageSettings, GravityDetails, average_with_gravity};
 use rotavg::so3::{exp, perturb_gaussian, random_rotation};
 use rotavg::{Rotation, Verdict};
 
@@ -560,4 +560,48 @@ fn the_start_cost_counts_the_priors() {
             }
         }
     }
+}
+
+/// `[G6]`'s check with information: the priors' disagreement with each edge in its standard
+/// deviations (the heading left free) is `chi` with 2 degrees of freedom for exact priors on a
+/// graph whose noise is drawn from its information (median `sqrt(2 ln 2) = 1.177`); priors of 2
+/// degrees against edges of 0.5 degrees are far above it and held ones warn
+/// (`gravity_imprecise`), soft ones do not; scalar weights carry no standard deviation (none).
+#[test]
+fn held_priors_less_precise_than_the_information_warn() {
+    use rotavg::multiple::synthetic::SyntheticAnisotropic;
+    let spec = SyntheticAnisotropic {
+        seed: 4,
+        ..SyntheticAnisotropic::two_view_like(300, 1200, 0.0)
+    };
+    let (graph, truth) = spec.generate();
+    let codes = |p: &GravityProblem| -> Vec<String> {
+        (GravityDetails::of(p).warnings().into_iter())
+            .map(|w| w.code.to_string())
+            .collect()
+    };
+    let exact = GravityProblem::from_truth(graph.clone(), &truth).unwrap();
+    let sigma = exact
+        .check_conventions()
+        .unwrap()
+        .information_sigma
+        .unwrap();
+    assert!((sigma - (2.0 * 2f64.ln()).sqrt()).abs() < 0.1, "{sigma}");
+    assert!(!codes(&exact).contains(&"gravity_imprecise".to_string()));
+    let noisy = SyntheticGravity {
+        noise_deg: 2.0,
+        missing_fraction: 0.0,
+        seed: 5,
+    }
+    .priors(&truth)
+    .unwrap();
+    let held = GravityProblem::new(graph.clone(), noisy.clone()).unwrap();
+    let sigma = held.check_conventions().unwrap().information_sigma.unwrap();
+    assert!(sigma > 3.0, "{sigma}");
+    assert!(codes(&held).contains(&"gravity_imprecise".to_string()));
+    let soft = GravityProblem::new(graph, noisy.with_weight(1.0).unwrap()).unwrap();
+    assert!(!codes(&soft).contains(&"gravity_imprecise".to_string()));
+    let (scalar, truth) = SyntheticGraph::default().generate();
+    let scalar = GravityProblem::from_truth(scalar, &truth).unwrap();
+    assert_eq!(scalar.check_conventions().unwrap().information_sigma, None);
 }
