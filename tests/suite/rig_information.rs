@@ -258,6 +258,40 @@ fn scaled_information_keeps_the_verdict() {
     }
 }
 
+/// Held gravity priors on a rig with information, several per frame (so the frames' combined
+/// directions carry a rounding charge, `[G14]` "Rounding with information"): scaling all the
+/// information by `1e-6` or `1e6` keeps the verdict and scales the bound.
+#[test]
+fn scaled_information_keeps_the_verdict_with_gravity() {
+    use rotavg::multiple::gravity::GravityPriors;
+    let scene = RigScene {
+        anisotropy: 9.0,
+        ..RigScene::sized(40, 2, 0.01, true, 8)
+    };
+    let (p, truth) = scene.generate();
+    let g = GravityPriors::new(truth.gravity(&p, 0.2f64.to_radians(), 0, 3)).unwrap();
+    let base = average_rig(
+        &p.clone().with_gravity(g.clone()).unwrap(),
+        &Default::default(),
+    );
+    let c0 = base.unwrap().certificate.unwrap();
+    assert!(c0.explanation.contains("G14"), "{}", c0.explanation);
+    for scale in [1e-6, 1e6] {
+        let info = (p.information().unwrap().iter())
+            .map(|h| Information::new(h.matrix() * scale).unwrap())
+            .collect();
+        let q = p.scalar().with_information(info).unwrap();
+        let out = average_rig(&q.with_gravity(g.clone()).unwrap(), &Default::default());
+        let c = out.unwrap().certificate.unwrap();
+        assert_eq!(c.verdict, c0.verdict, "scale {scale}");
+        let (lb, lb0) = (c.lower_bound.unwrap(), c0.lower_bound.unwrap());
+        assert!(
+            (lb / scale - lb0).abs() < 1e-6 * lb0,
+            "scale {scale}: {lb} against {lb0}"
+        );
+    }
+}
+
 /// Outliers with their information kept (confident wrong pairs): the default turns robust, the
 /// certified problem is the inlier rig with its information, few planted outliers are inliers,
 /// and the sensors are closer to the truth than least squares'.

@@ -89,10 +89,17 @@ fn found(
 
 /// What `[G14]` charges for the frames' priors as computed: the soft combination's rounding, or
 /// for held directions turned by at most `delta` from the exact ones, the change of the
-/// minimum `6 delta sqrt(W J) + 8 delta^2 W` (`W` the edges' weight, `J` the estimate's cost).
+/// minimum: `6 delta sqrt(W J) + 8 delta^2 W` (`W` the edges' weight, `J` the estimate's cost);
+/// with information, whose edge weights are 1 and whose `M` may be indefinite, the Lipschitz
+/// bound `20 delta sum tr(H)` (`[G14]` "Information": `8 delta ||M||_*` per edge).
 fn combination_charge(fg: &FrameGravity, cx: &RigState<'_>) -> f64 {
-    let w = cx.total_weight();
     let delta = fg.held_angle;
-    let held = 6.0 * delta * (w * cx.tally.cost.max(0.0)).sqrt() + 8.0 * delta * delta * w;
+    let held = match cx.problem.information() {
+        Some(info) => 20.0 * delta * info.iter().map(|h| h.matrix().trace()).sum::<f64>(),
+        None => {
+            let w = cx.total_weight();
+            6.0 * delta * (w * cx.tally.cost.max(0.0)).sqrt() + 8.0 * delta * delta * w
+        }
+    };
     (fg.soft_charge + held) * (1.0 + 1e-6)
 }
