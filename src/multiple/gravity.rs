@@ -38,7 +38,9 @@ use super::problem::MultipleProblem;
 use super::robust::{
     edge_residuals, inlier_threshold_deg, objective_cost_gradient, relative_weight,
 };
-use super::solve::{Initialisation, MultipleSettings, MultipleSolution, solve_multiple};
+use super::solve::{
+    IRLS_DECREASE_WINDOW, Initialisation, MultipleSettings, MultipleSolution, solve_multiple,
+};
 use crate::error::{Error, Result};
 use crate::objective::Loss;
 use crate::so3::Rotation;
@@ -501,6 +503,13 @@ impl GravityProblem {
     /// problem's gauge) that best aligns `R_i^T g_i` with `e_3` for an unconstrained estimate
     /// (defined up to `R_i -> R_i G`), then each constrained `R_i` projected onto its prior:
     /// the nearest `F_i Rz(theta)` (`[G5]`).
+    /// The robust objective's cost at `rotations` (standard convention): the view graph's
+    /// cost with the soft priors' terms (of the file convention's rotations).
+    fn robust_cost(&self, rotations: &[Rotation]) -> f64 {
+        let file = self.out_of_standard(rotations);
+        self.problem.cost(&file) + self.prior_cost(&file)
+    }
+
     pub(crate) fn aligned_and_projected(&self, rotations: &[Rotation]) -> Vec<Rotation> {
         let mean: Vector3<f64> = rotations
             .iter()
@@ -832,8 +841,9 @@ pub const IRLS_WEIGHT_TOLERANCE: f64 = 1e-6;
 /// the view graph with each edge's weight (information) multiplied by its relative IRLS weight
 /// at the current estimate ([`relative_weight`] of the residual or Mahalanobis angle; on graphs
 /// with information, the edges `aside` (set aside by the first stage, [`two_stage`]) keep the
-/// floor weight), until no weight changes by more than [`IRLS_WEIGHT_TOLERANCE`] (at most a
-/// tenth of `settings.max_iterations` passes, each a whole solve; within `settings.max_seconds`).
+/// floor weight), until no weight changes by more than [`IRLS_WEIGHT_TOLERANCE`] or the
+/// robust cost settles ([`settled`]; at most a tenth of `settings.max_iterations` passes, each
+/// a whole solve; within `settings.max_seconds`).
 /// Returns the rotations (standard convention), the passes and why it stopped.
 fn reweighted(
     problem: &GravityProblem,
@@ -856,6 +866,7 @@ fn reweighted(
     let mut weights = weights_at(&rotations);
     let (begun, deadline) = (std::time::Instant::now(), settings.deadline());
     let mut change = f64::NAN;
+    let mut recent = std::collections::VecDeque::with_capacity(IRLS_DECREASE_WINDOW + 1);
     let max_passes = (settings.max_iterations / 10).max(1);
     for pass in 1..=max_passes {
         let measure = (change, IRLS_WEIGHT_TOLERANCE);
@@ -866,6 +877,9 @@ fn reweighted(
         let reweighted = graph.reweighted(&weights)?;
         let left = settings.remaining(begun);
         rotations = solve_step(problem, &reweighted, rotations, &left)?.rotations;
+        if let Some(t) = settled(&mut recent, problem.robust_cost(&rotations), settings) {
+            return Ok((rotations, pass, t));
+        }
         let next = weights_at(&rotations);
         change = next
             .iter()
@@ -888,4 +902,51 @@ fn reweighted(
         threshold: IRLS_WEIGHT_TOLERANCE,
     };
     Ok((rotations, max_passes, t))
+}
+
+/// The test of [`MultipleSettings::irls_decrease_tolerance`] on the passes of [`reweighted`]:
+/// converged when the robust cost `cost` of the last pass decreased by at most that fraction of
+/// itself over the last [`IRLS_DECREASE_WINDOW`] passes (`recent`, updated here). The default
+/// `1e-10` leaves the weights' test to decide; the first stage of [`two_stage`], a start, asks
+/// for [`L1_START_DECREASE_TOLERANCE`](super::solve::L1_START_DECREASE_TOLERANCE).
+fn settled(
+    recent: &mut std::collections::VecDeque<f64>,
+    cost: f64,
+    settings: &MultipleSettings,
+) -> Option<Termination> {
+    recent.push_back(cost);
+    if recent.len() <= IRLS_DECREASE_WINDOW {
+        return None;
+    }
+    let oldest = recent.pop_front().unwrap_or(cost);
+    let decrease = (oldest - cost) / cost.abs().max(f64::MIN_POSITIVE);
+    (decrease <= settings.irls_decrease_tolerance).then(|| Termination::Converged {
+        measure: format!("relative cost decrease over the last {IRLS_DECREASE_WINDOW} passes"),
+        value: decrease,
+        threshold: settings.irls_decrease_tolerance,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::VecDeque;
+
+    #[test]
+    fn passes_settle_on_the_cost_decrease_over_the_window() {
+        let settings = MultipleSettings {
+            irls_decrease_tolerance: 1e-4,
+            ..Default::default()
+        };
+        // falling by 1e-3 per pass: 1e-2 over the window, never within 1e-4
+        let mut recent = VecDeque::new();
+        for k in 0..30 {
+            let cost = 1.0 - 1e-3 * k as f64;
+            assert!(settled(&mut recent, cost, &settings).is_none(), "pass {k}");
+        }
+        // flat: settled as soon as the window holds IRLS_DECREASE_WINDOW passes before this one
+        let mut recent = VecDeque::new();
+        let first = (0..20).position(|_| settled(&mut recent, 2.0, &settings).is_some());
+        assert_eq!(first, Some(IRLS_DECREASE_WINDOW));
+    }
 }
