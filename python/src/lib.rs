@@ -34,6 +34,7 @@ use rotavg::io::input::{
 use rotavg::io::json::Estimate;
 use rotavg::io::names::{LossKind, MultipleLoss};
 use rotavg::multiple::anisotropic::Information;
+use rotavg::multiple::robust_scale::ScaleRule;
 use rotavg::multiple::{Edge, Initialisation, MultipleProblem, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_conjugate, average_multiple, average_single};
 use rotavg::report::{CertifyReport, ConjugateReport, MultipleReport, SingleReport};
@@ -434,9 +435,11 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///         ``["robust"]["inlier_graph"]["certificate"]``). ``result.verdict`` and
 ///         ``to_dict()["verdict"]`` name the problem certified.
 ///     certify: ``"auto"``, ``"dual"``, ``"sdp"``, ``"staircase"`` or ``"none"``.
-///     loss_threshold: Huber threshold / Cauchy scale in degrees (also ``"auto"``'s), and the
+///     loss_threshold: Huber threshold / Cauchy scale in degrees (default 5), and the
 ///         inlier threshold (an edge is an inlier iff its residual is at most this many
-///         degrees).
+///         degrees); given, also ``"auto"``'s Cauchy scale, which is otherwise from the data
+///         (three times the median residual at the L1 solution;
+///         ``to_dict()["pipeline"]["loss_choice"]["scale"]``).
 ///     init: optional ``(n, 3, 3)`` initial estimate (default: spectral initialisation).
 ///     max_memory: the certificate's memory budget per factorisation, bytes (default 4 GiB).
 ///     max_seconds: the run's time budget, seconds (default 600; ``None``: no limit), one
@@ -491,7 +494,7 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     rotavg.Error: bad shapes, NaN, non-rotations, indices out of range, self loops,
 ///         bad weights, unknown names. rotavg.DisconnectedError: a disconnected graph.
 #[pyfunction]
-#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=5.0, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None, rotation_tolerance=1e-5, gravity=None, world_down=None, init_method="spectral", inlier_threshold=None, gravity_weight=None))]
+#[pyo3(name = "average_multiple", signature = (n, i=None, j=None, rel=None, weights=None, loss="auto", certify="auto", *, loss_threshold=None, init=None, max_memory=None, max_seconds=600.0, randomized=true, randomized_seed=None, largest_component=false, ground_truth=None, information=None, rotation_tolerance=1e-5, gravity=None, world_down=None, init_method="spectral", inlier_threshold=None, gravity_weight=None))]
 #[allow(clippy::too_many_arguments)]
 fn average_multiple_py(
     py: Python<'_>,
@@ -502,7 +505,7 @@ fn average_multiple_py(
     weights: Option<&Bound<'_, PyAny>>,
     loss: &str,
     certify: &str,
-    loss_threshold: f64,
+    loss_threshold: Option<f64>,
     init: Option<&Bound<'_, PyAny>>,
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
@@ -542,6 +545,7 @@ fn average_multiple_py(
             "inlier_threshold needs a robust loss (\"l1\", \"huber\", \"cauchy\" or \"auto\"), not \"{loss}\""
         )));
     }
+    let (loss_threshold, robust_scale) = ScaleRule::of(loss_threshold);
     let objective = loss.objective(loss_threshold);
     let mode: CertifyMode = parse_named(certify, "certify")?;
     let init = optional_matrices(init, "init")?.map(|m| m.within(tolerance));
@@ -559,6 +563,7 @@ fn average_multiple_py(
                 // as the command line: --inlier-threshold, else for L1 --loss-threshold
                 inlier_threshold_deg: loss.inlier_threshold_deg(loss_threshold, inlier_threshold),
                 robust_on_outliers: loss.robust_on_outliers(loss_threshold),
+                robust_scale,
                 // one clock for the solve and the certificate, as the command line
                 max_seconds: budget.budget.max_seconds,
                 ..Default::default()

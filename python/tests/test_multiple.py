@@ -121,7 +121,14 @@ def test_robust_losses_report_inliers_and_certify_the_inlier_graph(rng):
     res = rotavg.average_multiple(30, i, j, rel)
     d = res.to_dict()
     assert d["loss"] == "cauchy" and d["pipeline"]["loss_choice"]["diagnosis"]["suspected"] >= 3
-    assert np.array_equal(res.estimate, rotavg.average_multiple(30, i, j, rel, loss="cauchy").estimate)
+    # its Cauchy scale follows the data: three times the median residual at the L1 solution
+    # (0.01 rad of noise per axis: the median inlier angle about 0.88 deg)
+    scale = d["pipeline"]["loss_choice"]["scale"]
+    assert 2.0 < scale["scale_deg"] < 3.2 and scale["scale_deg"] == d["pipeline"]["loss_choice"]["chosen"]["loss"]["scale_deg"]
+    cauchy = rotavg.average_multiple(30, i, j, rel, loss="cauchy", loss_threshold=scale["scale_deg"])
+    assert np.allclose(res.estimate, cauchy.estimate, rtol=0, atol=1e-9)
+    given = rotavg.average_multiple(30, i, j, rel, loss_threshold=5.0).to_dict()["pipeline"]["loss_choice"]
+    assert given["scale"] is None and given["chosen"]["loss"]["scale_deg"] == 5.0
     assert res.certificate is None and res.verdict == "certified"
     assert d["verdict"]["problem"]["kind"] == "chordal_l2_inliers"
     assert d["verdict"]["estimate"] == "inlier_graph"

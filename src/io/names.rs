@@ -224,6 +224,7 @@ impl Choice for Initialisation {
             Initialisation::Spectral => "spectral",
             Initialisation::SpanningTree => "tree",
             Initialisation::Given(_) => "given",
+            Initialisation::L1Start(_) => "l1-start",
         }
     }
     fn help(&self) -> &'static str {
@@ -231,6 +232,7 @@ impl Choice for Initialisation {
             Initialisation::Spectral => "Spectral (connection Laplacian eigenvectors)",
             Initialisation::SpanningTree => "Maximum-weight spanning tree",
             Initialisation::Given(_) => "A given estimate",
+            Initialisation::L1Start(_) => "The L1 start, already solved",
         }
     }
 }

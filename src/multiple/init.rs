@@ -33,7 +33,7 @@ pub fn initialise(problem: &MultipleProblem, init: &Initialisation) -> Result<Ve
     match init {
         Initialisation::SpanningTree => Ok(spanning_tree(problem)),
         Initialisation::Spectral => spectral_with(problem, None),
-        Initialisation::Given(r) => {
+        Initialisation::Given(r) | Initialisation::L1Start(r) => {
             problem.check_estimate(r)?;
             Ok(r.iter().map(nearest_rotation).collect())
         }

@@ -35,6 +35,7 @@ pub mod init;
 pub mod laplacian;
 pub mod problem;
 pub mod robust;
+pub mod robust_scale;
 pub mod solve;
 pub mod stats;
 pub mod synthetic;

@@ -29,6 +29,11 @@ pub enum Initialisation {
     Spectral,
     /// A given estimate (one rotation per node).
     Given(#[serde(with = "crate::so3::serde_rows::rotations")] Vec<Rotation>),
+    /// The problem's L1 start (`[M9]`) already solved, as the rule `auto`'s scale from the
+    /// data solves it ([`data_scale`](crate::multiple::robust_scale::data_scale)): Huber and
+    /// Cauchy use it as their L1 start instead of solving it again; every other solve starts
+    /// from it as from a spectral start (the two stages of `[A14]` and `[G8]` still run).
+    L1Start(#[serde(with = "crate::so3::serde_rows::rotations")] Vec<Rotation>),
 }
 
 /// Settings of [`solve_multiple`]. Build with struct update syntax:
@@ -99,6 +104,11 @@ pub struct MultipleSettings {
     /// objective instead and certify its inlier graph. `None` (default): the problem's
     /// objective as given (least squares only warns). [`solve_multiple`] ignores it.
     pub robust_on_outliers: Option<crate::objective::Objective>,
+    /// How the rule `auto` scales `robust_on_outliers` (`[D20]`): from the data (the default,
+    /// [`data_scale`](crate::multiple::robust_scale::data_scale): three times the median
+    /// residual at the unit-weight L1 solution), or as given (the command line's
+    /// `--loss-threshold`).
+    pub robust_scale: crate::multiple::robust_scale::ScaleRule,
     /// Time limit of the solve, seconds (`None`, the default: no limit; the command line's
     /// `--max-seconds`). Checked before each iteration of the Newton-LM and IRLS loops (the
     /// initialisation, the L1 start and both stages of `[A14]` share the clock); when reached
@@ -120,6 +130,7 @@ impl Default for MultipleSettings {
             l1_epsilon: 1e-6,
             inlier_threshold_deg: None,
             robust_on_outliers: None,
+            robust_scale: crate::multiple::robust_scale::ScaleRule::FromData,
             max_seconds: None,
         }
     }
@@ -412,7 +423,12 @@ fn l1_start(
     let redescending = matches!(objective.loss, Loss::Huber { .. } | Loss::Cauchy { .. });
     // (anisotropic problems without a given start are solved in two stages, [A14]; their
     // first stage, isotropic, gets this start)
-    if !redescending || matches!(settings.init, Initialisation::Given(_)) {
+    if !redescending
+        || matches!(
+            settings.init,
+            Initialisation::Given(_) | Initialisation::L1Start(_)
+        )
+    {
         return Ok(init);
     }
     crate::progress::phase(crate::progress::Phase::Solve, || {

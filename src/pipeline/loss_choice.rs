@@ -8,6 +8,7 @@ use super::inlier_graph::ViewGraphProblem;
 use super::{AverageSettings, MultipleEstimate, certify_solved, validate};
 use crate::error::Result;
 use crate::multiple::robust::{OutlierWarning, judges_residuals, suspected_outliers};
+use crate::multiple::robust_scale::{DataScale, SCALE_PER_MEDIAN, ScaleRule, data_scale};
 use crate::multiple::{Initialisation, MultipleSettings};
 use crate::objective::Objective;
 use crate::termination::Termination;
@@ -34,6 +35,11 @@ pub struct LossChoice {
     /// Time of that least-squares solve, seconds (in the run's `total_seconds`; when the
     /// robust loss was chosen, not in its `solve_seconds`).
     pub least_squares_seconds: f64,
+    /// When the robust loss was chosen with its scale from the data
+    /// ([`ScaleRule::FromData`], `[D20]`): that scale and how it was found (its L1 solve is in
+    /// the run's `total_seconds`, not in its `solve_seconds`). `None`: the scale as given.
+    #[serde(default)]
+    pub scale: Option<DataScale>,
 }
 
 impl LossChoice {
@@ -46,13 +52,27 @@ impl LossChoice {
 impl fmt::Display for LossChoice {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match &self.diagnosis {
-            Some(w) => write!(
-                f,
-                "loss: {} chose {} (the least-squares residuals show outliers: {} of {} edges \
-                 at {:.1} deg or more, median {:.2} deg); its inlier graph's chordal L2 problem \
-                 is the one certified; `--loss chordal` keeps least squares over all edges",
-                self.rule, self.chosen, w.suspected, w.num_edges, w.threshold_deg, w.median_deg
-            ),
+            Some(w) => {
+                write!(
+                    f,
+                    "loss: {} chose {} (the least-squares residuals show outliers: {} of {} \
+                     edges at {:.1} deg or more, median {:.2} deg)",
+                    self.rule, self.chosen, w.suspected, w.num_edges, w.threshold_deg, w.median_deg
+                )?;
+                if let Some(s) = &self.scale {
+                    write!(
+                        f,
+                        "; its scale from the data: {SCALE_PER_MEDIAN} x the median residual \
+                         {:.3} deg at the L1 solution (`--loss-threshold` sets it)",
+                        s.median_deg
+                    )?;
+                }
+                write!(
+                    f,
+                    "; its inlier graph's chordal L2 problem is the one certified; `--loss \
+                     chordal` keeps least squares over all edges"
+                )
+            }
             None => write!(
                 f,
                 "loss: {} kept {} ({})",
@@ -90,6 +110,7 @@ pub(super) fn average_by_residuals<P: ViewGraphProblem>(
         },
         least_squares_cost: least_squares.chordal_cost,
         least_squares_seconds: least_squares.report.seconds,
+        scale: None,
     };
     let Some(mut diagnosis) = suspected_outliers(graph, &least_squares.rotations) else {
         let mut out = certify_solved(problem, least_squares, settings, skip, start)?;
@@ -103,9 +124,24 @@ pub(super) fn average_by_residuals<P: ViewGraphProblem>(
     );
     choice.reason = "the least-squares residuals show outliers".into();
     choice.diagnosis = Some(diagnosis);
-    let robust_problem = problem.with_objective(robust)?;
     let mut robust_settings = settings.remaining(start);
     robust_settings.solve.robust_on_outliers = None;
+    let robust = match settings.solve.robust_scale {
+        ScaleRule::FromData if robust.loss.threshold_deg().is_some() => {
+            let (scale, l1) = data_scale(graph, robust.metric, &robust_settings.solve)?;
+            if !matches!(settings.solve.init, Initialisation::Given(_)) {
+                // the robust solve's L1 start is the one just solved
+                robust_settings = settings.remaining(start);
+                robust_settings.solve.robust_on_outliers = None;
+                robust_settings.solve.init = Initialisation::L1Start(l1);
+            }
+            let scaled = scale.applied_to(robust);
+            choice.scale = Some(scale);
+            scaled
+        }
+        _ => robust,
+    };
+    let robust_problem = problem.with_objective(robust)?;
     let mut out = robust_problem.average_all(&robust_settings)?;
     choice.chosen = robust;
     out.details.loss_choice = Some(choice);

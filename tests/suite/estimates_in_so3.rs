@@ -198,15 +198,9 @@ fn check_multiple(problem: &MultipleProblem, truth: &[Rotation], seed: u64) {
                 Initialisation::SpanningTree,
                 Initialisation::Spectral,
                 Initialisation::Given(given.clone()),
+                Initialisation::L1Start(given.clone()),
             ] {
-                let what = format!(
-                    "{objective}, {} start, defect {defect:e}",
-                    match &init {
-                        Initialisation::SpanningTree => "tree",
-                        Initialisation::Spectral => "spectral",
-                        Initialisation::Given(_) => "given",
-                    }
-                );
+                let what = format!("{objective}, {init} start, defect {defect:e}");
                 let settings = MultipleSettings {
                     init,
                     ..Default::default()

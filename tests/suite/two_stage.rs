@@ -198,8 +198,20 @@ fn auto_judges_a_slow_least_squares_solve_early() {
     let out = average_multiple(&p, &auto).unwrap();
     let choice = out.details.loss_choice.expect("the rule ran");
     assert!(choice.is_robust(), "{choice}");
-    let robust = solve_multiple(&p.with_objective(CAUCHY).unwrap(), &Default::default()).unwrap();
-    assert_eq!(out.solution.rotations, robust.rotations);
+    // the robust loss at the scale the rule chose ([D20]), solved on its own: the same estimate
+    // to rounding (the rule hands its L1 start over instead of solving it again)
+    let robust = solve_multiple(
+        &p.with_objective(choice.chosen).unwrap(),
+        &Default::default(),
+    );
+    let worst = (out
+        .solution
+        .rotations
+        .iter()
+        .zip(&robust.unwrap().rotations))
+    .map(|(a, b)| rotavg::so3::angle_between(a, b))
+    .fold(0.0, f64::max);
+    assert!(worst < 1e-9, "{worst:e} rad");
     // judged early: the estimate judged is not the converged one (no timed assertion: the
     // machine's load would decide it)
     assert!(

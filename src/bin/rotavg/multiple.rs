@@ -9,6 +9,7 @@ use rotavg::io::input::{MultipleInputOptions, load_multiple_input};
 use rotavg::io::names::{Choice, MultipleLoss};
 use rotavg::io::output::{MultipleOutputs, OutputFormat, OutputSource};
 use rotavg::multiple::gravity::GravityProblem;
+use rotavg::multiple::robust_scale::ScaleRule;
 use rotavg::multiple::{Initialisation, MultipleSettings};
 use rotavg::pipeline::{AverageSettings, average_multiple, average_with_gravity};
 use rotavg::report::MultipleReport;
@@ -24,10 +25,11 @@ pub struct Args {
     /// chordal L2 problem on its inlier graph is the one certified).
     #[arg(long, value_parser = choice(MultipleLoss::choices()), default_value_t = MultipleLoss::Auto)]
     pub loss: MultipleLoss,
-    /// Huber / Cauchy threshold in degrees, also `auto`'s Cauchy scale (for L1: the inlier
-    /// threshold unless `--inlier-threshold` is given).
-    #[arg(long, value_name = "DEG", default_value_t = 5.0)]
-    pub loss_threshold: f64,
+    /// Huber / Cauchy threshold in degrees (default 5; for L1: the inlier threshold unless
+    /// `--inlier-threshold` is given); when given, also `auto`'s Cauchy scale, which is
+    /// otherwise from the data (3 x the median residual at the L1 solution).
+    #[arg(long, value_name = "DEG")]
+    pub loss_threshold: Option<f64>,
     /// Robust losses (l1, huber, cauchy; auto when it chooses cauchy): an edge is an inlier iff its residual angle at the
     /// robust estimate is at most DEG (default: `--loss-threshold`). The inlier graph's
     /// chordal L2 problem is refined and certified unless `--certify none`.
@@ -106,7 +108,8 @@ fn solve_and_write(args: &Args, outputs: &MultipleOutputs) -> Result<Outcome> {
         format: graph.format,
     };
     outputs.check(&source)?;
-    let objective = args.loss.objective(args.loss_threshold);
+    let (loss_threshold, robust_scale) = ScaleRule::of(args.loss_threshold);
+    let objective = args.loss.objective(loss_threshold);
     let problem = graph.problem.clone().with_objective(objective)?;
     let flags = [
         ("--inlier-threshold", args.inlier_threshold.is_some()),
@@ -123,8 +126,9 @@ fn solve_and_write(args: &Args, outputs: &MultipleOutputs) -> Result<Outcome> {
                 .map_or_else(|| args.init_method.clone(), Initialisation::Given),
             inlier_threshold_deg: args
                 .loss
-                .inlier_threshold_deg(args.loss_threshold, args.inlier_threshold),
-            robust_on_outliers: args.loss.robust_on_outliers(args.loss_threshold),
+                .inlier_threshold_deg(loss_threshold, args.inlier_threshold),
+            robust_on_outliers: args.loss.robust_on_outliers(loss_threshold),
+            robust_scale,
             // --max-seconds is one clock for the solve and the certificate
             max_seconds: args.common.solve_seconds(),
             ..Default::default()
