@@ -124,29 +124,42 @@ pub(super) fn average_by_residuals<P: ViewGraphProblem>(
     );
     choice.reason = "the least-squares residuals show outliers".into();
     choice.diagnosis = Some(diagnosis);
-    let mut robust_settings = settings.remaining(start);
-    robust_settings.solve.robust_on_outliers = None;
-    let robust = match settings.solve.robust_scale {
-        ScaleRule::FromData if robust.loss.threshold_deg().is_some() => {
-            let (scale, l1) = data_scale(graph, robust.metric, &robust_settings.solve)?;
-            if !matches!(settings.solve.init, Initialisation::Given(_)) {
-                // the robust solve's L1 start is the one just solved
-                robust_settings = settings.remaining(start);
-                robust_settings.solve.robust_on_outliers = None;
-                robust_settings.solve.init = Initialisation::L1Start(l1);
-            }
-            let scaled = scale.applied_to(robust);
-            choice.scale = Some(scale);
-            scaled
-        }
-        _ => robust,
-    };
+    let (robust, robust_settings) = robust_run(graph, robust, settings, start, &mut choice)?;
     let robust_problem = problem.with_objective(robust)?;
     let mut out = robust_problem.average_all(&robust_settings)?;
     choice.chosen = robust;
     out.details.loss_choice = Some(choice);
     out.details.total_seconds = start.elapsed().as_secs_f64();
     Ok(out)
+}
+
+/// The objective and settings of the rule's robust run: the scale of `robust` from the data
+/// ([`data_scale`], `[D20]`; recorded in `choice.scale`) unless the settings give it, and the L1
+/// solution found for it handed over as the run's L1 start (unless a start is given); the
+/// clock's remainder after it (`start` the run's).
+fn robust_run(
+    graph: &crate::multiple::MultipleProblem,
+    robust: Objective,
+    settings: &AverageSettings<MultipleSettings>,
+    start: Instant,
+    choice: &mut LossChoice,
+) -> Result<(Objective, AverageSettings<MultipleSettings>)> {
+    let run = || {
+        let mut run = settings.remaining(start);
+        run.solve.robust_on_outliers = None;
+        run
+    };
+    if settings.solve.robust_scale == ScaleRule::Given || robust.loss.threshold_deg().is_none() {
+        return Ok((robust, run()));
+    }
+    let (scale, l1) = data_scale(graph, robust.metric, &run().solve)?;
+    let mut after = run();
+    if !matches!(after.solve.init, Initialisation::Given(_)) {
+        after.solve.init = Initialisation::L1Start(l1);
+    }
+    let scaled = scale.applied_to(robust);
+    choice.scale = Some(scale);
+    Ok((scaled, after))
 }
 
 /// Newton iterations of the least-squares solve before the rule may judge an unconverged
