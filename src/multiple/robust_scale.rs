@@ -1,7 +1,8 @@
 //! The robust loss's scale from the data (`paper-notes/certificates.md` `[D20]`, issue 37): the
 //! rule `auto` solves Cauchy with a scale that follows the noise of the measurements instead of
-//! a fixed angle. The scale is [`SCALE_PER_MEDIAN`] times the median residual angle at the L1
-//! solution of the view graph with unit weights (no information): the L1 solution fits the
+//! a fixed angle. The scale is [`SCALE_PER_MEDIAN`] times the median residual angle at the
+//! robust solve's own L1 start (`[M9]`; of the view graph with its weights, or with unit weights
+//! and no information where it has information, `[A14]`'s first stage): the L1 solution fits the
 //! inliers and leaves the outliers' residuals large, so with fewer than half the edges wrong the
 //! median is an inlier's. For Gaussian noise of `sigma` per axis the inliers' residual angle is
 //! `sigma chi(3)`, median `1.538 sigma`; the scale `3 x median = 4.6 sigma` leaves 0.1 % of such
