@@ -19,8 +19,8 @@ certify=(--certify none)
 for mode in none held soft; do
   case $mode in
     none) g=();;
-    held) g=(--gravity "$D/gravity-$GDEG.txt");;
-    soft) g=(--gravity "$D/gravity-$GDEG.txt" --gravity-weight "$W");;
+    held) g=(--gravity "$D/gravity-$GDEG.txt" --world-down 0,0,-1);;
+    soft) g=(--gravity "$D/gravity-$GDEG.txt" --world-down 0,0,-1 --gravity-weight "$W");;
   esac
   out=$("$BIN" multiple "$D/database.db" --information full "${g[@]}" --ground-truth "$D/truth" \
     "${certify[@]}" --max-seconds "${MAX_SECONDS:-600}" 2>&1 || true)

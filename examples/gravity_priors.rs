@@ -6,7 +6,9 @@
 //! `"rotations"` or `"frames"` (as `examples/data/rig/truth.json` and `rig_pair` write it); with
 //! a view graph `GRAPH` (any file or COLMAP database `rotavg multiple` reads), any ground truth
 //! `--ground-truth` reads for it (a COLMAP `images.txt` or model folder, as `colmap_scene`
-//! writes), and `KEY` is the graph's file id (image id) of each node.
+//! writes), and `KEY` is the graph's file id (image id) of each node; the generated scenes have
+//! `z` up, so there the directions are of the world's down `-e_3`, to be read with
+//! `--world-down 0,0,-1`.
 //!
 //! ```text
 //! cargo run --release --example gravity_priors -- TRUTH.json NOISE_DEG MISSING SEED > gravity.txt
@@ -43,11 +45,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         print!("{text}");
         return Ok(());
     };
-    // the lines are keyed by index: put each node's file id instead
+    // the lines are keyed by index: put each node's file id instead; the generated scenes
+    // (`colmap_scene`) have `z` up, so their down is `-z`: the directions negated, read with
+    // `--world-down 0,0,-1` (the priors' check warns about up vectors otherwise)
+    println!("# world down (0, 0, -1) (z up): rotavg ... --gravity FILE --world-down 0,0,-1");
     for line in text.lines() {
         let mut words = line.split_whitespace();
         match words.next().map(str::parse::<usize>) {
-            Some(Ok(k)) => println!("{} {}", keys[k], words.collect::<Vec<_>>().join(" ")),
+            Some(Ok(k)) => {
+                let g: Vec<String> = (words.enumerate())
+                    .map(|(a, w)| (a < 3).then(|| negated(w)).flatten().unwrap_or(w.into()))
+                    .collect();
+                println!("{} {}", keys[k], g.join(" "));
+            }
             _ => println!("{line}"),
         }
     }
@@ -79,4 +89,9 @@ fn truth_of_graph(
         .map(|r| r.ok_or("a node without ground truth"))
         .collect::<Result<Vec<_>, _>>()?;
     Ok((rotations, g.node_ids.clone()))
+}
+
+/// A number of the text written, negated (`None`: not a number).
+fn negated(word: &str) -> Option<String> {
+    word.parse::<f64>().ok().map(|x| (-x).to_string())
 }
