@@ -8,7 +8,9 @@ use super::inlier_graph::ViewGraphProblem;
 use super::{AverageSettings, MultipleEstimate, certify_solved, validate};
 use crate::error::Result;
 use crate::multiple::robust::{OutlierWarning, judges_residuals, suspected_outliers};
-use crate::multiple::robust_scale::{DataScale, SCALE_PER_MEDIAN, ScaleRule, data_scale};
+use crate::multiple::robust_scale::{
+    DataScale, MAX_DATA_SCALE_DEG, MIN_DATA_SCALE_DEG, SCALE_PER_MEDIAN, ScaleRule, data_scale,
+};
 use crate::multiple::{Initialisation, MultipleSettings};
 use crate::objective::Objective;
 use crate::termination::Termination;
@@ -60,10 +62,15 @@ impl fmt::Display for LossChoice {
                     self.rule, self.chosen, w.suspected, w.num_edges, w.threshold_deg, w.median_deg
                 )?;
                 if let Some(s) = &self.scale {
+                    let bound = match (s.clamped, s.scale_deg >= MAX_DATA_SCALE_DEG) {
+                        (false, _) => String::new(),
+                        (true, true) => format!(", at most {MAX_DATA_SCALE_DEG} deg"),
+                        (true, false) => format!(", at least {MIN_DATA_SCALE_DEG} deg"),
+                    };
                     write!(
                         f,
                         "; its scale from the data: {SCALE_PER_MEDIAN} x the median residual \
-                         {:.3} deg at the L1 solution (`--loss-threshold` sets it)",
+                         {:.3} deg at the L1 solution{bound} (`--loss-threshold` sets it)",
                         s.median_deg
                     )?;
                 }

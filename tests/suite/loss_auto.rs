@@ -248,10 +248,11 @@ fn the_command_line_default_names_the_inlier_problem_it_certifies() {
         "{median} {l1_median}"
     );
     let scale_deg = scale["scale_deg"].as_f64().unwrap();
-    assert!(
-        (scale_deg - 3.0 * median).abs() < 0.01 * scale_deg,
-        "{scale}"
-    );
+    let max = rotavg::multiple::robust_scale::MAX_DATA_SCALE_DEG;
+    let expected = (3.0 * median).min(max);
+    assert!((scale_deg - expected).abs() < 0.01 * expected, "{scale}");
+    // 2 degrees of noise: 3 m is 10.1, above the bound (`clamped`, and the text says so)
+    assert_eq!(scale["clamped"].as_bool(), Some(3.0 * median > max));
     let given = scale_deg.to_string();
     let cauchy = json_of(&run(&[
         "multiple",
@@ -291,7 +292,14 @@ fn the_command_line_default_names_the_inlier_problem_it_certifies() {
     // the text says what was chosen and why
     let text = run(&["multiple", file]);
     let out = String::from_utf8_lossy(&text.stdout);
-    assert!(out.contains("loss: auto chose geodesic cauchy"), "{out}");
+    assert!(
+        out.contains("loss: auto chose geodesic cauchy (10 deg)"),
+        "{out}"
+    );
+    assert!(
+        out.contains("at the L1 solution,\n  at most 10 deg"),
+        "{out}"
+    );
     assert!(
         out.contains("verdict: certified for the chordal L2 problem on the inlier graph"),
         "{out}"
