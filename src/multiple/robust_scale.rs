@@ -10,9 +10,7 @@
 
 use crate::error::Result;
 use crate::multiple::problem::MultipleProblem;
-use crate::multiple::solve::{
-    L1_START_DECREASE_TOLERANCE, L1_START_EPSILON, MultipleSettings, solve_multiple,
-};
+use crate::multiple::solve::{MultipleSettings, solve_multiple};
 use crate::objective::{Loss, Objective};
 use crate::so3::{Metric, Rotation};
 use serde::{Deserialize, Serialize};
@@ -105,7 +103,7 @@ impl DataScale {
 
 /// The scale of `graph`'s robust loss of `metric` from its data, and the L1 solution it was
 /// read at: that of the robust solve's own L1 start (`[M9]`, stopped at
-/// [`L1_START_DECREASE_TOLERANCE`], smoothed at [`L1_START_EPSILON`]) on the graph's edges with
+/// [`L1_START_DECREASE_TOLERANCE`](crate::multiple::solve::L1_START_DECREASE_TOLERANCE), smoothed at [`L1_START_EPSILON`](crate::multiple::solve::L1_START_EPSILON)) on the graph's edges with
 /// their weights, or with unit weights and no information where the graph has information
 /// (`[A14]`'s first stage); the median of its residual angles, times [`SCALE_PER_MEDIAN`].
 /// Scaling every weight (or information matrix) by one factor changes neither. The solution
@@ -131,15 +129,7 @@ pub fn data_scale(
         false => graph.clone(),
     };
     let l1 = base.with_objective(Objective::new(metric, Loss::L1))?;
-    let start = MultipleSettings {
-        irls_decrease_tolerance: settings
-            .irls_decrease_tolerance
-            .max(L1_START_DECREASE_TOLERANCE),
-        l1_epsilon: settings.l1_epsilon.max(L1_START_EPSILON),
-        robust_on_outliers: None,
-        ..settings.clone()
-    };
-    let solution = solve_multiple(&l1, &start)?;
+    let solution = solve_multiple(&l1, &settings.for_l1_start())?;
     let mut angles = l1.residual_angles(&solution.rotations);
     angles.sort_by(f64::total_cmp);
     let median_deg = angles.get(angles.len() / 2).map_or(0.0, |a| a.to_degrees());

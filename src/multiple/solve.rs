@@ -106,8 +106,8 @@ pub struct MultipleSettings {
     pub robust_on_outliers: Option<crate::objective::Objective>,
     /// How the rule `auto` scales `robust_on_outliers` (`[D20]`): from the data (the default,
     /// [`data_scale`](crate::multiple::robust_scale::data_scale): three times the median
-    /// residual at the unit-weight L1 solution), or as given (the command line's
-    /// `--loss-threshold`).
+    /// residual at the robust solve's L1 start, within 0.01-10 degrees), or as given (the
+    /// command line's `--loss-threshold`).
     pub robust_scale: crate::multiple::robust_scale::ScaleRule,
     /// Time limit of the solve, seconds (`None`, the default: no limit; the command line's
     /// `--max-seconds`). Checked before each iteration of the Newton-LM and IRLS loops (the
@@ -195,6 +195,19 @@ impl MultipleSettings {
 
 impl MultipleSettings {
     /// The same settings with the time limit reduced by the time since `start` (at least 0).
+    /// These settings for an L1 start (`[M9]`): stopped at [`L1_START_DECREASE_TOLERANCE`],
+    /// smoothed at [`L1_START_EPSILON`] (each at least), no rule `auto`.
+    pub(crate) fn for_l1_start(&self) -> MultipleSettings {
+        MultipleSettings {
+            irls_decrease_tolerance: self
+                .irls_decrease_tolerance
+                .max(L1_START_DECREASE_TOLERANCE),
+            l1_epsilon: self.l1_epsilon.max(L1_START_EPSILON),
+            robust_on_outliers: None,
+            ..self.clone()
+        }
+    }
+
     pub(crate) fn remaining(&self, start: std::time::Instant) -> MultipleSettings {
         MultipleSettings {
             max_seconds: crate::deadline::remaining(self.max_seconds, start),
@@ -437,12 +450,6 @@ fn l1_start(
     let l1 = problem
         .clone()
         .with_objective(Objective::new(objective.metric, Loss::L1))?;
-    let start = MultipleSettings {
-        irls_decrease_tolerance: settings
-            .irls_decrease_tolerance
-            .max(L1_START_DECREASE_TOLERANCE),
-        l1_epsilon: settings.l1_epsilon.max(L1_START_EPSILON),
-        ..settings.clone()
-    };
+    let start = settings.for_l1_start();
     Ok(crate::multiple::robust::solve_robust(&l1, init, &start, kind)?.rotations)
 }
