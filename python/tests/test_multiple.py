@@ -121,10 +121,11 @@ def test_robust_losses_report_inliers_and_certify_the_inlier_graph(rng):
     res = rotavg.average_multiple(30, i, j, rel)
     d = res.to_dict()
     assert d["loss"] == "cauchy" and d["pipeline"]["loss_choice"]["diagnosis"]["suspected"] >= 3
-    # its Cauchy scale follows the data: three times the median residual at the L1 solution
-    # (0.01 rad of noise per axis: the median inlier angle about 0.88 deg)
+    # its Cauchy scale follows the data: 1.5 times the median residual at the L1 solution, the
+    # inlier threshold 3 times (0.01 rad of noise per axis: the median inlier angle about 0.88 deg)
     scale = d["pipeline"]["loss_choice"]["scale"]
-    assert 2.0 < scale["scale_deg"] < 3.2 and scale["scale_deg"] == d["pipeline"]["loss_choice"]["chosen"]["loss"]["scale_deg"]
+    assert 1.0 < scale["scale_deg"] < 1.6 and scale["scale_deg"] == d["pipeline"]["loss_choice"]["chosen"]["loss"]["scale_deg"]
+    assert 2.0 < scale["inlier_threshold_deg"] < 3.2 and scale["inlier_threshold_deg"] == d["robust"]["inlier_threshold_deg"]
     cauchy = rotavg.average_multiple(30, i, j, rel, loss="cauchy", loss_threshold=scale["scale_deg"])
     assert np.allclose(res.estimate, cauchy.estimate, rtol=0, atol=1e-9)
     given = rotavg.average_multiple(30, i, j, rel, loss_threshold=5.0).to_dict()["pipeline"]["loss_choice"]

@@ -2,11 +2,13 @@
 //! rule `auto` solves Cauchy with a scale that follows the noise of the measurements instead of
 //! a fixed angle. The scale is [`SCALE_PER_MEDIAN`] times the median residual angle at the
 //! robust solve's own L1 start (`[M9]`; of the view graph with its weights, or with unit weights
-//! and no information where it has information, `[A14]`'s first stage): the L1 solution fits the
-//! inliers and leaves the outliers' residuals large, so with fewer than half the edges wrong the
-//! median is an inlier's. For Gaussian noise of `sigma` per axis the inliers' residual angle is
-//! `sigma chi(3)`, median `1.538 sigma`; the scale `3 x median = 4.6 sigma` leaves 0.1 % of such
-//! inliers beyond it.
+//! and no information where it has information, `[A14]`'s first stage), and the inlier
+//! threshold (the certified inlier graph's) [`INLIER_PER_MEDIAN`] times it: the L1 solution fits
+//! the inliers and leaves the outliers' residuals large, so with fewer than half the edges wrong
+//! the median is an inlier's. For Gaussian noise of `sigma` per axis the inliers' residual angle
+//! is `sigma chi(3)`, median `1.538 sigma`; the scale `1.5 x median = 2.3 sigma` is about
+//! Cauchy's classical tuning constant (`2.385 sigma`, 95 % efficiency at the normal), and the
+//! threshold `3 x median = 4.6 sigma` leaves 0.1 % of such inliers outside the inlier graph.
 
 use crate::error::Result;
 use crate::multiple::problem::MultipleProblem;
@@ -49,14 +51,19 @@ impl ScaleRule {
 /// The Huber threshold and Cauchy scale of a loss named without one, degrees.
 pub const DEFAULT_THRESHOLD_DEG: f64 = 5.0;
 
-/// The scale is this many times the median residual angle at the L1 solution.
-pub const SCALE_PER_MEDIAN: f64 = 3.0;
+/// The scale is this many times the median residual angle at the L1 solution (`[D20]`: `2.3
+/// sigma` for Gaussian noise of `sigma` per axis).
+pub const SCALE_PER_MEDIAN: f64 = 1.5;
 
-/// The data's scale is at least this many degrees (data that fit to rounding: the loss's
-/// weights stay finite and exact inliers keep weight 1).
+/// The inlier threshold, unless one is given, is this many times the median residual angle at
+/// the L1 solution (`[D20]`: `4.6 sigma`, 0.1 % of Gaussian inliers beyond it).
+pub const INLIER_PER_MEDIAN: f64 = 3.0;
+
+/// The data's scale and inlier threshold are at least this many degrees (data that fit to
+/// rounding: the loss's weights stay finite and exact inliers keep weight 1).
 pub const MIN_DATA_SCALE_DEG: f64 = 0.01;
 
-/// The data's scale is at most this many degrees: pairs off by more are outliers in SfM
+/// The data's scale and inlier threshold are at most this many degrees: pairs off by more are outliers in SfM
 /// practice (COLMAP's global mapper marks them invalid), and a median residual past 3 degrees
 /// is more likely one that outliers inflate than noise (1DSfM Madrid_Metropolis: residual
 /// quantiles 2.8 / 9.3 / 32.6 degrees at 25 / 50 / 75 % at the L1 solution, so `3 m` would be
@@ -74,6 +81,10 @@ pub struct DataScale {
     /// [`MIN_DATA_SCALE_DEG`]..[`MAX_DATA_SCALE_DEG`], rounded to three significant digits,
     /// degrees.
     pub scale_deg: f64,
+    /// The inlier threshold unless one is given: [`INLIER_PER_MEDIAN`] x `median_deg`, within
+    /// the same bounds, rounded the same way, degrees (0 in records written before it existed).
+    #[serde(default)]
+    pub inlier_threshold_deg: f64,
     /// Whether `SCALE_PER_MEDIAN x median_deg` was outside
     /// [`MIN_DATA_SCALE_DEG`]..[`MAX_DATA_SCALE_DEG`] and the scale is that bound.
     #[serde(default)]
@@ -105,7 +116,8 @@ impl DataScale {
 /// read at: that of the robust solve's own L1 start (`[M9]`, stopped at
 /// [`L1_START_DECREASE_TOLERANCE`](crate::multiple::solve::L1_START_DECREASE_TOLERANCE), smoothed at [`L1_START_EPSILON`](crate::multiple::solve::L1_START_EPSILON)) on the graph's edges with
 /// their weights, or with unit weights and no information where the graph has information
-/// (`[A14]`'s first stage); the median of its residual angles, times [`SCALE_PER_MEDIAN`].
+/// (`[A14]`'s first stage); the median of its residual angles, times [`SCALE_PER_MEDIAN`] (and
+/// [`INLIER_PER_MEDIAN`] for the inlier threshold).
 /// Scaling every weight (or information matrix) by one factor changes neither. The solution
 /// is the start [`Initialisation::L1Start`](crate::multiple::Initialisation::L1Start) hands to the robust solve. Errors: those of the
 /// solve (a disconnected graph).
@@ -116,8 +128,9 @@ impl DataScale {
 /// use rotavg::Metric;
 /// let (p, _) = SyntheticGraph { num_rotations: 60, num_edges: 400, noise_sigma: 0.01, ..Default::default() }.generate();
 /// let (s, _) = data_scale(&p, Metric::Geodesic, &MultipleSettings::default()).unwrap();
-/// // 0.01 rad per axis: inlier angles 0.88 deg at the median, the scale about 2.6 deg
-/// assert!((2.0..3.2).contains(&s.scale_deg), "{}", s.scale_deg);
+/// // 0.01 rad per axis: inlier angles 0.88 deg at the median, the scale about 1.3 deg
+/// assert!((1.0..1.6).contains(&s.scale_deg), "{}", s.scale_deg);
+/// assert!((2.0..3.2).contains(&s.inlier_threshold_deg), "{}", s.inlier_threshold_deg);
 /// ```
 pub fn data_scale(
     graph: &MultipleProblem,
@@ -134,10 +147,12 @@ pub fn data_scale(
     angles.sort_by(f64::total_cmp);
     let median_deg = angles.get(angles.len() / 2).map_or(0.0, |a| a.to_degrees());
     let unclamped = SCALE_PER_MEDIAN * median_deg;
+    let bounded = |x: f64| three_digits(x.clamp(MIN_DATA_SCALE_DEG, MAX_DATA_SCALE_DEG));
     let scale = DataScale {
         rule: "from_data".into(),
         median_deg,
-        scale_deg: three_digits(unclamped.clamp(MIN_DATA_SCALE_DEG, MAX_DATA_SCALE_DEG)),
+        scale_deg: bounded(unclamped),
+        inlier_threshold_deg: bounded(INLIER_PER_MEDIAN * median_deg),
         clamped: !(MIN_DATA_SCALE_DEG..=MAX_DATA_SCALE_DEG).contains(&unclamped),
         iterations: solution.report.iterations,
         seconds: solution.report.seconds,

@@ -105,8 +105,9 @@ pub struct MultipleSettings {
     /// objective as given (least squares only warns). [`solve_multiple`] ignores it.
     pub robust_on_outliers: Option<crate::objective::Objective>,
     /// How the rule `auto` scales `robust_on_outliers` (`[D20]`): from the data (the default,
-    /// [`data_scale`](crate::multiple::robust_scale::data_scale): three times the median
-    /// residual at the robust solve's L1 start, within 0.01-10 degrees), or as given (the
+    /// [`data_scale`](crate::multiple::robust_scale::data_scale): 1.5 times the median
+    /// residual at the robust solve's L1 start, within 0.01-10 degrees, and unless
+    /// `inlier_threshold_deg` is given the inlier threshold 3 times it), or as given (the
     /// command line's `--loss-threshold`).
     pub robust_scale: crate::multiple::robust_scale::ScaleRule,
     /// Time limit of the solve, seconds (`None`, the default: no limit; the command line's

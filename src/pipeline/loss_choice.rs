@@ -9,7 +9,8 @@ use super::{AverageSettings, MultipleEstimate, certify_solved, validate};
 use crate::error::Result;
 use crate::multiple::robust::{OutlierWarning, judges_residuals, suspected_outliers};
 use crate::multiple::robust_scale::{
-    DataScale, MAX_DATA_SCALE_DEG, MIN_DATA_SCALE_DEG, SCALE_PER_MEDIAN, ScaleRule, data_scale,
+    DataScale, INLIER_PER_MEDIAN, MAX_DATA_SCALE_DEG, MIN_DATA_SCALE_DEG, SCALE_PER_MEDIAN,
+    ScaleRule, data_scale,
 };
 use crate::multiple::{Initialisation, MultipleSettings};
 use crate::objective::Objective;
@@ -70,8 +71,15 @@ impl fmt::Display for LossChoice {
                     write!(
                         f,
                         "; its scale from the data: {SCALE_PER_MEDIAN} x the median residual \
-                         {:.3} deg at the L1 solution{bound} (`--loss-threshold` sets it)",
-                        s.median_deg
+                         {:.3} deg at the L1 solution{bound} (`--loss-threshold` sets it), its \
+                         inlier threshold {INLIER_PER_MEDIAN} x that median ({} deg{}) unless \
+                         `--inlier-threshold` is given",
+                        s.median_deg,
+                        s.inlier_threshold_deg,
+                        match INLIER_PER_MEDIAN * s.median_deg > MAX_DATA_SCALE_DEG {
+                            true => ", at most that bound",
+                            false => "",
+                        }
                     )?;
                 }
                 write!(
@@ -141,9 +149,10 @@ pub(super) fn average_by_residuals<P: ViewGraphProblem>(
 }
 
 /// The objective and settings of the rule's robust run: the scale of `robust` from the data
-/// ([`data_scale`], `[D20]`; recorded in `choice.scale`) unless the settings give it, and the L1
-/// solution found for it handed over as the run's L1 start (unless a start is given); the
-/// clock's remainder after it (`start` the run's).
+/// ([`data_scale`], `[D20]`; recorded in `choice.scale`) unless the settings give it, with its
+/// inlier threshold unless the settings give one, and the L1 solution found for it handed over
+/// as the run's L1 start (unless a start is given); the clock's remainder after it (`start` the
+/// run's).
 fn robust_run(
     graph: &crate::multiple::MultipleProblem,
     robust: Objective,
@@ -163,6 +172,9 @@ fn robust_run(
     let mut after = run();
     if !matches!(after.solve.init, Initialisation::Given(_)) {
         after.solve.init = Initialisation::L1Start(l1);
+    }
+    if after.solve.inlier_threshold_deg.is_none() {
+        after.solve.inlier_threshold_deg = Some(scale.inlier_threshold_deg);
     }
     let scaled = scale.applied_to(robust);
     choice.scale = Some(scale);

@@ -5,7 +5,9 @@
 //! choice; the command line names the problem its verdict is about.
 
 use rotavg::certify::{CertifiedProblemKind, CertifyMode, CertifySettings};
-use rotavg::multiple::robust_scale::{DataScale, ScaleRule, data_scale};
+use rotavg::multiple::robust_scale::{
+    DataScale, INLIER_PER_MEDIAN, MAX_DATA_SCALE_DEG, SCALE_PER_MEDIAN, ScaleRule, data_scale,
+};
 use rotavg::multiple::synthetic::{SyntheticAnisotropic, SyntheticGraph};
 use rotavg::multiple::{Edge, MultipleProblem, MultipleSettings};
 use rotavg::objective::{Loss, Objective};
@@ -166,7 +168,7 @@ fn scaling_every_weight_never_changes_the_choice() {
                 b.is_robust(),
                 "outliers {outliers}, scale {c}"
             );
-            let scale = |s: Option<&DataScale>| s.map(|s| s.scale_deg);
+            let scale = |s: Option<&DataScale>| s.map(|s| (s.scale_deg, s.inlier_threshold_deg));
             assert_eq!(scale(a.scale.as_ref()), scale(b.scale.as_ref()));
             let verdict = |r: &MultipleEstimate| {
                 r.certificate.as_ref().map(|c| c.verdict).or_else(|| {
@@ -237,8 +239,8 @@ fn the_command_line_default_names_the_inlier_problem_it_certifies() {
         j["verdict"]["problem"]["num_edges"],
         j["robust"]["num_inliers"]
     );
-    // the scale from the data: three times the median residual at the L1 solution, which
-    // `--loss l1` reports (its residual quantiles)
+    // the scale from the data: 1.5 times the median residual at the L1 solution, which
+    // `--loss l1` reports (its residual quantiles), the inlier threshold 3 times it
     let scale = &j["pipeline"]["loss_choice"]["scale"];
     let l1 = json_of(&run(&["multiple", file, "--json", "--loss", "l1"]));
     let median = scale["median_deg"].as_f64().unwrap();
@@ -248,11 +250,24 @@ fn the_command_line_default_names_the_inlier_problem_it_certifies() {
         "{median} {l1_median}"
     );
     let scale_deg = scale["scale_deg"].as_f64().unwrap();
-    let max = rotavg::multiple::robust_scale::MAX_DATA_SCALE_DEG;
-    let expected = (3.0 * median).min(max);
+    let max = MAX_DATA_SCALE_DEG;
+    let expected = (SCALE_PER_MEDIAN * median).min(max);
     assert!((scale_deg - expected).abs() < 0.01 * expected, "{scale}");
-    // 2 degrees of noise: 3 m is 10.1, above the bound (`clamped`, and the text says so)
-    assert_eq!(scale["clamped"].as_bool(), Some(3.0 * median > max));
+    assert_eq!(
+        scale["clamped"].as_bool(),
+        Some(SCALE_PER_MEDIAN * median > max)
+    );
+    // 2 degrees of noise: 3 m is 10.1, so the inlier threshold is the bound (the text says so),
+    // and it is the one the inlier graph was cut at
+    let threshold = scale["inlier_threshold_deg"].as_f64().unwrap();
+    assert!(
+        INLIER_PER_MEDIAN * median > max && threshold == max,
+        "{scale}"
+    );
+    assert_eq!(
+        j["robust"]["inlier_threshold_deg"].as_f64(),
+        Some(threshold)
+    );
     let given = scale_deg.to_string();
     let cauchy = json_of(&run(&[
         "multiple",
@@ -293,13 +308,12 @@ fn the_command_line_default_names_the_inlier_problem_it_certifies() {
     let text = run(&["multiple", file]);
     let out = String::from_utf8_lossy(&text.stdout);
     assert!(
-        out.contains("loss: auto chose geodesic cauchy (10 deg)"),
+        out.contains(&format!(
+            "loss: auto chose geodesic cauchy ({scale_deg} deg)"
+        )),
         "{out}"
     );
-    assert!(
-        out.contains("at the L1 solution,\n  at most 10 deg"),
-        "{out}"
-    );
+    assert!(out.contains("(10 deg,\n  at most that bound)"), "{out}");
     assert!(
         out.contains("verdict: certified for the chordal L2 problem on the inlier graph"),
         "{out}"
@@ -323,9 +337,10 @@ fn robust_outputs_are_not_claimed_when_auto_keeps_least_squares() {
 /// vector of unit standard deviation per axis), a closed-form constant.
 const CHI3_MEDIAN: f64 = 1.538_172;
 
-/// The data's scale is three times the inliers' median residual: for planted Gaussian noise of
-/// `sigma` per axis and 20 % random outliers, `3 x 1.538 sigma` within the L1 fit's shrinkage;
-/// noise-free data a scale of hundredths of a degree.
+/// The data's scale is 1.5 times the inliers' median residual and its inlier threshold 3 times:
+/// for planted Gaussian noise of `sigma` per axis and 20 % random outliers, `1.5 x 1.538 sigma`
+/// and `3 x 1.538 sigma` within the L1 fit's shrinkage; noise-free data a scale of hundredths of
+/// a degree.
 #[test]
 fn the_data_scale_follows_the_planted_noise() {
     let settings = MultipleSettings::default();
@@ -339,11 +354,17 @@ fn the_data_scale_follows_the_planted_noise() {
         }
         .generate();
         let (s, _) = data_scale(&p, Metric::Geodesic, &settings).unwrap();
-        let expected = 3.0 * CHI3_MEDIAN * sigma_deg;
+        let expected = 1.5 * CHI3_MEDIAN * sigma_deg;
         assert!(
             (s.scale_deg / expected - 1.0).abs() < 0.15,
             "sigma {sigma_deg} deg: scale {} deg, expected {expected}",
             s.scale_deg
+        );
+        let expected = 3.0 * CHI3_MEDIAN * sigma_deg;
+        assert!(
+            (s.inlier_threshold_deg / expected - 1.0).abs() < 0.15,
+            "sigma {sigma_deg} deg: inlier threshold {} deg, expected {expected}",
+            s.inlier_threshold_deg
         );
     }
     let (exact, _) = SyntheticGraph {

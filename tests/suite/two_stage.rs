@@ -198,11 +198,15 @@ fn auto_judges_a_slow_least_squares_solve_early() {
     let out = average_multiple(&p, &auto).unwrap();
     let choice = out.details.loss_choice.expect("the rule ran");
     assert!(choice.is_robust(), "{choice}");
-    // the robust loss at the scale the rule chose ([D20]), solved on its own: the same estimate
-    // to rounding (the rule hands its L1 start over instead of solving it again)
+    // the robust loss at the scale the rule chose ([D20]), solved on its own with the rule's
+    // inlier threshold (the edges [A14]'s first stage sets aside): the same estimate to
+    // rounding (the rule hands its L1 start over instead of solving it again)
     let robust = solve_multiple(
         &p.with_objective(choice.chosen).unwrap(),
-        &Default::default(),
+        &MultipleSettings {
+            inlier_threshold_deg: choice.scale.as_ref().map(|s| s.inlier_threshold_deg),
+            ..Default::default()
+        },
     );
     let worst = (out
         .solution
