@@ -63,11 +63,11 @@ pub const INLIER_PER_MEDIAN: f64 = 3.0;
 /// rounding: the loss's weights stay finite and exact inliers keep weight 1).
 pub const MIN_DATA_SCALE_DEG: f64 = 0.01;
 
-/// The data's scale and inlier threshold are at most this many degrees: pairs off by more are outliers in SfM
-/// practice (COLMAP's global mapper marks them invalid), and a median residual past 3 degrees
-/// is more likely one that outliers inflate than noise (1DSfM Madrid_Metropolis: residual
-/// quantiles 2.8 / 9.3 / 32.6 degrees at 25 / 50 / 75 % at the L1 solution, so `3 m` would be
-/// 28 degrees).
+/// The data's scale and inlier threshold are at most this many degrees: pairs off by more are
+/// outliers in SfM practice (COLMAP's global mapper marks them invalid), and a median residual
+/// past 3 degrees is more likely one that outliers inflate than noise (1DSfM Madrid_Metropolis:
+/// residual quantiles 2.8 / 9.3 / 32.6 degrees at 25 / 50 / 75 % at the L1 solution, so the
+/// scale `1.5 m` would be 14 degrees and the inlier threshold `3 m` 28).
 pub const MAX_DATA_SCALE_DEG: f64 = 10.0;
 
 /// The scale [`data_scale`] found and how.
