@@ -289,6 +289,12 @@ pub fn trust_region_until(
             break TrustRegionStop::TimeLimit { value: gn };
         }
         iterations += 1;
+        crate::progress::emit(|| crate::progress::Event::Iteration {
+            phase: crate::progress::Phase::Staircase,
+            iteration: iterations,
+            cost: f,
+            measure: gn,
+        });
         let hess = |z: &[Block]| {
             let mut h = twice_s_times(problem, &lambdas, z);
             project(&y, &mut h);
