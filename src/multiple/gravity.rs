@@ -856,10 +856,10 @@ pub const RISES_TO_STOP: usize = 2;
 /// floor weight), until no weight changes by more than [`IRLS_WEIGHT_TOLERANCE`] or the
 /// robust cost settles ([`settled`] at [`PASS_DECREASE_TOLERANCE`] or the settings' looser
 /// tolerance) or rises in [`RISES_TO_STOP`] passes in a row (the passes minimise the chordal
-/// surrogate, not the robust cost itself: a rise is that mismatch, and the pass of the lowest
-/// cost is returned); at most a tenth of `settings.max_iterations` passes, each a whole solve;
-/// within `settings.max_seconds`.
-/// Returns the rotations (standard convention), the passes and why it stopped.
+/// surrogate, not the robust cost itself: a rise is that mismatch); at most a tenth of
+/// `settings.max_iterations` passes, each a whole solve; within `settings.max_seconds`.
+/// Returns the rotations of the pass of the lowest robust cost (standard convention; the start
+/// when no pass ran), the passes and why it stopped.
 fn reweighted(
     problem: &GravityProblem,
     init: Vec<Rotation>,
@@ -887,44 +887,44 @@ fn reweighted(
     let tolerance = settings
         .irls_decrease_tolerance
         .max(PASS_DECREASE_TOLERANCE);
-    for pass in 1..=max_passes {
-        let measure = (change, IRLS_WEIGHT_TOLERANCE);
-        if let Some(limit) = crate::deadline::limit_reached(pass - 1, max_passes, deadline, measure)
-        {
-            return Ok((rotations, pass - 1, limit));
+    let (passes, stop) = 'passes: {
+        for pass in 1..=max_passes {
+            let measure = (change, IRLS_WEIGHT_TOLERANCE);
+            let limit = crate::deadline::limit_reached(pass - 1, max_passes, deadline, measure);
+            if let Some(limit) = limit {
+                break 'passes (pass - 1, limit);
+            }
+            let reweighted = graph.reweighted(&weights)?;
+            let left = settings.remaining(begun);
+            rotations = solve_step(problem, &reweighted, rotations, &left)?.rotations;
+            let cost = problem.robust_cost(&rotations);
+            let stop = (lowest.rose(cost, pass, &rotations))
+                .or_else(|| settled(&mut recent, cost, tolerance));
+            if let Some(t) = stop {
+                break 'passes (pass, t);
+            }
+            let next = weights_at(&rotations);
+            change = (next.iter().zip(&weights))
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            weights = next;
+            if change <= IRLS_WEIGHT_TOLERANCE {
+                let t = Termination::Converged {
+                    measure: "largest change of the IRLS weights".into(),
+                    value: change,
+                    threshold: IRLS_WEIGHT_TOLERANCE,
+                };
+                break 'passes (pass, t);
+            }
         }
-        let reweighted = graph.reweighted(&weights)?;
-        let left = settings.remaining(begun);
-        rotations = solve_step(problem, &reweighted, rotations, &left)?.rotations;
-        let cost = problem.robust_cost(&rotations);
-        if let Some(t) = lowest.rose(cost, pass, &rotations) {
-            return Ok((lowest.rotations, pass, t));
-        }
-        if let Some(t) = settled(&mut recent, cost, tolerance) {
-            return Ok((rotations, pass, t));
-        }
-        let next = weights_at(&rotations);
-        change = next
-            .iter()
-            .zip(&weights)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
-        weights = next;
-        if change <= IRLS_WEIGHT_TOLERANCE {
-            let t = Termination::Converged {
-                measure: "largest change of the IRLS weights".into(),
-                value: change,
-                threshold: IRLS_WEIGHT_TOLERANCE,
-            };
-            return Ok((rotations, pass, t));
-        }
-    }
-    let t = Termination::IterationLimit {
-        iterations: max_passes,
-        value: f64::NAN,
-        threshold: IRLS_WEIGHT_TOLERANCE,
+        let t = Termination::IterationLimit {
+            iterations: max_passes,
+            value: f64::NAN,
+            threshold: IRLS_WEIGHT_TOLERANCE,
+        };
+        (max_passes, t)
     };
-    Ok((rotations, max_passes, t))
+    Ok((lowest.or(rotations), passes, stop))
 }
 
 /// The pass of the lowest robust cost so far in [`reweighted`], and the passes in a row that rose.
@@ -958,6 +958,14 @@ impl Lowest {
             value: self.rises as f64,
             threshold: RISES_TO_STOP as f64,
         })
+    }
+
+    /// The lowest pass's rotations, or `last` when no pass was recorded.
+    fn or(self, last: Vec<Rotation>) -> Vec<Rotation> {
+        match self.rotations.is_empty() {
+            true => last,
+            false => self.rotations,
+        }
     }
 }
 

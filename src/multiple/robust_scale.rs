@@ -96,6 +96,19 @@ pub struct DataScale {
 }
 
 impl DataScale {
+    /// `", at most 10 deg"` (or `", at least 0.01 deg"`) when `factor x median_deg` was outside
+    /// [`MIN_DATA_SCALE_DEG`]..[`MAX_DATA_SCALE_DEG`] and the bound was taken instead, else
+    /// `""`: for the scale ([`SCALE_PER_MEDIAN`]) and the inlier threshold
+    /// ([`INLIER_PER_MEDIAN`]).
+    pub fn bound_note(&self, factor: f64) -> String {
+        let x = factor * self.median_deg;
+        match (x > MAX_DATA_SCALE_DEG, x < MIN_DATA_SCALE_DEG) {
+            (true, _) => format!(", at most {MAX_DATA_SCALE_DEG} deg"),
+            (_, true) => format!(", at least {MIN_DATA_SCALE_DEG} deg"),
+            _ => String::new(),
+        }
+    }
+
     /// `objective` with this scale: the Huber threshold or Cauchy scale replaced; other losses
     /// unchanged.
     pub fn applied_to(&self, objective: Objective) -> Objective {

@@ -195,7 +195,6 @@ impl MultipleSettings {
 }
 
 impl MultipleSettings {
-    /// The same settings with the time limit reduced by the time since `start` (at least 0).
     /// These settings for an L1 start (`[M9]`): stopped at [`L1_START_DECREASE_TOLERANCE`],
     /// smoothed at [`L1_START_EPSILON`] (each at least), no rule `auto`.
     pub(crate) fn for_l1_start(&self) -> MultipleSettings {
@@ -209,6 +208,7 @@ impl MultipleSettings {
         }
     }
 
+    /// The same settings with the time limit reduced by the time since `start` (at least 0).
     pub(crate) fn remaining(&self, start: std::time::Instant) -> MultipleSettings {
         MultipleSettings {
             max_seconds: crate::deadline::remaining(self.max_seconds, start),

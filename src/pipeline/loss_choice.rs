@@ -9,8 +9,7 @@ use super::{AverageSettings, MultipleEstimate, certify_solved, validate};
 use crate::error::Result;
 use crate::multiple::robust::{OutlierWarning, judges_residuals, suspected_outliers};
 use crate::multiple::robust_scale::{
-    DataScale, INLIER_PER_MEDIAN, MAX_DATA_SCALE_DEG, MIN_DATA_SCALE_DEG, SCALE_PER_MEDIAN,
-    ScaleRule, data_scale,
+    DataScale, INLIER_PER_MEDIAN, SCALE_PER_MEDIAN, ScaleRule, data_scale,
 };
 use crate::multiple::{Initialisation, MultipleSettings};
 use crate::objective::Objective;
@@ -63,23 +62,16 @@ impl fmt::Display for LossChoice {
                     self.rule, self.chosen, w.suspected, w.num_edges, w.threshold_deg, w.median_deg
                 )?;
                 if let Some(s) = &self.scale {
-                    let bound = match (s.clamped, s.scale_deg >= MAX_DATA_SCALE_DEG) {
-                        (false, _) => String::new(),
-                        (true, true) => format!(", at most {MAX_DATA_SCALE_DEG} deg"),
-                        (true, false) => format!(", at least {MIN_DATA_SCALE_DEG} deg"),
-                    };
                     write!(
                         f,
                         "; its scale from the data: {SCALE_PER_MEDIAN} x the median residual \
-                         {:.3} deg at the L1 solution{bound} (`--loss-threshold` sets it), its \
+                         {:.3} deg at the L1 solution{} (`--loss-threshold` sets it), its \
                          inlier threshold {INLIER_PER_MEDIAN} x that median ({} deg{}) unless \
                          `--inlier-threshold` is given",
                         s.median_deg,
+                        s.bound_note(SCALE_PER_MEDIAN),
                         s.inlier_threshold_deg,
-                        match INLIER_PER_MEDIAN * s.median_deg > MAX_DATA_SCALE_DEG {
-                            true => ", at most that bound",
-                            false => "",
-                        }
+                        s.bound_note(INLIER_PER_MEDIAN),
                     )?;
                 }
                 write!(
