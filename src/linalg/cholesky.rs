@@ -92,6 +92,47 @@ pub(crate) fn to_dense(a: SparseColMatRef<'_, usize, f64>) -> nalgebra::DMatrix<
     m
 }
 
+/// `s` without the block row and column of node `g`, blocks of `size` rows and columns (the
+/// grounded bounds `[D15]`, `paper-notes/gravity.md` `[G17]`). Errors: `s` not compressed and
+/// square, or `g`'s block outside it.
+pub fn without_block(
+    s: &SparseColMat<usize, f64>,
+    g: usize,
+    size: usize,
+) -> Result<SparseColMat<usize, f64>> {
+    let dim = s.nrows();
+    let (first, end) = (size * g, size * g + size);
+    if s.symbolic().col_nnz().is_some() || dim < end || s.ncols() != dim {
+        return Err(Error::Solver {
+            message: "the grounded certificate matrix needs a compressed square S".into(),
+        });
+    }
+    let keep = |k: usize| k < first || k >= end;
+    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
+    // the columns and rows of S in order, block g left out: sorted rows stay sorted
+    let mut col_ptr = Vec::with_capacity(dim + 1 - size);
+    let (mut rows, mut vals) = (Vec::with_capacity(val.len()), Vec::with_capacity(val.len()));
+    col_ptr.push(0);
+    for col in (0..dim).filter(|&c| keep(c)) {
+        for p in cp[col]..cp[col + 1] {
+            let r = ri[p];
+            if keep(r) {
+                rows.push(if r < first { r } else { r - size });
+                vals.push(val[p]);
+            }
+        }
+        col_ptr.push(rows.len());
+    }
+    let symbolic = faer::sparse::SymbolicSparseColMat::new_unsorted_checked(
+        dim - size,
+        dim - size,
+        col_ptr,
+        None,
+        rows,
+    );
+    Ok(SparseColMat::new(symbolic, vals))
+}
+
 /// `y = A x` for a sparse matrix with both triangles stored (column-major traversal).
 pub fn sparse_matvec(a: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64]) {
     y.iter_mut().for_each(|v| *v = 0.0);

@@ -3,7 +3,7 @@
 //!
 //! | rung | when | bound |
 //! |---|---|---|
-//! | [`planar`]: the SO(2) dual certificate at the estimate `[G2]`, `[G3]` | every image has a prior | `K + sum lambda_i + n min(mu, 0)`, `mu` proven by the scalar comparison on large graphs (`scalar.rs`, `[G9]`), else (or when it does not certify) by a shifted sparse Cholesky |
+//! | [`planar`]: the SO(2) dual certificate at the estimate `[G2]`, `[G3]` | every image has a prior | `K + sum lambda_i + n min(mu, 0)`, `mu` proven by the scalar comparison on large graphs (`scalar.rs`, `[G9]`), else (or when it does not certify) by a shifted sparse Cholesky; then `K + sum lambda_i - (rho^2 / c + h) / |x_g|^2` with the null space deflated (`grounded.rs`, `[G17]`) |
 //! | `surrogate.rs`: the tilted soft surrogate `[G12]` | the mixed problem; a fallback of full gravity | the soft problem's certified bound (view graph and world node) less its constant on the held problem |
 //! | `relaxed.rs`: the priors dropped `[G7]` | the last fallback | the view graph's own certified bound |
 //!
@@ -13,12 +13,15 @@
 //! the same minimum, so every rung of that ladder applies (the SDP included), at the estimate
 //! with the world node at `I`.
 
+mod grounded;
 pub mod planar;
 mod relaxed;
 mod rung;
 mod scalar;
 mod state;
 mod surrogate;
+#[cfg(test)]
+mod test_support;
 
 pub use planar::{PlanarBound, PlanarForm, verify_planar};
 

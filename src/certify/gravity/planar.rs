@@ -11,6 +11,7 @@ use crate::certify::budget::{Budget, Deadline};
 use crate::certify::multiple::multipliers::data_defect;
 use crate::error::Result;
 use crate::linalg::cholesky::gamma;
+use crate::linalg::compensated::Accumulator;
 use crate::linalg::{
     Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme, sparse_matvec,
 };
@@ -23,10 +24,16 @@ use nalgebra::{Matrix3, Matrix3x2, Vector3};
 /// The full-gravity cost in its planar form `[G2]`: `f = c_0 + x^H H x` on `|x_i| = 1`.
 pub struct PlanarForm {
     n: usize,
-    /// `K = c_0 + sum_i d_i` (`c_0` and `H`'s diagonal: on unit `x` both are constants) and a
-    /// bound on its rounding.
-    constant: f64,
+    /// `K = c_0 + sum_i d_i` (`c_0` and `H`'s diagonal: on unit `x` both are constants) as an
+    /// unevaluated double-double sum (it cancels against `sum s_i` to the cost, `1e5` times
+    /// smaller on confident information) and a bound on its distance to `K` of the exact data
+    /// (the compensated sum's error and the blocks' forming error, `[G3]`).
+    constant: (f64, f64),
     constant_error: f64,
+    /// Per node, a bound on every row sum of `|S_exact - S^|` over the row's off-diagonal
+    /// entries (the forming error of `H_ij` from the exact data, `[G3]`; the diagonal is exact
+    /// by definition).
+    forming: Vec<f64>,
     /// The off-diagonal entries `H_ij` (`i < j` not required; both orders summed): `(i, j,
     /// re, im)` per edge.
     entries: Vec<(usize, usize, f64, f64)>,
@@ -59,18 +66,30 @@ impl PlanarForm {
         let graph = problem.problem();
         let mut degree = vec![0usize; n];
         let mut row_abs = vec![0.0f64; n];
-        let (mut constant, mut magnitude) = (0.0, 0.0);
+        let mut forming = vec![0.0f64; n];
+        let (mut constant, mut forming_constant) = (Accumulator::default(), 0.0);
         let mut entries = Vec::with_capacity(graph.num_edges());
-        for (i, j, a, b, c) in edge_blocks(graph) {
+        let multiplicity = pair_multiplicity(graph);
+        for (k, (i, j, a, b, c)) in edge_blocks(graph).enumerate() {
             let (fi, fj) = (&frames[i], &frames[j]);
             let (gi, gj) = (fi.column(2), fj.column(2));
             let (bi, bj) = (basis(fi), basis(fj));
-            constant += (gi.transpose() * a * gi)[0]
-                + (gj.transpose() * b * gj)[0]
-                + 2.0 * (gi.transpose() * c * gj)[0]
-                + (bi.transpose() * a * bi).trace()
-                + (bj.transpose() * b * bj).trace();
-            magnitude += 4.0 * (abs_sum(&a) + abs_sum(&b) + 2.0 * abs_sum(&c));
+            // K's edge terms, every product error-free: g_i^T a g_i + tr(B_i^T a B_i) + (j, b)
+            // + 2 g_i^T c g_j
+            for (u, m, v, w) in [(gi, &a, gi, 1.0), (gj, &b, gj, 1.0), (gi, &c, gj, 2.0)] {
+                add_form(&mut constant, &u.clone_owned(), m, &v.clone_owned(), w);
+            }
+            for col in 0..2 {
+                let (ui, uj) = (bi.column(col).clone_owned(), bj.column(col).clone_owned());
+                add_form(&mut constant, &ui, &a, &ui, 1.0);
+                add_form(&mut constant, &uj, &b, &uj, 1.0);
+            }
+            // T_e >= tr(H_e) (anisotropic) or w (isotropic) bounds the blocks' forming error
+            let t = abs_sum(&a).max(abs_sum(&b)) * (1.0 + 1e-10);
+            forming_constant += CONSTANT_FORMING * t;
+            let entry = (ENTRY_FORMING + PAIR_FORMING * (multiplicity[k] - 1) as f64) * t;
+            forming[i] += 2.0 * entry;
+            forming[j] += 2.0 * entry;
             let m = bi.transpose() * c * bj;
             entries.push((i, j, m[(0, 0)] + m[(1, 1)], m[(1, 0)] - m[(0, 1)]));
             degree[i] += 1;
@@ -78,6 +97,9 @@ impl PlanarForm {
             row_abs[i] += abs_sum(&a) + abs_sum(&c);
             row_abs[j] += abs_sum(&b) + abs_sum(&c);
         }
+        let u = UNIT_ROUNDOFF;
+        let inflate = 1.0 + gamma(n + graph.num_edges() + 4);
+        forming.iter_mut().for_each(|f| *f *= u * inflate);
         let frame_defect = (0..n)
             .map(|i| {
                 let f = &frames[i];
@@ -88,8 +110,9 @@ impl PlanarForm {
             + 8.0 * UNIT_ROUNDOFF;
         Some(PlanarForm {
             n,
-            constant,
-            constant_error: gamma(graph.num_edges() + 64) * magnitude,
+            constant: constant.parts(),
+            constant_error: constant.parts_bound() + forming_constant * u * inflate,
+            forming,
             entries,
             max_degree: degree.into_iter().max().unwrap_or(0),
             q_norm: row_abs.into_iter().fold(0.0, f64::max) * (1.0 + 1e-12),
@@ -142,8 +165,8 @@ impl PlanarForm {
     }
 
     /// `S = H - diag(lambda)` at phases `x` in its real `2n x 2n` form (both triangles), its
-    /// diagonal [`Self::certificate_diagonal`]. Returns `S`, `sum s_i` and `sum |s_i|`.
-    fn certificate_matrix(&self, x: &[(f64, f64)]) -> (SparseColMat<usize, f64>, f64, f64) {
+    /// diagonal [`Self::certificate_diagonal`].
+    pub(super) fn certificate_matrix(&self, x: &[(f64, f64)]) -> SparseColMat<usize, f64> {
         let s = self.certificate_diagonal(x);
         let mut t = Vec::with_capacity(8 * self.entries.len() + 2 * self.n);
         for &(i, j, re, im) in &self.entries {
@@ -157,34 +180,90 @@ impl PlanarForm {
             t.push(Triplet::new(2 * i, 2 * i, *si));
             t.push(Triplet::new(2 * i + 1, 2 * i + 1, *si));
         }
-        let m = SparseColMat::try_new_from_triplets(2 * self.n, 2 * self.n, &t)
-            .expect("indices within 2n");
-        let sum: f64 = s.iter().sum();
-        let abs: f64 = s.iter().map(|v| v.abs()).sum();
-        (m, sum, abs)
+        SparseColMat::try_new_from_triplets(2 * self.n, 2 * self.n, &t).expect("indices within 2n")
     }
 
-    /// `K - sum s_i + n min(mu, 0)` less every rounding and data term: the constant's
-    /// rounding, the sum's, the data defect of the measurements ([`data_defect`]) and the frame
-    /// term `||Q|| (2 sqrt(3) n d (1 + d) + n d^2)` (`[G3]`).
-    /// [`Self::bound`] at phases `x` (the sums of [`Self::certificate_diagonal`]).
+    /// The bound with `lambda_min(S^) >= mu` proven on the stored matrix: [`Self::bound_with`]
+    /// with the deficit `n max(-mu, 0)`.
     pub(super) fn bound_at(&self, graph_defect: f64, x: &[(f64, f64)], mu: f64) -> f64 {
-        let s = self.certificate_diagonal(x);
-        let sum: f64 = s.iter().sum();
-        let abs: f64 = s.iter().map(|v| v.abs()).sum();
-        self.bound(graph_defect, sum, abs, mu)
+        let deficit = self.n as f64 * (-mu).max(0.0);
+        self.bound_with(graph_defect, x, deficit)
     }
 
-    fn bound(&self, graph_defect: f64, sum_s: f64, abs_s: f64, mu: f64) -> f64 {
+    /// `K - sum s_i - deficit` less every rounding and data term (`[G3]`): `deficit` bounds
+    /// `-<S^, X>` over the relaxation's `X` (`n max(-mu, 0)`, or the grounded deficit
+    /// `[G17]`); then the forming error of `S`'s entries (`sum_i` of [`Self::forming`]'s row
+    /// sums), the constant's and the sum's rounding, the data defect of the measurements
+    /// ([`data_defect`]) and the frame term `||Q|| (2 sqrt(3) n d (1 + d) + n d^2)`.
+    pub(super) fn bound_with(&self, graph_defect: f64, x: &[(f64, f64)], deficit: f64) -> f64 {
         let n = self.n as f64;
         let d = self.frame_defect;
         let frames = self.q_norm * (2.0 * 3f64.sqrt() * n * d * (1.0 + d) + n * d * d);
-        let deficit = n * (-mu).max(0.0);
-        let value = self.constant - sum_s - deficit;
-        let rounding = 2.0 * gamma(self.n + 4) * (self.constant.abs() + abs_s + deficit);
-        value - rounding - self.constant_error - graph_defect - frames
+        // K - sum s_i in double-double: the two cancel to the cost
+        let mut value = Accumulator::default();
+        value.add_product(self.constant.0, 1.0);
+        value.add_low(self.constant.1);
+        for si in self.certificate_diagonal(x) {
+            value.add_product(si, -1.0);
+        }
+        let forming: f64 = self.forming.iter().sum::<f64>() * (1.0 + gamma(self.n));
+        let charges = (value.bound() + self.constant_error + graph_defect + frames + forming)
+            * (1.0 + 8.0 * UNIT_ROUNDOFF);
+        // the last three subtractions, each within u of its result's magnitude
+        let v = value.value();
+        let rounding = 4.0 * UNIT_ROUNDOFF * (v.abs() + deficit + charges);
+        v - deficit - charges - rounding
+    }
+
+    /// The largest row sum of the forming error `|S_exact - S^|` (every row of node `i`: the
+    /// `i`-th of [`Self::forming`]): `lambda_min(S_exact) >= lambda_min(S^)` less it.
+    pub(super) fn max_forming(&self) -> f64 {
+        self.forming.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// An upper bound on `||S||_2` and on every entry (the largest absolute row sum of `Q`).
+    pub(super) fn q_norm(&self) -> f64 {
+        self.q_norm
+    }
+
+    /// The entry terms of `[D6]`(b) for `S`'s real form (the shifts' forming).
+    pub(super) fn entry_terms(&self) -> usize {
+        30 * self.max_degree + 16
     }
 }
+
+/// Per edge, the number of edges on its pair of images (in either order): repeated pairs are
+/// summed into one entry of `H`, one more rounding per repeat.
+fn pair_multiplicity(graph: &crate::multiple::MultipleProblem) -> Vec<usize> {
+    let key = |k: usize| {
+        let e = &graph.edges()[k];
+        (e.i.min(e.j), e.i.max(e.j))
+    };
+    let mut order: Vec<usize> = (0..graph.num_edges()).collect();
+    order.sort_unstable_by_key(|&k| key(k));
+    let mut count = vec![1usize; graph.num_edges()];
+    for run in order.chunk_by(|&a, &b| key(a) == key(b)) {
+        run.iter().for_each(|&k| count[k] = run.len());
+    }
+    count
+}
+
+/// Add `w u^T m v` to `acc`, every product error-free (`w` a power of two).
+fn add_form(acc: &mut Accumulator, u: &Vector3<f64>, m: &Matrix3<f64>, v: &Vector3<f64>, w: f64) {
+    for k in 0..3 {
+        for l in 0..3 {
+            acc.add_triple(w * m[(k, l)], u[k], v[l]);
+        }
+    }
+}
+
+/// Per edge, `|K(stored blocks) - K(exact data)| <= CONSTANT_FORMING u T_e` (`[G3]`, the
+/// blocks' forming error; about 199 derived).
+const CONSTANT_FORMING: f64 = 256.0;
+/// Per edge, `|fl(re) - re|` and `|fl(im) - im|` at most `ENTRY_FORMING u T_e` (about 475
+/// derived), plus `PAIR_FORMING u T_e` per other edge on the same pair (the sum of repeats).
+const ENTRY_FORMING: f64 = 512.0;
+const PAIR_FORMING: f64 = 48.0;
 
 /// A verified bound of the planar dual, and how it was proven.
 #[derive(Debug, Clone, Copy)]
@@ -208,8 +287,8 @@ pub fn verify_planar(
     budget: &Budget,
     deadline: &Deadline,
 ) -> Result<std::result::Result<PlanarBound, String>> {
-    let (s, sum_s, abs_s) = form.certificate_matrix(x);
-    let terms = 30 * form.max_degree + 16;
+    let s = form.certificate_matrix(x);
+    let terms = form.entry_terms();
     let max_values = budget.max_factor_values(s.nrows());
     let mut ch = match ShiftedCholesky::new_within(s, terms, max_values)? {
         Ok(ch) => ch,
@@ -233,8 +312,8 @@ pub fn verify_planar(
         if let Some(f) = ch.factor(shift, 0.1 * floor) {
             let mu = f.verified_lower_bound();
             return Ok(Ok(PlanarBound {
-                lower_bound: form.bound(graph_defect, sum_s, abs_s, mu),
-                verified_min_eigenvalue: mu,
+                lower_bound: form.bound_at(graph_defect, x, mu),
+                verified_min_eigenvalue: mu - form.max_forming(),
             }));
         }
         shift = match attempt {

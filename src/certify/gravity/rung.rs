@@ -1,7 +1,9 @@
 //! The SO(2) dual certificate `[G3]` as a rung of the gravity ladder: on large graphs its
 //! `lambda_min(S)` is proven first by the scalar comparison `[G9]` (`scalar.rs`), else (or when
-//! that does not certify) by the shifted Cholesky of `S`'s real form (`planar.rs`).
+//! that does not certify) by the shifted Cholesky of `S`'s real form (`planar.rs`), and when
+//! that charges too much, with `S`'s null space deflated by a ground `[G17]` (`grounded.rs`).
 
+use super::grounded::verify_planar_grounded;
 use super::planar::{PlanarForm, verify_planar};
 use super::scalar::verify_planar_scalar;
 use super::state::GravityState;
@@ -82,29 +84,45 @@ impl<'a> Rung<GravityState<'a>> for PlanarRung {
             Some(Err(why)) => tried = format!("scalar comparison [G9]: {why}; "),
             None => {}
         }
+        let (budget, deadline) = (&cx.tally.settings.budget, &cx.tally.deadline);
         let found = verify_planar(
             cx.problem,
             &form,
             &x,
             cx.tally.allowed_gap,
-            &cx.tally.settings.budget,
-            &cx.tally.deadline,
+            budget,
+            deadline,
         )?;
+        match found {
+            Ok(b) => {
+                let note = format!(
+                    "SO(2) multipliers at the estimate verified, lambda_min(S) >= {:.3e}",
+                    b.verified_min_eigenvalue
+                );
+                let mu = Some(b.verified_min_eigenvalue);
+                let lb = cx.offer(b.lower_bound, Proof::GravityDual, mu, &note);
+                if cx.tally.certifies(lb) {
+                    return Ok(Found::proved(lb, true, format!("{tried}{note}")));
+                }
+                tried = format!("{tried}{note}, not enough; ");
+            }
+            Err(reason) => tried = format!("{tried}{reason}; "),
+        }
+        // the null space deflated [G17]: no n x margin at a critical estimate
+        let (budget, deadline) = (&cx.tally.settings.budget, &cx.tally.deadline);
+        let found = verify_planar_grounded(&form, &x, gaps, budget, deadline)?;
         Ok(match found {
             Ok(b) => {
                 let note = format!(
-                    "{tried}SO(2) multipliers at the estimate verified, lambda_min(S) >= {:.3e}",
+                    "{tried}SO(2) multipliers at the estimate verified with the null space \
+                     deflated [G17], lambda_min(S) >= {:.3e}",
                     b.verified_min_eigenvalue
                 );
-                let lb = cx.offer(
-                    b.lower_bound,
-                    Proof::GravityDual,
-                    Some(b.verified_min_eigenvalue),
-                    &note,
-                );
+                let mu = Some(b.verified_min_eigenvalue);
+                let lb = cx.offer(b.lower_bound, Proof::GravityDual, mu, &note);
                 Found::proved(lb, cx.tally.certifies(lb), note)
             }
-            Err(reason) => Found::failed(format!("{tried}{reason}")),
+            Err(reason) => Found::failed(format!("{tried}grounded [G17]: {reason}")),
         })
     }
 }

@@ -10,11 +10,11 @@ use super::verified::{GroundedBound, VerifiedBound};
 use crate::certify::log::{Prediction, Refusal};
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Plan, Rung};
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::linalg::cholesky::without_block;
 use crate::linalg::two_pass_lanczos::smallest_ritz_value;
 use crate::linalg::{Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme};
 use crate::multiple::laplacian::edge_blocks;
-use faer::sparse::SparseColMat;
 use nalgebra::Matrix3;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -273,7 +273,7 @@ fn analyse(
         .budget
         .max_factor_values(dim)
         .min(cx.settings.dual.max_factor_nonzeros);
-    let ch = match ShiftedCholesky::new_within(without_block(cx.s(), ground)?, cx.terms, cap)? {
+    let ch = match ShiftedCholesky::new_within(without_block(cx.s(), ground, 3)?, cx.terms, cap)? {
         Ok(ch) => ch,
         Err(predicted) => {
             let refusal = ordering_refusal(cx.settings, predicted, dim)
@@ -436,43 +436,6 @@ fn bound(
     Ok(b)
 }
 
-/// `s` without the block row and column of node `g` (3 rows and columns).
-pub(crate) fn without_block(
-    s: &SparseColMat<usize, f64>,
-    g: usize,
-) -> Result<SparseColMat<usize, f64>> {
-    let n3 = s.nrows();
-    if s.symbolic().col_nnz().is_some() || n3 < 3 * g + 3 || s.ncols() != n3 {
-        return Err(Error::Solver {
-            message: "the grounded certificate matrix needs a compressed square S".into(),
-        });
-    }
-    let keep = |k: usize| k < 3 * g || k >= 3 * g + 3;
-    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
-    // the columns and rows of S in order, block g left out: sorted rows stay sorted
-    let mut col_ptr = Vec::with_capacity(n3 - 2);
-    let (mut rows, mut vals) = (Vec::with_capacity(val.len()), Vec::with_capacity(val.len()));
-    col_ptr.push(0);
-    for col in (0..n3).filter(|&c| keep(c)) {
-        for p in cp[col]..cp[col + 1] {
-            let r = ri[p];
-            if keep(r) {
-                rows.push(if r < 3 * g { r } else { r - 3 });
-                vals.push(val[p]);
-            }
-        }
-        col_ptr.push(rows.len());
-    }
-    let symbolic = faer::sparse::SymbolicSparseColMat::new_unsorted_checked(
-        n3 - 3,
-        n3 - 3,
-        col_ptr,
-        None,
-        rows,
-    );
-    Ok(SparseColMat::new(symbolic, vals))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -486,6 +449,7 @@ mod tests {
     use crate::multiple::{Initialisation, MultipleSettings, MultipleSolution, solve_multiple};
     use crate::so3::Rotation;
     use crate::so3::random_rotation;
+    use faer::sparse::SparseColMat;
     use nalgebra::SymmetricEigen;
     use rand::SeedableRng;
     use rand::rngs::StdRng;

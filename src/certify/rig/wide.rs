@@ -9,9 +9,8 @@
 
 use super::bundle::{Eigen, Moves, Space, Spectrum, added_sums};
 use super::couplings::{self, BYTES_PER_EDGE, Coupled};
-use crate::certify::multiple::grounded::without_block;
 use crate::certify::multiple::multipliers::{FirstOrder, certificate_matrix};
-use crate::linalg::cholesky::symmetric_matvec;
+use crate::linalg::cholesky::{symmetric_matvec, without_block};
 use crate::linalg::lanczos::lanczos_blocks;
 use crate::linalg::ldlt::LdltSolver;
 use crate::linalg::{Extreme, LanczosSettings};
@@ -141,7 +140,7 @@ fn search_bytes(z: &SearchSizes) -> u64 {
 /// at image 0): the negative ones and the smallest positive ones of the grounded `s`; `None`
 /// when its factor is over `max_values` or a pivot vanishes.
 fn bottom(s: &SparseColMat<usize, f64>, max_values: usize) -> Option<(Vec<f64>, DMatrix<f64>)> {
-    let grounded = without_block(s, 0).ok()?;
+    let grounded = without_block(s, 0, 3).ok()?;
     let factor = LdltSolver::new(grounded.as_ref(), max_values).ok()??;
     let n = grounded.nrows();
     let settings = LanczosSettings {
@@ -191,10 +190,9 @@ fn bottom(s: &SparseColMat<usize, f64>, max_values: usize) -> Option<(Vec<f64>, 
 #[cfg(test)]
 mod tests {
     use super::{SearchSizes, bottom, search_bytes};
-    use crate::certify::multiple::grounded::without_block;
     use crate::certify::multiple::multipliers::{FirstOrder, certificate_matrix};
     use crate::certify::rig::couplings::couple;
-    use crate::linalg::cholesky::to_dense;
+    use crate::linalg::cholesky::{to_dense, without_block};
     use crate::rig::{RigScene, RigSettings, polish_passes, solve_rig};
 
     /// The 6-sensor path rig of 10^4 frames (`rig_many -- 10000 anisotropic estimated
@@ -246,7 +244,7 @@ mod tests {
         let first = FirstOrder::at(&c.graph, &x).unwrap();
         let s = certificate_matrix(&c.graph, &first.lambdas).unwrap();
         let (values, vectors) = bottom(&s, usize::MAX).unwrap();
-        let dense = to_dense(without_block(&s, 0).unwrap().as_ref());
+        let dense = to_dense(without_block(&s, 0, 3).unwrap().as_ref());
         let exact = crate::linalg::dense::symmetric_eigenvalues(&dense).unwrap();
         let norm = dense.norm();
         let negative = exact.iter().filter(|&&l| l < 0.0).count();
@@ -290,7 +288,7 @@ mod tests {
             }
         }
         let s = SparseColMat::try_new_from_triplets(n, n, &t).unwrap();
-        let dense = to_dense(without_block(&s, 0).unwrap().as_ref());
+        let dense = to_dense(without_block(&s, 0, 3).unwrap().as_ref());
         let exact = crate::linalg::dense::symmetric_eigenvalues(&dense).unwrap();
         assert_eq!(exact.iter().filter(|&&l| l < 0.0).count(), 12);
         let (values, _) = bottom(&s, usize::MAX).unwrap();

@@ -5,59 +5,9 @@
 //! Laplacian; and noise-free data are proven to the target.
 
 use super::*;
-use crate::multiple::gravity::{GravityProblem, solve_gravity};
-use crate::multiple::synthetic::{SyntheticGraph, SyntheticGravity};
-use crate::multiple::{MultipleSettings, laplacian::edge_blocks};
+use crate::certify::gravity::test_support::{dense_planar, instance, lambda_min};
+use crate::multiple::laplacian::edge_blocks;
 use nalgebra::DMatrix;
-
-/// A full-gravity problem, its solve's phases and the planar form.
-fn instance(n: usize, edges: usize, sigma: f64, seed: u64) -> (PlanarForm, Vec<(f64, f64)>) {
-    let (graph, truth) = SyntheticGraph {
-        num_rotations: n,
-        num_edges: edges,
-        noise_sigma: sigma,
-        outlier_fraction: 0.0,
-        seed,
-    }
-    .generate();
-    let priors = SyntheticGravity {
-        noise_deg: 0.3,
-        missing_fraction: 0.0,
-        seed,
-    }
-    .priors(&truth)
-    .unwrap();
-    let p = GravityProblem::new(graph, priors).unwrap();
-    let solution = solve_gravity(&p, &MultipleSettings::default()).unwrap();
-    let form = PlanarForm::new(&p).unwrap();
-    let x = PlanarForm::phases(&p, &p.to_standard(&solution.rotations));
-    (form, x)
-}
-
-/// `S`'s real `2n x 2n` form, dense: blocks `[[re, -im], [im, re]]` and their transposes,
-/// the diagonal `s_i` twice.
-fn dense_planar(form: &PlanarForm, x: &[(f64, f64)]) -> DMatrix<f64> {
-    let n = form.len();
-    let mut m = DMatrix::<f64>::zeros(2 * n, 2 * n);
-    for &(i, j, re, im) in form.entries() {
-        let block = [[re, -im], [im, re]];
-        for (a, row) in block.iter().enumerate() {
-            for (b, v) in row.iter().enumerate() {
-                m[(2 * i + a, 2 * j + b)] += v;
-                m[(2 * j + b, 2 * i + a)] += v;
-            }
-        }
-    }
-    for (i, s) in form.certificate_diagonal(x).into_iter().enumerate() {
-        m[(2 * i, 2 * i)] += s;
-        m[(2 * i + 1, 2 * i + 1)] += s;
-    }
-    m
-}
-
-fn lambda_min(m: DMatrix<f64>) -> f64 {
-    m.symmetric_eigenvalues().min()
-}
 
 #[test]
 fn every_proven_bound_is_below_the_dense_smallest_eigenvalue() {
