@@ -685,6 +685,36 @@ impl ShiftedCholesky {
         self.s.nrows()
     }
 
+    /// A shift-invert Lanczos *estimate* of `lambda_min(S)` (`[D7]`: the largest eigenvalue of
+    /// `S^-1` through the unshifted factor; 30 iterations at most, relative tolerance `1e-3`,
+    /// `settings`' seed) and the iterations it took. `None` when a pivot is not positive or the
+    /// estimate is not positive and finite. Never a bound: it only picks shifts to verify.
+    pub fn shift_invert_estimate(
+        &mut self,
+        settings: &super::LanczosSettings,
+    ) -> Option<(f64, usize)> {
+        let dim = self.dim();
+        let f = self.factor(0.0, f64::INFINITY)?;
+        let settings = super::LanczosSettings {
+            max_iterations: 30,
+            tolerance: 1e-3,
+            ..*settings
+        };
+        let r = super::lanczos_extreme(
+            dim,
+            |x, y| {
+                y.copy_from_slice(x);
+                f.solve_in_place(y);
+            },
+            super::Extreme::Largest,
+            0.0,
+            &settings,
+            None,
+        );
+        let estimate = 1.0 / r.value;
+        (estimate.is_finite() && estimate > 0.0).then_some((estimate, r.iterations))
+    }
+
     /// Number of stored values of the Cholesky factor (memory/fill indicator).
     pub fn factor_len(&self) -> usize {
         self.symbolic.len_val()

@@ -11,7 +11,7 @@
 use super::planar::{PlanarBound, PlanarForm};
 use crate::certify::budget::{Budget, Deadline};
 use crate::linalg::cholesky::{gamma, sparse_matvec, without_block};
-use crate::linalg::{Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme};
+use crate::linalg::{LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF};
 use faer::sparse::SparseColMat;
 
 /// The gauge terms at the phases: the ground, `rho >= ||S^ x||` (`= ||S^ Y||_2`: `S^` commutes
@@ -68,8 +68,8 @@ fn gauge(s: &SparseColMat<usize, f64>, xi: &[f64]) -> Gauge {
 
 /// `[G17]`'s bound at phases `x`: `S^_{-g} >= c I` proven first at the `c` that makes `rho^2 /
 /// c` a thirtieth of `allowed_gap` (one factorisation at a critical estimate), else at half, a
-/// fifth and a twentieth of a shift-invert Lanczos estimate of `lambda_min(S^_{-g})` (`[D7]`,
-/// an estimate that only picks the shifts). `Err` with the reason when no shift verifies, the
+/// fifth and a twentieth of a shift-invert Lanczos estimate of `lambda_min(S^_{-g})`
+/// ([`ShiftedCholesky::shift_invert_estimate`], an estimate that only picks the shifts). `Err` with the reason when no shift verifies, the
 /// factor is over the memory budget, or a factorisation is predicted past the deadline.
 pub(super) fn verify_planar_grounded(
     form: &PlanarForm,
@@ -148,7 +148,9 @@ fn prove_c(
         }
         estimated = true;
         fits()?;
-        let estimate = estimate_c(ch)?;
+        let Some((estimate, _)) = ch.shift_invert_estimate(&LanczosSettings::default()) else {
+            return Err("no positive estimate of lambda_min(S without the ground's rows)".into());
+        };
         if rho2 / (0.5 * estimate) + gauge.h > allowed_gap {
             return Err(format!(
                 "not a critical point: lambda_min(S without the ground) ~ {estimate:.1e} and \
@@ -160,36 +162,6 @@ fn prove_c(
         shifts = vec![0.05 * estimate, 0.2 * estimate, 0.5 * estimate];
     }
     Err("S without the ground's rows was not verified positive definite".into())
-}
-
-/// A shift-invert Lanczos estimate of `lambda_min(S^_{-g})` through its factor (`[D7]`).
-fn estimate_c(ch: &mut ShiftedCholesky) -> std::result::Result<f64, String> {
-    let dim = ch.dim();
-    let Some(f) = ch.factor(0.0, f64::INFINITY) else {
-        return Err("S without the ground's rows is not positive definite (a pivot <= 0)".into());
-    };
-    let settings = LanczosSettings {
-        max_iterations: 30,
-        tolerance: 1e-3,
-        ..LanczosSettings::default()
-    };
-    let r = lanczos_extreme(
-        dim,
-        |x, y| {
-            y.copy_from_slice(x);
-            f.solve_in_place(y);
-        },
-        Extreme::Largest,
-        0.0,
-        &settings,
-        None,
-    );
-    let estimate = 1.0 / r.value;
-    if estimate.is_finite() && estimate > 0.0 {
-        Ok(estimate)
-    } else {
-        Err("no positive estimate of lambda_min(S without the ground's rows)".into())
-    }
 }
 
 #[cfg(test)]

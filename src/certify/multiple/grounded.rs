@@ -13,7 +13,7 @@ use crate::certify::rung::{Found, Plan, Rung};
 use crate::error::Result;
 use crate::linalg::cholesky::without_block;
 use crate::linalg::two_pass_lanczos::smallest_ritz_value;
-use crate::linalg::{Extreme, LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF, lanczos_extreme};
+use crate::linalg::{ShiftedCholesky, UNIT_ROUNDOFF};
 use crate::multiple::laplacian::edge_blocks;
 use nalgebra::Matrix3;
 use rand::rngs::StdRng;
@@ -366,33 +366,11 @@ fn estimate_c(
     notes: &mut Notes,
 ) -> std::result::Result<f64, String> {
     notes.factorizations += 1;
-    let dim = ch.dim();
-    let Some(f) = ch.factor(0.0, f64::INFINITY) else {
-        return Err("S without the ground's block is not positive definite (a pivot <= 0)".into());
-    };
-    let lz = LanczosSettings {
-        max_iterations: 30,
-        tolerance: 1e-3,
-        ..cx.settings.dual.lanczos
-    };
-    let r = lanczos_extreme(
-        dim,
-        |x, y| {
-            y.copy_from_slice(x);
-            f.solve_in_place(y);
-        },
-        Extreme::Largest,
-        0.0,
-        &lz,
-        None,
-    );
-    notes.lanczos_iterations += r.iterations;
-    let estimate = 1.0 / r.value;
-    if estimate.is_finite() && estimate > 0.0 {
-        Ok(estimate)
-    } else {
-        Err("no positive estimate of lambda_min(S without the ground's block)".into())
-    }
+    let (estimate, iterations) = ch
+        .shift_invert_estimate(&cx.settings.dual.lanczos)
+        .ok_or("no positive estimate of lambda_min(S without the ground's block)")?;
+    notes.lanczos_iterations += iterations;
+    Ok(estimate)
 }
 
 /// The bound of `[D15]` from a proven `c` (with the factorisation's `margin`).
