@@ -70,6 +70,11 @@ impl PlanarForm {
         let (mut constant, mut forming_constant) = (Accumulator::default(), 0.0);
         let mut entries = Vec::with_capacity(graph.num_edges());
         let multiplicity = pair_multiplicity(graph);
+        let per_entry_sum = if graph.information().is_some() {
+            1.0
+        } else {
+            1.0 / 3.0
+        };
         for (k, (i, j, a, b, c)) in edge_blocks(graph).enumerate() {
             let (fi, fj) = (&frames[i], &frames[j]);
             let (gi, gj) = (fi.column(2), fj.column(2));
@@ -84,8 +89,9 @@ impl PlanarForm {
                 add_form(&mut constant, &ui, &a, &ui, 1.0);
                 add_form(&mut constant, &uj, &b, &uj, 1.0);
             }
-            // T_e >= tr(H_e) (anisotropic) or w (isotropic) bounds the blocks' forming error
-            let t = abs_sum(&a).max(abs_sum(&b)) * (1.0 + 1e-10);
+            // T_e >= tr(H_e) (anisotropic: sum |2M| >= |tr 2M| = tr H) or w (isotropic: 2M = w I)
+            // bounds the blocks' forming error
+            let t = abs_sum(&a).max(abs_sum(&b)) * per_entry_sum * (1.0 + 1e-10);
             forming_constant += CONSTANT_FORMING * t;
             let entry = (ENTRY_FORMING + PAIR_FORMING * (multiplicity[k] - 1) as f64) * t;
             forming[i] += 2.0 * entry;
