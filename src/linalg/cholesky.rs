@@ -133,6 +133,46 @@ pub fn without_block(
     Ok(SparseColMat::new(symbolic, vals))
 }
 
+/// `s` (symmetric, both triangles stored) without its rows and columns whose stored values are
+/// all zero: an exactly zero row adds nothing to `x^T s x`, so a lower bound on what remains
+/// bounds `x^T s x` by the other coordinates of `x` (the grounded bound `[D15]` "Coordinates
+/// no edge sees").
+pub fn without_zero_rows(s: SparseColMat<usize, f64>) -> SparseColMat<usize, f64> {
+    let dim = s.ncols();
+    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
+    if s.nrows() != dim || s.symbolic().col_nnz().is_some() {
+        return s;
+    }
+    let zero: Vec<bool> = (0..dim)
+        .map(|c| val[cp[c]..cp[c + 1]].iter().all(|v| *v == 0.0))
+        .collect();
+    if !zero.iter().any(|z| *z) {
+        return s;
+    }
+    // each kept coordinate's new index
+    let mut index = vec![usize::MAX; dim];
+    let mut kept = 0;
+    for (c, _) in zero.iter().enumerate().filter(|(_, z)| !**z) {
+        index[c] = kept;
+        kept += 1;
+    }
+    let mut col_ptr = Vec::with_capacity(kept + 1);
+    let (mut rows, mut vals) = (Vec::with_capacity(val.len()), Vec::with_capacity(val.len()));
+    col_ptr.push(0);
+    for col in (0..dim).filter(|&c| !zero[c]) {
+        for p in cp[col]..cp[col + 1] {
+            if !zero[ri[p]] {
+                rows.push(index[ri[p]]);
+                vals.push(val[p]);
+            }
+        }
+        col_ptr.push(rows.len());
+    }
+    let symbolic =
+        faer::sparse::SymbolicSparseColMat::new_unsorted_checked(kept, kept, col_ptr, None, rows);
+    SparseColMat::new(symbolic, vals)
+}
+
 /// `y = A x` for a sparse matrix with both triangles stored (column-major traversal).
 pub fn sparse_matvec(a: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64]) {
     y.iter_mut().for_each(|v| *v = 0.0);
@@ -1053,6 +1093,28 @@ mod tests {
     use super::*;
     use crate::linalg::lanczos::{Extreme, LanczosSettings, lanczos_extreme};
     use faer::sparse::Triplet;
+
+    /// Exactly zero rows and columns are left out, the rest kept in order.
+    #[test]
+    fn zero_rows_are_left_out() {
+        let t = [
+            (0, 0, 2.0),
+            (0, 2, -1.0),
+            (2, 0, -1.0),
+            (2, 2, 3.0),
+            (1, 1, 0.0),
+        ];
+        let t: Vec<_> = t.iter().map(|&(r, c, v)| Triplet::new(r, c, v)).collect();
+        let s = SparseColMat::try_new_from_triplets(3, 3, &t).unwrap();
+        let d = to_dense(without_zero_rows(s).as_ref());
+        assert_eq!((d.nrows(), d.ncols()), (2, 2));
+        assert_eq!(
+            (d[(0, 0)], d[(0, 1)], d[(1, 0)], d[(1, 1)]),
+            (2.0, -1.0, -1.0, 3.0)
+        );
+        let full = SparseColMat::try_new_from_triplets(1, 1, &[Triplet::new(0, 0, 1.0)]).unwrap();
+        assert_eq!(without_zero_rows(full).nrows(), 1);
+    }
 
     /// Path-graph Laplacian (tridiagonal 2,-1) of size n plus shift c: eigenvalues are known in
     /// closed form: c + 2 - 2 cos(k pi / (n+1)), k = 1..n.

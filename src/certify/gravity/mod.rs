@@ -152,13 +152,14 @@ fn certify_soft(
     let augmented = problem.soft_augmented(problem.problem())?;
     let mut settings = settings.clone();
     // The world node's edges see only its third row (M = w e_3 e_3^T): its turns about e_3 are
-    // a symmetry beyond the gauge, so S has two more null directions than the three the
-    // grounded bound and the block comparison's pencil lemma allow; they cannot prove here
-    // (at 10^4 cameras they failed in 19 s before the shifted Cholesky proved in 7.5 s).
+    // a symmetry beyond the gauge, so S has two more null directions than the three the block
+    // comparison's pencil lemma allows; it cannot prove here (at 10^4 cameras it failed in 19 s
+    // before the shifted Cholesky proved in 7.5 s). The grounded bound leaves the world's two
+    // unseen coordinates out (their rows of S exactly zero with their multipliers, [D15]).
     settings
         .dual
         .proofs
-        .retain(|p| !matches!(p, Proof::Grounded | Proof::BlockComparison));
+        .retain(|p| !matches!(p, Proof::BlockComparison));
     let mut c = certify_multiple(&augmented, &problem.soft_point(rotations), &settings)?;
     // the augmented graph's edges are the view graph's and the priors' (said so, [G10])
     let (m, k) = (problem.problem().num_edges(), problem.priors().num_known());

@@ -376,7 +376,13 @@ fn search_at(
     settings.validate()?;
     super::multipliers::check_rotations(problem, rotations)?;
     let frames = frames(problem, rotations)?;
-    let initial: Vec<Matrix3<f64>> = frames.iter().map(|f| initial_penalty(&f.k)).collect();
+    let initial: Vec<Matrix3<f64>> = frames
+        .iter()
+        .map(|f| match f.fixed {
+            true => Matrix3::zeros(),
+            false => initial_penalty(&f.k),
+        })
+        .collect();
     let lambdas = multipliers(problem, rotations)?;
     let s = certificate_matrix(problem, &lambdas)?;
     let s_scale = crate::linalg::cholesky::inf_norm(s.as_ref());
@@ -682,7 +688,10 @@ impl Round<'_> {
         let w: Vec<Vector3<f64>> = edges
             .iter()
             .zip(self.frames)
-            .map(|(e, f)| apply_b(e, &f.x, v))
+            .map(|(e, f)| match f.fixed {
+                true => Vector3::zeros(),
+                false => apply_b(e, &f.x, v),
+            })
             .collect();
         let norm_sq = 0.25 * w.iter().map(|x| x.norm_squared().powi(2)).sum::<f64>();
         (norm_sq > 0.0).then_some(Cut { base, w, norm_sq })

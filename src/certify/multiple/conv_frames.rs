@@ -19,6 +19,12 @@ use std::time::Instant;
 pub(super) struct Frame {
     pub(super) x: Matrix3<f64>,
     pub(super) k: Matrix3<f64>,
+    /// The edge's `2M` has an exactly zero row (information `w diag(1, 1, 0)`-like: a soft
+    /// gravity prior's edge to the world node, `paper-notes/gravity.md` `[G10]`): it carries no
+    /// penalty (`P_e = 0` is in the cone), so the surrogate keeps its data exactly and the
+    /// world node's two unseen coordinates stay exactly outside every edge (`[A11]` "Edges
+    /// that see two coordinates").
+    pub(super) fixed: bool,
 }
 
 pub(super) fn edge_coefficient(edge: &Edge, h: &Matrix3<f64>) -> Matrix3<f64> {
@@ -34,7 +40,9 @@ pub(super) fn frames(problem: &MultipleProblem, rotations: &[Rotation]) -> Resul
         .map(|(e, h)| {
             let x = rotations[e.j].matrix() * rotations[e.i].matrix().transpose();
             let k = x.transpose() * edge_coefficient(e, h.matrix());
-            Frame { x, k }
+            let m2 = h.twice_chordal_matrix();
+            let fixed = (0..3).any(|r| (0..3).all(|c| m2[(r, c)] == 0.0));
+            Frame { x, k, fixed }
         })
         .collect())
 }

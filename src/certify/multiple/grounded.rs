@@ -11,7 +11,7 @@ use crate::certify::log::{Prediction, Refusal};
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Plan, Rung};
 use crate::error::Result;
-use crate::linalg::cholesky::without_block;
+use crate::linalg::cholesky::{without_block, without_zero_rows};
 use crate::linalg::two_pass_lanczos::smallest_ritz_value;
 use crate::linalg::{ShiftedCholesky, UNIT_ROUNDOFF};
 use crate::multiple::laplacian::edge_blocks;
@@ -152,7 +152,11 @@ fn ground(cx: &Check<'_>, rotations: &[crate::so3::Rotation]) -> (usize, f64) {
         degree[e.i] += e.weight;
         degree[e.j] += e.weight;
     }
+    // a node with an exactly zero row of S (a coordinate no edge sees) cannot ground: the
+    // gauge's columns restricted to the other nodes stay null
+    let blocks = cx.diagonal_blocks();
     let g = (0..n)
+        .filter(|&i| (0..3).all(|a| blocks[i][(a, a)] != 0.0))
         .max_by(|&a, &b| degree[a].total_cmp(&degree[b]))
         .unwrap_or(0);
     let u = UNIT_ROUNDOFF;
@@ -187,10 +191,14 @@ pub(super) fn hopeless(
         q_diag[i] += qi.diagonal();
         q_diag[j] += qj.diagonal();
     }
-    let g = (0..n).max_by(|&a, &b| degree[a].total_cmp(&degree[b]))?;
+    let g = (0..n)
+        .filter(|&i| (0..3).all(|a| q_diag[i][a] != 0.0))
+        .max_by(|&a, &b| degree[a].total_cmp(&degree[b]))?;
     let c_upper = (0..n)
         .filter(|&i| i != g)
         .flat_map(|i| (0..3).map(move |a| (i, a)))
+        // coordinates no edge sees are left out of S_{-g} (their rows are zero)
+        .filter(|&(i, a)| q_diag[i][a] != 0.0)
         .map(|(i, a)| q_diag[i][a] - lambdas[i][(a, a)])
         .fold(f64::INFINITY, f64::min);
     let deficit = 3.0 * terms.rho * terms.rho / c_upper;
@@ -218,6 +226,8 @@ fn not_critical(cx: &Check<'_>, terms: &GaugeTerms, ground: usize) -> Option<f64
         .enumerate()
         .filter(|&(i, _)| i != ground)
         .flat_map(|(_, b)| (0..3).map(move |a| b[(a, a)]))
+        // exactly zero: a coordinate no edge sees, left out of S_{-g}
+        .filter(|&d| d != 0.0)
         .fold(f64::INFINITY, f64::min);
     let needed = 3.0 * terms.rho * terms.rho / cx.gap;
     if !(diag.is_finite() && diag > 0.0) {
@@ -273,7 +283,9 @@ fn analyse(
         .budget
         .max_factor_values(dim)
         .min(cx.settings.dual.max_factor_nonzeros);
-    let ch = match ShiftedCholesky::new_within(without_block(cx.s(), ground, 3)?, cx.terms, cap)? {
+    // the rows of coordinates no edge sees (exactly zero with their multipliers) left out too
+    let grounded = without_zero_rows(without_block(cx.s(), ground, 3)?);
+    let ch = match ShiftedCholesky::new_within(grounded, cx.terms, cap)? {
         Ok(ch) => ch,
         Err(predicted) => {
             let refusal = ordering_refusal(cx.settings, predicted, dim)

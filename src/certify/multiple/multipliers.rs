@@ -10,7 +10,7 @@ use crate::linalg::compensated::Accumulator;
 use crate::linalg::{UNIT_ROUNDOFF, gamma};
 use crate::multiple::MultipleProblem;
 use crate::multiple::anisotropic::exactly_isotropic;
-use crate::multiple::laplacian::laplacian_plus_diagonal;
+use crate::multiple::laplacian::{edge_blocks, laplacian_plus_diagonal};
 use crate::so3::Rotation;
 use faer::sparse::SparseColMat;
 use nalgebra::Matrix3;
@@ -187,6 +187,14 @@ impl FirstOrder {
             lambdas.push(sym);
             skew2 += skew.norm_squared();
         }
+        // coordinates no edge sees: their multipliers' rows are half the stationarity residual
+        // there; zero, `S`'s rows are exactly zero, which the grounded bound leaves out [D15]
+        for (l, zero) in lambdas.iter_mut().zip(unseen_coordinates(problem)) {
+            for a in (0..3).filter(|&a| zero[a]) {
+                l.row_mut(a).fill(0.0);
+                l.column_mut(a).fill(0.0);
+            }
+        }
         Ok(FirstOrder {
             qy,
             lambdas,
@@ -201,6 +209,26 @@ impl FirstOrder {
         self.gauge
             .get_or_init(|| gauge_terms_from(self.qy.clone(), rotations, &self.lambdas))
     }
+}
+
+/// Per node, which of its three coordinates no edge sees (an exactly zero row of `Q`: every
+/// edge's blocks zero in that row): the world node of soft gravity priors in its first two
+/// (`paper-notes/gravity.md` `[G10]`; its edges' `2M = diag(0, 0, 2w)`). With scalar weights
+/// every edge sees every coordinate of both ends (an isolated node's multipliers are zero
+/// anyway).
+pub(crate) fn unseen_coordinates(problem: &MultipleProblem) -> Vec<[bool; 3]> {
+    let n = problem.num_rotations();
+    if problem.information().is_none() {
+        return vec![[false; 3]; n];
+    }
+    let mut seen = vec![[false; 3]; n];
+    for (i, j, a, b, c) in edge_blocks(problem) {
+        for r in 0..3 {
+            seen[i][r] |= (0..3).any(|k| a[(r, k)] != 0.0 || c[(r, k)] != 0.0);
+            seen[j][r] |= (0..3).any(|k| b[(r, k)] != 0.0 || c[(k, r)] != 0.0);
+        }
+    }
+    seen.into_iter().map(|s| s.map(|v| !v)).collect()
 }
 
 /// The symmetric and skew parts of `(Q Y)_i R_i^T`: the multiplier and the stationarity
