@@ -100,37 +100,13 @@ pub fn without_block(
     g: usize,
     size: usize,
 ) -> Result<SparseColMat<usize, f64>> {
-    let dim = s.nrows();
     let (first, end) = (size * g, size * g + size);
-    if s.symbolic().col_nnz().is_some() || dim < end || s.ncols() != dim {
+    if s.symbolic().col_nnz().is_some() || s.nrows() < end || s.ncols() != s.nrows() {
         return Err(Error::Solver {
             message: "the grounded certificate matrix needs a compressed square S".into(),
         });
     }
-    let keep = |k: usize| k < first || k >= end;
-    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
-    // the columns and rows of S in order, block g left out: sorted rows stay sorted
-    let mut col_ptr = Vec::with_capacity(dim + 1 - size);
-    let (mut rows, mut vals) = (Vec::with_capacity(val.len()), Vec::with_capacity(val.len()));
-    col_ptr.push(0);
-    for col in (0..dim).filter(|&c| keep(c)) {
-        for p in cp[col]..cp[col + 1] {
-            let r = ri[p];
-            if keep(r) {
-                rows.push(if r < first { r } else { r - size });
-                vals.push(val[p]);
-            }
-        }
-        col_ptr.push(rows.len());
-    }
-    let symbolic = faer::sparse::SymbolicSparseColMat::new_unsorted_checked(
-        dim - size,
-        dim - size,
-        col_ptr,
-        None,
-        rows,
-    );
-    Ok(SparseColMat::new(symbolic, vals))
+    Ok(restricted(s, |k| k < first || k >= end))
 }
 
 /// `s` (symmetric, both triangles stored) without its rows and columns whose stored values are
@@ -138,30 +114,37 @@ pub fn without_block(
 /// bounds `x^T s x` by the other coordinates of `x` (the grounded bound `[D15]` "Coordinates
 /// no edge sees").
 pub fn without_zero_rows(s: SparseColMat<usize, f64>) -> SparseColMat<usize, f64> {
-    let dim = s.ncols();
-    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
-    if s.nrows() != dim || s.symbolic().col_nnz().is_some() {
-        return s;
-    }
-    let zero: Vec<bool> = (0..dim)
+    let (cp, val) = (s.col_ptr(), s.val());
+    let zero: Vec<bool> = (0..s.ncols())
         .map(|c| val[cp[c]..cp[c + 1]].iter().all(|v| *v == 0.0))
         .collect();
-    if !zero.iter().any(|z| *z) {
+    if !zero.contains(&true) || s.nrows() != s.ncols() || s.symbolic().col_nnz().is_some() {
         return s;
     }
+    restricted(&s, |k| !zero[k])
+}
+
+/// The rows and columns `k` of the compressed square `s` with `keep(k)`, in order (sorted rows
+/// stay sorted).
+fn restricted(
+    s: &SparseColMat<usize, f64>,
+    keep: impl Fn(usize) -> bool,
+) -> SparseColMat<usize, f64> {
+    let dim = s.ncols();
+    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
     // each kept coordinate's new index
     let mut index = vec![usize::MAX; dim];
     let mut kept = 0;
-    for (c, _) in zero.iter().enumerate().filter(|(_, z)| !**z) {
-        index[c] = kept;
+    for k in (0..dim).filter(|&k| keep(k)) {
+        index[k] = kept;
         kept += 1;
     }
     let mut col_ptr = Vec::with_capacity(kept + 1);
     let (mut rows, mut vals) = (Vec::with_capacity(val.len()), Vec::with_capacity(val.len()));
     col_ptr.push(0);
-    for col in (0..dim).filter(|&c| !zero[c]) {
+    for col in (0..dim).filter(|&c| keep(c)) {
         for p in cp[col]..cp[col + 1] {
-            if !zero[ri[p]] {
+            if keep(ri[p]) {
                 rows.push(index[ri[p]]);
                 vals.push(val[p]);
             }

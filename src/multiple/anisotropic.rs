@@ -262,6 +262,14 @@ impl Information {
     pub fn chordal_matrix_indefinite(&self) -> bool {
         self.chordal_matrix().symmetric_eigenvalues().min() < 0.0
     }
+
+    /// `true` when `2M` ([`Self::twice_chordal_matrix`]) has an exactly zero row: the edge sees
+    /// only two coordinates of its ends (information `w diag(1, 1, 0)` in the first node's
+    /// frame, a soft gravity prior's edge to the world node, `paper-notes/gravity.md` `[G10]`).
+    pub fn sees_two_coordinates(&self) -> bool {
+        let m2 = self.twice_chordal_matrix();
+        (0..3).any(|r| (0..3).all(|c| m2[(r, c)] == 0.0))
+    }
 }
 
 /// The smallest eigenvalue [`Information::start_weight`] counts, relative to `tr(H) / 3`: a

@@ -14,9 +14,11 @@ use crate::linalg::cholesky::{gamma, sparse_matvec, without_block};
 use crate::linalg::{LanczosSettings, ShiftedCholesky, UNIT_ROUNDOFF};
 use faer::sparse::SparseColMat;
 
-/// The gauge terms at the phases: the ground, `rho >= ||S^ x||` (`= ||S^ Y||_2`: `S^` commutes
-/// with the quarter turn), `h >= max(0, -x^T S^ x)` (`Y^T S^ Y = (x^T S^ x) I`) and a lower bound
-/// on `|x_g|^2`, every rounding of the products charged.
+/// The gauge terms at the phases: the ground, `rho >= ||S^ Y||_2` and `h >= max(0,
+/// -lambda_min(Y^T S^ Y))` for `Y = [xi, J xi]`, and a lower bound on `|x_g|^2`, every rounding
+/// of the products charged. (`S^` commutes with the quarter turn `J` when its repeated pairs are
+/// summed alike in both entries, which makes the second column redundant; both are computed so
+/// that nothing rests on the summation order.)
 #[derive(Debug, Clone, Copy)]
 struct Gauge {
     ground: usize,
@@ -25,42 +27,70 @@ struct Gauge {
     ground_norm2: f64,
 }
 
-/// The image whose row of `S^` has the largest absolute sum (the best-connected: its removal
+/// `fl(S^ y)` and `|S^| |y|` for the compressed symmetric `S^`.
+fn products(s: &SparseColMat<usize, f64>, y: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
+    let mut abs_product = vec![0.0f64; y.len()];
+    for col in 0..s.ncols() {
+        for p in cp[col]..cp[col + 1] {
+            abs_product[ri[p]] += val[p].abs() * y[col].abs();
+        }
+    }
+    let mut v = vec![0.0f64; y.len()];
+    sparse_matvec(s.as_ref(), y, &mut v);
+    (v, abs_product)
+}
+
+/// The image whose rows of `S^` have the largest absolute sum (the best-connected: its removal
 /// leaves the largest `c`), and the gauge terms of [`Gauge`] at the real phases `xi`.
 fn gauge(s: &SparseColMat<usize, f64>, xi: &[f64]) -> Gauge {
     let dim = s.nrows();
-    let (cp, ri, val) = (s.col_ptr(), s.row_idx(), s.val());
-    // |S^| |xi| and each node's absolute row sum (S^ is stored with both triangles)
-    let mut abs_product = vec![0.0f64; dim];
+    let (cp, val) = (s.col_ptr(), s.val());
     let mut row_abs = vec![0.0f64; dim / 2];
     let mut longest = 0usize;
     for col in 0..dim {
         longest = longest.max(cp[col + 1] - cp[col]);
-        for p in cp[col]..cp[col + 1] {
-            abs_product[ri[p]] += val[p].abs() * xi[col].abs();
-            row_abs[col / 2] += val[p].abs();
-        }
+        row_abs[col / 2] += val[cp[col]..cp[col + 1]]
+            .iter()
+            .map(|v| v.abs())
+            .sum::<f64>();
     }
     let ground = (0..dim / 2)
         .max_by(|&a, &b| row_abs[a].total_cmp(&row_abs[b]))
         .unwrap_or(0);
-    let mut v = vec![0.0f64; dim];
-    sparse_matvec(s.as_ref(), xi, &mut v);
+    // the columns of Y: xi and J xi (each node's (c, s) turned to (-s, c))
+    let turned: Vec<f64> = xi.chunks(2).flat_map(|p| [-p[1], p[0]]).collect();
+    let y = [xi, &turned[..]];
+    let sy = [products(s, y[0]), products(s, y[1])];
     let u = UNIT_ROUNDOFF;
-    // |fl(S^ xi) - S^ xi| <= gamma_k |S^| |xi| entrywise, k the longest row (symmetric: column)
+    // |fl(S^ y) - S^ y| <= gamma_k |S^| |y| entrywise, k the longest row (symmetric: column)
     let product_error = gamma(longest + 1);
-    let norm = |w: &[f64]| w.iter().map(|t| t * t).sum::<f64>().sqrt() * (1.0 + gamma(dim + 4));
-    let rho = (norm(&v) + product_error * norm(&abs_product)) * (1.0 + 4.0 * u);
-    // x^T S^ x >= t - err: the dot product's rounding and the product's
-    let t: f64 = xi.iter().zip(&v).map(|(a, b)| a * b).sum();
-    let dot_error = gamma(dim + 2) * xi.iter().zip(&v).map(|(a, b)| (a * b).abs()).sum::<f64>();
-    let product: f64 = xi.iter().zip(&abs_product).map(|(a, b)| a.abs() * b).sum();
-    let err = (dot_error + product_error * product) * (1.0 + 4.0 * u);
-    let h = (err - t).max(0.0) * (1.0 + 4.0 * u);
+    let sq = |w: &[f64]| w.iter().map(|t| t * t).sum::<f64>();
+    let frobenius = (sq(&sy[0].0) + sq(&sy[1].0)).sqrt();
+    let abs_frobenius = (sq(&sy[0].1) + sq(&sy[1].1)).sqrt();
+    let rho = (frobenius + product_error * abs_frobenius) * (1.0 + gamma(2 * dim + 4));
+    // Y^T S^ Y, each entry with its error: the dot product's rounding and the product's
+    let mut g = [[0.0f64; 2]; 2];
+    let mut err = 0.0;
+    for a in 0..2 {
+        for b in 0..2 {
+            let (v, abs_v) = (&sy[b].0, &sy[b].1);
+            g[a][b] = y[a].iter().zip(v).map(|(p, q)| p * q).sum();
+            let dot: f64 = y[a].iter().zip(v).map(|(p, q)| (p * q).abs()).sum();
+            let product: f64 = y[a].iter().zip(abs_v).map(|(p, q)| p.abs() * q).sum();
+            err += gamma(dim + 2) * dot + product_error * product;
+        }
+    }
+    // the smallest eigenvalue of the symmetric part, within a few ulps of its entries (Weyl:
+    // the entries' errors move it by at most their sum)
+    let (d1, d2, off) = (g[0][0], g[1][1], 0.5 * (g[0][1] + g[1][0]));
+    let lambda_min = 0.5 * (d1 + d2) - (0.25 * (d1 - d2) * (d1 - d2) + off * off).sqrt();
+    let evaluation = 8.0 * u * (d1.abs() + d2.abs() + 2.0 * off.abs());
+    let h = ((err + evaluation) * (1.0 + 4.0 * u) - lambda_min).max(0.0) * (1.0 + 4.0 * u);
     let g2 = xi[2 * ground] * xi[2 * ground] + xi[2 * ground + 1] * xi[2 * ground + 1];
     Gauge {
         ground,
-        rho,
+        rho: rho * (1.0 + 4.0 * u),
         h,
         ground_norm2: g2 * (1.0 - gamma(3)),
     }

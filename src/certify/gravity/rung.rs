@@ -84,15 +84,9 @@ impl<'a> Rung<GravityState<'a>> for PlanarRung {
             Some(Err(why)) => tried = format!("scalar comparison [G9]: {why}; "),
             None => {}
         }
-        let (budget, deadline) = (&cx.tally.settings.budget, &cx.tally.deadline);
-        let found = verify_planar(
-            cx.problem,
-            &form,
-            &x,
-            cx.tally.allowed_gap,
-            budget,
-            deadline,
-        )?;
+        let (settings, deadline, gap) =
+            (cx.tally.settings, &cx.tally.deadline, cx.tally.allowed_gap);
+        let found = verify_planar(cx.problem, &form, &x, gap, &settings.budget, deadline)?;
         match found {
             Ok(b) => {
                 let note = format!(

@@ -40,8 +40,7 @@ pub(super) fn frames(problem: &MultipleProblem, rotations: &[Rotation]) -> Resul
         .map(|(e, h)| {
             let x = rotations[e.j].matrix() * rotations[e.i].matrix().transpose();
             let k = x.transpose() * edge_coefficient(e, h.matrix());
-            let m2 = h.twice_chordal_matrix();
-            let fixed = (0..3).any(|r| (0..3).all(|c| m2[(r, c)] == 0.0));
+            let fixed = h.sees_two_coordinates();
             Frame { x, k, fixed }
         })
         .collect())

@@ -213,12 +213,17 @@ impl FirstOrder {
 
 /// Per node, which of its three coordinates no edge sees (an exactly zero row of `Q`: every
 /// edge's blocks zero in that row): the world node of soft gravity priors in its first two
-/// (`paper-notes/gravity.md` `[G10]`; its edges' `2M = diag(0, 0, 2w)`). With scalar weights
-/// every edge sees every coordinate of both ends (an isolated node's multipliers are zero
-/// anyway).
+/// (`paper-notes/gravity.md` `[G10]`; its edges' `2M = diag(0, 0, 2w)`). Only edges that see
+/// two coordinates ([`crate::multiple::anisotropic::Information::sees_two_coordinates`]) can
+/// leave one unseen; without them every coordinate is seen (an isolated node's multipliers are
+/// zero anyway).
 pub(crate) fn unseen_coordinates(problem: &MultipleProblem) -> Vec<[bool; 3]> {
     let n = problem.num_rotations();
-    if problem.information().is_none() {
+    // only an edge whose 2M has a zero row can leave a coordinate unseen: one cheap pass first
+    let some = problem
+        .information()
+        .is_some_and(|info| info.iter().any(|h| h.sees_two_coordinates()));
+    if !some {
         return vec![[false; 3]; n];
     }
     let mut seen = vec![[false; 3]; n];
