@@ -437,9 +437,9 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     certify: ``"auto"``, ``"dual"``, ``"sdp"``, ``"staircase"`` or ``"none"``.
 ///     loss_threshold: Huber threshold / Cauchy scale in degrees (default 5), and the
 ///         inlier threshold (an edge is an inlier iff its residual is at most this many
-///         degrees); given, also ``"auto"``'s Cauchy scale, which is otherwise from the data
-///         (three times the median residual at the L1 solution;
-///         ``to_dict()["pipeline"]["loss_choice"]["scale"]``).
+///         degrees); given, also ``"auto"``'s Cauchy scale and inlier threshold, which are
+///         otherwise from the data (1.5 and 3 times the median residual at the L1 solution,
+///         ``[D20]``; ``to_dict()["pipeline"]["loss_choice"]["scale"]``).
 ///     init: optional ``(n, 3, 3)`` initial estimate (default: spectral initialisation).
 ///     max_memory: the certificate's memory budget per factorisation, bytes (default 4 GiB).
 ///     max_seconds: the run's time budget, seconds (default 600; ``None``: no limit), one
@@ -482,7 +482,8 @@ fn optional_vector(weights: Option<&Bound<'_, PyAny>>, len: usize) -> PyResult<O
 ///     init_method: the local solver's start without ``init``: ``"spectral"`` (default) or
 ///         ``"tree"`` (the maximum-weight spanning tree), as ``--init-method``.
 ///     inlier_threshold: robust losses: an edge is an inlier iff its residual angle at the
-///         robust estimate is at most this many degrees (default ``loss_threshold``), as
+///         robust estimate is at most this many degrees (default ``loss_threshold``; for
+///         ``"auto"`` without it, from the data as above), as
 ///         ``--inlier-threshold``; the inlier graph is refined and certified.
 ///
 /// Returns:

@@ -3,12 +3,14 @@
 //! a fixed angle. The scale is [`SCALE_PER_MEDIAN`] times the median residual angle at the
 //! robust solve's own L1 start (`[M9]`; of the view graph with its weights, or with unit weights
 //! and no information where it has information, `[A14]`'s first stage), and the inlier
-//! threshold (the certified inlier graph's) [`INLIER_PER_MEDIAN`] times it: the L1 solution fits
+//! threshold (the certified inlier graph's) [`INLIER_PER_MEDIAN`] times it (times the median
+//! Mahalanobis angle at that solution where the graph has information: the angle the threshold
+//! cuts there, about 0.4 of the residual angle on generated COLMAP scenes): the L1 solution fits
 //! the inliers and leaves the outliers' residuals large, so with fewer than half the edges wrong
 //! the median is an inlier's. For Gaussian noise of `sigma` per axis the inliers' residual angle
 //! is `sigma chi(3)`, median `1.538 sigma`; the scale `1.5 x median = 2.3 sigma` is about
 //! Cauchy's classical tuning constant (`2.385 sigma`, 95 % efficiency at the normal), and the
-//! threshold `3 x median = 4.6 sigma` leaves 0.1 % of such inliers outside the inlier graph.
+//! threshold `3 x median = 4.6 sigma` leaves 0.01 % of such inliers outside the inlier graph.
 
 use crate::error::Result;
 use crate::multiple::problem::MultipleProblem;
@@ -56,7 +58,8 @@ pub const DEFAULT_THRESHOLD_DEG: f64 = 5.0;
 pub const SCALE_PER_MEDIAN: f64 = 1.5;
 
 /// The inlier threshold, unless one is given, is this many times the median residual angle at
-/// the L1 solution (`[D20]`: `4.6 sigma`, 0.1 % of Gaussian inliers beyond it).
+/// the L1 solution, or where the graph has information its median Mahalanobis angle
+/// (`[D20]`: `4.6 sigma`, 0.01 % of Gaussian inliers beyond it).
 pub const INLIER_PER_MEDIAN: f64 = 3.0;
 
 /// The data's scale and inlier threshold are at least this many degrees (data that fit to
@@ -81,8 +84,15 @@ pub struct DataScale {
     /// [`MIN_DATA_SCALE_DEG`]..[`MAX_DATA_SCALE_DEG`], rounded to three significant digits,
     /// degrees.
     pub scale_deg: f64,
-    /// The inlier threshold unless one is given: [`INLIER_PER_MEDIAN`] x `median_deg`, within
-    /// the same bounds, rounded the same way, degrees (0 in records written before it existed).
+    /// Where the graph has information: the median Mahalanobis angle (`[A14]`, the angle its
+    /// inlier threshold is compared with) at the same L1 solution, degrees; `None` with scalar
+    /// weights (and in records written before it existed).
+    #[serde(default)]
+    pub mahalanobis_median_deg: Option<f64>,
+    /// The inlier threshold unless one is given: [`INLIER_PER_MEDIAN`] x the median of the angle
+    /// it is compared with (`mahalanobis_median_deg` where the graph has information, else
+    /// `median_deg`), within the same bounds, rounded the same way, degrees (0 in records
+    /// written before it existed).
     #[serde(default)]
     pub inlier_threshold_deg: f64,
     /// Whether `SCALE_PER_MEDIAN x median_deg` was outside
@@ -96,17 +106,23 @@ pub struct DataScale {
 }
 
 impl DataScale {
-    /// `", at most 10 deg"` (or `", at least 0.01 deg"`) when `factor x median_deg` was outside
-    /// [`MIN_DATA_SCALE_DEG`]..[`MAX_DATA_SCALE_DEG`] and the bound was taken instead, else
-    /// `""`: for the scale ([`SCALE_PER_MEDIAN`]) and the inlier threshold
-    /// ([`INLIER_PER_MEDIAN`]).
-    pub fn bound_note(&self, factor: f64) -> String {
-        let x = factor * self.median_deg;
-        match (x > MAX_DATA_SCALE_DEG, x < MIN_DATA_SCALE_DEG) {
-            (true, _) => format!(", at most {MAX_DATA_SCALE_DEG} deg"),
-            (_, true) => format!(", at least {MIN_DATA_SCALE_DEG} deg"),
-            _ => String::new(),
-        }
+    /// `", at most 10 deg"` (or `", at least 0.01 deg"`) when the scale
+    /// ([`SCALE_PER_MEDIAN`] x `median_deg`) was outside
+    /// [`MIN_DATA_SCALE_DEG`]..[`MAX_DATA_SCALE_DEG`] and the bound was taken instead, else `""`.
+    pub fn scale_bound_note(&self) -> String {
+        bound_note(SCALE_PER_MEDIAN * self.median_deg)
+    }
+
+    /// The same note for the inlier threshold ([`INLIER_PER_MEDIAN`] x
+    /// [`DataScale::threshold_median_deg`]).
+    pub fn threshold_bound_note(&self) -> String {
+        bound_note(INLIER_PER_MEDIAN * self.threshold_median_deg())
+    }
+
+    /// The median the inlier threshold is a multiple of: `mahalanobis_median_deg` where the
+    /// graph has information, else `median_deg`.
+    pub fn threshold_median_deg(&self) -> f64 {
+        self.mahalanobis_median_deg.unwrap_or(self.median_deg)
     }
 
     /// `objective` with this scale: the Huber threshold or Cauchy scale replaced; other losses
@@ -129,8 +145,9 @@ impl DataScale {
 /// read at: that of the robust solve's own L1 start (`[M9]`, stopped at
 /// [`L1_START_DECREASE_TOLERANCE`](crate::multiple::solve::L1_START_DECREASE_TOLERANCE), smoothed at [`L1_START_EPSILON`](crate::multiple::solve::L1_START_EPSILON)) on the graph's edges with
 /// their weights, or with unit weights and no information where the graph has information
-/// (`[A14]`'s first stage); the median of its residual angles, times [`SCALE_PER_MEDIAN`] (and
-/// [`INLIER_PER_MEDIAN`] for the inlier threshold).
+/// (`[A14]`'s first stage); the median of its residual angles, times [`SCALE_PER_MEDIAN`], and
+/// [`INLIER_PER_MEDIAN`] times the median of the angle the inlier threshold is compared with
+/// (the Mahalanobis angle where the graph has information) for the inlier threshold.
 /// Scaling every weight (or information matrix) by one factor changes neither. The solution
 /// is the start [`Initialisation::L1Start`](crate::multiple::Initialisation::L1Start) hands to the robust solve. Errors: those of the
 /// solve (a disconnected graph).
@@ -156,21 +173,40 @@ pub fn data_scale(
     };
     let l1 = base.with_objective(Objective::new(metric, Loss::L1))?;
     let solution = solve_multiple(&l1, &settings.for_l1_start())?;
-    let mut angles = l1.residual_angles(&solution.rotations);
-    angles.sort_by(f64::total_cmp);
-    let median_deg = angles.get(angles.len() / 2).map_or(0.0, |a| a.to_degrees());
+    let median_deg = median_angle_deg(l1.residual_angles(&solution.rotations));
+    let mahalanobis_median_deg = (graph.is_anisotropic())
+        .then(|| median_angle_deg(graph.objective_angles(&solution.rotations)));
     let unclamped = SCALE_PER_MEDIAN * median_deg;
     let bounded = |x: f64| three_digits(x.clamp(MIN_DATA_SCALE_DEG, MAX_DATA_SCALE_DEG));
     let scale = DataScale {
         rule: "from_data".into(),
         median_deg,
+        mahalanobis_median_deg,
         scale_deg: bounded(unclamped),
-        inlier_threshold_deg: bounded(INLIER_PER_MEDIAN * median_deg),
+        inlier_threshold_deg: bounded(
+            INLIER_PER_MEDIAN * mahalanobis_median_deg.unwrap_or(median_deg),
+        ),
         clamped: !(MIN_DATA_SCALE_DEG..=MAX_DATA_SCALE_DEG).contains(&unclamped),
         iterations: solution.report.iterations,
         seconds: solution.report.seconds,
     };
     Ok((scale, solution.rotations))
+}
+
+/// `", at most 10 deg"` or `", at least 0.01 deg"` when `x` is outside
+/// [`MIN_DATA_SCALE_DEG`]..[`MAX_DATA_SCALE_DEG`], else `""`.
+fn bound_note(x: f64) -> String {
+    match (x > MAX_DATA_SCALE_DEG, x < MIN_DATA_SCALE_DEG) {
+        (true, _) => format!(", at most {MAX_DATA_SCALE_DEG} deg"),
+        (_, true) => format!(", at least {MIN_DATA_SCALE_DEG} deg"),
+        _ => String::new(),
+    }
+}
+
+/// The median of `angles` (radians; the upper one of an even count), degrees; 0 for none.
+fn median_angle_deg(mut angles: Vec<f64>) -> f64 {
+    angles.sort_by(f64::total_cmp);
+    angles.get(angles.len() / 2).map_or(0.0, |a| a.to_degrees())
 }
 
 /// `x > 0` rounded to three significant digits (the scale as it is printed is the scale used).

@@ -66,12 +66,13 @@ impl fmt::Display for LossChoice {
                         f,
                         "; its scale from the data: {SCALE_PER_MEDIAN} x the median residual \
                          {:.3} deg at the L1 solution{} (`--loss-threshold` sets it), its \
-                         inlier threshold {INLIER_PER_MEDIAN} x that median ({} deg{}) unless \
+                         inlier threshold {INLIER_PER_MEDIAN} x {} ({} deg{}) unless \
                          `--inlier-threshold` is given",
                         s.median_deg,
-                        s.bound_note(SCALE_PER_MEDIAN),
+                        s.scale_bound_note(),
+                        threshold_median(s),
                         s.inlier_threshold_deg,
-                        s.bound_note(INLIER_PER_MEDIAN),
+                        s.threshold_bound_note(),
                     )?;
                 }
                 write!(
@@ -86,6 +87,14 @@ impl fmt::Display for LossChoice {
                 self.rule, self.chosen, self.reason
             ),
         }
+    }
+}
+
+/// The median the inlier threshold of `s` is a multiple of, in words.
+fn threshold_median(s: &DataScale) -> String {
+    match s.mahalanobis_median_deg {
+        Some(m) => format!("the median Mahalanobis angle {m:.3} deg there"),
+        None => "that median".into(),
     }
 }
 

@@ -35,11 +35,22 @@ fn run_auto(p: &MultipleProblem) -> MultipleEstimate {
 }
 
 fn run_with(p: &MultipleProblem, objective: Objective) -> MultipleEstimate {
+    run_with_threshold(p, objective, None)
+}
+
+/// [`run_with`] with the inlier threshold `threshold_deg` (`None`: the loss's own).
+fn run_with_threshold(
+    p: &MultipleProblem,
+    objective: Objective,
+    threshold_deg: Option<f64>,
+) -> MultipleEstimate {
     let p = p
         .clone()
         .with_objective(objective)
         .expect("a loss of multiple");
-    average_multiple(&p, &settings(false)).expect("the pipeline runs")
+    let mut s = settings(false);
+    s.solve.inlier_threshold_deg = threshold_deg;
+    average_multiple(&p, &s).expect("the pipeline runs")
 }
 
 /// The auto run hands its L1 start (solved for the scale) to the robust solve, which a
@@ -185,7 +196,24 @@ fn scaling_every_weight_never_changes_the_choice() {
     }
 }
 
-/// Anisotropic measurements with outliers: auto's Cauchy is on the Mahalanobis angle and
+/// The median over `p`'s edges of the Mahalanobis angle `sqrt(e^T H e / (tr H / 3))`, `e =
+/// log(R_ij^T R_j R_i^T)` (`[A10]`), at `r`, in degrees: written out here, not the crate's.
+fn mahalanobis_median_deg(p: &MultipleProblem, r: &[Rotation]) -> f64 {
+    let info = p.information().expect("information");
+    let mut a: Vec<f64> = (p.edges().iter().zip(info))
+        .map(|(e, h)| {
+            let m = e.rotation.matrix().transpose() * r[e.j].matrix() * r[e.i].matrix().transpose();
+            let v = nalgebra::Rotation3::from_matrix_unchecked(m).scaled_axis();
+            let h = h.matrix();
+            (v.dot(&(h * v)) / (h.trace() / 3.0)).sqrt()
+        })
+        .collect();
+    a.sort_by(f64::total_cmp);
+    a[a.len() / 2].to_degrees()
+}
+
+/// Anisotropic measurements with outliers: auto's Cauchy is on the Mahalanobis angle, its
+/// inlier threshold three times the median Mahalanobis angle at its L1 start (`[D20]`), and it
 /// beats least squares against the planted truth.
 #[test]
 fn with_information_auto_is_the_anisotropic_robust_run() {
@@ -203,10 +231,25 @@ fn with_information_auto_is_the_anisotropic_robust_run() {
     let auto = run_auto(&p);
     let choice = auto.details.loss_choice.as_ref().unwrap();
     assert!(choice.is_robust());
-    assert_same(
-        &auto.solution.rotations,
-        &run_with(&p, choice.chosen).solution.rotations,
+    let scale = choice.scale.as_ref().expect("its scale from the data");
+    let (again, l1) = data_scale(&p, Metric::Geodesic, &MultipleSettings::default()).unwrap();
+    let medians = |s: &DataScale| (s.median_deg, s.mahalanobis_median_deg);
+    assert_eq!(medians(&again), medians(scale), "the same L1 start");
+    let m_h = mahalanobis_median_deg(&p, &l1);
+    assert!(
+        (scale.mahalanobis_median_deg.unwrap() / m_h - 1.0).abs() < 1e-9,
+        "{scale:?} against {m_h}"
     );
+    assert!(
+        (scale.inlier_threshold_deg / (INLIER_PER_MEDIAN * m_h) - 1.0).abs() < 5e-3,
+        "three significant digits of 3 m_H"
+    );
+    assert!(
+        m_h < 0.9 * scale.median_deg,
+        "the Mahalanobis angles are smaller here"
+    );
+    let cauchy = run_with_threshold(&p, choice.chosen, Some(scale.inlier_threshold_deg));
+    assert_same(&auto.solution.rotations, &cauchy.solution.rotations);
     let e_auto = median_error_deg(&auto.solution.rotations, &truth);
     let e_l2 = median_error_deg(
         &run_with(&p, Objective::CHORDAL_L2).solution.rotations,

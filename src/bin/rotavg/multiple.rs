@@ -26,12 +26,14 @@ pub struct Args {
     #[arg(long, value_parser = choice(MultipleLoss::choices()), default_value_t = MultipleLoss::Auto)]
     pub loss: MultipleLoss,
     /// Huber / Cauchy threshold in degrees (default 5; for L1: the inlier threshold unless
-    /// `--inlier-threshold` is given); when given, also `auto`'s Cauchy scale, which is
-    /// otherwise from the data (3 x the median residual at the L1 solution).
+    /// `--inlier-threshold` is given); when given, also `auto`'s Cauchy scale and inlier
+    /// threshold, which are otherwise from the data (1.5 x and 3 x the median residual at the
+    /// L1 solution, `[D20]`).
     #[arg(long, value_name = "DEG")]
     pub loss_threshold: Option<f64>,
     /// Robust losses (l1, huber, cauchy; auto when it chooses cauchy): an edge is an inlier iff its residual angle at the
-    /// robust estimate is at most DEG (default: `--loss-threshold`). The inlier graph's
+    /// robust estimate is at most DEG (default: `--loss-threshold`; for `auto` without it, 3 x
+    /// the median residual at the L1 solution). The inlier graph's
     /// chordal L2 problem is refined and certified unless `--certify none`.
     #[arg(long, value_name = "DEG")]
     pub inlier_threshold: Option<f64>,
