@@ -30,7 +30,7 @@
 mod soft;
 mod two_stage;
 
-pub use soft::{LIGHT_STRENGTH_FRACTION, SURROGATE_STIFFNESS, Stiffness};
+pub use soft::SURROGATE_STIFFNESS;
 
 use super::chordal::solve_chordal_tilt_fixed;
 use super::init::initialise;

@@ -182,15 +182,19 @@ fn robust_run(
     Ok((scaled, after))
 }
 
-/// Newton iterations of the least-squares solve before the rule may judge an unconverged
-/// estimate (`[D17]`).
-pub const JUDGE_AFTER_ITERATIONS: usize = 30;
+/// Newton iterations of the least-squares solve at which the rule may judge an unconverged
+/// estimate (`[D17]` "When it judges"): after 5 (the judged SLAM graphs of the shared data
+/// converge in 2-4) and after 30.
+pub const JUDGE_AT_ITERATIONS: [usize; 2] = [5, 30];
 
-/// The least-squares solve the rule judges. It runs at most [`JUDGE_AFTER_ITERATIONS`]
-/// iterations first; when it has not converged by then and its residuals there already show
-/// outliers, that estimate is judged (the rule discards it for the robust solve); otherwise
-/// the solve goes on from it to its own stopping test (iterations and time summed; one clock
-/// for [`MultipleSettings::max_seconds`], and a first part stopped by it is judged as it is). Confident
+/// The last of [`JUDGE_AT_ITERATIONS`]: past it the solve runs to its own stopping test.
+pub const JUDGE_AFTER_ITERATIONS: usize = JUDGE_AT_ITERATIONS[1];
+
+/// The least-squares solve the rule judges. It runs to each of [`JUDGE_AT_ITERATIONS`] in
+/// turn; when it has not converged by one and its residuals there already show outliers, that
+/// estimate is judged (the rule discards it for the robust solve); past the last the solve goes
+/// on to its own stopping test (iterations and time summed; one clock for
+/// [`MultipleSettings::max_seconds`], and a part stopped by it is judged as it is). Confident
 /// wrong pairs make least squares slow: a generated 10^4-image scene with `--information full`
 /// ran 100 Newton iterations (7.1 s) without converging before the rule chose Cauchy.
 fn judged_least_squares<P: ViewGraphProblem>(
@@ -198,30 +202,66 @@ fn judged_least_squares<P: ViewGraphProblem>(
     settings: &MultipleSettings,
 ) -> Result<crate::multiple::MultipleSolution> {
     // a graph whose residuals cannot be judged (`judges_residuals`) is solved in one piece
-    if settings.max_iterations <= JUDGE_AFTER_ITERATIONS || !judges_residuals(problem.graph()) {
+    if !judges_residuals(problem.graph()) {
         return problem.solve(settings);
     }
-    let first = MultipleSettings {
-        max_iterations: JUDGE_AFTER_ITERATIONS,
-        ..settings.clone()
-    };
     let start = Instant::now();
-    let early = problem.solve(&first)?;
-    let timed_out = matches!(early.report.termination, Termination::TimeLimit { .. });
-    if early.report.termination.is_converged()
-        || timed_out
-        || suspected_outliers(problem.graph(), &early.rotations).is_some()
-    {
-        return Ok(early);
+    let mut so_far: Option<crate::multiple::MultipleSolution> = None;
+    let checkpoints = JUDGE_AT_ITERATIONS.iter().copied();
+    for at in checkpoints.filter(|&at| at < settings.max_iterations) {
+        let part = solve_part(problem, settings, so_far.as_ref(), at, start)?;
+        let part = joined(so_far, part);
+        let timed_out = matches!(part.report.termination, Termination::TimeLimit { .. });
+        if part.report.termination.is_converged()
+            || timed_out
+            || suspected_outliers(problem.graph(), &part.rotations).is_some()
+        {
+            return Ok(part);
+        }
+        so_far = Some(part);
     }
-    let rest = MultipleSettings {
-        init: Initialisation::Given(early.rotations.clone()),
-        max_iterations: settings.max_iterations - JUDGE_AFTER_ITERATIONS,
-        ..settings.remaining(start)
+    let rest = solve_part(
+        problem,
+        settings,
+        so_far.as_ref(),
+        settings.max_iterations,
+        start,
+    )?;
+    Ok(joined(so_far, rest))
+}
+
+/// The least-squares solve from `so_far`'s estimate (from the settings' start when `None`) up
+/// to `until` iterations in all, within what is left of the budget started at `start`.
+fn solve_part<P: ViewGraphProblem>(
+    problem: &P,
+    settings: &MultipleSettings,
+    so_far: Option<&crate::multiple::MultipleSolution>,
+    until: usize,
+    start: Instant,
+) -> Result<crate::multiple::MultipleSolution> {
+    let part = match so_far {
+        None => MultipleSettings {
+            max_iterations: until,
+            ..settings.clone()
+        },
+        Some(s) => MultipleSettings {
+            init: Initialisation::Given(s.rotations.clone()),
+            max_iterations: until.saturating_sub(s.report.iterations).max(1),
+            ..settings.remaining(start)
+        },
     };
-    let mut out = problem.solve(&rest)?;
-    out.report.iterations += early.report.iterations;
-    out.report.seconds += early.report.seconds;
-    out.init_cost = early.init_cost;
-    Ok(out)
+    problem.solve(&part)
+}
+
+/// `next` continued from `so_far` (its iterations and seconds added, the first start's cost).
+fn joined(
+    so_far: Option<crate::multiple::MultipleSolution>,
+    mut next: crate::multiple::MultipleSolution,
+) -> crate::multiple::MultipleSolution {
+    if let Some(s) = so_far {
+        next.report.iterations += s.report.iterations;
+        next.report.seconds += s.report.seconds;
+        next.init_cost = s.init_cost;
+    }
+    next
 }

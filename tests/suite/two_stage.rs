@@ -150,8 +150,8 @@ fn scaling_all_information_leaves_the_two_stage_estimate() {
     assert_eq!(a.residuals.unwrap().inlier, b.residuals.unwrap().inlier);
 }
 
-/// The rule `auto` judges the least-squares estimate after at most `JUDGE_AFTER_ITERATIONS`
-/// Newton iterations when the solve has not converged by then and its residuals already show
+/// The rule `auto` judges the least-squares estimate at the first of `JUDGE_AT_ITERATIONS`
+/// (5 Newton iterations) when the solve has not converged by then and its residuals already show
 /// outliers (`[D17]`): confident wrong pairs make least squares slow, and its estimate is then
 /// discarded for the robust one. The robust run is the same as without the early judgement.
 /// The graph: a generated 100-image scene with correspondences (`[F16]`) read with
@@ -162,7 +162,7 @@ fn auto_judges_a_slow_least_squares_solve_early() {
     use rotavg::io::colmap::read_colmap_database;
     use rotavg::io::colmap::scene::SfmScene;
     use rotavg::io::detect::ReadOptions;
-    use rotavg::pipeline::loss_choice::JUDGE_AFTER_ITERATIONS;
+    use rotavg::pipeline::loss_choice::{JUDGE_AFTER_ITERATIONS, JUDGE_AT_ITERATIONS};
     use rotavg::pipeline::{AverageSettings, average_multiple};
     let dir =
         crate::common::scratch_root().join(format!("rotavg-two-stage-{}", std::process::id()));
@@ -202,7 +202,7 @@ fn auto_judges_a_slow_least_squares_solve_early() {
     // inlier threshold (the edges [A14]'s first stage sets aside): the same estimate to
     // rounding (the rule hands its L1 start over instead of solving it again)
     let robust = solve_multiple(
-        &p.with_objective(choice.chosen).unwrap(),
+        &p.clone().with_objective(choice.chosen).unwrap(),
         &MultipleSettings {
             inlier_threshold_deg: choice.scale.as_ref().map(|s| s.inlier_threshold_deg),
             ..Default::default()
@@ -218,6 +218,23 @@ fn auto_judges_a_slow_least_squares_solve_early() {
     assert!(worst < 1e-9, "{worst:e} rad");
     // judged early: the estimate judged is not the converged one (no timed assertion: the
     // machine's load would decide it)
+    // at the first checkpoint: the cost of least squares stopped there, solved apart
+    let first = solve_multiple(
+        &p,
+        &MultipleSettings {
+            max_iterations: JUDGE_AT_ITERATIONS[0],
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(first.report.iterations, JUDGE_AT_ITERATIONS[0]);
+    assert!(
+        (choice.least_squares_cost - first.cost).abs() <= 1e-12 * first.cost,
+        "judged at cost {}, {} iterations give {}",
+        choice.least_squares_cost,
+        JUDGE_AT_ITERATIONS[0],
+        first.cost
+    );
     assert!(
         choice.least_squares_cost > full.cost,
         "judged at {} (the converged cost {})",
