@@ -459,6 +459,33 @@ impl Certificate {
         self
     }
 
+    /// This certificate with its lower bound lowered by `amount >= 0` (rounded down): the
+    /// bound of a cost that differs from the one certified by at most `amount` at every point
+    /// (`paper-notes/gravity.md` `[G10]` "Two forms of the cost"). Gap, relative gap and
+    /// verdict are recomputed by the rule of [`Self::from_bounds`].
+    pub(crate) fn lowered_by(&self, amount: f64) -> Certificate {
+        let lower = self.lower_bound.map(|l| {
+            let l = l - amount.max(0.0);
+            l - l.abs() * f64::EPSILON
+        });
+        let mut c = Certificate::from_bounds(
+            self.upper_bound,
+            lower,
+            self.method,
+            self.min_eigenvalue,
+            self.tolerance,
+            self.explanation.clone(),
+            self.seconds,
+        );
+        c.verified_min_eigenvalue = self.verified_min_eigenvalue;
+        c.smallest_eigenvalues = self.smallest_eigenvalues.clone();
+        c.branch_and_bound = self.branch_and_bound;
+        c.certified_problem = self.certified_problem;
+        c.bound_from = self.bound_from;
+        c.randomized = self.randomized;
+        c
+    }
+
     /// The same lower bound (a bound on the global minimum, whatever estimate produced it)
     /// against another upper bound: the certificate of a different estimate, e.g. an improved
     /// one. Gap, relative gap and verdict are recomputed by the rule of [`Self::from_bounds`].
