@@ -468,9 +468,18 @@ impl Certificate {
             let l = l - amount.max(0.0);
             l - l.abs() * f64::EPSILON
         });
+        let mut c = self.rebounded(self.upper_bound, lower);
+        c.randomized = self.randomized;
+        c
+    }
+
+    /// This certificate with the bounds `upper_bound` and `lower_bound`, its evidence kept
+    /// (not the randomized estimate, which depends on the upper bound): gap, relative gap and
+    /// verdict by the rule of [`Self::from_bounds`].
+    fn rebounded(&self, upper_bound: f64, lower_bound: Option<f64>) -> Certificate {
         let mut c = Certificate::from_bounds(
-            self.upper_bound,
-            lower,
+            upper_bound,
+            lower_bound,
             self.method,
             self.min_eigenvalue,
             self.tolerance,
@@ -482,7 +491,6 @@ impl Certificate {
         c.branch_and_bound = self.branch_and_bound;
         c.certified_problem = self.certified_problem;
         c.bound_from = self.bound_from;
-        c.randomized = self.randomized;
         c
     }
 
@@ -500,20 +508,7 @@ impl Certificate {
     /// assert_eq!(better.lower_bound, Some(9.0));
     /// ```
     pub fn with_upper_bound(&self, upper_bound: f64) -> Certificate {
-        let mut c = Certificate::from_bounds(
-            upper_bound,
-            self.lower_bound,
-            self.method,
-            self.min_eigenvalue,
-            self.tolerance,
-            self.explanation.clone(),
-            self.seconds,
-        );
-        c.verified_min_eigenvalue = self.verified_min_eigenvalue;
-        c.smallest_eigenvalues = self.smallest_eigenvalues.clone();
-        c.branch_and_bound = self.branch_and_bound;
-        c.certified_problem = self.certified_problem;
-        c.bound_from = self.bound_from;
+        let mut c = self.rebounded(upper_bound, self.lower_bound);
         c.randomized = self.randomized.map(|r| {
             RandomizedLowerBound::new(
                 upper_bound,
