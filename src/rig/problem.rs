@@ -318,16 +318,15 @@ impl RigProblem {
     /// ([`Self::prior_cost`]).
     pub fn cost(&self, frames: &[Rotation], sensors: &[Rotation]) -> f64 {
         let x = self.image_rotations(frames, sensors);
-        if let Some(info) = &self.information {
-            return chordal_cost_compensated(&self.edges, info, &x);
-        }
-        let edges: f64 = self
-            .edges
-            .iter()
-            .map(|e| {
-                e.weight * (x[e.j].matrix() - e.rotation.matrix() * x[e.i].matrix()).norm_squared()
-            })
-            .sum();
+        let edges = match &self.information {
+            Some(info) => chordal_cost_compensated(&self.edges, info, &x),
+            None => (self.edges.iter())
+                .map(|e| {
+                    let r = x[e.j].matrix() - e.rotation.matrix() * x[e.i].matrix();
+                    e.weight * r.norm_squared()
+                })
+                .sum(),
+        };
         edges + self.prior_cost(frames, sensors)
     }
 

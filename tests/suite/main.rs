@@ -84,6 +84,7 @@ mod robust_inliers;
 mod scalar_weights;
 mod single;
 mod soundness_multiple;
+mod soundness_rig;
 mod spectrum;
 mod tolerance_invariance;
 mod tolerance_spectrum;
