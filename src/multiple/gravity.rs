@@ -30,7 +30,7 @@
 mod soft;
 mod two_stage;
 
-pub use soft::SURROGATE_STIFFNESS;
+pub use soft::{LIGHT_STRENGTH_FRACTION, SURROGATE_STIFFNESS, Stiffness};
 
 use super::chordal::solve_chordal_tilt_fixed;
 use super::init::initialise;

@@ -7,11 +7,12 @@
 
 use super::state::GravityState;
 use crate::certify::certificate::Certificate;
+use crate::certify::log::Outcome;
 use crate::certify::proof::Proof;
 use crate::certify::rung::{Found, Handed, Plan, Rung};
 use crate::certify::settings::CertifySettings;
 use crate::error::Result;
-use crate::multiple::gravity::GravityProblem;
+use crate::multiple::gravity::{GravityProblem, Stiffness};
 use crate::so3::Rotation;
 
 /// Certifies an estimate of a soft gravity problem (`certify_gravity`'s soft path).
@@ -37,7 +38,33 @@ impl<'a> Rung<GravityState<'a>> for SurrogateRung {
 
     fn attempt(&mut self, cx: &mut GravityState<'a>) -> Result<Found> {
         self.0.done = true;
-        let (surrogate, constant) = cx.problem.tilted_surrogate(cx.rotations)?;
+        let mut notes = Vec::new();
+        let mut best = None;
+        for stiffness in [Stiffness::Light, Stiffness::Stiff] {
+            let found = self.attempt_with(cx, stiffness)?;
+            notes.push(found.note.clone());
+            if let Outcome::Proved {
+                lower_bound,
+                sufficient,
+            } = found.outcome
+            {
+                if sufficient {
+                    return Ok(Found::proved(lower_bound, true, notes.join("; ")));
+                }
+                best = Some(best.map_or(lower_bound, |b: f64| b.max(lower_bound)));
+            }
+        }
+        Ok(match best {
+            Some(lb) => Found::proved(lb, cx.tally.certifies(lb), notes.join("; ")),
+            None => Found::failed(notes.join("; ")),
+        })
+    }
+}
+
+impl SurrogateRung {
+    /// The bound of the surrogate of `stiffness` at the estimate, offered to the tally.
+    fn attempt_with(&self, cx: &mut GravityState<'_>, stiffness: Stiffness) -> Result<Found> {
+        let (surrogate, constant) = cx.problem.tilted_surrogate(cx.rotations, stiffness)?;
         let mut settings = cx.tally.settings.clone();
         settings.budget.max_seconds = cx.tally.left();
         let inner = (self.0.certify)(&surrogate, cx.rotations, &settings)?;
@@ -51,9 +78,11 @@ impl<'a> Rung<GravityState<'a>> for SurrogateRung {
         let bound = (lb - constant) - (lb - constant).abs() * f64::EPSILON;
         let weight = surrogate.priors().weight().unwrap_or(f64::NAN);
         let note = format!(
-            "the priors' tilted soft surrogate (weight {weight:.3e}): its bound {lb:.9e} ({}, \
-             by {}) less its constant {constant:.3e} on the held problem",
-            inner.verdict, inner.method
+            "the priors' tilted soft surrogate ({}, weight {weight:.3e}): its bound {lb:.9e} \
+             ({}, by {}) less its constant {constant:.3e} on the held problem",
+            stiffness.name(),
+            inner.verdict,
+            inner.method
         );
         let lb = cx.offer(
             bound,

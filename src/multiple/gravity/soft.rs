@@ -24,6 +24,44 @@ use nalgebra::{Matrix3, Vector3};
 /// of 3e-6 at 10^4 cameras, 2 certified them).
 pub const SURROGATE_STIFFNESS: f64 = 2.0;
 
+/// The light surrogate's weight is at least this fraction of the stiff one's node strength
+/// (`[G12]` "Two weights"): a positive weight where the gradient vanishes.
+pub const LIGHT_STRENGTH_FRACTION: f64 = 1e-3;
+
+/// How stiff the tilted surrogate's priors are (`[G12]` "Two weights"); both keep the tilt
+/// `|v_i| <= 0.5`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stiffness {
+    /// `w = `[`SURROGATE_STIFFNESS`]` max(|gradient| / 4, `[`LIGHT_STRENGTH_FRACTION`]` x node
+    /// strength)`: the smallest weight of that tilt, whose world node's rows (the rounding
+    /// margin of its verification) are smallest.
+    Light,
+    /// `w = `[`SURROGATE_STIFFNESS`]` max(node strength, |gradient| / 4)`: the surrogate's
+    /// curvature dominated by the priors'.
+    Stiff,
+}
+
+impl Stiffness {
+    /// `"light"` or `"stiff"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stiffness::Light => "light",
+            Stiffness::Stiff => "stiff",
+        }
+    }
+
+    /// The weight for the largest node strength `strength` and largest gradient norm
+    /// `gradient`.
+    pub fn weight(self, strength: f64, gradient: f64) -> f64 {
+        let floor = match self {
+            Stiffness::Light => LIGHT_STRENGTH_FRACTION * strength,
+            Stiffness::Stiff => strength,
+        };
+        SURROGATE_STIFFNESS * floor.max(gradient / 4.0)
+    }
+}
+
 impl GravityProblem {
     /// The soft problem as one view graph, standard convention: `graph` (this problem's view
     /// graph or a reweighting of it, `n` nodes) with its information matrices (`w I` for scalar
@@ -84,10 +122,13 @@ impl GravityProblem {
     /// heading part, over `4 w`), and `C >= sum 2 w ||g_i - g_i'||^2`, rounded up. On every
     /// point of the held problem (`R_i world_down = g_i`) the surrogate's cost is the view
     /// graph's plus exactly that sum, so `min held >= min surrogate - C` whatever `g'` is.
-    /// `w = `[`SURROGATE_STIFFNESS`]` max(node strength, |gradient| / 4)`: `|v_i| <= 0.5`.
-    /// Errors: priors that are
+    /// `w` by `stiffness` ([`Stiffness::weight`]): `|v_i| <= 0.5`. Errors: priors that are
     /// already soft, a count of rotations that differs from the graph's.
-    pub fn tilted_surrogate(&self, rotations: &[Rotation]) -> Result<(GravityProblem, f64)> {
+    pub fn tilted_surrogate(
+        &self,
+        rotations: &[Rotation],
+        stiffness: Stiffness,
+    ) -> Result<(GravityProblem, f64)> {
         if self.priors.weight().is_some() {
             return Err(crate::Error::InvalidSettings {
                 name: "gravity".into(),
@@ -104,7 +145,7 @@ impl GravityProblem {
         }
         let most = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
         let grad_max = most(&grad.iter().map(|g| g.norm()).collect::<Vec<_>>());
-        let w = SURROGATE_STIFFNESS * most(&strength).max(grad_max / 4.0);
+        let w = stiffness.weight(most(&strength), grad_max);
         let e3 = Vector3::z();
         let dirs = (0..standard.len())
             .map(|i| {
