@@ -247,6 +247,19 @@ pub(crate) fn nonnegative_bound_at_most(lower_bound: f64, cost: f64) -> f64 {
     }
 }
 
+/// A lower bound capped at the computed cost, floored at 0 only where the cost is a sum of
+/// nonnegative terms (`nonnegative`: scalar weights). With information matrices the cost is
+/// `[A1]`'s trace form, which on data orthogonal only to rounding is negative at its minimum
+/// (`-1e-11` on a noise-free pair, `tests/suite/soundness_rig.rs`): a floor at 0 would lift the
+/// bound above the minimum. Not finite: 0 with the floor, `-inf` (no bound) without.
+pub(crate) fn bound_at_most(lower_bound: f64, cost: f64, nonnegative: bool) -> f64 {
+    match (nonnegative, lower_bound.is_finite()) {
+        (true, _) => nonnegative_bound_at_most(lower_bound, cost),
+        (false, true) => lower_bound.min(cost),
+        (false, false) => f64::NEG_INFINITY,
+    }
+}
+
 /// A certificate of (sub)optimality for an estimate (contract sections 3 and 5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Certificate {
@@ -669,5 +682,17 @@ mod bound_cap_tests {
         assert_eq!(cap(3.0, 2.0), 2.0);
         assert_eq!(cap(1.5, 2.0), 1.5);
         assert_eq!(cap(-1.0, 2.0), 0.0);
+    }
+
+    /// Without the floor (information matrices) a negative bound stays, a bound that is not
+    /// finite is no bound, and the cap at the cost holds.
+    #[test]
+    fn without_the_floor_negative_bounds_stay() {
+        use super::bound_at_most;
+        assert_eq!(bound_at_most(-1e-11, -5e-12, false), -1e-11);
+        assert_eq!(bound_at_most(-1e-11, -5e-12, true), 0.0);
+        assert_eq!(bound_at_most(1.0, -5e-12, false), -5e-12);
+        assert_eq!(bound_at_most(f64::NAN, 2.0, false), f64::NEG_INFINITY);
+        assert_eq!(bound_at_most(f64::INFINITY, 2.0, false), f64::NEG_INFINITY);
     }
 }

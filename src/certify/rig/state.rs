@@ -1,5 +1,6 @@
 //! The state of one rig certification: the estimate, its cost, the best bound, the one log.
 
+use crate::certify::certificate::bound_at_most;
 use crate::certify::proof::Proof;
 use crate::certify::tally::{Tally, climb_by_tally};
 use crate::rig::RigProblem;
@@ -21,17 +22,12 @@ impl RigState<'_> {
     /// Keep `lower_bound` (capped at the cost, at least 0 for scalar weights) when it is the
     /// best so far; the capped value.
     pub fn offer(&mut self, lower_bound: f64, proof: Proof, note: &str) -> f64 {
-        let cost = self.tally.cost;
-        let lb = if self.problem.is_anisotropic() {
-            // the trace form of data orthogonal only to rounding can be slightly negative
-            // (`[H24]`): no floor at 0; a bound that is not finite is no bound
-            if !lower_bound.is_finite() {
-                return f64::NEG_INFINITY;
-            }
-            lower_bound.min(cost)
-        } else {
-            crate::certify::certificate::nonnegative_bound_at_most(lower_bound, cost)
-        };
+        // the trace form of data orthogonal only to rounding can be slightly negative (`[H24]`)
+        let nonnegative = !self.problem.is_anisotropic();
+        let lb = bound_at_most(lower_bound, self.tally.cost, nonnegative);
+        if lb == f64::NEG_INFINITY {
+            return lb;
+        }
         self.tally.keep(lb, proof, None, note)
     }
 

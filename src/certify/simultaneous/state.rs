@@ -1,7 +1,7 @@
 //! The state of one certification of the simultaneous problem: the joint estimate, its cost,
 //! the best verified bound, the improvement (a cheaper SDP rounding) and the one log.
 
-use crate::certify::certificate::nonnegative_bound_at_most;
+use crate::certify::certificate::bound_at_most;
 use crate::certify::certification::SdpSummary;
 use crate::certify::proof::Proof;
 use crate::certify::simultaneous::multipliers::PointTerms;
@@ -31,10 +31,15 @@ impl SimState<'_> {
         PointTerms::new(self.right, self.left, self.rotations, self.s)
     }
 
-    /// Keep `lower_bound` (capped: at least 0, at most the cost, the joint cost being a sum of
-    /// nonnegative terms) when it is the best so far; the capped value.
+    /// Keep `lower_bound` (capped at the cost; at least 0 with scalar weights, where the joint
+    /// cost is a sum of nonnegative terms, not with information: `[A1]`'s trace form can be
+    /// negative, [`bound_at_most`]) when it is the best so far; the capped value.
     pub fn offer(&mut self, lower_bound: f64, proof: Proof, mu: f64, note: &str) -> f64 {
-        let lb = nonnegative_bound_at_most(lower_bound, self.tally.cost);
+        let nonnegative = !(self.right.is_anisotropic() || self.left.is_anisotropic());
+        let lb = bound_at_most(lower_bound, self.tally.cost, nonnegative);
+        if lb == f64::NEG_INFINITY {
+            return lb;
+        }
         self.tally.keep(lb, proof, Some(mu), note)
     }
 }
