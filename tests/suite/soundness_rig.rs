@@ -1,8 +1,11 @@
-//! Rig certificates on the data where rounding decides (`paper-notes/conjugate.md`, issue 36):
-//! noise-free rigs, whose minimum is the truth's cost (about `1e-30`), with weights from `0.01`
-//! to `100`, scalar or anisotropic, sensors known or estimated, with and without soft gravity
-//! priors: no bound above the truth's cost written out from the definitions. And the rig's
-//! cost counts its soft priors whatever its edges' weights are.
+//! Certificates on the data where rounding decides (`paper-notes/conjugate.md`, issue 36):
+//! noise-free rigs, whose minimum is the truth's cost (about `1e-30` with scalar weights), with
+//! weights from `0.01` to `100`, scalar or anisotropic, sensors known or estimated, with and
+//! without soft gravity priors; noise-free pairs of view graphs (the simultaneous problem) and
+//! anisotropic view graphs on exactly orthogonal truths, some with measurements exactly
+//! `1 + 2^-40` times rotations (a negative minimum): no bound above the truth's cost written out
+//! from the definitions. And the rig's cost counts its soft priors whatever its edges' weights
+//! are; a planted wrong point with soft priors is not certified.
 
 use rotavg::Rotation;
 use rotavg::certify::{CertifySettings, certify_rig};
@@ -166,8 +169,9 @@ fn a_tilted_anisotropic_rig_with_soft_priors_is_not_certified() {
     }
 }
 
-/// No rig certificate bounds a noise-free rig above the cost of its truth (its minimum, up to
-/// the data's rounding, which the trace form's double-double evaluation keeps), for every
+/// No rig certificate bounds a noise-free rig above the cost of its truth (its minimum; the
+/// anisotropic trace form at a truth orthogonal only to rounding is known to about `1e-12`,
+/// far below these bounds' distance to it: the exact check is the two tests below), for every
 /// weight scale, scalar or anisotropic, sensors known or estimated, with soft priors or
 /// without. Scalar rigs of one weight are certified; anisotropic ones (eigenvalue spreads to
 /// `1e4`) and mixed weights (spread `1e2`-`1e4`) may be `gap_reported`, the rounding of the
