@@ -132,6 +132,15 @@ fn octahedral(rng: &mut impl rand::Rng) -> Rotation {
     Rotation::from_matrix_unchecked(m)
 }
 
+/// An information matrix with eigenvalues `scale` times 1, 30 and 1 to 1001 (uniform) along
+/// random axes: `M = tr(H)/2 I - H` indefinite when the largest is above 31.
+fn information(rng: &mut impl rand::Rng, scale: f64) -> Information {
+    let q = rotavg::so3::random_rotation(rng);
+    let d = nalgebra::Vector3::new(1.0, 30.0, 1e3 * rng.random::<f64>() + 1.0);
+    let h = q.matrix() * nalgebra::Matrix3::from_diagonal(&d) * q.matrix().transpose();
+    Information::new((h + h.transpose()) * (0.5 * scale)).unwrap()
+}
+
 /// A planted wrong point: a rig with exact soft priors, certified at its truth turned by 30
 /// degrees about a horizontal axis (every edge's residual unchanged, every prior's
 /// `2 w ||X d - g||^2` grown by more than `0.5`). Not certified, and the certificate's upper
@@ -223,7 +232,6 @@ fn simultaneous_bounds_of_noise_free_pairs_stay_below_the_truth() {
     use rand::{Rng, SeedableRng};
     use rotavg::certify::simultaneous::certify_simultaneous;
     use rotavg::multiple::Edge;
-    use rotavg::so3::random_rotation;
     let side_cost = |g: &MultipleProblem, x: &[Rotation]| match g.information() {
         Some(_) => g.chordal_cost(x),
         None => (g.edges().iter())
@@ -278,15 +286,7 @@ fn simultaneous_bounds_of_noise_free_pairs_stay_below_the_truth() {
             if !anisotropic {
                 return g;
             }
-            let info = (0..pairs.len())
-                .map(|_| {
-                    let q = random_rotation(rng);
-                    let d = nalgebra::Vector3::new(1.0, 30.0, 1e3 * rng.random::<f64>() + 1.0);
-                    let h =
-                        q.matrix() * nalgebra::Matrix3::from_diagonal(&d) * q.matrix().transpose();
-                    Information::new((h + h.transpose()) * (0.5 * scale)).unwrap()
-                })
-                .collect();
+            let info = (0..pairs.len()).map(|_| information(rng, scale)).collect();
             g.with_information(info).unwrap()
         };
         let right = side(false, scale_right, &mut rng);
@@ -323,7 +323,6 @@ fn anisotropic_bounds_of_exact_noise_free_graphs_stay_below_the_minimum() {
     use rand::{Rng, SeedableRng};
     use rotavg::certify::certify_multiple;
     use rotavg::multiple::Edge;
-    use rotavg::so3::random_rotation;
     let mut bad = 0;
     for k in 0..30u64 {
         let mut rng = rand::rngs::StdRng::seed_from_u64(k);
@@ -356,12 +355,7 @@ fn anisotropic_bounds_of_exact_noise_free_graphs_stay_below_the_minimum() {
             })
             .collect();
         let info = (0..pairs.len())
-            .map(|_| {
-                let q = random_rotation(&mut rng);
-                let d = nalgebra::Vector3::new(1.0, 30.0, 1e3 * rng.random::<f64>() + 1.0);
-                let h = q.matrix() * nalgebra::Matrix3::from_diagonal(&d) * q.matrix().transpose();
-                Information::new((h + h.transpose()) * 0.5).unwrap()
-            })
+            .map(|_| information(&mut rng, 1.0))
             .collect();
         let g = MultipleProblem::new(n, edges)
             .unwrap()
@@ -431,12 +425,7 @@ fn anisotropic_rig_bounds_on_exact_truths_stay_below_the_minimum() {
             })
             .collect();
         let info = (0..pairs.len())
-            .map(|_| {
-                let q = rotavg::so3::random_rotation(&mut rng);
-                let d = nalgebra::Vector3::new(1.0, 30.0, 1e3 * rng.random::<f64>() + 1.0);
-                let h = q.matrix() * nalgebra::Matrix3::from_diagonal(&d) * q.matrix().transpose();
-                Information::new((h + h.transpose()) * 0.5).unwrap()
-            })
+            .map(|_| information(&mut rng, 1.0))
             .collect();
         let held = (0..sensors_n)
             .map(|s| Sensor {
