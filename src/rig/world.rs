@@ -55,11 +55,11 @@ impl RigProblem {
         // scalar edges: the posed norm form exceeds the world rig's trace form of `w I` by
         // `w (||R||^2 - 3)`; edges with information have the trace form in both (no defect:
         // charging theirs raised the bound above the minimum, `tests/suite/soundness_rig.rs`)
-        for e in self.edges().iter().filter(|_| !self.is_anisotropic()) {
-            defect.add(
-                e.weight * (e.rotation.matrix().norm_squared() - 3.0),
-                e.weight,
-            );
+        if !self.is_anisotropic() {
+            for e in self.edges() {
+                let term = e.weight * (e.rotation.matrix().norm_squared() - 3.0);
+                defect.add(term, e.weight);
+            }
         }
         let down = priors.world_down();
         for a in 0..images.len() {

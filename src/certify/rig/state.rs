@@ -25,9 +25,6 @@ impl RigState<'_> {
         // the trace form of data orthogonal only to rounding can be slightly negative (`[H24]`)
         let nonnegative = !self.problem.is_anisotropic();
         let lb = bound_at_most(lower_bound, self.tally.cost, nonnegative);
-        if lb == f64::NEG_INFINITY {
-            return lb;
-        }
         self.tally.keep(lb, proof, None, note)
     }
 

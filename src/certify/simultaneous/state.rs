@@ -37,9 +37,6 @@ impl SimState<'_> {
     pub fn offer(&mut self, lower_bound: f64, proof: Proof, mu: f64, note: &str) -> f64 {
         let nonnegative = !(self.right.is_anisotropic() || self.left.is_anisotropic());
         let lb = bound_at_most(lower_bound, self.tally.cost, nonnegative);
-        if lb == f64::NEG_INFINITY {
-            return lb;
-        }
         self.tally.keep(lb, proof, Some(mu), note)
     }
 }
