@@ -4,7 +4,7 @@
 //! reference computations on small instances (nalgebra dense Q, dense symmetric eigen), and the
 //! closed form of the z-axis cycle (`[D10]`).
 
-use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
+use nalgebra::{DMatrix, Matrix3, Vector3};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rotavg::Rotation;
@@ -59,7 +59,7 @@ fn dense_s(p: &MultipleProblem, l: &[Matrix3<f64>]) -> DMatrix<f64> {
 }
 
 fn dense_min_eig(m: DMatrix<f64>) -> f64 {
-    SymmetricEigen::new(m).eigenvalues.min()
+    m.symmetric_eigenvalues().min()
 }
 
 fn stack(rs: &[Rotation]) -> DMatrix<f64> {
@@ -926,8 +926,8 @@ fn over_budget_reports_the_gauge_deflated_estimate() {
         .clone()
         .expect("estimate reported");
     let lambdas = multipliers(&p, &rs).unwrap();
-    let mut eig: Vec<f64> = SymmetricEigen::new(dense_s(&p, &lambdas))
-        .eigenvalues
+    let mut eig: Vec<f64> = dense_s(&p, &lambdas)
+        .symmetric_eigenvalues()
         .iter()
         .copied()
         .collect();

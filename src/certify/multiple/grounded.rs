@@ -440,7 +440,6 @@ mod tests {
     use crate::so3::Rotation;
     use crate::so3::random_rotation;
     use faer::sparse::SparseColMat;
-    use nalgebra::SymmetricEigen;
     use rand::SeedableRng;
     use rand::rngs::StdRng;
 
@@ -458,8 +457,8 @@ mod tests {
     }
 
     fn dense_lambda_min(s: &SparseColMat<usize, f64>) -> f64 {
-        SymmetricEigen::new(crate::linalg::cholesky::to_dense(s.as_ref()))
-            .eigenvalues
+        crate::linalg::cholesky::to_dense(s.as_ref())
+            .symmetric_eigenvalues()
             .min()
     }
 

@@ -420,7 +420,6 @@ mod tests {
     use crate::certify::multiple::multipliers::{certificate_matrix, multipliers};
     use crate::multiple::{Edge, MultipleSettings, solve_multiple};
     use crate::so3::{perturb_gaussian, random_rotation};
-    use nalgebra::SymmetricEigen;
     use rand::{Rng, SeedableRng};
 
     /// A rig-like graph: `groups` groups of `size` nodes, each a random graph of about 3
@@ -478,8 +477,8 @@ mod tests {
 
     fn dense_lambda_min(p: &MultipleProblem, lambdas: &[Matrix3<f64>]) -> f64 {
         let s = certificate_matrix(p, lambdas).unwrap();
-        SymmetricEigen::new(crate::linalg::cholesky::to_dense(s.as_ref()))
-            .eigenvalues
+        crate::linalg::cholesky::to_dense(s.as_ref())
+            .symmetric_eigenvalues()
             .min()
     }
 
@@ -744,9 +743,7 @@ mod tests {
             .map(|i| e.eigenvectors.column(i).into_owned())
             .collect();
         let q = nalgebra::DMatrix::from_columns(&q);
-        SymmetricEigen::new(q.transpose() * m * &q)
-            .eigenvalues
-            .min()
+        (q.transpose() * m * &q).symmetric_eigenvalues().min()
     }
 
     /// The deflated components' space itself: `M = D^T S D` (dense) is positive semidefinite on

@@ -7,12 +7,12 @@ use super::*;
 use crate::certify::multiple::multipliers::{certificate_matrix, multipliers};
 use crate::multiple::synthetic::SyntheticGraph;
 use crate::multiple::{MultipleSettings, solve_multiple};
-use nalgebra::{SymmetricEigen, Vector3};
+use nalgebra::Vector3;
 
 fn dense_lambda_min(p: &MultipleProblem, lambdas: &[Matrix3<f64>]) -> f64 {
     let s = certificate_matrix(p, lambdas).unwrap();
-    SymmetricEigen::new(crate::linalg::cholesky::to_dense(s.as_ref()))
-        .eigenvalues
+    crate::linalg::cholesky::to_dense(s.as_ref())
+        .symmetric_eigenvalues()
         .min()
 }
 
