@@ -182,31 +182,28 @@ pub fn project_to_cone(p: &Matrix3<f64>) -> Matrix3<f64> {
     // the projection of the eigenvalues onto the polyhedral cone {q_a + q_b >= 0}: the closest
     // feasible solution of the equality-constrained problems of the 7 nonempty active sets
     let pairs = [(0usize, 1usize), (0, 2), (1, 2)];
+    let slack = 1e-12 * v.iter().map(|x| x.abs()).sum::<f64>();
     let mut best: Option<(f64, [f64; 3])> = None;
     for mask in 1u8..8 {
-        let active: Vec<(usize, usize)> = (0..3)
-            .filter(|k| mask & (1 << k) != 0)
-            .map(|k| pairs[k])
-            .collect();
-        let k = active.len();
-        // q = v - sum_c mu_c (e_a + e_b), with (e_a + e_b) . q = 0 for every active pair
-        let gram = nalgebra::DMatrix::from_fn(k, k, |r, c| {
-            let (a, b) = (active[r], active[c]);
-            [a.0, a.1]
-                .iter()
-                .filter(|x| **x == b.0 || **x == b.1)
-                .count() as f64
-        });
-        let rhs = nalgebra::DVector::from_fn(k, |r, _| v[active[r].0] + v[active[r].1]);
-        let Some(mu) = gram.lu().solve(&rhs) else {
-            continue;
-        };
-        let mut q = v;
-        for (c, &(a, b)) in active.iter().enumerate() {
-            q[a] -= mu[c];
-            q[b] -= mu[c];
+        let mut active = [(0, 0); 3];
+        let mut k = 0;
+        for (bit, &pair) in pairs.iter().enumerate() {
+            if mask & (1 << bit) != 0 {
+                active[k] = pair;
+                k += 1;
+            }
         }
-        let slack = 1e-12 * v.iter().map(|x| x.abs()).sum::<f64>();
+        let active = &active[..k];
+        // q = v - sum_c mu_c (e_a + e_b), with (e_a + e_b) . q = 0 for every active pair: the
+        // Gram matrix of any k of the three pairs is I + 1 1^T (each pair has 2 indices and
+        // shares exactly one with each other), whose inverse is I - 1 1^T / (1 + k)
+        let share = active.iter().map(|&(a, b)| v[a] + v[b]).sum::<f64>() / (1 + k) as f64;
+        let mut q = v;
+        for &(a, b) in active {
+            let mu = v[a] + v[b] - share;
+            q[a] -= mu;
+            q[b] -= mu;
+        }
         let feasible = pairs.iter().all(|&(a, b)| q[a] + q[b] >= -slack);
         let distance: f64 = q.iter().zip(&v).map(|(x, y)| (x - y).powi(2)).sum();
         if feasible && best.is_none_or(|(d, _)| distance < d) {
