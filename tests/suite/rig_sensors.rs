@@ -234,6 +234,8 @@ fn local_minimum(p: &RigProblem, mut frames: Vec<Rotation>, mut sensors: Vec<Rot
     let mut cost = p.cost(&frames, &sensors);
     for _ in 0..60 {
         frames = frames_at(p, &sensors, frames);
+        // the cost at the current sensors, kept as they move (not evaluated again per trial)
+        let mut current = p.cost(&frames, &sensors);
         for s in 1..sensors.len() {
             let mut step = 0.05;
             while step > 1e-9 {
@@ -244,8 +246,10 @@ fn local_minimum(p: &RigProblem, mut frames: Vec<Rotation>, mut sensors: Vec<Rot
                         v[axis] = sign * step;
                         let mut trial = sensors.clone();
                         trial[s] = sensors[s] * rotavg::so3::exp(&v);
-                        if p.cost(&frames, &trial) < p.cost(&frames, &sensors) {
+                        let at_trial = p.cost(&frames, &trial);
+                        if at_trial < current {
                             sensors = trial;
+                            current = at_trial;
                             moved = true;
                         }
                     }
