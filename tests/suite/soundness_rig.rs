@@ -101,13 +101,17 @@ fn the_rigs_cost_counts_its_soft_priors_with_information_too() {
     }
 }
 
-/// The truth's frames and estimated sensors turned by about `1e-6` rad (held sensors kept).
-fn near(truth: &RigTruth, held: &[Option<Rotation>], seed: u64) -> (Vec<Rotation>, Vec<Rotation>) {
+/// The frames and estimated sensors turned by about `1e-6` rad (held sensors kept).
+fn near(
+    (frames, sensors): (&[Rotation], &[Rotation]),
+    held: &[Option<Rotation>],
+    seed: u64,
+) -> (Vec<Rotation>, Vec<Rotation>) {
     let mut rng = <rand::rngs::StdRng as rand::SeedableRng>::seed_from_u64(seed);
-    let frames = (truth.frames.iter())
+    let frames = (frames.iter())
         .map(|f| perturb(f, 1e-6, &mut rng))
         .collect();
-    let sensors = (truth.sensors.iter().zip(held))
+    let sensors = (sensors.iter().zip(held))
         .map(|(s, h)| h.unwrap_or_else(|| perturb(s, 1e-6, &mut rng)))
         .collect();
     (frames, sensors)
@@ -197,7 +201,7 @@ fn rig_bounds_of_noise_free_rigs_stay_below_the_truth() {
             let at_truth = written_out_cost(&p, &truth.frames, &truth.sensors);
             // 1e-6 rad off the truth: a bound is capped at the estimate's computed cost, which
             // at the truth itself would hide one above the minimum
-            let (frames, sensors) = near(&truth, p.held(), k);
+            let (frames, sensors) = near((&truth.frames, &truth.sensors), p.held(), k);
             let c = certify_rig(&p, &frames, &sensors, &CertifySettings::default())
                 .unwrap()
                 .certificate;
@@ -450,12 +454,7 @@ fn anisotropic_rig_bounds_on_exact_truths_stay_below_the_minimum() {
             p = p.with_gravity(g).unwrap();
         }
         let at_truth = written_out_cost(&p, &frames, &sensors);
-        let mut rng = rand::rngs::StdRng::seed_from_u64(k);
-        let near_frames: Vec<Rotation> =
-            frames.iter().map(|f| perturb(f, 1e-6, &mut rng)).collect();
-        let near_sensors: Vec<Rotation> = (sensors.iter().zip(p.held()))
-            .map(|(s, h)| h.unwrap_or_else(|| perturb(s, 1e-6, &mut rng)))
-            .collect();
+        let (near_frames, near_sensors) = near((&frames, &sensors), p.held(), k);
         let cert = certify_rig(&p, &near_frames, &near_sensors, &CertifySettings::default())
             .unwrap()
             .certificate;

@@ -185,21 +185,18 @@ pub fn project_to_cone(p: &Matrix3<f64>) -> Matrix3<f64> {
     let slack = 1e-12 * v.iter().map(|x| x.abs()).sum::<f64>();
     let mut best: Option<(f64, [f64; 3])> = None;
     for mask in 1u8..8 {
-        let mut active = [(0, 0); 3];
-        let mut k = 0;
-        for (bit, &pair) in pairs.iter().enumerate() {
-            if mask & (1 << bit) != 0 {
-                active[k] = pair;
-                k += 1;
-            }
-        }
-        let active = &active[..k];
+        let active = || {
+            (pairs.iter().enumerate())
+                .filter(move |(bit, _)| mask & (1 << bit) != 0)
+                .map(|(_, &pair)| pair)
+        };
+        let k = mask.count_ones();
         // q = v - sum_c mu_c (e_a + e_b), with (e_a + e_b) . q = 0 for every active pair: the
         // Gram matrix of any k of the three pairs is I + 1 1^T (each pair has 2 indices and
         // shares exactly one with each other), whose inverse is I - 1 1^T / (1 + k)
-        let share = active.iter().map(|&(a, b)| v[a] + v[b]).sum::<f64>() / (1 + k) as f64;
+        let share = active().map(|(a, b)| v[a] + v[b]).sum::<f64>() / f64::from(1 + k);
         let mut q = v;
-        for &(a, b) in active {
+        for (a, b) in active() {
             let mu = v[a] + v[b] - share;
             q[a] -= mu;
             q[b] -= mu;
