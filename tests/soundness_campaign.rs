@@ -504,6 +504,7 @@ fn no_false_certificate_on_rigs_of_many_sensors() {
             cross_fraction: if strong { 0.0 } else { [0.0, 0.5][(k / 3) % 2] },
             noise_sigma: [0.0, 0.02, 0.1, 0.3][(k / 6) % 4],
             outlier_fraction: [0.0, 0.2][(k / 24) % 2],
+            outlier_angle_deg: None,
             known: !strong && (k / 48) % 2 == 1,
             // from 160: information matrices (`[H24]`)
             anisotropy: match k {

@@ -25,7 +25,9 @@ use rotavg::report::{RigFileReport, RigReport};
 ///         outliers), ``"chordal"`` or ``"cauchy"`` (then the inlier edges' problem is returned
 ///         and certified, ``paper-notes/conjugate.md`` [H20], [H22]), as ``rotavg rig RIGHT
 ///         LEFT --loss``; with ``sensor_from_rig``, least squares (``"cauchy"`` is an error).
-///     loss_threshold: the Cauchy loss's scale and the inlier threshold, degrees.
+///     loss_threshold: the Cauchy loss's scale and the inlier threshold, degrees; ``None``:
+///         both from the data with ``"auto"`` (``paper-notes/conjugate.md`` [H20] "The
+///         scale"), 5 with ``"cauchy"``.
 ///     certify: ``"auto"``, ``"dual"``, ``"sdp"`` or ``"none"``.
 ///     max_memory, max_seconds: the run's budget, as for ``average_multiple`` (one clock for
 ///         the joint solve and the certificate).
@@ -51,7 +53,7 @@ use rotavg::report::{RigFileReport, RigReport};
 ///     rotavg.Error: graphs over different node ids, a ``sensor_from_rig`` that is not a
 ///         rotation.
 #[pyfunction]
-#[pyo3(name = "average_rig", signature = (right, left, *, sensor_from_rig=None, loss="auto", loss_threshold=5.0, certify="auto", max_memory=None, max_seconds=600.0, gravity=None, world_down=None, gravity_weight=None))]
+#[pyo3(name = "average_rig", signature = (right, left, *, sensor_from_rig=None, loss="auto", loss_threshold=None, certify="auto", max_memory=None, max_seconds=600.0, gravity=None, world_down=None, gravity_weight=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn average_rig(
     py: Python<'_>,
@@ -59,7 +61,7 @@ pub fn average_rig(
     left: PyRef<'_, Graph>,
     sensor_from_rig: Option<&Bound<'_, PyAny>>,
     loss: &str,
-    loss_threshold: f64,
+    loss_threshold: Option<f64>,
     certify: &str,
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
@@ -111,7 +113,9 @@ pub fn average_rig(
 ///     loss: ``"auto"`` (least squares, the Cauchy loss instead when the residuals look like
 ///         outliers), ``"chordal"`` or ``"cauchy"`` (then the inlier edges' problem is returned
 ///         and certified), as ``rotavg rig FILE --loss``.
-///     loss_threshold: the Cauchy loss's scale and the inlier threshold, degrees.
+///     loss_threshold: the Cauchy loss's scale and the inlier threshold, degrees; ``None``:
+///         both from the data with ``"auto"`` (``paper-notes/conjugate.md`` [H20] "The
+///         scale"), 5 with ``"cauchy"``.
 ///     certify: ``"auto"``, ``"dual"`` or ``"none"``.
 ///     max_memory, max_seconds: the run's budget, as for ``average_multiple``.
 ///     rotation_tolerance: how far a rotation in a JSON rig file may be from SO(3).
@@ -137,13 +141,13 @@ pub fn average_rig(
 ///     rotavg.ParseError / FileError: a file that cannot be read (naming it); rotavg.Error: a
 ///         rig that is not valid (an image out of range, a sensor no edge places).
 #[pyfunction]
-#[pyo3(name = "average_rig_file", signature = (path, *, loss="auto", loss_threshold=5.0, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None, information="kappa"))]
+#[pyo3(name = "average_rig_file", signature = (path, *, loss="auto", loss_threshold=None, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None, information="kappa"))]
 #[allow(clippy::too_many_arguments)]
 pub fn average_rig_file(
     py: Python<'_>,
     path: &Bound<'_, PyAny>,
     loss: &str,
-    loss_threshold: f64,
+    loss_threshold: Option<f64>,
     certify: &str,
     max_memory: Option<u64>,
     max_seconds: Option<f64>,
@@ -387,6 +391,6 @@ impl RigEstimate {
 
 /// `loss` and `loss_threshold` of the rig functions: the loss and the Cauchy scale and inlier
 /// threshold.
-fn rig_loss(loss: &str, threshold: f64) -> PyResult<(RigLoss, rotavg::rig::RigRobust)> {
+fn rig_loss(loss: &str, threshold: Option<f64>) -> PyResult<(RigLoss, rotavg::rig::RigRobust)> {
     RigLoss::named(loss, threshold).map_err(|e| crate::errors::argument_error(e.to_string()))
 }

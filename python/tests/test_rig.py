@@ -129,6 +129,9 @@ def test_outliers_in_two_view_graphs_turn_robust_as_the_command_line(cli, tmp_pa
     d = ours.to_dict()
     assert d["verdict"]["problem"]["kind"] == "chordal_l2_rig_images_inliers"
     assert d["robust"]["robust"] is True
+    assert d["robust"]["data_scale"]["rule"] == "from_data"  # [H20] "The scale"
+    given = rotavg.average_rig(right, left, loss_threshold=4.0).to_dict()["robust"]
+    assert given["data_scale"] is None and given["inlier_threshold_deg"] == 4.0
     truth = json.loads((RIG / "truth.json").read_text())
     assert angle(np.array(d["sensor_from_rig"]), np.array(truth["sensor_from_rig"])) < 0.5
     plain = rotavg.average_rig(right, left, loss="chordal").to_dict()

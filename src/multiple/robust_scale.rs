@@ -78,14 +78,16 @@ pub const MAX_DATA_SCALE_DEG: f64 = 10.0;
 pub struct DataScale {
     /// The rule: `"from_data"`.
     pub rule: String,
-    /// Median residual angle at the unit-weight L1 solution, degrees.
+    /// Median residual angle at the estimate it was read at, degrees: a view graph's L1
+    /// solution (of unit weights where it has information; [`data_scale`]), or a rig's Cauchy
+    /// estimate after a few reweightings at 5 degrees (`crate::rig::rig_data_scale`).
     pub median_deg: f64,
     /// The scale: [`SCALE_PER_MEDIAN`] x `median_deg`, within
     /// [`MIN_DATA_SCALE_DEG`]..[`MAX_DATA_SCALE_DEG`], rounded to three significant digits,
     /// degrees.
     pub scale_deg: f64,
     /// Where the graph has information: the median Mahalanobis angle (`[A14]`, the angle its
-    /// inlier threshold is compared with) at the same L1 solution, degrees; `None` with scalar
+    /// inlier threshold is compared with) at the same estimate, degrees; `None` with scalar
     /// weights (and in records written before it existed).
     #[serde(default)]
     pub mahalanobis_median_deg: Option<f64>,
@@ -99,9 +101,9 @@ pub struct DataScale {
     /// [`MIN_DATA_SCALE_DEG`]..[`MAX_DATA_SCALE_DEG`] and the scale is that bound.
     #[serde(default)]
     pub clamped: bool,
-    /// IRLS iterations of that L1 solve.
+    /// IRLS iterations of that L1 solve (a rig's: its reweightings at 5 degrees).
     pub iterations: usize,
-    /// Time of that L1 solve, seconds.
+    /// Time of that solve, seconds.
     pub seconds: f64,
 }
 
@@ -117,6 +119,30 @@ impl DataScale {
     /// [`DataScale::threshold_median_deg`]).
     pub fn threshold_bound_note(&self) -> String {
         bound_note(INLIER_PER_MEDIAN * self.threshold_median_deg())
+    }
+
+    /// The scale in words: `"1.5 x the median residual 0.881 deg at {at}"`, and the bound
+    /// taken when it was outside the range ([`DataScale::scale_bound_note`]).
+    pub fn scale_words(&self, at: &str) -> String {
+        format!(
+            "{SCALE_PER_MEDIAN} x the median residual {:.3} deg at {at}{}",
+            self.median_deg,
+            self.scale_bound_note()
+        )
+    }
+
+    /// The inlier threshold in words: `"3 x that median (2.64 deg)"`, or where the graph has
+    /// information `"3 x the median Mahalanobis angle 0.4 deg there (1.2 deg)"`.
+    pub fn threshold_words(&self) -> String {
+        let of = match self.mahalanobis_median_deg {
+            Some(m) => format!("the median Mahalanobis angle {m:.3} deg there"),
+            None => "that median".into(),
+        };
+        format!(
+            "{INLIER_PER_MEDIAN} x {of} ({} deg{})",
+            self.inlier_threshold_deg,
+            self.threshold_bound_note()
+        )
     }
 
     /// The median the inlier threshold is a multiple of: `mahalanobis_median_deg` where the
@@ -167,30 +193,65 @@ pub fn data_scale(
     metric: Metric,
     settings: &MultipleSettings,
 ) -> Result<(DataScale, Vec<Rotation>)> {
+    let (at, solution) = l1_angles(graph, metric, settings)?;
+    Ok((DataScale::from_angles(&at), solution))
+}
+
+/// The angles a [`DataScale`] is read from: at the L1 solution of a view graph
+/// ([`data_scale`]), or at a rig's first Cauchy estimate (`crate::rig::rig_data_scale`).
+#[derive(Debug, Clone)]
+pub(crate) struct ScaleAngles {
+    /// Every edge's residual angle, radians.
+    pub residual: Vec<f64>,
+    /// Where the graph has information, every edge's Mahalanobis angle (`[A10]`), radians.
+    pub mahalanobis: Option<Vec<f64>>,
+    /// Iterations of the solve that found the estimate.
+    pub iterations: usize,
+    /// Its time, seconds.
+    pub seconds: f64,
+}
+
+/// The L1 solve of [`data_scale`] on `graph`: its angles and solution.
+fn l1_angles(
+    graph: &MultipleProblem,
+    metric: Metric,
+    settings: &MultipleSettings,
+) -> Result<(ScaleAngles, Vec<Rotation>)> {
     let base = match graph.is_anisotropic() {
         true => crate::multiple::two_stage::unit_weights(graph)?,
         false => graph.clone(),
     };
     let l1 = base.with_objective(Objective::new(metric, Loss::L1))?;
     let solution = solve_multiple(&l1, &settings.for_l1_start())?;
-    let median_deg = median_angle_deg(l1.residual_angles(&solution.rotations));
-    let mahalanobis_median_deg = (graph.is_anisotropic())
-        .then(|| median_angle_deg(graph.objective_angles(&solution.rotations)));
-    let unclamped = SCALE_PER_MEDIAN * median_deg;
-    let bounded = |x: f64| three_digits(x.clamp(MIN_DATA_SCALE_DEG, MAX_DATA_SCALE_DEG));
-    let scale = DataScale {
-        rule: "from_data".into(),
-        median_deg,
-        mahalanobis_median_deg,
-        scale_deg: bounded(unclamped),
-        inlier_threshold_deg: bounded(
-            INLIER_PER_MEDIAN * mahalanobis_median_deg.unwrap_or(median_deg),
-        ),
-        clamped: !(MIN_DATA_SCALE_DEG..=MAX_DATA_SCALE_DEG).contains(&unclamped),
+    let at = ScaleAngles {
+        residual: l1.residual_angles(&solution.rotations),
+        mahalanobis: (graph.is_anisotropic()).then(|| graph.objective_angles(&solution.rotations)),
         iterations: solution.report.iterations,
         seconds: solution.report.seconds,
     };
-    Ok((scale, solution.rotations))
+    Ok((at, solution.rotations))
+}
+
+impl DataScale {
+    /// The scale and inlier threshold of the angles `at` (`[D20]`'s rule).
+    pub(crate) fn from_angles(at: &ScaleAngles) -> DataScale {
+        let median_deg = median_angle_deg(at.residual.clone());
+        let mahalanobis_median_deg = at.mahalanobis.clone().map(median_angle_deg);
+        let unclamped = SCALE_PER_MEDIAN * median_deg;
+        let bounded = |x: f64| three_digits(x.clamp(MIN_DATA_SCALE_DEG, MAX_DATA_SCALE_DEG));
+        DataScale {
+            rule: "from_data".into(),
+            median_deg,
+            mahalanobis_median_deg,
+            scale_deg: bounded(unclamped),
+            inlier_threshold_deg: bounded(
+                INLIER_PER_MEDIAN * mahalanobis_median_deg.unwrap_or(median_deg),
+            ),
+            clamped: !(MIN_DATA_SCALE_DEG..=MAX_DATA_SCALE_DEG).contains(&unclamped),
+            iterations: at.iterations,
+            seconds: at.seconds,
+        }
+    }
 }
 
 /// `", at most 10 deg"` or `", at least 0.01 deg"` when `x` is outside

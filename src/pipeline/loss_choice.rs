@@ -8,9 +8,7 @@ use super::inlier_graph::ViewGraphProblem;
 use super::{AverageSettings, MultipleEstimate, certify_solved, validate};
 use crate::error::Result;
 use crate::multiple::robust::{OutlierWarning, judges_residuals, suspected_outliers};
-use crate::multiple::robust_scale::{
-    DataScale, INLIER_PER_MEDIAN, SCALE_PER_MEDIAN, ScaleRule, data_scale,
-};
+use crate::multiple::robust_scale::{DataScale, ScaleRule, data_scale};
 use crate::multiple::{Initialisation, MultipleSettings};
 use crate::objective::Objective;
 use crate::termination::Termination;
@@ -64,15 +62,10 @@ impl fmt::Display for LossChoice {
                 if let Some(s) = &self.scale {
                     write!(
                         f,
-                        "; its scale from the data: {SCALE_PER_MEDIAN} x the median residual \
-                         {:.3} deg at the L1 solution{} (`--loss-threshold` sets it), its \
-                         inlier threshold {INLIER_PER_MEDIAN} x {} ({} deg{}) unless \
-                         `--inlier-threshold` is given",
-                        s.median_deg,
-                        s.scale_bound_note(),
-                        threshold_median(s),
-                        s.inlier_threshold_deg,
-                        s.threshold_bound_note(),
+                        "; its scale from the data: {} (`--loss-threshold` sets it), its inlier \
+                         threshold {} unless `--inlier-threshold` is given",
+                        s.scale_words("the L1 solution"),
+                        s.threshold_words(),
                     )?;
                 }
                 write!(
@@ -87,14 +80,6 @@ impl fmt::Display for LossChoice {
                 self.rule, self.chosen, self.reason
             ),
         }
-    }
-}
-
-/// The median the inlier threshold of `s` is a multiple of, in words.
-fn threshold_median(s: &DataScale) -> String {
-    match s.mahalanobis_median_deg {
-        Some(m) => format!("the median Mahalanobis angle {m:.3} deg there"),
-        None => "that median".into(),
     }
 }
 

@@ -5,6 +5,7 @@ use super::{AverageSettings, Averaged, PipelineProblem, PipelineSolution, averag
 use crate::certify::{Certification, CertifyMode, CertifySettings, certify_rig};
 use crate::error::Result;
 use crate::multiple::robust::suspected_outliers;
+use crate::multiple::robust_scale::{DataScale, ScaleRule};
 use crate::rig::solve_rig_robust_given;
 use crate::rig::{RigProblem, RigRobust, RigSettings, RigSolution, solve_rig};
 use crate::termination::SolverReport;
@@ -82,10 +83,21 @@ pub enum RigLoss {
 
 impl RigLoss {
     /// The loss named `name` (`auto`, `chordal` or `cauchy`) with the Cauchy scale and the
-    /// inlier threshold both `threshold_deg` (`rotavg rig --loss --loss-threshold`, Python's
-    /// `loss=`, `loss_threshold=`). Errors: another name (the thresholds are checked by the
-    /// solve).
-    pub fn named(name: &str, threshold_deg: f64) -> Result<(RigLoss, RigRobust)> {
+    /// inlier threshold both `threshold_deg` when given (`rotavg rig --loss --loss-threshold`,
+    /// Python's `loss=`, `loss_threshold=`); not given, both from the data for `auto`
+    /// ([`crate::rig::rig_data_scale`], `[H20]` "The scale") and 5 degrees for `cauchy`, the
+    /// rule of view graphs ([`ScaleRule::of`]). Errors: another name (the thresholds are
+    /// checked by the solve).
+    ///
+    /// ```
+    /// use rotavg::multiple::robust_scale::ScaleRule;
+    /// use rotavg::pipeline::rig::RigLoss;
+    /// assert_eq!(RigLoss::named("auto", None)?.1.scale, ScaleRule::FromData);
+    /// assert_eq!(RigLoss::named("cauchy", None)?.1.scale, ScaleRule::Given);
+    /// assert_eq!(RigLoss::named("auto", Some(2.0))?.1.threshold_deg, 2.0);
+    /// # Ok::<(), rotavg::Error>(())
+    /// ```
+    pub fn named(name: &str, threshold_deg: Option<f64>) -> Result<(RigLoss, RigRobust)> {
         let loss = match name {
             "auto" => RigLoss::Auto,
             "chordal" => RigLoss::Chordal,
@@ -99,9 +111,14 @@ impl RigLoss {
                 });
             }
         };
+        let (threshold_deg, rule) = ScaleRule::of(threshold_deg);
         let robust = RigRobust {
             threshold_deg,
             inlier_threshold_deg: threshold_deg,
+            scale: match loss {
+                RigLoss::Auto => rule,
+                _ => ScaleRule::Given,
+            },
             ..Default::default()
         };
         Ok((loss, robust))
@@ -144,6 +161,48 @@ pub struct RigRobustDetails {
     pub total_edges: usize,
     /// The inlier threshold, degrees.
     pub inlier_threshold_deg: f64,
+    /// The Cauchy scale, degrees (0 in records written before it existed).
+    #[serde(default)]
+    pub scale_deg: f64,
+    /// When the scale and inlier threshold came from the data ([`ScaleRule::FromData`]): how
+    /// ([`crate::rig::rig_data_scale`]); `None`: as given.
+    #[serde(default)]
+    pub data_scale: Option<DataScale>,
+}
+
+impl RigRobustDetails {
+    /// What the robust solve did, in words (the text reports of `rotavg rig`); `anisotropic`:
+    /// the rig has information matrices (its alternations ran on unit weights, its inliers are
+    /// judged by their Mahalanobis angles).
+    pub fn summary(&self, anisotropic: bool) -> String {
+        let mut s = format!(
+            "Cauchy loss ({} reweighted alternations{}): {} of {} edges inliers ({} <= {} deg); \
+             the estimate and certificate are the inlier problem's",
+            self.reweights,
+            if anisotropic { " on unit weights" } else { "" },
+            self.inlier_edges,
+            self.total_edges,
+            if anisotropic {
+                "Mahalanobis angle"
+            } else {
+                "residual"
+            },
+            self.inlier_threshold_deg
+        );
+        if let Some(d) = &self.data_scale {
+            s += &format!(
+                "; its scale {} deg from the data: {} (`--loss-threshold` sets both), its inlier \
+                 threshold {}",
+                d.scale_deg,
+                d.scale_words(&format!(
+                    "the Cauchy estimate after {} reweightings at 5 deg",
+                    d.iterations
+                )),
+                d.threshold_words()
+            );
+        }
+        s
+    }
 }
 
 /// A rig solved with `loss` (`rotavg rig FILE`): least squares ([`average_rig`]); or the Cauchy
@@ -391,7 +450,10 @@ pub(crate) fn robust_from(
         reweights: rr.reweights,
         inlier_edges: rr.inliers.iter().filter(|k| **k).count(),
         total_edges: problem.edges().len(),
-        inlier_threshold_deg: robust.inlier_threshold_deg,
+        inlier_threshold_deg: (rr.scale.as_ref())
+            .map_or(robust.inlier_threshold_deg, |d| d.inlier_threshold_deg),
+        scale_deg: (rr.scale.as_ref()).map_or(robust.threshold_deg, |d| d.scale_deg),
+        data_scale: rr.scale.clone(),
     };
     let mut certify = settings.certify.clone();
     certify.budget = certify.budget.after(start);

@@ -221,6 +221,9 @@ impl fmt::Display for RigReport {
         for w in &self.warnings {
             write!(f, "\nwarning: {w}")?;
         }
+        if let Some(r) = &self.robust {
+            write!(f, "\n{}", r.summary(false))?;
+        }
         super::result_and_verdict(f, &self.result, self.verdict_of())
     }
 }

@@ -313,25 +313,7 @@ impl fmt::Display for RigFileReport {
             write!(f, "\nwarning: {w}")?;
         }
         if let Some(r) = &self.robust {
-            write!(
-                f,
-                "\nCauchy loss ({} reweighted alternations{}): {} of {} edges inliers ({} <= {} \
-                 deg); the estimate and certificate are the inlier problem's",
-                r.reweights,
-                if p.is_anisotropic() {
-                    " on unit weights"
-                } else {
-                    ""
-                },
-                r.inlier_edges,
-                r.total_edges,
-                if p.is_anisotropic() {
-                    "Mahalanobis angle"
-                } else {
-                    "residual"
-                },
-                r.inlier_threshold_deg
-            )?;
+            write!(f, "\n{}", r.summary(p.is_anisotropic()))?;
         }
         super::result_and_verdict(f, &self.result, self.verdict_of())
     }

@@ -8,6 +8,7 @@ use super::solve::{RigSettings, RigSolution, solve_rig, solve_rig_from};
 use crate::deadline::remaining;
 use crate::error::Result;
 use crate::multiple::Edge;
+use crate::multiple::robust_scale::{DEFAULT_THRESHOLD_DEG, DataScale, ScaleAngles, ScaleRule};
 use crate::so3::Rotation;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
@@ -15,32 +16,53 @@ use std::time::Instant;
 /// Alternation passes per reweighting of [`solve_rig_robust`].
 pub const REWEIGHT_PASSES: usize = 5;
 
+/// Reweightings of the first stage of the scale from the data at most ([`rig_data_scale`]).
+pub const FIRST_STAGE_REWEIGHTS: usize = 3;
+
 /// Settings of [`solve_rig_robust`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct RigRobust {
-    /// The Cauchy loss's scale `c`, degrees (default 5): an edge of residual angle `theta`
-    /// weighs `w / (1 + (theta / c)^2)`.
+    /// The Cauchy loss's scale `c`, degrees (5 unless set), used with [`ScaleRule::Given`]: an
+    /// edge of residual angle `theta` weighs `w / (1 + (theta / c)^2)`.
     pub threshold_deg: f64,
-    /// An edge is an inlier when its residual at the robust estimate is at most this, degrees
-    /// (default 5).
+    /// An edge is an inlier when its residual at the robust estimate (its Mahalanobis angle
+    /// with information) is at most this, degrees (5 unless set), with [`ScaleRule::Given`].
     pub inlier_threshold_deg: f64,
     /// Reweighted alternations at most (default 50); they stop earlier when one changes the
     /// robust cost by less than `1e-9` of it.
     pub max_reweights: usize,
+    /// Where the two thresholds come from: [`ScaleRule::FromData`] (the default) finds both
+    /// from the data ([`rig_data_scale`], `paper-notes/conjugate.md` `[H20]` "The scale", the
+    /// rule `[D20]` of view graphs) and ignores the two fields above; [`ScaleRule::Given`] uses
+    /// them as given (the command line's `--loss-threshold`, and `--loss cauchy`, whose scale
+    /// is 5 degrees unless given).
+    pub scale: ScaleRule,
 }
 
 impl Default for RigRobust {
     fn default() -> Self {
         RigRobust {
-            threshold_deg: 5.0,
-            inlier_threshold_deg: 5.0,
+            threshold_deg: DEFAULT_THRESHOLD_DEG,
+            inlier_threshold_deg: DEFAULT_THRESHOLD_DEG,
             max_reweights: 50,
+            scale: ScaleRule::FromData,
         }
     }
 }
 
 impl RigRobust {
+    /// The thresholds of `scale` ([`DataScale::scale_deg`] and
+    /// [`DataScale::inlier_threshold_deg`]) with the rule [`ScaleRule::Given`].
+    pub fn with_data_scale(self, scale: &DataScale) -> RigRobust {
+        RigRobust {
+            threshold_deg: scale.scale_deg,
+            inlier_threshold_deg: scale.inlier_threshold_deg,
+            scale: ScaleRule::Given,
+            ..self
+        }
+    }
+
     /// Errors: a threshold that is not a positive number of degrees.
     pub fn validate(&self) -> Result<()> {
         for (name, v) in [
@@ -71,6 +93,81 @@ pub struct RobustRig {
     pub inlier_problem: RigProblem,
     /// Its chordal L2 estimate, solved from the robust one: what is certified.
     pub inlier_solution: RigSolution,
+    /// With [`ScaleRule::FromData`], the scale and inlier threshold found ([`rig_data_scale`]).
+    pub scale: Option<DataScale>,
+}
+
+/// The Cauchy scale and inlier threshold of `p` from its data (`[H20]` "The scale"): the
+/// Cauchy alternations of [`solve_rig_robust`] at 5 degrees from least squares (on unit
+/// weights with information), then `[D20]`'s rule of view graphs on the edges' angles at their
+/// estimate: 1.5 times the median residual angle, the inlier threshold 3 times the median of
+/// the angle it is compared with (the Mahalanobis angle with information), within 0.01-10
+/// degrees. The median is an inlier's while fewer than half the edges are wrong. Scaling every
+/// weight changes neither. Its solves share `settings`' clock. Errors: those of [`solve_rig`].
+///
+/// ```
+/// use rotavg::rig::{RigScene, RigSettings, rig_data_scale};
+/// let (p, _) = RigScene { frames: 60, sensors: 3, noise_sigma: 0.01, outlier_fraction: 0.1, ..Default::default() }.generate();
+/// let s = rig_data_scale(&p, &RigSettings::default())?;
+/// // 0.01 rad per axis: inlier angles 0.88 deg at the median, the scale about 1.3 deg
+/// assert!((1.0..1.6).contains(&s.scale_deg), "{}", s.scale_deg);
+/// assert!((2.0..3.2).contains(&s.inlier_threshold_deg), "{}", s.inlier_threshold_deg);
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn rig_data_scale(p: &RigProblem, settings: &RigSettings) -> Result<DataScale> {
+    let clock = Instant::now();
+    let unit = unit_weights(p)?;
+    let q = unit.as_ref().unwrap_or(p);
+    let start = solve_rig(q, settings)?;
+    let within = RigSettings {
+        max_seconds: remaining(settings.max_seconds, clock),
+        ..*settings
+    };
+    let (_, _, scale) = first_stage(p, q, start, &RigRobust::default(), &within)?;
+    Ok(scale)
+}
+
+/// `p` with unit weights and no information when it has information (where its Cauchy
+/// alternations run, `[H24]`), else `None` (`p` itself).
+fn unit_weights(p: &RigProblem) -> Result<Option<RigProblem>> {
+    if !p.is_anisotropic() {
+        return Ok(None);
+    }
+    let edges = (p.edges().iter())
+        .map(|e| Edge {
+            weight: 1.0,
+            ..e.clone()
+        })
+        .collect();
+    Ok(Some(p.scalar().with_edges(edges)?))
+}
+
+/// The first stage of the scale from the data: the Cauchy alternations on `q` (`p`, or its
+/// unit weights) at [`DEFAULT_THRESHOLD_DEG`] from `start`, and the scale read at their
+/// estimate. The estimate, its reweightings and the scale.
+fn first_stage(
+    p: &RigProblem,
+    q: &RigProblem,
+    start: RigSolution,
+    robust: &RigRobust,
+    settings: &RigSettings,
+) -> Result<(RigSolution, usize, DataScale)> {
+    let clock = Instant::now();
+    let given = RigRobust {
+        threshold_deg: DEFAULT_THRESHOLD_DEG,
+        scale: ScaleRule::Given,
+        max_reweights: robust.max_reweights.min(FIRST_STAGE_REWEIGHTS),
+        ..*robust
+    };
+    let (estimate, reweights) = reweighted(q, start, &given, settings)?;
+    let at = ScaleAngles {
+        residual: residual_angles(q, &estimate.frames, &estimate.sensors),
+        mahalanobis: (p.is_anisotropic())
+            .then(|| p.objective_angles(&estimate.frames, &estimate.sensors)),
+        iterations: reweights,
+        seconds: clock.elapsed().as_secs_f64(),
+    };
+    Ok((estimate, reweights, DataScale::from_angles(&at)))
 }
 
 /// Each edge's residual angle `theta_e` (radians) at `(frames, sensors)`, from its chordal
@@ -138,29 +235,31 @@ pub(crate) fn solve_rig_robust_given(
         max_seconds: remaining(settings.max_seconds, clock),
         ..*s
     };
-    let (mut estimate, reweights) = if p.is_anisotropic() {
-        let unit = p.scalar().with_edges(
-            (p.edges().iter())
-                .map(|e| Edge {
-                    weight: 1.0,
-                    ..e.clone()
-                })
-                .collect(),
-        )?;
-        let start = solve_rig(&unit, &within(settings))?;
-        reweighted(&unit, start, robust, &within(settings))?
-    } else {
-        let start = match least_squares {
-            Some(ls) => ls,
-            None => solve_rig(p, &within(settings))?,
-        };
-        reweighted(p, start, robust, &within(settings))?
+    let unit = unit_weights(p)?;
+    let q = unit.as_ref().unwrap_or(p);
+    let start = match least_squares {
+        Some(ls) if unit.is_none() => ls,
+        _ => solve_rig(q, &within(settings))?,
     };
+    let (mut estimate, reweights, scale) = match robust.scale {
+        ScaleRule::Given => {
+            let (estimate, reweights) = reweighted(q, start, robust, &within(settings))?;
+            (estimate, reweights, None)
+        }
+        ScaleRule::FromData => {
+            let (first, n, scale) = first_stage(p, q, start, robust, &within(settings))?;
+            let robust = robust.with_data_scale(&scale);
+            let (estimate, more) = reweighted(q, first, &robust, &within(settings))?;
+            (estimate, n + more, Some(scale))
+        }
+    };
+    let threshold_deg =
+        (scale.as_ref()).map_or(robust.inlier_threshold_deg, |s| s.inlier_threshold_deg);
     estimate.cost = p.cost(&estimate.frames, &estimate.sensors);
     let inliers: Vec<bool> = (p
         .objective_angles(&estimate.frames, &estimate.sensors)
         .iter())
-    .map(|t| t.to_degrees() <= robust.inlier_threshold_deg)
+    .map(|t| t.to_degrees() <= threshold_deg)
     .collect();
     let inlier_problem = p.edge_subset(&inliers)?;
     let inlier_solution = solve_rig_from(
@@ -175,6 +274,7 @@ pub(crate) fn solve_rig_robust_given(
         inliers,
         inlier_problem,
         inlier_solution,
+        scale,
     })
 }
 

@@ -40,8 +40,12 @@ pub struct RigScene {
     pub cross_fraction: f64,
     /// Gaussian noise, radians.
     pub noise_sigma: f64,
-    /// Fraction of edges replaced by random rotations.
+    /// Fraction of edges replaced by outliers: random rotations, or see `outlier_angle_deg`.
     pub outlier_fraction: f64,
+    /// `Some((lo, hi))`: each outlier is its edge's true rotation turned by an angle uniform in
+    /// `lo..hi` degrees about a random axis (the wrong pairs repeated structure makes: a few
+    /// degrees to tens off, with the information of an inlier), instead of a random rotation.
+    pub outlier_angle_deg: Option<(f64, f64)>,
     /// Every sensor's `sensor_from_rig` given.
     pub known: bool,
     /// The weak axis's standard deviation over the others' (median), above 1 for information
@@ -61,6 +65,7 @@ impl Default for RigScene {
             cross_fraction: 0.3,
             noise_sigma: 0.01,
             outlier_fraction: 0.0,
+            outlier_angle_deg: None,
             known: false,
             anisotropy: 1.0,
             seed: 0,
@@ -123,12 +128,12 @@ impl RigScene {
                 information.push(h);
                 // X_b X_a^T = R exp([e]x)
                 if outlier {
-                    random_rotation(rng)
+                    self.outlier(&exact, rng)
                 } else {
                     exact * crate::so3::exp(&(-noise))
                 }
             } else if outlier {
-                random_rotation(rng)
+                self.outlier(&exact, rng)
             } else {
                 perturb_gaussian(&exact, self.noise_sigma, rng)
             };
@@ -175,6 +180,19 @@ impl RigScene {
             problem = (problem.with_information(information)).expect("generated information");
         }
         (problem, RigTruth { frames, sensors })
+    }
+
+    /// An outlier in place of the edge whose true rotation is `exact`
+    /// ([`RigScene::outlier_angle_deg`]).
+    fn outlier(&self, exact: &Rotation, rng: &mut StdRng) -> Rotation {
+        match self.outlier_angle_deg {
+            None => random_rotation(rng),
+            Some((lo, hi)) => {
+                let axis = Vector3::from_fn(|_, _| crate::so3::gaussian(rng)).normalize();
+                let angle = rng.random_range(lo..=hi).to_radians();
+                crate::so3::exp(&(axis * angle)) * exact
+            }
+        }
     }
 
     /// A random frame for an extra edge from frame `f` ([`RigScene::extra_edge_span`]).

@@ -78,6 +78,7 @@ mod relax_multiple;
 mod rig_cli;
 mod rig_gravity;
 mod rig_information;
+mod rig_robust_scale;
 mod rig_sensors;
 #[cfg(feature = "cli")]
 mod robust_inliers;

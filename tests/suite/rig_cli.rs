@@ -632,6 +632,32 @@ fn outliers_in_a_rig_file_turn_the_default_robust() {
         kept + planted + p.edges().len() / 50 >= p.edges().len(),
         "too many dropped: {kept}"
     );
+    // the scale and inlier threshold from the data (`[H20]` "The scale"): 0.01 rad of noise,
+    // median residual angle 1.538 x 0.573 = 0.88 deg; given, or with `--loss cauchy`, as given
+    let scale = &auto["robust"]["data_scale"];
+    assert_eq!(scale["rule"], "from_data");
+    let median = scale["median_deg"].as_f64().unwrap();
+    assert!((0.75..1.15).contains(&median), "{scale}");
+    assert_eq!(auto["robust"]["scale_deg"], scale["scale_deg"]);
+    assert_eq!(
+        auto["robust"]["inlier_threshold_deg"],
+        scale["inlier_threshold_deg"]
+    );
+    let text = String::from_utf8_lossy(&run(&["rig", file]).stdout).to_string();
+    assert!(
+        text.contains("from the data: 1.5 x the median residual"),
+        "{text}"
+    );
+    for flags in [["--loss-threshold", "4"], ["--loss", "cauchy"]] {
+        let given = json_of(&run(&["rig", file, "--json", flags[0], flags[1]]));
+        let expected = if flags[1] == "4" { 4.0 } else { 5.0 };
+        assert!(given["robust"]["data_scale"].is_null(), "{flags:?}");
+        assert_eq!(given["robust"]["scale_deg"].as_f64(), Some(expected));
+        assert_eq!(
+            given["robust"]["inlier_threshold_deg"].as_f64(),
+            Some(expected)
+        );
+    }
 }
 
 /// Two view graphs with 15 % random-rotation outliers on each: `--loss auto` (the default)
@@ -677,6 +703,8 @@ fn outliers_in_two_view_graphs_turn_the_default_robust() {
     );
     assert_eq!(auto["certificate"]["verdict"], "certified");
     assert!(auto["robust"]["robust"].as_bool().unwrap());
+    // two graphs without edges between them: the scale from the data all the same
+    assert_eq!(auto["robust"]["data_scale"]["rule"], "from_data");
     assert!(ls["robust"].is_null());
     let error = |v: &serde_json::Value| {
         let frames: f64 = (0..60)

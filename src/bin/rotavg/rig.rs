@@ -51,9 +51,11 @@ pub struct Args {
     /// (paper-notes/gravity.md [G14]; scalar weights only).
     #[command(flatten)]
     pub gravity: GravityArgs,
-    /// The Cauchy loss's scale and the inlier threshold, degrees.
-    #[arg(long, value_name = "DEG", default_value_t = 5.0)]
-    pub loss_threshold: f64,
+    /// The Cauchy loss's scale and the inlier threshold, degrees. Not given: both from the
+    /// data under `--loss auto` (1.5 and 3 times the median residual at the images' L1
+    /// solution, paper-notes/conjugate.md [H20] "The scale"), 5 with `--loss cauchy`.
+    #[arg(long, value_name = "DEG")]
+    pub loss_threshold: Option<f64>,
     #[command(flatten)]
     pub common: Common,
 }
