@@ -21,13 +21,14 @@ use crate::deadline::{Deadline, limit_reached};
 use crate::error::Result;
 use crate::linalg::block_pattern::{BlockPattern, SymbolicFactor};
 use crate::linalg::linear_solver::{LinearSolver, ScalarLaplacian, SolverKind, jacobi_inverses};
+use crate::linalg::threads::{PARALLEL_EDGES, in_chunks};
 use crate::multiple::MultipleProblem;
 use crate::multiple::chordal::{choose_solver, grounded_pattern};
 use crate::so3::{Rotation, exp, nearest_rotation};
 use crate::termination::Termination;
 use faer::Mat;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
-use std::cell::Cell;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// The relative predicted decrease of `J` below which the steps stop: about the rounding of a
@@ -134,10 +135,10 @@ pub(super) struct Joint<'a> {
     cg_budget: usize,
     /// Set when a step's conjugate gradients ran out of `cg_budget`: the factor then solves
     /// this step and every later one.
-    factorise: Cell<bool>,
+    factorise: AtomicBool,
     /// Set once the steps are small ([`JOINT_NEWTON_FROM`]): the systems built from then on
     /// carry Newton's Hessian ([`Joint::hessian`]) instead of Gauss-Newton's.
-    newton: Cell<bool>,
+    newton: AtomicBool,
 }
 
 /// Multiply-adds per second of a sparse Cholesky factorisation, and values per second of a
@@ -286,6 +287,23 @@ struct System {
     sensors_g: DVector<f64>,
 }
 
+impl System {
+    /// Adds `other` (of the same shape) term by term.
+    fn add(&mut self, other: &System) {
+        let sum = |a: &mut [f64], b: &[f64]| a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+        sum(&mut self.frames_h, &other.frames_h);
+        sum(&mut self.frames_g, &other.frames_g);
+        sum(self.sensors_h.as_mut_slice(), other.sensors_h.as_slice());
+        sum(self.sensors_g.as_mut_slice(), other.sensors_g.as_slice());
+        for j in 0..self.coupling.ncols() {
+            let column = other.coupling.col(j);
+            (self.coupling.col_mut(j).iter_mut())
+                .zip(column.iter())
+                .for_each(|(x, y)| *x += y);
+        }
+    }
+}
+
 impl<'a> Joint<'a> {
     /// The steps of `problem` (the frames' block's pattern from its frames' view graph at
     /// `sensors`; the frames' factor to fall back to, and the frames' Laplacian
@@ -322,8 +340,8 @@ impl<'a> Joint<'a> {
             direct: symbolic.map(LinearSolver::Direct),
             laplacian,
             cg_budget,
-            factorise: Cell::new(false),
-            newton: Cell::new(false),
+            factorise: AtomicBool::new(false),
+            newton: AtomicBool::new(false),
         }))
     }
 
@@ -351,7 +369,7 @@ impl<'a> Joint<'a> {
         let (mut steps, mut eta) = (0, JOINT_CG_FORCING);
         let stop_at = deadline.and_then(|d| d.instant());
         let mut newton_refused = false;
-        self.newton.set(false);
+        self.newton.store(false, Ordering::Relaxed);
         let stop = loop {
             let measure = (relative, JOINT_TOLERANCE);
             if let Some(limit) = limit_reached(steps, max_steps, deadline, measure) {
@@ -364,12 +382,14 @@ impl<'a> Joint<'a> {
                 Ok(taken) => taken,
                 Err(last) => {
                     let stop = self.converged(last, damping);
-                    if !self.newton.get() || !matches!(stop, Termination::Stalled { .. }) {
+                    if !self.newton.load(Ordering::Relaxed)
+                        || !matches!(stop, Termination::Stalled { .. })
+                    {
                         break stop;
                     }
                     // Newton's Hessian is indefinite about this point: Gauss-Newton from it
                     (newton_refused, damping) = (true, before);
-                    self.newton.set(false);
+                    self.newton.store(false, Ordering::Relaxed);
                     system = self.system(&frames, &sensors);
                     continue;
                 }
@@ -379,7 +399,7 @@ impl<'a> Joint<'a> {
             // inexact Newton: the conjugate gradients' tolerance follows the decrease
             eta = relative.sqrt().clamp(JOINT_CG_FINEST, JOINT_CG_FORCING);
             if !newton_refused && relative < JOINT_NEWTON_FROM {
-                self.newton.set(true);
+                self.newton.store(true, Ordering::Relaxed);
             }
             steps += 1;
             crate::progress::phase(crate::progress::Phase::Solve, || {
@@ -487,12 +507,12 @@ impl<'a> Joint<'a> {
         (eta, stop_at): (f64, Option<Instant>),
     ) -> Option<Step> {
         let damped = self.damped(s, damping);
-        if !self.factorise.get() {
+        if !self.factorise.load(Ordering::Relaxed) {
             let (step, converged) = self.iterative_step(s, &damped, (eta, stop_at))?;
             if converged || self.direct.is_none() {
                 return Some(step);
             }
-            self.factorise.set(true);
+            self.factorise.store(true, Ordering::Relaxed);
         }
         self.direct_step(s, &damped)
     }
@@ -623,8 +643,28 @@ impl<'a> Joint<'a> {
         Some(((dx, dy, decrease), iterations < self.cg_budget))
     }
 
-    /// The half gradient and half Gauss-Newton Hessian at `(frames, sensors)`.
+    /// The half gradient and half Gauss-Newton Hessian at `(frames, sensors)`: from
+    /// [`PARALLEL_EDGES`] terms on, the sum of the two halves' systems, each half on its own
+    /// thread where there are two (the same halves and the same sum on one thread).
     fn system(&self, frames: &[Rotation], sensors: &[Rotation]) -> System {
+        let n = self.terms.len();
+        if n < PARALLEL_EDGES {
+            return self.system_of(&self.terms, frames, sensors);
+        }
+        let mut halves = [0..n / 2, n / 2..n];
+        let parts = in_chunks(&mut halves, true, |_, hs| {
+            (hs.iter())
+                .map(|h| self.system_of(&self.terms[h.clone()], frames, sensors))
+                .collect::<Vec<_>>()
+        });
+        let mut parts = parts.into_iter().flatten();
+        let mut s = parts.next().expect("two halves");
+        parts.for_each(|other| s.add(&other));
+        s
+    }
+
+    /// The part of [`Joint::system`] of `terms`.
+    fn system_of(&self, terms: &[Term], frames: &[Rotation], sensors: &[Rotation]) -> System {
         let rows = 3 * (frames.len() - 1);
         let k = 3 * self.unknown.len();
         let mut s = System {
@@ -634,8 +674,8 @@ impl<'a> Joint<'a> {
             frames_g: vec![0.0; rows],
             sensors_g: DVector::zeros(k),
         };
-        let newton = self.newton.get();
-        for t in &self.terms {
+        let newton = self.newton.load(Ordering::Relaxed);
+        for t in terms {
             let (gamma, vars) = self.jacobians(t, frames, sensors);
             for &(u, ju) in vars.iter().flatten() {
                 let g = 0.5 * ju.transpose() * gamma;
@@ -772,6 +812,7 @@ mod tests {
     use crate::rig::{RigProblem, RigScene};
     use crate::so3::{Rotation, exp};
     use nalgebra::{DMatrix, DVector, Vector3};
+    use std::sync::atomic::Ordering;
 
     /// A rig of 40 frames and 3 sensors, 0.05 rad of noise, with scalar weights or information.
     fn medium(anisotropy: f64) -> (RigProblem, Vec<Rotation>, Vec<Rotation>) {
@@ -785,6 +826,47 @@ mod tests {
         }
         .generate();
         (p, truth.frames, truth.sensors)
+    }
+
+    /// A rig of more than `PARALLEL_EDGES` edges: its system assembled in two halves and
+    /// summed (on two threads where there are two) is the one assembled in one pass, to
+    /// rounding, in Gauss-Newton's and Newton's Hessians.
+    #[test]
+    fn the_system_in_two_halves_is_the_whole_system() {
+        let (p, truth) = RigScene {
+            frames: 2500,
+            sensors: 3,
+            noise_sigma: 0.05,
+            seed: 5,
+            ..Default::default()
+        }
+        .generate();
+        assert!(p.edges().len() >= super::PARALLEL_EDGES);
+        let (f, s) = (truth.frames, truth.sensors);
+        let joint = Joint::new(&p, &s, usize::MAX).unwrap().unwrap();
+        for newton in [false, true] {
+            joint.newton.store(newton, Ordering::Relaxed);
+            let (halves, whole) = (joint.system(&f, &s), joint.system_of(&joint.terms, &f, &s));
+            let close = |a: &[f64], b: &[f64]| {
+                let scale = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                assert!(scale > 0.0 && a.len() == b.len());
+                let gap = a
+                    .iter()
+                    .zip(b)
+                    .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+                assert!(gap <= 1e-12 * scale, "{newton}: {gap} of {scale}");
+            };
+            close(&halves.frames_h, &whole.frames_h);
+            close(&halves.frames_g, &whole.frames_g);
+            close(halves.sensors_h.as_slice(), whole.sensors_h.as_slice());
+            close(halves.sensors_g.as_slice(), whole.sensors_g.as_slice());
+            let column = |m: &faer::Mat<f64>| -> Vec<f64> {
+                (0..m.ncols())
+                    .flat_map(|j| m.col(j).iter().copied().collect::<Vec<_>>())
+                    .collect()
+            };
+            close(&column(&halves.coupling), &column(&whole.coupling));
+        }
     }
 
     /// One damped step by conjugate gradients (to a relative residual of `1e-13`, with the
@@ -834,7 +916,7 @@ mod tests {
             let (p, f, s) = medium(anisotropy);
             let run = |joint: &Joint<'_>| joint.run((f.clone(), s.clone()), (100, false), None);
             let direct = Joint::new(&p, &s, usize::MAX).unwrap().unwrap();
-            direct.factorise.set(true);
+            direct.factorise.store(true, Ordering::Relaxed);
             let (ff, fs, _, stop) = run(&direct);
             assert!(matches!(stop, Termination::Converged { .. }), "{stop:?}");
             let mut iterative = Joint::new(&p, &s, usize::MAX).unwrap().unwrap();
@@ -964,7 +1046,7 @@ mod tests {
         for anisotropy in [1.0, 9.0] {
             let (p, f, s) = small(0.3, anisotropy);
             let joint = Joint::new(&p, &s, usize::MAX).unwrap().unwrap();
-            joint.newton.set(true);
+            joint.newton.store(true, Ordering::Relaxed);
             let (_, h) = dense(&joint, &joint.system(&f, &s));
             let fd = second_differences(&p, (&f, &s), h.nrows());
             // two moves of one rotation compose (`e^{a G_a} e^{b G_b}`): away from a critical
