@@ -103,7 +103,7 @@ pub struct RobustRig {
 
 /// The Cauchy scale and inlier threshold of `p` from its data (`[H20]` "The scale"): the
 /// Cauchy alternations of [`solve_rig_robust`] at 5 degrees from least squares (on unit
-/// weights with information), then `[D20]`'s rule of view graphs on the edges' angles at their
+/// weights with information), [`FIRST_STAGE_REWEIGHTS`] reweightings at most, then `[D20]`'s rule of view graphs on the edges' angles at their
 /// estimate: 1.5 times the median residual angle, the inlier threshold 3 times the median of
 /// the angle it is compared with (the Mahalanobis angle with information), within 0.01-10
 /// degrees. The median is an inlier's while fewer than half the edges are wrong. Scaling every
