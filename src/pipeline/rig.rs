@@ -450,9 +450,8 @@ pub(crate) fn robust_from(
         reweights: rr.reweights,
         inlier_edges: rr.inliers.iter().filter(|k| **k).count(),
         total_edges: problem.edges().len(),
-        inlier_threshold_deg: (rr.scale.as_ref())
-            .map_or(robust.inlier_threshold_deg, |d| d.inlier_threshold_deg),
-        scale_deg: (rr.scale.as_ref()).map_or(robust.threshold_deg, |d| d.scale_deg),
+        inlier_threshold_deg: rr.applied.inlier_threshold_deg,
+        scale_deg: rr.applied.threshold_deg,
         data_scale: rr.scale.clone(),
     };
     let mut certify = settings.certify.clone();

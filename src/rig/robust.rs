@@ -97,6 +97,9 @@ pub struct RobustRig {
     pub inlier_problem: RigProblem,
     /// Its chordal L2 estimate, solved from the robust one: what is certified.
     pub inlier_solution: RigSolution,
+    /// The settings the Cauchy loss and the inliers ran with: those given, or with
+    /// [`ScaleRule::FromData`] the thresholds found ([`RigRobust::with_data_scale`]).
+    pub applied: RigRobust,
     /// With [`ScaleRule::FromData`], the scale and inlier threshold found ([`rig_data_scale`]).
     pub scale: Option<DataScale>,
 }
@@ -245,25 +248,20 @@ pub(crate) fn solve_rig_robust_given(
         Some(ls) if unit.is_none() => ls,
         _ => solve_rig(q, &within(settings))?,
     };
-    let (mut estimate, reweights, scale) = match robust.scale {
-        ScaleRule::Given => {
-            let (estimate, reweights) = reweighted(q, start, robust, &within(settings))?;
-            (estimate, reweights, None)
-        }
+    let (start, first_reweights, scale) = match robust.scale {
+        ScaleRule::Given => (start, 0, None),
         ScaleRule::FromData => {
             let (first, n, scale) = first_stage(p, q, start, robust, &within(settings))?;
-            let robust = robust.with_data_scale(&scale);
-            let (estimate, more) = reweighted(q, first, &robust, &within(settings))?;
-            (estimate, n + more, Some(scale))
+            (first, n, Some(scale))
         }
     };
-    let threshold_deg =
-        (scale.as_ref()).map_or(robust.inlier_threshold_deg, |s| s.inlier_threshold_deg);
+    let applied = (scale.as_ref()).map_or(*robust, |s| robust.with_data_scale(s));
+    let (mut estimate, more) = reweighted(q, start, &applied, &within(settings))?;
     estimate.cost = p.cost(&estimate.frames, &estimate.sensors);
     let inliers: Vec<bool> = (p
         .objective_angles(&estimate.frames, &estimate.sensors)
         .iter())
-    .map(|t| t.to_degrees() <= threshold_deg)
+    .map(|t| t.to_degrees() <= applied.inlier_threshold_deg)
     .collect();
     let inlier_problem = p.edge_subset(&inliers)?;
     let inlier_solution = solve_rig_from(
@@ -274,10 +272,11 @@ pub(crate) fn solve_rig_robust_given(
     )?;
     Ok(RobustRig {
         robust: estimate,
-        reweights,
+        reweights: first_reweights + more,
         inliers,
         inlier_problem,
         inlier_solution,
+        applied,
         scale,
     })
 }

@@ -52,8 +52,9 @@ pub struct Args {
     #[command(flatten)]
     pub gravity: GravityArgs,
     /// The Cauchy loss's scale and the inlier threshold, degrees. Not given: both from the
-    /// data under `--loss auto` (1.5 and 3 times the median residual at the images' L1
-    /// solution, paper-notes/conjugate.md [H20] "The scale"), 5 with `--loss cauchy`.
+    /// data under `--loss auto` (1.5 and 3 times the median residual at the rig's Cauchy
+    /// estimate after 3 reweightings at 5 degrees, paper-notes/conjugate.md [H20] "The
+    /// scale"), 5 with `--loss cauchy`.
     #[arg(long, value_name = "DEG")]
     pub loss_threshold: Option<f64>,
     #[command(flatten)]
