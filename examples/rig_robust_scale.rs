@@ -18,7 +18,7 @@
 use rotavg::multiple::accuracy::align_and_compare;
 use rotavg::multiple::robust_scale::ScaleRule;
 use rotavg::pipeline::rig::{RigLoss, average_rig_with_loss};
-use rotavg::rig::{RigRobust, RigScene};
+use rotavg::rig::{RigProblem, RigRobust, RigScene, RigTruth};
 use rotavg::so3::angle_between;
 
 /// One outlier model, noise and fraction.
@@ -91,41 +91,43 @@ fn main() -> rotavg::Result<()> {
                 case.sigma_deg
             );
             for scale in [ScaleRule::Given, ScaleRule::FromData] {
-                let robust = RigRobust {
-                    scale,
-                    ..Default::default()
-                };
-                let start = std::time::Instant::now();
-                let (out, _, details) =
-                    average_rig_with_loss(&p, RigLoss::Auto, &robust, &Default::default())?;
-                let seconds = start.elapsed().as_secs_f64();
-                let s = &out.solution;
-                let known: Vec<_> = truth.frames.iter().copied().map(Some).collect();
-                let frames_err = align_and_compare(&s.frames, &known)?.median_deg;
-                let sensors_err = (1..sensors)
-                    .map(|k| angle_between(&s.sensors[k], &truth.sensors[k]).to_degrees())
-                    .sum::<f64>()
-                    / (sensors - 1).max(1) as f64;
-                let verdict = out
-                    .certificate
-                    .map_or("none".into(), |c| c.verdict.to_string());
-                let (inliers, scale_words) = match &details {
-                    Some(d) => (
-                        format!("{}/{}", d.inlier_edges, d.total_edges),
-                        match &d.data_scale {
-                            Some(x) => format!(" ({} / {})", x.scale_deg, x.inlier_threshold_deg),
-                            None => String::new(),
-                        },
-                    ),
-                    None => ("all (least squares)".into(), String::new()),
-                };
-                row += &format!(
-                    "{scale_words} {frames_err:.4} / {sensors_err:.4}, {inliers}, {verdict}, \
-                     {seconds:.2} |"
-                );
+                row += &cell(&p, &truth, scale)?;
             }
             println!("{row}");
         }
     }
     Ok(())
+}
+
+/// One rule's cell of a row: the default loss on `p` with the scale `scale`, against `truth`.
+fn cell(p: &RigProblem, truth: &RigTruth, scale: ScaleRule) -> rotavg::Result<String> {
+    let robust = RigRobust {
+        scale,
+        ..Default::default()
+    };
+    let start = std::time::Instant::now();
+    let (out, _, details) = average_rig_with_loss(p, RigLoss::Auto, &robust, &Default::default())?;
+    let seconds = start.elapsed().as_secs_f64();
+    let s = &out.solution;
+    let known: Vec<_> = truth.frames.iter().copied().map(Some).collect();
+    let frames_err = align_and_compare(&s.frames, &known)?.median_deg;
+    let sensors = s.sensors.len();
+    let sensors_err = (1..sensors)
+        .map(|k| angle_between(&s.sensors[k], &truth.sensors[k]).to_degrees())
+        .sum::<f64>()
+        / (sensors - 1).max(1) as f64;
+    let verdict = (out.certificate).map_or("none".into(), |c| c.verdict.to_string());
+    let (inliers, scale_words) = match &details {
+        Some(d) => (
+            format!("{}/{}", d.inlier_edges, d.total_edges),
+            match &d.data_scale {
+                Some(x) => format!(" ({} / {})", x.scale_deg, x.inlier_threshold_deg),
+                None => String::new(),
+            },
+        ),
+        None => ("all (least squares)".into(), String::new()),
+    };
+    Ok(format!(
+        "{scale_words} {frames_err:.4} / {sensors_err:.4}, {inliers}, {verdict}, {seconds:.2} |"
+    ))
 }
