@@ -182,6 +182,46 @@ impl RigProblem {
         }
     }
 
+    /// The same rig without the images that no edge measures, the held sensors unchanged
+    /// (`paper-notes/conjugate.md` `[H19]` "Unmeasured images"): `J(F, S)` is the same function
+    /// of the same unknowns, so a bound of one is a bound of the other, while an unmeasured
+    /// image, a node without edges, leaves the images' view graphs a null direction that no
+    /// certificate of theirs can pay for. `None` when every image is measured, and for rigs
+    /// with gravity priors (a prior measures its image).
+    pub(crate) fn without_unmeasured_images(&self) -> Option<Self> {
+        if self.gravity.is_some() {
+            return None;
+        }
+        let mut index = vec![None; self.images.len()];
+        for e in &self.edges {
+            index[e.i] = Some(0);
+            index[e.j] = Some(0);
+        }
+        let mut images = Vec::with_capacity(self.images.len());
+        for (k, im) in self.images.iter().enumerate() {
+            if index[k].is_some() {
+                index[k] = Some(images.len());
+                images.push(*im);
+            }
+        }
+        if images.len() == self.images.len() {
+            return None;
+        }
+        let at = |k: usize| index[k].unwrap_or(usize::MAX);
+        let edges = (self.edges.iter())
+            .map(|e| Edge {
+                i: at(e.i),
+                j: at(e.j),
+                ..e.clone()
+            })
+            .collect();
+        Some(RigProblem {
+            images,
+            edges,
+            ..self.clone()
+        })
+    }
+
     /// The same rig with scalar weights: the information dropped, each edge weighing
     /// `tr(H) / 3` (itself when it has none).
     pub fn scalar(&self) -> Self {
@@ -470,4 +510,47 @@ fn held_sensors(num_frames: usize, sensors: &[Sensor], images: &[Image]) -> Vec<
         }
     }
     held
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    /// Without its unmeasured images a rig has fewer images, the same held sensors and the same
+    /// cost at any point (scalar weights and information); fully measured rigs are left as
+    /// they are.
+    #[test]
+    fn unmeasured_images_leave_the_same_cost() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        for anisotropy in [1.0, 9.0] {
+            let scene = crate::rig::RigScene {
+                frames: 20,
+                sensors: 3,
+                anisotropy,
+                ..Default::default()
+            };
+            let (full, _) = scene.generate();
+            assert!(full.without_unmeasured_images().is_none());
+            let gone = [4, 31];
+            let keep: Vec<bool> = (full.edges().iter())
+                .map(|e| !gone.contains(&e.i) && !gone.contains(&e.j))
+                .collect();
+            let p = full.edge_subset(&keep).unwrap();
+            let q = p.without_unmeasured_images().unwrap();
+            assert_eq!(q.images().len(), p.images().len() - 2);
+            assert_eq!((q.edges().len(), q.held()), (p.edges().len(), p.held()));
+            assert!(!q.images().contains(&p.images()[4]));
+            for _ in 0..3 {
+                let frames: Vec<Rotation> = (0..20)
+                    .map(|_| crate::so3::random_rotation(&mut rng))
+                    .collect();
+                let sensors: Vec<Rotation> = (0..3)
+                    .map(|_| crate::so3::random_rotation(&mut rng))
+                    .collect();
+                let (a, b) = (p.cost(&frames, &sensors), q.cost(&frames, &sensors));
+                assert!((a - b).abs() <= 1e-12 * a, "{a} against {b}");
+            }
+        }
+    }
 }

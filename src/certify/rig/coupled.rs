@@ -272,7 +272,7 @@ fn rig_bound(cx: &RigState<'_>, sum: f64, offset: f64) -> f64 {
 }
 
 /// The augmented graph's minimum bounded by the grouped scalar comparison (`[D13]`, groups:
-/// one group per sensor, each sensor's images factorised apart) at the estimate's own
+/// one group per sensor, [`sensor_groups`], each factorised apart) at the estimate's own
 /// multipliers: `(1, bound)`, or why it did not prove. Its target is the share of the gap
 /// that the whole graph's comparison would get (a quarter of the rig's allowed gap over
 /// `6n`).
@@ -282,7 +282,7 @@ fn grouped_minimum(
     x: &[Rotation],
     augmented: f64,
 ) -> Result<std::result::Result<(usize, f64), String>> {
-    let group: Vec<usize> = cx.problem.images().iter().map(|im| im.sensor).collect();
+    let group = sensor_groups(cx.problem);
     let n = x.len().max(1) as f64;
     let target = 0.25 * cx.tally.allowed_gap.min(augmented.abs()) / (6.0 * n);
     let memory =
@@ -298,6 +298,31 @@ fn grouped_minimum(
     Ok(found.map(|(bound, _)| (1, bound)).map_err(|why| {
         format!("the grouped scalar comparison [D13] of the augmented graph: {why}")
     }))
+}
+
+/// The grouped comparison's groups: each image in its sensor's group, except an image that no
+/// edge of its own sensor measures, which joins the group of its first edge's other image
+/// (`[H21]` "Groups"). Any grouping is sound; alone in its group, such an image is a
+/// component of one node whose only ties, its pseudo-edges and edges to other sensors, are all
+/// charged (a 10^4-frame rig of 6 sensors with 3 of them: a 0.27 % gap instead of certified).
+fn sensor_groups(problem: &RigProblem) -> Vec<usize> {
+    let images = problem.images();
+    let mut group: Vec<usize> = images.iter().map(|im| im.sensor).collect();
+    let mut own = vec![false; images.len()];
+    for e in problem.edges() {
+        if images[e.i].sensor == images[e.j].sensor {
+            own[e.i] = true;
+            own[e.j] = true;
+        }
+    }
+    for e in problem.edges() {
+        for (a, b) in [(e.i, e.j), (e.j, e.i)] {
+            if !own[a] && group[a] == images[a].sensor {
+                group[a] = images[b].sensor;
+            }
+        }
+    }
+    group
 }
 
 /// The augmented graph's minimum bounded by the regional bound (`[A16]`: one region per sensor,

@@ -103,6 +103,9 @@ fn certify_rig_with(
     let deadline = Deadline::start(&settings.budget);
     settings.validate()?;
     check_estimate(problem, frames, sensors)?;
+    // the same J of the same unknowns without the images no edge measures ([H19])
+    let measured = problem.without_unmeasured_images();
+    let problem = measured.as_ref().unwrap_or(problem);
     // the held sensors at their held rotations (the estimate's are within 1e-9 rad of them):
     // the bounds and the cost are of the problem as posed
     let sensors = &problem.at_held(sensors)[..];
