@@ -32,8 +32,8 @@ pub use gravity::FrameGravity;
 pub use joint::{JOINT_CG_ITERATIONS, JOINT_DIRECT_VALUES, JOINT_MAX_STEPS, JOINT_TOLERANCE};
 pub use problem::{Image, RigProblem, Sensor};
 pub use robust::{
-    FIRST_STAGE_REWEIGHTS, REWEIGHT_PASSES, RigRobust, RobustRig, residual_angles, rig_data_scale,
-    solve_rig_robust, solve_rig_robust_from,
+    FIRST_STAGE_REWEIGHTS, REWEIGHT_PASSES, REWEIGHT_TOLERANCE, RigRobust, RobustRig,
+    residual_angles, rig_data_scale, solve_rig_robust, solve_rig_robust_from,
 };
 pub use solve::{
     MAX_ESTIMATED_SENSORS, RIG_DECREASE_TOLERANCE, RigSettings, RigSolution, solve_rig,

@@ -100,7 +100,7 @@ pub fn solve_rig(p: &RigProblem, settings: &RigSettings) -> Result<RigSolution> 
     // with information ended with J 3.8x its minimum and frames flipped (the joint steps from
     // those frames alone, higher still); rough where the joint steps follow: they finish it
     let frames = frame_solve(p, &sensors, None, (left(), Joint::applies(p)))?.rotations;
-    alternate(p, (frames, sensors), settings, clock)
+    alternate(p, (frames, sensors), settings, (clock, None))
 }
 
 /// [`solve_rig`] with every sensor held: one solve of the frames' problem from its spectral
@@ -144,6 +144,17 @@ pub fn solve_rig_from(
     sensors: &[Rotation],
     settings: &RigSettings,
 ) -> Result<RigSolution> {
+    solve_rig_from_joint(p, (frames, sensors), settings, None)
+}
+
+/// [`solve_rig_from`] with the joint steps `joint` of `p` ([`Joint::reweighted`]: a robust
+/// solve's reweighting), made here when `None`.
+pub(super) fn solve_rig_from_joint(
+    p: &RigProblem,
+    (frames, sensors): (&[Rotation], &[Rotation]),
+    settings: &RigSettings,
+    joint: Option<Joint<'_>>,
+) -> Result<RigSolution> {
     settings.validate()?;
     check_estimated_sensors(p)?;
     if frames.len() != p.num_frames() || sensors.len() != p.sensors().len() {
@@ -164,20 +175,25 @@ pub fn solve_rig_from(
         .zip(p.held())
         .map(|(s, held)| held.unwrap_or_else(|| nearest_rotation(s)))
         .collect();
-    alternate(p, (frames, sensors), settings, Instant::now())
+    alternate(p, (frames, sensors), settings, (Instant::now(), joint))
 }
 
-/// The passes from `(frames, sensors)`, on the clock started at `clock`.
+/// The passes from `(frames, sensors)`, on the clock started at `clock`, by the joint steps
+/// `joint` where given (else made here where they apply).
 fn alternate(
     p: &RigProblem,
     (mut frames, mut sensors): (Vec<Rotation>, Vec<Rotation>),
     settings: &RigSettings,
-    clock: Instant,
+    (clock, joint): (Instant, Option<Joint<'_>>),
 ) -> Result<RigSolution> {
     let left = || remaining(settings.max_seconds, clock);
     let deadline = Deadline::after(left());
     let (mut passes, mut name) = (0, ALTERNATING);
-    if let Some(joint) = Joint::new(p, &sensors, JOINT_DIRECT_VALUES)? {
+    let joint = match joint {
+        Some(joint) => Some(joint),
+        None => Joint::new(p, &sensors, JOINT_DIRECT_VALUES)?,
+    };
+    if let Some(joint) = joint {
         let steps = settings.max_passes.min(JOINT_MAX_STEPS);
         let (f, s, taken, stop) = joint.run((frames, sensors), (steps, false), deadline);
         (frames, sensors, passes) = (f, s, taken);
