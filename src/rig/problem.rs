@@ -216,9 +216,13 @@ impl RigProblem {
             })
             .collect();
         Some(RigProblem {
+            num_frames: self.num_frames,
+            sensors: self.sensors.clone(),
             images,
             edges,
-            ..self.clone()
+            held: self.held.clone(),
+            gravity: None,
+            information: self.information.clone(),
         })
     }
 
