@@ -363,8 +363,9 @@ impl<'a> Joint<'a> {
     /// differ).
     pub(super) fn reweighted<'b>(&self, problem: &'b RigProblem) -> Result<Option<Joint<'b>>> {
         let (old, new) = (self.problem, problem);
-        let ends = |p: &RigProblem| p.edges().iter().map(|e| (e.i, e.j)).collect::<Vec<_>>();
-        if old.images() != new.images() || old.held() != new.held() || ends(old) != ends(new) {
+        let (a, b) = (old.edges().iter(), new.edges().iter());
+        let same_ends = a.map(|e| (e.i, e.j)).eq(b.map(|e| (e.i, e.j)));
+        if old.images() != new.images() || old.held() != new.held() || !same_ends {
             return Ok(None);
         }
         let info = problem.information();

@@ -140,7 +140,9 @@ pub fn rig_data_scale(p: &RigProblem, settings: &RigSettings) -> Result<DataScal
         max_seconds: remaining(settings.max_seconds, clock),
         ..*settings
     };
-    let (_, _, scale) = first_stage(p, q, start, &RigRobust::default(), &within)?;
+    let shape = Joint::new(q, &start.sensors, JOINT_DIRECT_VALUES)?;
+    let posed = (p, q, shape.as_ref());
+    let (_, _, scale) = first_stage(posed, start, &RigRobust::default(), &within)?;
     Ok(scale)
 }
 
@@ -163,8 +165,7 @@ fn unit_weights(p: &RigProblem) -> Result<Option<RigProblem>> {
 /// unit weights) at [`DEFAULT_THRESHOLD_DEG`] from `start`, and the scale read at their
 /// estimate. The estimate, its reweightings and the scale.
 fn first_stage(
-    p: &RigProblem,
-    q: &RigProblem,
+    (p, q, shape): (&RigProblem, &RigProblem, Option<&Joint<'_>>),
     start: RigSolution,
     robust: &RigRobust,
     settings: &RigSettings,
@@ -176,7 +177,7 @@ fn first_stage(
         max_reweights: robust.max_reweights.min(FIRST_STAGE_REWEIGHTS),
         ..*robust
     };
-    let (estimate, reweights) = reweighted(q, start, &given, settings)?;
+    let (estimate, reweights) = reweighted((q, shape), start, &given, settings)?;
     let at = ScaleAngles {
         residual: residual_angles(q, &estimate.frames, &estimate.sensors),
         mahalanobis: (p.is_anisotropic())
@@ -258,15 +259,19 @@ pub(crate) fn solve_rig_robust_given(
         Some(ls) if unit.is_none() => ls,
         _ => solve_rig(q, &within(settings))?,
     };
+    // the joint steps' shape, made once: every reweighting of both stages is `q` with other
+    // weights
+    let shape = Joint::new(q, &start.sensors, JOINT_DIRECT_VALUES)?;
     let (start, first_reweights, scale) = match robust.scale {
         ScaleRule::Given => (start, 0, None),
         ScaleRule::FromData => {
-            let (first, n, scale) = first_stage(p, q, start, robust, &within(settings))?;
+            let posed = (p, q, shape.as_ref());
+            let (first, n, scale) = first_stage(posed, start, robust, &within(settings))?;
             (first, n, Some(scale))
         }
     };
     let applied = (scale.as_ref()).map_or(*robust, |s| robust.with_data_scale(s));
-    let (mut estimate, more) = reweighted(q, start, &applied, &within(settings))?;
+    let (mut estimate, more) = reweighted((q, shape.as_ref()), start, &applied, &within(settings))?;
     estimate.cost = p.cost(&estimate.frames, &estimate.sensors);
     let inliers: Vec<bool> = (p
         .objective_angles(&estimate.frames, &estimate.sensors)
@@ -294,10 +299,10 @@ pub(crate) fn solve_rig_robust_given(
 /// The Cauchy alternations of [`solve_rig_robust_from`] on `p`'s scalar weights from
 /// `estimate`: each a few passes of [`solve_rig_from`] on the edges reweighted by
 /// `w / (1 + (theta / c)^2)` at the previous estimate, until the robust cost changes by at most
-/// [`REWEIGHT_TOLERANCE`] of it, each by the joint steps of one shape (`Joint::reweighted`).
-/// The estimate and the number of reweightings.
+/// [`REWEIGHT_TOLERANCE`] of it, each by the joint steps of `shape` (`p`'s, where they apply:
+/// `Joint::reweighted`). The estimate and the number of reweightings.
 fn reweighted(
-    p: &RigProblem,
+    (p, shape): (&RigProblem, Option<&Joint<'_>>),
     mut estimate: RigSolution,
     robust: &RigRobust,
     settings: &RigSettings,
@@ -305,8 +310,6 @@ fn reweighted(
     let clock = Instant::now();
     let c = robust.threshold_deg.to_radians();
     let (mut reweights, mut last) = (0, f64::INFINITY);
-    // the joint steps' shape, made once: every reweighting is this rig with other weights
-    let shape = Joint::new(p, &estimate.sensors, JOINT_DIRECT_VALUES)?;
     while reweights < robust.max_reweights {
         let theta = residual_angles(p, &estimate.frames, &estimate.sensors);
         let cost: f64 = p
@@ -341,7 +344,7 @@ fn reweighted(
             max_passes: REWEIGHT_PASSES.min(settings.max_passes),
             max_seconds: remaining(settings.max_seconds, clock),
         };
-        let joint = match &shape {
+        let joint = match shape {
             Some(shape) => shape.reweighted(&q)?,
             None => None,
         };
