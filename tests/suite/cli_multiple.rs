@@ -553,19 +553,19 @@ fn randomized_flags_report_a_monte_carlo_bound_beside_the_verdict() {
     assert_eq!(out.status.code(), Some(2));
 }
 
-/// The budget holds under a hard address-space limit (issue 25, item 1): a dense 150-node view
-/// graph with 20 % outliers, whose SDP is predicted at tens of GB, run with `--certify sdp
-/// --max-memory 256M` under `ulimit -v` of [`ADDRESS_SPACE_KIB`]: the SDP is refused before
-/// Clarabel starts, the staircase reports the gap, and the process never needs more address
-/// space than the budget plus the stated margin (binary, thread stacks, allocator arenas).
+/// The budget holds (issue 25, item 1): a dense 150-node view graph with 20 % outliers, whose
+/// SDP is predicted at tens of GB, run with `--certify sdp --max-memory 256M`: the SDP is
+/// refused before Clarabel starts, the staircase reports the gap, and the process's peak
+/// resident memory (the kernel's count, `wait4`) stays within the budget plus the stated margin
+/// (binary, thread stacks, allocator arenas) of [`PEAK_RESIDENT_KIB`]. Resident, not address
+/// space: faer's matrix products (private-gemm-x86) reserve twice the L3 cache per thread,
+/// untouched beyond what a product packs, 960 MiB per thread on a CPU reporting 480 MiB of
+/// L3, where the `ulimit -v` of 640 MiB this test once ran under made the allocation fail.
+#[cfg(target_os = "linux")]
 #[test]
-fn memory_budget_holds_under_an_address_space_limit() {
+fn memory_budget_holds_in_resident_memory() {
     /// 256 MiB of budget plus a 384 MiB margin for what the budget does not count.
-    const ADDRESS_SPACE_KIB: u64 = 640 * 1024;
-    if !std::path::Path::new("/bin/sh").exists() {
-        eprintln!("skipped: no /bin/sh to set ulimit -v");
-        return;
-    }
+    const PEAK_RESIDENT_KIB: u64 = 640 * 1024;
     let (p, _) = SyntheticGraph {
         num_rotations: 150,
         num_edges: 600,
@@ -575,25 +575,24 @@ fn memory_budget_holds_under_an_address_space_limit() {
     }
     .generate();
     let g = tmp("outliers150.json", &write_problem_json(&p));
-    let out = std::process::Command::new("/bin/sh")
-        .arg("-c")
-        .arg(format!(
-            "ulimit -v {ADDRESS_SPACE_KIB} && exec \"$0\" \"$@\""
-        ))
-        .arg(env!("CARGO_BIN_EXE_rotavg"))
-        .args([
-            "multiple",
-            g.to_str().unwrap(),
-            "--loss",
-            "chordal",
-            "--certify",
-            "sdp",
-            "--max-memory",
-            "256M",
-            "--json",
-        ])
-        .output()
-        .expect("run rotavg under ulimit -v");
+    let mut command = common::bin();
+    command.args([
+        "multiple",
+        g.to_str().unwrap(),
+        "--loss",
+        "chordal",
+        "--certify",
+        "sdp",
+        "--max-memory",
+        "256M",
+        "--json",
+    ]);
+    let (out, peak_kib) = common::run_with_peak_memory(command);
+    eprintln!("peak resident memory {} MiB", peak_kib / 1024);
+    assert!(
+        peak_kib <= PEAK_RESIDENT_KIB,
+        "peak resident {peak_kib} KiB"
+    );
     assert_success(&out);
     let v = json_of(&out);
     let c = &v["certificate"];

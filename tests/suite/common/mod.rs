@@ -40,6 +40,45 @@ pub fn run_with_stdin(args: &[&str], stdin: &str) -> Output {
     child.wait_with_output().expect("wait for rotavg")
 }
 
+/// Runs `command` to completion (its standard output and error read while it runs) and returns
+/// its output with its peak resident set size in KiB, as the kernel counted it (`wait4`'s
+/// `ru_maxrss`): the memory the process touched, not the address space it reserved.
+#[cfg(target_os = "linux")]
+#[expect(
+    clippy::zombie_processes,
+    reason = "the child is reaped by wait4, not Child::wait"
+)]
+pub fn run_with_peak_memory(mut command: Command) -> (Output, u64) {
+    use std::io::Read;
+    use std::os::unix::process::ExitStatusExt;
+    let mut child = (command.stdout(Stdio::piped()).stderr(Stdio::piped()))
+        .spawn()
+        .expect("spawn the command");
+    let drain = |mut pipe: Box<dyn Read + Send>| {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            pipe.read_to_end(&mut bytes)
+                .expect("read the command's output");
+            bytes
+        })
+    };
+    let stdout = drain(Box::new(child.stdout.take().expect("piped stdout")));
+    let stderr = drain(Box::new(child.stderr.take().expect("piped stderr")));
+    let pid = libc::pid_t::try_from(child.id()).expect("a process id");
+    let mut status: libc::c_int = 0;
+    // SAFETY: `rusage` is plain data (all-zero is a valid value); `wait4` writes `status` and
+    // `usage` and reaps the child, whose `Child` is not waited on afterwards.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let reaped = unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
+    assert_eq!(reaped, pid, "wait4 on the command");
+    let output = Output {
+        status: std::process::ExitStatus::from_raw(status),
+        stdout: stdout.join().expect("stdout reader"),
+        stderr: stderr.join().expect("stderr reader"),
+    };
+    (output, u64::try_from(usage.ru_maxrss).unwrap_or(0))
+}
+
 /// Exit status 0, else fail showing the process's stderr.
 pub fn assert_success(out: &Output) {
     assert_eq!(
