@@ -14,6 +14,7 @@
 //! | `skipped_without_information` | COLMAP `--information full`: geometries whose correspondences give none | geometries |
 //! | `outliers_suspected` | least squares whose residuals look like outliers | suspected edges |
 //! | `output_not_written` | `--edges-output` / `--inlier-output` with no robust solve | files |
+//! | `database_without_information` | a COLMAP database read with weights 1 under a robust solve (`--information full` weighs each pair by its correspondences) | - |
 //! | `estimate_unmatched` | `certify --estimate`: entries that match no node (not used) | entries |
 //! | `translations_not_finite` | `certify --estimate`: COLMAP images with NaN translations (not used) | images |
 //! | `name_not_format` | a text view graph named like a COLMAP database (`*.db`): read by its content | |

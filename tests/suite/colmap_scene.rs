@@ -303,3 +303,36 @@ fn robust_loss_beats_least_squares_on_a_scene() {
     assert_ne!(chosen, "chordal");
     assert!(auto < 0.2 * chordal, "{auto} vs {chordal}");
 }
+
+/// A COLMAP database read with weights 1 whose robust solve ran (the committed 36-image scene,
+/// where the default chooses Cauchy) carries the warning `database_without_information`, on
+/// stderr and in the JSON; with `--information full`, `--weights unit` or least squares
+/// (`--loss chordal`) it does not.
+#[test]
+fn a_database_read_without_its_information_says_so_when_the_robust_solve_runs() {
+    let db = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/data/colmap_scene/database.db"
+    );
+    let codes = |extra: &[&str]| {
+        let out = run(&[&["multiple", db, "--certify", "none", "--json"], extra].concat());
+        assert_success(&out);
+        let warned = String::from_utf8_lossy(&out.stderr).contains("--information full");
+        let json = json_of(&out);
+        let codes: Vec<String> = (json["warnings"].as_array().unwrap().iter())
+            .map(|w| w["code"].as_str().unwrap().to_string())
+            .collect();
+        (
+            codes.iter().any(|c| c == "database_without_information"),
+            warned,
+        )
+    };
+    assert_eq!(codes(&[]), (true, true));
+    for extra in [
+        &["--information", "full"][..],
+        &["--weights", "unit"],
+        &["--loss", "chordal"],
+    ] {
+        assert_eq!(codes(extra), (false, false), "{extra:?}");
+    }
+}
