@@ -5,18 +5,63 @@
 use crate::error::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, SymbolicCholeskyRaw, supernodal};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, Mat, MatMut, Par, Side};
 use nalgebra::Matrix3;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// A symbolic sparse Cholesky analysis (AMD ordering) of a [`BlockPattern`], shared by the
-/// numeric factorisations of matrices with that pattern.
+/// numeric factorisations of matrices with that pattern; with a supernodal factor, the
+/// permuted pattern its factorisations gather their values into (made at the first).
 #[derive(Clone)]
-pub(crate) struct SymbolicFactor(Arc<SymbolicCholesky<usize>>);
+pub(crate) struct SymbolicFactor(Arc<SymbolicCholesky<usize>>, Arc<OnceLock<Permuted>>);
+
+/// The lower triangle of `P A P^T` for a [`BlockPattern`]'s `A` and a factor's ordering `P`:
+/// its structure, and for each of its entries the position of its value among the pattern's.
+/// A numeric factorisation then gathers its values in one pass where faer's general
+/// permutation of `A` (counts, offsets, scatter) took 13 % of an anisotropic L1 solve.
+struct Permuted {
+    symbolic: SymbolicSparseColMat<usize>,
+    source: Vec<usize>,
+}
+
+impl Permuted {
+    /// The permuted lower triangle of `pattern` under the ordering `new_of` (`new_of[old]`,
+    /// faer's inverse permutation), each column's rows sorted.
+    fn new(pattern: SymbolicSparseColMatRef<'_, usize>, new_of: &[usize]) -> Permuted {
+        let n = pattern.ncols();
+        let entries: Vec<(usize, usize, usize)> = (0..n)
+            .flat_map(|c| {
+                let range = pattern.col_range(c);
+                (pattern.row_idx()[range.clone()].iter().zip(range)).map(move |(&r, k)| {
+                    let (a, b) = (new_of[r], new_of[c]);
+                    (a.min(b), a.max(b), k)
+                })
+            })
+            .collect();
+        let mut sorted = entries;
+        sorted.sort_unstable();
+        let mut col_ptr = vec![0usize; n + 1];
+        for &(c, _, _) in &sorted {
+            col_ptr[c + 1] += 1;
+        }
+        for c in 0..n {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        let row_idx = sorted.iter().map(|e| e.1).collect();
+        let source = sorted.iter().map(|e| e.2).collect();
+        let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        Permuted { symbolic, source }
+    }
+}
 
 impl SymbolicFactor {
+    /// The analysis `s`, its permuted pattern not made yet.
+    fn new(s: SymbolicCholesky<usize>) -> SymbolicFactor {
+        SymbolicFactor(Arc::new(s), Arc::new(OnceLock::new()))
+    }
+
     /// Stored values of the factor.
     pub(crate) fn len_val(&self) -> usize {
         self.0.len_val()
@@ -243,7 +288,7 @@ impl BlockPattern {
     /// ([`super::cholesky::symbolic_cholesky_within`]).
     pub(crate) fn symbolic_llt(&self) -> Result<SymbolicFactor> {
         super::cholesky::symbolic_cholesky_within(self.symbolic.as_ref(), usize::MAX)?
-            .map(|s| SymbolicFactor(Arc::new(s)))
+            .map(SymbolicFactor::new)
             .map_err(|predicted| Error::Solver {
                 message: format!("symbolic sparse Cholesky refused at {predicted} values"),
             })
@@ -255,30 +300,63 @@ impl BlockPattern {
         Ok(self
             .symbolic_within(max_values)?
             .ok()
-            .map(|(s, _)| SymbolicFactor(Arc::new(s))))
+            .map(|(s, _)| SymbolicFactor::new(s)))
     }
 
     /// Numeric Cholesky with the given values; `None` if the matrix is not positive definite
     /// (or its scratch space cannot be allocated). Factors above 2e6 values use all threads.
     pub(crate) fn llt(&self, sym: &SymbolicFactor, val: &[f64]) -> Option<SparseLlt> {
-        let mat = SparseColMatRef::new(self.symbolic.as_ref(), val);
         let par = super::factor_parallelism(sym.len_val());
         let mut values = vec![0.0f64; sym.len_val()];
         let req = sym
             .0
             .factorize_numeric_llt_scratch::<f64>(par, Default::default());
         let mut mem = MemBuffer::try_new(req).ok()?;
-        sym.0
-            .factorize_numeric_llt::<f64>(
-                &mut values,
-                mat,
-                Side::Lower,
-                LltRegularization::default(),
-                par,
-                MemStack::new(&mut mem),
-                Default::default(),
-            )
-            .ok()?;
+        let stack = MemStack::new(&mut mem);
+        let regularization = LltRegularization::default();
+        // a supernodal factor: `P A P^T` gathered by the permuted pattern, made once (an analysis
+        // is shared only by patterns built alike from the same edges, `multiple::chordal`; one
+        // of another size takes faer's own permutation)
+        let permuted = match (sym.0.raw(), sym.0.perm()) {
+            (SymbolicCholeskyRaw::Supernodal(s), Some(perm)) => {
+                let p = sym
+                    .1
+                    .get_or_init(|| Permuted::new(self.symbolic.as_ref(), perm.arrays().1));
+                (p.source.len() == val.len() && p.symbolic.ncols() == self.symbolic.ncols())
+                    .then_some((s, p))
+            }
+            _ => None,
+        };
+        match permuted {
+            Some((s, permuted)) => {
+                let gathered: Vec<f64> = permuted.source.iter().map(|&k| val[k]).collect();
+                let a = SparseColMatRef::new(permuted.symbolic.as_ref(), &gathered);
+                supernodal::factorize_supernodal_numeric_llt(
+                    &mut values,
+                    a,
+                    regularization,
+                    s,
+                    par,
+                    stack,
+                    Default::default(),
+                )
+                .ok()?;
+            }
+            _ => {
+                let mat = SparseColMatRef::new(self.symbolic.as_ref(), val);
+                (sym.0)
+                    .factorize_numeric_llt::<f64>(
+                        &mut values,
+                        mat,
+                        Side::Lower,
+                        regularization,
+                        par,
+                        stack,
+                        Default::default(),
+                    )
+                    .ok()?;
+            }
+        }
         Some(SparseLlt {
             symbolic: sym.clone(),
             values,
@@ -323,5 +401,65 @@ impl BlockPattern {
             }
         }
         y
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::rngs::StdRng;
+    use rand::{Rng, SeedableRng};
+
+    /// The supernodal factor from the permuted pattern's gathered values solves the system as
+    /// faer's own permutation of `A` does, to rounding; on a block pattern dense enough for the
+    /// supernodal kernel (the path is taken) and on a chain (simplicial: faer's path).
+    #[test]
+    fn gathered_factor_solves_as_faer_permuted_one() {
+        let mut rng = StdRng::seed_from_u64(3);
+        let dense: Vec<(usize, usize)> = (0..600)
+            .map(|_| (rng.random_range(0..80), rng.random_range(0..80)))
+            .filter(|(p, q)| p != q)
+            .collect();
+        let chain: Vec<(usize, usize)> = (1..80).map(|p| (p, p - 1)).collect();
+        for (pairs, supernodal) in [(dense, true), (chain, false)] {
+            let pattern = BlockPattern::new(80, 3, pairs.iter().copied());
+            let mut val = vec![0.0; pattern.nnz()];
+            for &(p, q) in &pairs {
+                let m = Matrix3::from_fn(|_, _| rng.random_range(-1.0..1.0));
+                pattern.add(&mut val, p.max(q), p.min(q), pattern.slot(p, q), &m);
+            }
+            // diagonally dominant: positive definite
+            pattern.add_diagonal(&mut val, 3.0 * 600.0);
+            let sym = pattern.symbolic_llt().unwrap();
+            let is_supernodal = matches!(sym.0.raw(), SymbolicCholeskyRaw::Supernodal(_));
+            assert_eq!(is_supernodal, supernodal);
+            let fast = pattern.llt(&sym, &val).unwrap();
+            let mut reference = vec![0.0; sym.len_val()];
+            let req = sym
+                .0
+                .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
+            let mut mem = MemBuffer::new(req);
+            sym.0
+                .factorize_numeric_llt::<f64>(
+                    &mut reference,
+                    pattern.matrix(&val),
+                    Side::Lower,
+                    LltRegularization::default(),
+                    Par::Seq,
+                    MemStack::new(&mut mem),
+                    Default::default(),
+                )
+                .unwrap();
+            let reference = SparseLlt {
+                symbolic: sym.clone(),
+                values: reference,
+            };
+            let rhs = Mat::<f64>::from_fn(240, 2, |i, j| ((i * 7 + j * 3) % 11) as f64 - 5.0);
+            let (mut x, mut y) = (rhs.clone(), rhs);
+            fast.solve_in_place(x.as_mut());
+            reference.solve_in_place(y.as_mut());
+            let diff = (&x - &y).norm_max();
+            assert!(diff <= 1e-12 * y.norm_max(), "{diff}");
+        }
     }
 }
