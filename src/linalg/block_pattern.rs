@@ -31,7 +31,7 @@ impl Permuted {
     /// faer's inverse permutation), each column's rows sorted.
     fn new(pattern: SymbolicSparseColMatRef<'_, usize>, new_of: &[usize]) -> Permuted {
         let n = pattern.ncols();
-        let entries: Vec<(usize, usize, usize)> = (0..n)
+        let mut entries: Vec<(usize, usize, usize)> = (0..n)
             .flat_map(|c| {
                 let range = pattern.col_range(c);
                 (pattern.row_idx()[range.clone()].iter().zip(range)).map(move |(&r, k)| {
@@ -40,17 +40,16 @@ impl Permuted {
                 })
             })
             .collect();
-        let mut sorted = entries;
-        sorted.sort_unstable();
+        entries.sort_unstable();
         let mut col_ptr = vec![0usize; n + 1];
-        for &(c, _, _) in &sorted {
+        for &(c, _, _) in &entries {
             col_ptr[c + 1] += 1;
         }
         for c in 0..n {
             col_ptr[c + 1] += col_ptr[c];
         }
-        let row_idx = sorted.iter().map(|e| e.1).collect();
-        let source = sorted.iter().map(|e| e.2).collect();
+        let row_idx = entries.iter().map(|e| e.1).collect();
+        let source = entries.iter().map(|e| e.2).collect();
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         Permuted { symbolic, source }
     }

@@ -127,9 +127,9 @@ fn database_without_information(
             format!(
                 "{}: the robust solve weighed the database's pairs alike (weights 1); \
                  `--information full` weighs each by the rotation information of its inlier \
-                 correspondences (anisotropic averaging; on 10 generated scenes the robust default \
-                 was then within 10 % of the best robust run's median error on 9, with weights 1 on 5: \
-                 docs/benchmarks.md; the keypoints are read too, about twice the reading time)",
+                 correspondences (anisotropic averaging, the more accurate on most generated \
+                 scenes: docs/benchmarks.md, \"The default against each robust loss a user can \
+                 name\"; the keypoints are read too, about twice the reading time)",
                 input.name
             ),
         )
