@@ -1,12 +1,13 @@
 """The default of `rotavg multiple` against each robust loss a user can name, on generated COLMAP
 scenes (`cargo run --release --example colmap_scene -- DIR --cameras N --seed S [...]`; the
-committed 36-image scene is `examples/data/colmap_scene`), with weights 1 (the database's
-default reading) and with `--information full`:
+committed 36-image scene is `examples/data/colmap_scene`), with no option (the default: since
+2026-12-07 `--information auto`, a database's information where it gives one), with weights 1
+(`--information kappa`) and with `--information full`:
 
     python benches/named_robust_runs.py ROTAVG_BINARY DIR [DIR ...]
 
 Each cell is one whole process, `rotavg multiple DIR/database.db --ground-truth DIR/truth --json
---certify none [--information full] [--loss cauchy|huber|l1]`: the median error in degrees
+--certify none [--information kappa|full] [--loss cauchy|huber|l1]`: the median error in degrees
 after the least-squares alignment / after the robust alignment (as `--ground-truth` reports
 them), and the process's seconds. Prints a Markdown table (docs/benchmarks.md, "The default
 against each robust loss a user can name"). Needs only the Python standard library.
@@ -17,11 +18,13 @@ import subprocess
 import sys
 import time
 
+KAPPA = ["--information", "kappa"]
 RUNS = [
-    ("weights 1, default", []),
-    ("weights 1, cauchy", ["--loss", "cauchy"]),
-    ("weights 1, huber", ["--loss", "huber"]),
-    ("weights 1, l1", ["--loss", "l1"]),
+    ("no option", []),
+    ("weights 1, default", KAPPA),
+    ("weights 1, cauchy", KAPPA + ["--loss", "cauchy"]),
+    ("weights 1, huber", KAPPA + ["--loss", "huber"]),
+    ("weights 1, l1", KAPPA + ["--loss", "l1"]),
     ("information, default", ["--information", "full"]),
     ("information, cauchy", ["--information", "full", "--loss", "cauchy"]),
     ("information, huber", ["--information", "full", "--loss", "huber"]),

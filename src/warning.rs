@@ -11,10 +11,10 @@
 //! | `information_symmetrized` | JSON, Python: information matrices asymmetric by rounding (their symmetric part used; `io::detect::information_symmetrized`) | edges |
 //! | `skipped_by_config` | COLMAP: two-view geometries of a config without a rotation | geometries |
 //! | `skipped_without_pose` | COLMAP: two-view geometries without a stored relative pose | geometries |
-//! | `skipped_without_information` | COLMAP `--information full`: geometries whose correspondences give none | geometries |
+//! | `skipped_without_information` | COLMAP information (`--information auto` or `full`): geometries whose correspondences give none | geometries |
 //! | `outliers_suspected` | least squares whose residuals look like outliers | suspected edges |
 //! | `output_not_written` | `--edges-output` / `--inlier-output` with no robust solve | files |
-//! | `database_without_information` | a COLMAP database read with weights 1 under a robust solve (`--information full` weighs each pair by its correspondences) | - |
+//! | `database_without_information` | `--information auto` (the default) on a COLMAP database that gives no two-view information (no keypoints, no `tvec`, an unsupported camera, ...): read with weights 1, the reason named | - |
 //! | `estimate_unmatched` | `certify --estimate`: entries that match no node (not used) | entries |
 //! | `translations_not_finite` | `certify --estimate`: COLMAP images with NaN translations (not used) | images |
 //! | `name_not_format` | a text view graph named like a COLMAP database (`*.db`): read by its content | |

@@ -465,7 +465,7 @@ def average_rig_file(
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
     gravity_weight: Optional[float] = None,
-    information: str = "kappa",
+    information: str = "auto",
 ) -> Result:
     """A rig of any number of sensors from a JSON rig file or a COLMAP rig configuration."""
 
@@ -481,7 +481,7 @@ def certify_rig_file(
     gravity: Union[npt.ArrayLike, str, os.PathLike[str], None] = None,
     world_down: Optional[Sequence[float]] = None,
     gravity_weight: Optional[float] = None,
-    information: str = "kappa",
+    information: str = "auto",
 ) -> Result:
     """Certify a rig file's estimate computed elsewhere, without changing it."""
 
@@ -508,7 +508,7 @@ def read_graph(
     *,
     ground_truth: Optional[_PathLike] = None,
     rotation_tolerance: float = 1e-5,
-    information: str = "kappa",
+    information: str = "auto",
 ) -> Graph:
     """Read a g2o, 1DSfM or JSON view graph with the library's readers."""
 

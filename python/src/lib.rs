@@ -1183,15 +1183,9 @@ fn certify_single_py(
     RunResult::new(py, Report::Certify(report))
 }
 
-/// `information=`: `"kappa"` (false) or `"full"` (true), the command line's `--information`.
-pub(crate) fn full_information(information: &str) -> PyResult<bool> {
-    match information {
-        "kappa" => Ok(false),
-        "full" => Ok(true),
-        other => Err(argument_error(format!(
-            "information must be \"kappa\" or \"full\", got {other:?}"
-        ))),
-    }
+/// `information=`: the command line's `--information` ([`rotavg::io::detect::information_choice`]).
+pub(crate) fn full_information(information: &str) -> PyResult<Option<bool>> {
+    rotavg::io::detect::information_choice(information).map_err(|e| argument_error(e.to_string()))
 }
 
 /// Read a view graph with the library's readers (the command line's): g2o / TORO, 1DSfM
@@ -1207,10 +1201,13 @@ pub(crate) fn full_information(information: &str) -> PyResult<bool> {
 ///     ground_truth: a ground-truth file for the graph's nodes (the command line's
 ///         ``--ground-truth``; formats: see ``read_ground_truth``): ``g.truth`` holds it, and
 ///         ``average_multiple(g)`` then reports ``result.accuracy``.
-///     information: ``"kappa"`` (default) or ``"full"``, the command line's ``--information``:
-///         g2o / TORO edges with their full 3x3 rotation information (an anisotropic problem)
-///         instead of SE-Sync's scalar kappa; COLMAP databases with each pair's information
-///         from its inlier correspondences and cameras instead of weights 1.
+///     information: ``"auto"`` (default), ``"kappa"`` or ``"full"``, the command line's
+///         ``--information``: g2o / TORO edges with their full 3x3 rotation information (an
+///         anisotropic problem, ``"full"``) or SE-Sync's scalar kappa (``"auto"``,
+///         ``"kappa"``); COLMAP databases with each pair's information from its inlier
+///         correspondences and cameras (``"full"``, and ``"auto"`` where the database gives
+///         it, else weights 1 with the warning ``database_without_information``) or weights 1
+///         (``"kappa"``).
 ///
 /// Returns:
 ///     Graph: with ``n, i, j, rel, weights`` for ``average_multiple``.
@@ -1219,7 +1216,7 @@ pub(crate) fn full_information(information: &str) -> PyResult<bool> {
 ///     rotavg.FileError: unreadable file. rotavg.ParseError: malformed content (the message
 ///         names file and line).
 #[pyfunction]
-#[pyo3(signature = (path, format="auto", weights="file", largest_component=false, *, ground_truth=None, rotation_tolerance=1e-5, information="kappa"))]
+#[pyo3(signature = (path, format="auto", weights="file", largest_component=false, *, ground_truth=None, rotation_tolerance=1e-5, information="auto"))]
 #[allow(clippy::too_many_arguments)]
 fn read_graph(
     py: Python<'_>,

@@ -127,9 +127,10 @@ pub fn average_rig(
 ///         ``rotavg rig FILE --gravity``: an ``(I, 3)`` or ``(I, 4)`` array in image order (NaN rows: none) or
 ///         a priors file keyed by image id or name; held, or soft of ``gravity_weight``.
 ///         ``to_dict()["gravity"]`` has their checks.
-///     information: ``"kappa"`` (default) or ``"full"``, as ``--information``: a COLMAP
-///         database's pairs with their rotation information from their correspondences (an
-///         anisotropic rig, [H24]; a JSON rig file's ``"information"`` is always read).
+///     information: ``"auto"`` (default), ``"kappa"`` or ``"full"``, as ``--information``:
+///         a COLMAP database's pairs with their rotation information from their
+///         correspondences (``"full"``: an anisotropic rig, [H24]) or weights 1 (``"auto"``,
+///         ``"kappa"``; a JSON rig file's ``"information"`` is always read).
 ///
 /// Returns:
 ///     Result: ``estimate`` is the frames ``(F, 3, 3)`` (``estimate[0] = I``);
@@ -141,7 +142,7 @@ pub fn average_rig(
 ///     rotavg.ParseError / FileError: a file that cannot be read (naming it); rotavg.Error: a
 ///         rig that is not valid (an image out of range, a sensor no edge places).
 #[pyfunction]
-#[pyo3(name = "average_rig_file", signature = (path, *, loss="auto", loss_threshold=None, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None, information="kappa"))]
+#[pyo3(name = "average_rig_file", signature = (path, *, loss="auto", loss_threshold=None, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None, information="auto"))]
 #[allow(clippy::too_many_arguments)]
 pub fn average_rig_file(
     py: Python<'_>,
@@ -198,7 +199,7 @@ pub fn average_rig_file(
 ///     rotavg.Error: counts or ids that do not match the rig, a matrix that is not a rotation,
 ///         ``sensors_from_rig`` missing with arrays or given with a path.
 #[pyfunction]
-#[pyo3(name = "certify_rig_file", signature = (path, frames, sensors_from_rig=None, *, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None, information="kappa"))]
+#[pyo3(name = "certify_rig_file", signature = (path, frames, sensors_from_rig=None, *, certify="auto", max_memory=None, max_seconds=600.0, rotation_tolerance=1e-5, gravity=None, world_down=None, gravity_weight=None, information="auto"))]
 #[allow(clippy::too_many_arguments)]
 pub fn certify_rig_file(
     py: Python<'_>,

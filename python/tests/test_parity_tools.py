@@ -126,7 +126,7 @@ def test_read_graph_information_full_and_init_method_match_the_command_line(cli)
     assert res.to_dict()["information"] == theirs["information"]
     assert res.cost == pytest.approx(theirs["cost"], rel=1e-12)
     assert not rotavg.average_multiple(rotavg.read_graph(slam)).to_dict().get("information")
-    with pytest.raises(rotavg.Error, match='information must be "kappa" or "full"'):
+    with pytest.raises(rotavg.Error, match='information must be "auto", "kappa" or "full"'):
         rotavg.read_graph(slam, information="diagonal")
     with pytest.raises(rotavg.Error, match="init"):
         rotavg.average_multiple(g, init_method="random")

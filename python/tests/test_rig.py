@@ -245,7 +245,7 @@ def test_soft_gravity_refines_the_estimated_sensors():
 def test_a_rig_file_with_information_is_the_command_line_s(cli):
     """A JSON rig file whose edges carry ``"information"`` ([H24]): the command line's report,
     the estimated sensors within 0.3 degrees of the planted ones; ``information`` takes
-    ``"kappa"`` or ``"full"`` only."""
+    ``"auto"``, ``"kappa"`` or ``"full"`` only."""
     path = REPO / "examples" / "data" / "rig_information" / "rig.json"
     ours = rotavg.average_rig_file(path)
     theirs = cli("rig", path)

@@ -41,11 +41,15 @@
 //!   the cameras (the cheirality test), which this reader does not redo. A database with no
 //!   usable row is an error that says so. A database without the column `qvec` (older COLMAP)
 //!   is an error too.
-//! * **Weights** are 1 (COLMAP stores none; the inlier count is not a variance). With
-//!   [`ReadOptions::full_information`] (`--information full`) each edge instead gets the
-//!   information of its rotation from the row's inlier matches (`data`), the two images'
-//!   `keypoints` and `cameras` (`paper-notes/formats.md` `[F13]`,
-//!   [`crate::io::two_view_information`]); pairs that give none are skipped with a warning.
+//! * **Information**: each edge gets the information of its rotation from the row's inlier
+//!   matches (`data`), the two images' `keypoints` and `cameras` (`paper-notes/formats.md`
+//!   `[F13]`, [`crate::io::two_view_information`]); pairs that give none are skipped with a
+//!   warning. By default ([`ReadOptions::full_information`] `None`, `--information auto`) a
+//!   database that cannot give it (no keypoints, no `tvec`, an unsupported camera, no pair
+//!   with an information) is read with weights 1 instead, with the warning
+//!   `database_without_information` naming the reason; `Some(true)` (`--information full`)
+//!   makes that an error, `Some(false)` (`--information kappa`) reads weights 1 (COLMAP
+//!   stores no weights; the inlier count is not a variance).
 //! * **Nodes** are the image ids that occur in a used row, sorted
 //!   ([`LoadedGraph::node_ids`]), with the image names of the table `images`
 //!   ([`LoadedGraph::node_names`]). A used row naming an image the table `images` does not

@@ -79,13 +79,45 @@ pub struct ReadOptions {
     /// Tolerance for quaternions (g2o): `| ||q|| - 1 |` must not exceed it; accepted quaternions
     /// are normalised. Files written with 6 decimals are accurate to about 1e-6.
     pub quaternion_tolerance: f64,
-    /// g2o / TORO edges with an information matrix become anisotropic measurements with their
-    /// full 3x3 rotation information (`paper-notes/anisotropic.md` `[A7]`) instead of SE-Sync's
-    /// scalar `kappa` (the default, `false`); COLMAP databases get each pair's rotation
-    /// information from its inlier correspondences and the cameras (`paper-notes/formats.md`
-    /// `[F13]`, [`crate::io::two_view_information`]) instead of weights 1. Other formats are
-    /// unaffected (JSON's `information` is always read).
-    pub full_information: bool,
+    /// Each format's full rotation information (`Some(true)`, `--information full`), its
+    /// scalar weight (`Some(false)`, `--information kappa`) or the format's default (`None`,
+    /// `--information auto`, the default):
+    /// - g2o / TORO edges with an information matrix: `Some(true)` makes them anisotropic
+    ///   measurements with their full 3x3 rotation information (`paper-notes/anisotropic.md`
+    ///   `[A7]`); `Some(false)` and `None` give SE-Sync's scalar `kappa`.
+    /// - COLMAP databases: `Some(true)` gives each pair the rotation information of its inlier
+    ///   correspondences and the cameras (`paper-notes/formats.md` `[F13]`,
+    ///   [`crate::io::two_view_information`]); `Some(false)` weights 1. `None` reads the
+    ///   information where the database gives it, and otherwise weights 1 with the warning
+    ///   `database_without_information` naming why (no keypoints, no relative translations,
+    ///   a camera model without an undistortion, ...). Rigs read from a database
+    ///   ([`crate::io::rig::read_colmap_rig`]) take `None` as `Some(false)`.
+    /// - Other formats are unaffected (JSON's `information` is always read).
+    ///
+    /// A graph's [`LoadedGraph::read`] records what was read: `Some(true)` or `Some(false)`.
+    pub full_information: Option<bool>,
+}
+
+/// [`ReadOptions::full_information`] of a name, the command line's `--information`: `auto`
+/// (`None`), `kappa` (`Some(false)`) or `full` (`Some(true)`).
+///
+/// ```
+/// use rotavg::io::detect::information_choice;
+/// assert_eq!(information_choice("full")?, Some(true));
+/// assert_eq!(information_choice("auto")?, None);
+/// assert!(information_choice("diagonal").is_err());
+/// # Ok::<(), rotavg::Error>(())
+/// ```
+pub fn information_choice(name: &str) -> Result<Option<bool>> {
+    match name {
+        "auto" => Ok(None),
+        "kappa" => Ok(Some(false)),
+        "full" => Ok(Some(true)),
+        other => Err(Error::InvalidSettings {
+            name: "information".into(),
+            reason: format!("information must be \"auto\", \"kappa\" or \"full\", got {other:?}"),
+        }),
+    }
 }
 
 impl Default for ReadOptions {
@@ -94,7 +126,7 @@ impl Default for ReadOptions {
             weights: WeightSource::File,
             rotation_tolerance: DEFAULT_ROTATION_TOLERANCE,
             quaternion_tolerance: 1e-3,
-            full_information: false,
+            full_information: None,
         }
     }
 }
@@ -151,14 +183,20 @@ impl LoadedGraph {
             warnings: information_symmetrized(&problem).into_iter().collect(),
             format: GraphFormat::Json,
             planar: false,
-            read: ReadOptions::default(),
+            read: ReadOptions {
+                full_information: Some(false),
+                ..Default::default()
+            },
             problem,
         }
     }
 
-    /// This graph, recorded as read with `options`.
+    /// This graph, recorded as read with `options`; `--information auto` (`None`) recorded as
+    /// what the reader chose (`Some(true)` when it read the information, else `Some(false)`).
     pub fn read_with(mut self, options: &ReadOptions) -> Self {
+        let chosen = self.read.full_information;
         self.read = *options;
+        self.read.full_information = options.full_information.or(chosen).or(Some(false));
         self
     }
 

@@ -605,7 +605,7 @@ impl G2oContents {
             }
             self.uninformed.0 += 1;
         }
-        if options.full_information && options.weights == WeightSource::File {
+        if options.full_information == Some(true) && options.weights == WeightSource::File {
             // checked here, so that an error names this line
             let h = Information::new(e.information).map_err(|e| t.err(format!("edge {e}")))?;
             self.infos.push(h);

@@ -251,7 +251,14 @@ pub fn read_colmap_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> 
     #[cfg(feature = "colmap")]
     {
         let file = path.display().to_string();
-        let graph = crate::io::colmap::read_colmap_database(path, options)?;
+        // `--information auto` is weights 1 for rigs: the default with information was measured
+        // on view graphs (`docs/benchmarks.md`, "The default against each robust loss a user
+        // can name"), not yet on rig databases with correspondences
+        let options = ReadOptions {
+            full_information: Some(options.full_information == Some(true)),
+            ..*options
+        };
+        let graph = crate::io::colmap::read_colmap_database(path, &options)?;
         let layout =
             crate::io::colmap::database::rig::rig_layout(path, options.quaternion_tolerance)?;
         rig_of_layout(&graph, &layout.images, &layout.sensors).map_err(|e| e.in_file(&file, None))

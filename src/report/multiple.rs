@@ -108,34 +108,6 @@ pub struct MultipleReport {
     pub information: Option<InformationSummary>,
 }
 
-/// The warning `database_without_information` when `input` is a COLMAP database read with weights
-/// 1 (no `--information full`, no `--weights unit`) and `result` is a robust solve: the
-/// database's correspondences give each pair's rotation information, with which the robust
-/// default was within 10 % of the best robust run on 9 of 10 generated scenes, against 5 with
-/// weights 1 (`docs/benchmarks.md`, "The default against each robust loss a user can name").
-fn database_without_information(
-    input: &MultipleInput,
-    result: &MultipleEstimate,
-) -> Option<Warning> {
-    let read = &input.graph.read;
-    let weights_one =
-        read.weights == crate::io::detect::WeightSource::File && !read.full_information;
-    let robust = result.solution.residuals.is_some();
-    (input.graph.format == GraphFormat::Colmap && weights_one && robust).then(|| {
-        Warning::new(
-            "database_without_information",
-            format!(
-                "{}: the robust solve weighed the database's pairs alike (weights 1); \
-                 `--information full` weighs each by the rotation information of its inlier \
-                 correspondences (anisotropic averaging, the more accurate on most generated \
-                 scenes: docs/benchmarks.md, \"The default against each robust loss a user can \
-                 name\"; the keypoints are read too, about twice the reading time)",
-                input.name
-            ),
-        )
-    })
-}
-
 impl MultipleReport {
     /// Name `--edges-output` (`edges`) in the report when a robust solve wrote it; when `--loss
     /// auto` kept least squares and `edges` or `--inlier-output` (`inlier_output`) was asked
@@ -170,9 +142,6 @@ impl MultipleReport {
             .as_ref()
             .map(|d| d.warnings())
             .unwrap_or_default();
-        let run_warnings = database_without_information(input, &result)
-            .into_iter()
-            .collect();
         Ok(MultipleReport {
             result,
             input: input.name.clone(),
@@ -181,7 +150,7 @@ impl MultipleReport {
             duplicates: g.duplicates,
             reversed: g.reversed,
             warnings: [super::input_warnings(g), gravity_warnings].concat(),
-            run_warnings,
+            run_warnings: Vec::new(),
             node_ids: g.node_ids.clone(),
             node_names: g.node_names.clone(),
             num_edges: g.problem.num_edges(),

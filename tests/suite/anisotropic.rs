@@ -718,7 +718,7 @@ fn g2o_full_information_is_four_times_g2os_chi_squared() {
         blocks.push((i, j, *q.to_rotation_matrix().matrix(), omega));
     }
     let full = ReadOptions {
-        full_information: true,
+        full_information: Some(true),
         ..Default::default()
     };
     let g = rotavg::io::g2o::read_g2o(&text, "a.g2o", &full).unwrap();

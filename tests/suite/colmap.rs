@@ -886,12 +886,19 @@ fn database_information_from_correspondences() {
     }
     drop(db);
     let full = ReadOptions {
-        full_information: true,
+        full_information: Some(true),
         ..Default::default()
     };
     let aniso = read_colmap_database(&path, &full).unwrap();
-    let iso = read_colmap_database(&path, &ReadOptions::default()).unwrap();
+    let weights_one = ReadOptions {
+        full_information: Some(false),
+        ..Default::default()
+    };
+    let iso = read_colmap_database(&path, &weights_one).unwrap();
     assert!(aniso.problem.is_anisotropic() && !iso.problem.is_anisotropic());
+    // `--information auto` (the default) reads the information this database gives
+    let auto = read_colmap_database(&path, &ReadOptions::default()).unwrap();
+    assert_eq!(auto.problem, aniso.problem);
     let info = aniso.problem.information().unwrap();
     assert_eq!(info.len(), expected.len());
     for (h, want) in info.iter().zip(&expected) {
@@ -936,7 +943,7 @@ fn information_full_errors_are_clear() {
     let path = db_path("information_errors.db");
     write_db(&path, SCHEMA, &images_of(&s), &rows);
     let full = ReadOptions {
-        full_information: true,
+        full_information: Some(true),
         ..Default::default()
     };
     let e = read_colmap_database(&path, &full).unwrap_err().to_string();

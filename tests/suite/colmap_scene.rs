@@ -236,7 +236,7 @@ fn every_pair_reads_with_full_information() {
     let dir = folder("read");
     scene.write(&dir).unwrap();
     let options = ReadOptions {
-        full_information: true,
+        full_information: Some(true),
         ..Default::default()
     };
     let graph = read_colmap_database(&dir.join("database.db"), &options).unwrap();
@@ -304,35 +304,57 @@ fn robust_loss_beats_least_squares_on_a_scene() {
     assert!(auto < 0.2 * chordal, "{auto} vs {chordal}");
 }
 
-/// A COLMAP database read with weights 1 whose robust solve ran (the committed 36-image scene,
-/// where the default chooses Cauchy) carries the warning `database_without_information`, on
-/// stderr and in the JSON; with `--information full`, `--weights unit` or least squares
-/// (`--loss chordal`) it does not.
+/// `--information auto` (the default) on a COLMAP database: the committed 36-image scene is
+/// read with its pairs' information, the problem of `--information full` to the last digit of
+/// the cost, and `input.read.full_information` says so; `--information kappa` reads weights 1
+/// without a warning. A copy without the table `keypoints` is read with weights 1 and the
+/// warning `database_without_information` naming the table, on stderr and in the JSON, where
+/// `--information full` is an error naming it.
 #[test]
-fn a_database_read_without_its_information_says_so_when_the_robust_solve_runs() {
+fn information_auto_reads_a_database_s_information_where_it_has_one() {
     let db = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/examples/data/colmap_scene/database.db"
     );
-    let codes = |extra: &[&str]| {
+    let report = |db: &str, extra: &[&str]| {
         let out = run(&[&["multiple", db, "--certify", "none", "--json"], extra].concat());
         assert_success(&out);
-        let warned = String::from_utf8_lossy(&out.stderr).contains("--information full");
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
         let json = json_of(&out);
-        let codes: Vec<String> = (json["warnings"].as_array().unwrap().iter())
-            .map(|w| w["code"].as_str().unwrap().to_string())
-            .collect();
-        (
-            codes.iter().any(|c| c == "database_without_information"),
-            warned,
-        )
+        let warned = (json["warnings"].as_array().unwrap().iter())
+            .any(|w| w["code"] == "database_without_information");
+        let full = json["input"]["read"]["full_information"].as_bool().unwrap();
+        let cost = json["cost"].as_f64().unwrap();
+        (full, warned, stderr, cost)
     };
-    assert_eq!(codes(&[]), (true, true));
-    for extra in [
-        &["--information", "full"][..],
-        &["--weights", "unit"],
-        &["--loss", "chordal"],
-    ] {
-        assert_eq!(codes(extra), (false, false), "{extra:?}");
-    }
+    let (full, warned, _, auto_cost) = report(db, &[]);
+    assert!(full && !warned);
+    let (full, warned, _, full_cost) = report(db, &["--information", "full"]);
+    assert!(full && !warned);
+    assert_eq!(auto_cost, full_cost);
+    let (full, warned, stderr, _) = report(db, &["--information", "kappa"]);
+    assert!(!full && !warned, "{stderr}");
+
+    let copy = temp_dir().join("colmap_scene_without_keypoints.db");
+    std::fs::copy(db, &copy).unwrap();
+    let conn = rusqlite::Connection::open(&copy).unwrap();
+    conn.execute_batch("DROP TABLE keypoints").unwrap();
+    drop(conn);
+    let copy = copy.to_str().unwrap();
+    let (full, warned, _, _) = report(copy, &[]);
+    assert!(!full && warned);
+    let out = run(&["multiple", copy, "--certify", "none"]);
+    assert_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout)
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert!(text.contains("warning:"), "{text}");
+    assert!(
+        text.contains("no two-view information: needs the table `keypoints`"),
+        "{text}"
+    );
+    let out = run(&["multiple", copy, "--information", "full"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("keypoints"));
 }

@@ -564,7 +564,7 @@ fn colmap_scene_is_reproducible_and_reads() {
     );
     std::fs::remove_dir_all(&fresh).expect("remove the scratch folder");
     let options = rotavg::io::detect::ReadOptions {
-        full_information: true,
+        full_information: Some(true),
         ..Default::default()
     };
     let graph =

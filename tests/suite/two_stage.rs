@@ -175,7 +175,7 @@ fn auto_judges_a_slow_least_squares_solve_early() {
     };
     scene.generate().unwrap().write(&dir).unwrap();
     let options = ReadOptions {
-        full_information: true,
+        full_information: Some(true),
         ..Default::default()
     };
     let p = read_colmap_database(&dir.join("database.db"), &options)

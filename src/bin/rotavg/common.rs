@@ -211,11 +211,13 @@ pub struct GraphArgs {
     /// and line.
     #[arg(long, value_name = "TOL", default_value_t = rotavg::so3::DEFAULT_ROTATION_TOLERANCE, value_parser = parse_tolerance)]
     pub rotation_tolerance: f64,
-    /// g2o / TORO edges with an information matrix: SE-Sync's scalar `kappa` (`kappa`,
-    /// default) or their full 3x3 rotation information, which makes the problem anisotropic
-    /// (`full`; docs/guides/anisotropic.md). COLMAP databases: weights 1 (default), or with
-    /// `full` each pair's rotation information from its inlier correspondences and cameras.
-    #[arg(long, value_name = "kappa|full", default_value = "kappa", value_parser = ["kappa", "full"])]
+    /// g2o / TORO edges with an information matrix: SE-Sync's scalar `kappa` (`auto`, `kappa`)
+    /// or their full 3x3 rotation information, which makes the problem anisotropic (`full`;
+    /// docs/guides/anisotropic.md). COLMAP databases: each pair's rotation information from
+    /// its inlier correspondences and cameras (`full`; `auto` too where the database gives it,
+    /// else weights 1 with the warning `database_without_information`; rigs: weights 1), or
+    /// weights 1 (`kappa`).
+    #[arg(long, value_name = "auto|kappa|full", default_value = "auto", value_parser = ["auto", "kappa", "full"])]
     pub information: String,
     /// Certification (`rotavg certify`: of view graphs; `none` there is `dual`).
     #[arg(long, value_parser = choice(graph_certify_modes()), default_value_t = CertifyMode::Auto)]
@@ -245,7 +247,8 @@ impl GraphArgs {
     /// The readers' options.
     pub fn read_options(&self, common: &Common) -> ReadOptions {
         ReadOptions {
-            full_information: self.information == "full",
+            full_information: rotavg::io::detect::information_choice(&self.information)
+                .unwrap_or_default(), // clap's value parser allows only the three names
             rotation_tolerance: self.rotation_tolerance,
             ..common.read_options()
         }

@@ -6,6 +6,7 @@ use super::*;
 use crate::io::RawEdge;
 use crate::io::detect::{GraphFormat, WeightSource};
 use crate::multiple::MultipleProblem;
+use crate::multiple::anisotropic::Information;
 use crate::warning::Warning;
 use rusqlite::{Connection, OpenFlags};
 
@@ -77,27 +78,10 @@ pub(super) fn read(path: &Path, options: &ReadOptions) -> Result<LoadedGraph> {
     let has_tvec = check_tables(&db)?;
     let names = image_names(&db)?;
     let mut rows = geometries(&db, &names, has_tvec, options)?;
-    let mut warnings = Vec::new();
-    let mut information = None;
-    if options.full_information && options.weights == WeightSource::File {
-        let (kept, info, skipped) = two_view::informations(&db, rows.raw, &rows.poses)?;
-        if kept.is_empty() && skipped.0 > 0 {
-            return Err(db.err(format!(
-                "--information full: none of the {} two-view geometries with a relative pose gives an information (first: {})",
-                skipped.0, skipped.1
-            )));
-        }
-        rows.raw = kept;
-        if skipped.0 > 0 {
-            let message = format!(
-                "--information full: skipped {} two-view geometries whose inlier correspondences give no information (first: {})",
-                skipped.0, skipped.1
-            );
-            warnings
-                .push(Warning::new("skipped_without_information", message).with_count(skipped.0));
-        }
-        information = Some(info);
-    }
+    let (information, mut warnings) = match options.weights {
+        WeightSource::File => information(&db, &mut rows, options.full_information)?,
+        WeightSource::Unit => (None, Vec::new()),
+    };
     warnings.extend(rows.warnings());
     if rows.raw.is_empty() {
         return Err(db.err(format!(
@@ -113,15 +97,75 @@ pub(super) fn read(path: &Path, options: &ReadOptions) -> Result<LoadedGraph> {
     view_graph(&db.file, rows.raw, &names, information, warnings)
 }
 
+/// The pairs' informations as `full` asks (`Some(true)`: read them, an error when none can
+/// be; `Some(false)`: none; `None`: read them where the database gives them, else none with
+/// the warning `database_without_information`), keeping in `rows` the pairs that have one;
+/// the warnings of the pairs skipped.
+fn information(
+    db: &Db,
+    rows: &mut Geometries,
+    full: Option<bool>,
+) -> Result<(Option<Vec<Information>>, Vec<Warning>)> {
+    let read = match full {
+        Some(false) => return Ok((None, Vec::new())),
+        Some(true) => two_view::informations(db, &rows.raw, &rows.poses),
+        None => match two_view::informations(db, &rows.raw, &rows.poses) {
+            Ok((kept, _, skipped)) if kept.is_empty() && skipped.0 > 0 => {
+                return Ok((None, vec![without_information(db, &skipped.1)]));
+            }
+            Err(Error::Parse { message, .. }) => {
+                let reason = message.trim_start_matches("--information full ");
+                return Ok((None, vec![without_information(db, reason)]));
+            }
+            read => read,
+        },
+    };
+    let (kept, info, skipped) = read?;
+    if kept.is_empty() && skipped.0 > 0 {
+        return Err(db.err(format!(
+            "--information full: none of the {} two-view geometries with a relative pose gives an information (first: {})",
+            skipped.0, skipped.1
+        )));
+    }
+    let mut kept = kept.into_iter().peekable();
+    let mut k = 0;
+    rows.raw.retain(|_| {
+        k += 1;
+        kept.next_if_eq(&(k - 1)).is_some()
+    });
+    let mut warnings = Vec::new();
+    if skipped.0 > 0 {
+        let message = format!(
+            "skipped {} two-view geometries whose inlier correspondences give no information (first: {})",
+            skipped.0, skipped.1
+        );
+        warnings.push(Warning::new("skipped_without_information", message).with_count(skipped.0));
+    }
+    Ok((Some(info), warnings))
+}
+
+/// The warning of `--information auto` on a database that gives no information (`reason`).
+fn without_information(db: &Db, reason: &str) -> Warning {
+    let message = format!(
+        "{}: no two-view information: {reason}; the pairs are weighed alike (weights 1). With \
+         information the robust default was the more accurate on most generated scenes \
+         (docs/benchmarks.md, \"The default against each robust loss a user can name\"); \
+         `--information kappa` reads weights 1 without this warning",
+        db.file
+    );
+    Warning::new("database_without_information", message)
+}
+
 /// The view graph of the edges kept, on the images they name (with their names), with
 /// `information` when given.
 fn view_graph(
     file: &str,
     raw: Vec<RawEdge>,
     names: &BTreeMap<u64, String>,
-    information: Option<Vec<crate::multiple::anisotropic::Information>>,
+    information: Option<Vec<Information>>,
     warnings: Vec<Warning>,
 ) -> Result<LoadedGraph> {
+    let anisotropic = information.is_some();
     let (ids, edges) = crate::io::compact_edges(raw, std::iter::empty());
     let node_names = ids
         .iter()
@@ -144,7 +188,11 @@ fn view_graph(
         warnings,
         format: GraphFormat::Colmap,
         planar: false,
-        read: Default::default(), // set by the caller (io::detect::load_graph)
+        // the caller (io::detect::load_graph) sets the options; this records what was read
+        read: ReadOptions {
+            full_information: Some(anisotropic),
+            ..Default::default()
+        },
     })
 }
 
@@ -396,7 +444,6 @@ pub(crate) mod rig;
 mod two_view {
     use super::*;
     use crate::io::two_view_information::{Camera, rotation_information};
-    use crate::multiple::anisotropic::Information;
     use nalgebra::{Vector2, Vector3};
     use rusqlite::Statement;
 
@@ -404,9 +451,9 @@ mod two_view {
     /// at most 8192 SIFT features per image by default); a larger count is an error.
     const MAX_ROWS: i64 = 10_000_000;
 
-    /// Edges kept (those with an information), their informations, and the number of
-    /// edges skipped with the first reason.
-    pub(super) type Informations = (Vec<RawEdge>, Vec<Information>, (usize, String));
+    /// The indices of the edges kept (those with an information), their informations, and
+    /// the number of edges skipped with the first reason.
+    pub(super) type Informations = (Vec<usize>, Vec<Information>, (usize, String));
 
     /// Normalised image points.
     type Points = Vec<Vector2<f64>>;
@@ -510,7 +557,7 @@ mod two_view {
 
     pub(super) fn informations(
         db: &Db,
-        raw: Vec<RawEdge>,
+        raw: &[RawEdge],
         poses: &[(i64, Option<[f64; 3]>)],
     ) -> Result<Informations> {
         let mut sources = Sources::new(db)?;
@@ -524,7 +571,7 @@ mod two_view {
             }
         };
         let mut first: Option<(u64, Keypoints)> = None;
-        for (edge, &(pair_id, tvec)) in raw.into_iter().zip(poses) {
+        for (k, (edge, &(pair_id, tvec))) in raw.iter().zip(poses).enumerate() {
             let at = format!(
                 "two_view_geometries row pair_id {pair_id} (images {}, {})",
                 edge.i, edge.j
@@ -550,7 +597,7 @@ mod two_view {
                 .and_then(|h| Information::new(h).map_err(|e| e.to_string()));
             match h {
                 Ok(h) => {
-                    kept.push(edge);
+                    kept.push(k);
                     info.push(h);
                 }
                 Err(reason) => skip(format!("{at}: {reason}")),

@@ -82,7 +82,7 @@
 //! // written as a COLMAP database that `rotavg multiple` reads
 //! let dir = std::env::temp_dir().join(format!("rotavg-doc-scene-{}", std::process::id()));
 //! scene.write(&dir)?;
-//! let options = rotavg::io::detect::ReadOptions { full_information: true, ..Default::default() };
+//! let options = rotavg::io::detect::ReadOptions { full_information: Some(true), ..Default::default() };
 //! let graph = rotavg::io::colmap::read_colmap_database(&dir.join("database.db"), &options)?;
 //! std::fs::remove_dir_all(&dir).unwrap();
 //! assert!(graph.problem.is_anisotropic());
