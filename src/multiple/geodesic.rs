@@ -281,7 +281,8 @@ impl<'a> Reweighted<'a> {
         })
     }
 
-    /// Backtracking along `R_i exp(t step_i)`: `t` halved from 1 until the cost does not
+    /// Backtracking along `R_i exp(t step_i)`: for L1 first at the over-relaxed `t =`
+    /// [`MultipleSettings::l1_overrelaxation`], then `t` halved from 1 until the cost does not
     /// increase (up to 30 halvings). Returns the point, its evaluation and `t`.
     fn backtrack(
         &self,
@@ -289,7 +290,11 @@ impl<'a> Reweighted<'a> {
         ev: &Eval,
         step: &[Vector3<f64>],
     ) -> Option<(Vec<Rotation>, Eval, f64)> {
-        let mut t = 1.0;
+        let over = match self.problem.objective().loss {
+            Loss::L1 => self.settings.l1_overrelaxation,
+            _ => 1.0,
+        };
+        let mut t = over;
         for _ in 0..30 {
             let cand: Vec<Rotation> = r
                 .iter()
@@ -300,7 +305,7 @@ impl<'a> Reweighted<'a> {
             if cev.cost <= ev.cost {
                 return Some((cand, cev, t));
             }
-            t *= 0.5;
+            t = if t > 1.0 { 1.0 } else { 0.5 * t };
         }
         None
     }

@@ -393,6 +393,54 @@ fn l1_stops_on_cost_decrease_near_the_long_run_cost() {
     );
 }
 
+/// `[M9]` over-relaxation: L1's IRLS with its default step multiple (1.8) and with the plain
+/// step (1.0) end at the same cost to 1e-4 relative (L1's IRLS stops at points that depend on
+/// its path by about that much: here the over-relaxed one 6.6e-5 lower) and as accurate against
+/// the planted truth (within 5 %) on a graph with 20 % outliers, the default in fewer
+/// iterations (150 against 319); multiples outside `[1, 2)` are refused.
+#[test]
+fn l1_over_relaxation_reaches_the_plain_steps_minimum_in_fewer_iterations() {
+    let (p, gt) = SyntheticGraph {
+        num_rotations: 200,
+        num_edges: 1000,
+        noise_sigma: 0.02,
+        outlier_fraction: 0.2,
+        seed: 5,
+    }
+    .generate();
+    let p = with(&p, GEODESIC_L1);
+    let plain = MultipleSettings {
+        l1_overrelaxation: 1.0,
+        ..Default::default()
+    };
+    let (fast, slow) = (
+        solve_multiple(&p, &MultipleSettings::default()).unwrap(),
+        solve_multiple(&p, &plain).unwrap(),
+    );
+    eprintln!("over-relaxed: {fast}\nplain: {slow}");
+    assert!(fast.report.termination.is_converged() && slow.report.termination.is_converged());
+    assert!(fast.report.iterations < slow.report.iterations);
+    assert!(
+        (fast.cost - slow.cost).abs() <= 1e-4 * slow.cost,
+        "{} vs {}",
+        fast.cost,
+        slow.cost
+    );
+    let errors = (
+        mean_error(&fast.rotations, &gt),
+        mean_error(&slow.rotations, &gt),
+    );
+    eprintln!("mean error against the truth: over-relaxed {errors:?}");
+    assert!(errors.0 <= 1.05 * errors.1, "{errors:?}");
+    for bad in [0.9, 2.0, f64::NAN] {
+        let s = MultipleSettings {
+            l1_overrelaxation: bad,
+            ..Default::default()
+        };
+        assert!(s.validate().is_err(), "{bad}");
+    }
+}
+
 #[test]
 fn robust_losses_reject_outliers() {
     for (seed, frac) in [(1u64, 0.1), (2, 0.2)] {
