@@ -6,7 +6,7 @@
 //! cargo run --release --example colmap_scene -- OUT_DIR [--cameras N] [--seed S] [--twisted F]
 //!     [--repeated F] [--near-pure F] [--wrong-matches F] [--pixel-sigma PX] [--focal PX]
 //!     [--points-per-facade N] [--cameras-per-site N] [--max-pairs N] [--min-common N]
-//!     [--symmetry DEG] [--settings FILE.json]
+//!     [--symmetry DEG] [--rig-sensors K] [--rig-yaw DEG] [--rig-known] [--settings FILE.json]
 //! rotavg multiple OUT_DIR/database.db --information full --ground-truth OUT_DIR/truth
 //! ```
 //!
@@ -31,6 +31,11 @@ fn parse(args: &[String]) -> rotavg::Result<(SfmScene, String)> {
         let flag = args[k].as_str();
         if !flag.starts_with("--") {
             out = Some(flag.to_string());
+            k += 1;
+            continue;
+        }
+        if flag == "--rig-known" {
+            s.rig_known = true;
             k += 1;
             continue;
         }
@@ -61,6 +66,9 @@ fn parse(args: &[String]) -> rotavg::Result<(SfmScene, String)> {
             "--max-pairs" => s.max_pairs_per_image = num()? as usize,
             "--min-common" => s.min_common = num()? as usize,
             "--symmetry" => s.symmetry_deg = num()?,
+            "--rig-sensors" => s.rig_sensors = num()? as usize,
+            "--rig-yaw" => s.rig_yaw_deg = num()?,
+
             other => return Err(bad(format!("unknown option {other}"))),
         }
         k += 2;

@@ -358,3 +358,96 @@ fn information_auto_reads_a_database_s_information_where_it_has_one() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("keypoints"));
 }
+
+/// A generated rig scene (`SfmScene::rig_sensors`): every frame's images are its sensors'
+/// (`R = S_s F_f`, `S_s = Rot(y, 30 s deg)`, checked on the generated views), the database
+/// carries COLMAP's rig tables, and `rotavg rig` recovers the unknown sensor within 0.5 degrees
+/// of the planted one and the frames within a median 0.5 degrees of `truth/rig.json` after
+/// alignment; with `rig_known` the database holds the planted `sensor_from_rig` (the sensors
+/// are then held). Out-of-range rigs are refused.
+#[test]
+fn rig_scenes_carry_their_rig() {
+    let s = SfmScene {
+        rig_sensors: 3,
+        ..settings(240, 11)
+    };
+    let scene = s.generate().unwrap();
+    let planted =
+        |k: usize| rotavg::so3::exp(&(nalgebra::Vector3::y() * (30.0 * k as f64).to_radians()));
+    for f in 0..80 {
+        for k in 0..3 {
+            let (image, frame) = (scene.views[3 * f + k].r, scene.views[3 * f].r);
+            assert!(angle_between(&image, &(planted(k) * frame)) < 1e-12);
+        }
+    }
+    for (known, name) in [(false, "rig"), (true, "rig_known")] {
+        let dir = folder(name);
+        let s = SfmScene {
+            rig_known: known,
+            ..s.clone()
+        };
+        s.generate().unwrap().write(&dir).unwrap();
+        let out = run(&[
+            "rig",
+            dir.join("database.db").to_str().unwrap(),
+            "--json",
+            "--certify",
+            "none",
+        ]);
+        assert_success(&out);
+        let json = json_of(&out);
+        let truth: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("truth/rig.json")).unwrap())
+                .unwrap();
+        let matrix = |v: &serde_json::Value| {
+            Rotation::from_matrix_unchecked(Matrix3::from_fn(|i, j| v[i][j].as_f64().unwrap()))
+        };
+        assert_eq!(json["sensor_ids"], serde_json::json!([1, 2, 3]));
+        let held = json["sensors_held"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|h| h.as_bool().unwrap())
+            .count();
+        assert_eq!(held, if known { 3 } else { 1 }, "{}", json["sensors_held"]);
+        for k in 0..3 {
+            let estimate = matrix(&json["sensors_from_rig"][k]);
+            assert!(
+                angle_between(&estimate, &planted(k)).to_degrees() < 0.5,
+                "sensor {k}"
+            );
+            assert!(angle_between(&matrix(&truth["sensors_from_rig"][k]), &planted(k)) < 1e-12);
+        }
+        let frames: Vec<Rotation> = (json["estimate"].as_array().unwrap().iter())
+            .map(matrix)
+            .collect();
+        let ids: Vec<usize> = (json["frame_ids"].as_array().unwrap().iter())
+            .map(|v| v.as_u64().unwrap() as usize)
+            .collect();
+        let true_frames: Vec<Option<Rotation>> = ids
+            .iter()
+            .map(|&f| Some(matrix(&truth["frames"][f - 1])))
+            .collect();
+        let accuracy =
+            rotavg::multiple::accuracy::align_and_compare(&frames, &true_frames).unwrap();
+        assert!(accuracy.median_deg < 0.5, "{}", accuracy.median_deg);
+    }
+    for bad in [0, 9] {
+        assert!(
+            SfmScene {
+                rig_sensors: bad,
+                ..settings(240, 11)
+            }
+            .validate()
+            .is_err()
+        );
+    }
+    assert!(
+        SfmScene {
+            rig_sensors: 3,
+            ..settings(5, 11)
+        }
+        .validate()
+        .is_err()
+    );
+}

@@ -23,6 +23,13 @@
 //!   principal point at the image centre). A fraction [`SfmScene::near_pure`] of the images are
 //!   *pans*: a copy of another camera moved by [`SfmScene::near_pure_baseline`] and turned by
 //!   5 to 12 degrees about its vertical axis.
+//! * **Rigs** ([`SfmScene::rig_sensors`] `K > 1`). The cameras above are the frames of a rig of
+//!   `K` cameras, `cameras / K` of them; sensor `s` is turned by `s x` [`SfmScene::rig_yaw_deg`]
+//!   about its `y` axis from sensor 0 and sits `0.1 s` m along the rig's `x` axis, so image
+//!   `f K + s` has `R = S_s F_f` (COLMAP's `cam_from_world = sensor_from_rig * rig_from_world`).
+//!   The database gets one camera per sensor and COLMAP's rig tables (`[F17]`), the
+//!   `sensor_from_rig` poses stored when [`SfmScene::rig_known`], else `NULL`; the truth adds
+//!   `rig.json` (frames, `sensors_from_rig`) for `rotavg rig`.
 //! * **Keypoints.** Each visible point (in front, within the image and 60 m, facade facing the
 //!   camera) is detected with probability [`SfmScene::detection_probability`], at its
 //!   projection plus Gaussian noise of [`SfmScene::pixel_sigma`] pixels per coordinate; a
@@ -154,6 +161,19 @@ pub struct SfmScene {
     pub near_pure_baseline: f64,
     /// The symmetry of the buildings (their repeated structure), degrees: 90 or 180.
     pub symmetry_deg: f64,
+    /// Cameras of a rig, 1 to 8 (default 1: no rig). With `K > 1` the scene is `cameras / K`
+    /// frames (at least 2), each taken by every camera of the rig (`K` images per frame, image
+    /// `k` of frame `k / K` and sensor `k % K`): sensor `s` turned by `s x rig_yaw_deg` about
+    /// the camera's `y` axis from sensor 0 (`sensor_from_rig = Rot(y, s x rig_yaw_deg)`, sensor
+    /// 0 the reference) and `0.1 s` metres along the rig's `x` axis. The database gets COLMAP's
+    /// rig tables (`rigs`, `rig_sensors`, `frames`, `frame_data`; `[F17]`) and one camera per
+    /// sensor, the truth `truth/rig.json` (frames and `sensors_from_rig`).
+    pub rig_sensors: usize,
+    /// The yaw between successive sensors of a rig, degrees (0 to 90).
+    pub rig_yaw_deg: f64,
+    /// Whether the database stores the rig's `sensor_from_rig` poses (known) or `NULL` (to be
+    /// calibrated, the default).
+    pub rig_known: bool,
 }
 
 impl Default for SfmScene {
@@ -178,6 +198,9 @@ impl Default for SfmScene {
             near_pure: 0.05,
             near_pure_baseline: 0.03,
             symmetry_deg: 90.0,
+            rig_sensors: 1,
+            rig_yaw_deg: 30.0,
+            rig_known: false,
         }
     }
 }
@@ -256,6 +279,9 @@ pub struct GeneratedScene {
     pub keypoints: Vec<Vec<[f32; 2]>>,
     /// The matched pairs, sorted by `(a, b)`.
     pub pairs: Vec<ScenePair>,
+    /// The rig's `sensor_from_rig` rotations (sensor 0 the identity), when
+    /// [`SfmScene::rig_sensors`] is more than 1.
+    pub sensors_from_rig: Option<Vec<Rotation>>,
 }
 
 /// Counts of a generated scene (the example's one-line summary).
@@ -361,11 +387,21 @@ impl SfmScene {
             ("repeated", self.repeated, 0.0, 1.0),
             ("near_pure", self.near_pure, 0.0, 0.5),
             ("near_pure_baseline", self.near_pure_baseline, 0.0, 1.0),
+            ("rig_yaw_deg", self.rig_yaw_deg, 0.0, 90.0),
         ];
         for (name, v, lo, hi) in reals {
             if !(v >= lo && v <= hi) {
                 return bad(name, format!("{v} is not in [{lo}, {hi}]"));
             }
+        }
+        if !(1..=8).contains(&self.rig_sensors) || self.cameras / self.rig_sensors < 2 {
+            return bad(
+                "rig_sensors",
+                format!(
+                    "{} sensors: 1 to 8, and at least 2 frames of them in the {} cameras",
+                    self.rig_sensors, self.cameras
+                ),
+            );
         }
         if self.symmetry_deg != 90.0 && self.symmetry_deg != 180.0 {
             return bad(
@@ -418,8 +454,17 @@ impl SfmScene {
     pub fn generate(&self) -> Result<GeneratedScene> {
         self.validate()?;
         let mut rng = StdRng::seed_from_u64(self.seed);
-        let world = World::new(self, &mut rng);
-        let (views, pan_of, site_of) = self.cameras_of(&mut rng);
+        // a rig's frames are placed as the cameras of a scene without rig (the same scene
+        // when there is none)
+        let frames = SfmScene {
+            cameras: self.cameras / self.rig_sensors,
+            ..self.clone()
+        };
+        let world = World::new(&frames, &mut rng);
+        let (views, pan_of, site_of) = match self.rig_sensors {
+            1 => frames.cameras_of(&mut rng),
+            _ => self.rig_images(frames.cameras_of(&mut rng)),
+        };
         let images: Vec<Image> = views
             .iter()
             .zip(&site_of)
@@ -433,7 +478,49 @@ impl SfmScene {
             pan_of,
             keypoints: images.into_iter().map(|i| i.pixels).collect(),
             pairs,
+            sensors_from_rig: (self.rig_sensors > 1).then(|| self.sensors_from_rig()),
         })
+    }
+
+    /// The rig's `sensor_from_rig` rotations: `Rot(y, s x rig_yaw_deg)`.
+    fn sensors_from_rig(&self) -> Vec<Rotation> {
+        (0..self.rig_sensors)
+            .map(|s| {
+                exp(&Vector3::new(
+                    0.0,
+                    (s as f64 * self.rig_yaw_deg).to_radians(),
+                    0.0,
+                ))
+            })
+            .collect()
+    }
+
+    /// Each sensor's centre in the rig's frame, metres: `0.1 s` along `x`.
+    pub(crate) fn rig_offset(s: usize) -> Vector3<f64> {
+        Vector3::new(0.1 * s as f64, 0.0, 0.0)
+    }
+
+    /// The images of the rig's `frames` (views, pan sources, sites): frame `f`'s sensor `s` is
+    /// image `f K + s`, rotation `S_s R_f`, centre `c_f + R_f^T o_s`; a pan frame's images are
+    /// pans of its source frame's.
+    fn rig_images(
+        &self,
+        frames: (Vec<View>, Vec<Option<usize>>, Vec<usize>),
+    ) -> (Vec<View>, Vec<Option<usize>>, Vec<usize>) {
+        let sensors = self.sensors_from_rig();
+        let k = sensors.len();
+        let (mut views, mut pan_of, mut site_of) = (Vec::new(), Vec::new(), Vec::new());
+        for (f, frame) in frames.0.iter().enumerate() {
+            for (s, sensor) in sensors.iter().enumerate() {
+                views.push(View {
+                    r: sensor * frame.r,
+                    c: frame.c + frame.r.transpose() * Self::rig_offset(s),
+                });
+                pan_of.push(frames.1[f].map(|src| src * k + s));
+                site_of.push(frames.2[f]);
+            }
+        }
+        (views, pan_of, site_of)
     }
 
     /// The cameras: each site's orbit and street cameras, then the pans; with each image's pan
@@ -1054,6 +1141,12 @@ impl GeneratedScene {
             height: s.height_px as u64,
             params: vec![cam.focal.x, cam.focal.y, cam.principal.x, cam.principal.y],
         };
+        let cameras: Vec<ColmapCamera> = (0..s.rig_sensors)
+            .map(|k| ColmapCamera {
+                camera_id: k as u32 + 1,
+                ..camera.clone()
+            })
+            .collect();
         let mut images = String::from(
             "# Image list with two lines of data per image:\n\
              #   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n\
@@ -1065,19 +1158,33 @@ impl GeneratedScene {
             let t = -(v.r * v.c);
             let _ = writeln!(
                 images,
-                "{} {w} {x} {y} {z} {} {} {} 1 {}\n",
+                "{} {w} {x} {y} {z} {} {} {} {} {}\n",
                 k + 1,
                 t.x,
                 t.y,
                 t.z,
+                k % s.rig_sensors + 1,
                 self.name(k)
             );
         }
-        for (name, text) in [
-            ("cameras.txt", write_cameras_text(&[camera])),
+        let mut files = vec![
+            ("cameras.txt", write_cameras_text(&cameras)),
             ("images.txt", images),
             ("points3D.txt", empty_points3d_text().to_string()),
-        ] {
+        ];
+        if let Some(sensors) = &self.sensors_from_rig {
+            let frames: Vec<Rotation> = self
+                .views
+                .iter()
+                .step_by(sensors.len())
+                .map(|v| v.r)
+                .collect();
+            files.push((
+                "rig.json",
+                crate::io::rig::write_rig_truth_json(&frames, sensors),
+            ));
+        }
+        for (name, text) in files {
             let path = dir.join(name);
             std::fs::write(&path, text).map_err(|e| io(&path, e))?;
         }

@@ -59,18 +59,24 @@ pub(super) fn write_database(scene: &GeneratedScene, path: &Path) -> Result<()> 
     let tx = db.transaction().map_err(sql)?;
     let s: &SfmScene = &scene.settings;
     let cam = s.camera();
-    tx.execute(
-        "INSERT INTO cameras VALUES (1, 1, ?1, ?2, ?3, 1)",
-        rusqlite::params![
-            s.width_px,
-            s.height_px,
-            f64s(&[cam.focal.x, cam.focal.y, cam.principal.x, cam.principal.y])
-        ],
-    )
-    .map_err(sql)?;
+    for sensor in 0..s.rig_sensors {
+        tx.execute(
+            "INSERT INTO cameras VALUES (?1, 1, ?2, ?3, ?4, 1)",
+            rusqlite::params![
+                sensor + 1,
+                s.width_px,
+                s.height_px,
+                f64s(&[cam.focal.x, cam.focal.y, cam.principal.x, cam.principal.y])
+            ],
+        )
+        .map_err(sql)?;
+    }
+    if let Some(sensors) = &scene.sensors_from_rig {
+        write_rig(&tx, s, sensors, scene.keypoints.len()).map_err(sql)?;
+    }
     {
         let mut image = tx
-            .prepare("INSERT INTO images (image_id, name, camera_id) VALUES (?1, ?2, 1)")
+            .prepare("INSERT INTO images (image_id, name, camera_id) VALUES (?1, ?2, ?3)")
             .map_err(sql)?;
         let mut keypoints = tx
             .prepare("INSERT INTO keypoints VALUES (?1, ?2, 6, ?3)")
@@ -79,7 +85,7 @@ pub(super) fn write_database(scene: &GeneratedScene, path: &Path) -> Result<()> 
         for (k, pixels) in scene.keypoints.iter().enumerate() {
             let id = k as i64 + 1;
             image
-                .execute(rusqlite::params![id, scene.name(k)])
+                .execute(rusqlite::params![id, scene.name(k), k % s.rig_sensors + 1])
                 .map_err(sql)?;
             let blob = keypoint_blob(pixels, &mut shapes);
             keypoints
@@ -113,6 +119,47 @@ pub(super) fn write_database(scene: &GeneratedScene, path: &Path) -> Result<()> 
     }
     tx.commit().map_err(sql)
 }
+
+/// COLMAP's rig tables (`[F17]`) for `images` images of a rig with `sensors` (camera `s + 1`
+/// is sensor `s`; frame `f + 1` holds images `f K + 1 ..= f K + K`): known `sensor_from_rig`
+/// poses (`Rigid3d`: `w x y z`, then `t = -S_s o_s`) or `NULL`.
+fn write_rig(
+    tx: &rusqlite::Transaction<'_>,
+    s: &SfmScene,
+    sensors: &[crate::so3::Rotation],
+    images: usize,
+) -> rusqlite::Result<()> {
+    tx.execute_batch(RIG_SCHEMA)?;
+    tx.execute("INSERT INTO rigs VALUES (1, 1, 0)", [])?;
+    for (k, sensor) in sensors.iter().enumerate().skip(1) {
+        let t = -(sensor * SfmScene::rig_offset(k));
+        let pose = [wxyz(sensor).as_slice(), t.as_slice()].concat();
+        let blob = s.rig_known.then(|| f64s(&pose));
+        tx.execute(
+            "INSERT INTO rig_sensors VALUES (1, ?1, 0, ?2)",
+            rusqlite::params![k + 1, blob],
+        )?;
+    }
+    let k = sensors.len();
+    for f in 0..images / k {
+        tx.execute("INSERT INTO frames VALUES (?1, 1)", [f + 1])?;
+        for sensor in 0..k {
+            tx.execute(
+                "INSERT INTO frame_data VALUES (?1, ?2, ?3, 0)",
+                [f + 1, f * k + sensor + 1, sensor + 1],
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// COLMAP's rig tables (as COLMAP 3.12 and later create them).
+const RIG_SCHEMA: &str = "\
+CREATE TABLE IF NOT EXISTS rigs (rig_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, ref_sensor_id INTEGER NOT NULL, ref_sensor_type INTEGER NOT NULL);
+CREATE TABLE IF NOT EXISTS rig_sensors (rig_id INTEGER NOT NULL, sensor_id INTEGER NOT NULL, sensor_type INTEGER NOT NULL, sensor_from_rig BLOB, FOREIGN KEY(rig_id) REFERENCES rigs(rig_id) ON DELETE CASCADE);
+CREATE TABLE IF NOT EXISTS frames (frame_id INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, rig_id INTEGER NOT NULL, FOREIGN KEY(rig_id) REFERENCES rigs(rig_id) ON DELETE CASCADE);
+CREATE TABLE IF NOT EXISTS frame_data (frame_id INTEGER NOT NULL, data_id INTEGER NOT NULL, sensor_id INTEGER NOT NULL, sensor_type INTEGER NOT NULL, FOREIGN KEY(frame_id) REFERENCES frames(frame_id) ON DELETE CASCADE);
+";
 
 #[derive(Serialize)]
 struct ImageLabel {
