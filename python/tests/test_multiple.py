@@ -444,3 +444,19 @@ def test_certify_multiple_takes_the_nearest_rotations_of_a_mirrored_estimate(rng
     mixed[4] = -mixed[4]
     with pytest.raises(rotavg.Error, match="1 of its 30 matrices are reflections"):
         rotavg.certify_multiple(30, i, j, rel, mixed, nearest_rotations=True)
+
+
+def test_a_colmap_database_is_read_with_its_information_by_default(cli):
+    """``read_graph(information="auto")`` (the default) reads the committed scene's two-view
+    information from its correspondences: the command line's default run to the last digit;
+    ``information="kappa"`` reads weights 1."""
+    import pathlib
+
+    db = pathlib.Path(__file__).resolve().parents[2] / "examples" / "data" / "colmap_scene" / "database.db"
+    ours = rotavg.average_multiple(rotavg.read_graph(db), certify="none").to_dict()
+    theirs = cli("multiple", db, "--certify", "none")
+    assert ours["information"] and ours["information"] == theirs["information"]
+    assert ours["cost"] == theirs["cost"]
+    assert theirs["input"]["read"]["full_information"] is True
+    plain = rotavg.average_multiple(rotavg.read_graph(db, information="kappa"), certify="none")
+    assert not plain.to_dict().get("information")
