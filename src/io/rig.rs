@@ -255,11 +255,7 @@ pub fn read_colmap_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> 
         // made the frames 1.8-2.5x more accurate but the estimated sensors 1.3-11x less, and the
         // certificate slower, up to `gap_reported` after 320 s (`docs/benchmarks.md`, "Rigs
         // with their information")
-        let options = ReadOptions {
-            full_information: Some(options.full_information == Some(true)),
-            ..*options
-        };
-        let graph = crate::io::colmap::read_colmap_database(path, &options)?;
+        let graph = crate::io::colmap::read_colmap_database(path, &options.scalar_by_default())?;
         let layout =
             crate::io::colmap::database::rig::rig_layout(path, options.quaternion_tolerance)?;
         rig_of_layout(&graph, &layout.images, &layout.sensors).map_err(|e| e.in_file(&file, None))

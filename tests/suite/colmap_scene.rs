@@ -307,7 +307,7 @@ fn robust_loss_beats_least_squares_on_a_scene() {
 /// `--information auto` (the default) on a COLMAP database: the committed 36-image scene is
 /// read with its pairs' information, the problem of `--information full` to the last digit of
 /// the cost, and `input.read.full_information` says so; `--information kappa` reads weights 1
-/// without a warning. A copy without the table `keypoints` is read with weights 1 and the
+/// without a warning, and so does `certify` under auto. A copy without the table `keypoints` is read with weights 1 and the
 /// warning `database_without_information` naming the table, on stderr and in the JSON, where
 /// `--information full` is an error naming it.
 #[test]
@@ -334,6 +334,38 @@ fn information_auto_reads_a_database_s_information_where_it_has_one() {
     assert_eq!(auto_cost, full_cost);
     let (full, warned, stderr, _) = report(db, &["--information", "kappa"]);
     assert!(!full && !warned, "{stderr}");
+    // `certify` (as rigs) reads weights 1 under auto (`ReadOptions::scalar_by_default`)
+    let estimate = temp_dir().join("colmap_scene_auto_estimate.json");
+    let estimate = estimate.to_str().unwrap();
+    assert_success(&run(&[
+        "multiple",
+        db,
+        "--certify",
+        "none",
+        "--output",
+        estimate,
+    ]));
+    for (extra, read) in [(&[][..], false), (&["--information", "full"], true)] {
+        let out = run(&[
+            &[
+                "certify",
+                db,
+                "--estimate",
+                estimate,
+                "--json",
+                "--certify",
+                "dual",
+            ],
+            extra,
+        ]
+        .concat());
+        assert_success(&out);
+        assert_eq!(
+            json_of(&out)["input"]["read"]["full_information"],
+            read,
+            "{extra:?}"
+        );
+    }
 
     let copy = temp_dir().join("colmap_scene_without_keypoints.db");
     std::fs::copy(db, &copy).unwrap();

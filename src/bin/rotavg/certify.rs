@@ -117,7 +117,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
     let inlier_threshold = args
         .loss
         .certify_inlier_threshold_deg(args.loss_threshold, args.inlier_threshold)?;
-    let options = args.graph.read_options(&args.common);
+    let options = args.graph.read_options(&args.common).scalar_by_default();
     let (input, problem) = load_certify_problem(
         args.input.as_deref(),
         args.graph.format,
@@ -183,7 +183,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
 
 /// `--left`: certify a rig estimate (frames and `sensor_from_rig`) on the two view graphs.
 fn certify_rig(args: &Args, left_path: &str) -> Result<Outcome> {
-    let options = args.graph.read_options(&args.common);
+    let options = args.graph.read_options(&args.common).scalar_by_default();
     let right_path = args.input.clone().unwrap_or_else(|| "-".into());
     let right =
         rotavg::io::detect::load_graph(Path::new(&right_path), args.graph.format, &options)?;
@@ -212,7 +212,7 @@ fn certify_rig(args: &Args, left_path: &str) -> Result<Outcome> {
 
 /// `--rig`: certify a rig file's estimate (frames and every sensor's `sensor_from_rig`).
 fn certify_rig_file(args: &Args) -> Result<Outcome> {
-    let options = args.graph.read_options(&args.common);
+    let options = args.graph.read_options(&args.common).scalar_by_default();
     let input = args.input.clone().unwrap_or_else(|| "-".into());
     let rig = rotavg::io::rig::load_rig(Path::new(&input), &options)?;
     let rig = args.gravity.apply_to_rig(rig)?;

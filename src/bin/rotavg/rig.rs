@@ -68,7 +68,7 @@ pub fn run(args: &Args) -> Result<Outcome> {
     };
     let rig_loss = loss(args)?;
     let input = format!("{} and {left}", args.right);
-    let options = args.graph.read_options(&args.common);
+    let options = args.graph.read_options(&args.common).scalar_by_default();
     let right = load_graph(Path::new(&args.right), args.graph.format, &options)?;
     let left = load_graph(Path::new(left), args.graph.format, &options)?;
     let certify = args.graph.settings(&args.common, &Default::default());
