@@ -383,7 +383,9 @@ fn information_auto_reads_a_database_s_information_where_it_has_one() {
         .join(" ");
     assert!(text.contains("warning:"), "{text}");
     assert!(
-        text.contains("no two-view information: needs the table `keypoints`"),
+        text.contains(
+            "no two-view information: the pairs' information needs the table `keypoints`"
+        ),
         "{text}"
     );
     let out = run(&["multiple", copy, "--information", "full"]);

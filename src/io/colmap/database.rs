@@ -114,8 +114,7 @@ fn information(
                 return Ok((None, vec![without_information(db, &skipped.1)]));
             }
             Err(Error::Parse { message, .. }) => {
-                let reason = message.trim_start_matches("--information full ");
-                return Ok((None, vec![without_information(db, reason)]));
+                return Ok((None, vec![without_information(db, &message)]));
             }
             read => read,
         },
@@ -486,7 +485,7 @@ mod two_view {
                     "SELECT rows, cols, CASE WHEN rows <= {MAX_ROWS} AND cols IN (2, 4, 6) \
                      AND length(data) = 4 * rows * cols THEN data END FROM keypoints WHERE image_id = ?1"
                 ))
-                .map_err(|e| db.err(format!("--information full needs the table `keypoints` ({e})")))?;
+                .map_err(|e| db.err(format!("the pairs' information needs the table `keypoints` ({e})")))?;
             let matches = db
                 .conn
                 .prepare(&format!(
@@ -578,7 +577,7 @@ mod two_view {
             );
             let t = tvec.ok_or_else(|| {
                 db.err(format!(
-                    "{at}: no tvec: --information full needs the relative translation"
+                    "{at}: no tvec: the pair's information needs the relative translation"
                 ))
             })?;
             let cameras = (sources.camera(edge.i)?, sources.camera(edge.j)?);
