@@ -238,15 +238,23 @@ pub fn rotations_array<'py>(
     py: Python<'py>,
     rotations: &[Rotation],
 ) -> PyResult<Bound<'py, PyAny>> {
-    let mut values = Vec::with_capacity(9 * rotations.len());
-    for r in rotations {
-        let m = r.matrix();
+    matrices_array(py, rotations.iter().map(Rotation::matrix))
+}
+
+/// `3 x 3` matrices as an `(N, 3, 3)` float64 array (row-major).
+pub fn matrices_array<'py, 'm>(
+    py: Python<'py>,
+    matrices: impl ExactSizeIterator<Item = &'m Matrix3<f64>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let count = matrices.len();
+    let mut values = Vec::with_capacity(9 * count);
+    for m in matrices {
         for row in 0..3 {
             values.extend((0..3).map(|col| m[(row, col)]));
         }
     }
     Ok(PyArray1::from_vec(py, values)
-        .reshape([rotations.len(), 3, 3])?
+        .reshape([count, 3, 3])?
         .into_any())
 }
 

@@ -3,7 +3,7 @@
 //! `to_dict()` / `to_json()` serialise it with serde, so they are exactly the objects the command
 //! line prints with `--json`.
 
-use crate::convert::{optional_rotations_array, rotation_array, rotations_array};
+use crate::convert::{matrices_array, optional_rotations_array, rotation_array, rotations_array};
 use crate::truth::Accuracy;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
@@ -552,8 +552,10 @@ impl RunResult {
 /// file's id of each node), ``format``, ``warnings``, ``initial`` (the vertex rotations of a
 /// g2o file as this crate's ``R_i``, or None), ``other_components`` (sizes of components dropped by
 /// ``largest_component=True``), ``truth`` (the ground truth read with
-/// ``read_graph(..., ground_truth=GT)``, ``(n, 3, 3)`` with NaN where unknown, or None).
-/// Passing the graph itself, ``average_multiple(g)``, solves exactly what the command line
+/// ``read_graph(..., ground_truth=GT)``, ``(n, 3, 3)`` with NaN where unknown, or None),
+/// ``information`` (each edge's ``3 x 3`` information matrix when read with anisotropic
+/// information, ``(M, 3, 3)``, else None: ``average_multiple(g.n, g.i, g.j, g.rel,
+/// information=g.information)`` is then the same problem). Passing the graph itself, ``average_multiple(g)``, solves exactly what the command line
 /// solves for the file (same numbers, same ``--json`` object, with the accuracy against the
 /// ground truth when one was read).
 #[pyclass(name = "Graph", module = "rotavg", frozen)]
@@ -591,6 +593,11 @@ pub struct Graph {
     /// Ground truth of each node (``(n, 3, 3)``, NaN where unknown), or None.
     #[pyo3(get, name = "truth")]
     truth_array: Option<Py<PyAny>>,
+    /// Each edge's ``3 x 3`` information matrix ``H`` (``(M, 3, 3)`` float64) when the graph
+    /// was read with anisotropic information, or None (the weights are then the whole story,
+    /// as for information that is exactly ``w I``).
+    #[pyo3(get)]
+    information: Option<Py<PyAny>>,
 }
 
 impl Graph {
@@ -632,6 +639,11 @@ impl Graph {
             truth_array: truth
                 .as_ref()
                 .map(|t| optional_rotations_array(py, t).and_then(arr))
+                .transpose()?,
+            information: loaded
+                .problem
+                .information()
+                .map(|h| matrices_array(py, h.iter().map(|h| h.matrix())).and_then(arr))
                 .transpose()?,
             truth,
             read_ids,

@@ -460,3 +460,21 @@ def test_a_colmap_database_is_read_with_its_information_by_default(cli):
     assert theirs["input"]["read"]["full_information"] is True
     plain = rotavg.average_multiple(rotavg.read_graph(db, information="kappa"), certify="none")
     assert not plain.to_dict().get("information")
+
+
+def test_a_graph_shows_the_information_it_was_read_with():
+    """``Graph.information``: the ``(M, 3, 3)`` matrices read from the committed database
+    (symmetric, positive semidefinite), the same problem as the graph itself when passed as
+    arrays; None with weights 1."""
+    import pathlib
+
+    db = pathlib.Path(__file__).resolve().parents[2] / "examples" / "data" / "colmap_scene" / "database.db"
+    g = rotavg.read_graph(db)
+    h = g.information
+    assert h is not None and h.shape == (g.num_edges, 3, 3) and not h.flags.writeable
+    assert np.allclose(h, np.transpose(h, (0, 2, 1)), rtol=0, atol=1e-9 * np.abs(h).max())
+    assert np.linalg.eigvalsh(h).min() >= -1e-9 * np.abs(h).max()
+    whole = rotavg.average_multiple(g, loss="chordal", certify="none")
+    arrays = rotavg.average_multiple(g.n, g.i, g.j, g.rel, information=h, loss="chordal", certify="none")
+    assert arrays.cost == whole.cost
+    assert rotavg.read_graph(db, information="kappa").information is None
