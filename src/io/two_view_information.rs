@@ -2,8 +2,10 @@
 //! the cameras (`paper-notes/formats.md` `[F13]`; as in Zhang, Larsson, Barath et al.,
 //! "Revisiting Rotation Averaging: Uncertainties and Robust Losses", CVPR 2023): the Fisher
 //! information of the relative pose under isotropic pixel noise, its rotation block
-//! marginalised over the translation direction (a Schur complement). Used by the COLMAP reader
-//! with `--information full` ([`crate::io::colmap`]).
+//! marginalised over the translation direction (a Schur complement), deflated where that
+//! direction is uncertain ([`TRANSLATION_ALLOWANCE`]). Used by the COLMAP reader with
+//! `--information auto|full` ([`crate::io::colmap`]), which also scales each pair by its residuals
+//! over the median pair's ([`scaled_by_residuals`]).
 //!
 //! The relative pose `(R, t)` maps camera 1's frame to camera 2's (`x_2 = R x_1 + t`, COLMAP's
 //! `cam2_from_cam1`), and the residual `e` of this crate's anisotropic model is the right
@@ -26,7 +28,7 @@
 //!     x1.push(Vector2::new(p.x / p.z, p.y / p.z));
 //!     x2.push(Vector2::new(q.x / q.z, q.y / q.z));
 //! }
-//! let h = rotation_information(&r, &t, &x1, &x2, &cam, &cam)?;
+//! let h = rotation_information(&r, &t, &x1, &x2, &cam, &cam)?.matrix;
 //! let eig = h.symmetric_eigenvalues();
 //! assert!(eig.min() > 0.0);
 //! // the rotation about the viewing axis (z) is the best determined
@@ -175,8 +177,21 @@ pub const MIN_CORRESPONDENCES: usize = 5;
 /// (`tests/suite/colmap.rs`).
 pub const TRANSLATION_ALLOWANCE: f64 = 4.0 * std::f64::consts::PI / 180.0;
 
-/// The information `H` (3x3, `pixel^-2`) of the right perturbation `e` of the relative
-/// rotation `R` (`R_true = R exp([e]x)`), from the normalised, undistorted correspondences
+/// A pair's rotation information with the variance its residuals show ([`rotation_information`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairInformation {
+    /// `H`, as [`rotation_information`] returns it (noise of 1 pixel).
+    pub matrix: Matrix3<f64>,
+    /// The a-posteriori variance factor of the correspondences at the stored pose, pixels^2
+    /// per keypoint coordinate (1 where the noise is the model's 1 pixel): the Sampson errors'
+    /// `sum s_k^2 / (n - 5)`, or for `t = 0` the transfer residuals' `sum |r_k|^2 / 2` over
+    /// `2 n - 3`; 0 without redundancy.
+    pub residual_variance: f64,
+}
+
+/// The information `H` (3x3, `pixel^-2`, [`PairInformation::matrix`]) of the right
+/// perturbation `e` of the relative rotation `R` (`R_true = R exp([e]x)`), from the
+/// normalised, undistorted correspondences
 /// `x1[k] <-> x2[k]` (`z = 1` plane) of cameras `c1`, `c2` and the relative pose
 /// `x_2 = R x_1 + t` (`[F13]`):
 ///
@@ -186,7 +201,9 @@ pub const TRANSLATION_ALLOWANCE: f64 = 4.0 * std::f64::consts::PI / 180.0;
 ///   `sum J^T J / d^2` (`d` the Sampson denominator in pixels), divided by
 ///   `sqrt(1 + sigma_tau^2 / TRANSLATION_ALLOWANCE^2)` ([`TRANSLATION_ALLOWANCE`]);
 /// - `t = 0` (a pure rotation, COLMAP's panoramic pairs): the transfer error
-///   `pi(R x_1) - x_2` in pixels of camera 2, with variance 2 (noise in both images).
+///   `pi(R x_1) - x_2` in pixels of camera 2, with variance 2 (noise in both images);
+///
+/// and the residuals' variance ([`PairInformation::residual_variance`]).
 ///
 /// Errors (the reason, for the reader's message): fewer than [`MIN_CORRESPONDENCES`]
 /// correspondences, a non-finite value, or a translation direction the correspondences do not
@@ -198,7 +215,7 @@ pub fn rotation_information(
     x2: &[Vector2<f64>],
     c1: &Camera,
     c2: &Camera,
-) -> Result<Matrix3<f64>, String> {
+) -> Result<PairInformation, String> {
     if x1.len() != x2.len() || x1.len() < MIN_CORRESPONDENCES {
         return Err(format!(
             "{} correspondences (at least {MIN_CORRESPONDENCES} are needed)",
@@ -206,16 +223,52 @@ pub fn rotation_information(
         ));
     }
     let rm = r.matrix();
-    let h = if t.norm() == 0.0 {
-        transfer_information(rm, x1, c2)
+    let views = Views { x1, x2, c1, c2 };
+    let p = if t.norm() == 0.0 {
+        transfer_information(rm, &views)
     } else {
-        epipolar_information(rm, &t.normalize(), &Views { x1, x2, c1, c2 })?
+        epipolar_information(rm, &t.normalize(), &views)?
     };
-    if !h.iter().all(|v| v.is_finite()) {
+    if !p.matrix.iter().all(|v| v.is_finite()) || !p.residual_variance.is_finite() {
         return Err("the information is not finite".into());
     }
     // exactly symmetric (the Schur complement is, up to rounding)
-    Ok((h + h.transpose()) * 0.5)
+    Ok(PairInformation {
+        matrix: (p.matrix + p.matrix.transpose()) * 0.5,
+        ..p
+    })
+}
+
+/// Each pair's information in units of its own noise where that is above the typical pair's
+/// (`[F13]` "Each pair's residuals"): `H / max(1, v / median v)` with `v` the pairs'
+/// [`PairInformation::residual_variance`]. A pair whose correspondences scatter more than the
+/// median pair's (wrong matches kept among its inliers, a worse detector response) is trusted
+/// that much less; none is trusted more than its 1-pixel model. Without a positive median
+/// (no redundancy anywhere) the matrices are returned as they are.
+///
+/// ```
+/// use nalgebra::Matrix3;
+/// use rotavg::io::two_view_information::{PairInformation, scaled_by_residuals};
+/// let pair = |v| PairInformation { matrix: Matrix3::identity(), residual_variance: v };
+/// let h = scaled_by_residuals(&[pair(0.5), pair(2.0), pair(8.0)]);
+/// assert_eq!(h[0], Matrix3::identity()); // quieter than the median pair: as it is
+/// assert_eq!(h[1], Matrix3::identity());
+/// assert_eq!(h[2], Matrix3::identity() / 4.0); // four times the median's variance
+/// ```
+pub fn scaled_by_residuals(pairs: &[PairInformation]) -> Vec<Matrix3<f64>> {
+    let mut variances: Vec<f64> = pairs.iter().map(|p| p.residual_variance).collect();
+    let middle = variances.len() / 2;
+    let median = match variances.is_empty() {
+        true => 0.0,
+        false => *variances.select_nth_unstable_by(middle, f64::total_cmp).1,
+    };
+    pairs
+        .iter()
+        .map(|p| match median > 0.0 {
+            true => p.matrix / (p.residual_variance / median).max(1.0),
+            false => p.matrix,
+        })
+        .collect()
 }
 
 /// The correspondences `x1[k] <-> x2[k]` of two views and their cameras.
@@ -402,11 +455,12 @@ fn epipolar_information(
     r: &Matrix3<f64>,
     t: &Vector3<f64>,
     views: &Views<'_>,
-) -> Result<Matrix3<f64>, String> {
+) -> Result<PairInformation, String> {
     let Views { x1, x2, c1, c2 } = views;
     let [b1, b2] = tangent_basis(t);
     let e = crate::so3::hat(t) * r;
     let mut fisher = SMatrix::<f64, 5, 5>::zeros();
+    let mut squares = Residuals::default();
     for (p, q) in x1.iter().zip(x2.iter()) {
         let (p, q) = (p.push(1.0), q.push(1.0));
         let (ep, etq) = (e * p, e.transpose() * q);
@@ -425,6 +479,7 @@ fn epipolar_information(
         let m = (r * p).cross(&q);
         let j = nalgebra::Vector5::new(de.x, de.y, de.z, b1.dot(&m), b2.dot(&m));
         fisher += j * j.transpose() / d2;
+        squares.add(q.dot(&ep).powi(2) / d2, 1);
     }
     let a = fisher.fixed_view::<3, 3>(0, 0).into_owned();
     let b = fisher.fixed_view::<3, 2>(0, 3).into_owned();
@@ -440,7 +495,10 @@ fn epipolar_information(
     })?;
     let variance = translation_variance(&a, &b, &c);
     let deflation = (1.0 + variance / TRANSLATION_ALLOWANCE.powi(2)).sqrt();
-    Ok((a - b * c_inv * b.transpose()) / deflation)
+    Ok(PairInformation {
+        matrix: (a - b * c_inv * b.transpose()) / deflation,
+        residual_variance: squares.variance(5),
+    })
 }
 
 /// The largest marginal variance of the translation direction (radians^2) under the Fisher
@@ -461,14 +519,18 @@ fn translation_variance(a: &Matrix3<f64>, b: &SMatrix<f64, 3, 2>, c: &Matrix2<f6
 }
 
 /// The observations `x2` do not enter: the transfer residual's derivative depends on `x1` only.
-fn transfer_information(r: &Matrix3<f64>, x1: &[Vector2<f64>], c2: &Camera) -> Matrix3<f64> {
-    let mut h = Matrix3::zeros();
-    for p in x1 {
+fn transfer_information(r: &Matrix3<f64>, views: &Views<'_>) -> PairInformation {
+    let (c2, mut h) = (views.c2, Matrix3::zeros());
+    let mut squares = Residuals::default();
+    for (p, q) in views.x1.iter().zip(views.x2.iter()) {
         let p = p.push(1.0);
         let u = r * p;
         if u.z <= 0.0 {
             continue;
         }
+        // the residual in pixels, each coordinate of variance 2 under the model
+        let residual = (u.xy() / u.z - q).component_mul(&c2.focal);
+        squares.add(residual.norm_squared() / 2.0, 2);
         // pixels of pi(R exp([e]x) x1): d/de = diag(f) dpi/du (-R [x1]x)
         let dpi = nalgebra::Matrix2x3::new(
             c2.focal.x / u.z,
@@ -481,7 +543,32 @@ fn transfer_information(r: &Matrix3<f64>, x1: &[Vector2<f64>], c2: &Camera) -> M
         let j = dpi * (-(r * crate::so3::hat(&p)));
         h += j.transpose() * j / 2.0;
     }
-    h
+    PairInformation {
+        matrix: h,
+        residual_variance: squares.variance(3),
+    }
+}
+
+/// Sums of squared residuals and their count, for the a-posteriori variance factor.
+#[derive(Default)]
+struct Residuals {
+    sum: f64,
+    count: usize,
+}
+
+impl Residuals {
+    fn add(&mut self, square: f64, count: usize) {
+        self.sum += square;
+        self.count += count;
+    }
+
+    /// `sum / (count - parameters)` (0 without redundancy).
+    fn variance(&self, parameters: usize) -> f64 {
+        match self.count.checked_sub(parameters) {
+            Some(dof) if dof > 0 => self.sum / dof as f64,
+            _ => 0.0,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -530,7 +617,9 @@ mod tests {
             .map(|k| Vector2::new((k % 3) as f64 * 0.1 - 0.1, (k / 3) as f64 * 0.1 - 0.1))
             .collect();
         let x2 = x1.clone();
-        let h = rotation_information(&r, &Vector3::zeros(), &x1, &x2, &cam, &cam).unwrap();
+        let h = rotation_information(&r, &Vector3::zeros(), &x1, &x2, &cam, &cam)
+            .unwrap()
+            .matrix;
         assert!(h.symmetric_eigenvalues().min() > 0.0);
         let err = rotation_information(&r, &Vector3::x(), &x1[..4], &x2[..4], &cam, &cam);
         assert!(err.unwrap_err().contains("at least 5"));

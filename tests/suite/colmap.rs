@@ -770,7 +770,9 @@ fn whitened_rotation_covariance(centre: Vector3<f64>, seed: u64) -> Vector3<f64>
         }
     }
     let cam = Camera::pinhole(f, f, 0.0, 0.0);
-    let h = rotation_information(&r, &t, &x1, &x2, &cam, &cam).unwrap();
+    let h = rotation_information(&r, &t, &x1, &x2, &cam, &cam)
+        .unwrap()
+        .matrix;
     let gauss = |rng: &mut StdRng| rotavg::so3::gaussian(rng);
     let mut c = Matrix3::zeros();
     let trials = 400;
@@ -802,8 +804,9 @@ fn whitened_rotation_covariance(centre: Vector3<f64>, seed: u64) -> Vector3<f64>
 /// rows of 6 float32 as SIFT's), inlier matches and relative poses estimated from noisy
 /// correspondences: `--information full` gives each edge the information of its
 /// correspondences (the crate's function on the test's own undistorted points, to the float32
-/// rounding of the stored pixels), and the anisotropic estimate is more accurate than the
-/// default weights 1.
+/// rounding of the stored pixels), divided by its Sampson errors' variance over the median
+/// pair's where that is above 1 (the test's own residuals), and the anisotropic estimate is
+/// more accurate than the default weights 1.
 #[test]
 fn database_information_from_correspondences() {
     let mut rng = StdRng::seed_from_u64(6);
@@ -895,7 +898,17 @@ fn database_information_from_correspondences() {
             let px = |x: &[Vector2<f64>]| x.iter().map(|p| p * f).collect::<Vec<_>>();
             let (r, t) = estimate_pose(&r0, &t0, &px(&x1), &px(&x2), f);
             let cam = Camera::pinhole(f, f, 0.0, 0.0);
-            expected.push(rotation_information(&r, &t, &x1, &x2, &cam, &cam).unwrap());
+            // the a-posteriori variance of the pair's Sampson errors (the test's own
+            // textbook form), for `[F13]` "Each pair's residuals"
+            let squares: f64 = x1
+                .iter()
+                .zip(&x2)
+                .map(|(p, q)| sampson_px(r.matrix(), &t, &(p * f), &(q * f), f).powi(2))
+                .sum();
+            let h = rotation_information(&r, &t, &x1, &x2, &cam, &cam)
+                .unwrap()
+                .matrix;
+            expected.push((h, squares / (x1.len() - 5) as f64));
             let matches: Vec<u8> = common
                 .iter()
                 .flat_map(|&p| [p as u32, p as u32])
@@ -931,6 +944,18 @@ fn database_information_from_correspondences() {
     assert_eq!(auto.problem, aniso.problem);
     let info = aniso.problem.information().unwrap();
     assert_eq!(info.len(), expected.len());
+    // each pair's information divided by its residual variance over the median pair's, where
+    // that is above 1
+    let mut variances: Vec<f64> = expected.iter().map(|e| e.1).collect();
+    variances.sort_by(f64::total_cmp);
+    let median = variances[variances.len() / 2];
+    let expected: Vec<Matrix3<f64>> = expected
+        .iter()
+        .map(|(h, v)| h / (v / median).max(1.0))
+        .collect();
+    assert!(
+        expected.len() > 10 && variances[0] < median && median < variances[variances.len() - 1]
+    );
     for (h, want) in info.iter().zip(&expected) {
         let err = (h.matrix() - want).norm() / want.norm();
         assert!(err < 1e-4, "{err}: {} vs {want}", h.matrix());

@@ -151,7 +151,8 @@ fn correct_pairs_within_their_uncertainty() {
                     .map(|(u, v)| (u / f, v / f))
                     .unzip();
                 let h = rotation_information(&p.rotation, &p.translation, &x1, &x2, &cam, &cam)
-                    .unwrap();
+                    .unwrap()
+                    .matrix;
                 let e = log(&(p.rotation.inverse() * truth));
                 d2.push((e.transpose() * h * e)[0]);
             }

@@ -442,7 +442,7 @@ pub(crate) mod rig;
 
 mod two_view {
     use super::*;
-    use crate::io::two_view_information::{Camera, rotation_information};
+    use crate::io::two_view_information::{Camera, rotation_information, scaled_by_residuals};
     use nalgebra::{Vector2, Vector3};
     use rusqlite::Statement;
 
@@ -560,8 +560,7 @@ mod two_view {
         poses: &[(i64, Option<[f64; 3]>)],
     ) -> Result<Informations> {
         let mut sources = Sources::new(db)?;
-        let mut kept = Vec::new();
-        let mut info = Vec::new();
+        let (mut kept, mut info, mut pairs) = (Vec::new(), Vec::new(), Vec::new());
         let mut skipped = (0usize, String::new());
         let mut skip = |reason: String| {
             skipped.0 += 1;
@@ -592,14 +591,19 @@ mod two_view {
             let kp2 = sources.keypoints(edge.j)?;
             let (x1, x2) = correspondences(db, &at, &matches, (kp1, &kp2), cameras)?;
             let (c1, c2) = cameras;
-            let h = rotation_information(&edge.rotation, &Vector3::from(t), &x1, &x2, &c1, &c2)
-                .and_then(|h| Information::new(h).map_err(|e| e.to_string()));
-            match h {
+            match rotation_information(&edge.rotation, &Vector3::from(t), &x1, &x2, &c1, &c2) {
+                Ok(p) => pairs.push((k, at, p)),
+                Err(reason) => skip(format!("{at}: {reason}")),
+            }
+        }
+        let scaled = scaled_by_residuals(&pairs.iter().map(|p| p.2).collect::<Vec<_>>());
+        for ((k, at, _), h) in pairs.into_iter().zip(scaled) {
+            match Information::new(h) {
                 Ok(h) => {
                     kept.push(k);
                     info.push(h);
                 }
-                Err(reason) => skip(format!("{at}: {reason}")),
+                Err(e) => skip(format!("{at}: {e}")),
             }
         }
         Ok((kept, info, skipped))
