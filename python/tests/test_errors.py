@@ -82,6 +82,8 @@ def test_settings_name_the_keyword_argument():
     assert "`max_seconds`" in text
     _, text = message(rotavg.Error, rotavg.read_graph, "x.g2o", format="xyz")
     assert "invalid setting `format`" in text
+    _, text = message(rotavg.Error, rotavg.read_graph, "x.g2o", weights="unit", information="full")
+    assert "invalid setting `information`: the full information cannot be read with unit weights" in text
 
 
 def test_hand_eye_settings_and_files(tmp_path):

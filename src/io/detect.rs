@@ -139,6 +139,29 @@ impl ReadOptions {
         self.full_information.get_or_insert(false);
         self
     }
+
+    /// An error when the options contradict each other: every weight 1
+    /// ([`WeightSource::Unit`]) reads no information, so asking for the full information too
+    /// (`full_information: Some(true)`) is refused rather than silently dropped. Every graph
+    /// reader checks it first.
+    ///
+    /// ```
+    /// use rotavg::io::detect::{ReadOptions, WeightSource};
+    /// let both = ReadOptions { weights: WeightSource::Unit, full_information: Some(true), ..Default::default() };
+    /// assert!(both.check().is_err());
+    /// assert!(ReadOptions { full_information: None, ..both }.check().is_ok());
+    /// ```
+    pub fn check(&self) -> Result<()> {
+        if self.weights == WeightSource::Unit && self.full_information == Some(true) {
+            return Err(Error::InvalidSettings {
+                name: "information".into(),
+                reason: "the full information cannot be read with unit weights (every weight 1 \
+                         reads no information): ask for one or the other"
+                    .into(),
+            });
+        }
+        Ok(())
+    }
 }
 
 impl Default for ReadOptions {
@@ -496,6 +519,7 @@ pub fn read_graph(
     format: GraphFormat,
     options: &ReadOptions,
 ) -> Result<LoadedGraph> {
+    options.check()?;
     let format = match format {
         GraphFormat::Auto => detect_format(file, text)?,
         f => f,
@@ -534,6 +558,7 @@ pub fn read_graph(
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn load_graph(path: &Path, format: GraphFormat, options: &ReadOptions) -> Result<LoadedGraph> {
+    options.check()?;
     let database = match format {
         GraphFormat::Colmap => {
             Some(crate::io::colmap::find_database(path).unwrap_or_else(|| path.to_path_buf()))
@@ -645,6 +670,7 @@ pub fn read_graph_stream(
     format: GraphFormat,
     options: &ReadOptions,
 ) -> Result<LoadedGraph> {
+    options.check()?;
     let mut stream = stream;
     let format = match format {
         GraphFormat::Auto => detect_stream_format(&mut stream)?,

@@ -793,6 +793,22 @@ fn command_line_reports_anisotropic_measurements() {
     let unit = run(&["multiple", data, "--weights", "unit", "--json"]);
     let unit: serde_json::Value = serde_json::from_slice(&unit.stdout).unwrap();
     assert!(unit.get("information").is_none());
+    assert_eq!(unit["input"]["read"]["full_information"], false);
+    // unit weights read no information: asking for both is refused, not silently half-done
+    let both = run(&[
+        "multiple",
+        data,
+        "--weights",
+        "unit",
+        "--information",
+        "full",
+    ]);
+    let stderr = String::from_utf8_lossy(&both.stderr);
+    assert_eq!(both.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("cannot be read with unit weights"),
+        "{stderr}"
+    );
     let huber = run(&["multiple", data, "--loss", "huber"]);
     assert!(huber.status.success());
     let text = String::from_utf8(huber.stdout).unwrap();
