@@ -246,6 +246,7 @@ pub(crate) fn without_colmap_feature(path: &Path) -> Error {
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn read_colmap_database(path: &Path, options: &ReadOptions) -> Result<LoadedGraph> {
+    options.check()?;
     #[cfg(feature = "colmap")]
     {
         database::read(path, options)

@@ -809,6 +809,18 @@ fn command_line_reports_anisotropic_measurements() {
         stderr.contains("cannot be read with unit weights"),
         "{stderr}"
     );
+    // and from a rig database, which `rotavg rig` reads without the view-graph loader
+    let rig_db = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/data/colmap_scene/database.db"
+    );
+    let rig = run(&["rig", rig_db, "--weights", "unit", "--information", "full"]);
+    let stderr = String::from_utf8_lossy(&rig.stderr);
+    assert_eq!(rig.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("cannot be read with unit weights"),
+        "{stderr}"
+    );
     let huber = run(&["multiple", data, "--loss", "huber"]);
     assert!(huber.status.success());
     let text = String::from_utf8(huber.stdout).unwrap();

@@ -1010,6 +1010,13 @@ fn information_full_errors_are_clear() {
         weights: rotavg::io::detect::WeightSource::Unit,
         ..full
     };
+    // unit weights read no information: with the full information asked for, refused
+    let e = read_colmap_database(&path, &unit).unwrap_err().to_string();
+    assert!(e.contains("cannot be read with unit weights"), "{e}");
+    let unit = ReadOptions {
+        full_information: None,
+        ..unit
+    };
     assert!(
         !read_colmap_database(&path, &unit)
             .unwrap()
