@@ -1194,7 +1194,8 @@ pub(crate) fn full_information(information: &str) -> PyResult<Option<bool>> {
 /// Args:
 ///     path: the file (str or path-like).
 ///     format: ``"auto"``, ``"g2o"``, ``"1dsfm"`` or ``"json"``.
-///     weights: ``"file"`` (the file's weights, e.g. SE-Sync's kappa for g2o) or ``"unit"``.
+///     weights: ``"file"`` (the file's weights, e.g. SE-Sync's kappa for g2o) or ``"unit"``
+///         (every weight 1 and no information; with ``information="full"`` an error).
 ///     largest_component: keep only the largest connected component (nodes renumbered).
 ///     rotation_tolerance: the tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` of every
 ///         rotation the file gives (the command line's ``--rotation-tolerance``) (default 1e-5, the command line's); beyond it, an error.
@@ -1207,7 +1208,7 @@ pub(crate) fn full_information(information: &str) -> PyResult<Option<bool>> {
 ///         ``"kappa"``); COLMAP databases with each pair's information from its inlier
 ///         correspondences and cameras (``"full"``, and ``"auto"`` where the database gives
 ///         it, else weights 1 with the warning ``database_without_information``) or weights 1
-///         (``"kappa"``).
+///         (``"kappa"``). ``g.information`` holds what was read.
 ///
 /// Returns:
 ///     Graph: with ``n, i, j, rel, weights`` for ``average_multiple``.
