@@ -558,7 +558,7 @@ pub fn read_graph(
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn load_graph(path: &Path, format: GraphFormat, options: &ReadOptions) -> Result<LoadedGraph> {
-    // `read_colmap_database` and `read_graph_stream` check the options
+    options.check()?;
     let database = match format {
         GraphFormat::Colmap => {
             Some(crate::io::colmap::find_database(path).unwrap_or_else(|| path.to_path_buf()))
