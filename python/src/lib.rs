@@ -624,7 +624,11 @@ fn average_multiple_py(
 ///
 /// Returns:
 ///     Result: ``solver`` is None; ``to_dict()`` equals
-///     ``rotavg certify FILE --estimate EST --json`` (with the same ``--loss``).
+///     ``rotavg certify FILE --estimate EST --json`` (with the same ``--loss``). A graph read
+///     from a COLMAP database by ``read_graph`` with ``information="auto"`` carries its pairs'
+///     information where ``rotavg certify`` reads weights 1 (certifying the least-squares
+///     problem of every pair with their information is slow and rarely tight): read it with
+///     ``information="kappa"`` for the command line's problem.
 ///
 /// Raises:
 ///     rotavg.Error: as ``average_multiple``, an estimate of the wrong size, and (a path) a node

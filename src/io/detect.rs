@@ -93,7 +93,8 @@ pub struct ReadOptions {
     ///   a camera model without an undistortion, ...). `rotavg certify` and rigs read from a
     ///   database ([`crate::io::rig::read_colmap_rig`]) take `None` as `Some(false)`
     ///   ([`ReadOptions::scalar_by_default`]).
-    /// - Other formats are unaffected (JSON's `information` is always read).
+    /// - Other formats are unaffected (JSON view graphs and rigs: `information` is read unless
+    ///   [`WeightSource::Unit`]; `kappa` and `full` change nothing).
     ///
     /// A graph's [`LoadedGraph::read`] records what was read: `Some(true)` or `Some(false)`.
     pub full_information: Option<bool>,
@@ -558,6 +559,8 @@ pub fn read_graph(
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn load_graph(path: &Path, format: GraphFormat, options: &ReadOptions) -> Result<LoadedGraph> {
+    // the options' contradiction first, though both readers below check it too: a missing
+    // file would otherwise hide it (Python's error test asks for it with no file)
     options.check()?;
     let database = match format {
         GraphFormat::Colmap => {

@@ -42,7 +42,7 @@ struct ProblemFile {
     deny_unknown_fields,
     expecting = "an edge {\"i\": 0, \"j\": 1, \"rotation\": R, \"weight\": w} (weight optional; or \"information\": H, a 3x3 array, instead of the weight)"
 )]
-struct EdgeFile {
+pub(crate) struct EdgeFile {
     i: usize,
     j: usize,
     rotation: Rows,
@@ -81,44 +81,10 @@ pub fn read_problem_json(text: &str, file: &str, options: &ReadOptions) -> Resul
             ),
         ));
     }
-    let mut edges = Vec::with_capacity(m);
-    let from_file = options.weights == WeightSource::File;
-    let anisotropic = from_file && pf.edges.iter().any(|e| e.information.is_some());
-    let mut information = Vec::with_capacity(if anisotropic { m } else { 0 });
-    for (k, e) in pf.edges.iter().enumerate() {
-        let item = format!("edge {k} ({}, {})", e.i, e.j);
-        let rotation = rotation_from_rows(&e.rotation, options.rotation_tolerance, &item)
-            .map_err(|err| err.in_file(file, None))?;
-        if e.weight.is_some() && e.information.is_some() {
-            return Err(Error::parse(
-                Some(file),
-                None,
-                format!("{item}: give \"weight\" or \"information\", not both"),
-            ));
-        }
-        let weight = e.weight.unwrap_or(1.0);
-        if from_file && let Some(why) = crate::io::weight_out_of_range(weight) {
-            return Err(Error::parse(Some(file), None, format!("{item}: {why}")));
-        }
-        if anisotropic {
-            let h = match &e.information {
-                Some(rows) => Information::try_from(*rows),
-                None => Information::try_from(isotropic_rows(weight)),
-            };
-            information.push(h.map_err(|reason| {
-                Error::parse(Some(file), None, format!("{item}: information {reason}"))
-            })?);
-        }
-        edges.push(Edge {
-            i: e.i,
-            j: e.j,
-            rotation,
-            weight: if from_file { weight } else { 1.0 },
-        });
-    }
+    let (edges, information) = read_edges(&pf.edges, file, options)?;
     let reversed = edges.iter().filter(|e| e.i > e.j).count();
     let mut problem = MultipleProblem::new(n, edges).map_err(|e| e.in_file(file, None))?;
-    if anisotropic {
+    if let Some(information) = information {
         problem = problem
             .with_information(information)
             .map_err(|e| e.in_file(file, None))?;
@@ -130,6 +96,47 @@ pub fn read_problem_json(text: &str, file: &str, options: &ReadOptions) -> Resul
 }
 
 /// `w I` as rows.
+/// A JSON file's edges checked, and their information when any edge carries some (an edge
+/// with a weight `w` then has `H = w I`). With unit weights ([`WeightSource::Unit`]) every
+/// weight is 1 and no information is read (each edge's rotation, and that it gives a weight or
+/// an information but not both, still checked). Errors name the file and the edge.
+pub(crate) fn read_edges(
+    entries: &[EdgeFile],
+    file: &str,
+    options: &ReadOptions,
+) -> Result<(Vec<Edge>, Option<Vec<Information>>)> {
+    let from_file = options.weights == WeightSource::File;
+    let anisotropic = from_file && entries.iter().any(|e| e.information.is_some());
+    let mut edges = Vec::with_capacity(entries.len());
+    let mut information = Vec::with_capacity(if anisotropic { entries.len() } else { 0 });
+    for (k, e) in entries.iter().enumerate() {
+        let item = format!("edge {k} ({}, {})", e.i, e.j);
+        let bad = |why: String| Error::parse(Some(file), None, format!("{item}: {why}"));
+        let rotation = rotation_from_rows(&e.rotation, options.rotation_tolerance, &item)
+            .map_err(|err| err.in_file(file, None))?;
+        if e.weight.is_some() && e.information.is_some() {
+            return Err(bad("give \"weight\" or \"information\", not both".into()));
+        }
+        let weight = e.weight.unwrap_or(1.0);
+        if from_file && let Some(why) = crate::io::weight_out_of_range(weight) {
+            return Err(bad(why));
+        }
+        if anisotropic {
+            let rows = e.information.unwrap_or(isotropic_rows(weight));
+            information.push(
+                Information::try_from(rows).map_err(|why| bad(format!("information {why}")))?,
+            );
+        }
+        edges.push(Edge {
+            i: e.i,
+            j: e.j,
+            rotation,
+            weight: if from_file { weight } else { 1.0 },
+        });
+    }
+    Ok((edges, anisotropic.then_some(information)))
+}
+
 fn isotropic_rows(w: f64) -> Rows {
     [[w, 0.0, 0.0], [0.0, w, 0.0], [0.0, 0.0, w]]
 }

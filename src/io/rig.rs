@@ -14,7 +14,9 @@
 //! An edge may carry `"information": H` (a symmetric positive semidefinite 3x3 array for the
 //! residual `e` of `X_b X_a^T = R exp([e]x)`, contract section 1) instead of its weight; when one
 //! does, the rig is anisotropic and an edge with a weight `w` has `H = w I`
-//! (`paper-notes/conjugate.md` `[H24]`).
+//! (`paper-notes/conjugate.md` `[H24]`). `--weights unit` ([`WeightSource::Unit`](crate::io::detect::WeightSource::Unit)) reads every
+//! edge with weight 1 and no information, as the JSON view graph reader does; with
+//! `--information full` too it is refused ([`ReadOptions::check`]).
 //!
 //! with `R X_a ~ X_b`, `X_a = S_{s_a} F_{f_a}` (world-to-camera; `S` is `sensor_from_rig`, as
 //! COLMAP's). A sensor without a known `S` is estimated; a rig without any known sensor has its
@@ -22,8 +24,7 @@
 
 use crate::error::{Error, Result};
 use crate::io::detect::ReadOptions;
-use crate::multiple::Edge;
-use crate::multiple::anisotropic::Information;
+use crate::io::json::EdgeFile;
 use crate::rig::{Image, RigProblem, Sensor};
 use crate::so3::{Rotation, rotation_from_rows, rotation_to_rows};
 use crate::warning::Warning;
@@ -110,21 +111,6 @@ struct SensorFile {
     sensor_from_rig: Option<Rows>,
 }
 
-#[derive(Deserialize)]
-#[serde(
-    deny_unknown_fields,
-    expecting = "an edge {\"i\": a, \"j\": b, \"rotation\": R, \"weight\": w} between two images (weight optional; or \"information\": H, a 3x3 array, instead of the weight)"
-)]
-struct EdgeFile {
-    i: usize,
-    j: usize,
-    rotation: Rows,
-    #[serde(default)]
-    weight: Option<f64>,
-    #[serde(default)]
-    information: Option<Rows>,
-}
-
 /// Read the JSON rig format (module docs) from `text` (of `file`). Errors name the file (and
 /// the line of a syntax error): a rotation off SO(3) beyond `options.rotation_tolerance`, a
 /// weight out of range, more frames than images, any error of [`RigProblem::new`].
@@ -141,6 +127,7 @@ struct EdgeFile {
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn read_rig_json(text: &str, file: &str, options: &ReadOptions) -> Result<LoadedRig> {
+    options.check()?;
     let rf: RigFile = serde_json::from_str(text).map_err(|e| {
         let line = (e.line() > 0).then_some(e.line());
         Error::parse(Some(file), line, format!("invalid JSON: {e}"))
@@ -171,7 +158,7 @@ pub fn read_rig_json(text: &str, file: &str, options: &ReadOptions) -> Result<Lo
         })
         .collect::<Result<Vec<_>>>()
         .map_err(in_file)?;
-    let (edges, information) = rig_edges(&rf.edges, file, options)?;
+    let (edges, information) = crate::io::json::read_edges(&rf.edges, file, options)?;
     let (frames, sensors_n, images_n) = (rf.num_frames, rf.sensors.len(), rf.images.len());
     let mut problem = RigProblem::new(frames, sensors, rf.images, edges).map_err(in_file)?;
     if let Some(info) = information {
@@ -189,49 +176,11 @@ pub fn read_rig_json(text: &str, file: &str, options: &ReadOptions) -> Result<Lo
     })
 }
 
-/// The JSON rig file's edges, and their information when any edge carries some (an edge with a
-/// weight `w` then has `H = w I`). Errors name the file and the edge.
-fn rig_edges(
-    file_edges: &[EdgeFile],
-    file: &str,
-    options: &ReadOptions,
-) -> Result<(Vec<Edge>, Option<Vec<Information>>)> {
-    let anisotropic = file_edges.iter().any(|e| e.information.is_some());
-    let mut edges = Vec::with_capacity(file_edges.len());
-    let mut information = Vec::with_capacity(if anisotropic { file_edges.len() } else { 0 });
-    for (k, e) in file_edges.iter().enumerate() {
-        let item = format!("edge {k} ({}, {})", e.i, e.j);
-        let bad = |why: String| Error::parse(Some(file), None, format!("{item}: {why}"));
-        let rotation = rotation_from_rows(&e.rotation, options.rotation_tolerance, &item)
-            .map_err(|err| err.in_file(file, None))?;
-        if e.weight.is_some() && e.information.is_some() {
-            return Err(bad("give \"weight\" or \"information\", not both".into()));
-        }
-        let weight = e.weight.unwrap_or(1.0);
-        if let Some(why) = crate::io::weight_out_of_range(weight) {
-            return Err(bad(why));
-        }
-        if anisotropic {
-            let rows = e.information.unwrap_or_else(|| {
-                std::array::from_fn(|r| std::array::from_fn(|c| if r == c { weight } else { 0.0 }))
-            });
-            information.push(
-                Information::try_from(rows).map_err(|why| bad(format!("information {why}")))?,
-            );
-        }
-        edges.push(Edge {
-            i: e.i,
-            j: e.j,
-            rotation,
-            weight,
-        });
-    }
-    Ok((edges, anisotropic.then_some(information)))
-}
-
 /// Read a rig from `path`: a COLMAP database (or a folder holding `database.db`) with a rig
 /// configuration, else the JSON rig format.
 pub fn load_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> {
+    // the options' contradiction first: a missing file would hide it
+    options.check()?;
     if let Some(db) = crate::io::colmap::find_database(path) {
         return read_colmap_rig(&db, options);
     }

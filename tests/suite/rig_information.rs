@@ -453,3 +453,55 @@ fn a_path_rig_with_information_is_solved_to_the_truth_s_minimum() {
     assert!(j <= j_truth * (1.0 + 1e-9), "{j:e} against {j_truth:e}");
     assert!(angle_between(&own.sensors[1], &truth.sensors[1]).to_degrees() < 0.05);
 }
+
+/// A JSON rig file's information follows the read options as a JSON view graph's does: read by
+/// default (an edge with a weight `w` then `w I`), dropped with every weight 1 by `--weights
+/// unit`, and unit weights with `--information full` refused. The file is written here, so
+/// the expected matrices and weights are the file's own numbers.
+#[test]
+fn json_rig_information_follows_the_read_options() {
+    use rotavg::io::detect::{ReadOptions, WeightSource};
+    use rotavg::io::rig::read_rig_json;
+    let text = r#"{"num_frames": 2,
+        "sensors": [{}, {}],
+        "images": [{"frame": 0, "sensor": 0}, {"frame": 0, "sensor": 1},
+                   {"frame": 1, "sensor": 0}, {"frame": 1, "sensor": 1}],
+        "edges": [
+          {"i": 0, "j": 1, "rotation": [[1,0,0],[0,1,0],[0,0,1]], "information": [[4,1,0],[1,3,0],[0,0,0.5]]},
+          {"i": 0, "j": 2, "rotation": [[1,0,0],[0,1,0],[0,0,1]], "weight": 2.5},
+          {"i": 1, "j": 3, "rotation": [[1,0,0],[0,1,0],[0,0,1]], "weight": 7},
+          {"i": 2, "j": 3, "rotation": [[1,0,0],[0,1,0],[0,0,1]]}]}"#;
+    let given = read_rig_json(text, "r.json", &ReadOptions::default()).unwrap();
+    let info = given.problem.information().expect("the file's information");
+    let rows = |h: &Information| -> [[f64; 3]; 3] { (*h).into() };
+    assert_eq!(
+        rows(&info[0]),
+        [[4.0, 1.0, 0.0], [1.0, 3.0, 0.0], [0.0, 0.0, 0.5]]
+    );
+    let diag = |w: f64| [[w, 0.0, 0.0], [0.0, w, 0.0], [0.0, 0.0, w]];
+    assert_eq!(rows(&info[1]), diag(2.5));
+    assert_eq!(rows(&info[2]), diag(7.0));
+    assert_eq!(rows(&info[3]), diag(1.0));
+    let unit = ReadOptions {
+        weights: WeightSource::Unit,
+        ..Default::default()
+    };
+    let plain = read_rig_json(text, "r.json", &unit).unwrap();
+    assert!(plain.problem.information().is_none());
+    assert!(plain.problem.edges().iter().all(|e| e.weight == 1.0));
+    let both = ReadOptions {
+        full_information: Some(true),
+        ..unit
+    };
+    let err = read_rig_json(text, "r.json", &both).unwrap_err();
+    assert!(
+        matches!(&err, rotavg::Error::InvalidSettings { name, .. } if name == "information"),
+        "{err}"
+    );
+    // and before the file is opened: the contradiction, not a missing file, is the error
+    let missing = rotavg::io::rig::load_rig(std::path::Path::new("no/such/rig.json"), &both);
+    assert!(matches!(
+        missing,
+        Err(rotavg::Error::InvalidSettings { .. })
+    ));
+}
