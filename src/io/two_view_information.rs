@@ -450,6 +450,119 @@ pub fn refine_relative_pose(
     Ok((r, t))
 }
 
+/// Correspondences whose Sampson error exceeds this many robust standard deviations of the
+/// pair's errors are wrong matches ([`trimmed_pose`], `[F13]` "Wrong matches among the
+/// inliers").
+pub const TRIM_SIGMAS: f64 = 3.0;
+
+/// The smallest noise scale (pixels) [`trimmed_pose`] assumes: keypoints are stored to about
+/// `1e-4` pixel (`float32` at image coordinates), so errors below `1e-3` are exact data, where
+/// the median absolute error says nothing about wrong matches.
+pub const MIN_NOISE_PX: f64 = 1e-3;
+
+/// Rounds of [`trimmed_pose`]: each takes the correspondences within [`TRIM_SIGMAS`] of the
+/// last pose and refines the pose on them; it ends when a round keeps the same ones.
+pub const TRIM_ROUNDS: usize = 3;
+
+/// Gauss-Newton steps of each round of [`trimmed_pose`], from the last pose (a few
+/// correspondences fewer); the next round goes on from where it stopped. On the generated
+/// scenes 4 steps gave the median errors of 10 to within 0.006 degrees.
+pub const REFINE_STEPS: usize = 4;
+
+/// A pair's relative pose re-estimated without its wrong matches ([`trimmed_pose`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrimmedPose {
+    /// The relative rotation `R` of `x_2 = R x_1 + t`.
+    pub rotation: Rotation,
+    /// The unit translation direction `t`.
+    pub translation: Vector3<f64>,
+    /// The indices of the correspondences kept, increasing.
+    pub kept: Vec<usize>,
+}
+
+/// The relative pose `(r, t)` (`t != 0`) re-estimated without the correspondences it does not
+/// explain (`[F13]` "Wrong matches among the inliers"): the Sampson errors `s_k` at the pose
+/// ([`sampson_error`], pixels), their robust standard deviation
+/// `sigma = max(1.4826 median |s_k|, MIN_NOISE_PX)`, the correspondences with
+/// `|s_k| <= TRIM_SIGMAS sigma` kept and the pose refined on them by Gauss-Newton
+/// ([`refine_relative_pose`], from the last pose); up to [`TRIM_ROUNDS`] rounds, until a round
+/// keeps the same correspondences.
+///
+/// `None` (keep the pose as it is) when the first round keeps every correspondence, when fewer
+/// than half of them (or than `2 MIN_CORRESPONDENCES`) would remain, or when the refinement
+/// fails. A matcher's inlier threshold (COLMAP: 4 pixels) is many times the keypoints' noise
+/// (0.3-1 pixel), so the wrong matches it lets through scatter beyond the correct ones and bias
+/// the stored pose; on generated scenes this made the pairs with wrong matches as accurate as
+/// the clean ones at 0.3 pixels of noise (median error 0.257 -> 0.183 degrees; clean pairs
+/// 0.185). Correct matches 3 robust standard deviations out are dropped too (about 0.3 % of
+/// Gaussian errors): the pose then moves within its own uncertainty.
+///
+/// ```
+/// use rotavg::io::two_view_information::{Camera, refine_relative_pose, trimmed_pose};
+/// use rotavg::so3::{angle_between, exp};
+/// use nalgebra::{Vector2, Vector3};
+/// let cam = Camera::pinhole(700.0, 700.0, 320.0, 240.0);
+/// let (r, t) = (exp(&Vector3::new(0.01, -0.2, 0.03)), Vector3::new(-1.0, 0.1, 0.2).normalize());
+/// let (mut x1, mut x2) = (Vec::new(), Vec::new());
+/// for k in 0..60 {
+///     let p = Vector3::new((k % 10) as f64 - 4.5, (k / 10) as f64 - 2.5, 9.0 + (k % 4) as f64);
+///     let q = r * p + t;
+///     // a deterministic 0.3-pixel jitter
+///     let jitter = 0.3 / 700.0 * if k % 2 == 0 { 1.0 } else { -1.0 };
+///     x1.push(Vector2::new(p.x / p.z, p.y / p.z));
+///     x2.push(Vector2::new(q.x / q.z + jitter, q.y / q.z - jitter));
+/// }
+/// x2[7].y += 3.0 / 700.0; // a wrong match 3 pixels off, within a 4-pixel inlier threshold
+/// // the least-squares pose of all 60, as a matcher stores it: pulled by the wrong match
+/// let (stored, t_stored) = refine_relative_pose(&r, &t, &x1, &x2, &cam, &cam, 20)?;
+/// let trimmed = trimmed_pose(&stored, &t_stored, &x1, &x2, &cam, &cam).expect("a wrong match");
+/// assert!(!trimmed.kept.contains(&7) && trimmed.kept.len() == 59);
+/// assert!(angle_between(&trimmed.rotation, &r) < 0.5 * angle_between(&stored, &r));
+/// # Ok::<(), String>(())
+/// ```
+pub fn trimmed_pose(
+    r: &Rotation,
+    t: &Vector3<f64>,
+    x1: &[Vector2<f64>],
+    x2: &[Vector2<f64>],
+    c1: &Camera,
+    c2: &Camera,
+) -> Option<TrimmedPose> {
+    let n = x1.len().min(x2.len());
+    let length = t.norm();
+    if !length.is_finite() || length == 0.0 || n < 2 * MIN_CORRESPONDENCES {
+        return None;
+    }
+    let (mut r, mut t) = (*r, t.normalize());
+    let mut kept: Vec<usize> = (0..n).collect();
+    for round in 0..TRIM_ROUNDS {
+        let errors: Vec<f64> = (0..n)
+            .map(|k| sampson_error(&r, &t, &x1[k], &x2[k], c1, c2))
+            .collect();
+        let mut sizes: Vec<f64> = errors.iter().map(|s| s.abs()).collect();
+        let middle = *sizes.select_nth_unstable_by(n / 2, f64::total_cmp).1;
+        let limit = TRIM_SIGMAS * (1.4826 * middle).max(MIN_NOISE_PX);
+        let next: Vec<usize> = (0..n).filter(|&k| errors[k].abs() <= limit).collect();
+        if round == 0 && next.len() == n {
+            return None;
+        }
+        if 2 * next.len() < n || next.len() < 2 * MIN_CORRESPONDENCES {
+            return None;
+        }
+        if round > 0 && next == kept {
+            break;
+        }
+        kept = next;
+        let pick = |x: &[Vector2<f64>]| kept.iter().map(|&k| x[k]).collect::<Vec<_>>();
+        (r, t) = refine_relative_pose(&r, &t, &pick(x1), &pick(x2), c1, c2, REFINE_STEPS).ok()?;
+    }
+    Some(TrimmedPose {
+        rotation: r,
+        translation: t,
+        kept,
+    })
+}
+
 /// The Sampson case of [`rotation_information`] (`t` a unit vector).
 fn epipolar_information(
     r: &Matrix3<f64>,

@@ -108,8 +108,8 @@ fn information(
 ) -> Result<(Option<Vec<Information>>, Vec<Warning>)> {
     let read = match full {
         Some(false) => return Ok((None, Vec::new())),
-        Some(true) => two_view::informations(db, &rows.raw, &rows.poses),
-        None => match two_view::informations(db, &rows.raw, &rows.poses) {
+        Some(true) => two_view::informations(db, &mut rows.raw, &rows.poses),
+        None => match two_view::informations(db, &mut rows.raw, &rows.poses) {
             Ok((kept, _, skipped)) if kept.is_empty() && skipped.0 > 0 => {
                 return Ok((None, vec![without_information(db, &skipped.1)]));
             }
@@ -442,7 +442,9 @@ pub(crate) mod rig;
 
 mod two_view {
     use super::*;
-    use crate::io::two_view_information::{Camera, rotation_information, scaled_by_residuals};
+    use crate::io::two_view_information::{
+        Camera, rotation_information, scaled_by_residuals, trimmed_pose,
+    };
     use nalgebra::{Vector2, Vector3};
     use rusqlite::Statement;
 
@@ -556,7 +558,7 @@ mod two_view {
 
     pub(super) fn informations(
         db: &Db,
-        raw: &[RawEdge],
+        raw: &mut [RawEdge],
         poses: &[(i64, Option<[f64; 3]>)],
     ) -> Result<Informations> {
         let mut sources = Sources::new(db)?;
@@ -569,7 +571,7 @@ mod two_view {
             }
         };
         let mut first: Option<(u64, Keypoints)> = None;
-        for (k, (edge, &(pair_id, tvec))) in raw.iter().zip(poses).enumerate() {
+        for (k, (edge, &(pair_id, tvec))) in raw.iter_mut().zip(poses).enumerate() {
             let at = format!(
                 "two_view_geometries row pair_id {pair_id} (images {}, {})",
                 edge.i, edge.j
@@ -591,7 +593,16 @@ mod two_view {
             let kp2 = sources.keypoints(edge.j)?;
             let (x1, x2) = correspondences(db, &at, &matches, (kp1, &kp2), cameras)?;
             let (c1, c2) = cameras;
-            match rotation_information(&edge.rotation, &Vector3::from(t), &x1, &x2, &c1, &c2) {
+            // the pose without its wrong matches, where it has some (`[F13]`)
+            let (t, x1, x2) = match trimmed_pose(&edge.rotation, &t.into(), &x1, &x2, &c1, &c2) {
+                Some(p) => {
+                    edge.rotation = p.rotation;
+                    let pick = |x: &[Vector2<f64>]| p.kept.iter().map(|&k| x[k]).collect();
+                    (p.translation, pick(&x1), pick(&x2))
+                }
+                None => (Vector3::from(t), x1, x2),
+            };
+            match rotation_information(&edge.rotation, &t, &x1, &x2, &c1, &c2) {
                 Ok(p) => pairs.push((k, at, p)),
                 Err(reason) => skip(format!("{at}: {reason}")),
             }
