@@ -12,6 +12,7 @@
 //! | `skipped_by_config` | COLMAP: two-view geometries of a config without a rotation | geometries |
 //! | `skipped_without_pose` | COLMAP: two-view geometries without a stored relative pose | geometries |
 //! | `skipped_without_information` | COLMAP information (`--information auto` or `full`): geometries whose correspondences give none | geometries |
+//! | `pairs_reestimated` | COLMAP information (`--information auto` or `full`): pairs measured by their pose re-estimated without their wrong matches, not by the stored rotation (`paper-notes/formats.md` `[F13]`) | pairs |
 //! | `outliers_suspected` | least squares whose residuals look like outliers | suspected edges |
 //! | `output_not_written` | `--edges-output` / `--inlier-output` with no robust solve | files |
 //! | `database_without_information` | `--information auto` (the default) on a COLMAP database that gives no two-view information (no keypoints, no `tvec`, an unsupported camera, ...): read with weights 1, the reason named | - |

@@ -95,7 +95,6 @@ pub fn read_problem_json(text: &str, file: &str, options: &ReadOptions) -> Resul
     })
 }
 
-/// `w I` as rows.
 /// A JSON file's edges checked, and their information when any edge carries some (an edge
 /// with a weight `w` then has `H = w I`). With unit weights ([`WeightSource::Unit`]) every
 /// weight is 1 and no information is read (each edge's rotation, and that it gives a weight or
@@ -137,6 +136,7 @@ pub(crate) fn read_edges(
     Ok((edges, anisotropic.then_some(information)))
 }
 
+/// `w I` as rows.
 fn isotropic_rows(w: f64) -> Rows {
     [[w, 0.0, 0.0], [0.0, w, 0.0], [0.0, 0.0, w]]
 }

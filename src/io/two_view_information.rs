@@ -465,8 +465,8 @@ pub const MIN_NOISE_PX: f64 = 1e-3;
 pub const TRIM_ROUNDS: usize = 3;
 
 /// Gauss-Newton steps of each round of [`trimmed_pose`], from the last pose (a few
-/// correspondences fewer); the next round goes on from where it stopped. On the generated
-/// scenes 4 steps gave the median errors of 10 to within 0.006 degrees.
+/// correspondences fewer); the next round goes on from where it stopped. On four generated
+/// scenes the default's median error with 4 steps was within 0.005 degrees of that with 10.
 pub const REFINE_STEPS: usize = 4;
 
 /// A pair's relative pose re-estimated without its wrong matches ([`trimmed_pose`]).

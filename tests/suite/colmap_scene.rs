@@ -268,10 +268,22 @@ fn every_pair_reads_with_full_information() {
             (p.a as u64 + 1, p.b as u64 + 1)
         );
         assert!(angle_between(&s.rotation, &p.rotation) < 1e-9);
-        changed += usize::from(angle_between(&e.rotation, &p.rotation) > 0.0);
+        changed += usize::from(e.rotation != s.rotation);
     }
     eprintln!("{changed} of {} pairs re-estimated", info.len());
     assert!(changed > 0 && changed < info.len());
+    // and the report says so (the JSON carries it), as weights 1 do not
+    let said = graph
+        .warnings
+        .iter()
+        .find(|w| w.code == "pairs_reestimated");
+    assert_eq!(said.and_then(|w| w.count), Some(changed));
+    assert!(
+        !stored
+            .warnings
+            .iter()
+            .any(|w| w.code == "pairs_reestimated")
+    );
 }
 
 /// At 0.3 pixels of noise the wrong matches a 4-pixel inlier threshold lets through scatter

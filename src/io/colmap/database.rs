@@ -108,10 +108,10 @@ fn information(
 ) -> Result<(Option<Vec<Information>>, Vec<Warning>)> {
     let read = match full {
         Some(false) => return Ok((None, Vec::new())),
-        Some(true) => two_view::informations(db, &mut rows.raw, &rows.poses),
-        None => match two_view::informations(db, &mut rows.raw, &rows.poses) {
-            Ok((kept, _, skipped)) if kept.is_empty() && skipped.0 > 0 => {
-                return Ok((None, vec![without_information(db, &skipped.1)]));
+        Some(true) => two_view::informations(db, &rows.raw, &rows.poses),
+        None => match two_view::informations(db, &rows.raw, &rows.poses) {
+            Ok(read) if read.kept.is_empty() && read.skipped.0 > 0 => {
+                return Ok((None, vec![without_information(db, &read.skipped.1)]));
             }
             Err(Error::Parse { message, .. }) => {
                 return Ok((None, vec![without_information(db, &message)]));
@@ -119,7 +119,13 @@ fn information(
             read => read,
         },
     };
-    let (kept, info, skipped) = read?;
+    let two_view::Informations {
+        kept,
+        rotations,
+        info,
+        skipped,
+        reestimated,
+    } = read?;
     if kept.is_empty() && skipped.0 > 0 {
         return Err(db.err(format!(
             "--information full: none of the {} two-view geometries with a relative pose gives an information (first: {})",
@@ -132,7 +138,20 @@ fn information(
         k += 1;
         kept.next_if_eq(&(k - 1)).is_some()
     });
+    for (edge, rotation) in rows.raw.iter_mut().zip(rotations) {
+        edge.rotation = rotation;
+    }
     let mut warnings = Vec::new();
+    if reestimated.0 > 0 {
+        let message = format!(
+            "{} of {} pairs measured by their pose re-estimated without {} inlier correspondences              beyond {} robust standard deviations of their Sampson errors (wrong matches;              paper-notes/formats.md [F13]), not by the database's stored rotation;              `--information kappa` reads the stored rotations",
+            reestimated.0,
+            info.len(),
+            reestimated.1,
+            crate::io::two_view_information::TRIM_SIGMAS
+        );
+        warnings.push(Warning::new("pairs_reestimated", message).with_count(reestimated.0));
+    }
     if skipped.0 > 0 {
         let message = format!(
             "skipped {} two-view geometries whose inlier correspondences give no information (first: {})",
@@ -452,9 +471,20 @@ mod two_view {
     /// at most 8192 SIFT features per image by default); a larger count is an error.
     const MAX_ROWS: i64 = 10_000_000;
 
-    /// The indices of the edges kept (those with an information), their informations, and
-    /// the number of edges skipped with the first reason.
-    pub(super) type Informations = (Vec<usize>, Vec<Information>, (usize, String));
+    /// What [`informations`] read.
+    pub(super) struct Informations {
+        /// The indices of the edges kept (those with an information), increasing.
+        pub kept: Vec<usize>,
+        /// Each kept edge's rotation: the stored one, or its pose's re-estimated without its
+        /// wrong matches ([`trimmed_pose`]).
+        pub rotations: Vec<Rotation>,
+        /// Each kept edge's information.
+        pub info: Vec<Information>,
+        /// The edges skipped, and the first reason.
+        pub skipped: (usize, String),
+        /// The kept edges re-estimated, and the correspondences they set aside.
+        pub reestimated: (usize, usize),
+    }
 
     /// Normalised image points.
     type Points = Vec<Vector2<f64>>;
@@ -558,7 +588,7 @@ mod two_view {
 
     pub(super) fn informations(
         db: &Db,
-        raw: &mut [RawEdge],
+        raw: &[RawEdge],
         poses: &[(i64, Option<[f64; 3]>)],
     ) -> Result<Informations> {
         let mut sources = Sources::new(db)?;
@@ -571,7 +601,7 @@ mod two_view {
             }
         };
         let mut first: Option<(u64, Keypoints)> = None;
-        for (k, (edge, &(pair_id, tvec))) in raw.iter_mut().zip(poses).enumerate() {
+        for (k, (edge, &(pair_id, tvec))) in raw.iter().zip(poses).enumerate() {
             let at = format!(
                 "two_view_geometries row pair_id {pair_id} (images {}, {})",
                 edge.i, edge.j
@@ -594,30 +624,44 @@ mod two_view {
             let (x1, x2) = correspondences(db, &at, &matches, (kp1, &kp2), cameras)?;
             let (c1, c2) = cameras;
             // the pose without its wrong matches, where it has some (`[F13]`)
-            let (t, x1, x2) = match trimmed_pose(&edge.rotation, &t.into(), &x1, &x2, &c1, &c2) {
+            let n = x1.len();
+            let trimmed = trimmed_pose(&edge.rotation, &t.into(), &x1, &x2, &c1, &c2);
+            let reestimated = trimmed.is_some();
+            let (r, t, x1, x2) = match trimmed {
                 Some(p) => {
-                    edge.rotation = p.rotation;
                     let pick = |x: &[Vector2<f64>]| p.kept.iter().map(|&k| x[k]).collect();
-                    (p.translation, pick(&x1), pick(&x2))
+                    (p.rotation, p.translation, pick(&x1), pick(&x2))
                 }
-                None => (Vector3::from(t), x1, x2),
+                None => (edge.rotation, Vector3::from(t), x1, x2),
             };
-            match rotation_information(&edge.rotation, &t, &x1, &x2, &c1, &c2) {
-                Ok(p) => pairs.push((k, at, p)),
+            let set_aside = reestimated.then_some(n - x1.len());
+            match rotation_information(&r, &t, &x1, &x2, &c1, &c2) {
+                Ok(p) => pairs.push((k, at, p, r, set_aside)),
                 Err(reason) => skip(format!("{at}: {reason}")),
             }
         }
         let scaled = scaled_by_residuals(&pairs.iter().map(|p| p.2).collect::<Vec<_>>());
-        for ((k, at, _), h) in pairs.into_iter().zip(scaled) {
+        let (mut rotations, mut reestimated) = (Vec::new(), (0, 0));
+        for ((k, at, _, r, set_aside), h) in pairs.into_iter().zip(scaled) {
             match Information::new(h) {
                 Ok(h) => {
                     kept.push(k);
                     info.push(h);
+                    rotations.push(r);
+                    if let Some(set_aside) = set_aside {
+                        reestimated = (reestimated.0 + 1, reestimated.1 + set_aside);
+                    }
                 }
                 Err(e) => skip(format!("{at}: {e}")),
             }
         }
-        Ok((kept, info, skipped))
+        Ok(Informations {
+            kept,
+            rotations,
+            info,
+            skipped,
+            reestimated,
+        })
     }
 
     /// The normalised points of the inlier matches `matches` (pairs of uint32 keypoint
