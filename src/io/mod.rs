@@ -57,6 +57,7 @@ pub mod single_json;
 pub mod text;
 pub mod two_view_information;
 pub mod values;
+pub mod within_frame;
 
 pub(crate) use crate::validate::weight_out_of_range;
 /// The weight window of every reader and constructor (see [`crate::validate::MAX_WEIGHT`]).

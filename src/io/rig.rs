@@ -260,9 +260,15 @@ fn rig_of_layout(
         rig_images,
         graph.problem.edges().to_vec(),
     )?;
-    // `--information full`: each pair's rotation information from its correspondences (`[F13]`)
+    // `--information full`: each pair's rotation information from its correspondences
+    // (`[F13]`), one per sensor pair within the frames (`[F18]`)
     if let Some(info) = graph.problem.information() {
-        problem = problem.with_information(info.to_vec())?;
+        let pooled = super::within_frame::pooled_within_frames(
+            problem.images(),
+            graph.problem.edges(),
+            info,
+        )?;
+        problem = problem.with_information(pooled)?;
     }
     Ok(LoadedRig {
         problem,
