@@ -269,9 +269,11 @@ fn rig_solution(
 /// The polish before a certificate that needs the sensors' gradient far below what an
 /// alternation's stopping rule leaves (`paper-notes/conjugate.md` `[H21]`): joint Gauss-Newton
 /// steps ([`Joint`], at most `passes`) to their convergence; where they do not apply (gravity
-/// priors) or stall, `passes` alternation passes ([`Passes`]) with no convergence test. Stops
-/// early at `max_seconds`; the joint steps' factor and preconditioner are held within a quarter
-/// of `max_bytes`.
+/// priors), stall, or take none (their model predicts no decrease of `J` while the sensors'
+/// gradient is still above what the couplings need: measured on a generated rig with pooled
+/// within-frame information, `[H21]` "Polish"), at most `passes` alternation passes
+/// ([`Passes`]), until one leaves the sensors where they were. Stops early at `max_seconds`; the joint
+/// steps' factor and preconditioner are held within a quarter of `max_bytes`.
 /// The point and the steps and passes taken (none: it was stationary to the cost's rounding
 /// already).
 pub(crate) fn polish_passes(
@@ -288,7 +290,7 @@ pub(crate) fn polish_passes(
         let limits = (passes, true);
         let (f, s, steps, stop) = joint.run((frames, sensors), limits, Deadline::after(left()));
         (frames, sensors, taken) = (f, s, steps);
-        if !matches!(stop, Termination::Stalled { .. }) {
+        if steps > 0 && !matches!(stop, Termination::Stalled { .. }) {
             return Ok((
                 frames,
                 sensors.iter().map(nearest_rotation).collect(),
@@ -301,7 +303,11 @@ pub(crate) fn polish_passes(
         if left().is_some_and(|l| l <= 0.0) {
             break;
         }
+        let before = sensors.clone();
         (frames, sensors) = run.pass(p, (frames, sensors), left())?;
+        if sensors == before {
+            break; // stationary to the sensor step's rounding
+        }
         taken += 1;
     }
     let sensors = sensors.iter().map(nearest_rotation).collect();
