@@ -200,10 +200,10 @@ pub fn read_colmap_rig(path: &Path, options: &ReadOptions) -> Result<LoadedRig> 
     #[cfg(feature = "colmap")]
     {
         let file = path.display().to_string();
-        // `--information auto` is weights 1 for rigs: on generated rig scenes the information
-        // made the frames 1.8-2.5x more accurate but the estimated sensors 1.3-11x less, and the
-        // certificate slower, up to `gap_reported` after 320 s (`docs/benchmarks.md`, "Rigs
-        // with their information")
+        // `--information auto` is weights 1 for rigs: with the within-frame information pooled
+        // (`[F18]`) the frames and most sensors are more accurate, but the certificate is
+        // slower, a 6000-image rig `gap_reported` after 5 minutes where weights 1 certify in 2 s
+        // (`docs/benchmarks.md`, "A rig's within-frame information, pooled")
         let graph = crate::io::colmap::read_colmap_database(path, &options.scalar_by_default())?;
         let layout =
             crate::io::colmap::database::rig::rig_layout(path, options.quaternion_tolerance)?;
