@@ -31,6 +31,18 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
         if self.0.done {
             return Ok(Plan::Done);
         }
+        if cx.problem.all_held() {
+            // the frames' view graph is then the rig's problem itself ([H19]); the couplings'
+            // bound, a relaxation over free images, can only be weaker (a 6000-image rig with
+            // information: 360 s for a bound of 1.74e5 against the frames' 4.98e5, 2026-12-08)
+            return Ok(Plan::Refuse(
+                Refusal::NotApplicable {
+                    reason: "every sensor held: the frames' view graph is the rig's problem                              itself [H19]"
+                        .into(),
+                },
+                None,
+            ));
+        }
         if !joins_sensors(cx.problem) {
             return Ok(Plan::Refuse(
                 Refusal::NotApplicable {

@@ -50,20 +50,36 @@ impl<'a> Rung<RigState<'a>> for FramesRung {
             None => {
                 let (graph, constant) = cx.problem.frame_graph(cx.sensors)?;
                 let inner = graph_certify(&graph, cx.frames, &settings)?;
+                // with information, the reformulation's rounding measured edge by edge
+                // (`[H24]` "Measured rounding") in place of the floor's allowance
+                if let Some(measured) =
+                    super::rounding::frames_information_charge(cx.problem, cx.sensors, &graph)
+                {
+                    let edges = graph.num_edges();
+                    return found(
+                        cx,
+                        &inner,
+                        (constant, measured),
+                        (edges, "view graph"),
+                        false,
+                    );
+                }
                 (inner, constant, 0.0, graph.num_edges(), "view graph")
             }
         };
-        found(cx, &inner, (constant, charge), (edges, what))
+        found(cx, &inner, (constant, charge), (edges, what), true)
     }
 }
 
 /// The rung's bound from the frames' certificate `inner`: its bound plus `constant`, less
-/// `charge` and the rounding (`rounding.rs`).
+/// `charge` and, when `floored`, the rounding allowance of `rounding.rs` (not when `charge` is
+/// the measured rounding itself, [`super::rounding::frames_information_charge`]).
 fn found(
     cx: &mut RigState<'_>,
     inner: &Certificate,
     (constant, charge): (f64, f64),
     (edges, what): (usize, &str),
+    floored: bool,
 ) -> Result<Found> {
     let Some(lb) = inner.lower_bound else {
         return Ok(Found::failed(format!(
@@ -71,12 +87,19 @@ fn found(
             inner.explanation
         )));
     };
-    let bound = cx.floor(lb + constant - charge);
+    let bound = match floored {
+        true => cx.floor(lb + constant - charge),
+        false => lb + constant - charge,
+    };
+    let rounding = match floored {
+        true => "rounding".to_string(),
+        false => format!("the rounding measured edge by edge, {charge:.3e} [H24]"),
+    };
     let note = format!(
         "the frames' {what} ({edges} edges) bounded by {} at {lb:.9e}, plus the within-frame \
-         edges'{} {constant:.9e}, less rounding [{}]",
+         edges'{} {constant:.9e}, less {rounding} [{}]",
         inner.method,
-        if charge > 0.0 {
+        if floored && charge > 0.0 {
             " and the priors' combination"
         } else {
             ""
