@@ -94,7 +94,7 @@ fn edge_charge(
         trace.add_product(h[(k, k)], -0.5);
     }
     let trace = trace.value().abs() + trace.bound();
-    let d_r = distance(r_f, |i, j, acc| triple(acc, 1.0, sb, r, sa, i, j));
+    let d_r = distance(r_f, |i, j, acc| triple(acc, 1.0, (sb, r, sa), (i, j)));
     // dM = M'_f - S_a^T M S_a with M'_f = tr(H'_f)/2 I - H'_f exactly, as the frames' problem
     // defines it from the stored H'_f
     let d_m = distance(&Matrix3::zeros(), |i, j, acc| {
@@ -104,7 +104,7 @@ fn edge_charge(
             }
         }
         acc.add_product(h_f[(i, j)], 1.0);
-        exact_turned_chordal(acc, h, sa, i, j);
+        exact_turned_chordal(acc, h, sa, (i, j));
     });
     let d = distance(&Matrix3::zeros(), |i, j, acc| {
         for k in 0..3 {
@@ -135,15 +135,13 @@ fn distance(stored: &Matrix3<f64>, entry: impl Fn(usize, usize, &mut Accumulator
     squares.sqrt() * (1.0 + 1e-12)
 }
 
-/// Add `w (B^T C A)_ij = w sum_kl B_ki C_kl A_lj` to `acc` (nine triple products).
+/// Add `w (B^T C A)_ij = w sum_kl B_ki C_kl A_lj` to `acc` (nine error-free products of four
+/// factors).
 fn triple(
     acc: &mut Accumulator,
     w: f64,
-    b: &Matrix3<f64>,
-    c: &Matrix3<f64>,
-    a: &Matrix3<f64>,
-    i: usize,
-    j: usize,
+    (b, c, a): (&Matrix3<f64>, &Matrix3<f64>, &Matrix3<f64>),
+    (i, j): (usize, usize),
 ) {
     for k in 0..3 {
         for l in 0..3 {
@@ -158,15 +156,15 @@ fn exact_turned_chordal(
     acc: &mut Accumulator,
     h: &Matrix3<f64>,
     s: &Matrix3<f64>,
-    i: usize,
-    j: usize,
+    ij: (usize, usize),
 ) {
+    let (i, j) = ij;
     for t in 0..3 {
         for k in 0..3 {
             acc.add_quad(0.5 * h[(t, t)], s[(k, i)], s[(k, j)], 1.0);
         }
     }
-    triple(acc, -1.0, s, h, s, i, j);
+    triple(acc, -1.0, (s, h, s), ij);
 }
 
 #[cfg(test)]
