@@ -14,10 +14,10 @@
 //! exponential), each expressed in the frame of the first sensor's camera, which is the same
 //! camera in every frame.
 
-use crate::Result;
 use crate::multiple::Edge;
 use crate::multiple::anisotropic::Information;
 use crate::rig::Image;
+use crate::{Error, Result};
 use nalgebra::Matrix3;
 use std::collections::BTreeMap;
 
@@ -28,8 +28,9 @@ const LOG_FLOOR: f64 = 1e-12;
 /// `information` with every within-frame edge's matrix (the edges whose images share a frame and
 /// not a sensor) replaced by the log-Euclidean median of its sensor pair's (module docs). An
 /// edge stored from sensor `t` to `s` (`t > s`) is turned into `s`'s frame for the median and
-/// back: `e' = -R e`, so `H' = R H R^T`. Other edges keep theirs. Errors: a pooled matrix the
-/// information's checks refuse (not expected: it is positive definite with the inputs' scale).
+/// back: `e' = -R e`, so `H' = R H R^T`. Other edges keep theirs. Errors: not one matrix per
+/// edge, an edge naming an image beyond `images`, or a pooled matrix the information's checks
+/// refuse (not expected: it is positive definite with the inputs' scale).
 ///
 /// ```
 /// use nalgebra::{Matrix3, Vector3};
@@ -57,13 +58,23 @@ pub fn pooled_within_frames(
     edges: &[Edge],
     information: &[Information],
 ) -> Result<Vec<Information>> {
+    let invalid = |reason: String| Error::InvalidSettings {
+        name: "information".into(),
+        reason,
+    };
+    if information.len() != edges.len() {
+        let (h, m) = (information.len(), edges.len());
+        return Err(invalid(format!("{h} information matrices for {m} edges")));
+    }
     let mut groups: BTreeMap<(usize, usize), Vec<usize>> = BTreeMap::new();
     for (k, e) in edges.iter().enumerate() {
-        let (a, b) = (images.get(e.i), images.get(e.j));
-        if let (Some(a), Some(b)) = (a, b)
-            && a.frame == b.frame
-            && a.sensor != b.sensor
-        {
+        let (Some(a), Some(b)) = (images.get(e.i), images.get(e.j)) else {
+            return Err(invalid(format!(
+                "edge {k} names an image beyond the {}",
+                images.len()
+            )));
+        };
+        if a.frame == b.frame && a.sensor != b.sensor {
             let key = (a.sensor.min(b.sensor), a.sensor.max(b.sensor));
             groups.entry(key).or_default().push(k);
         }
@@ -121,4 +132,48 @@ fn entrywise_median(ms: &[Matrix3<f64>]) -> Matrix3<f64> {
             _ => 0.5 * (v[n / 2 - 1] + v[n / 2]),
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Rotation;
+    use nalgebra::Vector3;
+
+    /// An edge stored from the second sensor to the first is turned into the first's camera
+    /// and back: two pairs whose information is the same matrix there keep theirs exactly (to
+    /// rounding), whichever way they are stored; and the counts are checked.
+    #[test]
+    fn a_reversed_edge_is_turned_and_back() {
+        let images: Vec<Image> = (0..4)
+            .map(|a| Image {
+                frame: a / 2,
+                sensor: a % 2,
+            })
+            .collect();
+        let r = crate::so3::exp(&Vector3::new(0.1, 0.5, -0.2));
+        let canonical = Matrix3::new(9.0, 1.0, 0.5, 1.0, 4.0, 0.2, 0.5, 0.2, 1.0);
+        let edge = |i, j, rotation: Rotation| Edge {
+            i,
+            j,
+            rotation,
+            weight: 1.0,
+        };
+        let edges = vec![edge(0, 1, r), edge(3, 2, r.inverse())];
+        let back = r.matrix() * canonical * r.matrix().transpose(); // R_ts^T H R_ts, R_ts = r^T
+        let info = vec![
+            Information::new(canonical).unwrap(),
+            Information::new((back + back.transpose()) * 0.5).unwrap(),
+        ];
+        let pooled = pooled_within_frames(&images, &edges, &info).unwrap();
+        for k in 0..2 {
+            let (got, want) = (pooled[k].matrix(), info[k].matrix());
+            assert!(
+                (got - want).norm() <= 1e-12 * want.norm(),
+                "edge {k}: {got} {want}"
+            );
+        }
+        assert!(pooled_within_frames(&images, &edges, &info[..1]).is_err());
+        assert!(pooled_within_frames(&images[..3], &edges, &info).is_err());
+    }
 }
