@@ -37,7 +37,7 @@ impl<'a> Rung<RigState<'a>> for CoupledRung {
             // information: 360 s for a bound of 1.74e5 against the frames' 4.98e5, 2026-12-08)
             return Ok(Plan::Refuse(
                 Refusal::NotApplicable {
-                    reason: "every sensor held: the frames' view graph is the rig's problem                              itself [H19]"
+                    reason: "every sensor held: the frames' view graph is the rig's problem itself [H19]"
                         .into(),
                 },
                 None,

@@ -129,7 +129,7 @@ fn hopeless(rho: f64, trace: f64, images: usize, gap: f64) -> Option<String> {
     let needed = 3.0 * rho * rho / gap;
     (gap > 0.0 && mean.is_finite() && needed > mean).then(|| {
         format!(
-            "not a critical point: the stationarity residual {rho:.1e} needs lambda_min(S              without a node) >= {needed:.1e}, above tr(S) / (3N - 3) = {mean:.1e}"
+            "not a critical point: the stationarity residual {rho:.1e} needs lambda_min(S without a node) >= {needed:.1e}, above tr(S) / (3N - 3) = {mean:.1e}"
         )
     })
 }

@@ -144,7 +144,7 @@ fn information(
     let mut warnings = Vec::new();
     if reestimated.0 > 0 {
         let message = format!(
-            "{} of {} pairs measured by their pose re-estimated without {} inlier correspondences              beyond {} robust standard deviations of their Sampson errors (wrong matches;              paper-notes/formats.md [F13]), not by the database's stored rotation;              `--information kappa` reads the stored rotations",
+            "{} of {} pairs measured by their pose re-estimated without {} inlier correspondences beyond {} robust standard deviations of their Sampson errors (wrong matches; paper-notes/formats.md [F13]), not by the database's stored rotation; `--information kappa` reads the stored rotations",
             reestimated.0,
             info.len(),
             reestimated.1,
