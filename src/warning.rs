@@ -13,6 +13,7 @@
 //! | `skipped_without_pose` | COLMAP: two-view geometries without a stored relative pose | geometries |
 //! | `skipped_without_information` | COLMAP information (`--information auto` or `full`): geometries whose correspondences give none | geometries |
 //! | `pairs_reestimated` | COLMAP information (`--information auto` or `full`): pairs measured by their pose re-estimated without their wrong matches, not by the stored rotation (`paper-notes/formats.md` `[F13]`) | pairs |
+//! | `within_frame_information_pooled` | COLMAP rigs with information (`--information full`): within-frame pairs measured with their sensor pair's pooled information, not their own (`paper-notes/formats.md` `[F18]`) | pairs |
 //! | `outliers_suspected` | least squares whose residuals look like outliers | suspected edges |
 //! | `output_not_written` | `--edges-output` / `--inlier-output` with no robust solve | files |
 //! | `database_without_information` | `--information auto` (the default) on a COLMAP database that gives no two-view information (no keypoints, no `tvec`, an unsupported camera, ...): read with weights 1, the reason named | - |

@@ -262,13 +262,24 @@ fn rig_of_layout(
     )?;
     // `--information full`: each pair's rotation information from its correspondences
     // (`[F13]`), one per sensor pair within the frames (`[F18]`)
+    let mut warnings = graph.warnings.clone();
     if let Some(info) = graph.problem.information() {
         let pooled = super::within_frame::pooled_within_frames(
             problem.images(),
             graph.problem.edges(),
             info,
         )?;
-        problem = problem.with_information(pooled)?;
+        if pooled.pairs > 0 {
+            let message = format!(
+                "{} within-frame pairs of {} sensor pairs measured with their sensor pair's \
+                 pooled information (the log-Euclidean median; paper-notes/formats.md [F18]), \
+                 not each pair's own",
+                pooled.pairs, pooled.sensor_pairs
+            );
+            let warning = Warning::new("within_frame_information_pooled", message);
+            warnings.push(warning.with_count(pooled.pairs));
+        }
+        problem = problem.with_information(pooled.information)?;
     }
     Ok(LoadedRig {
         problem,
@@ -277,7 +288,7 @@ fn rig_of_layout(
         image_ids: graph.node_ids.clone(),
         image_names: graph.node_names.clone(),
         format: "colmap".into(),
-        warnings: graph.warnings.clone(),
+        warnings,
         pending_gravity: None,
     })
 }

@@ -47,17 +47,18 @@ const LOG_FLOOR: f64 = 1e-12;
 /// let h = |y: f64| Information::new(Matrix3::from_diagonal(&Vector3::new(1e4, y, 1e4)));
 /// let info = vec![h(1.0)?, h(100.0)?, h(1e4)?, h(7.0)?];
 /// let pooled = pooled_within_frames(&images, &edges, &info)?;
+/// assert_eq!((pooled.pairs, pooled.sensor_pairs), (3, 1));
 /// for k in 0..3 {
-///     assert!((pooled[k].matrix()[(1, 1)] - 100.0).abs() < 1e-9); // the median
+///     assert!((pooled.information[k].matrix()[(1, 1)] - 100.0).abs() < 1e-9); // the median
 /// }
-/// assert_eq!(pooled[3], info[3]); // across frames: as it was
+/// assert_eq!(pooled.information[3], info[3]); // across frames: as it was
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn pooled_within_frames(
     images: &[Image],
     edges: &[Edge],
     information: &[Information],
-) -> Result<Vec<Information>> {
+) -> Result<Pooled> {
     let invalid = |reason: String| Error::InvalidSettings {
         name: "information".into(),
         reason,
@@ -80,7 +81,9 @@ pub fn pooled_within_frames(
         }
     }
     let mut pooled = information.to_vec();
+    let (mut pairs, mut sensor_pairs) = (0, 0);
     for members in groups.values().filter(|m| m.len() > 1) {
+        (pairs, sensor_pairs) = (pairs + members.len(), sensor_pairs + 1);
         // each member's H in the first sensor's camera frame, and the turn back
         let turns: Vec<Matrix3<f64>> = members
             .iter()
@@ -102,7 +105,22 @@ pub fn pooled_within_frames(
             pooled[k] = Information::new((h + h.transpose()) * 0.5)?;
         }
     }
-    Ok(pooled)
+    Ok(Pooled {
+        information: pooled,
+        pairs,
+        sensor_pairs,
+    })
+}
+
+/// What [`pooled_within_frames`] returns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pooled {
+    /// One matrix per edge, in edge order.
+    pub information: Vec<Information>,
+    /// The within-frame edges given their sensor pair's pooled matrix.
+    pub pairs: usize,
+    /// The sensor pairs pooled (with two or more within-frame edges).
+    pub sensor_pairs: usize,
 }
 
 /// The logarithm of a symmetric positive semidefinite matrix, its eigenvalues floored at
@@ -165,7 +183,9 @@ mod tests {
             Information::new(canonical).unwrap(),
             Information::new((back + back.transpose()) * 0.5).unwrap(),
         ];
-        let pooled = pooled_within_frames(&images, &edges, &info).unwrap();
+        let pooled = pooled_within_frames(&images, &edges, &info)
+            .unwrap()
+            .information;
         for k in 0..2 {
             let (got, want) = (pooled[k].matrix(), info[k].matrix());
             assert!(

@@ -272,8 +272,8 @@ fn rig_solution(
 /// priors), stall, or take none (their model predicts no decrease of `J` while the sensors'
 /// gradient is still above what the couplings need: measured on a generated rig with pooled
 /// within-frame information, `[H21]` "Polish"), at most `passes` alternation passes
-/// ([`Passes`]), until one leaves the sensors where they were. Stops early at `max_seconds`; the joint
-/// steps' factor and preconditioner are held within a quarter of `max_bytes`.
+/// ([`Passes`]), until one leaves the sensors where they were. Stops early at `max_seconds`;
+/// the joint steps' factor and preconditioner are held within a quarter of `max_bytes`.
 /// The point and the steps and passes taken (none: it was stationary to the cost's rounding
 /// already).
 pub(crate) fn polish_passes(

@@ -709,4 +709,25 @@ fn a_rig_whose_joint_steps_take_none_is_polished_by_passes() {
     );
     let note = json["certificate"]["explanation"].as_str().unwrap();
     assert!(note.contains("polished by"), "{note}");
+    // the pooling is reported, text and JSON alike (the count: within-frame pairs)
+    let pooled = (json["warnings"].as_array().unwrap().iter())
+        .find(|w| w["code"] == "within_frame_information_pooled")
+        .expect("the warning");
+    assert!(pooled["count"].as_u64().unwrap() > 100, "{pooled}");
+    let text = run(&[
+        "rig",
+        db.to_str().unwrap(),
+        "--information",
+        "full",
+        "--certify",
+        "none",
+    ]);
+    let text = String::from_utf8_lossy(&text.stdout)
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert!(
+        text.contains("pooled information (the log-Euclidean median"),
+        "{text}"
+    );
 }

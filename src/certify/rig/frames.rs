@@ -52,9 +52,13 @@ impl<'a> Rung<RigState<'a>> for FramesRung {
                 let inner = graph_certify(&graph, cx.frames, &settings)?;
                 // with information, the reformulation's rounding measured edge by edge
                 // (`[H24]` "Measured rounding") in place of the floor's allowance
-                if let Some(measured) =
-                    super::rounding::frames_information_charge(cx.problem, cx.sensors, &graph)
-                {
+                let measured = match inner.lower_bound {
+                    Some(_) => {
+                        super::rounding::frames_information_charge(cx.problem, cx.sensors, &graph)
+                    }
+                    None => None, // nothing to charge
+                };
+                if let Some(measured) = measured {
                     let edges = graph.num_edges();
                     return found(
                         cx,
