@@ -625,8 +625,10 @@ mod tests {
             .with_information(vec![h])
             .unwrap();
         let r = [Rotation::identity(); 2];
-        let mut settings = CertifySettings::default();
-        settings.mode = CertifyMode::Dual;
+        let settings = CertifySettings {
+            mode: CertifyMode::Dual,
+            ..Default::default()
+        };
         let runs_conv = |s: &CertifySettings| {
             let c = certify_multiple(&p, &r, s).unwrap();
             let conv =
