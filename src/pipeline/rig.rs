@@ -1,13 +1,14 @@
 //! A rig of any number of sensors solved and certified (`paper-notes/conjugate.md` `[H19]`):
 //! [`solve_rig`], then [`certify_rig`].
 
+use super::loss_choice::JUDGE_AT_ITERATIONS;
 use super::{AverageSettings, Averaged, PipelineProblem, PipelineSolution, average};
 use crate::certify::{Certification, CertifyMode, CertifySettings, certify_rig};
 use crate::error::Result;
-use crate::multiple::robust::suspected_outliers;
+use crate::multiple::robust::{judges_residuals, suspected_outliers};
 use crate::multiple::robust_scale::{DataScale, ScaleRule};
-use crate::rig::solve_rig_robust_given;
 use crate::rig::{RigProblem, RigRobust, RigSettings, RigSolution, solve_rig};
+use crate::rig::{solve_rig_judged, solve_rig_robust_given};
 use crate::termination::SolverReport;
 use serde::{Deserialize, Serialize};
 
@@ -221,7 +222,7 @@ pub fn average_rig_with_loss(
     let skip = super::validate(problem, settings)?;
     let (mut outliers, mut least_squares) = (None, None);
     if loss != RigLoss::Cauchy {
-        let ls = solve_rig(problem, &settings.solve)?;
+        let ls = judged_least_squares(problem, loss, &settings.solve)?;
         let x = problem.image_rotations(&ls.frames, &ls.sensors);
         outliers = suspected_outliers(&problem.image_graph()?, &x).map(|mut w| {
             w.suggestion = if loss == RigLoss::Chordal {
@@ -247,6 +248,30 @@ pub fn average_rig_with_loss(
     out.details
         .add_solve_seconds(start.elapsed().as_secs_f64() - out.details.total_seconds);
     Ok((out, inliers, Some(details)))
+}
+
+/// The rig's least squares for [`average_rig_with_loss`]: under `auto` on a rig with
+/// information whose images' residuals can be judged, judged at the view graphs'
+/// [`JUDGE_AT_ITERATIONS`] (`paper-notes/conjugate.md` `[H20]` "Judged least squares"): an
+/// estimate whose residuals already show outliers there is returned as it is, since the robust
+/// stage of a rig with information starts from unit weights and only the diagnosis reads it.
+/// Rigs without information keep the whole solve: it is their robust stage's start.
+fn judged_least_squares(
+    problem: &RigProblem,
+    loss: RigLoss,
+    settings: &RigSettings,
+) -> Result<RigSolution> {
+    if loss != RigLoss::Auto || !problem.is_anisotropic() {
+        return solve_rig(problem, settings);
+    }
+    let graph = problem.image_graph()?;
+    if !judges_residuals(&graph) {
+        return solve_rig(problem, settings);
+    }
+    let judge = |frames: &[crate::so3::Rotation], sensors: &[crate::so3::Rotation]| {
+        suspected_outliers(&graph, &problem.image_rotations(frames, sensors)).is_some()
+    };
+    Ok(solve_rig_judged(problem, settings, &JUDGE_AT_ITERATIONS, &judge)?.0)
 }
 
 /// The calibration a rig with gravity priors and sensors to estimate runs first (`[G14]`): the

@@ -35,6 +35,7 @@ pub use robust::{
     FIRST_STAGE_REWEIGHTS, REWEIGHT_PASSES, REWEIGHT_TOLERANCE, RigRobust, RobustRig,
     residual_angles, rig_data_scale, solve_rig_robust, solve_rig_robust_from,
 };
+pub(crate) use solve::solve_rig_judged;
 pub use solve::{
     MAX_ESTIMATED_SENSORS, RIG_DECREASE_TOLERANCE, RigSettings, RigSolution, solve_rig,
     solve_rig_from,

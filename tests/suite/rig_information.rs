@@ -330,6 +330,29 @@ fn outliers_with_information_turn_the_default_robust() {
     assert!(out.certificate.unwrap().lower_bound.is_some());
 }
 
+/// The default's least squares on a rig with information is judged at the view graphs'
+/// checkpoints and only decides the loss (`[H20]` "Judged least squares"): the robust stage
+/// starts from unit weights, so the default's estimate and certificate are the Cauchy loss's
+/// own, bit for bit, and the diagnosis is reported.
+#[test]
+fn the_judged_least_squares_leaves_the_robust_answer_as_cauchy_s() {
+    let scene = RigScene {
+        anisotropy: 9.0,
+        outlier_fraction: 0.2,
+        ..RigScene::sized(120, 3, 0.01, false, 4)
+    };
+    let (p, _) = scene.generate();
+    let run =
+        |loss| average_rig_with_loss(&p, loss, &RigRobust::default(), &Default::default()).unwrap();
+    let (auto, _, details) = run(RigLoss::Auto);
+    let (cauchy, _, _) = run(RigLoss::Cauchy);
+    assert!(details.expect("robust").outliers.is_some());
+    assert_eq!(auto.solution.frames, cauchy.solution.frames);
+    assert_eq!(auto.solution.sensors, cauchy.solution.sensors);
+    let bound = |c: Option<rotavg::certify::Certificate>| c.and_then(|c| c.lower_bound);
+    assert_eq!(bound(auto.certificate), bound(cauchy.certificate));
+}
+
 /// Gravity priors on a rig whose edges carry information (`[G14]` with `[H24]`; refused until
 /// 2026-12-06): 200 frames of 3 known sensors, 0.03 rad of noise from each edge's information,
 /// priors of 0.5 degrees on three images in four. Held and soft priors (weight 12 median
