@@ -85,22 +85,7 @@ pub struct RigSolution {
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn solve_rig(p: &RigProblem, settings: &RigSettings) -> Result<RigSolution> {
-    settings.validate()?;
-    let clock = Instant::now();
-    let left = || remaining(settings.max_seconds, clock);
-    check_estimated_sensors(p)?;
-    let sensors = start_sensors(p, left())?;
-    if p.all_held() {
-        // nothing to alternate: the frames' problem at the held sensors, solved once (a pass
-        // would solve it again: with gravity priors, from its unconstrained start)
-        return held_solution(p, sensors, left(), clock);
-    }
-    // the frames from the spectral start of every edge at the start's sensors ([A17] with
-    // information): from the held sensors' frames, a 10^4-frame path rig of 3-frame pairs
-    // with information ended with J 3.8x its minimum and frames flipped (the joint steps from
-    // those frames alone, higher still); rough where the joint steps follow: they finish it
-    let frames = frame_solve(p, &sensors, None, (left(), Joint::applies(p)))?.rotations;
-    alternate(p, (frames, sensors), settings, (clock, None))
+    Ok(solve_rig_judged(p, settings, &[], &|_, _| false)?.0)
 }
 
 /// [`solve_rig`] judged on the way, as a rule choosing the loss judges a view graph's least
@@ -110,7 +95,7 @@ pub fn solve_rig(p: &RigProblem, settings: &RigSettings) -> Result<RigSolution> 
 /// estimate is returned with `true` (the rule discards it for the robust solve); past the last
 /// checkpoint the solve is [`solve_rig`]'s from there. Confident wrong pairs make a rig's least
 /// squares with information slow: a generated 10^4-image rig of 2 sensors spent 57 s in it
-/// before the rule chose Cauchy. Every sensor held: [`solve_rig`], not judged.
+/// before the rule chose Cauchy. Every sensor held: not judged. No checkpoints: [`solve_rig`].
 pub(crate) fn solve_rig_judged(
     p: &RigProblem,
     settings: &RigSettings,
@@ -123,8 +108,14 @@ pub(crate) fn solve_rig_judged(
     check_estimated_sensors(p)?;
     let sensors = start_sensors(p, left())?;
     if p.all_held() {
+        // nothing to alternate: the frames' problem at the held sensors, solved once (a pass
+        // would solve it again: with gravity priors, from its unconstrained start)
         return Ok((held_solution(p, sensors, left(), clock)?, false));
     }
+    // the frames from the spectral start of every edge at the start's sensors ([A17] with
+    // information): from the held sensors' frames, a 10^4-frame path rig of 3-frame pairs
+    // with information ended with J 3.8x its minimum and frames flipped (the joint steps from
+    // those frames alone, higher still); rough where the joint steps follow: they finish it
     let rough = Joint::applies(p);
     let (mut frames, mut iterations) = (None, 0);
     for &at in checkpoints {
