@@ -268,10 +268,21 @@ fn judged_least_squares(
     if !judges_residuals(&graph) {
         return solve_rig(problem, settings);
     }
+    let start = std::time::Instant::now();
     let judge = |frames: &[crate::so3::Rotation], sensors: &[crate::so3::Rotation]| {
         suspected_outliers(&graph, &problem.image_rotations(frames, sensors)).is_some()
     };
-    Ok(solve_rig_judged(problem, settings, &JUDGE_AT_ITERATIONS, &judge)?.0)
+    let (ls, judged) = solve_rig_judged(problem, settings, &JUDGE_AT_ITERATIONS, &judge)?;
+    // the caller judges the returned estimate again (its sensors projected on SO(3)): where
+    // that no longer fires, the estimate it would certify is the converged one
+    if judged && !judge(&ls.frames, &ls.sensors) {
+        let rest = RigSettings {
+            max_seconds: crate::deadline::remaining(settings.max_seconds, start),
+            ..*settings
+        };
+        return crate::rig::solve_rig_from(problem, &ls.frames, &ls.sensors, &rest);
+    }
+    Ok(ls)
 }
 
 /// The calibration a rig with gravity priors and sensors to estimate runs first (`[G14]`): the
