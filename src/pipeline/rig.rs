@@ -5,10 +5,11 @@ use super::loss_choice::JUDGE_AT_ITERATIONS;
 use super::{AverageSettings, Averaged, PipelineProblem, PipelineSolution, average};
 use crate::certify::{Certification, CertifyMode, CertifySettings, certify_rig};
 use crate::error::Result;
-use crate::multiple::robust::{judges_residuals, suspected_outliers};
+use crate::multiple::robust::{OutlierWarning, judges_residuals, suspected_outliers};
 use crate::multiple::robust_scale::{DataScale, ScaleRule};
 use crate::rig::{RigProblem, RigRobust, RigSettings, RigSolution, solve_rig};
 use crate::rig::{solve_rig_judged, solve_rig_robust_given};
+use crate::so3::Rotation;
 use crate::termination::SolverReport;
 use serde::{Deserialize, Serialize};
 
@@ -222,9 +223,8 @@ pub fn average_rig_with_loss(
     let skip = super::validate(problem, settings)?;
     let (mut outliers, mut least_squares) = (None, None);
     if loss != RigLoss::Cauchy {
-        let ls = judged_least_squares(problem, loss, &settings.solve)?;
-        let x = problem.image_rotations(&ls.frames, &ls.sensors);
-        outliers = suspected_outliers(&problem.image_graph()?, &x).map(|mut w| {
+        let (ls, diagnosis) = judged_least_squares(problem, loss, &settings.solve)?;
+        outliers = diagnosis.map(|mut w| {
             w.suggestion = if loss == RigLoss::Chordal {
                 "`--loss cauchy` (or the default `--loss auto`) solves it and certifies the \
                  chordal L2 problem on the inlier edges"
@@ -250,39 +250,39 @@ pub fn average_rig_with_loss(
     Ok((out, inliers, Some(details)))
 }
 
-/// The rig's least squares for [`average_rig_with_loss`]: under `auto` on a rig with
-/// information whose images' residuals can be judged, judged at the view graphs'
+/// The rig's least squares for [`average_rig_with_loss`] and the outlier diagnosis at it
+/// ([`suspected_outliers`] on the images' view graph). Under `auto` on a rig with information
+/// whose images' residuals can be judged, the solve is judged at the view graphs'
 /// [`JUDGE_AT_ITERATIONS`] (`paper-notes/conjugate.md` `[H20]` "Judged least squares"): an
-/// estimate whose residuals already show outliers there is returned as it is, since the robust
-/// stage of a rig with information starts from unit weights and only the diagnosis reads it.
-/// Rigs without information keep the whole solve: it is their robust stage's start.
+/// estimate whose residuals already show outliers there is returned as it is, with the
+/// diagnosis that judged it, since the robust stage of a rig with information starts from unit
+/// weights and only the diagnosis reads it. Rigs without information keep the whole solve: it
+/// is their robust stage's start.
 fn judged_least_squares(
     problem: &RigProblem,
     loss: RigLoss,
     settings: &RigSettings,
-) -> Result<RigSolution> {
-    if loss != RigLoss::Auto || !problem.is_anisotropic() {
-        return solve_rig(problem, settings);
-    }
+) -> Result<(RigSolution, Option<OutlierWarning>)> {
     let graph = problem.image_graph()?;
-    if !judges_residuals(&graph) {
-        return solve_rig(problem, settings);
-    }
-    let start = std::time::Instant::now();
-    let judge = |frames: &[crate::so3::Rotation], sensors: &[crate::so3::Rotation]| {
-        suspected_outliers(&graph, &problem.image_rotations(frames, sensors)).is_some()
+    let diagnose = |frames: &[Rotation], sensors: &[Rotation]| {
+        suspected_outliers(&graph, &problem.image_rotations(frames, sensors))
     };
-    let (ls, judged) = solve_rig_judged(problem, settings, &JUDGE_AT_ITERATIONS, &judge)?;
-    // the caller judges the returned estimate again (its sensors projected on SO(3)): where
-    // that no longer fires, the estimate it would certify is the converged one
-    if judged && !judge(&ls.frames, &ls.sensors) {
-        let rest = RigSettings {
-            max_seconds: crate::deadline::remaining(settings.max_seconds, start),
-            ..*settings
-        };
-        return crate::rig::solve_rig_from(problem, &ls.frames, &ls.sensors, &rest);
+    if loss != RigLoss::Auto || !problem.is_anisotropic() || !judges_residuals(&graph) {
+        let ls = solve_rig(problem, settings)?;
+        let diagnosis = diagnose(&ls.frames, &ls.sensors);
+        return Ok((ls, diagnosis));
     }
-    Ok(ls)
+    let mut judged_by = None;
+    let mut judge = |frames: &[Rotation], sensors: &[Rotation]| {
+        judged_by = diagnose(frames, sensors);
+        judged_by.is_some()
+    };
+    let (ls, judged) = solve_rig_judged(problem, settings, &JUDGE_AT_ITERATIONS, &mut judge)?;
+    let diagnosis = match judged {
+        true => judged_by,
+        false => diagnose(&ls.frames, &ls.sensors),
+    };
+    Ok((ls, diagnosis))
 }
 
 /// The calibration a rig with gravity priors and sensors to estimate runs first (`[G14]`): the

@@ -85,7 +85,7 @@ pub struct RigSolution {
 /// # Ok::<(), rotavg::Error>(())
 /// ```
 pub fn solve_rig(p: &RigProblem, settings: &RigSettings) -> Result<RigSolution> {
-    Ok(solve_rig_judged(p, settings, &[], &|_, _| false)?.0)
+    Ok(solve_rig_judged(p, settings, &[], &mut |_, _| false)?.0)
 }
 
 /// [`solve_rig`] judged on the way, as a rule choosing the loss judges a view graph's least
@@ -100,7 +100,7 @@ pub(crate) fn solve_rig_judged(
     p: &RigProblem,
     settings: &RigSettings,
     checkpoints: &[usize],
-    judge: &dyn Fn(&[Rotation], &[Rotation]) -> bool,
+    judge: &mut dyn FnMut(&[Rotation], &[Rotation]) -> bool,
 ) -> Result<(RigSolution, bool)> {
     settings.validate()?;
     let clock = Instant::now();
@@ -127,14 +127,13 @@ pub(crate) fn solve_rig_judged(
             let rest = (part.rotations, sensors);
             return Ok((alternate(p, rest, settings, (clock, None))?, false));
         }
-        if judge(&part.rotations, &sensors) {
-            let judged = (JUDGED, iterations, stop);
-            return Ok((
-                rig_solution(p, (part.rotations, sensors), judged, clock),
-                true,
-            ));
+        // judged as it would be returned (its sensors projected on SO(3), `rig_solution`)
+        let judged = (JUDGED, iterations, stop);
+        let candidate = rig_solution(p, (part.rotations, sensors.clone()), judged, clock);
+        if judge(&candidate.frames, &candidate.sensors) {
+            return Ok((candidate, true));
         }
-        frames = Some(part.rotations);
+        frames = Some(candidate.frames);
     }
     let frames = frame_solve(p, &sensors, frames, (left(), rough))?.rotations;
     Ok((
@@ -820,7 +819,7 @@ mod tests {
         .generate();
         let settings = RigSettings::default();
         let whole = solve_rig(&p, &settings).unwrap();
-        let (judged, yes) = solve_rig_judged(&p, &settings, &[2, 30], &|_, _| true).unwrap();
+        let (judged, yes) = solve_rig_judged(&p, &settings, &[2, 30], &mut |_, _| true).unwrap();
         assert!(yes && judged.report.name == JUDGED);
         assert!(
             judged.report.iterations <= 2,
@@ -834,7 +833,7 @@ mod tests {
             judged.cost,
             whole.cost
         );
-        let (free, no) = solve_rig_judged(&p, &settings, &[2, 30], &|_, _| false).unwrap();
+        let (free, no) = solve_rig_judged(&p, &settings, &[2, 30], &mut |_, _| false).unwrap();
         assert!(!no && free.report.name != JUDGED);
         assert!(
             (free.cost - whole.cost).abs() <= 1e-9 * whole.cost,
@@ -851,7 +850,7 @@ mod tests {
             ..Default::default()
         }
         .generate();
-        let (_, judged) = solve_rig_judged(&held, &settings, &[2, 30], &|_, _| true).unwrap();
+        let (_, judged) = solve_rig_judged(&held, &settings, &[2, 30], &mut |_, _| true).unwrap();
         assert!(!judged);
     }
 
